@@ -1,0 +1,81 @@
+"""User-facing errors and the single place where scalar inputs are checked.
+
+Every user mistake raises :class:`ParameterError` (a ``ValueError``) with one line naming the
+bad value and the allowed range; the CLI turns it into that line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import math
+
+
+class ParameterError(ValueError):
+    """A bad input value: one line, naming the value and the allowed range."""
+
+
+class StoreError(ParameterError):
+    """A path that is not a complete, readable turbgen store (or would be overwritten)."""
+
+
+def _is_number(value) -> bool:
+    try:
+        return math.isfinite(float(value))
+    except (TypeError, ValueError):
+        return False
+
+
+def check_finite(name: str, value) -> float:
+    """Return ``value`` as float, or raise if it is not a finite number."""
+    if not _is_number(value):
+        raise ParameterError(f"{name} = {value!r} is not a finite number")
+    return float(value)
+
+
+def check_positive(name: str, value) -> float:
+    """Return ``value`` as float if it is finite and > 0."""
+    v = check_finite(name, value)
+    if v <= 0:
+        raise ParameterError(f"{name} = {value!r} must be > 0")
+    return v
+
+
+def check_nonnegative(name: str, value) -> float:
+    """Return ``value`` as float if it is finite and >= 0."""
+    v = check_finite(name, value)
+    if v < 0:
+        raise ParameterError(f"{name} = {value!r} must be >= 0")
+    return v
+
+
+def check_range(name: str, value, lo: float, hi: float, *, lo_open=False, hi_open=False) -> float:
+    """Return ``value`` as float if it lies in the interval from ``lo`` to ``hi``."""
+    v = check_finite(name, value)
+    bad_lo = v <= lo if lo_open else v < lo
+    bad_hi = v >= hi if hi_open else v > hi
+    if bad_lo or bad_hi:
+        left = "(" if lo_open else "["
+        right = ")" if hi_open else "]"
+        raise ParameterError(f"{name} = {value!r} is outside the allowed range {left}{lo:g}, {hi:g}{right}")
+    return v
+
+
+def check_int(name: str, value, lo: int, hi: int | None = None) -> int:
+    """Return ``value`` as int if it is an integer >= lo (and <= hi when given)."""
+    try:
+        iv = int(value)
+        ok = float(value) == iv
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise ParameterError(f"{name} = {value!r} is not an integer")
+    if iv < lo or (hi is not None and iv > hi):
+        upper = f", {hi}]" if hi is not None else ", ∞)"
+        raise ParameterError(f"{name} = {value!r} is outside the allowed range [{lo}{upper}")
+    return iv
+
+
+def check_choice(name: str, value, choices) -> str:
+    """Return ``value`` if it is one of ``choices``."""
+    if value not in choices:
+        raise ParameterError(f"{name} = {value!r} is not one of {', '.join(map(str, choices))}")
+    return value

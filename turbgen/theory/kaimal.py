@@ -1,0 +1,55 @@
+"""IEC 61400-1 Kaimal spectra and normal-turbulence-model parameters (paper 000 Sect. 2.2)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from turbgen.errors import check_choice, check_positive
+from turbgen.theory.params import KaimalParams, check_wind_speed
+
+# IEC 61400-1 reference turbulence intensity per class (NTM)
+IEC_IREF = {"A+": 0.18, "A": 0.16, "B": 0.14, "C": 0.12}
+# L_k = {8.1, 2.7, 0.66} Lambda1 (IEC 61400-1 Annex C); sigma2 = 0.8 sigma1, sigma3 = 0.5 sigma1
+IEC_LENGTH_FACTORS = (8.1, 2.7, 0.66)
+IEC_SIGMA_RATIOS = (1.0, 0.8, 0.5)
+
+
+def kaimal_spectrum(f_hz, sigma_m_s: float, length_scale_m: float, U_m_s: float):
+    """One-sided Kaimal PSD S(f) = 4 sigma^2 (L/U) / (1 + 6 f L/U)^(5/3) [m^2 s^-2 Hz^-1] (Eq. 11)."""
+    f = np.asarray(f_hz, dtype=float)
+    n = length_scale_m / U_m_s
+    return 4.0 * sigma_m_s**2 * n / (1.0 + 6.0 * np.abs(f) * n) ** (5.0 / 3.0)
+
+
+def kaimal_band_variance(f_lo_hz: float, f_hi_hz: float, sigma_m_s: float, length_scale_m: float, U_m_s: float):
+    """∫ S(f) df from f_lo to f_hi, closed form [m^2 s^-2]; f_lo = 0, f_hi = inf gives sigma^2."""
+    n = length_scale_m / U_m_s
+
+    def prim(f):  # antiderivative of Eq. 11: -sigma^2 (1 + 6 f n)^(-2/3)
+        return -(sigma_m_s**2) * (1.0 + 6.0 * f * n) ** (-2.0 / 3.0) if np.isfinite(f) else 0.0
+
+    return prim(f_hi_hz) - prim(f_lo_hz)
+
+
+def iec_lambda1_m(hub_height_m: float) -> float:
+    """Longitudinal turbulence scale parameter Lambda1 [m]: 0.7 z_hub below 60 m, else 42 m."""
+    z = check_positive("hub height (m)", hub_height_m)
+    return 0.7 * z if z < 60.0 else 42.0
+
+
+def iec_sigma1_m_s(U_m_s: float, turb_class: str = "A") -> float:
+    """NTM sigma1 = Iref (0.75 U + 5.6) [m/s] for class A+, A, B or C."""
+    check_choice("class", turb_class, tuple(IEC_IREF))
+    return IEC_IREF[turb_class] * (0.75 * check_wind_speed(U_m_s) + 5.6)
+
+
+def iec_kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float = 90.0) -> KaimalParams:
+    """IEC 61400-1 Kaimal model at hub-height speed U: sigma_k, L_k, a_yz = 12, Lc = 8.1 Lambda1."""
+    lam = iec_lambda1_m(hub_height_m)
+    s1 = iec_sigma1_m_s(U_m_s, turb_class)
+    return KaimalParams(
+        sigma_m_s=tuple(r * s1 for r in IEC_SIGMA_RATIOS),
+        length_scales_m=tuple(c * lam for c in IEC_LENGTH_FACTORS),
+        a_yz=12.0,
+        lc_m=8.1 * lam,
+    )

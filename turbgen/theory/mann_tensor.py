@@ -1,0 +1,95 @@
+"""The Mann (1994) uniform-shear spectral tensor and its square-root factor (Mann 1998).
+
+Wavenumbers in rad/m; the tensor in m^5 s^-2 (per unit dk1 dk2 dk3), so that
+sigma_i^2 = ∫ Phi_ii dk. Formulas: ../shared/reference/mann-model.md (Mann 1994 Eq. 13-19).
+Outputs have the 3x3 component axes first: ``phi[i, j]`` is an array shaped like k1.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.special import beta as beta_fn
+
+from turbgen.theory.eddy_lifetime import shear_distortion_beta
+from turbgen.theory.params import MannParams
+
+
+def von_karman_energy(k, ae: float, length_scale_m: float):
+    """von Karman energy spectrum E(k) = ae L^(5/3) (kL)^4 / (1 + (kL)^2)^(17/6) [m^3 s^-2]."""
+    kL = np.asarray(k, dtype=float) * length_scale_m
+    return ae * length_scale_m ** (5.0 / 3.0) * kL**4 / (1.0 + kL**2) ** (17.0 / 6.0)
+
+
+def _distortion(k1, k2, k3, params: MannParams):
+    """Undistorted wavenumber and the rapid-distortion coefficients zeta1, zeta2 (Mann 1994 Eq. 15-17).
+
+    Returns (k0sq, k30, ksq, zeta1, zeta2, E0). Exact limits are used on k1 = 0 (zeta1 = -beta,
+    zeta2 = 0: the linear growth of u under shear) and on the k3 axis (q = 0: zeta = 0).
+    """
+    k1, k2, k3 = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (k1, k2, k3)))
+    ksq = k1 * k1 + k2 * k2 + k3 * k3
+    beta = shear_distortion_beta(np.sqrt(ksq), params)
+    beta = np.where(np.isfinite(beta), beta, 0.0)  # k = 0 carries no energy
+    k30 = k3 + beta * k1
+    k0sq = k1 * k1 + k2 * k2 + k30 * k30
+    q = k1 * k1 + k2 * k2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sq = np.sqrt(q)
+        c1 = beta * k1 * k1 * (k0sq - 2.0 * k30 * k30 + beta * k1 * k30) / (ksq * q)
+        c2 = k2 * k0sq / (q * sq) * np.arctan2(beta * k1 * sq, k0sq - k30 * k1 * beta)
+        ratio = k2 / k1
+        zeta1 = c1 - ratio * c2
+        zeta2 = ratio * c1 + c2
+    on_k1_zero = (k1 == 0) & (q > 0)
+    zeta1 = np.where(on_k1_zero, -beta, zeta1)
+    zeta2 = np.where(on_k1_zero, 0.0, zeta2)
+    zeta1 = np.where(q > 0, zeta1, 0.0)
+    zeta2 = np.where(q > 0, zeta2, 0.0)
+    e0 = von_karman_energy(np.sqrt(k0sq), params.ae, params.length_scale_m)
+    return k1, k2, k0sq, k30, ksq, zeta1, zeta2, e0
+
+
+def sheared_tensor(k1, k2, k3, params: MannParams):
+    """Phi_ij(k) of the sheared Mann tensor, shape (3, 3, *k1.shape) [m^5 s^-2] (Mann 1994 Eq. 19)."""
+    k1, k2, k0sq, k30, ksq, z1, z2, e0 = _distortion(k1, k2, k3, params)
+    q = k1 * k1 + k2 * k2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(k0sq > 0, e0 / (4.0 * np.pi * k0sq * k0sq), 0.0)
+        b = np.where(ksq > 0, e0 / (4.0 * np.pi * k0sq * ksq), 0.0)
+        c = np.where(ksq > 0, e0 / (4.0 * np.pi * ksq * ksq), 0.0)
+    phi = np.empty((3, 3) + k1.shape)
+    phi[0, 0] = a * (k0sq - k1 * k1 - 2.0 * k1 * k30 * z1 + q * z1 * z1)
+    phi[1, 1] = a * (k0sq - k2 * k2 - 2.0 * k2 * k30 * z2 + q * z2 * z2)
+    phi[2, 2] = c * q
+    phi[0, 1] = phi[1, 0] = a * (-k1 * k2 - k1 * k30 * z2 - k2 * k30 * z1 + q * z1 * z2)
+    phi[0, 2] = phi[2, 0] = b * (-k1 * k30 + q * z1)
+    phi[1, 2] = phi[2, 1] = b * (-k2 * k30 + q * z2)
+    return phi
+
+
+def tensor_factor(k1, k2, k3, params: MannParams):
+    """Real factor C(k), shape (3, 3, *k1.shape), with C C^T = Phi (Mann 1998 Eq. 46-47) [m^(5/2) s^-1].
+
+    C = D(k) A(k0): A the isotropic factor sqrt(E(k0)/(4 pi))/k0^2 [[0, k30, -k2], [-k30, 0, k1],
+    [k2, -k1, 0]] and D = [[1, 0, zeta1], [0, 1, zeta2], [0, 0, k0^2/k^2]]. Multiply by
+    sqrt(dk1 dk2 dk3) for Fourier amplitudes on a grid. Zero at k = 0.
+    """
+    k1, k2, k0sq, k30, ksq, z1, z2, e0 = _distortion(k1, k2, k3, params)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        amp = np.where(k0sq > 0, np.sqrt(e0 / (4.0 * np.pi)) / k0sq, 0.0)
+        d33 = np.where(ksq > 0, k0sq / ksq, 0.0)
+    iso = np.zeros((3, 3) + k1.shape)
+    iso[0, 1], iso[0, 2] = k30, -k2
+    iso[1, 0], iso[1, 2] = -k30, k1
+    iso[2, 0], iso[2, 1] = k2, -k1
+    iso *= amp
+    c = iso.copy()
+    c[0] += z1 * iso[2]
+    c[1] += z2 * iso[2]
+    c[2] = d33 * iso[2]
+    return c
+
+
+def isotropic_variance(ae: float, length_scale_m: float) -> float:
+    """sigma_u^2 = sigma_v^2 = sigma_w^2 of the isotropic von Karman field [m^2 s^-2]."""
+    return beta_fn(2.5, 1.0 / 3.0) / 3.0 * ae * length_scale_m ** (2.0 / 3.0)

@@ -1,0 +1,83 @@
+"""Frozen, validated parameter sets of the turbulence models (SI units)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from turbgen.errors import ParameterError, check_choice, check_finite, check_nonnegative, check_positive, check_range
+
+LIFETIMES = ("guo", "mann")
+
+
+@dataclass(frozen=True)
+class MannParams:
+    """Mann (1994) sheared-tensor parameters plus the Guo et al. (2022) evolution lifetime.
+
+    ae : alpha*epsilon^(2/3) [m^(4/3) s^-2], spectral energy level.
+    length_scale_m : L [m], length scale of the energy-containing eddies.
+    gamma : Gamma [-], shear anisotropy (0 = isotropic).
+    lifetime : "guo" (paper 000 Eq. 6, default) or "mann" (Eq. 4, hypergeometric).
+    factor1 : small-k slope of the Guo lifetime is -factor1 (default 1; stable preset 0.8).
+    factor2 : large-k slope of the evolution lifetime tau_e is -(2/3) factor2 (default 3.5 = Eq. 15).
+    evo_time_s : gamma [s], evolution time constant of tau_e (Eq. 15); None = frozen turbulence.
+    """
+
+    ae: float
+    length_scale_m: float
+    gamma: float
+    lifetime: str = "guo"
+    factor1: float = 1.0
+    factor2: float = 3.5
+    evo_time_s: float | None = 400.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "ae", check_positive("ae (alpha*eps^(2/3), m^(4/3)/s^2)", self.ae))
+        object.__setattr__(self, "length_scale_m", check_positive("L (length scale, m)", self.length_scale_m))
+        object.__setattr__(self, "gamma", check_range("gamma (Gamma, -)", self.gamma, 0.0, 20.0))
+        check_choice("lifetime", self.lifetime, LIFETIMES)
+        object.__setattr__(self, "factor1", check_range("factor1", self.factor1, 0.0, 3.0, lo_open=True))
+        object.__setattr__(self, "factor2", check_range("factor2", self.factor2, 0.0, 10.0, lo_open=True))
+        if self.evo_time_s is not None:
+            object.__setattr__(self, "evo_time_s", check_positive("evo (gamma, s)", self.evo_time_s))
+
+    def with_ae(self, ae: float) -> "MannParams":
+        """The same parameters with another energy level alpha*eps^(2/3)."""
+        return replace(self, ae=ae)
+
+
+@dataclass(frozen=True)
+class KaimalParams:
+    """Kaimal spectra (paper 000 Eq. 11) and IEC yz coherence (Eq. 12) parameters.
+
+    sigma_m_s : (sigma_u, sigma_v, sigma_w) [m/s], standard deviations of the full spectrum.
+    length_scales_m : (L1, L2, L3) [m], Kaimal integral length scales.
+    a_yz : coherence decay constant [-] (IEC: 12).
+    lc_m : coherence scale parameter Lc [m] (IEC: 8.1 Lambda1).
+    """
+
+    sigma_m_s: tuple[float, float, float]
+    length_scales_m: tuple[float, float, float]
+    a_yz: float = 12.0
+    lc_m: float = 340.2
+
+    def __post_init__(self):
+        if len(self.sigma_m_s) != 3 or len(self.length_scales_m) != 3:
+            raise ParameterError("sigma_m_s and length_scales_m need three values (u, v, w)")
+        object.__setattr__(
+            self, "sigma_m_s", tuple(check_nonnegative(f"sigma_{c} (m/s)", s) for c, s in zip("uvw", self.sigma_m_s))
+        )
+        object.__setattr__(
+            self,
+            "length_scales_m",
+            tuple(check_positive(f"L{i + 1} (m)", s) for i, s in enumerate(self.length_scales_m)),
+        )
+        object.__setattr__(self, "a_yz", check_nonnegative("a_yz", self.a_yz))
+        object.__setattr__(self, "lc_m", check_positive("Lc (m)", self.lc_m))
+
+
+def check_wind_speed(U) -> float:
+    """Mean wind speed U [m/s], 0.5 to 100."""
+    return check_range("U (mean wind speed, m/s)", U, 0.5, 100.0)
+
+
+__all__ = ["MannParams", "KaimalParams", "LIFETIMES", "check_wind_speed", "check_finite"]
