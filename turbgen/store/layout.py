@@ -1,0 +1,122 @@
+"""The turbgen field store layout (zarr v3): the one place that defines it.
+
+One zarr v3 group holds one field::
+
+    <store>/zarr.json          group metadata: the attributes below + consolidated metadata
+    <store>/u, v, w            float32, shape (nt, nx, ny, nz), dimension_names ("t", "x", "y", "z"),
+                               chunks (chunk_t, 1, ny, nz), Blosc-lz4 + byte shuffle, fill value NaN,
+                               every chunk written (so a missing chunk file means a partial copy)
+    <store>/t, x, y, z         float64 1-D coordinates, dimension_names (name,), attrs units/long_name
+
+Group attributes (JSON Schema: ``turbgen/schemas/field.schema.json``):
+
+    turbgen_version, created_utc (ISO 8601), layout_version (int)
+    model ("mann" | "kaimal"), parameters {name: value}, units {name: unit}, seed (int),
+    U_m_s, hub_height_m, frame = "convected", frame_note, grid {nt, dt_s, x_m, ny, nz, dy_m, dz_m}
+    turbgen_complete = true    -- the completeness marker, written last
+
+Frame: all planes share one eddy-time axis t ("convected frame"). The field at plane x (upstream
+distance, rotor = 0) and physical time T is the stored sample at t = T + x/U, i.e. a stored
+sample (t, x) happens at physical time T = t - x/U (``turbgen.store.physical_time_view``).
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.resources
+import json
+import math
+
+import jsonschema
+
+from turbgen.grid import Grid
+
+LAYOUT_VERSION = 1
+
+COMPONENTS = ("u", "v", "w")
+DIMS = ("t", "x", "y", "z")
+MODELS = ("mann", "kaimal")
+DTYPE = "float32"
+COORD_DTYPE = "float64"
+
+COMPONENT_ATTRS = {
+    "u": {"units": "m s-1", "long_name": "longitudinal velocity fluctuation (along the mean wind, downwind)"},
+    "v": {"units": "m s-1", "long_name": "lateral velocity fluctuation (along +y)"},
+    "w": {"units": "m s-1", "long_name": "vertical velocity fluctuation (along +z, up)"},
+}
+COORD_ATTRS = {
+    "t": {"units": "s", "long_name": "eddy time (convected frame; physical time at plane x is t - x/U)"},
+    "x": {"units": "m", "long_name": "upstream distance of the yz-plane from the rotor (rotor = 0)"},
+    "y": {"units": "m", "long_name": "lateral position, +y to the left looking downwind, hub = 0"},
+    "z": {"units": "m", "long_name": "vertical position relative to hub height, up"},
+}
+
+FRAME = "convected"
+FRAME_NOTE = (
+    "all planes share one eddy-time axis; the field at plane x and physical time T "
+    "is the stored sample at t = T + x/U"
+)
+
+# Attributes the caller of create_store supplies / the writer adds / the marker.
+CALLER_ATTRS = ("model", "parameters", "units", "seed", "U_m_s", "hub_height_m")
+WRITER_ATTRS = ("turbgen_version", "created_utc", "layout_version", "frame", "frame_note", "grid")
+MARKER = "turbgen_complete"
+
+DEFAULT_CHUNK_T_MAX = 1024
+
+
+def default_chunk_t(nt: int) -> int:
+    """Default time-chunk length: min(nt, 1024) samples (16 MiB per chunk at 64 x 64)."""
+    return min(nt, DEFAULT_CHUNK_T_MAX)
+
+
+def chunk_shape(grid: Grid, chunk_t: int) -> tuple[int, int, int, int]:
+    """Chunk shape of the u, v, w arrays: one plane, ``chunk_t`` samples, the whole yz-plane."""
+    return (chunk_t, 1, grid.ny, grid.nz)
+
+
+def n_chunks(grid: Grid, chunk_t: int) -> int:
+    """Number of chunk files of one component array (all chunks are always written)."""
+    return math.ceil(grid.nt / chunk_t) * grid.nx
+
+
+def grid_to_attrs(grid: Grid) -> dict:
+    """The ``grid`` group attribute."""
+    return {
+        "nt": grid.nt,
+        "dt_s": grid.dt_s,
+        "x_m": list(grid.x_m),
+        "ny": grid.ny,
+        "nz": grid.nz,
+        "dy_m": grid.dy_m,
+        "dz_m": grid.dz_m,
+    }
+
+
+def grid_from_attrs(d: dict) -> Grid:
+    """Inverse of :func:`grid_to_attrs`."""
+    return Grid(
+        nt=d["nt"], dt_s=d["dt_s"], x_m=tuple(d["x_m"]), ny=d["ny"], nz=d["nz"], dy_m=d["dy_m"], dz_m=d["dz_m"]
+    )
+
+
+def coordinates(grid: Grid) -> dict:
+    """Coordinate name -> float64 values, in ``DIMS`` order."""
+    return {"t": grid.t(), "x": grid.x(), "y": grid.y(), "z": grid.z()}
+
+
+@functools.lru_cache(maxsize=1)
+def _validator():
+    text = importlib.resources.files("turbgen").joinpath("schemas/field.schema.json").read_text()
+    return jsonschema.Draft202012Validator(json.loads(text))
+
+
+def validate_attrs(attrs: dict, *, where: str, error: type[Exception]) -> None:
+    """Check group attributes against ``schemas/field.schema.json``; raise ``error`` (one line) if invalid."""
+    err = jsonschema.exceptions.best_match(_validator().iter_errors(attrs))
+    if err is not None:
+        at = "/".join(str(p) for p in err.absolute_path) or "(top level)"
+        msg = " ".join(err.message.split())
+        if len(msg) > 160:
+            msg = msg[:157] + "..."
+        raise error(f"{where}: attribute {at}: {msg}")

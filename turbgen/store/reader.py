@@ -1,0 +1,211 @@
+"""Opening a field store: refuse anything that is not a complete, consistent turbgen store.
+
+``open_store(path)`` checks, in order: the path exists; it is a zarr v3 group written by turbgen;
+the completeness marker is set; the attributes match ``schemas/field.schema.json``; the arrays
+u, v, w and coordinates t, x, y, z exist with the grid's shapes, dtypes and values; and every
+chunk file is present (a partially copied store is refused). Each failure is one-line StoreError.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+import zarr
+
+from turbgen.errors import ParameterError, StoreError
+from turbgen.grid import Grid
+from turbgen.store import layout
+from turbgen.store.writer import temp_prefix
+
+
+class FieldStore:
+    """A complete, validated field store opened read-only (see :func:`open_store`)."""
+
+    def __init__(self, path: Path, grid: Grid, attrs: dict, group: zarr.Group):
+        self.path = path
+        self.grid = grid
+        self.attrs = attrs
+        self._group = group
+
+    def __repr__(self) -> str:
+        g = self.grid
+        return f"FieldStore({str(self.path)!r}, model={self.model!r}, shape={g.shape})"
+
+    @property
+    def model(self) -> str:
+        """"mann" or "kaimal"."""
+        return self.attrs["model"]
+
+    @property
+    def U_m_s(self) -> float:
+        """Mean wind speed [m/s]."""
+        return float(self.attrs["U_m_s"])
+
+    @property
+    def hub_height_m(self) -> float:
+        """Hub height above ground [m]."""
+        return float(self.attrs["hub_height_m"])
+
+    @property
+    def seed(self) -> int:
+        """Random seed of the field."""
+        return int(self.attrs["seed"])
+
+    @property
+    def chunk_t(self) -> int:
+        """Time-chunk length of the u, v, w arrays."""
+        return int(self.array("u").chunks[0])
+
+    def array(self, component: str) -> zarr.Array:
+        """The zarr array of ``component`` ("u", "v" or "w"), dims (t, x, y, z), read-only."""
+        if component not in layout.COMPONENTS:
+            raise ParameterError(f"component = {component!r} is not one of {', '.join(layout.COMPONENTS)}")
+        return self._group[component]
+
+    def dask(self, component: str):
+        """``component`` as a dask array with the stored chunks (t, x, y, z)."""
+        import dask.array as da
+
+        arr = self.array(component)
+        return da.from_zarr(arr, chunks=arr.chunks)
+
+    def read_plane(self, component: str, ix: int) -> np.ndarray:
+        """One yz-plane time series, float32 array (nt, ny, nz), of plane index ``ix``."""
+        if not 0 <= ix < self.grid.nx:
+            raise ParameterError(f"plane index = {ix} is outside [0, {self.grid.nx - 1}]")
+        return np.asarray(self.array(component)[:, ix], dtype=np.float32)
+
+    def nbytes_on_disk(self) -> int:
+        """Total size of the store's files [bytes]."""
+        return sum(f.stat().st_size for f in self.path.rglob("*") if f.is_file())
+
+    def summary(self) -> dict:
+        """What ``turbgen info`` shows, as JSON-serialisable values (units in the key names)."""
+        g, a = self.grid, self.attrs
+        return {
+            "path": str(self.path),
+            "complete": True,
+            "model": self.model,
+            "turbgen_version": a["turbgen_version"],
+            "created_utc": a["created_utc"],
+            "grid": layout.grid_to_attrs(g),
+            "shape_t_x_y_z": list(g.shape),
+            "duration_s": g.nt * g.dt_s,
+            "width_y_m": (g.ny - 1) * g.dy_m,
+            "height_z_m": (g.nz - 1) * g.dz_m,
+            "chunk_t": self.chunk_t,
+            "U_m_s": self.U_m_s,
+            "hub_height_m": self.hub_height_m,
+            "seed": self.seed,
+            "frame": a["frame"],
+            "frame_note": a["frame_note"],
+            "parameters": a["parameters"],
+            "units": a["units"],
+            "size_on_disk_bytes": self.nbytes_on_disk(),
+            "size_uncompressed_bytes": 3 * g.nbytes_per_component(),
+        }
+
+
+def _leftover_hint(path: Path) -> str:
+    if not path.parent.is_dir():
+        return ""
+    left = sorted(p.name for p in path.parent.iterdir() if p.name.startswith(temp_prefix(path)))
+    if left:
+        return f" (an interrupted write left {path.parent / left[0]}; delete it)"
+    return ""
+
+
+def _count_files(directory: Path) -> int:
+    return sum(len(files) for _, _, files in os.walk(directory))
+
+
+def _check_arrays(path: Path, group: zarr.Group, grid: Grid) -> None:
+    for c in layout.COMPONENTS:
+        arr = group.get(c)
+        if not isinstance(arr, zarr.Array):
+            raise StoreError(f"{path} is corrupted: array {c!r} is missing")
+        if arr.shape != grid.shape or arr.dtype != np.dtype(layout.DTYPE):
+            raise StoreError(
+                f"{path} is corrupted: {c} has shape {arr.shape} {arr.dtype}, "
+                f"the grid needs {grid.shape} {layout.DTYPE}"
+            )
+        if tuple(arr.metadata.dimension_names or ()) != layout.DIMS or arr.chunks[1] != 1:
+            raise StoreError(f"{path} is corrupted: {c} has dims {arr.metadata.dimension_names}, chunks {arr.chunks}")
+        expected = layout.n_chunks(grid, arr.chunks[0])
+        found = _count_files(path / c / "c")
+        if found != expected:
+            raise StoreError(
+                f"{path} is incomplete: {c} has {found} of {expected} chunk files (partial copy?); "
+                "copy it again or regenerate it"
+            )
+    for name, values in layout.coordinates(grid).items():
+        arr = group.get(name)
+        if not isinstance(arr, zarr.Array) or arr.shape != values.shape:
+            raise StoreError(f"{path} is corrupted: coordinate {name!r} is missing or has the wrong length")
+        if not np.allclose(arr[:], values, rtol=1e-9, atol=1e-9):
+            raise StoreError(f"{path} is corrupted: coordinate {name!r} does not match the grid attributes")
+
+
+def open_store(path) -> FieldStore:
+    """Open the complete turbgen field store at ``path`` read-only; one-line StoreError otherwise."""
+    path = Path(path).expanduser().absolute()
+    if not path.exists():
+        raise StoreError(f"{path}: no such store{_leftover_hint(path)}")
+    if not path.is_dir():
+        raise StoreError(f"{path} is a file, not a turbgen store (a zarr directory)")
+    meta_file = path / "zarr.json"
+    if not meta_file.is_file():
+        raise StoreError(f"{path} is not a turbgen store (no zarr.json)")
+    try:
+        meta = json.loads(meta_file.read_text())
+        attrs = meta["attributes"]
+        node = meta["node_type"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise StoreError(f"{path} is corrupted: zarr.json unreadable ({type(exc).__name__})") from None
+    if node != "group" or not isinstance(attrs, dict) or "turbgen_version" not in attrs:
+        raise StoreError(f"{path} is a zarr {node} but not a turbgen store")
+    if attrs.get(layout.MARKER) is not True:
+        raise StoreError(
+            f"{path} is incomplete (no completeness marker: the write was interrupted or the copy is partial); "
+            "regenerate it"
+        )
+    layout.validate_attrs(attrs, where=f"{path} is corrupted", error=StoreError)
+    try:
+        grid = layout.grid_from_attrs(attrs["grid"])
+    except ParameterError as exc:
+        raise StoreError(f"{path} is corrupted: grid attribute: {exc}") from None
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="Consolidated metadata", category=UserWarning)
+            group = zarr.open_group(str(path), mode="r")
+        _check_arrays(path, group, grid)
+    except StoreError:
+        raise
+    except Exception as exc:  # any zarr/JSON failure inside the store is corruption
+        first = str(exc).splitlines()[0] if str(exc) else ""
+        raise StoreError(f"{path} is corrupted: {type(exc).__name__}: {first[:160]}") from None
+    return FieldStore(path, grid, attrs, group)
+
+
+def physical_time_view(path_or_fs):
+    """The store as an ``xarray.Dataset`` with an extra 2-D coordinate ``T(t, x) = t - x/U`` [s].
+
+    The store is in the convected frame: all planes share one eddy-time axis ``t``. The stored
+    sample (t, x) is the field at plane x at physical time T = t - x/U (an eddy at x upstream
+    reaches the rotor x/U later), so e.g. ``ds.u.isel(x=i)`` plotted against ``ds.T.isel(x=i)`` is
+    the time series a sensor at plane i sees. Data stay lazy (dask).
+    """
+    import xarray as xr
+
+    fs = path_or_fs if isinstance(path_or_fs, FieldStore) else open_store(path_or_fs)
+    ds = xr.open_zarr(str(fs.path), consolidated=True)
+    t = fs.grid.t()
+    x = fs.grid.x()
+    T = t[:, None] - x[None, :] / fs.U_m_s
+    return ds.assign_coords(
+        T=(("t", "x"), T, {"units": "s", "long_name": "physical time at plane x: T = t - x/U"})
+    )
