@@ -1,0 +1,90 @@
+"""Available memory, and the check made before anything large is allocated.
+
+    require_memory(nbytes, "the Mann snapshot (4096 x 128 x 128, 3 components)", "lower --nt or --pad-yz")
+
+raises ParameterError (CLI: one line, exit 2) when ``nbytes`` exceeds the available memory.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from turbgen.errors import ParameterError
+
+
+def format_bytes(n: float) -> str:
+    """``n`` bytes as a short human-readable string with binary units (e.g. '1.5 GiB')."""
+    units = ("B", "KiB", "MiB", "GiB", "TiB")
+    i = 0
+    while abs(n) >= 1024 and i < len(units) - 1:
+        n /= 1024
+        i += 1
+    return f"{n:.0f} B" if i == 0 else f"{n:.1f} {units[i]}"
+
+
+def _meminfo_available(meminfo: Path) -> int | None:
+    try:
+        for line in meminfo.read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024  # the value is in kB
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+def _read_int(path: Path) -> int | None:
+    try:
+        return int(path.read_text().strip())
+    except (OSError, ValueError):  # missing file, or "max" (no limit)
+        return None
+
+
+def _cgroup_headroom(root: Path) -> int | None:
+    """Limit minus usage of this process's memory cgroup (v2, then v1), or None if unlimited."""
+    for limit_file, usage_file in (
+        ("memory.max", "memory.current"),
+        ("memory/memory.limit_in_bytes", "memory/memory.usage_in_bytes"),
+    ):
+        limit, usage = _read_int(root / limit_file), _read_int(root / usage_file)
+        if limit is not None and usage is not None and limit < 2**60:  # v1 reports "no limit" as ~2^63
+            return max(limit - usage, 0)
+    return None
+
+
+def _sysconf_available() -> int | None:
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def available_memory_bytes(
+    meminfo: Path = Path("/proc/meminfo"), cgroup_root: Path = Path("/sys/fs/cgroup")
+) -> int | None:
+    """Memory [bytes] this process can still allocate, or None if it cannot be determined.
+
+    Linux: MemAvailable from /proc/meminfo, capped by the container's cgroup limit minus usage.
+    Elsewhere: free physical pages from ``os.sysconf`` (an underestimate: excludes caches).
+    """
+    system = _meminfo_available(meminfo)
+    if system is None:
+        system = _sysconf_available()
+    headroom = _cgroup_headroom(cgroup_root)
+    known = [v for v in (system, headroom) if v is not None]
+    return min(known) if known else None
+
+
+def require_memory(nbytes: int, what: str, hint: str) -> int | None:
+    """Raise ParameterError unless ``nbytes`` fit in the available memory; return the available bytes.
+
+    ``what`` names what needs the memory, ``hint`` which option to change (e.g. "lower --nt").
+    When the available memory cannot be determined the check passes (returns None).
+    """
+    available = available_memory_bytes()
+    if available is not None and nbytes > available:
+        raise ParameterError(
+            f"{what} needs about {format_bytes(nbytes)} of memory but only {format_bytes(available)} "
+            f"is available; {hint}"
+        )
+    return available
