@@ -1,0 +1,74 @@
+"""`turbgen info STORE`: a readable summary of a field store (or `--json`)."""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+from turbgen.resources import format_bytes
+from turbgen.store import open_store
+
+
+def _value(v) -> str:
+    if isinstance(v, float):
+        return f"{v:g}"
+    if isinstance(v, list):
+        return ", ".join(_value(x) for x in v)
+    if isinstance(v, dict):
+        return json.dumps(v)
+    return str(v)
+
+
+def _unit(u: str) -> str:
+    return "" if u in ("", "1", "-") else f" {u}"
+
+
+def _lines(s: dict) -> list[str]:
+    g = s["grid"]
+    rows = [
+        ("store", s["path"]),
+        (
+            "status",
+            f"complete, {format_bytes(s['size_on_disk_bytes'])} on disk "
+            f"({format_bytes(s['size_uncompressed_bytes'])} uncompressed)",
+        ),
+        ("model", f"{s['model']}, seed {s['seed']}"),
+        ("created", f"{s['created_utc']} by turbgen {s['turbgen_version']}"),
+        (
+            "grid",
+            f"(t, x, y, z) = {' x '.join(map(str, s['shape_t_x_y_z']))}, u v w float32, "
+            f"time chunks of {s['chunk_t']}",
+        ),
+        ("time", f"dt {g['dt_s']:g} s, duration {s['duration_s']:g} s"),
+        ("planes", f"{len(g['x_m'])}: x = {_value(g['x_m'])} m upstream of the rotor"),
+        (
+            "y, z",
+            f"dy {g['dy_m']:g} m, dz {g['dz_m']:g} m; points span {s['width_y_m']:g} m (y) x "
+            f"{s['height_z_m']:g} m (z), centred on the hub",
+        ),
+        ("wind", f"U {s['U_m_s']:g} m/s, hub height {s['hub_height_m']:g} m"),
+        ("frame", f"{s['frame']}: {s['frame_note']}"),
+    ]
+    width = max(len(k) for k, _ in rows)
+    out = [f"{k:<{width}}  {v}" for k, v in rows]
+    out.append("parameters")
+    units = s["units"]
+    pw = max((len(k) for k in s["parameters"]), default=0)
+    out += [f"  {k:<{pw}}  {_value(v)}{_unit(units.get(k, ''))}" for k, v in s["parameters"].items()]
+    return out
+
+
+@click.command()
+@click.argument("store", type=click.Path(path_type=str))
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON (units in the key names).")
+def info(store: str, as_json: bool):
+    """Summarise the field store STORE: model, grid, planes, dt, U, seed, parameters, size, completeness.
+
+    A missing, incomplete or corrupted store is reported in one line (exit code 2).
+    """
+    summary = open_store(store).summary()
+    if as_json:
+        click.echo(json.dumps(summary, indent=2))
+    else:
+        click.echo("\n".join(_lines(summary)))
