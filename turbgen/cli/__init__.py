@@ -48,5 +48,9 @@ def _register():
     for command in (theory.theory, theory.fit):
         cli.add_command(command)
 
+    from turbgen.cli import info
+
+    cli.add_command(info.info)
+
 
 _register()
