@@ -124,6 +124,9 @@ def _count_files(directory: Path) -> int:
 
 
 def _check_arrays(path: Path, group: zarr.Group, grid: Grid) -> None:
+    for name in (*layout.COMPONENTS, *layout.DIMS):
+        if not (path / name / "zarr.json").is_file():
+            raise StoreError(f"{path} is incomplete: {name}/zarr.json is missing (partial copy?)")
     for c in layout.COMPONENTS:
         arr = group.get(c)
         if not isinstance(arr, zarr.Array):
