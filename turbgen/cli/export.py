@@ -1,0 +1,38 @@
+"""`turbgen export STORE --format ... --out PATH`: write a store for InflowWind, HAWC2, the
+lidar simulator, the 4D Mann generator's scripts or HDF5."""
+
+from __future__ import annotations
+
+import click
+
+from turbgen.export import EXPORTERS, ExportRequest, export_store
+
+
+@click.command("export")
+@click.argument("store", type=click.Path(file_okay=True, dir_okay=True))
+@click.option("--format", "fmt", required=True, type=click.Choice(list(EXPORTERS)),
+              help="bts (TurbSim), wnd (Bladed .wnd+.sum), evo (lidar-simulator ROOT.evo/.wnd/.sum), "
+                   "hawc2 (ROOT_u/v/w.bin), mt4d, hdf5.")
+@click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
+              help="Output file, or root name for wnd/evo/hawc2.")
+@click.option("--plane", type=int, default=None, help="Plane index to export (default: the rotor plane, x = 0).")
+@click.option("--hub-height", "hub_height", type=float, default=None, help="Hub height [m] (default: the store's).")
+@click.option("--shear-exponent", "shear", type=float, default=0.2, show_default=True,
+              help="Power-law exponent of the mean profile added to u (InflowWind formats).")
+@click.option("--tower", is_flag=True, help="bts: add tower points down to the ground.")
+@click.option("--periodic/--no-periodic", default=True, show_default=True,
+              help="Flag bts/wnd/evo periodic in time (InflowWind wraps instead of starting half a grid upstream).")
+@click.option("--drop-below-ground", is_flag=True, help="Drop grid rows at or below the ground instead of refusing.")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+def export(store, fmt, out, plane, hub_height, shear, tower, periodic, drop_below_ground, overwrite):
+    """Export STORE to --format; prints the InflowWind input-file lines that load the result."""
+    request = ExportRequest(plane=plane, hub_height_m=hub_height, shear_exponent=shear, tower=tower,
+                            periodic=periodic, drop_below_ground=drop_below_ground, overwrite=overwrite)
+    result = export_store(store, fmt, out, request)
+    for p in result.paths:
+        click.echo(f"wrote {p}", err=True)
+    for note in result.notes:
+        click.echo(f"note: {note}", err=True)
+    click.echo("InflowWind input-file lines:")
+    for line in result.inflowwind_lines:
+        click.echo(line)

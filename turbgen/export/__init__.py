@@ -1,0 +1,42 @@
+"""Exports of a turbgen store to the files aeroelastic and lidar simulators read
+(byte-level reference: file-formats.md).
+
+Formats: ``bts`` (TurbSim, InflowWind WindType 3), ``wnd`` (Bladed-style .wnd + .sum, WindType 4),
+``evo`` (lidar-simulator 4D set ROOT.evo/.wnd/.sum), ``hawc2`` (three float32 .bin, WindType 5),
+``mt4d`` (4D Mann generator layout), ``hdf5`` (whole field for MATLAB/Python). Each export reads
+one plane from the store at a time, writes under temporary names renamed on success, and returns
+the InflowWind input-file lines that load the result.
+"""
+
+from __future__ import annotations
+
+from turbgen.export.bts import export_bts, read_bts
+from turbgen.export.evo import export_evo, read_evo
+from turbgen.export.hawc2 import export_hawc2, read_hawc2
+from turbgen.export.hdf5 import export_hdf5, read_hdf5
+from turbgen.export.mt4d import export_mt4d, read_mt4d
+from turbgen.export.request import ExportRequest, ExportResult
+from turbgen.export.wnd import export_wnd, read_sum, read_wnd
+from turbgen.errors import ParameterError, check_choice
+from turbgen.store import FieldStore, open_store
+
+EXPORTERS = {"bts": export_bts, "wnd": export_wnd, "evo": export_evo, "hawc2": export_hawc2,
+             "mt4d": export_mt4d, "hdf5": export_hdf5}
+
+__all__ = ["EXPORTERS", "ExportRequest", "ExportResult", "export_store", "read_bts", "read_evo", "read_hawc2",
+           "read_hdf5", "read_mt4d", "read_sum", "read_wnd"]
+
+
+def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> ExportResult:
+    """Export ``store`` (a path or an open FieldStore) in format ``fmt`` to ``out``.
+
+    Raises ParameterError (StoreError) for a missing or incomplete store, an existing output
+    without ``request.overwrite``, a grid reaching the ground, and other bad requests.
+    """
+    check_choice("format", fmt, tuple(EXPORTERS))
+    request = request or ExportRequest()
+    if request.tower and fmt != "bts":
+        raise ParameterError(f"--tower applies to --format bts only, not {fmt}")
+    if not isinstance(store, FieldStore):
+        store = open_store(store)
+    return EXPORTERS[fmt](store, out, request)

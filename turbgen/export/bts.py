@@ -1,0 +1,126 @@
+"""TurbSim binary full-field ``.bts`` (InflowWind WindType 3), file-formats.md section 2.
+
+Layout: 70-byte header ``<h4i6f6fi`` + description, then per time step (first step = first to
+reach the turbine) ny*nz*3 int16 with the component fastest, then y (from -W/2, +y left looking
+downwind), then z (from the bottom), followed by ntwr*3 int16 tower points. Velocity =
+(raw - offset) / slope per component.
+"""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from turbgen import __version__
+from turbgen.export.outputs import OutputSet
+from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, ifw_line, read_full_plane
+
+_HEADER = struct.Struct("<h4i6f6fi")
+_TIME_CHUNK_BYTES = 1 << 24
+
+
+def int16_scaling(vmin: float, vmax: float) -> tuple[float, float]:
+    """TurbSim's (slope, offset) as float32 values: raw = slope*v + offset spans the int16 range."""
+    slope = 65535.0 / (vmax - vmin) if vmax > vmin else 1.0
+    slope = float(np.float32(slope))
+    return slope, float(np.float32(-32768.0 - slope * vmin))
+
+
+def quantise(values: np.ndarray, slope: float, offset: float) -> np.ndarray:
+    """int16 raw values for velocities ``values`` (rounded, saturated)."""
+    return np.clip(np.rint(values * slope + offset), -32768, 32767).astype("<i2")
+
+
+def tower_heights(bottom_m: float, dz_m: float) -> np.ndarray:
+    """Tower point heights [m]: bottom, bottom - dz, ... while above the ground (section 2.4)."""
+    n = int(np.ceil(bottom_m / dz_m - 1e-6))
+    return bottom_m - dz_m * np.arange(max(n, 0))
+
+
+def write_bts(path, vel: dict, *, dy_m, dz_m, dt_s, U_m_s, hub_height_m, bottom_m, periodic: bool,
+              description: str, tower: dict | None = None) -> None:
+    """Write ``vel`` (u, v, w: full velocities (nt, ny, nz) [m/s]) and optional ``tower``
+    (u, v, w: (nt, ntwr)) to ``path``."""
+    nt, ny, nz = vel["u"].shape
+    ntwr = 0 if tower is None else tower["u"].shape[1]
+    scaling = []
+    for c in COMPONENTS:
+        parts = [vel[c]] + ([tower[c]] if ntwr else [])
+        scaling.append(int16_scaling(min(float(p.min()) for p in parts), max(float(p.max()) for p in parts)))
+    text = description.encode("ascii", "replace")
+    header = _HEADER.pack(8 if periodic else 7, nz, ny, ntwr, nt, dz_m, dy_m, dt_s, U_m_s, hub_height_m, bottom_m,
+                          *[s for pair in scaling for s in pair], len(text))
+    step = max(1, _TIME_CHUNK_BYTES // (6 * (ny * nz + ntwr)))
+    with open(path, "wb") as f:
+        f.write(header + text)
+        for a in range(0, nt, step):
+            b = min(nt, a + step)
+            grid = np.stack([quantise(vel[c][a:b], *s) for c, s in zip(COMPONENTS, scaling)], axis=-1)
+            block = grid.transpose(0, 2, 1, 3).reshape(b - a, -1)  # (t, z, y, component)
+            if ntwr:
+                twr = np.stack([quantise(tower[c][a:b], *s) for c, s in zip(COMPONENTS, scaling)], axis=-1)
+                block = np.concatenate([block, twr.reshape(b - a, -1)], axis=1)
+            f.write(np.ascontiguousarray(block).tobytes())
+
+
+def read_bts(path) -> dict:
+    """Read a ``.bts``: u, v, w (nt, ny, nz) [m/s], y, z (absolute heights), dt_s, U_m_s,
+    hub_height_m, periodic, description, and tower_z, tower_u/v/w (nt, ntwr)."""
+    raw = Path(path).read_bytes()
+    (ident, nz, ny, ntwr, nt, dz, dy, dt, uhub, zhub, zbot, *rest) = _HEADER.unpack_from(raw, 0)
+    scaling, nchar = rest[:6], rest[6]
+    start = _HEADER.size + nchar
+    data = np.frombuffer(raw, dtype="<i2", count=nt * (ny * nz + ntwr) * 3, offset=start).reshape(nt, -1)
+    grid = data[:, : ny * nz * 3].reshape(nt, nz, ny, 3).transpose(0, 2, 1, 3)
+    twr = data[:, ny * nz * 3:].reshape(nt, ntwr, 3)
+    out = {"dt_s": dt, "U_m_s": uhub, "hub_height_m": zhub, "periodic": ident == 8, "id": ident,
+           "description": raw[_HEADER.size:start].decode("ascii"),
+           "y": (np.arange(ny) - (ny - 1) / 2) * dy, "z": zbot + dz * np.arange(nz),
+           "tower_z": zbot - dz * np.arange(ntwr)}
+    for k, c in enumerate(COMPONENTS):
+        slope, off = scaling[2 * k], scaling[2 * k + 1]
+        out[c] = (grid[..., k] - off) / slope
+        out[f"tower_{c}"] = (twr[..., k] - off) / slope
+    return out
+
+
+def tower_values(vel: dict, heights_m: np.ndarray, layout, U_m_s: float) -> dict:
+    """Tower-point velocities (nt, ntwr): the power-law mean at each tower height plus the
+    fluctuations of the lowest grid row at y = 0 (held constant below the grid — the store has no
+    data there)."""
+    ny = vel["u"].shape[1]
+    cols = [(ny - 1) // 2, ny // 2]  # y = 0 is the centre column, or midway between two
+    mean_bottom = layout.mean_u(U_m_s)[0]
+    fluct = {c: 0.5 * (vel[c][:, cols[0], 0] + vel[c][:, cols[1], 0]) for c in COMPONENTS}
+    fluct["u"] = fluct["u"] - mean_bottom
+    out = {c: np.repeat(fluct[c][:, None], len(heights_m), axis=1) for c in COMPONENTS}
+    out["u"] = out["u"] + layout.mean_u(U_m_s, heights_m)[None, :]
+    return out
+
+
+def export_bts(fs, out, req: ExportRequest) -> ExportResult:
+    """Export one plane of store ``fs`` to ``out`` (.bts)."""
+    out = Path(out)
+    ix, lay = req.plane_index(fs), req.layout(fs)
+    g = fs.grid
+    with OutputSet([out], overwrite=req.overwrite) as files:
+        vel = read_full_plane(fs, ix, lay)
+        tower = None
+        if req.tower:
+            tower = tower_values(vel, tower_heights(lay.bottom_m, g.dz_m), lay, fs.U_m_s)
+        desc = (f"Generated by turbgen {__version__} from {fs.path} ({fs.model}, seed {fs.attrs.get('seed')}), "
+                f"plane x = {g.x_m[ix]:g} m, power-law shear alpha = {lay.shear_exponent:g}")
+        write_bts(files.temp(out), vel, dy_m=g.dy_m, dz_m=g.dz_m, dt_s=g.dt_s, U_m_s=fs.U_m_s,
+                  hub_height_m=lay.hub_height_m, bottom_m=lay.bottom_m, periodic=req.periodic,
+                  description=desc[:200], tower=tower)
+    lines = (ifw_line(3, "WindType", "switch for wind file type (3 = TurbSim binary .bts)"),
+             ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
+             ifw_line(str(out), "FileName_BTS", "TurbSim binary full-field file"))
+    notes = [f"plane x = {g.x_m[ix]:g} m in eddy time: slice k is stored t index k (t = k*{g.dt_s:g} s)"]
+    if lay.z_first:
+        notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
+    if req.tower:
+        notes.append("tower points: power-law mean plus the lowest row's fluctuations at y = 0 (held constant below the grid)")
+    return ExportResult((out,), lines, tuple(notes))

@@ -1,0 +1,88 @@
+"""The 4D lidar-simulator set ROOT.evo + ROOT.wnd + ROOT.sum (FUAS OpenFAST3.0_LidSim forks),
+file-formats.md sections 5.3 and 9.6.
+
+ROOT.evo, all little-endian int16: NL (<= 30), NL plane distances in whole metres (positive
+upstream), then for each plane, each time step, each z (bottom up), each y (from -W/2, since the
+.sum says CLOCKWISE = F), the components u, v, w (fastest) — the order the simulator's READER
+uses (evoTurb's writer uses another one). Scaling V = U (o + 1e-5 TI% raw) with U and TI from
+the ROOT.wnd header, which also carries the plane InflowWind uses at the rotor (WindType 4).
+The store's convected frame is exactly the simulator's "eddy index" time axis, so planes are
+written in stored t order.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.export.outputs import OutputSet
+from turbgen.export.request import ExportRequest, ExportResult, read_full_plane
+from turbgen.export.wnd import (BladedStats, WndHeader, bladed_raw, check_even_nt, export_root, from_bladed,
+                                inflowwind_lines, read_wnd, write_pair)
+
+MAX_PLANES = 30  # the reader copies the distances into a fixed 30-element buffer
+_TIME_CHUNK_BYTES = 1 << 24
+
+
+def plane_distances(x_m) -> np.ndarray:
+    """Plane distances as int16 whole metres; refuses what the format cannot hold."""
+    x = np.asarray(x_m, dtype=float)
+    if len(x) > MAX_PLANES:
+        raise ParameterError(f"{len(x)} planes: the lidar simulator's .evo reader holds at most {MAX_PLANES}")
+    r = np.rint(x)
+    bad = [float(v) for v, rv in zip(x, r) if abs(v - rv) > 1e-6 or abs(rv) > 32767]
+    if bad:
+        raise ParameterError(f"plane positions {bad} m are not whole metres within +-32767; .evo stores int16 metres")
+    return r.astype("<i2")
+
+
+def export_evo(fs, out, req: ExportRequest) -> ExportResult:
+    """Export every plane of store ``fs`` to ROOT.evo, and the chosen plane (default the rotor)
+    to ROOT.wnd / ROOT.sum. Two passes over the store, one plane in memory at a time."""
+    root = export_root(out)
+    ix_rotor, lay = req.plane_index(fs), req.layout(fs)
+    g = fs.grid
+    check_even_nt(g.nt)
+    dist = plane_distances(g.x_m)
+    paths = [root.with_suffix(".evo"), root.with_suffix(".wnd"), root.with_suffix(".sum")]
+    with OutputSet(paths, overwrite=req.overwrite) as files:
+        stats = BladedStats()
+        for ix in range(g.nx):  # pass 1: one TI scaling that fits every plane
+            stats.add(read_full_plane(fs, ix, lay), lay.mean_u(fs.U_m_s), fs.U_m_s)
+        header = WndHeader(nz=lay.nz, ny=g.ny, nt=g.nt, dz_m=g.dz_m, dy_m=g.dy_m, dx_m=fs.U_m_s * g.dt_s,
+                           U_m_s=fs.U_m_s, ti_percent=stats.ti_percent(fs.U_m_s), zref_m=lay.centre_m)
+        step = max(1, _TIME_CHUNK_BYTES // (6 * g.ny * lay.nz))
+        with open(files.temp(paths[0]), "wb") as f:
+            f.write(np.asarray([len(dist)], dtype="<i2").tobytes() + dist.tobytes())
+            for ix in range(g.nx):  # pass 2: plane, time, z, y, component
+                vel = read_full_plane(fs, ix, lay)
+                for a in range(0, g.nt, step):
+                    block = bladed_raw(vel, a, min(g.nt, a + step), header.U_m_s, header.ti_percent)
+                    f.write(np.ascontiguousarray(block).tobytes())
+                if ix == ix_rotor:
+                    write_pair(files, root, vel, header, lay, periodic=req.periodic,
+                               title=f"turbgen 4D export: the .wnd holds plane x = {g.x_m[ix]:g} m")
+    lines = inflowwind_lines(root) + (
+        "LidarSim input file, section ---- Wind Evolution ----:",
+        f'{"True":>20}   EvolutionFlag   - read the 4D field',
+        f'{chr(34) + str(paths[0]) + chr(34):>20}   EvolutionFilenameRoot - the .evo file (ROOT.wnd/.sum beside it)')
+    notes = [f"ROOT.evo holds {g.nx} planes at {dist.tolist()} m upstream (the simulator picks the nearest to -X, "
+             "X measured from the tower axis)",
+             f"ROOT.wnd holds plane x = {g.x_m[ix_rotor]:g} m; the turbine's InflowWind must use WindType 3 or 4"]
+    if lay.z_first:
+        notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
+    return ExportResult(tuple(paths), lines, tuple(notes))
+
+
+def read_evo(path) -> dict:
+    """Read ROOT.evo with ROOT.wnd's header: x_up (NL,) [m] and u, v, w (NL, nt, ny, nz) [m/s]."""
+    path = Path(path)
+    h = read_wnd(path.with_suffix(".wnd"))["header"]
+    raw = np.fromfile(path, dtype="<i2")
+    nl = int(raw[0])
+    data = raw[1 + nl:].reshape(nl, h.nt, h.nz, h.ny, 3).transpose(0, 1, 3, 2, 4)
+    out = from_bladed(data, h.U_m_s, h.ti_percent)
+    out["x_up"] = raw[1:1 + nl].astype(float)
+    return out

@@ -1,0 +1,72 @@
+"""HAWC2 / Mann binary box (InflowWind WindType 5), file-formats.md section 4.
+
+Three headerless little-endian float32 files ROOT_u.bin, ROOT_v.bin, ROOT_w.bin per plane, each
+nx*ny*nz values with z fastest (bottom up), then y stored REVERSED (+W/2 first), then x = time
+(the first x-plane reaches the turbine first). The files hold u - URef, v, w of the full field
+(mean + shear + fluctuations) and are loaded with WindProfile = 0, ScaleMethod = 0, which
+reproduces the field exactly (section 4.2; WindProfile = -1 is rejected by v5, ScaleMethod != 0
+removes the shear).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.export.outputs import OutputSet
+from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, ifw_line, read_full_plane
+
+
+def component_paths(root) -> dict[str, Path]:
+    """ROOT_u.bin, ROOT_v.bin, ROOT_w.bin."""
+    root = Path(root)
+    return {c: root.with_name(f"{root.name}_{c}.bin") for c in COMPONENTS}
+
+
+def write_hawc2(paths: dict, vel: dict, U_ref: float) -> None:
+    """Write full velocities ``vel`` (nt, ny, nz) as HAWC boxes holding u - U_ref, v, w."""
+    for c in COMPONENTS:
+        box = vel[c] - U_ref if c == "u" else vel[c]
+        np.ascontiguousarray(box[:, ::-1, :], dtype="<f4").tofile(paths[c])
+
+
+def read_hawc2(root, shape, U_ref: float) -> dict:
+    """Read ROOT_{u,v,w}.bin of ``shape`` (nt, ny, nz) back as velocities (nt, ny, nz) with y
+    ascending, u including U_ref (as InflowWind with WindProfile = 0)."""
+    out = {}
+    for c, p in component_paths(root).items():
+        box = np.fromfile(p, dtype="<f4").reshape(shape)[:, ::-1, :].astype(np.float64)
+        out[c] = box + U_ref if c == "u" else box
+    return out
+
+
+def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
+    """Export one plane of store ``fs`` to ROOT_{u,v,w}.bin."""
+    root = Path(out)
+    if root.suffix.lower() == ".bin":
+        root = root.with_suffix("")
+    ix, lay = req.plane_index(fs), req.layout(fs)
+    g = fs.grid
+    paths = component_paths(root)
+    with OutputSet(paths.values(), overwrite=req.overwrite) as files:
+        write_hawc2({c: files.temp(p) for c, p in paths.items()}, read_full_plane(fs, ix, lay), fs.U_m_s)
+    keys = [(paths["u"], "FileName_u", "u - URef"), (paths["v"], "FileName_v", "v"), (paths["w"], "FileName_w", "w"),
+            (g.nt, "nx", "number of grids in x (time)"), (g.ny, "ny", "number of grids in y"),
+            (lay.nz, "nz", "number of grids in z"), (fs.U_m_s * g.dt_s, "dx", "distance between x points (m) = URef*dt"),
+            (g.dy_m, "dy", "(m)"), (g.dz_m, "dz", "(m)"),
+            (lay.centre_m, "RefHt_HAWC", "height of the grid's vertical centre (m)"),
+            (0, "ScaleMethod", "0 = no scaling (keeps the shear stored in the files)"),
+            (1.0, "SFx", "unused"), (1.0, "SFy", "unused"), (1.0, "SFz", "unused"),
+            (0.0, "SigmaFx", "unused"), (0.0, "SigmaFy", "unused"), (0.0, "SigmaFz", "unused"),
+            (fs.U_m_s, "URef", "mean u at hub height (m/s), also the advection speed"),
+            (0, "WindProfile", "0 = constant: the power-law shear is already in the files"),
+            (lay.shear_exponent, "PLExp_HAWC", "unused with WindProfile 0"), (0.03, "Z0", "unused with WindProfile 0"),
+            (0.0, "XOffset", "(m)")]
+    lines = (ifw_line(5, "WindType", "switch for wind file type (5 = HAWC binary)"),
+             ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
+             *[ifw_line(v, k, c) for v, k, c in keys])
+    notes = [f"plane x = {g.x_m[ix]:g} m in eddy time; HAWC boxes are always periodic in time"]
+    if lay.z_first:
+        notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
+    return ExportResult(tuple(paths.values()), lines, tuple(notes))

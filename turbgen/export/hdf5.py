@@ -1,0 +1,67 @@
+"""HDF5 copy of the whole 4D field (h5py): u, v, w, the coordinates t, x, y, z and the store's
+attributes.
+
+MATLAB reverses the dimensions of a row-major HDF5 dataset, so the velocity datasets are stored
+with C shape (nz, ny, nx, nt): MATLAB's ``h5read(f, '/u')`` returns (nt, nx, ny, nz), the
+store's documented (t, x, y, z) order, while h5py/NumPy see (z, y, x, t). Values are the stored
+fluctuations (no mean, no shear), float32; the convected frame of the store is kept (attribute
+frame_note). Written plane by plane, one component-plane in memory.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from turbgen.export.outputs import OutputSet
+from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult
+
+_COORDS = {"t": ("s", "eddy (convected-frame) time"), "x": ("m", "upstream distance from the rotor"),
+           "y": ("m", "lateral, +y left looking downwind"), "z": ("m", "vertical relative to hub height, up")}
+_CHUNK_BYTES = 1 << 22
+DIMENSION_ORDER = "MATLAB h5read: (t, x, y, z); row-major (h5py/NumPy): (z, y, x, t)"
+
+
+def _attr_value(value):
+    """HDF5-storable attribute: numbers, strings and bools as they are, anything else as JSON."""
+    if isinstance(value, (bool, int, float, str, np.number)):
+        return value
+    return json.dumps(value)
+
+
+def export_hdf5(fs, out, req: ExportRequest) -> ExportResult:
+    """Export the whole store ``fs`` to ``out`` (.h5)."""
+    out = Path(out)
+    g = fs.grid
+    coords = {"t": g.t(), "x": g.x(), "y": g.y(), "z": g.z()}
+    ct = max(1, min(g.nt, _CHUNK_BYTES // (4 * g.ny * g.nz)))
+    with OutputSet([out], overwrite=req.overwrite) as files, h5py.File(files.temp(out), "w") as h5:
+        for name, value in fs.attrs.items():
+            h5.attrs[name] = _attr_value(value)
+        h5.attrs["dimension_order"] = DIMENSION_ORDER
+        for name, (unit, long_name) in _COORDS.items():
+            d = h5.create_dataset(name, data=coords[name])
+            d.attrs.update(units=unit, long_name=long_name)
+            d.make_scale(name)
+        for c in COMPONENTS:
+            d = h5.create_dataset(c, shape=(g.nz, g.ny, g.nx, g.nt), dtype="<f4", chunks=(g.nz, g.ny, 1, ct))
+            d.attrs.update(units="m/s", long_name=f"{c} velocity fluctuation", dimension_order=DIMENSION_ORDER)
+            for k, name in enumerate("zyxt"):
+                d.dims[k].attach_scale(h5[name])
+            for ix in range(g.nx):
+                d[:, :, ix, :] = fs.read_plane(c, ix).transpose(2, 1, 0)
+    lines = ("(HDF5 is not read by InflowWind: use --format wnd/bts/hawc2 for the rotor plane, evo for the lidar simulator)",)
+    notes = ["MATLAB: u = h5read(file, '/u') gives (t, x, y, z); h5py gives (z, y, x, t)"]
+    return ExportResult((out,), lines, tuple(notes))
+
+
+def read_hdf5(path) -> dict:
+    """Read an export back: u, v, w (nt, nx, ny, nz), coordinates t, x, y, z, and attrs."""
+    with h5py.File(path, "r") as h5:
+        out = {c: h5[c][...].transpose(3, 2, 1, 0) for c in COMPONENTS}
+        out.update({name: h5[name][...] for name in _COORDS})
+        out["attrs"] = dict(h5.attrs)
+    return out

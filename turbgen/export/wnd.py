@@ -1,0 +1,202 @@
+"""Bladed-style ``.wnd`` + TurbSim-style ``.sum`` (InflowWind WindType 4), file-formats.md
+section 3; the same pair carries the header for the lidar simulator's ``.evo`` (section 5.3).
+
+``.wnd``: new-style 104-byte header (ID -99, TurbType 4), then per time step nz*ny*3 int16 with
+the component fastest, then y (from -W/2, +y left), then z (from the bottom). Velocity =
+U (o + 1e-5 TI% raw), o = (1, 0, 0); no Bladed left-hand rule, so v has InflowWind's sign both
+in InflowWind and in the lidar simulator's ``.evo`` reader (which never negates v).
+"""
+
+from __future__ import annotations
+
+import re
+import struct
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.export.outputs import OutputSet
+from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, ifw_line, read_full_plane
+
+_HEADER = struct.Struct("<hhi6f3fi4f4i6f")
+_OFFSET = {"u": 1.0, "v": 0.0, "w": 0.0}
+_RAW_LIMIT = 32000.0  # keeps |raw| below the int16 limit with margin
+_TIME_CHUNK_BYTES = 1 << 24
+
+
+class BladedStats:
+    """Running per-component statistics that fix the Bladed TI scaling: the largest |deviation|
+    from U*o (full velocity) and the variance of the fluctuations."""
+
+    def __init__(self):
+        self.maxdev = dict.fromkeys(COMPONENTS, 0.0)
+        self.sums = {c: [0, 0.0, 0.0] for c in COMPONENTS}
+
+    def add(self, vel: dict, mean_u: np.ndarray, U_m_s: float) -> None:
+        """Include one plane of full velocities ``vel`` whose u has the mean profile ``mean_u`` (nz,)."""
+        fluct = dict(vel, u=vel["u"] - mean_u[None, None, :])
+        for c in COMPONENTS:
+            self.maxdev[c] = max(self.maxdev[c], float(np.abs(vel[c] - U_m_s * _OFFSET[c]).max()))
+            s = self.sums[c]
+            s[0] += fluct[c].size
+            s[1] += float(fluct[c].sum(dtype=np.float64))
+            s[2] += float(np.square(fluct[c], dtype=np.float64).sum())
+
+    def ti_percent(self, U_m_s: float) -> tuple[float, float, float]:
+        """TI [%] per component: the fluctuations' sigma/U, enlarged where needed so that every
+        raw value fits in +-32000 (raw = dev 1e5 / (U TI%))."""
+        out = []
+        for c in COMPONENTS:
+            n, s1, s2 = self.sums[c]
+            sigma = np.sqrt(max(s2 / n - (s1 / n) ** 2, 0.0))
+            out.append(max(100.0 * sigma / U_m_s, self.maxdev[c] * 1e5 / (U_m_s * _RAW_LIMIT), 1e-3))
+        return tuple(out)
+
+
+def bladed_raw(vel: dict, a: int, b: int, U_m_s: float, ti: tuple) -> np.ndarray:
+    """int16 block (b - a, nz, ny, 3) for time steps a..b-1 (component fastest, then y, z)."""
+    raw = [np.clip(np.rint((vel[c][a:b] / U_m_s - _OFFSET[c]) * 1e5 / t), -32768, 32767)
+           for c, t in zip(COMPONENTS, ti)]
+    return np.stack(raw, axis=-1).astype("<i2").transpose(0, 2, 1, 3)
+
+
+def from_bladed(raw: np.ndarray, U_m_s: float, ti: tuple) -> dict:
+    """Velocities from raw int16 (..., 3): V = U (o + 1e-5 TI% raw)."""
+    return {c: U_m_s * (_OFFSET[c] + 1e-5 * t * raw[..., k]) for k, (c, t) in enumerate(zip(COMPONENTS, ti))}
+
+
+@dataclass(frozen=True)
+class WndHeader:
+    """The grid and scaling of a ``.wnd`` (dz, dy, dx [m], nt, U [m/s], TI [%], nz, ny)."""
+
+    nz: int
+    ny: int
+    nt: int
+    dz_m: float
+    dy_m: float
+    dx_m: float
+    U_m_s: float
+    ti_percent: tuple
+    zref_m: float = 0.0
+
+    def pack(self) -> bytes:
+        return _HEADER.pack(-99, 4, 3, 0.0, 0.0, self.zref_m, *self.ti_percent, self.dz_m, self.dy_m, self.dx_m,
+                            self.nt // 2, self.U_m_s, 0.0, 0.0, 0.0, 0, 0, self.nz, self.ny, *([0.0] * 6))
+
+    @classmethod
+    def unpack(cls, raw: bytes) -> "WndHeader":
+        h = _HEADER.unpack_from(raw, 0)
+        if h[0] != -99 or h[1] != 4:
+            raise ParameterError(f"not a new-style TurbType-4 .wnd (ID {h[0]}, type {h[1]})")
+        return cls(nz=h[19], ny=h[20], nt=2 * h[12], dz_m=h[9], dy_m=h[10], dx_m=h[11], U_m_s=h[13],
+                   ti_percent=tuple(h[6:9]), zref_m=h[5])
+
+
+def write_wnd(path, vel: dict, header: WndHeader) -> None:
+    """Header plus the time steps of ``vel`` (full velocities (nt, ny, nz))."""
+    nt, ny, nz = vel["u"].shape
+    step = max(1, _TIME_CHUNK_BYTES // (6 * ny * nz))
+    with open(path, "wb") as f:
+        f.write(header.pack())
+        for a in range(0, nt, step):
+            f.write(np.ascontiguousarray(bladed_raw(vel, a, min(nt, a + step), header.U_m_s, header.ti_percent)).tobytes())
+
+
+def read_wnd(path) -> dict:
+    """Read a ``.wnd`` written by :func:`write_wnd`: header and u, v, w (nt, ny, nz) [m/s]."""
+    raw = Path(path).read_bytes()
+    h = WndHeader.unpack(raw)
+    data = np.frombuffer(raw, dtype="<i2", offset=_HEADER.size).reshape(-1, h.nz, h.ny, 3)
+    out = from_bladed(data.transpose(0, 2, 1, 3), h.U_m_s, h.ti_percent)
+    out["header"] = h
+    return out
+
+
+def sum_text(*, hub_height_m: float, U_m_s: float, ti_percent, height_offset_m: float, periodic: bool,
+             title: str) -> str:
+    """The ``.sum`` lines InflowWind (v5 and the lidar-simulator forks) parse, in their order:
+    CLOCKWISE (required by the forks, before the hub height), hub height, UBar, the three TI
+    lines, height offset, then PERIODIC. No Bladed left-hand-rule line."""
+    lines = [title,  # free text: must not contain the keys parsed below
+             "",
+             "         F  Clockwise rotation when looking downwind?",
+             f"{hub_height_m:12.4f}  Hub height [m]",
+             f"   UBar  = {U_m_s:12.6f} m/s",
+             *[f"   TI({c}) = {t:12.6f} %" for c, t in zip(COMPONENTS, ti_percent)],
+             f"   Height Offset = {height_offset_m:12.6f} m"]
+    if periodic:
+        lines.append("Creating a PERIODIC output file.")
+    return "\n".join(lines) + "\n"
+
+
+def read_sum(path) -> dict:
+    """Parse a ``.sum`` the way InflowWind does (keys in order): clockwise, hub height, UBar,
+    TI, height offset, periodic."""
+    lines = Path(path).read_text().upper().splitlines()
+    out = {"clockwise": False, "height_offset_m": 0.0, "periodic": False}
+    i = 0
+    while "HUB HEIGHT" not in lines[i] and "ZHUB" not in lines[i]:
+        if "CLOCKWISE" in lines[i]:
+            out["clockwise"] = lines[i].split()[0] in ("T", "Y", "TRUE")
+        i += 1
+    out["hub_height_m"] = float(lines[i].split()[0])
+    while "UBAR" not in lines[i]:
+        i += 1
+    out["U_m_s"] = float(lines[i].split("=")[1].split()[0])
+    out["ti_percent"] = tuple(float(re.search(r"=(.*)%", lines[i + k]).group(1)) for k in (1, 2, 3))
+    for j in range(i + 4, len(lines)):
+        if "HEIGHT OFFSET" in lines[j]:
+            out["height_offset_m"] = float(lines[j].split("=")[1].split()[0])
+            out["periodic"] = any("PERIODIC" in line for line in lines[j + 1:])
+    return out
+
+
+def check_even_nt(nt: int) -> None:
+    """The lidar simulator reads nt = 2 * nt_half steps from the .wnd header: nt must be even."""
+    if nt % 2:
+        raise ParameterError(f"nt = {nt} is odd; the .wnd header stores nt/2, so the Bladed/evo export needs an even nt")
+
+
+def write_pair(files: OutputSet, root: Path, vel: dict, header: WndHeader, lay, *, periodic: bool, title: str) -> None:
+    """Write ROOT.wnd and ROOT.sum (through the temporary names of ``files``)."""
+    write_wnd(files.temp(root.with_suffix(".wnd")), vel, header)
+    files.temp(root.with_suffix(".sum")).write_text(sum_text(
+        hub_height_m=lay.hub_height_m, U_m_s=header.U_m_s, ti_percent=header.ti_percent,
+        height_offset_m=lay.hub_height_m - lay.centre_m, periodic=periodic, title=title))
+
+
+def inflowwind_lines(root: Path) -> tuple[str, ...]:
+    """WindType 4 lines for FilenameRoot ``root``."""
+    return (ifw_line(4, "WindType", "switch for wind file type (4 = Bladed-style .wnd + .sum)"),
+            ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
+            ifw_line(str(root), "FilenameRoot", "root of ROOT.wnd and ROOT.sum"),
+            ifw_line(False, "TowerFile", "no ROOT.twr"))
+
+
+def export_root(out) -> Path:
+    """``out`` without a .wnd/.sum/.evo extension."""
+    out = Path(out)
+    return out.with_suffix("") if out.suffix.lower() in (".wnd", ".sum", ".evo") else out
+
+
+def export_wnd(fs, out, req: ExportRequest) -> ExportResult:
+    """Export one plane of store ``fs`` to ROOT.wnd + ROOT.sum."""
+    root = export_root(out)
+    ix, lay = req.plane_index(fs), req.layout(fs)
+    g = fs.grid
+    check_even_nt(g.nt)
+    paths = [root.with_suffix(".wnd"), root.with_suffix(".sum")]
+    with OutputSet(paths, overwrite=req.overwrite) as files:
+        vel = read_full_plane(fs, ix, lay)
+        stats = BladedStats()
+        stats.add(vel, lay.mean_u(fs.U_m_s), fs.U_m_s)
+        header = WndHeader(nz=lay.nz, ny=g.ny, nt=g.nt, dz_m=g.dz_m, dy_m=g.dy_m, dx_m=fs.U_m_s * g.dt_s,
+                           U_m_s=fs.U_m_s, ti_percent=stats.ti_percent(fs.U_m_s), zref_m=lay.centre_m)
+        write_pair(files, root, vel, header, lay, periodic=req.periodic,
+                   title=f"turbgen export: plane x = {g.x_m[ix]:g} m, power-law shear alpha = {lay.shear_exponent:g}")
+    notes = [f"plane x = {g.x_m[ix]:g} m in eddy time: slice k is stored t index k"]
+    if lay.z_first:
+        notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
+    return ExportResult(tuple(paths), inflowwind_lines(root), tuple(notes))
