@@ -52,5 +52,9 @@ def _register():
 
     cli.add_command(info.info)
 
+    from turbgen.cli import export
+
+    cli.add_command(export.export)
+
 
 _register()
