@@ -207,10 +207,8 @@ def test_exception_in_with_block_leaves_nothing(tmp_path, exc):
     assert siblings(path) == []
 
 
-def test_killed_writer_leaves_no_complete_looking_store(tmp_path):
-    """A SIGKILL mid-write (no cleanup possible) leaves only a temp dir that open_store refuses."""
-    path = tmp_path / "f.zarr"
-    script = textwrap.dedent(
+def _writer_script(path, kill_line):
+    return textwrap.dedent(
         f"""
         import os, signal, numpy as np
         from turbgen.grid import Grid
@@ -220,9 +218,23 @@ def test_killed_writer_leaves_no_complete_looking_store(tmp_path):
         with create_store({str(path)!r}, g, attrs) as w:
             for ix in range(3):
                 w.write("u", ix, np.ones((10, 4, 3)))
-            os.kill(os.getpid(), signal.SIGKILL)
+            {kill_line}
         """
     )
+
+
+def test_sigterm_cleans_up(tmp_path):
+    path = tmp_path / "f.zarr"
+    script = _writer_script(path, "os.kill(os.getpid(), signal.SIGTERM); signal.pause()")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, timeout=120)
+    assert proc.returncode == 128 + 15, proc.stderr.decode()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_killed_writer_leaves_no_complete_looking_store(tmp_path):
+    """A SIGKILL mid-write (no cleanup possible) leaves only a temp dir that open_store refuses."""
+    path = tmp_path / "f.zarr"
+    script = _writer_script(path, "os.kill(os.getpid(), signal.SIGKILL)")
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, timeout=120)
     assert proc.returncode == -9, proc.stderr.decode()
     assert not path.exists()
@@ -333,3 +345,15 @@ def test_available_memory_reads_meminfo_and_cgroup(tmp_path):
     assert resources.available_memory_bytes(tmp_path / "absent", tmp_path / "absent") > 0  # sysconf fallback
     assert resources.format_bytes(512) == "512 B" and resources.format_bytes(1536) == "1.5 KiB"
 
+
+
+def test_sigterm_handler_restored_after_with_block(tmp_path):
+    import signal
+
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(RuntimeError):
+        with create_store(tmp_path / "f.zarr", GRID, ATTRS):
+            if before == signal.SIG_DFL:
+                assert signal.getsignal(signal.SIGTERM) != signal.SIG_DFL  # cleanup handler active
+            raise RuntimeError
+    assert signal.getsignal(signal.SIGTERM) == before
