@@ -311,6 +311,34 @@ def kaimal_settings_for(
     return KaimalSettings(params, "exp", k.a_x if a_x is None else a_x, k.b_x if b_x is None else b_x)
 
 
+def kaimal_run_keys(
+    preset: str | StabilityPreset,
+    U_m_s: float,
+    *,
+    user: Mapping[str, StabilityPreset] | None = None,
+    turb_class: str | None = None,
+) -> dict:
+    """The keys of a Kaimal run mapping (turbgen.runs.kaimal.KaimalRun.from_mapping) that ``preset`` sets.
+
+    sigma_m_s, length_scales_m, a_yz, lc_m, long_model, a_x, b_x; ``turb_class`` (default: the
+    preset's) sets sigma_1. Used by ``turbgen kaimal --preset`` and by the sweep, so both build
+    the same run.
+    """
+    p = _resolve(preset, user)
+    if turb_class is not None:
+        p = replace(p, turb_class=turb_class)
+    s = kaimal_settings_for(p, U_m_s)
+    return {
+        "sigma_m_s": list(s.kaimal.sigma_m_s),
+        "length_scales_m": list(s.kaimal.length_scales_m),
+        "a_yz": s.kaimal.a_yz,
+        "lc_m": s.kaimal.lc_m,
+        "long_model": s.long_model,
+        "a_x": s.a_x,
+        "b_x": s.b_x,
+    }
+
+
 __all__ = [
     "BUILTIN_PRESETS",
     "REFERENCE_U_M_S",
@@ -319,6 +347,7 @@ __all__ = [
     "MannPreset",
     "StabilityPreset",
     "get_preset",
+    "kaimal_run_keys",
     "kaimal_settings_for",
     "load_presets",
     "mann_params_for",

@@ -1,0 +1,91 @@
+"""A lock file that keeps two sweeps from writing the same output directory.
+
+``DIR/.turbgen-sweep.lock`` is created with O_CREAT | O_EXCL and holds the owner's host, pid and
+start time (JSON). A lock left by a process that no longer exists on this host is stale and is
+taken over; a lock of a live process, or of another host (which cannot be checked), is refused.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+from datetime import datetime, timezone
+from pathlib import Path
+
+from turbgen.errors import ParameterError
+
+LOCK_NAME = ".turbgen-sweep.lock"
+
+
+class SweepLockedError(ParameterError):
+    """Another sweep (alive, or on another host) holds the directory's lock."""
+
+
+def pid_alive(pid: int) -> bool:
+    """True if a process with this pid exists on this host (EPERM counts as alive)."""
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+class SweepLock:
+    """Context manager holding DIR's sweep lock; released on exit (only if still ours)."""
+
+    def __init__(self, directory: str | Path):
+        self.path = Path(directory) / LOCK_NAME
+        self.owner = {
+            "host": socket.gethostname(),
+            "pid": os.getpid(),
+            "started_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        }
+
+    def _read(self) -> dict | None:
+        try:
+            data = json.loads(self.path.read_text())
+            return data if isinstance(data, dict) else {}
+        except FileNotFoundError:
+            return None
+        except (OSError, ValueError):
+            return {}  # unreadable or half-written: treated as held by an unknown owner
+
+    def _stale(self, holder: dict) -> bool:
+        pid = holder.get("pid")
+        return holder.get("host") == self.owner["host"] and isinstance(pid, int) and not pid_alive(pid)
+
+    def acquire(self) -> "SweepLock":
+        for _ in range(3):
+            try:
+                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                holder = self._read()
+                if holder is None:
+                    continue  # released between our open and read: retry
+                if self._stale(holder):
+                    self.path.unlink(missing_ok=True)
+                    continue
+                who = f"pid {holder.get('pid', '?')} on {holder.get('host', '?')} since {holder.get('started_utc', '?')}"
+                raise SweepLockedError(
+                    f"{self.path.parent} is locked by another sweep ({who}); "
+                    f"delete {self.path} only if that sweep is no longer running"
+                ) from None
+            with os.fdopen(fd, "w") as fh:
+                json.dump(self.owner, fh)
+            return self
+        raise SweepLockedError(f"could not take the lock {self.path} (it keeps changing)")
+
+    def release(self) -> None:
+        if self._read() == self.owner:
+            self.path.unlink(missing_ok=True)
+
+    def __enter__(self) -> "SweepLock":
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()

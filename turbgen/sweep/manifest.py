@@ -1,0 +1,126 @@
+"""The sweep manifest: DIR/manifest.json and DIR/manifest.csv, one record per planned run.
+
+Each record: name, model, preset, U_m_s, seed, path (relative to DIR), status ("pending",
+"complete", "failed"), action ("ran" in this invocation, "skipped" = an existing complete store
+was kept, "none"), duration_s, checksum, sigma_m_s, validation summary, error, parameters,
+finished_utc. Both files are written to a temporary sibling and renamed (atomic on POSIX).
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import os
+import tempfile
+from datetime import datetime, timezone
+from pathlib import Path
+
+from turbgen import __version__
+
+MANIFEST_JSON = "manifest.json"
+MANIFEST_CSV = "manifest.csv"
+CSV_COLUMNS = (
+    "name",
+    "model",
+    "preset",
+    "U_m_s",
+    "seed",
+    "status",
+    "action",
+    "duration_s",
+    "path",
+    "checksum",
+    "sigma_u_m_s",
+    "sigma_v_m_s",
+    "sigma_w_m_s",
+    "validation",
+    "error",
+    "finished_utc",
+    "parameters",
+)
+
+
+def utc_now() -> str:
+    """Current UTC time, ISO 8601 to the second."""
+    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+
+
+def store_checksum(path: str | Path) -> str:
+    """'sha256:<hex>' of the u, v, w float32 data (planes in stored order, C order), not of the files.
+
+    Independent of chunking, compression and metadata (creation time), so two stores holding the
+    same field have the same checksum.
+    """
+    from turbgen.store import open_store
+
+    fs = open_store(path)
+    h = hashlib.sha256()
+    for comp in ("u", "v", "w"):
+        for ix in range(fs.grid.nx):
+            h.update(fs.read_plane(comp, ix).astype("<f4", copy=False).tobytes(order="C"))
+    return "sha256:" + h.hexdigest()
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _validation_text(v) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, dict) and "passed" in v:
+        return "pass" if v["passed"] else "fail"
+    return json.dumps(v, sort_keys=True)
+
+
+def _csv_text(records: list[dict]) -> str:
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=CSV_COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    for r in records:
+        sig = r.get("sigma_m_s") or [None, None, None]
+        row = {k: r.get(k) for k in CSV_COLUMNS}
+        row.update(
+            sigma_u_m_s=sig[0],
+            sigma_v_m_s=sig[1],
+            sigma_w_m_s=sig[2],
+            validation=_validation_text(r.get("validation")),
+            parameters=json.dumps(r.get("parameters"), sort_keys=True),
+        )
+        writer.writerow({k: ("" if v is None else v) for k, v in row.items()})
+    return buf.getvalue()
+
+
+def write_manifest(directory: str | Path, sweep: dict, records: list[dict]) -> None:
+    """Write manifest.json and manifest.csv for these records (atomically, JSON first)."""
+    d = Path(directory)
+    counts = {s: sum(r["status"] == s for r in records) for s in ("complete", "failed", "pending")}
+    doc = {
+        "turbgen_version": __version__,
+        "updated_utc": utc_now(),
+        "sweep": sweep,
+        "counts": counts,
+        "runs": records,
+    }
+    _atomic_write(d / MANIFEST_JSON, json.dumps(doc, indent=1, sort_keys=False) + "\n")
+    _atomic_write(d / MANIFEST_CSV, _csv_text(records))
+
+
+def read_manifest(directory: str | Path) -> dict | None:
+    """The previous manifest.json of DIR, or None when there is none (or it is unreadable)."""
+    try:
+        doc = json.loads((Path(directory) / MANIFEST_JSON).read_text())
+    except (OSError, ValueError):
+        return None
+    return doc if isinstance(doc, dict) and isinstance(doc.get("runs"), list) else None
