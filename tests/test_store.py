@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import signal
 import subprocess
 import sys
 import textwrap
@@ -348,8 +349,6 @@ def test_available_memory_reads_meminfo_and_cgroup(tmp_path):
 
 
 def test_sigterm_handler_restored_after_with_block(tmp_path):
-    import signal
-
     before = signal.getsignal(signal.SIGTERM)
     with pytest.raises(RuntimeError):
         with create_store(tmp_path / "f.zarr", GRID, ATTRS):
