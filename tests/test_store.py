@@ -19,8 +19,7 @@ import zarr
 from turbgen import resources
 from turbgen.errors import ParameterError, StoreError
 from turbgen.grid import Grid
-from turbgen.store import FieldStore, create_store, open_store, physical_time_view
-from turbgen.store import layout
+from turbgen.store import FieldStore, create_store, layout, open_store, physical_time_view
 
 GRID = Grid(nt=10, dt_s=0.5, x_m=(0.0, 50.0, 63.3), ny=4, nz=3, dy_m=10.0, dz_m=8.0)
 ATTRS = {
@@ -110,7 +109,8 @@ def test_physical_time_view(tmp_path):
 def test_blockwise_and_threaded_writes_equal_one_shot(tmp_path):
     data = field(seed=3)
     path = tmp_path / "threads.zarr"
-    blocks = [(c, ix, t0, t1) for c in layout.COMPONENTS for ix in range(GRID.nx) for t0, t1 in ((0, 3), (3, 7), (7, 10))]
+    spans = ((0, 3), (3, 7), (7, 10))
+    blocks = [(c, ix, t0, t1) for c in layout.COMPONENTS for ix in range(GRID.nx) for t0, t1 in spans]
     with create_store(path, GRID, ATTRS, chunk_t=4) as w:  # blocks straddle chunk boundaries
         with ThreadPoolExecutor(4) as pool:
             list(pool.map(lambda b: w.write(b[0], b[1], data[b[0]][b[2] : b[3], b[1]], t0=b[2]), blocks[::-1]))
@@ -325,7 +325,9 @@ def test_require_memory_message_names_need_available_and_option(monkeypatch):
     with pytest.raises(ParameterError) as info:
         resources.require_memory(3 * 2**30, "the Mann snapshot", "lower --nt or --pad-yz")
     msg = str(info.value)
-    assert msg == "the Mann snapshot needs about 3.0 GiB of memory but only 2.0 GiB is available; lower --nt or --pad-yz"
+    assert msg == (
+        "the Mann snapshot needs about 3.0 GiB of memory but only 2.0 GiB is available; lower --nt or --pad-yz"
+    )
     assert resources.require_memory(2**30, "x", "y") == 2 * 2**30
     monkeypatch.setattr(resources, "available_memory_bytes", lambda: None)
     assert resources.require_memory(2**60, "x", "y") is None  # unknown -> no refusal
