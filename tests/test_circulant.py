@@ -1,0 +1,112 @@
+"""2-D circulant embedding: exact covariance on small grids, the adaptive torus, fallbacks, clipping report."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from turbgen.synthesis import circulant
+from turbgen.synthesis.circulant import embed, fft_size, grid_distances, torus_size, wrapped_distance
+from turbgen.theory.coherence_models import exponential_yz
+
+U, A_YZ, LC = 16.0, 12.0, 340.2
+
+
+def _kernel(f_hz):
+    return lambda r: exponential_yz(r, f_hz, U, A_YZ, LC)
+
+
+def _decay(f_hz):
+    return 1.0 / (A_YZ * np.hypot(f_hz / U, 0.12 / LC))
+
+
+def _linear_map(e):
+    """Matrix A (N x M) of the sampler: Z = A xi, found by sampling every unit vector in complex128."""
+    my, mz = e.torus_shape
+    eye = np.eye(my * mz, dtype=np.complex128).reshape(my * mz, my, mz)
+    z = e.sample(eye)  # (M, ny, nz)
+    return z.reshape(my * mz, -1).T
+
+
+@pytest.mark.parametrize("ny,nz,dy,dz,f", [(5, 4, 3.0, 4.0, 0.3), (4, 4, 5.0, 5.0, 0.1), (7, 1, 10.0, 1.0, 0.5)])
+def test_sampler_reproduces_covariance_exactly(ny, nz, dy, dz, f):
+    """The sampler's map A (Z = A xi, xi circular): A A^H equals C and the dense Cholesky L L^T (to rounding)."""
+    e = embed(_kernel(f), ny, nz, dy, dz, _decay(f))
+    assert e.chol is None and e.clip_error == 0.0
+    a = _linear_map(e)
+    c = _kernel(f)(grid_distances(ny, nz, dy, dz))
+    chol = np.linalg.cholesky(c)
+    np.testing.assert_allclose(a @ a.conj().T, c, atol=1e-12, rtol=0)
+    np.testing.assert_allclose(a @ a.conj().T, chol @ chol.T, atol=1e-12, rtol=0)
+
+
+def _corner_covariance(e):
+    """Covariance of the sampler's output between the corner origin and every corner point.
+
+    Z = FFT2(s xi) with independent xi gives cov(Z_a, Z_b) = sum_j s_j^2 w^(j (a - b)) = FFT2(s^2)[a - b].
+    """
+    return np.fft.fft2(e.scale**2)[: e.ny, : e.nz].real
+
+
+@pytest.mark.parametrize("f", [1 / 2048, 4 / 2048, 0.02, 0.05, 0.3, 1.0])
+def test_adaptive_torus_is_exact_on_the_paper_grid(f):
+    """31 x 31 at 5 m: every lag of the realised covariance equals coh(r, f) (eigenvalues all >= 0)."""
+    e = embed(_kernel(f), 31, 31, 5.0, 5.0, _decay(f))
+    assert e.chol is None and e.clip_error == 0.0
+    r = np.hypot(*np.meshgrid(np.arange(31) * 5.0, np.arange(31) * 5.0, indexing="ij"))
+    np.testing.assert_allclose(_corner_covariance(e), _kernel(f)(r), atol=1e-12, rtol=0)
+
+
+def test_minimal_torus_fails_at_low_frequency():
+    """The M = 2(N - 1) torus has negative eigenvalues at f = df on the paper grid (why the torus adapts)."""
+    f = 1 / 2048
+    lam = np.fft.fft2(_kernel(f)(wrapped_distance(31, 31, 5.0, 5.0, 60, 60))).real
+    assert lam.min() < -1e-3 * lam.max()
+    assert embed(_kernel(f), 31, 31, 5.0, 5.0, _decay(f)).torus_shape[0] >= 12 * _decay(f) / 5.0
+
+
+def test_torus_rule_and_fft_sizes():
+    for n in (1, 7, 60, 97, 121, 565):
+        m = fft_size(n)
+        assert m >= n and all(p in (2, 3, 5, 7, 11) for p in _prime_factors(m))  # pocketfft sizes
+    assert torus_size(1, 5.0, 1e9) == 1
+    assert torus_size(31, 5.0, 1.0) == 60  # 2 (N - 1) when the kernel decays fast
+    assert torus_size(31, 5.0, 100.0) == fft_size(240)  # 12 decay lengths
+
+
+def _prime_factors(m):
+    out, p = [], 2
+    while m > 1:
+        while m % p == 0:
+            out.append(p)
+            m //= p
+        p += 1
+    return out
+
+
+def _bad_kernel(r):
+    """A distance kernel that is not positive definite in 2-D (strong negative lobe): forces the fallbacks."""
+    return np.cos(np.asarray(r) / 3.0) * np.exp(-np.asarray(r) / 50.0)
+
+
+def test_enlarging_then_cholesky_fallback_is_exact(monkeypatch):
+    """A kernel whose torus spectrum stays negative: small grids fall back to Cholesky of a PD C."""
+    kernel = lambda r: np.exp(-np.asarray(r) / 50.0)  # noqa: E731 -- PD in 2-D, negative on the 10 x 8 torus
+    monkeypatch.setattr(circulant, "MAX_ENLARGE", 0)
+    monkeypatch.setattr(circulant, "torus_size", lambda n, h, d: 2 * (n - 1))
+    e = embed(kernel, 6, 5, 4.0, 4.0, 50.0)
+    assert e.chol is not None and e.clip_error == 0.0
+    a = _linear_map(e)
+    np.testing.assert_allclose(a @ a.conj().T, kernel(grid_distances(6, 5, 4.0, 4.0)), atol=1e-12)
+
+
+def test_clipping_is_reported_and_bounds_the_error(monkeypatch):
+    """Large grids clip negative eigenvalues: clip_error > 0 and >= the actual covariance error."""
+    monkeypatch.setattr(circulant, "CHOLESKY_MAX_POINTS", 0)
+    monkeypatch.setattr(circulant, "MAX_ENLARGE", 1)
+    monkeypatch.setattr(circulant, "torus_size", lambda n, h, d: 2 * (n - 1))
+    e = embed(_bad_kernel, 6, 6, 2.0, 2.0, 50.0)
+    assert e.clip_error > 0
+    a = _linear_map(e)
+    err = np.abs(a @ a.conj().T - _bad_kernel(grid_distances(6, 6, 2.0, 2.0))).max()
+    assert 0 < err <= e.clip_error + 1e-12
