@@ -358,3 +358,12 @@ def test_sigterm_handler_restored_after_with_block(tmp_path):
                 assert signal.getsignal(signal.SIGTERM) != signal.SIG_DFL  # cleanup handler active
             raise RuntimeError
     assert signal.getsignal(signal.SIGTERM) == before
+
+
+def test_schema_file_is_valid_and_reachable_via_symlink():
+    import jsonschema
+
+    repo_schema = Path(__file__).resolve().parents[1] / "schemas" / "field.schema.json"
+    schema = json.loads(repo_schema.read_text())
+    jsonschema.Draft202012Validator.check_schema(schema)
+    assert set(layout.CALLER_ATTRS + layout.WRITER_ATTRS + (layout.MARKER,)) == set(schema["required"])
