@@ -1,0 +1,224 @@
+"""Kaimal 4D fields: per-frequency yz synthesis with direct-product longitudinal coherence (evoTurb style).
+
+Cross-spectrum between component c at (plane p, point a) and (plane q, point b) (paper 000 Eq. 19):
+
+    S_c(f) coh_yz(r_ab, f) gamma_x(|x_p - x_q|, f),   zero phase between planes (convected frame).
+
+Per frequency bin k (f_k = k df exactly, df = 1/(nt dt); evoTurb mixes bin k with the coherence of
+(k + 1) df, an off-by-one avoided here):
+1. every plane gets independent yz coefficients with covariance coh_yz (u: IEC exponential,
+   Eq. 12 un-squared, by 2-D circulant embedding; v, w: spatially white as IEC / TurbSim
+   IECKAI, or the same exponential coherence as an explicit extension);
+2. the real Cholesky factor of the (n_planes x n_planes) matrix gamma_x(|x_p - x_q|, f_k)
+   mixes the planes (components in ``long_components``; others stay independent);
+3. amplitudes: 2 E|X_k|^2 = v_k, the integral of the one-sided Kaimal PSD (Eq. 11) over the bin
+   [(k - 1/2) df, (k + 1/2) df] (the Nyquist bin, real, over [f_N - df/2, f_N]); X_0 = 0.
+   The realised variance is then the band integral from df/2 to 1/(2 dt), not the nominal sigma^2
+   (``rescale`` multiplies the spectrum by sigma^2 / that integral instead);
+4. inverse real FFT over time (float32).
+
+Memory: one component at a time, (n_planes, nf, ny, nz) complex64. Random streams come from
+SeedSequence keyed by (seed, component, plane, frequency chunk) with FIXED chunks of
+FREQ_CHUNK bins, so the field does not depend on how it is written or on thread counts.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator
+
+import numpy as np
+import scipy.fft
+
+from turbgen.grid import Grid
+from turbgen.synthesis.circulant import Embedding, embed
+from turbgen.theory.coherence_models import exponential_yz
+from turbgen.theory.kaimal import kaimal_band_variance
+from turbgen.theory.params import KaimalParams
+
+COMPONENTS = ("u", "v", "w")
+# frequency bins per random stream; part of the definition of the field for a given seed -- never change
+FREQ_CHUNK = 32
+
+
+def bin_frequencies(nt: int, dt_s: float) -> np.ndarray:
+    """f_k = k df [Hz], k = 0 .. nt // 2, df = 1 / (nt dt): the rfft bins, bin k at exactly k df."""
+    return np.arange(nt // 2 + 1) / (nt * dt_s)
+
+
+def bin_variances(nt: int, dt_s: float, sigma_m_s: float, length_scale_m: float, U_m_s: float) -> np.ndarray:
+    """v_k = integral of the Kaimal PSD (Eq. 11) over bin k [m^2 s^-2]; v_0 = 0 (zero mean).
+
+    Bin k covers [(k - 1/2) df, (k + 1/2) df], clipped at the Nyquist frequency 1/(2 dt), so the
+    sum is the band integral from df/2 to 1/(2 dt).
+    """
+    df = 1.0 / (nt * dt_s)
+    k = np.arange(nt // 2 + 1)
+    lo = np.maximum(k - 0.5, 0.0) * df
+    hi = np.minimum((k + 0.5) * df, 0.5 / dt_s)
+    v = np.array([kaimal_band_variance(a, b, sigma_m_s, length_scale_m, U_m_s) for a, b in zip(lo, hi)])
+    v[0] = 0.0
+    return v
+
+
+def resolved_band_hz(nt: int, dt_s: float) -> tuple[float, float]:
+    """(df/2, 1/(2 dt)) [Hz]: the band whose Kaimal variance the synthesis reproduces."""
+    return 0.5 / (nt * dt_s), 0.5 / dt_s
+
+
+def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarray, float]:
+    """Real factors F_k (nf, P, P) with F_k F_k^T = G_k, G_k[p, q] = gamma_x(|x_p - x_q|, f_k).
+
+    Lower Cholesky factors where G_k is positive definite; otherwise the factor of G_k with its
+    negative eigenvalues clipped. Returns (factors, max |G_clipped - G|) -- 0 when exact.
+    """
+    x = np.asarray(x_m, dtype=float)
+    f = np.asarray(f_hz, dtype=float)
+    dx = np.abs(x[:, None] - x[None, :])
+    g = np.asarray(long_coherence(dx[None, :, :], f[:, None, None]), dtype=float)
+    g = np.broadcast_to(g, (f.size, x.size, x.size)).copy()
+    try:
+        return np.linalg.cholesky(g), 0.0
+    except np.linalg.LinAlgError:
+        pass
+    factors = np.empty_like(g)
+    err = 0.0
+    for i, gk in enumerate(g):
+        try:
+            factors[i] = np.linalg.cholesky(gk)
+        except np.linalg.LinAlgError:
+            w, v = np.linalg.eigh(gk)
+            factors[i] = v * np.sqrt(np.maximum(w, 0.0))
+            err = max(err, float(np.abs(factors[i] @ factors[i].T - gk).max()))
+    return factors, err
+
+
+class KaimalEvo:
+    """Generator of one Kaimal 4D field, one component at a time, plane by plane.
+
+    long_coherence(dx_m, f_hz) -> un-squared gamma_x (a function of turbgen.theory.coherence_models).
+    long_components : components mixed between planes ("u" or "uvw").
+    coherent_vw : v, w get the u yz coherence (extension; IEC / TurbSim IECKAI: white).
+    rescale : scale each component's spectrum so its expected variance is the nominal sigma^2.
+    """
+
+    def __init__(
+        self,
+        kaimal: KaimalParams,
+        grid: Grid,
+        U_m_s: float,
+        seed: int,
+        *,
+        long_coherence: Callable,
+        long_components: str = "u",
+        coherent_vw: bool = False,
+        rescale: bool = False,
+        workers: int | None = None,
+    ):
+        self.kaimal, self.grid, self.U_m_s, self.seed = kaimal, grid, U_m_s, seed
+        self.long_coherence = long_coherence
+        self.long_components = long_components
+        self.coherent_vw = coherent_vw
+        self.workers = workers or os.cpu_count()
+        self.freqs = bin_frequencies(grid.nt, grid.dt_s)
+        self.nf = self.freqs.size
+        self.n_chunks = -(-self.nf // FREQ_CHUNK)
+        self.variances = {}
+        self.rescale_factors = {}
+        for i, c in enumerate(COMPONENTS):
+            v = bin_variances(grid.nt, grid.dt_s, kaimal.sigma_m_s[i], kaimal.length_scales_m[i], U_m_s)
+            factor = kaimal.sigma_m_s[i] ** 2 / v.sum() if rescale and v.sum() > 0 else 1.0
+            self.variances[c] = v * factor
+            self.rescale_factors[c] = factor
+        self.report = {"yz_clip_error": 0.0, "torus_enlarged": 0, "cholesky_fallback": 0, "max_torus": [1, 1],
+                       "long_clip_error": 0.0}
+
+    def expected_variance(self, component: str) -> float:
+        """Expected variance [m^2 s^-2] of the synthesised component at every point."""
+        return float(self.variances[component].sum())
+
+    def _embeddings(self, component: str, ks: range) -> list[Embedding | None]:
+        """yz samplers for bins ks (None = spatially white)."""
+        if component != "u" and not self.coherent_vw:
+            return [None] * len(ks)
+        g, kp = self.grid, self.kaimal
+        out = []
+        for k in ks:
+            f = self.freqs[k]
+            kappa = np.hypot(f / self.U_m_s, 0.12 / kp.lc_m)
+            decay = 1.0 / (kp.a_yz * kappa) if kp.a_yz > 0 else np.inf
+            e = embed(lambda r, f=f: exponential_yz(r, f, self.U_m_s, kp.a_yz, kp.lc_m), g.ny, g.nz, g.dy_m, g.dz_m,
+                      decay)
+            rep = self.report
+            rep["yz_clip_error"] = max(rep["yz_clip_error"], e.clip_error)
+            rep["torus_enlarged"] += e.enlarged > 0
+            rep["cholesky_fallback"] += e.chol is not None
+            rep["max_torus"] = [max(a, b) for a, b in zip(rep["max_torus"], e.torus_shape)]
+            out.append(e)
+        return out
+
+    def _chunk_coefficients(self, component: str, plane: int, chunk: int, ks: range, embs) -> np.ndarray:
+        """Unit-variance yz coefficients (len(ks), ny, nz) complex64 of one plane and frequency chunk."""
+        g = self.grid
+        shapes = [(g.ny, g.nz) if e is None else e.torus_shape for e in embs]
+        ss = np.random.SeedSequence([self.seed, COMPONENTS.index(component), plane, chunk])
+        rng = np.random.Generator(np.random.Philox(ss))
+        normals = rng.standard_normal(2 * sum(a * b for a, b in shapes), dtype=np.float32)
+        normals *= np.float32(np.sqrt(0.5))
+        out = np.empty((len(ks), g.ny, g.nz), dtype=np.complex64)
+        kinds = ["white" if e is None else "chol" if e.chol is not None else "circ" for e in embs]
+        pos = i = 0
+        while i < len(ks):
+            j = i + 1  # batch consecutive circulant / white bins sharing a torus shape (one FFT call)
+            while kinds[i] != "chol" and j < len(ks) and (kinds[j], shapes[j]) == (kinds[i], shapes[i]):
+                j += 1
+            n = (j - i) * shapes[i][0] * shapes[i][1]
+            # consecutive normals are the (real, imaginary) parts of xi, each N(0, 1/2): E|xi|^2 = 1
+            xi = normals[2 * pos:2 * (pos + n)].view(np.complex64).reshape(j - i, *shapes[i])
+            pos += n
+            if kinds[i] == "white":
+                out[i:j] = xi
+            elif kinds[i] == "chol":
+                out[i] = embs[i].sample(xi[0], self.workers)
+            else:
+                scale = np.stack([e.scale for e in embs[i:j]])
+                out[i:j] = Embedding(g.ny, g.nz, scale, None, 0.0, 0).sample(xi, self.workers)
+            i = j
+        return out
+
+    def component_planes(self, component: str, tick: Callable[[], None] | None = None) -> Iterator[tuple[int, np.ndarray]]:
+        """Yield (plane index, field (nt, ny, nz) float32) for every plane of one component.
+
+        ``tick`` is called once per frequency chunk and once per plane (n_chunks + nx calls).
+        """
+        g = self.grid
+        nx = g.nx
+        spec = np.zeros((nx, self.nf, g.ny, g.nz), dtype=np.complex64)
+        mixed = component in self.long_components
+        amp = np.sqrt(self.variances[component] / 2.0).astype(np.float32)
+        if g.nt % 2 == 0:  # the Nyquist coefficient is real: sqrt(2) Re(Z) has unit variance
+            amp[-1] = np.sqrt(self.variances[component][-1]).astype(np.float32)
+        for chunk in range(self.n_chunks):
+            ks = range(max(1, chunk * FREQ_CHUNK), min(self.nf, (chunk + 1) * FREQ_CHUNK))
+            if len(ks):
+                embs = self._embeddings(component, ks)
+                for p in range(nx):
+                    spec[p, ks.start:ks.stop] = self._chunk_coefficients(component, p, chunk, ks, embs)
+                if mixed and nx > 1:
+                    fac, err = longitudinal_factors(self.long_coherence, g.x_m, self.freqs[ks.start:ks.stop])
+                    self.report["long_clip_error"] = max(self.report["long_clip_error"], err)
+                    block = spec[:, ks.start:ks.stop].reshape(nx, len(ks), -1).transpose(1, 0, 2)
+                    # real factor: mixes real and imaginary parts alike (zero phase between planes)
+                    mixed_block = fac.astype(np.float32) @ np.ascontiguousarray(block).view(np.float32)
+                    spec[:, ks.start:ks.stop] = mixed_block.view(np.complex64).transpose(1, 0, 2).reshape(
+                        nx, len(ks), g.ny, g.nz)
+            if tick:
+                tick()
+        if g.nt % 2 == 0:
+            spec[:, -1] = np.sqrt(2.0, dtype=np.float32) * spec[:, -1].real
+        spec *= amp[None, :, None, None]
+        for p in range(nx):
+            plane = scipy.fft.irfft(spec[p], n=g.nt, axis=0, norm="forward", workers=self.workers)
+            if tick:
+                tick()
+            yield p, plane.astype(np.float32, copy=False)
