@@ -1,0 +1,227 @@
+"""One Mann space-time run: parameters + grid + seed -> stencil -> snapshots -> zarr store.
+
+    run = MannRun.from_mapping({"length_scale_m": 49, "gamma": 3.1, "evo_time_s": 400})
+    summary = run_mann(run, "mann.zarr", progress=True)
+
+Used by ``turbgen mann`` and by the sweep, so both give bit-identical stores. The stencil
+(build_mann_stencil) depends on everything but the seed and can be shared between seeds.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from turbgen.errors import ParameterError, check_choice, check_int, check_positive, check_range
+from turbgen.grid import Grid
+from turbgen.resources import format_bytes, require_memory
+from turbgen.runs.defaults import MANN_DEFAULTS, MANN_GRID
+from turbgen.store import create_store
+from turbgen.synthesis.mann_spacetime import COMPONENTS, MannSnapshots, snapshot_memory_bytes
+from turbgen.synthesis.mann_stencil import BoxShape, MannStencil, build_stencil, stencil_nbytes
+from turbgen.theory.kaimal import IEC_IREF, iec_sigma1_m_s
+from turbgen.theory.params import MannParams, check_wind_speed
+
+_UNITS = {
+    "ae": "m4/3 s-2", "length_scale_m": "m", "gamma": "1", "lifetime": "", "factor1": "1", "factor2": "1",
+    "evo_time_s": "s", "U_m_s": "m s-1", "seed": "1", "hub_height_m": "m", "pad_yz": "1", "ae_from": "",
+}  # fmt: skip
+_INPUT_KEYS = set(_UNITS) | {"sigma_u_m_s", "ti", "turb_class", "grid"}
+_BUILD_SCRATCH = 96 * 2**20  # float64 temporaries of one stencil-building batch (tensor_factor)
+
+
+@dataclass(frozen=True)
+class MannRun:
+    """Everything that determines a Mann space-time field (paper 000 Sect. 2.3.1).
+
+    params : Mann parameters (ae, L, Gamma, lifetimes, evolution time gamma [s]).
+    grid : planes x_m [m upstream], nt samples dt_s [s] apart (dx = U dt), ny x nz points dy_m, dz_m [m].
+    U_m_s : mean wind speed [m/s]; seed : random seed (>= 0); hub_height_m : metadata [m].
+    pad_yz : the synthesis box is pad_yz times wider in y and z than the output (cropped).
+    ae_from : how ae was chosen (text, recorded in the store).
+    """
+
+    params: MannParams
+    grid: Grid
+    U_m_s: float
+    seed: int
+    hub_height_m: float = 150.0
+    pad_yz: int = 2
+    ae_from: str = "ae"
+
+    def __post_init__(self):
+        object.__setattr__(self, "U_m_s", check_wind_speed(self.U_m_s))
+        object.__setattr__(self, "seed", check_int("seed", self.seed, 0, 2**63 - 1))
+        object.__setattr__(self, "hub_height_m", check_positive("hub height (m)", self.hub_height_m))
+        object.__setattr__(self, "pad_yz", check_int("pad-yz", self.pad_yz, 1, 8))
+
+    @property
+    def box(self) -> BoxShape:
+        """The periodic synthesis box: (nt, dx = U dt) x (pad ny, dy) x (pad nz, dz)."""
+        g = self.grid
+        return BoxShape(g.nt, self.U_m_s * g.dt_s, self.pad_yz * g.ny, self.pad_yz * g.nz, g.dy_m, g.dz_m)
+
+    def plane_times_s(self) -> np.ndarray:
+        """Relative snapshot time t_n = x_n / U [s] of each plane, in storage order."""
+        return self.grid.x() / self.U_m_s
+
+    def parameters(self) -> dict:
+        """The input parameters (keys of the run mapping, see schemas/mann-run.schema.json)."""
+        p = self.params
+        return {
+            "ae": p.ae, "length_scale_m": p.length_scale_m, "gamma": p.gamma, "lifetime": p.lifetime,
+            "factor1": p.factor1, "factor2": p.factor2, "evo_time_s": p.evo_time_s, "U_m_s": self.U_m_s,
+            "seed": self.seed, "hub_height_m": self.hub_height_m, "pad_yz": self.pad_yz, "ae_from": self.ae_from,
+        }  # fmt: skip
+
+    def to_attrs(self) -> dict:
+        """model / parameters / units / seed / U_m_s / hub_height_m attributes of the store."""
+        params = self.parameters()
+        return {
+            "model": "mann",
+            "parameters": params,
+            "units": {k: _UNITS[k] for k in params},
+            "seed": self.seed,
+            "U_m_s": self.U_m_s,
+            "hub_height_m": self.hub_height_m,
+        }
+
+    def default_store_name(self) -> str:
+        """A readable store name from the parameters, e.g. mann_U16_L49_G3.1_evo400_s1.zarr."""
+        p = self.params
+        evo = "frozen" if p.evo_time_s is None else f"{p.evo_time_s:g}"
+        return f"mann_U{self.U_m_s:g}_L{p.length_scale_m:g}_G{p.gamma:g}_evo{evo}_s{self.seed}.zarr"
+
+    @classmethod
+    def from_mapping(cls, d: Mapping) -> "MannRun":
+        """A run from a (validated) mapping with the schema keys; missing keys take runs.defaults.
+
+        The energy level: ``ae`` if given, else the ae giving the model sigma_u = ``sigma_u_m_s``,
+        else ``ti`` * U, else the IEC NTM sigma_1 of ``turb_class`` (default A) at U.
+        """
+        unknown = set(d) - _INPUT_KEYS
+        if unknown:
+            raise ParameterError(f"mann config: unknown keys {sorted(unknown)}")
+        v = {**MANN_DEFAULTS, **{k: val for k, val in d.items() if k != "grid"}}
+        g = {**MANN_GRID, **d.get("grid", {})}
+        if "dz_m" not in d.get("grid", {}) and "dy_m" in d.get("grid", {}):
+            g["dz_m"] = g["dy_m"]
+        grid = Grid(g["nt"], g["dt_s"], tuple(g["x_m"]), g["ny"], g["nz"], g["dy_m"], g["dz_m"])
+        U = check_wind_speed(v["U_m_s"])
+        shape = MannParams(
+            ae=1.0, length_scale_m=v["length_scale_m"], gamma=v["gamma"], lifetime=v["lifetime"],
+            factor1=v["factor1"], factor2=v["factor2"], evo_time_s=v["evo_time_s"],
+        )  # fmt: skip
+        ae, ae_from = _resolve_ae(d, shape, U, v["turb_class"])
+        return cls(shape.with_ae(ae), grid, U, v["seed"], v["hub_height_m"], v["pad_yz"], ae_from)
+
+
+def _resolve_ae(d: Mapping, shape: MannParams, U: float, turb_class: str) -> tuple[float, str]:
+    if d.get("ae") is not None:
+        return check_positive("ae (alpha*eps^(2/3), m^(4/3)/s^2)", d["ae"]), d.get("ae_from", "ae")
+    if d.get("sigma_u_m_s") is not None:
+        sigma, how = check_positive("sigma-u (m/s)", d["sigma_u_m_s"]), f"sigma_u = {d['sigma_u_m_s']:g} m/s"
+    elif d.get("ti") is not None:
+        ti = check_range("ti (turbulence intensity, -)", d["ti"], 0.0, 1.0, lo_open=True)
+        sigma, how = ti * U, f"ti = {ti:g} (sigma_u = {ti * U:g} m/s)"
+    else:
+        check_choice("turb_class", turb_class, tuple(IEC_IREF))
+        sigma = iec_sigma1_m_s(U, turb_class)
+        how = f"IEC class {turb_class} NTM sigma_1 = {sigma:.4g} m/s at U"
+    from turbgen.theory.mann_spectra import ae_for_sigma_u  # model variance, paper 000 Eq. 8 integrated
+
+    return ae_for_sigma_u(sigma, shape), f"model sigma_u: {how}"
+
+
+def build_mann_stencil(run: MannRun, cache_dir: str | Path | None = None) -> MannStencil:
+    """The per-parameter-set part of a run (the same for runs differing only in seed)."""
+    return build_stencil(run.params, run.box, cache_dir)
+
+
+def memory_estimate_bytes(run: MannRun, threads: int, with_stencil: bool = True) -> int:
+    """Bytes a run allocates: stencil (unless given), OU state, spectra, one output plane, store buffers."""
+    g = run.grid
+    frozen = run.params.evo_time_s is None
+    n_snap = 1 if frozen else g.nx
+    need = snapshot_memory_bytes(run.box, g.ny, g.nz, n_snap, threads) + 2 * g.nt * g.ny * g.nz * 4
+    if with_stencil:
+        need += stencil_nbytes(run.box, frozen) + _BUILD_SCRATCH
+    return need
+
+
+def describe(run: MannRun, out: str | Path, threads: int, with_stencil: bool = True) -> list[str]:
+    """Lines saying what a run will generate (grid, synthesis box, memory, output path)."""
+    g, b, p = run.grid, run.box, run.params
+    evo = "frozen" if p.evo_time_s is None else f"gamma = {p.evo_time_s:g} s"
+    return [
+        f"Mann space-time field: L = {p.length_scale_m:g} m, Gamma = {p.gamma:g}, {evo}, lifetime {p.lifetime}, "
+        f"ae = {p.ae:.4g} m^(4/3)/s^2 ({run.ae_from}), U = {run.U_m_s:g} m/s, seed {run.seed}",
+        f"grid: {g.nt} x {g.nx} x {g.ny} x {g.nz} (t, x, y, z), dt = {g.dt_s:g} s (dx = {b.dx_m:g} m), "
+        f"dy = {g.dy_m:g} m, dz = {g.dz_m:g} m, planes x = {', '.join(f'{x:g}' for x in g.x_m)} m",
+        f"synthesis box: {b.nt} x {b.nyp} x {b.nzp} (pad-yz {run.pad_yz}), "
+        f"{b.nt * b.dx_m:g} x {b.nyp * b.dy_m:g} x {b.nzp * b.dz_m:g} m",
+        f"memory: about {format_bytes(memory_estimate_bytes(run, threads, with_stencil))}; "
+        f"output: {out} ({format_bytes(3 * g.nbytes_per_component())} float32 before compression)",
+    ]
+
+
+def run_mann(
+    run: MannRun,
+    out: str | Path,
+    *,
+    overwrite: bool = False,
+    chunk_t: int | None = None,
+    progress: bool = False,
+    stencil: MannStencil | None = None,
+    threads: int | None = None,
+    cache_dir: str | Path | None = None,
+) -> dict:
+    """Generate ``run`` into a new store at ``out``; return {path, sigma_u/v/w [m/s], seconds, ...}.
+
+    Memory is checked before anything is allocated; planes are written as they are produced;
+    an exception (or Ctrl-C) leaves no store at ``out``. ``stencil`` (from build_mann_stencil of a
+    run with the same parameters and grid) skips the stencil computation. ``threads`` defaults
+    to os.cpu_count() and does not change the field.
+    """
+    t_start = time.perf_counter()
+    gen_threads = MannSnapshots.default_threads(threads)
+    if stencil is not None and (stencil.params != run.params or stencil.box != run.box):
+        raise ParameterError("the given stencil was built for other parameters or another grid than this run")
+    g = run.grid
+    require_memory(
+        memory_estimate_bytes(run, gen_threads, with_stencil=stencil is None),
+        f"the Mann run ({g.nt} x {g.ny} x {g.nz}, synthesis box {run.box.nt} x {run.box.nyp} x {run.box.nzp})",
+        "lower --nt, --ny/--nz or --pad-yz",
+    )
+    path = Path(out)
+    sums = {c: [0.0, 0.0] for c in COMPONENTS}
+    with create_store(path, g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:
+        if stencil is None:
+            stencil = build_mann_stencil(run, cache_dir)
+        gen = MannSnapshots(stencil, g.ny, g.nz, gen_threads)
+        bar = tqdm(total=g.nx, unit="plane", desc="mann", file=sys.stderr, disable=not (progress and sys.stderr.isatty()))
+        with bar:
+            done = 0
+            for ix, comp, field in gen.generate(run.seed, run.plane_times_s()):
+                writer.write(comp, ix, field)
+                flat = field.reshape(-1)
+                sums[comp][0] += float(flat.sum(dtype=np.float64))
+                sums[comp][1] += float(np.dot(flat, flat))
+                done += 1
+                if done % 3 == 0:
+                    bar.update(1)
+    n = g.nt * g.nx * g.ny * g.nz
+    summary = {"path": str(path), "seconds": time.perf_counter() - t_start}
+    for c, (s1, s2) in sums.items():
+        mean = s1 / n
+        summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - mean * mean, 0.0))
+        summary[f"mean_{c}"] = mean
+    return summary
+

@@ -1,0 +1,272 @@
+"""Mann space-time field: FFT synthesis (Mann 1998) of yz-plane snapshots evolving as Guo et al. (2022).
+
+Each plane x_n is a snapshot of the (xi = U t, y, z) box at relative time t_n = x_n / U. Snapshots
+are taken in time order and the Fourier noise follows the exact Ornstein-Uhlenbeck recursion
+    n_{m+1} = rho n_m + sqrt(1 - rho^2) xi_{m+1},   rho = exp(-(t_{m+1} - t_m) / tau_e(k)),
+so <u_hat(k, t) u_hat^*(k, t + dt)> = exp(-|dt| / tau_e) Phi(k) dk = Theta(k, dt) dk (paper 000
+Eq. 13-14) for every pair of planes, whatever their spacing.
+
+Work per snapshot, slab-wise over k1 in fixed batches (the same batches for any thread count):
+noise (or OU update) -> u_hat = C n (compact factor, see mann_stencil) -> Hermitian completion of
+the k1 = 0 / Nyquist slabs -> inverse 2-D FFT over (k2, k3) -> crop to ny x nz -> store into a
+(ny nz, k1) buffer; then one real inverse FFT along k1 per component, in fixed row blocks.
+Memory scales with one snapshot: the OU state (3 complex64 per half-spectrum point), the stencil,
+three cropped spectra and one output plane.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pyfftw
+
+from turbgen.errors import ParameterError
+from turbgen.synthesis.mann_stencil import _ODD, BoxShape, MannStencil, expand_k2
+from turbgen.synthesis.random_streams import complex_normal
+
+COMPONENTS = ("u", "v", "w")
+SLAB_BATCH = 4  # k1 slabs per work unit (fixed: it fixes the FFT plan shapes, hence the rounding)
+ROW_BLOCK = 64  # (y, z) rows per real inverse FFT along k1
+_ALIGN = 64
+_SQRT_HALF = np.float32(np.sqrt(0.5))
+
+
+def _aligned(shape, dtype) -> np.ndarray:
+    return pyfftw.empty_aligned(shape, dtype=dtype, n=_ALIGN)
+
+
+def _padded_nk1(nk1: int) -> int:
+    return -(-nk1 // 8) * 8  # rows of 8 complex64 = 64 bytes keep every row aligned
+
+
+def snapshot_memory_bytes(box: BoxShape, ny: int, nz: int, n_snapshots: int, threads: int) -> int:
+    """Bytes allocated by the generator (stencil excluded): OU state, cropped spectra, output, scratch."""
+    slab = box.nyp * box.nzp
+    state = 3 * box.nk1 * slab * 8 if n_snapshots > 1 else 0
+    spectra = 3 * ny * nz * _padded_nk1(box.nk1) * 8
+    output = box.nt * ny * nz * 4
+    scratch = threads * (SLAB_BATCH * slab * (2 * 3 * 8 + 2 * 8 + 8 * 4) + ROW_BLOCK * box.nt * 4)
+    return state + spectra + output + scratch
+
+
+def hermitian_complete(slab: np.ndarray) -> None:
+    """Make the (..., nyp, nzp) spectra of a k1 = 0 or Nyquist slab Hermitian, in place, keeping E|.|^2.
+
+    u_hat(k) <- (u_hat(k) + conj u_hat(-k)) / sqrt(2): with C(-k) = -C(k) this is the noise relation
+    n(-k) = -conj n(k); self-conjugate points become sqrt(2) Re u_hat (real, same variance). Without
+    it the real inverse FFT keeps only the Hermitian part, i.e. half the energy of these slabs.
+    """
+    mirror = np.roll(slab[..., ::-1, ::-1], 1, axis=(-2, -1))  # u_hat(-k2, -k3), a copy
+    np.conjugate(mirror, out=mirror)
+    slab += mirror
+    slab *= _SQRT_HALF
+
+
+class _Scratch:
+    """Per-thread buffers and FFTW plans (all plans built in the calling thread: the planner is not thread-safe)."""
+
+    def __init__(self, box: BoxShape, nt: int):
+        b, nyp, nzp = SLAB_BATCH, box.nyp, box.nzp
+        self.noise = _aligned((b, 3, nyp, nzp), np.complex64)
+        self.uhat = _aligned((b, 3, nyp, nzp), np.complex64)
+        self.mix = _aligned((b, nyp, nzp), np.complex64)
+        self.tmp = _aligned((b, nyp, nzp), np.complex64)
+        self.coef = _aligned((5, b, nyp, nzp), np.float32)
+        self.rho = _aligned((b, nyp, nzp), np.float32)
+        self.sig = _aligned((b, nyp, nzp), np.float32)
+        self.real = _aligned((b, nyp, nzp), np.float32)
+        self.rows = _aligned((ROW_BLOCK, nt), np.float32)
+        self._yz: dict[int, pyfftw.FFTW] = {}
+        for n in {b, box.nk1 % b} - {0}:
+            view = self.uhat[:n]
+            self._yz[n] = pyfftw.FFTW(
+                view, view, axes=(2, 3), direction="FFTW_BACKWARD", flags=("FFTW_ESTIMATE",), threads=1
+            )
+        self._t: dict[int, pyfftw.FFTW] = {}
+
+    def yz_plan(self, n: int) -> pyfftw.FFTW:
+        return self._yz[n]
+
+    def plan_rows(self, spectra: np.ndarray) -> None:
+        """Plans for blocks of ROW_BLOCK rows and for the last, shorter block of ``spectra`` (3, rows, nk1)."""
+        rows = spectra.shape[1]
+        for n in {min(ROW_BLOCK, rows), rows % ROW_BLOCK} - {0}:
+            self._t[n] = pyfftw.FFTW(
+                spectra[0, :n],
+                self.rows[:n],
+                axes=(1,),
+                direction="FFTW_BACKWARD",
+                flags=("FFTW_ESTIMATE", "FFTW_DESTROY_INPUT"),
+                threads=1,
+            )
+
+    def t_plan(self, n: int) -> pyfftw.FFTW:
+        return self._t[n]
+
+
+class MannSnapshots:
+    """Generator of Mann space-time snapshots on one stencil, cropped to ny x nz.
+
+    ``threads`` only decides how many fixed work units run at once: the field is bit-identical
+    for any value (random streams per (seed, snapshot, slab), fixed batches and FFT plans).
+    """
+
+    def __init__(self, stencil: MannStencil, ny: int, nz: int, threads: int | None = None):
+        box = stencil.box
+        if not (1 <= ny <= box.nyp and 1 <= nz <= box.nzp):
+            raise ParameterError(f"ny, nz = {ny}, {nz} must not exceed the synthesis box {box.nyp} x {box.nzp}")
+        self.stencil, self.box, self.ny, self.nz = stencil, box, ny, nz
+        self.threads = self.default_threads(threads)
+        self._k1 = box.k1().astype(np.float32)
+        self._k2 = box.k2().astype(np.float32)[:, None]
+        self._hermitian_slabs = {0, box.nt // 2} if box.nt % 2 == 0 else {0}
+        self._spectra = None
+        self._state = None
+        self._output = None
+        self._scratch: queue.SimpleQueue | None = None
+
+    @staticmethod
+    def default_threads(threads: int | None) -> int:
+        """``threads`` or os.cpu_count() (at least 1)."""
+        return max(1, int(threads or os.cpu_count() or 1))
+
+    # -- public -------------------------------------------------------------------------
+    def generate(self, seed: int, times_s) -> Iterator[tuple[int, str, np.ndarray]]:
+        """Yield (plane index, component, field (nt, ny, nz) float32) for every plane and component.
+
+        ``times_s`` are the planes' relative times x/U [s] in storage order. Planes come in time
+        order, all three components of a plane before the next plane (frozen turbulence: the single
+        snapshot is yielded once per plane, component by component). The yielded array is a reused
+        buffer: consume (write) it before asking for the next item.
+        """
+        times = np.asarray(times_s, dtype=float)
+        order = [int(i) for i in np.argsort(times, kind="stable")]
+        frozen = self.stencil.inv_tau is None
+        self._allocate(n_snapshots=1 if frozen else len(order))
+        with ThreadPoolExecutor(self.threads) as pool:
+            if frozen:
+                self._synthesise(pool, seed, 0, None)
+                for c in range(3):
+                    self._transform(pool, c)
+                    for ix in order:
+                        yield ix, COMPONENTS[c], self._output
+                return
+            previous = None
+            for m, ix in enumerate(order):
+                dt = None if previous is None else float(times[ix] - previous)
+                self._synthesise(pool, seed, m, dt)
+                previous = times[ix]
+                for c in range(3):
+                    self._transform(pool, c)
+                    yield ix, COMPONENTS[c], self._output
+
+    # -- internals ------------------------------------------------------------------------
+    def _allocate(self, n_snapshots: int) -> None:
+        box = self.box
+        if self._spectra is None:
+            self._spectra = _aligned((3, self.ny * self.nz, _padded_nk1(box.nk1)), np.complex64)
+            self._output = _aligned((box.nt, self.ny, self.nz), np.float32)
+            self._scratch = queue.SimpleQueue()
+            for _ in range(self.threads):
+                scratch = _Scratch(box, box.nt)
+                scratch.plan_rows(self._spectra[:, :, : box.nk1])
+                self._scratch.put(scratch)
+        if n_snapshots > 1 and self._state is None:
+            self._state = _aligned((box.nk1, 3, box.nyp, box.nzp), np.complex64)
+
+    def _run(self, pool, fn, items) -> None:
+        def task(item):
+            s = self._scratch.get()
+            try:
+                fn(s, item)
+            finally:
+                self._scratch.put(s)
+
+        for _ in pool.map(task, items):
+            pass
+
+    def _synthesise(self, pool, seed: int, m: int, dt: float | None) -> None:
+        starts = range(0, self.box.nk1, SLAB_BATCH)
+        self._run(pool, lambda s, i0: self._batch(s, seed, m, dt, i0), starts)
+
+    def _transform(self, pool, c: int) -> None:
+        rows = range(0, self.ny * self.nz, ROW_BLOCK)
+        self._run(pool, lambda s, r0: self._rows(s, c, r0), rows)
+
+    def _batch(self, s: _Scratch, seed: int, m: int, dt: float | None, i0: int) -> None:
+        box, st = self.box, self.stencil
+        i1 = min(i0 + SLAB_BATCH, box.nk1)
+        b = i1 - i0
+        n = self._state[i0:i1] if self._state is not None else s.noise[:b]
+        fresh = n if dt is None else s.noise[:b]
+        for j in range(b):
+            complex_normal(seed, m, i0 + j, fresh[j])
+        if dt is not None:  # exact OU step over dt (paper 000 Eq. 13-14)
+            rho, sig = s.rho[:b], s.sig[:b]
+            expand_k2(st.inv_tau[i0:i1], box.nyp, False, rho)
+            rho *= np.float32(-dt)
+            np.exp(rho, out=rho)
+            np.multiply(rho, rho, out=sig)
+            np.subtract(np.float32(1.0), sig, out=sig)
+            np.sqrt(sig, out=sig)
+            n *= rho[:, None]
+            fresh *= sig[:, None]
+            n += fresh
+        coef = s.coef[:, :b]
+        for idx in range(5):
+            expand_k2(st.coef[idx, i0:i1], box.nyp, _ODD[idx], coef[idx])
+        a, p, z1, z2, w = coef
+        k1 = self._k1[i0:i1, None, None]
+        k2 = self._k2
+        n0, n1, n2 = n[:, 0], n[:, 1], n[:, 2]
+        mix, tmp, real = s.mix[:b], s.tmp[:b], s.real[:b]
+        uh = s.uhat[:b]
+        uu, uv, uw = uh[:, 0], uh[:, 1], uh[:, 2]
+        # m = k2 n0 - k1 n1; u_w = W m; u_u = P n1 - A k2 n2 + Z1 m; u_v = -P n0 + A k1 n2 + Z2 m (Mann 1998 Eq. 46-47)
+        np.multiply(n0, k2, out=mix)
+        np.multiply(n1, k1, out=tmp)
+        mix -= tmp
+        np.multiply(w, mix, out=uw)
+        np.multiply(p, n1, out=uu)
+        np.multiply(a, k2, out=real)
+        np.multiply(real, n2, out=tmp)
+        uu -= tmp
+        np.multiply(z1, mix, out=tmp)
+        uu += tmp
+        np.multiply(p, n0, out=uv)
+        np.negative(uv, out=uv)
+        np.multiply(a, k1, out=real)
+        np.multiply(real, n2, out=tmp)
+        uv += tmp
+        np.multiply(z2, mix, out=tmp)
+        uv += tmp
+        for i in self._hermitian_slabs.intersection(range(i0, i1)):
+            hermitian_complete(uh[i - i0])
+        s.yz_plan(b).execute()
+        ny, nz = self.ny, self.nz
+        for c in range(3):
+            dest = self._spectra[c].reshape(ny, nz, -1)[:, :, i0:i1]
+            dest[...] = uh[:, c, :ny, :nz].transpose(1, 2, 0)
+
+    def _rows(self, s: _Scratch, c: int, r0: int) -> None:
+        r1 = min(r0 + ROW_BLOCK, self.ny * self.nz)
+        n = r1 - r0
+        spectra = self._spectra[c, r0:r1, : self.box.nk1]
+        plan = s.t_plan(n)
+        plan.update_arrays(spectra, s.rows[:n])
+        plan.execute()
+        out = self._output.reshape(self.box.nt, -1)
+        out[:, r0:r1] = s.rows[:n].T
+
+
+def mann_box(stencil: MannStencil, ny: int, nz: int, seed: int, threads: int | None = None) -> np.ndarray:
+    """One frozen 3-D box (3, nt, ny, nz) float32 (snapshot 0 of ``seed``): the classic Mann (1998) field."""
+    gen = MannSnapshots(stencil, ny, nz, threads)
+    out = np.empty((3, stencil.box.nt, ny, nz), np.float32)
+    for _, comp, field in gen.generate(seed, [0.0]):
+        out[COMPONENTS.index(comp)] = field
+    return out

@@ -1,0 +1,216 @@
+"""The Mann (1998) synthesis stencil of one parameter set and grid: C(k) and 1/tau_e(k), stored compactly.
+
+The box is (xi, y, z) with xi along the mean wind; the real FFT is taken along xi (= the time
+axis of a plane, dx = U dt), so the half spectrum holds slabs k1 >= 0 of shape (nyp, nzp).
+Time reversal: a plane sees the frozen box u(xi = -U t) (Taylor: u(X, T) = u_box(X - U T)), so
+the stored slab of FFT frequency index i holds the physical wavenumber k1 = -i dk1.
+
+Compact factor. With a = sqrt(E(k0)/(4 pi))/k0^2, m = k2 n0 - k1 n1 and C = D A (Mann 1998
+Eq. 46-47; turbgen.theory.mann_tensor.tensor_factor) the product u_hat = C n reads
+    u_hat_u = P n1 - (A k2) n2 + Z1 m,   u_hat_v = -P n0 + (A k1) n2 + Z2 m,   u_hat_w = W m
+with A = a, P = a k30, Z1 = a zeta1, Z2 = a zeta2, W = a k0^2/k^2, all times sqrt(dk1 dk2 dk3 / 2)
+(the noise has E|n|^2 = 2). Under k2 -> -k2 the coefficients A, P, Z1, W are even and Z2 is
+odd, so only rows k2 >= 0 are stored: 5 float32 numbers per (k1 >= 0, k2 >= 0, k3), i.e.
+5/16 of the full 8-entry float32 factor on the whole half spectrum.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.theory.eddy_lifetime import evolution_lifetime_s
+from turbgen.theory.mann_tensor import tensor_factor
+from turbgen.theory.params import MannParams
+
+STENCIL_VERSION = 1
+COEF_NAMES = ("A", "P", "Z1", "Z2", "W")
+_ODD = (False, False, False, True, False)  # parity of each coefficient under k2 -> -k2
+_BUILD_POINTS = 1 << 18  # points per float64 batch while building (~2 MiB per temporary)
+
+
+@dataclass(frozen=True)
+class BoxShape:
+    """The synthesis box: nt samples along xi spaced dx_m [m], nyp x nzp (padded) spaced dy_m, dz_m [m]."""
+
+    nt: int
+    dx_m: float
+    nyp: int
+    nzp: int
+    dy_m: float
+    dz_m: float
+
+    @property
+    def nk1(self) -> int:
+        """Slabs of the real-FFT half spectrum along xi."""
+        return self.nt // 2 + 1
+
+    @property
+    def nk2_half(self) -> int:
+        """Stored k2 rows (k2 = 0 .. nyp//2)."""
+        return self.nyp // 2 + 1
+
+    def dk(self) -> tuple[float, float, float]:
+        """Wavenumber spacings (dk1, dk2, dk3) [rad/m] of the periodic box."""
+        return (
+            2 * np.pi / (self.nt * self.dx_m),
+            2 * np.pi / (self.nyp * self.dy_m),
+            2 * np.pi / (self.nzp * self.dz_m),
+        )
+
+    def k1(self) -> np.ndarray:
+        """Physical k1 [rad/m] of the stored slabs: -i dk1 (time reversal, see module docstring)."""
+        return -np.arange(self.nk1) * self.dk()[0]
+
+    def k2(self) -> np.ndarray:
+        """k2 [rad/m] of all nyp rows: j dk2 for j <= nyp//2 (Nyquist stored positive), else (j - nyp) dk2."""
+        j = np.arange(self.nyp)
+        return np.where(j <= self.nyp // 2, j, j - self.nyp) * self.dk()[1]
+
+    def k3(self) -> np.ndarray:
+        """k3 [rad/m] of the nzp columns (numpy fftfreq order)."""
+        return np.fft.fftfreq(self.nzp, d=self.dz_m) * 2 * np.pi
+
+
+@dataclass(frozen=True, eq=False)
+class MannStencil:
+    """Compact factor ``coef`` (5, nk1, nyp//2+1, nzp) float32 and ``inv_tau`` [1/s] (None if frozen)."""
+
+    params: MannParams
+    box: BoxShape
+    coef: np.ndarray
+    inv_tau: np.ndarray | None
+
+    @property
+    def nbytes(self) -> int:
+        return self.coef.nbytes + (0 if self.inv_tau is None else self.inv_tau.nbytes)
+
+
+def stencil_nbytes(box: BoxShape, frozen: bool) -> int:
+    """Bytes held by the stencil of ``box`` (for memory estimates before building it)."""
+    per = box.nk1 * box.nk2_half * box.nzp * 4
+    return per * (5 if frozen else 6)
+
+
+def expand_k2(half: np.ndarray, nyp: int, odd: bool, out: np.ndarray) -> np.ndarray:
+    """Rows k2 >= 0 (..., nyp//2+1, nz) -> all nyp rows in FFT order, negated on k2 < 0 if ``odd``."""
+    h = nyp // 2
+    out[..., : h + 1, :] = half
+    mirror = half[..., nyp - h - 1 : 0 : -1, :]  # row j > h is row nyp - j of the k2 >= 0 half
+    if odd:
+        np.negative(mirror, out=out[..., h + 1 :, :])
+    else:
+        out[..., h + 1 :, :] = mirror
+    return out
+
+
+def _compact(c, k1, k2):
+    """(A, P, Z1, Z2, W) from the factor C (3, 3, ...) of tensor_factor, exactly (see module docstring)."""
+    k1, k2 = np.broadcast_arrays(k1, k2, c[0, 0])[:2]
+    q = k1 * k1 + k2 * k2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(q > 0, (c[1, 2] * k1 - c[0, 2] * k2) / q, 0.0)
+        w = np.where(q > 0, (c[2, 0] * k2 - c[2, 1] * k1) / q, 0.0)
+        on_axis = k1 == 0  # the k1 = 0 slab: zeta2 = 0, C01 = a k30, C00 = a zeta1 k2
+        z2 = np.where(on_axis, np.where(k2 != 0, (c[1, 0] + c[0, 1]) / k2, 0.0), -c[1, 1] / k1)
+        p = np.where(on_axis, c[0, 1], z2 * k2 - c[1, 0])
+        z1 = np.where(on_axis, np.where(k2 != 0, c[0, 0] / k2, 0.0), (p - c[0, 1]) / k1)
+    return a, p, z1, z2, w
+
+
+def _build(params: MannParams, box: BoxShape) -> MannStencil:
+    nk1, nh, nzp = box.nk1, box.nk2_half, box.nzp
+    scale = np.sqrt(np.prod(box.dk()) / 2.0)
+    k1_all = box.k1()
+    k2 = box.k2()[:nh][None, :, None]
+    k3 = box.k3()[None, None, :]
+    coef = np.empty((5, nk1, nh, nzp), dtype=np.float32)
+    frozen = params.evo_time_s is None
+    inv_tau = None if frozen else np.empty((nk1, nh, nzp), dtype=np.float32)
+    step = max(1, _BUILD_POINTS // (nh * nzp))
+    for i0 in range(0, nk1, step):
+        k1 = k1_all[i0 : i0 + step][:, None, None]
+        c = tensor_factor(k1, k2, k3, params)
+        for dst, val in zip(coef[:, i0 : i0 + step], _compact(c, k1, k2)):
+            dst[...] = val * scale
+        if inv_tau is not None:
+            kmag = np.sqrt(k1 * k1 + k2 * k2 + k3 * k3)
+            inv_tau[i0 : i0 + step] = 1.0 / evolution_lifetime_s(kmag, params)  # tau_e, paper 000 Eq. 15
+    return MannStencil(params, box, coef, inv_tau)
+
+
+def stencil_key(params: MannParams, box: BoxShape) -> str:
+    """Hash of everything the stencil depends on (cache file name)."""
+    text = json.dumps({"v": STENCIL_VERSION, "params": asdict(params), "box": asdict(box)}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def build_stencil(params: MannParams, box: BoxShape, cache_dir: str | Path | None = None) -> MannStencil:
+    """The stencil of ``params`` on ``box``; with ``cache_dir``, loaded from / saved to ``<key>.npz`` there."""
+    if cache_dir is None:
+        return _build(params, box)
+    path = Path(cache_dir) / f"mann-stencil-{stencil_key(params, box)}.npy"
+    frozen = params.evo_time_s is None
+    expected = (6 - frozen, box.nk1, box.nk2_half, box.nzp)
+    if path.exists():
+        try:
+            data = np.load(path)
+            if data.shape == expected and data.dtype == np.float32:
+                return MannStencil(params, box, data[:5], None if frozen else data[5])
+        except (OSError, ValueError):
+            pass  # unreadable cache entry: rebuild and replace it
+    stencil = _build(params, box)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with open(tmp, "wb") as f:
+        np.save(f, stencil.coef if frozen else np.concatenate([stencil.coef, stencil.inv_tau[None]]))
+    os.replace(tmp, path)
+    return stencil
+
+
+def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
+    """The full factor C (3, 3, nyp, nzp) [float64, times sqrt(dk/2)] of slab ``i``, rebuilt from the compact form.
+
+    For tests and the discrete oracle: E[u_hat u_hat^H] = 2 C C^T on every stored point.
+    """
+    box = stencil.box
+    full = [
+        expand_k2(stencil.coef[n, i].astype(float), box.nyp, _ODD[n], np.empty((box.nyp, box.nzp)))
+        for n in range(5)
+    ]
+    a, p, z1, z2, w = full
+    k1 = box.k1()[i]
+    k2 = box.k2()[:, None] * np.ones((1, box.nzp))
+    c = np.zeros((3, 3, box.nyp, box.nzp))
+    # u = P n1 - A k2 n2 + Z1 (k2 n0 - k1 n1); v = -P n0 + A k1 n2 + Z2 (k2 n0 - k1 n1); w = W (k2 n0 - k1 n1)
+    c[0] = [z1 * k2, p - z1 * k1, -a * k2]
+    c[1] = [-p + z2 * k2, -z2 * k1, a * k1]
+    c[2] = [w * k2, -w * k1, np.zeros_like(a)]
+    return c
+
+
+def discrete_spectra(stencil: MannStencil) -> np.ndarray:
+    """Exact expectation of the synthesised discrete field: S[i, j, slab] = sum over (k2, k3) of E[u_hat_i u_hat_j^*].
+
+    Shape (3, 3, nk1), real [m^2 s^-2]. A point's variance is sum_slab w_slab S[i, i, slab] with
+    w = 1 on the k1 = 0 and Nyquist slabs and 2 elsewhere (the Hermitian partner slab).
+    """
+    out = np.empty((3, 3, stencil.box.nk1))
+    for i in range(stencil.box.nk1):
+        c = slab_factor(stencil, i)
+        out[:, :, i] = 2.0 * np.einsum("ikyz,jkyz->ij", c, c)
+    return out
+
+
+def slab_weights(nt: int) -> np.ndarray:
+    """Weights 1 (k1 = 0, Nyquist) or 2 of the half-spectrum slabs in full-spectrum sums."""
+    w = np.full(nt // 2 + 1, 2.0)
+    w[0] = 1.0
+    if nt % 2 == 0:
+        w[-1] = 1.0
+    return w
