@@ -18,12 +18,11 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.export.outputs import OutputSet
-from turbgen.export.request import ExportRequest, ExportResult, read_full_plane
+from turbgen.export.request import ExportRequest, ExportResult, Plane
 from turbgen.export.wnd import (BladedStats, WndHeader, bladed_raw, check_even_nt, export_root, from_bladed,
                                 inflowwind_lines, read_wnd, write_pair)
 
 MAX_PLANES = 30  # the reader copies the distances into a fixed 30-element buffer
-_TIME_CHUNK_BYTES = 1 << 24
 
 
 def plane_distances(x_m) -> np.ndarray:
@@ -50,19 +49,18 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
     with OutputSet(paths, overwrite=req.overwrite) as files:
         stats = BladedStats()
         for ix in range(g.nx):  # pass 1: one TI scaling that fits every plane
-            stats.add(read_full_plane(fs, ix, lay), lay.mean_u(fs.U_m_s), fs.U_m_s)
+            stats.add(Plane(fs, ix, lay), fs.U_m_s)
         header = WndHeader(nz=lay.nz, ny=g.ny, nt=g.nt, dz_m=g.dz_m, dy_m=g.dy_m, dx_m=fs.U_m_s * g.dt_s,
                            U_m_s=fs.U_m_s, ti_percent=stats.ti_percent(fs.U_m_s), zref_m=lay.centre_m)
-        step = max(1, _TIME_CHUNK_BYTES // (6 * g.ny * lay.nz))
         with open(files.temp(paths[0]), "wb") as f:
             f.write(np.asarray([len(dist)], dtype="<i2").tobytes() + dist.tobytes())
             for ix in range(g.nx):  # pass 2: plane, time, z, y, component
-                vel = read_full_plane(fs, ix, lay)
-                for a in range(0, g.nt, step):
-                    block = bladed_raw(vel, a, min(g.nt, a + step), header.U_m_s, header.ti_percent)
+                plane = Plane(fs, ix, lay)
+                for a, b in plane.blocks(8 * plane.ny * plane.nz):
+                    block = bladed_raw(plane, a, b, header.U_m_s, header.ti_percent)
                     f.write(np.ascontiguousarray(block).tobytes())
                 if ix == ix_rotor:
-                    write_pair(files, root, vel, header, lay, periodic=req.periodic,
+                    write_pair(files, root, plane, header, lay, periodic=req.periodic,
                                title=f"turbgen 4D export: the .wnd holds plane x = {g.x_m[ix]:g} m")
     lines = inflowwind_lines(root) + (
         "LidarSim input file, section ---- Wind Evolution ----:",

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.export.outputs import OutputSet
-from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, ifw_line, read_full_plane
+from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line
 
 
 def component_paths(root) -> dict[str, Path]:
@@ -24,11 +24,13 @@ def component_paths(root) -> dict[str, Path]:
     return {c: root.with_name(f"{root.name}_{c}.bin") for c in COMPONENTS}
 
 
-def write_hawc2(paths: dict, vel: dict, U_ref: float) -> None:
-    """Write full velocities ``vel`` (nt, ny, nz) as HAWC boxes holding u - U_ref, v, w."""
+def write_hawc2(paths: dict, plane: Plane, U_ref: float) -> None:
+    """Write ``plane`` as HAWC boxes holding u - U_ref, v, w (full velocities)."""
     for c in COMPONENTS:
-        box = vel[c] - U_ref if c == "u" else vel[c]
-        np.ascontiguousarray(box[:, ::-1, :], dtype="<f4").tofile(paths[c])
+        with open(paths[c], "wb") as f:
+            for a, b in plane.blocks(8 * plane.ny * plane.nz):
+                box = plane.full(c, a, b) - (U_ref if c == "u" else 0.0)
+                np.ascontiguousarray(box[:, ::-1, :], dtype="<f4").tofile(f)
 
 
 def read_hawc2(root, shape, U_ref: float) -> dict:
@@ -50,7 +52,7 @@ def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
     g = fs.grid
     paths = component_paths(root)
     with OutputSet(paths.values(), overwrite=req.overwrite) as files:
-        write_hawc2({c: files.temp(p) for c, p in paths.items()}, read_full_plane(fs, ix, lay), fs.U_m_s)
+        write_hawc2({c: files.temp(p) for c, p in paths.items()}, Plane(fs, ix, lay), fs.U_m_s)
     keys = [(paths["u"], "FileName_u", "u - URef"), (paths["v"], "FileName_v", "v"), (paths["w"], "FileName_w", "w"),
             (g.nt, "nx", "number of grids in x (time)"), (g.ny, "ny", "number of grids in y"),
             (lay.nz, "nz", "number of grids in z"), (fs.U_m_s * g.dt_s, "dx", "distance between x points (m) = URef*dt"),

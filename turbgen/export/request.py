@@ -64,12 +64,27 @@ class ExportResult:
     notes: tuple[str, ...] = field(default=())
 
 
-def read_full_plane(fs, ix: int, layout: VerticalLayout) -> dict[str, np.ndarray]:
-    """Plane ``ix`` of store ``fs`` as full velocities [m/s], float64 (nt, ny, nz_kept):
-    stored fluctuations of the kept rows plus the power-law mean on u."""
-    out = {c: fs.read_plane(c, ix)[:, :, layout.z_first:].astype(np.float64) for c in COMPONENTS}
-    out["u"] += layout.mean_u(fs.U_m_s)[None, None, :]
-    return out
+class Plane:
+    """One yz-plane as stored (float32 fluctuations, kept rows only) plus the power-law mean of
+    u; full velocities are made in float64 one time block at a time, so memory stays at about
+    one stored plane."""
+
+    def __init__(self, fs, ix: int, layout: VerticalLayout):
+        self.fluct = {c: fs.read_plane(c, ix)[:, :, layout.z_first:] for c in COMPONENTS}
+        self.mean_u = layout.mean_u(fs.U_m_s)
+        self.nt, self.ny, self.nz = self.fluct["u"].shape
+
+    def full(self, c: str, a: int = 0, b: int | None = None) -> np.ndarray:
+        """Full velocity [m/s] of component ``c`` for time steps a..b-1, float64 (b - a, ny, nz)."""
+        v = self.fluct[c][a:b].astype(np.float64)
+        if c == "u":
+            v += self.mean_u[None, None, :]
+        return v
+
+    def blocks(self, bytes_per_step: int, budget: int = 1 << 24):
+        """(a, b) time blocks of at most ``budget`` bytes at ``bytes_per_step`` each."""
+        step = max(1, budget // max(1, bytes_per_step))
+        return [(a, min(self.nt, a + step)) for a in range(0, self.nt, step)]
 
 
 def ifw_line(value, key: str, comment: str) -> str:

@@ -18,12 +18,11 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.export.outputs import OutputSet
-from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, ifw_line, read_full_plane
+from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line
 
 _HEADER = struct.Struct("<hhi6f3fi4f4i6f")
 _OFFSET = {"u": 1.0, "v": 0.0, "w": 0.0}
 _RAW_LIMIT = 32000.0  # keeps |raw| below the int16 limit with margin
-_TIME_CHUNK_BYTES = 1 << 24
 
 
 class BladedStats:
@@ -34,15 +33,17 @@ class BladedStats:
         self.maxdev = dict.fromkeys(COMPONENTS, 0.0)
         self.sums = {c: [0, 0.0, 0.0] for c in COMPONENTS}
 
-    def add(self, vel: dict, mean_u: np.ndarray, U_m_s: float) -> None:
-        """Include one plane of full velocities ``vel`` whose u has the mean profile ``mean_u`` (nz,)."""
-        fluct = dict(vel, u=vel["u"] - mean_u[None, None, :])
+    def add(self, plane: Plane, U_m_s: float) -> None:
+        """Include one plane."""
         for c in COMPONENTS:
-            self.maxdev[c] = max(self.maxdev[c], float(np.abs(vel[c] - U_m_s * _OFFSET[c]).max()))
             s = self.sums[c]
-            s[0] += fluct[c].size
-            s[1] += float(fluct[c].sum(dtype=np.float64))
-            s[2] += float(np.square(fluct[c], dtype=np.float64).sum())
+            for a, b in plane.blocks(8 * plane.ny * plane.nz):
+                dev = np.abs(plane.full(c, a, b) - U_m_s * _OFFSET[c]).max()
+                self.maxdev[c] = max(self.maxdev[c], float(dev))
+                fluct = plane.fluct[c][a:b].astype(np.float64)
+                s[0] += fluct.size
+                s[1] += float(fluct.sum())
+                s[2] += float(np.square(fluct).sum())
 
     def ti_percent(self, U_m_s: float) -> tuple[float, float, float]:
         """TI [%] per component: the fluctuations' sigma/U, enlarged where needed so that every
@@ -55,9 +56,9 @@ class BladedStats:
         return tuple(out)
 
 
-def bladed_raw(vel: dict, a: int, b: int, U_m_s: float, ti: tuple) -> np.ndarray:
+def bladed_raw(plane: Plane, a: int, b: int, U_m_s: float, ti: tuple) -> np.ndarray:
     """int16 block (b - a, nz, ny, 3) for time steps a..b-1 (component fastest, then y, z)."""
-    raw = [np.clip(np.rint((vel[c][a:b] / U_m_s - _OFFSET[c]) * 1e5 / t), -32768, 32767)
+    raw = [np.clip(np.rint((plane.full(c, a, b) / U_m_s - _OFFSET[c]) * 1e5 / t), -32768, 32767)
            for c, t in zip(COMPONENTS, ti)]
     return np.stack(raw, axis=-1).astype("<i2").transpose(0, 2, 1, 3)
 
@@ -94,14 +95,12 @@ class WndHeader:
                    ti_percent=tuple(h[6:9]), zref_m=h[5])
 
 
-def write_wnd(path, vel: dict, header: WndHeader) -> None:
-    """Header plus the time steps of ``vel`` (full velocities (nt, ny, nz))."""
-    nt, ny, nz = vel["u"].shape
-    step = max(1, _TIME_CHUNK_BYTES // (6 * ny * nz))
+def write_wnd(path, plane: Plane, header: WndHeader) -> None:
+    """Header plus the time steps of ``plane``."""
     with open(path, "wb") as f:
         f.write(header.pack())
-        for a in range(0, nt, step):
-            f.write(np.ascontiguousarray(bladed_raw(vel, a, min(nt, a + step), header.U_m_s, header.ti_percent)).tobytes())
+        for a, b in plane.blocks(8 * plane.ny * plane.nz):
+            f.write(np.ascontiguousarray(bladed_raw(plane, a, b, header.U_m_s, header.ti_percent)).tobytes())
 
 
 def read_wnd(path) -> dict:
@@ -159,9 +158,9 @@ def check_even_nt(nt: int) -> None:
         raise ParameterError(f"nt = {nt} is odd; the .wnd header stores nt/2, so the Bladed/evo export needs an even nt")
 
 
-def write_pair(files: OutputSet, root: Path, vel: dict, header: WndHeader, lay, *, periodic: bool, title: str) -> None:
+def write_pair(files: OutputSet, root: Path, plane: Plane, header: WndHeader, lay, *, periodic: bool, title: str) -> None:
     """Write ROOT.wnd and ROOT.sum (through the temporary names of ``files``)."""
-    write_wnd(files.temp(root.with_suffix(".wnd")), vel, header)
+    write_wnd(files.temp(root.with_suffix(".wnd")), plane, header)
     files.temp(root.with_suffix(".sum")).write_text(sum_text(
         hub_height_m=lay.hub_height_m, U_m_s=header.U_m_s, ti_percent=header.ti_percent,
         height_offset_m=lay.hub_height_m - lay.centre_m, periodic=periodic, title=title))
@@ -189,12 +188,12 @@ def export_wnd(fs, out, req: ExportRequest) -> ExportResult:
     check_even_nt(g.nt)
     paths = [root.with_suffix(".wnd"), root.with_suffix(".sum")]
     with OutputSet(paths, overwrite=req.overwrite) as files:
-        vel = read_full_plane(fs, ix, lay)
+        plane = Plane(fs, ix, lay)
         stats = BladedStats()
-        stats.add(vel, lay.mean_u(fs.U_m_s), fs.U_m_s)
+        stats.add(plane, fs.U_m_s)
         header = WndHeader(nz=lay.nz, ny=g.ny, nt=g.nt, dz_m=g.dz_m, dy_m=g.dy_m, dx_m=fs.U_m_s * g.dt_s,
                            U_m_s=fs.U_m_s, ti_percent=stats.ti_percent(fs.U_m_s), zref_m=lay.centre_m)
-        write_pair(files, root, vel, header, lay, periodic=req.periodic,
+        write_pair(files, root, plane, header, lay, periodic=req.periodic,
                    title=f"turbgen export: plane x = {g.x_m[ix]:g} m, power-law shear alpha = {lay.shear_exponent:g}")
     notes = [f"plane x = {g.x_m[ix]:g} m in eddy time: slice k is stored t index k"]
     if lay.z_first:

@@ -1,0 +1,127 @@
+"""`turbgen export` on the command line: exit codes, refusals, no overwrite, atomic output."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from tests.export_fixtures import make_store
+from turbgen.cli import cli
+from turbgen.export import ExportRequest, export_store
+from turbgen.store import FieldStore
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory):
+    path, _ = make_store(tmp_path_factory.mktemp("cli") / "s.zarr")
+    return path
+
+
+def run(*args):
+    return CliRunner().invoke(cli, ["export", *map(str, args)])
+
+
+@pytest.mark.parametrize("fmt,out,files,key", [
+    ("bts", "f.bts", ["f.bts"], "FileName_BTS"),
+    ("wnd", "r", ["r.wnd", "r.sum"], "FilenameRoot"),
+    ("evo", "lid.evo", ["lid.evo", "lid.wnd", "lid.sum"], "EvolutionFlag"),
+    ("hawc2", "box", ["box_u.bin", "box_v.bin", "box_w.bin"], "FileName_u"),
+    ("mt4d", "f.mt4d", ["f.mt4d"], "not read by InflowWind"),
+    ("hdf5", "f.h5", ["f.h5"], "not read by InflowWind"),
+])
+def test_each_format_writes_and_prints_inflowwind_lines(store, tmp_path, fmt, out, files, key):
+    res = run(store, "--format", fmt, "--out", tmp_path / out)
+    assert res.exit_code == 0, res.output
+    assert key in res.stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(files)  # no temporary files left
+
+
+def test_windtype_lines(store, tmp_path):
+    assert "3   WindType" in run(store, "--format", "bts", "--out", tmp_path / "a.bts").stdout
+    assert "4   WindType" in run(store, "--format", "wnd", "--out", tmp_path / "a").stdout
+    assert "5   WindType" in run(store, "--format", "hawc2", "--out", tmp_path / "a").stdout
+
+
+def test_no_overwrite_without_flag(store, tmp_path):
+    out = tmp_path / "f.bts"
+    assert run(store, "--format", "bts", "--out", out).exit_code == 0
+    before = out.read_bytes()
+    res = run(store, "--format", "bts", "--out", out, "--shear-exponent", "0.1")
+    assert res.exit_code == 2 and "--overwrite" in res.output
+    assert out.read_bytes() == before
+    res = run(store, "--format", "bts", "--out", out, "--shear-exponent", "0.1", "--overwrite")
+    assert res.exit_code == 0 and out.read_bytes() != before
+
+
+def test_partial_existing_output_set_is_refused(store, tmp_path):
+    (tmp_path / "lid.sum").write_text("someone's file\n")
+    res = run(store, "--format", "evo", "--out", tmp_path / "lid")
+    assert res.exit_code == 2 and "lid.sum" in res.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["lid.sum"]
+    assert (tmp_path / "lid.sum").read_text() == "someone's file\n"
+
+
+def test_incomplete_and_missing_store_exit_2(store, tmp_path):
+    import shutil
+
+    broken = tmp_path / "broken.zarr"
+    shutil.copytree(store, broken)
+    meta = json.loads((broken / "zarr.json").read_text())
+    del meta["attributes"]["turbgen_complete"]
+    (broken / "zarr.json").write_text(json.dumps(meta))
+    res = run(broken, "--format", "bts", "--out", tmp_path / "f.bts")
+    assert res.exit_code == 2 and "incomplete" in res.output
+    assert len(res.output.strip().splitlines()) == 1
+    assert not (tmp_path / "f.bts").exists()
+    res = run(tmp_path / "nothing.zarr", "--format", "hdf5", "--out", tmp_path / "f.h5")
+    assert res.exit_code == 2 and not (tmp_path / "f.h5").exists()
+
+
+def test_below_ground_exit_2_then_drop(tmp_path):
+    path, _ = make_store(tmp_path / "low.zarr", hub_height_m=5.0)  # rows at -4, -1, 2, ... m
+    res = run(path, "--format", "wnd", "--out", tmp_path / "low")
+    assert res.exit_code == 2 and "ground" in res.output and "--drop-below-ground" in res.output
+    assert not (tmp_path / "low.wnd").exists() and not (tmp_path / "low.sum").exists()
+    res = run(path, "--format", "wnd", "--out", tmp_path / "low", "--drop-below-ground")
+    assert res.exit_code == 0 and "dropped the 2" in res.output
+    res = run(path, "--format", "bts", "--out", tmp_path / "hi.bts", "--hub-height", "40")
+    assert res.exit_code == 0
+
+
+@pytest.mark.parametrize("args,msg", [
+    (["--plane", "3"], "plane"),
+    (["--shear-exponent", "2"], "shear exponent"),
+    (["--hub-height", "-5"], "hub height"),
+])
+def test_bad_options_exit_2(store, tmp_path, args, msg):
+    res = run(store, "--format", "bts", "--out", tmp_path / "f.bts", *args)
+    assert res.exit_code == 2 and msg in res.output
+    assert not list(tmp_path.iterdir())
+
+
+def test_tower_only_for_bts(store, tmp_path):
+    res = run(store, "--format", "hawc2", "--out", tmp_path / "b", "--tower")
+    assert res.exit_code == 2 and "--tower" in res.output
+
+
+def test_interrupted_export_leaves_nothing(store, tmp_path, monkeypatch):
+    real = FieldStore.read_plane
+
+    def failing(self, component, ix):
+        if ix == 2:
+            raise KeyboardInterrupt
+        return real(self, component, ix)
+
+    monkeypatch.setattr(FieldStore, "read_plane", failing)
+    with pytest.raises(KeyboardInterrupt):
+        export_store(store, "evo", tmp_path / "lid", ExportRequest())
+    assert not list(tmp_path.iterdir())
+
+
+def test_rotorless_store_needs_plane(tmp_path):
+    path, _ = make_store(tmp_path / "up.zarr", x_m=(10.0, 20.0))
+    res = run(path, "--format", "bts", "--out", tmp_path / "f.bts")
+    assert res.exit_code == 2 and "--plane" in res.output
+    assert run(path, "--format", "bts", "--out", tmp_path / "f.bts", "--plane", "1").exit_code == 0
