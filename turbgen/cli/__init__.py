@@ -56,5 +56,9 @@ def _register():
 
     cli.add_command(export.export)
 
+    from turbgen.cli import kaimal
+
+    cli.add_command(kaimal.kaimal)
+
 
 _register()

@@ -1,0 +1,85 @@
+"""Benchmark: `turbgen kaimal` vs the evoTurb pipeline (one independent 3-D field per plane) with pyconturb.
+
+    python benchmarks/bench_kaimal.py              # default case + pyconturb (1 plane, reduced nt) + 64 x 64
+    python benchmarks/bench_kaimal.py --pyconturb-nt 512 --skip-64
+
+Default case (issue 4): U = 16 m/s, IEC class A, hub 90 m, 4096 x 11 x 31 x 31 at dt = 0.5 s, 5 m spacing.
+turbgen writes the whole 4-D field (3 components, all planes) to a zarr store.
+
+pyconturb (the Veers method with a Cholesky factor per frequency, IEC coherence on u, v and w white,
+as evoTurb gets from TurbSim) is timed for ONE plane on the same 31 x 31 grid and dt, but with a
+reduced number of time steps (default 256, i.e. 128 of the 2048 frequencies): its cost is
+per frequency and independent of nt for a given grid, so the full time is EXTRAPOLATED as
+t_plane x (2048 / n_freq_reduced) x 11 planes. The extrapolation is printed as such.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.grid import Grid
+from turbgen.runs.defaults import DEFAULT_PLANES_M
+from turbgen.runs.kaimal import KaimalRun, kaimal_params, run_kaimal
+
+U, HUB, CLASS = 16.0, 90.0, "A"
+
+
+def time_turbgen(ny: int, dy: float, workdir: Path, nt: int = 4096) -> dict:
+    grid = Grid(nt, 0.5, tuple(DEFAULT_PLANES_M), ny, ny, dy, dy)
+    run = KaimalRun(kaimal_params(U, CLASS, HUB), grid, U, seed=1, hub_height_m=HUB, turb_class=CLASS)
+    out = workdir / f"kaimal_{ny}x{ny}.zarr"
+    t0 = time.perf_counter()
+    s = run_kaimal(run, out, overwrite=True)
+    s["wall_s"] = time.perf_counter() - t0
+    shutil.rmtree(out, ignore_errors=True)
+    return s
+
+
+def time_pyconturb_plane(nt_reduced: int, ny: int = 31, dy: float = 5.0) -> tuple[float, int]:
+    """Seconds for one 3-D pyconturb field (u, v, w) on the ny x ny grid with nt_reduced steps at dt 0.5 s."""
+    from pyconturb import gen_spat_grid, gen_turb
+
+    y = (np.arange(ny) - (ny - 1) / 2) * dy
+    z = HUB + (np.arange(ny) - (ny - 1) / 2) * dy
+    spat = gen_spat_grid(y, z)
+    t0 = time.perf_counter()
+    gen_turb(spat, T=nt_reduced * 0.5, nt=nt_reduced, u_ref=U, z_ref=HUB, turb_class=CLASS.lower(), seed=1,
+             coh_model="iec", dtype=np.float64)
+    return time.perf_counter() - t0, nt_reduced // 2
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--pyconturb-nt", type=int, default=256, help="time steps of the timed pyconturb plane")
+    ap.add_argument("--skip-pyconturb", action="store_true")
+    ap.add_argument("--skip-64", action="store_true")
+    args = ap.parse_args()
+    print(f"machine: {os.cpu_count()} cores; U {U:g} m/s, class {CLASS}, hub {HUB:g} m, dt 0.5 s, "
+          f"{len(DEFAULT_PLANES_M)} planes")
+    with tempfile.TemporaryDirectory(dir=".") as tmp:
+        tmp = Path(tmp)
+        s = time_turbgen(31, 5.0, tmp)
+        print(f"turbgen kaimal 4096 x 11 x 31 x 31 (u, v, w, written to zarr): {s['wall_s']:.1f} s; "
+              f"max torus {s['max_torus']}, yz clip error {s['yz_clip_error']:g}")
+        if not args.skip_pyconturb:
+            t_plane, nfreq = time_pyconturb_plane(args.pyconturb_nt)
+            full = t_plane * (2048 / nfreq) * len(DEFAULT_PLANES_M)
+            print(f"pyconturb 1 plane 31 x 31, nt = {args.pyconturb_nt} ({nfreq} frequencies): {t_plane:.1f} s measured")
+            print(f"pyconturb 11 planes x 4096 steps: {full / 60:.1f} min EXTRAPOLATED "
+                  f"(x {2048 / nfreq:g} frequencies x 11 planes; evoTurb's mixing step not included)")
+            print(f"ratio pyconturb / turbgen: {full / s['wall_s']:.0f}x (target >= 50x)")
+        if not args.skip_64:
+            s64 = time_turbgen(64, 4.84375, tmp)
+            print(f"turbgen kaimal 4096 x 11 x 64 x 64 (310 m, u, v, w, written to zarr): {s64['wall_s']:.1f} s; "
+                  f"max torus {s64['max_torus']}, yz clip error {s64['yz_clip_error']:g} (target: seconds to a minute)")
+
+
+if __name__ == "__main__":
+    main()
