@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
+import numpy as np
 from tqdm import tqdm
 
 from turbgen.errors import ParameterError, check_choice, check_int, check_nonnegative, check_positive
@@ -194,9 +195,11 @@ def kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float = 90.
 
 
 def memory_needed(grid: Grid) -> int:
-    """Peak bytes of a run: one component's spectrum (nx, nf, ny, nz) complex64 + one plane in flight."""
+    """Peak bytes of a run's arrays: one component's spectrum (nx, nf, ny, nz) complex64, plus one plane
+    in flight (its spectrum copy and float32 field, and the store's compression buffers)."""
     nf = grid.nt // 2 + 1
-    return grid.nx * nf * grid.ny * grid.nz * 8 + 3 * grid.nt * grid.ny * grid.nz * 4
+    plane = grid.ny * grid.nz
+    return (grid.nx + 2) * nf * plane * 8 + 3 * grid.nt * plane * 4
 
 
 def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | None = None,
@@ -218,7 +221,7 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
             for c in COMPONENTS:
                 for ix, plane in gen.component_planes(c, tick=lambda: bar.update(1)):
                     w.write(c, ix, plane)
-                    sums[c][0] += float((plane.astype("float64") ** 2).sum())
+                    sums[c][0] += float(np.einsum("tyz,tyz->", plane, plane, dtype=np.float64))
                     sums[c][1] += plane.size
         path = w.path
     summary = {"path": str(path), "seconds": time.perf_counter() - t0}
