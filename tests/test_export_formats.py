@@ -171,9 +171,16 @@ def test_evo_round_trip_reader_byte_order(store, tmp_path):
     assert read_sum(tmp_path / "lid.sum")["U_m_s"] == U
 
 
-def test_evo_refuses_what_the_format_cannot_hold(tmp_path):
-    path, _ = make_store(tmp_path / "half.zarr", x_m=(0.0, 12.5))
-    with pytest.raises(ParameterError, match="whole metres"):
+def test_evo_rounds_distances_and_refuses_what_the_format_cannot_hold(tmp_path):
+    path, data = make_store(tmp_path / "frac.zarr", x_m=(0.0, 13.3, 26.6))  # the default Mann spacing
+    r = export_store(path, "evo", tmp_path / "f")
+    assert any("13.3->13" in n and "26.6->27" in n for n in r.notes)
+    e = read_evo(tmp_path / "f.evo")
+    np.testing.assert_array_equal(e["x_up"], [0, 13, 27])
+    h = read_wnd(tmp_path / "f.wnd")["header"]
+    assert np.abs(e["w"][2] - data["w"][:, 2]).max() <= bladed_tolerance(h, 2)
+    path, _ = make_store(tmp_path / "close.zarr", x_m=(0.0, 0.4))
+    with pytest.raises(ParameterError, match="coincide"):
         export_store(path, "evo", tmp_path / "e")
     path, _ = make_store(tmp_path / "odd.zarr", nt=63)
     with pytest.raises(ParameterError, match="odd"):

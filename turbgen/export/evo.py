@@ -25,16 +25,19 @@ from turbgen.export.wnd import (BladedStats, WndHeader, bladed_raw, check_even_n
 MAX_PLANES = 30  # the reader copies the distances into a fixed 30-element buffer
 
 
-def plane_distances(x_m) -> np.ndarray:
-    """Plane distances as int16 whole metres; refuses what the format cannot hold."""
+def plane_distances(x_m) -> tuple[np.ndarray, list[str]]:
+    """Plane distances as int16 whole metres (the format's unit) and a note for each rounded one;
+    refuses what the format cannot hold (> 30 planes, |x| > 32767 m, planes merging on rounding)."""
     x = np.asarray(x_m, dtype=float)
     if len(x) > MAX_PLANES:
         raise ParameterError(f"{len(x)} planes: the lidar simulator's .evo reader holds at most {MAX_PLANES}")
     r = np.rint(x)
-    bad = [float(v) for v, rv in zip(x, r) if abs(v - rv) > 1e-6 or abs(rv) > 32767]
-    if bad:
-        raise ParameterError(f"plane positions {bad} m are not whole metres within +-32767; .evo stores int16 metres")
-    return r.astype("<i2")
+    if np.abs(r).max() > 32767:
+        raise ParameterError(f"plane positions {x.tolist()} m exceed the .evo int16 range +-32767 m")
+    if len(set(r.tolist())) != len(r):
+        raise ParameterError(f"plane positions {x.tolist()} m coincide when rounded to the .evo's whole metres")
+    rounded = [f"{v:g}->{rv:g}" for v, rv in zip(x, r) if abs(v - rv) > 1e-9]
+    return r.astype("<i2"), rounded
 
 
 def export_evo(fs, out, req: ExportRequest) -> ExportResult:
@@ -44,7 +47,7 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
     ix_rotor, lay = req.plane_index(fs), req.layout(fs)
     g = fs.grid
     check_even_nt(g.nt)
-    dist = plane_distances(g.x_m)
+    dist, rounded = plane_distances(g.x_m)
     paths = [root.with_suffix(".evo"), root.with_suffix(".wnd"), root.with_suffix(".sum")]
     with OutputSet(paths, overwrite=req.overwrite) as files:
         stats = BladedStats()
@@ -69,6 +72,9 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
     notes = [f"ROOT.evo holds {g.nx} planes at {dist.tolist()} m upstream (the simulator picks the nearest to -X, "
              "X measured from the tower axis)",
              f"ROOT.wnd holds plane x = {g.x_m[ix_rotor]:g} m; the turbine's InflowWind must use WindType 3 or 4"]
+    if rounded:
+        notes.append(f"plane distances rounded to the .evo's whole metres: {', '.join(rounded)} m "
+                     "(the simulator samples the stored eddy-time series of the nearest plane)")
     if lay.z_first:
         notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
     return ExportResult(tuple(paths), lines, tuple(notes))
