@@ -101,9 +101,17 @@ def test_bad_options_exit_2(store, tmp_path, args, msg):
     assert not list(tmp_path.iterdir())
 
 
-def test_tower_only_for_bts(store, tmp_path):
-    res = run(store, "--format", "hawc2", "--out", tmp_path / "b", "--tower")
-    assert res.exit_code == 2 and "--tower" in res.output
+@pytest.mark.parametrize("fmt,args", [
+    ("hawc2", ["--tower"]),
+    ("hawc2", ["--no-periodic"]),
+    ("hdf5", ["--plane", "1"]),
+    ("mt4d", ["--shear-exponent", "0.1"]),
+    ("mt4d", ["--drop-below-ground"]),
+])
+def test_options_a_format_would_ignore_are_refused(store, tmp_path, fmt, args):
+    res = run(store, "--format", fmt, "--out", tmp_path / "b", *args)
+    assert res.exit_code == 2 and args[0] in res.output
+    assert not list(tmp_path.iterdir())
 
 
 def test_interrupted_export_leaves_nothing(store, tmp_path, monkeypatch):

@@ -16,10 +16,12 @@ from turbgen.export.hawc2 import export_hawc2, read_hawc2
 from turbgen.export.hdf5 import export_hdf5, read_hdf5
 from turbgen.export.mt4d import export_mt4d, read_mt4d
 from turbgen.export.request import ExportRequest, ExportResult
+from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT
 from turbgen.export.wnd import export_wnd, read_sum, read_wnd
 from turbgen.errors import ParameterError, check_choice
 from turbgen.store import FieldStore, open_store
 
+WHOLE_FIELD = ("mt4d", "hdf5")  # every plane, stored fluctuations
 EXPORTERS = {"bts": export_bts, "wnd": export_wnd, "evo": export_evo, "hawc2": export_hawc2,
              "mt4d": export_mt4d, "hdf5": export_hdf5}
 
@@ -35,8 +37,23 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
     """
     check_choice("format", fmt, tuple(EXPORTERS))
     request = request or ExportRequest()
-    if request.tower and fmt != "bts":
-        raise ParameterError(f"--tower applies to --format bts only, not {fmt}")
+    _check_applicable(fmt, request)
     if not isinstance(store, FieldStore):
         store = open_store(store)
     return EXPORTERS[fmt](store, out, request)
+
+
+def _check_applicable(fmt: str, request: ExportRequest) -> None:
+    """Refuse options that the format would silently ignore."""
+    given = []
+    if request.tower and fmt != "bts":
+        given.append("--tower (bts only)")
+    if not request.periodic and fmt not in ("bts", "wnd", "evo"):
+        given.append("--no-periodic (bts, wnd, evo only; HAWC boxes are always periodic)")
+    if fmt in WHOLE_FIELD:
+        if request.plane is not None:
+            given.append("--plane")
+        if request.hub_height_m is not None or request.drop_below_ground or request.shear_exponent != DEFAULT_SHEAR_EXPONENT:
+            given.append("--hub-height/--shear-exponent/--drop-below-ground (no mean profile is added)")
+    if given:
+        raise ParameterError(f"--format {fmt} does not use {'; '.join(given)}")
