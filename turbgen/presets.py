@@ -311,6 +311,27 @@ def kaimal_settings_for(
     return KaimalSettings(params, "exp", k.a_x if a_x is None else a_x, k.b_x if b_x is None else b_x)
 
 
+def mann_run_keys(preset: str | StabilityPreset, *, user: Mapping[str, StabilityPreset] | None = None) -> dict:
+    """The keys of a Mann run mapping (turbgen.runs.mann.MannRun.from_mapping) that ``preset`` sets.
+
+    length_scale_m, gamma, evo_time_s, factor1, lifetime and turb_class: the run derives ae from
+    the model variance for the class's sigma_1 at its U (the same ae as :func:`mann_params_for`).
+    Used by ``turbgen mann --preset`` and by the sweep, so both build the same run.
+    """
+    p = _resolve(preset, user)
+    if p.mann is None:
+        raise ParameterError(f"preset {p.name!r} has no Mann parameters")
+    m = p.mann
+    return {
+        "length_scale_m": m.length_scale_m,
+        "gamma": m.gamma,
+        "evo_time_s": m.evo_time_s,
+        "factor1": m.factor1,
+        "lifetime": m.lifetime,
+        "turb_class": p.turb_class,
+    }
+
+
 def kaimal_run_keys(
     preset: str | StabilityPreset,
     U_m_s: float,
@@ -348,6 +369,7 @@ __all__ = [
     "StabilityPreset",
     "get_preset",
     "kaimal_run_keys",
+    "mann_run_keys",
     "kaimal_settings_for",
     "load_presets",
     "mann_params_for",

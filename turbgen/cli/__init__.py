@@ -56,6 +56,14 @@ def _register():
 
     cli.add_command(export.export)
 
+    from turbgen.cli import mann
+
+    cli.add_command(mann.mann)
+
+    from turbgen.cli import sweep
+
+    cli.add_command(sweep.sweep)
+
     from turbgen.cli import kaimal
 
     cli.add_command(kaimal.kaimal)

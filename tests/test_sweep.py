@@ -1,0 +1,176 @@
+"""`turbgen sweep` end to end on a 2-worker LocalCluster: stores bit-identical to single runs, resume,
+manifest, failure isolation, the directory lock."""
+
+import json
+import logging
+import shutil
+import socket
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from turbgen.cli import cli
+from turbgen.store import open_store
+from turbgen.sweep import SweepLock, make_plan, run_sweep
+from turbgen.sweep.lock import LOCK_NAME
+from turbgen.sweep.manifest import read_manifest, store_checksum
+
+GRID = {"nt": 32, "dt": 0.5, "planes": [0.0, 40.0], "ny": 4, "nz": 4, "dy": 8.0}
+CLI_GRID = ["--nt", "32", "--dt", "0.5", "--planes", "0,40", "--ny", "4", "--nz", "4", "--dy", "8"]
+PRESETS, SPEEDS, SEEDS = ["neutral", "stable"], [12.0, 16.0], [1, 2, 3]
+
+
+@pytest.fixture(scope="module")
+def client():
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                      silence_logs=logging.ERROR) as cluster, Client(cluster) as c:  # fmt: skip
+        yield c
+
+
+def _plan(out, model, **kw):
+    return make_plan(out=out, models=[model], presets=PRESETS, speeds=SPEEDS, seeds=SEEDS, grid=GRID, **kw)
+
+
+@pytest.fixture(scope="module", params=["kaimal", "mann"])
+def swept(request, client, tmp_path_factory):
+    """One full sweep per model (2 presets x 2 speeds x 3 seeds), shared by the tests below."""
+    out = tmp_path_factory.mktemp(f"sweep_{request.param}")
+    plan = _plan(out, request.param)
+    result = run_sweep(plan, client=client, progress=False)
+    return request.param, plan, result
+
+
+def _same_field(a, b):
+    fa, fb = open_store(a), open_store(b)
+    assert fa.grid == fb.grid
+    for c in "uvw":
+        assert np.array_equal(fa.array(c)[:], fb.array(c)[:]), c  # bit for bit (float32, NaN-free)
+
+
+def test_sweep_stores_equal_single_runs_bit_for_bit(swept, tmp_path):
+    model, plan, result = swept
+    assert result.ok and result.ran == 12 and result.skipped == 0
+    runner = CliRunner()
+    for pr in plan.runs:
+        single = tmp_path / f"{pr.name}.zarr"
+        args = [model, "--preset", pr.preset, "--U", f"{pr.U_m_s:g}", "--seed", str(pr.seed), *CLI_GRID,
+                "--out", str(single)]  # fmt: skip
+        res = runner.invoke(cli, args)
+        assert res.exit_code == 0, res.output
+        _same_field(plan.out / pr.store_name, single)
+        rec = next(r for r in result.records if r["name"] == pr.name)
+        assert rec["checksum"] == store_checksum(single)
+
+
+def test_manifest_describes_every_run(swept):
+    model, plan, result = swept
+    doc = read_manifest(plan.out)
+    assert doc["counts"] == {"complete": 12, "failed": 0, "pending": 0}
+    assert [r["name"] for r in doc["runs"]] == [pr.name for pr in plan.runs]
+    for pr, rec in zip(plan.runs, doc["runs"]):
+        fs = open_store(plan.out / rec["path"])
+        assert (rec["model"], rec["preset"], rec["U_m_s"], rec["seed"]) == (model, pr.preset, pr.U_m_s, pr.seed)
+        assert rec["status"] == "complete" and rec["action"] == "ran" and rec["error"] is None
+        assert rec["duration_s"] > 0 and rec["checksum"].startswith("sha256:")
+        assert rec["parameters"] == fs.attrs["parameters"]
+        # the recorded sigma_u is the generator's summary of the stored u over all points and planes
+        # (run_mann: std about the mean; run_kaimal: rms)
+        u = fs.array("u")[:].astype(np.float64)
+        expected = np.std(u) if model == "mann" else np.sqrt(np.mean(u**2))
+        assert rec["sigma_m_s"][0] == pytest.approx(expected, rel=1e-6)
+    assert len(set(r["checksum"] for r in doc["runs"])) == 12  # seeds / speeds / presets give distinct fields
+    csv_lines = (plan.out / "manifest.csv").read_text().splitlines()
+    assert len(csv_lines) == 13 and csv_lines[0].startswith("name,model,preset,U_m_s,seed,status")
+
+
+def test_interrupted_sweep_resumes_only_the_missing_runs(swept, client, tmp_path):
+    model, plan, first = swept
+    out = tmp_path / "resume"
+    shutil.copytree(plan.out, out)
+    names = [pr.name for pr in plan.runs]
+    # what a kill leaves behind: missing stores, an incomplete store, a dead writer's temp dir, a stale lock
+    for n in names[:2]:
+        shutil.rmtree(out / f"{n}.zarr")
+    meta = out / f"{names[5]}.zarr" / "zarr.json"
+    doc = json.loads(meta.read_text())
+    del doc["attributes"]["turbgen_complete"]
+    meta.write_text(json.dumps(doc))
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    temp = out / f".{names[7]}.zarr.tmp-{dead.pid}-abcd"
+    temp.mkdir()
+    (out / LOCK_NAME).write_text(json.dumps({"host": socket.gethostname(), "pid": dead.pid}))
+    kept = {n: (out / f"{n}.zarr" / "zarr.json").stat().st_mtime_ns for n in names if n not in (*names[:2], names[5])}
+
+    result = run_sweep(make_plan(**{**_kwargs(plan), "out": out}), client=client, progress=False)
+    assert result.ok and result.ran == 3 and result.skipped == 9
+    ran = {r["name"] for r in result.records if r["action"] == "ran"}
+    assert ran == {names[0], names[1], names[5]}
+    for n, mtime in kept.items():
+        assert (out / f"{n}.zarr" / "zarr.json").stat().st_mtime_ns == mtime  # untouched
+    assert [r["checksum"] for r in result.records] == [r["checksum"] for r in first.records]
+    assert not temp.exists() and not (out / LOCK_NAME).exists()
+    # a third run does nothing
+    again = run_sweep(make_plan(**{**_kwargs(plan), "out": out}), client=client, progress=False)
+    assert again.ok and again.ran == 0 and again.skipped == 12
+
+
+def _kwargs(plan):
+    return dict(models=plan.models, presets=plan.presets, speeds=plan.speeds_m_s, seeds=plan.seeds, grid=plan.grid)
+
+
+def test_existing_stores_with_other_parameters_are_never_overwritten(swept, client, tmp_path):
+    model, plan, _ = swept
+    out = tmp_path / "other"
+    shutil.copytree(plan.out, out)
+    before = store_checksum(out / plan.runs[0].store_name)
+    other = make_plan(**{**_kwargs(plan), "out": out, "grid": {**GRID, "dy": 9.0}})
+    result = run_sweep(other, client=client, progress=False)
+    assert not result.ok and result.ran == 0
+    assert all(r["status"] == "failed" and "different grid" in r["error"] for r in result.records)
+    assert store_checksum(out / plan.runs[0].store_name) == before
+
+
+def test_one_failing_run_does_not_stop_the_others_and_sets_the_exit_code(client, tmp_path):
+    out = tmp_path / "fail"
+    out.mkdir()
+    (out / "kaimal_stable_U16_seed2.zarr").write_text("not a store")  # e.g. a stray file where a store goes
+    cfg = tmp_path / "s.json"
+    cfg.write_text(json.dumps({"out": str(out), "models": ["kaimal"], "presets": PRESETS, "speeds": SPEEDS,
+                               "seeds": "1-3", "grid": GRID}))  # fmt: skip
+    res = CliRunner().invoke(cli, ["sweep", "--config", str(cfg), "--scheduler", client.scheduler.address])
+    assert res.exit_code == 1, res.output
+    doc = read_manifest(out)
+    bad = [r for r in doc["runs"] if r["status"] != "complete"]
+    assert [r["name"] for r in bad] == ["kaimal_stable_U16_seed2"] and "StoreError" in bad[0]["error"]
+    assert doc["counts"]["complete"] == 11
+    assert "kaimal_stable_U16_seed2" in res.output and "11/12 complete" in res.output
+
+
+def test_lock_refuses_a_second_concurrent_sweep(tmp_path):
+    out = tmp_path / "locked"
+    out.mkdir()
+    with SweepLock(out):  # a live sweep (this process) holds the directory
+        res = CliRunner().invoke(cli, ["sweep", "--model", "kaimal", "--preset", "neutral", "--speeds", "16",
+                                       "--seeds", "1", *CLI_GRID, "--out", str(out)])  # fmt: skip
+    assert res.exit_code == 2
+    assert "locked by another sweep" in res.output and res.output.count("\n") == 2  # banner + one error line
+    assert sorted(p.name for p in out.iterdir()) == []  # nothing written (lock released on exit)
+
+
+def test_mann_stencil_is_built_once_per_parameter_set(client, tmp_path):
+    from distributed import get_task_stream
+
+    plan = make_plan(out=tmp_path / "st", models=["mann"], presets=["neutral"], speeds=[12.0, 16.0], seeds=[1, 2, 3],
+                     grid=GRID)  # fmt: skip
+    with get_task_stream(client) as ts:
+        result = run_sweep(plan, client=client, progress=False)
+    assert result.ok and result.ran == 6
+    names = [t["key"] if isinstance(t["key"], str) else t["key"][0] for t in ts.data]
+    assert sum(n.startswith("build_mann_stencil") for n in names) == 2  # one per speed, shared by 3 seeds
+    assert sum(n.startswith("turbgen-run-") for n in names) == 6

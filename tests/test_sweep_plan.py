@@ -1,0 +1,143 @@
+"""Sweep definitions (files, options, schema), store names, the directory lock and the manifest files."""
+
+import csv
+import json
+import os
+import subprocess
+import sys
+
+import click
+import pytest
+
+from turbgen.errors import ParameterError
+from turbgen.presets import kaimal_settings_for
+from turbgen.sweep import SweepLock, SweepLockedError, make_plan, plan_from_file, store_name
+from turbgen.sweep.lock import LOCK_NAME
+from turbgen.sweep.manifest import read_manifest, write_manifest
+from turbgen.sweep.plan import COMMAND_DEFAULTS, MODELS
+
+TINY = {"nt": 16, "dt": 0.5, "planes": [0.0, 50.0], "ny": 3, "nz": 3, "dy": 10.0}
+
+
+def _dead_pid() -> int:
+    p = subprocess.Popen([sys.executable, "-c", "pass"])
+    p.wait()
+    return p.pid
+
+
+def test_plan_from_options_builds_every_combination(tmp_path):
+    plan = make_plan(out=tmp_path, models=["kaimal"], presets=["neutral", "stable"], speeds=[12, 16.5], seeds=[1, 2, 3],
+                     grid=TINY)  # fmt: skip
+    assert len(plan.runs) == 2 * 2 * 3
+    names = [r.store_name for r in plan.runs]
+    assert names[0] == "kaimal_neutral_U12_seed1.zarr" and "kaimal_stable_U16.5_seed3.zarr" in names
+    assert len(set(names)) == len(names)
+    r = next(r for r in plan.runs if r.name == "kaimal_stable_U16.5_seed2")
+    k = kaimal_settings_for("stable", 16.5)
+    assert (r.run.seed, r.run.U_m_s, r.run.a_x, r.run.b_x) == (2, 16.5, k.a_x, k.b_x)
+    assert r.run.kaimal == k.kaimal
+    assert (r.run.grid.nt, r.run.grid.x_m, r.run.grid.dz_m) == (16, (0.0, 50.0), 10.0)  # dz defaults to dy
+    assert store_name("mann", "neutral", 16.0, 2) == "mann_neutral_U16_seed2.zarr"
+
+
+def test_plan_from_toml_and_json_files(tmp_path):
+    (tmp_path / "mine.toml").write_text(
+        '[presets.gusty.kaimal]\nsigma_ratios = [1, 0.8, 0.5]\nlength_scales_m = [300.0, 100.0, 30.0]\n'
+        "a_yz = 10.0\nlc_m = 300.0\na_x = 2.0\nb_x = 1e-4\n"
+    )
+    (tmp_path / "s.toml").write_text(
+        'out = "study"\nmodels = ["kaimal"]\npresets = ["neutral", "gusty"]\nspeeds = [12, 14]\nseeds = "1-2,5"\n'
+        'preset_file = "mine.toml"\nchunks = 8\n[grid]\nnt = 16\ndt = 0.5\nplanes = [0, 50]\nny = 3\nnz = 3\n'
+        "dy = 10.0\n[kaimal]\nnz = 5\n"
+    )
+    plan = plan_from_file(tmp_path / "s.toml")
+    assert plan.out == tmp_path / "study" and plan.seeds == (1, 2, 5) and plan.chunk_t == 8
+    assert len(plan.runs) == 2 * 2 * 3 and plan.runs[-1].run.grid.nz == 5  # model table overrides grid
+    gusty = next(r for r in plan.runs if r.preset == "gusty")
+    assert gusty.run.a_x == 2.0 and gusty.run.kaimal.a_yz == 10.0
+    doc = {"models": ["kaimal"], "presets": ["neutral"], "speeds": [16], "seeds": [3], "grid": TINY, "validate": True}
+    (tmp_path / "s.json").write_text(json.dumps(doc))
+    plan = plan_from_file(tmp_path / "s.json", out=tmp_path / "o", workers=2)
+    assert plan.validate and plan.workers == 2 and [r.name for r in plan.runs] == ["kaimal_neutral_U16_seed3"]
+
+
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        ({"models": ["les"]}, "models/0"),
+        ({"speeds": []}, "speeds"),
+        ({"seeds": "1-x"}, "seeds"),
+        ({"seeds": "5-3"}, "backwards"),
+        ({"grid": {"nt": 16, "Nt": 3}}, "Nt"),
+        ({"presets": ["windy"]}, "windy"),
+        ({"bogus": 1}, "bogus"),
+        ({"out": None}, "output directory"),
+        ({"grid": {"ny": 0}}, "ny"),
+        ({"workers": 2, "scheduler": "tcp://x:1"}, "exclude"),
+    ],
+)
+def test_bad_sweep_files_give_one_line_errors(tmp_path, change, match):
+    doc = {"out": "o", "models": ["kaimal"], "presets": ["neutral"], "speeds": [16], "seeds": [1], "grid": TINY}
+    doc.update(change)
+    doc = {k: v for k, v in doc.items() if v is not None}
+    (tmp_path / "s.json").write_text(json.dumps(doc))
+    with pytest.raises(ParameterError, match=match) as info:
+        plan_from_file(tmp_path / "s.json")
+    assert "\n" not in str(info.value)
+
+
+def test_duplicate_names_and_missing_model_parameters(tmp_path):
+    with pytest.raises(ParameterError, match="duplicate store names"):
+        make_plan(out=tmp_path, models=["kaimal"], presets=["neutral"], speeds=[16, 16.0000001], seeds=[1], grid=TINY)
+    with pytest.raises(ParameterError, match="duplicate"):
+        make_plan(out=tmp_path, models=["kaimal"], presets=["neutral", "neutral"], speeds=[16], seeds=[1])
+
+
+def test_command_defaults_match_the_single_run_commands():
+    """The sweep's missing grid options must take exactly the defaults of `turbgen mann|kaimal`."""
+    import importlib
+
+    option = {"nt": "nt", "dt": "dt", "ny": "ny", "nz": "nz", "dy": "dy", "hub_height": "hub_height"}
+    for model in MODELS:
+        if model not in COMMAND_DEFAULTS:
+            continue
+        cmd = getattr(importlib.import_module(f"turbgen.cli.{model}"), model)
+        ctx = click.Context(cmd)
+        defaults = {p.name: p.get_default(ctx) for p in cmd.params if isinstance(p, click.Option)}
+        for key, name in option.items():
+            assert COMMAND_DEFAULTS[model][key] == defaults[name], (model, key)
+
+
+def test_lock_refuses_a_live_owner_and_takes_over_a_dead_one(tmp_path):
+    with SweepLock(tmp_path):
+        assert (tmp_path / LOCK_NAME).exists()
+        with pytest.raises(SweepLockedError, match=f"pid {os.getpid()}"):
+            SweepLock(tmp_path).acquire()
+    assert not (tmp_path / LOCK_NAME).exists()
+    import socket
+
+    (tmp_path / LOCK_NAME).write_text(json.dumps({"host": socket.gethostname(), "pid": _dead_pid()}))
+    with SweepLock(tmp_path) as lock:
+        assert json.loads((tmp_path / LOCK_NAME).read_text())["pid"] == os.getpid() == lock.owner["pid"]
+    # another host's lock cannot be checked: refused
+    (tmp_path / LOCK_NAME).write_text(json.dumps({"host": "elsewhere", "pid": _dead_pid()}))
+    with pytest.raises(SweepLockedError, match="elsewhere"):
+        SweepLock(tmp_path).acquire()
+
+
+def test_manifest_json_and_csv_agree(tmp_path):
+    recs = [
+        {"name": "a", "model": "mann", "preset": "neutral", "U_m_s": 16.0, "seed": 1, "status": "complete",
+         "action": "ran", "duration_s": 1.5, "path": "a.zarr", "checksum": "sha256:00", "sigma_m_s": [1.0, 0.8, 0.5],
+         "validation": {"passed": True}, "error": None, "parameters": {"L": 49.0}},
+        {"name": "b", "model": "mann", "preset": "neutral", "U_m_s": 16.0, "seed": 2, "status": "failed",
+         "action": "ran", "error": "StoreError: disk full", "parameters": {"L": 49.0}},
+    ]  # fmt: skip
+    write_manifest(tmp_path, {"n_runs": 2}, recs)
+    doc = read_manifest(tmp_path)
+    assert doc["counts"] == {"complete": 1, "failed": 1, "pending": 0} and doc["runs"] == recs
+    rows = list(csv.DictReader((tmp_path / "manifest.csv").open()))
+    assert [r["status"] for r in rows] == ["complete", "failed"]
+    assert rows[0]["sigma_v_m_s"] == "0.8" and rows[0]["validation"] == "pass" and rows[1]["error"].endswith("full")
+    assert json.loads(rows[1]["parameters"]) == {"L": 49.0}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["manifest.csv", "manifest.json"]  # no temp files left

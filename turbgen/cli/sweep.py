@@ -1,0 +1,86 @@
+"""`turbgen sweep`: many fields (models x presets x speeds x seeds) on dask.distributed."""
+
+from __future__ import annotations
+
+import click
+
+from turbgen.cli.options import parse_floats, parse_ints, parse_range
+
+
+def _split(text: str | None) -> list[str] | None:
+    return None if text is None else [t.strip() for t in text.split(",") if t.strip()]
+
+
+@click.command()
+@click.option("--config", "config", type=click.Path(dir_okay=False), help="sweep file (TOML or JSON, schemas/sweep.schema.json)")
+@click.option("--model", "models", help="mann, kaimal or mann,kaimal")
+@click.option("--preset", "presets", help="stability presets, e.g. neutral or unstable,neutral,stable")
+@click.option("--speeds", help="hub-height mean wind speeds [m/s], e.g. 12,16 or 12:24:2")
+@click.option("--seeds", help="seeds, e.g. 1-21 or 1,4,7")
+@click.option("--presets-file", type=click.Path(dir_okay=False), help="user presets (TOML or JSON)")
+@click.option("--nt", type=int, help="time steps (default: as turbgen mann / kaimal)")
+@click.option("--dt", type=float, help="time step [s]")
+@click.option("--planes", help="plane positions x [m upstream], e.g. 0,50,100")
+@click.option("--gates", help="range gates start:stop:step [m]; planes = rotor 0 + gates")
+@click.option("--ny", type=int, help="lateral points")
+@click.option("--nz", type=int, help="vertical points")
+@click.option("--dy", type=float, help="lateral spacing [m]")
+@click.option("--dz", type=float, help="vertical spacing [m]")
+@click.option("--hub-height", type=float, help="hub height [m]")
+@click.option("--chunks", type=int, help="time chunk length of the stores")
+@click.option("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
+@click.option("--scheduler", help="address of an existing dask scheduler (workers must see --out)")
+@click.option("--validate/--no-validate", default=None, help="validate every field against theory")
+@click.option("--out", type=click.Path(file_okay=False), help="output directory (stores and manifest)")
+def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, gates, ny, nz, dy, dz, hub_height, chunks,
+          workers, scheduler, validate, out):  # fmt: skip
+    """Generate every field of a sweep (resumable: complete stores are kept), write DIR/manifest.json/.csv.
+
+    Either --config FILE (command-line --out, --workers, --scheduler, --validate and --chunks
+    override the file) or --model, --preset, --speeds, --seeds and --out. Exit code 0 when every
+    run has a complete store, 1 when some failed (see the summary table and the manifest).
+    """
+    from turbgen.presets import load_presets
+    from turbgen.sweep import make_plan, plan_from_file, run_sweep, summary_table
+
+    grid = {
+        k: v
+        for k, v in dict(nt=nt, dt=dt, ny=ny, nz=nz, dy=dy, dz=dz, hub_height=hub_height).items()
+        if v is not None
+    }
+    if planes is not None and gates is not None:
+        raise click.UsageError("give --planes or --gates, not both")
+    if planes is not None:
+        grid["planes"] = parse_floats(planes, "--planes")
+    elif gates is not None:
+        grid["planes"] = [0.0, *parse_range(gates, "--gates")]
+    if config:
+        given = [n for n, v in [("--model", models), ("--preset", presets), ("--speeds", speeds), ("--seeds", seeds),
+                                ("--presets-file", presets_file)] if v is not None]  # fmt: skip
+        if given or grid:
+            raise click.UsageError(f"--config defines the sweep; {', '.join(given + sorted(grid))} cannot be combined")
+        plan = plan_from_file(config, out=out, validate=validate, workers=workers, scheduler=scheduler, chunk_t=chunks)
+    else:
+        missing = [n for n, v in [("--model", models), ("--preset", presets), ("--speeds", speeds), ("--seeds", seeds),
+                                  ("--out", out)] if v is None]  # fmt: skip
+        if missing:
+            raise click.UsageError(f"give --config FILE or all of {', '.join(missing)}")
+        speed_list = parse_range(speeds, "--speeds") if ":" in speeds else parse_floats(speeds, "--speeds")
+        plan = make_plan(
+            out=out,
+            models=_split(models),
+            presets=_split(presets),
+            speeds=speed_list,
+            seeds=parse_ints(seeds, "--seeds"),
+            grid=grid,
+            validate=bool(validate),
+            chunk_t=chunks,
+            workers=workers,
+            scheduler=scheduler,
+            user_presets=load_presets(presets_file) if presets_file else None,
+        )
+    click.echo(f"sweep: {len(plan.runs)} runs -> {plan.out}", err=True)
+    result = run_sweep(plan, progress=True)
+    click.echo(summary_table(result))
+    if not result.ok:
+        raise click.exceptions.Exit(1)

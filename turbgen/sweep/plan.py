@@ -1,0 +1,275 @@
+"""A sweep definition: models x presets x speeds x seeds on one grid, from a TOML/JSON file or options.
+
+The file format is ``turbgen/schemas/sweep.schema.json``. Every planned run is built by the same
+function the single-run commands use with ``--preset`` (:func:`turbgen.presets.preset_run`), so a
+sweep's store and ``turbgen mann|kaimal --preset P --U U --seed S`` hold the same field.
+Store names are derived from the parameters that vary within a sweep:
+``{model}_{preset}_U{U:g}_seed{seed}.zarr`` (e.g. ``mann_neutral_U16_seed2.zarr``).
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.resources
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from turbgen.errors import ParameterError, check_int
+from turbgen.presets import (
+    StabilityPreset,
+    get_preset,
+    kaimal_run_keys,
+    load_presets,
+    mann_run_keys,
+    presets_from_mapping,
+    read_mapping_file,
+)
+from turbgen.runs.defaults import DEFAULT_PLANES_M
+from turbgen.theory.params import check_wind_speed
+
+MODELS = ("mann", "kaimal")
+GRID_KEYS = ("nt", "dt", "planes", "ny", "nz", "dy", "dz", "hub_height")
+# The grid option defaults of `turbgen kaimal` (KaimalRun.from_mapping needs the whole grid; Mann's
+# from_mapping applies turbgen.runs.defaults itself). tests/test_sweep_plan.py checks them against the command.
+COMMAND_DEFAULTS = {
+    "kaimal": {"nt": 4096, "dt": 0.5, "planes": DEFAULT_PLANES_M, "ny": 31, "nz": 31, "dy": 5.0, "hub_height": 90.0},
+}
+
+
+def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int, grid: Mapping | None = None,
+              *, user: Mapping[str, StabilityPreset] | None = None):
+    """The MannRun / KaimalRun of one preset run, exactly as ``turbgen mann|kaimal --preset`` builds it.
+
+    ``grid``: options with the schema names; missing ones take the command's defaults (for Mann
+    those of MannRun.from_mapping, i.e. turbgen.runs.defaults; dz defaults to dy).
+    """
+    opts = {**COMMAND_DEFAULTS.get(model, {}), **(grid or {})}
+    if "dy" in opts and "dz" not in opts:
+        opts["dz"] = opts["dy"]
+    names = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}
+    g = {key: opts[name] for name, key in names.items() if name in opts}
+    if "planes" in opts:
+        g["x_m"] = [float(x) for x in opts["planes"]]
+    mapping = {"U_m_s": U_m_s, "seed": seed, "grid": g}
+    if "hub_height" in opts:
+        mapping["hub_height_m"] = opts["hub_height"]
+    if model == "mann":
+        from turbgen.runs.mann import MannRun
+
+        return MannRun.from_mapping({**mann_run_keys(preset, user=user), **mapping})
+    if model == "kaimal":
+        from turbgen.runs.kaimal import KaimalRun
+
+        return KaimalRun.from_mapping({**kaimal_run_keys(preset, U_m_s, user=user), **mapping})
+    raise ParameterError(f"model = {model!r} is not one of {', '.join(MODELS)}")
+
+
+def store_name(model: str, preset: str, U_m_s: float, seed: int) -> str:
+    """Readable, stable store name of one run: ``mann_neutral_U16_seed2.zarr``."""
+    return f"{model}_{preset}_U{U_m_s:g}_seed{seed}.zarr"
+
+
+@dataclass(frozen=True)
+class PlannedRun:
+    """One field of the sweep: the run object (MannRun or KaimalRun) and its store name."""
+
+    model: str
+    preset: str
+    U_m_s: float
+    seed: int
+    run: object
+
+    @property
+    def store_name(self) -> str:
+        return store_name(self.model, self.preset, self.U_m_s, self.seed)
+
+    @property
+    def name(self) -> str:
+        return self.store_name.removesuffix(".zarr")
+
+
+@dataclass(frozen=True)
+class SweepPlan:
+    """Validated sweep definition and its runs (models, presets, speeds, seeds in nested order)."""
+
+    out: Path
+    models: tuple[str, ...]
+    presets: tuple[str, ...]
+    speeds_m_s: tuple[float, ...]
+    seeds: tuple[int, ...]
+    grid: Mapping = field(default_factory=dict)  # common grid options (schema names)
+    model_grid: Mapping = field(default_factory=dict)  # model -> grid options overriding `grid`
+    validate: bool = False
+    chunk_t: int | None = None
+    workers: int | None = None
+    scheduler: str | None = None
+    user_presets: Mapping[str, StabilityPreset] = field(default_factory=dict)
+    runs: tuple[PlannedRun, ...] = ()
+
+    def grid_options(self, model: str) -> dict:
+        """Grid options of ``model``'s runs (its table over the common one; missing = command default)."""
+        return {**self.grid, **self.model_grid.get(model, {})}
+
+    def to_dict(self) -> dict:
+        """JSON-ready definition (for the manifest)."""
+        return {
+            "models": list(self.models),
+            "presets": list(self.presets),
+            "speeds": list(self.speeds_m_s),
+            "seeds": list(self.seeds),
+            "grid": dict(self.grid),
+            **{m: dict(g) for m, g in self.model_grid.items()},
+            "validate": self.validate,
+            "chunks": self.chunk_t,
+            "user_presets": sorted(self.user_presets),
+            "n_runs": len(self.runs),
+        }
+
+
+def _unique(name: str, values) -> tuple:
+    values = tuple(values)
+    if not values:
+        raise ParameterError(f"{name}: at least one value is needed")
+    if len(set(values)) != len(values):
+        raise ParameterError(f"{name} = {list(values)} contain a duplicate")
+    return values
+
+
+def _check_grid_keys(where: str, opts: Mapping | None) -> dict:
+    opts = dict(opts or {})
+    unknown = sorted(set(opts) - set(GRID_KEYS))
+    if unknown:
+        raise ParameterError(f"{where}: unknown grid option(s) {', '.join(unknown)}; allowed: {', '.join(GRID_KEYS)}")
+    return opts
+
+
+def make_plan(
+    *,
+    out: str | Path,
+    models,
+    presets,
+    speeds,
+    seeds,
+    grid: Mapping | None = None,
+    model_grid: Mapping[str, Mapping] | None = None,
+    validate: bool = False,
+    chunk_t: int | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    user_presets: Mapping[str, StabilityPreset] | None = None,
+) -> SweepPlan:
+    """Check a sweep definition and build all its runs (ParameterError on the first bad value)."""
+    models = _unique("models", models)
+    for m in models:
+        if m not in MODELS:
+            raise ParameterError(f"model = {m!r} is not one of {', '.join(MODELS)}")
+    user = dict(user_presets or {})
+    presets = _unique("presets", presets)
+    for p in presets:
+        preset = get_preset(p, user)
+        for m in models:
+            if getattr(preset, m) is None:
+                raise ParameterError(f"preset {p!r} has no {m} parameters")
+    speeds = _unique("speeds", (check_wind_speed(u) for u in speeds))
+    seeds = _unique("seeds", (check_int("seed", s, 0, 2**63 - 1) for s in seeds))
+    grid = _check_grid_keys("grid", grid)
+    model_grid = {m: _check_grid_keys(m, g) for m, g in (model_grid or {}).items() if g}
+    for m in model_grid:
+        if m not in MODELS:
+            raise ParameterError(f"grid table {m!r} is not one of {', '.join(MODELS)}")
+    if chunk_t is not None:
+        chunk_t = check_int("chunks", chunk_t, 1)
+    if workers is not None:
+        workers = check_int("workers", workers, 1, 4096)
+    if workers is not None and scheduler:
+        raise ParameterError("workers and scheduler exclude each other (the scheduler's cluster has its own workers)")
+    plan = SweepPlan(
+        Path(out), models, presets, speeds, seeds, grid, model_grid, bool(validate), chunk_t, workers,
+        scheduler or None, user,
+    )  # fmt: skip
+    runs = []
+    for m in models:
+        opts = plan.grid_options(m)
+        for p in presets:
+            for U in speeds:
+                for s in seeds:
+                    runs.append(PlannedRun(m, p, U, s, build_run(m, p, U, s, opts, user=user)))
+    names = [r.name for r in runs]
+    if len(set(names)) != len(names):
+        raise ParameterError(f"speeds = {list(speeds)} give duplicate store names (they differ below 6 digits)")
+    return SweepPlan(**{**plan.__dict__, "runs": tuple(runs)})
+
+
+@functools.lru_cache(maxsize=1)
+def _validator():
+    import jsonschema
+
+    schema = json.loads(importlib.resources.files("turbgen").joinpath("schemas/sweep.schema.json").read_text())
+    return jsonschema.Draft202012Validator(schema)
+
+
+def check_sweep_mapping(data: Mapping, where: str = "sweep definition") -> None:
+    """Validate against schemas/sweep.schema.json; ParameterError naming the first problem."""
+    errors = sorted(_validator().iter_errors(data), key=lambda e: list(e.absolute_path))
+    if errors:
+        e = errors[0]
+        loc = "/".join(str(p) for p in e.absolute_path) or "(top level)"
+        raise ParameterError(f"{where}: {loc}: {e.message}")
+
+
+def parse_seeds(value) -> list[int]:
+    """A list of ints, or a text like '1-21' / '1-3,9' (format checked by the schema) -> sorted seeds."""
+    if not isinstance(value, str):
+        return sorted(value)
+    out: set[int] = set()
+    for part in value.split(","):
+        lo, _, hi = part.strip().partition("-")
+        lo_i, hi_i = int(lo), int(hi or lo)
+        if hi_i < lo_i:
+            raise ParameterError(f"seeds = {value!r}: range {part.strip()!r} runs backwards")
+        out.update(range(lo_i, hi_i + 1))
+    return sorted(out)
+
+
+def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides) -> SweepPlan:
+    """Plan from a sweep mapping (file contents); non-None ``overrides`` (out, validate, workers,
+    scheduler, chunk_t) replace the file's values. Relative paths are relative to ``base_dir``."""
+    check_sweep_mapping(data)
+    base = Path(base_dir)
+    user: dict[str, StabilityPreset] = {}
+    if "preset_file" in data:
+        user.update(load_presets(base / data["preset_file"]))
+    if "user_presets" in data:
+        inline = presets_from_mapping(data["user_presets"])
+        clash = sorted(set(inline) & set(user))
+        if clash:
+            raise ParameterError(f"user preset(s) {', '.join(clash)} defined both inline and in preset_file")
+        user.update(inline)
+    kw = dict(
+        out=base / data["out"] if "out" in data else None,
+        models=data["models"],
+        presets=data["presets"],
+        speeds=data["speeds"],
+        seeds=parse_seeds(data["seeds"]),
+        grid=data.get("grid"),
+        model_grid={m: data[m] for m in MODELS if m in data},
+        validate=data.get("validate", False),
+        chunk_t=data.get("chunks"),
+        workers=data.get("workers"),
+        scheduler=data.get("scheduler"),
+        user_presets=user,
+    )
+    kw.update({k: v for k, v in overrides.items() if v is not None})
+    if kw["out"] is None:
+        raise ParameterError("no output directory: give 'out' in the sweep file or --out")
+    if overrides.get("scheduler"):
+        kw["workers"] = overrides.get("workers")
+    return make_plan(**kw)
+
+
+def plan_from_file(path: str | Path, **overrides) -> SweepPlan:
+    """Plan from a TOML or JSON sweep file (see :func:`plan_from_mapping`)."""
+    data = read_mapping_file(path)
+    return plan_from_mapping(data, base_dir=Path(path).parent, **overrides)

@@ -1,0 +1,325 @@
+"""Execute a sweep plan on dask.distributed: resumable, idempotent, one lock per output directory.
+
+* A LocalCluster sized to the machine (one single-threaded worker process per core, at most one
+  per run; each Mann run gets cores/workers FFT threads) or an existing scheduler
+  (plan.scheduler; its workers must see the output directory at the same path).
+* Runs that differ only in the seed share one Mann stencil: it is built once as a dask task and
+  passed to each seed's run task (dask ships it to the workers that need it).
+* Before anything is submitted, every planned store is inspected: complete stores with the planned
+  parameters are kept ("skipped"), stores with other parameters are never overwritten (the run
+  is recorded as failed), incomplete stores are regenerated, and temporary directories left by
+  dead writers on this host are removed.
+* A failing run is recorded with its error; the others continue. The manifest is rewritten
+  (atomically) after every finished run, so an interrupted sweep leaves an accurate record.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import shutil
+import sys
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from turbgen.errors import StoreError
+from turbgen.store.layout import grid_to_attrs
+from turbgen.sweep.lock import SweepLock, pid_alive
+from turbgen.sweep.manifest import read_manifest, store_checksum, utc_now, write_manifest
+from turbgen.sweep.plan import PlannedRun, SweepPlan
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """What a worker needs for one run: generate (unless only checksumming an existing store)."""
+
+    model: str
+    run: object
+    path: str
+    overwrite: bool
+    chunk_t: int | None
+    validate: bool
+    generate: bool = True
+    threads: int | None = None  # FFT threads of a Mann run (None: os.cpu_count(); never changes the field)
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
+
+
+def validate_store(path: str) -> dict:
+    """Validation summary of one stored field (turbgen.validate): {'passed': bool, ...}."""
+    from turbgen.validate import validate_field
+
+    return validate_field(path)
+
+
+def execute_run(task: RunTask, stencil=None) -> dict:
+    """Worker side: generate one field, checksum it, optionally validate it. Never raises."""
+    t0 = time.perf_counter()
+    out: dict = {"status": "failed"}
+    try:
+        if task.generate:
+            if task.model == "mann":
+                from turbgen.runs.mann import run_mann
+
+                summary = run_mann(task.run, task.path, overwrite=task.overwrite, chunk_t=task.chunk_t, stencil=stencil,
+                                   threads=task.threads)
+            else:
+                from turbgen.runs.kaimal import run_kaimal
+
+                summary = run_kaimal(task.run, task.path, overwrite=task.overwrite, chunk_t=task.chunk_t)
+            sig = [summary.get(f"sigma_{c}") for c in "uvw"]
+            out["sigma_m_s"] = [None if s is None else float(s) for s in sig]
+        out["checksum"] = store_checksum(task.path)
+        if task.validate:
+            try:
+                out["validation"] = validate_store(task.path)
+            except Exception as exc:  # a validator crash is recorded, the field itself is fine
+                out["validation"] = {"passed": False, "error": _one_line(exc)}
+        out["status"] = "complete"
+    except Exception as exc:
+        out["error"] = _one_line(exc)
+    out["duration_s"] = round(time.perf_counter() - t0, 3)
+    return out
+
+
+def _norm(value):
+    """JSON round trip: tuples -> lists, so attributes read back compare equal to planned ones."""
+    return json.loads(json.dumps(value, default=lambda o: o.item() if hasattr(o, "item") else list(o)))
+
+
+def _identity(model, attrs: dict, grid: dict) -> dict:
+    keys = ("parameters", "seed", "U_m_s", "hub_height_m")
+    return _norm({"model": model, **{k: attrs.get(k) for k in keys}, "grid": grid})
+
+
+def store_state(path: Path, pr: PlannedRun) -> tuple[str, str | None]:
+    """('absent' | 'incomplete' | 'mismatch' | 'complete', detail) of a planned run's store."""
+    from turbgen.store import open_store
+
+    if not path.exists():
+        return "absent", None
+    try:
+        fs = open_store(path)
+    except StoreError as exc:
+        return "incomplete", str(exc)
+    planned_grid = grid_to_attrs(pr.run.grid)
+    stored = _identity(fs.attrs.get("model"), fs.attrs, fs.attrs.get("grid"))
+    planned = _identity(pr.model, pr.run.to_attrs(), planned_grid)
+    if stored != planned:
+        diff = sorted(k for k in planned if planned[k] != stored.get(k))
+        return "mismatch", f"{path.name} exists with different {', '.join(diff)}; not overwritten"
+    return "complete", None
+
+
+def remove_dead_temps(directory: Path, names) -> list[Path]:
+    """Remove temporary store directories ('.NAME.tmp-PID-...') whose writer pid is dead on this host."""
+    removed = []
+    wanted = set(names)
+    for entry in directory.iterdir():
+        if not (entry.name.startswith(".") and ".tmp-" in entry.name and entry.is_dir()):
+            continue
+        store, _, rest = entry.name[1:].rpartition(".tmp-")
+        pid_text = rest.split("-", 1)[0]
+        if store in wanted and pid_text.isdigit() and not pid_alive(int(pid_text)):
+            shutil.rmtree(entry, ignore_errors=True)
+            removed.append(entry)
+    return removed
+
+
+@dataclass
+class SweepResult:
+    """Records of every planned run (manifest order) and what this invocation did."""
+
+    out: Path
+    records: list[dict]
+    ran: int = 0
+    skipped: int = 0
+    seconds: float = 0.0
+    failed: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        """True when every planned run has a complete store."""
+        return all(r["status"] == "complete" for r in self.records)
+
+
+def _base_record(pr: PlannedRun) -> dict:
+    return {
+        "name": pr.name,
+        "model": pr.model,
+        "preset": pr.preset,
+        "U_m_s": pr.U_m_s,
+        "seed": pr.seed,
+        "path": pr.store_name,
+        "status": "pending",
+        "action": "none",
+        "duration_s": None,
+        "checksum": None,
+        "sigma_m_s": None,
+        "validation": None,
+        "error": None,
+        "finished_utc": None,
+        "parameters": _norm(pr.run.to_attrs()["parameters"]),
+    }
+
+
+def _default_workers(n_tasks: int) -> int:
+    return max(1, min(os.cpu_count() or 1, n_tasks))
+
+
+def _make_client(plan: SweepPlan, n: int, processes: bool):
+    from distributed import Client, LocalCluster
+
+    if plan.scheduler:
+        return Client(plan.scheduler), None
+    cluster = LocalCluster(
+        n_workers=n,
+        threads_per_worker=1,
+        processes=processes,
+        dashboard_address=None,
+        silence_logs=logging.ERROR,
+    )
+    return Client(cluster), cluster
+
+
+def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress: bool = True) -> SweepResult:
+    """Run every planned field that has no complete store yet; write DIR/manifest.{json,csv}.
+
+    ``client``: an existing dask.distributed Client (otherwise one is made from plan.scheduler or
+    a LocalCluster with plan.workers processes, threads if ``processes`` is False).
+    Raises SweepLockedError (before touching anything) when another sweep holds DIR.
+    """
+    t_start = time.perf_counter()
+    out = plan.out
+    out.mkdir(parents=True, exist_ok=True)
+    with SweepLock(out):
+        previous = {r.get("name"): r for r in (read_manifest(out) or {}).get("runs", []) if isinstance(r, dict)}
+        remove_dead_temps(out, [pr.store_name for pr in plan.runs])
+        records = {pr.name: _base_record(pr) for pr in plan.runs}
+        tasks: dict[str, RunTask] = {}
+        skipped = 0
+        for pr in plan.runs:
+            rec = records[pr.name]
+            path = out / pr.store_name
+            state, detail = store_state(path, pr)
+            if state == "mismatch":
+                rec.update(status="failed", error=detail, finished_utc=utc_now())
+                continue
+            if state == "complete":
+                skipped += 1
+                old = previous.get(pr.name, {})
+                same = old.get("status") == "complete" and old.get("path") == pr.store_name and old.get("checksum")
+                if same:
+                    for k in ("duration_s", "checksum", "sigma_m_s", "validation", "finished_utc"):
+                        rec[k] = old.get(k)
+                rec["action"] = "skipped"
+                if same and (rec["validation"] is not None or not plan.validate):
+                    rec["status"] = "complete"
+                    continue
+                tasks[pr.name] = RunTask(pr.model, pr.run, str(path), False, plan.chunk_t, plan.validate, False)
+                continue
+            tasks[pr.name] = RunTask(pr.model, pr.run, str(path), state == "incomplete", plan.chunk_t, plan.validate)
+        sweep_doc = plan.to_dict()
+        write_manifest(out, sweep_doc, list(records.values()))
+        result = SweepResult(out, list(records.values()), skipped=skipped)
+        if tasks:
+            _execute(plan, tasks, records, sweep_doc, result, client, processes, progress)
+        result.records = list(records.values())
+        result.failed = [r["name"] for r in result.records if r["status"] != "complete"]
+        result.seconds = round(time.perf_counter() - t_start, 3)
+        write_manifest(out, sweep_doc, result.records)
+    return result
+
+
+def _execute(plan, tasks, records, sweep_doc, result, client, processes, progress):
+    from distributed import as_completed
+    from tqdm import tqdm
+
+    own_client = cluster = None
+    if client is None:
+        n = plan.workers or _default_workers(len(tasks))
+        own_client, cluster = _make_client(plan, n, processes)
+        client = own_client
+        if cluster is not None:  # share the cores between the local workers' FFTs
+            threads = max(1, (os.cpu_count() or 1) // n)
+            tasks = {name: replace(t, threads=threads) for name, t in tasks.items()}
+    try:
+        by_name = {pr.name: pr for pr in plan.runs}
+        stencils: dict = {}  # parameter set (run with seed 0) -> [stencil future, runs still to use it]
+        futures = {}  # future key -> (run name, stencil key or None)
+        pending = []
+        for name, task in tasks.items():
+            stencil = None
+            if task.model == "mann" and task.generate:
+                key = replace(by_name[name].run, seed=0)
+                if key not in stencils:
+                    from turbgen.runs.mann import build_mann_stencil
+
+                    stencils[key] = [client.submit(build_mann_stencil, by_name[name].run, pure=False), 0]
+                stencils[key][1] += 1
+                stencil = stencils[key][0]
+            fut = client.submit(execute_run, task, stencil, pure=False, key=f"turbgen-run-{name}-{os.urandom(4).hex()}")
+            pending.append(fut)
+            futures[fut.key] = (name, replace(by_name[name].run, seed=0) if stencil is not None else None)
+        bar = tqdm(total=len(pending), desc="sweep", unit="field", file=sys.stderr,
+                   disable=not (progress and sys.stderr.isatty()))  # fmt: skip
+        with bar:
+            for fut in as_completed(pending):
+                name, skey = futures[fut.key]
+                if fut.status == "finished":
+                    res = fut.result()
+                else:  # the stencil task (or the worker) failed: same error for each of its runs
+                    res = {"status": "failed", "error": _one_line(fut.exception()), "duration_s": None}
+                fut.release()
+                if skey is not None:
+                    stencils[skey][1] -= 1
+                    if stencils[skey][1] == 0:
+                        stencils.pop(skey)[0].release()
+                rec = records[name]
+                rec.update(res)
+                rec["finished_utc"] = utc_now()
+                if tasks[name].generate:
+                    rec["action"] = "ran"
+                    if rec["status"] == "complete":
+                        result.ran += 1
+                write_manifest(plan.out, sweep_doc, list(records.values()))
+                bar.set_postfix_str(f"{name}: {rec['status']}", refresh=False)
+                bar.update(1)
+    finally:
+        if own_client is not None:
+            own_client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def summary_table(result: SweepResult) -> str:
+    """Plain-text table of every run (name, status, action, seconds, sigma_u, validation, error)."""
+    rows = [("run", "status", "action", "seconds", "sigma_u", "validation", "error")]
+    for r in result.records:
+        sig = r.get("sigma_m_s") or [None]
+        val = r.get("validation")
+        rows.append(
+            (
+                r["name"],
+                r["status"],
+                r["action"],
+                "" if r.get("duration_s") is None else f"{r['duration_s']:.1f}",
+                "" if sig[0] is None else f"{sig[0]:.3f}",
+                "" if val is None else ("pass" if val.get("passed") else "FAIL"),
+                (r.get("error") or "")[:70],
+            )
+        )
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    lines = ["  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip() for row in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    n_ok = sum(r["status"] == "complete" for r in result.records)
+    lines.append(
+        f"{n_ok}/{len(result.records)} complete ({result.ran} generated, {result.skipped} already there), "
+        f"{len(result.failed)} failed or pending, {result.seconds:.1f} s -> {result.out}"
+    )
+    return "\n".join(lines)
