@@ -7,7 +7,7 @@ import json
 import pytest
 from click.testing import CliRunner
 
-from tests.export_fixtures import make_store
+from export_fixtures import make_store
 from turbgen.cli import cli
 from turbgen.export import ExportRequest, export_store
 from turbgen.store import FieldStore

@@ -10,7 +10,7 @@ import h5py
 import numpy as np
 import pytest
 
-from tests.export_fixtures import make_store
+from export_fixtures import make_store
 from turbgen.errors import ParameterError
 from turbgen.export import (ExportRequest, export_store, read_bts, read_evo, read_hawc2, read_hdf5, read_mt4d,
                             read_sum, read_wnd)
