@@ -65,6 +65,7 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
                 if ix == ix_rotor:
                     write_pair(files, root, plane, header, lay, periodic=req.periodic,
                                title=f"turbgen 4D export: the .wnd holds plane x = {g.x_m[ix]:g} m")
+                del plane  # free it before the next plane is read
     lines = inflowwind_lines(root) + (
         "LidarSim input file, section ---- Wind Evolution ----:",
         f'{"True":>20}   EvolutionFlag   - read the 4D field',
