@@ -7,7 +7,7 @@ so <u_hat(k, t) u_hat^*(k, t + dt)> = exp(-|dt| / tau_e) Phi(k) dk = Theta(k, dt
 Eq. 13-14) for every pair of planes, whatever their spacing.
 
 Work per snapshot, slab-wise over k1 in fixed batches (the same batches for any thread count):
-noise (or OU update) -> u_hat = C n (compact factor, see mann_stencil) -> Hermitian completion of
+noise (or OU update) -> u_hat = C n (compact factor and axis cells, see mann_stencil) -> Hermitian completion of
 the k1 = 0 / Nyquist slabs -> inverse 2-D FFT over (k2, k3) -> crop to ny x nz -> store into a
 (ny nz, k1) buffer; then one real inverse FFT along k1 per component, in fixed row blocks.
 Memory scales with one snapshot: the OU state (3 complex64 per half-spectrum point), the stencil,
@@ -244,6 +244,11 @@ class MannSnapshots:
         uv += tmp
         np.multiply(z2, mix, out=tmp)
         uv += tmp
+        cells = st.cells_in(i0, i1)
+        if cells.start < cells.stop:  # cell-averaged factors near the k1 axis (see mann_stencil)
+            sl, row, col = (st.cell_index[cells, q] for q in range(3))
+            sl = sl - i0
+            uh[sl, :, row, col] = np.einsum("cij,cj->ci", st.cell_factor[cells], n[sl, :, row, col])
         for i in self._hermitian_slabs.intersection(range(i0, i1)):
             hermitian_complete(uh[i - i0])
         s.yz_plan(b).execute()

@@ -25,13 +25,23 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.theory.eddy_lifetime import evolution_lifetime_s
-from turbgen.theory.mann_tensor import tensor_factor
+from turbgen.theory.mann_tensor import sheared_tensor, tensor_factor
 from turbgen.theory.params import MannParams
 
 STENCIL_VERSION = 1
 COEF_NAMES = ("A", "P", "Z1", "Z2", "W")
 _ODD = (False, False, False, True, False)  # parity of each coefficient under k2 -> -k2
 _BUILD_POINTS = 1 << 18  # points per float64 batch while building (~2 MiB per temporary)
+# Cell-averaged tensor near the k1 axis (Mann 1998: the point value Phi(k) dk is a poor estimate of
+# the cell integral where Phi varies within a cell). On the k1 axis Phi33 = E(k0) / (4 pi k1^2) with
+# k0 -> Gamma a / L finite, so with dk1 << dk2, dk3 (long boxes) the point rule puts far too much
+# energy in the cells (k1, 0, 0): sigma_w^2 of the default paper box came out 76 % above the model.
+# Cells with |k2| <= CELL_RADIUS dk2, |k3| <= CELL_RADIUS dk3 and |k1| <= CELL_K1_FACTOR max(dk2, dk3)
+# use a square root of the cell-averaged tensor instead (tensor-product Gauss rules, graded towards
+# the k1 axis down to the scale |k1|).
+CELL_RADIUS = 2
+CELL_K1_FACTOR = 4.0  # (1, 2) and (3, 8) change the paper box's sigma^2 by < 0.4 % and < 0.1 %
+_CELL_GAUSS = 4
 
 
 @dataclass(frozen=True)
@@ -79,16 +89,26 @@ class BoxShape:
 
 @dataclass(frozen=True, eq=False)
 class MannStencil:
-    """Compact factor ``coef`` (5, nk1, nyp//2+1, nzp) float32 and ``inv_tau`` [1/s] (None if frozen)."""
+    """Compact factor ``coef`` (5, nk1, nyp//2+1, nzp) float32, ``inv_tau`` [1/s] (None if frozen),
+    and the cell-averaged factors near the k1 axis: ``cell_index`` (ncell, 3) int (slab, row, column),
+    sorted by slab, and ``cell_factor`` (ncell, 3, 3) float32 (times sqrt(dk1 dk2 dk3 / 2)), which
+    replace the compact factor at those points."""
 
     params: MannParams
     box: BoxShape
     coef: np.ndarray
     inv_tau: np.ndarray | None
+    cell_index: np.ndarray
+    cell_factor: np.ndarray
 
     @property
     def nbytes(self) -> int:
         return self.coef.nbytes + (0 if self.inv_tau is None else self.inv_tau.nbytes)
+
+    def cells_in(self, i0: int, i1: int) -> slice:
+        """Rows of cell_index / cell_factor whose slab lies in [i0, i1)."""
+        slabs = self.cell_index[:, 0]
+        return slice(int(np.searchsorted(slabs, i0)), int(np.searchsorted(slabs, i1)))
 
 
 def stencil_nbytes(box: BoxShape, frozen: bool) -> int:
@@ -141,7 +161,53 @@ def _build(params: MannParams, box: BoxShape) -> MannStencil:
         if inv_tau is not None:
             kmag = np.sqrt(k1 * k1 + k2 * k2 + k3 * k3)
             inv_tau[i0 : i0 + step] = 1.0 / evolution_lifetime_s(kmag, params)  # tau_e, paper 000 Eq. 15
-    return MannStencil(params, box, coef, inv_tau)
+    index, factor = _axis_cells(params, box)
+    return MannStencil(params, box, coef, inv_tau, index, factor)
+
+
+def _gauss_rule(a: float, b: float, n: int = _CELL_GAUSS) -> tuple[np.ndarray, np.ndarray]:
+    x, w = np.polynomial.legendre.leggauss(n)
+    return 0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w
+
+
+def _cell_rule(center: float, width: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes/weights over [center - width/2, center + width/2]; graded towards 0 (down to ``scale``) if center = 0."""
+    if center != 0.0:
+        return _gauss_rule(center - width / 2, center + width / 2)
+    edges = [width / 2]
+    while edges[-1] > 2 * scale and len(edges) < 30:
+        edges.append(edges[-1] / 2)
+    edges = np.array([0.0, *edges[::-1]])
+    parts = [_gauss_rule(a, b) for a, b in zip(edges[:-1], edges[1:])]
+    x = np.concatenate([p[0] for p in parts])
+    w = np.concatenate([p[1] for p in parts])
+    return np.concatenate([-x[::-1], x]), np.concatenate([w[::-1], w])
+
+
+def _axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarray]:
+    """Cell-averaged factors (see CELL_RADIUS): Phi_bar = (1/dV) ∫_cell Phi dk, factor V sqrt(Lambda)."""
+    dk1, dk2, dk3 = box.dk()
+    r2 = min(CELL_RADIUS, (box.nyp - 1) // 2)
+    r3 = min(CELL_RADIUS, (box.nzp - 1) // 2)
+    n_slabs = min(box.nk1, int(CELL_K1_FACTOR * max(dk2, dk3) / dk1) + 1)
+    index, factor = [], []
+    for i in range(n_slabs):
+        k1c = box.k1()[i]
+        x1, w1 = _gauss_rule(k1c - dk1 / 2, k1c + dk1 / 2, 2)
+        scale = max(abs(k1c), dk1 / 4)
+        for j in range(-r2, r2 + 1):
+            x2, w2 = _cell_rule(j * dk2, dk2, scale)
+            for l in range(-r3, r3 + 1):
+                x3, w3 = _cell_rule(l * dk3, dk3, scale)
+                phi = sheared_tensor(x1[:, None, None], x2[None, :, None], x3[None, None, :], params)
+                weights = w1[:, None, None] * w2[None, :, None] * w3[None, None, :]
+                cell = np.einsum("ijabc,abc->ij", phi, weights) / 2.0  # ∫_cell Phi dk / 2 (E|n|^2 = 2)
+                if i == 0 and j == 0 and l == 0:
+                    cell[...] = 0.0  # the box mean stays zero (the mean wind is U)
+                lam, vec = np.linalg.eigh(cell)
+                index.append((i, j % box.nyp, l % box.nzp))
+                factor.append(vec * np.sqrt(np.clip(lam, 0.0, None)))
+    return np.array(index, dtype=np.int64).reshape(-1, 3), np.array(factor, dtype=np.float32).reshape(-1, 3, 3)
 
 
 def stencil_key(params: MannParams, box: BoxShape) -> str:
@@ -151,30 +217,34 @@ def stencil_key(params: MannParams, box: BoxShape) -> str:
 
 
 def build_stencil(params: MannParams, box: BoxShape, cache_dir: str | Path | None = None) -> MannStencil:
-    """The stencil of ``params`` on ``box``; with ``cache_dir``, loaded from / saved to ``<key>.npz`` there."""
+    """The stencil of ``params`` on ``box``; with ``cache_dir``, loaded from / saved to an .npz named by stencil_key."""
     if cache_dir is None:
         return _build(params, box)
-    path = Path(cache_dir) / f"mann-stencil-{stencil_key(params, box)}.npy"
+    path = Path(cache_dir) / f"mann-stencil-{stencil_key(params, box)}.npz"
     frozen = params.evo_time_s is None
-    expected = (6 - frozen, box.nk1, box.nk2_half, box.nzp)
     if path.exists():
         try:
-            data = np.load(path)
-            if data.shape == expected and data.dtype == np.float32:
-                return MannStencil(params, box, data[:5], None if frozen else data[5])
-        except (OSError, ValueError):
+            with np.load(path) as data:
+                coef, index, factor = data["coef"], data["cell_index"], data["cell_factor"]
+                inv_tau = None if frozen else data["inv_tau"]
+            if coef.shape == (5, box.nk1, box.nk2_half, box.nzp):
+                return MannStencil(params, box, coef, inv_tau, index, factor)
+        except (OSError, ValueError, KeyError):
             pass  # unreadable cache entry: rebuild and replace it
     stencil = _build(params, box)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    arrays = {"coef": stencil.coef, "cell_index": stencil.cell_index, "cell_factor": stencil.cell_factor}
+    if not frozen:
+        arrays["inv_tau"] = stencil.inv_tau
     with open(tmp, "wb") as f:
-        np.save(f, stencil.coef if frozen else np.concatenate([stencil.coef, stencil.inv_tau[None]]))
+        np.savez(f, **arrays)
     os.replace(tmp, path)
     return stencil
 
 
 def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
-    """The full factor C (3, 3, nyp, nzp) [float64, times sqrt(dk/2)] of slab ``i``, rebuilt from the compact form.
+    """The full factor C (3, 3, nyp, nzp) [float64, times sqrt(dk/2)] of slab ``i``: compact form + axis cells.
 
     For tests and the discrete oracle: E[u_hat u_hat^H] = 2 C C^T on every stored point.
     """
@@ -191,6 +261,9 @@ def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
     c[0] = [z1 * k2, p - z1 * k1, -a * k2]
     c[1] = [-p + z2 * k2, -z2 * k1, a * k1]
     c[2] = [w * k2, -w * k1, np.zeros_like(a)]
+    cells = stencil.cells_in(i, i + 1)
+    rows, cols = stencil.cell_index[cells, 1], stencil.cell_index[cells, 2]
+    c[:, :, rows, cols] = np.moveaxis(stencil.cell_factor[cells].astype(float), 0, -1)
     return c
 
 

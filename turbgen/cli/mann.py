@@ -1,0 +1,115 @@
+"""`turbgen mann`: the Mann space-time 4D field (Guo et al. 2022) to a zarr store."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from turbgen.cli.options import parse_floats, parse_range
+from turbgen.runs.config import read_config
+from turbgen.runs.defaults import MANN_DEFAULTS as D
+from turbgen.runs.defaults import MANN_GRID as G
+from turbgen.runs.mann import MannRun, describe, mann_preset_keys, run_mann
+from turbgen.synthesis.mann_spacetime import MannSnapshots
+from turbgen.theory.params import LIFETIMES
+
+# option name -> key of the run mapping (MannRun.from_mapping, schemas/mann-run.schema.json)
+_KEYS = {
+    "U": "U_m_s", "L": "length_scale_m", "gamma": "gamma", "evo": "evo_time_s", "lifetime": "lifetime",
+    "factor1": "factor1", "factor2": "factor2", "seed": "seed", "hub_height": "hub_height_m", "pad_yz": "pad_yz",
+    "ae": "ae", "sigma_u": "sigma_u_m_s", "ti": "ti",
+}  # fmt: skip
+_GRID_KEYS = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}
+_ENERGY = ("ae", "sigma_u", "ti")
+
+
+def _evo(ctx, param, value):
+    if value is None:
+        return None
+    if value.strip().lower() in ("frozen", "none"):
+        return "frozen"
+    try:
+        return float(value)
+    except ValueError:
+        raise click.BadParameter(f"{value!r} is not a number of seconds or 'frozen'") from None
+
+
+def _list(parser, name):
+    return lambda ctx, param, value: None if value is None else parser(value, name)
+
+
+@click.command()
+@click.option("--L", "L", type=float, help=f"Length scale L [m] (default {D['length_scale_m']:g}).")
+@click.option("--gamma", type=float, help=f"Shear anisotropy Gamma [-] (default {D['gamma']:g}).")
+@click.option("--evo", callback=_evo, help=f"Evolution time gamma [s] of tau_e (Eq. 15), or 'frozen' "
+              f"(default {D['evo_time_s']:g}).")  # fmt: skip
+@click.option("--U", "U", type=float, help=f"Mean wind speed [m/s] (default {D['U_m_s']:g}).")
+@click.option("--ae", type=float, help="alpha*eps^(2/3) [m^(4/3)/s^2] (default: the value giving the IEC class A "
+              "NTM sigma_1 = 0.16 (0.75 U + 5.6) as model sigma_u).")  # fmt: skip
+@click.option("--sigma-u", "sigma_u", type=float, help="Set ae so the model sigma_u is this [m/s].")
+@click.option("--ti", type=float, help="Set ae so the model sigma_u is ti * U (ti as a fraction, e.g. 0.18).")
+@click.option("--planes", callback=_list(parse_floats, "--planes"), help="Plane positions x [m upstream], e.g. 0,50,100.")
+@click.option("--gates", callback=_list(parse_range, "--gates"),
+              help="Range gates start:stop:step [m]; planes = rotor 0 + gates (default 50:170:13.3).")
+@click.option("--nt", type=int, help=f"Time samples (default {G['nt']}).")
+@click.option("--dt", type=float, help=f"Time step [s] (default {G['dt_s']:g}; dx = U dt along the box).")
+@click.option("--ny", type=int, help=f"Lateral points (default {G['ny']}).")
+@click.option("--nz", type=int, help=f"Vertical points (default {G['nz']}).")
+@click.option("--dy", type=float, help=f"Lateral spacing [m] (default {G['dy_m']:g}: a ~300 m box).")
+@click.option("--dz", type=float, help="Vertical spacing [m] (default: --dy).")
+@click.option("--lifetime", type=click.Choice(LIFETIMES), help="Eddy lifetime: guo (Eq. 6, default) or mann (Eq. 4).")
+@click.option("--factor1", type=float, help="Guo lifetime small-k slope -factor1 (default 1; stable preset 0.8).")
+@click.option("--factor2", type=float, help="tau_e large-k slope -(2/3) factor2 (default 3.5 = Eq. 15).")
+@click.option("--pad-yz", "pad_yz", type=int, help=f"Synthesise a box this many times wider in y and z and crop "
+              f"(default {D['pad_yz']}; 1 = periodic output, larger = less periodicity, more memory/time).")  # fmt: skip
+@click.option("--preset", help="Stability preset (unstable, neutral, stable, or from --presets-file): sets L, Gamma, "
+              "gamma, factor1, lifetime and the IEC class; typed options override it.")  # fmt: skip
+@click.option("--presets-file", type=click.Path(dir_okay=False), help="User presets (TOML or JSON).")
+@click.option("--seed", type=int, help=f"Random seed >= 0 (default {D['seed']}).")
+@click.option("--hub-height", "hub_height", type=float, help=f"Hub height [m] (default {D['hub_height_m']:g}).")
+@click.option("--out", type=click.Path(), help="Output store (default mann_U<U>_L<L>_G<Gamma>_evo<gamma>_s<seed>.zarr).")
+@click.option("--chunks", type=int, help="Time samples per store chunk (default min(nt, 1024)); never changes the field.")
+@click.option("--overwrite", is_flag=True, help="Replace an existing store.")
+@click.option("--config", type=click.Path(dir_okay=False), help="JSON/TOML run file (schemas/mann-run.schema.json); "
+              "options typed on the command line override it.")  # fmt: skip
+@click.option("--threads", type=click.IntRange(min=1), help="Worker threads (default: all cores); never changes the field.")
+@click.option("--stencil-cache", type=click.Path(file_okay=False),
+              help="Directory caching the stencil per parameter set and grid (reused by later seeds).")
+def mann(**opt):
+    """Mann space-time 4D field: yz-planes at the rotor and range gates, evolving with upstream distance."""
+    mapping = read_config(opt["config"], "mann-run") if opt["config"] else {}
+    grid = dict(mapping.get("grid", {}))
+    typed_energy = [name for name in _ENERGY if opt[name] is not None]
+    if len(typed_energy) > 1:
+        raise click.UsageError(f"give one of --ae, --sigma-u, --ti (got {', '.join(typed_energy)})")
+    if opt["preset"] is not None:
+        mapping.update(mann_preset_keys(opt["preset"], opt["presets_file"]))
+    elif opt["presets_file"]:
+        raise click.UsageError("--presets-file needs --preset")
+    if typed_energy:  # a typed energy level replaces any from the run file
+        for key in ("ae", "sigma_u_m_s", "ti", "ae_from"):
+            mapping.pop(key, None)
+    for name, key in _KEYS.items():
+        if opt[name] is not None:
+            mapping[key] = None if opt[name] == "frozen" else opt[name]
+    for name, key in _GRID_KEYS.items():
+        if opt[name] is not None:
+            grid[key] = opt[name]
+    if opt["planes"] is not None and opt["gates"] is not None:
+        raise click.UsageError("give --planes or --gates, not both")
+    if opt["planes"] is not None:
+        grid["x_m"] = opt["planes"]
+    elif opt["gates"] is not None:
+        grid["x_m"] = [0.0, *opt["gates"]]
+    mapping["grid"] = grid
+    run = MannRun.from_mapping(mapping)
+    out = opt["out"] or run.default_store_name()
+    threads = MannSnapshots.default_threads(opt["threads"])
+    click.echo("turbgen mann")
+    for line in describe(run, out, threads):
+        click.echo(f"  {line}")
+    s = run_mann(run, out, overwrite=opt["overwrite"], chunk_t=opt["chunks"], progress=sys.stderr.isatty(),
+                 threads=threads, cache_dir=opt["stencil_cache"])  # fmt: skip
+    click.echo(f"wrote {s['path']} in {s['seconds']:.1f} s: sigma u/v/w {s['sigma_u']:.3f}/{s['sigma_v']:.3f}/"
+               f"{s['sigma_w']:.3f} m/s")  # fmt: skip
