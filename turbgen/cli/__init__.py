@@ -56,6 +56,10 @@ def _register():
 
     cli.add_command(export.export)
 
+    from turbgen.cli import mann
+
+    cli.add_command(mann.mann)
+
     from turbgen.cli import sweep
 
     cli.add_command(sweep.sweep)
