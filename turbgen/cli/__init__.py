@@ -68,5 +68,9 @@ def _register():
 
     cli.add_command(kaimal.kaimal)
 
+    from turbgen.cli import validate
+
+    cli.add_command(validate.validate)
+
 
 _register()

@@ -1,0 +1,34 @@
+"""`turbgen validate STORE`: re-estimate spectra and coherences and compare them with the model."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import click
+
+from turbgen.validate import DEFAULT_ROTOR_RADIUS_M, validate as run_validation
+
+
+@click.command("validate")
+@click.argument("store", type=click.Path(path_type=str))
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON (stable keys) instead of a table.")
+@click.option("--plots", "plots_dir", type=click.Path(file_okay=False, path_type=str), default=None,
+              help="Write one PNG per comparison (estimate, 95 % band, theory) into this directory.")
+@click.option("--rotor-radius", "rotor_radius", type=float, default=DEFAULT_ROTOR_RADIUS_M, show_default=True,
+              help="Rotor radius R [m] of the rotor-effective wind speed (mean of u over the points within R).")
+def validate(store, as_json, plots_dir, rotor_radius):
+    """Validate the field store STORE against its model (Mann or Kaimal).
+
+    Exit code 0 when every metric passes, 1 when a metric fails, 2 for usage errors or a path
+    that is not a complete turbgen store.
+    """
+    report = run_validation(store, rotor_radius_m=rotor_radius)
+    if plots_dir is not None:
+        files = report.plots(plots_dir)
+        click.echo(f"wrote {len(files)} plots to {plots_dir}", err=True)
+    if as_json:
+        click.echo(json.dumps(report.to_dict(), indent=1))
+    else:
+        click.echo(report.table())
+    sys.exit(0 if report.passed else 1)

@@ -1,0 +1,346 @@
+"""Welch estimates from a field store, computed with dask over the store's time chunks.
+
+The field is never loaded whole. One task reads one plane over one *span* (a run of whole time
+chunks, ~4 Welch segments long; each chunk is decompressed exactly once) and returns small
+sums; the sums of all tasks are added up. Welch segments (Hann window, 50 % overlap, mean
+removed per segment) lie inside one span, so the segments straddling two spans are not used
+(the estimates say how many segments they averaged; the tolerances use that number).
+
+Estimated quantities (one-sided, [m^2 s^-2 Hz^-1] unless stated):
+* per-point record mean and variance of u, v, w (variance about the point's own record mean,
+  averaged over all points and planes);
+* one-point auto-spectra of u, v, w and the u-w cross-spectrum, averaged over segments, all
+  grid points and all planes;
+* yz cross-spectra of u, v, w for separations (a, b) grid steps (lateral, vertical): the sum of
+  conj(X(y, z)) X(y + a dy, z + b dz) over all pairs inside the grid, with the auto-spectra of
+  the two point sets; coherences follow in ``verdict``/``report`` as |C|^2 / (A B), Re C / sqrt(A B);
+* longitudinal cross-spectra of u between every pair of planes (same y, z, same stored time t,
+  i.e. in the convected frame of the store) on a sub-lattice of at most ~16 x 16 points;
+* the rotor-effective wind speed series of each plane (mean of u over the points within the
+  rotor radius, paper 000 Eq. 23 on the grid) and its Welch spectrum averaged over planes.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import dask
+import numpy as np
+import scipy.fft
+import scipy.signal
+from dask.callbacks import Callback
+from tqdm import tqdm
+
+from turbgen.errors import ParameterError
+from turbgen.grid import Grid
+
+COMPONENTS = ("u", "v", "w")
+SPAN_SEGMENTS = 4  # a span holds at least this many segment lengths (fewer segments lost at span edges)
+LONG_POINTS_PER_AXIS = 16  # sub-lattice for the plane-pair cross-spectra (bounds memory: nx x segments)
+MIN_NPERSEG = 32
+
+
+@dataclass(frozen=True)
+class WelchSetup:
+    """Welch segment length ``nperseg`` [samples] at time step ``dt_s``; Hann window, 50 % overlap."""
+
+    nperseg: int
+    dt_s: float
+
+    @property
+    def hop(self) -> int:
+        return self.nperseg // 2
+
+    @cached_property
+    def window(self) -> np.ndarray:
+        """Periodic Hann window (float64)."""
+        return scipy.signal.get_window("hann", self.nperseg, fftbins=True)
+
+    @property
+    def freqs(self) -> np.ndarray:
+        """Welch bin frequencies [Hz], 0 .. 1/(2 dt)."""
+        return np.fft.rfftfreq(self.nperseg, self.dt_s)
+
+    @property
+    def scale(self) -> np.ndarray:
+        """Per-bin factor turning sum |X|^2 into a one-sided PSD: 2 dt / sum w^2 (1x at 0 and Nyquist)."""
+        s = np.full(self.nperseg // 2 + 1, 2.0 * self.dt_s / np.sum(self.window**2))
+        s[0] *= 0.5
+        if self.nperseg % 2 == 0:
+            s[-1] *= 0.5
+        return s
+
+    @cached_property
+    def overlap_rho2(self) -> float:
+        """Correlation of the periodograms of two half-overlapping segments (white noise): 1/36 for Hann."""
+        w = self.window
+        return float(np.sum(w[self.hop :] * w[: self.nperseg - self.hop]) ** 2 / np.sum(w**2) ** 2)
+
+    def bin_rho2(self, lag: int) -> float:
+        """Correlation of periodogram bins ``lag`` apart (white noise): 4/9 at lag 1, 1/36 at lag 2 for Hann."""
+        w2 = self.window**2
+        t = np.arange(self.nperseg)
+        return float(np.abs(np.sum(w2 * np.exp(-2j * np.pi * lag * t / self.nperseg))) ** 2 / np.sum(w2) ** 2)
+
+    def effective_segments(self, n_segments: int, n_overlapping_pairs: int) -> float:
+        """Number of independent periodograms equivalent to the average (Welch 1967, Eq. of the variance)."""
+        return n_segments / (1.0 + 2.0 * self.overlap_rho2 * n_overlapping_pairs / n_segments)
+
+
+def default_nperseg(nt: int) -> int:
+    """Largest power of two <= nt / 8 (about 15 half-overlapping segments), at least 32 samples."""
+    if nt < 4 * MIN_NPERSEG:
+        raise ParameterError(f"nt = {nt} is too short to validate (needs >= {4 * MIN_NPERSEG} time steps)")
+    return 2 ** int(math.floor(math.log2(nt / 8))) if nt >= 8 * MIN_NPERSEG else MIN_NPERSEG
+
+
+def plan_spans(nt: int, chunk_t: int, nperseg: int) -> list[tuple[int, int]]:
+    """[t0, t1) spans made of whole chunks, each >= SPAN_SEGMENTS x nperseg (the last merged if short)."""
+    group = max(1, math.ceil(SPAN_SEGMENTS * nperseg / chunk_t))
+    step = group * chunk_t
+    spans = [(t0, min(nt, t0 + step)) for t0 in range(0, nt, step)]
+    if len(spans) > 1 and spans[-1][1] - spans[-1][0] < nperseg:
+        spans[-2:] = [(spans[-2][0], nt)]
+    return spans
+
+
+def segment_starts(length: int, setup: WelchSetup) -> range:
+    """Starts of the half-overlapping segments inside a record of ``length`` samples."""
+    return range(0, length - setup.nperseg + 1, setup.hop)
+
+
+def grid_steps(sep_m: float, step_m: float, n: int) -> int:
+    """A separation [m] as a whole number of grid steps, clipped to [0, n // 2]."""
+    return int(min(max(round(sep_m / step_m), 1 if sep_m > 0 else 0), n // 2))
+
+
+def default_separations(grid: Grid) -> tuple[tuple[int, int], ...]:
+    """(lateral, vertical) separations in grid steps: ~10 m and ~30 m lateral and vertical, ~20 m diagonal."""
+    seps = []
+    for dy_m, dz_m in ((10.0, 0.0), (30.0, 0.0), (0.0, 10.0), (0.0, 30.0), (20.0, 20.0)):
+        a, b = grid_steps(dy_m, grid.dy_m, grid.ny), grid_steps(dz_m, grid.dz_m, grid.nz)
+        if (a, b) != (0, 0) and (a, b) not in seps and (dy_m == 0 or a > 0) and (dz_m == 0 or b > 0):
+            seps.append((a, b))
+    return tuple(seps)
+
+
+def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
+    """Boolean (ny, nz): grid points with y^2 + z^2 <= R^2 (the rotor disc around the hub)."""
+    y, z = grid.y(), grid.z()
+    mask = y[:, None] ** 2 + z[None, :] ** 2 <= radius_m**2 * (1 + 1e-12)
+    if not mask.any():
+        raise ParameterError(f"rotor radius = {radius_m:g} m contains no grid point (dy = {grid.dy_m:g} m)")
+    return mask
+
+
+def check_rotor_radius(grid: Grid, radius_m: float) -> float:
+    """The rotor disc must lie inside the grid: 0 < R <= half the smaller grid extent."""
+    r = float(radius_m)
+    half = min((grid.ny - 1) * grid.dy_m, (grid.nz - 1) * grid.dz_m) / 2.0
+    if not (math.isfinite(r) and 0 < r <= half * (1 + 1e-9)):
+        raise ParameterError(f"rotor radius = {radius_m!r} m is outside the grid's range (0, {half:g}] m")
+    return r
+
+
+def long_sublattice(n: int) -> np.ndarray:
+    """Indices of an evenly strided sub-lattice of at most LONG_POINTS_PER_AXIS points (centred)."""
+    stride = max(1, math.ceil(n / LONG_POINTS_PER_AXIS))
+    idx = np.arange(0, n, stride)
+    return idx + (n - 1 - idx[-1]) // 2
+
+
+@dataclass
+class Estimates:
+    """Everything the validator estimated from one store (spectra one-sided, [m^2 s^-2 Hz^-1])."""
+
+    setup: WelchSetup
+    grid: Grid
+    separations: tuple[tuple[int, int], ...]
+    rotor_radius_m: float
+    rotor_mask: np.ndarray
+    long_iy: np.ndarray
+    long_iz: np.ndarray
+    n_segments: int = 0  # segments per point (all spans)
+    n_overlapping_pairs: int = 0  # pairs of consecutive half-overlapping segments
+    mean: dict = field(default_factory=dict)  # component -> grand mean [m/s]
+    variance: dict = field(default_factory=dict)  # component -> mean per-point variance [m^2 s^-2]
+    auto: dict = field(default_factory=dict)  # component -> (nf,) PSD
+    uw: np.ndarray | None = None  # (nf,) complex cross-spectrum  E[conj(X_u) X_w]
+    yz: dict = field(default_factory=dict)  # component -> {(a, b): (C complex, A, B)} (nf,) each
+    long_cross: np.ndarray | None = None  # (nx, nx, nf) complex, E[conj(X_p) X_q]
+    long_auto: np.ndarray | None = None  # (nx, nf)
+    rews: np.ndarray | None = None  # (nt, nx) rotor-effective wind speed series [m/s]
+    rews_psd: np.ndarray | None = None  # (nf,) averaged over planes
+    rews_segments: int = 0
+    rews_overlapping_pairs: int = 0
+
+    @property
+    def freqs(self) -> np.ndarray:
+        return self.setup.freqs
+
+    @property
+    def effective_segments(self) -> float:
+        return self.setup.effective_segments(self.n_segments, self.n_overlapping_pairs)
+
+    @property
+    def rews_effective_segments(self) -> float:
+        return self.setup.effective_segments(self.rews_segments, self.rews_overlapping_pairs)
+
+
+def _csum(a, b) -> np.ndarray:
+    """sum over the yz axes of conj(a) b, per frequency (complex128)."""
+    return np.einsum("fij,fij->f", np.conj(a), b).astype(np.complex128)
+
+
+def _psum(p) -> np.ndarray:
+    return p.sum(axis=(1, 2), dtype=np.float64)
+
+
+def _task(arrays, ix: int, t0: int, t1: int, setup: WelchSetup, seps, mask, iy, iz) -> dict:
+    """Sums of one plane over one span [t0, t1): the Welch and moment sums, the REWS series."""
+    data = {c: np.asarray(arrays[c][t0:t1, ix], dtype=np.float32) for c in COMPONENTS}
+    out = {"sum": {}, "sum2": {}, "auto": {}, "yz": {c: {} for c in COMPONENTS}}
+    for c, d in data.items():
+        out["sum"][c] = d.sum(axis=0, dtype=np.float64)
+        out["sum2"][c] = np.einsum("tij,tij->ij", d, d, dtype=np.float64)
+    out["rews"] = data["u"][:, mask].mean(axis=1, dtype=np.float64)
+    w = setup.window.astype(np.float32)[:, None, None]
+    n = setup.nperseg
+    nf = n // 2 + 1
+    ny, nz = data["u"].shape[1:]
+    auto = {c: np.zeros(nf) for c in COMPONENTS}
+    yz = {c: {s: [np.zeros(nf, complex), np.zeros(nf), np.zeros(nf)] for s in seps} for c in COMPONENTS}
+    uw = np.zeros(nf, complex)
+    sub = []
+    for s in segment_starts(t1 - t0, setup):
+        spec = {}
+        for c in COMPONENTS:
+            seg = data[c][s : s + n]
+            x = scipy.fft.rfft((seg - seg.mean(axis=0)) * w, axis=0, workers=1)
+            spec[c] = x
+            p = x.real * x.real + x.imag * x.imag
+            auto[c] += _psum(p)
+            for a, b in seps:
+                acc = yz[c][(a, b)]
+                acc[0] += _csum(x[:, : ny - a, : nz - b], x[:, a:, b:])
+                acc[1] += _psum(p[:, : ny - a, : nz - b])
+                acc[2] += _psum(p[:, a:, b:])
+        uw += _csum(spec["u"], spec["w"])
+        sub.append(spec["u"][:, iy][:, :, iz].reshape(nf, -1))
+    out.update(auto=auto, yz=yz, uw=uw)
+    out["sub"] = np.stack(sub) if sub else np.zeros((0, nf, iy.size * iz.size), np.complex64)
+    return out
+
+
+def _plane_pairs(subs: list[np.ndarray]) -> np.ndarray:
+    """Cross-spectra sums (nx, nx, nf) between the planes of one span: sum over segments, points of conj(X_p) X_q."""
+    x = np.stack(subs)  # (nx, nseg, nf, P)
+    cross = np.empty((x.shape[0], x.shape[0], x.shape[2]), complex)
+    for p in range(x.shape[0]):
+        cross[p] = np.einsum("sfk,qsfk->qf", np.conj(x[p]), x)
+    return cross
+
+
+def welch_series(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, int, int]:
+    """One-sided Welch PSD of series x (nt, m) averaged over its m columns; (psd, segments, overlapping pairs)."""
+    starts = segment_starts(x.shape[0], setup)
+    w = setup.window[:, None]
+    acc = np.zeros(setup.nperseg // 2 + 1)
+    for s in starts:
+        seg = x[s : s + setup.nperseg]
+        spec = scipy.fft.rfft((seg - seg.mean(axis=0)) * w, axis=0)
+        acc += (np.abs(spec) ** 2).mean(axis=1)
+    k = len(starts)
+    return acc * setup.scale / k, k, max(k - 1, 0)
+
+
+class _TqdmCallback(Callback):
+    """dask progress on a tqdm bar (stderr, only when it is a terminal)."""
+
+    def __init__(self, total: int, desc: str):
+        super().__init__()
+        self.bar = tqdm(total=total, desc=desc, unit="task", disable=not sys.stderr.isatty())
+
+    def _posttask(self, key, result, dsk, state, worker_id):
+        self.bar.update(1)
+
+    def _finish(self, dsk, state, errored):
+        self.bar.close()
+
+
+def estimate(fs, *, rotor_radius_m: float = 63.0, nperseg: int | None = None, separations=None,
+             workers: int | None = None) -> Estimates:
+    """All Welch estimates of the store ``fs`` (a FieldStore), one dask task per (span, plane)."""
+    g = fs.grid
+    setup = WelchSetup(nperseg or default_nperseg(g.nt), g.dt_s)
+    if not MIN_NPERSEG <= setup.nperseg <= g.nt // 2:
+        raise ParameterError(f"nperseg = {setup.nperseg} is outside [{MIN_NPERSEG}, nt/2 = {g.nt // 2}]")
+    radius = check_rotor_radius(g, rotor_radius_m)
+    mask = rotor_mask(g, radius)
+    seps = tuple(separations) if separations is not None else default_separations(g)
+    iy, iz = long_sublattice(g.ny), long_sublattice(g.nz)
+    est = Estimates(setup, g, seps, radius, mask, iy, iz)
+    arrays = {c: fs.array(c) for c in COMPONENTS}
+    spans = plan_spans(g.nt, fs.chunk_t, setup.nperseg)
+    task = dask.delayed(_task, pure=False)
+    pairs = dask.delayed(_plane_pairs, pure=False)
+    per_span = []
+    for t0, t1 in spans:
+        parts = [task(arrays, ix, t0, t1, setup, seps, mask, iy, iz) for ix in range(g.nx)]
+        per_span.append((parts, pairs([p["sub"] for p in parts])))
+    with _TqdmCallback(total=len(spans) * (g.nx * 2 + 1), desc="validate"):
+        results = dask.compute(per_span, scheduler="threads", num_workers=workers or os.cpu_count())[0]
+    _combine(est, spans, results)
+    return est
+
+
+def _combine(est: Estimates, spans, results) -> None:
+    """Add the per-task sums into the normalised estimates."""
+    g, setup = est.grid, est.setup
+    seps = est.separations
+    n_seg = sum(len(segment_starts(t1 - t0, setup)) for t0, t1 in spans)
+    est.n_segments = n_seg
+    est.n_overlapping_pairs = sum(max(len(segment_starts(t1 - t0, setup)) - 1, 0) for t0, t1 in spans)
+    nf = setup.nperseg // 2 + 1
+    scale = setup.scale
+    n_pts = g.ny * g.nz
+    norm = scale / (n_seg * n_pts * g.nx)
+    sums = {c: np.zeros((g.nx, g.ny, g.nz)) for c in COMPONENTS}
+    sums2 = {c: np.zeros((g.nx, g.ny, g.nz)) for c in COMPONENTS}
+    auto = {c: np.zeros(nf) for c in COMPONENTS}
+    yz = {c: {s: [np.zeros(nf, complex), np.zeros(nf), np.zeros(nf)] for s in seps} for c in COMPONENTS}
+    uw = np.zeros(nf, complex)
+    long_cross = np.zeros((g.nx, g.nx, nf), complex)
+    rews = np.zeros((g.nt, g.nx))
+    for (t0, t1), (parts, cross) in zip(spans, results):
+        long_cross += cross
+        for ix, r in enumerate(parts):
+            rews[t0:t1, ix] = r["rews"]
+            uw += r["uw"]
+            for c in COMPONENTS:
+                sums[c][ix] += r["sum"][c]
+                sums2[c][ix] += r["sum2"][c]
+                auto[c] += r["auto"][c]
+                for s in seps:
+                    for k in range(3):
+                        yz[c][s][k] += r["yz"][c][s][k]
+    for c in COMPONENTS:
+        point_mean = sums[c] / g.nt
+        est.mean[c] = float(point_mean.mean())
+        est.variance[c] = float((sums2[c] / g.nt - point_mean**2).mean())
+        est.auto[c] = auto[c] * norm
+        est.yz[c] = {}
+        for a, b in seps:
+            n_pairs = (g.ny - a) * (g.nz - b) * g.nx * n_seg
+            cc, pa, pb = yz[c][(a, b)]
+            est.yz[c][(a, b)] = (cc * scale / n_pairs, pa * scale / n_pairs, pb * scale / n_pairs)
+    est.uw = uw * norm
+    n_sub = est.long_iy.size * est.long_iz.size
+    est.long_cross = long_cross * scale / (n_seg * n_sub)
+    est.long_auto = np.real(np.einsum("ppf->pf", est.long_cross))
+    est.rews = rews
+    est.rews_psd, est.rews_segments, est.rews_overlapping_pairs = welch_series(rews, setup)

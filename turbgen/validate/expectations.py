@@ -1,0 +1,524 @@
+"""Theory side of the validation: what the store's model predicts for every estimate, on the store's grid.
+
+Both generators synthesise a periodic record of nt samples, i.e. spectral *lines* at
+f_j = j / (nt dt), j = 0 .. nt/2 (a real field: the lines -f_j are the complex conjugates). A
+field is described here by the two-sided line variances L_j = E|Z_j|^2 [m^2 s^-2] of
+x(t) = sum_j Z_j exp(i 2 pi f_j t) (one-sided variance of a line pair: 2 L_j), and by the line
+cross-covariances E[conj(Z_j^a) Z_j^b] between two points or components.
+
+* Kaimal (paper 000 Eq. 11): L_j = S_i(f_j) df / 2 with the one-sided Kaimal PSD S_i, L_0 = 0
+  (no mean); times sigma_i^2 / sum(2 L_j) when the store says the spectrum was rescaled. u yz
+  cross-covariance L_j coh(r, f_j) with the IEC exponential coherence (Eq. 12, un-squared);
+  v, w as the store says (white, or the same exponential); between planes the longitudinal
+  model of the store (Eq. 18 / Simley-Pao / Kristensen, un-squared, zero phase in the
+  convected frame) for the components it was applied to, independent otherwise. REWS: Eq. 25
+  over the rotor points of the grid.
+* Mann (paper 000 Eq. 8, 13, 24): the generator samples the spectral tensor on the lattice of
+  its periodic (xi = U t, y, z) box, nt x nyp x nzp points spaced U dt, dy, dz. The expected
+  field therefore has L_j = sum over the (k2, k3) lattice of Phi_ii(k1_j, k2, k3) dk1 dk2 dk3,
+  k1_j = 2 pi f_j / U: the Mann spectrum *as the grid resolves it* -- band-limited at the
+  y, z Nyquist wavenumbers pi/dy, pi/dz and missing the wavenumbers below 2 pi/(nyp dy),
+  2 pi/(nzp dz) of the finite box (Mann 1998). Cross-covariances use exp(i(k2 dy + k3 dz)) and
+  the space-time tensor Theta = exp(-dx/(U tau_e)) Phi (Eq. 13) between planes dx apart; the
+  REWS uses Phi_11 |H_R(k2, k3)|^2 with H_R the average of exp(i k.r) over the rotor points of
+  the grid (Eq. 24 with the grid's points instead of the continuous disc).
+  The tensor is evaluated here from turbgen.theory (not from the generator's stencil), so the
+  validator checks the generator's factorisation too.
+
+The Welch estimate of a bin is a weighted sum of lines (:class:`WelchKernel`, exact for the
+Hann window with the per-segment mean removed), so the expected estimate is computed exactly,
+also in the lowest bins where leakage and mean removal matter.
+
+Correlation of estimates across points (for the tolerances in ``verdict``): for Gaussian
+fields, Cov(|X_p|^2, |X_q|^2) = E|X_p|^2 E|X_q|^2 coh2_pq (Isserlis), so an average over N points
+(and planes) has the variance of one point times rho_bar = sum_pq coh2_pq / N^2. ``rho_*`` hold
+rho_bar for every averaged point set, from the model's magnitude-squared coherence between all
+the points (including different planes), at ``node_f``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from turbgen.errors import ParameterError
+from turbgen.grid import Grid
+from turbgen.theory.coherence_models import LONGITUDINAL_MODELS, exponential_yz
+from turbgen.theory.eddy_lifetime import evolution_lifetime_s
+from turbgen.theory.kaimal import kaimal_spectrum
+from turbgen.theory.mann_tensor import sheared_tensor
+from turbgen.theory.params import KaimalParams, MannParams
+from turbgen.validate.estimators import COMPONENTS, WelchSetup
+
+KERNEL_BAND = 32  # Welch bins either side of a bin whose lines are summed (Hann leakage beyond < 1e-8)
+N_LINE_NODES = 96  # k1 nodes of the Mann lattice sums when not every line is evaluated
+N_RHO_NODES = 24  # frequency nodes of the correlation sums rho_bar
+EXACT_LATTICE_POINTS = 4_000_000  # evaluate every line exactly when lines x lattice points is below this
+
+
+class WelchKernel:
+    """Expected one-sided Welch estimate of bins m = 0 .. n/2 as a weighted sum of spectral lines.
+
+    A segment's windowed, mean-removed DFT is X_m = sum_j Z_j G_m(f_j) with
+    G_m(f) = W(m/n - f dt) - e(f) W(m/n), W the window's DTFT and e(f) the segment mean of
+    exp(i 2 pi f t); so E[P_m] = scale_m sum_j |G_m(f_j)|^2 L_j over the lines +-f_j.
+    Lines more than KERNEL_BAND bins away are ignored (Hann sidelobes fall as bin^-3).
+    """
+
+    def __init__(self, setup: WelchSetup, nt: int):
+        n, dt = setup.nperseg, setup.dt_s
+        self.setup, self.nt = setup, nt
+        ratio = nt / n  # lines per Welch bin
+        m = np.arange(n // 2 + 1)
+        width = int(math.ceil(KERNEL_BAND * ratio))
+        centre = np.round(m * ratio).astype(int)
+        j = centre[:, None] + np.arange(-width, width + 1)[None, :]
+        valid = (j >= 1) & (j <= nt // 2)
+        self.j_pos = np.clip(j, 0, nt // 2)
+        fp = self.j_pos / (nt * dt)
+        # negative-frequency lines -f_j only matter for the lowest bins: j in [1, width]
+        self.j_neg = np.arange(1, min(width, nt // 2) + 1)
+        fn = -self.j_neg / (nt * dt)
+        scale = setup.scale[:, None]
+        self.k_pos = np.where(valid, scale * np.abs(self._g(m[:, None], fp, n, dt)) ** 2, 0.0)
+        self.k_neg = scale * np.abs(self._g(m[:, None], fn[None, :], n, dt)) ** 2
+        if nt % 2 == 0:  # the Nyquist line is one real line, not a +-pair: count it once (on +f)
+            self.k_neg[:, self.j_neg == nt // 2] = 0.0
+
+    @staticmethod
+    def _dirichlet(nu, n):
+        z = np.exp(-2j * np.pi * nu)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d = (1.0 - z**n) / (1.0 - z)
+        return np.where(np.abs(np.sin(np.pi * nu)) < 1e-12, complex(n), d)
+
+    @classmethod
+    def _window_dtft(cls, nu, n):
+        """DTFT of the periodic Hann window 0.5 - 0.5 cos(2 pi t / n), t = 0 .. n-1."""
+        return 0.5 * cls._dirichlet(nu, n) - 0.25 * cls._dirichlet(nu - 1.0 / n, n) - 0.25 * cls._dirichlet(nu + 1.0 / n, n)
+
+    @classmethod
+    def _g(cls, m, f, n, dt):
+        mean_e = cls._dirichlet(-f * dt, n) / n
+        return cls._window_dtft(m / n - f * dt, n) - mean_e * cls._window_dtft(m / n + 0.0 * f, n)
+
+    def apply(self, lines: np.ndarray) -> np.ndarray:
+        """Expected Welch estimate (n/2+1,) of line (cross-)variances ``lines`` (nt/2+1,), real or complex."""
+        lines = np.asarray(lines)
+        out = np.sum(self.k_pos * lines[self.j_pos], axis=1)
+        out = out + self.k_neg @ np.conj(lines[self.j_neg])
+        return out if np.iscomplexobj(lines) else out.real
+
+
+@dataclass
+class Theory:
+    """Model predictions on the store's grid (see module docstring). Lines are indexed j = 0 .. nt/2."""
+
+    model: str
+    nt: int
+    line_f: np.ndarray
+    auto: dict  # component -> (nl,) L_j
+    yz: dict  # component -> {(a, b): (nl,) complex}
+    long: dict  # |dx| rounded to 1e-6 m -> (nl,) u line covariance between planes (same y, z)
+    rews: np.ndarray  # (nl,) rotor-effective wind speed lines
+    node_f: np.ndarray  # (nn,) frequencies of the rho_bar nodes [Hz]
+    rho_all: dict  # component -> (nn,) over all points and planes
+    rho_yz: dict  # component -> {(a, b): (nn,)} over the first points of the pairs, all planes
+    rho_long: np.ndarray  # (nn,) over the plane-pair sub-lattice, one plane
+    rho_rews: np.ndarray  # (nn,) over the planes (REWS series)
+    sigma_model: dict  # component -> sigma of the full model spectrum [m/s] (information)
+    band: dict  # what the grid resolves (stated in the report)
+    uw: np.ndarray | None = None  # (nl,) Mann u-w line covariance
+    rho_uw: np.ndarray | None = None  # (nn,) cross-component term of the uw variance bound
+    long_components: str = "u"
+    reference: dict = field(default_factory=dict)  # continuous-model curves for the plots: name -> (f, S)
+
+    def long_lines(self, dx_m: float) -> np.ndarray:
+        return self.long[_dx_key(dx_m)]
+
+    def rho(self, values: np.ndarray, f_hz) -> np.ndarray:
+        """rho_bar node values interpolated (linear in log f) to ``f_hz``, clipped to [0, 1]."""
+        f = np.clip(np.asarray(f_hz, dtype=float), self.node_f[0], self.node_f[-1])
+        return np.clip(np.interp(np.log(f), np.log(self.node_f), values), 0.0, 1.0)
+
+    @property
+    def pair_weights(self) -> np.ndarray:
+        """Weight of line j in a variance: 2 (lines +-f_j), 1 for j = 0 and the single Nyquist line."""
+        return _pair_weights(self.line_f.size, self.nt % 2 == 0)
+
+    def variance(self, component: str) -> float:
+        """Expected variance about each point's record mean: all lines but j = 0 [m^2 s^-2]."""
+        return float(np.sum(self.pair_weights[1:] * self.auto[component][1:]))
+
+
+def _pair_weights(nl: int, nt_even: bool = True) -> np.ndarray:
+    """Lines j and -j together: weight 2, except j = 0 and the single Nyquist line (weight 1)."""
+    w = np.full(nl, 2.0)
+    w[0] = 1.0
+    if nt_even:
+        w[-1] = 1.0
+    return w
+
+
+def _dx_key(dx_m: float) -> float:
+    return round(abs(float(dx_m)), 6)
+
+
+def plane_separations(grid: Grid) -> dict:
+    """Distinct |x_p - x_q| [m] over ordered plane pairs -> number of pairs."""
+    out: dict = {}
+    for xp in grid.x_m:
+        for xq in grid.x_m:
+            k = _dx_key(xp - xq)
+            out[k] = out.get(k, 0) + 1
+    return out
+
+
+def _rect_counts(ny: int, nz: int, my: int, mz: int) -> np.ndarray:
+    """Pairs of points of an my x mz rectangle per separation (dy, dz) on the (2ny-1, 2nz-1) lag grid."""
+    dy = np.arange(-(ny - 1), ny)
+    dz = np.arange(-(nz - 1), nz)
+    return np.maximum(my - np.abs(dy), 0)[:, None] * np.maximum(mz - np.abs(dz), 0)[None, :].astype(float)
+
+
+def _set_counts(ny: int, nz: int, iy: np.ndarray, iz: np.ndarray) -> np.ndarray:
+    """Pairs of points of the sub-lattice iy x iz per separation on the (2ny-1, 2nz-1) lag grid."""
+    cy = np.zeros(2 * ny - 1)
+    cz = np.zeros(2 * nz - 1)
+    np.add.at(cy, (iy[:, None] - iy[None, :]).ravel() + ny - 1, 1.0)
+    np.add.at(cz, (iz[:, None] - iz[None, :]).ravel() + nz - 1, 1.0)
+    return cy[:, None] * cz[None, :]
+
+
+def _lag_radius(grid: Grid) -> np.ndarray:
+    """|r| [m] on the (2ny-1, 2nz-1) lag grid."""
+    dy = np.arange(-(grid.ny - 1), grid.ny) * grid.dy_m
+    dz = np.arange(-(grid.nz - 1), grid.nz) * grid.dz_m
+    return np.hypot(dy[:, None], dz[None, :])
+
+
+class _RhoAccumulator:
+    """Sums of coh2 over all ordered pairs of every averaged point set (see module docstring)."""
+
+    def __init__(self, grid: Grid, seps, iy, iz, nn: int):
+        self.grid, self.seps = grid, seps
+        ny, nz, nx = grid.ny, grid.nz, grid.nx
+        self.counts_all = _rect_counts(ny, nz, ny, nz)
+        self.counts_yz = {s: _rect_counts(ny, nz, ny - s[0], nz - s[1]) for s in seps}
+        self.counts_long = _set_counts(ny, nz, iy, iz)
+        self.norm_all = (nx * ny * nz) ** 2
+        self.norm_yz = {s: (nx * (ny - s[0]) * (nz - s[1])) ** 2 for s in seps}
+        self.norm_long = (iy.size * iz.size) ** 2
+        self.all = {c: np.zeros(nn) for c in COMPONENTS}
+        self.yz = {c: {s: np.zeros(nn) for s in seps} for c in COMPONENTS}
+        self.long = np.zeros(nn)
+        self.uw = np.zeros(nn)
+
+    def add(self, component: str, coh2: np.ndarray, multiplicity: int, same_plane: bool, n=slice(None)) -> None:
+        """coh2 (nodes, 2ny-1, 2nz-1) between points of two planes (``multiplicity`` ordered plane pairs), nodes ``n``."""
+        self.all[component][n] += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
+        for s in self.seps:
+            self.yz[component][s][n] += (
+                multiplicity * np.einsum("nij,ij->n", coh2, self.counts_yz[s]) / self.norm_yz[s]
+            )
+        if same_plane and component == "u":
+            self.long[n] += np.einsum("nij,ij->n", coh2, self.counts_long) / self.norm_long
+
+    def add_uw(self, coh2: np.ndarray, multiplicity: int, n=slice(None)) -> None:
+        """|u-w coherency|^2 between points of two planes, as :meth:`add`."""
+        self.uw[n] += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
+
+
+def _rotor_pair_counts(grid: Grid, mask: np.ndarray) -> np.ndarray:
+    """Pairs of rotor points per lag on the (2ny-1, 2nz-1) lag grid (autocorrelation of the mask)."""
+    sy, sz = 2 * grid.ny - 1, 2 * grid.nz - 1
+    f = np.fft.rfft2(mask.astype(float), s=(sy, sz))
+    ac = np.fft.irfft2(np.abs(f) ** 2, s=(sy, sz))
+    return np.round(np.fft.fftshift(ac, axes=(0, 1)))
+
+
+def _band(setup: WelchSetup, grid: Grid, U: float) -> dict:
+    f_lo, f_hi = 1.0 / (setup.nperseg * setup.dt_s), 0.5 / setup.dt_s
+    return {
+        "f_min_hz": f_lo,
+        "f_max_hz": f_hi,
+        "k1_min_rad_m": 2 * np.pi * f_lo / U,
+        "k1_max_rad_m": 2 * np.pi * f_hi / U,
+        "welch_df_hz": f_lo,
+        "record_df_hz": 1.0 / (grid.nt * grid.dt_s),
+        "k2_nyquist_rad_m": np.pi / grid.dy_m,
+        "k3_nyquist_rad_m": np.pi / grid.dz_m,
+    }
+
+
+def _node_freqs(setup: WelchSetup, nt: int) -> np.ndarray:
+    """rho_bar nodes from the lowest record line 1/(nt dt) (the variance needs it) to the Nyquist frequency."""
+    return np.geomspace(1.0 / (nt * setup.dt_s), setup.freqs[-1], N_RHO_NODES)
+
+
+# ----------------------------------------------------------------------------------------------- Kaimal
+
+
+def kaimal_theory(attrs: dict, grid: Grid, setup: WelchSetup, seps, mask, iy, iz) -> Theory:
+    """Kaimal / IEC expectations from the store attributes written by turbgen.runs.kaimal."""
+    p = attrs["parameters"]
+    U = float(attrs["U_m_s"])
+    try:
+        kp = KaimalParams(tuple(p["sigma_m_s"]), tuple(p["length_scales_m"]), p["a_yz"], p["lc_m"])
+        long_model, long_components = p["long_model"], p["long_components"]
+        vw_coherent = p.get("vw_coherence", "white") == "exp"
+        rescale = bool(p.get("rescale", False))
+    except (KeyError, TypeError) as exc:
+        raise ParameterError(f"store parameters lack the Kaimal model ({exc}); not a turbgen Kaimal store") from None
+    if long_model == "exp":
+        long_fn = lambda dx, f: LONGITUDINAL_MODELS["exp"](dx, f, U, p["a_x"], p["b_x"])  # noqa: E731
+    else:
+        s_tot = math.sqrt(sum(s * s for s in kp.sigma_m_s))
+        long_fn = lambda dx, f: LONGITUDINAL_MODELS[long_model](dx, f, U, s_tot, kp.length_scales_m[0])  # noqa: E731
+    nt, dt = grid.nt, grid.dt_s
+    line_f = np.arange(nt // 2 + 1) / (nt * dt)
+    df = line_f[1]
+    auto = {}
+    for i, c in enumerate(COMPONENTS):
+        lines = kaimal_spectrum(line_f, kp.sigma_m_s[i], kp.length_scales_m[i], U) * df / 2.0  # Eq. 11
+        lines[0] = 0.0
+        if rescale:
+            lines *= kp.sigma_m_s[i] ** 2 / np.sum(_pair_weights(lines.size, nt % 2 == 0) * lines)
+        auto[c] = lines
+
+    def yz_coh(c, r_m, f):
+        if c == "u" or vw_coherent:
+            return exponential_yz(r_m, f, U, kp.a_yz, kp.lc_m)  # Eq. 12, un-squared
+        return np.where(np.asarray(r_m) == 0, 1.0, 0.0) * np.ones_like(f)
+
+    yz = {c: {(a, b): auto[c] * yz_coh(c, math.hypot(a * grid.dy_m, b * grid.dz_m), line_f) for a, b in seps}
+          for c in COMPONENTS}
+    long = {dx: auto["u"] * long_fn(dx, line_f) for dx in plane_separations(grid)}
+    # Eq. 25: S_RR = S_1 / n_R^2 sum_ij coh(r_ij, f), summed over the rotor pairs per lag
+    counts = _rotor_pair_counts(grid, mask)
+    radius = _lag_radius(grid)
+    sel = counts > 0
+    n_r = mask.sum()
+    rews_factor = np.array([np.sum(counts[sel] * exponential_yz(radius[sel], f, U, kp.a_yz, kp.lc_m)) for f in line_f])
+    rews = auto["u"] * rews_factor / n_r**2
+
+    node_f = _node_freqs(setup, grid.nt)
+    acc = _RhoAccumulator(grid, seps, iy, iz, node_f.size)
+    lag_r = _lag_radius(grid)
+    for c in COMPONENTS:
+        coh_yz2 = np.stack([yz_coh(c, lag_r, np.full(lag_r.shape, f)) ** 2 for f in node_f])
+        for dx, mult in plane_separations(grid).items():
+            if dx == 0:
+                acc.add(c, coh_yz2, mult, same_plane=True)
+            elif c in long_components:
+                acc.add(c, coh_yz2 * (long_fn(dx, node_f) ** 2)[:, None, None], mult, same_plane=False)
+    rho_rews = np.zeros(node_f.size)
+    for dx, mult in plane_separations(grid).items():
+        rho_rews += mult * long_fn(dx, node_f) ** 2 / grid.nx**2
+    reference = {
+        f"spectrum_{c}": (line_f[1:], kaimal_spectrum(line_f[1:], kp.sigma_m_s[i], kp.length_scales_m[i], U))
+        for i, c in enumerate(COMPONENTS)
+    }
+    band = _band(setup, grid, U)
+    band["note"] = (
+        f"Kaimal lines f_j = j/(nt dt) up to the Nyquist frequency {band['f_max_hz']:g} Hz; "
+        + ("spectra rescaled to the nominal sigma (store attribute rescale)" if rescale
+           else "variance = the Kaimal integral over the resolved band (no rescaling)")
+    )
+    return Theory(
+        model="kaimal", nt=nt, line_f=line_f, auto=auto, yz=yz, long=long, rews=rews, node_f=node_f,
+        rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
+        sigma_model=dict(zip(COMPONENTS, kp.sigma_m_s)), band=band, long_components=long_components,
+        reference=reference,
+    )
+
+
+# ------------------------------------------------------------------------------------------------- Mann
+
+
+@dataclass(frozen=True)
+class MannBox:
+    """The generator's periodic box in y, z: nyp x nzp points spaced dy, dz (the grid is its corner)."""
+
+    nyp: int
+    nzp: int
+
+
+def _lattice(grid: Grid, box: MannBox):
+    """(k2, k3) lattice of the box [rad/m], (nyp, nzp) each, FFT order (k2 Nyquist positive, as synthesised)."""
+    j = np.arange(box.nyp)
+    k2 = np.where(j <= box.nyp // 2, j, j - box.nyp) * (2 * np.pi / (box.nyp * grid.dy_m))
+    k3 = np.fft.fftfreq(box.nzp, d=grid.dz_m) * 2 * np.pi
+    return np.meshgrid(k2, k3, indexing="ij")
+
+
+def _lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
+    """Values at lags -(n-1) .. n-1 (periodic box index lag mod nyp) -> (..., 2ny-1, 2nz-1)."""
+    iy = np.arange(-(ny - 1), ny) % field2d.shape[-2]
+    iz = np.arange(-(nz - 1), nz) % field2d.shape[-1]
+    return field2d[..., iy[:, None], iz[None, :]]
+
+
+class _MannLattice:
+    """Sheared tensor and space-time decay on the (k2, k3) lattice of the box, slab by slab in k1."""
+
+    def __init__(self, params: MannParams, grid: Grid, box: MannBox, U: float):
+        self.params, self.grid, self.box, self.U = params, grid, box, U
+        self.k2, self.k3 = _lattice(grid, box)
+        dk1 = 2 * np.pi / (grid.nt * grid.dt_s * U)
+        self.dk = dk1 * (2 * np.pi / (box.nyp * grid.dy_m)) * (2 * np.pi / (box.nzp * grid.dz_m))
+
+    def slabs(self, k1: np.ndarray, batch: int = 8):
+        """Yield (index, Phi (3, 3, nyp, nzp) times dk1 dk2 dk3, 1/tau_e (nyp, nzp) [1/s]) per k1."""
+        for i0 in range(0, k1.size, batch):
+            kk = k1[i0 : i0 + batch][:, None, None]
+            # the generator's slab of time frequency f holds k1 = -2 pi f / U (time reversal, see
+            # synthesis.mann_stencil); Phi(-k1, k2, k3) differs from Phi(k1, k2, k3) on the unpaired Nyquist rows
+            phi = sheared_tensor(-kk, self.k2[None], self.k3[None], self.params) * self.dk
+            kmag = np.sqrt(kk * kk + self.k2[None] ** 2 + self.k3[None] ** 2)
+            with np.errstate(divide="ignore"):
+                inv_tau = 1.0 / evolution_lifetime_s(kmag, self.params)  # Eq. 15 (0 when frozen)
+            for n in range(kk.shape[0]):
+                yield i0 + n, phi[:, :, n], inv_tau[n]
+
+
+def _interp_lines(k1_nodes, values, k1_lines, positive: bool):
+    """Node values -> lines: cubic in log-log for positive spectra, linear in log k1 for ratios."""
+    x, xl = np.log(k1_nodes[1:]), np.log(np.maximum(k1_lines[1:], k1_nodes[1]))
+    out = np.empty(k1_lines.size, dtype=values.dtype)
+    out[0] = values[0]
+    if positive:
+        out[1:] = np.exp(CubicSpline(x, np.log(values[1:]))(xl))
+    elif np.iscomplexobj(values):
+        out[1:] = np.interp(xl, x, values[1:].real) + 1j * np.interp(xl, x, values[1:].imag)
+    else:
+        out[1:] = np.interp(xl, x, values[1:])
+    return out
+
+
+def mann_params_from_attrs(p: dict) -> MannParams:
+    """MannParams from the store's ``parameters`` attribute (written by turbgen.runs.mann)."""
+    try:
+        return MannParams(ae=p["ae"], length_scale_m=p["length_scale_m"], gamma=p["gamma"], lifetime=p["lifetime"],
+                          factor1=p["factor1"], factor2=p["factor2"], evo_time_s=p["evo_time_s"])
+    except (KeyError, TypeError) as exc:
+        raise ParameterError(f"store parameters lack the Mann model ({exc}); not a turbgen Mann store") from None
+
+
+def mann_box_from_attrs(p: dict, grid: Grid) -> MannBox:
+    """The synthesis box: pad_yz times the grid in y and z (turbgen.runs.mann.MannRun.box)."""
+    try:
+        pad = int(p["pad_yz"])
+        return MannBox(pad * grid.ny, pad * grid.nz)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ParameterError(f"store parameters lack the Mann box size ({exc})") from None
+
+
+def mann_theory(attrs: dict, grid: Grid, setup: WelchSetup, seps, mask, iy, iz) -> Theory:
+    """Mann space-time expectations on the lattice of the generator's box (module docstring)."""
+    p = attrs["parameters"]
+    params = mann_params_from_attrs(p)
+    box = mann_box_from_attrs(p, grid)
+    U = float(attrs["U_m_s"])
+    lat = _MannLattice(params, grid, box, U)
+    nt, dt = grid.nt, grid.dt_s
+    line_f = np.arange(nt // 2 + 1) / (nt * dt)
+    k1_lines = 2 * np.pi * line_f / U
+    if line_f.size * box.nyp * box.nzp <= EXACT_LATTICE_POINTS:
+        k1_nodes = k1_lines
+    else:
+        k1_nodes = np.concatenate([[0.0], np.geomspace(k1_lines[1], k1_lines[-1], N_LINE_NODES)])
+    dxs = plane_separations(grid)
+    # rotor average transfer |H_R|^2 on the lattice (the grid's rotor points inside the box)
+    mask_box = np.zeros((box.nyp, box.nzp))
+    mask_box[: grid.ny, : grid.nz] = mask
+    h2 = np.abs(np.fft.fft2(mask_box)) ** 2 / mask.sum() ** 2
+    phase = {s: np.exp(1j * (lat.k2 * s[0] * grid.dy_m + lat.k3 * s[1] * grid.dz_m)) for s in seps}
+    nn = k1_nodes.size
+    f_nodes = {c: np.empty(nn) for c in COMPONENTS}
+    f13 = np.empty(nn)
+    yz_nodes = {c: {s: np.empty(nn, complex) for s in seps} for c in COMPONENTS}
+    long_nodes = {dx: np.empty(nn) for dx in dxs}
+    rews_nodes = np.empty(nn)
+    for n, phi, inv_tau in lat.slabs(k1_nodes):
+        for i, c in enumerate(COMPONENTS):
+            f_nodes[c][n] = phi[i, i].sum()
+            for s in seps:
+                yz_nodes[c][s][n] = np.sum(phi[i, i] * phase[s])
+        f13[n] = phi[0, 2].sum()
+        for dx in dxs:
+            long_nodes[dx][n] = np.sum(phi[0, 0] * np.exp(-dx / U * inv_tau))  # Theta_11, Eq. 13
+        rews_nodes[n] = np.sum(phi[0, 0] * h2)  # Eq. 24 on the lattice
+    exact = k1_nodes is k1_lines
+    auto = {c: f_nodes[c] if exact else _interp_lines(k1_nodes, f_nodes[c], k1_lines, True) for c in COMPONENTS}
+
+    def ratio_lines(values, ref):
+        return values if exact else _interp_lines(k1_nodes, values / ref, k1_lines, False)
+
+    norm13 = np.sqrt(f_nodes["u"] * f_nodes["w"])
+    uw = f13 if exact else ratio_lines(f13, norm13) * np.sqrt(auto["u"] * auto["w"])
+    yz = {c: {s: yz_nodes[c][s] if exact else ratio_lines(yz_nodes[c][s], f_nodes[c]) * auto[c] for s in seps}
+          for c in COMPONENTS}
+    long = {dx: v if exact else ratio_lines(v, f_nodes["u"]) * auto["u"] for dx, v in long_nodes.items()}
+    rews = rews_nodes if exact else ratio_lines(rews_nodes, f_nodes["u"]) * auto["u"]
+
+    # rho_bar at the nodes: coh2 over all lags from the 2-D FFT of Theta_ii on the lattice
+    node_f = _node_freqs(setup, grid.nt)
+    acc = _RhoAccumulator(grid, seps, iy, iz, node_f.size)
+    rho_rews = np.zeros(node_f.size)
+    size = box.nyp * box.nzp
+    for n, phi, inv_tau in lat.slabs(2 * np.pi * node_f / U):
+        sl = slice(n, n + 1)
+        diag = [phi[i, i].sum() for i in range(3)]
+        r0 = np.sum(phi[0, 0] * h2)
+        for dx, mult in dxs.items():
+            decay = np.exp(-dx / U * inv_tau)
+            for i, c in enumerate(COMPONENTS):
+                cross = _lags(np.fft.ifft2(phi[i, i] * decay) * size, grid.ny, grid.nz)
+                acc.add(c, np.abs(cross[None]) ** 2 / diag[i] ** 2, mult, dx == 0, sl)
+            cross13 = _lags(np.fft.ifft2(phi[0, 2] * decay) * size, grid.ny, grid.nz)
+            acc.add_uw(np.abs(cross13[None]) ** 2 / (diag[0] * diag[2]), mult, sl)
+            rho_rews[n] += mult * (np.sum(phi[0, 0] * decay * h2) / r0) ** 2 / grid.nx**2
+    band = _band(setup, grid, U)
+    band.update(
+        box_y_m=box.nyp * grid.dy_m,
+        box_z_m=box.nzp * grid.dz_m,
+        k2_min_rad_m=2 * np.pi / (box.nyp * grid.dy_m),
+        k3_min_rad_m=2 * np.pi / (box.nzp * grid.dz_m),
+        note=(
+            "Mann tensor summed over the box lattice: |k2| <= pi/dy, |k3| <= pi/dz, spacing 2 pi/box size; "
+            f"box {box.nyp} x {box.nzp} points ({box.nyp * grid.dy_m:g} m x {box.nzp * grid.dz_m:g} m)"
+        ),
+    )
+    from turbgen.theory.mann_spectra import variances
+
+    var = variances(params)
+    return Theory(
+        model="mann", nt=nt, line_f=line_f, auto=auto, yz=yz, long=long, rews=rews, node_f=node_f,
+        rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
+        sigma_model={c: math.sqrt(var[c + c]) for c in COMPONENTS}, band=band, uw=uw, rho_uw=acc.uw,
+        long_components="u", reference=_mann_reference(params, setup, U, mask, grid),
+    )
+
+
+def _mann_reference(params: MannParams, setup: WelchSetup, U: float, mask, grid: Grid) -> dict:
+    """Continuous-model curves (infinite box, no grid cut-off) for the plots: one-sided S(f) = 2 F(k1) 2 pi / U."""
+    from turbgen.theory.mann_spectra import one_point_spectra
+
+    f = np.geomspace(setup.freqs[1], setup.freqs[-1], 64)
+    k1 = 2 * np.pi * f / U
+    spec = one_point_spectra(k1, params)
+    conv = 2.0 * 2 * np.pi / U
+    out = {f"spectrum_{c}": (f, conv * spec[name]) for c, name in zip(COMPONENTS, ("F11", "F22", "F33"))}
+    out["uw_cross_spectrum"] = (f, conv * spec["F13"])
+    return out
+
+
+def theory_for(fs, setup: WelchSetup, seps, mask, iy, iz) -> Theory:
+    """The Theory of the store's model."""
+    if fs.model == "mann":
+        return mann_theory(fs.attrs, fs.grid, setup, seps, mask, iy, iz)
+    return kaimal_theory(fs.attrs, fs.grid, setup, seps, mask, iy, iz)
