@@ -68,7 +68,9 @@ def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
     lines = (ifw_line(5, "WindType", "switch for wind file type (5 = HAWC binary)"),
              ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
              *[ifw_line(v, k, c) for v, k, c in keys])
-    notes = [f"plane x = {g.x_m[ix]:g} m in eddy time; HAWC boxes are always periodic in time"]
+    notes = [f"plane x = {g.x_m[ix]:g} m in eddy time; HAWC boxes are always periodic in time",
+             "written for InflowWind: the first x-plane reaches the turbine first and u - URef already holds the "
+             "shear; in HAWC2 itself switch its shear off and check the box read direction (changed in v13.1)"]
     if lay.z_first:
         notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
     return ExportResult(tuple(paths.values()), lines, tuple(notes))
