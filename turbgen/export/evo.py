@@ -18,7 +18,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.export.outputs import OutputSet
-from turbgen.export.request import ExportRequest, ExportResult, Plane
+from turbgen.export.request import ExportRequest, ExportResult, Plane, ifw_line
 from turbgen.export.wnd import (BladedStats, WndHeader, bladed_raw, check_even_nt, export_root, from_bladed,
                                 inflowwind_lines, read_wnd, write_pair)
 
@@ -68,8 +68,8 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
                 del plane  # free it before the next plane is read
     lines = inflowwind_lines(root) + (
         "LidarSim input file, section ---- Wind Evolution ----:",
-        f'{"True":>20}   EvolutionFlag   - read the 4D field',
-        f'{chr(34) + str(paths[0]) + chr(34):>20}   EvolutionFilenameRoot - the .evo file (ROOT.wnd/.sum beside it)')
+        ifw_line(True, "EvolutionFlag", "read the 4D field"),
+        ifw_line(paths[0], "EvolutionFilenameRoot", "the .evo file, ROOT.wnd and ROOT.sum beside it"))
     notes = [f"ROOT.evo holds {g.nx} planes at {dist.tolist()} m upstream (the simulator picks the nearest to -X, "
              "X measured from the tower axis)",
              f"ROOT.wnd holds plane x = {g.x_m[ix_rotor]:g} m; the turbine's InflowWind must use WindType 3 or 4"]

@@ -52,7 +52,8 @@ class BladedStats:
         for c in COMPONENTS:
             n, s1, s2 = self.sums[c]
             sigma = np.sqrt(max(s2 / n - (s1 / n) ** 2, 0.0))
-            out.append(max(100.0 * sigma / U_m_s, self.maxdev[c] * 1e5 / (U_m_s * _RAW_LIMIT), 1e-3))
+            ti = max(100.0 * sigma / U_m_s, self.maxdev[c] * 1e5 / (U_m_s * _RAW_LIMIT), 1e-3)
+            out.append(float(np.float32(ti)))  # the header's float32 value, used by every reader
         return tuple(out)
 
 
