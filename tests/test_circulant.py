@@ -70,7 +70,8 @@ def test_torus_rule_and_fft_sizes():
         m = fft_size(n)
         assert m >= n and all(p in (2, 3, 5, 7, 11) for p in _prime_factors(m))  # pocketfft sizes
     assert torus_size(1, 5.0, 1e9) == 1
-    assert torus_size(31, 5.0, 1.0) == 60  # 2 (N - 1) when the kernel decays fast
+    assert torus_size(31, 5.0, 10.0) == 60  # 2 (N - 1) ...
+    assert torus_size(31, 5.0, 1.0) == 36  # ... unless the kernel is < 1e-13 beyond 30 decay lengths = 6 points
     assert torus_size(31, 5.0, 100.0) == fft_size(240)  # 12 decay lengths
 
 

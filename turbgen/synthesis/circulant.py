@@ -10,7 +10,9 @@ has covariance E[Z Z^H] = C (and E[Z Z^T] = 0) exactly when every eigenvalue is 
 (Dietrich & Newsam 1997). Cost O(M^2 log M) per frequency instead of the O(N^3) Cholesky.
 
 The torus period follows the frequency: M h >= max(2 (N - 1) h, 12 / (a kappa(f))) with
-kappa = sqrt((f/U)^2 + (0.12/Lc)^2), rounded up to an FFT-friendly size. The rule is empirical,
+kappa = sqrt((f/U)^2 + (0.12/Lc)^2), rounded up to an FFT-friendly size; at high frequencies, where
+the kernel is below 1e-13 within a few points, the torus shrinks to N - 1 + 30/(a kappa h) (wrapped
+lags then change C by less than 1e-13). The low-frequency rule is empirical,
 so the eigenvalues are checked at run time: the torus is enlarged while any is negative beyond
 rounding; if that does not help, small grids fall back to a dense Cholesky factor, large grids
 clip the negative eigenvalues and the clipping error (an upper bound on the covariance error
@@ -31,6 +33,8 @@ EIG_RTOL = 1e-10
 MAX_ENLARGE = 4
 # grids with at most this many points fall back to a dense Cholesky factor; larger ones clip
 CHOLESKY_MAX_POINTS = 2500
+# kernel values below exp(-30) ~ 1e-13 count as zero when sizing the torus
+CUTOFF_DECAYS = 30.0
 
 
 def fft_size(n: int) -> int:
@@ -39,11 +43,18 @@ def fft_size(n: int) -> int:
 
 
 def torus_size(n: int, h_m: float, decay_length_m: float) -> int:
-    """Torus period M (points) for n points spaced h: M h >= max(2 (n - 1) h, 12 decay_length)."""
+    """Torus period M (points) for n points spaced h and a kernel <= exp(-r / decay_length).
+
+    M h >= max(2 (n - 1) h, 12 decay_length) (non-negative eigenvalues at low frequencies), except
+    that a kernel below exp(-CUTOFF_DECAYS) beyond (M - n + 1) h -- fast decay at high frequencies --
+    needs only M >= n - 1 + CUTOFF_DECAYS decay / h: wrapped lags then change C by < 1e-13.
+    """
     if n == 1:
         return 1
-    need = max(2 * (n - 1), math.ceil(12.0 * decay_length_m / h_m - 1e-9) if math.isfinite(decay_length_m) else 0)
-    return fft_size(need)
+    if not math.isfinite(decay_length_m):
+        return fft_size(2 * (n - 1))
+    wrap = min(2 * (n - 1), n - 1 + math.ceil(CUTOFF_DECAYS * decay_length_m / h_m))
+    return fft_size(max(wrap, math.ceil(12.0 * decay_length_m / h_m - 1e-9)))
 
 
 def wrapped_distance(ny: int, nz: int, dy_m: float, dz_m: float, my: int, mz: int) -> np.ndarray:
@@ -88,7 +99,7 @@ class Embedding:
         if self.chol is not None:
             z = np.einsum("ij,...j->...i", self.chol.astype(xi.real.dtype), xi[..., 0])
             return z.reshape(*xi.shape[:-2], self.ny, self.nz)
-        w = xi * self.scale.astype(xi.real.dtype)
+        w = xi * self.scale.astype(xi.real.dtype, copy=False)
         # only the ny x nz corner is needed: FFT along z, keep nz columns, then FFT along y
         w = scipy.fft.fft(w, axis=-1, workers=workers)[..., : self.nz]
         return scipy.fft.fft(w, axis=-2, workers=workers)[..., : self.ny, :]
@@ -97,8 +108,8 @@ class Embedding:
 def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: float) -> Embedding:
     """Embedding of C_ab = kernel(r_ab) (kernel(0) = 1, a function of distance in m).
 
-    decay_length_m : e-folding length 1/(a kappa) of the kernel [m] (inf for a constant kernel);
-    it sets the initial torus period by the 12-decay-length rule.
+    decay_length_m : the kernel is <= exp(-r / decay_length_m) (IEC: 1/(a kappa)) [m]; inf for a
+    constant kernel. It sets the initial torus period (:func:`torus_size`).
     """
     my, mz = torus_size(ny, dy_m, decay_length_m), torus_size(nz, dz_m, decay_length_m)
     for enlarged in range(MAX_ENLARGE + 1):

@@ -157,33 +157,50 @@ class KaimalEvo:
             out.append(e)
         return out
 
-    def _chunk_coefficients(self, component: str, plane: int, chunk: int, ks: range, embs) -> np.ndarray:
-        """Unit-variance yz coefficients (len(ks), ny, nz) complex64 of one plane and frequency chunk."""
+    def _groups(self, embs) -> list[tuple[int, int, tuple[int, int], object]]:
+        """Runs [i, j) of consecutive bins drawn and sampled together: (i, j, torus shape, sampler).
+
+        sampler: None (white), an Embedding with a Cholesky factor (one bin), or one circulant
+        Embedding whose ``scale`` stacks the bins' float32 scales (one batched FFT).
+        """
         g = self.grid
         shapes = [(g.ny, g.nz) if e is None else e.torus_shape for e in embs]
+        kinds = ["white" if e is None else "chol" if e.chol is not None else "circ" for e in embs]
+        out = []
+        i = 0
+        while i < len(embs):
+            j = i + 1
+            while kinds[i] != "chol" and j < len(embs) and (kinds[j], shapes[j]) == (kinds[i], shapes[i]):
+                j += 1
+            if kinds[i] == "circ":
+                scale = np.stack([e.scale for e in embs[i:j]]).astype(np.float32)
+                sampler = Embedding(g.ny, g.nz, scale, None, 0.0, 0)
+            else:
+                sampler = embs[i]
+            out.append((i, j, shapes[i], sampler))
+            i = j
+        return out
+
+    def _chunk_coefficients(self, component: str, plane: int, chunk: int, n_bins: int, groups) -> np.ndarray:
+        """Unit-variance yz coefficients (n_bins, ny, nz) complex64 of one plane and frequency chunk."""
+        g = self.grid
         ss = np.random.SeedSequence([self.seed, COMPONENTS.index(component), plane, chunk])
         rng = np.random.Generator(np.random.Philox(ss))
-        normals = rng.standard_normal(2 * sum(a * b for a, b in shapes), dtype=np.float32)
+        normals = rng.standard_normal(2 * sum((j - i) * a * b for i, j, (a, b), _ in groups), dtype=np.float32)
         normals *= np.float32(np.sqrt(0.5))
-        out = np.empty((len(ks), g.ny, g.nz), dtype=np.complex64)
-        kinds = ["white" if e is None else "chol" if e.chol is not None else "circ" for e in embs]
-        pos = i = 0
-        while i < len(ks):
-            j = i + 1  # batch consecutive circulant / white bins sharing a torus shape (one FFT call)
-            while kinds[i] != "chol" and j < len(ks) and (kinds[j], shapes[j]) == (kinds[i], shapes[i]):
-                j += 1
-            n = (j - i) * shapes[i][0] * shapes[i][1]
+        out = np.empty((n_bins, g.ny, g.nz), dtype=np.complex64)
+        pos = 0
+        for i, j, shape, sampler in groups:
+            n = (j - i) * shape[0] * shape[1]
             # consecutive normals are the (real, imaginary) parts of xi, each N(0, 1/2): E|xi|^2 = 1
-            xi = normals[2 * pos:2 * (pos + n)].view(np.complex64).reshape(j - i, *shapes[i])
+            xi = normals[2 * pos:2 * (pos + n)].view(np.complex64).reshape(j - i, *shape)
             pos += n
-            if kinds[i] == "white":
+            if sampler is None:
                 out[i:j] = xi
-            elif kinds[i] == "chol":
-                out[i] = embs[i].sample(xi[0], self.workers)
+            elif sampler.chol is not None:
+                out[i] = sampler.sample(xi[0], self.workers)
             else:
-                scale = np.stack([e.scale for e in embs[i:j]])
-                out[i:j] = Embedding(g.ny, g.nz, scale, None, 0.0, 0).sample(xi, self.workers)
-            i = j
+                out[i:j] = sampler.sample(xi, self.workers)
         return out
 
     def component_planes(self, component: str, tick: Callable[[], None] | None = None) -> Iterator[tuple[int, np.ndarray]]:
@@ -201,9 +218,9 @@ class KaimalEvo:
         for chunk in range(self.n_chunks):
             ks = range(max(1, chunk * FREQ_CHUNK), min(self.nf, (chunk + 1) * FREQ_CHUNK))
             if len(ks):
-                embs = self._embeddings(component, ks)
+                groups = self._groups(self._embeddings(component, ks))
                 for p in range(nx):
-                    spec[p, ks.start:ks.stop] = self._chunk_coefficients(component, p, chunk, ks, embs)
+                    spec[p, ks.start:ks.stop] = self._chunk_coefficients(component, p, chunk, len(ks), groups)
                 if mixed and nx > 1:
                     fac, err = longitudinal_factors(self.long_coherence, g.x_m, self.freqs[ks.start:ks.stop])
                     self.report["long_clip_error"] = max(self.report["long_clip_error"], err)
