@@ -174,3 +174,22 @@ def test_mann_stencil_is_built_once_per_parameter_set(client, tmp_path):
     names = [t["key"] if isinstance(t["key"], str) else t["key"][0] for t in ts.data]
     assert sum(n.startswith("build_mann_stencil") for n in names) == 2  # one per speed, shared by 3 seeds
     assert sum(n.startswith("turbgen-run-") for n in names) == 6
+
+
+def test_validate_adds_a_summary_without_regenerating(client, tmp_path):
+    out = tmp_path / "val"
+    args = ["sweep", "--model", "kaimal", "--preset", "neutral", "--speeds", "16", "--seeds", "1-2", "--nt", "512",
+            "--ny", "8", "--nz", "8", "--dy", "20", "--planes", "0,50", "--out", str(out),
+            "--scheduler", client.scheduler.address]  # fmt: skip
+    res = CliRunner().invoke(cli, args)
+    assert res.exit_code == 0, res.output
+    assert all(r["validation"] is None for r in read_manifest(out)["runs"])
+    res = CliRunner().invoke(cli, [*args, "--validate"])  # the stores exist: only validated now
+    doc = read_manifest(out)
+    assert [r["action"] for r in doc["runs"]] == ["skipped", "skipped"]
+    for r in doc["runs"]:
+        v = r["validation"]
+        assert set(v) == {"passed", "failed", "max_abs_z", "seconds"} and "sigma_u" in v["max_abs_z"]
+        assert v["passed"] == (not v["failed"])
+    all_passed = all(r["validation"]["passed"] for r in doc["runs"])
+    assert res.exit_code == (0 if all_passed else 3), res.output

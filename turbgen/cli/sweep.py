@@ -38,7 +38,8 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
 
     Either --config FILE (command-line --out, --workers, --scheduler, --validate and --chunks
     override the file) or --model, --preset, --speeds, --seeds and --out. Exit code 0 when every
-    run has a complete store, 1 when some failed (see the summary table and the manifest).
+    run has a complete store (and passed validation, with --validate), 1 when some run failed,
+    3 when all stores are complete but some failed validation (see the summary and the manifest).
     """
     from turbgen.presets import load_presets
     from turbgen.sweep import make_plan, plan_from_file, run_sweep, summary_table
@@ -84,3 +85,5 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
     click.echo(summary_table(result))
     if not result.ok:
         raise click.exceptions.Exit(1)
+    if result.validation_failed:
+        raise click.exceptions.Exit(3)

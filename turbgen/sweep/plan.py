@@ -1,17 +1,15 @@
 """A sweep definition: models x presets x speeds x seeds on one grid, from a TOML/JSON file or options.
 
-The file format is ``turbgen/schemas/sweep.schema.json``. Every planned run is built by the same
-function the single-run commands use with ``--preset`` (:func:`turbgen.presets.preset_run`), so a
-sweep's store and ``turbgen mann|kaimal --preset P --U U --seed S`` hold the same field.
+The file format is ``turbgen/schemas/sweep.schema.json``. Every planned run is built from the same
+run mapping as ``turbgen mann|kaimal --preset P --U U --seed S`` (the preset's keys from
+turbgen.presets.mann_run_keys / kaimal_run_keys, then MannRun/KaimalRun.from_mapping), so the
+sweep's store and the single run hold the same field (tests/test_sweep.py checks it bit for bit).
 Store names are derived from the parameters that vary within a sweep:
 ``{model}_{preset}_U{U:g}_seed{seed}.zarr`` (e.g. ``mann_neutral_U16_seed2.zarr``).
 """
 
 from __future__ import annotations
 
-import functools
-import importlib.resources
-import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,8 +22,8 @@ from turbgen.presets import (
     load_presets,
     mann_run_keys,
     presets_from_mapping,
-    read_mapping_file,
 )
+from turbgen.runs.config import check_mapping, read_config
 from turbgen.runs.defaults import DEFAULT_PLANES_M
 from turbgen.theory.params import check_wind_speed
 
@@ -202,23 +200,6 @@ def make_plan(
     return SweepPlan(**{**plan.__dict__, "runs": tuple(runs)})
 
 
-@functools.lru_cache(maxsize=1)
-def _validator():
-    import jsonschema
-
-    schema = json.loads(importlib.resources.files("turbgen").joinpath("schemas/sweep.schema.json").read_text())
-    return jsonschema.Draft202012Validator(schema)
-
-
-def check_sweep_mapping(data: Mapping, where: str = "sweep definition") -> None:
-    """Validate against schemas/sweep.schema.json; ParameterError naming the first problem."""
-    errors = sorted(_validator().iter_errors(data), key=lambda e: list(e.absolute_path))
-    if errors:
-        e = errors[0]
-        loc = "/".join(str(p) for p in e.absolute_path) or "(top level)"
-        raise ParameterError(f"{where}: {loc}: {e.message}")
-
-
 def parse_seeds(value) -> list[int]:
     """A list of ints, or a text like '1-21' / '1-3,9' (format checked by the schema) -> sorted seeds."""
     if not isinstance(value, str):
@@ -236,7 +217,7 @@ def parse_seeds(value) -> list[int]:
 def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides) -> SweepPlan:
     """Plan from a sweep mapping (file contents); non-None ``overrides`` (out, validate, workers,
     scheduler, chunk_t) replace the file's values. Relative paths are relative to ``base_dir``."""
-    check_sweep_mapping(data)
+    check_mapping(data, "sweep", "sweep definition")
     base = Path(base_dir)
     user: dict[str, StabilityPreset] = {}
     if "preset_file" in data:
@@ -271,5 +252,5 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
 
 def plan_from_file(path: str | Path, **overrides) -> SweepPlan:
     """Plan from a TOML or JSON sweep file (see :func:`plan_from_mapping`)."""
-    data = read_mapping_file(path)
+    data = read_config(path, "sweep")
     return plan_from_mapping(data, base_dir=Path(path).parent, **overrides)

@@ -50,11 +50,17 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
 
 
-def validate_store(path: str) -> dict:
-    """Validation summary of one stored field (turbgen.validate): {'passed': bool, ...}."""
-    from turbgen.validate import validate_field
+def validate_store(path: str, threads: int | None = None) -> dict:
+    """Summary of turbgen.validate on one store: passed, failed metrics, worst |z| vs critical z per metric."""
+    from turbgen.validate import validate
 
-    return validate_field(path)
+    rep = validate(path, workers=threads)
+    return {
+        "passed": rep.passed,
+        "failed": rep.failed,
+        "max_abs_z": {m.name: [round(m.max_abs_z, 3), round(m.z_crit, 3)] for m in rep.metrics},
+        "seconds": round(sum(rep.seconds.values()), 3),
+    }
 
 
 def execute_run(task: RunTask, stencil=None) -> dict:
@@ -77,7 +83,7 @@ def execute_run(task: RunTask, stencil=None) -> dict:
         out["checksum"] = store_checksum(task.path)
         if task.validate:
             try:
-                out["validation"] = validate_store(task.path)
+                out["validation"] = validate_store(task.path, task.threads)
             except Exception as exc:  # a validator crash is recorded, the field itself is fine
                 out["validation"] = {"passed": False, "error": _one_line(exc)}
         out["status"] = "complete"
@@ -146,6 +152,11 @@ class SweepResult:
     def ok(self) -> bool:
         """True when every planned run has a complete store."""
         return all(r["status"] == "complete" for r in self.records)
+
+    @property
+    def validation_failed(self) -> list[str]:
+        """Runs whose field failed validation (only when the sweep validates)."""
+        return [r["name"] for r in self.records if r.get("validation") and not r["validation"].get("passed")]
 
 
 def _base_record(pr: PlannedRun) -> dict:
@@ -322,4 +333,6 @@ def summary_table(result: SweepResult) -> str:
         f"{n_ok}/{len(result.records)} complete ({result.ran} generated, {result.skipped} already there), "
         f"{len(result.failed)} failed or pending, {result.seconds:.1f} s -> {result.out}"
     )
+    if result.validation_failed:
+        lines.append(f"validation failed for {len(result.validation_failed)}: {', '.join(result.validation_failed)}")
     return "\n".join(lines)
