@@ -1,0 +1,184 @@
+"""Benchmark of the Mann generator against the PyPI anchors mannrs and hipersim (issue 3).
+
+    python benchmarks/bench_mann.py            # all cases (several minutes on 2 cores)
+    python benchmarks/bench_mann.py --quick    # smaller grids, to check the script
+
+Cases (each run in its own subprocess; wall time and peak RSS = ru_maxrss of that process and of
+its children, e.g. hipersim's worker pool):
+  paper   `turbgen mann` default: 4096 x 11 planes x 64 x 64, y/z padded x2, end to end (stencil,
+          11 evolving snapshots, zarr store). The anchors cannot evolve a field between planes;
+          their column is ONE 4096 x 64 x 64 box (doubled in y, z) times 11 (extrapolated).
+  box     one 8192 x 64 x 64 box (y/z doubled, Mann lifetime as in the anchors), synthesis only
+          (stencil + field in memory, no file), turbgen vs mannrs vs hipersim.
+  floor   the bare inverse real FFTs of the same transforms (pyfftw, all cores): one
+          nt x 128 x 128 transform timed and multiplied by 3 components x snapshots.
+Spacing of all cases: dx = U dt = 8 m, dy = dz = 4.8 m; L = 49 m, Gamma = 3.1, ae for sigma_u = 2.816 m/s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+
+L_M, GAMMA, DX, DY = 49.0, 3.1, 8.0, 4.8
+N_PLANES = 11
+
+
+def _ae(lifetime: str) -> float:
+    from turbgen.theory.mann_spectra import ae_for_sigma_u
+    from turbgen.theory.params import MannParams
+
+    return ae_for_sigma_u(2.816, MannParams(ae=1.0, length_scale_m=L_M, gamma=GAMMA, lifetime=lifetime))
+
+
+def case_turbgen_paper(nt: int) -> dict:
+    from turbgen.runs.mann import MannRun, run_mann
+
+    run = MannRun.from_mapping({"grid": {"nt": nt}})
+    with tempfile.TemporaryDirectory(dir=os.environ.get("BENCH_TMP")) as tmp:
+        t0 = time.perf_counter()
+        s = run_mann(run, os.path.join(tmp, "paper.zarr"))
+        return {"seconds": time.perf_counter() - t0, "sigma_u": s["sigma_u"]}
+
+
+def case_turbgen_box(nt: int) -> dict:
+    from turbgen.synthesis.mann_spacetime import MannSnapshots
+    from turbgen.synthesis.mann_stencil import BoxShape, build_stencil
+    from turbgen.theory.params import MannParams
+
+    params = MannParams(ae=_ae("mann"), length_scale_m=L_M, gamma=GAMMA, lifetime="mann")
+    t0 = time.perf_counter()
+    stencil = build_stencil(params, BoxShape(nt, DX, 128, 128, DY, DY))
+    t_stencil = time.perf_counter() - t0
+    var = 0.0
+    for _, comp, field in MannSnapshots(stencil, 64, 64).generate(1, [0.0]):
+        if comp == "u":
+            var = float(field.var())
+    return {"seconds": time.perf_counter() - t0, "stencil_s": t_stencil, "sigma_u": var**0.5}
+
+
+def case_hipersim(nt: int) -> dict:
+    from hipersim import MannSpectralTensor
+
+    t0 = time.perf_counter()
+    mst = MannSpectralTensor(alphaepsilon=_ae("mann"), L=L_M, Gamma=GAMMA, Nxyz=(nt, 64, 64), dxyz=(DX, DY, DY),
+                             double_xyz=(False, True, True), n_cpu=os.cpu_count())  # fmt: skip
+    field = mst.generate(seed=1)
+    return {"seconds": time.perf_counter() - t0, "sigma_u": float(field.uvw[0].std())}
+
+
+def case_mannrs(nt: int) -> dict:
+    import mannrs
+
+    t0 = time.perf_counter()
+    st = mannrs.Stencil(L=L_M, gamma=GAMMA, Lx=nt * DX, Ly=64 * DY, Lz=64 * DY, Nx=nt, Ny=64, Nz=64).build()
+    wf = st.turbulence(_ae("mann"), 1)
+    return {"seconds": time.perf_counter() - t0, "sigma_u": float(wf.U.std())}
+
+
+def case_floor(nt: int) -> dict:
+    """Seconds of ONE inverse real 3-D FFT of the padded box nt x 128 x 128 (complex64 -> float32)."""
+    import numpy as np
+    import pyfftw
+
+    spec = pyfftw.empty_aligned((nt, 128, 65), np.complex64)
+    out = pyfftw.empty_aligned((nt, 128, 128), np.float32)
+    plan = pyfftw.FFTW(spec, out, axes=(0, 1, 2), direction="FFTW_BACKWARD", flags=("FFTW_MEASURE",),
+                       threads=os.cpu_count())  # fmt: skip
+    spec[...] = 1.0
+    plan.execute()
+    t0 = time.perf_counter()
+    for _ in range(3):
+        spec[...] = 1.0
+        plan.execute()
+    return {"seconds": (time.perf_counter() - t0) / 3}
+
+
+CASES = {
+    "turbgen-paper": case_turbgen_paper,
+    "turbgen-box": case_turbgen_box,
+    "hipersim": case_hipersim,
+    "mannrs": case_mannrs,
+    "floor": case_floor,
+}
+
+
+def _child(case: str, nt: int) -> None:
+    result = CASES[case](nt)
+    result["maxrss_gib"] = max(
+        resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    ) / 2**20
+    print(json.dumps(result))
+
+
+def _run(case: str, nt: int) -> dict:
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, __file__, "--child", case, "--nt", str(nt)], capture_output=True, text=True)
+    if proc.returncode != 0:
+        return {"error": (proc.stderr.strip().splitlines() or ["?"])[-1], "wall": time.perf_counter() - t0}
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    out["wall"] = time.perf_counter() - t0
+    return out
+
+
+def _fmt(r: dict) -> str:
+    if "error" in r:
+        return f"FAILED ({r['error']})"
+    return f"{r['seconds']:7.1f} s  peak RSS {r['maxrss_gib']:.2f} GiB" + (
+        f"  sigma_u {r['sigma_u']:.3f} m/s" if "sigma_u" in r else ""
+    )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="nt / 8 in every case")
+    ap.add_argument("--skip-anchors", action="store_true")
+    ap.add_argument("--child", help=argparse.SUPPRESS)
+    ap.add_argument("--nt", type=int, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        _child(args.child, args.nt)
+        return
+    div = 8 if args.quick else 1
+    nt_paper, nt_box = 4096 // div, 8192 // div
+    print(f"machine: {os.cpu_count()} cores; grids: paper {nt_paper} x {N_PLANES} x 64 x 64, box {nt_box} x 64 x 64")
+
+    paper = _run("turbgen-paper", nt_paper)
+    floor_p = _run("floor", nt_paper)
+    print(f"\n[paper] turbgen mann (end to end, {N_PLANES} evolving planes): {_fmt(paper)}")
+    if "error" not in floor_p and "error" not in paper:
+        floor = floor_p["seconds"] * 3 * N_PLANES
+        print(f"  FFT floor: 3 x {N_PLANES} inverse FFTs of {nt_paper} x 128 x 128 = {floor:.1f} s; "
+              f"turbgen / floor = {paper['seconds'] / floor:.1f}")
+    if not args.skip_anchors:
+        for name in ("mannrs", "hipersim"):
+            r = _run(name, nt_paper)
+            if "error" in r:
+                print(f"  {name}: {_fmt(r)}")
+                continue
+            est = r["seconds"] * N_PLANES
+            print(f"  {name}: one {nt_paper} x 64 x 64 box {_fmt(r)}; x{N_PLANES} = {est:.0f} s; "
+                  f"turbgen / ({name} x{N_PLANES}) = {paper['seconds'] / est:.2f}" if "error" not in paper else "")
+
+    box = _run("turbgen-box", nt_box)
+    floor_b = _run("floor", nt_box)
+    print(f"\n[box] one {nt_box} x 64 x 64 box (synthesis only): turbgen {_fmt(box)}"
+          + (f" (stencil {box['stencil_s']:.1f} s)" if "stencil_s" in box else ""))
+    if "error" not in floor_b and "error" not in box:
+        print(f"  FFT floor: 3 inverse FFTs of {nt_box} x 128 x 128 = {3 * floor_b['seconds']:.1f} s; "
+              f"turbgen / floor = {box['seconds'] / (3 * floor_b['seconds']):.1f}")
+    if not args.skip_anchors:
+        for name in ("mannrs", "hipersim"):
+            r = _run(name, nt_box)
+            ratio = "" if "error" in r or "error" in box else f"; turbgen / {name} = {box['seconds'] / r['seconds']:.2f}"
+            print(f"  {name}: {_fmt(r)}{ratio}")
+
+
+if __name__ == "__main__":
+    main()
