@@ -193,3 +193,40 @@ def test_validate_adds_a_summary_without_regenerating(client, tmp_path):
         assert v["passed"] == (not v["failed"])
     all_passed = all(r["validation"]["passed"] for r in doc["runs"])
     assert res.exit_code == (0 if all_passed else 3), res.output
+
+
+@pytest.mark.slow
+def test_killed_sweep_process_is_resumed(client, tmp_path):
+    """SIGKILL a real `turbgen sweep` (process group: client, scheduler, workers) after its first field."""
+    import os
+    import signal
+    import time
+
+    out = tmp_path / "killed"
+    args = ["sweep", "--model", "kaimal", "--preset", "stable", "--speeds", "16", "--seeds", "1-8", "--nt", "4096",
+            "--ny", "12", "--nz", "12", "--dy", "10", "--planes", "0,50,100", "--out", str(out)]  # fmt: skip
+    cmd = [sys.executable, "-c", "from turbgen.cli import main; main()", *args, "--workers", "1"]
+    proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            doc = read_manifest(out) if out.exists() else None
+            if doc and doc["counts"]["complete"] >= 1:
+                break
+            time.sleep(0.02)
+        os.killpg(proc.pid, signal.SIGKILL)
+    finally:
+        proc.wait()
+    before = read_manifest(out)
+    done = [r["name"] for r in before["runs"] if r["status"] == "complete"]
+    assert 1 <= len(done) < 8, "the sweep was not interrupted midway"
+    assert (out / LOCK_NAME).exists()  # left behind by the killed sweep: stale, taken over below
+    res = CliRunner().invoke(cli, [*args, "--scheduler", client.scheduler.address])
+    assert res.exit_code == 0, res.output
+    after = read_manifest(out)
+    assert after["counts"]["complete"] == 8
+    assert {r["name"] for r in after["runs"] if r["action"] == "skipped"} >= set(done)
+    assert sum(r["action"] == "ran" for r in after["runs"]) == 8 - len(
+        [r for r in after["runs"] if r["action"] == "skipped"]
+    )
+    assert not [p for p in out.iterdir() if ".tmp-" in p.name] and not (out / LOCK_NAME).exists()
