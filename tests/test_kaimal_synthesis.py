@@ -116,7 +116,8 @@ def test_vw_white_by_default_and_coherent_as_option():
         for c in "vw":
             xc = _coefs(_field(gen, c))
             v = gen.variances[c]
-            target = float((v[k] * exponential_yz(5.0, f[k], U, KP.a_yz, KP.lc_m)).sum() / v[k].sum()) if coherent else 0.0
+            coh = exponential_yz(5.0, f[k], U, KP.a_yz, KP.lc_m) if coherent else np.zeros(k.size)
+            target = float((v[k] * coh).sum() / v[k].sum())
             _coherence_check(xc[:, :, 0, 0], xc[:, :, 1, 0], v, k, target, f"{c} coherent={coherent}")
 
 

@@ -74,7 +74,8 @@ def _list(parser, name):
 @click.option("--nz", type=int, default=31, show_default=True, help="Vertical points.")
 @click.option("--dy", type=float, default=5.0, show_default=True, help="Lateral spacing [m].")
 @click.option("--dz", type=float, help="Vertical spacing [m] (default: --dy).")
-@click.option("--chunks", type=int, help="Time samples per store chunk (default min(nt, 1024)); never changes the field.")
+@click.option("--chunks", type=int,
+              help="Time samples per store chunk (default min(nt, 1024)); never changes the field.")
 @click.option("--config", "config", type=click.Path(dir_okay=False), help="JSON/TOML run file; options typed on the "
               "command line override it.")
 @click.option("--seed", type=int, default=1, show_default=True, help="Random seed (>= 0).")

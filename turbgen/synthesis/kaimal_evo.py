@@ -203,7 +203,9 @@ class KaimalEvo:
                 out[i:j] = sampler.sample(xi, self.workers)
         return out
 
-    def component_planes(self, component: str, tick: Callable[[], None] | None = None) -> Iterator[tuple[int, np.ndarray]]:
+    def component_planes(
+        self, component: str, tick: Callable[[], None] | None = None
+    ) -> Iterator[tuple[int, np.ndarray]]:
         """Yield (plane index, field (nt, ny, nz) float32) for every plane of one component.
 
         ``tick`` is called once per frequency chunk and once per plane (n_chunks + nx calls).
