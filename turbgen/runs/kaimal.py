@@ -203,8 +203,10 @@ def memory_needed(grid: Grid) -> int:
 
 
 def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | None = None,
-               progress: bool = False) -> dict:
+               progress: bool = False, threads: int | None = None) -> dict:
     """Generate the field of ``run`` into the store ``out``; return a summary dict.
+
+    ``threads``: FFT workers (default all cores); the field does not depend on it.
 
     Summary: path, sigma_u/v/w (realised, all points and planes) [m/s], expected_sigma [m/s],
     seconds, and the synthesis report (yz_clip_error, long_clip_error: 0 when exact).
@@ -212,7 +214,7 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
     g = run.grid
     require_memory(memory_needed(g), f"the Kaimal spectrum ({g.nx} planes x {g.nt // 2 + 1} bins x {g.ny} x {g.nz})",
                    "lower --nt, --ny/--nz or the number of planes")
-    gen = run.generator()
+    gen = run.generator(workers=threads)
     attrs = run.to_attrs()
     t0 = time.perf_counter()
     sums = {c: [0.0, 0] for c in COMPONENTS}
