@@ -198,11 +198,14 @@ def _make_client(plan: SweepPlan, n: int, processes: bool):
     return Client(cluster), cluster
 
 
-def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress: bool = True) -> SweepResult:
+def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress: bool = True,
+              threads: int | None = None) -> SweepResult:
     """Run every planned field that has no complete store yet; write DIR/manifest.{json,csv}.
 
     ``client``: an existing dask.distributed Client (otherwise one is made from plan.scheduler or
     a LocalCluster with plan.workers processes, threads if ``processes`` is False).
+    ``threads``: FFT threads of each Mann run (default: cores / workers for the sweep's own
+    LocalCluster, else all cores); never changes the fields.
     Raises SweepLockedError (before touching anything) when another sweep holds DIR.
     """
     t_start = time.perf_counter()
@@ -239,7 +242,7 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
         write_manifest(out, sweep_doc, list(records.values()))
         result = SweepResult(out, list(records.values()), skipped=skipped)
         if tasks:
-            _execute(plan, tasks, records, sweep_doc, result, client, processes, progress)
+            _execute(plan, tasks, records, sweep_doc, result, client, processes, progress, threads)
         result.records = list(records.values())
         result.failed = [r["name"] for r in result.records if r["status"] != "complete"]
         result.seconds = round(time.perf_counter() - t_start, 3)
@@ -247,7 +250,7 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
     return result
 
 
-def _execute(plan, tasks, records, sweep_doc, result, client, processes, progress):
+def _execute(plan, tasks, records, sweep_doc, result, client, processes, progress, threads):
     from distributed import as_completed
     from tqdm import tqdm
 
@@ -256,9 +259,10 @@ def _execute(plan, tasks, records, sweep_doc, result, client, processes, progres
         n = plan.workers or _default_workers(len(tasks))
         own_client, cluster = _make_client(plan, n, processes)
         client = own_client
-        if cluster is not None:  # share the cores between the local workers' FFTs
+        if cluster is not None and threads is None:  # share the cores between the local workers' FFTs
             threads = max(1, (os.cpu_count() or 1) // n)
-            tasks = {name: replace(t, threads=threads) for name, t in tasks.items()}
+    if threads is not None:
+        tasks = {name: replace(t, threads=threads) for name, t in tasks.items()}
     try:
         by_name = {pr.name: pr for pr in plan.runs}
         stencils: dict = {}  # parameter set (run with seed 0) -> [stencil future, runs still to use it]
