@@ -4,7 +4,7 @@
 
 Each worker count runs the same sweep (one preset, one speed, the given seeds, so the Mann stencil
 is built once and reused) into a fresh directory on a LocalCluster of that many single-threaded
-worker processes, each Mann run using cores/workers FFT threads (as `turbgen sweep` does). The
+worker processes, each run using cores/workers threads (as `turbgen sweep` does). The
 cluster start-up is timed separately from the sweep (stencil + runs + checksums + manifest). The
 stores of the different worker counts are checked to be identical (checksums). Results are printed
 and written to benchmarks/results/bench_sweep.json.

@@ -143,18 +143,12 @@ def _resolve_ae(d: Mapping, shape: MannParams, U: float, turb_class: str) -> tup
 def mann_preset_keys(preset: str, presets_file: str | Path | None = None) -> dict:
     """Run-mapping keys a stability preset sets: length_scale_m, gamma, evo_time_s, factor1, lifetime, turb_class.
 
-    ae then follows U (IEC sigma_1 of the preset's class, as turbgen.presets.mann_params_for).
+    ae then follows U (IEC sigma_1 of the preset's class). The same keys as the sweep uses
+    (turbgen.presets.mann_run_keys), so `turbgen mann --preset` and the sweep build the same run.
     """
-    from turbgen.presets import get_preset, load_presets
+    from turbgen.presets import load_presets, mann_run_keys
 
-    p = get_preset(preset, load_presets(presets_file) if presets_file else None)
-    if p.mann is None:
-        raise ParameterError(f"preset {p.name!r} has no Mann parameters")
-    m = p.mann
-    return {
-        "length_scale_m": m.length_scale_m, "gamma": m.gamma, "evo_time_s": m.evo_time_s, "factor1": m.factor1,
-        "lifetime": m.lifetime, "turb_class": p.turb_class,
-    }  # fmt: skip
+    return mann_run_keys(preset, user=load_presets(presets_file) if presets_file else None)
 
 
 def build_mann_stencil(run: MannRun, cache_dir: str | Path | None = None) -> MannStencil:

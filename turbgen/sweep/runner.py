@@ -1,7 +1,7 @@
 """Execute a sweep plan on dask.distributed: resumable, idempotent, one lock per output directory.
 
 * A LocalCluster sized to the machine (one single-threaded worker process per core, at most one
-  per run; each Mann run gets cores/workers FFT threads) or an existing scheduler
+  per run; each run gets cores/workers threads) or an existing scheduler
   (plan.scheduler; its workers must see the output directory at the same path).
 * Runs that differ only in the seed share one Mann stencil: it is built once as a dask task and
   passed to each seed's run task (dask ships it to the workers that need it).
@@ -42,7 +42,7 @@ class RunTask:
     chunk_t: int | None
     validate: bool
     generate: bool = True
-    threads: int | None = None  # FFT threads of a Mann run (None: os.cpu_count(); never changes the field)
+    threads: int | None = None  # threads of one run (None: os.cpu_count(); never changes the field)
 
 
 def _one_line(exc: BaseException) -> str:
@@ -77,7 +77,8 @@ def execute_run(task: RunTask, stencil=None) -> dict:
             else:
                 from turbgen.runs.kaimal import run_kaimal
 
-                summary = run_kaimal(task.run, task.path, overwrite=task.overwrite, chunk_t=task.chunk_t)
+                summary = run_kaimal(task.run, task.path, overwrite=task.overwrite, chunk_t=task.chunk_t,
+                                     threads=task.threads)
             sig = [summary.get(f"sigma_{c}") for c in "uvw"]
             out["sigma_m_s"] = [None if s is None else float(s) for s in sig]
         out["checksum"] = store_checksum(task.path)
@@ -204,7 +205,7 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
 
     ``client``: an existing dask.distributed Client (otherwise one is made from plan.scheduler or
     a LocalCluster with plan.workers processes, threads if ``processes`` is False).
-    ``threads``: FFT threads of each Mann run (default: cores / workers for the sweep's own
+    ``threads``: threads of each run (default: cores / workers for the sweep's own
     LocalCluster, else all cores); never changes the fields.
     Raises SweepLockedError (before touching anything) when another sweep holds DIR.
     """
