@@ -141,3 +141,20 @@ def test_manifest_json_and_csv_agree(tmp_path):
     assert rows[0]["sigma_v_m_s"] == "0.8" and rows[0]["validation"] == "pass" and rows[1]["error"].endswith("full")
     assert json.loads(rows[1]["parameters"]) == {"L": 49.0}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["manifest.csv", "manifest.json"]  # no temp files left
+
+
+def test_default_cluster_size_follows_cores_runs_and_memory(tmp_path, monkeypatch):
+    from turbgen.runs.kaimal import memory_needed
+    from turbgen.sweep import runner
+
+    plan = make_plan(out=tmp_path, models=["kaimal"], presets=["neutral"], speeds=[16], seeds=range(1, 7), grid=TINY)
+    tasks = [runner.RunTask(r.model, r.run, "x", False, None, False) for r in plan.runs]
+    need = memory_needed(plan.runs[0].run.grid)
+    monkeypatch.setattr(runner.os, "cpu_count", lambda: 8)
+    monkeypatch.setattr(runner, "available_memory_bytes", lambda: None)
+    assert runner.default_workers(tasks) == 6  # at most one worker per run
+    assert runner.default_workers(tasks[:3]) == 3
+    monkeypatch.setattr(runner, "available_memory_bytes", lambda: int(2.5 * need / 0.8))
+    assert runner.default_workers(tasks) == 2  # 80 % of the memory holds two runs
+    monkeypatch.setattr(runner, "available_memory_bytes", lambda: need // 10)
+    assert runner.default_workers(tasks) == 1  # never fewer than one (the run itself checks its memory)

@@ -1,7 +1,7 @@
 """Execute a sweep plan on dask.distributed: resumable, idempotent, one lock per output directory.
 
 * A LocalCluster sized to the machine (one single-threaded worker process per core, at most one
-  per run; each run gets cores/workers threads) or an existing scheduler
+  per run and as many as fit in 80 % of the available memory; each run gets cores/workers threads) or an existing scheduler
   (plan.scheduler; its workers must see the output directory at the same path).
 * Runs that differ only in the seed share one Mann stencil: it is built once as a dask task and
   passed to each seed's run task (dask ships it to the workers that need it).
@@ -25,6 +25,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from turbgen.errors import StoreError
+from turbgen.resources import available_memory_bytes
 from turbgen.store.layout import grid_to_attrs
 from turbgen.sweep.lock import SweepLock, pid_alive
 from turbgen.sweep.manifest import read_manifest, store_checksum, utc_now, write_manifest
@@ -180,8 +181,25 @@ def _base_record(pr: PlannedRun) -> dict:
     }
 
 
-def _default_workers(n_tasks: int) -> int:
-    return max(1, min(os.cpu_count() or 1, n_tasks))
+def _task_bytes(task: RunTask) -> int:
+    """Peak memory of one run (its generator's own estimate; a Mann stencil included)."""
+    if task.model == "mann":
+        from turbgen.runs.mann import memory_estimate_bytes
+
+        return memory_estimate_bytes(task.run, 1)
+    from turbgen.runs.kaimal import memory_needed
+
+    return memory_needed(task.run.grid)
+
+
+def default_workers(tasks) -> int:
+    """LocalCluster size: one worker per core, at most one per run, and as many as fit in 80 % of the memory."""
+    tasks = list(tasks)
+    n = min(os.cpu_count() or 1, len(tasks))
+    avail = available_memory_bytes()
+    if avail and tasks:
+        n = min(n, int(0.8 * avail) // max(_task_bytes(t) for t in tasks))
+    return max(1, n)
 
 
 def _make_client(plan: SweepPlan, n: int, processes: bool):
@@ -257,7 +275,7 @@ def _execute(plan, tasks, records, sweep_doc, result, client, processes, progres
 
     own_client = cluster = None
     if client is None:
-        n = plan.workers or _default_workers(len(tasks))
+        n = plan.workers or default_workers(tasks.values())
         own_client, cluster = _make_client(plan, n, processes)
         client = own_client
         if cluster is not None and threads is None:  # share the cores between the local workers' FFTs
