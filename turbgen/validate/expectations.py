@@ -64,8 +64,10 @@ class WelchKernel:
 
     A segment's windowed, mean-removed DFT is X_m = sum_j Z_j G_m(f_j) with
     G_m(f) = W(m/n - f dt) - e(f) W(m/n), W the window's DTFT and e(f) the segment mean of
-    exp(i 2 pi f t); so E[P_m] = scale_m sum_j |G_m(f_j)|^2 L_j over the lines +-f_j.
-    Lines more than KERNEL_BAND bins away are ignored (Hann sidelobes fall as bin^-3).
+    exp(i 2 pi f t); so E[P_m] = scale_m sum_j |G_m(f_j)|^2 L_j over the lines +-f_j (the
+    line -f_j carries conj(L_j); G is periodic in f with period 1/dt, which folds the partners
+    of lines near the Nyquist frequency back). Lines more than KERNEL_BAND bins away are
+    ignored (Hann sidelobes fall as bin^-3).
     """
 
     def __init__(self, setup: WelchSetup, nt: int):
@@ -73,20 +75,15 @@ class WelchKernel:
         self.setup, self.nt = setup, nt
         ratio = nt / n  # lines per Welch bin
         m = np.arange(n // 2 + 1)
-        width = int(math.ceil(KERNEL_BAND * ratio))
-        centre = np.round(m * ratio).astype(int)
-        j = centre[:, None] + np.arange(-width, width + 1)[None, :]
-        valid = (j >= 1) & (j <= nt // 2)
-        self.j_pos = np.clip(j, 0, nt // 2)
-        fp = self.j_pos / (nt * dt)
-        # negative-frequency lines -f_j only matter for the lowest bins: j in [1, width]
-        self.j_neg = np.arange(1, min(width, nt // 2) + 1)
-        fn = -self.j_neg / (nt * dt)
-        scale = setup.scale[:, None]
-        self.k_pos = np.where(valid, scale * np.abs(self._g(m[:, None], fp, n, dt)) ** 2, 0.0)
-        self.k_neg = scale * np.abs(self._g(m[:, None], fn[None, :], n, dt)) ** 2
-        if nt % 2 == 0:  # the Nyquist line is one real line, not a +-pair: count it once (on +f)
-            self.k_neg[:, self.j_neg == nt // 2] = 0.0
+        width = min(int(math.ceil(KERNEL_BAND * ratio)), (nt - 1) // 2)  # each line (mod nt) at most once per bin
+        e = np.round(m * ratio).astype(int)[:, None] + np.arange(-width, width + 1)[None, :]  # extended line index
+        e_mod = np.mod(e, nt)
+        half = nt // 2
+        self.conj = e_mod > half  # frequency e/(nt dt) = -(nt - e_mod)/(nt dt): the conjugate partner
+        self.idx = np.where(self.conj, nt - e_mod, e_mod)
+        weight = self._g(m[:, None], e / (nt * dt), n, dt)
+        self.k = setup.scale[:, None] * np.abs(weight) ** 2
+        self.k[self.idx == 0] = 0.0  # the mean (j = 0) is removed from every segment
 
     @staticmethod
     def _dirichlet(nu, n):
@@ -108,9 +105,10 @@ class WelchKernel:
     def apply(self, lines: np.ndarray) -> np.ndarray:
         """Expected Welch estimate (n/2+1,) of line (cross-)variances ``lines`` (nt/2+1,), real or complex."""
         lines = np.asarray(lines)
-        out = np.sum(self.k_pos * lines[self.j_pos], axis=1)
-        out = out + self.k_neg @ np.conj(lines[self.j_neg])
-        return out if np.iscomplexobj(lines) else out.real
+        vals = lines[self.idx]
+        if np.iscomplexobj(lines):
+            vals = np.where(self.conj, np.conj(vals), vals)
+        return np.sum(self.k * vals, axis=1)
 
 
 @dataclass
@@ -134,6 +132,7 @@ class Theory:
     uw: np.ndarray | None = None  # (nl,) Mann u-w line covariance
     rho_uw: np.ndarray | None = None  # (nn,) cross-component term of the uw variance bound
     long_components: str = "u"
+    auto_model: dict | None = None  # Mann: component -> (nl,) lines of the continuous model band-limited to the grid
     reference: dict = field(default_factory=dict)  # continuous-model curves for the plots: name -> (f, S)
 
     def long_lines(self, dx_m: float) -> np.ndarray:
@@ -152,6 +151,12 @@ class Theory:
     def variance(self, component: str) -> float:
         """Expected variance about each point's record mean: all lines but j = 0 [m^2 s^-2]."""
         return float(np.sum(self.pair_weights[1:] * self.auto[component][1:]))
+
+    def band_variance(self, component: str) -> float:
+        """Variance of the continuous model band-limited to the record's lines and the grid's Nyquist
+        rectangle, without the box's point sampling (Mann; Kaimal: = variance) [m^2 s^-2]."""
+        lines = self.auto[component] if self.auto_model is None else self.auto_model[component]
+        return float(np.sum(self.pair_weights[1:] * lines[1:]))
 
 
 def _pair_weights(nl: int, nt_even: bool = True) -> np.ndarray:
@@ -362,17 +367,67 @@ def _lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
     return field2d[..., iy[:, None], iz[None, :]]
 
 
+CELL_RADIUS = 2  # cells |k2| <= 2 dk2, |k3| <= 2 dk3 around the k1 axis are integrated, not point-sampled
+CELL_K1_MAX = 8.0  # ... for |k1| <= 8 max(dk2, dk3); beyond, Phi is smooth on the cell scale there
+CELL_GAUSS = 4
+
+
+def _gauss(a: float, b: float, n: int = CELL_GAUSS):
+    x, w = np.polynomial.legendre.leggauss(n)
+    return 0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w
+
+
+def _graded(center: float, width: float, scale: float):
+    """Nodes/weights over a cell of ``width`` around ``center``; halving panels towards 0 down to ``scale``."""
+    if center != 0.0:
+        return _gauss(center - width / 2, center + width / 2)
+    edges = [width / 2]
+    while edges[-1] > scale and len(edges) < 40:
+        edges.append(edges[-1] / 2)
+    edges = np.array([0.0, *edges[::-1]])
+    x = np.concatenate([_gauss(a, b)[0] for a, b in zip(edges[:-1], edges[1:])])
+    w = np.concatenate([_gauss(a, b)[1] for a, b in zip(edges[:-1], edges[1:])])
+    return np.concatenate([-x[::-1], x]), np.concatenate([w[::-1], w])
+
+
 class _MannLattice:
-    """Sheared tensor and space-time decay on the (k2, k3) lattice of the box, slab by slab in k1."""
+    """Mann tensor and space-time decay on the (k2, k3) lattice of the box, slab by slab in k1.
+
+    Each lattice point stands for its cell: the point value Phi(k) dk1 dk2 dk3 is used except in
+    the cells around the k1 axis at small k1, where Phi varies strongly inside a cell (on the axis
+    Phi_33 = E(k0)/(4 pi k1^2) with k0 -> Gamma a / L finite) and the cell integral is computed
+    (Gauss rules graded towards the axis down to the scale |k1|; Mann 1998). The generator does the
+    same (turbgen.synthesis.mann_stencil), with its own rule, so this is an independent check of it.
+    """
 
     def __init__(self, params: MannParams, grid: Grid, box: MannBox, U: float):
         self.params, self.grid, self.box, self.U = params, grid, box, U
         self.k2, self.k3 = _lattice(grid, box)
-        dk1 = 2 * np.pi / (grid.nt * grid.dt_s * U)
-        self.dk = dk1 * (2 * np.pi / (box.nyp * grid.dy_m)) * (2 * np.pi / (box.nzp * grid.dz_m))
+        self.dk1 = dk1 = 2 * np.pi / (grid.nt * grid.dt_s * U)
+        self.dk2, self.dk3 = 2 * np.pi / (box.nyp * grid.dy_m), 2 * np.pi / (box.nzp * grid.dz_m)
+        self.dk = dk1 * self.dk2 * self.dk3
+        self.r2 = min(CELL_RADIUS, (box.nyp - 1) // 2)
+        self.r3 = min(CELL_RADIUS, (box.nzp - 1) // 2)
+
+    def _axis_cells(self, k1: float) -> np.ndarray:
+        """∫_cell Phi dk over the (2 r2 + 1) x (2 r3 + 1) cells around the axis at k1, (3, 3, 2r2+1, 2r3+1)."""
+        x1, w1 = _gauss(k1 - self.dk1 / 2, k1 + self.dk1 / 2, 2)
+        scale = max(abs(k1), self.dk1 / 4)
+        rules2 = [_graded(j * self.dk2, self.dk2, scale) for j in range(-self.r2, self.r2 + 1)]
+        rules3 = [_graded(l * self.dk3, self.dk3, scale) for l in range(-self.r3, self.r3 + 1)]
+        out = np.empty((3, 3, len(rules2), len(rules3)))
+        for a, (x2, w2) in enumerate(rules2):
+            for b, (x3, w3) in enumerate(rules3):
+                g1, g2, g3 = np.meshgrid(x1, x2, x3, indexing="ij")
+                w = w1[:, None, None] * w2[None, :, None] * w3[None, None, :]
+                out[:, :, a, b] = np.sum(sheared_tensor(g1, g2, g3, self.params) * w, axis=(2, 3, 4))
+        return out
 
     def slabs(self, k1: np.ndarray, batch: int = 8):
-        """Yield (index, Phi (3, 3, nyp, nzp) times dk1 dk2 dk3, 1/tau_e (nyp, nzp) [1/s]) per k1."""
+        """Yield (index, Phi (3, 3, nyp, nzp) times dk1 dk2 dk3 (cell integrals), 1/tau_e (nyp, nzp) [1/s]) per k1."""
+        iy = np.arange(-self.r2, self.r2 + 1) % self.box.nyp
+        iz = np.arange(-self.r3, self.r3 + 1) % self.box.nzp
+        k1_cells = CELL_K1_MAX * max(self.dk2, self.dk3)
         for i0 in range(0, k1.size, batch):
             kk = k1[i0 : i0 + batch][:, None, None]
             # the generator's slab of time frequency f holds k1 = -2 pi f / U (time reversal, see
@@ -382,7 +437,14 @@ class _MannLattice:
             with np.errstate(divide="ignore"):
                 inv_tau = 1.0 / evolution_lifetime_s(kmag, self.params)  # Eq. 15 (0 when frozen)
             for n in range(kk.shape[0]):
-                yield i0 + n, phi[:, :, n], inv_tau[n]
+                p = phi[:, :, n]
+                k1n = float(kk[n, 0, 0])
+                if k1n <= k1_cells:
+                    cells = self._axis_cells(-k1n)
+                    if k1n == 0.0:
+                        cells[:, :, self.r2, self.r3] = 0.0  # the box mean (k = 0) carries no energy
+                    p[:, :, iy[:, None], iz[None, :]] = cells
+                yield i0 + n, p, inv_tau[n]
 
 
 def _interp_lines(k1_nodes, values, k1_lines, positive: bool):
@@ -396,6 +458,45 @@ def _interp_lines(k1_nodes, values, k1_lines, positive: bool):
         out[1:] = np.interp(xl, x, values[1:].real) + 1j * np.interp(xl, x, values[1:].imag)
     else:
         out[1:] = np.interp(xl, x, values[1:])
+    return out
+
+
+def band_limited_spectra(params: MannParams, grid: Grid, k1: np.ndarray, n_theta: int = 24, n_panels: int = 24):
+    """Continuous F_ii(k1) = ∫ Phi_ii dk2 dk3 over the grid's Nyquist rectangle |k2| <= pi/dy, |k3| <= pi/dz.
+
+    Returns (3, len(k1)) [m^3 s^-2], two-sided in k1. Polar quadrature: Gauss-Legendre in angle on the
+    four sectors between the rectangle's corners (kappa_max(theta) = k_N / |cos| or / |sin| is smooth
+    inside each), Gauss panels in ln kappa from 1e-7 s to kappa_max (s = sqrt(k1^2 + L^-2)), which
+    resolves the peak of Phi_33 near kappa ~ k1 at small k1. This is the model the grid can represent,
+    without the point sampling of a finite box.
+    """
+    kny, knz = np.pi / grid.dy_m, np.pi / grid.dz_m
+    tc = np.arctan2(knz, kny)
+    gx, gw = np.polynomial.legendre.leggauss(n_theta)
+    sectors = [(-tc, tc, 0), (tc, np.pi - tc, 1), (np.pi - tc, np.pi + tc, 0), (np.pi + tc, 2 * np.pi - tc, 1)]
+    th, wth, kmax = [], [], []
+    for a, b, kind in sectors:
+        t = 0.5 * (a + b) + 0.5 * (b - a) * gx
+        th.append(t)
+        wth.append(0.5 * (b - a) * gw)
+        kmax.append(kny / np.abs(np.cos(t)) if kind == 0 else knz / np.abs(np.sin(t)))
+    th, wth, kmax = (np.concatenate(v) for v in (th, wth, kmax))
+    rx, rw = np.polynomial.legendre.leggauss(8)
+    out = np.empty((3, k1.size))
+    for n, kk in enumerate(k1):
+        s = np.sqrt(kk * kk + params.length_scale_m**-2)
+        lo = np.log(1e-7 * s)
+        hi = np.log(kmax)  # (n_th,)
+        edges = lo + (hi - lo)[:, None] * np.linspace(0.0, 1.0, n_panels + 1)[None, :]
+        a, b = edges[:, :-1], edges[:, 1:]
+        t = 0.5 * (a + b)[..., None] + 0.5 * (b - a)[..., None] * rx  # (n_th, panels, 8) in ln kappa
+        kap = np.exp(t)
+        w = 0.5 * (b - a)[..., None] * rw * kap * kap * wth[:, None, None]  # kappa dkappa dtheta = kappa^2 dln
+        k2 = kap * np.cos(th)[:, None, None]
+        k3 = kap * np.sin(th)[:, None, None]
+        phi = sheared_tensor(np.full(k2.shape, kk), k2, k3, params)
+        for i in range(3):
+            out[i, n] = np.sum(w * phi[i, i])
     return out
 
 
@@ -458,6 +559,13 @@ def mann_theory(attrs: dict, grid: Grid, setup: WelchSetup, seps, mask, iy, iz) 
     def ratio_lines(values, ref):
         return values if exact else _interp_lines(k1_nodes, values / ref, k1_lines, False)
 
+    # the continuous model band-limited to the grid (sigma_i metrics), smooth in k1: interpolated log-log
+    bl_k1 = np.geomspace(k1_lines[1], k1_lines[-1], N_RHO_NODES)
+    band_lim = band_limited_spectra(params, grid, bl_k1)
+    auto_model = {}
+    for i, c in enumerate(COMPONENTS):
+        spline = CubicSpline(np.log(bl_k1), np.log(band_lim[i]))
+        auto_model[c] = np.concatenate([[0.0], np.exp(spline(np.log(k1_lines[1:]))) * lat.dk1])
     norm13 = np.sqrt(f_nodes["u"] * f_nodes["w"])
     uw = f13 if exact else ratio_lines(f13, norm13) * np.sqrt(auto["u"] * auto["w"])
     yz = {c: {s: yz_nodes[c][s] if exact else ratio_lines(yz_nodes[c][s], f_nodes[c]) * auto[c] for s in seps}
@@ -500,7 +608,7 @@ def mann_theory(attrs: dict, grid: Grid, setup: WelchSetup, seps, mask, iy, iz) 
         model="mann", nt=nt, line_f=line_f, auto=auto, yz=yz, long=long, rews=rews, node_f=node_f,
         rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
         sigma_model={c: math.sqrt(var[c + c]) for c in COMPONENTS}, band=band, uw=uw, rho_uw=acc.uw,
-        long_components="u", reference=_mann_reference(params, setup, U, mask, grid),
+        long_components="u", auto_model=auto_model, reference=_mann_reference(params, setup, U, mask, grid),
     )
 
 

@@ -225,6 +225,8 @@ def _mean(est: Estimates, th: Theory) -> MetricResult:
 
 
 def _variance(est: Estimates, th: Theory, c: str) -> MetricResult:
+    # One-sided line pair j: 2|Z_j|^2 is exponential with variance (2 L_j)^2; the point/plane
+    # average multiplies it by rho_bar(f_j). Expected: the lines the grid (Mann: the box lattice) holds.
     lines = th.auto[c][1:] * th.pair_weights[1:]
     var = np.sum(lines**2 * th.rho(th.rho_all[c], th.line_f[1:]))
     e = th.variance(c)
@@ -314,3 +316,4 @@ def _uw(est, th, kernel, bands, exp_auto, k_eff) -> MetricResult:
     lo, hi = _band95(co[b], sd[b])
     curve = Curve("uw_cross_spectrum", f[b], co[b], exp[b], lo, hi, th.reference.get("uw_cross_spectrum"))
     return MetricResult("uw_cross_spectrum", "u-w co-spectrum (Reynolds stress)", "m^2/s^2/Hz", tests, [curve])
+

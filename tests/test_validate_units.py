@@ -1,0 +1,125 @@
+"""Unit tests of the validator's building blocks: Welch setup, expected-Welch kernel, coherence statistics."""
+
+import numpy as np
+import pytest
+import scipy.signal
+
+from turbgen.grid import Grid
+from turbgen.validate.estimators import (
+    WelchSetup,
+    check_rotor_radius,
+    default_nperseg,
+    default_separations,
+    plan_spans,
+    rotor_mask,
+    welch_series,
+)
+from turbgen.validate.expectations import WelchKernel, _rect_counts, _set_counts
+from turbgen.validate.verdict import coherence_stats
+from turbgen.errors import ParameterError
+
+
+def test_hann_correlations_match_welch_1967():
+    s = WelchSetup(256, 0.5)
+    assert s.overlap_rho2 == pytest.approx(1 / 36, rel=1e-12)  # (sum w_t w_{t+n/2} / sum w^2)^2 = (1/6)^2
+    assert s.bin_rho2(1) == pytest.approx(4 / 9, rel=1e-12)
+    assert s.bin_rho2(2) == pytest.approx(1 / 36, rel=1e-12)
+    assert s.bin_rho2(3) == pytest.approx(0.0, abs=1e-20)
+
+
+def test_welch_series_matches_scipy_density():
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal((4096, 3))
+    s = WelchSetup(256, 0.25)
+    psd, k, pairs = welch_series(x, s)
+    _, ref = scipy.signal.welch(x, fs=4.0, window="hann", nperseg=256, noverlap=128, axis=0)
+    assert k == 31 and pairs == 30
+    np.testing.assert_allclose(psd[1:-1], ref.mean(axis=1)[1:-1], rtol=1e-10)
+
+
+def test_kernel_is_the_exact_expectation_of_a_line():
+    # a single line Z e^{i 2 pi f t}: the windowed, mean-removed DFT is Z G_m(f) exactly
+    nt, n, dt = 1024, 64, 0.5
+    s = WelchSetup(n, dt)
+    k = WelchKernel(s, nt)
+    j = 37
+    lines = np.zeros(nt // 2 + 1)
+    lines[j] = 1.0
+    t = np.arange(n) * dt
+    e = np.exp(2j * np.pi * j / (nt * dt) * t)
+    expected = np.zeros(n // 2 + 1)
+    for sign in (1, -1):  # the line and its conjugate partner, each of variance 1
+        v = (e if sign > 0 else e.conj())
+        expected += s.scale * np.abs(np.fft.fft(s.window * (v - v.mean()))[: n // 2 + 1]) ** 2
+    np.testing.assert_allclose(k.apply(lines), expected, rtol=1e-9, atol=1e-12)
+
+
+def test_kernel_of_white_lines_is_flat():
+    nt, n, dt = 4096, 256, 0.5
+    k = WelchKernel(WelchSetup(n, dt), nt)
+    lines = np.full(nt // 2 + 1, 1.0 / nt)  # variance 1 over the band: one-sided PSD 2 dt
+    lines[0] = 0.0
+    out = k.apply(lines)
+    np.testing.assert_allclose(out[3:-1], 2 * dt, rtol=1e-5)
+    # mean removal: E|X_m|^2 = sum w^2 - |W(m/n)|^2 / n, i.e. 5/6 of the flat level at bin 1 (Hann), and
+    # (dt/3) / (2 dt) = 1/6 at bin 0; lines beyond KERNEL_BAND bins carry the rest (the mean term decays as 1/f)
+    assert out[1] / (2 * dt) == pytest.approx(5 / 6, rel=2e-3)
+    assert out[0] / (2 * dt) == pytest.approx(1 / 6, rel=2e-2)
+
+
+@pytest.mark.parametrize("g", [0.0, 0.3, 0.9])
+def test_coherence_stats_match_closed_forms(g):
+    n = 50.0
+    st = coherence_stats(np.sqrt(g) + 0j, n)
+    # Var coh2 = 2 g (1-g)^2 / n (+ bias^2), Var cocoh = (1 - c^2)^2 / (2n), Var phase = (1-g)/(2 n g)
+    assert st["coh2_sd"] ** 2 == pytest.approx(2 * g * (1 - g) ** 2 / n + ((1 - g) ** 2 / n) ** 2, rel=1e-9)
+    assert st["cocoh_sd"] ** 2 == pytest.approx((1 - g) ** 2 / (2 * n), rel=1e-9)
+    if g > 0:
+        assert st["phase_sd"] ** 2 == pytest.approx((1 - g) / (2 * n * g), rel=1e-9)
+    assert st["coh2_mean"] == pytest.approx(g + (1 - g) ** 2 / n)
+
+
+def test_coherence_stats_against_monte_carlo():
+    # n independent complex Gaussian pairs with coherency rho: sample mean/sd of the estimators
+    rng = np.random.default_rng(7)
+    rho, n, trials = 0.6 * np.exp(0.5j), 40, 4000
+    a = (rng.standard_normal((trials, n)) + 1j * rng.standard_normal((trials, n))) / np.sqrt(2)
+    b = (rng.standard_normal((trials, n)) + 1j * rng.standard_normal((trials, n))) / np.sqrt(2)
+    y = np.conj(rho) * a + np.sqrt(1 - abs(rho) ** 2) * b  # E[conj(a) y] = rho
+    c = np.mean(np.conj(a) * y, axis=1)
+    aa, yy = np.mean(abs(a) ** 2, axis=1), np.mean(abs(y) ** 2, axis=1)
+    coh2, cocoh = abs(c) ** 2 / (aa * yy), c.real / np.sqrt(aa * yy)
+    st = coherence_stats(rho, n)
+    # Monte Carlo sd of a sd estimate ~ 1/sqrt(2 trials) ~ 1.1 %; the delta method is O(1/n): allow 10 %
+    assert coh2.std() == pytest.approx(st["coh2_sd"], rel=0.10)
+    assert cocoh.std() == pytest.approx(st["cocoh_sd"], rel=0.10)
+    assert np.std(np.angle(c)) == pytest.approx(st["phase_sd"], rel=0.10)
+    # the mean coh2 including the bias, within 4 standard errors of the Monte Carlo mean
+    assert abs(coh2.mean() - st["coh2_mean"]) < 4 * coh2.std() / np.sqrt(trials)
+
+
+def test_pair_counts():
+    c = _rect_counts(4, 3, 4, 3)
+    assert c.sum() == (4 * 3) ** 2 and c[3, 2] == 12
+    iy, iz = np.array([0, 2]), np.array([1])
+    s = _set_counts(4, 3, iy, iz)
+    assert s.sum() == 4 and s[3, 2] == 2 and s[5, 2] == 1
+
+
+def test_spans_use_whole_chunks_and_enough_segments():
+    spans = plan_spans(4096, 1024, 512)
+    assert spans == [(0, 2048), (2048, 4096)]
+    assert plan_spans(1000, 128, 64) == [(0, 256), (256, 512), (512, 768), (768, 1000)]
+    assert default_nperseg(4096) == 512
+    with pytest.raises(ParameterError):
+        default_nperseg(100)
+
+
+def test_rotor_and_separations():
+    g = Grid(nt=256, dt_s=0.5, x_m=(0.0,), ny=16, nz=16, dy_m=8.0, dz_m=8.0)
+    m = rotor_mask(g, 30.0)
+    y, z = g.y(), g.z()
+    assert m.sum() == np.sum(y[:, None] ** 2 + z[None, :] ** 2 <= 900.0)
+    with pytest.raises(ParameterError, match="rotor radius"):
+        check_rotor_radius(g, 61.0)
+    assert default_separations(g) == ((1, 0), (4, 0), (0, 1), (0, 4), (2, 2))
