@@ -78,6 +78,7 @@ def _list(parser, name):
               help="Time samples per store chunk (default min(nt, 1024)); never changes the field.")
 @click.option("--config", "config", type=click.Path(dir_okay=False), help="JSON/TOML run file; options typed on the "
               "command line override it.")
+@click.option("--threads", type=click.IntRange(min=1), help="FFT threads (default: all cores); never changes the field.")
 @click.option("--seed", type=int, default=1, show_default=True, help="Random seed (>= 0).")
 @click.option("--out", type=click.Path(), help="Output store (default kaimal_U<U>_<class>_s<seed>.zarr).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing store.")
@@ -130,7 +131,8 @@ def kaimal(ctx, **opt):
                f"dz {g.dz_m:g} m, planes x = {', '.join(f'{x:g}' for x in g.x_m)} m")
     click.echo(f"  memory ~{format_bytes(memory_needed(g))}, output {format_bytes(3 * g.nbytes_per_component())} "
                f"float32 -> {out}")
-    s = run_kaimal(run, out, overwrite=opt["overwrite"], chunk_t=opt["chunks"], progress=sys.stderr.isatty())
+    s = run_kaimal(run, out, overwrite=opt["overwrite"], chunk_t=opt["chunks"], progress=sys.stderr.isatty(),
+                   threads=opt["threads"])
     exp = ", ".join(f"{v:.3f}" for v in s["expected_sigma"])
     clip = ""
     if s["yz_clip_error"] > 0 or s["long_clip_error"] > 0:
