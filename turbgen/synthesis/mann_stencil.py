@@ -19,6 +19,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -154,7 +155,8 @@ def _build(params: MannParams, box: BoxShape) -> MannStencil:
     frozen = params.evo_time_s is None
     inv_tau = None if frozen else np.empty((nk1, nh, nzp), dtype=np.float32)
     step = max(1, _BUILD_POINTS // (nh * nzp))
-    for i0 in range(0, nk1, step):
+
+    def batch(i0: int) -> None:  # independent slab batches: threads only change who computes which
         k1 = k1_all[i0 : i0 + step][:, None, None]
         c = tensor_factor(k1, k2, k3, params)
         for dst, val in zip(coef[:, i0 : i0 + step], _compact(c, k1, k2)):
@@ -162,6 +164,9 @@ def _build(params: MannParams, box: BoxShape) -> MannStencil:
         if inv_tau is not None:
             kmag = np.sqrt(k1 * k1 + k2 * k2 + k3 * k3)
             inv_tau[i0 : i0 + step] = 1.0 / evolution_lifetime_s(kmag, params)  # tau_e, paper 000 Eq. 15
+
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+        list(pool.map(batch, range(0, nk1, step)))
     index, factor = _axis_cells(params, box)
     return MannStencil(params, box, coef, inv_tau, index, factor)
 
