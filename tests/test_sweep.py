@@ -230,3 +230,15 @@ def test_killed_sweep_process_is_resumed(client, tmp_path):
         [r for r in after["runs"] if r["action"] == "skipped"]
     )
     assert not [p for p in out.iterdir() if ".tmp-" in p.name] and not (out / LOCK_NAME).exists()
+
+
+def test_a_second_sweep_into_the_same_directory_adds_to_the_manifest(client, tmp_path):
+    kw = dict(out=tmp_path / "two", models=["kaimal"], presets=["neutral"], speeds=[16.0], grid=GRID)
+    first = run_sweep(make_plan(seeds=[1, 2], **kw), client=client, progress=False)
+    second = run_sweep(make_plan(seeds=[2, 3], **kw), client=client, progress=False)
+    assert (second.ran, second.skipped) == (1, 1)
+    doc = read_manifest(tmp_path / "two")
+    by_name = {r["name"]: r for r in doc["runs"]}
+    assert sorted(by_name) == [f"kaimal_neutral_U16_seed{s}" for s in (1, 2, 3)]
+    assert by_name["kaimal_neutral_U16_seed1"] == first.records[0]  # kept as the first sweep wrote it
+    assert doc["counts"]["complete"] == 3

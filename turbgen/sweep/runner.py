@@ -10,7 +10,8 @@
   is recorded as failed), incomplete stores are regenerated, and temporary directories left by
   dead writers on this host are removed.
 * A failing run is recorded with its error; the others continue. The manifest is rewritten
-  (atomically) after every finished run, so an interrupted sweep leaves an accurate record.
+  (atomically) after every finished run, so an interrupted sweep leaves an accurate record; records
+  of runs from earlier sweeps into the same directory that are not in this plan are kept.
 """
 
 from __future__ import annotations
@@ -258,18 +259,24 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
                 continue
             tasks[pr.name] = RunTask(pr.model, pr.run, str(path), state == "incomplete", plan.chunk_t, plan.validate)
         sweep_doc = plan.to_dict()
-        write_manifest(out, sweep_doc, list(records.values()))
+        # runs of earlier sweeps into DIR that this plan does not contain keep their records
+        earlier = [r for name, r in previous.items() if name not in records]
+
+        def save():
+            write_manifest(out, sweep_doc, [*records.values(), *earlier])
+
+        save()
         result = SweepResult(out, list(records.values()), skipped=skipped)
         if tasks:
-            _execute(plan, tasks, records, sweep_doc, result, client, processes, progress, threads)
+            _execute(plan, tasks, records, save, result, client, processes, progress, threads)
         result.records = list(records.values())
         result.failed = [r["name"] for r in result.records if r["status"] != "complete"]
         result.seconds = round(time.perf_counter() - t_start, 3)
-        write_manifest(out, sweep_doc, result.records)
+        save()
     return result
 
 
-def _execute(plan, tasks, records, sweep_doc, result, client, processes, progress, threads):
+def _execute(plan, tasks, records, save, result, client, processes, progress, threads):
     from distributed import as_completed
     from tqdm import tqdm
 
@@ -321,7 +328,7 @@ def _execute(plan, tasks, records, sweep_doc, result, client, processes, progres
                     rec["action"] = "ran"
                     if rec["status"] == "complete":
                         result.ran += 1
-                write_manifest(plan.out, sweep_doc, list(records.values()))
+                save()
                 bar.set_postfix_str(f"{name}: {rec['status']}", refresh=False)
                 bar.update(1)
     finally:
