@@ -64,7 +64,8 @@ def main() -> None:
         finally:
             shutil.rmtree(d, ignore_errors=True)
         rows.append({
-            "workers": workers, "fields": len(seeds), "cluster_startup_s": round(startup, 2), "seconds": round(seconds, 2),
+            "workers": workers, "fields": len(seeds), "cluster_startup_s": round(startup, 2),
+            "seconds": round(seconds, 2),
             "fields_per_minute": round(60 * len(seeds) / seconds, 2),
             "mean_task_seconds": round(sum(per_field) / len(per_field), 2),
         })  # fmt: skip

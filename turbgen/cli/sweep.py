@@ -12,7 +12,8 @@ def _split(text: str | None) -> list[str] | None:
 
 
 @click.command()
-@click.option("--config", "config", type=click.Path(dir_okay=False), help="sweep file (TOML or JSON, schemas/sweep.schema.json)")
+@click.option("--config", "config", type=click.Path(dir_okay=False),
+              help="sweep file (TOML or JSON, schemas/sweep.schema.json)")
 @click.option("--model", "models", help="mann, kaimal or mann,kaimal")
 @click.option("--preset", "presets", help="stability presets, e.g. neutral or unstable,neutral,stable")
 @click.option("--speeds", help="hub-height mean wind speeds [m/s], e.g. 12,16 or 12:24:2")
@@ -32,8 +33,8 @@ def _split(text: str | None) -> list[str] | None:
 @click.option("--scheduler", help="address of an existing dask scheduler (workers must see --out)")
 @click.option("--validate/--no-validate", default=None, help="validate every field against theory")
 @click.option("--out", type=click.Path(file_okay=False), help="output directory (stores and manifest)")
-def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, gates, ny, nz, dy, dz, hub_height, chunks,
-          workers, scheduler, validate, out):  # fmt: skip
+def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, gates, ny, nz, dy, dz, hub_height,
+          chunks, workers, scheduler, validate, out):  # fmt: skip
     """Generate every field of a sweep (resumable: complete stores are kept), write DIR/manifest.json/.csv.
 
     Either --config FILE (command-line --out, --workers, --scheduler, --validate and --chunks

@@ -70,7 +70,8 @@ class SweepLock:
                 if self._stale(holder):
                     self.path.unlink(missing_ok=True)
                     continue
-                who = f"pid {holder.get('pid', '?')} on {holder.get('host', '?')} since {holder.get('started_utc', '?')}"
+                pid, host, since = (holder.get(k, "?") for k in ("pid", "host", "started_utc"))
+                who = f"pid {pid} on {host} since {since}"
                 raise SweepLockedError(
                     f"{self.path.parent} is locked by another sweep ({who}); "
                     f"delete {self.path} only if that sweep is no longer running"

@@ -18,6 +18,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from turbgen import __version__
+from turbgen.store import open_store
 
 MANIFEST_JSON = "manifest.json"
 MANIFEST_CSV = "manifest.csv"
@@ -53,8 +54,6 @@ def store_checksum(path: str | Path) -> str:
     Independent of chunking, compression and metadata (creation time), so two stores holding the
     same field have the same checksum.
     """
-    from turbgen.store import open_store
-
     fs = open_store(path)
     h = hashlib.sha256()
     for comp in ("u", "v", "w"):

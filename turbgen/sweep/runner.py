@@ -1,8 +1,9 @@
 """Execute a sweep plan on dask.distributed: resumable, idempotent, one lock per output directory.
 
 * A LocalCluster sized to the machine (one single-threaded worker process per core, at most one
-  per run and as many as fit in 80 % of the available memory; each run gets cores/workers threads) or an existing scheduler
-  (plan.scheduler; its workers must see the output directory at the same path).
+  per run and as many as fit in 80 % of the available memory; each run gets cores/workers
+  threads) or an existing scheduler (plan.scheduler; its workers must see the output directory
+  at the same path).
 * Runs that differ only in the seed share one Mann stencil: it is built once as a dask task and
   passed to each seed's run task (dask ships it to the workers that need it).
 * Before anything is submitted, every planned store is inspected: complete stores with the planned
@@ -27,6 +28,7 @@ from pathlib import Path
 
 from turbgen.errors import StoreError
 from turbgen.resources import available_memory_bytes
+from turbgen.store import open_store
 from turbgen.store.layout import grid_to_attrs
 from turbgen.sweep.lock import SweepLock, pid_alive
 from turbgen.sweep.manifest import read_manifest, store_checksum, utc_now, write_manifest
@@ -108,8 +110,6 @@ def _identity(model, attrs: dict, grid: dict) -> dict:
 
 def store_state(path: Path, pr: PlannedRun) -> tuple[str, str | None]:
     """('absent' | 'incomplete' | 'mismatch' | 'complete', detail) of a planned run's store."""
-    from turbgen.store import open_store
-
     if not path.exists():
         return "absent", None
     try:
