@@ -83,6 +83,10 @@ def test_identical_for_any_chunking_threads_and_given_stencil(tmp_path):
 def test_a_stencil_of_other_parameters_is_refused(tmp_path):
     with pytest.raises(ValueError, match="stencil"):
         run_mann(small_run(gamma=2.0), tmp_path / "a.zarr", stencil=build_mann_stencil(small_run()))
+    one_plane = MannRun.from_mapping({"grid": {**SMALL, "x_m": [0.0]}})
+    with pytest.raises(ValueError, match="evolving=False"):
+        run_mann(small_run(), tmp_path / "a.zarr", stencil=build_mann_stencil(one_plane))
+    assert build_mann_stencil(one_plane).inv_tau is None
     assert not (tmp_path / "a.zarr").exists()
 
 
@@ -190,4 +194,4 @@ def test_memory_estimate_scales_with_one_snapshot():
     est2, est11 = (runs_mann.memory_estimate_bytes(r, 2) for r in (two, eleven))
     assert est2 == est11 and est11 < 2 * 2**30  # the paper case fits the 2 GiB target
     assert math.isclose(runs_mann.memory_estimate_bytes(MannRun.from_mapping({"grid": {"x_m": [0.0]}}), 2),
-                        est11 - 3 * 2049 * 128 * 128 * 8)  # one plane: no OU state  # fmt: skip
+                        est11 - 3 * 2049 * 128 * 128 * 8 - 2049 * 65 * 128 * 4)  # one plane: no OU state, no tau_e

@@ -153,17 +153,17 @@ def mann_preset_keys(preset: str, presets_file: str | Path | None = None) -> dic
 
 def build_mann_stencil(run: MannRun, cache_dir: str | Path | None = None) -> MannStencil:
     """The per-parameter-set part of a run (the same for runs differing only in seed)."""
-    return build_stencil(run.params, run.box, cache_dir)
+    return build_stencil(run.params, run.box, cache_dir, evolving=run.grid.nx > 1)
 
 
 def memory_estimate_bytes(run: MannRun, threads: int, with_stencil: bool = True) -> int:
     """Bytes a run allocates: stencil (unless given), OU state, spectra, one output plane, store buffers."""
     g = run.grid
-    frozen = run.params.evo_time_s is None
-    n_snap = 1 if frozen else g.nx
-    need = snapshot_memory_bytes(run.box, g.ny, g.nz, n_snap, threads) + 2 * g.nt * g.ny * g.nz * 4
+    evolving = run.params.evo_time_s is not None and g.nx > 1
+    need = snapshot_memory_bytes(run.box, g.ny, g.nz, g.nx if evolving else 1, threads)
+    need += 2 * g.nt * g.ny * g.nz * 4  # the output plane and the store's encoding buffers
     if with_stencil:
-        need += stencil_nbytes(run.box, frozen) + _BUILD_SCRATCH
+        need += stencil_nbytes(run.box, evolving) + _BUILD_SCRATCH
     return need
 
 
@@ -205,6 +205,8 @@ def run_mann(
     gen_threads = MannSnapshots.default_threads(threads)
     if stencil is not None and (stencil.params != run.params or stencil.box != run.box):
         raise ParameterError("the given stencil was built for other parameters or another grid than this run")
+    if stencil is not None and stencil.inv_tau is None and run.params.evo_time_s is not None and run.grid.nx > 1:
+        raise ParameterError("the given stencil was built for one plane (evolving=False); this run evolves planes")
     g = run.grid
     require_memory(
         memory_estimate_bytes(run, gen_threads, with_stencil=stencil is None),

@@ -145,7 +145,9 @@ class MannSnapshots:
         """
         times = np.asarray(times_s, dtype=float)
         order = [int(i) for i in np.argsort(times, kind="stable")]
-        frozen = self.stencil.inv_tau is None
+        frozen = self.stencil.params.evo_time_s is None
+        if not frozen and self.stencil.inv_tau is None and len(order) > 1:
+            raise ParameterError("this stencil was built with evolving=False: it serves one plane only")
         self._allocate(n_snapshots=1 if frozen else len(order))
         with ThreadPoolExecutor(self.threads) as pool:
             if frozen:

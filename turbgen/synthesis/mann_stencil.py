@@ -91,7 +91,8 @@ class BoxShape:
 
 @dataclass(frozen=True, eq=False)
 class MannStencil:
-    """Compact factor ``coef`` (5, nk1, nyp//2+1, nzp) float32, ``inv_tau`` [1/s] (None if frozen),
+    """Compact factor ``coef`` (5, nk1, nyp//2+1, nzp) float32, ``inv_tau`` = 1/tau_e [1/s] (None if
+    frozen or built with evolving=False: then it serves single snapshots only),
     and the cell-averaged factors near the k1 axis: ``cell_index`` (ncell, 3) int (slab, row, column),
     sorted by slab, and ``cell_factor`` (ncell, 3, 3) float32 (times sqrt(dk1 dk2 dk3 / 2)), which
     replace the compact factor at those points."""
@@ -113,10 +114,10 @@ class MannStencil:
         return slice(int(np.searchsorted(slabs, i0)), int(np.searchsorted(slabs, i1)))
 
 
-def stencil_nbytes(box: BoxShape, frozen: bool) -> int:
+def stencil_nbytes(box: BoxShape, with_tau: bool) -> int:
     """Bytes held by the stencil of ``box`` (for memory estimates before building it)."""
     per = box.nk1 * box.nk2_half * box.nzp * 4
-    return per * (5 if frozen else 6)
+    return per * (6 if with_tau else 5)
 
 
 def expand_k2(half: np.ndarray, nyp: int, odd: bool, out: np.ndarray) -> np.ndarray:
@@ -145,15 +146,14 @@ def _compact(c, k1, k2):
     return a, p, z1, z2, w
 
 
-def _build(params: MannParams, box: BoxShape) -> MannStencil:
+def _build(params: MannParams, box: BoxShape, with_tau: bool) -> MannStencil:
     nk1, nh, nzp = box.nk1, box.nk2_half, box.nzp
     scale = np.sqrt(np.prod(box.dk()) / 2.0)
     k1_all = box.k1()
     k2 = box.k2()[:nh][None, :, None]
     k3 = box.k3()[None, None, :]
     coef = np.empty((5, nk1, nh, nzp), dtype=np.float32)
-    frozen = params.evo_time_s is None
-    inv_tau = None if frozen else np.empty((nk1, nh, nzp), dtype=np.float32)
+    inv_tau = np.empty((nk1, nh, nzp), dtype=np.float32) if with_tau else None
     step = max(1, _BUILD_POINTS // (nh * nzp))
 
     def batch(i0: int) -> None:  # independent slab batches: threads only change who computes which
@@ -231,32 +231,39 @@ def _axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarr
     return index, factor
 
 
-def stencil_key(params: MannParams, box: BoxShape) -> str:
+def stencil_key(params: MannParams, box: BoxShape, with_tau: bool) -> str:
     """Hash of everything the stencil depends on (cache file name)."""
-    text = json.dumps({"v": STENCIL_VERSION, "params": asdict(params), "box": asdict(box)}, sort_keys=True)
+    text = json.dumps(
+        {"v": STENCIL_VERSION, "params": asdict(params), "box": asdict(box), "tau": with_tau}, sort_keys=True
+    )
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
-def build_stencil(params: MannParams, box: BoxShape, cache_dir: str | Path | None = None) -> MannStencil:
-    """The stencil of ``params`` on ``box``; with ``cache_dir``, loaded from / saved to an .npz named by stencil_key."""
+def build_stencil(
+    params: MannParams, box: BoxShape, cache_dir: str | Path | None = None, *, evolving: bool = True
+) -> MannStencil:
+    """The stencil of ``params`` on ``box``; with ``cache_dir``, loaded from / saved to an .npz named by stencil_key.
+
+    ``evolving=False`` skips 1/tau_e (1/6 of the memory): enough for a single snapshot (one plane).
+    """
+    with_tau = evolving and params.evo_time_s is not None
     if cache_dir is None:
-        return _build(params, box)
-    path = Path(cache_dir) / f"mann-stencil-{stencil_key(params, box)}.npz"
-    frozen = params.evo_time_s is None
+        return _build(params, box, with_tau)
+    path = Path(cache_dir) / f"mann-stencil-{stencil_key(params, box, with_tau)}.npz"
     if path.exists():
         try:
             with np.load(path) as data:
                 coef, index, factor = data["coef"], data["cell_index"], data["cell_factor"]
-                inv_tau = None if frozen else data["inv_tau"]
+                inv_tau = data["inv_tau"] if with_tau else None
             if coef.shape == (5, box.nk1, box.nk2_half, box.nzp):
                 return MannStencil(params, box, coef, inv_tau, index, factor)
         except (OSError, ValueError, KeyError):
             pass  # unreadable cache entry: rebuild and replace it
-    stencil = _build(params, box)
+    stencil = _build(params, box, with_tau)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     arrays = {"coef": stencil.coef, "cell_index": stencil.cell_index, "cell_factor": stencil.cell_factor}
-    if not frozen:
+    if with_tau:
         arrays["inv_tau"] = stencil.inv_tau
     with open(tmp, "wb") as f:
         np.savez(f, **arrays)
