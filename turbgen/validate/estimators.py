@@ -42,6 +42,7 @@ COMPONENTS = ("u", "v", "w")
 SPAN_SEGMENTS = 4  # a span holds at least this many segment lengths (fewer segments lost at span edges)
 LONG_POINTS_PER_AXIS = 16  # sub-lattice for the plane-pair cross-spectra (bounds memory: nx x segments)
 MIN_NPERSEG = 32
+MOMENT_BLOCK = 64  # time steps per float32 block of the sum of squares (no float64 copy of a span)
 
 
 @dataclass(frozen=True)
@@ -200,13 +201,27 @@ def _psum(p) -> np.ndarray:
     return p.sum(axis=(1, 2), dtype=np.float64)
 
 
+def _read(arr, ix: int, t0: int, t1: int) -> np.ndarray:
+    """Plane ``ix`` over [t0, t1), read one stored chunk at a time (zarr's temporaries stay chunk-sized)."""
+    out = np.empty((t1 - t0, *arr.shape[2:]), dtype=np.float32)
+    step = arr.chunks[0]
+    for a in range(t0, t1, step):
+        b = min(a + step, t1)
+        out[a - t0 : b - t0] = arr[a:b, ix]
+    return out
+
+
 def _task(arrays, ix: int, t0: int, t1: int, setup: WelchSetup, seps, mask, iy, iz) -> dict:
     """Sums of one plane over one span [t0, t1): the Welch and moment sums, the REWS series."""
-    data = {c: np.asarray(arrays[c][t0:t1, ix], dtype=np.float32) for c in COMPONENTS}
+    data = {c: _read(arrays[c], ix, t0, t1) for c in COMPONENTS}
     out = {"sum": {}, "sum2": {}, "auto": {}, "yz": {c: {} for c in COMPONENTS}}
     for c, d in data.items():
         out["sum"][c] = d.sum(axis=0, dtype=np.float64)
-        out["sum2"][c] = np.einsum("tij,tij->ij", d, d, dtype=np.float64)
+        s2 = np.zeros(d.shape[1:])
+        for b in range(0, d.shape[0], MOMENT_BLOCK):  # float32 products in small blocks, float64 sums
+            blk = d[b : b + MOMENT_BLOCK]
+            s2 += np.einsum("tij,tij->ij", blk, blk)
+        out["sum2"][c] = s2
     out["rews"] = data["u"][:, mask].mean(axis=1, dtype=np.float64)
     w = setup.window.astype(np.float32)[:, None, None]
     n = setup.nperseg

@@ -1,0 +1,70 @@
+"""Benchmark of `turbgen validate` on the default Mann store (issue 5: well under a minute on 2 cores).
+
+    python benchmarks/bench_validate.py                     # generate the default store, validate it
+    python benchmarks/bench_validate.py --store PATH        # validate an existing store (any model)
+    python benchmarks/bench_validate.py --quick             # 1024 x 3 x 32 x 32, to check the script
+
+The store is generated (if needed) in its own subprocess; the validation runs in another
+subprocess so that its wall time and peak RSS (ru_maxrss) are its own. Printed: one JSON line
+with the wall time, the split estimate / theory / verdict, the peak RSS, the store size and the
+verdict. The uncompressed default field is 3 x 738 MiB; the validator reads it chunk by chunk
+(one task per plane and span of time chunks), so its memory follows the chunks, not the field.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+GENERATE = """
+import sys
+from turbgen.runs.mann import MannRun, run_mann
+grid = {quick}
+run = MannRun.from_mapping({{"grid": grid}} if grid else {{}})
+run_mann(run, sys.argv[1])
+"""
+
+VALIDATE = """
+import json, resource, sys, time
+from turbgen.validate import validate
+t0 = time.perf_counter()
+r = validate(sys.argv[1], rotor_radius_m=float(sys.argv[2]))
+wall = time.perf_counter() - t0
+g = r.store.grid
+print(json.dumps({
+    "store": str(r.store.path), "model": r.store.model, "shape_t_x_y_z": list(g.shape),
+    "chunk_t": r.store.chunk_t, "wall_s": round(wall, 2),
+    "estimate_s": round(r.seconds["estimate"], 2), "theory_s": round(r.seconds["theory"], 2),
+    "verdict_s": round(r.seconds["verdict"], 2),
+    "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
+    "field_mib_uncompressed": round(3 * g.nbytes_per_component() / 2**20, 1),
+    "passed": r.passed, "failed": r.failed,
+}))
+"""
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--store", help="validate this store instead of generating the default Mann store")
+    ap.add_argument("--quick", action="store_true", help="small grid (checks the script)")
+    ap.add_argument("--rotor-radius", type=float, default=None, help="rotor radius [m] (default 63, quick 40)")
+    args = ap.parse_args()
+    radius = args.rotor_radius or (40.0 if args.quick else 63.0)
+    with tempfile.TemporaryDirectory(prefix="bench_validate_") as tmp:
+        store = args.store
+        if store is None:
+            store = str(Path(tmp) / "mann_default.zarr")
+            quick = ({"nt": 1024, "x_m": [0.0, 50.0, 63.3], "ny": 32, "nz": 32, "dy_m": 4.8, "dz_m": 4.8}
+                     if args.quick else None)
+            subprocess.run([sys.executable, "-c", GENERATE.format(quick=repr(quick)), store], check=True)
+        out = subprocess.run([sys.executable, "-c", VALIDATE, store, str(radius)], check=True,
+                             capture_output=True, text=True)
+        print(out.stdout.strip())
+
+
+if __name__ == "__main__":
+    main()
