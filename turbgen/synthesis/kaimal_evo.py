@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import scipy.fft
@@ -198,9 +199,9 @@ class KaimalEvo:
             if sampler is None:
                 out[i:j] = xi
             elif sampler.chol is not None:
-                out[i] = sampler.sample(xi[0], self.workers)
+                out[i] = sampler.sample(xi[0], 1)
             else:
-                out[i:j] = sampler.sample(xi, self.workers)
+                out[i:j] = sampler.sample(xi, 1)  # planes already run in parallel
         return out
 
     def component_planes(
@@ -217,12 +218,18 @@ class KaimalEvo:
         amp = np.sqrt(self.variances[component] / 2.0).astype(np.float32)
         if g.nt % 2 == 0:  # the Nyquist coefficient is real: sqrt(2) Re(Z) has unit variance
             amp[-1] = np.sqrt(self.variances[component][-1]).astype(np.float32)
+        pool = ThreadPoolExecutor(max_workers=self.workers)
         for chunk in range(self.n_chunks):
             ks = range(max(1, chunk * FREQ_CHUNK), min(self.nf, (chunk + 1) * FREQ_CHUNK))
             if len(ks):
                 groups = self._groups(self._embeddings(component, ks))
-                for p in range(nx):
+
+                def fill(p, ks=ks, chunk=chunk, groups=groups):
                     spec[p, ks.start:ks.stop] = self._chunk_coefficients(component, p, chunk, len(ks), groups)
+
+                # planes in parallel (NumPy's generators and the FFTs release the GIL); each plane has its
+                # own random stream and its own slice of spec, so the result does not depend on the order
+                list(pool.map(fill, range(nx)))
                 if mixed and nx > 1:
                     fac, err = longitudinal_factors(self.long_coherence, g.x_m, self.freqs[ks.start:ks.stop])
                     self.report["long_clip_error"] = max(self.report["long_clip_error"], err)
@@ -233,6 +240,7 @@ class KaimalEvo:
                         nx, len(ks), g.ny, g.nz)
             if tick:
                 tick()
+        pool.shutdown()
         if g.nt % 2 == 0:
             spec[:, -1] = np.sqrt(2.0, dtype=np.float32) * spec[:, -1].real
         spec *= amp[None, :, None, None]
