@@ -162,3 +162,27 @@ def test_wrong_length_scale_fails_the_spectra_kaimal(kaimal_store, tmp_path):
     failed = _failed(copy_store(data, tmp_path / "wrong_L.zarr", attrs=attrs))
     assert {"spectrum_u", "spectrum_v", "spectrum_w"} <= failed
     assert "yz_coherence_u" not in failed
+
+
+def test_kaimal_rescaled_field_is_compared_like_with_like(tmp_path):
+    # rescale=True multiplies each spectrum by sigma^2 / (band variance) (w: x1.25 at 16 m/s);
+    # the validator reads that from the attributes, so the field passes, and the same data under the
+    # attributes of an un-rescaled run fail the w spectrum
+    rescaled = tmp_path / "rescaled.zarr"
+    run = _kaimal_run()
+    run_kaimal(KaimalRun(**{**run.__dict__, "rescale": True}), rescaled, chunk_t=512)
+    assert validate(rescaled, rotor_radius_m=R).failed == []
+    plain_attrs = run.to_attrs()
+    failed = _failed(copy_store(rescaled, tmp_path / "lying.zarr", attrs={k: plain_attrs[k] for k in CALLER_ATTRS}))
+    assert "spectrum_w" in failed
+
+
+def test_frozen_mann_field_passes(tmp_path):
+    # gamma = None: every plane is the same box; coherence 1 and phase 0 between planes, to float32 resolution
+    path = tmp_path / "frozen.zarr"
+    grid = {**GRID, "nt": 1024}
+    run_mann(MannRun.from_mapping({"grid": grid, "evo_time_s": None}), path)
+    report = validate(path, rotor_radius_m=R)
+    assert report.failed == []
+    long = report.metric("longitudinal_coherence_u")
+    assert all(t.estimate > 0.999 for t in long.tests if t.label.startswith("coh2"))

@@ -46,7 +46,8 @@ from turbgen.validate.expectations import Theory, WelchKernel
 
 ALPHA = 1e-3  # family-wise probability that a correct field fails one given metric
 BANDS_PER_DECADE = 5
-FLOAT32_FLOOR = 1e-6  # relative resolution floor of float32 data (tolerance on a mean that is exactly 0)
+FLOAT32_FLOOR = 1e-6
+COHERENCE_FLOOR = 1e-5  # absolute resolution of a coherence estimated from float32 data  # relative resolution floor of float32 data (tolerance on a mean that is exactly 0)
 
 
 @dataclass
@@ -138,12 +139,14 @@ def coherence_stats(rho, n):
     cocoh_var = var((-re / 2, -re / 2, 1.0 + zero, zero))
     with np.errstate(divide="ignore", invalid="ignore"):
         phase_var = np.where(g > 0, var((zero, zero, -im / g, re / g)), np.inf)
+    # float32 data: coherences of identical signals (frozen planes) are 1 only to ~1e-6; keep sd above that
+    floor = COHERENCE_FLOOR**2
     return {
         "coh2_mean": g + bias,
-        "coh2_sd": np.sqrt(coh2_var),
+        "coh2_sd": np.sqrt(coh2_var + floor),
         "cocoh_mean": re,
-        "cocoh_sd": np.sqrt(cocoh_var),
-        "phase_sd": np.minimum(np.sqrt(phase_var), np.pi / np.sqrt(3.0)),  # uniform phase at most
+        "cocoh_sd": np.sqrt(cocoh_var + floor),
+        "phase_sd": np.minimum(np.sqrt(phase_var + floor), np.pi / np.sqrt(3.0)),  # uniform phase at most
     }
 
 
