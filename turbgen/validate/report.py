@@ -187,7 +187,10 @@ def _coherence_figure(plt, m: MetricResult):
     fig, axes = plt.subplots(1, len(kinds), figsize=(5 * len(kinds), 4), squeeze=False)
     for ax, kind in zip(axes[0], kinds):
         curves = [c for c in m.curves if c.label.split()[0] == kind]
-        step = max(1, len(curves) // 6)  # at most ~6 curves per panel
+        if m.name.startswith("longitudinal"):  # the first plane (rotor) against the others, as in the paper
+            first = curves[0].label.split()[1].split("-")[0] + "-"
+            curves = [c for c in curves if c.label.split()[1].startswith(first)]
+        step = max(1, -(-len(curves) // 6))  # at most 6 curves per panel
         for i, c in enumerate(curves[::step]):
             color = f"C{i % 10}"
             ax.fill_between(c.f_hz, c.lower, c.upper, color=color, alpha=0.2, lw=0)
@@ -196,5 +199,7 @@ def _coherence_figure(plt, m: MetricResult):
         ax.set_xscale("log")
         ax.set_xlabel("f [Hz]")
         ax.set_ylabel(kind + (" [rad]" if kind == "phase" else " [-]"))
+        if kind == "phase":
+            ax.set_ylim(-np.pi, np.pi)
         ax.legend(fontsize=7, title="solid sim., dashed theo.", title_fontsize=7)
     return fig
