@@ -20,15 +20,18 @@ def von_karman_energy(k, ae: float, length_scale_m: float):
     return ae * length_scale_m ** (5.0 / 3.0) * kL**4 / (1.0 + kL**2) ** (17.0 / 6.0)
 
 
-def _distortion(k1, k2, k3, params: MannParams):
+def _distortion(k1, k2, k3, params: MannParams, beta=None):
     """Undistorted wavenumber and the rapid-distortion coefficients zeta1, zeta2 (Mann 1994 Eq. 15-17).
 
     Returns (k0sq, k30, ksq, zeta1, zeta2, E0). Exact limits are used on k1 = 0 (zeta1 = -beta,
     zeta2 = 0: the linear growth of u under shear) and on the k3 axis (q = 0: zeta = 0).
+    ``beta`` may be passed precomputed (it depends on |k| only; broadcastable to k1).
     """
     k1, k2, k3 = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (k1, k2, k3)))
     ksq = k1 * k1 + k2 * k2 + k3 * k3
-    beta = shear_distortion_beta(np.sqrt(ksq), params)
+    if beta is None:
+        beta = shear_distortion_beta(np.sqrt(ksq), params)
+    beta = np.broadcast_to(beta, ksq.shape)
     beta = np.where(np.isfinite(beta), beta, 0.0)  # k = 0 carries no energy
     k30 = k3 + beta * k1
     k0sq = k1 * k1 + k2 * k2 + k30 * k30
@@ -49,9 +52,12 @@ def _distortion(k1, k2, k3, params: MannParams):
     return k1, k2, k0sq, k30, ksq, zeta1, zeta2, e0
 
 
-def sheared_tensor(k1, k2, k3, params: MannParams):
-    """Phi_ij(k) of the sheared Mann tensor, shape (3, 3, *k1.shape) [m^5 s^-2] (Mann 1994 Eq. 19)."""
-    k1, k2, k0sq, k30, ksq, z1, z2, e0 = _distortion(k1, k2, k3, params)
+def sheared_tensor(k1, k2, k3, params: MannParams, beta=None):
+    """Phi_ij(k) of the sheared Mann tensor, shape (3, 3, *k1.shape) [m^5 s^-2] (Mann 1994 Eq. 19).
+
+    ``beta``: optional precomputed beta(|k|) (see shear_distortion_beta), broadcastable to k1.
+    """
+    k1, k2, k0sq, k30, ksq, z1, z2, e0 = _distortion(k1, k2, k3, params, beta)
     q = k1 * k1 + k2 * k2
     with np.errstate(divide="ignore", invalid="ignore"):
         a = np.where(k0sq > 0, e0 / (4.0 * np.pi * k0sq * k0sq), 0.0)
