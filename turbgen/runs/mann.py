@@ -13,6 +13,7 @@ import math
 import sys
 import time
 from collections.abc import Mapping
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,7 +35,7 @@ _UNITS = {
     "evo_time_s": "s", "U_m_s": "m s-1", "seed": "1", "hub_height_m": "m", "pad_yz": "1", "ae_from": "",
 }  # fmt: skip
 _INPUT_KEYS = set(_UNITS) | {"sigma_u_m_s", "ti", "turb_class", "grid"}
-_BUILD_SCRATCH = 96 * 2**20  # float64 temporaries of one stencil-building batch (tensor_factor)
+_BUILD_SCRATCH = 64 * 2**20  # float64 temporaries of the stencil-building batches (all threads)
 
 
 @dataclass(frozen=True)
@@ -160,7 +161,7 @@ def memory_estimate_bytes(run: MannRun, threads: int, with_stencil: bool = True)
     """Bytes a run allocates: stencil (unless given), OU state, spectra, one output plane, store buffers."""
     g = run.grid
     evolving = run.params.evo_time_s is not None and g.nx > 1
-    need = snapshot_memory_bytes(run.box, g.ny, g.nz, g.nx if evolving else 1, threads)
+    need = snapshot_memory_bytes(run.box, g.ny, g.nz, g.nx if evolving else 1, threads, buffers=2)
     need += 2 * g.nt * g.ny * g.nz * 4  # the output plane and the store's encoding buffers
     if with_stencil:
         need += stencil_nbytes(run.box, evolving) + _BUILD_SCRATCH
@@ -218,18 +219,24 @@ def run_mann(
     with create_store(path, g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:
         if stencil is None:
             stencil = build_mann_stencil(run, cache_dir)
-        gen = MannSnapshots(stencil, g.ny, g.nz, gen_threads)
-        bar = tqdm(total=g.nx, unit="plane", desc="mann", file=sys.stderr, disable=not (progress and sys.stderr.isatty()))
-        with bar:
-            done = 0
-            for ix, comp, field in gen.generate(run.seed, run.plane_times_s()):
-                writer.write(comp, ix, field)
+        gen = MannSnapshots(stencil, g.ny, g.nz, gen_threads, buffers=2)
+        show = progress and sys.stderr.isatty()
+        bar = tqdm(total=g.nx, unit="plane", desc="mann", file=sys.stderr, disable=not show)
+        # One write in flight while the generator computes the next item (it alternates two buffers);
+        # leaving the pool waits for that write, so an exception never races the store's clean-up.
+        with bar, ThreadPoolExecutor(1) as background:
+            pending = None
+            for done, (ix, comp, field) in enumerate(gen.generate(run.seed, run.plane_times_s()), start=1):
+                if pending is not None:
+                    pending.result()
+                pending = background.submit(writer.write, comp, ix, field)
                 flat = field.reshape(-1)
                 sums[comp][0] += float(flat.sum(dtype=np.float64))
                 sums[comp][1] += float(np.dot(flat, flat))
-                done += 1
                 if done % 3 == 0:
                     bar.update(1)
+            if pending is not None:
+                pending.result()
     n = g.nt * g.nx * g.ny * g.nz
     summary = {"path": str(path), "seconds": time.perf_counter() - t_start}
     for c, (s1, s2) in sums.items():

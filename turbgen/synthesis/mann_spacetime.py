@@ -11,7 +11,7 @@ noise (or OU update) -> u_hat = C n (compact factor and axis cells, see mann_ste
 the k1 = 0 / Nyquist slabs -> inverse 2-D FFT over (k2, k3) -> crop to ny x nz -> store into a
 (ny nz, k1) buffer; then one real inverse FFT along k1 per component, in fixed row blocks.
 Memory scales with one snapshot: the OU state (3 complex64 per half-spectrum point), the stencil,
-three cropped spectra and one output plane.
+three cropped spectra and one output plane (two when one is written while the next is computed).
 """
 
 from __future__ import annotations
@@ -43,12 +43,12 @@ def _padded_nk1(nk1: int) -> int:
     return -(-nk1 // 8) * 8  # rows of 8 complex64 = 64 bytes keep every row aligned
 
 
-def snapshot_memory_bytes(box: BoxShape, ny: int, nz: int, n_snapshots: int, threads: int) -> int:
+def snapshot_memory_bytes(box: BoxShape, ny: int, nz: int, n_snapshots: int, threads: int, buffers: int = 1) -> int:
     """Bytes allocated by the generator (stencil excluded): OU state, cropped spectra, output, scratch."""
     slab = box.nyp * box.nzp
     state = 3 * box.nk1 * slab * 8 if n_snapshots > 1 else 0
     spectra = 3 * ny * nz * _padded_nk1(box.nk1) * 8
-    output = box.nt * ny * nz * 4
+    output = buffers * box.nt * ny * nz * 4  # output plane(s)
     scratch = threads * (SLAB_BATCH * slab * (2 * 3 * 8 + 2 * 8 + 8 * 4) + ROW_BLOCK * box.nt * 4)
     return state + spectra + output + scratch
 
@@ -115,7 +115,7 @@ class MannSnapshots:
     for any value (random streams per (seed, snapshot, slab), fixed batches and FFT plans).
     """
 
-    def __init__(self, stencil: MannStencil, ny: int, nz: int, threads: int | None = None):
+    def __init__(self, stencil: MannStencil, ny: int, nz: int, threads: int | None = None, buffers: int = 1):
         box = stencil.box
         if not (1 <= ny <= box.nyp and 1 <= nz <= box.nzp):
             raise ParameterError(f"ny, nz = {ny}, {nz} must not exceed the synthesis box {box.nyp} x {box.nzp}")
@@ -126,7 +126,9 @@ class MannSnapshots:
         self._hermitian_slabs = {0, box.nt // 2} if box.nt % 2 == 0 else {0}
         self._spectra = None
         self._state = None
-        self._output = None
+        self._n_buffers = 2 if buffers >= 2 else 1
+        self._outputs: list[np.ndarray] = []
+        self._n_out = 0
         self._scratch: queue.SimpleQueue | None = None
 
     @staticmethod
@@ -141,7 +143,9 @@ class MannSnapshots:
         ``times_s`` are the planes' relative times x/U [s] in storage order. Planes come in time
         order, all three components of a plane before the next plane (frozen turbulence: the single
         snapshot is yielded once per plane, component by component). The yielded array is a reused
-        buffer: consume (write) it before asking for the next item.
+        buffer: consume it before asking for the next item. With ``buffers=2`` two buffers alternate,
+        so an array stays valid while the next item is produced (a background write of it must end
+        before the item after next is asked for).
         """
         times = np.asarray(times_s, dtype=float)
         order = [int(i) for i in np.argsort(times, kind="stable")]
@@ -153,9 +157,9 @@ class MannSnapshots:
             if frozen:
                 self._synthesise(pool, seed, 0, None)
                 for c in range(3):
-                    self._transform(pool, c)
+                    out = self._transform(pool, c)
                     for ix in order:
-                        yield ix, COMPONENTS[c], self._output
+                        yield ix, COMPONENTS[c], out
                 return
             previous = None
             for m, ix in enumerate(order):
@@ -163,15 +167,14 @@ class MannSnapshots:
                 self._synthesise(pool, seed, m, dt)
                 previous = times[ix]
                 for c in range(3):
-                    self._transform(pool, c)
-                    yield ix, COMPONENTS[c], self._output
+                    yield ix, COMPONENTS[c], self._transform(pool, c)
 
     # -- internals ------------------------------------------------------------------------
     def _allocate(self, n_snapshots: int) -> None:
         box = self.box
         if self._spectra is None:
             self._spectra = _aligned((3, self.ny * self.nz, _padded_nk1(box.nk1)), np.complex64)
-            self._output = _aligned((box.nt, self.ny, self.nz), np.float32)
+            self._outputs = [_aligned((box.nt, self.ny, self.nz), np.float32) for _ in range(self._n_buffers)]
             self._scratch = queue.SimpleQueue()
             for _ in range(self.threads):
                 scratch = _Scratch(box, box.nt)
@@ -195,9 +198,13 @@ class MannSnapshots:
         starts = range(0, self.box.nk1, SLAB_BATCH)
         self._run(pool, lambda s, i0: self._batch(s, seed, m, dt, i0), starts)
 
-    def _transform(self, pool, c: int) -> None:
+    def _transform(self, pool, c: int) -> np.ndarray:
+        """Component ``c`` of the current snapshot into the next of the two output buffers."""
+        out = self._outputs[self._n_out % self._n_buffers]
+        self._n_out += 1
         rows = range(0, self.ny * self.nz, ROW_BLOCK)
-        self._run(pool, lambda s, r0: self._rows(s, c, r0), rows)
+        self._run(pool, lambda s, r0: self._rows(s, c, r0, out), rows)
+        return out
 
     def _batch(self, s: _Scratch, seed: int, m: int, dt: float | None, i0: int) -> None:
         box, st = self.box, self.stencil
@@ -259,14 +266,14 @@ class MannSnapshots:
             dest = self._spectra[c].reshape(ny, nz, -1)[:, :, i0:i1]
             dest[...] = uh[:, c, :ny, :nz].transpose(1, 2, 0)
 
-    def _rows(self, s: _Scratch, c: int, r0: int) -> None:
+    def _rows(self, s: _Scratch, c: int, r0: int, output: np.ndarray) -> None:
         r1 = min(r0 + ROW_BLOCK, self.ny * self.nz)
         n = r1 - r0
         spectra = self._spectra[c, r0:r1, : self.box.nk1]
         plan = s.t_plan(n)
         plan.update_arrays(spectra, s.rows[:n])
         plan.execute()
-        out = self._output.reshape(self.box.nt, -1)
+        out = output.reshape(self.box.nt, -1)
         out[:, r0:r1] = s.rows[:n].T
 
 

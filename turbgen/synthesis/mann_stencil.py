@@ -33,7 +33,7 @@ from turbgen.theory.params import MannParams
 STENCIL_VERSION = 1
 COEF_NAMES = ("A", "P", "Z1", "Z2", "W")
 _ODD = (False, False, False, True, False)  # parity of each coefficient under k2 -> -k2
-_BUILD_POINTS = 1 << 18  # points per float64 batch while building (~2 MiB per temporary)
+_BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0.5 MiB per temporary)
 # Cell-averaged tensor near the k1 axis (Mann 1998: the point value Phi(k) dk is a poor estimate of
 # the cell integral where Phi varies within a cell). On the k1 axis Phi33 = E(k0) / (4 pi k1^2) with
 # k0 -> Gamma a / L finite, so with dk1 << dk2, dk3 (long boxes) the point rule puts far too much
