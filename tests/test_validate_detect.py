@@ -186,3 +186,12 @@ def test_frozen_mann_field_passes(tmp_path):
     assert report.failed == []
     long = report.metric("longitudinal_coherence_u")
     assert all(t.estimate > 0.999 for t in long.tests if t.label.startswith("coh2"))
+
+
+def test_kaimal_variants_pass(tmp_path):
+    # coherent v, w (extension), longitudinal coherence on u, v, w, Kristensen's longitudinal model
+    path = tmp_path / "variant.zarr"
+    run = _kaimal_run(seed=8)
+    run_kaimal(KaimalRun(**{**run.__dict__, "vw_coherence": "exp", "long_components": "uvw",
+                            "long_model": "kristensen", "a_x": None, "b_x": None}), path, chunk_t=512)
+    assert validate(path, rotor_radius_m=R).failed == []

@@ -123,3 +123,21 @@ def test_rotor_and_separations():
     with pytest.raises(ParameterError, match="rotor radius"):
         check_rotor_radius(g, 61.0)
     assert default_separations(g) == ((1, 0), (4, 0), (0, 1), (0, 4), (2, 2))
+
+
+def test_kaimal_rews_lines_equal_eq25_of_the_theory_module():
+    # two independent implementations of paper 000 Eq. 25 over the grid's rotor points
+    from turbgen.runs.kaimal import KaimalRun, kaimal_params
+    from turbgen.theory.rotor_effective import rews_spectrum_kaimal
+    from turbgen.validate.expectations import kaimal_theory
+
+    g = Grid(nt=512, dt_s=0.5, x_m=(0.0, 30.0), ny=12, nz=10, dy_m=7.0, dz_m=9.0)
+    run = KaimalRun(kaimal=kaimal_params(14.0, "A", 90.0), grid=g, U_m_s=14.0, seed=1)
+    mask = rotor_mask(g, 35.0)
+    setup = WelchSetup(64, g.dt_s)
+    th = kaimal_theory(run.to_attrs(), g, setup, default_separations(g), mask, np.arange(12), np.arange(10))
+    yy, zz = np.meshgrid(g.y(), g.z(), indexing="ij")
+    j = np.array([1, 5, 40, 200])
+    ref = rews_spectrum_kaimal(th.line_f[j], run.kaimal, 14.0, yy[mask], zz[mask])
+    df = th.line_f[1]
+    np.testing.assert_allclose(2 * th.rews[j] / df, ref, rtol=1e-9)

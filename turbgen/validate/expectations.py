@@ -622,6 +622,11 @@ def _mann_reference(params: MannParams, setup: WelchSetup, U: float, mask, grid:
     conv = 2.0 * 2 * np.pi / U
     out = {f"spectrum_{c}": (f, conv * spec[name]) for c, name in zip(COMPONENTS, ("F11", "F22", "F33"))}
     out["uw_cross_spectrum"] = (f, conv * spec["F13"])
+    from turbgen.theory.rotor_effective import rews_spectrum_mann
+
+    # Eq. 24 for the continuous disc of the rotor radius (the expectation uses the grid's rotor points)
+    radius = float(np.sqrt(mask.sum() * grid.dy_m * grid.dz_m / np.pi))
+    out["rews_spectrum"] = (f[::2], conv * rews_spectrum_mann(k1[::2], params, radius))
     return out
 
 

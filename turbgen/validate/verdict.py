@@ -213,7 +213,8 @@ def judge(est: Estimates, th: Theory) -> list[MetricResult]:
         out.append(_uw(est, th, kernel, bands, exp_auto, k_eff))
     exp_r = kernel.apply(th.rews)
     out.append(_spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
-                         est.rews_psd, exp_r, th.rho(th.rho_rews, f) / est.rews_effective_segments, bands, f, None))
+                         est.rews_psd, exp_r, th.rho(th.rho_rews, f) / est.rews_effective_segments, bands, f,
+                         th.reference.get("rews_spectrum")))
     return out
 
 
