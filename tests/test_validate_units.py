@@ -15,7 +15,7 @@ from turbgen.validate.estimators import (
     welch_series,
 )
 from turbgen.validate.expectations import WelchKernel, _rect_counts, _set_counts
-from turbgen.validate.verdict import coherence_stats
+from turbgen.validate.verdict import COHERENCE_FLOOR, coherence_stats
 from turbgen.errors import ParameterError
 
 
@@ -71,11 +71,13 @@ def test_kernel_of_white_lines_is_flat():
 def test_coherence_stats_match_closed_forms(g):
     n = 50.0
     st = coherence_stats(np.sqrt(g) + 0j, n)
-    # Var coh2 = 2 g (1-g)^2 / n (+ bias^2), Var cocoh = (1 - c^2)^2 / (2n), Var phase = (1-g)/(2 n g)
-    assert st["coh2_sd"] ** 2 == pytest.approx(2 * g * (1 - g) ** 2 / n + ((1 - g) ** 2 / n) ** 2, rel=1e-9)
-    assert st["cocoh_sd"] ** 2 == pytest.approx((1 - g) ** 2 / (2 * n), rel=1e-9)
+    # Var coh2 = 2 g (1-g)^2 / n (+ bias^2), Var cocoh = (1 - c^2)^2 / (2n), Var phase = (1-g)/(2 n g),
+    # each plus the float32 resolution floor
+    fl = COHERENCE_FLOOR**2
+    assert st["coh2_sd"] ** 2 == pytest.approx(2 * g * (1 - g) ** 2 / n + ((1 - g) ** 2 / n) ** 2 + fl, rel=1e-9)
+    assert st["cocoh_sd"] ** 2 == pytest.approx((1 - g) ** 2 / (2 * n) + fl, rel=1e-9)
     if g > 0:
-        assert st["phase_sd"] ** 2 == pytest.approx((1 - g) / (2 * n * g), rel=1e-9)
+        assert st["phase_sd"] ** 2 == pytest.approx((1 - g) / (2 * n * g) + fl, rel=1e-9)
     assert st["coh2_mean"] == pytest.approx(g + (1 - g) ** 2 / n)
 
 
@@ -109,6 +111,8 @@ def test_pair_counts():
 def test_spans_use_whole_chunks_and_enough_segments():
     spans = plan_spans(4096, 1024, 512)
     assert spans == [(0, 2048), (2048, 4096)]
+    # memory cap: 64 x 64 points, u v w float32 = 48 KiB per step; 4 segments of 4096 would need 768 MiB
+    assert plan_spans(65536, 1024, 4096, 3 * 4 * 64 * 64)[0] == (0, 6144)
     assert plan_spans(1000, 128, 64) == [(0, 256), (256, 512), (512, 768), (768, 1000)]
     assert default_nperseg(4096) == 512
     with pytest.raises(ParameterError):

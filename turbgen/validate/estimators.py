@@ -40,8 +40,11 @@ from turbgen.grid import Grid
 
 COMPONENTS = ("u", "v", "w")
 SPAN_SEGMENTS = 4  # a span holds at least this many segment lengths (fewer segments lost at span edges)
-LONG_POINTS_PER_AXIS = 16  # sub-lattice for the plane-pair cross-spectra (bounds memory: nx x segments)
+LONG_POINTS_PER_AXIS = 16  # sub-lattice for the plane-pair cross-spectra: at most 16 x 16 points per plane ...
+LONG_BYTES_PER_TASK = 8 * 2**20  # ... and at most 8 MiB of their spectra per task (nx tasks wait for the pair sums)
 MIN_NPERSEG = 32
+MAX_NPERSEG = 4096  # long records: more segments rather than ever finer bins (4096 x 0.5 s: 0.49 mHz)
+SPAN_BYTES = 256 * 2**20  # a task's u, v, w data stay below this unless one segment needs more
 MOMENT_BLOCK = 64  # time steps per float32 block of the sum of squares (no float64 copy of a span)
 
 
@@ -93,15 +96,19 @@ class WelchSetup:
 
 
 def default_nperseg(nt: int) -> int:
-    """Largest power of two <= nt / 8 (about 15 half-overlapping segments), at least 32 samples."""
+    """Largest power of two <= nt / 8 (about 15 half-overlapping segments), within [32, MAX_NPERSEG] samples."""
     if nt < 4 * MIN_NPERSEG:
         raise ParameterError(f"nt = {nt} is too short to validate (needs >= {4 * MIN_NPERSEG} time steps)")
-    return 2 ** int(math.floor(math.log2(nt / 8))) if nt >= 8 * MIN_NPERSEG else MIN_NPERSEG
+    return min(2 ** int(math.floor(math.log2(nt / 8))) if nt >= 8 * MIN_NPERSEG else MIN_NPERSEG, MAX_NPERSEG)
 
 
-def plan_spans(nt: int, chunk_t: int, nperseg: int) -> list[tuple[int, int]]:
-    """[t0, t1) spans made of whole chunks, each >= SPAN_SEGMENTS x nperseg (the last merged if short)."""
-    group = max(1, math.ceil(SPAN_SEGMENTS * nperseg / chunk_t))
+def plan_spans(nt: int, chunk_t: int, nperseg: int, bytes_per_sample: int = 0) -> list[tuple[int, int]]:
+    """[t0, t1) spans of whole chunks, each >= SPAN_SEGMENTS x nperseg samples if that fits SPAN_BYTES
+    (u, v, w of one plane: ``bytes_per_sample`` per time step), else >= nperseg; the last one merged if short."""
+    target = SPAN_SEGMENTS * nperseg
+    if bytes_per_sample > 0:
+        target = max(nperseg, min(target, SPAN_BYTES // bytes_per_sample))
+    group = max(1, math.ceil(target / chunk_t))
     step = group * chunk_t
     spans = [(t0, min(nt, t0 + step)) for t0 in range(0, nt, step)]
     if len(spans) > 1 and spans[-1][1] - spans[-1][0] < nperseg:
@@ -147,11 +154,18 @@ def check_rotor_radius(grid: Grid, radius_m: float) -> float:
     return r
 
 
-def long_sublattice(n: int) -> np.ndarray:
-    """Indices of an evenly strided sub-lattice of at most LONG_POINTS_PER_AXIS points (centred)."""
-    stride = max(1, math.ceil(n / LONG_POINTS_PER_AXIS))
+def long_sublattice(n: int, per_axis: int = LONG_POINTS_PER_AXIS) -> np.ndarray:
+    """Indices of an evenly strided sub-lattice of at most ``per_axis`` points (centred)."""
+    stride = max(1, math.ceil(n / per_axis))
     idx = np.arange(0, n, stride)
     return idx + (n - 1 - idx[-1]) // 2
+
+
+def long_points_per_axis(setup: WelchSetup, spans) -> int:
+    """Sub-lattice size per axis so one task's kept spectra (segments x bins x points, complex64) fit LONG_BYTES_PER_TASK."""
+    n_seg = max(len(segment_starts(t1 - t0, setup)) for t0, t1 in spans)
+    per_point = max(n_seg, 1) * (setup.nperseg // 2 + 1) * 8
+    return int(max(2, min(LONG_POINTS_PER_AXIS, math.isqrt(max(LONG_BYTES_PER_TASK // per_point, 1)))))
 
 
 @dataclass
@@ -297,10 +311,11 @@ def estimate(fs, *, rotor_radius_m: float = 63.0, nperseg: int | None = None, se
     radius = check_rotor_radius(g, rotor_radius_m)
     mask = rotor_mask(g, radius)
     seps = tuple(separations) if separations is not None else default_separations(g)
-    iy, iz = long_sublattice(g.ny), long_sublattice(g.nz)
+    spans = plan_spans(g.nt, fs.chunk_t, setup.nperseg, 3 * 4 * g.ny * g.nz)
+    per_axis = long_points_per_axis(setup, spans)
+    iy, iz = long_sublattice(g.ny, per_axis), long_sublattice(g.nz, per_axis)
     est = Estimates(setup, g, seps, radius, mask, iy, iz)
     arrays = {c: fs.array(c) for c in COMPONENTS}
-    spans = plan_spans(g.nt, fs.chunk_t, setup.nperseg)
     task = dask.delayed(_task, pure=False)
     pairs = dask.delayed(_plane_pairs, pure=False)
     per_span = []
