@@ -14,7 +14,6 @@ verdict. The uncompressed default field is 3 x 738 MiB; the validator reads it c
 from __future__ import annotations
 
 import argparse
-import json
 import subprocess
 import sys
 import tempfile

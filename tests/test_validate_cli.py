@@ -98,7 +98,8 @@ def test_white_noise_store_fails(tmp_path):
     with create_store(path, GRID, attrs) as w:
         for i, c in enumerate("uvw"):
             for ix in range(GRID.nx):
-                w.write(c, ix, rng.standard_normal((GRID.nt, GRID.ny, GRID.nz)) * attrs["parameters"]["expected_sigma_m_s"][i])
+                sigma = attrs["parameters"]["expected_sigma_m_s"][i]
+                w.write(c, ix, rng.standard_normal((GRID.nt, GRID.ny, GRID.nz)) * sigma)
     r = _run(path, "--json", "--rotor-radius", 30)
     assert r.exit_code == 1
     assert {"spectrum_u", "yz_coherence_u"} <= set(json.loads(r.output)["failed"])

@@ -162,7 +162,8 @@ def long_sublattice(n: int, per_axis: int = LONG_POINTS_PER_AXIS) -> np.ndarray:
 
 
 def long_points_per_axis(setup: WelchSetup, spans) -> int:
-    """Sub-lattice size per axis so one task's kept spectra (segments x bins x points, complex64) fit LONG_BYTES_PER_TASK."""
+    """Sub-lattice points per axis such that one task's kept spectra (segments x bins x points, complex64)
+    fit in LONG_BYTES_PER_TASK."""
     n_seg = max(len(segment_starts(t1 - t0, setup)) for t0, t1 in spans)
     per_point = max(n_seg, 1) * (setup.nperseg // 2 + 1) * 8
     return int(max(2, min(LONG_POINTS_PER_AXIS, math.isqrt(max(LONG_BYTES_PER_TASK // per_point, 1)))))

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -95,7 +96,8 @@ class WelchKernel:
     @classmethod
     def _window_dtft(cls, nu, n):
         """DTFT of the periodic Hann window 0.5 - 0.5 cos(2 pi t / n), t = 0 .. n-1."""
-        return 0.5 * cls._dirichlet(nu, n) - 0.25 * cls._dirichlet(nu - 1.0 / n, n) - 0.25 * cls._dirichlet(nu + 1.0 / n, n)
+        d = cls._dirichlet
+        return 0.5 * d(nu, n) - 0.25 * d(nu - 1.0 / n, n) - 0.25 * d(nu + 1.0 / n, n)
 
     @classmethod
     def _g(cls, m, f, n, dt):
@@ -223,7 +225,10 @@ class _RhoAccumulator:
         self.uw = np.zeros(nn)
 
     def add(self, component: str, coh2: np.ndarray, multiplicity: int, same_plane: bool, n=slice(None)) -> None:
-        """coh2 (nodes, 2ny-1, 2nz-1) between points of two planes (``multiplicity`` ordered plane pairs), nodes ``n``."""
+        """Add coh2 (nodes, 2ny-1, 2nz-1) between the points of two planes at nodes ``n``.
+
+        ``multiplicity``: number of ordered plane pairs with this separation.
+        """
         self.all[component][n] += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
         for s in self.seps:
             self.yz[component][s][n] += (
@@ -372,8 +377,13 @@ CELL_K1_MAX = 8.0  # ... for |k1| <= 8 max(dk2, dk3); beyond, Phi is smooth on t
 CELL_GAUSS = 4
 
 
+@lru_cache(maxsize=8)
+def _leggauss(n: int):
+    return np.polynomial.legendre.leggauss(n)
+
+
 def _gauss(a: float, b: float, n: int = CELL_GAUSS):
-    x, w = np.polynomial.legendre.leggauss(n)
+    x, w = _leggauss(n)
     return 0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w
 
 
@@ -415,13 +425,17 @@ class _MannLattice:
         scale = max(abs(k1), self.dk1 / 4)
         rules2 = [_graded(j * self.dk2, self.dk2, scale) for j in range(-self.r2, self.r2 + 1)]
         rules3 = [_graded(l * self.dk3, self.dk3, scale) for l in range(-self.r3, self.r3 + 1)]
-        out = np.empty((3, 3, len(rules2), len(rules3)))
-        for a, (x2, w2) in enumerate(rules2):
-            for b, (x3, w3) in enumerate(rules3):
-                g1, g2, g3 = np.meshgrid(x1, x2, x3, indexing="ij")
-                w = w1[:, None, None] * w2[None, :, None] * w3[None, None, :]
-                out[:, :, a, b] = np.sum(sheared_tensor(g1, g2, g3, self.params) * w, axis=(2, 3, 4))
-        return out
+        pts, wts, starts = [], [], []
+        for x2, w2 in rules2:
+            for x3, w3 in rules3:
+                starts.append(sum(p.shape[1] for p in pts))
+                g = np.meshgrid(x1, x2, x3, indexing="ij")
+                pts.append(np.stack([a.ravel() for a in g]))
+                wts.append((w1[:, None, None] * w2[None, :, None] * w3[None, None, :]).ravel())
+        k = np.concatenate(pts, axis=1)
+        phi = sheared_tensor(k[0], k[1], k[2], self.params) * np.concatenate(wts)  # one call for all cells
+        cells = np.add.reduceat(phi, starts, axis=2)
+        return cells.reshape(3, 3, len(rules2), len(rules3))
 
     def slabs(self, k1: np.ndarray, batch: int = 8):
         """Yield (index, Phi (3, 3, nyp, nzp) times dk1 dk2 dk3 (cell integrals), 1/tau_e (nyp, nzp) [1/s]) per k1."""

@@ -46,8 +46,8 @@ from turbgen.validate.expectations import Theory, WelchKernel
 
 ALPHA = 1e-3  # family-wise probability that a correct field fails one given metric
 BANDS_PER_DECADE = 5
-FLOAT32_FLOOR = 1e-6
-COHERENCE_FLOOR = 1e-5  # absolute resolution of a coherence estimated from float32 data  # relative resolution floor of float32 data (tolerance on a mean that is exactly 0)
+FLOAT32_FLOOR = 1e-6  # relative resolution of float32 data (tolerance on a mean that is exactly 0)
+COHERENCE_FLOOR = 1e-5  # absolute resolution of a coherence estimated from float32 data
 
 
 @dataclass
