@@ -123,7 +123,7 @@ def _child(case: str, nt: int) -> None:
 
 def _run(case: str, nt: int) -> dict:
     t0 = time.perf_counter()
-    env = {**os.environ, "BENCH_AE": repr(_ae("mann"))}
+    env = {**os.environ, "BENCH_AE": repr(float(_ae("mann")))}
     proc = subprocess.run([sys.executable, __file__, "--child", case, "--nt", str(nt)], capture_output=True, text=True,
                           env=env)  # fmt: skip
     if proc.returncode != 0:
