@@ -2,7 +2,115 @@
 
 from __future__ import annotations
 
+import json
+import math
+
 import click
+import numpy as np
+
+from turbgen.cli.options import parse_floats
+from turbgen.errors import ParameterError, check_positive
+from turbgen.theory.params import LIFETIMES, MannParams, check_wind_speed
+
+
+def _mann_options(f):
+    """Model and evaluation-point options shared by every theory/fit command."""
+    opts = [
+        click.option("--L", "L", type=float, default=49.0, show_default=True, help="Mann length scale L [m]."),
+        click.option("--gamma", type=float, default=3.1, show_default=True, help="Shear anisotropy Γ [-]."),
+        click.option("--ae", type=float, default=None,
+                     help="αε^(2/3) [m^(4/3) s^-2]; default: σ_u of IEC class A at U (or --sigma-u / --ti)."),
+        click.option("--sigma-u", "sigma_u", type=float, default=None, help="Target σ_u [m/s] (sets αε^(2/3))."),
+        click.option("--ti", type=float, default=None, help="Target turbulence intensity σ_u/U [-] (sets αε^(2/3))."),
+        click.option("--lifetime", type=click.Choice(LIFETIMES), default="guo", show_default=True,
+                     help="Eddy lifetime: guo (paper 000 Eq. 6) or mann (Eq. 4)."),
+        click.option("--factor1", type=float, default=1.0, show_default=True, help="Small-k lifetime slope -factor1."),
+        click.option("--factor2", type=float, default=3.5, show_default=True,
+                     help="Large-k slope -(2/3)factor2 of the evolution lifetime."),
+        click.option("--evo", type=float, default=400.0, show_default=True, help="Evolution time constant γ [s]."),
+        click.option("--U", "U", type=float, default=16.0, show_default=True, help="Mean wind speed U [m/s]."),
+        click.option("--k1", "k1_text", default=None, help="Wavenumbers a,b,c [rad/m] (instead of --f)."),
+        click.option("--f", "f_text", default=None, help="Frequencies a,b,c [Hz]; default 40 log-spaced, 1e-3..1 Hz."),
+        click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON (keys: README, theory)."),
+        click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+                     help="Write a PNG plot (paper 000 Fig. 2 style)."),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+def _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U) -> MannParams:
+    """MannParams from the options; αε^(2/3) from --ae, --sigma-u, --ti or IEC class A at U."""
+    from turbgen.theory.kaimal import iec_sigma1_m_s
+    from turbgen.theory.mann_spectra import ae_for_sigma_u
+
+    U = check_wind_speed(U)
+    if sum(v is not None for v in (ae, sigma_u, ti)) > 1:
+        raise ParameterError("give at most one of --ae, --sigma-u, --ti")
+    shape = MannParams(1.0, L, gamma, lifetime, factor1, factor2, evo)
+    if ae is not None:
+        return shape.with_ae(ae)
+    if ti is not None:
+        sigma = check_positive("ti (turbulence intensity)", ti) * U
+    elif sigma_u is not None:
+        sigma = sigma_u
+    else:
+        sigma = iec_sigma1_m_s(U, "A")
+    return shape.with_ae(ae_for_sigma_u(sigma, shape))
+
+
+def _points(k1_text, f_text, U):
+    """(f [Hz], k1 [rad/m]) from --k1 or --f (k1 = 2 pi f / U)."""
+    U = check_wind_speed(U)
+    if k1_text is not None and f_text is not None:
+        raise ParameterError("give either --k1 or --f, not both")
+    if k1_text is not None:
+        k1 = np.array(parse_floats(k1_text, "--k1"))
+        f = k1 * U / (2.0 * math.pi)
+    else:
+        f = np.array(parse_floats(f_text, "--f")) if f_text is not None else np.logspace(-3, 0, 40)
+        k1 = 2.0 * math.pi * f / U
+    if np.any(k1 <= 0):
+        raise ParameterError("--k1 / --f values must be > 0")
+    return f, k1
+
+
+def _emit(columns: dict, as_json: bool, extra: dict | None = None):
+    """Print the columns as JSON (lists) or as an aligned table."""
+    if as_json:
+        out = {k: [float(x) for x in np.atleast_1d(v)] for k, v in columns.items()}
+        out.update(extra or {})
+        click.echo(json.dumps(out))
+        return
+    for k, v in (extra or {}).items():
+        click.echo(f"# {k} = {v}")
+    names = list(columns)
+    click.echo("  ".join(f"{n:>12s}" for n in names))
+    for row in zip(*(np.atleast_1d(columns[n]) for n in names)):
+        click.echo("  ".join(f"{x:12.5g}" for x in row))
+
+
+def _plot(path, x, curves: dict, xlabel: str, ylabel: str, logy=False):
+    """Curves over log x (paper 000 Fig. 2 style), written as PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for label, (y, style) in curves.items():
+        ax.plot(x, y, style, label=label)
+    ax.set_xscale("log")
+    if logy:
+        ax.set_yscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, format="png", dpi=120)
+    plt.close(fig)
 
 
 @click.group()
@@ -10,6 +118,138 @@ def theory():
     """Evaluate model spectra and coherences (Mann, space-time, Kaimal)."""
 
 
+@theory.command()
+@_mann_options
+def spectra(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path):
+    """Mann one-point spectra F_ij(k1) (two-sided, m^3 s^-2; paper 000 Eq. 8)."""
+    from turbgen.theory.mann_spectra import one_point_spectra
+
+    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    f, k1 = _points(k1_text, f_text, U)
+    F = one_point_spectra(k1, p)
+    cols = {"k1": k1, "f": f, **{n: F[n] for n in ("F11", "F22", "F33", "F13")}}
+    _emit(cols, as_json, {"ae": p.ae})
+    if plot_path:
+        curves = {c: (2.0 * k1 * F[n], s) for c, n, s in (("u", "F11", "-"), ("v", "F22", "--"), ("w", "F33", ":"))}
+        _plot(plot_path, f, curves, "f [Hz]", "f S(f) [m² s⁻²]")
+
+
+@theory.command()
+@_mann_options
+@click.option("--dy", type=float, default=20.0, show_default=True, help="Lateral separation [m].")
+@click.option("--dz", type=float, default=20.0, show_default=True, help="Vertical separation [m].")
+@click.option("--components", type=click.Choice(["uu", "vv", "ww", "uw"]), default="uu", show_default=True)
+def coherence(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path,
+              dy, dz, components):
+    """yz-plane coherence of the Mann model: coh2 (Eq. 9) and co-coherence (Eq. 10)."""
+    from turbgen.theory.mann_spectra import yz_coherence
+
+    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    f, k1 = _points(k1_text, f_text, U)
+    i, j = ("uvw".index(components[0]), "uvw".index(components[1]))
+    coh2, cocoh = yz_coherence(k1, p, i, j, dy, dz)
+    _emit({"k1": k1, "f": f, "coh2": coh2, "cocoh": cocoh}, as_json)
+    if plot_path:
+        _plot(plot_path, f, {"coh²": (coh2, "-"), "co-coherence": (cocoh, "--")}, "f [Hz]", "coherence [-]")
+
+
+@theory.command()
+@_mann_options
+@click.option("--dx", type=float, default=100.0, show_default=True, help="Longitudinal separation [m].")
+def longitudinal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path,
+                 dx):
+    """Longitudinal (magnitude-squared) coherence of u from the space-time tensor (paper 000 Eq. 16)."""
+    from turbgen.theory.space_time import longitudinal_coherence
+
+    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    f, k1 = _points(k1_text, f_text, U)
+    coh2 = longitudinal_coherence(f, dx, U, p)
+    _emit({"f": f, "k1": k1, "coh2": coh2}, as_json)
+    if plot_path:
+        _plot(plot_path, f, {f"coh² (Δx = {dx:g} m)": (coh2, "-")}, "f [Hz]", "coherence [-]")
+
+
+@theory.command()
+@_mann_options
+@click.option("--radius", type=float, default=63.0, show_default=True, help="Rotor radius R [m].")
+def rews(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path, radius):
+    """Rotor-effective wind speed spectrum of the Mann model (paper 000 Eq. 24; two-sided, m^3 s^-2)."""
+    from turbgen.theory.mann_spectra import one_point_spectra
+    from turbgen.theory.rotor_effective import rews_spectrum_mann
+
+    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    f, k1 = _points(k1_text, f_text, U)
+    s_rr = rews_spectrum_mann(k1, p, radius)
+    f11 = one_point_spectra(k1, p)["F11"]
+    _emit({"k1": k1, "f": f, "S_RR": s_rr, "F11": f11}, as_json)
+    if plot_path:
+        _plot(plot_path, f, {"point u": (2 * k1 * f11, "--"), f"REWS (R = {radius:g} m)": (2 * k1 * s_rr, "-")},
+              "f [Hz]", "f S(f) [m² s⁻²]")
+
+
 @click.group()
 def fit():
     """Fit Kaimal / exponential-coherence models to the Mann (space-time) model."""
+
+
+@fit.command()
+@_mann_options
+def kaimal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path):
+    """Kaimal σ_i, L_i (paper 000 Eq. 20) and IEC a_yz, Lc (Eq. 21, dy = dz = 20 m) fitted to the Mann model.
+
+    --f / --k1 set the Eq. 20 grid (default 1e-3..1 Hz in 1e-3 Hz steps).
+    """
+    from turbgen.theory.fitting import fit_kaimal_spectra, fit_yz_coherence
+    from turbgen.theory.kaimal import kaimal_spectrum
+    from turbgen.theory.mann_spectra import one_point_spectra
+
+    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    grid = None if (k1_text is None and f_text is None) else _points(k1_text, f_text, U)[0]
+    res = fit_kaimal_spectra(p, U, grid)
+    a_yz, lc = fit_yz_coherence(p, U)
+    out = {"sigma_m_s": list(res["sigma_m_s"]), "length_scales_m": list(res["length_scales_m"]),
+           "a_yz": a_yz, "lc_m": lc, "ae": p.ae}
+    if as_json:
+        click.echo(json.dumps(out))
+    else:
+        click.echo(f"# Mann: ae = {p.ae:.4g}, L = {p.length_scale_m:g} m, Gamma = {p.gamma:g}, U = {U:g} m/s")
+        click.echo(f"{'comp':>5s}  {'sigma [m/s]':>12s}  {'L [m]':>10s}")
+        for c, s, l in zip("uvw", res["sigma_m_s"], res["length_scales_m"]):
+            click.echo(f"{c:>5s}  {s:12.4g}  {l:10.4g}")
+        click.echo(f"a_yz = {a_yz:.4g}, Lc = {lc:.4g} m")
+    if plot_path:
+        f = np.logspace(-3, 0, 60)
+        k1 = 2.0 * math.pi * f / U
+        F = one_point_spectra(k1, p)
+        curves = {}
+        for c, n, s, l in zip("uvw", ("F11", "F22", "F33"), res["sigma_m_s"], res["length_scales_m"]):
+            curves[f"Mann {c}"] = (2.0 * k1 * F[n], "-")
+            curves[f"Kaimal {c}"] = (f * kaimal_spectrum(f, s, l, U), "--")
+        _plot(plot_path, f, curves, "f [Hz]", "f S(f) [m² s⁻²]")
+
+
+@fit.command()
+@_mann_options
+@click.option("--dx", type=float, default=100.0, show_default=True, help="Longitudinal separation [m].")
+def evolution(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path, dx):
+    """a_x, b_x of the exponential longitudinal coherence (Eq. 18) fitted to the space-time model (Eq. 22).
+
+    --f / --k1 set the fitting grid (default 60 log-spaced frequencies, 3e-4..0.5 Hz).
+    """
+    from turbgen.theory.coherence_models import exponential_longitudinal
+    from turbgen.theory.fitting import LONG_F_HZ, fit_longitudinal
+    from turbgen.theory.space_time import longitudinal_coherence
+
+    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    grid = None if (k1_text is None and f_text is None) else _points(k1_text, f_text, U)[0]
+    a_x, b_x = fit_longitudinal(p, U, dx, grid)
+    if as_json:
+        click.echo(json.dumps({"a_x": a_x, "b_x": b_x}))
+    else:
+        click.echo(f"a_x = {a_x:.4g}, b_x = {b_x:.4g} 1/m  (dx = {dx:g} m, gamma = {p.evo_time_s:g} s, U = {U:g} m/s)")
+    if plot_path:
+        f = LONG_F_HZ if grid is None else grid
+        coh2 = longitudinal_coherence(f, dx, U, p)
+        model = exponential_longitudinal(dx, f, U, a_x, b_x) ** 2
+        _plot(plot_path, f, {"space-time (Eq. 16)": (coh2, "-"), "exponential fit (Eq. 18)": (model, "--")},
+              "f [Hz]", "coh² [-]")

@@ -44,8 +44,7 @@ N_GAUSS = 8  # Gauss-Legendre nodes per radial panel
 N_THETA = 64  # trapezoid nodes in angle
 PANEL_LN = 1.0  # radial panel width in ln(kappa)
 X_LO, X_HI = 1e-6, 1e4  # radial range in units of s = sqrt(k1^2 + L^-2)
-X_HI_SEP = 60.0  # largest radial cut (units of s) when a separation or rotor radius is resolved
-SEP_TAIL = 1e-6  # target size of the dropped radial tail with a separation (see _separated_cut)
+SEP_TAIL = 2e-6  # target size of the dropped radial tail with a separation (see _separated_cut)
 _CHUNK_POINTS = 400_000  # tensor evaluations per batch (bounds memory)
 
 COMPONENTS = {"F11": (0, 0), "F22": (1, 1), "F33": (2, 2), "F12": (0, 1), "F13": (0, 2), "F23": (1, 2)}
@@ -63,7 +62,9 @@ def _radial_rule(x_lo: float, x_hi: float, panel_ln: float, n_gauss: int, max_wi
     """Nodes x and weights w with ∫ g(x) x dx ≈ sum w g(x) on [x_lo, x_hi] (x = kappa / s).
 
     Panels are uniform in ln x (width <= panel_ln); each is further split uniformly in ln x so
-    that no sub-panel is wider than ``max_width_over_s`` in x (inf: no splitting).
+    that no sub-panel is wider than ``max_width_over_s`` in x. Without splitting (inf: no
+    separation) a last node at x_hi with weight (3/5) x_hi^2 adds the inertial tail
+    ∫_{x_hi}^inf g x dx of g ~ x^(-11/3).
     """
     gx, gw = _gauss(n_gauss)
     n_pan = int(np.ceil(np.log(x_hi / x_lo) / panel_ln))
@@ -80,14 +81,20 @@ def _radial_rule(x_lo: float, x_hi: float, panel_ln: float, n_gauss: int, max_wi
     t = lo[:, None] + (hi - lo)[:, None] * gx[None, :]
     x = np.exp(t).ravel()
     w = ((hi - lo)[:, None] * gw[None, :]).ravel() * x * x  # dx x = x^2 d(ln x)
+    if not np.isfinite(max_width_over_s):
+        x, w = np.append(x, x_hi), np.append(w, 0.6 * x_hi * x_hi)
     return x, w
 
 
 def _separated_cut(sd: float) -> float:
-    """Radial cut x = kappa/s for separation d: the dropped tail, ~x^(-11/3) min(1, (x s d)^(-3/2))
-    relative to F_ii (power-law tail times the cancellation of its oscillation), stays < SEP_TAIL."""
-    x = (SEP_TAIL * max(sd, 1e-300) ** 1.5) ** (-6.0 / 31.0)
-    return float(np.clip(round(x, 1), 4.0, X_HI_SEP))
+    """Radial cut x = kappa/s with a separation d (s d = ``sd``): the dropped tail is ~x^(-5/3) of F_ii
+    (the kappa^(-8/3) inertial tail of the integrand), reduced by ~(x s d)^(-3/2) by its oscillation
+    when x s d > 1; the cut keeps this estimate below SEP_TAIL (and between 4 s and X_HI s)."""
+    sd = min(max(sd, 1e-300), 1e300)
+    x = (SEP_TAIL * sd**1.5) ** (-6.0 / 19.0)
+    if x * sd < 1.0:  # no cancellation to count on
+        x = SEP_TAIL ** -0.6
+    return float(np.clip(round(x, 1), 4.0, X_HI))
 
 
 def _check_k1(k1) -> np.ndarray:
