@@ -131,7 +131,7 @@ class Theory:
     rho_rews: np.ndarray  # (nn,) over the planes (REWS series)
     sigma_model: dict  # component -> sigma of the full model spectrum [m/s] (information)
     band: dict  # what the grid resolves (stated in the report)
-    uw: np.ndarray | None = None  # (nl,) Mann u-w line covariance
+    uw: np.ndarray | None = None  # (nl,) u-w line covariance (Mann F13; 0 for Kaimal)
     rho_uw: np.ndarray | None = None  # (nn,) cross-component term of the uw variance bound
     long_components: str = "u"
     auto_model: dict | None = None  # Mann: component -> (nl,) lines of the continuous model band-limited to the grid
@@ -342,6 +342,7 @@ def kaimal_theory(attrs: dict, grid: Grid, setup: WelchSetup, seps, mask, iy, iz
         model="kaimal", nt=nt, line_f=line_f, auto=auto, yz=yz, long=long, rews=rews, node_f=node_f,
         rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
         sigma_model=dict(zip(COMPONENTS, kp.sigma_m_s)), band=band, long_components=long_components,
+        uw=np.zeros(line_f.size), rho_uw=np.zeros(node_f.size),  # u and w are synthesised independently
         reference=reference,
     )
 

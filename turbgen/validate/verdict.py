@@ -196,7 +196,7 @@ def _band95(est, sd):
 
 
 def judge(est: Estimates, th: Theory) -> list[MetricResult]:
-    """All metrics of the store (uw only for Mann)."""
+    """All metrics of the store."""
     kernel = WelchKernel(est.setup, est.grid.nt)
     bands = _Bands(est)
     f = est.freqs
@@ -209,8 +209,7 @@ def judge(est: Estimates, th: Theory) -> list[MetricResult]:
     for c in COMPONENTS:
         out.append(_yz(est, th, kernel, bands, c, exp_auto[c], k_eff))
     out.append(_longitudinal(est, th, kernel, bands, exp_auto["u"], k_eff))
-    if th.uw is not None:
-        out.append(_uw(est, th, kernel, bands, exp_auto, k_eff))
+    out.append(_uw(est, th, kernel, bands, exp_auto, k_eff))
     exp_r = kernel.apply(th.rews)
     out.append(_spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
                          est.rews_psd, exp_r, th.rho(th.rho_rews, f) / est.rews_effective_segments, bands, f,
@@ -319,5 +318,6 @@ def _uw(est, th, kernel, bands, exp_auto, k_eff) -> MetricResult:
     tests = bands.tests("co-spectrum/sqrt(SuSw)", co / norm_uw, exp / norm_uw, sd / norm_uw)
     lo, hi = _band95(co[b], sd[b])
     curve = Curve("uw_cross_spectrum", f[b], co[b], exp[b], lo, hi, th.reference.get("uw_cross_spectrum"))
-    return MetricResult("uw_cross_spectrum", "u-w co-spectrum (Reynolds stress)", "m^2/s^2/Hz", tests, [curve])
+    return MetricResult("uw_cross_spectrum", "u-w co-spectrum (Reynolds stress; 0 for Kaimal)", "m^2/s^2/Hz",
+                        tests, [curve])
 
