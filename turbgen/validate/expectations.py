@@ -612,8 +612,9 @@ def mann_theory(attrs: dict, grid: Grid, setup: WelchSetup, seps, mask, iy, iz) 
         k2_min_rad_m=2 * np.pi / (box.nyp * grid.dy_m),
         k3_min_rad_m=2 * np.pi / (box.nzp * grid.dz_m),
         note=(
-            "Mann tensor summed over the box lattice: |k2| <= pi/dy, |k3| <= pi/dz, spacing 2 pi/box size; "
-            f"box {box.nyp} x {box.nzp} points ({box.nyp * grid.dy_m:g} m x {box.nzp * grid.dz_m:g} m)"
+            "Mann tensor summed over the box lattice (cells at the k1 axis integrated): |k2| <= pi/dy, "
+            f"|k3| <= pi/dz, spacing 2 pi/box size; box {box.nyp} x {box.nzp} points "
+            f"({box.nyp * grid.dy_m:g} m x {box.nzp * grid.dz_m:g} m)"
         ),
     )
     from turbgen.theory.mann_spectra import variances
