@@ -25,7 +25,7 @@ import numpy as np
 import pyfftw
 
 from turbgen.errors import ParameterError
-from turbgen.synthesis.mann_stencil import _ODD, BoxShape, MannStencil, expand_k2
+from turbgen.synthesis.mann_stencil import _ODD, BoxShape, MannStencil, expand_k2, w_coefficient
 from turbgen.synthesis.random_streams import complex_normal
 
 COMPONENTS = ("u", "v", "w")
@@ -123,6 +123,8 @@ class MannSnapshots:
         self.threads = self.default_threads(threads)
         self._k1 = box.k1().astype(np.float32)
         self._k2 = box.k2().astype(np.float32)[:, None]
+        self._k2sq = self._k2 * self._k2
+        self._k3sq = (box.k3() ** 2).astype(np.float32)
         self._hermitian_slabs = {0, box.nt // 2} if box.nt % 2 == 0 else {0}
         self._spectra = None
         self._state = None
@@ -226,11 +228,14 @@ class MannSnapshots:
             fresh *= sig[:, None]
             n += fresh
         coef = s.coef[:, :b]
-        for idx in range(5):
+        for idx in range(4):
             expand_k2(st.coef[idx, i0:i1], box.nyp, _ODD[idx], coef[idx])
         a, p, z1, z2, w = coef
         k1 = self._k1[i0:i1, None, None]
         k2 = self._k2
+        q = k1 * k1 + self._k2sq  # (b, nyp, 1)
+        ksq = np.add(q, self._k3sq, out=s.rho[:b])
+        w_coefficient(a, p, q, ksq, w, s.sig[:b])
         n0, n1, n2 = n[:, 0], n[:, 1], n[:, 2]
         mix, tmp, real = s.mix[:b], s.tmp[:b], s.real[:b]
         uh = s.uhat[:b]

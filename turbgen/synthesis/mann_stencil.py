@@ -8,10 +8,11 @@ the stored slab of FFT frequency index i holds the physical wavenumber k1 = -i d
 Compact factor. With a = sqrt(E(k0)/(4 pi))/k0^2, m = k2 n0 - k1 n1 and C = D A (Mann 1998
 Eq. 46-47; turbgen.theory.mann_tensor.tensor_factor) the product u_hat = C n reads
     u_hat_u = P n1 - (A k2) n2 + Z1 m,   u_hat_v = -P n0 + (A k1) n2 + Z2 m,   u_hat_w = W m
-with A = a, P = a k30, Z1 = a zeta1, Z2 = a zeta2, W = a k0^2/k^2, all times sqrt(dk1 dk2 dk3 / 2)
-(the noise has E|n|^2 = 2). Under k2 -> -k2 the coefficients A, P, Z1, W are even and Z2 is
-odd, so only rows k2 >= 0 are stored: 5 float32 numbers per (k1 >= 0, k2 >= 0, k3), i.e.
-5/16 of the full 8-entry float32 factor on the whole half spectrum.
+with A = a, P = a k30, Z1 = a zeta1, Z2 = a zeta2, all times sqrt(dk1 dk2 dk3 / 2) (the noise has
+E|n|^2 = 2), and W = a k0^2/k^2 = (A^2 q + P^2) / (A k^2), q = k1^2 + k2^2, rebuilt when used
+(k0^2 = q + k30^2, k30 = P/A). Under k2 -> -k2 the coefficients A, P, Z1 are even and Z2 is odd,
+so only rows k2 >= 0 are stored: 4 float32 numbers per (k1 >= 0, k2 >= 0, k3), i.e. 1/4 of the
+full 8-entry float32 factor on the whole half spectrum.
 """
 
 from __future__ import annotations
@@ -30,9 +31,9 @@ from turbgen.theory.eddy_lifetime import evolution_lifetime_s
 from turbgen.theory.mann_tensor import sheared_tensor, tensor_factor
 from turbgen.theory.params import MannParams
 
-STENCIL_VERSION = 1
-COEF_NAMES = ("A", "P", "Z1", "Z2", "W")
-_ODD = (False, False, False, True, False)  # parity of each coefficient under k2 -> -k2
+STENCIL_VERSION = 2
+COEF_NAMES = ("A", "P", "Z1", "Z2")
+_ODD = (False, False, False, True)  # parity of each coefficient under k2 -> -k2
 _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0.5 MiB per temporary)
 # Cell-averaged tensor near the k1 axis (Mann 1998: the point value Phi(k) dk is a poor estimate of
 # the cell integral where Phi varies within a cell). On the k1 axis Phi33 = E(k0) / (4 pi k1^2) with
@@ -91,7 +92,7 @@ class BoxShape:
 
 @dataclass(frozen=True, eq=False)
 class MannStencil:
-    """Compact factor ``coef`` (5, nk1, nyp//2+1, nzp) float32, ``inv_tau`` = 1/tau_e [1/s] (None if
+    """Compact factor ``coef`` (4, nk1, nyp//2+1, nzp) float32 (A, P, Z1, Z2), ``inv_tau`` = 1/tau_e [1/s] (None if
     frozen or built with evolving=False: then it serves single snapshots only),
     and the cell-averaged factors near the k1 axis: ``cell_index`` (ncell, 3) int (slab, row, column),
     sorted by slab, and ``cell_factor`` (ncell, 3, 3) float32 (times sqrt(dk1 dk2 dk3 / 2)), which
@@ -117,7 +118,7 @@ class MannStencil:
 def stencil_nbytes(box: BoxShape, with_tau: bool) -> int:
     """Bytes held by the stencil of ``box`` (for memory estimates before building it)."""
     per = box.nk1 * box.nk2_half * box.nzp * 4
-    return per * (6 if with_tau else 5)
+    return per * (5 if with_tau else 4)
 
 
 def expand_k2(half: np.ndarray, nyp: int, odd: bool, out: np.ndarray) -> np.ndarray:
@@ -133,17 +134,31 @@ def expand_k2(half: np.ndarray, nyp: int, odd: bool, out: np.ndarray) -> np.ndar
 
 
 def _compact(c, k1, k2):
-    """(A, P, Z1, Z2, W) from the factor C (3, 3, ...) of tensor_factor, exactly (see module docstring)."""
+    """(A, P, Z1, Z2) from the factor C (3, 3, ...) of tensor_factor, exactly (see module docstring)."""
     k1, k2 = np.broadcast_arrays(k1, k2, c[0, 0])[:2]
     q = k1 * k1 + k2 * k2
     with np.errstate(divide="ignore", invalid="ignore"):
         a = np.where(q > 0, (c[1, 2] * k1 - c[0, 2] * k2) / q, 0.0)
-        w = np.where(q > 0, (c[2, 0] * k2 - c[2, 1] * k1) / q, 0.0)
         on_axis = k1 == 0  # the k1 = 0 slab: zeta2 = 0, C01 = a k30, C00 = a zeta1 k2
         z2 = np.where(on_axis, np.where(k2 != 0, (c[1, 0] + c[0, 1]) / k2, 0.0), -c[1, 1] / k1)
         p = np.where(on_axis, c[0, 1], z2 * k2 - c[1, 0])
         z1 = np.where(on_axis, np.where(k2 != 0, c[0, 0] / k2, 0.0), (p - c[0, 1]) / k1)
-    return a, p, z1, z2, w
+    return a, p, z1, z2
+
+
+def w_coefficient(a, p, q, ksq, out, scratch):
+    """W = a k0^2 / k^2 = (A^2 q + P^2) / (A k^2) into ``out`` (0 where A k^2 = 0: there m = 0).
+
+    ``q`` = k1^2 + k2^2 and ``ksq`` = |k|^2 broadcast against ``a``; ``scratch`` like ``out``.
+    """
+    np.multiply(a, a, out=out)
+    out *= q
+    np.multiply(p, p, out=scratch)
+    out += scratch
+    np.multiply(a, ksq, out=scratch)
+    np.divide(out, scratch, out=out, where=scratch != 0)
+    out[scratch == 0] = 0
+    return out
 
 
 def _build(params: MannParams, box: BoxShape, with_tau: bool) -> MannStencil:
@@ -152,7 +167,7 @@ def _build(params: MannParams, box: BoxShape, with_tau: bool) -> MannStencil:
     k1_all = box.k1()
     k2 = box.k2()[:nh][None, :, None]
     k3 = box.k3()[None, None, :]
-    coef = np.empty((5, nk1, nh, nzp), dtype=np.float32)
+    coef = np.empty((4, nk1, nh, nzp), dtype=np.float32)
     inv_tau = np.empty((nk1, nh, nzp), dtype=np.float32) if with_tau else None
     step = max(1, _BUILD_POINTS // (nh * nzp))
 
@@ -255,7 +270,7 @@ def build_stencil(
             with np.load(path) as data:
                 coef, index, factor = data["coef"], data["cell_index"], data["cell_factor"]
                 inv_tau = data["inv_tau"] if with_tau else None
-            if coef.shape == (5, box.nk1, box.nk2_half, box.nzp):
+            if coef.shape == (4, box.nk1, box.nk2_half, box.nzp):
                 return MannStencil(params, box, coef, inv_tau, index, factor)
         except (OSError, ValueError, KeyError):
             pass  # unreadable cache entry: rebuild and replace it
@@ -279,11 +294,13 @@ def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
     box = stencil.box
     full = [
         expand_k2(stencil.coef[n, i].astype(float), box.nyp, _ODD[n], np.empty((box.nyp, box.nzp)))
-        for n in range(5)
+        for n in range(4)
     ]
-    a, p, z1, z2, w = full
+    a, p, z1, z2 = full
     k1 = box.k1()[i]
     k2 = box.k2()[:, None] * np.ones((1, box.nzp))
+    q = k1 * k1 + k2 * k2
+    w = w_coefficient(a, p, q, q + box.k3()[None, :] ** 2, np.empty_like(a), np.empty_like(a))
     c = np.zeros((3, 3, box.nyp, box.nzp))
     # u = P n1 - A k2 n2 + Z1 (k2 n0 - k1 n1); v = -P n0 + A k1 n2 + Z2 (k2 n0 - k1 n1); w = W (k2 n0 - k1 n1)
     c[0] = [z1 * k2, p - z1 * k1, -a * k2]
