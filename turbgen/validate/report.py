@@ -150,6 +150,12 @@ def _draw(ax, c: Curve, color, logy: bool, label_prefix: str = ""):
         ax.set_yscale("log")
 
 
+def _premultiplied(c: Curve) -> Curve:
+    ref = None if c.reference is None else (c.reference[0], c.reference[0] * c.reference[1])
+    f = c.f_hz
+    return Curve(c.label, f, f * c.estimate, f * c.expected, f * c.lower, f * c.upper, ref)
+
+
 def plots(report, directory) -> list[Path]:
     """One PNG per metric with curves (estimate with 95 % band, theory line) in ``directory``."""
     import matplotlib
@@ -168,8 +174,13 @@ def plots(report, directory) -> list[Path]:
         else:
             fig, ax = plt.subplots(figsize=(6, 4))
             c = m.curves[0]
-            _draw(ax, c, "C0", logy=m.name != "uw_cross_spectrum")
-            ax.set_ylabel(f"S(f) [{m.quantity}]")
+            if m.name == "uw_cross_spectrum":  # premultiplied, linear axis: the sign and the peak show
+                c = _premultiplied(c)
+                _draw(ax, c, "C0", logy=False)
+                ax.set_ylabel("f Co_uw(f) [m^2/s^2]")
+            else:
+                _draw(ax, c, "C0", logy=True)
+                ax.set_ylabel(f"S(f) [{m.quantity}]")
             ax.set_xlabel("f [Hz]")
             ax.legend(fontsize=8)
         fig.suptitle(f"{m.title}: {'pass' if m.passed else 'FAIL'} (max|z| {m.max_abs_z:.1f}, z_crit {m.z_crit:.1f})",

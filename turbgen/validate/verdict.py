@@ -245,8 +245,9 @@ def _spectrum(name, title, estimate, expected, rel_var, bands: _Bands, f, refere
     sd = expected * np.sqrt(rel_var)
     tests = bands.tests(name.split("_")[-1], estimate, expected, sd, kind="chi2")
     b = bands.bins
-    lo, hi = _band95(estimate[b], sd[b])
-    curve = Curve(name, f[b], estimate[b], expected[b], np.maximum(lo, 0), hi, reference)
+    nu = 2.0 / rel_var[b]  # 95 % confidence interval of a chi2_nu/nu estimate (always positive)
+    lo, hi = estimate[b] * nu / chi2.ppf(0.975, nu), estimate[b] * nu / chi2.ppf(0.025, nu)
+    curve = Curve(name, f[b], estimate[b], expected[b], lo, hi, reference)
     return MetricResult(name, title, "m^2/s^2/Hz", tests, [curve])
 
 
