@@ -266,6 +266,10 @@ def _task(arrays, ix: int, t0: int, t1: int, setup: WelchSetup, seps, mask, iy, 
     return out
 
 
+def _without_sub(part: dict) -> dict:
+    return {k: v for k, v in part.items() if k != "sub"}
+
+
 def _plane_pairs(subs: list[np.ndarray]) -> np.ndarray:
     """Cross-spectra sums (nx, nx, nf) between the planes of one span: sum over segments, points of conj(X_p) X_q."""
     x = np.stack(subs)  # (nx, nseg, nf, P)
@@ -319,11 +323,13 @@ def estimate(fs, *, rotor_radius_m: float = 63.0, nperseg: int | None = None, se
     arrays = {c: fs.array(c) for c in COMPONENTS}
     task = dask.delayed(_task, pure=False)
     pairs = dask.delayed(_plane_pairs, pure=False)
+    strip = dask.delayed(_without_sub, pure=False)
     per_span = []
     for t0, t1 in spans:
         parts = [task(arrays, ix, t0, t1, setup, seps, mask, iy, iz) for ix in range(g.nx)]
-        per_span.append((parts, pairs([p["sub"] for p in parts])))
-    with _TqdmCallback(total=len(spans) * (g.nx * 2 + 1), desc="validate"):
+        # the kept sub-lattice spectra feed the plane-pair sums only; the output holds the small sums
+        per_span.append(([strip(p) for p in parts], pairs([p["sub"] for p in parts])))
+    with _TqdmCallback(total=len(spans) * (g.nx * 3 + 1), desc="validate"):
         results = dask.compute(per_span, scheduler="threads", num_workers=workers or os.cpu_count())[0]
     _combine(est, spans, results)
     return est
