@@ -114,12 +114,21 @@ def test_per_slab_energy_matches_the_discrete_oracle(small):
     s = _mode_power(small)
     n_seeds = 300
     acc = np.zeros((3, box.nk1))
+    acc_uw = np.zeros(box.nk1)
     for seed in range(n_seeds):
         uh = _spectrum(mann_box(small, box.nyp, box.nzp, seed).transpose(1, 2, 3, 0))
         acc += (np.abs(uh) ** 2).sum(axis=(1, 2)).T
+        acc_uw += np.real(uh[..., 0] * np.conj(uh[..., 2])).sum(axis=(1, 2))
     mean = acc / n_seeds
     expect = s.sum(axis=(2, 3))
-    np.testing.assert_allclose(expect, np.einsum("iis->is", discrete_spectra(small)), rtol=1e-10)
+    oracle = discrete_spectra(small)
+    np.testing.assert_allclose(expect, np.einsum("iis->is", oracle), rtol=1e-10)
+    # uw co-spectrum per slab: Var Re(u w*) <= s_u s_w per mode (x2 on the Hermitian slabs)
+    var_uw = (s[0] * s[2]).sum(axis=(1, 2))
+    var_uw[[0, box.nk1 - 1]] *= 2.0
+    z_uw = (acc_uw / n_seeds - oracle[0, 2]) / np.sqrt(var_uw / n_seeds)
+    assert np.abs(z_uw).max() < Z_MAX, z_uw
+    assert np.all(oracle[0, 2, 1:] < 0) and np.all(acc_uw[1:4] < 0)  # shear: negative uw at low k1
     # Var of the slab sum: sum_k s_k^2 over independent modes; on the Hermitian slabs the pair
     # (k, -k) is one complex number counted twice, Var = 2 sum_k s_k^2.
     var = (s**2).sum(axis=(2, 3))
