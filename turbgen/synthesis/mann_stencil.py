@@ -32,8 +32,7 @@ from turbgen.theory.mann_tensor import sheared_tensor, tensor_factor
 from turbgen.theory.params import MannParams
 
 STENCIL_VERSION = 2
-COEF_NAMES = ("A", "P", "Z1", "Z2")
-_ODD = (False, False, False, True)  # parity of each coefficient under k2 -> -k2
+_ODD = (False, False, False, True)  # parity of A, P, Z1, Z2 under k2 -> -k2
 _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0.5 MiB per temporary)
 # Cell-averaged tensor near the k1 axis (Mann 1998: the point value Phi(k) dk is a poor estimate of
 # the cell integral where Phi varies within a cell). On the k1 axis Phi33 = E(k0) / (4 pi k1^2) with
@@ -104,10 +103,6 @@ class MannStencil:
     inv_tau: np.ndarray | None
     cell_index: np.ndarray
     cell_factor: np.ndarray
-
-    @property
-    def nbytes(self) -> int:
-        return self.coef.nbytes + (0 if self.inv_tau is None else self.inv_tau.nbytes)
 
     def cells_in(self, i0: int, i1: int) -> slice:
         """Rows of cell_index / cell_factor whose slab lies in [i0, i1)."""
