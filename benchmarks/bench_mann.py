@@ -13,7 +13,7 @@ its children, e.g. hipersim's worker pool):
           by the parent process and passed to the cases.
   floor   the bare inverse real FFTs of the same transforms (pyfftw, all cores): one
           nt x 128 x 128 transform timed and multiplied by 3 components x snapshots.
-Spacing of all cases: dx = U dt = 8 m, dy = dz = 4.8 m; L = 49 m, Gamma = 3.1, ae for sigma_u = 2.816 m/s.
+Spacing of all cases: dx = U dt = 8 m, dy = dz = 4.7 m (the default grid); L = 49 m, Gamma = 3.1, ae for sigma_u = 2.816 m/s.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ import sys
 import tempfile
 import time
 
-L_M, GAMMA, DX, DY = 49.0, 3.1, 8.0, 4.8
+L_M, GAMMA, DX, DY = 49.0, 3.1, 8.0, 4.7
 N_PLANES = 11
 
 

@@ -30,13 +30,15 @@ def small_run(**kw) -> MannRun:
 def test_defaults_are_the_paper_case():
     run = MannRun.from_mapping({})
     g = run.grid
-    assert (g.nt, g.dt_s, g.ny, g.nz, g.dy_m, g.dz_m) == (4096, 0.5, 64, 64, 4.8, 4.8)
+    assert (g.nt, g.dt_s, g.ny, g.nz, g.dy_m, g.dz_m) == (4096, 0.5, 64, 64, 4.7, 4.7)
     assert g.x_m == DEFAULT_PLANES_M and len(g.x_m) == 11 and g.x_m[-1] == pytest.approx(169.7)
     p = run.params
     assert (p.length_scale_m, p.gamma, p.evo_time_s, p.lifetime, run.U_m_s, run.seed) == (49, 3.1, 400, "guo", 16, 1)
     assert (run.hub_height_m, run.pad_yz) == (150.0, 2)
     assert p.ae == pytest.approx(ae_for_sigma_u(iec_sigma1_m_s(16.0, "A"), p), rel=1e-12)
-    assert 60 * 4.8 < g.ny * g.dy_m < 330  # a ~300 m wide box
+    assert 290 < g.ny * g.dy_m < 310  # a ~300 m wide box
+    # ... that stays above the ground at the default hub height (exports need hub + z > 0)
+    assert 150.0 + g.z()[0] > 0
     assert run.default_store_name() == "mann_U16_L49_G3.1_evo400_s1.zarr"
 
 

@@ -24,5 +24,5 @@ MANN_DEFAULTS = {
     "pad_yz": 2,  # synthesise a box 2x wider in y and z and crop (periodicity of Mann boxes)
 }
 
-# Grid: 4096 samples at 0.5 s (2048 s, dx = U dt); 64 x 64 points, 4.8 m apart (a ~300 m box).
-MANN_GRID = {"nt": 4096, "dt_s": 0.5, "x_m": DEFAULT_PLANES_M, "ny": 64, "nz": 64, "dy_m": 4.8, "dz_m": 4.8}
+# Grid: 4096 samples at 0.5 s (2048 s, dx = U dt); 64 x 64 points, 4.7 m apart: a 296 m box whose lowest row stays 2 m above ground at hub height 150 m.
+MANN_GRID = {"nt": 4096, "dt_s": 0.5, "x_m": DEFAULT_PLANES_M, "ny": 64, "nz": 64, "dy_m": 4.7, "dz_m": 4.7}
