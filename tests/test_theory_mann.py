@@ -76,8 +76,8 @@ def test_coherence_convergence():
     a = _quad(k1, IEC, {}, d, ((0, 0), (0, 2)))
     b = _quad(k1, IEC, rule, d, ((0, 0), (0, 2)))
     a0 = _quad(k1, IEC, {})
-    assert np.max(np.abs(a[(0, 0)] - b[(0, 0)]) / a0[(0, 0)]) < 1e-3  # measured <= 2e-4
-    assert np.max(np.abs(a[(0, 2)] - b[(0, 2)]) / np.sqrt(a0[(0, 0)] * a0[(2, 2)])) < 1e-3
+    assert np.max(np.abs(a[(0, 0)] - b[(0, 0)]) / a0[(0, 0)]) < 5e-4  # measured <= 7e-5
+    assert np.max(np.abs(a[(0, 2)] - b[(0, 2)]) / np.sqrt(a0[(0, 0)] * a0[(2, 2)])) < 2e-4  # measured 1e-5
 
 
 def test_coherence_limits_and_monotonicity():
@@ -123,16 +123,16 @@ def test_longitudinal_coherence():
     assert np.all(c100 < c50) and np.all(np.diff(c100) < 0)
 
 
-def test_rews_limits():
+def test_rews_limits(monkeypatch):
+    from turbgen.theory import rotor_effective
+
     k1 = np.logspace(-3, 0, 6)
     f11 = ms.one_point_spectra(k1, NEUTRAL)["F11"]
-    np.testing.assert_allclose(rews_spectrum_mann(k1, NEUTRAL, 1e-3), f11, rtol=1e-4)  # measured 3e-5 (radial cut)
+    np.testing.assert_allclose(rews_spectrum_mann(k1, NEUTRAL, 1e-5), f11, rtol=1e-6)
     big = rews_spectrum_mann(k1, NEUTRAL, 63.0)
     assert np.all(big < f11) and np.all(np.diff(big / f11) < 0)
-    # refined radial resolution changes the result by < 1e-4 relative
-    kappa, w, g = ms.perpendicular_quadrature(k1, NEUTRAL, ((0, 0),), resolve_m=126.0,
-                                              _rule=dict(n_gauss=12, panel_ln=0.5, x_hi_sep=60.0))
-    from turbgen.theory.rotor_effective import _disk_filter
-
-    ref = (w * g[(0, 0)] * _disk_filter(kappa * 63.0)).sum(-1)
-    assert np.max(np.abs(big / ref - 1)) < 1e-4
+    # resolving the J1^2 oscillation much further changes the result by < 1e-5 relative (measured 1e-6)
+    monkeypatch.setattr(rotor_effective, "Z_SMOOTH", 200.0)
+    monkeypatch.setattr(rotor_effective, "SMOOTH_S", 16.0)
+    ref = rews_spectrum_mann(k1, NEUTRAL, 63.0)
+    assert np.max(np.abs(big / ref - 1)) < 1e-5

@@ -6,26 +6,28 @@ and the one-sided frequency spectrum is S_i(f) = 2 F_ii(k1) 2 pi / U (f S_i = 2 
 Quadrature of F_ij(k1, dy, dz) = ∫ Phi_ij(k) exp(i(k2 dy + k3 dz)) dk2 dk3 (Eq. 8)
 -------------------------------------------------------------------------------------
 Polar coordinates k2 = kappa cos(theta), k3 = kappa sin(theta); beta(|k|) is constant on circles.
-* Radial: Gauss-Legendre panels (N_GAUSS = 8 nodes) in ln(kappa), panel width PANEL_LN = 1, over
-  kappa = s*[1e-6, 1e4] with s = sqrt(k1^2 + L^-2) (the scale of the integrand at every k1). The
-  integrand kappa^2 Phi falls as kappa^2 below and as kappa^(-11/3) above, so both tails are
-  below 1e-12 relative.
-* Angle: trapezoid rule with N_THETA = 64 points (periodic integrand -> spectral accuracy).
+* Radial: Gauss-Legendre panels (N_GAUSS = 8 nodes, width PANEL_LN = 1 in ln kappa) over
+  kappa = s*[1e-6, 1e4], s = sqrt(k1^2 + L^-2) (the scale of the integrand at every k1), plus the
+  inertial tail beyond 1e4 s in closed form (integrand ~ kappa^(-8/3): without it the cut costs
+  ~1e-7). Below 1e-6 s the integrand ~ kappa^3 leaves < 1e-15.
+* Angle: trapezoid rule (periodic -> spectral accuracy) with N_THETA = 64 nodes for k1 L >= 0.3,
+  256 for 0.01 <= k1 L < 0.3 and 512 below: at k1 L << 1 the integrand has angular features of
+  width ~k1/kappa around k2 = 0.
 * With a separation d = sqrt(dy^2 + dz^2) > 0 the angular integral uses the angular Fourier
-  coefficients c_n(kappa) of Phi (FFT of the 64 samples) and Jacobi-Anger,
+  coefficients c_n(kappa) (FFT of the samples) and Jacobi-Anger,
   ∫ Phi e^{i kappa d cos(theta - theta_d)} dtheta = 2 pi sum_n c_n i^n J_n(kappa d) e^{i n theta_d},
-  exact in angle for any kappa d. Radially, every panel is split (uniformly in ln kappa) so that
-  no sub-panel is wider than pi/d in kappa, and the radial range is cut at kappa = X_HI_SEP*s = 60 s
-  (the part of F_ii beyond is < 1e-7 relative, an upper bound of what the cut can change in
-  |F_ij|/F_ii). The same splitting resolves the J1^2(kappa R) weight of the rotor average.
-Measured accuracy (tests/test_theory_mann.py, against a grid with 2x the panels, 16 Gauss
-nodes and 128 angles, Gamma = 3.9, k1 L in [1e-3, 1e3]): F_ii relative error < 1e-8; one-point
-co-spectrum F13 < 1e-7 relative to sqrt(F11 F33); yz coherences (dy = dz = 20 m) < 1e-6
-absolute; Gamma = 0 agrees with the isotropic closed form (9/55) ae L^(5/3) (L^-2 + k1^2)^(-5/6)
-to < 1e-9 relative.
-Variances integrate F_ii over k1 with Gauss panels in ln(k1 L) on [1e-6, 1e5] plus the
-inertial-range tail (3/2) K F(K) beyond K = 1e5/L; at Gamma = 0 they match
-(1/3) B(5/2, 1/3) ae L^(2/3) to < 1e-6 relative.
+  exact in angle for any kappa d. Radially every panel is split (uniformly in ln kappa) so that no
+  sub-panel is wider than pi/d, and the range is cut where the dropped oscillating tail is
+  estimated below SEP_TAIL of F_ii (_separated_cut).
+Measured accuracy (tests/test_theory_mann.py and a sweep over Gamma = 2.4-3.9, L = 30-140 m,
+k1 L in [1e-3, 1e3], against 2x the panels, 10-12 Gauss nodes, 256-1024 angles): F_ii <= 4e-6
+relative, F13 <= 1e-7 of sqrt(F11 F33); cross-spectra at dy, dz up to 60 m <= 7e-5 of F_ii
+(so coherences to ~1e-4 absolute); Gamma = 0 matches the isotropic closed form
+F11 = (9/55) ae (L^-2 + k1^2)^(-5/6) to 1e-6 relative.
+Variances integrate F_ii over k1 with Gauss panels in ln(k1 L) on [1e-6, 1e5] plus the inertial
+tail (3/2) K F(K) beyond K = 1e5/L; at Gamma = 0 they match (1/3) B(5/2, 1/3) ae L^(2/3) to 1e-6.
+Cost: ~0.25 s for 100 k1 values of one-point spectra, ~1.6 s for a yz coherence at d = 28 m up
+to k1 = 1 rad/m (2-core machine).
 """
 
 from __future__ import annotations
@@ -44,7 +46,7 @@ N_GAUSS = 8  # Gauss-Legendre nodes per radial panel
 N_THETA = 64  # trapezoid nodes in angle
 PANEL_LN = 1.0  # radial panel width in ln(kappa)
 X_LO, X_HI = 1e-6, 1e4  # radial range in units of s = sqrt(k1^2 + L^-2)
-SEP_TAIL = 2e-6  # target size of the dropped radial tail with a separation (see _separated_cut)
+SEP_TAIL = 3e-5  # target size of the dropped radial tail with a separation (see _separated_cut)
 _CHUNK_POINTS = 400_000  # tensor evaluations per batch (bounds memory)
 
 COMPONENTS = {"F11": (0, 0), "F22": (1, 1), "F33": (2, 2), "F12": (0, 1), "F13": (0, 2), "F23": (1, 2)}
@@ -58,13 +60,14 @@ def _gauss(n: int):
 
 
 @lru_cache(maxsize=64)
-def _radial_rule(x_lo: float, x_hi: float, panel_ln: float, n_gauss: int, max_width_over_s: float):
+def _radial_rule(x_lo: float, x_hi: float, panel_ln: float, n_gauss: int, max_width_over_s: float,
+                 split_below: float = np.inf, tail: bool = False):
     """Nodes x and weights w with ∫ g(x) x dx ≈ sum w g(x) on [x_lo, x_hi] (x = kappa / s).
 
-    Panels are uniform in ln x (width <= panel_ln); each is further split uniformly in ln x so
-    that no sub-panel is wider than ``max_width_over_s`` in x. Without splitting (inf: no
-    separation) a last node at x_hi with weight (3/5) x_hi^2 adds the inertial tail
-    ∫_{x_hi}^inf g x dx of g ~ x^(-11/3).
+    Panels are uniform in ln x (width <= panel_ln); those starting below ``split_below`` are split
+    uniformly in ln x so that no sub-panel is wider than ``max_width_over_s`` in x. With ``tail``
+    a last node at x_hi with weight (3/5) x_hi^2 adds the inertial tail ∫_{x_hi}^inf g x dx of
+    g ~ x^(-11/3).
     """
     gx, gw = _gauss(n_gauss)
     n_pan = int(np.ceil(np.log(x_hi / x_lo) / panel_ln))
@@ -73,7 +76,7 @@ def _radial_rule(x_lo: float, x_hi: float, panel_ln: float, n_gauss: int, max_wi
     for a, b in zip(edges[:-1], edges[1:]):
         # m sub-panels uniform in ln x: the widest (last) one is e^b (1 - e^(-(b - a)/m)) wide
         m = 1
-        if max_width_over_s < np.exp(b) - np.exp(a):
+        if np.exp(a) < split_below and max_width_over_s < np.exp(b) - np.exp(a):
             m = int(np.ceil((b - a) / -np.log1p(-max_width_over_s / np.exp(b))))
         sub.append(np.linspace(a, b, m + 1))
     lo = np.concatenate([s[:-1] for s in sub])
@@ -81,7 +84,7 @@ def _radial_rule(x_lo: float, x_hi: float, panel_ln: float, n_gauss: int, max_wi
     t = lo[:, None] + (hi - lo)[:, None] * gx[None, :]
     x = np.exp(t).ravel()
     w = ((hi - lo)[:, None] * gw[None, :]).ravel() * x * x  # dx x = x^2 d(ln x)
-    if not np.isfinite(max_width_over_s):
+    if tail:
         x, w = np.append(x, x_hi), np.append(w, 0.6 * x_hi * x_hi)
     return x, w
 
@@ -105,7 +108,8 @@ def _check_k1(k1) -> np.ndarray:
 
 
 def perpendicular_quadrature(
-    k1, params: MannParams, pairs, dy_m: float = 0.0, dz_m: float = 0.0, resolve_m: float = 0.0, _rule=None
+    k1, params: MannParams, pairs, dy_m: float = 0.0, dz_m: float = 0.0, resolve_m: float = 0.0,
+    resolve_kappa_max: float = np.inf, _rule=None
 ):
     """Angular integrals on the radial nodes of the (k2, k3) plane, for every k1.
 
@@ -113,29 +117,31 @@ def perpendicular_quadrature(
     ≈ sum weights * g(kappa), and G[(i, j)] = ∫_0^{2pi} Phi_ij(k1, kappa, theta) exp(i kappa d
     cos(theta - theta_d)) dtheta (complex if a separation is given, else real). Any radial weight
     that depends on |k| or kappa only (space-time decay, rotor average) is applied by the caller;
-    ``resolve_m`` is the length whose oscillation exp(i kappa resolve_m) the radial panels must resolve.
+    ``resolve_m`` (no separation only) is the length whose oscillation exp(i kappa resolve_m) the radial
+    panels resolve for kappa < ``resolve_kappa_max`` [rad/m] (scalar or per k1; the caller smooths its
+    weight beyond).
     This is the engine behind Eq. 8, 16 and 24 (module docstring: rule and accuracy).
     """
     k1 = _check_k1(k1)
     dy = check_finite("dy (m)", dy_m)
     dz = check_finite("dz (m)", dz_m)
     d = float(np.hypot(dy, dz))
-    res = max(d, check_finite("resolution length (m)", resolve_m))
+    resolve_m = check_finite("resolution length (m)", resolve_m)
     rule = _rule or {}
     s_all = np.sqrt(k1 * k1 + params.length_scale_m**-2)
     per_k1 = []
-    for s in s_all:
-        if res > 0:
-            per_k1.append(
-                _radial_rule(
-                    rule.get("x_lo", X_LO), rule.get("x_hi_sep", _separated_cut(s * res)), rule.get("panel_ln", PANEL_LN),
-                    rule.get("n_gauss", N_GAUSS), float(np.pi / (res * s)),
-                )
-            )
+    x_lo, x_hi = rule.get("x_lo", X_LO), rule.get("x_hi", X_HI)
+    panel_ln, n_gauss = rule.get("panel_ln", PANEL_LN), rule.get("n_gauss", N_GAUSS)
+    kappa_res = np.broadcast_to(np.asarray(resolve_kappa_max, dtype=float), k1.shape)
+    for s, k_res in zip(s_all, kappa_res):
+        if d > 0:  # oscillating integrand: resolve it up to a cut that bounds the dropped tail
+            cut = rule.get("x_hi_sep", _separated_cut(s * d))
+            per_k1.append(_radial_rule(x_lo, cut, panel_ln, n_gauss, float(np.pi / (d * s))))
+        elif resolve_m > 0:  # smooth angular integrals, an oscillating radial weight below resolve_kappa_max
+            per_k1.append(_radial_rule(x_lo, x_hi, panel_ln, n_gauss, float(np.pi / (resolve_m * s)),
+                                       float(k_res / s), True))
         else:
-            per_k1.append(
-                _radial_rule(rule.get("x_lo", X_LO), rule.get("x_hi", X_HI), rule.get("panel_ln", PANEL_LN), rule.get("n_gauss", N_GAUSS), np.inf)
-            )
+            per_k1.append(_radial_rule(x_lo, x_hi, panel_ln, n_gauss, np.inf, np.inf, True))
     n_r = max(len(x) for x, _ in per_k1)
     kappa = np.empty((k1.size, n_r))
     weights = np.zeros((k1.size, n_r))
@@ -143,24 +149,29 @@ def perpendicular_quadrature(
         kappa[m, : x.size] = x * s
         kappa[m, x.size :] = x[-1] * s  # padding nodes carry zero weight
         weights[m, : x.size] = w * s * s
-    out = {p: np.empty(kappa.shape, dtype=complex if d > 0 else float) for p in pairs}
+    n_nodes = np.array([x.size for x, _ in per_k1])
+    out = {p: np.zeros(kappa.shape, dtype=complex if d > 0 else float) for p in pairs}
     n_theta_all = _angle_count(np.abs(k1) * params.length_scale_m, rule)
     for n_theta in np.unique(n_theta_all):
         theta = 2.0 * np.pi * np.arange(n_theta) / n_theta
         cos_t, sin_t = np.cos(theta), np.sin(theta)
         idx = np.flatnonzero(n_theta_all == n_theta)
-        rows = max(1, _CHUNK_POINTS // (n_r * n_theta))
-        for start in range(0, idx.size, rows):
+        idx = idx[np.argsort(n_nodes[idx], kind="stable")]  # similar node counts share a batch
+        start = 0
+        while start < idx.size:
+            rows = max(1, _CHUNK_POINTS // (int(n_nodes[idx[start]]) * n_theta))
             sl = idx[start : start + rows]
-            kk = kappa[sl]
+            start += rows
+            nr = int(n_nodes[sl].max())  # only the padding beyond the longest row in the batch is skipped
+            kk = kappa[sl, :nr]
             kk1 = k1[sl, None]
             beta = shear_distortion_beta(np.sqrt(kk1 * kk1 + kk * kk), params)[..., None]
             phi = sheared_tensor(kk1[..., None], kk[..., None] * cos_t, kk[..., None] * sin_t, params, beta=beta)
             for p in pairs:
                 if d == 0:
-                    out[p][sl] = 2.0 * np.pi * phi[p[0], p[1]].mean(axis=-1)
+                    out[p][sl, :nr] = 2.0 * np.pi * phi[p[0], p[1]].mean(axis=-1)
                 else:
-                    out[p][sl] = _jacobi_anger(phi[p[0], p[1]], kk * d, float(np.arctan2(dz, dy)))
+                    out[p][sl, :nr] = _jacobi_anger(phi[p[0], p[1]], kk * d, float(np.arctan2(dz, dy)))
     return kappa, weights, out
 
 

@@ -17,22 +17,31 @@ from turbgen.theory.mann_spectra import perpendicular_quadrature
 from turbgen.theory.params import KaimalParams, MannParams, check_wind_speed
 
 
-def _disk_filter(z):
-    """4 J1(z)^2 / z^2, the squared Fourier transform of the unit-disk average (-> 1 at z = 0)."""
+# Beyond z = kappa R = max(Z_SMOOTH, SMOOTH_S * s R), s = sqrt(k1^2 + L^-2), the filter is replaced by
+# its local mean 4/(pi z^3) (J1^2 ~ 2 cos^2(z - 3pi/4)/(pi z)); the dropped oscillating part nearly
+# cancels against the smooth integrand (measured: < 2e-5 relative change of S_RR against 200 / 16 s R).
+Z_SMOOTH, SMOOTH_S = 60.0, 6.0
+
+
+def _disk_filter(z, z_smooth=np.inf):
+    """4 J1(z)^2 / z^2, the squared Fourier transform of the unit-disk average (-> 1 at z = 0),
+    replaced by its mean 4/(pi z^3) beyond ``z_smooth``."""
     z = np.asarray(z, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
-        out = 4.0 * j1(z) ** 2 / (z * z)
+        out = np.where(z < z_smooth, 4.0 * j1(z) ** 2 / (z * z), 4.0 / (np.pi * z**3))
     return np.where(z > 1e-8, out, 1.0)
 
 
 def rews_spectrum_mann(k1, params: MannParams, radius_m: float) -> np.ndarray:
     """Two-sided REWS spectrum S_RR(k1) of the Mann model for a rotor of radius R [m^3 s^-2] (paper 000 Eq. 24).
 
-    The radial panels resolve the J1^2(kappa R) oscillation (narrower than pi/(2R)).
+    The radial panels resolve the J1^2(kappa R) oscillation (narrower than pi/(2R)) up to kappa R = Z_SMOOTH.
     """
     R = check_positive("radius (m)", radius_m)
-    kappa, w, g = perpendicular_quadrature(k1, params, ((0, 0),), resolve_m=2.0 * R)
-    return (w * g[(0, 0)] * _disk_filter(kappa * R)).sum(axis=-1)
+    k1 = np.atleast_1d(np.asarray(k1, dtype=float))
+    z_smooth = np.maximum(Z_SMOOTH, SMOOTH_S * np.sqrt(k1 * k1 + params.length_scale_m**-2) * R)
+    kappa, w, g = perpendicular_quadrature(k1, params, ((0, 0),), resolve_m=2.0 * R, resolve_kappa_max=z_smooth / R)
+    return (w * g[(0, 0)] * _disk_filter(kappa * R, z_smooth[:, None])).sum(axis=-1)
 
 
 def rews_spectrum_kaimal(f_hz, kparams: KaimalParams, U_m_s: float, y_m, z_m) -> np.ndarray:
