@@ -7,6 +7,7 @@ import shutil
 import socket
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -196,6 +197,15 @@ def test_validate_adds_a_summary_without_regenerating(client, tmp_path):
 
 
 @pytest.mark.slow
+def _in_group(proc_dir, pgid: int) -> bool:
+    """True if /proc/PID belongs to process group pgid and is not a zombie."""
+    try:
+        fields = (proc_dir / "stat").read_text().rsplit(")", 1)[-1].split()
+    except OSError:
+        return False
+    return fields[0] != "Z" and int(fields[2]) == pgid
+
+
 def test_killed_sweep_process_is_resumed(client, tmp_path):
     """SIGKILL a real `turbgen sweep` (process group: client, scheduler, workers) after its first field."""
     import os
@@ -217,6 +227,14 @@ def test_killed_sweep_process_is_resumed(client, tmp_path):
         os.killpg(proc.pid, signal.SIGKILL)
     finally:
         proc.wait()
+    # SIGKILL is delivered asynchronously: wait until every process of the group is gone (the user's
+    # rerun comes after the kill), reading zombies as gone like the lock does
+    group_deadline = time.monotonic() + 30
+    while time.monotonic() < group_deadline:
+        members = [int(p.name) for p in Path("/proc").iterdir() if p.name.isdigit() and _in_group(p, proc.pid)]
+        if not members:
+            break
+        time.sleep(0.05)
     before = read_manifest(out)
     done = [r["name"] for r in before["runs"] if r["status"] == "complete"]
     assert 1 <= len(done) < 8, "the sweep was not interrupted midway"
