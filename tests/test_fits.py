@@ -28,7 +28,6 @@ def test_table2_ax_fast(name, evo):
     assert 0 < b_x < 2e-3
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("name", list(CLASSES))
 @pytest.mark.parametrize("evo", [200.0, 400.0, 600.0])
 def test_table2_ax_all(name, evo):
@@ -62,7 +61,6 @@ def test_table1_neutral_u_length_scale():
     assert res["sigma_m_s"][0] == pytest.approx(2.82, rel=0.05)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("name,expected", [("unstable", (744.8, 181.9, 126.4)), ("stable", (101.1, 33.3, 27.0))])
 def test_table1_length_scales(name, expected):
     res = fit_kaimal_spectra(_params(name), U)

@@ -136,3 +136,14 @@ def test_rews_limits(monkeypatch):
     monkeypatch.setattr(rotor_effective, "SMOOTH_S", 16.0)
     ref = rews_spectrum_mann(k1, NEUTRAL, 63.0)
     assert np.max(np.abs(big / ref - 1)) < 1e-5
+
+
+def test_k1_zero_is_the_limit():
+    # the distortion puts a finite part of F11 at kappa ~ k1 as k1 -> 0; F(0) must be that limit
+    # (the tensor's exact k1 = 0 plane alone gives ~4x less), and F is even in k1
+    k1 = np.array([0.0, 1e-7, 1e-6, -1e-6])
+    F = ms.one_point_spectra(k1, NEUTRAL)
+    for name in ("F11", "F22", "F33", "F13"):
+        assert F[name][0] == pytest.approx(F[name][1], rel=2e-3)
+        assert F[name][1] == pytest.approx(F[name][2], rel=1e-2)
+        assert F[name][2] == pytest.approx(F[name][3], rel=1e-12)

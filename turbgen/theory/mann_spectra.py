@@ -9,7 +9,9 @@ Polar coordinates k2 = kappa cos(theta), k3 = kappa sin(theta); beta(|k|) is con
 * Radial: Gauss-Legendre panels (N_GAUSS = 8 nodes, width PANEL_LN = 1 in ln kappa) over
   kappa = s*[1e-6, 1e4], s = sqrt(k1^2 + L^-2) (the scale of the integrand at every k1), plus the
   inertial tail beyond 1e4 s in closed form (integrand ~ kappa^(-8/3): without it the cut costs
-  ~1e-7). Below 1e-6 s the integrand ~ kappa^3 leaves < 1e-15.
+  ~1e-7). The lower end moves to 1e-3 |k1| when that is smaller: at k1 L << 1 the distortion puts a
+  finite part of F_ij at kappa ~ |k1| (F11(k1 -> 0) differs by 4x from the tensor's k1 = 0 plane;
+  k1 = 0 is evaluated as the limit, at k1 L = K1_ZERO).
 * Angle: trapezoid rule (periodic -> spectral accuracy) with N_THETA = 64 nodes for k1 L >= 0.3,
   256 for 0.01 <= k1 L < 0.3 and 512 below: at k1 L << 1 the integrand has angular features of
   width ~k1/kappa around k2 = 0.
@@ -47,6 +49,7 @@ N_THETA = 64  # trapezoid nodes in angle
 PANEL_LN = 1.0  # radial panel width in ln(kappa)
 X_LO, X_HI = 1e-6, 1e4  # radial range in units of s = sqrt(k1^2 + L^-2)
 SEP_TAIL = 3e-5  # target size of the dropped radial tail with a separation (see _separated_cut)
+K1_ZERO = 1e-8  # k1 L used for k1 = 0 (the limit; see perpendicular_quadrature)
 _CHUNK_POINTS = 400_000  # tensor evaluations per batch (bounds memory)
 
 COMPONENTS = {"F11": (0, 0), "F22": (1, 1), "F33": (2, 2), "F12": (0, 1), "F13": (0, 2), "F23": (1, 2)}
@@ -122,7 +125,10 @@ def perpendicular_quadrature(
     weight beyond).
     This is the engine behind Eq. 8, 16 and 24 (module docstring: rule and accuracy).
     """
+    # F_ij at k1 = 0 is taken as the limit k1 -> 0: as k1 -> 0 the shear distortion concentrates a
+    # finite amount of energy at |k| ~ k1, which the tensor's exact k1 = 0 plane (ζ1 = -β) lacks
     k1 = _check_k1(k1)
+    k1 = np.where(k1 == 0, K1_ZERO / params.length_scale_m, k1)
     dy = check_finite("dy (m)", dy_m)
     dz = check_finite("dz (m)", dz_m)
     d = float(np.hypot(dy, dz))
@@ -130,10 +136,13 @@ def perpendicular_quadrature(
     rule = _rule or {}
     s_all = np.sqrt(k1 * k1 + params.length_scale_m**-2)
     per_k1 = []
-    x_lo, x_hi = rule.get("x_lo", X_LO), rule.get("x_hi", X_HI)
+    x_hi = rule.get("x_hi", X_HI)
     panel_ln, n_gauss = rule.get("panel_ln", PANEL_LN), rule.get("n_gauss", N_GAUSS)
     kappa_res = np.broadcast_to(np.asarray(resolve_kappa_max, dtype=float), k1.shape)
-    for s, k_res in zip(s_all, kappa_res):
+    for s, k_res, k1_abs in zip(s_all, kappa_res, np.abs(k1)):
+        # at k1 L << 1 a finite part of F_ij sits at kappa ~ |k1| (shear distortion of |k| ~ k1):
+        # the grid starts three decades below |k1| (rounded to a power of 10 so rules are reused)
+        x_lo = min(rule.get("x_lo", X_LO), 10.0 ** np.floor(np.log10(1e-3 * k1_abs / s)))
         if d > 0:  # oscillating integrand: resolve it up to a cut that bounds the dropped tail
             cut = rule.get("x_hi_sep", _separated_cut(s * d))
             per_k1.append(_radial_rule(x_lo, cut, panel_ln, n_gauss, float(np.pi / (d * s))))
