@@ -147,3 +147,19 @@ def test_k1_zero_is_the_limit():
         assert F[name][0] == pytest.approx(F[name][1], rel=2e-3)
         assert F[name][1] == pytest.approx(F[name][2], rel=1e-2)
         assert F[name][2] == pytest.approx(F[name][3], rel=1e-12)
+
+
+def test_variance_is_integral_of_spectrum_sheared():
+    # sigma_i^2 = ∫ F_ii dk1 over all k1 (two-sided): an independent adaptive quadrature in ln k1
+    from scipy.integrate import quad
+
+    def integrand(t, name):
+        k1 = np.exp(t)
+        return 2.0 * k1 * ms.one_point_spectra([k1], NEUTRAL)[name][0]
+
+    v = ms.variances(NEUTRAL)
+    lo, hi = np.log(1e-7 / 49.0), np.log(1e6 / 49.0)
+    for name, key in (("F11", "uu"), ("F33", "ww"), ("F13", "uw")):
+        body, _ = quad(integrand, lo, hi, args=(name,), limit=200, epsrel=1e-8)
+        tail = 0.0 if name == "F13" else 2.0 * 1.5 * np.exp(hi) * ms.one_point_spectra([np.exp(hi)], NEUTRAL)[name][0]
+        assert v[key] == pytest.approx(body + tail, rel=1e-5)
