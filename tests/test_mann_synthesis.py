@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from turbgen.runs.stencil_cache import cached_stencil
 from turbgen.synthesis.mann_spacetime import MannSnapshots, hermitian_complete, mann_box
 from turbgen.synthesis.mann_stencil import (
     BoxShape,
@@ -219,8 +220,8 @@ def test_zero_mean_of_the_uncropped_box(small):
 
 
 def test_stencil_cache_roundtrip(tmp_path, small):
-    a = build_stencil(PARAMS, small.box, cache_dir=tmp_path)
-    b = build_stencil(PARAMS, small.box, cache_dir=tmp_path)
+    a = cached_stencil(PARAMS, small.box, tmp_path)
+    b = cached_stencil(PARAMS, small.box, tmp_path)
     assert len(list(tmp_path.iterdir())) == 1
     for x in (a, b):
         assert np.array_equal(x.coef, small.coef) and np.array_equal(x.inv_tau, small.inv_tau)

@@ -24,6 +24,7 @@ from turbgen.errors import ParameterError, check_choice, check_int, check_positi
 from turbgen.grid import Grid
 from turbgen.resources import format_bytes, require_memory
 from turbgen.runs.defaults import MANN_DEFAULTS, MANN_GRID
+from turbgen.runs.stencil_cache import cached_stencil
 from turbgen.store import create_store
 from turbgen.synthesis.mann_spacetime import COMPONENTS, MannSnapshots, snapshot_memory_bytes
 from turbgen.synthesis.mann_stencil import BoxShape, MannStencil, build_stencil, stencil_nbytes
@@ -154,7 +155,9 @@ def mann_preset_keys(preset: str, presets_file: str | Path | None = None) -> dic
 
 def build_mann_stencil(run: MannRun, cache_dir: str | Path | None = None) -> MannStencil:
     """The per-parameter-set part of a run (the same for runs differing only in seed)."""
-    return build_stencil(run.params, run.box, cache_dir, evolving=run.grid.nx > 1)
+    if cache_dir is None:
+        return build_stencil(run.params, run.box, evolving=run.grid.nx > 1)
+    return cached_stencil(run.params, run.box, cache_dir, evolving=run.grid.nx > 1)
 
 
 def memory_estimate_bytes(run: MannRun, threads: int, with_stencil: bool = True) -> int:

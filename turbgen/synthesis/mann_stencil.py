@@ -23,7 +23,6 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
@@ -249,36 +248,12 @@ def stencil_key(params: MannParams, box: BoxShape, with_tau: bool) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
-def build_stencil(
-    params: MannParams, box: BoxShape, cache_dir: str | Path | None = None, *, evolving: bool = True
-) -> MannStencil:
-    """The stencil of ``params`` on ``box``; with ``cache_dir``, loaded from / saved to an .npz named by stencil_key.
+def build_stencil(params: MannParams, box: BoxShape, *, evolving: bool = True) -> MannStencil:
+    """The stencil of ``params`` on ``box`` (computed; turbgen.runs.stencil_cache keeps it on disk).
 
     ``evolving=False`` skips 1/tau_e (1/6 of the memory): enough for a single snapshot (one plane).
     """
-    with_tau = evolving and params.evo_time_s is not None
-    if cache_dir is None:
-        return _build(params, box, with_tau)
-    path = Path(cache_dir) / f"mann-stencil-{stencil_key(params, box, with_tau)}.npz"
-    if path.exists():
-        try:
-            with np.load(path) as data:
-                coef, index, factor = data["coef"], data["cell_index"], data["cell_factor"]
-                inv_tau = data["inv_tau"] if with_tau else None
-            if coef.shape == (4, box.nk1, box.nk2_half, box.nzp):
-                return MannStencil(params, box, coef, inv_tau, index, factor)
-        except (OSError, ValueError, KeyError):
-            pass  # unreadable cache entry: rebuild and replace it
-    stencil = _build(params, box, with_tau)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    arrays = {"coef": stencil.coef, "cell_index": stencil.cell_index, "cell_factor": stencil.cell_factor}
-    if with_tau:
-        arrays["inv_tau"] = stencil.inv_tau
-    with open(tmp, "wb") as f:
-        np.savez(f, **arrays)
-    os.replace(tmp, path)
-    return stencil
+    return _build(params, box, evolving and params.evo_time_s is not None)
 
 
 def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
