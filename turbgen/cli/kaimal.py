@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from turbgen.cli.options import parse_floats, parse_range
+from turbgen.cli.options import parse_floats, parse_range, plane_positions
 from turbgen.resources import format_bytes
 from turbgen.runs.config import read_config
 from turbgen.runs.kaimal import (
@@ -113,12 +113,9 @@ def kaimal(ctx, **opt):
     for name, key in _GRID_KEYS.items():
         if name in typed or (key not in grid and opt[name] is not None):
             grid[key] = opt[name]
-    if opt["planes"] is not None and opt["gates"] is not None:
-        raise click.UsageError("give --planes or --gates, not both")
-    if opt["planes"] is not None:
-        grid["x_m"] = opt["planes"]
-    elif opt["gates"] is not None:
-        grid["x_m"] = [0.0, *opt["gates"]]
+    x_m = plane_positions(opt["planes"], opt["gates"])
+    if x_m is not None:
+        grid["x_m"] = x_m
     mapping["grid"] = grid
     run = KaimalRun.from_mapping(mapping)
     g = run.grid

@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from turbgen.cli.options import parse_floats, parse_range
+from turbgen.cli.options import parse_floats, parse_range, plane_positions
 from turbgen.runs.config import read_config
 from turbgen.runs.defaults import MANN_DEFAULTS as D
 from turbgen.runs.defaults import MANN_GRID as G
@@ -96,12 +96,9 @@ def mann(**opt):
     for name, key in _GRID_KEYS.items():
         if opt[name] is not None:
             grid[key] = opt[name]
-    if opt["planes"] is not None and opt["gates"] is not None:
-        raise click.UsageError("give --planes or --gates, not both")
-    if opt["planes"] is not None:
-        grid["x_m"] = opt["planes"]
-    elif opt["gates"] is not None:
-        grid["x_m"] = [0.0, *opt["gates"]]
+    x_m = plane_positions(opt["planes"], opt["gates"])
+    if x_m is not None:
+        grid["x_m"] = x_m
     mapping["grid"] = grid
     run = MannRun.from_mapping(mapping)
     out = opt["out"] or run.default_store_name()

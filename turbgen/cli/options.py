@@ -52,3 +52,14 @@ def parse_ints(text: str, name: str) -> list[int]:
     if not out:
         raise click.BadParameter(f"{text!r} holds no integer", param_hint=name)
     return sorted(out)
+
+
+def plane_positions(planes: list[float] | None, gates: list[float] | None) -> list[float] | None:
+    """x positions [m] from --planes (taken as given) or --gates (the rotor plane 0 added); None if neither."""
+    if planes is not None and gates is not None:
+        raise click.UsageError("give --planes or --gates, not both")
+    if planes is not None:
+        return list(planes)
+    if gates is not None:
+        return [0.0, *gates]
+    return None

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from turbgen.cli.options import parse_floats, parse_ints, parse_range
+from turbgen.cli.options import parse_floats, parse_ints, parse_range, plane_positions
 
 
 def _split(text: str | None) -> list[str] | None:
@@ -50,12 +50,12 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
         for k, v in dict(nt=nt, dt=dt, ny=ny, nz=nz, dy=dy, dz=dz, hub_height=hub_height).items()
         if v is not None
     }
-    if planes is not None and gates is not None:
-        raise click.UsageError("give --planes or --gates, not both")
-    if planes is not None:
-        grid["planes"] = parse_floats(planes, "--planes")
-    elif gates is not None:
-        grid["planes"] = [0.0, *parse_range(gates, "--gates")]
+    x_m = plane_positions(
+        parse_floats(planes, "--planes") if planes is not None else None,
+        parse_range(gates, "--gates") if gates is not None else None,
+    )
+    if x_m is not None:
+        grid["planes"] = x_m
     if config:
         given = [n for n, v in [("--model", models), ("--preset", presets), ("--speeds", speeds), ("--seeds", seeds),
                                 ("--presets-file", presets_file)] if v is not None]  # fmt: skip
