@@ -57,7 +57,7 @@ def bin_variances(nt: int, dt_s: float, sigma_m_s: float, length_scale_m: float,
     k = np.arange(nt // 2 + 1)
     lo = np.maximum(k - 0.5, 0.0) * df
     hi = np.minimum((k + 0.5) * df, 0.5 / dt_s)
-    v = np.array([kaimal_band_variance(a, b, sigma_m_s, length_scale_m, U_m_s) for a, b in zip(lo, hi)])
+    v = kaimal_band_variance(lo, hi, sigma_m_s, length_scale_m, U_m_s)
     v[0] = 0.0
     return v
 
