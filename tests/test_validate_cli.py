@@ -74,6 +74,14 @@ def test_failing_metric_gives_exit_1(store, tmp_path):
     assert d["passed"] is False and "sigma_u" in d["failed"]
 
 
+def test_default_rotor_radius_fits_a_small_grid(store):
+    # no --rotor-radius: 63 m, or the largest disc inside a smaller grid (here (ny - 1) dy / 2)
+    r = _run(store, "--json")
+    assert r.exit_code == 0, r.output
+    half = min((GRID.ny - 1) * GRID.dy_m, (GRID.nz - 1) * GRID.dz_m) / 2
+    assert json.loads(r.output)["settings"]["rotor_radius_m"] == pytest.approx(min(63.0, half))
+
+
 def test_usage_errors_give_exit_2(store, tmp_path):
     r = _run(tmp_path / "missing.zarr")
     assert r.exit_code == 2 and "no such store" in r.output

@@ -15,8 +15,9 @@ from turbgen.validate import DEFAULT_ROTOR_RADIUS_M, validate as run_validation
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON (stable keys) instead of a table.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False, path_type=str), default=None,
               help="Write one PNG per comparison (estimate, 95 % band, theory) into this directory.")
-@click.option("--rotor-radius", "rotor_radius", type=float, default=DEFAULT_ROTOR_RADIUS_M, show_default=True,
-              help="Rotor radius R [m] of the rotor-effective wind speed (mean of u over the points within R).")
+@click.option("--rotor-radius", "rotor_radius", type=float, default=None,
+              help=f"Rotor radius R [m] of the rotor-effective wind speed (mean of u over the points within R); "
+              f"default {DEFAULT_ROTOR_RADIUS_M:g} m, or the largest disc inside a smaller grid.")
 def validate(store, as_json, plots_dir, rotor_radius):
     """Validate the field store STORE against its model (Mann or Kaimal).
 

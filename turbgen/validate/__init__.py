@@ -15,11 +15,10 @@ import time
 from dataclasses import dataclass
 
 from turbgen.store import FieldStore, open_store
-from turbgen.validate.estimators import Estimates, estimate
+from turbgen.validate.estimators import DEFAULT_ROTOR_RADIUS_M, Estimates, estimate
 from turbgen.validate.expectations import Theory, theory_for
 from turbgen.validate.verdict import ALPHA, MetricResult, judge
 
-DEFAULT_ROTOR_RADIUS_M = 63.0  # NREL 5 MW (paper 000)
 
 
 @dataclass
@@ -59,9 +58,12 @@ class ValidationReport:
         return plots(self, directory)
 
 
-def validate(store, *, rotor_radius_m: float = DEFAULT_ROTOR_RADIUS_M, nperseg: int | None = None,
+def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None = None,
              workers: int | None = None) -> ValidationReport:
-    """Validate the store at ``store`` (path or FieldStore); StoreError/ParameterError on bad input."""
+    """Validate the store at ``store`` (path or FieldStore); StoreError/ParameterError on bad input.
+
+    rotor_radius_m: R [m] of the rotor-effective wind speed; None = 63 m, or the largest disc a smaller grid holds.
+    """
     fs = store if isinstance(store, FieldStore) else open_store(store)
     t0 = time.perf_counter()
     est = estimate(fs, rotor_radius_m=rotor_radius_m, nperseg=nperseg, workers=workers)

@@ -136,6 +136,9 @@ def default_separations(grid: Grid) -> tuple[tuple[int, int], ...]:
     return tuple(seps)
 
 
+DEFAULT_ROTOR_RADIUS_M = 63.0  # NREL 5 MW (paper 000)
+
+
 def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
     """Boolean (ny, nz): grid points with y^2 + z^2 <= R^2 (the rotor disc around the hub)."""
     y, z = grid.y(), grid.z()
@@ -145,10 +148,15 @@ def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
     return mask
 
 
-def check_rotor_radius(grid: Grid, radius_m: float) -> float:
-    """The rotor disc must lie inside the grid: 0 < R <= half the smaller grid extent."""
-    r = float(radius_m)
+def check_rotor_radius(grid: Grid, radius_m: float | None) -> float:
+    """The rotor disc must lie inside the grid: 0 < R <= half the smaller grid extent.
+
+    None: the default 63 m (NREL 5 MW, paper 000), or the largest disc that fits a smaller grid.
+    """
     half = min((grid.ny - 1) * grid.dy_m, (grid.nz - 1) * grid.dz_m) / 2.0
+    if radius_m is None:
+        return min(DEFAULT_ROTOR_RADIUS_M, half)
+    r = float(radius_m)
     if not (math.isfinite(r) and 0 < r <= half * (1 + 1e-9)):
         raise ParameterError(f"rotor radius = {radius_m!r} m is outside the grid's range (0, {half:g}] m")
     return r
@@ -306,7 +314,7 @@ class _TqdmCallback(Callback):
         self.bar.close()
 
 
-def estimate(fs, *, rotor_radius_m: float = 63.0, nperseg: int | None = None, separations=None,
+def estimate(fs, *, rotor_radius_m: float | None = None, nperseg: int | None = None, separations=None,
              workers: int | None = None) -> Estimates:
     """All Welch estimates of the store ``fs`` (a FieldStore), one dask task per (span, plane)."""
     g = fs.grid
