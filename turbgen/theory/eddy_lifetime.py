@@ -42,6 +42,8 @@ def shear_distortion_beta(k, params: MannParams):
         tau = mann_lifetime(kL)
     else:
         tau = guo_lifetime(kL, params.factor1)
+    if params.gamma == 0.0:
+        return np.zeros_like(tau)  # isotropic: no distortion, also where tau = inf (k = 0)
     return params.gamma * tau
 
 

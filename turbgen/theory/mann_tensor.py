@@ -23,11 +23,14 @@ def von_karman_energy(k, ae: float, length_scale_m: float):
 def _distortion(k1, k2, k3, params: MannParams, beta=None):
     """Undistorted wavenumber and the rapid-distortion coefficients zeta1, zeta2 (Mann 1994 Eq. 15-17).
 
-    Returns (k0sq, k30, ksq, zeta1, zeta2, E0). Exact limits are used on k1 = 0 (zeta1 = -beta,
+    Returns (k1, k2, k0sq, k30, ksq, zeta1, zeta2, E0). Exact limits are used on k1 = 0 (zeta1 = -beta,
     zeta2 = 0: the linear growth of u under shear) and on the k3 axis (q = 0: zeta = 0).
     ``beta`` may be passed precomputed (it depends on |k| only; broadcastable to k1).
     """
     k1, k2, k3 = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (k1, k2, k3)))
+    # |k| < 1e-30 rad/m carries no energy (E ~ k^4) but would underflow k^4: treat it as k = 0
+    negligible = k1 * k1 + k2 * k2 + k3 * k3 < 1e-60
+    k1, k2, k3 = (np.where(negligible, 0.0, a) for a in (k1, k2, k3))
     ksq = k1 * k1 + k2 * k2 + k3 * k3
     if beta is None:
         beta = shear_distortion_beta(np.sqrt(ksq), params)
@@ -36,18 +39,23 @@ def _distortion(k1, k2, k3, params: MannParams, beta=None):
     k30 = k3 + beta * k1
     k0sq = k1 * k1 + k2 * k2 + k30 * k30
     q = k1 * k1 + k2 * k2
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         sq = np.sqrt(q)
         c1 = beta * k1 * k1 * (k0sq - 2.0 * k30 * k30 + beta * k1 * k30) / (ksq * q)
         c2 = k2 * k0sq / (q * sq) * np.arctan2(beta * k1 * sq, k0sq - k30 * k1 * beta)
         ratio = k2 / k1
         zeta1 = c1 - ratio * c2
         zeta2 = ratio * c1 + c2
-    on_k1_zero = (k1 == 0) & (q > 0)
+    # near the k3 axis (q/k^2 < 1e-30, where q^(3/2) may underflow) every zeta term of Phi carries a
+    # factor k1 or q, so zeta = 0 there changes Phi by O(1e-15) relative
+    axis = q <= 1e-30 * ksq
+    # k1 -> 0 at fixed q: zeta1 -> -beta, zeta2 -> 0 (the error of the limit is O(k1/sqrt(q)); it also
+    # keeps k2/k1 from overflowing for subnormal k1)
+    on_k1_zero = (np.abs(k1) <= 1e-12 * np.sqrt(q)) & ~axis
     zeta1 = np.where(on_k1_zero, -beta, zeta1)
     zeta2 = np.where(on_k1_zero, 0.0, zeta2)
-    zeta1 = np.where(q > 0, zeta1, 0.0)
-    zeta2 = np.where(q > 0, zeta2, 0.0)
+    zeta1 = np.where(axis, 0.0, zeta1)
+    zeta2 = np.where(axis, 0.0, zeta2)
     e0 = von_karman_energy(np.sqrt(k0sq), params.ae, params.length_scale_m)
     return k1, k2, k0sq, k30, ksq, zeta1, zeta2, e0
 
@@ -59,7 +67,7 @@ def sheared_tensor(k1, k2, k3, params: MannParams, beta=None):
     """
     k1, k2, k0sq, k30, ksq, z1, z2, e0 = _distortion(k1, k2, k3, params, beta)
     q = k1 * k1 + k2 * k2
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         a = np.where(k0sq > 0, e0 / (4.0 * np.pi * k0sq * k0sq), 0.0)
         b = np.where(ksq > 0, e0 / (4.0 * np.pi * k0sq * ksq), 0.0)
         c = np.where(ksq > 0, e0 / (4.0 * np.pi * ksq * ksq), 0.0)
@@ -81,7 +89,7 @@ def tensor_factor(k1, k2, k3, params: MannParams):
     sqrt(dk1 dk2 dk3) for Fourier amplitudes on a grid. Zero at k = 0.
     """
     k1, k2, k0sq, k30, ksq, z1, z2, e0 = _distortion(k1, k2, k3, params)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         amp = np.where(k0sq > 0, np.sqrt(e0 / (4.0 * np.pi)) / k0sq, 0.0)
         d33 = np.where(ksq > 0, k0sq / ksq, 0.0)
     iso = np.zeros((3, 3) + k1.shape)
