@@ -47,6 +47,9 @@ def test_store_attrs_round_trip_and_chunking_independence(tmp_path):
     rebuilt = KaimalRun.from_mapping({**fa.attrs["parameters"], "grid": fa.attrs["grid"]})
     assert rebuilt == run
     assert a["yz_clip_error"] == 0.0 and a["long_clip_error"] == 0.0
+    # the synthesis report (clipping errors) is stored with the field, not only printed
+    assert fa.attrs["synthesis_report"]["yz_clip_error"] == 0.0
+    assert fa.attrs["synthesis_report"]["max_torus"] == a["max_torus"]
     u = fa.array("u")[:]
     assert a["sigma_u"] == pytest.approx(float(np.sqrt((u.astype(np.float64) ** 2).mean())), rel=1e-6)
 

@@ -78,6 +78,20 @@ def test_round_trip_values_coords_attrs(tmp_path):
     assert list(a)[-1] == "turbgen_complete"  # the marker is the last attribute written
 
 
+def test_attributes_added_after_generation_precede_the_marker(tmp_path):
+    data = field()
+    with create_store(tmp_path / "r.zarr", GRID, ATTRS) as w:
+        for c in layout.COMPONENTS:
+            for ix in range(GRID.nx):
+                w.write(c, ix, data[c][:, ix])
+        w.add_attrs(synthesis_report={"clip_error": np.float64(0.0)})
+        with pytest.raises(ValueError, match="already set"):
+            w.add_attrs(seed=3)
+    a = open_store(tmp_path / "r.zarr").attrs
+    assert a["synthesis_report"] == {"clip_error": 0.0} and a["seed"] == 7
+    assert list(a)[-1] == "turbgen_complete"
+
+
 def test_xarray_open_gives_named_dims_and_coords(tmp_path):
     xr = pytest.importorskip("xarray")
     data = field()

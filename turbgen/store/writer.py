@@ -134,6 +134,15 @@ class StoreWriter:
             self._old_sigterm = None
 
     # -- writing ----------------------------------------------------------------------------
+    def add_attrs(self, **attrs) -> None:
+        """Add attributes known only after generation (e.g. a synthesis report); written before the marker."""
+        if self._tmp is None:
+            raise RuntimeError("StoreWriter.add_attrs outside its 'with' block")
+        clash = [k for k in attrs if k in self._group.attrs or k == layout.MARKER]
+        if clash:
+            raise ValueError(f"store attrs {clash} are already set")
+        self._group.attrs.update(_jsonable(attrs))
+
     def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0) -> None:
         """Write ``data`` (nt_block, ny, nz) to ``component`` at plane index ``ix``, time ``t0``."""
         if self._tmp is None:
