@@ -5,7 +5,9 @@ Used by ``turbgen kaimal`` and by the sweep, so both give bit-identical stores f
 
 from __future__ import annotations
 
+import contextlib
 import math
+import shutil
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -17,8 +19,9 @@ from tqdm import tqdm
 
 from turbgen.errors import ParameterError, check_choice, check_int, check_nonnegative, check_positive
 from turbgen.grid import Grid
-from turbgen.resources import require_memory
+from turbgen.resources import available_memory_bytes, format_bytes, require_memory
 from turbgen.runs.defaults import DEFAULT_PLANES_M
+from turbgen.runs.scratch import FileSpectrum
 from turbgen.store import create_store
 from turbgen.synthesis.kaimal_evo import COMPONENTS, FREQ_CHUNK, KaimalEvo, resolved_band_hz
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS, simley_pao_parameters
@@ -194,26 +197,56 @@ def kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float = 90.
     )
 
 
-def memory_needed(grid: Grid) -> int:
-    """Peak bytes of a run's arrays: one component's spectrum (nx, nf, ny, nz) complex64, plus one plane
-    in flight (its spectrum copy and float32 field, and the store's compression buffers)."""
+def memory_needed(grid: Grid, spill: bool = False) -> int:
+    """Peak bytes of a run's arrays: one component's spectrum (nx, nf, ny, nz) complex64 -- or, with
+    ``spill`` (the spectrum in a scratch file), one frequency chunk of all planes with its mixing
+    copies -- plus one plane in flight (its spectrum copy and float32 field, and the store's
+    compression buffers)."""
     nf = grid.nt // 2 + 1
     plane = grid.ny * grid.nz
-    return (grid.nx + 2) * nf * plane * 8 + 3 * grid.nt * plane * 4
+    in_flight = 2 * nf * plane * 8 + 3 * grid.nt * plane * 4
+    if spill:
+        return 3 * grid.nx * FREQ_CHUNK * plane * 8 + in_flight
+    return grid.nx * nf * plane * 8 + in_flight
+
+
+def spectrum_bytes(grid: Grid) -> int:
+    """Bytes of one component's spectrum (nx, nf, ny, nz) complex64 (in memory, or the scratch file)."""
+    return grid.nx * (grid.nt // 2 + 1) * grid.ny * grid.nz * 8
+
+
+def _plan_spill(grid: Grid, out: Path, spill: bool | None) -> bool:
+    """Whether the spectrum goes to a scratch file next to ``out``; checks memory (and disk) first."""
+    what = f"the Kaimal spectrum ({grid.nx} planes x {grid.nt // 2 + 1} bins x {grid.ny} x {grid.nz})"
+    if spill is None:
+        available = available_memory_bytes()
+        spill = available is not None and memory_needed(grid) > 0.8 * available
+    require_memory(memory_needed(grid, spill), what, "lower --nt, --ny/--nz or the number of planes")
+    if spill:
+        free = shutil.disk_usage(out.parent).free
+        if spectrum_bytes(grid) + 3 * grid.nbytes_per_component() > free:
+            raise ParameterError(
+                f"{what} does not fit in memory and its {format_bytes(spectrum_bytes(grid))} scratch file plus "
+                f"the store do not fit on the disk of {out.parent} ({format_bytes(free)} free); lower --nt, "
+                "--ny/--nz or the number of planes"
+            )
+    return spill
 
 
 def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | None = None,
-               progress: bool = False, threads: int | None = None) -> dict:
+               progress: bool = False, threads: int | None = None, spill: bool | None = None) -> dict:
     """Generate the field of ``run`` into the store ``out``; return a summary dict.
 
     ``threads``: FFT workers (default all cores); the field does not depend on it.
+    ``spill``: keep each component's spectrum in an unlinked scratch file next to ``out`` instead
+    of memory (None: only when it would not fit in 80 % of the available memory); the field is the same.
 
     Summary: path, sigma_u/v/w (realised, all points and planes) [m/s], expected_sigma [m/s],
     seconds, and the synthesis report (yz_clip_error, long_clip_error: 0 when exact).
     """
     g = run.grid
-    require_memory(memory_needed(g), f"the Kaimal spectrum ({g.nx} planes x {g.nt // 2 + 1} bins x {g.ny} x {g.nz})",
-                   "lower --nt, --ny/--nz or the number of planes")
+    out = Path(out)
+    spill = _plan_spill(g, out.absolute(), spill)
     gen = run.generator(workers=threads)
     attrs = run.to_attrs()
     t0 = time.perf_counter()
@@ -221,14 +254,18 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
     with create_store(Path(out), g, attrs, chunk_t=chunk_t, overwrite=overwrite) as w:
         with tqdm(total=3 * (gen.n_chunks + g.nx), desc="kaimal", unit="step", disable=not progress) as bar:
             for c in COMPONENTS:
-                for ix, plane in gen.component_planes(c, tick=lambda: bar.update(1)):
-                    w.write(c, ix, plane)
-                    sums[c][0] += float(np.einsum("tyz,tyz->", plane, plane, dtype=np.float64))
-                    sums[c][1] += plane.size
+                with contextlib.ExitStack() as stack:
+                    buffer = None
+                    if spill:
+                        buffer = stack.enter_context(FileSpectrum(out.absolute().parent, g.nx, gen.nf, g.ny, g.nz))
+                    for ix, plane in gen.component_planes(c, tick=lambda: bar.update(1), spectrum=buffer):
+                        w.write(c, ix, plane)
+                        sums[c][0] += float(np.einsum("tyz,tyz->", plane, plane, dtype=np.float64))
+                        sums[c][1] += plane.size
         # clipping of any embedding is recorded with the field, never only printed (issue 4)
         w.add_attrs(synthesis_report=gen.report)
         path = w.path
-    summary = {"path": str(path), "seconds": time.perf_counter() - t0}
+    summary = {"path": str(path), "seconds": time.perf_counter() - t0, "spilled": spill}
     for c in COMPONENTS:
         summary[f"sigma_{c}"] = math.sqrt(sums[c][0] / sums[c][1])
     summary["expected_sigma"] = [math.sqrt(gen.expected_variance(c)) for c in COMPONENTS]

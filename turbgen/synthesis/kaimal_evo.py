@@ -17,7 +17,11 @@ Per frequency bin k (f_k = k df exactly, df = 1/(nt dt); evoTurb mixes bin k wit
    (``rescale`` multiplies the spectrum by sigma^2 / that integral instead);
 4. inverse real FFT over time (float32).
 
-Memory: one component at a time, (n_planes, nf, ny, nz) complex64. Random streams come from
+Memory: one component at a time. The mixed spectrum (n_planes, nf, ny, nz) complex64 is put frequency
+chunk by frequency chunk into a spectrum buffer and read back plane by plane for the inverse FFT:
+``InMemorySpectrum`` by default; the runs layer passes a file-backed buffer (turbgen.runs.scratch)
+when that array does not fit in memory, which bounds the memory by one frequency chunk of all
+planes plus one plane's spectrum. Random streams come from
 SeedSequence keyed by (seed, component, plane, frequency chunk) with FIXED chunks of
 FREQ_CHUNK bins, so the field does not depend on how it is written or on thread counts.
 """
@@ -92,6 +96,21 @@ def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarra
             factors[i] = v * np.sqrt(np.maximum(w, 0.0))
             err = max(err, float(np.abs(factors[i] @ factors[i].T - gk).max()))
     return factors, err
+
+
+class InMemorySpectrum:
+    """Spectrum buffer (n_planes, nf, ny, nz) complex64 held in memory; unfilled bins are zero."""
+
+    def __init__(self, nx: int, nf: int, ny: int, nz: int):
+        self.data = np.zeros((nx, nf, ny, nz), dtype=np.complex64)
+
+    def put(self, plane: int, k0: int, block: np.ndarray) -> None:
+        """Store bins k0 .. k0 + len(block) of ``plane``."""
+        self.data[plane, k0:k0 + block.shape[0]] = block
+
+    def get(self, plane: int) -> np.ndarray:
+        """All bins of ``plane`` (nf, ny, nz); the caller may modify the array."""
+        return self.data[plane]
 
 
 class KaimalEvo:
@@ -205,15 +224,17 @@ class KaimalEvo:
         return out
 
     def component_planes(
-        self, component: str, tick: Callable[[], None] | None = None
+        self, component: str, tick: Callable[[], None] | None = None, spectrum=None
     ) -> Iterator[tuple[int, np.ndarray]]:
         """Yield (plane index, field (nt, ny, nz) float32) for every plane of one component.
 
         ``tick`` is called once per frequency chunk and once per plane (n_chunks + nx calls).
+        ``spectrum``: a fresh buffer with put/get like :class:`InMemorySpectrum` (the default).
         """
         g = self.grid
         nx = g.nx
-        spec = np.zeros((nx, self.nf, g.ny, g.nz), dtype=np.complex64)
+        if spectrum is None:
+            spectrum = InMemorySpectrum(nx, self.nf, g.ny, g.nz)
         mixed = component in self.long_components
         amp = np.sqrt(self.variances[component] / 2.0).astype(np.float32)
         if g.nt % 2 == 0:  # the Nyquist coefficient is real: sqrt(2) Re(Z) has unit variance
@@ -223,29 +244,32 @@ class KaimalEvo:
             ks = range(max(1, chunk * FREQ_CHUNK), min(self.nf, (chunk + 1) * FREQ_CHUNK))
             if len(ks):
                 groups = self._groups(self._embeddings(component, ks))
+                block = np.empty((nx, len(ks), g.ny, g.nz), dtype=np.complex64)
 
-                def fill(p, ks=ks, chunk=chunk, groups=groups):
-                    spec[p, ks.start:ks.stop] = self._chunk_coefficients(component, p, chunk, len(ks), groups)
+                def fill(p, ks=ks, chunk=chunk, groups=groups, block=block):
+                    block[p] = self._chunk_coefficients(component, p, chunk, len(ks), groups)
 
                 # planes in parallel (NumPy's generators and the FFTs release the GIL); each plane has its
-                # own random stream and its own slice of spec, so the result does not depend on the order
+                # own random stream and its own slice of the block, so the result does not depend on the order
                 list(pool.map(fill, range(nx)))
                 if mixed and nx > 1:
                     fac, err = longitudinal_factors(self.long_coherence, g.x_m, self.freqs[ks.start:ks.stop])
                     self.report["long_clip_error"] = max(self.report["long_clip_error"], err)
-                    block = spec[:, ks.start:ks.stop].reshape(nx, len(ks), -1).transpose(1, 0, 2)
+                    flat = block.reshape(nx, len(ks), -1).transpose(1, 0, 2)
                     # real factor: mixes real and imaginary parts alike (zero phase between planes)
-                    mixed_block = fac.astype(np.float32) @ np.ascontiguousarray(block).view(np.float32)
-                    spec[:, ks.start:ks.stop] = mixed_block.view(np.complex64).transpose(1, 0, 2).reshape(
-                        nx, len(ks), g.ny, g.nz)
+                    mixed_block = fac.astype(np.float32) @ np.ascontiguousarray(flat).view(np.float32)
+                    block = mixed_block.view(np.complex64).transpose(1, 0, 2).reshape(nx, len(ks), g.ny, g.nz)
+                for p in range(nx):
+                    spectrum.put(p, ks.start, block[p])
             if tick:
                 tick()
         pool.shutdown()
-        if g.nt % 2 == 0:
-            spec[:, -1] = np.sqrt(2.0, dtype=np.float32) * spec[:, -1].real
-        spec *= amp[None, :, None, None]
         for p in range(nx):
-            plane = scipy.fft.irfft(spec[p], n=g.nt, axis=0, norm="forward", workers=self.workers)
+            spec = spectrum.get(p)
+            if g.nt % 2 == 0:
+                spec[-1] = np.sqrt(2.0, dtype=np.float32) * spec[-1].real
+            spec *= amp[:, None, None]
+            plane = scipy.fft.irfft(spec, n=g.nt, axis=0, norm="forward", workers=self.workers)
             if tick:
                 tick()
             yield p, plane.astype(np.float32, copy=False)

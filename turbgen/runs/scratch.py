@@ -1,0 +1,62 @@
+"""File-backed spectrum buffer for Kaimal runs whose spectrum does not fit in memory.
+
+The generator puts the mixed spectrum frequency chunk by frequency chunk (all planes) and reads it
+back plane by plane; with this buffer both are contiguous reads and writes of an unlinked temporary
+file next to the output store, so memory holds one frequency chunk of all planes plus one plane's
+spectrum, whatever nt, the grid or the number of planes. Bins never put read back as zero.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+ITEM = np.dtype(np.complex64).itemsize
+
+
+class FileSpectrum:
+    """Spectrum buffer (n_planes, nf, ny, nz) complex64 in a temporary file (a context manager)."""
+
+    def __init__(self, directory: str | Path, nx: int, nf: int, ny: int, nz: int):
+        self.nf, self.point = nf, ny * nz
+        self.shape = (nf, ny, nz)
+        fd, name = tempfile.mkstemp(prefix=".turbgen-spectrum-", dir=directory)
+        os.unlink(name)  # the space is freed when the file is closed, even after a crash
+        self.fd = fd
+        os.ftruncate(fd, nx * nf * self.point * ITEM)  # sparse: unwritten bins read as zeros
+
+    def put(self, plane: int, k0: int, block: np.ndarray) -> None:
+        """Store bins k0 .. k0 + len(block) of ``plane``."""
+        data = np.ascontiguousarray(block, dtype=np.complex64)
+        offset = (plane * self.nf + k0) * self.point * ITEM
+        view = memoryview(data).cast("B")
+        while view:
+            n = os.pwrite(self.fd, view, offset)
+            view, offset = view[n:], offset + n
+
+    def get(self, plane: int) -> np.ndarray:
+        """All bins of ``plane`` (nf, ny, nz), a fresh array."""
+        out = np.empty(self.shape, dtype=np.complex64)
+        view = memoryview(out).cast("B")
+        offset = plane * self.nf * self.point * ITEM
+        while view:
+            n = os.preadv(self.fd, [view], offset)
+            if n == 0:
+                raise OSError("spectrum scratch file is shorter than expected")
+            view, offset = view[n:], offset + n
+        return out
+
+    def close(self) -> None:
+        """Free the file."""
+        if self.fd >= 0:
+            os.close(self.fd)
+            self.fd = -1
+
+    def __enter__(self) -> "FileSpectrum":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
