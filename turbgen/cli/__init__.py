@@ -1,10 +1,12 @@
 """turbgen command line: click commands only (parse, call the library, print).
 
 User mistakes (``turbgen.errors.ParameterError``) become one line on stderr and exit code 2.
-Each sub-module holds one command or command group and is registered below.
+Each sub-module holds one command or command group, listed in COMMANDS and imported on use.
 """
 
 from __future__ import annotations
+
+import importlib
 
 import click
 
@@ -21,8 +23,31 @@ class UserError(click.ClickException):
         click.echo(f"Error: {self.format_message()}", err=True)
 
 
+# command name -> (module, attribute); modules are imported only when their command runs (or for --help),
+# so `turbgen info` does not pay for importing the FFT and synthesis stack
+COMMANDS = {
+    "export": ("turbgen.cli.export", "export"),
+    "fit": ("turbgen.cli.theory", "fit"),
+    "info": ("turbgen.cli.info", "info"),
+    "kaimal": ("turbgen.cli.kaimal", "kaimal"),
+    "mann": ("turbgen.cli.mann", "mann"),
+    "sweep": ("turbgen.cli.sweep", "sweep"),
+    "theory": ("turbgen.cli.theory", "theory"),
+    "validate": ("turbgen.cli.validate", "validate"),
+}
+
+
 class TurbgenGroup(click.Group):
-    """A click group that turns ParameterError into a one-line usage error."""
+    """A click group with lazily imported commands that turns ParameterError into a one-line usage error."""
+
+    def list_commands(self, ctx):
+        return sorted(COMMANDS)
+
+    def get_command(self, ctx, cmd_name):
+        if cmd_name not in COMMANDS:
+            return None
+        module, attr = COMMANDS[cmd_name]
+        return getattr(importlib.import_module(module), attr)
 
     def invoke(self, ctx):
         try:
@@ -40,37 +65,3 @@ def cli():
 def main():
     """Console-script entry point."""
     cli()
-
-
-def _register():
-    from turbgen.cli import theory
-
-    for command in (theory.theory, theory.fit):
-        cli.add_command(command)
-
-    from turbgen.cli import info
-
-    cli.add_command(info.info)
-
-    from turbgen.cli import export
-
-    cli.add_command(export.export)
-
-    from turbgen.cli import mann
-
-    cli.add_command(mann.mann)
-
-    from turbgen.cli import sweep
-
-    cli.add_command(sweep.sweep)
-
-    from turbgen.cli import kaimal
-
-    cli.add_command(kaimal.kaimal)
-
-    from turbgen.cli import validate
-
-    cli.add_command(validate.validate)
-
-
-_register()
