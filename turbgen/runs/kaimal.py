@@ -130,10 +130,13 @@ class KaimalRun:
             "seed": self.seed,
         }
 
-    def to_attrs(self) -> dict:
-        """model / parameters / units / seed / U_m_s / hub_height_m for the store (plus synthesis notes)."""
+    def to_attrs(self, gen: KaimalEvo | None = None) -> dict:
+        """model / parameters / units / seed / U_m_s / hub_height_m for the store (plus synthesis notes).
+
+        ``gen``: this run's generator, if already built (its expected variances are recorded).
+        """
         params = {key: v for key, v in self.parameters().items() if v is not None}
-        gen = self.generator()
+        gen = gen or self.generator()
         lo, hi = resolved_band_hz(self.grid.nt, self.grid.dt_s)
         params.update(
             effective_long_parameters=self.effective_long_parameters(),
@@ -248,7 +251,7 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
     out = Path(out)
     spill = _plan_spill(g, out.absolute(), spill)
     gen = run.generator(workers=threads)
-    attrs = run.to_attrs()
+    attrs = run.to_attrs(gen)
     t0 = time.perf_counter()
     sums = {c: [0.0, 0] for c in COMPONENTS}
     with create_store(Path(out), g, attrs, chunk_t=chunk_t, overwrite=overwrite) as w:
