@@ -1,0 +1,94 @@
+"""`turbgen lidar STORE`: the virtual lidar on a field store; `turbgen lidar optimize` (lidar theory).
+
+The group takes either a subcommand (``run``, ``optimize``) or a STORE path as its first word:
+``turbgen lidar STORE ...`` is the same as ``turbgen lidar run STORE ...`` (a first word that is
+not a subcommand name is taken as the store).
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import sys
+
+import click
+
+from turbgen.errors import ParameterError
+
+# subcommands from other modules, imported on use; a module not in this build is not listed
+EXTERNAL = {"optimize": ("turbgen.cli.lidar_optimize", "optimize")}
+
+
+class LidarGroup(click.Group):
+    """A group whose unknown first word is the STORE of the default subcommand ``run``."""
+
+    def list_commands(self, ctx):
+        return sorted({*super().list_commands(ctx), *(n for n in EXTERNAL if self.get_command(ctx, n))})
+
+    def get_command(self, ctx, cmd_name):
+        cmd = super().get_command(ctx, cmd_name)
+        if cmd is None and cmd_name in EXTERNAL:
+            module, attr = EXTERNAL[cmd_name]
+            try:
+                cmd = getattr(importlib.import_module(module), attr)
+            except ModuleNotFoundError as exc:
+                if exc.name != module:
+                    raise
+                return None
+        return cmd
+
+    def resolve_command(self, ctx, args):
+        if args and not args[0].startswith("-") and self.get_command(ctx, args[0]) is None:
+            args = ["run", *args]
+        return super().resolve_command(ctx, args)
+
+
+@click.group("lidar", cls=LidarGroup, invoke_without_command=False)
+def lidar():
+    """Virtual lidar on a store (`turbgen lidar STORE`, same as `turbgen lidar run STORE`)."""
+
+
+@lidar.command("run")
+@click.argument("store", type=click.Path(path_type=str))
+@click.option("--lidar", "lidar_name", default=None,
+              help="lidar preset name or TOML/JSON lidar file (default: the 4-beam pulsed lidar of Guo et al. 2023, Table 3)")
+@click.option("--out", type=click.Path(path_type=str), default=None,
+              help="write the lidar dataset (zarr: v_los, u_LL, u_RR, TI, every lidar parameter) here")
+@click.option("--overwrite", is_flag=True, help="replace an existing --out dataset")
+@click.option("--rotor-radius", "rotor_radius", type=float, default=None,
+              help="rotor radius R [m] of u_RR (default 63 m, or the largest disc inside a smaller grid)")
+@click.option("--mean-wind/--no-mean-wind", default=False, show_default=True,
+              help="add the mean wind U (1 + z/h_hub)^alpha to u before projecting (default: fluctuations only)")
+@click.option("--shear", "shear_exponent", type=float, default=0.2, show_default=True,
+              help="power-law shear exponent alpha of --mean-wind")
+@click.option("--json", "as_json", is_flag=True, help="print the result as JSON instead of text")
+@click.option("--plots", "plots_dir", type=click.Path(file_okay=False, path_type=str), default=None,
+              help="write gamma^2_RL and |G_RL| plots (simulated with 95 % band, theory) into this directory")
+def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_exponent, as_json, plots_dir):
+    """Sample STORE with a lidar; report simulated preview quality (MCB, cut-off, TI).
+
+    Exit code 0 when the simulated coherence agrees with theory, 1 when it departs beyond the
+    estimator's uncertainty, 2 for usage errors (nothing written).
+    """
+    from turbgen.lidar import report
+    from turbgen.lidar.dataset import check_output
+    from turbgen.store import open_store
+
+    try:
+        fs = open_store(store)
+        if out is not None:
+            check_output(out, overwrite)
+        result = report.lidar_report(fs, lidar_name, rotor_radius_m=rotor_radius, add_mean_wind=mean_wind,
+                                     shear_exponent=shear_exponent)
+    except ParameterError as exc:
+        from turbgen.cli import UserError
+
+        raise UserError(str(exc)) from None
+    if out is not None:
+        path = result.write(out, overwrite=overwrite)
+        click.echo(f"wrote {path}", err=True)
+    if plots_dir is not None:
+        files = result.plots(plots_dir)
+        click.echo(f"wrote {len(files)} plots to {plots_dir}", err=True)
+    click.echo(json.dumps(result.to_dict(), indent=1) if as_json else result.text())
+    sys.exit(0 if result.passed else 1)

@@ -1,0 +1,102 @@
+"""The lidar output dataset: a small zarr group, xarray-readable, written atomically.
+
+Variables (named dims, units in attributes):
+    v_los (scan, beam, gate)  line-of-sight speed [m s-1], positive towards the lidar (+u for a beam
+                              looking straight upstream); time_s (scan, beam) its physical time [s]
+    u_LL (t_arrival)          lidar estimate of the rotor-effective wind speed [m s-1], aligned to
+                              rotor arrival (stored/eddy time of the rotor plane)
+    u_RR (t_arrival)          u averaged over the rotor disc at x = 0 [m s-1]
+    gate_x_m (gate), n1 (beam, gate)
+Attributes: every lidar parameter, the store it came from, mean_wind_added, TI values.
+Publishing: written under a hidden temporary name in the output directory, then renamed.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import secrets
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import StoreError
+
+MARKER = "turbgen_lidar_complete"
+
+
+def check_output(path, overwrite: bool) -> Path:
+    """Refuse an existing output without overwrite, or a missing/unwritable directory (before any work)."""
+    path = Path(path).expanduser().absolute()
+    if path.exists() and not overwrite:
+        raise StoreError(f"{path} already exists; use --overwrite to replace it")
+    if path.exists() and not (path / "zarr.json").is_file():
+        raise StoreError(f"{path} exists and is not a zarr dataset; refusing to replace it")
+    if not path.parent.is_dir():
+        raise StoreError(f"output directory {path.parent} does not exist")
+    if not os.access(path.parent, os.W_OK):
+        raise StoreError(f"output directory {path.parent} is not writable")
+    return path
+
+
+def _jsonable(v):
+    if isinstance(v, dict):
+        return {str(k): _jsonable(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_jsonable(x) for x in v]
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    return v
+
+
+def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: bool = False) -> Path:
+    """Write the lidar dataset to ``path`` atomically; returns the absolute path."""
+    import xarray as xr
+
+    path = check_output(path, overwrite)
+    nb, ng = samples.v_los.shape[1:]
+    ds = xr.Dataset(
+        {
+            "v_los": (("scan", "beam", "gate"), samples.v_los.astype(np.float32),
+                      {"units": "m s-1", "long_name": "line-of-sight speed, positive towards the lidar"}),
+            "u_LL": (("t_arrival",), u_ll.astype(np.float32),
+                     {"units": "m s-1", "long_name": "lidar estimate of the rotor-effective wind speed (moving full-scan window)"}),
+            "u_RR": (("t_arrival",), u_rr.astype(np.float32),
+                     {"units": "m s-1", "long_name": "u averaged over the rotor disc at x = 0"}),
+            "n1": (("beam", "gate"), samples.n1, {"units": "1", "long_name": "longitudinal component of the beam vector"}),
+        },
+        coords={
+            "time_s": (("scan", "beam"), samples.time_s, {"units": "s", "long_name": "physical time of the measurement"}),
+            "t_arrival": (("t_arrival",), t_arrival, {"units": "s", "long_name": "rotor arrival time (eddy time of plane x = 0)"}),
+            "gate_x_m": (("gate",), samples.gates_x_m, {"units": "m", "long_name": "upstream distance of the range gate"}),
+            "beam": (("beam",), np.arange(nb)),
+            "gate": (("gate",), np.arange(ng)),
+        },
+        attrs={k: json.dumps(_jsonable(v)) if isinstance(v, (dict, list, tuple)) else _jsonable(v) for k, v in attrs.items()},
+    )
+    tmp = path.parent / f".{path.name}.tmp-{os.getpid()}-{secrets.token_hex(4)}"
+    try:
+        import warnings
+
+        import zarr
+
+        ds.attrs[MARKER] = False
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="Consolidated metadata", category=UserWarning)
+            ds.to_zarr(tmp, mode="w", consolidated=True)
+            zarr.open_group(str(tmp), mode="r+").attrs[MARKER] = True  # the completeness marker, last
+            zarr.consolidate_metadata(str(tmp))
+        if path.exists():
+            old = path.parent / f".{path.name}.old-{os.getpid()}-{secrets.token_hex(4)}"
+            os.rename(path, old)
+            os.rename(tmp, path)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.rename(tmp, path)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return path

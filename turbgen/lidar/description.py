@@ -1,0 +1,196 @@
+"""What a lidar is: beams, range gates, probe volume, timing, and the turbine it serves.
+
+Presets
+-------
+* ``nacelle-4beam`` — the four-beam pulsed nacelle lidar of Guo et al. (2023) Table 3: azimuth
+  +-14.4 deg, elevation +-14.0 deg (beam pairs (14.4, 14), (14.4, -14), (-14.4, -14), (-14.4, 14)),
+  10 range gates at upstream distances 50 ... 169.7 m every 13.3 m, one beam at a time at 1 Hz per
+  beam (a full scan in 1 s), Gaussian probe volume with FWHM 30 m; NREL 5 MW rotor, R = 63 m.
+* ``spinner-cw`` / ``spinner-pulsed`` — the single-beam spinner lidars of Fu et al. (2023) at their
+  optima (CW: range 190 m, half-cone 21 deg; pulsed: 220 m, 18 deg; lambda = 1.565 um,
+  r_b = 28 mm, W_L = 30 m), 32 scan positions per revolution at 4 Hz (7.56 rpm, Eq. 12), shaft tilt
+  6 deg; IEA 15 MW rotor, R = 120 m.
+* ``nacelle-1beam`` — one pulsed beam along the shaft at 100 m (Fu et al. 2023's single-beam
+  nacelle reference), IEA 15 MW rotor.
+
+A user lidar is a TOML or JSON file with the same fields (``schemas/lidar.schema.json``).
+The frame and the line-of-sight sign are those of ``turbgen.theory.lidar_geometry``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError, check_choice, check_positive, check_range
+from turbgen.runs.config import check_mapping, read_config
+from turbgen.theory.lidar_geometry import Measurements, los_vectors, nacelle_directions, spinner_directions
+from turbgen.theory.lidar_weighting import cw_discrete, pulsed_discrete, rayleigh_length_m
+
+KINDS = ("pulsed", "cw")
+MOUNTS = ("nacelle", "spinner")
+MAX_MEASUREMENTS = 4096  # beams x gates
+
+
+@dataclass(frozen=True)
+class LidarDescription:
+    """A lidar and the rotor it previews. Angles in degrees, lengths in metres, rates in Hz.
+
+    kind : "pulsed" (Gaussian probe volume, FWHM ``fwhm_m``) or "cw" (Lorentzian, Rayleigh length
+        from ``wavelength_m``, ``beam_radius_m`` and the focus distance).
+    mount : "nacelle" (beams from ``azimuth_deg``, ``elevation_deg``) or "spinner" (beams on a cone of
+        half-angle ``half_cone_deg`` at scan angles ``scan_deg``, tilted with the shaft by ``tilt_deg``).
+    ranges_m : upstream distances x of the range gates (spinner: measurement range along the shaft
+        axis; the focus distance is x / cos(half cone)).
+    beam_rate_hz : beams measured per second, one beam at a time (all gates of a beam at once).
+    rotor_radius_m : radius R of the rotor whose effective wind speed the lidar previews.
+    """
+
+    name: str
+    kind: str
+    mount: str
+    ranges_m: tuple[float, ...]
+    beam_rate_hz: float
+    rotor_radius_m: float
+    azimuth_deg: tuple[float, ...] = ()
+    elevation_deg: tuple[float, ...] = ()
+    half_cone_deg: float = 0.0
+    scan_deg: tuple[float, ...] = ()
+    tilt_deg: float = 0.0
+    fwhm_m: float = 30.0
+    wavelength_m: float = 1.565e-6
+    beam_radius_m: float = 0.028
+    source: str = field(default="", compare=False)
+
+    def __post_init__(self):
+        check_choice("lidar kind", self.kind, KINDS)
+        check_choice("lidar mount", self.mount, MOUNTS)
+        for name in ("ranges_m", "azimuth_deg", "elevation_deg", "scan_deg"):
+            object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
+        if not self.ranges_m:
+            raise ParameterError("lidar ranges_m: give at least one range gate")
+        for x in self.ranges_m:
+            check_range("lidar range (m)", x, 1.0, 5000.0)
+        check_positive("lidar beam_rate_hz", self.beam_rate_hz)
+        check_range("rotor radius (m)", self.rotor_radius_m, 1.0, 500.0)
+        check_range("lidar fwhm_m", self.fwhm_m, 0.1, 1000.0)
+        check_range("lidar wavelength_m", self.wavelength_m, 1e-7, 1e-4)
+        check_range("lidar beam_radius_m", self.beam_radius_m, 1e-4, 1.0)
+        if self.mount == "nacelle":
+            if not self.azimuth_deg or len(self.azimuth_deg) != len(self.elevation_deg):
+                raise ParameterError("nacelle lidar: azimuth_deg and elevation_deg need one value per beam")
+            for a in self.azimuth_deg:
+                check_range("lidar azimuth (deg)", a, -80.0, 80.0)
+            for e in self.elevation_deg:
+                check_range("lidar elevation (deg)", e, -80.0, 80.0)
+        else:
+            check_range("lidar half_cone_deg", self.half_cone_deg, 0.0, 80.0)
+            if not self.scan_deg:
+                raise ParameterError("spinner lidar: scan_deg needs at least one scan angle")
+            check_range("lidar tilt_deg", self.tilt_deg, -30.0, 30.0)
+        if self.n_beams * len(self.ranges_m) > MAX_MEASUREMENTS:
+            raise ParameterError(f"lidar: {self.n_beams} beams x {len(self.ranges_m)} gates exceed "
+                                 f"{MAX_MEASUREMENTS} measurements")
+
+    @property
+    def n_beams(self) -> int:
+        return len(self.azimuth_deg) if self.mount == "nacelle" else len(self.scan_deg)
+
+    @property
+    def scan_time_s(self) -> float:
+        """Time of one full scan (every beam once) [s]."""
+        return self.n_beams / self.beam_rate_hz
+
+    def directions(self) -> np.ndarray:
+        """Beam directions d (n_beams, 3) in (x upstream, y, z)."""
+        if self.mount == "nacelle":
+            return nacelle_directions(self.azimuth_deg, self.elevation_deg)
+        return spinner_directions(self.half_cone_deg, self.scan_deg, self.tilt_deg)
+
+    def measurement_points(self) -> Measurements:
+        """Every (beam, gate) measurement: LOS vector, focus point, probe-volume offsets and weights."""
+        d = self.directions()
+        rows = []
+        for b in range(self.n_beams):
+            for g, x in enumerate(self.ranges_m):
+                if self.mount == "nacelle":
+                    focus_dist = x / d[b, 0]  # the gate is the plane x: the focus lies on it
+                else:
+                    focus_dist = x / np.cos(np.radians(self.half_cone_deg))  # Fu et al. 2023: f_d = x / cos(phi)
+                if self.kind == "pulsed":
+                    s, w = pulsed_discrete(self.fwhm_m)
+                else:
+                    s, w = cw_discrete(float(rayleigh_length_m(focus_dist, self.wavelength_m, self.beam_radius_m)))
+                rows.append((b, g, focus_dist, s, w))
+        k = max(r[3].size for r in rows)
+        M = len(rows)
+        offsets = np.zeros((M, k))
+        weights = np.zeros((M, k))
+        for i, (_, _, _, s, w) in enumerate(rows):  # pad with zero weights (same rows for one kind)
+            offsets[i, : s.size], weights[i, : w.size] = s, w
+        beam = np.array([r[0] for r in rows])
+        gate = np.array([r[1] for r in rows])
+        dist = np.array([r[2] for r in rows])
+        direction = d[beam]
+        return Measurements(n=los_vectors(direction), focus_m=direction * dist[:, None], direction=direction,
+                            offsets_m=offsets, weights=weights, beam=beam, gate=gate)
+
+    def schedule(self, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """Measurement times [s] from 0 to duration and the beam measured at each (one beam at a time)."""
+        n = int(np.floor(check_positive("duration (s)", duration_s) * self.beam_rate_hz + 1e-9))
+        k = np.arange(n)
+        return k / self.beam_rate_hz, k % self.n_beams
+
+    def to_attrs(self) -> dict:
+        """Every field, JSON-ready (for a store's attributes or a report)."""
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}
+
+
+def _spinner_scan_deg(rpm: float = 7.56, rate_hz: float = 4.0, n: int = 32) -> tuple[float, ...]:
+    """theta_i = (2 pi / 60) Omega i / f_s, i = 1 ... 32 (Fu et al. 2023 Eq. 12), in degrees."""
+    return tuple(float(np.degrees(2.0 * np.pi / 60.0 * rpm * i / rate_hz)) for i in range(1, n + 1))
+
+
+PRESETS: dict[str, LidarDescription] = {
+    "nacelle-4beam": LidarDescription(
+        name="nacelle-4beam", kind="pulsed", mount="nacelle",
+        ranges_m=tuple(50.0 + 13.3 * i for i in range(10)), beam_rate_hz=4.0, rotor_radius_m=63.0,
+        azimuth_deg=(14.4, 14.4, -14.4, -14.4), elevation_deg=(14.0, -14.0, -14.0, 14.0), fwhm_m=30.0,
+        source="Guo et al. (2023) Table 3; NREL 5 MW rotor"),
+    "spinner-cw": LidarDescription(
+        name="spinner-cw", kind="cw", mount="spinner", ranges_m=(190.0,), beam_rate_hz=4.0, rotor_radius_m=120.0,
+        half_cone_deg=21.0, scan_deg=_spinner_scan_deg(), tilt_deg=6.0,
+        source="Fu et al. (2023) CW optimum; IEA 15 MW rotor"),
+    "spinner-pulsed": LidarDescription(
+        name="spinner-pulsed", kind="pulsed", mount="spinner", ranges_m=(220.0,), beam_rate_hz=4.0,
+        rotor_radius_m=120.0, half_cone_deg=18.0, scan_deg=_spinner_scan_deg(), tilt_deg=6.0, fwhm_m=30.0,
+        source="Fu et al. (2023) pulsed optimum; IEA 15 MW rotor"),
+    "nacelle-1beam": LidarDescription(
+        name="nacelle-1beam", kind="pulsed", mount="nacelle", ranges_m=(100.0,), beam_rate_hz=1.0,
+        rotor_radius_m=120.0, azimuth_deg=(0.0,), elevation_deg=(0.0,), fwhm_m=30.0,
+        source="single pulsed beam along the axis (Fu et al. 2023 nacelle reference); IEA 15 MW rotor"),
+}
+
+def lidar_from_mapping(data: dict, where: str = "lidar") -> LidarDescription:
+    """A LidarDescription from a mapping (a file's content), checked against schemas/lidar.schema.json."""
+    data = dict(check_mapping(data, "lidar", where))
+    data.setdefault("name", where)
+    return LidarDescription(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in data.items()})
+
+
+def load_lidar(name_or_path) -> LidarDescription:
+    """A preset by name, or a TOML/JSON lidar file (``schemas/lidar.schema.json``)."""
+    key = str(name_or_path)
+    if key in PRESETS:
+        return PRESETS[key]
+    path = Path(key)
+    if path.suffix.lower() not in (".toml", ".json") or not path.is_file():
+        raise ParameterError(f"lidar {key!r} is neither a preset ({', '.join(PRESETS)}) nor a .toml/.json file")
+    return lidar_from_mapping(read_config(path, "lidar"), where=path.stem)
+
+
+def with_ranges(lidar: LidarDescription, ranges_m) -> LidarDescription:
+    """The same lidar with other range gates (used by the range search)."""
+    return replace(lidar, ranges_m=tuple(float(x) for x in ranges_m))

@@ -1,0 +1,77 @@
+"""One virtual-lidar run on a store: sample -> u_LL, u_RR, TI -> Welch gamma^2_RL, |G_RL| -> dataset.
+
+Shared by ``turbgen lidar`` and ``turbgen sweep --lidar``. The lidar is described by an object
+with ``measurement_points()`` (per beam-gate: beam, gate, n, focus, probe offsets, weights) and
+``schedule(duration_s)`` -> (times_s, beam index), see ``turbgen.lidar.description``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.lidar import compare, sampling, signals
+from turbgen.lidar.sampling import Measurement
+from turbgen.validate.estimators import WelchSetup, check_rotor_radius
+
+
+def measurements_of(description) -> list[Measurement]:
+    """The description's beam-gates (``turbgen.theory.lidar_geometry.Measurements`` rows) as
+    :class:`Measurement`, each taken from the plane of its gate's range ``ranges_m[gate]``."""
+    m = description.measurement_points()
+    ranges = getattr(description, "ranges_m", None)
+    return [
+        Measurement(int(m.beam[i]), int(m.gate[i]), tuple(m.n[i]), tuple(m.focus_m[i]), tuple(m.offsets_m[i]),
+                    tuple(m.weights[i]), tuple(m.direction[i]),
+                    None if ranges is None else float(ranges[int(m.gate[i])]))
+        for i in range(m.count)
+    ]
+
+
+def lidar_attrs(description) -> dict:
+    """Every parameter of the description (dataclass fields, or its own ``to_dict``)."""
+    if hasattr(description, "to_attrs"):
+        return dict(description.to_attrs())
+    if dataclasses.is_dataclass(description):
+        return {f.name: getattr(description, f.name) for f in dataclasses.fields(description)}
+    return {"description": repr(description)}
+
+
+@dataclass
+class LidarRun:
+    samples: sampling.LidarSamples
+    t_arrival_s: np.ndarray
+    u_LL: np.ndarray
+    u_RR: np.ndarray
+    ti_lidar: float
+    ti_rotor: float
+    welch: dict
+    simulated: dict  # k05_rad_m, d_eddy_min_m, cutoff_hz of the simulated curves
+    rotor_radius_m: float
+
+
+def default_nperseg(n: int) -> int:
+    """Largest power of two <= n / 8 (about 15 half-overlapping Welch segments), at least 16."""
+    if n < 64:
+        raise ParameterError(f"lidar signal of {n} samples is too short (needs >= 64 scan steps)")
+    return max(16, 2 ** int(np.floor(np.log2(n / 8))))
+
+
+def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shear_exponent=0.2,
+              nperseg=None) -> LidarRun:
+    """Sample ``fs`` with ``description`` and estimate the simulated preview quality."""
+    g = fs.grid
+    radius = check_rotor_radius(g, rotor_radius_m)
+    ms = measurements_of(description)
+    times, beams = description.schedule(g.nt * g.dt_s)
+    s = sampling.sample(fs, ms, times, beams, add_mean_wind=add_mean_wind, shear_exponent=shear_exponent)
+    t_arr, u_ll = signals.lidar_estimate(s, fs.U_m_s)
+    u_rr, ti_r = signals.rotor_average(fs, radius, t_arr)
+    step = float(t_arr[1] - t_arr[0])
+    setup = WelchSetup(nperseg or default_nperseg(u_ll.size), step)
+    w = signals.welch_rl(u_ll, u_rr, setup)  # segment means removed: the mean wind does not enter
+    sim = compare.preview_numbers(w["f_hz"], w["coh2_RL"], w["G_RL"], fs.U_m_s)
+    return LidarRun(s, t_arr, u_ll, u_rr, signals.lidar_ti(s, fs.U_m_s), ti_r, w, sim, radius)

@@ -1,0 +1,212 @@
+"""Virtual lidar: line-of-sight speeds sampled from a field store along the beams.
+
+Frame (the store's, README "Convected frame"): x upstream distance from the rotor [m], y to the
+left looking downwind, z up from the hub; u downwind. A measurement (one beam, one range gate)
+returns v_los = sum_k w_k n . (u, v, w)(p_k), with n the projection vector (v_los = +u for a beam
+looking straight upstream) and p_k = focus + s_k d the probe-volume points at offsets s_k [m] along
+the geometric beam direction d (default: focus / |focus|, a lidar at the hub).
+
+Where a point lies on the 4D field (Guo et al. 2023, Sect. 5.1.2): every point of gate g's probe
+volume is taken from gate g's own plane x_g, with Taylor's frozen hypothesis within the probe
+volume: the field at upstream distance x' and physical time T is the field at x_g and physical time
+T + (x' - x_g)/U. In the convected frame the field at plane x_g and physical time T' is stored at
+t = T' + x_g/U, so the point is the stored sample t = T + x'/U of plane x_g (linear in t, bilinear
+in y, z). Gates must coincide with planes of the store; a beam may not leave the yz field.
+
+Memory: each plane is read once, only the time span and the yz box its points need.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+
+PLANE_TOL_M = 1e-6
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """One beam-gate of a lidar.
+
+    beam, gate: indices; n: projection vector (3,) on (u, v, w) [-]; focus_m: (x, y, z) [m] of the
+    gate centre; offsets_m: probe-volume points along the beam [m] (0 = focus); weights: their
+    weights [-] (sum 1); direction: geometric unit direction (x, y, z) of the beam, default the
+    focus direction seen from the hub.
+    """
+
+    beam: int
+    gate: int
+    n: tuple
+    focus_m: tuple
+    offsets_m: tuple = (0.0,)
+    weights: tuple = (1.0,)
+    direction: tuple | None = field(default=None)
+    plane_x_m: float | None = None  # the gate's plane; default the focus x (a tilted beam's focus may lie off it)
+
+    def points_m(self) -> np.ndarray:
+        """Probe-volume points (k, 3) [m]."""
+        f = np.asarray(self.focus_m, float)
+        d = np.asarray(self.direction, float) if self.direction is not None else f / np.linalg.norm(f)
+        return f[None, :] + np.asarray(self.offsets_m, float)[:, None] * d[None, :]
+
+
+@dataclass(frozen=True)
+class LidarSamples:
+    """v_los (n_scan, n_beam, n_gate) [m/s] at physical times time_s (n_scan, n_beam) [s]."""
+
+    v_los: np.ndarray
+    time_s: np.ndarray
+    gates_x_m: np.ndarray
+    n1: np.ndarray  # (n_beam, n_gate) longitudinal projection of each measurement
+    mean_wind_added: bool
+    shear_exponent: float
+
+
+def _plane_index(grid, x: float, beam: int, gate: int) -> int:
+    xs = grid.x()
+    i = int(np.argmin(np.abs(xs - x)))
+    if abs(xs[i] - x) <= PLANE_TOL_M * max(1.0, abs(x)):
+        return i
+    where = "beyond the store's planes" if x > xs.max() + PLANE_TOL_M else "between the store's planes"
+    raise ParameterError(
+        f"lidar gate {gate} of beam {beam} at x = {x:g} m is {where} (planes: "
+        f"{', '.join(f'{v:g}' for v in xs)} m); gates must be planes of the store"
+    )
+
+
+def check_measurements(fs, measurements) -> list[int]:
+    """Validate geometry and weights against the store; the plane index of each measurement."""
+    g = fs.grid
+    y, z = g.y(), g.z()
+    planes = []
+    for m in measurements:
+        w = np.asarray(m.weights, float)
+        s = np.asarray(m.offsets_m, float)
+        n = np.asarray(m.n, float)
+        if w.shape != s.shape or w.size == 0 or not np.all(np.isfinite(w)) or np.any(w < 0) or abs(w.sum() - 1) > 1e-6:
+            raise ParameterError(
+                f"lidar beam {m.beam} gate {m.gate}: probe-volume weights must be >= 0, one per offset, "
+                f"summing to 1 (got sum {w.sum():g})"
+            )
+        if not np.all(np.isfinite(n)) or abs(np.linalg.norm(n) - 1) > 1e-6:
+            raise ParameterError(f"lidar beam {m.beam}: n = {n.tolist()} is not a unit vector")
+        px = float(m.focus_m[0]) if m.plane_x_m is None else float(m.plane_x_m)
+        planes.append(_plane_index(g, px, m.beam, m.gate))
+        p = m.points_m()
+        for k, (lo, hi, name) in enumerate(((y[0], y[-1], "y"), (z[0], z[-1], "z"))):
+            c = p[:, k + 1]
+            if c.min() < lo - 1e-9 or c.max() > hi + 1e-9:
+                bad = c.min() if c.min() < lo else c.max()
+                raise ParameterError(
+                    f"lidar beam {m.beam} leaves the yz field at gate x = {m.focus_m[0]:g} m: "
+                    f"{name} = {bad:.4g} m is outside [{lo:g}, {hi:g}] m"
+                )
+        if p[:, 0].min() < -1e-9:
+            raise ParameterError(f"lidar beam {m.beam} gate {m.gate}: probe volume reaches behind the rotor (x < 0)")
+    return planes
+
+
+def _interp_axis(coord0: float, step: float, n: int, values: np.ndarray):
+    """Lower index and fraction of linear interpolation on a regular axis of n nodes."""
+    f = (values - coord0) / step
+    i = np.clip(np.floor(f).astype(np.int64), 0, max(n - 2, 0))
+    a = f - i
+    if n == 1:
+        a = np.zeros_like(f)
+    return i, a
+
+
+def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = False,
+           shear_exponent: float = 0.2) -> LidarSamples:
+    """Sample ``fs`` with ``measurements`` at the scan schedule (times_s [s], beam index per entry).
+
+    The schedule must be one beam at a time, cycling over all beams in a fixed order (a full scan =
+    n_beam consecutive entries); the entries whose stored times fall outside the store are dropped
+    at the end (whole scans only). add_mean_wind: add U (1 + z/h_hub)^alpha to u (False: fluctuations).
+    """
+    g, U = fs.grid, fs.U_m_s
+    planes = check_measurements(fs, measurements)
+    beams = sorted({m.beam for m in measurements})
+    gates = sorted({m.gate for m in measurements})
+    nb, ng = len(beams), len(gates)
+    if len(measurements) != nb * ng:
+        raise ParameterError(f"lidar: every beam needs every gate ({len(measurements)} measurements for {nb} x {ng})")
+    times_s = np.asarray(times_s, float)
+    beam_of_sample = np.asarray(beam_of_sample)
+    order = beam_of_sample[:nb]
+    if sorted(order.tolist()) != beams:
+        raise ParameterError("lidar schedule: the first scan does not visit every beam once")
+    # stored-time extent of every point: t = T + x'/U must lie within [0, t_end]
+    x_max = max(m.points_m()[:, 0].max() for m in measurements)
+    t_end = (g.nt - 1) * g.dt_s
+    n_scan = 0
+    while (n_scan + 1) * nb <= times_s.size and times_s[(n_scan + 1) * nb - 1] + x_max / U <= t_end:
+        n_scan += 1
+    if n_scan < 2:
+        raise ParameterError(
+            f"store of {t_end:g} s is too short for the lidar: its farthest point (x = {x_max:g} m) "
+            f"needs T + x/U <= {t_end:g} s"
+        )
+    T = times_s[: n_scan * nb].reshape(n_scan, nb)
+    if not np.array_equal(beam_of_sample[: n_scan * nb].reshape(n_scan, nb), np.broadcast_to(order, (n_scan, nb))):
+        raise ParameterError("lidar schedule: beams must be measured one at a time in a repeating order")
+    col = {b: i for i, b in enumerate(order.tolist())}
+    bi = {b: i for i, b in enumerate(beams)}
+    gi = {gg: i for i, gg in enumerate(gates)}
+    v_los = np.zeros((n_scan, nb, ng))
+    n1 = np.zeros((nb, ng))
+    time_out = np.zeros((n_scan, nb))
+    for b in beams:
+        time_out[:, bi[b]] = T[:, col[b]]
+    y0, z0 = g.y()[0], g.z()[0]
+    by_plane: dict[int, list[int]] = {}
+    for j, ix in enumerate(planes):
+        by_plane.setdefault(ix, []).append(j)
+    for ix, idx in sorted(by_plane.items()):
+        pts = [measurements[j].points_m() for j in idx]
+        allp = np.concatenate(pts)
+        iy, _ = _interp_axis(y0, g.dy_m, g.ny, allp[:, 1])
+        iz, _ = _interp_axis(z0, g.dz_m, g.nz, allp[:, 2])
+        y_lo, y_hi = int(iy.min()), min(int(iy.max()) + 2, g.ny)
+        z_lo, z_hi = int(iz.min()), min(int(iz.max()) + 2, g.nz)
+        t_lo = max(0, int(math.floor((T.min() + allp[:, 0].min() / U) / g.dt_s)))
+        t_hi = min(g.nt, int(math.ceil((T.max() + allp[:, 0].max() / U) / g.dt_s)) + 2)
+        box = {c: np.asarray(fs.array(c)[t_lo:t_hi, ix, y_lo:y_hi, z_lo:z_hi], dtype=np.float64) for c in "uvw"}
+        for j, p in zip(idx, pts):
+            m = measurements[j]
+            Tm = T[:, col[m.beam]]  # (n_scan,)
+            t = Tm[:, None] + p[None, :, 0] / U  # (n_scan, k) stored time
+            it, at = _interp_axis(t_lo * g.dt_s, g.dt_s, t_hi - t_lo, t)
+            jy, ay = _interp_axis(y0 + y_lo * g.dy_m, g.dy_m, y_hi - y_lo, p[:, 1])
+            jz, az = _interp_axis(z0 + z_lo * g.dz_m, g.dz_m, z_hi - z_lo, p[:, 2])
+            n = np.asarray(m.n, float)
+            shape = box["u"].shape
+            # the 8 corners of (t, y, z): flat indices and weights, shared by the three components
+            corners = []
+            for dt_, wt in ((0, 1 - at), (1, at)):
+                ii = np.minimum(it + dt_, shape[0] - 1)
+                for dy_, wy in ((0, 1 - ay), (1, ay)):
+                    yy = np.minimum(jy + dy_, shape[1] - 1)
+                    for dz_, wz in ((0, 1 - az), (1, az)):
+                        zz = np.minimum(jz + dz_, shape[2] - 1)
+                        corners.append(((ii * shape[1] + yy) * shape[2] + zz, wt * (wy * wz)))
+            los = 0.0
+            for c, nc in zip("uvw", n):
+                if nc == 0.0:
+                    continue
+                flat = box[c].ravel()
+                val = sum(w * flat[idx] for idx, w in corners)
+                if c == "u" and add_mean_wind:
+                    h = fs.hub_height_m + p[:, 2]
+                    if np.any(h <= 0):
+                        raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+                    val = val + U * (h / fs.hub_height_m) ** shear_exponent
+                los = los + nc * val
+            v_los[:, bi[m.beam], gi[m.gate]] = los @ np.asarray(m.weights, float)
+            n1[bi[m.beam], gi[m.gate]] = n[0]
+    gx = np.array([g.x_m[next(planes[j] for j, m in enumerate(measurements) if m.gate == gg)] for gg in gates], float)
+    return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, add_mean_wind, shear_exponent)

@@ -1,0 +1,327 @@
+"""Lidar preview quality: rotor-effective wind speed (REWS) spectra, lidar-rotor coherence, Wiener gain.
+
+Signals (Guo et al. 2023 Sect. 3; Fu et al. 2023 Sect. 2.4):
+* u_RR, the rotor-averaged u over a disc of radius R at x = 0 (Eq. 23);
+* u_LL = (1/M) sum_i v_los,i / n_i1 over the M measurements of one full scan (Eq. 28 without the
+  stray outer factor; Fu et al. 2023 Eq. 23), v_los,i = sum_s w_is n_i . u(focus_i + s d_i);
+* each measurement shifted by its own preview time x_i/U (the buffer), so the longitudinal lag
+  x_i is not a phase: what remains between a gate and the rotor, or two gates, is the eddies'
+  evolution over |x_i - x_j|/U (Guo et al. 2023 Eq. 29, 32 with Delta t as in Fu et al. 2023 Eq. 25).
+
+Mann model (space-time tensor Theta = exp(-|dt|/tau_e(|k|)) Phi, Guo et al. 2022), two-sided in k1:
+  S_LL(k1) = ∫ sum_{g,h} D(k, |x_g - x_h|/U) A_g(k)^T Phi(k) A_h(k)^* dk_perp        (Eq. 29)
+  S_RL(k1) = ∫ sum_g D(k, x_g/U) r(kappa) sum_m Phi_1m(k) A_g,m(k)^* dk_perp          (Eq. 32)
+  S_RR(k1) = ∫ r(kappa)^2 Phi_11(k) dk_perp                                           (Eq. 24)
+with A_g(k) = sum_{i in gate g} n_i phi_hat_i(k . n_i) exp(i (k2 y_i + k3 z_i)) / (M n_i1), the rotor
+filter r = 2 J1(kappa R) / (kappa R) and D = exp(-dt / tau_e(|k|)) (1 for frozen turbulence).
+Quadrature: polar (kappa, theta); kappa in Gauss-Legendre panels (log-spaced below KAPPA_SPLIT,
+PANEL_WIDTH wide above, up to KAPPA_MAX), theta with the trapezoid rule (N_THETA nodes, spectral for
+the periodic integrand). All three spectra use the same nodes, so their quadrature errors largely
+cancel in the coherence; against twice-refined nodes gamma^2 and |G_RL| of the Table 3 lidar change
+by < 1e-4 (tests/test_lidar_theory.py). KAPPA_MAX = 1 rad/m suits averaged signals (probe volumes
+and the rotor disc damp higher kappa); a single *point* loses the inertial tail (~2 % of F11 at
+k1 = 0.08 rad/m) unless kappa_max is raised.
+
+Kaimal model (direct product, Guo et al. 2023 Eq. 25, 31, 33): S_c(f) coh_yz(r, f) gamma_x(dx, f)
+between the probe-volume samples (Taylor within the probe volume: a sample s metres along the beam
+from focus i is taken from the plane of gate i, shifted by its upstream offset / U), the rotor
+points on a square grid inside the disc.
+
+Derived quantities: gamma^2_RL = |S_RL|^2 / (S_RR S_LL) (magnitude-squared, Eq. 34),
+|G_RL| = |S_RL| / S_LL (Eq. 35), the -3 dB cut-off of |G_RL|, the measurement coherence bandwidth
+k_0.5 where gamma^2 drops to 0.5 and d_eddy,min = 2 pi / k_0.5 (Fu et al. 2023 Eq. 26-27), the delay
+of the first-order low-pass filter (Fu et al. 2023 Eq. 30) and the buffer time (Sect. 3.5).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import j1
+
+from turbgen.errors import ParameterError, check_positive
+from turbgen.theory.coherence_models import exponential_yz
+from turbgen.theory.eddy_lifetime import evolution_lifetime_s
+from turbgen.theory.kaimal import kaimal_spectrum
+from turbgen.theory.lidar_geometry import Measurements
+from turbgen.theory.lidar_weighting import discrete_transform
+from turbgen.theory.mann_tensor import sheared_tensor
+from turbgen.theory.params import KaimalParams, MannParams, check_wind_speed
+from turbgen.theory.rotor_effective import rews_spectrum_kaimal
+
+KAPPA_LO = 1e-5  # rad/m, lowest radial node
+KAPPA_SPLIT = 0.02  # rad/m: log panels below, uniform panels above
+KAPPA_MAX = 1.0  # rad/m
+PANEL_WIDTH = 0.05  # rad/m, resolves exp(i kappa r) for point separations up to ~150 m
+N_GAUSS = 8
+N_THETA = 160
+MINUS_3_DB = 10.0 ** (-3.0 / 20.0)
+
+
+@dataclass(frozen=True)
+class PreviewSpectra:
+    """One-sided spectra in frequency [m^2 s^-2 Hz^-1] of u_RR, u_LL and their cross-spectrum."""
+
+    f_hz: np.ndarray
+    S_RR: np.ndarray
+    S_LL: np.ndarray
+    S_RL: np.ndarray
+
+    @property
+    def coh2_RL(self) -> np.ndarray:
+        """gamma^2_RL = |S_RL|^2 / (S_RR S_LL) (Guo et al. 2023 Eq. 34, magnitude-squared)."""
+        return np.abs(self.S_RL) ** 2 / (self.S_RR * self.S_LL)
+
+    @property
+    def G_RL(self) -> np.ndarray:
+        """Wiener gain |G_RL| = |S_RL| / S_LL (Guo et al. 2023 Eq. 35)."""
+        return np.abs(self.S_RL) / self.S_LL
+
+
+def _check(f_hz, meas: Measurements, U_m_s: float, radius_m: float):
+    f = np.atleast_1d(np.asarray(f_hz, dtype=float))
+    if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
+        raise ParameterError("f (Hz) must be positive finite numbers")
+    U = check_wind_speed(U_m_s)
+    R = check_positive("rotor radius (m)", radius_m)
+    if meas.count == 0:
+        raise ParameterError("the lidar has no measurements")
+    if np.any(meas.n[:, 0] <= 1e-6):
+        raise ParameterError("every beam must look upstream (n_1 > 0): u_LL divides by n_1")
+    return f, U, R
+
+
+def _radial_nodes(kappa_max: float = KAPPA_MAX, panel: float = PANEL_WIDTH):
+    g, gw = np.polynomial.legendre.leggauss(N_GAUSS)
+    nodes, weights = [], []
+    edges = np.exp(np.arange(np.log(KAPPA_LO), np.log(KAPPA_SPLIT), 1.0))
+    edges = np.append(edges, KAPPA_SPLIT)
+    edges = np.concatenate([edges, np.arange(KAPPA_SPLIT + panel, kappa_max + 0.5 * panel, panel)])
+    for a, b in zip(edges[:-1], edges[1:]):
+        nodes.append(0.5 * (b - a) * g + 0.5 * (b + a))
+        weights.append(0.5 * (b - a) * gw)
+    kappa = np.concatenate(nodes)
+    return kappa, np.concatenate(weights) * kappa  # kappa dkappa
+
+
+def _weight_table(meas: Measurements, nu_max: float):
+    """phi_hat on a fine |nu| grid for each distinct probe volume (rows sharing offsets share a table)."""
+    keys, first, inverse = np.unique(np.hstack([meas.offsets_m, meas.weights]).round(12), axis=0,
+                                     return_index=True, return_inverse=True)
+    nu = np.linspace(0.0, nu_max, int(nu_max / 2e-4) + 2)
+    tables = [discrete_transform(nu, meas.offsets_m[i], meas.weights[i]) for i in first]
+    return nu, tables, inverse.ravel()
+
+
+def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: float, radius_m: float,
+                         *, kappa_max: float = KAPPA_MAX, n_theta: int = N_THETA,
+                         panel_width: float = PANEL_WIDTH) -> PreviewSpectra:
+    """S_RR, S_LL, S_RL of the Mann space-time tensor for a lidar and a rotor of radius R (module docstring).
+
+    f_hz : frequencies [Hz] (k1 = 2 pi f / U); meas : the lidar's measurements (one full scan);
+    U_m_s : mean wind speed [m/s]; radius_m : rotor radius R [m]. Returns one-sided spectra in f.
+    """
+    f, U, R = _check(f_hz, meas, U_m_s, radius_m)
+    k1_all = 2.0 * np.pi * f / U
+    kappa, wk = _radial_nodes(kappa_max, panel_width)
+    theta = 2.0 * np.pi * np.arange(n_theta) / n_theta
+    ct, st = np.cos(theta), np.sin(theta)
+    k2 = kappa[:, None] * ct[None, :]
+    k3 = kappa[:, None] * st[None, :]
+    w_rad = wk * (2.0 * np.pi / n_theta)
+    z = kappa * R
+    rotor = np.where(z > 1e-8, 2.0 * j1(z) / np.where(z > 1e-8, z, 1.0), 1.0)
+    x_gate = meas.focus_m[:, 0]
+    xs, gate_of = np.unique(np.round(x_gate, 6), return_inverse=True)
+    gate_of = gate_of.ravel()
+    n_g, n_r = xs.size, kappa.size
+    nu_max = float(np.sqrt(k1_all.max() ** 2 + kappa_max**2)) * 1.01
+    nu_tab, tables, table_of = _weight_table(meas, nu_max)
+    # measurements that share a LOS vector and a probe volume share phi_hat(k . n) (a beam's gates)
+    beams, beam_of = np.unique(np.hstack([meas.n.round(12), table_of[:, None]]), axis=0, return_inverse=True)
+    beam_of = beam_of.ravel()
+    scale = meas.n / (meas.count * meas.n[:, :1])  # n_i / (M n_i1)
+    # exp(i (k2 y_i + k3 z_i)) does not depend on k1: once per measurement (complex64 halves the memory)
+    phase = np.exp(1j * (k2[None] * meas.focus_m[:, 1, None, None] + k3[None] * meas.focus_m[:, 2, None, None]))
+    phase = phase.astype(np.complex64)
+    mix = np.zeros((n_g, 3, meas.count), dtype=np.complex64)
+    mix[gate_of, :, np.arange(meas.count)] = scale
+    mix = mix.reshape(3 * n_g, meas.count)
+    dx_gg = np.abs(xs[:, None] - xs[None, :])
+    S_RR = np.empty(f.size)
+    S_LL = np.empty(f.size)
+    S_RL = np.empty(f.size, dtype=complex)
+    for m, k1 in enumerate(k1_all):
+        phi = sheared_tensor(k1, k2, k3, params)  # (3, 3, nr, nt)
+        phi32 = phi.astype(np.float32)
+        hat = np.stack([np.interp(np.abs(k1 * b[0] + k2 * b[1] + k3 * b[2]), nu_tab, tables[int(b[3])])
+                        for b in beams]).astype(np.float32)
+        amp = (hat[beam_of] * phase).reshape(meas.count, -1)  # (M, nodes)
+        A = (mix @ amp).reshape(n_g, 3, n_r, n_theta)  # A_g,l = sum_{i in g} n_il / (M n_i1) amp_i
+        Ac = A.conj()
+        PhiA = np.stack([sum(phi32[l, c] * Ac[:, c] for c in range(3)) for l in range(3)], axis=1)  # Phi conj(A_h)
+        # P[g, h, r] = sum_{l, theta} A[g, l, r, theta] PhiA[h, l, r, theta] as one batched product over r
+        a_r = A.transpose(2, 0, 1, 3).reshape(n_r, n_g, 3 * n_theta)
+        b_r = PhiA.transpose(2, 1, 3, 0).reshape(n_r, 3 * n_theta, n_g)
+        P = np.matmul(a_r, b_r).transpose(1, 2, 0)  # (g, h, r)
+        Q = PhiA[:, 0].sum(axis=-1)  # sum_m Phi_1m conj(A_g,m), summed over theta: (g, r)
+        kmag = np.sqrt(k1 * k1 + kappa * kappa)
+        tau = evolution_lifetime_s(kmag, params) if params.evo_time_s is not None else np.full(n_r, np.inf)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv_tau = np.where(np.isfinite(tau), 1.0 / tau, 0.0)
+        D_gh = np.exp(-(dx_gg / U)[..., None] * inv_tau)  # (g, h, r)
+        D_g = np.exp(-(xs / U)[:, None] * inv_tau)  # (g, r)
+        S_LL[m] = float(np.real((D_gh * P * w_rad).sum()))
+        S_RL[m] = (D_g * Q * rotor * w_rad).sum()
+        S_RR[m] = float((rotor**2 * phi[0, 0].sum(axis=-1) * w_rad).sum())
+    to_f = 2.0 * 2.0 * np.pi / U  # two-sided in k1 -> one-sided in f
+    return PreviewSpectra(f, S_RR * to_f, S_LL * to_f, S_RL * to_f)
+
+
+def rotor_points(radius_m: float, spacing_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(y, z) [m] of a square grid (spacing default R/10) inside the rotor disc of radius R."""
+    R = check_positive("rotor radius (m)", radius_m)
+    h = R / 10.0 if spacing_m is None else check_positive("rotor grid spacing (m)", spacing_m)
+    n = int(np.floor(R / h))
+    c = h * np.arange(-n, n + 1)
+    yy, zz = np.meshgrid(c, c, indexing="ij")
+    inside = yy**2 + zz**2 <= R * R
+    return yy[inside], zz[inside]
+
+
+def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: float, radius_m: float,
+                           long_coherence, *, long_components: str = "u", vw_coherence: bool = False,
+                           rotor_spacing_m: float | None = None) -> PreviewSpectra:
+    """S_RR, S_LL, S_RL of the Kaimal direct-product model (Guo et al. 2023 Eq. 25, 31, 33).
+
+    long_coherence(dx_m, f_hz) : un-squared longitudinal coherence between planes dx apart (e.g.
+    ``lambda dx, f: exponential_longitudinal(dx, f, U, a_x, b_x)``), applied to the components in
+    ``long_components``; other components are independent between planes. u is coherent in the yz
+    plane (IEC exponential, un-squared); v, w are spatially white unless ``vw_coherence``.
+    """
+    f, U, R = _check(f_hz, meas, U_m_s, radius_m)
+    pts = meas.sample_points_m()  # (M, K, 3)
+    M, K = meas.weights.shape
+    gate_x = np.repeat(meas.focus_m[:, 0], K)
+    delay_s = (pts[..., 0] - meas.focus_m[:, None, 0]).ravel() / U  # Taylor shift inside the probe volume
+    py, pz = pts[..., 1].ravel(), pts[..., 2].ravel()
+    r_ll = np.hypot(py[:, None] - py[None, :], pz[:, None] - pz[None, :])
+    dx_ll = np.abs(gate_x[:, None] - gate_x[None, :])
+    same_point = (r_ll < 1e-9) & (dx_ll < 1e-9)
+    coef = (meas.weights[..., None] * meas.n[:, None, :] / (M * meas.n[:, None, :1])).reshape(M * K, 3)
+    yr, zr = rotor_points(R, rotor_spacing_m)
+    r_rl = np.hypot(yr[:, None] - py[None, :], zr[:, None] - pz[None, :])
+    S_LL = np.empty(f.size)
+    S_RL = np.empty(f.size, dtype=complex)
+    for m, fm in enumerate(f):
+        ph = np.exp(2j * np.pi * fm * delay_s)
+        total = 0.0
+        for c in range(3):
+            S_c = kaimal_spectrum(fm, kparams.sigma_m_s[c], kparams.length_scales_m[c], U)
+            if c == 0 or vw_coherence:
+                coh = exponential_yz(r_ll, fm, U, kparams.a_yz, kparams.lc_m)
+            else:
+                coh = same_point.astype(float)
+            gx = long_coherence(dx_ll, fm) if "uvw"[c] in long_components else (dx_ll < 1e-9).astype(float)
+            a = coef[:, c] * ph
+            total += S_c * np.real(a @ (coh * gx) @ a.conj())
+        S_LL[m] = total
+        S_1 = kaimal_spectrum(fm, kparams.sigma_m_s[0], kparams.length_scales_m[0], U)
+        gx_r = long_coherence(gate_x, fm) if "u" in long_components else (gate_x < 1e-9).astype(float)
+        coh_r = exponential_yz(r_rl, fm, U, kparams.a_yz, kparams.lc_m)
+        S_RL[m] = S_1 * (coh_r.mean(axis=0) * gx_r) @ (coef[:, 0] * ph).conj()
+    S_RR = rews_spectrum_kaimal(f, kparams, U, yr, zr)
+    return PreviewSpectra(f, S_RR, S_LL, S_RL)
+
+
+def _first_crossing(f: np.ndarray, y: np.ndarray, level: float) -> float:
+    """The first frequency where y falls below level (linear interpolation in log f); nan if never."""
+    below = np.flatnonzero(y < level)
+    if below.size == 0:
+        return float("nan")
+    j = int(below[0])
+    if j == 0:
+        return float(f[0])
+    t = (y[j - 1] - level) / (y[j - 1] - y[j])
+    return float(np.exp(np.log(f[j - 1]) + t * (np.log(f[j]) - np.log(f[j - 1]))))
+
+
+def cutoff_frequency_hz(f_hz, gain) -> float:
+    """The -3 dB cut-off: first frequency where |G_RL| drops below 10^(-3/20) (Guo et al. 2023 Table 5)."""
+    return _first_crossing(np.asarray(f_hz, float), np.asarray(gain, float), MINUS_3_DB)
+
+
+def coherence_bandwidth_rad_m(f_hz, coh2, U_m_s: float) -> float:
+    """MCB k_0.5 = 2 pi f_0.5 / U [rad/m], f_0.5 where gamma^2_RL drops below 0.5 (Fu et al. 2023 Eq. 26)."""
+    return 2.0 * np.pi * _first_crossing(np.asarray(f_hz, float), np.asarray(coh2, float), 0.5) / U_m_s
+
+
+def smallest_eddy_m(k05_rad_m: float) -> float:
+    """d_eddy,min = 2 pi / k_0.5 [m] (Fu et al. 2023 Eq. 27)."""
+    return 2.0 * np.pi / k05_rad_m
+
+
+def lowpass_gain(f_hz, cutoff_hz: float):
+    """|G| of the first-order low-pass omega_c / (s + omega_c) (Fu et al. 2023 Eq. 28)."""
+    f = np.asarray(f_hz, dtype=float)
+    return 1.0 / np.sqrt(1.0 + (f / check_positive("cut-off (Hz)", cutoff_hz)) ** 2)
+
+
+def filter_delay_s(cutoff_hz: float, f_delay_hz: float = 0.025) -> float:
+    """T_filter = arctan(f_delay / f_cutoff) / (2 pi f_delay) [s] (Fu et al. 2023 Eq. 30)."""
+    fd = check_positive("f_delay (Hz)", f_delay_hz)
+    return float(np.arctan(fd / check_positive("cut-off (Hz)", cutoff_hz)) / (2.0 * np.pi * fd))
+
+
+def buffer_time_s(range_m: float, U_m_s: float, scan_time_s: float, cutoff_hz: float,
+                  pitch_delay_s: float = 0.0, f_delay_hz: float = 0.025) -> float:
+    """T_buffer = x/U - T_scan/2 - T_filter - T_pitch [s] (Fu et al. 2023 Sect. 3.5)."""
+    return (range_m / check_wind_speed(U_m_s) - 0.5 * scan_time_s - filter_delay_s(cutoff_hz, f_delay_hz)
+            - pitch_delay_s)
+
+
+def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: float, *,
+                       vw_coherence: bool = False) -> np.ndarray:
+    """One-sided spectra S_los,i(f) [m^2 s^-2 Hz^-1] of each measurement's line-of-sight speed (M, n_f),
+    IEC Kaimal model with the probe volume (Schlipf et al. 2020 Eq. 2, 6; Taylor within the probe volume)."""
+    f = np.atleast_1d(np.asarray(f_hz, dtype=float))
+    U = check_wind_speed(U_m_s)
+    pts = meas.sample_points_m()
+    out = np.empty((meas.count, f.size))
+    for i in range(meas.count):
+        w = meas.weights[i]
+        delay = (pts[i, :, 0] - meas.focus_m[i, 0]) / U
+        r = np.hypot(pts[i, :, 1, None] - pts[i, None, :, 1], pts[i, :, 2, None] - pts[i, None, :, 2])
+        for m, fm in enumerate(f):
+            a = w * np.exp(2j * np.pi * fm * delay)
+            total = 0.0
+            for c in range(3):
+                S_c = kaimal_spectrum(fm, kparams.sigma_m_s[c], kparams.length_scales_m[c], U)
+                coh = exponential_yz(r, fm, U, kparams.a_yz, kparams.lc_m) if (c == 0 or vw_coherence) \
+                    else (r < 1e-9).astype(float)
+                total += meas.n[i, c] ** 2 * S_c * np.real(a @ coh @ a.conj())
+            out[i, m] = total
+    return out
+
+
+def lidar_ti_correction(meas: Measurements, kparams: KaimalParams, U_m_s: float, *, averaging_s: float = 600.0,
+                        f_scan_hz: float = 1.0, f_max_hz: float = 1.0, n_f: int = 120) -> np.ndarray:
+    """c_TI = sigma_u / sigma_L per measurement (Schlipf et al. 2020 Eq. 6-8).
+
+    sigma_L^2 = ∫_{1/T}^{f_scan} S_los df (the lidar sees each point f_scan times a second, through its
+    probe volume and the beam angle), sigma_u^2 = ∫_{1/T}^{f_max} S_u df (the wind field's u up to its
+    highest frequency). The lidar TI estimate multiplies each LOS standard deviation by its c_TI.
+    """
+    from turbgen.theory.kaimal import kaimal_band_variance
+
+    T = check_positive("averaging time T (s)", averaging_s)
+    f_scan = check_positive("f_scan (Hz)", f_scan_hz)
+    if f_scan <= 1.0 / T:
+        raise ParameterError(f"f_scan = {f_scan:g} Hz must exceed 1/T = {1.0 / T:g} Hz")
+    f = np.geomspace(1.0 / T, f_scan, n_f)
+    S = kaimal_los_spectra(f, meas, kparams, U_m_s)
+    var_l = np.trapezoid(S * f, np.log(f), axis=-1)  # ∫ S df = ∫ S f dln f
+    var_u = kaimal_band_variance(1.0 / T, check_positive("f_max (Hz)", f_max_hz), kparams.sigma_m_s[0],
+                                 kparams.length_scales_m[0], U_m_s)
+    return np.sqrt(var_u / var_l)
