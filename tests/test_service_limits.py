@@ -1,0 +1,149 @@
+"""`turbgen serve` security and limits: token, body size, memory budget, queue length, bad requests,
+restart after kill -9. Real server processes on loopback ports."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+from service_server import TINY_GRID, Server
+
+TOKEN = "s3cret-token-for-tests-0123456789"
+AUTH = {"Authorization": f"Bearer {TOKEN}"}
+# a run taking a few seconds: long enough to be caught mid-way by kill -9 or to fill a queue of one
+SLOW_GRID = {"nt": 2048, "ny": 16, "nz": 16, "x_m": [0.0, 20.0, 40.0, 60.0]}
+
+
+@pytest.fixture(scope="module")
+def guarded(tmp_path_factory):
+    root = tmp_path_factory.mktemp("guarded") / "root"
+    token_file = root.parent / "token"
+    token_file.write_text(TOKEN + "\n")
+    srv = Server(root, "--token-file", str(token_file), "--max-queue", "1", "--memory-budget", "0.5")
+    yield srv
+    srv.kill()
+
+
+def _run(seed, grid=TINY_GRID):
+    return {"model": "mann", "seed": seed, "U_m_s": 10.0, "grid": dict(grid)}
+
+
+def test_non_loopback_host_needs_a_token_file(tmp_path):
+    cmd = [sys.executable, "-c", "from turbgen.cli import main; main()", "serve", "--host", "0.0.0.0",
+           "--root", str(tmp_path / "root")]  # fmt: skip
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "--token-file" in done.stderr and "Traceback" not in done.stderr
+    assert not (tmp_path / "root").exists()
+
+
+def test_mutating_requests_need_the_token(guarded):
+    assert guarded.call("POST", "/runs", _run(1))[0] == 401
+    status, hdrs, _ = guarded.call("POST", "/runs", _run(1), headers={"Authorization": "Bearer wrong"})
+    assert status == 401 and hdrs["www-authenticate"] == "Bearer"
+    assert guarded.call("POST", "/sweeps", {"models": ["mann"]})[0] == 401
+    assert guarded.call("DELETE", "/runs/" + "0" * 24)[0] == 401
+    status, _, out = guarded.call("POST", "/runs", _run(1), headers=AUTH)
+    assert status == 202
+    guarded.wait(out["id"])
+    assert guarded.call("GET", f"/runs/{out['id']}")[0] == 200  # reading needs no token
+
+
+def test_limits_413_and_429(guarded):
+    status, _, out = guarded.call("POST", "/runs", raw=b"{" + b" " * 70000 + b"}", headers=AUTH)
+    assert status == 413 and "body" in out["detail"]
+    big = _run(2, {"nt": 65536, "ny": 64, "nz": 64, "x_m": [0.0, 50.0]})
+    status, _, out = guarded.call("POST", "/runs", big, headers=AUTH)
+    assert status == 413 and "grid" in out["detail"] and "--memory-budget" in out["detail"] and "GiB" in out["detail"]
+    status, _, slow = guarded.call("POST", "/runs", _run(3, SLOW_GRID), headers=AUTH)
+    assert status == 202
+    status, hdrs, out = guarded.call("POST", "/runs", _run(4), headers=AUTH)
+    assert status == 429 and int(hdrs["retry-after"]) > 0
+    assert guarded.call("POST", "/runs", _run(3, SLOW_GRID), headers=AUTH)[2]["submitted"] in ("joined", "complete")
+    guarded.wait(slow["id"], timeout_s=120)
+    assert guarded.call("POST", "/runs", _run(4), headers=AUTH)[0] == 202
+
+
+BAD = [
+    ("POST", "/runs", b"not json", 422, None),
+    ("POST", "/runs", b"[1, 2]", 422, "JSON object"),
+    ("POST", "/runs", b'"text"', 422, "JSON object"),
+    ("POST", "/runs", b"", 422, None),
+    ("POST", "/runs", b'{"model": "lattice"}', 422, "model"),
+    ("POST", "/runs", b'{"U_m_s": -3}', 422, "U_m_s"),
+    ("POST", "/runs", b'{"U_m_s": "fast"}', 422, "U_m_s"),
+    ("POST", "/runs", b'{"seed": -1}', 422, "seed"),
+    ("POST", "/runs", b'{"seed": 1.5}', 422, "seed"),
+    ("POST", "/runs", b'{"gamma": 1e9}', 422, "gamma"),
+    ("POST", "/runs", b'{"unknown_key": 1}', 422, "unknown_key"),
+    ("POST", "/runs", b'{"grid": {"nt": 1}}', 422, "nt"),
+    ("POST", "/runs", b'{"grid": {"ny": 0}}', 422, "ny"),
+    ("POST", "/runs", b'{"grid": {"x_m": []}}', 422, "x_m"),
+    ("POST", "/runs", b'{"grid": "big"}', 422, "grid"),
+    ("POST", "/runs", b'{"lifetime": "forever"}', 422, "lifetime"),
+    ("POST", "/runs", b'{"preset": "hurricane"}', 422, "hurricane"),
+    ("POST", "/runs", b'{"model": "kaimal", "preset": "neutral"}', 422, "preset"),
+    ("POST", "/runs", b'{"U_m_s": NaN}', 422, None),
+    ("POST", "/sweeps", b'{"models": ["mann"]}', 422, None),
+    ("POST", "/sweeps", b'{"models": ["mann"], "presets": ["neutral"], "speeds": [10], "seeds": [1], '
+                        b'"preset_file": "/etc/passwd"}', 422, "preset_file"),
+    ("GET", "/runs/../../etc/passwd", None, 404, None),
+    ("GET", "/runs/%2e%2e%2f%2e%2e%2fetc%2fpasswd", None, 404, None),
+    ("GET", "/runs/" + "0" * 24, None, 404, None),
+    ("GET", "/runs/NOT-AN-ID", None, 404, None),
+    ("GET", "/runs/" + "0" * 24 + "/store/zarr.json", None, 404, None),
+    ("GET", "/runs/" + "0" * 24 + "/export?format=bts", None, 404, None),
+    ("GET", "/runs/" + "0" * 24 + "/plots/..%2F..%2Frequest.json", None, 404, None),
+    ("GET", "/nowhere", None, 404, None),
+    ("PUT", "/runs", b"{}", 405, None),
+]
+
+
+@pytest.mark.parametrize("method,path,raw,expected,mentions", BAD, ids=[f"{m} {p} {r!r}"[:60] for m, p, r, *_ in BAD])
+def test_bad_requests(guarded, method, path, raw, expected, mentions):
+    before = sorted(os.listdir(guarded.root / "runs"))
+    status, _, out = guarded.call(method, path, raw=raw, headers=AUTH)
+    assert status == expected, out
+    if mentions is not None:
+        assert mentions in out["detail"]
+    assert guarded.call("GET", "/health")[0] == 200
+    assert sorted(os.listdir(guarded.root / "runs")) == before  # nothing left behind
+
+
+def test_store_paths_cannot_escape(guarded):
+    status, _, out = guarded.call("POST", "/runs", _run(1), headers=AUTH)
+    rid = guarded.wait(out["id"])["id"]
+    assert guarded.call("GET", f"/runs/{rid}/store/zarr.json")[0] == 200
+    for path in ("../request.json", "%2e%2e/request.json", "..%2frequest.json", "u/../../request.json",
+                 ".hidden", "u/%00", "/etc/passwd", "%2fetc%2fpasswd"):
+        assert guarded.call("GET", f"/runs/{rid}/store/{path}")[0] == 404, path
+    assert guarded.call("GET", f"/runs/{rid}/export?format=exe")[0] == 422
+
+
+def test_restart_after_kill_9(tmp_path):
+    root = tmp_path / "root"
+    srv = Server(root)
+    try:
+        done = srv.call("POST", "/runs", _run(7))[2]["id"]
+        srv.wait(done)
+        slow = srv.call("POST", "/runs", _run(8, SLOW_GRID))[2]["id"]
+        srv.wait(slow, states=("running",), timeout_s=60)
+    finally:
+        srv.kill()  # SIGKILL mid-run
+    assert not (root / "runs" / slow / "store.zarr").exists()
+    srv = Server(root)
+    try:
+        assert srv.call("GET", f"/runs/{done}")[2]["status"] == "complete"
+        assert srv.call("GET", f"/health")[2]["computations"] == 1  # only the interrupted run is recomputed
+        state = srv.call("GET", f"/runs/{slow}")[2]["status"]
+        assert state in ("queued", "running", "complete")
+        if state != "complete":
+            assert srv.call("GET", f"/runs/{slow}/store/zarr.json")[0] == 404  # no partial store served
+        srv.wait(slow, timeout_s=120)
+        assert srv.call("GET", f"/runs/{slow}/store/zarr.json")[0] == 200
+        leftovers = [p for p in os.listdir(root / "runs" / slow) if p.startswith(".")]
+        assert leftovers == []
+    finally:
+        srv.kill()

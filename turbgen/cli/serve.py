@@ -1,0 +1,58 @@
+"""`turbgen serve`: the HTTP job service (turbgen.service) on a dask LocalCluster or an existing scheduler."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from turbgen.errors import ParameterError
+from turbgen.service.limits import DEFAULT_MAX_QUEUE, DEFAULT_MEMORY_BUDGET_BYTES, is_loopback, read_token
+
+
+@click.command("serve")
+@click.option("--host", default="127.0.0.1", show_default=True,
+              help="Address to bind; a non-loopback address needs --token-file.")
+@click.option("--port", type=click.IntRange(0, 65535), default=8000, show_default=True, help="TCP port.")
+@click.option("--root", type=click.Path(file_okay=False), default="turbgen-service", show_default=True,
+              help="Catalog directory (stores, exports, validation); survives restarts.")
+@click.option("--workers", type=click.IntRange(1, 256), default=1, show_default=True,
+              help="Runs computed at once on the local dask cluster.")
+@click.option("--scheduler", help="Address of an existing dask scheduler (its workers must see --root).")
+@click.option("--token-file", type=click.Path(dir_okay=False, exists=True),
+              help="File whose first line is the bearer token every mutating request (POST, DELETE) must carry.")
+@click.option("--memory-budget", "memory_gb", type=click.FloatRange(0.01, 4096), default=DEFAULT_MEMORY_BUDGET_BYTES / 2**30,
+              show_default=True, help="Largest memory estimate [GiB] a submitted run may have (413 above).")  # fmt: skip
+@click.option("--max-queue", type=click.IntRange(1, 100000), default=DEFAULT_MAX_QUEUE, show_default=True,
+              help="Runs queued or running at once (429 with Retry-After above).")
+def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue):
+    """Serve turbulence fields over HTTP: POST /runs, GET /runs/<id>, zarr at /runs/<id>/store, web page at /.
+
+    A field served is the one `turbgen mann|kaimal` writes for the same config, bit for bit.
+    """
+    token = None
+    if token_file:
+        try:
+            token = read_token(token_file)
+        except (OSError, ValueError) as exc:
+            raise ParameterError(str(exc)) from None
+    elif not is_loopback(host):
+        raise ParameterError(f"--host {host} is not a loopback address: give --token-file so mutating requests "
+                             "need a bearer token")  # fmt: skip
+    import uvicorn
+    from dask.distributed import Client, LocalCluster
+
+    from turbgen.service.app import create_app
+
+    if scheduler:
+        client = Client(scheduler)
+    else:
+        # threads in this process: a killed server leaves no orphan worker writing into --root
+        cluster = LocalCluster(n_workers=1, threads_per_worker=workers, processes=False, dashboard_address=None)
+        client = Client(cluster)
+    app = create_app(Path(root), client, token=token, memory_budget=int(memory_gb * 2**30), max_queue=max_queue)
+    requeued = app.state.jobs.resume()
+    click.echo(f"turbgen serve: catalog {Path(root).absolute()}, {len(requeued)} interrupted run(s) re-queued")
+    click.echo(f"turbgen serve: listening on http://{host}:{port}/ (API docs at /docs)")
+    uvicorn.run(app, host=host, port=port, log_level="warning")
+    client.close()

@@ -1,0 +1,119 @@
+"""The service's job queue on dask.distributed: one computation per run id, joined by duplicates.
+
+A run is submitted once (under a lock) and tracked until its future finishes; a duplicate request
+for a queued or running id joins it, a complete store is never recomputed. After a restart,
+``resume`` re-queues every recorded run that has neither a complete store nor a failure.
+"""
+
+from __future__ import annotations
+
+import threading
+import uuid
+
+from turbgen.service.catalog import Catalog, canonical_mapping, run_from_canonical, write_json_atomic
+
+_STENCIL_LOCK = threading.Lock()  # the stencil cache's temporary name is per process: build one at a time
+
+
+def execute(model: str, run, out: str, stencil_cache: str) -> dict:
+    """Worker side: generate ``run`` into the store ``out`` by the CLI's library path; the run summary."""
+    if model == "mann":
+        from turbgen.runs.mann import build_mann_stencil, run_mann
+
+        with _STENCIL_LOCK:
+            stencil = build_mann_stencil(run, stencil_cache)
+        summary = run_mann(run, out, stencil=stencil)
+    else:
+        from turbgen.runs.kaimal import run_kaimal
+
+        summary = run_kaimal(run, out)
+    return {k: v for k, v in summary.items() if isinstance(v, (int, float, str, bool, list)) and k != "path"}
+
+
+def one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+class QueueFull(Exception):
+    """More runs queued or running than the server allows."""
+
+
+class Jobs:
+    """Submitted runs by id (queued or running) on a dask client."""
+
+    def __init__(self, catalog: Catalog, client, max_queue: int):
+        self.catalog = catalog
+        self.client = client
+        self.max_queue = max_queue
+        self.lock = threading.Lock()
+        self.active: dict[str, object] = {}
+        self.computations = 0  # runs handed to dask since start (duplicates are joined, not counted)
+
+    def submit(self, rid: str, model: str, run, preset: str | None = None) -> str:
+        """'complete' (already in the catalog), 'joined' (queued/running) or 'queued' (new computation)."""
+        with self.lock:
+            if rid in self.active:
+                return "joined"
+            if self.catalog.is_complete(rid):
+                return "complete"
+            if len(self.active) >= self.max_queue:
+                raise QueueFull(f"{len(self.active)} runs are queued or running (the server's --max-queue)")
+            self.catalog.record(rid, model, canonical_mapping(run), preset)
+            self._start(rid, model, run)
+            return "queued"
+
+    def _start(self, rid: str, model: str, run) -> None:
+        self.catalog.clear_partial(rid)
+        out = str(self.catalog.store_path(rid))
+        cache = str(self.catalog.root / "stencils")
+        fut = self.client.submit(execute, model, run, out, cache, key=f"turbgen-run-{rid}-{uuid.uuid4().hex[:8]}",
+                                 pure=False)  # fmt: skip
+        self.active[rid] = fut
+        self.computations += 1
+        fut.add_done_callback(lambda f, rid=rid: self._finished(rid, f))
+
+    def _finished(self, rid: str, fut) -> None:
+        try:
+            try:
+                summary = fut.result()
+                write_json_atomic(self.catalog.run_dir(rid) / "summary.json", summary)
+            except Exception as exc:
+                if not self.catalog.is_complete(rid):
+                    self.catalog.mark_failed(rid, one_line(exc))
+        except OSError:
+            pass  # the run was deleted meanwhile
+        finally:
+            with self.lock:
+                if self.active.get(rid) is fut:
+                    del self.active[rid]
+
+    def is_active(self, rid: str) -> bool:
+        with self.lock:
+            return rid in self.active
+
+    def cancel(self, rid: str) -> None:
+        with self.lock:
+            fut = self.active.pop(rid, None)
+        if fut is not None:
+            fut.cancel()
+
+    def resume(self) -> list[str]:
+        """Re-queue recorded runs that are neither complete nor failed (after a crash or kill -9)."""
+        requeued = []
+        for rid in self.catalog.ids():
+            if self.catalog.is_complete(rid):
+                self.catalog.clear_partial(rid)
+                continue
+            if self.catalog.failure(rid) is not None:
+                continue
+            try:
+                req = self.catalog.request(rid)
+                run = run_from_canonical(req["model"], req["run"])
+            except Exception as exc:  # an unreadable request is recorded as a failure, never retried blindly
+                self.catalog.mark_failed(rid, f"cannot re-queue: {one_line(exc)}")
+                continue
+            with self.lock:
+                self._start(rid, req["model"], run)
+            requeued.append(rid)
+        return requeued
