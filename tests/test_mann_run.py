@@ -111,7 +111,8 @@ def test_cli_runs_and_prints_plan_and_summary(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     res = CliRunner().invoke(cli, ["mann", "--L", "49", "--gamma", "3.1", "--evo", "400", *SMALL_ARGS])
     assert res.exit_code == 0, res.output
-    name = "mann_U16_L49_G3.1_evo400_s1.zarr"
+    # a grid other than the default: the readable name plus a digest of parameters and grid
+    (name,) = [p.name for p in tmp_path.iterdir() if p.name.startswith("mann_U16_L49_G3.1_evo400_s1_p")]
     assert "grid: 64 x 3 x 6 x 5" in res.output and "memory" in res.output and name in res.output
     assert "sigma u/v/w" in res.output.splitlines()[-1]
     assert open_store(tmp_path / name).attrs["parameters"]["gamma"] == 3.1

@@ -20,14 +20,16 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from turbgen.errors import ParameterError, check_choice, check_int, check_positive, check_range
+from turbgen.errors import ParameterError, check_choice
 from turbgen.grid import Grid
 from turbgen.resources import format_bytes, require_memory
 from turbgen.runs.defaults import MANN_DEFAULTS, MANN_GRID
+from turbgen.runs.naming import run_digest
 from turbgen.runs.stencil_cache import cached_stencil
 from turbgen.store import create_store
 from turbgen.synthesis.mann_spacetime import COMPONENTS, MannSnapshots, snapshot_memory_bytes
 from turbgen.synthesis.mann_stencil import BoxShape, MannStencil, build_stencil, stencil_nbytes
+from turbgen.theory import ranges
 from turbgen.theory.kaimal import IEC_IREF, iec_sigma1_m_s
 from turbgen.theory.params import MannParams, check_wind_speed
 
@@ -60,9 +62,9 @@ class MannRun:
 
     def __post_init__(self):
         object.__setattr__(self, "U_m_s", check_wind_speed(self.U_m_s))
-        object.__setattr__(self, "seed", check_int("seed", self.seed, 0, 2**63 - 1))
-        object.__setattr__(self, "hub_height_m", check_positive("hub height (m)", self.hub_height_m))
-        object.__setattr__(self, "pad_yz", check_int("pad-yz", self.pad_yz, 1, 8))
+        for key in ("seed", "hub_height_m", "pad_yz"):  # ranges: turbgen.theory.ranges
+            object.__setattr__(self, key, ranges.check(key, getattr(self, key)))
+        ranges.check_grid(self.grid)
 
     @property
     def box(self) -> BoxShape:
@@ -96,10 +98,20 @@ class MannRun:
         }
 
     def default_store_name(self) -> str:
-        """A readable store name from the parameters, e.g. mann_U16_L49_G3.1_evo400_s1.zarr."""
+        """A readable store name from the parameters, e.g. mann_U16_L49_G3.1_evo400_s1.zarr.
+
+        Runs that differ from the named ones only in parameters the name does not show (lifetime,
+        factor1/2, energy level, grid, pad-yz, hub height) get ``_p<8 hex digits>`` of everything
+        that determines the field appended, so two different fields never share a default name.
+        """
         p = self.params
         evo = "frozen" if p.evo_time_s is None else f"{p.evo_time_s:g}"
-        return f"mann_U{self.U_m_s:g}_L{p.length_scale_m:g}_G{p.gamma:g}_evo{evo}_s{self.seed}.zarr"
+        base = f"mann_U{self.U_m_s:g}_L{p.length_scale_m:g}_G{p.gamma:g}_evo{evo}_s{self.seed}"
+        named = MannRun.from_mapping({"U_m_s": self.U_m_s, "length_scale_m": p.length_scale_m, "gamma": p.gamma,
+                                      "evo_time_s": p.evo_time_s, "seed": self.seed})  # fmt: skip
+        if named == self:
+            return base + ".zarr"
+        return f"{base}_p{run_digest(self.parameters(), self.grid)}.zarr"
 
     @classmethod
     def from_mapping(cls, d: Mapping) -> "MannRun":
@@ -117,6 +129,9 @@ class MannRun:
             g["dz_m"] = g["dy_m"]
         grid = Grid(g["nt"], g["dt_s"], tuple(g["x_m"]), g["ny"], g["nz"], g["dy_m"], g["dz_m"])
         U = check_wind_speed(v["U_m_s"])
+        ranges.check_grid(grid)  # the cheap checks before the energy-level quadrature of _resolve_ae
+        for key in ("seed", "hub_height_m", "pad_yz"):
+            ranges.check(key, v[key])
         shape = MannParams(
             ae=1.0, length_scale_m=v["length_scale_m"], gamma=v["gamma"], lifetime=v["lifetime"],
             factor1=v["factor1"], factor2=v["factor2"], evo_time_s=v["evo_time_s"],
@@ -127,11 +142,12 @@ class MannRun:
 
 def _resolve_ae(d: Mapping, shape: MannParams, U: float, turb_class: str) -> tuple[float, str]:
     if d.get("ae") is not None:
-        return check_positive("ae (alpha*eps^(2/3), m^(4/3)/s^2)", d["ae"]), d.get("ae_from", "ae")
+        return ranges.check("ae", d["ae"]), d.get("ae_from", "ae")
     if d.get("sigma_u_m_s") is not None:
-        sigma, how = check_positive("sigma-u (m/s)", d["sigma_u_m_s"]), f"sigma_u = {d['sigma_u_m_s']:g} m/s"
+        sigma = ranges.check("sigma_u_m_s", d["sigma_u_m_s"])
+        how = f"sigma_u = {sigma:g} m/s"
     elif d.get("ti") is not None:
-        ti = check_range("ti (turbulence intensity, -)", d["ti"], 0.0, 1.0, lo_open=True)
+        ti = ranges.check("ti", d["ti"])
         sigma, how = ti * U, f"ti = {ti:g} (sigma_u = {ti * U:g} m/s)"
     else:
         check_choice("turb_class", turb_class, tuple(IEC_IREF))
@@ -182,7 +198,7 @@ def describe(run: MannRun, out: str | Path, threads: int, with_stencil: bool = T
         f"dy = {g.dy_m:g} m, dz = {g.dz_m:g} m, planes x = {', '.join(f'{x:g}' for x in g.x_m)} m",
         f"synthesis box: {b.nt} x {b.nyp} x {b.nzp} (pad-yz {run.pad_yz}), "
         f"{b.nt * b.dx_m:g} x {b.nyp * b.dy_m:g} x {b.nzp * b.dz_m:g} m",
-        f"memory: about {format_bytes(memory_estimate_bytes(run, threads, with_stencil))}; "
+        f"memory: about {format_bytes(memory_estimate_bytes(run, threads, with_stencil))} in one pass; "
         f"output: {out} ({format_bytes(3 * g.nbytes_per_component())} float32 before compression)",
     ]
 
@@ -229,13 +245,17 @@ def run_mann(
         # leaving the pool waits for that write, so an exception never races the store's clean-up.
         with bar, ThreadPoolExecutor(1) as background:
             pending = None
-            for done, (ix, comp, field) in enumerate(gen.generate(run.seed, run.plane_times_s()), start=1):
-                if pending is not None:
-                    pending.result()
-                pending = background.submit(writer.write, comp, ix, field)
+
+            def write_and_sum(comp, ix, field):  # in the background, with the next item's synthesis
+                writer.write(comp, ix, field)
                 flat = field.reshape(-1)
                 sums[comp][0] += float(flat.sum(dtype=np.float64))
                 sums[comp][1] += float(np.dot(flat, flat))
+
+            for done, (ix, comp, field) in enumerate(gen.generate(run.seed, run.plane_times_s()), start=1):
+                if pending is not None:
+                    pending.result()
+                pending = background.submit(write_and_sum, comp, ix, field)
                 if done % 3 == 0:
                     bar.update(1)
             if pending is not None:

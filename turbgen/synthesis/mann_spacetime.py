@@ -8,8 +8,9 @@ Eq. 13-14) for every pair of planes, whatever their spacing.
 
 Work per snapshot, slab-wise over k1 in fixed batches (the same batches for any thread count):
 noise (or OU update) -> u_hat = C n (compact factor and axis cells, see mann_stencil) -> Hermitian completion of
-the k1 = 0 / Nyquist slabs -> inverse 2-D FFT over (k2, k3) -> crop to ny x nz -> store into a
-(ny nz, k1) buffer; then one real inverse FFT along k1 per component, in fixed row blocks.
+the k1 = 0 / Nyquist slabs -> inverse FFT along k3, then along k2 only for the kept z columns -> crop to
+ny x nz -> store into a (ny nz, k1) buffer; then one real inverse FFT along k1 per component (kept
+points only), in fixed row blocks.
 Memory scales with one snapshot: the OU state (3 complex64 per half-spectrum point), the stencil,
 three cropped spectra and one output plane (two when one is written while the next is computed).
 """
@@ -69,7 +70,7 @@ def hermitian_complete(slab: np.ndarray) -> None:
 class _Scratch:
     """Per-thread buffers and FFTW plans (all plans built in the calling thread: the planner is not thread-safe)."""
 
-    def __init__(self, box: BoxShape, nt: int):
+    def __init__(self, box: BoxShape, nt: int, nz: int, n_slabs: int):
         b, nyp, nzp = SLAB_BATCH, box.nyp, box.nzp
         self.noise = _aligned((b, 3, nyp, nzp), np.complex64)
         self.uhat = _aligned((b, 3, nyp, nzp), np.complex64)
@@ -80,16 +81,23 @@ class _Scratch:
         self.sig = _aligned((b, nyp, nzp), np.float32)
         self.real = _aligned((b, nyp, nzp), np.float32)
         self.rows = _aligned((ROW_BLOCK, nt), np.float32)
-        self._yz: dict[int, pyfftw.FFTW] = {}
-        for n in {b, box.nk1 % b} - {0}:
-            view = self.uhat[:n]
-            self._yz[n] = pyfftw.FFTW(
-                view, view, axes=(2, 3), direction="FFTW_BACKWARD", flags=("FFTW_ESTIMATE",), threads=1
+        # Pruned 2-D inverse transform: along z on all nyp rows, then along y only on the nz kept columns
+        # (3/4 of the full 2-D transform's work for pad-yz 2).
+        self._yz: dict[int, tuple[pyfftw.FFTW, pyfftw.FFTW]] = {}
+        for n in {min(b, n_slabs), n_slabs % b} - {0}:
+            view, kept = self.uhat[:n], self.uhat[:n, :, :, :nz]
+            flags = ("FFTW_ESTIMATE",)
+            self._yz[n] = (
+                pyfftw.FFTW(view, view, axes=(3,), direction="FFTW_BACKWARD", flags=flags, threads=1),
+                pyfftw.FFTW(kept, kept, axes=(2,), direction="FFTW_BACKWARD", flags=flags, threads=1),
             )
         self._t: dict[int, pyfftw.FFTW] = {}
 
-    def yz_plan(self, n: int) -> pyfftw.FFTW:
-        return self._yz[n]
+    def yz_transform(self, n: int) -> None:
+        """Inverse transform of uhat[:n] over (k2, k3), exact on the kept columns z < nz only."""
+        along_z, along_y = self._yz[n]
+        along_z.execute()
+        along_y.execute()
 
     def plan_rows(self, spectra: np.ndarray) -> None:
         """Plans for blocks of ROW_BLOCK rows and for the last, shorter block of ``spectra`` (3, rows, nk1)."""
@@ -120,6 +128,10 @@ class MannSnapshots:
         if not (1 <= ny <= box.nyp and 1 <= nz <= box.nzp):
             raise ParameterError(f"ny, nz = {ny}, {nz} must not exceed the synthesis box {box.nyp} x {box.nzp}")
         self.stencil, self.box, self.ny, self.nz = stencil, box, ny, nz
+        self._first, self._end = stencil.slab_range  # a part of the box (out-of-core) or all of it
+        if self._first % SLAB_BATCH:
+            raise ValueError(f"a part of the stencil must start at a multiple of {SLAB_BATCH} slabs")
+        self._n_slabs = self._end - self._first
         self.threads = self.default_threads(threads)
         self._k1 = box.k1().astype(np.float32)
         self._k2 = box.k2().astype(np.float32)[:, None]
@@ -171,19 +183,40 @@ class MannSnapshots:
                 for c in range(3):
                     yield ix, COMPONENTS[c], self._transform(pool, c)
 
+    def spectra(self, seed: int, times_s) -> Iterator[tuple[int, np.ndarray]]:
+        """Yield (snapshot number m in time order, cropped spectra (3, ny nz, n_slabs) complex64) of this
+        stencil's slabs, for the snapshots at ``times_s`` in time order (frozen: one snapshot, m = 0).
+
+        The first pass of an out-of-core run: the same numbers as the whole-box generator holds in its
+        spectrum buffer before the transform along k1. The array is reused: consume it first.
+        """
+        times = np.sort(np.asarray(times_s, dtype=float), kind="stable")
+        frozen = self.stencil.params.evo_time_s is None
+        if not frozen and self.stencil.inv_tau is None and len(times) > 1:
+            raise ParameterError("this stencil was built with evolving=False: it serves one plane only")
+        times = times[:1] if frozen else times
+        self._allocate(n_snapshots=len(times))
+        with ThreadPoolExecutor(self.threads) as pool:
+            for m, t in enumerate(times):
+                self._synthesise(pool, seed, m, None if m == 0 else float(t - times[m - 1]))
+                yield m, self._spectra[:, :, : self._n_slabs]
+
     # -- internals ------------------------------------------------------------------------
     def _allocate(self, n_snapshots: int) -> None:
         box = self.box
         if self._spectra is None:
-            self._spectra = _aligned((3, self.ny * self.nz, _padded_nk1(box.nk1)), np.complex64)
-            self._outputs = [_aligned((box.nt, self.ny, self.nz), np.float32) for _ in range(self._n_buffers)]
+            whole = self._n_slabs == box.nk1
+            self._spectra = _aligned((3, self.ny * self.nz, _padded_nk1(self._n_slabs)), np.complex64)
+            if whole:
+                self._outputs = [_aligned((box.nt, self.ny, self.nz), np.float32) for _ in range(self._n_buffers)]
             self._scratch = queue.SimpleQueue()
             for _ in range(self.threads):
-                scratch = _Scratch(box, box.nt)
-                scratch.plan_rows(self._spectra[:, :, : box.nk1])
+                scratch = _Scratch(box, box.nt, self.nz, self._n_slabs)
+                if whole:
+                    scratch.plan_rows(self._spectra[:, :, : box.nk1])
                 self._scratch.put(scratch)
         if n_snapshots > 1 and self._state is None:
-            self._state = _aligned((box.nk1, 3, box.nyp, box.nzp), np.complex64)
+            self._state = _aligned((self._n_slabs, 3, box.nyp, box.nzp), np.complex64)
 
     def _run(self, pool, fn, items) -> None:
         def task(item):
@@ -197,7 +230,7 @@ class MannSnapshots:
             pass
 
     def _synthesise(self, pool, seed: int, m: int, dt: float | None) -> None:
-        starts = range(0, self.box.nk1, SLAB_BATCH)
+        starts = range(self._first, self._end, SLAB_BATCH)
         self._run(pool, lambda s, i0: self._batch(s, seed, m, dt, i0), starts)
 
     def _transform(self, pool, c: int) -> np.ndarray:
@@ -210,15 +243,16 @@ class MannSnapshots:
 
     def _batch(self, s: _Scratch, seed: int, m: int, dt: float | None, i0: int) -> None:
         box, st = self.box, self.stencil
-        i1 = min(i0 + SLAB_BATCH, box.nk1)
+        i1 = min(i0 + SLAB_BATCH, self._end)
         b = i1 - i0
-        n = self._state[i0:i1] if self._state is not None else s.noise[:b]
+        j0, j1 = i0 - self._first, i1 - self._first  # local indices in the stencil part, state and spectra
+        n = self._state[j0:j1] if self._state is not None else s.noise[:b]
         fresh = n if dt is None else s.noise[:b]
         for j in range(b):
             complex_normal(seed, m, i0 + j, fresh[j])
         if dt is not None:  # exact OU step over dt (paper 000 Eq. 13-14)
             rho, sig = s.rho[:b], s.sig[:b]
-            expand_k2(st.inv_tau[i0:i1], box.nyp, False, rho)
+            expand_k2(st.inv_tau[j0:j1], box.nyp, False, rho)
             rho *= np.float32(-dt)
             np.exp(rho, out=rho)
             np.multiply(rho, rho, out=sig)
@@ -229,7 +263,7 @@ class MannSnapshots:
             n += fresh
         coef = s.coef[:, :b]
         for idx in range(4):
-            expand_k2(st.coef[idx, i0:i1], box.nyp, _ODD[idx], coef[idx])
+            expand_k2(st.coef[idx, j0:j1], box.nyp, _ODD[idx], coef[idx])
         a, p, z1, z2, w = coef
         k1 = self._k1[i0:i1, None, None]
         k2 = self._k2
@@ -265,10 +299,10 @@ class MannSnapshots:
             uh[sl, :, row, col] = np.einsum("cij,cj->ci", st.cell_factor[cells], n[sl, :, row, col])
         for i in self._hermitian_slabs.intersection(range(i0, i1)):
             hermitian_complete(uh[i - i0])
-        s.yz_plan(b).execute()
+        s.yz_transform(b)
         ny, nz = self.ny, self.nz
         for c in range(3):
-            dest = self._spectra[c].reshape(ny, nz, -1)[:, :, i0:i1]
+            dest = self._spectra[c].reshape(ny, nz, -1)[:, :, j0:j1]
             dest[...] = uh[:, c, :ny, :nz].transpose(1, 2, 0)
 
     def _rows(self, s: _Scratch, c: int, r0: int, output: np.ndarray) -> None:
@@ -280,6 +314,33 @@ class MannSnapshots:
         plan.execute()
         out = output.reshape(self.box.nt, -1)
         out[:, r0:r1] = s.rows[:n].T
+
+
+class PencilTransform:
+    """The real inverse FFT along k1 of (y, z) points, block by block exactly as MannSnapshots does it (the same
+    plans on buffers of the same layout), for the second pass of out-of-core runs."""
+
+    def __init__(self, nt: int, n_points: int):
+        self.nt, self.nk1 = nt, nt // 2 + 1
+        self._buf = _aligned((ROW_BLOCK, _padded_nk1(self.nk1)), np.complex64)
+        self._rows = _aligned((ROW_BLOCK, nt), np.float32)
+        self._plans = {}
+        for n in {min(ROW_BLOCK, n_points), n_points % ROW_BLOCK} - {0}:
+            self._plans[n] = pyfftw.FFTW(
+                self._buf[:n, : self.nk1],
+                self._rows[:n],
+                axes=(1,),
+                direction="FFTW_BACKWARD",
+                flags=("FFTW_ESTIMATE", "FFTW_DESTROY_INPUT"),
+                threads=1,
+            )
+
+    def __call__(self, spectra: np.ndarray, out: np.ndarray) -> None:
+        """``spectra`` (n, nk1) complex64 of one block (n = ROW_BLOCK, or the last block's size) -> ``out`` (nt, n)."""
+        n = spectra.shape[0]
+        self._buf[:n, : self.nk1] = spectra
+        self._plans[n].execute()
+        out[...] = self._rows[:n].T
 
 
 def mann_box(stencil: MannStencil, ny: int, nz: int, seed: int, threads: int | None = None) -> np.ndarray:

@@ -26,11 +26,11 @@ from functools import lru_cache
 
 import numpy as np
 
-from turbgen.theory.eddy_lifetime import evolution_lifetime_s
-from turbgen.theory.mann_tensor import sheared_tensor, tensor_factor
+from turbgen.theory.eddy_lifetime import evolution_lifetime_table, shear_lifetime_table
+from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
 
-STENCIL_VERSION = 2
+STENCIL_VERSION = 4  # 3: lifetimes from tables, coefficients straight from Mann (1994) Eq. 13-17; 4: arctan
 _ODD = (False, False, False, True)  # parity of A, P, Z1, Z2 under k2 -> -k2
 _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0.5 MiB per temporary)
 # Cell-averaged tensor near the k1 axis (Mann 1998: the point value Phi(k) dk is a poor estimate of
@@ -102,6 +102,12 @@ class MannStencil:
     inv_tau: np.ndarray | None
     cell_index: np.ndarray
     cell_factor: np.ndarray
+    slab0: int = 0  # coef / inv_tau hold slabs slab0 .. slab0 + coef.shape[1] (a part of the box: out-of-core runs)
+
+    @property
+    def slab_range(self) -> tuple[int, int]:
+        """Slabs [first, end) that coef and inv_tau hold."""
+        return self.slab0, self.slab0 + self.coef.shape[1]
 
     def cells_in(self, i0: int, i1: int) -> slice:
         """Rows of cell_index / cell_factor whose slab lies in [i0, i1)."""
@@ -127,19 +133,6 @@ def expand_k2(half: np.ndarray, nyp: int, odd: bool, out: np.ndarray) -> np.ndar
     return out
 
 
-def _compact(c, k1, k2):
-    """(A, P, Z1, Z2) from the factor C (3, 3, ...) of tensor_factor, exactly (see module docstring)."""
-    k1, k2 = np.broadcast_arrays(k1, k2, c[0, 0])[:2]
-    q = k1 * k1 + k2 * k2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a = np.where(q > 0, (c[1, 2] * k1 - c[0, 2] * k2) / q, 0.0)
-        on_axis = k1 == 0  # the k1 = 0 slab: zeta2 = 0, C01 = a k30, C00 = a zeta1 k2
-        z2 = np.where(on_axis, np.where(k2 != 0, (c[1, 0] + c[0, 1]) / k2, 0.0), -c[1, 1] / k1)
-        p = np.where(on_axis, c[0, 1], z2 * k2 - c[1, 0])
-        z1 = np.where(on_axis, np.where(k2 != 0, c[0, 0] / k2, 0.0), (p - c[0, 1]) / k1)
-    return a, p, z1, z2
-
-
 def w_coefficient(a, p, q, ksq, out, scratch):
     """W = a k0^2 / k^2 = (A^2 q + P^2) / (A k^2) into ``out`` (0 where A k^2 = 0: there m = 0).
 
@@ -155,29 +148,100 @@ def w_coefficient(a, p, q, ksq, out, scratch):
     return out
 
 
-def _build(params: MannParams, box: BoxShape, with_tau: bool) -> MannStencil:
-    nk1, nh, nzp = box.nk1, box.nk2_half, box.nzp
+def _coefficients(params: MannParams, k1, k2, k3, out: np.ndarray, inv_tau: np.ndarray | None) -> None:
+    """(A, P, Z1, Z2) of slabs k1 (b, 1, 1) on rows k2 (nh, 1) x columns k3 (nzp,) into ``out`` (4, b, nh, nzp).
+
+    Straight from Mann (1994) Eq. 13-17 (the formulas of theory.mann_tensor._distortion with its
+    exact limits), in float64, with beta = Gamma tau~(|k| L) and tau_e from the lifetime tables
+    (relative error <= 1e-6, theory.eddy_lifetime.TABLE_REL_ERROR) instead of Eq. 4 / 6 / 15 point
+    by point. a = sqrt(E(k0) / (4 pi)) / k0^2 = sqrt(ae L^(17/3) / (4 pi)) (1 + (k0 L)^2)^(-17/12).
+    ``out`` holds the coefficients without the sqrt(dk / 2) scale; ``inv_tau`` (b, nh, nzp) gets 1/tau_e.
+    """
+    L = params.length_scale_m
+    q = k1 * k1 + k2 * k2  # (b, nh, 1)
+    ksq = q + k3 * k3  # (b, nh, nzp)
+    a, p, z1, z2 = out
+    if params.gamma == 0.0:
+        beta = np.zeros_like(ksq)
+    else:
+        beta = shear_lifetime_table(params).from_ksq(ksq, L)
+        beta *= params.gamma
+    with np.errstate(invalid="ignore"):
+        bk1 = beta * k1  # nan at k = 0 (inf * 0): set to 0 below
+    k30 = np.add(bk1, k3, out=p)  # P = a k30 once a is known
+    k0sq = k30 * k30
+    k0sq += q
+    np.multiply(k0sq, L * L, out=a)
+    a += 1.0
+    np.log(a, out=a)
+    a *= -17.0 / 12.0
+    np.exp(a, out=a)
+    a *= np.sqrt(params.ae * L ** (17.0 / 3.0) / (4.0 * np.pi))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sq = np.sqrt(q)
+        c1 = np.multiply(bk1, k30, out=z1)
+        c1 -= 2.0 * k30 * k30
+        c1 += k0sq
+        c1 *= bk1 * k1
+        c1 /= ksq * q
+        # atan2(Y, X) with Y = beta k1 sqrt(q) <= 0 (stored k1 <= 0, beta >= 0): arctan(Y / X), minus pi where
+        # X < 0 (the continuous branch of Mann 1994 Eq. 16; twice as fast as np.arctan2 here)
+        x = k0sq - k30 * bk1
+        c2 = np.arctan(np.divide(bk1 * sq, x, out=z2), out=z2)
+        c2 -= np.pi * (x < 0)
+        c2 *= k0sq
+        c2 *= k2 / (q * sq)
+        ratio = k2 / k1
+        c1_ratio = c1 * ratio
+        c1 -= c2 * ratio  # zeta1 = C1 - (k2/k1) C2
+        c2 += c1_ratio  # zeta2 = (k2/k1) C1 + C2
+    p *= a
+    z1 *= a
+    z2 *= a
+    for i in np.flatnonzero(k1[:, 0, 0] == 0.0):  # the k1 -> 0 limit at fixed q > 0: zeta1 = -beta, zeta2 = 0
+        np.multiply(beta[i], a[i], out=z1[i])
+        np.negative(z1[i], out=z1[i])
+        z2[i] = 0.0
+        axis = q[i, :, 0] == 0  # the row k2 = 0 is the k3 axis: zeta = 0, and A is never used (m = 0, k2 = 0)
+        z1[i, axis] = 0.0
+        a[i, axis] = 0.0
+        p[i] = np.where(ksq[i] == 0, 0.0, p[i])  # k = 0 (beta = inf there) carries no energy
+    if inv_tau is not None:
+        tau = evolution_lifetime_table(params).from_ksq(ksq, L)
+        tau *= params.evo_time_s  # tau_e [s], paper 000 Eq. 15 (inf at k = 0)
+        np.divide(1.0, tau, out=inv_tau)
+
+
+def build_step(box: BoxShape) -> int:
+    """Slabs per stencil-building batch: batches start at multiples of it (also when building a part)."""
+    return max(1, _BUILD_POINTS // (box.nk2_half * box.nzp))
+
+
+def _build(params: MannParams, box: BoxShape, with_tau: bool, slabs=None, cells=None) -> MannStencil:
+    first, end = (0, box.nk1) if slabs is None else slabs
+    nh, nzp = box.nk2_half, box.nzp
     scale = np.sqrt(np.prod(box.dk()) / 2.0)
     k1_all = box.k1()
-    k2 = box.k2()[:nh][None, :, None]
-    k3 = box.k3()[None, None, :]
-    coef = np.empty((4, nk1, nh, nzp), dtype=np.float32)
-    inv_tau = np.empty((nk1, nh, nzp), dtype=np.float32) if with_tau else None
-    step = max(1, _BUILD_POINTS // (nh * nzp))
+    k2 = box.k2()[:nh][:, None]
+    k3 = box.k3()
+    coef = np.empty((4, end - first, nh, nzp), dtype=np.float32)
+    inv_tau = np.empty((end - first, nh, nzp), dtype=np.float32) if with_tau else None
+    step = build_step(box)
 
     def batch(i0: int) -> None:  # independent slab batches: threads only change who computes which
-        k1 = k1_all[i0 : i0 + step][:, None, None]
-        c = tensor_factor(k1, k2, k3, params)
-        for dst, val in zip(coef[:, i0 : i0 + step], _compact(c, k1, k2)):
-            dst[...] = val * scale
-        if inv_tau is not None:
-            kmag = np.sqrt(k1 * k1 + k2 * k2 + k3 * k3)
-            inv_tau[i0 : i0 + step] = 1.0 / evolution_lifetime_s(kmag, params)  # tau_e, paper 000 Eq. 15
+        i1 = min((i0 // step + 1) * step, end)  # the batches of the whole stencil, cut to [first, end)
+        work = np.empty((4, i1 - i0, nh, nzp))
+        tau = np.empty((i1 - i0, nh, nzp)) if with_tau else None
+        _coefficients(params, k1_all[i0:i1, None, None], k2, k3, work, tau)
+        work *= scale
+        coef[:, i0 - first : i1 - first] = work
+        if with_tau:
+            inv_tau[i0 - first : i1 - first] = tau
 
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
-        list(pool.map(batch, range(0, nk1, step)))
-    index, factor = _axis_cells(params, box)
-    return MannStencil(params, box, coef, inv_tau, index, factor)
+        list(pool.map(batch, [first, *range((first // step + 1) * step, end, step)]))
+    index, factor = _axis_cells(params, box) if cells is None else cells
+    return MannStencil(params, box, coef, inv_tau, index, factor, first)
 
 
 @lru_cache(maxsize=4)
@@ -207,34 +271,43 @@ def _cell_rule(center: float, width: float, scale: float) -> tuple[np.ndarray, n
 def _axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarray]:
     """Cell-averaged factors (see CELL_RADIUS): Phi_bar = (1/dV) ∫_cell Phi dk, factor V sqrt(Lambda).
 
-    All cells of one slab are evaluated in one call (nodes concatenated, sums by np.add.reduceat).
+    All cells of one slab are evaluated in one call: the nodes of all (k2, k3) cells are one outer product
+    of the k1 rule with the concatenated k2 and k3 rules, summed per cell by np.bincount. beta comes from
+    the lifetime table (as in the rest of the stencil).
     """
     dk1, dk2, dk3 = box.dk()
     r2 = min(CELL_RADIUS, (box.nyp - 1) // 2)
     r3 = min(CELL_RADIUS, (box.nzp - 1) // 2)
     n_slabs = min(box.nk1, int(CELL_K1_FACTOR * max(dk2, dk3) / dk1) + 1)
+    table = shear_lifetime_table(params)
+    js, ls = np.arange(-r2, r2 + 1), np.arange(-r3, r3 + 1)
+    n3 = len(ls)
     index, factor = [], []
     for i in range(n_slabs):
         k1c = box.k1()[i]
         x1, w1 = _gauss_rule(k1c - dk1 / 2, k1c + dk1 / 2, 2)
         scale = max(abs(k1c), dk1 / 4)
-        rules2 = {j: _cell_rule(j * dk2, dk2, scale) for j in range(-r2, r2 + 1)}
-        rules3 = {l: _cell_rule(l * dk3, dk3, scale) for l in range(-r3, r3 + 1)}
-        pts, wts, starts = [], [], []
-        for j, (x2, w2) in rules2.items():
-            for l, (x3, w3) in rules3.items():
-                grid = np.meshgrid(x1, x2, x3, indexing="ij")
-                starts.append(sum(p.shape[1] for p in pts))
-                pts.append(np.stack([g.ravel() for g in grid]))
-                wts.append((w1[:, None, None] * w2[None, :, None] * w3[None, None, :]).ravel())
-                index.append((i, j % box.nyp, l % box.nzp))
-        k = np.concatenate(pts, axis=1)
-        phi = sheared_tensor(k[0], k[1], k[2], params) * np.concatenate(wts)
-        cells = np.add.reduceat(phi, starts, axis=2) / 2.0  # ∫_cell Phi dk / 2 (E|n|^2 = 2), (3, 3, ncell)
+        rules2 = [_cell_rule(j * dk2, dk2, scale) for j in js]
+        rules3 = [_cell_rule(l * dk3, dk3, scale) for l in ls]
+        x2, w2 = np.concatenate([r[0] for r in rules2]), np.concatenate([r[1] for r in rules2])
+        x3, w3 = np.concatenate([r[0] for r in rules3]), np.concatenate([r[1] for r in rules3])
+        id2 = np.repeat(np.arange(len(js)), [len(r[0]) for r in rules2])
+        id3 = np.repeat(np.arange(n3), [len(r[0]) for r in rules3])
+        shape = (len(x1), len(x2), len(x3))
+        k1n, k2n, k3n = (np.broadcast_to(v, shape).ravel() for v in (x1[:, None, None], x2[None, :, None], x3))
+        weight = (w1[:, None, None] * w2[None, :, None] * w3[None, None, :]).ravel()
+        cell = np.broadcast_to(id2[None, :, None] * n3 + id3[None, None, :], shape).ravel()
+        beta = params.gamma * table.from_ksq(k1n * k1n + k2n * k2n + k3n * k3n, params.length_scale_m)
+        phi = sheared_tensor(k1n, k2n, k3n, params, beta=beta) * weight
+        ncell = len(js) * n3
+        cells = np.stack(  # ∫_cell Phi dk / 2 (E|n|^2 = 2), (3, 3, ncell)
+            [[np.bincount(cell, phi[a, b], minlength=ncell) for b in range(3)] for a in range(3)]
+        ) / 2.0
         if i == 0:
-            cells[:, :, list(rules2).index(0) * len(rules3) + list(rules3).index(0)] = 0.0  # box mean stays zero
+            cells[:, :, r2 * n3 + r3] = 0.0  # the cell around k = 0: the box mean stays zero
         lam, vec = np.linalg.eigh(np.moveaxis(cells, -1, 0))
         factor.append(vec * np.sqrt(np.clip(lam, 0.0, None))[:, None, :])
+        index.extend((i, j % box.nyp, l % box.nzp) for j in js for l in ls)
     index = np.array(index, dtype=np.int64).reshape(-1, 3)
     factor = np.concatenate(factor).astype(np.float32) if factor else np.zeros((0, 3, 3), np.float32)
     return index, factor
@@ -248,12 +321,22 @@ def stencil_key(params: MannParams, box: BoxShape, with_tau: bool) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
-def build_stencil(params: MannParams, box: BoxShape, *, evolving: bool = True) -> MannStencil:
+def build_stencil(
+    params: MannParams, box: BoxShape, *, evolving: bool = True, slabs: tuple[int, int] | None = None, cells=None
+) -> MannStencil:
     """The stencil of ``params`` on ``box`` (computed; turbgen.runs.stencil_cache keeps it on disk).
 
     ``evolving=False`` skips 1/tau_e (1/6 of the memory): enough for a single snapshot (one plane).
+    ``slabs=(first, end)``: only those k1 slabs (the same numbers as those slabs of the whole stencil:
+    every point is computed by the same elementwise operations); ``cells``: (cell_index, cell_factor) of axis_cells, to
+    compute them once for many parts.
     """
-    return _build(params, box, evolving and params.evo_time_s is not None)
+    return _build(params, box, evolving and params.evo_time_s is not None, slabs, cells)
+
+
+def axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarray]:
+    """(cell_index, cell_factor) of the cell-averaged factors near the k1 axis (see MannStencil)."""
+    return _axis_cells(params, box)
 
 
 def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:

@@ -1,0 +1,359 @@
+"""Out-of-core Mann runs: a field whose snapshot does not fit in memory, made in two passes through scratch files.
+
+    summary = run_mann_outofcore(run, "big.zarr", memory_bytes=4 * 2**30)
+
+Pass 1, per part of S k1 slabs (S a multiple of the synthesis batch, so every number is computed
+exactly as in memory): the stencil of those slabs, their noise and OU state through
+all snapshots in time order, the factor C, the (k2, k3) transforms and the crop. The cropped spectra
+(3, ny nz, S) of snapshot m go to the spectrum scratch file, laid out (snapshot, component, part,
+point, slab) so that every write is one contiguous block.
+Pass 2, per snapshot and component, per block of (y, z) points: the spectra of the block are read back
+from every part, transformed along k1 with the plans of the in-memory generator
+(synthesis.mann_spacetime.PencilTransform) and put in the output plane: in memory if it fits the
+budget, else in a plane scratch file (block, t, point), which is then written to the store in time
+chunks. The field is bit for bit the one run_mann makes (tests/test_mann_outofcore.py).
+
+Memory is bounded by ``memory_bytes`` (S, the block sizes and the store's time chunk are chosen from
+it), never by the field. Scratch files live in a hidden directory next to the output,
+``.NAME.scratch-PID-XXXX``: removed at the end and on any exception, and by the next run writing next
+to it when its process is dead (after kill -9). With a dask ``client`` the parts of pass 1 and the
+blocks of pass 2 are its tasks (one big field spread over the workers; the scratch directory must be
+on a filesystem they share); this process writes the store. Without one both passes run here
+(threads in pass 1).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from contextlib import nullcontext
+import re
+import secrets
+import shutil
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from turbgen.errors import ParameterError
+from turbgen.resources import format_bytes, require_disk
+from turbgen.runs.mann import MannRun
+from turbgen.store import create_store
+from turbgen.store.layout import default_chunk_t
+from turbgen.store.temporaries import pid_alive
+from turbgen.synthesis.mann_spacetime import (
+    COMPONENTS,
+    ROW_BLOCK,
+    SLAB_BATCH,
+    MannSnapshots,
+    PencilTransform,
+)
+from turbgen.synthesis.mann_stencil import axis_cells, build_stencil
+
+BASE_BYTES = 250 * 2**20  # the interpreter with turbgen, numpy, scipy, zarr, pyfftw loaded (VmHWM measured 165 MiB,
+# 197 MiB in a fresh virtualenv) + slack
+_C64, _F32 = 8, 4
+_HINT = "raise --memory, or lower --nt, --ny/--nz or --pad-yz"
+
+
+def _scratch_prefix(out: Path) -> str:
+    return f".{out.name}.scratch-"
+
+
+def remove_stale_scratch(out: str | Path) -> list[Path]:
+    """Remove scratch directories of ``out`` left by dead processes (kill -9); return what was removed."""
+    out = Path(out).expanduser().absolute()
+    removed = []
+    pattern = re.compile(re.escape(_scratch_prefix(out)) + r"(\d+)-[0-9a-f]+$")
+    if not out.parent.is_dir():
+        return removed
+    for p in out.parent.iterdir():
+        m = pattern.match(p.name)
+        if m and not pid_alive(int(m.group(1))):
+            shutil.rmtree(p, ignore_errors=True)
+            removed.append(p)
+    return removed
+
+
+class OutOfCorePlan:
+    """Sizes of an out-of-core run under a memory budget [bytes] (see module docstring)."""
+
+    def __init__(
+        self,
+        run: MannRun,
+        memory_bytes: int,
+        threads: int,
+        chunk_t: int | None = None,
+        *,
+        slabs_per_part: int | None = None,
+        block_points: int | None = None,
+        plane_in_memory: bool | None = None,
+    ):
+        """Sizes from the budget; ``slabs_per_part`` (a multiple of SLAB_BATCH), ``block_points`` (a multiple of
+        ROW_BLOCK) and ``plane_in_memory`` override them (tests: several parts and blocks on a small field)."""
+        g, box = run.grid, run.box
+        self.run, self.memory_bytes, self.threads = run, int(memory_bytes), threads
+        self.evolving = run.params.evo_time_s is not None and g.nx > 1
+        self.n_snapshots = g.nx if self.evolving else 1
+        self.points = g.ny * g.nz
+        align = SLAB_BATCH
+        slab = box.nyp * box.nzp
+        half = box.nk2_half * box.nzp
+        scratch = threads * SLAB_BATCH * slab * (2 * 3 * 8 + 2 * 8 + 8 * 4)  # MannSnapshots' per-thread buffers
+        building = (os.cpu_count() or 1) * (1 << 16) * 8 * 16  # float64 temporaries of the stencil batches
+        per_slab = (
+            (5 if self.evolving else 4) * half * _F32  # stencil part
+            + (3 * slab * _C64 if self.evolving else 0)  # OU state
+            + 4 * self.points * _C64  # cropped spectra, and one component's contiguous copy for the scratch write
+        )
+        # 3/4 of what is left: numpy temporaries, allocator slack (measured: the peak stays below the budget)
+        free = (self.memory_bytes - BASE_BYTES - scratch - building) * 3 // 4
+        self.slabs_per_part = (free // (per_slab * align)) * align if free > 0 else 0
+        if self.slabs_per_part < align:
+            need = BASE_BYTES + scratch + building + per_slab * align * 4 // 3
+            raise ParameterError(
+                f"the out-of-core Mann run needs at least {format_bytes(need)} of memory "
+                f"(got a budget of {format_bytes(self.memory_bytes)}); {_HINT}"
+            )
+        self.slabs_per_part = min(self.slabs_per_part, -(-box.nk1 // align) * align)
+        if slabs_per_part is not None:
+            if slabs_per_part < 1 or slabs_per_part % align:
+                raise ValueError(f"slabs_per_part must be a positive multiple of {align}")
+            self.slabs_per_part = slabs_per_part
+        self.n_parts = -(-box.nk1 // self.slabs_per_part)
+        # pass 2: the plane (and a copy) in memory if they fit a quarter of the budget, else a plane scratch file
+        plane = g.nt * self.points * _F32
+        pass2 = self.memory_bytes - BASE_BYTES
+        self.plane_in_memory = 2 * plane <= pass2 // 4 if plane_in_memory is None else plane_in_memory
+        # points read back per block: spectra (block, nk1) complex64 twice + their transform, within an eighth
+        per_point = 2 * self.n_parts * self.slabs_per_part * _C64 + g.nt * _F32
+        block = max(ROW_BLOCK, (pass2 // 8 // per_point) // ROW_BLOCK * ROW_BLOCK)
+        self.block_points = min(block, -(-self.points // ROW_BLOCK) * ROW_BLOCK)
+        if block_points is not None:
+            if block_points < 1 or block_points % ROW_BLOCK:
+                raise ValueError(f"block_points must be a positive multiple of {ROW_BLOCK}")
+            self.block_points = block_points
+        # the store's time chunk: as by default, but a chunk and its encoding buffers within an eighth
+        fit = max(1, (pass2 // 8) // (4 * self.points * _F32))
+        self.chunk_t = chunk_t if chunk_t is not None else min(default_chunk_t(g.nt), fit)
+
+    def scratch_bytes(self) -> int:
+        """Disk bytes of the scratch files (spectra, and the plane file when the plane is not held in memory)."""
+        g = self.run.grid
+        spectra = self.n_snapshots * 3 * self.n_parts * self.points * self.slabs_per_part * _C64
+        n_blocks = -(-self.points // self.block_points)
+        plane = 0 if self.plane_in_memory else n_blocks * g.nt * self.block_points * _F32
+        return spectra + plane
+
+    def describe(self) -> str:
+        """One line: parts, blocks, plane handling, scratch size."""
+        where = "in memory" if self.plane_in_memory else "via a plane scratch file"
+        return (
+            f"out-of-core: budget {format_bytes(self.memory_bytes)}, {self.n_parts} part(s) of "
+            f"{self.slabs_per_part} k1 slabs, blocks of {self.block_points} (y, z) points, planes {where}, "
+            f"store time chunk {self.chunk_t}, scratch {format_bytes(self.scratch_bytes())}"
+        )
+
+
+class _File:
+    """A scratch file written and read by offsets (pwrite / preadv: no mapping, so not counted in RSS).
+
+    ``nbytes`` creates it (sized, sparse); without it an existing file is opened (a dask worker's side).
+    """
+
+    def __init__(self, path: Path, nbytes: int | None = None):
+        if nbytes is None:
+            self.fd = os.open(path, os.O_RDWR)
+        else:
+            self.fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o600)
+            os.ftruncate(self.fd, max(1, nbytes))
+
+    def write(self, offset: int, data: np.ndarray) -> None:
+        view = memoryview(np.ascontiguousarray(data)).cast("B")
+        while view:
+            n = os.pwrite(self.fd, view, offset)
+            view, offset = view[n:], offset + n
+
+    def read(self, offset: int, out: np.ndarray) -> np.ndarray:
+        view = memoryview(out).cast("B")
+        while view:
+            n = os.preadv(self.fd, [view], offset)
+            if n == 0:
+                raise OSError("scratch file is shorter than expected")
+            view, offset = view[n:], offset + n
+        return out
+
+    def close(self) -> None:
+        os.close(self.fd)
+
+    def __enter__(self) -> "_File":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def run_mann_outofcore(
+    run: MannRun,
+    out: str | Path,
+    *,
+    memory_bytes: int,
+    overwrite: bool = False,
+    chunk_t: int | None = None,
+    progress: bool = False,
+    threads: int | None = None,
+    plan: OutOfCorePlan | None = None,
+    client=None,
+) -> dict:
+    """Generate ``run`` into a new store at ``out`` within ``memory_bytes``; return {path, sigma_*, mean_*, seconds, plan}.
+
+    The same field, bit for bit, as turbgen.runs.mann.run_mann. Disk space for the store (uncompressed)
+    and the scratch files is checked first; an exception leaves neither a store nor scratch files.
+    ``client``: a dask.distributed Client: the parts of pass 1 and the blocks of pass 2 run as its tasks
+    (its workers must see the output's directory; ``memory_bytes`` and ``threads`` then hold per task),
+    the store is written by this process. Without it both passes run here.
+    """
+    t_start = time.perf_counter()
+    threads = MannSnapshots.default_threads(threads)
+    plan = plan or OutOfCorePlan(run, memory_bytes, threads, chunk_t)
+    if client is not None and plan.plane_in_memory:  # workers hand planes over through the plane file
+        plan.plane_in_memory = False
+    g = run.grid
+    path = Path(out).expanduser().absolute()
+    remove_stale_scratch(path)
+    store_bytes = 3 * g.nt * g.nx * g.ny * g.nz * _F32
+    require_disk(path.parent, store_bytes + plan.scratch_bytes(), "the out-of-core Mann run (store + scratch)",
+               "free disk space or write --out elsewhere")  # fmt: skip
+    times = np.sort(run.plane_times_s(), kind="stable")
+    times = times if plan.evolving else times[:1]
+    order = [int(i) for i in np.argsort(run.plane_times_s(), kind="stable")]
+    sums = {c: [0.0, 0.0] for c in COMPONENTS}
+    scratch_dir = path.parent / f"{_scratch_prefix(path)}{os.getpid()}-{secrets.token_hex(4)}"
+    show = progress and sys.stderr.isatty()
+    n_blocks = -(-plan.points // plan.block_points)
+    spectra_bytes = plan.n_snapshots * 3 * plan.n_parts * plan.points * plan.slabs_per_part * _C64
+    with create_store(path, g, run.to_attrs(), chunk_t=plan.chunk_t, overwrite=overwrite) as writer:
+        scratch_dir.mkdir()
+        try:
+            spectra_path, plane_path = scratch_dir / "spectra", scratch_dir / "plane"
+            _File(spectra_path, spectra_bytes).close()
+            if not plan.plane_in_memory:
+                _File(plane_path, n_blocks * g.nt * plan.block_points * _F32).close()
+            cells = axis_cells(run.params, run.box)
+            with tqdm(total=plan.n_parts, unit="part", desc="mann pass 1", file=sys.stderr, disable=not show) as bar:
+                args = (run, plan, str(spectra_path), cells, times, threads)
+                _map(client, lambda part: pass1_part(*args, part), range(plan.n_parts), bar)
+            del cells
+            plane = np.empty((g.nt, plan.points), np.float32) if plan.plane_in_memory else None  # after pass 1
+            with tqdm(total=3 * plan.n_snapshots, desc="mann pass 2", file=sys.stderr, disable=not show) as bar:
+                for m in range(plan.n_snapshots):
+                    targets = [order[m]] if plan.evolving else order  # frozen: the one snapshot is every plane
+                    for c, comp in enumerate(COMPONENTS):
+                        if plane is not None:
+                            pass2_blocks(run, plan, str(spectra_path), None, m, c, range(n_blocks), plane)
+                        else:
+                            blocks = [range(b, b + 1) for b in range(n_blocks)]
+                            args2 = (run, plan, str(spectra_path), str(plane_path), m, c)
+                            _map(client, lambda bl: pass2_blocks(*args2, bl), blocks, None)
+                        with _File(plane_path) if plane is None else nullcontext() as plane_file:
+                            for ix in targets:
+                                _write_plane(writer, comp, ix, plane, plane_file, plan, g, sums)
+                        bar.update(1)
+        finally:
+            shutil.rmtree(scratch_dir, ignore_errors=True)
+    n = g.nt * g.nx * g.ny * g.nz
+    summary = {"path": str(path), "seconds": time.perf_counter() - t_start, "plan": plan.describe()}
+    for c, (s1, s2) in sums.items():
+        mean = s1 / n
+        summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - mean * mean, 0.0))
+        summary[f"mean_{c}"] = mean
+    return summary
+
+
+def _map(client, fn, items, bar) -> None:
+    """fn over items: here, or as tasks of ``client`` (results are None; an exception is raised here)."""
+    if client is None:
+        for item in items:
+            fn(item)
+            if bar is not None:
+                bar.update(1)
+        return
+    from distributed import as_completed
+
+    futures = [client.submit(fn, item, pure=False) for item in items]
+    try:
+        for fut in as_completed(futures):
+            fut.result()
+            if bar is not None:
+                bar.update(1)
+    finally:
+        client.cancel(futures)
+
+
+def _spectra_offset(plan: OutOfCorePlan, m: int, c: int, part: int, point: int = 0) -> int:
+    return (((m * 3 + c) * plan.n_parts + part) * plan.points + point) * plan.slabs_per_part * _C64
+
+
+def pass1_part(run: MannRun, plan: OutOfCorePlan, spectra_path: str, cells, times, threads: int, part: int) -> None:
+    """Pass 1 for one part of k1 slabs: its stencil, snapshots in time order, cropped spectra to the scratch file."""
+    box, g = run.box, run.grid
+    S = plan.slabs_per_part
+    first, end = part * S, min((part + 1) * S, box.nk1)
+    stencil = build_stencil(run.params, box, evolving=plan.evolving, slabs=(first, end), cells=cells)
+    gen = MannSnapshots(stencil, g.ny, g.nz, threads)
+    with _File(Path(spectra_path)) as spectra_file:
+        for m, spectra in gen.spectra(run.seed, times):
+            for c in range(3):
+                block = spectra[c]  # (points, end - first)
+                if end - first < S:  # the last part: pad its rows to S slabs so every write is one block
+                    full = np.zeros((plan.points, S), np.complex64)
+                    full[:, : end - first] = block
+                    block = full
+                spectra_file.write(_spectra_offset(plan, m, c, part), block)
+
+
+def pass2_blocks(run, plan: OutOfCorePlan, spectra_path: str, plane_path: str | None, m: int, c: int, blocks,
+                 plane: np.ndarray | None = None) -> None:  # fmt: skip
+    """Pass 2 for blocks of (y, z) points of snapshot m, component c: read back, transform along k1, into ``plane``
+    (nt, points) or, without it, into the plane scratch file (block, t, point)."""
+    g, box = run.grid, run.box
+    S, P, B = plan.slabs_per_part, plan.points, plan.block_points
+    transform = PencilTransform(g.nt, P)
+    parts = np.empty((plan.n_parts, B, S), np.complex64)
+    spectra = np.empty((B, plan.n_parts * S), np.complex64)
+    block_out = np.empty((g.nt, B), np.float32) if plane is None else None
+    with _File(Path(spectra_path)) as spectra_file, (_File(Path(plane_path)) if plane is None else nullcontext()) as pf:
+        for b in blocks:
+            p0, p1 = b * B, min((b + 1) * B, P)
+            n = p1 - p0
+            for part in range(plan.n_parts):
+                spectra_file.read(_spectra_offset(plan, m, c, part, p0), parts[part, :n])
+            np.copyto(spectra[:n].reshape(n, plan.n_parts, S), parts[:, :n].transpose(1, 0, 2))
+            dest = plane[:, p0:p1] if plane is not None else block_out[:, :n]
+            for r0 in range(0, n, ROW_BLOCK):
+                r1 = min(r0 + ROW_BLOCK, n)
+                transform(spectra[r0:r1, : box.nk1], dest[:, r0:r1])
+            if pf is not None:
+                pf.write(b * g.nt * B * _F32, block_out)
+
+
+def _write_plane(writer, comp, ix, plane, plane_file, plan, g, sums) -> None:
+    """The plane (held, or in the plane file) to the store in time chunks; accumulate its sums."""
+    P, B, ct = plan.points, plan.block_points, plan.chunk_t
+    for t0 in range(0, g.nt, ct):
+        t1 = min(t0 + ct, g.nt)
+        if plane is not None:
+            chunk = plane[t0:t1]
+        else:
+            chunk = np.empty((t1 - t0, P), np.float32)
+            piece = np.empty((t1 - t0, B), np.float32)
+            for b in range(-(-P // B)):
+                p0, p1 = b * B, min((b + 1) * B, P)
+                plane_file.read((b * g.nt + t0) * B * _F32, piece)
+                chunk[:, p0:p1] = piece[:, : p1 - p0]
+        writer.write(comp, ix, chunk.reshape(t1 - t0, g.ny, g.nz), t0)
+        flat = chunk.reshape(-1)
+        sums[comp][0] += float(flat.sum(dtype=np.float64))
+        sums[comp][1] += float(np.dot(flat, flat))
