@@ -37,6 +37,7 @@ from tqdm import tqdm
 
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
+from turbgen.store.reader import read_checked
 
 COMPONENTS = ("u", "v", "w")
 SPAN_SEGMENTS = 4  # a span holds at least this many segment lengths (fewer segments lost at span edges)
@@ -190,6 +191,7 @@ class Estimates:
     long_iz: np.ndarray
     n_segments: int = 0  # segments per point (all spans)
     n_overlapping_pairs: int = 0  # pairs of consecutive half-overlapping segments
+    starts: tuple = ()  # start sample of every averaged segment (for the exact Welch covariance)
     mean: dict = field(default_factory=dict)  # component -> grand mean [m/s]
     variance: dict = field(default_factory=dict)  # component -> mean per-point variance [m^2 s^-2]
     auto: dict = field(default_factory=dict)  # component -> (nf,) PSD
@@ -226,12 +228,7 @@ def _psum(p) -> np.ndarray:
 
 def _read(arr, ix: int, t0: int, t1: int) -> np.ndarray:
     """Plane ``ix`` over [t0, t1), read one stored chunk at a time (zarr's temporaries stay chunk-sized)."""
-    out = np.empty((t1 - t0, *arr.shape[2:]), dtype=np.float32)
-    step = arr.chunks[0]
-    for a in range(t0, t1, step):
-        b = min(a + step, t1)
-        out[a - t0 : b - t0] = arr[a:b, ix]
-    return out
+    return read_checked(arr, ix, t0, t1)  # corrupted chunks and NaN: one-line StoreError
 
 
 def _task(arrays, ix: int, t0: int, t1: int, setup: WelchSetup, seps, mask, iy, iz) -> dict:
@@ -349,6 +346,7 @@ def _combine(est: Estimates, spans, results) -> None:
     seps = est.separations
     n_seg = sum(len(segment_starts(t1 - t0, setup)) for t0, t1 in spans)
     est.n_segments = n_seg
+    est.starts = tuple(t0 + s for t0, t1 in spans for s in segment_starts(t1 - t0, setup))
     est.n_overlapping_pairs = sum(max(len(segment_starts(t1 - t0, setup)) - 1, 0) for t0, t1 in spans)
     nf = setup.nperseg // 2 + 1
     scale = setup.scale

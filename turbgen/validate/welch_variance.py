@@ -1,0 +1,136 @@
+"""Exact covariance of Welch estimates of an nt-periodic Gaussian line process (short records).
+
+Theory side of the tolerances (independent of the generator): the model on the record is a
+sum of lines q = 0 .. nt-1 (frequency q / (nt dt), q > nt/2 the negative frequencies) with
+independent circular Gaussian amplitudes Y_q, E|Y_q|^2 = L_q and Y_{nt-q} = conj(Y_q) (real
+field). A segment starting at sample t0 has the windowed, mean-removed DFT
+
+    X_{t0, m} = sum_q Y_q c_m(q) exp(i 2 pi q t0 / nt),   c_m(q) = G_m(q / (nt dt))
+
+(G_m of ``expectations.WelchKernel``: Hann DTFT minus the segment-mean term), so by Isserlis
+
+    Cov(|X_{s,m}|^2, |X_{s',m'}|^2) = |A|^2 + |B|^2,
+    A = sum_q L_q c_m(q) conj(c_m'(q)) e^{i 2 pi q D / nt},   B = sum_q L_q c_m(q) c_m'(nt - q) e^{i 2 pi q D / nt},
+
+D = t0_s - t0_s'. Summed over all segment pairs this is the exact variance of the Welch average of one
+point, including everything the "K_eff = K / (1 + 2 rho_w ...)" rule of thumb leaves out: the actual
+segment starts (segments lost at span edges), overlap for a coloured spectrum, correlation of
+non-overlapping segments where the spectrum varies within a bin (low bins of short records), the
+per-segment mean removal, and the correlation of neighbouring bins for a coloured spectrum.
+
+Averages over points/planes multiply the one-point covariance by rho_bar(f) (module docstring of
+``expectations``; sqrt(rho_m rho_m') between two bins), as before.
+
+Cost: lines within LINE_BAND Welch bins of each bin (Hann sidelobes: |c|^2 falls as bin^-6, so
+the neglected part is < 1e-6 of the sum), bin pairs up to MAX_LAG bins apart (beyond, |A|^2 + |B|^2 <
+1e-4 of the diagonal for a Hann window), all distinct start differences D. When that is more than
+MAX_WORK products the rule-of-thumb model is used (very long records: many segments, where it is accurate).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from turbgen.validate.estimators import WelchSetup
+
+LINE_BAND = 8  # Welch bins either side whose lines enter a bin's sums
+MAX_LAG = 3  # covariances kept between bins up to this many bins apart
+MAX_WORK = 6e7  # bins x lines x (lags x bin offsets) above which the rule-of-thumb model is used
+
+
+def _hann_dtft(nu, n):
+    """DTFT of the periodic Hann window at normalised frequency nu, and the Dirichlet kernel d used for it."""
+
+    def d(x):
+        zz = np.exp(-2j * np.pi * x)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out = (1.0 - zz**n) / (1.0 - zz)
+        return np.where(np.abs(np.sin(np.pi * x)) < 1e-12, complex(n), out)
+
+    return 0.5 * d(nu) - 0.25 * d(nu - 1.0 / n) - 0.25 * d(nu + 1.0 / n), d
+
+
+class WelchCovariance:
+    """Covariance matrix (bins m, m' with |m - m'| <= MAX_LAG) of a Welch average over given segment starts.
+
+    ``cov(lines)`` returns a dict lag d -> (nbins - d,) array Cov(P_m, P_{m+d}) of the one-point one-sided
+    Welch estimate [(m^2 s^-2 Hz^-1)^2]; ``None`` when too expensive (see module docstring).
+    """
+
+    def __init__(self, setup: WelchSetup, nt: int, starts):
+        self.setup, self.nt = setup, nt
+        n = setup.nperseg
+        self.nb = n // 2 + 1
+        ratio = nt / n
+        self.width = min(int(math.ceil(LINE_BAND * ratio)), (nt - 1) // 2)
+        starts = np.asarray(list(starts), dtype=np.int64)
+        self.k = starts.size
+        diff = (starts[:, None] - starts[None, :]).ravel()
+        self.lags, self.lag_count = np.unique(diff, return_counts=True)
+        work = self.nb * (2 * self.width + 1) * self.lags.size * (MAX_LAG + 1) * 2
+        self.feasible = self.k > 0 and work <= MAX_WORK
+        if not self.feasible:
+            return
+        m = np.arange(self.nb)
+        # q for bin m: round(m ratio) + o, o in [-width - MAX_LAG ratio, width + MAX_LAG ratio] so every
+        # partner bin's lines are in the same index window
+        ext = self.width + int(math.ceil(MAX_LAG * ratio))
+        self.base = np.round(m * ratio).astype(np.int64)
+        self.offsets = np.arange(-ext, ext + 1)
+        q = self.base[:, None] + self.offsets[None, :]  # (nb, nq) extended line index
+        self.q = np.mod(q, nt)
+        dt = setup.dt_s
+        f = q / (nt * dt)
+        w_m, d = _hann_dtft(m[:, None] / n - f * dt, n)
+        mean_e = d(-f * dt) / n
+        w0, _ = _hann_dtft(m[:, None] / n + 0.0 * f, n)
+        self.c = w_m - mean_e * w0  # (nb, nq): c_m(q), q = self.q
+        self.c[self.q == 0] = 0.0
+        # lines farther than ``width`` from bin m's own base carry nothing for bin m
+        self.c[np.abs(q - self.base[:, None]) > self.width] = 0.0
+        # c_m(nt - q) on the same index window: the partner (negative) frequency of each q
+        fneg = -f
+        w_mn, _ = _hann_dtft(m[:, None] / n - fneg * dt, n)
+        self.cneg = w_mn - (d(-fneg * dt) / n) * w0
+        self.cneg[self.q == 0] = 0.0  # (not windowed: c_m(-q) matters where -q is near bin m, i.e. m near 0 or n/2)
+        self.phase = np.exp(2j * np.pi * np.outer(self.lags, q.ravel()) / nt).reshape(self.lags.size, *q.shape)
+
+    def cov(self, lines_half: np.ndarray) -> dict | None:
+        """Covariances for line variances ``lines_half`` (nt/2 + 1,) (L_j, j = 0 .. nt/2)."""
+        if not self.feasible:
+            return None
+        nt = self.nt
+        j = np.where(self.q > nt // 2, nt - self.q, self.q)
+        L = np.asarray(lines_half, float)[j]  # (nb, nq)
+        scale = self.setup.scale
+        out = {}
+        for lag in range(MAX_LAG + 1):
+            a_rows = slice(0, self.nb - lag)
+            b_rows = slice(lag, self.nb)
+            # align bin m+lag's coefficients on bin m's q window: shift by base difference
+            shift = self.base[b_rows] - self.base[a_rows]
+            cb = _shift_rows(self.c[b_rows], shift)
+            cbn = _shift_rows(self.cneg[b_rows], shift)
+            wa = L[a_rows] * self.c[a_rows]  # (r, nq)
+            A = np.einsum("lrq,rq->lr", self.phase[:, a_rows], wa * np.conj(cb))
+            B = np.einsum("lrq,rq->lr", self.phase[:, a_rows], wa * cbn)
+            s = np.einsum("l,lr->r", self.lag_count.astype(float), np.abs(A) ** 2 + np.abs(B) ** 2)
+            out[lag] = s * scale[a_rows] * scale[b_rows] / self.k**2
+        return out
+
+
+def _shift_rows(x: np.ndarray, shift: np.ndarray) -> np.ndarray:
+    """Row r shifted right by shift[r] columns (zero fill): column o of bin m + d's row then holds line
+    base_m + offset_o, as column o of bin m's row does (bases differ by shift)."""
+    out = np.zeros_like(x)
+    nq = x.shape[1]
+    for s in np.unique(shift):
+        rows = shift == s
+        s = int(s)
+        if s >= 0:
+            out[rows, s:] = x[rows, : nq - s]
+        else:
+            out[rows, : nq + s] = x[rows, -s:]
+    return out
