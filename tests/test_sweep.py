@@ -14,6 +14,7 @@ import pytest
 from click.testing import CliRunner
 
 from turbgen.cli import cli
+from turbgen.errors import ParameterError
 from turbgen.store import open_store
 from turbgen.sweep import SweepLock, make_plan, run_sweep
 from turbgen.sweep.lock import LOCK_NAME
@@ -130,11 +131,13 @@ def test_existing_stores_with_other_parameters_are_never_overwritten(swept, clie
     out = tmp_path / "other"
     shutil.copytree(plan.out, out)
     before = store_checksum(out / plan.runs[0].store_name)
+    manifest_before = (out / "manifest.json").read_text()
     other = make_plan(**{**_kwargs(plan), "out": out, "grid": {**GRID, "dy": 9.0}})
-    result = run_sweep(other, client=client, progress=False)
-    assert not result.ok and result.ran == 0
-    assert all(r["status"] == "failed" and "different grid" in r["error"] for r in result.records)
+    # refused before anything is written: the records of the existing stores are not rewritten
+    with pytest.raises(ParameterError, match="different grid.*nothing run, manifest unchanged"):
+        run_sweep(other, client=client, progress=False)
     assert store_checksum(out / plan.runs[0].store_name) == before
+    assert (out / "manifest.json").read_text() == manifest_before
 
 
 def test_one_failing_run_does_not_stop_the_others_and_sets_the_exit_code(client, tmp_path):

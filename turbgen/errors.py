@@ -47,6 +47,13 @@ def check_nonnegative(name: str, value) -> float:
     return v
 
 
+def _show(value) -> str:
+    """A value for a message: floats in short form when exact (1e+12, not 1000000000000.0), else repr."""
+    if isinstance(value, float) and math.isfinite(value) and float(f"{value:g}") == value:
+        return f"{value:g}"
+    return repr(float(value)) if isinstance(value, float) else repr(value)
+
+
 def check_range(name: str, value, lo: float, hi: float, *, lo_open=False, hi_open=False) -> float:
     """Return ``value`` as float if it lies in the interval from ``lo`` to ``hi``."""
     v = check_finite(name, value)
@@ -55,7 +62,7 @@ def check_range(name: str, value, lo: float, hi: float, *, lo_open=False, hi_ope
     if bad_lo or bad_hi:
         left = "(" if lo_open else "["
         right = ")" if hi_open else "]"
-        raise ParameterError(f"{name} = {value!r} is outside the allowed range {left}{lo:g}, {hi:g}{right}")
+        raise ParameterError(f"{name} = {_show(value)} is outside the allowed range {left}{lo:g}, {hi:g}{right}")
     return v
 
 
@@ -63,7 +70,8 @@ def check_int(name: str, value, lo: int, hi: int | None = None) -> int:
     """Return ``value`` as int if it is an integer >= lo (and <= hi when given)."""
     try:
         iv = int(value)
-        ok = float(value) == iv
+        # a Python int is exact at any size (float() would round it and call 2**63 "not an integer")
+        ok = isinstance(value, int) and not isinstance(value, bool) or float(value) == iv
     except (TypeError, ValueError, OverflowError):
         ok = False
     if not ok:

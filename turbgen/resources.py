@@ -1,8 +1,9 @@
-"""Available memory, and the check made before anything large is allocated.
+"""Available memory and disk space, and the checks made before anything large is allocated or written.
 
     require_memory(nbytes, "the Mann snapshot (4096 x 128 x 128, 3 components)", "lower --nt or --pad-yz")
+    require_disk(out, nbytes, "the store (4096 x 5 x 64 x 64)", "free space or choose another --out")
 
-raises ParameterError (CLI: one line, exit 2) when ``nbytes`` exceeds the available memory.
+raise ParameterError (CLI: one line, exit 2) when ``nbytes`` exceed the available memory / free disk.
 """
 
 from __future__ import annotations
@@ -88,3 +89,51 @@ def require_memory(nbytes: int, what: str, hint: str) -> int | None:
             f"is available; {hint}"
         )
     return available
+
+
+def available_disk_bytes(path) -> int | None:
+    """Bytes an unprivileged writer can still put on the filesystem holding ``path`` (or its
+    nearest existing parent), or None if it cannot be determined."""
+    p = Path(path).expanduser().absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    try:
+        st = os.statvfs(p)
+    except OSError:
+        return None
+    return st.f_bavail * st.f_frsize
+
+
+def require_disk(path, nbytes: int, what: str, hint: str) -> int | None:
+    """Raise ParameterError unless ``nbytes`` fit on the filesystem of ``path``; return the free bytes.
+
+    The disk-space counterpart of :func:`require_memory` (same message form). ``path`` is the
+    output (or its directory); ``hint`` says what to change (e.g. "free space or choose another --out").
+    When the free space cannot be determined the check passes (returns None).
+    """
+    free = available_disk_bytes(path)
+    if free is not None and nbytes > free:
+        where = Path(path).expanduser().absolute()
+        raise ParameterError(
+            f"{what} needs about {format_bytes(nbytes)} of disk space but only {format_bytes(free)} "
+            f"is free at {where.parent if not where.is_dir() else where}; {hint}"
+        )
+    return free
+
+
+_SIZE_UNITS = {"": 1, "b": 1, "k": 1000, "kb": 1000, "kib": 2**10, "m": 10**6, "mb": 10**6, "mib": 2**20,
+               "g": 10**9, "gb": 10**9, "gib": 2**30, "t": 10**12, "tb": 10**12, "tib": 2**40}  # fmt: skip
+
+
+def parse_size(text: str, name: str = "size") -> int:
+    """Bytes from a size such as '256MiB', '4GiB', '1.5GB' or '1000000' (binary and decimal units).
+
+    Raises ParameterError naming ``name`` and the accepted forms when ``text`` is not a positive size.
+    """
+    import re
+
+    m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*([a-zA-Z]*)\s*", str(text))
+    unit = m.group(2).lower() if m else ""
+    if not m or unit not in _SIZE_UNITS or float(m.group(1)) <= 0:
+        raise ParameterError(f"{name} {text!r} is not a size; give a positive number with a unit such as 256MiB or 4GiB")
+    return int(float(m.group(1)) * _SIZE_UNITS[unit])

@@ -6,12 +6,20 @@ Each sub-module holds one command or command group, listed in COMMANDS and impor
 
 from __future__ import annotations
 
+import atexit
 import importlib
+import logging
+import signal
+import warnings
 
 import click
 
 from turbgen import __version__
 from turbgen.errors import ParameterError
+
+
+# click >= 8.2 raises this (a UsageError) to print the help of a group called without a command
+_NoArgsIsHelp = getattr(click.exceptions, "NoArgsIsHelpError", ())
 
 
 class UserError(click.ClickException):
@@ -30,7 +38,9 @@ COMMANDS = {
     "fit": ("turbgen.cli.theory", "fit"),
     "info": ("turbgen.cli.info", "info"),
     "kaimal": ("turbgen.cli.kaimal", "kaimal"),
+    "lidar": ("turbgen.cli.lidar", "lidar"),
     "mann": ("turbgen.cli.mann", "mann"),
+    "serve": ("turbgen.cli.serve", "serve"),
     "sweep": ("turbgen.cli.sweep", "sweep"),
     "theory": ("turbgen.cli.theory", "theory"),
     "validate": ("turbgen.cli.validate", "validate"),
@@ -49,11 +59,77 @@ class TurbgenGroup(click.Group):
         module, attr = COMMANDS[cmd_name]
         return getattr(importlib.import_module(module), attr)
 
+    def make_context(self, info_name, args, parent=None, **extra):
+        try:
+            return super().make_context(info_name, args, parent=parent, **extra)
+        except click.ClickException as exc:  # e.g. `turbgen --bogus`
+            raise _one_line(exc) from None
+
     def invoke(self, ctx):
+        try:
+            return self._invoke_one_line(ctx)
+        except Exception:  # a SIGTERM/SIGHUP whose SystemExit the running library replaced by its own error
+            from turbgen.store.temporaries import received_signal
+
+            sig = received_signal()
+            if sig is None:
+                raise
+            _quiet_shutdown()
+            click.echo(f"Error: terminated ({signal.Signals(sig).name}); unfinished output was removed", err=True)
+            ctx.exit(128 + sig)
+
+    def _invoke_one_line(self, ctx):
         try:
             return super().invoke(ctx)
         except ParameterError as exc:
             raise UserError(str(exc)) from None
+        except click.ClickException as exc:  # click's own usage errors (bad option, missing argument, ...)
+            raise _one_line(exc) from None
+        except KeyboardInterrupt:  # Ctrl-C: writers have removed their temporaries; conventional exit 130
+            _quiet_shutdown()
+            click.echo("Error: interrupted; unfinished output was removed", err=True)
+            ctx.exit(130)
+        except SystemExit as exc:  # SIGTERM / SIGHUP turned into SystemExit(128 + signum) by the writers
+            if exc.code in (128 + signal.SIGTERM, 128 + signal.SIGHUP):
+                _quiet_shutdown()
+                name = signal.Signals(exc.code - 128).name
+                click.echo(f"Error: terminated ({name}); unfinished output was removed", err=True)
+            raise
+        except OSError as exc:  # a file-system error the library did not word itself (read-only, missing dir)
+            where = f"{exc.filename}: " if exc.filename else ""
+            raise UserError(f"{where}{exc.strerror or type(exc).__name__} (errno {exc.errno})") from None
+
+
+def _one_line(exc: click.ClickException) -> click.ClickException:
+    """Click's exception as one line (no usage block, no 'Try --help' hint), exit code 2."""
+    if isinstance(exc, (UserError, _NoArgsIsHelp)):  # a bare `turbgen` / `turbgen theory` shows the help
+        return exc
+    message = " ".join(exc.format_message().split())
+    ctx = getattr(exc, "ctx", None)
+    if isinstance(exc, click.UsageError) and ctx is not None and ctx.command_path:
+        message = f"{ctx.command_path}: {message}"
+    return UserError(message)
+
+
+def _quiet_shutdown() -> None:
+    """After an interruption: no warnings about zarr reads that were submitted but never run, and no
+    traceback from zarr's exit hook when its I/O thread was busy (it closes a running event loop)."""
+    warnings.filterwarnings("ignore", message="coroutine .* was never awaited", category=RuntimeWarning)
+    logging.getLogger("zarr.core.sync").setLevel(logging.ERROR)
+    logging.getLogger("asyncio").setLevel(logging.CRITICAL)  # "Task was destroyed but it is pending!" at exit
+    try:
+        from zarr.core import sync
+    except ImportError:
+        return
+    atexit.unregister(sync.cleanup_resources)
+
+    def cleanup():
+        try:
+            sync.cleanup_resources()
+        except RuntimeError:  # "Cannot close a running event loop": the process is exiting anyway
+            pass
+
+    atexit.register(cleanup)
 
 
 @click.group(cls=TurbgenGroup, context_settings={"help_option_names": ["-h", "--help"]})

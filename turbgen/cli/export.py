@@ -6,6 +6,7 @@ from __future__ import annotations
 import click
 
 from turbgen.export import EXPORTERS, ExportRequest, export_store
+from turbgen.store.paths import check_output_path
 
 
 @click.command("export")
@@ -26,6 +27,7 @@ from turbgen.export import EXPORTERS, ExportRequest, export_store
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 def export(store, fmt, out, plane, hub_height, shear, tower, periodic, drop_below_ground, overwrite):
     """Export STORE to --format; prints the InflowWind input-file lines that load the result."""
+    check_output_path(out)
     request = ExportRequest(plane=plane, hub_height_m=hub_height, shear_exponent=shear, tower=tower,
                             periodic=periodic, drop_below_ground=drop_below_ground, overwrite=overwrite)
     result = export_store(store, fmt, out, request)

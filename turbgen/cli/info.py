@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import click
 
 from turbgen.resources import format_bytes
 from turbgen.store import open_store
+from turbgen.store.temporaries import remove_dead_temporaries, report_removed
+
+DECODE_LIMIT_BYTES = 256 * 2**20  # stores up to this size on disk have every chunk decoded (~0.3 s)
 
 
 def _value(v) -> str:
@@ -31,7 +35,8 @@ def _lines(s: dict) -> list[str]:
         (
             "status",
             f"complete, {format_bytes(s['size_on_disk_bytes'])} on disk "
-            f"({format_bytes(s['size_uncompressed_bytes'])} uncompressed)",
+            f"({format_bytes(s['size_uncompressed_bytes'])} uncompressed), "
+            + ("every chunk decoded" if s.get("chunks_decoded") else "chunks not decoded (large store: validate reads them)"),
         ),
         ("model", f"{s['model']}, seed {s['seed']}"),
         ("created", f"{s['created_utc']} by turbgen {s['turbgen_version']}"),
@@ -65,9 +70,19 @@ def _lines(s: dict) -> list[str]:
 def info(store: str, as_json: bool):
     """Summarise the field store STORE: model, grid, planes, dt, U, seed, parameters, size, completeness.
 
-    A missing, incomplete or corrupted store is reported in one line (exit code 2).
+    A missing, incomplete or corrupted store (a chunk that does not decode or holds NaN; every
+    chunk is decoded for stores up to 256 MiB) is reported in one line (exit code 2). Temporaries
+    left beside STORE (or inside it, for a sweep directory) by killed writers are removed.
     """
-    summary = open_store(store).summary()
+    path = Path(store).expanduser().absolute()
+    report_removed(remove_dead_temporaries(path.parent, [path.name]))
+    if path.is_dir() and not (path / "zarr.json").is_file():
+        report_removed(remove_dead_temporaries(path))  # e.g. a sweep directory
+    fs = open_store(path)
+    summary = fs.summary()
+    summary["chunks_decoded"] = summary["size_on_disk_bytes"] <= DECODE_LIMIT_BYTES
+    if summary["chunks_decoded"]:
+        fs.check_chunks()
     if as_json:
         click.echo(json.dumps(summary, indent=2))
     else:

@@ -16,8 +16,10 @@ from turbgen.runs.kaimal import (
     memory_needed,
     run_kaimal,
 )
+from turbgen.store.paths import check_output_path
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS
 from turbgen.theory.kaimal import IEC_IREF
+from turbgen.theory.ranges import LIMITS
 
 # option name -> key of the run mapping (KaimalRun.from_mapping)
 _KEYS = {
@@ -78,9 +80,10 @@ def _list(parser, name):
               help="Time samples per store chunk (default min(nt, 1024)); never changes the field.")
 @click.option("--config", "config", type=click.Path(dir_okay=False), help="JSON/TOML run file; options typed on the "
               "command line override it.")
-@click.option("--threads", type=click.IntRange(min=1), help="FFT threads (default: all cores); never changes the field.")
+@click.option("--threads", type=click.IntRange(min=1, max=LIMITS["threads"]), help="FFT threads (default: all cores); never changes the field.")
 @click.option("--seed", type=int, default=1, show_default=True, help="Random seed (>= 0).")
-@click.option("--out", type=click.Path(), help="Output store (default kaimal_U<U>_<class>_s<seed>.zarr).")
+@click.option("--out", type=click.Path(), help="Output store (default kaimal_U<U>_<class or preset>_s<seed>.zarr, "
+              "plus _p<digest> when other parameters differ from the class or preset).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing store.")
 @click.option("--rescale", is_flag=True, help="Scale spectra so the expected sigma is the nominal one (recorded in "
               "the store); default: spectra follow Eq. 11 over the resolved band.")
@@ -101,11 +104,14 @@ def kaimal(ctx, **opt):
         user = load_presets(opt["presets_file"]) if opt["presets_file"] else None
         U = opt["U"] if "U" in typed or "U_m_s" not in mapping else mapping["U_m_s"]
         cls = opt["turb_class"] if "turb_class" in typed else None
-        mapping.update(kaimal_run_keys(opt["preset"], U, user=user, turb_class=cls))
+        preset_keys = kaimal_run_keys(opt["preset"], U, user=user, turb_class=cls)
+        mapping.update(preset_keys)
         if "turb_class" not in typed:
             opt["turb_class"] = None
     elif opt["presets_file"]:
         raise click.UsageError("--presets-file needs --preset")
+    else:
+        preset_keys = None
     # typed options override the run file and preset; defaults fill what neither gives
     for name, key in _KEYS.items():
         if name in typed or (key not in mapping and opt[name] is not None):
@@ -119,7 +125,8 @@ def kaimal(ctx, **opt):
     mapping["grid"] = grid
     run = KaimalRun.from_mapping(mapping)
     g = run.grid
-    out = opt["out"] or f"kaimal_U{run.U_m_s:g}_{run.turb_class or 'sigma'}_s{run.seed}.zarr"
+    out = opt["out"] if opt["out"] is not None else run.default_store_name(opt["preset"], preset_keys)
+    check_output_path(out)
     k = run.kaimal
     click.echo(f"turbgen kaimal: U {run.U_m_s:g} m/s, sigma {', '.join(f'{s:.3g}' for s in k.sigma_m_s)} m/s, "
                f"L {', '.join(f'{s:.4g}' for s in k.length_scales_m)} m, a_yz {k.a_yz:g}, Lc {k.lc_m:g} m, "

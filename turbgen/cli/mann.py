@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from contextlib import contextmanager
 
 import click
 
@@ -10,9 +11,14 @@ from turbgen.cli.options import parse_floats, parse_range, plane_positions
 from turbgen.runs.config import read_config
 from turbgen.runs.defaults import MANN_DEFAULTS as D
 from turbgen.runs.defaults import MANN_GRID as G
-from turbgen.runs.mann import MannRun, describe, mann_preset_keys, run_mann
+from turbgen import resources
+from turbgen.resources import parse_size
+from turbgen.runs.mann import MannRun, describe, mann_preset_keys, memory_estimate_bytes, run_mann
+from turbgen.runs.mann_outofcore import BASE_BYTES, remove_stale_scratch
+from turbgen.store.paths import check_output_path
 from turbgen.synthesis.mann_spacetime import MannSnapshots
 from turbgen.theory.params import LIFETIMES
+from turbgen.theory.ranges import LIMITS
 
 # option name -> key of the run mapping (MannRun.from_mapping, schemas/mann-run.schema.json)
 _KEYS = {
@@ -33,6 +39,25 @@ def _evo(ctx, param, value):
         return float(value)
     except ValueError:
         raise click.BadParameter(f"{value!r} is not a number of seconds or 'frozen'") from None
+
+
+@contextmanager
+def _dask_client(scheduler):
+    """None (both passes in this process), a Client of the given scheduler, or of a LocalCluster ('local')."""
+    if scheduler is None:
+        yield None
+        return
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    if scheduler == "local":
+        with LocalCluster(threads_per_worker=1, processes=True, dashboard_address=None,
+                          silence_logs=logging.ERROR) as cluster, Client(cluster) as client:  # fmt: skip
+            yield client
+    else:
+        with Client(scheduler) as client:
+            yield client
 
 
 def _list(parser, name):
@@ -68,14 +93,21 @@ def _list(parser, name):
 @click.option("--presets-file", type=click.Path(dir_okay=False), help="User presets (TOML or JSON).")
 @click.option("--seed", type=int, help=f"Random seed >= 0 (default {D['seed']}).")
 @click.option("--hub-height", "hub_height", type=float, help=f"Hub height [m] (default {D['hub_height_m']:g}).")
-@click.option("--out", type=click.Path(), help="Output store (default mann_U<U>_L<L>_G<Gamma>_evo<gamma>_s<seed>.zarr).")
+@click.option("--out", type=click.Path(), help="Output store (default mann_U<U>_L<L>_G<Gamma>_evo<gamma>_s<seed>.zarr, plus "
+              "_p<digest> when other parameters differ from the defaults).")
 @click.option("--chunks", type=int, help="Time samples per store chunk (default min(nt, 1024)); never changes the field.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing store.")
 @click.option("--config", type=click.Path(dir_okay=False), help="JSON/TOML run file (schemas/mann-run.schema.json); "
               "options typed on the command line override it.")  # fmt: skip
-@click.option("--threads", type=click.IntRange(min=1), help="Worker threads (default: all cores); never changes the field.")
+@click.option("--threads", type=click.IntRange(min=1, max=LIMITS["threads"]), help="Worker threads (default: all cores); never changes the field.")
 @click.option("--stencil-cache", type=click.Path(file_okay=False),
               help="Directory caching the stencil per parameter set and grid (reused by later seeds).")
+@click.option("--memory", help="Memory budget, e.g. 256MiB, 4GiB (default: the available memory). A field whose "
+              "snapshot does not fit is made out of core, in two passes through scratch files next to --out "
+              "(the same field).")  # fmt: skip
+@click.option("--scheduler", help="Out-of-core runs only: dask scheduler address whose workers make the passes "
+              "(they must see --out's directory; --memory then holds per worker), or 'local' for a LocalCluster "
+              "of one worker per core sharing --memory.")  # fmt: skip
 def mann(**opt):
     """Mann space-time 4D field: yz-planes at the rotor and range gates, evolving with upstream distance."""
     mapping = read_config(opt["config"], "mann-run") if opt["config"] else {}
@@ -101,12 +133,35 @@ def mann(**opt):
         grid["x_m"] = x_m
     mapping["grid"] = grid
     run = MannRun.from_mapping(mapping)
-    out = opt["out"] or run.default_store_name()
+    out = opt["out"] if opt["out"] is not None else run.default_store_name()
+    check_output_path(out)
     threads = MannSnapshots.default_threads(opt["threads"])
+    budget = parse_size(opt["memory"], "--memory") if opt["memory"] is not None else resources.available_memory_bytes()
+    in_memory = memory_estimate_bytes(run, threads, opt["stencil_cache"] is None) + BASE_BYTES
+    plan = None
+    if budget is not None and in_memory > budget:
+        from turbgen.runs.mann_outofcore import OutOfCorePlan
+
+        per_task, task_threads = budget, threads
+        if opt["scheduler"] == "local":  # one single-threaded worker per core, the budget shared between them
+            per_task, task_threads = budget // threads, 1
+        # a budget too small fails here, before any output
+        plan = OutOfCorePlan(run, per_task, task_threads, opt["chunks"])
     click.echo("turbgen mann")
     for line in describe(run, out, threads):
         click.echo(f"  {line}")
-    s = run_mann(run, out, overwrite=opt["overwrite"], chunk_t=opt["chunks"], progress=sys.stderr.isatty(),
-                 threads=threads, cache_dir=opt["stencil_cache"])  # fmt: skip
+    for stale in remove_stale_scratch(out):
+        click.echo(f"  removed {stale.name}: scratch of a run that was killed")
+    if plan is not None:
+        from turbgen.runs.mann_outofcore import run_mann_outofcore
+
+        click.echo(f"  {plan.describe()}")
+        with _dask_client(opt["scheduler"]) as client:
+            s = run_mann_outofcore(run, out, memory_bytes=plan.memory_bytes, overwrite=opt["overwrite"],
+                                   chunk_t=opt["chunks"], progress=sys.stderr.isatty(), threads=plan.threads,
+                                   plan=plan, client=client)  # fmt: skip
+    else:
+        s = run_mann(run, out, overwrite=opt["overwrite"], chunk_t=opt["chunks"], progress=sys.stderr.isatty(),
+                     threads=threads, cache_dir=opt["stencil_cache"])  # fmt: skip
     click.echo(f"wrote {s['path']} in {s['seconds']:.1f} s: sigma u/v/w {s['sigma_u']:.3f}/{s['sigma_v']:.3f}/"
                f"{s['sigma_w']:.3f} m/s")  # fmt: skip

@@ -6,51 +6,79 @@ import math
 
 import click
 
+from turbgen.theory.ranges import LIMITS
+
+
+def _limit(name: str) -> tuple[str, int]:
+    """The LIMITS key and maximum count of a list option (turbgen.theory.ranges.LIMITS)."""
+    key = {"--planes": "planes", "--gates": "planes", "--seeds": "seeds", "--speeds": "speeds"}.get(name, "points")
+    return key, LIMITS[key]
+
 
 def parse_floats(text: str, name: str) -> list[float]:
-    """'a,b,c' -> [a, b, c] (finite floats)."""
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise click.BadParameter(f"{text!r} is not a comma-separated list of numbers", param_hint=name) from None
-    if not values or not all(math.isfinite(v) for v in values):
-        raise click.BadParameter(f"{text!r} must hold finite numbers", param_hint=name)
-    return values
+    """'a,b,c' -> [a, b, c] (finite floats, at most the option's LIMITS count)."""
+    items = [v for v in text.split(",") if v.strip()]
+    _, limit = _limit(name)
+    if len(items) > limit:
+        raise click.BadParameter(f"{len(items)} values is more than the maximum {limit}", param_hint=name)
+    for v in items:
+        try:
+            x = float(v)
+        except ValueError:
+            raise click.BadParameter(f"{v.strip()!r} in {text!r} is not a number", param_hint=name) from None
+        if not math.isfinite(x):
+            raise click.BadParameter(f"{v.strip()!r} in {text!r} is not a finite number", param_hint=name)
+    if not items:
+        raise click.BadParameter(f"{text!r} holds no number", param_hint=name)
+    return [float(v) for v in items]
 
 
 def parse_range(text: str, name: str) -> list[float]:
-    """'start:stop:step' -> start, start+step, ... <= stop (inclusive, 1e-9 relative tolerance)."""
+    """'start:stop:step' -> start, start+step, ... <= stop (inclusive, 1e-9 relative tolerance).
+
+    The count is checked against the option's LIMITS before the list is built.
+    """
     parts = text.split(":")
     try:
         start, stop, step = (float(p) for p in parts)
     except ValueError:
-        raise click.BadParameter(f"{text!r} is not start:stop:step", param_hint=name) from None
+        raise click.BadParameter(f"{text!r} is not start:stop:step (three numbers)", param_hint=name) from None
     if not (step > 0 and stop >= start and all(map(math.isfinite, (start, stop, step)))):
-        raise click.BadParameter(f"{text!r} needs step > 0 and stop >= start", param_hint=name)
+        raise click.BadParameter(f"{text!r} needs finite numbers, step > 0 and stop >= start", param_hint=name)
     n = int(math.floor((stop - start) / step * (1 + 1e-9) + 1e-9)) + 1
+    _, limit = _limit(name)
+    if n > limit:
+        raise click.BadParameter(f"{text!r} gives {n} values, more than the maximum {limit}", param_hint=name)
     return [round(start + i * step, 9) for i in range(n)]
 
 
 def parse_ints(text: str, name: str) -> list[int]:
-    """'1-21' or '1,4,7' or '1-3,9' -> sorted unique ints."""
-    out: set[int] = set()
-    try:
-        for part in text.split(","):
-            part = part.strip()
-            if not part:
-                continue
-            if "-" in part[1:]:
-                lo, hi = part.split("-", 1) if not part.startswith("-") else (part, part)
-                lo_i, hi_i = int(lo), int(hi)
-                if hi_i < lo_i:
-                    raise ValueError
-                out.update(range(lo_i, hi_i + 1))
-            else:
-                out.add(int(part))
-    except ValueError:
-        raise click.BadParameter(f"{text!r} is not a list of integers or ranges like 1-21", param_hint=name) from None
-    if not out:
+    """'1-21' or '1,4,7' or '1-3,9' -> sorted unique non-negative ints (at most the option's LIMITS count;
+    counted before any range is expanded)."""
+    _, limit = _limit(name)
+    ranges: list[tuple[int, int]] = []
+    for part in text.split(","):
+        part = part.strip()
+        if not part:
+            continue
+        lo, sep, hi = part.partition("-")
+        try:
+            lo_i, hi_i = int(lo), int(hi) if sep else int(lo)
+        except ValueError:
+            raise click.BadParameter(
+                f"{part!r} in {text!r} is not a non-negative integer or a range like 1-21", param_hint=name
+            ) from None
+        if hi_i < lo_i:
+            raise click.BadParameter(f"range {part!r} runs backwards (write {hi_i}-{lo_i})", param_hint=name)
+        ranges.append((lo_i, hi_i))
+    if not ranges:
         raise click.BadParameter(f"{text!r} holds no integer", param_hint=name)
+    count = sum(hi - lo + 1 for lo, hi in ranges)
+    if count > limit:
+        raise click.BadParameter(f"{text!r} gives {count} values, more than the maximum {limit}", param_hint=name)
+    out: set[int] = set()
+    for lo, hi in ranges:
+        out.update(range(lo, hi + 1))
     return sorted(out)
 
 

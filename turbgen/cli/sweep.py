@@ -32,15 +32,20 @@ def _split(text: str | None) -> list[str] | None:
 @click.option("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
 @click.option("--scheduler", help="address of an existing dask scheduler (workers must see --out)")
 @click.option("--validate/--no-validate", default=None, help="validate every field against theory")
+@click.option("--lidar", help="run this lidar (preset or TOML/JSON file, see turbgen lidar) on every field and put "
+              "its k_0.5, cut-off and coherence verdict in the manifest")
 @click.option("--out", type=click.Path(file_okay=False), help="output directory (stores and manifest)")
+@click.option("--memory", help="memory budget of each run, e.g. 4GiB: Mann fields that do not fit are made out of "
+              "core (turbgen mann --memory), the same fields")  # fmt: skip
 def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, gates, ny, nz, dy, dz, hub_height,
-          chunks, workers, scheduler, validate, out):  # fmt: skip
+          chunks, workers, scheduler, validate, lidar, out, memory):  # fmt: skip
     """Generate every field of a sweep (resumable: complete stores are kept), write DIR/manifest.json/.csv.
 
     Either --config FILE (command-line --out, --workers, --scheduler, --validate and --chunks
     override the file) or --model, --preset, --speeds, --seeds and --out. Exit code 0 when every
     run has a complete store (and passed validation, with --validate), 1 when some run failed,
-    3 when all stores are complete but some failed validation (see the summary and the manifest).
+    3 when all stores are complete but some failed validation or the lidar coherence check (see the summary and
+    the manifest).
     """
     from turbgen.presets import load_presets
     from turbgen.sweep import make_plan, plan_from_file, run_sweep, summary_table
@@ -61,12 +66,15 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
                                 ("--presets-file", presets_file)] if v is not None]  # fmt: skip
         if given or grid:
             raise click.UsageError(f"--config defines the sweep; {', '.join(given + sorted(grid))} cannot be combined")
-        plan = plan_from_file(config, out=out, validate=validate, workers=workers, scheduler=scheduler, chunk_t=chunks)
+        plan = plan_from_file(config, out=out, validate=validate, workers=workers, scheduler=scheduler, chunk_t=chunks,
+                              lidar=lidar)
     else:
         missing = [n for n, v in [("--model", models), ("--preset", presets), ("--speeds", speeds), ("--seeds", seeds),
                                   ("--out", out)] if v is None]  # fmt: skip
         if missing:
-            raise click.UsageError(f"give --config FILE or all of {', '.join(missing)}")
+            raise click.UsageError(
+                f"give --config FILE, or --model, --preset, --speeds, --seeds and --out (missing: {', '.join(missing)})"
+            )
         speed_list = parse_range(speeds, "--speeds") if ":" in speeds else parse_floats(speeds, "--speeds")
         plan = make_plan(
             out=out,
@@ -80,11 +88,15 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
             workers=workers,
             scheduler=scheduler,
             user_presets=load_presets(presets_file) if presets_file else None,
+            lidar=lidar,
         )
     click.echo(f"sweep: {len(plan.runs)} runs -> {plan.out}", err=True)
-    result = run_sweep(plan, progress=True)
+    from turbgen.resources import parse_size
+
+    budget = parse_size(memory, "--memory") if memory is not None else None
+    result = run_sweep(plan, progress=True, memory_bytes=budget)
     click.echo(summary_table(result))
     if not result.ok:
         raise click.exceptions.Exit(1)
-    if result.validation_failed:
+    if result.validation_failed or result.lidar_failed:
         raise click.exceptions.Exit(3)

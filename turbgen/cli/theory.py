@@ -4,13 +4,48 @@ from __future__ import annotations
 
 import json
 import math
+import os
 
 import click
 import numpy as np
 
 from turbgen.cli.options import parse_floats
-from turbgen.errors import ParameterError, check_positive
+from turbgen.errors import ParameterError
+from turbgen.theory import ranges
 from turbgen.theory.params import LIFETIMES, MannParams, check_wind_speed
+
+
+def _evo(ctx, param, value):
+    """--evo: seconds, or 'frozen' / 'none' (frozen turbulence, no evolution lifetime) -> None."""
+    if value is None or value.strip().lower() in ("frozen", "none"):
+        return None
+    try:
+        return float(value)
+    except ValueError:
+        raise click.BadParameter(f"{value!r} is not a number of seconds or 'frozen'") from None
+
+
+def _ranged(key: str, label: str):
+    """Option callback checking the value against turbgen.theory.ranges.RANGES[key]."""
+    return lambda ctx, param, value: ranges.check(key, value, label)
+
+
+def _remember_overwrite(ctx, param, value):
+    ctx.meta["theory_overwrite"] = value
+
+
+def _plot_path(ctx, param, value):
+    """--plot: refuse an existing file (without --overwrite) or an unusable directory before computing."""
+    if value is None:
+        return None
+    from turbgen.store.paths import check_output_path
+
+    p = check_output_path(value, "--plot")
+    if p.exists() and not ctx.meta.get("theory_overwrite"):
+        raise ParameterError(f"--plot = {value!r} exists; pass --overwrite to replace it")
+    if not os.access(p.absolute().parent, os.W_OK):
+        raise ParameterError(f"--plot = {value!r}: directory {str(p.absolute().parent)!r} is not writable")
+    return value
 
 
 def _mann_options(f):
@@ -27,13 +62,16 @@ def _mann_options(f):
         click.option("--factor1", type=float, default=1.0, show_default=True, help="Small-k lifetime slope -factor1."),
         click.option("--factor2", type=float, default=3.5, show_default=True,
                      help="Large-k slope -(2/3)factor2 of the evolution lifetime."),
-        click.option("--evo", type=float, default=400.0, show_default=True, help="Evolution time constant γ [s]."),
+        click.option("--evo", default="400", show_default=True, callback=_evo,
+                     help="Evolution time constant γ [s], or 'frozen' (no evolution)."),
         click.option("--U", "U", type=float, default=16.0, show_default=True, help="Mean wind speed U [m/s]."),
         click.option("--k1", "k1_text", default=None, help="Wavenumbers a,b,c [rad/m] (instead of --f)."),
         click.option("--f", "f_text", default=None, help="Frequencies a,b,c [Hz]; default 40 log-spaced, 1e-3..1 Hz."),
         click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON (keys: README, theory)."),
-        click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-                     help="Write a PNG plot (paper 000 Fig. 2 style)."),
+        click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None, callback=_plot_path,
+                     help="Write a PNG plot (paper 000 Fig. 2 style); an existing file needs --overwrite."),
+        click.option("--overwrite", is_flag=True, is_eager=True, expose_value=False, callback=_remember_overwrite,
+                     help="Replace an existing --plot file."),
     ]
     for opt in reversed(opts):
         f = opt(f)
@@ -52,9 +90,9 @@ def _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U) -> Ma
     if ae is not None:
         return shape.with_ae(ae)
     if ti is not None:
-        sigma = check_positive("ti (turbulence intensity)", ti) * U
+        sigma = ranges.check("ti", ti) * U
     elif sigma_u is not None:
-        sigma = sigma_u
+        sigma = ranges.check("sigma_u_m_s", sigma_u)
     else:
         sigma = iec_sigma1_m_s(U, "A")
     return shape.with_ae(ae_for_sigma_u(sigma, shape))
@@ -66,13 +104,12 @@ def _points(k1_text, f_text, U):
     if k1_text is not None and f_text is not None:
         raise ParameterError("give either --k1 or --f, not both")
     if k1_text is not None:
-        k1 = np.array(parse_floats(k1_text, "--k1"))
+        k1 = np.array([ranges.check("k1_rad_m", v, "--k1 (rad/m)") for v in parse_floats(k1_text, "--k1")])
         f = k1 * U / (2.0 * math.pi)
     else:
-        f = np.array(parse_floats(f_text, "--f")) if f_text is not None else np.logspace(-3, 0, 40)
+        values = parse_floats(f_text, "--f") if f_text is not None else np.logspace(-3, 0, 40)
+        f = np.array([ranges.check("f_hz", v, "--f (Hz)") for v in values])
         k1 = 2.0 * math.pi * f / U
-    if np.any(k1 <= 0):
-        raise ParameterError("--k1 / --f values must be > 0")
     return f, k1
 
 
@@ -136,8 +173,8 @@ def spectra(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_te
 
 @theory.command()
 @_mann_options
-@click.option("--dy", type=float, default=20.0, show_default=True, help="Lateral separation [m].")
-@click.option("--dz", type=float, default=20.0, show_default=True, help="Vertical separation [m].")
+@click.option("--dy", type=float, callback=_ranged("separation_m", "--dy (m)"), default=20.0, show_default=True, help="Lateral separation [m].")
+@click.option("--dz", type=float, callback=_ranged("separation_m", "--dz (m)"), default=20.0, show_default=True, help="Vertical separation [m].")
 @click.option("--components", type=click.Choice(["uu", "vv", "ww", "uw"]), default="uu", show_default=True)
 def coherence(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path,
               dy, dz, components):
@@ -155,7 +192,7 @@ def coherence(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_
 
 @theory.command()
 @_mann_options
-@click.option("--dx", type=float, default=100.0, show_default=True, help="Longitudinal separation [m].")
+@click.option("--dx", type=float, callback=_ranged("separation_m", "--dx (m)"), default=100.0, show_default=True, help="Longitudinal separation [m].")
 def longitudinal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path,
                  dx):
     """Longitudinal (magnitude-squared) coherence of u from the space-time tensor (paper 000 Eq. 16)."""
@@ -171,7 +208,7 @@ def longitudinal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, 
 
 @theory.command()
 @_mann_options
-@click.option("--radius", type=float, default=63.0, show_default=True, help="Rotor radius R [m].")
+@click.option("--radius", type=float, callback=_ranged("rotor_radius_m", "--radius (m)"), default=63.0, show_default=True, help="Rotor radius R [m].")
 def rews(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path, radius):
     """Rotor-effective wind speed spectrum of the Mann model (paper 000 Eq. 24; two-sided, m^3 s^-2)."""
     from turbgen.theory.mann_spectra import one_point_spectra
@@ -230,7 +267,7 @@ def kaimal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_tex
 
 @fit.command()
 @_mann_options
-@click.option("--dx", type=float, default=100.0, show_default=True, help="Longitudinal separation [m].")
+@click.option("--dx", type=float, callback=_ranged("separation_m", "--dx (m)"), default=100.0, show_default=True, help="Longitudinal separation [m].")
 def evolution(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path, dx):
     """a_x, b_x of the exponential longitudinal coherence (Eq. 18) fitted to the space-time model (Eq. 22).
 
@@ -240,6 +277,8 @@ def evolution(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_
     from turbgen.theory.fitting import LONG_F_HZ, fit_longitudinal
     from turbgen.theory.space_time import longitudinal_coherence
 
+    if evo is None:  # before the (slow) energy-level quadrature
+        raise ParameterError("--evo frozen: fit evolution needs an evolution time (frozen turbulence has coh = 1)")
     p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
     grid = None if (k1_text is None and f_text is None) else _points(k1_text, f_text, U)[0]
     a_x, b_x = fit_longitudinal(p, U, dx, grid)
@@ -253,3 +292,12 @@ def evolution(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_
         model = exponential_longitudinal(dx, f, U, a_x, b_x) ** 2
         _plot(plot_path, f, {"space-time (Eq. 16)": (coh2, "-"), "exponential fit (Eq. 18)": (model, "--")},
               "f [Hz]", "coh² [-]")
+
+
+def _attach_lidar():
+    from turbgen.cli.theory_lidar import lidar_theory
+
+    theory.add_command(lidar_theory)
+
+
+_attach_lidar()

@@ -3,27 +3,50 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
+from pathlib import Path
 
 import click
 
 from turbgen.validate import DEFAULT_ROTOR_RADIUS_M, validate as run_validation
 
 
+def _check_plots_dir(plots_dir: str, overwrite: bool) -> None:
+    """Refuse (one line, before validating) a --plots path that is a file, unwritable, or holds PNGs."""
+    from turbgen.errors import ParameterError
+    from turbgen.store.paths import check_output_path
+
+    p = Path(plots_dir)
+    if p.exists():
+        if not p.is_dir():
+            raise ParameterError(f"--plots = {plots_dir!r} is a file, not a directory")
+        if not os.access(p, os.W_OK):
+            raise ParameterError(f"--plots = {plots_dir!r} is not writable")
+        if not overwrite and any(p.glob("*.png")):
+            raise ParameterError(f"--plots = {plots_dir!r} already holds PNG files; pass --overwrite to replace them")
+        return
+    check_output_path(plots_dir, "--plots", create_parents=True)  # report.plots makes missing directories
+
+
 @click.command("validate")
 @click.argument("store", type=click.Path(path_type=str))
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON (stable keys) instead of a table.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False, path_type=str), default=None,
-              help="Write one PNG per comparison (estimate, 95 % band, theory) into this directory.")
+              help="Write one PNG per comparison (estimate, 95 % band, theory) into this directory (PNGs already "
+              "there need --overwrite).")
+@click.option("--overwrite", is_flag=True, help="Replace PNGs already in the --plots directory.")
 @click.option("--rotor-radius", "rotor_radius", type=float, default=None,
               help=f"Rotor radius R [m] of the rotor-effective wind speed (mean of u over the points within R); "
               f"default {DEFAULT_ROTOR_RADIUS_M:g} m, or the largest disc inside a smaller grid.")
-def validate(store, as_json, plots_dir, rotor_radius):
+def validate(store, as_json, plots_dir, overwrite, rotor_radius):
     """Validate the field store STORE against its model (Mann or Kaimal).
 
     Exit code 0 when every metric passes, 1 when a metric fails, 2 for usage errors or a path
     that is not a complete turbgen store.
     """
+    if plots_dir is not None:
+        _check_plots_dir(plots_dir, overwrite)
     report = run_validation(store, rotor_radius_m=rotor_radius)
     if plots_dir is not None:
         files = report.plots(plots_dir)

@@ -19,6 +19,7 @@ from turbgen.export.request import ExportRequest, ExportResult
 from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT
 from turbgen.export.wnd import export_wnd, read_sum, read_wnd
 from turbgen.errors import ParameterError, check_choice
+from turbgen.resources import require_disk
 from turbgen.store import FieldStore, open_store
 
 WHOLE_FIELD = ("mt4d", "hdf5")  # every plane, stored fluctuations
@@ -40,7 +41,23 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
     _check_applicable(fmt, request)
     if not isinstance(store, FieldStore):
         store = open_store(store)
+    need = export_bytes(fmt, store.grid)
+    require_disk(out, need, f"the {fmt} export of {store.path.name}",
+                 "free space there or choose another --out")
     return EXPORTERS[fmt](store, out, request)
+
+
+# bytes per stored value and whether every plane is written, per format
+_SIZE = {"bts": (2, False), "wnd": (2, False), "hawc2": (4, False), "evo": (2, True), "mt4d": (4, True),
+         "hdf5": (4, True)}
+
+
+def export_bytes(fmt: str, grid) -> int:
+    """Upper bound of the size [bytes] of an export of a store with ``grid`` (checked against free disk)."""
+    itemsize, all_planes = _SIZE[fmt]
+    values = 3 * grid.nt * grid.ny * grid.nz * (grid.nx if all_planes else 1)
+    extra = 3 * grid.nt * grid.ny * grid.nz * 2 if fmt == "evo" else 0  # evo also writes the rotor .wnd
+    return values * itemsize + extra + (1 << 20)  # + headers, HDF5 metadata
 
 
 def _check_applicable(fmt: str, request: ExportRequest) -> None:

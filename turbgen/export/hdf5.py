@@ -39,6 +39,9 @@ def export_hdf5(fs, out, req: ExportRequest) -> ExportResult:
     coords = {"t": g.t(), "x": g.x(), "y": g.y(), "z": g.z()}
     ct = max(1, min(g.nt, _CHUNK_BYTES // (4 * g.ny * g.nz)))
     with OutputSet([out], overwrite=req.overwrite) as files, h5py.File(files.temp(out), "w") as h5:
+        # HDF5 aborts the process (double free) when it cannot flush on close, e.g. on a full disk:
+        # reserve the whole file first, so that ENOSPC comes here, as a Python error, or never
+        files.reserve(out, 3 * g.nbytes_per_component() + g.nbytes_per_component() // 32 + (1 << 20))
         for name, value in fs.attrs.items():
             h5.attrs[name] = _attr_value(value)
         h5.attrs["dimension_order"] = DIMENSION_ORDER

@@ -1,17 +1,27 @@
 """Atomic multi-file output: every file is written under a temporary sibling name and all are
 renamed into place only when every one of them was written completely.
 
-Nothing at the final paths changes when an error (or Ctrl-C) happens, and existing files are
-never replaced unless ``overwrite`` is set (checked for all targets before anything is written).
+Nothing at the final paths changes when an error (Ctrl-C, SIGTERM, SIGHUP, a full or read-only
+disk) happens, and existing files are never replaced unless ``overwrite`` is set (checked for all
+targets before anything is written). Errors of the file system become one-line ParameterErrors;
+temporaries of earlier exports killed with SIGKILL are removed when the next export of the same
+outputs starts.
 """
 
 from __future__ import annotations
 
+import ctypes
+import errno
 import os
 import secrets
 from pathlib import Path
 
 from turbgen.errors import ParameterError
+from turbgen.store.paths import check_output_path
+from turbgen.resources import require_disk
+from turbgen.store.temporaries import TEMP_MARK, exit_on_signals, remove_dead_temporaries, report_removed
+
+_FALLOC_FL_KEEP_SIZE = 1
 
 
 class OutputSet:
@@ -21,42 +31,83 @@ class OutputSet:
     ...     write(out.temp(a)); write(out.temp(b))
     """
 
-    def __init__(self, paths, *, overwrite: bool):
+    def __init__(self, paths, *, overwrite: bool, need_bytes: int | None = None):
         self.paths = [Path(p) for p in paths]
         if len(set(self.paths)) != len(self.paths):
             raise ParameterError(f"output paths {[str(p) for p in self.paths]} are not distinct")
         for p in self.paths:
+            check_output_path(p)
             if not p.parent.is_dir():
                 raise ParameterError(f"output directory {str(p.parent)!r} does not exist")
             if p.is_dir():
                 raise ParameterError(f"output {str(p)!r} is a directory")
             if p.exists() and not overwrite:
                 raise ParameterError(f"output {str(p)!r} exists; pass --overwrite to replace it")
+            if not os.access(p.parent, os.W_OK):
+                raise ParameterError(f"output directory {str(p.parent)!r} is not writable")
+        for parent in {p.parent for p in self.paths}:
+            report_removed(remove_dead_temporaries(parent, [p.name for p in self.paths if p.parent == parent]))
+        if need_bytes is not None:
+            names = ", ".join(p.name for p in self.paths)
+            require_disk(self.paths[0], need_bytes, f"the export ({names})",
+                         "free space there or choose another --out")
         token = f"{os.getpid()}-{secrets.token_hex(4)}"
-        self._temps = {p: p.with_name(f".{p.name}.tmp-{token}") for p in self.paths}
+        self._temps = {p: p.with_name(f".{p.name}{TEMP_MARK}{token}") for p in self.paths}
+        self._signals = exit_on_signals()
 
     def temp(self, path) -> Path:
         """Temporary path to write instead of the final ``path``."""
         return self._temps[Path(path)]
 
+    def reserve(self, path, nbytes: int) -> None:
+        """Reserve ``nbytes`` of disk for the (already created) temporary of ``path`` without changing
+        its size, so that a library that cannot survive a failed write (HDF5 aborts the process when
+        it cannot flush on close) never meets a full disk. Raises OSError (ENOSPC) when the space is
+        not there; a no-op where fallocate(2) is unavailable."""
+        fd = os.open(self.temp(path), os.O_WRONLY)
+        try:
+            fn = getattr(ctypes.CDLL(None, use_errno=True), "fallocate", None)
+            if fn is None:
+                return
+            fn.argtypes = (ctypes.c_int, ctypes.c_int, ctypes.c_longlong, ctypes.c_longlong)
+            if fn(fd, _FALLOC_FL_KEEP_SIZE, 0, int(nbytes)) != 0:
+                err = ctypes.get_errno()
+                if err not in (errno.EOPNOTSUPP, errno.ENOSYS, errno.EINVAL):
+                    raise OSError(err, os.strerror(err), str(self.temp(path)))
+        finally:
+            os.close(fd)
+
     def __enter__(self):
+        self._signals.__enter__()
         return self
 
     def __exit__(self, exc_type, exc, tb):
-        if exc_type is None:
-            missing = [str(p) for p, t in self._temps.items() if not t.exists()]
-            if missing:
-                self._cleanup()
-                raise RuntimeError(f"exporter did not write {missing}")
-            for p, t in self._temps.items():
-                os.replace(t, p)
-        else:
+        try:
+            if exc_type is None:
+                missing = [str(p) for p, t in self._temps.items() if not t.exists()]
+                if missing:
+                    self._cleanup()
+                    raise RuntimeError(f"exporter did not write {missing}")
+                try:
+                    for p, t in self._temps.items():
+                        os.truncate(t, t.stat().st_size)  # release reserved blocks past the end
+                        os.replace(t, p)
+                except OSError as err:
+                    exc = err
+                else:
+                    return False
             self._cleanup()
-        return False
+            if isinstance(exc, OSError):
+                reason = exc.strerror or (str(exc).splitlines() or [type(exc).__name__])[0]
+                where = ", ".join(str(p) for p in self.paths)
+                raise ParameterError(f"writing {where} failed: {reason} (errno {exc.errno}); nothing was written") from None
+            return False
+        finally:
+            self._signals.__exit__(None, None, None)
 
     def _cleanup(self):
         for t in self._temps.values():
             try:
-                t.unlink()
-            except FileNotFoundError:
-                pass
+                t.unlink(missing_ok=True)
+            except OSError:
+                pass  # e.g. a read-only directory where the temporary was never created

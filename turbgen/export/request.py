@@ -34,7 +34,8 @@ class ExportRequest:
 
     def __post_init__(self):
         if self.plane is not None:
-            object.__setattr__(self, "plane", check_int("plane", self.plane, 0))
+            # the range [0, nx - 1] depends on the store: checked in plane_index
+            object.__setattr__(self, "plane", check_int("plane", self.plane, -(2**63), 2**63))
         if self.hub_height_m is not None:
             object.__setattr__(self, "hub_height_m", check_positive("hub height (m)", self.hub_height_m))
 
@@ -45,7 +46,7 @@ class ExportRequest:
             if 0.0 not in xs:
                 raise ParameterError(f"store has no rotor plane (x = 0 m) among x = {list(xs)}; choose one with --plane 0..{len(xs) - 1}")
             return xs.index(0.0)
-        if self.plane >= len(xs):
+        if not 0 <= self.plane < len(xs):
             raise ParameterError(f"plane = {self.plane} is outside the allowed range [0, {len(xs) - 1}] (x = {list(xs)} m)")
         return self.plane
 

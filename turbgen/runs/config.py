@@ -27,8 +27,25 @@ def check_mapping(data, schema_name: str, where: str) -> dict:
     err = jsonschema.exceptions.best_match(validator.iter_errors(data))
     if err is not None:
         at = "/".join(str(q) for q in err.absolute_path) or "(top level)"
-        raise ParameterError(f"{where}: {at}: {' '.join(err.message.split())}")
+        message = err.message
+        if err.validator == "pattern":  # say what is expected (the schema's description), not the raw regex
+            expected = _description(validator.schema, err.absolute_schema_path)
+            message = f"{err.instance!r} is not valid" + (f"; expected {expected}" if expected else "")
+        raise ParameterError(f"{where}: {at}: {' '.join(message.split())}")
     return data
+
+
+def _description(schema: dict, path) -> str | None:
+    """The deepest ``description`` on the way to the failing keyword of a schema."""
+    found, node = None, schema
+    for key in path:
+        if isinstance(node, dict) and isinstance(node.get("description"), str):
+            found = node["description"]
+        try:
+            node = node[key]
+        except (KeyError, IndexError, TypeError):
+            break
+    return found
 
 
 def read_config(path, schema_name: str) -> dict:

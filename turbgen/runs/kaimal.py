@@ -17,13 +17,15 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from turbgen.errors import ParameterError, check_choice, check_int, check_nonnegative, check_positive
+from turbgen.errors import ParameterError, check_choice
 from turbgen.grid import Grid
 from turbgen.resources import available_memory_bytes, format_bytes, require_memory
 from turbgen.runs.defaults import DEFAULT_PLANES_M
+from turbgen.runs.naming import run_digest
 from turbgen.runs.scratch import FileSpectrum
 from turbgen.store import create_store
 from turbgen.synthesis.kaimal_evo import COMPONENTS, FREQ_CHUNK, KaimalEvo, resolved_band_hz
+from turbgen.theory import ranges
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS, simley_pao_parameters
 from turbgen.theory.kaimal import iec_kaimal_params
 from turbgen.theory.params import KaimalParams, check_wind_speed
@@ -67,16 +69,15 @@ class KaimalRun:
 
     def __post_init__(self):
         object.__setattr__(self, "U_m_s", check_wind_speed(self.U_m_s))
-        object.__setattr__(self, "seed", check_int("seed", self.seed, 0, SEED_MAX))
-        object.__setattr__(self, "hub_height_m", check_positive("hub height (m)", self.hub_height_m))
+        for key in ("seed", "hub_height_m"):  # ranges: turbgen.theory.ranges
+            object.__setattr__(self, key, ranges.check(key, getattr(self, key)))
+        ranges.check_grid(self.grid)
         check_choice("long-model", self.long_model, tuple(LONGITUDINAL_MODELS))
         check_choice("long-components", self.long_components, LONG_COMPONENTS)
         check_choice("vw-coherence", self.vw_coherence, VW_COHERENCE)
         if self.long_model == "exp":
-            a_x = DEFAULT_A_X if self.a_x is None else check_positive("a_x (-)", self.a_x)
-            b_x = DEFAULT_B_X if self.b_x is None else check_nonnegative("b_x (1/m)", self.b_x)
-            if a_x > 100.0:
-                raise ParameterError(f"a_x (-) = {a_x!r} is outside the allowed range (0, 100]")
+            a_x = DEFAULT_A_X if self.a_x is None else ranges.check("a_x", self.a_x)
+            b_x = DEFAULT_B_X if self.b_x is None else ranges.check("b_x", self.b_x)
             object.__setattr__(self, "a_x", a_x)
             object.__setattr__(self, "b_x", b_x)
         elif self.a_x is not None or self.b_x is not None:
@@ -103,6 +104,26 @@ class KaimalRun:
         if self.long_model == "exp":
             return {"a_x": self.a_x, "b_x": self.b_x}
         return {}
+
+    def default_store_name(self, preset: str | None = None, preset_keys: Mapping | None = None) -> str:
+        """A readable store name, e.g. kaimal_U16_A_s1.zarr or kaimal_U16_stable_s1.zarr (``preset``,
+        whose run keys ``preset_keys`` are, from turbgen.presets.kaimal_run_keys).
+
+        Runs that differ from the named ones (U, class or preset, seed) in anything the name does not
+        show (sigmas, lengths, coherence models, grid, ...) get ``_p<8 hex digits>`` of everything that
+        determines the field appended, so two different fields never share a default name.
+        """
+        label = preset or self.turb_class or "sigma"
+        base = f"kaimal_U{self.U_m_s:g}_{label}_s{self.seed}"
+        named = {"U_m_s": self.U_m_s, "seed": self.seed}
+        if preset is not None:
+            named.update(preset_keys or {})
+        if self.turb_class:
+            named["turb_class"] = self.turb_class
+        reference = KaimalRun.from_mapping(named) if (preset is not None or self.turb_class) else None
+        if reference is not None and reference.parameters() == self.parameters() and reference.grid == self.grid:
+            return base + ".zarr"
+        return f"{base}_p{run_digest(self.parameters(), self.grid)}.zarr"
 
     def generator(self, workers: int | None = None) -> KaimalEvo:
         """The synthesis object of this run."""

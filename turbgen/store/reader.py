@@ -4,6 +4,9 @@
 the completeness marker is set; the attributes match ``schemas/field.schema.json``; the arrays
 u, v, w and coordinates t, x, y, z exist with the grid's shapes, dtypes and values; and every
 chunk file is present (a partially copied store is refused). Each failure is one-line StoreError.
+Data are checked as they are read (:func:`read_checked`): a chunk that does not decode (truncated,
+overwritten) or holds NaN (the writer never stores NaN or inf) is reported as "corrupted chunk at
+..." / "NaN at ..." naming the component, plane, time index and chunk file.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import zarr
 from turbgen.errors import ParameterError, StoreError
 from turbgen.grid import Grid
 from turbgen.store import layout
-from turbgen.store.writer import temp_prefix
+from turbgen.store.temporaries import parse_temp, pid_alive, temp_prefix
 
 
 class FieldStore:
@@ -77,7 +80,14 @@ class FieldStore:
         """One yz-plane time series, float32 array (nt, ny, nz), of plane index ``ix``."""
         if not 0 <= ix < self.grid.nx:
             raise ParameterError(f"plane index = {ix} is outside [0, {self.grid.nx - 1}]")
-        return np.asarray(self.array(component)[:, ix], dtype=np.float32)
+        return read_checked(self.array(component), ix, 0, self.grid.nt, self.path)
+
+    def check_chunks(self) -> None:
+        """Decode every chunk of u, v, w (StoreError naming the first corrupted chunk or NaN)."""
+        for c in layout.COMPONENTS:
+            arr = self.array(c)
+            for ix in range(self.grid.nx):
+                read_checked(arr, ix, 0, self.grid.nt, self.path)
 
     def nbytes_on_disk(self) -> int:
         """Total size of the store's files [bytes]."""
@@ -110,12 +120,46 @@ class FieldStore:
         }
 
 
+def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None) -> np.ndarray:
+    """Plane ``ix`` of a component array over t in [t0, t1), float32 (t, y, z), read one stored chunk
+    at a time; one-line StoreError when a chunk does not decode or holds NaN/inf."""
+    name = arr.basename
+    where = path if path is not None else getattr(arr.store, "root", None) or "store"
+    out = np.empty((t1 - t0, *arr.shape[2:]), dtype=np.float32)
+    step = arr.chunks[0]
+    for a in range(t0, t1, step):
+        b = min(a - a % step + step, t1)
+        chunk_file = f"{name}/c/{a // step}/{ix}/0/0"
+        try:
+            block = arr[a:b, ix]
+        except Exception as exc:  # a decompression/decoding failure inside zarr
+            raise StoreError(
+                f"{where}: corrupted chunk at {name}, plane index {ix}, t index {a - a % step}-{b - 1} "
+                f"(file {chunk_file}: {type(exc).__name__}); regenerate the store"
+            ) from None
+        bad = ~np.isfinite(block)
+        if bad.any():
+            it, iy, iz = (int(i) for i in np.argwhere(bad)[0])
+            what = "NaN" if np.isnan(block[it, iy, iz]) else "inf"
+            raise StoreError(
+                f"{where}: {what} at {name}, plane index {ix}, t index {a + it}, y index {iy}, z index {iz} "
+                f"({int(bad.sum())} non-finite values in chunk file {chunk_file}); the data are corrupted, "
+                "regenerate the store"
+            )
+        out[a - t0 : b - t0] = block
+    return out
+
+
 def _leftover_hint(path: Path) -> str:
     if not path.parent.is_dir():
         return ""
     left = sorted(p.name for p in path.parent.iterdir() if p.name.startswith(temp_prefix(path)))
+    for name in left:
+        parsed = parse_temp(name)
+        if parsed and pid_alive(parsed[1]):
+            return f" (process {parsed[1]} is writing it now)"
     if left:
-        return f" (an interrupted write left {path.parent / left[0]}; delete it)"
+        return f" (an interrupted write left {path.parent / left[0]}; the next write or `turbgen info` removes it)"
     return ""
 
 

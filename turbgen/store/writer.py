@@ -4,8 +4,11 @@
         w.write("u", ix, block, t0)        # block (nt_block, ny, nz), any thread
 
 On normal exit of the ``with`` block the marker is written last, metadata consolidated and the
-temporary directory renamed to ``path`` (atomic: same parent directory, same filesystem). On any
-exception (KeyboardInterrupt included) the temporary directory is removed and ``path`` is untouched.
+temporary directory renamed to ``path`` (atomic: same parent directory, same filesystem; with
+``overwrite`` the old store is swapped out in the same step, see ``temporaries.publish``). On any
+exception (KeyboardInterrupt, SIGTERM and SIGHUP included) the temporary directory is removed and
+``path`` is untouched; a disk error (full, read-only) becomes a one-line StoreError. Temporaries
+of earlier writers of ``path`` that were killed (SIGKILL) are removed when the next write starts.
 """
 
 from __future__ import annotations
@@ -13,9 +16,7 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import os
-import secrets
 import shutil
-import signal
 import threading
 import warnings
 from pathlib import Path
@@ -26,12 +27,11 @@ import zarr
 from turbgen import __version__
 from turbgen.errors import StoreError, check_int
 from turbgen.grid import Grid
+from turbgen.resources import format_bytes, require_disk
 from turbgen.store import layout
-
-def temp_prefix(path: Path) -> str:
-    """Name prefix of the temporary sibling directories used while writing ``path``."""
-    return f".{path.name}.tmp-"
-
+from turbgen.store.temporaries import exit_on_signals, publish, remove_dead_temporaries, report_removed, temp_name
+from turbgen.store.temporaries import temp_prefix  # noqa: F401  (re-exported for readers)
+from turbgen.store.paths import check_output_path
 
 def _jsonable(value):
     """``value`` with numpy scalars/arrays and tuples turned into plain JSON types."""
@@ -89,7 +89,7 @@ class StoreWriter:
         self._attrs = attrs
         self._overwrite = overwrite
         self._tmp: Path | None = None
-        self._old_sigterm = None
+        self._signals = None
         self._arrays: dict[str, zarr.Array] = {}
         self._written = {c: np.zeros((grid.nx, grid.nt), dtype=bool) for c in layout.COMPONENTS}
         self._bookkeeping = threading.Lock()
@@ -97,13 +97,15 @@ class StoreWriter:
 
     # -- context protocol -------------------------------------------------------------------
     def __enter__(self) -> "StoreWriter":
-        self._install_sigterm_handler()
-        self._tmp = self.path.parent / f"{temp_prefix(self.path)}{os.getpid()}-{secrets.token_hex(4)}"
+        self._signals = exit_on_signals()
+        self._signals.__enter__()
+        self._tmp = temp_name(self.path)
         try:
             self._create(self._tmp)
-        except BaseException:
+        except BaseException as exc:
             self._discard()
-            self._restore_sigterm_handler()
+            self._restore_signal_handlers()
+            _raise_disk_error(exc, self.path)
             raise
         return self
 
@@ -111,27 +113,22 @@ class StoreWriter:
         try:
             if exc_type is not None:
                 self._discard()
+                _raise_disk_error(exc, self.path)
                 return False
             try:
                 self._finish()
-            except BaseException:
+            except BaseException as err:
                 self._discard()
+                _raise_disk_error(err, self.path)
                 raise
             return False
         finally:
-            self._restore_sigterm_handler()
+            self._restore_signal_handlers()
 
-    def _install_sigterm_handler(self) -> None:
-        """Turn SIGTERM (e.g. a batch scheduler's kill) into SystemExit so the temp dir is removed."""
-        in_main = threading.current_thread() is threading.main_thread()
-        if in_main and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
-            signal.signal(signal.SIGTERM, _exit_on_sigterm)
-            self._old_sigterm = signal.SIG_DFL
-
-    def _restore_sigterm_handler(self) -> None:
-        if self._old_sigterm is not None:
-            signal.signal(signal.SIGTERM, self._old_sigterm)
-            self._old_sigterm = None
+    def _restore_signal_handlers(self) -> None:
+        if self._signals is not None:
+            self._signals.__exit__(None, None, None)
+            self._signals = None
 
     # -- writing ----------------------------------------------------------------------------
     def add_attrs(self, **attrs) -> None:
@@ -222,31 +219,52 @@ class StoreWriter:
         self._install()
 
     def _install(self) -> None:
-        """Rename the finished temporary directory to ``path`` (replacing an old store if allowed)."""
-        old = None
-        if self.path.exists() or self.path.is_symlink():
-            if not self._overwrite:
-                raise StoreError(f"{self.path} appeared while writing; not replaced (use --overwrite)")
-            old = self.path.parent / f".{self.path.name}.old-{os.getpid()}-{secrets.token_hex(4)}"
-            os.rename(self.path, old)
+        """Rename the finished temporary directory to ``path`` (swapping out an old store if allowed)."""
+        if (self.path.exists() or self.path.is_symlink()) and self._overwrite and not _looks_like_turbgen_store(self.path):
+            raise StoreError(f"{self.path} appeared while writing and is not a turbgen store; not replaced")
         try:
-            os.rename(self._tmp, self.path)
-        except BaseException:
-            if old is not None:
-                os.rename(old, self.path)
-            raise
-        self._tmp = None
-        if old is not None:
-            _remove(old)
+            old = publish(self._tmp, self.path, replace=self._overwrite)
+        except FileExistsError:
+            raise StoreError(f"{self.path} appeared while writing; not replaced (use --overwrite)") from None
+        self._tmp = old  # the swapped-out old store (a dead writer's garbage should we die now), or None
+        self._discard()
 
     def _discard(self) -> None:
         if self._tmp is not None:
+            _drain_zarr_io()
             _remove(self._tmp)
             self._tmp = None
 
 
-def _exit_on_sigterm(signum, frame):
-    raise SystemExit(128 + signum)
+def _drain_zarr_io(timeout_s: float = 10.0) -> None:
+    """Wait for zarr's I/O tasks still running in its event-loop thread (a Ctrl-C interrupts the
+    waiting, not the writing): otherwise they recreate files in a directory being removed, and
+    print tracebacks at interpreter shutdown."""
+    import asyncio
+
+    from zarr.core import sync as zsync
+
+    loop = zsync.loop[0]
+    if loop is None or loop.is_closed() or not loop.is_running():
+        return
+
+    async def wait_others():
+        me = asyncio.current_task()
+        others = [t for t in asyncio.all_tasks() if t is not me]
+        if others:
+            await asyncio.wait(others, timeout=timeout_s)
+
+    try:
+        asyncio.run_coroutine_threadsafe(wait_others(), loop).result(timeout_s + 1)
+    except Exception:  # noqa: BLE001 - best effort: the directory is removed anyway
+        pass
+
+
+def _raise_disk_error(exc: BaseException, path: Path) -> None:
+    """Re-raise an OSError of the file system (disk full, read-only, ...) as a one-line StoreError."""
+    if isinstance(exc, OSError) and not isinstance(exc, StoreError):
+        reason = exc.strerror or (str(exc).splitlines() or [type(exc).__name__])[0]
+        raise StoreError(f"writing {path} failed: {reason} (errno {exc.errno}); nothing was written") from None
 
 
 def _remove(path: Path) -> None:
@@ -267,7 +285,7 @@ def create_store(
     min(nt, 1024)). Raises StoreError before anything is created when ``path`` exists and
     ``overwrite`` is False, or when ``path`` exists and is not a turbgen store (never replaced).
     """
-    path = Path(path).expanduser().absolute()
+    path = check_output_path(path).absolute()
     if chunk_t is None:
         chunk_t = layout.default_chunk_t(grid.nt)
     chunk_t = check_int("chunks (time samples per chunk)", chunk_t, 1, grid.nt)
@@ -295,4 +313,10 @@ def create_store(
         raise StoreError(f"output directory {path.parent} does not exist")
     if not os.access(path.parent, os.W_OK):
         raise StoreError(f"output directory {path.parent} is not writable")
+    report_removed(remove_dead_temporaries(path.parent, [path.name]))
+    need = 3 * grid.nbytes_per_component()
+    require_disk(
+        path.parent, need, f"the store ({' x '.join(map(str, grid.shape))}, 3 components, "
+        f"{format_bytes(need)} uncompressed)", "free space there, choose another --out or lower --nt/--ny/--nz/planes",
+    )
     return StoreWriter(path, grid, full, chunk_t, overwrite)

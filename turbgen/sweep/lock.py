@@ -14,34 +14,13 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from turbgen.errors import ParameterError
+from turbgen.store.temporaries import pid_alive  # the one liveness test, shared with the store writers
 
 LOCK_NAME = ".turbgen-sweep.lock"
 
 
 class SweepLockedError(ParameterError):
     """Another sweep (alive, or on another host) holds the directory's lock."""
-
-
-def pid_alive(pid: int) -> bool:
-    """True if a process with this pid exists on this host (EPERM counts as alive)."""
-    if pid <= 0:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return not _is_zombie(pid)
-
-
-def _is_zombie(pid: int) -> bool:
-    """A killed process not yet reaped (state Z in /proc/PID/stat; False where /proc is absent)."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return False
-    return stat.rsplit(")", 1)[-1].split()[0] == "Z"
 
 
 class SweepLock:

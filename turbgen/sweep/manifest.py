@@ -19,6 +19,7 @@ from pathlib import Path
 
 from turbgen import __version__
 from turbgen.store import open_store
+from turbgen.store.temporaries import temp_prefix
 
 MANIFEST_JSON = "manifest.json"
 MANIFEST_CSV = "manifest.csv"
@@ -37,6 +38,9 @@ CSV_COLUMNS = (
     "sigma_v_m_s",
     "sigma_w_m_s",
     "validation",
+    "lidar_k05_rad_m",
+    "lidar_cutoff_hz",
+    "lidar",
     "error",
     "finished_utc",
     "parameters",
@@ -62,9 +66,23 @@ def store_checksum(path: str | Path) -> str:
     return "sha256:" + h.hexdigest()
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+def _umask() -> int:
+    """The process umask, read without changing it (os.umask would briefly set it for every thread)."""
     try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    return 0o022
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    # a temporary name of this process ('.NAME.tmp-PID-...': removed by the next sweep if we are killed),
+    # and the mode an ordinary file gets (0644 under umask 022), like the stores beside it
+    fd, tmp = tempfile.mkstemp(prefix=f"{temp_prefix(path)}{os.getpid()}-", dir=path.parent)
+    try:
+        os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, "w", newline="") as fh:
             fh.write(text)
             fh.flush()
@@ -95,6 +113,9 @@ def _csv_text(records: list[dict]) -> str:
             sigma_v_m_s=sig[1],
             sigma_w_m_s=sig[2],
             validation=_validation_text(r.get("validation")),
+            lidar=_validation_text(r.get("lidar")),
+            lidar_k05_rad_m=((r.get("lidar") or {}).get("simulated") or {}).get("k05_rad_m"),
+            lidar_cutoff_hz=((r.get("lidar") or {}).get("simulated") or {}).get("cutoff_hz"),
             parameters=json.dumps(r.get("parameters"), sort_keys=True),
         )
         writer.writerow({k: ("" if v is None else v) for k, v in row.items()})

@@ -11,7 +11,7 @@ Store names are derived from the parameters that vary within a sweep:
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from turbgen.errors import ParameterError, check_int
@@ -25,6 +25,8 @@ from turbgen.presets import (
 )
 from turbgen.runs.config import check_mapping, read_config
 from turbgen.runs.defaults import DEFAULT_PLANES_M
+from turbgen.store.paths import check_output_path
+from turbgen.theory import ranges
 from turbgen.theory.params import check_wind_speed
 
 MODELS = ("mann", "kaimal")
@@ -105,6 +107,7 @@ class SweepPlan:
     scheduler: str | None = None
     user_presets: Mapping[str, StabilityPreset] = field(default_factory=dict)
     runs: tuple[PlannedRun, ...] = ()
+    lidar: str | None = None  # lidar preset or file run on every field (turbgen lidar)
 
     def grid_options(self, model: str) -> dict:
         """Grid options of ``model``'s runs (its table over the common one; missing = command default)."""
@@ -120,6 +123,7 @@ class SweepPlan:
             "grid": dict(self.grid),
             **{m: dict(g) for m, g in self.model_grid.items()},
             "validate": self.validate,
+            "lidar": self.lidar,
             "chunks": self.chunk_t,
             "user_presets": sorted(self.user_presets),
             "n_runs": len(self.runs),
@@ -157,6 +161,7 @@ def make_plan(
     workers: int | None = None,
     scheduler: str | None = None,
     user_presets: Mapping[str, StabilityPreset] | None = None,
+    lidar: str | None = None,
 ) -> SweepPlan:
     """Check a sweep definition and build all its runs (ParameterError on the first bad value)."""
     models = _unique("models", models)
@@ -170,8 +175,13 @@ def make_plan(
         for m in models:
             if getattr(preset, m) is None:
                 raise ParameterError(f"preset {p!r} has no {m} parameters")
+    speeds, seeds = list(speeds), list(seeds)
+    ranges.check_count("speeds", len(speeds))
+    ranges.check_count("seeds", len(seeds))
+    ranges.check_count("runs", len(models) * len(presets) * len(speeds) * len(seeds),
+                       "runs (models x presets x speeds x seeds)")  # fmt: skip
     speeds = _unique("speeds", (check_wind_speed(u) for u in speeds))
-    seeds = _unique("seeds", (check_int("seed", s, 0, 2**63 - 1) for s in seeds))
+    seeds = _unique("seeds", (ranges.check("seed", s) for s in seeds))
     grid = _check_grid_keys("grid", grid)
     model_grid = {m: _check_grid_keys(m, g) for m, g in (model_grid or {}).items() if g}
     for m in model_grid:
@@ -180,36 +190,113 @@ def make_plan(
     if chunk_t is not None:
         chunk_t = check_int("chunks", chunk_t, 1)
     if workers is not None:
-        workers = check_int("workers", workers, 1, 4096)
+        workers = check_int("workers", workers, 1, ranges.LIMITS["workers"])
     if workers is not None and scheduler:
         raise ParameterError("workers and scheduler exclude each other (the scheduler's cluster has its own workers)")
+    if scheduler:
+        check_scheduler_address(scheduler)
+    check_output_path(out, "out (sweep directory)", create_parents=True)
+    if lidar is not None:
+        from turbgen.lidar.description import load_lidar
+
+        load_lidar(lidar)  # a bad preset or file fails here, before any run
+        lidar = str(lidar)
     plan = SweepPlan(
         Path(out), models, presets, speeds, seeds, grid, model_grid, bool(validate), chunk_t, workers,
-        scheduler or None, user,
+        scheduler or None, user, lidar=lidar,
     )  # fmt: skip
     runs = []
     for m in models:
         opts = plan.grid_options(m)
         for p in presets:
             for U in speeds:
+                # the seed changes nothing but the random streams: build the run once, then swap the seed
+                # (10 000 seeds plan in a second instead of minutes of identical ae quadratures)
+                first = build_run(m, p, U, seeds[0], opts, user=user)
                 for s in seeds:
-                    runs.append(PlannedRun(m, p, U, s, build_run(m, p, U, s, opts, user=user)))
+                    runs.append(PlannedRun(m, p, U, s, first if s == seeds[0] else replace(first, seed=s)))
     names = [r.name for r in runs]
     if len(set(names)) != len(names):
         raise ParameterError(f"speeds = {list(speeds)} give duplicate store names (they differ below 6 digits)")
+    if not scheduler:  # a remote cluster's workers have their own memory (and check it themselves)
+        check_plan_memory(runs)
     return SweepPlan(**{**plan.__dict__, "runs": tuple(runs)})
+
+
+def check_plan_memory(runs) -> None:
+    """Refuse the sweep (one line) when any run needs more memory than is available here, before any starts.
+
+    Each run's own estimate (Mann: stencil, OU state, spectra, plane buffers with one thread; Kaimal:
+    the smaller of in-memory and spilled spectrum), checked once per distinct grid and model.
+    """
+    from turbgen.resources import available_memory_bytes, format_bytes
+
+    available = available_memory_bytes()
+    if available is None:
+        return
+    seen = set()
+    for pr in runs:
+        key = (pr.model, pr.run.grid, getattr(pr.run, "pad_yz", None), getattr(pr.run.params, "evo_time_s", 0)
+               if pr.model == "mann" else None)  # fmt: skip
+        if key in seen:
+            continue
+        seen.add(key)
+        if pr.model == "mann":
+            from turbgen.runs.mann import memory_estimate_bytes
+
+            need, hint = memory_estimate_bytes(pr.run, 1), "lower nt, ny/nz or pad-yz"
+        else:
+            from turbgen.runs.kaimal import memory_needed
+
+            need, hint = memory_needed(pr.run.grid, spill=True), "lower nt, ny/nz or the number of planes"
+        if need > available:
+            g = pr.run.grid
+            raise ParameterError(
+                f"run {pr.name} ({g.nt} x {g.nx} x {g.ny} x {g.nz}) needs about {format_bytes(need)} of memory but only "
+                f"{format_bytes(available)} is available; {hint}"
+            )
+
+
+def check_scheduler_address(address: str, timeout_s: float = 3.0) -> str:
+    """``address`` if a dask scheduler could listen there: 'tcp://host:port' (or tls://) reachable now.
+
+    Refuses malformed addresses and closed ports in one line within ``timeout_s`` seconds (dask itself
+    retries for 30 s and then raises a traceback).
+    """
+    import socket
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if parts.scheme not in ("tcp", "tls") or not host or not port:
+        raise ParameterError(f"scheduler = {address!r} is not an address like tcp://HOST:PORT")
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s):
+            pass
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise ParameterError(f"scheduler = {address!r}: cannot connect ({reason}); is the scheduler running?") from None
+    return address
 
 
 def parse_seeds(value) -> list[int]:
     """A list of ints, or a text like '1-21' / '1-3,9' (format checked by the schema) -> sorted seeds."""
     if not isinstance(value, str):
+        ranges.check_count("seeds", len(value))
         return sorted(value)
-    out: set[int] = set()
+    spans = []
     for part in value.split(","):
         lo, _, hi = part.strip().partition("-")
         lo_i, hi_i = int(lo), int(hi or lo)
         if hi_i < lo_i:
             raise ParameterError(f"seeds = {value!r}: range {part.strip()!r} runs backwards")
+        spans.append((lo_i, hi_i))
+    ranges.check_count("seeds", sum(hi - lo + 1 for lo, hi in spans), f"seeds = {value!r}")  # before expanding
+    out: set[int] = set()
+    for lo_i, hi_i in spans:
         out.update(range(lo_i, hi_i + 1))
     return sorted(out)
 
@@ -241,6 +328,7 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
         workers=data.get("workers"),
         scheduler=data.get("scheduler"),
         user_presets=user,
+        lidar=data.get("lidar"),
     )
     kw.update({k: v for k, v in overrides.items() if v is not None})
     if kw["out"] is None:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from turbgen.errors import ParameterError, check_choice, check_finite, check_nonnegative, check_positive, check_range
+from turbgen.errors import ParameterError, check_choice, check_finite
+from turbgen.theory.ranges import check
 
 LIFETIMES = ("guo", "mann")
 
@@ -31,14 +32,12 @@ class MannParams:
     evo_time_s: float | None = 400.0
 
     def __post_init__(self):
-        object.__setattr__(self, "ae", check_positive("ae (alpha*eps^(2/3), m^(4/3)/s^2)", self.ae))
-        object.__setattr__(self, "length_scale_m", check_positive("L (length scale, m)", self.length_scale_m))
-        object.__setattr__(self, "gamma", check_range("gamma (Gamma, -)", self.gamma, 0.0, 20.0))
+        # ranges: turbgen.theory.ranges.RANGES (the one table of allowed parameter values)
+        for key in ("ae", "length_scale_m", "gamma", "factor1", "factor2"):
+            object.__setattr__(self, key, check(key, getattr(self, key)))
         check_choice("lifetime", self.lifetime, LIFETIMES)
-        object.__setattr__(self, "factor1", check_range("factor1", self.factor1, 0.0, 3.0, lo_open=True))
-        object.__setattr__(self, "factor2", check_range("factor2", self.factor2, 0.0, 10.0, lo_open=True))
         if self.evo_time_s is not None:
-            object.__setattr__(self, "evo_time_s", check_positive("evo (gamma, s)", self.evo_time_s))
+            object.__setattr__(self, "evo_time_s", check("evo_time_s", self.evo_time_s))
 
     def with_ae(self, ae: float) -> "MannParams":
         """The same parameters with another energy level alpha*eps^(2/3)."""
@@ -63,21 +62,22 @@ class KaimalParams:
     def __post_init__(self):
         if len(self.sigma_m_s) != 3 or len(self.length_scales_m) != 3:
             raise ParameterError("sigma_m_s and length_scales_m need three values (u, v, w)")
+        # ranges: turbgen.theory.ranges.RANGES (the one table of allowed parameter values)
         object.__setattr__(
-            self, "sigma_m_s", tuple(check_nonnegative(f"sigma_{c} (m/s)", s) for c, s in zip("uvw", self.sigma_m_s))
+            self, "sigma_m_s", tuple(check("sigma_m_s", s, f"sigma_{c} (m/s)") for c, s in zip("uvw", self.sigma_m_s))
         )
         object.__setattr__(
             self,
             "length_scales_m",
-            tuple(check_positive(f"L{i + 1} (m)", s) for i, s in enumerate(self.length_scales_m)),
+            tuple(check("length_scales_m", s, f"L{i + 1} (Kaimal length, m)") for i, s in enumerate(self.length_scales_m)),
         )
-        object.__setattr__(self, "a_yz", check_nonnegative("a_yz", self.a_yz))
-        object.__setattr__(self, "lc_m", check_positive("Lc (m)", self.lc_m))
+        object.__setattr__(self, "a_yz", check("a_yz", self.a_yz))
+        object.__setattr__(self, "lc_m", check("lc_m", self.lc_m))
 
 
 def check_wind_speed(U) -> float:
-    """Mean wind speed U [m/s], 0.5 to 100."""
-    return check_range("U (mean wind speed, m/s)", U, 0.5, 100.0)
+    """Mean wind speed U [m/s], 0.5 to 100 (turbgen.theory.ranges)."""
+    return check("U_m_s", U)
 
 
 __all__ = ["MannParams", "KaimalParams", "LIFETIMES", "check_wind_speed", "check_finite"]

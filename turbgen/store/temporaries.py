@@ -1,0 +1,209 @@
+"""Temporary names of unfinished outputs, the liveness of their writers, and atomic publication.
+
+Every turbgen writer (field stores, exports, manifests) works under a hidden sibling name
+``.NAME.tmp-PID-XXXXXXXX`` (PID = the writing process) and renames it to ``NAME`` only when
+complete. A temporary whose PID is dead on this host (killed with SIGKILL, power loss) is garbage:
+:func:`remove_dead_temporaries` deletes it (the next write of the same output, ``turbgen info``
+and ``turbgen sweep`` call it and say so in one line). :func:`exit_on_signals` turns SIGTERM and
+SIGHUP into ``SystemExit`` so that ``with``-block clean-up runs as it does for Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import ctypes.util
+import errno
+import os
+import secrets
+import shutil
+import signal
+import sys
+import threading
+from pathlib import Path
+
+TEMP_MARK = ".tmp-"
+
+
+def temp_prefix(path: Path) -> str:
+    """Name prefix of the temporary siblings used while writing ``path``."""
+    return f".{Path(path).name}{TEMP_MARK}"
+
+
+def temp_name(path: Path) -> Path:
+    """A fresh temporary sibling of ``path`` owned by this process."""
+    path = Path(path)
+    return path.parent / f"{temp_prefix(path)}{os.getpid()}-{secrets.token_hex(4)}"
+
+
+def pid_alive(pid: int) -> bool:
+    """True if a process with this pid exists on this host (EPERM counts as alive, a zombie as dead)."""
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return not _is_zombie(pid)
+
+
+def _is_zombie(pid: int) -> bool:
+    """A killed process not yet reaped (state Z in /proc/PID/stat; False where /proc is absent)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[-1].split()[0] == "Z"
+
+
+def parse_temp(name: str) -> tuple[str, int] | None:
+    """(final name, writer pid) of a temporary name ``.NAME.tmp-PID-...``, else None."""
+    if not name.startswith(".") or TEMP_MARK not in name:
+        return None
+    final, _, rest = name[1:].rpartition(TEMP_MARK)
+    pid_text = rest.split("-", 1)[0]
+    if not final or not pid_text.isdigit():
+        return None
+    return final, int(pid_text)
+
+
+def remove_dead_temporaries(directory, names=None) -> list[Path]:
+    """Delete temporaries in ``directory`` (of the outputs ``names``, or all) whose writer is dead.
+
+    Returns the removed paths. Unreadable directories and entries that vanish meanwhile are skipped.
+    """
+    directory = Path(directory)
+    wanted = None if names is None else set(names)
+    removed = []
+    try:
+        entries = list(directory.iterdir())
+    except OSError:
+        return removed
+    for entry in entries:
+        parsed = parse_temp(entry.name)
+        if parsed is None or (wanted is not None and parsed[0] not in wanted) or pid_alive(parsed[1]):
+            continue
+        try:
+            if entry.is_dir() and not entry.is_symlink():
+                shutil.rmtree(entry)
+            else:
+                entry.unlink()
+        except FileNotFoundError:
+            continue
+        except OSError:
+            continue  # read-only or foreign: leave it, the caller's own write reports the real problem
+        removed.append(entry)
+    return removed
+
+
+def removed_line(removed) -> str:
+    """One line naming the removed temporaries (empty when none)."""
+    removed = list(removed)
+    if not removed:
+        return ""
+    first = removed[0]
+    more = f" and {len(removed) - 1} more" if len(removed) > 1 else ""
+    return f"removed {first}{more} (temporary of an interrupted write whose process is gone)"
+
+
+def report_removed(removed) -> None:
+    """Print :func:`removed_line` on stderr when something was removed."""
+    line = removed_line(removed)
+    if line:
+        print(line, file=sys.stderr)
+
+
+_received: list[int] = []
+
+
+def received_signal() -> int | None:
+    """The signal number that :func:`exit_on_signals` turned into ``SystemExit``, if one arrived.
+
+    Library code running when the signal lands may replace the ``SystemExit`` with an exception of
+    its own (h5py turns an exception raised inside an attribute write into ``TypeError``); the CLI
+    asks this to report the interruption, not the replacement.
+    """
+    return _received[-1] if _received else None
+
+
+def _exit_on_signal(signum, frame):
+    _received.append(signum)
+    raise SystemExit(128 + signum)
+
+
+@contextlib.contextmanager
+def exit_on_signals():
+    """Within the block, SIGTERM and SIGHUP raise SystemExit(128 + signum) in the main thread.
+
+    Only default handlers are replaced (a caller's own handler is kept); outside the main thread
+    this does nothing (Python delivers signals to the main thread only).
+    """
+    old = {}
+    if threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGTERM, signal.SIGHUP):
+            if signal.getsignal(sig) == signal.SIG_DFL:
+                old[sig] = signal.signal(sig, _exit_on_signal)
+    try:
+        yield
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+
+
+_RENAME_NOREPLACE, _RENAME_EXCHANGE, _AT_FDCWD = 1, 2, -100
+
+
+def _renameat2(src: Path, dst: Path, flags: int) -> bool:
+    """renameat2(2) with ``flags``; False when the C library or the filesystem lacks it."""
+    libc_name = ctypes.util.find_library("c")
+    if not libc_name or not sys.platform.startswith("linux"):
+        return False
+    libc = ctypes.CDLL(libc_name, use_errno=True)
+    fn = getattr(libc, "renameat2", None)
+    if fn is None:
+        return False
+    fn.argtypes = (ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint)
+    if fn(_AT_FDCWD, os.fsencode(src), _AT_FDCWD, os.fsencode(dst), flags) == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP):
+        return False
+    raise OSError(err, os.strerror(err), str(dst))
+
+
+def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
+    """Move the finished temporary ``tmp`` to ``path`` atomically.
+
+    ``replace`` False: fails with FileExistsError if ``path`` exists (never clobbers, also not a
+    directory created meanwhile). ``replace`` True: ``path`` is swapped with ``tmp`` in one step
+    (renameat2 RENAME_EXCHANGE), so readers always see either the old or the new complete output;
+    the old one is left at the temporary name (a dead writer's garbage if we are killed now) and
+    returned for the caller to delete. Where renameat2 is missing, the old output is first renamed
+    to a temporary name of this process, then the new one renamed in (a short window without
+    ``path``; a writer losing a race against another one gets FileExistsError).
+    """
+    tmp, path = Path(tmp), Path(path)
+    exists = path.exists() or path.is_symlink()
+    if not replace or not exists:
+        if _renameat2(tmp, path, _RENAME_NOREPLACE):
+            return None
+        if path.exists() or path.is_symlink():
+            raise FileExistsError(errno.EEXIST, "exists", str(path))
+        os.rename(tmp, path)
+        return None
+    if _renameat2(tmp, path, _RENAME_EXCHANGE):
+        return tmp
+    old = temp_name(path)
+    os.rename(path, old)
+    try:
+        os.rename(tmp, path)
+    except BaseException:
+        try:
+            os.rename(old, path)
+        except OSError:  # another writer published meanwhile: ours lost the race, the old store is stale
+            shutil.rmtree(old, ignore_errors=True)
+            raise FileExistsError(errno.EEXIST, "another writer replaced it meanwhile", str(path)) from None
+        raise
+    return old

@@ -1,0 +1,133 @@
+"""The allowed range of every physical input parameter and the size limit of every list: one table.
+
+Parameters outside these ranges are refused with one line naming the value and the range
+(``ParameterError``; CLI exit code 2) before anything is computed or written. The ranges are
+what the models and generators are meant for (atmospheric boundary layer, wind-turbine and lidar
+scales), not what happens to compute: e.g. L = 1e-9 m or 1e6 m gives a field whose variance is
+far from the model's on any grid turbgen can hold, dt = 1e12 s an all-zero field. README
+("Safety") shows this table; tests/test_bad_input.py checks that every bound is enforced and that
+the run-file JSON Schemas (types, looser bounds) never refuse a value this table allows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from turbgen.errors import ParameterError, check_int, check_range
+
+
+@dataclass(frozen=True)
+class Range:
+    """Closed interval [lo, hi] (open at ``lo`` when ``lo_open``) of one parameter, in SI units."""
+
+    label: str  # name in messages: option and unit
+    lo: float
+    hi: float
+    why: str  # one phrase for the README table
+    lo_open: bool = False
+    integer: bool = False
+
+    def check(self, value, label: str | None = None):
+        """``value`` as float (int for integer ranges), or ParameterError naming it and the range."""
+        if self.integer:
+            return check_int(label or self.label, value, int(self.lo), int(self.hi))
+        return check_range(label or self.label, value, self.lo, self.hi, lo_open=self.lo_open)
+
+    def text(self) -> str:
+        """'[lo, hi]' or '(lo, hi]'."""
+        if self.integer:
+            return f"[{int(self.lo)}, {int(self.hi)}]"
+        return f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}]"
+
+
+RANGES: dict[str, Range] = {
+    # mean flow and run metadata
+    "U_m_s": Range("U (mean wind speed, m/s)", 0.5, 100.0, "mean wind at hub height"),
+    "hub_height_m": Range("hub height (m)", 1.0, 1000.0, "within the atmospheric boundary layer"),
+    "seed": Range("seed", 0, 2**63 - 1, "64-bit SeedSequence entropy", integer=True),
+    "pad_yz": Range("pad-yz", 1, 8, "synthesis box width / output width", integer=True),
+    # Mann model (Mann 1994; Guo et al. 2022)
+    "ae": Range("ae (alpha*eps^(2/3), m^(4/3)/s^2)", 0.0, 100.0, "spectral energy level", lo_open=True),
+    "length_scale_m": Range("L (length scale, m)", 1.0, 1000.0, "energy-containing eddies of the ABL"),
+    "gamma": Range("gamma (Gamma, -)", 0.0, 20.0, "shear anisotropy (0 = isotropic)"),
+    "evo_time_s": Range("evo (gamma, s)", 1.0, 1e5, "eddy evolution time (or 'frozen')"),
+    "factor1": Range("factor1", 0.0, 3.0, "small-k slope of the Guo lifetime", lo_open=True),
+    "factor2": Range("factor2", 0.0, 10.0, "large-k slope of the evolution lifetime", lo_open=True),
+    "sigma_u_m_s": Range("sigma-u (m/s)", 0.001, 30.0, "target standard deviation of u"),
+    "ti": Range("ti (turbulence intensity, -)", 0.0, 1.0, "sigma_u / U", lo_open=True),
+    # Kaimal / IEC model (IEC 61400-1; Guo et al. 2022 Eq. 11-12, 18)
+    "sigma_m_s": Range("sigma (m/s)", 0.001, 30.0, "each of sigma_u, sigma_v, sigma_w"),
+    "length_scales_m": Range("lengths (Kaimal L, m)", 0.1, 10000.0, "each of L1, L2, L3"),
+    "a_yz": Range("ayz (a_yz, -)", 0.0, 1e4, "yz coherence decay (1e4: incoherent)"),
+    "lc_m": Range("lc (Lc, m)", 0.1, 10000.0, "yz coherence scale"),
+    "a_x": Range("ax (a_x, -)", 0.0, 100.0, "longitudinal coherence decay", lo_open=True),
+    "b_x": Range("bx (b_x, 1/m)", 0.0, 1.0, "longitudinal coherence distance term"),
+    # grid of a run (the store's Grid itself only needs to be consistent)
+    "nt": Range("nt", 2, 2**24, "time samples", integer=True),
+    "dt_s": Range("dt (s)", 0.001, 60.0, "time step (dx = U dt for Mann)"),
+    "ny": Range("ny", 2, 4096, "lateral points", integer=True),
+    "nz": Range("nz", 2, 4096, "vertical points", integer=True),
+    "dy_m": Range("dy (m)", 0.01, 1000.0, "lateral spacing"),
+    "dz_m": Range("dz (m)", 0.01, 1000.0, "vertical spacing"),
+    "x_m": Range("planes (x, m upstream)", 0.0, 10000.0, "rotor 0, positive upstream; increasing"),
+    # theory evaluation points and separations
+    "separation_m": Range("separation (m)", 0.0, 10000.0, "dx, dy, dz of `turbgen theory` / `fit`"),
+    "rotor_radius_m": Range("rotor radius (m)", 0.5, 500.0, "rotor-effective wind speed disc"),
+    "f_hz": Range("f (Hz)", 0.0, 1000.0, "frequency", lo_open=True),
+    "k1_rad_m": Range("k1 (rad/m)", 0.0, 1e4, "longitudinal wavenumber", lo_open=True),
+}
+
+# Maximum number of entries of every list-valued input; a longer list is refused before it is built.
+LIMITS: dict[str, int] = {
+    "planes": 256,  # planes (or 1 + gates) of one field
+    "seeds": 10_000,  # seeds of one sweep
+    "speeds": 200,  # wind speeds of one sweep
+    "runs": 10_000,  # fields of one sweep (models x presets x speeds x seeds)
+    "points": 100_000,  # --f / --k1 evaluation points of `turbgen theory`
+    "threads": 256,  # --threads of one run (never changes the field)
+    "workers": 256,  # --workers of a sweep's local cluster
+}
+
+
+def check(key: str, value, label: str | None = None):
+    """Check ``value`` against ``RANGES[key]`` (``label`` replaces the table's name in the message)."""
+    return RANGES[key].check(value, label)
+
+
+def check_count(key: str, n: int, what: str | None = None) -> int:
+    """Refuse a list of ``n`` entries longer than ``LIMITS[key]`` (``what`` names it in the message)."""
+    limit = LIMITS[key]
+    if n > limit:
+        raise ParameterError(f"{what or key}: {n} values is more than the maximum {limit}")
+    return n
+
+
+def check_grid(grid) -> None:
+    """Check a run's grid (turbgen.grid.Grid) against the table: sizes, spacings, planes.
+
+    Plane positions must lie in the x range and be strictly increasing (stores and readers rely on
+    sorted x; a negative x would be downstream of the rotor, which no generator models).
+    """
+    check("nt", grid.nt)
+    check("dt_s", grid.dt_s)
+    check("ny", grid.ny)
+    check("nz", grid.nz)
+    check("dy_m", grid.dy_m)
+    check("dz_m", grid.dz_m)
+    xs = list(grid.x_m)
+    check_count("planes", len(xs))
+    for x in xs:
+        check("x_m", x)
+    if any(b <= a for a, b in zip(xs, xs[1:])):
+        raise ParameterError(f"planes = {', '.join(f'{x:g}' for x in xs)} must be in increasing order (e.g. 0,50,100)")
+
+
+def markdown_table() -> str:
+    """The README table: parameter, allowed range, meaning; then the list limits."""
+    rows = ["| parameter | allowed range | note |", "|---|---|---|"]
+    rows += [f"| {r.label} | {r.text()} | {r.why} |" for r in RANGES.values()]
+    rows += [f"| number of {k} | at most {v:,} | |" for k, v in LIMITS.items()]
+    return "\n".join(rows)
+
+
+__all__ = ["LIMITS", "RANGES", "Range", "check", "check_count", "check_grid", "markdown_table"]
