@@ -1,0 +1,35 @@
+"""The fields of a few fixed commands are pinned (tests/data/pinned_fields.npz): a refactor must not
+change a single bit of them.
+
+Bit identity holds for one build of numpy/scipy/pyfftw on one kind of CPU (SIMD exp/sqrt/FFT kernels
+round differently); on another fingerprint the fields must agree to float32 round-off: a few ulps
+of the accumulated FFT, bounded here by 1e-5 of the component's standard deviation (a changed seed
+stream, parameter or normalisation moves values by O(1) standard deviations).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pinned_fields import CASES, PINNED, fingerprint, make_field
+
+
+@pytest.fixture(scope="module")
+def pinned():
+    with np.load(PINNED) as data:
+        return dict(data)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_field_is_the_pinned_one(name, pinned, tmp_path):
+    got = make_field(name, tmp_path)
+    exact = str(pinned["fingerprint"]) == fingerprint()
+    for key, value in got.items():
+        want = pinned[f"{name}/{key}"]
+        assert value.dtype == want.dtype and value.shape == want.shape, key
+        if exact:
+            assert np.array_equal(value, want), f"{name}/{key} differs from the pinned field"
+        else:
+            np.testing.assert_allclose(value, want, rtol=0, atol=1e-5 * float(np.std(want)) + 1e-12,
+                                       err_msg=f"{name}/{key} (fingerprint differs: round-off check)")
