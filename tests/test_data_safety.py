@@ -337,10 +337,9 @@ def _check_interrupted(code, err, sig, directory, final: list[Path]):
 
 
 KAIMAL_LONG = ["kaimal", "--nt", "8192", "--ny", "16", "--nz", "16", "--planes", "0,50"]
-# Mann and Kaimal share the store writer: all four signals with Kaimal, and with Mann (a process costs
-# ~5 s) the two paths that differ: no handler at all (KILL) and KeyboardInterrupt (INT); TERM and HUP
-# are the same SystemExit path, tested with Kaimal, the export and the sweep
-GENERATION_CASES = [*((KAIMAL_LONG, s) for s in SIGNALS), *((MANN, s) for s in SIGNALS[:2])]
+# all four signals for both generators (KILL: no handler at all; INT: KeyboardInterrupt; TERM and HUP:
+# SystemExit from our handler)
+GENERATION_CASES = [*((KAIMAL_LONG, s) for s in SIGNALS), *((MANN, s) for s in SIGNALS)]
 
 
 @pytest.mark.parametrize("args,sig", GENERATION_CASES, ids=[f"{a[0]}-{s.name}" for a, s in GENERATION_CASES])
@@ -362,12 +361,29 @@ def big_store(tmp_path_factory):
     return path
 
 
+@pytest.fixture(scope="module")
+def long_store(tmp_path_factory):
+    """Long records, so that a rotor-plane export (one plane) writes long enough to be interrupted."""
+    path = tmp_path_factory.mktemp("long") / "l.zarr"
+    assert cli_run("kaimal", "--nt", "32768", "--ny", "16", "--nz", "16", "--planes", "0,50",
+                   "--out", path).exit_code == 0
+    return path
+
+
 EXPORT_CASES = [*(("hdf5", "x.h5", ["x.h5"], s) for s in SIGNALS),  # the three-file set: KILL and TERM
-                *(("evo", "lid.evo", ["lid.evo", "lid.wnd", "lid.sum"], s) for s in (signal.SIGKILL, signal.SIGTERM))]
+                *(("evo", "lid.evo", ["lid.evo", "lid.wnd", "lid.sum"], s) for s in (signal.SIGKILL, signal.SIGTERM)),
+                # the other formats share OutputSet: TERM (our handler) and KILL (no handler) each
+                *((fmt, out, names, s) for fmt, out, names in (("bts", "r.bts", ["r.bts"]),
+                                                               ("wnd", "r.wnd", ["r.wnd", "r.sum"]),
+                                                               ("hawc2", "h", ["h_u.bin", "h_v.bin", "h_w.bin"]),
+                                                               ("mt4d", "m", ["m"]))
+                  for s in (signal.SIGKILL, signal.SIGTERM))]
+ONE_PLANE = ("bts", "wnd", "hawc2")
 
 
 @pytest.mark.parametrize("fmt,out,names,sig", EXPORT_CASES, ids=[f"{c[0]}-{c[3].name}" for c in EXPORT_CASES])
-def test_interrupted_export(big_store, fmt, out, names, sig, tmp_path):
+def test_interrupted_export(request, fmt, out, names, sig, tmp_path):
+    big_store = request.getfixturevalue("long_store" if fmt in ONE_PLANE else "big_store")
     code, err = _interrupt(["export", big_store, "--format", fmt, "--out", tmp_path / out], tmp_path, sig)
     _check_interrupted(code, err, sig, tmp_path, [tmp_path / n for n in names])
     res = cli_run("export", big_store, "--format", fmt, "--out", tmp_path / out)
@@ -424,7 +440,7 @@ def _umask():
     return m
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGHUP], ids=lambda s: s.name)
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP], ids=lambda s: s.name)
 def test_interrupted_sweep_leaves_a_consistent_manifest_and_one_line(sig, tmp_path):
     d = tmp_path / "sw"
     d.mkdir()
@@ -437,6 +453,27 @@ def test_interrupted_sweep_leaves_a_consistent_manifest_and_one_line(sig, tmp_pa
     assert doc["counts"]["complete"] + doc["counts"]["pending"] == 400
     assert not [p for p in d.iterdir() if p.name.startswith(".") and p.name != ".turbgen-sweep.lock"
                 and parse_temp(p.name) and pid_alive(parse_temp(p.name)[1])]
+    assert not (d / ".turbgen-sweep.lock").exists()
+
+
+def test_killed_sweep_is_finished_by_its_rerun(tmp_path):
+    # kill -9 of the whole group mid-sweep: no handler runs; the rerun takes over the dead writer's lock,
+    # removes its temporaries, keeps the complete stores and writes the rest, with a consistent manifest
+    d = tmp_path / "sw"
+    d.mkdir()
+    sweep = [*SWEEP[:SWEEP.index("--seeds")], "--seeds", "1-24", *SWEEP[SWEEP.index("--seeds") + 2:], "--out", d]
+    code, err = _interrupt(sweep, d, signal.SIGKILL, group=True, timeout=120,
+                           ready=lambda: sum(p.suffix == ".zarr" for p in d.iterdir()) >= 2)
+    assert code == -9
+    before = {p.name: p.stat().st_mtime_ns for p in d.glob("*.zarr")}
+    res = subprocess.run([sys.executable, "-c", "from turbgen.cli import main; main()", *map(str, sweep)],
+                         capture_output=True, text=True, env=ENV, timeout=300)
+    assert res.returncode == 0, res.stderr[-800:]
+    assert "Traceback" not in res.stderr
+    doc = _consistent(d)
+    assert doc["counts"] == {**{k: 0 for k in doc["counts"]}, "complete": 24}
+    assert all((d / name).stat().st_mtime_ns == t for name, t in before.items())  # not recomputed
+    assert not [p for p in d.iterdir() if p.name.startswith(".") and parse_temp(p.name)]
     assert not (d / ".turbgen-sweep.lock").exists()
 
 

@@ -267,16 +267,20 @@ def _make_client(plan: SweepPlan, n: int, processes: bool):
     )
     client = Client(cluster)
     if processes:
-        # a terminal's Ctrl-C (or hang-up) goes to the whole process group: let it reach the sweep
+        # a terminal's Ctrl-C (hang-up, or a kill of the group) goes to the whole process group: let it reach the sweep
         # alone, which shuts the workers down, instead of ~80 lines of tracebacks from every worker
         client.run(_ignore_interrupts)
     return client, cluster
 
 
 def _ignore_interrupts() -> None:
-    """Worker side (its main thread): ignore SIGINT and SIGHUP."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    """Worker side (its main thread): ignore SIGINT, SIGTERM and SIGHUP; the sweep closes the workers.
+
+    A worker killed by a group-wide SIGTERM leaves its semaphores to multiprocessing's resource
+    tracker, which then warns about them on the terminal after the sweep's own one-line message.
+    """
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_IGN)
 
 
 def _check_out(out: Path) -> None:
