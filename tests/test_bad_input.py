@@ -421,3 +421,27 @@ def test_run_schemas_accept_the_whole_ranges_table(schema_name):
             jsonschema.validate(value, sub)
         checked += 1
     assert checked >= 10
+
+
+def test_scheduler_at_a_port_where_no_dask_scheduler_answers(workdir, monkeypatch):
+    # an open port of some other server: dask's own connect would wait 30 s and raise a traceback;
+    # refused in one line within the 3 s identity probe
+    import socket
+    import threading
+    import time
+
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(4)
+    accepted = []
+    threading.Thread(target=lambda: accepted.append(srv.accept()), daemon=True).start()
+    address = f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+    monkeypatch.chdir(workdir)
+    before = _listing(workdir)
+    t0 = time.monotonic()
+    res = CliRunner().invoke(cli, [*SWEEP, "--out", "sw", "--scheduler", address])
+    assert time.monotonic() - t0 < 15
+    assert res.exit_code == 2 and res.stderr.strip().splitlines() == [res.stderr.strip()], res.output
+    assert address in res.stderr and "no dask scheduler answered" in res.stderr
+    assert _listing(workdir) == before
+    srv.close()

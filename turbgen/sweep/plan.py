@@ -279,7 +279,32 @@ def check_scheduler_address(address: str, timeout_s: float = 3.0) -> str:
     except OSError as exc:
         reason = exc.strerror or type(exc).__name__
         raise ParameterError(f"scheduler = {address!r}: cannot connect ({reason}); is the scheduler running?") from None
+    if not _answers_as_scheduler(address, timeout_s):
+        raise ParameterError(f"scheduler = {address!r}: something listens there but no dask scheduler answered "
+                             f"within {timeout_s:g} s; check the port")
     return address
+
+
+def _answers_as_scheduler(address: str, timeout_s: float) -> bool:
+    """True if a dask scheduler at ``address`` answers an identity request within ``timeout_s`` s
+    (any other server on an open port would keep dask's own connect waiting for 30 s)."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def identity():
+        comm = await connect(address, timeout=timeout_s)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            await comm.close()
+
+    try:
+        reply = asyncio.run(asyncio.wait_for(identity(), timeout_s))
+    except (OSError, asyncio.TimeoutError, ValueError, TypeError):
+        return False
+    return isinstance(reply, dict) and reply.get("type") == "Scheduler"
 
 
 def parse_seeds(value) -> list[int]:
