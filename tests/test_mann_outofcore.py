@@ -17,7 +17,8 @@ from turbgen.cli import cli
 from turbgen.errors import ParameterError, StoreError
 from turbgen.resources import parse_size
 from turbgen.runs import mann_outofcore as ooc
-from turbgen.runs.mann import MannRun, memory_estimate_bytes, run_mann
+from turbgen.runs.mann import memory_estimate_bytes, run_mann
+from turbgen.spec.mann import MannRun
 from turbgen.store import open_store
 
 SMALL = {"nt": 64, "ny": 9, "nz": 10, "x_m": [0.0, 50.0, 100.0]}  # 90 (y, z) points: a short last row block

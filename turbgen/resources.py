@@ -14,6 +14,11 @@ from pathlib import Path
 from turbgen.errors import ParameterError
 
 
+def default_threads(threads: int | None) -> int:
+    """Threads of one run: ``threads`` if given, else os.cpu_count() (at least 1); never changes a field."""
+    return max(1, int(threads or os.cpu_count() or 1))
+
+
 def format_bytes(n: float) -> str:
     """``n`` bytes as a short human-readable string with binary units (e.g. '1.5 GiB')."""
     units = ("B", "KiB", "MiB", "GiB", "TiB")

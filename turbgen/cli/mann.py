@@ -7,16 +7,17 @@ from contextlib import contextmanager
 
 import click
 
-from turbgen.cli.options import parse_floats, parse_range, plane_positions
-from turbgen.runs.config import read_config
-from turbgen.runs.defaults import MANN_DEFAULTS as D
-from turbgen.runs.defaults import MANN_GRID as G
 from turbgen import resources
-from turbgen.resources import parse_size
-from turbgen.runs.mann import MannRun, describe, mann_preset_keys, memory_estimate_bytes, run_mann
+from turbgen.cli.options import parse_floats, parse_range, plane_positions
+from turbgen.cli.run_options import run_mapping
+from turbgen.resources import default_threads, parse_size
+from turbgen.runs.mann import describe, memory_estimate_bytes, run_mann
 from turbgen.runs.mann_outofcore import BASE_BYTES, remove_stale_scratch
+from turbgen.spec.defaults import MANN_DEFAULTS as D
+from turbgen.spec.defaults import MANN_GRID as G
+from turbgen.spec.mann import MannRun
+from turbgen.spec.presets import load_presets, mann_run_keys
 from turbgen.store.paths import check_output_path
-from turbgen.synthesis.mann_spacetime import MannSnapshots
 from turbgen.theory.params import LIFETIMES
 from turbgen.theory.ranges import LIMITS
 
@@ -26,8 +27,9 @@ _KEYS = {
     "factor1": "factor1", "factor2": "factor2", "seed": "seed", "hub_height": "hub_height_m", "pad_yz": "pad_yz",
     "ae": "ae", "sigma_u": "sigma_u_m_s", "ti": "ti",
 }  # fmt: skip
-_GRID_KEYS = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}
 _ENERGY = ("ae", "sigma_u", "ti")
+# a typed energy level replaces any from the run file or the preset
+_REPLACES = {key: ("ae", "sigma_u_m_s", "ti", "ae_from") for key in ("ae", "sigma_u_m_s", "ti")}
 
 
 def _evo(ctx, param, value):
@@ -110,32 +112,23 @@ def _list(parser, name):
               "of one worker per core sharing --memory.")  # fmt: skip
 def mann(**opt):
     """Mann space-time 4D field: yz-planes at the rotor and range gates, evolving with upstream distance."""
-    mapping = read_config(opt["config"], "mann-run") if opt["config"] else {}
-    grid = dict(mapping.get("grid", {}))
     typed_energy = [name for name in _ENERGY if opt[name] is not None]
     if len(typed_energy) > 1:
         raise click.UsageError(f"give one of --ae, --sigma-u, --ti (got {', '.join(typed_energy)})")
-    if opt["preset"] is not None:
-        mapping.update(mann_preset_keys(opt["preset"], opt["presets_file"]))
-    elif opt["presets_file"]:
+    if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
-    if typed_energy:  # a typed energy level replaces any from the run file
-        for key in ("ae", "sigma_u_m_s", "ti", "ae_from"):
-            mapping.pop(key, None)
-    for name, key in _KEYS.items():
-        if opt[name] is not None:
-            mapping[key] = None if opt[name] == "frozen" else opt[name]
-    for name, key in _GRID_KEYS.items():
-        if opt[name] is not None:
-            grid[key] = opt[name]
-    x_m = plane_positions(opt["planes"], opt["gates"])
-    if x_m is not None:
-        grid["x_m"] = x_m
-    mapping["grid"] = grid
+    preset_keys = None
+    if opt["preset"] is not None:
+        user = load_presets(opt["presets_file"]) if opt["presets_file"] else None
+
+        def preset_keys(mapping, given):
+            return mann_run_keys(opt["preset"], user=user)
+
+    mapping = run_mapping(opt, "mann-run", _KEYS, preset_keys, _REPLACES, plane_positions(opt["planes"], opt["gates"]))
     run = MannRun.from_mapping(mapping)
     out = opt["out"] if opt["out"] is not None else run.default_store_name()
     check_output_path(out)
-    threads = MannSnapshots.default_threads(opt["threads"])
+    threads = default_threads(opt["threads"])
     budget = parse_size(opt["memory"], "--memory") if opt["memory"] is not None else resources.available_memory_bytes()
     in_memory = memory_estimate_bytes(run, threads, opt["stencil_cache"] is None) + BASE_BYTES
     plan = None

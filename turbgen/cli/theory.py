@@ -79,23 +79,14 @@ def _mann_options(f):
 
 
 def _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U) -> MannParams:
-    """MannParams from the options; αε^(2/3) from --ae, --sigma-u, --ti or IEC class A at U."""
-    from turbgen.theory.kaimal import iec_sigma1_m_s
-    from turbgen.theory.mann_spectra import ae_for_sigma_u
+    """MannParams from the options; αε^(2/3) from --ae, --sigma-u, --ti or IEC class A at U (turbgen.spec.energy)."""
+    from turbgen.spec.energy import resolve_ae
 
     U = check_wind_speed(U)
     if sum(v is not None for v in (ae, sigma_u, ti)) > 1:
         raise ParameterError("give at most one of --ae, --sigma-u, --ti")
     shape = MannParams(1.0, L, gamma, lifetime, factor1, factor2, evo)
-    if ae is not None:
-        return shape.with_ae(ae)
-    if ti is not None:
-        sigma = ranges.check("ti", ti) * U
-    elif sigma_u is not None:
-        sigma = ranges.check("sigma_u_m_s", sigma_u)
-    else:
-        sigma = iec_sigma1_m_s(U, "A")
-    return shape.with_ae(ae_for_sigma_u(sigma, shape))
+    return shape.with_ae(resolve_ae(shape, U, ae=ae, sigma_u_m_s=sigma_u, ti=ti)[0])
 
 
 def _points(k1_text, f_text, U):
