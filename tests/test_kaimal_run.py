@@ -117,7 +117,7 @@ def test_existing_store_needs_overwrite(tmp_path):
 
 
 def test_run_validation():
-    with pytest.raises(ParameterError, match="long-model"):
+    with pytest.raises(ParameterError, match="long_model"):
         _run(long_model="taylor")
     with pytest.raises(ParameterError, match="a_x"):
         _run(long_model="simley-pao", a_x=1.0)

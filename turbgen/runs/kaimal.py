@@ -67,14 +67,14 @@ def _plan_spill(grid: Grid, out: Path, spill: bool | None) -> bool:
     if spill is None:
         available = available_memory_bytes()
         spill = available is not None and memory_needed(grid) > 0.8 * available
-    require_memory(memory_needed(grid, spill), what, "lower --nt, --ny/--nz or the number of planes")
+    require_memory(memory_needed(grid, spill), what, "lower `nt`, `ny`/`nz` or the number of planes")
     if spill:
         free = shutil.disk_usage(out.parent).free
         if spectrum_bytes(grid) + 3 * grid.nbytes_per_component() > free:
             raise ParameterError(
                 f"{what} does not fit in memory and its {format_bytes(spectrum_bytes(grid))} scratch file plus "
-                f"the store do not fit on the disk of {out.parent} ({format_bytes(free)} free); lower --nt, "
-                "--ny/--nz or the number of planes"
+                f"the store do not fit on the disk of {out.parent} ({format_bytes(free)} free); lower `nt`, "
+                "`ny`/`nz` or the number of planes"
             )
     return spill
 

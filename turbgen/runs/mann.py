@@ -97,7 +97,7 @@ def run_mann(
     require_memory(
         memory_estimate_bytes(run, gen_threads, with_stencil=stencil is None),
         f"the Mann run ({g.nt} x {g.ny} x {g.nz}, synthesis box {box.nt} x {box.nyp} x {box.nzp})",
-        "lower --nt, --ny/--nz or --pad-yz",
+        "lower `nt`, `ny`/`nz` or `pad_yz`",
     )
     path = Path(out)
     sums = {c: [0.0, 0.0] for c in COMPONENTS}

@@ -56,7 +56,7 @@ from turbgen.synthesis.mann_stencil import axis_cells, build_stencil
 BASE_BYTES = 250 * 2**20  # the interpreter with turbgen, numpy, scipy, zarr, pyfftw loaded (VmHWM measured 165 MiB,
 # 197 MiB in a fresh virtualenv) + slack
 _C64, _F32 = 8, 4
-_HINT = "raise --memory, or lower --nt, --ny/--nz or --pad-yz"
+_HINT = "raise `memory`, or lower `nt`, `ny`/`nz` or `pad_yz`"
 
 
 def _scratch_prefix(out: Path) -> str:
@@ -226,7 +226,7 @@ def run_mann_outofcore(
     remove_stale_scratch(path)
     store_bytes = 3 * g.nt * g.nx * g.ny * g.nz * _F32
     require_disk(path.parent, store_bytes + plan.scratch_bytes(), "the out-of-core Mann run (store + scratch)",
-               "free disk space or write --out elsewhere")  # fmt: skip
+               "free disk space or write `out` elsewhere")  # fmt: skip
     times = np.sort(run.plane_times_s(), kind="stable")
     times = times if plan.evolving else times[:1]
     order = [int(i) for i in np.argsort(run.plane_times_s(), kind="stable")]

@@ -98,9 +98,9 @@ def _kaimal_least_memory(run: KaimalRun) -> int:
 
 MODELS: dict[str, Model] = {
     "mann": Model("mann", MannRun, _run_mann, _mann_memory, lambda run: _mann_memory(run, 1),
-                  "nt, ny/nz or pad_yz", _mann_shared, out_of_core=True),
+                  "`nt`, `ny`/`nz` or `pad_yz`", _mann_shared, out_of_core=True),
     "kaimal": Model("kaimal", KaimalRun, _run_kaimal, _kaimal_memory, _kaimal_least_memory,
-                    "nt, ny/nz or the number of planes", lambda run, threads, memory_bytes: None),
+                    "`nt`, `ny`/`nz` or the number of planes", lambda run, threads, memory_bytes: None),
 }
 
 

@@ -20,7 +20,7 @@ import tempfile
 from pathlib import Path
 
 from turbgen import __version__
-from turbgen.errors import ParameterError
+from turbgen.errors import ParameterError, TurbgenError
 from turbgen.spec.config import check_mapping
 from turbgen.store.layout import grid_to_attrs
 from turbgen.store.writer import temp_prefix
@@ -144,7 +144,7 @@ class Catalog:
 
         try:
             open_store(path)
-        except ParameterError:
+        except TurbgenError:
             return False
         self._complete.add(rid)
         return True

@@ -304,7 +304,7 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
     )
     kw.update({k: v for k, v in overrides.items() if v is not None})
     if kw["out"] is None:
-        raise ParameterError("no output directory: give 'out' in the sweep file or --out")
+        raise ParameterError("no output directory: give `out` in the sweep file or on the command line")
     if overrides.get("scheduler"):
         kw["workers"] = overrides.get("workers")
     return make_plan(**kw)

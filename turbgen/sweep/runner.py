@@ -87,13 +87,13 @@ def _ignore_interrupts() -> None:
 def _check_out(out: Path) -> None:
     """One-line errors for an --out that cannot hold a sweep (a file, under a file, read-only)."""
     if out.exists() and not out.is_dir():
-        raise ParameterError(f"--out {out} is a file, not a directory")
+        raise ParameterError(f"`out` {out} is a file, not a directory")
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ParameterError(f"--out {out} cannot be created: {exc.strerror} ({exc.filename})") from None
+        raise ParameterError(f"`out` {out} cannot be created: {exc.strerror} ({exc.filename})") from None
     if not os.access(out, os.W_OK):
-        raise ParameterError(f"--out {out} is not writable")
+        raise ParameterError(f"`out` {out} is not writable")
 
 
 def _settle_interrupted(plan: SweepPlan, records: dict) -> None:
@@ -134,7 +134,7 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
         if mismatched:
             more = f" (and {len(mismatched) - 1} more)" if len(mismatched) > 1 else ""
             raise ParameterError(f"{out}: {mismatched[0]}{more}; nothing run, manifest unchanged: "
-                                 "use another --out for another grid or other parameters")
+                                 "use another `out` for another grid or other parameters")
         rechunked = [pr.store_name for pr in plan.runs if states[pr.name][0] == "complete" and plan.chunk_t
                      and open_store(out / pr.store_name).chunk_t != plan.chunk_t]
         if rechunked:
@@ -165,7 +165,7 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
         need = sum(3 * t.run.grid.nbytes_per_component() for t in tasks.values() if t.generate)
         if need:
             n_gen = sum(t.generate for t in tasks.values())
-            require_disk(out, need, f"the {n_gen} stores still to generate", "free space, choose another --out "
+            require_disk(out, need, f"the {n_gen} stores still to generate", "free space, choose another `out` "
                          "or sweep fewer seeds/speeds or a smaller grid")
         sweep_doc = plan.to_dict()
         # runs of earlier sweeps into DIR that this plan does not contain keep their records
