@@ -6,8 +6,8 @@ import sys
 
 import click
 
-from turbgen.cli.options import parse_floats, parse_range, plane_positions
-from turbgen.cli.run_options import run_mapping
+from turbgen.cli.options import parse_floats, plane_positions
+from turbgen.cli.run_options import grid_options, run_mapping
 from turbgen.resources import format_bytes
 from turbgen.runs.kaimal import memory_needed, run_kaimal
 from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X
@@ -41,10 +41,6 @@ def _three(name):
     return convert
 
 
-def _list(parser, name):
-    return lambda ctx, param, value: None if value is None else parser(value, name)
-
-
 @click.command()
 @click.option("--U", "U", type=float, help=f"Hub-height mean wind speed [m/s] (default {D['U_m_s']:g}).")
 @click.option("--class", "turb_class", type=click.Choice(list(IEC_IREF)),
@@ -68,15 +64,7 @@ def _list(parser, name):
 @click.option("--vw-coherence", type=click.Choice(VW_COHERENCE),
               help="v, w in the yz plane: white (IEC / TurbSim IECKAI) or exp (extension: u's coherence); "
               f"default {D['vw_coherence']}.")
-@click.option("--planes", callback=_list(parse_floats, "--planes"), help="Plane positions x [m], e.g. 0,50,100.")
-@click.option("--gates", callback=_list(parse_range, "--gates"),
-              help="Range gates start:stop:step [m]; planes = rotor 0 + gates (default 50:170:13.3).")
-@click.option("--nt", type=int, help=f"Time samples (default {G['nt']}).")
-@click.option("--dt", type=float, help=f"Time step [s] (default {G['dt_s']:g}).")
-@click.option("--ny", type=int, help=f"Lateral points (default {G['ny']}).")
-@click.option("--nz", type=int, help=f"Vertical points (default {G['nz']}).")
-@click.option("--dy", type=float, help=f"Lateral spacing [m] (default {G['dy_m']:g}).")
-@click.option("--dz", type=float, help="Vertical spacing [m] (default: --dy).")
+@grid_options(G)
 @click.option("--chunks", type=int,
               help="Time samples per store chunk (default min(nt, 1024)); never changes the field.")
 @click.option("--config", "config", type=click.Path(dir_okay=False), help="JSON/TOML run file; options typed on the "

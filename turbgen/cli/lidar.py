@@ -13,7 +13,7 @@ import sys
 
 import click
 
-from turbgen.errors import ParameterError, TurbgenError
+from turbgen.errors import TurbgenError
 
 # subcommands from other modules, imported on use; a module not in this build is not listed
 EXTERNAL = {"optimize": ("turbgen.cli.lidar_optimize", "optimize")}

@@ -8,8 +8,8 @@ from contextlib import contextmanager
 import click
 
 from turbgen import resources
-from turbgen.cli.options import parse_floats, parse_range, plane_positions
-from turbgen.cli.run_options import run_mapping
+from turbgen.cli.options import plane_positions
+from turbgen.cli.run_options import grid_options, run_mapping
 from turbgen.resources import default_threads, parse_size
 from turbgen.runs.mann import describe, memory_estimate_bytes, run_mann
 from turbgen.runs.mann_outofcore import BASE_BYTES, remove_stale_scratch
@@ -62,10 +62,6 @@ def _dask_client(scheduler):
             yield client
 
 
-def _list(parser, name):
-    return lambda ctx, param, value: None if value is None else parser(value, name)
-
-
 @click.command()
 @click.option("--L", "L", type=float, help=f"Length scale L [m] (default {D['length_scale_m']:g}).")
 @click.option("--gamma", type=float, help=f"Shear anisotropy Gamma [-] (default {D['gamma']:g}).")
@@ -76,15 +72,7 @@ def _list(parser, name):
               "NTM sigma_1 = 0.16 (0.75 U + 5.6) as model sigma_u).")  # fmt: skip
 @click.option("--sigma-u", "sigma_u", type=float, help="Set ae so the model sigma_u is this [m/s].")
 @click.option("--ti", type=float, help="Set ae so the model sigma_u is ti * U (ti as a fraction, e.g. 0.18).")
-@click.option("--planes", callback=_list(parse_floats, "--planes"), help="Plane positions x [m upstream], e.g. 0,50,100.")
-@click.option("--gates", callback=_list(parse_range, "--gates"),
-              help="Range gates start:stop:step [m]; planes = rotor 0 + gates (default 50:170:13.3).")
-@click.option("--nt", type=int, help=f"Time samples (default {G['nt']}).")
-@click.option("--dt", type=float, help=f"Time step [s] (default {G['dt_s']:g}; dx = U dt along the box).")
-@click.option("--ny", type=int, help=f"Lateral points (default {G['ny']}).")
-@click.option("--nz", type=int, help=f"Vertical points (default {G['nz']}).")
-@click.option("--dy", type=float, help=f"Lateral spacing [m] (default {G['dy_m']:g}: a ~300 m box).")
-@click.option("--dz", type=float, help="Vertical spacing [m] (default: --dy).")
+@grid_options(G)
 @click.option("--lifetime", type=click.Choice(LIFETIMES), help="Eddy lifetime: guo (Eq. 6, default) or mann (Eq. 4).")
 @click.option("--factor1", type=float, help="Guo lifetime small-k slope -factor1 (default 1; stable preset 0.8).")
 @click.option("--factor2", type=float, help="tau_e large-k slope -(2/3) factor2 (default 3.5 = Eq. 15).")

@@ -8,10 +8,41 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+import click
+
+from turbgen.cli.options import parse_floats, parse_range
 from turbgen.spec.config import read_config
 
 # option name -> key of the run mapping's grid table
 GRID_OPTIONS = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}
+
+
+def _list(parser, name):
+    return lambda ctx, param, value: None if value is None else parser(value, name)
+
+
+def grid_options(defaults: Mapping):
+    """Decorator adding --planes, --gates, --nt, --dt, --ny, --nz, --dy, --dz, their help showing ``defaults``
+    (the model's grid table of turbgen.spec.defaults)."""
+    opts = [
+        click.option("--planes", callback=_list(parse_floats, "--planes"),
+                     help="Plane positions x [m upstream], e.g. 0,50,100."),
+        click.option("--gates", callback=_list(parse_range, "--gates"),
+                     help="Range gates start:stop:step [m]; planes = rotor 0 + gates (default 50:170:13.3)."),
+        click.option("--nt", type=int, help=f"Time samples (default {defaults['nt']})."),
+        click.option("--dt", type=float, help=f"Time step [s] (default {defaults['dt_s']:g}; dx = U dt)."),
+        click.option("--ny", type=int, help=f"Lateral points (default {defaults['ny']})."),
+        click.option("--nz", type=int, help=f"Vertical points (default {defaults['nz']})."),
+        click.option("--dy", type=float, help=f"Lateral spacing [m] (default {defaults['dy_m']:g})."),
+        click.option("--dz", type=float, help="Vertical spacing [m] (default: --dy)."),
+    ]
+
+    def add(f):
+        for opt in reversed(opts):
+            f = opt(f)
+        return f
+
+    return add
 
 
 def typed(opt: Mapping, names: Mapping[str, str]) -> dict:

@@ -108,7 +108,7 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
                         w.write(c, ix, plane)
                         sums[c][0] += float(np.einsum("tyz,tyz->", plane, plane, dtype=np.float64))
                         sums[c][1] += plane.size
-        # clipping of any embedding is recorded with the field, never only printed (issue 4)
+        # clipping of any embedding is recorded with the field, never only printed
         w.add_attrs(synthesis_report=gen.report)
         path = w.path
     summary = {"path": str(path), "seconds": time.perf_counter() - t0, "spilled": spill}

@@ -93,7 +93,7 @@ def _kaimal_memory(run: KaimalRun, threads: int) -> int:
 def _kaimal_least_memory(run: KaimalRun) -> int:
     from turbgen.runs.kaimal import memory_needed
 
-    return memory_needed(run.grid, spill=True)
+    return min(memory_needed(run.grid), memory_needed(run.grid, spill=True))  # in memory or spilled to disk
 
 
 MODELS: dict[str, Model] = {
