@@ -11,6 +11,7 @@ import numpy as np
 
 from turbgen.cli.options import parse_floats
 from turbgen.errors import ParameterError
+from turbgen.spec.defaults import MANN_DEFAULTS as D
 from turbgen.theory import ranges
 from turbgen.theory.params import LIFETIMES, MannParams, check_wind_speed
 
@@ -51,20 +52,20 @@ def _plot_path(ctx, param, value):
 def _mann_options(f):
     """Model and evaluation-point options shared by every theory/fit command."""
     opts = [
-        click.option("--L", "L", type=float, default=49.0, show_default=True, help="Mann length scale L [m]."),
-        click.option("--gamma", type=float, default=3.1, show_default=True, help="Shear anisotropy Γ [-]."),
+        click.option("--L", "L", type=float, default=D["length_scale_m"], show_default=True, help="Mann length scale L [m]."),
+        click.option("--gamma", type=float, default=D["gamma"], show_default=True, help="Shear anisotropy Γ [-]."),
         click.option("--ae", type=float, default=None,
                      help="αε^(2/3) [m^(4/3) s^-2]; default: σ_u of IEC class A at U (or --sigma-u / --ti)."),
         click.option("--sigma-u", "sigma_u", type=float, default=None, help="Target σ_u [m/s] (sets αε^(2/3))."),
         click.option("--ti", type=float, default=None, help="Target turbulence intensity σ_u/U [-] (sets αε^(2/3))."),
-        click.option("--lifetime", type=click.Choice(LIFETIMES), default="guo", show_default=True,
+        click.option("--lifetime", type=click.Choice(LIFETIMES), default=D["lifetime"], show_default=True,
                      help="Eddy lifetime: guo (Guo et al. 2022, Eq. 6) or mann (Eq. 4)."),
-        click.option("--factor1", type=float, default=1.0, show_default=True, help="Small-k lifetime slope -factor1."),
-        click.option("--factor2", type=float, default=3.5, show_default=True,
+        click.option("--factor1", type=float, default=D["factor1"], show_default=True, help="Small-k lifetime slope -factor1."),
+        click.option("--factor2", type=float, default=D["factor2"], show_default=True,
                      help="Large-k slope -(2/3)factor2 of the evolution lifetime."),
-        click.option("--evo", default="400", show_default=True, callback=_evo,
+        click.option("--evo", default=f"{D['evo_time_s']:g}", show_default=True, callback=_evo,
                      help="Evolution time constant γ [s], or 'frozen' (no evolution)."),
-        click.option("--U", "U", type=float, default=16.0, show_default=True, help="Mean wind speed U [m/s]."),
+        click.option("--U", "U", type=float, default=D["U_m_s"], show_default=True, help="Mean wind speed U [m/s]."),
         click.option("--k1", "k1_text", default=None, help="Wavenumbers a,b,c [rad/m] (instead of --f)."),
         click.option("--f", "f_text", default=None, help="Frequencies a,b,c [Hz]; default 40 log-spaced, 1e-3..1 Hz."),
         click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON (keys: README, theory)."),
