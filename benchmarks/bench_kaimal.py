@@ -26,8 +26,9 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.grid import Grid
-from turbgen.runs.defaults import DEFAULT_PLANES_M
-from turbgen.runs.kaimal import KaimalRun, kaimal_params, run_kaimal
+from turbgen.spec.defaults import DEFAULT_PLANES_M
+from turbgen.runs.kaimal import run_kaimal
+from turbgen.spec.kaimal import KaimalRun, kaimal_params
 
 U, HUB, CLASS = 16.0, 90.0, "A"
 

@@ -18,7 +18,8 @@ from pathlib import Path
 
 GENERATE = """
 import sys
-from turbgen.runs.mann import MannRun, run_mann
+from turbgen.runs.mann import run_mann
+from turbgen.spec.mann import MannRun
 run_mann(MannRun.from_mapping({}), sys.argv[1])
 """
 

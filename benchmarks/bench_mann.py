@@ -48,7 +48,8 @@ def _ae(lifetime: str) -> float:
 
 
 def case_turbgen_paper(nt: int) -> dict:
-    from turbgen.runs.mann import MannRun, run_mann
+    from turbgen.runs.mann import run_mann
+    from turbgen.spec.mann import MannRun
 
     run = MannRun.from_mapping({"grid": {"nt": nt}})
     with tempfile.TemporaryDirectory(dir=os.environ.get("BENCH_TMP")) as tmp:

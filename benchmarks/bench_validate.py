@@ -21,7 +21,8 @@ from pathlib import Path
 
 GENERATE = """
 import sys
-from turbgen.runs.mann import MannRun, run_mann
+from turbgen.runs.mann import run_mann
+from turbgen.spec.mann import MannRun
 grid = {quick}
 run = MannRun.from_mapping({{"grid": grid}} if grid else {{}})
 run_mann(run, sys.argv[1])

@@ -195,7 +195,7 @@ def power(tmp: str) -> str:
     import copy
 
     from turbgen.grid import Grid
-    from turbgen.runs.kaimal import KaimalRun, kaimal_params
+    from turbgen.spec.kaimal import KaimalRun, kaimal_params
     from turbgen.store import open_store
     from turbgen.store.layout import CALLER_ATTRS
 

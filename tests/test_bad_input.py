@@ -369,9 +369,9 @@ def test_readme_shows_the_ranges_table():
 
 def test_default_store_names_differ_whenever_the_field_does():
     """Issue 15 item 10: parameters the readable name does not show add a digest; defaults keep the short name."""
-    from turbgen.presets import kaimal_run_keys
-    from turbgen.runs.kaimal import KaimalRun
-    from turbgen.runs.mann import MannRun
+    from turbgen.spec.presets import kaimal_run_keys
+    from turbgen.spec.kaimal import KaimalRun
+    from turbgen.spec.mann import MannRun
 
     mann = {name: MannRun.from_mapping(extra).default_store_name() for name, extra in {
         # explicit ae where the shape differs from the defaults: no energy-level quadrature for those
@@ -405,7 +405,7 @@ def test_run_schemas_accept_the_whole_ranges_table(schema_name):
     looser bounds, but never refuses a value the table allows (so files and options obey the same ranges)."""
     import jsonschema
 
-    from turbgen.runs.config import load_schema
+    from turbgen.spec.config import load_schema
 
     schema = load_schema(schema_name)
     props, grid = schema["properties"], schema["properties"]["grid"]["properties"]

@@ -11,8 +11,10 @@ from click.testing import CliRunner
 from turbgen.cli import cli
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
-from turbgen.runs.defaults import DEFAULT_PLANES_M
-from turbgen.runs.kaimal import DEFAULT_A_X, DEFAULT_B_X, KaimalRun, kaimal_params, run_kaimal
+from turbgen.spec.defaults import DEFAULT_PLANES_M
+from turbgen.runs.kaimal import run_kaimal
+from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X
+from turbgen.spec.kaimal import KaimalRun, kaimal_params
 from turbgen.store import open_store
 
 TINY = ["--nt", "128", "--ny", "4", "--nz", "3", "--dy", "10", "--planes", "0,50,63.3"]
@@ -75,7 +77,7 @@ def test_cli_config_and_typed_override(tmp_path):
     p = fs.attrs["parameters"]
     assert (p["U_m_s"], p["long_model"], p["seed"], p["rescale"]) == (12.0, "kristensen", 2, True)
     assert fs.grid == Grid(64, 0.5, (0.0, 40.0), 3, 3, 8.0, 8.0)
-    assert p["expected_sigma_m_s"] == pytest.approx(p["sigma_m_s"], rel=1e-12)  # rescaled to nominal
+    assert fs.attrs["derived"]["expected_sigma_m_s"] == pytest.approx(p["sigma_m_s"], rel=1e-12)  # rescaled to nominal
 
 
 @pytest.mark.parametrize(
@@ -115,7 +117,7 @@ def test_existing_store_needs_overwrite(tmp_path):
 
 
 def test_run_validation():
-    with pytest.raises(ParameterError, match="long-model"):
+    with pytest.raises(ParameterError, match="long_model"):
         _run(long_model="taylor")
     with pytest.raises(ParameterError, match="a_x"):
         _run(long_model="simley-pao", a_x=1.0)

@@ -12,7 +12,8 @@ import pytest
 
 from turbgen.grid import Grid
 from turbgen.runs import kaimal as runs_kaimal
-from turbgen.runs.kaimal import KaimalRun, kaimal_params, memory_needed, run_kaimal, spectrum_bytes
+from turbgen.runs.kaimal import memory_needed, run_kaimal, spectrum_bytes
+from turbgen.spec.kaimal import KaimalRun, kaimal_params
 from turbgen.store import open_store
 
 GRID = Grid(256, 0.5, (0.0, 50.0, 63.3, 76.6), 5, 4, 10.0, 10.0)
@@ -58,7 +59,8 @@ def test_spilled_run_peak_memory_is_lower_by_about_the_spectrum(tmp_path):
     code = textwrap.dedent(
         """
         import sys
-        from turbgen.runs.kaimal import KaimalRun, run_kaimal
+        from turbgen.runs.kaimal import run_kaimal
+        from turbgen.spec.kaimal import KaimalRun
         run_kaimal(KaimalRun.from_mapping({}), sys.argv[1], spill=sys.argv[2] == "1", threads=1)
         # VmHWM is this process image's own peak (ru_maxrss can carry the forking parent's peak over exec)
         status = open("/proc/self/status").read().split("VmHWM:")[1]

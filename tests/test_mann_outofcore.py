@@ -17,7 +17,8 @@ from turbgen.cli import cli
 from turbgen.errors import ParameterError, StoreError
 from turbgen.resources import parse_size
 from turbgen.runs import mann_outofcore as ooc
-from turbgen.runs.mann import MannRun, memory_estimate_bytes, run_mann
+from turbgen.runs.mann import memory_estimate_bytes, run_mann
+from turbgen.spec.mann import MannRun
 from turbgen.store import open_store
 
 SMALL = {"nt": 64, "ny": 9, "nz": 10, "x_m": [0.0, 50.0, 100.0]}  # 90 (y, z) points: a short last row block
@@ -56,7 +57,7 @@ def test_plan_follows_the_budget_and_refuses_a_too_small_one():
     small, large = ooc.OutOfCorePlan(run, 300 * 2**20, 2), ooc.OutOfCorePlan(run, 2**30, 2)  # above the 250 MiB base
     assert small.n_parts > large.n_parts >= 1 and small.slabs_per_part % 4 == 0
     assert not small.plane_in_memory and large.plane_in_memory
-    with pytest.raises(ParameterError, match="raise --memory"):
+    with pytest.raises(ParameterError, match="raise `memory`"):
         ooc.OutOfCorePlan(run, 100 * 2**20, 2)
 
 
@@ -80,7 +81,7 @@ def test_cli_memory_option_goes_out_of_core_with_the_same_field(tmp_path, monkey
 def test_disk_space_is_checked_before_anything_is_written(tmp_path, monkeypatch):
     run = MannRun.from_mapping({"grid": SMALL})
     monkeypatch.setattr("turbgen.resources.available_disk_bytes", lambda path: 1000)
-    with pytest.raises(ParameterError, match="disk space.*free disk space or write --out elsewhere"):
+    with pytest.raises(ParameterError, match="disk space.*free disk space or write `out` elsewhere"):
         ooc.run_mann_outofcore(run, tmp_path / "a.zarr", memory_bytes=2**30, threads=1)
     assert list(tmp_path.iterdir()) == []
 

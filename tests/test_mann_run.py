@@ -12,8 +12,9 @@ from click.testing import CliRunner
 
 from turbgen.cli import cli
 from turbgen.runs import mann as runs_mann
-from turbgen.runs.defaults import DEFAULT_PLANES_M
-from turbgen.runs.mann import MannRun, build_mann_stencil, run_mann
+from turbgen.spec.defaults import DEFAULT_PLANES_M
+from turbgen.runs.mann import build_mann_stencil, run_mann
+from turbgen.spec.mann import MannRun
 from turbgen.store import open_store
 from turbgen.synthesis.mann_spacetime import MannSnapshots
 from turbgen.theory.kaimal import iec_sigma1_m_s
@@ -63,8 +64,9 @@ def test_store_layout_summary_and_mapping_roundtrip(tmp_path):
         data = fs.array(c)[...].astype(float)
         assert s[f"sigma_{c}"] == pytest.approx(data.std(), rel=1e-5)
         assert s[f"mean_{c}"] == pytest.approx(data.mean(), abs=1e-5 * data.std())
-    # the stored parameters plus the stored grid rebuild the same run
-    again = MannRun.from_mapping({**fs.attrs["parameters"], "grid": fs.attrs["grid"]})
+    # the stored parameters (inputs), derived values and grid rebuild the same run
+    assert "ae_from" not in fs.attrs["parameters"] and fs.attrs["derived"]["ae_from"] == run.ae_from
+    again = MannRun.from_attrs(fs.attrs)
     assert again == run
     # planes differ (evolution) but are strongly correlated 50 m apart (tau_e >> 50/16 s at large scales)
     u = fs.array("u")[...].astype(float)

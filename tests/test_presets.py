@@ -5,7 +5,7 @@ import json
 import pytest
 
 from turbgen.errors import ParameterError
-from turbgen.presets import (
+from turbgen.spec.presets import (
     BUILTIN_PRESETS,
     get_preset,
     kaimal_settings_for,

@@ -17,7 +17,7 @@ import pytest
 import zarr
 
 from turbgen import resources
-from turbgen.errors import ParameterError, StoreError
+from turbgen.errors import ParameterError, StoreError, TurbgenError
 from turbgen.grid import Grid
 from turbgen.store import FieldStore, create_store, layout, open_store, physical_time_view
 
@@ -270,7 +270,10 @@ def _one_line_refusal(path, match):
     with pytest.raises(StoreError, match=match) as info:
         open_store(path)
     assert "\n" not in str(info.value)
-    assert isinstance(info.value, ParameterError)  # the CLI turns it into exit code 2
+    assert isinstance(info.value, TurbgenError) and not isinstance(info.value, ParameterError)
+    from turbgen.cli import user_error
+
+    assert user_error(info.value).exit_code == 2  # the CLI turns it into exit code 2
 
 
 def test_open_store_refuses_missing_file_and_foreign_paths(tmp_path):

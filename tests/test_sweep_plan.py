@@ -10,11 +10,11 @@ import click
 import pytest
 
 from turbgen.errors import ParameterError
-from turbgen.presets import kaimal_settings_for
+from turbgen.spec.presets import kaimal_settings_for
 from turbgen.sweep import SweepLock, SweepLockedError, make_plan, plan_from_file, store_name
 from turbgen.sweep.lock import LOCK_NAME
 from turbgen.sweep.manifest import read_manifest, write_manifest
-from turbgen.sweep.plan import COMMAND_DEFAULTS, MODELS
+from turbgen.runs.models import MODELS
 
 TINY = {"nt": 16, "dt": 0.5, "planes": [0.0, 50.0], "ny": 3, "nz": 3, "dy": 10.0}
 
@@ -94,18 +94,26 @@ def test_duplicate_names_and_missing_model_parameters(tmp_path):
 
 
 def test_command_defaults_match_the_single_run_commands():
-    """The sweep's missing grid options must take exactly the defaults of `turbgen mann|kaimal`."""
+    """The sweep's missing grid options must take exactly the defaults of `turbgen mann|kaimal`: the
+    commands' options have no defaults of their own (the spec's from_mapping applies them), and a
+    sweep run without grid options has the grid and hub height of the spec defaults."""
     import importlib
 
-    option = {"nt": "nt", "dt": "dt", "ny": "ny", "nz": "nz", "dy": "dy", "hub_height": "hub_height"}
-    for model in MODELS:
-        if model not in COMMAND_DEFAULTS:
-            continue
+    from turbgen.spec.defaults import KAIMAL_DEFAULTS, KAIMAL_GRID, MANN_DEFAULTS, MANN_GRID
+    from turbgen.sweep.plan import build_run
+
+    option = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "hub_height": "hub_height_m"}
+    for model, (defaults, grid) in {"mann": (MANN_DEFAULTS, MANN_GRID), "kaimal": (KAIMAL_DEFAULTS, KAIMAL_GRID)}.items():
+        assert model in MODELS
         cmd = getattr(importlib.import_module(f"turbgen.cli.{model}"), model)
         ctx = click.Context(cmd)
-        defaults = {p.name: p.get_default(ctx) for p in cmd.params if isinstance(p, click.Option)}
-        for key, name in option.items():
-            assert COMMAND_DEFAULTS[model][key] == defaults[name], (model, key)
+        own = {p.name: p.get_default(ctx) for p in cmd.params if isinstance(p, click.Option)}
+        assert all(own[name] in (None, getattr(click.core, "UNSET", None)) for name in option), (model, own)
+        run = build_run(model, "neutral", 16.0, 1)
+        g = run.grid
+        assert (g.nt, g.dt_s, g.ny, g.nz, g.dy_m, g.dz_m, g.x_m) == (
+            grid["nt"], grid["dt_s"], grid["ny"], grid["nz"], grid["dy_m"], grid["dy_m"], grid["x_m"])
+        assert run.hub_height_m == defaults["hub_height_m"]
 
 
 def test_lock_refuses_a_live_owner_and_takes_over_a_dead_one(tmp_path):
@@ -145,7 +153,7 @@ def test_manifest_json_and_csv_agree(tmp_path):
 
 def test_default_cluster_size_follows_cores_runs_and_memory(tmp_path, monkeypatch):
     from turbgen.runs.kaimal import memory_needed
-    from turbgen.sweep import runner
+    from turbgen.sweep import tasks as runner
 
     plan = make_plan(out=tmp_path, models=["kaimal"], presets=["neutral"], speeds=[16], seeds=range(1, 7), grid=TINY)
     tasks = [runner.RunTask(r.model, r.run, "x", False, None, False) for r in plan.runs]

@@ -8,7 +8,8 @@ from click.testing import CliRunner
 
 from turbgen.cli import cli
 from turbgen.grid import Grid
-from turbgen.runs.kaimal import KaimalRun, kaimal_params, run_kaimal
+from turbgen.runs.kaimal import run_kaimal, store_attrs
+from turbgen.spec.kaimal import KaimalRun, kaimal_params
 from turbgen.store import create_store, open_store
 from turbgen.store.layout import CALLER_ATTRS
 
@@ -100,13 +101,13 @@ def test_usage_errors_give_exit_2(store, tmp_path):
 def test_white_noise_store_fails(tmp_path):
     # a store whose attributes say Kaimal but whose data are white noise of the right variance
     run = KaimalRun(kaimal=kaimal_params(12.0, "B", 90.0), grid=GRID, U_m_s=12.0, seed=4)
-    attrs = run.to_attrs()
+    attrs = store_attrs(run)
     rng = np.random.default_rng(3)
     path = tmp_path / "white.zarr"
     with create_store(path, GRID, attrs) as w:
         for i, c in enumerate("uvw"):
             for ix in range(GRID.nx):
-                sigma = attrs["parameters"]["expected_sigma_m_s"][i]
+                sigma = attrs["derived"]["expected_sigma_m_s"][i]
                 w.write(c, ix, rng.standard_normal((GRID.nt, GRID.ny, GRID.nz)) * sigma)
     r = _run(path, "--json", "--rotor-radius", 30)
     assert r.exit_code == 1

@@ -11,8 +11,10 @@ import numpy as np
 import pytest
 
 from turbgen.grid import Grid
-from turbgen.runs.kaimal import KaimalRun, kaimal_params, run_kaimal
-from turbgen.runs.mann import MannRun, run_mann
+from turbgen.runs.kaimal import run_kaimal
+from turbgen.spec.kaimal import KaimalRun, kaimal_params
+from turbgen.runs.mann import run_mann
+from turbgen.spec.mann import MannRun
 from turbgen.store import create_store, open_store
 from turbgen.store.layout import CALLER_ATTRS
 from turbgen.validate import validate

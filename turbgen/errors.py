@@ -1,7 +1,13 @@
 """User-facing errors and the single place where scalar inputs are checked.
 
-Every user mistake raises :class:`ParameterError` (a ``ValueError``) with one line naming the
-bad value and the allowed range; the CLI turns it into that line on stderr and exit code 2.
+Errors by meaning, all :class:`TurbgenError` (one line for the user):
+
+* :class:`ParameterError` (a ``ValueError``): a bad input value, naming it and the allowed range;
+* :class:`StoreError`: a path that is not a complete, readable store (or would be overwritten).
+
+Messages name the run's fields (``nt``, ``overwrite``, ...), written in backquotes where they tell
+the user what to change (e.g. "lower `nt`"); each front end spells them its own way (the CLI as
+options, ``--nt``) and maps the error classes to its exit codes.
 """
 
 from __future__ import annotations
@@ -9,11 +15,15 @@ from __future__ import annotations
 import math
 
 
-class ParameterError(ValueError):
+class TurbgenError(Exception):
+    """Base of the errors turbgen reports to its user in one line."""
+
+
+class ParameterError(TurbgenError, ValueError):
     """A bad input value: one line, naming the value and the allowed range."""
 
 
-class StoreError(ParameterError):
+class StoreError(TurbgenError, ValueError):
     """A path that is not a complete, readable turbgen store (or would be overwritten)."""
 
 

@@ -1,7 +1,7 @@
 """Available memory and disk space, and the checks made before anything large is allocated or written.
 
-    require_memory(nbytes, "the Mann snapshot (4096 x 128 x 128, 3 components)", "lower --nt or --pad-yz")
-    require_disk(out, nbytes, "the store (4096 x 5 x 64 x 64)", "free space or choose another --out")
+    require_memory(nbytes, "the Mann snapshot (4096 x 128 x 128, 3 components)", "lower `nt` or `pad_yz`")
+    require_disk(out, nbytes, "the store (4096 x 5 x 64 x 64)", "free space or choose another `out`")
 
 raise ParameterError (CLI: one line, exit 2) when ``nbytes`` exceed the available memory / free disk.
 """
@@ -12,6 +12,11 @@ import os
 from pathlib import Path
 
 from turbgen.errors import ParameterError
+
+
+def default_threads(threads: int | None) -> int:
+    """Threads of one run: ``threads`` if given, else os.cpu_count() (at least 1); never changes a field."""
+    return max(1, int(threads or os.cpu_count() or 1))
 
 
 def format_bytes(n: float) -> str:
@@ -79,7 +84,7 @@ def available_memory_bytes(
 def require_memory(nbytes: int, what: str, hint: str) -> int | None:
     """Raise ParameterError unless ``nbytes`` fit in the available memory; return the available bytes.
 
-    ``what`` names what needs the memory, ``hint`` which option to change (e.g. "lower --nt").
+    ``what`` names what needs the memory, ``hint`` which field to change (e.g. "lower `nt`").
     When the available memory cannot be determined the check passes (returns None).
     """
     available = available_memory_bytes()
@@ -108,7 +113,7 @@ def require_disk(path, nbytes: int, what: str, hint: str) -> int | None:
     """Raise ParameterError unless ``nbytes`` fit on the filesystem of ``path``; return the free bytes.
 
     The disk-space counterpart of :func:`require_memory` (same message form). ``path`` is the
-    output (or its directory); ``hint`` says what to change (e.g. "free space or choose another --out").
+    output (or its directory); ``hint`` says what to change (e.g. "free space or choose another `out`").
     When the free space cannot be determined the check passes (returns None).
     """
     free = available_disk_bytes(path)

@@ -1,7 +1,9 @@
 """turbgen command line: click commands only (parse, call the library, print).
 
-User mistakes (``turbgen.errors.ParameterError``) become one line on stderr and exit code 2.
-Each sub-module holds one command or command group, listed in COMMANDS and imported on use.
+Errors the library reports to its user (``turbgen.errors.TurbgenError``) become one line on stderr
+with the run fields they name spelled as options (`nt` -> --nt, see :func:`as_options`) and the exit
+code of their class (EXIT_CODES). Each sub-module holds one command or command group, listed in
+COMMANDS and imported on use.
 """
 
 from __future__ import annotations
@@ -9,13 +11,14 @@ from __future__ import annotations
 import atexit
 import importlib
 import logging
+import re
 import signal
 import warnings
 
 import click
 
 from turbgen import __version__
-from turbgen.errors import ParameterError
+from turbgen.errors import ParameterError, StoreError, TurbgenError
 
 
 # click >= 8.2 raises this (a UsageError) to print the help of a group called without a command
@@ -23,12 +26,34 @@ _NoArgsIsHelp = getattr(click.exceptions, "NoArgsIsHelpError", ())
 
 
 class UserError(click.ClickException):
-    """A usage error from the library: printed as one line, exit code 2."""
+    """A usage error from the library: printed as one line, exit code 2 (or ``exit_code``)."""
 
     exit_code = 2
 
+    def __init__(self, message: str, exit_code: int = 2):
+        super().__init__(message)
+        self.exit_code = exit_code
+
     def show(self, file=None):
         click.echo(f"Error: {self.format_message()}", err=True)
+
+
+# exit code per error class (the first class the error is an instance of); every user error is 2
+EXIT_CODES = {StoreError: 2, ParameterError: 2, TurbgenError: 2}
+# run fields whose option is not --<field with - for _>
+_OPTIONS = {"chunk_t": "--chunks", "dt_s": "--dt", "dy_m": "--dy", "dz_m": "--dz", "x_m": "--planes",
+            "U_m_s": "--U", "hub_height_m": "--hub-height", "memory_bytes": "--memory"}  # fmt: skip
+
+
+def as_options(message: str) -> str:
+    """A library message with its backquoted run fields spelled as options: "lower `pad_yz`" -> "lower --pad-yz"."""
+    return re.sub(r"`(\w+)`", lambda m: _OPTIONS.get(m[1], "--" + m[1].replace("_", "-")), message)
+
+
+def user_error(exc: TurbgenError) -> UserError:
+    """The one-line CLI error of a library error (options spelled for the command line, exit code by class)."""
+    code = next(code for cls, code in EXIT_CODES.items() if isinstance(exc, cls))
+    return UserError(as_options(str(exc)), code)
 
 
 # command name -> (module, attribute); modules are imported only when their command runs (or for --help),
@@ -81,8 +106,8 @@ class TurbgenGroup(click.Group):
     def _invoke_one_line(self, ctx):
         try:
             return super().invoke(ctx)
-        except ParameterError as exc:
-            raise UserError(str(exc)) from None
+        except TurbgenError as exc:
+            raise user_error(exc) from None
         except click.ClickException as exc:  # click's own usage errors (bad option, missing argument, ...)
             raise _one_line(exc) from None
         except KeyboardInterrupt:  # Ctrl-C: writers have removed their temporaries; conventional exit 130

@@ -13,7 +13,7 @@ import sys
 
 import click
 
-from turbgen.errors import ParameterError
+from turbgen.errors import TurbgenError
 
 # subcommands from other modules, imported on use; a module not in this build is not listed
 EXTERNAL = {"optimize": ("turbgen.cli.lidar_optimize", "optimize")}
@@ -80,10 +80,10 @@ def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_expone
             check_output(out, overwrite)
         result = report.lidar_report(fs, lidar_name, rotor_radius_m=rotor_radius, add_mean_wind=mean_wind,
                                      shear_exponent=shear_exponent)
-    except ParameterError as exc:
-        from turbgen.cli import UserError
+    except TurbgenError as exc:
+        from turbgen.cli import user_error
 
-        raise UserError(str(exc)) from None
+        raise user_error(exc) from None
     if out is not None:
         path = result.write(out, overwrite=overwrite)
         click.echo(f"wrote {path}", err=True)

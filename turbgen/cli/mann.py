@@ -7,16 +7,17 @@ from contextlib import contextmanager
 
 import click
 
-from turbgen.cli.options import parse_floats, parse_range, plane_positions
-from turbgen.runs.config import read_config
-from turbgen.runs.defaults import MANN_DEFAULTS as D
-from turbgen.runs.defaults import MANN_GRID as G
 from turbgen import resources
-from turbgen.resources import parse_size
-from turbgen.runs.mann import MannRun, describe, mann_preset_keys, memory_estimate_bytes, run_mann
+from turbgen.cli.options import plane_positions
+from turbgen.cli.run_options import grid_options, run_mapping
+from turbgen.resources import default_threads, parse_size
+from turbgen.runs.mann import describe, memory_estimate_bytes, run_mann
 from turbgen.runs.mann_outofcore import BASE_BYTES, remove_stale_scratch
+from turbgen.spec.defaults import MANN_DEFAULTS as D
+from turbgen.spec.defaults import MANN_GRID as G
+from turbgen.spec.mann import MannRun
+from turbgen.spec.presets import load_presets, mann_run_keys
 from turbgen.store.paths import check_output_path
-from turbgen.synthesis.mann_spacetime import MannSnapshots
 from turbgen.theory.params import LIFETIMES
 from turbgen.theory.ranges import LIMITS
 
@@ -26,8 +27,9 @@ _KEYS = {
     "factor1": "factor1", "factor2": "factor2", "seed": "seed", "hub_height": "hub_height_m", "pad_yz": "pad_yz",
     "ae": "ae", "sigma_u": "sigma_u_m_s", "ti": "ti",
 }  # fmt: skip
-_GRID_KEYS = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}
 _ENERGY = ("ae", "sigma_u", "ti")
+# a typed energy level replaces any from the run file or the preset
+_REPLACES = {key: ("ae", "sigma_u_m_s", "ti", "ae_from") for key in ("ae", "sigma_u_m_s", "ti")}
 
 
 def _evo(ctx, param, value):
@@ -60,10 +62,6 @@ def _dask_client(scheduler):
             yield client
 
 
-def _list(parser, name):
-    return lambda ctx, param, value: None if value is None else parser(value, name)
-
-
 @click.command()
 @click.option("--L", "L", type=float, help=f"Length scale L [m] (default {D['length_scale_m']:g}).")
 @click.option("--gamma", type=float, help=f"Shear anisotropy Gamma [-] (default {D['gamma']:g}).")
@@ -74,15 +72,7 @@ def _list(parser, name):
               "NTM sigma_1 = 0.16 (0.75 U + 5.6) as model sigma_u).")  # fmt: skip
 @click.option("--sigma-u", "sigma_u", type=float, help="Set ae so the model sigma_u is this [m/s].")
 @click.option("--ti", type=float, help="Set ae so the model sigma_u is ti * U (ti as a fraction, e.g. 0.18).")
-@click.option("--planes", callback=_list(parse_floats, "--planes"), help="Plane positions x [m upstream], e.g. 0,50,100.")
-@click.option("--gates", callback=_list(parse_range, "--gates"),
-              help="Range gates start:stop:step [m]; planes = rotor 0 + gates (default 50:170:13.3).")
-@click.option("--nt", type=int, help=f"Time samples (default {G['nt']}).")
-@click.option("--dt", type=float, help=f"Time step [s] (default {G['dt_s']:g}; dx = U dt along the box).")
-@click.option("--ny", type=int, help=f"Lateral points (default {G['ny']}).")
-@click.option("--nz", type=int, help=f"Vertical points (default {G['nz']}).")
-@click.option("--dy", type=float, help=f"Lateral spacing [m] (default {G['dy_m']:g}: a ~300 m box).")
-@click.option("--dz", type=float, help="Vertical spacing [m] (default: --dy).")
+@grid_options(G)
 @click.option("--lifetime", type=click.Choice(LIFETIMES), help="Eddy lifetime: guo (Eq. 6, default) or mann (Eq. 4).")
 @click.option("--factor1", type=float, help="Guo lifetime small-k slope -factor1 (default 1; stable preset 0.8).")
 @click.option("--factor2", type=float, help="tau_e large-k slope -(2/3) factor2 (default 3.5 = Eq. 15).")
@@ -110,32 +100,23 @@ def _list(parser, name):
               "of one worker per core sharing --memory.")  # fmt: skip
 def mann(**opt):
     """Mann space-time 4D field: yz-planes at the rotor and range gates, evolving with upstream distance."""
-    mapping = read_config(opt["config"], "mann-run") if opt["config"] else {}
-    grid = dict(mapping.get("grid", {}))
     typed_energy = [name for name in _ENERGY if opt[name] is not None]
     if len(typed_energy) > 1:
         raise click.UsageError(f"give one of --ae, --sigma-u, --ti (got {', '.join(typed_energy)})")
-    if opt["preset"] is not None:
-        mapping.update(mann_preset_keys(opt["preset"], opt["presets_file"]))
-    elif opt["presets_file"]:
+    if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
-    if typed_energy:  # a typed energy level replaces any from the run file
-        for key in ("ae", "sigma_u_m_s", "ti", "ae_from"):
-            mapping.pop(key, None)
-    for name, key in _KEYS.items():
-        if opt[name] is not None:
-            mapping[key] = None if opt[name] == "frozen" else opt[name]
-    for name, key in _GRID_KEYS.items():
-        if opt[name] is not None:
-            grid[key] = opt[name]
-    x_m = plane_positions(opt["planes"], opt["gates"])
-    if x_m is not None:
-        grid["x_m"] = x_m
-    mapping["grid"] = grid
+    preset_keys = None
+    if opt["preset"] is not None:
+        user = load_presets(opt["presets_file"]) if opt["presets_file"] else None
+
+        def preset_keys(mapping, given):
+            return mann_run_keys(opt["preset"], user=user)
+
+    mapping = run_mapping(opt, "mann-run", _KEYS, preset_keys, _REPLACES, plane_positions(opt["planes"], opt["gates"]))
     run = MannRun.from_mapping(mapping)
     out = opt["out"] if opt["out"] is not None else run.default_store_name()
     check_output_path(out)
-    threads = MannSnapshots.default_threads(opt["threads"])
+    threads = default_threads(opt["threads"])
     budget = parse_size(opt["memory"], "--memory") if opt["memory"] is not None else resources.available_memory_bytes()
     in_memory = memory_estimate_bytes(run, threads, opt["stencil_cache"] is None) + BASE_BYTES
     plan = None

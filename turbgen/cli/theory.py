@@ -11,6 +11,7 @@ import numpy as np
 
 from turbgen.cli.options import parse_floats
 from turbgen.errors import ParameterError
+from turbgen.spec.defaults import MANN_DEFAULTS as D
 from turbgen.theory import ranges
 from turbgen.theory.params import LIFETIMES, MannParams, check_wind_speed
 
@@ -51,25 +52,25 @@ def _plot_path(ctx, param, value):
 def _mann_options(f):
     """Model and evaluation-point options shared by every theory/fit command."""
     opts = [
-        click.option("--L", "L", type=float, default=49.0, show_default=True, help="Mann length scale L [m]."),
-        click.option("--gamma", type=float, default=3.1, show_default=True, help="Shear anisotropy Γ [-]."),
+        click.option("--L", "L", type=float, default=D["length_scale_m"], show_default=True, help="Mann length scale L [m]."),
+        click.option("--gamma", type=float, default=D["gamma"], show_default=True, help="Shear anisotropy Γ [-]."),
         click.option("--ae", type=float, default=None,
                      help="αε^(2/3) [m^(4/3) s^-2]; default: σ_u of IEC class A at U (or --sigma-u / --ti)."),
         click.option("--sigma-u", "sigma_u", type=float, default=None, help="Target σ_u [m/s] (sets αε^(2/3))."),
         click.option("--ti", type=float, default=None, help="Target turbulence intensity σ_u/U [-] (sets αε^(2/3))."),
-        click.option("--lifetime", type=click.Choice(LIFETIMES), default="guo", show_default=True,
-                     help="Eddy lifetime: guo (paper 000 Eq. 6) or mann (Eq. 4)."),
-        click.option("--factor1", type=float, default=1.0, show_default=True, help="Small-k lifetime slope -factor1."),
-        click.option("--factor2", type=float, default=3.5, show_default=True,
+        click.option("--lifetime", type=click.Choice(LIFETIMES), default=D["lifetime"], show_default=True,
+                     help="Eddy lifetime: guo (Guo et al. 2022, Eq. 6) or mann (Eq. 4)."),
+        click.option("--factor1", type=float, default=D["factor1"], show_default=True, help="Small-k lifetime slope -factor1."),
+        click.option("--factor2", type=float, default=D["factor2"], show_default=True,
                      help="Large-k slope -(2/3)factor2 of the evolution lifetime."),
-        click.option("--evo", default="400", show_default=True, callback=_evo,
+        click.option("--evo", default=f"{D['evo_time_s']:g}", show_default=True, callback=_evo,
                      help="Evolution time constant γ [s], or 'frozen' (no evolution)."),
-        click.option("--U", "U", type=float, default=16.0, show_default=True, help="Mean wind speed U [m/s]."),
+        click.option("--U", "U", type=float, default=D["U_m_s"], show_default=True, help="Mean wind speed U [m/s]."),
         click.option("--k1", "k1_text", default=None, help="Wavenumbers a,b,c [rad/m] (instead of --f)."),
         click.option("--f", "f_text", default=None, help="Frequencies a,b,c [Hz]; default 40 log-spaced, 1e-3..1 Hz."),
         click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON (keys: README, theory)."),
         click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None, callback=_plot_path,
-                     help="Write a PNG plot (paper 000 Fig. 2 style); an existing file needs --overwrite."),
+                     help="Write a PNG plot (Guo et al. 2022, Fig. 2 style); an existing file needs --overwrite."),
         click.option("--overwrite", is_flag=True, is_eager=True, expose_value=False, callback=_remember_overwrite,
                      help="Replace an existing --plot file."),
     ]
@@ -79,23 +80,14 @@ def _mann_options(f):
 
 
 def _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U) -> MannParams:
-    """MannParams from the options; αε^(2/3) from --ae, --sigma-u, --ti or IEC class A at U."""
-    from turbgen.theory.kaimal import iec_sigma1_m_s
-    from turbgen.theory.mann_spectra import ae_for_sigma_u
+    """MannParams from the options; αε^(2/3) from --ae, --sigma-u, --ti or IEC class A at U (turbgen.spec.energy)."""
+    from turbgen.spec.energy import resolve_ae
 
     U = check_wind_speed(U)
     if sum(v is not None for v in (ae, sigma_u, ti)) > 1:
         raise ParameterError("give at most one of --ae, --sigma-u, --ti")
     shape = MannParams(1.0, L, gamma, lifetime, factor1, factor2, evo)
-    if ae is not None:
-        return shape.with_ae(ae)
-    if ti is not None:
-        sigma = ranges.check("ti", ti) * U
-    elif sigma_u is not None:
-        sigma = ranges.check("sigma_u_m_s", sigma_u)
-    else:
-        sigma = iec_sigma1_m_s(U, "A")
-    return shape.with_ae(ae_for_sigma_u(sigma, shape))
+    return shape.with_ae(resolve_ae(shape, U, ae=ae, sigma_u_m_s=sigma_u, ti=ti)[0])
 
 
 def _points(k1_text, f_text, U):
@@ -129,7 +121,7 @@ def _emit(columns: dict, as_json: bool, extra: dict | None = None):
 
 
 def _plot(path, x, curves: dict, xlabel: str, ylabel: str, logy=False):
-    """Curves over log x (paper 000 Fig. 2 style), written as PNG."""
+    """Curves over log x (Guo et al. 2022, Fig. 2 style), written as PNG."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -158,7 +150,7 @@ def theory():
 @theory.command()
 @_mann_options
 def spectra(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path):
-    """Mann one-point spectra F_ij(k1) (two-sided, m^3 s^-2; paper 000 Eq. 8)."""
+    """Mann one-point spectra F_ij(k1) (two-sided, m^3 s^-2; Guo et al. 2022, Eq. 8)."""
     from turbgen.theory.mann_spectra import one_point_spectra
 
     p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
@@ -195,7 +187,7 @@ def coherence(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_
 @click.option("--dx", type=float, callback=_ranged("separation_m", "--dx (m)"), default=100.0, show_default=True, help="Longitudinal separation [m].")
 def longitudinal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path,
                  dx):
-    """Longitudinal (magnitude-squared) coherence of u from the space-time tensor (paper 000 Eq. 16)."""
+    """Longitudinal (magnitude-squared) coherence of u from the space-time tensor (Guo et al. 2022, Eq. 16)."""
     from turbgen.theory.space_time import longitudinal_coherence
 
     p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
@@ -210,7 +202,7 @@ def longitudinal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, 
 @_mann_options
 @click.option("--radius", type=float, callback=_ranged("rotor_radius_m", "--radius (m)"), default=63.0, show_default=True, help="Rotor radius R [m].")
 def rews(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path, radius):
-    """Rotor-effective wind speed spectrum of the Mann model (paper 000 Eq. 24; two-sided, m^3 s^-2)."""
+    """Rotor-effective wind speed spectrum of the Mann model (Guo et al. 2022, Eq. 24; two-sided, m^3 s^-2)."""
     from turbgen.theory.mann_spectra import one_point_spectra
     from turbgen.theory.rotor_effective import rews_spectrum_mann
 
@@ -232,7 +224,7 @@ def fit():
 @fit.command()
 @_mann_options
 def kaimal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path):
-    """Kaimal σ_i, L_i (paper 000 Eq. 20) and IEC a_yz, Lc (Eq. 21, dy = dz = 20 m) fitted to the Mann model.
+    """Kaimal σ_i, L_i (Guo et al. 2022, Eq. 20) and IEC a_yz, Lc (Eq. 21, dy = dz = 20 m) fitted to the Mann model.
 
     --f / --k1 set the Eq. 20 grid (default 1e-3..1 Hz in 1e-3 Hz steps).
     """

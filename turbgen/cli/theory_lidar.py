@@ -9,13 +9,14 @@ import numpy as np
 
 from turbgen.cli.options import parse_floats
 from turbgen.errors import ParameterError
+from turbgen.spec.defaults import MANN_DEFAULTS
 
 
 @click.command("lidar")
 @click.option("--model", type=click.Choice(["mann", "kaimal"]), default="mann", show_default=True)
 @click.option("--preset", type=click.Choice(["unstable", "neutral", "stable"]), default="neutral",
               show_default=True, help="Stability class (Guo et al. 2023 Table 1/2).")
-@click.option("--U", "U", type=float, default=16.0, show_default=True, help="Mean wind speed U [m/s].")
+@click.option("--U", "U", type=float, default=MANN_DEFAULTS["U_m_s"], show_default=True, help="Mean wind speed U [m/s].")
 @click.option("--lidar", "lidar_name", default="nacelle-4beam", show_default=True,
               help="Lidar preset (nacelle-4beam, spinner-cw, spinner-pulsed, nacelle-1beam) or a TOML/JSON file.")
 @click.option("--radius", type=float, default=None, help="Rotor radius R [m]; default: the lidar preset's turbine.")

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.errors import ParameterError, check_choice, check_positive, check_range
-from turbgen.runs.config import check_mapping, read_config
+from turbgen.spec.config import check_mapping, read_config
 from turbgen.theory.lidar_geometry import Measurements, los_vectors, nacelle_directions, spinner_directions
 from turbgen.theory.lidar_weighting import cw_discrete, pulsed_discrete, rayleigh_length_m
 

@@ -1,7 +1,10 @@
-"""One run = generator -> store, shared by the CLI and the sweep (so both give bit-identical stores).
+"""Execution of one run (turbgen.spec says what a run is): generator -> store, shared by the CLI, the
+sweep and the service (so all give bit-identical stores).
 
-mann      MannRun, build_mann_stencil, run_mann (Mann space-time field, issue 3)
-kaimal    KaimalRun, run_kaimal (Kaimal field with longitudinal coherence, issue 4)
-config    reading a --config TOML/JSON file and validating it against turbgen/schemas/
-defaults  the paper defaults (DEFAULT_PLANES_M, MANN_DEFAULTS, MANN_GRID)
+mann            run_mann, build_mann_stencil, memory_estimate_bytes (Mann space-time field)
+mann_outofcore  the same Mann field in two passes through scratch files (a memory budget)
+kaimal          run_kaimal, memory_needed (Kaimal field with longitudinal coherence)
+models          the model registry: name -> spec class, run function, memory estimate
+stencil_cache   Mann stencils on disk, one per parameter set and box
+scratch         file-backed spectra of Kaimal runs that do not fit in memory
 """

@@ -38,8 +38,9 @@ import numpy as np
 from tqdm import tqdm
 
 from turbgen.errors import ParameterError
-from turbgen.resources import format_bytes, require_disk
-from turbgen.runs.mann import MannRun
+from turbgen.resources import default_threads, format_bytes, require_disk
+from turbgen.runs.mann import synthesis_box
+from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.store.layout import default_chunk_t
 from turbgen.store.temporaries import pid_alive
@@ -55,7 +56,7 @@ from turbgen.synthesis.mann_stencil import axis_cells, build_stencil
 BASE_BYTES = 250 * 2**20  # the interpreter with turbgen, numpy, scipy, zarr, pyfftw loaded (VmHWM measured 165 MiB,
 # 197 MiB in a fresh virtualenv) + slack
 _C64, _F32 = 8, 4
-_HINT = "raise --memory, or lower --nt, --ny/--nz or --pad-yz"
+_HINT = "raise `memory`, or lower `nt`, `ny`/`nz` or `pad_yz`"
 
 
 def _scratch_prefix(out: Path) -> str:
@@ -93,7 +94,7 @@ class OutOfCorePlan:
     ):
         """Sizes from the budget; ``slabs_per_part`` (a multiple of SLAB_BATCH), ``block_points`` (a multiple of
         ROW_BLOCK) and ``plane_in_memory`` override them (tests: several parts and blocks on a small field)."""
-        g, box = run.grid, run.box
+        g, box = run.grid, synthesis_box(run)
         self.run, self.memory_bytes, self.threads = run, int(memory_bytes), threads
         self.evolving = run.params.evo_time_s is not None and g.nx > 1
         self.n_snapshots = g.nx if self.evolving else 1
@@ -216,7 +217,7 @@ def run_mann_outofcore(
     the store is written by this process. Without it both passes run here.
     """
     t_start = time.perf_counter()
-    threads = MannSnapshots.default_threads(threads)
+    threads = default_threads(threads)
     plan = plan or OutOfCorePlan(run, memory_bytes, threads, chunk_t)
     if client is not None and plan.plane_in_memory:  # workers hand planes over through the plane file
         plan.plane_in_memory = False
@@ -225,7 +226,7 @@ def run_mann_outofcore(
     remove_stale_scratch(path)
     store_bytes = 3 * g.nt * g.nx * g.ny * g.nz * _F32
     require_disk(path.parent, store_bytes + plan.scratch_bytes(), "the out-of-core Mann run (store + scratch)",
-               "free disk space or write --out elsewhere")  # fmt: skip
+               "free disk space or write `out` elsewhere")  # fmt: skip
     times = np.sort(run.plane_times_s(), kind="stable")
     times = times if plan.evolving else times[:1]
     order = [int(i) for i in np.argsort(run.plane_times_s(), kind="stable")]
@@ -241,7 +242,7 @@ def run_mann_outofcore(
             _File(spectra_path, spectra_bytes).close()
             if not plan.plane_in_memory:
                 _File(plane_path, n_blocks * g.nt * plan.block_points * _F32).close()
-            cells = axis_cells(run.params, run.box)
+            cells = axis_cells(run.params, synthesis_box(run))
             with tqdm(total=plan.n_parts, unit="part", desc="mann pass 1", file=sys.stderr, disable=not show) as bar:
                 args = (run, plan, str(spectra_path), cells, times, threads)
                 _map(client, lambda part: pass1_part(*args, part), range(plan.n_parts), bar)
@@ -298,7 +299,7 @@ def _spectra_offset(plan: OutOfCorePlan, m: int, c: int, part: int, point: int =
 
 def pass1_part(run: MannRun, plan: OutOfCorePlan, spectra_path: str, cells, times, threads: int, part: int) -> None:
     """Pass 1 for one part of k1 slabs: its stencil, snapshots in time order, cropped spectra to the scratch file."""
-    box, g = run.box, run.grid
+    box, g = synthesis_box(run), run.grid
     S = plan.slabs_per_part
     first, end = part * S, min((part + 1) * S, box.nk1)
     stencil = build_stencil(run.params, box, evolving=plan.evolving, slabs=(first, end), cells=cells)
@@ -318,7 +319,7 @@ def pass2_blocks(run, plan: OutOfCorePlan, spectra_path: str, plane_path: str | 
                  plane: np.ndarray | None = None) -> None:  # fmt: skip
     """Pass 2 for blocks of (y, z) points of snapshot m, component c: read back, transform along k1, into ``plane``
     (nt, points) or, without it, into the plane scratch file (block, t, point)."""
-    g, box = run.grid, run.box
+    g, box = run.grid, synthesis_box(run)
     S, P, B = plan.slabs_per_part, plan.points, plan.block_points
     transform = PencilTransform(g.nt, P)
     parts = np.empty((plan.n_parts, B, S), np.complex64)

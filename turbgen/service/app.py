@@ -19,7 +19,7 @@ from fastapi import FastAPI, Request
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
 
 from turbgen import __version__
-from turbgen.errors import ParameterError
+from turbgen.errors import ParameterError, TurbgenError
 from turbgen.service.catalog import Catalog, build_run, canonical_mapping, run_id
 from turbgen.service.jobs import Jobs, QueueFull
 from turbgen.service.limits import MAX_BODY_BYTES, RETRY_AFTER_S, LimitError, check_memory, check_token
@@ -72,8 +72,8 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
     async def _limit(request, exc: LimitError):
         return _error(exc.status, str(exc), exc.headers)
 
-    @app.exception_handler(ParameterError)
-    async def _param(request, exc: ParameterError):
+    @app.exception_handler(TurbgenError)
+    async def _param(request, exc: TurbgenError):
         return _error(422, str(exc))
 
     def status(rid: str) -> dict:
@@ -300,7 +300,7 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
             if not final.is_file():
                 try:
                     report = lidar_report(open_store(store), lidar).to_dict()
-                except ParameterError as exc:
+                except TurbgenError as exc:
                     return _error(422, str(exc).replace(str(store), f"/runs/{rid}/store"))
                 report["store"] = f"/runs/{rid}/store"  # the server's paths stay private
                 final.parent.mkdir(exist_ok=True)

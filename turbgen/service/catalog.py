@@ -20,8 +20,8 @@ import tempfile
 from pathlib import Path
 
 from turbgen import __version__
-from turbgen.errors import ParameterError
-from turbgen.runs.config import check_mapping
+from turbgen.errors import ParameterError, TurbgenError
+from turbgen.spec.config import check_mapping
 from turbgen.store.layout import grid_to_attrs
 from turbgen.store.writer import temp_prefix
 
@@ -46,16 +46,17 @@ def build_run(body) -> tuple[str, object]:
     preset = body.pop("preset", None)
     check_mapping(body, f"{model}-run", "run config")
     if model == "mann":
-        from turbgen.runs.mann import MannRun, mann_preset_keys
+        from turbgen.spec.mann import MannRun
+        from turbgen.spec.presets import mann_run_keys
 
         if preset is not None:
             if not isinstance(preset, str):
                 raise ParameterError("preset: expected a preset name (string)")
-            body = {**mann_preset_keys(preset), **body}
+            body = {**mann_run_keys(preset), **body}
         return model, MannRun.from_mapping(body)
     if preset is not None:
         raise ParameterError("preset: only the mann model takes a preset")
-    from turbgen.runs.kaimal import KaimalRun
+    from turbgen.spec.kaimal import KaimalRun
 
     return model, KaimalRun.from_mapping(body)
 
@@ -68,10 +69,10 @@ def canonical_mapping(run) -> dict:
 def run_from_canonical(model: str, mapping: dict):
     """Inverse of :func:`canonical_mapping` (used to re-queue runs after a restart)."""
     if model == "mann":
-        from turbgen.runs.mann import MannRun
+        from turbgen.spec.mann import MannRun
 
         return MannRun.from_mapping(mapping)
-    from turbgen.runs.kaimal import KaimalRun
+    from turbgen.spec.kaimal import KaimalRun
 
     return KaimalRun.from_mapping(mapping)
 
@@ -143,7 +144,7 @@ class Catalog:
 
         try:
             open_store(path)
-        except ParameterError:
+        except TurbgenError:
             return False
         self._complete.add(rid)
         return True

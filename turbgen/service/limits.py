@@ -54,10 +54,10 @@ def check_token(expected: str | None, authorization: str | None) -> None:
 def run_memory_bytes(model: str, run) -> int:
     """Memory [bytes] the run allocates (the runs/ estimates the CLI checks before allocating)."""
     if model == "mann":
+        from turbgen.resources import default_threads
         from turbgen.runs.mann import memory_estimate_bytes
-        from turbgen.synthesis.mann_spacetime import MannSnapshots
 
-        return memory_estimate_bytes(run, MannSnapshots.default_threads(None))
+        return memory_estimate_bytes(run, default_threads(None))
     from turbgen.runs.kaimal import memory_needed
 
     return memory_needed(run.grid)

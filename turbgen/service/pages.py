@@ -8,7 +8,7 @@ from __future__ import annotations
 import html
 
 from turbgen import __version__
-from turbgen.presets import BUILTIN_PRESETS
+from turbgen.spec.presets import BUILTIN_PRESETS
 
 _PAGE = """<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>turbgen serve</title>

@@ -13,13 +13,13 @@ import socket
 from datetime import datetime, timezone
 from pathlib import Path
 
-from turbgen.errors import ParameterError
+from turbgen.errors import TurbgenError
 from turbgen.store.temporaries import pid_alive  # the one liveness test, shared with the store writers
 
 LOCK_NAME = ".turbgen-sweep.lock"
 
 
-class SweepLockedError(ParameterError):
+class SweepLockedError(TurbgenError):
     """Another sweep (alive, or on another host) holds the directory's lock."""
 
 

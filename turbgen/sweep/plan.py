@@ -2,7 +2,7 @@
 
 The file format is ``turbgen/schemas/sweep.schema.json``. Every planned run is built from the same
 run mapping as ``turbgen mann|kaimal --preset P --U U --seed S`` (the preset's keys from
-turbgen.presets.mann_run_keys / kaimal_run_keys, then MannRun/KaimalRun.from_mapping), so the
+turbgen.spec.presets.run_keys, then the model's from_mapping), so the
 sweep's store and the single run hold the same field (tests/test_sweep.py checks it bit for bit).
 Store names are derived from the parameters that vary within a sweep:
 ``{model}_{preset}_U{U:g}_seed{seed}.zarr`` (e.g. ``mann_neutral_U16_seed2.zarr``).
@@ -15,55 +15,34 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from turbgen.errors import ParameterError, check_int
-from turbgen.presets import (
-    StabilityPreset,
-    get_preset,
-    kaimal_run_keys,
-    load_presets,
-    mann_run_keys,
-    presets_from_mapping,
-)
-from turbgen.runs.config import check_mapping, read_config
-from turbgen.runs.defaults import DEFAULT_PLANES_M
+from turbgen.runs.models import MODELS, get_model
+from turbgen.spec.config import check_mapping, read_config
+from turbgen.spec.presets import StabilityPreset, get_preset, load_presets, presets_from_mapping, run_keys
 from turbgen.store.paths import check_output_path
 from turbgen.theory import ranges
 from turbgen.theory.params import check_wind_speed
 
-MODELS = ("mann", "kaimal")
 GRID_KEYS = ("nt", "dt", "planes", "ny", "nz", "dy", "dz", "hub_height")
-# The grid option defaults of `turbgen kaimal` (KaimalRun.from_mapping needs the whole grid; Mann's
-# from_mapping applies turbgen.runs.defaults itself). tests/test_sweep_plan.py checks them against the command.
-COMMAND_DEFAULTS = {
-    "kaimal": {"nt": 4096, "dt": 0.5, "planes": DEFAULT_PLANES_M, "ny": 31, "nz": 31, "dy": 5.0, "hub_height": 90.0},
-}
+# sweep grid option -> key of the run mapping's grid table (missing ones: the model's defaults, turbgen.spec.defaults)
+_GRID_NAMES = {"nt": "nt", "dt": "dt_s", "planes": "x_m", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}
 
 
 def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int, grid: Mapping | None = None,
               *, user: Mapping[str, StabilityPreset] | None = None):
     """The MannRun / KaimalRun of one preset run, exactly as ``turbgen mann|kaimal --preset`` builds it.
 
-    ``grid``: options with the schema names; missing ones take the command's defaults (for Mann
-    those of MannRun.from_mapping, i.e. turbgen.runs.defaults; dz defaults to dy).
+    ``grid``: options with the sweep schema names; missing ones take the model's defaults
+    (turbgen.spec.defaults; dz defaults to dy).
     """
-    opts = {**COMMAND_DEFAULTS.get(model, {}), **(grid or {})}
-    if "dy" in opts and "dz" not in opts:
-        opts["dz"] = opts["dy"]
-    names = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}
-    g = {key: opts[name] for name, key in names.items() if name in opts}
-    if "planes" in opts:
-        g["x_m"] = [float(x) for x in opts["planes"]]
+    spec = get_model(model).spec
+    opts = dict(grid or {})
+    g = {key: opts[name] for name, key in _GRID_NAMES.items() if name in opts}
+    if "x_m" in g:
+        g["x_m"] = [float(x) for x in g["x_m"]]
     mapping = {"U_m_s": U_m_s, "seed": seed, "grid": g}
     if "hub_height" in opts:
         mapping["hub_height_m"] = opts["hub_height"]
-    if model == "mann":
-        from turbgen.runs.mann import MannRun
-
-        return MannRun.from_mapping({**mann_run_keys(preset, user=user), **mapping})
-    if model == "kaimal":
-        from turbgen.runs.kaimal import KaimalRun
-
-        return KaimalRun.from_mapping({**kaimal_run_keys(preset, U_m_s, user=user), **mapping})
-    raise ParameterError(f"model = {model!r} is not one of {', '.join(MODELS)}")
+    return spec.from_mapping({**run_keys(model, preset, U_m_s, user=user), **mapping})
 
 
 def store_name(model: str, preset: str, U_m_s: float, seed: int) -> str:
@@ -226,8 +205,8 @@ def make_plan(
 def check_plan_memory(runs) -> None:
     """Refuse the sweep (one line) when any run needs more memory than is available here, before any starts.
 
-    Each run's own estimate (Mann: stencil, OU state, spectra, plane buffers with one thread; Kaimal:
-    the smaller of in-memory and spilled spectrum), checked once per distinct grid and model.
+    Each run's smallest footprint (turbgen.runs.models: Mann with one thread, Kaimal with its spectrum
+    spilled to disk), checked once per distinct run apart from the seed.
     """
     from turbgen.resources import available_memory_bytes, format_bytes
 
@@ -236,24 +215,17 @@ def check_plan_memory(runs) -> None:
         return
     seen = set()
     for pr in runs:
-        key = (pr.model, pr.run.grid, getattr(pr.run, "pad_yz", None), getattr(pr.run.params, "evo_time_s", 0)
-               if pr.model == "mann" else None)  # fmt: skip
+        key = replace(pr.run, seed=0)  # the seed changes no memory
         if key in seen:
             continue
         seen.add(key)
-        if pr.model == "mann":
-            from turbgen.runs.mann import memory_estimate_bytes
-
-            need, hint = memory_estimate_bytes(pr.run, 1), "lower nt, ny/nz or pad-yz"
-        else:
-            from turbgen.runs.kaimal import memory_needed
-
-            need, hint = memory_needed(pr.run.grid, spill=True), "lower nt, ny/nz or the number of planes"
+        model = MODELS[pr.model]
+        need = model.least_memory_bytes(pr.run)
         if need > available:
             g = pr.run.grid
             raise ParameterError(
                 f"run {pr.name} ({g.nt} x {g.nx} x {g.ny} x {g.nz}) needs about {format_bytes(need)} of memory but only "
-                f"{format_bytes(available)} is available; {hint}"
+                f"{format_bytes(available)} is available; lower {model.memory_fields}"
             )
 
 
@@ -357,7 +329,7 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
     )
     kw.update({k: v for k, v in overrides.items() if v is not None})
     if kw["out"] is None:
-        raise ParameterError("no output directory: give 'out' in the sweep file or --out")
+        raise ParameterError("no output directory: give `out` in the sweep file or on the command line")
     if overrides.get("scheduler"):
         kw["workers"] = overrides.get("workers")
     return make_plan(**kw)

@@ -1,7 +1,8 @@
-"""Run configuration files (``--config run.toml|json``): read and validate against a JSON Schema.
+"""The one reader of TOML/JSON files: run files (``--config``), sweep files and preset files.
 
-The schemas live in turbgen/schemas/ (the repository's schemas/ links there), e.g.
-mann-run.schema.json. Any problem is a ParameterError naming the file and the offending key.
+Files are validated against a JSON Schema of turbgen/schemas/ (the repository's schemas/ links
+there), e.g. mann-run.schema.json. Any problem is a ParameterError naming the file and the
+offending key.
 """
 
 from __future__ import annotations
@@ -48,13 +49,27 @@ def _description(schema: dict, path) -> str | None:
     return found
 
 
-def read_config(path, schema_name: str) -> dict:
-    """The mapping in a TOML (``.toml``) or JSON file, validated against ``schema_name``."""
+def read_config(path, schema_name: str | None = None) -> dict:
+    """The mapping in a TOML (``.toml``) or JSON (``.json``) file, validated against ``schema_name`` if given.
+
+    Parameters
+    ----------
+    path : the file; any suffix other than .json is read as TOML.
+    schema_name : a schema of turbgen/schemas/ (e.g. "mann-run"), or None for a top-level table only.
+    """
     p = Path(path)
-    kind = "TOML" if p.suffix.lower() == ".toml" else "JSON"
+    kind = "JSON" if p.suffix.lower() == ".json" else "TOML"
     try:
-        text = p.read_text()
-        data = tomllib.loads(text) if kind == "TOML" else json.loads(text)
-    except (OSError, ValueError) as exc:
-        raise ParameterError(f"config {p}: cannot read it as {kind} ({' '.join(str(exc).split())})") from None
-    return check_mapping(data, schema_name, f"config {p}")
+        text = p.read_bytes()
+    except OSError as exc:
+        raise ParameterError(f"config {p}: cannot read it ({exc.strerror or exc})") from None
+    try:
+        data = json.loads(text) if kind == "JSON" else tomllib.loads(text.decode())
+    except (ValueError, UnicodeDecodeError) as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ParameterError(f"config {p}: not valid {kind} ({first})") from None
+    if schema_name is not None:
+        return check_mapping(data, schema_name, f"config {p}")
+    if not isinstance(data, dict):
+        raise ParameterError(f"config {p}: must hold a table/object at the top level")
+    return data

@@ -1,6 +1,6 @@
-"""Atmospheric-stability presets for both models (paper 000 Table 1 and Table 2).
+"""Atmospheric-stability presets for both models (Guo et al. 2022, Tables 1 and 2).
 
-Sources of every number (paper 000 = Guo et al., "Lidar-assisted control ... atmospheric stability"):
+Sources of every number (Guo et al. 2022, the 4D Mann space-time model under atmospheric stability):
 
 * Mann alpha*eps^(2/3), L, Gamma: Table 1 (after Pena 2019), at the reference speed U = 16 m/s.
   alpha*eps^(2/3) is NOT taken from the table: the paper scales it "such that the turbulence
@@ -10,7 +10,7 @@ Sources of every number (paper 000 = Guo et al., "Lidar-assisted control ... atm
   (the re-derived value is within a few % of it at 16 m/s).
 * Evolution time constant gamma = 600 / 400 / 200 s for unstable / neutral / stable (Sect. 2.4).
 * factor1 = 0.8 (Guo lifetime small-k slope -0.8) for the stable class: the 4D Mann turbulence
-  generator's stable preset (reference/mann-model.md, "the stable class needs b1 = -0.8");
+  generator's stable preset (its stable class needs the slope b1 = -0.8);
   1.0 (the Mann-like slope) otherwise.
 * Kaimal L1, L2, L3, a_yz, Lc and sigma_2/sigma_1, sigma_3/sigma_1: Table 1 (fitted to the Mann
   spectra and co-coherence, Eqs. 20-21). The neutral class is the IEC 61400-1 set (Sect. 2.4:
@@ -32,18 +32,17 @@ optional ``kaimal`` table (sigma_ratios, length_scales_m, a_yz, lc_m, a_x, b_x),
 
 from __future__ import annotations
 
-import json
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from turbgen.errors import ParameterError, check_choice, check_nonnegative, check_positive
-from turbgen.theory.mann_spectra import ae_for_sigma_u
+from turbgen.spec.config import read_config
+from turbgen.spec.mann import MannRun
 from turbgen.theory.kaimal import IEC_IREF, IEC_LENGTH_FACTORS, IEC_SIGMA_RATIOS, iec_sigma1_m_s
 from turbgen.theory.params import KaimalParams, MannParams, check_wind_speed
 
-REFERENCE_U_M_S = 16.0  # paper 000 Table 1 caption: "with the mean wind speed of 16 m/s"
+REFERENCE_U_M_S = 16.0  # Guo et al. 2022, Table 1 caption: "with the mean wind speed of 16 m/s"
 
 
 @dataclass(frozen=True)
@@ -109,15 +108,15 @@ class KaimalSettings:
     b_x: float
 
 
-# paper 000 Table 2: (a_x, b_x [1/m]) of Eq. 18 per class, for gamma = 200, 400, 600 s
+# Guo et al. 2022, Table 2: (a_x, b_x [1/m]) of Eq. 18 per class, for gamma = 200, 400, 600 s
 _TABLE2 = {
     "unstable": {200.0: (8.2, 8.52e-5), 400.0: (5.1, 8.02e-5), 600.0: (4.1, 7.67e-5)},
     "neutral": {200.0: (2.9, 1.59e-4), 400.0: (1.8, 1.49e-4), 600.0: (1.4, 1.42e-4)},
     "stable": {200.0: (1.6, 9.18e-4), 400.0: (1.0, 8.59e-4), 600.0: (0.8, 8.27e-4)},
 }
-_EVO_S = {"unstable": 600.0, "neutral": 400.0, "stable": 200.0}  # paper 000 Sect. 2.4
+_EVO_S = {"unstable": 600.0, "neutral": 400.0, "stable": 200.0}  # Guo et al. 2022, Sect. 2.4
 _IEC_LAMBDA1_M = 42.0  # IEC 61400-1 Lambda1 for hub heights >= 60 m; Table 1 neutral L1 = 8.1 * 42 = 340.2 m
-_SOURCE = "paper 000 (Guo et al.) Table 1 ({cls}, U = 16 m/s), gamma from Sect. 2.4, a_x/b_x from Table 2"
+_SOURCE = "Guo et al. 2022, Table 1 ({cls}, U = 16 m/s), gamma from Sect. 2.4, a_x/b_x from Table 2"
 
 
 def _builtin() -> dict[str, StabilityPreset]:
@@ -196,26 +195,6 @@ def preset_from_mapping(name: str, data: Mapping) -> StabilityPreset:
     return StabilityPreset(name, mann, kaimal, d.get("turb_class", "A"), str(d.get("source", "user preset")))
 
 
-def read_mapping_file(path: str | Path) -> dict:
-    """Parse a TOML (.toml) or JSON file into a dict; ParameterError (one line) when unreadable."""
-    p = Path(path)
-    try:
-        text = p.read_bytes()
-    except OSError as exc:
-        raise ParameterError(f"cannot read {p}: {exc.strerror or exc}") from None
-    try:
-        if p.suffix.lower() == ".json":
-            data = json.loads(text)
-        else:
-            data = tomllib.loads(text.decode())
-    except (ValueError, UnicodeDecodeError) as exc:
-        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ParameterError(f"{p} is not valid {'JSON' if p.suffix.lower() == '.json' else 'TOML'}: {first}") from None
-    if not isinstance(data, dict):
-        raise ParameterError(f"{p} must hold a table/object at the top level")
-    return data
-
-
 def presets_from_mapping(data: Mapping) -> dict[str, StabilityPreset]:
     """``{"presets": {NAME: {...}}}`` or ``{NAME: {...}}`` -> {name: StabilityPreset}."""
     table = data.get("presets", data) if isinstance(data, Mapping) else data
@@ -226,7 +205,7 @@ def presets_from_mapping(data: Mapping) -> dict[str, StabilityPreset]:
 
 def load_presets(path: str | Path) -> dict[str, StabilityPreset]:
     """Read user presets from a TOML or JSON file."""
-    return presets_from_mapping(read_mapping_file(path))
+    return presets_from_mapping(read_config(path))
 
 
 def get_preset(name: str, user: Mapping[str, StabilityPreset] | None = None) -> StabilityPreset:
@@ -257,25 +236,15 @@ def mann_params_for(
     """MannParams of ``preset`` at mean speed U [m/s]; explicit (non-None) arguments override the preset.
 
     Unless ``ae`` is given, alpha*eps^(2/3) is re-derived so that the model sigma_u equals the
-    IEC NTM sigma_1 = Iref (0.75 U + 5.6) of the preset's class (paper 000 Sect. 2.4).
+    IEC NTM sigma_1 = Iref (0.75 U + 5.6) of the preset's class (Guo et al. 2022, Sect. 2.4): the run
+    mapping of :func:`mann_run_keys` resolved by MannRun.from_mapping, as ``turbgen mann --preset``
+    and the sweep do.
     """
-    p = _resolve(preset, user)
-    if p.mann is None:
-        raise ParameterError(f"preset {p.name!r} has no Mann parameters")
-    m = p.mann
-    base = MannParams(
-        ae=1.0,
-        length_scale_m=m.length_scale_m if length_scale_m is None else length_scale_m,
-        gamma=m.gamma if gamma is None else gamma,
-        lifetime=m.lifetime if lifetime is None else lifetime,
-        factor1=m.factor1 if factor1 is None else factor1,
-        evo_time_s=m.evo_time_s if evo_time_s is None else evo_time_s,
-    )
-    if factor2 is not None:
-        base = replace(base, factor2=factor2)
-    if ae is None:
-        ae = ae_for_sigma_u(iec_sigma1_m_s(check_wind_speed(U_m_s), p.turb_class), base)
-    return base.with_ae(ae)
+    given = {"ae": ae, "length_scale_m": length_scale_m, "gamma": gamma, "evo_time_s": evo_time_s,
+             "factor1": factor1, "lifetime": lifetime, "factor2": factor2}
+    mapping = {**mann_run_keys(preset, user=user), "U_m_s": U_m_s}
+    mapping.update({key: v for key, v in given.items() if v is not None})
+    return MannRun.from_mapping(mapping).params
 
 
 def kaimal_settings_for(
@@ -312,7 +281,7 @@ def kaimal_settings_for(
 
 
 def mann_run_keys(preset: str | StabilityPreset, *, user: Mapping[str, StabilityPreset] | None = None) -> dict:
-    """The keys of a Mann run mapping (turbgen.runs.mann.MannRun.from_mapping) that ``preset`` sets.
+    """The keys of a Mann run mapping (turbgen.spec.mann.MannRun.from_mapping) that ``preset`` sets.
 
     length_scale_m, gamma, evo_time_s, factor1, lifetime and turb_class: the run derives ae from
     the model variance for the class's sigma_1 at its U (the same ae as :func:`mann_params_for`).
@@ -339,7 +308,7 @@ def kaimal_run_keys(
     user: Mapping[str, StabilityPreset] | None = None,
     turb_class: str | None = None,
 ) -> dict:
-    """The keys of a Kaimal run mapping (turbgen.runs.kaimal.KaimalRun.from_mapping) that ``preset`` sets.
+    """The keys of a Kaimal run mapping (turbgen.spec.kaimal.KaimalRun.from_mapping) that ``preset`` sets.
 
     sigma_m_s, length_scales_m, a_yz, lc_m, long_model, a_x, b_x; ``turb_class`` (default: the
     preset's) sets sigma_1. Used by ``turbgen kaimal --preset`` and by the sweep, so both build
@@ -360,6 +329,17 @@ def kaimal_run_keys(
     }
 
 
+def run_keys(model: str, preset: str | StabilityPreset, U_m_s: float, *,
+             user: Mapping[str, StabilityPreset] | None = None, turb_class: str | None = None) -> dict:
+    """The run-mapping keys ``preset`` sets for ``model`` ("mann" or "kaimal") at U [m/s]:
+    :func:`mann_run_keys` or :func:`kaimal_run_keys` (``turb_class`` overrides a Kaimal preset's class)."""
+    if model == "mann":
+        return mann_run_keys(preset, user=user)
+    if model == "kaimal":
+        return kaimal_run_keys(preset, U_m_s, user=user, turb_class=turb_class)
+    raise ParameterError(f"model = {model!r} has no presets")
+
+
 __all__ = [
     "BUILTIN_PRESETS",
     "REFERENCE_U_M_S",
@@ -374,6 +354,6 @@ __all__ = [
     "load_presets",
     "mann_params_for",
     "preset_from_mapping",
+    "run_keys",
     "presets_from_mapping",
-    "read_mapping_file",
-]
+    ]

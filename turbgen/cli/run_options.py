@@ -1,0 +1,82 @@
+"""One rule for turning `turbgen mann|kaimal` options into a run mapping: run file < preset < typed options.
+
+Missing keys take the defaults of turbgen.spec.defaults (applied by the model's from_mapping, shown in
+the options' help), so no option carries a default of its own.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import click
+
+from turbgen.cli.options import parse_floats, parse_range
+from turbgen.spec.config import read_config
+
+# option name -> key of the run mapping's grid table
+GRID_OPTIONS = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}
+
+
+def _list(parser, name):
+    return lambda ctx, param, value: None if value is None else parser(value, name)
+
+
+def grid_options(defaults: Mapping):
+    """Decorator adding --planes, --gates, --nt, --dt, --ny, --nz, --dy, --dz, their help showing ``defaults``
+    (the model's grid table of turbgen.spec.defaults)."""
+    opts = [
+        click.option("--planes", callback=_list(parse_floats, "--planes"),
+                     help="Plane positions x [m upstream], e.g. 0,50,100."),
+        click.option("--gates", callback=_list(parse_range, "--gates"),
+                     help="Range gates start:stop:step [m]; planes = rotor 0 + gates (default 50:170:13.3)."),
+        click.option("--nt", type=int, help=f"Time samples (default {defaults['nt']})."),
+        click.option("--dt", type=float, help=f"Time step [s] (default {defaults['dt_s']:g}; dx = U dt)."),
+        click.option("--ny", type=int, help=f"Lateral points (default {defaults['ny']})."),
+        click.option("--nz", type=int, help=f"Vertical points (default {defaults['nz']})."),
+        click.option("--dy", type=float, help=f"Lateral spacing [m] (default {defaults['dy_m']:g})."),
+        click.option("--dz", type=float, help="Vertical spacing [m] (default: --dy)."),
+    ]
+
+    def add(f):
+        for opt in reversed(opts):
+            f = opt(f)
+        return f
+
+    return add
+
+
+def typed(opt: Mapping, names: Mapping[str, str]) -> dict:
+    """Run-mapping key -> value of the options typed on the command line (``names``: option -> key).
+
+    An option is typed when its value is not None (flags: when set); 'frozen' stands for None.
+    """
+    return {key: None if opt[name] == "frozen" else opt[name] for name, key in names.items()
+            if opt[name] is not None and opt[name] is not False}
+
+
+def run_mapping(opt: Mapping, schema: str, keys: Mapping[str, str], preset_keys=None,
+                replaces: Mapping[str, tuple] | None = None, x_m=None) -> dict:
+    """The run mapping of a command: the ``--config`` file, then the preset's keys, then typed options.
+
+    Parameters
+    ----------
+    opt : the command's option values; ``opt["config"]`` is the run file (checked against ``schema``).
+    keys : option name -> run-mapping key of the model's options.
+    preset_keys : callable(mapping so far, typed keys) -> the preset's run keys, or None without --preset.
+    replaces : typed key -> keys it removes from the file and the preset (e.g. a typed energy level
+        replaces any other): one level, one source.
+    x_m : plane positions [m] from --planes / --gates, or None.
+    """
+    mapping = read_config(opt["config"], schema) if opt["config"] else {}
+    grid = dict(mapping.pop("grid", {}))
+    given = typed(opt, keys)
+    layers = [mapping, preset_keys(mapping, given) if preset_keys else {}]
+    for key in given:
+        for layer in layers:
+            for gone in (replaces or {}).get(key, ()):
+                layer.pop(gone, None)
+    merged = {**layers[0], **layers[1], **given}
+    grid.update(typed(opt, GRID_OPTIONS))
+    if x_m is not None:
+        grid["x_m"] = x_m
+    return {**merged, "grid": grid}

@@ -1,0 +1,111 @@
+"""The model registry: model name -> what a run is (spec class), how it runs, what memory it needs.
+
+Looked up once by the sweep (planning and execution) and the service instead of switching on the
+model's name. The registry lives here, in runs/, because its entries hold run functions; the
+validator (a layer above) keeps its own name -> expected-statistics table keyed by the same names
+(turbgen.validate), so imports stay one-way (theory <- spec <- runs <- validate).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from turbgen.errors import ParameterError
+from turbgen.spec.kaimal import KaimalRun
+from turbgen.spec.mann import MannRun
+
+
+@dataclass(frozen=True)
+class Model:
+    """One model of the registry.
+
+    name : "mann" | "kaimal" (the store's ``model`` attribute).
+    spec : the run class (from_mapping, to_attrs, from_attrs).
+    run : ``run(run, out, *, overwrite, chunk_t, threads, memory_bytes, shared)`` -> summary dict
+        (``memory_bytes``: budget [bytes] or None; ``shared``: the seed-independent part, or None).
+    memory_bytes : ``memory_bytes(run, threads)`` -> peak bytes of a run in memory.
+    least_memory_bytes : ``least_memory_bytes(run)`` -> the smallest footprint a run can be made with [bytes].
+    memory_fields : the run fields that lower the memory (for messages).
+    shared_part : ``shared_part(run, threads, memory_bytes)`` -> the function building the part that runs
+        differing only in the seed can share (the Mann stencil), or None when the run does not use one.
+    out_of_core : a memory budget bounds the run's memory (a run over it is made out of core within it).
+    """
+
+    name: str
+    spec: type
+    run: Callable[..., dict]
+    memory_bytes: Callable[[object, int], int]
+    least_memory_bytes: Callable[[object], int]
+    memory_fields: str
+    shared_part: Callable[[object, int | None, int | None], Callable | None]
+    out_of_core: bool = False
+
+
+def _mann_out_of_core(run: MannRun, threads: int | None, memory_bytes: int | None) -> bool:
+    """Whether a Mann run exceeds its memory budget (then turbgen.runs.mann_outofcore makes it)."""
+    if memory_bytes is None:
+        return False
+    from turbgen.runs.mann import memory_estimate_bytes
+    from turbgen.runs.mann_outofcore import BASE_BYTES
+
+    return memory_estimate_bytes(run, threads or os.cpu_count() or 1) + BASE_BYTES > memory_bytes
+
+
+def _run_mann(run: MannRun, out, *, overwrite=False, chunk_t=None, threads=None, memory_bytes=None, shared=None):
+    if _mann_out_of_core(run, threads, memory_bytes):
+        from turbgen.runs.mann_outofcore import run_mann_outofcore
+
+        return run_mann_outofcore(run, out, memory_bytes=memory_bytes, overwrite=overwrite, chunk_t=chunk_t,
+                                  threads=threads)
+    from turbgen.runs.mann import run_mann
+
+    return run_mann(run, out, overwrite=overwrite, chunk_t=chunk_t, stencil=shared, threads=threads)
+
+
+def _mann_memory(run: MannRun, threads: int) -> int:
+    from turbgen.runs.mann import memory_estimate_bytes
+
+    return memory_estimate_bytes(run, threads)
+
+
+def _mann_shared(run: MannRun, threads: int | None, memory_bytes: int | None):
+    if _mann_out_of_core(run, threads, memory_bytes):
+        return None
+    from turbgen.runs.mann import build_mann_stencil
+
+    return build_mann_stencil
+
+
+def _run_kaimal(run: KaimalRun, out, *, overwrite=False, chunk_t=None, threads=None, memory_bytes=None, shared=None):
+    from turbgen.runs.kaimal import run_kaimal
+
+    return run_kaimal(run, out, overwrite=overwrite, chunk_t=chunk_t, threads=threads)
+
+
+def _kaimal_memory(run: KaimalRun, threads: int) -> int:
+    from turbgen.runs.kaimal import memory_needed
+
+    return memory_needed(run.grid)
+
+
+def _kaimal_least_memory(run: KaimalRun) -> int:
+    from turbgen.runs.kaimal import memory_needed
+
+    return min(memory_needed(run.grid), memory_needed(run.grid, spill=True))  # in memory or spilled to disk
+
+
+MODELS: dict[str, Model] = {
+    "mann": Model("mann", MannRun, _run_mann, _mann_memory, lambda run: _mann_memory(run, 1),
+                  "`nt`, `ny`/`nz` or `pad_yz`", _mann_shared, out_of_core=True),
+    "kaimal": Model("kaimal", KaimalRun, _run_kaimal, _kaimal_memory, _kaimal_least_memory,
+                    "`nt`, `ny`/`nz` or the number of planes", lambda run, threads, memory_bytes: None),
+}
+
+
+def get_model(name: str) -> Model:
+    """The registry entry of ``name``; ParameterError listing the models otherwise."""
+    if name not in MODELS:
+        raise ParameterError(f"model = {name!r} is not one of {', '.join(MODELS)}")
+    return MODELS[name]

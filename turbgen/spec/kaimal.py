@@ -1,0 +1,215 @@
+"""What a Kaimal 4D run is: IEC spectra + yz coherence, longitudinal coherence, grid, speed and seed.
+
+``KaimalRun.from_mapping`` reads a run file / request / preset mapping (schemas/kaimal-run.schema.json)
+and applies turbgen.spec.defaults; ``to_attrs`` / ``from_attrs`` write and read the store attributes.
+turbgen.runs.kaimal generates the field.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import partial
+
+from turbgen.errors import ParameterError, check_choice
+from turbgen.grid import Grid
+from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X, KAIMAL_DEFAULTS, KAIMAL_GRID, grid_from_mapping
+from turbgen.spec.naming import run_digest
+from turbgen.theory import ranges
+from turbgen.theory.coherence_models import LONGITUDINAL_MODELS, simley_pao_parameters
+from turbgen.theory.kaimal import iec_kaimal_params
+from turbgen.theory.params import KaimalParams, check_wind_speed
+
+LONG_COMPONENTS = ("u", "uvw")
+VW_COHERENCE = ("white", "exp")
+UNITS = {
+    "U_m_s": "m s-1", "turb_class": "", "hub_height_m": "m", "sigma_m_s": "m s-1", "length_scales_m": "m",
+    "a_yz": "1", "lc_m": "m", "long_model": "", "a_x": "1", "b_x": "m-1", "long_components": "",
+    "vw_coherence": "", "rescale": "", "seed": "1", "effective_long_parameters": "a_x: 1, b_x: m-1",
+    "resolved_band_hz": "Hz", "expected_sigma_m_s": "m s-1", "rescale_factors": "1", "freq_chunk": "1",
+}  # fmt: skip
+# the store's 'derived' attribute (worked out from the inputs; older stores kept them among the parameters)
+DERIVED_KEYS = ("effective_long_parameters", "resolved_band_hz", "expected_sigma_m_s", "rescale_factors",
+                "freq_chunk")  # fmt: skip
+_INPUT_KEYS = set(UNITS) - set(DERIVED_KEYS)
+
+
+@dataclass(frozen=True)
+class KaimalRun:
+    """A Kaimal 4D field: spectra + yz coherence (``kaimal``), grid, speed, seed, longitudinal model.
+
+    long_model : "exp" (Guo et al. 2022, Eq. 18 with a_x [-], b_x [1/m]; defaults Table 2 neutral,
+        gamma = 400 s), "simley-pao" (Eq. 18 with the Simley and Pao 2015 parameters) or "kristensen"
+        (Kristensen 1979).
+    long_components : "u" (evoTurb) or "uvw": components given the longitudinal coherence.
+    vw_coherence : "white" (IEC / TurbSim IECKAI: v, w incoherent in yz) or "exp" (extension: the u
+        exponential coherence with the same a_yz, Lc).
+    rescale : scale each component's spectrum so its expected variance is the nominal sigma^2
+        (default: the spectrum follows Eq. 11 and the variance is its resolved-band integral).
+    turb_class : IEC class the sigmas came from (recorded only; None for explicit sigmas).
+    """
+
+    kaimal: KaimalParams
+    grid: Grid
+    U_m_s: float
+    seed: int
+    hub_height_m: float = 90.0
+    long_model: str = "exp"
+    a_x: float | None = None
+    b_x: float | None = None
+    long_components: str = "u"
+    rescale: bool = False
+    vw_coherence: str = "white"
+    turb_class: str | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "U_m_s", check_wind_speed(self.U_m_s))
+        for key in ("seed", "hub_height_m"):  # ranges: turbgen.theory.ranges
+            object.__setattr__(self, key, ranges.check(key, getattr(self, key)))
+        ranges.check_grid(self.grid)
+        check_choice("long_model", self.long_model, tuple(LONGITUDINAL_MODELS))
+        check_choice("long_components", self.long_components, LONG_COMPONENTS)
+        check_choice("vw_coherence", self.vw_coherence, VW_COHERENCE)
+        if self.long_model == "exp":
+            a_x = DEFAULT_A_X if self.a_x is None else ranges.check("a_x", self.a_x)
+            b_x = DEFAULT_B_X if self.b_x is None else ranges.check("b_x", self.b_x)
+            object.__setattr__(self, "a_x", a_x)
+            object.__setattr__(self, "b_x", b_x)
+        elif self.a_x is not None or self.b_x is not None:
+            raise ParameterError(f"a_x / b_x apply to long_model exp only, not {self.long_model!r}")
+        object.__setattr__(self, "rescale", bool(self.rescale))
+
+    @property
+    def model(self) -> str:
+        """The model name ("kaimal"), the key of turbgen.runs.models.MODELS."""
+        return "kaimal"
+
+    @property
+    def sigma_total_m_s(self) -> float:
+        """sqrt(sigma_u^2 + sigma_v^2 + sigma_w^2) [m/s] (Simley-Pao and Kristensen models)."""
+        return math.sqrt(sum(s * s for s in self.kaimal.sigma_m_s))
+
+    def long_coherence(self):
+        """gamma_x(dx_m, f_hz), un-squared, of the chosen longitudinal model."""
+        if self.long_model == "exp":
+            return partial(LONGITUDINAL_MODELS["exp"], U_m_s=self.U_m_s, a_x=self.a_x, b_x=self.b_x)
+        return partial(LONGITUDINAL_MODELS[self.long_model], U_m_s=self.U_m_s,
+                       sigma_total_m_s=self.sigma_total_m_s, length_u_m=self.kaimal.length_scales_m[0])
+
+    def effective_long_parameters(self) -> dict:
+        """The a_x, b_x actually used (Simley-Pao derives them; Kristensen has none)."""
+        if self.long_model == "simley-pao":
+            a_x, b_x = simley_pao_parameters(self.sigma_total_m_s, self.U_m_s, self.kaimal.length_scales_m[0])
+            return {"a_x": a_x, "b_x": b_x}
+        if self.long_model == "exp":
+            return {"a_x": self.a_x, "b_x": self.b_x}
+        return {}
+
+    def default_store_name(self, preset: str | None = None, preset_keys: Mapping | None = None) -> str:
+        """A readable store name, e.g. kaimal_U16_A_s1.zarr or kaimal_U16_stable_s1.zarr (``preset``,
+        whose run keys ``preset_keys`` are, from turbgen.spec.presets.kaimal_run_keys).
+
+        Runs that differ from the named ones (U, class or preset, seed) in anything the name does not
+        show (sigmas, lengths, coherence models, grid, ...) get ``_p<8 hex digits>`` of everything that
+        determines the field appended, so two different fields never share a default name.
+        """
+        label = preset or self.turb_class or "sigma"
+        base = f"kaimal_U{self.U_m_s:g}_{label}_s{self.seed}"
+        named = {"U_m_s": self.U_m_s, "seed": self.seed}
+        if preset is not None:
+            named.update(preset_keys or {})
+        if self.turb_class:
+            named["turb_class"] = self.turb_class
+        reference = KaimalRun.from_mapping(named) if (preset is not None or self.turb_class) else None
+        if reference is not None and reference.parameters() == self.parameters() and reference.grid == self.grid:
+            return base + ".zarr"
+        return f"{base}_p{run_digest(self.parameters(), self.grid)}.zarr"
+
+    def parameters(self) -> dict:
+        """Every input parameter (JSON values), the keys :meth:`from_mapping` reads back."""
+        k = self.kaimal
+        return {
+            "U_m_s": self.U_m_s,
+            "turb_class": self.turb_class or "",
+            "hub_height_m": self.hub_height_m,
+            "sigma_m_s": list(k.sigma_m_s),
+            "length_scales_m": list(k.length_scales_m),
+            "a_yz": k.a_yz,
+            "lc_m": k.lc_m,
+            "long_model": self.long_model,
+            "a_x": self.a_x,
+            "b_x": self.b_x,
+            "long_components": self.long_components,
+            "vw_coherence": self.vw_coherence,
+            "rescale": self.rescale,
+            "seed": self.seed,
+        }
+
+    def to_attrs(self, derived: Mapping | None = None) -> dict:
+        """model / parameters / derived / units / seed / U_m_s / hub_height_m attributes of the store.
+
+        ``derived``: values the generator worked out (resolved_band_hz [Hz], expected_sigma_m_s [m/s],
+        rescale_factors, freq_chunk; see turbgen.runs.kaimal.store_attrs), recorded next to
+        effective_long_parameters in the ``derived`` attribute.
+        """
+        params = {key: v for key, v in self.parameters().items() if v is not None}
+        out = {"effective_long_parameters": self.effective_long_parameters(), **(derived or {})}
+        return {
+            "model": "kaimal",
+            "parameters": params,
+            "derived": out,
+            "units": {key: UNITS[key] for key in (*params, *out)},
+            "seed": self.seed,
+            "U_m_s": self.U_m_s,
+            "hub_height_m": self.hub_height_m,
+        }
+
+    @classmethod
+    def from_attrs(cls, attrs: Mapping) -> "KaimalRun":
+        """The run of a store from its ``parameters`` and ``grid`` attributes (derived values, also
+        those older stores kept among the parameters, are not inputs and are ignored)."""
+        try:
+            inputs = {k: v for k, v in attrs["parameters"].items() if k not in DERIVED_KEYS}
+            return cls.from_mapping({**inputs, "grid": attrs["grid"]})
+        except (KeyError, TypeError, AttributeError) as exc:
+            raise ParameterError(f"store parameters lack the Kaimal run ({exc}); not a turbgen Kaimal store") from None
+
+    @classmethod
+    def from_mapping(cls, d: Mapping) -> "KaimalRun":
+        """A run from a (schema-valid) mapping: the keys of :meth:`parameters` plus ``grid``.
+
+        Missing keys take turbgen.spec.defaults; ``turb_class`` + ``hub_height_m`` give the IEC
+        sigmas and length scales unless ``sigma_m_s`` / ``length_scales_m`` are given.
+        """
+        unknown = set(d) - _INPUT_KEYS - {"grid"}
+        if unknown:
+            raise ParameterError(f"kaimal config: unknown keys {sorted(unknown)}")
+        v = {**KAIMAL_DEFAULTS, **{k: val for k, val in d.items() if k != "grid"}}
+        grid = grid_from_mapping(d.get("grid"), KAIMAL_GRID)
+        explicit = d.get("sigma_m_s") is not None
+        kaimal = kaimal_params(v["U_m_s"], v["turb_class"] or "A", v["hub_height_m"], d.get("sigma_m_s"),
+                               d.get("length_scales_m"), d.get("a_yz"), d.get("lc_m"))
+        return cls(kaimal=kaimal, grid=grid, U_m_s=v["U_m_s"], seed=v["seed"], hub_height_m=v["hub_height_m"],
+                   long_model=v["long_model"], a_x=d.get("a_x"), b_x=d.get("b_x"),
+                   long_components=v["long_components"], rescale=v["rescale"], vw_coherence=v["vw_coherence"],
+                   turb_class=d.get("turb_class") or (None if explicit else KAIMAL_DEFAULTS["turb_class"]))
+
+
+def kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float = 90.0, sigma_m_s=None,
+                  length_scales_m=None, a_yz: float | None = None, lc_m: float | None = None) -> KaimalParams:
+    """IEC Kaimal parameters of a class and hub height, with any of them given explicitly instead.
+
+    Parameters
+    ----------
+    U_m_s : hub-height mean wind speed [m/s]; turb_class : IEC class; hub_height_m : hub height [m].
+    sigma_m_s : (sigma_u, sigma_v, sigma_w) [m/s]; length_scales_m : Kaimal L1, L2, L3 [m];
+    a_yz : yz coherence decay [-]; lc_m : coherence scale Lc [m] (None: the IEC value).
+    """
+    iec = iec_kaimal_params(U_m_s, turb_class, hub_height_m)
+    return KaimalParams(
+        sigma_m_s=tuple(sigma_m_s) if sigma_m_s is not None else iec.sigma_m_s,
+        length_scales_m=tuple(length_scales_m) if length_scales_m is not None else iec.length_scales_m,
+        a_yz=iec.a_yz if a_yz is None else a_yz,
+        lc_m=iec.lc_m if lc_m is None else lc_m,
+    )

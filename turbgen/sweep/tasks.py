@@ -1,0 +1,105 @@
+"""The worker side of a sweep: one task per run (generate, checksum, validate, lidar) and the pool size."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+
+from turbgen.resources import available_memory_bytes
+from turbgen.runs.models import MODELS
+from turbgen.sweep.manifest import store_checksum
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """What a worker needs for one run: generate (unless only checksumming an existing store)."""
+
+    model: str
+    run: object
+    path: str
+    overwrite: bool
+    chunk_t: int | None
+    validate: bool
+    generate: bool = True
+    threads: int | None = None  # threads of one run (None: os.cpu_count(); never changes the field)
+    memory_bytes: int | None = None  # memory budget of one run: a Mann run that does not fit goes out of core
+    lidar: str | None = None  # lidar preset or file to run on the field (turbgen lidar)
+
+
+def one_line(exc: BaseException) -> str:
+    """'ExceptionType: first line of its message' (for the manifest)."""
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
+
+
+def validate_store(path: str, threads: int | None = None) -> dict:
+    """Summary of turbgen.validate on one store: passed, failed metrics, worst |z| vs critical z per metric."""
+    from turbgen.validate import validate
+
+    rep = validate(path, workers=threads)
+    return {
+        "passed": rep.passed,
+        "failed": rep.failed,
+        "max_abs_z": {m.name: [round(m.max_abs_z, 3), round(m.z_crit, 3)] for m in rep.metrics},
+        "seconds": round(sum(rep.seconds.values()), 3),
+    }
+
+
+def lidar_store(path: str, lidar: str) -> dict:
+    """Summary of the virtual lidar on one store: verdict, simulated and theoretical k_0.5 and cut-off."""
+    from turbgen.lidar.report import lidar_report
+    from turbgen.store import open_store
+
+    d = lidar_report(open_store(path), lidar).to_dict()
+    return {"passed": d["verdict"]["passed"], "simulated": d["simulated"], "theory": d["theory"],
+            "max_abs_z": d["verdict"]["max_abs_z"], "z_crit": d["verdict"]["z_crit"]}
+
+
+def execute_run(task: RunTask, shared=None) -> dict:
+    """Worker side: generate one field, checksum it, optionally validate it. Never raises.
+
+    ``shared``: the part of the run shared between seeds (a Mann stencil), or None.
+    """
+    t0 = time.perf_counter()
+    out: dict = {"status": "failed"}
+    try:
+        if task.generate:
+            summary = MODELS[task.model].run(task.run, task.path, overwrite=task.overwrite, chunk_t=task.chunk_t,
+                                             threads=task.threads, memory_bytes=task.memory_bytes, shared=shared)
+            sig = [summary.get(f"sigma_{c}") for c in "uvw"]
+            out["sigma_m_s"] = [None if s is None else float(s) for s in sig]
+        out["checksum"] = store_checksum(task.path)
+        if task.validate:
+            try:
+                out["validation"] = validate_store(task.path, task.threads)
+            except Exception as exc:  # a validator crash is recorded, the field itself is fine
+                out["validation"] = {"passed": False, "error": one_line(exc)}
+        if task.lidar:
+            try:
+                out["lidar"] = lidar_store(task.path, task.lidar)
+            except Exception as exc:  # recorded like a validator crash: the field itself is fine
+                out["lidar"] = {"passed": False, "error": one_line(exc)}
+        out["status"] = "complete"
+    except Exception as exc:
+        out["error"] = one_line(exc)
+    out["duration_s"] = round(time.perf_counter() - t0, 3)
+    return out
+
+
+def task_bytes(task: RunTask) -> int:
+    """Peak memory of one run with one thread (its generator's own estimate; a Mann stencil included),
+    at most its memory budget when the run can be made out of core within one."""
+    model = MODELS[task.model]
+    need = model.memory_bytes(task.run, 1)
+    return need if task.memory_bytes is None or not model.out_of_core else min(need, task.memory_bytes)
+
+
+def default_workers(tasks) -> int:
+    """LocalCluster size: one worker per core, at most one per run, and as many as fit in 80 % of the memory."""
+    tasks = list(tasks)
+    n = min(os.cpu_count() or 1, len(tasks))
+    avail = available_memory_bytes()
+    if avail and tasks:
+        n = min(n, int(0.8 * avail) // max(task_bytes(t) for t in tasks))
+    return max(1, n)
