@@ -250,7 +250,7 @@ def test_hdf5_round_trip_and_matlab_order(store, tmp_path):
 
 def test_below_ground_refused_or_dropped(tmp_path):
     path, data = make_store(tmp_path / "low.zarr", hub_height_m=9.0)  # lowest row at 9 - 9 = 0 m
-    with pytest.raises(ParameterError, match="ground.*--drop-below-ground"):
+    with pytest.raises(ParameterError, match="ground.*`drop_below_ground`"):
         export_store(path, "bts", tmp_path / "low.bts")
     assert not (tmp_path / "low.bts").exists()
     export_store(path, "bts", tmp_path / "low.bts", ExportRequest(drop_below_ground=True))

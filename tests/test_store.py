@@ -180,7 +180,7 @@ def test_create_store_checks_attrs(tmp_path, change, match):
 def test_existing_store_refused_before_anything_is_written(tmp_path):
     path = write_store(tmp_path / "f.zarr", field(seed=1))
     before = sorted(str(p) for p in path.rglob("*"))
-    with pytest.raises(StoreError, match="already exists; use --overwrite"):
+    with pytest.raises(StoreError, match="already exists; use `overwrite`"):
         create_store(path, GRID, ATTRS)
     assert siblings(path) == ["f.zarr"]
     assert sorted(str(p) for p in path.rglob("*")) == before

@@ -43,7 +43,7 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
         store = open_store(store)
     need = export_bytes(fmt, store.grid)
     require_disk(out, need, f"the {fmt} export of {store.path.name}",
-                 "free space there or choose another --out")
+                 "free space there or choose another `out`")
     return EXPORTERS[fmt](store, out, request)
 
 
@@ -64,13 +64,13 @@ def _check_applicable(fmt: str, request: ExportRequest) -> None:
     """Refuse options that the format would silently ignore."""
     given = []
     if request.tower and fmt != "bts":
-        given.append("--tower (bts only)")
+        given.append("`tower` (bts only)")
     if not request.periodic and fmt not in ("bts", "wnd", "evo"):
-        given.append("--no-periodic (bts, wnd, evo only; HAWC boxes are always periodic)")
+        given.append("`no_periodic` (bts, wnd, evo only; HAWC boxes are always periodic)")
     if fmt in WHOLE_FIELD:
         if request.plane is not None:
-            given.append("--plane")
+            given.append("`plane`")
         if request.hub_height_m is not None or request.drop_below_ground or request.shear_exponent != DEFAULT_SHEAR_EXPONENT:
-            given.append("--hub-height/--shear-exponent/--drop-below-ground (no mean profile is added)")
+            given.append("`hub_height`/`shear_exponent`/`drop_below_ground` (no mean profile is added)")
     if given:
-        raise ParameterError(f"--format {fmt} does not use {'; '.join(given)}")
+        raise ParameterError(f"`format` {fmt} does not use {'; '.join(given)}")

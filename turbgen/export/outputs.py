@@ -42,7 +42,7 @@ class OutputSet:
             if p.is_dir():
                 raise ParameterError(f"output {str(p)!r} is a directory")
             if p.exists() and not overwrite:
-                raise ParameterError(f"output {str(p)!r} exists; pass --overwrite to replace it")
+                raise ParameterError(f"output {str(p)!r} exists; pass `overwrite` to replace it")
             if not os.access(p.parent, os.W_OK):
                 raise ParameterError(f"output directory {str(p.parent)!r} is not writable")
         for parent in {p.parent for p in self.paths}:
@@ -50,7 +50,7 @@ class OutputSet:
         if need_bytes is not None:
             names = ", ".join(p.name for p in self.paths)
             require_disk(self.paths[0], need_bytes, f"the export ({names})",
-                         "free space there or choose another --out")
+                         "free space there or choose another `out`")
         token = f"{os.getpid()}-{secrets.token_hex(4)}"
         self._temps = {p: p.with_name(f".{p.name}{TEMP_MARK}{token}") for p in self.paths}
         self._signals = exit_on_signals()

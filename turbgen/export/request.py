@@ -44,7 +44,7 @@ class ExportRequest:
         xs = fs.grid.x_m
         if self.plane is None:
             if 0.0 not in xs:
-                raise ParameterError(f"store has no rotor plane (x = 0 m) among x = {list(xs)}; choose one with --plane 0..{len(xs) - 1}")
+                raise ParameterError(f"store has no rotor plane (x = 0 m) among x = {list(xs)}; choose one with `plane` 0..{len(xs) - 1}")
             return xs.index(0.0)
         if not 0 <= self.plane < len(xs):
             raise ParameterError(f"plane = {self.plane} is outside the allowed range [0, {len(xs) - 1}] (x = {list(xs)} m)")

@@ -64,7 +64,7 @@ def vertical_layout(grid: Grid, hub_height_m, shear_exponent=DEFAULT_SHEAR_EXPON
     if below and not drop_below_ground:
         raise ParameterError(
             f"grid reaches the ground: hub height {hub:g} m + lowest z {grid.z()[0]:g} m = {heights[0]:g} m <= 0; "
-            f"raise --hub-height above {-grid.z()[0]:g} m or pass --drop-below-ground to drop the {below} lowest rows")
+            f"raise `hub_height` above {-grid.z()[0]:g} m or pass `drop_below_ground` to drop the {below} lowest rows")
     if below == grid.nz:
         raise ParameterError(f"hub height {hub:g} m puts every grid row below ground")
     return VerticalLayout(hub, alpha, below, heights[below:])

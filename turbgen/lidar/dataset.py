@@ -30,7 +30,7 @@ def check_output(path, overwrite: bool) -> Path:
     """Refuse an existing output without overwrite, or a missing/unwritable directory (before any work)."""
     path = Path(path).expanduser().absolute()
     if path.exists() and not overwrite:
-        raise StoreError(f"{path} already exists; use --overwrite to replace it")
+        raise StoreError(f"{path} already exists; use `overwrite` to replace it")
     if path.exists() and not (path / "zarr.json").is_file():
         raise StoreError(f"{path} exists and is not a zarr dataset; refusing to replace it")
     if not path.parent.is_dir():

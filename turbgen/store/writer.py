@@ -225,7 +225,7 @@ class StoreWriter:
         try:
             old = publish(self._tmp, self.path, replace=self._overwrite)
         except FileExistsError:
-            raise StoreError(f"{self.path} appeared while writing; not replaced (use --overwrite)") from None
+            raise StoreError(f"{self.path} appeared while writing; not replaced (use `overwrite`)") from None
         self._tmp = old  # the swapped-out old store (a dead writer's garbage should we die now), or None
         self._discard()
 
@@ -306,7 +306,7 @@ def create_store(
     )
     if path.exists() or path.is_symlink():
         if not overwrite:
-            raise StoreError(f"{path} already exists; use --overwrite to replace it")
+            raise StoreError(f"{path} already exists; use `overwrite` to replace it")
         if not _looks_like_turbgen_store(path):
             raise StoreError(f"{path} exists and is not a turbgen store; refusing to replace it")
     if not path.parent.is_dir():
@@ -317,6 +317,6 @@ def create_store(
     need = 3 * grid.nbytes_per_component()
     require_disk(
         path.parent, need, f"the store ({' x '.join(map(str, grid.shape))}, 3 components, "
-        f"{format_bytes(need)} uncompressed)", "free space there, choose another --out or lower --nt/--ny/--nz/planes",
+        f"{format_bytes(need)} uncompressed)", "free space there, choose another `out` or lower `nt`/`ny`/`nz`/`planes`",
     )
     return StoreWriter(path, grid, full, chunk_t, overwrite)
