@@ -84,7 +84,7 @@ BAD = [
     ("POST", "/runs", b'{"grid": "big"}', 422, "grid"),
     ("POST", "/runs", b'{"lifetime": "forever"}', 422, "lifetime"),
     ("POST", "/runs", b'{"preset": "hurricane"}', 422, "hurricane"),
-    ("POST", "/runs", b'{"model": "kaimal", "preset": "neutral"}', 422, "preset"),
+    ("POST", "/runs", b'{"model": "kaimal", "preset": 3}', 422, "preset"),
     ("POST", "/runs", b'{"U_m_s": NaN}', 422, None),
     ("POST", "/sweeps", b'{"models": ["mann"]}', 422, None),
     ("POST", "/sweeps", b'{"models": ["mann"], "presets": ["neutral"], "speeds": [10], "seeds": [1], '
@@ -147,3 +147,14 @@ def test_restart_after_kill_9(tmp_path):
         assert leftovers == []
     finally:
         srv.kill()
+
+
+@pytest.mark.parametrize("model", ["mann", "kaimal"])
+def test_a_preset_request_builds_the_run_of_the_cli_and_the_sweep(model):
+    # the service's request -> run path is the registry's, as `turbgen mann|kaimal --preset` and sweeps
+    from turbgen.service.catalog import build_run
+    from turbgen.sweep.plan import build_run as sweep_run
+
+    name, run = build_run({"model": model, "preset": "stable", "U_m_s": 12.0, "seed": 4})
+    assert name == model
+    assert run.to_attrs() == sweep_run(model, "stable", 12.0, 4).to_attrs()

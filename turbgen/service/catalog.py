@@ -25,7 +25,6 @@ from turbgen.spec.config import check_mapping
 from turbgen.store.layout import grid_to_attrs
 from turbgen.store.writer import temp_prefix
 
-MODELS = ("mann", "kaimal")
 STORE = "store.zarr"
 _ID = re.compile(r"^[0-9a-f]{24}$")
 
@@ -41,24 +40,28 @@ def build_run(body) -> tuple[str, object]:
         raise ParameterError("request body: expected a JSON object with the run config")
     body = dict(body)
     model = body.pop("model", "mann")
-    if model not in MODELS:
-        raise ParameterError(f"model: {model!r} is not one of {', '.join(MODELS)}")
+    entry = _model(model)
     preset = body.pop("preset", None)
     check_mapping(body, f"{model}-run", "run config")
-    if model == "mann":
-        from turbgen.spec.mann import MannRun
-        from turbgen.spec.presets import mann_run_keys
-
-        if preset is not None:
-            if not isinstance(preset, str):
-                raise ParameterError("preset: expected a preset name (string)")
-            body = {**mann_run_keys(preset), **body}
-        return model, MannRun.from_mapping(body)
     if preset is not None:
-        raise ParameterError("preset: only the mann model takes a preset")
-    from turbgen.spec.kaimal import KaimalRun
+        from turbgen.spec.presets import run_keys
 
-    return model, KaimalRun.from_mapping(body)
+        if not isinstance(preset, str):
+            raise ParameterError("preset: expected a preset name (string)")
+        U = body.get("U_m_s")
+        if isinstance(U, bool) or not isinstance(U, (int, float)):  # a bad U is reported by from_mapping below
+            U = entry.spec.from_mapping({}).U_m_s
+        body = {**run_keys(model, preset, U), **body}
+    return model, entry.spec.from_mapping(body)
+
+
+def _model(name):
+    """The registry entry of ``name`` (ParameterError naming the field otherwise)."""
+    from turbgen.runs.models import MODELS
+
+    if name not in MODELS:
+        raise ParameterError(f"model: {name!r} is not one of {', '.join(MODELS)}")
+    return MODELS[name]
 
 
 def canonical_mapping(run) -> dict:
@@ -68,13 +71,7 @@ def canonical_mapping(run) -> dict:
 
 def run_from_canonical(model: str, mapping: dict):
     """Inverse of :func:`canonical_mapping` (used to re-queue runs after a restart)."""
-    if model == "mann":
-        from turbgen.spec.mann import MannRun
-
-        return MannRun.from_mapping(mapping)
-    from turbgen.spec.kaimal import KaimalRun
-
-    return KaimalRun.from_mapping(mapping)
+    return _model(model).spec.from_mapping(mapping)
 
 
 def run_id(model: str, mapping: dict) -> str:

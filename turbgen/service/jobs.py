@@ -12,21 +12,20 @@ import uuid
 
 from turbgen.service.catalog import Catalog, canonical_mapping, run_from_canonical, write_json_atomic
 
-_STENCIL_LOCK = threading.Lock()  # the stencil cache's temporary name is per process: build one at a time
+_STENCIL_LOCK = threading.Lock()  # one stencil build at a time: a second request for it waits and reuses it
 
 
 def execute(model: str, run, out: str, stencil_cache: str) -> dict:
     """Worker side: generate ``run`` into the store ``out`` by the CLI's library path; the run summary."""
-    if model == "mann":
-        from turbgen.runs.mann import build_mann_stencil, run_mann
+    from turbgen.runs.models import get_model
 
+    entry = get_model(model)
+    build_shared = entry.shared_part(run, None, None)
+    shared = None
+    if build_shared is not None:
         with _STENCIL_LOCK:
-            stencil = build_mann_stencil(run, stencil_cache)
-        summary = run_mann(run, out, stencil=stencil)
-    else:
-        from turbgen.runs.kaimal import run_kaimal
-
-        summary = run_kaimal(run, out)
+            shared = build_shared(run, stencil_cache)
+    summary = entry.run(run, out, shared=shared)
     return {k: v for k, v in summary.items() if isinstance(v, (int, float, str, bool, list)) and k != "path"}
 
 

@@ -53,21 +53,20 @@ def check_token(expected: str | None, authorization: str | None) -> None:
 
 def run_memory_bytes(model: str, run) -> int:
     """Memory [bytes] the run allocates (the runs/ estimates the CLI checks before allocating)."""
-    if model == "mann":
-        from turbgen.resources import default_threads
-        from turbgen.runs.mann import memory_estimate_bytes
+    from turbgen.resources import default_threads
+    from turbgen.runs.models import get_model
 
-        return memory_estimate_bytes(run, default_threads(None))
-    from turbgen.runs.kaimal import memory_needed
-
-    return memory_needed(run.grid)
+    return get_model(model).memory_bytes(run, default_threads(None))
 
 
 def check_memory(model: str, run, budget_bytes: int) -> int:
     """LimitError 413 naming the estimate, the budget and what to change when the run does not fit."""
+    from turbgen.runs.models import get_model
+
     need = run_memory_bytes(model, run)
     if need > budget_bytes:
+        fields = get_model(model).memory_fields.replace("`", "")
         raise LimitError(413, f"grid: the run needs about {format_bytes(need)} of memory, over the server's budget of "
-                         f"{format_bytes(budget_bytes)}; lower grid.nt, grid.ny/grid.nz"
-                         f"{' or pad_yz' if model == 'mann' else ''} (or start the server with a larger --memory-budget)")  # fmt: skip
+                         f"{format_bytes(budget_bytes)}; lower {fields} (or start the server with a larger "
+                         "--memory-budget)")
     return need
