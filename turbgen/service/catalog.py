@@ -33,7 +33,7 @@ def build_run(body) -> tuple[str, object]:
     """(model, MannRun | KaimalRun) from a request body: {"model": ..., "preset": ..., <run config keys>}.
 
     The run config keys are those of ``turbgen mann|kaimal --config`` (schemas/<model>-run.schema.json);
-    ``preset`` (Mann only) sets the stability keys as ``--preset`` does, given keys override it.
+    ``preset`` sets the stability keys as ``--preset`` does (at the body's U), given keys override it.
     ParameterError naming the bad field otherwise.
     """
     if not isinstance(body, dict):
