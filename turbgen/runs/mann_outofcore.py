@@ -50,7 +50,8 @@ from turbgen.synthesis.mann_spacetime import (
     MannSnapshots,
     PencilTransform,
 )
-from turbgen.synthesis.mann_stencil import axis_cells, build_stencil
+from turbgen.synthesis.mann_cells import axis_cells
+from turbgen.synthesis.mann_stencil import build_stencil
 
 BASE_BYTES = 250 * 2**20  # the interpreter with turbgen, numpy, scipy, zarr, pyfftw loaded (VmHWM measured 165 MiB,
 # 197 MiB in a fresh virtualenv) + slack
