@@ -21,6 +21,7 @@ from turbgen.synthesis.mann_stencil import (
     build_unit_stencil,
     scale_stencil,
     stencil_key,
+    unit_stencil_nbytes,
 )
 from turbgen.theory.params import MannParams
 
@@ -53,6 +54,24 @@ def cached_unit_stencil(
     finally:
         tmp.unlink(missing_ok=True)
     return unit
+
+
+def shared_stencil_key(run) -> tuple:
+    """What the unit stencil of a Mann ``run`` (params, box, grid) depends on: runs with equal keys share it."""
+    return run.params.with_ae(1.0), run.box, run.grid.nx > 1
+
+
+def shared_stencil_nbytes(run) -> int:
+    """Bytes of the unit stencil of a Mann ``run`` (held besides the run's own scaled stencil)."""
+    return unit_stencil_nbytes(run.box, run.grid.nx > 1 and run.params.evo_time_s is not None)
+
+
+def build_shared_stencil(run, cache_dir: str | Path | None = None) -> UnitMannStencil:
+    """The unit stencil of a Mann ``run`` (params, box, grid), for all runs of its shared_stencil_key."""
+    evolving = run.grid.nx > 1
+    if cache_dir is None:
+        return build_unit_stencil(run.params, run.box, evolving=evolving)
+    return cached_unit_stencil(run.params, run.box, cache_dir, evolving=evolving)
 
 
 def cached_stencil(params: MannParams, box: BoxShape, cache_dir: str | Path, *, evolving: bool = True) -> MannStencil:

@@ -4,8 +4,9 @@
   per run and as many as fit in 80 % of the available memory; each run gets cores/workers
   threads) or an existing scheduler (plan.scheduler; its workers must see the output directory
   at the same path).
-* Runs that differ only in the seed share one Mann stencil: it is built once as a dask task and
-  passed to each seed's run task (dask ships it to the workers that need it).
+* Runs that differ only in the seed or in ae (TI, turbulence class) share one ae-free Mann stencil:
+  it is built once as a dask task and passed to each run task (dask ships it to the workers that
+  need it), which scales it to its ae.
 * Before anything is submitted, every planned store is inspected: complete stores with the planned
   parameters are kept ("skipped"), stores with other parameters are never overwritten (the run
   is recorded as failed), incomplete stores are regenerated, and temporary directories left by
@@ -226,7 +227,9 @@ def _task_bytes(task: RunTask) -> int:
     if task.model == "mann":
         from turbgen.runs.mann import memory_estimate_bytes
 
-        need = memory_estimate_bytes(task.run, 1)
+        from turbgen.runs.stencil_cache import shared_stencil_nbytes
+
+        need = memory_estimate_bytes(task.run, 1) + shared_stencil_nbytes(task.run)
         return need if task.memory_bytes is None else min(need, task.memory_bytes)
     from turbgen.runs.kaimal import memory_needed
 
@@ -402,22 +405,23 @@ def _execute(plan, tasks, records, save, result, client, processes, progress, th
         tasks = {name: replace(t, threads=threads) for name, t in tasks.items()}
     try:
         by_name = {pr.name: pr for pr in plan.runs}
-        stencils: dict = {}  # parameter set (run with seed 0) -> [stencil future, runs still to use it]
+        stencils: dict = {}  # shared_stencil_key -> [unit stencil future, runs still to use it]
         futures = {}  # future key -> (run name, stencil key or None)
         pending = []
         for name, task in tasks.items():
             stencil = None
             if task.model == "mann" and task.generate and not _out_of_core(task):
-                key = replace(by_name[name].run, seed=0)
-                if key not in stencils:
-                    from turbgen.runs.mann import build_mann_stencil
+                from turbgen.runs.stencil_cache import build_shared_stencil, shared_stencil_key
 
-                    stencils[key] = [client.submit(build_mann_stencil, by_name[name].run, pure=False), 0]
+                key = shared_stencil_key(by_name[name].run)
+                if key not in stencils:  # the ae-free stencil: shared also by runs differing in TI or class
+                    stencils[key] = [client.submit(build_shared_stencil, by_name[name].run, pure=False,
+                                                   key=f"build_mann_stencil-{os.urandom(4).hex()}"), 0]  # fmt: skip
                 stencils[key][1] += 1
                 stencil = stencils[key][0]
             fut = client.submit(execute_run, task, stencil, pure=False, key=f"turbgen-run-{name}-{os.urandom(4).hex()}")
             pending.append(fut)
-            futures[fut.key] = (name, replace(by_name[name].run, seed=0) if stencil is not None else None)
+            futures[fut.key] = (name, key if stencil is not None else None)
         bar = tqdm(total=len(pending), desc="sweep", unit="field", file=sys.stderr,
                    disable=not (progress and sys.stderr.isatty()))  # fmt: skip
         with bar:

@@ -126,6 +126,12 @@ def stencil_nbytes(box: BoxShape, with_tau: bool) -> int:
     return per * (5 if with_tau else 4)
 
 
+def unit_stencil_nbytes(box: BoxShape, with_tau: bool) -> int:
+    """Bytes held by the unit stencil (UnitMannStencil) of ``box``: four float64 factors and float32 1/tau_e."""
+    per = box.nk1 * box.nk2_half * box.nzp
+    return per * (36 if with_tau else 32)
+
+
 def expand_k2(half: np.ndarray, nyp: int, odd: bool, out: np.ndarray) -> np.ndarray:
     """Rows k2 >= 0 (..., nyp//2+1, nz) -> all nyp rows in FFT order, negated on k2 < 0 if ``odd``."""
     h = nyp // 2
