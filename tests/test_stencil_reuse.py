@@ -83,8 +83,13 @@ def test_disk_cache_serves_every_ae_from_one_build(tmp_path, monkeypatch):
     for ae in (0.3, 0.6, 1.2):
         got = stencil_cache.cached_stencil(PARAMS.with_ae(ae), BOX, tmp_path)
         assert _same_bits(got.coef, build_stencil(PARAMS.with_ae(ae), BOX).coef)
-    assert len(builds) == 1 and len(list(tmp_path.glob("mann-stencil-*.npz"))) == 1
+    assert len(builds) == 1 and [p.suffix for p in tmp_path.iterdir()] == [".npy"]
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporaries left
+    entry = next(tmp_path.iterdir())
+    entry.write_bytes(entry.read_bytes()[:1000])  # a truncated entry is rebuilt and replaced
+    got = stencil_cache.cached_stencil(PARAMS, BOX, tmp_path)
+    assert len(builds) == 2 and _same_bits(got.coef, build_stencil(PARAMS, BOX).coef)
+    assert _same_bits(got.inv_tau, build_stencil(PARAMS, BOX).inv_tau)
 
 
 @pytest.fixture()

@@ -1,9 +1,11 @@
-"""On-disk cache of ae-free Mann stencils (``turbgen mann --stencil-cache DIR``): one .npz per parameter set and box.
+"""On-disk cache of ae-free Mann stencils (``turbgen mann --stencil-cache DIR``): one .npy per parameter set and box.
 
 The file name is the hash of everything the unit stencil depends on (synthesis.mann_stencil.stencil_key:
 all parameters but ae), so a cache entry can never serve another parameter set, and serves every ae
-(synthesis.mann_stencil.scale_stencil). Entries are written to a temporary name and renamed; an
-unreadable or mismatched entry is rebuilt and replaced.
+(synthesis.mann_stencil.scale_stencil). An entry ``mann-stencil-KEY.npy`` holds the four float64
+factors and, for evolving fields, 1/tau_e as a fifth (float64) array; it is built straight into the
+file and read back memory-mapped, so the factors never have to be resident. Entries are written to
+a temporary name and renamed; an unreadable or mismatched entry is rebuilt and replaced.
 """
 
 from __future__ import annotations
@@ -29,31 +31,40 @@ from turbgen.theory.params import MannParams
 def cached_unit_stencil(
     params: MannParams, box: BoxShape, cache_dir: str | Path, *, evolving: bool = True
 ) -> UnitMannStencil:
-    """The ae-free stencil of ``params`` on ``box``, loaded from ``cache_dir`` or built and saved there."""
+    """The ae-free stencil of ``params`` on ``box``, read from ``cache_dir`` or built into it."""
     with_tau = evolving and params.evo_time_s is not None
-    path = Path(cache_dir) / f"mann-stencil-{stencil_key(params, box, with_tau)}.npz"
-    if path.exists():
-        try:
-            with np.load(path) as data:
-                factors = data["factors"]
-                inv_tau = data["inv_tau"] if with_tau else None
-            if factors.shape == (4, box.nk1, box.nk2_half, box.nzp) and factors.dtype == np.float64:
-                return UnitMannStencil(params.with_ae(1.0), box, factors, inv_tau)
-        except (OSError, ValueError, KeyError):
-            pass  # unreadable cache entry: rebuild and replace it
-    unit = build_unit_stencil(params, box, evolving=evolving)
+    path = Path(cache_dir) / f"mann-stencil-{stencil_key(params, box, with_tau)}.npy"
+    shape = (5 if with_tau else 4, box.nk1, box.nk2_half, box.nzp)
+    try:
+        data = np.load(path, mmap_mode="r")
+        if data.shape == shape and data.dtype == np.float64:
+            return _unit(params, box, data, with_tau)
+    except (OSError, ValueError):
+        pass  # missing or unreadable cache entry: rebuild and replace it
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temp_name(path)
-    arrays = {"factors": unit.factors}
-    if with_tau:
-        arrays["inv_tau"] = unit.inv_tau
     try:
-        with open(tmp, "wb") as f:
-            np.savez(f, **arrays)
+        mapped = np.lib.format.open_memmap(tmp, mode="w+", dtype=np.float64, shape=shape)
+        unit = build_unit_stencil(params, box, evolving=evolving, factors=mapped[:4])
+        if with_tau:
+            mapped[4] = unit.inv_tau  # float32 -> float64 -> float32 is exact
+        mapped.flush()
+        del mapped, unit
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
-    return unit
+    return _unit(params, box, np.load(path, mmap_mode="r"), with_tau)
+
+
+def _unit(params: MannParams, box: BoxShape, data: np.ndarray, with_tau: bool) -> UnitMannStencil:
+    """The unit stencil of a mapped cache entry: factors (4, ...) float64 and 1/tau_e as float32 in memory."""
+    inv_tau = data[4].astype(np.float32) if with_tau else None
+    return UnitMannStencil(params.with_ae(1.0), box, data[:4], inv_tau)
+
+
+def cached_stencil(params: MannParams, box: BoxShape, cache_dir: str | Path, *, evolving: bool = True) -> MannStencil:
+    """The stencil of ``params`` on ``box`` (ae included), from the cached ae-free stencil."""
+    return scale_stencil(cached_unit_stencil(params, box, cache_dir, evolving=evolving), params)
 
 
 def shared_stencil_key(run) -> tuple:
@@ -72,8 +83,3 @@ def build_shared_stencil(run, cache_dir: str | Path | None = None) -> UnitMannSt
     if cache_dir is None:
         return build_unit_stencil(run.params, run.box, evolving=evolving)
     return cached_unit_stencil(run.params, run.box, cache_dir, evolving=evolving)
-
-
-def cached_stencil(params: MannParams, box: BoxShape, cache_dir: str | Path, *, evolving: bool = True) -> MannStencil:
-    """The stencil of ``params`` on ``box`` (ae included), from the cached ae-free stencil."""
-    return scale_stencil(cached_unit_stencil(params, box, cache_dir, evolving=evolving), params)

@@ -306,11 +306,14 @@ def build_stencil(
     return _build(params, box, evolving and params.evo_time_s is not None, slabs, cells)
 
 
-def build_unit_stencil(params: MannParams, box: BoxShape, *, evolving: bool = True) -> UnitMannStencil:
+def build_unit_stencil(
+    params: MannParams, box: BoxShape, *, evolving: bool = True, factors: np.ndarray | None = None
+) -> UnitMannStencil:
     """The ae-free stencil of ``params`` on ``box`` (ae ignored), to serve every ae through scale_stencil.
 
-    Twice the memory of a MannStencil's coefficients (float64, see UnitMannStencil); building it costs
-    what build_stencil costs, scaling it a few multiplications per point.
+    Twice the memory of a MannStencil's coefficients (float64, see UnitMannStencil) unless ``factors``
+    (4, nk1, nyp//2+1, nzp) float64 is given to hold them (e.g. a file mapped by the stencil cache);
+    building it costs what build_stencil costs, scaling it a few multiplications per point.
     """
     with_tau = evolving and params.evo_time_s is not None
     nh, nzp = box.nk2_half, box.nzp
@@ -318,7 +321,7 @@ def build_unit_stencil(params: MannParams, box: BoxShape, *, evolving: bool = Tr
     k1_all = box.k1()
     k2 = box.k2()[:nh][:, None]
     k3 = box.k3()
-    factors = np.empty((4, box.nk1, nh, nzp))
+    factors = np.empty((4, box.nk1, nh, nzp)) if factors is None else factors
     inv_tau = np.empty((box.nk1, nh, nzp), dtype=np.float32) if with_tau else None
 
     def batch(i0: int, i1: int) -> None:
