@@ -31,7 +31,19 @@ from turbgen.theory.params import MannParams
 def cached_unit_stencil(
     params: MannParams, box: BoxShape, cache_dir: str | Path, *, evolving: bool = True
 ) -> UnitMannStencil:
-    """The ae-free stencil of ``params`` on ``box``, read from ``cache_dir`` or built into it."""
+    """The ae-free stencil of ``params`` on ``box``, read from ``cache_dir`` or built into it.
+
+    Parameters
+    ----------
+    params : Mann parameters (ae is ignored).
+    box : the synthesis box.
+    cache_dir : the cache directory (created if missing).
+    evolving : False: without 1/tau_e (single snapshots), a separate entry.
+
+    Returns
+    -------
+    UnitMannStencil : its factors memory-mapped from the entry.
+    """
     with_tau = evolving and params.evo_time_s is not None
     path = Path(cache_dir) / f"mann-stencil-{stencil_key(params, box, with_tau)}.npy"
     shape = (5 if with_tau else 4, box.nk1, box.nk2_half, box.nzp)
@@ -63,22 +75,62 @@ def _unit(params: MannParams, box: BoxShape, data: np.ndarray, with_tau: bool) -
 
 
 def cached_stencil(params: MannParams, box: BoxShape, cache_dir: str | Path, *, evolving: bool = True) -> MannStencil:
-    """The stencil of ``params`` on ``box`` (ae included), from the cached ae-free stencil."""
+    """The stencil of ``params`` on ``box`` (ae included), scaled from the cached ae-free stencil.
+
+    Parameters
+    ----------
+    params : Mann parameters, ae [m^(4/3) s^-2] included.
+    box : the synthesis box.
+    cache_dir : the cache directory.
+    evolving : False: without 1/tau_e (single snapshots).
+
+    Returns
+    -------
+    MannStencil : bit-identical to synthesis.mann_stencil.build_stencil(params, box).
+    """
     return scale_stencil(cached_unit_stencil(params, box, cache_dir, evolving=evolving), params)
 
 
 def shared_stencil_key(run) -> tuple:
-    """What the unit stencil of a Mann ``run`` (params, box, grid) depends on: runs with equal keys share it."""
+    """What the unit stencil of a Mann ``run`` depends on: runs with equal keys share it.
+
+    Parameters
+    ----------
+    run : a Mann run (its params, box and grid are read).
+
+    Returns
+    -------
+    tuple : (parameters with ae = 1, box, evolving); hashable.
+    """
     return run.params.with_ae(1.0), run.box, run.grid.nx > 1
 
 
 def shared_stencil_nbytes(run) -> int:
-    """Bytes of the unit stencil of a Mann ``run`` (held besides the run's own scaled stencil)."""
+    """Bytes [B] of the unit stencil of a Mann ``run`` (held besides the run's own scaled stencil).
+
+    Parameters
+    ----------
+    run : a Mann run (its params, box and grid are read).
+
+    Returns
+    -------
+    int
+    """
     return unit_stencil_nbytes(run.box, run.grid.nx > 1 and run.params.evo_time_s is not None)
 
 
 def build_shared_stencil(run, cache_dir: str | Path | None = None) -> UnitMannStencil:
-    """The unit stencil of a Mann ``run`` (params, box, grid), for all runs of its shared_stencil_key."""
+    """The unit stencil of a Mann ``run``, for all runs of its shared_stencil_key (run_mann scales it).
+
+    Parameters
+    ----------
+    run : a Mann run (its params, box and grid are read).
+    cache_dir : optional stencil cache directory (cached_unit_stencil).
+
+    Returns
+    -------
+    UnitMannStencil
+    """
     evolving = run.grid.nx > 1
     if cache_dir is None:
         return build_unit_stencil(run.params, run.box, evolving=evolving)

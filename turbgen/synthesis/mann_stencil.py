@@ -127,7 +127,7 @@ def stencil_nbytes(box: BoxShape, with_tau: bool) -> int:
 
 
 def unit_stencil_nbytes(box: BoxShape, with_tau: bool) -> int:
-    """Bytes held by the unit stencil (UnitMannStencil) of ``box``: four float64 factors and float32 1/tau_e."""
+    """Bytes [B] held by the UnitMannStencil of ``box``: four float64 factors, float32 1/tau_e if ``with_tau``."""
     per = box.nk1 * box.nk2_half * box.nzp
     return per * (36 if with_tau else 32)
 
@@ -221,7 +221,16 @@ def _unit_coefficients(params: MannParams, k1, k2, k3, out: np.ndarray, inv_tau:
 
 
 def energy_scale(params: MannParams) -> float:
-    """sqrt(ae L^(17/3) / (4 pi)): a = e times this (Mann 1998 Eq. 46 with the von Karman E(k))."""
+    """The factor a / e = sqrt(ae L^(17/3) / (4 pi)) of the von Karman amplitude (Mann 1998, Eq. 46).
+
+    Parameters
+    ----------
+    params : ae [m^(4/3) s^-2] and length_scale_m [m] are used.
+
+    Returns
+    -------
+    float : [m^(7/2) s^-1] float64; the only place where ae enters the stencil's coefficients.
+    """
     return np.sqrt(params.ae * params.length_scale_m ** (17.0 / 3.0) / (4.0 * np.pi))
 
 
@@ -309,11 +318,22 @@ def build_stencil(
 def build_unit_stencil(
     params: MannParams, box: BoxShape, *, evolving: bool = True, factors: np.ndarray | None = None
 ) -> UnitMannStencil:
-    """The ae-free stencil of ``params`` on ``box`` (ae ignored), to serve every ae through scale_stencil.
+    """The ae-free stencil of ``params`` on ``box``, to serve every ae through scale_stencil.
 
-    Twice the memory of a MannStencil's coefficients (float64, see UnitMannStencil) unless ``factors``
-    (4, nk1, nyp//2+1, nzp) float64 is given to hold them (e.g. a file mapped by the stencil cache);
-    building it costs what build_stencil costs, scaling it a few multiplications per point.
+    Building it costs what build_stencil costs; scaling it, a few multiplications per point.
+
+    Parameters
+    ----------
+    params : Mann parameters; ae is ignored (the result carries ae = 1).
+    box : the synthesis box.
+    evolving : False skips 1/tau_e (a stencil for single snapshots), as in build_stencil.
+    factors : optional (4, nk1, nyp//2+1, nzp) float64 array to hold the factors (e.g. a file mapped
+        by the stencil cache); by default they are allocated: twice the bytes of a MannStencil's
+        coefficients (unit_stencil_nbytes).
+
+    Returns
+    -------
+    UnitMannStencil
     """
     with_tau = evolving and params.evo_time_s is not None
     nh, nzp = box.nk2_half, box.nzp
@@ -335,12 +355,25 @@ def build_unit_stencil(
 
 
 def scale_stencil(unit: UnitMannStencil, params: MannParams) -> MannStencil:
-    """The stencil of ``params`` (ae included) from the ae-free ``unit`` stencil of the same other parameters.
+    """The stencil of ``params`` (ae included) from the ae-free ``unit`` stencil.
 
     Bit-identical to build_stencil(params, unit.box): the energy enters by the same float64 operations
     at the same point (_apply_energy), then the coefficients are rounded to float32. The axis cells
     (a few hundred 3 x 3 factors) are computed for ``params``: their eigen-decomposition is not
     linear in ae to the last bit.
+
+    Parameters
+    ----------
+    unit : from build_unit_stencil (or the stencil cache) of parameters equal to ``params`` but for ae.
+    params : the run's parameters, ae [m^(4/3) s^-2] included.
+
+    Returns
+    -------
+    MannStencil : sharing ``unit.inv_tau`` (1/tau_e does not depend on ae).
+
+    Raises
+    ------
+    ValueError : ``unit`` was built for parameters that differ from ``params`` in more than ae.
     """
     if params.with_ae(1.0) != unit.params:
         raise ValueError("the unit stencil was built for other parameters than ae")
@@ -358,51 +391,3 @@ def scale_stencil(unit: UnitMannStencil, params: MannParams) -> MannStencil:
     _batches(box, 0, box.nk1, batch)
     index, factor = axis_cells(params, box)
     return MannStencil(params, box, coef, unit.inv_tau, index, factor)
-
-
-def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
-    """The full factor C (3, 3, nyp, nzp) [float64, times sqrt(dk/2)] of slab ``i``: compact form + axis cells.
-
-    For tests and the discrete oracle: E[u_hat u_hat^H] = 2 C C^T on every stored point.
-    """
-    box = stencil.box
-    full = [
-        expand_k2(stencil.coef[n, i].astype(float), box.nyp, _ODD[n], np.empty((box.nyp, box.nzp)))
-        for n in range(4)
-    ]
-    a, p, z1, z2 = full
-    k1 = box.k1()[i]
-    k2 = box.k2()[:, None] * np.ones((1, box.nzp))
-    q = k1 * k1 + k2 * k2
-    w = w_coefficient(a, p, q, q + box.k3()[None, :] ** 2, np.empty_like(a), np.empty_like(a))
-    c = np.zeros((3, 3, box.nyp, box.nzp))
-    # u = P n1 - A k2 n2 + Z1 (k2 n0 - k1 n1); v = -P n0 + A k1 n2 + Z2 (k2 n0 - k1 n1); w = W (k2 n0 - k1 n1)
-    c[0] = [z1 * k2, p - z1 * k1, -a * k2]
-    c[1] = [-p + z2 * k2, -z2 * k1, a * k1]
-    c[2] = [w * k2, -w * k1, np.zeros_like(a)]
-    cells = stencil.cells_in(i, i + 1)
-    rows, cols = stencil.cell_index[cells, 1], stencil.cell_index[cells, 2]
-    c[:, :, rows, cols] = np.moveaxis(stencil.cell_factor[cells].astype(float), 0, -1)
-    return c
-
-
-def discrete_spectra(stencil: MannStencil) -> np.ndarray:
-    """Exact expectation of the synthesised discrete field: S[i, j, slab] = sum over (k2, k3) of E[u_hat_i u_hat_j^*].
-
-    Shape (3, 3, nk1), real [m^2 s^-2]. A point's variance is sum_slab w_slab S[i, i, slab] with
-    w = 1 on the k1 = 0 and Nyquist slabs and 2 elsewhere (the Hermitian partner slab).
-    """
-    out = np.empty((3, 3, stencil.box.nk1))
-    for i in range(stencil.box.nk1):
-        c = slab_factor(stencil, i)
-        out[:, :, i] = 2.0 * np.einsum("ikyz,jkyz->ij", c, c)
-    return out
-
-
-def slab_weights(nt: int) -> np.ndarray:
-    """Weights 1 (k1 = 0, Nyquist) or 2 of the half-spectrum slabs in full-spectrum sums."""
-    w = np.full(nt // 2 + 1, 2.0)
-    w[0] = 1.0
-    if nt % 2 == 0:
-        w[-1] = 1.0
-    return w

@@ -24,9 +24,18 @@ def exponential_yz(r_m, f_hz, U_m_s: float, a_yz: float = 12.0, lc_m: float = 34
 
 
 def exponential_yz_decay_length_m(f_hz: float, U_m_s: float, a_yz: float = 12.0, lc_m: float = 340.2) -> float:
-    """Decay length [m] of exponential_yz at ``f_hz``: coh = exp(-r / decay), decay = 1 / (a_yz kappa).
+    """Decay length of exponential_yz at ``f_hz``: coh(r) = exp(-r / decay) with decay = 1 / (a_yz kappa).
 
-    kappa = sqrt((f/U)^2 + (0.12/Lc)^2) [1/m]; infinite for a_yz = 0 (full coherence).
+    Parameters
+    ----------
+    f_hz : frequency [Hz].
+    U_m_s : mean wind speed [m/s].
+    a_yz : coherence decrement [-] (IEC 61400-1: 12).
+    lc_m : coherence scale parameter Lc [m] (IEC 61400-1: 8.1 Lambda_1).
+
+    Returns
+    -------
+    float : decay [m], kappa = sqrt((f/U)^2 + (0.12/Lc)^2) [1/m]; infinite for a_yz = 0 (full coherence).
     """
     kappa = np.hypot(f_hz / U_m_s, 0.12 / lc_m)
     return 1.0 / (a_yz * kappa) if a_yz > 0 else np.inf
