@@ -15,14 +15,8 @@ import pytest
 
 from turbgen.runs.stencil_cache import cached_stencil
 from turbgen.synthesis.mann_spacetime import MannSnapshots, hermitian_complete, mann_box
-from turbgen.synthesis.mann_stencil import (
-    BoxShape,
-    build_stencil,
-    discrete_spectra,
-    expand_k2,
-    slab_factor,
-    slab_weights,
-)
+from turbgen.synthesis.mann_oracle import discrete_spectra, slab_factor, slab_weights
+from turbgen.synthesis.mann_stencil import BoxShape, build_stencil, expand_k2
 from turbgen.synthesis.random_streams import complex_normal
 from turbgen.theory.mann_tensor import tensor_factor
 from turbgen.theory.params import MannParams

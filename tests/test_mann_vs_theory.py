@@ -11,14 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from turbgen.synthesis.mann_stencil import (
-    BoxShape,
-    build_stencil,
-    discrete_spectra,
-    expand_k2,
-    slab_factor,
-    slab_weights,
-)
+from turbgen.synthesis.mann_oracle import discrete_spectra, slab_factor, slab_weights
+from turbgen.synthesis.mann_stencil import BoxShape, build_stencil, expand_k2
 from turbgen.theory.mann_spectra import one_point_spectra, variances
 from turbgen.theory.space_time import longitudinal_coherence
 from turbgen.theory.params import MannParams

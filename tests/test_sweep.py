@@ -176,7 +176,7 @@ def test_mann_stencil_is_built_once_per_parameter_set(client, tmp_path):
         result = run_sweep(plan, client=client, progress=False)
     assert result.ok and result.ran == 6
     names = [t["key"] if isinstance(t["key"], str) else t["key"][0] for t in ts.data]
-    assert sum(n.startswith("build_mann_stencil") for n in names) == 2  # one per speed, shared by 3 seeds
+    assert sum(n.startswith("turbgen-shared-mann") for n in names) == 2  # one per speed, shared by 3 seeds
     assert sum(n.startswith("turbgen-run-") for n in names) == 6
 
 

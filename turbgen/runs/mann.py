@@ -24,15 +24,17 @@ from turbgen.runs.stencil_cache import cached_stencil
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.synthesis.mann_spacetime import COMPONENTS, MannSnapshots, snapshot_memory_bytes
-from turbgen.synthesis.mann_stencil import BoxShape, MannStencil, build_stencil, stencil_nbytes
+from turbgen.synthesis.mann_stencil import (
+    BoxShape,
+    MannStencil,
+    UnitMannStencil,
+    build_stencil,
+    scale_stencil,
+    stencil_nbytes,
+    synthesis_box,
+)
 
 _BUILD_SCRATCH = 64 * 2**20  # float64 temporaries of the stencil-building batches (all threads)
-
-
-def synthesis_box(run: MannRun) -> BoxShape:
-    """The periodic synthesis box of a run: (nt, dx = U dt) x (pad ny, dy) x (pad nz, dz)."""
-    g = run.grid
-    return BoxShape(g.nt, run.U_m_s * g.dt_s, run.pad_yz * g.ny, run.pad_yz * g.nz, g.dy_m, g.dz_m)
 
 
 def build_mann_stencil(run: MannRun, cache_dir: str | Path | None = None) -> MannStencil:
@@ -76,7 +78,7 @@ def run_mann(
     overwrite: bool = False,
     chunk_t: int | None = None,
     progress: bool = False,
-    stencil: MannStencil | None = None,
+    stencil: MannStencil | UnitMannStencil | None = None,
     threads: int | None = None,
     cache_dir: str | Path | None = None,
 ) -> dict:
@@ -84,11 +86,17 @@ def run_mann(
 
     Memory is checked before anything is allocated; planes are written as they are produced;
     an exception (or Ctrl-C) leaves no store at ``out``. ``stencil`` (from build_mann_stencil of a
-    run with the same parameters and grid) skips the stencil computation. ``threads`` defaults
+    run with the same parameters and grid) skips the stencil computation, a UnitMannStencil (of a run
+    differing at most in ae and seed) leaves only its scaling to ae. ``threads`` defaults
     to os.cpu_count() and does not change the field.
     """
     t_start = time.perf_counter()
     gen_threads = default_threads(threads)
+    unit, stencil = (stencil, None) if isinstance(stencil, UnitMannStencil) else (None, stencil)
+    if unit is not None and (unit.params != run.params.with_ae(1.0) or unit.box != synthesis_box(run)):
+        raise ParameterError("the given unit stencil was built for other parameters or another grid than this run")
+    if unit is not None and unit.inv_tau is None and run.params.evo_time_s is not None and run.grid.nx > 1:
+        raise ParameterError("the given stencil was built for one plane (evolving=False); this run evolves planes")
     if stencil is not None and (stencil.params != run.params or stencil.box != synthesis_box(run)):
         raise ParameterError("the given stencil was built for other parameters or another grid than this run")
     if stencil is not None and stencil.inv_tau is None and run.params.evo_time_s is not None and run.grid.nx > 1:
@@ -102,7 +110,9 @@ def run_mann(
     path = Path(out)
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
     with create_store(path, g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:
-        if stencil is None:
+        if unit is not None:
+            stencil = scale_stencil(unit, run.params)
+        elif stencil is None:
             stencil = build_mann_stencil(run, cache_dir)
         gen = MannSnapshots(stencil, g.ny, g.nz, gen_threads, buffers=2)
         show = progress and sys.stderr.isatty()

@@ -39,7 +39,6 @@ from tqdm import tqdm
 
 from turbgen.errors import ParameterError
 from turbgen.resources import default_threads, format_bytes, require_disk
-from turbgen.runs.mann import synthesis_box
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.store.layout import default_chunk_t
@@ -51,7 +50,8 @@ from turbgen.synthesis.mann_spacetime import (
     MannSnapshots,
     PencilTransform,
 )
-from turbgen.synthesis.mann_stencil import axis_cells, build_stencil
+from turbgen.synthesis.mann_cells import axis_cells
+from turbgen.synthesis.mann_stencil import build_stencil, synthesis_box
 
 BASE_BYTES = 250 * 2**20  # the interpreter with turbgen, numpy, scipy, zarr, pyfftw loaded (VmHWM measured 165 MiB,
 # 197 MiB in a fresh virtualenv) + slack

@@ -28,8 +28,12 @@ class Model:
     memory_bytes : ``memory_bytes(run, threads)`` -> peak bytes of a run in memory.
     least_memory_bytes : ``least_memory_bytes(run)`` -> the smallest footprint a run can be made with [bytes].
     memory_fields : the run fields that lower the memory (for messages).
-    shared_part : ``shared_part(run, threads, memory_bytes)`` -> the function building the part that runs
-        differing only in the seed can share (the Mann stencil), or None when the run does not use one.
+    shared_part : ``shared_part(run, threads, memory_bytes)`` -> the function ``build(run)`` of the part
+        that runs with equal :attr:`shared_key` share (the ae-free Mann stencil), or None when the run
+        does not use one.
+    shared_key : ``shared_key(run)`` -> hashable; runs with equal keys share one part (Mann: equal but
+        for seed and ae, i.e. TI or turbulence class).
+    shared_bytes : ``shared_bytes(run)`` -> bytes [B] of that part, held by a worker besides the run.
     out_of_core : a memory budget bounds the run's memory (a run over it is made out of core within it).
     """
 
@@ -40,6 +44,8 @@ class Model:
     least_memory_bytes: Callable[[object], int]
     memory_fields: str
     shared_part: Callable[[object, int | None, int | None], Callable | None]
+    shared_key: Callable[[object], object] = lambda run: None
+    shared_bytes: Callable[[object], int] = lambda run: 0
     out_of_core: bool = False
 
 
@@ -73,9 +79,21 @@ def _mann_memory(run: MannRun, threads: int) -> int:
 def _mann_shared(run: MannRun, threads: int | None, memory_bytes: int | None):
     if _mann_out_of_core(run, threads, memory_bytes):
         return None
-    from turbgen.runs.mann import build_mann_stencil
+    from turbgen.runs.stencil_cache import build_shared_stencil
 
-    return build_mann_stencil
+    return build_shared_stencil
+
+
+def _mann_shared_key(run: MannRun):
+    from turbgen.runs.stencil_cache import shared_stencil_key
+
+    return shared_stencil_key(run)
+
+
+def _mann_shared_bytes(run: MannRun) -> int:
+    from turbgen.runs.stencil_cache import shared_stencil_nbytes
+
+    return shared_stencil_nbytes(run)
 
 
 def _run_kaimal(run: KaimalRun, out, *, overwrite=False, chunk_t=None, threads=None, memory_bytes=None, shared=None):
@@ -98,7 +116,7 @@ def _kaimal_least_memory(run: KaimalRun) -> int:
 
 MODELS: dict[str, Model] = {
     "mann": Model("mann", MannRun, _run_mann, _mann_memory, lambda run: _mann_memory(run, 1),
-                  "`nt`, `ny`/`nz` or `pad_yz`", _mann_shared, out_of_core=True),
+                  "`nt`, `ny`/`nz` or `pad_yz`", _mann_shared, _mann_shared_key, _mann_shared_bytes, out_of_core=True),
     "kaimal": Model("kaimal", KaimalRun, _run_kaimal, _kaimal_memory, _kaimal_least_memory,
                     "`nt`, `ny`/`nz` or the number of planes", lambda run, threads, memory_bytes: None),
 }

@@ -4,9 +4,9 @@
   per run and as many as fit in 80 % of the available memory; each run gets cores/workers
   threads) or an existing scheduler (plan.scheduler; its workers must see the output directory
   at the same path).
-* Runs that differ only in the seed share the part their model lets them share (a Mann stencil,
-  turbgen.runs.models): it is built once as a dask task and passed to each seed's run task (dask
-  ships it to the workers that need it).
+* Runs that share a part of their model (a Mann stencil: runs differing only in the seed or in ae,
+  i.e. TI or turbulence class, share one ae-free stencil; turbgen.runs.models) get it built once as a
+  dask task and passed to each run task (dask ships it to the workers that need it).
 * Before anything is submitted, every planned store is inspected: complete stores with the planned
   parameters are kept ("skipped"), stores with other parameters are never overwritten (the run
   is recorded as failed), incomplete stores are regenerated, and temporary directories left by
@@ -211,16 +211,17 @@ def _execute(plan, tasks, records, save, result, client, processes, progress, th
         tasks = {name: replace(t, threads=threads) for name, t in tasks.items()}
     try:
         by_name = {pr.name: pr for pr in plan.runs}
-        shared: dict = {}  # run with seed 0 -> [future of the shared part, runs still to use it]
+        shared: dict = {}  # shared key -> [future of the shared part, runs still to use it]
         futures = {}  # future key -> (run name, shared key or None)
         pending = []
         for name, task in tasks.items():
             part, skey = None, None
             build = MODELS[task.model].shared_part(task.run, task.threads, task.memory_bytes) if task.generate else None
             if build is not None:
-                skey = replace(by_name[name].run, seed=0)
+                skey = MODELS[task.model].shared_key(by_name[name].run)
                 if skey not in shared:
-                    shared[skey] = [client.submit(build, by_name[name].run, pure=False), 0]
+                    shared[skey] = [client.submit(build, by_name[name].run, pure=False,
+                                                  key=f"turbgen-shared-{task.model}-{os.urandom(4).hex()}"), 0]
                 shared[skey][1] += 1
                 part = shared[skey][0]
             fut = client.submit(execute_run, task, part, pure=False, key=f"turbgen-run-{name}-{os.urandom(4).hex()}")

@@ -92,6 +92,8 @@ def task_bytes(task: RunTask) -> int:
     at most its memory budget when the run can be made out of core within one."""
     model = MODELS[task.model]
     need = model.memory_bytes(task.run, 1)
+    if task.generate and model.shared_part(task.run, task.threads, task.memory_bytes) is not None:
+        need += model.shared_bytes(task.run)  # the shared part, held besides the run's own
     return need if task.memory_bytes is None or not model.out_of_core else min(need, task.memory_bytes)
 
 

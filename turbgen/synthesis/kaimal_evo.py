@@ -6,9 +6,9 @@ Cross-spectrum between component c at (plane p, point a) and (plane q, point b) 
 
 Per frequency bin k (f_k = k df exactly, df = 1/(nt dt); evoTurb mixes bin k with the coherence of
 (k + 1) df, an off-by-one avoided here):
-1. every plane gets independent yz coefficients with covariance coh_yz (u: IEC exponential,
-   Eq. 12 un-squared, by 2-D circulant embedding; v, w: spatially white as IEC / TurbSim
-   IECKAI, or the same exponential coherence as an explicit extension);
+1. every plane gets independent yz coefficients with covariance coh_yz (u: a plain function
+   coh(r, f), by default the IEC exponential, Eq. 12 un-squared, by 2-D circulant embedding;
+   v, w: spatially white as IEC / TurbSim IECKAI, or the same coherence as an explicit extension);
 2. the real Cholesky factor of the (n_planes x n_planes) matrix gamma_x(|x_p - x_q|, f_k)
    mixes the planes (components in ``long_components``; others stay independent);
 3. amplitudes: 2 E|X_k|^2 = v_k, the integral of the one-sided Kaimal PSD (Eq. 11) over the bin
@@ -31,13 +31,14 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
+from functools import partial
 
 import numpy as np
 import scipy.fft
 
 from turbgen.grid import Grid
 from turbgen.synthesis.circulant import Embedding, embed
-from turbgen.theory.coherence_models import exponential_yz
+from turbgen.theory.coherence_models import exponential_yz, exponential_yz_decay_length_m
 from turbgen.theory.kaimal import kaimal_band_variance
 from turbgen.theory.params import KaimalParams
 
@@ -117,6 +118,11 @@ class KaimalEvo:
     """Generator of one Kaimal 4D field, one component at a time, plane by plane.
 
     long_coherence(dx_m, f_hz) -> un-squared gamma_x (a function of turbgen.theory.coherence_models).
+    yz_coherence(r_m, f_hz) -> un-squared yz coherence (1 at r = 0); None: exponential_yz with the
+        a_yz, lc_m of ``kaimal`` (IEC 61400-1).
+    yz_decay_length_m(f_hz) -> a length [m] with yz_coherence(r, f) <= exp(-r / length), which lets the
+        circulant embedding use a smaller torus; None: exponential_yz_decay_length_m for the default
+        coherence, else infinite (the minimal embedding 2 (n - 1), exact for any coherence).
     long_components : components mixed between planes ("u" or "uvw").
     coherent_vw : v, w get the u yz coherence (extension; IEC / TurbSim IECKAI: white).
     rescale : scale each component's spectrum so its expected variance is the nominal sigma^2.
@@ -130,6 +136,8 @@ class KaimalEvo:
         seed: int,
         *,
         long_coherence: Callable,
+        yz_coherence: Callable | None = None,
+        yz_decay_length_m: Callable | None = None,
         long_components: str = "u",
         coherent_vw: bool = False,
         rescale: bool = False,
@@ -137,6 +145,13 @@ class KaimalEvo:
     ):
         self.kaimal, self.grid, self.U_m_s, self.seed = kaimal, grid, U_m_s, seed
         self.long_coherence = long_coherence
+        if yz_coherence is None:
+            yz_coherence = partial(exponential_yz, U_m_s=U_m_s, a_yz=kaimal.a_yz, lc_m=kaimal.lc_m)
+            if yz_decay_length_m is None:
+                yz_decay_length_m = partial(exponential_yz_decay_length_m, U_m_s=U_m_s, a_yz=kaimal.a_yz,
+                                            lc_m=kaimal.lc_m)  # fmt: skip
+        self.yz_coherence = yz_coherence
+        self.yz_decay_length_m = yz_decay_length_m or (lambda f_hz: np.inf)
         self.long_components = long_components
         self.coherent_vw = coherent_vw
         self.workers = workers or os.cpu_count()
@@ -161,14 +176,11 @@ class KaimalEvo:
         """yz samplers for bins ks (None = spatially white)."""
         if component != "u" and not self.coherent_vw:
             return [None] * len(ks)
-        g, kp = self.grid, self.kaimal
+        g = self.grid
         out = []
         for k in ks:
             f = self.freqs[k]
-            kappa = np.hypot(f / self.U_m_s, 0.12 / kp.lc_m)
-            decay = 1.0 / (kp.a_yz * kappa) if kp.a_yz > 0 else np.inf
-            e = embed(lambda r, f=f: exponential_yz(r, f, self.U_m_s, kp.a_yz, kp.lc_m), g.ny, g.nz, g.dy_m, g.dz_m,
-                      decay)
+            e = embed(lambda r, f=f: self.yz_coherence(r, f), g.ny, g.nz, g.dy_m, g.dz_m, self.yz_decay_length_m(f))
             rep = self.report
             rep["yz_clip_error"] = max(rep["yz_clip_error"], e.clip_error)
             rep["torus_enlarged"] += e.enlarged > 0

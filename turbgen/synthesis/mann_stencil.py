@@ -22,27 +22,16 @@ import json
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
-from functools import lru_cache
 
 import numpy as np
 
+from turbgen.synthesis.mann_cells import axis_cells
 from turbgen.theory.eddy_lifetime import evolution_lifetime_table, shear_lifetime_table
-from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
 
-STENCIL_VERSION = 4  # 3: lifetimes from tables, coefficients straight from Mann (1994) Eq. 13-17; 4: arctan
+STENCIL_VERSION = 5  # 3: lifetime tables, Mann (1994) Eq. 13-17; 4: arctan; 5: ae-free float64 factors
 _ODD = (False, False, False, True)  # parity of A, P, Z1, Z2 under k2 -> -k2
 _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0.5 MiB per temporary)
-# Cell-averaged tensor near the k1 axis (Mann 1998: the point value Phi(k) dk is a poor estimate of
-# the cell integral where Phi varies within a cell). On the k1 axis Phi33 = E(k0) / (4 pi k1^2) with
-# k0 -> Gamma a / L finite, so with dk1 << dk2, dk3 (long boxes) the point rule puts far too much
-# energy in the cells (k1, 0, 0): sigma_w^2 of the default paper box came out 76 % above the model.
-# Cells with |k2| <= CELL_RADIUS dk2, |k3| <= CELL_RADIUS dk3 and |k1| <= CELL_K1_FACTOR max(dk2, dk3)
-# use a square root of the cell-averaged tensor instead (tensor-product Gauss rules, graded towards
-# the k1 axis down to the scale |k1|).
-CELL_RADIUS = 2
-CELL_K1_FACTOR = 4.0  # (1, 2) and (3, 8) change the paper box's sigma^2 by < 0.4 % and < 0.1 %
-_CELL_GAUSS = 4
 
 
 @dataclass(frozen=True)
@@ -115,10 +104,39 @@ class MannStencil:
         return slice(int(np.searchsorted(slabs, i0)), int(np.searchsorted(slabs, i1)))
 
 
+@dataclass(frozen=True, eq=False)
+class UnitMannStencil:
+    """The part of a stencil that does not depend on ae (Mann.rs and hipersim likewise build for ae = 1 and scale).
+
+    ``factors`` (4, nk1, nyp//2+1, nzp) float64 holds (e, k30, c1, c2) of _unit_coefficients, from which
+    scale_stencil forms the float32 (A, P, Z1, Z2) of any ae bit-identically to build_stencil (a float32
+    stencil for ae = 1 times sqrt(ae) would differ in the last bit). ``inv_tau`` as in MannStencil
+    (it does not depend on ae). ``params`` carry ae = 1.
+    """
+
+    params: MannParams
+    box: BoxShape
+    factors: np.ndarray
+    inv_tau: np.ndarray | None
+
+
+def synthesis_box(run) -> BoxShape:
+    """The periodic synthesis box of a Mann run (``turbgen.spec.mann.MannRun``): (nt, dx = U dt) x
+    (pad_yz ny, dy) x (pad_yz nz, dz)."""
+    g = run.grid
+    return BoxShape(g.nt, run.U_m_s * g.dt_s, run.pad_yz * g.ny, run.pad_yz * g.nz, g.dy_m, g.dz_m)
+
+
 def stencil_nbytes(box: BoxShape, with_tau: bool) -> int:
     """Bytes held by the stencil of ``box`` (for memory estimates before building it)."""
     per = box.nk1 * box.nk2_half * box.nzp * 4
     return per * (5 if with_tau else 4)
+
+
+def unit_stencil_nbytes(box: BoxShape, with_tau: bool) -> int:
+    """Bytes [B] held by the UnitMannStencil of ``box``: four float64 factors, float32 1/tau_e if ``with_tau``."""
+    per = box.nk1 * box.nk2_half * box.nzp
+    return per * (36 if with_tau else 32)
 
 
 def expand_k2(half: np.ndarray, nyp: int, odd: bool, out: np.ndarray) -> np.ndarray:
@@ -148,19 +166,21 @@ def w_coefficient(a, p, q, ksq, out, scratch):
     return out
 
 
-def _coefficients(params: MannParams, k1, k2, k3, out: np.ndarray, inv_tau: np.ndarray | None) -> None:
-    """(A, P, Z1, Z2) of slabs k1 (b, 1, 1) on rows k2 (nh, 1) x columns k3 (nzp,) into ``out`` (4, b, nh, nzp).
+def _unit_coefficients(params: MannParams, k1, k2, k3, out: np.ndarray, inv_tau: np.ndarray | None) -> None:
+    """The energy-free factors (e, k30, c1, c2) of slabs k1 (b, 1, 1) on rows k2 (nh, 1) x columns k3 (nzp,).
 
-    Straight from Mann (1994) Eq. 13-17 (the formulas of theory.mann_tensor._distortion with its
-    exact limits), in float64, with beta = Gamma tau~(|k| L) and tau_e from the lifetime tables
-    (relative error <= 1e-6, theory.eddy_lifetime.TABLE_REL_ERROR) instead of Eq. 4 / 6 / 15 point
-    by point. a = sqrt(E(k0) / (4 pi)) / k0^2 = sqrt(ae L^(17/3) / (4 pi)) (1 + (k0 L)^2)^(-17/12).
-    ``out`` holds the coefficients without the sqrt(dk / 2) scale; ``inv_tau`` (b, nh, nzp) gets 1/tau_e.
+    Into ``out`` (4, b, nh, nzp) float64, independent of ae: with a = e sqrt(ae L^(17/3) / (4 pi))
+    the coefficients are A = a, P = k30 a, Z1 = c1 a, Z2 = c2 a (see _apply_energy), where
+    e = (1 + (k0 L)^2)^(-17/12) and c1, c2 are zeta1, zeta2 of Mann (1994) Eq. 13-17 (the formulas of
+    theory.mann_tensor._distortion with its exact limits), with beta = Gamma tau~(|k| L) and tau_e from
+    the lifetime tables (relative error <= 1e-6, theory.eddy_lifetime.TABLE_REL_ERROR) instead of
+    Mann (1994) Eq. 4 / 6 / 15 point by point. At k = 0 all four are 0 (no energy). ``inv_tau``
+    (b, nh, nzp) gets 1/tau_e [1/s].
     """
     L = params.length_scale_m
     q = k1 * k1 + k2 * k2  # (b, nh, 1)
     ksq = q + k3 * k3  # (b, nh, nzp)
-    a, p, z1, z2 = out
+    e, k30, z1, z2 = out
     if params.gamma == 0.0:
         beta = np.zeros_like(ksq)
     else:
@@ -168,15 +188,14 @@ def _coefficients(params: MannParams, k1, k2, k3, out: np.ndarray, inv_tau: np.n
         beta *= params.gamma
     with np.errstate(invalid="ignore"):
         bk1 = beta * k1  # nan at k = 0 (inf * 0): set to 0 below
-    k30 = np.add(bk1, k3, out=p)  # P = a k30 once a is known
+    np.add(bk1, k3, out=k30)
     k0sq = k30 * k30
     k0sq += q
-    np.multiply(k0sq, L * L, out=a)
-    a += 1.0
-    np.log(a, out=a)
-    a *= -17.0 / 12.0
-    np.exp(a, out=a)
-    a *= np.sqrt(params.ae * L ** (17.0 / 3.0) / (4.0 * np.pi))
+    np.multiply(k0sq, L * L, out=e)
+    e += 1.0
+    np.log(e, out=e)
+    e *= -17.0 / 12.0
+    np.exp(e, out=e)
     with np.errstate(divide="ignore", invalid="ignore"):
         sq = np.sqrt(q)
         c1 = np.multiply(bk1, k30, out=z1)
@@ -195,21 +214,49 @@ def _coefficients(params: MannParams, k1, k2, k3, out: np.ndarray, inv_tau: np.n
         c1_ratio = c1 * ratio
         c1 -= c2 * ratio  # zeta1 = C1 - (k2/k1) C2
         c2 += c1_ratio  # zeta2 = (k2/k1) C1 + C2
-    p *= a
-    z1 *= a
-    z2 *= a
     for i in np.flatnonzero(k1[:, 0, 0] == 0.0):  # the k1 -> 0 limit at fixed q > 0: zeta1 = -beta, zeta2 = 0
-        np.multiply(beta[i], a[i], out=z1[i])
-        np.negative(z1[i], out=z1[i])
+        np.negative(beta[i], out=z1[i])
         z2[i] = 0.0
-        axis = q[i, :, 0] == 0  # the row k2 = 0 is the k3 axis: zeta = 0, and A is never used (m = 0, k2 = 0)
-        z1[i, axis] = 0.0
-        a[i, axis] = 0.0
-        p[i] = np.where(ksq[i] == 0, 0.0, p[i])  # k = 0 (beta = inf there) carries no energy
+        z1[i, q[i, :, 0] == 0] = 0.0  # the row k2 = 0 is the k3 axis: zeta = 0
+        origin = ksq[i] == 0  # k = 0 (beta = inf there) carries no energy
+        for f in (e, k30, z1, z2):
+            f[i, origin] = 0.0
     if inv_tau is not None:
         tau = evolution_lifetime_table(params).from_ksq(ksq, L)
-        tau *= params.evo_time_s  # tau_e [s], paper 000 Eq. 15 (inf at k = 0)
+        tau *= params.evo_time_s  # tau_e [s] (inf at k = 0)
         np.divide(1.0, tau, out=inv_tau)
+
+
+def energy_scale(params: MannParams) -> float:
+    """The factor a / e = sqrt(ae L^(17/3) / (4 pi)) of the von Karman amplitude (Mann 1998, Eq. 46).
+
+    Parameters
+    ----------
+    params : ae [m^(4/3) s^-2] and length_scale_m [m] are used.
+
+    Returns
+    -------
+    float : [m^(7/2) s^-1] float64; the only place where ae enters the stencil's coefficients.
+    """
+    return np.sqrt(params.ae * params.length_scale_m ** (17.0 / 3.0) / (4.0 * np.pi))
+
+
+def _apply_energy(unit: np.ndarray, energy: float, k1, scale: float, out: np.ndarray) -> np.ndarray:
+    """(A, P, Z1, Z2) times sqrt(dk / 2) = ``scale`` into ``out`` (4, b, nh, nzp) float64 from the ``unit`` factors.
+
+    a = e ``energy`` (energy_scale), P = k30 a, Z1 = c1 a, Z2 = c2 a, A = a except on the k3 axis
+    (k1 = k2 = 0, where A is never used: m = 0 and k2 = 0). The same float64 operations in the same
+    order whether the unit factors were just computed or are reused for another ae.
+    """
+    a, p, z1, z2 = out
+    np.multiply(unit[0], energy, out=a)
+    np.multiply(unit[1], a, out=p)
+    np.multiply(unit[2], a, out=z1)
+    np.multiply(unit[3], a, out=z2)
+    for i in np.flatnonzero(k1[:, 0, 0] == 0.0):
+        a[i, 0] = 0.0  # row 0 is k2 = 0
+    out *= scale
+    return out
 
 
 def build_step(box: BoxShape) -> int:
@@ -217,106 +264,47 @@ def build_step(box: BoxShape) -> int:
     return max(1, _BUILD_POINTS // (box.nk2_half * box.nzp))
 
 
+def _batches(box: BoxShape, first: int, end: int, batch) -> None:
+    """Call ``batch(i0, i1)`` on the building batches cut to [first, end), on all cores."""
+    step = build_step(box)
+
+    def one(i0: int) -> None:  # independent slab batches: threads only change who computes which
+        batch(i0, min((i0 // step + 1) * step, end))
+
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+        list(pool.map(one, [first, *range((first // step + 1) * step, end, step)]))
+
+
 def _build(params: MannParams, box: BoxShape, with_tau: bool, slabs=None, cells=None) -> MannStencil:
     first, end = (0, box.nk1) if slabs is None else slabs
     nh, nzp = box.nk2_half, box.nzp
     scale = np.sqrt(np.prod(box.dk()) / 2.0)
+    energy = energy_scale(params)
     k1_all = box.k1()
     k2 = box.k2()[:nh][:, None]
     k3 = box.k3()
     coef = np.empty((4, end - first, nh, nzp), dtype=np.float32)
     inv_tau = np.empty((end - first, nh, nzp), dtype=np.float32) if with_tau else None
-    step = build_step(box)
 
-    def batch(i0: int) -> None:  # independent slab batches: threads only change who computes which
-        i1 = min((i0 // step + 1) * step, end)  # the batches of the whole stencil, cut to [first, end)
-        work = np.empty((4, i1 - i0, nh, nzp))
+    def batch(i0: int, i1: int) -> None:
+        unit = np.empty((4, i1 - i0, nh, nzp))
         tau = np.empty((i1 - i0, nh, nzp)) if with_tau else None
-        _coefficients(params, k1_all[i0:i1, None, None], k2, k3, work, tau)
-        work *= scale
-        coef[:, i0 - first : i1 - first] = work
+        k1 = k1_all[i0:i1, None, None]
+        _unit_coefficients(params, k1, k2, k3, unit, tau)
+        coef[:, i0 - first : i1 - first] = _apply_energy(unit, energy, k1, scale, unit)
         if with_tau:
             inv_tau[i0 - first : i1 - first] = tau
 
-    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
-        list(pool.map(batch, [first, *range((first // step + 1) * step, end, step)]))
-    index, factor = _axis_cells(params, box) if cells is None else cells
+    _batches(box, first, end, batch)
+    index, factor = axis_cells(params, box) if cells is None else cells
     return MannStencil(params, box, coef, inv_tau, index, factor, first)
 
 
-@lru_cache(maxsize=4)
-def _unit_gauss(n: int) -> tuple[np.ndarray, np.ndarray]:
-    return np.polynomial.legendre.leggauss(n)
-
-
-def _gauss_rule(a: float, b: float, n: int = _CELL_GAUSS) -> tuple[np.ndarray, np.ndarray]:
-    x, w = _unit_gauss(n)
-    return 0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w
-
-
-def _cell_rule(center: float, width: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
-    """Nodes/weights over [center - width/2, center + width/2]; graded towards 0 (down to ``scale``) if center = 0."""
-    if center != 0.0:
-        return _gauss_rule(center - width / 2, center + width / 2)
-    edges = [width / 2]
-    while edges[-1] > 2 * scale and len(edges) < 30:
-        edges.append(edges[-1] / 2)
-    edges = np.array([0.0, *edges[::-1]])
-    parts = [_gauss_rule(a, b) for a, b in zip(edges[:-1], edges[1:])]
-    x = np.concatenate([p[0] for p in parts])
-    w = np.concatenate([p[1] for p in parts])
-    return np.concatenate([-x[::-1], x]), np.concatenate([w[::-1], w])
-
-
-def _axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarray]:
-    """Cell-averaged factors (see CELL_RADIUS): Phi_bar = (1/dV) ∫_cell Phi dk, factor V sqrt(Lambda).
-
-    All cells of one slab are evaluated in one call: the nodes of all (k2, k3) cells are one outer product
-    of the k1 rule with the concatenated k2 and k3 rules, summed per cell by np.bincount. beta comes from
-    the lifetime table (as in the rest of the stencil).
-    """
-    dk1, dk2, dk3 = box.dk()
-    r2 = min(CELL_RADIUS, (box.nyp - 1) // 2)
-    r3 = min(CELL_RADIUS, (box.nzp - 1) // 2)
-    n_slabs = min(box.nk1, int(CELL_K1_FACTOR * max(dk2, dk3) / dk1) + 1)
-    table = shear_lifetime_table(params)
-    js, ls = np.arange(-r2, r2 + 1), np.arange(-r3, r3 + 1)
-    n3 = len(ls)
-    index, factor = [], []
-    for i in range(n_slabs):
-        k1c = box.k1()[i]
-        x1, w1 = _gauss_rule(k1c - dk1 / 2, k1c + dk1 / 2, 2)
-        scale = max(abs(k1c), dk1 / 4)
-        rules2 = [_cell_rule(j * dk2, dk2, scale) for j in js]
-        rules3 = [_cell_rule(l * dk3, dk3, scale) for l in ls]
-        x2, w2 = np.concatenate([r[0] for r in rules2]), np.concatenate([r[1] for r in rules2])
-        x3, w3 = np.concatenate([r[0] for r in rules3]), np.concatenate([r[1] for r in rules3])
-        id2 = np.repeat(np.arange(len(js)), [len(r[0]) for r in rules2])
-        id3 = np.repeat(np.arange(n3), [len(r[0]) for r in rules3])
-        shape = (len(x1), len(x2), len(x3))
-        k1n, k2n, k3n = (np.broadcast_to(v, shape).ravel() for v in (x1[:, None, None], x2[None, :, None], x3))
-        weight = (w1[:, None, None] * w2[None, :, None] * w3[None, None, :]).ravel()
-        cell = np.broadcast_to(id2[None, :, None] * n3 + id3[None, None, :], shape).ravel()
-        beta = params.gamma * table.from_ksq(k1n * k1n + k2n * k2n + k3n * k3n, params.length_scale_m)
-        phi = sheared_tensor(k1n, k2n, k3n, params, beta=beta) * weight
-        ncell = len(js) * n3
-        cells = np.stack(  # ∫_cell Phi dk / 2 (E|n|^2 = 2), (3, 3, ncell)
-            [[np.bincount(cell, phi[a, b], minlength=ncell) for b in range(3)] for a in range(3)]
-        ) / 2.0
-        if i == 0:
-            cells[:, :, r2 * n3 + r3] = 0.0  # the cell around k = 0: the box mean stays zero
-        lam, vec = np.linalg.eigh(np.moveaxis(cells, -1, 0))
-        factor.append(vec * np.sqrt(np.clip(lam, 0.0, None))[:, None, :])
-        index.extend((i, j % box.nyp, l % box.nzp) for j in js for l in ls)
-    index = np.array(index, dtype=np.int64).reshape(-1, 3)
-    factor = np.concatenate(factor).astype(np.float32) if factor else np.zeros((0, 3, 3), np.float32)
-    return index, factor
-
-
 def stencil_key(params: MannParams, box: BoxShape, with_tau: bool) -> str:
-    """Hash of everything the stencil depends on (cache file name)."""
+    """Hash of everything the unit stencil depends on (cache file name): all parameters but ae."""
     text = json.dumps(
-        {"v": STENCIL_VERSION, "params": asdict(params), "box": asdict(box), "tau": with_tau}, sort_keys=True
+        {"v": STENCIL_VERSION, "params": asdict(params.with_ae(1.0)), "box": asdict(box), "tau": with_tau},
+        sort_keys=True,
     )
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
@@ -334,54 +322,79 @@ def build_stencil(
     return _build(params, box, evolving and params.evo_time_s is not None, slabs, cells)
 
 
-def axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarray]:
-    """(cell_index, cell_factor) of the cell-averaged factors near the k1 axis (see MannStencil)."""
-    return _axis_cells(params, box)
+def build_unit_stencil(
+    params: MannParams, box: BoxShape, *, evolving: bool = True, factors: np.ndarray | None = None
+) -> UnitMannStencil:
+    """The ae-free stencil of ``params`` on ``box``, to serve every ae through scale_stencil.
 
+    Building it costs what build_stencil costs; scaling it, a few multiplications per point.
 
-def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
-    """The full factor C (3, 3, nyp, nzp) [float64, times sqrt(dk/2)] of slab ``i``: compact form + axis cells.
+    Parameters
+    ----------
+    params : Mann parameters; ae is ignored (the result carries ae = 1).
+    box : the synthesis box.
+    evolving : False skips 1/tau_e (a stencil for single snapshots), as in build_stencil.
+    factors : optional (4, nk1, nyp//2+1, nzp) float64 array to hold the factors (e.g. a file mapped
+        by the stencil cache); by default they are allocated: twice the bytes of a MannStencil's
+        coefficients (unit_stencil_nbytes).
 
-    For tests and the discrete oracle: E[u_hat u_hat^H] = 2 C C^T on every stored point.
+    Returns
+    -------
+    UnitMannStencil
     """
-    box = stencil.box
-    full = [
-        expand_k2(stencil.coef[n, i].astype(float), box.nyp, _ODD[n], np.empty((box.nyp, box.nzp)))
-        for n in range(4)
-    ]
-    a, p, z1, z2 = full
-    k1 = box.k1()[i]
-    k2 = box.k2()[:, None] * np.ones((1, box.nzp))
-    q = k1 * k1 + k2 * k2
-    w = w_coefficient(a, p, q, q + box.k3()[None, :] ** 2, np.empty_like(a), np.empty_like(a))
-    c = np.zeros((3, 3, box.nyp, box.nzp))
-    # u = P n1 - A k2 n2 + Z1 (k2 n0 - k1 n1); v = -P n0 + A k1 n2 + Z2 (k2 n0 - k1 n1); w = W (k2 n0 - k1 n1)
-    c[0] = [z1 * k2, p - z1 * k1, -a * k2]
-    c[1] = [-p + z2 * k2, -z2 * k1, a * k1]
-    c[2] = [w * k2, -w * k1, np.zeros_like(a)]
-    cells = stencil.cells_in(i, i + 1)
-    rows, cols = stencil.cell_index[cells, 1], stencil.cell_index[cells, 2]
-    c[:, :, rows, cols] = np.moveaxis(stencil.cell_factor[cells].astype(float), 0, -1)
-    return c
+    with_tau = evolving and params.evo_time_s is not None
+    nh, nzp = box.nk2_half, box.nzp
+    unit_params = params.with_ae(1.0)
+    k1_all = box.k1()
+    k2 = box.k2()[:nh][:, None]
+    k3 = box.k3()
+    factors = np.empty((4, box.nk1, nh, nzp)) if factors is None else factors
+    inv_tau = np.empty((box.nk1, nh, nzp), dtype=np.float32) if with_tau else None
+
+    def batch(i0: int, i1: int) -> None:
+        tau = np.empty((i1 - i0, nh, nzp)) if with_tau else None
+        _unit_coefficients(unit_params, k1_all[i0:i1, None, None], k2, k3, factors[:, i0:i1], tau)
+        if with_tau:
+            inv_tau[i0:i1] = tau
+
+    _batches(box, 0, box.nk1, batch)
+    return UnitMannStencil(unit_params, box, factors, inv_tau)
 
 
-def discrete_spectra(stencil: MannStencil) -> np.ndarray:
-    """Exact expectation of the synthesised discrete field: S[i, j, slab] = sum over (k2, k3) of E[u_hat_i u_hat_j^*].
+def scale_stencil(unit: UnitMannStencil, params: MannParams) -> MannStencil:
+    """The stencil of ``params`` (ae included) from the ae-free ``unit`` stencil.
 
-    Shape (3, 3, nk1), real [m^2 s^-2]. A point's variance is sum_slab w_slab S[i, i, slab] with
-    w = 1 on the k1 = 0 and Nyquist slabs and 2 elsewhere (the Hermitian partner slab).
+    Bit-identical to build_stencil(params, unit.box): the energy enters by the same float64 operations
+    at the same point (_apply_energy), then the coefficients are rounded to float32. The axis cells
+    (a few hundred 3 x 3 factors) are computed for ``params``: their eigen-decomposition is not
+    linear in ae to the last bit.
+
+    Parameters
+    ----------
+    unit : from build_unit_stencil (or the stencil cache) of parameters equal to ``params`` but for ae.
+    params : the run's parameters, ae [m^(4/3) s^-2] included.
+
+    Returns
+    -------
+    MannStencil : sharing ``unit.inv_tau`` (1/tau_e does not depend on ae).
+
+    Raises
+    ------
+    ValueError : ``unit`` was built for parameters that differ from ``params`` in more than ae.
     """
-    out = np.empty((3, 3, stencil.box.nk1))
-    for i in range(stencil.box.nk1):
-        c = slab_factor(stencil, i)
-        out[:, :, i] = 2.0 * np.einsum("ikyz,jkyz->ij", c, c)
-    return out
+    if params.with_ae(1.0) != unit.params:
+        raise ValueError("the unit stencil was built for other parameters than ae")
+    box = unit.box
+    nh, nzp = box.nk2_half, box.nzp
+    scale = np.sqrt(np.prod(box.dk()) / 2.0)
+    energy = energy_scale(params)
+    k1_all = box.k1()
+    coef = np.empty((4, box.nk1, nh, nzp), dtype=np.float32)
 
+    def batch(i0: int, i1: int) -> None:
+        work = np.empty((4, i1 - i0, nh, nzp))
+        coef[:, i0:i1] = _apply_energy(unit.factors[:, i0:i1], energy, k1_all[i0:i1, None, None], scale, work)
 
-def slab_weights(nt: int) -> np.ndarray:
-    """Weights 1 (k1 = 0, Nyquist) or 2 of the half-spectrum slabs in full-spectrum sums."""
-    w = np.full(nt // 2 + 1, 2.0)
-    w[0] = 1.0
-    if nt % 2 == 0:
-        w[-1] = 1.0
-    return w
+    _batches(box, 0, box.nk1, batch)
+    index, factor = axis_cells(params, box)
+    return MannStencil(params, box, coef, unit.inv_tau, index, factor)

@@ -4,7 +4,8 @@ All return the *un-squared* (magnitude) coherence, i.e. the correlation coeffici
 Fourier amplitudes that a synthesis uses directly; square it to compare with a
 magnitude-squared estimate. Separations in m, frequencies in Hz, speeds in m/s.
 
-yz-plane:      exponential_yz                          (IEC 61400-1; paper 000 Eq. 12)
+yz-plane:      exponential_yz                          (IEC 61400-1; paper 000 Eq. 12),
+               exponential_yz_decay_length_m           (its bound exp(-r / decay), for the embedding)
 longitudinal:  exponential_longitudinal(a_x, b_x)      (paper 000 Eq. 18)
                simley_pao(sigma_total, L_u)            (Simley & Pao 2015 LES parameters of Eq. 18)
                kristensen(sigma_total, L_u)            (Kristensen 1979)
@@ -20,6 +21,24 @@ def exponential_yz(r_m, f_hz, U_m_s: float, a_yz: float = 12.0, lc_m: float = 34
     r = np.asarray(r_m, dtype=float)
     f = np.asarray(f_hz, dtype=float)
     return np.exp(-a_yz * r * np.sqrt((f / U_m_s) ** 2 + (0.12 / lc_m) ** 2))
+
+
+def exponential_yz_decay_length_m(f_hz: float, U_m_s: float, a_yz: float = 12.0, lc_m: float = 340.2) -> float:
+    """Decay length of exponential_yz at ``f_hz``: coh(r) = exp(-r / decay) with decay = 1 / (a_yz kappa).
+
+    Parameters
+    ----------
+    f_hz : frequency [Hz].
+    U_m_s : mean wind speed [m/s].
+    a_yz : coherence decrement [-] (IEC 61400-1: 12).
+    lc_m : coherence scale parameter Lc [m] (IEC 61400-1: 8.1 Lambda_1).
+
+    Returns
+    -------
+    float : decay [m], kappa = sqrt((f/U)^2 + (0.12/Lc)^2) [1/m]; infinite for a_yz = 0 (full coherence).
+    """
+    kappa = np.hypot(f_hz / U_m_s, 0.12 / lc_m)
+    return 1.0 / (a_yz * kappa) if a_yz > 0 else np.inf
 
 
 def exponential_longitudinal(dx_m, f_hz, U_m_s: float, a_x: float, b_x: float):

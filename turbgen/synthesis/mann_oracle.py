@@ -1,0 +1,59 @@
+"""The exact second moments of a synthesised Mann field, from its stencil: the discrete oracle of the tests.
+
+The generator forms u_hat = C n with E|n|^2 = 2 per component (turbgen.synthesis.mann_spacetime), so
+E[u_hat u_hat^H] = 2 C C^T at every stored point; these functions rebuild C from the compact stencil.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from turbgen.synthesis.mann_stencil import _ODD, MannStencil, expand_k2, w_coefficient
+
+
+def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
+    """The full factor C (3, 3, nyp, nzp) [float64, times sqrt(dk/2)] of slab ``i``: compact form + axis cells.
+
+    For tests and the discrete oracle: E[u_hat u_hat^H] = 2 C C^T on every stored point.
+    """
+    box = stencil.box
+    full = [
+        expand_k2(stencil.coef[n, i].astype(float), box.nyp, _ODD[n], np.empty((box.nyp, box.nzp)))
+        for n in range(4)
+    ]
+    a, p, z1, z2 = full
+    k1 = box.k1()[i]
+    k2 = box.k2()[:, None] * np.ones((1, box.nzp))
+    q = k1 * k1 + k2 * k2
+    w = w_coefficient(a, p, q, q + box.k3()[None, :] ** 2, np.empty_like(a), np.empty_like(a))
+    c = np.zeros((3, 3, box.nyp, box.nzp))
+    # u = P n1 - A k2 n2 + Z1 (k2 n0 - k1 n1); v = -P n0 + A k1 n2 + Z2 (k2 n0 - k1 n1); w = W (k2 n0 - k1 n1)
+    c[0] = [z1 * k2, p - z1 * k1, -a * k2]
+    c[1] = [-p + z2 * k2, -z2 * k1, a * k1]
+    c[2] = [w * k2, -w * k1, np.zeros_like(a)]
+    cells = stencil.cells_in(i, i + 1)
+    rows, cols = stencil.cell_index[cells, 1], stencil.cell_index[cells, 2]
+    c[:, :, rows, cols] = np.moveaxis(stencil.cell_factor[cells].astype(float), 0, -1)
+    return c
+
+
+def discrete_spectra(stencil: MannStencil) -> np.ndarray:
+    """Exact expectation of the synthesised discrete field: S[i, j, slab] = sum over (k2, k3) of E[u_hat_i u_hat_j^*].
+
+    Shape (3, 3, nk1), real [m^2 s^-2]. A point's variance is sum_slab w_slab S[i, i, slab] with
+    w = 1 on the k1 = 0 and Nyquist slabs and 2 elsewhere (the Hermitian partner slab).
+    """
+    out = np.empty((3, 3, stencil.box.nk1))
+    for i in range(stencil.box.nk1):
+        c = slab_factor(stencil, i)
+        out[:, :, i] = 2.0 * np.einsum("ikyz,jkyz->ij", c, c)
+    return out
+
+
+def slab_weights(nt: int) -> np.ndarray:
+    """Weights 1 (k1 = 0, Nyquist) or 2 of the half-spectrum slabs in full-spectrum sums."""
+    w = np.full(nt // 2 + 1, 2.0)
+    w[0] = 1.0
+    if nt % 2 == 0:
+        w[-1] = 1.0
+    return w
