@@ -25,7 +25,6 @@ from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.synthesis.mann_spacetime import COMPONENTS, MannSnapshots, snapshot_memory_bytes
 from turbgen.synthesis.mann_stencil import (
-    BoxShape,
     MannStencil,
     UnitMannStencil,
     build_stencil,

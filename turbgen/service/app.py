@@ -285,7 +285,6 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
     @app.get("/runs/{rid}/lidar")
     def lidar(rid: str, lidar: str = "nacelle-4beam"):
         """`turbgen lidar --json` on the run's store for a lidar *preset* (computed once per preset, cached)."""
-        from turbgen.errors import ParameterError
         from turbgen.lidar.description import PRESETS
         from turbgen.lidar.report import lidar_report
         from turbgen.store import open_store
@@ -331,7 +330,7 @@ class _GridShape:
 
 
 def _has_temp(catalog: Catalog, rid: str) -> bool:
-    from turbgen.store.writer import temp_prefix
+    from turbgen.store.temporaries import temp_prefix
 
     prefix = temp_prefix(catalog.store_path(rid))
     return any(p.name.startswith(prefix) for p in catalog.run_dir(rid).iterdir())

@@ -23,7 +23,7 @@ from turbgen import __version__
 from turbgen.errors import ParameterError, TurbgenError
 from turbgen.spec.config import check_mapping
 from turbgen.store.layout import grid_to_attrs
-from turbgen.store.writer import temp_prefix
+from turbgen.store.temporaries import temp_prefix
 
 STORE = "store.zarr"
 _ID = re.compile(r"^[0-9a-f]{24}$")

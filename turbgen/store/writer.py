@@ -30,7 +30,6 @@ from turbgen.grid import Grid
 from turbgen.resources import format_bytes, require_disk
 from turbgen.store import layout
 from turbgen.store.temporaries import exit_on_signals, publish, remove_dead_temporaries, report_removed, temp_name
-from turbgen.store.temporaries import temp_prefix  # noqa: F401  (re-exported for readers)
 from turbgen.store.paths import check_output_path
 
 def _jsonable(value):
