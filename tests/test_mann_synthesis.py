@@ -21,9 +21,9 @@ from turbgen.synthesis.mann_stencil import (
     discrete_spectra,
     expand_k2,
     slab_factor,
-    slab_weights,
 )
 from turbgen.synthesis.random_streams import complex_normal
+from turbgen.theory.lattice import pair_weights
 from turbgen.theory.mann_tensor import tensor_factor
 from turbgen.theory.params import MannParams
 
@@ -143,7 +143,7 @@ def test_per_slab_energy_matches_the_discrete_oracle(small):
 
 def test_point_variance_and_uw_covariance_match_oracle(small):
     box = small.box
-    total = np.einsum("ijs,s->ij", discrete_spectra(small), slab_weights(box.nt))
+    total = np.einsum("ijs,s->ij", discrete_spectra(small), pair_weights(box.nt))
     n_seeds = 300
     fields = np.stack([mann_box(small, box.nyp, box.nzp, seed) for seed in range(n_seeds)]).astype(float)
     cov = np.einsum("sitab,sjtab->ij", fields, fields) / (n_seeds * box.nt * box.nyp * box.nzp)

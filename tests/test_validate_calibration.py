@@ -19,7 +19,7 @@ from turbgen.sweep.plan import build_run
 from turbgen.validate import ALPHA, validate
 from turbgen.validate.distributions import coh2_tails, coh2_z, cospectrum_tails, phase_sf
 from turbgen.validate.estimators import WelchSetup, segment_starts
-from turbgen.validate.expectations import WelchKernel
+from turbgen.validate.welch_kernel import WelchKernel
 from turbgen.validate.welch_variance import WelchCovariance
 
 ISSUE_GRID = {"nt": 512, "ny": 12, "nz": 12, "dy": 10.0, "dz": 10.0, "planes": [0.0, 50.0]}

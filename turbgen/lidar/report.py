@@ -28,7 +28,7 @@ def store_theory(fs, description, f_hz, radius_m: float):
     """PreviewSpectra of ``description`` for the store's model and parameters at f_hz > 0."""
     from turbgen.lidar.preview import preview_spectra
     from turbgen.theory.params import KaimalParams
-    from turbgen.validate.expectations import mann_params_from_attrs
+    from turbgen.validate.store_run import mann_params_from_attrs
 
     p = fs.attrs["parameters"]
     if fs.model == "mann":

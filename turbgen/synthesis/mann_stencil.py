@@ -27,6 +27,7 @@ from functools import lru_cache
 import numpy as np
 
 from turbgen.theory.eddy_lifetime import evolution_lifetime_table, shear_lifetime_table
+from turbgen.theory.lattice import k2_wavenumbers, k3_wavenumbers
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
 
@@ -39,7 +40,8 @@ _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0
 # energy in the cells (k1, 0, 0): sigma_w^2 of the default paper box came out 76 % above the model.
 # Cells with |k2| <= CELL_RADIUS dk2, |k3| <= CELL_RADIUS dk3 and |k1| <= CELL_K1_FACTOR max(dk2, dk3)
 # use a square root of the cell-averaged tensor instead (tensor-product Gauss rules, graded towards
-# the k1 axis down to the scale |k1|).
+# the k1 axis down to the scale |k1|). turbgen.validate.mann_lattice integrates these cells with its own
+# rule on purpose (an independent check of this one): do not share the rules.
 CELL_RADIUS = 2
 CELL_K1_FACTOR = 4.0  # (1, 2) and (3, 8) change the paper box's sigma^2 by < 0.4 % and < 0.1 %
 _CELL_GAUSS = 4
@@ -80,12 +82,11 @@ class BoxShape:
 
     def k2(self) -> np.ndarray:
         """k2 [rad/m] of all nyp rows: j dk2 for j <= nyp//2 (Nyquist stored positive), else (j - nyp) dk2."""
-        j = np.arange(self.nyp)
-        return np.where(j <= self.nyp // 2, j, j - self.nyp) * self.dk()[1]
+        return k2_wavenumbers(self.nyp, self.dy_m)
 
     def k3(self) -> np.ndarray:
         """k3 [rad/m] of the nzp columns (numpy fftfreq order)."""
-        return np.fft.fftfreq(self.nzp, d=self.dz_m) * 2 * np.pi
+        return k3_wavenumbers(self.nzp, self.dz_m)
 
 
 @dataclass(frozen=True, eq=False)
@@ -377,11 +378,3 @@ def discrete_spectra(stencil: MannStencil) -> np.ndarray:
         out[:, :, i] = 2.0 * np.einsum("ikyz,jkyz->ij", c, c)
     return out
 
-
-def slab_weights(nt: int) -> np.ndarray:
-    """Weights 1 (k1 = 0, Nyquist) or 2 of the half-spectrum slabs in full-spectrum sums."""
-    w = np.full(nt // 2 + 1, 2.0)
-    w[0] = 1.0
-    if nt % 2 == 0:
-        w[-1] = 1.0
-    return w

@@ -5,8 +5,10 @@
     report.passed, report.to_dict(), report.table(), report.plots("figs/")
 
 Modules: ``estimators`` (Welch estimates with dask over the store's chunks), ``expectations``
-(the model's prediction on the store's grid), ``verdict`` (tolerances from the estimators'
-statistical uncertainty, pass/fail), ``report`` (terminal table, JSON, PNG plots).
+(the model's prediction on the store's grid, for the ``prediction.SamplingDesign`` of the estimates;
+split into ``kaimal_expectation``, ``mann_expectation``, ``mann_lattice``, ``welch_kernel``,
+``pair_sums``, ``store_run``), ``verdict`` (tolerances from the estimators' statistical uncertainty,
+pass/fail), ``report`` (terminal table, JSON, PNG plots).
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ from dataclasses import dataclass
 
 from turbgen.store import FieldStore, open_store
 from turbgen.validate.estimators import DEFAULT_ROTOR_RADIUS_M, Estimates, estimate
-from turbgen.validate.expectations import Theory, theory_for
+from turbgen.validate.expectations import theory_for
+from turbgen.validate.prediction import SamplingDesign, Theory
 from turbgen.validate.verdict import ALPHA, MetricResult, judge
 
 
@@ -68,7 +71,7 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
     t0 = time.perf_counter()
     est = estimate(fs, rotor_radius_m=rotor_radius_m, nperseg=nperseg, workers=workers)
     t1 = time.perf_counter()
-    th = theory_for(fs, est.setup, est.separations, est.rotor_mask, est.long_iy, est.long_iz)
+    th = theory_for(fs, SamplingDesign.of(est))
     t2 = time.perf_counter()
     metrics = judge(est, th)
     t3 = time.perf_counter()

@@ -55,7 +55,8 @@ from scipy.stats import chi2, norm
 
 from turbgen.validate.distributions import coh2_z, cospectrum_z, phase_z
 from turbgen.validate.estimators import COMPONENTS, Estimates, segment_starts
-from turbgen.validate.expectations import Theory, WelchKernel
+from turbgen.validate.prediction import Theory
+from turbgen.validate.welch_kernel import WelchKernel
 from turbgen.validate.welch_variance import MAX_LAG, WelchCovariance
 
 ALPHA = 1e-3  # family-wise probability that a correct field fails one given metric
