@@ -149,5 +149,5 @@ def test_long_records_fall_back_to_the_rule_of_thumb(tmp_path, monkeypatch):
     monkeypatch.setattr(wv, "MAX_WORK", 0)
     rough = validate(path, workers=1)
     assert exact.failed == rough.failed == []
-    s_exact, s_rough = (r.metric("spectrum_u").tests[0].sigma for r in (exact, rough))
+    s_exact, s_rough = (r.metric("spectrum_u").checks[0].sigma for r in (exact, rough))
     assert s_rough < s_exact  # bin 1 of a short record: the rule of thumb is optimistic (see above)

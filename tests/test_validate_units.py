@@ -15,7 +15,7 @@ from turbgen.validate.estimators import (
     welch_series,
 )
 from turbgen.validate.pair_sums import rect_pair_counts, set_pair_counts
-from turbgen.validate.verdict import COHERENCE_FLOOR, coherence_stats
+from turbgen.validate.band_checks import COHERENCE_FLOOR, coherence_stats
 from turbgen.validate.welch_kernel import WelchKernel
 from turbgen.errors import ParameterError
 

@@ -20,7 +20,8 @@ from turbgen.store import FieldStore, open_store
 from turbgen.validate.estimators import DEFAULT_ROTOR_RADIUS_M, Estimates, estimate
 from turbgen.validate.expectations import theory_for
 from turbgen.validate.prediction import SamplingDesign, Theory
-from turbgen.validate.verdict import ALPHA, MetricResult, judge
+from turbgen.validate.checks import ALPHA, MetricResult
+from turbgen.validate.verdict import judge
 
 
 

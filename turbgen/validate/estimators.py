@@ -17,7 +17,7 @@ Estimated quantities (one-sided, [m^2 s^-2 Hz^-1] unless stated):
 * longitudinal cross-spectra of u between every pair of planes (same y, z, same stored time t,
   i.e. in the convected frame of the store) on a sub-lattice of at most ~16 x 16 points;
 * the rotor-effective wind speed series of each plane (mean of u over the points within the
-  rotor radius, paper 000 Eq. 23 on the grid) and its Welch spectrum averaged over planes.
+  rotor radius, Guo et al. 2022, Eq. 23 on the grid) and its Welch spectrum averaged over planes.
 """
 
 from __future__ import annotations
@@ -137,7 +137,7 @@ def default_separations(grid: Grid) -> tuple[tuple[int, int], ...]:
     return tuple(seps)
 
 
-DEFAULT_ROTOR_RADIUS_M = 63.0  # NREL 5 MW (paper 000)
+DEFAULT_ROTOR_RADIUS_M = 63.0  # NREL 5 MW reference turbine (Jonkman et al. 2009), as in Guo et al. 2022
 
 
 def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
@@ -152,7 +152,7 @@ def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
 def check_rotor_radius(grid: Grid, radius_m: float | None) -> float:
     """The rotor disc must lie inside the grid: 0 < R <= half the smaller grid extent.
 
-    None: the default 63 m (NREL 5 MW, paper 000), or the largest disc that fits a smaller grid.
+    None: the default 63 m (NREL 5 MW, Jonkman et al. 2009), or the largest disc that fits a smaller grid.
     """
     half = min((grid.ny - 1) * grid.dy_m, (grid.nz - 1) * grid.dz_m) / 2.0
     if radius_m is None:
