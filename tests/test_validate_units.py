@@ -5,19 +5,12 @@ import pytest
 import scipy.signal
 
 from turbgen.grid import Grid
-from turbgen.validate.estimators import (
-    WelchSetup,
-    check_rotor_radius,
-    default_nperseg,
-    default_separations,
-    plan_spans,
-    rotor_mask,
-    welch_series,
-)
-from turbgen.validate.pair_sums import rect_pair_counts, set_pair_counts
-from turbgen.validate.band_checks import COHERENCE_FLOOR, coherence_stats
-from turbgen.validate.welch_kernel import WelchKernel
 from turbgen.errors import ParameterError
+from turbgen.validate.band_checks import COHERENCE_FLOOR, coherence_stats
+from turbgen.validate.estimators import WelchSetup, default_nperseg, plan_spans, welch_series
+from turbgen.validate.pair_sums import rect_pair_counts, set_pair_counts
+from turbgen.validate.point_sets import check_rotor_radius, default_separations, rotor_mask
+from turbgen.validate.welch_kernel import WelchKernel
 
 
 def test_hann_correlations_match_welch_1967():
@@ -141,7 +134,8 @@ def test_kaimal_rews_lines_equal_eq25_of_the_theory_module():
     run = KaimalRun(kaimal=kaimal_params(14.0, "A", 90.0), grid=g, U_m_s=14.0, seed=1)
     mask = rotor_mask(g, 35.0)
     setup = WelchSetup(64, g.dt_s)
-    th = kaimal_theory(run.to_attrs(), SamplingDesign(g, setup, default_separations(g), mask, np.arange(12), np.arange(10)))
+    design = SamplingDesign(g, setup, default_separations(g), mask, np.arange(12), np.arange(10))
+    th = kaimal_theory(run.to_attrs(), design)
     yy, zz = np.meshgrid(g.y(), g.z(), indexing="ij")
     j = np.array([1, 5, 40, 200])
     ref = rews_spectrum_kaimal(th.line_f[j], run.kaimal, 14.0, yy[mask], zz[mask])

@@ -20,7 +20,20 @@ NEAR_UNIT = 1e-3  # 1 - |rho|^2 below this: delta method with the float32 floor 
 
 
 def chi2_z(ratio, nu):
-    """Normal score of ratio ~ chi2_nu / nu (two-sided tails kept symmetric in probability)."""
+    """Normal score of an observed ``ratio`` under ratio ~ chi2_nu / nu.
+
+    Parameters
+    ----------
+    ratio : array_like
+        Estimate / expectation [-].
+    nu : array_like
+        Degrees of freedom [-].
+
+    Returns
+    -------
+    numpy.ndarray
+        z [-] with the probability of the smaller tail (two-sided tails kept symmetric in probability).
+    """
     ratio, nu = np.asarray(ratio, float), np.asarray(nu, float)
     lower = chi2.logcdf(nu * ratio, nu)
     upper = chi2.logsf(nu * ratio, nu)

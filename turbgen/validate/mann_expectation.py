@@ -52,7 +52,25 @@ def _interp_lines(k1_nodes, values, k1_lines, positive: bool):
 def band_limited_spectra(params: MannParams, grid: Grid, k1: np.ndarray, n_theta: int = 24, n_panels: int = 24):
     """Continuous F_ii(k1) = ∫ Phi_ii dk2 dk3 over the grid's Nyquist rectangle |k2| <= pi/dy, |k3| <= pi/dz.
 
-    Returns (3, len(k1)) [m^3 s^-2], two-sided in k1. Polar quadrature: Gauss-Legendre in angle on the
+    Parameters
+    ----------
+    params : MannParams
+        The Mann model.
+    grid : Grid
+        The store's grid (dy, dz [m]).
+    k1 : numpy.ndarray
+        Streamwise wavenumbers [rad/m].
+    n_theta, n_panels : int
+        Gauss-Legendre nodes per angular sector and panels in ln kappa.
+
+    Returns
+    -------
+    numpy.ndarray
+        (3, len(k1)) F_11, F_22, F_33 [m^3 s^-2], two-sided in k1.
+
+    Notes
+    -----
+    Polar quadrature: Gauss-Legendre in angle on the
     four sectors between the rectangle's corners (kappa_max(theta) = k_N / |cos| or / |sin| is smooth
     inside each), Gauss panels in ln kappa from 1e-7 s to kappa_max (s = sqrt(k1^2 + L^-2)), which
     resolves the peak of Phi_33 near kappa ~ k1 at small k1. This is the model the grid can represent,

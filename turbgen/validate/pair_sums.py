@@ -16,14 +16,27 @@ from turbgen.validate.estimators import COMPONENTS
 from turbgen.validate.prediction import SamplingDesign
 
 def rect_pair_counts(ny: int, nz: int, my: int, mz: int) -> np.ndarray:
-    """Pairs of points of an my x mz rectangle per separation (dy, dz) on the (2ny-1, 2nz-1) lag grid."""
+    """Pairs of points of an my x mz rectangle of grid points per lag.
+
+    Parameters
+    ----------
+    ny, nz : int
+        Grid points in y and z (the lag grid is (2 ny - 1, 2 nz - 1), lags -(n-1) .. n-1 steps).
+    my, mz : int
+        Extent of the rectangle [points].
+
+    Returns
+    -------
+    numpy.ndarray
+        (2 ny - 1, 2 nz - 1) number of ordered point pairs per lag (float).
+    """
     dy = np.arange(-(ny - 1), ny)
     dz = np.arange(-(nz - 1), nz)
     return np.maximum(my - np.abs(dy), 0)[:, None] * np.maximum(mz - np.abs(dz), 0)[None, :].astype(float)
 
 
 def set_pair_counts(ny: int, nz: int, iy: np.ndarray, iz: np.ndarray) -> np.ndarray:
-    """Pairs of points of the sub-lattice iy x iz per separation on the (2ny-1, 2nz-1) lag grid."""
+    """Pairs of points of the sub-lattice ``iy`` x ``iz`` (grid indices) per lag, as :func:`rect_pair_counts`."""
     cy = np.zeros(2 * ny - 1)
     cz = np.zeros(2 * nz - 1)
     np.add.at(cy, (iy[:, None] - iy[None, :]).ravel() + ny - 1, 1.0)
@@ -83,7 +96,7 @@ class RhoAccumulator:
 
 
 def rotor_pair_counts(grid: Grid, mask: np.ndarray) -> np.ndarray:
-    """Pairs of rotor points per lag on the (2ny-1, 2nz-1) lag grid (autocorrelation of the mask)."""
+    """Pairs of rotor points (``mask``, (ny, nz) bool) per lag, as :func:`rect_pair_counts` (mask autocorrelation)."""
     sy, sz = 2 * grid.ny - 1, 2 * grid.nz - 1
     f = np.fft.rfft2(mask.astype(float), s=(sy, sz))
     ac = np.fft.irfft2(np.abs(f) ** 2, s=(sy, sz))
@@ -91,7 +104,7 @@ def rotor_pair_counts(grid: Grid, mask: np.ndarray) -> np.ndarray:
 
 
 def box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
-    """Values at lags -(n-1) .. n-1 (periodic box index lag mod nyp) -> (..., 2ny-1, 2nz-1)."""
+    """Values of a periodic box field (..., nyp, nzp) at the grid's lags -(n-1) .. n-1 -> (..., 2 ny - 1, 2 nz - 1)."""
     iy = np.arange(-(ny - 1), ny) % field2d.shape[-2]
     iz = np.arange(-(nz - 1), nz) % field2d.shape[-1]
     return field2d[..., iy[:, None], iz[None, :]]

@@ -59,7 +59,18 @@ def _metric_dict(m: MetricResult) -> dict:
 
 
 def components(report) -> dict:
-    """Per component: mean, sigma (estimated, expected on this grid, full model), TI."""
+    """Per component: mean [m/s], sigma [m/s] (estimated, expected on this grid, full model), TI [-].
+
+    Parameters
+    ----------
+    report : ValidationReport
+        The validation.
+
+    Returns
+    -------
+    dict
+        component -> dict of those values.
+    """
     est, th, U = report.estimates, report.theory, report.store.U_m_s
     out = {}
     for c in COMPONENTS:
@@ -77,7 +88,7 @@ def components(report) -> dict:
 
 
 def to_dict(report) -> dict:
-    """The JSON-serialisable result (keys in the module docstring)."""
+    """The JSON-serialisable result of ``report`` (a ValidationReport; keys and units in the module docstring)."""
     est = report.estimates
     g = est.grid
     return {
@@ -113,7 +124,7 @@ def _fmt_band(t: Check) -> str:
 
 
 def table(report) -> str:
-    """Readable multi-line summary for the terminal."""
+    """Readable multi-line summary of ``report`` (a ValidationReport) for the terminal."""
     est, band = report.estimates, report.theory.band
     lines = [
         f"store   {report.store.path} ({report.store.model})",
@@ -157,7 +168,21 @@ def _premultiplied(c: Curve) -> Curve:
 
 
 def plots(report, directory) -> list[Path]:
-    """One PNG per metric with curves (estimate with 95 % band, theory line) in ``directory``."""
+    """Plot every metric of a validation.
+
+    Parameters
+    ----------
+    report : ValidationReport
+        The validation.
+    directory : str or pathlib.Path
+        Where the PNG files go (created if missing).
+
+    Returns
+    -------
+    list of pathlib.Path
+        One PNG per metric with curves (estimate with its 95 % band, the expectation on the grid, the
+        continuous model where there is one).
+    """
     import matplotlib
 
     matplotlib.use("Agg")

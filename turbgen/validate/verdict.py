@@ -34,7 +34,7 @@ Uncertainties (Gaussian fields; derivations in the comments below):
   (n gamma2 of order 10) |C|^2 is a noncentral chi2 with 2 degrees of freedom whose lower tail is far
   heavier than any Gaussian or gamma law with the same moments (a 1e-4 event looked like z = -5.6),
   and the phase is heavy-tailed as well. Near unit coherence (frozen planes) the delta method with
-  the float32 resolution floor is used (``coherence_stats``: Var coh2 = 2 g (1-g)^2/n + bias^2,
+  the float32 resolution floor is used (``band_checks.coherence_stats``: Var coh2 = 2 g (1-g)^2/n + bias^2,
   Var phase = (1-g)/(2 n g)).
 * u-w co-spectrum: Var of the point average <= E_u E_w (sqrt(rho_u rho_w) + rho_uw) / (2 K_m)
   (Cauchy-Schwarz on the Isserlis covariance; rho_uw the mean |u-w coherency|^2 over pairs; K_m the
@@ -67,7 +67,20 @@ def _band95(est, sd):
 
 
 def judge(est: Estimates, th: Theory) -> list[MetricResult]:
-    """All metrics of the store."""
+    """Pass/fail of every metric of the store (module docstring).
+
+    Parameters
+    ----------
+    est : Estimates
+        What was estimated from the store.
+    th : Theory
+        What the store's model predicts for the same sampling design.
+
+    Returns
+    -------
+    list of MetricResult
+        Mean, variances, spectra, yz and longitudinal coherences, u-w co-spectrum, REWS spectrum.
+    """
     kernel = WelchKernel(est.setup, est.grid.nt)
     bands = Bands(est)
     f = est.freqs

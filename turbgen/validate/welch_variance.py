@@ -98,7 +98,18 @@ class WelchCovariance:
         self.phase = np.exp(2j * np.pi * np.outer(self.lags, q.ravel()) / nt).reshape(self.lags.size, *q.shape)
 
     def cov(self, lines_half: np.ndarray) -> dict | None:
-        """Covariances for line variances ``lines_half`` (nt/2 + 1,) (L_j, j = 0 .. nt/2)."""
+        """Covariance of the one-point Welch estimate of a line process.
+
+        Parameters
+        ----------
+        lines_half : numpy.ndarray
+            (nt // 2 + 1,) two-sided line variances L_j [m^2 s^-2], j = 0 .. nt // 2.
+
+        Returns
+        -------
+        dict or None
+            Lag d -> (nbins - d,) Cov(P_m, P_{m+d}) [(m^2 s^-2 Hz^-1)^2]; None when too expensive.
+        """
         if not self.feasible:
             return None
         nt = self.nt
