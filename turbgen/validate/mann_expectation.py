@@ -113,14 +113,14 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
     Parameters
     ----------
     attrs : dict
-        The store's attributes (``parameters``, ``U_m_s`` [m/s]).
+        Store attributes: the Mann ``parameters`` (with the box padding ``pad_yz``) and ``U_m_s`` [m/s].
     design : SamplingDesign
-        Grid, Welch segments and point sets of the estimates.
+        The estimates' sampling design: grid, Welch segments, separations, rotor disc, sub-lattice.
 
     Returns
     -------
     Theory
-        Line (cross-)variances [m^2 s^-2] and correlation sums rho_bar [-] (module docstring).
+        Lattice sums per record line [m^2 s^-2] (interpolated from k1 nodes on long records) and rho_bar [-].
     """
     grid, setup, seps, mask = design.grid, design.setup, design.separations, design.rotor_mask
     p = attrs["parameters"]
