@@ -117,7 +117,7 @@ def test_time_domain_matches_frequency_domain_and_shuffled_planes_fail(stores):
     f, coh2, n_eff, fs, desc = _ensemble(stores["evolving"])
     th = np.concatenate([[0.0], store_theory(fs, desc, f[1:-1], desc.rotor_radius_m).coh2_RL, [0.0]])
     ok = compare.coherence_metric(f, coh2, th, n_eff)
-    assert len(ok.tests) >= 4 and ok.passed, (ok.max_abs_z, ok.z_crit)
+    assert len(ok.checks) >= 4 and ok.passed, (ok.max_abs_z, ok.z_crit)
     # shuffled planes: gates read the planes in reverse order (far gates from near planes)
     xs = sorted(desc.ranges_m)
     _, cs, ns, _, _ = _ensemble(stores["evolving"][:2], dict(zip(xs, xs[::-1])))

@@ -19,7 +19,7 @@ def test_known_coherence_passes_and_a_wrong_theory_fails():
     w = signals.welch_rl(a, b, setup)
     assert w["n_eff"] > 300  # 399 half-overlapping segments
     ok = compare.coherence_metric(w["f_hz"], w["coh2_RL"], np.full(w["f_hz"].size, 0.7), w["n_eff"])
-    assert len(ok.tests) == 31 and ok.passed, ok.max_abs_z
+    assert len(ok.checks) == 31 and ok.passed, ok.max_abs_z
     # theory 0.55 instead of 0.7: sd of coh2 = sqrt(2 g (1-g)^2 / n_eff) ~ 0.02-0.03, bins ~ 5-7 sd off
     bad = compare.coherence_metric(w["f_hz"], w["coh2_RL"], np.full(w["f_hz"].size, 0.55), w["n_eff"])
     assert not bad.passed

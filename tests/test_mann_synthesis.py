@@ -15,9 +15,10 @@ import pytest
 
 from turbgen.runs.stencil_cache import cached_stencil
 from turbgen.synthesis.mann_spacetime import MannSnapshots, hermitian_complete, mann_box
-from turbgen.synthesis.mann_oracle import discrete_spectra, slab_factor, slab_weights
+from turbgen.synthesis.mann_oracle import discrete_spectra, slab_factor
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil, expand_k2
 from turbgen.synthesis.random_streams import complex_normal
+from turbgen.theory.lattice import pair_weights
 from turbgen.theory.mann_tensor import tensor_factor
 from turbgen.theory.params import MannParams
 
@@ -137,7 +138,7 @@ def test_per_slab_energy_matches_the_discrete_oracle(small):
 
 def test_point_variance_and_uw_covariance_match_oracle(small):
     box = small.box
-    total = np.einsum("ijs,s->ij", discrete_spectra(small), slab_weights(box.nt))
+    total = np.einsum("ijs,s->ij", discrete_spectra(small), pair_weights(box.nt))
     n_seeds = 300
     fields = np.stack([mann_box(small, box.nyp, box.nzp, seed) for seed in range(n_seeds)]).astype(float)
     cov = np.einsum("sitab,sjtab->ij", fields, fields) / (n_seeds * box.nt * box.nyp * box.nzp)

@@ -11,8 +11,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from turbgen.synthesis.mann_oracle import discrete_spectra, slab_factor, slab_weights
+from turbgen.synthesis.mann_oracle import discrete_spectra, slab_factor
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil, expand_k2
+from turbgen.theory.lattice import pair_weights
 from turbgen.theory.mann_spectra import one_point_spectra, variances
 from turbgen.theory.space_time import longitudinal_coherence
 from turbgen.theory.params import MannParams
@@ -56,7 +57,7 @@ def test_variance_deficit_of_the_discrete_box(oracle):
     box: u 0.81, v 0.83, w 0.81, <uw> 0.91. The bounds below are those +-0.04. The point rule
     without the cell-averaged axis cells gives u 0.76, v 0.76 here (and w 1.76 on the 32 km
     paper box, where dk1 << dk2), so a broken low-k treatment fails this test."""
-    total = np.einsum("ijs,s->ij", oracle, slab_weights(BOX.nt))
+    total = np.einsum("ijs,s->ij", oracle, pair_weights(BOX.nt))
     v = variances(PARAMS)
     ratios = {
         "uu": total[0, 0] / v["uu"],

@@ -19,7 +19,7 @@ from turbgen.sweep.plan import build_run
 from turbgen.validate import ALPHA, validate
 from turbgen.validate.distributions import coh2_tails, coh2_z, cospectrum_tails, phase_sf
 from turbgen.validate.estimators import WelchSetup, segment_starts
-from turbgen.validate.expectations import WelchKernel
+from turbgen.validate.welch_kernel import WelchKernel
 from turbgen.validate.welch_variance import WelchCovariance
 
 ISSUE_GRID = {"nt": 512, "ny": 12, "nz": 12, "dy": 10.0, "dz": 10.0, "planes": [0.0, 50.0]}
@@ -149,5 +149,5 @@ def test_long_records_fall_back_to_the_rule_of_thumb(tmp_path, monkeypatch):
     monkeypatch.setattr(wv, "MAX_WORK", 0)
     rough = validate(path, workers=1)
     assert exact.failed == rough.failed == []
-    s_exact, s_rough = (r.metric("spectrum_u").tests[0].sigma for r in (exact, rough))
+    s_exact, s_rough = (r.metric("spectrum_u").checks[0].sigma for r in (exact, rough))
     assert s_rough < s_exact  # bin 1 of a short record: the rule of thumb is optimistic (see above)

@@ -199,7 +199,7 @@ def test_frozen_mann_field_passes(tmp_path):
     report = validate(path, rotor_radius_m=R)
     assert report.failed == []
     long = report.metric("longitudinal_coherence_u")
-    assert all(t.estimate > 0.999 for t in long.tests if t.label.startswith("coh2"))
+    assert all(t.estimate > 0.999 for t in long.checks if t.label.startswith("coh2"))
 
 
 def test_kaimal_variants_pass(tmp_path):

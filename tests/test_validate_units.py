@@ -5,18 +5,12 @@ import pytest
 import scipy.signal
 
 from turbgen.grid import Grid
-from turbgen.validate.estimators import (
-    WelchSetup,
-    check_rotor_radius,
-    default_nperseg,
-    default_separations,
-    plan_spans,
-    rotor_mask,
-    welch_series,
-)
-from turbgen.validate.expectations import WelchKernel, _rect_counts, _set_counts
-from turbgen.validate.verdict import COHERENCE_FLOOR, coherence_stats
 from turbgen.errors import ParameterError
+from turbgen.validate.band_checks import COHERENCE_FLOOR, coherence_stats
+from turbgen.validate.estimators import WelchSetup, default_nperseg, plan_spans, welch_series
+from turbgen.validate.pair_sums import rect_pair_counts, set_pair_counts
+from turbgen.validate.point_sets import check_rotor_radius, default_separations, rotor_mask
+from turbgen.validate.welch_kernel import WelchKernel
 
 
 def test_hann_correlations_match_welch_1967():
@@ -101,10 +95,10 @@ def test_coherence_stats_against_monte_carlo():
 
 
 def test_pair_counts():
-    c = _rect_counts(4, 3, 4, 3)
+    c = rect_pair_counts(4, 3, 4, 3)
     assert c.sum() == (4 * 3) ** 2 and c[3, 2] == 12
     iy, iz = np.array([0, 2]), np.array([1])
-    s = _set_counts(4, 3, iy, iz)
+    s = set_pair_counts(4, 3, iy, iz)
     assert s.sum() == 4 and s[3, 2] == 2 and s[5, 2] == 1
 
 
@@ -133,13 +127,15 @@ def test_kaimal_rews_lines_equal_eq25_of_the_theory_module():
     # two independent implementations of paper 000 Eq. 25 over the grid's rotor points
     from turbgen.spec.kaimal import KaimalRun, kaimal_params
     from turbgen.theory.rotor_effective import rews_spectrum_kaimal
-    from turbgen.validate.expectations import kaimal_theory
+    from turbgen.validate.kaimal_expectation import kaimal_theory
+    from turbgen.validate.prediction import SamplingDesign
 
     g = Grid(nt=512, dt_s=0.5, x_m=(0.0, 30.0), ny=12, nz=10, dy_m=7.0, dz_m=9.0)
     run = KaimalRun(kaimal=kaimal_params(14.0, "A", 90.0), grid=g, U_m_s=14.0, seed=1)
     mask = rotor_mask(g, 35.0)
     setup = WelchSetup(64, g.dt_s)
-    th = kaimal_theory(run.to_attrs(), g, setup, default_separations(g), mask, np.arange(12), np.arange(10))
+    design = SamplingDesign(g, setup, default_separations(g), mask, np.arange(12), np.arange(10))
+    th = kaimal_theory(run.to_attrs(), design)
     yy, zz = np.meshgrid(g.y(), g.z(), indexing="ij")
     j = np.array([1, 5, 40, 200])
     ref = rews_spectrum_kaimal(th.line_f[j], run.kaimal, 14.0, yy[mask], zz[mask])

@@ -3,7 +3,7 @@
 The simulated gamma^2_RL is a Welch estimate from n_eff effectively independent segments
 (``WelchSetup.effective_segments``; several seeds add their n_eff). Its mean and standard deviation
 under the null hypothesis "the field follows the theory" come from
-``turbgen.validate.verdict.coherence_stats`` (delta method, including the (1 - g)^2/n bias), each
+``turbgen.validate.band_checks.coherence_stats`` (delta method, including the (1 - g)^2/n bias), each
 bin giving a normal score z; the family of bins fails at |z| > z_crit (Bonferroni, ALPHA of the
 validator), exactly as a validator metric. Bins are compared only where the theory gives
 gamma^2 >= MIN_COH2 and n_eff >= MIN_NEFF: below that the estimator's law is far from Gaussian
@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from turbgen.validate.verdict import Curve, MetricResult, Test, coherence_stats
+from turbgen.validate.band_checks import coherence_stats
+from turbgen.validate.checks import Check, Curve, MetricResult
 
 MIN_COH2 = 0.2
 MIN_NEFF = 10.0
@@ -34,10 +35,10 @@ def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff: float, f_max_hz: float 
         sel &= f <= f_max_hz
     if n_eff < MIN_NEFF:
         sel[:] = False
-    tests = [Test("coh2_RL", (float(f[i]), float(f[i])), float(sim[i]), float(mean[i]), float(sd[i]),
+    checks = [Check("coh2_RL", (float(f[i]), float(f[i])), float(sim[i]), float(mean[i]), float(sd[i]),
                   float((sim[i] - mean[i]) / sd[i])) for i in np.nonzero(sel)[0]]
     curve = Curve("coh2_RL", f[1:-1], sim[1:-1], mean[1:-1], (mean - 1.96 * sd)[1:-1], (mean + 1.96 * sd)[1:-1])
-    return MetricResult("lidar_coherence", "lidar-rotor coherence gamma^2_RL", "coh2 (-)", tests, [curve])
+    return MetricResult("lidar_coherence", "lidar-rotor coherence gamma^2_RL", "coh2 (-)", checks, [curve])
 
 
 def crossing(f_hz, values, level: float) -> float | None:

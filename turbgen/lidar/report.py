@@ -16,7 +16,7 @@ import numpy as np
 from turbgen.errors import ParameterError
 from turbgen.lidar import compare
 from turbgen.lidar.run import LidarRun, lidar_attrs, run_lidar
-from turbgen.validate.verdict import MetricResult
+from turbgen.validate.checks import MetricResult
 
 DEFAULT_LIDAR = "nacelle-4beam"
 # Theory is evaluated at the Welch bins up to this frequency only (its cost grows with the bins;
@@ -28,7 +28,7 @@ def store_theory(fs, description, f_hz, radius_m: float):
     """PreviewSpectra of ``description`` for the store's model and parameters at f_hz > 0."""
     from turbgen.lidar.preview import preview_spectra
     from turbgen.theory.params import KaimalParams
-    from turbgen.validate.expectations import mann_params_from_attrs
+    from turbgen.validate.store_run import mann_params_from_attrs
 
     p = fs.attrs["parameters"]
     if fs.model == "mann":
@@ -86,7 +86,7 @@ class LidarReport:
             "coh2_RL_theory": self.coh2_theory.tolist(),
             "G_RL_theory": self.G_theory.tolist(),
             "verdict": {"passed": self.passed, "max_abs_z": self.metric.max_abs_z, "z_crit": self.metric.z_crit,
-                        "n_tests": len(self.metric.tests),
+                        "n_tests": len(self.metric.checks),
                         "worst_f_hz": None if worst is None else worst.band_hz[0]},
         }
 

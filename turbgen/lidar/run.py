@@ -15,7 +15,8 @@ import numpy as np
 from turbgen.errors import ParameterError
 from turbgen.lidar import compare, sampling, signals
 from turbgen.lidar.sampling import Measurement
-from turbgen.validate.estimators import WelchSetup, check_rotor_radius
+from turbgen.validate.estimators import WelchSetup
+from turbgen.validate.point_sets import check_rotor_radius
 
 
 def measurements_of(description) -> list[Measurement]:

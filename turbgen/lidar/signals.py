@@ -14,7 +14,8 @@ import numpy as np
 import scipy.fft
 
 from turbgen.errors import ParameterError
-from turbgen.validate.estimators import WelchSetup, rotor_mask, segment_starts
+from turbgen.validate.estimators import WelchSetup, segment_starts
+from turbgen.validate.point_sets import rotor_mask
 
 
 def lidar_estimate(samples, U_m_s: float):

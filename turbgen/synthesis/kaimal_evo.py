@@ -40,6 +40,7 @@ from turbgen.grid import Grid
 from turbgen.synthesis.circulant import Embedding, embed
 from turbgen.theory.coherence_models import exponential_yz, exponential_yz_decay_length_m
 from turbgen.theory.kaimal import kaimal_band_variance
+from turbgen.theory.lattice import line_frequencies
 from turbgen.theory.params import KaimalParams
 
 COMPONENTS = ("u", "v", "w")
@@ -49,7 +50,7 @@ FREQ_CHUNK = 32
 
 def bin_frequencies(nt: int, dt_s: float) -> np.ndarray:
     """f_k = k df [Hz], k = 0 .. nt // 2, df = 1 / (nt dt): the rfft bins, bin k at exactly k df."""
-    return np.arange(nt // 2 + 1) / (nt * dt_s)
+    return line_frequencies(nt, dt_s)
 
 
 def bin_variances(nt: int, dt_s: float, sigma_m_s: float, length_scale_m: float, U_m_s: float) -> np.ndarray:

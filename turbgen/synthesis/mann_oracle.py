@@ -48,12 +48,3 @@ def discrete_spectra(stencil: MannStencil) -> np.ndarray:
         c = slab_factor(stencil, i)
         out[:, :, i] = 2.0 * np.einsum("ikyz,jkyz->ij", c, c)
     return out
-
-
-def slab_weights(nt: int) -> np.ndarray:
-    """Weights 1 (k1 = 0, Nyquist) or 2 of the half-spectrum slabs in full-spectrum sums."""
-    w = np.full(nt // 2 + 1, 2.0)
-    w[0] = 1.0
-    if nt % 2 == 0:
-        w[-1] = 1.0
-    return w

@@ -27,6 +27,7 @@ import numpy as np
 
 from turbgen.synthesis.mann_cells import axis_cells
 from turbgen.theory.eddy_lifetime import evolution_lifetime_table, shear_lifetime_table
+from turbgen.theory.lattice import k2_wavenumbers, k3_wavenumbers
 from turbgen.theory.params import MannParams
 
 STENCIL_VERSION = 5  # 3: lifetime tables, Mann (1994) Eq. 13-17; 4: arctan; 5: ae-free float64 factors
@@ -69,12 +70,11 @@ class BoxShape:
 
     def k2(self) -> np.ndarray:
         """k2 [rad/m] of all nyp rows: j dk2 for j <= nyp//2 (Nyquist stored positive), else (j - nyp) dk2."""
-        j = np.arange(self.nyp)
-        return np.where(j <= self.nyp // 2, j, j - self.nyp) * self.dk()[1]
+        return k2_wavenumbers(self.nyp, self.dy_m)
 
     def k3(self) -> np.ndarray:
         """k3 [rad/m] of the nzp columns (numpy fftfreq order)."""
-        return np.fft.fftfreq(self.nzp, d=self.dz_m) * 2 * np.pi
+        return k3_wavenumbers(self.nzp, self.dz_m)
 
 
 @dataclass(frozen=True, eq=False)

@@ -10,5 +10,6 @@ coherence_models  yz exponential (Eq. 12), longitudinal exponential (Eq. 18), Si
 mann_spectra      one-point and cross-spectra F_ij(k1, dy, dz) by quadrature (Eq. 8-10), variances, ae for sigma_u
 space_time        space-time tensor Theta (Eq. 13) and longitudinal coherence (Eq. 16)
 rotor_effective   rotor-effective wind speed spectra (Eq. 24 Mann, Eq. 25 Kaimal)
+lattice           line frequencies, pair weights and box wavenumbers of the periodic record/box
 fitting           Kaimal spectra (Eq. 20), yz coherence (Eq. 21) and exponential longitudinal coherence (Eq. 22) fits
 """

@@ -5,8 +5,10 @@
     report.passed, report.to_dict(), report.table(), report.plots("figs/")
 
 Modules: ``estimators`` (Welch estimates with dask over the store's chunks), ``expectations``
-(the model's prediction on the store's grid), ``verdict`` (tolerances from the estimators'
-statistical uncertainty, pass/fail), ``report`` (terminal table, JSON, PNG plots).
+(the model's prediction on the store's grid, for the ``prediction.SamplingDesign`` of the estimates;
+split into ``kaimal_expectation``, ``mann_expectation``, ``mann_lattice``, ``welch_kernel``,
+``pair_sums``, ``store_run``), ``verdict`` (tolerances from the estimators' statistical uncertainty,
+pass/fail), ``report`` (terminal table, JSON, PNG plots).
 """
 
 from __future__ import annotations
@@ -15,10 +17,12 @@ import time
 from dataclasses import dataclass
 
 from turbgen.store import FieldStore, open_store
-from turbgen.validate.estimators import DEFAULT_ROTOR_RADIUS_M, Estimates, estimate
-from turbgen.validate.expectations import Theory, theory_for
-from turbgen.validate.verdict import ALPHA, MetricResult, judge
-
+from turbgen.validate.estimators import Estimates, estimate
+from turbgen.validate.expectations import theory_for
+from turbgen.validate.point_sets import DEFAULT_ROTOR_RADIUS_M
+from turbgen.validate.prediction import SamplingDesign, Theory
+from turbgen.validate.checks import ALPHA, MetricResult
+from turbgen.validate.verdict import judge
 
 
 @dataclass
@@ -33,10 +37,12 @@ class ValidationReport:
 
     @property
     def passed(self) -> bool:
+        """True if every metric passes."""
         return all(m.passed for m in self.metrics)
 
     @property
     def failed(self) -> list[str]:
+        """Names of the failed metrics."""
         return [m.name for m in self.metrics if not m.passed]
 
     def metric(self, name: str) -> MetricResult:
@@ -60,15 +66,35 @@ class ValidationReport:
 
 def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None = None,
              workers: int | None = None) -> ValidationReport:
-    """Validate the store at ``store`` (path or FieldStore); StoreError/ParameterError on bad input.
+    """Validate a store against its model.
 
-    rotor_radius_m: R [m] of the rotor-effective wind speed; None = 63 m, or the largest disc a smaller grid holds.
+    Parameters
+    ----------
+    store : str, pathlib.Path or FieldStore
+        The store.
+    rotor_radius_m : float, optional
+        Rotor radius R [m] of the rotor-effective wind speed; None: 63 m, or the largest disc a smaller
+        grid holds.
+    nperseg : int, optional
+        Welch segment length [samples]; None: ``estimators.default_nperseg``.
+    workers : int, optional
+        dask threads; None: the CPU count.
+
+    Returns
+    -------
+    ValidationReport
+        Estimates, predictions, metrics and timings [s].
+
+    Raises
+    ------
+    StoreError, ParameterError
+        On an unreadable store or bad input.
     """
     fs = store if isinstance(store, FieldStore) else open_store(store)
     t0 = time.perf_counter()
     est = estimate(fs, rotor_radius_m=rotor_radius_m, nperseg=nperseg, workers=workers)
     t1 = time.perf_counter()
-    th = theory_for(fs, est.setup, est.separations, est.rotor_mask, est.long_iy, est.long_iz)
+    th = theory_for(fs, SamplingDesign.of(est))
     t2 = time.perf_counter()
     metrics = judge(est, th)
     t3 = time.perf_counter()

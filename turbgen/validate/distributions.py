@@ -17,7 +17,7 @@ independent residual (1 - gamma2) chi2_{2(n-1)} / 2. Hence, with Q = 2 sum|x|^2 
 The unconditional laws are the expectation over Q, computed with Gauss-Hermite nodes in the
 normal score of Q (so the extreme quantiles of Q that drive 1e-6 tails are sampled). At
 gamma2 = 0 the coherence law reduces to Beta(1, n - 1), the phase to the uniform law; as
-n gamma2 grows both approach the delta-method normal laws of ``verdict.coherence_stats``.
+n gamma2 grows both approach the delta-method normal laws of ``band_checks.coherence_stats``.
 
 Tail probabilities are returned one-sided and turned into normal scores by ``normal_score``
 so they plug into the Bonferroni rule of ``verdict`` unchanged.
@@ -49,9 +49,21 @@ def _q_nodes(n):
 
 
 def coh2_tails(g, gamma2, n):
-    """(P(G <= g), P(G >= g)) of the sample magnitude-squared coherence G from n independent samples.
+    """Tail probabilities of the sample magnitude-squared coherence G from n independent samples.
 
-    g, gamma2 in [0, 1), n > 1 (real: equivalent number of independent samples); arrays broadcast.
+    Parameters
+    ----------
+    g : array_like
+        Observed sample coherence [-], in [0, 1).
+    gamma2 : array_like
+        True magnitude-squared coherence [-], in [0, 1).
+    n : array_like
+        Equivalent number of independent samples (> 1, real). Arrays broadcast.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (P(G <= g), P(G >= g)).
     """
     g, gamma2, n = np.broadcast_arrays(*(np.asarray(a, float) for a in (g, gamma2, n)))
     g = np.clip(g, 0.0, 1.0 - 1e-15)
@@ -87,7 +99,10 @@ def _rice_phase_sf(t, kappa):
 
 
 def phase_sf(dphi, gamma2, n):
-    """P(|arg C - arg rho| >= |dphi|) (wrapped to [0, pi]) for the sample coherency of n independent samples."""
+    """Two-sided tail of the sample phase: P(|arg C - arg rho| >= |dphi|) (dphi [rad] wrapped to [0, pi]).
+
+    ``gamma2`` [-] and ``n`` as in :func:`coh2_tails`; arrays broadcast.
+    """
     dphi, gamma2, n = np.broadcast_arrays(*(np.asarray(a, float) for a in (dphi, gamma2, n)))
     t = np.abs((dphi + np.pi) % (2.0 * np.pi) - np.pi)
     kappa = (gamma2 / (2.0 * (1.0 - gamma2)))[..., None] * _q_nodes(n)
@@ -102,12 +117,13 @@ def normal_score(lower, upper):
 
 
 def coh2_z(g, gamma2, n):
-    """Normal score of an observed sample coherence g under (gamma2, n) (two-sided, exact law)."""
+    """Normal score [-] of an observed sample coherence ``g`` under (gamma2, n) (exact law, :func:`coh2_tails`)."""
     return normal_score(*coh2_tails(g, gamma2, n))
 
 
 def phase_z(dphi, gamma2, n):
-    """Signed normal score of a phase deviation dphi (wrapped): sign(dphi) z with P(|error| >= |dphi|) = 2 Phi(-z)."""
+    """Signed normal score [-] of a phase deviation ``dphi`` [rad] (wrapped): sign(dphi) z with
+    P(|error| >= |dphi|) = 2 Phi(-z) under (gamma2, n) (:func:`phase_sf`)."""
     wrapped = (np.asarray(dphi, float) + np.pi) % (2.0 * np.pi) - np.pi
     return np.sign(wrapped) * norm.isf(np.maximum(phase_sf(dphi, gamma2, n), 1e-300) / 2.0)
 
@@ -135,5 +151,5 @@ def cospectrum_tails(x, c, n):
 
 
 def cospectrum_z(x, c, n):
-    """Normal score of an observed sample co-coherence x under (c, n) (two-sided, exact law)."""
+    """Normal score [-] of an observed sample co-coherence ``x`` under (c, n) (exact law, :func:`cospectrum_tails`)."""
     return normal_score(*cospectrum_tails(x, c, n))

@@ -17,7 +17,7 @@ Estimated quantities (one-sided, [m^2 s^-2 Hz^-1] unless stated):
 * longitudinal cross-spectra of u between every pair of planes (same y, z, same stored time t,
   i.e. in the convected frame of the store) on a sub-lattice of at most ~16 x 16 points;
 * the rotor-effective wind speed series of each plane (mean of u over the points within the
-  rotor radius, paper 000 Eq. 23 on the grid) and its Welch spectrum averaged over planes.
+  rotor radius, Guo et al. 2022, Eq. 23 on the grid) and its Welch spectrum averaged over planes.
 """
 
 from __future__ import annotations
@@ -38,11 +38,17 @@ from tqdm import tqdm
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
 from turbgen.store.reader import read_checked
+from turbgen.validate.point_sets import (
+    LONG_POINTS_PER_AXIS,
+    check_rotor_radius,
+    default_separations,
+    long_sublattice,
+    rotor_mask,
+)
 
 COMPONENTS = ("u", "v", "w")
 SPAN_SEGMENTS = 4  # a span holds at least this many segment lengths (fewer segments lost at span edges)
-LONG_POINTS_PER_AXIS = 16  # sub-lattice for the plane-pair cross-spectra: at most 16 x 16 points per plane ...
-LONG_BYTES_PER_TASK = 8 * 2**20  # ... and at most 8 MiB of their spectra per task (nx tasks wait for the pair sums)
+LONG_BYTES_PER_TASK = 8 * 2**20  # plane-pair spectra per task at most 8 MiB (nx tasks wait for the pair sums)
 MIN_NPERSEG = 32
 MAX_NPERSEG = 4096  # long records: more segments rather than ever finer bins (4096 x 0.5 s: 0.49 mHz)
 SPAN_BYTES = 256 * 2**20  # a task's u, v, w data stay below this unless one segment needs more
@@ -97,7 +103,18 @@ class WelchSetup:
 
 
 def default_nperseg(nt: int) -> int:
-    """Largest power of two <= nt / 8 (about 15 half-overlapping segments), within [32, MAX_NPERSEG] samples."""
+    """Default Welch segment length [samples] of a record of ``nt`` samples.
+
+    Returns
+    -------
+    int
+        The largest power of two <= nt / 8 (about 15 half-overlapping segments), within [32, MAX_NPERSEG].
+
+    Raises
+    ------
+    ParameterError
+        If nt < 4 MIN_NPERSEG.
+    """
     if nt < 4 * MIN_NPERSEG:
         raise ParameterError(f"nt = {nt} is too short to validate (needs >= {4 * MIN_NPERSEG} time steps)")
     return min(2 ** int(math.floor(math.log2(nt / 8))) if nt >= 8 * MIN_NPERSEG else MIN_NPERSEG, MAX_NPERSEG)
@@ -118,56 +135,8 @@ def plan_spans(nt: int, chunk_t: int, nperseg: int, bytes_per_sample: int = 0) -
 
 
 def segment_starts(length: int, setup: WelchSetup) -> range:
-    """Starts of the half-overlapping segments inside a record of ``length`` samples."""
+    """Start samples of the half-overlapping segments of ``setup`` inside a record of ``length`` samples."""
     return range(0, length - setup.nperseg + 1, setup.hop)
-
-
-def grid_steps(sep_m: float, step_m: float, n: int) -> int:
-    """A separation [m] as a whole number of grid steps, clipped to [0, n // 2]."""
-    return int(min(max(round(sep_m / step_m), 1 if sep_m > 0 else 0), n // 2))
-
-
-def default_separations(grid: Grid) -> tuple[tuple[int, int], ...]:
-    """(lateral, vertical) separations in grid steps: ~10 m and ~30 m lateral and vertical, ~20 m diagonal."""
-    seps = []
-    for dy_m, dz_m in ((10.0, 0.0), (30.0, 0.0), (0.0, 10.0), (0.0, 30.0), (20.0, 20.0)):
-        a, b = grid_steps(dy_m, grid.dy_m, grid.ny), grid_steps(dz_m, grid.dz_m, grid.nz)
-        if (a, b) != (0, 0) and (a, b) not in seps and (dy_m == 0 or a > 0) and (dz_m == 0 or b > 0):
-            seps.append((a, b))
-    return tuple(seps)
-
-
-DEFAULT_ROTOR_RADIUS_M = 63.0  # NREL 5 MW (paper 000)
-
-
-def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
-    """Boolean (ny, nz): grid points with y^2 + z^2 <= R^2 (the rotor disc around the hub)."""
-    y, z = grid.y(), grid.z()
-    mask = y[:, None] ** 2 + z[None, :] ** 2 <= radius_m**2 * (1 + 1e-12)
-    if not mask.any():
-        raise ParameterError(f"rotor radius = {radius_m:g} m contains no grid point (dy = {grid.dy_m:g} m)")
-    return mask
-
-
-def check_rotor_radius(grid: Grid, radius_m: float | None) -> float:
-    """The rotor disc must lie inside the grid: 0 < R <= half the smaller grid extent.
-
-    None: the default 63 m (NREL 5 MW, paper 000), or the largest disc that fits a smaller grid.
-    """
-    half = min((grid.ny - 1) * grid.dy_m, (grid.nz - 1) * grid.dz_m) / 2.0
-    if radius_m is None:
-        return min(DEFAULT_ROTOR_RADIUS_M, half)
-    r = float(radius_m)
-    if not (math.isfinite(r) and 0 < r <= half * (1 + 1e-9)):
-        raise ParameterError(f"rotor radius = {radius_m!r} m is outside the grid's range (0, {half:g}] m")
-    return r
-
-
-def long_sublattice(n: int, per_axis: int = LONG_POINTS_PER_AXIS) -> np.ndarray:
-    """Indices of an evenly strided sub-lattice of at most ``per_axis`` points (centred)."""
-    stride = max(1, math.ceil(n / per_axis))
-    idx = np.arange(0, n, stride)
-    return idx + (n - 1 - idx[-1]) // 2
 
 
 def long_points_per_axis(setup: WelchSetup, spans) -> int:
@@ -285,7 +254,24 @@ def _plane_pairs(subs: list[np.ndarray]) -> np.ndarray:
 
 
 def welch_series(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, int, int]:
-    """One-sided Welch PSD of series x (nt, m) averaged over its m columns; (psd, segments, overlapping pairs)."""
+    """One-sided Welch PSD of the series ``x`` averaged over its columns (Welch 1967).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        (nt, m) series [m/s], one per column.
+    setup : WelchSetup
+        Segment length, dt [s], Hann window.
+
+    Returns
+    -------
+    psd : numpy.ndarray
+        (nperseg // 2 + 1,) one-sided PSD [m^2 s^-2 Hz^-1], averaged over segments and columns.
+    segments : int
+        Segments per column.
+    overlapping_pairs : int
+        Pairs of consecutive half-overlapping segments per column.
+    """
     starts = segment_starts(x.shape[0], setup)
     w = setup.window[:, None]
     acc = np.zeros(setup.nperseg // 2 + 1)
@@ -313,7 +299,31 @@ class _TqdmCallback(Callback):
 
 def estimate(fs, *, rotor_radius_m: float | None = None, nperseg: int | None = None, separations=None,
              workers: int | None = None) -> Estimates:
-    """All Welch estimates of the store ``fs`` (a FieldStore), one dask task per (span, plane)."""
+    """All Welch estimates of a store, one dask task per (span, plane) (module docstring).
+
+    Parameters
+    ----------
+    fs : turbgen.store.FieldStore
+        The store.
+    rotor_radius_m : float, optional
+        Rotor radius R [m] of the rotor-effective wind speed (``point_sets.check_rotor_radius``).
+    nperseg : int, optional
+        Welch segment length [samples]; default ``default_nperseg(nt)``.
+    separations : sequence of (int, int), optional
+        yz separations in grid steps; default ``point_sets.default_separations``.
+    workers : int, optional
+        dask threads; default the CPU count.
+
+    Returns
+    -------
+    Estimates
+        Means [m/s], variances [m^2 s^-2], one-sided (cross-)spectra [m^2 s^-2 Hz^-1].
+
+    Raises
+    ------
+    ParameterError
+        If nperseg is outside [MIN_NPERSEG, nt / 2] or the rotor radius does not fit the grid.
+    """
     g = fs.grid
     setup = WelchSetup(nperseg or default_nperseg(g.nt), g.dt_s)
     if not MIN_NPERSEG <= setup.nperseg <= g.nt // 2:

@@ -28,12 +28,12 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.validate.estimators import COMPONENTS
-from turbgen.validate.verdict import ALPHA, Curve, MetricResult, Test
+from turbgen.validate.checks import ALPHA, Check, Curve, MetricResult
 
 SCHEMA = "turbgen-validate/1"
 
 
-def _test_dict(t: Test) -> dict:
+def _check_dict(t: Check) -> dict:
     return {
         "label": t.label,
         "band_hz": None if t.band_hz is None else [t.band_hz[0], t.band_hz[1]],
@@ -52,14 +52,25 @@ def _metric_dict(m: MetricResult) -> dict:
         "passed": m.passed,
         "max_abs_z": m.max_abs_z,
         "z_crit": m.z_crit,
-        "n_tests": len(m.tests),
-        "worst": None if w is None else _test_dict(w),
-        "tests": [_test_dict(t) for t in m.tests],
+        "n_tests": len(m.checks),
+        "worst": None if w is None else _check_dict(w),
+        "tests": [_check_dict(t) for t in m.checks],
     }
 
 
 def components(report) -> dict:
-    """Per component: mean, sigma (estimated, expected on this grid, full model), TI."""
+    """Per component: mean [m/s], sigma [m/s] (estimated, expected on this grid, full model), TI [-].
+
+    Parameters
+    ----------
+    report : ValidationReport
+        The validation.
+
+    Returns
+    -------
+    dict
+        component -> dict of those values.
+    """
     est, th, U = report.estimates, report.theory, report.store.U_m_s
     out = {}
     for c in COMPONENTS:
@@ -77,7 +88,7 @@ def components(report) -> dict:
 
 
 def to_dict(report) -> dict:
-    """The JSON-serialisable result (keys in the module docstring)."""
+    """The JSON-serialisable result of ``report`` (a ValidationReport; keys and units in the module docstring)."""
     est = report.estimates
     g = est.grid
     return {
@@ -105,7 +116,7 @@ def to_dict(report) -> dict:
     }
 
 
-def _fmt_band(t: Test) -> str:
+def _fmt_band(t: Check) -> str:
     if t.band_hz is None:
         return ""
     lo, hi = t.band_hz
@@ -113,7 +124,7 @@ def _fmt_band(t: Test) -> str:
 
 
 def table(report) -> str:
-    """Readable multi-line summary for the terminal."""
+    """Readable multi-line summary of ``report`` (a ValidationReport) for the terminal."""
     est, band = report.estimates, report.theory.band
     lines = [
         f"store   {report.store.path} ({report.store.model})",
@@ -133,7 +144,7 @@ def table(report) -> str:
         worst = "" if w is None else (
             f"{w.label} {_fmt_band(w)}: {w.estimate:.4g} vs {w.expected:.4g} (sd {w.sigma:.2g})")
         lines.append(f"{m.name:26s} {'pass' if m.passed else 'FAIL':6s} {m.max_abs_z:7.2f} {m.z_crit:6.2f} "
-                     f"{len(m.tests):5d}  {worst}")
+                     f"{len(m.checks):5d}  {worst}")
     verdict = "all metrics pass" if report.passed else f"FAILED: {', '.join(report.failed)}"
     lines += ["", f"result  {verdict} (per-metric false-failure probability {ALPHA:g})"]
     return "\n".join(lines)
@@ -157,7 +168,21 @@ def _premultiplied(c: Curve) -> Curve:
 
 
 def plots(report, directory) -> list[Path]:
-    """One PNG per metric with curves (estimate with 95 % band, theory line) in ``directory``."""
+    """Plot every metric of a validation.
+
+    Parameters
+    ----------
+    report : ValidationReport
+        The validation.
+    directory : str or pathlib.Path
+        Where the PNG files go (created if missing).
+
+    Returns
+    -------
+    list of pathlib.Path
+        One PNG per metric with curves (estimate with its 95 % band, the expectation on the grid, the
+        continuous model where there is one).
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -34,7 +34,7 @@ Uncertainties (Gaussian fields; derivations in the comments below):
   (n gamma2 of order 10) |C|^2 is a noncentral chi2 with 2 degrees of freedom whose lower tail is far
   heavier than any Gaussian or gamma law with the same moments (a 1e-4 event looked like z = -5.6),
   and the phase is heavy-tailed as well. Near unit coherence (frozen planes) the delta method with
-  the float32 resolution floor is used (``coherence_stats``: Var coh2 = 2 g (1-g)^2/n + bias^2,
+  the float32 resolution floor is used (``band_checks.coherence_stats``: Var coh2 = 2 g (1-g)^2/n + bias^2,
   Var phase = (1-g)/(2 n g)).
 * u-w co-spectrum: Var of the point average <= E_u E_w (sqrt(rho_u rho_w) + rho_uw) / (2 K_m)
   (Cauchy-Schwarz on the Isserlis covariance; rho_uw the mean |u-w coherency|^2 over pairs; K_m the
@@ -48,208 +48,18 @@ one point); the gamma law for the spectra's band means.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
-from scipy.stats import chi2, norm
+from scipy.stats import chi2
 
-from turbgen.validate.distributions import coh2_z, cospectrum_z, phase_z
+from turbgen.validate.band_checks import Bands, chi2_z, coherence_stats
+from turbgen.validate.checks import Check, Curve, MetricResult
+from turbgen.validate.distributions import cospectrum_z
 from turbgen.validate.estimators import COMPONENTS, Estimates, segment_starts
-from turbgen.validate.expectations import Theory, WelchKernel
-from turbgen.validate.welch_variance import MAX_LAG, WelchCovariance
+from turbgen.validate.prediction import Theory
+from turbgen.validate.welch_kernel import WelchKernel
+from turbgen.validate.welch_variance import WelchCovariance
 
-ALPHA = 1e-3  # family-wise probability that a correct field fails one given metric
-BANDS_PER_DECADE = 5
 FLOAT32_FLOOR = 1e-6  # relative resolution of float32 data (tolerance on a mean that is exactly 0)
-COHERENCE_FLOOR = 1e-5  # absolute resolution of a coherence estimated from float32 data
-NEAR_UNIT = 1e-3  # 1 - |rho|^2 below this: delta method with the float32 floor (frozen planes), not the exact laws
-
-
-@dataclass
-class Curve:
-    """Per-bin comparison for plots/JSON: estimate with its 95 % band and the expectation."""
-
-    label: str
-    f_hz: np.ndarray
-    estimate: np.ndarray
-    expected: np.ndarray
-    lower: np.ndarray
-    upper: np.ndarray
-    reference: tuple | None = None  # (f, values) of the continuous model (plots only)
-
-
-@dataclass
-class Test:
-    """One comparison: a frequency band of one curve (or a scalar)."""
-
-    label: str
-    band_hz: tuple[float, float] | None
-    estimate: float
-    expected: float
-    sigma: float
-    z: float
-
-
-@dataclass
-class MetricResult:
-    name: str
-    title: str
-    quantity: str  # what is compared (units)
-    tests: list[Test]
-    curves: list[Curve] = field(default_factory=list)
-    z_crit: float = 0.0
-
-    def __post_init__(self):
-        self.z_crit = float(norm.isf(ALPHA / (2 * max(len(self.tests), 1))))
-
-    @property
-    def max_abs_z(self) -> float:
-        return max((abs(t.z) for t in self.tests), default=0.0)
-
-    @property
-    def passed(self) -> bool:
-        return self.max_abs_z <= self.z_crit
-
-    @property
-    def worst(self) -> Test | None:
-        return max(self.tests, key=lambda t: abs(t.z), default=None)
-
-
-def _chi2_z(ratio, nu):
-    """Normal score of ratio ~ chi2_nu / nu (two-sided tails kept symmetric in probability)."""
-    ratio, nu = np.asarray(ratio, float), np.asarray(nu, float)
-    lower = chi2.logcdf(nu * ratio, nu)
-    upper = chi2.logsf(nu * ratio, nu)
-    return np.where(lower < upper, norm.ppf(np.exp(lower)), norm.isf(np.exp(upper)))
-
-
-def coherence_stats(rho, n):
-    """Mean and sd of the coh2, cocoh and phase estimators from n independent samples (module docstring).
-
-    rho: complex coherency; returns dict of arrays coh2_mean, coh2_sd, cocoh_mean, cocoh_sd, phase_sd.
-    """
-    rho = np.asarray(rho, complex)
-    n = np.asarray(n, float)
-    g = np.abs(rho) ** 2
-    re, im = rho.real, rho.imag
-    r2c = rho * rho
-    # per-sample covariance of (A, B, Re C, Im C), unit auto-spectra (Isserlis, circular Gaussian)
-    cov = np.empty(rho.shape + (4, 4))
-    cov[..., 0, 0] = cov[..., 1, 1] = 1.0
-    cov[..., 0, 1] = cov[..., 1, 0] = g
-    for i in (0, 1):
-        cov[..., i, 2] = cov[..., 2, i] = re
-        cov[..., i, 3] = cov[..., 3, i] = im
-    cov[..., 2, 2] = (1.0 + r2c.real) / 2.0
-    cov[..., 3, 3] = (1.0 - r2c.real) / 2.0
-    cov[..., 2, 3] = cov[..., 3, 2] = r2c.imag / 2.0
-
-    def var(grad):
-        grad = np.stack(np.broadcast_arrays(*grad), axis=-1)
-        return np.einsum("...i,...ij,...j->...", grad, cov, grad) / n
-
-    zero = np.zeros_like(g)
-    bias = (1.0 - g) ** 2 / n
-    coh2_var = var((-g, -g, 2 * re, 2 * im)) + bias**2
-    cocoh_var = var((-re / 2, -re / 2, 1.0 + zero, zero))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        phase_var = np.where(g > 0, var((zero, zero, -im / g, re / g)), np.inf)
-    # float32 data: coherences of identical signals (frozen planes) are 1 only to ~1e-6; keep sd above that
-    floor = COHERENCE_FLOOR**2
-    return {
-        "coh2_mean": g + bias,
-        "coh2_sd": np.sqrt(coh2_var + floor),
-        "cocoh_mean": re,
-        "cocoh_sd": np.sqrt(cocoh_var + floor),
-        "phase_sd": np.minimum(np.sqrt(phase_var + floor), np.pi / np.sqrt(3.0)),  # uniform phase at most
-    }
-
-
-class _Bands:
-    """Welch bins 1 .. n/2-1 grouped into log-spaced bands; band statistics from the Welch covariance.
-
-    ``cov``: one-point covariance of the Welch estimate, lag d -> Cov(P_m, P_{m+d}) (``welch_variance``,
-    exact for the record's segments), or the rule-of-thumb model E_m E_m' r_d / K_eff (r_d the Hann
-    bin correlations 1, 4/9, 1/36) when the exact sums are too long (very long records).
-    """
-
-    def __init__(self, est: Estimates):
-        f = est.freqs
-        self.bins = np.arange(1, f.size - 1)
-        fb = f[self.bins]
-        n_edges = max(2, int(np.ceil(np.log10(fb[-1] / fb[0]) * BANDS_PER_DECADE)) + 1)
-        edges = np.geomspace(fb[0], fb[-1] * (1 + 1e-9), n_edges)
-        idx = np.clip(np.searchsorted(edges, fb, side="right") - 1, 0, n_edges - 2)
-        self.groups = [self.bins[idx == k] for k in range(n_edges - 1) if np.any(idx == k)]
-        self.f = f
-        rho1, rho2 = est.setup.bin_rho2(1), est.setup.bin_rho2(2)
-        self.lag_corr = {0: 1.0, 1: rho1, 2: rho2}
-        self.k_eff = est.effective_segments
-
-    def cov(self, wcov: WelchCovariance, lines: np.ndarray, expected: np.ndarray) -> dict:
-        """One-point covariance dict of the Welch estimate of ``lines`` (expected estimate ``expected``)."""
-        exact = wcov.cov(lines)
-        if exact is not None:
-            return exact
-        e = np.asarray(expected, float)
-        return {d: e[: e.size - d] * e[d:] * self.lag_corr.get(d, 0.0) / self.k_eff for d in range(MAX_LAG + 1)}
-
-    @staticmethod
-    def sum_var(cov: dict, rho: np.ndarray, group: np.ndarray) -> float:
-        """Variance of the sum over the bins ``group`` of the point-averaged estimate (rho: rho_bar per bin)."""
-        total = 0.0
-        r = np.sqrt(np.asarray(rho, float))
-        for d, c in cov.items():
-            a = group[group + d <= group[-1]]
-            part = np.sum(c[a] * r[a] * r[a + d])
-            total += part if d == 0 else 2.0 * part
-        return float(total)
-
-    def spectrum_tests(self, label, est, exp, cov, rho) -> list[Test]:
-        """Band means of a point-averaged Welch spectrum: ratio ~ chi2_nu / nu, nu = 2 E^2 / Var (gamma law
-        with the exact mean and variance; Welch 1967 / Satterthwaite equivalent degrees of freedom)."""
-        out = []
-        for g in self.groups:
-            e, x = float(np.mean(est[g])), float(np.mean(exp[g]))
-            s = np.sqrt(self.sum_var(cov, rho, g)) / g.size
-            z = float(_chi2_z(e / x, 2.0 * (x / s) ** 2)) if x > 0 and s > 0 else 0.0
-            out.append(Test(label, (float(self.f[g[0]]), float(self.f[g[-1]])), e, x, float(s), z))
-        return out
-
-    def coherence_tests(self, label, cross, auto_a, auto_b, rho_lines, exp_auto, cov, rho_bar) -> list[Test]:
-        """Exact-law tests of the band-pooled sample coherency C = sum_g cross / sqrt(sum_g A sum_g B).
-
-        Its expectation is rho_band = sum_g rho_m E_m / sum_g E_m (E_m the expected auto-spectrum of both
-        point sets), and it is treated as the sample coherency of n_band independent samples with
-        n_band = (sum_g E_m)^2 / Var(sum_g A) (the equivalent number of independent periodograms of the
-        pooled, point-averaged auto-spectrum, exact Welch covariance). |C|^2 then follows Goodman's law and
-        arg C - arg rho_band the Rice phase law (``distributions``). Near unit coherence (1 - |rho|^2 <
-        NEAR_UNIT) the delta method with the float32 floor is used instead (``coherence_stats``).
-        """
-        gs = self.groups
-        c = np.array([np.sum(cross[g]) for g in gs])
-        a = np.array([np.sum(auto_a[g]) for g in gs])
-        b = np.array([np.sum(auto_b[g]) for g in gs])
-        e_sum = np.array([np.sum(exp_auto[g]) for g in gs])
-        rho_band = np.array([np.sum(rho_lines[g] * exp_auto[g]) for g in gs]) / e_sum
-        n_band = e_sum**2 / np.array([self.sum_var(cov, rho_bar, g) for g in gs])
-        coh = c / np.sqrt(a * b)
-        gam2 = np.minimum(np.abs(rho_band) ** 2, 1.0)
-        dphi = _wrap(np.angle(coh) - np.angle(rho_band))
-        st = coherence_stats(rho_band, n_band)
-        near = 1.0 - gam2 < NEAR_UNIT
-        g_exact = np.where(near, 0.5, gam2)  # (placeholder where the delta method is used)
-        z_coh = np.where(near, (np.abs(coh) ** 2 - st["coh2_mean"]) / st["coh2_sd"], coh2_z(np.abs(coh) ** 2, g_exact,
-                                                                                              n_band))
-        z_ph = np.where(near, dphi / st["phase_sd"], phase_z(dphi, g_exact, n_band))
-        out = []
-        for i, g in enumerate(gs):
-            band = (float(self.f[g[0]]), float(self.f[g[-1]]))
-            out.append(Test(f"coh2 {label}", band, float(abs(coh[i]) ** 2), float(st["coh2_mean"][i]),
-                            float(st["coh2_sd"][i]), float(z_coh[i])))
-            out.append(Test(f"phase {label}", band, float(np.angle(coh[i])), float(np.angle(rho_band[i])),
-                            float(st["phase_sd"][i]), float(z_ph[i])))
-        return out
 
 
 def _band95(est, sd):
@@ -257,9 +67,22 @@ def _band95(est, sd):
 
 
 def judge(est: Estimates, th: Theory) -> list[MetricResult]:
-    """All metrics of the store."""
+    """Pass/fail of every metric of the store (module docstring).
+
+    Parameters
+    ----------
+    est : Estimates
+        What was estimated from the store.
+    th : Theory
+        What the store's model predicts for the same sampling design.
+
+    Returns
+    -------
+    list of MetricResult
+        Mean, variances, spectra, yz and longitudinal coherences, u-w co-spectrum, REWS spectrum.
+    """
     kernel = WelchKernel(est.setup, est.grid.nt)
-    bands = _Bands(est)
+    bands = Bands(est)
     f = est.freqs
     starts = est.starts or tuple(range(0, est.n_segments * est.setup.hop, est.setup.hop))
     wcov = WelchCovariance(est.setup, est.grid.nt, starts)
@@ -287,11 +110,11 @@ def judge(est: Estimates, th: Theory) -> list[MetricResult]:
 def _mean(est: Estimates, th: Theory) -> MetricResult:
     # The grand mean is the average of the j = 0 lines Z_0 (variance L_0 per point); averaging over
     # points can only lower the variance, so sd = sqrt(L_0) is conservative.
-    tests = []
+    checks = []
     for c in COMPONENTS:
         sd = np.sqrt(th.auto[c][0] + (FLOAT32_FLOOR**2) * th.variance(c))
-        tests.append(Test(c, None, est.mean[c], 0.0, float(sd), float(est.mean[c] / sd)))
-    return MetricResult("mean", "mean of u, v, w", "m/s", tests)
+        checks.append(Check(c, None, est.mean[c], 0.0, float(sd), float(est.mean[c] / sd)))
+    return MetricResult("mean", "mean of u, v, w", "m/s", checks)
 
 
 def _variance(est: Estimates, th: Theory, c: str) -> MetricResult:
@@ -301,20 +124,20 @@ def _variance(est: Estimates, th: Theory, c: str) -> MetricResult:
     var = np.sum(lines**2 * th.rho(th.rho_all[c], th.line_f[1:]))
     e = th.variance(c)
     nu = 2.0 * e * e / var
-    z = float(_chi2_z(est.variance[c] / e, nu))
+    z = float(chi2_z(est.variance[c] / e, nu))
     sd = float(np.sqrt(var))
-    t = Test(f"sigma_{c}^2", None, est.variance[c], e, sd, z)
+    t = Check(f"sigma_{c}^2", None, est.variance[c], e, sd, z)
     return MetricResult(f"sigma_{c}", f"variance of {c} (sigma_{c}, TI)", "m^2/s^2", [t])
 
 
-def _spectrum(name, title, estimate, expected, cov, rho, bands: _Bands, f, reference) -> MetricResult:
+def _spectrum(name, title, estimate, expected, cov, rho, bands: Bands, f, reference) -> MetricResult:
     # band mean ratio estimate/expected ~ chi2_nu/nu with nu = 2 E^2 / Var (exact Welch covariance x rho_bar)
-    tests = bands.spectrum_tests(name.split("_")[-1], estimate, expected, cov, rho)
+    checks = bands.spectrum_checks(name.split("_")[-1], estimate, expected, cov, rho)
     b = bands.bins
     nu = 2.0 * expected[b] ** 2 / (cov[0][b] * rho[b])  # 95 % interval of a chi2_nu/nu estimate (always positive)
     lo, hi = estimate[b] * nu / chi2.ppf(0.975, nu), estimate[b] * nu / chi2.ppf(0.025, nu)
     curve = Curve(name, f[b], estimate[b], expected[b], lo, hi, reference)
-    return MetricResult(name, title, "m^2/s^2/Hz", tests, [curve])
+    return MetricResult(name, title, "m^2/s^2/Hz", checks, [curve])
 
 
 def _sep_label(est: Estimates, s) -> str:
@@ -322,7 +145,7 @@ def _sep_label(est: Estimates, s) -> str:
 
 
 def _yz(est, th, kernel, bands, c, exp_auto, cov) -> MetricResult:
-    tests, curves = [], []
+    checks, curves = [], []
     b = bands.bins
     f = est.freqs
     for s in est.separations:
@@ -332,22 +155,19 @@ def _yz(est, th, kernel, bands, c, exp_auto, cov) -> MetricResult:
         rho = kernel.apply(th.yz[c][s]) / exp_auto
         rho_bar = th.rho(th.rho_yz[c][s], f)
         lab = _sep_label(est, s)
-        tests += bands.coherence_tests(lab, cc, pa, pb, rho, exp_auto, cov, rho_bar)
+        checks += bands.coherence_checks(lab, cc, pa, pb, rho, exp_auto, cov, rho_bar)
         st = coherence_stats(rho, exp_auto**2 / (cov[0] * rho_bar))  # per-bin bands for the plots
         for name, e, m, sd in (("coh2", coh2, st["coh2_mean"], st["coh2_sd"]),
                                ("phase", phase, np.angle(rho), st["phase_sd"])):
             lo, hi = _band95(e[b], sd[b])
             curves.append(Curve(f"{name} {lab}", f[b], e[b], m[b], lo, hi))
     return MetricResult(f"yz_coherence_{c}", f"yz coherence of {c} (magnitude-squared and phase)", "-, rad",
-                        tests, curves)
+                        checks, curves)
 
-
-def _wrap(a):
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
 def _longitudinal(est, th, kernel, bands, exp_auto_u, cov_u) -> MetricResult:
-    tests, curves = [], []
+    checks, curves = [], []
     g = est.grid
     b = bands.bins
     f = est.freqs
@@ -361,7 +181,7 @@ def _longitudinal(est, th, kernel, bands, exp_auto_u, cov_u) -> MetricResult:
             rho = kernel.apply(th.long_lines(g.x_m[q] - g.x_m[p])) / exp_auto_u
             lab = f"x={g.x_m[p]:g}m-{g.x_m[q]:g}m"
             # expected phase arg(rho) = 0 in the convected frame of the store
-            tests += bands.coherence_tests(lab, cross, est.long_auto[p], est.long_auto[q], rho, exp_auto_u, cov_u,
+            checks += bands.coherence_checks(lab, cross, est.long_auto[p], est.long_auto[q], rho, exp_auto_u, cov_u,
                                            rho_bar)
             st = coherence_stats(rho, n_bins)
             lo, hi = _band95(coh2[b], st["coh2_sd"][b])
@@ -370,7 +190,7 @@ def _longitudinal(est, th, kernel, bands, exp_auto_u, cov_u) -> MetricResult:
             curves.append(Curve(f"phase {lab}", f[b], phase[b], np.zeros(b.size), lo, hi))
     return MetricResult("longitudinal_coherence_u",
                         "longitudinal coherence of u between planes (magnitude-squared and phase, convected frame)",
-                        "-, rad", tests, curves)
+                        "-, rad", checks, curves)
 
 
 def _uw(est, th, kernel, bands, exp_auto, cov) -> MetricResult:
@@ -393,7 +213,7 @@ def _uw(est, th, kernel, bands, exp_auto, cov) -> MetricResult:
                                                    0, 1)))
                 for d in cov["u"]}
     co = est.uw.real
-    tests = []
+    checks = []
     for g in bands.groups:
         var = 0.0
         for d, r in corr.items():
@@ -405,8 +225,8 @@ def _uw(est, th, kernel, bands, exp_auto, cov) -> MetricResult:
         v = var / scale**2
         n_band = (1.0 + c * c) / (2.0 * v)
         z = float(cospectrum_z(x, c, n_band))
-        tests.append(Test("co-spectrum/sqrt(SuSw)", (float(f[g[0]]), float(f[g[-1]])), x, c, float(np.sqrt(v)), z))
+        checks.append(Check("co-spectrum/sqrt(SuSw)", (float(f[g[0]]), float(f[g[-1]])), x, c, float(np.sqrt(v)), z))
     lo, hi = _band95(co[b], sd[b])
     curve = Curve("uw_cross_spectrum", f[b], co[b], exp[b], lo, hi, th.reference.get("uw_cross_spectrum"))
     return MetricResult("uw_cross_spectrum", "u-w co-spectrum (Reynolds stress; 0 for Kaimal)", "m^2/s^2/Hz",
-                        tests, [curve])
+                        checks, [curve])

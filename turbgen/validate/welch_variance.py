@@ -7,7 +7,7 @@ field). A segment starting at sample t0 has the windowed, mean-removed DFT
 
     X_{t0, m} = sum_q Y_q c_m(q) exp(i 2 pi q t0 / nt),   c_m(q) = G_m(q / (nt dt))
 
-(G_m of ``expectations.WelchKernel``: Hann DTFT minus the segment-mean term), so by Isserlis
+(G_m of ``welch_kernel.WelchKernel``: Hann DTFT minus the segment-mean term), so by Isserlis
 
     Cov(|X_{s,m}|^2, |X_{s',m'}|^2) = |A|^2 + |B|^2,
     A = sum_q L_q c_m(q) conj(c_m'(q)) e^{i 2 pi q D / nt},   B = sum_q L_q c_m(q) c_m'(nt - q) e^{i 2 pi q D / nt},
@@ -19,7 +19,7 @@ non-overlapping segments where the spectrum varies within a bin (low bins of sho
 per-segment mean removal, and the correlation of neighbouring bins for a coloured spectrum.
 
 Averages over points/planes multiply the one-point covariance by rho_bar(f) (module docstring of
-``expectations``; sqrt(rho_m rho_m') between two bins), as before.
+``prediction``; sqrt(rho_m rho_m') between two bins), as before.
 
 Cost: lines within LINE_BAND Welch bins of each bin (Hann sidelobes: |c|^2 falls as bin^-6, so
 the neglected part is < 1e-6 of the sum), bin pairs up to MAX_LAG bins apart (beyond, |A|^2 + |B|^2 <
@@ -98,7 +98,18 @@ class WelchCovariance:
         self.phase = np.exp(2j * np.pi * np.outer(self.lags, q.ravel()) / nt).reshape(self.lags.size, *q.shape)
 
     def cov(self, lines_half: np.ndarray) -> dict | None:
-        """Covariances for line variances ``lines_half`` (nt/2 + 1,) (L_j, j = 0 .. nt/2)."""
+        """Covariance of the one-point Welch estimate of a line process.
+
+        Parameters
+        ----------
+        lines_half : numpy.ndarray
+            (nt // 2 + 1,) two-sided line variances L_j [m^2 s^-2], j = 0 .. nt // 2.
+
+        Returns
+        -------
+        dict or None
+            Lag d -> (nbins - d,) Cov(P_m, P_{m+d}) [(m^2 s^-2 Hz^-1)^2]; None when too expensive.
+        """
         if not self.feasible:
             return None
         nt = self.nt

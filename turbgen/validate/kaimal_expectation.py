@@ -1,0 +1,109 @@
+"""What a Kaimal / IEC store's model predicts for every estimate, on the store's grid.
+
+The generator synthesises a periodic record: line j of the one-sided Kaimal PSD S_i has the two-sided
+variance L_j = S_i(f_j) df / 2 (IEC 61400-1 Kaimal spectrum; Guo et al. 2022, Eq. 11), L_0 = 0 (no
+mean), times sigma_i^2 / sum(2 L_j) when the store says the spectrum was rescaled. The u yz line
+cross-covariance is L_j coh(r, f_j) with the IEC exponential coherence (Eq. 12, un-squared); v, w as
+the store says (white, or the same exponential); between planes the store's longitudinal model
+(Eq. 18 / Simley and Pao / Kristensen, un-squared, zero phase in the convected frame) for the
+components it was applied to, independent otherwise. The rotor-effective wind speed follows Eq. 25
+over the rotor points of the grid.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from turbgen.theory.coherence_models import LONGITUDINAL_MODELS, exponential_yz
+from turbgen.theory.kaimal import kaimal_spectrum
+from turbgen.theory.lattice import line_frequencies, pair_weights
+from turbgen.validate.estimators import COMPONENTS
+from turbgen.validate.pair_sums import RhoAccumulator, lag_radius, rotor_pair_counts
+from turbgen.validate.prediction import SamplingDesign, Theory, plane_separations
+from turbgen.validate.store_run import kaimal_model_from_attrs
+
+
+def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
+    """Kaimal / IEC expectations from the store attributes written by turbgen.runs.kaimal.
+
+    Parameters
+    ----------
+    attrs : dict
+        The store's attributes (``parameters``, ``U_m_s`` [m/s]).
+    design : SamplingDesign
+        Grid, Welch segments and point sets of the estimates.
+
+    Returns
+    -------
+    Theory
+        Line (cross-)variances [m^2 s^-2] and correlation sums rho_bar [-] (module docstring).
+    """
+    km = kaimal_model_from_attrs(attrs["parameters"])
+    kp, long_model, long_components = km.params, km.long_model, km.long_components
+    grid, mask = design.grid, design.rotor_mask
+    U = float(attrs["U_m_s"])
+    if long_model == "exp":
+        long_fn = lambda dx, f: LONGITUDINAL_MODELS["exp"](dx, f, U, km.a_x, km.b_x)  # noqa: E731
+    else:
+        s_tot = math.sqrt(sum(s * s for s in kp.sigma_m_s))
+        long_fn = lambda dx, f: LONGITUDINAL_MODELS[long_model](dx, f, U, s_tot, kp.length_scales_m[0])  # noqa: E731
+    nt = grid.nt
+    line_f = line_frequencies(nt, grid.dt_s)
+    df = line_f[1]
+    auto = {}
+    for i, c in enumerate(COMPONENTS):
+        lines = kaimal_spectrum(line_f, kp.sigma_m_s[i], kp.length_scales_m[i], U) * df / 2.0  # Eq. 11
+        lines[0] = 0.0
+        if km.rescale:
+            lines *= kp.sigma_m_s[i] ** 2 / np.sum(pair_weights(nt) * lines)
+        auto[c] = lines
+
+    def yz_coh(c, r_m, f):
+        if c == "u" or km.vw_coherent:
+            return exponential_yz(r_m, f, U, kp.a_yz, kp.lc_m)  # Eq. 12, un-squared
+        return np.where(np.asarray(r_m) == 0, 1.0, 0.0) * np.ones_like(f)
+
+    seps = design.separations
+    yz = {c: {(a, b): auto[c] * yz_coh(c, math.hypot(a * grid.dy_m, b * grid.dz_m), line_f) for a, b in seps}
+          for c in COMPONENTS}
+    long = {dx: auto["u"] * long_fn(dx, line_f) for dx in plane_separations(grid)}
+    # Eq. 25: S_RR = S_1 / n_R^2 sum_ij coh(r_ij, f), summed over the rotor pairs per lag
+    counts = rotor_pair_counts(grid, mask)
+    radius = lag_radius(grid)
+    sel = counts > 0
+    n_r = mask.sum()
+    rews_factor = np.array([np.sum(counts[sel] * exponential_yz(radius[sel], f, U, kp.a_yz, kp.lc_m)) for f in line_f])
+    rews = auto["u"] * rews_factor / n_r**2
+
+    node_f = design.node_freqs()
+    acc = RhoAccumulator(design, node_f.size)
+    lag_r = lag_radius(grid)
+    for c in COMPONENTS:
+        coh_yz2 = np.stack([yz_coh(c, lag_r, np.full(lag_r.shape, f)) ** 2 for f in node_f])
+        for dx, mult in plane_separations(grid).items():
+            if dx == 0:
+                acc.add(c, coh_yz2, mult, same_plane=True)
+            elif c in long_components:
+                acc.add(c, coh_yz2 * (long_fn(dx, node_f) ** 2)[:, None, None], mult, same_plane=False)
+    rho_rews = np.zeros(node_f.size)
+    for dx, mult in plane_separations(grid).items():
+        rho_rews += mult * long_fn(dx, node_f) ** 2 / grid.nx**2
+    reference = {
+        f"spectrum_{c}": (line_f[1:], kaimal_spectrum(line_f[1:], kp.sigma_m_s[i], kp.length_scales_m[i], U))
+        for i, c in enumerate(COMPONENTS)
+    }
+    band = design.band(U)
+    band["note"] = (
+        f"Kaimal lines f_j = j/(nt dt) up to the Nyquist frequency {band['f_max_hz']:g} Hz; "
+        + ("spectra rescaled to the nominal sigma (store attribute rescale)" if km.rescale
+           else "variance = the Kaimal integral over the resolved band (no rescaling)")
+    )
+    return Theory(
+        model="kaimal", nt=nt, line_f=line_f, auto=auto, yz=yz, long=long, rews=rews, node_f=node_f,
+        rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
+        sigma_model=dict(zip(COMPONENTS, kp.sigma_m_s)), band=band, long_components=long_components,
+        uw=np.zeros(line_f.size), rho_uw=np.zeros(node_f.size),  # u and w are synthesised independently
+        reference=reference,
+    )

@@ -1,0 +1,110 @@
+"""Sums over the pairs of points of the grid, by lag: the correlation sums rho_bar of averaged estimates.
+
+All sums run over the (2 ny - 1, 2 nz - 1) grid of lags (dy, dz) between two points of one plane:
+a function of the lag (a coherence) times the number of point pairs of a set at that lag. For Gaussian
+fields Cov(|X_p|^2, |X_q|^2) = E|X_p|^2 E|X_q|^2 coh2_pq (Isserlis 1918), so the average of an
+estimate over N points has the one-point variance times rho_bar = sum_pq coh2_pq / N^2
+(``turbgen.validate.prediction``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from turbgen.grid import Grid
+from turbgen.validate.estimators import COMPONENTS
+from turbgen.validate.prediction import SamplingDesign
+
+def rect_pair_counts(ny: int, nz: int, my: int, mz: int) -> np.ndarray:
+    """Pairs of points of an my x mz rectangle of grid points per lag.
+
+    Parameters
+    ----------
+    ny, nz : int
+        Grid points in y and z (the lag grid is (2 ny - 1, 2 nz - 1), lags -(n-1) .. n-1 steps).
+    my, mz : int
+        Extent of the rectangle [points].
+
+    Returns
+    -------
+    numpy.ndarray
+        (2 ny - 1, 2 nz - 1) number of ordered point pairs per lag (float).
+    """
+    dy = np.arange(-(ny - 1), ny)
+    dz = np.arange(-(nz - 1), nz)
+    return np.maximum(my - np.abs(dy), 0)[:, None] * np.maximum(mz - np.abs(dz), 0)[None, :].astype(float)
+
+
+def set_pair_counts(ny: int, nz: int, iy: np.ndarray, iz: np.ndarray) -> np.ndarray:
+    """Pairs of points of the sub-lattice ``iy`` x ``iz`` (grid indices) per lag, as :func:`rect_pair_counts`."""
+    cy = np.zeros(2 * ny - 1)
+    cz = np.zeros(2 * nz - 1)
+    np.add.at(cy, (iy[:, None] - iy[None, :]).ravel() + ny - 1, 1.0)
+    np.add.at(cz, (iz[:, None] - iz[None, :]).ravel() + nz - 1, 1.0)
+    return cy[:, None] * cz[None, :]
+
+
+def lag_radius(grid: Grid) -> np.ndarray:
+    """|r| [m] on the (2ny-1, 2nz-1) lag grid."""
+    dy = np.arange(-(grid.ny - 1), grid.ny) * grid.dy_m
+    dz = np.arange(-(grid.nz - 1), grid.nz) * grid.dz_m
+    return np.hypot(dy[:, None], dz[None, :])
+
+
+class RhoAccumulator:
+    """Sums of coh2 over all ordered pairs of every averaged point set (see module docstring).
+
+    Parameters
+    ----------
+    design : SamplingDesign
+        The grid, the yz separations and the plane-pair sub-lattice (long_iy, long_iz) of the estimates.
+    nn : int
+        Frequency nodes of the sums.
+    """
+
+    def __init__(self, design: SamplingDesign, nn: int):
+        grid, seps, iy, iz = design.grid, design.separations, design.long_iy, design.long_iz
+        self.grid, self.seps = grid, seps
+        ny, nz, nx = grid.ny, grid.nz, grid.nx
+        self.counts_all = rect_pair_counts(ny, nz, ny, nz)
+        self.counts_yz = {s: rect_pair_counts(ny, nz, ny - s[0], nz - s[1]) for s in seps}
+        self.counts_long = set_pair_counts(ny, nz, iy, iz)
+        self.norm_all = (nx * ny * nz) ** 2
+        self.norm_yz = {s: (nx * (ny - s[0]) * (nz - s[1])) ** 2 for s in seps}
+        self.norm_long = (iy.size * iz.size) ** 2
+        self.all = {c: np.zeros(nn) for c in COMPONENTS}
+        self.yz = {c: {s: np.zeros(nn) for s in seps} for c in COMPONENTS}
+        self.long = np.zeros(nn)
+        self.uw = np.zeros(nn)
+
+    def add(self, component: str, coh2: np.ndarray, multiplicity: int, same_plane: bool, n=slice(None)) -> None:
+        """Add coh2 (nodes, 2ny-1, 2nz-1) between the points of two planes at nodes ``n``.
+
+        ``multiplicity``: number of ordered plane pairs with this separation.
+        """
+        self.all[component][n] += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
+        for s in self.seps:
+            self.yz[component][s][n] += (
+                multiplicity * np.einsum("nij,ij->n", coh2, self.counts_yz[s]) / self.norm_yz[s]
+            )
+        if same_plane and component == "u":
+            self.long[n] += np.einsum("nij,ij->n", coh2, self.counts_long) / self.norm_long
+
+    def add_uw(self, coh2: np.ndarray, multiplicity: int, n=slice(None)) -> None:
+        """|u-w coherency|^2 between points of two planes, as :meth:`add`."""
+        self.uw[n] += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
+
+
+def rotor_pair_counts(grid: Grid, mask: np.ndarray) -> np.ndarray:
+    """Pairs of rotor points (``mask``, (ny, nz) bool) per lag, as :func:`rect_pair_counts` (mask autocorrelation)."""
+    sy, sz = 2 * grid.ny - 1, 2 * grid.nz - 1
+    f = np.fft.rfft2(mask.astype(float), s=(sy, sz))
+    ac = np.fft.irfft2(np.abs(f) ** 2, s=(sy, sz))
+    return np.round(np.fft.fftshift(ac, axes=(0, 1)))
+
+
+def box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
+    """Values of a periodic box field (..., nyp, nzp) at the grid's lags -(n-1) .. n-1 -> (..., 2 ny - 1, 2 nz - 1)."""
+    iy = np.arange(-(ny - 1), ny) % field2d.shape[-2]
+    iz = np.arange(-(nz - 1), nz) % field2d.shape[-1]
+    return field2d[..., iy[:, None], iz[None, :]]
