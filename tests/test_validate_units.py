@@ -127,6 +127,7 @@ def test_kaimal_rews_lines_equal_eq25_of_the_theory_module():
     # two independent implementations of paper 000 Eq. 25 over the grid's rotor points
     from turbgen.spec.kaimal import KaimalRun, kaimal_params
     from turbgen.theory.rotor_effective import rews_spectrum_kaimal
+    from turbgen.store.layout import grid_to_attrs
     from turbgen.validate.kaimal_expectation import kaimal_theory
     from turbgen.validate.prediction import SamplingDesign
 
@@ -135,7 +136,7 @@ def test_kaimal_rews_lines_equal_eq25_of_the_theory_module():
     mask = rotor_mask(g, 35.0)
     setup = WelchSetup(64, g.dt_s)
     design = SamplingDesign(g, setup, default_separations(g), mask, np.arange(12), np.arange(10))
-    th = kaimal_theory(run.to_attrs(), design)
+    th = kaimal_theory({**run.to_attrs(), "grid": grid_to_attrs(run.grid)}, design)  # as the store holds them
     yy, zz = np.meshgrid(g.y(), g.z(), indexing="ij")
     j = np.array([1, 5, 40, 200])
     ref = rews_spectrum_kaimal(th.line_f[j], run.kaimal, 14.0, yy[mask], zz[mask])

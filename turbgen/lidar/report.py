@@ -27,23 +27,17 @@ F_THEORY_MAX_HZ = 0.5
 def store_theory(fs, description, f_hz, radius_m: float):
     """PreviewSpectra of ``description`` for the store's model and parameters at f_hz > 0."""
     from turbgen.lidar.preview import preview_spectra
-    from turbgen.theory.params import KaimalParams
-    from turbgen.validate.store_run import mann_params_from_attrs
+    from turbgen.validate.store_run import kaimal_model_from_attrs, mann_params_from_attrs
 
-    p = fs.attrs["parameters"]
     if fs.model == "mann":
         return preview_spectra("mann", description, fs.U_m_s, f_hz=f_hz, radius_m=radius_m,
-                               mann=mann_params_from_attrs(p))
-    try:
-        kp = KaimalParams(tuple(p["sigma_m_s"]), tuple(p["length_scales_m"]), p["a_yz"], p["lc_m"])
-        if p["long_model"] != "exp":
-            raise ParameterError(f"lidar theory supports the exponential longitudinal coherence only "
-                                 f"(store has long_model = {p['long_model']!r})")
-        return preview_spectra("kaimal", description, fs.U_m_s, f_hz=f_hz, radius_m=radius_m, kaimal=kp,
-                               a_x=p["a_x"], b_x=p["b_x"], long_components=p["long_components"],
-                               vw_coherence=p.get("vw_coherence", "white") == "exp")
-    except (KeyError, TypeError) as exc:
-        raise ParameterError(f"store parameters lack the Kaimal model ({exc}); not a turbgen Kaimal store") from None
+                               mann=mann_params_from_attrs(fs.attrs))
+    km = kaimal_model_from_attrs(fs.attrs)
+    if km.long_model != "exp":
+        raise ParameterError(f"lidar theory supports the exponential longitudinal coherence only "
+                             f"(store has long_model = {km.long_model!r})")
+    return preview_spectra("kaimal", description, fs.U_m_s, f_hz=f_hz, radius_m=radius_m, kaimal=km.params,
+                           a_x=km.a_x, b_x=km.b_x, long_components=km.long_components, vw_coherence=km.vw_coherent)
 
 
 @dataclass

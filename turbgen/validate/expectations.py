@@ -14,9 +14,14 @@ points and segments the estimates used (``prediction.SamplingDesign``):
 
 from __future__ import annotations
 
+from turbgen.errors import ParameterError
 from turbgen.validate.kaimal_expectation import kaimal_theory
 from turbgen.validate.mann_expectation import mann_theory
 from turbgen.validate.prediction import SamplingDesign, Theory
+
+# model name (turbgen.runs.models.MODELS, the store's ``model`` attribute) -> its predictions; kept here,
+# beside the generators' registry, so that imports stay one-way (runs never imports validate)
+THEORIES = {"mann": mann_theory, "kaimal": kaimal_theory}
 
 
 def theory_for(fs, design: SamplingDesign) -> Theory:
@@ -34,6 +39,6 @@ def theory_for(fs, design: SamplingDesign) -> Theory:
     Theory
         Line (cross-)variances [m^2 s^-2] and correlation sums rho_bar [-].
     """
-    if fs.model == "mann":
-        return mann_theory(fs.attrs, design)
-    return kaimal_theory(fs.attrs, design)
+    if fs.model not in THEORIES:
+        raise ParameterError(f"store model {fs.model!r} has no validator theory (known: {', '.join(THEORIES)})")
+    return THEORIES[fs.model](fs.attrs, design)

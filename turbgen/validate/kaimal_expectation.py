@@ -40,7 +40,7 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
     Theory
         Line (cross-)variances [m^2 s^-2] and correlation sums rho_bar [-] (module docstring).
     """
-    km = kaimal_model_from_attrs(attrs["parameters"])
+    km = kaimal_model_from_attrs(attrs)
     kp, long_model, long_components = km.params, km.long_model, km.long_components
     grid, mask = design.grid, design.rotor_mask
     U = float(attrs["U_m_s"])

@@ -123,9 +123,8 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
         Lattice sums per record line [m^2 s^-2] (interpolated from k1 nodes on long records) and rho_bar [-].
     """
     grid, seps, mask = design.grid, design.separations, design.rotor_mask
-    p = attrs["parameters"]
-    params = mann_params_from_attrs(p)
-    box = mann_box_from_attrs(p, grid)
+    params = mann_params_from_attrs(attrs)
+    box = mann_box_from_attrs(attrs, grid)
     U = float(attrs["U_m_s"])
     lat = MannLattice(params, grid, box, U)
     nt = grid.nt

@@ -1,16 +1,17 @@
 """The run a store describes, decoded from its attributes: the one place the validator reads them.
 
-turbgen.runs writes the model parameters into the store's ``parameters`` attribute; everything the
-validator needs of them (the Mann tensor parameters and box, the Kaimal spectra and coherence
-models) is decoded here, and nowhere else in turbgen.validate.
+The store's attributes are decoded by the run's own spec (turbgen.spec: ``MannRun.from_attrs``,
+``KaimalRun.from_attrs``, which also read older stores); here is the one place the validator asks
+for what it needs of them (the Mann tensor parameters and box, the Kaimal spectra and coherence models).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from turbgen.errors import ParameterError
 from turbgen.grid import Grid
+from turbgen.spec.kaimal import KaimalRun
+from turbgen.spec.mann import MannRun
 from turbgen.theory.params import KaimalParams, MannParams
 
 
@@ -51,49 +52,37 @@ class KaimalModel:
     b_x: float | None = None
 
 
-def mann_params_from_attrs(p: dict) -> MannParams:
-    """MannParams from the store's ``parameters`` attribute (written by turbgen.runs.mann).
+def mann_params_from_attrs(attrs: dict) -> MannParams:
+    """MannParams of a Mann store (its run, turbgen.spec.mann.MannRun.from_attrs).
 
     Raises
     ------
     ParameterError
-        If the attribute lacks a Mann parameter (not a turbgen Mann store).
+        If the attributes lack a Mann parameter (not a turbgen Mann store).
     """
-    try:
-        return MannParams(ae=p["ae"], length_scale_m=p["length_scale_m"], gamma=p["gamma"], lifetime=p["lifetime"],
-                          factor1=p["factor1"], factor2=p["factor2"], evo_time_s=p["evo_time_s"])
-    except (KeyError, TypeError) as exc:
-        raise ParameterError(f"store parameters lack the Mann model ({exc}); not a turbgen Mann store") from None
+    return MannRun.from_attrs(attrs).params
 
 
-def mann_box_from_attrs(p: dict, grid: Grid) -> MannBox:
-    """The synthesis box: pad_yz times the grid in y and z (turbgen.runs.mann.MannRun.box).
+def mann_box_from_attrs(attrs: dict, grid: Grid) -> MannBox:
+    """The synthesis box of a Mann store: pad_yz times the grid in y and z.
 
     Raises
     ------
     ParameterError
-        If the attribute lacks ``pad_yz``.
+        If the attributes lack a Mann parameter.
     """
-    try:
-        pad = int(p["pad_yz"])
-        return MannBox(pad * grid.ny, pad * grid.nz)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ParameterError(f"store parameters lack the Mann box size ({exc})") from None
+    pad = MannRun.from_attrs(attrs).pad_yz
+    return MannBox(pad * grid.ny, pad * grid.nz)
 
 
-def kaimal_model_from_attrs(p: dict) -> KaimalModel:
-    """The Kaimal model from the store's ``parameters`` attribute (written by turbgen.runs.kaimal).
+def kaimal_model_from_attrs(attrs: dict) -> KaimalModel:
+    """The Kaimal model of a Kaimal store (its run, turbgen.spec.kaimal.KaimalRun.from_attrs).
 
     Raises
     ------
     ParameterError
-        If the attribute lacks a Kaimal parameter (not a turbgen Kaimal store).
+        If the attributes lack a Kaimal parameter (not a turbgen Kaimal store).
     """
-    try:
-        kp = KaimalParams(tuple(p["sigma_m_s"]), tuple(p["length_scales_m"]), p["a_yz"], p["lc_m"])
-        long_model = p["long_model"]
-        a_x, b_x = (p["a_x"], p["b_x"]) if long_model == "exp" else (None, None)
-        return KaimalModel(kp, long_model, p["long_components"], p.get("vw_coherence", "white") == "exp",
-                           bool(p.get("rescale", False)), a_x, b_x)
-    except (KeyError, TypeError) as exc:
-        raise ParameterError(f"store parameters lack the Kaimal model ({exc}); not a turbgen Kaimal store") from None
+    run = KaimalRun.from_attrs(attrs)
+    return KaimalModel(run.kaimal, run.long_model, run.long_components, run.vw_coherence == "exp", run.rescale,
+                       run.a_x, run.b_x)
