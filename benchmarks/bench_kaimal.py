@@ -3,7 +3,7 @@
     python benchmarks/bench_kaimal.py              # default case + pyconturb (1 plane, reduced nt) + 64 x 64
     python benchmarks/bench_kaimal.py --pyconturb-nt 512 --skip-64
 
-Default case (issue 4): U = 16 m/s, IEC class A, hub 90 m, 4096 x 11 x 31 x 31 at dt = 0.5 s, 5 m spacing.
+Default case: U = 16 m/s, IEC class A, hub 90 m, 4096 x 11 x 31 x 31 at dt = 0.5 s, 5 m spacing.
 turbgen writes the whole 4-D field (3 components, all planes) to a zarr store.
 
 pyconturb (the Veers method with a Cholesky factor per frequency, IEC coherence on u, v and w white,

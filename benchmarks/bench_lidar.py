@@ -1,4 +1,4 @@
-"""Benchmark of the virtual lidar on the default Mann store (issue 10: <= 10 s, memory bounded by chunks).
+"""Benchmark of the virtual lidar on the default Mann store (target <= 10 s, memory bounded by chunks).
 
     python benchmarks/bench_lidar.py --store PATH       # an existing store (default `turbgen mann` size)
     python benchmarks/bench_lidar.py                     # generate the default store first (minutes)

@@ -1,4 +1,4 @@
-"""Benchmark of the Mann generator against the PyPI anchors mannrs and hipersim (issue 3).
+"""Benchmark of the Mann generator against the PyPI anchors mannrs and hipersim.
 
     python benchmarks/bench_mann.py            # all cases (several minutes on 2 cores)
     python benchmarks/bench_mann.py --quick    # smaller grids, to check the script

@@ -1,4 +1,4 @@
-"""Benchmark of `turbgen validate` on the default Mann store (issue 5: well under a minute on 2 cores).
+"""Benchmark of `turbgen validate` on the default Mann store (target: well under a minute on 2 cores).
 
     python benchmarks/bench_validate.py                     # generate the default store, validate it
     python benchmarks/bench_validate.py --store PATH        # validate an existing store (any model)

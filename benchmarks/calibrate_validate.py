@@ -14,7 +14,7 @@ planes, both models, low and high U; seeds are fixed (reproducible to the bit). 
 small (well under a second each) so the whole table costs ~15-25 min of one core; it runs niced.
 
     python benchmarks/calibrate_validate.py                       # full table (~580 fields) -> benchmarks/calibration.md
-    python benchmarks/calibrate_validate.py --subset issue        # the 120-field neutral sweep of issue 13
+    python benchmarks/calibrate_validate.py --subset issue        # the 120-field neutral sweep (12 x 12, nt 512, U 8/10/12, seeds 101-120)
     python benchmarks/calibrate_validate.py --subset quick --out /tmp/cal.md
     python benchmarks/calibrate_validate.py --power               # smallest detected defects (one field)
 

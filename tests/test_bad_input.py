@@ -3,8 +3,9 @@
 Every case runs the click app in-process (CliRunner) inside a directory holding a small complete
 Mann store (``mann.zarr``), a plain file (``afile``) and a user-written PNG in ``plots/``; the
 directory listing must be the same afterwards. Each case names the substring(s) the error line
-must contain (the bad value, or the range it is refused against). The cases cover issue 15
-items 2, 3, 6, 7, 9 and 10 (input side) and a broad sample of inputs that were already refused.
+must contain (the bad value, or the range it is refused against). The cases cover unbounded
+lists and sizes, memory checks, physical ranges, misleading messages and output naming, and a broad
+sample of inputs that were always refused.
 A subprocess case checks the installed console script prints the same single line.
 """
 
@@ -28,7 +29,7 @@ HUGE = ["--nt", "65536", "--ny", "1024", "--nz", "1024"]
 
 # (id, args, substrings the single error line must contain)
 CASES = [
-    # --- mann: physical ranges (issue 15 items 6, 7) ---
+    # --- mann: physical ranges ---
     ("mann-L-1e300", ["mann", "--L", "1e300"], ["1e+300", "[1, 1000]"]),
     ("mann-L-1e-9", ["mann", "--L", "1e-9"], ["1e-09", "[1, 1000]"]),
     ("mann-L-1e6", ["mann", "--L", "1e6"], ["1e+06", "[1, 1000]"]),
@@ -368,7 +369,7 @@ def test_readme_shows_the_ranges_table():
 
 
 def test_default_store_names_differ_whenever_the_field_does():
-    """Issue 15 item 10: parameters the readable name does not show add a digest; defaults keep the short name."""
+    """Parameters the readable name does not show add a digest; defaults keep the short name."""
     from turbgen.spec.presets import kaimal_run_keys
     from turbgen.spec.kaimal import KaimalRun
     from turbgen.spec.mann import MannRun

@@ -1,4 +1,4 @@
-"""Fits of paper 000 Sect. 2.4 (Eq. 20-22) against its Tables 1 and 2."""
+"""Fits of Guo et al. (2023), Sect. 2.4 (Eq. 20-22) against its Tables 1 and 2."""
 
 import numpy as np
 import pytest
@@ -9,9 +9,9 @@ from turbgen.theory.fitting import fit_kaimal_spectra, fit_longitudinal, fit_yz_
 from turbgen.theory.params import MannParams
 from turbgen.theory.space_time import longitudinal_coherence
 
-# paper 000 Table 1 Mann sets (ae, L, Gamma, factor1); stable uses b1 = -0.8 (mann-model.md)
+# Guo et al. (2023), Table 1 Mann sets (ae, L, Gamma, factor1); stable uses b1 = -0.8 (mann-model.md)
 CLASSES = {"unstable": (0.184, 140.0, 2.6, 1.0), "neutral": (0.311, 49.0, 3.1, 1.0), "stable": (0.652, 30.0, 2.4, 0.8)}
-# paper 000 Table 2: a_x for gamma = 200, 400, 600 s
+# Guo et al. (2023), Table 2: a_x for gamma = 200, 400, 600 s
 TABLE2_AX = {"unstable": (8.2, 5.1, 4.1), "neutral": (2.9, 1.8, 1.4), "stable": (1.6, 1.0, 0.8)}
 U = 16.0
 
@@ -55,7 +55,7 @@ def test_longitudinal_fit_needs_evolution():
 
 
 def test_table1_neutral_u_length_scale():
-    # u of the neutral Mann set fits the IEC Kaimal L1 = 340.2 m (paper 000 keeps IEC for neutral)
+    # u of the neutral Mann set fits the IEC Kaimal L1 = 340.2 m (Guo et al. (2023) keeps IEC for neutral)
     res = fit_kaimal_spectra(_params("neutral"), U)
     assert res["length_scales_m"][0] == pytest.approx(340.2, rel=0.06)
     assert res["sigma_m_s"][0] == pytest.approx(2.82, rel=0.05)

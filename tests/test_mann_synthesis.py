@@ -153,7 +153,7 @@ def test_point_variance_and_uw_covariance_match_oracle(small):
 
 
 def test_evolution_cross_spectrum_is_theta(small):
-    """Between snapshots dt apart, E[u_hat(t) u_hat^*(t+dt)] = exp(-dt/tau_e) E|u_hat|^2 (paper 000 Eq. 13)."""
+    """Between snapshots dt apart, E[u_hat(t) u_hat^*(t+dt)] = exp(-dt/tau_e) E|u_hat|^2 (Guo et al. 2023, Eq. 13)."""
     box = small.box
     s = _mode_power(small)
     dt = 1.0  # [s]; tau_e on this grid runs from ~0.3 s to ~1000 s, so rho spans (0, 1)

@@ -1,4 +1,4 @@
-"""Stability presets (paper 000 Table 1, Table 2) and user preset files."""
+"""Stability presets (Guo et al. 2023, Table 1, Table 2) and user preset files."""
 
 import json
 
@@ -15,13 +15,13 @@ from turbgen.spec.presets import (
 from turbgen.theory.kaimal import iec_sigma1_m_s
 from turbgen.theory.mann_spectra import variances
 
-# paper 000 Table 1 at U = 16 m/s: Mann (ae, L, Gamma); Kaimal (L1, L2, L3, sigma1..3, a_yz, Lc)
+# Guo et al. (2023), Table 1 at U = 16 m/s: Mann (ae, L, Gamma); Kaimal (L1, L2, L3, sigma1..3, a_yz, Lc)
 TABLE1 = {
     "unstable": ((0.184, 140, 2.6), (744.8, 181.9, 126.4, 2.82, 2.34, 1.98, 6.5, 1502.0)),
     "neutral": ((0.311, 49, 3.1), (340.2, 113.4, 27.72, 2.82, 2.25, 1.41, 12.0, 340.2)),
     "stable": ((0.652, 30, 2.4), (101.1, 33.3, 27.0, 2.82, 2.26, 1.83, 13.1, 101.1)),
 }
-# paper 000 Table 2 column of each class's gamma (600 / 400 / 200 s)
+# Guo et al. (2023), Table 2 column of each class's gamma (600 / 400 / 200 s)
 TABLE2 = {"unstable": (600, 4.1, 7.67e-5), "neutral": (400, 1.8, 1.49e-4), "stable": (200, 1.6, 9.18e-4)}
 
 

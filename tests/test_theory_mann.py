@@ -54,7 +54,7 @@ def test_published_iec_ratios():
 def test_ae_for_sigma_u_round_trip():
     ae = ms.ae_for_sigma_u(2.816, NEUTRAL)
     assert np.sqrt(ms.variances(NEUTRAL.with_ae(ae))["uu"]) == pytest.approx(2.816, rel=1e-10)
-    # paper 000 Table 1: ae = 0.311 gives sigma_u within a few % of 2.82 m/s
+    # Guo et al. (2023), Table 1: ae = 0.311 gives sigma_u within a few % of 2.82 m/s
     assert ae == pytest.approx(0.311, rel=0.05)
 
 

@@ -1,4 +1,4 @@
-"""Calibration of the validator's null distributions (issue 13: false alarms at the design rate).
+"""Calibration of the validator's null distributions (false alarms at the design rate).
 
 Fast tests: the exact coherence / phase laws and the exact Welch covariance against Monte Carlo of
 their own definitions (fixed seeds), and fields of the issue's small sweep that failed before.

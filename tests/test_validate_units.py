@@ -124,7 +124,7 @@ def test_rotor_and_separations():
 
 
 def test_kaimal_rews_lines_equal_eq25_of_the_theory_module():
-    # two independent implementations of paper 000 Eq. 25 over the grid's rotor points
+    # two independent implementations of Guo et al. (2023), Eq. 25 over the grid's rotor points
     from turbgen.spec.kaimal import KaimalRun, kaimal_params
     from turbgen.theory.rotor_effective import rews_spectrum_kaimal
     from turbgen.store.layout import grid_to_attrs

@@ -49,13 +49,13 @@ def _three(name):
               help=f"Hub height [m] (Lambda1 = 0.7 z below 60 m, else 42 m; default {D['hub_height_m']:g}).")
 @click.option("--sigma", callback=_three("--sigma"), help="Explicit sigma_u,sigma_v,sigma_w [m/s] (overrides --class).")
 @click.option("--lengths", callback=_three("--lengths"), help="Explicit Kaimal L1,L2,L3 [m] (e.g. Table 1 classes).")
-@click.option("--preset", help="Stability preset (Guo et al. 2022, Tables 1-2: unstable, neutral, stable, or from "
+@click.option("--preset", help="Stability preset (Guo et al. 2023, Tables 1-2: unstable, neutral, stable, or from "
               "--presets-file): sets sigma, L, a_yz, Lc and the longitudinal model; typed options override it.")
 @click.option("--presets-file", type=click.Path(dir_okay=False), help="User presets (TOML or JSON).")
 @click.option("--ayz", type=float, help="yz coherence decay a_yz [-] (default 12).")
 @click.option("--lc", type=float, help="yz coherence scale Lc [m] (default 8.1 Lambda1).")
 @click.option("--long-model", type=click.Choice(list(LONGITUDINAL_MODELS)),
-              help=f"Longitudinal coherence model (Guo et al. 2022 Eq. 18, Simley-Pao, Kristensen; default "
+              help=f"Longitudinal coherence model (Guo et al. 2023, Eq. 18, Simley-Pao, Kristensen; default "
               f"{D['long_model']}).")
 @click.option("--ax", type=float, help=f"a_x of the exp model [-] (default {DEFAULT_A_X:g}, Table 2 neutral, gamma 400 s).")
 @click.option("--bx", type=float, help=f"b_x of the exp model [1/m] (default {DEFAULT_B_X:g}).")

@@ -59,7 +59,7 @@ def _mann_options(f):
         click.option("--sigma-u", "sigma_u", type=float, default=None, help="Target σ_u [m/s] (sets αε^(2/3))."),
         click.option("--ti", type=float, default=None, help="Target turbulence intensity σ_u/U [-] (sets αε^(2/3))."),
         click.option("--lifetime", type=click.Choice(LIFETIMES), default=D["lifetime"], show_default=True,
-                     help="Eddy lifetime: guo (Guo et al. 2022, Eq. 6) or mann (Eq. 4)."),
+                     help="Eddy lifetime: guo (Guo et al. 2023, Eq. 6) or mann (Eq. 4)."),
         click.option("--factor1", type=float, default=D["factor1"], show_default=True, help="Small-k lifetime slope -factor1."),
         click.option("--factor2", type=float, default=D["factor2"], show_default=True,
                      help="Large-k slope -(2/3)factor2 of the evolution lifetime."),
@@ -70,7 +70,7 @@ def _mann_options(f):
         click.option("--f", "f_text", default=None, help="Frequencies a,b,c [Hz]; default 40 log-spaced, 1e-3..1 Hz."),
         click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON (keys: README, theory)."),
         click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None, callback=_plot_path,
-                     help="Write a PNG plot (Guo et al. 2022, Fig. 2 style); an existing file needs --overwrite."),
+                     help="Write a PNG plot (Guo et al. 2023, Fig. 2 style); an existing file needs --overwrite."),
         click.option("--overwrite", is_flag=True, is_eager=True, expose_value=False, callback=_remember_overwrite,
                      help="Replace an existing --plot file."),
     ]
@@ -121,7 +121,7 @@ def _emit(columns: dict, as_json: bool, extra: dict | None = None):
 
 
 def _plot(path, x, curves: dict, xlabel: str, ylabel: str, logy=False):
-    """Curves over log x (Guo et al. 2022, Fig. 2 style), written as PNG."""
+    """Curves over log x (Guo et al. 2023, Fig. 2 style), written as PNG."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -150,7 +150,7 @@ def theory():
 @theory.command()
 @_mann_options
 def spectra(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path):
-    """Mann one-point spectra F_ij(k1) (two-sided, m^3 s^-2; Guo et al. 2022, Eq. 8)."""
+    """Mann one-point spectra F_ij(k1) (two-sided, m^3 s^-2; Guo et al. 2023, Eq. 8)."""
     from turbgen.theory.mann_spectra import one_point_spectra
 
     p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
@@ -187,7 +187,7 @@ def coherence(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_
 @click.option("--dx", type=float, callback=_ranged("separation_m", "--dx (m)"), default=100.0, show_default=True, help="Longitudinal separation [m].")
 def longitudinal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path,
                  dx):
-    """Longitudinal (magnitude-squared) coherence of u from the space-time tensor (Guo et al. 2022, Eq. 16)."""
+    """Longitudinal (magnitude-squared) coherence of u from the space-time tensor (Guo et al. 2023, Eq. 16)."""
     from turbgen.theory.space_time import longitudinal_coherence
 
     p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
@@ -202,7 +202,7 @@ def longitudinal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, 
 @_mann_options
 @click.option("--radius", type=float, callback=_ranged("rotor_radius_m", "--radius (m)"), default=63.0, show_default=True, help="Rotor radius R [m].")
 def rews(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path, radius):
-    """Rotor-effective wind speed spectrum of the Mann model (Guo et al. 2022, Eq. 24; two-sided, m^3 s^-2)."""
+    """Rotor-effective wind speed spectrum of the Mann model (Guo et al. 2023, Eq. 24; two-sided, m^3 s^-2)."""
     from turbgen.theory.mann_spectra import one_point_spectra
     from turbgen.theory.rotor_effective import rews_spectrum_mann
 
@@ -224,7 +224,7 @@ def fit():
 @fit.command()
 @_mann_options
 def kaimal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path):
-    """Kaimal σ_i, L_i (Guo et al. 2022, Eq. 20) and IEC a_yz, Lc (Eq. 21, dy = dz = 20 m) fitted to the Mann model.
+    """Kaimal σ_i, L_i (Guo et al. 2023, Eq. 20) and IEC a_yz, Lc (Eq. 21, dy = dz = 20 m) fitted to the Mann model.
 
     --f / --k1 set the Eq. 20 grid (default 1e-3..1 Hz in 1e-3 Hz steps).
     """

@@ -1,4 +1,4 @@
-"""Defaults of every run (Guo et al. 2022, Sect. 5.1.2, neutral case) and the grid rule "dz defaults to dy".
+"""Defaults of every run (Guo et al. 2023, Sect. 5.1.2, neutral case) and the grid rule "dz defaults to dy".
 
 The commands show these values in their help, ``MannRun.from_mapping`` / ``KaimalRun.from_mapping``
 apply them, and the sweep plans with them: they are written nowhere else.
@@ -14,7 +14,7 @@ from turbgen.grid import Grid
 GATES_M = tuple(round(50.0 + 13.3 * i, 9) for i in range(10))
 DEFAULT_PLANES_M = (0.0, *GATES_M)
 
-# Mann space-time model, neutral class (Guo et al. 2022, Table 1 and Sect. 2.4): L [m], Gamma [-], gamma [s].
+# Mann space-time model, neutral class (Guo et al. 2023, Table 1 and Sect. 2.4): L [m], Gamma [-], gamma [s].
 MANN_DEFAULTS = {
     "U_m_s": 16.0,  # mean wind speed [m/s]
     "length_scale_m": 49.0,
@@ -33,7 +33,7 @@ MANN_DEFAULTS = {
 # lowest row stays 2 m above ground at hub height 150 m.
 MANN_GRID = {"nt": 4096, "dt_s": 0.5, "x_m": DEFAULT_PLANES_M, "ny": 64, "nz": 64, "dy_m": 4.7}
 
-# Kaimal 4D field: IEC class A NTM at 16 m/s, exponential longitudinal coherence (Guo et al. 2022,
+# Kaimal 4D field: IEC class A NTM at 16 m/s, exponential longitudinal coherence (Guo et al. 2023,
 # Eq. 18) with the neutral Table 2 constants for gamma = 400 s: a_x [-], b_x [1/m].
 DEFAULT_A_X = 1.8
 DEFAULT_B_X = 1.49e-4

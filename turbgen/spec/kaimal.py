@@ -39,7 +39,7 @@ _INPUT_KEYS = set(UNITS) - set(DERIVED_KEYS)
 class KaimalRun:
     """A Kaimal 4D field: spectra + yz coherence (``kaimal``), grid, speed, seed, longitudinal model.
 
-    long_model : "exp" (Guo et al. 2022, Eq. 18 with a_x [-], b_x [1/m]; defaults Table 2 neutral,
+    long_model : "exp" (Guo et al. 2023, Eq. 18 with a_x [-], b_x [1/m]; defaults Table 2 neutral,
         gamma = 400 s), "simley-pao" (Eq. 18 with the Simley and Pao 2015 parameters) or "kristensen"
         (Kristensen 1979).
     long_components : "u" (evoTurb) or "uvw": components given the longitudinal coherence.

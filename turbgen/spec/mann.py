@@ -1,4 +1,4 @@
-"""What a Mann space-time run is: parameters + grid + seed (Guo et al. 2022, Sect. 2.3.1), apart from how it runs.
+"""What a Mann space-time run is: parameters + grid + seed (Guo et al. 2023, Sect. 2.3.1), apart from how it runs.
 
     run = MannRun.from_mapping({"length_scale_m": 49, "gamma": 3.1, "evo_time_s": 400})
 
@@ -32,7 +32,7 @@ _INPUT_KEYS = set(UNITS) | {"sigma_u_m_s", "ti", "turb_class", "grid"}
 
 @dataclass(frozen=True)
 class MannRun:
-    """Everything that determines a Mann space-time field (Guo et al. 2022, Sect. 2.3.1).
+    """Everything that determines a Mann space-time field (Guo et al. 2023, Sect. 2.3.1).
 
     params : Mann parameters (ae, L, Gamma, lifetimes, evolution time gamma [s]).
     grid : planes x_m [m upstream], nt samples dt_s [s] apart (dx = U dt), ny x nz points dy_m, dz_m [m].

@@ -1,6 +1,6 @@
-"""Atmospheric-stability presets for both models (Guo et al. 2022, Tables 1 and 2).
+"""Atmospheric-stability presets for both models (Guo et al. 2023, Tables 1 and 2).
 
-Sources of every number (Guo et al. 2022, the 4D Mann space-time model under atmospheric stability):
+Sources of every number (Guo, Schlipf and Cheng 2023, Wind Energ. Sci. 8, 149-171: lidar-assisted control under various turbulence characteristics):
 
 * Mann alpha*eps^(2/3), L, Gamma: Table 1 (after Pena 2019), at the reference speed U = 16 m/s.
   alpha*eps^(2/3) is NOT taken from the table: the paper scales it "such that the turbulence
@@ -42,7 +42,7 @@ from turbgen.spec.mann import MannRun
 from turbgen.theory.kaimal import IEC_IREF, IEC_LENGTH_FACTORS, IEC_SIGMA_RATIOS, iec_sigma1_m_s
 from turbgen.theory.params import KaimalParams, MannParams, check_wind_speed
 
-REFERENCE_U_M_S = 16.0  # Guo et al. 2022, Table 1 caption: "with the mean wind speed of 16 m/s"
+REFERENCE_U_M_S = 16.0  # Guo et al. 2023, Table 1 caption: "with the mean wind speed of 16 m/s"
 
 
 @dataclass(frozen=True)
@@ -108,15 +108,15 @@ class KaimalSettings:
     b_x: float
 
 
-# Guo et al. 2022, Table 2: (a_x, b_x [1/m]) of Eq. 18 per class, for gamma = 200, 400, 600 s
+# Guo et al. 2023, Table 2: (a_x, b_x [1/m]) of Eq. 18 per class, for gamma = 200, 400, 600 s
 _TABLE2 = {
     "unstable": {200.0: (8.2, 8.52e-5), 400.0: (5.1, 8.02e-5), 600.0: (4.1, 7.67e-5)},
     "neutral": {200.0: (2.9, 1.59e-4), 400.0: (1.8, 1.49e-4), 600.0: (1.4, 1.42e-4)},
     "stable": {200.0: (1.6, 9.18e-4), 400.0: (1.0, 8.59e-4), 600.0: (0.8, 8.27e-4)},
 }
-_EVO_S = {"unstable": 600.0, "neutral": 400.0, "stable": 200.0}  # Guo et al. 2022, Sect. 2.4
+_EVO_S = {"unstable": 600.0, "neutral": 400.0, "stable": 200.0}  # Guo et al. 2023, Sect. 2.4
 _IEC_LAMBDA1_M = 42.0  # IEC 61400-1 Lambda1 for hub heights >= 60 m; Table 1 neutral L1 = 8.1 * 42 = 340.2 m
-_SOURCE = "Guo et al. 2022, Table 1 ({cls}, U = 16 m/s), gamma from Sect. 2.4, a_x/b_x from Table 2"
+_SOURCE = "Guo et al. 2023, Table 1 ({cls}, U = 16 m/s), gamma from Sect. 2.4, a_x/b_x from Table 2"
 
 
 def _builtin() -> dict[str, StabilityPreset]:
@@ -236,7 +236,7 @@ def mann_params_for(
     """MannParams of ``preset`` at mean speed U [m/s]; explicit (non-None) arguments override the preset.
 
     Unless ``ae`` is given, alpha*eps^(2/3) is re-derived so that the model sigma_u equals the
-    IEC NTM sigma_1 = Iref (0.75 U + 5.6) of the preset's class (Guo et al. 2022, Sect. 2.4): the run
+    IEC NTM sigma_1 = Iref (0.75 U + 5.6) of the preset's class (Guo et al. 2023, Sect. 2.4): the run
     mapping of :func:`mann_run_keys` resolved by MannRun.from_mapping, as ``turbgen mann --preset``
     and the sweep do.
     """

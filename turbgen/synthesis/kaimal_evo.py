@@ -1,6 +1,6 @@
 """Kaimal 4D fields: per-frequency yz synthesis with direct-product longitudinal coherence (evoTurb style).
 
-Cross-spectrum between component c at (plane p, point a) and (plane q, point b) (paper 000 Eq. 19):
+Cross-spectrum between component c at (plane p, point a) and (plane q, point b) (Guo et al. 2023, Eq. 19):
 
     S_c(f) coh_yz(r_ab, f) gamma_x(|x_p - x_q|, f),   zero phase between planes (convected frame).
 

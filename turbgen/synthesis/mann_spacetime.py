@@ -3,7 +3,7 @@
 Each plane x_n is a snapshot of the (xi = U t, y, z) box at relative time t_n = x_n / U. Snapshots
 are taken in time order and the Fourier noise follows the exact Ornstein-Uhlenbeck recursion
     n_{m+1} = rho n_m + sqrt(1 - rho^2) xi_{m+1},   rho = exp(-(t_{m+1} - t_m) / tau_e(k)),
-so <u_hat(k, t) u_hat^*(k, t + dt)> = exp(-|dt| / tau_e) Phi(k) dk = Theta(k, dt) dk (paper 000
+so <u_hat(k, t) u_hat^*(k, t + dt)> = exp(-|dt| / tau_e) Phi(k) dk = Theta(k, dt) dk (Guo et al. (2023)
 Eq. 13-14) for every pair of planes, whatever their spacing.
 
 Work per snapshot, slab-wise over k1 in fixed batches (the same batches for any thread count):
@@ -250,7 +250,7 @@ class MannSnapshots:
         fresh = n if dt is None else s.noise[:b]
         for j in range(b):
             complex_normal(seed, m, i0 + j, fresh[j])
-        if dt is not None:  # exact OU step over dt (paper 000 Eq. 13-14)
+        if dt is not None:  # exact OU step over dt (Guo et al. 2023, Eq. 13-14)
             rho, sig = s.rho[:b], s.sig[:b]
             expand_k2(st.inv_tau[j0:j1], box.nyp, False, rho)
             rho *= np.float32(-dt)

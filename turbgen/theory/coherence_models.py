@@ -4,9 +4,9 @@ All return the *un-squared* (magnitude) coherence, i.e. the correlation coeffici
 Fourier amplitudes that a synthesis uses directly; square it to compare with a
 magnitude-squared estimate. Separations in m, frequencies in Hz, speeds in m/s.
 
-yz-plane:      exponential_yz                          (IEC 61400-1; paper 000 Eq. 12),
+yz-plane:      exponential_yz                          (IEC 61400-1; Guo et al. (2023), Eq. 12),
                exponential_yz_decay_length_m           (its bound exp(-r / decay), for the embedding)
-longitudinal:  exponential_longitudinal(a_x, b_x)      (paper 000 Eq. 18)
+longitudinal:  exponential_longitudinal(a_x, b_x)      (Guo et al. 2023, Eq. 18)
                simley_pao(sigma_total, L_u)            (Simley & Pao 2015 LES parameters of Eq. 18)
                kristensen(sigma_total, L_u)            (Kristensen 1979)
 """
@@ -17,7 +17,7 @@ import numpy as np
 
 
 def exponential_yz(r_m, f_hz, U_m_s: float, a_yz: float = 12.0, lc_m: float = 340.2):
-    """coh(r, f) = exp(-a_yz r sqrt((f/U)^2 + (0.12/Lc)^2)); its square is paper 000 Eq. 12."""
+    """coh(r, f) = exp(-a_yz r sqrt((f/U)^2 + (0.12/Lc)^2)); its square is Guo et al. (2023), Eq. 12."""
     r = np.asarray(r_m, dtype=float)
     f = np.asarray(f_hz, dtype=float)
     return np.exp(-a_yz * r * np.sqrt((f / U_m_s) ** 2 + (0.12 / lc_m) ** 2))
@@ -42,7 +42,7 @@ def exponential_yz_decay_length_m(f_hz: float, U_m_s: float, a_yz: float = 12.0,
 
 
 def exponential_longitudinal(dx_m, f_hz, U_m_s: float, a_x: float, b_x: float):
-    """gamma_x = sqrt(exp(-a_x dx sqrt((f/U)^2 + b_x^2))); the square is paper 000 Eq. 18."""
+    """gamma_x = sqrt(exp(-a_x dx sqrt((f/U)^2 + b_x^2))); the square is Guo et al. (2023), Eq. 18."""
     dx = np.abs(np.asarray(dx_m, dtype=float))
     f = np.asarray(f_hz, dtype=float)
     return np.exp(-0.5 * a_x * dx * np.sqrt((f / U_m_s) ** 2 + b_x**2))

@@ -1,4 +1,4 @@
-"""Eddy lifetimes of the Mann model and of its space-time extension (paper 000, Sect. 2.1, 2.3.1).
+"""Eddy lifetimes of the Mann model and of its space-time extension (Guo et al. 2023, Sect. 2.1, 2.3.1).
 
 All functions are vectorised over the wavenumber magnitude and return non-dimensional
 lifetimes (tau * dU/dz / Gamma for the shear lifetimes) or seconds (evolution lifetime).
@@ -13,12 +13,12 @@ from scipy.special import hyp2f1
 
 from turbgen.theory.params import MannParams
 
-# a = [2F1(1/3, 17/6; 4/3; -1)]^(-1/2) ≈ 1.23443 (paper 000 Eq. 7)
+# a = [2F1(1/3, 17/6; 4/3; -1)]^(-1/2) ≈ 1.23443 (Guo et al. 2023, Eq. 7)
 GUO_A = float(hyp2f1(1.0 / 3.0, 17.0 / 6.0, 4.0 / 3.0, -1.0) ** -0.5)
 
 
 def mann_lifetime(kL):
-    """Non-dimensional Mann lifetime (kL)^(-2/3) [2F1(1/3,17/6;4/3;-(kL)^-2)]^(-1/2) (paper 000 Eq. 4)."""
+    """Non-dimensional Mann lifetime (kL)^(-2/3) [2F1(1/3,17/6;4/3;-(kL)^-2)]^(-1/2) (Guo et al. 2023, Eq. 4)."""
     kL = np.asarray(kL, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         out = kL ** (-2.0 / 3.0) / np.sqrt(hyp2f1(1.0 / 3.0, 17.0 / 6.0, 4.0 / 3.0, -(kL ** -2.0)))
@@ -38,7 +38,7 @@ def guo_lifetime(kL, factor1: float = 1.0):
 
 
 def shear_distortion_beta(k, params: MannParams):
-    """beta(k) = Gamma * tau~(kL), the non-dimensional distortion time (paper 000 after Eq. 4)."""
+    """beta(k) = Gamma * tau~(kL), the non-dimensional distortion time (Guo et al. (2023) after Eq. 4)."""
     kL = np.asarray(k, dtype=float) * params.length_scale_m
     if params.lifetime == "mann":
         tau = mann_lifetime(kL)

@@ -1,4 +1,4 @@
-"""Kaimal / exponential-coherence models fitted to the Mann space-time model (paper 000 Sect. 2.4).
+"""Kaimal / exponential-coherence models fitted to the Mann space-time model (Guo et al. 2023, Sect. 2.4).
 
 fit_kaimal_spectra  Eq. 20: (sigma_i, L_i) of Eq. 11 to the Mann spectra, weights 1/k1 as written.
 fit_yz_coherence    Eq. 21: (a_yz, Lc) of the un-squared IEC coherence to the Mann co-coherence of u
@@ -6,7 +6,7 @@ fit_yz_coherence    Eq. 21: (a_yz, Lc) of the un-squared IEC coherence to the Ma
 fit_longitudinal    Eq. 22: (a_x, b_x) of Eq. 18 to the space-time longitudinal coherence at dx = 100 m,
                     weights 1/f. The paper does not say which side is squared; fitting the squared
                     model (Eq. 18) to the squared coherence (Eq. 16) reproduces its Table 2
-                    (../shared/reference/mann-model.md), so that is what is done.
+                    (tested in tests/theory), so that is what is done.
 The paper does not state its frequency grids; the defaults below are documented in the README.
 """
 
@@ -23,7 +23,7 @@ from turbgen.theory.params import MannParams, check_wind_speed
 from turbgen.theory.space_time import longitudinal_coherence
 
 # Default fitting grids [Hz]. Eq. 20 on a LINEAR grid: the 1/k1 weights then give every
-# logarithmic band the same weight ("equivalent weighting", paper 000 after Eq. 21); this
+# logarithmic band the same weight ("equivalent weighting", Guo et al. (2023) after Eq. 21); this
 # reproduces Table 1's fitted L2, L3 within 2 % (README, theory).
 SPECTRA_F_HZ = np.arange(1, 1001) * 1e-3
 YZ_F_HZ = np.logspace(-3, 0, 40)
@@ -38,7 +38,7 @@ def _grid(f_hz, default) -> np.ndarray:
 
 
 def fit_kaimal_spectra(params: MannParams, U_m_s: float, f_hz=None) -> dict:
-    """Kaimal (sigma_i [m/s], L_i [m]) per component fitted to the Mann spectra (paper 000 Eq. 20).
+    """Kaimal (sigma_i [m/s], L_i [m]) per component fitted to the Mann spectra (Guo et al. 2023, Eq. 20).
 
     Minimises sum_n (1/k1_n) (S_i(f_n) f_n - 2 F_ii(k1_n) k1_n)^2. For a given L_i the best sigma_i^2
     is linear least squares; L_i is found by a bounded 1-D search in ln L. Returns
@@ -66,7 +66,7 @@ def fit_kaimal_spectra(params: MannParams, U_m_s: float, f_hz=None) -> dict:
 
 
 def fit_yz_coherence(params: MannParams, U_m_s: float, f_hz=None, dy_m: float = 20.0, dz_m: float = 20.0):
-    """(a_yz, Lc [m]) of the un-squared IEC coherence fitted to the Mann co-coherence of u (paper 000 Eq. 21).
+    """(a_yz, Lc [m]) of the un-squared IEC coherence fitted to the Mann co-coherence of u (Guo et al. 2023, Eq. 21).
 
     Minimises sum_n (1/k1_n) (gamma_yz(f_n) - cocoh_11(k1_n, dy, dz))^2.
     """
@@ -86,7 +86,7 @@ def fit_yz_coherence(params: MannParams, U_m_s: float, f_hz=None, dy_m: float = 
 
 
 def fit_longitudinal(params: MannParams, U_m_s: float, dx_m: float = 100.0, f_hz=None):
-    """(a_x [-], b_x [1/m]) of Eq. 18 fitted to the space-time longitudinal coherence (paper 000 Eq. 22).
+    """(a_x [-], b_x [1/m]) of Eq. 18 fitted to the space-time longitudinal coherence (Guo et al. 2023, Eq. 22).
 
     Minimises sum_n (1/f_n) (gamma_x^2(dx, f_n) - coh2_11(f_n, dx))^2: the squared model against the
     magnitude-squared coherence, log-spaced f from 3e-4 to 0.5 Hz by default.

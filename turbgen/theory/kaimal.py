@@ -1,4 +1,4 @@
-"""IEC 61400-1 Kaimal spectra and normal-turbulence-model parameters (paper 000 Sect. 2.2)."""
+"""IEC 61400-1 Kaimal spectra and normal-turbulence-model parameters (Guo et al. 2023, Sect. 2.2)."""
 
 from __future__ import annotations
 

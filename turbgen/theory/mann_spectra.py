@@ -1,4 +1,4 @@
-"""One-point spectra, cross-spectra, coherences and variances of the Mann tensor (paper 000 Eq. 8-10).
+"""One-point spectra, cross-spectra, coherences and variances of the Mann tensor (Guo et al. 2023, Eq. 8-10).
 
 Conventions: k1 in rad/m; spectra are TWO-SIDED in k1 [m^3 s^-2], so sigma_i^2 = ∫_{-inf}^{inf} F_ii dk1
 and the one-sided frequency spectrum is S_i(f) = 2 F_ii(k1) 2 pi / U (f S_i = 2 k1 F_ii).
@@ -213,14 +213,14 @@ def _integrate(weights, values):
 
 
 def one_point_spectra(k1, params: MannParams) -> dict[str, np.ndarray]:
-    """Two-sided one-point spectra F11 F22 F33 F12 F13 F23 at k1 [m^3 s^-2] (paper 000 Eq. 8 with dy = dz = 0)."""
+    """Two-sided one-point spectra F11 F22 F33 F12 F13 F23 at k1 [m^3 s^-2] (Guo et al. 2023, Eq. 8 with dy = dz = 0)."""
     k1 = _check_k1(k1)
     _, w, g = perpendicular_quadrature(k1, params, tuple(COMPONENTS.values()))
     return {name: _integrate(w, g[p]) for name, p in COMPONENTS.items()}
 
 
 def cross_spectrum(k1, params: MannParams, i: int, j: int, dy_m: float = 0.0, dz_m: float = 0.0) -> np.ndarray:
-    """Complex cross-spectrum F_ij(k1, dy, dz) [m^3 s^-2], two-sided (paper 000 Eq. 8); i, j in 0..2."""
+    """Complex cross-spectrum F_ij(k1, dy, dz) [m^3 s^-2], two-sided (Guo et al. 2023, Eq. 8); i, j in 0..2."""
     for name, v in (("i", i), ("j", j)):
         if v not in (0, 1, 2):
             raise ParameterError(f"component {name} = {v!r} must be 0, 1 or 2")

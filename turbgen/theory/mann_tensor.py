@@ -1,7 +1,7 @@
 """The Mann (1994) uniform-shear spectral tensor and its square-root factor (Mann 1998).
 
 Wavenumbers in rad/m; the tensor in m^5 s^-2 (per unit dk1 dk2 dk3), so that
-sigma_i^2 = ∫ Phi_ii dk. Formulas: ../shared/reference/mann-model.md (Mann 1994 Eq. 13-19).
+sigma_i^2 = ∫ Phi_ii dk. Formulas: Mann (1994), Eq. 13-19; the square root as in Mann (1998).
 Outputs have the 3x3 component axes first: ``phi[i, j]`` is an array shaped like k1.
 """
 

@@ -17,7 +17,7 @@ class MannParams:
     ae : alpha*epsilon^(2/3) [m^(4/3) s^-2], spectral energy level.
     length_scale_m : L [m], length scale of the energy-containing eddies.
     gamma : Gamma [-], shear anisotropy (0 = isotropic).
-    lifetime : "guo" (paper 000 Eq. 6, default) or "mann" (Eq. 4, hypergeometric).
+    lifetime : "guo" (Guo et al. 2023, Eq. 6, default) or "mann" (Eq. 4, hypergeometric).
     factor1 : small-k slope of the Guo lifetime is -factor1 (default 1; stable preset 0.8).
     factor2 : large-k slope of the evolution lifetime tau_e is -(2/3) factor2 (default 3.5 = Eq. 15).
     evo_time_s : gamma [s], evolution time constant of tau_e (Eq. 15); None = frozen turbulence.
@@ -46,7 +46,7 @@ class MannParams:
 
 @dataclass(frozen=True)
 class KaimalParams:
-    """Kaimal spectra (paper 000 Eq. 11) and IEC yz coherence (Eq. 12) parameters.
+    """Kaimal spectra (Guo et al. 2023, Eq. 11) and IEC yz coherence (Eq. 12) parameters.
 
     sigma_m_s : (sigma_u, sigma_v, sigma_w) [m/s], standard deviations of the full spectrum.
     length_scales_m : (L1, L2, L3) [m], Kaimal integral length scales.

@@ -55,7 +55,7 @@ RANGES: dict[str, Range] = {
     "factor2": Range("factor2", 0.0, 10.0, "large-k slope of the evolution lifetime", lo_open=True),
     "sigma_u_m_s": Range("sigma-u (m/s)", 0.001, 30.0, "target standard deviation of u"),
     "ti": Range("ti (turbulence intensity, -)", 0.0, 1.0, "sigma_u / U", lo_open=True),
-    # Kaimal / IEC model (IEC 61400-1; Guo et al. 2022 Eq. 11-12, 18)
+    # Kaimal / IEC model (IEC 61400-1; Guo et al. 2023, Eq. 11-12, 18)
     "sigma_m_s": Range("sigma (m/s)", 0.001, 30.0, "each of sigma_u, sigma_v, sigma_w"),
     "length_scales_m": Range("lengths (Kaimal L, m)", 0.1, 10000.0, "each of L1, L2, L3"),
     "a_yz": Range("ayz (a_yz, -)", 0.0, 1e4, "yz coherence decay (1e4: incoherent)"),

@@ -1,4 +1,4 @@
-"""Rotor-effective wind speed (REWS, rotor-averaged u) auto-spectra (paper 000 Sect. 3.1).
+"""Rotor-effective wind speed (REWS, rotor-averaged u) auto-spectra (Guo et al. 2023, Sect. 3.1).
 
 Mann:   S_RR(k1) = ∫ Phi_11(k) 4 J1^2(kappa R) / (kappa R)^2 dk_perp (Eq. 24), two-sided in k1.
 Kaimal: S_RR(f) = S_1(f) / n_R^2 sum_i sum_j gamma_yz(dyz_ij, f) (Eq. 25), one-sided in f, with the
@@ -33,7 +33,7 @@ def _disk_filter(z, z_smooth=np.inf):
 
 
 def rews_spectrum_mann(k1, params: MannParams, radius_m: float) -> np.ndarray:
-    """Two-sided REWS spectrum S_RR(k1) of the Mann model for a rotor of radius R [m^3 s^-2] (paper 000 Eq. 24).
+    """Two-sided REWS spectrum S_RR(k1) of the Mann model for a rotor of radius R [m^3 s^-2] (Guo et al. 2023, Eq. 24).
 
     The radial panels resolve the J1^2(kappa R) oscillation (narrower than pi/(2R)) up to kappa R = Z_SMOOTH.
     """
@@ -45,7 +45,7 @@ def rews_spectrum_mann(k1, params: MannParams, radius_m: float) -> np.ndarray:
 
 
 def rews_spectrum_kaimal(f_hz, kparams: KaimalParams, U_m_s: float, y_m, z_m) -> np.ndarray:
-    """One-sided REWS spectrum of the Kaimal model over rotor points (y, z) [m^2 s^-2 Hz^-1] (paper 000 Eq. 25)."""
+    """One-sided REWS spectrum of the Kaimal model over rotor points (y, z) [m^2 s^-2 Hz^-1] (Guo et al. 2023, Eq. 25)."""
     U = check_wind_speed(U_m_s)
     y = np.ravel(np.asarray(y_m, dtype=float))
     z = np.ravel(np.asarray(z_m, dtype=float))

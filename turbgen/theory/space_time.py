@@ -1,4 +1,4 @@
-"""Space-time tensor and longitudinal coherence of Guo et al. (2022) (paper 000 Sect. 2.3.1).
+"""Space-time tensor and longitudinal coherence of Guo et al. (2022), as in Guo et al. (2023, Sect. 2.3.1).
 
 Theta_ij(k, dt) = exp(-dt / tau_e(|k|)) Phi_ij(k) (Eq. 13). Because tau_e depends on |k| only, the
 (k2, k3) integral of Theta_11 at fixed k1 uses the quadrature of mann_spectra (angular integrals on
@@ -24,7 +24,7 @@ def _decay(k, dt_s: float, params: MannParams):
 
 
 def space_time_tensor(k1, k2, k3, dt_s: float, params: MannParams) -> np.ndarray:
-    """Theta_ij(k, dt) = exp(-|dt|/tau_e(k)) Phi_ij(k), shape (3, 3, *k.shape) [m^5 s^-2] (paper 000 Eq. 13)."""
+    """Theta_ij(k, dt) = exp(-|dt|/tau_e(k)) Phi_ij(k), shape (3, 3, *k.shape) [m^5 s^-2] (Guo et al. 2023, Eq. 13)."""
     dt = check_finite("dt (s)", dt_s)
     k1, k2, k3 = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (k1, k2, k3)))
     k = np.sqrt(k1 * k1 + k2 * k2 + k3 * k3)
@@ -32,7 +32,7 @@ def space_time_tensor(k1, k2, k3, dt_s: float, params: MannParams) -> np.ndarray
 
 
 def longitudinal_coherence(f_hz, dx_m: float, U_m_s: float, params: MannParams) -> np.ndarray:
-    """Magnitude-squared longitudinal coherence of u, planes dx apart at mean speed U (paper 000 Eq. 16).
+    """Magnitude-squared longitudinal coherence of u, planes dx apart at mean speed U (Guo et al. 2023, Eq. 16).
 
     coh2(k1, dx) = |∫ Theta_11(k, dx/U) dk_perp|^2 / F11(k1)^2 with k1 = 2 pi f / U.
     """

@@ -17,7 +17,7 @@ Estimated quantities (one-sided, [m^2 s^-2 Hz^-1] unless stated):
 * longitudinal cross-spectra of u between every pair of planes (same y, z, same stored time t,
   i.e. in the convected frame of the store) on a sub-lattice of at most ~16 x 16 points;
 * the rotor-effective wind speed series of each plane (mean of u over the points within the
-  rotor radius, Guo et al. 2022, Eq. 23 on the grid) and its Welch spectrum averaged over planes.
+  rotor radius, Guo et al. 2023, Eq. 23 on the grid) and its Welch spectrum averaged over planes.
 """
 
 from __future__ import annotations

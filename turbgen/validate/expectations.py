@@ -4,9 +4,9 @@ Both generators synthesise a periodic record of nt samples, i.e. spectral *lines
 (turbgen.theory.lattice); the predictions are line (cross-)variances (``prediction.Theory``) for the
 points and segments the estimates used (``prediction.SamplingDesign``):
 
-* ``kaimal_expectation``: Kaimal / IEC spectra and coherences (Guo et al. 2022, Eq. 11, 12, 18, 25);
+* ``kaimal_expectation``: Kaimal / IEC spectra and coherences (Guo et al. 2023, Eq. 11, 12, 18, 25);
 * ``mann_expectation``: the Mann tensor summed over the lattice of the generator's box
-  (Guo et al. 2022, Eq. 8, 13, 24), with the lattice sums in ``mann_lattice``;
+  (Guo et al. 2023, Eq. 8, 13, 24), with the lattice sums in ``mann_lattice``;
 * ``welch_kernel``: the exact expected Welch estimate of a line process;
 * ``pair_sums``: correlation sums rho_bar over the averaged point sets (tolerances in ``verdict``);
 * ``store_run``: the run parameters decoded from the store's attributes.

@@ -1,7 +1,7 @@
 """What a Kaimal / IEC store's model predicts for every estimate, on the store's grid.
 
 The generator synthesises a periodic record: line j of the one-sided Kaimal PSD S_i has the two-sided
-variance L_j = S_i(f_j) df / 2 (IEC 61400-1 Kaimal spectrum; Guo et al. 2022, Eq. 11), L_0 = 0 (no
+variance L_j = S_i(f_j) df / 2 (IEC 61400-1 Kaimal spectrum; Guo et al. 2023, Eq. 11), L_0 = 0 (no
 mean), times sigma_i^2 / sum(2 L_j) when the store says the spectrum was rescaled. The u yz line
 cross-covariance is L_j coh(r, f_j) with the IEC exponential coherence (Eq. 12, un-squared); v, w as
 the store says (white, or the same exponential); between planes the store's longitudinal model

@@ -1,12 +1,12 @@
 """What a Mann store's model predicts for every estimate, on the lattice of the generator's box.
 
 The generator samples the spectral tensor on the lattice of its periodic (xi = U t, y, z) box, nt x
-nyp x nzp points spaced U dt, dy, dz (Guo et al. 2022, Eq. 8, 13, 24). The expected field therefore
+nyp x nzp points spaced U dt, dy, dz (Guo et al. 2023, Eq. 8, 13, 24). The expected field therefore
 has L_j = sum over the (k2, k3) lattice of Phi_ii(k1_j, k2, k3) dk1 dk2 dk3, k1_j = 2 pi f_j / U: the
 Mann spectrum *as the grid resolves it* -- band-limited at the y, z Nyquist wavenumbers pi/dy, pi/dz
 and missing the wavenumbers below 2 pi/(nyp dy), 2 pi/(nzp dz) of the finite box (Mann 1998).
 Cross-covariances use exp(i(k2 dy + k3 dz)) and the space-time tensor Theta = exp(-dx/(U tau_e)) Phi
-(Guo et al. 2022, Eq. 13) between planes dx apart; the rotor-effective wind speed uses
+(Guo et al. 2023, Eq. 13) between planes dx apart; the rotor-effective wind speed uses
 Phi_11 |H_R(k2, k3)|^2 with H_R the average of exp(i k.r) over the rotor points of the grid (Eq. 24
 with the grid's points instead of the continuous disc). The lattice sums are in
 ``turbgen.validate.mann_lattice``.

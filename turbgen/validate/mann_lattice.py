@@ -1,6 +1,6 @@
 """The Mann tensor on the (k2, k3) lattice of the generator's periodic box, slab by slab in k1.
 
-The generator samples the spectral tensor Phi_ij (Mann 1994, Eq. 13-17; Guo et al. 2022, Eq. 8) on
+The generator samples the spectral tensor Phi_ij (Mann 1994, Eq. 13-17; Guo et al. 2023, Eq. 8) on
 the lattice of its periodic (xi = U t, y, z) box; the lattice itself (wavenumbers in FFT order) is
 shared with the generator (turbgen.theory.lattice). The tensor is evaluated here from turbgen.theory,
 not from the generator's stencil, so the validator checks the generator's factorisation too.

@@ -30,7 +30,7 @@ def default_separations(grid: Grid) -> tuple[tuple[int, int], ...]:
     return tuple(seps)
 
 
-DEFAULT_ROTOR_RADIUS_M = 63.0  # NREL 5 MW reference turbine (Jonkman et al. 2009), as in Guo et al. 2022
+DEFAULT_ROTOR_RADIUS_M = 63.0  # NREL 5 MW reference turbine (Jonkman et al. 2009), as in Guo et al. 2023
 
 
 def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
