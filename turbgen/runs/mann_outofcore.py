@@ -11,7 +11,7 @@ Pass 2, per snapshot and component, per block of (y, z) points: the spectra of t
 from every part, transformed along k1 with the plans of the in-memory generator
 (synthesis.mann_spacetime.PencilTransform) and put in the output plane: in memory if it fits the
 budget, else in a plane scratch file (block, t, point), which is then written to the store in time
-chunks. The field is bit for bit the one run_mann makes (tests/test_mann_outofcore.py).
+chunks. The field is bit for bit the one run_mann makes (tests/runs/test_mann_outofcore.py).
 
 Memory is bounded by ``memory_bytes`` (S, the block sizes and the store's time chunk are chosen from
 it), never by the field. Scratch files live in a hidden directory next to the output,

@@ -3,7 +3,7 @@
 The file format is ``turbgen/schemas/sweep.schema.json``. Every planned run is built from the same
 run mapping as ``turbgen mann|kaimal --preset P --U U --seed S`` (the preset's keys from
 turbgen.spec.presets.run_keys, then the model's from_mapping), so the
-sweep's store and the single run hold the same field (tests/test_sweep.py checks it bit for bit).
+sweep's store and the single run hold the same field (tests/sweep/test_sweep.py checks it bit for bit).
 Store names are derived from the parameters that vary within a sweep:
 ``{model}_{preset}_U{U:g}_seed{seed}.zarr`` (e.g. ``mann_neutral_U16_seed2.zarr``).
 """

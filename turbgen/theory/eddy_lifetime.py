@@ -73,7 +73,7 @@ def evolution_lifetime_s(k, params: MannParams):
 # knee (Eq. 6 and 15 with a large slope change). Measured on 2e6 random kL over the table's range for
 # the Mann lifetime, the Guo lifetime with factor1 in [0.1, 3] and the evolution lifetime with factor2
 # in [0.01, 10]: at most 1.4e-7 (h = 1/64 for Eq. 4 and 6, 1/128 for Eq. 15, whose factor2 = 10
-# gives the sharpest knee: 2.6e-6 at h = 1/64); tests/test_lifetime_table.py checks <= TABLE_REL_ERROR.
+# gives the sharpest knee: 2.6e-6 at h = 1/64); tests/theory/test_lifetime_table.py checks <= TABLE_REL_ERROR.
 # Outside [TABLE_KL_MIN, TABLE_KL_MAX] the exact function is evaluated (kL < 1e-6 would need e.g. a
 # 1e7 m long box at L = 1 m).
 TABLE_KL_MIN, TABLE_KL_MAX = 1e-6, 1e6

@@ -18,7 +18,7 @@ Quadrature: polar (kappa, theta); kappa in Gauss-Legendre panels (log-spaced bel
 PANEL_WIDTH wide above, up to KAPPA_MAX), theta with the trapezoid rule (N_THETA nodes, spectral for
 the periodic integrand). All three spectra use the same nodes, so their quadrature errors largely
 cancel in the coherence; against twice-refined nodes gamma^2 and |G_RL| of the Table 3 lidar change
-by < 1e-4 (tests/test_lidar_theory.py). KAPPA_MAX = 1 rad/m suits averaged signals (probe volumes
+by < 1e-4 (tests/theory/test_lidar_theory.py). KAPPA_MAX = 1 rad/m suits averaged signals (probe volumes
 and the rotor disc damp higher kappa); a single *point* loses the inertial tail (~2 % of F11 at
 k1 = 0.08 rad/m) unless kappa_max is raised.
 

@@ -21,7 +21,7 @@ Polar coordinates k2 = kappa cos(theta), k3 = kappa sin(theta); beta(|k|) is con
   exact in angle for any kappa d. Radially every panel is split (uniformly in ln kappa) so that no
   sub-panel is wider than pi/d, and the range is cut where the dropped oscillating tail is
   estimated below SEP_TAIL of F_ii (_separated_cut).
-Measured accuracy (tests/test_theory_mann.py and a sweep over Gamma = 2.4-3.9, L = 30-140 m,
+Measured accuracy (tests/theory/test_theory_mann.py and a sweep over Gamma = 2.4-3.9, L = 30-140 m,
 k1 L in [1e-3, 1e3], against 2x the panels, 10-12 Gauss nodes, 256-1024 angles): F_ii <= 4e-6
 relative, F13 <= 1e-7 of sqrt(F11 F33); cross-spectra at dy, dz up to 60 m <= 7e-5 of F_ii
 (so coherences to ~1e-4 absolute); Gamma = 0 matches the isotropic closed form

@@ -5,7 +5,7 @@ Parameters outside these ranges are refused with one line naming the value and t
 what the models and generators are meant for (atmospheric boundary layer, wind-turbine and lidar
 scales), not what happens to compute: e.g. L = 1e-9 m or 1e6 m gives a field whose variance is
 far from the model's on any grid turbgen can hold, dt = 1e12 s an all-zero field. README
-("Safety") shows this table; tests/test_bad_input.py checks that every bound is enforced and that
+("Safety") shows this table; tests/cli/test_bad_input.py checks that every bound is enforced and that
 the run-file JSON Schemas (types, looser bounds) never refuse a value this table allows.
 """
 

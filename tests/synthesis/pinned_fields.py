@@ -1,6 +1,6 @@
 """Small fields pinned across refactors: the CLI commands, the machine fingerprint and the arrays.
 
-``python tests/pinned_fields.py`` rewrites ``tests/data/pinned_fields.npz``; do that only when a
+``python tests/synthesis/pinned_fields.py`` rewrites ``tests/synthesis/data/pinned_fields.npz``; do that only when a
 change is *meant* to change the fields (and say so in the commit). ``test_pinned_fields.py`` reads it.
 """
 

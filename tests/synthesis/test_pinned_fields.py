@@ -1,4 +1,4 @@
-"""The fields of a few fixed commands are pinned (tests/data/pinned_fields.npz): a refactor must not
+"""The fields of a few fixed commands are pinned (tests/synthesis/data/pinned_fields.npz): a refactor must not
 change a single bit of them.
 
 Bit identity holds for one build of numpy/scipy/pyfftw on one kind of CPU (SIMD exp/sqrt/FFT kernels

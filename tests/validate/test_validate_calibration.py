@@ -126,7 +126,7 @@ def test_reduced_calibration(tmp_path):
     # 22 correct fields of the quick subset: every metric's failure count within the binomial 99 % bound of
     # the design rate (for 22 fields and ALPHA = 1e-3 the bound is 1 failure per metric)
     spec = importlib.util.spec_from_file_location(
-        "calibrate_validate", Path(__file__).parents[1] / "benchmarks" / "calibrate_validate.py")
+        "calibrate_validate", Path(__file__).resolve().parents[2] / "benchmarks" / "calibrate_validate.py")
     cal = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = cal  # (dataclasses look their module up there)
     spec.loader.exec_module(cal)

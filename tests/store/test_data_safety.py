@@ -30,7 +30,7 @@ from turbgen.store.temporaries import parse_temp, pid_alive, remove_dead_tempora
 
 KAIMAL = ["kaimal", "--nt", "256", "--ny", "8", "--nz", "8", "--planes", "0,50"]
 MANN = ["mann", "--nt", "256", "--ny", "8", "--nz", "8", "--planes", "0,50"]
-ENV = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+ENV = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
 
 
 def _mount(*args) -> bool:

@@ -364,7 +364,7 @@ def test_every_range_is_enforced_at_both_ends():
 
 
 def test_readme_shows_the_ranges_table():
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
     assert ranges.markdown_table() in readme
 
 

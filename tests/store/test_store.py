@@ -380,7 +380,7 @@ def test_sigterm_handler_restored_after_with_block(tmp_path):
 def test_schema_file_is_valid_and_reachable_via_symlink():
     import jsonschema
 
-    repo_schema = Path(__file__).resolve().parents[1] / "schemas" / "field.schema.json"
+    repo_schema = Path(__file__).resolve().parents[2] / "schemas" / "field.schema.json"
     schema = json.loads(repo_schema.read_text())
     jsonschema.Draft202012Validator.check_schema(schema)
     assert set(layout.CALLER_ATTRS + layout.WRITER_ATTRS + (layout.MARKER,)) == set(schema["required"])
