@@ -39,6 +39,7 @@ from tqdm import tqdm
 
 from turbgen.errors import ParameterError
 from turbgen.resources import default_threads, format_bytes, require_disk
+from turbgen.runs.scratch import read_at, write_at
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.store.layout import default_chunk_t
@@ -172,19 +173,10 @@ class _File:
             os.ftruncate(self.fd, max(1, nbytes))
 
     def write(self, offset: int, data: np.ndarray) -> None:
-        view = memoryview(np.ascontiguousarray(data)).cast("B")
-        while view:
-            n = os.pwrite(self.fd, view, offset)
-            view, offset = view[n:], offset + n
+        write_at(self.fd, data, offset)
 
     def read(self, offset: int, out: np.ndarray) -> np.ndarray:
-        view = memoryview(out).cast("B")
-        while view:
-            n = os.preadv(self.fd, [view], offset)
-            if n == 0:
-                raise OSError("scratch file is shorter than expected")
-            view, offset = view[n:], offset + n
-        return out
+        return read_at(self.fd, out, offset)
 
     def close(self) -> None:
         os.close(self.fd)

@@ -17,6 +17,25 @@ import numpy as np
 ITEM = np.dtype(np.complex64).itemsize
 
 
+def write_at(fd: int, data: np.ndarray, offset: int) -> None:
+    """Write the bytes of ``data`` at byte ``offset`` of the open file ``fd`` (pwrite: no mapping, no RSS)."""
+    view = memoryview(np.ascontiguousarray(data)).cast("B")
+    while view:
+        n = os.pwrite(fd, view, offset)
+        view, offset = view[n:], offset + n
+
+
+def read_at(fd: int, out: np.ndarray, offset: int) -> np.ndarray:
+    """Fill the contiguous array ``out`` from byte ``offset`` of ``fd``; OSError if the file ends first."""
+    view = memoryview(out).cast("B")
+    while view:
+        n = os.preadv(fd, [view], offset)
+        if n == 0:
+            raise OSError("scratch file is shorter than expected")
+        view, offset = view[n:], offset + n
+    return out
+
+
 class FileSpectrum:
     """Spectrum buffer (n_planes, nf, ny, nz) complex64 in a temporary file (a context manager)."""
 
@@ -30,24 +49,11 @@ class FileSpectrum:
 
     def put(self, plane: int, k0: int, block: np.ndarray) -> None:
         """Store bins k0 .. k0 + len(block) of ``plane``."""
-        data = np.ascontiguousarray(block, dtype=np.complex64)
-        offset = (plane * self.nf + k0) * self.point * ITEM
-        view = memoryview(data).cast("B")
-        while view:
-            n = os.pwrite(self.fd, view, offset)
-            view, offset = view[n:], offset + n
+        write_at(self.fd, np.asarray(block, dtype=np.complex64), (plane * self.nf + k0) * self.point * ITEM)
 
     def get(self, plane: int) -> np.ndarray:
         """All bins of ``plane`` (nf, ny, nz), a fresh array."""
-        out = np.empty(self.shape, dtype=np.complex64)
-        view = memoryview(out).cast("B")
-        offset = plane * self.nf * self.point * ITEM
-        while view:
-            n = os.preadv(self.fd, [view], offset)
-            if n == 0:
-                raise OSError("spectrum scratch file is shorter than expected")
-            view, offset = view[n:], offset + n
-        return out
+        return read_at(self.fd, np.empty(self.shape, dtype=np.complex64), plane * self.nf * self.point * ITEM)
 
     def close(self) -> None:
         """Free the file."""
