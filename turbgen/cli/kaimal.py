@@ -80,20 +80,19 @@ def kaimal(**opt):
     """Kaimal 4D field: IEC spectra and yz coherence per plane, exponential longitudinal coherence between planes."""
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
-    preset_keys = get_keys = None
-    if opt["preset"] is not None:
-        user = load_presets(opt["presets_file"]) if opt["presets_file"] else None
+    user = load_presets(opt["presets_file"]) if opt["presets_file"] else None
+    preset_keys = {}  # the preset's keys as resolved at the run's U (they also name the default store)
 
-        def get_keys(mapping, given):  # the preset's sigmas follow the run's U and a typed class
-            nonlocal preset_keys
-            U = given.get("U_m_s", mapping.get("U_m_s", D["U_m_s"]))
-            preset_keys = kaimal_run_keys(opt["preset"], U, user=user, turb_class=given.get("turb_class"))
-            return dict(preset_keys)
+    def get_keys(mapping, given):  # the preset's sigmas follow the run's U and a typed class
+        U = given.get("U_m_s", mapping.get("U_m_s", D["U_m_s"]))
+        preset_keys.update(kaimal_run_keys(opt["preset"], U, user=user, turb_class=given.get("turb_class")))
+        return dict(preset_keys)
 
-    mapping = run_mapping(opt, "kaimal-run", _KEYS, get_keys, _REPLACES, plane_positions(opt["planes"], opt["gates"]))
+    mapping = run_mapping(opt, "kaimal-run", _KEYS, get_keys if opt["preset"] is not None else None, _REPLACES,
+                          plane_positions(opt["planes"], opt["gates"]))
     run = KaimalRun.from_mapping(mapping)
     g = run.grid
-    out = opt["out"] if opt["out"] is not None else run.default_store_name(opt["preset"], preset_keys)
+    out = opt["out"] if opt["out"] is not None else run.default_store_name(opt["preset"], preset_keys or None)
     check_output_path(out)
     k = run.kaimal
     click.echo(f"turbgen kaimal: U {run.U_m_s:g} m/s, sigma {', '.join(f'{s:.3g}' for s in k.sigma_m_s)} m/s, "

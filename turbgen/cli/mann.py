@@ -105,13 +105,9 @@ def mann(**opt):
         raise click.UsageError(f"give one of --ae, --sigma-u, --ti (got {', '.join(typed_energy)})")
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
-    preset_keys = None
-    if opt["preset"] is not None:
-        user = load_presets(opt["presets_file"]) if opt["presets_file"] else None
-
-        def preset_keys(mapping, given):
-            return mann_run_keys(opt["preset"], user=user)
-
+    user = load_presets(opt["presets_file"]) if opt["presets_file"] else None
+    preset_keys = (None if opt["preset"] is None
+                   else lambda mapping, given: mann_run_keys(opt["preset"], user=user))  # fmt: skip
     mapping = run_mapping(opt, "mann-run", _KEYS, preset_keys, _REPLACES, plane_positions(opt["planes"], opt["gates"]))
     run = MannRun.from_mapping(mapping)
     out = opt["out"] if opt["out"] is not None else run.default_store_name()

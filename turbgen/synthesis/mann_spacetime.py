@@ -17,7 +17,6 @@ three cropped spectra and one output plane (two when one is written while the ne
 
 from __future__ import annotations
 
-import os
 import queue
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
@@ -26,6 +25,7 @@ import numpy as np
 import pyfftw
 
 from turbgen.errors import ParameterError
+from turbgen.resources import default_threads
 from turbgen.synthesis.mann_stencil import _ODD, BoxShape, MannStencil, expand_k2, w_coefficient
 from turbgen.synthesis.random_streams import complex_normal
 
@@ -132,7 +132,7 @@ class MannSnapshots:
         if self._first % SLAB_BATCH:
             raise ValueError(f"a part of the stencil must start at a multiple of {SLAB_BATCH} slabs")
         self._n_slabs = self._end - self._first
-        self.threads = self.default_threads(threads)
+        self.threads = default_threads(threads)
         self._k1 = box.k1().astype(np.float32)
         self._k2 = box.k2().astype(np.float32)[:, None]
         self._k2sq = self._k2 * self._k2
@@ -144,11 +144,6 @@ class MannSnapshots:
         self._outputs: list[np.ndarray] = []
         self._n_out = 0
         self._scratch: queue.SimpleQueue | None = None
-
-    @staticmethod
-    def default_threads(threads: int | None) -> int:
-        """``threads`` or os.cpu_count() (at least 1)."""
-        return max(1, int(threads or os.cpu_count() or 1))
 
     # -- public -------------------------------------------------------------------------
     def generate(self, seed: int, times_s) -> Iterator[tuple[int, str, np.ndarray]]:
