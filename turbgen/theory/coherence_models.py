@@ -112,7 +112,7 @@ def simley_pao_parameters(sigma_total_m_s: float, U_m_s: float, length_u_m: floa
     Returns
     -------
     tuple of float
-        (a_x [-], b_x [1/m]; the fit's L_u exponent is empirical).
+        (a_x [-], b_x [1/m]) with L_u in m.
     """
     return 8.4 * sigma_total_m_s / U_m_s + 0.05, 0.25 * length_u_m**-1.24
 
