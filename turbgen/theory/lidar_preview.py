@@ -423,7 +423,7 @@ def lowpass_gain(f_hz, cutoff_hz: float):
 
 
 def filter_delay_s(cutoff_hz: float, f_delay_hz: float = 0.025) -> float:
-    """Delay of the first-order low-pass T_filter = arctan(f_delay / f_cutoff) / (2 pi f_delay) (Fu et al. 2023 Eq. 30).
+    """T_filter = arctan(f_delay / f_cutoff) / (2 pi f_delay), delay of the low-pass (Fu et al. 2023 Eq. 30).
 
     Parameters
     ----------
