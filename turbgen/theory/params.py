@@ -40,7 +40,23 @@ class MannParams:
             object.__setattr__(self, "evo_time_s", check("evo_time_s", self.evo_time_s))
 
     def with_ae(self, ae: float) -> "MannParams":
-        """The same parameters with another energy level alpha*eps^(2/3)."""
+        """The same parameters with another energy level alpha*eps^(2/3).
+
+        Parameters
+        ----------
+        ae : float
+            alpha*eps^(2/3) [m^(4/3) s^-2].
+
+        Returns
+        -------
+        MannParams
+            A validated copy with ``ae`` replaced.
+
+        Raises
+        ------
+        ParameterError
+            If ``ae`` is outside the allowed range (turbgen.theory.ranges).
+        """
         return replace(self, ae=ae)
 
 
@@ -76,7 +92,23 @@ class KaimalParams:
 
 
 def check_wind_speed(U) -> float:
-    """Mean wind speed U [m/s], 0.5 to 100 (turbgen.theory.ranges)."""
+    """Mean wind speed U [m/s], 0.5 to 100 (turbgen.theory.ranges).
+
+    Parameters
+    ----------
+    U : float
+        Mean wind speed [m/s].
+
+    Returns
+    -------
+    float
+        U [m/s] as float.
+
+    Raises
+    ------
+    ParameterError
+        If ``U`` is not a finite number in [0.5, 100] m/s.
+    """
     return check("U_m_s", U)
 
 
