@@ -113,12 +113,22 @@ def los_vectors(directions) -> np.ndarray:
 class Measurements:
     """Where and how a lidar measures, as arrays (one row per measurement = beam x range gate).
 
-    n : (M, 3) line-of-sight vectors, v_los = n . (u, v, w) (module docstring)
-    focus_m : (M, 3) focus points (x upstream, y, z) [m] relative to the hub
-    direction : (M, 3) beam directions d (unit, x upstream, y, z)
-    offsets_m : (M, K) positions along the beam relative to the focus [m] (probe volume)
-    weights : (M, K) probe-volume weights, each row summing to 1
-    beam : (M,) beam index of each measurement; gate : (M,) range-gate index
+    Parameters
+    ----------
+    n : numpy.ndarray
+        (M, 3) line-of-sight vectors [-], v_los = n . (u, v, w) (module docstring).
+    focus_m : numpy.ndarray
+        (M, 3) focus points (x upstream, y, z) [m] relative to the hub.
+    direction : numpy.ndarray
+        (M, 3) beam directions d (unit, x upstream, y, z) [-].
+    offsets_m : numpy.ndarray
+        (M, K) positions along the beam relative to the focus [m] (probe volume).
+    weights : numpy.ndarray
+        (M, K) probe-volume weights [-], each row summing to 1.
+    beam : numpy.ndarray
+        (M,) beam index of each measurement.
+    gate : numpy.ndarray
+        (M,) range-gate index of each measurement.
     """
 
     n: np.ndarray

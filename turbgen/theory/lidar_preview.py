@@ -61,7 +61,19 @@ MINUS_3_DB = 10.0 ** (-3.0 / 20.0)
 
 @dataclass(frozen=True)
 class PreviewSpectra:
-    """One-sided spectra in frequency [m^2 s^-2 Hz^-1] of u_RR, u_LL and their cross-spectrum."""
+    """One-sided spectra in frequency [m^2 s^-2 Hz^-1] of u_RR, u_LL and their cross-spectrum.
+
+    Parameters
+    ----------
+    f_hz : numpy.ndarray
+        (n_f,) frequencies [Hz].
+    S_RR : numpy.ndarray
+        (n_f,) spectrum of the rotor-effective wind speed u_RR [m^2 s^-2 Hz^-1].
+    S_LL : numpy.ndarray
+        (n_f,) spectrum of the lidar estimate u_LL [m^2 s^-2 Hz^-1].
+    S_RL : numpy.ndarray
+        (n_f,) complex cross-spectrum of u_RR and u_LL [m^2 s^-2 Hz^-1].
+    """
 
     f_hz: np.ndarray
     S_RR: np.ndarray

@@ -18,7 +18,21 @@ from turbgen.errors import ParameterError, check_int, check_range
 
 @dataclass(frozen=True)
 class Range:
-    """Closed interval [lo, hi] (open at ``lo`` when ``lo_open``) of one parameter, in SI units."""
+    """Closed interval [lo, hi] (open at ``lo`` when ``lo_open``) of one parameter, in SI units.
+
+    Parameters
+    ----------
+    label : str
+        Name in messages: option and unit.
+    lo, hi : float
+        Bounds, in the parameter's SI unit.
+    why : str
+        One phrase for the README table.
+    lo_open : bool, optional
+        Exclude ``lo`` (default False).
+    integer : bool, optional
+        The parameter is an integer (default False).
+    """
 
     label: str  # name in messages: option and unit
     lo: float
