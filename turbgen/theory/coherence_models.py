@@ -17,7 +17,28 @@ import numpy as np
 
 
 def exponential_yz(r_m, f_hz, U_m_s: float, a_yz: float = 12.0, lc_m: float = 340.2):
-    """coh(r, f) = exp(-a_yz r sqrt((f/U)^2 + (0.12/Lc)^2)); its square is Guo et al. (2023), Eq. 12."""
+    """Un-squared IEC yz coherence coh(r, f) = exp(-a_yz r sqrt((f/U)^2 + (0.12/Lc)^2)).
+
+    Its square is Guo et al. (2023), Eq. 12 (IEC 61400-1 exponential coherence).
+
+    Parameters
+    ----------
+    r_m : array_like
+        Separation r in the yz plane [m].
+    f_hz : array_like
+        Frequency [Hz] (broadcast against ``r_m``).
+    U_m_s : float
+        Mean wind speed U [m/s].
+    a_yz : float, optional
+        Coherence decrement a_yz [-] (IEC 61400-1: 12).
+    lc_m : float, optional
+        Coherence scale parameter Lc [m] (IEC 61400-1: 8.1 Lambda_1; default 340.2 m).
+
+    Returns
+    -------
+    numpy.ndarray
+        Un-squared (magnitude) coherence [-], shape of the broadcast of ``r_m`` and ``f_hz``.
+    """
     r = np.asarray(r_m, dtype=float)
     f = np.asarray(f_hz, dtype=float)
     return np.exp(-a_yz * r * np.sqrt((f / U_m_s) ** 2 + (0.12 / lc_m) ** 2))
@@ -28,33 +49,97 @@ def exponential_yz_decay_length_m(f_hz: float, U_m_s: float, a_yz: float = 12.0,
 
     Parameters
     ----------
-    f_hz : frequency [Hz].
-    U_m_s : mean wind speed [m/s].
-    a_yz : coherence decrement [-] (IEC 61400-1: 12).
-    lc_m : coherence scale parameter Lc [m] (IEC 61400-1: 8.1 Lambda_1).
+    f_hz : float
+        Frequency [Hz].
+    U_m_s : float
+        Mean wind speed U [m/s].
+    a_yz : float, optional
+        Coherence decrement [-] (IEC 61400-1: 12).
+    lc_m : float, optional
+        Coherence scale parameter Lc [m] (IEC 61400-1: 8.1 Lambda_1).
 
     Returns
     -------
-    float : decay [m], kappa = sqrt((f/U)^2 + (0.12/Lc)^2) [1/m]; infinite for a_yz = 0 (full coherence).
+    float
+        decay [m], with kappa = sqrt((f/U)^2 + (0.12/Lc)^2) [1/m]; infinite for a_yz = 0 (full coherence).
     """
     kappa = np.hypot(f_hz / U_m_s, 0.12 / lc_m)
     return 1.0 / (a_yz * kappa) if a_yz > 0 else np.inf
 
 
 def exponential_longitudinal(dx_m, f_hz, U_m_s: float, a_x: float, b_x: float):
-    """gamma_x = sqrt(exp(-a_x dx sqrt((f/U)^2 + b_x^2))); the square is Guo et al. (2023), Eq. 18."""
+    """Un-squared longitudinal coherence gamma_x = sqrt(exp(-a_x dx sqrt((f/U)^2 + b_x^2))).
+
+    The square is Guo et al. (2023), Eq. 18.
+
+    Parameters
+    ----------
+    dx_m : array_like
+        Longitudinal separation dx [m]; only |dx| is used.
+    f_hz : array_like
+        Frequency [Hz] (broadcast against ``dx_m``).
+    U_m_s : float
+        Mean wind speed U [m/s].
+    a_x : float
+        Decay parameter a_x [-].
+    b_x : float
+        Distance term b_x [1/m].
+
+    Returns
+    -------
+    numpy.ndarray
+        gamma_x [-], shape of the broadcast of ``dx_m`` and ``f_hz``.
+    """
     dx = np.abs(np.asarray(dx_m, dtype=float))
     f = np.asarray(f_hz, dtype=float)
     return np.exp(-0.5 * a_x * dx * np.sqrt((f / U_m_s) ** 2 + b_x**2))
 
 
 def simley_pao_parameters(sigma_total_m_s: float, U_m_s: float, length_u_m: float) -> tuple[float, float]:
-    """(a_x, b_x) of Eq. 18 from Simley & Pao (2015): a_x = 8.4 sigma/U + 0.05, b_x = 0.25 L_u^-1.24."""
+    """Parameters (a_x, b_x) of Guo et al. (2023) Eq. 18 from the LES fit of Simley & Pao (2015).
+
+    a_x = 8.4 sigma/U + 0.05, b_x = 0.25 L_u^-1.24.
+
+    Parameters
+    ----------
+    sigma_total_m_s : float
+        sigma_total = sqrt(s1^2 + s2^2 + s3^2) [m/s].
+    U_m_s : float
+        Mean wind speed U [m/s].
+    length_u_m : float
+        Longitudinal length scale L_u [m] (IEC: 8.1 Lambda1).
+
+    Returns
+    -------
+    tuple of float
+        (a_x [-], b_x [1/m]) with L_u in m.
+    """
     return 8.4 * sigma_total_m_s / U_m_s + 0.05, 0.25 * length_u_m**-1.24
 
 
 def simley_pao(dx_m, f_hz, U_m_s: float, sigma_total_m_s: float, length_u_m: float):
-    """Eq. 18 with the Simley-Pao LES parameters; sigma_total = sqrt(s1^2+s2^2+s3^2), L_u = 8.1 Lambda1."""
+    """Un-squared longitudinal coherence of Eq. 18 (Guo et al. 2023) with the Simley-Pao (2015) LES parameters.
+
+    sigma_total = sqrt(s1^2+s2^2+s3^2), L_u = 8.1 Lambda1 (see simley_pao_parameters).
+
+    Parameters
+    ----------
+    dx_m : array_like
+        Longitudinal separation dx [m]; only |dx| is used.
+    f_hz : array_like
+        Frequency [Hz] (broadcast against ``dx_m``).
+    U_m_s : float
+        Mean wind speed U [m/s].
+    sigma_total_m_s : float
+        sigma_total [m/s].
+    length_u_m : float
+        Longitudinal length scale L_u [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        gamma_x [-], shape of the broadcast of ``dx_m`` and ``f_hz``.
+    """
     a_x, b_x = simley_pao_parameters(sigma_total_m_s, U_m_s, length_u_m)
     return exponential_longitudinal(dx_m, f_hz, U_m_s, a_x, b_x)
 
@@ -66,9 +151,29 @@ def _kristensen_g(xi):
 
 
 def kristensen(dx_m, f_hz, U_m_s: float, sigma_total_m_s: float, length_u_m: float):
-    """Kristensen (1979): gamma^2 = exp(-2 alpha G(xi)) (1 - exp(-1/(2 alpha^m xi^2)))^2.
+    """Un-squared longitudinal coherence of Kristensen (1979).
 
-    xi = f L_u / U, alpha = sigma_total dx / (U L_u), m = 2 if alpha <= 1 else 1. Returns gamma.
+    gamma^2 = exp(-2 alpha G(xi)) (1 - exp(-1/(2 alpha^m xi^2)))^2 with xi = f L_u / U,
+    alpha = sigma_total dx / (U L_u), m = 2 if alpha <= 1 else 1. Returns gamma; dx = 0 or f = 0 gives
+    the limit 1 (full coherence).
+
+    Parameters
+    ----------
+    dx_m : array_like
+        Longitudinal separation dx [m]; only |dx| is used.
+    f_hz : array_like
+        Frequency [Hz] (broadcast against ``dx_m``).
+    U_m_s : float
+        Mean wind speed U [m/s].
+    sigma_total_m_s : float
+        sigma_total = sqrt(s1^2 + s2^2 + s3^2) [m/s].
+    length_u_m : float
+        Longitudinal length scale L_u [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        gamma [-], shape of the broadcast of ``dx_m`` and ``f_hz``.
     """
     dx = np.abs(np.asarray(dx_m, dtype=float))
     f = np.asarray(f_hz, dtype=float)

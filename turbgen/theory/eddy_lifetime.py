@@ -18,7 +18,18 @@ GUO_A = float(hyp2f1(1.0 / 3.0, 17.0 / 6.0, 4.0 / 3.0, -1.0) ** -0.5)
 
 
 def mann_lifetime(kL):
-    """Non-dimensional Mann lifetime (kL)^(-2/3) [2F1(1/3,17/6;4/3;-(kL)^-2)]^(-1/2) (Guo et al. 2023, Eq. 4)."""
+    """Non-dimensional Mann lifetime (kL)^(-2/3) [2F1(1/3,17/6;4/3;-(kL)^-2)]^(-1/2) (Guo et al. 2023, Eq. 4).
+
+    Parameters
+    ----------
+    kL : array_like
+        Wavenumber magnitude times length scale, |k| L [-].
+
+    Returns
+    -------
+    numpy.ndarray
+        tau~ = tau dU/dz / Gamma [-], shaped like ``kL``; inf where kL <= 0.
+    """
     kL = np.asarray(kL, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         out = kL ** (-2.0 / 3.0) / np.sqrt(hyp2f1(1.0 / 3.0, 17.0 / 6.0, 4.0 / 3.0, -(kL ** -2.0)))
@@ -26,7 +37,22 @@ def mann_lifetime(kL):
 
 
 def guo_lifetime(kL, factor1: float = 1.0):
-    """Non-dimensional Guo lifetime a (kL)^b1 ((kL)^10 + 1)^((b2 - b1)/10), b1 = -factor1, b2 = -2/3 (Eq. 6)."""
+    """Non-dimensional Guo lifetime a (kL)^b1 ((kL)^10 + 1)^((b2 - b1)/10), b1 = -factor1, b2 = -2/3 (Eq. 6).
+
+    Guo et al. (2023), Eq. 6, with a = GUO_A (Eq. 7). Evaluated in logarithms so large kL stays finite.
+
+    Parameters
+    ----------
+    kL : array_like
+        Wavenumber magnitude times length scale, |k| L [-].
+    factor1 : float, optional
+        Small-k slope is -factor1 [-] (default 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        tau~ = tau dU/dz / Gamma [-], shaped like ``kL``; inf where kL <= 0.
+    """
     kL = np.asarray(kL, dtype=float)
     b1, b2 = -factor1, -2.0 / 3.0
     with np.errstate(divide="ignore", over="ignore"):
@@ -38,7 +64,23 @@ def guo_lifetime(kL, factor1: float = 1.0):
 
 
 def shear_distortion_beta(k, params: MannParams):
-    """beta(k) = Gamma * tau~(kL), the non-dimensional distortion time (Guo et al. (2023) after Eq. 4)."""
+    """beta(k) = Gamma * tau~(kL), the non-dimensional distortion time (Guo et al. (2023) after Eq. 4).
+
+    tau~ is the Mann (Eq. 4) or Guo (Eq. 6) lifetime per ``params.lifetime``.
+
+    Parameters
+    ----------
+    k : array_like
+        Wavenumber magnitude |k| [rad/m].
+    params : MannParams
+        Mann model parameters (length_scale_m, gamma, lifetime, factor1 are used).
+
+    Returns
+    -------
+    numpy.ndarray
+        beta [-], shaped like ``k``; zero everywhere for Gamma = 0 (isotropic: no distortion, also
+        where tau = inf at k = 0), else inf at k = 0.
+    """
     kL = np.asarray(k, dtype=float) * params.length_scale_m
     if params.lifetime == "mann":
         tau = mann_lifetime(kL)
@@ -52,8 +94,21 @@ def shear_distortion_beta(k, params: MannParams):
 def evolution_lifetime_s(k, params: MannParams):
     """Evolution lifetime tau_e(k) [s] = gamma a (kL)^-1 ((kL)^10 + 1)^((1 - 2 factor2/3)/10) (Eq. 15).
 
-    factor2 = 3.5 gives the paper's exponent -2/15 (large-k slope -7/3). Infinite when the
-    parameters are frozen (evo_time_s is None) or at k = 0.
+    Guo et al. (2023), Eq. 15, with gamma = ``params.evo_time_s`` and a = GUO_A.
+    factor2 = 3.5 gives the paper's exponent -2/15 (large-k slope -7/3).
+
+    Parameters
+    ----------
+    k : array_like
+        Wavenumber magnitude |k| [rad/m].
+    params : MannParams
+        Mann model parameters (length_scale_m, factor2, evo_time_s are used).
+
+    Returns
+    -------
+    numpy.ndarray
+        tau_e [s], shaped like ``k``. Infinite when the parameters are frozen (evo_time_s is None) or
+        at k = 0.
     """
     kL = np.asarray(k, dtype=float) * params.length_scale_m
     if params.evo_time_s is None:
@@ -94,9 +149,21 @@ def _evolution_shape(kL, factor2: float):
 class LifetimeTable:
     """Cubic spline of tau~ over x = ln(kL) on a uniform grid (accuracy: TABLE_REL_ERROR, see above).
 
-    ``kind``: "mann" (Eq. 4), "guo" (Eq. 6, ``parameter`` = factor1) or "evolution" (Eq. 15 divided by
-    gamma [s], ``parameter`` = factor2). ``table.from_ksq(ksq, L)`` with |k|^2 [rad^2/m^2] and L [m]
-    returns tau~(|k| L), float64, shaped like ``ksq`` (inf at k = 0).
+    ``table.from_ksq(ksq, L)`` with |k|^2 [rad^2/m^2] and L [m] returns tau~(|k| L), float64, shaped
+    like ``ksq`` (inf at k = 0). Outside [TABLE_KL_MIN, TABLE_KL_MAX] the exact function is evaluated.
+
+    Parameters
+    ----------
+    kind : str
+        "mann" (Guo et al. 2023, Eq. 4), "guo" (Eq. 6, ``parameter`` = factor1) or "evolution" (Eq. 15
+        divided by gamma [s], ``parameter`` = factor2).
+    parameter : float, optional
+        factor1 or factor2 [-] (default 1; unused for "mann").
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is not one of the three.
     """
 
     def __init__(self, kind: str, parameter: float = 1.0):
@@ -118,7 +185,20 @@ class LifetimeTable:
         self.n_intervals = n - 1
 
     def from_ksq(self, ksq, length_scale_m: float) -> np.ndarray:
-        """tau~(|k| L) from |k|^2 (any shape); exact outside the table's range, inf at k = 0."""
+        """tau~(|k| L) from |k|^2 (any shape); exact outside the table's range, inf at k = 0.
+
+        Parameters
+        ----------
+        ksq : array_like
+            Squared wavenumber magnitude |k|^2 [rad^2/m^2], any shape.
+        length_scale_m : float
+            Length scale L [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            tau~ [-] (tau_e / gamma for kind "evolution"), float64, shaped like ``ksq``.
+        """
         ksq = np.asarray(ksq, dtype=float)
         with np.errstate(divide="ignore"):
             x = np.log(ksq * (length_scale_m * length_scale_m))
@@ -143,15 +223,55 @@ class LifetimeTable:
 
 @lru_cache(maxsize=16)
 def lifetime_table(kind: str, parameter: float = 1.0) -> LifetimeTable:
-    """The (cached) LifetimeTable of ``kind`` and ``parameter`` (built in well under a second)."""
+    """The (cached) LifetimeTable of ``kind`` and ``parameter`` (built in well under a second).
+
+    Parameters
+    ----------
+    kind : str
+        "mann", "guo" or "evolution" (see LifetimeTable).
+    parameter : float, optional
+        factor1 ("guo") or factor2 ("evolution") [-]; default 1.
+
+    Returns
+    -------
+    LifetimeTable
+        The table, shared between calls with the same arguments (lru_cache).
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is unknown.
+    """
     return LifetimeTable(kind, parameter)
 
 
 def shear_lifetime_table(params: MannParams) -> LifetimeTable:
-    """The table of tau~ for beta = Gamma tau~(kL) of ``params`` (Eq. 4, or Eq. 6 with its factor1)."""
+    """The table of tau~ for beta = Gamma tau~(kL) of ``params`` (Eq. 4, or Eq. 6 with its factor1).
+
+    Parameters
+    ----------
+    params : MannParams
+        Mann model parameters (lifetime and factor1 are used).
+
+    Returns
+    -------
+    LifetimeTable
+        The cached table of the non-dimensional shear lifetime tau~ [-] (Guo et al. 2023, Eq. 4 or 6).
+    """
     return lifetime_table("mann") if params.lifetime == "mann" else lifetime_table("guo", float(params.factor1))
 
 
 def evolution_lifetime_table(params: MannParams) -> LifetimeTable:
-    """The table of tau_e / gamma (Eq. 15 with ``params.factor2``)."""
+    """The table of tau_e / gamma (Guo et al. 2023, Eq. 15 with ``params.factor2``).
+
+    Parameters
+    ----------
+    params : MannParams
+        Mann model parameters (factor2 is used).
+
+    Returns
+    -------
+    LifetimeTable
+        The cached table of tau_e / gamma [-]; multiply by gamma = evo_time_s for tau_e [s].
+    """
     return lifetime_table("evolution", float(params.factor2))

@@ -26,7 +26,7 @@ def line_frequencies(nt: int, dt_s: float) -> np.ndarray:
     Returns
     -------
     numpy.ndarray
-        f_j = j / (nt dt) [Hz], j = 0 .. nt // 2 (the rfft bins).
+        (nt // 2 + 1,) f_j = j / (nt dt) [Hz], j = 0 .. nt // 2 (the rfft bins).
     """
     return np.arange(nt // 2 + 1) / (nt * dt_s)
 
@@ -55,6 +55,13 @@ def pair_weights(nt: int) -> np.ndarray:
 def k2_wavenumbers(nyp: int, dy_m: float) -> np.ndarray:
     """Lateral wavenumbers of a periodic box of nyp points spaced dy_m [m].
 
+    Parameters
+    ----------
+    nyp : int
+        Points of the periodic box in y.
+    dy_m : float
+        Lateral spacing [m].
+
     Returns
     -------
     numpy.ndarray
@@ -67,6 +74,13 @@ def k2_wavenumbers(nyp: int, dy_m: float) -> np.ndarray:
 
 def k3_wavenumbers(nzp: int, dz_m: float) -> np.ndarray:
     """Vertical wavenumbers of a periodic box of nzp points spaced dz_m [m].
+
+    Parameters
+    ----------
+    nzp : int
+        Points of the periodic box in z.
+    dz_m : float
+        Vertical spacing [m].
 
     Returns
     -------

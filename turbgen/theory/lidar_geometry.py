@@ -32,7 +32,27 @@ from turbgen.errors import ParameterError
 
 
 def nacelle_directions(azimuth_deg, elevation_deg) -> np.ndarray:
-    """Beam directions d (n_beams, 3) in (x upstream, y, z) from azimuth and elevation [deg]."""
+    """Beam directions d of a nacelle lidar from azimuth and elevation (Guo et al. 2023 Fig. 3).
+
+    d = (cos beta cos phi, cos beta sin phi, sin beta) in (x upstream, y, z).
+
+    Parameters
+    ----------
+    azimuth_deg : array_like
+        Azimuth phi of each beam, towards +y [deg].
+    elevation_deg : array_like
+        Elevation beta of each beam, up [deg]; as many values as ``azimuth_deg``.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_beams, 3) unit direction vectors [-].
+
+    Raises
+    ------
+    ParameterError
+        If ``azimuth_deg`` and ``elevation_deg`` differ in shape (number of beams).
+    """
     phi = np.radians(np.atleast_1d(np.asarray(azimuth_deg, dtype=float)))
     beta = np.radians(np.atleast_1d(np.asarray(elevation_deg, dtype=float)))
     if phi.shape != beta.shape:
@@ -41,7 +61,25 @@ def nacelle_directions(azimuth_deg, elevation_deg) -> np.ndarray:
 
 
 def spinner_directions(half_cone_deg: float, scan_deg, tilt_deg: float = 0.0) -> np.ndarray:
-    """Beam directions d (n_beams, 3) of a spinner lidar: half-cone angle, scan angles, shaft tilt [deg]."""
+    """Beam directions d of a spinner lidar: half-cone angle, scan angles, shaft tilt (Fu et al. 2023 Eq. 10-12).
+
+    d = cos phi a + sin phi (cos theta e_y + sin theta e_perp), a = (cos tilt, 0, sin tilt),
+    e_perp = (-sin tilt, 0, cos tilt), in (x upstream, y, z).
+
+    Parameters
+    ----------
+    half_cone_deg : float
+        Half-cone angle phi around the shaft axis [deg].
+    scan_deg : array_like
+        Scan angles theta, from +y towards +z [deg].
+    tilt_deg : float, optional
+        Shaft tilt, the cone tilted up (a rotation about y) [deg] (default 0).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_beams, 3) unit direction vectors [-], one row per scan angle.
+    """
     phi = np.radians(float(half_cone_deg))
     theta = np.radians(np.atleast_1d(np.asarray(scan_deg, dtype=float)))
     tilt = np.radians(float(tilt_deg))
@@ -53,7 +91,20 @@ def spinner_directions(half_cone_deg: float, scan_deg, tilt_deg: float = 0.0) ->
 
 
 def los_vectors(directions) -> np.ndarray:
-    """n = (d_x, -d_y, -d_z): v_los = n . (u, v, w), positive towards the lidar (module docstring)."""
+    """Line-of-sight vectors n = (d_x, -d_y, -d_z): v_los = n . (u, v, w), positive towards the lidar.
+
+    Sign convention of Guo et al. 2023 Eq. 26 with x downwind (module docstring).
+
+    Parameters
+    ----------
+    directions : array_like
+        (..., 3) beam directions d (x upstream, y, z) [-].
+
+    Returns
+    -------
+    numpy.ndarray
+        n [-], shaped like ``directions``.
+    """
     d = np.asarray(directions, dtype=float)
     return d * np.array([1.0, -1.0, -1.0])
 
@@ -62,12 +113,22 @@ def los_vectors(directions) -> np.ndarray:
 class Measurements:
     """Where and how a lidar measures, as arrays (one row per measurement = beam x range gate).
 
-    n : (M, 3) line-of-sight vectors, v_los = n . (u, v, w) (module docstring)
-    focus_m : (M, 3) focus points (x upstream, y, z) [m] relative to the hub
-    direction : (M, 3) beam directions d (unit, x upstream, y, z)
-    offsets_m : (M, K) positions along the beam relative to the focus [m] (probe volume)
-    weights : (M, K) probe-volume weights, each row summing to 1
-    beam : (M,) beam index of each measurement; gate : (M,) range-gate index
+    Parameters
+    ----------
+    n : numpy.ndarray
+        (M, 3) line-of-sight vectors [-], v_los = n . (u, v, w) (module docstring).
+    focus_m : numpy.ndarray
+        (M, 3) focus points (x upstream, y, z) [m] relative to the hub.
+    direction : numpy.ndarray
+        (M, 3) beam directions d (unit, x upstream, y, z) [-].
+    offsets_m : numpy.ndarray
+        (M, K) positions along the beam relative to the focus [m] (probe volume).
+    weights : numpy.ndarray
+        (M, K) probe-volume weights [-], each row summing to 1.
+    beam : numpy.ndarray
+        (M,) beam index of each measurement.
+    gate : numpy.ndarray
+        (M,) range-gate index of each measurement.
     """
 
     n: np.ndarray
@@ -80,14 +141,38 @@ class Measurements:
 
     @property
     def count(self) -> int:
+        """Number of measurements M (rows: beam x range gate).
+
+        Returns
+        -------
+        int
+            M [-].
+        """
         return int(self.n.shape[0])
 
     def sample_points_m(self) -> np.ndarray:
-        """(M, K, 3) points (x upstream, y, z) of the probe volume [m]."""
+        """Points (x upstream, y, z) of the probe volume: focus + offset * direction.
+
+        Returns
+        -------
+        numpy.ndarray
+            (M, K, 3) points [m] relative to the hub.
+        """
         return self.focus_m[:, None, :] + self.offsets_m[..., None] * self.direction[:, None, :]
 
     def subset(self, rows) -> "Measurements":
-        """The measurements of the given rows (indices or boolean mask)."""
+        """The measurements of the given rows (indices or boolean mask).
+
+        Parameters
+        ----------
+        rows : array_like
+            Integer indices or a boolean mask of length M.
+
+        Returns
+        -------
+        Measurements
+            A new Measurements with the selected rows of every field.
+        """
         rows = np.asarray(rows)
         return Measurements(*(getattr(self, f)[rows] for f in
                               ("n", "focus_m", "direction", "offsets_m", "weights", "beam", "gate")))

@@ -61,7 +61,19 @@ MINUS_3_DB = 10.0 ** (-3.0 / 20.0)
 
 @dataclass(frozen=True)
 class PreviewSpectra:
-    """One-sided spectra in frequency [m^2 s^-2 Hz^-1] of u_RR, u_LL and their cross-spectrum."""
+    """One-sided spectra in frequency [m^2 s^-2 Hz^-1] of u_RR, u_LL and their cross-spectrum.
+
+    Parameters
+    ----------
+    f_hz : numpy.ndarray
+        (n_f,) frequencies [Hz].
+    S_RR : numpy.ndarray
+        (n_f,) spectrum of the rotor-effective wind speed u_RR [m^2 s^-2 Hz^-1].
+    S_LL : numpy.ndarray
+        (n_f,) spectrum of the lidar estimate u_LL [m^2 s^-2 Hz^-1].
+    S_RL : numpy.ndarray
+        (n_f,) complex cross-spectrum of u_RR and u_LL [m^2 s^-2 Hz^-1].
+    """
 
     f_hz: np.ndarray
     S_RR: np.ndarray
@@ -70,12 +82,24 @@ class PreviewSpectra:
 
     @property
     def coh2_RL(self) -> np.ndarray:
-        """gamma^2_RL = |S_RL|^2 / (S_RR S_LL) (Guo et al. 2023 Eq. 34, magnitude-squared)."""
+        """gamma^2_RL = |S_RL|^2 / (S_RR S_LL) (Guo et al. 2023 Eq. 34, magnitude-squared).
+
+        Returns
+        -------
+        numpy.ndarray
+            Magnitude-squared lidar-rotor coherence [-], shaped like ``f_hz``.
+        """
         return np.abs(self.S_RL) ** 2 / (self.S_RR * self.S_LL)
 
     @property
     def G_RL(self) -> np.ndarray:
-        """Wiener gain |G_RL| = |S_RL| / S_LL (Guo et al. 2023 Eq. 35)."""
+        """Wiener gain |G_RL| = |S_RL| / S_LL (Guo et al. 2023 Eq. 35).
+
+        Returns
+        -------
+        numpy.ndarray
+            |G_RL| [-], shaped like ``f_hz``.
+        """
         return np.abs(self.S_RL) / self.S_LL
 
 
@@ -119,8 +143,39 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
                          panel_width: float = PANEL_WIDTH) -> PreviewSpectra:
     """S_RR, S_LL, S_RL of the Mann space-time tensor for a lidar and a rotor of radius R (module docstring).
 
-    f_hz : frequencies [Hz] (k1 = 2 pi f / U); meas : the lidar's measurements (one full scan);
-    U_m_s : mean wind speed [m/s]; radius_m : rotor radius R [m]. Returns one-sided spectra in f.
+    Guo et al. 2023 Eq. 24, 29, 32, integrated on the polar (kappa, theta) quadrature of the module
+    docstring.
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Frequencies [Hz] (k1 = 2 pi f / U), positive.
+    meas : Measurements
+        The lidar's measurements (one full scan).
+    params : MannParams
+        Mann model parameters (with ``evo_time_s`` None: frozen turbulence, D = 1).
+    U_m_s : float
+        Mean wind speed U [m/s].
+    radius_m : float
+        Rotor radius R [m].
+    kappa_max : float, optional
+        Upper end of the radial quadrature [rad/m] (default KAPPA_MAX = 1 rad/m).
+    n_theta : int, optional
+        Trapezoid nodes in angle (default N_THETA).
+    panel_width : float, optional
+        Width of the uniform Gauss-Legendre radial panels above KAPPA_SPLIT [rad/m] (default PANEL_WIDTH).
+
+    Returns
+    -------
+    PreviewSpectra
+        One-sided spectra in f [m^2 s^-2 Hz^-1], each (n_f,); S_RL complex.
+
+    Raises
+    ------
+    ParameterError
+        If ``f_hz`` is empty or not positive finite numbers, ``U_m_s`` is outside the allowed range,
+        ``radius_m`` is not > 0, ``meas`` has no measurements or a beam does not look upstream
+        (n_1 <= 1e-6: u_LL divides by n_1).
     """
     f, U, R = _check(f_hz, meas, U_m_s, radius_m)
     k1_all = 2.0 * np.pi * f / U
@@ -180,7 +235,25 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
 
 
 def rotor_points(radius_m: float, spacing_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(y, z) [m] of a square grid (spacing default R/10) inside the rotor disc of radius R."""
+    """(y, z) of a square grid inside the rotor disc of radius R.
+
+    Parameters
+    ----------
+    radius_m : float
+        Rotor radius R [m].
+    spacing_m : float, optional
+        Grid spacing [m] (default R/10).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (y [m], z [m]), each (n_points,), the grid points with y^2 + z^2 <= R^2.
+
+    Raises
+    ------
+    ParameterError
+        If ``radius_m`` or a given ``spacing_m`` is not a finite number > 0.
+    """
     R = check_positive("rotor radius (m)", radius_m)
     h = R / 10.0 if spacing_m is None else check_positive("rotor grid spacing (m)", spacing_m)
     n = int(np.floor(R / h))
@@ -195,10 +268,44 @@ def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_
                            rotor_spacing_m: float | None = None) -> PreviewSpectra:
     """S_RR, S_LL, S_RL of the Kaimal direct-product model (Guo et al. 2023 Eq. 25, 31, 33).
 
-    long_coherence(dx_m, f_hz) : un-squared longitudinal coherence between planes dx apart (e.g.
-    ``lambda dx, f: exponential_longitudinal(dx, f, U, a_x, b_x)``), applied to the components in
-    ``long_components``; other components are independent between planes. u is coherent in the yz
-    plane (IEC exponential, un-squared); v, w are spatially white unless ``vw_coherence``.
+    u is coherent in the yz plane (IEC exponential, un-squared); v, w are spatially white unless
+    ``vw_coherence``. Within the probe volume Taylor's hypothesis applies; the rotor points are a
+    square grid inside the disc (rotor_points).
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Frequencies [Hz], positive.
+    meas : Measurements
+        The lidar's measurements (one full scan).
+    kparams : KaimalParams
+        Kaimal spectra and IEC yz coherence parameters.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    radius_m : float
+        Rotor radius R [m].
+    long_coherence : callable
+        long_coherence(dx_m, f_hz): un-squared longitudinal coherence [-] between planes dx [m] apart
+        at f [Hz] (e.g. ``lambda dx, f: exponential_longitudinal(dx, f, U, a_x, b_x)``), applied to the
+        components in ``long_components``; other components are independent between planes.
+    long_components : str, optional
+        Components among "uvw" with longitudinal coherence (default "u").
+    vw_coherence : bool, optional
+        Give v and w the yz coherence of u too (default False).
+    rotor_spacing_m : float, optional
+        Spacing of the rotor grid [m] (default R/10).
+
+    Returns
+    -------
+    PreviewSpectra
+        One-sided spectra in f [m^2 s^-2 Hz^-1], each (n_f,); S_RL complex.
+
+    Raises
+    ------
+    ParameterError
+        If ``f_hz`` is empty or not positive finite numbers, ``U_m_s`` is outside the allowed range,
+        ``radius_m`` is not > 0, ``meas`` has no measurements or a beam does not look upstream
+        (n_1 <= 1e-6: u_LL divides by n_1), or ``rotor_spacing_m`` is not > 0.
     """
     f, U, R = _check(f_hz, meas, U_m_s, radius_m)
     pts = meas.sample_points_m()  # (M, K, 3)
@@ -248,43 +355,172 @@ def _first_crossing(f: np.ndarray, y: np.ndarray, level: float) -> float:
 
 
 def cutoff_frequency_hz(f_hz, gain) -> float:
-    """The -3 dB cut-off: first frequency where |G_RL| drops below 10^(-3/20) (Guo et al. 2023 Table 5)."""
+    """The -3 dB cut-off: first frequency where |G_RL| drops below 10^(-3/20) (Guo et al. 2023 Table 5).
+
+    Linear interpolation in log f between the grid points.
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Increasing frequencies [Hz], > 0.
+    gain : array_like
+        |G_RL| [-] at ``f_hz``.
+
+    Returns
+    -------
+    float
+        Cut-off frequency [Hz]; f_hz[0] if the gain starts below the level, nan if it never drops.
+    """
     return _first_crossing(np.asarray(f_hz, float), np.asarray(gain, float), MINUS_3_DB)
 
 
 def coherence_bandwidth_rad_m(f_hz, coh2, U_m_s: float) -> float:
-    """MCB k_0.5 = 2 pi f_0.5 / U [rad/m], f_0.5 where gamma^2_RL drops below 0.5 (Fu et al. 2023 Eq. 26)."""
+    """MCB k_0.5 = 2 pi f_0.5 / U [rad/m], f_0.5 where gamma^2_RL drops below 0.5 (Fu et al. 2023 Eq. 26).
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Increasing frequencies [Hz], > 0.
+    coh2 : array_like
+        Magnitude-squared coherence gamma^2_RL [-] at ``f_hz``.
+    U_m_s : float
+        Mean wind speed U [m/s].
+
+    Returns
+    -------
+    float
+        k_0.5 [rad/m]; nan if gamma^2 never drops below 0.5.
+    """
     return 2.0 * np.pi * _first_crossing(np.asarray(f_hz, float), np.asarray(coh2, float), 0.5) / U_m_s
 
 
 def smallest_eddy_m(k05_rad_m: float) -> float:
-    """d_eddy,min = 2 pi / k_0.5 [m] (Fu et al. 2023 Eq. 27)."""
+    """Smallest detectable eddy d_eddy,min = 2 pi / k_0.5 (Fu et al. 2023 Eq. 27).
+
+    Parameters
+    ----------
+    k05_rad_m : float
+        Measurement coherence bandwidth k_0.5 [rad/m].
+
+    Returns
+    -------
+    float
+        d_eddy,min [m].
+    """
     return 2.0 * np.pi / k05_rad_m
 
 
 def lowpass_gain(f_hz, cutoff_hz: float):
-    """|G| of the first-order low-pass omega_c / (s + omega_c) (Fu et al. 2023 Eq. 28)."""
+    """|G| of the first-order low-pass omega_c / (s + omega_c) (Fu et al. 2023 Eq. 28).
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Frequency [Hz].
+    cutoff_hz : float
+        Cut-off frequency f_c = omega_c / (2 pi) [Hz].
+
+    Returns
+    -------
+    numpy.ndarray
+        1 / sqrt(1 + (f / f_c)^2) [-], shaped like ``f_hz``.
+
+    Raises
+    ------
+    ParameterError
+        If ``cutoff_hz`` is not a finite number > 0.
+    """
     f = np.asarray(f_hz, dtype=float)
     return 1.0 / np.sqrt(1.0 + (f / check_positive("cut-off (Hz)", cutoff_hz)) ** 2)
 
 
 def filter_delay_s(cutoff_hz: float, f_delay_hz: float = 0.025) -> float:
-    """T_filter = arctan(f_delay / f_cutoff) / (2 pi f_delay) [s] (Fu et al. 2023 Eq. 30)."""
+    """T_filter = arctan(f_delay / f_cutoff) / (2 pi f_delay), delay of the low-pass (Fu et al. 2023 Eq. 30).
+
+    Parameters
+    ----------
+    cutoff_hz : float
+        Cut-off frequency f_cutoff [Hz].
+    f_delay_hz : float, optional
+        Frequency f_delay at which the delay is evaluated [Hz] (default 0.025 Hz).
+
+    Returns
+    -------
+    float
+        T_filter [s].
+
+    Raises
+    ------
+    ParameterError
+        If ``cutoff_hz`` or ``f_delay_hz`` is not a finite number > 0.
+    """
     fd = check_positive("f_delay (Hz)", f_delay_hz)
     return float(np.arctan(fd / check_positive("cut-off (Hz)", cutoff_hz)) / (2.0 * np.pi * fd))
 
 
 def buffer_time_s(range_m: float, U_m_s: float, scan_time_s: float, cutoff_hz: float,
                   pitch_delay_s: float = 0.0, f_delay_hz: float = 0.025) -> float:
-    """T_buffer = x/U - T_scan/2 - T_filter - T_pitch [s] (Fu et al. 2023 Sect. 3.5)."""
+    """Buffer time T_buffer = x/U - T_scan/2 - T_filter - T_pitch (Fu et al. 2023 Sect. 3.5).
+
+    Parameters
+    ----------
+    range_m : float
+        Preview distance x upstream of the rotor [m].
+    U_m_s : float
+        Mean wind speed U [m/s].
+    scan_time_s : float
+        Duration of one full scan T_scan [s].
+    cutoff_hz : float
+        Cut-off frequency of the low-pass filter [Hz] (see filter_delay_s).
+    pitch_delay_s : float, optional
+        Pitch actuator delay T_pitch [s] (default 0).
+    f_delay_hz : float, optional
+        Frequency at which the filter delay is evaluated [Hz] (default 0.025 Hz).
+
+    Returns
+    -------
+    float
+        T_buffer [s].
+
+    Raises
+    ------
+    ParameterError
+        If ``U_m_s`` is outside the allowed range or ``cutoff_hz``, ``f_delay_hz`` is not > 0.
+    """
     return (range_m / check_wind_speed(U_m_s) - 0.5 * scan_time_s - filter_delay_s(cutoff_hz, f_delay_hz)
             - pitch_delay_s)
 
 
 def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: float, *,
                        vw_coherence: bool = False) -> np.ndarray:
-    """One-sided spectra S_los,i(f) [m^2 s^-2 Hz^-1] of each measurement's line-of-sight speed (M, n_f),
-    IEC Kaimal model with the probe volume (Schlipf et al. 2020 Eq. 2, 6; Taylor within the probe volume)."""
+    """One-sided spectra S_los,i(f) of each measurement's line-of-sight speed, IEC Kaimal model.
+
+    Includes the probe volume (Schlipf et al. 2020 Eq. 2, 6; Taylor within the probe volume); u is
+    coherent in the yz plane (IEC exponential), v, w are spatially white unless ``vw_coherence``.
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Frequencies [Hz].
+    meas : Measurements
+        The lidar's measurements.
+    kparams : KaimalParams
+        Kaimal spectra and IEC yz coherence parameters.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    vw_coherence : bool, optional
+        Give v and w the yz coherence of u too (default False).
+
+    Returns
+    -------
+    numpy.ndarray
+        (M, n_f) one-sided spectra [m^2 s^-2 Hz^-1].
+
+    Raises
+    ------
+    ParameterError
+        If ``U_m_s`` is outside the allowed range.
+    """
     f = np.atleast_1d(np.asarray(f_hz, dtype=float))
     U = check_wind_speed(U_m_s)
     pts = meas.sample_points_m()
@@ -307,11 +543,39 @@ def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: f
 
 def lidar_ti_correction(meas: Measurements, kparams: KaimalParams, U_m_s: float, *, averaging_s: float = 600.0,
                         f_scan_hz: float = 1.0, f_max_hz: float = 1.0, n_f: int = 120) -> np.ndarray:
-    """c_TI = sigma_u / sigma_L per measurement (Schlipf et al. 2020 Eq. 6-8).
+    """TI correction factor c_TI = sigma_u / sigma_L per measurement (Schlipf et al. 2020 Eq. 6-8).
 
     sigma_L^2 = ∫_{1/T}^{f_scan} S_los df (the lidar sees each point f_scan times a second, through its
     probe volume and the beam angle), sigma_u^2 = ∫_{1/T}^{f_max} S_u df (the wind field's u up to its
     highest frequency). The lidar TI estimate multiplies each LOS standard deviation by its c_TI.
+
+    Parameters
+    ----------
+    meas : Measurements
+        The lidar's measurements.
+    kparams : KaimalParams
+        Kaimal spectra and IEC yz coherence parameters.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    averaging_s : float, optional
+        Averaging time T [s] (default 600 s).
+    f_scan_hz : float, optional
+        Rate f_scan at which each point is measured [Hz] (default 1 Hz).
+    f_max_hz : float, optional
+        Highest frequency f_max of the wind field [Hz] (default 1 Hz).
+    n_f : int, optional
+        Log-spaced frequencies of the sigma_L^2 quadrature (default 120).
+
+    Returns
+    -------
+    numpy.ndarray
+        (M,) c_TI [-].
+
+    Raises
+    ------
+    ParameterError
+        If ``averaging_s``, ``f_scan_hz`` or ``f_max_hz`` is not > 0, f_scan <= 1/T, or ``U_m_s`` is
+        outside the allowed range.
     """
     from turbgen.theory.kaimal import kaimal_band_variance
 

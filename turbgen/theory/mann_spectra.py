@@ -116,14 +116,42 @@ def perpendicular_quadrature(
 ):
     """Angular integrals on the radial nodes of the (k2, k3) plane, for every k1.
 
-    Returns (kappa, weights, G): kappa and weights shaped (len(k1), n_r) with ∫ g(kappa) kappa dkappa
-    ≈ sum weights * g(kappa), and G[(i, j)] = ∫_0^{2pi} Phi_ij(k1, kappa, theta) exp(i kappa d
-    cos(theta - theta_d)) dtheta (complex if a separation is given, else real). Any radial weight
-    that depends on |k| or kappa only (space-time decay, rotor average) is applied by the caller;
-    ``resolve_m`` (no separation only) is the length whose oscillation exp(i kappa resolve_m) the radial
-    panels resolve for kappa < ``resolve_kappa_max`` [rad/m] (scalar or per k1; the caller smooths its
-    weight beyond).
-    This is the engine behind Eq. 8, 16 and 24 (module docstring: rule and accuracy).
+    Any radial weight that depends on |k| or kappa only (space-time decay, rotor average) is applied by
+    the caller. k1 = 0 is evaluated as the limit k1 -> 0 (at k1 L = K1_ZERO).
+    This is the engine behind Eq. 8, 16 and 24 of Guo et al. (2023) (module docstring: rule and accuracy).
+
+    Parameters
+    ----------
+    k1 : array_like
+        Longitudinal wavenumbers [rad/m], finite.
+    params : MannParams
+        Mann model parameters.
+    pairs : iterable of tuple of int
+        Tensor components (i, j), each index in 0..2, to integrate.
+    dy_m, dz_m : float, optional
+        Lateral and vertical separation dy, dz [m] (default 0: no separation).
+    resolve_m : float, optional
+        (No separation only) the length [m] whose oscillation exp(i kappa resolve_m) the radial panels
+        resolve for kappa < ``resolve_kappa_max``; 0 (default) for none.
+    resolve_kappa_max : float or array_like, optional
+        [rad/m], scalar or per k1; the caller smooths its weight beyond.
+    _rule : dict, optional
+        Internal overrides of the quadrature rule (x_lo, x_hi, x_hi_sep, panel_ln, n_gauss, n_theta).
+
+    Returns
+    -------
+    kappa : numpy.ndarray
+        (len(k1), n_r) radial nodes [rad/m] (padding nodes carry zero weight).
+    weights : numpy.ndarray
+        (len(k1), n_r) weights [rad^2/m^2] with ∫ g(kappa) kappa dkappa ≈ sum weights * g(kappa).
+    G : dict
+        G[(i, j)] = ∫_0^{2pi} Phi_ij(k1, kappa, theta) exp(i kappa d cos(theta - theta_d)) dtheta
+        [m^5 s^-2], (len(k1), n_r), complex if a separation is given, else real.
+
+    Raises
+    ------
+    ParameterError
+        If ``k1`` is not finite numbers or ``dy_m``, ``dz_m``, ``resolve_m`` is not a finite number.
     """
     # F_ij at k1 = 0 is taken as the limit k1 -> 0: as k1 -> 0 the shear distortion concentrates a
     # finite amount of energy at |k| ~ k1, which the tensor's exact k1 = 0 plane (ζ1 = -β) lacks
@@ -213,14 +241,57 @@ def _integrate(weights, values):
 
 
 def one_point_spectra(k1, params: MannParams) -> dict[str, np.ndarray]:
-    """Two-sided one-point spectra F11 F22 F33 F12 F13 F23 at k1 [m^3 s^-2] (Guo et al. 2023, Eq. 8 with dy = dz = 0)."""
+    """Two-sided one-point spectra F11 F22 F33 F12 F13 F23 at k1 (Guo et al. 2023, Eq. 8 with dy = dz = 0).
+
+    sigma_i^2 = ∫_{-inf}^{inf} F_ii dk1; the one-sided frequency spectrum is S_i(f) = 2 F_ii(k1) 2 pi / U.
+    k1 = 0 is evaluated as the limit k1 -> 0.
+
+    Parameters
+    ----------
+    k1 : array_like
+        Longitudinal wavenumbers [rad/m], finite.
+    params : MannParams
+        Mann model parameters.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Keys "F11", "F22", "F33", "F12", "F13", "F23"; each (len(k1),) [m^3 s^-2], two-sided in k1.
+
+    Raises
+    ------
+    ParameterError
+        If ``k1`` is not finite numbers.
+    """
     k1 = _check_k1(k1)
     _, w, g = perpendicular_quadrature(k1, params, tuple(COMPONENTS.values()))
     return {name: _integrate(w, g[p]) for name, p in COMPONENTS.items()}
 
 
 def cross_spectrum(k1, params: MannParams, i: int, j: int, dy_m: float = 0.0, dz_m: float = 0.0) -> np.ndarray:
-    """Complex cross-spectrum F_ij(k1, dy, dz) [m^3 s^-2], two-sided (Guo et al. 2023, Eq. 8); i, j in 0..2."""
+    """Complex cross-spectrum F_ij(k1, dy, dz), two-sided in k1 (Guo et al. 2023, Eq. 8).
+
+    Parameters
+    ----------
+    k1 : array_like
+        Longitudinal wavenumbers [rad/m], finite.
+    params : MannParams
+        Mann model parameters.
+    i, j : int
+        Velocity components, each in 0..2 (u, v, w).
+    dy_m, dz_m : float, optional
+        Lateral and vertical separation [m] (default 0).
+
+    Returns
+    -------
+    numpy.ndarray
+        (len(k1),) complex F_ij [m^3 s^-2].
+
+    Raises
+    ------
+    ParameterError
+        If ``i`` or ``j`` is not 0, 1 or 2, ``k1`` is not finite numbers or ``dy_m``, ``dz_m`` is not finite.
+    """
     for name, v in (("i", i), ("j", j)):
         if v not in (0, 1, 2):
             raise ParameterError(f"component {name} = {v!r} must be 0, 1 or 2")
@@ -229,7 +300,31 @@ def cross_spectrum(k1, params: MannParams, i: int, j: int, dy_m: float = 0.0, dz
 
 
 def yz_coherence(k1, params: MannParams, i: int, j: int, dy_m: float, dz_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """(coh2, cocoh): magnitude-squared coherence (Eq. 9) and un-squared co-coherence (Eq. 10)."""
+    """Magnitude-squared coherence (Eq. 9) and un-squared co-coherence (Eq. 10) of Guo et al. (2023).
+
+    coh2 = |F_ij|^2 / (F_ii F_jj), cocoh = Re F_ij / sqrt(F_ii F_jj), with F_ij(k1, dy, dz).
+
+    Parameters
+    ----------
+    k1 : array_like
+        Longitudinal wavenumbers [rad/m], finite.
+    params : MannParams
+        Mann model parameters.
+    i, j : int
+        Velocity components, each in 0..2 (u, v, w).
+    dy_m, dz_m : float
+        Lateral and vertical separation [m].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (coh2, cocoh) [-], each (len(k1),).
+
+    Raises
+    ------
+    ParameterError
+        If ``i`` or ``j`` is not 0, 1 or 2, ``k1`` is not finite numbers or ``dy_m``, ``dz_m`` is not finite.
+    """
     k1 = _check_k1(k1)
     fij = cross_spectrum(k1, params, i, j, dy_m, dz_m)
     _, w, g = perpendicular_quadrature(k1, params, ((i, i), (j, j)))
@@ -262,13 +357,47 @@ def _variances_cached(params: MannParams) -> tuple[float, float, float, float]:
 
 
 def variances(params: MannParams) -> dict[str, float]:
-    """sigma_u^2, sigma_v^2, sigma_w^2 and <uw> = ∫ F_ij dk1 over all k1 [m^2 s^-2] (keys uu vv ww uw)."""
+    """sigma_u^2, sigma_v^2, sigma_w^2 and <uw> = ∫ F_ij dk1 over all k1 (keys uu vv ww uw).
+
+    Gauss panels in ln(k1 L) on [1e-6, 1e5] plus the inertial tail (module docstring); cached per
+    ``params``.
+
+    Parameters
+    ----------
+    params : MannParams
+        Mann model parameters.
+
+    Returns
+    -------
+    dict of str to float
+        {"uu", "vv", "ww", "uw"} [m^2 s^-2].
+    """
     uu, vv, ww, uw = _variances_cached(params)
     return {"uu": uu, "vv": vv, "ww": ww, "uw": uw}
 
 
 def ae_for_sigma_u(sigma_u_m_s: float, params: MannParams) -> float:
-    """alpha*eps^(2/3) [m^(4/3) s^-2] that gives sigma_u for the shape (L, Gamma, lifetime) of ``params``."""
+    """alpha*eps^(2/3) that gives sigma_u for the shape (L, Gamma, lifetime) of ``params``.
+
+    Spectra are linear in ae, so ae = sigma_u^2 / sigma_u^2(ae = 1).
+
+    Parameters
+    ----------
+    sigma_u_m_s : float
+        Target standard deviation of u [m/s].
+    params : MannParams
+        Mann model parameters (their ae is ignored).
+
+    Returns
+    -------
+    float
+        ae [m^(4/3) s^-2].
+
+    Raises
+    ------
+    ParameterError
+        If ``sigma_u_m_s`` is not a finite number > 0.
+    """
     sigma = check_positive("sigma_u (m/s)", sigma_u_m_s)
     unit = variances(params.with_ae(1.0))["uu"]  # spectra are linear in ae
     return sigma * sigma / unit

@@ -14,13 +14,29 @@ LIFETIMES = ("guo", "mann")
 class MannParams:
     """Mann (1994) sheared-tensor parameters plus the Guo et al. (2022) evolution lifetime.
 
-    ae : alpha*epsilon^(2/3) [m^(4/3) s^-2], spectral energy level.
-    length_scale_m : L [m], length scale of the energy-containing eddies.
-    gamma : Gamma [-], shear anisotropy (0 = isotropic).
-    lifetime : "guo" (Guo et al. 2023, Eq. 6, default) or "mann" (Eq. 4, hypergeometric).
-    factor1 : small-k slope of the Guo lifetime is -factor1 (default 1; stable preset 0.8).
-    factor2 : large-k slope of the evolution lifetime tau_e is -(2/3) factor2 (default 3.5 = Eq. 15).
-    evo_time_s : gamma [s], evolution time constant of tau_e (Eq. 15); None = frozen turbulence.
+    Frozen dataclass, validated on construction against turbgen.theory.ranges.RANGES.
+
+    Parameters
+    ----------
+    ae : float
+        alpha*epsilon^(2/3) [m^(4/3) s^-2], spectral energy level.
+    length_scale_m : float
+        L [m], length scale of the energy-containing eddies.
+    gamma : float
+        Gamma [-], shear anisotropy (0 = isotropic).
+    lifetime : str, optional
+        "guo" (Guo et al. 2023, Eq. 6, default) or "mann" (Eq. 4, hypergeometric).
+    factor1 : float, optional
+        Small-k slope of the Guo lifetime is -factor1 [-] (default 1; stable preset 0.8).
+    factor2 : float, optional
+        Large-k slope of the evolution lifetime tau_e is -(2/3) factor2 [-] (default 3.5 = Eq. 15).
+    evo_time_s : float or None, optional
+        gamma [s], evolution time constant of tau_e (Eq. 15), default 400 s; None = frozen turbulence.
+
+    Raises
+    ------
+    ParameterError
+        If a value is outside its range or ``lifetime`` is not "guo" or "mann".
     """
 
     ae: float
@@ -40,7 +56,23 @@ class MannParams:
             object.__setattr__(self, "evo_time_s", check("evo_time_s", self.evo_time_s))
 
     def with_ae(self, ae: float) -> "MannParams":
-        """The same parameters with another energy level alpha*eps^(2/3)."""
+        """The same parameters with another energy level alpha*eps^(2/3).
+
+        Parameters
+        ----------
+        ae : float
+            alpha*eps^(2/3) [m^(4/3) s^-2].
+
+        Returns
+        -------
+        MannParams
+            A validated copy with ``ae`` replaced.
+
+        Raises
+        ------
+        ParameterError
+            If ``ae`` is outside the allowed range (turbgen.theory.ranges).
+        """
         return replace(self, ae=ae)
 
 
@@ -48,10 +80,23 @@ class MannParams:
 class KaimalParams:
     """Kaimal spectra (Guo et al. 2023, Eq. 11) and IEC yz coherence (Eq. 12) parameters.
 
-    sigma_m_s : (sigma_u, sigma_v, sigma_w) [m/s], standard deviations of the full spectrum.
-    length_scales_m : (L1, L2, L3) [m], Kaimal integral length scales.
-    a_yz : coherence decay constant [-] (IEC: 12).
-    lc_m : coherence scale parameter Lc [m] (IEC: 8.1 Lambda1).
+    Frozen dataclass, validated on construction against turbgen.theory.ranges.RANGES.
+
+    Parameters
+    ----------
+    sigma_m_s : tuple of float
+        (sigma_u, sigma_v, sigma_w) [m/s], standard deviations of the full spectrum.
+    length_scales_m : tuple of float
+        (L1, L2, L3) [m], Kaimal integral length scales.
+    a_yz : float, optional
+        Coherence decay constant [-] (IEC: 12).
+    lc_m : float, optional
+        Coherence scale parameter Lc [m] (IEC: 8.1 Lambda1; default 340.2 m).
+
+    Raises
+    ------
+    ParameterError
+        If ``sigma_m_s`` or ``length_scales_m`` does not hold three values, or a value is outside its range.
     """
 
     sigma_m_s: tuple[float, float, float]
@@ -76,7 +121,23 @@ class KaimalParams:
 
 
 def check_wind_speed(U) -> float:
-    """Mean wind speed U [m/s], 0.5 to 100 (turbgen.theory.ranges)."""
+    """Mean wind speed U [m/s], 0.5 to 100 (turbgen.theory.ranges).
+
+    Parameters
+    ----------
+    U : float
+        Mean wind speed [m/s].
+
+    Returns
+    -------
+    float
+        U [m/s] as float.
+
+    Raises
+    ------
+    ParameterError
+        If ``U`` is not a finite number in [0.5, 100] m/s.
+    """
     return check("U_m_s", U)
 
 

@@ -18,7 +18,21 @@ from turbgen.errors import ParameterError, check_int, check_range
 
 @dataclass(frozen=True)
 class Range:
-    """Closed interval [lo, hi] (open at ``lo`` when ``lo_open``) of one parameter, in SI units."""
+    """Closed interval [lo, hi] (open at ``lo`` when ``lo_open``) of one parameter, in SI units.
+
+    Parameters
+    ----------
+    label : str
+        Name in messages: option and unit.
+    lo, hi : float
+        Bounds, in the parameter's SI unit.
+    why : str
+        One phrase for the README table.
+    lo_open : bool, optional
+        Exclude ``lo`` (default False).
+    integer : bool, optional
+        The parameter is an integer (default False).
+    """
 
     label: str  # name in messages: option and unit
     lo: float
@@ -28,13 +42,37 @@ class Range:
     integer: bool = False
 
     def check(self, value, label: str | None = None):
-        """``value`` as float (int for integer ranges), or ParameterError naming it and the range."""
+        """``value`` as float (int for integer ranges), or ParameterError naming it and the range.
+
+        Parameters
+        ----------
+        value : float or int
+            The value, in the range's SI unit.
+        label : str, optional
+            Name in the message instead of ``self.label``.
+
+        Returns
+        -------
+        float or int
+            ``value`` as float, or as int for integer ranges.
+
+        Raises
+        ------
+        ParameterError
+            If ``value`` is not a finite number (an integer for integer ranges) within the range.
+        """
         if self.integer:
             return check_int(label or self.label, value, int(self.lo), int(self.hi))
         return check_range(label or self.label, value, self.lo, self.hi, lo_open=self.lo_open)
 
     def text(self) -> str:
-        """'[lo, hi]' or '(lo, hi]'."""
+        """The range as text: '[lo, hi]' or '(lo, hi]'.
+
+        Returns
+        -------
+        str
+            The interval, e.g. '[0.5, 100]'.
+        """
         if self.integer:
             return f"[{int(self.lo)}, {int(self.hi)}]"
         return f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}]"
@@ -90,12 +128,56 @@ LIMITS: dict[str, int] = {
 
 
 def check(key: str, value, label: str | None = None):
-    """Check ``value`` against ``RANGES[key]`` (``label`` replaces the table's name in the message)."""
+    """Check ``value`` against ``RANGES[key]`` (``label`` replaces the table's name in the message).
+
+    Parameters
+    ----------
+    key : str
+        Key of RANGES, e.g. "U_m_s".
+    value : float or int
+        The value, in the SI unit of that range.
+    label : str, optional
+        Name in the message.
+
+    Returns
+    -------
+    float or int
+        ``value`` as float (int for integer ranges).
+
+    Raises
+    ------
+    ParameterError
+        If ``value`` is outside the range.
+    KeyError
+        If ``key`` is not in RANGES.
+    """
     return RANGES[key].check(value, label)
 
 
 def check_count(key: str, n: int, what: str | None = None) -> int:
-    """Refuse a list of ``n`` entries longer than ``LIMITS[key]`` (``what`` names it in the message)."""
+    """Refuse a list of ``n`` entries longer than ``LIMITS[key]`` (``what`` names it in the message).
+
+    Parameters
+    ----------
+    key : str
+        Key of LIMITS, e.g. "planes".
+    n : int
+        Number of entries.
+    what : str, optional
+        Name in the message (default ``key``).
+
+    Returns
+    -------
+    int
+        ``n``.
+
+    Raises
+    ------
+    ParameterError
+        If ``n`` exceeds the limit.
+    KeyError
+        If ``key`` is not in LIMITS.
+    """
     limit = LIMITS[key]
     if n > limit:
         raise ParameterError(f"{what or key}: {n} values is more than the maximum {limit}")
@@ -107,6 +189,17 @@ def check_grid(grid) -> None:
 
     Plane positions must lie in the x range and be strictly increasing (stores and readers rely on
     sorted x; a negative x would be downstream of the rotor, which no generator models).
+
+    Parameters
+    ----------
+    grid : turbgen.grid.Grid
+        The grid: nt, dt_s [s], ny, nz, dy_m [m], dz_m [m] and plane positions x_m [m upstream].
+
+    Raises
+    ------
+    ParameterError
+        If a size or spacing is outside its range, there are too many planes, or a plane position is
+        outside the x range or the positions are not strictly increasing.
     """
     check("nt", grid.nt)
     check("dt_s", grid.dt_s)
@@ -123,7 +216,13 @@ def check_grid(grid) -> None:
 
 
 def markdown_table() -> str:
-    """The README table: parameter, allowed range, meaning; then the list limits."""
+    """The README table: parameter, allowed range, meaning; then the list limits.
+
+    Returns
+    -------
+    str
+        A Markdown table, one row per RANGES entry and per LIMITS entry.
+    """
     rows = ["| parameter | allowed range | note |", "|---|---|---|"]
     rows += [f"| {r.label} | {r.text()} | {r.why} |" for r in RANGES.values()]
     rows += [f"| number of {k} | at most {v:,} | |" for k, v in LIMITS.items()]

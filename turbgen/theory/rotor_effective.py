@@ -33,9 +33,30 @@ def _disk_filter(z, z_smooth=np.inf):
 
 
 def rews_spectrum_mann(k1, params: MannParams, radius_m: float) -> np.ndarray:
-    """Two-sided REWS spectrum S_RR(k1) of the Mann model for a rotor of radius R [m^3 s^-2] (Guo et al. 2023, Eq. 24).
+    """Two-sided REWS spectrum S_RR(k1) of the Mann model for a rotor of radius R (Guo et al. 2023, Eq. 24).
 
-    The radial panels resolve the J1^2(kappa R) oscillation (narrower than pi/(2R)) up to kappa R = Z_SMOOTH.
+    S_RR(k1) = ∫ Phi_11(k) 4 J1^2(kappa R) / (kappa R)^2 dk_perp. The radial panels resolve the
+    J1^2(kappa R) oscillation (narrower than pi/(2R)) up to kappa R = Z_SMOOTH (or SMOOTH_S s R if larger);
+    beyond, the filter is replaced by its local mean.
+
+    Parameters
+    ----------
+    k1 : array_like
+        Longitudinal wavenumbers [rad/m], finite.
+    params : MannParams
+        Mann model parameters.
+    radius_m : float
+        Rotor radius R [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        (len(k1),) S_RR [m^3 s^-2], two-sided in k1.
+
+    Raises
+    ------
+    ParameterError
+        If ``radius_m`` is not a finite number > 0 or ``k1`` is not finite numbers.
     """
     R = check_positive("radius (m)", radius_m)
     k1 = np.atleast_1d(np.asarray(k1, dtype=float))
@@ -45,7 +66,32 @@ def rews_spectrum_mann(k1, params: MannParams, radius_m: float) -> np.ndarray:
 
 
 def rews_spectrum_kaimal(f_hz, kparams: KaimalParams, U_m_s: float, y_m, z_m) -> np.ndarray:
-    """One-sided REWS spectrum of the Kaimal model over rotor points (y, z) [m^2 s^-2 Hz^-1] (Guo et al. 2023, Eq. 25)."""
+    """One-sided REWS spectrum of the Kaimal model over rotor points (y, z) (Guo et al. 2023, Eq. 25).
+
+    S_RR(f) = S_1(f) / n_R^2 sum_i sum_j gamma_yz(dyz_ij, f), with the un-squared IEC coherence.
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Frequencies [Hz].
+    kparams : KaimalParams
+        Kaimal spectra and IEC yz coherence parameters.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    y_m, z_m : array_like
+        Lateral and vertical positions of the n_R rotor points [m], equally long.
+
+    Returns
+    -------
+    numpy.ndarray
+        (len(f),) S_RR [m^2 s^-2 Hz^-1], one-sided in f.
+
+    Raises
+    ------
+    ParameterError
+        If ``U_m_s`` is outside the allowed range, or ``y_m`` and ``z_m`` are empty, differ in length
+        or hold non-finite values.
+    """
     U = check_wind_speed(U_m_s)
     y = np.ravel(np.asarray(y_m, dtype=float))
     z = np.ravel(np.asarray(z_m, dtype=float))

@@ -24,7 +24,29 @@ def _decay(k, dt_s: float, params: MannParams):
 
 
 def space_time_tensor(k1, k2, k3, dt_s: float, params: MannParams) -> np.ndarray:
-    """Theta_ij(k, dt) = exp(-|dt|/tau_e(k)) Phi_ij(k), shape (3, 3, *k.shape) [m^5 s^-2] (Guo et al. 2023, Eq. 13)."""
+    """Theta_ij(k, dt) = exp(-|dt|/tau_e(k)) Phi_ij(k) (Guo et al. 2023, Eq. 13).
+
+    Equal to Phi_ij for frozen turbulence (``params.evo_time_s`` None) or dt = 0.
+
+    Parameters
+    ----------
+    k1, k2, k3 : array_like
+        Wavenumber components [rad/m] (broadcast together).
+    dt_s : float
+        Time lag dt [s]; only |dt| is used.
+    params : MannParams
+        Mann model parameters.
+
+    Returns
+    -------
+    numpy.ndarray
+        (3, 3, *k.shape) Theta_ij [m^5 s^-2].
+
+    Raises
+    ------
+    ParameterError
+        If ``dt_s`` is not a finite number.
+    """
     dt = check_finite("dt (s)", dt_s)
     k1, k2, k3 = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (k1, k2, k3)))
     k = np.sqrt(k1 * k1 + k2 * k2 + k3 * k3)
@@ -35,6 +57,27 @@ def longitudinal_coherence(f_hz, dx_m: float, U_m_s: float, params: MannParams) 
     """Magnitude-squared longitudinal coherence of u, planes dx apart at mean speed U (Guo et al. 2023, Eq. 16).
 
     coh2(k1, dx) = |∫ Theta_11(k, dx/U) dk_perp|^2 / F11(k1)^2 with k1 = 2 pi f / U.
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Frequencies f [Hz], finite.
+    dx_m : float
+        Longitudinal separation dx [m].
+    U_m_s : float
+        Mean wind speed U [m/s].
+    params : MannParams
+        Mann model parameters (frozen turbulence gives coh2 = 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        (len(f),) coh2 [-].
+
+    Raises
+    ------
+    ParameterError
+        If ``f_hz`` is not finite numbers, ``U_m_s`` is outside the allowed range or ``dx_m`` is not finite.
     """
     f = np.atleast_1d(np.asarray(f_hz, dtype=float))
     if not np.all(np.isfinite(f)):
