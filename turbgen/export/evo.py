@@ -63,8 +63,9 @@ def plane_distances(x_m) -> tuple[np.ndarray, list[str]]:
 def export_evo(fs, out, req: ExportRequest) -> ExportResult:
     """Export every plane of store ``fs`` to ROOT.evo, and one plane to ROOT.wnd / ROOT.sum.
 
-    The .wnd / .sum pair holds the chosen plane (default the rotor). Two passes over the store, one plane in memory at a time: the first fixes one TI scaling that
-    fits every plane, the second writes the planes (plane, time, z, y, component order).
+    The .wnd / .sum pair holds the chosen plane (default the rotor). Two passes over the store,
+    one plane in memory at a time: the first fixes one TI scaling that fits every plane, the second
+    writes the planes (plane, time, z, y, component order).
 
     Parameters
     ----------
