@@ -33,8 +33,32 @@ __all__ = ["EXPORTERS", "ExportRequest", "ExportResult", "export_store", "read_b
 def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> ExportResult:
     """Export ``store`` (a path or an open FieldStore) in format ``fmt`` to ``out``.
 
-    Raises ParameterError (StoreError) for a missing or incomplete store, an existing output
-    without ``request.overwrite``, a grid reaching the ground, and other bad requests.
+    Checks that the options apply to the format and that the export fits on the disk, then calls
+    the format's exporter (``EXPORTERS[fmt]``).
+
+    Parameters
+    ----------
+    store : str, os.PathLike or FieldStore
+        The store, or its path (opened with :func:`turbgen.store.open_store`).
+    fmt : str
+        One of "bts", "wnd", "evo", "hawc2", "mt4d", "hdf5".
+    out : str or os.PathLike
+        The output file, or ROOT for the multi-file formats (wnd, evo, hawc2).
+    request : ExportRequest, optional
+        Export options; default ``ExportRequest()``.
+
+    Returns
+    -------
+    ExportResult
+        The files written, the InflowWind input-file lines that load them, and notes.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown format, options the format does not use, too little free disk, an existing
+        output without ``request.overwrite``, a grid reaching the ground, and other bad requests.
+    StoreError
+        For a missing or incomplete store.
     """
     check_choice("format", fmt, tuple(EXPORTERS))
     request = request or ExportRequest()
@@ -53,7 +77,26 @@ _SIZE = {"bts": (2, False), "wnd": (2, False), "hawc2": (4, False), "evo": (2, T
 
 
 def export_bytes(fmt: str, grid) -> int:
-    """Upper bound of the size [bytes] of an export of a store with ``grid`` (checked against free disk)."""
+    """Upper bound of the size [bytes] of an export of a store with ``grid`` (checked against free disk).
+
+    Parameters
+    ----------
+    fmt : str
+        Export format, a key of ``EXPORTERS``.
+    grid : Grid
+        The store grid.
+
+    Returns
+    -------
+    int
+        Size bound [bytes]: the stored values (one plane, or every plane for evo, mt4d, hdf5) at the
+        format's item size, plus the rotor .wnd for evo and 1 MiB for headers and HDF5 metadata.
+
+    Raises
+    ------
+    KeyError
+        For an unknown ``fmt``.
+    """
     itemsize, all_planes = _SIZE[fmt]
     values = 3 * grid.nt * grid.ny * grid.nz * (grid.nx if all_planes else 1)
     extra = 3 * grid.nt * grid.ny * grid.nz * 2 if fmt == "evo" else 0  # evo also writes the rotor .wnd

@@ -26,8 +26,28 @@ MAX_PLANES = 30  # the reader copies the distances into a fixed 30-element buffe
 
 
 def plane_distances(x_m) -> tuple[np.ndarray, list[str]]:
-    """Plane distances as int16 whole metres (the format's unit) and a note for each rounded one;
-    refuses what the format cannot hold (> 30 planes, |x| > 32767 m, planes merging on rounding)."""
+    """Plane distances as int16 whole metres (the format's unit) and a note for each rounded one.
+
+    Refuses what the format cannot hold (> 30 planes, |x| > 32767 m, planes merging on rounding).
+
+    Parameters
+    ----------
+    x_m : array_like
+        Upstream distances of the planes from the rotor [m], shape (nx,).
+
+    Returns
+    -------
+    distances : numpy.ndarray
+        Little-endian int16 array (nx,) of the distances rounded to whole metres [m].
+    rounded : list of str
+        One ``"x->r"`` note per distance changed by the rounding (empty when none was).
+
+    Raises
+    ------
+    ParameterError
+        For more than ``MAX_PLANES`` (30) planes, a rounded distance beyond +-32767 m, or two planes
+        that coincide when rounded.
+    """
     x = np.asarray(x_m, dtype=float)
     if len(x) > MAX_PLANES:
         raise ParameterError(f"{len(x)} planes: the lidar simulator's .evo reader holds at most {MAX_PLANES}")
@@ -41,8 +61,36 @@ def plane_distances(x_m) -> tuple[np.ndarray, list[str]]:
 
 
 def export_evo(fs, out, req: ExportRequest) -> ExportResult:
-    """Export every plane of store ``fs`` to ROOT.evo, and the chosen plane (default the rotor)
-    to ROOT.wnd / ROOT.sum. Two passes over the store, one plane in memory at a time."""
+    """Export every plane of store ``fs`` to ROOT.evo, and one plane to ROOT.wnd / ROOT.sum.
+
+    The .wnd / .sum pair holds the chosen plane (default the rotor). Two passes over the store,
+    one plane in memory at a time: the first fixes one TI scaling that fits every plane, the second
+    writes the planes (plane, time, z, y, component order).
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    out : str or os.PathLike
+        ROOT, or a path ending in .evo, .wnd or .sum (the extension is dropped).
+    req : ExportRequest
+        Plane for the .wnd (default the rotor plane), hub height, shear exponent, periodic and
+        overwrite options.
+
+    Returns
+    -------
+    ExportResult
+        The paths ROOT.evo, ROOT.wnd, ROOT.sum, the InflowWind (WindType 4) and lidar-simulator
+        input lines, and notes.
+
+    Raises
+    ------
+    ParameterError
+        For an odd nt, planes the .evo cannot hold (see :func:`plane_distances`), a plane index out
+        of range or a store without a rotor plane, a grid reaching the ground (without
+        ``drop_below_ground``), an existing output without ``overwrite``, a bad output path, or a
+        failed write.
+    """
     root = export_root(out)
     ix_rotor, lay = req.plane_index(fs), req.layout(fs)
     g = fs.grid
@@ -82,7 +130,25 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
 
 
 def read_evo(path) -> dict:
-    """Read ROOT.evo with ROOT.wnd's header: x_up (NL,) [m] and u, v, w (NL, nt, ny, nz) [m/s]."""
+    """Read ROOT.evo with ROOT.wnd's header.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ROOT.evo file; ROOT.wnd must lie beside it.
+
+    Returns
+    -------
+    dict
+        x_up (NL,) [m] (plane distances, positive upstream) and u, v, w (NL, nt, ny, nz) [m/s].
+
+    Raises
+    ------
+    ParameterError
+        When ROOT.wnd is not a new-style TurbType-4 .wnd.
+    OSError
+        When a file cannot be read.
+    """
     path = Path(path)
     h = read_wnd(path.with_suffix(".wnd"))["header"]
     raw = np.fromfile(path, dtype="<i2")

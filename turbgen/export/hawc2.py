@@ -19,13 +19,45 @@ from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plan
 
 
 def component_paths(root) -> dict[str, Path]:
-    """ROOT_u.bin, ROOT_v.bin, ROOT_w.bin."""
+    """ROOT_u.bin, ROOT_v.bin, ROOT_w.bin.
+
+    Parameters
+    ----------
+    root : str or os.PathLike
+        Path root of the three files.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        {"u": ROOT_u.bin, "v": ROOT_v.bin, "w": ROOT_w.bin}.
+    """
     root = Path(root)
     return {c: root.with_name(f"{root.name}_{c}.bin") for c in COMPONENTS}
 
 
 def write_hawc2(paths: dict, plane: Plane, U_ref: float) -> None:
-    """Write ``plane`` as HAWC boxes holding u - U_ref, v, w (full velocities)."""
+    """Write ``plane`` as HAWC boxes holding u - U_ref, v, w (full velocities).
+
+    Each file is little-endian float32 with z fastest, then y reversed, then time.
+
+    Parameters
+    ----------
+    paths : dict
+        {"u", "v", "w": path} of the files to write.
+    plane : Plane
+        The yz-plane to write.
+    U_ref : float
+        Reference wind speed subtracted from u [m/s].
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    OSError
+        When a file cannot be written.
+    """
     for c in COMPONENTS:
         with open(paths[c], "wb") as f:
             for a, b in plane.blocks(8 * plane.ny * plane.nz):
@@ -34,8 +66,30 @@ def write_hawc2(paths: dict, plane: Plane, U_ref: float) -> None:
 
 
 def read_hawc2(root, shape, U_ref: float) -> dict:
-    """Read ROOT_{u,v,w}.bin of ``shape`` (nt, ny, nz) back as velocities (nt, ny, nz) with y
-    ascending, u including U_ref (as InflowWind with WindProfile = 0)."""
+    """Read ROOT_{u,v,w}.bin of ``shape`` (nt, ny, nz) back as velocities.
+
+    Parameters
+    ----------
+    root : str or os.PathLike
+        Path root of the three files.
+    shape : tuple of int
+        (nt, ny, nz) of each box.
+    U_ref : float
+        Reference wind speed added back to u [m/s].
+
+    Returns
+    -------
+    dict
+        {"u", "v", "w": float64 array (nt, ny, nz) [m/s]} with y ascending, u including U_ref (as
+        InflowWind with WindProfile = 0).
+
+    Raises
+    ------
+    OSError
+        When a file cannot be read.
+    ValueError
+        When a file does not hold ``shape`` values.
+    """
     out = {}
     for c, p in component_paths(root).items():
         box = np.fromfile(p, dtype="<f4").reshape(shape)[:, ::-1, :].astype(np.float64)
@@ -44,7 +98,29 @@ def read_hawc2(root, shape, U_ref: float) -> dict:
 
 
 def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
-    """Export one plane of store ``fs`` to ROOT_{u,v,w}.bin."""
+    """Export one plane of store ``fs`` to ROOT_{u,v,w}.bin.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    out : str or os.PathLike
+        ROOT, or a path ending in .bin (the extension is dropped).
+    req : ExportRequest
+        Plane, hub height, shear exponent and overwrite options.
+
+    Returns
+    -------
+    ExportResult
+        The three paths, the InflowWind lines (WindType 5, WindProfile 0, ScaleMethod 0) and notes.
+
+    Raises
+    ------
+    ParameterError
+        For a plane index out of range or a store without a rotor plane, a grid reaching the ground
+        (without ``drop_below_ground``), an existing output without ``overwrite``, a bad output
+        path, or a failed write.
+    """
     root = Path(out)
     if root.suffix.lower() == ".bin":
         root = root.with_suffix("")

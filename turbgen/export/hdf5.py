@@ -33,7 +33,33 @@ def _attr_value(value):
 
 
 def export_hdf5(fs, out, req: ExportRequest) -> ExportResult:
-    """Export the whole store ``fs`` to ``out`` (.h5)."""
+    """Export the whole store ``fs`` to ``out`` (.h5).
+
+    Datasets u, v, w are float32 fluctuations [m/s] of C shape (nz, ny, nx, nt) (MATLAB's ``h5read``
+    gives (nt, nx, ny, nz)), with dimension scales t, x, y, z and the store's attributes; written
+    plane by plane, one component-plane in memory. The disk space is reserved first.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    out : str or os.PathLike
+        The HDF5 file to write.
+    req : ExportRequest
+        Only ``overwrite`` is used.
+
+    Returns
+    -------
+    ExportResult
+        The written path, a line saying InflowWind does not read HDF5, and a note on the
+        dimension order.
+
+    Raises
+    ------
+    ParameterError
+        For an existing output without ``overwrite``, a bad output path, or a failed write (e.g.
+        ENOSPC when reserving the space).
+    """
     out = Path(out)
     g = fs.grid
     coords = {"t": g.t(), "x": g.x(), "y": g.y(), "z": g.z()}
@@ -63,7 +89,24 @@ def export_hdf5(fs, out, req: ExportRequest) -> ExportResult:
 
 
 def read_hdf5(path) -> dict:
-    """Read an export back: u, v, w (nt, nx, ny, nz), coordinates t, x, y, z, and attrs."""
+    """Read an export back.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The HDF5 file written by :func:`export_hdf5`.
+
+    Returns
+    -------
+    dict
+        u, v, w (nt, nx, ny, nz) float32 [m/s], coordinates t [s], x, y, z [m], and attrs (dict of the
+        file attributes).
+
+    Raises
+    ------
+    OSError
+        When the file cannot be opened as HDF5.
+    """
     with h5py.File(path, "r") as h5:
         out = {c: h5[c][...].transpose(3, 2, 1, 0) for c in COMPONENTS}
         out.update({name: h5[name][...] for name in _COORDS})

@@ -19,7 +19,28 @@ from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult
 
 
 def export_mt4d(fs, out, req: ExportRequest) -> ExportResult:
-    """Export every plane of store ``fs`` to ``out`` (.mt4d); one component-plane in memory."""
+    """Export every plane of store ``fs`` to ``out`` (.mt4d); one component-plane in memory.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    out : str or os.PathLike
+        The ``.mt4d`` file to write.
+    req : ExportRequest
+        Only ``overwrite`` is used.
+
+    Returns
+    -------
+    ExportResult
+        The written path, a line saying InflowWind does not read .mt4d, and notes giving the box
+        sizes, slot times t_k = x_k/U [s] and the MATLAB ``reshape`` call.
+
+    Raises
+    ------
+    ParameterError
+        For an existing output without ``overwrite``, a bad output path, or a failed write.
+    """
     out = Path(out)
     g = fs.grid
     with OutputSet([out], overwrite=req.overwrite) as files, open(files.temp(out), "wb") as f:
@@ -36,8 +57,27 @@ def export_mt4d(fs, out, req: ExportRequest) -> ExportResult:
 
 
 def read_mt4d(path, shape) -> dict:
-    """Read an ``.mt4d`` of store ``shape`` (nt, nx, ny, nz) back as u, v, w (nt, nx, ny, nz) in
-    store orientation (eddy time ascending)."""
+    """Read an ``.mt4d`` of store ``shape`` (nt, nx, ny, nz) back in store orientation.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.mt4d`` file.
+    shape : tuple of int
+        (nt, nx, ny, nz) of the store it was exported from.
+
+    Returns
+    -------
+    dict
+        {"u", "v", "w": float32 array (nt, nx, ny, nz) [m/s]} (eddy time ascending).
+
+    Raises
+    ------
+    OSError
+        When the file cannot be read.
+    ValueError
+        When the file does not hold 3 * nt * nx * ny * nz values.
+    """
     nt, nx, ny, nz = shape
     data = np.fromfile(path, dtype="<f4").reshape(3, nx, nt, ny, nz)
     return {c: data[k, :, ::-1].transpose(1, 0, 2, 3) for k, c in enumerate(COMPONENTS)}

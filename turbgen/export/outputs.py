@@ -29,6 +29,28 @@ class OutputSet:
 
     >>> with OutputSet([a, b], overwrite=False) as out:
     ...     write(out.temp(a)); write(out.temp(b))
+
+    On a normal exit every temporary is renamed to its final path; on an exception (or when a
+    temporary was not written) all temporaries are removed and the final paths are untouched.
+    Within the block SIGTERM and SIGHUP raise SystemExit.
+
+    Parameters
+    ----------
+    paths : iterable of str or os.PathLike
+        The final output paths (distinct).
+    overwrite : bool
+        Allow replacing existing outputs.
+    need_bytes : int, optional
+        Disk space the outputs need [bytes], checked against the free space when given.
+
+    Raises
+    ------
+    ParameterError
+        At construction: paths not distinct, a bad output path, a missing or non-writable output
+        directory, an output that is a directory or exists without ``overwrite``, too little free
+        disk. On exit: a file-system error (OSError) while writing or renaming, as one line.
+    RuntimeError
+        On exit, when the exporter did not write the temporary of every path.
     """
 
     def __init__(self, paths, *, overwrite: bool, need_bytes: int | None = None):
@@ -56,14 +78,48 @@ class OutputSet:
         self._signals = exit_on_signals()
 
     def temp(self, path) -> Path:
-        """Temporary path to write instead of the final ``path``."""
+        """Temporary path to write instead of the final ``path``.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            One of the final paths of the set.
+
+        Returns
+        -------
+        pathlib.Path
+            The hidden temporary sibling ``.NAME.tmp-PID-XXXXXXXX``.
+
+        Raises
+        ------
+        KeyError
+            When ``path`` is not one of the set's paths.
+        """
         return self._temps[Path(path)]
 
     def reserve(self, path, nbytes: int) -> None:
-        """Reserve ``nbytes`` of disk for the (already created) temporary of ``path`` without changing
-        its size, so that a library that cannot survive a failed write (HDF5 aborts the process when
-        it cannot flush on close) never meets a full disk. Raises OSError (ENOSPC) when the space is
-        not there; a no-op where fallocate(2) is unavailable."""
+        """Reserve ``nbytes`` of disk for the (already created) temporary of ``path`` without changing its size.
+
+        So that a library that cannot survive a failed write (HDF5 aborts the process when it cannot
+        flush on close) never meets a full disk. A no-op where fallocate(2) is unavailable.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            One of the final paths of the set; its temporary must exist.
+        nbytes : int
+            Bytes to reserve.
+
+        Returns
+        -------
+        None
+
+        Raises
+        ------
+        OSError
+            ENOSPC when the space is not there (other fallocate errors except EOPNOTSUPP, ENOSYS and
+            EINVAL too), or when the temporary cannot be opened.
+        """
         fd = os.open(self.temp(path), os.O_WRONLY)
         try:
             fn = getattr(ctypes.CDLL(None, use_errno=True), "fallocate", None)

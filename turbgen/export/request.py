@@ -17,11 +17,27 @@ COMPONENTS = ("u", "v", "w")
 class ExportRequest:
     """Options shared by all formats.
 
-    plane: index into the store's planes (None = the rotor plane, x = 0);
-    hub_height_m: overrides the store's hub height [m]; shear_exponent: power-law alpha [-];
-    tower: add .bts tower points; periodic: flag the file periodic in time (InflowWind wraps);
-    drop_below_ground: drop grid rows at or below the ground instead of refusing;
-    overwrite: replace existing outputs.
+    Parameters
+    ----------
+    plane : int, optional
+        Index into the store's planes (None = the rotor plane, x = 0).
+    hub_height_m : float, optional
+        Overrides the store's hub height [m] (> 0).
+    shear_exponent : float, optional
+        Power-law alpha [-]; default ``DEFAULT_SHEAR_EXPONENT``.
+    tower : bool, optional
+        Add .bts tower points.
+    periodic : bool, optional
+        Flag the file periodic in time (InflowWind wraps); default True.
+    drop_below_ground : bool, optional
+        Drop grid rows at or below the ground instead of refusing.
+    overwrite : bool, optional
+        Replace existing outputs.
+
+    Raises
+    ------
+    ParameterError
+        For a non-integer ``plane`` or a non-positive ``hub_height_m``.
     """
 
     plane: int | None = None
@@ -40,7 +56,23 @@ class ExportRequest:
             object.__setattr__(self, "hub_height_m", check_positive("hub height (m)", self.hub_height_m))
 
     def plane_index(self, fs) -> int:
-        """The plane to export from store ``fs`` (default: the plane at x = 0)."""
+        """The plane to export from store ``fs`` (default: the plane at x = 0).
+
+        Parameters
+        ----------
+        fs : FieldStore
+            The open store.
+
+        Returns
+        -------
+        int
+            Plane index in [0, nx - 1].
+
+        Raises
+        ------
+        ParameterError
+            When ``plane`` is None and the store has no plane at x = 0 m, or ``plane`` is out of range.
+        """
         xs = fs.grid.x_m
         if self.plane is None:
             if 0.0 not in xs:
@@ -51,7 +83,23 @@ class ExportRequest:
         return self.plane
 
     def layout(self, fs) -> VerticalLayout:
-        """Rows to export and the mean profile, for store ``fs``."""
+        """Rows to export and the mean profile, for store ``fs``.
+
+        Parameters
+        ----------
+        fs : FieldStore
+            The open store; its hub height is used unless ``hub_height_m`` is set.
+
+        Returns
+        -------
+        VerticalLayout
+            See :func:`turbgen.export.shear.vertical_layout`.
+
+        Raises
+        ------
+        ParameterError
+            For a grid reaching the ground without ``drop_below_ground``, or a bad shear exponent.
+        """
         hub = fs.hub_height_m if self.hub_height_m is None else self.hub_height_m
         return vertical_layout(fs.grid, hub, self.shear_exponent, drop_below_ground=self.drop_below_ground)
 
@@ -66,9 +114,27 @@ class ExportResult:
 
 
 class Plane:
-    """One yz-plane as stored (float32 fluctuations, kept rows only) plus the power-law mean of
-    u; full velocities are made in float64 one time block at a time, so memory stays at about
-    one stored plane."""
+    """One yz-plane as stored (float32 fluctuations, kept rows only) plus the power-law mean of u.
+
+    Full velocities are made in float64 one time block at a time, so memory stays at about one
+    stored plane.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    ix : int
+        Plane index.
+    layout : VerticalLayout
+        Kept rows and the mean profile.
+
+    Raises
+    ------
+    ParameterError
+        For a plane index out of range.
+    StoreError
+        When a chunk of the plane is corrupted or holds NaN/inf.
+    """
 
     def __init__(self, fs, ix: int, layout: VerticalLayout):
         self.fluct = {c: fs.read_plane(c, ix)[:, :, layout.z_first:] for c in COMPONENTS}
@@ -76,19 +142,62 @@ class Plane:
         self.nt, self.ny, self.nz = self.fluct["u"].shape
 
     def full(self, c: str, a: int = 0, b: int | None = None) -> np.ndarray:
-        """Full velocity [m/s] of component ``c`` for time steps a..b-1, float64 (b - a, ny, nz)."""
+        """Full velocity [m/s] of component ``c`` for time steps a..b-1, float64 (b - a, ny, nz).
+
+        Parameters
+        ----------
+        c : str
+            "u", "v" or "w"; only u gets the power-law mean added.
+        a : int, optional
+            First time index (default 0).
+        b : int, optional
+            End time index, exclusive (default None: to the end).
+
+        Returns
+        -------
+        numpy.ndarray
+            float64 array (b - a, ny, nz) [m/s].
+        """
         v = self.fluct[c][a:b].astype(np.float64)
         if c == "u":
             v += self.mean_u[None, None, :]
         return v
 
     def blocks(self, bytes_per_step: int, budget: int = 1 << 24):
-        """(a, b) time blocks of at most ``budget`` bytes at ``bytes_per_step`` each."""
+        """(a, b) time blocks of at most ``budget`` bytes at ``bytes_per_step`` each.
+
+        Parameters
+        ----------
+        bytes_per_step : int
+            Bytes one time step takes [bytes].
+        budget : int, optional
+            Largest block [bytes]; default 16 MiB (at least one step per block).
+
+        Returns
+        -------
+        list of tuple of (int, int)
+            Consecutive half-open time ranges [a, b) covering 0..nt.
+        """
         step = max(1, budget // max(1, bytes_per_step))
         return [(a, min(self.nt, a + step)) for a in range(0, self.nt, step)]
 
 
 def ifw_line(value, key: str, comment: str) -> str:
-    """One InflowWind input-file line: value, key name (second token), description."""
+    """One InflowWind input-file line: value, key name (second token), description.
+
+    Parameters
+    ----------
+    value : object
+        The value; strings and paths are quoted, floats written with 10 significant digits.
+    key : str
+        The InflowWind key name.
+    comment : str
+        Description after the key.
+
+    Returns
+    -------
+    str
+        The line, value right-aligned in 20 characters.
+    """
     text = f'"{value}"' if isinstance(value, (str, Path)) else (str(value) if not isinstance(value, float) else f"{value:.10g}")
     return f"{text:>20}   {key:<15} - {comment}"

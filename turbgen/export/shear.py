@@ -34,21 +34,54 @@ class VerticalLayout:
 
     @property
     def nz(self) -> int:
-        """Number of kept rows."""
+        """Number of kept rows.
+
+        Returns
+        -------
+        int
+            Number of kept rows.
+        """
         return len(self.heights_m)
 
     @property
     def bottom_m(self) -> float:
-        """Height of the lowest kept row [m]."""
+        """Height of the lowest kept row [m].
+
+        Returns
+        -------
+        float
+            Absolute height of the lowest kept row [m].
+        """
         return float(self.heights_m[0])
 
     @property
     def centre_m(self) -> float:
-        """Height of the vertical centre of the kept rows [m]."""
+        """Height of the vertical centre of the kept rows [m].
+
+        Returns
+        -------
+        float
+            Midpoint of the lowest and highest kept rows [m].
+        """
         return float(0.5 * (self.heights_m[0] + self.heights_m[-1]))
 
     def mean_u(self, U_m_s: float, heights_m=None) -> np.ndarray:
-        """Power-law mean u [m/s] at ``heights_m`` (default: the kept rows)."""
+        """Power-law mean u [m/s] at ``heights_m`` (default: the kept rows).
+
+        u(h) = U (h / hub_height_m)^shear_exponent.
+
+        Parameters
+        ----------
+        U_m_s : float
+            Mean wind speed at hub height [m/s].
+        heights_m : array_like, optional
+            Absolute heights [m]; default the kept rows (``self.heights_m``).
+
+        Returns
+        -------
+        numpy.ndarray
+            Mean u [m/s], shape of ``heights_m``.
+        """
         h = self.heights_m if heights_m is None else np.asarray(heights_m, dtype=float)
         # power-law shear profile, u = U (h / h_hub)^alpha
         return U_m_s * (h / self.hub_height_m) ** self.shear_exponent
@@ -56,7 +89,30 @@ class VerticalLayout:
 
 def vertical_layout(grid: Grid, hub_height_m, shear_exponent=DEFAULT_SHEAR_EXPONENT,
                     *, drop_below_ground: bool = False) -> VerticalLayout:
-    """Check the grid against the ground and return the rows to export."""
+    """Check the grid against the ground and return the rows to export.
+
+    Parameters
+    ----------
+    grid : Grid
+        The store grid (z relative to the hub).
+    hub_height_m : float
+        Hub height [m], > 0.
+    shear_exponent : float, optional
+        Power-law exponent alpha [-] in [-1, 1]; default ``DEFAULT_SHEAR_EXPONENT`` (0.2).
+    drop_below_ground : bool, optional
+        Drop the rows at or below the ground (h <= 0) instead of refusing the grid.
+
+    Returns
+    -------
+    VerticalLayout
+        Hub height, exponent, index of the lowest kept row and the kept heights [m].
+
+    Raises
+    ------
+    ParameterError
+        For a non-positive hub height, an exponent outside [-1, 1], a grid reaching the ground
+        without ``drop_below_ground``, or a hub height that puts every row below ground.
+    """
     hub = check_positive("hub height (m)", hub_height_m)
     alpha = check_range("shear exponent", shear_exponent, -1.0, 1.0)
     heights = hub + grid.z()

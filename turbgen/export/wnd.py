@@ -34,7 +34,21 @@ class BladedStats:
         self.sums = {c: [0, 0.0, 0.0] for c in COMPONENTS}
 
     def add(self, plane: Plane, U_m_s: float) -> None:
-        """Include one plane."""
+        """Include one plane.
+
+        Updates the largest |full velocity - U*o| and the running sums of the fluctuations, per component.
+
+        Parameters
+        ----------
+        plane : Plane
+            The yz-plane to include.
+        U_m_s : float
+            Mean wind speed [m/s] (the U of the scaling).
+
+        Returns
+        -------
+        None
+        """
         for c in COMPONENTS:
             s = self.sums[c]
             for a, b in plane.blocks(8 * plane.ny * plane.nz):
@@ -46,8 +60,20 @@ class BladedStats:
                 s[2] += float(np.square(fluct).sum())
 
     def ti_percent(self, U_m_s: float) -> tuple[float, float, float]:
-        """TI [%] per component: the fluctuations' sigma/U, enlarged where needed so that every
-        raw value fits in +-32000 (raw = dev 1e5 / (U TI%))."""
+        """TI [%] per component: the fluctuations' sigma/U, enlarged where needed so that every raw value fits.
+
+        Every raw value fits in +-32000 (raw = dev 1e5 / (U TI%)); at least 1e-3 %.
+
+        Parameters
+        ----------
+        U_m_s : float
+            Mean wind speed [m/s].
+
+        Returns
+        -------
+        tuple of (float, float, float)
+            TI of u, v, w [%], rounded to float32 (the header's float32 value, used by every reader).
+        """
         out = []
         for c in COMPONENTS:
             n, s1, s2 = self.sums[c]
@@ -58,14 +84,50 @@ class BladedStats:
 
 
 def bladed_raw(plane: Plane, a: int, b: int, U_m_s: float, ti: tuple) -> np.ndarray:
-    """int16 block (b - a, nz, ny, 3) for time steps a..b-1 (component fastest, then y, z)."""
+    """int16 block (b - a, nz, ny, 3) for time steps a..b-1 (component fastest, then y, z).
+
+    raw = (V / U - o) 1e5 / TI%, rounded and saturated to the int16 range, o = (1, 0, 0).
+
+    Parameters
+    ----------
+    plane : Plane
+        The yz-plane.
+    a : int
+        First time index.
+    b : int
+        End time index (exclusive).
+    U_m_s : float
+        Mean wind speed of the scaling [m/s].
+    ti : tuple of float
+        TI of u, v, w [%].
+
+    Returns
+    -------
+    numpy.ndarray
+        Little-endian int16 array (b - a, nz, ny, 3).
+    """
     raw = [np.clip(np.rint((plane.full(c, a, b) / U_m_s - _OFFSET[c]) * 1e5 / t), -32768, 32767)
            for c, t in zip(COMPONENTS, ti)]
     return np.stack(raw, axis=-1).astype("<i2").transpose(0, 2, 1, 3)
 
 
 def from_bladed(raw: np.ndarray, U_m_s: float, ti: tuple) -> dict:
-    """Velocities from raw int16 (..., 3): V = U (o + 1e-5 TI% raw)."""
+    """Velocities from raw int16 (..., 3): V = U (o + 1e-5 TI% raw).
+
+    Parameters
+    ----------
+    raw : numpy.ndarray
+        Raw values with the component (u, v, w) last, shape (..., 3).
+    U_m_s : float
+        Mean wind speed of the scaling [m/s].
+    ti : tuple of float
+        TI of u, v, w [%].
+
+    Returns
+    -------
+    dict
+        {"u", "v", "w": float64 array of shape raw.shape[:-1] [m/s]}.
+    """
     return {c: U_m_s * (_OFFSET[c] + 1e-5 * t * raw[..., k]) for k, (c, t) in enumerate(zip(COMPONENTS, ti))}
 
 
@@ -84,11 +146,40 @@ class WndHeader:
     zref_m: float = 0.0
 
     def pack(self) -> bytes:
+        """The 104-byte new-style header (little-endian ``<hhi6f3fi4f4i6f``).
+
+        ID -99, TurbType 4, 3 components, zref [m], TI [%], dz, dy, dx [m], nt/2, U [m/s], nz, ny; the
+        remaining fields are zero.
+
+        Returns
+        -------
+        bytes
+            The packed header.
+        """
         return _HEADER.pack(-99, 4, 3, 0.0, 0.0, self.zref_m, *self.ti_percent, self.dz_m, self.dy_m, self.dx_m,
                             self.nt // 2, self.U_m_s, 0.0, 0.0, 0.0, 0, 0, self.nz, self.ny, *([0.0] * 6))
 
     @classmethod
     def unpack(cls, raw: bytes) -> "WndHeader":
+        """Header read from the first 104 bytes of a ``.wnd``.
+
+        Parameters
+        ----------
+        raw : bytes
+            The file contents (at least the header).
+
+        Returns
+        -------
+        WndHeader
+            Grid and scaling; nt = 2 * the stored nt/2.
+
+        Raises
+        ------
+        ParameterError
+            When the file is not a new-style TurbType-4 .wnd (ID -99, type 4).
+        struct.error
+            When ``raw`` is shorter than the header.
+        """
         h = _HEADER.unpack_from(raw, 0)
         if h[0] != -99 or h[1] != 4:
             raise ParameterError(f"not a new-style TurbType-4 .wnd (ID {h[0]}, type {h[1]})")
@@ -97,7 +188,26 @@ class WndHeader:
 
 
 def write_wnd(path, plane: Plane, header: WndHeader) -> None:
-    """Header plus the time steps of ``plane``."""
+    """Header plus the time steps of ``plane``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.wnd`` file to write.
+    plane : Plane
+        The yz-plane to write.
+    header : WndHeader
+        Grid and scaling (U, TI) of the file.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    OSError
+        When the file cannot be written.
+    """
     with open(path, "wb") as f:
         f.write(header.pack())
         for a, b in plane.blocks(8 * plane.ny * plane.nz):
@@ -105,7 +215,25 @@ def write_wnd(path, plane: Plane, header: WndHeader) -> None:
 
 
 def read_wnd(path) -> dict:
-    """Read a ``.wnd`` written by :func:`write_wnd`: header and u, v, w (nt, ny, nz) [m/s]."""
+    """Read a ``.wnd`` written by :func:`write_wnd`: header and u, v, w (nt, ny, nz) [m/s].
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.wnd`` file.
+
+    Returns
+    -------
+    dict
+        u, v, w float64 (nt, ny, nz) [m/s] and header (:class:`WndHeader`).
+
+    Raises
+    ------
+    ParameterError
+        When the file is not a new-style TurbType-4 .wnd.
+    OSError
+        When the file cannot be read.
+    """
     raw = Path(path).read_bytes()
     h = WndHeader.unpack(raw)
     data = np.frombuffer(raw, dtype="<i2", offset=_HEADER.size).reshape(-1, h.nz, h.ny, 3)
@@ -116,9 +244,32 @@ def read_wnd(path) -> dict:
 
 def sum_text(*, hub_height_m: float, U_m_s: float, ti_percent, height_offset_m: float, periodic: bool,
              title: str) -> str:
-    """The ``.sum`` lines InflowWind (v5 and the lidar-simulator forks) parse, in their order:
-    CLOCKWISE (required by the forks, before the hub height), hub height, UBar, the three TI
-    lines, height offset, then PERIODIC. No Bladed left-hand-rule line."""
+    """The ``.sum`` lines InflowWind (v5 and the lidar-simulator forks) parse, in their order.
+
+    CLOCKWISE (required by the forks, before the hub height; written as F), hub height, UBar, the
+    three TI lines, height offset, then PERIODIC (only when ``periodic``). No Bladed left-hand-rule
+    line.
+
+    Parameters
+    ----------
+    hub_height_m : float
+        Hub height [m].
+    U_m_s : float
+        Mean wind speed UBar [m/s].
+    ti_percent : sequence of float
+        TI of u, v, w [%].
+    height_offset_m : float
+        Height offset [m] (hub height minus the height of the grid centre).
+    periodic : bool
+        Add the "PERIODIC" line.
+    title : str
+        First line, free text: must not contain the keys parsed by :func:`read_sum`.
+
+    Returns
+    -------
+    str
+        The file text, newline-terminated.
+    """
     lines = [title,  # free text: must not contain the keys parsed below
              "",
              "         F  Clockwise rotation when looking downwind?",
@@ -132,8 +283,28 @@ def sum_text(*, hub_height_m: float, U_m_s: float, ti_percent, height_offset_m: 
 
 
 def read_sum(path) -> dict:
-    """Parse a ``.sum`` the way InflowWind does (keys in order): clockwise, hub height, UBar,
-    TI, height offset, periodic."""
+    """Parse a ``.sum`` the way InflowWind does (keys in order).
+
+    Clockwise, hub height, UBar, TI, height offset, periodic.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.sum`` file.
+
+    Returns
+    -------
+    dict
+        clockwise (bool), hub_height_m [m], U_m_s [m/s], ti_percent (3 floats) [%],
+        height_offset_m [m] (0 when absent), periodic (bool).
+
+    Raises
+    ------
+    OSError
+        When the file cannot be read.
+    IndexError, ValueError, AttributeError
+        When a key is missing or its value is malformed.
+    """
     lines = Path(path).read_text().upper().splitlines()
     out = {"clockwise": False, "height_offset_m": 0.0, "periodic": False}
     i = 0
@@ -154,13 +325,55 @@ def read_sum(path) -> dict:
 
 
 def check_even_nt(nt: int) -> None:
-    """The lidar simulator reads nt = 2 * nt_half steps from the .wnd header: nt must be even."""
+    """The lidar simulator reads nt = 2 * nt_half steps from the .wnd header: nt must be even.
+
+    Parameters
+    ----------
+    nt : int
+        Number of time steps.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    ParameterError
+        When ``nt`` is odd.
+    """
     if nt % 2:
         raise ParameterError(f"nt = {nt} is odd; the .wnd header stores nt/2, so the Bladed/evo export needs an even nt")
 
 
 def write_pair(files: OutputSet, root: Path, plane: Plane, header: WndHeader, lay, *, periodic: bool, title: str) -> None:
-    """Write ROOT.wnd and ROOT.sum (through the temporary names of ``files``)."""
+    """Write ROOT.wnd and ROOT.sum (through the temporary names of ``files``).
+
+    Parameters
+    ----------
+    files : OutputSet
+        The output set holding ROOT.wnd and ROOT.sum.
+    root : pathlib.Path
+        ROOT (without extension).
+    plane : Plane
+        The yz-plane to write.
+    header : WndHeader
+        Grid and scaling of the .wnd.
+    lay : VerticalLayout
+        Hub height and kept rows (for the .sum hub height and height offset).
+    periodic : bool
+        Mark the .sum PERIODIC.
+    title : str
+        First line of the .sum.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    OSError
+        When a file cannot be written.
+    """
     write_wnd(files.temp(root.with_suffix(".wnd")), plane, header)
     files.temp(root.with_suffix(".sum")).write_text(sum_text(
         hub_height_m=lay.hub_height_m, U_m_s=header.U_m_s, ti_percent=header.ti_percent,
@@ -168,7 +381,18 @@ def write_pair(files: OutputSet, root: Path, plane: Plane, header: WndHeader, la
 
 
 def inflowwind_lines(root: Path) -> tuple[str, ...]:
-    """WindType 4 lines for FilenameRoot ``root``."""
+    """WindType 4 lines for FilenameRoot ``root``.
+
+    Parameters
+    ----------
+    root : pathlib.Path
+        ROOT of ROOT.wnd and ROOT.sum.
+
+    Returns
+    -------
+    tuple of str
+        WindType, PropagationDir, FilenameRoot and TowerFile (False: no ROOT.twr) lines.
+    """
     return (ifw_line(4, "WindType", "switch for wind file type (4 = Bladed-style .wnd + .sum)"),
             ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
             ifw_line(str(root), "FilenameRoot", "root of ROOT.wnd and ROOT.sum"),
@@ -176,13 +400,46 @@ def inflowwind_lines(root: Path) -> tuple[str, ...]:
 
 
 def export_root(out) -> Path:
-    """``out`` without a .wnd/.sum/.evo extension."""
+    """``out`` without a .wnd/.sum/.evo extension.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        Output path given by the user.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out`` with a .wnd, .sum or .evo extension (any case) removed, else unchanged.
+    """
     out = Path(out)
     return out.with_suffix("") if out.suffix.lower() in (".wnd", ".sum", ".evo") else out
 
 
 def export_wnd(fs, out, req: ExportRequest) -> ExportResult:
-    """Export one plane of store ``fs`` to ROOT.wnd + ROOT.sum."""
+    """Export one plane of store ``fs`` to ROOT.wnd + ROOT.sum.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    out : str or os.PathLike
+        ROOT, or a path ending in .wnd, .sum or .evo (the extension is dropped).
+    req : ExportRequest
+        Plane, hub height, shear exponent, periodic and overwrite options.
+
+    Returns
+    -------
+    ExportResult
+        The two paths, the InflowWind lines (WindType 4) and notes.
+
+    Raises
+    ------
+    ParameterError
+        For an odd nt, a plane index out of range or a store without a rotor plane, a grid reaching
+        the ground (without ``drop_below_ground``), an existing output without ``overwrite``, a bad
+        output path, or a failed write.
+    """
     root = export_root(out)
     ix, lay = req.plane_index(fs), req.layout(fs)
     g = fs.grid

@@ -73,27 +73,80 @@ def compressor() -> BloscCodec:
     Measured on the shared 2-core box (one 4096 x 64 x 64 float32 plane): ~300-700 MB/s written,
     files ~0.85 of the raw size on turbulence (random low mantissa bits); zstd level 0-1 is
     ~1.5x slower for ~0.9. Without compression writes are ~2x faster but files 15 % larger.
+
+    Returns
+    -------
+    zarr.codecs.BloscCodec
+        Blosc codec, cname "lz4", clevel 5, byte shuffle.
     """
     return BloscCodec(cname="lz4", clevel=5, shuffle="shuffle")
 
 
 def default_chunk_t(nt: int) -> int:
-    """Default time-chunk length: min(nt, 1024) samples (16 MiB per chunk at 64 x 64)."""
+    """Default time-chunk length: min(nt, 1024) samples (16 MiB per chunk at 64 x 64).
+
+    Parameters
+    ----------
+    nt : int
+        Number of time samples of the grid.
+
+    Returns
+    -------
+    int
+        Samples per chunk, min(nt, ``DEFAULT_CHUNK_T_MAX``).
+    """
     return min(nt, DEFAULT_CHUNK_T_MAX)
 
 
 def chunk_shape(grid: Grid, chunk_t: int) -> tuple[int, int, int, int]:
-    """Chunk shape of the u, v, w arrays: one plane, ``chunk_t`` samples, the whole yz-plane."""
+    """Chunk shape of the u, v, w arrays: one plane, ``chunk_t`` samples, the whole yz-plane.
+
+    Parameters
+    ----------
+    grid : Grid
+        The store grid.
+    chunk_t : int
+        Time samples per chunk.
+
+    Returns
+    -------
+    tuple of int
+        (chunk_t, 1, ny, nz), in (t, x, y, z) order.
+    """
     return (chunk_t, 1, grid.ny, grid.nz)
 
 
 def n_chunks(grid: Grid, chunk_t: int) -> int:
-    """Number of chunk files of one component array (all chunks are always written)."""
+    """Number of chunk files of one component array (all chunks are always written).
+
+    Parameters
+    ----------
+    grid : Grid
+        The store grid.
+    chunk_t : int
+        Time samples per chunk.
+
+    Returns
+    -------
+    int
+        ceil(nt / chunk_t) * nx.
+    """
     return math.ceil(grid.nt / chunk_t) * grid.nx
 
 
 def grid_to_attrs(grid: Grid) -> dict:
-    """The ``grid`` group attribute."""
+    """The ``grid`` group attribute.
+
+    Parameters
+    ----------
+    grid : Grid
+        The store grid.
+
+    Returns
+    -------
+    dict
+        JSON-serialisable {nt, dt_s [s], x_m (list) [m], ny, nz, dy_m [m], dz_m [m]}.
+    """
     return {
         "nt": grid.nt,
         "dt_s": grid.dt_s,
@@ -106,14 +159,43 @@ def grid_to_attrs(grid: Grid) -> dict:
 
 
 def grid_from_attrs(d: dict) -> Grid:
-    """Inverse of :func:`grid_to_attrs`."""
+    """Inverse of :func:`grid_to_attrs`.
+
+    Parameters
+    ----------
+    d : dict
+        The ``grid`` group attribute.
+
+    Returns
+    -------
+    Grid
+        The grid it describes.
+
+    Raises
+    ------
+    KeyError
+        When a key is missing.
+    ParameterError
+        When a value is not a valid grid parameter (checked by :class:`~turbgen.grid.Grid`).
+    """
     return Grid(
         nt=d["nt"], dt_s=d["dt_s"], x_m=tuple(d["x_m"]), ny=d["ny"], nz=d["nz"], dy_m=d["dy_m"], dz_m=d["dz_m"]
     )
 
 
 def coordinates(grid: Grid) -> dict:
-    """Coordinate name -> float64 values, in ``DIMS`` order."""
+    """Coordinate name -> float64 values, in ``DIMS`` order.
+
+    Parameters
+    ----------
+    grid : Grid
+        The store grid.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        t (nt,) [s], x (nx,) [m], y (ny,) [m], z (nz,) [m, relative to hub height].
+    """
     return {"t": grid.t(), "x": grid.x(), "y": grid.y(), "z": grid.z()}
 
 
@@ -124,7 +206,27 @@ def _validator():
 
 
 def validate_attrs(attrs: dict, *, where: str, error: type[Exception]) -> None:
-    """Check group attributes against ``schemas/field.schema.json``; raise ``error`` (one line) if invalid."""
+    """Check group attributes against ``schemas/field.schema.json``; raise ``error`` (one line) if invalid.
+
+    Parameters
+    ----------
+    attrs : dict
+        The group attributes.
+    where : str
+        Message prefix naming the store or the caller.
+    error : type of Exception
+        Exception class raised for invalid attributes (e.g. StoreError, ValueError).
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    error
+        For the best-matching schema violation: "``where``: attribute PATH: message" (message
+        shortened to 160 characters).
+    """
     err = jsonschema.exceptions.best_match(_validator().iter_errors(attrs))
     if err is not None:
         at = "/".join(str(p) for p in err.absolute_path) or "(top level)"

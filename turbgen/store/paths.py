@@ -18,6 +18,25 @@ def check_output_path(path, what: str = "--out", *, create_parents: bool = False
     Refused: an empty path, a name longer than MAX_NAME_BYTES, an ancestor that is a file, and (unless
     ``create_parents``: the caller makes missing directories) a parent that does not exist.
     (Existence of ``path`` itself and --overwrite are the writers' business.)
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output path (``~`` is expanded).
+    what : str, optional
+        Name of the option in messages; default "--out".
+    create_parents : bool, optional
+        Accept a missing parent directory (the caller creates it).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path`` with ``~`` expanded (not made absolute).
+
+    Raises
+    ------
+    ParameterError
+        For any refused path (one line naming it).
     """
     text = os.fspath(path) if path is not None else ""
     if not str(text).strip():

@@ -40,61 +40,170 @@ class FieldStore:
 
     @property
     def model(self) -> str:
-        """"mann" or "kaimal"."""
+        """The turbulence model of the field.
+
+        Returns
+        -------
+        str
+            "mann" or "kaimal".
+        """
         return self.attrs["model"]
 
     @property
     def U_m_s(self) -> float:
-        """Mean wind speed [m/s]."""
+        """Mean wind speed [m/s].
+
+        Returns
+        -------
+        float
+            Mean wind speed [m/s] (attribute U_m_s).
+        """
         return float(self.attrs["U_m_s"])
 
     @property
     def hub_height_m(self) -> float:
-        """Hub height above ground [m]."""
+        """Hub height above ground [m].
+
+        Returns
+        -------
+        float
+            Hub height above ground [m] (attribute hub_height_m).
+        """
         return float(self.attrs["hub_height_m"])
 
     @property
     def seed(self) -> int:
-        """Random seed of the field."""
+        """Random seed of the field.
+
+        Returns
+        -------
+        int
+            The seed (attribute seed).
+        """
         return int(self.attrs["seed"])
 
     @property
     def chunk_t(self) -> int:
-        """Time-chunk length of the u, v, w arrays."""
+        """Time-chunk length of the u, v, w arrays.
+
+        Returns
+        -------
+        int
+            Time samples per chunk.
+        """
         return int(self.array("u").chunks[0])
 
     def array(self, component: str) -> zarr.Array:
-        """The zarr array of ``component`` ("u", "v" or "w"), dims (t, x, y, z), read-only."""
+        """The zarr array of ``component`` ("u", "v" or "w"), dims (t, x, y, z), read-only.
+
+        Parameters
+        ----------
+        component : str
+            "u", "v" or "w".
+
+        Returns
+        -------
+        zarr.Array
+            float32 array (nt, nx, ny, nz) of the velocity fluctuations [m/s]. Reading it directly does
+            not check the data (use :meth:`read_plane` or :func:`read_checked`).
+
+        Raises
+        ------
+        ParameterError
+            For an unknown component.
+        """
         if component not in layout.COMPONENTS:
             raise ParameterError(f"component = {component!r} is not one of {', '.join(layout.COMPONENTS)}")
         return self._group[component]
 
     def dask(self, component: str):
-        """``component`` as a dask array with the stored chunks (t, x, y, z)."""
+        """``component`` as a dask array with the stored chunks (t, x, y, z).
+
+        Parameters
+        ----------
+        component : str
+            "u", "v" or "w".
+
+        Returns
+        -------
+        dask.array.Array
+            Lazy float32 array (nt, nx, ny, nz) [m/s].
+
+        Raises
+        ------
+        ParameterError
+            For an unknown component.
+        """
         import dask.array as da
 
         arr = self.array(component)
         return da.from_zarr(arr, chunks=arr.chunks)
 
     def read_plane(self, component: str, ix: int) -> np.ndarray:
-        """One yz-plane time series, float32 array (nt, ny, nz), of plane index ``ix``."""
+        """One yz-plane time series, float32 array (nt, ny, nz), of plane index ``ix``.
+
+        Read and checked chunk by chunk (:func:`read_checked`).
+
+        Parameters
+        ----------
+        component : str
+            "u", "v" or "w".
+        ix : int
+            Plane index in [0, nx - 1].
+
+        Returns
+        -------
+        numpy.ndarray
+            float32 array (nt, ny, nz) of velocity fluctuations [m/s].
+
+        Raises
+        ------
+        ParameterError
+            For an unknown component or a plane index out of range.
+        StoreError
+            For a corrupted chunk or one holding NaN/inf.
+        """
         if not 0 <= ix < self.grid.nx:
             raise ParameterError(f"plane index = {ix} is outside [0, {self.grid.nx - 1}]")
         return read_checked(self.array(component), ix, 0, self.grid.nt, self.path)
 
     def check_chunks(self) -> None:
-        """Decode every chunk of u, v, w (StoreError naming the first corrupted chunk or NaN)."""
+        """Decode every chunk of u, v, w (StoreError naming the first corrupted chunk or NaN).
+
+        Returns
+        -------
+        None
+
+        Raises
+        ------
+        StoreError
+            At the first chunk that does not decode or holds NaN/inf.
+        """
         for c in layout.COMPONENTS:
             arr = self.array(c)
             for ix in range(self.grid.nx):
                 read_checked(arr, ix, 0, self.grid.nt, self.path)
 
     def nbytes_on_disk(self) -> int:
-        """Total size of the store's files [bytes]."""
+        """Total size of the store's files [bytes].
+
+        Returns
+        -------
+        int
+            Sum of the sizes of all files under the store directory [bytes].
+        """
         return sum(f.stat().st_size for f in self.path.rglob("*") if f.is_file())
 
     def summary(self) -> dict:
-        """What ``turbgen info`` shows, as JSON-serialisable values (units in the key names)."""
+        """What ``turbgen info`` shows, as JSON-serialisable values (units in the key names).
+
+        Returns
+        -------
+        dict
+            path, complete, model, turbgen_version, created_utc, grid, shape_t_x_y_z, duration_s [s],
+            width_y_m [m], height_z_m [m], chunk_t, U_m_s [m/s], hub_height_m [m], seed, frame,
+            frame_note, parameters, units, size_on_disk_bytes and size_uncompressed_bytes [bytes].
+        """
         g, a = self.grid, self.attrs
         return {
             "path": str(self.path),
@@ -121,8 +230,34 @@ class FieldStore:
 
 
 def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None) -> np.ndarray:
-    """Plane ``ix`` of a component array over t in [t0, t1), float32 (t, y, z), read one stored chunk
-    at a time; one-line StoreError when a chunk does not decode or holds NaN/inf."""
+    """Plane ``ix`` of a component array over t in [t0, t1), float32 (t, y, z), read one stored chunk at a time.
+
+    One-line StoreError when a chunk does not decode or holds NaN/inf.
+
+    Parameters
+    ----------
+    arr : zarr.Array
+        A component array (t, x, y, z) of a store.
+    ix : int
+        Plane index.
+    t0 : int
+        First time index.
+    t1 : int
+        End time index (exclusive).
+    path : str or os.PathLike, optional
+        Store path named in messages; default the array's store root.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32 array (t1 - t0, ny, nz) [m/s].
+
+    Raises
+    ------
+    StoreError
+        "corrupted chunk at ..." when a chunk does not decode, "NaN at ..." / "inf at ..." when it
+        holds non-finite values, naming the component, plane, time index and chunk file.
+    """
     name = arr.basename
     where = path if path is not None else getattr(arr.store, "root", None) or "store"
     out = np.empty((t1 - t0, *arr.shape[2:]), dtype=np.float32)
@@ -198,7 +333,29 @@ def _check_arrays(path: Path, group: zarr.Group, grid: Grid) -> None:
 
 
 def open_store(path) -> FieldStore:
-    """Open the complete turbgen field store at ``path`` read-only; one-line StoreError otherwise."""
+    """Open the complete turbgen field store at ``path`` read-only; one-line StoreError otherwise.
+
+    Checks, in order: the path exists; it is a zarr v3 group written by turbgen; the completeness
+    marker is set; the attributes match ``schemas/field.schema.json``; the arrays u, v, w and the
+    coordinates t, x, y, z have the grid's shapes, dtypes and values; every chunk file is present.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The store directory (``~`` is expanded).
+
+    Returns
+    -------
+    FieldStore
+        The validated store.
+
+    Raises
+    ------
+    StoreError
+        When the path is missing, a file, not a turbgen store, incomplete (no marker, missing
+        metadata or chunk files) or corrupted (unreadable metadata, invalid attributes or grid,
+        wrong arrays or coordinates).
+    """
     path = Path(path).expanduser().absolute()
     if not path.exists():
         raise StoreError(f"{path}: no such store{_leftover_hint(path)}")
@@ -245,6 +402,21 @@ def physical_time_view(path_or_fs):
     sample (t, x) is the field at plane x at physical time T = t - x/U (an eddy at x upstream
     reaches the rotor x/U later), so e.g. ``ds.u.isel(x=i)`` plotted against ``ds.T.isel(x=i)`` is
     the time series a sensor at plane i sees. Data stay lazy (dask).
+
+    Parameters
+    ----------
+    path_or_fs : str, os.PathLike or FieldStore
+        The store, or its path (opened with :func:`open_store`).
+
+    Returns
+    -------
+    xarray.Dataset
+        u, v, w (t, x, y, z) [m/s] with coordinates t [s], x, y, z [m] and T (t, x) [s].
+
+    Raises
+    ------
+    StoreError
+        When a path is given and it is not a complete, valid store.
     """
     import xarray as xr
 

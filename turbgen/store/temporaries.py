@@ -26,18 +26,51 @@ TEMP_MARK = ".tmp-"
 
 
 def temp_prefix(path: Path) -> str:
-    """Name prefix of the temporary siblings used while writing ``path``."""
+    """Name prefix of the temporary siblings used while writing ``path``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The final output path.
+
+    Returns
+    -------
+    str
+        ``.NAME.tmp-`` for ``path`` named NAME.
+    """
     return f".{Path(path).name}{TEMP_MARK}"
 
 
 def temp_name(path: Path) -> Path:
-    """A fresh temporary sibling of ``path`` owned by this process."""
+    """A fresh temporary sibling of ``path`` owned by this process.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The final output path.
+
+    Returns
+    -------
+    pathlib.Path
+        ``.NAME.tmp-PID-XXXXXXXX`` beside ``path`` (PID = this process, 8 random hex digits).
+    """
     path = Path(path)
     return path.parent / f"{temp_prefix(path)}{os.getpid()}-{secrets.token_hex(4)}"
 
 
 def pid_alive(pid: int) -> bool:
-    """True if a process with this pid exists on this host (EPERM counts as alive, a zombie as dead)."""
+    """True if a process with this pid exists on this host (EPERM counts as alive, a zombie as dead).
+
+    Parameters
+    ----------
+    pid : int
+        Process id; values <= 0 are never alive.
+
+    Returns
+    -------
+    bool
+        Whether the process exists and is not a zombie.
+    """
     if pid <= 0:
         return False
     try:
@@ -59,7 +92,18 @@ def _is_zombie(pid: int) -> bool:
 
 
 def parse_temp(name: str) -> tuple[str, int] | None:
-    """(final name, writer pid) of a temporary name ``.NAME.tmp-PID-...``, else None."""
+    """(final name, writer pid) of a temporary name ``.NAME.tmp-PID-...``, else None.
+
+    Parameters
+    ----------
+    name : str
+        A file or directory name (no directory part).
+
+    Returns
+    -------
+    tuple of (str, int) or None
+        (NAME, PID), or None when ``name`` is not a temporary name.
+    """
     if not name.startswith(".") or TEMP_MARK not in name:
         return None
     final, _, rest = name[1:].rpartition(TEMP_MARK)
@@ -72,7 +116,20 @@ def parse_temp(name: str) -> tuple[str, int] | None:
 def remove_dead_temporaries(directory, names=None) -> list[Path]:
     """Delete temporaries in ``directory`` (of the outputs ``names``, or all) whose writer is dead.
 
-    Returns the removed paths. Unreadable directories and entries that vanish meanwhile are skipped.
+    Unreadable directories and entries that vanish meanwhile are skipped, as are entries that cannot
+    be removed (read-only or foreign).
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        Directory to clean.
+    names : iterable of str, optional
+        Final names whose temporaries may be removed; None (default) for all.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The removed paths.
     """
     directory = Path(directory)
     wanted = None if names is None else set(names)
@@ -99,7 +156,18 @@ def remove_dead_temporaries(directory, names=None) -> list[Path]:
 
 
 def removed_line(removed) -> str:
-    """One line naming the removed temporaries (empty when none)."""
+    """One line naming the removed temporaries (empty when none).
+
+    Parameters
+    ----------
+    removed : iterable of pathlib.Path
+        Paths returned by :func:`remove_dead_temporaries`.
+
+    Returns
+    -------
+    str
+        The message, or "" when nothing was removed.
+    """
     removed = list(removed)
     if not removed:
         return ""
@@ -109,7 +177,17 @@ def removed_line(removed) -> str:
 
 
 def report_removed(removed) -> None:
-    """Print :func:`removed_line` on stderr when something was removed."""
+    """Print :func:`removed_line` on stderr when something was removed.
+
+    Parameters
+    ----------
+    removed : iterable of pathlib.Path
+        Paths returned by :func:`remove_dead_temporaries`.
+
+    Returns
+    -------
+    None
+    """
     line = removed_line(removed)
     if line:
         print(line, file=sys.stderr)
@@ -124,6 +202,11 @@ def received_signal() -> int | None:
     Library code running when the signal lands may replace the ``SystemExit`` with an exception of
     its own (h5py turns an exception raised inside an attribute write into ``TypeError``); the CLI
     asks this to report the interruption, not the replacement.
+
+    Returns
+    -------
+    int or None
+        The last signal number received, or None.
     """
     return _received[-1] if _received else None
 
@@ -138,7 +221,17 @@ def exit_on_signals():
     """Within the block, SIGTERM and SIGHUP raise SystemExit(128 + signum) in the main thread.
 
     Only default handlers are replaced (a caller's own handler is kept); outside the main thread
-    this does nothing (Python delivers signals to the main thread only).
+    this does nothing (Python delivers signals to the main thread only). The previous handlers are
+    restored on leaving the block.
+
+    Yields
+    ------
+    None
+
+    Raises
+    ------
+    SystemExit
+        Code 128 + signum, when SIGTERM or SIGHUP arrives within the block.
     """
     old = {}
     if threading.current_thread() is threading.main_thread():
@@ -183,6 +276,27 @@ def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
     returned for the caller to delete. Where renameat2 is missing, the old output is first renamed
     to a temporary name of this process, then the new one renamed in (a short window without
     ``path``; a writer losing a race against another one gets FileExistsError).
+
+    Parameters
+    ----------
+    tmp : str or os.PathLike
+        The finished temporary (file or directory), a sibling of ``path``.
+    path : str or os.PathLike
+        The final path.
+    replace : bool
+        Allow replacing an existing ``path``.
+
+    Returns
+    -------
+    pathlib.Path or None
+        Where the old output now lies (for the caller to delete), or None when nothing was replaced.
+
+    Raises
+    ------
+    FileExistsError
+        When ``path`` exists and ``replace`` is False, or another writer replaced it meanwhile.
+    OSError
+        For other rename failures.
     """
     tmp, path = Path(tmp), Path(path)
     exists = path.exists() or path.is_symlink()

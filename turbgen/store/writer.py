@@ -79,6 +79,28 @@ class StoreWriter:
     (different planes/components, or time blocks aligned to ``chunk_t``) run in parallel;
     unaligned blocks of the same plane are serialised (zarr read-modify-writes partial chunks).
     Every (component, plane, time sample) must be written before the ``with`` block ends.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        Final store path (absolute).
+    grid : Grid
+        The field grid.
+    attrs : dict
+        Checked caller attributes (see :func:`create_store`).
+    chunk_t : int
+        Time samples per chunk.
+    overwrite : bool
+        Replace an existing turbgen store at ``path``.
+
+    Raises
+    ------
+    StoreError
+        On entering or leaving the ``with`` block: a file-system error (disk full, read-only, ...) as
+        one line, or a non-store or unexpected store that appeared at ``path`` while writing.
+    RuntimeError
+        On leaving the ``with`` block, when some (component, plane, time sample) was not written
+        (nothing is written then).
     """
 
     def __init__(self, path: Path, grid: Grid, attrs: dict, chunk_t: int, overwrite: bool):
@@ -131,7 +153,24 @@ class StoreWriter:
 
     # -- writing ----------------------------------------------------------------------------
     def add_attrs(self, **attrs) -> None:
-        """Add attributes known only after generation (e.g. a synthesis report); written before the marker."""
+        """Add attributes known only after generation (e.g. a synthesis report); written before the marker.
+
+        Parameters
+        ----------
+        **attrs
+            Attribute name -> value; numpy values and tuples are stored as plain JSON types.
+
+        Returns
+        -------
+        None
+
+        Raises
+        ------
+        RuntimeError
+            When called outside the ``with`` block.
+        ValueError
+            When an attribute is already set or is the completeness marker.
+        """
         if self._tmp is None:
             raise RuntimeError("StoreWriter.add_attrs outside its 'with' block")
         clash = [k for k in attrs if k in self._group.attrs or k == layout.MARKER]
@@ -140,7 +179,31 @@ class StoreWriter:
         self._group.attrs.update(_jsonable(attrs))
 
     def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0) -> None:
-        """Write ``data`` (nt_block, ny, nz) to ``component`` at plane index ``ix``, time ``t0``."""
+        """Write ``data`` (nt_block, ny, nz) to ``component`` at plane index ``ix``, time ``t0``.
+
+        Parameters
+        ----------
+        component : str
+            "u", "v" or "w".
+        ix : int
+            Plane index in [0, nx - 1].
+        data : array_like
+            Velocity fluctuations [m/s], shape (nt_block, ny, nz), stored as float32; must be finite.
+        t0 : int, optional
+            Time index of the first sample (default 0); t0 + nt_block <= nt.
+
+        Returns
+        -------
+        None
+
+        Raises
+        ------
+        RuntimeError
+            When called outside the ``with`` block.
+        ValueError
+            For an unknown component, a plane index out of range, a block that does not fit the plane,
+            or a block containing NaN or inf.
+        """
         if self._tmp is None:
             raise RuntimeError("StoreWriter.write outside its 'with' block")
         if component not in self._arrays:
@@ -283,6 +346,36 @@ def create_store(
     grid and finally the completeness marker. ``chunk_t`` is the time-chunk length (default
     min(nt, 1024)). Raises StoreError before anything is created when ``path`` exists and
     ``overwrite`` is False, or when ``path`` exists and is not a turbgen store (never replaced).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The store directory to create.
+    grid : Grid
+        The field grid.
+    attrs : dict
+        Caller attributes: model, parameters, units, seed, U_m_s [m/s], hub_height_m [m].
+    chunk_t : int, optional
+        Time samples per chunk, in [1, nt]; default min(nt, 1024).
+    overwrite : bool, optional
+        Replace an existing turbgen store at ``path`` (default False).
+
+    Returns
+    -------
+    StoreWriter
+        The writer; nothing is created before its ``with`` block is entered.
+
+    Raises
+    ------
+    ParameterError
+        For a bad output path, a ``chunk_t`` outside [1, nt], or too little free disk for the
+        uncompressed field.
+    ValueError
+        For attributes that lack a required key or a parameter's unit, set writer attributes, are
+        not JSON-serialisable, or do not match the schema.
+    StoreError
+        When ``path`` exists and ``overwrite`` is False, ``path`` exists and is not a turbgen store,
+        or the output directory does not exist or is not writable.
     """
     path = check_output_path(path).absolute()
     if chunk_t is None:
