@@ -13,6 +13,7 @@ import importlib
 import logging
 import re
 import signal
+import sys
 import warnings
 
 import click
@@ -91,16 +92,20 @@ class TurbgenGroup(click.Group):
             raise _one_line(exc) from None
 
     def invoke(self, ctx):
+        # signals are recorded by turbgen.store.temporaries (looked up, not imported: it loads zarr)
+        recorder = sys.modules.get("turbgen.store.temporaries")
+        if recorder is not None:
+            recorder.forget_signals()  # an earlier command in this process (tests) is not this one
         try:
             return self._invoke_one_line(ctx)
-        except Exception:  # a SIGTERM/SIGHUP whose SystemExit the running library replaced by its own error
-            from turbgen.store.temporaries import received_signal
-
-            sig = received_signal()
+        except Exception:  # a signal whose exception the running library replaced by its own error
+            recorder = sys.modules.get("turbgen.store.temporaries")
+            sig = recorder.received_signal() if recorder is not None else None
             if sig is None:
                 raise
             _quiet_shutdown()
-            click.echo(f"Error: terminated ({signal.Signals(sig).name}); unfinished output was removed", err=True)
+            what = "interrupted" if sig == signal.SIGINT else f"terminated ({signal.Signals(sig).name})"
+            click.echo(f"Error: {what}; unfinished output was removed", err=True)
             ctx.exit(128 + sig)
 
     def _invoke_one_line(self, ctx):

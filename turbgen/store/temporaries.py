@@ -197,9 +197,10 @@ _received: list[int] = []
 
 
 def received_signal() -> int | None:
-    """The signal number that :func:`exit_on_signals` turned into ``SystemExit``, if one arrived.
+    """The signal number that :func:`exit_on_signals` turned into an exception, if one arrived.
 
-    Library code running when the signal lands may replace the ``SystemExit`` with an exception of
+    Library code running when the signal lands may replace the ``SystemExit`` (``KeyboardInterrupt``
+    for SIGINT) with an exception of
     its own (h5py turns an exception raised inside an attribute write into ``TypeError``); the CLI
     asks this to report the interruption, not the replacement.
 
@@ -211,14 +212,26 @@ def received_signal() -> int | None:
     return _received[-1] if _received else None
 
 
+def forget_signals() -> None:
+    """Forget the signals recorded so far (the CLI calls it when a command starts)."""
+    _received.clear()
+
+
 def _exit_on_signal(signum, frame):
     _received.append(signum)
     raise SystemExit(128 + signum)
 
 
+def _interrupt(signum, frame):
+    """Python's own SIGINT behaviour (KeyboardInterrupt), with the signal recorded (``received_signal``)."""
+    _received.append(signum)
+    raise KeyboardInterrupt
+
+
 @contextlib.contextmanager
 def exit_on_signals():
-    """Within the block, SIGTERM and SIGHUP raise SystemExit(128 + signum) in the main thread.
+    """Within the block, SIGTERM and SIGHUP raise SystemExit(128 + signum) in the main thread, and
+    SIGINT raises KeyboardInterrupt as usual; each is recorded for :func:`received_signal`.
 
     Only default handlers are replaced (a caller's own handler is kept); outside the main thread
     this does nothing (Python delivers signals to the main thread only). The previous handlers are
@@ -238,6 +251,8 @@ def exit_on_signals():
         for sig in (signal.SIGTERM, signal.SIGHUP):
             if signal.getsignal(sig) == signal.SIG_DFL:
                 old[sig] = signal.signal(sig, _exit_on_signal)
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # Ctrl-C: recorded as well
+            old[signal.SIGINT] = signal.signal(signal.SIGINT, _interrupt)
     try:
         yield
     finally:
