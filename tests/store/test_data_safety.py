@@ -394,11 +394,13 @@ def test_interrupted_export(request, fmt, out, names, sig, tmp_path):
 @pytest.mark.parametrize("sig,line", [(signal.SIGTERM, "Error: terminated (SIGTERM); unfinished output was removed"),
                                       (signal.SIGINT, "Error: interrupted; unfinished output was removed")],
                          ids=["SIGTERM", "SIGINT"])
+@pytest.mark.parametrize("swallowed", [False, True], ids=["replaced", "swallowed"])
 def test_a_signal_whose_exit_the_library_replaced_is_still_reported_as_the_signal(store, tmp_path, monkeypatch,
-                                                                                   sig, line):
+                                                                                   sig, line, swallowed):
     # h5py turns an exception raised inside an attribute write (our SIGTERM's SystemExit, Ctrl-C's
-    # KeyboardInterrupt) into TypeError (seen in CI: a traceback and exit 1); the CLI must still report
-    # the signal, exit 128 + signum, leave nothing
+    # KeyboardInterrupt) into TypeError (seen in CI: a traceback and exit 1), and an exception raised in a
+    # weakref callback is only printed, the export going on to publish (seen in CI: exit 0 and x.h5); the
+    # CLI must still report the signal, exit 128 + signum, publish nothing
     import turbgen.export as export
     from turbgen.export.hdf5 import export_hdf5
 
@@ -408,7 +410,8 @@ def test_a_signal_whose_exit_the_library_replaced_is_still_reported_as_the_signa
                 os.kill(os.getpid(), sig)  # the handler runs here and raises SystemExit / KeyboardInterrupt
                 time.sleep(5)
             except BaseException:
-                raise TypeError("Operation not defined for data type class") from None
+                if not swallowed:
+                    raise TypeError("Operation not defined for data type class") from None
 
         monkeypatch.setattr("h5py.AttributeManager.__setitem__", attr_write)
         return export_hdf5(fs, out, req)

@@ -98,6 +98,8 @@ class TurbgenGroup(click.Group):
             recorder.forget_signals()  # an earlier command in this process (tests) is not this one
         try:
             return self._invoke_one_line(ctx)
+        except (click.exceptions.Exit, click.ClickException):  # already said (e.g. Ctrl-C's line) or a user error
+            raise
         except Exception:  # a signal whose exception the running library replaced by its own error
             recorder = sys.modules.get("turbgen.store.temporaries")
             sig = recorder.received_signal() if recorder is not None else None

@@ -19,7 +19,8 @@ from pathlib import Path
 from turbgen.errors import ParameterError
 from turbgen.store.paths import check_output_path
 from turbgen.resources import require_disk
-from turbgen.store.temporaries import TEMP_MARK, exit_on_signals, remove_dead_temporaries, report_removed
+from turbgen.store.temporaries import (TEMP_MARK, exit_on_signals, raise_if_signalled, remove_dead_temporaries,
+                                       report_removed)
 
 _FALLOC_FL_KEEP_SIZE = 1
 
@@ -140,6 +141,11 @@ class OutputSet:
     def __exit__(self, exc_type, exc, tb):
         try:
             if exc_type is None:
+                try:
+                    raise_if_signalled()  # a signal whose exception was swallowed on the way publishes nothing
+                except BaseException:
+                    self._cleanup()
+                    raise
                 missing = [str(p) for p, t in self._temps.items() if not t.exists()]
                 if missing:
                     self._cleanup()

@@ -212,6 +212,25 @@ def received_signal() -> int | None:
     return _received[-1] if _received else None
 
 
+def raise_if_signalled() -> None:
+    """Raise the exception of a recorded signal (SystemExit(128 + signum), KeyboardInterrupt for SIGINT).
+
+    Writers call it before publishing: a signal whose exception was swallowed where Python cannot
+    propagate it (a weakref callback, a ``__del__``, a library's ``except``) must still stop the publish.
+
+    Raises
+    ------
+    SystemExit, KeyboardInterrupt
+        When :func:`received_signal` is not None.
+    """
+    sig = received_signal()
+    if sig is None:
+        return
+    if sig == signal.SIGINT:
+        raise KeyboardInterrupt
+    raise SystemExit(128 + sig)
+
+
 def forget_signals() -> None:
     """Forget the signals recorded so far (the CLI calls it when a command starts)."""
     _received.clear()

@@ -29,7 +29,8 @@ from turbgen.errors import StoreError, check_int
 from turbgen.grid import Grid
 from turbgen.resources import format_bytes, require_disk
 from turbgen.store import layout
-from turbgen.store.temporaries import exit_on_signals, publish, remove_dead_temporaries, report_removed, temp_name
+from turbgen.store.temporaries import (exit_on_signals, publish, raise_if_signalled, remove_dead_temporaries,
+                                       report_removed, temp_name)
 from turbgen.store.paths import check_output_path
 
 def _jsonable(value):
@@ -137,6 +138,7 @@ class StoreWriter:
                 _raise_disk_error(exc, self.path)
                 return False
             try:
+                raise_if_signalled()  # a signal whose exception was swallowed on the way publishes nothing
                 self._finish()
             except BaseException as err:
                 self._discard()
