@@ -212,6 +212,15 @@ def received_signal() -> int | None:
     return _received[-1] if _received else None
 
 
+def _quiet_about_signals(unraisable) -> None:
+    """sys.unraisablehook: say nothing about our signal's exception where Python could not raise it (a
+    weakref callback, a ``__del__``: "Exception ignored in ..." and a traceback); the writer's publish check
+    (:func:`raise_if_signalled`) acts on the signal instead. Anything else goes to the default hook."""
+    if received_signal() is not None and issubclass(unraisable.exc_type, (SystemExit, KeyboardInterrupt)):
+        return
+    sys.__unraisablehook__(unraisable)
+
+
 def raise_if_signalled() -> None:
     """Raise the exception of a recorded signal (SystemExit(128 + signum), KeyboardInterrupt for SIGINT).
 
@@ -266,7 +275,9 @@ def exit_on_signals():
         Code 128 + signum, when SIGTERM or SIGHUP arrives within the block.
     """
     old = {}
+    hook = sys.unraisablehook
     if threading.current_thread() is threading.main_thread():
+        sys.unraisablehook = _quiet_about_signals
         for sig in (signal.SIGTERM, signal.SIGHUP):
             if signal.getsignal(sig) == signal.SIG_DFL:
                 old[sig] = signal.signal(sig, _exit_on_signal)
@@ -277,6 +288,7 @@ def exit_on_signals():
     finally:
         for sig, handler in old.items():
             signal.signal(sig, handler)
+        sys.unraisablehook = hook
 
 
 _RENAME_NOREPLACE, _RENAME_EXCHANGE, _AT_FDCWD = 1, 2, -100
