@@ -153,21 +153,27 @@ def test_bin_k_uses_coherence_of_k_df_not_k_plus_one():
     """evoTurb's off-by-one (bin k mixed with gamma_x((k+1) df)) is absent.
 
     df = 1/32 Hz, b_x = 0, a_x dx df / (2 U) = 0.5: gamma_x(k df) = exp(-k/2), so bins 1..4 have
-    coherence 0.61, 0.37, 0.22, 0.14 and the off-by-one values 0.37, 0.22, 0.14, 0.08 are 4-17
-    standard deviations away with 1024 independent points (v is white in yz, mixed via "uvw").
+    coherence 0.61, 0.37, 0.22, 0.14 (each checked within Z sd). The off-by-one values 0.37, 0.22
+    of bins 1 and 2 are 28 and 11 sd away with 2304 independent points (v is white in yz, mixed via
+    "uvw"): more than 2 Z, so an estimate within Z sd of the right value is more than Z sd from the
+    wrong one, and the check cannot pass or fail by chance. (Bins 3-4 are only 6 and 4 sd apart.)
     """
     a_x = 0.5 * 2 * U / (100.0 / 32.0)
     gam = partial(exponential_longitudinal, U_m_s=U, a_x=a_x, b_x=0.0)
-    g = Grid(64, 0.5, (0.0, 100.0), 32, 32, 5.0, 5.0)
+    g = Grid(64, 0.5, (0.0, 100.0), 48, 48, 5.0, 5.0)
     gen = KaimalEvo(KP, g, U, 11, long_coherence=gam, long_components="uvw")
     xv = _coefs(_field(gen, "v")).reshape(2, 64 // 2 + 1, -1)  # (plane, bin, point)
     for k in range(1, 5):
         a, b = xv[0, k], xv[1, k]
         c = (a * b.conj()).sum() / np.sqrt((np.abs(a) ** 2).sum() * (np.abs(b) ** 2).sum())
         right, wrong = np.exp(-k / 2), np.exp(-(k + 1) / 2)
+        # sample coherence of n complex pairs: sd of Re c ~ (1 - rho^2) / sqrt(2 n)
         sd = (1 - right**2) / np.sqrt(2 * a.size)
         assert abs(c.real - right) < Z * sd + (1 - right**2) / a.size, (k, c, right)
-        assert abs(c.real - wrong) > Z * sd, (k, c, wrong)
+        if abs(right - wrong) > 2 * Z * sd:
+            assert abs(c.real - wrong) > Z * sd, (k, c, wrong)
+        else:
+            assert k > 2, "bins 1 and 2 must be separated by more than 2 Z sd"
 
 
 # -- variance -------------------------------------------------------------------------------------

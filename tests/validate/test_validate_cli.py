@@ -72,7 +72,10 @@ def test_failing_metric_gives_exit_1(store, tmp_path):
     r = _run(bad, "--json", "--rotor-radius", 30)
     assert r.exit_code == 1
     d = json.loads(r.output)
-    assert d["passed"] is False and "sigma_u" in d["failed"]
+    # u x 1.3 is 1.69 x the u spectrum in every band: spectrum_u fails whatever the seed. sigma_u alone has
+    # sd ~17 % of sigma_u^2 on this short 12 x 12 record (z ~4 +- 1.7 under the defect), so it is not asserted.
+    assert d["passed"] is False and "spectrum_u" in d["failed"]
+    assert not [m for m in d["failed"] if m.endswith(("_v", "_w"))], d["failed"]
 
 
 def test_default_rotor_radius_fits_a_small_grid(store):

@@ -9,6 +9,7 @@ import contextlib
 import math
 import shutil
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,7 @@ from turbgen.resources import available_memory_bytes, format_bytes, require_memo
 from turbgen.runs.scratch import FileSpectrum
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import create_store
-from turbgen.synthesis.kaimal_evo import COMPONENTS, FREQ_CHUNK, KaimalEvo, resolved_band_hz
+from turbgen.synthesis.kaimal_evo import COMPONENTS, FREQ_CHUNK, InMemorySpectrum, KaimalEvo, resolved_band_hz
 
 def kaimal_generator(run: KaimalRun, workers: int | None = None) -> KaimalEvo:
     """The synthesis object of ``run`` (``workers``: FFT threads; the field does not depend on them)."""
@@ -46,11 +47,11 @@ def store_attrs(run: KaimalRun, gen: KaimalEvo | None = None) -> dict:
 def memory_needed(grid: Grid, spill: bool = False) -> int:
     """Peak bytes of a run's arrays: one component's spectrum (nx, nf, ny, nz) complex64 -- or, with
     ``spill`` (the spectrum in a scratch file), one frequency chunk of all planes with its mixing
-    copies -- plus one plane in flight (its spectrum copy and float32 field, and the store's
-    compression buffers)."""
+    copies -- plus two planes in flight (one transformed, with its spectrum copy, while the previous one
+    is written with the store's compression buffers)."""
     nf = grid.nt // 2 + 1
     plane = grid.ny * grid.nz
-    in_flight = 2 * nf * plane * 8 + 3 * grid.nt * plane * 4
+    in_flight = 2 * nf * plane * 8 + 4 * grid.nt * plane * 4
     if spill:
         return 3 * grid.nx * FREQ_CHUNK * plane * 8 + in_flight
     return grid.nx * nf * plane * 8 + in_flight
@@ -97,17 +98,31 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
     attrs = store_attrs(run, gen)
     t0 = time.perf_counter()
     sums = {c: [0.0, 0] for c in COMPONENTS}
-    with create_store(Path(out), g, attrs, chunk_t=chunk_t, overwrite=overwrite) as w:
-        with tqdm(total=3 * (gen.n_chunks + g.nx), desc="kaimal", unit="step", disable=not progress) as bar:
-            for c in COMPONENTS:
-                with contextlib.ExitStack() as stack:
-                    buffer = None
-                    if spill:
-                        buffer = stack.enter_context(FileSpectrum(out.absolute().parent, g.nx, gen.nf, g.ny, g.nz))
-                    for ix, plane in gen.component_planes(c, tick=lambda: bar.update(1), spectrum=buffer):
-                        w.write(c, ix, plane)
-                        sums[c][0] += float(np.einsum("tyz,tyz->", plane, plane, dtype=np.float64))
-                        sums[c][1] += plane.size
+    with create_store(Path(out), g, attrs, chunk_t=chunk_t, overwrite=overwrite) as w, contextlib.ExitStack() as stack:
+        # one spectrum buffer for the three components in turn
+        if spill:
+            buffer = stack.enter_context(FileSpectrum(out.absolute().parent, g.nx, gen.nf, g.ny, g.nz))
+        else:
+            buffer = InMemorySpectrum(g.nx, gen.nf, g.ny, g.nz)
+        bar = stack.enter_context(tqdm(total=3 * (gen.n_chunks + g.nx), desc="kaimal", unit="step",
+                                       disable=not progress))
+        # One plane written (and summed) in the background while the next is made; leaving the pool waits
+        # for that write, so an exception never races the store's clean-up.
+        background = stack.enter_context(ThreadPoolExecutor(1))
+        pending = None
+
+        def write_and_sum(c, ix, plane):
+            w.write(c, ix, plane)
+            sums[c][0] += float(np.einsum("tyz,tyz->", plane, plane, dtype=np.float64))
+            sums[c][1] += plane.size
+
+        for c in COMPONENTS:
+            for ix, plane in gen.component_planes(c, tick=lambda: bar.update(1), spectrum=buffer):
+                if pending is not None:
+                    pending.result()
+                pending = background.submit(write_and_sum, c, ix, plane)
+        if pending is not None:
+            pending.result()
         # clipping of any embedding is recorded with the field, never only printed
         w.add_attrs(synthesis_report=gen.report)
         path = w.path

@@ -40,7 +40,7 @@ class FileSpectrum:
     """Spectrum buffer (n_planes, nf, ny, nz) complex64 in a temporary file (a context manager)."""
 
     def __init__(self, directory: str | Path, nx: int, nf: int, ny: int, nz: int):
-        self.nf, self.point = nf, ny * nz
+        self.nx, self.nf, self.point = nx, nf, ny * nz
         self.shape = (nf, ny, nz)
         fd, name = tempfile.mkstemp(prefix=".turbgen-spectrum-", dir=directory)
         os.unlink(name)  # the space is freed when the file is closed, even after a crash
@@ -50,6 +50,15 @@ class FileSpectrum:
     def put(self, plane: int, k0: int, block: np.ndarray) -> None:
         """Store bins k0 .. k0 + len(block) of ``plane``."""
         write_at(self.fd, np.asarray(block, dtype=np.complex64), (plane * self.nf + k0) * self.point * ITEM)
+
+    def chunk(self, k0: int, k1: int) -> np.ndarray:
+        """Where bins k0 .. k1 - 1 of all planes are made (nx, k1 - k0, ny, nz): a fresh array."""
+        return np.empty((self.nx, k1 - k0, *self.shape[1:]), dtype=np.complex64)
+
+    def put_chunk(self, k0: int, block: np.ndarray) -> None:
+        """Store ``block`` (nx, nb, ny, nz) as bins k0 .. k0 + nb of every plane."""
+        for plane in range(self.nx):
+            self.put(plane, k0, block[plane])
 
     def get(self, plane: int) -> np.ndarray:
         """All bins of ``plane`` (nf, ny, nz), a fresh array."""

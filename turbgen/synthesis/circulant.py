@@ -21,6 +21,7 @@ at any lag) is reported -- never silently.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -57,13 +58,19 @@ def torus_size(n: int, h_m: float, decay_length_m: float) -> int:
     return fft_size(max(wrap, math.ceil(12.0 * decay_length_m / h_m - 1e-9)))
 
 
+@functools.lru_cache(maxsize=16)
 def wrapped_distance(ny: int, nz: int, dy_m: float, dz_m: float, my: int, mz: int) -> np.ndarray:
-    """Distance [m] of every torus point (my x mz) from the origin, with wrapped lags min(i, M - i)."""
+    """Distance [m] of every torus point (my x mz) from the origin, with wrapped lags min(i, M - i).
+
+    Cached (consecutive frequency bins share torus shapes); the array is read-only.
+    """
     iy = np.arange(my)
     iz = np.arange(mz)
     ly = np.minimum(iy, my - iy) * dy_m
     lz = np.minimum(iz, mz - iz) * dz_m
-    return np.hypot(ly[:, None], lz[None, :])
+    r = np.hypot(ly[:, None], lz[None, :])
+    r.flags.writeable = False
+    return r
 
 
 def grid_distances(ny: int, nz: int, dy_m: float, dz_m: float) -> np.ndarray:

@@ -22,7 +22,7 @@ chunk by frequency chunk into a spectrum buffer and read back plane by plane for
 ``InMemorySpectrum`` by default; the runs layer passes a file-backed buffer (turbgen.runs.scratch)
 when that array does not fit in memory, which bounds the memory by one frequency chunk of all
 planes plus one plane's spectrum. Random streams come from
-SeedSequence keyed by (seed, component, plane, frequency chunk) with FIXED chunks of
+SFC64 streams (Box-Muller, turbgen.synthesis.random_streams) keyed by SeedSequence of (seed, component, plane, frequency chunk) with FIXED chunks of
 FREQ_CHUNK bins, so the field does not depend on how it is written or on thread counts.
 """
 
@@ -38,6 +38,7 @@ import scipy.fft
 
 from turbgen.grid import Grid
 from turbgen.synthesis.circulant import Embedding, embed
+from turbgen.synthesis.random_streams import keyed_complex_normal
 from turbgen.theory.coherence_models import exponential_yz, exponential_yz_decay_length_m
 from turbgen.theory.kaimal import kaimal_band_variance
 from turbgen.theory.lattice import line_frequencies
@@ -101,17 +102,25 @@ def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarra
 
 
 class InMemorySpectrum:
-    """Spectrum buffer (n_planes, nf, ny, nz) complex64 held in memory; unfilled bins are zero."""
+    """Spectrum buffer (n_planes, nf, ny, nz) complex64 held in memory; bins never put are zero.
+
+    One buffer serves the components in turn: every bin but k = 0 (always zero) is put anew for each.
+    """
 
     def __init__(self, nx: int, nf: int, ny: int, nz: int):
         self.data = np.zeros((nx, nf, ny, nz), dtype=np.complex64)
 
-    def put(self, plane: int, k0: int, block: np.ndarray) -> None:
-        """Store bins k0 .. k0 + len(block) of ``plane``."""
-        self.data[plane, k0:k0 + block.shape[0]] = block
+    def chunk(self, k0: int, k1: int) -> np.ndarray:
+        """Where bins k0 .. k1 - 1 of all planes are made (nx, k1 - k0, ny, nz): a view of the buffer."""
+        return self.data[:, k0:k1]
+
+    def put_chunk(self, k0: int, block: np.ndarray) -> None:
+        """Store ``block`` (nx, nb, ny, nz) as bins k0 .. k0 + nb (nothing to do for the view of :meth:`chunk`)."""
+        if not np.may_share_memory(block, self.data):
+            self.data[:, k0:k0 + block.shape[1]] = block
 
     def get(self, plane: int) -> np.ndarray:
-        """All bins of ``plane`` (nf, ny, nz); the caller may modify the array."""
+        """All bins of ``plane`` (nf, ny, nz): a view the caller may modify."""
         return self.data[plane]
 
 
@@ -173,21 +182,23 @@ class KaimalEvo:
         """Expected variance [m^2 s^-2] of the synthesised component at every point."""
         return float(self.variances[component].sum())
 
-    def _embeddings(self, component: str, ks: range) -> list[Embedding | None]:
-        """yz samplers for bins ks (None = spatially white)."""
+    def _embeddings(self, component: str, ks: range, pool: ThreadPoolExecutor | None = None) -> list[Embedding | None]:
+        """yz samplers for bins ks (None = spatially white), computed in ``pool`` when given."""
         if component != "u" and not self.coherent_vw:
             return [None] * len(ks)
         g = self.grid
-        out = []
-        for k in ks:
+
+        def one(k):
             f = self.freqs[k]
-            e = embed(lambda r, f=f: self.yz_coherence(r, f), g.ny, g.nz, g.dy_m, g.dz_m, self.yz_decay_length_m(f))
-            rep = self.report
+            return embed(lambda r: self.yz_coherence(r, f), g.ny, g.nz, g.dy_m, g.dz_m, self.yz_decay_length_m(f))
+
+        out = list(pool.map(one, ks)) if pool is not None else [one(k) for k in ks]
+        rep = self.report
+        for e in out:
             rep["yz_clip_error"] = max(rep["yz_clip_error"], e.clip_error)
             rep["torus_enlarged"] += e.enlarged > 0
             rep["cholesky_fallback"] += e.chol is not None
             rep["max_torus"] = [max(a, b) for a, b in zip(rep["max_torus"], e.torus_shape)]
-            out.append(e)
         return out
 
     def _groups(self, embs) -> list[tuple[int, int, tuple[int, int], object]]:
@@ -214,19 +225,15 @@ class KaimalEvo:
             i = j
         return out
 
-    def _chunk_coefficients(self, component: str, plane: int, chunk: int, n_bins: int, groups) -> np.ndarray:
-        """Unit-variance yz coefficients (n_bins, ny, nz) complex64 of one plane and frequency chunk."""
-        g = self.grid
-        ss = np.random.SeedSequence([self.seed, COMPONENTS.index(component), plane, chunk])
-        rng = np.random.Generator(np.random.Philox(ss))
-        normals = rng.standard_normal(2 * sum((j - i) * a * b for i, j, (a, b), _ in groups), dtype=np.float32)
-        normals *= np.float32(np.sqrt(0.5))
-        out = np.empty((n_bins, g.ny, g.nz), dtype=np.complex64)
+    def _chunk_coefficients(self, component: str, plane: int, chunk: int, groups, out: np.ndarray) -> None:
+        """yz coefficients with E|Z|^2 = 2 of one plane and frequency chunk into ``out`` (n_bins, ny, nz) complex64."""
+        noise = np.empty(sum((j - i) * a * b for i, j, (a, b), _ in groups), dtype=np.complex64)
+        # real and imaginary parts N(0, 1): E|xi|^2 = 2, compensated by the amplitudes (component_planes)
+        keyed_complex_normal((self.seed, COMPONENTS.index(component), plane, chunk), noise)
         pos = 0
         for i, j, shape, sampler in groups:
             n = (j - i) * shape[0] * shape[1]
-            # consecutive normals are the (real, imaginary) parts of xi, each N(0, 1/2): E|xi|^2 = 1
-            xi = normals[2 * pos:2 * (pos + n)].view(np.complex64).reshape(j - i, *shape)
+            xi = noise[pos:pos + n].reshape(j - i, *shape)
             pos += n
             if sampler is None:
                 out[i:j] = xi
@@ -234,7 +241,6 @@ class KaimalEvo:
                 out[i] = sampler.sample(xi[0], 1)
             else:
                 out[i:j] = sampler.sample(xi, 1)  # planes already run in parallel
-        return out
 
     def component_planes(
         self, component: str, tick: Callable[[], None] | None = None, spectrum=None
@@ -242,25 +248,27 @@ class KaimalEvo:
         """Yield (plane index, field (nt, ny, nz) float32) for every plane of one component.
 
         ``tick`` is called once per frequency chunk and once per plane (n_chunks + nx calls).
-        ``spectrum``: a fresh buffer with put/get like :class:`InMemorySpectrum` (the default).
+        ``spectrum``: a buffer with chunk/put_chunk/get like :class:`InMemorySpectrum` (default: a new one);
+        one buffer may serve the components in turn, each after the previous one's planes were all yielded.
         """
         g = self.grid
         nx = g.nx
         if spectrum is None:
             spectrum = InMemorySpectrum(nx, self.nf, g.ny, g.nz)
         mixed = component in self.long_components
-        amp = np.sqrt(self.variances[component] / 2.0).astype(np.float32)
-        if g.nt % 2 == 0:  # the Nyquist coefficient is real: sqrt(2) Re(Z) has unit variance
+        # E|Z|^2 = 2 (real and imaginary parts of unit variance) and 2 E|X_k|^2 = v_k: X_k = sqrt(v_k) / 2 Z_k
+        amp = (np.sqrt(self.variances[component]) / 2.0).astype(np.float32)
+        if g.nt % 2 == 0:  # the Nyquist coefficient is real: Re(Z) has unit variance, E X^2 = v
             amp[-1] = np.sqrt(self.variances[component][-1]).astype(np.float32)
         pool = ThreadPoolExecutor(max_workers=self.workers)
         for chunk in range(self.n_chunks):
             ks = range(max(1, chunk * FREQ_CHUNK), min(self.nf, (chunk + 1) * FREQ_CHUNK))
             if len(ks):
-                groups = self._groups(self._embeddings(component, ks))
-                block = np.empty((nx, len(ks), g.ny, g.nz), dtype=np.complex64)
+                groups = self._groups(self._embeddings(component, ks, pool))
+                block = spectrum.chunk(ks.start, ks.stop)
 
-                def fill(p, ks=ks, chunk=chunk, groups=groups, block=block):
-                    block[p] = self._chunk_coefficients(component, p, chunk, len(ks), groups)
+                def fill(p, chunk=chunk, groups=groups, block=block):
+                    self._chunk_coefficients(component, p, chunk, groups, block[p])
 
                 # planes in parallel (NumPy's generators and the FFTs release the GIL); each plane has its
                 # own random stream and its own slice of the block, so the result does not depend on the order
@@ -272,15 +280,14 @@ class KaimalEvo:
                     # real factor: mixes real and imaginary parts alike (zero phase between planes)
                     mixed_block = fac.astype(np.float32) @ np.ascontiguousarray(flat).view(np.float32)
                     block = mixed_block.view(np.complex64).transpose(1, 0, 2).reshape(nx, len(ks), g.ny, g.nz)
-                for p in range(nx):
-                    spectrum.put(p, ks.start, block[p])
+                spectrum.put_chunk(ks.start, block)
             if tick:
                 tick()
         pool.shutdown()
         for p in range(nx):
             spec = spectrum.get(p)
             if g.nt % 2 == 0:
-                spec[-1] = np.sqrt(2.0, dtype=np.float32) * spec[-1].real
+                spec[-1] = spec[-1].real
             spec *= amp[:, None, None]
             plane = scipy.fft.irfft(spec, n=g.nt, axis=0, norm="forward", workers=self.workers)
             if tick:

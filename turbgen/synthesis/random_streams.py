@@ -1,4 +1,5 @@
-"""Counter-keyed complex Gaussian noise: one independent stream per (seed, snapshot, k1-slab).
+"""Counter-keyed complex Gaussian noise: one independent stream per key -- (seed, snapshot, k1-slab) for
+Mann fields, (seed, component, plane, frequency chunk) for Kaimal fields.
 
 The stream of a slab depends only on its key, never on call order, chunking or threads, so a
 field is bit-identical however the work is split. Gaussians come from the Box-Muller transform
@@ -23,14 +24,33 @@ def slab_key(seed: int, snapshot: int, slab: int) -> tuple[int, int, int]:
 
 
 def complex_normal(seed: int, snapshot: int, slab: int, out: np.ndarray) -> np.ndarray:
-    """Fill complex64 ``out`` (C-contiguous, any shape) with standard complex normals.
+    """Fill complex64 ``out`` (C-contiguous, any shape) with standard complex normals of one Mann slab.
 
     Real and imaginary parts are independent N(0, 1) (so E|n|^2 = 2), drawn from the stream
     keyed by (seed, snapshot, slab); components/rows follow in C order of ``out``.
     """
+    return keyed_complex_normal(slab_key(seed, snapshot, slab), out)
+
+
+def keyed_complex_normal(key: tuple[int, ...], out: np.ndarray) -> np.ndarray:
+    """Fill complex64 ``out`` (C-contiguous, any shape) with standard complex normals of the stream ``key``.
+
+    Parameters
+    ----------
+    key : tuple of int
+        Entropy of the stream (``SeedSequence(key)`` seeds an SFC64 generator); any fixed tuple of
+        non-negative integers naming the stream, never a call counter.
+    out : numpy.ndarray
+        complex64, C-contiguous; filled in C order.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``out``, whose real and imaginary parts are independent N(0, 1) (E|n|^2 = 2).
+    """
     n = out.size
     # One uint64 per complex value, viewed as 2n uint32: the first n give u1, the last n u2.
-    bits = SFC64(SeedSequence(slab_key(seed, snapshot, slab))).random_raw(n).view(np.uint32)
+    bits = SFC64(SeedSequence(tuple(int(k) for k in key))).random_raw(n).view(np.uint32)
     np.right_shift(bits, 8, out=bits)  # 24-bit integers, exact in float32
     ints = bits.view(np.int32)
     pairs = out.reshape(-1).view(np.float32).reshape(n, 2)
