@@ -22,7 +22,31 @@ MIN_NEFF = 10.0
 
 
 def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff: float, f_max_hz: float | None = None) -> MetricResult:
-    """MetricResult comparing simulated and theoretical gamma^2_RL bin by bin (bins 1 .. Nyquist-1)."""
+    """MetricResult comparing simulated and theoretical gamma^2_RL bin by bin (bins 1 .. Nyquist-1).
+
+    Bins are tested where the theory gives gamma^2 >= MIN_COH2 and f <= ``f_max_hz``, and only if
+    n_eff >= MIN_NEFF; each tested bin's z uses the delta-method mean and sd of
+    ``turbgen.validate.band_checks.coherence_stats``.
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Welch bin frequencies [Hz], 0 .. Nyquist.
+    coh2_sim : array_like
+        Simulated magnitude-squared coherence gamma^2_RL [-], one value per bin.
+    coh2_theory : array_like
+        Theoretical gamma^2_RL [-], one value per bin (clipped to [0, 1]).
+    n_eff : float
+        Effective number of independent Welch segments [-].
+    f_max_hz : float, optional
+        Highest frequency tested [Hz]; None (default) tests up to Nyquist-1.
+
+    Returns
+    -------
+    MetricResult
+        Metric "lidar_coherence": one Check per tested bin and the curve with its 95 % band
+        (mean +- 1.96 sd).
+    """
     f = np.asarray(f_hz, float)
     sim = np.asarray(coh2_sim, float)
     th = np.clip(np.asarray(coh2_theory, float), 0.0, 1.0)
@@ -42,7 +66,24 @@ def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff: float, f_max_hz: float 
 
 
 def crossing(f_hz, values, level: float) -> float | None:
-    """First frequency [Hz] where ``values`` falls below ``level`` (linear interpolation), None if never."""
+    """First frequency [Hz] where ``values`` falls below ``level`` (linear interpolation), None if never.
+
+    Bin 0 is skipped; non-finite values never count as a crossing.
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Frequencies [Hz], increasing.
+    values : array_like
+        Curve sampled at ``f_hz`` (e.g. gamma^2_RL or |G_RL|) [-].
+    level : float
+        Level to cross [-], in the units of ``values``.
+
+    Returns
+    -------
+    float or None
+        Crossing frequency [Hz]; ``f_hz[1]`` if bin 1 is already below; None if the curve never falls below.
+    """
     f, v = np.asarray(f_hz, float), np.asarray(values, float)
     below = np.nonzero((v[1:] < level) & np.isfinite(v[1:]))[0]
     if below.size == 0:
@@ -55,8 +96,28 @@ def crossing(f_hz, values, level: float) -> float | None:
 
 
 def preview_numbers(f_hz, coh2, gain, U_m_s: float) -> dict:
-    """MCB k_0.5 [rad/m] (gamma^2 = 0.5, Guo et al. 2024 Eq. 26), d_eddy,min = 2 pi / k_0.5 [m] and the
-    -3 dB cut-off of |G_RL| [Hz] (|G_RL| = 1/sqrt 2) of one set of curves."""
+    """MCB k_0.5 [rad/m], d_eddy,min [m] and the -3 dB cut-off of |G_RL| [Hz] of one set of curves.
+
+    k_0.5 = 2 pi f_0.5 / U where gamma^2 = 0.5 (Guo et al. 2024 Eq. 26), d_eddy,min = 2 pi / k_0.5, and
+    the cut-off is where |G_RL| = 1/sqrt 2.
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Frequencies [Hz], increasing (bin 0 is skipped, see :func:`crossing`).
+    coh2 : array_like
+        gamma^2_RL [-] at ``f_hz``.
+    gain : array_like
+        |G_RL| [-] at ``f_hz``.
+    U_m_s : float
+        Mean wind speed U [m/s].
+
+    Returns
+    -------
+    dict
+        ``k05_rad_m`` [rad/m], ``d_eddy_min_m`` [m] and ``cutoff_hz`` [Hz]; each None where its curve
+        never crosses its level.
+    """
     f05 = crossing(f_hz, coh2, 0.5)
     fc = crossing(f_hz, gain, 1.0 / np.sqrt(2.0))
     k05 = None if f05 is None else 2 * np.pi * f05 / U_m_s

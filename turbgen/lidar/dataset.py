@@ -27,7 +27,26 @@ MARKER = "turbgen_lidar_complete"
 
 
 def check_output(path, overwrite: bool) -> Path:
-    """Refuse an existing output without overwrite, or a missing/unwritable directory (before any work)."""
+    """Refuse an existing output without overwrite, or a missing/unwritable directory (before any work).
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output dataset path (``~`` expanded, made absolute).
+    overwrite : bool
+        Allow replacing an existing lidar dataset.
+
+    Returns
+    -------
+    pathlib.Path
+        The absolute output path.
+
+    Raises
+    ------
+    StoreError
+        If ``path`` exists and ``overwrite`` is False, exists and is not a zarr dataset, or its parent
+        directory is missing or not writable.
+    """
     path = Path(path).expanduser().absolute()
     if path.exists() and not overwrite:
         raise StoreError(f"{path} already exists; use `overwrite` to replace it")
@@ -53,7 +72,38 @@ def _jsonable(v):
 
 
 def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: bool = False) -> Path:
-    """Write the lidar dataset to ``path`` atomically; returns the absolute path."""
+    """Write the lidar dataset to ``path`` atomically; returns the absolute path.
+
+    Written under a hidden temporary name in the output directory, the completeness marker set last,
+    then renamed into place (an existing dataset is replaced only after the new one is complete).
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output zarr directory.
+    samples : LidarSamples
+        Sampled line-of-sight speeds (v_los [m/s], time_s [s], gates_x_m [m], n1 [-]).
+    t_arrival : numpy.ndarray
+        Rotor arrival time axis [s] of ``u_ll`` and ``u_rr``.
+    u_ll : numpy.ndarray
+        Lidar estimate u_LL of the rotor-effective wind speed [m/s].
+    u_rr : numpy.ndarray
+        Rotor-disc average u_RR at x = 0 [m/s].
+    attrs : dict
+        Dataset attributes; dict, list and tuple values are stored as JSON strings.
+    overwrite : bool, optional
+        Replace an existing lidar dataset (default False).
+
+    Returns
+    -------
+    pathlib.Path
+        The absolute path of the dataset.
+
+    Raises
+    ------
+    StoreError
+        As :func:`check_output`: existing output without ``overwrite``, or a missing/unwritable directory.
+    """
     import xarray as xr
 
     path = check_output(path, overwrite)

@@ -38,14 +38,45 @@ MAX_MEASUREMENTS = 4096  # beams x gates
 class LidarDescription:
     """A lidar and the rotor it previews. Angles in degrees, lengths in metres, rates in Hz.
 
-    kind : "pulsed" (Gaussian probe volume, FWHM ``fwhm_m``) or "cw" (Lorentzian, Rayleigh length
+    Parameters
+    ----------
+    name : str
+        Name of the lidar (a preset's key, or the file's stem).
+    kind : {"pulsed", "cw"}
+        "pulsed" (Gaussian probe volume, FWHM ``fwhm_m``) or "cw" (Lorentzian, Rayleigh length
         from ``wavelength_m``, ``beam_radius_m`` and the focus distance).
-    mount : "nacelle" (beams from ``azimuth_deg``, ``elevation_deg``) or "spinner" (beams on a cone of
+    mount : {"nacelle", "spinner"}
+        "nacelle" (beams from ``azimuth_deg``, ``elevation_deg``) or "spinner" (beams on a cone of
         half-angle ``half_cone_deg`` at scan angles ``scan_deg``, tilted with the shaft by ``tilt_deg``).
-    ranges_m : upstream distances x of the range gates (spinner: measurement range along the shaft
-        axis; the focus distance is x / cos(half cone)).
-    beam_rate_hz : beams measured per second, one beam at a time (all gates of a beam at once).
-    rotor_radius_m : radius R of the rotor whose effective wind speed the lidar previews.
+    ranges_m : tuple of float
+        Upstream distances x of the range gates [m], each in [1, 5000] (spinner: measurement range along
+        the shaft axis; the focus distance is x / cos(half cone)).
+    beam_rate_hz : float
+        Beams measured per second [Hz] (> 0), one beam at a time (all gates of a beam at once).
+    rotor_radius_m : float
+        Radius R [m] of the rotor whose effective wind speed the lidar previews, in [1, 500].
+    azimuth_deg, elevation_deg : tuple of float, optional
+        Nacelle beams: one azimuth and one elevation per beam [deg], each in [-80, 80].
+    half_cone_deg : float, optional
+        Spinner cone half-angle [deg], in [0, 80].
+    scan_deg : tuple of float, optional
+        Spinner scan angles [deg], at least one.
+    tilt_deg : float, optional
+        Spinner shaft tilt [deg], in [-30, 30].
+    fwhm_m : float, optional
+        Pulsed probe-volume FWHM [m], in [0.1, 1000] (default 30).
+    wavelength_m : float, optional
+        CW laser wavelength [m], in [1e-7, 1e-4] (default 1.565e-6).
+    beam_radius_m : float, optional
+        CW beam radius at the lens [m], in [1e-4, 1] (default 0.028).
+    source : str, optional
+        Where the values come from (not compared).
+
+    Raises
+    ------
+    ParameterError
+        For a value outside its range, an unknown kind or mount, no range gate, beams without their
+        angles, or more than MAX_MEASUREMENTS beams x gates.
     """
 
     name: str
@@ -96,21 +127,48 @@ class LidarDescription:
 
     @property
     def n_beams(self) -> int:
+        """Number of beams (nacelle: azimuths; spinner: scan angles).
+
+        Returns
+        -------
+        int
+            Number of beams [-].
+        """
         return len(self.azimuth_deg) if self.mount == "nacelle" else len(self.scan_deg)
 
     @property
     def scan_time_s(self) -> float:
-        """Time of one full scan (every beam once) [s]."""
+        """Time of one full scan (every beam once) [s].
+
+        Returns
+        -------
+        float
+            n_beams / beam_rate_hz [s].
+        """
         return self.n_beams / self.beam_rate_hz
 
     def directions(self) -> np.ndarray:
-        """Beam directions d (n_beams, 3) in (x upstream, y, z)."""
+        """Beam directions d (n_beams, 3) in (x upstream, y, z).
+
+        Returns
+        -------
+        numpy.ndarray
+            Unit beam directions (n_beams, 3) [-].
+        """
         if self.mount == "nacelle":
             return nacelle_directions(self.azimuth_deg, self.elevation_deg)
         return spinner_directions(self.half_cone_deg, self.scan_deg, self.tilt_deg)
 
     def measurement_points(self) -> Measurements:
-        """Every (beam, gate) measurement: LOS vector, focus point, probe-volume offsets and weights."""
+        """Every (beam, gate) measurement: LOS vector, focus point, probe-volume offsets and weights.
+
+        Returns
+        -------
+        Measurements
+            One row per beam-gate (beam-major); offsets [m] and weights [-] padded with zero weights to a
+            common length; focus [m] on the gate's plane x (nacelle) or at x / cos(half cone) along the beam
+            (spinner, Fu et al. 2023).
+        """
         d = self.directions()
         rows = []
         for b in range(self.n_beams):
@@ -138,13 +196,35 @@ class LidarDescription:
                             offsets_m=offsets, weights=weights, beam=beam, gate=gate)
 
     def schedule(self, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """Measurement times [s] from 0 to duration and the beam measured at each (one beam at a time)."""
+        """Measurement times [s] from 0 to duration and the beam measured at each (one beam at a time).
+
+        Parameters
+        ----------
+        duration_s : float
+            Duration [s] (> 0).
+
+        Returns
+        -------
+        tuple of (numpy.ndarray, numpy.ndarray)
+            Times k / beam_rate_hz [s] and beam index k mod n_beams, for k = 0 .. floor(duration * rate) - 1.
+
+        Raises
+        ------
+        ParameterError
+            If ``duration_s`` is not a finite number > 0.
+        """
         n = int(np.floor(check_positive("duration (s)", duration_s) * self.beam_rate_hz + 1e-9))
         k = np.arange(n)
         return k / self.beam_rate_hz, k % self.n_beams
 
     def to_attrs(self) -> dict:
-        """Every field, JSON-ready (for a store's attributes or a report)."""
+        """Every field, JSON-ready (for a store's attributes or a report).
+
+        Returns
+        -------
+        dict
+            Field name -> value, tuples as lists.
+        """
         return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}
 
 
@@ -174,14 +254,48 @@ PRESETS: dict[str, LidarDescription] = {
 }
 
 def lidar_from_mapping(data: dict, where: str = "lidar") -> LidarDescription:
-    """A LidarDescription from a mapping (a file's content), checked against schemas/lidar.schema.json."""
+    """A LidarDescription from a mapping (a file's content), checked against schemas/lidar.schema.json.
+
+    Parameters
+    ----------
+    data : dict
+        The lidar's fields (lists become tuples); ``name`` defaults to ``where``.
+    where : str, optional
+        Where the mapping comes from, for error messages (default "lidar").
+
+    Returns
+    -------
+    LidarDescription
+        The checked lidar.
+
+    Raises
+    ------
+    ParameterError
+        If the mapping does not satisfy the schema or a value is out of range.
+    """
     data = dict(check_mapping(data, "lidar", where))
     data.setdefault("name", where)
     return LidarDescription(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in data.items()})
 
 
 def load_lidar(name_or_path) -> LidarDescription:
-    """A preset by name, or a TOML/JSON lidar file (``schemas/lidar.schema.json``)."""
+    """A preset by name, or a TOML/JSON lidar file (``schemas/lidar.schema.json``).
+
+    Parameters
+    ----------
+    name_or_path : str or path-like
+        A key of PRESETS, or the path of a ``.toml``/``.json`` file.
+
+    Returns
+    -------
+    LidarDescription
+        The preset or the file's lidar (named after the file's stem unless it sets ``name``).
+
+    Raises
+    ------
+    ParameterError
+        If it is neither a preset nor an existing .toml/.json file, or the file is unreadable or invalid.
+    """
     key = str(name_or_path)
     if key in PRESETS:
         return PRESETS[key]
@@ -192,5 +306,23 @@ def load_lidar(name_or_path) -> LidarDescription:
 
 
 def with_ranges(lidar: LidarDescription, ranges_m) -> LidarDescription:
-    """The same lidar with other range gates (used by the range search)."""
+    """The same lidar with other range gates (used by the range search).
+
+    Parameters
+    ----------
+    lidar : LidarDescription
+        The lidar.
+    ranges_m : iterable of float
+        New range-gate distances [m], each in [1, 5000].
+
+    Returns
+    -------
+    LidarDescription
+        A copy with ``ranges_m`` replaced.
+
+    Raises
+    ------
+    ParameterError
+        If a range is out of [1, 5000] m, none is given, or beams x gates exceed MAX_MEASUREMENTS.
+    """
     return replace(lidar, ranges_m=tuple(float(x) for x in ranges_m))

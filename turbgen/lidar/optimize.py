@@ -26,6 +26,21 @@ MAX_CANDIDATES = 2000
 
 @dataclass(frozen=True)
 class Candidate:
+    """One evaluated lidar geometry of the search.
+
+    Parameters
+    ----------
+    range_m : float
+        Measurement range x [m].
+    half_cone_deg : float
+        Half-cone angle phi [deg].
+    k05_rad_m : float
+        Measurement coherence bandwidth k_0.5 [rad/m] (nan if gamma^2 never reaches 0.5).
+    cutoff_hz : float
+        -3 dB cut-off of |G_RL| [Hz] (nan if none).
+    buffer_time_s : float
+        T_buffer [s] (Fu et al. 2023 Eq. 31; nan without a cut-off).
+    """
     range_m: float
     half_cone_deg: float
     k05_rad_m: float
@@ -38,7 +53,33 @@ SEARCH_F_HZ = np.geomspace(2e-3, 0.25, 28)  # one spectral evaluation per candid
 
 def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch_delay_s: float = 0.9,
              f_delay_hz: float = 0.025, f_hz=SEARCH_F_HZ) -> Candidate:
-    """k_0.5, -3 dB cut-off and buffer time of one lidar (single range gate) for the Mann model."""
+    """k_0.5, -3 dB cut-off and buffer time of one lidar (single range gate) for the Mann model.
+
+    Parameters
+    ----------
+    lidar : LidarDescription
+        The lidar; its first range gate is the measurement range x [m].
+    params : MannParams
+        Mann model parameters.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    pitch_delay_s : float, optional
+        Pitch actuator delay T_pitch [s] (default 0.9, IEA 15 MW).
+    f_delay_hz : float, optional
+        Frequency [Hz] of the filter delay (Fu et al. 2023 Eq. 30; default 0.025).
+    f_hz : array_like, optional
+        Frequencies [Hz] of the spectral evaluation (default SEARCH_F_HZ).
+
+    Returns
+    -------
+    Candidate
+        The lidar's range, half-cone angle, k_0.5, cut-off and buffer time.
+
+    Raises
+    ------
+    ParameterError
+        For non-positive frequencies or a beam that does not look upstream.
+    """
     S = mann_preview_spectra(f_hz, lidar.measurement_points(), params, U_m_s, lidar.rotor_radius_m)
     k05 = coherence_bandwidth_rad_m(S.f_hz, S.coh2_RL, U_m_s)
     fc = cutoff_frequency_hz(S.f_hz, S.G_RL)
@@ -49,7 +90,36 @@ def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch
 
 def optimize_spinner(lidar: LidarDescription, params: MannParams, U_m_s: float, ranges_m, half_cones_deg,
                      *, pitch_delay_s: float = 0.9, progress=None) -> tuple[list[Candidate], Candidate | None]:
-    """All candidates of the grid and the best one with T_buffer >= 0 (None if no candidate has it)."""
+    """All candidates of the grid and the best one with T_buffer >= 0 (None if no candidate has it).
+
+    Parameters
+    ----------
+    lidar : LidarDescription
+        A spinner lidar; range and half-cone angle are replaced per candidate.
+    params : MannParams
+        Mann model parameters.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    ranges_m : iterable of float
+        Measurement ranges x to try [m].
+    half_cones_deg : iterable of float
+        Half-cone angles phi to try [deg].
+    pitch_delay_s : float, optional
+        Pitch actuator delay T_pitch [s] (default 0.9).
+    progress : callable, optional
+        Called with 1 after each candidate.
+
+    Returns
+    -------
+    tuple of (list of Candidate, Candidate or None)
+        Every candidate (range-major) and the feasible one with the largest k_0.5.
+
+    Raises
+    ------
+    ParameterError
+        If the lidar is not a spinner lidar, the grid is empty or has more than MAX_CANDIDATES
+        candidates, or a candidate's geometry is invalid.
+    """
     if lidar.mount != "spinner":
         raise ParameterError(f"lidar {lidar.name!r}: the range x half-cone search is for spinner lidars")
     ranges = [float(x) for x in ranges_m]

@@ -25,7 +25,29 @@ F_THEORY_MAX_HZ = 0.5
 
 
 def store_theory(fs, description, f_hz, radius_m: float):
-    """PreviewSpectra of ``description`` for the store's model and parameters at f_hz > 0."""
+    """PreviewSpectra of ``description`` for the store's model and parameters at f_hz > 0.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store (model and parameters read from its attributes).
+    description : LidarDescription
+        The lidar.
+    f_hz : array_like
+        Frequencies [Hz] (> 0).
+    radius_m : float
+        Rotor radius R [m].
+
+    Returns
+    -------
+    PreviewSpectra
+        S_RR, S_LL, S_RL at ``f_hz``.
+
+    Raises
+    ------
+    ParameterError
+        If a Kaimal store's longitudinal coherence is not the exponential model.
+    """
     from turbgen.lidar.preview import preview_spectra
     from turbgen.validate.store_run import kaimal_model_from_attrs, mann_params_from_attrs
 
@@ -42,6 +64,29 @@ def store_theory(fs, description, f_hz, radius_m: float):
 
 @dataclass
 class LidarReport:
+    """The virtual lidar's result on a store against the theory (see :func:`lidar_report`).
+
+    Parameters
+    ----------
+    store : str
+        Path of the store.
+    lidar : LidarDescription or object
+        The lidar.
+    run : LidarRun
+        The simulated run.
+    f_hz : numpy.ndarray
+        Welch bins 1 .. up to F_THEORY_MAX_HZ where the theory is evaluated [Hz].
+    coh2_theory : numpy.ndarray
+        Theoretical gamma^2_RL [-] at ``f_hz``.
+    G_theory : numpy.ndarray
+        Theoretical |G_RL| [-] at ``f_hz``.
+    theory_numbers : dict
+        k05_rad_m [rad/m], d_eddy_min_m [m], cutoff_hz [Hz] of the theory.
+    metric : MetricResult
+        The coherence verdict.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    """
     store: str
     lidar: object
     run: LidarRun
@@ -54,9 +99,25 @@ class LidarReport:
 
     @property
     def passed(self) -> bool:
+        """Whether the coherence metric passed.
+
+        Returns
+        -------
+        bool
+            True if every tested bin has |z| <= z_crit.
+        """
         return self.metric.passed
 
     def to_dict(self) -> dict:
+        """The report, JSON-ready.
+
+        Returns
+        -------
+        dict
+            Store, lidar parameters, rotor radius [m], mean-wind settings, scans, Welch setup, TIs [-],
+            simulated and theoretical numbers, the curves (bins 1 .. Nyquist-1 simulated, ``f_theory`` [Hz])
+            and the verdict.
+        """
         r, w = self.run, self.run.welch
         sl = slice(1, -1)
         worst = self.metric.worst
@@ -85,6 +146,13 @@ class LidarReport:
         }
 
     def text(self) -> str:
+        """A short human-readable summary: k_0.5 and cut-off simulated vs theory, TIs and the verdict.
+
+        Returns
+        -------
+        str
+            Several lines of text.
+        """
         d = self.to_dict()
 
         def num(v, fmt):
@@ -105,6 +173,26 @@ class LidarReport:
         return "\n".join(lines)
 
     def write(self, out, overwrite: bool = False) -> Path:
+        """Write the lidar dataset (``turbgen.lidar.dataset``) with the report's numbers as attributes.
+
+        Parameters
+        ----------
+        out : str or path-like
+            Output zarr directory.
+        overwrite : bool, optional
+            Replace an existing lidar dataset (default False).
+
+        Returns
+        -------
+        pathlib.Path
+            The absolute path of the dataset.
+
+        Raises
+        ------
+        StoreError
+            If ``out`` exists without ``overwrite``, is not a zarr dataset, or its directory is missing or
+            not writable.
+        """
         from turbgen.lidar.dataset import write_dataset
 
         r = self.run
@@ -125,8 +213,20 @@ class LidarReport:
         return write_dataset(out, r.samples, r.t_arrival_s, r.u_LL, r.u_RR, attrs, overwrite=overwrite)
 
     def plots(self, directory) -> list[Path]:
-        """gamma^2_RL and |G_RL|: simulated (95 % band of the estimator) against theory, MCB and cut-off
-        marked (the style of Guo et al. 2023 Fig. 4 and Fu et al. 2023 Fig. 6)."""
+        """gamma^2_RL and |G_RL|: simulated (95 % band of the estimator) against theory, MCB and cut-off marked.
+
+        The style of Guo et al. 2023 Fig. 4 and Fu et al. 2023 Fig. 6.
+
+        Parameters
+        ----------
+        directory : str or path-like
+            Directory for the figure (created if missing).
+
+        Returns
+        -------
+        list of pathlib.Path
+            The written ``lidar_coherence.png``.
+        """
         import matplotlib
 
         matplotlib.use("Agg")
@@ -168,8 +268,36 @@ class LidarReport:
 
 def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, shear_exponent=0.2,
                  nperseg=None) -> LidarReport:
-    """Run the virtual lidar on the open store ``fs`` and compare with theory (rotor radius: option,
-    else the lidar's turbine if it fits the grid, else the validator's default)."""
+    """Run the virtual lidar on the open store ``fs`` and compare with theory.
+
+    Rotor radius: the option, else the lidar's turbine if it fits the grid, else the validator's default.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    lidar : LidarDescription or str, optional
+        A lidar, a preset name or a lidar file; default DEFAULT_LIDAR.
+    rotor_radius_m : float, optional
+        Rotor radius R [m] (0 < R <= half the smaller grid extent).
+    add_mean_wind : bool, optional
+        Add the power-law mean wind to u before sampling (default False).
+    shear_exponent : float, optional
+        Power-law exponent alpha [-] of the mean wind (default 0.2).
+    nperseg : int, optional
+        Welch segment length [samples]; default :func:`turbgen.lidar.run.default_nperseg`.
+
+    Returns
+    -------
+    LidarReport
+        Simulated run, theory at the Welch bins up to F_THEORY_MAX_HZ and the verdict.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown lidar, a lidar that does not fit the store, a signal too short, or a store whose
+        model the lidar theory does not support.
+    """
     from turbgen.lidar.description import LidarDescription, load_lidar
 
     desc = lidar if isinstance(lidar, LidarDescription) else load_lidar(lidar or DEFAULT_LIDAR)

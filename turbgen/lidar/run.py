@@ -20,8 +20,21 @@ from turbgen.validate.point_sets import check_rotor_radius
 
 
 def measurements_of(description) -> list[Measurement]:
-    """The description's beam-gates (``turbgen.theory.lidar_geometry.Measurements`` rows) as
-    :class:`Measurement`, each taken from the plane of its gate's range ``ranges_m[gate]``."""
+    """The description's beam-gates as :class:`Measurement` rows.
+
+    Rows of ``turbgen.theory.lidar_geometry.Measurements``, each taken from the plane of its gate's
+    range ``ranges_m[gate]`` (if the description has ``ranges_m``).
+
+    Parameters
+    ----------
+    description : LidarDescription or object
+        Anything with ``measurement_points()`` (and optionally ``ranges_m`` [m]).
+
+    Returns
+    -------
+    list of Measurement
+        One per beam-gate.
+    """
     m = description.measurement_points()
     ranges = getattr(description, "ranges_m", None)
     return [
@@ -33,7 +46,18 @@ def measurements_of(description) -> list[Measurement]:
 
 
 def lidar_attrs(description) -> dict:
-    """Every parameter of the description (dataclass fields, or its own ``to_dict``)."""
+    """Every parameter of the description (its ``to_attrs``, else its dataclass fields, else its repr).
+
+    Parameters
+    ----------
+    description : LidarDescription or object
+        The lidar description.
+
+    Returns
+    -------
+    dict
+        Parameter name -> value.
+    """
     if hasattr(description, "to_attrs"):
         return dict(description.to_attrs())
     if dataclasses.is_dataclass(description):
@@ -43,6 +67,29 @@ def lidar_attrs(description) -> dict:
 
 @dataclass
 class LidarRun:
+    """The result of one virtual-lidar run (see :func:`run_lidar`).
+
+    Parameters
+    ----------
+    samples : LidarSamples
+        Sampled line-of-sight speeds.
+    t_arrival_s : numpy.ndarray
+        Rotor arrival time axis [s].
+    u_LL : numpy.ndarray
+        Lidar estimate of the rotor-effective wind speed [m/s].
+    u_RR : numpy.ndarray
+        Rotor-disc average u at x = 0 [m/s].
+    ti_lidar : float
+        Uncorrected lidar turbulence intensity [-].
+    ti_rotor : float
+        Rotor-averaged turbulence intensity [-].
+    welch : dict
+        Output of :func:`turbgen.lidar.signals.welch_rl`.
+    simulated : dict
+        k05_rad_m [rad/m], d_eddy_min_m [m], cutoff_hz [Hz] of the simulated curves.
+    rotor_radius_m : float
+        Rotor radius R used [m].
+    """
     samples: sampling.LidarSamples
     t_arrival_s: np.ndarray
     u_LL: np.ndarray
@@ -55,7 +102,23 @@ class LidarRun:
 
 
 def default_nperseg(n: int) -> int:
-    """Largest power of two <= n / 8 (about 15 half-overlapping Welch segments), at least 16."""
+    """Largest power of two <= n / 8 (about 15 half-overlapping Welch segments), at least 16.
+
+    Parameters
+    ----------
+    n : int
+        Signal length [samples] (scan steps).
+
+    Returns
+    -------
+    int
+        Welch segment length [samples].
+
+    Raises
+    ------
+    ParameterError
+        If ``n`` < 64.
+    """
     if n < 64:
         raise ParameterError(f"lidar signal of {n} samples is too short (needs >= 64 scan steps)")
     return max(16, 2 ** int(np.floor(np.log2(n / 8))))
@@ -63,7 +126,34 @@ def default_nperseg(n: int) -> int:
 
 def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shear_exponent=0.2,
               nperseg=None) -> LidarRun:
-    """Sample ``fs`` with ``description`` and estimate the simulated preview quality."""
+    """Sample ``fs`` with ``description`` and estimate the simulated preview quality.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    description : LidarDescription or object
+        The lidar (``measurement_points()`` and ``schedule(duration_s)``).
+    rotor_radius_m : float, optional
+        Rotor radius R [m] (0 < R <= half the smaller grid extent); None: the validator's default.
+    add_mean_wind : bool, optional
+        Add the power-law mean wind to u before sampling (default False).
+    shear_exponent : float, optional
+        Power-law exponent alpha [-] of the mean wind (default 0.2).
+    nperseg : int, optional
+        Welch segment length [samples]; None: :func:`default_nperseg`.
+
+    Returns
+    -------
+    LidarRun
+        Samples, u_LL, u_RR, TIs, Welch spectra and the simulated k_0.5 and cut-off.
+
+    Raises
+    ------
+    ParameterError
+        For a rotor radius that does not fit the grid, a lidar that does not fit the store (see
+        :func:`turbgen.lidar.sampling.sample`), a store without a plane x = 0, or a signal too short.
+    """
     g = fs.grid
     radius = check_rotor_radius(g, rotor_radius_m)
     ms = measurements_of(description)

@@ -32,10 +32,22 @@ PLANE_TOL_M = 1e-6
 class Measurement:
     """One beam-gate of a lidar.
 
-    beam, gate: indices; n: projection vector (3,) on (u, v, w) [-]; focus_m: (x, y, z) [m] of the
-    gate centre; offsets_m: probe-volume points along the beam [m] (0 = focus); weights: their
-    weights [-] (sum 1); direction: geometric unit direction (x, y, z) of the beam, default the
-    focus direction seen from the hub.
+    Parameters
+    ----------
+    beam, gate : int
+        Beam and range-gate indices.
+    n : tuple of float
+        Projection vector (3,) on (u, v, w) [-] (unit length).
+    focus_m : tuple of float
+        (x, y, z) of the gate centre [m].
+    offsets_m : tuple of float, optional
+        Probe-volume points along the beam [m] (0 = focus); default (0,).
+    weights : tuple of float, optional
+        Their weights [-] (>= 0, sum 1); default (1,).
+    direction : tuple of float, optional
+        Geometric unit direction (x, y, z) of the beam [-]; default the focus direction seen from the hub.
+    plane_x_m : float, optional
+        x of the gate's plane [m]; default the focus x (a tilted beam's focus may lie off it).
     """
 
     beam: int
@@ -48,7 +60,13 @@ class Measurement:
     plane_x_m: float | None = None  # the gate's plane; default the focus x (a tilted beam's focus may lie off it)
 
     def points_m(self) -> np.ndarray:
-        """Probe-volume points (k, 3) [m]."""
+        """Probe-volume points (k, 3) [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            Points focus + offset * direction, (k, 3) in (x upstream, y, z) [m], one row per offset.
+        """
         f = np.asarray(self.focus_m, float)
         d = np.asarray(self.direction, float) if self.direction is not None else f / np.linalg.norm(f)
         return f[None, :] + np.asarray(self.offsets_m, float)[:, None] * d[None, :]
@@ -56,7 +74,23 @@ class Measurement:
 
 @dataclass(frozen=True)
 class LidarSamples:
-    """v_los (n_scan, n_beam, n_gate) [m/s] at physical times time_s (n_scan, n_beam) [s]."""
+    """v_los (n_scan, n_beam, n_gate) [m/s] at physical times time_s (n_scan, n_beam) [s].
+
+    Parameters
+    ----------
+    v_los : numpy.ndarray
+        Line-of-sight speeds (n_scan, n_beam, n_gate) [m/s], float32, positive towards the lidar.
+    time_s : numpy.ndarray
+        Physical time of each beam's measurement (n_scan, n_beam) [s].
+    gates_x_m : numpy.ndarray
+        Plane x of each range gate (n_gate,) [m].
+    n1 : numpy.ndarray
+        Longitudinal projection n_1 of each measurement (n_beam, n_gate) [-].
+    mean_wind_added : bool
+        Whether the power-law mean wind was added to u.
+    shear_exponent : float
+        Power-law exponent alpha [-] used when the mean wind was added.
+    """
 
     v_los: np.ndarray
     time_s: np.ndarray
@@ -79,7 +113,27 @@ def _plane_index(grid, x: float, beam: int, gate: int) -> int:
 
 
 def check_measurements(fs, measurements) -> list[int]:
-    """Validate geometry and weights against the store; the plane index of each measurement."""
+    """Validate geometry and weights against the store; the plane index of each measurement.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    measurements : sequence of Measurement
+        The lidar's beam-gates.
+
+    Returns
+    -------
+    list of int
+        Index of the store plane of each measurement's gate (its ``plane_x_m``, default the focus x).
+
+    Raises
+    ------
+    ParameterError
+        If weights are negative, not one per offset or do not sum to 1; if n is not a unit vector; if a
+        gate is not a plane of the store (within 1e-6 relative); if a probe point leaves the yz field or
+        reaches behind the rotor (x < 0).
+    """
     g = fs.grid
     y, z = g.y(), g.z()
     planes = []
@@ -127,6 +181,33 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
     The schedule must be one beam at a time, cycling over all beams in a fixed order (a full scan =
     n_beam consecutive entries); the entries whose stored times fall outside the store are dropped
     at the end (whole scans only). add_mean_wind: add U (1 + z/h_hub)^alpha to u (False: fluctuations).
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store (its U [m/s], grid and hub height [m] are used).
+    measurements : sequence of Measurement
+        Every beam must have every gate.
+    times_s : array_like
+        Physical measurement times [s], one per schedule entry.
+    beam_of_sample : array_like
+        Beam index measured at each entry.
+    add_mean_wind : bool, optional
+        Add the power-law mean wind U (h / h_hub)^alpha to u (default False: fluctuations only).
+    shear_exponent : float, optional
+        Power-law exponent alpha [-] for ``add_mean_wind`` (default 0.2).
+
+    Returns
+    -------
+    LidarSamples
+        v_los of every whole scan that fits in the store, with times, gate planes and n_1.
+
+    Raises
+    ------
+    ParameterError
+        For invalid measurements (see :func:`check_measurements`), a beam missing a gate, a schedule that
+        is not one beam at a time in a repeating order, a store too short for two scans, or a probe point
+        below the ground when adding the mean wind.
     """
     g, U = fs.grid, fs.U_m_s
     planes = check_measurements(fs, measurements)
