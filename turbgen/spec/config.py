@@ -18,12 +18,50 @@ from turbgen.errors import ParameterError
 
 
 def load_schema(name: str) -> dict:
-    """The JSON Schema ``turbgen/schemas/<name>.schema.json``."""
+    """The JSON Schema ``turbgen/schemas/<name>.schema.json``.
+
+    Parameters
+    ----------
+    name : str
+        Schema name without suffix, e.g. "mann-run".
+
+    Returns
+    -------
+    dict
+        The parsed schema.
+
+    Raises
+    ------
+    FileNotFoundError
+        If turbgen has no such schema.
+    """
     return json.loads(importlib.resources.files("turbgen").joinpath(f"schemas/{name}.schema.json").read_text())
 
 
 def check_mapping(data, schema_name: str, where: str) -> dict:
-    """``data`` if it satisfies the schema, else ParameterError '<where>: <key path>: <message>'."""
+    """``data`` if it satisfies the schema, else ParameterError '<where>: <key path>: <message>'.
+
+    For a failed ``pattern`` the message gives the schema's description of what is expected, not the regex.
+
+    Parameters
+    ----------
+    data : object
+        The mapping (a file's content, a request body, ...).
+    schema_name : str
+        A schema of turbgen/schemas/, e.g. "mann-run".
+    where : str
+        Where ``data`` comes from, first in the message.
+
+    Returns
+    -------
+    dict
+        ``data`` itself.
+
+    Raises
+    ------
+    ParameterError
+        If ``data`` does not satisfy the schema (the best-matching error, with its key path).
+    """
     validator = jsonschema.Draft202012Validator(load_schema(schema_name))
     err = jsonschema.exceptions.best_match(validator.iter_errors(data))
     if err is not None:
@@ -54,8 +92,21 @@ def read_config(path, schema_name: str | None = None) -> dict:
 
     Parameters
     ----------
-    path : the file; any suffix other than .json is read as TOML.
-    schema_name : a schema of turbgen/schemas/ (e.g. "mann-run"), or None for a top-level table only.
+    path : str or path-like
+        The file; any suffix other than .json is read as TOML.
+    schema_name : str, optional
+        A schema of turbgen/schemas/ (e.g. "mann-run"), or None for a top-level table only.
+
+    Returns
+    -------
+    dict
+        The file's top-level table.
+
+    Raises
+    ------
+    ParameterError
+        If the file cannot be read, is not valid TOML/JSON, does not satisfy the schema, or (without a
+        schema) does not hold a table at the top level.
     """
     p = Path(path)
     kind = "JSON" if p.suffix.lower() == ".json" else "TOML"

@@ -56,8 +56,21 @@ def grid_from_mapping(given: Mapping | Grid | None, defaults: Mapping) -> Grid:
 
     Parameters
     ----------
-    given : the ``grid`` table (keys nt, dt_s, x_m [m], ny, nz, dy_m [m], dz_m [m]), a Grid, or None.
-    defaults : the model's default grid (MANN_GRID or KAIMAL_GRID, without dz_m).
+    given : Mapping or Grid or None
+        The ``grid`` table (keys nt, dt_s [s], x_m [m upstream], ny, nz, dy_m [m], dz_m [m]), a Grid
+        (returned as is), or None (all defaults).
+    defaults : Mapping
+        The model's default grid (MANN_GRID or KAIMAL_GRID, without dz_m).
+
+    Returns
+    -------
+    Grid
+        The grid (not checked against turbgen.theory.ranges here; the run classes do that).
+
+    Raises
+    ------
+    ParameterError
+        If the plane positions are empty or contain a duplicate (Grid's own checks).
     """
     if isinstance(given, Grid):
         return given

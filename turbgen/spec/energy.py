@@ -15,21 +15,34 @@ def resolve_ae(shape: MannParams, U_m_s: float, *, ae: float | None = None, sigm
                ti: float | None = None, turb_class: str = "A") -> tuple[float, str]:
     """alpha*eps^(2/3) [m^(4/3) s^-2] of a Mann run and a line saying how it was chosen.
 
+    The first of ``ae``, ``sigma_u_m_s``, ``ti``, ``turb_class`` that is given sets the level.
+
     Parameters
     ----------
-    shape : the Mann parameters (their ae is ignored).
-    U_m_s : mean wind speed [m/s] (for ``ti`` and the IEC class).
-
-    The first of ``ae``, ``sigma_u_m_s``, ``ti``, ``turb_class`` that is given sets the level.
-    ae : alpha*eps^(2/3) [m^(4/3) s^-2], taken as given.
-    sigma_u_m_s : target model sigma_u [m/s].
-    ti : target turbulence intensity sigma_u / U [-].
-    turb_class : IEC class whose NTM sigma_1 = Iref (0.75 U + 5.6) is the target when none of the above is given.
+    shape : MannParams
+        The Mann parameters (their ae is ignored).
+    U_m_s : float
+        Mean wind speed [m/s] (for ``ti`` and the IEC class).
+    ae : float, optional
+        alpha*eps^(2/3) [m^(4/3) s^-2], taken as given; in (0, 100].
+    sigma_u_m_s : float, optional
+        Target model sigma_u [m/s], in [0.001, 30].
+    ti : float, optional
+        Target turbulence intensity sigma_u / U [-], in (0, 1].
+    turb_class : str, optional
+        IEC class ("A+", "A", "B", "C") whose NTM sigma_1 = Iref (0.75 U + 5.6) is the target when none of
+        the above is given (default "A").
 
     Returns
     -------
-    (ae, how) : ae from the model variance (Mann 1994, Eq. 8 integrated over k) for the target sigma_u,
-        and "ae" or "model sigma_u: ..." (recorded with the store).
+    tuple of (float, str)
+        ae from the model variance (Mann 1994, Eq. 8 integrated over k) for the target sigma_u, and
+        "ae" or "model sigma_u: ..." (recorded with the store).
+
+    Raises
+    ------
+    ParameterError
+        If the given value is outside its range (turbgen.theory.ranges) or ``turb_class`` is unknown.
     """
     if ae is not None:
         return ranges.check("ae", ae), "ae"

@@ -34,11 +34,28 @@ _INPUT_KEYS = set(UNITS) | {"sigma_u_m_s", "ti", "turb_class", "grid"}
 class MannRun:
     """Everything that determines a Mann space-time field (Guo et al. 2023, Sect. 2.3.1).
 
-    params : Mann parameters (ae, L, Gamma, lifetimes, evolution time gamma [s]).
-    grid : planes x_m [m upstream], nt samples dt_s [s] apart (dx = U dt), ny x nz points dy_m, dz_m [m].
-    U_m_s : mean wind speed [m/s]; seed : random seed (>= 0); hub_height_m : metadata [m].
-    pad_yz : the synthesis box is pad_yz times wider in y and z than the output (cropped).
-    ae_from : how ae was chosen (text, recorded in the store).
+    Parameters
+    ----------
+    params : MannParams
+        Mann parameters (ae, L, Gamma, lifetimes, evolution time gamma [s]).
+    grid : Grid
+        Planes x_m [m upstream], nt samples dt_s [s] apart (dx = U dt), ny x nz points dy_m, dz_m [m];
+        checked against turbgen.theory.ranges.
+    U_m_s : float
+        Mean wind speed [m/s], in [0.5, 100].
+    seed : int
+        Random seed, in [0, 2^63 - 1].
+    hub_height_m : float, optional
+        Hub height [m] (metadata for exports), in [1, 1000]; default 150.
+    pad_yz : int, optional
+        The synthesis box is pad_yz times wider in y and z than the output (cropped), in [1, 8]; default 2.
+    ae_from : str, optional
+        How ae was chosen (text, recorded in the store).
+
+    Raises
+    ------
+    ParameterError
+        If a value or the grid is outside its range (turbgen.theory.ranges).
     """
 
     params: MannParams
@@ -57,15 +74,34 @@ class MannRun:
 
     @property
     def model(self) -> str:
-        """The model name ("mann"), the key of turbgen.runs.models.MODELS."""
+        """The model name ("mann"), the key of turbgen.runs.models.MODELS.
+
+        Returns
+        -------
+        str
+            "mann".
+        """
         return "mann"
 
     def plane_times_s(self) -> np.ndarray:
-        """Relative snapshot time t_n = x_n / U [s] of each plane, in storage order."""
+        """Relative snapshot time t_n = x_n / U [s] of each plane, in storage order.
+
+        Returns
+        -------
+        numpy.ndarray
+            t_n [s], one per plane.
+        """
         return self.grid.x() / self.U_m_s
 
     def parameters(self) -> dict:
-        """The keys of the run mapping that rebuild this run (with its grid), ae_from included."""
+        """The keys of the run mapping that rebuild this run (with its grid), ae_from included.
+
+        Returns
+        -------
+        dict
+            ae [m^(4/3) s^-2], length_scale_m [m], gamma [-], lifetime, factor1/2 [-], evo_time_s [s] (None:
+            frozen), U_m_s [m/s], seed, hub_height_m [m], pad_yz, ae_from.
+        """
         p = self.params
         return {
             "ae": p.ae, "length_scale_m": p.length_scale_m, "gamma": p.gamma, "lifetime": p.lifetime,
@@ -77,6 +113,11 @@ class MannRun:
         """model / parameters / derived / units / seed / U_m_s / hub_height_m attributes of the store.
 
         ``parameters`` holds the inputs, ``derived`` what was worked out from them (``ae_from``).
+
+        Returns
+        -------
+        dict
+            The store attributes (without the grid).
         """
         params = self.parameters()
         derived = {key: params.pop(key) for key in DERIVED_KEYS}
@@ -95,6 +136,21 @@ class MannRun:
         """The run of a store from its attributes (``parameters``, ``derived``, ``grid``).
 
         Stores written before the ``derived`` attribute (``ae_from`` among the parameters) are read too.
+
+        Parameters
+        ----------
+        attrs : Mapping
+            The store's attributes.
+
+        Returns
+        -------
+        MannRun
+            The run that wrote the store.
+
+        Raises
+        ------
+        ParameterError
+            If the attributes lack the Mann run or hold invalid values.
         """
         try:
             return cls.from_mapping({**attrs["parameters"], **attrs.get("derived", {}), "grid": attrs["grid"]})
@@ -107,6 +163,11 @@ class MannRun:
         Runs that differ from the named ones only in parameters the name does not show (lifetime,
         factor1/2, energy level, grid, pad-yz, hub height) get ``_p<8 hex digits>`` of everything
         that determines the field appended, so two different fields never share a default name.
+
+        Returns
+        -------
+        str
+            The store name, ending in ``.zarr``.
         """
         p = self.params
         evo = "frozen" if p.evo_time_s is None else f"{p.evo_time_s:g}"
@@ -124,6 +185,22 @@ class MannRun:
         The energy level (turbgen.spec.energy.resolve_ae): ``ae`` if given, else the ae giving the
         model sigma_u = ``sigma_u_m_s``, else ``ti`` * U, else the IEC NTM sigma_1 of ``turb_class``
         (default A) at U.
+
+        Parameters
+        ----------
+        d : Mapping
+            Keys of :meth:`parameters` (ae_from only with ae), ``sigma_u_m_s`` [m/s], ``ti`` [-],
+            ``turb_class`` and ``grid`` (see turbgen.spec.defaults.grid_from_mapping).
+
+        Returns
+        -------
+        MannRun
+            The run.
+
+        Raises
+        ------
+        ParameterError
+            For an unknown key or a value outside its range (turbgen.theory.ranges).
         """
         unknown = set(d) - _INPUT_KEYS
         if unknown:

@@ -47,7 +47,24 @@ REFERENCE_U_M_S = 16.0  # Guo et al. 2023, Table 1 caption: "with the mean wind 
 
 @dataclass(frozen=True)
 class MannPreset:
-    """Mann parameters of a stability class (speed-independent part; ae follows U)."""
+    """Mann parameters of a stability class (speed-independent part; ae follows U).
+
+    Parameters
+    ----------
+    length_scale_m, gamma, evo_time_s : float
+        L [m], Gamma [-] and evolution time gamma [s] (ranges of turbgen.theory.ranges).
+    factor1 : float, optional
+        The small-k slope of the Guo lifetime is -factor1 [-] (default 1).
+    lifetime : {"guo", "mann"}, optional
+        Lifetime model (default "guo").
+    ae_ref : float, optional
+        Table 1 alpha*eps^(2/3) at 16 m/s [m^(4/3) s^-2] (> 0), for comparison only.
+
+    Raises
+    ------
+    ParameterError
+        If a value is outside its range.
+    """
 
     length_scale_m: float
     gamma: float
@@ -65,7 +82,20 @@ class MannPreset:
 
 @dataclass(frozen=True)
 class KaimalPreset:
-    """Kaimal parameters of a stability class (sigma_1 follows U; ratios, scales and coherences fixed)."""
+    """Kaimal parameters of a stability class (sigma_1 follows U; ratios, scales and coherences fixed).
+
+    Parameters
+    ----------
+    sigma_ratios, length_scales_m : tuple of float
+        sigma_1..3 / sigma_1 [-] and Kaimal L1..L3 [m].
+    a_yz, lc_m, a_x, b_x : float
+        yz coherence a_yz [-] and Lc [m]; Eq. 18 a_x [-] (>= 0) and b_x [1/m] (>= 0).
+
+    Raises
+    ------
+    ParameterError
+        If a value is outside its range.
+    """
 
     sigma_ratios: tuple[float, float, float]
     length_scales_m: tuple[float, float, float]
@@ -84,7 +114,24 @@ class KaimalPreset:
 
 @dataclass(frozen=True)
 class StabilityPreset:
-    """A named stability class: Mann and/or Kaimal parameters, the IEC class that sets the TI."""
+    """A named stability class: Mann and/or Kaimal parameters, the IEC class that sets the TI.
+
+    Parameters
+    ----------
+    name : str
+        Preset name.
+    mann : MannPreset or None
+        Mann parameters.
+    kaimal : KaimalPreset or None
+        Kaimal parameters (at least one of ``mann``, ``kaimal`` is given).
+    turb_class, source : str, optional
+        IEC class "A+", "A" (default), "B" or "C"; where the numbers come from.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown class or neither ``mann`` nor ``kaimal``.
+    """
 
     name: str
     mann: MannPreset | None
@@ -100,7 +147,17 @@ class StabilityPreset:
 
 @dataclass(frozen=True)
 class KaimalSettings:
-    """What a Kaimal run takes from a preset: spectra/yz coherence and the exponential a_x, b_x."""
+    """What a Kaimal run takes from a preset: spectra/yz coherence and the exponential a_x, b_x.
+
+    Parameters
+    ----------
+    kaimal : KaimalParams
+        Spectra and yz coherence (sigmas [m/s], L1..L3 [m], a_yz [-], Lc [m]).
+    long_model : str
+        Longitudinal coherence model ("exp").
+    a_x, b_x : float
+        Eq. 18 parameters a_x [-] and b_x [1/m].
+    """
 
     kaimal: KaimalParams
     long_model: str
@@ -165,7 +222,24 @@ def _table(data: Mapping, where: str, allowed: set[str]) -> dict:
 
 
 def preset_from_mapping(name: str, data: Mapping) -> StabilityPreset:
-    """Build a preset from a plain mapping (one entry of a user preset file)."""
+    """Build a preset from a plain mapping (one entry of a user preset file).
+
+    Parameters
+    ----------
+    name : str
+        New preset name: letters, digits, '-' or '_', not a built-in name.
+    data : Mapping
+        Optional ``mann`` and ``kaimal`` tables, ``turb_class``, ``source`` (see the module docstring).
+
+    Returns
+    -------
+    StabilityPreset
+
+    Raises
+    ------
+    ParameterError
+        For a bad or built-in name, an unknown or missing key, or a value outside its range.
+    """
     if not isinstance(name, str) or not name or not name.replace("-", "").replace("_", "").isalnum():
         raise ParameterError(f"preset name {name!r} must be a non-empty word of letters, digits, '-' or '_'")
     if name in BUILTIN_PRESETS:
@@ -196,7 +270,22 @@ def preset_from_mapping(name: str, data: Mapping) -> StabilityPreset:
 
 
 def presets_from_mapping(data: Mapping) -> dict[str, StabilityPreset]:
-    """``{"presets": {NAME: {...}}}`` or ``{NAME: {...}}`` -> {name: StabilityPreset}."""
+    """``{"presets": {NAME: {...}}}`` or ``{NAME: {...}}`` -> {name: StabilityPreset}.
+
+    Parameters
+    ----------
+    data : Mapping
+        The content of a user preset file.
+
+    Returns
+    -------
+    dict of str to StabilityPreset
+
+    Raises
+    ------
+    ParameterError
+        If the table is not a mapping or an entry is invalid (see :func:`preset_from_mapping`).
+    """
     table = data.get("presets", data) if isinstance(data, Mapping) else data
     if not isinstance(table, Mapping):
         raise ParameterError("user presets must be a table/object NAME -> parameters")
@@ -204,12 +293,44 @@ def presets_from_mapping(data: Mapping) -> dict[str, StabilityPreset]:
 
 
 def load_presets(path: str | Path) -> dict[str, StabilityPreset]:
-    """Read user presets from a TOML or JSON file."""
+    """Read user presets from a TOML or JSON file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (``.json`` is JSON, anything else TOML).
+
+    Returns
+    -------
+    dict of str to StabilityPreset
+
+    Raises
+    ------
+    ParameterError
+        If the file is unreadable or invalid, or a preset is invalid.
+    """
     return presets_from_mapping(read_config(path))
 
 
 def get_preset(name: str, user: Mapping[str, StabilityPreset] | None = None) -> StabilityPreset:
-    """Built-in or user preset by name; ParameterError listing the known names otherwise."""
+    """Built-in or user preset by name; ParameterError listing the known names otherwise.
+
+    Parameters
+    ----------
+    name : str
+        Preset name.
+    user : Mapping of str to StabilityPreset, optional
+        User presets (shadowing built-in ones of the same name).
+
+    Returns
+    -------
+    StabilityPreset
+
+    Raises
+    ------
+    ParameterError
+        If ``name`` is not a known preset.
+    """
     known = {**BUILTIN_PRESETS, **(user or {})}
     if name not in known:
         raise ParameterError(f"preset = {name!r} is not one of {', '.join(known)}")
@@ -239,6 +360,26 @@ def mann_params_for(
     IEC NTM sigma_1 = Iref (0.75 U + 5.6) of the preset's class (Guo et al. 2023, Sect. 2.4): the run
     mapping of :func:`mann_run_keys` resolved by MannRun.from_mapping, as ``turbgen mann --preset``
     and the sweep do.
+
+    Parameters
+    ----------
+    preset : str or StabilityPreset
+        Preset name (built-in or in ``user``) or the preset itself.
+    U_m_s : float
+        Mean wind speed U [m/s], in [0.5, 100].
+    user : Mapping of str to StabilityPreset, optional
+        User presets (see :func:`get_preset`).
+    ae, length_scale_m, gamma, evo_time_s, factor1, lifetime, factor2 : optional
+        Overrides: ae [m^(4/3) s^-2], L [m], Gamma [-], gamma [s], factor1/2 [-], lifetime model.
+
+    Returns
+    -------
+    MannParams
+
+    Raises
+    ------
+    ParameterError
+        For an unknown preset, one without Mann parameters, or a value outside its range.
     """
     given = {"ae": ae, "length_scale_m": length_scale_m, "gamma": gamma, "evo_time_s": evo_time_s,
              "factor1": factor1, "lifetime": lifetime, "factor2": factor2}
@@ -263,6 +404,26 @@ def kaimal_settings_for(
 
     sigma_1 = Iref (0.75 U + 5.6) (IEC class of the preset), sigma_2,3 = sigma_1 x preset ratios;
     the longitudinal model is the exponential Eq. 18 with the preset's Table 2 a_x, b_x.
+
+    Parameters
+    ----------
+    preset : str or StabilityPreset
+        Preset name (built-in or in ``user``) or the preset itself.
+    U_m_s : float
+        Mean wind speed U [m/s], in [0.5, 100].
+    user : Mapping of str to StabilityPreset, optional
+        User presets (see :func:`get_preset`).
+    sigma_m_s, length_scales_m, a_yz, lc_m, a_x, b_x : optional
+        Overrides: sigmas [m/s], L1..L3 [m], a_yz [-], Lc [m], a_x [-], b_x [1/m].
+
+    Returns
+    -------
+    KaimalSettings
+
+    Raises
+    ------
+    ParameterError
+        For an unknown preset, one without Kaimal parameters, or a value outside its range.
     """
     p = _resolve(preset, user)
     if p.kaimal is None:
@@ -286,6 +447,22 @@ def mann_run_keys(preset: str | StabilityPreset, *, user: Mapping[str, Stability
     length_scale_m, gamma, evo_time_s, factor1, lifetime and turb_class: the run derives ae from
     the model variance for the class's sigma_1 at its U (the same ae as :func:`mann_params_for`).
     Used by ``turbgen mann --preset`` and by the sweep, so both build the same run.
+
+    Parameters
+    ----------
+    preset : str or StabilityPreset
+        Preset name (built-in or in ``user``) or the preset itself.
+    user : Mapping of str to StabilityPreset, optional
+        User presets (see :func:`get_preset`).
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    ParameterError
+        For an unknown preset or one without Mann parameters.
     """
     p = _resolve(preset, user)
     if p.mann is None:
@@ -313,6 +490,26 @@ def kaimal_run_keys(
     sigma_m_s, length_scales_m, a_yz, lc_m, long_model, a_x, b_x; ``turb_class`` (default: the
     preset's) sets sigma_1. Used by ``turbgen kaimal --preset`` and by the sweep, so both build
     the same run.
+
+    Parameters
+    ----------
+    preset : str or StabilityPreset
+        Preset name (built-in or in ``user``) or the preset itself.
+    U_m_s : float
+        Mean wind speed U [m/s], in [0.5, 100].
+    user : Mapping of str to StabilityPreset, optional
+        User presets (see :func:`get_preset`).
+    turb_class : str, optional
+        IEC class overriding the preset's.
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    ParameterError
+        For an unknown preset or class, one without Kaimal parameters, or U outside its range.
     """
     p = _resolve(preset, user)
     if turb_class is not None:
@@ -331,8 +528,26 @@ def kaimal_run_keys(
 
 def run_keys(model: str, preset: str | StabilityPreset, U_m_s: float, *,
              user: Mapping[str, StabilityPreset] | None = None, turb_class: str | None = None) -> dict:
-    """The run-mapping keys ``preset`` sets for ``model`` ("mann" or "kaimal") at U [m/s]:
-    :func:`mann_run_keys` or :func:`kaimal_run_keys` (``turb_class`` overrides a Kaimal preset's class)."""
+    """The run-mapping keys ``preset`` sets for ``model`` ("mann" or "kaimal") at U [m/s].
+
+    :func:`mann_run_keys` or :func:`kaimal_run_keys` (``turb_class`` overrides a Kaimal preset's class).
+
+    Parameters
+    ----------
+    model : {"mann", "kaimal"}
+        The model.
+    preset, U_m_s, user, turb_class : optional
+        As :func:`kaimal_run_keys` (U [m/s]); Mann uses ``preset`` and ``user`` only.
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    ParameterError
+        For a model without presets, or as :func:`mann_run_keys` / :func:`kaimal_run_keys`.
+    """
     if model == "mann":
         return mann_run_keys(preset, user=user)
     if model == "kaimal":
