@@ -24,7 +24,14 @@ class SweepLockedError(TurbgenError):
 
 
 class SweepLock:
-    """Context manager holding DIR's sweep lock; released on exit (only if still ours)."""
+    """Context manager holding DIR's sweep lock; released on exit (only if still ours).
+
+    Parameters
+    ----------
+    directory : str or Path
+        The sweep's output directory; the lock is ``directory/.turbgen-sweep.lock``. Entering the
+        context calls :meth:`acquire` (SweepLockedError if another sweep holds it).
+    """
 
     def __init__(self, directory: str | Path):
         self.path = Path(directory) / LOCK_NAME
@@ -48,6 +55,19 @@ class SweepLock:
         return holder.get("host") == self.owner["host"] and isinstance(pid, int) and not pid_alive(pid)
 
     def acquire(self) -> "SweepLock":
+        """Create the lock file with this process as owner, taking over a stale lock of a dead local process.
+
+        Returns
+        -------
+        SweepLock
+            ``self``.
+
+        Raises
+        ------
+        SweepLockedError
+            If a live process, one on another host, or an unreadable lock holds the directory, or the lock
+            file keeps changing (three attempts).
+        """
         for _ in range(3):
             try:
                 fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
@@ -70,6 +90,12 @@ class SweepLock:
         raise SweepLockedError(f"could not take the lock {self.path} (it keeps changing)")
 
     def release(self) -> None:
+        """Remove the lock file if it still names this owner (a lock taken over by another sweep is left).
+
+        Returns
+        -------
+        None
+        """
         if self._read() == self.owner:
             self.path.unlink(missing_ok=True)
 

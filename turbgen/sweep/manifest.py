@@ -48,7 +48,13 @@ CSV_COLUMNS = (
 
 
 def utc_now() -> str:
-    """Current UTC time, ISO 8601 to the second."""
+    """Current UTC time, ISO 8601 to the second.
+
+    Returns
+    -------
+    str
+        E.g. "2026-01-31T12:00:00+00:00".
+    """
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
 
@@ -57,6 +63,21 @@ def store_checksum(path: str | Path) -> str:
 
     Independent of chunking, compression and metadata (creation time), so two stores holding the
     same field have the same checksum.
+
+    Parameters
+    ----------
+    path : str or Path
+        The store.
+
+    Returns
+    -------
+    str
+        "sha256:" followed by 64 hex digits.
+
+    Raises
+    ------
+    StoreError
+        If ``path`` is not a complete, readable store, or a chunk is corrupted or holds NaN/inf.
     """
     fs = open_store(path)
     h = hashlib.sha256()
@@ -123,7 +144,26 @@ def _csv_text(records: list[dict]) -> str:
 
 
 def write_manifest(directory: str | Path, sweep: dict, records: list[dict]) -> None:
-    """Write manifest.json and manifest.csv for these records (atomically, JSON first)."""
+    """Write manifest.json and manifest.csv for these records (atomically, JSON first).
+
+    Parameters
+    ----------
+    directory : str or Path
+        The sweep's output directory.
+    sweep : dict
+        The sweep definition (``SweepPlan.to_dict``).
+    records : list of dict
+        One manifest record per run (see the module docstring).
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    OSError
+        If a file cannot be written (the temporary is removed).
+    """
     d = Path(directory)
     counts = {s: sum(r["status"] == s for r in records) for s in ("complete", "failed", "pending")}
     doc = {
@@ -138,7 +178,18 @@ def write_manifest(directory: str | Path, sweep: dict, records: list[dict]) -> N
 
 
 def read_manifest(directory: str | Path) -> dict | None:
-    """The previous manifest.json of DIR, or None when there is none (or it is unreadable)."""
+    """The previous manifest.json of DIR, or None when there is none (or it is unreadable).
+
+    Parameters
+    ----------
+    directory : str or Path
+        The sweep's output directory.
+
+    Returns
+    -------
+    dict or None
+        The manifest (with a ``runs`` list), or None.
+    """
     try:
         doc = json.loads((Path(directory) / MANIFEST_JSON).read_text())
     except (OSError, ValueError):

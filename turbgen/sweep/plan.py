@@ -31,8 +31,30 @@ def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int
               *, user: Mapping[str, StabilityPreset] | None = None):
     """The MannRun / KaimalRun of one preset run, exactly as ``turbgen mann|kaimal --preset`` builds it.
 
-    ``grid``: options with the sweep schema names; missing ones take the model's defaults
-    (turbgen.spec.defaults; dz defaults to dy).
+    Parameters
+    ----------
+    model : {"mann", "kaimal"}
+        The model.
+    preset : str or StabilityPreset
+        Preset name (built-in or in ``user``) or the preset itself.
+    U_m_s : float
+        Mean wind speed [m/s], in [0.5, 100].
+    seed : int
+        Random seed, in [0, 2^63 - 1].
+    grid : Mapping, optional
+        Options with the sweep schema names (nt, dt [s], planes [m], ny, nz, dy [m], dz [m],
+        hub_height [m]); missing ones take the model's defaults (turbgen.spec.defaults; dz defaults to dy).
+    user : Mapping of str to StabilityPreset, optional
+        User presets.
+
+    Returns
+    -------
+    MannRun or KaimalRun
+
+    Raises
+    ------
+    ParameterError
+        For an unknown model or preset, or a value outside its range.
     """
     spec = get_model(model).spec
     opts = dict(grid or {})
@@ -46,13 +68,39 @@ def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int
 
 
 def store_name(model: str, preset: str, U_m_s: float, seed: int) -> str:
-    """Readable, stable store name of one run: ``mann_neutral_U16_seed2.zarr``."""
+    """Readable, stable store name of one run: ``mann_neutral_U16_seed2.zarr``.
+
+    Parameters
+    ----------
+    model, preset : str
+        Model and preset names.
+    U_m_s : float
+        Mean wind speed [m/s] (written with ``:g``).
+    seed : int
+        Random seed.
+
+    Returns
+    -------
+    str
+    """
     return f"{model}_{preset}_U{U_m_s:g}_seed{seed}.zarr"
 
 
 @dataclass(frozen=True)
 class PlannedRun:
-    """One field of the sweep: the run object (MannRun or KaimalRun) and its store name."""
+    """One field of the sweep: the run object (MannRun or KaimalRun) and its store name.
+
+    Parameters
+    ----------
+    model, preset : str
+        Model and preset names.
+    U_m_s : float
+        Mean wind speed [m/s].
+    seed : int
+        Random seed.
+    run : MannRun or KaimalRun
+        The run.
+    """
 
     model: str
     preset: str
@@ -62,16 +110,32 @@ class PlannedRun:
 
     @property
     def store_name(self) -> str:
+        """The run's store name (:func:`store_name`).
+
+        Returns
+        -------
+        str
+        """
         return store_name(self.model, self.preset, self.U_m_s, self.seed)
 
     @property
     def name(self) -> str:
+        """The run's name in the manifest: its store name without ``.zarr``.
+
+        Returns
+        -------
+        str
+        """
         return self.store_name.removesuffix(".zarr")
 
 
 @dataclass(frozen=True)
 class SweepPlan:
-    """Validated sweep definition and its runs (models, presets, speeds, seeds in nested order)."""
+    """Validated sweep definition and its runs (models, presets, speeds, seeds in nested order).
+
+    Built by :func:`make_plan`; parameters as there (``speeds_m_s`` [m/s]), plus ``runs``, the
+    PlannedRun of every field.
+    """
 
     out: Path
     models: tuple[str, ...]
@@ -89,11 +153,28 @@ class SweepPlan:
     lidar: str | None = None  # lidar preset or file run on every field (turbgen lidar)
 
     def grid_options(self, model: str) -> dict:
-        """Grid options of ``model``'s runs (its table over the common one; missing = command default)."""
+        """Grid options of ``model``'s runs (its table over the common one; missing = command default).
+
+        Parameters
+        ----------
+        model : str
+            Model name.
+
+        Returns
+        -------
+        dict
+            Grid options with the sweep schema names.
+        """
         return {**self.grid, **self.model_grid.get(model, {})}
 
     def to_dict(self) -> dict:
-        """JSON-ready definition (for the manifest)."""
+        """JSON-ready definition (for the manifest).
+
+        Returns
+        -------
+        dict
+            Models, presets, speeds [m/s], seeds, grid tables, validate, lidar, chunks, user preset names, n_runs.
+        """
         return {
             "models": list(self.models),
             "presets": list(self.presets),
@@ -142,7 +223,43 @@ def make_plan(
     user_presets: Mapping[str, StabilityPreset] | None = None,
     lidar: str | None = None,
 ) -> SweepPlan:
-    """Check a sweep definition and build all its runs (ParameterError on the first bad value)."""
+    """Check a sweep definition and build all its runs (ParameterError on the first bad value).
+
+    Parameters
+    ----------
+    out : str or Path
+        Output directory; it and missing parents are created when the sweep runs (checked here).
+    models, presets, speeds, seeds : iterable
+        Model names, preset names, mean wind speeds [m/s] in [0.5, 100], seeds in [0, 2^63 - 1]; each
+        non-empty, without duplicates, within turbgen.theory.ranges.LIMITS (speeds, seeds, runs).
+    grid : Mapping, optional
+        Common grid options (sweep schema names, see :func:`build_run`).
+    model_grid : Mapping, optional
+        Model name -> grid options overriding ``grid``.
+    validate : bool, optional
+        Validate every field.
+    chunk_t : int, optional
+        Time steps per chunk (>= 1).
+    workers : int, optional
+        LocalCluster workers, in [1, 256]; excludes ``scheduler``.
+    scheduler : str, optional
+        Address tcp://HOST:PORT of a running dask scheduler.
+    user_presets : Mapping, optional
+        User presets by name.
+    lidar : str, optional
+        Lidar preset or file run on every field.
+
+    Returns
+    -------
+    SweepPlan
+        The checked plan with its runs.
+
+    Raises
+    ------
+    ParameterError
+        For any bad value, an unreachable scheduler, an unusable ``out``, duplicate store names, or a run
+        needing more memory than is available here (without a scheduler).
+    """
     models = _unique("models", models)
     for m in models:
         if m not in MODELS:
@@ -207,6 +324,20 @@ def check_plan_memory(runs) -> None:
 
     Each run's smallest footprint (turbgen.runs.models: Mann with one thread, Kaimal with its spectrum
     spilled to disk), checked once per distinct run apart from the seed.
+
+    Parameters
+    ----------
+    runs : iterable of PlannedRun
+        The planned runs.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    ParameterError
+        Naming the first run that does not fit and what to lower.
     """
     from turbgen.resources import available_memory_bytes, format_bytes
 
@@ -234,6 +365,23 @@ def check_scheduler_address(address: str, timeout_s: float = 3.0) -> str:
 
     Refuses malformed addresses and closed ports in one line within ``timeout_s`` seconds (dask itself
     retries for 30 s and then raises a traceback).
+
+    Parameters
+    ----------
+    address : str
+        Scheduler address (tcp:// assumed without a scheme).
+    timeout_s : float, optional
+        Connection timeout [s] (default 3).
+
+    Returns
+    -------
+    str
+        ``address``.
+
+    Raises
+    ------
+    ParameterError
+        If the address is malformed, nothing accepts connections there, or no dask scheduler answers.
     """
     import socket
     from urllib.parse import urlsplit
@@ -280,7 +428,23 @@ def _answers_as_scheduler(address: str, timeout_s: float) -> bool:
 
 
 def parse_seeds(value) -> list[int]:
-    """A list of ints, or a text like '1-21' / '1-3,9' (format checked by the schema) -> sorted seeds."""
+    """A list of ints, or a text like '1-21' / '1-3,9' (format checked by the schema) -> sorted seeds.
+
+    Parameters
+    ----------
+    value : str or list of int
+        The seeds.
+
+    Returns
+    -------
+    list of int
+        Sorted seeds (a text's ranges inclusive and merged).
+
+    Raises
+    ------
+    ParameterError
+        For a range that runs backwards or more seeds than turbgen.theory.ranges.LIMITS["seeds"].
+    """
     if not isinstance(value, str):
         ranges.check_count("seeds", len(value))
         return sorted(value)
@@ -299,8 +463,29 @@ def parse_seeds(value) -> list[int]:
 
 
 def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides) -> SweepPlan:
-    """Plan from a sweep mapping (file contents); non-None ``overrides`` (out, validate, workers,
-    scheduler, chunk_t) replace the file's values. Relative paths are relative to ``base_dir``."""
+    """Plan from a sweep mapping (file contents); non-None ``overrides`` replace the file's values.
+
+    Relative paths are relative to ``base_dir``.
+
+    Parameters
+    ----------
+    data : Mapping
+        Content of a sweep file (turbgen/schemas/sweep.schema.json).
+    base_dir : str or Path, optional
+        Directory of the sweep file (default ".").
+    **overrides
+        out, validate, workers, scheduler, chunk_t (see :func:`make_plan`); a scheduler drops the file's workers.
+
+    Returns
+    -------
+    SweepPlan
+
+    Raises
+    ------
+    ParameterError
+        If the mapping breaks the schema, a user preset is defined twice or invalid, no ``out`` is given,
+        or as :func:`make_plan`.
+    """
     check_mapping(data, "sweep", "sweep definition")
     base = Path(base_dir)
     user: dict[str, StabilityPreset] = {}
@@ -336,6 +521,23 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
 
 
 def plan_from_file(path: str | Path, **overrides) -> SweepPlan:
-    """Plan from a TOML or JSON sweep file (see :func:`plan_from_mapping`)."""
+    """Plan from a TOML or JSON sweep file (see :func:`plan_from_mapping`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The sweep file.
+    **overrides
+        As :func:`plan_from_mapping`.
+
+    Returns
+    -------
+    SweepPlan
+
+    Raises
+    ------
+    ParameterError
+        If the file is unreadable or invalid, or as :func:`plan_from_mapping`.
+    """
     data = read_config(path, "sweep")
     return plan_from_mapping(data, base_dir=Path(path).parent, **overrides)

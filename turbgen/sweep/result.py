@@ -10,7 +10,21 @@ import numpy as np
 
 @dataclass
 class SweepResult:
-    """Records of every planned run (manifest order) and what this invocation did."""
+    """Records of every planned run (manifest order) and what this invocation did.
+
+    Parameters
+    ----------
+    out : Path
+        The sweep's output directory.
+    records : list of dict
+        Manifest record of every planned run.
+    ran, skipped : int, optional
+        Runs generated now; existing complete stores kept.
+    seconds : float, optional
+        Wall time of the sweep [s].
+    failed : list of str, optional
+        Names of the runs that are not complete.
+    """
 
     out: Path
     records: list[dict]
@@ -21,22 +35,53 @@ class SweepResult:
 
     @property
     def ok(self) -> bool:
-        """True when every planned run has a complete store."""
+        """True when every planned run has a complete store.
+
+        Returns
+        -------
+        bool
+        """
         return all(r["status"] == "complete" for r in self.records)
 
     @property
     def validation_failed(self) -> list[str]:
-        """Runs whose field failed validation (only when the sweep validates)."""
+        """Runs whose field failed validation (only when the sweep validates).
+
+        Returns
+        -------
+        list of str
+            Run names.
+        """
         return [r["name"] for r in self.records if r.get("validation") and not r["validation"].get("passed")]
 
     @property
     def lidar_failed(self) -> list[str]:
-        """Runs whose virtual-lidar coherence departed from theory (only when the sweep runs a lidar)."""
+        """Runs whose virtual-lidar coherence departed from theory (only when the sweep runs a lidar).
+
+        Returns
+        -------
+        list of str
+            Run names.
+        """
         return [r["name"] for r in self.records if r.get("lidar") and not r["lidar"].get("passed")]
 
 
 def summary_table(result: SweepResult) -> str:
-    """Plain-text table of every run (name, status, action, seconds, sigma_u, validation, error)."""
+    """Plain-text table of every run (name, status, action, seconds, sigma_u, validation, error).
+
+    Followed by a totals line, and lines for failed validations, the lidar numbers (mean +- sd of
+    k_0.5 [rad/m] and cut-off [Hz] over the fields, with theory) and failed lidar checks.
+
+    Parameters
+    ----------
+    result : SweepResult
+        The sweep's outcome.
+
+    Returns
+    -------
+    str
+        The table, lines joined by newlines.
+    """
     rows = [("run", "status", "action", "seconds", "sigma_u", "validation", "error")]
     for r in result.records:
         sig = r.get("sigma_m_s") or [None]

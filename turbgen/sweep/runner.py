@@ -117,12 +117,36 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
               threads: int | None = None, memory_bytes: int | None = None) -> SweepResult:
     """Run every planned field that has no complete store yet; write DIR/manifest.{json,csv}.
 
-    ``client``: an existing dask.distributed Client (otherwise one is made from plan.scheduler or
-    a LocalCluster with plan.workers processes, threads if ``processes`` is False).
-    ``threads``: threads of each run (default: cores / workers for the sweep's own
-    LocalCluster, else all cores); never changes the fields. ``memory_bytes``: memory budget of each
-    run (`turbgen sweep --memory`): Mann runs that do not fit are made out of core (the same fields).
-    Raises SweepLockedError (before touching anything) when another sweep holds DIR.
+    Parameters
+    ----------
+    plan : SweepPlan
+        The checked sweep.
+    client : distributed.Client, optional
+        An existing client (otherwise one is made from plan.scheduler or a LocalCluster with
+        plan.workers processes, threads if ``processes`` is False).
+    processes : bool, optional
+        Worker processes (default True) or threads for the sweep's own LocalCluster.
+    progress : bool, optional
+        Show progress (default True).
+    threads : int, optional
+        Threads of each run (default: cores / workers for the sweep's own LocalCluster, else all
+        cores); never changes the fields.
+    memory_bytes : int, optional
+        Memory budget of each run [bytes] (`turbgen sweep --memory`): Mann runs that do not fit are
+        made out of core (the same fields).
+
+    Returns
+    -------
+    SweepResult
+        Every run's record; failing runs are recorded, not raised.
+
+    Raises
+    ------
+    SweepLockedError
+        Before touching anything, when another sweep holds DIR.
+    ParameterError
+        If ``out`` cannot hold the sweep (a file, not creatable, read-only), a planned store exists with
+        other parameters or grid (nothing run, manifest unchanged), or the disk lacks space for the stores.
     """
     t_start = time.perf_counter()
     out = plan.out

@@ -13,7 +13,31 @@ from turbgen.sweep.manifest import store_checksum
 
 @dataclass(frozen=True)
 class RunTask:
-    """What a worker needs for one run: generate (unless only checksumming an existing store)."""
+    """What a worker needs for one run: generate (unless only checksumming an existing store).
+
+    Parameters
+    ----------
+    model : str
+        Model name (key of turbgen.runs.models.MODELS).
+    run : MannRun or KaimalRun
+        The run.
+    path : str
+        Store path.
+    overwrite : bool
+        Replace an incomplete store.
+    chunk_t : int or None
+        Time steps per chunk (None: the generator's default).
+    validate : bool
+        Run turbgen.validate on the store.
+    generate : bool, optional
+        Generate the field (False: only checksum, validate, lidar an existing store).
+    threads : int, optional
+        Threads of one run (None: os.cpu_count(); never changes the field).
+    memory_bytes : int, optional
+        Memory budget of one run [bytes]: a Mann run that does not fit goes out of core.
+    lidar : str, optional
+        Lidar preset or file to run on the field (turbgen lidar).
+    """
 
     model: str
     run: object
@@ -28,13 +52,44 @@ class RunTask:
 
 
 def one_line(exc: BaseException) -> str:
-    """'ExceptionType: first line of its message' (for the manifest)."""
+    """'ExceptionType: first line of its message' (for the manifest).
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception.
+
+    Returns
+    -------
+    str
+        One line.
+    """
     text = str(exc).strip().splitlines()
     return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
 
 
 def validate_store(path: str, threads: int | None = None) -> dict:
-    """Summary of turbgen.validate on one store: passed, failed metrics, worst |z| vs critical z per metric."""
+    """Summary of turbgen.validate on one store: passed, failed metrics, worst |z| vs critical z per metric.
+
+    Parameters
+    ----------
+    path : str
+        The store.
+    threads : int, optional
+        Workers of the validator.
+
+    Returns
+    -------
+    dict
+        ``passed``, ``failed``, ``max_abs_z`` (metric -> [max |z|, z_crit]) and ``seconds`` [s].
+
+    Raises
+    ------
+    StoreError
+        If ``path`` is not a complete, readable store.
+    ParameterError
+        For bad input to the validator (e.g. a grid too small for it).
+    """
     from turbgen.validate import validate
 
     rep = validate(path, workers=threads)
@@ -47,7 +102,28 @@ def validate_store(path: str, threads: int | None = None) -> dict:
 
 
 def lidar_store(path: str, lidar: str) -> dict:
-    """Summary of the virtual lidar on one store: verdict, simulated and theoretical k_0.5 and cut-off."""
+    """Summary of the virtual lidar on one store: verdict, simulated and theoretical k_0.5 and cut-off.
+
+    Parameters
+    ----------
+    path : str
+        The store.
+    lidar : str
+        Lidar preset or file.
+
+    Returns
+    -------
+    dict
+        ``passed``, ``simulated`` and ``theory`` (k05_rad_m [rad/m], d_eddy_min_m [m], cutoff_hz [Hz]),
+        ``max_abs_z``, ``z_crit``.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown lidar or one that does not fit the store.
+    StoreError
+        If ``path`` is not a complete, readable store.
+    """
     from turbgen.lidar.report import lidar_report
     from turbgen.store import open_store
 
@@ -59,7 +135,19 @@ def lidar_store(path: str, lidar: str) -> dict:
 def execute_run(task: RunTask, shared=None) -> dict:
     """Worker side: generate one field, checksum it, optionally validate it. Never raises.
 
-    ``shared``: the part of the run shared between seeds (a Mann stencil), or None.
+    Parameters
+    ----------
+    task : RunTask
+        The run.
+    shared : object, optional
+        The part of the run shared between seeds (a Mann stencil), or None.
+
+    Returns
+    -------
+    dict
+        ``status`` ("complete" or "failed"), ``duration_s`` [s], and as available ``sigma_m_s`` [m/s],
+        ``checksum``, ``validation``, ``lidar`` and ``error`` (one line); a validator or lidar crash is
+        recorded in its entry and leaves the run complete.
     """
     t0 = time.perf_counter()
     out: dict = {"status": "failed"}
@@ -88,8 +176,20 @@ def execute_run(task: RunTask, shared=None) -> dict:
 
 
 def task_bytes(task: RunTask) -> int:
-    """Peak memory of one run with one thread (its generator's own estimate; a Mann stencil included),
-    at most its memory budget when the run can be made out of core within one."""
+    """Peak memory [bytes] of one run with one thread (its generator's own estimate; a Mann stencil included).
+
+    At most its memory budget when the run can be made out of core within one.
+
+    Parameters
+    ----------
+    task : RunTask
+        The run.
+
+    Returns
+    -------
+    int
+        Memory [bytes].
+    """
     model = MODELS[task.model]
     need = model.memory_bytes(task.run, 1)
     if task.generate and model.shared_part(task.run, task.threads, task.memory_bytes) is not None:
@@ -98,7 +198,18 @@ def task_bytes(task: RunTask) -> int:
 
 
 def default_workers(tasks) -> int:
-    """LocalCluster size: one worker per core, at most one per run, and as many as fit in 80 % of the memory."""
+    """LocalCluster size: one worker per core, at most one per run, and as many as fit in 80 % of the memory.
+
+    Parameters
+    ----------
+    tasks : iterable of RunTask
+        The runs to execute.
+
+    Returns
+    -------
+    int
+        Number of workers (>= 1).
+    """
     tasks = list(tasks)
     n = min(os.cpu_count() or 1, len(tasks))
     avail = available_memory_bytes()
