@@ -55,7 +55,26 @@ async def _read_json(request: Request):
 
 
 def create_app(root: Path, client, *, token: str | None = None, memory_budget: int, max_queue: int) -> FastAPI:
-    """The application over the catalog in ``root`` running jobs on the dask ``client``."""
+    """The application over the catalog in ``root`` running jobs on the dask ``client``.
+
+    Parameters
+    ----------
+    root : Path
+        The catalog's root directory (``root/runs`` is created if missing).
+    client : distributed.Client
+        Client the runs are submitted to.
+    token : str, optional
+        Bearer token every request must carry (None: open).
+    memory_budget : int
+        Memory budget of one run [bytes] (larger runs are refused with 413).
+    max_queue : int
+        Most runs queued or running at once.
+
+    Returns
+    -------
+    fastapi.FastAPI
+        The application (``app.state.jobs`` holds its job queue).
+    """
     catalog = Catalog(root)
     jobs = Jobs(catalog, client, max_queue)
     app = FastAPI(title="turbgen serve", version=__version__,

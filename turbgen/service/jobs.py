@@ -16,7 +16,32 @@ _STENCIL_LOCK = threading.Lock()  # one stencil build at a time: a second reques
 
 
 def execute(model: str, run, out: str, stencil_cache: str) -> dict:
-    """Worker side: generate ``run`` into the store ``out`` by the CLI's library path; the run summary."""
+    """Worker side: generate ``run`` into the store ``out`` by the CLI's library path; the run summary.
+
+    A shared part (a Mann stencil) is built one at a time per process, cached in ``stencil_cache``.
+
+    Parameters
+    ----------
+    model : str
+        Model name ("mann" or "kaimal").
+    run : MannRun or KaimalRun
+        The run.
+    out : str
+        Store path.
+    stencil_cache : str
+        Directory of cached shared parts.
+
+    Returns
+    -------
+    dict
+        The run summary's JSON-able scalar and list entries, without ``path``.
+
+    Raises
+    ------
+    TurbgenError
+        Whatever the model's generator raises (e.g. StoreError, ParameterError); the job records it as
+        the run's failure.
+    """
     from turbgen.runs.models import get_model
 
     entry = get_model(model)
@@ -30,6 +55,17 @@ def execute(model: str, run, out: str, stencil_cache: str) -> dict:
 
 
 def one_line(exc: BaseException) -> str:
+    """'ExceptionType: message' on one line (whitespace collapsed), for failed.json.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception.
+
+    Returns
+    -------
+    str
+    """
     text = " ".join(str(exc).split())
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
@@ -39,7 +75,17 @@ class QueueFull(Exception):
 
 
 class Jobs:
-    """Submitted runs by id (queued or running) on a dask client."""
+    """Submitted runs by id (queued or running) on a dask client.
+
+    Parameters
+    ----------
+    catalog : Catalog
+        The run directories.
+    client : distributed.Client
+        Client the runs are submitted to.
+    max_queue : int
+        Most runs queued or running at once.
+    """
 
     def __init__(self, catalog: Catalog, client, max_queue: int):
         self.catalog = catalog
@@ -50,7 +96,29 @@ class Jobs:
         self.computations = 0  # runs handed to dask since start (duplicates are joined, not counted)
 
     def submit(self, rid: str, model: str, run, preset: str | None = None) -> str:
-        """'complete' (already in the catalog), 'joined' (queued/running) or 'queued' (new computation)."""
+        """'complete' (already in the catalog), 'joined' (queued/running) or 'queued' (new computation).
+
+        Parameters
+        ----------
+        rid : str
+            Run id (:func:`turbgen.service.catalog.run_id`).
+        model : str
+            Model name.
+        run : MannRun or KaimalRun
+            The run.
+        preset : str, optional
+            Preset label for listing.
+
+        Returns
+        -------
+        str
+            "complete", "joined" or "queued".
+
+        Raises
+        ------
+        QueueFull
+            If ``max_queue`` runs are already queued or running.
+        """
         with self.lock:
             if rid in self.active:
                 return "joined"
@@ -88,17 +156,47 @@ class Jobs:
                     del self.active[rid]
 
     def is_active(self, rid: str) -> bool:
+        """True while run ``rid`` is queued or running here.
+
+        Parameters
+        ----------
+        rid : str
+            Run id.
+
+        Returns
+        -------
+        bool
+        """
         with self.lock:
             return rid in self.active
 
     def cancel(self, rid: str) -> None:
+        """Forget run ``rid`` and cancel its future (nothing if it is not active).
+
+        Parameters
+        ----------
+        rid : str
+            Run id.
+
+        Returns
+        -------
+        None
+        """
         with self.lock:
             fut = self.active.pop(rid, None)
         if fut is not None:
             fut.cancel()
 
     def resume(self) -> list[str]:
-        """Re-queue recorded runs that are neither complete nor failed (after a crash or kill -9)."""
+        """Re-queue recorded runs that are neither complete nor failed (after a crash or kill -9).
+
+        A run whose request cannot be read back is marked failed, never retried blindly.
+
+        Returns
+        -------
+        list of str
+            Ids of the re-queued runs.
+        """
         requeued = []
         for rid in self.catalog.ids():
             if self.catalog.is_complete(rid):

@@ -14,7 +14,17 @@ RETRY_AFTER_S = 5
 
 
 class LimitError(Exception):
-    """A request over a limit: HTTP ``status`` and a one-line message."""
+    """A request over a limit: HTTP ``status`` and a one-line message.
+
+    Parameters
+    ----------
+    status : int
+        HTTP status code of the answer (e.g. 401, 413, 422).
+    message : str
+        One-line message for the client.
+    headers : dict, optional
+        Extra response headers (e.g. WWW-Authenticate).
+    """
 
     def __init__(self, status: int, message: str, headers: dict | None = None):
         super().__init__(message)
@@ -23,7 +33,17 @@ class LimitError(Exception):
 
 
 def is_loopback(host: str) -> bool:
-    """True for localhost and loopback addresses (127.0.0.0/8, ::1)."""
+    """True for localhost and loopback addresses (127.0.0.0/8, ::1).
+
+    Parameters
+    ----------
+    host : str
+        Host name or IP address.
+
+    Returns
+    -------
+    bool
+    """
     if host == "localhost":
         return True
     try:
@@ -33,7 +53,25 @@ def is_loopback(host: str) -> bool:
 
 
 def read_token(path) -> str:
-    """The bearer token in ``path`` (first line, stripped); ValueError if it is empty or too short."""
+    """The bearer token in ``path`` (first line, stripped); ValueError if it is empty or too short.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The token file.
+
+    Returns
+    -------
+    str
+        The token (at least 16 characters).
+
+    Raises
+    ------
+    ValueError
+        If the token is shorter than 16 characters.
+    OSError
+        If the file cannot be read.
+    """
     with open(path) as f:
         token = f.readline().strip()
     if len(token) < 16:
@@ -42,7 +80,24 @@ def read_token(path) -> str:
 
 
 def check_token(expected: str | None, authorization: str | None) -> None:
-    """LimitError 401 unless ``authorization`` is 'Bearer <expected>' (no token configured: open)."""
+    """LimitError 401 unless ``authorization`` is 'Bearer <expected>' (no token configured: open).
+
+    Parameters
+    ----------
+    expected : str or None
+        The server's token; None accepts every request.
+    authorization : str or None
+        The request's Authorization header.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    LimitError
+        Status 401 (with WWW-Authenticate: Bearer) for a missing or wrong token.
+    """
     if expected is None:
         return
     scheme, _, given = (authorization or "").partition(" ")
@@ -52,7 +107,25 @@ def check_token(expected: str | None, authorization: str | None) -> None:
 
 
 def run_memory_bytes(model: str, run) -> int:
-    """Memory [bytes] the run allocates (the runs/ estimates the CLI checks before allocating)."""
+    """Memory [bytes] the run allocates (the runs/ estimates the CLI checks before allocating).
+
+    Parameters
+    ----------
+    model : str
+        Model name ("mann" or "kaimal").
+    run : MannRun or KaimalRun
+        The run.
+
+    Returns
+    -------
+    int
+        Estimated memory [bytes] with the default number of threads.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown model.
+    """
     from turbgen.resources import default_threads
     from turbgen.runs.models import get_model
 
@@ -60,7 +133,27 @@ def run_memory_bytes(model: str, run) -> int:
 
 
 def check_memory(model: str, run, budget_bytes: int) -> int:
-    """LimitError 413 naming the estimate, the budget and what to change when the run does not fit."""
+    """LimitError 413 naming the estimate, the budget and what to change when the run does not fit.
+
+    Parameters
+    ----------
+    model : str
+        Model name ("mann" or "kaimal").
+    run : MannRun or KaimalRun
+        The run.
+    budget_bytes : int
+        The server's memory budget [bytes].
+
+    Returns
+    -------
+    int
+        The run's estimated memory [bytes].
+
+    Raises
+    ------
+    LimitError
+        Status 413 if the estimate exceeds ``budget_bytes``.
+    """
     from turbgen.runs.models import get_model
 
     need = run_memory_bytes(model, run)

@@ -76,7 +76,18 @@ refresh(); setInterval(refresh, 1000);
 
 
 def index_html(token_required: bool) -> str:
-    """The page; with a token configured the form asks for it (kept in the page only, never stored)."""
+    """The page; with a token configured the form asks for it (kept in the page only, never stored).
+
+    Parameters
+    ----------
+    token_required : bool
+        Whether the server needs a bearer token.
+
+    Returns
+    -------
+    str
+        The HTML page (built-in presets listed, turbgen version shown).
+    """
     presets = "".join(f"<option>{html.escape(name)}</option>" for name in sorted(BUILTIN_PRESETS))
     token = '<label>token <input name="token" type="password" size="12"></label>' if token_required else ""
     return _PAGE.format(version=html.escape(__version__), presets=presets, token=token)
