@@ -133,8 +133,32 @@ class PlannedRun:
 class SweepPlan:
     """Validated sweep definition and its runs (models, presets, speeds, seeds in nested order).
 
-    Built by :func:`make_plan`; parameters as there (``speeds_m_s`` [m/s]), plus ``runs``, the
-    PlannedRun of every field.
+    Built by :func:`make_plan`, which checks every value.
+
+    Parameters
+    ----------
+    out : Path
+        Output directory.
+    models, presets : tuple of str
+        Model and preset names.
+    speeds_m_s : tuple of float
+        Mean wind speeds [m/s].
+    seeds : tuple of int
+        Random seeds.
+    grid, model_grid : Mapping, optional
+        Common grid options (sweep schema names); model name -> options overriding them.
+    validate : bool, optional
+        Validate every field.
+    chunk_t, workers : int, optional
+        Time steps per chunk; LocalCluster workers.
+    scheduler : str, optional
+        Address of a running dask scheduler.
+    user_presets : Mapping, optional
+        User presets by name.
+    runs : tuple of PlannedRun, optional
+        Every field, models x presets x speeds x seeds in nested order.
+    lidar : str, optional
+        Lidar preset or file run on every field.
     """
 
     out: Path
