@@ -370,7 +370,7 @@ def test_readme_shows_the_ranges_table():
 
 def test_default_store_names_differ_whenever_the_field_does():
     """Parameters the readable name does not show add a digest; defaults keep the short name."""
-    from turbgen.spec.presets import kaimal_run_keys
+    from turbgen.spec.preset_runs import kaimal_run_keys
     from turbgen.spec.kaimal import KaimalRun
     from turbgen.spec.mann import MannRun
 

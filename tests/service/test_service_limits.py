@@ -136,7 +136,7 @@ def test_restart_after_kill_9(tmp_path):
     srv = Server(root)
     try:
         assert srv.call("GET", f"/runs/{done}")[2]["status"] == "complete"
-        assert srv.call("GET", f"/health")[2]["computations"] == 1  # only the interrupted run is recomputed
+        assert srv.call("GET", "/health")[2]["computations"] == 1  # only the interrupted run is recomputed
         state = srv.call("GET", f"/runs/{slow}")[2]["status"]
         assert state in ("queued", "running", "complete")
         if state != "complete":
@@ -152,7 +152,7 @@ def test_restart_after_kill_9(tmp_path):
 @pytest.mark.parametrize("model", ["mann", "kaimal"])
 def test_a_preset_request_builds_the_run_of_the_cli_and_the_sweep(model):
     # the service's request -> run path is the registry's, as `turbgen mann|kaimal --preset` and sweeps
-    from turbgen.service.catalog import build_run
+    from turbgen.service.run_ids import build_run
     from turbgen.sweep.plan import build_run as sweep_run
 
     name, run = build_run({"model": model, "preset": "stable", "U_m_s": 12.0, "seed": 4})

@@ -5,13 +5,9 @@ import json
 import pytest
 
 from turbgen.errors import ParameterError
-from turbgen.spec.presets import (
-    BUILTIN_PRESETS,
-    get_preset,
-    kaimal_settings_for,
-    load_presets,
-    mann_params_for,
-)
+from turbgen.spec.presets import BUILTIN_PRESETS, get_preset
+from turbgen.spec.preset_files import load_presets
+from turbgen.spec.preset_runs import kaimal_settings_for, mann_params_for
 from turbgen.theory.kaimal import iec_sigma1_m_s
 from turbgen.theory.mann_spectra import variances
 

@@ -11,7 +11,7 @@ from turbgen.spec.defaults import KAIMAL_GRID, MANN_GRID, grid_from_mapping
 from turbgen.spec.energy import resolve_ae
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
-from turbgen.spec.presets import mann_params_for, mann_run_keys
+from turbgen.spec.preset_runs import mann_params_for, mann_run_keys
 from turbgen.theory.kaimal import iec_sigma1_m_s
 from turbgen.theory.mann_spectra import ae_for_sigma_u
 from turbgen.theory.params import MannParams

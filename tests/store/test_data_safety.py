@@ -24,7 +24,7 @@ import zarr
 from click.testing import CliRunner
 
 from turbgen.cli import cli
-from turbgen.errors import ParameterError, StoreError
+from turbgen.errors import StoreError
 from turbgen.store import open_store
 from turbgen.store import temporaries
 from turbgen.store.temporaries import parse_temp, pid_alive, remove_dead_temporaries

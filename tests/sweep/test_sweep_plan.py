@@ -10,7 +10,7 @@ import click
 import pytest
 
 from turbgen.errors import ParameterError
-from turbgen.spec.presets import kaimal_settings_for
+from turbgen.spec.preset_runs import kaimal_settings_for
 from turbgen.sweep import SweepLock, SweepLockedError, make_plan, plan_from_file, store_name
 from turbgen.sweep.lock import LOCK_NAME
 from turbgen.sweep.manifest import read_manifest, write_manifest

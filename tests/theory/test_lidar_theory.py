@@ -9,7 +9,7 @@ from click.testing import CliRunner
 from turbgen.errors import ParameterError
 from turbgen.lidar.description import PRESETS, LidarDescription, load_lidar
 from turbgen.lidar.preview import preview_spectra
-from turbgen.spec.presets import mann_params_for
+from turbgen.spec.preset_runs import mann_params_for
 from turbgen.theory.kaimal import kaimal_spectrum
 from turbgen.theory.lidar_geometry import Measurements, los_vectors, nacelle_directions, spinner_directions
 from turbgen.theory.lidar_preview import (

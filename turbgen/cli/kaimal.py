@@ -14,7 +14,8 @@ from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X
 from turbgen.spec.defaults import KAIMAL_DEFAULTS as D
 from turbgen.spec.defaults import KAIMAL_GRID as G
 from turbgen.spec.kaimal import LONG_COMPONENTS, VW_COHERENCE, KaimalRun
-from turbgen.spec.presets import kaimal_run_keys, load_presets
+from turbgen.spec.preset_files import load_presets
+from turbgen.spec.preset_runs import kaimal_run_keys
 from turbgen.store.paths import check_output_path
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS
 from turbgen.theory.kaimal import IEC_IREF

@@ -16,7 +16,8 @@ from turbgen.runs.mann_outofcore import BASE_BYTES, remove_stale_scratch
 from turbgen.spec.defaults import MANN_DEFAULTS as D
 from turbgen.spec.defaults import MANN_GRID as G
 from turbgen.spec.mann import MannRun
-from turbgen.spec.presets import load_presets, mann_run_keys
+from turbgen.spec.preset_files import load_presets
+from turbgen.spec.preset_runs import mann_run_keys
 from turbgen.store.paths import check_output_path
 from turbgen.theory.params import LIFETIMES
 from turbgen.theory.ranges import LIMITS

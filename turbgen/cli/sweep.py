@@ -47,7 +47,7 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
     3 when all stores are complete but some failed validation or the lidar coherence check (see the summary and
     the manifest).
     """
-    from turbgen.spec.presets import load_presets
+    from turbgen.spec.preset_files import load_presets
     from turbgen.sweep import make_plan, plan_from_file, run_sweep, summary_table
 
     grid = {

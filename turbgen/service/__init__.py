@@ -1,6 +1,7 @@
 """`turbgen serve`: an HTTP face over runs/, sweep/, export/ and validate/ (no science here).
 
-catalog   run ids (hash of model, canonical parameters, grid, seed, turbgen version) and the on-disk catalog
+run_ids   run requests and ids (hash of model, canonical parameters, grid, seed, turbgen version)
+catalog   the on-disk catalog of runs
 jobs      the job queue on dask.distributed (dedupe, progress, restart)
 limits    body size, memory budget, queue length, bearer token
 pages     the server-rendered web page at /

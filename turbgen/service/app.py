@@ -20,7 +20,8 @@ from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
 
 from turbgen import __version__
 from turbgen.errors import ParameterError, TurbgenError
-from turbgen.service.catalog import Catalog, build_run, canonical_mapping, run_id
+from turbgen.service.catalog import Catalog
+from turbgen.service.run_ids import build_run, canonical_mapping, run_id
 from turbgen.service.jobs import Jobs, QueueFull
 from turbgen.service.limits import MAX_BODY_BYTES, RETRY_AFTER_S, LimitError, check_memory, check_token
 from turbgen.service.pages import index_html
@@ -190,7 +191,7 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         body = await _read_json(request)
         if not isinstance(body, dict):
             raise ParameterError("request body: expected a JSON object with the sweep config")
-        from turbgen.sweep.plan import plan_from_mapping
+        from turbgen.sweep.plan_file import plan_from_mapping
 
         body = {**body, "out": "unused"}
         if "preset_file" in body:

@@ -10,7 +10,8 @@ from __future__ import annotations
 import threading
 import uuid
 
-from turbgen.service.catalog import Catalog, canonical_mapping, run_from_canonical, write_json_atomic
+from turbgen.service.catalog import Catalog, write_json_atomic
+from turbgen.service.run_ids import canonical_mapping, run_from_canonical
 
 _STENCIL_LOCK = threading.Lock()  # one stencil build at a time: a second request for it waits and reuses it
 
@@ -101,7 +102,7 @@ class Jobs:
         Parameters
         ----------
         rid : str
-            Run id (:func:`turbgen.service.catalog.run_id`).
+            Run id (:func:`turbgen.service.run_ids.run_id`).
         model : str
             Model name.
         run : MannRun or KaimalRun

@@ -166,7 +166,7 @@ class KaimalRun:
         preset : str, optional
             Preset name shown in the name instead of the class.
         preset_keys : Mapping, optional
-            The preset's run keys (from turbgen.spec.presets.kaimal_run_keys).
+            The preset's run keys (from turbgen.spec.preset_runs.kaimal_run_keys).
 
         Returns
         -------

@@ -6,7 +6,8 @@
 """
 
 from turbgen.sweep.lock import SweepLock, SweepLockedError
-from turbgen.sweep.plan import PlannedRun, SweepPlan, make_plan, plan_from_file, plan_from_mapping, store_name
+from turbgen.sweep.plan import PlannedRun, SweepPlan, make_plan, store_name
+from turbgen.sweep.plan_file import plan_from_file, plan_from_mapping
 from turbgen.sweep.runner import SweepResult, run_sweep, summary_table
 
 __all__ = [

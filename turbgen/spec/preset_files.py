@@ -1,0 +1,116 @@
+"""User stability presets from TOML or JSON files.
+
+A file holds ``{"presets": {NAME: {...}}}`` (or the mapping NAME -> {...} directly), each entry with an
+optional ``mann`` table (L, gamma, evo, factor1, lifetime, ae_ref) and an optional ``kaimal`` table
+(sigma_ratios, length_scales_m, a_yz, lc_m, a_x, b_x), plus ``turb_class`` (IEC class, default "A") and
+``source`` (free text). The built-in presets are in turbgen.spec.presets.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+from turbgen.errors import ParameterError
+from turbgen.spec.config import read_config
+from turbgen.spec.presets import BUILTIN_PRESETS, KaimalPreset, MannPreset, StabilityPreset
+
+
+def _table(data: Mapping, where: str, allowed: set[str]) -> dict:
+    if not isinstance(data, Mapping):
+        raise ParameterError(f"{where} must be a table/object, got {type(data).__name__}")
+    unknown = sorted(set(data) - allowed)
+    if unknown:
+        raise ParameterError(f"{where}: unknown key(s) {', '.join(unknown)}; allowed: {', '.join(sorted(allowed))}")
+    return dict(data)
+
+
+def preset_from_mapping(name: str, data: Mapping) -> StabilityPreset:
+    """Build a preset from a plain mapping (one entry of a user preset file).
+
+    Parameters
+    ----------
+    name : str
+        New preset name: letters, digits, '-' or '_', not a built-in name.
+    data : Mapping
+        Optional ``mann`` and ``kaimal`` tables, ``turb_class``, ``source`` (see the module docstring).
+
+    Returns
+    -------
+    StabilityPreset
+
+    Raises
+    ------
+    ParameterError
+        For a bad or built-in name, an unknown or missing key, or a value outside its range.
+    """
+    if not isinstance(name, str) or not name or not name.replace("-", "").replace("_", "").isalnum():
+        raise ParameterError(f"preset name {name!r} must be a non-empty word of letters, digits, '-' or '_'")
+    if name in BUILTIN_PRESETS:
+        raise ParameterError(f"preset name {name!r} is built in; choose another name for a user preset")
+    d = _table(data, f"preset {name!r}", {"mann", "kaimal", "turb_class", "source"})
+    mann = kaimal = None
+    try:
+        if "mann" in d:
+            m = _table(d["mann"], f"preset {name!r} mann", {"L", "gamma", "evo", "factor1", "lifetime", "ae_ref"})
+            missing = {"L", "gamma", "evo"} - set(m)
+            if missing:
+                raise ParameterError(f"preset {name!r} mann: missing {', '.join(sorted(missing))}")
+            mann = MannPreset(
+                m["L"], m["gamma"], m["evo"], m.get("factor1", 1.0), m.get("lifetime", "guo"), m.get("ae_ref")
+            )
+        if "kaimal" in d:
+            keys = {"sigma_ratios", "length_scales_m", "a_yz", "lc_m", "a_x", "b_x"}
+            k = _table(d["kaimal"], f"preset {name!r} kaimal", keys)
+            missing = keys - set(k)
+            if missing:
+                raise ParameterError(f"preset {name!r} kaimal: missing {', '.join(sorted(missing))}")
+            kaimal = KaimalPreset(
+                tuple(k["sigma_ratios"]), tuple(k["length_scales_m"]), k["a_yz"], k["lc_m"], k["a_x"], k["b_x"]
+            )
+    except TypeError as exc:
+        raise ParameterError(f"preset {name!r}: {exc}") from None
+    return StabilityPreset(name, mann, kaimal, d.get("turb_class", "A"), str(d.get("source", "user preset")))
+
+
+def presets_from_mapping(data: Mapping) -> dict[str, StabilityPreset]:
+    """``{"presets": {NAME: {...}}}`` or ``{NAME: {...}}`` -> {name: StabilityPreset}.
+
+    Parameters
+    ----------
+    data : Mapping
+        The content of a user preset file.
+
+    Returns
+    -------
+    dict of str to StabilityPreset
+
+    Raises
+    ------
+    ParameterError
+        If the table is not a mapping or an entry is invalid (see :func:`preset_from_mapping`).
+    """
+    table = data.get("presets", data) if isinstance(data, Mapping) else data
+    if not isinstance(table, Mapping):
+        raise ParameterError("user presets must be a table/object NAME -> parameters")
+    return {name: preset_from_mapping(name, entry) for name, entry in table.items()}
+
+
+def load_presets(path: str | Path) -> dict[str, StabilityPreset]:
+    """Read user presets from a TOML or JSON file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (``.json`` is JSON, anything else TOML).
+
+    Returns
+    -------
+    dict of str to StabilityPreset
+
+    Raises
+    ------
+    ParameterError
+        If the file is unreadable or invalid, or a preset is invalid.
+    """
+    return presets_from_mapping(read_config(path))

@@ -1,0 +1,130 @@
+"""A sweep plan from a TOML or JSON file or mapping (``turbgen/schemas/sweep.schema.json``), and seed lists."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+from turbgen.errors import ParameterError
+from turbgen.runs.models import MODELS
+from turbgen.spec.config import check_mapping, read_config
+from turbgen.spec.preset_files import load_presets, presets_from_mapping
+from turbgen.spec.presets import StabilityPreset
+from turbgen.sweep.plan import SweepPlan, make_plan
+from turbgen.theory import ranges
+
+
+def parse_seeds(value) -> list[int]:
+    """A list of ints, or a text like '1-21' / '1-3,9' (format checked by the schema) -> sorted seeds.
+
+    Parameters
+    ----------
+    value : str or list of int
+        The seeds.
+
+    Returns
+    -------
+    list of int
+        Sorted seeds (a text's ranges inclusive and merged).
+
+    Raises
+    ------
+    ParameterError
+        For a range that runs backwards or more seeds than turbgen.theory.ranges.LIMITS["seeds"].
+    """
+    if not isinstance(value, str):
+        ranges.check_count("seeds", len(value))
+        return sorted(value)
+    spans = []
+    for part in value.split(","):
+        lo, _, hi = part.strip().partition("-")
+        lo_i, hi_i = int(lo), int(hi or lo)
+        if hi_i < lo_i:
+            raise ParameterError(f"seeds = {value!r}: range {part.strip()!r} runs backwards")
+        spans.append((lo_i, hi_i))
+    ranges.check_count("seeds", sum(hi - lo + 1 for lo, hi in spans), f"seeds = {value!r}")  # before expanding
+    out: set[int] = set()
+    for lo_i, hi_i in spans:
+        out.update(range(lo_i, hi_i + 1))
+    return sorted(out)
+
+
+def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides) -> SweepPlan:
+    """Plan from a sweep mapping (file contents); non-None ``overrides`` replace the file's values.
+
+    Relative paths are relative to ``base_dir``.
+
+    Parameters
+    ----------
+    data : Mapping
+        Content of a sweep file (turbgen/schemas/sweep.schema.json).
+    base_dir : str or Path, optional
+        Directory of the sweep file (default ".").
+    **overrides
+        out, validate, workers, scheduler, chunk_t (see :func:`make_plan`); a scheduler drops the file's workers.
+
+    Returns
+    -------
+    SweepPlan
+
+    Raises
+    ------
+    ParameterError
+        If the mapping breaks the schema, a user preset is defined twice or invalid, no ``out`` is given,
+        or as :func:`make_plan`.
+    """
+    check_mapping(data, "sweep", "sweep definition")
+    base = Path(base_dir)
+    user: dict[str, StabilityPreset] = {}
+    if "preset_file" in data:
+        user.update(load_presets(base / data["preset_file"]))
+    if "user_presets" in data:
+        inline = presets_from_mapping(data["user_presets"])
+        clash = sorted(set(inline) & set(user))
+        if clash:
+            raise ParameterError(f"user preset(s) {', '.join(clash)} defined both inline and in preset_file")
+        user.update(inline)
+    kw = dict(
+        out=base / data["out"] if "out" in data else None,
+        models=data["models"],
+        presets=data["presets"],
+        speeds=data["speeds"],
+        seeds=parse_seeds(data["seeds"]),
+        grid=data.get("grid"),
+        model_grid={m: data[m] for m in MODELS if m in data},
+        validate=data.get("validate", False),
+        chunk_t=data.get("chunks"),
+        workers=data.get("workers"),
+        scheduler=data.get("scheduler"),
+        user_presets=user,
+        lidar=data.get("lidar"),
+    )
+    kw.update({k: v for k, v in overrides.items() if v is not None})
+    if kw["out"] is None:
+        raise ParameterError("no output directory: give `out` in the sweep file or on the command line")
+    if overrides.get("scheduler"):
+        kw["workers"] = overrides.get("workers")
+    return make_plan(**kw)
+
+
+def plan_from_file(path: str | Path, **overrides) -> SweepPlan:
+    """Plan from a TOML or JSON sweep file (see :func:`plan_from_mapping`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The sweep file.
+    **overrides
+        As :func:`plan_from_mapping`.
+
+    Returns
+    -------
+    SweepPlan
+
+    Raises
+    ------
+    ParameterError
+        If the file is unreadable or invalid, or as :func:`plan_from_mapping`.
+    """
+    data = read_config(path, "sweep")
+    return plan_from_mapping(data, base_dir=Path(path).parent, **overrides)

@@ -1,0 +1,72 @@
+"""The dask scheduler a sweep runs on (``--scheduler``): refused in one line when nothing answers as one."""
+
+from __future__ import annotations
+
+from turbgen.errors import ParameterError
+
+
+def check_scheduler_address(address: str, timeout_s: float = 3.0) -> str:
+    """``address`` if a dask scheduler could listen there: 'tcp://host:port' (or tls://) reachable now.
+
+    Refuses malformed addresses and closed ports in one line within ``timeout_s`` seconds (dask itself
+    retries for 30 s and then raises a traceback).
+
+    Parameters
+    ----------
+    address : str
+        Scheduler address (tcp:// assumed without a scheme).
+    timeout_s : float, optional
+        Connection timeout [s] (default 3).
+
+    Returns
+    -------
+    str
+        ``address``.
+
+    Raises
+    ------
+    ParameterError
+        If the address is malformed, nothing accepts connections there, or no dask scheduler answers.
+    """
+    import socket
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if parts.scheme not in ("tcp", "tls") or not host or not port:
+        raise ParameterError(f"scheduler = {address!r} is not an address like tcp://HOST:PORT")
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s):
+            pass
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise ParameterError(f"scheduler = {address!r}: cannot connect ({reason}); is the scheduler running?") from None
+    if not _answers_as_scheduler(address, timeout_s):
+        raise ParameterError(f"scheduler = {address!r}: something listens there but no dask scheduler answered "
+                             f"within {timeout_s:g} s; check the port")
+    return address
+
+
+def _answers_as_scheduler(address: str, timeout_s: float) -> bool:
+    """True if a dask scheduler at ``address`` answers an identity request within ``timeout_s`` s
+    (any other server on an open port would keep dask's own connect waiting for 30 s)."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def identity():
+        comm = await connect(address, timeout=timeout_s)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            await comm.close()
+
+    try:
+        reply = asyncio.run(asyncio.wait_for(identity(), timeout_s))
+    except (OSError, asyncio.TimeoutError, ValueError, TypeError):
+        return False
+    return isinstance(reply, dict) and reply.get("type") == "Scheduler"
