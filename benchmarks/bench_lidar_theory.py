@@ -11,7 +11,7 @@ import numpy as np
 
 from turbgen.lidar.description import PRESETS
 from turbgen.lidar.preview import preview_spectra
-from turbgen.theory.lidar_preview import cutoff_frequency_hz
+from turbgen.theory.lidar_control import cutoff_frequency_hz
 
 
 def main():

@@ -16,7 +16,7 @@ import numpy as np
 
 from turbgen.lidar.description import PRESETS
 from turbgen.lidar.preview import preview_spectra
-from turbgen.theory.lidar_preview import cutoff_frequency_hz
+from turbgen.theory.lidar_control import cutoff_frequency_hz
 
 PAPER_16 = {("mann", "unstable"): 0.0544, ("mann", "neutral"): 0.0490, ("mann", "stable"): 0.0455,
             ("kaimal", "unstable"): 0.0347, ("kaimal", "neutral"): 0.0449, ("kaimal", "stable"): 0.0439}

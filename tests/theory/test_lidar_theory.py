@@ -12,9 +12,8 @@ from turbgen.lidar.preview import preview_spectra
 from turbgen.spec.preset_runs import mann_params_for
 from turbgen.theory.kaimal import kaimal_spectrum
 from turbgen.theory.lidar_geometry import Measurements, los_vectors, nacelle_directions, spinner_directions
-from turbgen.theory.lidar_preview import (
-    coherence_bandwidth_rad_m, cutoff_frequency_hz, kaimal_preview_spectra, mann_preview_spectra,
-)
+from turbgen.theory.lidar_control import coherence_bandwidth_rad_m, cutoff_frequency_hz
+from turbgen.theory.lidar_preview import kaimal_preview_spectra, mann_preview_spectra
 from turbgen.theory.lidar_weighting import (
     cw_discrete, discrete_transform, gaussian_transform, lorentzian_transform, pulsed_discrete,
 )
@@ -223,7 +222,7 @@ def test_lidar_ti_correction_limits():
     """Schlipf et al. (2020) Eq. 6-8: a point beam along x sampled as fast as the field has c_TI = 1;
     a probe volume and tilted beams lose variance (c_TI > 1), more for a longer probe volume."""
     from turbgen.theory.kaimal import iec_kaimal_params
-    from turbgen.theory.lidar_preview import lidar_ti_correction
+    from turbgen.theory.lidar_los import lidar_ti_correction
 
     kp = iec_kaimal_params(16.0, "A", 90.0)
     c = lidar_ti_correction(_points([[50.0, 0.0, 0.0]]), kp, U, f_scan_hz=1.0, f_max_hz=1.0, n_f=400)

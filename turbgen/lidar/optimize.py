@@ -16,9 +16,8 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.lidar.description import LidarDescription
-from turbgen.theory.lidar_preview import (
-    buffer_time_s, coherence_bandwidth_rad_m, cutoff_frequency_hz, mann_preview_spectra,
-)
+from turbgen.theory.lidar_control import buffer_time_s, coherence_bandwidth_rad_m, cutoff_frequency_hz
+from turbgen.theory.lidar_preview import mann_preview_spectra
 from turbgen.theory.params import MannParams
 
 MAX_CANDIDATES = 2000

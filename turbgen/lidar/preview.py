@@ -16,10 +16,8 @@ from turbgen.errors import check_choice
 from turbgen.lidar.description import LidarDescription
 from turbgen.spec.preset_runs import kaimal_settings_for, mann_params_for
 from turbgen.theory.coherence_models import exponential_longitudinal
-from turbgen.theory.lidar_preview import (
-    PreviewSpectra, buffer_time_s, coherence_bandwidth_rad_m, cutoff_frequency_hz, filter_delay_s,
-    kaimal_preview_spectra, mann_preview_spectra,
-)
+from turbgen.theory.lidar_control import buffer_time_s, coherence_bandwidth_rad_m, cutoff_frequency_hz, filter_delay_s
+from turbgen.theory.lidar_preview import PreviewSpectra, kaimal_preview_spectra, mann_preview_spectra
 from turbgen.theory.params import KaimalParams, MannParams
 
 MODELS = ("mann", "kaimal")

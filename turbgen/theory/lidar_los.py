@@ -1,0 +1,113 @@
+"""Line-of-sight spectra of a lidar in a Kaimal field and the lidar turbulence-intensity correction
+(Guo et al. 2023 Sect. 3; the measurement geometry of turbgen.theory.lidar_geometry).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from turbgen.errors import ParameterError, check_positive
+from turbgen.theory.coherence_models import exponential_yz
+from turbgen.theory.kaimal import kaimal_spectrum
+from turbgen.theory.lidar_geometry import Measurements
+from turbgen.theory.params import KaimalParams, check_wind_speed
+
+
+def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: float, *,
+                       vw_coherence: bool = False) -> np.ndarray:
+    """One-sided spectra S_los,i(f) of each measurement's line-of-sight speed, IEC Kaimal model.
+
+    Includes the probe volume (Schlipf et al. 2020 Eq. 2, 6; Taylor within the probe volume); u is
+    coherent in the yz plane (IEC exponential), v, w are spatially white unless ``vw_coherence``.
+
+    Parameters
+    ----------
+    f_hz : array_like
+        Frequencies [Hz].
+    meas : Measurements
+        The lidar's measurements.
+    kparams : KaimalParams
+        Kaimal spectra and IEC yz coherence parameters.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    vw_coherence : bool, optional
+        Give v and w the yz coherence of u too (default False).
+
+    Returns
+    -------
+    numpy.ndarray
+        (M, n_f) one-sided spectra [m^2 s^-2 Hz^-1].
+
+    Raises
+    ------
+    ParameterError
+        If ``U_m_s`` is outside the allowed range.
+    """
+    f = np.atleast_1d(np.asarray(f_hz, dtype=float))
+    U = check_wind_speed(U_m_s)
+    pts = meas.sample_points_m()
+    out = np.empty((meas.count, f.size))
+    for i in range(meas.count):
+        w = meas.weights[i]
+        delay = (pts[i, :, 0] - meas.focus_m[i, 0]) / U
+        r = np.hypot(pts[i, :, 1, None] - pts[i, None, :, 1], pts[i, :, 2, None] - pts[i, None, :, 2])
+        for m, fm in enumerate(f):
+            a = w * np.exp(2j * np.pi * fm * delay)
+            total = 0.0
+            for c in range(3):
+                S_c = kaimal_spectrum(fm, kparams.sigma_m_s[c], kparams.length_scales_m[c], U)
+                coh = exponential_yz(r, fm, U, kparams.a_yz, kparams.lc_m) if (c == 0 or vw_coherence) \
+                    else (r < 1e-9).astype(float)
+                total += meas.n[i, c] ** 2 * S_c * np.real(a @ coh @ a.conj())
+            out[i, m] = total
+    return out
+
+
+def lidar_ti_correction(meas: Measurements, kparams: KaimalParams, U_m_s: float, *, averaging_s: float = 600.0,
+                        f_scan_hz: float = 1.0, f_max_hz: float = 1.0, n_f: int = 120) -> np.ndarray:
+    """TI correction factor c_TI = sigma_u / sigma_L per measurement (Schlipf et al. 2020 Eq. 6-8).
+
+    sigma_L^2 = ∫_{1/T}^{f_scan} S_los df (the lidar sees each point f_scan times a second, through its
+    probe volume and the beam angle), sigma_u^2 = ∫_{1/T}^{f_max} S_u df (the wind field's u up to its
+    highest frequency). The lidar TI estimate multiplies each LOS standard deviation by its c_TI.
+
+    Parameters
+    ----------
+    meas : Measurements
+        The lidar's measurements.
+    kparams : KaimalParams
+        Kaimal spectra and IEC yz coherence parameters.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    averaging_s : float, optional
+        Averaging time T [s] (default 600 s).
+    f_scan_hz : float, optional
+        Rate f_scan at which each point is measured [Hz] (default 1 Hz).
+    f_max_hz : float, optional
+        Highest frequency f_max of the wind field [Hz] (default 1 Hz).
+    n_f : int, optional
+        Log-spaced frequencies of the sigma_L^2 quadrature (default 120).
+
+    Returns
+    -------
+    numpy.ndarray
+        (M,) c_TI [-].
+
+    Raises
+    ------
+    ParameterError
+        If ``averaging_s``, ``f_scan_hz`` or ``f_max_hz`` is not > 0, f_scan <= 1/T, or ``U_m_s`` is
+        outside the allowed range.
+    """
+    from turbgen.theory.kaimal import kaimal_band_variance
+
+    T = check_positive("averaging time T (s)", averaging_s)
+    f_scan = check_positive("f_scan (Hz)", f_scan_hz)
+    if f_scan <= 1.0 / T:
+        raise ParameterError(f"f_scan = {f_scan:g} Hz must exceed 1/T = {1.0 / T:g} Hz")
+    f = np.geomspace(1.0 / T, f_scan, n_f)
+    S = kaimal_los_spectra(f, meas, kparams, U_m_s)
+    var_l = np.trapezoid(S * f, np.log(f), axis=-1)  # ∫ S df = ∫ S f dln f
+    var_u = kaimal_band_variance(1.0 / T, check_positive("f_max (Hz)", f_max_hz), kparams.sigma_m_s[0],
+                                 kparams.length_scales_m[0], U_m_s)
+    return np.sqrt(var_u / var_l)
