@@ -11,8 +11,8 @@ mann_spectra      one-point and cross-spectra F_ij(k1, dy, dz) by quadrature (Eq
 space_time        space-time tensor Theta (Eq. 13) and longitudinal coherence (Eq. 16)
 rotor_effective   rotor-effective wind speed spectra (Eq. 24 Mann, Eq. 25 Kaimal)
 lattice           line frequencies, pair weights and box wavenumbers of the periodic record/box
-lidar_geometry    lidar beams, focus points and probe-volume weights (Schlipf et al. 2020)
-lidar_weighting   probe-volume transforms of the measurement weights
+lidar_geometry    lidar beam geometry in the store frame: directions, focus points, measurements
+lidar_weighting   probe-volume weighting along the beam (pulsed Gaussian, continuous-wave) and its transform
 lidar_preview     REWS, lidar and lidar-rotor spectra, gamma^2_RL (Guo et al. 2023 Eq. 29-35)
 lidar_control     cut-off of |G_RL|, coherence bandwidth, filter delay, buffer time (Fu et al. 2023)
 lidar_los         line-of-sight spectra (Kaimal) and the lidar TI correction
