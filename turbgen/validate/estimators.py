@@ -45,14 +45,13 @@ from turbgen.validate.point_sets import (
     long_sublattice,
     rotor_mask,
 )
+from turbgen.validate.span_sums import COMPONENTS, span_sums
 
-COMPONENTS = ("u", "v", "w")
 SPAN_SEGMENTS = 4  # a span holds at least this many segment lengths (fewer segments lost at span edges)
 LONG_BYTES_PER_TASK = 8 * 2**20  # plane-pair spectra per task at most 8 MiB (nx tasks wait for the pair sums)
 MIN_NPERSEG = 32
 MAX_NPERSEG = 4096  # long records: more segments rather than ever finer bins (4096 x 0.5 s: 0.49 mHz)
 SPAN_BYTES = 256 * 2**20  # a task's u, v, w data stay below this unless one segment needs more
-MOMENT_BLOCK = 64  # time steps per float32 block of the sum of squares (no float64 copy of a span)
 
 
 @dataclass(frozen=True)
@@ -186,58 +185,11 @@ class Estimates:
         return self.setup.effective_segments(self.rews_segments, self.rews_overlapping_pairs)
 
 
-def _csum(a, b) -> np.ndarray:
-    """sum over the yz axes of conj(a) b, per frequency (complex128)."""
-    return np.einsum("fij,fij->f", np.conj(a), b).astype(np.complex128)
-
-
-def _psum(p) -> np.ndarray:
-    return p.sum(axis=(1, 2), dtype=np.float64)
-
-
-def _read(arr, ix: int, t0: int, t1: int) -> np.ndarray:
-    """Plane ``ix`` over [t0, t1), read one stored chunk at a time (zarr's temporaries stay chunk-sized)."""
-    return read_checked(arr, ix, t0, t1)  # corrupted chunks and NaN: one-line StoreError
-
-
 def _task(arrays, ix: int, t0: int, t1: int, setup: WelchSetup, seps, mask, iy, iz) -> dict:
-    """Sums of one plane over one span [t0, t1): the Welch and moment sums, the REWS series."""
-    data = {c: _read(arrays[c], ix, t0, t1) for c in COMPONENTS}
-    out = {"sum": {}, "sum2": {}, "auto": {}, "yz": {c: {} for c in COMPONENTS}}
-    for c, d in data.items():
-        out["sum"][c] = d.sum(axis=0, dtype=np.float64)
-        s2 = np.zeros(d.shape[1:])
-        for b in range(0, d.shape[0], MOMENT_BLOCK):  # float32 products in small blocks, float64 sums
-            blk = d[b : b + MOMENT_BLOCK]
-            s2 += np.einsum("tij,tij->ij", blk, blk)
-        out["sum2"][c] = s2
-    out["rews"] = data["u"][:, mask].mean(axis=1, dtype=np.float64)
-    w = setup.window.astype(np.float32)[:, None, None]
-    n = setup.nperseg
-    nf = n // 2 + 1
-    ny, nz = data["u"].shape[1:]
-    auto = {c: np.zeros(nf) for c in COMPONENTS}
-    yz = {c: {s: [np.zeros(nf, complex), np.zeros(nf), np.zeros(nf)] for s in seps} for c in COMPONENTS}
-    uw = np.zeros(nf, complex)
-    sub = []
-    for s in segment_starts(t1 - t0, setup):
-        spec = {}
-        for c in COMPONENTS:
-            seg = data[c][s : s + n]
-            x = scipy.fft.rfft((seg - seg.mean(axis=0)) * w, axis=0, workers=1)
-            spec[c] = x
-            p = x.real * x.real + x.imag * x.imag
-            auto[c] += _psum(p)
-            for a, b in seps:
-                acc = yz[c][(a, b)]
-                acc[0] += _csum(x[:, : ny - a, : nz - b], x[:, a:, b:])
-                acc[1] += _psum(p[:, : ny - a, : nz - b])
-                acc[2] += _psum(p[:, a:, b:])
-        uw += _csum(spec["u"], spec["w"])
-        sub.append(spec["u"][:, iy][:, :, iz].reshape(nf, -1))
-    out.update(auto=auto, yz=yz, uw=uw)
-    out["sub"] = np.stack(sub) if sub else np.zeros((0, nf, iy.size * iz.size), np.complex64)
-    return out
+    """Sums of one plane over one span [t0, t1) (``span_sums``): each stored chunk is read once
+    (read_checked: corrupted chunks and NaN give a one-line StoreError)."""
+    data = {c: read_checked(arrays[c], ix, t0, t1) for c in COMPONENTS}
+    return span_sums(data, setup.window, segment_starts(t1 - t0, setup), seps, mask, iy, iz)
 
 
 def _without_sub(part: dict) -> dict:
