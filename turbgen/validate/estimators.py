@@ -249,9 +249,9 @@ class _TqdmCallback(Callback):
         self.bar.close()
 
 
-def estimate(fs, *, rotor_radius_m: float | None = None, nperseg: int | None = None, separations=None,
-             workers: int | None = None) -> Estimates:
-    """All Welch estimates of a store, one dask task per (span, plane) (module docstring).
+def plan_estimates(fs, *, rotor_radius_m: float | None = None, nperseg: int | None = None,
+                   separations=None) -> Estimates:
+    """The sampling design of a store's estimates, before any data is read (sums still empty).
 
     Parameters
     ----------
@@ -263,13 +263,11 @@ def estimate(fs, *, rotor_radius_m: float | None = None, nperseg: int | None = N
         Welch segment length [samples]; default ``default_nperseg(nt)``.
     separations : sequence of (int, int), optional
         yz separations in grid steps; default ``point_sets.default_separations``.
-    workers : int, optional
-        dask threads; default the CPU count.
 
     Returns
     -------
     Estimates
-        Means [m/s], variances [m^2 s^-2], one-sided (cross-)spectra [m^2 s^-2 Hz^-1].
+        Welch setup (segment length, dt [s]), separations, rotor radius [m] and disc, plane-pair sub-lattice.
 
     Raises
     ------
@@ -281,19 +279,45 @@ def estimate(fs, *, rotor_radius_m: float | None = None, nperseg: int | None = N
     if not MIN_NPERSEG <= setup.nperseg <= g.nt // 2:
         raise ParameterError(f"nperseg = {setup.nperseg} is outside [{MIN_NPERSEG}, nt/2 = {g.nt // 2}]")
     radius = check_rotor_radius(g, rotor_radius_m)
-    mask = rotor_mask(g, radius)
     seps = tuple(separations) if separations is not None else default_separations(g)
-    spans = plan_spans(g.nt, fs.chunk_t, setup.nperseg, 3 * 4 * g.ny * g.nz)
-    per_axis = long_points_per_axis(setup, spans)
+    per_axis = long_points_per_axis(setup, _spans(fs, setup))
     iy, iz = long_sublattice(g.ny, per_axis), long_sublattice(g.nz, per_axis)
-    est = Estimates(setup, g, seps, radius, mask, iy, iz)
+    return Estimates(setup, g, seps, radius, rotor_mask(g, radius), iy, iz)
+
+
+def _spans(fs, setup: WelchSetup) -> list[tuple[int, int]]:
+    g = fs.grid
+    return plan_spans(g.nt, fs.chunk_t, setup.nperseg, 3 * 4 * g.ny * g.nz)
+
+
+def run_estimates(fs, est: Estimates, workers: int | None = None) -> Estimates:
+    """Fill the planned estimates ``est`` (:func:`plan_estimates`) from the store, one dask task per
+    (span, plane) (module docstring).
+
+    Parameters
+    ----------
+    fs : turbgen.store.FieldStore
+        The store the plan was made for.
+    est : Estimates
+        The plan; filled in place.
+    workers : int, optional
+        dask threads; default the CPU count.
+
+    Returns
+    -------
+    Estimates
+        ``est``: means [m/s], variances [m^2 s^-2], one-sided (cross-)spectra [m^2 s^-2 Hz^-1].
+    """
+    g, setup = est.grid, est.setup
+    spans = _spans(fs, setup)
     arrays = {c: fs.array(c) for c in COMPONENTS}
     task = dask.delayed(_task, pure=False)
     pairs = dask.delayed(_plane_pairs, pure=False)
     strip = dask.delayed(_without_sub, pure=False)
     per_span = []
     for t0, t1 in spans:
-        parts = [task(arrays, ix, t0, t1, setup, seps, mask, iy, iz) for ix in range(g.nx)]
+        parts = [task(arrays, ix, t0, t1, setup, est.separations, est.rotor_mask, est.long_iy, est.long_iz)
+                 for ix in range(g.nx)]
         # the kept sub-lattice spectra feed the plane-pair sums only; the output holds the small sums
         per_span.append(([strip(p) for p in parts], pairs([p["sub"] for p in parts])))
     with _TqdmCallback(total=len(spans) * (g.nx * 3 + 1), desc="validate"):

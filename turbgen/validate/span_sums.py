@@ -69,13 +69,17 @@ def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy
     cross = {c: {s: np.zeros(nf, complex) for s in seps} for c in COMPONENTS}
     uw = np.zeros(nf, complex)
     sub = []
+    seg_buf = np.empty((n, ny, nz), np.float32)  # reused: (segment - its mean) * window
+    p_buf, q_buf = np.empty((nf, ny, nz), np.float32), np.empty((nf, ny, nz), np.float32)
     for s in starts:
         spec = {}
         for c in COMPONENTS:
             seg = data[c][s : s + n]
-            x = scipy.fft.rfft((seg - seg.mean(axis=0)) * w, axis=0, workers=1)
+            np.multiply(np.subtract(seg, seg.mean(axis=0), out=seg_buf), w, out=seg_buf)
+            x = scipy.fft.rfft(seg_buf, axis=0, workers=1)
             spec[c] = x
-            power[c] += x.real * x.real + x.imag * x.imag
+            np.add(np.multiply(x.real, x.real, out=p_buf), np.multiply(x.imag, x.imag, out=q_buf), out=p_buf)
+            power[c] += p_buf  # |X|^2 in float32, summed over segments in float64
             for a, b in seps:
                 cross[c][(a, b)] += pair_sum(x[:, : ny - a, : nz - b], x[:, a:, b:])
         uw += pair_sum(spec["u"], spec["w"])

@@ -91,7 +91,7 @@ def judge(est: Estimates, th: Theory) -> list[MetricResult]:
     cov = {c: bands.cov(wcov, th.auto[c], exp_auto[c]) for c in COMPONENTS}
     for c in COMPONENTS:
         out.append(_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c], cov[c],
-                             th.rho(th.rho_all[c], f), bands, f, th.reference.get(f"spectrum_{c}")))
+                             th.rho(th.rho_all[c], f), bands, f))
     for c in COMPONENTS:
         out.append(_yz(est, th, kernel, bands, c, exp_auto[c], cov[c]))
     out.append(_longitudinal(est, th, kernel, bands, exp_auto["u"], cov["u"]))
@@ -102,8 +102,7 @@ def judge(est: Estimates, th: Theory) -> list[MetricResult]:
     if not rews_w.feasible:  # rule of thumb: the REWS series has its own segment count
         rews_cov = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_cov.items()}
     out.append(_spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
-                         est.rews_psd, exp_r, rews_cov, th.rho(th.rho_rews, f), bands, f,
-                         th.reference.get("rews_spectrum")))
+                         est.rews_psd, exp_r, rews_cov, th.rho(th.rho_rews, f), bands, f))
     return out
 
 
@@ -130,13 +129,13 @@ def _variance(est: Estimates, th: Theory, c: str) -> MetricResult:
     return MetricResult(f"sigma_{c}", f"variance of {c} (sigma_{c}, TI)", "m^2/s^2", [t])
 
 
-def _spectrum(name, title, estimate, expected, cov, rho, bands: Bands, f, reference) -> MetricResult:
+def _spectrum(name, title, estimate, expected, cov, rho, bands: Bands, f) -> MetricResult:
     # band mean ratio estimate/expected ~ chi2_nu/nu with nu = 2 E^2 / Var (exact Welch covariance x rho_bar)
     checks = bands.spectrum_checks(name.split("_")[-1], estimate, expected, cov, rho)
     b = bands.bins
     nu = 2.0 * expected[b] ** 2 / (cov[0][b] * rho[b])  # 95 % interval of a chi2_nu/nu estimate (always positive)
     lo, hi = estimate[b] * nu / chi2.ppf(0.975, nu), estimate[b] * nu / chi2.ppf(0.025, nu)
-    curve = Curve(name, f[b], estimate[b], expected[b], lo, hi, reference)
+    curve = Curve(name, f[b], estimate[b], expected[b], lo, hi)
     return MetricResult(name, title, "m^2/s^2/Hz", checks, [curve])
 
 
@@ -227,6 +226,6 @@ def _uw(est, th, kernel, bands, exp_auto, cov) -> MetricResult:
         z = float(cospectrum_z(x, c, n_band))
         checks.append(Check("co-spectrum/sqrt(SuSw)", (float(f[g[0]]), float(f[g[-1]])), x, c, float(np.sqrt(v)), z))
     lo, hi = _band95(co[b], sd[b])
-    curve = Curve("uw_cross_spectrum", f[b], co[b], exp[b], lo, hi, th.reference.get("uw_cross_spectrum"))
+    curve = Curve("uw_cross_spectrum", f[b], co[b], exp[b], lo, hi)
     return MetricResult("uw_cross_spectrum", "u-w co-spectrum (Reynolds stress; 0 for Kaimal)", "m^2/s^2/Hz",
                         checks, [curve])
