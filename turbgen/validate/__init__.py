@@ -81,7 +81,8 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
         Welch segment length [samples]; None: ``estimators.default_nperseg``.
     workers : int, optional
         dask threads; None: the CPU count. With more than one, the theory is computed in a thread of
-        its own while the store is read (it needs only the estimates' sampling design).
+        its own while the store is read (it needs only the estimates' sampling design), and the verdict
+        uses two threads.
 
     Returns
     -------
@@ -98,7 +99,8 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
     t0 = time.perf_counter()
     planned = plan_estimates(fs, rotor_radius_m=rotor_radius_m, nperseg=nperseg)
     design = SamplingDesign.of(planned)
-    if (workers or os.cpu_count() or 1) > 1:
+    parallel = (workers or os.cpu_count() or 1) > 1
+    if parallel:
         with ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-theory") as pool:
             theory = pool.submit(_timed, theory_for, fs, design)
             est = run_estimates(fs, planned, workers)
@@ -109,7 +111,7 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
         t1 = time.perf_counter()
         th, theory_s = _timed(theory_for, fs, design)
     t2 = time.perf_counter()
-    metrics = judge(est, th)
+    metrics = judge(est, th, parallel)
     t3 = time.perf_counter()
     seconds = {"estimate": t1 - t0, "theory": theory_s, "verdict": t3 - t2, "total": t3 - t0}
     return ValidationReport(fs, est, th, metrics, seconds)

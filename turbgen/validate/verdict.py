@@ -48,6 +48,9 @@ one point); the gamma law for the spectra's band means.
 
 from __future__ import annotations
 
+from concurrent.futures import Future, ThreadPoolExecutor
+from contextlib import nullcontext
+
 import numpy as np
 from scipy.stats import chi2
 
@@ -66,7 +69,7 @@ def _band95(est, sd):
     return est - 1.96 * sd, est + 1.96 * sd
 
 
-def judge(est: Estimates, th: Theory) -> list[MetricResult]:
+def judge(est: Estimates, th: Theory, parallel: bool = False) -> list[MetricResult]:
     """Pass/fail of every metric of the store (module docstring).
 
     Parameters
@@ -75,6 +78,9 @@ def judge(est: Estimates, th: Theory) -> list[MetricResult]:
         What was estimated from the store.
     th : Theory
         What the store's model predicts for the same sampling design.
+    parallel : bool
+        Judge the longitudinal coherence (the plane pairs: most of the exact-law evaluations) in a second
+        thread while the other metrics are judged; the results are the same.
 
     Returns
     -------
@@ -89,21 +95,32 @@ def judge(est: Estimates, th: Theory) -> list[MetricResult]:
     out = [_mean(est, th), *(_variance(est, th, c) for c in COMPONENTS)]
     exp_auto = {c: kernel.apply(th.auto[c]) for c in COMPONENTS}
     cov = {c: bands.cov(wcov, th.auto[c], exp_auto[c]) for c in COMPONENTS}
-    for c in COMPONENTS:
-        out.append(_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c], cov[c],
-                             th.rho(th.rho_all[c], f), bands, f))
-    for c in COMPONENTS:
-        out.append(_yz(est, th, kernel, bands, c, exp_auto[c], cov[c]))
-    out.append(_longitudinal(est, th, kernel, bands, exp_auto["u"], cov["u"]))
-    out.append(_uw(est, th, kernel, bands, exp_auto, cov))
-    exp_r = kernel.apply(th.rews)
-    rews_w = WelchCovariance(est.setup, est.grid.nt, segment_starts(est.grid.nt, est.setup))  # one span: whole record
-    rews_cov = bands.cov(rews_w, th.rews, exp_r)
-    if not rews_w.feasible:  # rule of thumb: the REWS series has its own segment count
-        rews_cov = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_cov.items()}
-    out.append(_spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
-                         est.rews_psd, exp_r, rews_cov, th.rho(th.rho_rews, f), bands, f))
+    second = ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-verdict") if parallel else nullcontext()
+    with second as pool:
+        longitudinal = (pool.submit if pool else _done)(_longitudinal, est, th, kernel, bands, exp_auto["u"],
+                                                        cov["u"])
+        for c in COMPONENTS:
+            out.append(_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c], cov[c],
+                                 th.rho(th.rho_all[c], f), bands, f))
+        for c in COMPONENTS:
+            out.append(_yz(est, th, kernel, bands, c, exp_auto[c], cov[c]))
+        uw = _uw(est, th, kernel, bands, exp_auto, cov)
+        exp_r = kernel.apply(th.rews)
+        rews_w = WelchCovariance(est.setup, est.grid.nt, segment_starts(est.grid.nt, est.setup))  # one span
+        rews_cov = bands.cov(rews_w, th.rews, exp_r)
+        if not rews_w.feasible:  # rule of thumb: the REWS series has its own segment count
+            rews_cov = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_cov.items()}
+        rews = _spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
+                         est.rews_psd, exp_r, rews_cov, th.rho(th.rho_rews, f), bands, f)
+        out += [longitudinal.result(), uw, rews]
     return out
+
+
+def _done(fn, *args) -> Future:
+    """fn(*args) now, as a completed Future."""
+    fut = Future()
+    fut.set_result(fn(*args))
+    return fut
 
 
 def _mean(est: Estimates, th: Theory) -> MetricResult:
