@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+import threading
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -185,11 +186,27 @@ class Estimates:
         return self.setup.effective_segments(self.rews_segments, self.rews_overlapping_pairs)
 
 
-def _task(arrays, ix: int, t0: int, t1: int, setup: WelchSetup, seps, mask, iy, iz) -> dict:
+class _ReadBuffers:
+    """float32 (t, ny, nz) buffers per thread and component, reused by the tasks of one run: the chunks are
+    decoded straight into them (no copy and no fresh pages per task)."""
+
+    def __init__(self, shape: tuple[int, int, int]):
+        self.shape = shape
+        self._local = threading.local()
+
+    def get(self, component: str, n_t: int) -> np.ndarray:
+        """This thread's buffer of ``component``, its first ``n_t`` time steps."""
+        bufs = self._local.__dict__.setdefault("bufs", {})
+        if component not in bufs:
+            bufs[component] = np.empty(self.shape, np.float32)
+        return bufs[component][:n_t]
+
+
+def _task(arrays, buffers: _ReadBuffers, ix: int, t0: int, t1: int, setup: WelchSetup, seps, mask, iy, iz) -> dict:
     """Sums of one plane over one span [t0, t1) (``span_sums``): each stored chunk is read once
     (read_checked: corrupted chunks and NaN give a one-line StoreError)."""
-    data = {c: read_checked(arrays[c], ix, t0, t1) for c in COMPONENTS}
-    return span_sums(data, setup.window, segment_starts(t1 - t0, setup), seps, mask, iy, iz)
+    data = {c: read_checked(arrays[c], ix, t0, t1, out=buffers.get(c, t1 - t0)) for c in COMPONENTS}
+    return span_sums(data, setup.window, segment_starts(t1 - t0, setup), seps, mask, iy, iz)  # keeps no view of data
 
 
 def _without_sub(part: dict) -> dict:
@@ -311,12 +328,13 @@ def run_estimates(fs, est: Estimates, workers: int | None = None) -> Estimates:
     g, setup = est.grid, est.setup
     spans = _spans(fs, setup)
     arrays = {c: fs.array(c) for c in COMPONENTS}
+    buffers = _ReadBuffers((max(t1 - t0 for t0, t1 in spans), g.ny, g.nz))
     task = dask.delayed(_task, pure=False)
     pairs = dask.delayed(_plane_pairs, pure=False)
     strip = dask.delayed(_without_sub, pure=False)
     per_span = []
     for t0, t1 in spans:
-        parts = [task(arrays, ix, t0, t1, setup, est.separations, est.rotor_mask, est.long_iy, est.long_iz)
+        parts = [task(arrays, buffers, ix, t0, t1, setup, est.separations, est.rotor_mask, est.long_iy, est.long_iz)
                  for ix in range(g.nx)]
         # the kept sub-lattice spectra feed the plane-pair sums only; the output holds the small sums
         per_span.append(([strip(p) for p in parts], pairs([p["sub"] for p in parts])))
