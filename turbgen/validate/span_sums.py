@@ -70,7 +70,7 @@ def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy
     uw = np.zeros(nf, complex)
     sub = []
     seg_buf = np.empty((n, ny, nz), np.float32)  # reused: (segment - its mean) * window
-    p_buf, q_buf = np.empty((nf, ny, nz), np.float32), np.empty((nf, ny, nz), np.float32)
+    p_buf, sq_buf = np.empty((nf, ny, nz), np.float32), np.empty((nf, ny, 2 * nz), np.float32)
     for s in starts:
         spec = {}
         for c in COMPONENTS:
@@ -78,8 +78,10 @@ def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy
             np.multiply(np.subtract(seg, seg.mean(axis=0), out=seg_buf), w, out=seg_buf)
             x = scipy.fft.rfft(seg_buf, axis=0, workers=1)
             spec[c] = x
-            np.add(np.multiply(x.real, x.real, out=p_buf), np.multiply(x.imag, x.imag, out=q_buf), out=p_buf)
-            power[c] += p_buf  # |X|^2 in float32, summed over segments in float64
+            xv = x.view(np.float32)  # (nf, ny, 2 nz): re, im interleaved
+            np.multiply(xv, xv, out=sq_buf)
+            np.add(sq_buf[..., 0::2], sq_buf[..., 1::2], out=p_buf)  # |X|^2 = re^2 + im^2 in float32
+            power[c] += p_buf  # summed over segments in float64
             for a, b in seps:
                 cross[c][(a, b)] += pair_sum(x[:, : ny - a, : nz - b], x[:, a:, b:])
         uw += pair_sum(spec["u"], spec["w"])
