@@ -24,7 +24,7 @@ from turbgen.validate.expectations import theory_for
 from turbgen.validate.point_sets import DEFAULT_ROTOR_RADIUS_M
 from turbgen.validate.prediction import SamplingDesign, Theory
 from turbgen.validate.checks import ALPHA, MetricResult
-from turbgen.validate.verdict import judge
+from turbgen.validate.verdict import Expectations, expectations, judge
 
 
 @dataclass
@@ -87,8 +87,9 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
     Returns
     -------
     ValidationReport
-        Estimates, predictions, metrics and timings [s]: ``estimate``, ``theory`` (overlapping the
-        estimates when computed alongside), ``verdict`` and ``total`` (wall time of the validation).
+        Estimates, predictions, metrics and timings [s]: ``estimate``, ``theory`` (the model, the expected
+        Welch estimates and their covariance; overlapping the estimates when computed alongside), ``verdict``
+        and ``total`` (wall time of the validation).
 
     Raises
     ------
@@ -98,23 +99,29 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
     fs = store if isinstance(store, FieldStore) else open_store(store)
     t0 = time.perf_counter()
     planned = plan_estimates(fs, rotor_radius_m=rotor_radius_m, nperseg=nperseg)
-    design = SamplingDesign.of(planned)
     parallel = (workers or os.cpu_count() or 1) > 1
     if parallel:
         with ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-theory") as pool:
-            theory = pool.submit(_timed, theory_for, fs, design)
+            theory = pool.submit(_timed, _theory, fs, planned)
             est = run_estimates(fs, planned, workers)
             t1 = time.perf_counter()
-            th, theory_s = theory.result()
+            (th, expected), theory_s = theory.result()
     else:
         est = run_estimates(fs, planned, workers)
         t1 = time.perf_counter()
-        th, theory_s = _timed(theory_for, fs, design)
+        (th, expected), theory_s = _timed(_theory, fs, planned)
     t2 = time.perf_counter()
-    metrics = judge(est, th, parallel)
+    metrics = judge(est, th, parallel, expected)
     t3 = time.perf_counter()
     seconds = {"estimate": t1 - t0, "theory": theory_s, "verdict": t3 - t2, "total": t3 - t0}
     return ValidationReport(fs, est, th, metrics, seconds)
+
+
+def _theory(fs, planned: Estimates) -> tuple[Theory, Expectations]:
+    """The model's predictions for the planned estimates, and the expected Welch estimates and covariances
+    the verdict compares them with (both need only the sampling design; ``planned`` is only read)."""
+    th = theory_for(fs, SamplingDesign.of(planned))
+    return th, expectations(planned, th)
 
 
 def _timed(fn, *args):

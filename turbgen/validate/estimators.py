@@ -284,7 +284,8 @@ def plan_estimates(fs, *, rotor_radius_m: float | None = None, nperseg: int | No
     Returns
     -------
     Estimates
-        Welch setup (segment length, dt [s]), separations, rotor radius [m] and disc, plane-pair sub-lattice.
+        Welch setup (segment length, dt [s]), separations, rotor radius [m] and disc, plane-pair sub-lattice,
+        the segments averaged (start samples, counts; also those of the REWS series).
 
     Raises
     ------
@@ -297,9 +298,17 @@ def plan_estimates(fs, *, rotor_radius_m: float | None = None, nperseg: int | No
         raise ParameterError(f"nperseg = {setup.nperseg} is outside [{MIN_NPERSEG}, nt/2 = {g.nt // 2}]")
     radius = check_rotor_radius(g, rotor_radius_m)
     seps = tuple(separations) if separations is not None else default_separations(g)
-    per_axis = long_points_per_axis(setup, _spans(fs, setup))
+    spans = _spans(fs, setup)
+    per_axis = long_points_per_axis(setup, spans)
     iy, iz = long_sublattice(g.ny, per_axis), long_sublattice(g.nz, per_axis)
-    return Estimates(setup, g, seps, radius, rotor_mask(g, radius), iy, iz)
+    est = Estimates(setup, g, seps, radius, rotor_mask(g, radius), iy, iz)
+    # segments lie inside one span each (module docstring); the REWS series is one record
+    est.starts = tuple(t0 + s for t0, t1 in spans for s in segment_starts(t1 - t0, setup))
+    est.n_segments = len(est.starts)
+    est.n_overlapping_pairs = sum(max(len(segment_starts(t1 - t0, setup)) - 1, 0) for t0, t1 in spans)
+    est.rews_segments = len(segment_starts(g.nt, setup))
+    est.rews_overlapping_pairs = max(est.rews_segments - 1, 0)
+    return est
 
 
 def _spans(fs, setup: WelchSetup) -> list[tuple[int, int]]:
@@ -348,10 +357,7 @@ def _combine(est: Estimates, spans, results) -> None:
     """Add the per-task sums into the normalised estimates."""
     g, setup = est.grid, est.setup
     seps = est.separations
-    n_seg = sum(len(segment_starts(t1 - t0, setup)) for t0, t1 in spans)
-    est.n_segments = n_seg
-    est.starts = tuple(t0 + s for t0, t1 in spans for s in segment_starts(t1 - t0, setup))
-    est.n_overlapping_pairs = sum(max(len(segment_starts(t1 - t0, setup)) - 1, 0) for t0, t1 in spans)
+    n_seg = est.n_segments
     nf = setup.nperseg // 2 + 1
     scale = setup.scale
     n_pts = g.ny * g.nz
@@ -390,4 +396,4 @@ def _combine(est: Estimates, spans, results) -> None:
     est.long_cross = long_cross * scale / (n_seg * n_sub)
     est.long_auto = np.real(np.einsum("ppf->pf", est.long_cross))
     est.rews = rews
-    est.rews_psd, est.rews_segments, est.rews_overlapping_pairs = welch_series(rews, setup)
+    est.rews_psd = welch_series(rews, setup)[0]  # segment counts: planned

@@ -50,6 +50,7 @@ from __future__ import annotations
 
 from concurrent.futures import Future, ThreadPoolExecutor
 from contextlib import nullcontext
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.stats import chi2
@@ -69,7 +70,38 @@ def _band95(est, sd):
     return est - 1.96 * sd, est + 1.96 * sd
 
 
-def judge(est: Estimates, th: Theory, parallel: bool = False) -> list[MetricResult]:
+@dataclass
+class Expectations:
+    """The theory side of the verdict: expected Welch estimates and their one-point covariance (``welch_kernel``,
+    ``welch_variance``) for the planned segments; needs the theory and the sampling design, not the data."""
+
+    kernel: WelchKernel
+    bands: Bands
+    exp_auto: dict  # component -> (nf,) expected auto-spectrum [m^2 s^-2 Hz^-1]
+    cov: dict  # component -> {lag: covariance of the one-point estimate}
+    exp_rews: np.ndarray  # (nf,) expected REWS spectrum
+    rews_cov: dict
+
+
+def expectations(est: Estimates, th: Theory) -> Expectations:
+    """The expected estimates and their covariance for the planned estimates ``est`` (``plan_estimates``: the
+    segments are known before the data are read), under the theory ``th``."""
+    kernel = WelchKernel(est.setup, est.grid.nt)
+    bands = Bands(est)
+    starts = est.starts or tuple(range(0, est.n_segments * est.setup.hop, est.setup.hop))
+    wcov = WelchCovariance(est.setup, est.grid.nt, starts)
+    exp_auto = {c: kernel.apply(th.auto[c]) for c in COMPONENTS}
+    cov = {c: bands.cov(wcov, th.auto[c], exp_auto[c]) for c in COMPONENTS}
+    exp_r = kernel.apply(th.rews)
+    rews_w = WelchCovariance(est.setup, est.grid.nt, segment_starts(est.grid.nt, est.setup))  # one span: the record
+    rews_cov = bands.cov(rews_w, th.rews, exp_r)
+    if not rews_w.feasible:  # rule of thumb: the REWS series has its own segment count
+        rews_cov = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_cov.items()}
+    return Expectations(kernel, bands, exp_auto, cov, exp_r, rews_cov)
+
+
+def judge(est: Estimates, th: Theory, parallel: bool = False, expected: Expectations | None = None
+          ) -> list[MetricResult]:
     """Pass/fail of every metric of the store (module docstring).
 
     Parameters
@@ -81,20 +113,18 @@ def judge(est: Estimates, th: Theory, parallel: bool = False) -> list[MetricResu
     parallel : bool
         Judge the longitudinal coherence (the plane pairs: most of the exact-law evaluations) in a second
         thread while the other metrics are judged; the results are the same.
+    expected : Expectations, optional
+        ``expectations(est, th)`` if already computed (e.g. alongside the estimates).
 
     Returns
     -------
     list of MetricResult
         Mean, variances, spectra, yz and longitudinal coherences, u-w co-spectrum, REWS spectrum.
     """
-    kernel = WelchKernel(est.setup, est.grid.nt)
-    bands = Bands(est)
+    ex = expected if expected is not None else expectations(est, th)
+    kernel, bands, exp_auto, cov = ex.kernel, ex.bands, ex.exp_auto, ex.cov
     f = est.freqs
-    starts = est.starts or tuple(range(0, est.n_segments * est.setup.hop, est.setup.hop))
-    wcov = WelchCovariance(est.setup, est.grid.nt, starts)
     out = [_mean(est, th), *(_variance(est, th, c) for c in COMPONENTS)]
-    exp_auto = {c: kernel.apply(th.auto[c]) for c in COMPONENTS}
-    cov = {c: bands.cov(wcov, th.auto[c], exp_auto[c]) for c in COMPONENTS}
     second = ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-verdict") if parallel else nullcontext()
     with second as pool:
         longitudinal = (pool.submit if pool else _done)(_longitudinal, est, th, kernel, bands, exp_auto["u"],
@@ -105,13 +135,8 @@ def judge(est: Estimates, th: Theory, parallel: bool = False) -> list[MetricResu
         for c in COMPONENTS:
             out.append(_yz(est, th, kernel, bands, c, exp_auto[c], cov[c]))
         uw = _uw(est, th, kernel, bands, exp_auto, cov)
-        exp_r = kernel.apply(th.rews)
-        rews_w = WelchCovariance(est.setup, est.grid.nt, segment_starts(est.grid.nt, est.setup))  # one span
-        rews_cov = bands.cov(rews_w, th.rews, exp_r)
-        if not rews_w.feasible:  # rule of thumb: the REWS series has its own segment count
-            rews_cov = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_cov.items()}
         rews = _spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
-                         est.rews_psd, exp_r, rews_cov, th.rho(th.rho_rews, f), bands, f)
+                         est.rews_psd, ex.exp_rews, ex.rews_cov, th.rho(th.rho_rews, f), bands, f)
         out += [longitudinal.result(), uw, rews]
     return out
 
