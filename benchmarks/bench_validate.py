@@ -6,8 +6,10 @@
 
 The store is generated (if needed) in its own subprocess; the validation runs in another
 subprocess so that its wall time and peak RSS (ru_maxrss) are its own. Printed: one JSON line
-with the wall time, the split estimate / theory / verdict, the peak RSS, the store size and the
-verdict. The uncompressed default field is 3 x 738 MiB; the validator reads it chunk by chunk
+with the wall time, the CPU time of all threads, the split estimate / theory / verdict (the theory
+runs in its own thread while the store is read, so its seconds overlap the estimate's), the 1-minute
+load average at the end (a loaded machine stretches the wall time), the peak RSS, the store size and
+the verdict. The uncompressed default field is 3 x 738 MiB; the validator reads it chunk by chunk
 (one task per plane and span of time chunks), so its memory follows the chunks, not the field.
 """
 
@@ -29,15 +31,15 @@ run_mann(run, sys.argv[1])
 """
 
 VALIDATE = """
-import json, resource, sys, time
+import json, os, resource, sys, time
 from turbgen.validate import validate
-t0 = time.perf_counter()
+t0, c0 = time.perf_counter(), time.process_time()
 r = validate(sys.argv[1], rotor_radius_m=float(sys.argv[2]))
-wall = time.perf_counter() - t0
+wall, cpu = time.perf_counter() - t0, time.process_time() - c0
 g = r.store.grid
 print(json.dumps({
     "store": str(r.store.path), "model": r.store.model, "shape_t_x_y_z": list(g.shape),
-    "chunk_t": r.store.chunk_t, "wall_s": round(wall, 2),
+    "chunk_t": r.store.chunk_t, "wall_s": round(wall, 2), "cpu_s": round(cpu, 2), "load_1min": os.getloadavg()[0],
     "estimate_s": round(r.seconds["estimate"], 2), "theory_s": round(r.seconds["theory"], 2),
     "verdict_s": round(r.seconds["verdict"], 2),
     "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import zarr
+from zarr.core.buffer import default_buffer_prototype
 
 from turbgen.errors import ParameterError, StoreError
 from turbgen.grid import Grid
@@ -229,7 +230,7 @@ class FieldStore:
         }
 
 
-def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None) -> np.ndarray:
+def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None, out: np.ndarray | None = None) -> np.ndarray:
     """Plane ``ix`` of a component array over t in [t0, t1), float32 (t, y, z), read one stored chunk at a time.
 
     One-line StoreError when a chunk does not decode or holds NaN/inf.
@@ -246,11 +247,14 @@ def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None) -> np.nd
         End time index (exclusive).
     path : str or os.PathLike, optional
         Store path named in messages; default the array's store root.
+    out : numpy.ndarray, optional
+        C-contiguous float32 array (t1 - t0, ny, nz) the chunks are decoded into (a buffer reused across
+        reads saves a copy and fresh pages per read); default a new array.
 
     Returns
     -------
     numpy.ndarray
-        float32 array (t1 - t0, ny, nz) [m/s].
+        float32 array (t1 - t0, ny, nz) [m/s]: ``out`` if given.
 
     Raises
     ------
@@ -260,13 +264,18 @@ def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None) -> np.nd
     """
     name = arr.basename
     where = path if path is not None else getattr(arr.store, "root", None) or "store"
-    out = np.empty((t1 - t0, *arr.shape[2:]), dtype=np.float32)
+    if out is None:
+        out = np.empty((t1 - t0, *arr.shape[2:]), dtype=np.float32)
+    elif out.shape != (t1 - t0, *arr.shape[2:]) or out.dtype != np.float32 or not out.flags.c_contiguous:
+        raise ValueError(f"out must be C-contiguous float32 of shape {(t1 - t0, *arr.shape[2:])}")
+    nd_buffer = default_buffer_prototype().nd_buffer
     step = arr.chunks[0]
     for a in range(t0, t1, step):
         b = min(a - a % step + step, t1)
         chunk_file = f"{name}/c/{a // step}/{ix}/0/0"
+        block = out[a - t0 : b - t0]
         try:
-            block = arr[a:b, ix]
+            arr.get_basic_selection((slice(a, b), ix), out=nd_buffer.from_numpy_array(block))
         except Exception as exc:  # a decompression/decoding failure inside zarr
             raise StoreError(
                 f"{where}: corrupted chunk at {name}, plane index {ix}, t index {a - a % step}-{b - 1} "
@@ -281,7 +290,6 @@ def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None) -> np.nd
                 f"({int(bad.sum())} non-finite values in chunk file {chunk_file}); the data are corrupted, "
                 "regenerate the store"
             )
-        out[a - t0 : b - t0] = block
     return out
 
 

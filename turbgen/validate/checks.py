@@ -20,7 +20,6 @@ class Curve:
     expected: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
-    reference: tuple | None = None  # (f, values) of the continuous model (plots only)
 
 
 @dataclass

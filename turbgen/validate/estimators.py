@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+import threading
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -45,14 +46,13 @@ from turbgen.validate.point_sets import (
     long_sublattice,
     rotor_mask,
 )
+from turbgen.validate.span_sums import COMPONENTS, span_sums
 
-COMPONENTS = ("u", "v", "w")
 SPAN_SEGMENTS = 4  # a span holds at least this many segment lengths (fewer segments lost at span edges)
 LONG_BYTES_PER_TASK = 8 * 2**20  # plane-pair spectra per task at most 8 MiB (nx tasks wait for the pair sums)
 MIN_NPERSEG = 32
 MAX_NPERSEG = 4096  # long records: more segments rather than ever finer bins (4096 x 0.5 s: 0.49 mHz)
 SPAN_BYTES = 256 * 2**20  # a task's u, v, w data stay below this unless one segment needs more
-MOMENT_BLOCK = 64  # time steps per float32 block of the sum of squares (no float64 copy of a span)
 
 
 @dataclass(frozen=True)
@@ -186,58 +186,27 @@ class Estimates:
         return self.setup.effective_segments(self.rews_segments, self.rews_overlapping_pairs)
 
 
-def _csum(a, b) -> np.ndarray:
-    """sum over the yz axes of conj(a) b, per frequency (complex128)."""
-    return np.einsum("fij,fij->f", np.conj(a), b).astype(np.complex128)
+class _ReadBuffers:
+    """float32 (t, ny, nz) buffers per thread and component, reused by the tasks of one run: the chunks are
+    decoded straight into them (no copy and no fresh pages per task)."""
+
+    def __init__(self, shape: tuple[int, int, int]):
+        self.shape = shape
+        self._local = threading.local()
+
+    def get(self, component: str, n_t: int) -> np.ndarray:
+        """This thread's buffer of ``component``, its first ``n_t`` time steps."""
+        bufs = self._local.__dict__.setdefault("bufs", {})
+        if component not in bufs:
+            bufs[component] = np.empty(self.shape, np.float32)
+        return bufs[component][:n_t]
 
 
-def _psum(p) -> np.ndarray:
-    return p.sum(axis=(1, 2), dtype=np.float64)
-
-
-def _read(arr, ix: int, t0: int, t1: int) -> np.ndarray:
-    """Plane ``ix`` over [t0, t1), read one stored chunk at a time (zarr's temporaries stay chunk-sized)."""
-    return read_checked(arr, ix, t0, t1)  # corrupted chunks and NaN: one-line StoreError
-
-
-def _task(arrays, ix: int, t0: int, t1: int, setup: WelchSetup, seps, mask, iy, iz) -> dict:
-    """Sums of one plane over one span [t0, t1): the Welch and moment sums, the REWS series."""
-    data = {c: _read(arrays[c], ix, t0, t1) for c in COMPONENTS}
-    out = {"sum": {}, "sum2": {}, "auto": {}, "yz": {c: {} for c in COMPONENTS}}
-    for c, d in data.items():
-        out["sum"][c] = d.sum(axis=0, dtype=np.float64)
-        s2 = np.zeros(d.shape[1:])
-        for b in range(0, d.shape[0], MOMENT_BLOCK):  # float32 products in small blocks, float64 sums
-            blk = d[b : b + MOMENT_BLOCK]
-            s2 += np.einsum("tij,tij->ij", blk, blk)
-        out["sum2"][c] = s2
-    out["rews"] = data["u"][:, mask].mean(axis=1, dtype=np.float64)
-    w = setup.window.astype(np.float32)[:, None, None]
-    n = setup.nperseg
-    nf = n // 2 + 1
-    ny, nz = data["u"].shape[1:]
-    auto = {c: np.zeros(nf) for c in COMPONENTS}
-    yz = {c: {s: [np.zeros(nf, complex), np.zeros(nf), np.zeros(nf)] for s in seps} for c in COMPONENTS}
-    uw = np.zeros(nf, complex)
-    sub = []
-    for s in segment_starts(t1 - t0, setup):
-        spec = {}
-        for c in COMPONENTS:
-            seg = data[c][s : s + n]
-            x = scipy.fft.rfft((seg - seg.mean(axis=0)) * w, axis=0, workers=1)
-            spec[c] = x
-            p = x.real * x.real + x.imag * x.imag
-            auto[c] += _psum(p)
-            for a, b in seps:
-                acc = yz[c][(a, b)]
-                acc[0] += _csum(x[:, : ny - a, : nz - b], x[:, a:, b:])
-                acc[1] += _psum(p[:, : ny - a, : nz - b])
-                acc[2] += _psum(p[:, a:, b:])
-        uw += _csum(spec["u"], spec["w"])
-        sub.append(spec["u"][:, iy][:, :, iz].reshape(nf, -1))
-    out.update(auto=auto, yz=yz, uw=uw)
-    out["sub"] = np.stack(sub) if sub else np.zeros((0, nf, iy.size * iz.size), np.complex64)
-    return out
+def _task(arrays, buffers: _ReadBuffers, ix: int, t0: int, t1: int, setup: WelchSetup, seps, mask, iy, iz) -> dict:
+    """Sums of one plane over one span [t0, t1) (``span_sums``): each stored chunk is read once
+    (read_checked: corrupted chunks and NaN give a one-line StoreError)."""
+    data = {c: read_checked(arrays[c], ix, t0, t1, out=buffers.get(c, t1 - t0)) for c in COMPONENTS}
+    return span_sums(data, setup.window, segment_starts(t1 - t0, setup), seps, mask, iy, iz)  # keeps no view of data
 
 
 def _without_sub(part: dict) -> dict:
@@ -297,9 +266,9 @@ class _TqdmCallback(Callback):
         self.bar.close()
 
 
-def estimate(fs, *, rotor_radius_m: float | None = None, nperseg: int | None = None, separations=None,
-             workers: int | None = None) -> Estimates:
-    """All Welch estimates of a store, one dask task per (span, plane) (module docstring).
+def plan_estimates(fs, *, rotor_radius_m: float | None = None, nperseg: int | None = None,
+                   separations=None) -> Estimates:
+    """The sampling design of a store's estimates, before any data is read (sums still empty).
 
     Parameters
     ----------
@@ -311,13 +280,12 @@ def estimate(fs, *, rotor_radius_m: float | None = None, nperseg: int | None = N
         Welch segment length [samples]; default ``default_nperseg(nt)``.
     separations : sequence of (int, int), optional
         yz separations in grid steps; default ``point_sets.default_separations``.
-    workers : int, optional
-        dask threads; default the CPU count.
 
     Returns
     -------
     Estimates
-        Means [m/s], variances [m^2 s^-2], one-sided (cross-)spectra [m^2 s^-2 Hz^-1].
+        Welch setup (segment length, dt [s]), separations, rotor radius [m] and disc, plane-pair sub-lattice,
+        the segments averaged (start samples, counts; also those of the REWS series).
 
     Raises
     ------
@@ -329,19 +297,54 @@ def estimate(fs, *, rotor_radius_m: float | None = None, nperseg: int | None = N
     if not MIN_NPERSEG <= setup.nperseg <= g.nt // 2:
         raise ParameterError(f"nperseg = {setup.nperseg} is outside [{MIN_NPERSEG}, nt/2 = {g.nt // 2}]")
     radius = check_rotor_radius(g, rotor_radius_m)
-    mask = rotor_mask(g, radius)
     seps = tuple(separations) if separations is not None else default_separations(g)
-    spans = plan_spans(g.nt, fs.chunk_t, setup.nperseg, 3 * 4 * g.ny * g.nz)
+    spans = _spans(fs, setup)
     per_axis = long_points_per_axis(setup, spans)
     iy, iz = long_sublattice(g.ny, per_axis), long_sublattice(g.nz, per_axis)
-    est = Estimates(setup, g, seps, radius, mask, iy, iz)
+    est = Estimates(setup, g, seps, radius, rotor_mask(g, radius), iy, iz)
+    # segments lie inside one span each (module docstring); the REWS series is one record
+    est.starts = tuple(t0 + s for t0, t1 in spans for s in segment_starts(t1 - t0, setup))
+    est.n_segments = len(est.starts)
+    est.n_overlapping_pairs = sum(max(len(segment_starts(t1 - t0, setup)) - 1, 0) for t0, t1 in spans)
+    est.rews_segments = len(segment_starts(g.nt, setup))
+    est.rews_overlapping_pairs = max(est.rews_segments - 1, 0)
+    return est
+
+
+def _spans(fs, setup: WelchSetup) -> list[tuple[int, int]]:
+    g = fs.grid
+    return plan_spans(g.nt, fs.chunk_t, setup.nperseg, 3 * 4 * g.ny * g.nz)
+
+
+def run_estimates(fs, est: Estimates, workers: int | None = None) -> Estimates:
+    """Fill the planned estimates ``est`` (:func:`plan_estimates`) from the store, one dask task per
+    (span, plane) (module docstring).
+
+    Parameters
+    ----------
+    fs : turbgen.store.FieldStore
+        The store the plan was made for.
+    est : Estimates
+        The plan; filled in place.
+    workers : int, optional
+        dask threads; default the CPU count.
+
+    Returns
+    -------
+    Estimates
+        ``est``: means [m/s], variances [m^2 s^-2], one-sided (cross-)spectra [m^2 s^-2 Hz^-1].
+    """
+    g, setup = est.grid, est.setup
+    spans = _spans(fs, setup)
     arrays = {c: fs.array(c) for c in COMPONENTS}
+    buffers = _ReadBuffers((max(t1 - t0 for t0, t1 in spans), g.ny, g.nz))
     task = dask.delayed(_task, pure=False)
     pairs = dask.delayed(_plane_pairs, pure=False)
     strip = dask.delayed(_without_sub, pure=False)
     per_span = []
     for t0, t1 in spans:
-        parts = [task(arrays, ix, t0, t1, setup, seps, mask, iy, iz) for ix in range(g.nx)]
+        parts = [task(arrays, buffers, ix, t0, t1, setup, est.separations, est.rotor_mask, est.long_iy, est.long_iz)
+                 for ix in range(g.nx)]
         # the kept sub-lattice spectra feed the plane-pair sums only; the output holds the small sums
         per_span.append(([strip(p) for p in parts], pairs([p["sub"] for p in parts])))
     with _TqdmCallback(total=len(spans) * (g.nx * 3 + 1), desc="validate"):
@@ -354,10 +357,7 @@ def _combine(est: Estimates, spans, results) -> None:
     """Add the per-task sums into the normalised estimates."""
     g, setup = est.grid, est.setup
     seps = est.separations
-    n_seg = sum(len(segment_starts(t1 - t0, setup)) for t0, t1 in spans)
-    est.n_segments = n_seg
-    est.starts = tuple(t0 + s for t0, t1 in spans for s in segment_starts(t1 - t0, setup))
-    est.n_overlapping_pairs = sum(max(len(segment_starts(t1 - t0, setup)) - 1, 0) for t0, t1 in spans)
+    n_seg = est.n_segments
     nf = setup.nperseg // 2 + 1
     scale = setup.scale
     n_pts = g.ny * g.nz
@@ -396,4 +396,4 @@ def _combine(est: Estimates, spans, results) -> None:
     est.long_cross = long_cross * scale / (n_seg * n_sub)
     est.long_auto = np.real(np.einsum("ppf->pf", est.long_cross))
     est.rews = rews
-    est.rews_psd, est.rews_segments, est.rews_overlapping_pairs = welch_series(rews, setup)
+    est.rews_psd = welch_series(rews, setup)[0]  # segment counts: planned

@@ -15,6 +15,7 @@ with the grid's points instead of the continuous disc). The lattice sums are in
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -209,7 +210,7 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
         model="mann", nt=nt, line_f=line_f, auto=auto, yz=yz, long=long, rews=rews, node_f=node_f,
         rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
         sigma_model={c: math.sqrt(var[c + c]) for c in COMPONENTS}, band=band, uw=uw, rho_uw=acc.uw,
-        long_components="u", auto_model=auto_model, reference=_mann_reference(params, design, U),
+        long_components="u", auto_model=auto_model, reference=partial(_mann_reference, params, design, U),
     )
 
 

@@ -14,7 +14,8 @@ points (including different planes), at ``node_f``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -97,7 +98,8 @@ class Theory:
     rho_uw: np.ndarray | None = None  # (nn,) cross-component term of the uw variance bound
     long_components: str = "u"
     auto_model: dict | None = None  # Mann: component -> (nl,) lines of the continuous model band-limited to the grid
-    reference: dict = field(default_factory=dict)  # continuous-model curves for the plots: name -> (f, S)
+    # continuous-model curves for the plots, computed only for them: () -> {curve label: (f [Hz], S)}
+    reference: Callable[[], dict] | None = None
 
     def long_lines(self, dx_m: float) -> np.ndarray:
         """(nl,) u line covariance [m^2 s^-2] between two planes ``dx_m`` [m] apart (same y, z)."""

@@ -17,7 +17,7 @@ JSON (``to_dict``; keys are stable, units in the names)::
                       (full model spectrum), ti, ti_expected
     metrics           name -> title, quantity, passed, max_abs_z, z_crit, n_tests,
                       worst {label, band_hz, estimate, expected, sigma, z}, tests [same keys ...]
-    seconds           estimate, theory, verdict
+    seconds           estimate, theory (alongside the estimates when run in parallel), verdict, total [s]
 """
 
 from __future__ import annotations
@@ -150,21 +150,21 @@ def table(report) -> str:
     return "\n".join(lines)
 
 
-def _draw(ax, c: Curve, color, logy: bool, label_prefix: str = ""):
+def _draw(ax, c: Curve, color, logy: bool, reference=None, label_prefix: str = ""):
     ax.fill_between(c.f_hz, c.lower, c.upper, color=color, alpha=0.25, lw=0)
     ax.plot(c.f_hz, c.estimate, color=color, lw=1.0, label=f"{label_prefix}sim.")
     ax.plot(c.f_hz, c.expected, color="k", lw=1.2, ls="-", label=f"{label_prefix}theo. (grid)")
-    if c.reference is not None:
-        ax.plot(c.reference[0], c.reference[1], color="0.4", lw=1.0, ls="--", label="model (continuous)")
+    if reference is not None:  # (f [Hz], values) of the continuous model
+        ax.plot(reference[0], reference[1], color="0.4", lw=1.0, ls="--", label="model (continuous)")
     ax.set_xscale("log")
     if logy:
         ax.set_yscale("log")
 
 
-def _premultiplied(c: Curve) -> Curve:
-    ref = None if c.reference is None else (c.reference[0], c.reference[0] * c.reference[1])
+def _premultiplied(c: Curve, reference) -> tuple[Curve, tuple | None]:
+    ref = None if reference is None else (reference[0], reference[0] * reference[1])
     f = c.f_hz
-    return Curve(c.label, f, f * c.estimate, f * c.expected, f * c.lower, f * c.upper, ref)
+    return Curve(c.label, f, f * c.estimate, f * c.expected, f * c.lower, f * c.upper), ref
 
 
 def plots(report, directory) -> list[Path]:
@@ -190,6 +190,7 @@ def plots(report, directory) -> list[Path]:
 
     out_dir = Path(directory)
     out_dir.mkdir(parents=True, exist_ok=True)
+    references = report.theory.reference() if report.theory.reference is not None else {}
     files = []
     for m in report.metrics:
         if not m.curves:
@@ -199,12 +200,13 @@ def plots(report, directory) -> list[Path]:
         else:
             fig, ax = plt.subplots(figsize=(6, 4))
             c = m.curves[0]
+            ref = references.get(c.label)
             if m.name == "uw_cross_spectrum":  # premultiplied, linear axis: the sign and the peak show
-                c = _premultiplied(c)
-                _draw(ax, c, "C0", logy=False)
+                c, ref = _premultiplied(c, ref)
+                _draw(ax, c, "C0", logy=False, reference=ref)
                 ax.set_ylabel("f Co_uw(f) [m^2/s^2]")
             else:
-                _draw(ax, c, "C0", logy=True)
+                _draw(ax, c, "C0", logy=True, reference=ref)
                 ax.set_ylabel(f"S(f) [{m.quantity}]")
             ax.set_xlabel("f [Hz]")
             ax.legend(fontsize=8)

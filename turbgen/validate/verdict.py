@@ -48,6 +48,10 @@ one point); the gamma law for the spectra's band means.
 
 from __future__ import annotations
 
+from concurrent.futures import Future, ThreadPoolExecutor
+from contextlib import nullcontext
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.stats import chi2
 
@@ -66,7 +70,38 @@ def _band95(est, sd):
     return est - 1.96 * sd, est + 1.96 * sd
 
 
-def judge(est: Estimates, th: Theory) -> list[MetricResult]:
+@dataclass
+class Expectations:
+    """The theory side of the verdict: expected Welch estimates and their one-point covariance (``welch_kernel``,
+    ``welch_variance``) for the planned segments; needs the theory and the sampling design, not the data."""
+
+    kernel: WelchKernel
+    bands: Bands
+    exp_auto: dict  # component -> (nf,) expected auto-spectrum [m^2 s^-2 Hz^-1]
+    cov: dict  # component -> {lag: covariance of the one-point estimate}
+    exp_rews: np.ndarray  # (nf,) expected REWS spectrum
+    rews_cov: dict
+
+
+def expectations(est: Estimates, th: Theory) -> Expectations:
+    """The expected estimates and their covariance for the planned estimates ``est`` (``plan_estimates``: the
+    segments are known before the data are read), under the theory ``th``."""
+    kernel = WelchKernel(est.setup, est.grid.nt)
+    bands = Bands(est)
+    starts = est.starts or tuple(range(0, est.n_segments * est.setup.hop, est.setup.hop))
+    wcov = WelchCovariance(est.setup, est.grid.nt, starts)
+    exp_auto = {c: kernel.apply(th.auto[c]) for c in COMPONENTS}
+    cov = {c: bands.cov(wcov, th.auto[c], exp_auto[c]) for c in COMPONENTS}
+    exp_r = kernel.apply(th.rews)
+    rews_w = WelchCovariance(est.setup, est.grid.nt, segment_starts(est.grid.nt, est.setup))  # one span: the record
+    rews_cov = bands.cov(rews_w, th.rews, exp_r)
+    if not rews_w.feasible:  # rule of thumb: the REWS series has its own segment count
+        rews_cov = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_cov.items()}
+    return Expectations(kernel, bands, exp_auto, cov, exp_r, rews_cov)
+
+
+def judge(est: Estimates, th: Theory, parallel: bool = False, expected: Expectations | None = None
+          ) -> list[MetricResult]:
     """Pass/fail of every metric of the store (module docstring).
 
     Parameters
@@ -75,36 +110,42 @@ def judge(est: Estimates, th: Theory) -> list[MetricResult]:
         What was estimated from the store.
     th : Theory
         What the store's model predicts for the same sampling design.
+    parallel : bool
+        Judge the longitudinal coherence (the plane pairs: most of the exact-law evaluations) in a second
+        thread while the other metrics are judged; the results are the same.
+    expected : Expectations, optional
+        ``expectations(est, th)`` if already computed (e.g. alongside the estimates).
 
     Returns
     -------
     list of MetricResult
         Mean, variances, spectra, yz and longitudinal coherences, u-w co-spectrum, REWS spectrum.
     """
-    kernel = WelchKernel(est.setup, est.grid.nt)
-    bands = Bands(est)
+    ex = expected if expected is not None else expectations(est, th)
+    kernel, bands, exp_auto, cov = ex.kernel, ex.bands, ex.exp_auto, ex.cov
     f = est.freqs
-    starts = est.starts or tuple(range(0, est.n_segments * est.setup.hop, est.setup.hop))
-    wcov = WelchCovariance(est.setup, est.grid.nt, starts)
     out = [_mean(est, th), *(_variance(est, th, c) for c in COMPONENTS)]
-    exp_auto = {c: kernel.apply(th.auto[c]) for c in COMPONENTS}
-    cov = {c: bands.cov(wcov, th.auto[c], exp_auto[c]) for c in COMPONENTS}
-    for c in COMPONENTS:
-        out.append(_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c], cov[c],
-                             th.rho(th.rho_all[c], f), bands, f, th.reference.get(f"spectrum_{c}")))
-    for c in COMPONENTS:
-        out.append(_yz(est, th, kernel, bands, c, exp_auto[c], cov[c]))
-    out.append(_longitudinal(est, th, kernel, bands, exp_auto["u"], cov["u"]))
-    out.append(_uw(est, th, kernel, bands, exp_auto, cov))
-    exp_r = kernel.apply(th.rews)
-    rews_w = WelchCovariance(est.setup, est.grid.nt, segment_starts(est.grid.nt, est.setup))  # one span: whole record
-    rews_cov = bands.cov(rews_w, th.rews, exp_r)
-    if not rews_w.feasible:  # rule of thumb: the REWS series has its own segment count
-        rews_cov = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_cov.items()}
-    out.append(_spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
-                         est.rews_psd, exp_r, rews_cov, th.rho(th.rho_rews, f), bands, f,
-                         th.reference.get("rews_spectrum")))
+    second = ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-verdict") if parallel else nullcontext()
+    with second as pool:
+        longitudinal = (pool.submit if pool else _done)(_longitudinal, est, th, kernel, bands, exp_auto["u"],
+                                                        cov["u"])
+        for c in COMPONENTS:
+            out.append(_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c], cov[c],
+                                 th.rho(th.rho_all[c], f), bands, f))
+        for c in COMPONENTS:
+            out.append(_yz(est, th, kernel, bands, c, exp_auto[c], cov[c]))
+        uw = _uw(est, th, kernel, bands, exp_auto, cov)
+        rews = _spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
+                         est.rews_psd, ex.exp_rews, ex.rews_cov, th.rho(th.rho_rews, f), bands, f)
+        out += [longitudinal.result(), uw, rews]
     return out
+
+
+def _done(fn, *args) -> Future:
+    """fn(*args) now, as a completed Future."""
+    fut = Future()
+    fut.set_result(fn(*args))
+    return fut
 
 
 def _mean(est: Estimates, th: Theory) -> MetricResult:
@@ -130,13 +171,13 @@ def _variance(est: Estimates, th: Theory, c: str) -> MetricResult:
     return MetricResult(f"sigma_{c}", f"variance of {c} (sigma_{c}, TI)", "m^2/s^2", [t])
 
 
-def _spectrum(name, title, estimate, expected, cov, rho, bands: Bands, f, reference) -> MetricResult:
+def _spectrum(name, title, estimate, expected, cov, rho, bands: Bands, f) -> MetricResult:
     # band mean ratio estimate/expected ~ chi2_nu/nu with nu = 2 E^2 / Var (exact Welch covariance x rho_bar)
     checks = bands.spectrum_checks(name.split("_")[-1], estimate, expected, cov, rho)
     b = bands.bins
     nu = 2.0 * expected[b] ** 2 / (cov[0][b] * rho[b])  # 95 % interval of a chi2_nu/nu estimate (always positive)
     lo, hi = estimate[b] * nu / chi2.ppf(0.975, nu), estimate[b] * nu / chi2.ppf(0.025, nu)
-    curve = Curve(name, f[b], estimate[b], expected[b], lo, hi, reference)
+    curve = Curve(name, f[b], estimate[b], expected[b], lo, hi)
     return MetricResult(name, title, "m^2/s^2/Hz", checks, [curve])
 
 
@@ -227,6 +268,6 @@ def _uw(est, th, kernel, bands, exp_auto, cov) -> MetricResult:
         z = float(cospectrum_z(x, c, n_band))
         checks.append(Check("co-spectrum/sqrt(SuSw)", (float(f[g[0]]), float(f[g[-1]])), x, c, float(np.sqrt(v)), z))
     lo, hi = _band95(co[b], sd[b])
-    curve = Curve("uw_cross_spectrum", f[b], co[b], exp[b], lo, hi, th.reference.get("uw_cross_spectrum"))
+    curve = Curve("uw_cross_spectrum", f[b], co[b], exp[b], lo, hi)
     return MetricResult("uw_cross_spectrum", "u-w co-spectrum (Reynolds stress; 0 for Kaimal)", "m^2/s^2/Hz",
                         checks, [curve])

@@ -46,7 +46,7 @@ def _hann_dtft(nu, n):
     def d(x):
         zz = np.exp(-2j * np.pi * x)
         with np.errstate(divide="ignore", invalid="ignore"):
-            out = (1.0 - zz**n) / (1.0 - zz)
+            out = (1.0 - np.exp(-2j * np.pi * n * x)) / (1.0 - zz)  # zz^n as one exp
         return np.where(np.abs(np.sin(np.pi * x)) < 1e-12, complex(n), out)
 
     return 0.5 * d(nu) - 0.25 * d(nu - 1.0 / n) - 0.25 * d(nu + 1.0 / n), d

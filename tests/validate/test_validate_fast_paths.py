@@ -1,0 +1,65 @@
+"""The validator's fast paths equal their definitions: one-pass span sums, threads (theory alongside the
+estimates, the verdict in two threads) giving the results of one thread."""
+
+import numpy as np
+import pytest
+import scipy.fft
+
+from turbgen.runs.mann import run_mann
+from turbgen.spec.mann import MannRun
+from turbgen.validate import validate
+from turbgen.validate.estimators import WelchSetup, segment_starts
+from turbgen.validate.span_sums import COMPONENTS, span_sums
+
+
+def test_span_sums_equal_the_definition():
+    rng = np.random.default_rng(3)
+    nt, ny, nz = 200, 7, 9
+    data = {c: rng.standard_normal((nt, ny, nz)).astype(np.float32) + 1.5 for c in COMPONENTS}
+    setup = WelchSetup(64, 0.5)
+    seps = ((2, 0), (0, 3), (1, 2))
+    mask = np.zeros((ny, nz), bool)
+    mask[2:5, 3:7] = True
+    iy, iz = np.array([1, 4]), np.array([0, 5, 8])
+    starts = segment_starts(nt, setup)
+    out = span_sums(data, setup.window, starts, seps, mask, iy, iz)
+    # the definition in float64: per segment, the DFT of the mean-removed, windowed segment, and sums over
+    # every point pair (y, z), (y + a, z + b) of the grid
+    spec = {c: np.stack([scipy.fft.rfft((d[s : s + 64] - d[s : s + 64].mean(axis=0)) * setup.window[:, None, None],
+                                        axis=0) for s in starts]) for c, d in data.items()}
+    for c in COMPONENTS:
+        x = spec[c]
+        p = np.abs(x) ** 2
+        auto = p.sum(axis=(0, 2, 3))
+        # float32 data and FFT: relative rounding ~ 1e-7 per term, ~1e-6 after the FFT; 1e-5 of the scale of
+        # each sum (sqrt(A B) bounds |cross|) leaves room for the summation order and nothing for a wrong pair
+        np.testing.assert_allclose(out["auto"][c], auto, rtol=1e-5)
+        for a, b in seps:
+            cross = np.sum(np.conj(x[:, :, : ny - a, : nz - b]) * x[:, :, a:, b:], axis=(0, 2, 3))
+            pa, pb = p[:, :, : ny - a, : nz - b].sum(axis=(0, 2, 3)), p[:, :, a:, b:].sum(axis=(0, 2, 3))
+            got = out["yz"][c][(a, b)]
+            np.testing.assert_allclose(got[1], pa, rtol=1e-5)
+            np.testing.assert_allclose(got[2], pb, rtol=1e-5)
+            assert np.all(np.abs(got[0] - cross) <= 1e-5 * np.sqrt(pa * pb))
+        np.testing.assert_allclose(out["sum"][c], data[c].sum(axis=0, dtype=np.float64), rtol=1e-12)
+        np.testing.assert_allclose(out["sum2"][c], (data[c].astype(np.float64) ** 2).sum(axis=0), rtol=1e-6)
+    uw = np.sum(np.conj(spec["u"]) * spec["w"], axis=(0, 2, 3))
+    assert np.all(np.abs(out["uw"] - uw) <= 1e-5 * np.sqrt(out["auto"]["u"] * out["auto"]["w"]))
+    np.testing.assert_allclose(out["rews"], data["u"][:, mask].astype(np.float64).mean(axis=1), rtol=1e-6)
+    sub = spec["u"][:, :, iy][:, :, :, iz].reshape(len(starts), 33, -1)
+    np.testing.assert_allclose(out["sub"], sub, rtol=0, atol=1e-5 * np.abs(sub).max())
+
+
+@pytest.fixture(scope="module")
+def mann_store(tmp_path_factory):
+    path = tmp_path_factory.mktemp("fast") / "m.zarr"
+    grid = {"nt": 1024, "x_m": [0.0, 40.0, 60.0], "ny": 10, "nz": 10, "dy_m": 8.0, "dz_m": 8.0}
+    run_mann(MannRun.from_mapping({"grid": grid, "seed": 7}), path)
+    return path
+
+
+def test_threads_give_the_results_of_one_thread(mann_store):
+    one, two = validate(mann_store, workers=1), validate(mann_store, workers=2)
+    a, b = one.to_dict(), two.to_dict()
+    a.pop("seconds"), b.pop("seconds")
+    assert a == b  # bit for bit: the same operations, only run alongside each other
