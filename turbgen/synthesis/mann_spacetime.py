@@ -70,7 +70,7 @@ def snapshot_memory_bytes(box: BoxShape, ny: int, nz: int, n_snapshots: int, thr
     state = 3 * box.nk1 * slab * 8 if n_snapshots > 1 else 0
     spectra = 3 * ny * nz * _padded_nk1(box.nk1) * 8
     output = buffers * box.nt * ny * nz * 4  # output plane(s)
-    scratch = threads * (SLAB_BATCH * slab * (2 * 3 * 8 + 2 * 8 + 8 * 4) + ROW_BLOCK * box.nt * 4)
+    scratch = threads * (SLAB_BATCH * slab * (2 * 3 * 8 + 2 * 8 + 8 * 4) + 2 * ROW_BLOCK * (box.nt + 16) * 4)
     return state + spectra + output + scratch
 
 
@@ -100,6 +100,7 @@ class _Scratch:
         self.rho, self.sig, self.w, self.ksq, self.half, self.z2 = _aligned((6, b, nh, nzp), np.float32)
         self.real = _aligned((b, nyp, nzp), np.float32)
         self.rows = _aligned((ROW_BLOCK, nt), np.float32)
+        self.staged = None  # rows re-strided for the transposing copy (allocated with the plans along k1)
         # Pruned 2-D inverse transform: along z on all nyp rows, then along y only on the nz kept columns
         # (3/4 of the full 2-D transform's work for pad-yz 2).
         self._yz: dict[int, tuple[pyfftw.FFTW, pyfftw.FFTW]] = {}
@@ -121,6 +122,7 @@ class _Scratch:
     def plan_rows(self, spectra: np.ndarray) -> None:
         """Plans for blocks of ROW_BLOCK rows and for the last, shorter block of ``spectra`` (3, rows, nk1)."""
         rows = spectra.shape[1]
+        self.staged = _aligned((ROW_BLOCK, self.rows.shape[1] + 16), np.float32)
         for n in {min(ROW_BLOCK, rows), rows % ROW_BLOCK} - {0}:
             self._t[n] = pyfftw.FFTW(
                 spectra[0, :n],
@@ -338,8 +340,11 @@ class MannSnapshots:
         plan = s.t_plan(n)
         plan.update_arrays(spectra, s.rows[:n])
         plan.execute()
-        out = output.reshape(self.box.nt, -1)
-        out[:, r0:r1] = s.rows[:n].T
+        # Transposed through rows whose stride is not a power of two: read straight from s.rows (nt = 2^p) every
+        # column hits the same cache sets (2-3x slower: 3.0-3.6 vs 1.1-1.5 ns per value measured, nt = 1024-8192)
+        staged = s.staged[:n, : self.box.nt]
+        staged[...] = s.rows[:n]
+        output.reshape(self.box.nt, -1)[:, r0:r1] = staged.T
 
 
 class PencilTransform:
