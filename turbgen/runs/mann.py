@@ -122,9 +122,8 @@ def run_mann(
             pending = None
 
             def write_and_sum(comp, ix, field):  # in the background, with the next item's synthesis
-                writer.write(comp, ix, field)
+                sums[comp][0] += writer.write(comp, ix, field)  # the float64 sum of its finiteness check
                 flat = field.reshape(-1)
-                sums[comp][0] += float(flat.sum(dtype=np.float64))
                 sums[comp][1] += float(np.dot(flat, flat))
 
             for done, (ix, comp, field) in enumerate(gen.generate(run.seed, run.plane_times_s()), start=1):

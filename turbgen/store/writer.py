@@ -180,7 +180,7 @@ class StoreWriter:
             raise ValueError(f"store attrs {clash} are already set")
         self._group.attrs.update(_jsonable(attrs))
 
-    def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0) -> None:
+    def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0) -> float:
         """Write ``data`` (nt_block, ny, nz) to ``component`` at plane index ``ix``, time ``t0``.
 
         Parameters
@@ -196,7 +196,9 @@ class StoreWriter:
 
         Returns
         -------
-        None
+        float
+            The sum of the block's values in float64 [m/s] (computed for the finiteness check; a caller
+            accumulating the mean can use it instead of summing the block again).
 
         Raises
         ------
@@ -218,7 +220,8 @@ class StoreWriter:
             raise ValueError(
                 f"block of shape {block.shape} at t0={t0} does not fit plane shape ({g.nt}, {g.ny}, {g.nz})"
             )
-        if not np.isfinite(block.sum(dtype=np.float64)):
+        total = float(block.sum(dtype=np.float64))
+        if not np.isfinite(total):
             raise ValueError(f"{component} plane {ix}: block at t0={t0} contains NaN or inf")
         t1 = t0 + block.shape[0]
         aligned = t0 % self.chunk_t == 0 and (t1 % self.chunk_t == 0 or t1 == g.nt)
@@ -229,6 +232,7 @@ class StoreWriter:
                 self._arrays[component][t0:t1, ix] = block
         with self._bookkeeping:
             self._written[component][ix, t0:t1] = True
+        return total
 
     # -- internals --------------------------------------------------------------------------
     def _create(self, root: Path) -> None:

@@ -166,6 +166,18 @@ def w_coefficient(a, p, q, ksq, out, scratch):
     return out
 
 
+def _even_in_k3(table, ksq: np.ndarray, length_scale_m: float) -> np.ndarray:
+    """``table.from_ksq(ksq, length_scale_m)`` (float64, shaped like ``ksq``, columns k3 in fftfreq order), evaluated on
+    the columns k3 >= 0 and the Nyquist only: fftfreq is exactly antisymmetric, so |k|^2 and the result on column j
+    equal those on column nzp - j (half the table lookups, the same numbers)."""
+    nzp = ksq.shape[-1]
+    h = nzp // 2
+    out = np.empty(ksq.shape)
+    out[..., : h + 1] = table.from_ksq(ksq[..., : h + 1], length_scale_m)
+    out[..., h + 1 :] = out[..., nzp - h - 1 : 0 : -1]
+    return out
+
+
 def _unit_coefficients(params: MannParams, k1, k2, k3, out: np.ndarray, inv_tau: np.ndarray | None) -> None:
     """The energy-free factors (e, k30, c1, c2) of slabs k1 (b, 1, 1) on rows k2 (nh, 1) x columns k3 (nzp,).
 
@@ -184,7 +196,7 @@ def _unit_coefficients(params: MannParams, k1, k2, k3, out: np.ndarray, inv_tau:
     if params.gamma == 0.0:
         beta = np.zeros_like(ksq)
     else:
-        beta = shear_lifetime_table(params).from_ksq(ksq, L)
+        beta = _even_in_k3(shear_lifetime_table(params), ksq, L)
         beta *= params.gamma
     with np.errstate(invalid="ignore"):
         bk1 = beta * k1  # nan at k = 0 (inf * 0): set to 0 below
@@ -222,7 +234,7 @@ def _unit_coefficients(params: MannParams, k1, k2, k3, out: np.ndarray, inv_tau:
         for f in (e, k30, z1, z2):
             f[i, origin] = 0.0
     if inv_tau is not None:
-        tau = evolution_lifetime_table(params).from_ksq(ksq, L)
+        tau = _even_in_k3(evolution_lifetime_table(params), ksq, L)
         tau *= params.evo_time_s  # tau_e [s] (inf at k = 0)
         np.divide(1.0, tau, out=inv_tau)
 

@@ -15,7 +15,7 @@ from numpy.random import SFC64, SeedSequence
 _TWO_PI = np.float32(2.0 * np.pi)
 _INV_2_24 = np.float32(2.0**-24)
 _ANGLE_STEP = _INV_2_24 * _TWO_PI  # float32
-_BLOCK = 8192
+_BLOCK = 24576  # 96 KiB float32 temporaries (in L2); 2 blocks per 3 x 128 x 128 slab: ~8 % faster than 8192
 
 
 def slab_key(seed: int, snapshot: int, slab: int) -> tuple[int, int, int]:
