@@ -47,11 +47,11 @@ def store_attrs(run: KaimalRun, gen: KaimalEvo | None = None) -> dict:
 def memory_needed(grid: Grid, spill: bool = False) -> int:
     """Peak bytes of a run's arrays: one component's spectrum (nx, nf, ny, nz) complex64 -- or, with
     ``spill`` (the spectrum in a scratch file), one frequency chunk of all planes with its mixing
-    copies -- plus two planes in flight (one transformed, with its spectrum copy, while the previous one
-    is written with the store's compression buffers)."""
+    copies -- plus the planes in flight (two transformed at once, each with its spectrum copy, one
+    yielded and one written by the store)."""
     nf = grid.nt // 2 + 1
     plane = grid.ny * grid.nz
-    in_flight = 2 * nf * plane * 8 + 4 * grid.nt * plane * 4
+    in_flight = 3 * nf * plane * 8 + 5 * grid.nt * plane * 4
     if spill:
         return 3 * grid.nx * FREQ_CHUNK * plane * 8 + in_flight
     return grid.nx * nf * plane * 8 + in_flight

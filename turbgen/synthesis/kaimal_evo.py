@@ -283,13 +283,26 @@ class KaimalEvo:
                 spectrum.put_chunk(ks.start, block)
             if tick:
                 tick()
-        pool.shutdown()
-        for p in range(nx):
+        # two planes transformed at once (half the threads each; pocketfft's columns do not depend on the
+        # thread count), yielded in order: the amplitude pass runs in parallel too
+        fft_workers = max(1, self.workers // 2)
+
+        def transform(p):
             spec = spectrum.get(p)
             if g.nt % 2 == 0:
                 spec[-1] = spec[-1].real
             spec *= amp[:, None, None]
-            plane = scipy.fft.irfft(spec, n=g.nt, axis=0, norm="forward", workers=self.workers)
-            if tick:
-                tick()
-            yield p, plane.astype(np.float32, copy=False)
+            return scipy.fft.irfft(spec, n=g.nt, axis=0, norm="forward", workers=fft_workers).astype(np.float32,
+                                                                                                  copy=False)
+
+        try:
+            ahead = [pool.submit(transform, p) for p in range(min(2, nx))]
+            for p in range(nx):
+                plane = ahead.pop(0).result()
+                if p + 2 < nx:
+                    ahead.append(pool.submit(transform, p + 2))
+                if tick:
+                    tick()
+                yield p, plane
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
