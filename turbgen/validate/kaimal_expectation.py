@@ -81,15 +81,16 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
     acc = RhoAccumulator(design, node_f.size)
     lag_r = lag_radius(grid)
     for c in COMPONENTS:
-        coh_yz2 = np.stack([yz_coh(c, lag_r, np.full(lag_r.shape, f)) ** 2 for f in node_f])
+        coh_yz = np.stack([yz_coh(c, lag_r, np.full(lag_r.shape, f)) for f in node_f])
         for dx, mult in plane_separations(grid).items():
             if dx == 0:
-                acc.add(c, coh_yz2, mult, same_plane=True)
+                acc.add(c, coh_yz, mult, same_plane=True)
             elif c in long_components:
-                acc.add(c, coh_yz2 * (long_fn(dx, node_f) ** 2)[:, None, None], mult, same_plane=False)
-    rho_rews = np.zeros(node_f.size)
+                acc.add(c, coh_yz * long_fn(dx, node_f)[:, None, None], mult, same_plane=False)
+    rho_rews = np.zeros((node_f.size, node_f.size))  # planes' REWS series: coherency gamma_x between planes
     for dx, mult in plane_separations(grid).items():
-        rho_rews += mult * long_fn(dx, node_f) ** 2 / grid.nx**2
+        g_x = long_fn(dx, node_f) if dx > 0 else np.ones(node_f.size)
+        rho_rews += mult * np.outer(g_x, g_x) / grid.nx**2
     reference = {
         f"spectrum_{c}": (line_f[1:], kaimal_spectrum(line_f[1:], kp.sigma_m_s[i], kp.length_scales_m[i], U))
         for i, c in enumerate(COMPONENTS)

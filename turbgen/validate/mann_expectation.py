@@ -175,23 +175,26 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
     long = {dx: v if exact else ratio_lines(v, f_nodes["u"]) * auto["u"] for dx, v in long_nodes.items()}
     rews = rews_nodes if exact else ratio_lines(rews_nodes, f_nodes["u"]) * auto["u"]
 
-    # rho_bar at the nodes: coh2 over all lags from the 2-D FFT of Theta_ii on the lattice
+    # correlation sums at pairs of nodes: coherencies over all lags from the 2-D FFT of Theta_ii on the lattice
     node_f = design.node_freqs()
     acc = RhoAccumulator(design, node_f.size)
-    rho_rews = np.zeros(node_f.size)
     size = box.nyp * box.nzp
-    for n, phi, inv_tau in lat.slabs(2 * np.pi * node_f / U):
-        sl = slice(n, n + 1)
-        diag = [phi[i, i].sum() for i in range(3)]
-        r0 = np.sum(phi[0, 0] * h2)
-        for dx, mult in dxs.items():
-            decay = np.exp(-dx / U * inv_tau)
-            for i, c in enumerate(COMPONENTS):
-                cross = box_lags(np.fft.ifft2(phi[i, i] * decay) * size, grid.ny, grid.nz)
-                acc.add(c, np.abs(cross[None]) ** 2 / diag[i] ** 2, mult, dx == 0, sl)
-            cross13 = box_lags(np.fft.ifft2(phi[0, 2] * decay) * size, grid.ny, grid.nz)
-            acc.add_uw(np.abs(cross13[None]) ** 2 / (diag[0] * diag[2]), mult, sl)
-            rho_rews[n] += mult * (np.sum(phi[0, 0] * decay * h2) / r0) ** 2 / grid.nx**2
+    slabs = [(phi[[0, 1, 2, 0], [0, 1, 2, 2]].copy(), inv_tau) for _, phi, inv_tau in lat.slabs(2 * np.pi * node_f / U)]
+    diag = np.array([[p[i].sum() for i in range(3)] for p, _ in slabs])  # (nn, 3)
+    r0 = np.array([np.sum(p[0] * h2) for p, _ in slabs])
+    rho_rews = np.zeros((node_f.size, node_f.size))
+    for dx, mult in dxs.items():
+        decay = [np.exp(-dx / U * inv_tau) for _, inv_tau in slabs]
+
+        def lags(i):
+            return np.stack([box_lags(np.fft.ifft2(p[i] * d) * size, grid.ny, grid.nz)
+                             for (p, _), d in zip(slabs, decay)])
+
+        for i, c in enumerate(COMPONENTS):
+            acc.add(c, lags(i) / diag[:, i, None, None], mult, dx == 0)
+        acc.add_uw(np.abs(lags(3)) ** 2 / (diag[:, 0] * diag[:, 2])[:, None, None], mult)
+        c_r = np.array([np.sum(p[0] * d * h2) for (p, _), d in zip(slabs, decay)]) / r0
+        rho_rews += mult * np.outer(c_r, c_r) / grid.nx**2
     band = design.band(U)
     band.update(
         box_y_m=box.nyp * grid.dy_m,

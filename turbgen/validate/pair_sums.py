@@ -4,7 +4,9 @@ All sums run over the (2 ny - 1, 2 nz - 1) grid of lags (dy, dz) between two poi
 a function of the lag (a coherence) times the number of point pairs of a set at that lag. For Gaussian
 fields Cov(|X_p|^2, |X_q|^2) = E|X_p|^2 E|X_q|^2 coh2_pq (Isserlis 1918), so the average of an
 estimate over N points has the one-point variance times rho_bar = sum_pq coh2_pq / N^2
-(``turbgen.validate.prediction``).
+(``turbgen.validate.prediction``). The sums are kept at pairs of frequency nodes,
+R(nu_i, nu_j) = sum_pq coh_pq(nu_i) conj(coh_pq(nu_j)) / N^2 (coh_pq the complex coherency), which the
+exact covariance of averaged Welch estimates needs (``welch_variance``); rho_bar(nu) = R(nu, nu).
 """
 
 from __future__ import annotations
@@ -52,7 +54,8 @@ def lag_radius(grid: Grid) -> np.ndarray:
 
 
 class RhoAccumulator:
-    """Sums of coh2 over all ordered pairs of every averaged point set (see module docstring).
+    """Two-frequency sums R (nn, nn) over all ordered pairs of every averaged point set (module docstring);
+    the u-w sum ``uw`` (nn,) is one-frequency (|coherency|^2).
 
     Parameters
     ----------
@@ -72,27 +75,31 @@ class RhoAccumulator:
         self.norm_all = (nx * ny * nz) ** 2
         self.norm_yz = {s: (nx * (ny - s[0]) * (nz - s[1])) ** 2 for s in seps}
         self.norm_long = (iy.size * iz.size) ** 2
-        self.all = {c: np.zeros(nn) for c in COMPONENTS}
-        self.yz = {c: {s: np.zeros(nn) for s in seps} for c in COMPONENTS}
-        self.long = np.zeros(nn)
+        self.all = {c: np.zeros((nn, nn)) for c in COMPONENTS}
+        self.yz = {c: {s: np.zeros((nn, nn)) for s in seps} for c in COMPONENTS}
+        self.long = np.zeros((nn, nn))
         self.uw = np.zeros(nn)
 
-    def add(self, component: str, coh2: np.ndarray, multiplicity: int, same_plane: bool, n=slice(None)) -> None:
-        """Add coh2 (nodes, 2ny-1, 2nz-1) between the points of two planes at nodes ``n``.
+    @staticmethod
+    def _pair_sum(coh: np.ndarray, counts: np.ndarray) -> np.ndarray:
+        """sum over lags of counts x coh(nu_i) conj(coh(nu_j)) (real part: ordered pairs come in conjugate pairs)."""
+        weighted = coh * counts
+        return np.einsum("nij,mij->nm", weighted, np.conj(coh)).real
+
+    def add(self, component: str, coh: np.ndarray, multiplicity: int, same_plane: bool) -> None:
+        """Add the coherency coh (all nodes, 2ny-1, 2nz-1) [-] between the points of two planes.
 
         ``multiplicity``: number of ordered plane pairs with this separation.
         """
-        self.all[component][n] += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
+        self.all[component] += multiplicity * self._pair_sum(coh, self.counts_all) / self.norm_all
         for s in self.seps:
-            self.yz[component][s][n] += (
-                multiplicity * np.einsum("nij,ij->n", coh2, self.counts_yz[s]) / self.norm_yz[s]
-            )
+            self.yz[component][s] += multiplicity * self._pair_sum(coh, self.counts_yz[s]) / self.norm_yz[s]
         if same_plane and component == "u":
-            self.long[n] += np.einsum("nij,ij->n", coh2, self.counts_long) / self.norm_long
+            self.long += self._pair_sum(coh, self.counts_long) / self.norm_long
 
-    def add_uw(self, coh2: np.ndarray, multiplicity: int, n=slice(None)) -> None:
-        """|u-w coherency|^2 between points of two planes, as :meth:`add`."""
-        self.uw[n] += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
+    def add_uw(self, coh2: np.ndarray, multiplicity: int) -> None:
+        """|u-w coherency|^2 (all nodes, 2ny-1, 2nz-1) between points of two planes, as :meth:`add`."""
+        self.uw += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
 
 
 def rotor_pair_counts(grid: Grid, mask: np.ndarray) -> np.ndarray:

@@ -18,10 +18,13 @@ Uncertainties (Gaussian fields; derivations in the comments below):
   removal, coloured neighbouring bins. (Very long records fall back to the rule of thumb
   K_eff = K / (1 + 2 (1/36) K_adj / K), Hann bin correlations 4/9, 1/36, accurate there.)
 * Averaging over points/planes does not multiply the number of independent samples by the
-  number of points: Cov(P_p, P_q) = E P_p E P_q coh2_pq (Isserlis), so the average over a point
-  set has the one-point covariance times rho_bar, the mean of the model's coh2 over all ordered
-  pairs of the set (``Theory.rho_*``; 1 for fully coherent points, 1/N for independent ones).
-  The same holds for averages of cross-products conj(X_p) X_{p+d} over p.
+  number of points: the covariance of the Welch estimate averaged over a point set is the same
+  Isserlis sum with the pair's line cross-covariances L_q coh_pq(f_q) inside the line sums
+  (``welch_variance``, module docstring), computed from the two-frequency correlation sum
+  R(nu_i, nu_j) = sum_pq coh_pq(nu_i) conj(coh_pq(nu_j)) / N^2 of the set (``Theory.rho_*``). The
+  one-frequency rule "one-point covariance x rho_bar(f_m)" (rho_bar = R(f_m, f_m), 1 for fully coherent
+  points, 1/N for independent ones) underestimated the sd of the lowest bins by 25-30 % (the bins collect
+  lower, more coherent lines by leakage); it remains the fallback of very long records.
 * Auto-spectra and REWS spectra, per band (bins grouped ~5 per decade): the band mean has the exact
   mean and variance above; compared as chi2_nu / nu with nu = 2 E^2 / Var (Satterthwaite).
 * Variance: one-sided line pair j contributes 2|Z_j|^2 (exponential, variance (2 L_j)^2), so
@@ -88,22 +91,29 @@ def judge(est: Estimates, th: Theory) -> list[MetricResult]:
     wcov = WelchCovariance(est.setup, est.grid.nt, starts)
     out = [_mean(est, th), *(_variance(est, th, c) for c in COMPONENTS)]
     exp_auto = {c: kernel.apply(th.auto[c]) for c in COMPONENTS}
-    cov = {c: bands.cov(wcov, th.auto[c], exp_auto[c]) for c in COMPONENTS}
+    cov = {c: bands.cov(wcov, th.auto[c], exp_auto[c]) for c in COMPONENTS}  # one point
+    terms = {c: wcov.node_terms(th.auto[c], th.node_f) for c in COMPONENTS}
+
+    def averaged(c, rho2, w=wcov, t=None, one=None):  # covariance of the estimate averaged over a point set
+        t = terms[c] if t is None else t
+        return bands.averaged_cov(w, t, cov[c] if one is None else one, rho2, th.rho(rho2, f))
+
     for c in COMPONENTS:
-        out.append(_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c], cov[c],
-                             th.rho(th.rho_all[c], f), bands, f, th.reference.get(f"spectrum_{c}")))
+        out.append(_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c],
+                             averaged(c, th.rho_all[c]), bands, f, th.reference.get(f"spectrum_{c}")))
     for c in COMPONENTS:
-        out.append(_yz(est, th, kernel, bands, c, exp_auto[c], cov[c]))
-    out.append(_longitudinal(est, th, kernel, bands, exp_auto["u"], cov["u"]))
+        covs = {s: averaged(c, th.rho_yz[c][s]) for s in est.separations}
+        out.append(_yz(est, th, kernel, bands, c, exp_auto[c], covs))
+    out.append(_longitudinal(est, th, kernel, bands, exp_auto["u"], averaged("u", th.rho_long)))
     out.append(_uw(est, th, kernel, bands, exp_auto, cov))
     exp_r = kernel.apply(th.rews)
     rews_w = WelchCovariance(est.setup, est.grid.nt, segment_starts(est.grid.nt, est.setup))  # one span: whole record
-    rews_cov = bands.cov(rews_w, th.rews, exp_r)
+    rews_one = bands.cov(rews_w, th.rews, exp_r)
     if not rews_w.feasible:  # rule of thumb: the REWS series has its own segment count
-        rews_cov = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_cov.items()}
+        rews_one = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_one.items()}
+    rews_cov = averaged("u", th.rho_rews, rews_w, rews_w.node_terms(th.rews, th.node_f), rews_one)
     out.append(_spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
-                         est.rews_psd, exp_r, rews_cov, th.rho(th.rho_rews, f), bands, f,
-                         th.reference.get("rews_spectrum")))
+                         est.rews_psd, exp_r, rews_cov, bands, f, th.reference.get("rews_spectrum")))
     return out
 
 
@@ -130,11 +140,11 @@ def _variance(est: Estimates, th: Theory, c: str) -> MetricResult:
     return MetricResult(f"sigma_{c}", f"variance of {c} (sigma_{c}, TI)", "m^2/s^2", [t])
 
 
-def _spectrum(name, title, estimate, expected, cov, rho, bands: Bands, f, reference) -> MetricResult:
-    # band mean ratio estimate/expected ~ chi2_nu/nu with nu = 2 E^2 / Var (exact Welch covariance x rho_bar)
-    checks = bands.spectrum_checks(name.split("_")[-1], estimate, expected, cov, rho)
+def _spectrum(name, title, estimate, expected, cov, bands: Bands, f, reference) -> MetricResult:
+    # band mean ratio estimate/expected ~ chi2_nu/nu with nu = 2 E^2 / Var (exact covariance of the point average)
+    checks = bands.spectrum_checks(name.split("_")[-1], estimate, expected, cov)
     b = bands.bins
-    nu = 2.0 * expected[b] ** 2 / (cov[0][b] * rho[b])  # 95 % interval of a chi2_nu/nu estimate (always positive)
+    nu = 2.0 * expected[b] ** 2 / cov[0][b]  # 95 % interval of a chi2_nu/nu estimate (always positive)
     lo, hi = estimate[b] * nu / chi2.ppf(0.975, nu), estimate[b] * nu / chi2.ppf(0.025, nu)
     curve = Curve(name, f[b], estimate[b], expected[b], lo, hi, reference)
     return MetricResult(name, title, "m^2/s^2/Hz", checks, [curve])
@@ -144,7 +154,8 @@ def _sep_label(est: Estimates, s) -> str:
     return f"dy={s[0] * est.grid.dy_m:g}m dz={s[1] * est.grid.dz_m:g}m"
 
 
-def _yz(est, th, kernel, bands, c, exp_auto, cov) -> MetricResult:
+def _yz(est, th, kernel, bands, c, exp_auto, covs) -> MetricResult:
+    # covs: separation -> covariance of the auto-spectrum averaged over the first points of its pairs
     checks, curves = [], []
     b = bands.bins
     f = est.freqs
@@ -153,10 +164,9 @@ def _yz(est, th, kernel, bands, c, exp_auto, cov) -> MetricResult:
         coh2 = np.abs(cc) ** 2 / (pa * pb)
         phase = np.angle(cc)
         rho = kernel.apply(th.yz[c][s]) / exp_auto
-        rho_bar = th.rho(th.rho_yz[c][s], f)
         lab = _sep_label(est, s)
-        checks += bands.coherence_checks(lab, cc, pa, pb, rho, exp_auto, cov, rho_bar)
-        st = coherence_stats(rho, exp_auto**2 / (cov[0] * rho_bar))  # per-bin bands for the plots
+        checks += bands.coherence_checks(lab, cc, pa, pb, rho, exp_auto, covs[s])
+        st = coherence_stats(rho, exp_auto**2 / covs[s][0])  # per-bin bands for the plots
         for name, e, m, sd in (("coh2", coh2, st["coh2_mean"], st["coh2_sd"]),
                                ("phase", phase, np.angle(rho), st["phase_sd"])):
             lo, hi = _band95(e[b], sd[b])
@@ -167,12 +177,12 @@ def _yz(est, th, kernel, bands, c, exp_auto, cov) -> MetricResult:
 
 
 def _longitudinal(est, th, kernel, bands, exp_auto_u, cov_u) -> MetricResult:
+    # cov_u: covariance of the u auto-spectrum averaged over the plane-pair sub-lattice of one plane
     checks, curves = [], []
     g = est.grid
     b = bands.bins
     f = est.freqs
-    rho_bar = th.rho(th.rho_long, f)
-    n_bins = exp_auto_u**2 / (cov_u[0] * rho_bar)
+    n_bins = exp_auto_u**2 / cov_u[0]
     for p in range(g.nx):
         for q in range(p + 1, g.nx):
             cross = est.long_cross[p, q]
@@ -181,8 +191,7 @@ def _longitudinal(est, th, kernel, bands, exp_auto_u, cov_u) -> MetricResult:
             rho = kernel.apply(th.long_lines(g.x_m[q] - g.x_m[p])) / exp_auto_u
             lab = f"x={g.x_m[p]:g}m-{g.x_m[q]:g}m"
             # expected phase arg(rho) = 0 in the convected frame of the store
-            checks += bands.coherence_checks(lab, cross, est.long_auto[p], est.long_auto[q], rho, exp_auto_u, cov_u,
-                                           rho_bar)
+            checks += bands.coherence_checks(lab, cross, est.long_auto[p], est.long_auto[q], rho, exp_auto_u, cov_u)
             st = coherence_stats(rho, n_bins)
             lo, hi = _band95(coh2[b], st["coh2_sd"][b])
             curves.append(Curve(f"coh2 {lab}", f[b], coh2[b], st["coh2_mean"][b], lo, hi))
