@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.stats import binom
+from scipy.stats import binom, chi2
 
 from turbgen.runs.kaimal import run_kaimal
 from turbgen.runs.mann import run_mann
@@ -20,6 +20,7 @@ from turbgen.validate import ALPHA, validate
 from turbgen.theory.coherence_models import exponential_yz
 from turbgen.validate.distributions import coh2_tails, coh2_z, cospectrum_tails, phase_sf
 from turbgen.validate.estimators import WelchSetup, segment_starts
+from turbgen.validate.variance_law import gamma_sum_tails, gamma_terms
 from turbgen.validate.welch_kernel import WelchKernel
 from turbgen.validate.welch_variance import WelchCovariance
 
@@ -147,6 +148,34 @@ def test_point_averaged_welch_covariance_matches_monte_carlo():
     # the one-frequency rule is 13 % (bin 1) and 15 % (bin 2) low in variance; 0.93 is > 4 sd above
     rho_bar = np.interp(np.log(setup.freqs[1:3]), np.log(nodes), np.diagonal(rho2))
     assert np.all(wcov.cov(lines)[0][1:3] * rho_bar < 0.93 * P.var(0)[1:3])
+
+
+def test_variance_law_tails_match_monte_carlo():
+    # a point-averaged variance: 40 lines with a red spectrum, the lowest ones coherent over the grid (top mode
+    # of line 1 ~ 0.7 of its mean, as for u on 12 x 12 x 2 points), the rest of each line's modes spread out
+    rng = np.random.default_rng(3)
+    nl, npts = 40, 50
+    means = (1.0 + np.arange(1, nl + 1) / 2.0) ** (-5 / 3)
+    mu = np.empty((nl, npts))
+    for j in range(nl):
+        share = 0.7 * np.exp(-j / 4.0)
+        mu[j] = np.r_[share, np.full(npts - 1, (1 - share) / (npts - 1))]
+    rho = np.sum(mu**2, axis=1)
+    T = 400_000
+    s = sum(means[j] * (mu[j, 0] * rng.exponential(size=T) + rng.gamma(npts - 1, (1 - mu[j, 0]) / (npts - 1), T))
+            for j in range(nl))
+    p = np.array([1e-3, 0.05, 0.5, 0.95, 0.999])
+    q = np.quantile(s, p)
+    exact = gamma_terms(means, rho, np.c_[mu[:8, :4], rho[:8]])
+    tails = np.array([gamma_sum_tails(x, *exact) for x in q])
+    # binomial sd of an empirical quantile's tail probability sqrt(p (1 - p) / T); saddlepoint error ~1 % relative
+    tol = 5 * np.sqrt(p * (1 - p) / T) + 0.02 * np.minimum(p, 1 - p)
+    assert np.all(np.abs(tails[:, 0] - p) <= tol), tails[:, 0]
+    assert np.all(np.abs(tails[:, 1] - (1 - p)) <= tol), tails[:, 1]
+    # one moment-matched gamma (Satterthwaite, the law used before) makes the 0.999 quantile a ~70x rarer event
+    m, v = means.sum(), np.sum(means**2 * rho)
+    nu = 2 * m * m / v
+    assert chi2.sf(nu * q[-1] / m, nu) < 0.25 * (1 - p[-1])
 
 
 def _field(tmp_path, model, U, seed):

@@ -20,9 +20,10 @@ from turbgen.theory.coherence_models import LONGITUDINAL_MODELS, exponential_yz
 from turbgen.theory.kaimal import kaimal_spectrum
 from turbgen.theory.lattice import line_frequencies, pair_weights
 from turbgen.validate.estimators import COMPONENTS
-from turbgen.validate.pair_sums import RhoAccumulator, lag_radius, rotor_pair_counts
+from turbgen.validate.pair_sums import RhoAccumulator, coherency_matrix, lag_radius, rotor_pair_counts
 from turbgen.validate.prediction import SamplingDesign, Theory, plane_separations
 from turbgen.validate.store_run import kaimal_model_from_attrs
+from turbgen.validate.variance_law import MAX_MODE_POINTS, N_MODE_LINES, top_modes
 
 
 def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
@@ -91,6 +92,16 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
     for dx, mult in plane_separations(grid).items():
         g_x = long_fn(dx, node_f) if dx > 0 else np.ones(node_f.size)
         rho_rews += mult * np.outer(g_x, g_x) / grid.nx**2
+    # top modes of the lowest lines' coherency matrices (variance law); v, w white: all modes equal, none needed
+    modes = {}
+    if grid.nx * grid.ny * grid.nz <= MAX_MODE_POINTS:
+        for c in COMPONENTS if km.vw_coherent else ("u",):
+            def lags(dx, f, c=c):
+                g_x = 1.0 if dx == 0 else long_fn(dx, f) if c in long_components else 0.0
+                return yz_coh(c, lag_r, np.full(lag_r.shape, f)) * g_x
+
+            modes[c] = np.array([top_modes(coherency_matrix({dx: lags(dx, f) for dx in plane_separations(grid)}, grid))
+                                 for f in line_f[1 : N_MODE_LINES + 1]])
     reference = {
         f"spectrum_{c}": (line_f[1:], kaimal_spectrum(line_f[1:], kp.sigma_m_s[i], kp.length_scales_m[i], U))
         for i, c in enumerate(COMPONENTS)
@@ -106,5 +117,5 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
         rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
         sigma_model=dict(zip(COMPONENTS, kp.sigma_m_s)), band=band, long_components=long_components,
         uw=np.zeros(line_f.size), rho_uw=np.zeros(node_f.size),  # u and w are synthesised independently
-        reference=reference,
+        reference=reference, variance_modes=modes,
     )

@@ -15,7 +15,7 @@ import numpy as np
 
 from turbgen.grid import Grid
 from turbgen.validate.estimators import COMPONENTS
-from turbgen.validate.prediction import SamplingDesign
+from turbgen.validate.prediction import SamplingDesign, dx_key
 
 def rect_pair_counts(ny: int, nz: int, my: int, mz: int) -> np.ndarray:
     """Pairs of points of an my x mz rectangle of grid points per lag.
@@ -115,3 +115,24 @@ def box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
     iy = np.arange(-(ny - 1), ny) % field2d.shape[-2]
     iz = np.arange(-(nz - 1), nz) % field2d.shape[-1]
     return field2d[..., iy[:, None], iz[None, :]]
+
+
+def coherency_matrix(lags: dict, grid: Grid) -> np.ndarray:
+    """Coherency matrix (N, N) between all points of all planes (ordered by plane, y, z).
+
+    Parameters
+    ----------
+    lags : dict
+        Plane separation ``dx_key(|x_p - x_q|)`` -> (2 ny - 1, 2 nz - 1) coherency at the yz lags [-].
+    grid : Grid
+        The store's grid.
+
+    Returns
+    -------
+    numpy.ndarray
+        (nx ny nz, nx ny nz) coherency between every two points [-].
+    """
+    iy, iz = (a.ravel() for a in np.meshgrid(np.arange(grid.ny), np.arange(grid.nz), indexing="ij"))
+    dy = iy[:, None] - iy[None, :] + grid.ny - 1
+    dz = iz[:, None] - iz[None, :] + grid.nz - 1
+    return np.block([[lags[dx_key(xp - xq)][dy, dz] for xq in grid.x_m] for xp in grid.x_m])

@@ -99,6 +99,7 @@ class Theory:
     rho_uw: np.ndarray | None = None  # (nn,) cross-component term of the uw variance bound
     long_components: str = "u"
     auto_model: dict | None = None  # Mann: component -> (nl,) lines of the continuous model band-limited to the grid
+    variance_modes: dict = field(default_factory=dict)  # component -> (J, K + 1) ``variance_law.top_modes``, lines 1..J
     reference: dict = field(default_factory=dict)  # continuous-model curves for the plots: name -> (f, S)
 
     def long_lines(self, dx_m: float) -> np.ndarray:
