@@ -30,15 +30,29 @@ from scipy.stats import chi2, norm
 
 N_MODE_LINES = 4  # lowest lines whose top modes enter exactly
 N_MODES = 4  # top modes per such line
-MAX_MODE_POINTS = 800  # grids with more points get no modes (a dense N x N eigenproblem per line: ~0.3 s at 800)
+MAX_MODE_POINTS = 2048  # grids with more points get no modes (dense N x N coherency matrix: 67 MB at 2048)
+SUBSPACE = 16  # block size of the subspace iteration of ``top_modes``
+POWER_STEPS = 6  # its power steps
 
 
 def top_modes(coherency: np.ndarray) -> np.ndarray:
     """The N_MODES largest eigenvalues mu of a Hermitian coherency matrix C (N, N) divided by N [-], followed by
-    the exact sum of all squared eigenvalues ||C||_F^2 / N^2 (= rho_bar at the line, without interpolation)."""
+    the exact sum of all squared eigenvalues ||C||_F^2 / N^2 (= rho_bar at the line, without interpolation).
+
+    Subspace iteration from a fixed random block of SUBSPACE vectors (Halko, Martinsson & Tropp 2011, Alg. 4.4)
+    and Rayleigh-Ritz: deterministic, O(N^2) per step instead of a full O(N^3) eigenproblem; the error of the
+    k-th value falls as (mu_{SUBSPACE+1} / mu_k)^(2 POWER_STEPS) (~1e-6 relative for the coherent lowest lines,
+    whose spectra fall fast; checked against full eigenproblems in the tests).
+    """
     n = coherency.shape[0]
-    mu = np.clip(np.linalg.eigvalsh(coherency)[::-1][:N_MODES] / n, 0.0, None)
-    return np.append(mu, np.sum(np.abs(coherency) ** 2) / n**2)
+    if n <= 2 * SUBSPACE:
+        mu = np.linalg.eigvalsh(coherency)[::-1]
+    else:
+        q = np.random.default_rng(0).standard_normal((n, SUBSPACE)).astype(coherency.dtype)
+        for _ in range(POWER_STEPS):
+            q, _ = np.linalg.qr(coherency @ q)
+        mu = np.linalg.eigvalsh(np.conj(q.T) @ coherency @ q)[::-1]
+    return np.append(np.clip(mu[:N_MODES] / n, 0.0, None), np.sum(np.abs(coherency) ** 2) / n**2)
 
 
 def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray | None = None):
