@@ -169,8 +169,13 @@ class WelchCovariance:
         scale = self.setup.scale
         w = self.lag_count.astype(float)
         out = {}
+        r = np.ascontiguousarray(np.real(rho2).T)  # real: sums over ordered pairs
         for lag, (A, B) in terms.items():
-            s = sum(w @ np.sum((X @ rho2.T) * np.conj(X), axis=-1).real for X in (A, B))  # a^T R conj(a) per lag
+            s = 0.0
+            for X in (A, B):  # a^T R conj(a) per segment lag and bin, as two real matrix products
+                flat = X.reshape(-1, X.shape[-1])
+                y = (flat.real @ r + 1j * (flat.imag @ r)).reshape(X.shape)
+                s = s + w @ np.sum(y * np.conj(X), axis=-1).real
             out[lag] = s * scale[: self.nb - lag] * scale[lag:] / self.k**2
         return out
 
