@@ -46,9 +46,12 @@ Uncertainties (Gaussian fields; derivations in the comments below):
   exact equivalent segments of bin m); the band-pooled co-coherence is compared with the exact
   variance-gamma law of that many equivalent samples (exponential, not Gaussian, tails).
 
-Approximations, stated: the rho_bar are evaluated at the bin centre (interpolated from nodes);
-the equivalent-samples description of point-averaged coherences (exact for independent points or
-one point); the gamma law for the spectra's band means.
+Approximations, stated: coherencies interpolated linearly in log f between the rho nodes (and taken at
+|f| for the negative-frequency lines) in the averaged Welch covariance; rho_bar at the bin centre in the
+u-w bound and the very-long-record fallback; the equivalent-samples description of point-averaged
+coherences (exact for independent points or one point; with the exact averaged covariance it is
+conservative in the lowest bins: yz coh2 z sd 0.8-0.9 there); the gamma law for the spectra's band
+means; per-line gamma terms beyond the top modes of the lowest lines for the variances.
 """
 
 from __future__ import annotations
