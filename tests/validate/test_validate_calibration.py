@@ -11,14 +11,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.stats import binom
+from scipy.stats import binom, chi2
 
 from turbgen.runs.kaimal import run_kaimal
 from turbgen.runs.mann import run_mann
 from turbgen.sweep.plan import build_run
 from turbgen.validate import ALPHA, validate
+from turbgen.theory.coherence_models import exponential_yz
 from turbgen.validate.distributions import coh2_tails, coh2_z, cospectrum_tails, phase_sf
 from turbgen.validate.estimators import WelchSetup, segment_starts
+from turbgen.validate.variance_law import gamma_sum_tails, gamma_terms
 from turbgen.validate.welch_kernel import WelchKernel
 from turbgen.validate.welch_variance import WelchCovariance
 
@@ -105,6 +107,75 @@ def test_exact_welch_covariance_matches_monte_carlo():
     # and the rule of thumb it replaces is 17 % optimistic at bin 1 (equivalent segments 11.8 vs 14.3)
     k_eff = expected[1] ** 2 / cov[0][1]
     assert k_eff < 0.9 * setup.effective_segments(len(starts), len(starts) - 1)
+
+
+def test_point_averaged_welch_covariance_matches_monte_carlo():
+    # 8 points in a row 10 m apart with the IEC u coherence (U 10 m/s) and a steep Kaimal-like spectrum: the
+    # lowest Welch bins collect lower, more coherent lines by leakage, so the average over the points has the
+    # covariance of ``averaged`` with R(nu_i, nu_j) = sum_pq coh_pq(nu_i) coh_pq(nu_j) / N^2, not the
+    # one-frequency rule "one-point covariance x rho_bar(f_m)"
+    nt, dt, n, npts = 512, 0.5, 64, 8
+    setup = WelchSetup(n, dt)
+    f = np.arange(nt // 2 + 1) / (nt * dt)
+    lines = (1.0 + 200.0 * f) ** (-5 / 3) * f[1]
+    lines[0] = 0.0
+    y = np.arange(npts) * 10.0
+    coh = exponential_yz(np.abs(y[:, None] - y[None, :])[None], f[:, None, None], 10.0)  # (lines, N, N)
+    nodes = f[1:]  # every line a node: the interpolation in log f is exact at the lines
+    rho2 = np.einsum("ipq,jpq->ij", coh[1:], coh[1:]) / npts**2
+    starts = list(segment_starts(nt, setup))
+    wcov = WelchCovariance(setup, nt, starts)
+    cov = wcov.averaged(wcov.node_terms(lines, nodes), rho2)
+    rng = np.random.default_rng(11)
+    T = 20_000
+    chol = np.linalg.cholesky(coh + 1e-12 * np.eye(npts))
+    batches = []
+    for _ in range(T // 1000):  # ~35 MB per array of a batch
+        z = (rng.standard_normal((1000, f.size, npts)) + 1j * rng.standard_normal((1000, f.size, npts))) * np.sqrt(0.5)
+        Y = np.einsum("fpq,tfq->tpf", chol, z) * np.sqrt(lines)
+        Y[..., -1] = np.sqrt(2) * Y[..., -1].real
+        x = np.fft.irfft(Y, n=nt, axis=-1, norm="forward")  # (batch, N, nt)
+        P = 0.0
+        for s in starts:
+            seg = x[..., s : s + n]
+            P = P + (abs(np.fft.rfft((seg - seg.mean(-1, keepdims=True)) * setup.window, axis=-1)) ** 2).mean(1)
+        batches.append(P * setup.scale / len(starts))
+    P = np.concatenate(batches)
+    b = np.arange(1, 12)
+    # relative sd of a variance from T = 20000 draws ~1.1-1.5 % (kurtosis); 6 % is > 4 sd
+    np.testing.assert_allclose(P.var(0)[b], cov[0][b], rtol=0.06)
+    np.testing.assert_allclose(P.mean(0)[b], WelchKernel(setup, nt).apply(lines)[b], rtol=0.02)
+    # the one-frequency rule is 13 % (bin 1) and 15 % (bin 2) low in variance; 0.93 is > 4 sd above
+    rho_bar = np.interp(np.log(setup.freqs[1:3]), np.log(nodes), np.diagonal(rho2))
+    assert np.all(wcov.cov(lines)[0][1:3] * rho_bar < 0.93 * P.var(0)[1:3])
+
+
+def test_variance_law_tails_match_monte_carlo():
+    # a point-averaged variance: 40 lines with a red spectrum, the lowest ones coherent over the grid (top mode
+    # of line 1 ~ 0.7 of its mean, as for u on 12 x 12 x 2 points), the rest of each line's modes spread out
+    rng = np.random.default_rng(3)
+    nl, npts = 40, 50
+    means = (1.0 + np.arange(1, nl + 1) / 2.0) ** (-5 / 3)
+    mu = np.empty((nl, npts))
+    for j in range(nl):
+        share = 0.7 * np.exp(-j / 4.0)
+        mu[j] = np.r_[share, np.full(npts - 1, (1 - share) / (npts - 1))]
+    rho = np.sum(mu**2, axis=1)
+    T = 400_000
+    s = sum(means[j] * (mu[j, 0] * rng.exponential(size=T) + rng.gamma(npts - 1, (1 - mu[j, 0]) / (npts - 1), T))
+            for j in range(nl))
+    p = np.array([1e-3, 0.05, 0.5, 0.95, 0.999])
+    q = np.quantile(s, p)
+    exact = gamma_terms(means, rho, np.c_[mu[:8, :4], rho[:8]])
+    tails = np.array([gamma_sum_tails(x, *exact) for x in q])
+    # binomial sd of an empirical quantile's tail probability sqrt(p (1 - p) / T); saddlepoint error ~1 % relative
+    tol = 5 * np.sqrt(p * (1 - p) / T) + 0.02 * np.minimum(p, 1 - p)
+    assert np.all(np.abs(tails[:, 0] - p) <= tol), tails[:, 0]
+    assert np.all(np.abs(tails[:, 1] - (1 - p)) <= tol), tails[:, 1]
+    # one moment-matched gamma (Satterthwaite, the law used before) makes the 0.999 quantile a ~70x rarer event
+    m, v = means.sum(), np.sum(means**2 * rho)
+    nu = 2 * m * m / v
+    assert chi2.sf(nu * q[-1] / m, nu) < 0.25 * (1 - p[-1])
 
 
 def _field(tmp_path, model, U, seed):

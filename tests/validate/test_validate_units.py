@@ -126,6 +126,7 @@ def test_rotor_and_separations():
 def test_kaimal_rews_lines_equal_eq25_of_the_theory_module():
     # two independent implementations of Guo et al. (2023), Eq. 25 over the grid's rotor points
     from turbgen.spec.kaimal import KaimalRun, kaimal_params
+    from turbgen.theory.kaimal import kaimal_spectrum
     from turbgen.theory.rotor_effective import rews_spectrum_kaimal
     from turbgen.store.layout import grid_to_attrs
     from turbgen.validate.kaimal_expectation import kaimal_theory
@@ -140,5 +141,6 @@ def test_kaimal_rews_lines_equal_eq25_of_the_theory_module():
     yy, zz = np.meshgrid(g.y(), g.z(), indexing="ij")
     j = np.array([1, 5, 40, 200])
     ref = rews_spectrum_kaimal(th.line_f[j], run.kaimal, 14.0, yy[mask], zz[mask])
-    df = th.line_f[1]
-    np.testing.assert_allclose(2 * th.rews[j] / df, ref, rtol=1e-9)
+    # the lines are bin integrals of S_1 (``kaimal_expectation``); Eq. 25's rotor factor S_RR / S_1 is per line
+    s1 = kaimal_spectrum(th.line_f[j], run.kaimal.sigma_m_s[0], run.kaimal.length_scales_m[0], 14.0)
+    np.testing.assert_allclose(th.rews[j] / th.auto["u"][j], ref / s1, rtol=1e-9)

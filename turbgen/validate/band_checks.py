@@ -96,9 +96,10 @@ def coherence_stats(rho, n):
 class Bands:
     """Welch bins 1 .. n/2-1 grouped into log-spaced bands; band statistics from the Welch covariance.
 
-    ``cov``: one-point covariance of the Welch estimate, lag d -> Cov(P_m, P_{m+d}) (``welch_variance``,
-    exact for the record's segments), or the rule-of-thumb model E_m E_m' r_d / K_eff (r_d the Hann
-    bin correlations 1, 4/9, 1/36) when the exact sums are too long (very long records).
+    ``cov``: covariance of the Welch estimate averaged over a point set, lag d -> Cov(P_m, P_{m+d})
+    (``welch_variance``, exact for the record's segments and the set's two-frequency correlation sum), or
+    the rule-of-thumb model E_m E_m' r_d sqrt(rho_m rho_m') / K_eff (r_d the Hann bin correlations
+    1, 4/9, 1/36, rho_m = rho_bar at bin m) when the exact sums are too long (very long records).
     """
 
     def __init__(self, est: Estimates):
@@ -122,29 +123,38 @@ class Bands:
         e = np.asarray(expected, float)
         return {d: e[: e.size - d] * e[d:] * self.lag_corr.get(d, 0.0) / self.k_eff for d in range(MAX_LAG + 1)}
 
-    @staticmethod
-    def sum_var(cov: dict, rho: np.ndarray, group: np.ndarray) -> float:
-        """Variance of the sum over the bins ``group`` of the point-averaged estimate (rho: rho_bar per bin)."""
-        total = 0.0
+    def averaged_cov(self, wcov: WelchCovariance, terms, one_point: dict, rho2: np.ndarray, rho: np.ndarray) -> dict:
+        """Covariance dict of the point-averaged estimate: exact from ``terms`` (``WelchCovariance.node_terms``)
+        and the two-frequency sum ``rho2``; else the ``one_point`` covariance times sqrt(rho_m rho_m') (``rho``
+        per bin)."""
+        exact = wcov.averaged(terms, rho2)
+        if exact is not None:
+            return exact
         r = np.sqrt(np.asarray(rho, float))
+        return {d: c * r[: r.size - d] * r[d:] for d, c in one_point.items()}
+
+    @staticmethod
+    def sum_var(cov: dict, group: np.ndarray) -> float:
+        """Variance of the sum over the bins ``group`` of an estimate with covariance dict ``cov``."""
+        total = 0.0
         for d, c in cov.items():
             a = group[group + d <= group[-1]]
-            part = np.sum(c[a] * r[a] * r[a + d])
+            part = np.sum(c[a])
             total += part if d == 0 else 2.0 * part
         return float(total)
 
-    def spectrum_checks(self, label, est, exp, cov, rho) -> list[Check]:
+    def spectrum_checks(self, label, est, exp, cov) -> list[Check]:
         """Band means of a point-averaged Welch spectrum: ratio ~ chi2_nu / nu, nu = 2 E^2 / Var (gamma law
         with the exact mean and variance; Welch 1967 / Satterthwaite equivalent degrees of freedom)."""
         out = []
         for g in self.groups:
             e, x = float(np.mean(est[g])), float(np.mean(exp[g]))
-            s = np.sqrt(self.sum_var(cov, rho, g)) / g.size
+            s = np.sqrt(self.sum_var(cov, g)) / g.size
             z = float(chi2_z(e / x, 2.0 * (x / s) ** 2)) if x > 0 and s > 0 else 0.0
             out.append(Check(label, (float(self.f[g[0]]), float(self.f[g[-1]])), e, x, float(s), z))
         return out
 
-    def coherence_checks(self, label, cross, auto_a, auto_b, rho_lines, exp_auto, cov, rho_bar) -> list[Check]:
+    def coherence_checks(self, label, cross, auto_a, auto_b, rho_lines, exp_auto, cov) -> list[Check]:
         """Exact-law tests of the band-pooled sample coherency C = sum_g cross / sqrt(sum_g A sum_g B).
 
         Its expectation is rho_band = sum_g rho_m E_m / sum_g E_m (E_m the expected auto-spectrum of both
@@ -160,7 +170,7 @@ class Bands:
         b = np.array([np.sum(auto_b[g]) for g in gs])
         e_sum = np.array([np.sum(exp_auto[g]) for g in gs])
         rho_band = np.array([np.sum(rho_lines[g] * exp_auto[g]) for g in gs]) / e_sum
-        n_band = e_sum**2 / np.array([self.sum_var(cov, rho_bar, g) for g in gs])
+        n_band = e_sum**2 / np.array([self.sum_var(cov, g) for g in gs])
         coh = c / np.sqrt(a * b)
         gam2 = np.minimum(np.abs(rho_band) ** 2, 1.0)
         dphi = wrap_phase(np.angle(coh) - np.angle(rho_band))

@@ -1,8 +1,10 @@
 """What a Kaimal / IEC store's model predicts for every estimate, on the store's grid.
 
 The generator synthesises a periodic record: line j of the one-sided Kaimal PSD S_i has the two-sided
-variance L_j = S_i(f_j) df / 2 (IEC 61400-1 Kaimal spectrum; Guo et al. 2023, Eq. 11), L_0 = 0 (no
-mean), times sigma_i^2 / sum(2 L_j) when the store says the spectrum was rescaled. The u yz line
+variance L_j = (1/2) of the integral of S_i over the line's bin [f_j - df/2, f_j + df/2] (IEC 61400-1 Kaimal
+spectrum; Guo et al. 2023, Eq. 11; the Nyquist line: its half bin, unshared), L_0 = 0 (no mean), times
+sigma_i^2 / sum(2 L_j) when the store says the spectrum was rescaled. (S_i(f_j) df / 2 instead, as before,
+is 3.7 % low at line 1 of u for L 340 m, U 10 m/s, nt 512 x 0.5 s, and biased sigma_v by ~0.2 sd.) The u yz line
 cross-covariance is L_j coh(r, f_j) with the IEC exponential coherence (Eq. 12, un-squared); v, w as
 the store says (white, or the same exponential); between planes the store's longitudinal model
 (Eq. 18 / Simley and Pao / Kristensen, un-squared, zero phase in the convected frame) for the
@@ -17,12 +19,13 @@ import math
 import numpy as np
 
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS, exponential_yz
-from turbgen.theory.kaimal import kaimal_spectrum
+from turbgen.theory.kaimal import kaimal_band_variance, kaimal_spectrum
 from turbgen.theory.lattice import line_frequencies, pair_weights
 from turbgen.validate.estimators import COMPONENTS
-from turbgen.validate.pair_sums import RhoAccumulator, lag_radius, rotor_pair_counts
+from turbgen.validate.pair_sums import RhoAccumulator, coherency_matrix, lag_radius, rotor_pair_counts
 from turbgen.validate.prediction import SamplingDesign, Theory, plane_separations
 from turbgen.validate.store_run import kaimal_model_from_attrs
+from turbgen.validate.variance_law import MAX_MODE_POINTS, N_MODE_LINES, top_modes
 
 
 def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
@@ -53,8 +56,12 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
     line_f = line_frequencies(nt, grid.dt_s)
     df = line_f[1]
     auto = {}
+    lo = np.maximum(line_f - df / 2.0, 0.0)
+    hi = np.minimum(line_f + df / 2.0, 0.5 / grid.dt_s)
     for i, c in enumerate(COMPONENTS):
-        lines = kaimal_spectrum(line_f, kp.sigma_m_s[i], kp.length_scales_m[i], U) * df / 2.0  # Eq. 11
+        # Eq. 11 integrated over each line's bin [f_j - df/2, f_j + df/2] (clipped at the Nyquist frequency),
+        # shared by the +-f_j pair (pair weight 2; the single Nyquist line keeps its bin)
+        lines = kaimal_band_variance(lo, hi, kp.sigma_m_s[i], kp.length_scales_m[i], U) / pair_weights(nt)
         lines[0] = 0.0
         if km.rescale:
             lines *= kp.sigma_m_s[i] ** 2 / np.sum(pair_weights(nt) * lines)
@@ -81,15 +88,26 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
     acc = RhoAccumulator(design, node_f.size)
     lag_r = lag_radius(grid)
     for c in COMPONENTS:
-        coh_yz2 = np.stack([yz_coh(c, lag_r, np.full(lag_r.shape, f)) ** 2 for f in node_f])
+        coh_yz = np.stack([yz_coh(c, lag_r, np.full(lag_r.shape, f)) for f in node_f])
         for dx, mult in plane_separations(grid).items():
             if dx == 0:
-                acc.add(c, coh_yz2, mult, same_plane=True)
+                acc.add(c, coh_yz, mult, same_plane=True)
             elif c in long_components:
-                acc.add(c, coh_yz2 * (long_fn(dx, node_f) ** 2)[:, None, None], mult, same_plane=False)
-    rho_rews = np.zeros(node_f.size)
+                acc.add(c, coh_yz * long_fn(dx, node_f)[:, None, None], mult, same_plane=False)
+    rho_rews = np.zeros((node_f.size, node_f.size))  # planes' REWS series: coherency gamma_x between planes
     for dx, mult in plane_separations(grid).items():
-        rho_rews += mult * long_fn(dx, node_f) ** 2 / grid.nx**2
+        g_x = long_fn(dx, node_f) if dx > 0 else np.ones(node_f.size)
+        rho_rews += mult * np.outer(g_x, g_x) / grid.nx**2
+    # top modes of the lowest lines' coherency matrices (variance law); v, w white: all modes equal, none needed
+    modes = {}
+    if grid.nx * grid.ny * grid.nz <= MAX_MODE_POINTS:
+        for c in COMPONENTS if km.vw_coherent else ("u",):
+            def lags(dx, f, c=c):
+                g_x = 1.0 if dx == 0 else long_fn(dx, f) if c in long_components else 0.0
+                return yz_coh(c, lag_r, np.full(lag_r.shape, f)) * g_x
+
+            modes[c] = np.array([top_modes(coherency_matrix({dx: lags(dx, f) for dx in plane_separations(grid)}, grid))
+                                 for f in line_f[1 : N_MODE_LINES + 1]])
 
     def reference() -> dict:  # continuous Kaimal spectra (plots only)
         return {f"spectrum_{c}": (line_f[1:], kaimal_spectrum(line_f[1:], kp.sigma_m_s[i], kp.length_scales_m[i], U))
@@ -106,5 +124,5 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
         rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
         sigma_model=dict(zip(COMPONENTS, kp.sigma_m_s)), band=band, long_components=long_components,
         uw=np.zeros(line_f.size), rho_uw=np.zeros(node_f.size),  # u and w are synthesised independently
-        reference=reference,
+        reference=reference, variance_modes=modes,
     )

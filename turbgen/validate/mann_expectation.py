@@ -28,9 +28,10 @@ from turbgen.theory.params import MannParams
 from turbgen.theory.rotor_effective import rews_spectrum_mann
 from turbgen.validate.estimators import COMPONENTS
 from turbgen.validate.mann_lattice import MannLattice
-from turbgen.validate.pair_sums import RhoAccumulator, box_lags
+from turbgen.validate.pair_sums import RhoAccumulator, box_lags, coherency_matrix
 from turbgen.validate.prediction import N_RHO_NODES, SamplingDesign, Theory, plane_separations
 from turbgen.validate.store_run import mann_box_from_attrs, mann_params_from_attrs
+from turbgen.validate.variance_law import MAX_MODE_POINTS, N_MODE_LINES, top_modes
 
 N_LINE_NODES = 96  # k1 nodes of the Mann lattice sums when not every line is evaluated
 EXACT_LATTICE_POINTS = 4_000_000  # evaluate every line exactly when lines x lattice points is below this
@@ -176,23 +177,27 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
     long = {dx: v if exact else ratio_lines(v, f_nodes["u"]) * auto["u"] for dx, v in long_nodes.items()}
     rews = rews_nodes if exact else ratio_lines(rews_nodes, f_nodes["u"]) * auto["u"]
 
-    # rho_bar at the nodes: coh2 over all lags from the 2-D FFT of Theta_ii on the lattice
+    # correlation sums at pairs of nodes: coherencies over all lags from the 2-D FFT of Theta_ii on the lattice
     node_f = design.node_freqs()
     acc = RhoAccumulator(design, node_f.size)
-    rho_rews = np.zeros(node_f.size)
     size = box.nyp * box.nzp
-    for n, phi, inv_tau in lat.slabs(2 * np.pi * node_f / U):
-        sl = slice(n, n + 1)
-        diag = [phi[i, i].sum() for i in range(3)]
-        r0 = np.sum(phi[0, 0] * h2)
-        for dx, mult in dxs.items():
-            decay = np.exp(-dx / U * inv_tau)
-            for i, c in enumerate(COMPONENTS):
-                cross = box_lags(np.fft.ifft2(phi[i, i] * decay) * size, grid.ny, grid.nz)
-                acc.add(c, np.abs(cross[None]) ** 2 / diag[i] ** 2, mult, dx == 0, sl)
-            cross13 = box_lags(np.fft.ifft2(phi[0, 2] * decay) * size, grid.ny, grid.nz)
-            acc.add_uw(np.abs(cross13[None]) ** 2 / (diag[0] * diag[2]), mult, sl)
-            rho_rews[n] += mult * (np.sum(phi[0, 0] * decay * h2) / r0) ** 2 / grid.nx**2
+    slabs = [(phi[[0, 1, 2, 0], [0, 1, 2, 2]].copy(), inv_tau) for _, phi, inv_tau in lat.slabs(2 * np.pi * node_f / U)]
+    diag = np.array([[p[i].sum() for i in range(3)] for p, _ in slabs])  # (nn, 3)
+    r0 = np.array([np.sum(p[0] * h2) for p, _ in slabs])
+    rho_rews = np.zeros((node_f.size, node_f.size))
+    for dx, mult in dxs.items():
+        decay = [np.exp(-dx / U * inv_tau) for _, inv_tau in slabs]
+
+        def lags(i):
+            return np.stack([box_lags(np.fft.ifft2(p[i] * d) * size, grid.ny, grid.nz)
+                             for (p, _), d in zip(slabs, decay)])
+
+        for i, c in enumerate(COMPONENTS):
+            acc.add(c, lags(i) / diag[:, i, None, None], mult, dx == 0)
+        acc.add_uw(np.abs(lags(3)) ** 2 / (diag[:, 0] * diag[:, 2])[:, None, None], mult)
+        c_r = np.array([np.sum(p[0] * d * h2) for (p, _), d in zip(slabs, decay)]) / r0
+        rho_rews += mult * np.outer(c_r, c_r) / grid.nx**2
+    modes = _variance_modes(lat, grid, dxs, k1_lines[1 : N_MODE_LINES + 1], U, size)
     band = design.band(U)
     band.update(
         box_y_m=box.nyp * grid.dy_m,
@@ -211,7 +216,23 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
         rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
         sigma_model={c: math.sqrt(var[c + c]) for c in COMPONENTS}, band=band, uw=uw, rho_uw=acc.uw,
         long_components="u", auto_model=auto_model, reference=partial(_mann_reference, params, design, U),
+        variance_modes=modes,
     )
+
+
+def _variance_modes(lat: MannLattice, grid: Grid, dxs: dict, k1: np.ndarray, U: float, size: int) -> dict:
+    """Component -> (len(k1), K) top eigenvalues of the lines' coherency matrices between all points / N
+    (``variance_law``); empty for grids above MAX_MODE_POINTS points."""
+    if grid.nx * grid.ny * grid.nz > MAX_MODE_POINTS:
+        return {}
+    out = {c: [] for c in COMPONENTS}
+    for _, phi, inv_tau in lat.slabs(k1):
+        decay = {dx: np.exp(-dx / U * inv_tau) for dx in dxs}
+        for i, c in enumerate(COMPONENTS):
+            lags = {dx: box_lags(np.fft.ifft2(phi[i, i] * d) * size, grid.ny, grid.nz) / phi[i, i].sum()
+                    for dx, d in decay.items()}
+            out[c].append(top_modes(coherency_matrix(lags, grid)))
+    return {c: np.array(v) for c, v in out.items()}
 
 
 def _mann_reference(params: MannParams, design: SamplingDesign, U: float) -> dict:

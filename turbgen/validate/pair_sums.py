@@ -4,7 +4,9 @@ All sums run over the (2 ny - 1, 2 nz - 1) grid of lags (dy, dz) between two poi
 a function of the lag (a coherence) times the number of point pairs of a set at that lag. For Gaussian
 fields Cov(|X_p|^2, |X_q|^2) = E|X_p|^2 E|X_q|^2 coh2_pq (Isserlis 1918), so the average of an
 estimate over N points has the one-point variance times rho_bar = sum_pq coh2_pq / N^2
-(``turbgen.validate.prediction``).
+(``turbgen.validate.prediction``). The sums are kept at pairs of frequency nodes,
+R(nu_i, nu_j) = sum_pq coh_pq(nu_i) conj(coh_pq(nu_j)) / N^2 (coh_pq the complex coherency), which the
+exact covariance of averaged Welch estimates needs (``welch_variance``); rho_bar(nu) = R(nu, nu).
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import numpy as np
 
 from turbgen.grid import Grid
 from turbgen.validate.estimators import COMPONENTS
-from turbgen.validate.prediction import SamplingDesign
+from turbgen.validate.prediction import SamplingDesign, dx_key
 
 def rect_pair_counts(ny: int, nz: int, my: int, mz: int) -> np.ndarray:
     """Pairs of points of an my x mz rectangle of grid points per lag.
@@ -52,7 +54,8 @@ def lag_radius(grid: Grid) -> np.ndarray:
 
 
 class RhoAccumulator:
-    """Sums of coh2 over all ordered pairs of every averaged point set (see module docstring).
+    """Two-frequency sums R (nn, nn) over all ordered pairs of every averaged point set (module docstring);
+    the u-w sum ``uw`` (nn,) is one-frequency (|coherency|^2).
 
     Parameters
     ----------
@@ -72,27 +75,31 @@ class RhoAccumulator:
         self.norm_all = (nx * ny * nz) ** 2
         self.norm_yz = {s: (nx * (ny - s[0]) * (nz - s[1])) ** 2 for s in seps}
         self.norm_long = (iy.size * iz.size) ** 2
-        self.all = {c: np.zeros(nn) for c in COMPONENTS}
-        self.yz = {c: {s: np.zeros(nn) for s in seps} for c in COMPONENTS}
-        self.long = np.zeros(nn)
+        self.all = {c: np.zeros((nn, nn)) for c in COMPONENTS}
+        self.yz = {c: {s: np.zeros((nn, nn)) for s in seps} for c in COMPONENTS}
+        self.long = np.zeros((nn, nn))
         self.uw = np.zeros(nn)
 
-    def add(self, component: str, coh2: np.ndarray, multiplicity: int, same_plane: bool, n=slice(None)) -> None:
-        """Add coh2 (nodes, 2ny-1, 2nz-1) between the points of two planes at nodes ``n``.
+    @staticmethod
+    def _pair_sum(coh: np.ndarray, counts: np.ndarray) -> np.ndarray:
+        """sum over lags of counts x coh(nu_i) conj(coh(nu_j)) (real part: ordered pairs come in conjugate pairs)."""
+        weighted = coh * counts
+        return np.einsum("nij,mij->nm", weighted, np.conj(coh)).real
+
+    def add(self, component: str, coh: np.ndarray, multiplicity: int, same_plane: bool) -> None:
+        """Add the coherency coh (all nodes, 2ny-1, 2nz-1) [-] between the points of two planes.
 
         ``multiplicity``: number of ordered plane pairs with this separation.
         """
-        self.all[component][n] += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
+        self.all[component] += multiplicity * self._pair_sum(coh, self.counts_all) / self.norm_all
         for s in self.seps:
-            self.yz[component][s][n] += (
-                multiplicity * np.einsum("nij,ij->n", coh2, self.counts_yz[s]) / self.norm_yz[s]
-            )
+            self.yz[component][s] += multiplicity * self._pair_sum(coh, self.counts_yz[s]) / self.norm_yz[s]
         if same_plane and component == "u":
-            self.long[n] += np.einsum("nij,ij->n", coh2, self.counts_long) / self.norm_long
+            self.long += self._pair_sum(coh, self.counts_long) / self.norm_long
 
-    def add_uw(self, coh2: np.ndarray, multiplicity: int, n=slice(None)) -> None:
-        """|u-w coherency|^2 between points of two planes, as :meth:`add`."""
-        self.uw[n] += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
+    def add_uw(self, coh2: np.ndarray, multiplicity: int) -> None:
+        """|u-w coherency|^2 (all nodes, 2ny-1, 2nz-1) between points of two planes, as :meth:`add`."""
+        self.uw += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
 
 
 def rotor_pair_counts(grid: Grid, mask: np.ndarray) -> np.ndarray:
@@ -108,3 +115,24 @@ def box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
     iy = np.arange(-(ny - 1), ny) % field2d.shape[-2]
     iz = np.arange(-(nz - 1), nz) % field2d.shape[-1]
     return field2d[..., iy[:, None], iz[None, :]]
+
+
+def coherency_matrix(lags: dict, grid: Grid) -> np.ndarray:
+    """Coherency matrix (N, N) between all points of all planes (ordered by plane, y, z).
+
+    Parameters
+    ----------
+    lags : dict
+        Plane separation ``dx_key(|x_p - x_q|)`` -> (2 ny - 1, 2 nz - 1) coherency at the yz lags [-].
+    grid : Grid
+        The store's grid.
+
+    Returns
+    -------
+    numpy.ndarray
+        (nx ny nz, nx ny nz) coherency between every two points [-].
+    """
+    iy, iz = (a.ravel() for a in np.meshgrid(np.arange(grid.ny), np.arange(grid.nz), indexing="ij"))
+    dy = iy[:, None] - iy[None, :] + grid.ny - 1
+    dz = iz[:, None] - iz[None, :] + grid.nz - 1
+    return np.block([[lags[dx_key(xp - xq)][dy, dz] for xq in grid.x_m] for xp in grid.x_m])

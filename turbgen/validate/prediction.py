@@ -6,16 +6,18 @@ turbgen.theory.lattice), and by the line cross-covariances E[conj(Z_j^a) Z_j^b] 
 or components.
 
 Correlation of estimates across points (for the tolerances in ``verdict``): for Gaussian fields,
-Cov(|X_p|^2, |X_q|^2) = E|X_p|^2 E|X_q|^2 coh2_pq (Isserlis 1918), so an average over N points (and
-planes) has the variance of one point times rho_bar = sum_pq coh2_pq / N^2. ``Theory.rho_*`` hold
-rho_bar for every averaged point set, from the model's magnitude-squared coherence between all the
-points (including different planes), at ``node_f``.
+Cov(|X_p|^2, |X_q|^2) = E|X_p|^2 E|X_q|^2 coh2_pq (Isserlis 1918), so the average over N points (and
+planes) of one line's power has the variance of one point times rho_bar = sum_pq coh2_pq / N^2. A Welch
+bin mixes lines of different frequencies, so ``Theory.rho_*`` hold, for every averaged point set, the
+two-frequency sum R(nu_i, nu_j) = sum_pq coh_pq(nu_i) conj(coh_pq(nu_j)) / N^2 of the model's coherency
+between all the points (including different planes) at pairs of nodes ``node_f`` (``pair_sums``;
+rho_bar = its diagonal), from which ``welch_variance`` computes the exact covariance of averaged estimates.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -88,16 +90,17 @@ class Theory:
     long: dict  # |dx| rounded to 1e-6 m -> (nl,) u line covariance between planes (same y, z)
     rews: np.ndarray  # (nl,) rotor-effective wind speed lines
     node_f: np.ndarray  # (nn,) frequencies of the rho_bar nodes [Hz]
-    rho_all: dict  # component -> (nn,) over all points and planes
-    rho_yz: dict  # component -> {(a, b): (nn,)} over the first points of the pairs, all planes
-    rho_long: np.ndarray  # (nn,) over the plane-pair sub-lattice, one plane
-    rho_rews: np.ndarray  # (nn,) over the planes (REWS series)
+    rho_all: dict  # component -> (nn, nn) R(nu_i, nu_j) over all points and planes
+    rho_yz: dict  # component -> {(a, b): (nn, nn)} over the first points of the pairs, all planes
+    rho_long: np.ndarray  # (nn, nn) over the plane-pair sub-lattice, one plane
+    rho_rews: np.ndarray  # (nn, nn) over the planes (REWS series)
     sigma_model: dict  # component -> sigma of the full model spectrum [m/s] (information)
     band: dict  # what the grid resolves (stated in the report)
     uw: np.ndarray | None = None  # (nl,) u-w line covariance (Mann F13; 0 for Kaimal)
     rho_uw: np.ndarray | None = None  # (nn,) cross-component term of the uw variance bound
     long_components: str = "u"
     auto_model: dict | None = None  # Mann: component -> (nl,) lines of the continuous model band-limited to the grid
+    variance_modes: dict = field(default_factory=dict)  # component -> (J, K + 1) ``variance_law.top_modes``, lines 1..J
     # continuous-model curves for the plots, computed only for them: () -> {curve label: (f [Hz], S)}
     reference: Callable[[], dict] | None = None
 
@@ -106,7 +109,9 @@ class Theory:
         return self.long[dx_key(dx_m)]
 
     def rho(self, values: np.ndarray, f_hz) -> np.ndarray:
-        """rho_bar node values interpolated (linear in log f) to ``f_hz``, clipped to [0, 1]."""
+        """rho_bar node values (or the diagonal R(nu, nu) of a two-frequency sum) interpolated (linear in
+        log f) to ``f_hz``, clipped to [0, 1]."""
+        values = np.diagonal(values) if np.ndim(values) == 2 else values
         f = np.clip(np.asarray(f_hz, dtype=float), self.node_f[0], self.node_f[-1])
         return np.clip(np.interp(np.log(f), np.log(self.node_f), values), 0.0, 1.0)
 

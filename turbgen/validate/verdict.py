@@ -18,14 +18,19 @@ Uncertainties (Gaussian fields; derivations in the comments below):
   removal, coloured neighbouring bins. (Very long records fall back to the rule of thumb
   K_eff = K / (1 + 2 (1/36) K_adj / K), Hann bin correlations 4/9, 1/36, accurate there.)
 * Averaging over points/planes does not multiply the number of independent samples by the
-  number of points: Cov(P_p, P_q) = E P_p E P_q coh2_pq (Isserlis), so the average over a point
-  set has the one-point covariance times rho_bar, the mean of the model's coh2 over all ordered
-  pairs of the set (``Theory.rho_*``; 1 for fully coherent points, 1/N for independent ones).
-  The same holds for averages of cross-products conj(X_p) X_{p+d} over p.
+  number of points: the covariance of the Welch estimate averaged over a point set is the same
+  Isserlis sum with the pair's line cross-covariances L_q coh_pq(f_q) inside the line sums
+  (``welch_variance``, module docstring), computed from the two-frequency correlation sum
+  R(nu_i, nu_j) = sum_pq coh_pq(nu_i) conj(coh_pq(nu_j)) / N^2 of the set (``Theory.rho_*``). The
+  one-frequency rule "one-point covariance x rho_bar(f_m)" (rho_bar = R(f_m, f_m), 1 for fully coherent
+  points, 1/N for independent ones) underestimated the sd of the lowest bins by 25-30 % (the bins collect
+  lower, more coherent lines by leakage); it remains the fallback of very long records.
 * Auto-spectra and REWS spectra, per band (bins grouped ~5 per decade): the band mean has the exact
   mean and variance above; compared as chi2_nu / nu with nu = 2 E^2 / Var (Satterthwaite).
 * Variance: one-sided line pair j contributes 2|Z_j|^2 (exponential, variance (2 L_j)^2), so
-  Var(sigma^2 estimate) = sum_j (w_j L_j)^2 rho_bar(f_j); compared as chi2 with nu = 2 E^2/Var.
+  Var(sigma^2 estimate) = sum_j (w_j L_j)^2 rho_bar(f_j); its law is a sum of gamma terms with the top
+  eigen-modes of the lowest lines exact (``variance_law``: one chi2 with nu = 2 E^2/Var had far too light an
+  upper tail when the coherent lowest lines of u dominate, z 4.6 for an exact 3.3).
 * Coherences (yz and between planes), per band: the band-pooled sample coherency
   C = sum cross / sqrt(sum A sum B) is the sample coherency of n_band equivalent independent samples,
   n_band = (sum E_m)^2 / Var(sum of the point-averaged auto-spectrum over the band); |C|^2 is compared
@@ -41,9 +46,12 @@ Uncertainties (Gaussian fields; derivations in the comments below):
   exact equivalent segments of bin m); the band-pooled co-coherence is compared with the exact
   variance-gamma law of that many equivalent samples (exponential, not Gaussian, tails).
 
-Approximations, stated: the rho_bar are evaluated at the bin centre (interpolated from nodes);
-the equivalent-samples description of point-averaged coherences (exact for independent points or
-one point); the gamma law for the spectra's band means.
+Approximations, stated: coherencies interpolated linearly in log f between the rho nodes (and taken at
+|f| for the negative-frequency lines) in the averaged Welch covariance; rho_bar at the bin centre in the
+u-w bound and the very-long-record fallback; the equivalent-samples description of point-averaged
+coherences (exact for independent points or one point; with the exact averaged covariance it is
+conservative in the lowest bins: yz coh2 z sd 0.8-0.9 there); the gamma law for the spectra's band
+means; per-line gamma terms beyond the top modes of the lowest lines for the variances.
 """
 
 from __future__ import annotations
@@ -55,11 +63,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2
 
-from turbgen.validate.band_checks import Bands, chi2_z, coherence_stats
+from turbgen.validate.band_checks import Bands, coherence_stats
 from turbgen.validate.checks import Check, Curve, MetricResult
-from turbgen.validate.distributions import cospectrum_z
+from turbgen.validate.distributions import cospectrum_z, normal_score
 from turbgen.validate.estimators import COMPONENTS, Estimates, segment_starts
 from turbgen.validate.prediction import Theory
+from turbgen.validate.variance_law import gamma_sum_tails, gamma_terms
 from turbgen.validate.welch_kernel import WelchKernel
 from turbgen.validate.welch_variance import WelchCovariance
 
@@ -72,32 +81,47 @@ def _band95(est, sd):
 
 @dataclass
 class Expectations:
-    """The theory side of the verdict: expected Welch estimates and their one-point covariance (``welch_kernel``,
-    ``welch_variance``) for the planned segments; needs the theory and the sampling design, not the data."""
+    """The theory side of the verdict: expected Welch estimates and the covariances of the point-averaged
+    estimates (``welch_kernel``, ``welch_variance``) for the planned segments; needs the theory and the
+    sampling design, not the data."""
 
     kernel: WelchKernel
     bands: Bands
     exp_auto: dict  # component -> (nf,) expected auto-spectrum [m^2 s^-2 Hz^-1]
     cov: dict  # component -> {lag: covariance of the one-point estimate}
+    cov_all: dict  # component -> covariance of the spectrum averaged over all points and planes
+    cov_yz: dict  # component -> {separation: covariance averaged over the first points of its pairs}
+    cov_long: dict  # covariance of the u spectrum averaged over the plane-pair sub-lattice of one plane
     exp_rews: np.ndarray  # (nf,) expected REWS spectrum
-    rews_cov: dict
+    rews_cov: dict  # covariance of the REWS spectrum (planes' series averaged)
 
 
 def expectations(est: Estimates, th: Theory) -> Expectations:
-    """The expected estimates and their covariance for the planned estimates ``est`` (``plan_estimates``: the
+    """The expected estimates and their covariances for the planned estimates ``est`` (``plan_estimates``: the
     segments are known before the data are read), under the theory ``th``."""
     kernel = WelchKernel(est.setup, est.grid.nt)
     bands = Bands(est)
+    f = est.freqs
     starts = est.starts or tuple(range(0, est.n_segments * est.setup.hop, est.setup.hop))
     wcov = WelchCovariance(est.setup, est.grid.nt, starts)
     exp_auto = {c: kernel.apply(th.auto[c]) for c in COMPONENTS}
-    cov = {c: bands.cov(wcov, th.auto[c], exp_auto[c]) for c in COMPONENTS}
+    cov = {c: bands.cov(wcov, th.auto[c], exp_auto[c]) for c in COMPONENTS}  # one point
+    terms = {c: wcov.node_terms(th.auto[c], th.node_f) for c in COMPONENTS}
+
+    def averaged(c, rho2, w=wcov, t=None, one=None):  # covariance of the estimate averaged over a point set
+        t = terms[c] if t is None else t
+        return bands.averaged_cov(w, t, cov[c] if one is None else one, rho2, th.rho(rho2, f))
+
+    cov_all = {c: averaged(c, th.rho_all[c]) for c in COMPONENTS}
+    cov_yz = {c: {s: averaged(c, th.rho_yz[c][s]) for s in est.separations} for c in COMPONENTS}
+    cov_long = averaged("u", th.rho_long)
     exp_r = kernel.apply(th.rews)
-    rews_w = WelchCovariance(est.setup, est.grid.nt, segment_starts(est.grid.nt, est.setup))  # one span: the record
-    rews_cov = bands.cov(rews_w, th.rews, exp_r)
+    rews_w = WelchCovariance(est.setup, est.grid.nt, segment_starts(est.grid.nt, est.setup))  # one span: whole record
+    rews_one = bands.cov(rews_w, th.rews, exp_r)
     if not rews_w.feasible:  # rule of thumb: the REWS series has its own segment count
-        rews_cov = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_cov.items()}
-    return Expectations(kernel, bands, exp_auto, cov, exp_r, rews_cov)
+        rews_one = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_one.items()}
+    rews_cov = averaged("u", th.rho_rews, rews_w, rews_w.node_terms(th.rews, th.node_f), rews_one)
+    return Expectations(kernel, bands, exp_auto, cov, cov_all, cov_yz, cov_long, exp_r, rews_cov)
 
 
 def judge(est: Estimates, th: Theory, parallel: bool = False, expected: Expectations | None = None
@@ -122,21 +146,21 @@ def judge(est: Estimates, th: Theory, parallel: bool = False, expected: Expectat
         Mean, variances, spectra, yz and longitudinal coherences, u-w co-spectrum, REWS spectrum.
     """
     ex = expected if expected is not None else expectations(est, th)
-    kernel, bands, exp_auto, cov = ex.kernel, ex.bands, ex.exp_auto, ex.cov
+    kernel, bands, exp_auto = ex.kernel, ex.bands, ex.exp_auto
     f = est.freqs
     out = [_mean(est, th), *(_variance(est, th, c) for c in COMPONENTS)]
     second = ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-verdict") if parallel else nullcontext()
     with second as pool:
         longitudinal = (pool.submit if pool else _done)(_longitudinal, est, th, kernel, bands, exp_auto["u"],
-                                                        cov["u"])
+                                                        ex.cov_long)
         for c in COMPONENTS:
-            out.append(_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c], cov[c],
-                                 th.rho(th.rho_all[c], f), bands, f))
+            out.append(_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c],
+                                 ex.cov_all[c], bands, f))
         for c in COMPONENTS:
-            out.append(_yz(est, th, kernel, bands, c, exp_auto[c], cov[c]))
-        uw = _uw(est, th, kernel, bands, exp_auto, cov)
+            out.append(_yz(est, th, kernel, bands, c, exp_auto[c], ex.cov_yz[c]))
+        uw = _uw(est, th, kernel, bands, exp_auto, ex.cov)
         rews = _spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
-                         est.rews_psd, ex.exp_rews, ex.rews_cov, th.rho(th.rho_rews, f), bands, f)
+                         est.rews_psd, ex.exp_rews, ex.rews_cov, bands, f)
         out += [longitudinal.result(), uw, rews]
     return out
 
@@ -161,21 +185,22 @@ def _mean(est: Estimates, th: Theory) -> MetricResult:
 def _variance(est: Estimates, th: Theory, c: str) -> MetricResult:
     # One-sided line pair j: 2|Z_j|^2 is exponential with variance (2 L_j)^2; the point/plane
     # average multiplies it by rho_bar(f_j). Expected: the lines the grid (Mann: the box lattice) holds.
+    # Law: a sum of gamma terms, the top modes of the lowest lines exact (``variance_law``).
     lines = th.auto[c][1:] * th.pair_weights[1:]
-    var = np.sum(lines**2 * th.rho(th.rho_all[c], th.line_f[1:]))
+    rho = th.rho(th.rho_all[c], th.line_f[1:])
+    var = np.sum(lines**2 * rho)
     e = th.variance(c)
-    nu = 2.0 * e * e / var
-    z = float(chi2_z(est.variance[c] / e, nu))
+    z = float(normal_score(*gamma_sum_tails(est.variance[c], *gamma_terms(lines, rho, th.variance_modes.get(c)))))
     sd = float(np.sqrt(var))
     t = Check(f"sigma_{c}^2", None, est.variance[c], e, sd, z)
     return MetricResult(f"sigma_{c}", f"variance of {c} (sigma_{c}, TI)", "m^2/s^2", [t])
 
 
-def _spectrum(name, title, estimate, expected, cov, rho, bands: Bands, f) -> MetricResult:
-    # band mean ratio estimate/expected ~ chi2_nu/nu with nu = 2 E^2 / Var (exact Welch covariance x rho_bar)
-    checks = bands.spectrum_checks(name.split("_")[-1], estimate, expected, cov, rho)
+def _spectrum(name, title, estimate, expected, cov, bands: Bands, f) -> MetricResult:
+    # band mean ratio estimate/expected ~ chi2_nu/nu with nu = 2 E^2 / Var (exact covariance of the point average)
+    checks = bands.spectrum_checks(name.split("_")[-1], estimate, expected, cov)
     b = bands.bins
-    nu = 2.0 * expected[b] ** 2 / (cov[0][b] * rho[b])  # 95 % interval of a chi2_nu/nu estimate (always positive)
+    nu = 2.0 * expected[b] ** 2 / cov[0][b]  # 95 % interval of a chi2_nu/nu estimate (always positive)
     lo, hi = estimate[b] * nu / chi2.ppf(0.975, nu), estimate[b] * nu / chi2.ppf(0.025, nu)
     curve = Curve(name, f[b], estimate[b], expected[b], lo, hi)
     return MetricResult(name, title, "m^2/s^2/Hz", checks, [curve])
@@ -185,7 +210,8 @@ def _sep_label(est: Estimates, s) -> str:
     return f"dy={s[0] * est.grid.dy_m:g}m dz={s[1] * est.grid.dz_m:g}m"
 
 
-def _yz(est, th, kernel, bands, c, exp_auto, cov) -> MetricResult:
+def _yz(est, th, kernel, bands, c, exp_auto, covs) -> MetricResult:
+    # covs: separation -> covariance of the auto-spectrum averaged over the first points of its pairs
     checks, curves = [], []
     b = bands.bins
     f = est.freqs
@@ -194,10 +220,9 @@ def _yz(est, th, kernel, bands, c, exp_auto, cov) -> MetricResult:
         coh2 = np.abs(cc) ** 2 / (pa * pb)
         phase = np.angle(cc)
         rho = kernel.apply(th.yz[c][s]) / exp_auto
-        rho_bar = th.rho(th.rho_yz[c][s], f)
         lab = _sep_label(est, s)
-        checks += bands.coherence_checks(lab, cc, pa, pb, rho, exp_auto, cov, rho_bar)
-        st = coherence_stats(rho, exp_auto**2 / (cov[0] * rho_bar))  # per-bin bands for the plots
+        checks += bands.coherence_checks(lab, cc, pa, pb, rho, exp_auto, covs[s])
+        st = coherence_stats(rho, exp_auto**2 / covs[s][0])  # per-bin bands for the plots
         for name, e, m, sd in (("coh2", coh2, st["coh2_mean"], st["coh2_sd"]),
                                ("phase", phase, np.angle(rho), st["phase_sd"])):
             lo, hi = _band95(e[b], sd[b])
@@ -208,12 +233,12 @@ def _yz(est, th, kernel, bands, c, exp_auto, cov) -> MetricResult:
 
 
 def _longitudinal(est, th, kernel, bands, exp_auto_u, cov_u) -> MetricResult:
+    # cov_u: covariance of the u auto-spectrum averaged over the plane-pair sub-lattice of one plane
     checks, curves = [], []
     g = est.grid
     b = bands.bins
     f = est.freqs
-    rho_bar = th.rho(th.rho_long, f)
-    n_bins = exp_auto_u**2 / (cov_u[0] * rho_bar)
+    n_bins = exp_auto_u**2 / cov_u[0]
     for p in range(g.nx):
         for q in range(p + 1, g.nx):
             cross = est.long_cross[p, q]
@@ -222,8 +247,7 @@ def _longitudinal(est, th, kernel, bands, exp_auto_u, cov_u) -> MetricResult:
             rho = kernel.apply(th.long_lines(g.x_m[q] - g.x_m[p])) / exp_auto_u
             lab = f"x={g.x_m[p]:g}m-{g.x_m[q]:g}m"
             # expected phase arg(rho) = 0 in the convected frame of the store
-            checks += bands.coherence_checks(lab, cross, est.long_auto[p], est.long_auto[q], rho, exp_auto_u, cov_u,
-                                           rho_bar)
+            checks += bands.coherence_checks(lab, cross, est.long_auto[p], est.long_auto[q], rho, exp_auto_u, cov_u)
             st = coherence_stats(rho, n_bins)
             lo, hi = _band95(coh2[b], st["coh2_sd"][b])
             curves.append(Curve(f"coh2 {lab}", f[b], coh2[b], st["coh2_mean"][b], lo, hi))

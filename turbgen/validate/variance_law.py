@@ -1,0 +1,136 @@
+"""Law of the point-averaged variance estimate as a sum of independent gamma terms (its tails exact where it matters).
+
+The estimate is s2 = (1/N) sum_p sum_{j >= 1} w_j |Z_jp|^2 over the N points (and planes) of the grid
+(variance about each point's record mean; w_j the pair weight of line j, ``Theory.pair_weights``). For
+line j the amplitudes (Z_j1 .. Z_jN) are circular Gaussian with covariance L_j C_j (C_j the model's
+coherency matrix between the points), so line j contributes sum_k w_j L_j mu_jk E_jk with E_jk ~ Exp(1)
+independent and mu_jk the eigenvalues of C_j / N (sum_k mu_jk = 1, sum_k mu_jk^2 = rho_bar(f_j)).
+
+One gamma law for the whole sum with the exact mean and variance (Satterthwaite) has far too light an
+upper tail when a few modes dominate: the lowest lines of u are coherent over the whole grid, so the
+top mode of line 1 alone carries ~18 % of the mean (Kaimal, U 10 m/s, nt 512, 12 x 12 x 2 planes);
+there an estimate 2.25 x its expectation scored z = 4.60 under that law, 3.33 under the exact one
+(saddlepoint of the exact eigenvalue sum, checked against 200 000 Monte-Carlo draws to 2 %).
+
+Here the top modes of the lowest N_MODE_LINES lines enter exactly (shape-1 terms, from the
+eigenvalues the expectation modules compute, ``Theory.variance_modes``) and every line's remaining
+modes are one gamma term with their exact mean and variance (exact when they are equal, e.g. the
+spatially white v, w of Kaimal: Gamma(N, w_j L_j / N)); mean and variance of the whole sum stay exact.
+With the top 4 modes of the lowest 4 lines the z above is the exact one to 0.01 (per-line gamma terms
+alone: 3.65). Grids of more than MAX_MODE_POINTS points (all planes) get the per-line gamma terms only (no
+eigenproblems): still too light an upper tail when the lowest lines dominate, but far less than one gamma.
+Tail probabilities by the Lugannani-Rice saddlepoint formula (Lugannani & Rice 1980; Butler 2007, Eq. 1.11).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import brentq
+from scipy.stats import chi2, norm
+
+N_MODE_LINES = 4  # lowest lines whose top modes enter exactly
+N_MODES = 4  # top modes per such line
+MAX_MODE_POINTS = 2048  # grids with more points get no modes (dense N x N coherency matrix: 67 MB at 2048)
+SUBSPACE = 16  # block size of the subspace iteration of ``top_modes``
+POWER_STEPS = 6  # its power steps
+
+
+def top_modes(coherency: np.ndarray) -> np.ndarray:
+    """The N_MODES largest eigenvalues mu of a Hermitian coherency matrix C (N, N) divided by N [-], followed by
+    the exact sum of all squared eigenvalues ||C||_F^2 / N^2 (= rho_bar at the line, without interpolation).
+
+    Subspace iteration from a fixed random block of SUBSPACE vectors (Halko, Martinsson & Tropp 2011, Alg. 4.4)
+    and Rayleigh-Ritz: deterministic, O(N^2) per step instead of a full O(N^3) eigenproblem; the error of the
+    k-th value falls as (mu_{SUBSPACE+1} / mu_k)^(2 POWER_STEPS) (~1e-6 relative for the coherent lowest lines,
+    whose spectra fall fast; checked against full eigenproblems in the tests).
+    """
+    n = coherency.shape[0]
+    if n <= 2 * SUBSPACE:
+        mu = np.linalg.eigvalsh(coherency)[::-1]
+    else:
+        q = np.random.default_rng(0).standard_normal((n, SUBSPACE)).astype(coherency.dtype)
+        for _ in range(POWER_STEPS):
+            q = _orthonormal(coherency @ q)
+        mu = np.linalg.eigvalsh(np.conj(q.T) @ coherency @ q)[::-1]
+    return np.append(np.clip(mu[:N_MODES] / n, 0.0, None), np.sum(np.abs(coherency) ** 2) / n**2)
+
+
+def _orthonormal(y: np.ndarray) -> np.ndarray:
+    """Orthonormal basis of the columns of y (N, k) by Cholesky QR (y = Q R, R^H R = y^H y): k x k work besides two
+    N x k products; its loss of orthogonality ~ cond(y)^2 eps stays < 1e-9 for one power step of a coherency
+    matrix (cond ~ mu_1 / mu_k < 1e3)."""
+    r = np.linalg.cholesky(np.conj(y.T) @ y)  # lower: y^H y = r r^H, Q = y r^-H
+    return np.linalg.solve(r, np.conj(y.T)).conj().T
+
+
+def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray | None = None):
+    """Shapes and scales of the gamma terms of the variance estimate (module docstring).
+
+    Parameters
+    ----------
+    line_means : numpy.ndarray
+        (nl,) w_j L_j of lines j = 1 .. [m^2 s^-2] (expected contribution of each line).
+    line_rho : numpy.ndarray
+        (nl,) rho_bar(f_j) = sum_k mu_jk^2 [-].
+    modes : numpy.ndarray, optional
+        (J, K + 1) top eigenvalues mu_jk of C_j / N for lines 1 .. J (J <= nl), last column the exact
+        rho_bar(f_j) (``top_modes``) [-]; it replaces ``line_rho`` for those lines.
+
+    Returns
+    -------
+    alpha, theta : numpy.ndarray
+        Shapes [-] and scales [m^2 s^-2]: the estimate is sum_i Gamma(alpha_i, theta_i).
+    """
+    m = np.asarray(line_means, float)
+    rho = np.asarray(line_rho, float)
+    modes = np.zeros((0, 2)) if modes is None or np.size(modes) == 0 else np.asarray(modes, float)[: m.size]
+    top = np.zeros((m.size, modes.shape[1] - 1))
+    top[: modes.shape[0]] = modes[:, :-1]
+    rho = rho.copy()
+    rho[: modes.shape[0]] = modes[:, -1]
+    rest_mean = m * np.clip(1.0 - top.sum(axis=1), 0.0, None)
+    rest_var = m**2 * np.clip(rho - np.sum(top**2, axis=1), 0.0, None)
+    keep = (rest_mean > 0) & (rest_var > 0)
+    alpha = np.concatenate([np.ones(np.count_nonzero(top)), rest_mean[keep] ** 2 / rest_var[keep]])
+    theta = np.concatenate([(m[:, None] * top)[top > 0], rest_var[keep] / rest_mean[keep]])
+    return alpha, theta
+
+
+def gamma_sum_tails(x: float, alpha: np.ndarray, theta: np.ndarray) -> tuple[float, float]:
+    """(P(S <= x), P(S >= x)) of S = sum_i Gamma(alpha_i, theta_i), independent (saddlepoint, Lugannani-Rice).
+
+    Parameters
+    ----------
+    x : float
+        Observed value [units of theta].
+    alpha, theta : numpy.ndarray
+        Shapes [-] and scales of the terms.
+
+    Returns
+    -------
+    tuple of float
+        Lower and upper tail probabilities.
+    """
+    mean = float(np.sum(alpha * theta))
+    var = float(np.sum(alpha * theta**2))
+    if not x > 0:
+        return 0.0, 1.0
+    if abs(x - mean) < 1e-3 * np.sqrt(var):  # the saddlepoint formula is 0/0 at the mean: moment-matched gamma
+        nu = 2.0 * mean**2 / var
+        return float(chi2.cdf(nu * x / mean, nu)), float(chi2.sf(nu * x / mean, nu))
+
+    def k1(t):
+        return float(np.sum(alpha * theta / (1.0 - theta * t)))
+
+    if x > mean:
+        t = brentq(lambda s: k1(s) - x, 0.0, (1.0 - 1e-15) / theta.max(), xtol=1e-300, rtol=1e-14, maxiter=500)
+    else:  # K'(t) < sum(alpha) / |t| for t < 0
+        t = brentq(lambda s: k1(s) - x, -2.0 * alpha.sum() / x, 0.0, xtol=1e-300, rtol=1e-14, maxiter=500)
+    k = -float(np.sum(alpha * np.log1p(-theta * t)))
+    k2 = float(np.sum(alpha * (theta / (1.0 - theta * t)) ** 2))
+    w = np.sign(t) * np.sqrt(max(2.0 * (t * x - k), 0.0))
+    u = t * np.sqrt(k2)
+    upper = float(norm.sf(w) + norm.pdf(w) * (1.0 / u - 1.0 / w))
+    upper = min(max(upper, 0.0), 1.0)
+    lower = float(norm.cdf(w) - norm.pdf(w) * (1.0 / u - 1.0 / w))
+    return min(max(lower, 0.0), 1.0), upper
