@@ -309,11 +309,21 @@ def test_a_publish_killed_midway_is_garbage_of_a_dead_writer(store, tmp_path):
 
 
 # -- interruptions ------------------------------------------------------------------------------
-def _interrupt(cmd, directory: Path, sig, group=False, timeout=60, ready=None):
+def _terminal_signals():
+    """In the child: the default dispositions of a terminal session. A test run under ``nohup`` (HUP ignored)
+    or in a non-interactive shell's background (INT ignored) would otherwise pass the ignore on, and turbgen
+    rightly keeps an ignored signal ignored (see test_nohup_keeps_a_run_going)."""
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def _interrupt(cmd, directory: Path, sig, group=False, timeout=60, ready=None, preexec=_terminal_signals):
     """Start ``turbgen cmd``, send ``sig`` as soon as a temporary appears in ``directory`` (or ``ready()``)."""
     ready = ready or (lambda: leftovers(directory))
     p = subprocess.Popen([sys.executable, "-c", "from turbgen.cli import main; main()", *map(str, cmd)],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, start_new_session=True)
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, start_new_session=True,
+                         preexec_fn=preexec)
     deadline = time.time() + timeout
     while p.poll() is None and not ready() and time.time() < deadline:
         time.sleep(0.002)
@@ -341,6 +351,20 @@ KAIMAL_LONG = ["kaimal", "--nt", "8192", "--ny", "16", "--nz", "16", "--planes",
 # all four signals for both generators (KILL: no handler at all; INT: KeyboardInterrupt; TERM and HUP:
 # SystemExit from our handler)
 GENERATION_CASES = [*((KAIMAL_LONG, s) for s in SIGNALS), *((MANN, s) for s in SIGNALS)]
+
+
+def test_nohup_keeps_a_run_going(tmp_path):
+    # `nohup turbgen ...`: HUP is ignored before turbgen starts, and a hang-up must not stop the run
+    out = tmp_path / "f.zarr"
+
+    def hup_ignored():
+        _terminal_signals()
+        signal.signal(signal.SIGHUP, signal.SIG_IGN)
+
+    code, err = _interrupt([*MANN, "--out", out], tmp_path, signal.SIGHUP, preexec=hup_ignored)
+    assert code == 0, err[-500:]
+    assert open_store(out).grid.nt == int(MANN[MANN.index("--nt") + 1])
+    assert leftovers(tmp_path) == []
 
 
 @pytest.mark.parametrize("args,sig", GENERATION_CASES, ids=[f"{a[0]}-{s.name}" for a, s in GENERATION_CASES])
