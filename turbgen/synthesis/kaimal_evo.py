@@ -21,9 +21,9 @@ Memory: one component at a time. The mixed spectrum (n_planes, nf, ny, nz) compl
 chunk by frequency chunk into a spectrum buffer and read back plane by plane for the inverse FFT:
 ``InMemorySpectrum`` by default; the runs layer passes a file-backed buffer (turbgen.runs.scratch)
 when that array does not fit in memory, which bounds the memory by one frequency chunk of all
-planes plus one plane's spectrum. Random streams come from
-SFC64 streams (Box-Muller, turbgen.synthesis.random_streams) keyed by SeedSequence of (seed, component, plane, frequency chunk) with FIXED chunks of
-FREQ_CHUNK bins, so the field does not depend on how it is written or on thread counts.
+planes plus one plane's spectrum. Random streams are SFC64 with Box-Muller normals
+(turbgen.synthesis.random_streams) keyed by SeedSequence((seed, component, plane, frequency chunk)) with
+FIXED chunks of FREQ_CHUNK bins, so the field does not depend on how it is written or on thread counts.
 """
 
 from __future__ import annotations
@@ -261,41 +261,41 @@ class KaimalEvo:
         if g.nt % 2 == 0:  # the Nyquist coefficient is real: Re(Z) has unit variance, E X^2 = v
             amp[-1] = np.sqrt(self.variances[component][-1]).astype(np.float32)
         pool = ThreadPoolExecutor(max_workers=self.workers)
-        for chunk in range(self.n_chunks):
-            ks = range(max(1, chunk * FREQ_CHUNK), min(self.nf, (chunk + 1) * FREQ_CHUNK))
-            if len(ks):
-                groups = self._groups(self._embeddings(component, ks, pool))
-                block = spectrum.chunk(ks.start, ks.stop)
+        try:  # the pool is shut down however the generator ends (exception, early close)
+            for chunk in range(self.n_chunks):
+                ks = range(max(1, chunk * FREQ_CHUNK), min(self.nf, (chunk + 1) * FREQ_CHUNK))
+                if len(ks):
+                    groups = self._groups(self._embeddings(component, ks, pool))
+                    block = spectrum.chunk(ks.start, ks.stop)
 
-                def fill(p, chunk=chunk, groups=groups, block=block):
-                    self._chunk_coefficients(component, p, chunk, groups, block[p])
+                    def fill(p, chunk=chunk, groups=groups, block=block):
+                        self._chunk_coefficients(component, p, chunk, groups, block[p])
 
-                # planes in parallel (NumPy's generators and the FFTs release the GIL); each plane has its
-                # own random stream and its own slice of the block, so the result does not depend on the order
-                list(pool.map(fill, range(nx)))
-                if mixed and nx > 1:
-                    fac, err = longitudinal_factors(self.long_coherence, g.x_m, self.freqs[ks.start:ks.stop])
-                    self.report["long_clip_error"] = max(self.report["long_clip_error"], err)
-                    flat = block.reshape(nx, len(ks), -1).transpose(1, 0, 2)
-                    # real factor: mixes real and imaginary parts alike (zero phase between planes)
-                    mixed_block = fac.astype(np.float32) @ np.ascontiguousarray(flat).view(np.float32)
-                    block = mixed_block.view(np.complex64).transpose(1, 0, 2).reshape(nx, len(ks), g.ny, g.nz)
-                spectrum.put_chunk(ks.start, block)
-            if tick:
-                tick()
-        # two planes transformed at once (half the threads each; pocketfft's columns do not depend on the
-        # thread count), yielded in order: the amplitude pass runs in parallel too
-        fft_workers = max(1, self.workers // 2)
+                    # planes in parallel (NumPy's generators and the FFTs release the GIL); each plane has its
+                    # own random stream and its own slice of the block, so the result does not depend on the order
+                    list(pool.map(fill, range(nx)))
+                    if mixed and nx > 1:
+                        fac, err = longitudinal_factors(self.long_coherence, g.x_m, self.freqs[ks.start:ks.stop])
+                        self.report["long_clip_error"] = max(self.report["long_clip_error"], err)
+                        flat = block.reshape(nx, len(ks), -1).transpose(1, 0, 2)
+                        # real factor: mixes real and imaginary parts alike (zero phase between planes)
+                        mixed_block = fac.astype(np.float32) @ np.ascontiguousarray(flat).view(np.float32)
+                        block = mixed_block.view(np.complex64).transpose(1, 0, 2).reshape(nx, len(ks), g.ny, g.nz)
+                    spectrum.put_chunk(ks.start, block)
+                if tick:
+                    tick()
+            # two planes transformed at once (half the threads each; pocketfft's columns do not depend on the
+            # thread count), yielded in order: the amplitude pass runs in parallel too
+            fft_workers = max(1, self.workers // 2)
 
-        def transform(p):
-            spec = spectrum.get(p)
-            if g.nt % 2 == 0:
-                spec[-1] = spec[-1].real
-            spec *= amp[:, None, None]
-            return scipy.fft.irfft(spec, n=g.nt, axis=0, norm="forward", workers=fft_workers).astype(np.float32,
-                                                                                                  copy=False)
+            def transform(p):
+                spec = spectrum.get(p)
+                if g.nt % 2 == 0:
+                    spec[-1] = spec[-1].real
+                spec *= amp[:, None, None]
+                return scipy.fft.irfft(spec, n=g.nt, axis=0, norm="forward", workers=fft_workers).astype(np.float32,
+                                                                                                      copy=False)
 
-        try:
             ahead = [pool.submit(transform, p) for p in range(min(2, nx))]
             for p in range(nx):
                 plane = ahead.pop(0).result()
