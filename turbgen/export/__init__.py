@@ -17,7 +17,8 @@ from turbgen.export.hdf5 import export_hdf5, read_hdf5
 from turbgen.export.mt4d import export_mt4d, read_mt4d
 from turbgen.export.request import ExportRequest, ExportResult
 from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT
-from turbgen.export.wnd import export_wnd, read_sum, read_wnd
+from turbgen.export.wnd import export_wnd, read_wnd
+from turbgen.export.wnd_summary import read_sum
 from turbgen.errors import ParameterError, check_choice
 from turbgen.resources import require_disk
 from turbgen.store import FieldStore, open_store
