@@ -55,7 +55,7 @@ def test_normals_equal_numpy_short(n):
 
 
 def test_normals_equal_numpy_long():
-    """2e7 values: ~5000 tail samples and ~1e5 wedge tests, so every path of the kernel is compared."""
+    """2e7 values: ~5000 tail entries and ~3e5 wedge tests, so every path of the kernel is compared."""
     key = (9, 9, 9, 9)
     n = 20_000_003
     assert np.array_equal(fill_normals(key_words(key), np.empty(n, np.float32)).view(np.uint32),
