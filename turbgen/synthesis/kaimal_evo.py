@@ -21,7 +21,7 @@ Memory: one component at a time. The mixed spectrum (n_planes, nf, ny, nz) compl
 chunk by frequency chunk into a spectrum buffer and read back plane by plane for the inverse FFT:
 ``InMemorySpectrum`` by default; the runs layer passes a file-backed buffer (turbgen.runs.scratch)
 when that array does not fit in memory, which bounds the memory by one frequency chunk of all
-planes plus one plane's spectrum. Random streams are SFC64 with Box-Muller normals
+planes plus one plane's spectrum. Random streams are numpy's SFC64 with its float32 Ziggurat normals
 (turbgen.synthesis.random_streams) keyed by SeedSequence((seed, component, plane, frequency chunk)) with
 FIXED chunks of FREQ_CHUNK bins, so the field does not depend on how it is written or on thread counts.
 """

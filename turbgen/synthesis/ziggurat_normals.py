@@ -1,0 +1,140 @@
+"""float32 standard normals of one keyed SFC64 stream by the Ziggurat method, compiled (numba).
+
+The values equal numpy's ``Generator(SFC64(SeedSequence(key))).standard_normal(n, dtype=np.float32)``
+bit for bit (tested), at ~1.6 ns a value instead of numpy's ~8 ns. The algorithm (numpy's ``random_standard_normal_f``)
+is the Ziggurat method of Marsaglia & Tsang (2000, "The Ziggurat Method for Generating Random Variables",
+J. Stat. Softw. 5(8)) with 256 layers: each value takes one 32-bit word u of the stream (the low then the
+high half of each 64-bit SFC64 output): layer i = u & 255, sign bit (u >> 8) & 1, 23-bit magnitude
+m = u >> 9, x = m w_i; x is returned when m < k_i (98.5 % of words); otherwise the wedge of layer i is
+tested with one further word, or for i = 0 the tail beyond r is sampled by Marsaglia's exact method
+(Marsaglia & Tsang 2000, section "The tail"), and on rejection the draw restarts with a new word.
+The tables w_i, k_i, f_i come from r = 3.6541528853610088 and the layer area v = 4.92867323399e-3
+(Marsaglia & Tsang 2000, 256-layer constants) by their recursion, computed here at import in float64 and
+rounded to float32 / uint32 (k_i to nearest) -- they equal numpy's ``ziggurat_constants.h`` tables.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from turbgen.synthesis.sfc64 import next64, seed_state
+
+_R = 3.6541528853610087963519472518  # right edge of the base layer (Marsaglia & Tsang 2000, n = 256)
+_V = 4.92867323399e-3  # area of every layer
+
+
+def _tables() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """k_i (uint32), w_i, f_i (float32) of Marsaglia & Tsang (2000), program ``zigset``, with m = 2^23."""
+    m, n = 2.0**23, 256
+    k, w, f = np.zeros(n), np.zeros(n), np.zeros(n)
+    x_prev = x = _R
+    q = _V / math.exp(-0.5 * x * x)  # width of the base strip (rectangle plus tail) at height f(r)
+    k[0], w[0], w[n - 1] = x / q * m, q / m, x / m
+    f[0], f[n - 1] = 1.0, math.exp(-0.5 * x * x)
+    for i in range(n - 2, 0, -1):  # x_i: the rectangle under f(x_i) ... f(x_{i+1}) has area v
+        x = math.sqrt(-2.0 * math.log(_V / x_prev + math.exp(-0.5 * x_prev * x_prev)))
+        k[i + 1], f[i], w[i] = x / x_prev * m, math.exp(-0.5 * x * x), x / m
+        x_prev = x
+    return np.round(k).astype(np.uint32), w.astype(np.float32), f.astype(np.float32)
+
+
+KI, WI, FI = _tables()
+_RF = np.float32(_R)
+_INV_RF = np.float32(1.0 / _R)
+_INV_2_24 = np.float32(2.0**-24)
+_M32, _M23, _U8, _U9, _U32 = np.uint64(0xFFFFFFFF), np.uint64(0x7FFFFF), np.uint64(8), np.uint64(9), np.uint64(32)
+_MLAYER, _ONE, _M9, _U41 = np.uint64(0xFF), np.uint64(1), np.uint64(0x1FF), np.uint64(41)
+# Tables indexed by the 9 low bits of a word (layer i, then the sign bit): k_i twice, then w_i and -w_i.
+_KIS = np.concatenate([KI, KI])
+_WIS = np.concatenate([WI, -WI])
+_MINUS_HALF = np.float64(-0.5)
+
+
+@numba.njit(nogil=True, cache=True)
+def _next32(a, b, c, w, has, buf):
+    """numpy's ``next_uint32`` of SFC64: the low half of a fresh 64-bit output, its high half buffered."""
+    if has:
+        return buf, a, b, c, w, False, buf
+    r, a, b, c, w = next64(a, b, c, w)
+    return r & _M32, a, b, c, w, True, r >> _U32
+
+
+@numba.njit(nogil=True, cache=True)
+def _next_float(a, b, c, w, has, buf):
+    """numpy's ``next_float``: (u >> 8) 2^-24, in [0, 1)."""
+    u, a, b, c, w, has, buf = _next32(a, b, c, w, has, buf)
+    return np.float32(u >> _U8) * _INV_2_24, a, b, c, w, has, buf
+
+
+@numba.njit(nogil=True, cache=True)
+def _normal(u, a, b, c, w, has, buf):
+    """One normal whose first word is ``u``, drawing further words as needed; returns (x, state...)."""
+    while True:
+        i = u & _MLAYER
+        m = (u >> _U9) & _M23
+        x = np.float32(m) * WI[i]
+        if (u >> _U8) & _ONE:
+            x = -x
+        if m < KI[i]:
+            return x, a, b, c, w, has, buf
+        if i == 0:  # tail beyond r: x = -ln(U1)/r, y = -ln(U2), accept if 2y > x^2 (Marsaglia & Tsang 2000)
+            while True:
+                f1, a, b, c, w, has, buf = _next_float(a, b, c, w, has, buf)
+                xx = -_INV_RF * np.float32(math.log1p(-f1))
+                f2, a, b, c, w, has, buf = _next_float(a, b, c, w, has, buf)
+                yy = -np.float32(math.log1p(-f2))
+                if yy + yy > xx * xx:
+                    t = _RF + xx
+                    return (-t if (m >> _U8) & _ONE else t), a, b, c, w, has, buf
+        else:  # wedge: a uniform height in [f_i, f_{i-1}] under exp(-x^2/2) (compared in float64, as numpy)
+            f1, a, b, c, w, has, buf = _next_float(a, b, c, w, has, buf)
+            if (FI[i - 1] - FI[i]) * f1 + FI[i] < math.exp(_MINUS_HALF * np.float64(x) * np.float64(x)):
+                return x, a, b, c, w, has, buf
+        u, a, b, c, w, has, buf = _next32(a, b, c, w, has, buf)
+
+
+@numba.njit(nogil=True, cache=True)
+def fill_normals(words, out):
+    """Fill float32 ``out`` (1-D) with the first ``out.size`` normals of the stream keyed by ``words``.
+
+    ``words`` are the key's uint32 entropy words (turbgen.synthesis.sfc64.key_words).
+    """
+    a, b, c, w = seed_state(words)
+    has, buf = False, np.uint64(0)
+    n = out.size
+    i = 0
+    while i < n:
+        if has:  # a high half left buffered by the general path starts the next value
+            has = False
+            out[i], a, b, c, w, has, buf = _normal(buf, a, b, c, w, has, buf)
+            i += 1
+            continue
+        if i + 1 == n:
+            u, a, b, c, w, has, buf = _next32(a, b, c, w, has, buf)
+            out[i], a, b, c, w, has, buf = _normal(u, a, b, c, w, has, buf)
+            i += 1
+            continue
+        # Fast run: one 64-bit output per pair of values while both halves fall in their rectangles (97 %).
+        # The 9-bit index (layer, sign) reads the signed tables, so x = m w_i carries its sign: the same
+        # float32 product as numpy's x = m w_i then x = -x, without the branch.
+        o = out[i:]
+        n_pairs = (n - i) // 2
+        done = n_pairs
+        r = np.uint64(0)
+        for t in range(n_pairs):
+            r, a, b, c, w = next64(a, b, c, w)
+            jl, ml = r & _M9, (r >> _U9) & _M23
+            jh, mh = (r >> _U32) & _M9, r >> _U41
+            if (ml >= _KIS[jl]) | (mh >= _KIS[jh]):
+                done = t
+                break
+            o[2 * t] = np.float32(np.int32(ml)) * _WIS[jl]
+            o[2 * t + 1] = np.float32(np.int32(mh)) * _WIS[jh]
+        i += 2 * done
+        if done < n_pairs:  # the general path, exactly numpy's: the low half starts a value, the high half is buffered
+            out[i], a, b, c, w, has, buf = _normal(r & _M32, a, b, c, w, True, r >> _U32)
+            i += 1
+    return out
