@@ -12,6 +12,7 @@ exact covariance of averaged Welch estimates needs (``welch_variance``); rho_bar
 from __future__ import annotations
 
 import numpy as np
+import scipy.fft
 
 from turbgen.grid import Grid
 from turbgen.validate.estimators import COMPONENTS
@@ -82,14 +83,27 @@ class RhoAccumulator:
 
     @staticmethod
     def _pair_sum(coh: np.ndarray, counts: np.ndarray) -> np.ndarray:
-        """sum over lags of counts x coh(nu_i) conj(coh(nu_j)) (real part: ordered pairs come in conjugate pairs)."""
+        """sum over lags of counts x coh(nu_i) conj(coh(nu_j)), real part (ordered pairs come in conjugate pairs).
+
+        The lag grid is point-symmetric: flat index k holds lag l, index K - 1 - k lag -l, and counts(-l) =
+        counts(l) (pair (p, q) at l, pair (q, p) at -l). A coherency is Hermitian in the lag, coh(-l) =
+        conj(coh(l)) (it is a coherency of pair (q, p)), so the terms at l and -l have the same real part:
+        the sum is the centre term plus twice the half-plane, Re(W C^H) = A A^T with the rows of A the
+        real and imaginary parts of coh x sqrt(weights) (one symmetric BLAS product, a quarter of the
+        products of Re(W C^H) over the whole grid).
+        """
         nn = coh.shape[0]
-        weighted = (coh * counts).reshape(nn, -1)
         flat = coh.reshape(nn, -1)
-        if not np.iscomplexobj(flat):
-            return weighted @ flat.T
-        # Re(W C^H) = Re W (Re C)^T + Im W (Im C)^T: two real BLAS products (einsum's complex loop was ~10x slower)
-        return weighted.real @ flat.real.T + weighted.imag @ flat.imag.T
+        centre = (flat.shape[1] - 1) // 2
+        w = 2.0 * counts.ravel()[centre:]
+        w[0] *= 0.5
+        sw = np.sqrt(w)
+        half = flat[:, centre:]
+        if np.iscomplexobj(half):
+            a = np.concatenate([half.real * sw, half.imag * sw], axis=1)
+        else:
+            a = half * sw
+        return a @ a.T  # numpy recognises a @ a.T (syrk): exactly symmetric
 
     def add(self, component: str, coh: np.ndarray, multiplicity: int, same_plane: bool) -> None:
         """Add the coherency coh (all nodes, 2ny-1, 2nz-1) [-] between the points of two planes.
@@ -120,6 +134,20 @@ def box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
     iy = np.arange(-(ny - 1), ny) % field2d.shape[-2]
     iz = np.arange(-(nz - 1), nz) % field2d.shape[-1]
     return field2d[..., iy[:, None], iz[None, :]]
+
+
+def real_box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
+    """``box_lags(numpy.fft.ifft2(field2d) * size, ny, nz)`` for a real field (..., nyp, nzp), with half the
+    transform: for real input ifft2 x size = conj(fft2), Hermitian, so the half spectrum of rfft2 holds the
+    lags dz >= 0 and F(dy, -dz) = conj(F(-dy, dz)) the others (full transform when nzp < 2 nz - 1)."""
+    nyp, nzp = field2d.shape[-2:]
+    if nzp < 2 * nz - 1:
+        return box_lags(np.fft.ifft2(field2d) * (nyp * nzp), ny, nz)
+    half = np.conj(scipy.fft.rfft2(field2d, workers=1))  # (..., nyp, nzp // 2 + 1): dz = 0 .. nzp / 2
+    iy = np.arange(-(ny - 1), ny) % nyp
+    pos = half[..., iy, :nz]
+    neg = np.conj(half[..., (-iy) % nyp, nz - 1 : 0 : -1])  # dz = -(nz - 1) .. -1
+    return np.concatenate([neg, pos], axis=-1)
 
 
 def coherency_matrix(lags: dict, grid: Grid) -> np.ndarray:

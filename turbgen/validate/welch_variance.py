@@ -143,9 +143,12 @@ class WelchCovariance:
             wa = L[a_rows] * self.c[a_rows]
             terms = []
             for cb in (np.conj(_shift_rows(self.c[b_rows], shift)), _shift_rows(self.cneg[b_rows], shift)):
-                x = self.phase[:, a_rows] * (wa * cb)  # (l, r, q); lines summed per node with real weights
-                terms.append(np.matmul(x.real.transpose(1, 0, 2), hat[a_rows]).transpose(1, 0, 2)
-                             + 1j * np.matmul(x.imag.transpose(1, 0, 2), hat[a_rows]).transpose(1, 0, 2))
+                x = (self.phase[:, a_rows] * (wa * cb)).transpose(1, 0, 2)  # (r, l, q)
+                n_l = x.shape[1]
+                # lines summed per node with real weights: one real BLAS product per bin on the contiguous
+                # real and imaginary parts (matmul does not use BLAS on the strided views x.real, x.imag)
+                y = np.matmul(np.concatenate([x.real, x.imag], axis=1), hat[a_rows])  # (r, 2 l, nn)
+                terms.append(np.ascontiguousarray((y[:, :n_l] + 1j * y[:, n_l:]).transpose(1, 0, 2)))
             out[lag] = tuple(terms)
         return out
 
@@ -172,10 +175,11 @@ class WelchCovariance:
         r = np.ascontiguousarray(np.real(rho2).T)  # real: sums over ordered pairs
         for lag, (A, B) in terms.items():
             s = 0.0
-            for X in (A, B):  # a^T R conj(a) per segment lag and bin, as two real matrix products
+            for X in (A, B):  # Re a^T R conj(a) = ar^T R ar + ai^T R ai per segment lag and bin: one real product
                 flat = X.reshape(-1, X.shape[-1])
-                y = (flat.real @ r + 1j * (flat.imag @ r)).reshape(X.shape)
-                s = s + w @ np.sum(y * np.conj(X), axis=-1).real
+                parts = np.concatenate([flat.real, flat.imag])  # contiguous (BLAS)
+                q = np.einsum("mk,mk->m", parts @ r, parts)
+                s = s + w @ (q[: flat.shape[0]] + q[flat.shape[0] :]).reshape(X.shape[:-1])
             out[lag] = s * scale[: self.nb - lag] * scale[lag:] / self.k**2
         return out
 

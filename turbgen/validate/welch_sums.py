@@ -1,0 +1,178 @@
+"""Compiled inner loops of one validator task (``span_sums``): point moments, windowed segments, and the
+per-frequency sums of a segment's spectra, each one pass over the data.
+
+The spectra are complex64 (nf, ny, nz), read as float32 (nf, ny, 2 nz) with re, im interleaved. For two
+rows a, b of that view, sum_k a[k] b[k] = Re sum_z conj(x_z) y_z, and with t = -i y (t[2z] = Im y_z,
+t[2z+1] = -Re y_z) sum_k a[k] t[k] = Im sum_z conj(x_z) y_z: every cross-product is an element-wise
+product of contiguous rows. The products are float32 summed per element over y (ny terms) and then in
+float64 over z, so their rounding is that of ny-term float32 sums (the numpy version: nz-term dot products).
+Per-point powers |X|^2 are float32, summed in float64.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+
+@numba.njit(nogil=True, cache=True)
+def point_moments(d, mask_index):
+    """Per-point sum and sum of squares over time of a float32 span (t, ny, nz), and the mean over the
+    points ``mask_index`` (flat indices into ny nz) at every time step; all float64.
+
+    Returns
+    -------
+    s, s2 : numpy.ndarray
+        (ny, nz) sum [m/s] and sum of squares [m^2 s^-2] over t.
+    masked_mean : numpy.ndarray
+        (t,) mean over the masked points [m/s].
+    """
+    nt, ny, nz = d.shape
+    npt = ny * nz
+    flat = d.reshape(nt, npt)
+    s = np.zeros(npt)
+    s2 = np.zeros(npt)
+    mean = np.zeros(nt)
+    n_mask = max(mask_index.size, 1)
+    for t in range(nt):
+        row = flat[t]
+        for p in range(npt):
+            v = np.float64(row[p])
+            s[p] += v
+            s2[p] += v * v
+        a0 = 0.0  # four partial sums: independent additions
+        a1 = 0.0
+        a2 = 0.0
+        a3 = 0.0
+        n4 = mask_index.size - mask_index.size % 4
+        for i in range(0, n4, 4):
+            a0 += row[mask_index[i]]
+            a1 += row[mask_index[i + 1]]
+            a2 += row[mask_index[i + 2]]
+            a3 += row[mask_index[i + 3]]
+        for i in range(n4, mask_index.size):
+            a0 += row[mask_index[i]]
+        mean[t] = (a0 + a1 + a2 + a3) / n_mask
+    return s.reshape(ny, nz), s2.reshape(ny, nz), mean
+
+
+@numba.njit(nogil=True, cache=True)
+def window_segment(d, start, window, out):
+    """out = (segment - its per-point mean) x window, float32; the segment is d[start : start + n],
+    n = window.size, the mean summed in float64 and rounded to float32."""
+    n = window.size
+    _, ny, nz = d.shape
+    npt = ny * nz
+    src = d.reshape(d.shape[0], npt)
+    dst = out.reshape(n, npt)
+    acc = np.zeros(npt)
+    for t in range(n):
+        row = src[start + t]
+        for p in range(npt):
+            acc[p] += row[p]
+    m = np.empty(npt, np.float32)
+    for p in range(npt):
+        m[p] = np.float32(acc[p] / n)
+    for t in range(n):
+        row = src[start + t]
+        w = window[t]
+        o = dst[t]
+        for p in range(npt):
+            o[p] = (row[p] - m[p]) * w
+
+
+@numba.njit(nogil=True, cache=True)
+def spectrum_sums(xv, sep_a, sep_b, total, part_a, part_b, cross):
+    """Add one segment's spectral sums of one component (float32 view (nf, ny, 2 nz) of its spectra).
+
+    Adds, per frequency f (index 0 .. nf-1), into float64 arrays: ``total[f]`` sum of |X|^2 over the
+    plane; for separation k = (sep_a[k], sep_b[k]) grid steps, ``part_a[k, f]`` and ``part_b[k, f]``
+    sums of |X|^2 over the first (y < ny - a, z < nz - b) and second (y >= a, z >= b) points of the
+    pairs, and ``cross[k, f, 0 / 1]`` real / imaginary part of sum conj(X(y, z)) X(y + a, z + b).
+    """
+    nf, ny, nz2 = xv.shape
+    nz = nz2 // 2
+    ns = sep_a.size
+    rot = np.empty((ny, nz2), np.float32)  # -i X: (Im, -Re)
+    pw = np.empty(nz, np.float32)
+    rows = np.empty((ny, nz + 1))  # per y: prefix sums over z of |X|^2 (float64)
+    acc_re = np.empty(nz2, np.float32)
+    acc_im = np.empty(nz2, np.float32)
+    for f in range(nf):
+        x = xv[f]
+        for y in range(ny):
+            xr = x[y]
+            for z in range(nz):
+                re = xr[2 * z]
+                im = xr[2 * z + 1]
+                rot[y, 2 * z] = im
+                rot[y, 2 * z + 1] = -re
+                pw[z] = re * re + im * im
+            c = 0.0
+            rows[y, 0] = 0.0
+            for z in range(nz):
+                c += pw[z]
+                rows[y, z + 1] = c
+        tot = 0.0
+        for y in range(ny):
+            tot += rows[y, nz]
+        total[f] += tot
+        for k in range(ns):
+            a = sep_a[k]
+            b = sep_b[k]
+            pa = 0.0
+            pb = 0.0
+            for y in range(ny - a):
+                pa += rows[y, nz - b]
+            for y in range(a, ny):
+                pb += rows[y, nz] - rows[y, b]
+            part_a[k, f] += pa
+            part_b[k, f] += pb
+            m = 2 * (nz - b)
+            are = acc_re[:m]  # slices: non-negative indices, so the loops below vectorise
+            aim = acc_im[:m]
+            are[:] = 0.0
+            aim[:] = 0.0
+            for y in range(ny - a):
+                p = x[y, :m]
+                q = x[y + a, 2 * b :]
+                r = rot[y + a, 2 * b :]
+                for j in range(m):
+                    are[j] += p[j] * q[j]
+                    aim[j] += p[j] * r[j]
+            sr = 0.0
+            si = 0.0
+            for j in range(m):
+                sr += are[j]
+                si += aim[j]
+            cross[k, f, 0] += sr
+            cross[k, f, 1] += si
+
+
+@numba.njit(nogil=True, cache=True)
+def cross_sum(xv, yv, out):
+    """Add sum over the plane of conj(X) Y per frequency to ``out`` (nf, 2) float64 (re, im); xv, yv float32
+    views (nf, ny, 2 nz) of two components' spectra."""
+    nf, ny, nz2 = xv.shape
+    acc_re = np.empty(nz2, np.float32)
+    acc_im = np.empty(nz2 // 2, np.float32)
+    for f in range(nf):
+        for j in range(nz2):
+            acc_re[j] = 0.0
+        for j in range(nz2 // 2):
+            acc_im[j] = 0.0
+        for y in range(ny):
+            p = xv[f, y]
+            q = yv[f, y]
+            for j in range(nz2):
+                acc_re[j] += p[j] * q[j]
+            for z in range(nz2 // 2):
+                acc_im[z] += p[2 * z] * q[2 * z + 1] - p[2 * z + 1] * q[2 * z]
+        sr = 0.0
+        si = 0.0
+        for j in range(nz2):
+            sr += acc_re[j]
+        for z in range(nz2 // 2):
+            si += acc_im[z]
+        out[f, 0] += sr
+        out[f, 1] += si
