@@ -43,12 +43,14 @@ def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy
     from turbgen.validate.welch_sums import cross_sum, point_moments, spectrum_sums, window_segment
 
     out = {"sum": {}, "sum2": {}}
+    n = window.size
+    hop = n // 2
     mask_index = np.flatnonzero(mask)
+    blocks = {}  # sums over blocks of hop samples: the segments (starts on multiples of hop) are 2 blocks if n = 2 hop
     for c, d in data.items():
-        out["sum"][c], out["sum2"][c], masked = point_moments(d, mask_index)
+        out["sum"][c], out["sum2"][c], blocks[c], masked = point_moments(d, mask_index, hop)
         if c == "u":
             out["rews"] = masked
-    n = window.size
     w = window.astype(np.float32)
     nf = n // 2 + 1
     ny, nz = data["u"].shape[1:]
@@ -64,7 +66,11 @@ def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy
     for s in starts:
         spec = {}
         for c in COMPONENTS:
-            window_segment(data[c], s, w, seg_buf)
+            if n == 2 * hop and s % hop == 0:
+                mean = ((blocks[c][s // hop] + blocks[c][s // hop + 1]) / n).astype(np.float32)
+            else:
+                mean = data[c][s : s + n].mean(axis=0, dtype=np.float64).astype(np.float32)
+            window_segment(data[c], s, w, mean, seg_buf)
             x = scipy.fft.rfft(seg_buf, axis=0, workers=1)
             spec[c] = x
             spectrum_sums(x.view(np.float32), sep_a, sep_b, total[c], part_a[c], part_b[c], cross[c])

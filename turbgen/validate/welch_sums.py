@@ -16,29 +16,34 @@ import numpy as np
 
 
 @numba.njit(nogil=True, cache=True)
-def point_moments(d, mask_index):
-    """Per-point sum and sum of squares over time of a float32 span (t, ny, nz), and the mean over the
-    points ``mask_index`` (flat indices into ny nz) at every time step; all float64.
+def point_moments(d, mask_index, block):
+    """Per-point sums over time of a float32 span (t, ny, nz), and the mean over the points ``mask_index``
+    (flat indices into ny nz) at every time step; all float64.
 
     Returns
     -------
     s, s2 : numpy.ndarray
         (ny, nz) sum [m/s] and sum of squares [m^2 s^-2] over t.
+    block_sums : numpy.ndarray
+        (t // block, ny, nz) sums [m/s] over the whole blocks of ``block`` time steps (segment means).
     masked_mean : numpy.ndarray
         (t,) mean over the masked points [m/s].
     """
     nt, ny, nz = d.shape
     npt = ny * nz
     flat = d.reshape(nt, npt)
-    s = np.zeros(npt)
+    nblk = nt // block
+    blocks = np.zeros((nblk, npt))
+    s = np.zeros(npt)  # the tail after the last whole block
     s2 = np.zeros(npt)
     mean = np.zeros(nt)
     n_mask = max(mask_index.size, 1)
     for t in range(nt):
         row = flat[t]
+        acc = blocks[t // block] if t < nblk * block else s
         for p in range(npt):
             v = np.float64(row[p])
-            s[p] += v
+            acc[p] += v
             s2[p] += v * v
         a0 = 0.0  # four partial sums: independent additions
         a1 = 0.0
@@ -53,26 +58,21 @@ def point_moments(d, mask_index):
         for i in range(n4, mask_index.size):
             a0 += row[mask_index[i]]
         mean[t] = (a0 + a1 + a2 + a3) / n_mask
-    return s.reshape(ny, nz), s2.reshape(ny, nz), mean
+    for k in range(nblk):
+        for p in range(npt):
+            s[p] += blocks[k, p]
+    return s.reshape(ny, nz), s2.reshape(ny, nz), blocks.reshape(nblk, ny, nz), mean
 
 
 @numba.njit(nogil=True, cache=True)
-def window_segment(d, start, window, out):
-    """out = (segment - its per-point mean) x window, float32; the segment is d[start : start + n],
-    n = window.size, the mean summed in float64 and rounded to float32."""
+def window_segment(d, start, window, mean, out):
+    """out = (d[start : start + n] - mean) x window, float32 (n = window.size; ``mean`` (ny, nz) float32)."""
     n = window.size
     _, ny, nz = d.shape
     npt = ny * nz
     src = d.reshape(d.shape[0], npt)
     dst = out.reshape(n, npt)
-    acc = np.zeros(npt)
-    for t in range(n):
-        row = src[start + t]
-        for p in range(npt):
-            acc[p] += row[p]
-    m = np.empty(npt, np.float32)
-    for p in range(npt):
-        m[p] = np.float32(acc[p] / n)
+    m = mean.reshape(npt)
     for t in range(n):
         row = src[start + t]
         w = window[t]

@@ -116,7 +116,9 @@ class WelchCovariance:
         return np.asarray(lines_half, float)[j]
 
     def node_terms(self, lines_half: np.ndarray, node_f: np.ndarray) -> dict | None:
-        """Per-node line sums a_i of A and B (module docstring) for ``averaged``.
+        """Per-node line sums a_i of A and B (module docstring), gathered for ``averaged`` into the Gram
+        matrices G_m = sum over segment lags D (weighted by their count) and over A, B of
+        Re(a) Re(a)^T + Im(a) Im(a)^T, so that the covariance for any R is sum_ij G_m,ij R_ij.
 
         Parameters
         ----------
@@ -128,7 +130,7 @@ class WelchCovariance:
         Returns
         -------
         dict or None
-            Lag d -> (A, B), each (segment lags, nbins - d, nn) complex; None when too expensive.
+            Lag d -> (nbins - d, nn, nn) G_m [(m^2 s^-2)^2]; None when too expensive.
         """
         if not self.feasible:
             return None
@@ -136,20 +138,20 @@ class WelchCovariance:
         j = np.where(self.q > nt // 2, nt - self.q, self.q)
         hat = _log_hat_weights(j / (nt * self.setup.dt_s), node_f)  # (nb, nq, nn)
         L = self._lines(lines_half)
+        sw = np.sqrt(np.tile(self.lag_count.astype(float), 2))[None, :, None]  # real and imaginary rows
         out = {}
         for lag in range(MAX_LAG + 1):
             a_rows, b_rows = slice(0, self.nb - lag), slice(lag, self.nb)
             shift = self.base[b_rows] - self.base[a_rows]
             wa = L[a_rows] * self.c[a_rows]
-            terms = []
+            gram = 0.0
             for cb in (np.conj(_shift_rows(self.c[b_rows], shift)), _shift_rows(self.cneg[b_rows], shift)):
                 x = (self.phase[:, a_rows] * (wa * cb)).transpose(1, 0, 2)  # (r, l, q)
-                n_l = x.shape[1]
                 # lines summed per node with real weights: one real BLAS product per bin on the contiguous
                 # real and imaginary parts (matmul does not use BLAS on the strided views x.real, x.imag)
-                y = np.matmul(np.concatenate([x.real, x.imag], axis=1), hat[a_rows])  # (r, 2 l, nn)
-                terms.append(np.ascontiguousarray((y[:, :n_l] + 1j * y[:, n_l:]).transpose(1, 0, 2)))
-            out[lag] = tuple(terms)
+                y = np.matmul(np.concatenate([x.real, x.imag], axis=1), hat[a_rows]) * sw  # (r, 2 l, nn)
+                gram = gram + np.matmul(y.transpose(0, 2, 1), y)
+            out[lag] = gram
         return out
 
     def averaged(self, terms: dict | None, rho2: np.ndarray) -> dict | None:
@@ -170,18 +172,10 @@ class WelchCovariance:
         if terms is None:
             return None
         scale = self.setup.scale
-        w = self.lag_count.astype(float)
-        out = {}
-        r = np.ascontiguousarray(np.real(rho2).T)  # real: sums over ordered pairs
-        for lag, (A, B) in terms.items():
-            s = 0.0
-            for X in (A, B):  # Re a^T R conj(a) = ar^T R ar + ai^T R ai per segment lag and bin: one real product
-                flat = X.reshape(-1, X.shape[-1])
-                parts = np.concatenate([flat.real, flat.imag])  # contiguous (BLAS)
-                q = np.einsum("mk,mk->m", parts @ r, parts)
-                s = s + w @ (q[: flat.shape[0]] + q[flat.shape[0] :]).reshape(X.shape[:-1])
-            out[lag] = s * scale[: self.nb - lag] * scale[lag:] / self.k**2
-        return out
+        r = np.real(rho2)  # real: sums over ordered pairs
+        # sum_D count_D (|A|^2 + |B|^2) = sum_ij a_i conj(a_j) R_ij summed = sum_ij G_ij R_ij (R symmetric)
+        return {lag: np.einsum("rij,ij->r", gram, r) * scale[: self.nb - lag] * scale[lag:] / self.k**2
+                for lag, gram in terms.items()}
 
     def cov(self, lines_half: np.ndarray) -> dict | None:
         """Covariance of the one-point Welch estimate of a line process.
