@@ -5,8 +5,8 @@ The spectra are complex64 (nf, ny, nz), read as float32 (nf, ny, 2 nz) with re, 
 rows a, b of that view, sum_k a[k] b[k] = Re sum_z conj(x_z) y_z, and with t = -i y (t[2z] = Im y_z,
 t[2z+1] = -Re y_z) sum_k a[k] t[k] = Im sum_z conj(x_z) y_z: every cross-product is an element-wise
 product of contiguous rows. The products are float32 summed per element over y (ny terms) and then in
-float64 over z, so their rounding is that of ny-term float32 sums (the numpy version: nz-term dot products).
-Per-point powers |X|^2 are float32, summed in float64.
+float64 over z, so their rounding is that of ny-term float32 sums (the numpy version: nz-term dot products);
+the powers |X|^2 likewise (cumulative over y in float32, then float64).
 """
 
 from __future__ import annotations
@@ -89,46 +89,46 @@ def spectrum_sums(xv, sep_a, sep_b, total, part_a, part_b, cross):
     plane; for separation k = (sep_a[k], sep_b[k]) grid steps, ``part_a[k, f]`` and ``part_b[k, f]``
     sums of |X|^2 over the first (y < ny - a, z < nz - b) and second (y >= a, z >= b) points of the
     pairs, and ``cross[k, f, 0 / 1]`` real / imaginary part of sum conj(X(y, z)) X(y + a, z + b).
+    The squares are summed over y per element (float32 cumulative column sums), then over z in float64.
     """
     nf, ny, nz2 = xv.shape
     nz = nz2 // 2
     ns = sep_a.size
     rot = np.empty((ny, nz2), np.float32)  # -i X: (Im, -Re)
-    pw = np.empty(nz, np.float32)
-    rows = np.empty((ny, nz + 1))  # per y: prefix sums over z of |X|^2 (float64)
+    col = np.zeros((ny + 1, nz2), np.float32)  # col[y] = sum over rows < y of the squares, per element
     acc_re = np.empty(nz2, np.float32)
     acc_im = np.empty(nz2, np.float32)
     for f in range(nf):
         x = xv[f]
         for y in range(ny):
             xr = x[y]
+            ry = rot[y]
             for z in range(nz):
-                re = xr[2 * z]
-                im = xr[2 * z + 1]
-                rot[y, 2 * z] = im
-                rot[y, 2 * z + 1] = -re
-                pw[z] = re * re + im * im
-            c = 0.0
-            rows[y, 0] = 0.0
-            for z in range(nz):
-                c += pw[z]
-                rows[y, z + 1] = c
+                ry[2 * z] = xr[2 * z + 1]
+                ry[2 * z + 1] = -xr[2 * z]
+            c0 = col[y]
+            c1 = col[y + 1]
+            for j in range(nz2):
+                c1[j] = c0[j] + xr[j] * xr[j]
         tot = 0.0
-        for y in range(ny):
-            tot += rows[y, nz]
+        last = col[ny]
+        for j in range(nz2):
+            tot += last[j]
         total[f] += tot
         for k in range(ns):
             a = sep_a[k]
             b = sep_b[k]
+            m = 2 * (nz - b)
+            first = col[ny - a, :m]  # rows y < ny - a, columns z < nz - b
+            hi = col[ny, 2 * b :]  # rows y >= a, columns z >= b
+            lo = col[a, 2 * b :]
             pa = 0.0
             pb = 0.0
-            for y in range(ny - a):
-                pa += rows[y, nz - b]
-            for y in range(a, ny):
-                pb += rows[y, nz] - rows[y, b]
+            for j in range(m):
+                pa += first[j]
+                pb += hi[j] - lo[j]
             part_a[k, f] += pa
             part_b[k, f] += pb
-            m = 2 * (nz - b)
             are = acc_re[:m]  # slices: non-negative indices, so the loops below vectorise
             aim = acc_im[:m]
             are[:] = 0.0
