@@ -37,6 +37,8 @@ Cost: lines within LINE_BAND Welch bins of each bin (Hann sidelobes: |c|^2 falls
 the neglected part is < 1e-6 of the sum), bin pairs up to MAX_LAG bins apart (beyond, |A|^2 + |B|^2 <
 1e-4 of the diagonal for a Hann window), all distinct start differences D. When that is more than
 MAX_WORK products the rule-of-thumb model is used (very long records: many segments, where it is accurate).
+The sums over D and over A, B do not depend on the point set, so ``node_terms`` folds them into one Gram
+matrix G_m = sum_D count_D (Re a Re a^T + Im a Im a^T) per bin and ``averaged`` is sum_ij G_m,ij R_ij.
 """
 
 from __future__ import annotations
