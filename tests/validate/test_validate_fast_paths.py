@@ -9,7 +9,9 @@ from turbgen.runs.mann import run_mann
 from turbgen.spec.mann import MannRun
 from turbgen.validate import validate
 from turbgen.validate.estimators import WelchSetup, segment_starts
+from turbgen.validate.pair_sums import box_lags, pair_sum, real_box_lags, rect_pair_counts, set_pair_counts
 from turbgen.validate.span_sums import COMPONENTS, span_sums
+from turbgen.validate.welch_sums import point_moments, window_segment
 
 
 def test_span_sums_equal_the_definition():
@@ -48,6 +50,37 @@ def test_span_sums_equal_the_definition():
     np.testing.assert_allclose(out["rews"], data["u"][:, mask].astype(np.float64).mean(axis=1), rtol=1e-6)
     sub = spec["u"][:, :, iy][:, :, :, iz].reshape(len(starts), 33, -1)
     np.testing.assert_allclose(out["sub"], sub, rtol=0, atol=1e-5 * np.abs(sub).max())
+
+
+def test_point_moments_and_window_segment_equal_numpy():
+    rng = np.random.default_rng(4)
+    d = (rng.standard_normal((100, 5, 6)) + 3.0).astype(np.float32)
+    mask_index = np.array([0, 3, 7, 8, 29])
+    s, s2, blocks, masked = point_moments(d, mask_index, 16)
+    x = d.astype(np.float64)
+    np.testing.assert_allclose(s, x.sum(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(s2, (x**2).sum(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(blocks, x[:96].reshape(6, 16, 5, 6).sum(axis=1), rtol=1e-12)
+    np.testing.assert_allclose(masked, x.reshape(100, -1)[:, mask_index].mean(axis=1), rtol=1e-12)
+    w = WelchSetup(32, 0.5).window.astype(np.float32)
+    out = np.empty((32, 5, 6), np.float32)
+    mean = d[40:72].mean(axis=0)
+    window_segment(d, 40, w, mean, out)
+    # float32 data: the difference and the product rounded to float32 (relative 6e-8 each)
+    np.testing.assert_allclose(out, (x[40:72] - mean) * w[:, None, None], rtol=0, atol=1e-6)
+
+
+def test_pair_sums_equal_the_full_lag_grid():
+    # half the lag grid (coh Hermitian in the lag, the counts symmetric) gives the sum over the whole grid
+    rng = np.random.default_rng(5)
+    ny, nz, nn, nyp, nzp = 6, 5, 7, 12, 10
+    field = rng.standard_normal((nn, nyp, nzp))  # real spectrum: its transform is Hermitian in the lag
+    coh = real_box_lags(field, ny, nz)
+    np.testing.assert_allclose(coh, box_lags(np.fft.ifft2(field) * nyp * nzp, ny, nz), rtol=0, atol=1e-12)
+    for counts in (rect_pair_counts(ny, nz, 4, 3), set_pair_counts(ny, nz, np.array([0, 2, 5]), np.array([1, 4]))):
+        for c in (coh, coh.real + coh.real[:, ::-1, ::-1]):  # complex and real (symmetric) coherencies
+            full = np.real(np.einsum("il,jl->ij", (c * counts).reshape(nn, -1), np.conj(c).reshape(nn, -1)))
+            np.testing.assert_allclose(pair_sum(c, counts), full, rtol=1e-12, atol=1e-12)
 
 
 @pytest.fixture(scope="module")

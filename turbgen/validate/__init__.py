@@ -5,7 +5,7 @@
     report.passed, report.to_dict(), report.table(), report.plots("figs/")
 
 Modules: ``estimators`` (Welch estimates with dask over the store's chunks; the sums of one task in
-``span_sums``), ``expectations`` (the model's prediction on the store's grid, for the
+``span_sums``, compiled loops in ``welch_sums``), ``expectations`` (the model's prediction on the store's grid, for the
 ``prediction.SamplingDesign`` of the estimates; split into ``kaimal_expectation``, ``mann_expectation``,
 ``mann_lattice``, ``welch_kernel``, ``pair_sums``, ``store_run``), ``verdict`` (tolerances from the
 estimators' statistical uncertainty, pass/fail), ``report`` (terminal table, JSON, PNG plots). The theory

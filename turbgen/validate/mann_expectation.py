@@ -28,7 +28,7 @@ from turbgen.theory.params import MannParams
 from turbgen.theory.rotor_effective import rews_spectrum_mann
 from turbgen.validate.estimators import COMPONENTS
 from turbgen.validate.mann_lattice import MannLattice
-from turbgen.validate.pair_sums import RhoAccumulator, box_lags, coherency_matrix
+from turbgen.validate.pair_sums import RhoAccumulator, box_lags, coherency_matrix, real_box_lags
 from turbgen.validate.prediction import N_RHO_NODES, SamplingDesign, Theory, plane_separations
 from turbgen.validate.store_run import mann_box_from_attrs, mann_params_from_attrs
 from turbgen.validate.variance_law import MAX_MODE_POINTS, N_MODE_LINES, top_modes
@@ -182,20 +182,21 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
     acc = RhoAccumulator(design, node_f.size)
     size = box.nyp * box.nzp
     slabs = [(phi[[0, 1, 2, 0], [0, 1, 2, 2]].copy(), inv_tau) for _, phi, inv_tau in lat.slabs(2 * np.pi * node_f / U)]
-    diag = np.array([[p[i].sum() for i in range(3)] for p, _ in slabs])  # (nn, 3)
-    r0 = np.array([np.sum(p[0] * h2) for p, _ in slabs])
+    phis = np.stack([p for p, _ in slabs])  # (nn, 4, nyp, nzp): Phi_11, Phi_22, Phi_33, Phi_13
+    inv_taus = np.stack([t for _, t in slabs])  # (nn, nyp, nzp)
+    diag = phis[:, :3].sum(axis=(2, 3))  # (nn, 3)
+    r0 = np.sum(phis[:, 0] * h2, axis=(1, 2))
     rho_rews = np.zeros((node_f.size, node_f.size))
     for dx, mult in dxs.items():
-        decay = [np.exp(-dx / U * inv_tau) for _, inv_tau in slabs]
+        decay = np.exp(-dx / U * inv_taus)
 
-        def lags(i):
-            return np.stack([box_lags(np.fft.ifft2(p[i] * d) * size, grid.ny, grid.nz)
-                             for (p, _), d in zip(slabs, decay)])
+        def lags(i):  # coherency of all nodes at the grid's lags (Theta real: half a transform)
+            return real_box_lags(phis[:, i] * decay, grid.ny, grid.nz)
 
         for i, c in enumerate(COMPONENTS):
             acc.add(c, lags(i) / diag[:, i, None, None], mult, dx == 0)
         acc.add_uw(np.abs(lags(3)) ** 2 / (diag[:, 0] * diag[:, 2])[:, None, None], mult)
-        c_r = np.array([np.sum(p[0] * d * h2) for (p, _), d in zip(slabs, decay)]) / r0
+        c_r = np.sum(phis[:, 0] * decay * h2, axis=(1, 2)) / r0
         rho_rews += mult * np.outer(c_r, c_r) / grid.nx**2
     modes = _variance_modes(lat, grid, dxs, k1_lines[1 : N_MODE_LINES + 1], U, size)
     band = design.band(U)

@@ -12,6 +12,7 @@ exact covariance of averaged Welch estimates needs (``welch_variance``); rho_bar
 from __future__ import annotations
 
 import numpy as np
+import scipy.fft
 
 from turbgen.grid import Grid
 from turbgen.validate.estimators import COMPONENTS
@@ -80,31 +81,63 @@ class RhoAccumulator:
         self.long = np.zeros((nn, nn))
         self.uw = np.zeros(nn)
 
-    @staticmethod
-    def _pair_sum(coh: np.ndarray, counts: np.ndarray) -> np.ndarray:
-        """sum over lags of counts x coh(nu_i) conj(coh(nu_j)) (real part: ordered pairs come in conjugate pairs)."""
-        nn = coh.shape[0]
-        weighted = (coh * counts).reshape(nn, -1)
-        flat = coh.reshape(nn, -1)
-        if not np.iscomplexobj(flat):
-            return weighted @ flat.T
-        # Re(W C^H) = Re W (Re C)^T + Im W (Im C)^T: two real BLAS products (einsum's complex loop was ~10x slower)
-        return weighted.real @ flat.real.T + weighted.imag @ flat.imag.T
-
     def add(self, component: str, coh: np.ndarray, multiplicity: int, same_plane: bool) -> None:
         """Add the coherency coh (all nodes, 2ny-1, 2nz-1) [-] between the points of two planes.
 
         ``multiplicity``: number of ordered plane pairs with this separation.
         """
-        self.all[component] += multiplicity * self._pair_sum(coh, self.counts_all) / self.norm_all
+        half = half_lags(coh)  # the real and imaginary parts once for all the point sets
+        self.all[component] += multiplicity * weighted_gram(half, self.counts_all) / self.norm_all
         for s in self.seps:
-            self.yz[component][s] += multiplicity * self._pair_sum(coh, self.counts_yz[s]) / self.norm_yz[s]
+            self.yz[component][s] += multiplicity * weighted_gram(half, self.counts_yz[s]) / self.norm_yz[s]
         if same_plane and component == "u":
-            self.long += self._pair_sum(coh, self.counts_long) / self.norm_long
+            self.long += weighted_gram(half, self.counts_long) / self.norm_long
 
     def add_uw(self, coh2: np.ndarray, multiplicity: int) -> None:
         """|u-w coherency|^2 (all nodes, 2ny-1, 2nz-1) between points of two planes, as :meth:`add`."""
         self.uw += multiplicity * np.einsum("nij,ij->n", coh2, self.counts_all) / self.norm_all
+
+
+def half_lags(coh: np.ndarray) -> np.ndarray:
+    """The centre and one half of the (point-symmetric) lag grid of ``coh`` (nn, 2 ny - 1, 2 nz - 1): flat
+    indices from the centre (lag 0) on, (nn, H) if real, [Re | Im] (nn, 2 H) if complex (``pair_sum``)."""
+    flat = coh.reshape(coh.shape[0], -1)
+    half = flat[:, (flat.shape[1] - 1) // 2 :]
+    return np.concatenate([half.real, half.imag], axis=1) if np.iscomplexobj(half) else np.ascontiguousarray(half)
+
+
+def weighted_gram(half: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """``pair_sum`` from ``half_lags(coh)``: (nn, nn)."""
+    w = counts.ravel()[(counts.size - 1) // 2 :] * 2.0
+    w[0] *= 0.5  # lag 0 is its own mirror
+    sw = np.sqrt(w)
+    a = half * (np.tile(sw, 2) if half.shape[1] > sw.size else sw)
+    return a @ a.T  # numpy recognises a @ a.T (syrk): exactly symmetric
+
+
+def pair_sum(coh: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """sum over lags of counts x coh(nu_i) conj(coh(nu_j)), real part (ordered pairs come in conjugate pairs).
+
+    The lag grid is point-symmetric: flat index k holds lag l, index K - 1 - k lag -l, and counts(-l) =
+    counts(l) (pair (p, q) at l, pair (q, p) at -l). A coherency is Hermitian in the lag, coh(-l) =
+    conj(coh(l)) (it is the coherency of the pair (q, p)), so the terms at l and -l have the same real part:
+    the sum is the centre term plus twice the half-plane, Re(W C^H) = A A^T with the rows of A the real and
+    imaginary parts of coh x sqrt(weights) over the half (one symmetric BLAS product, a quarter of the
+    products of Re(W C^H) over the whole grid).
+
+    Parameters
+    ----------
+    coh : numpy.ndarray
+        (nn, 2 ny - 1, 2 nz - 1) coherency [-] at the nodes and lags, Hermitian in the lag.
+    counts : numpy.ndarray
+        (2 ny - 1, 2 nz - 1) pairs per lag, symmetric (``rect_pair_counts``, ``set_pair_counts``).
+
+    Returns
+    -------
+    numpy.ndarray
+        (nn, nn) symmetric sum.
+    """
+    return weighted_gram(half_lags(coh), counts)
 
 
 def rotor_pair_counts(grid: Grid, mask: np.ndarray) -> np.ndarray:
@@ -120,6 +153,19 @@ def box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
     iy = np.arange(-(ny - 1), ny) % field2d.shape[-2]
     iz = np.arange(-(nz - 1), nz) % field2d.shape[-1]
     return field2d[..., iy[:, None], iz[None, :]]
+
+
+def real_box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
+    """``box_lags(numpy.fft.ifft2(field2d) * size, ny, nz)`` for a real field (..., nyp, nzp), with half the
+    transform: for real input ifft2 x size = conj(fft2), Hermitian, so the half spectrum of rfft2 holds the
+    lags dz >= 0 and F(dy, -dz) = conj(F(-dy, dz)) the others (full transform when nzp < 2 nz - 1)."""
+    nyp, nzp = field2d.shape[-2:]
+    if nzp < 2 * nz - 1:
+        return box_lags(np.fft.ifft2(field2d) * (nyp * nzp), ny, nz)
+    half = np.conj(scipy.fft.rfft2(field2d, workers=1))  # (..., nyp, nzp // 2 + 1): dz = 0 .. nzp / 2
+    rows = np.concatenate([half[..., nyp - ny + 1 :, :nz], half[..., :ny, :nz]], axis=-2)  # dy = -(ny - 1) .. ny - 1
+    neg = np.conj(rows[..., ::-1, :0:-1])  # dz = -(nz - 1) .. -1: F(dy, -m) = conj(F(-dy, m))
+    return np.concatenate([neg, rows], axis=-1)
 
 
 def coherency_matrix(lags: dict, grid: Grid) -> np.ndarray:

@@ -1,10 +1,9 @@
 """The sums one validator task takes over one plane and one span of time (``estimators``).
 
-Every Welch segment's spectra are computed once per component and feed all the sums: the one-point
-periodograms |X|^2 are accumulated per point over the segments (float64) and summed over the point
-sets of every yz separation once, at the end of the span; the cross-products conj(X_p) X_{p+d} of
-each separation and the u-w cross-products are dot products along z (complex64, BLAS) added over y
-in complex128, so their rounding is that of 64-term float32 sums, not of whole-plane float32 sums.
+Every Welch segment's spectra are computed once per component (float32 FFT) and feed all the sums, each
+taken in one compiled pass over the spectra (``welch_sums``): per frequency, the sum of |X|^2 over the
+plane and over the first and second points of every yz separation's pairs, the cross-products
+conj(X_p) X_{p+d} of each separation, and the u-w cross-products; per point, the moments over time.
 """
 
 from __future__ import annotations
@@ -13,22 +12,6 @@ import numpy as np
 import scipy.fft
 
 COMPONENTS = ("u", "v", "w")
-MOMENT_BLOCK = 64  # time steps per float32 block of the sum of squares (no float64 copy of a span)
-
-
-def pair_sum(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """sum over the two yz axes of conj(a) b, per frequency (complex128): float32 dot products along z,
-    added over y in complex128."""
-    return np.vecdot(a, b).sum(axis=1, dtype=np.complex128)
-
-
-def _moments(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per-point sum and sum of squares over time of a float32 span (t, y, z), float64."""
-    s2 = np.zeros(d.shape[1:])
-    for b in range(0, d.shape[0], MOMENT_BLOCK):  # float32 products in small blocks, float64 sums
-        blk = d[b : b + MOMENT_BLOCK]
-        s2 += np.einsum("tij,tij->ij", blk, blk)
-    return d.sum(axis=0, dtype=np.float64), s2
 
 
 def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy: np.ndarray, iz: np.ndarray) -> dict:
@@ -57,41 +40,47 @@ def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy
         ``yz`` (component -> {(a, b): [cross (nf,) complex, A (nf,), B (nf,)]}), ``uw`` (nf,) complex;
         ``sub`` (segments, nf, sub-lattice points) complex64 spectra of u.
     """
+    from turbgen.validate.welch_sums import cross_sum, point_moments, spectrum_sums, window_segment
+
     out = {"sum": {}, "sum2": {}}
-    for c, d in data.items():
-        out["sum"][c], out["sum2"][c] = _moments(d)
-    out["rews"] = data["u"][:, mask].mean(axis=1, dtype=np.float64)
     n = window.size
-    w = window.astype(np.float32)[:, None, None]
+    hop = n // 2
+    mask_index = np.flatnonzero(mask)
+    blocks = {}  # sums over blocks of hop samples: the segments (starts on multiples of hop) are 2 blocks if n = 2 hop
+    for c, d in data.items():
+        out["sum"][c], out["sum2"][c], blocks[c], masked = point_moments(d, mask_index, hop)
+        if c == "u":
+            out["rews"] = masked
+    w = window.astype(np.float32)
     nf = n // 2 + 1
     ny, nz = data["u"].shape[1:]
-    power = {c: np.zeros((nf, ny, nz)) for c in COMPONENTS}  # sum over segments of |X|^2 per point
-    cross = {c: {s: np.zeros(nf, complex) for s in seps} for c in COMPONENTS}
-    uw = np.zeros(nf, complex)
+    sep_a = np.array([a for a, _ in seps], np.int64)
+    sep_b = np.array([b for _, b in seps], np.int64)
+    total = {c: np.zeros(nf) for c in COMPONENTS}  # sums over segments and points of |X|^2
+    part_a = {c: np.zeros((len(seps), nf)) for c in COMPONENTS}  # ... over the first points of each separation
+    part_b = {c: np.zeros((len(seps), nf)) for c in COMPONENTS}  # ... over the second points
+    cross = {c: np.zeros((len(seps), nf, 2)) for c in COMPONENTS}
+    uw = np.zeros((nf, 2))
     sub = []
     seg_buf = np.empty((n, ny, nz), np.float32)  # reused: (segment - its mean) * window
-    p_buf, sq_buf = np.empty((nf, ny, nz), np.float32), np.empty((nf, ny, 2 * nz), np.float32)
     for s in starts:
         spec = {}
         for c in COMPONENTS:
-            seg = data[c][s : s + n]
-            np.multiply(np.subtract(seg, seg.mean(axis=0), out=seg_buf), w, out=seg_buf)
+            if n == 2 * hop and s % hop == 0:
+                mean = ((blocks[c][s // hop] + blocks[c][s // hop + 1]) / n).astype(np.float32)
+            else:
+                mean = data[c][s : s + n].mean(axis=0, dtype=np.float64).astype(np.float32)
+            window_segment(data[c], s, w, mean, seg_buf)
             x = scipy.fft.rfft(seg_buf, axis=0, workers=1)
             spec[c] = x
-            xv = x.view(np.float32)  # (nf, ny, 2 nz): re, im interleaved
-            np.multiply(xv, xv, out=sq_buf)
-            np.add(sq_buf[..., 0::2], sq_buf[..., 1::2], out=p_buf)  # |X|^2 = re^2 + im^2 in float32
-            power[c] += p_buf  # summed over segments in float64
-            for a, b in seps:
-                cross[c][(a, b)] += pair_sum(x[:, : ny - a, : nz - b], x[:, a:, b:])
-        uw += pair_sum(spec["u"], spec["w"])
+            spectrum_sums(x.view(np.float32), sep_a, sep_b, total[c], part_a[c], part_b[c], cross[c])
+        cross_sum(spec["u"].view(np.float32), spec["w"].view(np.float32), uw)
         sub.append(spec["u"][:, iy][:, :, iz].reshape(nf, -1))
-    out["auto"] = {c: power[c].sum(axis=(1, 2)) for c in COMPONENTS}
+    out["auto"] = total
     out["yz"] = {
-        c: {(a, b): [cross[c][(a, b)], power[c][:, : ny - a, : nz - b].sum(axis=(1, 2)),
-                     power[c][:, a:, b:].sum(axis=(1, 2))] for a, b in seps}
+        c: {s: [cross[c][k, :, 0] + 1j * cross[c][k, :, 1], part_a[c][k], part_b[c][k]] for k, s in enumerate(seps)}
         for c in COMPONENTS
     }
-    out["uw"] = uw
+    out["uw"] = uw[:, 0] + 1j * uw[:, 1]
     out["sub"] = np.stack(sub) if sub else np.zeros((0, nf, iy.size * iz.size), np.complex64)
     return out

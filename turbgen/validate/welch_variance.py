@@ -37,6 +37,8 @@ Cost: lines within LINE_BAND Welch bins of each bin (Hann sidelobes: |c|^2 falls
 the neglected part is < 1e-6 of the sum), bin pairs up to MAX_LAG bins apart (beyond, |A|^2 + |B|^2 <
 1e-4 of the diagonal for a Hann window), all distinct start differences D. When that is more than
 MAX_WORK products the rule-of-thumb model is used (very long records: many segments, where it is accurate).
+The sums over D and over A, B do not depend on the point set, so ``node_terms`` folds them into one Gram
+matrix G_m = sum_D count_D (Re a Re a^T + Im a Im a^T) per bin and ``averaged`` is sum_ij G_m,ij R_ij.
 """
 
 from __future__ import annotations
@@ -116,7 +118,9 @@ class WelchCovariance:
         return np.asarray(lines_half, float)[j]
 
     def node_terms(self, lines_half: np.ndarray, node_f: np.ndarray) -> dict | None:
-        """Per-node line sums a_i of A and B (module docstring) for ``averaged``.
+        """Per-node line sums a_i of A and B (module docstring), gathered for ``averaged`` into the Gram
+        matrices G_m = sum over segment lags D (weighted by their count) and over A, B of
+        Re(a) Re(a)^T + Im(a) Im(a)^T, so that the covariance for any R is sum_ij G_m,ij R_ij.
 
         Parameters
         ----------
@@ -128,7 +132,7 @@ class WelchCovariance:
         Returns
         -------
         dict or None
-            Lag d -> (A, B), each (segment lags, nbins - d, nn) complex; None when too expensive.
+            Lag d -> (nbins - d, nn, nn) G_m [(m^2 s^-2)^2]; None when too expensive.
         """
         if not self.feasible:
             return None
@@ -136,17 +140,20 @@ class WelchCovariance:
         j = np.where(self.q > nt // 2, nt - self.q, self.q)
         hat = _log_hat_weights(j / (nt * self.setup.dt_s), node_f)  # (nb, nq, nn)
         L = self._lines(lines_half)
+        sw = np.sqrt(np.tile(self.lag_count.astype(float), 2))[None, :, None]  # real and imaginary rows
         out = {}
         for lag in range(MAX_LAG + 1):
             a_rows, b_rows = slice(0, self.nb - lag), slice(lag, self.nb)
             shift = self.base[b_rows] - self.base[a_rows]
             wa = L[a_rows] * self.c[a_rows]
-            terms = []
+            gram = 0.0
             for cb in (np.conj(_shift_rows(self.c[b_rows], shift)), _shift_rows(self.cneg[b_rows], shift)):
-                x = self.phase[:, a_rows] * (wa * cb)  # (l, r, q); lines summed per node with real weights
-                terms.append(np.matmul(x.real.transpose(1, 0, 2), hat[a_rows]).transpose(1, 0, 2)
-                             + 1j * np.matmul(x.imag.transpose(1, 0, 2), hat[a_rows]).transpose(1, 0, 2))
-            out[lag] = tuple(terms)
+                x = (self.phase[:, a_rows] * (wa * cb)).transpose(1, 0, 2)  # (r, l, q)
+                # lines summed per node with real weights: one real BLAS product per bin on the contiguous
+                # real and imaginary parts (matmul does not use BLAS on the strided views x.real, x.imag)
+                y = np.matmul(np.concatenate([x.real, x.imag], axis=1), hat[a_rows]) * sw  # (r, 2 l, nn)
+                gram = gram + np.matmul(y.transpose(0, 2, 1), y)
+            out[lag] = gram
         return out
 
     def averaged(self, terms: dict | None, rho2: np.ndarray) -> dict | None:
@@ -167,17 +174,10 @@ class WelchCovariance:
         if terms is None:
             return None
         scale = self.setup.scale
-        w = self.lag_count.astype(float)
-        out = {}
-        r = np.ascontiguousarray(np.real(rho2).T)  # real: sums over ordered pairs
-        for lag, (A, B) in terms.items():
-            s = 0.0
-            for X in (A, B):  # a^T R conj(a) per segment lag and bin, as two real matrix products
-                flat = X.reshape(-1, X.shape[-1])
-                y = (flat.real @ r + 1j * (flat.imag @ r)).reshape(X.shape)
-                s = s + w @ np.sum(y * np.conj(X), axis=-1).real
-            out[lag] = s * scale[: self.nb - lag] * scale[lag:] / self.k**2
-        return out
+        r = np.real(rho2)  # real: sums over ordered pairs
+        # sum_D count_D (|A|^2 + |B|^2) = sum_ij a_i conj(a_j) R_ij summed = sum_ij G_ij R_ij (R symmetric)
+        return {lag: np.einsum("rij,ij->r", gram, r) * scale[: self.nb - lag] * scale[lag:] / self.k**2
+                for lag, gram in terms.items()}
 
     def cov(self, lines_half: np.ndarray) -> dict | None:
         """Covariance of the one-point Welch estimate of a line process.
