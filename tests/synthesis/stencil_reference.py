@@ -1,5 +1,7 @@
 """The numpy stencil of turbgen 34862bc (whole-array passes), kept as the reference of the compiled stencil kernel.
 
+``reference_axis_cells`` is the former slab-by-slab ``turbgen.synthesis.mann_cells.axis_cells`` (now batched).
+
 ``reference_unit_factors`` is the former ``turbgen.synthesis.mann_stencil._unit_coefficients`` operation by
 operation; ``reference_coefficients`` applies the energy as ``mann_stencil._apply_energy`` does. The compiled
 kernel evaluates the same float64 operations in the same order point by point, except that log, exp and arctan
@@ -10,8 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from turbgen.synthesis.mann_cells import CELL_K1_FACTOR, CELL_RADIUS, _cell_rule, _gauss_rule
 from turbgen.synthesis.mann_stencil import BoxShape, energy_scale
 from turbgen.theory.eddy_lifetime import evolution_lifetime_table, shear_lifetime_table
+from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
 
 
@@ -96,3 +100,41 @@ def reference_coefficients(params: MannParams, box: BoxShape, with_tau: bool):
         a[i, 0] = 0.0
     out *= scale
     return out.astype(np.float32), None if inv_tau is None else inv_tau.astype(np.float32)
+
+
+def reference_axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarray]:
+    """(cell_index, cell_factor) as the slab-by-slab axis_cells of 34862bc computed them."""
+    dk1, dk2, dk3 = box.dk()
+    r2 = min(CELL_RADIUS, (box.nyp - 1) // 2)
+    r3 = min(CELL_RADIUS, (box.nzp - 1) // 2)
+    n_slabs = min(box.nk1, int(CELL_K1_FACTOR * max(dk2, dk3) / dk1) + 1)
+    table = shear_lifetime_table(params)
+    js, ls = np.arange(-r2, r2 + 1), np.arange(-r3, r3 + 1)
+    n3 = len(ls)
+    index, factor = [], []
+    for i in range(n_slabs):
+        k1c = box.k1()[i]
+        x1, w1 = _gauss_rule(k1c - dk1 / 2, k1c + dk1 / 2, 2)
+        scale = max(abs(k1c), dk1 / 4)
+        rules2 = [_cell_rule(j * dk2, dk2, scale) for j in js]
+        rules3 = [_cell_rule(l * dk3, dk3, scale) for l in ls]
+        x2, w2 = np.concatenate([r[0] for r in rules2]), np.concatenate([r[1] for r in rules2])
+        x3, w3 = np.concatenate([r[0] for r in rules3]), np.concatenate([r[1] for r in rules3])
+        id2 = np.repeat(np.arange(len(js)), [len(r[0]) for r in rules2])
+        id3 = np.repeat(np.arange(n3), [len(r[0]) for r in rules3])
+        shape = (len(x1), len(x2), len(x3))
+        k1n, k2n, k3n = (np.broadcast_to(v, shape).ravel() for v in (x1[:, None, None], x2[None, :, None], x3))
+        weight = (w1[:, None, None] * w2[None, :, None] * w3[None, None, :]).ravel()
+        cell = np.broadcast_to(id2[None, :, None] * n3 + id3[None, None, :], shape).ravel()
+        beta = params.gamma * table.from_ksq(k1n * k1n + k2n * k2n + k3n * k3n, params.length_scale_m)
+        phi = sheared_tensor(k1n, k2n, k3n, params, beta=beta) * weight
+        ncell = len(js) * n3
+        cells = np.stack([[np.bincount(cell, phi[a, b], minlength=ncell) for b in range(3)] for a in range(3)]) / 2.0
+        if i == 0:
+            cells[:, :, r2 * n3 + r3] = 0.0
+        lam, vec = np.linalg.eigh(np.moveaxis(cells, -1, 0))
+        factor.append(vec * np.sqrt(np.clip(lam, 0.0, None))[:, None, :])
+        index.extend((i, j % box.nyp, l % box.nzp) for j in js for l in ls)
+    index = np.array(index, dtype=np.int64).reshape(-1, 3)
+    factor = np.concatenate(factor).astype(np.float32) if factor else np.zeros((0, 3, 3), np.float32)
+    return index, factor

@@ -1,4 +1,5 @@
-"""The compiled stencil (turbgen.synthesis.mann_factor_kernel) against the numpy code it replaced, bit for bit.
+"""The compiled stencil (turbgen.synthesis.mann_factor_kernel) and the batched axis cells against the code they
+replaced, bit for bit.
 
 The reference (stencil_reference.py) is the former whole-array numpy stencil; the kernels evaluate the same
 float64 operations in the same order and leave log, exp and arctan to the same numpy ufuncs, so every bit must
@@ -10,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from stencil_reference import reference_coefficients, reference_unit_factors
-from turbgen.synthesis import mann_stencil
+from stencil_reference import reference_axis_cells, reference_coefficients, reference_unit_factors
+from turbgen.synthesis import mann_cells, mann_stencil
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil, build_unit_stencil
 from turbgen.theory.eddy_lifetime import TABLE_KL_MAX, TABLE_KL_MIN, LifetimeTable
 from turbgen.theory.params import MannParams
@@ -78,3 +79,15 @@ def test_compiled_spline_is_from_ksq(kind, parameter):
     got = mann_stencil._table_half(table, log_kl_sq, lambda: ksq, L)
     assert _same_bits(got, table.from_ksq(ksq, L))
     assert np.isinf(got[-3]) and np.count_nonzero((kl < TABLE_KL_MIN) | (kl >= TABLE_KL_MAX)) > 1000
+
+
+@pytest.mark.parametrize("params_name", ["guo_evolving", "isotropic"])
+@pytest.mark.parametrize(
+    "box",
+    [BoxShape(nt=512, dx_m=4.0, nyp=16, nzp=16, dy_m=6.0, dz_m=5.0), BoxShape(nt=63, dx_m=4.0, nyp=3, nzp=9, dy_m=6.0, dz_m=5.0)],
+)
+def test_batched_axis_cells_are_the_slab_by_slab_ones(params_name, box):
+    index, factor = mann_cells.axis_cells(PARAMS[params_name], box)
+    ref_index, ref_factor = reference_axis_cells(PARAMS[params_name], box)
+    assert np.array_equal(index, ref_index) and _same_bits(factor, ref_factor)
+    assert len(np.unique(index[:, 0])) > mann_cells._CELL_SLABS  # more than one batch of slabs

@@ -274,15 +274,19 @@ def build_step(box: BoxShape) -> int:
     return max(1, _BUILD_POINTS // (box.nk2_half * box.nzp))
 
 
-def _batches(box: BoxShape, first: int, end: int, batch) -> None:
-    """Call ``batch(i0, i1)`` on the building batches cut to [first, end), on all cores."""
+def _batches(box: BoxShape, first: int, end: int, batch, side=None):
+    """Call ``batch(i0, i1)`` on the building batches cut to [first, end), on all cores; return ``side()``
+    (None if not given), a task run in the same pool alongside the batches (the axis cells: mostly Python, so
+    it overlaps the batches, which leave the GIL in compiled loops and numpy)."""
     step = build_step(box)
 
     def one(i0: int) -> None:  # independent slab batches: threads only change who computes which
         batch(i0, min((i0 // step + 1) * step, end))
 
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+        pending = None if side is None else pool.submit(side)
         list(pool.map(one, [first, *range((first // step + 1) * step, end, step)]))
+        return None if pending is None else pending.result()
 
 
 def _build(params: MannParams, box: BoxShape, with_tau: bool, slabs=None, cells=None) -> MannStencil:
@@ -296,8 +300,8 @@ def _build(params: MannParams, box: BoxShape, with_tau: bool, slabs=None, cells=
         part = slice(i0 - first, i1 - first)
         _factors(params, box, i0, i1, coef[:, part], None if inv_tau is None else inv_tau[part], energy)
 
-    _batches(box, first, end, batch)
-    index, factor = axis_cells(params, box) if cells is None else cells
+    computed = _batches(box, first, end, batch, None if cells is not None else lambda: axis_cells(params, box))
+    index, factor = cells if cells is not None else computed
     return MannStencil(params, box, coef, inv_tau, index, factor, first)
 
 
@@ -390,6 +394,5 @@ def scale_stencil(unit: UnitMannStencil, params: MannParams) -> MannStencil:
         work = np.empty((4, i1 - i0, nh, nzp))
         coef[:, i0:i1] = _apply_energy(unit.factors[:, i0:i1], energy, k1_all[i0:i1, None, None], scale, work)
 
-    _batches(box, 0, box.nk1, batch)
-    index, factor = axis_cells(params, box)
+    index, factor = _batches(box, 0, box.nk1, batch, lambda: axis_cells(params, box))
     return MannStencil(params, box, coef, unit.inv_tau, index, factor)
