@@ -120,7 +120,9 @@ def mann_factors(k1, k2, k3, beta_half, inv_tau_half, e, arctan, unit, energy, s
                 c1 = bk1 * k30 - 2.0 * k30 * k30
                 c1 = (c1 + k0sq) * (bk1 * kk1) / (ksq * q)
                 c2 = arctan[i, j, l]
-                if k0sq - k30 * bk1 < 0.0:  # the continuous branch of atan2 (Y <= 0)
+                # atan2(Y, X) with Y = beta k1 sqrt(q) <= 0 (stored k1 <= 0, beta >= 0): arctan(Y / X), minus pi where
+                # X < 0 (the continuous branch of Mann 1994 Eq. 16)
+                if k0sq - k30 * bk1 < 0.0:
                     c2 -= math.pi
                 c2 = c2 * k0sq * w
                 z1 = c1 - c2 * ratio
