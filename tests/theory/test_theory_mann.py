@@ -163,3 +163,17 @@ def test_variance_is_integral_of_spectrum_sheared():
         body, _ = quad(integrand, lo, hi, args=(name,), limit=200, epsrel=1e-8)
         tail = 0.0 if name == "F13" else 2.0 * 1.5 * np.exp(hi) * ms.one_point_spectra([np.exp(hi)], NEUTRAL)[name][0]
         assert v[key] == pytest.approx(body + tail, rel=1e-5)
+
+
+def test_quadrature_threads_do_not_change_the_numbers(monkeypatch):
+    """perpendicular_quadrature evaluates its batches on threads: every batch fills its own rows."""
+    p = MannParams(ae=0.7, length_scale_m=30.0, gamma=2.5, lifetime="mann")
+    k1 = np.geomspace(1e-4, 10.0, 40)
+    monkeypatch.setattr(ms, "_CHUNK_POINTS", 20_000)  # many batches
+    monkeypatch.setattr(ms, "_QUADRATURE_THREADS", 3)
+    threaded = ms.one_point_spectra(k1, p), ms.cross_spectrum(k1, p, 0, 2, 5.0, 3.0)
+    monkeypatch.setattr(ms, "_QUADRATURE_THREADS", 1)
+    serial = ms.one_point_spectra(k1, p), ms.cross_spectrum(k1, p, 0, 2, 5.0, 3.0)
+    for name in serial[0]:
+        assert np.array_equal(threaded[0][name], serial[0][name]), name
+    assert np.array_equal(threaded[1], serial[1])

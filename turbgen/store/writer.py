@@ -225,8 +225,12 @@ class StoreWriter:
             raise ValueError(f"{component} plane {ix}: block at t0={t0} contains NaN or inf")
         t1 = t0 + block.shape[0]
         aligned = t0 % self.chunk_t == 0 and (t1 % self.chunk_t == 0 or t1 == g.nt)
-        if aligned:
-            self._arrays[component][t0:t1, ix] = block
+        if aligned:  # chunk by chunk: zarr stores a value shaped like its chunk as is (a larger block it copies into
+            # a fill-valued chunk buffer first)
+            array = self._arrays[component]
+            for a in range(t0, t1, self.chunk_t):
+                b = min(a + self.chunk_t, t1)
+                array[a:b, ix : ix + 1] = block[a - t0 : b - t0, None]
         else:
             with self._plane_locks[(component, ix)]:
                 self._arrays[component][t0:t1, ix] = block

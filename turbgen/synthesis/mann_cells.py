@@ -28,6 +28,7 @@ if TYPE_CHECKING:
 CELL_RADIUS = 2
 CELL_K1_FACTOR = 4.0  # (1, 2) and (3, 8) change the paper box's sigma^2 by < 0.4 % and < 0.1 %
 _CELL_GAUSS = 4
+_CELL_SLABS = 16  # slabs per tensor evaluation (~100 k nodes)
 
 
 @lru_cache(maxsize=4)
@@ -54,14 +55,34 @@ def _cell_rule(center: float, width: float, scale: float) -> tuple[np.ndarray, n
     return np.concatenate([-x[::-1], x]), np.concatenate([w[::-1], w])
 
 
+def _slab_nodes(box: BoxShape, k1c: float, js: np.ndarray, ls: np.ndarray, off_axis: dict):
+    """Quadrature nodes (k1, k2, k3) [rad/m], weights and cell numbers (row-major over js x ls) of the cells of the
+    slab at k1 = ``k1c``; ``off_axis[(2, j)]`` / ``[(3, l)]``: the rules of the cells j, l != 0 (the same on every slab)."""
+    dk1, dk2, dk3 = box.dk()
+    x1, w1 = _gauss_rule(k1c - dk1 / 2, k1c + dk1 / 2, 2)
+    scale = max(abs(k1c), dk1 / 4)
+    rules2 = [off_axis[(2, j)] if j else _cell_rule(j * dk2, dk2, scale) for j in js]
+    rules3 = [off_axis[(3, l)] if l else _cell_rule(l * dk3, dk3, scale) for l in ls]
+    x2, w2 = np.concatenate([r[0] for r in rules2]), np.concatenate([r[1] for r in rules2])
+    x3, w3 = np.concatenate([r[0] for r in rules3]), np.concatenate([r[1] for r in rules3])
+    id2 = np.repeat(np.arange(len(js)), [len(r[0]) for r in rules2])
+    id3 = np.repeat(np.arange(len(ls)), [len(r[0]) for r in rules3])
+    shape = (len(x1), len(x2), len(x3))
+    k1n, k2n, k3n = (np.broadcast_to(v, shape).ravel() for v in (x1[:, None, None], x2[None, :, None], x3))
+    weight = (w1[:, None, None] * w2[None, :, None] * w3[None, None, :]).ravel()
+    cell = np.broadcast_to(id2[None, :, None] * len(ls) + id3[None, None, :], shape).ravel()
+    return k1n, k2n, k3n, weight, cell
+
+
 def axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarray]:
     """(cell_index, cell_factor) of the cell-averaged factors near the k1 axis (see MannStencil and CELL_RADIUS).
 
     Phi_bar = (1/dV) ∫_cell Phi dk, factor V sqrt(Lambda).
 
-    All cells of one slab are evaluated in one call: the nodes of all (k2, k3) cells are one outer product
-    of the k1 rule with the concatenated k2 and k3 rules, summed per cell by np.bincount. beta comes from
-    the lifetime table (as in the rest of the stencil).
+    The nodes of all (k2, k3) cells of a slab are one outer product of the k1 rule with the concatenated
+    k2 and k3 rules; the nodes of _CELL_SLABS slabs are evaluated in one call and summed per cell by
+    np.bincount (in node order: the same sums as slab by slab). beta comes from the lifetime table (as in
+    the rest of the stencil).
     """
     dk1, dk2, dk3 = box.dk()
     r2 = min(CELL_RADIUS, (box.nyp - 1) // 2)
@@ -69,33 +90,26 @@ def axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarra
     n_slabs = min(box.nk1, int(CELL_K1_FACTOR * max(dk2, dk3) / dk1) + 1)
     table = shear_lifetime_table(params)
     js, ls = np.arange(-r2, r2 + 1), np.arange(-r3, r3 + 1)
-    n3 = len(ls)
-    index, factor = [], []
-    for i in range(n_slabs):
-        k1c = box.k1()[i]
-        x1, w1 = _gauss_rule(k1c - dk1 / 2, k1c + dk1 / 2, 2)
-        scale = max(abs(k1c), dk1 / 4)
-        rules2 = [_cell_rule(j * dk2, dk2, scale) for j in js]
-        rules3 = [_cell_rule(l * dk3, dk3, scale) for l in ls]
-        x2, w2 = np.concatenate([r[0] for r in rules2]), np.concatenate([r[1] for r in rules2])
-        x3, w3 = np.concatenate([r[0] for r in rules3]), np.concatenate([r[1] for r in rules3])
-        id2 = np.repeat(np.arange(len(js)), [len(r[0]) for r in rules2])
-        id3 = np.repeat(np.arange(n3), [len(r[0]) for r in rules3])
-        shape = (len(x1), len(x2), len(x3))
-        k1n, k2n, k3n = (np.broadcast_to(v, shape).ravel() for v in (x1[:, None, None], x2[None, :, None], x3))
-        weight = (w1[:, None, None] * w2[None, :, None] * w3[None, None, :]).ravel()
-        cell = np.broadcast_to(id2[None, :, None] * n3 + id3[None, None, :], shape).ravel()
+    ncell = len(js) * len(ls)
+    off_axis = {(2, j): _cell_rule(j * dk2, dk2, 0.0) for j in js if j} | {(3, l): _cell_rule(l * dk3, dk3, 0.0) for l in ls if l}
+    k1 = box.k1()
+    factor = []
+    for first in range(0, n_slabs, _CELL_SLABS):
+        slabs = range(first, min(first + _CELL_SLABS, n_slabs))
+        nodes = [_slab_nodes(box, k1[i], js, ls, off_axis) for i in slabs]
+        k1n, k2n, k3n, weight = (np.concatenate([n[a] for n in nodes]) for a in range(4))
+        cell = np.concatenate([n[4] + m * ncell for m, n in enumerate(nodes)])
         beta = params.gamma * table.from_ksq(k1n * k1n + k2n * k2n + k3n * k3n, params.length_scale_m)
         phi = sheared_tensor(k1n, k2n, k3n, params, beta=beta) * weight
-        ncell = len(js) * n3
-        cells = np.stack(  # ∫_cell Phi dk / 2 (E|n|^2 = 2), (3, 3, ncell)
-            [[np.bincount(cell, phi[a, b], minlength=ncell) for b in range(3)] for a in range(3)]
+        size = len(slabs) * ncell
+        cells = np.stack(  # ∫_cell Phi dk / 2 (E|n|^2 = 2), (3, 3, slabs x cells)
+            [[np.bincount(cell, phi[a, b], minlength=size) for b in range(3)] for a in range(3)]
         ) / 2.0
-        if i == 0:
-            cells[:, :, r2 * n3 + r3] = 0.0  # the cell around k = 0: the box mean stays zero
+        if first == 0:
+            cells[:, :, r2 * len(ls) + r3] = 0.0  # the cell around k = 0: the box mean stays zero
         lam, vec = np.linalg.eigh(np.moveaxis(cells, -1, 0))
         factor.append(vec * np.sqrt(np.clip(lam, 0.0, None))[:, None, :])
-        index.extend((i, j % box.nyp, l % box.nzp) for j in js for l in ls)
-    index = np.array(index, dtype=np.int64).reshape(-1, 3)
+    index = np.array([(i, j % box.nyp, l % box.nzp) for i in range(n_slabs) for j in js for l in ls], dtype=np.int64)
+    index = index.reshape(-1, 3)
     factor = np.concatenate(factor).astype(np.float32) if factor else np.zeros((0, 3, 3), np.float32)
     return index, factor

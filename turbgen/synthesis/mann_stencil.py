@@ -108,7 +108,7 @@ class MannStencil:
 class UnitMannStencil:
     """The part of a stencil that does not depend on ae (Mann.rs and hipersim likewise build for ae = 1 and scale).
 
-    ``factors`` (4, nk1, nyp//2+1, nzp) float64 holds (e, k30, c1, c2) of _unit_coefficients, from which
+    ``factors`` (4, nk1, nyp//2+1, nzp) float64 holds (e, k30, c1, c2) of _factors, from which
     scale_stencil forms the float32 (A, P, Z1, Z2) of any ae bit-identically to build_stencil (a float32
     stencil for ae = 1 times sqrt(ae) would differ in the last bit). ``inv_tau`` as in MannStencil
     (it does not depend on ae). ``params`` carry ae = 1.
@@ -166,77 +166,74 @@ def w_coefficient(a, p, q, ksq, out, scratch):
     return out
 
 
-def _even_in_k3(table, ksq: np.ndarray, length_scale_m: float) -> np.ndarray:
-    """``table.from_ksq(ksq, length_scale_m)`` (float64, shaped like ``ksq``, columns k3 in fftfreq order), evaluated on
-    the columns k3 >= 0 and the Nyquist only: fftfreq is exactly antisymmetric, so |k|^2 and the result on column j
-    equal those on column nzp - j (half the table lookups, the same numbers)."""
-    nzp = ksq.shape[-1]
-    h = nzp // 2
-    out = np.empty(ksq.shape)
-    out[..., : h + 1] = table.from_ksq(ksq[..., : h + 1], length_scale_m)
-    out[..., h + 1 :] = out[..., nzp - h - 1 : 0 : -1]
+def _table_half(table, log_kl_sq: np.ndarray, ksq, length_scale_m: float) -> np.ndarray:
+    """``table.from_ksq`` from ln(|k|^2 L^2) ``log_kl_sq``: the compiled spline (mann_factor_kernel.table_spline, the
+    operations of from_ksq), and ``table.exact`` outside the table's range (k = 0 among them) as from_ksq does;
+    ``ksq()`` gives |k|^2 [rad^2/m^2] shaped like ``log_kl_sq`` (needed only there)."""
+    from turbgen.synthesis.mann_factor_kernel import table_spline
+
+    out = np.empty_like(log_kl_sq)
+    if table_spline(log_kl_sq, 0.5 / table.h, table.x0 / table.h, table.h, table.n_intervals, *table.coefficients, out):
+        outside = np.isnan(out)
+        out[outside] = table.exact(np.sqrt(ksq()[outside]) * length_scale_m)
     return out
 
 
-def _unit_coefficients(params: MannParams, k1, k2, k3, out: np.ndarray, inv_tau: np.ndarray | None) -> None:
-    """The energy-free factors (e, k30, c1, c2) of slabs k1 (b, 1, 1) on rows k2 (nh, 1) x columns k3 (nzp,).
+def _factors(params: MannParams, box: BoxShape, i0: int, i1: int, out, inv_tau, energy: float | None) -> None:
+    """The factors of slabs [i0, i1) of ``box`` into the four arrays ``out`` (i1 - i0, nyp//2+1, nzp).
 
-    Into ``out`` (4, b, nh, nzp) float64, independent of ae: with a = e sqrt(ae L^(17/3) / (4 pi))
-    the coefficients are A = a, P = k30 a, Z1 = c1 a, Z2 = c2 a (see _apply_energy), where
-    e = (1 + (k0 L)^2)^(-17/12) and c1, c2 are zeta1, zeta2 of Mann (1994) Eq. 13-17 (the formulas of
-    theory.mann_tensor._distortion with its exact limits), with beta = Gamma tau~(|k| L) and tau_e from
-    the lifetime tables (relative error <= 1e-6, theory.eddy_lifetime.TABLE_REL_ERROR) instead of
-    Mann (1994) Eq. 4 / 6 / 15 point by point. At k = 0 all four are 0 (no energy). ``inv_tau``
-    (b, nh, nzp) gets 1/tau_e [1/s].
+    ``energy`` None: the energy-free factors (e, k30, c1, c2) (float64), independent of ae: with
+    a = e sqrt(ae L^(17/3) / (4 pi)) the coefficients are A = a, P = k30 a, Z1 = c1 a, Z2 = c2 a
+    (see _apply_energy), where e = (1 + (k0 L)^2)^(-17/12) and c1, c2 are zeta1, zeta2 of Mann (1994)
+    Eq. 13-17 (the formulas of theory.mann_tensor._distortion with its exact limits), with
+    beta = Gamma tau~(|k| L) and tau_e from the lifetime tables (relative error <= 1e-6,
+    theory.eddy_lifetime.TABLE_REL_ERROR) instead of Mann (1994) Eq. 4 / 6 / 15 point by point. At k = 0
+    all four are 0 (no energy). ``energy`` = energy_scale(params): (A, P, Z1, Z2) times sqrt(dk1 dk2 dk3 / 2)
+    as _apply_energy forms them from the factors (out float32). ``inv_tau`` (i1 - i0, nyp//2+1, nzp)
+    float32 gets 1/tau_e [1/s], or None.
+
+    Compiled loops (mann_factor_kernel) and numpy's log, exp and arctan on the batch. |k|^2, beta and
+    tau_e are even in k3 and computed on the columns k3 >= 0 and the Nyquist only: fftfreq is exactly
+    antisymmetric, so |k|^2 on column l equals that on column nzp - l.
     """
+    from turbgen.synthesis import mann_factor_kernel as kernel
+
     L = params.length_scale_m
-    q = k1 * k1 + k2 * k2  # (b, nh, 1)
-    ksq = q + k3 * k3  # (b, nh, nzp)
-    e, k30, z1, z2 = out
+    k1, k2, k3 = box.k1()[i0:i1], box.k2()[: box.nk2_half], box.k3()
+    k3_half = k3[: box.nzp // 2 + 1]
+    half = (k1.size, k2.size, k3_half.size)
+
+    def ksq() -> np.ndarray:
+        squares = np.empty(half)
+        kernel.squared_wavenumbers(k1, k2, k3_half, 1.0, squares)
+        return squares
+
+    log_kl_sq = np.empty(half)
+    kernel.squared_wavenumbers(k1, k2, k3_half, L * L, log_kl_sq)
+    with np.errstate(divide="ignore"):
+        np.log(log_kl_sq, out=log_kl_sq)  # -inf at k = 0
     if params.gamma == 0.0:
-        beta = np.zeros_like(ksq)
+        beta = np.zeros(half)
     else:
-        beta = _even_in_k3(shear_lifetime_table(params), ksq, L)
+        beta = _table_half(shear_lifetime_table(params), log_kl_sq, ksq, L)
         beta *= params.gamma
-    with np.errstate(invalid="ignore"):
-        bk1 = beta * k1  # nan at k = 0 (inf * 0): set to 0 below
-    np.add(bk1, k3, out=k30)
-    k0sq = k30 * k30
-    k0sq += q
-    np.multiply(k0sq, L * L, out=e)
-    e += 1.0
-    np.log(e, out=e)
-    e *= -17.0 / 12.0
-    np.exp(e, out=e)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sq = np.sqrt(q)
-        c1 = np.multiply(bk1, k30, out=z1)
-        c1 -= 2.0 * k30 * k30
-        c1 += k0sq
-        c1 *= bk1 * k1
-        c1 /= ksq * q
-        # atan2(Y, X) with Y = beta k1 sqrt(q) <= 0 (stored k1 <= 0, beta >= 0): arctan(Y / X), minus pi where
-        # X < 0 (the continuous branch of Mann 1994 Eq. 16; twice as fast as np.arctan2 here)
-        x = k0sq - k30 * bk1
-        c2 = np.arctan(np.divide(bk1 * sq, x, out=z2), out=z2)
-        c2 -= np.pi * (x < 0)
-        c2 *= k0sq
-        c2 *= k2 / (q * sq)
-        ratio = k2 / k1
-        c1_ratio = c1 * ratio
-        c1 -= c2 * ratio  # zeta1 = C1 - (k2/k1) C2
-        c2 += c1_ratio  # zeta2 = (k2/k1) C1 + C2
-    for i in np.flatnonzero(k1[:, 0, 0] == 0.0):  # the k1 -> 0 limit at fixed q > 0: zeta1 = -beta, zeta2 = 0
-        np.negative(beta[i], out=z1[i])
-        z2[i] = 0.0
-        z1[i, q[i, :, 0] == 0] = 0.0  # the row k2 = 0 is the k3 axis: zeta = 0
-        origin = ksq[i] == 0  # k = 0 (beta = inf there) carries no energy
-        for f in (e, k30, z1, z2):
-            f[i, origin] = 0.0
-    if inv_tau is not None:
-        tau = _even_in_k3(evolution_lifetime_table(params), ksq, L)
-        tau *= params.evo_time_s  # tau_e [s] (inf at k = 0)
-        np.divide(1.0, tau, out=inv_tau)
+    if inv_tau is None:
+        inv_tau_half, inv_tau = np.empty((0, 0, 0)), np.empty((0, 0, 0), np.float32)
+    else:
+        inv_tau_half = _table_half(evolution_lifetime_table(params), log_kl_sq, ksq, L)
+        inv_tau_half *= params.evo_time_s  # tau_e [s] (inf at k = 0)
+        np.divide(1.0, inv_tau_half, out=inv_tau_half)
+    e = np.empty(out[0].shape)
+    arctan = np.empty(out[0].shape)
+    kernel.transcendental_arguments(k1, k2, k3, beta, L * L, e, arctan)
+    with np.errstate(invalid="ignore"):  # nan at k = 0 (beta = inf there; replaced by 0)
+        np.log(e, out=e)
+        e *= -17.0 / 12.0
+        np.exp(e, out=e)
+        np.arctan(arctan, out=arctan)
+    out = [np.asarray(f) for f in out]  # plain arrays (the stencil cache passes a memory map)
+    kernel.mann_factors(k1, k2, k3, beta, inv_tau_half, e, arctan, energy is None, 1.0 if energy is None else energy,
+                        np.sqrt(np.prod(box.dk()) / 2.0), *out, inv_tau)
 
 
 def energy_scale(params: MannParams) -> float:
@@ -257,8 +254,9 @@ def _apply_energy(unit: np.ndarray, energy: float, k1, scale: float, out: np.nda
     """(A, P, Z1, Z2) times sqrt(dk / 2) = ``scale`` into ``out`` (4, b, nh, nzp) float64 from the ``unit`` factors.
 
     a = e ``energy`` (energy_scale), P = k30 a, Z1 = c1 a, Z2 = c2 a, A = a except on the k3 axis
-    (k1 = k2 = 0, where A is never used: m = 0 and k2 = 0). The same float64 operations in the same
-    order whether the unit factors were just computed or are reused for another ae.
+    (k1 = k2 = 0, where A is never used: m = 0 and k2 = 0). mann_factor_kernel.mann_factors applies the
+    energy by the same float64 operations in the same order when it builds a stencil directly, so a scaled
+    unit stencil is bit-identical to a direct build.
     """
     a, p, z1, z2 = out
     np.multiply(unit[0], energy, out=a)
@@ -276,39 +274,34 @@ def build_step(box: BoxShape) -> int:
     return max(1, _BUILD_POINTS // (box.nk2_half * box.nzp))
 
 
-def _batches(box: BoxShape, first: int, end: int, batch) -> None:
-    """Call ``batch(i0, i1)`` on the building batches cut to [first, end), on all cores."""
+def _batches(box: BoxShape, first: int, end: int, batch, side=None):
+    """Call ``batch(i0, i1)`` on the building batches cut to [first, end), on all cores; return ``side()``
+    (None if not given), a task run in the same pool alongside the batches (the axis cells: mostly Python, so
+    it overlaps the batches, which leave the GIL in compiled loops and numpy)."""
     step = build_step(box)
 
     def one(i0: int) -> None:  # independent slab batches: threads only change who computes which
         batch(i0, min((i0 // step + 1) * step, end))
 
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+        pending = None if side is None else pool.submit(side)
         list(pool.map(one, [first, *range((first // step + 1) * step, end, step)]))
+        return None if pending is None else pending.result()
 
 
 def _build(params: MannParams, box: BoxShape, with_tau: bool, slabs=None, cells=None) -> MannStencil:
     first, end = (0, box.nk1) if slabs is None else slabs
     nh, nzp = box.nk2_half, box.nzp
-    scale = np.sqrt(np.prod(box.dk()) / 2.0)
     energy = energy_scale(params)
-    k1_all = box.k1()
-    k2 = box.k2()[:nh][:, None]
-    k3 = box.k3()
     coef = np.empty((4, end - first, nh, nzp), dtype=np.float32)
     inv_tau = np.empty((end - first, nh, nzp), dtype=np.float32) if with_tau else None
 
     def batch(i0: int, i1: int) -> None:
-        unit = np.empty((4, i1 - i0, nh, nzp))
-        tau = np.empty((i1 - i0, nh, nzp)) if with_tau else None
-        k1 = k1_all[i0:i1, None, None]
-        _unit_coefficients(params, k1, k2, k3, unit, tau)
-        coef[:, i0 - first : i1 - first] = _apply_energy(unit, energy, k1, scale, unit)
-        if with_tau:
-            inv_tau[i0 - first : i1 - first] = tau
+        part = slice(i0 - first, i1 - first)
+        _factors(params, box, i0, i1, coef[:, part], None if inv_tau is None else inv_tau[part], energy)
 
-    _batches(box, first, end, batch)
-    index, factor = axis_cells(params, box) if cells is None else cells
+    computed = _batches(box, first, end, batch, None if cells is not None else lambda: axis_cells(params, box))
+    index, factor = cells if cells is not None else computed
     return MannStencil(params, box, coef, inv_tau, index, factor, first)
 
 
@@ -357,17 +350,11 @@ def build_unit_stencil(
     with_tau = evolving and params.evo_time_s is not None
     nh, nzp = box.nk2_half, box.nzp
     unit_params = params.with_ae(1.0)
-    k1_all = box.k1()
-    k2 = box.k2()[:nh][:, None]
-    k3 = box.k3()
     factors = np.empty((4, box.nk1, nh, nzp)) if factors is None else factors
     inv_tau = np.empty((box.nk1, nh, nzp), dtype=np.float32) if with_tau else None
 
     def batch(i0: int, i1: int) -> None:
-        tau = np.empty((i1 - i0, nh, nzp)) if with_tau else None
-        _unit_coefficients(unit_params, k1_all[i0:i1, None, None], k2, k3, factors[:, i0:i1], tau)
-        if with_tau:
-            inv_tau[i0:i1] = tau
+        _factors(unit_params, box, i0, i1, factors[:, i0:i1], None if inv_tau is None else inv_tau[i0:i1], None)
 
     _batches(box, 0, box.nk1, batch)
     return UnitMannStencil(unit_params, box, factors, inv_tau)
@@ -407,6 +394,5 @@ def scale_stencil(unit: UnitMannStencil, params: MannParams) -> MannStencil:
         work = np.empty((4, i1 - i0, nh, nzp))
         coef[:, i0:i1] = _apply_energy(unit.factors[:, i0:i1], energy, k1_all[i0:i1, None, None], scale, work)
 
-    _batches(box, 0, box.nk1, batch)
-    index, factor = axis_cells(params, box)
+    index, factor = _batches(box, 0, box.nk1, batch, lambda: axis_cells(params, box))
     return MannStencil(params, box, coef, unit.inv_tau, index, factor)

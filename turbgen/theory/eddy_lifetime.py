@@ -160,6 +160,18 @@ class LifetimeTable:
     parameter : float, optional
         factor1 or factor2 [-] (default 1; unused for "mann").
 
+    Attributes
+    ----------
+    x0, h : float
+        First node ln(TABLE_KL_MIN) and step of the grid in x = ln(kL) [-].
+    n_intervals : int
+        Intervals of the grid; interval i is [x0 + i h, x0 + (i + 1) h).
+    coefficients : tuple of numpy.ndarray
+        (c3, c2, c1, c0), each (n_intervals,) float64: tau~ = ((c3 d + c2) d + c1) d + c0 with d = x - x_i,
+        evaluated in that order by from_ksq (and by the compiled stencil kernel, which must agree with it).
+    exact : callable
+        The exact function of kL, used outside the table's range.
+
     Raises
     ------
     ValueError
@@ -181,7 +193,7 @@ class LifetimeTable:
         n = int(np.ceil((np.log(TABLE_KL_MAX) - self.x0) / self.h)) + 1
         x = self.x0 + self.h * np.arange(n)
         c = CubicSpline(x, self.exact(np.exp(x))).c  # (4, n - 1): powers 3, 2, 1, 0 of (x - x_i)
-        self._c3, self._c2, self._c1, self._c0 = (np.ascontiguousarray(row) for row in c)
+        self.coefficients = tuple(np.ascontiguousarray(row) for row in c)  # (c3, c2, c1, c0) per interval
         self.n_intervals = n - 1
 
     def from_ksq(self, ksq, length_scale_m: float) -> np.ndarray:
@@ -209,13 +221,14 @@ class LifetimeTable:
         idx = x.astype(np.intp)
         x -= idx
         x *= self.h  # x - x_i
-        out = np.take(self._c3, idx)
+        c3, c2, c1, c0 = self.coefficients
+        out = np.take(c3, idx)
         out *= x
-        out += np.take(self._c2, idx)
+        out += np.take(c2, idx)
         out *= x
-        out += np.take(self._c1, idx)
+        out += np.take(c1, idx)
         out *= x
-        out += np.take(self._c0, idx)
+        out += np.take(c0, idx)
         if outside.any():
             out[outside] = self.exact(np.sqrt(ksq[outside]) * length_scale_m)
         return out

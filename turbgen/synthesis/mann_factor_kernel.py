@@ -1,0 +1,157 @@
+"""Compiled per-point loops of the Mann stencil (turbgen.synthesis.mann_stencil): lifetimes and compact factors.
+
+A few passes over a batch of slabs (small enough to stay in the core's cache) instead of ~40 whole-array
+numpy passes, whose memory traffic cost ~100 ns per point. The loops evaluate the float64 operations of the
+former numpy code in the same order (tests/synthesis/stencil_reference.py keeps it as the reference); log,
+exp and arctan are left to numpy's ufuncs between the loops (mann_stencil._factors), on arrays of the
+arguments these loops write: numpy's SIMD log, exp and arctan are 4-7 times faster than the C library's
+scalar ones a compiled loop would call, and round like those of the numpy code, so the stencil keeps its
+bits. ``error_model="numpy"``: a division by zero gives inf or nan as in numpy (k = 0 and the k1 = 0 slab,
+whose values are replaced by their limits) instead of raising.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+
+@numba.njit(nogil=True, cache=True, error_model="numpy")
+def squared_wavenumbers(k1, k2, k3, factor, out):
+    """``out[i, j, l]`` = ((k1[i]^2 + k2[j]^2) + k3[l]^2) ``factor``: |k|^2 times ``factor`` on slabs x rows x columns."""
+    for i in range(k1.size):
+        for j in range(k2.size):
+            q = k1[i] * k1[i] + k2[j] * k2[j]
+            for l in range(k3.size):
+                out[i, j, l] = (q + k3[l] * k3[l]) * factor
+
+
+@numba.njit(nogil=True, cache=True, error_model="numpy")
+def table_spline(log_kl_sq, inv_2h, x0_h, step, n_intervals, c3, c2, c1, c0, out):
+    """The lifetime table's spline at x = ln((kL)^2) / (2 h) - x0 / h grid steps, as LifetimeTable.from_ksq.
+
+    ``log_kl_sq`` and ``out``: C-contiguous arrays of one shape, ln(|k|^2 L^2) in, tau~ out (nan outside
+    the table's range, k = 0 among them: the caller evaluates the exact function there). ``inv_2h`` =
+    0.5 / h, ``x0_h`` = x0 / h, ``step`` = h, ``n_intervals`` and ``c3`` .. ``c0`` of the table.
+    Returns the number of points outside the range.
+    """
+    xs = log_kl_sq.reshape(-1)
+    values = out.reshape(-1)
+    outside = 0
+    for n in range(xs.size):
+        x = xs[n] * inv_2h
+        x -= x0_h
+        if not (x >= 0.0 and x < n_intervals):
+            values[n] = np.nan
+            outside += 1
+            continue
+        idx = int(x)
+        x -= idx
+        x *= step
+        v = c3[idx]
+        v *= x
+        v += c2[idx]
+        v *= x
+        v += c1[idx]
+        v *= x
+        v += c0[idx]
+        values[n] = v
+    return outside
+
+
+@numba.njit(nogil=True, cache=True, error_model="numpy")
+def transcendental_arguments(k1, k2, k3, beta_half, length_sq, e_arg, t_arg):
+    """The arguments of log and arctan in the factors of slabs k1 (b,) x rows k2 (nh,) x columns k3 (nzp,).
+
+    ``e_arg`` = 1 + k0^2 L^2 (of e = (1 + (k0 L)^2)^(-17/12)) and ``t_arg`` = beta k1 sqrt(q) / (k0^2 - k30 beta k1)
+    (of the arctan in zeta2, Mann 1994 Eq. 16), both (b, nh, nzp), with k30 = k3 + beta k1, q = k1^2 + k2^2,
+    k0^2 = k30^2 + q. ``beta_half`` (b, nh, nzp//2 + 1): beta = Gamma tau~ on the columns k3 >= 0 and the
+    Nyquist (|k|^2 is even in k3: column l > nzp//2 reads column nzp - l). ``length_sq`` = L^2 [m^2].
+    """
+    nzp = k3.size
+    h = nzp // 2
+    for i in range(k1.size):
+        kk1 = k1[i]
+        for j in range(k2.size):
+            q = kk1 * kk1 + k2[j] * k2[j]
+            sq = math.sqrt(q)
+            for l in range(nzp):
+                bk1 = beta_half[i, j, l if l <= h else nzp - l] * kk1
+                k30 = bk1 + k3[l]
+                k0sq = k30 * k30 + q
+                e_arg[i, j, l] = k0sq * length_sq + 1.0
+                t_arg[i, j, l] = (bk1 * sq) / (k0sq - k30 * bk1)
+
+
+@numba.njit(nogil=True, cache=True, error_model="numpy")
+def mann_factors(k1, k2, k3, beta_half, inv_tau_half, e, arctan, unit, energy, scale, f0, f1, f2, f3, inv_tau):
+    """The compact factors of slabs k1 (b,) x rows k2 (nh,) x columns k3 (nzp,) into f0 .. f3 (b, nh, nzp).
+
+    ``beta_half`` as in transcendental_arguments; ``e`` (b, nh, nzp) = (1 + (k0 L)^2)^(-17/12) and ``arctan``
+    the arctan of its ``t_arg``. ``inv_tau_half`` (b, nh, nzp//2 + 1) 1/tau_e [1/s] on the same columns as
+    beta_half, written mirrored into ``inv_tau`` (b, nh, nzp); an empty ``inv_tau`` skips it.
+
+    ``unit`` True: (f0, f1, f2, f3) = (e, k30, c1, c2) of mann_stencil._factors (float64, ae-free).
+    False: (A, P, Z1, Z2) = (e, k30 e, c1 e, c2 e) ``energy`` ``scale`` as mann_stencil._apply_energy forms
+    them, with A = 0 on the k3 axis; the output's dtype (float32) rounds them.
+    """
+    nzp = k3.size
+    h = nzp // 2
+    with_tau = inv_tau.size > 0
+    for i in range(k1.size):
+        kk1 = k1[i]
+        for j in range(k2.size):
+            kk2 = k2[j]
+            q = kk1 * kk1 + kk2 * kk2
+            w = kk2 / (q * math.sqrt(q))
+            ratio = kk2 / kk1
+            for l in range(nzp):
+                lc = l if l <= h else nzp - l
+                kk3 = k3[l]
+                ksq = q + kk3 * kk3
+                beta = beta_half[i, j, lc]
+                bk1 = beta * kk1
+                k30 = bk1 + kk3
+                k0sq = k30 * k30 + q
+                ee = e[i, j, l]
+                # zeta1 = C1 - (k2/k1) C2, zeta2 = (k2/k1) C1 + C2 of Mann (1994) Eq. 13-17 (see mann_stencil._factors)
+                c1 = bk1 * k30 - 2.0 * k30 * k30
+                c1 = (c1 + k0sq) * (bk1 * kk1) / (ksq * q)
+                c2 = arctan[i, j, l]
+                # atan2(Y, X) with Y = beta k1 sqrt(q) <= 0 (stored k1 <= 0, beta >= 0): arctan(Y / X), minus pi where
+                # X < 0 (the continuous branch of Mann 1994 Eq. 16)
+                if k0sq - k30 * bk1 < 0.0:
+                    c2 -= math.pi
+                c2 = c2 * k0sq * w
+                z1 = c1 - c2 * ratio
+                z2 = c2 + c1 * ratio
+                if kk1 == 0.0:  # the k1 -> 0 limit: zeta1 = -beta, zeta2 = 0; zeta = 0 on the k3 axis; k = 0 empty
+                    z1 = -beta
+                    z2 = 0.0
+                    if q == 0.0:
+                        z1 = 0.0
+                    if ksq == 0.0:
+                        ee = 0.0
+                        k30 = 0.0
+                        z1 = 0.0
+                        z2 = 0.0
+                if unit:
+                    f0[i, j, l] = ee
+                    f1[i, j, l] = k30
+                    f2[i, j, l] = z1
+                    f3[i, j, l] = z2
+                else:
+                    a = ee * energy
+                    p = k30 * a
+                    z1 = z1 * a
+                    z2 = z2 * a
+                    if kk1 == 0.0 and j == 0:  # row 0: k2 = 0
+                        a = 0.0
+                    f0[i, j, l] = a * scale
+                    f1[i, j, l] = p * scale
+                    f2[i, j, l] = z1 * scale
+                    f3[i, j, l] = z2 * scale
+                if with_tau:
+                    inv_tau[i, j, l] = inv_tau_half[i, j, lc]
