@@ -21,7 +21,7 @@ import numpy as np
 
 _ZERO = np.float32(0.0)
 _ONE = np.float32(1.0)
-_A, _P, _Z1, _Z2, _MZ2, _W, _RHO, _SIG = range(8)  # rows of the per-row factor scratch
+_A, _P, _Z1, _Z2, _W, _RHO, _SIG = range(7)  # rows of the per-row factor scratch
 
 
 @numba.njit(inline="always")
@@ -33,8 +33,9 @@ def _pairs(src, out, sign):
 
 
 @numba.njit(inline="always")
-def _factors(coef, rho, sig, i, j, h, k1, k2, k3sq, evolve, w, out):
-    """The factors of stored row h of slab i (stencil slab j), each duplicated per (re, im) pair, into ``out`` (8, 2 nzp).
+def _factors(coef, rho, sig, i, j, h, k1, k2, k3sq, evolve, z2_sign, w, out):
+    """The factors of stored row h of slab i (stencil slab j), each duplicated per (re, im) pair, into ``out`` (7, 2 nzp),
+    Z2 times ``z2_sign`` (-1 on a row k2 < 0: Z2 is odd in k2).
 
     W = (A^2 q + P^2) / (A |k|^2), 0 where A |k|^2 = 0 (there m = 0), as mann_stencil.w_coefficient; ``w`` (nzp,)
     is scratch.
@@ -47,8 +48,7 @@ def _factors(coef, rho, sig, i, j, h, k1, k2, k3sq, evolve, w, out):
     _pairs(a, out[_A], _ONE)
     _pairs(p, out[_P], _ONE)
     _pairs(coef[2, j, h], out[_Z1], _ONE)
-    _pairs(coef[3, j, h], out[_Z2], _ONE)
-    _pairs(coef[3, j, h], out[_MZ2], -_ONE)
+    _pairs(coef[3, j, h], out[_Z2], z2_sign)
     _pairs(w, out[_W], _ONE)
     if evolve:
         _pairs(rho[i, h], out[_RHO], _ONE)
@@ -66,7 +66,7 @@ def _product(n0, n1, n2, a, p, z1, z2, w, k1, k2, uu, uv, uw, x):
 
 
 @numba.njit(inline="always")
-def _evolve_row(n0, n1, n2, f0, f1, f2, fac, z2, k1, k2, uu, uv, uw):
+def _evolve_row(n0, n1, n2, f0, f1, f2, fac, k1, k2, uu, uv, uw):
     """n <- rho n + sig fresh (in place), then u_hat = C n, on one row of floats."""
     rho, sig = fac[_RHO], fac[_SIG]
     for x in range(n0.shape[0]):
@@ -74,14 +74,14 @@ def _evolve_row(n0, n1, n2, f0, f1, f2, fac, z2, k1, k2, uu, uv, uw):
         a1 = n1[x] * rho[x] + f1[x] * sig[x]
         a2 = n2[x] * rho[x] + f2[x] * sig[x]
         n0[x], n1[x], n2[x] = a0, a1, a2
-        _product(a0, a1, a2, fac[_A], fac[_P], fac[_Z1], z2, fac[_W], k1, k2, uu, uv, uw, x)
+        _product(a0, a1, a2, fac[_A], fac[_P], fac[_Z1], fac[_Z2], fac[_W], k1, k2, uu, uv, uw, x)
 
 
 @numba.njit(inline="always")
-def _frozen_row(n0, n1, n2, fac, z2, k1, k2, uu, uv, uw):
+def _frozen_row(n0, n1, n2, fac, k1, k2, uu, uv, uw):
     """u_hat = C n on one row of floats."""
     for x in range(n0.shape[0]):
-        _product(n0[x], n1[x], n2[x], fac[_A], fac[_P], fac[_Z1], z2, fac[_W], k1, k2, uu, uv, uw, x)
+        _product(n0[x], n1[x], n2[x], fac[_A], fac[_P], fac[_Z1], fac[_Z2], fac[_W], k1, k2, uu, uv, uw, x)
 
 
 @numba.njit(nogil=True, cache=True, error_model="numpy")
@@ -111,16 +111,15 @@ def ou_product(n, fresh, rho, sig, coef, j0, k1, k2, k3sq, uhat, evolve):
         Whether to take the OU step.
     """
     nyp, nh = n.shape[2], coef.shape[2]
-    fac = np.empty((8, n.shape[3]), np.float32)
+    fac = np.empty((7, n.shape[3]), np.float32)
     w = np.empty(coef.shape[3], np.float32)
     for i in range(n.shape[0]):
         for row in range(nyp):
-            h = row if row < nh else nyp - row
-            _factors(coef, rho, sig, i, j0 + i, h, k1[i], k2[h], k3sq, evolve, w, fac)
-            z2 = fac[_MZ2] if row != h else fac[_Z2]
+            h = row if row < nh else nyp - row  # a row k2 < 0 reads the stored row of -k2
+            _factors(coef, rho, sig, i, j0 + i, h, k1[i], k2[h], k3sq, evolve, _ONE if row == h else -_ONE, w, fac)
             uu, uv, uw = uhat[i, 0, row], uhat[i, 1, row], uhat[i, 2, row]
             if evolve:
                 _evolve_row(n[i, 0, row], n[i, 1, row], n[i, 2, row], fresh[i, 0, row], fresh[i, 1, row],
-                            fresh[i, 2, row], fac, z2, k1[i], k2[row], uu, uv, uw)
+                            fresh[i, 2, row], fac, k1[i], k2[row], uu, uv, uw)
             else:
-                _frozen_row(n[i, 0, row], n[i, 1, row], n[i, 2, row], fac, z2, k1[i], k2[row], uu, uv, uw)
+                _frozen_row(n[i, 0, row], n[i, 1, row], n[i, 2, row], fac, k1[i], k2[row], uu, uv, uw)
