@@ -84,7 +84,7 @@ def _frozen_row(n0, n1, n2, fac, k1, k2, uu, uv, uw):
         _product(n0[x], n1[x], n2[x], fac[_A], fac[_P], fac[_Z1], fac[_Z2], fac[_W], k1, k2, uu, uv, uw, x)
 
 
-@numba.njit(nogil=True, cache=True, error_model="numpy")
+@numba.njit(nogil=True, cache=True)
 def ou_product(n, fresh, rho, sig, coef, j0, k1, k2, k3sq, uhat, evolve):
     """OU step of the noise (Guo et al. 2023, Eq. 13-14) and u_hat = C n (Mann 1998, Eq. 46-47) on b slabs.
 
