@@ -25,7 +25,9 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.resources import default_threads
-from turbgen.synthesis.mann_stencil import BoxShape, MannStencil, w_coefficient
+from turbgen.synthesis.mann_product import ou_product
+from turbgen.synthesis.mann_stencil import BoxShape, MannStencil
+from turbgen.synthesis.pencil_crop import crop_into_pencils
 from turbgen.synthesis.random_streams import complex_normal
 
 
@@ -70,7 +72,7 @@ def snapshot_memory_bytes(box: BoxShape, ny: int, nz: int, n_snapshots: int, thr
     state = 3 * box.nk1 * slab * 8 if n_snapshots > 1 else 0
     spectra = 3 * ny * nz * _padded_nk1(box.nk1) * 8
     output = buffers * box.nt * ny * nz * 4  # output plane(s)
-    scratch = threads * (SLAB_BATCH * slab * (2 * 3 * 8 + 2 * 8 + 8 * 4) + 2 * ROW_BLOCK * (box.nt + 16) * 4)
+    scratch = threads * (SLAB_BATCH * slab * (2 * 3 * 8 + 2 * 4) + 2 * ROW_BLOCK * (box.nt + 16) * 4)
     return state + spectra + output + scratch
 
 
@@ -94,11 +96,7 @@ class _Scratch:
         b, nyp, nzp = SLAB_BATCH, box.nyp, box.nzp
         self.noise = _aligned((b, 3, nyp, nzp), np.complex64)
         self.uhat = _aligned((b, 3, nyp, nzp), np.complex64)
-        self.mix = _aligned((b, nyp, nzp), np.complex64)
-        self.tmp = _aligned((b, nyp, nzp), np.complex64)
-        nh = box.nk2_half  # rows k2 >= 0: rho, sig, W, |k|^2, a scratch and the mirrored -Z2
-        self.rho, self.sig, self.w, self.ksq, self.half, self.z2 = _aligned((6, b, nh, nzp), np.float32)
-        self.real = _aligned((b, nyp, nzp), np.float32)
+        self.rho, self.sig = _aligned((2, b, box.nk2_half, nzp), np.float32)  # OU factors on the rows k2 >= 0
         self.rows = _aligned((ROW_BLOCK, nt), np.float32)
         self.staged = None  # rows re-strided for the transposing copy (allocated with the plans along k1)
         # Pruned 2-D inverse transform: along z on all nyp rows, then along y only on the nz kept columns
@@ -155,8 +153,7 @@ class MannSnapshots:
         self._n_slabs = self._end - self._first
         self.threads = default_threads(threads)
         self._k1 = box.k1().astype(np.float32)
-        self._k2 = box.k2().astype(np.float32)[:, None]
-        self._k2sq = self._k2 * self._k2
+        self._k2 = box.k2().astype(np.float32)
         self._k3sq = (box.k3() ** 2).astype(np.float32)
         self._hermitian_slabs = {0, box.nt // 2} if box.nt % 2 == 0 else {0}
         self._spectra = None
@@ -258,7 +255,7 @@ class MannSnapshots:
         return out
 
     def _batch(self, s: _Scratch, seed: int, m: int, dt: float | None, i0: int) -> None:
-        box, st = self.box, self.stencil
+        st = self.stencil
         i1 = min(i0 + SLAB_BATCH, self._end)
         b = i1 - i0
         j0, j1 = i0 - self._first, i1 - self._first  # local indices in the stencil part, state and spectra
@@ -266,35 +263,15 @@ class MannSnapshots:
         fresh = n if dt is None else s.noise[:b]
         for j in range(b):
             complex_normal(seed, m, i0 + j, fresh[j])
-        nh = box.nk2_half
-        # The stencil holds rows k2 >= 0 only; A, P, Z1, 1/tau_e and W are even in k2, so the rows k2 < 0 read
-        # the mirrored rows in place (views, no expanded copies), and rho, sig and W are computed on rows
-        # k2 >= 0 only: the same float32 operations on the same numbers as on expanded rows.
-        halves = [(slice(0, nh), slice(0, nh))]
-        if box.nyp > nh:
-            halves.append((slice(nh, box.nyp), slice(box.nyp - nh, 0, -1)))
-        if dt is not None:  # exact OU step over dt (Guo et al. 2023, Eq. 13-14)
+        if dt is not None:  # exact OU step over dt (Guo et al. 2023, Eq. 13-14), factors on the stored rows k2 >= 0
             rho, sig = s.rho[:b], s.sig[:b]
             np.multiply(st.inv_tau[j0:j1], np.float32(-dt), out=rho)
             np.exp(rho, out=rho)
             np.multiply(rho, rho, out=sig)
             np.subtract(np.float32(1.0), sig, out=sig)
             np.sqrt(sig, out=sig)
-            for rows, half in halves:
-                n[:, :, rows] *= rho[:, None, half]
-                fresh[:, :, rows] *= sig[:, None, half]
-            n += fresh
-        a, p, z1, z2 = st.coef[:, j0:j1]
-        k1 = self._k1[i0:i1, None, None]
-        w = s.w[:b]
-        q = k1 * k1 + self._k2sq[:nh]  # (b, nh, 1)
-        ksq = np.add(q, self._k3sq, out=s.ksq[:b])
-        w_coefficient(a, p, q, ksq, w, s.half[:b])
-        z2_mirror = s.z2[:b, : box.nyp - nh]
-        for rows, half in halves:
-            zeta2 = z2 if half.start == 0 else np.negative(z2[:, half], out=z2_mirror)  # Z2 is odd in k2
-            self._multiply(n[:, :, rows], s.uhat[:b, :, rows], a[:, half], p[:, half], z1[:, half], zeta2,
-                           w[:, half], k1, self._k2[rows], s.mix[:b, rows], s.tmp[:b, rows], s.real[:b, rows])
+        ou_product(n.view(np.float32), fresh.view(np.float32), s.rho, s.sig, st.coef, j0, self._k1[i0:i1], self._k2,
+                   self._k3sq, s.uhat[:b].view(np.float32), dt is not None)
         uh = s.uhat[:b]
         cells = st.cells_in(i0, i1)
         if cells.start < cells.stop:  # cell-averaged factors near the k1 axis (see mann_stencil)
@@ -304,34 +281,7 @@ class MannSnapshots:
         for i in self._hermitian_slabs.intersection(range(i0, i1)):
             hermitian_complete(uh[i - i0])
         s.yz_transform(b)
-        ny, nz = self.ny, self.nz
-        for c in range(3):  # slab by slab: the inner loop runs over nz points, not over b (2x faster)
-            dest = self._spectra[c].reshape(ny, nz, -1)
-            for j in range(b):
-                dest[:, :, j0 + j] = uh[j, c, :ny, :nz]
-
-    @staticmethod
-    def _multiply(n, uh, a, p, z1, z2, w, k1, k2, mix, tmp, real) -> None:
-        """u_hat = C n on some k2 rows (Mann 1998 Eq. 46-47): m = k2 n0 - k1 n1; u_w = W m;
-        u_u = P n1 - A k2 n2 + Z1 m; u_v = -P n0 + A k1 n2 + Z2 m."""
-        n0, n1, n2 = n[:, 0], n[:, 1], n[:, 2]
-        uu, uv, uw = uh[:, 0], uh[:, 1], uh[:, 2]
-        np.multiply(n0, k2, out=mix)
-        np.multiply(n1, k1, out=tmp)
-        mix -= tmp
-        np.multiply(w, mix, out=uw)
-        np.multiply(p, n1, out=uu)
-        np.multiply(a, k2, out=real)
-        np.multiply(real, n2, out=tmp)
-        uu -= tmp
-        np.multiply(z1, mix, out=tmp)
-        uu += tmp
-        np.multiply(a, k1, out=real)
-        np.multiply(real, n2, out=tmp)
-        np.multiply(p, n0, out=uv)
-        np.subtract(tmp, uv, out=uv)  # = (-P n0) + A k1 n2 exactly (IEEE: x - y is x + (-y))
-        np.multiply(z2, mix, out=tmp)
-        uv += tmp
+        crop_into_pencils(uh, self.ny, self.nz, self._spectra, j0)
 
     def _rows(self, s: _Scratch, c: int, r0: int, output: np.ndarray) -> None:
         r1 = min(r0 + ROW_BLOCK, self.ny * self.nz)

@@ -1,0 +1,30 @@
+"""Compiled copy of the Mann generator's cropped yz-transformed slabs into its (y z point, k1) pencils: one pass
+over the batch writing b consecutive complex numbers per pencil (numpy assigned slab by slab: b passes)."""
+
+from __future__ import annotations
+
+import numba
+
+
+@numba.njit(nogil=True, cache=True)
+def crop_into_pencils(uhat, ny, nz, spectra, j0):
+    """spectra[c, y nz + z, j0 + j] = uhat[j, c, y, z] for y < ny, z < nz (the cropped spectra of b slabs).
+
+    Parameters
+    ----------
+    uhat : ndarray, complex64 (b, 3, nyp, nzp)
+        The yz-transformed slabs [m/s].
+    ny, nz : int
+        Kept rows and columns.
+    spectra : ndarray, complex64 (3, ny nz, >= j0 + b)
+        The pencils along k1 [m/s].
+    j0 : int
+        Pencil index of the first slab.
+    """
+    b = uhat.shape[0]
+    for c in range(3):
+        for y in range(ny):
+            for z in range(nz):
+                row = spectra[c, y * nz + z]
+                for j in range(b):
+                    row[j0 + j] = uhat[j, c, y, z]
