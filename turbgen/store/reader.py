@@ -23,6 +23,7 @@ from zarr.core.buffer import default_buffer_prototype
 from turbgen.errors import ParameterError, StoreError
 from turbgen.grid import Grid
 from turbgen.store import layout
+from turbgen.store.chunk_files import raw_chunk_path, read_chunk_file
 from turbgen.store.temporaries import parse_temp, pid_alive, temp_prefix
 
 
@@ -274,9 +275,13 @@ def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None, out: np.
         b = min(a - a % step + step, t1)
         chunk_file = f"{name}/c/{a // step}/{ix}/0/0"
         block = out[a - t0 : b - t0]
+        file = raw_chunk_path(arr, (a // step, ix, 0, 0)) if a % step == 0 and b - a == step else None
         try:
-            arr.get_basic_selection((slice(a, b), ix), out=nd_buffer.from_numpy_array(block))
-        except Exception as exc:  # a decompression/decoding failure inside zarr
+            if file is not None:  # a whole raw chunk: its file by direct I/O, no page-cache fill (chunk_files)
+                read_chunk_file(file, block)
+            else:
+                arr.get_basic_selection((slice(a, b), ix), out=nd_buffer.from_numpy_array(block))
+        except Exception as exc:  # a decompression/decoding failure inside zarr, a missing or short chunk file
             raise StoreError(
                 f"{where}: corrupted chunk at {name}, plane index {ix}, t index {a - a % step}-{b - 1} "
                 f"(file {chunk_file}: {type(exc).__name__}); regenerate the store"

@@ -29,6 +29,7 @@ from turbgen.errors import StoreError, check_int
 from turbgen.grid import Grid
 from turbgen.resources import format_bytes, require_disk
 from turbgen.store import layout
+from turbgen.store.chunk_files import raw_chunk_path, write_chunk_file
 from turbgen.store.temporaries import (exit_on_signals, publish, raise_if_signalled, remove_dead_temporaries,
                                        report_removed, temp_name)
 from turbgen.store.paths import check_output_path
@@ -225,12 +226,17 @@ class StoreWriter:
             raise ValueError(f"{component} plane {ix}: block at t0={t0} contains NaN or inf")
         t1 = t0 + block.shape[0]
         aligned = t0 % self.chunk_t == 0 and (t1 % self.chunk_t == 0 or t1 == g.nt)
-        if aligned:  # chunk by chunk: zarr stores a value shaped like its chunk as is (a larger block it copies into
-            # a fill-valued chunk buffer first)
+        if aligned:  # chunk by chunk: whole chunks of raw stores as files by direct I/O (chunk_files), others
+            # through zarr, which stores a value shaped like its chunk as is (a larger block it copies into a
+            # fill-valued chunk buffer first; the last, shorter chunk is padded with the fill value)
             array = self._arrays[component]
             for a in range(t0, t1, self.chunk_t):
                 b = min(a + self.chunk_t, t1)
-                array[a:b, ix : ix + 1] = block[a - t0 : b - t0, None]
+                file = raw_chunk_path(array, (a // self.chunk_t, ix, 0, 0)) if b - a == self.chunk_t else None
+                if file is not None:
+                    write_chunk_file(file, block[a - t0 : b - t0])
+                else:
+                    array[a:b, ix : ix + 1] = block[a - t0 : b - t0, None]
         else:
             with self._plane_locks[(component, ix)]:
                 self._arrays[component][t0:t1, ix] = block

@@ -55,6 +55,7 @@ COMPONENTS = ("u", "v", "w")
 SLAB_BATCH = 4  # k1 slabs per work unit (fixed: it fixes the FFT plan shapes, hence the rounding)
 ROW_BLOCK = 64  # (y, z) rows per real inverse FFT along k1
 _ALIGN = 64
+_PAGE = 4096
 _SQRT_HALF = np.float32(np.sqrt(0.5))
 
 
@@ -221,7 +222,9 @@ class MannSnapshots:
             whole = self._n_slabs == box.nk1
             self._spectra = _aligned((3, self.ny * self.nz, _padded_nk1(self._n_slabs)), np.complex64)
             if whole:
-                self._outputs = [_aligned((box.nt, self.ny, self.nz), np.float32) for _ in range(self._n_buffers)]
+                # page-aligned planes: a store's direct-I/O writer takes their chunks without a bounce copy
+                self._outputs = [pyfftw.empty_aligned((box.nt, self.ny, self.nz), np.float32, n=_PAGE)
+                                 for _ in range(self._n_buffers)]
             self._scratch = queue.SimpleQueue()
             for _ in range(self.threads):
                 scratch = _Scratch(box, box.nt, self.nz, self._n_slabs)

@@ -38,6 +38,7 @@ from tqdm import tqdm
 
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
+from turbgen.store.chunk_files import empty_aligned
 from turbgen.store.reader import read_checked
 from turbgen.validate.point_sets import (
     LONG_POINTS_PER_AXIS,
@@ -198,7 +199,7 @@ class _ReadBuffers:
         """This thread's buffer of ``component``, its first ``n_t`` time steps."""
         bufs = self._local.__dict__.setdefault("bufs", {})
         if component not in bufs:
-            bufs[component] = np.empty(self.shape, np.float32)
+            bufs[component] = empty_aligned(self.shape, np.float32)  # page-aligned: direct reads need no bounce
         return bufs[component][:n_t]
 
 
