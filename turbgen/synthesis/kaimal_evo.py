@@ -102,6 +102,26 @@ def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarra
     return factors, err
 
 
+def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int = 1) -> np.ndarray:
+    """Field (nt, ny, nz) float32 of the spectrum ``spec`` (nf, ny, nz) complex64 scaled by ``amp`` (nf,) float32.
+
+    The same values as ``irfft(spec * amp[:, None, None], n=nt, axis=0, norm="forward")``, computed on
+    contiguous blocks of about 1 MiB of columns: pocketfft reads and writes time columns strided by
+    ny nz values otherwise, and the block copy applies the amplitudes (measured 2026-11-23 on the default
+    grid, one thread, loaded machine: 19-28 -> 17-24 ms per plane in a run, 20 -> 14 ms with the spectrum
+    in cache). Columns are transformed independently, so the blocks change no bit.
+    """
+    nf = spec.shape[0]
+    flat = spec.reshape(nf, -1)
+    out = np.empty((nt, flat.shape[1]), dtype=np.float32)
+    step = max(16, (1 << 20) // (8 * nf))
+    column_amp = amp[:, None]
+    for j in range(0, flat.shape[1], step):
+        block = flat[:, j:j + step] * column_amp
+        out[:, j:j + step] = scipy.fft.irfft(block, n=nt, axis=0, norm="forward", overwrite_x=True, workers=workers)
+    return out.reshape(nt, *spec.shape[1:])
+
+
 class InMemorySpectrum:
     """Spectrum buffer (n_planes, nf, ny, nz) complex64 held in memory; bins never put are zero.
 
@@ -314,9 +334,7 @@ class KaimalEvo:
                 spec = spectrum.get(p)
                 if g.nt % 2 == 0:
                     spec[-1] = spec[-1].real
-                spec *= amp[:, None, None]
-                return scipy.fft.irfft(spec, n=g.nt, axis=0, norm="forward", workers=fft_workers).astype(np.float32,
-                                                                                                      copy=False)
+                return inverse_transform(spec, amp, g.nt, fft_workers)
 
             ahead = [pool.submit(transform, p) for p in range(min(2, nx))]
             for p in range(nx):
