@@ -103,13 +103,28 @@ def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarra
 
 
 def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int = 1) -> np.ndarray:
-    """Field (nt, ny, nz) float32 of the spectrum ``spec`` (nf, ny, nz) complex64 scaled by ``amp`` (nf,) float32.
+    """One plane's field from its yz coefficients: ``irfft(spec * amp[:, None, None], n=nt, axis=0, norm="forward")``.
 
-    The same values as ``irfft(spec * amp[:, None, None], n=nt, axis=0, norm="forward")``, computed on
-    contiguous blocks of about 1 MiB of columns: pocketfft reads and writes time columns strided by
-    ny nz values otherwise, and the block copy applies the amplitudes (measured 2026-11-23 on the default
-    grid, one thread, loaded machine: 19-28 -> 17-24 ms per plane in a run, 20 -> 14 ms with the spectrum
-    in cache). Columns are transformed independently, so the blocks change no bit.
+    Computed on contiguous blocks of about 1 MiB of columns: pocketfft reads and writes time columns
+    strided by ny nz values otherwise, and the block copy applies the amplitudes (measured 2026-11-23 on
+    the default grid, one thread, loaded machine: 19-28 -> 17-24 ms per plane in a run, 20 -> 14 ms with
+    the spectrum in cache). Columns are transformed independently, so the blocks change no bit.
+
+    Parameters
+    ----------
+    spec : numpy.ndarray
+        Coefficients Z (nf, ny, nz) complex64 [-], bins k = 0 .. nt // 2 (not modified).
+    amp : numpy.ndarray
+        Amplitude of each bin (nf,) float32 [m/s].
+    nt : int
+        Number of time samples.
+    workers : int, optional
+        FFT threads (the values do not depend on them).
+
+    Returns
+    -------
+    numpy.ndarray
+        Velocity fluctuations (nt, ny, nz) float32 [m/s].
     """
     nf = spec.shape[0]
     flat = spec.reshape(nf, -1)
@@ -293,8 +308,9 @@ class KaimalEvo:
         if g.nt % 2 == 0:  # the Nyquist coefficient is real: Re(Z) has unit variance, E X^2 = v
             amp[-1] = np.sqrt(self.variances[component][-1]).astype(np.float32)
         pool = ThreadPoolExecutor(max_workers=self.workers)
-        # one work array per pool thread for the torus noise, reused from chunk to chunk: fresh arrays of
-        # up to ~70 MB per plane and chunk cost the kernel ~0.4 s of page zeroing on the default field
+        # one work array per pool thread for the torus noise, reused from chunk to chunk and sampled in place:
+        # three fresh arrays of up to ~70 MB per plane and chunk cost page faults and zeroing (default field,
+        # one thread, loaded machine: torus sampling and the other coefficient work 0.94-1.1 -> 0.70-0.81 s CPU)
         local = threading.local()
 
         def work(n):
