@@ -28,7 +28,7 @@ import pytest
 
 from turbgen.grid import Grid
 from turbgen.synthesis.circulant import grid_distances
-from turbgen.synthesis.kaimal_evo import FREQ_CHUNK, KaimalEvo, bin_frequencies, bin_variances
+from turbgen.synthesis.kaimal_evo import FREQ_CHUNK, KaimalEvo, bin_frequencies, bin_variances, inverse_transform
 from turbgen.theory.coherence_models import exponential_longitudinal, exponential_yz, kristensen, simley_pao
 from turbgen.theory.kaimal import iec_kaimal_params, kaimal_band_variance
 from turbgen.theory.params import KaimalParams
@@ -217,3 +217,24 @@ def test_deterministic_across_threads_and_seed_sensitive():
     assert np.array_equal(one[0], one[1])
     other = _field(KaimalEvo(KP, g, U, 22, long_coherence=EXP), "u")
     assert not np.array_equal(one[0], other)
+
+
+@pytest.mark.parametrize("nt,ny,nz", [(4096, 31, 31), (256, 5, 3), (255, 4, 1)])
+def test_blocked_inverse_transform_is_the_whole_array_irfft(nt, ny, nz):
+    """inverse_transform (column blocks, amplitudes applied in the block copy) equals scipy's irfft of the
+    scaled spectrum bit for bit, and numpy's irfft (an independent FFT) to float32 rounding."""
+    import scipy.fft
+
+    rng = np.random.default_rng(5)
+    nf = nt // 2 + 1
+    spec = (rng.standard_normal((nf, ny, nz)) + 1j * rng.standard_normal((nf, ny, nz))).astype(np.complex64)
+    amp = rng.random(nf).astype(np.float32)
+    scaled = spec * amp[:, None, None]
+    got = inverse_transform(spec, amp, nt)
+    assert got.dtype == np.float32 and got.shape == (nt, ny, nz)
+    np.testing.assert_array_equal(got, scipy.fft.irfft(scaled, n=nt, axis=0, norm="forward"))
+    reference = np.fft.irfft(scaled.astype(np.complex128), n=nt, axis=0, norm="forward")
+    # float32 FFT rounding grows like eps log2(nt) times the rms (observed about half of eps log2(nt) here);
+    # a factor 4 above that bound
+    eps = float(np.finfo(np.float32).eps)
+    np.testing.assert_allclose(got, reference, rtol=0, atol=4 * eps * np.log2(nt) * reference.std())

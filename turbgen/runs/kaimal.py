@@ -13,7 +13,6 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
@@ -104,8 +103,12 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
             buffer = stack.enter_context(FileSpectrum(out.absolute().parent, g.nx, gen.nf, g.ny, g.nz))
         else:
             buffer = InMemorySpectrum(g.nx, gen.nf, g.ny, g.nz)
-        bar = stack.enter_context(tqdm(total=3 * (gen.n_chunks + g.nx), desc="kaimal", unit="step",
-                                       disable=not progress))
+        tick = None
+        if progress:  # tqdm is imported only then (CLI start-up)
+            from tqdm import tqdm
+
+            bar = stack.enter_context(tqdm(total=3 * (gen.n_chunks + g.nx), desc="kaimal", unit="step"))
+            tick = lambda: bar.update(1)  # noqa: E731
         # One plane written (and summed) in the background while the next is made; leaving the pool waits
         # for that write, so an exception never races the store's clean-up.
         background = stack.enter_context(ThreadPoolExecutor(1))
@@ -117,7 +120,7 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
             sums[c][1] += plane.size
 
         for c in COMPONENTS:
-            for ix, plane in gen.component_planes(c, tick=lambda: bar.update(1), spectrum=buffer):
+            for ix, plane in gen.component_planes(c, tick=tick, spectrum=buffer):
                 if pending is not None:
                     pending.result()
                 pending = background.submit(write_and_sum, c, ix, plane)

@@ -101,15 +101,21 @@ class Embedding:
         """(My, Mz) of the circulant torus, or (N, 1) for the Cholesky fallback."""
         return self.scale.shape if self.scale is not None else (self.ny * self.nz, 1)
 
-    def sample(self, xi: np.ndarray, workers: int | None = None) -> np.ndarray:
-        """Map standard complex normals xi (..., *torus_shape) to coefficients (..., ny, nz) with covariance C."""
+    def sample(self, xi: np.ndarray, workers: int | None = None, overwrite: bool = False) -> np.ndarray:
+        """Map standard complex normals xi (..., *torus_shape) to coefficients (..., ny, nz) with covariance C.
+
+        ``overwrite``: xi (C-contiguous) may be used as the work array (its values are destroyed and the
+        result may be a view of it): no temporaries of the torus size, the same values.
+        """
         if self.chol is not None:
             z = np.einsum("ij,...j->...i", self.chol.astype(xi.real.dtype), xi[..., 0])
             return z.reshape(*xi.shape[:-2], self.ny, self.nz)
-        w = xi * self.scale.astype(xi.real.dtype, copy=False)
-        # only the ny x nz corner is needed: FFT along z, keep nz columns, then FFT along y
-        w = scipy.fft.fft(w, axis=-1, workers=workers)[..., : self.nz]
-        return scipy.fft.fft(w, axis=-2, workers=workers)[..., : self.ny, :]
+        scale = self.scale.astype(xi.real.dtype, copy=False)
+        w = np.multiply(xi, scale, out=xi) if overwrite else xi * scale
+        # only the ny x nz corner is needed: FFT along z, keep nz columns, then FFT along y (in place:
+        # w is ours, a copy or the caller's work array)
+        w = scipy.fft.fft(w, axis=-1, workers=workers, overwrite_x=True)[..., : self.nz]
+        return scipy.fft.fft(w, axis=-2, workers=workers, overwrite_x=overwrite)[..., : self.ny, :]
 
 
 def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: float) -> Embedding:
