@@ -43,7 +43,6 @@ from scipy.special import jv
 
 from turbgen.errors import ParameterError, check_finite, check_positive
 from turbgen.theory.eddy_lifetime import shear_distortion_beta
-from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
 
 N_GAUSS = 8  # Gauss-Legendre nodes per radial panel
@@ -204,17 +203,19 @@ def perpendicular_quadrature(
             batches.append((idx[start : start + rows], cos_t, sin_t))
             start += rows
 
+    from turbgen.theory.sheared_tensor_samples import sheared_tensor_on_circles  # numba: imported when needed
+
     def batch(sl, cos_t, sin_t) -> None:
         nr = int(n_nodes[sl].max())  # only the padding beyond the longest row in the batch is skipped
         kk = kappa[sl, :nr]
         kk1 = k1[sl, None]
-        beta = shear_distortion_beta(np.sqrt(kk1 * kk1 + kk * kk), params)[..., None]
-        phi = sheared_tensor(kk1[..., None], kk[..., None] * cos_t, kk[..., None] * sin_t, params, beta=beta)
-        for p in pairs:
+        beta = shear_distortion_beta(np.sqrt(kk1 * kk1 + kk * kk), params)
+        phi = sheared_tensor_on_circles(k1[sl], kk, beta, cos_t, sin_t, pairs, params.ae, params.length_scale_m)
+        for m, p in enumerate(pairs):
             if d == 0:
-                out[p][sl, :nr] = 2.0 * np.pi * phi[p[0], p[1]].mean(axis=-1)
+                out[p][sl, :nr] = 2.0 * np.pi * phi[m].mean(axis=-1)
             else:
-                out[p][sl, :nr] = _jacobi_anger(phi[p[0], p[1]], kk * d, float(np.arctan2(dz, dy)))
+                out[p][sl, :nr] = _jacobi_anger(phi[m], kk * d, float(np.arctan2(dz, dy)))
 
     # disjoint rows of ``out`` per batch: the threads (numpy leaves the GIL) change who computes which, not the numbers
     with ThreadPoolExecutor(min(len(batches), _QUADRATURE_THREADS)) as pool:
