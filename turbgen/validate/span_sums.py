@@ -62,7 +62,11 @@ def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy
     cross = {c: np.zeros((len(seps), nf, 2)) for c in COMPONENTS}
     uw = np.zeros((nf, 2))
     sub = []
-    seg_buf = np.empty((n, ny, nz), np.float32)  # reused: (segment - its mean) * window
+    # reused: (segment - its mean) * window in the rows y < ny. The spare row ny makes the stride along t of the
+    # FFT's input and output not a multiple of 4 KiB on power-of-two planes (64 x 64 x 4 B = 16 KiB), so that
+    # the transform's strided reads and writes do not all fall into a few cache sets: the FFT of the default
+    # Mann plane measured 15-35 % cheaper for 1/64 more lanes. The spectra of the plane are the same bits.
+    seg_buf = np.zeros((n, ny + 1, nz), np.float32)
     for s in starts:
         spec = {}
         for c in COMPONENTS:
@@ -71,10 +75,10 @@ def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy
             else:
                 mean = data[c][s : s + n].mean(axis=0, dtype=np.float64).astype(np.float32)
             window_segment(data[c], s, w, mean, seg_buf)
-            x = scipy.fft.rfft(seg_buf, axis=0, workers=1)
+            x = scipy.fft.rfft(seg_buf, axis=0, workers=1)  # (nf, ny + 1, nz): row ny is never read
             spec[c] = x
-            spectrum_sums(x.view(np.float32), sep_a, sep_b, total[c], part_a[c], part_b[c], cross[c])
-        cross_sum(spec["u"].view(np.float32), spec["w"].view(np.float32), uw)
+            spectrum_sums(x.view(np.float32), ny, sep_a, sep_b, total[c], part_a[c], part_b[c], cross[c])
+        cross_sum(spec["u"].view(np.float32), spec["w"].view(np.float32), ny, uw)
         sub.append(spec["u"][:, iy][:, :, iz].reshape(nf, -1))
     out["auto"] = total
     out["yz"] = {

@@ -66,12 +66,13 @@ def point_moments(d, mask_index, block):
 
 @numba.njit(nogil=True, cache=True)
 def window_segment(d, start, window, mean, out):
-    """out = (d[start : start + n] - mean) x window, float32 (n = window.size; ``mean`` (ny, nz) float32)."""
+    """out[:, :ny] = (d[start : start + n] - mean) x window, float32 (n = window.size; ``mean`` (ny, nz)
+    float32; ``out`` (n, ny_out >= ny, nz): rows ny and after are left as they are)."""
     n = window.size
     _, ny, nz = d.shape
     npt = ny * nz
     src = d.reshape(d.shape[0], npt)
-    dst = out.reshape(n, npt)
+    dst = out.reshape(n, out.shape[1] * nz)  # the first npt elements of a time step are its rows < ny
     m = mean.reshape(npt)
     for t in range(n):
         row = src[start + t]
@@ -82,8 +83,9 @@ def window_segment(d, start, window, mean, out):
 
 
 @numba.njit(nogil=True, cache=True)
-def spectrum_sums(xv, sep_a, sep_b, total, part_a, part_b, cross):
-    """Add one segment's spectral sums of one component (float32 view (nf, ny, 2 nz) of its spectra).
+def spectrum_sums(xv, ny, sep_a, sep_b, total, part_a, part_b, cross):
+    """Add one segment's spectral sums of one component (float32 view (nf, ny_x, 2 nz) of its spectra; the
+    rows y < ny are the plane, those after are not read).
 
     Adds, per frequency f (index 0 .. nf-1), into float64 arrays: ``total[f]`` sum of |X|^2 over the
     plane; for separation k = (sep_a[k], sep_b[k]) grid steps, ``part_a[k, f]`` and ``part_b[k, f]``
@@ -91,7 +93,7 @@ def spectrum_sums(xv, sep_a, sep_b, total, part_a, part_b, cross):
     pairs, and ``cross[k, f, 0 / 1]`` real / imaginary part of sum conj(X(y, z)) X(y + a, z + b).
     The squares are summed over y per element (float32 cumulative column sums), then over z in float64.
     """
-    nf, ny, nz2 = xv.shape
+    nf, _, nz2 = xv.shape
     nz = nz2 // 2
     ns = sep_a.size
     rot = np.empty((ny, nz2), np.float32)  # -i X: (Im, -Re)
@@ -150,10 +152,10 @@ def spectrum_sums(xv, sep_a, sep_b, total, part_a, part_b, cross):
 
 
 @numba.njit(nogil=True, cache=True)
-def cross_sum(xv, yv, out):
-    """Add sum over the plane of conj(X) Y per frequency to ``out`` (nf, 2) float64 (re, im); xv, yv float32
-    views (nf, ny, 2 nz) of two components' spectra."""
-    nf, ny, nz2 = xv.shape
+def cross_sum(xv, yv, ny, out):
+    """Add sum over the plane (rows y < ny) of conj(X) Y per frequency to ``out`` (nf, 2) float64 (re, im);
+    xv, yv float32 views (nf, ny_x >= ny, 2 nz) of two components' spectra."""
+    nf, _, nz2 = xv.shape
     acc_re = np.empty(nz2, np.float32)
     acc_im = np.empty(nz2 // 2, np.float32)
     for f in range(nf):
