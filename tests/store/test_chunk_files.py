@@ -16,7 +16,7 @@ from turbgen.grid import Grid
 from turbgen.store import chunk_files, open_store
 from turbgen.store import writer as writer_module
 from turbgen.store.chunk_files import empty_aligned, raw_chunk_path, read_chunk_file, write_chunk_file
-from turbgen.store.reader import read_checked
+from turbgen.store.checked_reads import read_checked
 from turbgen.store.writer import create_store
 
 

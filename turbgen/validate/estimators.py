@@ -39,7 +39,7 @@ from tqdm import tqdm
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
 from turbgen.store.chunk_files import empty_aligned
-from turbgen.store.reader import read_checked
+from turbgen.store.checked_reads import read_checked
 from turbgen.validate.point_sets import (
     LONG_POINTS_PER_AXIS,
     check_rotor_radius,

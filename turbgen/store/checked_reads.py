@@ -1,0 +1,79 @@
+"""Reading a plane of a store chunk by chunk with its data checked: a chunk that does not decode (truncated,
+overwritten) or holds NaN/inf (the writer never stores them) is a one-line StoreError naming the component,
+plane, time index and chunk file. Whole raw chunks are read by direct I/O (``chunk_files``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import zarr
+from zarr.core.buffer import default_buffer_prototype
+
+from turbgen.errors import StoreError
+from turbgen.store.chunk_files import raw_chunk_path, read_chunk_file
+
+
+def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None, out: np.ndarray | None = None) -> np.ndarray:
+    """Plane ``ix`` of a component array over t in [t0, t1), float32 (t, y, z), read one stored chunk at a time.
+
+    One-line StoreError when a chunk does not decode or holds NaN/inf.
+
+    Parameters
+    ----------
+    arr : zarr.Array
+        A component array (t, x, y, z) of a store.
+    ix : int
+        Plane index.
+    t0 : int
+        First time index.
+    t1 : int
+        End time index (exclusive).
+    path : str or os.PathLike, optional
+        Store path named in messages; default the array's store root.
+    out : numpy.ndarray, optional
+        C-contiguous float32 array (t1 - t0, ny, nz) the chunks are decoded into (a buffer reused across
+        reads saves a copy and fresh pages per read); default a new array.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32 array (t1 - t0, ny, nz) [m/s]: ``out`` if given.
+
+    Raises
+    ------
+    StoreError
+        "corrupted chunk at ..." when a chunk does not decode, "NaN at ..." / "inf at ..." when it
+        holds non-finite values, naming the component, plane, time index and chunk file.
+    """
+    name = arr.basename
+    where = path if path is not None else getattr(arr.store, "root", None) or "store"
+    if out is None:
+        out = np.empty((t1 - t0, *arr.shape[2:]), dtype=np.float32)
+    elif out.shape != (t1 - t0, *arr.shape[2:]) or out.dtype != np.float32 or not out.flags.c_contiguous:
+        raise ValueError(f"out must be C-contiguous float32 of shape {(t1 - t0, *arr.shape[2:])}")
+    nd_buffer = default_buffer_prototype().nd_buffer
+    step = arr.chunks[0]
+    for a in range(t0, t1, step):
+        b = min(a - a % step + step, t1)
+        chunk_file = f"{name}/c/{a // step}/{ix}/0/0"
+        block = out[a - t0 : b - t0]
+        file = raw_chunk_path(arr, (a // step, ix, 0, 0)) if a % step == 0 and b - a == step else None
+        try:
+            if file is not None:  # a whole raw chunk: its file by direct I/O, no page-cache fill (chunk_files)
+                read_chunk_file(file, block)
+            else:
+                arr.get_basic_selection((slice(a, b), ix), out=nd_buffer.from_numpy_array(block))
+        except Exception as exc:  # a decompression/decoding failure inside zarr, a missing or short chunk file
+            raise StoreError(
+                f"{where}: corrupted chunk at {name}, plane index {ix}, t index {a - a % step}-{b - 1} "
+                f"(file {chunk_file}: {type(exc).__name__}); regenerate the store"
+            ) from None
+        bad = ~np.isfinite(block)
+        if bad.any():
+            it, iy, iz = (int(i) for i in np.argwhere(bad)[0])
+            what = "NaN" if np.isnan(block[it, iy, iz]) else "inf"
+            raise StoreError(
+                f"{where}: {what} at {name}, plane index {ix}, t index {a + it}, y index {iy}, z index {iz} "
+                f"({int(bad.sum())} non-finite values in chunk file {chunk_file}); the data are corrupted, "
+                "regenerate the store"
+            )
+    return out
