@@ -199,4 +199,21 @@ def test_memory_estimate_scales_with_one_snapshot():
     est2, est11 = (runs_mann.memory_estimate_bytes(r, 2) for r in (two, eleven))
     assert est2 == est11 and est11 < 2 * 2**30  # the paper case fits the 2 GiB target
     one = runs_mann.memory_estimate_bytes(MannRun.from_mapping({"grid": {"x_m": [0.0]}}), 2)
-    assert math.isclose(one, est11 - 3 * 2049 * 128 * 128 * 8 - 2049 * 65 * 128 * 4)  # no OU state, no tau_e
+    # one snapshot: no OU state, no stored stencil (5 float32 per stored point, with its 64 MiB of building
+    # temporaries) but two threads' on-demand batches of 4 slabs (48 bytes per stored point)
+    state, stencil, batches = 3 * 2049 * 128 * 128 * 8, 2049 * 65 * 128 * 4 * 5 + 64 * 2**20, 2 * 4 * 65 * 128 * 48
+    assert math.isclose(one, est11 - state - stencil + batches)
+
+
+def test_a_single_snapshot_computes_its_stencil_on_demand(tmp_path, monkeypatch):
+    one_plane = MannRun.from_mapping({"grid": {**SMALL, "x_m": [0.0]}})
+    made = []
+    original = runs_mann.build_stencil
+    monkeypatch.setattr(runs_mann, "build_stencil", lambda *a, **k: made.append(original(*a, **k)) or made[-1])
+    run_mann(one_plane, tmp_path / "a.zarr")
+    assert len(made) == 1 and made[0].coef is None  # no stored coefficients
+    run_mann(one_plane, tmp_path / "b.zarr", stencil=build_mann_stencil(one_plane))  # a stored stencil
+    assert made[-1].coef is not None
+    a, b = open_store(tmp_path / "a.zarr"), open_store(tmp_path / "b.zarr")
+    for c in "uvw":
+        assert np.array_equal(a.array(c)[...].view(np.uint32), b.array(c)[...].view(np.uint32))

@@ -60,6 +60,20 @@ def test_scaled_unit_stencil_is_bit_identical_to_a_direct_build(ae):
     assert _same_bits(part.coef, direct.coef[:, 16:32])
 
 
+@pytest.mark.parametrize("evo_time_s", [20.0, None])
+def test_a_stencil_computed_on_demand_gives_the_stored_stencils_field(evo_time_s):
+    params = MannParams(ae=0.3, length_scale_m=30.0, gamma=3.2, evo_time_s=evo_time_s)
+    stored = build_stencil(params, BOX, evolving=False)
+    on_demand = build_stencil(params, BOX, on_demand=True)
+    assert on_demand.coef is None and on_demand.slab_range == stored.slab_range == (0, BOX.nk1)
+    assert _same_bits(on_demand.cell_factor, stored.cell_factor)
+    reference = mann_box(stored, 6, 5, seed=3)
+    for threads in (1, 2):  # batches computed by whichever thread: the same coefficients
+        assert _same_bits(mann_box(on_demand, 6, 5, seed=3, threads=threads), reference)
+    with pytest.raises(ValueError, match="whole box"):
+        build_stencil(params, BOX, on_demand=True, slabs=(0, 16))
+
+
 def test_the_key_ignores_ae_and_nothing_else():
     assert stencil_key(PARAMS, BOX, True) == stencil_key(PARAMS.with_ae(1.7), BOX, True)
     assert stencil_key(PARAMS, BOX, True) != stencil_key(MannParams(0.3, 31.0, 3.2, evo_time_s=20.0), BOX, True)

@@ -43,13 +43,22 @@ def build_mann_stencil(run: MannRun, cache_dir: str | Path | None = None) -> Man
     return cached_stencil(run.params, synthesis_box(run), cache_dir, evolving=run.grid.nx > 1)
 
 
+def _evolving(run: MannRun) -> bool:
+    """Whether the run makes several snapshots (planes of evolving turbulence) from one stencil."""
+    return run.params.evo_time_s is not None and run.grid.nx > 1
+
+
 def memory_estimate_bytes(run: MannRun, threads: int, with_stencil: bool = True) -> int:
-    """Bytes a run allocates: stencil (unless given), OU state, spectra, one output plane, store buffers."""
-    g = run.grid
-    evolving = run.params.evo_time_s is not None and g.nx > 1
-    need = snapshot_memory_bytes(synthesis_box(run), g.ny, g.nz, g.nx if evolving else 1, threads, buffers=2)
+    """Bytes a run allocates: stencil (unless given), OU state, spectra, one output plane, store buffers.
+
+    A single snapshot computes its stencil on demand (run_mann): then only the generator's per-thread
+    coefficient batches count."""
+    g, evolving = run.grid, _evolving(run)
+    on_demand = with_stencil and not evolving
+    need = snapshot_memory_bytes(synthesis_box(run), g.ny, g.nz, g.nx if evolving else 1, threads, buffers=2,
+                                 coefficients=on_demand)  # fmt: skip
     need += 2 * g.nt * g.ny * g.nz * 4  # the output plane and the store's encoding buffers
-    if with_stencil:
+    if with_stencil and evolving:
         need += stencil_nbytes(synthesis_box(run), evolving) + _BUILD_SCRATCH
     return need
 
@@ -111,6 +120,9 @@ def run_mann(
     with create_store(path, g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:
         if unit is not None:
             stencil = scale_stencil(unit, run.params)
+        elif stencil is None and cache_dir is None and not _evolving(run):
+            # one snapshot uses each slab of the stencil once: compute it batch by batch in the generator
+            stencil = build_stencil(run.params, box, on_demand=True)
         elif stencil is None:
             stencil = build_mann_stencil(run, cache_dir)
         gen = MannSnapshots(stencil, g.ny, g.nz, gen_threads, buffers=2)

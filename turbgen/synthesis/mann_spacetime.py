@@ -67,13 +67,18 @@ def _padded_nk1(nk1: int) -> int:
     return -(-nk1 // 8) * 8  # rows of 8 complex64 = 64 bytes keep every row aligned
 
 
-def snapshot_memory_bytes(box: BoxShape, ny: int, nz: int, n_snapshots: int, threads: int, buffers: int = 1) -> int:
-    """Bytes allocated by the generator (stencil excluded): OU state, cropped spectra, output, scratch."""
+def snapshot_memory_bytes(box: BoxShape, ny: int, nz: int, n_snapshots: int, threads: int, buffers: int = 1,
+                          coefficients: bool = False) -> int:  # fmt: skip
+    """Bytes allocated by the generator (stored stencil excluded): OU state, cropped spectra, output, scratch;
+    ``coefficients``: with the batches of a stencil computed on demand (float32 coefficients and the float64
+    temporaries of computing them, ~48 bytes per stored point of a batch)."""
     slab = box.nyp * box.nzp
     state = 3 * box.nk1 * slab * 8 if n_snapshots > 1 else 0
     spectra = 3 * ny * nz * _padded_nk1(box.nk1) * 8
     output = buffers * box.nt * ny * nz * 4  # output plane(s)
     scratch = threads * (SLAB_BATCH * slab * (2 * 3 * 8 + 2 * 4) + 2 * ROW_BLOCK * (box.nt + 16) * 4)
+    if coefficients:
+        scratch += threads * SLAB_BATCH * box.nk2_half * box.nzp * 48
     return state + spectra + output + scratch
 
 
@@ -93,8 +98,10 @@ def hermitian_complete(slab: np.ndarray) -> None:
 class _Scratch:
     """Per-thread buffers and FFTW plans (all plans built in the calling thread: the planner is not thread-safe)."""
 
-    def __init__(self, box: BoxShape, nt: int, nz: int, n_slabs: int):
+    def __init__(self, box: BoxShape, nt: int, nz: int, n_slabs: int, coefficients: bool = False):
         b, nyp, nzp = SLAB_BATCH, box.nyp, box.nzp
+        # a batch's stencil coefficients, for a stencil computed on demand
+        self.coef = _aligned((4, b, box.nk2_half, nzp), np.float32) if coefficients else None
         self.noise = _aligned((b, 3, nyp, nzp), np.complex64)
         self.uhat = _aligned((b, 3, nyp, nzp), np.complex64)
         self.rho, self.sig = _aligned((2, b, box.nk2_half, nzp), np.float32)  # OU factors on the rows k2 >= 0
@@ -227,7 +234,7 @@ class MannSnapshots:
                                  for _ in range(self._n_buffers)]
             self._scratch = queue.SimpleQueue()
             for _ in range(self.threads):
-                scratch = _Scratch(box, box.nt, self.nz, self._n_slabs)
+                scratch = _Scratch(box, box.nt, self.nz, self._n_slabs, coefficients=self.stencil.coef is None)
                 if whole:
                     scratch.plan_rows(self._spectra[:, :, : box.nk1])
                 self._scratch.put(scratch)
@@ -273,7 +280,8 @@ class MannSnapshots:
             np.multiply(rho, rho, out=sig)
             np.subtract(np.float32(1.0), sig, out=sig)
             np.sqrt(sig, out=sig)
-        ou_product(n.view(np.float32), fresh.view(np.float32), s.rho, s.sig, st.coef, j0, self._k1[i0:i1], self._k2,
+        coef, c0 = st.coefficients(i0, i1, s.coef)
+        ou_product(n.view(np.float32), fresh.view(np.float32), s.rho, s.sig, coef, c0, self._k1[i0:i1], self._k2,
                    self._k3sq, s.uhat[:b].view(np.float32), dt is not None)
         uh = s.uhat[:b]
         cells = st.cells_in(i0, i1)

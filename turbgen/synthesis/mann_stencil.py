@@ -83,11 +83,14 @@ class MannStencil:
     frozen or built with evolving=False: then it serves single snapshots only),
     and the cell-averaged factors near the k1 axis: ``cell_index`` (ncell, 3) int (slab, row, column),
     sorted by slab, and ``cell_factor`` (ncell, 3, 3) float32 (times sqrt(dk1 dk2 dk3 / 2)), which
-    replace the compact factor at those points."""
+    replace the compact factor at those points.
+
+    ``coef`` None (``build_stencil(on_demand=True)``): the coefficients are computed slab batch by slab batch
+    when used (:meth:`coefficients`): the same numbers, for a single snapshot, which uses each slab once."""
 
     params: MannParams
     box: BoxShape
-    coef: np.ndarray
+    coef: np.ndarray | None
     inv_tau: np.ndarray | None
     cell_index: np.ndarray
     cell_factor: np.ndarray
@@ -95,8 +98,21 @@ class MannStencil:
 
     @property
     def slab_range(self) -> tuple[int, int]:
-        """Slabs [first, end) that coef and inv_tau hold."""
-        return self.slab0, self.slab0 + self.coef.shape[1]
+        """Slabs [first, end) that coef and inv_tau hold (all of the box's when coef is computed on demand)."""
+        return self.slab0, self.box.nk1 if self.coef is None else self.slab0 + self.coef.shape[1]
+
+    def coefficients(self, i0: int, i1: int, scratch: np.ndarray | None = None) -> tuple[np.ndarray, int]:
+        """(A, P, Z1, Z2) of slabs [i0, i1): an array (4, slabs, nyp//2+1, nzp) float32 holding them and the index of
+        slab i0 in it.
+
+        ``coef`` itself, or, for a stencil computed on demand, ``scratch`` (4, >= i1 - i0, nyp//2+1, nzp) float32
+        with slabs [i0, i1) computed into its first slabs by the operations build_stencil uses (the same numbers,
+        whatever the batch).
+        """
+        if self.coef is not None:
+            return self.coef, i0 - self.slab0
+        _factors(self.params, self.box, i0, i1, scratch[:, : i1 - i0], None, energy_scale(self.params))
+        return scratch, 0
 
     def cells_in(self, i0: int, i1: int) -> slice:
         """Rows of cell_index / cell_factor whose slab lies in [i0, i1)."""
@@ -315,15 +331,28 @@ def stencil_key(params: MannParams, box: BoxShape, with_tau: bool) -> str:
 
 
 def build_stencil(
-    params: MannParams, box: BoxShape, *, evolving: bool = True, slabs: tuple[int, int] | None = None, cells=None
+    params: MannParams,
+    box: BoxShape,
+    *,
+    evolving: bool = True,
+    slabs: tuple[int, int] | None = None,
+    cells=None,
+    on_demand: bool = False,
 ) -> MannStencil:
     """The stencil of ``params`` on ``box`` (computed; turbgen.runs.stencil_cache keeps it on disk).
 
     ``evolving=False`` skips 1/tau_e (1/6 of the memory): enough for a single snapshot (one plane).
     ``slabs=(first, end)``: only those k1 slabs (the same numbers as those slabs of the whole stencil:
     every point is computed by the same elementwise operations); ``cells``: (cell_index, cell_factor) of axis_cells, to
-    compute them once for many parts.
+    compute them once for many parts. ``on_demand=True`` (implies evolving=False; not with ``slabs``): only the
+    axis cells are computed now, the coefficients when a generator uses them (MannStencil.coefficients), so a
+    single snapshot never holds the stencil's 16 bytes per stored point, nor writes and reads them back.
     """
+    if on_demand:
+        if slabs is not None:
+            raise ValueError("a stencil computed on demand covers the whole box (no slabs)")
+        index, factor = cells if cells is not None else axis_cells(params, box)
+        return MannStencil(params, box, None, None, index, factor)
     return _build(params, box, evolving and params.evo_time_s is not None, slabs, cells)
 
 
