@@ -75,7 +75,7 @@ def snapshot_memory_bytes(box: BoxShape, ny: int, nz: int, n_snapshots: int, thr
     slab = box.nyp * box.nzp
     state = 3 * box.nk1 * slab * 8 if n_snapshots > 1 else 0
     spectra = 3 * ny * nz * _padded_nk1(box.nk1) * 8
-    output = buffers * box.nt * ny * nz * 4  # output plane(s)
+    output = (1 if n_snapshots == 1 else buffers) * box.nt * ny * nz * 4  # output plane(s) (see _transform)
     scratch = threads * (SLAB_BATCH * slab * (2 * 3 * 8 + 2 * 4) + 2 * ROW_BLOCK * (box.nt + 16) * 4)
     if coefficients:
         scratch += threads * SLAB_BATCH * box.nk2_half * box.nzp * 48
@@ -192,7 +192,7 @@ class MannSnapshots:
             if frozen:
                 self._synthesise(pool, seed, 0, None)
                 for c in range(3):
-                    out = self._transform(pool, c)
+                    out = self._transform(pool, c, single=True)
                     for ix in order:
                         yield ix, COMPONENTS[c], out
                 return
@@ -202,7 +202,7 @@ class MannSnapshots:
                 self._synthesise(pool, seed, m, dt)
                 previous = times[ix]
                 for c in range(3):
-                    yield ix, COMPONENTS[c], self._transform(pool, c)
+                    yield ix, COMPONENTS[c], self._transform(pool, c, single=len(order) == 1)
 
     def spectra(self, seed: int, times_s) -> Iterator[tuple[int, np.ndarray]]:
         """Yield (snapshot number m in time order, cropped spectra (3, ny nz, n_slabs) complex64) of this
@@ -227,11 +227,9 @@ class MannSnapshots:
         box = self.box
         if self._spectra is None:
             whole = self._n_slabs == box.nk1
-            self._spectra = _aligned((3, self.ny * self.nz, _padded_nk1(self._n_slabs)), np.complex64)
-            if whole:
-                # page-aligned planes: a store's direct-I/O writer takes their chunks without a bounce copy
-                self._outputs = [pyfftw.empty_aligned((box.nt, self.ny, self.nz), np.float32, n=_PAGE)
-                                 for _ in range(self._n_buffers)]
+            # page-aligned (whole box): output planes in it (_transform) go to a direct-I/O writer without a bounce copy
+            self._spectra = pyfftw.empty_aligned((3, self.ny * self.nz, _padded_nk1(self._n_slabs)), np.complex64,
+                                                 n=_PAGE if whole else _ALIGN)  # fmt: skip
             self._scratch = queue.SimpleQueue()
             for _ in range(self.threads):
                 scratch = _Scratch(box, box.nt, self.nz, self._n_slabs, coefficients=self.stencil.coef is None)
@@ -256,10 +254,19 @@ class MannSnapshots:
         starts = range(self._first, self._end, SLAB_BATCH)
         self._run(pool, lambda s, i0: self._batch(s, seed, m, dt, i0), starts)
 
-    def _transform(self, pool, c: int) -> np.ndarray:
-        """Component ``c`` of the current snapshot into the next of the two output buffers."""
-        out = self._outputs[self._n_out % self._n_buffers]
-        self._n_out += 1
+    def _transform(self, pool, c: int, single: bool) -> np.ndarray:
+        """Component ``c`` of the current snapshot into the next of the output buffers; of a ``single`` snapshot
+        (no spectra follow), components 1 and 2 go into the spectra of components 0 and 1, transformed already,
+        so one output plane is allocated instead of two (every yielded plane stays valid as long as before)."""
+        if single and c > 0:
+            flat = self._spectra[c - 1].view(np.float32).reshape(-1)  # >= (nt + 2) ny nz floats
+            out = flat[: self.box.nt * self.ny * self.nz].reshape(self.box.nt, self.ny, self.nz)
+        else:
+            k = self._n_out % self._n_buffers
+            self._n_out += 1
+            while len(self._outputs) <= k:  # page-aligned planes, allocated when first needed
+                self._outputs.append(pyfftw.empty_aligned((self.box.nt, self.ny, self.nz), np.float32, n=_PAGE))
+            out = self._outputs[k]
         rows = range(0, self.ny * self.nz, ROW_BLOCK)
         self._run(pool, lambda s, r0: self._rows(s, c, r0, out), rows)
         return out
