@@ -12,7 +12,6 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
@@ -115,8 +114,7 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
         pending = None
 
         def write_and_sum(c, ix, plane):
-            w.write(c, ix, plane)
-            sums[c][0] += float(np.einsum("tyz,tyz->", plane, plane, dtype=np.float64))
+            sums[c][0] += w.write(c, ix, plane, squares=True)[1]  # the sum of squares of its finiteness check
             sums[c][1] += plane.size
 
         for c in COMPONENTS:

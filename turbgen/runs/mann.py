@@ -15,7 +15,6 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-import numpy as np
 from tqdm import tqdm
 
 from turbgen.errors import ParameterError
@@ -134,9 +133,9 @@ def run_mann(
             pending = None
 
             def write_and_sum(comp, ix, field):  # in the background, with the next item's synthesis
-                sums[comp][0] += writer.write(comp, ix, field)  # the float64 sum of its finiteness check
-                flat = field.reshape(-1)
-                sums[comp][1] += float(np.dot(flat, flat))
+                total, squares = writer.write(comp, ix, field, squares=True)  # the sums of its finiteness check
+                sums[comp][0] += total
+                sums[comp][1] += squares
 
             for done, (ix, comp, field) in enumerate(gen.generate(run.seed, run.plane_times_s()), start=1):
                 if pending is not None:

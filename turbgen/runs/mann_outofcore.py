@@ -346,7 +346,6 @@ def _write_plane(writer, comp, ix, plane, plane_file, plan, g, sums) -> None:
                 p0, p1 = b * B, min((b + 1) * B, P)
                 plane_file.read((b * g.nt + t0) * B * _F32, piece)
                 chunk[:, p0:p1] = piece[:, : p1 - p0]
-        writer.write(comp, ix, chunk.reshape(t1 - t0, g.ny, g.nz), t0)
-        flat = chunk.reshape(-1)
-        sums[comp][0] += float(flat.sum(dtype=np.float64))
-        sums[comp][1] += float(np.dot(flat, flat))
+        total, squares = writer.write(comp, ix, chunk.reshape(t1 - t0, g.ny, g.nz), t0, squares=True)
+        sums[comp][0] += total
+        sums[comp][1] += squares

@@ -181,7 +181,7 @@ class StoreWriter:
             raise ValueError(f"store attrs {clash} are already set")
         self._group.attrs.update(_jsonable(attrs))
 
-    def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0) -> float:
+    def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0, squares: bool = False):
         """Write ``data`` (nt_block, ny, nz) to ``component`` at plane index ``ix``, time ``t0``.
 
         Parameters
@@ -194,12 +194,15 @@ class StoreWriter:
             Velocity fluctuations [m/s], shape (nt_block, ny, nz), stored as float32; must be finite.
         t0 : int, optional
             Time index of the first sample (default 0); t0 + nt_block <= nt.
+        squares : bool, optional
+            Also return the sum of squares (the same compiled pass computes both).
 
         Returns
         -------
-        float
+        float or tuple of float
             The sum of the block's values in float64 [m/s] (computed for the finiteness check; a caller
-            accumulating the mean can use it instead of summing the block again).
+            accumulating the mean can use it instead of summing the block again); with ``squares``,
+            (sum [m/s], sum of squares [m^2/s^2]).
 
         Raises
         ------
@@ -221,7 +224,9 @@ class StoreWriter:
             raise ValueError(
                 f"block of shape {block.shape} at t0={t0} does not fit plane shape ({g.nt}, {g.ny}, {g.nz})"
             )
-        total = float(block.sum(dtype=np.float64))
+        from turbgen.store.block_sums import block_sums  # numba: only for commands that write fields
+
+        total, sum_sq = block_sums(block)
         if not np.isfinite(total):
             raise ValueError(f"{component} plane {ix}: block at t0={t0} contains NaN or inf")
         t1 = t0 + block.shape[0]
@@ -242,7 +247,7 @@ class StoreWriter:
                 self._arrays[component][t0:t1, ix] = block
         with self._bookkeeping:
             self._written[component][ix, t0:t1] = True
-        return total
+        return (total, sum_sq) if squares else total
 
     # -- internals --------------------------------------------------------------------------
     def _create(self, root: Path) -> None:
