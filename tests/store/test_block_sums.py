@@ -40,3 +40,4 @@ def test_writer_returns_the_sums_of_its_check(tmp_path):
         assert w.write("v", 0, block, squares=True) == block_sums(block)
         with pytest.raises(ValueError, match="NaN or inf"):
             w.write("w", 0, np.full((8, 3, 2), np.nan, np.float32))
+        w.write("w", 0, block)
