@@ -9,7 +9,8 @@ subprocess so that its wall time and peak RSS (ru_maxrss) are its own. Printed: 
 with the wall time, the CPU time of all threads, the split estimate / theory / verdict (the theory
 runs in its own thread while the store is read, so its seconds overlap the estimate's), the 1-minute
 load average at the end (a loaded machine stretches the wall time), the peak RSS, the store size and
-the verdict. The uncompressed default field is 3 x 738 MiB; the validator reads it chunk by chunk
+the verdict; then the wall time of validating the store again in the same process, as the next seed of a
+sweep is (``again_wall_s``: the predictions are kept, turbgen.validate.theory_cache). The uncompressed default field is 3 x 738 MiB; the validator reads it chunk by chunk
 (one task per plane and span of time chunks), so its memory follows the chunks, not the field.
 """
 
@@ -36,6 +37,9 @@ from turbgen.validate import validate
 t0, c0 = time.perf_counter(), time.process_time()
 r = validate(sys.argv[1], rotor_radius_m=float(sys.argv[2]))
 wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+t1 = time.perf_counter()
+again = validate(sys.argv[1], rotor_radius_m=float(sys.argv[2]))  # as for the next seed of a sweep: theory kept
+again_wall = round(time.perf_counter() - t1, 2)
 g = r.store.grid
 print(json.dumps({
     "store": str(r.store.path), "model": r.store.model, "shape_t_x_y_z": list(g.shape),
@@ -45,6 +49,7 @@ print(json.dumps({
     "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
     "field_mib_uncompressed": round(3 * g.nbytes_per_component() / 2**20, 1),
     "passed": r.passed, "failed": r.failed,
+    "again_wall_s": again_wall, "again_theory_kept": again.seconds["theory_kept"],
 }))
 """
 

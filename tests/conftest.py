@@ -20,3 +20,15 @@ def pytest_collection_modifyitems(config, items):
         for item in items:
             if "slow" in item.keywords:
                 item.add_marker(skip)
+
+
+@pytest.fixture(autouse=True)
+def _no_kept_validator_theory():
+    """Every test starts without predictions kept by an earlier one (turbgen.validate.theory_cache): a test that
+    monkeypatches the validator's internals must compute its theory afresh."""
+    import sys
+
+    kept = sys.modules.get("turbgen.validate.theory_cache")
+    if kept is not None:
+        kept.clear()
+    yield

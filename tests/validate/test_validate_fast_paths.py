@@ -7,7 +7,7 @@ import scipy.fft
 
 from turbgen.runs.mann import run_mann
 from turbgen.spec.mann import MannRun
-from turbgen.validate import validate
+from turbgen.validate import theory_cache, validate
 from turbgen.validate.estimators import WelchSetup, segment_starts
 from turbgen.validate.pair_sums import box_lags, pair_sum, real_box_lags, rect_pair_counts, set_pair_counts
 from turbgen.validate.span_sums import COMPONENTS, span_sums
@@ -92,7 +92,34 @@ def mann_store(tmp_path_factory):
 
 
 def test_threads_give_the_results_of_one_thread(mann_store):
-    one, two = validate(mann_store, workers=1), validate(mann_store, workers=2)
+    theory_cache.clear()
+    one = validate(mann_store, workers=1)
+    theory_cache.clear()  # the second computes its theory too, in its own thread
+    two = validate(mann_store, workers=2)
+    assert not one.seconds["theory_kept"] and not two.seconds["theory_kept"]
     a, b = one.to_dict(), two.to_dict()
     a.pop("seconds"), b.pop("seconds")
     assert a == b  # bit for bit: the same operations, only run alongside each other
+
+
+def test_theory_is_kept_for_a_store_differing_only_in_seed(mann_store, tmp_path):
+    other = tmp_path / "seed8.zarr"
+    grid = {"nt": 1024, "x_m": [0.0, 40.0, 60.0], "ny": 10, "nz": 10, "dy_m": 8.0, "dz_m": 8.0}
+    run_mann(MannRun.from_mapping({"grid": grid, "seed": 8}), other)
+    theory_cache.clear()
+    validate(mann_store, workers=2)
+    kept = validate(other, workers=2)
+    assert kept.seconds["theory_kept"]
+    theory_cache.clear()
+    fresh = validate(other, workers=2)
+    assert not fresh.seconds["theory_kept"]
+    a, b = kept.to_dict(), fresh.to_dict()
+    a.pop("seconds"), b.pop("seconds")
+    assert a == b  # the kept predictions are those of the store (and the verdict did not alter them)
+    # another option or parameter is another entry
+    assert not validate(other, workers=2, rotor_radius_m=30.0).seconds["theory_kept"]
+    def key(seed, created, gamma):
+        return theory_cache.theory_key("mann", {"seed": seed, "created_utc": created,
+                                                "parameters": {"gamma": gamma, "seed": seed}})  # fmt: skip
+
+    assert key(1, "x", 3.1) == key(2, "y", 3.1) != key(1, "x", 3.2)

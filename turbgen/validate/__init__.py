@@ -26,6 +26,7 @@ from turbgen.validate.expectations import theory_for
 from turbgen.validate.point_sets import DEFAULT_ROTOR_RADIUS_M
 from turbgen.validate.prediction import SamplingDesign, Theory
 from turbgen.validate.checks import ALPHA, MetricResult
+from turbgen.validate.theory_cache import cached, theory_key
 from turbgen.validate.verdict import Expectations, expectations, judge
 
 
@@ -90,7 +91,8 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
     -------
     ValidationReport
         Estimates, predictions, metrics and timings [s]: ``estimate``, ``theory`` (the model, the expected
-        Welch estimates and their covariance; overlapping the estimates when computed alongside), ``verdict``
+        Welch estimates and their covariance; overlapping the estimates when computed alongside; ~0 when
+        kept from a store of this process that differs only in seed: ``theory_kept`` True), ``verdict``
         and ``total`` (wall time of the validation).
 
     Raises
@@ -102,26 +104,29 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
     t0 = time.perf_counter()
     planned = plan_estimates(fs, rotor_radius_m=rotor_radius_m, nperseg=nperseg)
     parallel = (workers or os.cpu_count() or 1) > 1
+    key = theory_key(fs.model, fs.attrs, rotor_radius_m=rotor_radius_m, nperseg=nperseg)
     if parallel:
         with ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-theory") as pool:
-            theory = pool.submit(_timed, _theory, fs, planned)
+            theory = pool.submit(_timed, cached, key, lambda: _theory(fs, planned))
             est = run_estimates(fs, planned, workers)
             t1 = time.perf_counter()
-            (th, expected), theory_s = theory.result()
+            ((th, expected), kept), theory_s = theory.result()
     else:
         est = run_estimates(fs, planned, workers)
         t1 = time.perf_counter()
-        (th, expected), theory_s = _timed(_theory, fs, planned)
+        ((th, expected), kept), theory_s = _timed(cached, key, lambda: _theory(fs, planned))
     t2 = time.perf_counter()
     metrics = judge(est, th, parallel, expected)
     t3 = time.perf_counter()
-    seconds = {"estimate": t1 - t0, "theory": theory_s, "verdict": t3 - t2, "total": t3 - t0}
+    seconds = {"estimate": t1 - t0, "theory": theory_s, "verdict": t3 - t2, "total": t3 - t0,
+               "theory_kept": kept}  # fmt: skip
     return ValidationReport(fs, est, th, metrics, seconds)
 
 
 def _theory(fs, planned: Estimates) -> tuple[Theory, Expectations]:
     """The model's predictions for the planned estimates, and the expected Welch estimates and covariances
-    the verdict compares them with (both need only the sampling design; ``planned`` is only read)."""
+    the verdict compares them with (both need only the sampling design; ``planned`` is only read; kept for
+    stores differing only in seed by ``theory_cache``)."""
     th = theory_for(fs, SamplingDesign.of(planned))
     return th, expectations(planned, th)
 
