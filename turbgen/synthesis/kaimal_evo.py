@@ -289,6 +289,17 @@ class KaimalEvo:
             else:
                 out[i:j] = sampler.sample(xi, 1, overwrite=True)  # planes already run in parallel
 
+    def _mix_and_put(self, ks: range, block: np.ndarray, spectrum) -> None:
+        """Mix the planes' coefficients of bins ``ks`` (``block`` (nx, nb, ny, nz)) with the longitudinal
+        coherence's factors and put them into ``spectrum``."""
+        g, nx = self.grid, self.grid.nx
+        fac, err = longitudinal_factors(self.long_coherence, g.x_m, self.freqs[ks.start:ks.stop])
+        self.report["long_clip_error"] = max(self.report["long_clip_error"], err)
+        flat = block.reshape(nx, len(ks), -1).transpose(1, 0, 2)
+        # real factor: mixes real and imaginary parts alike (zero phase between planes)
+        mixed_block = fac.astype(np.float32) @ np.ascontiguousarray(flat).view(np.float32)
+        spectrum.put_chunk(ks.start, mixed_block.view(np.complex64).transpose(1, 0, 2).reshape(nx, len(ks), g.ny, g.nz))
+
     def component_planes(
         self, component: str, tick: Callable[[], None] | None = None, spectrum=None
     ) -> Iterator[tuple[int, np.ndarray]]:
@@ -318,6 +329,7 @@ class KaimalEvo:
                 local.noise = np.empty(n, dtype=np.complex64)
             return local.noise[:n]
 
+        mixing = []
         try:  # the pool is shut down however the generator ends (exception, early close)
             for chunk in range(self.n_chunks):
                 ks = range(max(1, chunk * FREQ_CHUNK), min(self.nf, (chunk + 1) * FREQ_CHUNK))
@@ -331,16 +343,14 @@ class KaimalEvo:
                     # planes in parallel (NumPy's generators and the FFTs release the GIL); each plane has its
                     # own random stream and its own slice of the block, so the result does not depend on the order
                     list(pool.map(fill, range(nx)))
-                    if mixed and nx > 1:
-                        fac, err = longitudinal_factors(self.long_coherence, g.x_m, self.freqs[ks.start:ks.stop])
-                        self.report["long_clip_error"] = max(self.report["long_clip_error"], err)
-                        flat = block.reshape(nx, len(ks), -1).transpose(1, 0, 2)
-                        # real factor: mixes real and imaginary parts alike (zero phase between planes)
-                        mixed_block = fac.astype(np.float32) @ np.ascontiguousarray(flat).view(np.float32)
-                        block = mixed_block.view(np.complex64).transpose(1, 0, 2).reshape(nx, len(ks), g.ny, g.nz)
-                    spectrum.put_chunk(ks.start, block)
+                    if mixed and nx > 1:  # in the pool, alongside the next chunk's coefficients (disjoint bins)
+                        mixing.append(pool.submit(self._mix_and_put, ks, block, spectrum))
+                    else:
+                        spectrum.put_chunk(ks.start, block)
                 if tick:
                     tick()
+            for done in mixing:
+                done.result()
             local = None  # the work arrays are not needed by the transforms
             # two planes transformed at once (half the threads each; pocketfft's columns do not depend on the
             # thread count), yielded in order: the amplitude pass runs in parallel too
