@@ -120,6 +120,23 @@ def _axis_cells(k1: float, dk1: float, dk2: float, dk3: float, r2: int, r3: int,
     return out
 
 
+def lattice_wavenumbers(box: BoxLattice) -> tuple[np.ndarray, np.ndarray]:
+    """The box's (k2, k3) lattice, flattened.
+
+    Parameters
+    ----------
+    box : BoxLattice
+        The periodic box.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        k2, k3 [rad/m], each (nyp nzp,), row-major over the FFT orders of turbgen.theory.lattice.
+    """
+    k2, k3 = np.meshgrid(k2_wavenumbers(box.nyp, box.dy_m), k3_wavenumbers(box.nzp, box.dz_m), indexing="ij")
+    return k2.ravel(), k3.ravel()
+
+
 def lattice_tensor(box: BoxLattice, k1: float, params: MannParams, U_m_s: float):
     """Phi times dk2 dk3 on the box's (k2, k3) lattice at k1, the axis cells integrated (module docstring).
 
@@ -136,12 +153,12 @@ def lattice_tensor(box: BoxLattice, k1: float, params: MannParams, U_m_s: float)
 
     Returns
     -------
-    tuple of numpy.ndarray
-        k2, k3 [rad/m], each (nyp nzp,) in the FFT order of turbgen.theory.lattice, and Phi dk2 dk3
-        [m^3 s^-2] (3, 3, nyp nzp), a density in k1 like Phi itself.
+    numpy.ndarray
+        Phi dk2 dk3 [m^3 s^-2] (3, 3, nyp nzp) at the nodes of :func:`lattice_wavenumbers`, a density in
+        k1 like Phi itself.
     """
     dk2, dk3 = box.spacings()
-    k2, k3 = np.meshgrid(k2_wavenumbers(box.nyp, box.dy_m), k3_wavenumbers(box.nzp, box.dz_m), indexing="ij")
+    k2, k3 = (k.reshape(box.nyp, box.nzp) for k in lattice_wavenumbers(box))
     phi = sheared_tensor(k1, k2, k3, params) * (dk2 * dk3)  # (3, 3, nyp, nzp)
     if abs(k1) <= CELL_K1_FACTOR * max(dk2, dk3):
         r2, r3 = min(CELL_RADIUS, (box.nyp - 1) // 2), min(CELL_RADIUS, (box.nzp - 1) // 2)
@@ -149,4 +166,4 @@ def lattice_tensor(box: BoxLattice, k1: float, params: MannParams, U_m_s: float)
         iz = np.arange(-r3, r3 + 1) % box.nzp
         phi[:, :, iy[:, None], iz[None, :]] = _axis_cells(k1, 2 * np.pi / (U_m_s * box.record_s), dk2, dk3, r2, r3,
                                                           params)
-    return k2.ravel(), k3.ravel(), phi.reshape(3, 3, -1)
+    return phi.reshape(3, 3, -1)

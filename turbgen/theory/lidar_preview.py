@@ -49,7 +49,7 @@ from turbgen.theory.coherence_models import exponential_yz
 from turbgen.theory.eddy_lifetime import evolution_lifetime_s
 from turbgen.theory.kaimal import kaimal_spectrum
 from turbgen.theory.lidar_geometry import Measurements
-from turbgen.theory.lidar_lattice import BoxLattice, lattice_tensor
+from turbgen.theory.lidar_lattice import BoxLattice, lattice_tensor, lattice_wavenumbers
 from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import KaimalParams, MannParams, check_wind_speed
@@ -254,7 +254,7 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
     if box is None:
         k2, k3, w = _polar_nodes(kappa_max, n_theta, panel_width)
     else:
-        k2, k3, _ = lattice_tensor(box, float(k1_all[0]), params, U)
+        k2, k3 = lattice_wavenumbers(box)
     kappa = np.hypot(k2, k3)
     z = kappa * R
     rotor = np.where(z > 1e-8, 2.0 * j1(z) / np.where(z > 1e-8, z, 1.0), 1.0)
@@ -264,7 +264,7 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
         if box is None:
             phi_w = sheared_tensor(k1, k2, k3, params) * w
         else:
-            phi_w = lattice_tensor(box, k1, params, U)[2]
+            phi_w = lattice_tensor(box, k1, params, U)
         tau = evolution_lifetime_s(np.sqrt(k1 * k1 + kappa * kappa), params)
         with np.errstate(divide="ignore", invalid="ignore"):
             inv_tau = np.where(np.isfinite(tau), 1.0 / tau, 0.0)
