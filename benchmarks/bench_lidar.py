@@ -40,7 +40,7 @@ t0 = time.perf_counter()
 r = run_lidar(fs, d)
 lidar = time.perf_counter() - t0
 t0 = time.perf_counter()
-store_theory(fs, d, r.welch["f_hz"][1:-1], r.rotor_radius_m)
+store_theory(fs, d, r.welch["f_hz"][1:-1], r.rotor_radius_m, r.welch["setup"])
 theory = time.perf_counter() - t0
 hwm = [l for l in open("/proc/self/status") if l.startswith("VmHWM")][0].split()[1]
 print(json.dumps({"shape_t_x_y_z": list(fs.grid.shape), "run_lidar_s": round(lidar, 2), "theory_s": round(theory, 2),

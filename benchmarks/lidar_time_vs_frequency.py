@@ -49,7 +49,7 @@ def _spectra(fs, desc, plane_map=None) -> dict:
     t, u_ll = signals.lidar_estimate(s, fs.U_m_s)
     u_rr, _ = signals.rotor_average(fs, desc.rotor_radius_m, t)
     w = signals.welch_rl(u_ll, u_rr, WelchSetup(NPERSEG, float(t[1] - t[0])))
-    return {k: w[k] for k in ("f_hz", "S_LL", "S_RR", "S_RL", "n_eff")}
+    return {k: w[k] for k in ("f_hz", "S_LL", "S_RR", "S_RL", "n_eff", "setup")}
 
 
 def _add(acc: dict | None, w: dict) -> dict:
@@ -96,7 +96,7 @@ def main() -> None:
                     acc["shuffled"] = _add(acc["shuffled"], _spectra(fs, desc, reverse))
                     if theory is None:
                         f = acc["evolving"]["f_hz"]
-                        th = store_theory(fs, desc, f[1:-1], desc.rotor_radius_m)
+                        th = store_theory(fs, desc, f[1:-1], desc.rotor_radius_m, acc["evolving"]["setup"])
                         theory = np.concatenate([[0.0], th.coh2_RL, [0.0]])
                         U = fs.U_m_s
                 del fs

@@ -17,6 +17,7 @@ from turbgen.lidar.description import LidarDescription
 from turbgen.spec.preset_runs import kaimal_settings_for, mann_params_for
 from turbgen.theory.coherence_models import exponential_longitudinal
 from turbgen.theory.lidar_control import buffer_time_s, coherence_bandwidth_rad_m, cutoff_frequency_hz, filter_delay_s
+from turbgen.theory.lidar_lattice import BoxLattice
 from turbgen.theory.lidar_preview import PreviewSpectra, kaimal_preview_spectra, mann_preview_spectra
 from turbgen.theory.params import KaimalParams, MannParams
 
@@ -28,7 +29,8 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
                     f_hz=DEFAULT_F_HZ, radius_m: float | None = None, frozen: bool = False,
                     mann: MannParams | None = None, kaimal: KaimalParams | None = None,
                     a_x: float | None = None, b_x: float | None = None,
-                    long_components: str = "uvw", vw_coherence: bool = True) -> PreviewSpectra:
+                    long_components: str = "uvw", vw_coherence: bool = True,
+                    box: BoxLattice | None = None) -> PreviewSpectra:
     """S_RR, S_LL, S_RL of ``lidar`` for the preset's model parameters at U (or explicit ones).
 
     Kaimal defaults follow Guo et al. (2023) Eq. 31/33 (Chen et al. 2022): the yz and the longitudinal
@@ -61,6 +63,9 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
         Components the longitudinal coherence acts on (default "uvw").
     vw_coherence : bool, optional
         Apply the yz coherence to v and w as well (default True).
+    box : BoxLattice, optional
+        Mann only: sum over this periodic box's (k2, k3) lattice (what a synthesised box holds) instead of
+        the continuous integral (default).
 
     Returns
     -------
@@ -80,7 +85,7 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
         params = mann if mann is not None else mann_params_for(preset, U_m_s)
         if frozen:
             params = replace(params, evo_time_s=None)
-        return mann_preview_spectra(f_hz, meas, params, U_m_s, R)
+        return mann_preview_spectra(f_hz, meas, params, U_m_s, R, box=box)
     settings = kaimal_settings_for(preset, U_m_s)
     kp = kaimal if kaimal is not None else settings.kaimal
     ax = settings.a_x if a_x is None else a_x

@@ -135,7 +135,8 @@ def welch_rl(u_ll: np.ndarray, u_rr: np.ndarray, setup: WelchSetup) -> dict:
     -------
     dict
         ``f_hz`` [Hz]; one-sided PSDs ``S_LL``, ``S_RR`` [m^2 s^-2 Hz^-1] and cross-spectrum ``S_RL``
-        (complex); ``coh2_RL`` [-]; ``G_RL`` [-]; ``n_segments``; ``n_eff`` (effective independent segments).
+        (complex); ``coh2_RL`` [-]; ``G_RL`` [-]; ``n_segments``; ``n_eff`` (effective independent segments);
+        ``setup`` (the WelchSetup).
 
     Raises
     ------
@@ -170,4 +171,5 @@ def welch_rl(u_ll: np.ndarray, u_rr: np.ndarray, setup: WelchSetup) -> dict:
         "G_RL": gain,
         "n_segments": k,
         "n_eff": setup.effective_segments(k, k - 1),
+        "setup": setup,
     }

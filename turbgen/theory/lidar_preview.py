@@ -21,6 +21,10 @@ cancel in the coherence; against twice-refined nodes gamma^2 and |G_RL| of the T
 by < 1e-4 (tests/theory/test_lidar_theory.py). KAPPA_MAX = 1 rad/m suits averaged signals (probe volumes
 and the rotor disc damp higher kappa); a single *point* loses the inertial tail (~2 % of F11 at
 k1 = 0.08 rad/m) unless kappa_max is raised.
+With ``box`` the (k2, k3) integral is instead the sum over the lattice of a periodic synthesis box
+(turbgen.theory.lidar_lattice): the spectra of what such a box holds, for comparing with a synthesised
+field; it tends to the polar quadrature as the box grows. Both use the same node algebra (_node_spectra),
+the decay between gates summed by a recursion over the sorted gates.
 
 Kaimal model (direct product, Guo et al. 2023 Eq. 25, 31, 33): S_c(f) coh_yz(r, f) gamma_x(dx, f)
 between the probe-volume samples (Taylor within the probe volume: a sample s metres along the beam
@@ -45,6 +49,7 @@ from turbgen.theory.coherence_models import exponential_yz
 from turbgen.theory.eddy_lifetime import evolution_lifetime_s
 from turbgen.theory.kaimal import kaimal_spectrum
 from turbgen.theory.lidar_geometry import Measurements
+from turbgen.theory.lidar_lattice import BoxLattice, lattice_tensor, lattice_wavenumbers
 from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import KaimalParams, MannParams, check_wind_speed
@@ -137,13 +142,78 @@ def _weight_table(meas: Measurements, nu_max: float):
     return nu, tables, inverse.ravel()
 
 
+def _polar_nodes(kappa_max: float, n_theta: int, panel_width: float):
+    """Flat (k2, k3) [rad/m] nodes of the polar quadrature and their weights kappa dkappa dtheta."""
+    kappa, wk = _radial_nodes(kappa_max, panel_width)
+    theta = 2.0 * np.pi * np.arange(n_theta) / n_theta
+    k2 = (kappa[:, None] * np.cos(theta)[None, :]).ravel()
+    k3 = (kappa[:, None] * np.sin(theta)[None, :]).ravel()
+    return k2, k3, np.repeat(wk * (2.0 * np.pi / n_theta), n_theta)
+
+
+class _Lidar:
+    """What the spectra need of the measurements at any node set: gates, beams, probe-volume tables, phases."""
+
+    def __init__(self, meas: Measurements, k2: np.ndarray, k3: np.ndarray, nu_max: float):
+        x_gate = meas.focus_m[:, 0]
+        self.xs, gate_of = np.unique(np.round(x_gate, 6), return_inverse=True)
+        n_g = self.xs.size
+        self.nu_tab, self.tables, table_of = _weight_table(meas, nu_max)
+        # measurements that share a LOS vector and a probe volume share phi_hat(k . n) (a beam's gates)
+        self.beams, beam_of = np.unique(np.hstack([meas.n.round(12), table_of[:, None]]), axis=0,
+                                        return_inverse=True)
+        self.beam_of = beam_of.ravel()
+        scale = meas.n / (meas.count * meas.n[:, :1])  # n_i / (M n_i1)
+        # exp(i (k2 y_i + k3 z_i)) does not depend on k1: once per measurement (complex64 halves the memory)
+        self.phase = np.exp(1j * (k2[None] * meas.focus_m[:, 1, None] + k3[None] * meas.focus_m[:, 2, None]))
+        self.phase = self.phase.astype(np.complex64)
+        mix = np.zeros((n_g, 3, meas.count), dtype=np.complex64)
+        mix[gate_of.ravel(), :, np.arange(meas.count)] = scale
+        self.mix = mix.reshape(3 * n_g, meas.count)
+
+    def transfer(self, k1: float, k2: np.ndarray, k3: np.ndarray) -> np.ndarray:
+        """A_g,l(k) = sum_{i in gate g} n_il / (M n_i1) phi_hat_i(k . n_i) exp(i (k2 y_i + k3 z_i)): (gates, 3, nodes)."""
+        hat = np.stack([np.interp(np.abs(k1 * b[0] + k2 * b[1] + k3 * b[2]), self.nu_tab, self.tables[int(b[3])])
+                        for b in self.beams]).astype(np.float32)
+        return (self.mix @ (hat[self.beam_of] * self.phase)).reshape(self.xs.size, 3, -1)
+
+
+def _node_spectra(lidar: _Lidar, k1: float, k2, k3, phi_w, inv_tau, rotor, U: float):
+    """Two-sided (in k1) S_RR, S_LL, S_RL of Eq. 24, 29, 32 as sums over (k2, k3) nodes with weights in ``phi_w``.
+
+    The decay D_gh = exp(-s |x_g - x_h|), s = 1 / (U tau_e), is summed by the recursion over the sorted
+    gates C_h = sum_{g<h} D_gh A_g = exp(-s (x_h - x_{h-1})) (C_{h-1} + A_{h-1}) (only decaying factors):
+    sum_{g,h} D_gh A_g^T Phi conj(A_h) = sum_h (A_h + 2 C_h)^T Phi conj(A_h) in its real part, O(gates) per node.
+    """
+    A = lidar.transfer(k1, k2, k3)
+    phi32 = phi_w.astype(np.float32)
+    Ac = A.conj()
+    PhiA = np.stack([sum(phi32[l, c] * Ac[:, c] for c in range(3)) for l in range(3)], axis=1)  # Phi conj(A_h)
+    s = (inv_tau / U).astype(np.float32)
+    C = np.zeros_like(A[0])
+    d = np.exp(-s * np.float32(lidar.xs[0]))  # D_g = exp(-s x_g), the decay from gate g to the rotor
+    rl = np.zeros_like(A[0, 0])
+    S_LL = 0.0
+    for h, x in enumerate(lidar.xs):
+        if h:
+            step = np.exp(-s * np.float32(x - lidar.xs[h - 1]))
+            C = step * (C + A[h - 1])
+            d = d * step
+        S_LL += float(np.real(((A[h] + 2 * C) * PhiA[h]).sum()))
+        rl += d * PhiA[h, 0]
+    S_RL = complex((rl * rotor.astype(np.float32)).sum())
+    S_RR = float((rotor**2 * phi_w[0, 0]).sum())
+    return S_RR, S_LL, S_RL
+
+
 def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: float, radius_m: float,
                          *, kappa_max: float = KAPPA_MAX, n_theta: int = N_THETA,
-                         panel_width: float = PANEL_WIDTH) -> PreviewSpectra:
+                         panel_width: float = PANEL_WIDTH, box: BoxLattice | None = None) -> PreviewSpectra:
     """S_RR, S_LL, S_RL of the Mann space-time tensor for a lidar and a rotor of radius R (module docstring).
 
-    Guo et al. 2023 Eq. 24, 29, 32, integrated on the polar (kappa, theta) quadrature of the module
-    docstring.
+    Guo et al. 2023 Eq. 24, 29, 32, integrated over (k2, k3) on the polar (kappa, theta) quadrature of
+    the module docstring, or summed over the lattice of a periodic synthesis box (``box``,
+    turbgen.theory.lidar_lattice): the spectra of what that box holds.
 
     Parameters
     ----------
@@ -163,6 +233,9 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
         Trapezoid nodes in angle (default N_THETA).
     panel_width : float, optional
         Width of the uniform Gauss-Legendre radial panels above KAPPA_SPLIT [rad/m] (default PANEL_WIDTH).
+    box : BoxLattice, optional
+        Sum over this box's (k2, k3) lattice instead of the polar quadrature (then ``kappa_max``,
+        ``n_theta`` and ``panel_width`` are not used).
 
     Returns
     -------
@@ -178,59 +251,26 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
     """
     f, U, R = _check(f_hz, meas, U_m_s, radius_m)
     k1_all = 2.0 * np.pi * f / U
-    kappa, wk = _radial_nodes(kappa_max, panel_width)
-    theta = 2.0 * np.pi * np.arange(n_theta) / n_theta
-    ct, st = np.cos(theta), np.sin(theta)
-    k2 = kappa[:, None] * ct[None, :]
-    k3 = kappa[:, None] * st[None, :]
-    w_rad = wk * (2.0 * np.pi / n_theta)
+    if box is None:
+        k2, k3, w = _polar_nodes(kappa_max, n_theta, panel_width)
+    else:
+        k2, k3 = lattice_wavenumbers(box)
+    kappa = np.hypot(k2, k3)
     z = kappa * R
     rotor = np.where(z > 1e-8, 2.0 * j1(z) / np.where(z > 1e-8, z, 1.0), 1.0)
-    x_gate = meas.focus_m[:, 0]
-    xs, gate_of = np.unique(np.round(x_gate, 6), return_inverse=True)
-    gate_of = gate_of.ravel()
-    n_g, n_r = xs.size, kappa.size
-    nu_max = float(np.sqrt(k1_all.max() ** 2 + kappa_max**2)) * 1.01
-    nu_tab, tables, table_of = _weight_table(meas, nu_max)
-    # measurements that share a LOS vector and a probe volume share phi_hat(k . n) (a beam's gates)
-    beams, beam_of = np.unique(np.hstack([meas.n.round(12), table_of[:, None]]), axis=0, return_inverse=True)
-    beam_of = beam_of.ravel()
-    scale = meas.n / (meas.count * meas.n[:, :1])  # n_i / (M n_i1)
-    # exp(i (k2 y_i + k3 z_i)) does not depend on k1: once per measurement (complex64 halves the memory)
-    phase = np.exp(1j * (k2[None] * meas.focus_m[:, 1, None, None] + k3[None] * meas.focus_m[:, 2, None, None]))
-    phase = phase.astype(np.complex64)
-    mix = np.zeros((n_g, 3, meas.count), dtype=np.complex64)
-    mix[gate_of, :, np.arange(meas.count)] = scale
-    mix = mix.reshape(3 * n_g, meas.count)
-    dx_gg = np.abs(xs[:, None] - xs[None, :])
-    S_RR = np.empty(f.size)
-    S_LL = np.empty(f.size)
-    S_RL = np.empty(f.size, dtype=complex)
+    lidar = _Lidar(meas, k2, k3, float(np.sqrt(k1_all.max() ** 2 + kappa.max() ** 2)) * 1.01)
+    S = np.empty((f.size, 3), dtype=complex)
     for m, k1 in enumerate(k1_all):
-        phi = sheared_tensor(k1, k2, k3, params)  # (3, 3, nr, nt)
-        phi32 = phi.astype(np.float32)
-        hat = np.stack([np.interp(np.abs(k1 * b[0] + k2 * b[1] + k3 * b[2]), nu_tab, tables[int(b[3])])
-                        for b in beams]).astype(np.float32)
-        amp = (hat[beam_of] * phase).reshape(meas.count, -1)  # (M, nodes)
-        A = (mix @ amp).reshape(n_g, 3, n_r, n_theta)  # A_g,l = sum_{i in g} n_il / (M n_i1) amp_i
-        Ac = A.conj()
-        PhiA = np.stack([sum(phi32[l, c] * Ac[:, c] for c in range(3)) for l in range(3)], axis=1)  # Phi conj(A_h)
-        # P[g, h, r] = sum_{l, theta} A[g, l, r, theta] PhiA[h, l, r, theta] as one batched product over r
-        a_r = A.transpose(2, 0, 1, 3).reshape(n_r, n_g, 3 * n_theta)
-        b_r = PhiA.transpose(2, 1, 3, 0).reshape(n_r, 3 * n_theta, n_g)
-        P = np.matmul(a_r, b_r).transpose(1, 2, 0)  # (g, h, r)
-        Q = PhiA[:, 0].sum(axis=-1)  # sum_m Phi_1m conj(A_g,m), summed over theta: (g, r)
-        kmag = np.sqrt(k1 * k1 + kappa * kappa)
-        tau = evolution_lifetime_s(kmag, params) if params.evo_time_s is not None else np.full(n_r, np.inf)
+        if box is None:
+            phi_w = sheared_tensor(k1, k2, k3, params) * w
+        else:
+            phi_w = lattice_tensor(box, k1, params, U)
+        tau = evolution_lifetime_s(np.sqrt(k1 * k1 + kappa * kappa), params)
         with np.errstate(divide="ignore", invalid="ignore"):
             inv_tau = np.where(np.isfinite(tau), 1.0 / tau, 0.0)
-        D_gh = np.exp(-(dx_gg / U)[..., None] * inv_tau)  # (g, h, r)
-        D_g = np.exp(-(xs / U)[:, None] * inv_tau)  # (g, r)
-        S_LL[m] = float(np.real((D_gh * P * w_rad).sum()))
-        S_RL[m] = (D_g * Q * rotor * w_rad).sum()
-        S_RR[m] = float((rotor**2 * phi[0, 0].sum(axis=-1) * w_rad).sum())
+        S[m] = _node_spectra(lidar, k1, k2, k3, phi_w, inv_tau, rotor, U)
     to_f = 2.0 * 2.0 * np.pi / U  # two-sided in k1 -> one-sided in f
-    return PreviewSpectra(f, S_RR * to_f, S_LL * to_f, S_RL * to_f)
+    return PreviewSpectra(f, S[:, 0].real * to_f, S[:, 1].real * to_f, S[:, 2] * to_f)
 
 
 def rotor_points(radius_m: float, spacing_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:

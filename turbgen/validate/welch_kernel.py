@@ -86,3 +86,24 @@ class WelchKernel:
         if np.iscomplexobj(lines):
             vals = np.where(self.conj, np.conj(vals), vals)
         return np.sum(self.k * vals, axis=1)
+
+
+def segment_gain(m, f_hz, setup: WelchSetup) -> np.ndarray:
+    """G_m(f): bin m of a segment's windowed, mean-removed DFT of exp(i 2 pi f t) (see :class:`WelchKernel`).
+
+    Parameters
+    ----------
+    m : array_like
+        Welch bin indices [-].
+    f_hz : array_like
+        Line frequencies [Hz] (any sign; broadcast against ``m``).
+    setup : WelchSetup
+        Segment length and sampling interval dt [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex gains [-]; the expected one-sided estimate of bin m is scale_m sum_j |G_m(f_j)|^2 L_j
+        over the lines +-f_j of (cross-)variance L_j.
+    """
+    return WelchKernel._g(np.asarray(m), np.asarray(f_hz, dtype=float), setup.nperseg, setup.dt_s)
