@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import resource
 import subprocess
@@ -90,11 +91,13 @@ def case_turbgen_box(nt: int) -> dict:
     t0 = time.perf_counter()
     stored = build_stencil(params, box, evolving=False)
     t_build = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    synthesis(stored)
-    t_from_stored = time.perf_counter() - t0
+    t_from_stored = math.inf
+    for _ in range(2):  # the first big allocations of a process cost more: the better of two, as on demand
+        t0 = time.perf_counter()
+        synthesis(stored)
+        t_from_stored = min(t_from_stored, time.perf_counter() - t0)
     del stored
-    seconds = min(seconds, on_demand()[0])  # the first big allocations of a process cost more: take the better
+    seconds = min(seconds, on_demand()[0])
     return {"seconds": seconds, "stencil_s": seconds - t_from_stored, "stored_build_s": t_build, "sigma_u": var**0.5}
 
 
@@ -255,8 +258,9 @@ def main() -> None:
         print(f"  FFT floor: 3 unpruned inverse real FFTs of 128 x 128 x {nt_box} = "
               f"{_fmt(floor_b).split('  peak')[0].strip()}")
     print(f"  turbgen, synthesis in memory: {_fmt(box)}"
-          + (f" (stencil on demand: {box['stencil_s']:.2f} s = {box['stencil_s'] / box['seconds']:.0%} of the box "
-             f"more than from a stencil built beforehand, whose build took {box['stored_build_s']:.2f} s)"
+          + (f" (stencil computed on demand; the same synthesis from a stencil built beforehand: "
+             f"{box['seconds'] - box['stencil_s']:.2f} s + {box['stored_build_s']:.2f} s to build it, so the "
+             f"stencil's marginal cost is {box['stencil_s']:.2f} s = {box['stencil_s'] / box['seconds']:.0%} of the box)"
              if "stencil_s" in box else "")
           + ("" if fl is None or "error" in box else f"; / floor = {box['seconds'] / fl:.2f}"))
     print(f"  turbgen mann CLI (process start, stencil, store): {_fmt(cli)}"
