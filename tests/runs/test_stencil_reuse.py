@@ -17,13 +17,8 @@ from turbgen.cli import cli
 from turbgen.store import open_store
 from turbgen.sweep.manifest import read_manifest
 from turbgen.synthesis.mann_spacetime import mann_box
-from turbgen.synthesis.mann_stencil import (
-    BoxShape,
-    build_stencil,
-    build_unit_stencil,
-    scale_stencil,
-    stencil_key,
-)
+from turbgen.synthesis.mann_stencil import BoxShape, build_stencil, stencil_key
+from turbgen.synthesis.unit_stencil import build_unit_stencil, scale_stencil
 from turbgen.theory.params import MannParams
 
 BOX = BoxShape(nt=64, dx_m=4.0, nyp=12, nzp=10, dy_m=6.0, dz_m=5.0)

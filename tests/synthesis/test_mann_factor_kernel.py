@@ -13,7 +13,8 @@ import pytest
 
 from stencil_reference import reference_axis_cells, reference_coefficients, reference_unit_factors
 from turbgen.synthesis import mann_cells, mann_stencil
-from turbgen.synthesis.mann_stencil import BoxShape, build_stencil, build_unit_stencil
+from turbgen.synthesis.mann_stencil import BoxShape, build_stencil
+from turbgen.synthesis.unit_stencil import build_unit_stencil
 from turbgen.theory.eddy_lifetime import TABLE_KL_MAX, TABLE_KL_MIN, LifetimeTable
 from turbgen.theory.params import MannParams
 

@@ -23,14 +23,8 @@ from turbgen.runs.stencil_cache import cached_stencil
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.synthesis.mann_spacetime import COMPONENTS, MannSnapshots, snapshot_memory_bytes
-from turbgen.synthesis.mann_stencil import (
-    MannStencil,
-    UnitMannStencil,
-    build_stencil,
-    scale_stencil,
-    stencil_nbytes,
-    synthesis_box,
-)
+from turbgen.synthesis.mann_stencil import MannStencil, build_stencil, stencil_nbytes, synthesis_box
+from turbgen.synthesis.unit_stencil import UnitMannStencil, scale_stencil
 
 _BUILD_SCRATCH = 64 * 2**20  # float64 temporaries of the stencil-building batches (all threads)
 

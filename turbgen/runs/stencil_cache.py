@@ -2,7 +2,7 @@
 
 The file name is the hash of everything the unit stencil depends on (synthesis.mann_stencil.stencil_key:
 all parameters but ae), so a cache entry can never serve another parameter set, and serves every ae
-(synthesis.mann_stencil.scale_stencil). An entry ``mann-stencil-KEY.npy`` holds the four float64
+(synthesis.unit_stencil.scale_stencil). An entry ``mann-stencil-KEY.npy`` holds the four float64
 factors and, for evolving fields, 1/tau_e as a fifth (float64) array; it is built straight into the
 file and read back memory-mapped, so the factors never have to be resident. Entries are written to
 a temporary name and renamed; an unreadable or mismatched entry is rebuilt and replaced.
@@ -16,16 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.store.temporaries import temp_name
-from turbgen.synthesis.mann_stencil import (
-    BoxShape,
-    MannStencil,
-    UnitMannStencil,
-    build_unit_stencil,
-    scale_stencil,
-    stencil_key,
-    synthesis_box,
-    unit_stencil_nbytes,
-)
+from turbgen.synthesis.mann_stencil import BoxShape, MannStencil, stencil_key, synthesis_box
+from turbgen.synthesis.unit_stencil import UnitMannStencil, build_unit_stencil, scale_stencil, unit_stencil_nbytes
 from turbgen.theory.params import MannParams
 
 

@@ -111,29 +111,13 @@ class MannStencil:
         """
         if self.coef is not None:
             return self.coef, i0 - self.slab0
-        _factors(self.params, self.box, i0, i1, scratch[:, : i1 - i0], None, energy_scale(self.params))
+        slab_factors(self.params, self.box, i0, i1, scratch[:, : i1 - i0], None, energy_scale(self.params))
         return scratch, 0
 
     def cells_in(self, i0: int, i1: int) -> slice:
         """Rows of cell_index / cell_factor whose slab lies in [i0, i1)."""
         slabs = self.cell_index[:, 0]
         return slice(int(np.searchsorted(slabs, i0)), int(np.searchsorted(slabs, i1)))
-
-
-@dataclass(frozen=True, eq=False)
-class UnitMannStencil:
-    """The part of a stencil that does not depend on ae (Mann.rs and hipersim likewise build for ae = 1 and scale).
-
-    ``factors`` (4, nk1, nyp//2+1, nzp) float64 holds (e, k30, c1, c2) of _factors, from which
-    scale_stencil forms the float32 (A, P, Z1, Z2) of any ae bit-identically to build_stencil (a float32
-    stencil for ae = 1 times sqrt(ae) would differ in the last bit). ``inv_tau`` as in MannStencil
-    (it does not depend on ae). ``params`` carry ae = 1.
-    """
-
-    params: MannParams
-    box: BoxShape
-    factors: np.ndarray
-    inv_tau: np.ndarray | None
 
 
 def synthesis_box(run) -> BoxShape:
@@ -147,12 +131,6 @@ def stencil_nbytes(box: BoxShape, with_tau: bool) -> int:
     """Bytes held by the stencil of ``box`` (for memory estimates before building it)."""
     per = box.nk1 * box.nk2_half * box.nzp * 4
     return per * (5 if with_tau else 4)
-
-
-def unit_stencil_nbytes(box: BoxShape, with_tau: bool) -> int:
-    """Bytes [B] held by the UnitMannStencil of ``box``: four float64 factors, float32 1/tau_e if ``with_tau``."""
-    per = box.nk1 * box.nk2_half * box.nzp
-    return per * (36 if with_tau else 32)
 
 
 def expand_k2(half: np.ndarray, nyp: int, odd: bool, out: np.ndarray) -> np.ndarray:
@@ -195,17 +173,17 @@ def _table_half(table, log_kl_sq: np.ndarray, ksq, length_scale_m: float) -> np.
     return out
 
 
-def _factors(params: MannParams, box: BoxShape, i0: int, i1: int, out, inv_tau, energy: float | None) -> None:
+def slab_factors(params: MannParams, box: BoxShape, i0: int, i1: int, out, inv_tau, energy: float | None) -> None:
     """The factors of slabs [i0, i1) of ``box`` into the four arrays ``out`` (i1 - i0, nyp//2+1, nzp).
 
     ``energy`` None: the energy-free factors (e, k30, c1, c2) (float64), independent of ae: with
     a = e sqrt(ae L^(17/3) / (4 pi)) the coefficients are A = a, P = k30 a, Z1 = c1 a, Z2 = c2 a
-    (see _apply_energy), where e = (1 + (k0 L)^2)^(-17/12) and c1, c2 are zeta1, zeta2 of Mann (1994)
+    (see unit_stencil.apply_energy), where e = (1 + (k0 L)^2)^(-17/12) and c1, c2 are zeta1, zeta2 of Mann (1994)
     Eq. 13-17 (the formulas of theory.mann_tensor._distortion with its exact limits), with
     beta = Gamma tau~(|k| L) and tau_e from the lifetime tables (relative error <= 1e-6,
     theory.eddy_lifetime.TABLE_REL_ERROR) instead of Mann (1994) Eq. 4 / 6 / 15 point by point. At k = 0
     all four are 0 (no energy). ``energy`` = energy_scale(params): (A, P, Z1, Z2) times sqrt(dk1 dk2 dk3 / 2)
-    as _apply_energy forms them from the factors (out float32). ``inv_tau`` (i1 - i0, nyp//2+1, nzp)
+    as unit_stencil.apply_energy forms them from the factors (out float32). ``inv_tau`` (i1 - i0, nyp//2+1, nzp)
     float32 gets 1/tau_e [1/s], or None.
 
     Compiled loops (mann_factor_kernel) and numpy's log, exp and arctan on the batch. |k|^2, beta and
@@ -266,31 +244,12 @@ def energy_scale(params: MannParams) -> float:
     return np.sqrt(params.ae * params.length_scale_m ** (17.0 / 3.0) / (4.0 * np.pi))
 
 
-def _apply_energy(unit: np.ndarray, energy: float, k1, scale: float, out: np.ndarray) -> np.ndarray:
-    """(A, P, Z1, Z2) times sqrt(dk / 2) = ``scale`` into ``out`` (4, b, nh, nzp) float64 from the ``unit`` factors.
-
-    a = e ``energy`` (energy_scale), P = k30 a, Z1 = c1 a, Z2 = c2 a, A = a except on the k3 axis
-    (k1 = k2 = 0, where A is never used: m = 0 and k2 = 0). mann_factor_kernel.mann_factors applies the
-    energy by the same float64 operations in the same order when it builds a stencil directly, so a scaled
-    unit stencil is bit-identical to a direct build.
-    """
-    a, p, z1, z2 = out
-    np.multiply(unit[0], energy, out=a)
-    np.multiply(unit[1], a, out=p)
-    np.multiply(unit[2], a, out=z1)
-    np.multiply(unit[3], a, out=z2)
-    for i in np.flatnonzero(k1[:, 0, 0] == 0.0):
-        a[i, 0] = 0.0  # row 0 is k2 = 0
-    out *= scale
-    return out
-
-
 def build_step(box: BoxShape) -> int:
     """Slabs per stencil-building batch: batches start at multiples of it (also when building a part)."""
     return max(1, _BUILD_POINTS // (box.nk2_half * box.nzp))
 
 
-def _batches(box: BoxShape, first: int, end: int, batch, side=None):
+def slab_batches(box: BoxShape, first: int, end: int, batch, side=None):
     """Call ``batch(i0, i1)`` on the building batches cut to [first, end), on all cores; return ``side()``
     (None if not given), a task run in the same pool alongside the batches (the axis cells: mostly Python, so
     it overlaps the batches, which leave the GIL in compiled loops and numpy)."""
@@ -314,9 +273,9 @@ def _build(params: MannParams, box: BoxShape, with_tau: bool, slabs=None, cells=
 
     def batch(i0: int, i1: int) -> None:
         part = slice(i0 - first, i1 - first)
-        _factors(params, box, i0, i1, coef[:, part], None if inv_tau is None else inv_tau[part], energy)
+        slab_factors(params, box, i0, i1, coef[:, part], None if inv_tau is None else inv_tau[part], energy)
 
-    computed = _batches(box, first, end, batch, None if cells is not None else lambda: axis_cells(params, box))
+    computed = slab_batches(box, first, end, batch, None if cells is not None else lambda: axis_cells(params, box))
     index, factor = cells if cells is not None else computed
     return MannStencil(params, box, coef, inv_tau, index, factor, first)
 
@@ -354,74 +313,3 @@ def build_stencil(
         index, factor = cells if cells is not None else axis_cells(params, box)
         return MannStencil(params, box, None, None, index, factor)
     return _build(params, box, evolving and params.evo_time_s is not None, slabs, cells)
-
-
-def build_unit_stencil(
-    params: MannParams, box: BoxShape, *, evolving: bool = True, factors: np.ndarray | None = None
-) -> UnitMannStencil:
-    """The ae-free stencil of ``params`` on ``box``, to serve every ae through scale_stencil.
-
-    Building it costs what build_stencil costs; scaling it, a few multiplications per point.
-
-    Parameters
-    ----------
-    params : Mann parameters; ae is ignored (the result carries ae = 1).
-    box : the synthesis box.
-    evolving : False skips 1/tau_e (a stencil for single snapshots), as in build_stencil.
-    factors : optional (4, nk1, nyp//2+1, nzp) float64 array to hold the factors (e.g. a file mapped
-        by the stencil cache); by default they are allocated: twice the bytes of a MannStencil's
-        coefficients (unit_stencil_nbytes).
-
-    Returns
-    -------
-    UnitMannStencil
-    """
-    with_tau = evolving and params.evo_time_s is not None
-    nh, nzp = box.nk2_half, box.nzp
-    unit_params = params.with_ae(1.0)
-    factors = np.empty((4, box.nk1, nh, nzp)) if factors is None else factors
-    inv_tau = np.empty((box.nk1, nh, nzp), dtype=np.float32) if with_tau else None
-
-    def batch(i0: int, i1: int) -> None:
-        _factors(unit_params, box, i0, i1, factors[:, i0:i1], None if inv_tau is None else inv_tau[i0:i1], None)
-
-    _batches(box, 0, box.nk1, batch)
-    return UnitMannStencil(unit_params, box, factors, inv_tau)
-
-
-def scale_stencil(unit: UnitMannStencil, params: MannParams) -> MannStencil:
-    """The stencil of ``params`` (ae included) from the ae-free ``unit`` stencil.
-
-    Bit-identical to build_stencil(params, unit.box): the energy enters by the same float64 operations
-    at the same point (_apply_energy), then the coefficients are rounded to float32. The axis cells
-    (a few hundred 3 x 3 factors) are computed for ``params``: their eigen-decomposition is not
-    linear in ae to the last bit.
-
-    Parameters
-    ----------
-    unit : from build_unit_stencil (or the stencil cache) of parameters equal to ``params`` but for ae.
-    params : the run's parameters, ae [m^(4/3) s^-2] included.
-
-    Returns
-    -------
-    MannStencil : sharing ``unit.inv_tau`` (1/tau_e does not depend on ae).
-
-    Raises
-    ------
-    ValueError : ``unit`` was built for parameters that differ from ``params`` in more than ae.
-    """
-    if params.with_ae(1.0) != unit.params:
-        raise ValueError("the unit stencil was built for other parameters than ae")
-    box = unit.box
-    nh, nzp = box.nk2_half, box.nzp
-    scale = np.sqrt(np.prod(box.dk()) / 2.0)
-    energy = energy_scale(params)
-    k1_all = box.k1()
-    coef = np.empty((4, box.nk1, nh, nzp), dtype=np.float32)
-
-    def batch(i0: int, i1: int) -> None:
-        work = np.empty((4, i1 - i0, nh, nzp))
-        coef[:, i0:i1] = _apply_energy(unit.factors[:, i0:i1], energy, k1_all[i0:i1, None, None], scale, work)
-
-    index, factor = _batches(box, 0, box.nk1, batch, lambda: axis_cells(params, box))
-    return MannStencil(params, box, coef, unit.inv_tau, index, factor)
