@@ -48,7 +48,7 @@ def _model_spectra(fs, description, f_hz, radius_m: float):
                            a_x=km.a_x, b_x=km.b_x, long_components=km.long_components, vw_coherence=km.vw_coherent)
 
 
-def store_theory(fs, description, f_hz, radius_m: float, setup):
+def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int | None = None):
     """The expected Welch S_RR, S_LL, S_RL of ``description`` on the store at the bins f_hz > 0.
 
     The store's model and parameters are read from its attributes. A Mann store's spectra are summed
@@ -69,11 +69,14 @@ def store_theory(fs, description, f_hz, radius_m: float, setup):
         Rotor radius R [m].
     setup : WelchSetup
         The Welch estimate's segment length and time step [s].
+    n_samples : int, optional
+        Samples of the lidar signal; if given, the result's ``n_eff`` holds the equivalent independent
+        segments of its gamma^2_RL per bin (turbgen.lidar.welch_expectation.effective_segments).
 
     Returns
     -------
-    PreviewSpectra
-        Expected Welch S_RR, S_LL, S_RL at ``f_hz`` [m^2 s^-2 Hz^-1].
+    ExpectedWelch
+        Expected Welch S_RR, S_LL, S_RL at ``f_hz`` [m^2 s^-2 Hz^-1] (and ``n_eff`` [-] if asked for).
 
     Raises
     ------
@@ -84,7 +87,7 @@ def store_theory(fs, description, f_hz, radius_m: float, setup):
 
     record_s = fs.grid.nt * fs.grid.dt_s
     nodes, _ = theory_nodes(f_hz, setup, record_s)
-    return expected_welch(_model_spectra(fs, description, nodes, radius_m), f_hz, setup, record_s)
+    return expected_welch(_model_spectra(fs, description, nodes, radius_m), f_hz, setup, record_s, n_samples)
 
 
 @dataclass
@@ -334,10 +337,12 @@ def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, sh
                     shear_exponent=shear_exponent, nperseg=nperseg)
     fw = run.welch["f_hz"]
     f = fw[1:-1][fw[1:-1] <= F_THEORY_MAX_HZ]
-    th = store_theory(fs, desc, f, run.rotor_radius_m, run.welch["setup"])
+    th = store_theory(fs, desc, f, run.rotor_radius_m, run.welch["setup"], run.u_LL.size)
     coh2_th = np.full(fw.size, np.nan)
     coh2_th[1 : 1 + f.size] = th.coh2_RL
-    metric = compare.coherence_metric(run.welch["f_hz"], run.welch["coh2_RL"], np.nan_to_num(coh2_th), run.welch["n_eff"])
+    n_eff = np.full(fw.size, run.welch["n_eff"])  # (bins above F_THEORY_MAX_HZ are not tested)
+    n_eff[1 : 1 + f.size] = th.n_eff
+    metric = compare.coherence_metric(run.welch["f_hz"], run.welch["coh2_RL"], np.nan_to_num(coh2_th), n_eff)
     numbers = compare.preview_numbers(np.concatenate([[0.0], f]), np.concatenate([[1.0], th.coh2_RL]),
                                       np.concatenate([[th.G_RL[0]], th.G_RL]), fs.U_m_s)
     return LidarReport(str(fs.path), desc, run, f, th.coh2_RL, th.G_RL, numbers, metric, fs.U_m_s)
