@@ -38,11 +38,10 @@ MIN_NEFF = 10.0
 BAND_P = (0.025, 0.975)  # probabilities of the plotted band's edges
 
 
-def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None = None,
-                     f_min_hz: float | None = None) -> MetricResult:
+def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None = None) -> MetricResult:
     """MetricResult comparing simulated and theoretical gamma^2_RL bin by bin (bins 1 .. Nyquist-1).
 
-    Bins are tested where the theory gives gamma^2 >= MIN_COH2 and f_min_hz <= f <= ``f_max_hz``, and only
+    Bins are tested where the theory gives gamma^2 >= MIN_COH2 and f <= ``f_max_hz``, and only
     where n_eff >= MIN_NEFF; each tested bin's z is the normal score of the simulated value under Goodman's
     law of the estimate from n_eff independent segments (``turbgen.validate.distributions.coh2_z``), its
     expectation and sd are that law's (``coh2_moments``). Where 1 - gamma^2 < NEAR_UNIT (or n_eff <= 1)
@@ -60,8 +59,6 @@ def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None 
         Effective number of independent Welch segments [-], one for all bins or one per bin.
     f_max_hz : float, optional
         Highest frequency tested [Hz]; None (default) tests up to Nyquist-1.
-    f_min_hz : float, optional
-        Lowest frequency tested [Hz]; None (default) tests from bin 1.
 
     Returns
     -------
@@ -87,8 +84,6 @@ def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None 
     sel &= (th >= MIN_COH2) & (n >= MIN_NEFF)
     if f_max_hz is not None:
         sel &= f <= f_max_hz
-    if f_min_hz is not None:
-        sel &= f >= f_min_hz
     checks = [Check("coh2_RL", (float(f[i]), float(f[i])), float(sim[i]), float(mean[i]), float(sd[i]), float(z[i]))
               for i in np.nonzero(sel)[0]]
     curve = Curve("coh2_RL", f[1:-1], sim[1:-1], mean[1:-1], lower[1:-1], upper[1:-1])
