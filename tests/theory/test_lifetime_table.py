@@ -60,15 +60,3 @@ def test_outside_the_table_is_exact_and_k_zero_is_infinite():
 def test_unknown_kind_is_refused():
     with pytest.raises(ValueError, match="kind"):
         LifetimeTable("kolmogorov")
-
-
-@pytest.mark.parametrize("n", [4, 5, 9, 40])
-def test_not_a_knot_spline_is_scipys_cubic_spline_bit_for_bit(n):
-    from scipy.interpolate import CubicSpline
-
-    from turbgen.theory.eddy_lifetime import not_a_knot_spline
-
-    rng = np.random.default_rng(n)
-    x = np.cumsum(rng.uniform(0.05, 1.0, n))
-    y = rng.standard_normal(n) * 10.0 ** rng.uniform(-3, 3, n)
-    assert np.array_equal(not_a_knot_spline(x, y).view(np.uint64), CubicSpline(x, y).c.view(np.uint64))

@@ -179,6 +179,8 @@ class LifetimeTable:
     """
 
     def __init__(self, kind: str, parameter: float = 1.0):
+        from scipy.interpolate import CubicSpline
+
         if kind == "mann":
             self.exact = mann_lifetime
         elif kind == "guo":
@@ -190,7 +192,7 @@ class LifetimeTable:
         self.x0, self.h = float(np.log(TABLE_KL_MIN)), TABLE_STEP[kind]
         n = int(np.ceil((np.log(TABLE_KL_MAX) - self.x0) / self.h)) + 1
         x = self.x0 + self.h * np.arange(n)
-        c = not_a_knot_spline(x, self.exact(np.exp(x)))  # (4, n - 1): powers 3, 2, 1, 0 of (x - x_i)
+        c = CubicSpline(x, self.exact(np.exp(x))).c  # (4, n - 1): powers 3, 2, 1, 0 of (x - x_i)
         self.coefficients = tuple(np.ascontiguousarray(row) for row in c)  # (c3, c2, c1, c0) per interval
         self.n_intervals = n - 1
 
@@ -230,51 +232,6 @@ class LifetimeTable:
         if outside.any():
             out[outside] = self.exact(np.sqrt(ksq[outside]) * length_scale_m)
         return out
-
-
-def not_a_knot_spline(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Coefficients of the not-a-knot cubic spline through (x, y), as ``scipy.interpolate.CubicSpline(x, y).c``.
-
-    The same operations as scipy's CubicSpline (1.17) for 1-D y and n >= 4 nodes: the tridiagonal system of the
-    node slopes (de Boor 1978, Ch. IV) solved by ``scipy.linalg.solve_banded``, then the Hermite coefficients;
-    tested equal to scipy's bit for bit. Written out because importing scipy.interpolate (with scipy.optimize)
-    cost 0.1-0.26 s of every Mann run's start-up, for these few lines; scipy.linalg is loaded anyway (numba).
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        (n,) strictly increasing nodes, n >= 4.
-    y : numpy.ndarray
-        (n,) float64 values at the nodes.
-
-    Returns
-    -------
-    numpy.ndarray
-        (4, n - 1): on [x_i, x_i+1), y = ((c0 d + c1) d + c2) d + c3 with d = x - x_i (rows: powers 3, 2, 1, 0).
-    """
-    from scipy.linalg import solve_banded
-
-    n = x.size
-    dx = np.diff(x)
-    slope = np.diff(y, axis=0) / dx
-    A = np.zeros((3, n))  # banded: upper diagonal, diagonal, lower diagonal
-    b = np.empty(n)
-    A[1, 1:-1] = 2 * (dx[:-1] + dx[1:])
-    A[0, 2:] = dx[:-1]
-    A[-1, :-2] = dx[1:]
-    b[1:-1] = 3 * (dx[1:] * slope[:-1] + dx[:-1] * slope[1:])
-    A[1, 0] = dx[1]  # not-a-knot at both ends: the third derivative is continuous at x_1 and x_n-2
-    A[0, 1] = x[2] - x[0]
-    d = x[2] - x[0]
-    b[0] = ((dx[0] + 2 * d) * dx[1] * slope[0] + dx[0] ** 2 * slope[1]) / d
-    A[1, -1] = dx[-2]
-    A[-1, -2] = x[-1] - x[-3]
-    d = x[-1] - x[-3]
-    b[-1] = (dx[-1] ** 2 * slope[-2] + (2 * d + dx[-1]) * dx[-2] * slope[-1]) / d
-    s = solve_banded((1, 1), A, b.reshape(n, -1), overwrite_ab=True, overwrite_b=True, check_finite=False)
-    s = s.reshape(n)
-    t = (s[:-1] + s[1:] - 2 * slope) / dx
-    return np.stack((t / dx, (slope - s[:-1]) / dx - t, s[:-1], y[:-1]))
 
 
 @lru_cache(maxsize=16)
