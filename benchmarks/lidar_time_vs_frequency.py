@@ -49,13 +49,13 @@ def _spectra(fs, desc, plane_map=None) -> dict:
     t, u_ll = signals.lidar_estimate(s, fs.U_m_s)
     u_rr, _ = signals.rotor_average(fs, desc.rotor_radius_m, t)
     w = signals.welch_rl(u_ll, u_rr, WelchSetup(NPERSEG, float(t[1] - t[0])))
-    return {k: w[k] for k in ("f_hz", "S_LL", "S_RR", "S_RL", "n_eff", "setup")}
+    return {**{k: w[k] for k in ("f_hz", "S_LL", "S_RR", "S_RL", "n_eff", "setup")}, "n_samples": t.size, "fields": 1}
 
 
 def _add(acc: dict | None, w: dict) -> dict:
     if acc is None:
         return dict(w)
-    return {**acc, **{k: acc[k] + w[k] for k in ("S_LL", "S_RR", "S_RL", "n_eff")}}
+    return {**acc, **{k: acc[k] + w[k] for k in ("S_LL", "S_RR", "S_RL", "n_eff", "fields")}}
 
 
 def _coh2(acc: dict) -> np.ndarray:
@@ -96,8 +96,10 @@ def main() -> None:
                     acc["shuffled"] = _add(acc["shuffled"], _spectra(fs, desc, reverse))
                     if theory is None:
                         f = acc["evolving"]["f_hz"]
-                        th = store_theory(fs, desc, f[1:-1], desc.rotor_radius_m, acc["evolving"]["setup"])
+                        th = store_theory(fs, desc, f[1:-1], desc.rotor_radius_m, acc["evolving"]["setup"],
+                                          acc["evolving"]["n_samples"])
                         theory = np.concatenate([[0.0], th.coh2_RL, [0.0]])
+                        segments = th.n_eff  # equivalent segments per field and bin (lowest bin: fewer)
                         U = fs.U_m_s
                 del fs
                 shutil.rmtree(out)
@@ -110,9 +112,10 @@ def main() -> None:
         if acc[kind] is None:
             continue
         c = _coh2(acc[kind])
-        m = compare.coherence_metric(f, c, theory, acc[kind]["n_eff"])
+        n_bins = np.concatenate([[acc[kind]["n_eff"]], acc[kind]["fields"] * segments, [acc[kind]["n_eff"]]])
+        m = compare.coherence_metric(f, c, theory, n_bins)
         k05 = compare.preview_numbers(f, c, np.sqrt(np.clip(c, 0, 1)), U)["k05_rad_m"]
-        rows.append((kind, acc[kind]["n_eff"], len(m.tests), m.max_abs_z, m.z_crit, m.passed, k05))
+        rows.append((kind, acc[kind]["n_eff"], len(m.checks), m.max_abs_z, m.z_crit, m.passed, k05))
         curves[kind] = c
     k05_th = compare.preview_numbers(f[1:-1], theory[1:-1], np.sqrt(theory[1:-1]), U)["k05_rad_m"]
     n = len(_seeds(a.seeds))
