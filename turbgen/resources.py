@@ -29,6 +29,17 @@ def format_bytes(n: float) -> str:
     return f"{n:.0f} B" if i == 0 else f"{n:.1f} {units[i]}"
 
 
+def resident_bytes(status: Path = Path("/proc/self/status")) -> int | None:
+    """This process's resident memory now [bytes] (VmRSS), or None where /proc does not tell (not Linux)."""
+    try:
+        for line in status.read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024  # the value is in kB
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
 def _meminfo_available(meminfo: Path) -> int | None:
     try:
         for line in meminfo.read_text().splitlines():

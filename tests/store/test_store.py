@@ -350,6 +350,14 @@ def test_require_memory_message_names_need_available_and_option(monkeypatch):
     assert resources.require_memory(2**60, "x", "y") is None  # unknown -> no refusal
 
 
+def test_resident_bytes_reads_vmrss(tmp_path):
+    status = tmp_path / "status"
+    status.write_text("Name:\tpython\nVmHWM:\t  300000 kB\nVmRSS:\t  123456 kB\n")
+    assert resources.resident_bytes(status) == 123456 * 1024
+    assert resources.resident_bytes(tmp_path / "absent") is None
+    assert resources.resident_bytes() > 10 * 2**20  # this interpreter (Linux)
+
+
 def test_available_memory_reads_meminfo_and_cgroup(tmp_path):
     meminfo = tmp_path / "meminfo"
     meminfo.write_text("MemTotal:  8000000 kB\nMemFree:  100 kB\nMemAvailable:  4000000 kB\n")

@@ -12,7 +12,7 @@ from turbgen.cli.options import plane_positions
 from turbgen.cli.run_options import grid_options, run_mapping
 from turbgen.resources import default_threads, parse_size
 from turbgen.runs.mann import describe, memory_estimate_bytes, run_mann
-from turbgen.runs.mann_outofcore import BASE_BYTES, remove_stale_scratch
+from turbgen.runs.mann_outofcore import base_bytes, remove_stale_scratch
 from turbgen.spec.defaults import MANN_DEFAULTS as D
 from turbgen.spec.defaults import MANN_GRID as G
 from turbgen.spec.mann import MannRun
@@ -115,7 +115,7 @@ def mann(**opt):
     check_output_path(out)
     threads = default_threads(opt["threads"])
     budget = parse_size(opt["memory"], "--memory") if opt["memory"] is not None else resources.available_memory_bytes()
-    in_memory = memory_estimate_bytes(run, threads, opt["stencil_cache"] is None) + BASE_BYTES
+    in_memory = memory_estimate_bytes(run, threads, opt["stencil_cache"] is None) + base_bytes()
     plan = None
     if budget is not None and in_memory > budget:
         from turbgen.runs.mann_outofcore import OutOfCorePlan

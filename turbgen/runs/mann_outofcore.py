@@ -38,7 +38,7 @@ import numpy as np
 from tqdm import tqdm
 
 from turbgen.errors import ParameterError
-from turbgen.resources import default_threads, format_bytes, require_disk
+from turbgen.resources import default_threads, format_bytes, require_disk, resident_bytes
 from turbgen.runs.scratch import read_at, write_at
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
@@ -56,8 +56,23 @@ from turbgen.synthesis.mann_stencil import build_stencil, synthesis_box
 
 BASE_BYTES = 250 * 2**20  # the interpreter with turbgen, numpy, scipy, zarr, pyfftw loaded (VmHWM measured 165 MiB,
 # 197 MiB in a fresh virtualenv) + slack
+# what a run allocates after it is planned besides the planned arrays: the axis cells' temporaries (~100 k tensor
+# nodes at a time: +30 MiB of resident memory measured on a 2048 x 64 x 64 box), FFTW plans, zarr's buffers
+LATE_BYTES = 48 * 2**20
 _C64, _F32 = 8, 4
 _HINT = "raise `memory`, or lower `nt`, `ny`/`nz` or `pad_yz`"
+
+
+def base_bytes() -> int:
+    """Memory [bytes] a budget leaves to the process besides a run's planned arrays: BASE_BYTES, or what is
+    resident now plus LATE_BYTES if that is more.
+
+    What is resident depends on what the process did before: computing ae from sigma_u (the Mann spectra's
+    quadrature) leaves ~70-125 MiB more resident than a given ae (the allocator keeps the freed buffers; measured),
+    and a budget must hold that too (it bounds the process's peak resident memory, VmHWM).
+    """
+    resident = resident_bytes()
+    return BASE_BYTES if resident is None else max(BASE_BYTES, resident + LATE_BYTES)
 
 
 def _scratch_prefix(out: Path) -> str:
@@ -111,10 +126,11 @@ class OutOfCorePlan:
             + 4 * self.points * _C64  # cropped spectra, and one component's contiguous copy for the scratch write
         )
         # 3/4 of what is left: numpy temporaries, allocator slack (measured: the peak stays below the budget)
-        free = (self.memory_bytes - BASE_BYTES - scratch - building) * 3 // 4
+        base = base_bytes()
+        free = (self.memory_bytes - base - scratch - building) * 3 // 4
         self.slabs_per_part = (free // (per_slab * align)) * align if free > 0 else 0
         if self.slabs_per_part < align:
-            need = BASE_BYTES + scratch + building + per_slab * align * 4 // 3
+            need = base + scratch + building + per_slab * align * 4 // 3
             raise ParameterError(
                 f"the out-of-core Mann run needs at least {format_bytes(need)} of memory "
                 f"(got a budget of {format_bytes(self.memory_bytes)}); {_HINT}"
@@ -127,7 +143,7 @@ class OutOfCorePlan:
         self.n_parts = -(-box.nk1 // self.slabs_per_part)
         # pass 2: the plane (and a copy) in memory if they fit a quarter of the budget, else a plane scratch file
         plane = g.nt * self.points * _F32
-        pass2 = self.memory_bytes - BASE_BYTES
+        pass2 = self.memory_bytes - base
         self.plane_in_memory = 2 * plane <= pass2 // 4 if plane_in_memory is None else plane_in_memory
         # points read back per block: spectra (block, nk1) complex64 twice + their transform, within an eighth
         per_point = 2 * self.n_parts * self.slabs_per_part * _C64 + g.nt * _F32

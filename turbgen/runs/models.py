@@ -54,9 +54,9 @@ def _mann_out_of_core(run: MannRun, threads: int | None, memory_bytes: int | Non
     if memory_bytes is None:
         return False
     from turbgen.runs.mann import memory_estimate_bytes
-    from turbgen.runs.mann_outofcore import BASE_BYTES
+    from turbgen.runs.mann_outofcore import base_bytes
 
-    return memory_estimate_bytes(run, threads or os.cpu_count() or 1) + BASE_BYTES > memory_bytes
+    return memory_estimate_bytes(run, threads or os.cpu_count() or 1) + base_bytes() > memory_bytes
 
 
 def _run_mann(run: MannRun, out, *, overwrite=False, chunk_t=None, threads=None, memory_bytes=None, shared=None):
