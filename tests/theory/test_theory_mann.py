@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from turbgen.errors import ParameterError
+from turbgen.theory import mann_quadrature as mq
 from turbgen.theory import mann_spectra as ms
 from turbgen.theory.mann_tensor import isotropic_variance, sheared_tensor
 from turbgen.theory.params import MannParams
@@ -18,7 +19,7 @@ STABLE = MannParams(0.652, 30.0, 2.4, factor1=0.8, evo_time_s=200.0)
 
 
 def _quad(k1, p, rule, d=(0.0, 0.0), pairs=((0, 0), (1, 1), (2, 2), (0, 2))):
-    _, w, g = ms.perpendicular_quadrature(k1, p, pairs, *d, _rule=rule)
+    _, w, g = mq.perpendicular_quadrature(k1, p, pairs, *d, _rule=rule)
     return {q: (w * g[q]).sum(-1) for q in pairs}
 
 
@@ -169,10 +170,10 @@ def test_quadrature_threads_do_not_change_the_numbers(monkeypatch):
     """perpendicular_quadrature evaluates its batches on threads: every batch fills its own rows."""
     p = MannParams(ae=0.7, length_scale_m=30.0, gamma=2.5, lifetime="mann")
     k1 = np.geomspace(1e-4, 10.0, 40)
-    monkeypatch.setattr(ms, "_CHUNK_POINTS", 20_000)  # many batches
-    monkeypatch.setattr(ms, "_QUADRATURE_THREADS", 3)
+    monkeypatch.setattr(mq, "_CHUNK_POINTS", 20_000)  # many batches
+    monkeypatch.setattr(mq, "_QUADRATURE_THREADS", 3)
     threaded = ms.one_point_spectra(k1, p), ms.cross_spectrum(k1, p, 0, 2, 5.0, 3.0)
-    monkeypatch.setattr(ms, "_QUADRATURE_THREADS", 1)
+    monkeypatch.setattr(mq, "_QUADRATURE_THREADS", 1)
     serial = ms.one_point_spectra(k1, p), ms.cross_spectrum(k1, p, 0, 2, 5.0, 3.0)
     for name in serial[0]:
         assert np.array_equal(threaded[0][name], serial[0][name]), name

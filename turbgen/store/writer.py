@@ -14,9 +14,7 @@ of earlier writers of ``path`` that were killed (SIGKILL) are removed when the n
 from __future__ import annotations
 
 import datetime as _dt
-import json
 import os
-import shutil
 import threading
 import warnings
 from pathlib import Path
@@ -29,49 +27,12 @@ from turbgen.errors import StoreError, check_int
 from turbgen.grid import Grid
 from turbgen.resources import format_bytes, require_disk
 from turbgen.store import layout
+from turbgen.store.attributes import check_caller_attrs, jsonable, looks_like_turbgen_store
 from turbgen.store.chunk_files import raw_chunk_path, write_chunk_file
+from turbgen.store.discard import drain_zarr_io, remove
 from turbgen.store.temporaries import (exit_on_signals, publish, raise_if_signalled, remove_dead_temporaries,
                                        report_removed, temp_name)
 from turbgen.store.paths import check_output_path
-
-def _jsonable(value):
-    """``value`` with numpy scalars/arrays and tuples turned into plain JSON types."""
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.floating):
-        return float(str(value))  # shortest repr: float32(3.1) -> 3.1, not 3.0999999046325684
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, Path):
-        return str(value)
-    return value
-
-
-def _looks_like_turbgen_store(path: Path) -> bool:
-    try:
-        meta = json.loads((path / "zarr.json").read_text())
-    except (OSError, ValueError):
-        return False
-    attrs = meta.get("attributes", {}) if isinstance(meta, dict) else {}
-    return isinstance(attrs, dict) and "turbgen_version" in attrs
-
-
-def _check_caller_attrs(attrs: dict) -> dict:
-    """Programming errors in the attributes a generator passes (not user input)."""
-    missing = [k for k in layout.CALLER_ATTRS if k not in attrs]
-    if missing:
-        raise ValueError(f"store attrs lack {missing} (required: {list(layout.CALLER_ATTRS)})")
-    reserved = [k for k in (*layout.WRITER_ATTRS, layout.MARKER) if k in attrs]
-    if reserved:
-        raise ValueError(f"store attrs {reserved} are set by the writer, do not pass them")
-    out = _jsonable(dict(attrs))
-    no_unit = [k for k in out["parameters"] if k not in out["units"]]
-    if no_unit:
-        raise ValueError(f"store attrs 'units' lack a unit for parameters {no_unit} ('1' dimensionless, '' text)")
-    json.dumps(out, allow_nan=False)  # raises on values a JSON reader could not load
-    return out
 
 
 class StoreWriter:
@@ -179,7 +140,7 @@ class StoreWriter:
         clash = [k for k in attrs if k in self._group.attrs or k == layout.MARKER]
         if clash:
             raise ValueError(f"store attrs {clash} are already set")
-        self._group.attrs.update(_jsonable(attrs))
+        self._group.attrs.update(jsonable(attrs))
 
     def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0, squares: bool = False):
         """Write ``data`` (nt_block, ny, nz) to ``component`` at plane index ``ix``, time ``t0``.
@@ -303,7 +264,7 @@ class StoreWriter:
 
     def _install(self) -> None:
         """Rename the finished temporary directory to ``path`` (swapping out an old store if allowed)."""
-        if (self.path.exists() or self.path.is_symlink()) and self._overwrite and not _looks_like_turbgen_store(self.path):
+        if (self.path.exists() or self.path.is_symlink()) and self._overwrite and not looks_like_turbgen_store(self.path):
             raise StoreError(f"{self.path} appeared while writing and is not a turbgen store; not replaced")
         try:
             old = publish(self._tmp, self.path, replace=self._overwrite)
@@ -314,33 +275,9 @@ class StoreWriter:
 
     def _discard(self) -> None:
         if self._tmp is not None:
-            _drain_zarr_io()
-            _remove(self._tmp)
+            drain_zarr_io()
+            remove(self._tmp)
             self._tmp = None
-
-
-def _drain_zarr_io(timeout_s: float = 10.0) -> None:
-    """Wait for zarr's I/O tasks still running in its event-loop thread (a Ctrl-C interrupts the
-    waiting, not the writing): otherwise they recreate files in a directory being removed, and
-    print tracebacks at interpreter shutdown."""
-    import asyncio
-
-    from zarr.core import sync as zsync
-
-    loop = zsync.loop[0]
-    if loop is None or loop.is_closed() or not loop.is_running():
-        return
-
-    async def wait_others():
-        me = asyncio.current_task()
-        others = [t for t in asyncio.all_tasks() if t is not me]
-        if others:
-            await asyncio.wait(others, timeout=timeout_s)
-
-    try:
-        asyncio.run_coroutine_threadsafe(wait_others(), loop).result(timeout_s + 1)
-    except Exception:  # noqa: BLE001 - best effort: the directory is removed anyway
-        pass
 
 
 def _raise_disk_error(exc: BaseException, path: Path) -> None:
@@ -348,13 +285,6 @@ def _raise_disk_error(exc: BaseException, path: Path) -> None:
     if isinstance(exc, OSError) and not isinstance(exc, StoreError):
         reason = exc.strerror or (str(exc).splitlines() or [type(exc).__name__])[0]
         raise StoreError(f"writing {path} failed: {reason} (errno {exc.errno}); nothing was written") from None
-
-
-def _remove(path: Path) -> None:
-    if path.is_dir() and not path.is_symlink():
-        shutil.rmtree(path, ignore_errors=True)
-    elif path.exists() or path.is_symlink():
-        path.unlink()
 
 
 def create_store(
@@ -402,7 +332,7 @@ def create_store(
     if chunk_t is None:
         chunk_t = layout.default_chunk_t(grid.nt)
     chunk_t = check_int("chunks (time samples per chunk)", chunk_t, 1, grid.nt)
-    full = _check_caller_attrs(attrs)
+    full = check_caller_attrs(attrs)
     layout.validate_attrs(
         {
             **full,
@@ -420,7 +350,7 @@ def create_store(
     if path.exists() or path.is_symlink():
         if not overwrite:
             raise StoreError(f"{path} already exists; use `overwrite` to replace it")
-        if not _looks_like_turbgen_store(path):
+        if not looks_like_turbgen_store(path):
             raise StoreError(f"{path} exists and is not a turbgen store; refusing to replace it")
     if not path.parent.is_dir():
         raise StoreError(f"output directory {path.parent} does not exist")

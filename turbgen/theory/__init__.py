@@ -8,6 +8,7 @@ mann_tensor       von Karman spectrum, sheared tensor Phi_ij and its square-root
 kaimal            IEC 61400-1 Kaimal spectra and NTM parameters (Eq. 11)
 coherence_models  yz exponential (Eq. 12), longitudinal exponential (Eq. 18), Simley-Pao, Kristensen
 mann_spectra      one-point and cross-spectra F_ij(k1, dy, dz) by quadrature (Eq. 8-10), variances, ae for sigma_u
+mann_quadrature   the (k2, k3) quadrature of Eq. 8: radial nodes, angular integrals of the sheared tensor
 space_time        space-time tensor Theta (Eq. 13) and longitudinal coherence (Eq. 16)
 rotor_effective   rotor-effective wind speed spectra (Eq. 24 Mann, Eq. 25 Kaimal)
 lattice           line frequencies, pair weights and box wavenumbers of the periodic record/box

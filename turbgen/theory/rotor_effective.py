@@ -13,7 +13,7 @@ from scipy.special import j1
 from turbgen.errors import ParameterError, check_positive
 from turbgen.theory.coherence_models import exponential_yz
 from turbgen.theory.kaimal import kaimal_spectrum
-from turbgen.theory.mann_spectra import perpendicular_quadrature
+from turbgen.theory.mann_quadrature import perpendicular_quadrature
 from turbgen.theory.params import KaimalParams, MannParams, check_wind_speed
 
 

@@ -1,7 +1,7 @@
 """Space-time tensor and longitudinal coherence of Guo et al. (2022), as in Guo et al. (2023, Sect. 2.3.1).
 
 Theta_ij(k, dt) = exp(-dt / tau_e(|k|)) Phi_ij(k) (Eq. 13). Because tau_e depends on |k| only, the
-(k2, k3) integral of Theta_11 at fixed k1 uses the quadrature of mann_spectra (angular integrals on
+(k2, k3) integral of Theta_11 at fixed k1 uses the quadrature in mann_quadrature (angular integrals on
 circles kappa = const) with the radial factor exp(-dt/tau_e(sqrt(k1^2 + kappa^2))).
 """
 
@@ -11,7 +11,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError, check_finite
 from turbgen.theory.eddy_lifetime import evolution_lifetime_s
-from turbgen.theory.mann_spectra import perpendicular_quadrature
+from turbgen.theory.mann_quadrature import perpendicular_quadrature
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams, check_wind_speed
 
