@@ -31,7 +31,8 @@ def drain_zarr_io(timeout_s: float = 10.0) -> None:
         pass
 
 
-def remove(path: Path) -> None:
+def remove_path(path: Path) -> None:
+    """Remove ``path``: a directory tree (not followed through a symlink), a file or a symlink; nothing if absent."""
     if path.is_dir() and not path.is_symlink():
         shutil.rmtree(path, ignore_errors=True)
     elif path.exists() or path.is_symlink():

@@ -29,7 +29,7 @@ from turbgen.resources import format_bytes, require_disk
 from turbgen.store import layout
 from turbgen.store.attributes import check_caller_attrs, jsonable, looks_like_turbgen_store
 from turbgen.store.chunk_files import raw_chunk_path, write_chunk_file
-from turbgen.store.discard import drain_zarr_io, remove
+from turbgen.store.discard import drain_zarr_io, remove_path
 from turbgen.store.temporaries import (exit_on_signals, publish, raise_if_signalled, remove_dead_temporaries,
                                        report_removed, temp_name)
 from turbgen.store.paths import check_output_path
@@ -276,7 +276,7 @@ class StoreWriter:
     def _discard(self) -> None:
         if self._tmp is not None:
             drain_zarr_io()
-            remove(self._tmp)
+            remove_path(self._tmp)
             self._tmp = None
 
 
