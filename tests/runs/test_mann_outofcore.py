@@ -72,8 +72,7 @@ def test_cli_memory_option_goes_out_of_core_with_the_same_field(tmp_path, monkey
     monkeypatch.chdir(tmp_path)
     args = ["mann", "--nt", "64", "--ny", "9", "--nz", "10", "--planes", "0,50"]
     assert CliRunner().invoke(cli, [*args, "--out", "a.zarr"]).exit_code == 0
-    for module in ("turbgen.cli.mann", "turbgen.runs.mann_outofcore"):  # the interpreter's own share aside
-        monkeypatch.setattr(f"{module}.base_bytes", lambda: 0)
+    monkeypatch.setattr(ooc, "base_bytes", lambda: 0)  # the interpreter's own share aside
     res = CliRunner().invoke(cli, [*args, "--memory", "48MiB", "--out", "b.zarr"])
     assert res.exit_code == 0, res.output
     assert "out-of-core: budget 48.0 MiB" in res.output
@@ -140,6 +139,37 @@ def test_base_follows_what_is_resident(monkeypatch):
     assert ooc.base_bytes() == ooc.BASE_BYTES
     monkeypatch.setattr(ooc, "resident_bytes", lambda: None)  # no /proc
     assert ooc.base_bytes() == ooc.BASE_BYTES
+
+
+def test_local_cluster_plan_shares_the_budget_with_this_process():
+    run = MannRun.from_mapping({"grid": {"nt": 8192, "ny": 48, "nz": 48, "x_m": [0.0, 50.0]}, "ae": 0.3})
+    here = ooc.BASE_BYTES + ooc.LOCAL_CLUSTER_BYTES  # this process (the fixture: BASE_BYTES) and the cluster's share
+    worker = ooc.OutOfCorePlan(run, 2**62, 1, base=ooc.BASE_BYTES).minimum_bytes
+    assert memory_estimate_bytes(run, 2) + ooc.BASE_BYTES > here + 2 * worker + 2**20  # not in memory
+    with pytest.raises(ParameterError, match="local cluster of 2 workers needs at least .* each worker"):
+        ooc.plan_for_budget(run, here + 2 * worker - 1, 2, scheduler="local")
+    plan = ooc.plan_for_budget(run, here + 2 * worker + 2**20, 2, scheduler="local")
+    assert plan.memory_bytes == (2 * worker + 2**20) // 2 and plan.threads == 1 and "per worker" in plan.describe()
+    assert ooc.plan_for_budget(run, 2**40, 2, scheduler="local") is None  # fits in memory: no cluster
+    assert not ooc.plan_for_budget(run, 400 * 2**20, 2).per_worker
+
+
+def test_local_cluster_run_stays_within_the_shared_budget(tmp_path):
+    # this process's peak plus each worker's (the largest child's) bounds what the processes held at once
+    code = (
+        "import resource, sys\nfrom turbgen.cli import cli\ncli.main(sys.argv[1:], standalone_mode=False)\n"
+        "hwm = int(open('/proc/self/status').read().split('VmHWM:')[1].split()[0])\n"
+        "print('KIB', hwm, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n"
+    )
+    args = ["mann", "--nt", "4096", "--ny", "48", "--nz", "48", "--planes", "0,50,100", "--threads", "2",
+            "--scheduler", "local", "--memory", "1GiB", "--out", "a.zarr"]  # fmt: skip
+    res = subprocess.run([sys.executable, "-c", code, *args], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert "per worker" in res.stdout
+    parent_kib, worker_kib = (int(v) for v in res.stdout.split("KIB")[1].split())
+    tracker_kib = 16 * 1024  # multiprocessing's resource tracker, alive until this process exits (15 MiB measured)
+    assert (parent_kib + 2 * worker_kib + tracker_kib) * 1024 <= 2**30, (parent_kib, worker_kib)
+    assert open_store(tmp_path / "a.zarr").attrs["turbgen_complete"] is True
 
 
 def _scratch_dirs(d):

@@ -11,8 +11,8 @@ from turbgen import resources
 from turbgen.cli.options import plane_positions
 from turbgen.cli.run_options import grid_options, run_mapping
 from turbgen.resources import default_threads, parse_size
-from turbgen.runs.mann import describe, memory_estimate_bytes, run_mann
-from turbgen.runs.mann_outofcore import base_bytes, remove_stale_scratch
+from turbgen.runs.mann import describe, run_mann
+from turbgen.runs.mann_outofcore import local_cluster, plan_for_budget, remove_stale_scratch
 from turbgen.spec.defaults import MANN_DEFAULTS as D
 from turbgen.spec.defaults import MANN_GRID as G
 from turbgen.spec.mann import MannRun
@@ -45,18 +45,16 @@ def _evo(ctx, param, value):
 
 
 @contextmanager
-def _dask_client(scheduler):
-    """None (both passes in this process), a Client of the given scheduler, or of a LocalCluster ('local')."""
+def _dask_client(scheduler, workers: int):
+    """None (both passes in this process), a Client of the given scheduler, or of a LocalCluster of ``workers``
+    ('local')."""
     if scheduler is None:
         yield None
         return
-    import logging
-
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler == "local":
-        with LocalCluster(threads_per_worker=1, processes=True, dashboard_address=None,
-                          silence_logs=logging.ERROR) as cluster, Client(cluster) as client:  # fmt: skip
+        with local_cluster(workers) as cluster, Client(cluster) as client:
             yield client
     else:
         with Client(scheduler) as client:
@@ -98,7 +96,7 @@ def _dask_client(scheduler):
               "(the same field).")  # fmt: skip
 @click.option("--scheduler", help="Out-of-core runs only: dask scheduler address whose workers make the passes "
               "(they must see --out's directory; --memory then holds per worker), or 'local' for a LocalCluster "
-              "of one worker per core sharing --memory.")  # fmt: skip
+              "of --threads single-threaded workers sharing --memory with this process.")  # fmt: skip
 def mann(**opt):
     """Mann space-time 4D field: yz-planes at the rotor and range gates, evolving with upstream distance."""
     typed_energy = [name for name in _ENERGY if opt[name] is not None]
@@ -115,16 +113,8 @@ def mann(**opt):
     check_output_path(out)
     threads = default_threads(opt["threads"])
     budget = parse_size(opt["memory"], "--memory") if opt["memory"] is not None else resources.available_memory_bytes()
-    in_memory = memory_estimate_bytes(run, threads, opt["stencil_cache"] is None) + base_bytes()
-    plan = None
-    if budget is not None and in_memory > budget:
-        from turbgen.runs.mann_outofcore import OutOfCorePlan
-
-        per_task, task_threads = budget, threads
-        if opt["scheduler"] == "local":  # one single-threaded worker per core, the budget shared between them
-            per_task, task_threads = budget // threads, 1
-        # a budget too small fails here, before any output
-        plan = OutOfCorePlan(run, per_task, task_threads, opt["chunks"])
+    # a budget too small fails here, before any output
+    plan = plan_for_budget(run, budget, threads, opt["chunks"], opt["scheduler"], opt["stencil_cache"] is None)
     click.echo("turbgen mann")
     for line in describe(run, out, threads):
         click.echo(f"  {line}")
@@ -134,7 +124,7 @@ def mann(**opt):
         from turbgen.runs.mann_outofcore import run_mann_outofcore
 
         click.echo(f"  {plan.describe()}")
-        with _dask_client(opt["scheduler"]) as client:
+        with _dask_client(opt["scheduler"], threads) as client:
             s = run_mann_outofcore(run, out, memory_bytes=plan.memory_bytes, overwrite=opt["overwrite"],
                                    chunk_t=opt["chunks"], progress=sys.stderr.isatty(), threads=plan.threads,
                                    plan=plan, client=client)  # fmt: skip

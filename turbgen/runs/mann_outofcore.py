@@ -59,6 +59,9 @@ BASE_BYTES = 250 * 2**20  # the interpreter with turbgen, numpy, scipy, zarr, py
 # what a run allocates after it is planned besides the planned arrays: the axis cells' temporaries (~100 k tensor
 # nodes at a time: +30 MiB of resident memory measured on a 2048 x 64 x 64 box), FFTW plans, zarr's buffers
 LATE_BYTES = 48 * 2**20
+# what a LocalCluster adds to the process that starts it: distributed (imported: +13 MiB), its scheduler (+2 MiB)
+# and multiprocessing's resource tracker process (15 MiB), measured
+LOCAL_CLUSTER_BYTES = 32 * 2**20
 _C64, _F32 = 8, 4
 _HINT = "raise `memory`, or lower `nt`, `ny`/`nz` or `pad_yz`"
 
@@ -107,11 +110,15 @@ class OutOfCorePlan:
         slabs_per_part: int | None = None,
         block_points: int | None = None,
         plane_in_memory: bool | None = None,
+        base: int | None = None,
     ):
         """Sizes from the budget; ``slabs_per_part`` (a multiple of SLAB_BATCH), ``block_points`` (a multiple of
-        ROW_BLOCK) and ``plane_in_memory`` override them (tests: several parts and blocks on a small field)."""
+        ROW_BLOCK) and ``plane_in_memory`` override them (tests: several parts and blocks on a small field).
+        ``base``: what the process making the passes holds besides the planned arrays [bytes] (default
+        :func:`base_bytes`: this process). ``minimum_bytes``: the smallest budget with one part."""
         g, box = run.grid, synthesis_box(run)
         self.run, self.memory_bytes, self.threads = run, int(memory_bytes), threads
+        self.per_worker = False  # the budget of each worker of a dask cluster (plan_for_budget)
         self.evolving = run.params.evo_time_s is not None and g.nx > 1
         self.n_snapshots = g.nx if self.evolving else 1
         self.points = g.ny * g.nz
@@ -126,13 +133,13 @@ class OutOfCorePlan:
             + 4 * self.points * _C64  # cropped spectra, and one component's contiguous copy for the scratch write
         )
         # 3/4 of what is left: numpy temporaries, allocator slack (measured: the peak stays below the budget)
-        base = base_bytes()
+        base = base_bytes() if base is None else base
         free = (self.memory_bytes - base - scratch - building) * 3 // 4
+        self.minimum_bytes = base + scratch + building + per_slab * align * 4 // 3
         self.slabs_per_part = (free // (per_slab * align)) * align if free > 0 else 0
         if self.slabs_per_part < align:
-            need = base + scratch + building + per_slab * align * 4 // 3
             raise ParameterError(
-                f"the out-of-core Mann run needs at least {format_bytes(need)} of memory "
+                f"the out-of-core Mann run needs at least {format_bytes(self.minimum_bytes)} of memory "
                 f"(got a budget of {format_bytes(self.memory_bytes)}); {_HINT}"
             )
         self.slabs_per_part = min(self.slabs_per_part, -(-box.nk1 // align) * align)
@@ -169,10 +176,55 @@ class OutOfCorePlan:
         """One line: parts, blocks, plane handling, scratch size."""
         where = "in memory" if self.plane_in_memory else "via a plane scratch file"
         return (
-            f"out-of-core: budget {format_bytes(self.memory_bytes)}, {self.n_parts} part(s) of "
+            f"out-of-core: budget {format_bytes(self.memory_bytes)}{' per worker' if self.per_worker else ''}, "
+            f"{self.n_parts} part(s) of "
             f"{self.slabs_per_part} k1 slabs, blocks of {self.block_points} (y, z) points, planes {where}, "
             f"store time chunk {self.chunk_t}, scratch {format_bytes(self.scratch_bytes())}"
         )
+
+
+def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_t: int | None = None,
+                    scheduler: str | None = None, with_stencil: bool = True) -> OutOfCorePlan | None:
+    """The out-of-core plan of ``run`` if it does not fit ``memory_bytes`` in memory, else None (also without a budget).
+
+    ``scheduler`` None: both passes in this process, ``threads`` threads. "local": a LocalCluster of ``threads``
+    single-threaded worker processes (:func:`local_cluster`) which, with this process, share the budget. Any other
+    address: the budget holds per worker of that cluster (one task at a time, ``threads`` threads).
+    ``with_stencil``: the in-memory run would compute its stencil (False: a stencil cache gives it).
+    Raises ParameterError (one line, the minimum it needs) if the budget is too small even out of core.
+    """
+    from turbgen.runs.mann import memory_estimate_bytes
+
+    if memory_bytes is None or memory_estimate_bytes(run, threads, with_stencil) + base_bytes() <= memory_bytes:
+        return None
+    if scheduler != "local":
+        plan = OutOfCorePlan(run, memory_bytes, threads, chunk_t)
+        plan.per_worker = scheduler is not None
+        return plan
+    # this process (what it holds, the cluster's own share) and the workers, fresh processes (BASE_BYTES each)
+    here = base_bytes() + LOCAL_CLUSTER_BYTES
+    per_worker = OutOfCorePlan(run, 2**62, 1, chunk_t, base=BASE_BYTES).minimum_bytes
+    if memory_bytes - here < threads * per_worker:
+        raise ParameterError(
+            f"the out-of-core Mann run on a local cluster of {threads} workers needs at least "
+            f"{format_bytes(here + threads * per_worker)} of memory (this process {format_bytes(here)}, each worker "
+            f"{format_bytes(per_worker)}; got a budget of {format_bytes(memory_bytes)}); raise `memory`, use fewer "
+            "`threads` (workers), or lower `nt`, `ny`/`nz` or `pad_yz`"
+        )
+    plan = OutOfCorePlan(run, (memory_bytes - here) // threads, 1, chunk_t, base=BASE_BYTES)
+    plan.per_worker = True
+    return plan
+
+
+def local_cluster(workers: int):
+    """A dask LocalCluster of ``workers`` single-threaded worker processes (what :func:`plan_for_budget` plans
+    for with scheduler "local"), quiet and without a dashboard."""
+    import logging
+
+    from distributed import LocalCluster
+
+    return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                        silence_logs=logging.ERROR)  # fmt: skip
 
 
 class _File:
