@@ -77,12 +77,13 @@ def transcendental_arguments(k1, k2, k3, beta_half, length_sq, e_arg, t_arg):
         for j in range(k2.size):
             q = kk1 * kk1 + k2[j] * k2[j]
             sq = math.sqrt(q)
-            for l in range(nzp):
-                bk1 = beta_half[i, j, l if l <= h else nzp - l] * kk1
-                k30 = bk1 + k3[l]
-                k0sq = k30 * k30 + q
-                e_arg[i, j, l] = k0sq * length_sq + 1.0
-                t_arg[i, j, l] = (bk1 * sq) / (k0sq - k30 * bk1)
+            for part in range(2):  # columns k3 >= 0 (and the Nyquist), then k3 < 0: see mann_factors
+                for l in range(0 if part == 0 else h + 1, h + 1 if part == 0 else nzp):
+                    bk1 = beta_half[i, j, l if part == 0 else nzp - l] * kk1
+                    k30 = bk1 + k3[l]
+                    k0sq = k30 * k30 + q
+                    e_arg[i, j, l] = k0sq * length_sq + 1.0
+                    t_arg[i, j, l] = (bk1 * sq) / (k0sq - k30 * bk1)
 
 
 @numba.njit(nogil=True, cache=True, error_model="numpy")
@@ -107,51 +108,55 @@ def mann_factors(k1, k2, k3, beta_half, inv_tau_half, e, arctan, unit, energy, s
             q = kk1 * kk1 + kk2 * kk2
             w = kk2 / (q * math.sqrt(q))
             ratio = kk2 / kk1
-            for l in range(nzp):
-                lc = l if l <= h else nzp - l
-                kk3 = k3[l]
-                ksq = q + kk3 * kk3
-                beta = beta_half[i, j, lc]
-                bk1 = beta * kk1
-                k30 = bk1 + kk3
-                k0sq = k30 * k30 + q
-                ee = e[i, j, l]
-                # zeta1 = C1 - (k2/k1) C2, zeta2 = (k2/k1) C1 + C2 of Mann (1994) Eq. 13-17 (mann_stencil.slab_factors)
-                c1 = bk1 * k30 - 2.0 * k30 * k30
-                c1 = (c1 + k0sq) * (bk1 * kk1) / (ksq * q)
-                c2 = arctan[i, j, l]
-                # atan2(Y, X) with Y = beta k1 sqrt(q) <= 0 (stored k1 <= 0, beta >= 0): arctan(Y / X), minus pi where
-                # X < 0 (the continuous branch of Mann 1994 Eq. 16)
-                if k0sq - k30 * bk1 < 0.0:
-                    c2 -= math.pi
-                c2 = c2 * k0sq * w
-                z1 = c1 - c2 * ratio
-                z2 = c2 + c1 * ratio
-                if kk1 == 0.0:  # the k1 -> 0 limit: zeta1 = -beta, zeta2 = 0; zeta = 0 on the k3 axis; k = 0 empty
-                    z1 = -beta
-                    z2 = 0.0
-                    if q == 0.0:
-                        z1 = 0.0
-                    if ksq == 0.0:
-                        ee = 0.0
-                        k30 = 0.0
-                        z1 = 0.0
+            # the columns k3 >= 0 (and the Nyquist), then k3 < 0, each read from beta_half in one direction: a loop
+            # the compiler vectorises (one loop with the mirrored column index did not: 1.4-1.5x slower, same bits)
+            for part in range(2):
+                for l in range(0 if part == 0 else h + 1, h + 1 if part == 0 else nzp):
+                    lc = l if part == 0 else nzp - l
+                    kk3 = k3[l]
+                    ksq = q + kk3 * kk3
+                    beta = beta_half[i, j, lc]
+                    bk1 = beta * kk1
+                    k30 = bk1 + kk3
+                    k0sq = k30 * k30 + q
+                    ee = e[i, j, l]
+                    # zeta1 = C1 - (k2/k1) C2, zeta2 = (k2/k1) C1 + C2 of Mann (1994) Eq. 13-17
+                    # (mann_stencil.slab_factors)
+                    c1 = bk1 * k30 - 2.0 * k30 * k30
+                    c1 = (c1 + k0sq) * (bk1 * kk1) / (ksq * q)
+                    c2 = arctan[i, j, l]
+                    # atan2(Y, X) with Y = beta k1 sqrt(q) <= 0 (stored k1 <= 0, beta >= 0): arctan(Y / X), minus pi
+                    # where X < 0 (the continuous branch of Mann 1994 Eq. 16)
+                    if k0sq - k30 * bk1 < 0.0:
+                        c2 -= math.pi
+                    c2 = c2 * k0sq * w
+                    z1 = c1 - c2 * ratio
+                    z2 = c2 + c1 * ratio
+                    if kk1 == 0.0:  # the k1 -> 0 limit: zeta1 = -beta, zeta2 = 0; zeta = 0 on the k3 axis; k = 0 empty
+                        z1 = -beta
                         z2 = 0.0
-                if unit:
-                    f0[i, j, l] = ee
-                    f1[i, j, l] = k30
-                    f2[i, j, l] = z1
-                    f3[i, j, l] = z2
-                else:
-                    a = ee * energy
-                    p = k30 * a
-                    z1 = z1 * a
-                    z2 = z2 * a
-                    if kk1 == 0.0 and j == 0:  # row 0: k2 = 0
-                        a = 0.0
-                    f0[i, j, l] = a * scale
-                    f1[i, j, l] = p * scale
-                    f2[i, j, l] = z1 * scale
-                    f3[i, j, l] = z2 * scale
-                if with_tau:
-                    inv_tau[i, j, l] = inv_tau_half[i, j, lc]
+                        if q == 0.0:
+                            z1 = 0.0
+                        if ksq == 0.0:
+                            ee = 0.0
+                            k30 = 0.0
+                            z1 = 0.0
+                            z2 = 0.0
+                    if unit:
+                        f0[i, j, l] = ee
+                        f1[i, j, l] = k30
+                        f2[i, j, l] = z1
+                        f3[i, j, l] = z2
+                    else:
+                        a = ee * energy
+                        p = k30 * a
+                        z1 = z1 * a
+                        z2 = z2 * a
+                        if kk1 == 0.0 and j == 0:  # row 0: k2 = 0
+                            a = 0.0
+                        f0[i, j, l] = a * scale
+                        f1[i, j, l] = p * scale
+                        f2[i, j, l] = z1 * scale
+                        f3[i, j, l] = z2 * scale
+                    if with_tau:
+                        inv_tau[i, j, l] = inv_tau_half[i, j, lc]
