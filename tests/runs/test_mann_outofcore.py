@@ -141,6 +141,14 @@ def test_base_follows_what_is_resident(monkeypatch):
     assert ooc.base_bytes() == ooc.BASE_BYTES
 
 
+def test_scheduler_of_a_field_that_fits_is_reported_unused(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    res = CliRunner().invoke(cli, ["mann", "--nt", "64", "--ny", "9", "--nz", "10", "--scheduler", "tcp://127.0.0.1:1",
+                                   "--out", "a.zarr"])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    assert "--scheduler tcp://127.0.0.1:1 not used: the field fits" in res.output
+
+
 def test_local_cluster_plan_shares_the_budget_with_this_process():
     run = MannRun.from_mapping({"grid": {"nt": 8192, "ny": 48, "nz": 48, "x_m": [0.0, 50.0]}, "ae": 0.3})
     here = ooc.BASE_BYTES + ooc.LOCAL_CLUSTER_BYTES  # this process (the fixture: BASE_BYTES) and the cluster's share

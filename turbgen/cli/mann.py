@@ -115,9 +115,15 @@ def mann(**opt):
     budget = parse_size(opt["memory"], "--memory") if opt["memory"] is not None else resources.available_memory_bytes()
     # a budget too small fails here, before any output
     plan = plan_for_budget(run, budget, threads, opt["chunks"], opt["scheduler"], opt["stencil_cache"] is None)
+    if opt["scheduler"] not in (None, "local"):  # one line within seconds, not dask's traceback after 30 s
+        from turbgen.sweep.scheduler import check_scheduler_address
+
+        check_scheduler_address(opt["scheduler"], connect=plan is not None)
     click.echo("turbgen mann")
     for line in describe(run, out, threads):
         click.echo(f"  {line}")
+    if plan is None and opt["scheduler"] is not None:
+        click.echo(f"  --scheduler {opt['scheduler']} not used: the field fits the memory budget in one pass")
     for stale in remove_stale_scratch(out):
         click.echo(f"  removed {stale.name}: scratch of a run that was killed")
     if plan is not None:

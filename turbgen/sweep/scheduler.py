@@ -5,7 +5,7 @@ from __future__ import annotations
 from turbgen.errors import ParameterError
 
 
-def check_scheduler_address(address: str, timeout_s: float = 3.0) -> str:
+def check_scheduler_address(address: str, timeout_s: float = 3.0, connect: bool = True) -> str:
     """``address`` if a dask scheduler could listen there: 'tcp://host:port' (or tls://) reachable now.
 
     Refuses malformed addresses and closed ports in one line within ``timeout_s`` seconds (dask itself
@@ -17,6 +17,8 @@ def check_scheduler_address(address: str, timeout_s: float = 3.0) -> str:
         Scheduler address (tcp:// assumed without a scheme).
     timeout_s : float, optional
         Connection timeout [s] (default 3).
+    connect : bool, optional
+        False: check the form of the address only (default True: also that a dask scheduler answers there).
 
     Returns
     -------
@@ -38,6 +40,8 @@ def check_scheduler_address(address: str, timeout_s: float = 3.0) -> str:
         host = port = None
     if parts.scheme not in ("tcp", "tls") or not host or not port:
         raise ParameterError(f"scheduler = {address!r} is not an address like tcp://HOST:PORT")
+    if not connect:
+        return address
     try:
         with socket.create_connection((host, port), timeout=timeout_s):
             pass
