@@ -129,16 +129,16 @@ def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: 
     )
     tmp = path.parent / f".{path.name}.tmp-{os.getpid()}-{secrets.token_hex(4)}"
     try:
-        import warnings
-
         import zarr
 
+        from turbgen.store.layout import silence_consolidated_metadata_warning
+
+        silence_consolidated_metadata_warning()
+
         ds.attrs[MARKER] = False
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", message="Consolidated metadata", category=UserWarning)
-            ds.to_zarr(tmp, mode="w", consolidated=True)
-            zarr.open_group(str(tmp), mode="r+").attrs[MARKER] = True  # the completeness marker, last
-            zarr.consolidate_metadata(str(tmp))
+        ds.to_zarr(tmp, mode="w", consolidated=True)
+        zarr.open_group(str(tmp), mode="r+").attrs[MARKER] = True  # the completeness marker, last
+        zarr.consolidate_metadata(str(tmp))
         if path.exists():
             old = path.parent / f".{path.name}.old-{os.getpid()}-{secrets.token_hex(4)}"
             os.rename(path, old)

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import os
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -328,9 +327,8 @@ def open_store(path) -> FieldStore:
     except ParameterError as exc:
         raise StoreError(f"{path} is corrupted: grid attribute: {exc}") from None
     try:
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", message="Consolidated metadata", category=UserWarning)
-            group = zarr.open_group(str(path), mode="r")
+        layout.silence_consolidated_metadata_warning()
+        group = zarr.open_group(str(path), mode="r")
         _check_arrays(path, group, grid)
     except StoreError:
         raise

@@ -16,7 +16,6 @@ from __future__ import annotations
 import datetime as _dt
 import os
 import threading
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -257,9 +256,8 @@ class StoreWriter:
                     f"t index {it} ({int((~done).sum())} samples of {c} missing); nothing was written"
                 )
         self._group.attrs[layout.MARKER] = True  # the completeness marker, written last ...
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", message="Consolidated metadata", category=UserWarning)
-            zarr.consolidate_metadata(str(self._tmp))  # ... together with the consolidated metadata
+        layout.silence_consolidated_metadata_warning()
+        zarr.consolidate_metadata(str(self._tmp))  # ... together with the consolidated metadata
         self._install()
 
     def _install(self) -> None:
