@@ -97,8 +97,7 @@ CASES = [
     ("mann-memory", ["mann", *HUGE, "--ae", "0.3"], ["disk space"]),
     # --scheduler: a malformed address always; nothing listening, when the run would use it (out of core)
     ("mann-scheduler-bad", ["mann", *SMALL, "--scheduler", "notanaddress"], ["'notanaddress'", "tcp://HOST:PORT"]),
-    ("mann-scheduler-closed", ["mann", "--nt", "4096", "--ny", "48", "--nz", "48", "--planes", "0,50,100", "--ae", "0.3",
-                               "--memory", "600MiB", "--scheduler", "tcp://127.0.0.1:1"],
+    ("mann-scheduler-closed", ["mann", *HUGE, "--ae", "0.3", "--scheduler", "tcp://127.0.0.1:1"],
      ["'tcp://127.0.0.1:1'", "cannot connect"]),
     # --- mann: other options ---
     ("mann-threads-0", ["mann", "--threads", "0"], ["--threads", "0"]),

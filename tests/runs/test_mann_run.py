@@ -200,9 +200,9 @@ def test_memory_estimate_scales_with_one_snapshot():
     assert est2 == est11 and est11 < 2 * 2**30  # the paper case fits the 2 GiB target
     one = runs_mann.memory_estimate_bytes(MannRun.from_mapping({"grid": {"x_m": [0.0]}}), 2)
     # one snapshot: no OU state, no stored stencil (5 float32 per stored point, with its 64 MiB of building
-    # temporaries) but two threads' on-demand batches of 4 slabs (48 bytes per stored point), and one output
-    # plane instead of two (components 1 and 2 go into spectra already transformed)
-    state, stencil, batches = 3 * 2049 * 128 * 128 * 8, 2049 * 65 * 128 * 4 * 5 + 64 * 2**20, 2 * 4 * 65 * 128 * 48
+    # temporaries) but two threads' on-demand coefficients of a task of 16 slabs (48 bytes per stored point), and one
+    # output plane instead of two (components 1 and 2 go into spectra already transformed)
+    state, stencil, batches = 3 * 2049 * 128 * 128 * 8, 2049 * 65 * 128 * 4 * 5 + 64 * 2**20, 2 * 16 * 65 * 128 * 48
     assert math.isclose(one, est11 - state - stencil + batches - 4096 * 64 * 64 * 4)
 
 
