@@ -31,6 +31,7 @@ def _plans_independent_of_this_process(monkeypatch):
     """Plans made in this (long-lived pytest) process take the fixed BASE_BYTES, not what pytest holds resident by
     then; the budget tests run the CLI in a fresh process (_vmhwm_run), where the resident memory counts."""
     monkeypatch.setattr(ooc, "resident_bytes", lambda: None)
+    monkeypatch.setattr(ooc, "_IMPORTED_RESIDENT", None)
 
 
 def _same(a, b) -> bool:
@@ -124,9 +125,9 @@ def test_peak_memory_stays_within_the_budget(tmp_path):
 
 def test_peak_memory_stays_within_the_budget_when_ae_is_computed(tmp_path):
     # ae from the default sigma_u: its quadrature leaves ~70-125 MiB more resident than a given ae, which the plan
-    # once ignored (a fixed 250 MiB for the interpreter: 344 MiB peak in this 340 MiB budget, 319 MiB in 300 MiB)
-    budget = 340 * 2**20
-    hwm_kib = _vmhwm_run(["mann", "--nt", "2048", "--ny", "32", "--nz", "32", "--memory", "340MiB", "--out", "a.zarr"],
+    # once ignored (a fixed 250 MiB for the interpreter: 438 MiB peak in this 380 MiB budget, 344 MiB in 340 MiB)
+    budget = 380 * 2**20
+    hwm_kib = _vmhwm_run(["mann", "--nt", "2048", "--ny", "32", "--nz", "32", "--memory", "380MiB", "--out", "a.zarr"],
                          tmp_path)  # fmt: skip
     assert hwm_kib * 1024 <= budget, hwm_kib / 1024
     assert open_store(tmp_path / "a.zarr").attrs["turbgen_complete"] is True
@@ -169,14 +170,14 @@ def test_local_cluster_run_stays_within_the_shared_budget(tmp_path):
         "hwm = int(open('/proc/self/status').read().split('VmHWM:')[1].split()[0])\n"
         "print('KIB', hwm, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n"
     )
-    args = ["mann", "--nt", "4096", "--ny", "48", "--nz", "48", "--planes", "0,50,100", "--threads", "2",
-            "--scheduler", "local", "--memory", "1GiB", "--out", "a.zarr"]  # fmt: skip
+    args = ["mann", "--nt", "6144", "--ny", "48", "--nz", "48", "--planes", "0,50,100", "--threads", "2",
+            "--scheduler", "local", "--memory", "1280MiB", "--out", "a.zarr"]  # fmt: skip
     res = subprocess.run([sys.executable, "-c", code, *args], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stderr
     assert "per worker" in res.stdout
     parent_kib, worker_kib = (int(v) for v in res.stdout.split("KIB")[1].split())
     tracker_kib = 16 * 1024  # multiprocessing's resource tracker, alive until this process exits (15 MiB measured)
-    assert (parent_kib + 2 * worker_kib + tracker_kib) * 1024 <= 2**30, (parent_kib, worker_kib)
+    assert (parent_kib + 2 * worker_kib + tracker_kib) * 1024 <= 1280 * 2**20, (parent_kib, worker_kib)
     assert open_store(tmp_path / "a.zarr").attrs["turbgen_complete"] is True
 
 

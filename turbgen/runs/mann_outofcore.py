@@ -62,8 +62,20 @@ LATE_BYTES = 48 * 2**20
 # what a LocalCluster adds to the process that starts it: distributed (imported: +13 MiB), its scheduler (+2 MiB)
 # and multiprocessing's resource tracker process (15 MiB), measured
 LOCAL_CLUSTER_BYTES = 32 * 2**20
+# what a fresh worker process adds to the imports this module needs before its first task ends: numba's LLVM
+# (+52 MiB measured), the lifetime tables with scipy.interpolate (+19 MiB), distributed's worker (+20 MiB)
+WORKER_LOADS_BYTES = 96 * 2**20
 _C64, _F32 = 8, 4
 _HINT = "raise `memory`, or lower `nt`, `ny`/`nz` or `pad_yz`"
+
+
+def worker_base_bytes() -> int:
+    """What a fresh worker process holds besides a task's planned arrays [bytes]: what this process held once this
+    module's imports were done (165-200 MiB measured, more in a fresh virtualenv), plus WORKER_LOADS_BYTES and
+    LATE_BYTES; at least BASE_BYTES."""
+    if _IMPORTED_RESIDENT is None:
+        return BASE_BYTES
+    return max(BASE_BYTES, _IMPORTED_RESIDENT + WORKER_LOADS_BYTES + LATE_BYTES)
 
 
 def base_bytes() -> int:
@@ -201,9 +213,9 @@ def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_
         plan = OutOfCorePlan(run, memory_bytes, threads, chunk_t)
         plan.per_worker = scheduler is not None
         return plan
-    # this process (what it holds, the cluster's own share) and the workers, fresh processes (BASE_BYTES each)
-    here = base_bytes() + LOCAL_CLUSTER_BYTES
-    per_worker = OutOfCorePlan(run, 2**62, 1, chunk_t, base=BASE_BYTES).minimum_bytes
+    # this process (what it holds, the cluster's own share) and the workers, fresh processes
+    here, worker_base = base_bytes() + LOCAL_CLUSTER_BYTES, worker_base_bytes()
+    per_worker = OutOfCorePlan(run, 2**62, 1, chunk_t, base=worker_base).minimum_bytes
     if memory_bytes - here < threads * per_worker:
         raise ParameterError(
             f"the out-of-core Mann run on a local cluster of {threads} workers needs at least "
@@ -211,7 +223,7 @@ def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_
             f"{format_bytes(per_worker)}; got a budget of {format_bytes(memory_bytes)}); raise `memory`, use fewer "
             "`threads` (workers), or lower `nt`, `ny`/`nz` or `pad_yz`"
         )
-    plan = OutOfCorePlan(run, (memory_bytes - here) // threads, 1, chunk_t, base=BASE_BYTES)
+    plan = OutOfCorePlan(run, (memory_bytes - here) // threads, 1, chunk_t, base=worker_base)
     plan.per_worker = True
     return plan
 
@@ -417,3 +429,8 @@ def _write_plane(writer, comp, ix, plane, plane_file, plan, g, sums) -> None:
         total, squares = writer.write(comp, ix, chunk.reshape(t1 - t0, g.ny, g.nz), t0, squares=True)
         sums[comp][0] += total
         sums[comp][1] += squares
+
+
+# this process's resident memory once the modules above were imported (the model of a fresh worker's, see
+# worker_base_bytes); None where /proc does not tell
+_IMPORTED_RESIDENT = resident_bytes()
