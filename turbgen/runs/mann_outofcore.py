@@ -195,6 +195,14 @@ class OutOfCorePlan:
         )
 
 
+def fits_in_memory(run: MannRun, memory_bytes: int | None, threads: int, with_stencil: bool = True) -> bool:
+    """Whether ``run`` is made in one pass within ``memory_bytes`` (True without a budget): its in-memory estimate
+    (turbgen.runs.mann.memory_estimate_bytes) plus what this process holds (:func:`base_bytes`)."""
+    from turbgen.runs.mann import memory_estimate_bytes
+
+    return memory_bytes is None or memory_estimate_bytes(run, threads, with_stencil) + base_bytes() <= memory_bytes
+
+
 def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_t: int | None = None,
                     scheduler: str | None = None, with_stencil: bool = True) -> OutOfCorePlan | None:
     """The out-of-core plan of ``run`` if it does not fit ``memory_bytes`` in memory, else None (also without a budget).
@@ -205,9 +213,7 @@ def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_
     ``with_stencil``: the in-memory run would compute its stencil (False: a stencil cache gives it).
     Raises ParameterError (one line, the minimum it needs) if the budget is too small even out of core.
     """
-    from turbgen.runs.mann import memory_estimate_bytes
-
-    if memory_bytes is None or memory_estimate_bytes(run, threads, with_stencil) + base_bytes() <= memory_bytes:
+    if fits_in_memory(run, memory_bytes, threads, with_stencil):
         return None
     if scheduler != "local":
         plan = OutOfCorePlan(run, memory_bytes, threads, chunk_t)

@@ -53,10 +53,9 @@ def _mann_out_of_core(run: MannRun, threads: int | None, memory_bytes: int | Non
     """Whether a Mann run exceeds its memory budget (then turbgen.runs.mann_outofcore makes it)."""
     if memory_bytes is None:
         return False
-    from turbgen.runs.mann import memory_estimate_bytes
-    from turbgen.runs.mann_outofcore import base_bytes
+    from turbgen.runs.mann_outofcore import fits_in_memory
 
-    return memory_estimate_bytes(run, threads or os.cpu_count() or 1) + base_bytes() > memory_bytes
+    return not fits_in_memory(run, memory_bytes, threads or os.cpu_count() or 1)
 
 
 def _run_mann(run: MannRun, out, *, overwrite=False, chunk_t=None, threads=None, memory_bytes=None, shared=None):
