@@ -26,3 +26,27 @@ def test_main_freezes_the_command_imports_and_leaves_the_collector_on(args, froz
     assert enabled == "True"
     # importing a command's module creates > 10^4 long-lived objects (click, numpy, turbgen); --version imports none
     assert (int(count) > 10_000) if frozen else (int(count) == 0), out
+
+
+BLAS_PROBE = """
+import os, sys
+from turbgen.cli import main
+sys.argv = ["turbgen", "--version"]
+try:
+    main()
+except SystemExit:
+    pass
+import numpy  # loads OpenBLAS after main() set its default
+print(os.environ["OPENBLAS_NUM_THREADS"])
+"""
+
+
+@pytest.mark.parametrize("given, expected", [(None, "1"), ("2", "2")])
+def test_main_keeps_openblas_to_one_thread_unless_the_user_says_otherwise(given, expected):
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if given is not None:
+        env["OPENBLAS_NUM_THREADS"] = given
+    out = subprocess.run([sys.executable, "-c", BLAS_PROBE], capture_output=True, text=True, check=True, env=env)
+    assert out.stdout.split()[-1] == expected
