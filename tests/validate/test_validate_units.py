@@ -21,6 +21,14 @@ def test_hann_correlations_match_welch_1967():
     assert s.bin_rho2(3) == pytest.approx(0.0, abs=1e-20)
 
 
+@pytest.mark.parametrize("n", [32, 33, 256, 4096])
+def test_hann_window_is_scipys_periodic_hann(n):
+    # formed without importing scipy.signal (start-up time); the same construction, so the same numbers today;
+    # 1 ulp of slack in case scipy reorders its sum
+    np.testing.assert_allclose(WelchSetup(n, 0.5).window, scipy.signal.get_window("hann", n, fftbins=True),
+                               rtol=0, atol=2.3e-16)
+
+
 def test_welch_series_matches_scipy_density():
     rng = np.random.default_rng(1)
     x = rng.standard_normal((4096, 3))

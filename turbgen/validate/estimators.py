@@ -32,7 +32,6 @@ from functools import cached_property
 import dask
 import numpy as np
 import scipy.fft
-import scipy.signal
 from dask.callbacks import Callback
 from tqdm import tqdm
 
@@ -69,8 +68,13 @@ class WelchSetup:
 
     @cached_property
     def window(self) -> np.ndarray:
-        """Periodic Hann window (float64)."""
-        return scipy.signal.get_window("hann", self.nperseg, fftbins=True)
+        """Periodic Hann window (float64): w_n = 1/2 + 1/2 cos(-pi + 2 pi n / N), n = 0 .. N - 1 (= 1/2 - 1/2 cos(2 pi n / N)).
+
+        Formed as scipy.signal.get_window("hann", N, fftbins=True) forms it (the same numbers, tested) without
+        importing scipy.signal, which took 0.4-0.7 s of every `turbgen validate`.
+        """
+        phase = np.linspace(-np.pi, np.pi, self.nperseg + 1)
+        return (0.5 * np.cos(0.0 * phase) + 0.5 * np.cos(phase))[:-1]
 
     @property
     def freqs(self) -> np.ndarray:
