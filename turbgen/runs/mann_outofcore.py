@@ -63,7 +63,8 @@ LATE_BYTES = 48 * 2**20
 # and multiprocessing's resource tracker process (15 MiB), measured
 LOCAL_CLUSTER_BYTES = 32 * 2**20
 # what a fresh worker process adds to the imports this module needs before its first task ends: numba's LLVM
-# (+52 MiB measured), the lifetime tables with scipy.interpolate (+19 MiB), distributed's worker (+20 MiB)
+# (+52 MiB measured), the lifetime tables (+19 MiB measured when they loaded scipy.interpolate; now scipy.linalg:
+# less, so kept as a margin), distributed's worker (+20 MiB)
 WORKER_LOADS_BYTES = 96 * 2**20
 _C64, _F32 = 8, 4
 _HINT = "raise `memory`, or lower `nt`, `ny`/`nz` or `pad_yz`"

@@ -11,6 +11,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.special import hyp2f1
 
+from turbgen.theory.cubic_spline import not_a_knot_coefficients
 from turbgen.theory.params import MannParams
 
 # a = [2F1(1/3, 17/6; 4/3; -1)]^(-1/2) ≈ 1.23443 (Guo et al. 2023, Eq. 7)
@@ -179,8 +180,6 @@ class LifetimeTable:
     """
 
     def __init__(self, kind: str, parameter: float = 1.0):
-        from scipy.interpolate import CubicSpline
-
         if kind == "mann":
             self.exact = mann_lifetime
         elif kind == "guo":
@@ -192,7 +191,7 @@ class LifetimeTable:
         self.x0, self.h = float(np.log(TABLE_KL_MIN)), TABLE_STEP[kind]
         n = int(np.ceil((np.log(TABLE_KL_MAX) - self.x0) / self.h)) + 1
         x = self.x0 + self.h * np.arange(n)
-        c = CubicSpline(x, self.exact(np.exp(x))).c  # (4, n - 1): powers 3, 2, 1, 0 of (x - x_i)
+        c = not_a_knot_coefficients(x, self.exact(np.exp(x)))  # powers 3, 2, 1, 0 of (x - x_i), (n - 1,) each
         self.coefficients = tuple(np.ascontiguousarray(row) for row in c)  # (c3, c2, c1, c0) per interval
         self.n_intervals = n - 1
 
