@@ -16,7 +16,12 @@ its children, e.g. hipersim's worker pool):
           time left out: on this VM first-touch page zeroing swings it by ~1.5 s between runs, which made
           the former measure, the wall-time difference with a synthesis from a stored stencil, noise).
   box-cli the same box through `turbgen mann --planes 0 --lifetime mann` (process start, stencil,
-          field and zarr store): the figure the issue's <= 3 x floor target is about.
+          field and zarr store): the figure the issue's <= 3 x floor target is about. Printed with what a
+          fresh process pays besides the computation, measured in fresh processes: the interpreter's start,
+          the command's imports, and the first touch of the box's buffers (0.5 GiB). On the 2-core VMs
+          this was developed on, the first touch of memory a process has not used costs ~2.8 s/GiB (the
+          hypervisor backs the pages then; writing them again: ~0.05 s/GiB), which the floor, whose
+          arrays are touched before timing, does not pay.
   floor   the same NUMBER of unpruned padded inverse real 3-D FFTs, complex64 -> float32, pyfftw
           FFTW_MEASURE on all cores, real (time) axis last, the fastest layout: 33 transforms of
           128 x 128 x 4096 for the paper case (3 components x 11 snapshots), 3 of 128 x 128 x 8192
@@ -60,9 +65,10 @@ def case_turbgen_paper(nt: int) -> dict:
 
     run = MannRun.from_mapping({"grid": {"nt": nt}})
     with tempfile.TemporaryDirectory(dir=os.environ.get("BENCH_TMP")) as tmp:
-        t0 = time.perf_counter()
+        r0, t0 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
         s = run_mann(run, os.path.join(tmp, "paper.zarr"))
-        return {"seconds": time.perf_counter() - t0, "sigma_u": s["sigma_u"]}
+        seconds, r1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_SELF)
+        return {"seconds": seconds, "sigma_u": s["sigma_u"], "sys_cpu_s": r1.ru_stime - r0.ru_stime}
 
 
 def case_turbgen_box(nt: int) -> dict:
@@ -174,6 +180,41 @@ def case_turbgen_box_cli(nt: int) -> dict:
     return {"seconds": seconds}
 
 
+def case_process_costs(nt: int) -> dict:
+    """What a fresh `turbgen mann` process pays before and besides computing the box: importing what the command
+    imports, and the first touch of the box's buffers (the cropped spectra of 3 components + one output plane,
+    as MannSnapshots holds them). The floor's arrays are touched before it is timed."""
+    import numpy as np
+
+    t0 = time.perf_counter()
+    import importlib
+
+    importlib.import_module("turbgen.cli.mann")  # the imports of `turbgen mann`
+    from turbgen.synthesis.mann_spacetime import _padded_nk1
+
+    imports = time.perf_counter() - t0
+    nbytes = 3 * 64 * 64 * _padded_nk1(nt // 2 + 1) * 8 + nt * 64 * 64 * 4
+    t0 = time.perf_counter()
+    buf = np.empty(nbytes // 4, np.float32)
+    buf[...] = 1.0
+    touch = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    buf[...] = 2.0
+    again = time.perf_counter() - t0
+    return {"seconds": imports + touch, "imports_s": imports, "touch_s": touch, "write_again_s": again,
+            "touch_gib": nbytes / 2**30}  # fmt: skip
+
+
+def _interpreter_start() -> float:
+    """Wall time of `python -c pass` [s], the fastest of three."""
+    best = float("inf")
+    for _ in range(3):
+        t0 = time.perf_counter()
+        subprocess.run([sys.executable, "-c", "pass"], check=True)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
 CASES = {
     "turbgen-paper": case_turbgen_paper,
     "turbgen-box": case_turbgen_box,
@@ -181,6 +222,7 @@ CASES = {
     "mannrs": case_mannrs,
     "turbgen-box-cli": case_turbgen_box_cli,
     "floor": case_floor,
+    "process-costs": case_process_costs,
 }
 
 
@@ -244,7 +286,9 @@ def main() -> None:
     rep = max(1, args.repeat)
     floor_p = _best("floor", nt_paper, rep, BENCH_FLOOR_COUNT=n_paper)
     paper = _best("turbgen-paper", nt_paper, rep)
-    print(f"\n[paper] turbgen mann (end to end, {N_PLANES} evolving planes, store written): {_fmt(paper)}")
+    print(f"\n[paper] turbgen mann (end to end, {N_PLANES} evolving planes, store written): {_fmt(paper)}"
+          + ("" if "sys_cpu_s" not in paper else f"; kernel CPU {paper['sys_cpu_s']:.2f} s (first touch of its memory, "
+             "see [box])"))
     if "error" not in floor_p:
         print(f"  FFT floor: {n_paper} unpruned inverse real FFTs of 128 x 128 x {nt_paper} (FFTW_MEASURE, "
               f"{os.cpu_count()} threads, real axis last) = {_fmt(floor_p).split('  peak')[0].strip()}"
@@ -276,6 +320,18 @@ def main() -> None:
           + ("" if fl is None or "error" in box else f"; / floor = {box['seconds'] / fl:.2f}"))
     print(f"  turbgen mann CLI (process start, stencil, store): {_fmt(cli)}"
           + ("" if fl is None or "error" in cli else f"; / floor = {cli['seconds'] / fl:.2f} (target <= 3)"))
+    costs = [_run("process-costs", nt_box) for _ in range(rep)]
+    costs = [c for c in costs if "error" not in c]
+    if costs and "error" not in cli:
+        start = _interpreter_start()
+        c = min(costs, key=lambda r: r["seconds"])
+        rest = cli["seconds"] - start - c["imports_s"] - c["touch_s"]
+        touches = ", ".join(f"{r['touch_s']:.2f}" for r in costs)
+        print(f"    of which, in fresh processes: interpreter start {start:.2f} s, the command's imports "
+              f"{c['imports_s']:.2f} s, first touch of the box's {c['touch_gib']:.2f} GiB of buffers {c['touch_s']:.2f} s "
+              f"(all runs: {touches} s; writing them again "
+              f"{c['write_again_s']:.2f} s); the rest {rest:.2f} s"
+              + ("" if fl is None else f" = {rest / fl:.2f} x floor"))
     if not args.skip_anchors:
         for name in ("mannrs", "hipersim"):
             r = _run(name, nt_box)
