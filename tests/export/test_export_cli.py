@@ -133,3 +133,18 @@ def test_rotorless_store_needs_plane(tmp_path):
     res = run(path, "--format", "bts", "--out", tmp_path / "f.bts")
     assert res.exit_code == 2 and "--plane" in res.output
     assert run(path, "--format", "bts", "--out", tmp_path / "f.bts", "--plane", "1").exit_code == 0
+
+
+@pytest.mark.parametrize("fmt,exts", [("wnd", [".wnd", ".sum"]), ("evo", [".evo", ".wnd", ".sum"])])
+def test_root_with_a_dot_keeps_its_whole_name(store, tmp_path, fmt, exts):
+    """InflowWind opens FilenameRoot + '.wnd'/'.sum': a root such as case_U16.5 must give case_U16.5.wnd,
+    the name the printed FilenameRoot line loads (it gave case_U16.wnd, which InflowWind never opens)."""
+    res = run(store, "--format", fmt, "--out", tmp_path / "case_U16.5")
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(f"case_U16.5{e}" for e in exts)
+    assert f'"{tmp_path / "case_U16.5"}"   FilenameRoot' in res.stdout
+    if fmt == "evo":
+        assert f'"{tmp_path / "case_U16.5.evo"}"' in res.stdout
+    # an extension of the format itself is still dropped
+    res = run(store, "--format", fmt, "--out", tmp_path / f"b.{fmt}")
+    assert res.exit_code == 0 and (tmp_path / "b.wnd").exists() and (tmp_path / "b.sum").exists()
