@@ -116,3 +116,18 @@ def test_white_noise_store_fails(tmp_path):
     r = _run(path, "--json", "--rotor-radius", 30)
     assert r.exit_code == 1
     assert {"spectrum_u", "yz_coherence_u"} <= set(json.loads(r.output)["failed"])
+
+
+@pytest.mark.parametrize("ny,nz,dy,dz", [(2, 2, 5.0, 5.0), (4, 4, 2.0, 10.0)])
+def test_default_rotor_radius_holds_a_grid_point(tmp_path, ny, nz, dy, dz):
+    # grids the generators accept where the largest disc inside the grid holds no grid point: the
+    # default radius reaches the nearest points instead of refusing a radius the user never gave
+    grid = Grid(nt=256, dt_s=0.5, x_m=(0.0,), ny=ny, nz=nz, dy_m=dy, dz_m=dz)
+    path = tmp_path / "k.zarr"
+    run_kaimal(KaimalRun(kaimal=kaimal_params(12.0, "B", 90.0), grid=grid, U_m_s=12.0, seed=4), path)
+    r = _run(path, "--json")
+    assert r.exit_code == 0, r.output
+    settings = json.loads(r.output)["settings"]
+    nearest = np.hypot(grid.y(), grid.z()[:, None]).min()
+    assert settings["rotor_radius_m"] == pytest.approx(nearest)
+    assert settings["rotor_points"] == 4  # the nearest points: (+-dy/2, +-dz/2), (+-1, +-5) m
