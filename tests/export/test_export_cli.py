@@ -148,3 +148,16 @@ def test_root_with_a_dot_keeps_its_whole_name(store, tmp_path, fmt, exts):
     # an extension of the format itself is still dropped
     res = run(store, "--format", fmt, "--out", tmp_path / f"b.{fmt}")
     assert res.exit_code == 0 and (tmp_path / "b.wnd").exists() and (tmp_path / "b.sum").exists()
+
+
+@pytest.mark.parametrize("fmt,name", [("bts", "zarr.json"), ("wnd", "u/root"), ("hdf5", "f.h5")])
+def test_output_inside_the_source_store_is_refused(tmp_path, fmt, name):
+    """`--out STORE/zarr.json --overwrite` replaced the store's metadata with the export (the store was
+    lost); any file written into the store's directory tree is refused, even with --overwrite."""
+    path, _ = make_store(tmp_path / "s.zarr")
+    before = {p: p.read_bytes() for p in path.rglob("*") if p.is_file()}
+    res = run(path, "--format", fmt, "--out", path / name, "--overwrite")
+    assert res.exit_code == 2 and "inside the store" in res.output
+    assert len(res.output.strip().splitlines()) == 1
+    assert {p: p.read_bytes() for p in path.rglob("*") if p.is_file()} == before
+    assert run(path, "--format", "bts", "--out", tmp_path / "s.zarr.bts").exit_code == 0  # beside it: fine

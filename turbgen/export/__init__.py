@@ -10,6 +10,8 @@ the InflowWind input-file lines that load the result.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from turbgen.export.bts import export_bts, read_bts
 from turbgen.export.evo import export_evo, read_evo
 from turbgen.export.hawc2 import export_hawc2, read_hawc2
@@ -56,8 +58,9 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
     Raises
     ------
     ParameterError
-        For an unknown format, options the format does not use, too little free disk, an existing
-        output without ``request.overwrite``, a grid reaching the ground, and other bad requests.
+        For an unknown format, options the format does not use, an output inside the store, too little
+        free disk, an existing output without ``request.overwrite``, a grid reaching the ground, and
+        other bad requests.
     StoreError
         For a missing or incomplete store.
     """
@@ -66,6 +69,8 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
     _check_applicable(fmt, request)
     if not isinstance(store, FieldStore):
         store = open_store(store)
+    if Path(store.path).resolve() in Path(out).resolve().parents:
+        raise ParameterError(f"`out` = {str(out)!r} is inside the store {str(store.path)!r}; write the export beside it")
     need = export_bytes(fmt, store.grid)
     require_disk(out, need, f"the {fmt} export of {store.path.name}",
                  "free space there or choose another `out`")
