@@ -94,6 +94,8 @@ def test_below_ground_exit_2_then_drop(tmp_path):
     (["--plane", "3"], "plane"),
     (["--shear-exponent", "2"], "shear exponent"),
     (["--hub-height", "-5"], "hub height"),
+    (["--hub-height", "0.5"], "[1, 1000]"),  # the README's range of hub heights, as for the generators
+    (["--hub-height", "1e9"], "[1, 1000]"),
 ])
 def test_bad_options_exit_2(store, tmp_path, args, msg):
     res = run(store, "--format", "bts", "--out", tmp_path / "f.bts", *args)

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from turbgen.errors import ParameterError, check_int, check_positive
+from turbgen.errors import ParameterError, check_int
 from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT, VerticalLayout, vertical_layout
+from turbgen.theory import ranges
 
 COMPONENTS = ("u", "v", "w")
 
@@ -22,7 +23,7 @@ class ExportRequest:
     plane : int, optional
         Index into the store's planes (None = the rotor plane, x = 0).
     hub_height_m : float, optional
-        Overrides the store's hub height [m] (> 0).
+        Overrides the store's hub height [m], in the range of ``turbgen.theory.ranges`` ([1, 1000]).
     shear_exponent : float, optional
         Power-law alpha [-]; default ``DEFAULT_SHEAR_EXPONENT``.
     tower : bool, optional
@@ -37,7 +38,7 @@ class ExportRequest:
     Raises
     ------
     ParameterError
-        For a non-integer ``plane`` or a non-positive ``hub_height_m``.
+        For a non-integer ``plane`` or a ``hub_height_m`` outside its range.
     """
 
     plane: int | None = None
@@ -53,7 +54,7 @@ class ExportRequest:
             # the range [0, nx - 1] depends on the store: checked in plane_index
             object.__setattr__(self, "plane", check_int("plane", self.plane, -(2**63), 2**63))
         if self.hub_height_m is not None:
-            object.__setattr__(self, "hub_height_m", check_positive("hub height (m)", self.hub_height_m))
+            object.__setattr__(self, "hub_height_m", ranges.check("hub_height_m", self.hub_height_m))
 
     def plane_index(self, fs) -> int:
         """The plane to export from store ``fs`` (default: the plane at x = 0).
