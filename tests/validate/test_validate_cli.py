@@ -100,6 +100,8 @@ def test_usage_errors_give_exit_2(store, tmp_path):
     assert r.exit_code == 2 and "incomplete" in r.output
     r = _run(store, "--rotor-radius", "abc")
     assert r.exit_code == 2
+    r = _run(store, "--rotor-radius", 0.1)  # inside the grid but below the README's range of rotor radii
+    assert r.exit_code == 2 and "[0.5, 500]" in r.output
 
 
 def test_white_noise_store_fails(tmp_path):
