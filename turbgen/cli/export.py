@@ -16,7 +16,7 @@ from turbgen.store.paths import check_output_path
                    "hawc2 (ROOT_u/v/w.bin), mt4d, hdf5.")
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
               help="Output file, or root name for wnd/evo/hawc2.")
-@click.option("--plane", type=int, default=None, help="Plane index to export (default: the rotor plane, x = 0).")
+@click.option("--plane", type=int, default=None, help="Plane index to export (default: the rotor plane, x = 0); evo: the plane of ROOT.wnd (ROOT.evo holds every plane).")
 @click.option("--hub-height", "hub_height", type=float, default=None, help="Hub height [m] (default: the store's).")
 @click.option("--shear-exponent", "shear", type=float, default=0.2, show_default=True,
               help="Power-law exponent of the mean profile added to u (InflowWind formats).")
