@@ -108,6 +108,7 @@ def test_bad_options_exit_2(store, tmp_path, args, msg):
     ("hawc2", ["--no-periodic"]),
     ("hdf5", ["--plane", "1"]),
     ("mt4d", ["--shear-exponent", "0.1"]),
+    ("hdf5", ["--shear-exponent", "0.2"]),  # the default value, typed: still ignored by hdf5, so refused
     ("mt4d", ["--drop-below-ground"]),
 ])
 def test_options_a_format_would_ignore_are_refused(store, tmp_path, fmt, args):

@@ -18,7 +18,6 @@ from turbgen.export.hawc2 import export_hawc2, read_hawc2
 from turbgen.export.hdf5 import export_hdf5, read_hdf5
 from turbgen.export.mt4d import export_mt4d, read_mt4d
 from turbgen.export.request import ExportRequest, ExportResult
-from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT
 from turbgen.export.wnd import export_wnd, read_wnd
 from turbgen.export.wnd_summary import read_sum
 from turbgen.errors import ParameterError, check_choice
@@ -119,7 +118,7 @@ def _check_applicable(fmt: str, request: ExportRequest) -> None:
     if fmt in WHOLE_FIELD:
         if request.plane is not None:
             given.append("`plane`")
-        if request.hub_height_m is not None or request.drop_below_ground or request.shear_exponent != DEFAULT_SHEAR_EXPONENT:
+        if request.hub_height_m is not None or request.drop_below_ground or request.shear_exponent is not None:
             given.append("`hub_height`/`shear_exponent`/`drop_below_ground` (no mean profile is added)")
     if given:
         raise ParameterError(f"`format` {fmt} does not use {'; '.join(given)}")

@@ -25,7 +25,8 @@ class ExportRequest:
     hub_height_m : float, optional
         Overrides the store's hub height [m], in the range of ``turbgen.theory.ranges`` ([1, 1000]).
     shear_exponent : float, optional
-        Power-law alpha [-]; default ``DEFAULT_SHEAR_EXPONENT``.
+        Power-law alpha [-]; None (default): ``DEFAULT_SHEAR_EXPONENT``. Given, it is refused by the
+        formats without a mean profile, even at the default value.
     tower : bool, optional
         Add .bts tower points.
     periodic : bool, optional
@@ -43,7 +44,7 @@ class ExportRequest:
 
     plane: int | None = None
     hub_height_m: float | None = None
-    shear_exponent: float = DEFAULT_SHEAR_EXPONENT
+    shear_exponent: float | None = None
     tower: bool = False
     periodic: bool = True
     drop_below_ground: bool = False
@@ -102,7 +103,8 @@ class ExportRequest:
             For a grid reaching the ground without ``drop_below_ground``, or a bad shear exponent.
         """
         hub = fs.hub_height_m if self.hub_height_m is None else self.hub_height_m
-        return vertical_layout(fs.grid, hub, self.shear_exponent, drop_below_ground=self.drop_below_ground)
+        alpha = DEFAULT_SHEAR_EXPONENT if self.shear_exponent is None else self.shear_exponent
+        return vertical_layout(fs.grid, hub, alpha, drop_below_ground=self.drop_below_ground)
 
 
 @dataclass(frozen=True)
