@@ -164,3 +164,10 @@ def test_output_inside_the_source_store_is_refused(tmp_path, fmt, name):
     assert len(res.output.strip().splitlines()) == 1
     assert {p: p.read_bytes() for p in path.rglob("*") if p.is_file()} == before
     assert run(path, "--format", "bts", "--out", tmp_path / "s.zarr.bts").exit_code == 0  # beside it: fine
+
+
+def test_out_naming_a_directory_is_refused(store, tmp_path):
+    # `--out newdir/` wrote a FILE named newdir (the trailing separator was dropped)
+    res = run(store, "--format", "bts", "--out", f"{tmp_path / 'newdir'}/")
+    assert res.exit_code == 2 and "newdir/" in res.output
+    assert not list(tmp_path.iterdir())

@@ -10,6 +10,7 @@ the InflowWind input-file lines that load the result.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from turbgen.export.bts import export_bts, read_bts
@@ -57,13 +58,15 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
     Raises
     ------
     ParameterError
-        For an unknown format, options the format does not use, an output inside the store, too little
-        free disk, an existing output without ``request.overwrite``, a grid reaching the ground, and
-        other bad requests.
+        For an unknown format, options the format does not use, an ``out`` ending with a path
+        separator, an output inside the store, too little free disk, an existing output without
+        ``request.overwrite``, a grid reaching the ground, and other bad requests.
     StoreError
         For a missing or incomplete store.
     """
     check_choice("format", fmt, tuple(EXPORTERS))
+    if isinstance(out, str) and out.endswith(("/", os.sep)):
+        raise ParameterError(f"`out` = {out!r} names a directory; give the file (or ROOT) to write")
     request = request or ExportRequest()
     _check_applicable(fmt, request)
     if not isinstance(store, FieldStore):
