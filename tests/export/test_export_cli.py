@@ -94,6 +94,8 @@ def test_below_ground_exit_2_then_drop(tmp_path):
     (["--plane", "3"], "plane"),
     (["--shear-exponent", "2"], "shear exponent"),
     (["--hub-height", "-5"], "hub height"),
+    (["--hub-height", "0.5"], "[1, 1000]"),  # the README's range of hub heights, as for the generators
+    (["--hub-height", "1e9"], "[1, 1000]"),
 ])
 def test_bad_options_exit_2(store, tmp_path, args, msg):
     res = run(store, "--format", "bts", "--out", tmp_path / "f.bts", *args)
@@ -106,6 +108,7 @@ def test_bad_options_exit_2(store, tmp_path, args, msg):
     ("hawc2", ["--no-periodic"]),
     ("hdf5", ["--plane", "1"]),
     ("mt4d", ["--shear-exponent", "0.1"]),
+    ("hdf5", ["--shear-exponent", "0.2"]),  # the default value, typed: still ignored by hdf5, so refused
     ("mt4d", ["--drop-below-ground"]),
 ])
 def test_options_a_format_would_ignore_are_refused(store, tmp_path, fmt, args):
@@ -133,3 +136,38 @@ def test_rotorless_store_needs_plane(tmp_path):
     res = run(path, "--format", "bts", "--out", tmp_path / "f.bts")
     assert res.exit_code == 2 and "--plane" in res.output
     assert run(path, "--format", "bts", "--out", tmp_path / "f.bts", "--plane", "1").exit_code == 0
+
+
+@pytest.mark.parametrize("fmt,exts", [("wnd", [".wnd", ".sum"]), ("evo", [".evo", ".wnd", ".sum"])])
+def test_root_with_a_dot_keeps_its_whole_name(store, tmp_path, fmt, exts):
+    """InflowWind opens FilenameRoot + '.wnd'/'.sum': a root such as case_U16.5 must give case_U16.5.wnd,
+    the name the printed FilenameRoot line loads (it gave case_U16.wnd, which InflowWind never opens)."""
+    res = run(store, "--format", fmt, "--out", tmp_path / "case_U16.5")
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(f"case_U16.5{e}" for e in exts)
+    assert f'"{tmp_path / "case_U16.5"}"   FilenameRoot' in res.stdout
+    if fmt == "evo":
+        assert f'"{tmp_path / "case_U16.5.evo"}"' in res.stdout
+    # an extension of the format itself is still dropped
+    res = run(store, "--format", fmt, "--out", tmp_path / f"b.{fmt}")
+    assert res.exit_code == 0 and (tmp_path / "b.wnd").exists() and (tmp_path / "b.sum").exists()
+
+
+@pytest.mark.parametrize("fmt,name", [("bts", "zarr.json"), ("wnd", "u/root"), ("hdf5", "f.h5")])
+def test_output_inside_the_source_store_is_refused(tmp_path, fmt, name):
+    """`--out STORE/zarr.json --overwrite` replaced the store's metadata with the export (the store was
+    lost); any file written into the store's directory tree is refused, even with --overwrite."""
+    path, _ = make_store(tmp_path / "s.zarr")
+    before = {p: p.read_bytes() for p in path.rglob("*") if p.is_file()}
+    res = run(path, "--format", fmt, "--out", path / name, "--overwrite")
+    assert res.exit_code == 2 and "inside the store" in res.output
+    assert len(res.output.strip().splitlines()) == 1
+    assert {p: p.read_bytes() for p in path.rglob("*") if p.is_file()} == before
+    assert run(path, "--format", "bts", "--out", tmp_path / "s.zarr.bts").exit_code == 0  # beside it: fine
+
+
+def test_out_naming_a_directory_is_refused(store, tmp_path):
+    # `--out newdir/` wrote a FILE named newdir (the trailing separator was dropped)
+    res = run(store, "--format", "bts", "--out", f"{tmp_path / 'newdir'}/")
+    assert res.exit_code == 2 and "newdir/" in res.output
+    assert not list(tmp_path.iterdir())

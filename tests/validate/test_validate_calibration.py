@@ -178,6 +178,18 @@ def test_variance_law_tails_match_monte_carlo():
     assert chi2.sf(nu * q[-1] / m, nu) < 0.25 * (1 - p[-1])
 
 
+def test_rounding_residue_of_the_exact_modes_adds_no_gamma_term():
+    # a line whose top mode holds it all (rank-1 coherency: Kaimal a_yz = 0, one plane) leaves 1 - sum(mu) and
+    # rho - sum(mu^2) at rounding level; their ratio made a term of shape ~1e-16 and a scale larger than the
+    # line's own, which bounded the saddlepoint's bracket: brentq failed (a traceback) or the upper tail came
+    # out 0 (a 1.2-sd excess of sigma_u^2 scored z = 37). The law must be that of the exact modes.
+    lines, rho = np.array([2.0, 1.0]), np.array([1.0, 0.5])
+    exact = gamma_terms(lines, rho, np.array([[1.0, 0.0, 0.0, 0.0, 1.0]]))
+    rounded = gamma_terms(lines, rho, np.array([[1.0 - 2.0**-52, 0.0, 0.0, 0.0, 1.0]]))
+    for x in (1.0, 3.0, 8.0, 16.0):
+        np.testing.assert_allclose(gamma_sum_tails(x, *rounded), gamma_sum_tails(x, *exact), rtol=1e-9)
+
+
 def _field(tmp_path, model, U, seed):
     run = build_run(model, "neutral", U, seed, ISSUE_GRID)
     path = tmp_path / f"{model}_{U:g}_{seed}.zarr"

@@ -100,6 +100,8 @@ def test_usage_errors_give_exit_2(store, tmp_path):
     assert r.exit_code == 2 and "incomplete" in r.output
     r = _run(store, "--rotor-radius", "abc")
     assert r.exit_code == 2
+    r = _run(store, "--rotor-radius", 0.1)  # inside the grid but below the README's range of rotor radii
+    assert r.exit_code == 2 and "[0.5, 500]" in r.output
 
 
 def test_white_noise_store_fails(tmp_path):
@@ -116,3 +118,30 @@ def test_white_noise_store_fails(tmp_path):
     r = _run(path, "--json", "--rotor-radius", 30)
     assert r.exit_code == 1
     assert {"spectrum_u", "yz_coherence_u"} <= set(json.loads(r.output)["failed"])
+
+
+@pytest.mark.parametrize("ny,nz,dy,dz", [(2, 2, 5.0, 5.0), (4, 4, 2.0, 10.0)])
+def test_default_rotor_radius_holds_a_grid_point(tmp_path, ny, nz, dy, dz):
+    # grids the generators accept where the largest disc inside the grid holds no grid point: the
+    # default radius reaches the nearest points instead of refusing a radius the user never gave
+    grid = Grid(nt=256, dt_s=0.5, x_m=(0.0,), ny=ny, nz=nz, dy_m=dy, dz_m=dz)
+    path = tmp_path / "k.zarr"
+    run_kaimal(KaimalRun(kaimal=kaimal_params(12.0, "B", 90.0), grid=grid, U_m_s=12.0, seed=4), path)
+    r = _run(path, "--json")
+    assert r.exit_code == 0, r.output
+    settings = json.loads(r.output)["settings"]
+    nearest = np.hypot(grid.y(), grid.z()[:, None]).min()
+    assert settings["rotor_radius_m"] == pytest.approx(nearest)
+    assert settings["rotor_points"] == 4  # the nearest points: (+-dy/2, +-dz/2), (+-1, +-5) m
+
+
+def test_fully_coherent_plane_validates(tmp_path):
+    # a_yz = 0 (allowed: [0, 1e4]) makes u coherent over each plane; on 5 x 5 x 2 points validate raised
+    # numpy's LinAlgError (a traceback), then, with the modes computed, scored sigma_u^2 8.24 vs 5.74 (sd 2.1)
+    # at z = 37 from the modes' rounding residue
+    grid = Grid(nt=256, dt_s=0.5, x_m=(0.0, 40.0), ny=5, nz=5, dy_m=5.0, dz_m=5.0)
+    path = tmp_path / "k.zarr"
+    run_kaimal(KaimalRun(kaimal=kaimal_params(16.0, "A", 90.0, a_yz=0.0), grid=grid, U_m_s=16.0, seed=1), path)
+    r = _run(path, "--json")
+    assert r.exit_code == 0, r.output
+    assert abs(json.loads(r.output)["metrics"]["sigma_u"]["max_abs_z"]) < 3

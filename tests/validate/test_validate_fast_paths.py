@@ -123,3 +123,25 @@ def test_theory_is_kept_for_a_store_differing_only_in_seed(mann_store, tmp_path)
                                                 "parameters": {"gamma": gamma, "seed": seed}})  # fmt: skip
 
     assert key(1, "x", 3.1) == key(2, "y", 3.1) != key(1, "x", 3.2)
+
+
+@pytest.mark.parametrize("rank", [1, 3, None])
+def test_top_modes_equal_the_full_eigenproblem_also_for_low_rank(rank):
+    # a fully coherent plane (Kaimal a_yz = 0, allowed) has a rank-1 coherency matrix; the subspace
+    # iteration's Cholesky QR failed on it ("Matrix is not positive definite") for N > 32 points.
+    # rank None: a full-rank exponential coherence exp(-0.05 r) on a 5 x 10 grid, 4 m apart
+    from turbgen.validate.variance_law import N_MODES, top_modes
+
+    rng = np.random.default_rng(5)
+    n = 50
+    if rank is None:
+        yz = 4.0 * np.stack(np.meshgrid(np.arange(5), np.arange(10)), -1).reshape(n, 2)
+        c = np.exp(-0.05 * np.hypot(*(yz[:, None, :] - yz[None, :, :]).transpose(2, 0, 1))).astype(complex)
+    else:
+        a = rng.standard_normal((n, rank)) + 1j * rng.standard_normal((n, rank))
+        c = a @ a.conj().T
+        c /= np.mean(np.diag(c).real)  # unit mean diagonal, like a coherency matrix
+    mu = np.clip(np.linalg.eigvalsh(c)[::-1][:N_MODES] / n, 0.0, None)
+    got = top_modes(c)
+    np.testing.assert_allclose(got[:N_MODES], mu, rtol=1e-6, atol=1e-12)
+    assert got[-1] == pytest.approx(np.sum(np.abs(c) ** 2) / n**2)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import click
 
 from turbgen.export import EXPORTERS, ExportRequest, export_store
+from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT
 from turbgen.store.paths import check_output_path
 
 
@@ -16,10 +17,10 @@ from turbgen.store.paths import check_output_path
                    "hawc2 (ROOT_u/v/w.bin), mt4d, hdf5.")
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
               help="Output file, or root name for wnd/evo/hawc2.")
-@click.option("--plane", type=int, default=None, help="Plane index to export (default: the rotor plane, x = 0).")
+@click.option("--plane", type=int, default=None, help="Plane index to export (default: the rotor plane, x = 0); evo: the plane of ROOT.wnd (ROOT.evo holds every plane).")
 @click.option("--hub-height", "hub_height", type=float, default=None, help="Hub height [m] (default: the store's).")
-@click.option("--shear-exponent", "shear", type=float, default=0.2, show_default=True,
-              help="Power-law exponent of the mean profile added to u (InflowWind formats).")
+@click.option("--shear-exponent", "shear", type=float, default=None,
+              help=f"Power-law exponent of the mean profile added to u (InflowWind formats; default {DEFAULT_SHEAR_EXPONENT:g}).")
 @click.option("--tower", is_flag=True, help="bts: add tower points down to the ground.")
 @click.option("--periodic/--no-periodic", default=True, show_default=True,
               help="Flag bts/wnd/evo periodic in time (InflowWind wraps instead of starting half a grid upstream).")

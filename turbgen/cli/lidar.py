@@ -56,7 +56,7 @@ def lidar():
               help="write the lidar dataset (zarr: v_los, u_LL, u_RR, TI, every lidar parameter) here")
 @click.option("--overwrite", is_flag=True, help="replace an existing --out dataset")
 @click.option("--rotor-radius", "rotor_radius", type=float, default=None,
-              help="rotor radius R [m] of u_RR (default 63 m, or the largest disc inside a smaller grid)")
+              help="rotor radius R [m] of u_RR (default 63 m, or the largest disc inside a smaller grid, widened to the nearest grid points when it holds none)")
 @click.option("--mean-wind/--no-mean-wind", default=False, show_default=True,
               help="add the mean wind U (1 + z/h_hub)^alpha to u before projecting (default: fluctuations only)")
 @click.option("--shear", "shear_exponent", type=float, default=0.2, show_default=True,

@@ -38,7 +38,7 @@ def _check_plots_dir(plots_dir: str, overwrite: bool) -> None:
 @click.option("--overwrite", is_flag=True, help="Replace PNGs already in the --plots directory.")
 @click.option("--rotor-radius", "rotor_radius", type=float, default=None,
               help=f"Rotor radius R [m] of the rotor-effective wind speed (mean of u over the points within R); "
-              f"default {DEFAULT_ROTOR_RADIUS_M:g} m, or the largest disc inside a smaller grid.")
+              f"default {DEFAULT_ROTOR_RADIUS_M:g} m, or the largest disc inside a smaller grid (widened to the nearest grid points when it holds none).")
 def validate(store, as_json, plots_dir, overwrite, rotor_radius):
     """Validate the field store STORE against its model (Mann or Kaimal).
 

@@ -10,13 +10,15 @@ the InflowWind input-file lines that load the result.
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 from turbgen.export.bts import export_bts, read_bts
 from turbgen.export.evo import export_evo, read_evo
 from turbgen.export.hawc2 import export_hawc2, read_hawc2
 from turbgen.export.hdf5 import export_hdf5, read_hdf5
 from turbgen.export.mt4d import export_mt4d, read_mt4d
 from turbgen.export.request import ExportRequest, ExportResult
-from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT
 from turbgen.export.wnd import export_wnd, read_wnd
 from turbgen.export.wnd_summary import read_sum
 from turbgen.errors import ParameterError, check_choice
@@ -56,16 +58,21 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
     Raises
     ------
     ParameterError
-        For an unknown format, options the format does not use, too little free disk, an existing
-        output without ``request.overwrite``, a grid reaching the ground, and other bad requests.
+        For an unknown format, options the format does not use, an ``out`` ending with a path
+        separator, an output inside the store, too little free disk, an existing output without
+        ``request.overwrite``, a grid reaching the ground, and other bad requests.
     StoreError
         For a missing or incomplete store.
     """
     check_choice("format", fmt, tuple(EXPORTERS))
+    if isinstance(out, str) and out.endswith(("/", os.sep)):
+        raise ParameterError(f"`out` = {out!r} names a directory; give the file (or ROOT) to write")
     request = request or ExportRequest()
     _check_applicable(fmt, request)
     if not isinstance(store, FieldStore):
         store = open_store(store)
+    if Path(store.path).resolve() in Path(out).resolve().parents:
+        raise ParameterError(f"`out` = {str(out)!r} is inside the store {str(store.path)!r}; write the export beside it")
     need = export_bytes(fmt, store.grid)
     require_disk(out, need, f"the {fmt} export of {store.path.name}",
                  "free space there or choose another `out`")
@@ -114,7 +121,7 @@ def _check_applicable(fmt: str, request: ExportRequest) -> None:
     if fmt in WHOLE_FIELD:
         if request.plane is not None:
             given.append("`plane`")
-        if request.hub_height_m is not None or request.drop_below_ground or request.shear_exponent != DEFAULT_SHEAR_EXPONENT:
+        if request.hub_height_m is not None or request.drop_below_ground or request.shear_exponent is not None:
             given.append("`hub_height`/`shear_exponent`/`drop_below_ground` (no mean profile is added)")
     if given:
         raise ParameterError(f"`format` {fmt} does not use {'; '.join(given)}")

@@ -20,7 +20,7 @@ from turbgen.errors import ParameterError
 from turbgen.export.outputs import OutputSet
 from turbgen.export.request import ExportRequest, ExportResult, Plane, ifw_line
 from turbgen.export.wnd import (BladedStats, WndHeader, bladed_raw, check_even_nt, export_root, from_bladed,
-                                inflowwind_lines, read_wnd, write_pair)
+                                inflowwind_lines, read_wnd, root_file, write_pair)
 
 MAX_PLANES = 30  # the reader copies the distances into a fixed 30-element buffer
 
@@ -96,7 +96,7 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
     g = fs.grid
     check_even_nt(g.nt)
     dist, rounded = plane_distances(g.x_m)
-    paths = [root.with_suffix(".evo"), root.with_suffix(".wnd"), root.with_suffix(".sum")]
+    paths = [root_file(root, ".evo"), root_file(root, ".wnd"), root_file(root, ".sum")]
     with OutputSet(paths, overwrite=req.overwrite) as files:
         stats = BladedStats()
         for ix in range(g.nx):  # pass 1: one TI scaling that fits every plane

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from turbgen.errors import ParameterError, check_int, check_positive
+from turbgen.errors import ParameterError, check_int
 from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT, VerticalLayout, vertical_layout
+from turbgen.theory import ranges
 
 COMPONENTS = ("u", "v", "w")
 
@@ -22,9 +23,10 @@ class ExportRequest:
     plane : int, optional
         Index into the store's planes (None = the rotor plane, x = 0).
     hub_height_m : float, optional
-        Overrides the store's hub height [m] (> 0).
+        Overrides the store's hub height [m], in the range of ``turbgen.theory.ranges`` ([1, 1000]).
     shear_exponent : float, optional
-        Power-law alpha [-]; default ``DEFAULT_SHEAR_EXPONENT``.
+        Power-law alpha [-]; None (default): ``DEFAULT_SHEAR_EXPONENT``. Given, it is refused by the
+        formats without a mean profile, even at the default value.
     tower : bool, optional
         Add .bts tower points.
     periodic : bool, optional
@@ -37,12 +39,12 @@ class ExportRequest:
     Raises
     ------
     ParameterError
-        For a non-integer ``plane`` or a non-positive ``hub_height_m``.
+        For a non-integer ``plane`` or a ``hub_height_m`` outside its range.
     """
 
     plane: int | None = None
     hub_height_m: float | None = None
-    shear_exponent: float = DEFAULT_SHEAR_EXPONENT
+    shear_exponent: float | None = None
     tower: bool = False
     periodic: bool = True
     drop_below_ground: bool = False
@@ -53,7 +55,7 @@ class ExportRequest:
             # the range [0, nx - 1] depends on the store: checked in plane_index
             object.__setattr__(self, "plane", check_int("plane", self.plane, -(2**63), 2**63))
         if self.hub_height_m is not None:
-            object.__setattr__(self, "hub_height_m", check_positive("hub height (m)", self.hub_height_m))
+            object.__setattr__(self, "hub_height_m", ranges.check("hub_height_m", self.hub_height_m))
 
     def plane_index(self, fs) -> int:
         """The plane to export from store ``fs`` (default: the plane at x = 0).
@@ -101,7 +103,8 @@ class ExportRequest:
             For a grid reaching the ground without ``drop_below_ground``, or a bad shear exponent.
         """
         hub = fs.hub_height_m if self.hub_height_m is None else self.hub_height_m
-        return vertical_layout(fs.grid, hub, self.shear_exponent, drop_below_ground=self.drop_below_ground)
+        alpha = DEFAULT_SHEAR_EXPONENT if self.shear_exponent is None else self.shear_exponent
+        return vertical_layout(fs.grid, hub, alpha, drop_below_ground=self.drop_below_ground)
 
 
 @dataclass(frozen=True)

@@ -292,8 +292,8 @@ def write_pair(files: OutputSet, root: Path, plane: Plane, header: WndHeader, la
     OSError
         When a file cannot be written.
     """
-    write_wnd(files.temp(root.with_suffix(".wnd")), plane, header)
-    files.temp(root.with_suffix(".sum")).write_text(sum_text(
+    write_wnd(files.temp(root_file(root, ".wnd")), plane, header)
+    files.temp(root_file(root, ".sum")).write_text(sum_text(
         hub_height_m=lay.hub_height_m, U_m_s=header.U_m_s, ti_percent=header.ti_percent,
         height_offset_m=lay.hub_height_m - lay.centre_m, periodic=periodic, title=title))
 
@@ -315,6 +315,27 @@ def inflowwind_lines(root: Path) -> tuple[str, ...]:
             ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
             ifw_line(str(root), "FilenameRoot", "root of ROOT.wnd and ROOT.sum"),
             ifw_line(False, "TowerFile", "no ROOT.twr"))
+
+
+def root_file(root: Path, ext: str) -> Path:
+    """ROOT + ``ext``, the name InflowWind and the lidar simulator open for FilenameRoot ROOT.
+
+    Appended, not substituted: ``Path.with_suffix`` would turn the root ``case_U16.5`` into
+    ``case_U16.wnd``, a file the printed FilenameRoot line never loads.
+
+    Parameters
+    ----------
+    root : pathlib.Path
+        ROOT (without extension).
+    ext : str
+        Extension with its dot, e.g. ".wnd".
+
+    Returns
+    -------
+    pathlib.Path
+        ROOT with ``ext`` appended.
+    """
+    return root.with_name(root.name + ext)
 
 
 def export_root(out) -> Path:
@@ -362,7 +383,7 @@ def export_wnd(fs, out, req: ExportRequest) -> ExportResult:
     ix, lay = req.plane_index(fs), req.layout(fs)
     g = fs.grid
     check_even_nt(g.nt)
-    paths = [root.with_suffix(".wnd"), root.with_suffix(".sum")]
+    paths = [root_file(root, ".wnd"), root_file(root, ".sum")]
     with OutputSet(paths, overwrite=req.overwrite) as files:
         plane = Plane(fs, ix, lay)
         stats = BladedStats()

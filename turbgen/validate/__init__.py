@@ -79,7 +79,7 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
         The store.
     rotor_radius_m : float, optional
         Rotor radius R [m] of the rotor-effective wind speed; None: 63 m, or the largest disc a smaller
-        grid holds.
+        grid holds (widened to the nearest grid points when it holds none).
     nperseg : int, optional
         Welch segment length [samples]; None: ``estimators.default_nperseg``.
     workers : int, optional

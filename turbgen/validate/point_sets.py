@@ -8,6 +8,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
+from turbgen.theory import ranges
 
 LONG_POINTS_PER_AXIS = 16  # sub-lattice for the plane-pair cross-spectra: at most 16 x 16 points per plane ...
 
@@ -69,17 +70,27 @@ def check_rotor_radius(grid: Grid, radius_m: float | None) -> float:
         The store's grid.
     radius_m : float or None
         Requested radius [m]; None: the default 63 m (NREL 5 MW, Jonkman et al. 2009), or the largest
-        disc that fits a smaller grid.
+        disc that fits a smaller grid, enlarged to the nearest grid points when that disc holds none
+        (e.g. 2 x 2 points, or 4 x 4 points with dz = 5 dy).
+
+    Returns
+    -------
+    float
+        The rotor radius R [m].
 
     Raises
     ------
     ParameterError
-        If the requested radius is not in (0, half the smaller grid extent].
+        If the requested radius is not in (0, half the smaller grid extent] or outside the range of
+        rotor radii (``turbgen.theory.ranges``, [0.5, 500] m).
     """
     half = min((grid.ny - 1) * grid.dy_m, (grid.nz - 1) * grid.dz_m) / 2.0
     if radius_m is None:
-        return min(DEFAULT_ROTOR_RADIUS_M, half)
+        nearest = float(np.hypot(grid.y()[:, None], grid.z()[None, :]).min())
+        return max(min(DEFAULT_ROTOR_RADIUS_M, half), nearest)
     r = float(radius_m)
+    if math.isfinite(r) and r > 0:
+        ranges.check("rotor_radius_m", r)
     if not (math.isfinite(r) and 0 < r <= half * (1 + 1e-9)):
         raise ParameterError(f"rotor radius = {radius_m!r} m is outside the grid's range (0, {half:g}] m")
     return r

@@ -34,6 +34,7 @@ N_MODES = 4  # top modes per such line
 MAX_MODE_POINTS = 2048  # grids with more points get no modes (dense N x N coherency matrix: 67 MB at 2048)
 SUBSPACE = 16  # block size of the subspace iteration of ``top_modes``
 POWER_STEPS = 6  # its power steps
+REST_FLOOR = 1e-9  # a line's remaining modes holding less than this fraction of its mean are dropped (rounding)
 
 
 def top_modes(coherency: np.ndarray) -> np.ndarray:
@@ -57,11 +58,11 @@ def top_modes(coherency: np.ndarray) -> np.ndarray:
 
 
 def _orthonormal(y: np.ndarray) -> np.ndarray:
-    """Orthonormal basis of the columns of y (N, k) by Cholesky QR (y = Q R, R^H R = y^H y): k x k work besides two
-    N x k products; its loss of orthogonality ~ cond(y)^2 eps stays < 1e-9 for one power step of a coherency
-    matrix (cond ~ mu_1 / mu_k < 1e3)."""
-    r = np.linalg.cholesky(np.conj(y.T) @ y)  # lower: y^H y = r r^H, Q = y r^-H
-    return np.linalg.solve(r, np.conj(y.T)).conj().T
+    """Orthonormal columns (N, k) spanning the columns of y (N, k): Householder QR, O(N k^2).
+
+    Not Cholesky QR: a coherency matrix of rank < k (a fully coherent plane, e.g. Kaimal a_yz = 0,
+    has rank 1 per plane) makes y^H y singular, and its Cholesky factor does not exist."""
+    return np.linalg.qr(y)[0]
 
 
 def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray | None = None):
@@ -91,7 +92,9 @@ def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray 
     rho[: modes.shape[0]] = modes[:, -1]
     rest_mean = m * np.clip(1.0 - top.sum(axis=1), 0.0, None)
     rest_var = m**2 * np.clip(rho - np.sum(top**2, axis=1), 0.0, None)
-    keep = (rest_mean > 0) & (rest_var > 0)
+    # a rest below REST_FLOOR of its line is the rounding residue of 1 - sum(mu) (a rank-1 line): its ratio
+    # rest_var / rest_mean would be a term of shape ~1e-16 and arbitrary scale that caps the saddlepoint bracket
+    keep = (rest_mean > REST_FLOOR * m) & (rest_var > 0)
     alpha = np.concatenate([np.ones(np.count_nonzero(top)), rest_mean[keep] ** 2 / rest_var[keep]])
     theta = np.concatenate([(m[:, None] * top)[top > 0], rest_var[keep] / rest_mean[keep]])
     return alpha, theta
