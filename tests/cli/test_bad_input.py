@@ -127,6 +127,9 @@ CASES = [
     ("kaimal-lengths-0", ["kaimal", "--lengths", "340,113,0"], ["L3", "= 0"]),
     ("kaimal-ayz-neg", ["kaimal", "--ayz", "-1"], ["a_yz", "-1"]),
     ("kaimal-ayz-big", ["kaimal", "--ayz", "1e6"], ["1e+06"]),
+    # a coherence high far beyond a large grid: neither a torus nor a dense factor is affordable (was a 7986^2 torus)
+    ("kaimal-ayz-small-big-grid", ["kaimal", "--nt", "256", "--ny", "64", "--nz", "64", "--ayz", "0.5"],
+     ["a_yz = 0.5", "--ayz", "--lc", "64 x 64"]),
     ("kaimal-lc-0", ["kaimal", "--lc", "0"], ["Lc", "= 0"]),
     ("kaimal-ax-0", ["kaimal", "--ax", "0"], ["a_x", "= 0", "(0, 100]"]),
     ("kaimal-ax-200", ["kaimal", "--ax", "200"], ["= 200"]),

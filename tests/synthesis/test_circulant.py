@@ -128,3 +128,46 @@ def test_in_place_sampling_gives_the_same_values():
     assert got.dtype == np.complex64 and np.shares_memory(got, work)
     np.testing.assert_array_equal(got, expected)
     assert not np.array_equal(work, xi)  # the input was used as the work array
+
+
+def test_a_torus_beyond_the_cap_becomes_a_dense_factor():
+    """a_yz = 0.5 on a 5 x 5 grid at the lowest bin of a 256-sample record wants an 11979 x 11979 torus (7 GB in a
+    run): the dense factor instead, exact (F F^T = C)."""
+    a_yz, f = 0.5, 1.0 / 128.0
+    kernel = lambda r: exponential_yz(r, f, U, a_yz, LC)  # noqa: E731
+    decay = 1.0 / (a_yz * np.hypot(f / U, 0.12 / LC))
+    assert torus_size(5, 5.0, decay) ** 2 > circulant.MAX_TORUS_POINTS
+    e = embed(kernel, 5, 5, 5.0, 5.0, decay)
+    assert e.chol is not None and e.torus_shape == (25, 1)
+    a = _linear_map(e)
+    np.testing.assert_allclose(a @ a.conj().T, kernel(grid_distances(5, 5, 5.0, 5.0)), atol=1e-12, rtol=0)
+
+
+def test_enlarging_stops_at_the_cap(monkeypatch):
+    """The torus grown for negative eigenvalues is not grown beyond MAX_TORUS_POINTS either: dense factor."""
+    monkeypatch.setattr(circulant, "MAX_TORUS_POINTS", 11 * 11)
+    monkeypatch.setattr(circulant, "torus_size", lambda n, h, d: 2 * (n - 1))
+    kernel = lambda r: np.exp(-np.asarray(r) / 50.0)  # noqa: E731 -- negative on the 10 x 8 torus (see above)
+    e = embed(kernel, 6, 5, 4.0, 4.0, 50.0)
+    assert e.chol is not None and e.clip_error == 0.0
+
+
+def test_semi_definite_coherence_gets_an_eigen_factor():
+    """A coherence of 1 everywhere (rank 1: no Cholesky factor) is sampled exactly through its eigenvectors."""
+    e = circulant.dense_embedding(lambda r: np.ones_like(r), 3, 4, 5.0, 5.0)
+    a = _linear_map(e)
+    np.testing.assert_allclose(a @ a.conj().T, np.ones((12, 12)), atol=1e-12, rtol=0)
+    assert e.clip_error <= 1e-12
+
+
+@pytest.mark.parametrize("ny, a_yz, refused", [(5, 0.5, False), (64, 0.5, True), (64, 12.0, False)])
+def test_sampling_cost_is_checked_before_anything_is_allocated(ny, a_yz, refused):
+    from turbgen.errors import ParameterError
+
+    freqs = np.arange(1, 129) / 128.0
+    decays = 1.0 / (a_yz * np.hypot(freqs / U, 0.12 / LC))
+    if refused:  # 4096 points: a dense factor is too large, the torus too
+        with pytest.raises(ParameterError, match=r"a_yz.*lc_m"):
+            circulant.check_sampling_cost(ny, ny, 5.0, 5.0, decays, "the yz coherence (a_yz = 0.5)")
+    else:
+        circulant.check_sampling_cost(ny, ny, 5.0, 5.0, decays, "the yz coherence")

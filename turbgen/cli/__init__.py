@@ -45,7 +45,8 @@ class UserError(click.ClickException):
 EXIT_CODES = {StoreError: 2, ParameterError: 2, TurbgenError: 2}
 # run fields whose option is not --<field with - for _>
 _OPTIONS = {"chunk_t": "--chunks", "dt_s": "--dt", "dy_m": "--dy", "dz_m": "--dz", "x_m": "--planes",
-            "U_m_s": "--U", "hub_height_m": "--hub-height", "memory_bytes": "--memory"}  # fmt: skip
+            "U_m_s": "--U", "hub_height_m": "--hub-height", "memory_bytes": "--memory", "a_yz": "--ayz",
+            "lc_m": "--lc"}  # fmt: skip
 
 
 def as_options(message: str) -> str:

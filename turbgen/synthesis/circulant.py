@@ -17,6 +17,13 @@ so the eigenvalues are checked at run time: the torus is enlarged while any is n
 rounding; if that does not help, small grids fall back to a dense Cholesky factor, large grids
 clip the negative eigenvalues and the clipping error (an upper bound on the covariance error
 at any lag) is reported -- never silently.
+
+A coherence that stays high far beyond the grid (a small a_yz or a large Lc) would need a torus much larger
+than the grid (a_yz = 0.5 on a 5 x 5 grid: 11979 x 11979 points per frequency, 7 GB; a_yz = 0.01 with
+Lc = 10 km: terabytes). A torus of more than MAX_TORUS_POINTS points is not built: a grid of at most
+CHOLESKY_MAX_POINTS points is sampled with a dense square root of C instead (:func:`dense_embedding`), and
+:func:`check_sampling_cost` refuses, before anything is allocated, what neither can do in reasonable time
+and memory.
 """
 
 from __future__ import annotations
@@ -28,6 +35,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
+from turbgen.errors import ParameterError
+
 # eigenvalues above -EIG_RTOL * max(lam) are rounding noise of an exactly non-negative spectrum
 EIG_RTOL = 1e-10
 # the torus is enlarged (x1.5 per step) at most this many times before falling back
@@ -36,6 +45,11 @@ MAX_ENLARGE = 4
 CHOLESKY_MAX_POINTS = 2500
 # kernel values below exp(-30) ~ 1e-13 count as zero when sizing the torus
 CUTOFF_DECAYS = 30.0
+# larger tori are not built (16 MiB of complex64 per frequency and plane, up to FREQ_CHUNK = 32 frequencies at once
+# per thread, and their FFTs): a dense factor instead
+MAX_TORUS_POINTS = 1 << 21
+# at most this many floating-point operations for the dense factors of one component (~N^3 / 3 per frequency)
+MAX_DENSE_FLOPS = 1e11
 
 
 def fft_size(n: int) -> int:
@@ -84,8 +98,8 @@ def grid_distances(ny: int, nz: int, dy_m: float, dz_m: float) -> np.ndarray:
 class Embedding:
     """Sampler of one correlation matrix C on the ny x nz grid.
 
-    Either circulant (``scale`` = sqrt(lam/(My Mz)) on the torus, ``chol`` None) or, as the
-    fallback, a dense lower Cholesky factor ``chol`` (N x N). ``clip_error`` bounds the absolute
+    Either circulant (``scale`` = sqrt(lam/(My Mz)) on the torus, ``chol`` None) or dense: ``chol`` (N x N) a
+    square root F of C (F F^T = C: its lower Cholesky factor, or from its eigenvectors, see dense_embedding). ``clip_error`` bounds the absolute
     covariance error left by clipped negative eigenvalues (0 when the embedding is exact).
     """
 
@@ -118,29 +132,73 @@ class Embedding:
         return scipy.fft.fft(w, axis=-2, workers=workers, overwrite_x=overwrite)[..., : self.ny, :]
 
 
+def dense_embedding(kernel, ny: int, nz: int, dy_m: float, dz_m: float) -> Embedding:
+    """Sampler of C_ab = kernel(r_ab) with a dense square root F of C (F F^T = C): its Cholesky factor, or, where
+    rounding leaves C numerically semi-definite (a coherence near 1 across the grid), V sqrt(max(Lambda, 0)) from
+    its eigenvectors V and eigenvalues Lambda, with the clipped part's spectral norm max|Lambda_neg| (a bound on
+    the covariance error of every pair) as clip_error.
+    """
+    c = kernel(grid_distances(ny, nz, dy_m, dz_m))
+    try:
+        return Embedding(ny, nz, None, np.linalg.cholesky(c), 0.0, 0)
+    except np.linalg.LinAlgError:
+        lam, vec = np.linalg.eigh(c)
+        return Embedding(ny, nz, None, vec * np.sqrt(np.clip(lam, 0.0, None)), float(max(-lam.min(), 0.0)), 0)
+
+
+def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m, what: str) -> None:
+    """Refuse (ParameterError) a coherence whose tori exceed MAX_TORUS_POINTS on a grid too large for dense factors
+    (more than CHOLESKY_MAX_POINTS points, or more than MAX_DENSE_FLOPS for all of them).
+
+    ``decay_lengths_m``: the decay length [m] at every frequency (:func:`embed`'s ``decay_length_m``); ``what``
+    names the coherence and its parameters for the message.
+    """
+    n = ny * nz
+    big = [d for d in decay_lengths_m if torus_size(ny, dy_m, d) * torus_size(nz, dz_m, d) > MAX_TORUS_POINTS]
+    if not big:
+        return
+    my, mz = torus_size(ny, dy_m, max(big)), torus_size(nz, dz_m, max(big))
+    if n > CHOLESKY_MAX_POINTS or len(big) * n**3 / 3.0 > MAX_DENSE_FLOPS:
+        raise ParameterError(
+            f"{what} stays high over {max(big):.4g} m: sampling it on the {ny} x {nz} grid would need a {my} x {mz} "
+            f"torus (more than {MAX_TORUS_POINTS} points) or a dense {n} x {n} factor at {len(big)} frequencies; "
+            "raise `a_yz`, lower `lc_m` or use fewer grid points (`ny`, `nz`)"
+        )
+
+
 def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: float) -> Embedding:
     """Embedding of C_ab = kernel(r_ab) (kernel(0) = 1, a function of distance in m).
 
     decay_length_m : the kernel is <= exp(-r / decay_length_m) (IEC: 1/(a kappa)) [m]; inf for a
-    constant kernel. It sets the initial torus period (:func:`torus_size`).
+    constant kernel. It sets the initial torus period (:func:`torus_size`). A torus of more than
+    MAX_TORUS_POINTS points is replaced by :func:`dense_embedding` (grids of at most CHOLESKY_MAX_POINTS
+    points; :func:`check_sampling_cost` refuses the others up front).
     """
     my, mz = torus_size(ny, dy_m, decay_length_m), torus_size(nz, dz_m, decay_length_m)
-    for enlarged in range(MAX_ENLARGE + 1):
+    if my * mz > MAX_TORUS_POINTS:
+        if ny * nz > CHOLESKY_MAX_POINTS:
+            raise ValueError(f"a {my} x {mz} torus for a {ny} x {nz} grid: check_sampling_cost should have refused it")
+        return dense_embedding(kernel, ny, nz, dy_m, dz_m)
+    enlarged = 0
+    while True:
         lam = scipy.fft.fft2(kernel(wrapped_distance(ny, nz, dy_m, dz_m, my, mz))).real
         lam_max = float(lam.max())
         neg = lam < -EIG_RTOL * lam_max
         if not neg.any():
             break
-        if enlarged < MAX_ENLARGE:
-            my = fft_size(math.ceil(1.5 * my)) if ny > 1 else 1
-            mz = fft_size(math.ceil(1.5 * mz)) if nz > 1 else 1
-    else:
-        if ny * nz <= CHOLESKY_MAX_POINTS:
-            try:
-                chol = np.linalg.cholesky(kernel(grid_distances(ny, nz, dy_m, dz_m)))
-                return Embedding(ny, nz, None, chol, 0.0, MAX_ENLARGE)
-            except np.linalg.LinAlgError:
-                pass  # C itself is not positive definite: clip below and report
+        grown = (fft_size(math.ceil(1.5 * my)) if ny > 1 else 1, fft_size(math.ceil(1.5 * mz)) if nz > 1 else 1)
+        if enlarged < MAX_ENLARGE and grown[0] * grown[1] > MAX_TORUS_POINTS and ny * nz <= CHOLESKY_MAX_POINTS:
+            return dense_embedding(kernel, ny, nz, dy_m, dz_m)  # a larger torus is not built
+        if enlarged == MAX_ENLARGE or grown[0] * grown[1] > MAX_TORUS_POINTS:
+            if enlarged == MAX_ENLARGE and ny * nz <= CHOLESKY_MAX_POINTS:
+                try:
+                    chol = np.linalg.cholesky(kernel(grid_distances(ny, nz, dy_m, dz_m)))
+                    return Embedding(ny, nz, None, chol, 0.0, MAX_ENLARGE)
+                except np.linalg.LinAlgError:
+                    pass  # C itself is not positive definite: clip below and report
+            break
+        my, mz = grown
+        enlarged += 1
     m = my * mz
     # the covariance at any lag changes by ifft2 of the clipped part: at most sum|lam_neg| / M
     clip_error = float(-lam[lam < 0].sum() / m)

@@ -38,7 +38,7 @@ import numpy as np
 import scipy.fft
 
 from turbgen.grid import Grid
-from turbgen.synthesis.circulant import Embedding, embed
+from turbgen.synthesis.circulant import Embedding, check_sampling_cost, embed
 from turbgen.synthesis.random_streams import keyed_complex_normal
 from turbgen.theory.coherence_models import exponential_yz, exponential_yz_decay_length_m
 from turbgen.theory.kaimal import kaimal_band_variance
@@ -213,6 +213,10 @@ class KaimalEvo:
             self.rescale_factors[c] = factor
         self.report = {"yz_clip_error": 0.0, "torus_enlarged": 0, "cholesky_fallback": 0, "max_torus": [1, 1],
                        "long_clip_error": 0.0}
+        # before anything is allocated: a coherence high far beyond the grid needs huge tori or dense factors
+        check_sampling_cost(grid.ny, grid.nz, grid.dy_m, grid.dz_m,
+                            [self.yz_decay_length_m(f) for f in self.freqs[1:]],
+                            f"the yz coherence (a_yz = {kaimal.a_yz:g}, Lc = {kaimal.lc_m:g} m at U = {U_m_s:g} m/s)")
 
     def expected_variance(self, component: str) -> float:
         """Expected variance [m^2 s^-2] of the synthesised component at every point."""
