@@ -152,12 +152,13 @@ def test_manifest_json_and_csv_agree(tmp_path):
 
 
 def test_default_cluster_size_follows_cores_runs_and_memory(tmp_path, monkeypatch):
-    from turbgen.runs.kaimal import memory_needed
+    from turbgen.runs.kaimal import kaimal_generator, memory_needed
     from turbgen.sweep import tasks as runner
 
     plan = make_plan(out=tmp_path, models=["kaimal"], presets=["neutral"], speeds=[16], seeds=range(1, 7), grid=TINY)
     tasks = [runner.RunTask(r.model, r.run, "x", False, None, False) for r in plan.runs]
-    need = memory_needed(plan.runs[0].run.grid)
+    run = plan.runs[0].run
+    need = memory_needed(run.grid, sampler=kaimal_generator(run, workers=1).sampler_bytes())  # one thread per run
     monkeypatch.setattr(runner.os, "cpu_count", lambda: 8)
     monkeypatch.setattr(runner, "available_memory_bytes", lambda: None)
     assert runner.default_workers(tasks) == 6  # at most one worker per run

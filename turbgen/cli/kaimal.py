@@ -9,7 +9,7 @@ import click
 from turbgen.cli.options import parse_floats, plane_positions
 from turbgen.cli.run_options import grid_options, run_mapping
 from turbgen.resources import format_bytes
-from turbgen.runs.kaimal import memory_needed, run_kaimal
+from turbgen.runs.kaimal import kaimal_generator, memory_needed, run_kaimal
 from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X
 from turbgen.spec.defaults import KAIMAL_DEFAULTS as D
 from turbgen.spec.defaults import KAIMAL_GRID as G
@@ -101,7 +101,8 @@ def kaimal(**opt):
                f"long {run.long_model} {run.effective_long_parameters()} on {run.long_components}, seed {run.seed}")
     click.echo(f"  grid (t, x, y, z) = {g.nt} x {g.nx} x {g.ny} x {g.nz}, dt {g.dt_s:g} s, dy {g.dy_m:g} m, "
                f"dz {g.dz_m:g} m, planes x = {', '.join(f'{x:g}' for x in g.x_m)} m")
-    click.echo(f"  memory ~{format_bytes(memory_needed(g))}, output {format_bytes(3 * g.nbytes_per_component())} "
+    sampler = kaimal_generator(run, workers=opt["threads"]).sampler_bytes()
+    click.echo(f"  memory ~{format_bytes(memory_needed(g, sampler=sampler))}, output {format_bytes(3 * g.nbytes_per_component())} "
                f"float32 -> {out}")
     s = run_kaimal(run, out, overwrite=opt["overwrite"], chunk_t=opt["chunks"], progress=sys.stderr.isatty(),
                    threads=opt["threads"])

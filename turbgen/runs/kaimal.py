@@ -42,14 +42,15 @@ def store_attrs(run: KaimalRun, gen: KaimalEvo | None = None) -> dict:
     })
 
 
-def memory_needed(grid: Grid, spill: bool = False) -> int:
+def memory_needed(grid: Grid, spill: bool = False, sampler: int = 0) -> int:
     """Peak bytes of a run's arrays: one component's spectrum (nx, nf, ny, nz) complex64 -- or, with
     ``spill`` (the spectrum in a scratch file), one frequency chunk of all planes with its mixing
-    copies -- plus the planes in flight (two transformed at once, each with its spectrum copy, one
+    copies -- plus the larger of the yz samplers of one chunk (``sampler``: KaimalEvo.sampler_bytes, made
+    before the transforms) and the planes in flight (two transformed at once, each with its spectrum copy, one
     yielded and one written by the store)."""
     nf = grid.nt // 2 + 1
     plane = grid.ny * grid.nz
-    in_flight = 3 * nf * plane * 8 + 5 * grid.nt * plane * 4
+    in_flight = max(3 * nf * plane * 8 + 5 * grid.nt * plane * 4, sampler)
     if spill:
         return 3 * grid.nx * FREQ_CHUNK * plane * 8 + in_flight
     return grid.nx * nf * plane * 8 + in_flight
@@ -60,13 +61,13 @@ def spectrum_bytes(grid: Grid) -> int:
     return grid.nx * (grid.nt // 2 + 1) * grid.ny * grid.nz * 8
 
 
-def _plan_spill(grid: Grid, out: Path, spill: bool | None) -> bool:
+def _plan_spill(grid: Grid, out: Path, spill: bool | None, sampler: int) -> bool:
     """Whether the spectrum goes to a scratch file next to ``out``; checks memory (and disk) first."""
     what = f"the Kaimal spectrum ({grid.nx} planes x {grid.nt // 2 + 1} bins x {grid.ny} x {grid.nz})"
     if spill is None:
         available = available_memory_bytes()
-        spill = available is not None and memory_needed(grid) > 0.8 * available
-    require_memory(memory_needed(grid, spill), what, "lower `nt`, `ny`/`nz` or the number of planes")
+        spill = available is not None and memory_needed(grid, sampler=sampler) > 0.8 * available
+    require_memory(memory_needed(grid, spill, sampler), what, "lower `nt`, `ny`/`nz` or the number of planes")
     if spill:
         free = shutil.disk_usage(out.parent).free
         if spectrum_bytes(grid) + 3 * grid.nbytes_per_component() > free:
@@ -91,8 +92,8 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
     """
     g = run.grid
     out = Path(out)
-    spill = _plan_spill(g, out.absolute(), spill)
     gen = kaimal_generator(run, workers=threads)
+    spill = _plan_spill(g, out.absolute(), spill, gen.sampler_bytes())
     attrs = store_attrs(run, gen)
     t0 = time.perf_counter()
     sums = {c: [0.0, 0] for c in COMPONENTS}

@@ -102,15 +102,16 @@ def _run_kaimal(run: KaimalRun, out, *, overwrite=False, chunk_t=None, threads=N
 
 
 def _kaimal_memory(run: KaimalRun, threads: int) -> int:
-    from turbgen.runs.kaimal import memory_needed
+    from turbgen.runs.kaimal import kaimal_generator, memory_needed
 
-    return memory_needed(run.grid)
+    return memory_needed(run.grid, sampler=kaimal_generator(run, workers=threads).sampler_bytes())
 
 
 def _kaimal_least_memory(run: KaimalRun) -> int:
-    from turbgen.runs.kaimal import memory_needed
+    from turbgen.runs.kaimal import kaimal_generator, memory_needed
 
-    return min(memory_needed(run.grid), memory_needed(run.grid, spill=True))  # in memory or spilled to disk
+    sampler = kaimal_generator(run, workers=1).sampler_bytes()
+    return min(memory_needed(run.grid, sampler=sampler), memory_needed(run.grid, True, sampler))  # memory or disk
 
 
 MODELS: dict[str, Model] = {

@@ -20,10 +20,10 @@ at any lag) is reported -- never silently.
 
 A coherence that stays high far beyond the grid (a small a_yz or a large Lc) would need a torus much larger
 than the grid (a_yz = 0.5 on a 5 x 5 grid: 11979 x 11979 points per frequency, 7 GB; a_yz = 0.01 with
-Lc = 10 km: terabytes). A torus of more than MAX_TORUS_POINTS points is not built: a grid of at most
-CHOLESKY_MAX_POINTS points is sampled with a dense square root of C instead (:func:`dense_embedding`), and
-:func:`check_sampling_cost` refuses, before anything is allocated, what neither can do in reasonable time
-and memory.
+Lc = 10 km: terabytes). A torus of more than :func:`torus_cap` points (MAX_TORUS_POINTS, or 4 x the grid's
+minimal torus) is not built: a grid of at most CHOLESKY_MAX_POINTS points is sampled with a dense square root
+of C instead (:func:`dense_embedding`), and :func:`check_sampling_cost` refuses, before anything is allocated,
+what neither can do in reasonable time and memory.
 """
 
 from __future__ import annotations
@@ -45,8 +45,8 @@ MAX_ENLARGE = 4
 CHOLESKY_MAX_POINTS = 2500
 # kernel values below exp(-30) ~ 1e-13 count as zero when sizing the torus
 CUTOFF_DECAYS = 30.0
-# larger tori are not built (16 MiB of complex64 per frequency and plane, up to FREQ_CHUNK = 32 frequencies at once
-# per thread, and their FFTs): a dense factor instead
+# tori larger than this and than 4 x the grid's minimal torus (torus_cap) are not built (16 MiB of complex64 per
+# frequency and plane, up to FREQ_CHUNK = 32 frequencies at once per thread, and their FFTs): a dense factor instead
 MAX_TORUS_POINTS = 1 << 21
 # at most this many floating-point operations for the dense factors of one component (~N^3 / 3 per frequency)
 MAX_DENSE_FLOPS = 1e11
@@ -132,6 +132,12 @@ class Embedding:
         return scipy.fft.fft(w, axis=-2, workers=workers, overwrite_x=overwrite)[..., : self.ny, :]
 
 
+def torus_cap(ny: int, nz: int) -> int:
+    """Most torus points built for an ny x nz grid: MAX_TORUS_POINTS, or 4 x the grid's minimal torus
+    (2 (n - 1) per axis) on grids that need more anyway."""
+    return max(MAX_TORUS_POINTS, 4 * torus_size(ny, 1.0, math.inf) * torus_size(nz, 1.0, math.inf))
+
+
 def dense_embedding(kernel, ny: int, nz: int, dy_m: float, dz_m: float) -> Embedding:
     """Sampler of C_ab = kernel(r_ab) with a dense square root F of C (F F^T = C): its Cholesky factor, or, where
     rounding leaves C numerically semi-definite (a coherence near 1 across the grid), V sqrt(max(Lambda, 0)) from
@@ -147,21 +153,22 @@ def dense_embedding(kernel, ny: int, nz: int, dy_m: float, dz_m: float) -> Embed
 
 
 def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m, what: str) -> None:
-    """Refuse (ParameterError) a coherence whose tori exceed MAX_TORUS_POINTS on a grid too large for dense factors
+    """Refuse (ParameterError) a coherence whose tori exceed :func:`torus_cap` on a grid too large for dense factors
     (more than CHOLESKY_MAX_POINTS points, or more than MAX_DENSE_FLOPS for all of them).
 
     ``decay_lengths_m``: the decay length [m] at every frequency (:func:`embed`'s ``decay_length_m``); ``what``
     names the coherence and its parameters for the message.
     """
     n = ny * nz
-    big = [d for d in decay_lengths_m if torus_size(ny, dy_m, d) * torus_size(nz, dz_m, d) > MAX_TORUS_POINTS]
+    cap = torus_cap(ny, nz)
+    big = [d for d in decay_lengths_m if torus_size(ny, dy_m, d) * torus_size(nz, dz_m, d) > cap]
     if not big:
         return
     my, mz = torus_size(ny, dy_m, max(big)), torus_size(nz, dz_m, max(big))
     if n > CHOLESKY_MAX_POINTS or len(big) * n**3 / 3.0 > MAX_DENSE_FLOPS:
         raise ParameterError(
             f"{what} stays high over {max(big):.4g} m: sampling it on the {ny} x {nz} grid would need a {my} x {mz} "
-            f"torus (more than {MAX_TORUS_POINTS} points) or a dense {n} x {n} factor at {len(big)} frequencies; "
+            f"torus (more than {cap} points) or a dense {n} x {n} factor at {len(big)} frequencies; "
             "raise `a_yz`, lower `lc_m` or use fewer grid points (`ny`, `nz`)"
         )
 
@@ -171,11 +178,12 @@ def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: fl
 
     decay_length_m : the kernel is <= exp(-r / decay_length_m) (IEC: 1/(a kappa)) [m]; inf for a
     constant kernel. It sets the initial torus period (:func:`torus_size`). A torus of more than
-    MAX_TORUS_POINTS points is replaced by :func:`dense_embedding` (grids of at most CHOLESKY_MAX_POINTS
+    :func:`torus_cap` points is replaced by :func:`dense_embedding` (grids of at most CHOLESKY_MAX_POINTS
     points; :func:`check_sampling_cost` refuses the others up front).
     """
     my, mz = torus_size(ny, dy_m, decay_length_m), torus_size(nz, dz_m, decay_length_m)
-    if my * mz > MAX_TORUS_POINTS:
+    cap = torus_cap(ny, nz)
+    if my * mz > cap:
         if ny * nz > CHOLESKY_MAX_POINTS:
             raise ValueError(f"a {my} x {mz} torus for a {ny} x {nz} grid: check_sampling_cost should have refused it")
         return dense_embedding(kernel, ny, nz, dy_m, dz_m)
@@ -187,9 +195,9 @@ def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: fl
         if not neg.any():
             break
         grown = (fft_size(math.ceil(1.5 * my)) if ny > 1 else 1, fft_size(math.ceil(1.5 * mz)) if nz > 1 else 1)
-        if enlarged < MAX_ENLARGE and grown[0] * grown[1] > MAX_TORUS_POINTS and ny * nz <= CHOLESKY_MAX_POINTS:
+        if enlarged < MAX_ENLARGE and grown[0] * grown[1] > cap and ny * nz <= CHOLESKY_MAX_POINTS:
             return dense_embedding(kernel, ny, nz, dy_m, dz_m)  # a larger torus is not built
-        if enlarged == MAX_ENLARGE or grown[0] * grown[1] > MAX_TORUS_POINTS:
+        if enlarged == MAX_ENLARGE or grown[0] * grown[1] > cap:
             if enlarged == MAX_ENLARGE and ny * nz <= CHOLESKY_MAX_POINTS:
                 try:
                     chol = np.linalg.cholesky(kernel(grid_distances(ny, nz, dy_m, dz_m)))

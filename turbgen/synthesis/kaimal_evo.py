@@ -38,7 +38,7 @@ import numpy as np
 import scipy.fft
 
 from turbgen.grid import Grid
-from turbgen.synthesis.circulant import Embedding, check_sampling_cost, embed
+from turbgen.synthesis.circulant import Embedding, check_sampling_cost, embed, torus_cap, torus_size
 from turbgen.synthesis.random_streams import keyed_complex_normal
 from turbgen.theory.coherence_models import exponential_yz, exponential_yz_decay_length_m
 from turbgen.theory.kaimal import kaimal_band_variance
@@ -217,6 +217,24 @@ class KaimalEvo:
         check_sampling_cost(grid.ny, grid.nz, grid.dy_m, grid.dz_m,
                             [self.yz_decay_length_m(f) for f in self.freqs[1:]],
                             f"the yz coherence (a_yz = {kaimal.a_yz:g}, Lc = {kaimal.lc_m:g} m at U = {U_m_s:g} m/s)")
+
+    def sampler_bytes(self) -> int:
+        """Peak bytes of the yz samplers while one frequency chunk is made: its bins' embeddings (float64 torus
+        scales, or dense float64 N x N factors beyond circulant.torus_cap) with their float32 stacked copies, and each
+        thread's complex64 noise over the chunk's tori (u is always sampled this way; v, w too with coherent_vw,
+        one component after the other)."""
+        g, n = self.grid, self.grid.ny * self.grid.nz
+        cap = torus_cap(g.ny, g.nz)
+        per_bin = []
+        for f in self.freqs[1:]:
+            d = self.yz_decay_length_m(f)
+            points = torus_size(g.ny, g.dy_m, d) * torus_size(g.nz, g.dz_m, d)
+            per_bin.append((8 * n * n, n) if points > cap else (12 * points, points))
+        worst = 0
+        for k0 in range(0, len(per_bin), FREQ_CHUNK):
+            chunk = per_bin[k0:k0 + FREQ_CHUNK]
+            worst = max(worst, sum(b for b, _ in chunk) + 8 * self.workers * sum(p for _, p in chunk))
+        return worst
 
     def expected_variance(self, component: str) -> float:
         """Expected variance [m^2 s^-2] of the synthesised component at every point."""
