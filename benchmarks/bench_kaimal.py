@@ -23,12 +23,15 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
+# as the `turbgen` command does before numpy loads OpenBLAS (turbgen.cli.main): its threads only oversubscribe
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from turbgen.grid import Grid
-from turbgen.spec.defaults import DEFAULT_PLANES_M
-from turbgen.runs.kaimal import run_kaimal
-from turbgen.spec.kaimal import KaimalRun, kaimal_params
+import numpy as np  # noqa: E402
+
+from turbgen.grid import Grid  # noqa: E402
+from turbgen.spec.defaults import DEFAULT_PLANES_M  # noqa: E402
+from turbgen.runs.kaimal import run_kaimal  # noqa: E402
+from turbgen.spec.kaimal import KaimalRun, kaimal_params  # noqa: E402
 
 U, HUB, CLASS = 16.0, 90.0, "A"
 
