@@ -74,6 +74,8 @@ def test_plan_from_toml_and_json_files(tmp_path):
         ({"out": None}, "output directory"),
         ({"grid": {"ny": 0}}, "ny"),
         ({"workers": 2, "scheduler": "tcp://x:1"}, "exclude"),
+        # a time chunk longer than a run's record failed every run at write time (found with --chunks 100000)
+        ({"chunks": 17}, r"chunks .*= 17 .*\[1, 16\]"),
     ],
 )
 def test_bad_sweep_files_give_one_line_errors(tmp_path, change, match):
