@@ -39,6 +39,17 @@ def test_non_loopback_host_needs_a_token_file(tmp_path):
     assert not (tmp_path / "root").exists()
 
 
+def test_scheduler_that_does_not_answer_is_refused_in_one_line(tmp_path):
+    # found with `turbgen serve --scheduler tcp://127.0.0.1:1`: dask's Client retried for 30 s, then
+    # "Error: OSError (errno None)"; now the sweep's check of the address, within its 3 s probe
+    cmd = [sys.executable, "-c", "from turbgen.cli import main; main()", "serve", "--scheduler", "tcp://127.0.0.1:1",
+           "--root", str(tmp_path / "root"), "--port", "0"]  # fmt: skip
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=25)
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert done.stderr.strip().splitlines() == [done.stderr.strip()] and "tcp://127.0.0.1:1" in done.stderr
+    assert "cannot connect" in done.stderr and not (tmp_path / "root").exists()
+
+
 def test_mutating_requests_need_the_token(guarded):
     assert guarded.call("POST", "/runs", _run(1))[0] == 401
     status, hdrs, _ = guarded.call("POST", "/runs", _run(1), headers={"Authorization": "Bearer wrong"})

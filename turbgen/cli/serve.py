@@ -39,6 +39,10 @@ def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue
     elif not is_loopback(host):
         raise ParameterError(f"--host {host} is not a loopback address: give --token-file so mutating requests "
                              "need a bearer token")  # fmt: skip
+    if scheduler:  # in one line within 3 s (dask's Client retries for 30 s, then an OSError without a reason)
+        from turbgen.sweep.scheduler import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     import uvicorn
     from dask.distributed import Client, LocalCluster
 
