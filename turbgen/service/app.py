@@ -40,7 +40,16 @@ def _not_found() -> JSONResponse:
 
 
 async def _read_json(request: Request):
-    """The request body as JSON, at most MAX_BODY_BYTES (LimitError 413 / 422 otherwise)."""
+    """The request body as JSON, at most MAX_BODY_BYTES (LimitError 413 / 415 / 422 otherwise).
+
+    Only ``Content-Type: application/json``: any web page a user of a token-less loopback server visits
+    can POST a form or a no-cors fetch (text/plain, form encodings) to it without a CORS preflight, so
+    accepting those would let other sites queue and compute runs; a JSON body needs the preflight,
+    which this server never grants.
+    """
+    media = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if media != "application/json":
+        raise LimitError(415, f"request body: Content-Type must be application/json, not {media or 'missing'!r}")
     length = request.headers.get("content-length")
     if length is not None and (not length.isdigit() or int(length) > MAX_BODY_BYTES):
         raise LimitError(413, f"request body over {MAX_BODY_BYTES} bytes")
