@@ -88,6 +88,22 @@ def test_bad_sweep_files_give_one_line_errors(tmp_path, change, match):
     assert "\n" not in str(info.value)
 
 
+def test_a_lidar_that_does_not_fit_the_grid_is_refused_before_any_run(tmp_path):
+    # found with `turbgen sweep ... --ny 8 --nz 8 --lidar nacelle-4beam`: every field was generated, then
+    # each lidar run failed ("lidar coherence failed", exit 3) because the beams leave the 33 m wide field
+    grid = {"nt": 256, "ny": 8, "nz": 8, "dy": 4.7}
+    with pytest.raises(ParameterError, match="leaves the yz field") as info:
+        make_plan(out=tmp_path / "o", models=["mann"], presets=["neutral"], speeds=[16], seeds=[1], grid=grid,
+                  lidar="nacelle-4beam")  # fmt: skip
+    assert "\n" not in str(info.value) and not (tmp_path / "o").exists()
+    with pytest.raises(ParameterError, match="between the store's planes"):
+        make_plan(out=tmp_path / "o", models=["mann"], presets=["neutral"], speeds=[16], seeds=[1],
+                  grid={**grid, "ny": 16, "nz": 16, "dy": 8.0, "planes": [0, 50, 100]}, lidar="nacelle-4beam")
+    ok = make_plan(out=tmp_path / "o", models=["mann"], presets=["neutral"], speeds=[16], seeds=[1],
+                   grid={**grid, "ny": 16, "nz": 16, "dy": 8.0}, lidar="nacelle-4beam")  # fmt: skip
+    assert len(ok.runs) == 1
+
+
 def test_duplicate_names_and_missing_model_parameters(tmp_path):
     with pytest.raises(ParameterError, match="duplicate store names"):
         make_plan(out=tmp_path, models=["kaimal"], presets=["neutral"], speeds=[16, 16.0000001], seeds=[1], grid=TINY)
