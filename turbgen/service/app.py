@@ -23,7 +23,8 @@ from turbgen.errors import ParameterError, TurbgenError
 from turbgen.service.catalog import Catalog
 from turbgen.service.run_ids import build_run, canonical_mapping, run_id
 from turbgen.service.jobs import Jobs, QueueFull
-from turbgen.service.limits import MAX_BODY_BYTES, RETRY_AFTER_S, LimitError, check_memory, check_token
+from turbgen.service.limits import (MAX_BODY_BYTES, RETRY_AFTER_S, LimitError, check_memory, check_token,
+                                    is_loopback)
 from turbgen.service.pages import index_html
 from turbgen.store.layout import default_chunk_t, n_chunks
 
@@ -64,7 +65,8 @@ async def _read_json(request: Request):
         raise LimitError(422, f"request body: not valid JSON ({' '.join(str(exc).split())})") from None
 
 
-def create_app(root: Path, client, *, token: str | None = None, memory_budget: int, max_queue: int) -> FastAPI:
+def create_app(root: Path, client, *, token: str | None = None, memory_budget: int, max_queue: int,
+               loopback_only: bool = False) -> FastAPI:
     """The application over the catalog in ``root`` running jobs on the dask ``client``.
 
     Parameters
@@ -79,6 +81,10 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         Memory budget of one run [bytes] (larger runs are refused with 413).
     max_queue : int
         Most runs queued or running at once.
+    loopback_only : bool, optional
+        Answer only requests whose Host header names a loopback address (400 otherwise): a server bound
+        to 127.0.0.1 is then out of reach of DNS rebinding (a web page whose own name resolves to
+        127.0.0.1 would otherwise be same-origin with it and could submit and delete runs).
 
     Returns
     -------
@@ -96,6 +102,15 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
     def lock_for(key: str) -> threading.Lock:
         with locks_guard:
             return locks.setdefault(key, threading.Lock())
+
+    if loopback_only:
+        @app.middleware("http")
+        async def _loopback_host(request: Request, call_next):
+            host = request.headers.get("host", "")
+            name = host[1:host.find("]")] if host.startswith("[") else host.rsplit(":", 1)[0]
+            if not is_loopback(name):
+                return _error(400, f"Host {host!r} is not a loopback name of this server")
+            return await call_next(request)
 
     @app.exception_handler(LimitError)
     async def _limit(request, exc: LimitError):
