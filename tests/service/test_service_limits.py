@@ -3,11 +3,15 @@ restart after kill -9. Real server processes on loopback ports."""
 
 from __future__ import annotations
 
+import json
 import os
+from pathlib import Path
 import subprocess
 import sys
 
 import pytest
+
+import turbgen
 
 from service_server import TINY_GRID, Server
 
@@ -77,6 +81,14 @@ def test_limits_413_and_429(guarded):
     assert guarded.call("POST", "/runs", _run(4), headers=AUTH)[0] == 202
 
 
+_SERVER_FILE = Path(turbgen.__file__).parent / "schemas" / "lidar.schema.json"  # exists on the server
+
+
+def _SWEEP_WITH(key, value):
+    doc = {"models": ["mann"], "presets": ["neutral"], "speeds": [10], "seeds": [1], key: value}
+    return json.dumps(doc).encode()
+
+
 BAD = [
     ("POST", "/runs", b"not json", 422, None),
     ("POST", "/runs", b"[1, 2]", 422, "JSON object"),
@@ -100,6 +112,10 @@ BAD = [
     ("POST", "/sweeps", b'{"models": ["mann"]}', 422, None),
     ("POST", "/sweeps", b'{"models": ["mann"], "presets": ["neutral"], "speeds": [10], "seeds": [1], '
                         b'"preset_file": "/etc/passwd"}', 422, "preset_file"),
+    # found with "lidar": "/path/on/the/server.json": the server opened and parsed a client-named file (its
+    # keys came back in the 422), and "scheduler": the server probed a client-chosen host:port for 3 s
+    ("POST", "/sweeps", _SWEEP_WITH("lidar", str(_SERVER_FILE)), 422, "lidar: not accepted"),
+    ("POST", "/sweeps", _SWEEP_WITH("scheduler", "tcp://127.0.0.1:1"), 422, "scheduler: not accepted"),
     ("GET", "/runs/../../etc/passwd", None, 404, None),
     ("GET", "/runs/%2e%2e%2f%2e%2e%2fetc%2fpasswd", None, 404, None),
     ("GET", "/runs/" + "0" * 24, None, 404, None),

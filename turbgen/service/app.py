@@ -220,6 +220,10 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         body = {**body, "out": "unused"}
         if "preset_file" in body:
             raise ParameterError("preset_file: not accepted by the service (give user_presets inline)")
+        for key in ("lidar", "scheduler"):  # a server file / a network address named by the client
+            if key in body:
+                raise ParameterError(f"{key}: not accepted by the service (lidar: GET /runs/<id>/lidar?lidar=PRESET; "
+                                     "the server's own cluster runs every run)")
         plan = plan_from_mapping(body)
         for pr in plan.runs:
             check_memory(pr.model, pr.run, memory_budget)
