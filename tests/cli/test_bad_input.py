@@ -453,3 +453,29 @@ def test_scheduler_at_a_port_where_no_dask_scheduler_answers(workdir, monkeypatc
     assert address in res.stderr and "no dask scheduler answered" in res.stderr
     assert _listing(workdir) == before
     srv.close()
+
+
+def test_scheduler_at_a_port_where_a_server_answers_other_bytes(workdir, monkeypatch):
+    # found with --scheduler tcp://10.255.255.1:8786 behind a proxy that answers every port: dask read the
+    # reply's first 8 bytes as a frame length and raised MemoryError (a 3 EiB buffer) as a traceback
+    import socket
+    import threading
+
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(4)
+
+    def answer():  # every connection: the port probe's and dask's
+        while True:
+            conn, _ = srv.accept()
+            conn.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" * 4)
+
+    threading.Thread(target=answer, daemon=True).start()
+    address = f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+    monkeypatch.chdir(workdir)
+    before = _listing(workdir)
+    res = CliRunner().invoke(cli, [*SWEEP, "--out", "sw", "--scheduler", address])
+    assert res.exit_code == 2 and res.stderr.strip().splitlines() == [res.stderr.strip()], res.output
+    assert address in res.stderr and "no dask scheduler answered" in res.stderr
+    assert _listing(workdir) == before
+    srv.close()

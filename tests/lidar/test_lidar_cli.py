@@ -143,3 +143,30 @@ def test_optimize_subcommand_is_attached_and_store_alias_does_not_shadow_it():
     assert r.exit_code == 0 and "optimize" in r.output and "run" in r.output
     r = CliRunner().invoke(cli, ["lidar", "optimize", "--help"])
     assert r.exit_code == 0 and "half-cone" in r.output
+
+
+@pytest.fixture(scope="module")
+def tiny_store(tmp_path_factory):
+    # the Table 3 lidar fits 16 x 16 points 8 m apart (beams reach |y| 42 m at 169.7 m of 60 m)
+    out = tmp_path_factory.mktemp("tiny") / "field.zarr"
+    r = CliRunner().invoke(cli, ["mann", "--nt", "256", "--ny", "16", "--nz", "16", "--dy", "8", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    return out
+
+
+def test_out_never_replaces_a_field_store(tiny_store):
+    # found with `turbgen lidar F.zarr --out F.zarr --overwrite`: the field store was replaced by the
+    # lidar dataset (exit 0); --overwrite is for an earlier lidar output only
+    before = sorted(p.name for p in tiny_store.iterdir())
+    r = CliRunner().invoke(cli, ["lidar", str(tiny_store), "--out", str(tiny_store), "--overwrite"])
+    assert r.exit_code == 2 and len(r.output.strip().splitlines()) == 1 and "not a lidar dataset" in r.output, r.output
+    assert sorted(p.name for p in tiny_store.iterdir()) == before
+    assert open_store(tiny_store).grid.ny == 16
+
+
+@pytest.mark.parametrize("shear", ["nan", "inf", "50"])
+def test_bad_shear_exponent_is_exit_2(tiny_store, shear):
+    # found with `--mean-wind --shear nan`: NaN lidar TI and a coherence FAIL at |z| 37 (exit 1) instead of
+    # a usage error; the range is the exports' (turbgen.export.shear.vertical_layout)
+    r = CliRunner().invoke(cli, ["lidar", str(tiny_store), "--mean-wind", "--shear", shear])
+    assert r.exit_code == 2 and len(r.output.strip().splitlines()) == 1 and "shear exponent" in r.output, r.output

@@ -73,6 +73,40 @@ def _cli(args, cwd):
     return done
 
 
+def test_cross_site_posts_are_refused(server):
+    # found by POSTing a run as text/plain with an Origin of another site: 200/202, so any web page the
+    # user visits could queue runs on a token-less loopback server (a form or a no-cors fetch needs no
+    # CORS preflight; application/json does, and the server grants none)
+    import http.client
+
+    run = json.dumps({"model": "mann", "seed": 987654, "U_m_s": 10.0, "grid": dict(TINY_GRID)})
+    for ctype in ("text/plain", "application/x-www-form-urlencoded", "multipart/form-data; boundary=x"):
+        for path in ("/runs", "/sweeps"):
+            conn = http.client.HTTPConnection("127.0.0.1", server.port, timeout=30)
+            conn.request("POST", path, run, headers={"Content-Type": ctype, "Origin": "http://evil.example"})
+            r = conn.getresponse()
+            out = json.loads(r.read())
+            conn.close()
+            assert r.status == 415 and "application/json" in out["detail"], (ctype, path, r.status, out)
+    assert server.call("GET", "/runs?seed=987654")[2]["runs"] == []
+
+
+def test_loopback_server_answers_only_loopback_host_names(server):
+    # found by sending Host: evil.example to the 127.0.0.1 server: 200 (and POST 202), so a page whose
+    # name is re-bound to 127.0.0.1 (DNS rebinding) is same-origin with the server and can submit or
+    # delete runs and read the catalog
+    import http.client
+
+    for host, expected in ((f"evil.example:{server.port}", 400), ("evil.example", 400),
+                           (f"localhost:{server.port}", 200), (f"127.0.0.1:{server.port}", 200)):  # fmt: skip
+        conn = http.client.HTTPConnection("127.0.0.1", server.port, timeout=30)
+        conn.request("GET", "/runs", headers={"Host": host})
+        r = conn.getresponse()
+        r.read()
+        conn.close()
+        assert r.status == expected, (host, r.status)
+
+
 @pytest.mark.parametrize("model", ["mann", "kaimal"])
 def test_served_store_is_bit_identical_to_the_cli(server, tmp_path, model):
     cfg = _config(11, model)

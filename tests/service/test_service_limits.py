@@ -3,11 +3,15 @@ restart after kill -9. Real server processes on loopback ports."""
 
 from __future__ import annotations
 
+import json
 import os
+from pathlib import Path
 import subprocess
 import sys
 
 import pytest
+
+import turbgen
 
 from service_server import TINY_GRID, Server
 
@@ -39,6 +43,17 @@ def test_non_loopback_host_needs_a_token_file(tmp_path):
     assert not (tmp_path / "root").exists()
 
 
+def test_scheduler_that_does_not_answer_is_refused_in_one_line(tmp_path):
+    # found with `turbgen serve --scheduler tcp://127.0.0.1:1`: dask's Client retried for 30 s, then
+    # "Error: OSError (errno None)"; now the sweep's check of the address, within its 3 s probe
+    cmd = [sys.executable, "-c", "from turbgen.cli import main; main()", "serve", "--scheduler", "tcp://127.0.0.1:1",
+           "--root", str(tmp_path / "root"), "--port", "0"]  # fmt: skip
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=25)
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert done.stderr.strip().splitlines() == [done.stderr.strip()] and "tcp://127.0.0.1:1" in done.stderr
+    assert "cannot connect" in done.stderr and not (tmp_path / "root").exists()
+
+
 def test_mutating_requests_need_the_token(guarded):
     assert guarded.call("POST", "/runs", _run(1))[0] == 401
     status, hdrs, _ = guarded.call("POST", "/runs", _run(1), headers={"Authorization": "Bearer wrong"})
@@ -66,6 +81,14 @@ def test_limits_413_and_429(guarded):
     assert guarded.call("POST", "/runs", _run(4), headers=AUTH)[0] == 202
 
 
+_SERVER_FILE = Path(turbgen.__file__).parent / "schemas" / "lidar.schema.json"  # exists on the server
+
+
+def _SWEEP_WITH(key, value):
+    doc = {"models": ["mann"], "presets": ["neutral"], "speeds": [10], "seeds": [1], key: value}
+    return json.dumps(doc).encode()
+
+
 BAD = [
     ("POST", "/runs", b"not json", 422, None),
     ("POST", "/runs", b"[1, 2]", 422, "JSON object"),
@@ -89,6 +112,10 @@ BAD = [
     ("POST", "/sweeps", b'{"models": ["mann"]}', 422, None),
     ("POST", "/sweeps", b'{"models": ["mann"], "presets": ["neutral"], "speeds": [10], "seeds": [1], '
                         b'"preset_file": "/etc/passwd"}', 422, "preset_file"),
+    # found with "lidar": "/path/on/the/server.json": the server opened and parsed a client-named file (its
+    # keys came back in the 422), and "scheduler": the server probed a client-chosen host:port for 3 s
+    ("POST", "/sweeps", _SWEEP_WITH("lidar", str(_SERVER_FILE)), 422, "lidar: not accepted"),
+    ("POST", "/sweeps", _SWEEP_WITH("scheduler", "tcp://127.0.0.1:1"), 422, "scheduler: not accepted"),
     ("GET", "/runs/../../etc/passwd", None, 404, None),
     ("GET", "/runs/%2e%2e%2f%2e%2e%2fetc%2fpasswd", None, 404, None),
     ("GET", "/runs/" + "0" * 24, None, 404, None),

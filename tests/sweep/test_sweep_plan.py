@@ -74,6 +74,8 @@ def test_plan_from_toml_and_json_files(tmp_path):
         ({"out": None}, "output directory"),
         ({"grid": {"ny": 0}}, "ny"),
         ({"workers": 2, "scheduler": "tcp://x:1"}, "exclude"),
+        # a time chunk longer than a run's record failed every run at write time (found with --chunks 100000)
+        ({"chunks": 17}, r"chunks .*= 17 .*\[1, 16\]"),
     ],
 )
 def test_bad_sweep_files_give_one_line_errors(tmp_path, change, match):
@@ -84,6 +86,22 @@ def test_bad_sweep_files_give_one_line_errors(tmp_path, change, match):
     with pytest.raises(ParameterError, match=match) as info:
         plan_from_file(tmp_path / "s.json")
     assert "\n" not in str(info.value)
+
+
+def test_a_lidar_that_does_not_fit_the_grid_is_refused_before_any_run(tmp_path):
+    # found with `turbgen sweep ... --ny 8 --nz 8 --lidar nacelle-4beam`: every field was generated, then
+    # each lidar run failed ("lidar coherence failed", exit 3) because the beams leave the 33 m wide field
+    grid = {"nt": 256, "ny": 8, "nz": 8, "dy": 4.7}
+    with pytest.raises(ParameterError, match="leaves the yz field") as info:
+        make_plan(out=tmp_path / "o", models=["mann"], presets=["neutral"], speeds=[16], seeds=[1], grid=grid,
+                  lidar="nacelle-4beam")  # fmt: skip
+    assert "\n" not in str(info.value) and not (tmp_path / "o").exists()
+    with pytest.raises(ParameterError, match="between the store's planes"):
+        make_plan(out=tmp_path / "o", models=["mann"], presets=["neutral"], speeds=[16], seeds=[1],
+                  grid={**grid, "ny": 16, "nz": 16, "dy": 8.0, "planes": [0, 50, 100]}, lidar="nacelle-4beam")
+    ok = make_plan(out=tmp_path / "o", models=["mann"], presets=["neutral"], speeds=[16], seeds=[1],
+                   grid={**grid, "ny": 16, "nz": 16, "dy": 8.0}, lidar="nacelle-4beam")  # fmt: skip
+    assert len(ok.runs) == 1
 
 
 def test_duplicate_names_and_missing_model_parameters(tmp_path):

@@ -39,6 +39,10 @@ def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue
     elif not is_loopback(host):
         raise ParameterError(f"--host {host} is not a loopback address: give --token-file so mutating requests "
                              "need a bearer token")  # fmt: skip
+    if scheduler:  # in one line within 3 s (dask's Client retries for 30 s, then an OSError without a reason)
+        from turbgen.sweep.scheduler import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     import uvicorn
     from dask.distributed import Client, LocalCluster
 
@@ -50,7 +54,8 @@ def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue
         # threads in this process: a killed server leaves no orphan worker writing into --root
         cluster = LocalCluster(n_workers=1, threads_per_worker=workers, processes=False, dashboard_address=None)
         client = Client(cluster)
-    app = create_app(Path(root), client, token=token, memory_budget=int(memory_gb * 2**30), max_queue=max_queue)
+    app = create_app(Path(root), client, token=token, memory_budget=int(memory_gb * 2**30), max_queue=max_queue,
+                     loopback_only=is_loopback(host))
     requeued = app.state.jobs.resume()
     click.echo(f"turbgen serve: catalog {Path(root).absolute()}, {len(requeued)} interrupted run(s) re-queued")
     click.echo(f"turbgen serve: listening on http://{host}:{port}/ (API docs at /docs)")

@@ -44,7 +44,7 @@ def check_output(path, overwrite: bool) -> Path:
     Raises
     ------
     StoreError
-        If ``path`` exists and ``overwrite`` is False, exists and is not a zarr dataset, or its parent
+        If ``path`` exists and ``overwrite`` is False, exists and is not a lidar dataset, or its parent
         directory is missing or not writable.
     """
     path = Path(path).expanduser().absolute()
@@ -52,6 +52,8 @@ def check_output(path, overwrite: bool) -> Path:
         raise StoreError(f"{path} already exists; use `overwrite` to replace it")
     if path.exists() and not (path / "zarr.json").is_file():
         raise StoreError(f"{path} exists and is not a zarr dataset; refusing to replace it")
+    if path.exists() and not (path / "v_los" / "zarr.json").is_file():  # e.g. the field store being measured
+        raise StoreError(f"{path} exists and is not a lidar dataset (no v_los); refusing to replace it")
     if not path.parent.is_dir():
         raise StoreError(f"output directory {path.parent} does not exist")
     if not os.access(path.parent, os.W_OK):

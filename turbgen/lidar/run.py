@@ -124,6 +124,30 @@ def default_nperseg(n: int) -> int:
     return max(16, 2 ** int(np.floor(np.log2(n / 8))))
 
 
+def check_lidar_fits(description, grid) -> None:
+    """Refuse a lidar whose gates are not planes of ``grid`` or whose probe volumes leave it (before any field exists).
+
+    Parameters
+    ----------
+    description : LidarDescription or object
+        The lidar (``measurement_points()``).
+    grid : Grid
+        The grid of the stores it will measure.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    ParameterError
+        As :func:`turbgen.lidar.sampling.check_measurements` (it reads only the store's grid).
+    """
+    from types import SimpleNamespace
+
+    sampling.check_measurements(SimpleNamespace(grid=grid), measurements_of(description))
+
+
 def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shear_exponent=0.2,
               nperseg=None) -> LidarRun:
     """Sample ``fs`` with ``description`` and estimate the simulated preview quality.

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from turbgen.errors import ParameterError
+from turbgen.errors import ParameterError, check_range
 
 PLANE_TOL_M = 1e-6
 
@@ -206,9 +206,10 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
     ------
     ParameterError
         For invalid measurements (see :func:`check_measurements`), a beam missing a gate, a schedule that
-        is not one beam at a time in a repeating order, a store too short for two scans, or a probe point
-        below the ground when adding the mean wind.
+        is not one beam at a time in a repeating order, a store too short for two scans, a shear exponent
+        outside [-1, 1] or not finite, or a probe point below the ground when adding the mean wind.
     """
+    shear_exponent = check_range("shear exponent", shear_exponent, -1.0, 1.0)  # the exports' range
     g, U = fs.grid, fs.U_m_s
     planes = check_measurements(fs, measurements)
     beams = sorted({m.beam for m in measurements})

@@ -23,7 +23,8 @@ from turbgen.errors import ParameterError, TurbgenError
 from turbgen.service.catalog import Catalog
 from turbgen.service.run_ids import build_run, canonical_mapping, run_id
 from turbgen.service.jobs import Jobs, QueueFull
-from turbgen.service.limits import MAX_BODY_BYTES, RETRY_AFTER_S, LimitError, check_memory, check_token
+from turbgen.service.limits import (MAX_BODY_BYTES, RETRY_AFTER_S, LimitError, check_memory, check_token,
+                                    is_loopback)
 from turbgen.service.pages import index_html
 from turbgen.store.layout import default_chunk_t, n_chunks
 
@@ -40,7 +41,16 @@ def _not_found() -> JSONResponse:
 
 
 async def _read_json(request: Request):
-    """The request body as JSON, at most MAX_BODY_BYTES (LimitError 413 / 422 otherwise)."""
+    """The request body as JSON, at most MAX_BODY_BYTES (LimitError 413 / 415 / 422 otherwise).
+
+    Only ``Content-Type: application/json``: any web page a user of a token-less loopback server visits
+    can POST a form or a no-cors fetch (text/plain, form encodings) to it without a CORS preflight, so
+    accepting those would let other sites queue and compute runs; a JSON body needs the preflight,
+    which this server never grants.
+    """
+    media = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if media != "application/json":
+        raise LimitError(415, f"request body: Content-Type must be application/json, not {media or 'missing'!r}")
     length = request.headers.get("content-length")
     if length is not None and (not length.isdigit() or int(length) > MAX_BODY_BYTES):
         raise LimitError(413, f"request body over {MAX_BODY_BYTES} bytes")
@@ -55,7 +65,8 @@ async def _read_json(request: Request):
         raise LimitError(422, f"request body: not valid JSON ({' '.join(str(exc).split())})") from None
 
 
-def create_app(root: Path, client, *, token: str | None = None, memory_budget: int, max_queue: int) -> FastAPI:
+def create_app(root: Path, client, *, token: str | None = None, memory_budget: int, max_queue: int,
+               loopback_only: bool = False) -> FastAPI:
     """The application over the catalog in ``root`` running jobs on the dask ``client``.
 
     Parameters
@@ -70,6 +81,10 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         Memory budget of one run [bytes] (larger runs are refused with 413).
     max_queue : int
         Most runs queued or running at once.
+    loopback_only : bool, optional
+        Answer only requests whose Host header names a loopback address (400 otherwise): a server bound
+        to 127.0.0.1 is then out of reach of DNS rebinding (a web page whose own name resolves to
+        127.0.0.1 would otherwise be same-origin with it and could submit and delete runs).
 
     Returns
     -------
@@ -87,6 +102,15 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
     def lock_for(key: str) -> threading.Lock:
         with locks_guard:
             return locks.setdefault(key, threading.Lock())
+
+    if loopback_only:
+        @app.middleware("http")
+        async def _loopback_host(request: Request, call_next):
+            host = request.headers.get("host", "")
+            name = host[1:host.find("]")] if host.startswith("[") else host.rsplit(":", 1)[0]
+            if not is_loopback(name):
+                return _error(400, f"Host {host!r} is not a loopback name of this server")
+            return await call_next(request)
 
     @app.exception_handler(LimitError)
     async def _limit(request, exc: LimitError):
@@ -196,6 +220,10 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         body = {**body, "out": "unused"}
         if "preset_file" in body:
             raise ParameterError("preset_file: not accepted by the service (give user_presets inline)")
+        for key in ("lidar", "scheduler"):  # a server file / a network address named by the client
+            if key in body:
+                raise ParameterError(f"{key}: not accepted by the service (lidar: GET /runs/<id>/lidar?lidar=PRESET; "
+                                     "the server's own cluster runs every run)")
         plan = plan_from_mapping(body)
         for pr in plan.runs:
             check_memory(pr.model, pr.run, memory_budget)

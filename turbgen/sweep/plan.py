@@ -336,6 +336,16 @@ def make_plan(
                 first = build_run(m, p, U, seeds[0], opts, user=user)
                 for s in seeds:
                     runs.append(PlannedRun(m, p, U, s, first if s == seeds[0] else replace(first, seed=s)))
+    if chunk_t is not None:  # the store writer's check, before any run instead of in every run
+        for nt in sorted({r.run.grid.nt for r in runs}):
+            check_int("chunks (time samples per chunk)", chunk_t, 1, nt)
+    if lidar is not None:  # gates on planes, beams inside the field: refused before any field is made
+        from turbgen.lidar.description import load_lidar
+        from turbgen.lidar.run import check_lidar_fits
+
+        description = load_lidar(lidar)
+        for g in {r.run.grid for r in runs}:
+            check_lidar_fits(description, g)
     names = [r.name for r in runs]
     if len(set(names)) != len(names):
         raise ParameterError(f"speeds = {list(speeds)} give duplicate store names (they differ below 6 digits)")
