@@ -108,7 +108,7 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         async def _loopback_host(request: Request, call_next):
             host = request.headers.get("host", "")
             name = host[1:host.find("]")] if host.startswith("[") else host.rsplit(":", 1)[0]
-            if not is_loopback(name):
+            if not is_loopback(name.lower()):  # host names are case-insensitive
                 return _error(400, f"Host {host!r} is not a loopback name of this server")
             return await call_next(request)
 
