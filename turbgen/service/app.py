@@ -16,6 +16,7 @@ import zipfile
 from pathlib import Path
 
 from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
 
 from turbgen import __version__
@@ -111,6 +112,13 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
             if not is_loopback(name.lower()):  # host names are case-insensitive
                 return _error(400, f"Host {host!r} is not a loopback name of this server")
             return await call_next(request)
+
+    @app.exception_handler(RequestValidationError)
+    async def _invalid(request, exc: RequestValidationError):
+        # FastAPI's own check of query and path parameters (e.g. ?U=fast): one line as every other error, not
+        # its list of objects (the page showed "[object Object]")
+        parts = [f"{'.'.join(str(x) for x in e.get('loc', ()))}: {e.get('msg', 'invalid')}" for e in exc.errors()]
+        return _error(422, "; ".join(parts) or "invalid request")
 
     @app.exception_handler(LimitError)
     async def _limit(request, exc: LimitError):
