@@ -159,6 +159,8 @@ CASES = [
     ("kaimal-threads-huge", ["kaimal", "--threads", "100000"], ["--threads", "100000", "256"]),
     ("mann-threads-huge", ["mann", "--threads", "100000"], ["--threads", "100000", "256"]),
     ("sweep-workers-huge", [*SWEEP, "--out", "sw", "--workers", "5000"], ["workers = 5000", "256"]),
+    # found by the sweep probe: every run failed in its worker (exit 1) after DIR and its manifest were written
+    ("sweep-memory-tiny", [*SWEEP, "--out", "sw", "--memory", "1KiB"], ["1.0 KiB", "at least", "--memory"]),
     ("kaimal-memory", ["kaimal", *HUGE], ["memory"]),
     ("kaimal-out-empty", ["kaimal", *SMALL, "--out", ""], ["--out = ''"]),
     ("kaimal-out-long", ["kaimal", *SMALL, "--out", LONG_NAME], ["the maximum is 200"]),

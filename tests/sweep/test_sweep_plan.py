@@ -185,3 +185,22 @@ def test_default_cluster_size_follows_cores_runs_and_memory(tmp_path, monkeypatc
     assert runner.default_workers(tasks) == 2  # 80 % of the memory holds two runs
     monkeypatch.setattr(runner, "available_memory_bytes", lambda: need // 10)
     assert runner.default_workers(tasks) == 1  # never fewer than one (the run itself checks its memory)
+
+
+def test_a_memory_budget_no_run_fits_is_refused_before_dir_is_touched(tmp_path):
+    """--memory below what any worker needs even out of core (found by the sweep probe: every run failed in its
+    worker, exit 1, after DIR and its manifest were written): refused up front; a budget above the in-memory need
+    passes the check."""
+    from turbgen.runs.mann_outofcore import least_budget_bytes
+    from turbgen.sweep import run_sweep
+
+    grid = {"nt": 256, "planes": [0.0, 50.0], "ny": 8, "nz": 8}
+    plan = make_plan(out=tmp_path / "sw", models=["mann"], presets=["neutral"], speeds=[12], seeds=[1, 2], grid=grid)
+    need = least_budget_bytes(plan.runs[0].run)
+    assert 100 * 2**20 < need < 2**30  # the interpreter's floor plus the smallest plan of a tiny run
+    with pytest.raises(ParameterError, match="at least"):
+        run_sweep(plan, progress=False, memory_bytes=need - 1)
+    assert not (tmp_path / "sw").exists()
+    from turbgen.sweep.plan import check_memory_budget
+
+    check_memory_budget(plan.runs, need)  # at the bound: not refused (the run itself checks its real need)

@@ -49,6 +49,7 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
     """
     from turbgen.spec.preset_files import load_presets
     from turbgen.sweep import make_plan, plan_from_file, run_sweep, summary_table
+    from turbgen.sweep.plan import check_memory_budget
 
     grid = {
         k: v
@@ -90,10 +91,11 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
             user_presets=load_presets(presets_file) if presets_file else None,
             lidar=lidar,
         )
-    click.echo(f"sweep: {len(plan.runs)} runs -> {plan.out}", err=True)
     from turbgen.resources import parse_size
 
     budget = parse_size(memory, "--memory") if memory is not None else None
+    check_memory_budget(plan.runs, budget, plan.chunk_t)  # (run_sweep checks it too) before any line is printed
+    click.echo(f"sweep: {len(plan.runs)} runs -> {plan.out}", err=True)
     result = run_sweep(plan, progress=True, memory_bytes=budget)
     click.echo(summary_table(result))
     if not result.ok:

@@ -196,6 +196,18 @@ class OutOfCorePlan:
         )
 
 
+def least_budget_bytes(run: MannRun, chunk_t: int | None = None) -> int:
+    """A lower bound [bytes] of the memory budget any process can make ``run`` within: in memory with one thread, or
+    out of core with one thread (:class:`OutOfCorePlan`'s minimum), both with the smallest base any plan assumes
+    (BASE_BYTES; :func:`base_bytes` never plans with less). A budget below it fails in every worker, so a sweep can
+    refuse it before it starts."""
+    from turbgen.runs.mann import memory_estimate_bytes
+
+    base = min(BASE_BYTES, base_bytes())
+    in_memory = memory_estimate_bytes(run, 1) + base
+    return min(in_memory, OutOfCorePlan(run, 2**62, 1, chunk_t, base=base).minimum_bytes)
+
+
 def fits_in_memory(run: MannRun, memory_bytes: int | None, threads: int, with_stencil: bool = True) -> bool:
     """Whether ``run`` is made in one pass within ``memory_bytes`` (True without a budget): its in-memory estimate
     (turbgen.runs.mann.memory_estimate_bytes) plus what this process holds (:func:`base_bytes`)."""

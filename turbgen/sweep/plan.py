@@ -354,6 +354,43 @@ def make_plan(
     return SweepPlan(**{**plan.__dict__, "runs": tuple(runs)})
 
 
+def check_memory_budget(runs, memory_bytes: int | None, chunk_t: int | None = None) -> None:
+    """Refuse (one line) a per-run memory budget (`turbgen sweep --memory`) that a planned Mann run cannot be made
+    within even out of core, before anything is written (each run would otherwise fail in its worker).
+
+    Parameters
+    ----------
+    runs : iterable of PlannedRun
+        The planned runs.
+    memory_bytes : int or None
+        The budget of each run [bytes]; None: no budget, nothing to check.
+    chunk_t : int, optional
+        The sweep's time chunk (it sizes the out-of-core passes).
+
+    Raises
+    ------
+    ParameterError
+        Naming the first run, the least budget it needs and what to change.
+    """
+    if memory_bytes is None:
+        return
+    from turbgen.resources import format_bytes
+    from turbgen.runs.mann_outofcore import least_budget_bytes
+
+    seen = set()
+    for pr in runs:
+        key = replace(pr.run, seed=0)  # the seed changes no memory
+        if not MODELS[pr.model].out_of_core or key in seen:
+            continue
+        seen.add(key)
+        need = least_budget_bytes(pr.run, chunk_t)
+        if memory_bytes < need:
+            raise ParameterError(
+                f"run {pr.name} cannot be made within a memory budget of {format_bytes(memory_bytes)}: it needs at "
+                f"least {format_bytes(need)} even out of core; raise `memory_bytes`, or lower `nt`, `ny`/`nz` or `pad_yz`"
+            )
+
+
 def check_plan_memory(runs) -> None:
     """Refuse the sweep (one line) when any run needs more memory than is available here, before any starts.
 

@@ -40,7 +40,7 @@ from turbgen.store import open_store
 from turbgen.store.temporaries import exit_on_signals, report_removed
 from turbgen.sweep.lock import SweepLock
 from turbgen.sweep.manifest import read_manifest, utc_now, write_manifest
-from turbgen.sweep.plan import SweepPlan
+from turbgen.sweep.plan import SweepPlan, check_memory_budget
 from turbgen.sweep.result import SweepResult, summary_table
 from turbgen.sweep.state import base_record, remove_dead_temps, store_state
 from turbgen.sweep.tasks import RunTask, default_workers, execute_run, one_line
@@ -150,6 +150,7 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
     """
     t_start = time.perf_counter()
     out = plan.out
+    check_memory_budget(plan.runs, memory_bytes, plan.chunk_t)  # before DIR or its manifest is touched
     _check_out(out)
     with exit_on_signals(), SweepLock(out):
         previous = {r.get("name"): r for r in (read_manifest(out) or {}).get("runs", []) if isinstance(r, dict)}
