@@ -66,6 +66,23 @@ def test_mutating_requests_need_the_token(guarded):
     assert guarded.call("GET", f"/runs/{out['id']}")[0] == 200  # reading needs no token
 
 
+def test_computing_a_derived_product_needs_the_token(guarded):
+    """Found by the service probe: on a server with a token, GET export / validation / lidar / plots started
+    computations (and wrote cached files) for anyone. Now only a request with the token starts them; what is
+    cached stays readable without it."""
+    status, _, out = guarded.call("POST", "/runs", _run(11), headers=AUTH)
+    assert status in (200, 202)
+    rid = out["id"]
+    guarded.wait(rid)
+    for path in (f"/runs/{rid}/export?format=bts", f"/runs/{rid}/validation", f"/runs/{rid}/lidar",
+                 f"/runs/{rid}/plots/spectrum_u.png"):  # fmt: skip
+        assert guarded.call("GET", path)[0] == 401, path
+    assert not (guarded.root / "runs" / rid / "validation").exists()
+    assert not (guarded.root / "runs" / rid / "exports").exists()
+    assert guarded.call("GET", f"/runs/{rid}/validation", headers=AUTH)[0] == 200
+    assert guarded.call("GET", f"/runs/{rid}/validation")[0] == 200  # cached: reading needs no token
+
+
 def test_limits_413_and_429(guarded):
     status, _, out = guarded.call("POST", "/runs", raw=b"{" + b" " * 70000 + b"}", headers=AUTH)
     assert status == 413 and "body" in out["detail"]

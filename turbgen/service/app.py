@@ -104,6 +104,11 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         with locks_guard:
             return locks.setdefault(key, threading.Lock())
 
+    def may_compute(request: Request) -> None:
+        """A derived product (export, validation, lidar report) not cached yet is computed only for a request
+        with the token (when the server has one): reading what exists stays open, starting work does not."""
+        check_token(token, request.headers.get("authorization"))
+
     if loopback_only:
         @app.middleware("http")
         async def _loopback_host(request: Request, call_next):
@@ -275,7 +280,7 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         return FileResponse(target, media_type="application/octet-stream")
 
     @app.get("/runs/{rid}/export")
-    def export(rid: str, format: str, plane: int | None = None):
+    def export(rid: str, format: str, http: Request, plane: int | None = None):
         """The store exported (made on first request, cached); several files come as one .zip."""
         store = complete_store(rid)
         if store is None:
@@ -289,6 +294,7 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         final = catalog.run_dir(rid) / "exports" / key
         with lock_for(f"{rid}/export/{key}"):
             if not final.is_dir():
+                may_compute(http)
                 final.parent.mkdir(exist_ok=True)
                 tmp = Path(tempfile.mkdtemp(dir=final.parent, prefix=".tmp-"))
                 try:
@@ -308,10 +314,11 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         (single,) = [p for p in final.iterdir() if not p.name.startswith(".")]
         return FileResponse(single, filename=single.name, media_type="application/octet-stream")
 
-    def validation_dir(rid: str, store: Path) -> Path:
+    def validation_dir(rid: str, store: Path, request: Request) -> Path:
         final = catalog.run_dir(rid) / "validation"
         with lock_for(f"{rid}/validation"):
             if not (final / "report.json").is_file():
+                may_compute(request)
                 from turbgen.validate import validate
 
                 tmp = Path(tempfile.mkdtemp(dir=final.parent, prefix=".tmp-validation-"))
@@ -327,19 +334,19 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         return final
 
     @app.get("/runs/{rid}/validation")
-    def validation(rid: str):
+    def validation(rid: str, request: Request):
         """The `turbgen validate --json` report (computed once, cached), with the names of its PNG plots."""
         store = complete_store(rid)
         if store is None:
             return _not_found()
-        d = validation_dir(rid, store)
+        d = validation_dir(rid, store, request)
         report = json.loads((d / "report.json").read_text())
         report["store"] = f"/runs/{rid}/store"  # the server's paths stay private
         plots = sorted(p.name for p in (d / "plots").glob("*.png"))
         return {"id": rid, "report": report, "plots": [f"/runs/{rid}/plots/{p}" for p in plots]}
 
     @app.get("/runs/{rid}/lidar")
-    def lidar(rid: str, lidar: str = "nacelle-4beam"):
+    def lidar(rid: str, request: Request, lidar: str = "nacelle-4beam"):
         """`turbgen lidar --json` on the run's store for a lidar *preset* (computed once per preset, cached)."""
         from turbgen.lidar.description import PRESETS
         from turbgen.lidar.report import lidar_report
@@ -353,6 +360,7 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         final = catalog.run_dir(rid) / "lidar" / f"{lidar}.json"
         with lock_for(f"{rid}/lidar/{lidar}"):
             if not final.is_file():
+                may_compute(request)
                 try:
                     report = lidar_report(open_store(store), lidar).to_dict()
                 except TurbgenError as exc:
@@ -365,11 +373,11 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         return {"id": rid, "lidar": lidar, "report": json.loads(final.read_text())}
 
     @app.get("/runs/{rid}/plots/{name}")
-    def plot(rid: str, name: str):
+    def plot(rid: str, name: str, request: Request):
         store = complete_store(rid)
         if store is None or not _NAME.match(name) or not name.endswith(".png"):
             return _not_found()
-        d = validation_dir(rid, store) / "plots"
+        d = validation_dir(rid, store, request) / "plots"
         if name not in {p.name for p in d.glob("*.png")}:
             return _not_found()
         return FileResponse(d / name, media_type="image/png")

@@ -50,7 +50,9 @@ async function refresh() {{
 }}
 async function showPlots(id) {{
   $('#plots').innerHTML = 'validating ' + id + ' ...';
-  const r = await fetch('/runs/' + id + '/validation'); const v = await r.json();
+  const t = document.querySelector('input[name=token]');  // computing a validation needs the token, if any
+  const r = await fetch('/runs/' + id + '/validation', {{headers: t && t.value ? {{'Authorization': 'Bearer ' + t.value}} : {{}}}});
+  const v = await r.json();
   if (!r.ok) {{ $('#plots').innerHTML = '<p class="err">' + text(v.detail) + '</p>'; return; }}
   $('#plots').innerHTML = '<h2>Validation of ' + id + ': ' + (v.report.passed ? 'passed' : 'failed') + '</h2>' +
     v.plots.map(u => '<img class="plot" alt="validation plot" src="' + u + '">').join('');
