@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from turbgen.resources import available_memory_bytes
 from turbgen.runs.models import MODELS
@@ -214,5 +214,7 @@ def default_workers(tasks) -> int:
     n = min(os.cpu_count() or 1, len(tasks))
     avail = available_memory_bytes()
     if avail and tasks:
-        n = min(n, int(0.8 * avail) // max(task_bytes(t) for t in tasks))
+        # the seed changes no memory: one estimate per distinct run (a Kaimal estimate sizes its tori, ~15 ms)
+        distinct = {(t.model, replace(t.run, seed=0), t.generate, t.threads, t.memory_bytes): t for t in tasks}
+        n = min(n, int(0.8 * avail) // max(task_bytes(t) for t in distinct.values()))
     return max(1, n)

@@ -152,25 +152,28 @@ def dense_embedding(kernel, ny: int, nz: int, dy_m: float, dz_m: float) -> Embed
         return Embedding(ny, nz, None, vec * np.sqrt(np.clip(lam, 0.0, None)), float(max(-lam.min(), 0.0)), 0)
 
 
-def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m, what: str) -> None:
-    """Refuse (ParameterError) a coherence whose tori exceed :func:`torus_cap` on a grid too large for dense factors
-    (more than CHOLESKY_MAX_POINTS points, or more than MAX_DENSE_FLOPS for all of them).
+def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m, what: str) -> list[int]:
+    """The torus points (My Mz) of every frequency; refuse (ParameterError) a coherence whose tori exceed
+    :func:`torus_cap` on a grid too large for dense factors (more than CHOLESKY_MAX_POINTS points, or more than
+    MAX_DENSE_FLOPS for all of them).
 
     ``decay_lengths_m``: the decay length [m] at every frequency (:func:`embed`'s ``decay_length_m``); ``what``
-    names the coherence and its parameters for the message.
+    names the coherence and its parameters for the message. Frequencies whose torus exceeds the cap get a dense
+    factor (:func:`embed`).
     """
     n = ny * nz
     cap = torus_cap(ny, nz)
-    big = [d for d in decay_lengths_m if torus_size(ny, dy_m, d) * torus_size(nz, dz_m, d) > cap]
-    if not big:
-        return
-    my, mz = torus_size(ny, dy_m, max(big)), torus_size(nz, dz_m, max(big))
-    if n > CHOLESKY_MAX_POINTS or len(big) * n**3 / 3.0 > MAX_DENSE_FLOPS:
+    decays = list(decay_lengths_m)
+    points = [torus_size(ny, dy_m, d) * torus_size(nz, dz_m, d) for d in decays]
+    big = [d for d, m in zip(decays, points) if m > cap]
+    if big and (n > CHOLESKY_MAX_POINTS or len(big) * n**3 / 3.0 > MAX_DENSE_FLOPS):
+        my, mz = torus_size(ny, dy_m, max(big)), torus_size(nz, dz_m, max(big))
         raise ParameterError(
             f"{what} stays high over {max(big):.4g} m: sampling it on the {ny} x {nz} grid would need a {my} x {mz} "
             f"torus (more than {cap} points) or a dense {n} x {n} factor at {len(big)} frequencies; "
             "raise `a_yz`, lower `lc_m` or use fewer grid points (`ny`, `nz`)"
         )
+    return points
 
 
 def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: float) -> Embedding:

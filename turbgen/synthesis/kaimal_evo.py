@@ -38,7 +38,7 @@ import numpy as np
 import scipy.fft
 
 from turbgen.grid import Grid
-from turbgen.synthesis.circulant import Embedding, check_sampling_cost, embed, torus_cap, torus_size
+from turbgen.synthesis.circulant import Embedding, check_sampling_cost, embed, torus_cap
 from turbgen.synthesis.random_streams import keyed_complex_normal
 from turbgen.theory.coherence_models import exponential_yz, exponential_yz_decay_length_m
 from turbgen.theory.kaimal import kaimal_band_variance
@@ -214,9 +214,9 @@ class KaimalEvo:
         self.report = {"yz_clip_error": 0.0, "torus_enlarged": 0, "cholesky_fallback": 0, "max_torus": [1, 1],
                        "long_clip_error": 0.0}
         # before anything is allocated: a coherence high far beyond the grid needs huge tori or dense factors
-        check_sampling_cost(grid.ny, grid.nz, grid.dy_m, grid.dz_m,
-                            [self.yz_decay_length_m(f) for f in self.freqs[1:]],
-                            f"the yz coherence (a_yz = {kaimal.a_yz:g}, Lc = {kaimal.lc_m:g} m at U = {U_m_s:g} m/s)")
+        what = f"the yz coherence (a_yz = {kaimal.a_yz:g}, Lc = {kaimal.lc_m:g} m at U = {U_m_s:g} m/s)"
+        decays = [self.yz_decay_length_m(f) for f in self.freqs[1:]]
+        self._torus_points = check_sampling_cost(grid.ny, grid.nz, grid.dy_m, grid.dz_m, decays, what)
 
     def sampler_bytes(self) -> int:
         """Peak bytes of the yz samplers while one frequency chunk is made: its bins' embeddings (float64 torus
@@ -225,11 +225,7 @@ class KaimalEvo:
         one component after the other)."""
         g, n = self.grid, self.grid.ny * self.grid.nz
         cap = torus_cap(g.ny, g.nz)
-        per_bin = []
-        for f in self.freqs[1:]:
-            d = self.yz_decay_length_m(f)
-            points = torus_size(g.ny, g.dy_m, d) * torus_size(g.nz, g.dz_m, d)
-            per_bin.append((8 * n * n, n) if points > cap else (12 * points, points))
+        per_bin = [(8 * n * n, n) if points > cap else (12 * points, points) for points in self._torus_points]
         worst = 0
         for k0 in range(0, len(per_bin), FREQ_CHUNK):
             chunk = per_bin[k0:k0 + FREQ_CHUNK]
