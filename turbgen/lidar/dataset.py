@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.errors import StoreError
+from turbgen.store.attributes import jsonable
 
 MARKER = "turbgen_lidar_complete"
 
@@ -59,18 +60,6 @@ def check_output(path, overwrite: bool) -> Path:
     if not os.access(path.parent, os.W_OK):
         raise StoreError(f"output directory {path.parent} is not writable")
     return path
-
-
-def _jsonable(v):
-    if isinstance(v, dict):
-        return {str(k): _jsonable(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_jsonable(x) for x in v]
-    if isinstance(v, np.generic):
-        return v.item()
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    return v
 
 
 def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: bool = False) -> Path:
@@ -127,7 +116,7 @@ def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: 
             "beam": (("beam",), np.arange(nb)),
             "gate": (("gate",), np.arange(ng)),
         },
-        attrs={k: json.dumps(_jsonable(v)) if isinstance(v, (dict, list, tuple)) else _jsonable(v) for k, v in attrs.items()},
+        attrs={k: json.dumps(jsonable(v)) if isinstance(v, (dict, list, tuple)) else jsonable(v) for k, v in attrs.items()},
     )
     tmp = path.parent / f".{path.name}.tmp-{os.getpid()}-{secrets.token_hex(4)}"
     try:
