@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -10,6 +12,9 @@ from turbgen.synthesis.circulant import embed, fft_size, grid_distances, torus_s
 from turbgen.theory.coherence_models import exponential_yz
 
 U, A_YZ, LC = 16.0, 12.0, 340.2
+# a torus shorter than 2 (N - 1) wraps lags where the kernel is below exp(-CUTOFF_DECAYS) (4e-8, under the float32
+# rounding of the scales the generator samples with): each lag takes at most one such image per axis and corner
+WRAP_TOL = 3 * math.exp(-circulant.CUTOFF_DECAYS) + 1e-12
 
 
 def _kernel(f_hz):
@@ -36,8 +41,8 @@ def test_sampler_reproduces_covariance_exactly(ny, nz, dy, dz, f):
     a = _linear_map(e)
     c = _kernel(f)(grid_distances(ny, nz, dy, dz))
     chol = np.linalg.cholesky(c)
-    np.testing.assert_allclose(a @ a.conj().T, c, atol=1e-12, rtol=0)
-    np.testing.assert_allclose(a @ a.conj().T, chol @ chol.T, atol=1e-12, rtol=0)
+    np.testing.assert_allclose(a @ a.conj().T, c, atol=WRAP_TOL, rtol=0)
+    np.testing.assert_allclose(a @ a.conj().T, chol @ chol.T, atol=WRAP_TOL, rtol=0)
 
 
 def _corner_covariance(e):
@@ -50,11 +55,43 @@ def _corner_covariance(e):
 
 @pytest.mark.parametrize("f", [1 / 2048, 4 / 2048, 0.02, 0.05, 0.3, 1.0])
 def test_adaptive_torus_is_exact_on_the_paper_grid(f):
-    """31 x 31 at 5 m: every lag of the realised covariance equals coh(r, f) (eigenvalues all >= 0)."""
+    """31 x 31 at 5 m: every lag of the realised covariance equals coh(r, f) (eigenvalues all >= 0): to rounding
+    where the torus holds every lag (classical at least 2 (N - 1), or with the smooth cut-off), to WRAP_TOL where a
+    short torus wraps the negligible tail (high f)."""
     e = embed(_kernel(f), 31, 31, 5.0, 5.0, _decay(f))
-    assert e.chol is None and e.clip_error == 0.0
+    assert e.chol is None and e.clip_error == 0.0 and e.enlarged == 0
     r = np.hypot(*np.meshgrid(np.arange(31) * 5.0, np.arange(31) * 5.0, indexing="ij"))
+    tol = 1e-12 if min(e.torus_shape) >= 60 else WRAP_TOL
+    np.testing.assert_allclose(_corner_covariance(e), _kernel(f)(r), atol=tol, rtol=0)
+
+
+def test_smooth_cutoff_keeps_every_grid_lag_and_vanishes_at_half_the_period():
+    phi = circulant.smooth_cutoff(31, 5.0, 120)
+    lag = np.minimum(np.arange(120), 120 - np.arange(120)) * 5.0
+    assert np.all(phi[lag <= 150.0] == 1.0) and phi[60] == 0.0
+    inside = (lag > 150.0) & (lag < 300.0)
+    assert np.all((phi[inside] > 0) & (phi[inside] < 1))
+    assert np.all(np.diff(phi[30:61]) <= 0)  # falls monotonically from the grid's largest lag to half the period
+
+
+@pytest.mark.parametrize("ny,nz,dy,dz", [(31, 31, 5.0, 5.0), (20, 8, 3.0, 7.0), (64, 64, 2.5, 2.5), (11, 40, 10.0, 2.0)])
+@pytest.mark.parametrize("f", [1 / 2048, 1 / 256, 0.01])
+def test_smooth_cutoff_torus_is_exact_and_smaller(ny, nz, dy, dz, f):
+    """Low frequencies (the kernel high across the grid): the smooth cut-off's torus needs no enlarging, realises C on
+    every lag to rounding and holds fewer points than the classical 12-decay-length torus."""
+    my, mz, smooth = circulant.torus_plan(ny, nz, dy, dz, _decay(f))
+    assert smooth and my * mz < torus_size(ny, dy, _decay(f)) * torus_size(nz, dz, _decay(f))
+    e = embed(_kernel(f), ny, nz, dy, dz, _decay(f))
+    assert e.chol is None and e.clip_error == 0.0 and e.enlarged == 0 and e.torus_shape == (my, mz)
+    r = np.hypot(*np.meshgrid(np.arange(ny) * dy, np.arange(nz) * dz, indexing="ij"))
     np.testing.assert_allclose(_corner_covariance(e), _kernel(f)(r), atol=1e-12, rtol=0)
+
+
+def test_smooth_cutoff_cuts_the_lowest_bins_torus_of_the_paper_grid():
+    """f = df of the default Kaimal field: 5 decay lengths beyond twice the grid instead of 12 decay lengths."""
+    d = _decay(1 / 2048)
+    my, mz, smooth = circulant.torus_plan(31, 31, 5.0, 5.0, d)
+    assert smooth and my * 5.0 >= 300.0 + 5 * d and torus_size(31, 5.0, d) ** 2 > 3.5 * my * mz  # 567^2 vs 297^2
 
 
 def test_minimal_torus_fails_at_low_frequency():
@@ -62,7 +99,7 @@ def test_minimal_torus_fails_at_low_frequency():
     f = 1 / 2048
     lam = np.fft.fft2(_kernel(f)(wrapped_distance(31, 31, 5.0, 5.0, 60, 60))).real
     assert lam.min() < -1e-3 * lam.max()
-    assert embed(_kernel(f), 31, 31, 5.0, 5.0, _decay(f)).torus_shape[0] >= 12 * _decay(f) / 5.0
+    assert embed(_kernel(f), 31, 31, 5.0, 5.0, _decay(f)).torus_shape[0] >= 60 + 5 * _decay(f) / 5.0  # smooth cut-off
 
 
 def test_torus_rule_and_fft_sizes():
@@ -71,7 +108,7 @@ def test_torus_rule_and_fft_sizes():
         assert m >= n and all(p in (2, 3, 5, 7, 11) for p in _prime_factors(m))  # pocketfft sizes
     assert torus_size(1, 5.0, 1e9) == 1
     assert torus_size(31, 5.0, 10.0) == 60  # 2 (N - 1) ...
-    assert torus_size(31, 5.0, 1.0) == 36  # ... unless the kernel is < 1e-13 beyond 30 decay lengths = 6 points
+    assert torus_size(31, 5.0, 1.0) == 35  # ... unless the kernel is < 4e-8 beyond 17 decay lengths = 4 points
     assert torus_size(31, 5.0, 100.0) == fft_size(240)  # 12 decay lengths
 
 
@@ -131,7 +168,7 @@ def test_in_place_sampling_gives_the_same_values():
 
 
 def test_a_torus_beyond_the_cap_becomes_a_dense_factor():
-    """a_yz = 0.5 on a 5 x 5 grid at the lowest bin of a 256-sample record wants an 11979 x 11979 torus (7 GB in a
+    """a_yz = 0.5 on a 5 x 5 grid at the lowest bin of a 256-sample record wants a 3312 x 3312 torus even with the cut-off (0.5 GB in a
     run): the dense factor instead, exact (F F^T = C)."""
     a_yz, f = 0.5, 1.0 / 128.0
     kernel = lambda r: exponential_yz(r, f, U, a_yz, LC)  # noqa: E731
