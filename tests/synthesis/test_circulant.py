@@ -208,3 +208,27 @@ def test_sampling_cost_is_checked_before_anything_is_allocated(ny, a_yz, refused
             circulant.check_sampling_cost(ny, ny, 5.0, 5.0, decays, "the yz coherence (a_yz = 0.5)")
     else:
         circulant.check_sampling_cost(ny, ny, 5.0, 5.0, decays, "the yz coherence")
+
+
+def test_embed_many_equals_embed_bit_for_bit():
+    """The batched embeddings (the Kaimal generator's path) are those of embed, bin by bin and bit for bit, on every
+    torus kind: smooth cut-off, classical, wrapped (the default field's bins 1-2048 at nt 4096, dt 0.5 s), a dense
+    factor beyond the cap and a torus that must be enlarged."""
+    freqs = np.arange(1, 2049) / 2048.0
+    kernels = [_kernel(f) for f in freqs]
+    got = circulant.embed_many(kernels, 31, 31, 5.0, 5.0, [_decay(f) for f in freqs])
+    for f, e in zip(freqs, got):
+        want = embed(_kernel(f), 31, 31, 5.0, 5.0, _decay(f))
+        assert e.chol is None and np.array_equal(e.scale, want.scale) and e.enlarged == want.enlarged == 0
+    a_yz, f = 0.5, 1.0 / 128.0  # beyond the cap: a dense factor (see test_a_torus_beyond_the_cap_becomes_a_dense_factor)
+    far = lambda r: exponential_yz(r, f, U, a_yz, LC)  # noqa: E731
+    (dense,) = circulant.embed_many([far], 5, 5, 5.0, 5.0, [1.0 / (a_yz * np.hypot(f / U, 0.12 / LC))])
+    assert dense.chol is not None
+
+
+def test_embed_many_enlarges_like_embed(monkeypatch):
+    monkeypatch.setattr(circulant, "torus_size", lambda n, h, d: 2 * (n - 1))
+    kernel = lambda r: np.exp(-np.asarray(r) / 50.0)  # noqa: E731 -- negative on the minimal 10 x 8 torus
+    (got,) = circulant.embed_many([kernel], 6, 5, 4.0, 4.0, [math.inf])
+    want = embed(kernel, 6, 5, 4.0, 4.0, math.inf)
+    assert got.enlarged == want.enlarged > 0 and np.array_equal(got.scale, want.scale)

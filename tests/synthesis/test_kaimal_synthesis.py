@@ -28,7 +28,14 @@ import pytest
 
 from turbgen.grid import Grid
 from turbgen.synthesis.circulant import grid_distances
-from turbgen.synthesis.kaimal_evo import FREQ_CHUNK, KaimalEvo, bin_frequencies, bin_variances, inverse_transform
+from turbgen.synthesis.kaimal_evo import (
+    FREQ_CHUNK,
+    KaimalEvo,
+    PlaneRing,
+    bin_frequencies,
+    bin_variances,
+    inverse_transform,
+)
 from turbgen.theory.coherence_models import exponential_longitudinal, exponential_yz, kristensen, simley_pao
 from turbgen.theory.kaimal import iec_kaimal_params, kaimal_band_variance
 from turbgen.theory.params import KaimalParams
@@ -219,6 +226,25 @@ def test_deterministic_across_threads_and_seed_sensitive():
     assert not np.array_equal(one[0], other)
 
 
+def test_plane_ring_gives_the_same_planes_to_a_consumer_one_plane_behind():
+    """With a PlaneRing the planes of u, v, w (read as the runs layer reads them: plane k is used up when plane k + 1
+    arrives) are those made in fresh arrays, bit for bit, from 4 buffers reused over the components."""
+    g = Grid(3 * FREQ_CHUNK, 0.5, (0.0, 20.0, 40.0, 60.0, 80.0, 100.0), 4, 3, 5.0, 5.0)
+    fresh = {c: _field(KaimalEvo(KP, g, U, 4, long_coherence=EXP), c) for c in "uvw"}
+    ring, gen, seen, buffers = PlaneRing(g.nt, g.ny, g.nz), KaimalEvo(KP, g, U, 4, long_coherence=EXP), {}, set()
+    previous = None
+    for c in "uvw":
+        for ix, plane in gen.component_planes(c, ring=ring):
+            if previous is not None:  # the consumer is one plane behind, as run_kaimal's background write
+                seen[previous[0]] = previous[1].copy()
+            previous = ((c, ix), plane)
+            buffers.add(plane.__array_interface__["data"][0])
+    seen[previous[0]] = previous[1].copy()
+    assert len(buffers) == PlaneRing.SIZE
+    for c in "uvw":
+        np.testing.assert_array_equal(np.stack([seen[(c, ix)] for ix in range(g.nx)]), fresh[c])
+
+
 @pytest.mark.parametrize("nt,ny,nz", [(4096, 31, 31), (256, 5, 3), (255, 4, 1)])
 def test_blocked_inverse_transform_is_the_whole_array_irfft(nt, ny, nz):
     """inverse_transform (column blocks, amplitudes applied in the block copy) equals scipy's irfft of the
@@ -231,6 +257,9 @@ def test_blocked_inverse_transform_is_the_whole_array_irfft(nt, ny, nz):
     amp = rng.random(nf).astype(np.float32)
     scaled = spec * amp[:, None, None]
     got = inverse_transform(spec, amp, nt)
+    into = np.full((nt, ny, nz), np.nan, dtype=np.float32)
+    assert inverse_transform(spec, amp, nt, out=into) is not None
+    np.testing.assert_array_equal(into, got)  # the same values written into a given array
     assert got.dtype == np.float32 and got.shape == (nt, ny, nz)
     np.testing.assert_array_equal(got, scipy.fft.irfft(scaled, n=nt, axis=0, norm="forward"))
     reference = np.fft.irfft(scaled.astype(np.complex128), n=nt, axis=0, norm="forward")

@@ -19,7 +19,7 @@ from turbgen.resources import available_memory_bytes, format_bytes, require_memo
 from turbgen.runs.scratch import FileSpectrum
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import create_store
-from turbgen.synthesis.kaimal_evo import COMPONENTS, FREQ_CHUNK, InMemorySpectrum, KaimalEvo, resolved_band_hz
+from turbgen.synthesis.kaimal_evo import COMPONENTS, FREQ_CHUNK, InMemorySpectrum, KaimalEvo, PlaneRing, resolved_band_hz
 
 def kaimal_generator(run: KaimalRun, workers: int | None = None) -> KaimalEvo:
     """The synthesis object of ``run`` (``workers``: FFT threads; the field does not depend on them)."""
@@ -118,8 +118,9 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
             sums[c][0] += w.write(c, ix, plane, squares=True)[1]  # the sum of squares of its finiteness check
             sums[c][1] += plane.size
 
+        ring = PlaneRing(g.nt, g.ny, g.nz)  # valid here: plane k's write is awaited when plane k + 1 arrives
         for c in COMPONENTS:
-            for ix, plane in gen.component_planes(c, tick=tick, spectrum=buffer):
+            for ix, plane in gen.component_planes(c, tick=tick, spectrum=buffer, ring=ring):
                 if pending is not None:
                     pending.result()
                 pending = background.submit(write_and_sum, c, ix, plane)

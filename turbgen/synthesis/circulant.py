@@ -222,6 +222,40 @@ def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_length
     return points
 
 
+def embed_many(kernels, ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m) -> list[Embedding]:
+    """:func:`embed` of every kernel with its decay length, the same embeddings bit for bit (tested), with one
+    batched FFT per run of consecutive kernels on the same torus: ~2x less CPU on the default Kaimal field's 2048
+    bins, where the per-call overhead of tori of 35-60 points per axis dominates. Kernels whose torus needs
+    enlarging or exceeds the cap go through :func:`embed` itself."""
+    plans = [torus_plan(ny, nz, dy_m, dz_m, d) for d in decay_lengths_m]
+    cap = torus_cap(ny, nz)
+    out: list[Embedding | None] = [None] * len(plans)
+    i = 0
+    while i < len(plans):
+        j = i + 1
+        while j < len(plans) and plans[j] == plans[i]:
+            j += 1
+        my, mz, smooth = plans[i]
+        if my * mz > cap:
+            for b in range(i, j):
+                out[b] = embed(kernels[b], ny, nz, dy_m, dz_m, decay_lengths_m[b])
+            i = j
+            continue
+        stack = np.empty((j - i, my, mz))
+        for b in range(i, j):
+            stack[b - i] = torus_kernel(kernels[b], ny, nz, dy_m, dz_m, my, mz, smooth)
+        lam = scipy.fft.fft2(stack, overwrite_x=True).real
+        m = my * mz
+        for b in range(i, j):
+            one = lam[b - i]
+            if (one < -EIG_RTOL * float(one.max())).any():
+                out[b] = embed(kernels[b], ny, nz, dy_m, dz_m, decay_lengths_m[b])  # enlarged, or a fallback
+            else:
+                out[b] = Embedding(ny, nz, np.sqrt(np.maximum(one, 0.0) / m), None, 0.0, 0)
+        i = j
+    return out
+
+
 def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: float) -> Embedding:
     """Embedding of C_ab = kernel(r_ab) (kernel(0) = 1, a function of distance in m).
 
