@@ -5,6 +5,7 @@ Used by ``turbgen kaimal``, the sweep and the service, so all give bit-identical
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import math
 import shutil
@@ -42,15 +43,29 @@ def store_attrs(run: KaimalRun, gen: KaimalEvo | None = None) -> dict:
     })
 
 
+# components in the order they are made: u last, whose yz coherence (by default the only one) makes its frequency
+# chunks the longest phase of a run, long enough to write w's planes meanwhile (the store's writes are bound by the
+# disk: ~0.5 s of the default field's 2 s); the field does not depend on the order
+ORDER = ("v", "w", "u")
+# planes whose store writes may lag behind the synthesis (at most; ring_planes)
+MAX_WRITE_BACKLOG = 8
+
+
+def ring_planes(grid: Grid, spill: bool = False) -> int:
+    """Planes of the run's PlaneRing: the two transformed ahead, the one yielded, and up to MAX_WRITE_BACKLOG (one
+    component's planes at most) waiting for the store; spilled runs (short of memory) let one write wait."""
+    return 3 + (1 if spill else min(grid.nx, MAX_WRITE_BACKLOG))
+
+
 def memory_needed(grid: Grid, spill: bool = False, sampler: int = 0) -> int:
     """Peak bytes of a run's arrays: one component's spectrum (nx, nf, ny, nz) complex64 -- or, with
     ``spill`` (the spectrum in a scratch file), one frequency chunk of all planes with its mixing
-    copies -- plus the larger of the yz samplers of one chunk (``sampler``: KaimalEvo.sampler_bytes, made
-    before the transforms) and the planes in flight (two transformed at once, each with its spectrum copy, one
-    yielded and one written by the store)."""
+    copies -- plus the field planes of the run's ring (:func:`ring_planes`: in flight and waiting for the store,
+    also while the next component is made) and the larger of the yz samplers of one chunk (``sampler``:
+    KaimalEvo.sampler_bytes) and the spectrum copies of the two planes transformed at once."""
     nf = grid.nt // 2 + 1
     plane = grid.ny * grid.nz
-    in_flight = max(3 * nf * plane * 8 + 5 * grid.nt * plane * 4, sampler)
+    in_flight = ring_planes(grid, spill) * grid.nt * plane * 4 + max(3 * nf * plane * 8, sampler)
     if spill:
         return 3 * grid.nx * FREQ_CHUNK * plane * 8 + in_flight
     return grid.nx * nf * plane * 8 + in_flight
@@ -109,23 +124,23 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
 
             bar = stack.enter_context(tqdm(total=3 * (gen.n_chunks + g.nx), desc="kaimal", unit="step"))
             tick = lambda: bar.update(1)  # noqa: E731
-        # One plane written (and summed) in the background while the next is made; leaving the pool waits
-        # for that write, so an exception never races the store's clean-up.
+        # Planes written (and summed) in the background, in order, while the next are made; leaving the pool
+        # waits for the writes, so an exception never races the store's clean-up.
         background = stack.enter_context(ThreadPoolExecutor(1))
-        pending = None
+        ring = PlaneRing(g.nt, g.ny, g.nz, ring_planes(g, spill))
+        pending = collections.deque()
 
         def write_and_sum(c, ix, plane):
             sums[c][0] += w.write(c, ix, plane, squares=True)[1]  # the sum of squares of its finiteness check
             sums[c][1] += plane.size
 
-        ring = PlaneRing(g.nt, g.ny, g.nz)  # valid here: plane k's write is awaited when plane k + 1 arrives
-        for c in COMPONENTS:
+        for c in ORDER:
             for ix, plane in gen.component_planes(c, tick=tick, spectrum=buffer, ring=ring):
-                if pending is not None:
-                    pending.result()
-                pending = background.submit(write_and_sum, c, ix, plane)
-        if pending is not None:
-            pending.result()
+                pending.append(background.submit(write_and_sum, c, ix, plane))
+                while len(pending) > ring.size - 3:  # the ring's condition: plane k's buffer serves plane k + size
+                    pending.popleft().result()
+        while pending:
+            pending.popleft().result()
         # clipping of any embedding is recorded with the field, never only printed
         w.add_attrs(synthesis_report=gen.report)
         path = w.path

@@ -164,26 +164,27 @@ class InMemorySpectrum:
 
 
 class PlaneRing:
-    """Four field planes (nt, ny, nz) float32 handed out in turn to :meth:`KaimalEvo.component_planes`, which then
-    writes every plane into one of them instead of a new array: a run touches 4 planes' memory instead of 3 nx fresh
-    ones (the default field: 33 x 16 MB of page faults and kernel page zeroing, which perf showed at ~12 % of the
-    command's cycles).
+    """``size`` (>= 4) field planes (nt, ny, nz) float32 handed out in turn to :meth:`KaimalEvo.component_planes`,
+    which then writes every plane into one of them instead of a new array: a run touches ``size`` planes' memory
+    instead of 3 nx fresh ones (the default field: 33 x 16 MB of page faults and kernel page zeroing, which perf
+    showed at ~12 % of the command's cycles), and may let the store's writes lag behind the synthesis.
 
-    Only for a consumer that is done with plane k once it asks for plane k + 2 (the runs layer: one write in flight,
-    awaited when the next plane arrives), also across components: the generator computes two planes ahead, so the
-    buffer of plane k serves plane k + 4 (counted over the components in turn).
+    Only for a consumer that is done with plane k once it asks for plane k + size - 2, also across components (the
+    generator computes two planes ahead, so the buffer of plane k serves plane k + size, counted over the components
+    in turn); the runs layer keeps at most size - 3 writes pending.
     """
 
-    SIZE = 4
-
-    def __init__(self, nt: int, ny: int, nz: int):
+    def __init__(self, nt: int, ny: int, nz: int, size: int = 4):
+        if size < 4:
+            raise ValueError(f"a plane ring needs at least 4 planes, not {size}")
         self.shape = (nt, ny, nz)
+        self.size = size
         self._planes: list[np.ndarray] = []
         self._count = 0
 
     def take(self) -> np.ndarray:
         """The next buffer in turn (allocated on first use)."""
-        slot = self._count % self.SIZE
+        slot = self._count % self.size
         self._count += 1
         if slot == len(self._planes):
             self._planes.append(np.empty(self.shape, dtype=np.float32))
