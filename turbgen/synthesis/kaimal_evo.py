@@ -251,38 +251,30 @@ class KaimalEvo:
 
     def sampler_bytes(self) -> int:
         """Peak bytes of the yz samplers while one frequency chunk is made: its bins' embeddings (float64 torus
-        scales, or dense float64 N x N factors beyond circulant.torus_cap) with their float32 stacked copies, and each
-        thread's complex64 noise over the chunk's tori (u is always sampled this way; v, w too with coherent_vw,
-        one component after the other)."""
+        scales, or dense float64 N x N factors beyond circulant.torus_cap) with their float32 stacked copies, the
+        next chunk's, made meanwhile, and each thread's complex64 noise over the chunk's tori (u is always sampled
+        this way; v, w too with coherent_vw, one component after the other)."""
         g, n = self.grid, self.grid.ny * self.grid.nz
         cap = torus_cap(g.ny, g.nz)
         per_bin = [(8 * n * n, n) if points > cap else (12 * points, points) for points in self._torus_points]
-        worst = 0
-        for k0 in range(0, len(per_bin), FREQ_CHUNK):
-            chunk = per_bin[k0:k0 + FREQ_CHUNK]
-            worst = max(worst, sum(b for b, _ in chunk) + 8 * self.workers * sum(p for _, p in chunk))
-        return worst
+        # per_bin[i] is bin i + 1 (bin 0 is never sampled); chunk c holds bins max(1, c F) .. (c + 1) F - 1
+        chunks = [per_bin[max(0, c * FREQ_CHUNK - 1):(c + 1) * FREQ_CHUNK - 1] for c in range(self.n_chunks)]
+        held = [sum(b for b, _ in chunk) for chunk in chunks] + [0]
+        # a chunk's samplers and noise, and the next chunk's samplers made meanwhile (component_planes)
+        return max(held[i] + held[i + 1] + 8 * self.workers * sum(p for _, p in chunk) for i, chunk in enumerate(chunks))
 
     def expected_variance(self, component: str) -> float:
         """Expected variance [m^2 s^-2] of the synthesised component at every point."""
         return float(self.variances[component].sum())
 
-    def _embeddings(self, component: str, ks: range, pool: ThreadPoolExecutor | None = None) -> list[Embedding | None]:
-        """yz samplers for bins ks (None = spatially white), computed in ``pool`` when given."""
+    def _embeddings(self, component: str, ks: range) -> list[Embedding | None]:
+        """yz samplers for bins ks (None = spatially white)."""
         if component != "u" and not self.coherent_vw:
             return [None] * len(ks)
         g = self.grid
-
-        def part(bins: range) -> list[Embedding]:
-            freqs = [self.freqs[k] for k in bins]
-            kernels = [lambda r, f=f: self.yz_coherence(r, f) for f in freqs]
-            return embed_many(kernels, g.ny, g.nz, g.dy_m, g.dz_m, [self.yz_decay_length_m(f) for f in freqs])
-
-        # contiguous parts, one per thread (embed_many gives the same embeddings however the bins are split)
-        n_parts = 1 if pool is None else min(self.workers, len(ks))
-        bounds = [ks.start + len(ks) * i // n_parts for i in range(n_parts + 1)]
-        parts = [range(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
-        out = [e for done in (pool.map(part, parts) if pool is not None else map(part, parts)) for e in done]
+        freqs = [self.freqs[k] for k in ks]
+        kernels = [lambda r, f=f: self.yz_coherence(r, f) for f in freqs]
+        out = embed_many(kernels, g.ny, g.nz, g.dy_m, g.dz_m, [self.yz_decay_length_m(f) for f in freqs])
         rep = self.report
         for e in out:
             rep["yz_clip_error"] = max(rep["yz_clip_error"], e.clip_error)
@@ -386,11 +378,21 @@ class KaimalEvo:
             return local.noise[:n]
 
         mixing = []
+
+        def bins(chunk: int) -> range:
+            return range(max(1, chunk * FREQ_CHUNK), min(self.nf, (chunk + 1) * FREQ_CHUNK))
+
+        def samplers(chunk: int):  # one pool thread, while the other threads fill the previous chunk's planes
+            return self._groups(self._embeddings(component, bins(chunk)))
+
         try:  # the pool is shut down however the generator ends (exception, early close)
+            upcoming = pool.submit(samplers, 0)
             for chunk in range(self.n_chunks):
-                ks = range(max(1, chunk * FREQ_CHUNK), min(self.nf, (chunk + 1) * FREQ_CHUNK))
+                ks = bins(chunk)
+                groups = upcoming.result()
+                if chunk + 1 < self.n_chunks:  # ahead of this chunk's planes in the pool's queue
+                    upcoming = pool.submit(samplers, chunk + 1)
                 if len(ks):
-                    groups = self._groups(self._embeddings(component, ks, pool))
                     block = spectrum.chunk(ks.start, ks.stop)
 
                     def fill(p, chunk=chunk, groups=groups, block=block):
