@@ -232,3 +232,16 @@ def test_embed_many_enlarges_like_embed(monkeypatch):
     (got,) = circulant.embed_many([kernel], 6, 5, 4.0, 4.0, [math.inf])
     want = embed(kernel, 6, 5, 4.0, 4.0, math.inf)
     assert got.enlarged == want.enlarged > 0 and np.array_equal(got.scale, want.scale)
+
+
+@pytest.mark.parametrize("f", [1 / 2048, 1 / 128])
+def test_anisotropic_grid_enlarges_the_smooth_torus_by_one_decay_length(f):
+    """A 3 x 40 grid needs 6 decay lengths beyond twice the grid, not 5: one enlarging step adds one decay length
+    (not x1.5), the realised covariance is exact and the torus stays below the classical one."""
+    e = embed(_kernel(f), 3, 40, 5.0, 5.0, _decay(f))
+    assert e.enlarged == 1 and e.clip_error == 0.0 and e.chol is None
+    my, mz = e.torus_shape
+    assert my == circulant.smooth_torus_size(3, 5.0, _decay(f), 6.0) and mz == circulant.smooth_torus_size(40, 5.0, _decay(f), 6.0)
+    assert my * mz < torus_size(3, 5.0, _decay(f)) * torus_size(40, 5.0, _decay(f))
+    r = np.hypot(*np.meshgrid(np.arange(3) * 5.0, np.arange(40) * 5.0, indexing="ij"))
+    np.testing.assert_allclose(_corner_covariance(e), _kernel(f)(r), atol=1e-12, rtol=0)

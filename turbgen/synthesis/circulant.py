@@ -45,13 +45,14 @@ from turbgen.errors import ParameterError
 
 # eigenvalues above -EIG_RTOL * max(lam) are rounding noise of an exactly non-negative spectrum
 EIG_RTOL = 1e-10
-# the torus is enlarged (x1.5 per step) at most this many times before falling back
+# the torus is enlarged (x1.5 per step; one decay length more with the smooth cut-off) at most this many times
 MAX_ENLARGE = 4
 # grids with at most this many points fall back to a dense Cholesky factor; larger ones clip
 CHOLESKY_MAX_POINTS = 2500
 # kernel values below exp(-17) ~ 4e-8 count as zero when sizing the torus (the torus scales are float32: 6e-8)
 CUTOFF_DECAYS = 17.0
-# decay lengths of the smooth cut-off's torus beyond twice the grid (torus_plan; 4.6 was the largest needed)
+# decay lengths of the smooth cut-off's torus beyond twice the grid (torus_plan; 4.6 was the largest needed on square
+# grids, up to 6 on strongly anisotropic ones: embed then adds one decay length per step)
 SMOOTH_DECAYS = 5.0
 # tori larger than this and than 4 x the grid's minimal torus (torus_cap) are not built (16 MiB of complex64 per
 # frequency and plane, up to FREQ_CHUNK = 32 frequencies at once per thread, and their FFTs): a dense factor instead
@@ -95,10 +96,10 @@ def wrapped_distance(ny: int, nz: int, dy_m: float, dz_m: float, my: int, mz: in
     return r
 
 
-def smooth_torus_size(n: int, h_m: float, decay_length_m: float) -> int:
-    """Torus period M (points) with the smooth cut-off (:func:`torus_kernel`): M h >= 2 (n - 1) h + SMOOTH_DECAYS decay,
+def smooth_torus_size(n: int, h_m: float, decay_length_m: float, decays: float = SMOOTH_DECAYS) -> int:
+    """Torus period M (points) with the smooth cut-off (:func:`torus_kernel`): M h >= 2 (n - 1) h + ``decays`` decay,
     FFT-friendly; more than 2 (n - 1) points, so the cut-off has room to fall."""
-    return fft_size(2 * (n - 1) + max(1, math.ceil(SMOOTH_DECAYS * decay_length_m / h_m - 1e-9)))
+    return fft_size(2 * (n - 1) + max(1, math.ceil(decays * decay_length_m / h_m - 1e-9)))
 
 
 def torus_plan(ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: float) -> tuple[int, int, bool]:
@@ -278,6 +279,10 @@ def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: fl
         if not neg.any():
             break
         grown = (fft_size(math.ceil(1.5 * my)) if ny > 1 else 1, fft_size(math.ceil(1.5 * mz)) if nz > 1 else 1)
+        if smooth:  # one decay length more per step (5 suffices on square grids, 6 on the anisotropic ones tried)
+            more = SMOOTH_DECAYS + enlarged + 1
+            grown = (max(smooth_torus_size(ny, dy_m, decay_length_m, more), fft_size(my + 1)),
+                     max(smooth_torus_size(nz, dz_m, decay_length_m, more), fft_size(mz + 1)))
         if enlarged < MAX_ENLARGE and grown[0] * grown[1] > cap and ny * nz <= CHOLESKY_MAX_POINTS:
             return dense_embedding(kernel, ny, nz, dy_m, dz_m)  # a larger torus is not built
         if enlarged == MAX_ENLARGE or grown[0] * grown[1] > cap:
