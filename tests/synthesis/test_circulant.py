@@ -74,7 +74,9 @@ def test_smooth_cutoff_keeps_every_grid_lag_and_vanishes_at_half_the_period():
     assert np.all(np.diff(phi[30:61]) <= 0)  # falls monotonically from the grid's largest lag to half the period
 
 
-@pytest.mark.parametrize("ny,nz,dy,dz", [(31, 31, 5.0, 5.0), (20, 8, 3.0, 7.0), (64, 64, 2.5, 2.5), (11, 40, 10.0, 2.0)])
+@pytest.mark.parametrize(
+    "ny,nz,dy,dz", [(31, 31, 5.0, 5.0), (20, 8, 3.0, 7.0), (64, 64, 2.5, 2.5), (11, 40, 10.0, 2.0)]
+)
 @pytest.mark.parametrize("f", [1 / 2048, 1 / 256, 0.01])
 def test_smooth_cutoff_torus_is_exact_and_smaller(ny, nz, dy, dz, f):
     """Low frequencies (the kernel high across the grid): the smooth cut-off's torus needs no enlarging, realises C on
@@ -168,8 +170,8 @@ def test_in_place_sampling_gives_the_same_values():
 
 
 def test_a_torus_beyond_the_cap_becomes_a_dense_factor():
-    """a_yz = 0.5 on a 5 x 5 grid at the lowest bin of a 256-sample record wants a 3312 x 3312 torus even with the cut-off (0.5 GB in a
-    run): the dense factor instead, exact (F F^T = C)."""
+    """a_yz = 0.5 on a 5 x 5 grid at the lowest bin of a 256-sample record wants a 3312 x 3312 torus even with the
+    cut-off (0.5 GB in a run): the dense factor instead, exact (F F^T = C)."""
     a_yz, f = 0.5, 1.0 / 128.0
     kernel = lambda r: exponential_yz(r, f, U, a_yz, LC)  # noqa: E731
     decay = 1.0 / (a_yz * np.hypot(f / U, 0.12 / LC))
@@ -220,7 +222,7 @@ def test_embed_many_equals_embed_bit_for_bit():
     for f, e in zip(freqs, got):
         want = embed(_kernel(f), 31, 31, 5.0, 5.0, _decay(f))
         assert e.chol is None and np.array_equal(e.scale, want.scale) and e.enlarged == want.enlarged == 0
-    a_yz, f = 0.5, 1.0 / 128.0  # beyond the cap: a dense factor (see test_a_torus_beyond_the_cap_becomes_a_dense_factor)
+    a_yz, f = 0.5, 1.0 / 128.0  # beyond the cap: a dense factor (test_a_torus_beyond_the_cap_becomes_a_dense_factor)
     far = lambda r: exponential_yz(r, f, U, a_yz, LC)  # noqa: E731
     (dense,) = circulant.embed_many([far], 5, 5, 5.0, 5.0, [1.0 / (a_yz * np.hypot(f / U, 0.12 / LC))])
     assert dense.chol is not None
@@ -241,7 +243,8 @@ def test_anisotropic_grid_enlarges_the_smooth_torus_by_one_decay_length(f):
     e = embed(_kernel(f), 3, 40, 5.0, 5.0, _decay(f))
     assert e.enlarged == 1 and e.clip_error == 0.0 and e.chol is None
     my, mz = e.torus_shape
-    assert my == circulant.smooth_torus_size(3, 5.0, _decay(f), 6.0) and mz == circulant.smooth_torus_size(40, 5.0, _decay(f), 6.0)
+    assert my == circulant.smooth_torus_size(3, 5.0, _decay(f), 6.0)
+    assert mz == circulant.smooth_torus_size(40, 5.0, _decay(f), 6.0)
     assert my * mz < torus_size(3, 5.0, _decay(f)) * torus_size(40, 5.0, _decay(f))
     r = np.hypot(*np.meshgrid(np.arange(3) * 5.0, np.arange(40) * 5.0, indexing="ij"))
     np.testing.assert_allclose(_corner_covariance(e), _kernel(f)(r), atol=1e-12, rtol=0)

@@ -20,7 +20,14 @@ from turbgen.resources import available_memory_bytes, format_bytes, require_memo
 from turbgen.runs.scratch import FileSpectrum
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import create_store
-from turbgen.synthesis.kaimal_evo import COMPONENTS, FREQ_CHUNK, InMemorySpectrum, KaimalEvo, PlaneRing, resolved_band_hz
+from turbgen.synthesis.kaimal_evo import (
+    COMPONENTS,
+    FREQ_CHUNK,
+    InMemorySpectrum,
+    KaimalEvo,
+    PlaneRing,
+    resolved_band_hz,
+)
 
 def kaimal_generator(run: KaimalRun, workers: int | None = None) -> KaimalEvo:
     """The synthesis object of ``run`` (``workers``: FFT threads; the field does not depend on them)."""

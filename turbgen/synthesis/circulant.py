@@ -261,9 +261,9 @@ def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: fl
     """Embedding of C_ab = kernel(r_ab) (kernel(0) = 1, a function of distance in m).
 
     decay_length_m : the kernel is <= exp(-r / decay_length_m) (IEC: 1/(a kappa)) [m]; inf for a
-    constant kernel. It sets the initial torus (:func:`torus_plan`: classical, or with the smooth cut-off). A torus of more than
-    :func:`torus_cap` points is replaced by :func:`dense_embedding` (grids of at most CHOLESKY_MAX_POINTS
-    points; :func:`check_sampling_cost` refuses the others up front).
+    constant kernel. It sets the initial torus (:func:`torus_plan`: classical, or with the smooth cut-off). A
+    torus of more than :func:`torus_cap` points is replaced by :func:`dense_embedding` (grids of at most
+    CHOLESKY_MAX_POINTS points; :func:`check_sampling_cost` refuses the others up front).
     """
     my, mz, smooth = torus_plan(ny, nz, dy_m, dz_m, decay_length_m)
     cap = torus_cap(ny, nz)

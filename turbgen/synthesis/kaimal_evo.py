@@ -261,7 +261,8 @@ class KaimalEvo:
         chunks = [per_bin[max(0, c * FREQ_CHUNK - 1):(c + 1) * FREQ_CHUNK - 1] for c in range(self.n_chunks)]
         held = [sum(b for b, _ in chunk) for chunk in chunks] + [0]
         # a chunk's samplers and noise, and the next chunk's samplers made meanwhile (component_planes)
-        return max(held[i] + held[i + 1] + 8 * self.workers * sum(p for _, p in chunk) for i, chunk in enumerate(chunks))
+        noise = [8 * self.workers * sum(p for _, p in chunk) for chunk in chunks]
+        return max(held[i] + held[i + 1] + noise[i] for i in range(len(chunks)))
 
     def expected_variance(self, component: str) -> float:
         """Expected variance [m^2 s^-2] of the synthesised component at every point."""
