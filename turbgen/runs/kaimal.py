@@ -13,6 +13,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
@@ -28,6 +29,8 @@ from turbgen.synthesis.kaimal_evo import (
     PlaneRing,
     resolved_band_hz,
 )
+from turbgen.synthesis.random_streams import keyed_complex_normal
+
 
 def kaimal_generator(run: KaimalRun, workers: int | None = None) -> KaimalEvo:
     """The synthesis object of ``run`` (``workers``: FFT threads; the field does not depend on them)."""
@@ -101,6 +104,25 @@ def _plan_spill(grid: Grid, out: Path, spill: bool | None, sampler: int) -> bool
     return spill
 
 
+def _touch_while_loading_noise(pool: ThreadPoolExecutor, ring: PlaneRing, spectrum: InMemorySpectrum | None) -> None:
+    """Touch the in-memory spectrum in ``pool`` while this thread loads the compiled noise, then touches the ring.
+
+    The first compiled call of a process sets up numba's typing registries (~0.3 s of Python, holding the GIL), and
+    this VM's first touch of fresh memory is slow and erratic (0.05-0.8 s for the default field's 350 MB; numpy's
+    fills leave the GIL): side by side, the touch hides behind the load (measured: 0.35-0.42 s for both, 0.35-0.47 s
+    for the load alone) instead of slowing the synthesis, and in a process that has loaded it already (a sweep's
+    worker) the two halves are touched on two cores. Returns when all is touched, so no fill races the synthesis.
+    """
+    if spectrum is None:  # spilled: the spectrum is a file
+        touched = pool.submit(ring.touch)
+    else:
+        touched = pool.submit(np.copyto, spectrum.data, 0)
+    keyed_complex_normal((0,), np.empty(1, dtype=np.complex64))  # the stream is discarded: only the load counts
+    if spectrum is not None:
+        ring.touch()
+    touched.result()
+
+
 def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | None = None,
                progress: bool = False, threads: int | None = None, spill: bool | None = None) -> dict:
     """Generate the field of ``run`` into the store ``out``; return a summary dict.
@@ -135,6 +157,7 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
         # waits for the writes, so an exception never races the store's clean-up.
         background = stack.enter_context(ThreadPoolExecutor(1))
         ring = PlaneRing(g.nt, g.ny, g.nz, ring_planes(g, spill))
+        _touch_while_loading_noise(background, ring, None if spill else buffer)
         pending = collections.deque()
 
         def write_and_sum(c, ix, plane):

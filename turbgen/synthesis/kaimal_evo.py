@@ -182,6 +182,13 @@ class PlaneRing:
         self._planes: list[np.ndarray] = []
         self._count = 0
 
+    def touch(self) -> None:
+        """Allocate every plane now and write it once (the first touch of fresh memory, in the caller's thread)."""
+        while len(self._planes) < self.size:
+            self._planes.append(np.empty(self.shape, dtype=np.float32))
+        for plane in self._planes:
+            plane.fill(0.0)
+
     def take(self) -> np.ndarray:
         """The next buffer in turn (allocated on first use)."""
         slot = self._count % self.size
