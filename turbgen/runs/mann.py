@@ -15,6 +15,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+import numpy as np
 from tqdm import tqdm
 
 from turbgen.errors import ParameterError
@@ -24,6 +25,7 @@ from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.synthesis.mann_spacetime import COMPONENTS, MannSnapshots, snapshot_memory_bytes
 from turbgen.synthesis.mann_stencil import MannStencil, build_stencil, stencil_nbytes, synthesis_box
+from turbgen.synthesis.random_streams import complex_normal
 from turbgen.synthesis.unit_stencil import UnitMannStencil, scale_stencil
 
 _BUILD_SCRATCH = 64 * 2**20  # float64 temporaries of the stencil-building batches (all threads)
@@ -70,6 +72,23 @@ def describe(run: MannRun, out: str | Path, threads: int, with_stencil: bool = T
         f"memory: about {format_bytes(memory_estimate_bytes(run, threads, with_stencil))} in one pass; "
         f"output: {out} ({format_bytes(3 * g.nbytes_per_component())} float32 before compression)",
     ]
+
+
+def _touch_while_loading_kernels(gen: MannSnapshots) -> None:
+    """First touch of a single snapshot's buffers (0.5 GiB for an 8192 x 64 x 64 box) while the compiled noise loads.
+
+    numba's first call in a process sets up its typing registries (~0.3 s of Python, holding the GIL), and this VM's
+    first touch of fresh memory is slow and erratic (0.08-1.3 s for those 0.5 GiB in fresh processes; numpy's fills
+    leave the GIL): the spectra are touched in a thread meanwhile (0.37-0.78 s for both, measured), then the output
+    plane here (on two cores when the kernels were loaded already, as in a sweep's worker). Returns when all is
+    touched, so no fill races the synthesis; the field is the same.
+    """
+    spectra, output = gen.single_buffers()
+    with ThreadPoolExecutor(1) as pool:
+        touched = pool.submit(spectra.fill, 0)
+        complex_normal(0, 0, 0, np.empty(1, dtype=np.complex64))  # the stream is discarded: only the load counts
+        output.fill(0.0)
+        touched.result()
 
 
 def run_mann(
@@ -119,6 +138,8 @@ def run_mann(
         elif stencil is None:
             stencil = build_mann_stencil(run, cache_dir)
         gen = MannSnapshots(stencil, g.ny, g.nz, gen_threads, buffers=2)
+        if stencil.coef is None:  # one snapshot, its stencil computed on demand: no compiled code has run yet
+            _touch_while_loading_kernels(gen)
         show = progress and sys.stderr.isatty()
         bar = tqdm(total=g.nx, unit="plane", desc="mann", file=sys.stderr, disable=not show)
         # One write in flight while the generator computes the next item (it alternates two buffers);
