@@ -123,3 +123,18 @@ def test_run_validation():
         _run(long_model="simley-pao", a_x=1.0)
     with pytest.raises(ParameterError, match="unknown keys"):
         KaimalRun.from_mapping({"U": 16})
+
+
+def test_small_grid_with_long_range_coherence_takes_dense_factors(tmp_path, monkeypatch):
+    """a_yz = 0.5 on 5 x 5 points: every bin is sampled with a 25 x 25 factor, which the memory estimate counts,
+    instead of tori of up to ~10^6 points (the estimate with tori, rule switched off: > 10 x larger)."""
+    from turbgen.runs.kaimal import kaimal_generator
+    from turbgen.synthesis import circulant
+
+    run = KaimalRun.from_mapping({"a_yz": 0.5, "grid": {"nt": 1024, "ny": 5, "nz": 5, "x_m": [0.0, 50.0]}})
+    dense = kaimal_generator(run, workers=2).sampler_bytes()
+    s = run_kaimal(run, tmp_path / "k.zarr", threads=2)
+    assert s["dense_factor_bins"] == 512 and s["max_torus"] == [1, 1]  # every bin of nt / 2; no circulant bin
+    assert open_store(tmp_path / "k.zarr").attrs["synthesis_report"]["dense_factor_bins"] == 512
+    monkeypatch.setattr(circulant, "dense_is_cheaper", lambda n, m: False)
+    assert kaimal_generator(run, workers=2).sampler_bytes() > 10 * dense

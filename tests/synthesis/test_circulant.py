@@ -36,7 +36,7 @@ def _linear_map(e):
 @pytest.mark.parametrize("ny,nz,dy,dz,f", [(5, 4, 3.0, 4.0, 0.3), (4, 4, 5.0, 5.0, 0.1), (7, 1, 10.0, 1.0, 0.5)])
 def test_sampler_reproduces_covariance_exactly(ny, nz, dy, dz, f):
     """The sampler's map A (Z = A xi, xi circular): A A^H equals C and the dense Cholesky L L^T (to rounding)."""
-    e = embed(_kernel(f), ny, nz, dy, dz, _decay(f))
+    e = embed(_kernel(f), ny, nz, dy, dz, _decay(f), dense_when_cheaper=False)  # the torus itself
     assert e.chol is None and e.clip_error == 0.0
     a = _linear_map(e)
     c = _kernel(f)(grid_distances(ny, nz, dy, dz))
@@ -83,7 +83,7 @@ def test_smooth_cutoff_torus_is_exact_and_smaller(ny, nz, dy, dz, f):
     every lag to rounding and holds fewer points than the classical 12-decay-length torus."""
     my, mz, smooth = circulant.torus_plan(ny, nz, dy, dz, _decay(f))
     assert smooth and my * mz < torus_size(ny, dy, _decay(f)) * torus_size(nz, dz, _decay(f))
-    e = embed(_kernel(f), ny, nz, dy, dz, _decay(f))
+    e = embed(_kernel(f), ny, nz, dy, dz, _decay(f), dense_when_cheaper=False)
     assert e.chol is None and e.clip_error == 0.0 and e.enlarged == 0 and e.torus_shape == (my, mz)
     r = np.hypot(*np.meshgrid(np.arange(ny) * dy, np.arange(nz) * dz, indexing="ij"))
     np.testing.assert_allclose(_corner_covariance(e), _kernel(f)(r), atol=1e-12, rtol=0)
@@ -134,7 +134,7 @@ def test_enlarging_then_cholesky_fallback_is_exact(monkeypatch):
     kernel = lambda r: np.exp(-np.asarray(r) / 50.0)  # noqa: E731 -- PD in 2-D, negative on the 10 x 8 torus
     monkeypatch.setattr(circulant, "MAX_ENLARGE", 0)
     monkeypatch.setattr(circulant, "torus_size", lambda n, h, d: 2 * (n - 1))
-    e = embed(kernel, 6, 5, 4.0, 4.0, 50.0)
+    e = embed(kernel, 6, 5, 4.0, 4.0, 50.0, dense_when_cheaper=False)
     assert e.chol is not None and e.clip_error == 0.0
     a = _linear_map(e)
     np.testing.assert_allclose(a @ a.conj().T, kernel(grid_distances(6, 5, 4.0, 4.0)), atol=1e-12)
@@ -176,7 +176,7 @@ def test_a_torus_beyond_the_cap_becomes_a_dense_factor():
     kernel = lambda r: exponential_yz(r, f, U, a_yz, LC)  # noqa: E731
     decay = 1.0 / (a_yz * np.hypot(f / U, 0.12 / LC))
     assert torus_size(5, 5.0, decay) ** 2 > circulant.MAX_TORUS_POINTS
-    e = embed(kernel, 5, 5, 5.0, 5.0, decay)
+    e = embed(kernel, 5, 5, 5.0, 5.0, decay, dense_when_cheaper=False)
     assert e.chol is not None and e.torus_shape == (25, 1)
     a = _linear_map(e)
     np.testing.assert_allclose(a @ a.conj().T, kernel(grid_distances(5, 5, 5.0, 5.0)), atol=1e-12, rtol=0)
@@ -187,7 +187,7 @@ def test_enlarging_stops_at_the_cap(monkeypatch):
     monkeypatch.setattr(circulant, "MAX_TORUS_POINTS", 11 * 11)
     monkeypatch.setattr(circulant, "torus_size", lambda n, h, d: 2 * (n - 1))
     kernel = lambda r: np.exp(-np.asarray(r) / 50.0)  # noqa: E731 -- negative on the 10 x 8 torus (see above)
-    e = embed(kernel, 6, 5, 4.0, 4.0, 50.0)
+    e = embed(kernel, 6, 5, 4.0, 4.0, 50.0, dense_when_cheaper=False)
     assert e.chol is not None and e.clip_error == 0.0
 
 
@@ -224,15 +224,16 @@ def test_embed_many_equals_embed_bit_for_bit():
         assert e.chol is None and np.array_equal(e.scale, want.scale) and e.enlarged == want.enlarged == 0
     a_yz, f = 0.5, 1.0 / 128.0  # beyond the cap: a dense factor (test_a_torus_beyond_the_cap_becomes_a_dense_factor)
     far = lambda r: exponential_yz(r, f, U, a_yz, LC)  # noqa: E731
-    (dense,) = circulant.embed_many([far], 5, 5, 5.0, 5.0, [1.0 / (a_yz * np.hypot(f / U, 0.12 / LC))])
+    (dense,) = circulant.embed_many([far], 5, 5, 5.0, 5.0, [1.0 / (a_yz * np.hypot(f / U, 0.12 / LC))],
+                                    dense_when_cheaper=False)
     assert dense.chol is not None
 
 
 def test_embed_many_enlarges_like_embed(monkeypatch):
     monkeypatch.setattr(circulant, "torus_size", lambda n, h, d: 2 * (n - 1))
     kernel = lambda r: np.exp(-np.asarray(r) / 50.0)  # noqa: E731 -- negative on the minimal 10 x 8 torus
-    (got,) = circulant.embed_many([kernel], 6, 5, 4.0, 4.0, [math.inf])
-    want = embed(kernel, 6, 5, 4.0, 4.0, math.inf)
+    (got,) = circulant.embed_many([kernel], 6, 5, 4.0, 4.0, [math.inf], dense_when_cheaper=False)
+    want = embed(kernel, 6, 5, 4.0, 4.0, math.inf, dense_when_cheaper=False)
     assert got.enlarged == want.enlarged > 0 and np.array_equal(got.scale, want.scale)
 
 
@@ -240,7 +241,7 @@ def test_embed_many_enlarges_like_embed(monkeypatch):
 def test_anisotropic_grid_enlarges_the_smooth_torus_by_one_decay_length(f):
     """A 3 x 40 grid needs 6 decay lengths beyond twice the grid, not 5: one enlarging step adds one decay length
     (not x1.5), the realised covariance is exact and the torus stays below the classical one."""
-    e = embed(_kernel(f), 3, 40, 5.0, 5.0, _decay(f))
+    e = embed(_kernel(f), 3, 40, 5.0, 5.0, _decay(f), dense_when_cheaper=False)
     assert e.enlarged == 1 and e.clip_error == 0.0 and e.chol is None
     my, mz = e.torus_shape
     assert my == circulant.smooth_torus_size(3, 5.0, _decay(f), 6.0)
@@ -248,3 +249,37 @@ def test_anisotropic_grid_enlarges_the_smooth_torus_by_one_decay_length(f):
     assert my * mz < torus_size(3, 5.0, _decay(f)) * torus_size(40, 5.0, _decay(f))
     r = np.hypot(*np.meshgrid(np.arange(3) * 5.0, np.arange(40) * 5.0, indexing="ij"))
     np.testing.assert_allclose(_corner_covariance(e), _kernel(f)(r), atol=1e-12, rtol=0)
+
+
+def test_small_grids_take_a_dense_factor_where_it_is_cheaper_than_the_torus():
+    """a_yz = 0.5 on 5 x 5 points: the tori below the cap (up to 1440 x 1440 points: 1.3 GB and 7.6 s for a
+    default-length field; 44 bins beyond it took dense factors already) cost far more than a 25 x 25 factor, which
+    embed and embed_many then take, exactly (F F^T = C); on the default 31 x 31 grid every bin keeps its torus (a
+    961 x 961 factor costs more)."""
+    a_yz = 0.5
+    freqs = np.arange(1, 2049) / 2048.0
+    decays = [1.0 / (a_yz * np.hypot(f / U, 0.12 / LC)) for f in freqs]
+    kernels = [lambda r, f=f: exponential_yz(r, f, U, a_yz, LC) for f in freqs]
+    plans = [circulant.torus_plan(5, 5, 5.0, 5.0, d) for d in decays]
+    below_cap = [my * mz for my, mz, _ in plans if my * mz <= circulant.MAX_TORUS_POINTS]
+    assert len(below_cap) > 2000 and max(below_cap) > 1400**2  # tori that used to be built
+    assert all(circulant.dense_is_cheaper(25, my * mz) for my, mz, _ in plans)
+    got = circulant.embed_many(kernels, 5, 5, 5.0, 5.0, decays)
+    assert all(e.chol is not None and e.torus_shape == (25, 1) for e in got)
+    a = _linear_map(got[0])
+    np.testing.assert_allclose(a @ a.conj().T, kernels[0](grid_distances(5, 5, 5.0, 5.0)), atol=1e-12, rtol=0)
+    default = circulant.embed_many([_kernel(f) for f in freqs], 31, 31, 5.0, 5.0, [_decay(f) for f in freqs])
+    assert all(e.chol is None for e in default)
+
+
+def test_dense_choice_is_the_same_in_embed_and_embed_many():
+    """On a 6 x 6 grid the low bins take dense factors and the high ones tori: embed_many gives embed's choice and
+    values bin by bin."""
+    freqs = np.arange(1, 257) / 256.0
+    got = circulant.embed_many([_kernel(f) for f in freqs], 6, 6, 5.0, 5.0, [_decay(f) for f in freqs])
+    kinds = [e.chol is not None for e in got]
+    assert any(kinds) and not all(kinds)
+    for f, e in zip(freqs, got):
+        want = embed(_kernel(f), 6, 6, 5.0, 5.0, _decay(f))
+        assert (e.chol is None) == (want.chol is None)
+        assert np.array_equal(e.chol, want.chol) if e.chol is not None else np.array_equal(e.scale, want.scale)

@@ -110,5 +110,7 @@ def kaimal(**opt):
     clip = ""
     if s["yz_clip_error"] > 0 or s["long_clip_error"] > 0:
         clip = f"; CLIPPED embedding, coherence error <= {max(s['yz_clip_error'], s['long_clip_error']):.2g}"
+    dense = f", {s['dense_factor_bins']} bins with dense factors" if s["dense_factor_bins"] else ""
+    torus = f"max torus {s['max_torus'][0]}x{s['max_torus'][1]}{dense}"
     click.echo(f"wrote {s['path']} in {s['seconds']:.1f} s: sigma u/v/w {s['sigma_u']:.3f}/{s['sigma_v']:.3f}/"
-               f"{s['sigma_w']:.3f} m/s (expected {exp}; max torus {s['max_torus'][0]}x{s['max_torus'][1]}{clip})")
+               f"{s['sigma_w']:.3f} m/s (expected {exp}; {torus}{clip})")

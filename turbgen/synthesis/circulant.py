@@ -29,7 +29,9 @@ than the grid (a_yz = 0.5 on a 5 x 5 grid: 3312 x 3312 points per frequency with
 Lc = 10 km: terabytes). A torus of more than :func:`torus_cap` points (MAX_TORUS_POINTS, or 4 x the grid's
 minimal torus) is not built: a grid of at most CHOLESKY_MAX_POINTS points is sampled with a dense square root
 of C instead (:func:`dense_embedding`), and :func:`check_sampling_cost` refuses, before anything is allocated,
-what neither can do in reasonable time and memory.
+what neither can do in reasonable time and memory. On such small grids a bin also takes the dense factor wherever
+it costs fewer operations than the bin's torus (:func:`dense_sampled`): a 5 x 5 grid with a_yz = 0.5 needs tori of
+up to 1440 x 1440 points below the cap, against a 25 x 25 factor.
 """
 
 from __future__ import annotations
@@ -184,6 +186,26 @@ def torus_cap(ny: int, nz: int) -> int:
     return max(MAX_TORUS_POINTS, 4 * torus_size(ny, 1.0, math.inf) * torus_size(nz, 1.0, math.inf))
 
 
+def dense_is_cheaper(n_points: int, torus_points: int) -> bool:
+    """Whether a dense square root of a bin's n x n C costs fewer floating-point operations than its torus of
+    ``torus_points`` points M: the factor (~n^3 / 3) and one sample (~4 n^2), against the torus's eigenvalue FFT and
+    one sample's FFT (~5 M log2(M) each). True on small grids where the coherence needs a torus much larger than the
+    grid: 5 x 5 points with a_yz = 0.5 took 7.6 s and 1.3 GB on tori of up to 1440 x 1440 points, 0.x s with dense
+    factors."""
+    m = max(int(torus_points), 2)
+    return n_points**3 / 3.0 + 4.0 * n_points**2 <= 10.0 * m * math.log2(m)
+
+
+def dense_sampled(ny: int, nz: int, torus_points: int, when_cheaper: bool = True) -> bool:
+    """Whether a bin whose torus would have ``torus_points`` points is sampled with a dense factor
+    (:func:`dense_embedding`) instead: grids of at most CHOLESKY_MAX_POINTS points, where the torus exceeds
+    :func:`torus_cap` or (``when_cheaper``) the dense factor costs less (:func:`dense_is_cheaper`)."""
+    n = ny * nz
+    if n > CHOLESKY_MAX_POINTS:
+        return False
+    return torus_points > torus_cap(ny, nz) or (when_cheaper and dense_is_cheaper(n, torus_points))
+
+
 def dense_embedding(kernel, ny: int, nz: int, dy_m: float, dz_m: float) -> Embedding:
     """Sampler of C_ab = kernel(r_ab) with a dense square root F of C (F F^T = C): its Cholesky factor, or, where
     rounding leaves C numerically semi-definite (a coherence near 1 across the grid), V sqrt(max(Lambda, 0)) from
@@ -223,13 +245,13 @@ def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_length
     return points
 
 
-def embed_many(kernels, ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m) -> list[Embedding]:
+def embed_many(kernels, ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m,
+               dense_when_cheaper: bool = True) -> list[Embedding]:
     """:func:`embed` of every kernel with its decay length, the same embeddings bit for bit (tested), with one
     batched FFT per run of consecutive kernels on the same torus: ~2x less CPU on the default Kaimal field's 2048
     bins, where the per-call overhead of tori of 35-60 points per axis dominates. Kernels whose torus needs
-    enlarging or exceeds the cap go through :func:`embed` itself."""
+    enlarging, or that are sampled with a dense factor, go through :func:`embed` itself."""
     plans = [torus_plan(ny, nz, dy_m, dz_m, d) for d in decay_lengths_m]
-    cap = torus_cap(ny, nz)
     out: list[Embedding | None] = [None] * len(plans)
     i = 0
     while i < len(plans):
@@ -237,9 +259,9 @@ def embed_many(kernels, ny: int, nz: int, dy_m: float, dz_m: float, decay_length
         while j < len(plans) and plans[j] == plans[i]:
             j += 1
         my, mz, smooth = plans[i]
-        if my * mz > cap:
+        if dense_sampled(ny, nz, my * mz, dense_when_cheaper):
             for b in range(i, j):
-                out[b] = embed(kernels[b], ny, nz, dy_m, dz_m, decay_lengths_m[b])
+                out[b] = embed(kernels[b], ny, nz, dy_m, dz_m, decay_lengths_m[b], dense_when_cheaper)
             i = j
             continue
         stack = np.empty((j - i, my, mz))
@@ -249,28 +271,30 @@ def embed_many(kernels, ny: int, nz: int, dy_m: float, dz_m: float, decay_length
         m = my * mz
         for b in range(i, j):
             one = lam[b - i]
-            if (one < -EIG_RTOL * float(one.max())).any():
-                out[b] = embed(kernels[b], ny, nz, dy_m, dz_m, decay_lengths_m[b])  # enlarged, or a fallback
+            if (one < -EIG_RTOL * float(one.max())).any():  # enlarged, or a fallback
+                out[b] = embed(kernels[b], ny, nz, dy_m, dz_m, decay_lengths_m[b], dense_when_cheaper)
             else:
                 out[b] = Embedding(ny, nz, np.sqrt(np.maximum(one, 0.0) / m), None, 0.0, 0)
         i = j
     return out
 
 
-def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: float) -> Embedding:
+def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: float,
+          dense_when_cheaper: bool = True) -> Embedding:
     """Embedding of C_ab = kernel(r_ab) (kernel(0) = 1, a function of distance in m).
 
     decay_length_m : the kernel is <= exp(-r / decay_length_m) (IEC: 1/(a kappa)) [m]; inf for a
     constant kernel. It sets the initial torus (:func:`torus_plan`: classical, or with the smooth cut-off). A
-    torus of more than :func:`torus_cap` points is replaced by :func:`dense_embedding` (grids of at most
-    CHOLESKY_MAX_POINTS points; :func:`check_sampling_cost` refuses the others up front).
+    torus of more than :func:`torus_cap` points, or (``dense_when_cheaper``) one costing more than a dense factor
+    (:func:`dense_sampled`), is replaced by :func:`dense_embedding` (grids of at most CHOLESKY_MAX_POINTS points;
+    :func:`check_sampling_cost` refuses the others up front when their torus exceeds the cap).
     """
     my, mz, smooth = torus_plan(ny, nz, dy_m, dz_m, decay_length_m)
     cap = torus_cap(ny, nz)
-    if my * mz > cap:
-        if ny * nz > CHOLESKY_MAX_POINTS:
-            raise ValueError(f"a {my} x {mz} torus for a {ny} x {nz} grid: check_sampling_cost should have refused it")
+    if dense_sampled(ny, nz, my * mz, dense_when_cheaper):
         return dense_embedding(kernel, ny, nz, dy_m, dz_m)
+    if my * mz > cap:
+        raise ValueError(f"a {my} x {mz} torus for a {ny} x {nz} grid: check_sampling_cost should have refused it")
     enlarged = 0
     while True:
         lam = scipy.fft.fft2(torus_kernel(kernel, ny, nz, dy_m, dz_m, my, mz, smooth)).real

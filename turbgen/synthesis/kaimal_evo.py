@@ -38,7 +38,7 @@ import numpy as np
 import scipy.fft
 
 from turbgen.grid import Grid
-from turbgen.synthesis.circulant import Embedding, check_sampling_cost, embed_many, torus_cap
+from turbgen.synthesis.circulant import Embedding, check_sampling_cost, dense_sampled, embed_many
 from turbgen.synthesis.random_streams import keyed_complex_normal
 from turbgen.theory.coherence_models import exponential_yz, exponential_yz_decay_length_m
 from turbgen.theory.kaimal import kaimal_band_variance
@@ -249,7 +249,7 @@ class KaimalEvo:
             factor = kaimal.sigma_m_s[i] ** 2 / v.sum() if rescale and v.sum() > 0 else 1.0
             self.variances[c] = v * factor
             self.rescale_factors[c] = factor
-        self.report = {"yz_clip_error": 0.0, "torus_enlarged": 0, "cholesky_fallback": 0, "max_torus": [1, 1],
+        self.report = {"yz_clip_error": 0.0, "torus_enlarged": 0, "dense_factor_bins": 0, "max_torus": [1, 1],
                        "long_clip_error": 0.0}
         # before anything is allocated: a coherence high far beyond the grid needs huge tori or dense factors
         what = f"the yz coherence (a_yz = {kaimal.a_yz:g}, Lc = {kaimal.lc_m:g} m at U = {U_m_s:g} m/s)"
@@ -258,12 +258,12 @@ class KaimalEvo:
 
     def sampler_bytes(self) -> int:
         """Peak bytes of the yz samplers while one frequency chunk is made: its bins' embeddings (float64 torus
-        scales, or dense float64 N x N factors beyond circulant.torus_cap) with their float32 stacked copies, the
+        scales, or dense float64 N x N factors where circulant.dense_sampled) with their float32 stacked copies, the
         next chunk's, made meanwhile, and each thread's complex64 noise over the chunk's tori (u is always sampled
         this way; v, w too with coherent_vw, one component after the other)."""
         g, n = self.grid, self.grid.ny * self.grid.nz
-        cap = torus_cap(g.ny, g.nz)
-        per_bin = [(8 * n * n, n) if points > cap else (12 * points, points) for points in self._torus_points]
+        per_bin = [(8 * n * n, n) if dense_sampled(g.ny, g.nz, points) else (12 * points, points)
+                   for points in self._torus_points]
         # per_bin[i] is bin i + 1 (bin 0 is never sampled); chunk c holds bins max(1, c F) .. (c + 1) F - 1
         chunks = [per_bin[max(0, c * FREQ_CHUNK - 1):(c + 1) * FREQ_CHUNK - 1] for c in range(self.n_chunks)]
         held = [sum(b for b, _ in chunk) for chunk in chunks] + [0]
@@ -287,8 +287,10 @@ class KaimalEvo:
         for e in out:
             rep["yz_clip_error"] = max(rep["yz_clip_error"], e.clip_error)
             rep["torus_enlarged"] += e.enlarged > 0
-            rep["cholesky_fallback"] += e.chol is not None
-            rep["max_torus"] = [max(a, b) for a, b in zip(rep["max_torus"], e.torus_shape)]
+            if e.chol is not None:
+                rep["dense_factor_bins"] += 1
+            else:
+                rep["max_torus"] = [max(a, b) for a, b in zip(rep["max_torus"], e.torus_shape)]
         return out
 
     def _groups(self, embs) -> list[tuple[int, int, tuple[int, int], object]]:
