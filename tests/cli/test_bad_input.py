@@ -333,6 +333,17 @@ def test_bad_input_is_one_line_exit_2_nothing_written(workdir, monkeypatch, args
     assert _listing(workdir) == before
 
 
+@pytest.mark.parametrize("command", ["mann", "kaimal"])
+@pytest.mark.parametrize("out, overwrite", [("mann.zarr", []), ("afile", ["--overwrite"])])
+def test_an_output_that_may_not_be_replaced_is_refused_before_the_banner(workdir, monkeypatch, command, out, overwrite):
+    """Rerunning into an existing store without --overwrite (or over a non-store with it): the refusal is the only
+    output, before the run's description is printed."""
+    monkeypatch.chdir(workdir)
+    res = CliRunner().invoke(cli, [command, *SMALL, "--out", out, *overwrite], prog_name="turbgen")
+    assert res.exit_code == 2 and res.stdout == "", res.output
+    assert len(res.stderr.strip().splitlines()) == 1 and out in res.stderr
+
+
 @pytest.mark.parametrize("args", [[], ["theory"], ["fit"]])
 def test_group_without_command_shows_its_help(args):
     res = CliRunner().invoke(cli, args, prog_name="turbgen")

@@ -65,8 +65,12 @@ def test_plan_follows_the_budget_and_refuses_a_too_small_one():
     small, large = ooc.OutOfCorePlan(run, 300 * 2**20, 2), ooc.OutOfCorePlan(run, 2**30, 2)  # above the 250 MiB base
     assert small.n_parts > large.n_parts >= 1 and small.slabs_per_part % 4 == 0
     assert not small.plane_in_memory and large.plane_in_memory
-    with pytest.raises(ParameterError, match="raise `memory`"):
+    with pytest.raises(ParameterError, match="raise `memory`") as given:
         ooc.OutOfCorePlan(run, 100 * 2**20, 2)
+    assert "`ae`" not in str(given.value)  # ae was given: nothing to suggest
+    computed = MannRun.from_mapping({"grid": {"nt": 2048, "ny": 48, "nz": 48, "x_m": [0.0, 50.0]}})
+    with pytest.raises(ParameterError, match=r"or give `ae` \(here \d"):  # its sigma_u quadrature left memory resident
+        ooc.OutOfCorePlan(computed, 100 * 2**20, 2)
 
 
 def test_cli_memory_option_goes_out_of_core_with_the_same_field(tmp_path, monkeypatch):

@@ -166,6 +166,11 @@ def test_bad_lidars_are_refused(tmp_path):
         LidarDescription("x", "pulsed", "nacelle", (50.0,), 1.0, 63.0, (0.0,), (0.0,), fwhm_m=0.0)
     with pytest.raises(ParameterError, match="neither a preset"):
         load_lidar("no-such-lidar")
+    with pytest.raises(ParameterError, match="lidar file 'nothere.toml' does not exist"):  # not "neither a ..."
+        load_lidar("nothere.toml")
+    (tmp_path / "d.toml").mkdir()
+    with pytest.raises(ParameterError, match="is not a file"):
+        load_lidar(tmp_path / "d.toml")
     bad = tmp_path / "l.json"
     bad.write_text(json.dumps({"kind": "pulsed", "mount": "nacelle", "ranges_m": [50], "beam_rate_hz": 1,
                                "rotor_radius_m": 63, "azimuth_deg": [95], "elevation_deg": [0]}))

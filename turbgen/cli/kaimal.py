@@ -17,6 +17,7 @@ from turbgen.spec.kaimal import LONG_COMPONENTS, VW_COHERENCE, KaimalRun
 from turbgen.spec.preset_files import load_presets
 from turbgen.spec.preset_runs import kaimal_run_keys
 from turbgen.store.paths import check_output_path
+from turbgen.store.writer import check_replaceable
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS
 from turbgen.theory.kaimal import IEC_IREF
 from turbgen.theory.ranges import LIMITS
@@ -95,6 +96,7 @@ def kaimal(**opt):
     g = run.grid
     out = opt["out"] if opt["out"] is not None else run.default_store_name(opt["preset"], preset_keys or None)
     check_output_path(out)
+    check_replaceable(out, opt["overwrite"])  # before anything is printed
     k = run.kaimal
     click.echo(f"turbgen kaimal: U {run.U_m_s:g} m/s, sigma {', '.join(f'{s:.3g}' for s in k.sigma_m_s)} m/s, "
                f"L {', '.join(f'{s:.4g}' for s in k.length_scales_m)} m, a_yz {k.a_yz:g}, Lc {k.lc_m:g} m, "

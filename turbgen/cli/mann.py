@@ -19,6 +19,7 @@ from turbgen.spec.mann import MannRun
 from turbgen.spec.preset_files import load_presets
 from turbgen.spec.preset_runs import mann_run_keys
 from turbgen.store.paths import check_output_path
+from turbgen.store.writer import check_replaceable
 from turbgen.theory.params import LIFETIMES
 from turbgen.theory.ranges import LIMITS
 
@@ -111,6 +112,7 @@ def mann(**opt):
     run = MannRun.from_mapping(mapping)
     out = opt["out"] if opt["out"] is not None else run.default_store_name()
     check_output_path(out)
+    check_replaceable(out, opt["overwrite"])  # before anything is printed
     threads = default_threads(opt["threads"])
     budget = parse_size(opt["memory"], "--memory") if opt["memory"] is not None else resources.available_memory_bytes()
     # a budget too small fails here, before any output

@@ -300,7 +300,9 @@ def load_lidar(name_or_path) -> LidarDescription:
     if key in PRESETS:
         return PRESETS[key]
     path = Path(key)
-    if path.suffix.lower() not in (".toml", ".json") or not path.is_file():
+    if path.suffix.lower() in (".toml", ".json") and not path.is_file():
+        raise ParameterError(f"lidar file {key!r} {'is not a file' if path.exists() else 'does not exist'}")
+    if path.suffix.lower() not in (".toml", ".json"):
         raise ParameterError(f"lidar {key!r} is neither a preset ({', '.join(PRESETS)}) nor a .toml/.json file")
     return lidar_from_mapping(read_config(path, "lidar"), where=path.stem)
 

@@ -108,7 +108,8 @@ def _plane_index(grid, x: float, beam: int, gate: int) -> int:
     where = "beyond the store's planes" if x > xs.max() + PLANE_TOL_M else "between the store's planes"
     raise ParameterError(
         f"lidar gate {gate} of beam {beam} at x = {x:g} m is {where} (planes: "
-        f"{', '.join(f'{v:g}' for v in xs)} m); gates must be planes of the store"
+        f"{', '.join(f'{v:g}' for v in xs)} m); gates must be planes of the store: make the field with a plane at "
+        f"x = {x:g} m (`x_m`)"
     )
 
 

@@ -70,7 +70,7 @@ def describe(run: MannRun, out: str | Path, threads: int, with_stencil: bool = T
         f"synthesis box: {b.nt} x {b.nyp} x {b.nzp} (pad-yz {run.pad_yz}), "
         f"{b.nt * b.dx_m:g} x {b.nyp * b.dy_m:g} x {b.nzp * b.dz_m:g} m",
         f"memory: about {format_bytes(memory_estimate_bytes(run, threads, with_stencil))} in one pass; "
-        f"output: {out} ({format_bytes(3 * g.nbytes_per_component())} float32 before compression)",
+        f"output: {out} ({format_bytes(3 * g.nbytes_per_component())} float32, uncompressed)",
     ]
 
 

@@ -151,9 +151,13 @@ class OutOfCorePlan:
         self.minimum_bytes = base + scratch + building + per_slab * align * 4 // 3
         self.slabs_per_part = (free // (per_slab * align)) * align if free > 0 else 0
         if self.slabs_per_part < align:
+            # without `ae` its sigma_u quadrature ran in this process first and left more memory resident (README)
+            given = run.ae_from == "ae"
             raise ParameterError(
                 f"the out-of-core Mann run needs at least {format_bytes(self.minimum_bytes)} of memory "
                 f"(got a budget of {format_bytes(self.memory_bytes)}); {_HINT}"
+                + ("" if given else f", or give `ae` (here {run.params.ae:.4g}: computing it from sigma_u first leaves "
+                                    "more memory resident)")
             )
         self.slabs_per_part = min(self.slabs_per_part, -(-box.nk1 // align) * align)
         if slabs_per_part is not None:

@@ -285,6 +285,18 @@ def _raise_disk_error(exc: BaseException, path: Path) -> None:
         raise StoreError(f"writing {path} failed: {reason} (errno {exc.errno}); nothing was written") from None
 
 
+def check_replaceable(path, overwrite: bool) -> None:
+    """Raise StoreError (one line) if a new store at ``path`` would replace what it may not: an existing path
+    without ``overwrite``, or, with it, a path that is not a turbgen store. create_store checks this itself; a
+    command calls it first so that a refusal is its only output."""
+    path = Path(path).expanduser().absolute()
+    if path.exists() or path.is_symlink():
+        if not overwrite:
+            raise StoreError(f"{path} already exists; use `overwrite` to replace it")
+        if not looks_like_turbgen_store(path):
+            raise StoreError(f"{path} exists and is not a turbgen store; refusing to replace it")
+
+
 def create_store(
     path, grid: Grid, attrs: dict, *, chunk_t: int | None = None, overwrite: bool = False
 ) -> StoreWriter:
@@ -345,11 +357,7 @@ def create_store(
         where="store attrs",
         error=ValueError,
     )
-    if path.exists() or path.is_symlink():
-        if not overwrite:
-            raise StoreError(f"{path} already exists; use `overwrite` to replace it")
-        if not looks_like_turbgen_store(path):
-            raise StoreError(f"{path} exists and is not a turbgen store; refusing to replace it")
+    check_replaceable(path, overwrite)
     if not path.parent.is_dir():
         raise StoreError(f"output directory {path.parent} does not exist")
     if not os.access(path.parent, os.W_OK):
