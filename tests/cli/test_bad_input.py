@@ -327,6 +327,7 @@ def test_bad_input_is_one_line_exit_2_nothing_written(workdir, monkeypatch, args
     assert res.exit_code == 2, (res.exit_code, res.output, repr(res.exception))
     assert isinstance(res.exception, SystemExit), repr(res.exception)
     assert len(err_lines) == 1 and err_lines[0].startswith("Error: "), res.stderr
+    assert res.stdout == "", res.stdout  # the refusal is the only output: nothing printed before it
     assert "Traceback" not in res.output
     for text in expected:
         assert text in err_lines[0], (text, err_lines[0])

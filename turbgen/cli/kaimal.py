@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import click
 
 from turbgen.cli.options import parse_floats, plane_positions
 from turbgen.cli.run_options import grid_options, run_mapping
 from turbgen.resources import format_bytes
-from turbgen.runs.kaimal import kaimal_generator, memory_needed, run_kaimal
+from turbgen.runs.kaimal import kaimal_generator, memory_needed, plan_spill, run_kaimal
 from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X
 from turbgen.spec.defaults import KAIMAL_DEFAULTS as D
 from turbgen.spec.defaults import KAIMAL_GRID as G
@@ -17,7 +18,7 @@ from turbgen.spec.kaimal import LONG_COMPONENTS, VW_COHERENCE, KaimalRun
 from turbgen.spec.preset_files import load_presets
 from turbgen.spec.preset_runs import kaimal_run_keys
 from turbgen.store.paths import check_output_path
-from turbgen.store.writer import check_replaceable
+from turbgen.store.writer import check_new_store
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS
 from turbgen.theory.kaimal import IEC_IREF
 from turbgen.theory.ranges import LIMITS
@@ -95,15 +96,18 @@ def kaimal(**opt):
     run = KaimalRun.from_mapping(mapping)
     g = run.grid
     out = opt["out"] if opt["out"] is not None else run.default_store_name(opt["preset"], preset_keys or None)
+    # refusals before anything is printed, in run_kaimal's order: a coherence too costly to sample, a spectrum that
+    # fits neither memory nor disk, then the store (existing output, chunks, disk)
     check_output_path(out)
-    check_replaceable(out, opt["overwrite"])  # before anything is printed
+    sampler = kaimal_generator(run, workers=opt["threads"]).sampler_bytes()
+    plan_spill(g, Path(out).absolute(), None, sampler)
+    check_new_store(out, g, chunk_t=opt["chunks"], overwrite=opt["overwrite"])
     k = run.kaimal
     click.echo(f"turbgen kaimal: U {run.U_m_s:g} m/s, sigma {', '.join(f'{s:.3g}' for s in k.sigma_m_s)} m/s, "
                f"L {', '.join(f'{s:.4g}' for s in k.length_scales_m)} m, a_yz {k.a_yz:g}, Lc {k.lc_m:g} m, "
                f"long {run.long_model} {run.effective_long_parameters()} on {run.long_components}, seed {run.seed}")
     click.echo(f"  grid (t, x, y, z) = {g.nt} x {g.nx} x {g.ny} x {g.nz}, dt {g.dt_s:g} s, dy {g.dy_m:g} m, "
                f"dz {g.dz_m:g} m, planes x = {', '.join(f'{x:g}' for x in g.x_m)} m")
-    sampler = kaimal_generator(run, workers=opt["threads"]).sampler_bytes()
     click.echo(f"  memory ~{format_bytes(memory_needed(g, sampler=sampler))}, output {format_bytes(3 * g.nbytes_per_component())} "
                f"float32 -> {out}")
     s = run_kaimal(run, out, overwrite=opt["overwrite"], chunk_t=opt["chunks"], progress=sys.stderr.isatty(),

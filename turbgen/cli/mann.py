@@ -19,7 +19,7 @@ from turbgen.spec.mann import MannRun
 from turbgen.spec.preset_files import load_presets
 from turbgen.spec.preset_runs import mann_run_keys
 from turbgen.store.paths import check_output_path
-from turbgen.store.writer import check_replaceable
+from turbgen.store.writer import check_new_store
 from turbgen.theory.params import LIFETIMES
 from turbgen.theory.ranges import LIMITS
 
@@ -112,7 +112,6 @@ def mann(**opt):
     run = MannRun.from_mapping(mapping)
     out = opt["out"] if opt["out"] is not None else run.default_store_name()
     check_output_path(out)
-    check_replaceable(out, opt["overwrite"])  # before anything is printed
     threads = default_threads(opt["threads"])
     budget = parse_size(opt["memory"], "--memory") if opt["memory"] is not None else resources.available_memory_bytes()
     # a budget too small fails here, before any output
@@ -121,13 +120,17 @@ def mann(**opt):
         from turbgen.sweep.scheduler import check_scheduler_address
 
         check_scheduler_address(opt["scheduler"], connect=plan is not None)
+    stale = remove_stale_scratch(out)  # first: the disk check counts the space it held
+    # the store's checks (existing output, chunks, disk with the out-of-core scratch) before anything is printed
+    check_new_store(out, run.grid, chunk_t=opt["chunks"], overwrite=opt["overwrite"],
+                    scratch_bytes=0 if plan is None else plan.scratch_bytes())
     click.echo("turbgen mann")
     for line in describe(run, out, threads):
         click.echo(f"  {line}")
     if plan is None and opt["scheduler"] is not None:
         click.echo(f"  --scheduler {opt['scheduler']} not used: the field fits the memory budget in one pass")
-    for stale in remove_stale_scratch(out):
-        click.echo(f"  removed {stale.name}: scratch of a run that was killed")
+    for path in stale:
+        click.echo(f"  removed {path.name}: scratch of a run that was killed")
     if plan is not None:
         from turbgen.runs.mann_outofcore import run_mann_outofcore
 

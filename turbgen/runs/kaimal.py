@@ -86,8 +86,10 @@ def spectrum_bytes(grid: Grid) -> int:
     return grid.nx * (grid.nt // 2 + 1) * grid.ny * grid.nz * 8
 
 
-def _plan_spill(grid: Grid, out: Path, spill: bool | None, sampler: int) -> bool:
-    """Whether the spectrum goes to a scratch file next to ``out``; checks memory (and disk) first."""
+def plan_spill(grid: Grid, out: Path, spill: bool | None, sampler: int) -> bool:
+    """Whether the spectrum goes to a scratch file next to ``out`` (``spill`` None: when it would not fit in 80 % of
+    the available memory); refuses (ParameterError) a spectrum that fits neither memory nor, spilled, the disk.
+    ``sampler``: the generator's sampler_bytes."""
     what = f"the Kaimal spectrum ({grid.nx} planes x {grid.nt // 2 + 1} bins x {grid.ny} x {grid.nz})"
     if spill is None:
         available = available_memory_bytes()
@@ -137,7 +139,7 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
     g = run.grid
     out = Path(out)
     gen = kaimal_generator(run, workers=threads)
-    spill = _plan_spill(g, out.absolute(), spill, gen.sampler_bytes())
+    spill = plan_spill(g, out.absolute(), spill, gen.sampler_bytes())
     attrs = store_attrs(run, gen)
     t0 = time.perf_counter()
     sums = {c: [0.0, 0] for c in COMPONENTS}

@@ -285,16 +285,61 @@ def _raise_disk_error(exc: BaseException, path: Path) -> None:
         raise StoreError(f"writing {path} failed: {reason} (errno {exc.errno}); nothing was written") from None
 
 
-def check_replaceable(path, overwrite: bool) -> None:
-    """Raise StoreError (one line) if a new store at ``path`` would replace what it may not: an existing path
-    without ``overwrite``, or, with it, a path that is not a turbgen store. create_store checks this itself; a
-    command calls it first so that a refusal is its only output."""
-    path = Path(path).expanduser().absolute()
+def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: bool = False,
+                    scratch_bytes: int = 0) -> tuple[Path, int]:
+    """What :func:`create_store` checks before it creates anything, for a command to call before it prints: then a
+    refusal is its only output.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The store directory to create.
+    grid : Grid
+        The field grid (the store's size, for the disk check).
+    chunk_t : int, optional
+        Time samples per chunk, in [1, nt]; default min(nt, 1024).
+    overwrite : bool, optional
+        Whether an existing turbgen store at ``path`` may be replaced.
+    scratch_bytes : int, optional
+        Bytes of scratch files the run writes next to the store, counted with it in the disk check.
+
+    Returns
+    -------
+    (pathlib.Path, int)
+        The absolute path and the time-chunk length.
+
+    Raises
+    ------
+    ParameterError
+        For a bad output path, a ``chunk_t`` outside [1, nt], or too little free disk for the uncompressed
+        field (and the scratch).
+    StoreError
+        When ``path`` exists and ``overwrite`` is False, exists and is not a turbgen store, or the output
+        directory does not exist or is not writable.
+
+    Temporaries of ``path`` left by dead writers are removed (and said on stderr) before the disk is checked,
+    as the next write of the same output does.
+    """
+    path = check_output_path(path).absolute()
+    if chunk_t is None:
+        chunk_t = layout.default_chunk_t(grid.nt)
+    chunk_t = check_int("chunks (time samples per chunk)", chunk_t, 1, grid.nt)
     if path.exists() or path.is_symlink():
         if not overwrite:
             raise StoreError(f"{path} already exists; use `overwrite` to replace it")
         if not looks_like_turbgen_store(path):
             raise StoreError(f"{path} exists and is not a turbgen store; refusing to replace it")
+    if not path.parent.is_dir():
+        raise StoreError(f"output directory {path.parent} does not exist")
+    if not os.access(path.parent, os.W_OK):
+        raise StoreError(f"output directory {path.parent} is not writable")
+    report_removed(remove_dead_temporaries(path.parent, [path.name]))
+    need = 3 * grid.nbytes_per_component()
+    what = (f"the store ({' x '.join(map(str, grid.shape))}, 3 components, {format_bytes(need)} uncompressed)"
+            + (f" and {format_bytes(scratch_bytes)} of scratch" if scratch_bytes else ""))
+    require_disk(path.parent, need + scratch_bytes, what,
+                 "free space there, choose another `out` or lower `nt`/`ny`/`nz`/`planes`")
+    return path, chunk_t
 
 
 def create_store(
@@ -338,10 +383,6 @@ def create_store(
         When ``path`` exists and ``overwrite`` is False, ``path`` exists and is not a turbgen store,
         or the output directory does not exist or is not writable.
     """
-    path = check_output_path(path).absolute()
-    if chunk_t is None:
-        chunk_t = layout.default_chunk_t(grid.nt)
-    chunk_t = check_int("chunks (time samples per chunk)", chunk_t, 1, grid.nt)
     full = check_caller_attrs(attrs)
     layout.validate_attrs(
         {
@@ -357,15 +398,5 @@ def create_store(
         where="store attrs",
         error=ValueError,
     )
-    check_replaceable(path, overwrite)
-    if not path.parent.is_dir():
-        raise StoreError(f"output directory {path.parent} does not exist")
-    if not os.access(path.parent, os.W_OK):
-        raise StoreError(f"output directory {path.parent} is not writable")
-    report_removed(remove_dead_temporaries(path.parent, [path.name]))
-    need = 3 * grid.nbytes_per_component()
-    require_disk(
-        path.parent, need, f"the store ({' x '.join(map(str, grid.shape))}, 3 components, "
-        f"{format_bytes(need)} uncompressed)", "free space there, choose another `out` or lower `nt`/`ny`/`nz`/`planes`",
-    )
+    path, chunk_t = check_new_store(path, grid, chunk_t=chunk_t, overwrite=overwrite)
     return StoreWriter(path, grid, full, chunk_t, overwrite)
