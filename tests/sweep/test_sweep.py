@@ -138,6 +138,13 @@ def test_existing_stores_with_other_parameters_are_never_overwritten(swept, clie
         run_sweep(other, client=client, progress=False)
     assert store_checksum(out / plan.runs[0].store_name) == before
     assert (out / "manifest.json").read_text() == manifest_before
+    # the command: its one error line is all it prints (no "sweep: N runs" line before it)
+    res = CliRunner().invoke(cli, ["sweep", "--model", model, "--preset", ",".join(PRESETS), "--speeds",
+                                   ",".join(f"{v:g}" for v in SPEEDS), "--seeds", ",".join(map(str, SEEDS)),
+                                   *CLI_GRID[:-1], "9", "--out", str(out)])
+    assert res.exit_code == 2 and res.stdout == "", res.output
+    assert res.stderr.strip().splitlines() == [res.stderr.strip()] and "different grid" in res.stderr
+    assert (out / "manifest.json").read_text() == manifest_before
 
 
 def test_one_failing_run_does_not_stop_the_others_and_sets_the_exit_code(client, tmp_path):

@@ -95,7 +95,6 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
 
     budget = parse_size(memory, "--memory") if memory is not None else None
     check_memory_budget(plan.runs, budget, plan.chunk_t)  # (run_sweep checks it too) before any line is printed
-    click.echo(f"sweep: {len(plan.runs)} runs -> {plan.out}", err=True)
     result = run_sweep(plan, progress=True, memory_bytes=budget)
     click.echo(summary_table(result))
     if not result.ok:

@@ -196,6 +196,8 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
             n_gen = sum(t.generate for t in tasks.values())
             require_disk(out, need, f"the {n_gen} stores still to generate", "free space, choose another `out` "
                          "or sweep fewer seeds/speeds or a smaller grid")
+        if progress:  # after every refusal: a refused sweep prints only its error
+            print(f"sweep: {len(plan.runs)} runs -> {out}", file=sys.stderr)
         sweep_doc = plan.to_dict()
         # runs of earlier sweeps into DIR that this plan does not contain keep their records
         earlier = [r for name, r in previous.items() if name not in records]
