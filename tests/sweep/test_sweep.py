@@ -170,7 +170,7 @@ def test_lock_refuses_a_second_concurrent_sweep(tmp_path):
         res = CliRunner().invoke(cli, ["sweep", "--model", "kaimal", "--preset", "neutral", "--speeds", "16",
                                        "--seeds", "1", *CLI_GRID, "--out", str(out)])  # fmt: skip
     assert res.exit_code == 2
-    assert "locked by another sweep" in res.output and res.output.count("\n") == 2  # banner + one error line
+    assert "locked by another sweep" in res.output and res.output.count("\n") == 1  # the error line only
     assert sorted(p.name for p in out.iterdir()) == []  # nothing written (lock released on exit)
 
 
