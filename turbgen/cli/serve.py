@@ -44,15 +44,16 @@ def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue
 
         check_scheduler_address(scheduler)
     import uvicorn
-    from dask.distributed import Client, LocalCluster
+    from dask.distributed import Client
 
+    from turbgen.runs.local_cluster import loopback_cluster
     from turbgen.service.app import create_app
 
     if scheduler:
         client = Client(scheduler)
     else:
         # threads in this process: a killed server leaves no orphan worker writing into --root
-        cluster = LocalCluster(n_workers=1, threads_per_worker=workers, processes=False, dashboard_address=None)
+        cluster = loopback_cluster(1, workers, processes=False)  # no socket beyond loopback (runs.local_cluster)
         client = Client(cluster)
     app = create_app(Path(root), client, token=token, memory_budget=int(memory_gb * 2**30), max_queue=max_queue,
                      loopback_only=is_loopback(host))

@@ -253,13 +253,10 @@ def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_
 
 def local_cluster(workers: int):
     """A dask LocalCluster of ``workers`` single-threaded worker processes (what :func:`plan_for_budget` plans
-    for with scheduler "local"), quiet and without a dashboard."""
-    import logging
+    for with scheduler "local"), quiet, on loopback, without a dashboard (runs.local_cluster)."""
+    from turbgen.runs.local_cluster import loopback_cluster
 
-    from distributed import LocalCluster
-
-    return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                        silence_logs=logging.ERROR)  # fmt: skip
+    return loopback_cluster(workers, 1, processes=True)
 
 
 class _File:

@@ -49,7 +49,9 @@ __all__ = ["SweepResult", "run_sweep", "summary_table"]
 
 
 def _make_client(plan: SweepPlan, n: int, processes: bool):
-    from distributed import Client, LocalCluster
+    from distributed import Client
+
+    from turbgen.runs.local_cluster import loopback_cluster
 
     if plan.scheduler:
         return Client(plan.scheduler), None
@@ -63,13 +65,7 @@ def _make_client(plan: SweepPlan, n: int, processes: bool):
             resource_tracker.ensure_running()
         finally:
             signal.signal(signal.SIGHUP, old)
-    cluster = LocalCluster(
-        n_workers=n,
-        threads_per_worker=1,
-        processes=processes,
-        dashboard_address=None,
-        silence_logs=logging.ERROR,
-    )
+    cluster = loopback_cluster(n, 1, processes)
     client = Client(cluster)
     if processes:
         # a terminal's Ctrl-C (hang-up, or a kill of the group) goes to the whole process group: let it reach the sweep
