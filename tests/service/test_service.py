@@ -91,6 +91,23 @@ def test_cross_site_posts_are_refused(server):
     assert server.call("GET", "/runs?seed=987654")[2]["runs"] == []
 
 
+@pytest.mark.parametrize("depth", [30000, 40])
+def test_deeply_nested_json_is_a_422_not_a_500(server, depth):
+    # found by POSTing 30000 nested arrays (60 KB, under the body limit): json.loads recursed past Python's limit,
+    # a 500; 40 levels parse but are refused before the schema validation recurses into them
+    import http.client
+
+    nested = "[" * depth + "]" * depth
+    body = json.dumps({"model": "mann", "grid": {"x_m": nested}}).replace(f'"{nested}"', nested)
+    for path in ("/runs", "/sweeps"):
+        conn = http.client.HTTPConnection("127.0.0.1", server.port, timeout=30)
+        conn.request("POST", path, body, headers={"Content-Type": "application/json"})
+        r = conn.getresponse()
+        out = json.loads(r.read())
+        conn.close()
+        assert r.status == 422 and "nested deeper than 32 levels" in out["detail"], (path, r.status, out)
+
+
 def test_loopback_server_answers_only_loopback_host_names(server):
     # found by sending Host: evil.example to the 127.0.0.1 server: 200 (and POST 202), so a page whose
     # name is re-bound to 127.0.0.1 (DNS rebinding) is same-origin with the server and can submit or

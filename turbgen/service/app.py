@@ -24,8 +24,8 @@ from turbgen.errors import ParameterError, TurbgenError
 from turbgen.service.catalog import Catalog
 from turbgen.service.run_ids import build_run, canonical_mapping, run_id
 from turbgen.service.jobs import Jobs, QueueFull
-from turbgen.service.limits import (MAX_BODY_BYTES, RETRY_AFTER_S, LimitError, check_memory, check_token,
-                                    is_loopback)
+from turbgen.service.limits import (MAX_BODY_BYTES, MAX_JSON_DEPTH, RETRY_AFTER_S, LimitError, check_json_depth,
+                                    check_memory, check_token, is_loopback)
 from turbgen.service.pages import index_html
 from turbgen.store.layout import default_chunk_t, n_chunks
 
@@ -61,9 +61,13 @@ async def _read_json(request: Request):
         if len(data) > MAX_BODY_BYTES:
             raise LimitError(413, f"request body over {MAX_BODY_BYTES} bytes")
     try:
-        return json.loads(data)
+        value = json.loads(data)
+    except RecursionError:  # the decoder itself recurses: thousands of nested arrays
+        raise LimitError(422, f"request body: arrays and objects nested deeper than {MAX_JSON_DEPTH} levels") from None
     except (ValueError, UnicodeDecodeError) as exc:
         raise LimitError(422, f"request body: not valid JSON ({' '.join(str(exc).split())})") from None
+    check_json_depth(value)
+    return value
 
 
 def create_app(root: Path, client, *, token: str | None = None, memory_budget: int, max_queue: int,
