@@ -12,6 +12,7 @@ import threading
 import time
 import zipfile
 
+import h5py
 import numpy as np
 import pytest
 import xarray as xr
@@ -186,6 +187,12 @@ def test_exports_download_and_read_back(server, tmp_path):
     for key in ("u", "v", "w"):
         np.testing.assert_array_equal(got[key], want[key])
     assert server.call("GET", f"/runs/{rid}/export?format=bts")[2] == payload  # cached, same bytes
+    # the exports name the store as the API does, never by the server's catalog path
+    assert f"/runs/{rid}/store ".encode() in payload and str(server.root).encode() not in payload
+    status, _, h5_bytes = server.call("GET", f"/runs/{rid}/export?format=hdf5")
+    (tmp_path / "served.h5").write_bytes(h5_bytes)
+    with h5py.File(tmp_path / "served.h5", "r") as h5:
+        assert status == 200 and h5.attrs["source_store"] == f"/runs/{rid}/store"
     status, _, payload = server.call("GET", f"/runs/{rid}/export?format=hawc2")
     assert status == 200
     zipfile.ZipFile(io.BytesIO(payload)).extractall(tmp_path / "h2")

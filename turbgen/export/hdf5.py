@@ -71,7 +71,7 @@ def export_hdf5(fs, out, req: ExportRequest) -> ExportResult:
         for name, value in fs.attrs.items():
             h5.attrs[name] = _attr_value(value)
         h5.attrs["dimension_order"] = DIMENSION_ORDER
-        h5.attrs["source_store"] = str(fs.path)
+        h5.attrs["source_store"] = req.source(fs)
         for name, (unit, long_name) in _COORDS.items():
             d = h5.create_dataset(name, data=coords[name])
             d.attrs.update(units=unit, long_name=long_name)

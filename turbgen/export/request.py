@@ -35,6 +35,9 @@ class ExportRequest:
         Drop grid rows at or below the ground instead of refusing.
     overwrite : bool, optional
         Replace existing outputs.
+    source_label : str, optional
+        How the exports name their source store (the .bts description, the HDF5 ``source_store``); default its
+        path. The service gives ``/runs/<id>/store``, not its catalog's path on the server.
 
     Raises
     ------
@@ -49,6 +52,11 @@ class ExportRequest:
     periodic: bool = True
     drop_below_ground: bool = False
     overwrite: bool = False
+    source_label: str | None = None
+
+    def source(self, fs) -> str:
+        """The source store's name in the exports: ``source_label``, or the store's path."""
+        return str(fs.path) if self.source_label is None else self.source_label
 
     def __post_init__(self):
         if self.plane is not None:

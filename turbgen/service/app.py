@@ -293,7 +293,7 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
             raise ParameterError(f"format: {format!r} is not one of {', '.join(EXPORT_FORMATS)}")
         from turbgen.export import ExportRequest, export_store
 
-        request = ExportRequest(plane=plane)
+        request = ExportRequest(plane=plane, source_label=f"/runs/{rid}/store")  # not the catalog's path here
         key = format if plane is None else f"{format}-plane{plane}"
         final = catalog.run_dir(rid) / "exports" / key
         with lock_for(f"{rid}/export/{key}"):
