@@ -204,3 +204,24 @@ def test_a_preset_request_builds_the_run_of_the_cli_and_the_sweep(model):
     name, run = build_run({"model": model, "preset": "stable", "U_m_s": 12.0, "seed": 4})
     assert name == model
     assert run.to_attrs() == sweep_run(model, "stable", 12.0, 4).to_attrs()
+
+
+def test_a_complete_run_is_served_whatever_the_memory_budget(tmp_path):
+    """Found by a walk-through: a run completed under one budget, resubmitted to a server restarted with a smaller
+    --memory-budget, got 413 instead of its store. A complete run is served (200) without the budget check; a new
+    run over the budget is still refused."""
+    root = tmp_path / "root"
+    first = Server(root)
+    try:
+        rid = first.call("POST", "/runs", _run(7, SLOW_GRID))[2]["id"]
+        first.wait(rid, timeout_s=120)
+    finally:
+        first.kill()
+    small = Server(root, "--memory-budget", "0.01")  # 10 MiB, the least allowed: below this run
+    try:
+        status, _, out = small.call("POST", "/runs", _run(7, SLOW_GRID))
+        assert status == 200 and out["id"] == rid and out["submitted"] == "complete", (status, out)
+        status, _, out = small.call("POST", "/runs", _run(8, SLOW_GRID))
+        assert status == 413 and "--memory-budget" in out["detail"], (status, out)
+    finally:
+        small.kill()

@@ -180,8 +180,9 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         body = await _read_json(request)
         model, run = build_run(body)
         preset = body.get("preset") if isinstance(body, dict) else None
-        check_memory(model, run, memory_budget)
         rid = run_id(model, canonical_mapping(run))
+        if not (catalog.exists(rid) and catalog.is_complete(rid)):  # a complete run is served, never recomputed
+            check_memory(model, run, memory_budget)
         try:
             state = jobs.submit(rid, model, run, preset)
         except QueueFull as exc:
