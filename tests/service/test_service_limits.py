@@ -132,7 +132,10 @@ BAD = [
     # found with "lidar": "/path/on/the/server.json": the server opened and parsed a client-named file (its
     # keys came back in the 422), and "scheduler": the server probed a client-chosen host:port for 3 s
     ("POST", "/sweeps", _SWEEP_WITH("lidar", str(_SERVER_FILE)), 422, "lidar: not accepted"),
-    ("POST", "/sweeps", _SWEEP_WITH("scheduler", "tcp://127.0.0.1:1"), 422, "scheduler: not accepted"),
+    ("POST", "/sweeps", _SWEEP_WITH("scheduler", "tcp://127.0.0.1:1"), 422, "scheduler: not accepted by the service "
+     "(the server's own cluster"),
+    ("POST", "/sweeps", _SWEEP_WITH("workers", 256), 422, "workers: not accepted"),  # was silently ignored
+    ("POST", "/sweeps", _SWEEP_WITH("out", "/tmp/elsewhere"), 422, "out: not accepted"),  # was silently ignored
     ("GET", "/runs/../../etc/passwd", None, 404, None),
     ("GET", "/runs/%2e%2e%2f%2e%2e%2fetc%2fpasswd", None, 404, None),
     ("GET", "/runs/" + "0" * 24, None, 404, None),

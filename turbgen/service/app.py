@@ -235,16 +235,18 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
             raise ParameterError("request body: expected a JSON object with the sweep config")
         from turbgen.sweep.plan_file import plan_from_mapping
 
-        body = {**body, "out": "unused"}
-        if "preset_file" in body:
-            raise ParameterError("preset_file: not accepted by the service (give user_presets inline)")
-        for key in ("lidar", "scheduler"):  # a server file / a network address named by the client
+        # keys of `turbgen sweep` files the service does not take: a server file, a network address, a path or a
+        # worker count named by the client (refused rather than silently ignored)
+        refused = {"preset_file": "give user_presets inline", "lidar": "GET /runs/<id>/lidar?lidar=PRESET per run",
+                   "scheduler": "the server's own cluster runs every run", "workers": "the server's own cluster runs "
+                   "every run", "out": "runs are stored in the server's catalog: GET /runs/<id>/store"}  # fmt: skip
+        for key, instead in refused.items():
             if key in body:
-                raise ParameterError(f"{key}: not accepted by the service (lidar: GET /runs/<id>/lidar?lidar=PRESET; "
-                                     "the server's own cluster runs every run)")
-        plan = plan_from_mapping(body)
+                raise ParameterError(f"{key}: not accepted by the service ({instead})")
+        plan = plan_from_mapping({**body, "out": "unused"})
         for pr in plan.runs:
-            check_memory(pr.model, pr.run, memory_budget)
+            if not catalog.is_complete(run_id(pr.model, canonical_mapping(pr.run))):  # complete runs are served
+                check_memory(pr.model, pr.run, memory_budget)
         ids = []
         with jobs.lock:
             free = jobs.max_queue - len(jobs.active)
