@@ -228,3 +228,15 @@ def test_a_complete_run_is_served_whatever_the_memory_budget(tmp_path):
         assert status == 413 and "--memory-budget" in out["detail"], (status, out)
     finally:
         small.kill()
+
+
+@pytest.mark.parametrize("mode, warned", [(0o644, True), (0o600, False)])
+def test_a_token_file_others_can_read_is_warned_about(tmp_path, mode, warned):
+    root = tmp_path / "root"
+    token_file = tmp_path / "token"
+    token_file.write_text(TOKEN + "\n")
+    token_file.chmod(mode)
+    srv = Server(root, "--token-file", str(token_file))
+    srv.kill()
+    log = (tmp_path / "root.log").read_text()
+    assert ("token file" in log and "readable by other users (chmod 600 it)" in log) == warned, log

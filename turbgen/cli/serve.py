@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import click
@@ -36,6 +37,9 @@ def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue
             token = read_token(token_file)
         except (OSError, ValueError) as exc:
             raise ParameterError(str(exc)) from None
+        if os.stat(token_file).st_mode & 0o077:  # a secret others on this machine can read
+            click.echo(f"turbgen serve: warning: token file {token_file} is readable by other users (chmod 600 it)",
+                       err=True)
     elif not is_loopback(host):
         raise ParameterError(f"--host {host} is not a loopback address: give --token-file so mutating requests "
                              "need a bearer token")  # fmt: skip
@@ -59,6 +63,7 @@ def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue
                      loopback_only=is_loopback(host))
     requeued = app.state.jobs.resume()
     click.echo(f"turbgen serve: catalog {Path(root).absolute()}, {len(requeued)} interrupted run(s) re-queued")
-    click.echo(f"turbgen serve: listening on http://{host}:{port}/ (API docs at /docs)")
+    url_host = f"[{host}]" if ":" in host else host  # an IPv6 literal in a URL needs brackets
+    click.echo(f"turbgen serve: listening on http://{url_host}:{port}/ (API docs at /docs)")
     uvicorn.run(app, host=host, port=port, log_level="warning")
     client.close()
