@@ -12,7 +12,7 @@ from turbgen.lidar.preview import preview_spectra
 from turbgen.spec.preset_runs import mann_params_for
 from turbgen.theory.kaimal import kaimal_spectrum
 from turbgen.theory.lidar_geometry import Measurements, los_vectors, nacelle_directions, spinner_directions
-from turbgen.theory.lidar_control import coherence_bandwidth_rad_m, cutoff_frequency_hz
+from turbgen.theory.lidar_control import MINUS_3_DB, coherence_bandwidth_rad_m, cutoff_frequency_hz
 from turbgen.theory.lidar_lattice import BoxLattice
 from turbgen.theory.lidar_preview import kaimal_preview_spectra, mann_preview_spectra
 from turbgen.theory.lidar_weighting import (
@@ -254,3 +254,24 @@ def test_box_lattice_converges_to_the_continuous_integral():
            for n in (64, 128, 256)]
     assert err[0][0] > 3e-3
     assert np.all(err[1] < err[0]) and np.all(err[2] < err[1]) and err[2].max() < 1e-3
+
+
+def test_crossings_do_not_depend_on_the_frequency_grid():
+    """The -3 dB / 0.5 crossings of a smooth curve: exact for a cubic in log f, and on a smooth gain-like
+    curve the same to < 5e-5 relative on grids of 12, 14 and 60 points (linear interpolation in log f, used
+    before, moved the cut-off's 4th digit with the grid: 0.05064 / 0.05080 / 0.05078 Hz for one lidar)."""
+    f = np.geomspace(0.01, 0.2, 9)
+    cubic = lambda x: 1.0 - 0.1 * (x + 4.6) - 0.05 * (x + 4.6) ** 3  # noqa: E731 -- in x = ln f, decreasing
+    fine = np.geomspace(0.01, 0.2, 200001)
+    exact = fine[np.argmax(cubic(np.log(fine)) < 0.5)]
+    assert cutoff_frequency_hz(f, cubic(np.log(f)) * MINUS_3_DB / 0.5) == pytest.approx(exact, rel=1e-4)
+    gain = lambda f_hz: 1.0 / np.sqrt(1.0 + (f_hz / 0.05) ** 2.4)  # noqa: E731 -- crosses 10^(-3/20) at 0.05 Hz
+    want = 0.05 * (MINUS_3_DB**-2 - 1.0) ** (1 / 2.4)
+    # relative errors 2.5e-5, 5e-6, 6e-6 here (linear interpolation: 1.1e-3, 5e-4, 6e-4, over 4th-digit rounding)
+    for grid in (np.geomspace(0.02, 0.1, 12), np.geomspace(0.025, 0.08, 14), np.geomspace(0.002, 0.5, 60)):
+        assert cutoff_frequency_hz(grid, gain(grid)) == pytest.approx(want, rel=5e-5), grid.size
+    three = np.array([0.01, 0.05, 0.1])  # fewer than 4 points: linear in log f
+    y = np.array([1.0, 0.8, 0.6])
+    assert coherence_bandwidth_rad_m(three, y**2, 10.0) == pytest.approx(
+        2 * np.pi * np.exp(np.interp(0.5, [0.6**2, 0.8**2], np.log([0.1, 0.05]))) / 10.0, rel=1e-12)
+    assert cutoff_frequency_hz(f, np.full(9, 0.1)) == f[0] and np.isnan(cutoff_frequency_hz(f, np.ones(9)))
