@@ -479,10 +479,13 @@ def test_scheduler_at_a_port_where_a_server_answers_other_bytes(workdir, monkeyp
     srv.bind(("127.0.0.1", 0))
     srv.listen(4)
 
-    def answer():  # every connection: the port probe's and dask's
+    def answer():  # every connection: the port probe's and dask's, until the test closes the socket
         while True:
-            conn, _ = srv.accept()
-            conn.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" * 4)
+            try:
+                conn, _ = srv.accept()
+                conn.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" * 4)
+            except OSError:  # closed: an unhandled thread exception would surface as a warning in a later test
+                return
 
     threading.Thread(target=answer, daemon=True).start()
     address = f"tcp://127.0.0.1:{srv.getsockname()[1]}"
