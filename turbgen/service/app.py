@@ -181,7 +181,7 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         model, run = build_run(body)
         preset = body.get("preset") if isinstance(body, dict) else None
         rid = run_id(model, canonical_mapping(run))
-        if not (catalog.exists(rid) and catalog.is_complete(rid)):  # a complete run is served, never recomputed
+        if not catalog.is_complete(rid):  # a complete run is served, never recomputed
             check_memory(model, run, memory_budget)
         try:
             state = jobs.submit(rid, model, run, preset)
@@ -244,18 +244,17 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
             if key in body:
                 raise ParameterError(f"{key}: not accepted by the service ({instead})")
         plan = plan_from_mapping({**body, "out": "unused"})
-        for pr in plan.runs:
-            if not catalog.is_complete(run_id(pr.model, canonical_mapping(pr.run))):  # complete runs are served
-                check_memory(pr.model, pr.run, memory_budget)
+        rids = [run_id(pr.model, canonical_mapping(pr.run)) for pr in plan.runs]
+        new = [pr for pr, rid in zip(plan.runs, rids) if not catalog.is_complete(rid)]  # complete runs are served
+        for pr in new:
+            check_memory(pr.model, pr.run, memory_budget)
         ids = []
         with jobs.lock:
             free = jobs.max_queue - len(jobs.active)
-        new = [pr for pr in plan.runs if not catalog.is_complete(run_id(pr.model, canonical_mapping(pr.run)))]
         if len(new) > free:
             return _error(429, f"the sweep has {len(new)} runs to compute, the queue has room for {free}",
                           {"Retry-After": str(RETRY_AFTER_S)})  # fmt: skip
-        for pr in plan.runs:
-            rid = run_id(pr.model, canonical_mapping(pr.run))
+        for pr, rid in zip(plan.runs, rids):
             try:
                 jobs.submit(rid, pr.model, pr.run, pr.preset)
             except QueueFull as exc:
