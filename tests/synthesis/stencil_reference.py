@@ -132,8 +132,8 @@ def reference_axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray,
         cells = np.stack([[np.bincount(cell, phi[a, b], minlength=ncell) for b in range(3)] for a in range(3)]) / 2.0
         if i == 0:
             cells[:, :, r2 * n3 + r3] = 0.0
-        lam, vec = np.linalg.eigh(np.moveaxis(cells, -1, 0))
-        factor.append(vec * np.sqrt(np.clip(lam, 0.0, None))[:, None, :])
+        lam, vec = np.linalg.eigh(np.moveaxis(cells, -1, 0))  # the principal square root V sqrt(Lambda) V^T
+        factor.append((vec * np.sqrt(np.clip(lam, 0.0, None))[:, None, :]) @ np.swapaxes(vec, -1, -2))
         index.extend((i, j % box.nyp, l % box.nzp) for j in js for l in ls)
     index = np.array(index, dtype=np.int64).reshape(-1, 3)
     factor = np.concatenate(factor).astype(np.float32) if factor else np.zeros((0, 3, 3), np.float32)

@@ -20,7 +20,7 @@ the period through a C-infinity step (smooth periodization, Bachmayr, Graham, Ng
 grid is unchanged, and the torus needs only M h >= 2 (N - 1) h + 5 / (a kappa) instead of 12 / (a kappa) (the
 largest multiple of the decay length needed on grids of 11-64 points was 4.6: 3-6 x fewer torus points per
 low-frequency bin). Both rules are empirical, so the eigenvalues are checked at run time: the torus is enlarged
-while any is negative beyond rounding; if that does not help, small grids fall back to a dense Cholesky factor,
+while any is negative beyond rounding; if that does not help, small grids fall back to a dense square root,
 large grids clip the negative eigenvalues and the clipping error (an upper bound on the covariance error at any
 lag) is reported -- never silently.
 
@@ -44,12 +44,13 @@ import numpy as np
 import scipy.fft
 
 from turbgen.errors import ParameterError
+from turbgen.synthesis.square_root import principal_sqrt
 
 # eigenvalues above -EIG_RTOL * max(lam) are rounding noise of an exactly non-negative spectrum
 EIG_RTOL = 1e-10
 # the torus is enlarged (x1.5 per step; one decay length more with the smooth cut-off) at most this many times
 MAX_ENLARGE = 4
-# grids with at most this many points fall back to a dense Cholesky factor; larger ones clip
+# grids with at most this many points fall back to a dense (principal) square root; larger ones clip
 CHOLESKY_MAX_POINTS = 2500
 # kernel values below exp(-17) ~ 4e-8 count as zero when sizing the torus (the torus scales are float32: 6e-8)
 CUTOFF_DECAYS = 17.0
@@ -59,8 +60,12 @@ SMOOTH_DECAYS = 5.0
 # tori larger than this and than 4 x the grid's minimal torus (torus_cap) are not built (16 MiB of complex64 per
 # frequency and plane, up to FREQ_CHUNK = 32 frequencies at once per thread, and their FFTs): a dense factor instead
 MAX_TORUS_POINTS = 1 << 21
-# at most this many floating-point operations for the dense factors of one component (~N^3 / 3 per frequency)
-MAX_DENSE_FLOPS = 1e11
+# operations of one dense factor per N^3: eigh with eigenvectors and the product V sqrt(Lambda) V^T (measured 8-16 x a
+# Cholesky factor's N^3 / 3 for N = 100 ... 2500)
+DENSE_OPS_PER_N3 = 4.0
+# at most this many floating-point operations for the dense factors of one component (the grids accepted when the
+# factors were Cholesky's N^3 / 3 at 1e11 operations)
+MAX_DENSE_FLOPS = 1.2e12
 
 
 def fft_size(n: int) -> int:
@@ -147,7 +152,7 @@ class Embedding:
     """Sampler of one correlation matrix C on the ny x nz grid.
 
     Either circulant (``scale`` = sqrt(lam/(My Mz)) on the torus, ``chol`` None) or dense: ``chol`` (N x N) a
-    square root F of C (F F^T = C: its lower Cholesky factor, or from its eigenvectors, see dense_embedding). ``clip_error`` bounds the absolute
+    square root F of C (F F^T = C: its principal square root, see dense_embedding). ``clip_error`` bounds the absolute
     covariance error left by clipped negative eigenvalues (0 when the embedding is exact).
     """
 
@@ -160,7 +165,7 @@ class Embedding:
 
     @property
     def torus_shape(self) -> tuple[int, int]:
-        """(My, Mz) of the circulant torus, or (N, 1) for the Cholesky fallback."""
+        """(My, Mz) of the circulant torus, or (N, 1) for a dense factor."""
         return self.scale.shape if self.scale is not None else (self.ny * self.nz, 1)
 
     def sample(self, xi: np.ndarray, workers: int | None = None, overwrite: bool = False) -> np.ndarray:
@@ -188,12 +193,12 @@ def torus_cap(ny: int, nz: int) -> int:
 
 def dense_is_cheaper(n_points: int, torus_points: int) -> bool:
     """Whether a dense square root of a bin's n x n C costs fewer floating-point operations than its torus of
-    ``torus_points`` points M: the factor (~n^3 / 3) and one sample (~4 n^2), against the torus's eigenvalue FFT and
+    ``torus_points`` points M: the factor (DENSE_OPS_PER_N3 n^3) and one sample (~4 n^2), against the torus's eigenvalue FFT and
     one sample's FFT (~5 M log2(M) each). True on small grids where the coherence needs a torus much larger than the
     grid: a default-length field on 5 x 5 points with a_yz = 0.5 took 7.6 s and 1.3 GB on tori of up to 1440 x 1440
     points, 0.9 s and 0.2 GB with dense factors."""
     m = max(int(torus_points), 2)
-    return n_points**3 / 3.0 + 4.0 * n_points**2 <= 10.0 * m * math.log2(m)
+    return DENSE_OPS_PER_N3 * n_points**3 + 4.0 * n_points**2 <= 10.0 * m * math.log2(m)
 
 
 def dense_sampled(ny: int, nz: int, torus_points: int, when_cheaper: bool = True) -> bool:
@@ -206,18 +211,14 @@ def dense_sampled(ny: int, nz: int, torus_points: int, when_cheaper: bool = True
     return torus_points > torus_cap(ny, nz) or (when_cheaper and dense_is_cheaper(n, torus_points))
 
 
-def dense_embedding(kernel, ny: int, nz: int, dy_m: float, dz_m: float) -> Embedding:
-    """Sampler of C_ab = kernel(r_ab) with a dense square root F of C (F F^T = C): its Cholesky factor, or, where
-    rounding leaves C numerically semi-definite (a coherence near 1 across the grid), V sqrt(max(Lambda, 0)) from
-    its eigenvectors V and eigenvalues Lambda, with the clipped part's spectral norm max|Lambda_neg| (a bound on
-    the covariance error of every pair) as clip_error.
+def dense_embedding(kernel, ny: int, nz: int, dy_m: float, dz_m: float, enlarged: int = 0) -> Embedding:
+    """Sampler of C_ab = kernel(r_ab) with a dense square root F of C (F F^T = C): its principal square root
+    V sqrt(max(Lambda, 0)) V^T (turbgen.synthesis.square_root: unique, so the same on every CPU, also where rounding
+    leaves C numerically semi-definite, a coherence near 1 across the grid), with the clipped part's spectral norm
+    max|Lambda_neg| (a bound on the covariance error of every pair) as clip_error.
     """
-    c = kernel(grid_distances(ny, nz, dy_m, dz_m))
-    try:
-        return Embedding(ny, nz, None, np.linalg.cholesky(c), 0.0, 0)
-    except np.linalg.LinAlgError:
-        lam, vec = np.linalg.eigh(c)
-        return Embedding(ny, nz, None, vec * np.sqrt(np.clip(lam, 0.0, None)), float(max(-lam.min(), 0.0)), 0)
+    root, clipped = principal_sqrt(kernel(grid_distances(ny, nz, dy_m, dz_m)))
+    return Embedding(ny, nz, None, root, clipped, enlarged)
 
 
 def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m, what: str) -> list[int]:
@@ -235,7 +236,7 @@ def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_length
     plans = [torus_plan(ny, nz, dy_m, dz_m, d) for d in decays]
     points = [my * mz for my, mz, _ in plans]
     big = [d for d, m in zip(decays, points) if m > cap]
-    if big and (n > CHOLESKY_MAX_POINTS or len(big) * n**3 / 3.0 > MAX_DENSE_FLOPS):
+    if big and (n > CHOLESKY_MAX_POINTS or len(big) * DENSE_OPS_PER_N3 * n**3 > MAX_DENSE_FLOPS):
         my, mz, _ = torus_plan(ny, nz, dy_m, dz_m, max(big))
         raise ParameterError(
             f"{what} stays high over {max(big):.4g} m: sampling it on the {ny} x {nz} grid would need a {my} x {mz} "
@@ -311,11 +312,7 @@ def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: fl
             return dense_embedding(kernel, ny, nz, dy_m, dz_m)  # a larger torus is not built
         if enlarged == MAX_ENLARGE or grown[0] * grown[1] > cap:
             if enlarged == MAX_ENLARGE and ny * nz <= CHOLESKY_MAX_POINTS:
-                try:
-                    chol = np.linalg.cholesky(kernel(grid_distances(ny, nz, dy_m, dz_m)))
-                    return Embedding(ny, nz, None, chol, 0.0, MAX_ENLARGE)
-                except np.linalg.LinAlgError:
-                    pass  # C itself is not positive definite: clip below and report
+                return dense_embedding(kernel, ny, nz, dy_m, dz_m, MAX_ENLARGE)
             break
         my, mz = grown
         enlarged += 1

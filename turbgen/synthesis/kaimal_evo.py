@@ -9,7 +9,7 @@ Per frequency bin k (f_k = k df exactly, df = 1/(nt dt); evoTurb mixes bin k wit
 1. every plane gets independent yz coefficients with covariance coh_yz (u: a plain function
    coh(r, f), by default the IEC exponential, Eq. 12 un-squared, by 2-D circulant embedding;
    v, w: spatially white as IEC / TurbSim IECKAI, or the same coherence as an explicit extension);
-2. the real Cholesky factor of the (n_planes x n_planes) matrix gamma_x(|x_p - x_q|, f_k)
+2. the real principal square root of the (n_planes x n_planes) matrix gamma_x(|x_p - x_q|, f_k)
    mixes the planes (components in ``long_components``; others stay independent);
 3. amplitudes: 2 E|X_k|^2 = v_k, the integral of the one-sided Kaimal PSD (Eq. 11) over the bin
    [(k - 1/2) df, (k + 1/2) df] (the Nyquist bin, real, over [f_N - df/2, f_N]); X_0 = 0.
@@ -40,6 +40,7 @@ import scipy.fft
 from turbgen.grid import Grid
 from turbgen.synthesis.circulant import Embedding, check_sampling_cost, dense_sampled, embed_many
 from turbgen.synthesis.random_streams import keyed_complex_normal
+from turbgen.synthesis.square_root import principal_sqrt
 from turbgen.theory.coherence_models import exponential_yz, exponential_yz_decay_length_m
 from turbgen.theory.kaimal import kaimal_band_variance
 from turbgen.theory.lattice import line_frequencies
@@ -78,28 +79,16 @@ def resolved_band_hz(nt: int, dt_s: float) -> tuple[float, float]:
 def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarray, float]:
     """Real factors F_k (nf, P, P) with F_k F_k^T = G_k, G_k[p, q] = gamma_x(|x_p - x_q|, f_k).
 
-    Lower Cholesky factors where G_k is positive definite; otherwise the factor of G_k with its
-    negative eigenvalues clipped. Returns (factors, max |G_clipped - G|) -- 0 when exact.
+    F_k is the principal square root of G_k (turbgen.synthesis.square_root: the same on every CPU, where a Cholesky
+    factor with an eigenvector fallback switched on rounding at low frequencies, G_k -> all ones). Returns
+    (factors, max |G_clipped - G|): the spectral norm of the negative part clipped, 0 when every G_k >= 0.
     """
     x = np.asarray(x_m, dtype=float)
     f = np.asarray(f_hz, dtype=float)
     dx = np.abs(x[:, None] - x[None, :])
     g = np.asarray(long_coherence(dx[None, :, :], f[:, None, None]), dtype=float)
-    g = np.broadcast_to(g, (f.size, x.size, x.size)).copy()
-    try:
-        return np.linalg.cholesky(g), 0.0
-    except np.linalg.LinAlgError:
-        pass
-    factors = np.empty_like(g)
-    err = 0.0
-    for i, gk in enumerate(g):
-        try:
-            factors[i] = np.linalg.cholesky(gk)
-        except np.linalg.LinAlgError:
-            w, v = np.linalg.eigh(gk)
-            factors[i] = v * np.sqrt(np.maximum(w, 0.0))
-            err = max(err, float(np.abs(factors[i] @ factors[i].T - gk).max()))
-    return factors, err
+    g = np.broadcast_to(g, (f.size, x.size, x.size))
+    return principal_sqrt(g)
 
 
 def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int = 1,
@@ -296,7 +285,7 @@ class KaimalEvo:
     def _groups(self, embs) -> list[tuple[int, int, tuple[int, int], object]]:
         """Runs [i, j) of consecutive bins drawn and sampled together: (i, j, torus shape, sampler).
 
-        sampler: None (white), an Embedding with a Cholesky factor (one bin), or one circulant
+        sampler: None (white), an Embedding with a dense factor (one bin), or one circulant
         Embedding whose ``scale`` stacks the bins' float32 scales (one batched FFT).
         """
         g = self.grid

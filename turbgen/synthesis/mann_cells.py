@@ -21,6 +21,7 @@ import numpy as np
 from turbgen.theory.eddy_lifetime import shear_lifetime_table
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
+from turbgen.synthesis.square_root import principal_sqrt
 
 if TYPE_CHECKING:
     from turbgen.synthesis.mann_stencil import BoxShape
@@ -77,7 +78,8 @@ def _slab_nodes(box: BoxShape, k1c: float, js: np.ndarray, ls: np.ndarray, off_a
 def axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarray]:
     """(cell_index, cell_factor) of the cell-averaged factors near the k1 axis (see MannStencil and CELL_RADIUS).
 
-    Phi_bar = (1/dV) ∫_cell Phi dk, factor V sqrt(Lambda).
+    Phi_bar = (1/dV) ∫_cell Phi dk, factor V sqrt(Lambda) V^T (the principal square root, the same on every CPU: see
+    turbgen.synthesis.square_root).
 
     The nodes of all (k2, k3) cells of a slab are one outer product of the k1 rule with the concatenated
     k2 and k3 rules; the nodes of _CELL_SLABS slabs are evaluated in one call and summed per cell by
@@ -107,8 +109,7 @@ def axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarra
         ) / 2.0
         if first == 0:
             cells[:, :, r2 * len(ls) + r3] = 0.0  # the cell around k = 0: the box mean stays zero
-        lam, vec = np.linalg.eigh(np.moveaxis(cells, -1, 0))
-        factor.append(vec * np.sqrt(np.clip(lam, 0.0, None))[:, None, :])
+        factor.append(principal_sqrt(np.moveaxis(cells, -1, 0))[0])
     index = np.array([(i, j % box.nyp, l % box.nzp) for i in range(n_slabs) for j in js for l in ls], dtype=np.int64)
     index = index.reshape(-1, 3)
     factor = np.concatenate(factor).astype(np.float32) if factor else np.zeros((0, 3, 3), np.float32)
