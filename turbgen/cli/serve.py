@@ -47,23 +47,17 @@ def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue
         from turbgen.sweep.scheduler import check_scheduler_address
 
         check_scheduler_address(scheduler)
-    import uvicorn
     from dask.distributed import Client
 
-    from turbgen.runs.local_cluster import loopback_cluster
     from turbgen.service.app import create_app
+    from turbgen.service.server import run_server, service_cluster
 
-    if scheduler:
-        client = Client(scheduler)
-    else:
-        # threads in this process: a killed server leaves no orphan worker writing into --root
-        cluster = loopback_cluster(1, workers, processes=False)  # no socket beyond loopback (runs.local_cluster)
-        client = Client(cluster)
+    client = Client(scheduler) if scheduler else Client(service_cluster(workers))
     app = create_app(Path(root), client, token=token, memory_budget=int(memory_gb * 2**30), max_queue=max_queue,
                      loopback_only=is_loopback(host))
     requeued = app.state.jobs.resume()
     click.echo(f"turbgen serve: catalog {Path(root).absolute()}, {len(requeued)} interrupted run(s) re-queued")
     url_host = f"[{host}]" if ":" in host else host  # an IPv6 literal in a URL needs brackets
     click.echo(f"turbgen serve: listening on http://{url_host}:{port}/ (API docs at /docs)")
-    uvicorn.run(app, host=host, port=port, log_level="warning")
+    run_server(app, host, port)
     client.close()
