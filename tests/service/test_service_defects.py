@@ -74,3 +74,144 @@ def test_a_disk_full_refusal_is_shown_without_the_root_or_out(tmp_path):
     assert str(catalog.root) in raw and "`out`" in raw  # what clients saw before
     shown = public_text(raw, catalog)
     assert str(catalog.root) not in shown and "`out`" not in shown and f"/runs/{rid}" in shown, shown
+
+
+def _dead_pid() -> int:
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid  # reaped: no process has it (until the kernel reuses it, far away)
+
+
+def test_start_up_removes_dead_processes_temporaries_and_caps_the_stencil_cache(tmp_path):
+    """Found by the service audit: a kill -9 during a stencil build left a 385 MB .mann-stencil-*.npy.tmp-* forever,
+    kills during validation/export left runs/<id>/.tmp-validation-* that start-up never removed; the stencil cache
+    had no size cap."""
+    root = tmp_path / "root"
+    rid = "0123456789abcdef01234567"
+    run_dir = root / "runs" / rid
+    (run_dir / "exports").mkdir(parents=True)
+    stencils = root / "stencils"
+    stencils.mkdir()
+    dead, alive = _dead_pid(), os.getpid()
+    garbage = [stencils / f".mann-stencil-abc.npy.tmp-{dead}-0badc0de", run_dir / ".tmp-validation-k3j4h5",
+               run_dir / "exports" / ".tmp-x8y9z0", run_dir / f".summary.json.tmp-{dead}-01234567",
+               root / "runs" / f".{rid}.tmp-{dead}-89abcdef", root / "work" / f".{rid}-validation.tmp-{dead}-aa"]
+    for p in garbage:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        (p / "report.json").parent.mkdir(parents=True) if "validation" in p.name else p.write_bytes(b"x" * 1000)
+    live = stencils / f".mann-stencil-def.npy.tmp-{alive}-0badc0de"  # a writer that still runs: kept
+    live.write_bytes(b"x")
+    entries = [stencils / f"mann-stencil-{k}.npy" for k in ("old", "mid", "new")]
+    for age, p in zip((300, 200, 100), entries):
+        p.write_bytes(b"s" * 2**20)
+        os.utime(p, (time.time() - age,) * 2)
+    srv = Server(root, "--stencil-cache-size", "2.5MiB")
+    srv.kill()
+    left = [p for p in garbage if p.exists()]
+    assert left == [], left
+    assert live.exists()
+    assert [p.exists() for p in entries] == [False, True, True]  # the least recently used evicted down to the cap
+    log = (tmp_path / "root.log").read_text()
+    assert f"{len(garbage) + 1} temporary file(s)" in log, log
+
+
+def test_stencil_cache_trim_keeps_the_most_recent_entry(tmp_path):
+    from turbgen.service.cleanup import trim_stencil_cache
+
+    entries = [tmp_path / f"mann-stencil-{k}.npy" for k in "abc"]
+    for age, p in zip((30, 20, 10), entries):
+        p.write_bytes(b"s" * 1000)
+        os.utime(p, (time.time() - age,) * 2)
+    assert trim_stencil_cache(tmp_path, 2500) == entries[:1]
+    assert trim_stencil_cache(tmp_path, 10) == entries[1:2]  # the newest stays even when alone over the cap
+    assert trim_stencil_cache(tmp_path, None) == [] and entries[2].exists()
+
+
+class _SlowValidation:
+    """Stands in for turbgen.validate.validate: each call blocks until ``release`` (at most 60 s) and counts."""
+
+    def __init__(self):
+        self.release = threading.Event()
+        self.started = threading.Semaphore(0)
+        self.calls = 0
+
+    def __call__(self, store):
+        self.calls += 1
+        self.started.release()
+        assert self.release.wait(60)
+        return _Report()
+
+
+class _Report:
+    def plots(self, directory):
+        directory.mkdir(parents=True, exist_ok=True)  # as ValidationReport.plots
+        (directory / "spectrum_u.png").write_bytes(b"\x89PNG fake")
+
+    def to_dict(self):
+        return {"passed": True}
+
+
+@pytest.fixture
+def slow_server(tmp_path, monkeypatch):
+    """An in-process server with one complete Kaimal run whose validation blocks until released."""
+    import turbgen.validate
+    from inprocess_server import InProcessServer
+
+    fake = _SlowValidation()
+    monkeypatch.setattr(turbgen.validate, "validate", fake)
+    srv = InProcessServer(tmp_path / "root", derived_running=1, derived_waiting=1)
+    try:
+        rid = srv.call("POST", "/runs", _kaimal(5))[2]["id"]
+        srv.wait(rid)
+        yield srv, rid, fake
+    finally:
+        fake.release.set()
+        srv.stop()
+
+
+def _in_thread(fn, *args, **kw):
+    out = {}
+    t = threading.Thread(target=lambda: out.setdefault("result", fn(*args, **kw)), daemon=True)
+    t.start()
+    return t, out
+
+
+def test_a_run_deleted_during_its_validation_stays_deleted(slow_server):
+    """Found by the service audit: DELETE /runs/<id> while its validation computed; the validation then recreated
+    runs/<id>/validation/, invisible to the API and never removed."""
+    srv, rid, fake = slow_server
+    thread, out = _in_thread(srv.call, "GET", f"/runs/{rid}/validation", timeout_s=90)
+    assert fake.started.acquire(timeout=30)  # the validation computes
+    assert srv.call("DELETE", f"/runs/{rid}")[0] == 200
+    fake.release.set()
+    thread.join(60)
+    status, _, body = out["result"]
+    assert status == 404 and "deleted" in body["detail"], (status, body)
+    assert not (srv.root / "runs" / rid).exists()
+    assert os.listdir(srv.root / "work") == []
+
+
+def test_concurrent_uncached_validations_are_bounded_and_health_answers(slow_server):
+    """Found by the service audit: 42 concurrent uncached GET .../validation took every worker thread and /health
+    answered after 14 s. Now at most running + waiting (here 1 + 1) are admitted, the others get 503 with
+    Retry-After at once, and /health answers meanwhile."""
+    srv, rid, fake = slow_server
+    requests = [_in_thread(srv.call, "GET", f"/runs/{rid}/validation", timeout_s=90) for _ in range(6)]
+    assert fake.started.acquire(timeout=30)
+    deadline = time.monotonic() + 30
+    while sum("result" in out for _, out in requests) < 4 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    refused = [out["result"] for _, out in requests if "result" in out]
+    assert len(refused) == 4, refused  # 6 requests - 1 computing - 1 waiting
+    assert all(s == 503 and int(h["retry-after"]) > 0 for s, h, _ in refused), refused
+    t0 = time.monotonic()
+    assert srv.call("GET", "/health", timeout_s=5)[0] == 200
+    assert time.monotonic() - t0 < 2.0  # the event loop answers while the validation holds its thread
+    fake.release.set()
+    for thread, _ in requests:
+        thread.join(60)
+    answers = sorted(out["result"][0] for _, out in requests)
+    assert answers == [200, 200, 503, 503, 503, 503] and fake.calls == 1  # the waiting one reused the result

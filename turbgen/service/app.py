@@ -16,8 +16,9 @@ from fastapi.responses import JSONResponse
 from turbgen import __version__
 from turbgen.errors import TurbgenError
 from turbgen.service.catalog import Catalog
+from turbgen.service.cleanup import DEFAULT_STENCIL_CACHE_BYTES, remove_dead_work, trim_stencil_cache
 from turbgen.service.jobs import Jobs
-from turbgen.service.limits import LimitError, is_loopback
+from turbgen.service.limits import DERIVED_RUNNING, DERIVED_WAITING, LimitError, is_loopback
 from turbgen.service.routes import pages, products, runs, sweeps
 from turbgen.service.state import ServiceSettings, ServiceState
 from turbgen.service.status import public_text
@@ -28,7 +29,9 @@ def _error(status: int, message: str, headers: dict | None = None) -> JSONRespon
 
 
 def create_app(root: Path, client, *, token: str | None = None, memory_budget: int, max_queue: int,
-               loopback_only: bool = False) -> FastAPI:
+               loopback_only: bool = False, stencil_cache_bytes: int | None = DEFAULT_STENCIL_CACHE_BYTES,
+               own_cluster: bool = True, derived_running: int = DERIVED_RUNNING,
+               derived_waiting: int = DERIVED_WAITING) -> FastAPI:
     """The application over the catalog in ``root`` running jobs on the dask ``client``.
 
     Parameters
@@ -47,19 +50,31 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
         Answer only requests whose Host header names a loopback address (400 otherwise): a server bound
         to 127.0.0.1 is then out of reach of DNS rebinding (a web page whose own name resolves to
         127.0.0.1 would otherwise be same-origin with it and could submit and delete runs).
+    stencil_cache_bytes : int or None, optional
+        Size cap of ``root/stencils`` [bytes] (least recently used stencils evicted; None: no cap).
+    own_cluster : bool, optional
+        ``client`` is the service's own in-process cluster (:func:`turbgen.service.server.service_cluster`), not
+        an external scheduler: temporaries of dead processes in ``root/stencils`` are this host's.
+    derived_running, derived_waiting : int, optional
+        Exports, validations and lidar reports computed at once, and requests that may wait for one (503 with
+        Retry-After beyond).
 
     Returns
     -------
     fastapi.FastAPI
-        The application (``app.state.service`` holds its state, ``app.state.jobs`` its job queue).
+        The application (``app.state.service`` holds its state, ``app.state.jobs`` its job queue,
+        ``app.state.removed`` the temporaries of dead processes removed at start-up).
     """
-    settings = ServiceSettings(Path(root), token, memory_budget, max_queue, loopback_only)
+    settings = ServiceSettings(Path(root), token, memory_budget, max_queue, loopback_only, derived_running,
+                               derived_waiting, stencil_cache_bytes, own_cluster)  # fmt: skip
     catalog = Catalog(settings.root)
-    state = ServiceState(settings, catalog, Jobs(catalog, client, max_queue))
+    state = ServiceState(settings, catalog, Jobs(catalog, client, max_queue, stencil_cache_bytes))
     app = FastAPI(title="turbgen serve", version=__version__,
                   description="Turbulence fields on demand: the same runs as `turbgen mann|kaimal`, deduplicated.")
     app.state.service = state
     app.state.jobs = state.jobs
+    app.state.removed = remove_dead_work(catalog, stencils=own_cluster)
+    app.state.removed += trim_stencil_cache(settings.root / "stencils", stencil_cache_bytes)
     _add_error_handlers(app)
     if loopback_only:
         app.middleware("http")(_loopback_host)

@@ -11,7 +11,8 @@ from fastapi import Depends, Request
 
 from turbgen.service.catalog import Catalog
 from turbgen.service.jobs import Jobs
-from turbgen.service.limits import LimitError, check_token
+from turbgen.service.limits import (DERIVED_RUNNING, DERIVED_WAITING, DerivedLimiter, LimitError,
+                                    check_token)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -30,6 +31,13 @@ class ServiceSettings:
         Most runs queued or running at once (429 above).
     loopback_only : bool
         Answer only requests whose Host header names a loopback address.
+    derived_running, derived_waiting : int
+        Exports, validations and lidar reports computed at once, and requests that may wait for them (503 beyond).
+    stencil_cache_bytes : int or None
+        Size cap of ``root/stencils`` [bytes] (least recently used entries evicted; None: no cap).
+    own_cluster : bool
+        The runs execute in this process (the service's own cluster, not --scheduler): temporaries of dead
+        processes in ``root/stencils`` are this host's and start-up may remove them.
     """
 
     root: Path
@@ -37,6 +45,10 @@ class ServiceSettings:
     memory_budget_bytes: int
     max_queue: int
     loopback_only: bool = False
+    derived_running: int = DERIVED_RUNNING
+    derived_waiting: int = DERIVED_WAITING
+    stencil_cache_bytes: int | None = None
+    own_cluster: bool = True
 
 
 @dataclass
@@ -51,13 +63,47 @@ class ServiceState:
         The run directories.
     jobs : Jobs
         The run queue on dask.
+    limiter : DerivedLimiter, optional
+        The bound on derived computations (default: from the settings).
     """
 
     settings: ServiceSettings
     catalog: Catalog
     jobs: Jobs
+    limiter: DerivedLimiter = None
     _locks: dict = field(default_factory=dict)
     _guard: threading.Lock = field(default_factory=threading.Lock)
+    _generations: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.limiter is None:
+            self.limiter = DerivedLimiter(self.settings.derived_running, self.settings.derived_waiting)
+
+    def generation(self, rid: str) -> int:
+        """How often run ``rid`` was deleted since start-up (a product computed across a change is not published).
+
+        Parameters
+        ----------
+        rid : str
+            Run id.
+
+        Returns
+        -------
+        int
+        """
+        with self._guard:
+            return self._generations.get(rid, 0)
+
+    def deleted(self, rid: str) -> None:
+        """Record that run ``rid`` is being deleted (call it holding ``lock_for(rid)``).
+
+        Parameters
+        ----------
+        rid : str
+            Run id.
+        """
+        with self._guard:
+            self._generations[rid] = self._generations.get(rid, 0) + 1
 
     def lock_for(self, key: str) -> threading.Lock:
         """The lock of ``key`` (a run id, or a run's derived product such as ``<id>/validation``).

@@ -71,7 +71,8 @@ def delete_run(rid: str, state: ServiceState = Depends(get_state)):
         raise not_found()
     if state.jobs.is_active(rid):
         raise LimitError(409, "the run is queued or running; delete it once it has finished")
-    with state.lock_for(rid):
+    with state.lock_for(rid):  # a derived product being computed is then not published (service.derived)
+        state.deleted(rid)
         state.catalog.delete(rid)
     return {"id": rid, "deleted": True}
 
