@@ -215,3 +215,26 @@ def test_concurrent_uncached_validations_are_bounded_and_health_answers(slow_ser
         thread.join(60)
     answers = sorted(out["result"][0] for _, out in requests)
     assert answers == [200, 200, 503, 503, 503, 503] and fake.calls == 1  # the waiting one reused the result
+
+
+def test_a_low_hub_height_run_exports_with_drop_below_ground(tmp_path):
+    """Found by the service audit: a run with a low hub height could never be exported (422 '... pass
+    drop_below_ground', which the endpoint did not take)."""
+    from inprocess_server import InProcessServer
+
+    srv = InProcessServer(tmp_path / "root")
+    try:
+        rid = srv.call("POST", "/runs", _kaimal(6, hub_height_m=10.0))[2]["id"]  # 8 rows 5 m apart: 2 below ground
+        srv.wait(rid)
+        status, _, out = srv.call("GET", f"/runs/{rid}/export?format=bts")
+        assert status == 422 and "?drop_below_ground=true" in out["detail"] and str(srv.root) not in out["detail"]
+        status, _, data = srv.call("GET", f"/runs/{rid}/export?format=bts&drop_below_ground=true")
+        assert status == 200, data
+        bts = tmp_path / "out.bts"
+        bts.write_bytes(data)
+        from turbgen.export.bts import read_bts
+
+        z = read_bts(bts)["z"]
+        assert z.min() > 0 and len(z) == TINY_GRID["nz"] - 2, z
+    finally:
+        srv.stop()

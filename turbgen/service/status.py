@@ -67,6 +67,8 @@ _CLI_ADVICE = (
     (" (use `overwrite`)", ""),
     ("choose another `out` or lower", "or lower"),
     ("`out`", "the server's catalog"),
+    ("pass `drop_below_ground`", "pass ?drop_below_ground=true"),
+    ("raise `hub_height` above", "submit a run with hub_height_m above"),
 )
 
 

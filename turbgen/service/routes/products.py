@@ -20,15 +20,20 @@ EXPORT_FORMATS = ("bts", "wnd", "evo", "hawc2", "mt4d", "hdf5")
 
 
 @router.get("/runs/{rid}/export")
-def export(rid: str, format: str, http: Request, plane: int | None = None, store: Path = Depends(complete_store),
-           state: ServiceState = Depends(get_state)):  # fmt: skip
-    """The store exported (made on first request, cached); several files come as one .zip."""
+def export(rid: str, format: str, http: Request, plane: int | None = None, drop_below_ground: bool = False,
+           store: Path = Depends(complete_store), state: ServiceState = Depends(get_state)):  # fmt: skip
+    """The store exported (made on first request, cached); several files come as one .zip.
+
+    ``drop_below_ground`` drops the grid rows at or below the ground (a run with a low hub height), as
+    `turbgen export --drop-below-ground`; without it such a run is refused (422).
+    """
     if format not in EXPORT_FORMATS:
         raise ParameterError(f"format: {format!r} is not one of {', '.join(EXPORT_FORMATS)}")
     from turbgen.export import ExportRequest
 
-    request = ExportRequest(plane=plane, source_label=f"/runs/{rid}/store")  # not the catalog's path here
-    key = format if plane is None else f"{format}-plane{plane}"
+    request = ExportRequest(plane=plane, drop_below_ground=drop_below_ground,
+                            source_label=f"/runs/{rid}/store")  # not the catalog's path here  # fmt: skip
+    key = format + ("" if plane is None else f"-plane{plane}") + ("-above-ground" if drop_below_ground else "")
     final = state.catalog.run_dir(rid) / "exports" / key
     cached_product(state, http, rid, final, Path.is_dir, partial(build_export, store, rid, format, request))
     (single,) = [p for p in final.iterdir() if not p.name.startswith(".")]
