@@ -238,3 +238,18 @@ def test_a_low_hub_height_run_exports_with_drop_below_ground(tmp_path):
         assert z.min() > 0 and len(z) == TINY_GRID["nz"] - 2, z
     finally:
         srv.stop()
+
+
+def test_the_server_listens_on_its_own_port_only(tmp_path):
+    """Found by the service audit: each server opened two more loopback ports (the dask scheduler's and worker's
+    HTTP servers) answering /json/identity.json and /metrics without the Host check."""
+    import psutil
+
+    srv = Server(tmp_path / "root")
+    try:
+        assert srv.call("POST", "/runs", _kaimal(8))[0] == 202  # the cluster has worked
+        conns = psutil.Process(srv.proc.pid).net_connections(kind="inet")
+        listening = sorted({c.laddr.port for c in conns if c.status == psutil.CONN_LISTEN})
+        assert listening == [srv.port], listening
+    finally:
+        srv.kill()
