@@ -22,7 +22,7 @@ class InProcessServer:
         from distributed import Client
 
         from turbgen.service.app import create_app
-        from turbgen.service.server import service_cluster
+        from turbgen.service.server import server_config, service_cluster
 
         self.root = root
         self.cluster = service_cluster(1)
@@ -31,7 +31,7 @@ class InProcessServer:
         self.app = create_app(root, self.client, **options)
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
-        self.server = uvicorn.Server(uvicorn.Config(self.app, host="127.0.0.1", port=self.port, log_level="warning"))
+        self.server = uvicorn.Server(server_config(self.app, "127.0.0.1", self.port))  # as `turbgen serve`
         self.thread = threading.Thread(target=self.server.run, daemon=True)
         self.thread.start()
         deadline = time.monotonic() + 30

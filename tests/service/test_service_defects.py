@@ -253,3 +253,31 @@ def test_the_server_listens_on_its_own_port_only(tmp_path):
         assert listening == [srv.port], listening
     finally:
         srv.kill()
+
+
+def test_half_open_connections_are_closed_within_the_head_deadline(tmp_path):
+    """Found by the service audit: 2000 half-open connections (nothing or half a request head sent) were held over
+    10 s. Now a connection without a complete request head is closed within one to two head deadlines (5 s each)
+    while complete requests, also slow ones, are answered."""
+    import socket
+
+    from turbgen.service.server import HEADER_TIMEOUT_S
+
+    srv = Server(tmp_path / "root")
+    socks = []
+    try:
+        t0 = time.monotonic()
+        for i in range(40):
+            s = socket.create_connection(("127.0.0.1", srv.port), timeout=15)
+            if i % 2:
+                s.sendall(b"GET /health HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: ")  # half a head, never finished
+            socks.append(s)
+        assert srv.call("GET", "/health", timeout_s=5)[0] == 200  # others are served meanwhile
+        for s in socks:
+            assert s.recv(1024) == b""  # closed by the server (a timeout here raises)
+        elapsed = time.monotonic() - t0
+        assert elapsed < 2 * HEADER_TIMEOUT_S + 1.0, elapsed  # the audit saw > 10 s with no end
+    finally:
+        for s in socks:
+            s.close()
+        srv.kill()
