@@ -281,3 +281,20 @@ def test_half_open_connections_are_closed_within_the_head_deadline(tmp_path):
         for s in socks:
             s.close()
         srv.kill()
+
+
+def test_no_page_loads_anything_from_another_host(token_server):
+    """Found by the service audit: /docs loaded Swagger UI from a CDN (offline it rendered nothing)."""
+    import re
+
+    external = re.compile(r"""(?:src|href|action)\s*=\s*["']?\s*(?:[a-z][a-z0-9+.-]*:)?//|@import|url\(\s*["']?(?:https?:)?//""",
+                          re.IGNORECASE)  # fmt: skip
+    for path in ("/", "/docs"):
+        status, hdrs, page = token_server.call("GET", path)
+        text = page.decode()
+        assert status == 200 and hdrs["content-type"].startswith("text/html"), (path, status)
+        assert not external.search(text) and "cdn" not in text.lower(), (path, external.search(text))
+    docs = token_server.call("GET", "/docs")[2].decode()
+    assert 'href="/openapi.json"' in docs and "GET /runs/{rid}/export" in docs and "drop_below_ground" in docs
+    assert token_server.call("GET", "/redoc")[0] == 404  # FastAPI's ReDoc page loads from a CDN too: off
+    assert token_server.call("GET", "/openapi.json")[0] == 200

@@ -69,8 +69,9 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
                                derived_waiting, stencil_cache_bytes, own_cluster)  # fmt: skip
     catalog = Catalog(settings.root)
     state = ServiceState(settings, catalog, Jobs(catalog, client, max_queue, stencil_cache_bytes))
-    app = FastAPI(title="turbgen serve", version=__version__,
+    app = FastAPI(title="turbgen serve", version=__version__, docs_url=None, redoc_url=None,  # they load from a CDN
                   description="Turbulence fields on demand: the same runs as `turbgen mann|kaimal`, deduplicated.")
+    # /docs is the service's own page (routes.pages), rendered from /openapi.json without any external host
     app.state.service = state
     app.state.jobs = state.jobs
     app.state.removed = remove_dead_work(catalog, stencils=own_cluster)

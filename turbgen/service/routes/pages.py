@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter, Depends
+from fastapi import APIRouter, Depends, Request
 from fastapi.responses import HTMLResponse
 
 from turbgen import __version__
-from turbgen.service.pages import index_html
+from turbgen.service.pages import api_docs_html, index_html
 from turbgen.service.state import ServiceState, get_state
 
 router = APIRouter()
@@ -16,6 +16,12 @@ router = APIRouter()
 def index(state: ServiceState = Depends(get_state)):
     """The catalog page with its submit form."""
     return HTMLResponse(index_html(token_required=state.settings.token is not None))
+
+
+@router.get("/docs", response_class=HTMLResponse, include_in_schema=False)
+def docs(request: Request):
+    """The API reference, rendered here from /openapi.json (FastAPI's Swagger UI is off: it loads from a CDN)."""
+    return HTMLResponse(api_docs_html(request.app.openapi()))
 
 
 @router.get("/health")
