@@ -70,7 +70,7 @@ class ServiceState:
     settings: ServiceSettings
     catalog: Catalog
     jobs: Jobs
-    limiter: DerivedLimiter = None
+    limiter: DerivedLimiter | None = None
     _locks: dict = field(default_factory=dict)
     _guard: threading.Lock = field(default_factory=threading.Lock)
     _generations: dict = field(default_factory=dict)
