@@ -298,3 +298,18 @@ def test_no_page_loads_anything_from_another_host(token_server):
     assert 'href="/openapi.json"' in docs and "GET /runs/{rid}/export" in docs and "drop_below_ground" in docs
     assert token_server.call("GET", "/redoc")[0] == 404  # FastAPI's ReDoc page loads from a CDN too: off
     assert token_server.call("GET", "/openapi.json")[0] == 200
+
+
+def test_a_stencil_cache_hit_renews_the_entry_for_the_lru_cap(tmp_path):
+    # the cap evicts by modification time: a hit must count as a use, or the most used stencil goes first
+    from turbgen.runs.stencil_cache import cached_unit_stencil
+    from turbgen.synthesis.mann_stencil import BoxShape
+    from turbgen.theory.params import MannParams
+
+    box = BoxShape(nt=16, dx_m=4.0, nyp=6, nzp=6, dy_m=6.0, dz_m=5.0)
+    params = MannParams(ae=0.3, length_scale_m=30.0, gamma=3.2, evo_time_s=20.0)
+    cached_unit_stencil(params, box, tmp_path)
+    (entry,) = tmp_path.glob("mann-stencil-*.npy")
+    os.utime(entry, (1e9, 1e9))  # used long ago
+    cached_unit_stencil(params, box, tmp_path)  # a hit
+    assert entry.stat().st_mtime > time.time() - 60
