@@ -257,10 +257,11 @@ def test_the_server_listens_on_its_own_port_only(tmp_path):
 
 def test_half_open_connections_are_closed_within_the_head_deadline(tmp_path):
     """Found by the service audit: 2000 half-open connections (nothing or half a request head sent) were held over
-    10 s. Now a connection without a complete request head is closed within one to two head deadlines (5 s each)
-    while complete requests, also slow ones, are answered."""
+    10 s. Now a connection without a complete request head is closed within one to two head deadlines (5 s each),
+    one whose body trickles is answered 408 after BODY_TIMEOUT_S, while complete requests are answered."""
     import socket
 
+    from turbgen.service.bodies import BODY_TIMEOUT_S
     from turbgen.service.server import HEADER_TIMEOUT_S
 
     srv = Server(tmp_path / "root")
@@ -272,11 +273,17 @@ def test_half_open_connections_are_closed_within_the_head_deadline(tmp_path):
             if i % 2:
                 s.sendall(b"GET /health HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: ")  # half a head, never finished
             socks.append(s)
+        trickle = socket.create_connection(("127.0.0.1", srv.port), timeout=15)  # a body that never completes
+        trickle.sendall(b"POST /runs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+                        b"Content-Length: 100\r\n\r\n{")
+        socks.append(trickle)
         assert srv.call("GET", "/health", timeout_s=5)[0] == 200  # others are served meanwhile
-        for s in socks:
+        for s in socks[:-1]:
             assert s.recv(1024) == b""  # closed by the server (a timeout here raises)
         elapsed = time.monotonic() - t0
         assert elapsed < 2 * HEADER_TIMEOUT_S + 1.0, elapsed  # the audit saw > 10 s with no end
+        assert trickle.recv(1024).startswith(b"HTTP/1.1 408 ")  # after BODY_TIMEOUT_S
+        assert time.monotonic() - t0 < BODY_TIMEOUT_S + 3.0
     finally:
         for s in socks:
             s.close()

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 
 from fastapi import Request
 
 from turbgen.service.limits import MAX_BODY_BYTES, MAX_JSON_DEPTH, LimitError, check_json_depth
+
+BODY_TIMEOUT_S = 10.0  # a request body (at most MAX_BODY_BYTES) must arrive within this: a trickle holds no task
 
 
 async def read_json(request: Request):
@@ -30,8 +33,8 @@ async def read_json(request: Request):
     Raises
     ------
     LimitError
-        415 for another content type, 413 for a body over MAX_BODY_BYTES, 422 for invalid or too deeply
-        nested JSON.
+        415 for another content type, 413 for a body over MAX_BODY_BYTES, 408 for a body not received within
+        BODY_TIMEOUT_S, 422 for invalid or too deeply nested JSON.
     """
     media = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if media != "application/json":
@@ -39,11 +42,10 @@ async def read_json(request: Request):
     length = request.headers.get("content-length")
     if length is not None and (not length.isdigit() or int(length) > MAX_BODY_BYTES):
         raise LimitError(413, f"request body over {MAX_BODY_BYTES} bytes")
-    data = bytearray()
-    async for chunk in request.stream():
-        data += chunk
-        if len(data) > MAX_BODY_BYTES:
-            raise LimitError(413, f"request body over {MAX_BODY_BYTES} bytes")
+    try:
+        data = await asyncio.wait_for(_read_body(request), BODY_TIMEOUT_S)
+    except TimeoutError:
+        raise LimitError(408, f"request body not received within {BODY_TIMEOUT_S:g} s", {"Connection": "close"}) from None
     try:
         value = json.loads(data)
     except RecursionError:  # the decoder itself recurses: thousands of nested arrays
@@ -52,3 +54,12 @@ async def read_json(request: Request):
         raise LimitError(422, f"request body: not valid JSON ({' '.join(str(exc).split())})") from None
     check_json_depth(value)
     return value
+
+
+async def _read_body(request: Request) -> bytearray:
+    data = bytearray()
+    async for chunk in request.stream():
+        data += chunk
+        if len(data) > MAX_BODY_BYTES:
+            raise LimitError(413, f"request body over {MAX_BODY_BYTES} bytes")
+    return data
