@@ -69,7 +69,7 @@ def header_timeout_protocol(header_timeout_s: float):
     request head ``header_timeout_s`` after it opened (or after its last response) is closed.
 
     uvicorn has a keep-alive timeout but none for a connection that sends nothing or half a request head: those were
-    held for ever (2000 of them stayed open over 10 s). The deadline is checked every ``header_timeout_s``: a
+    held for ever. The deadline is checked every ``header_timeout_s``: a
     connection whose request is being answered is left alone, one idle or stuck in a head since the last check is
     closed (so within one to two periods).
 
