@@ -45,7 +45,8 @@ async def read_json(request: Request):
     try:
         data = await asyncio.wait_for(_read_body(request), BODY_TIMEOUT_S)
     except TimeoutError:
-        raise LimitError(408, f"request body not received within {BODY_TIMEOUT_S:g} s", {"Connection": "close"}) from None
+        raise LimitError(408, f"request body not received within {BODY_TIMEOUT_S:g} s",
+                         {"Connection": "close"}) from None  # fmt: skip
     try:
         value = json.loads(data)
     except RecursionError:  # the decoder itself recurses: thousands of nested arrays

@@ -135,7 +135,8 @@ def api_docs_html(openapi: dict) -> str:
                 f"<td>{'required' if p.get('required') else ''}</td></tr>"
                 for p in op.get("parameters", ())
             )
-            table = f"<table><tr><th>parameter</th><th>in</th><th>type</th><th></th></tr>{params}</table>" if params else ""
+            head = "<tr><th>parameter</th><th>in</th><th>type</th><th></th></tr>"
+            table = f"<table>{head}{params}</table>" if params else ""
             text = esc(op.get("description") or op.get("summary") or "")
             parts.append(f"<h2><code>{esc(method.upper())} {esc(path)}</code></h2><p>{text}</p>{table}")
     return _DOCS.format(version=esc(openapi.get("info", {}).get("version", "")),

@@ -130,6 +130,6 @@ def server_config(app, host: str, port: int, *, header_timeout_s: float = HEADER
     """
     import uvicorn
 
-    return uvicorn.Config(app, host=host, port=port, log_level="warning", http=header_timeout_protocol(header_timeout_s),
-                          timeout_keep_alive=KEEP_ALIVE_S, limit_concurrency=MAX_CONNECTIONS,
-                          h11_max_incomplete_event_size=MAX_HEADER_BYTES)  # fmt: skip
+    return uvicorn.Config(app, host=host, port=port, log_level="warning",
+                          http=header_timeout_protocol(header_timeout_s), timeout_keep_alive=KEEP_ALIVE_S,
+                          limit_concurrency=MAX_CONNECTIONS, h11_max_incomplete_event_size=MAX_HEADER_BYTES)

@@ -303,7 +303,8 @@ def make_plan(
     runs = _planned_runs(models, presets, speeds, seeds, lambda m: {**grid, **model_grid.get(m, {})}, user)
     _check_runs(runs, speeds, chunk_t, lidar_description, local=not scheduler)
     return SweepPlan(Path(out), models, presets, speeds, seeds, grid, model_grid, bool(validate), chunk_t, workers,
-                     scheduler or None, user, runs=tuple(runs), lidar=None if lidar is None else str(lidar))  # fmt: skip
+                     scheduler or None, user, runs=tuple(runs),
+                     lidar=None if lidar is None else str(lidar))  # fmt: skip
 
 
 def _check_models_presets(models, presets, user) -> tuple[tuple, tuple]:
