@@ -47,8 +47,9 @@ class Server:
             time.sleep(0.2)
 
     def call(self, method: str, path: str, body=None, *, raw: bytes | None = None, headers: dict | None = None,
-             timeout_s: float = 30.0):
-        """(status, headers, parsed JSON or bytes) of one request."""
+             timeout_s: float = 120.0):
+        """(status, headers, parsed JSON or bytes) of one request (the default timeout leaves room for a first
+        validation, which imports and compiles in a fresh server, on a loaded machine)."""
         data = raw if raw is not None else (None if body is None else json.dumps(body).encode())
         req = urllib.request.Request(self.url + path, data=data, method=method, headers=headers or {})
         if data is not None and "Content-Type" not in req.headers:

@@ -26,11 +26,17 @@ from turbgen.service.limits import DEFAULT_MAX_QUEUE, DEFAULT_MEMORY_BUDGET_BYTE
               show_default=True, help="Largest memory estimate [GiB] a submitted run may have (413 above).")  # fmt: skip
 @click.option("--max-queue", type=click.IntRange(1, 100000), default=DEFAULT_MAX_QUEUE, show_default=True,
               help="Runs queued or running at once (429 with Retry-After above).")
-def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue):
+@click.option("--stencil-cache-size", "stencil_cache_size", default="4GiB", show_default=True,
+              help="Size cap of the Mann stencil cache --root/stencils (e.g. 512MiB, 20GiB); the least recently used "
+                   "stencils are removed beyond it.")
+def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue, stencil_cache_size):
     """Serve turbulence fields over HTTP: POST /runs, GET /runs/<id>, zarr at /runs/<id>/store, web page at /.
 
     A field served is the one `turbgen mann|kaimal` writes for the same config, bit for bit.
     """
+    from turbgen.resources import parse_size
+
+    stencil_cache_bytes = parse_size(stencil_cache_size, "--stencil-cache-size")
     token = None
     if token_file:
         try:
@@ -47,23 +53,19 @@ def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue
         from turbgen.sweep.scheduler import check_scheduler_address
 
         check_scheduler_address(scheduler)
-    import uvicorn
     from dask.distributed import Client
 
-    from turbgen.runs.local_cluster import loopback_cluster
     from turbgen.service.app import create_app
+    from turbgen.service.server import run_server, service_cluster
 
-    if scheduler:
-        client = Client(scheduler)
-    else:
-        # threads in this process: a killed server leaves no orphan worker writing into --root
-        cluster = loopback_cluster(1, workers, processes=False)  # no socket beyond loopback (runs.local_cluster)
-        client = Client(cluster)
+    client = Client(scheduler) if scheduler else Client(service_cluster(workers))
     app = create_app(Path(root), client, token=token, memory_budget=int(memory_gb * 2**30), max_queue=max_queue,
-                     loopback_only=is_loopback(host))
+                     loopback_only=is_loopback(host), stencil_cache_bytes=stencil_cache_bytes,
+                     own_cluster=not scheduler)  # fmt: skip
     requeued = app.state.jobs.resume()
-    click.echo(f"turbgen serve: catalog {Path(root).absolute()}, {len(requeued)} interrupted run(s) re-queued")
+    click.echo(f"turbgen serve: catalog {Path(root).absolute()}, {len(requeued)} interrupted run(s) re-queued, "
+               f"{len(app.state.removed)} temporary file(s) of stopped processes or evicted stencil(s) removed")
     url_host = f"[{host}]" if ":" in host else host  # an IPv6 literal in a URL needs brackets
     click.echo(f"turbgen serve: listening on http://{url_host}:{port}/ (API docs at /docs)")
-    uvicorn.run(app, host=host, port=port, log_level="warning")
+    run_server(app, host, port)
     client.close()

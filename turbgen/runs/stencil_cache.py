@@ -10,6 +10,7 @@ a temporary name and renamed; an unreadable or mismatched entry is rebuilt and r
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 
@@ -43,6 +44,8 @@ def cached_unit_stencil(
     try:
         data = np.load(path, mmap_mode="r")
         if data.shape == shape and data.dtype == np.float64:
+            with contextlib.suppress(OSError):  # the hit renews the entry's recency (a size-capped cache evicts by it)
+                os.utime(path)
             return _unit(params, box, data, with_tau)
     except (OSError, ValueError):
         pass  # missing or unreadable cache entry: rebuild and replace it

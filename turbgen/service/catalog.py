@@ -4,6 +4,8 @@
     ROOT/runs/<id>/store.zarr     the field (published atomically by runs/; complete or absent)
     ROOT/runs/<id>/failed.json    the one-line reason of a failed run
     ROOT/runs/<id>/exports/<fmt>  cached exports;  ROOT/runs/<id>/validation/  report.json + PNG plots
+    ROOT/work/                    derived products being computed (temporary names, turbgen.service.derived)
+    ROOT/stencils/                the Mann stencil cache of the runs (size-capped, turbgen.service.cleanup)
 
 Run ids: turbgen.service.run_ids.
 """
@@ -13,13 +15,12 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import tempfile
 from pathlib import Path
 
 from turbgen import __version__
 from turbgen.errors import TurbgenError
 from turbgen.service.run_ids import valid_id
-from turbgen.store.temporaries import temp_prefix
+from turbgen.store.temporaries import temp_name, temp_prefix
 
 STORE = "store.zarr"
 
@@ -43,13 +44,13 @@ def write_json_atomic(path: Path, data) -> None:
     OSError
         If the file cannot be written (the temporary is removed).
     """
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.tmp-")
+    tmp = temp_name(path)  # .NAME.tmp-PID-XXXXXXXX: removed at start-up if this process dies before the rename
     try:
-        with os.fdopen(fd, "w") as f:
+        with open(tmp, "x") as f:
             json.dump(data, f, indent=1)
         os.replace(tmp, path)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
 
 
@@ -66,6 +67,8 @@ class Catalog:
         self.root = Path(root).absolute()
         self.runs = self.root / "runs"
         self.runs.mkdir(parents=True, exist_ok=True)
+        self.work = self.root / "work"
+        self.work.mkdir(exist_ok=True)
         self._complete: set[str] = set()  # ids whose store opened as complete (a published store stays so)
 
     def run_dir(self, rid: str) -> Path:
@@ -300,7 +303,7 @@ class Catalog:
         """
         d = self.run_dir(rid)
         self._complete.discard(rid)
-        trash = self.runs / f".deleted-{rid}-{os.getpid()}"
+        trash = temp_name(d)  # a temporary name: start-up removes it if this process dies before rmtree finishes
         os.replace(d, trash)
         shutil.rmtree(trash, ignore_errors=True)
 

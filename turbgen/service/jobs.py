@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import threading
 import uuid
+from pathlib import Path
 
 from turbgen.service.catalog import Catalog, write_json_atomic
 from turbgen.service.run_ids import canonical_mapping, run_from_canonical
@@ -16,10 +17,11 @@ from turbgen.service.run_ids import canonical_mapping, run_from_canonical
 _STENCIL_LOCK = threading.Lock()  # one stencil build at a time: a second request for it waits and reuses it
 
 
-def execute(model: str, run, out: str, stencil_cache: str) -> dict:
+def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: int | None = None) -> dict:
     """Worker side: generate ``run`` into the store ``out`` by the CLI's library path; the run summary.
 
-    A shared part (a Mann stencil) is built one at a time per process, cached in ``stencil_cache``.
+    A shared part (a Mann stencil) is built one at a time per process, cached in ``stencil_cache``, which is
+    then trimmed to ``stencil_cache_bytes`` (least recently used entries evicted).
 
     Parameters
     ----------
@@ -31,6 +33,8 @@ def execute(model: str, run, out: str, stencil_cache: str) -> dict:
         Store path.
     stencil_cache : str
         Directory of cached shared parts.
+    stencil_cache_bytes : int, optional
+        Size cap of ``stencil_cache`` [bytes] (None: no cap).
 
     Returns
     -------
@@ -49,8 +53,11 @@ def execute(model: str, run, out: str, stencil_cache: str) -> dict:
     build_shared = entry.shared_part(run, None, None)
     shared = None
     if build_shared is not None:
+        from turbgen.service.cleanup import trim_stencil_cache
+
         with _STENCIL_LOCK:
             shared = build_shared(run, stencil_cache)
+            trim_stencil_cache(Path(stencil_cache), stencil_cache_bytes)  # the entry just used is the most recent
     summary = entry.run(run, out, shared=shared)
     return {k: v for k, v in summary.items() if isinstance(v, (int, float, str, bool, list)) and k != "path"}
 
@@ -86,12 +93,15 @@ class Jobs:
         Client the runs are submitted to.
     max_queue : int
         Most runs queued or running at once.
+    stencil_cache_bytes : int, optional
+        Size cap of the stencil cache ``root/stencils`` [bytes] (None: no cap).
     """
 
-    def __init__(self, catalog: Catalog, client, max_queue: int):
+    def __init__(self, catalog: Catalog, client, max_queue: int, stencil_cache_bytes: int | None = None):
         self.catalog = catalog
         self.client = client
         self.max_queue = max_queue
+        self.stencil_cache_bytes = stencil_cache_bytes
         self.lock = threading.Lock()
         self.active: dict[str, object] = {}
         self.computations = 0  # runs handed to dask since start (duplicates are joined, not counted)
@@ -135,8 +145,8 @@ class Jobs:
         self.catalog.clear_partial(rid)
         out = str(self.catalog.store_path(rid))
         cache = str(self.catalog.root / "stencils")
-        fut = self.client.submit(execute, model, run, out, cache, key=f"turbgen-run-{rid}-{uuid.uuid4().hex[:8]}",
-                                 pure=False)  # fmt: skip
+        fut = self.client.submit(execute, model, run, out, cache, self.stencil_cache_bytes,
+                                 key=f"turbgen-run-{rid}-{uuid.uuid4().hex[:8]}", pure=False)  # fmt: skip
         self.active[rid] = fut
         self.computations += 1
         fut.add_done_callback(lambda f, rid=rid: self._finished(rid, f))

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import hmac
 import ipaddress
+import threading
 
 from turbgen.resources import format_bytes
 
@@ -12,6 +14,8 @@ MAX_JSON_DEPTH = 32  # nesting of a request body's arrays and objects (a run con
 DEFAULT_MEMORY_BUDGET_BYTES = 4 * 2**30
 DEFAULT_MAX_QUEUE = 32
 RETRY_AFTER_S = 5
+DERIVED_RUNNING = 2  # exports, validations, lidar reports computed at once (each may take a core for a while)
+DERIVED_WAITING = 8  # more requests waiting for one of them; beyond: 503 (the server's threads stay free)
 
 
 class LimitError(Exception):
@@ -179,3 +183,48 @@ def check_json_depth(value, limit: int = MAX_JSON_DEPTH) -> None:
                 if depth + 1 > limit:
                     raise LimitError(422, f"request body: arrays and objects nested deeper than {limit} levels")
                 stack.append((child, depth + 1))
+
+
+class DerivedLimiter:
+    """At most ``running`` derived products computed at once and ``waiting`` more requests queued for them.
+
+    Parameters
+    ----------
+    running : int
+        Products computed at once (>= 1).
+    waiting : int
+        Requests that may wait for a slot (>= 0); more are refused.
+    """
+
+    def __init__(self, running: int, waiting: int):
+        self.running, self.waiting = running, waiting
+        self._slots = threading.BoundedSemaphore(running)
+        self._admitted = 0
+        self._lock = threading.Lock()
+
+    @contextlib.contextmanager
+    def admit(self):
+        """Count the request among those computing or queued for a derived product for the block's duration.
+
+        Raises
+        ------
+        LimitError
+            503 with Retry-After when ``running + waiting`` requests are admitted already.
+        """
+        with self._lock:
+            if self._admitted >= self.running + self.waiting:
+                raise LimitError(503, f"{self._admitted} exports, validations or lidar reports are being computed or "
+                                 f"queued (at most {self.running} at once, {self.waiting} waiting); retry later",
+                                 {"Retry-After": str(RETRY_AFTER_S)})  # fmt: skip
+            self._admitted += 1
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._admitted -= 1
+
+    @contextlib.contextmanager
+    def slot(self):
+        """Hold one of the ``running`` computation slots for the block's duration (waits for one)."""
+        with self._slots:
+            yield

@@ -93,3 +93,52 @@ def index_html(token_required: bool) -> str:
     presets = "".join(f"<option>{html.escape(name)}</option>" for name in sorted(BUILTIN_PRESETS))
     token = '<label>token <input name="token" type="password" size="12"></label>' if token_required else ""
     return _PAGE.format(version=html.escape(__version__), presets=presets, token=token)
+
+
+_DOCS = """<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>turbgen serve: API</title>
+<style>
+body {{ font-family: sans-serif; margin: 1.5em; max-width: 70em; }} code {{ background: #f4f4f4; }}
+h2 {{ font-size: 1.1em; margin-top: 1.5em; }} td, th {{ border: 1px solid #ccc; padding: 0.2em 0.6em; }}
+table {{ border-collapse: collapse; }}
+</style></head>
+<body>
+<h1>turbgen serve {version}: HTTP API</h1>
+<p>{description} The machine-readable description is <a href="/openapi.json">/openapi.json</a> (OpenAPI 3); the
+web page is <a href="/">/</a>.</p>
+{operations}
+</body></html>
+"""
+
+
+def api_docs_html(openapi: dict) -> str:
+    """The API reference at /docs, rendered on the server from the OpenAPI description (no script, nothing loaded
+    from another host: FastAPI's own /docs loads Swagger UI from a CDN and shows nothing offline).
+
+    Parameters
+    ----------
+    openapi : dict
+        The application's OpenAPI description (``app.openapi()``).
+
+    Returns
+    -------
+    str
+        The HTML page: per operation its method, path, description and parameters.
+    """
+    esc = html.escape
+    parts = []
+    for path, item in openapi.get("paths", {}).items():
+        for method, op in item.items():
+            params = "".join(
+                f"<tr><td><code>{esc(p['name'])}</code></td><td>{esc(p.get('in', ''))}</td>"
+                f"<td>{esc(str(p.get('schema', {}).get('type', p.get('schema', {}).get('anyOf', ''))))}</td>"
+                f"<td>{'required' if p.get('required') else ''}</td></tr>"
+                for p in op.get("parameters", ())
+            )
+            head = "<tr><th>parameter</th><th>in</th><th>type</th><th></th></tr>"
+            table = f"<table>{head}{params}</table>" if params else ""
+            text = esc(op.get("description") or op.get("summary") or "")
+            parts.append(f"<h2><code>{esc(method.upper())} {esc(path)}</code></h2><p>{text}</p>{table}")
+    return _DOCS.format(version=esc(openapi.get("info", {}).get("version", "")),
+                        description=esc(openapi.get("info", {}).get("description", "")),
+                        operations="\n".join(parts))  # fmt: skip

@@ -285,17 +285,8 @@ def make_plan(
         For any bad value, an unreachable scheduler, an unusable ``out``, duplicate store names, or a run
         needing more memory than is available here (without a scheduler).
     """
-    models = _unique("models", models)
-    for m in models:
-        if m not in MODELS:
-            raise ParameterError(f"model = {m!r} is not one of {', '.join(MODELS)}")
     user = dict(user_presets or {})
-    presets = _unique("presets", presets)
-    for p in presets:
-        preset = get_preset(p, user)
-        for m in models:
-            if getattr(preset, m) is None:
-                raise ParameterError(f"preset {p!r} has no {m} parameters")
+    models, presets = _check_models_presets(models, presets, user)
     speeds, seeds = list(speeds), list(seeds)
     ranges.check_count("speeds", len(speeds))
     ranges.check_count("seeds", len(seeds))
@@ -308,6 +299,31 @@ def make_plan(
     for m in model_grid:
         if m not in MODELS:
             raise ParameterError(f"grid table {m!r} is not one of {', '.join(MODELS)}")
+    chunk_t, workers, lidar_description = _check_execution(out, chunk_t, workers, scheduler, lidar)
+    runs = _planned_runs(models, presets, speeds, seeds, lambda m: {**grid, **model_grid.get(m, {})}, user)
+    _check_runs(runs, speeds, chunk_t, lidar_description, local=not scheduler)
+    return SweepPlan(Path(out), models, presets, speeds, seeds, grid, model_grid, bool(validate), chunk_t, workers,
+                     scheduler or None, user, runs=tuple(runs),
+                     lidar=None if lidar is None else str(lidar))  # fmt: skip
+
+
+def _check_models_presets(models, presets, user) -> tuple[tuple, tuple]:
+    """(models, presets) without duplicates, each model known and each preset defined for every model."""
+    models = _unique("models", models)
+    for m in models:
+        if m not in MODELS:
+            raise ParameterError(f"model = {m!r} is not one of {', '.join(MODELS)}")
+    presets = _unique("presets", presets)
+    for p in presets:
+        preset = get_preset(p, user)
+        for m in models:
+            if getattr(preset, m) is None:
+                raise ParameterError(f"preset {p!r} has no {m} parameters")
+    return models, presets
+
+
+def _check_execution(out, chunk_t, workers, scheduler, lidar):
+    """(chunk_t, workers, lidar description or None) checked, with ``out`` and ``scheduler`` (ParameterError)."""
     if chunk_t is not None:
         chunk_t = check_int("chunks", chunk_t, 1)
     if workers is not None:
@@ -317,18 +333,19 @@ def make_plan(
     if scheduler:
         check_scheduler_address(scheduler)
     check_output_path(out, "out (sweep directory)", create_parents=True)
+    description = None
     if lidar is not None:
         from turbgen.lidar.description import load_lidar
 
-        load_lidar(lidar)  # a bad preset or file fails here, before any run
-        lidar = str(lidar)
-    plan = SweepPlan(
-        Path(out), models, presets, speeds, seeds, grid, model_grid, bool(validate), chunk_t, workers,
-        scheduler or None, user, lidar=lidar,
-    )  # fmt: skip
+        description = load_lidar(lidar)  # a bad preset or file fails here, before any run
+    return chunk_t, workers, description
+
+
+def _planned_runs(models, presets, speeds, seeds, grid_options, user) -> list[PlannedRun]:
+    """Every run in nested order models x presets x speeds x seeds (``grid_options(model)``: its grid options)."""
     runs = []
     for m in models:
-        opts = plan.grid_options(m)
+        opts = grid_options(m)
         for p in presets:
             for U in speeds:
                 # the seed changes nothing but the random streams: build the run once, then swap the seed
@@ -336,22 +353,24 @@ def make_plan(
                 first = build_run(m, p, U, seeds[0], opts, user=user)
                 for s in seeds:
                     runs.append(PlannedRun(m, p, U, s, first if s == seeds[0] else replace(first, seed=s)))
+    return runs
+
+
+def _check_runs(runs, speeds, chunk_t, lidar_description, *, local: bool) -> None:
+    """Checks of the planned runs together: chunk length, lidar fit, distinct names, memory here (``local``)."""
     if chunk_t is not None:  # the store writer's check, before any run instead of in every run
         for nt in sorted({r.run.grid.nt for r in runs}):
             check_int("chunks (time samples per chunk)", chunk_t, 1, nt)
-    if lidar is not None:  # gates on planes, beams inside the field: refused before any field is made
-        from turbgen.lidar.description import load_lidar
+    if lidar_description is not None:  # gates on planes, beams inside the field: refused before any field is made
         from turbgen.lidar.run import check_lidar_fits
 
-        description = load_lidar(lidar)
         for g in {r.run.grid for r in runs}:
-            check_lidar_fits(description, g)
+            check_lidar_fits(lidar_description, g)
     names = [r.name for r in runs]
     if len(set(names)) != len(names):
         raise ParameterError(f"speeds = {list(speeds)} give duplicate store names (they differ below 6 digits)")
-    if not scheduler:  # a remote cluster's workers have their own memory (and check it themselves)
+    if local:  # a remote cluster's workers have their own memory (and check it themselves)
         check_plan_memory(runs)
-    return SweepPlan(**{**plan.__dict__, "runs": tuple(runs)})
 
 
 def check_memory_budget(runs, memory_bytes: int | None, chunk_t: int | None = None) -> None:

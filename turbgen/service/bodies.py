@@ -1,0 +1,66 @@
+"""Request bodies of `turbgen serve`: JSON only, bounded in size and nesting."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+
+from fastapi import Request
+
+from turbgen.service.limits import MAX_BODY_BYTES, MAX_JSON_DEPTH, LimitError, check_json_depth
+
+BODY_TIMEOUT_S = 10.0  # a request body (at most MAX_BODY_BYTES) must arrive within this: a trickle holds no task
+
+
+async def read_json(request: Request):
+    """The request body as JSON, at most MAX_BODY_BYTES (LimitError 413 / 415 / 422 otherwise).
+
+    Only ``Content-Type: application/json``: any web page a user of a token-less loopback server visits
+    can POST a form or a no-cors fetch (text/plain, form encodings) to it without a CORS preflight, so
+    accepting those would let other sites queue and compute runs; a JSON body needs the preflight,
+    which this server never grants.
+
+    Parameters
+    ----------
+    request : fastapi.Request
+        The request.
+
+    Returns
+    -------
+    object
+        The parsed JSON value.
+
+    Raises
+    ------
+    LimitError
+        415 for another content type, 413 for a body over MAX_BODY_BYTES, 408 for a body not received within
+        BODY_TIMEOUT_S, 422 for invalid or too deeply nested JSON.
+    """
+    media = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if media != "application/json":
+        raise LimitError(415, f"request body: Content-Type must be application/json, not {media or 'missing'!r}")
+    length = request.headers.get("content-length")
+    if length is not None and (not length.isdigit() or int(length) > MAX_BODY_BYTES):
+        raise LimitError(413, f"request body over {MAX_BODY_BYTES} bytes")
+    try:
+        data = await asyncio.wait_for(_read_body(request), BODY_TIMEOUT_S)
+    except TimeoutError:
+        raise LimitError(408, f"request body not received within {BODY_TIMEOUT_S:g} s",
+                         {"Connection": "close"}) from None  # fmt: skip
+    try:
+        value = json.loads(data)
+    except RecursionError:  # the decoder itself recurses: thousands of nested arrays
+        raise LimitError(422, f"request body: arrays and objects nested deeper than {MAX_JSON_DEPTH} levels") from None
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise LimitError(422, f"request body: not valid JSON ({' '.join(str(exc).split())})") from None
+    check_json_depth(value)
+    return value
+
+
+async def _read_body(request: Request) -> bytearray:
+    data = bytearray()
+    async for chunk in request.stream():
+        data += chunk
+        if len(data) > MAX_BODY_BYTES:
+            raise LimitError(413, f"request body over {MAX_BODY_BYTES} bytes")
+    return data

@@ -1,0 +1,164 @@
+"""Products derived from a complete run (exports, validation report and plots, lidar reports): computed on first
+request, published atomically under the run's directory, served from there afterwards.
+
+A product is built under a temporary name in ``ROOT/work`` (``.<id>-<product>.tmp-PID-XXXXXXXX``, the writers'
+convention of turbgen.store.temporaries, so start-up removes what a killed server left) and published only if its
+run was not deleted meanwhile (a DELETE bumps the run's generation). At most ``running`` products are computed at
+once and ``waiting`` more wait for a slot; beyond, the request is answered 503 with Retry-After, so computations
+cannot occupy every worker thread of the server (the health check and the catalog stay responsive).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import zipfile
+from pathlib import Path
+
+from fastapi import Request
+
+from turbgen.service.limits import LimitError
+from turbgen.service.state import ServiceState, require_token
+from turbgen.store.temporaries import publish, temp_name
+
+
+def cached_product(state: ServiceState, request: Request, rid: str, final: Path, ready, build) -> Path:
+    """``final`` once ``ready(final)``; built first by ``build(tmp)`` and published when it is not.
+
+    One build per product at a time (a concurrent request for it waits and reuses it); nothing is published for a
+    run deleted meanwhile.
+
+    Parameters
+    ----------
+    state : ServiceState
+        The server's state.
+    request : fastapi.Request
+        The request (starting a computation needs the server's token).
+    rid : str
+        Run id.
+    final : Path
+        Where the product lies under the run's directory.
+    ready : callable
+        ``ready(final)`` True when the product is complete.
+    build : callable
+        ``build(tmp)`` writes the product (file or directory) at the absent path ``tmp``.
+
+    Returns
+    -------
+    Path
+        ``final``.
+
+    Raises
+    ------
+    LimitError
+        401 without the token, 503 when too many products are computed or queued, 404 when the run was deleted
+        while its product was computed.
+    """
+    if ready(final):
+        return final
+    generation = state.generation(rid)
+    name = "-".join(final.relative_to(state.catalog.run_dir(rid)).parts)
+    with state.limiter.admit(), state.lock_for(f"{rid}/{name}"):
+        if ready(final):
+            return final
+        require_token(request, state)
+        tmp = temp_name(state.catalog.work / f"{rid}-{name}")
+        try:
+            try:
+                with state.limiter.slot():
+                    build(tmp)
+            except Exception:
+                _raise_if_deleted(state, rid, generation)
+                raise
+            with state.lock_for(rid):  # DELETE takes it too: the run cannot vanish between this check and the rename
+                _raise_if_deleted(state, rid, generation)
+                final.parent.mkdir(exist_ok=True)
+                old = publish(tmp, final, replace=True)
+            if old is not None:
+                _remove(old)
+        finally:
+            _remove(tmp)
+    return final
+
+
+def _raise_if_deleted(state: ServiceState, rid: str, generation: int) -> None:
+    if state.generation(rid) != generation or not state.catalog.exists(rid):
+        raise LimitError(404, "the run was deleted while this was computed")
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
+
+
+def build_export(store: Path, rid: str, fmt: str, request, tmp: Path) -> None:
+    """Export ``store`` in format ``fmt`` into the new directory ``tmp`` (several files as one .zip).
+
+    Parameters
+    ----------
+    store : Path
+        The run's complete store.
+    rid : str
+        Run id (names the files).
+    fmt : str
+        Export format.
+    request : turbgen.export.ExportRequest
+        Export options.
+    tmp : Path
+        The directory to create.
+    """
+    from turbgen.export import export_store
+
+    tmp.mkdir()
+    name = f"{rid}.{fmt}" if fmt in ("bts", "hdf5") else rid
+    result = export_store(store, fmt, tmp / name, request)
+    files = sorted(Path(p) for p in result.paths)
+    if len(files) > 1:
+        with zipfile.ZipFile(tmp / f"{rid}-{fmt}.zip", "w") as z:
+            for f in files:
+                z.write(f, f.name)
+        for f in files:
+            f.unlink()
+
+
+def build_validation(store: Path, tmp: Path) -> None:
+    """The `turbgen validate` report of ``store`` (report.json) and its PNG plots (plots/) into the new directory
+    ``tmp``.
+
+    Parameters
+    ----------
+    store : Path
+        The run's complete store.
+    tmp : Path
+        The directory to create.
+    """
+    from turbgen.validate import validate
+
+    rep = validate(store)
+    tmp.mkdir()
+    rep.plots(tmp / "plots")
+    (tmp / "report.json").write_text(json.dumps(rep.to_dict(), indent=1))
+
+
+def build_lidar(store: Path, rid: str, lidar: str, tmp: Path) -> None:
+    """`turbgen lidar --json` of ``store`` for the lidar preset ``lidar`` into the new file ``tmp``.
+
+    Parameters
+    ----------
+    store : Path
+        The run's complete store.
+    rid : str
+        Run id (the report names its store /runs/<id>/store).
+    lidar : str
+        A lidar preset name.
+    tmp : Path
+        The file to write.
+    """
+    from turbgen.lidar.report import lidar_report
+    from turbgen.store import open_store
+
+    report = lidar_report(open_store(store), lidar).to_dict()
+    report["store"] = f"/runs/{rid}/store"  # the server's paths stay private
+    tmp.write_text(json.dumps(report, default=float))

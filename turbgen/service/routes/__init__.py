@@ -1,0 +1,1 @@
+"""The routers of `turbgen serve`: runs, sweeps, derived products (exports, validation, lidar), pages and health."""

@@ -1,0 +1,83 @@
+"""Routes of products derived from a complete run: exports, the validation report and plots, lidar reports."""
+
+from __future__ import annotations
+
+import json
+from functools import partial
+from pathlib import Path
+
+from fastapi import APIRouter, Depends, Request
+from fastapi.responses import FileResponse
+
+from turbgen.errors import ParameterError
+from turbgen.service.derived import build_export, build_lidar, build_validation, cached_product
+from turbgen.service.limits import LimitError
+from turbgen.service.routes.runs import NAME
+from turbgen.service.state import ServiceState, complete_store, get_state, not_found
+
+router = APIRouter()
+EXPORT_FORMATS = ("bts", "wnd", "evo", "hawc2", "mt4d", "hdf5")
+
+
+@router.get("/runs/{rid}/export")
+def export(rid: str, format: str, http: Request, plane: int | None = None, drop_below_ground: bool = False,
+           store: Path = Depends(complete_store), state: ServiceState = Depends(get_state)):  # fmt: skip
+    """The store exported (made on first request, cached); several files come as one .zip.
+
+    ``drop_below_ground`` drops the grid rows at or below the ground (a run with a low hub height), as
+    `turbgen export --drop-below-ground`; without it such a run is refused (422).
+    """
+    if format not in EXPORT_FORMATS:
+        raise ParameterError(f"format: {format!r} is not one of {', '.join(EXPORT_FORMATS)}")
+    from turbgen.export import ExportRequest
+
+    request = ExportRequest(plane=plane, drop_below_ground=drop_below_ground,
+                            source_label=f"/runs/{rid}/store")  # not the catalog's path here  # fmt: skip
+    key = format + ("" if plane is None else f"-plane{plane}") + ("-above-ground" if drop_below_ground else "")
+    final = state.catalog.run_dir(rid) / "exports" / key
+    cached_product(state, http, rid, final, Path.is_dir, partial(build_export, store, rid, format, request))
+    (single,) = [p for p in final.iterdir() if not p.name.startswith(".")]
+    return FileResponse(single, filename=single.name, media_type="application/octet-stream")
+
+
+def _validation_dir(state: ServiceState, request: Request, rid: str, store: Path) -> Path:
+    final = state.catalog.run_dir(rid) / "validation"
+    return cached_product(state, request, rid, final, lambda d: (d / "report.json").is_file(),
+                          partial(build_validation, store))  # fmt: skip
+
+
+@router.get("/runs/{rid}/validation")
+def validation(rid: str, request: Request, store: Path = Depends(complete_store),
+               state: ServiceState = Depends(get_state)):  # fmt: skip
+    """The `turbgen validate --json` report (computed once, cached), with the names of its PNG plots."""
+    d = _validation_dir(state, request, rid, store)
+    report = json.loads((d / "report.json").read_text())
+    report["store"] = f"/runs/{rid}/store"  # the server's paths stay private
+    plots = sorted(p.name for p in (d / "plots").glob("*.png"))
+    return {"id": rid, "report": report, "plots": [f"/runs/{rid}/plots/{p}" for p in plots]}
+
+
+@router.get("/runs/{rid}/lidar")
+def lidar(rid: str, request: Request, lidar: str = "nacelle-4beam", store: Path = Depends(complete_store),
+          state: ServiceState = Depends(get_state)):  # fmt: skip
+    """`turbgen lidar --json` on the run's store for a lidar *preset* (computed once per preset, cached)."""
+    from turbgen.lidar.description import PRESETS
+
+    if lidar not in PRESETS:  # presets only: no client-supplied file path reaches the filesystem
+        raise LimitError(422, f"lidar = {lidar!r} is not one of {', '.join(PRESETS)}")
+    final = state.catalog.run_dir(rid) / "lidar" / f"{lidar}.json"
+    cached_product(state, request, rid, final, Path.is_file, partial(build_lidar, store, rid, lidar))  # paths in a
+    # refusal (TurbgenError, 422) are shown as URLs by the application's handler
+    return {"id": rid, "lidar": lidar, "report": json.loads(final.read_text())}
+
+
+@router.get("/runs/{rid}/plots/{name}")
+def plot(rid: str, name: str, request: Request, state: ServiceState = Depends(get_state)):
+    """One PNG plot of the run's validation (the validation is computed first if needed)."""
+    if not NAME.match(name) or not name.endswith(".png"):
+        raise not_found()
+    store = complete_store(rid, state)
+    d = _validation_dir(state, request, rid, store) / "plots"
+    if name not in {p.name for p in d.glob("*.png")}:
+        raise not_found()
+    return FileResponse(d / name, media_type="image/png")

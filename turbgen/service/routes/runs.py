@@ -1,0 +1,93 @@
+"""Routes of single runs: submit, list, status, delete, and read-only zarr access to a complete store."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from fastapi import APIRouter, Depends, Request
+from fastapi.responses import FileResponse, JSONResponse
+
+from turbgen.service.bodies import read_json
+from turbgen.service.jobs import QueueFull
+from turbgen.service.limits import RETRY_AFTER_S, LimitError, check_memory
+from turbgen.service.run_ids import build_run, canonical_mapping, run_id
+from turbgen.service.state import ServiceState, complete_store, get_state, not_found, require_token
+from turbgen.service.status import links, run_status
+
+router = APIRouter()
+NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")  # a path component the server may look up
+
+
+@router.post("/runs", status_code=202, dependencies=[Depends(require_token)])
+async def submit(request: Request, state: ServiceState = Depends(get_state)):
+    """Submit a run config (the JSON `turbgen mann|kaimal --config` takes, plus "model" and "preset")."""
+    body = await read_json(request)
+    model, run = build_run(body)
+    preset = body.get("preset") if isinstance(body, dict) else None
+    rid = run_id(model, canonical_mapping(run))
+    if not state.catalog.is_complete(rid):  # a complete run is served, never recomputed
+        check_memory(model, run, state.settings.memory_budget_bytes)
+    try:
+        submitted = state.jobs.submit(rid, model, run, preset)
+    except QueueFull as exc:
+        raise LimitError(429, str(exc), {"Retry-After": str(RETRY_AFTER_S)}) from None
+    code = 200 if submitted == "complete" else 202
+    return JSONResponse({"id": rid, "submitted": submitted, **links(rid)}, status_code=code)
+
+
+@router.get("/runs")
+def list_runs(model: str | None = None, preset: str | None = None, U: float | None = None, seed: int | None = None,
+              state: ServiceState = Depends(get_state)):  # fmt: skip
+    """The catalog, optionally filtered by model, preset (as submitted), U [m/s] and seed."""
+    rows = []
+    for rid in state.catalog.ids():
+        try:
+            s = run_status(state.catalog, state.jobs, rid)
+        except (OSError, ValueError, KeyError):
+            continue
+        p = s["parameters"]
+        wanted = ((model is None or s["model"] == model) and (preset is None or s["preset"] == preset)
+                  and (U is None or p.get("U_m_s") == U) and (seed is None or p.get("seed") == seed))
+        if not wanted:
+            continue
+        rows.append({k: s.get(k) for k in ("id", "model", "status", "progress", "error")} |
+                    {"preset": s["preset"], "U_m_s": p.get("U_m_s"), "seed": p.get("seed")})  # fmt: skip
+    return {"runs": rows}
+
+
+@router.get("/runs/{rid}")
+def get_run(rid: str, state: ServiceState = Depends(get_state)):
+    """The status of run ``rid``: parameters, grid, status, progress, and its summary or error."""
+    if not state.catalog.exists(rid):
+        raise not_found()
+    return run_status(state.catalog, state.jobs, rid)
+
+
+@router.delete("/runs/{rid}", dependencies=[Depends(require_token)])
+def delete_run(rid: str, state: ServiceState = Depends(get_state)):
+    """Remove a finished run with its exports and validation (409 while it is queued or running)."""
+    if not state.catalog.exists(rid):
+        raise not_found()
+    if state.jobs.is_active(rid):
+        raise LimitError(409, "the run is queued or running; delete it once it has finished")
+    with state.lock_for(rid):  # a derived product being computed is then not published (service.derived)
+        state.deleted(rid)
+        state.catalog.delete(rid)
+    return {"id": rid, "deleted": True}
+
+
+@router.api_route("/runs/{rid}/store/{path:path}", methods=["GET", "HEAD"])
+def store_file(path: str, store: Path = Depends(complete_store)):
+    """Read-only zarr access: xr.open_zarr("http://host:port/runs/<id>/store")."""
+    parts = path.split("/")
+    if not all(NAME.match(p) for p in parts):
+        raise not_found()
+    target = store.joinpath(*parts)
+    try:
+        target.resolve().relative_to(store.resolve())
+    except ValueError:
+        raise not_found() from None
+    if not target.is_file():
+        raise not_found()
+    return FileResponse(target, media_type="application/octet-stream")

@@ -1,0 +1,194 @@
+"""What every route of `turbgen serve` shares (settings, catalog, jobs, locks) and the FastAPI dependencies that
+hand it to them (``Depends(get_state)``, ``Depends(require_token)``)."""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from fastapi import Depends, Request
+
+from turbgen.service.catalog import Catalog
+from turbgen.service.jobs import Jobs
+from turbgen.service.limits import (DERIVED_RUNNING, DERIVED_WAITING, DerivedLimiter, LimitError,
+                                    check_token)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class ServiceSettings:
+    """The server's settings (command-line options of `turbgen serve`).
+
+    Parameters
+    ----------
+    root : Path
+        The catalog's root directory.
+    token : str or None
+        Bearer token of mutating requests and new computations (None: open).
+    memory_budget_bytes : int
+        Largest memory estimate of a submitted run [bytes] (413 above).
+    max_queue : int
+        Most runs queued or running at once (429 above).
+    loopback_only : bool
+        Answer only requests whose Host header names a loopback address.
+    derived_running, derived_waiting : int
+        Exports, validations and lidar reports computed at once, and requests that may wait for them (503 beyond).
+    stencil_cache_bytes : int or None
+        Size cap of ``root/stencils`` [bytes] (least recently used entries evicted; None: no cap).
+    own_cluster : bool
+        The runs execute in this process (the service's own cluster, not --scheduler): temporaries of dead
+        processes in ``root/stencils`` are this host's and start-up may remove them.
+    """
+
+    root: Path
+    token: str | None
+    memory_budget_bytes: int
+    max_queue: int
+    loopback_only: bool = False
+    derived_running: int = DERIVED_RUNNING
+    derived_waiting: int = DERIVED_WAITING
+    stencil_cache_bytes: int | None = None
+    own_cluster: bool = True
+
+
+@dataclass
+class ServiceState:
+    """The server's shared state: settings, catalog, job queue and per-key locks.
+
+    Parameters
+    ----------
+    settings : ServiceSettings
+        The server's settings.
+    catalog : Catalog
+        The run directories.
+    jobs : Jobs
+        The run queue on dask.
+    limiter : DerivedLimiter, optional
+        The bound on derived computations (default: from the settings).
+    """
+
+    settings: ServiceSettings
+    catalog: Catalog
+    jobs: Jobs
+    limiter: DerivedLimiter | None = None
+    _locks: dict = field(default_factory=dict)
+    _guard: threading.Lock = field(default_factory=threading.Lock)
+    _generations: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.limiter is None:
+            self.limiter = DerivedLimiter(self.settings.derived_running, self.settings.derived_waiting)
+
+    def generation(self, rid: str) -> int:
+        """How often run ``rid`` was deleted since start-up (a product computed across a change is not published).
+
+        Parameters
+        ----------
+        rid : str
+            Run id.
+
+        Returns
+        -------
+        int
+        """
+        with self._guard:
+            return self._generations.get(rid, 0)
+
+    def deleted(self, rid: str) -> None:
+        """Record that run ``rid`` is being deleted (call it holding ``lock_for(rid)``).
+
+        Parameters
+        ----------
+        rid : str
+            Run id.
+        """
+        with self._guard:
+            self._generations[rid] = self._generations.get(rid, 0) + 1
+
+    def lock_for(self, key: str) -> threading.Lock:
+        """The lock of ``key`` (a run id, or a run's derived product such as ``<id>/validation``).
+
+        Parameters
+        ----------
+        key : str
+            Lock name.
+
+        Returns
+        -------
+        threading.Lock
+            The same lock for the same key, for the server's lifetime.
+        """
+        with self._guard:
+            return self._locks.setdefault(key, threading.Lock())
+
+
+def get_state(request: Request) -> ServiceState:
+    """FastAPI dependency: the application's :class:`ServiceState`.
+
+    Parameters
+    ----------
+    request : fastapi.Request
+        The request.
+
+    Returns
+    -------
+    ServiceState
+    """
+    return request.app.state.service
+
+
+def require_token(request: Request, state: ServiceState = Depends(get_state)) -> None:
+    """FastAPI dependency: LimitError 401 unless the request carries the server's bearer token (if it has one).
+
+    Mutating requests need it, and so does a request that starts a computation (a derived product not cached
+    yet): reading what exists stays open, starting work does not.
+
+    Parameters
+    ----------
+    request : fastapi.Request
+        The request.
+    state : ServiceState
+        The server's state.
+
+    Raises
+    ------
+    LimitError
+        Status 401 for a missing or wrong token.
+    """
+    check_token(state.settings.token, request.headers.get("authorization"))
+
+
+def not_found() -> LimitError:
+    """The one 404 of the service (never says which of run or file is missing).
+
+    Returns
+    -------
+    LimitError
+        Status 404.
+    """
+    return LimitError(404, "no such run or file")
+
+
+def complete_store(rid: str, state: ServiceState = Depends(get_state)) -> Path:
+    """FastAPI dependency: the store of run ``rid`` when it exists and is complete (404 otherwise).
+
+    Parameters
+    ----------
+    rid : str
+        Run id (path parameter).
+    state : ServiceState
+        The server's state.
+
+    Returns
+    -------
+    Path
+        The store's path on the server (never shown to clients).
+
+    Raises
+    ------
+    LimitError
+        Status 404.
+    """
+    if not state.catalog.exists(rid) or not state.catalog.is_complete(rid):
+        raise not_found()
+    return state.catalog.store_path(rid)

@@ -1,0 +1,127 @@
+"""The status of a run as the service shows it (GET /runs/<id>, the catalog listing)."""
+
+from __future__ import annotations
+
+import json
+import re
+
+from turbgen.service.catalog import Catalog
+from turbgen.service.jobs import Jobs
+from turbgen.store.layout import default_chunk_t, n_chunks
+from turbgen.store.temporaries import temp_prefix
+
+
+def run_status(catalog: Catalog, jobs: Jobs, rid: str) -> dict:
+    """Id, model, parameters, grid, status (complete / running / queued / failed / interrupted), progress, and the
+    summary, validation verdict or error where there is one.
+
+    Parameters
+    ----------
+    catalog : Catalog
+        The run directories.
+    jobs : Jobs
+        The run queue.
+    rid : str
+        A recorded run id.
+
+    Returns
+    -------
+    dict
+        The JSON-able status.
+
+    Raises
+    ------
+    OSError, ValueError, KeyError
+        When the run's request cannot be read.
+    """
+    req = catalog.request(rid)
+    grid = req["run"]["grid"]
+    out = {"id": rid, "model": req["model"], "parameters": {k: v for k, v in req["run"].items() if k != "grid"},
+           "grid": grid, "preset": req.get("preset"), "turbgen": req.get("turbgen")}  # fmt: skip
+    total = 3 * n_chunks(_GridShape(grid), default_chunk_t(grid["nt"]))
+    if catalog.is_complete(rid):
+        out["status"] = "complete"
+        out["progress"] = {"chunks_done": total, "chunks_total": total}
+        try:
+            out["summary"] = json.loads((catalog.run_dir(rid) / "summary.json").read_text())
+        except (OSError, ValueError):
+            pass
+        rep = catalog.run_dir(rid) / "validation" / "report.json"
+        if rep.is_file():
+            out["validation"] = {"passed": json.loads(rep.read_text()).get("passed")}
+    elif jobs.is_active(rid):
+        done = catalog.progress(rid, total)
+        out["status"] = "running" if done or _has_temp(catalog, rid) else "queued"
+        out["progress"] = {"chunks_done": done, "chunks_total": total}
+    else:
+        reason = catalog.failure(rid)
+        out["status"] = "failed" if reason else "interrupted"
+        out["error"] = None if reason is None else public_text(reason, catalog)
+    return out
+
+
+# advice in the library's messages about options of the CLI and the API that a client of the service cannot give
+# (the service chooses every output path and never overwrites): dropped or replaced
+_CLI_ADVICE = (
+    ("; use `overwrite` to replace it", ""),
+    (" (use `overwrite`)", ""),
+    ("choose another `out` or lower", "or lower"),
+    ("`out`", "the server's catalog"),
+    ("pass `drop_below_ground`", "pass ?drop_below_ground=true"),
+    ("raise `hub_height` above", "submit a run with hub_height_m above"),
+)
+
+
+def public_text(text: str, catalog: Catalog) -> str:
+    """An error message as clients see it: the server's paths as URLs or ``<server root>``, no advice about CLI options.
+
+    Parameters
+    ----------
+    text : str
+        A message of the library (a run's failure, a refused export).
+    catalog : Catalog
+        The catalog (its root is the path hidden).
+
+    Returns
+    -------
+    str
+        ``ROOT/runs/<id>/store.zarr`` as ``/runs/<id>/store``, ``ROOT/runs/<id>`` as ``/runs/<id>``, any other path
+        under the root as ``<server root>/...``, and the advice of :data:`_CLI_ADVICE` rewritten.
+    """
+    for root in dict.fromkeys((catalog.root, catalog.root.resolve())):
+        runs = re.escape(str(root / "runs"))
+        text = re.sub(runs + r"/([0-9a-f]{24})/store\.zarr\b", r"/runs/\1/store", text)
+        text = re.sub(runs + r"/([0-9a-f]{24})\b", r"/runs/\1", text)
+        text = text.replace(str(root), "<server root>")
+    for advice, instead in _CLI_ADVICE:
+        text = text.replace(advice, instead)
+    return text
+
+
+class _GridShape:
+    """The two grid fields n_chunks reads (nt, nx), from a grid mapping."""
+
+    def __init__(self, grid: dict):
+        self.nt = grid["nt"]
+        self.nx = len(grid["x_m"])
+
+
+def _has_temp(catalog: Catalog, rid: str) -> bool:
+    prefix = temp_prefix(catalog.store_path(rid))
+    return any(p.name.startswith(prefix) for p in catalog.run_dir(rid).iterdir())
+
+
+def links(rid: str) -> dict:
+    """The URLs of a run's status and store.
+
+    Parameters
+    ----------
+    rid : str
+        Run id.
+
+    Returns
+    -------
+    dict
+        ``status_url`` and ``store_url``.
+    """
+    return {"status_url": f"/runs/{rid}", "store_url": f"/runs/{rid}/store"}
