@@ -23,10 +23,10 @@ import pytest
 import zarr
 from click.testing import CliRunner
 
+from turbgen import interruption
 from turbgen.cli import cli
 from turbgen.errors import StoreError
-from turbgen.store import open_store
-from turbgen.store import temporaries
+from turbgen.store import open_store, temporaries
 from turbgen.store.temporaries import parse_temp, pid_alive, remove_dead_temporaries
 
 KAIMAL = ["kaimal", "--nt", "256", "--ny", "8", "--nz", "8", "--planes", "0,50"]
@@ -446,7 +446,7 @@ def test_a_signal_whose_exit_the_library_replaced_is_still_reported_as_the_signa
         monkeypatch.setattr("h5py.AttributeManager.__setitem__", attr_write)
         return export_hdf5(fs, out, req)
 
-    monkeypatch.setattr(temporaries, "_received", [])
+    monkeypatch.setattr(interruption, "_received", [])
     monkeypatch.setitem(export.EXPORTERS, "hdf5", swallowing_library)
     res = cli_run("export", store, "--format", "hdf5", "--out", tmp_path / "x.h5")
     assert res.exit_code == 128 + sig, res.output
@@ -459,12 +459,12 @@ def test_a_signal_in_a_weakref_callback_prints_no_traceback():
     # goes on (seen in CI during an export); our signal's exception is recorded and kept quiet instead
     code = """if True:
         import os, signal, time, weakref
-        from turbgen.store import temporaries
-        with temporaries.exit_on_signals():
+        from turbgen import interruption
+        with interruption.exit_on_signals():
             obj = type("Obj", (), {})()
             ref = weakref.ref(obj, lambda r: (os.kill(os.getpid(), signal.SIGTERM), time.sleep(5)))
             del obj
-            print(temporaries.received_signal())
+            print(interruption.received_signal())
     """
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=ENV, timeout=60)
     assert res.returncode == 0 and res.stdout.strip() == str(int(signal.SIGTERM)), res.stderr

@@ -22,6 +22,7 @@ from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+import pyfftw
 
 from turbgen.errors import ParameterError
 from turbgen.resources import default_threads
@@ -29,26 +30,6 @@ from turbgen.synthesis.mann_product import ou_product
 from turbgen.synthesis.mann_stencil import BoxShape, MannStencil
 from turbgen.synthesis.pencil_crop import crop_into_pencils
 from turbgen.synthesis.random_streams import complex_normal
-
-
-def _import_pyfftw():
-    """pyfftw without its dask interface: pyfftw's package __init__ imports dask.array (and through it pandas and
-    xarray) when dask is installed, ~0.9 s of CPU at every process start (measured; about 1 s of the
-    `turbgen mann` CLI); only pyfftw.FFTW is used here. dask stays importable afterwards."""
-    import sys
-
-    if "dask.array.fft" in sys.modules:
-        import pyfftw
-    else:
-        sys.modules["dask.array.fft"] = None  # makes pyfftw's optional `from dask.array.fft import ...` fail fast
-        try:
-            import pyfftw
-        finally:
-            del sys.modules["dask.array.fft"]
-    return pyfftw
-
-
-pyfftw = _import_pyfftw()
 
 
 COMPONENTS = ("u", "v", "w")
