@@ -92,7 +92,7 @@ class TurbgenGroup(click.Group):
         if _startup_collector_paused and not gc.isenabled():
             # the console script's imports (numpy, scipy, zarr, numba, click: ~10^6 objects that live as long as
             # the process) go to the permanent generation, so the cyclic collector never traverses them again
-            # (~0.4 s of CPU in every command otherwise)
+            # (its cost: benchmarks/README.md, "Measurements behind design choices")
             gc.freeze()
             gc.enable()
         return command
@@ -172,8 +172,8 @@ def main():
     """Console-script entry point (the cyclic garbage collector is paused until the command is imported)."""
     global _startup_collector_paused
     # turbgen parallelises with its own thread pools; OpenBLAS threads (numpy's and scipy's libraries each start one
-    # per core) only oversubscribe the cores and spin between calls: default Kaimal field, 5 runs each on 2 cores,
-    # 5.59 -> 5.22 s of CPU. Set before numpy loads OpenBLAS; a user's own setting is kept (dask's nanny sets the same
+    # per core) only oversubscribe the cores and spin between calls (benchmarks/README.md, "Measurements behind
+    # design choices"). Set before numpy loads OpenBLAS; a user's own setting is kept (dask's nanny sets the same
     # for its workers). The fields keep their bits: OpenBLAS splits a product's rows and columns among its threads,
     # not the sums (default Kaimal store with 2 and 1 threads: identical).
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")

@@ -123,7 +123,7 @@ def evolution_lifetime_s(k, params: MannParams):
 
 # -- Tabulated lifetimes ------------------------------------------------------------------------------
 # Every lifetime above depends on kL only. Synthesis evaluates them on tens of millions of wavenumbers
-# (the hypergeometric function of Eq. 4 costs ~0.2 us per point), so it uses a not-a-knot cubic spline
+# (the hypergeometric function of Eq. 4 is costly per point), so it uses a not-a-knot cubic spline
 # of tau~ against x = ln(kL) on a uniform grid of step h = TABLE_STEP[kind] instead. Its relative error is
 # of order (5/384) h^4 max|d^4 tau~/dx^4| / tau~, largest for the lifetimes with the sharp (kL)^10
 # knee (Eq. 6 and 15 with a large slope change). Measured on 2e6 random kL over the table's range for
