@@ -409,3 +409,20 @@ def test_schema_file_is_valid_and_reachable_via_symlink():
     schema = json.loads(repo_schema.read_text())
     jsonschema.Draft202012Validator.check_schema(schema)
     assert set(layout.CALLER_ATTRS + layout.WRITER_ATTRS + (layout.MARKER,)) == set(schema["required"])
+
+
+def test_a_stop_request_publishes_nothing(tmp_path, monkeypatch):
+    # an application's stop request (turbgen.cancellation; the CLI makes one on a signal) reaches a writer whose
+    # block ended normally: it raises the requested exception and removes its temporary
+    from turbgen import cancellation
+
+    monkeypatch.setattr(cancellation, "_requests", [])
+    path = tmp_path / "f.zarr"
+    with pytest.raises(SystemExit) as info:
+        with create_store(path, GRID, ATTRS) as w:
+            for c in ("u", "v", "w"):
+                for ix in range(GRID.nx):
+                    w.write(c, ix, field()[c][:, ix])
+            cancellation.request_stop(SystemExit(143))
+    assert info.value.code == 143
+    assert siblings(path) == [] and not path.exists()
