@@ -23,10 +23,11 @@ import pytest
 import zarr
 from click.testing import CliRunner
 
+from turbgen import interruption
 from turbgen.cli import cli
 from turbgen.errors import StoreError
-from turbgen.store import open_store
-from turbgen.store import temporaries
+from turbgen.store import open_store, temporaries
+from turbgen.sweep import SweepLock
 from turbgen.store.temporaries import parse_temp, pid_alive, remove_dead_temporaries
 
 KAIMAL = ["kaimal", "--nt", "256", "--ny", "8", "--nz", "8", "--planes", "0,50"]
@@ -446,7 +447,7 @@ def test_a_signal_whose_exit_the_library_replaced_is_still_reported_as_the_signa
         monkeypatch.setattr("h5py.AttributeManager.__setitem__", attr_write)
         return export_hdf5(fs, out, req)
 
-    monkeypatch.setattr(temporaries, "_received", [])
+    monkeypatch.setattr(interruption, "_received", [])
     monkeypatch.setitem(export.EXPORTERS, "hdf5", swallowing_library)
     res = cli_run("export", store, "--format", "hdf5", "--out", tmp_path / "x.h5")
     assert res.exit_code == 128 + sig, res.output
@@ -459,12 +460,12 @@ def test_a_signal_in_a_weakref_callback_prints_no_traceback():
     # goes on (seen in CI during an export); our signal's exception is recorded and kept quiet instead
     code = """if True:
         import os, signal, time, weakref
-        from turbgen.store import temporaries
-        with temporaries.exit_on_signals():
+        from turbgen import interruption
+        with interruption.exit_on_signals():
             obj = type("Obj", (), {})()
             ref = weakref.ref(obj, lambda r: (os.kill(os.getpid(), signal.SIGTERM), time.sleep(5)))
             del obj
-            print(temporaries.received_signal())
+            print(interruption.received_signal())
     """
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=ENV, timeout=60)
     assert res.returncode == 0 and res.stdout.strip() == str(int(signal.SIGTERM)), res.stderr
@@ -508,7 +509,7 @@ def test_interrupted_sweep_leaves_a_consistent_manifest_and_one_line(sig, tmp_pa
     assert doc["counts"]["complete"] + doc["counts"]["pending"] == 400
     assert not [p for p in d.iterdir() if p.name.startswith(".") and p.name != ".turbgen-sweep.lock"
                 and parse_temp(p.name) and pid_alive(parse_temp(p.name)[1])]
-    assert not (d / ".turbgen-sweep.lock").exists()
+    SweepLock(d).acquire().release()  # the lock is free
 
 
 def test_killed_sweep_is_finished_by_its_rerun(tmp_path):
@@ -529,7 +530,7 @@ def test_killed_sweep_is_finished_by_its_rerun(tmp_path):
     assert doc["counts"] == {**{k: 0 for k in doc["counts"]}, "complete": 24}
     assert all((d / name).stat().st_mtime_ns == t for name, t in before.items())  # not recomputed
     assert not [p for p in d.iterdir() if p.name.startswith(".") and parse_temp(p.name)]
-    assert not (d / ".turbgen-sweep.lock").exists()
+    SweepLock(d).acquire().release()  # the lock is free
 
 
 def test_sweep_rerun_with_other_chunks_is_reported(tmp_path):

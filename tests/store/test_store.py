@@ -20,6 +20,7 @@ from turbgen import resources
 from turbgen.errors import ParameterError, StoreError, TurbgenError
 from turbgen.grid import Grid
 from turbgen.store import FieldStore, create_store, layout, open_store, physical_time_view
+from turbgen.store.temporaries import remove_dead_temporaries
 
 GRID = Grid(nt=10, dt_s=0.5, x_m=(0.0, 50.0, 63.3), ny=4, nz=3, dy_m=10.0, dz_m=8.0)
 ATTRS = {
@@ -239,11 +240,26 @@ def _writer_script(path, kill_line):
 
 
 def test_sigterm_cleans_up(tmp_path):
+    # the application's handler (turbgen.interruption, installed by the CLI) turns SIGTERM into SystemExit: the
+    # writer's with block removes its temporary
     path = tmp_path / "f.zarr"
     script = _writer_script(path, "os.kill(os.getpid(), signal.SIGTERM); signal.pause()")
+    script = "from turbgen.interruption import exit_on_signals\nwith exit_on_signals():\n" + textwrap.indent(script, "    ")
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, timeout=120)
     assert proc.returncode == 128 + 15, proc.stderr.decode()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_sigterm_without_a_handler_leaves_only_a_dead_writers_temporary(tmp_path):
+    # the library installs no handler: SIGTERM kills a bare writer outright, like SIGKILL; what it leaves is a
+    # temporary of a dead writer (removed by the next writer), never a store
+    path = tmp_path / "f.zarr"
+    script = _writer_script(path, "os.kill(os.getpid(), signal.SIGTERM); signal.pause()")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, timeout=120)
+    assert proc.returncode == -15, proc.stderr.decode()
+    assert not path.exists()
+    (tmp,) = list(tmp_path.iterdir())
+    assert remove_dead_temporaries(tmp_path, ["f.zarr"]) == [tmp]
 
 
 def test_killed_writer_leaves_no_complete_looking_store(tmp_path):
@@ -375,14 +391,15 @@ def test_available_memory_reads_meminfo_and_cgroup(tmp_path):
 
 
 
-def test_sigterm_handler_restored_after_with_block(tmp_path):
-    before = signal.getsignal(signal.SIGTERM)
+def test_writer_leaves_signal_handlers_and_hooks_alone(tmp_path):
+    # a library behaves: writing a store changes no process-wide state (handlers, unraisable hook)
+    before = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGHUP, signal.SIGINT)}
+    hook = sys.unraisablehook
     with pytest.raises(RuntimeError):
         with create_store(tmp_path / "f.zarr", GRID, ATTRS):
-            if before == signal.SIG_DFL:
-                assert signal.getsignal(signal.SIGTERM) != signal.SIG_DFL  # cleanup handler active
+            assert {s: signal.getsignal(s) for s in before} == before and sys.unraisablehook is hook
             raise RuntimeError
-    assert signal.getsignal(signal.SIGTERM) == before
+    assert {s: signal.getsignal(s) for s in before} == before and sys.unraisablehook is hook
 
 
 def test_schema_file_is_valid_and_reachable_via_symlink():
@@ -392,3 +409,20 @@ def test_schema_file_is_valid_and_reachable_via_symlink():
     schema = json.loads(repo_schema.read_text())
     jsonschema.Draft202012Validator.check_schema(schema)
     assert set(layout.CALLER_ATTRS + layout.WRITER_ATTRS + (layout.MARKER,)) == set(schema["required"])
+
+
+def test_a_stop_request_publishes_nothing(tmp_path, monkeypatch):
+    # an application's stop request (turbgen.cancellation; the CLI makes one on a signal) reaches a writer whose
+    # block ended normally: it raises the requested exception and removes its temporary
+    from turbgen import cancellation
+
+    monkeypatch.setattr(cancellation, "_requests", [])
+    path = tmp_path / "f.zarr"
+    with pytest.raises(SystemExit) as info:
+        with create_store(path, GRID, ATTRS) as w:
+            for c in ("u", "v", "w"):
+                for ix in range(GRID.nx):
+                    w.write(c, ix, field()[c][:, ix])
+            cancellation.request_stop(SystemExit(143))
+    assert info.value.code == 143
+    assert siblings(path) == [] and not path.exists()

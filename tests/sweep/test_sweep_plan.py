@@ -136,19 +136,26 @@ def test_command_defaults_match_the_single_run_commands():
 
 def test_lock_refuses_a_live_owner_and_takes_over_a_dead_one(tmp_path):
     with SweepLock(tmp_path):
-        assert (tmp_path / LOCK_NAME).exists()
+        assert json.loads((tmp_path / LOCK_NAME).read_text())["pid"] == os.getpid()  # names its owner
         with pytest.raises(SweepLockedError, match=f"pid {os.getpid()}"):
             SweepLock(tmp_path).acquire()
-    assert not (tmp_path / LOCK_NAME).exists()
-    import socket
-
-    (tmp_path / LOCK_NAME).write_text(json.dumps({"host": socket.gethostname(), "pid": _dead_pid()}))
+    assert (tmp_path / LOCK_NAME).read_text() == ""  # released: emptied (filelock leaves the file)
+    # a lock file left by a killed sweep holds no OS lock any more (whatever it names): taken over
+    (tmp_path / LOCK_NAME).write_text(json.dumps({"host": "elsewhere", "pid": _dead_pid()}))
     with SweepLock(tmp_path) as lock:
         assert json.loads((tmp_path / LOCK_NAME).read_text())["pid"] == os.getpid() == lock.owner["pid"]
-    # another host's lock cannot be checked: refused
-    (tmp_path / LOCK_NAME).write_text(json.dumps({"host": "elsewhere", "pid": _dead_pid()}))
-    with pytest.raises(SweepLockedError, match="elsewhere"):
-        SweepLock(tmp_path).acquire()
+    # a sweep in another process holds it: refused, naming that process
+    code = ("import sys, time; from turbgen.sweep import SweepLock\n"
+            f"with SweepLock({str(tmp_path)!r}):\n    print('held', flush=True); sys.stdin.read()")
+    holder = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with pytest.raises(SweepLockedError, match=f"pid {holder.pid} "):
+            SweepLock(tmp_path).acquire()
+    finally:
+        holder.communicate("", timeout=60)
+    with SweepLock(tmp_path):  # free again once that process let go
+        pass
 
 
 def test_manifest_json_and_csv_agree(tmp_path):

@@ -8,7 +8,6 @@ COMMANDS and imported on use.
 
 from __future__ import annotations
 
-import atexit
 import gc
 import importlib
 import logging
@@ -20,7 +19,7 @@ import warnings
 
 import click
 
-from turbgen import __version__
+from turbgen import __version__, interruption
 from turbgen.errors import ParameterError, StoreError, TurbgenError
 
 
@@ -93,7 +92,7 @@ class TurbgenGroup(click.Group):
         if _startup_collector_paused and not gc.isenabled():
             # the console script's imports (numpy, scipy, zarr, numba, click: ~10^6 objects that live as long as
             # the process) go to the permanent generation, so the cyclic collector never traverses them again
-            # (~0.4 s of CPU in every command otherwise)
+            # (its cost: benchmarks/README.md, "Measurements behind design choices")
             gc.freeze()
             gc.enable()
         return command
@@ -105,17 +104,13 @@ class TurbgenGroup(click.Group):
             raise _one_line(exc) from None
 
     def invoke(self, ctx):
-        # signals are recorded by turbgen.store.temporaries (looked up, not imported: it loads zarr)
-        recorder = sys.modules.get("turbgen.store.temporaries")
-        if recorder is not None:
-            recorder.forget_signals()  # an earlier command in this process (tests) is not this one
+        interruption.forget_signals()  # an earlier command in this process (tests) is not this one
         try:
             return self._invoke_one_line(ctx)
         except (click.exceptions.Exit, click.ClickException):  # already said (e.g. Ctrl-C's line) or a user error
             raise
         except Exception:  # a signal whose exception the running library replaced by its own error
-            recorder = sys.modules.get("turbgen.store.temporaries")
-            sig = recorder.received_signal() if recorder is not None else None
+            sig = interruption.received_signal()
             if sig is None:
                 raise
             _quiet_shutdown()
@@ -157,38 +152,28 @@ def _one_line(exc: click.ClickException) -> click.ClickException:
 
 
 def _quiet_shutdown() -> None:
-    """After an interruption: no warnings about zarr reads that were submitted but never run, and no
-    traceback from zarr's exit hook when its I/O thread was busy (it closes a running event loop)."""
+    """After an interruption: no warnings about zarr reads that were submitted but never run."""
     warnings.filterwarnings("ignore", message="coroutine .* was never awaited", category=RuntimeWarning)
-    logging.getLogger("zarr.core.sync").setLevel(logging.ERROR)
     logging.getLogger("asyncio").setLevel(logging.CRITICAL)  # "Task was destroyed but it is pending!" at exit
-    try:
-        from zarr.core import sync
-    except ImportError:
-        return
-    atexit.unregister(sync.cleanup_resources)
-
-    def cleanup():
-        try:
-            sync.cleanup_resources()
-        except RuntimeError:  # "Cannot close a running event loop": the process is exiting anyway
-            pass
-
-    atexit.register(cleanup)
 
 
 @click.group(cls=TurbgenGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="turbgen")
-def cli():
+@click.pass_context
+def cli(ctx):
     """4D stochastic wind-turbulence fields for aeroelastic and lidar studies."""
+    if ctx.invoked_subcommand != "serve":  # the service's server keeps its own signal handlers
+        # interruption handling is the application's: for the command's duration SIGTERM/SIGHUP become SystemExit,
+        # Ctrl-C KeyboardInterrupt, and the library's writers are told not to publish (turbgen.interruption)
+        ctx.with_resource(interruption.exit_on_signals())
 
 
 def main():
     """Console-script entry point (the cyclic garbage collector is paused until the command is imported)."""
     global _startup_collector_paused
     # turbgen parallelises with its own thread pools; OpenBLAS threads (numpy's and scipy's libraries each start one
-    # per core) only oversubscribe the cores and spin between calls: default Kaimal field, 5 runs each on 2 cores,
-    # 5.59 -> 5.22 s of CPU. Set before numpy loads OpenBLAS; a user's own setting is kept (dask's nanny sets the same
+    # per core) only oversubscribe the cores and spin between calls (benchmarks/README.md, "Measurements behind
+    # design choices"). Set before numpy loads OpenBLAS; a user's own setting is kept (dask's nanny sets the same
     # for its workers). The fields keep their bits: OpenBLAS splits a product's rows and columns among its threads,
     # not the sums (default Kaimal store with 2 and 1 threads: identical).
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")

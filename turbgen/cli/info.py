@@ -11,7 +11,7 @@ from turbgen.resources import format_bytes
 from turbgen.store import open_store
 from turbgen.store.temporaries import remove_dead_temporaries, report_removed
 
-DECODE_LIMIT_BYTES = 256 * 2**20  # stores up to this size on disk have every chunk decoded (~0.3 s)
+DECODE_LIMIT_BYTES = 256 * 2**20  # stores up to this size on disk have every chunk decoded
 
 
 def _value(v) -> str:

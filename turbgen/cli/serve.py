@@ -34,6 +34,12 @@ def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue
 
     A field served is the one `turbgen mann|kaimal` writes for the same config, bit for bit.
     """
+    try:  # the service's libraries are the `service` extra, not in the base install
+        import fastapi  # noqa: F401
+        import uvicorn  # noqa: F401
+    except ImportError as exc:
+        raise ParameterError(f'turbgen serve needs {exc.name or "the service libraries"}: '
+                             'pip install "turbgen[service]"') from None
     from turbgen.resources import parse_size
 
     stencil_cache_bytes = parse_size(stencil_cache_size, "--stencil-cache-size")

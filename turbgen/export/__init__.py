@@ -1,5 +1,6 @@
 """Exports of a turbgen store to the files aeroelastic and lidar simulators read
-(byte-level reference: file-formats.md).
+(each format's own documentation is cited in its module: TurbSim and InflowWind user guides, the HAWC2 manual,
+Mann 1998, the 4D generators and lidar-simulator sources).
 
 Formats: ``bts`` (TurbSim, InflowWind WindType 3), ``wnd`` (Bladed-style .wnd + .sum, WindType 4),
 ``evo`` (lidar-simulator 4D set ROOT.evo/.wnd/.sum), ``hawc2`` (three float32 .bin, WindType 5),

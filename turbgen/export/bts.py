@@ -1,4 +1,5 @@
-"""TurbSim binary full-field ``.bts`` (InflowWind WindType 3), file-formats.md section 2.
+"""TurbSim binary full-field ``.bts`` (InflowWind WindType 3; Jonkman 2009, TurbSim User's Guide v1.50,
+NREL/TP-500-46198, appendix on the binary full-field format, and OpenFAST's InflowWind documentation).
 
 Layout: 70-byte header ``<h4i6f6fi`` + description, then per time step (first step = first to
 reach the turbine) ny*nz*3 int16 with the component fastest, then y (from -W/2, +y left looking
@@ -65,7 +66,7 @@ def quantise(values: np.ndarray, slope: float, offset: float) -> np.ndarray:
 
 
 def tower_heights(bottom_m: float, dz_m: float) -> np.ndarray:
-    """Tower point heights [m]: bottom, bottom - dz, ... while above the ground (section 2.4).
+    """Tower point heights [m]: bottom, bottom - dz, ... while above the ground (TurbSim User's Guide, tower points).
 
     Parameters
     ----------

@@ -1,5 +1,5 @@
 """The 4D lidar-simulator set ROOT.evo + ROOT.wnd + ROOT.sum (FUAS OpenFAST3.0_LidSim forks),
-file-formats.md sections 5.3 and 9.6.
+as read by the forks' LidarSim ``.evo`` reader (fengguoFUAS/OpenFAST3.0_LidSim; evoTurb, Guo et al. 2022).
 
 ROOT.evo, all little-endian int16: NL (<= 30), NL plane distances in whole metres (positive
 upstream), then for each plane, each time step, each z (bottom up), each y (from -W/2, since the

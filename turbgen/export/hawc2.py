@@ -1,10 +1,11 @@
-"""HAWC2 / Mann binary box (InflowWind WindType 5), file-formats.md section 4.
+"""HAWC2 / Mann binary box (InflowWind WindType 5; the HAWC2 user manual's Mann turbulence box, Mann 1998, and
+OpenFAST's InflowWind documentation of the HAWC format).
 
 Three headerless little-endian float32 files ROOT_u.bin, ROOT_v.bin, ROOT_w.bin per plane, each
 nx*ny*nz values with z fastest (bottom up), then y stored REVERSED (+W/2 first), then x = time
 (the first x-plane reaches the turbine first). The files hold u - URef, v, w of the full field
 (mean + shear + fluctuations) and are loaded with WindProfile = 0, ScaleMethod = 0, which
-reproduces the field exactly (section 4.2; WindProfile = -1 is rejected by v5, ScaleMethod != 0
+reproduces the field exactly (InflowWind v5 input keys; WindProfile = -1 is rejected by v5, ScaleMethod != 0
 removes the shear).
 """
 

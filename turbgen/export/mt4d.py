@@ -1,5 +1,5 @@
 """``.mt4d``: the headerless float32 layout of the 4D Mann turbulence generator
-(MSCA-LIKE/4D-Mann-Turbulence-Generator), file-formats.md section 5.1.
+(MSCA-LIKE/4D-Mann-Turbulence-Generator, its MannTurb4D writer; Guo et al. 2022).
 
 Fortran order z fastest, then y, then x, then snapshot slot, then component (u, v, w), i.e. a
 MATLAB ``reshape(data, [nz ny n1 nslots 3])``. Mapping from the store: slot k = plane k (slot

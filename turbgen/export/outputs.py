@@ -19,7 +19,8 @@ from pathlib import Path
 from turbgen.errors import ParameterError
 from turbgen.store.paths import check_output_path
 from turbgen.resources import require_disk
-from turbgen.store.temporaries import (TEMP_MARK, exit_on_signals, raise_if_signalled, remove_dead_temporaries,
+from turbgen.cancellation import raise_if_stop_requested
+from turbgen.store.temporaries import (TEMP_MARK, remove_dead_temporaries,
                                        report_removed)
 
 _FALLOC_FL_KEEP_SIZE = 1
@@ -76,7 +77,6 @@ class OutputSet:
                          "free space there or choose another `out`")
         token = f"{os.getpid()}-{secrets.token_hex(4)}"
         self._temps = {p: p.with_name(f".{p.name}{TEMP_MARK}{token}") for p in self.paths}
-        self._signals = exit_on_signals()
 
     def temp(self, path) -> Path:
         """Temporary path to write instead of the final ``path``.
@@ -135,37 +135,33 @@ class OutputSet:
             os.close(fd)
 
     def __enter__(self):
-        self._signals.__enter__()
         return self
 
     def __exit__(self, exc_type, exc, tb):
-        try:
-            if exc_type is None:
-                try:
-                    raise_if_signalled()  # a signal whose exception was swallowed on the way publishes nothing
-                except BaseException:
-                    self._cleanup()
-                    raise
-                missing = [str(p) for p, t in self._temps.items() if not t.exists()]
-                if missing:
-                    self._cleanup()
-                    raise RuntimeError(f"exporter did not write {missing}")
-                try:
-                    for p, t in self._temps.items():
-                        os.truncate(t, t.stat().st_size)  # release reserved blocks past the end
-                        os.replace(t, p)
-                except OSError as err:
-                    exc = err
-                else:
-                    return False
-            self._cleanup()
-            if isinstance(exc, OSError):
-                reason = exc.strerror or (str(exc).splitlines() or [type(exc).__name__])[0]
-                where = ", ".join(str(p) for p in self.paths)
-                raise ParameterError(f"writing {where} failed: {reason} (errno {exc.errno}); nothing was written") from None
-            return False
-        finally:
-            self._signals.__exit__(None, None, None)
+        if exc_type is None:
+            try:
+                raise_if_stop_requested()  # an interruption whose exception was swallowed on the way publishes nothing
+            except BaseException:
+                self._cleanup()
+                raise
+            missing = [str(p) for p, t in self._temps.items() if not t.exists()]
+            if missing:
+                self._cleanup()
+                raise RuntimeError(f"exporter did not write {missing}")
+            try:
+                for p, t in self._temps.items():
+                    os.truncate(t, t.stat().st_size)  # release reserved blocks past the end
+                    os.replace(t, p)
+            except OSError as err:
+                exc = err
+            else:
+                return False
+        self._cleanup()
+        if isinstance(exc, OSError):
+            reason = exc.strerror or (str(exc).splitlines() or [type(exc).__name__])[0]
+            where = ", ".join(str(p) for p in self.paths)
+            raise ParameterError(f"writing {where} failed: {reason} (errno {exc.errno}); nothing was written") from None
+        return False
 
     def _cleanup(self):
         for t in self._temps.values():

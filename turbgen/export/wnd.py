@@ -1,5 +1,6 @@
-"""Bladed-style ``.wnd`` + TurbSim-style ``.sum`` (InflowWind WindType 4), file-formats.md
-section 3; the same pair carries the header for the lidar simulator's ``.evo`` (section 5.3).
+"""Bladed-style ``.wnd`` + TurbSim-style ``.sum`` (InflowWind WindType 4; Jonkman 2009, TurbSim User's Guide
+v1.50, and OpenFAST's InflowWind documentation); the same pair carries the header for the lidar simulator's
+``.evo`` (turbgen.export.evo).
 
 ``.wnd``: new-style 104-byte header (ID -99, TurbType 4), then per time step nz*ny*3 int16 with
 the component fastest, then y (from -W/2, +y left), then z (from the bottom). Velocity =

@@ -1,4 +1,5 @@
-"""TurbSim-style ``.sum`` summary file of a ``.wnd`` export (file-formats.md section 3): the lines
+"""TurbSim-style ``.sum`` summary file of a ``.wnd`` export (Jonkman 2009, TurbSim User's Guide v1.50; the
+parser of OpenFAST's InflowWind for WindType 4): the lines
 InflowWind v5 and the lidar-simulator forks parse, written and read back in their order."""
 
 from __future__ import annotations

@@ -19,8 +19,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
-from turbgen.theory.cubic_spline import NotAKnotSpline
 from turbgen.theory.lidar_preview import PreviewSpectra
 from turbgen.validate.estimators import WelchSetup, segment_starts
 from turbgen.validate.welch_kernel import segment_gain
@@ -126,10 +126,10 @@ def expected_welch(spectra: PreviewSpectra, f_bins_hz, setup: WelchSetup, record
         rr, ll, rl = spectra.S_RR, spectra.S_LL, spectra.S_RL
     else:
         x, xl = np.log(spectra.f_hz), np.log(lines)
-        rr = np.exp(NotAKnotSpline(x, np.log(spectra.S_RR))(xl))
-        ll = np.exp(NotAKnotSpline(x, np.log(spectra.S_LL))(xl))
+        rr = np.exp(CubicSpline(x, np.log(spectra.S_RR))(xl))
+        ll = np.exp(CubicSpline(x, np.log(spectra.S_LL))(xl))
         c = spectra.S_RL / np.sqrt(spectra.S_RR * spectra.S_LL)
-        rl = (NotAKnotSpline(x, c.real)(xl) + 1j * NotAKnotSpline(x, c.imag)(xl)) * np.sqrt(rr * ll)
+        rl = (CubicSpline(x, c.real)(xl) + 1j * CubicSpline(x, c.imag)(xl)) * np.sqrt(rr * ll)
     n_eff = None if n_samples is None else effective_segments(rr, ll, lines, f_bins, setup, n_samples)
     return ExpectedWelch(f_bins, *weigh_lines(rr, ll, rl, lines, f_bins, setup, record_s), n_eff=n_eff)
 

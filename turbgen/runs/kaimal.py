@@ -55,7 +55,7 @@ def store_attrs(run: KaimalRun, gen: KaimalEvo | None = None) -> dict:
 
 # components in the order they are made: u last, whose yz coherence (by default the only one) makes its frequency
 # chunks the longest phase of a run, long enough to write w's planes meanwhile (the store's writes are bound by the
-# disk: ~0.5 s of the default field's 2 s); the field does not depend on the order
+# disk); the field does not depend on the order
 ORDER = ("v", "w", "u")
 # planes whose store writes may lag behind the synthesis (at most; ring_planes)
 MAX_WRITE_BACKLOG = 8
@@ -109,10 +109,9 @@ def plan_spill(grid: Grid, out: Path, spill: bool | None, sampler: int) -> bool:
 def _touch_while_loading_noise(pool: ThreadPoolExecutor, ring: PlaneRing, spectrum: InMemorySpectrum | None) -> None:
     """Touch the in-memory spectrum in ``pool`` while this thread loads the compiled noise, then touches the ring.
 
-    The first compiled call of a process sets up numba's typing registries (~0.3 s of Python, holding the GIL), and
-    this VM's first touch of fresh memory is slow and erratic (0.05-0.8 s for the default field's 350 MB; numpy's
-    fills leave the GIL): side by side, the touch hides behind the load (measured: 0.35-0.42 s for both, 0.35-0.47 s
-    for the load alone) instead of slowing the synthesis, and in a process that has loaded it already (a sweep's
+    The first compiled call of a process sets up numba's typing registries (Python, holding the GIL), and a first
+    touch of fresh memory can be slow and erratic (numpy's fills leave the GIL): side by side, the touch hides
+    behind the load instead of slowing the synthesis, and in a process that has loaded it already (a sweep's
     worker) the two halves are touched on two cores. Returns when all is touched, so no fill races the synthesis.
     """
     if spectrum is None:  # spilled: the spectrum is a file

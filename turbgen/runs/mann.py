@@ -77,9 +77,9 @@ def describe(run: MannRun, out: str | Path, threads: int, with_stencil: bool = T
 def _touch_while_loading_kernels(gen: MannSnapshots) -> None:
     """First touch of a single snapshot's buffers (0.5 GiB for an 8192 x 64 x 64 box) while the compiled noise loads.
 
-    numba's first call in a process sets up its typing registries (~0.3 s of Python, holding the GIL), and this VM's
-    first touch of fresh memory is slow and erratic (0.08-1.3 s for those 0.5 GiB in fresh processes; numpy's fills
-    leave the GIL): the spectra are touched in a thread meanwhile (0.37-0.78 s for both, measured), then the output
+    numba's first call in a process sets up its typing registries (Python, holding the GIL), and a first touch of
+    fresh memory can be slow and erratic (numpy's fills leave the GIL): the spectra are touched in a thread
+    meanwhile, then the output
     plane here (on two cores when the kernels were loaded already, as in a sweep's worker). Returns when all is
     touched, so no fill races the synthesis; the field is the same.
     """

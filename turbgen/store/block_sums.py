@@ -1,8 +1,8 @@
 """The float64 sum and sum of squares of a float32 block in one compiled pass (the writer's finiteness check).
 
-numpy's ``block.sum(dtype=np.float64)`` casts chunk by chunk (~1 ns per value) and the sum of squares was a
-second pass (``np.einsum(..., dtype=np.float64)``: ~10 ns per value; ``np.dot`` of float32: float32
-accumulation and OpenBLAS threads spinning beside the generator's). Eight float64 accumulators per sum keep
+numpy's ``block.sum(dtype=np.float64)`` casts chunk by chunk and the sum of squares was a second pass
+(``np.einsum(..., dtype=np.float64)``; ``np.dot`` of float32: float32 accumulation and OpenBLAS threads spinning
+beside the generator's). Eight float64 accumulators per sum keep
 the loop at the speed of memory without reassociating anything behind our back (no fastmath): the result
 depends only on the block's values and their order, never on threads or chunking.
 """

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import zarr
-from zarr.core.buffer import default_buffer_prototype
+from zarr.buffer import default_buffer_prototype
 
 from turbgen.errors import StoreError
 from turbgen.store.chunk_files import raw_chunk_path, read_chunk_file

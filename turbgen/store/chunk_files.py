@@ -3,12 +3,13 @@ allows it, bypassing the page cache.
 
 An uncompressed float32 chunk of a zarr v3 array with the little-endian ``bytes`` codec is a file holding
 exactly the chunk's C-order bytes (``<array>/c/<it>/<ix>/0/0`` with the default "/" chunk key encoding),
-so the writer and the validator may move those bytes themselves. Why: filling the page cache is the most
-expensive step of writing a field on the machines this was measured on (2026-11-23, the 2-core CI
-machine): a buffered write of 2 GiB cost 1.4-3.0 s of kernel CPU (allocating and copying into fresh
-page-cache pages; ``copy_folio_from_iter_atomic`` was 21 % of the default Mann run's CPU), a cold
-buffered read of it 4.0 s, while direct I/O moved the same bytes in 1.6-1.7 s of device time with
-0.1-0.2 s of CPU, time a background writer thread overlaps with the synthesis.
+so the writer and the validator may move those bytes themselves. Why: filling the page cache (allocating and
+copying into fresh page-cache pages) is the most expensive step of writing a field, while direct I/O moves the
+same bytes with little CPU, time a background writer thread overlaps with the synthesis (the measurements:
+benchmarks/README.md, "Measurements behind design choices"). :func:`raw_chunk_path` is the one place that relies
+on zarr's v3 on-disk layout (the Zarr v3 specification's chunk key encoding and ``bytes`` codec, no private zarr
+API); tests/store/test_chunk_files.py compares the files with the ones zarr itself writes, so a zarr that lays
+chunks out otherwise fails there.
 
 Direct I/O needs the buffer address, the file offset and the length to be multiples of the device's
 logical block: data that are not (a chunk of 31 x 31 points, an unaligned array) pass through a

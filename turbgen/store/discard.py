@@ -1,34 +1,46 @@
-"""Discarding a store writer's directory: zarr's pending I/O drained first, then the directory removed.
+"""Discarding a store writer's directory: no zarr I/O of the writer left running, then the directory removed.
 """
 
 from __future__ import annotations
 
+import concurrent.futures
 import shutil
+import threading
 from pathlib import Path
 
 
-def drain_zarr_io(timeout_s: float = 10.0) -> None:
-    """Wait for zarr's I/O tasks still running in its event-loop thread (a Ctrl-C interrupts the
-    waiting, not the writing): otherwise they recreate files in a directory being removed, and
-    print tracebacks at interpreter shutdown."""
-    import asyncio
+def finish_before_raising(fn, *args):
+    """``fn(*args)``, run to its end even when the calling thread is interrupted while it runs.
 
-    from zarr.core import sync as zsync
+    zarr performs a write in its own event-loop thread while the caller waits; an exception raised in the waiting
+    thread (Ctrl-C's KeyboardInterrupt, an application's signal turned into SystemExit) would leave that I/O running,
+    to recreate files in a temporary directory being removed. In the main thread (the only one Python raises such
+    exceptions in) ``fn`` therefore runs in a helper thread, and an interrupted wait waits for ``fn`` to end before
+    the exception goes on (a second interruption stops that wait). Other threads call ``fn`` directly.
 
-    loop = zsync.loop[0]
-    if loop is None or loop.is_closed() or not loop.is_running():
-        return
+    Parameters
+    ----------
+    fn : callable
+        The zarr call (a write, a metadata update).
+    *args
+        Its arguments.
 
-    async def wait_others():
-        me = asyncio.current_task()
-        others = [t for t in asyncio.all_tasks() if t is not me]
-        if others:
-            await asyncio.wait(others, timeout=timeout_s)
-
+    Returns
+    -------
+    object
+        What ``fn`` returns.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return fn(*args)
+    pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="turbgen-zarr-call")
+    future = pool.submit(fn, *args)
     try:
-        asyncio.run_coroutine_threadsafe(wait_others(), loop).result(timeout_s + 1)
-    except Exception:  # noqa: BLE001 - best effort: the directory is removed anyway
-        pass
+        return future.result()
+    except BaseException:
+        concurrent.futures.wait([future])  # fn's own exception: done already; an interruption: fn finishes first
+        raise
+    finally:
+        pool.shutdown(wait=False)
 
 
 def remove_path(path: Path) -> None:

@@ -79,11 +79,10 @@ DEFAULT_CHUNK_T_MAX = 1024
 def compressor() -> None:
     """Compressor of u, v, w: none (chunks stored raw).
 
-    Turbulence in float32 has random low mantissa bits: Blosc-lz4 with byte shuffle (the codec of stores
-    written before 2026-11-23, which still read) kept 0.88-0.92 of the bytes of Mann and Kaimal fields
-    while costing 3.3-3.9 ns of CPU per value against 0.28 ns raw (measured 2026-11-23): about 1.7 s of
-    CPU on the default Mann field, a fifth of its inverse-FFT floor, to save ~10 % of disk. zarr readers
-    decode either layout.
+    Turbulence in float32 has random low mantissa bits: Blosc-lz4 with byte shuffle (the codec of older
+    stores, which still read) kept 0.88-0.92 of the bytes of Mann and Kaimal fields, ~10 % of disk saved for
+    an order of magnitude more CPU per value than raw chunks (benchmarks/README.md). zarr readers decode
+    either layout.
 
     Returns
     -------

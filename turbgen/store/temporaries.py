@@ -4,22 +4,20 @@ Every turbgen writer (field stores, exports, manifests) works under a hidden sib
 ``.NAME.tmp-PID-XXXXXXXX`` (PID = the writing process) and renames it to ``NAME`` only when
 complete. A temporary whose PID is dead on this host (killed with SIGKILL, power loss) is garbage:
 :func:`remove_dead_temporaries` deletes it (the next write of the same output, ``turbgen info``
-and ``turbgen sweep`` call it and say so in one line). :func:`exit_on_signals` turns SIGTERM and
-SIGHUP into ``SystemExit`` so that ``with``-block clean-up runs as it does for Ctrl-C.
+and ``turbgen sweep`` call it and say so in one line). Signals are the application's business
+(:mod:`turbgen.interruption`): here an exception leaving a writer removes its temporary, and a process killed
+outright leaves garbage of a dead writer, never a complete-looking output.
 """
 
 from __future__ import annotations
 
-import contextlib
 import ctypes
 import ctypes.util
 import errno
 import os
 import secrets
 import shutil
-import signal
 import sys
-import threading
 from pathlib import Path
 
 TEMP_MARK = ".tmp-"
@@ -191,104 +189,6 @@ def report_removed(removed) -> None:
     line = removed_line(removed)
     if line:
         print(line, file=sys.stderr)
-
-
-_received: list[int] = []
-
-
-def received_signal() -> int | None:
-    """The signal number that :func:`exit_on_signals` turned into an exception, if one arrived.
-
-    Library code running when the signal lands may replace the ``SystemExit`` (``KeyboardInterrupt``
-    for SIGINT) with an exception of
-    its own (h5py turns an exception raised inside an attribute write into ``TypeError``); the CLI
-    asks this to report the interruption, not the replacement.
-
-    Returns
-    -------
-    int or None
-        The last signal number received, or None.
-    """
-    return _received[-1] if _received else None
-
-
-def _quiet_about_signals(unraisable) -> None:
-    """sys.unraisablehook: say nothing about our signal's exception where Python could not raise it (a
-    weakref callback, a ``__del__``: "Exception ignored in ..." and a traceback); the writer's publish check
-    (:func:`raise_if_signalled`) acts on the signal instead. Anything else goes to the default hook."""
-    if received_signal() is not None and issubclass(unraisable.exc_type, (SystemExit, KeyboardInterrupt)):
-        return
-    sys.__unraisablehook__(unraisable)
-
-
-def raise_if_signalled() -> None:
-    """Raise the exception of a recorded signal (SystemExit(128 + signum), KeyboardInterrupt for SIGINT).
-
-    Writers call it before publishing: a signal whose exception was swallowed where Python cannot
-    propagate it (a weakref callback, a ``__del__``, a library's ``except``) must still stop the publish.
-
-    Raises
-    ------
-    SystemExit, KeyboardInterrupt
-        When :func:`received_signal` is not None.
-    """
-    sig = received_signal()
-    if sig is None:
-        return
-    if sig == signal.SIGINT:
-        raise KeyboardInterrupt
-    raise SystemExit(128 + sig)
-
-
-def forget_signals() -> None:
-    """Forget the signals recorded so far (the CLI calls it when a command starts)."""
-    _received.clear()
-
-
-def _exit_on_signal(signum, frame):
-    _received.append(signum)
-    raise SystemExit(128 + signum)
-
-
-def _interrupt(signum, frame):
-    """Python's own SIGINT behaviour (KeyboardInterrupt), with the signal recorded (``received_signal``)."""
-    _received.append(signum)
-    raise KeyboardInterrupt
-
-
-@contextlib.contextmanager
-def exit_on_signals():
-    """Within the block, SIGTERM and SIGHUP raise SystemExit(128 + signum) in the main thread, and
-    SIGINT raises KeyboardInterrupt as usual; each is recorded for :func:`received_signal`.
-
-    Only default handlers are replaced (a caller's own handler is kept); outside the main thread
-    this does nothing (Python delivers signals to the main thread only). The previous handlers are
-    restored on leaving the block.
-
-    Yields
-    ------
-    None
-
-    Raises
-    ------
-    SystemExit
-        Code 128 + signum, when SIGTERM or SIGHUP arrives within the block.
-    """
-    old = {}
-    hook = sys.unraisablehook
-    if threading.current_thread() is threading.main_thread():
-        sys.unraisablehook = _quiet_about_signals
-        for sig in (signal.SIGTERM, signal.SIGHUP):
-            if signal.getsignal(sig) == signal.SIG_DFL:
-                old[sig] = signal.signal(sig, _exit_on_signal)
-        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # Ctrl-C: recorded as well
-            old[signal.SIGINT] = signal.signal(signal.SIGINT, _interrupt)
-    try:
-        yield
-    finally:
-        for sig, handler in old.items():
-            signal.signal(sig, handler)
-        sys.unraisablehook = hook
 
 
 _RENAME_NOREPLACE, _RENAME_EXCHANGE, _AT_FDCWD = 1, 2, -100

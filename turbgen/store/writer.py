@@ -28,8 +28,9 @@ from turbgen.resources import format_bytes, require_disk
 from turbgen.store import layout
 from turbgen.store.attributes import check_caller_attrs, jsonable, looks_like_turbgen_store
 from turbgen.store.chunk_files import raw_chunk_path, write_chunk_file
-from turbgen.store.discard import drain_zarr_io, remove_path
-from turbgen.store.temporaries import (exit_on_signals, publish, raise_if_signalled, remove_dead_temporaries,
+from turbgen.store.discard import finish_before_raising, remove_path
+from turbgen.cancellation import raise_if_stop_requested
+from turbgen.store.temporaries import (publish, remove_dead_temporaries,
                                        report_removed, temp_name)
 from turbgen.store.paths import check_output_path
 
@@ -72,7 +73,6 @@ class StoreWriter:
         self._attrs = attrs
         self._overwrite = overwrite
         self._tmp: Path | None = None
-        self._signals = None
         self._arrays: dict[str, zarr.Array] = {}
         self._written = {c: np.zeros((grid.nx, grid.nt), dtype=bool) for c in layout.COMPONENTS}
         self._bookkeeping = threading.Lock()
@@ -80,39 +80,28 @@ class StoreWriter:
 
     # -- context protocol -------------------------------------------------------------------
     def __enter__(self) -> "StoreWriter":
-        self._signals = exit_on_signals()
-        self._signals.__enter__()
         self._tmp = temp_name(self.path)
         try:
-            self._create(self._tmp)
+            finish_before_raising(self._create, self._tmp)
         except BaseException as exc:
             self._discard()
-            self._restore_signal_handlers()
             _raise_disk_error(exc, self.path)
             raise
         return self
 
     def __exit__(self, exc_type, exc, tb) -> bool:
-        try:
-            if exc_type is not None:
-                self._discard()
-                _raise_disk_error(exc, self.path)
-                return False
-            try:
-                raise_if_signalled()  # a signal whose exception was swallowed on the way publishes nothing
-                self._finish()
-            except BaseException as err:
-                self._discard()
-                _raise_disk_error(err, self.path)
-                raise
+        if exc_type is not None:
+            self._discard()
+            _raise_disk_error(exc, self.path)
             return False
-        finally:
-            self._restore_signal_handlers()
-
-    def _restore_signal_handlers(self) -> None:
-        if self._signals is not None:
-            self._signals.__exit__(None, None, None)
-            self._signals = None
+        try:
+            raise_if_stop_requested()  # an interruption whose exception was swallowed on the way publishes nothing
+            self._finish()
+        except BaseException as err:
+            self._discard()
+            _raise_disk_error(err, self.path)
+            raise
+        return False
 
     # -- writing ----------------------------------------------------------------------------
     def add_attrs(self, **attrs) -> None:
@@ -139,7 +128,7 @@ class StoreWriter:
         clash = [k for k in attrs if k in self._group.attrs or k == layout.MARKER]
         if clash:
             raise ValueError(f"store attrs {clash} are already set")
-        self._group.attrs.update(jsonable(attrs))
+        finish_before_raising(self._group.attrs.update, jsonable(attrs))
 
     def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0, squares: bool = False):
         """Write ``data`` (nt_block, ny, nz) to ``component`` at plane index ``ix``, time ``t0``.
@@ -201,10 +190,11 @@ class StoreWriter:
                 if file is not None:
                     write_chunk_file(file, block[a - t0 : b - t0])
                 else:
-                    array[a:b, ix : ix + 1] = block[a - t0 : b - t0, None]
+                    finish_before_raising(array.__setitem__, (slice(a, b), slice(ix, ix + 1)),
+                                          block[a - t0 : b - t0, None])
         else:
             with self._plane_locks[(component, ix)]:
-                self._arrays[component][t0:t1, ix] = block
+                finish_before_raising(self._arrays[component].__setitem__, (slice(t0, t1), ix), block)
         with self._bookkeeping:
             self._written[component][ix, t0:t1] = True
         return (total, sum_sq) if squares else total
@@ -255,10 +245,13 @@ class StoreWriter:
                     f"store {self.path}: {c} at plane x = {self.grid.x_m[ix]:g} m was not written from "
                     f"t index {it} ({int((~done).sum())} samples of {c} missing); nothing was written"
                 )
+        finish_before_raising(self._mark_complete)
+        self._install()
+
+    def _mark_complete(self) -> None:
         self._group.attrs[layout.MARKER] = True  # the completeness marker, written last ...
         layout.silence_consolidated_metadata_warning()
         zarr.consolidate_metadata(str(self._tmp))  # ... together with the consolidated metadata
-        self._install()
 
     def _install(self) -> None:
         """Rename the finished temporary directory to ``path`` (swapping out an old store if allowed)."""
@@ -273,7 +266,6 @@ class StoreWriter:
 
     def _discard(self) -> None:
         if self._tmp is not None:
-            drain_zarr_io()
             remove_path(self._tmp)
             self._tmp = None
 

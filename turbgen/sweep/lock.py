@@ -1,8 +1,9 @@
-"""A lock file that keeps two sweeps from writing the same output directory.
+"""A lock that keeps two sweeps from writing the same output directory (the ``filelock`` package).
 
-``DIR/.turbgen-sweep.lock`` is created with O_CREAT | O_EXCL and holds the owner's host, pid and
-start time (JSON). A lock left by a process that no longer exists on this host is stale and is
-taken over; a lock of a live process, or of another host (which cannot be checked), is refused.
+``DIR/.turbgen-sweep.lock`` is an OS file lock (flock; filelock's soft lock where the file system has none), so a
+sweep that dies, even by SIGKILL, holds nothing any more. While held, the file names its owner's host, pid and start
+time (JSON) for the refusal message; on release it is emptied and left in place (filelock never unlinks a Unix lock
+file: a waiter could otherwise lock a removed inode while a third process locks a new one).
 """
 
 from __future__ import annotations
@@ -13,18 +14,19 @@ import socket
 from datetime import datetime, timezone
 from pathlib import Path
 
+from filelock import FileLock, Timeout
+
 from turbgen.errors import TurbgenError
-from turbgen.store.temporaries import pid_alive  # the one liveness test, shared with the store writers
 
 LOCK_NAME = ".turbgen-sweep.lock"
 
 
 class SweepLockedError(TurbgenError):
-    """Another sweep (alive, or on another host) holds the directory's lock."""
+    """Another sweep holds the directory's lock."""
 
 
 class SweepLock:
-    """Context manager holding DIR's sweep lock; released on exit (only if still ours).
+    """Context manager holding DIR's sweep lock; released on exit.
 
     Parameters
     ----------
@@ -40,22 +42,21 @@ class SweepLock:
             "pid": os.getpid(),
             "started_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         }
+        self._lock = FileLock(self.path, blocking=False, on_acquired=self._write_owner)
 
-    def _read(self) -> dict | None:
+    def _write_owner(self, fd: int) -> None:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, json.dumps(self.owner).encode(), 0)
+
+    def _holder(self) -> dict:
         try:
             data = json.loads(self.path.read_text())
-            return data if isinstance(data, dict) else {}
-        except FileNotFoundError:
-            return None
-        except (OSError, ValueError):
-            return {}  # unreadable or half-written: treated as held by an unknown owner
-
-    def _stale(self, holder: dict) -> bool:
-        pid = holder.get("pid")
-        return holder.get("host") == self.owner["host"] and isinstance(pid, int) and not pid_alive(pid)
+        except (OSError, ValueError):  # released meanwhile, or being written
+            return {}
+        return data if isinstance(data, dict) else {}
 
     def acquire(self) -> "SweepLock":
-        """Create the lock file with this process as owner, taking over a stale lock of a dead local process.
+        """Take the lock without waiting.
 
         Returns
         -------
@@ -65,39 +66,30 @@ class SweepLock:
         Raises
         ------
         SweepLockedError
-            If a live process, one on another host, or an unreadable lock holds the directory, or the lock
-            file keeps changing (three attempts).
+            If another sweep (another process, or another SweepLock of this process) holds the directory.
         """
-        for _ in range(3):
-            try:
-                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-            except FileExistsError:
-                holder = self._read()
-                if holder is None:
-                    continue  # released between our open and read: retry
-                if self._stale(holder):
-                    self.path.unlink(missing_ok=True)
-                    continue
-                pid, host, since = (holder.get(k, "?") for k in ("pid", "host", "started_utc"))
-                who = f"pid {pid} on {host} since {since}"
-                raise SweepLockedError(
-                    f"{self.path.parent} is locked by another sweep ({who}); "
-                    f"delete {self.path} only if that sweep is no longer running"
-                ) from None
-            with os.fdopen(fd, "w") as fh:
-                json.dump(self.owner, fh)
-            return self
-        raise SweepLockedError(f"could not take the lock {self.path} (it keeps changing)")
+        try:
+            self._lock.acquire()
+        except Timeout:
+            pid, host, since = (self._holder().get(k, "?") for k in ("pid", "host", "started_utc"))
+            raise SweepLockedError(
+                f"{self.path.parent} is locked by another sweep (pid {pid} on {host} since {since}); "
+                "wait for it to finish or use another `out`"
+            ) from None
+        return self
 
     def release(self) -> None:
-        """Remove the lock file if it still names this owner (a lock taken over by another sweep is left).
+        """Release the lock (the lock file is emptied, not removed).
 
         Returns
         -------
         None
         """
-        if self._read() == self.owner:
-            self.path.unlink(missing_ok=True)
+        if self._lock.is_locked:
+            try:
+                os.truncate(self.path, 0)
+            finally:
+                self._lock.release()
 
     def __enter__(self) -> "SweepLock":
         return self.acquire()

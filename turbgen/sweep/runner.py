@@ -34,10 +34,11 @@ from dataclasses import replace
 from pathlib import Path
 
 from turbgen.errors import ParameterError
+from turbgen.interruption import exit_on_signals
 from turbgen.resources import require_disk
 from turbgen.runs.models import MODELS
 from turbgen.store import open_store
-from turbgen.store.temporaries import exit_on_signals, report_removed
+from turbgen.store.temporaries import report_removed
 from turbgen.sweep.lock import SweepLock
 from turbgen.sweep.manifest import read_manifest, utc_now, write_manifest
 from turbgen.sweep.plan import SweepPlan, check_memory_budget

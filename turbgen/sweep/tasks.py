@@ -214,7 +214,7 @@ def default_workers(tasks) -> int:
     n = min(os.cpu_count() or 1, len(tasks))
     avail = available_memory_bytes()
     if avail and tasks:
-        # the seed changes no memory: one estimate per distinct run (a Kaimal estimate sizes its tori, ~15 ms)
+        # the seed changes no memory: one estimate per distinct run (a Kaimal estimate sizes its tori)
         distinct = {(t.model, replace(t.run, seed=0), t.generate, t.threads, t.memory_bytes): t for t in tasks}
         n = min(n, int(0.8 * avail) // max(task_bytes(t) for t in distinct.values()))
     return max(1, n)

@@ -60,8 +60,8 @@ SMOOTH_DECAYS = 5.0
 # tori larger than this and than 4 x the grid's minimal torus (torus_cap) are not built (16 MiB of complex64 per
 # frequency and plane, up to FREQ_CHUNK = 32 frequencies at once per thread, and their FFTs): a dense factor instead
 MAX_TORUS_POINTS = 1 << 21
-# operations of one dense factor per N^3: eigh with eigenvectors and the product V sqrt(Lambda) V^T (measured 8-16 x a
-# Cholesky factor's N^3 / 3 for N = 100 ... 2500)
+# operations of one dense factor per N^3: eigh with eigenvectors and the product V sqrt(Lambda) V^T (its measured
+# cost relative to a Cholesky factor: benchmarks/README.md, "Measurements behind design choices")
 DENSE_OPS_PER_N3 = 4.0
 # at most this many floating-point operations for the dense factors of one component (the grids accepted when the
 # factors were Cholesky's N^3 / 3 at 1e11 operations)
@@ -195,8 +195,7 @@ def dense_is_cheaper(n_points: int, torus_points: int) -> bool:
     """Whether a dense square root of a bin's n x n C costs fewer floating-point operations than its torus of
     ``torus_points`` points M: the factor (DENSE_OPS_PER_N3 n^3) and one sample (~4 n^2), against the torus's eigenvalue FFT and
     one sample's FFT (~5 M log2(M) each). True on small grids where the coherence needs a torus much larger than the
-    grid: a default-length field on 5 x 5 points with a_yz = 0.5 took 7.6 s and 1.3 GB on tori of up to 1440 x 1440
-    points, 0.9 s and 0.2 GB with dense factors."""
+    grid (e.g. 5 x 5 points with a_yz = 0.5: tori of up to 1440 x 1440 points)."""
     m = max(int(torus_points), 2)
     return DENSE_OPS_PER_N3 * n_points**3 + 4.0 * n_points**2 <= 10.0 * m * math.log2(m)
 

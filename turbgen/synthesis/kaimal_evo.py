@@ -96,9 +96,8 @@ def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int =
     """One plane's field from its yz coefficients: ``irfft(spec * amp[:, None, None], n=nt, axis=0, norm="forward")``.
 
     Computed on contiguous blocks of about 1 MiB of columns: pocketfft reads and writes time columns
-    strided by ny nz values otherwise, and the block copy applies the amplitudes (measured 2026-11-23 on
-    the default grid, one thread, loaded machine: 19-28 -> 17-24 ms per plane in a run, 20 -> 14 ms with
-    the spectrum in cache). Columns are transformed independently, so the blocks change no bit.
+    strided by ny nz values otherwise, and the block copy applies the amplitudes. Columns are transformed
+    independently, so the blocks change no bit.
 
     Parameters
     ----------
@@ -367,8 +366,7 @@ class KaimalEvo:
             amp[-1] = np.sqrt(self.variances[component][-1]).astype(np.float32)
         pool = ThreadPoolExecutor(max_workers=self.workers)
         # one work array per pool thread for the torus noise, reused from chunk to chunk and sampled in place:
-        # three fresh arrays of up to ~70 MB per plane and chunk cost page faults and zeroing (default field,
-        # one thread, loaded machine: torus sampling and the other coefficient work 0.94-1.1 -> 0.70-0.81 s CPU)
+        # three fresh arrays of up to ~70 MB per plane and chunk cost page faults and zeroing
         local = threading.local()
 
         def work(n):

@@ -14,17 +14,14 @@ do not share the rules.
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from turbgen.theory.eddy_lifetime import shear_lifetime_table
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
+from turbgen.synthesis.box_shape import BoxShape
 from turbgen.synthesis.square_root import principal_sqrt
-
-if TYPE_CHECKING:
-    from turbgen.synthesis.mann_stencil import BoxShape
 
 CELL_RADIUS = 2
 CELL_K1_FACTOR = 4.0  # (1, 2) and (3, 8) change the paper box's sigma^2 by < 0.4 % and < 0.1 %

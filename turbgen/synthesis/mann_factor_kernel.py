@@ -1,10 +1,10 @@
 """Compiled per-point loops of the Mann stencil (turbgen.synthesis.mann_stencil): lifetimes and compact factors.
 
 A few passes over a batch of slabs (small enough to stay in the core's cache) instead of ~40 whole-array
-numpy passes, whose memory traffic cost ~100 ns per point. The loops evaluate the float64 operations of the
+numpy passes and their memory traffic. The loops evaluate the float64 operations of the
 former numpy code in the same order (tests/synthesis/stencil_reference.py keeps it as the reference); log,
 exp and arctan are left to numpy's ufuncs between the loops (mann_stencil.slab_factors), on arrays of the
-arguments these loops write: numpy's SIMD log, exp and arctan are 4-7 times faster than the C library's
+arguments these loops write: numpy's SIMD log, exp and arctan are faster than the C library's
 scalar ones a compiled loop would call, and round like those of the numpy code, so the stencil keeps its
 bits. ``error_model="numpy"``: a division by zero gives inf or nan as in numpy (k = 0 and the k1 = 0 slab,
 whose values are replaced by their limits) instead of raising.
@@ -109,7 +109,7 @@ def mann_factors(k1, k2, k3, beta_half, inv_tau_half, e, arctan, unit, energy, s
             w = kk2 / (q * math.sqrt(q))
             ratio = kk2 / kk1
             # the columns k3 >= 0 (and the Nyquist), then k3 < 0, each read from beta_half in one direction: a loop
-            # the compiler vectorises (one loop with the mirrored column index did not: 1.4-1.5x slower, same bits)
+            # the compiler vectorises (one loop with the mirrored column index did not; same bits either way)
             for part in range(2):
                 for l in range(0 if part == 0 else h + 1, h + 1 if part == 0 else nzp):
                     lc = l if part == 0 else nzp - l

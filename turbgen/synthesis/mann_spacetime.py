@@ -22,6 +22,7 @@ from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+import pyfftw
 
 from turbgen.errors import ParameterError
 from turbgen.resources import default_threads
@@ -31,31 +32,11 @@ from turbgen.synthesis.pencil_crop import crop_into_pencils
 from turbgen.synthesis.random_streams import complex_normal
 
 
-def _import_pyfftw():
-    """pyfftw without its dask interface: pyfftw's package __init__ imports dask.array (and through it pandas and
-    xarray) when dask is installed, ~0.9 s of CPU at every process start (measured; about 1 s of the
-    `turbgen mann` CLI); only pyfftw.FFTW is used here. dask stays importable afterwards."""
-    import sys
-
-    if "dask.array.fft" in sys.modules:
-        import pyfftw
-    else:
-        sys.modules["dask.array.fft"] = None  # makes pyfftw's optional `from dask.array.fft import ...` fail fast
-        try:
-            import pyfftw
-        finally:
-            del sys.modules["dask.array.fft"]
-    return pyfftw
-
-
-pyfftw = _import_pyfftw()
-
-
 COMPONENTS = ("u", "v", "w")
 SLAB_BATCH = 4  # k1 slabs per work unit (fixed: it fixes the FFT plan shapes, hence the rounding)
 # slabs per task: SLAB_BATCH-slab units in turn, a stencil computed on demand for all of them at once (its
 # elementwise coefficients do not depend on the batch; per 4 slabs its ~10 numpy and compiled calls per batch, with
-# two threads contending for the GIL, cost 0.9 s instead of 0.5 s of CPU on an 8192 x 128 x 128 box)
+# two threads contending for the GIL, cost noticeably more CPU)
 TASK_SLABS = 4 * SLAB_BATCH
 ROW_BLOCK = 64  # (y, z) rows per real inverse FFT along k1
 _ALIGN = 64
@@ -328,7 +309,7 @@ class MannSnapshots:
         plan.update_arrays(spectra, s.rows[:n])
         plan.execute()
         # Transposed through rows whose stride is not a power of two: read straight from s.rows (nt = 2^p) every
-        # column hits the same cache sets (2-3x slower: 3.0-3.6 vs 1.1-1.5 ns per value measured, nt = 1024-8192)
+        # column hits the same cache sets
         staged = s.staged[:n, : self.box.nt]
         staged[...] = s.rows[:n]
         output.reshape(self.box.nt, -1)[:, r0:r1] = staged.T

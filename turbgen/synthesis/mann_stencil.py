@@ -25,56 +25,14 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from turbgen.synthesis.box_shape import BoxShape
 from turbgen.synthesis.mann_cells import axis_cells
 from turbgen.theory.eddy_lifetime import evolution_lifetime_table, shear_lifetime_table
-from turbgen.theory.lattice import k2_wavenumbers, k3_wavenumbers
 from turbgen.theory.params import MannParams
 
 STENCIL_VERSION = 5  # 3: lifetime tables, Mann (1994) Eq. 13-17; 4: arctan; 5: ae-free float64 factors
 _ODD = (False, False, False, True)  # parity of A, P, Z1, Z2 under k2 -> -k2
 _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0.5 MiB per temporary)
-
-
-@dataclass(frozen=True)
-class BoxShape:
-    """The synthesis box: nt samples along xi spaced dx_m [m], nyp x nzp (padded) spaced dy_m, dz_m [m]."""
-
-    nt: int
-    dx_m: float
-    nyp: int
-    nzp: int
-    dy_m: float
-    dz_m: float
-
-    @property
-    def nk1(self) -> int:
-        """Slabs of the real-FFT half spectrum along xi."""
-        return self.nt // 2 + 1
-
-    @property
-    def nk2_half(self) -> int:
-        """Stored k2 rows (k2 = 0 .. nyp//2)."""
-        return self.nyp // 2 + 1
-
-    def dk(self) -> tuple[float, float, float]:
-        """Wavenumber spacings (dk1, dk2, dk3) [rad/m] of the periodic box."""
-        return (
-            2 * np.pi / (self.nt * self.dx_m),
-            2 * np.pi / (self.nyp * self.dy_m),
-            2 * np.pi / (self.nzp * self.dz_m),
-        )
-
-    def k1(self) -> np.ndarray:
-        """Physical k1 [rad/m] of the stored slabs: -i dk1 (time reversal, see module docstring)."""
-        return -np.arange(self.nk1) * self.dk()[0]
-
-    def k2(self) -> np.ndarray:
-        """k2 [rad/m] of all nyp rows: j dk2 for j <= nyp//2 (Nyquist stored positive), else (j - nyp) dk2."""
-        return k2_wavenumbers(self.nyp, self.dy_m)
-
-    def k3(self) -> np.ndarray:
-        """k3 [rad/m] of the nzp columns (numpy fftfreq order)."""
-        return k3_wavenumbers(self.nzp, self.dz_m)
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,4 +1,4 @@
-"""numpy's SFC64 generator seeded by ``SeedSequence(key)``, compiled (numba) so a stream costs ~1 us to set up.
+"""numpy's SFC64 generator seeded by ``SeedSequence(key)``, compiled (numba) so a stream is cheap to set up.
 
 The state after :func:`seed_state` is exactly that of ``numpy.random.SFC64(numpy.random.SeedSequence(key))``
 (numpy >= 1.17; O'Neill's SeedSequence mixing of the key's 32-bit words into a pool of 4 words, 3 uint64

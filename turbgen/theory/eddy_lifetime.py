@@ -9,9 +9,9 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 from scipy.special import hyp2f1
 
-from turbgen.theory.cubic_spline import not_a_knot_coefficients
 from turbgen.theory.params import MannParams
 
 # a = [2F1(1/3, 17/6; 4/3; -1)]^(-1/2) ≈ 1.23443 (Guo et al. 2023, Eq. 7)
@@ -123,7 +123,7 @@ def evolution_lifetime_s(k, params: MannParams):
 
 # -- Tabulated lifetimes ------------------------------------------------------------------------------
 # Every lifetime above depends on kL only. Synthesis evaluates them on tens of millions of wavenumbers
-# (the hypergeometric function of Eq. 4 costs ~0.2 us per point), so it uses a not-a-knot cubic spline
+# (the hypergeometric function of Eq. 4 is costly per point), so it uses a not-a-knot cubic spline
 # of tau~ against x = ln(kL) on a uniform grid of step h = TABLE_STEP[kind] instead. Its relative error is
 # of order (5/384) h^4 max|d^4 tau~/dx^4| / tau~, largest for the lifetimes with the sharp (kL)^10
 # knee (Eq. 6 and 15 with a large slope change). Measured on 2e6 random kL over the table's range for
@@ -191,7 +191,7 @@ class LifetimeTable:
         self.x0, self.h = float(np.log(TABLE_KL_MIN)), TABLE_STEP[kind]
         n = int(np.ceil((np.log(TABLE_KL_MAX) - self.x0) / self.h)) + 1
         x = self.x0 + self.h * np.arange(n)
-        c = not_a_knot_coefficients(x, self.exact(np.exp(x)))  # powers 3, 2, 1, 0 of (x - x_i), (n - 1,) each
+        c = CubicSpline(x, self.exact(np.exp(x))).c  # not-a-knot; powers 3, 2, 1, 0 of (x - x_i), (n - 1,) each
         self.coefficients = tuple(np.ascontiguousarray(row) for row in c)  # (c3, c2, c1, c0) per interval
         self.n_intervals = n - 1
 

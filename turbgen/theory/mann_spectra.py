@@ -7,8 +7,6 @@ The (k2, k3) quadrature of Eq. 8 (rule and measured accuracy) is in turbgen.theo
 
 Variances integrate F_ii over k1 with Gauss panels in ln(k1 L) on [1e-6, 1e5] plus the inertial
 tail (3/2) K F(K) beyond K = 1e5/L; at Gamma = 0 they match (1/3) B(5/2, 1/3) ae L^(2/3) to 1e-6.
-Cost: ~0.25 s for 100 k1 values of one-point spectra, ~1.6 s for a yz coherence at d = 28 m up
-to k1 = 1 rad/m (2-core machine).
 """
 
 from __future__ import annotations

@@ -7,11 +7,11 @@ The derivations are in the module docstring of ``verdict``.
 from __future__ import annotations
 
 import numpy as np
+from scipy.stats import chi2, norm
 
 from turbgen.validate.checks import Check
 from turbgen.validate.distributions import coh2_z, phase_z
 from turbgen.validate.estimators import Estimates
-from turbgen.validate.normal_and_chi2 import chi2_logcdf, chi2_logsf, norm_isf, norm_ppf
 from turbgen.validate.welch_variance import MAX_LAG, WelchCovariance
 
 BANDS_PER_DECADE = 5
@@ -35,9 +35,9 @@ def chi2_z(ratio, nu):
         z [-] with the probability of the smaller tail (two-sided tails kept symmetric in probability).
     """
     ratio, nu = np.asarray(ratio, float), np.asarray(nu, float)
-    lower = chi2_logcdf(nu * ratio, nu)
-    upper = chi2_logsf(nu * ratio, nu)
-    return np.where(lower < upper, norm_ppf(np.exp(lower)), norm_isf(np.exp(upper)))
+    lower = chi2.logcdf(nu * ratio, nu)
+    upper = chi2.logsf(nu * ratio, nu)
+    return np.where(lower < upper, norm.ppf(np.exp(lower)), norm.isf(np.exp(upper)))
 
 
 def coherence_stats(rho, n):

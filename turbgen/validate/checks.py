@@ -5,8 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.stats import norm
 
-from turbgen.validate.normal_and_chi2 import norm_isf
 
 ALPHA = 1e-3  # family-wise probability that a correct field fails one given metric
 
@@ -50,7 +50,7 @@ class MetricResult:
     z_crit: float = 0.0
 
     def __post_init__(self):
-        self.z_crit = float(norm_isf(ALPHA / (2 * max(len(self.checks), 1))))
+        self.z_crit = float(norm.isf(ALPHA / (2 * max(len(self.checks), 1))))
 
     @property
     def max_abs_z(self) -> float:

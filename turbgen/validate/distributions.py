@@ -28,8 +28,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import (erfc, erfcx, gammainc, gammaincc, gammainccinv, gammaincinv, ncfdtr, ndtr, roots_hermitenorm,
                            roots_laguerre, roots_legendre)
+from scipy.stats import norm
 
-from turbgen.validate.normal_and_chi2 import norm_isf, norm_ppf
 
 N_Q_NODES = 40  # Gauss-Hermite nodes of the chi2_{2n} mixture (normal scores up to ~+-8.9)
 N_PHI_NODES = 48  # Gauss-Legendre nodes per piece of the phase tail integral
@@ -176,7 +176,7 @@ def normal_score(lower, upper):
     """Signed normal score of one-sided tail probabilities: Phi^-1(lower) if the lower tail is the smaller one,
     else Phi^-1(1 - upper); |z| > z_crit  <=>  the smaller tail < ALPHA / (2 n), as for a Gaussian z."""
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
-    return np.where(lower < upper, norm_ppf(np.maximum(lower, 1e-300)), norm_isf(np.maximum(upper, 1e-300)))
+    return np.where(lower < upper, norm.ppf(np.maximum(lower, 1e-300)), norm.isf(np.maximum(upper, 1e-300)))
 
 
 def coh2_z(g, gamma2, n):
@@ -188,7 +188,7 @@ def phase_z(dphi, gamma2, n):
     """Signed normal score [-] of a phase deviation ``dphi`` [rad] (wrapped): sign(dphi) z with
     P(|error| >= |dphi|) = 2 Phi(-z) under (gamma2, n) (:func:`phase_sf`)."""
     wrapped = (np.asarray(dphi, float) + np.pi) % (2.0 * np.pi) - np.pi
-    return np.sign(wrapped) * norm_isf(np.maximum(phase_sf(dphi, gamma2, n), 1e-300) / 2.0)
+    return np.sign(wrapped) * norm.isf(np.maximum(phase_sf(dphi, gamma2, n), 1e-300) / 2.0)
 
 
 def cospectrum_tails(x, c, n):

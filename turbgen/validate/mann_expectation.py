@@ -18,9 +18,9 @@ import math
 from functools import partial
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from turbgen.grid import Grid
-from turbgen.theory.cubic_spline import NotAKnotSpline
 from turbgen.theory.lattice import line_frequencies
 from turbgen.theory.mann_spectra import one_point_spectra, variances
 from turbgen.theory.mann_tensor import sheared_tensor
@@ -43,7 +43,7 @@ def _interp_lines(k1_nodes, values, k1_lines, positive: bool):
     out = np.empty(k1_lines.size, dtype=values.dtype)
     out[0] = values[0]
     if positive:
-        out[1:] = np.exp(NotAKnotSpline(x, np.log(values[1:]))(xl))
+        out[1:] = np.exp(CubicSpline(x, np.log(values[1:]))(xl))
     elif np.iscomplexobj(values):
         out[1:] = np.interp(xl, x, values[1:].real) + 1j * np.interp(xl, x, values[1:].imag)
     else:
@@ -168,7 +168,7 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
     band_lim = band_limited_spectra(params, grid, bl_k1)
     auto_model = {}
     for i, c in enumerate(COMPONENTS):
-        spline = NotAKnotSpline(np.log(bl_k1), np.log(band_lim[i]))
+        spline = CubicSpline(np.log(bl_k1), np.log(band_lim[i]))
         auto_model[c] = np.concatenate([[0.0], np.exp(spline(np.log(k1_lines[1:]))) * lat.dk1])
     norm13 = np.sqrt(f_nodes["u"] * f_nodes["w"])
     uw = f13 if exact else ratio_lines(f13, norm13) * np.sqrt(auto["u"] * auto["w"])

@@ -2,8 +2,8 @@
 
 The theory and the expected Welch estimates depend on the store's model, parameters and grid and on the
 options of the estimates (rotor radius, segment length), never on the seed or the data: a sweep validating
-20 seeds of one configuration computes them once (the default Mann store: 6.5 s of one core each time,
-which on two cores also slows the estimates it runs beside). The key is every attribute of the store but
+20 seeds of one configuration computes them once (for a Mann store they cost more than the estimates, which
+they also slow down when run beside them). The key is every attribute of the store but
 its seed and creation time (any other difference, e.g. another turbgen version, makes a new entry), and
 the entries are kept in this process only (sweep workers, the service, library loops), a few at a time.
 """

@@ -26,8 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import brentq
+from scipy.stats import chi2, norm
 
-from turbgen.validate.normal_and_chi2 import chi2_cdf, chi2_sf, norm_cdf, norm_pdf, norm_sf
 
 N_MODE_LINES = 4  # lowest lines whose top modes enter exactly
 N_MODES = 4  # top modes per such line
@@ -121,7 +121,7 @@ def gamma_sum_tails(x: float, alpha: np.ndarray, theta: np.ndarray) -> tuple[flo
         return 0.0, 1.0
     if abs(x - mean) < 1e-3 * np.sqrt(var):  # the saddlepoint formula is 0/0 at the mean: moment-matched gamma
         nu = 2.0 * mean**2 / var
-        return float(chi2_cdf(nu * x / mean, nu)), float(chi2_sf(nu * x / mean, nu))
+        return float(chi2.cdf(nu * x / mean, nu)), float(chi2.sf(nu * x / mean, nu))
 
     def k1(t):
         return float(np.sum(alpha * theta / (1.0 - theta * t)))
@@ -134,7 +134,7 @@ def gamma_sum_tails(x: float, alpha: np.ndarray, theta: np.ndarray) -> tuple[flo
     k2 = float(np.sum(alpha * (theta / (1.0 - theta * t)) ** 2))
     w = np.sign(t) * np.sqrt(max(2.0 * (t * x - k), 0.0))
     u = t * np.sqrt(k2)
-    upper = float(norm_sf(w) + norm_pdf(w) * (1.0 / u - 1.0 / w))
+    upper = float(norm.sf(w) + norm.pdf(w) * (1.0 / u - 1.0 / w))
     upper = min(max(upper, 0.0), 1.0)
-    lower = float(norm_cdf(w) - norm_pdf(w) * (1.0 / u - 1.0 / w))
+    lower = float(norm.cdf(w) - norm.pdf(w) * (1.0 / u - 1.0 / w))
     return min(max(lower, 0.0), 1.0), upper

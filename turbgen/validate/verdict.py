@@ -61,12 +61,12 @@ from contextlib import nullcontext
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import chi2
 
 from turbgen.validate.band_checks import Bands, coherence_stats
 from turbgen.validate.checks import Check, Curve, MetricResult
 from turbgen.validate.distributions import cospectrum_z, normal_score
 from turbgen.validate.estimators import COMPONENTS, Estimates, segment_starts
-from turbgen.validate.normal_and_chi2 import chi2_ppf
 from turbgen.validate.prediction import Theory
 from turbgen.validate.variance_law import gamma_sum_tails, gamma_terms
 from turbgen.validate.welch_kernel import WelchKernel
@@ -201,7 +201,7 @@ def _spectrum(name, title, estimate, expected, cov, bands: Bands, f) -> MetricRe
     checks = bands.spectrum_checks(name.split("_")[-1], estimate, expected, cov)
     b = bands.bins
     nu = 2.0 * expected[b] ** 2 / cov[0][b]  # 95 % interval of a chi2_nu/nu estimate (always positive)
-    lo, hi = estimate[b] * nu / chi2_ppf(0.975, nu), estimate[b] * nu / chi2_ppf(0.025, nu)
+    lo, hi = estimate[b] * nu / chi2.ppf(0.975, nu), estimate[b] * nu / chi2.ppf(0.025, nu)
     curve = Curve(name, f[b], estimate[b], expected[b], lo, hi)
     return MetricResult(name, title, "m^2/s^2/Hz", checks, [curve])
 

@@ -54,7 +54,7 @@ class WelchKernel:
     def _dirichlet(nu, n):
         z = np.exp(-2j * np.pi * nu)
         with np.errstate(divide="ignore", invalid="ignore"):
-            d = (1.0 - np.exp(-2j * np.pi * n * nu)) / (1.0 - z)  # z^n as one exp (complex power: 6 x slower)
+            d = (1.0 - np.exp(-2j * np.pi * n * nu)) / (1.0 - z)  # z^n as one exp (cheaper than a complex power)
         return np.where(np.abs(np.sin(np.pi * nu)) < 1e-12, complex(n), d)
 
     @classmethod
