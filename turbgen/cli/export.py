@@ -6,7 +6,9 @@ from __future__ import annotations
 import click
 
 from turbgen.export import EXPORTERS, ExportRequest, export_store
+from turbgen.errors import ParameterError
 from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT
+from turbgen.spec.mean_wind_files import mean_wind_from_options
 from turbgen.store.paths import check_output_path
 
 
@@ -21,16 +23,33 @@ from turbgen.store.paths import check_output_path
 @click.option("--hub-height", "hub_height", type=float, default=None, help="Hub height [m] (default: the store's).")
 @click.option("--shear-exponent", "shear", type=float, default=None,
               help=f"Power-law exponent of the mean profile added to u (InflowWind formats; default {DEFAULT_SHEAR_EXPONENT:g}).")
+@click.option("--profile", "profile", default=None, metavar="KIND:VALUE",
+              help="Mean profile added (InflowWind/HAWC2 formats): power:ALPHA | log:z0=Z0[,d=D] (roughness and "
+                   "displacement, m) | table:FILE (CSV rows z [m], U [m/s] [, direction deg]; speeds scaled so the "
+                   "table's value at hub height is the hub mean). Default power:0.2.")
+@click.option("--veer", "veer", type=float, default=None, metavar="DEG_PER_M",
+              help="Direction change with height [deg/m], (u, v) turned per height about the hub, counter-clockwise "
+                   "seen from above (northern-hemisphere veer is negative).")
+@click.option("--mean-history", "mean_history", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="Hub-height mean history: CSV rows t [s], U [m/s] [, direction deg] at the turbine (times within "
+                   "the record; linear between rows, end values held); the advection speed stays the store's U.")
 @click.option("--tower", is_flag=True, help="bts: add tower points down to the ground.")
 @click.option("--periodic/--no-periodic", default=True, show_default=True,
               help="Flag bts/wnd/evo periodic in time (InflowWind wraps instead of starting half a grid upstream).")
 @click.option("--drop-below-ground", is_flag=True, help="Drop grid rows at or below the ground instead of refusing.")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-def export(store, fmt, out, plane, hub_height, shear, tower, periodic, drop_below_ground, overwrite):
+def export(store, fmt, out, plane, hub_height, shear, profile, veer, mean_history, tower, periodic, drop_below_ground,
+           overwrite):
     """Export STORE to --format; prints the InflowWind input-file lines that load the result."""
     check_output_path(out)
+    if shear is not None and profile is not None:
+        raise ParameterError(f"--shear-exponent {shear:g} and --profile {profile} both set the profile; give one")
+    if shear is not None and (veer is not None or mean_history is not None):
+        profile, shear = f"power:{shear!r}", None
+    mean_wind = mean_wind_from_options(profile, veer, mean_history)
     request = ExportRequest(plane=plane, hub_height_m=hub_height, shear_exponent=shear, tower=tower,
-                            periodic=periodic, drop_below_ground=drop_below_ground, overwrite=overwrite)
+                            periodic=periodic, drop_below_ground=drop_below_ground, overwrite=overwrite,
+                            mean_wind=mean_wind)
     result = export_store(store, fmt, out, request)
     for p in result.paths:
         click.echo(f"wrote {p}", err=True)

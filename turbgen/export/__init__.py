@@ -121,7 +121,9 @@ def _check_applicable(fmt: str, request: ExportRequest) -> None:
     if fmt in WHOLE_FIELD:
         if request.plane is not None:
             given.append("`plane`")
-        if request.hub_height_m is not None or request.drop_below_ground or request.shear_exponent is not None:
-            given.append("`hub_height`/`shear_exponent`/`drop_below_ground` (no mean profile is added)")
+        if (request.hub_height_m is not None or request.drop_below_ground or request.shear_exponent is not None
+                or request.mean_wind is not None):
+            given.append("`hub_height`/`shear_exponent`/`drop_below_ground` or a mean wind (profile, veer, history): "
+                         "no mean profile is added")
     if given:
         raise ParameterError(f"`format` {fmt} does not use {'; '.join(given)}")

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.export.outputs import OutputSet
-from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line
+from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
 
 
 def component_paths(root) -> dict[str, Path]:
@@ -138,7 +138,7 @@ def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
             (1.0, "SFx", "unused"), (1.0, "SFy", "unused"), (1.0, "SFz", "unused"),
             (0.0, "SigmaFx", "unused"), (0.0, "SigmaFy", "unused"), (0.0, "SigmaFz", "unused"),
             (fs.U_m_s, "URef", "mean u at hub height (m/s), also the advection speed"),
-            (0, "WindProfile", "0 = constant: the power-law shear is already in the files"),
+            (0, "WindProfile", "0 = constant: the mean profile is already in the files"),
             (lay.shear_exponent, "PLExp_HAWC", "unused with WindProfile 0"), (0.03, "Z0", "unused with WindProfile 0"),
             (0.0, "XOffset", "(m)")]
     lines = (ifw_line(5, "WindType", "switch for wind file type (5 = HAWC binary)"),
@@ -146,7 +146,8 @@ def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
              *[ifw_line(v, k, c) for v, k, c in keys])
     notes = [f"plane x = {g.x_m[ix]:g} m in eddy time; HAWC boxes are always periodic in time",
              "written for InflowWind: the first x-plane reaches the turbine first and u - URef already holds the "
-             "shear; in HAWC2 itself switch its shear off and check the box read direction (changed in v13.1)"]
+             "shear; in HAWC2 itself switch its shear off and check the box read direction (changed in v13.1)",
+             *mean_wind_notes(lay, 0.0, g.nt, g.dt_s)]
     if lay.z_first:
         notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
     return ExportResult(tuple(paths.values()), lines, tuple(notes))

@@ -17,7 +17,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.export.outputs import OutputSet
-from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line
+from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
 from turbgen.export.wnd_summary import sum_text
 
 _HEADER = struct.Struct("<hhi6f3fi4f4i6f")
@@ -385,14 +385,16 @@ def export_wnd(fs, out, req: ExportRequest) -> ExportResult:
     check_even_nt(g.nt)
     paths = [root_file(root, ".wnd"), root_file(root, ".sum")]
     with OutputSet(paths, overwrite=req.overwrite) as files:
-        plane = Plane(fs, ix, lay)
+        shift = req.start_shift_s(fs)
+        plane = Plane(fs, ix, lay, -shift)
         stats = BladedStats()
         stats.add(plane, fs.U_m_s)
         header = WndHeader(nz=lay.nz, ny=g.ny, nt=g.nt, dz_m=g.dz_m, dy_m=g.dy_m, dx_m=fs.U_m_s * g.dt_s,
                            U_m_s=fs.U_m_s, ti_percent=stats.ti_percent(fs.U_m_s), zref_m=lay.centre_m)
         write_pair(files, root, plane, header, lay, periodic=req.periodic,
-                   title=f"turbgen export: plane x = {g.x_m[ix]:g} m, power-law shear alpha = {lay.shear_exponent:g}")
-    notes = [f"plane x = {g.x_m[ix]:g} m in eddy time: slice k is stored t index k"]
+                   title=f"turbgen export: plane x = {g.x_m[ix]:g} m, {lay.wind.describe()}")
+    notes = [f"plane x = {g.x_m[ix]:g} m in eddy time: slice k is stored t index k",
+             *mean_wind_notes(lay, shift, g.nt, g.dt_s)]
     if lay.z_first:
         notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
     return ExportResult(tuple(paths), inflowwind_lines(root), tuple(notes))
