@@ -37,9 +37,13 @@ from turbgen.store.paths import check_output_path
 @click.option("--periodic/--no-periodic", default=True, show_default=True,
               help="Flag bts/wnd/evo periodic in time (InflowWind wraps instead of starting half a grid upstream).")
 @click.option("--drop-below-ground", is_flag=True, help="Drop grid rows at or below the ground instead of refusing.")
+@click.option("--runner-files/--no-runner-files", "runner_files", default=True, show_default=True,
+              help="Also write the runners' input files beside the wind files: OUT_InflowWind.dat, a complete "
+                   "InflowWind v5 input file (bts, wnd, hawc2; wind-file names relative to it) and OUT_wind.htc, a "
+                   "HAWC2 wind + mann block (hawc2).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 def export(store, fmt, out, plane, hub_height, shear, profile, veer, mean_history, tower, periodic, drop_below_ground,
-           overwrite):
+           runner_files, overwrite):
     """Export STORE to --format; prints the InflowWind input-file lines that load the result."""
     check_output_path(out)
     if shear is not None and profile is not None:
@@ -49,12 +53,14 @@ def export(store, fmt, out, plane, hub_height, shear, profile, veer, mean_histor
     mean_wind = mean_wind_from_options(profile, veer, mean_history)
     request = ExportRequest(plane=plane, hub_height_m=hub_height, shear_exponent=shear, tower=tower,
                             periodic=periodic, drop_below_ground=drop_below_ground, overwrite=overwrite,
-                            mean_wind=mean_wind)
+                            mean_wind=mean_wind, runner_files=runner_files and fmt in ("bts", "wnd", "hawc2"))
     result = export_store(store, fmt, out, request)
     for p in result.paths:
         click.echo(f"wrote {p}", err=True)
     for note in result.notes:
         click.echo(f"note: {note}", err=True)
+    for line in result.usage:
+        click.echo(f"use: {line}", err=True)
     click.echo("InflowWind input-file lines:")
     for line in result.inflowwind_lines:
         click.echo(line)

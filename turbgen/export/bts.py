@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from turbgen import __version__
+from turbgen.export.inflowwind_file import InflowWindInput, inflowwind_path, write_inflowwind
 from turbgen.export.outputs import OutputSet
 from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
 from turbgen.theory.mean_wind import rotate_horizontal
@@ -262,7 +263,9 @@ def export_bts(fs, out, req: ExportRequest) -> ExportResult:
     out = Path(out)
     ix, lay = req.plane_index(fs), req.layout(fs)
     g = fs.grid
-    with OutputSet([out], overwrite=req.overwrite) as files:
+    dat = inflowwind_path(out.with_suffix("") if out.suffix.lower() == ".bts" else out, "bts")
+    usage = []
+    with OutputSet([out, dat] if req.runner_files else [out], overwrite=req.overwrite) as files:
         shift = req.start_shift_s(fs)
         plane = Plane(fs, ix, lay, -shift)
         tower = None
@@ -275,6 +278,9 @@ def export_bts(fs, out, req: ExportRequest) -> ExportResult:
         write_bts(files.temp(out), plane, dy_m=g.dy_m, dz_m=g.dz_m, dt_s=g.dt_s, U_m_s=fs.U_m_s,
                   hub_height_m=lay.hub_height_m, bottom_m=lay.bottom_m, periodic=req.periodic,
                   description=desc[:200], tower=tower)
+        if req.runner_files:
+            usage.append(write_inflowwind(files, dat, InflowWindInput(
+                3, lay.hub_height_m, fs.U_m_s, {"FileName_BTS": out}, title=desc)))
     lines = (ifw_line(3, "WindType", "switch for wind file type (3 = TurbSim binary .bts)"),
              ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
              ifw_line(str(out), "FileName_BTS", "TurbSim binary full-field file"))
@@ -283,5 +289,5 @@ def export_bts(fs, out, req: ExportRequest) -> ExportResult:
     if lay.z_first:
         notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
     if req.tower:
-        notes.append("tower points: power-law mean plus the lowest row's fluctuations at y = 0 (held constant below the grid)")
-    return ExportResult((out,), lines, tuple(notes))
+        notes.append("tower points: the mean wind plus the lowest row's fluctuations at y = 0 (held constant below the grid)")
+    return ExportResult((out, dat) if req.runner_files else (out,), lines, tuple(notes), tuple(usage))

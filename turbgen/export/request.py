@@ -43,6 +43,9 @@ class ExportRequest:
     mean_wind : MeanWind, optional
         Profile, veer and hub-height history added by the InflowWind/HAWC2 formats; None (default):
         the power law with ``shear_exponent``. Refused together with ``shear_exponent``.
+    runner_files : bool, optional
+        Also write the runners' input files beside the wind files: a complete InflowWind v5 input file
+        ``<out>_InflowWind.dat`` (bts, wnd, hawc2) and a HAWC2 ``<out>_wind.htc`` block (hawc2); default False.
 
     Raises
     ------
@@ -60,6 +63,7 @@ class ExportRequest:
     overwrite: bool = False
     source_label: str | None = None
     mean_wind: MeanWind | None = None
+    runner_files: bool = False
 
     def source(self, fs) -> str:
         """The source store's name in the exports: ``source_label``, or the store's path."""
@@ -152,11 +156,13 @@ class ExportRequest:
 
 @dataclass(frozen=True)
 class ExportResult:
-    """Files written, the InflowWind input-file lines that load them, and remarks for the user."""
+    """Files written, the InflowWind input-file lines that load them, remarks for the user, and one line
+    per runner input file saying how to use it."""
 
     paths: tuple[Path, ...]
     inflowwind_lines: tuple[str, ...]
     notes: tuple[str, ...] = field(default=())
+    usage: tuple[str, ...] = field(default=())
 
 
 class Plane:
