@@ -83,3 +83,25 @@ def ews_amplitude_m_s(sigma1_m_s: float, diameter_m: float, lambda1_m: float) ->
 def ews_factor(t_s, period_s: float = EWS_PERIOD_S) -> np.ndarray:
     """EWS time factor 1 - cos(2 pi t / T), 0 outside [0, T]."""
     return 1.0 - np.cos(2.0 * np.pi * _window(t_s, period_s) / period_s)
+
+
+def etm_sigma1_m_s(v_hub_m_s: float, i_ref: float, v_ref_m_s: float) -> float:
+    """Extreme turbulence model sigma1 = c I_ref (0.072 (V_ave / c + 3) (V_hub / c - 4) + 10), c = 2 m/s,
+    V_ave = 0.2 V_ref (Sect. 6.3.3.4).
+
+    Parameters
+    ----------
+    v_hub_m_s : float
+        Hub-height mean speed [m/s].
+    i_ref : float
+        Reference turbulence intensity of the category [-].
+    v_ref_m_s : float
+        Reference wind speed of the turbine class [m/s].
+
+    Returns
+    -------
+    float
+        sigma1 [m/s].
+    """
+    c = 2.0
+    return c * i_ref * (0.072 * (0.2 * v_ref_m_s / c + 3.0) * (v_hub_m_s / c - 4.0) + 10.0)
