@@ -230,7 +230,9 @@ def tower_values(plane: Plane, heights_m: np.ndarray, layout, U_m_s: float) -> d
         out["u"] += layout.mean_u(U_m_s, heights_m)[None, :]
         return out
     wind, hub = layout.wind, layout.hub_height_m
-    speed = plane.hub_speed[:, None] * wind.speed_ratio(heights_m, hub)[None, :]
+    diameter = wind.transient.rotor_diameter_m if wind.transient is not None else 1.0
+    speed = (plane.hub_speed[:, None] * wind.speed_ratio(heights_m, hub)[None, :] + plane.gust[:, None]
+             + plane.vshear[:, None] * (heights_m[None, :] - hub) / diameter)  # tower at y = 0: no horizontal shear
     angle = wind.veer_deg(heights_m, hub)[None, :] + plane.hub_direction[:, None]
     out["u"], out["v"] = rotate_horizontal(out["u"] + speed, out["v"], angle)
     return out

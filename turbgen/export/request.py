@@ -131,6 +131,12 @@ class ExportRequest:
         lay = vertical_layout(fs.grid, hub, alpha, drop_below_ground=self.drop_below_ground,
                               mean_wind=self.mean_wind)
         g = fs.grid
+        event = lay.wind.transient
+        if event is not None and (not np.isclose(event.V_hub_m_s, fs.U_m_s, rtol=1e-9, atol=0.0)
+                                  or not np.isclose(event.hub_height_m, lay.hub_height_m, rtol=1e-9, atol=0.0)):
+            raise ParameterError(f"the {event.kind} is set for V_hub {event.V_hub_m_s:g} m/s at hub height "
+                                 f"{event.hub_height_m:g} m, but the field has U {fs.U_m_s:g} m/s at "
+                                 f"{lay.hub_height_m:g} m: superimpose it at the field's own hub speed and height")
         lay.wind.check_record(0.0, (g.nt - 1) * g.dt_s - self.start_shift_s(fs))
         return lay
 
@@ -169,9 +175,9 @@ class Plane:
     """One yz-plane as stored (float32 fluctuations, kept rows only) plus the mean wind.
 
     Full velocities are made in float64 one time block at a time, so memory stays at about one
-    stored plane. Without veer or history only u gets the profile's mean (the exports' bits of
-    earlier versions); with them (u, v) = rotate((U_hub(t) r(h) + u', v'), veer(h) + direction(t)),
-    t the time slice k reaches the turbine (``first_slice_s`` + k dt).
+    stored plane. Without veer, history or transient only u gets the profile's mean (the exports' bits of
+    earlier versions); with them (u, v) = rotate((U(t, y, h) + u', v'), veer(h) + direction(t)) as
+    :mod:`turbgen.spec.mean_wind` defines, t the time slice k reaches the turbine (``first_slice_s`` + k dt).
 
     Parameters
     ----------
@@ -197,11 +203,15 @@ class Plane:
         self.mean_u = layout.mean_u(fs.U_m_s)
         self.nt, self.ny, self.nz = self.fluct["u"].shape
         wind = layout.wind
-        self.varying = wind.has_history or wind.turns
+        self.varying = wind.varies
         self.ratio = wind.speed_ratio(layout.heights_m, layout.hub_height_m)
         self.veer_deg = wind.veer_deg(layout.heights_m, layout.hub_height_m)
         self.times_s = first_slice_s + fs.grid.dt_s * np.arange(self.nt)
         self.hub_speed, self.hub_direction = wind.hub_history(self.times_s, fs.U_m_s)
+        self.gust, self.vshear, self.hshear = wind.transient_terms(self.times_s)
+        diameter = wind.transient.rotor_diameter_m if wind.transient is not None else 1.0
+        self.z_over_d = (layout.heights_m - layout.hub_height_m) / diameter
+        self.y_over_d = fs.grid.y() / diameter
 
     def mean_uv(self, heights_ratio, veer_deg, a: int = 0, b: int | None = None):
         """Mean (u, v) [m/s] at points of profile ratio ``heights_ratio`` and veer ``veer_deg`` (trailing axis).
@@ -249,6 +259,8 @@ class Plane:
         if c == "w":
             return v
         u = self.fluct["u"][a:b].astype(np.float64) + (self.hub_speed[a:b, None] * self.ratio[None, :])[:, None, :]
+        u += (self.gust[a:b, None, None] + self.vshear[a:b, None, None] * self.z_over_d[None, None, :]
+              + self.hshear[a:b, None, None] * self.y_over_d[None, :, None])
         other = self.fluct["v"][a:b].astype(np.float64)
         angle = (self.veer_deg[None, :] + self.hub_direction[a:b, None])[:, None, :]
         u, other = formulas.rotate_horizontal(u, other, angle)
@@ -325,6 +337,10 @@ def mean_wind_notes(lay: VerticalLayout, shift_s: float, nt: int, dt_s: float) -
     if wind.turns:
         notes.append("veer/direction turn (mean + fluctuations) per height and time, counter-clockwise seen from "
                      "above (+y = left looking downwind), as TurbSim does")
+    if wind.transient is not None:
+        notes.append(f"{wind.transient.describe()}, superimposed: it rides on the slices (slice k carries the event at "
+                     "the time it reaches the turbine); the advection speed in the file stays the store's U, so "
+                     "Taylor's shift uses the hub mean and a point X m upstream sees the event X/U s earlier")
     if wind.has_history:
         notes.append("the hub-height history rides on the slices (slice k carries the history at the time it "
                      "reaches the turbine); the advection speed in the file stays the store's U, so Taylor's "

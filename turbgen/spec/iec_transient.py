@@ -120,6 +120,11 @@ class IecTransient:
         return parse_class(self.iec_class)[1]
 
     @property
+    def period_s(self) -> float:
+        """Duration T of the event [s]."""
+        return PERIODS_S[self.kind]
+
+    @property
     def v_e1_m_s(self) -> float:
         """1-year extreme gust V_e1 [m/s] of the turbine class."""
         return iec.extreme_speeds_m_s(iec.V_REF_M_S[parse_class(self.iec_class)[0]])[1]
@@ -156,31 +161,53 @@ class IecTransient:
         event = self.start_s + np.linspace(0.0, period, n + 1)
         return np.unique(np.concatenate([[0.0], event, [self.duration_s]]))
 
+    def at(self, t_s) -> dict:
+        """The event at times ``t_s`` [s] of the record (the event's clock is t - start).
+
+        Parameters
+        ----------
+        t_s : array_like
+            Times [s].
+
+        Returns
+        -------
+        dict
+            "gust_m_s": speed change uniform over the rotor [m/s] (EOG, ECD); "direction_deg": direction,
+            positive clockwise seen from above as in InflowWind (EDC, ECD); "vshear_m_s", "hshear_m_s": speed
+            change across one rotor diameter, times (z - z_hub) / D or y / D (EWS-V, EWS-H); arrays of the
+            shape of ``t_s``, zero where the event has none.
+        """
+        tau = np.asarray(t_s, dtype=float) - self.start_s
+        zero = np.zeros_like(tau)
+        out = {"gust_m_s": zero, "direction_deg": zero, "vshear_m_s": zero, "hshear_m_s": zero}
+        size, period = self.magnitude(), PERIODS_S[self.kind]
+        if self.kind == "EOG":
+            out["gust_m_s"] = iec.eog_speed_change_m_s(tau, size, period)
+        elif self.kind == "EDC":
+            out["direction_deg"] = iec.cosine_rise(tau, self.sign * size, period)
+        elif self.kind == "ECD":
+            out["gust_m_s"] = iec.cosine_rise(tau, iec.ECD_GUST_M_S, period)
+            out["direction_deg"] = iec.cosine_rise(tau, self.sign * size, period)
+        else:
+            key = "vshear_m_s" if self.kind == "EWS-V" else "hshear_m_s"
+            out[key] = self.sign * size * iec.ews_factor(tau, period)
+        return out
+
     def columns(self) -> dict:
         """The uniform-wind columns at :meth:`times_s` (keys ``COLUMNS``).
 
         Returns
         -------
         dict
-            Column name -> float array [s, m/s, deg, m/s, -, -, -, m/s].
+            Column name -> float array [s, m/s, deg, m/s, -, -, -, m/s]; the EWS shear is written as
+            LinVShear / HorizShear = (speed change across D) / V_hub with RefLength = D.
         """
         t = self.times_s()
-        tau = t - self.start_s  # the event's clock
+        ev = self.at(t)
         zero = np.zeros_like(t)
-        out = dict(zip(COLUMNS, (t, np.full_like(t, self.V_hub_m_s), zero, zero, zero,
-                                 np.full_like(t, NWP_EXPONENT), zero, zero)))
-        size, period = self.magnitude(), PERIODS_S[self.kind]
-        if self.kind == "EOG":
-            out["GustSpeed"] = iec.eog_speed_change_m_s(tau, size, period)
-        elif self.kind == "EDC":
-            out["WindDir"] = iec.cosine_rise(tau, self.sign * size, period)
-        elif self.kind == "ECD":
-            out["GustSpeed"] = iec.cosine_rise(tau, iec.ECD_GUST_M_S, period)
-            out["WindDir"] = iec.cosine_rise(tau, self.sign * size, period)
-        else:  # V_h gains V_hub * LinShr / D * x = sign * amplitude * factor * x / D
-            key = "LinVShear" if self.kind == "EWS-V" else "HorizShear"
-            out[key] = self.sign * size * iec.ews_factor(tau, period) / self.V_hub_m_s
-        return out
+        return dict(zip(COLUMNS, (t, np.full_like(t, self.V_hub_m_s), ev["direction_deg"], zero,
+                                  ev["hshear_m_s"] / self.V_hub_m_s, np.full_like(t, NWP_EXPONENT),
+                                  ev["vshear_m_s"] / self.V_hub_m_s, ev["gust_m_s"])))
 
     def describe(self) -> str:
         """One line: kind, class, V_hub, magnitude and timing."""

@@ -5,12 +5,16 @@ A :class:`MeanWind` is a vertical profile (power law, log law or a user table of
 time history (t -> U [, direction]). Every InflowWind/HAWC2 export applies it the same way
 (:func:`turbgen.export.request.Plane`): at height h and slice time t,
 
-    U(t, h) = U_hub(t) * r(h),  theta(t, h) = veer(h) + direction(t),
-    (u, v) = rotate((U(t, h) + u', v'), theta)        (Jonkman 2009, TurbSim's per-height rotation)
+    U(t, y, h) = U_hub(t) * r(h) + g(t) + s_v(t) (h - h_hub) / D + s_h(t) y / D,
+    theta(t, h) = veer(h) + direction(t),
+    (u, v) = rotate((U(t, y, h) + u', v'), theta)        (Jonkman 2009, TurbSim's per-height rotation)
 
 where r(h) = U(h)/U(h_hub) is the profile's ratio (:mod:`turbgen.theory.mean_wind`), U_hub(t) the
-history's speed (the store's U without a history), u', v' the stored fluctuations, and angles turn
-counter-clockwise seen from above (towards +y, left looking downwind); w is unchanged.
+history's speed (the store's U without a history), g, s_v, s_h and the transient's direction the
+superimposed IEC transient's (:class:`turbgen.spec.iec_transient.IecTransient`, zero without one), u', v'
+the stored fluctuations, and angles turn counter-clockwise seen from above (towards +y, left looking
+downwind; an IEC direction, clockwise in InflowWind, enters with its sign flipped so both mean the same
+turn); w is unchanged.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from turbgen.errors import ParameterError, check_choice, check_finite, check_nonnegative, check_positive, check_range
+from turbgen.spec.iec_transient import IecTransient
 from turbgen.theory import mean_wind as formulas
 
 PROFILES = ("power", "log", "table")
@@ -71,6 +76,9 @@ class MeanWind:
         end values held outside them.
     table_label, history_label : str
         Where the table and the history came from (a file name), for descriptions.
+    transient : IecTransient, optional
+        An IEC 61400-1 transient superimposed on the mean (its V_hub and hub height must be the store's);
+        excludes a history.
 
     Raises
     ------
@@ -92,6 +100,7 @@ class MeanWind:
     history_directions_deg: tuple = ()
     table_label: str = ""
     history_label: str = ""
+    transient: IecTransient | None = None
 
     def __post_init__(self):
         check_choice("mean-wind profile", self.profile, PROFILES)
@@ -112,6 +121,12 @@ class MeanWind:
             raise ParameterError(f"a height table belongs to the table profile, not {self.profile!r}")
         if self.history_times_s or self.history_speeds_m_s or self.history_directions_deg:
             self._check_history()
+        if self.transient is not None:
+            if not isinstance(self.transient, IecTransient):
+                raise ParameterError(f"transient = {self.transient!r} is not a turbgen.spec.iec_transient.IecTransient")
+            if self.has_history:
+                raise ParameterError("a hub-height history and an IEC transient both set the hub's time series; "
+                                     "give one")
 
     def _check_table(self):
         put = object.__setattr__
@@ -144,8 +159,14 @@ class MeanWind:
 
     @property
     def turns(self) -> bool:
-        """Whether any angle can be non-zero (veer rate, table directions or history directions)."""
-        return bool(self.veer_deg_per_m or self.table_directions_deg or self.history_directions_deg)
+        """Whether any angle can be non-zero (veer rate, table directions, history or transient directions)."""
+        return bool(self.veer_deg_per_m or self.table_directions_deg or self.history_directions_deg
+                    or (self.transient is not None and self.transient.kind in ("EDC", "ECD")))
+
+    @property
+    def varies(self) -> bool:
+        """Whether the mean changes in time or turns (else only u gets a fixed profile)."""
+        return self.has_history or self.turns or self.transient is not None
 
     def speed_ratio(self, heights_m, hub_height_m: float) -> np.ndarray:
         """Profile ratio U(h) / U(h_hub) [-] at ``heights_m`` [m].
@@ -227,18 +248,39 @@ class MeanWind:
         -------
         tuple of numpy.ndarray
             (speed [m/s], direction [deg]), each of the shape of ``times_s``; linear between the
-            history's times, its end values held outside them.
+            history's times, its end values held outside them; with a transient, the store's U and the
+            transient's direction (counter-clockwise).
         """
         t = np.asarray(times_s, dtype=float)
         if not self.has_history:
-            return np.full(t.shape, float(U_m_s)), np.zeros(t.shape)
+            turn = np.zeros(t.shape) if self.transient is None else -self.transient.at(t)["direction_deg"]
+            return np.full(t.shape, float(U_m_s)), turn
         speed = np.interp(t, self.history_times_s, self.history_speeds_m_s)
         direction = (np.interp(t, self.history_times_s, self.history_directions_deg)
                      if self.history_directions_deg else np.zeros(t.shape))
         return speed, direction
 
+    def transient_terms(self, times_s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The transient's additive speed terms at ``times_s`` [s]: (g, s_v, s_h) [m/s], zero without one.
+
+        Parameters
+        ----------
+        times_s : array_like
+            Times at the turbine [s].
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Uniform gust g, vertical and horizontal linear-shear speed changes across one rotor diameter.
+        """
+        t = np.asarray(times_s, dtype=float)
+        if self.transient is None:
+            return np.zeros(t.shape), np.zeros(t.shape), np.zeros(t.shape)
+        ev = self.transient.at(t)
+        return ev["gust_m_s"], ev["vshear_m_s"], ev["hshear_m_s"]
+
     def check_record(self, first_s: float, last_s: float) -> None:
-        """Refuse a history with times outside the record [first_s, last_s] seen at the turbine.
+        """Refuse a history or transient with times outside the record [first_s, last_s] seen at the turbine.
 
         Parameters
         ----------
@@ -248,8 +290,13 @@ class MeanWind:
         Raises
         ------
         ParameterError
-            When a history time lies outside [first_s, last_s].
+            When a history time, or the transient's start or end, lies outside [first_s, last_s].
         """
+        if self.transient is not None:
+            t0, t1 = self.transient.start_s, self.transient.start_s + self.transient.period_s
+            if t0 < first_s - 1e-9 or t1 > last_s + 1e-9:
+                raise ParameterError(f"the {self.transient.kind} from {t0:g} to {t1:g} s is outside the record "
+                                     f"[{first_s:g}, {last_s:g}] s seen at the turbine")
         if self.has_history:
             t0, t1 = self.history_times_s[0], self.history_times_s[-1]
             if t0 < first_s - 1e-9 or t1 > last_s + 1e-9:
@@ -277,6 +324,10 @@ class MeanWind:
             out.append("veer from the table")
         if self.has_history:
             out.append(f"hub history {self.history_label} ({len(self.history_times_s)} points)".replace("  ", " "))
+        if self.transient is not None:
+            t = self.transient
+            out.append(f"IEC {t.kind} {t.iec_class} ({t.magnitude():.4g} {'deg' if t.kind in ('EDC', 'ECD') else 'm/s'}"
+                       f"{'' if t.kind == 'EOG' else f', sign {t.sign:+d}'}) from {t.start_s:g} s")
         return "; ".join(out)
 
     def to_attrs(self) -> dict:
@@ -295,5 +346,8 @@ class MeanWind:
                 continue
             if key == "veer_deg_per_m" and not value:
                 continue
+            if key == "transient":
+                value = {f: getattr(value, f) for f in ("kind", "iec_class", "V_hub_m_s", "hub_height_m",
+                                                         "rotor_diameter_m", "start_s", "duration_s", "sign")}
             out[key] = list(value) if isinstance(value, tuple) else value
         return out

@@ -109,7 +109,7 @@ def profile_fields(text: str) -> dict:
 
 
 def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | None = None,
-                           history=None) -> MeanWind | None:
+                           history=None, transient=None) -> MeanWind | None:
     """The MeanWind of the export options, or None when none is given (the exports' default power law).
 
     Parameters
@@ -120,6 +120,8 @@ def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | N
         Linear veer rate [deg/m].
     history : str or os.PathLike, optional
         CSV of t [s], U [m/s] [, direction (deg)] at hub height.
+    transient : IecTransient, optional
+        An IEC transient to superimpose.
 
     Returns
     -------
@@ -131,7 +133,7 @@ def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | N
     ParameterError
         For a malformed option, an unreadable file or values outside their ranges.
     """
-    if profile is None and veer_deg_per_m is None and history is None:
+    if profile is None and veer_deg_per_m is None and history is None and transient is None:
         return None
     fields = profile_fields(profile) if profile is not None else {}
     if veer_deg_per_m is not None:
@@ -140,4 +142,6 @@ def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | N
         cols = read_columns(history, "mean history", ("t (s)", "U (m/s)", "direction (deg)"))
         fields.update(history_times_s=cols[0], history_speeds_m_s=cols[1],
                       history_directions_deg=cols[2] if len(cols) == 3 else (), history_label=Path(history).name)
+    if transient is not None:
+        fields["transient"] = transient
     return MeanWind(**fields)
