@@ -86,3 +86,17 @@ def test_dlc_needs_class_and_refuses_presets(tmp_path):
                                    "--out", str(tmp_path / "d")])
     assert res.exit_code == 2 and "--preset" in res.output
     assert not (tmp_path / "d").exists()
+
+
+def test_mann_and_etm_plans_target_sigma1(tmp_path):
+    from turbgen.sweep.dlc import make_dlc_plan
+    from turbgen.theory.mann_spectra import ae_for_sigma_u
+
+    d = DlcSet("1.3", "IA", 10, 12, (5, 6))
+    plan = make_dlc_plan(d, out=tmp_path / "m", model="mann", grid={"nt": 32, "ny": 4, "nz": 4, "dy": 8})
+    assert [(r.U_m_s, r.seed) for r in plan.runs] == [(10.0, 5), (10.0, 6), (12.0, 5), (12.0, 6)]
+    for r in plan.runs:
+        s1 = d.sigma1_m_s(r.U_m_s)  # ETM, category A
+        assert s1 == pytest.approx(2 * 0.16 * (0.072 * (10.0 / 2 + 3) * (r.U_m_s / 2 - 4) + 10))
+        assert r.run.params.ae == pytest.approx(ae_for_sigma_u(s1, r.run.params), rel=1e-12)
+        assert r.name == f"mann_dlc1.3-IA_U{r.U_m_s:g}_seed{r.seed}"

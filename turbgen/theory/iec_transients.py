@@ -44,44 +44,137 @@ def extreme_speeds_m_s(v_ref_m_s: float) -> tuple[float, float]:
 
 
 def _window(t, period_s):
-    """t clipped to [0, T] (the event's clock, frozen before and after it)."""
+    """t [s] clipped to [0, T] (the event's clock, frozen before and after it)."""
     return np.clip(np.asarray(t, dtype=float), 0.0, period_s)
 
 
 def eog_gust_m_s(v_hub_m_s: float, v_e1_m_s: float, sigma1_m_s: float, diameter_m: float, lambda1_m: float) -> float:
-    """EOG magnitude V_gust = min(1.35 (V_e1 - V_hub), 3.3 sigma1 / (1 + 0.1 D / Lambda1)) [m/s]."""
+    """EOG magnitude V_gust = min(1.35 (V_e1 - V_hub), 3.3 sigma1 / (1 + 0.1 D / Lambda1)) [m/s].
+
+    Parameters
+    ----------
+    v_hub_m_s, v_e1_m_s, sigma1_m_s : float
+        Hub speed, 1-year extreme gust and NTM sigma1 [m/s].
+    diameter_m, lambda1_m : float
+        Rotor diameter D and scale parameter Lambda1 [m].
+
+    Returns
+    -------
+    float
+        V_gust [m/s].
+    """
     return min(1.35 * (v_e1_m_s - v_hub_m_s), 3.3 * sigma1_m_s / (1.0 + 0.1 * diameter_m / lambda1_m))
 
 
 def eog_speed_change_m_s(t_s, gust_m_s: float, period_s: float = EOG_PERIOD_S) -> np.ndarray:
-    """EOG speed change -0.37 V_gust sin(3 pi t / T) (1 - cos(2 pi t / T)) [m/s], 0 outside [0, T]."""
+    """EOG speed change -0.37 V_gust sin(3 pi t / T) (1 - cos(2 pi t / T)) [m/s], 0 outside [0, T].
+
+    Parameters
+    ----------
+    t_s : array_like
+        Event time t [s].
+    gust_m_s : float
+        V_gust [m/s].
+    period_s : float, optional
+        T [s] (10.5).
+
+    Returns
+    -------
+    numpy.ndarray
+        Speed change [m/s], shape of ``t_s``.
+    """
     t = _window(t_s, period_s)
     return -0.37 * gust_m_s * np.sin(3.0 * np.pi * t / period_s) * (1.0 - np.cos(2.0 * np.pi * t / period_s))
 
 
 def edc_angle_deg(v_hub_m_s: float, sigma1_m_s: float, diameter_m: float, lambda1_m: float) -> float:
-    """EDC magnitude theta_e = 4 arctan(sigma1 / (V_hub (1 + 0.1 D / Lambda1))) [deg], at most 180 deg."""
+    """EDC magnitude theta_e = 4 arctan(sigma1 / (V_hub (1 + 0.1 D / Lambda1))) [deg], at most 180 deg.
+
+    Parameters
+    ----------
+    v_hub_m_s, sigma1_m_s : float
+        Hub speed and NTM sigma1 [m/s].
+    diameter_m, lambda1_m : float
+        Rotor diameter D and scale parameter Lambda1 [m].
+
+    Returns
+    -------
+    float
+        theta_e [deg].
+    """
     theta = 4.0 * np.degrees(np.arctan(sigma1_m_s / (v_hub_m_s * (1.0 + 0.1 * diameter_m / lambda1_m))))
     return float(min(theta, 180.0))
 
 
 def cosine_rise(t_s, amplitude: float, period_s: float) -> np.ndarray:
-    """0.5 A (1 - cos(pi t / T)): 0 before the event, A after it (EDC and ECD direction, ECD speed)."""
+    """0.5 A (1 - cos(pi t / T)): 0 before the event, A after it (EDC and ECD direction, ECD speed).
+
+    Parameters
+    ----------
+    t_s : array_like
+        Event time t [s].
+    amplitude : float
+        A (deg or m/s).
+    period_s : float
+        T [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        The rise, in the unit of ``amplitude``, shape of ``t_s``.
+    """
     return 0.5 * amplitude * (1.0 - np.cos(np.pi * _window(t_s, period_s) / period_s))
 
 
 def ecd_angle_deg(v_hub_m_s: float) -> float:
-    """ECD direction change theta_cg [deg]: 180 below 4 m/s, else 720 / V_hub (V_hub in m/s)."""
+    """ECD direction change theta_cg [deg]: 180 below 4 m/s, else 720 / V_hub (V_hub in m/s).
+
+    Parameters
+    ----------
+    v_hub_m_s : float
+        Hub speed [m/s].
+
+    Returns
+    -------
+    float
+        theta_cg [deg].
+    """
     return 180.0 if v_hub_m_s < 4.0 else 720.0 / v_hub_m_s
 
 
 def ews_amplitude_m_s(sigma1_m_s: float, diameter_m: float, lambda1_m: float) -> float:
-    """EWS amplitude 2.5 + 0.2 beta sigma1 (D / Lambda1)^(1/4) [m/s] (speed change across one diameter, per unit)."""
+    """EWS amplitude 2.5 + 0.2 beta sigma1 (D / Lambda1)^(1/4) [m/s]: the speed change across one diameter.
+
+    Parameters
+    ----------
+    sigma1_m_s : float
+        NTM sigma1 [m/s].
+    diameter_m, lambda1_m : float
+        Rotor diameter D and scale parameter Lambda1 [m].
+
+    Returns
+    -------
+    float
+        Amplitude [m/s] (2.5 in m/s, as the standard writes it).
+    """
     return 2.5 + 0.2 * EWS_BETA * sigma1_m_s * (diameter_m / lambda1_m) ** 0.25
 
 
 def ews_factor(t_s, period_s: float = EWS_PERIOD_S) -> np.ndarray:
-    """EWS time factor 1 - cos(2 pi t / T), 0 outside [0, T]."""
+    """EWS time factor 1 - cos(2 pi t / T), 0 outside [0, T].
+
+    Parameters
+    ----------
+    t_s : array_like
+        Event time t [s].
+    period_s : float, optional
+        T [s] (12).
+
+    Returns
+    -------
+    numpy.ndarray
+        The factor [-], shape of ``t_s``.
+    """
     return 1.0 - np.cos(2.0 * np.pi * _window(t_s, period_s) / period_s)
 
 
