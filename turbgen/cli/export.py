@@ -48,7 +48,7 @@ from turbgen.store.paths import check_output_path
               help="Flag bts/wnd/evo periodic in time (InflowWind wraps instead of starting half a grid upstream).")
 @click.option("--drop-below-ground", is_flag=True, help="Drop grid rows at or below the ground instead of refusing.")
 @click.option("--runner-files/--no-runner-files", "runner_files", default=True, show_default=True,
-              help="Also write the runners' input files beside the wind files: OUT_InflowWind.dat, a complete "
+              help="Also write the runners' input files beside the wind files: OUT_InflowWind_FORMAT.dat, a complete "
                    "InflowWind v5 input file (bts, wnd, hawc2; wind-file names relative to it) and OUT_wind.htc, a "
                    "HAWC2 wind + mann block (hawc2).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")

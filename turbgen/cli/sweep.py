@@ -136,6 +136,6 @@ def _run_dlc(dlc, iec_class, v_in, v_out, seeds, model, grid, chunks, workers, s
     click.echo(summary_table(result))
     manifest = export_dlc(plan, dlc_set, result, export_format)
     click.echo(f"wrote {manifest} ({dlc_set.label}: wind files and InflowWind input files in {plan.out}/wind)")
-    click.echo(f"use: each row's inflowwind_file is the InflowFile of one OpenFAST run (names relative to it)")
+    click.echo("use: each row's inflowwind_file is the InflowFile of one OpenFAST run (names relative to it)")
     if not result.ok:
         raise click.exceptions.Exit(1)

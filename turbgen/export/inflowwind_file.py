@@ -71,8 +71,6 @@ def inflowwind_text(spec: InflowWindInput, path) -> str:
     """
     folder = Path(path).absolute().parent
     files = {k: _rel(v, folder) for k, v in spec.files.items()}
-    hw = {"nx": 2, "ny": 2, "nz": 2, "dx": 1.0, "dy": 1.0, "dz": 1.0, "RefHt_HAWC": spec.ref_height_m,
-          "PLExp_HAWC": 0.0, **spec.hawc}
     L = ifw_line
     lines = [
         "------- InflowWind INPUT FILE -------------------------------------------------------------------------",
@@ -100,6 +98,17 @@ def inflowwind_text(spec: InflowWindInput, path) -> str:
         "================== Parameters for Binary Bladed-style Full-Field files   [used only for WindType = 4 or 7] =====",
         L(files.get("FilenameRoot", "unused"), "FilenameRoot", "root of ROOT.wnd and ROOT.sum (relative to this file)"),
         L(False, "TowerFile", "have tower file (.twr) (flag)"),
+        *_hawc_lidar_output(spec, files),
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _hawc_lidar_output(spec: InflowWindInput, files: dict) -> list[str]:
+    """The HAWC, lidar and output sections of the input file (inert values where unused)."""
+    hw = {"nx": 2, "ny": 2, "nz": 2, "dx": 1.0, "dy": 1.0, "dz": 1.0, "RefHt_HAWC": spec.ref_height_m,
+          "PLExp_HAWC": 0.0, **spec.hawc}
+    L = ifw_line
+    return [
         "================== Parameters for HAWC-format binary files  [Only used with WindType = 5] =====================",
         L(files.get("FileName_u", "unused_u.bin"), "FileName_u", "u - URef (relative to this file)"),
         L(files.get("FileName_v", "unused_v.bin"), "FileName_v", "v (relative to this file)"),
@@ -135,7 +144,6 @@ def inflowwind_text(spec: InflowWindInput, path) -> str:
         'END of input file (the word "END" must appear in the first 3 columns of the last OutList line)',
         "---------------------------------------------------------------------------------------",
     ]
-    return "\n".join(lines) + "\n"
 
 
 def inflowwind_path(stem_path, fmt: str) -> Path:

@@ -45,7 +45,8 @@ class ExportRequest:
         the power law with ``shear_exponent``. Refused together with ``shear_exponent``.
     runner_files : bool, optional
         Also write the runners' input files beside the wind files: a complete InflowWind v5 input file
-        ``<out>_InflowWind.dat`` (bts, wnd, hawc2) and a HAWC2 ``<out>_wind.htc`` block (hawc2); default False.
+        ``<out>_InflowWind_<format>.dat`` (bts, wnd, hawc2) and a HAWC2 ``<out>_wind.htc`` block (hawc2);
+        default False.
 
     Raises
     ------
@@ -212,26 +213,6 @@ class Plane:
         diameter = wind.transient.rotor_diameter_m if wind.transient is not None else 1.0
         self.z_over_d = (layout.heights_m - layout.hub_height_m) / diameter
         self.y_over_d = fs.grid.y() / diameter
-
-    def mean_uv(self, heights_ratio, veer_deg, a: int = 0, b: int | None = None):
-        """Mean (u, v) [m/s] at points of profile ratio ``heights_ratio`` and veer ``veer_deg`` (trailing axis).
-
-        Parameters
-        ----------
-        heights_ratio : numpy.ndarray
-            U(h) / U(h_hub) of the points, shape (n,).
-        veer_deg : numpy.ndarray
-            Veer of the points [deg], shape (n,).
-        a, b : int, optional
-            Time steps a..b-1 (default all).
-
-        Returns
-        -------
-        tuple of numpy.ndarray
-            Mean u and v [m/s], each (b - a, n): U_hub(t) r rotated by veer + direction(t).
-        """
-        speed = self.hub_speed[a:b, None] * heights_ratio[None, :]
-        return formulas.rotate_horizontal(speed, 0.0, veer_deg[None, :] + self.hub_direction[a:b, None])
 
     def full(self, c: str, a: int = 0, b: int | None = None) -> np.ndarray:
         """Full velocity [m/s] of component ``c`` for time steps a..b-1, float64 (b - a, ny, nz).

@@ -18,7 +18,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError, check_choice, check_positive, check_range
 from turbgen.theory import iec_transients as iec
-from turbgen.theory.kaimal import IEC_IREF, iec_lambda1_m, iec_sigma1_m_s
+from turbgen.theory.kaimal import iec_lambda1_m, iec_sigma1_m_s
 
 KINDS = ("EOG", "EDC", "ECD", "EWS-V", "EWS-H")
 PERIODS_S = {"EOG": iec.EOG_PERIOD_S, "EDC": iec.EDC_PERIOD_S, "ECD": iec.ECD_PERIOD_S,

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from turbgen.errors import ParameterError, check_choice
 from turbgen.export import ExportRequest, export_store
+from turbgen.export.inflowwind_file import inflowwind_path
 from turbgen.runs.models import MODELS, get_model
 from turbgen.spec.dlc import DlcSet
 from turbgen.store.paths import check_output_path
@@ -130,8 +131,6 @@ def export_dlc(plan: SweepPlan, dlc: DlcSet, result, fmt: str = "bts") -> Path:
 
 def _export_one(store: Path, fmt: str, target: Path) -> tuple[Path, Path]:
     """(wind file, InflowWind input file) of one field, exported unless both exist already."""
-    from turbgen.export.inflowwind_file import inflowwind_path
-
     stem = target.with_suffix("") if fmt == "bts" else target
     first = {"bts": target, "wnd": Path(f"{target}.wnd"), "hawc2": Path(f"{target}_u.bin")}[fmt]
     dat = inflowwind_path(stem, fmt)
