@@ -174,3 +174,14 @@ def test_mean_wind_refused_by_formats_without_a_mean(store, tmp_path):
     res = run(path, "--format", "hdf5", "--out", tmp_path / "f.h5", "--veer", "0.1")
     assert res.exit_code == 2 and "no mean profile is added" in res.output
     assert not list(tmp_path.iterdir())
+
+
+def test_sum_title_cannot_fake_a_key(store, tmp_path):
+    from turbgen.export import read_sum
+
+    path, _ = store
+    wind = MeanWind(profile="table", table_heights_m=(5.0, 40.0), table_speeds_m_s=(8.0, 11.0),
+                    table_label="PERIODIC hub height 99 UBar.csv")
+    export_store(path, "wnd", tmp_path / "r", ExportRequest(mean_wind=wind, periodic=False))
+    s = read_sum(tmp_path / "r.sum")
+    assert s["periodic"] is False and s["hub_height_m"] == HUB and s["U_m_s"] == pytest.approx(U)

@@ -113,7 +113,8 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
                     f.write(np.ascontiguousarray(block).tobytes())
                 if ix == ix_rotor:
                     write_pair(files, root, plane, header, lay, periodic=req.periodic,
-                               title=f"turbgen 4D export: the .wnd holds plane x = {g.x_m[ix]:g} m")
+                               title=f"turbgen 4D export: the .wnd holds plane x = {g.x_m[ix]:g} m"
+                               + ("" if lay.mean_wind is None else f", {lay.wind.describe()}"))
                 del plane  # free it before the next plane is read
     lines = inflowwind_lines(root) + (
         "LidarSim input file, section ---- Wind Evolution ----:",
