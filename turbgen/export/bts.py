@@ -17,7 +17,6 @@ from turbgen import __version__
 from turbgen.export.inflowwind_file import InflowWindInput, inflowwind_path, write_inflowwind
 from turbgen.export.outputs import OutputSet
 from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
-from turbgen.theory.mean_wind import rotate_horizontal
 
 _HEADER = struct.Struct("<h4i6f6fi")
 
@@ -229,12 +228,8 @@ def tower_values(plane: Plane, heights_m: np.ndarray, layout, U_m_s: float) -> d
     if not plane.varying:
         out["u"] += layout.mean_u(U_m_s, heights_m)[None, :]
         return out
-    wind, hub = layout.wind, layout.hub_height_m
-    diameter = wind.transient.rotor_diameter_m if wind.transient is not None else 1.0
-    speed = (plane.hub_speed[:, None] * wind.speed_ratio(heights_m, hub)[None, :] + plane.gust[:, None]
-             + plane.vshear[:, None] * (heights_m[None, :] - hub) / diameter)  # tower at y = 0: no horizontal shear
-    angle = wind.veer_deg(heights_m, hub)[None, :] + plane.hub_direction[:, None]
-    out["u"], out["v"] = rotate_horizontal(out["u"] + speed, out["v"], angle)
+    out["u"], out["v"] = layout.wind.full_uv(out["u"], out["v"], plane.times_s[:, None], 0.0, heights_m[None, :],
+                                             U_m_s, layout.hub_height_m)  # the tower stands at y = 0
     return out
 
 

@@ -10,7 +10,6 @@ import numpy as np
 from turbgen.errors import ParameterError, check_int
 from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT, VerticalLayout, vertical_layout
 from turbgen.spec.mean_wind import MeanWind
-from turbgen.theory import mean_wind as formulas
 from turbgen.theory import ranges
 
 COMPONENTS = ("u", "v", "w")
@@ -203,16 +202,11 @@ class Plane:
         self.fluct = {c: fs.read_plane(c, ix)[:, :, layout.z_first:] for c in COMPONENTS}
         self.mean_u = layout.mean_u(fs.U_m_s)
         self.nt, self.ny, self.nz = self.fluct["u"].shape
-        wind = layout.wind
-        self.varying = wind.varies
-        self.ratio = wind.speed_ratio(layout.heights_m, layout.hub_height_m)
-        self.veer_deg = wind.veer_deg(layout.heights_m, layout.hub_height_m)
+        self.wind = layout.wind
+        self.varying = self.wind.varies
         self.times_s = first_slice_s + fs.grid.dt_s * np.arange(self.nt)
-        self.hub_speed, self.hub_direction = wind.hub_history(self.times_s, fs.U_m_s)
-        self.gust, self.vshear, self.hshear = wind.transient_terms(self.times_s)
-        diameter = wind.transient.rotor_diameter_m if wind.transient is not None else 1.0
-        self.z_over_d = (layout.heights_m - layout.hub_height_m) / diameter
-        self.y_over_d = fs.grid.y() / diameter
+        self.y_m, self.heights_m = fs.grid.y(), layout.heights_m
+        self.U_m_s, self.hub_height_m = fs.U_m_s, layout.hub_height_m
 
     def full(self, c: str, a: int = 0, b: int | None = None) -> np.ndarray:
         """Full velocity [m/s] of component ``c`` for time steps a..b-1, float64 (b - a, ny, nz).
@@ -239,12 +233,9 @@ class Plane:
             return v
         if c == "w":
             return v
-        u = self.fluct["u"][a:b].astype(np.float64) + (self.hub_speed[a:b, None] * self.ratio[None, :])[:, None, :]
-        u += (self.gust[a:b, None, None] + self.vshear[a:b, None, None] * self.z_over_d[None, None, :]
-              + self.hshear[a:b, None, None] * self.y_over_d[None, :, None])
-        other = self.fluct["v"][a:b].astype(np.float64)
-        angle = (self.veer_deg[None, :] + self.hub_direction[a:b, None])[:, None, :]
-        u, other = formulas.rotate_horizontal(u, other, angle)
+        u, other = self.wind.full_uv(self.fluct["u"][a:b].astype(np.float64), self.fluct["v"][a:b].astype(np.float64),
+                                     self.times_s[a:b, None, None], self.y_m[None, :, None],
+                                     self.heights_m[None, None, :], self.U_m_s, self.hub_height_m)
         return u if c == "u" else other
 
     def blocks(self, bytes_per_step: int, budget: int = 1 << 24):

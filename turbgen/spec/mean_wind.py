@@ -279,6 +279,39 @@ class MeanWind:
         ev = self.transient.at(t)
         return ev["gust_m_s"], ev["vshear_m_s"], ev["hshear_m_s"]
 
+    def full_uv(self, u, v, times_s, y_m, heights_m, U_m_s: float, hub_height_m: float):
+        """Full (u, v) [m/s] from fluctuations (u, v) at times, lateral positions and heights (all broadcast).
+
+        u + U_hub(t) r(h) + g(t) + s_v(t) (h - h_hub) / D + s_h(t) y / D, then (u, v) turned by veer(h) +
+        direction(t) (the module's formula; v unchanged without a turn).
+
+        Parameters
+        ----------
+        u, v : array_like
+            Fluctuations [m/s].
+        times_s, y_m, heights_m : array_like
+            Time at the turbine [s], lateral position [m] (+y left) and height above ground [m],
+            broadcastable with ``u``.
+        U_m_s : float
+            The store's mean speed [m/s].
+        hub_height_m : float
+            Hub height [m].
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            (u, v) [m/s].
+        """
+        t, h = np.asarray(times_s, dtype=float), np.asarray(heights_m, dtype=float)
+        speed, turn = self.hub_history(t, U_m_s)
+        gust, vshear, hshear = self.transient_terms(t)
+        diameter = self.transient.rotor_diameter_m if self.transient is not None else 1.0
+        u = u + speed * self.speed_ratio(h, hub_height_m)
+        u = u + (gust + vshear * (h - hub_height_m) / diameter + hshear * np.asarray(y_m, dtype=float) / diameter)
+        if not self.turns:
+            return u, v
+        return formulas.rotate_horizontal(u, v, self.veer_deg(h, hub_height_m) + turn)
+
     def check_record(self, first_s: float, last_s: float) -> None:
         """Refuse a history or transient with times outside the record [first_s, last_s] seen at the turbine.
 
