@@ -24,10 +24,10 @@ def run(*args):
 
 
 @pytest.mark.parametrize("fmt,out,files,key", [
-    ("bts", "f.bts", ["f.bts"], "FileName_BTS"),
-    ("wnd", "r", ["r.wnd", "r.sum"], "FilenameRoot"),
+    ("bts", "f.bts", ["f.bts", "f_InflowWind_bts.dat"], "FileName_BTS"),
+    ("wnd", "r", ["r.wnd", "r.sum", "r_InflowWind_wnd.dat"], "FilenameRoot"),
     ("evo", "lid.evo", ["lid.evo", "lid.wnd", "lid.sum"], "EvolutionFlag"),
-    ("hawc2", "box", ["box_u.bin", "box_v.bin", "box_w.bin"], "FileName_u"),
+    ("hawc2", "box", ["box_u.bin", "box_v.bin", "box_w.bin", "box_InflowWind_hawc2.dat", "box_wind.htc"], "FileName_u"),
     ("mt4d", "f.mt4d", ["f.mt4d"], "not read by InflowWind"),
     ("hdf5", "f.h5", ["f.h5"], "not read by InflowWind"),
 ])
@@ -142,7 +142,7 @@ def test_rotorless_store_needs_plane(tmp_path):
 def test_root_with_a_dot_keeps_its_whole_name(store, tmp_path, fmt, exts):
     """InflowWind opens FilenameRoot + '.wnd'/'.sum': a root such as case_U16.5 must give case_U16.5.wnd,
     the name the printed FilenameRoot line loads (it gave case_U16.wnd, which InflowWind never opens)."""
-    res = run(store, "--format", fmt, "--out", tmp_path / "case_U16.5")
+    res = run(store, "--format", fmt, "--out", tmp_path / "case_U16.5", "--no-runner-files")
     assert res.exit_code == 0, res.output
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(f"case_U16.5{e}" for e in exts)
     assert f'"{tmp_path / "case_U16.5"}"   FilenameRoot' in res.stdout

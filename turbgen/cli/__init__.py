@@ -74,6 +74,7 @@ COMMANDS = {
     "serve": ("turbgen.cli.serve", "serve"),
     "sweep": ("turbgen.cli.sweep", "sweep"),
     "theory": ("turbgen.cli.theory", "theory"),
+    "transient": ("turbgen.cli.transient", "transient"),
     "validate": ("turbgen.cli.validate", "validate"),
 }
 

@@ -6,7 +6,9 @@ from __future__ import annotations
 import click
 
 from turbgen.export import EXPORTERS, ExportRequest, export_store
+from turbgen.errors import ParameterError
 from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT
+from turbgen.spec.mean_wind_files import mean_wind_from_options
 from turbgen.store.paths import check_output_path
 
 
@@ -21,21 +23,74 @@ from turbgen.store.paths import check_output_path
 @click.option("--hub-height", "hub_height", type=float, default=None, help="Hub height [m] (default: the store's).")
 @click.option("--shear-exponent", "shear", type=float, default=None,
               help=f"Power-law exponent of the mean profile added to u (InflowWind formats; default {DEFAULT_SHEAR_EXPONENT:g}).")
+@click.option("--profile", "profile", default=None, metavar="KIND:VALUE",
+              help="Mean profile added (InflowWind/HAWC2 formats): power:ALPHA | log:z0=Z0[,d=D] (roughness and "
+                   "displacement, m) | table:FILE (CSV rows z [m], U [m/s] [, direction deg]; speeds scaled so the "
+                   "table's value at hub height is the hub mean). Default power:0.2.")
+@click.option("--veer", "veer", type=float, default=None, metavar="DEG_PER_M",
+              help="Direction change with height [deg/m], (u, v) turned per height about the hub, counter-clockwise "
+                   "seen from above (northern-hemisphere veer is negative).")
+@click.option("--mean-history", "mean_history", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="Hub-height mean history: CSV rows t [s], U [m/s] [, direction deg] at the turbine (times within "
+                   "the record; linear between rows, end values held); the advection speed stays the store's U.")
+@click.option("--transient", type=click.Choice(["EOG", "EDC", "ECD", "EWS-V", "EWS-H"], case_sensitive=False),
+              default=None, help="Superimpose an IEC 61400-1 Ed. 4 transient (Sect. 6.3.3) at the store's U and hub "
+                                 "height, from --transient-start; needs --iec-class and --rotor-diameter. It rides "
+                                 "on the slices: Taylor's shift keeps the hub mean U.")
+@click.option("--iec-class", default=None, help="--transient: turbine class and turbulence category, e.g. IIB.")
+@click.option("--rotor-diameter", type=float, default=None, help="--transient: rotor diameter D [m].")
+@click.option("--transient-start", type=float, default=10.0, show_default=True,
+              help="--transient: time the event reaches the turbine [s].")
+@click.option("--transient-sign", type=click.Choice(["+", "-"]), default="+", show_default=True,
+              help="--transient: the standard's +- (direction change sense, shear sense).")
 @click.option("--tower", is_flag=True, help="bts: add tower points down to the ground.")
 @click.option("--periodic/--no-periodic", default=True, show_default=True,
               help="Flag bts/wnd/evo periodic in time (InflowWind wraps instead of starting half a grid upstream).")
 @click.option("--drop-below-ground", is_flag=True, help="Drop grid rows at or below the ground instead of refusing.")
+@click.option("--runner-files/--no-runner-files", "runner_files", default=True, show_default=True,
+              help="Also write the runners' input files beside the wind files: OUT_InflowWind_FORMAT.dat, a complete "
+                   "InflowWind v5 input file (bts, wnd, hawc2; wind-file names relative to it) and OUT_wind.htc, a "
+                   "HAWC2 wind + mann block (hawc2).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-def export(store, fmt, out, plane, hub_height, shear, tower, periodic, drop_below_ground, overwrite):
+def export(store, fmt, out, plane, hub_height, shear, profile, veer, mean_history, transient, iec_class,
+           rotor_diameter, transient_start, transient_sign, tower, periodic, drop_below_ground, runner_files,
+           overwrite):
     """Export STORE to --format; prints the InflowWind input-file lines that load the result."""
     check_output_path(out)
+    if shear is not None and profile is not None:
+        raise ParameterError(f"--shear-exponent {shear:g} and --profile {profile} both set the profile; give one")
+    if shear is not None and (veer is not None or mean_history is not None):
+        profile, shear = f"power:{shear!r}", None
+    event = _transient(store, transient, iec_class, rotor_diameter, transient_start, transient_sign, hub_height)
+    mean_wind = mean_wind_from_options(profile, veer, mean_history, event)
     request = ExportRequest(plane=plane, hub_height_m=hub_height, shear_exponent=shear, tower=tower,
-                            periodic=periodic, drop_below_ground=drop_below_ground, overwrite=overwrite)
+                            periodic=periodic, drop_below_ground=drop_below_ground, overwrite=overwrite,
+                            mean_wind=mean_wind, runner_files=runner_files and fmt in ("bts", "wnd", "hawc2"))
     result = export_store(store, fmt, out, request)
     for p in result.paths:
         click.echo(f"wrote {p}", err=True)
     for note in result.notes:
         click.echo(f"note: {note}", err=True)
+    for line in result.usage:
+        click.echo(f"use: {line}", err=True)
     click.echo("InflowWind input-file lines:")
     for line in result.inflowwind_lines:
         click.echo(line)
+
+
+def _transient(store, kind, iec_class, rotor_diameter, start, sign, hub_height):
+    """The IEC transient of the --transient options at the store's U and hub height (None without --transient)."""
+    extra = [n for n, v in (("--iec-class", iec_class), ("--rotor-diameter", rotor_diameter)) if v is not None]
+    if kind is None:
+        if extra:
+            raise ParameterError(f"{' and '.join(extra)} belong to --transient")
+        return None
+    if iec_class is None or rotor_diameter is None:
+        raise ParameterError(f"--transient {kind.upper()} needs --iec-class and --rotor-diameter")
+    from turbgen.spec.iec_transient import IecTransient
+    from turbgen.store import open_store
+
+    fs = open_store(store)
+    return IecTransient(kind, iec_class, fs.U_m_s, fs.hub_height_m if hub_height is None else hub_height,
+                        rotor_diameter, start_s=start, duration_s=(fs.grid.nt - 1) * fs.grid.dt_s,
+                        sign=1 if sign == "+" else -1)

@@ -70,11 +70,24 @@ def _lines(s: dict) -> list[str]:
 def info(store: str, as_json: bool):
     """Summarise the field store STORE: model, grid, planes, dt, U, seed, parameters, size, completeness.
 
+    STORE may also be an exported .bts, InflowWind input file (.dat) or .sum: its header, title and
+    description are printed (the mean wind the export added, a non-periodic file's start shift).
+
     A missing, incomplete or corrupted store (a chunk that does not decode or holds NaN; every
     chunk is decoded for stores up to 256 MiB) is reported in one line (exit code 2). Temporaries
     left beside STORE (or inside it, for a sweep directory) by killed writers are removed.
     """
     path = Path(store).expanduser().absolute()
+    if path.is_file():
+        from turbgen.export.describe import file_summary
+
+        rows = file_summary(path)
+        if as_json:
+            click.echo(json.dumps(dict(rows), indent=2))
+        else:
+            width = max(len(k) for k, _ in rows)
+            click.echo("\n".join(f"{k:<{width}}  {v}" for k, v in rows))
+        return
     report_removed(remove_dead_temporaries(path.parent, [path.name]))
     if path.is_dir() and not (path / "zarr.json").is_file():
         report_removed(remove_dead_temporaries(path))  # e.g. a sweep directory

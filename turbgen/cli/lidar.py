@@ -61,10 +61,17 @@ def lidar():
               help="add the mean wind U (1 + z/h_hub)^alpha to u before projecting (default: fluctuations only)")
 @click.option("--shear", "shear_exponent", type=float, default=0.2, show_default=True,
               help="power-law shear exponent alpha of --mean-wind")
+@click.option("--profile", default=None, metavar="KIND:VALUE",
+              help="--mean-wind profile as turbgen export takes it: power:ALPHA | log:z0=Z0[,d=D] | table:FILE "
+                   "(replaces --shear)")
+@click.option("--veer", type=float, default=None, metavar="DEG_PER_M", help="--mean-wind veer [deg/m], as turbgen export")
+@click.option("--mean-history", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="--mean-wind hub-height history CSV (t, U [, direction]), as turbgen export")
 @click.option("--json", "as_json", is_flag=True, help="print the result as JSON instead of text")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False, path_type=str), default=None,
               help="write gamma^2_RL and |G_RL| plots (simulated with 95 % band, theory) into this directory")
-def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_exponent, as_json, plots_dir):
+def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_exponent, profile, veer, mean_history,
+        as_json, plots_dir):
     """Sample STORE with a lidar; report simulated preview quality (MCB, cut-off, TI).
 
     Exit code 0 when the simulated coherence agrees with theory, 1 when it departs beyond the
@@ -75,11 +82,12 @@ def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_expone
     from turbgen.store import open_store
 
     try:
+        wind = _mean_wind(mean_wind, shear_exponent, profile, veer, mean_history)
         fs = open_store(store)
         if out is not None:
             check_output(out, overwrite)
         result = report.lidar_report(fs, lidar_name, rotor_radius_m=rotor_radius, add_mean_wind=mean_wind,
-                                     shear_exponent=shear_exponent)
+                                     shear_exponent=shear_exponent, mean_wind=wind)
     except TurbgenError as exc:
         from turbgen.cli import user_error
 
@@ -92,3 +100,16 @@ def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_expone
         click.echo(f"wrote {len(files)} plots to {plots_dir}", err=True)
     click.echo(json.dumps(result.to_dict(), indent=1) if as_json else result.text())
     sys.exit(0 if result.passed else 1)
+
+
+def _mean_wind(add: bool, shear_exponent: float, profile, veer, history):
+    """The MeanWind of --profile/--veer/--mean-history (None when none is given: --shear's power law)."""
+    from turbgen.errors import ParameterError
+    from turbgen.spec.mean_wind_files import mean_wind_from_options
+
+    given = [n for n, v in (("--profile", profile), ("--veer", veer), ("--mean-history", history)) if v is not None]
+    if given and not add:
+        raise ParameterError(f"{', '.join(given)} belong to --mean-wind")
+    if profile is None and given:
+        profile = f"power:{shear_exponent!r}"
+    return mean_wind_from_options(profile, veer, history)

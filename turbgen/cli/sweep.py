@@ -35,10 +35,20 @@ def _split(text: str | None) -> list[str] | None:
 @click.option("--lidar", help="run this lidar (preset or TOML/JSON file, see turbgen lidar) on every field and put "
               "its k_0.5, cut-off and coherence verdict in the manifest")
 @click.option("--out", type=click.Path(file_okay=False), help="output directory (stores and manifest)")
+@click.option("--dlc", type=click.Choice(["1.1", "1.2", "1.3"]), default=None,
+              help="IEC 61400-1 design-load-case set: 1.1/1.2 (NTM) or 1.3 (ETM) at --class, speeds --v-in..--v-out in "
+                   "2 m/s steps, --seeds (default 1-6), one --model (default kaimal); every field is exported to "
+                   "OUT/wind/ with its InflowWind input file and listed in OUT/dlc_manifest.csv.")
+@click.option("--class", "iec_class", help="--dlc: turbine class and turbulence category, e.g. IIB.")
+@click.option("--v-in", "v_in", type=float, default=4.0, show_default=True, help="--dlc: cut-in speed V_in [m/s].")
+@click.option("--v-out", "v_out", type=float, default=24.0, show_default=True, help="--dlc: cut-out speed V_out [m/s].")
+@click.option("--export-format", type=click.Choice(["bts", "wnd", "hawc2"]), default="bts", show_default=True,
+              help="--dlc: format of the exported wind files.")
 @click.option("--memory", help="memory budget of each run, e.g. 4GiB: Mann fields that do not fit are made out of "
               "core (turbgen mann --memory), the same fields")  # fmt: skip
 def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, gates, ny, nz, dy, dz, hub_height,
-          chunks, workers, scheduler, validate, lidar, out, memory):  # fmt: skip
+          chunks, workers, scheduler, validate, lidar, out, dlc, iec_class, v_in, v_out, export_format,
+          memory):  # fmt: skip
     """Generate every field of a sweep (resumable: complete stores are kept), write DIR/manifest.json/.csv.
 
     Either --config FILE (command-line --out, --workers, --scheduler, --validate and --chunks
@@ -62,6 +72,15 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
     )
     if x_m is not None:
         grid["planes"] = x_m
+    if dlc is not None:
+        given = [n for n, v in [("--config", config), ("--preset", presets), ("--speeds", speeds),
+                                ("--presets-file", presets_file), ("--lidar", lidar), ("--memory", memory),
+                                ("--validate", validate)] if v is not None]  # fmt: skip
+        if given or not iec_class or not out or (models is not None and "," in models):
+            raise click.UsageError(f"--dlc takes --class, --out and one --model; it sets presets and speeds itself"
+                                   f"{' (remove ' + ', '.join(given) + ')' if given else ''}")
+        return _run_dlc(dlc, iec_class, v_in, v_out, seeds, (models or "kaimal").strip(), grid, chunks, workers,
+                        scheduler, out, export_format)
     if config:
         given = [n for n, v in [("--model", models), ("--preset", presets), ("--speeds", speeds), ("--seeds", seeds),
                                 ("--presets-file", presets_file)] if v is not None]  # fmt: skip
@@ -101,3 +120,22 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
         raise click.exceptions.Exit(1)
     if result.validation_failed or result.lidar_failed:
         raise click.exceptions.Exit(3)
+
+
+def _run_dlc(dlc, iec_class, v_in, v_out, seeds, model, grid, chunks, workers, scheduler, out, export_format):
+    """`turbgen sweep --dlc`: the set's fields, their exports and OUT/dlc_manifest.csv."""
+    from turbgen.spec.dlc import DlcSet
+    from turbgen.sweep import run_sweep, summary_table
+    from turbgen.sweep.dlc import export_dlc, make_dlc_plan
+
+    seed_list = parse_ints(seeds, "--seeds") if seeds is not None else (1, 2, 3, 4, 5, 6)
+    dlc_set = DlcSet(dlc, iec_class, v_in, v_out, tuple(seed_list))
+    plan = make_dlc_plan(dlc_set, out=out, model=model, grid=grid, chunk_t=chunks, workers=workers,
+                         scheduler=scheduler)
+    result = run_sweep(plan, progress=True)
+    click.echo(summary_table(result))
+    manifest = export_dlc(plan, dlc_set, result, export_format)
+    click.echo(f"wrote {manifest} ({dlc_set.label}: wind files and InflowWind input files in {plan.out}/wind)")
+    click.echo("use: each row's inflowwind_file is the InflowFile of one OpenFAST run (names relative to it)")
+    if not result.ok:
+        raise click.exceptions.Exit(1)

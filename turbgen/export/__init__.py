@@ -117,12 +117,16 @@ def _check_applicable(fmt: str, request: ExportRequest) -> None:
     given = []
     if request.tower and fmt != "bts":
         given.append("`tower` (bts only)")
+    if request.runner_files and fmt not in ("bts", "wnd", "hawc2"):
+        given.append("`runner_files` (bts, wnd, hawc2 only)")
     if not request.periodic and fmt not in ("bts", "wnd", "evo"):
         given.append("`no_periodic` (bts, wnd, evo only; HAWC boxes are always periodic)")
     if fmt in WHOLE_FIELD:
         if request.plane is not None:
             given.append("`plane`")
-        if request.hub_height_m is not None or request.drop_below_ground or request.shear_exponent is not None:
-            given.append("`hub_height`/`shear_exponent`/`drop_below_ground` (no mean profile is added)")
+        if (request.hub_height_m is not None or request.drop_below_ground or request.shear_exponent is not None
+                or request.mean_wind is not None):
+            given.append("`hub_height`/`shear_exponent`/`drop_below_ground` or a mean wind (profile, veer, history): "
+                         "no mean profile is added")
     if given:
         raise ParameterError(f"`format` {fmt} does not use {'; '.join(given)}")

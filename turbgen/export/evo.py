@@ -18,7 +18,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.export.outputs import OutputSet
-from turbgen.export.request import ExportRequest, ExportResult, Plane, ifw_line
+from turbgen.export.request import ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
 from turbgen.export.wnd import (BladedStats, WndHeader, bladed_raw, check_even_nt, export_root, from_bladed,
                                 inflowwind_lines, read_wnd, root_file, write_pair)
 
@@ -97,22 +97,24 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
     check_even_nt(g.nt)
     dist, rounded = plane_distances(g.x_m)
     paths = [root_file(root, ".evo"), root_file(root, ".wnd"), root_file(root, ".sum")]
+    shift = req.start_shift_s(fs)
     with OutputSet(paths, overwrite=req.overwrite) as files:
         stats = BladedStats()
         for ix in range(g.nx):  # pass 1: one TI scaling that fits every plane
-            stats.add(Plane(fs, ix, lay), fs.U_m_s)
+            stats.add(Plane(fs, ix, lay, -shift), fs.U_m_s)
         header = WndHeader(nz=lay.nz, ny=g.ny, nt=g.nt, dz_m=g.dz_m, dy_m=g.dy_m, dx_m=fs.U_m_s * g.dt_s,
                            U_m_s=fs.U_m_s, ti_percent=stats.ti_percent(fs.U_m_s), zref_m=lay.centre_m)
         with open(files.temp(paths[0]), "wb") as f:
             f.write(np.asarray([len(dist)], dtype="<i2").tobytes() + dist.tobytes())
             for ix in range(g.nx):  # pass 2: plane, time, z, y, component
-                plane = Plane(fs, ix, lay)
+                plane = Plane(fs, ix, lay, -shift)
                 for a, b in plane.blocks(8 * plane.ny * plane.nz):
                     block = bladed_raw(plane, a, b, header.U_m_s, header.ti_percent)
                     f.write(np.ascontiguousarray(block).tobytes())
                 if ix == ix_rotor:
                     write_pair(files, root, plane, header, lay, periodic=req.periodic,
-                               title=f"turbgen 4D export: the .wnd holds plane x = {g.x_m[ix]:g} m")
+                               title=f"turbgen 4D export: the .wnd holds plane x = {g.x_m[ix]:g} m"
+                               + ("" if lay.mean_wind is None else f", {lay.wind.describe()}"))
                 del plane  # free it before the next plane is read
     lines = inflowwind_lines(root) + (
         "LidarSim input file, section ---- Wind Evolution ----:",
@@ -120,7 +122,8 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
         ifw_line(paths[0], "EvolutionFilenameRoot", "the .evo file, ROOT.wnd and ROOT.sum beside it"))
     notes = [f"ROOT.evo holds {g.nx} planes at {dist.tolist()} m upstream (the simulator picks the nearest to -X, "
              "X measured from the tower axis)",
-             f"ROOT.wnd holds plane x = {g.x_m[ix_rotor]:g} m; the turbine's InflowWind must use WindType 3 or 4"]
+             f"ROOT.wnd holds plane x = {g.x_m[ix_rotor]:g} m; the turbine's InflowWind must use WindType 3 or 4",
+             *mean_wind_notes(lay, shift, g.nt, g.dt_s)]
     if rounded:
         notes.append(f"plane distances rounded to the .evo's whole metres: {', '.join(rounded)} m "
                      "(the simulator samples the stored eddy-time series of the nearest plane)")

@@ -15,8 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
+from turbgen.export.inflowwind_file import (InflowWindInput, hawc2_wind_block, inflowwind_path,
+                                            write_inflowwind)
 from turbgen.export.outputs import OutputSet
-from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line
+from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
 
 
 def component_paths(root) -> dict[str, Path]:
@@ -128,8 +130,14 @@ def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
     ix, lay = req.plane_index(fs), req.layout(fs)
     g = fs.grid
     paths = component_paths(root)
-    with OutputSet(paths.values(), overwrite=req.overwrite) as files:
-        write_hawc2({c: files.temp(p) for c, p in paths.items()}, Plane(fs, ix, lay), fs.U_m_s)
+    dat, htc = inflowwind_path(root, "hawc2"), root.with_name(root.name + "_wind.htc")
+    usage = []
+    with OutputSet([*paths.values(), dat, htc] if req.runner_files else paths.values(),
+                   overwrite=req.overwrite) as files:
+        plane = Plane(fs, ix, lay)
+        write_hawc2({c: files.temp(p) for c, p in paths.items()}, plane, fs.U_m_s)
+        if req.runner_files:
+            usage += runner_files(files, fs, req, plane, lay, paths, dat, htc)
     keys = [(paths["u"], "FileName_u", "u - URef"), (paths["v"], "FileName_v", "v"), (paths["w"], "FileName_w", "w"),
             (g.nt, "nx", "number of grids in x (time)"), (g.ny, "ny", "number of grids in y"),
             (lay.nz, "nz", "number of grids in z"), (fs.U_m_s * g.dt_s, "dx", "distance between x points (m) = URef*dt"),
@@ -139,7 +147,7 @@ def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
             (1.0, "SFx", "unused"), (1.0, "SFy", "unused"), (1.0, "SFz", "unused"),
             (0.0, "SigmaFx", "unused"), (0.0, "SigmaFy", "unused"), (0.0, "SigmaFz", "unused"),
             (fs.U_m_s, "URef", "mean u at hub height (m/s), also the advection speed"),
-            (0, "WindProfile", "0 = constant: the power-law shear is already in the files"),
+            (0, "WindProfile", "0 = constant: the mean profile is already in the files"),
             (lay.shear_exponent, "PLExp_HAWC", "unused with WindProfile 0"), (0.03, "Z0", "unused with WindProfile 0"),
             (0.0, "XOffset", "(m)")]
     lines = (ifw_line(5, "WindType", "switch for wind file type (5 = HAWC binary)"),
@@ -147,7 +155,49 @@ def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
              *[ifw_line(v, k, c) for v, k, c in keys])
     notes = [f"plane x = {g.x_m[ix]:g} m in eddy time; HAWC boxes are always periodic in time",
              "written for InflowWind: the first x-plane reaches the turbine first and u - URef already holds the "
-             "shear; in HAWC2 itself switch its shear off and check the box read direction (changed in v13.1)"]
+             "shear; in HAWC2 itself switch its shear off and check the box read direction (changed in v13.1)",
+             *mean_wind_notes(lay, 0.0, g.nt, g.dt_s)]
     if lay.z_first:
         notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
-    return ExportResult(tuple(paths.values()), lines, tuple(notes))
+    written = (*paths.values(), dat, htc) if req.runner_files else tuple(paths.values())
+    return ExportResult(written, lines, tuple(notes), tuple(usage))
+
+
+def runner_files(files, fs, req: ExportRequest, plane: Plane, lay, paths: dict, dat: Path, htc: Path) -> list[str]:
+    """Write the InflowWind v5 input file and the HAWC2 wind block of a HAWC2 export (through ``files``).
+
+    Parameters
+    ----------
+    files : OutputSet
+        The export's output set (holding ``dat`` and ``htc``).
+    fs : FieldStore
+        The open store.
+    req : ExportRequest
+        The export request.
+    plane : Plane
+        The exported plane (its u fluctuations give the block's tint).
+    lay : VerticalLayout
+        Kept rows and mean wind.
+    paths : dict
+        {"u", "v", "w": final path} of the boxes.
+    dat, htc : pathlib.Path
+        Final paths of the input file and of the wind block.
+
+    Returns
+    -------
+    list of str
+        One usage line per file.
+    """
+    g = fs.grid
+    desc = f"turbgen {htc.name}: plane of {req.source(fs)}, {lay.wind.describe()}"
+    keys = {"nx": g.nt, "ny": g.ny, "nz": lay.nz, "dx": fs.U_m_s * g.dt_s, "dy": g.dy_m, "dz": g.dz_m,
+            "RefHt_HAWC": lay.centre_m, "PLExp_HAWC": lay.shear_exponent}
+    files_ifw = {"FileName_u": paths["u"], "FileName_v": paths["v"], "FileName_w": paths["w"]}
+    usage = [write_inflowwind(files, dat, InflowWindInput(5, lay.hub_height_m, fs.U_m_s, files_ifw, keys, title=desc))]
+    ti = float(np.std(plane.fluct["u"], dtype=np.float64)) / fs.U_m_s
+    files.temp(htc).write_text(hawc2_wind_block(
+        paths=paths, folder=htc.absolute().parent, U_m_s=fs.U_m_s, ti=ti, centre_m=lay.centre_m, nt=g.nt, ny=g.ny,
+        nz=lay.nz, dx_m=fs.U_m_s * g.dt_s, dy_m=g.dy_m, dz_m=g.dz_m, description=desc))
+    usage.append(f"HAWC2: paste \"{htc}\" in place of the htc's wind block (box names relative to its folder: run "
+                 "HAWC2 there or adjust them; check the box read direction of your HAWC2 version)")
+    return usage

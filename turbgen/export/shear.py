@@ -1,8 +1,9 @@
 """Mean wind profile and ground clearance for the InflowWind formats.
 
 The store holds zero-mean fluctuations with z relative to the hub. The InflowWind formats carry
-the full velocity, so the exporters add a power-law mean u(h) = U (h / h_hub)^alpha at absolute
-height h = h_hub + z. A grid reaching the ground (h <= 0) can carry neither the profile nor be
+the full velocity, so the exporters add a mean at absolute height h = h_hub + z: by default the
+power law u(h) = U (h / h_hub)^alpha, or any :class:`turbgen.spec.mean_wind.MeanWind` (profile,
+veer, hub-height history). A grid reaching the ground (h <= 0) can carry neither the profile nor be
 read by InflowWind (its grid origin is the ground): it is refused unless the rows below ground
 are dropped explicitly.
 """
@@ -13,24 +14,36 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from turbgen.errors import ParameterError, check_positive, check_range
+from turbgen.errors import ParameterError, check_positive
 from turbgen.grid import Grid
-
-DEFAULT_SHEAR_EXPONENT = 0.2
+from turbgen.spec.mean_wind import DEFAULT_SHEAR_EXPONENT, MeanWind
 
 
 @dataclass(frozen=True)
 class VerticalLayout:
-    """Rows ``z_first..nz-1`` of a grid placed at ``hub_height_m`` with a power-law mean.
+    """Rows ``z_first..nz-1`` of a grid placed at ``hub_height_m`` with a mean-wind profile.
 
-    hub_height_m [m], shear_exponent [-], z_first: index of the lowest kept row,
-    heights_m: absolute heights [m] of the kept rows (ascending).
+    hub_height_m [m], shear_exponent [-] (of the power law; unused by the other profiles), z_first:
+    index of the lowest kept row, heights_m: absolute heights [m] of the kept rows (ascending),
+    mean_wind: the profile, veer and history (None: the power law with ``shear_exponent``).
     """
 
     hub_height_m: float
     shear_exponent: float
     z_first: int
     heights_m: np.ndarray
+    mean_wind: MeanWind | None = None
+
+    @property
+    def wind(self) -> MeanWind:
+        """The mean wind (the power law with ``shear_exponent`` when none was given).
+
+        Returns
+        -------
+        MeanWind
+            The mean-wind definition applied by the exports.
+        """
+        return self.mean_wind if self.mean_wind is not None else MeanWind(shear_exponent=self.shear_exponent)
 
     @property
     def nz(self) -> int:
@@ -66,9 +79,9 @@ class VerticalLayout:
         return float(0.5 * (self.heights_m[0] + self.heights_m[-1]))
 
     def mean_u(self, U_m_s: float, heights_m=None) -> np.ndarray:
-        """Power-law mean u [m/s] at ``heights_m`` (default: the kept rows).
+        """Mean speed [m/s] of the profile at ``heights_m`` (default: the kept rows), before any veer.
 
-        u(h) = U (h / hub_height_m)^shear_exponent.
+        u(h) = U r(h), r the profile's ratio U(h) / U(h_hub); the power law: r = (h / hub_height_m)^alpha.
 
         Parameters
         ----------
@@ -83,12 +96,11 @@ class VerticalLayout:
             Mean u [m/s], shape of ``heights_m``.
         """
         h = self.heights_m if heights_m is None else np.asarray(heights_m, dtype=float)
-        # power-law shear profile, u = U (h / h_hub)^alpha
-        return U_m_s * (h / self.hub_height_m) ** self.shear_exponent
+        return U_m_s * self.wind.speed_ratio(h, self.hub_height_m)
 
 
 def vertical_layout(grid: Grid, hub_height_m, shear_exponent=DEFAULT_SHEAR_EXPONENT,
-                    *, drop_below_ground: bool = False) -> VerticalLayout:
+                    *, drop_below_ground: bool = False, mean_wind: MeanWind | None = None) -> VerticalLayout:
     """Check the grid against the ground and return the rows to export.
 
     Parameters
@@ -101,6 +113,8 @@ def vertical_layout(grid: Grid, hub_height_m, shear_exponent=DEFAULT_SHEAR_EXPON
         Power-law exponent alpha [-] in [-1, 1]; default ``DEFAULT_SHEAR_EXPONENT`` (0.2).
     drop_below_ground : bool, optional
         Drop the rows at or below the ground (h <= 0) instead of refusing the grid.
+    mean_wind : MeanWind, optional
+        Profile, veer and history (replaces ``shear_exponent``); checked against the kept heights.
 
     Returns
     -------
@@ -111,10 +125,11 @@ def vertical_layout(grid: Grid, hub_height_m, shear_exponent=DEFAULT_SHEAR_EXPON
     ------
     ParameterError
         For a non-positive hub height, an exponent outside [-1, 1], a grid reaching the ground
-        without ``drop_below_ground``, or a hub height that puts every row below ground.
+        without ``drop_below_ground``, a hub height that puts every row below ground, or kept heights
+        the profile does not cover (outside its table, below d + z0 of the log law).
     """
     hub = check_positive("hub height (m)", hub_height_m)
-    alpha = check_range("shear exponent", shear_exponent, -1.0, 1.0)
+    wind = mean_wind if mean_wind is not None else MeanWind(shear_exponent=shear_exponent)
     heights = hub + grid.z()
     below = int(np.count_nonzero(heights <= 0.0))
     if below and not drop_below_ground:
@@ -123,4 +138,7 @@ def vertical_layout(grid: Grid, hub_height_m, shear_exponent=DEFAULT_SHEAR_EXPON
             f"raise `hub_height` above {-grid.z()[0]:g} m or pass `drop_below_ground` to drop the {below} lowest rows")
     if below == grid.nz:
         raise ParameterError(f"hub height {hub:g} m puts every grid row below ground")
-    return VerticalLayout(hub, alpha, below, heights[below:])
+    kept = heights[below:]
+    wind.speed_ratio(kept, hub)  # refuses heights the profile does not cover, before anything is written
+    wind.veer_deg(kept, hub)
+    return VerticalLayout(hub, wind.shear_exponent, below, kept, mean_wind)

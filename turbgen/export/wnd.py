@@ -17,8 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.errors import ParameterError
+from turbgen.export.inflowwind_file import InflowWindInput, inflowwind_path, write_inflowwind
 from turbgen.export.outputs import OutputSet
-from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line
+from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
 from turbgen.export.wnd_summary import sum_text
 
 _HEADER = struct.Struct("<hhi6f3fi4f4i6f")
@@ -385,15 +386,26 @@ def export_wnd(fs, out, req: ExportRequest) -> ExportResult:
     g = fs.grid
     check_even_nt(g.nt)
     paths = [root_file(root, ".wnd"), root_file(root, ".sum")]
+    if req.runner_files:
+        paths.append(inflowwind_path(root, "wnd"))
+    usage = []
     with OutputSet(paths, overwrite=req.overwrite) as files:
-        plane = Plane(fs, ix, lay)
+        shift = req.start_shift_s(fs)
+        plane = Plane(fs, ix, lay, -shift)
         stats = BladedStats()
         stats.add(plane, fs.U_m_s)
         header = WndHeader(nz=lay.nz, ny=g.ny, nt=g.nt, dz_m=g.dz_m, dy_m=g.dy_m, dx_m=fs.U_m_s * g.dt_s,
                            U_m_s=fs.U_m_s, ti_percent=stats.ti_percent(fs.U_m_s), zref_m=lay.centre_m)
         write_pair(files, root, plane, header, lay, periodic=req.periodic,
-                   title=f"turbgen export: plane x = {g.x_m[ix]:g} m, power-law shear alpha = {lay.shear_exponent:g}")
-    notes = [f"plane x = {g.x_m[ix]:g} m in eddy time: slice k is stored t index k"]
+                   title=f"turbgen export: plane x = {g.x_m[ix]:g} m, {lay.wind.describe()}")
+        if req.runner_files:
+            title = f"turbgen {root.name}.wnd: plane x = {g.x_m[ix]:g} m, {lay.wind.describe()}"
+            if shift:
+                title = f"NOT PERIODIC: starts {shift:.6g} s upstream (InitX/U). " + title
+            usage.append(write_inflowwind(files, paths[2], InflowWindInput(
+                4, lay.hub_height_m, fs.U_m_s, {"FilenameRoot": root}, title=title)))
+    notes = [f"plane x = {g.x_m[ix]:g} m in eddy time: slice k is stored t index k",
+             *mean_wind_notes(lay, shift, g.nt, g.dt_s)]
     if lay.z_first:
         notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
-    return ExportResult(tuple(paths), inflowwind_lines(root), tuple(notes))
+    return ExportResult(tuple(paths), inflowwind_lines(root), tuple(notes), tuple(usage))

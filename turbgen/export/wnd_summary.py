@@ -31,14 +31,15 @@ def sum_text(*, hub_height_m: float, U_m_s: float, ti_percent, height_offset_m: 
     periodic : bool
         Add the "PERIODIC" line.
     title : str
-        First line, free text: must not contain the keys parsed by :func:`read_sum`.
+        First line, free text; the keys the readers search for (e.g. a file name "periodic.csv" in a
+        mean-wind description) are broken up with a hyphen so that they cannot match.
 
     Returns
     -------
     str
         The file text, newline-terminated.
     """
-    lines = [title,  # free text: must not contain the keys parsed below
+    lines = [_defuse(title),  # free text: must not contain the keys parsed below
              "",
              "         F  Clockwise rotation when looking downwind?",
              f"{hub_height_m:12.4f}  Hub height [m]",
@@ -48,6 +49,16 @@ def sum_text(*, hub_height_m: float, U_m_s: float, ti_percent, height_offset_m: 
     if periodic:
         lines.append("Creating a PERIODIC output file.")
     return "\n".join(lines) + "\n"
+
+
+_KEYS = ("HUB HEIGHT", "ZHUB", "UBAR", "CLOCKWISE", "HEIGHT OFFSET", "PERIODIC", "BLADED LEFT-HAND RULE")
+
+
+def _defuse(title: str) -> str:
+    """``title`` with every parsed key (any case) broken by a hyphen after its first letter."""
+    for key in _KEYS:
+        title = re.sub(re.escape(key), lambda m: m[0][0] + "-" + m[0][1:], title, flags=re.IGNORECASE)
+    return title
 
 
 def read_sum(path) -> dict:

@@ -295,7 +295,7 @@ class LidarReport:
 
 
 def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, shear_exponent=0.2,
-                 nperseg=None) -> LidarReport:
+                 nperseg=None, mean_wind=None) -> LidarReport:
     """Run the virtual lidar on the open store ``fs`` and compare with theory.
 
     Rotor radius: the option, else the lidar's turbine if it fits the grid, else the validator's default.
@@ -314,6 +314,8 @@ def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, sh
         Power-law exponent alpha [-] of the mean wind (default 0.2).
     nperseg : int, optional
         Welch segment length [samples]; default :func:`turbgen.lidar.run.default_nperseg`.
+    mean_wind : MeanWind, optional
+        With ``add_mean_wind``: this mean wind instead of the power law.
 
     Returns
     -------
@@ -334,7 +336,7 @@ def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, sh
         half = min((g.ny - 1) * g.dy_m, (g.nz - 1) * g.dz_m) / 2.0
         rotor_radius_m = desc.rotor_radius_m if desc.rotor_radius_m <= half else None
     run = run_lidar(fs, desc, rotor_radius_m=rotor_radius_m, add_mean_wind=add_mean_wind,
-                    shear_exponent=shear_exponent, nperseg=nperseg)
+                    shear_exponent=shear_exponent, nperseg=nperseg, mean_wind=mean_wind)
     fw = run.welch["f_hz"]
     f = fw[1:-1][fw[1:-1] <= F_THEORY_MAX_HZ]
     th = store_theory(fs, desc, f, run.rotor_radius_m, run.welch["setup"], run.u_LL.size)

@@ -149,7 +149,7 @@ def check_lidar_fits(description, grid) -> None:
 
 
 def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shear_exponent=0.2,
-              nperseg=None) -> LidarRun:
+              nperseg=None, mean_wind=None) -> LidarRun:
     """Sample ``fs`` with ``description`` and estimate the simulated preview quality.
 
     Parameters
@@ -166,6 +166,8 @@ def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shea
         Power-law exponent alpha [-] of the mean wind (default 0.2).
     nperseg : int, optional
         Welch segment length [samples]; None: :func:`default_nperseg`.
+    mean_wind : MeanWind, optional
+        With ``add_mean_wind``: this mean wind instead of the power law (see :func:`turbgen.lidar.sampling.sample`).
 
     Returns
     -------
@@ -182,7 +184,8 @@ def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shea
     radius = check_rotor_radius(g, rotor_radius_m)
     ms = measurements_of(description)
     times, beams = description.schedule(g.nt * g.dt_s)
-    s = sampling.sample(fs, ms, times, beams, add_mean_wind=add_mean_wind, shear_exponent=shear_exponent)
+    s = sampling.sample(fs, ms, times, beams, add_mean_wind=add_mean_wind, shear_exponent=shear_exponent,
+                        mean_wind=mean_wind)
     t_arr, u_ll = signals.lidar_estimate(s, fs.U_m_s)
     u_rr, ti_r = signals.rotor_average(fs, radius, t_arr)
     step = float(t_arr[1] - t_arr[0])

@@ -90,6 +90,8 @@ class LidarSamples:
         Whether the power-law mean wind was added to u.
     shear_exponent : float
         Power-law exponent alpha [-] used when the mean wind was added.
+    mean_wind : str, optional
+        The mean wind added, described (:meth:`turbgen.spec.mean_wind.MeanWind.describe`); "" when none.
     """
 
     v_los: np.ndarray
@@ -98,6 +100,7 @@ class LidarSamples:
     n1: np.ndarray  # (n_beam, n_gate) longitudinal projection of each measurement
     mean_wind_added: bool
     shear_exponent: float
+    mean_wind: str = ""
 
 
 def _plane_index(grid, x: float, beam: int, gate: int) -> int:
@@ -176,7 +179,7 @@ def _interp_axis(coord0: float, step: float, n: int, values: np.ndarray):
 
 
 def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = False,
-           shear_exponent: float = 0.2) -> LidarSamples:
+           shear_exponent: float = 0.2, mean_wind=None) -> LidarSamples:
     """Sample ``fs`` with ``measurements`` at the scan schedule (times_s [s], beam index per entry).
 
     The schedule must be one beam at a time, cycling over all beams in a fixed order (a full scan =
@@ -197,6 +200,10 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
         Add the power-law mean wind U (h / h_hub)^alpha to u (default False: fluctuations only).
     shear_exponent : float, optional
         Power-law exponent alpha [-] for ``add_mean_wind`` (default 0.2).
+    mean_wind : MeanWind, optional
+        With ``add_mean_wind``: this mean wind (profile, veer, hub history, IEC transient) instead of the
+        power law, applied as the exports apply it (:meth:`turbgen.spec.mean_wind.MeanWind.full_uv`) at each
+        probe point and stored time (the time its slice reaches the rotor).
 
     Returns
     -------
@@ -278,8 +285,10 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
                         zz = np.minimum(jz + dz_, shape[2] - 1)
                         corners.append(((ii * shape[1] + yy) * shape[2] + zz, wt * (wy * wz)))
             los = 0.0
+            if mean_wind is not None and add_mean_wind:
+                los = _with_mean_wind(mean_wind, fs, box, corners, n, t, p)
             for c, nc in zip("uvw", n):
-                if nc == 0.0:
+                if nc == 0.0 or (mean_wind is not None and add_mean_wind):
                     continue
                 flat = box[c].ravel()
                 val = sum(w * flat[idx] for idx, w in corners)
@@ -292,4 +301,20 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
             v_los[:, bi[m.beam], gi[m.gate]] = los @ np.asarray(m.weights, float)
             n1[bi[m.beam], gi[m.gate]] = n[0]
     gx = np.array([g.x_m[next(planes[j] for j, m in enumerate(measurements) if m.gate == gg)] for gg in gates], float)
+    if mean_wind is not None and add_mean_wind:
+        return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, True, mean_wind.shear_exponent,
+                            mean_wind.describe())
     return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, add_mean_wind, shear_exponent)
+
+
+def _with_mean_wind(mean_wind, fs, box, corners, n, t, p) -> np.ndarray:
+    """Line-of-sight projection (n_scan, k) of the interpolated fluctuations plus ``mean_wind`` at the probe points.
+
+    ``t`` (n_scan, k) are the stored times (when each slice reaches the rotor), ``p`` (k, 3) the points.
+    """
+    h = fs.hub_height_m + p[:, 2]
+    if np.any(h <= 0):
+        raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+    vals = {c: sum(w * box[c].ravel()[idx] for idx, w in corners) for c in "uvw"}
+    u, v = mean_wind.full_uv(vals["u"], vals["v"], t, p[None, :, 1], h[None, :], fs.U_m_s, fs.hub_height_m)
+    return n[0] * u + n[1] * v + n[2] * vals["w"]

@@ -58,14 +58,31 @@ def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int
         For an unknown model or preset, or a value outside its range.
     """
     spec = get_model(model).spec
+    mapping = {"U_m_s": U_m_s, "seed": seed, **grid_mapping(grid)}
+    return spec.from_mapping({**run_keys(model, preset, U_m_s, user=user), **mapping})
+
+
+def grid_mapping(grid: Mapping | None) -> dict:
+    """The run-mapping keys of sweep grid options: {"grid": {...}} and "hub_height_m" when given.
+
+    Parameters
+    ----------
+    grid : Mapping, optional
+        Options with the sweep schema names (nt, dt, planes, ny, nz, dy, dz, hub_height).
+
+    Returns
+    -------
+    dict
+        ``{"grid": {nt, dt_s, x_m, ny, nz, dy_m, dz_m present}}`` plus ``hub_height_m`` when given.
+    """
     opts = dict(grid or {})
     g = {key: opts[name] for name, key in _GRID_NAMES.items() if name in opts}
     if "x_m" in g:
         g["x_m"] = [float(x) for x in g["x_m"]]
-    mapping = {"U_m_s": U_m_s, "seed": seed, "grid": g}
+    mapping = {"grid": g}
     if "hub_height" in opts:
         mapping["hub_height_m"] = opts["hub_height"]
-    return spec.from_mapping({**run_keys(model, preset, U_m_s, user=user), **mapping})
+    return mapping
 
 
 def store_name(model: str, preset: str, U_m_s: float, seed: int) -> str:

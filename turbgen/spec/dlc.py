@@ -1,0 +1,121 @@
+"""IEC 61400-1 Ed. 4 design-load-case sets of turbulent fields (Table 2): DLC 1.1 and 1.2 with the normal
+turbulence model, 1.3 with the extreme turbulence model; hub speeds V_in .. V_out in 2 m/s steps, 6 seeds
+each, at the turbine class's I_ref.
+
+Each run is the neutral stability preset's model shape (Mann L, Gamma, lifetime; Kaimal coherence) with
+its variance set to the load case's sigma1 at V_hub: NTM sigma1 = I_ref (0.75 V_hub + 5.6) (Sect. 6.3.2.3),
+ETM (:func:`turbgen.theory.iec_transients.etm_sigma1_m_s`); Kaimal sigma2 = 0.8 sigma1, sigma3 = 0.5 sigma1
+and the length scales from Lambda1(hub) (Annex C).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from turbgen.errors import ParameterError, check_choice, check_int, check_range
+from turbgen.spec.iec_transient import parse_class
+from turbgen.spec.preset_runs import run_keys
+from turbgen.theory import iec_transients as iec
+from turbgen.theory.kaimal import IEC_IREF, IEC_SIGMA_RATIOS, iec_sigma1_m_s
+
+DLCS = {"1.1": "NTM", "1.2": "NTM", "1.3": "ETM"}
+SPEED_STEP_M_S = 2.0
+
+
+@dataclass(frozen=True)
+class DlcSet:
+    """A DLC set: load case, class, speeds and seeds (validated at construction).
+
+    Parameters
+    ----------
+    dlc : str
+        "1.1", "1.2" (NTM) or "1.3" (ETM).
+    iec_class : str
+        Turbine class and turbulence category, e.g. "IIB".
+    v_in_m_s, v_out_m_s : float
+        Cut-in and cut-out hub speeds [m/s], 0.5 <= V_in <= V_out <= V_ref; the speeds are V_in,
+        V_in + 2, ... and V_out.
+    seeds : tuple of int
+        Random seeds (default 1..6).
+
+    Raises
+    ------
+    ParameterError
+        For an unknown load case or class, speeds out of range or in the wrong order, no seeds.
+    """
+
+    dlc: str
+    iec_class: str
+    v_in_m_s: float = 4.0
+    v_out_m_s: float = 24.0
+    seeds: tuple = (1, 2, 3, 4, 5, 6)
+
+    def __post_init__(self):
+        put = object.__setattr__
+        check_choice("DLC", str(self.dlc), tuple(DLCS))
+        put(self, "dlc", str(self.dlc))
+        turbine, category = parse_class(self.iec_class)
+        put(self, "iec_class", turbine + category)
+        v_ref = iec.V_REF_M_S[turbine]
+        put(self, "v_in_m_s", check_range("V_in (m/s)", self.v_in_m_s, 0.5, v_ref))
+        put(self, "v_out_m_s", check_range("V_out (m/s)", self.v_out_m_s, self.v_in_m_s, v_ref))
+        seeds = tuple(check_int("seed", s, 0) for s in self.seeds)
+        if not seeds or len(set(seeds)) != len(seeds):
+            raise ParameterError(f"seeds = {list(seeds)}: give at least one, without duplicates")
+        put(self, "seeds", seeds)
+
+    @property
+    def category(self) -> str:
+        """Turbulence category A+, A, B or C."""
+        return parse_class(self.iec_class)[1]
+
+    @property
+    def label(self) -> str:
+        """Name prefix of the set's runs, e.g. "dlc1.2-IIB"."""
+        return f"dlc{self.dlc}-{self.iec_class}"
+
+    def speeds_m_s(self) -> tuple[float, ...]:
+        """V_in, V_in + 2, ... below V_out, and V_out [m/s]."""
+        n = int(np.floor((self.v_out_m_s - self.v_in_m_s) / SPEED_STEP_M_S + 1e-9))
+        speeds = [self.v_in_m_s + SPEED_STEP_M_S * k for k in range(n + 1)]
+        if self.v_out_m_s - speeds[-1] > 1e-9:
+            speeds.append(self.v_out_m_s)
+        return tuple(round(s, 9) for s in speeds)
+
+    def sigma1_m_s(self, V_hub_m_s: float) -> float:
+        """The load case's sigma1 [m/s] at V_hub: NTM (1.1, 1.2) or ETM (1.3)."""
+        if DLCS[self.dlc] == "NTM":
+            return iec_sigma1_m_s(V_hub_m_s, self.category)
+        turbine = parse_class(self.iec_class)[0]
+        return iec.etm_sigma1_m_s(V_hub_m_s, IEC_IREF[self.category], iec.V_REF_M_S[turbine])
+
+    def run_mapping(self, model: str, V_hub_m_s: float, seed: int) -> dict:
+        """The run mapping (MannRun/KaimalRun.from_mapping keys) of one field of the set.
+
+        Parameters
+        ----------
+        model : str
+            "mann" or "kaimal".
+        V_hub_m_s : float
+            Hub speed [m/s].
+        seed : int
+            Random seed.
+
+        Returns
+        -------
+        dict
+            The neutral preset's keys with the variance set to the load case's sigma1 (Mann: model
+            sigma_u; Kaimal: sigma1, 0.8 sigma1, 0.5 sigma1 and the IEC length scales of the hub height).
+        """
+        keys = dict(run_keys(model, "neutral", V_hub_m_s))
+        s1 = self.sigma1_m_s(V_hub_m_s)
+        keys.update(U_m_s=V_hub_m_s, seed=seed, turb_class=self.category)
+        if model == "mann":
+            keys["sigma_u_m_s"] = s1
+        else:
+            for k in ("length_scales_m", "lc_m"):  # IEC values of the run's hub height (Annex C)
+                keys.pop(k, None)
+            keys["sigma_m_s"] = [r * s1 for r in IEC_SIGMA_RATIOS]
+        return keys

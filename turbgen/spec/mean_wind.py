@@ -1,0 +1,386 @@
+"""The mean wind an export adds to the stored fluctuations: one frozen, validated definition.
+
+A :class:`MeanWind` is a vertical profile (power law, log law or a user table of height -> speed
+[, direction]), an optional veer (a rate in deg/m, or the table's directions) and an optional hub-height
+time history (t -> U [, direction]). Every InflowWind/HAWC2 export applies it the same way
+(:func:`turbgen.export.request.Plane`): at height h and slice time t,
+
+    U(t, y, h) = U_hub(t) * r(h) + g(t) + s_v(t) (h - h_hub) / D + s_h(t) y / D,
+    theta(t, h) = veer(h) + direction(t),
+    (u, v) = rotate((U(t, y, h) + u', v'), theta)        (Jonkman 2009, TurbSim's per-height rotation)
+
+where r(h) = U(h)/U(h_hub) is the profile's ratio (:mod:`turbgen.theory.mean_wind`), U_hub(t) the
+history's speed (the store's U without a history), g, s_v, s_h and the transient's direction the
+superimposed IEC transient's (:class:`turbgen.spec.iec_transient.IecTransient`, zero without one), u', v'
+the stored fluctuations, and angles turn counter-clockwise seen from above (towards +y, left looking
+downwind; an IEC direction, clockwise in InflowWind, enters with its sign flipped so both mean the same
+turn); w is unchanged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from turbgen.errors import ParameterError, check_choice, check_finite, check_nonnegative, check_positive, check_range
+from turbgen.spec.iec_transient import IecTransient
+from turbgen.theory import mean_wind as formulas
+
+PROFILES = ("power", "log", "table")
+DEFAULT_SHEAR_EXPONENT = 0.2
+VEER_LIMIT_DEG_PER_M = 5.0  # |rate| beyond this turns the flow by > 90 deg over 18 m: surely a unit mistake
+
+
+def _strictly_increasing(name: str, values) -> tuple:
+    vals = tuple(check_finite(name, v) for v in values)
+    if len(vals) < 2:
+        raise ParameterError(f"{name} has {len(vals)} rows; give at least 2")
+    for a, b in zip(vals, vals[1:]):
+        if not b > a:
+            raise ParameterError(f"{name} must increase strictly: {a:g} is followed by {b:g}")
+    return vals
+
+
+def _column(name: str, values, n: int, check=check_finite) -> tuple:
+    vals = tuple(check(name, v) for v in values)
+    if vals and len(vals) != n:
+        raise ParameterError(f"{name} has {len(vals)} values for {n} rows")
+    return vals
+
+
+@dataclass(frozen=True)
+class MeanWind:
+    """Mean-wind profile, veer and hub-height time history (validated at construction).
+
+    Parameters
+    ----------
+    profile : str
+        "power" (``shear_exponent``), "log" (``roughness_m``, ``displacement_m``) or "table"
+        (``table_heights_m``, ``table_speeds_m_s`` and optionally ``table_directions_deg``).
+    shear_exponent : float
+        Power-law alpha [-] in [-1, 1] (profile "power"); default 0.2.
+    roughness_m : float
+        Roughness length z0 [m], > 0 (profile "log").
+    displacement_m : float
+        Displacement height d [m], >= 0 (profile "log").
+    table_heights_m, table_speeds_m_s, table_directions_deg : tuple of float
+        The user table: heights above ground [m] (> 0, strictly increasing), speeds [m/s] (>= 0; only
+        their ratio to the value at hub height is used) and optionally directions [deg] (veer =
+        direction(h) - direction(hub), counter-clockwise seen from above).
+    veer_deg_per_m : float
+        Linear veer rate [deg/m], |rate| <= 5; negative = clockwise with height (northern hemisphere).
+    history_times_s, history_speeds_m_s, history_directions_deg : tuple of float
+        Hub-height history: times at the turbine [s] (strictly increasing), hub speeds [m/s] (>= 0) and
+        optionally directions [deg] (counter-clockwise seen from above); linear between the times, the
+        end values held outside them.
+    table_label, history_label : str
+        Where the table and the history came from (a file name), for descriptions.
+    transient : IecTransient, optional
+        An IEC 61400-1 transient superimposed on the mean (its V_hub and hub height must be the store's);
+        excludes a history.
+
+    Raises
+    ------
+    ParameterError
+        For a value outside its range, a table or history not increasing in height/time, columns of
+        different lengths, or parameters that belong to another profile.
+    """
+
+    profile: str = "power"
+    shear_exponent: float = DEFAULT_SHEAR_EXPONENT
+    roughness_m: float | None = None
+    displacement_m: float = 0.0
+    table_heights_m: tuple = ()
+    table_speeds_m_s: tuple = ()
+    table_directions_deg: tuple = ()
+    veer_deg_per_m: float = 0.0
+    history_times_s: tuple = ()
+    history_speeds_m_s: tuple = ()
+    history_directions_deg: tuple = ()
+    table_label: str = ""
+    history_label: str = ""
+    transient: IecTransient | None = None
+
+    def __post_init__(self):
+        check_choice("mean-wind profile", self.profile, PROFILES)
+        put = object.__setattr__
+        put(self, "shear_exponent", check_range("shear exponent", self.shear_exponent, -1.0, 1.0))
+        put(self, "displacement_m", check_nonnegative("log-law displacement d (m)", self.displacement_m))
+        put(self, "veer_deg_per_m", check_range("veer (deg/m)", self.veer_deg_per_m,
+                                                -VEER_LIMIT_DEG_PER_M, VEER_LIMIT_DEG_PER_M))
+        if self.profile == "log":
+            if self.roughness_m is None:
+                raise ParameterError("the log profile needs a roughness length z0 > 0 m")
+            put(self, "roughness_m", check_positive("log-law roughness z0 (m)", self.roughness_m))
+        elif self.roughness_m is not None or self.displacement_m:
+            raise ParameterError(f"roughness z0 and displacement d belong to the log profile, not {self.profile!r}")
+        if self.profile == "table":
+            self._check_table()
+        elif self.table_heights_m or self.table_speeds_m_s or self.table_directions_deg:
+            raise ParameterError(f"a height table belongs to the table profile, not {self.profile!r}")
+        if self.history_times_s or self.history_speeds_m_s or self.history_directions_deg:
+            self._check_history()
+        if self.transient is not None:
+            if not isinstance(self.transient, IecTransient):
+                raise ParameterError(f"transient = {self.transient!r} is not a turbgen.spec.iec_transient.IecTransient")
+            if self.has_history:
+                raise ParameterError("a hub-height history and an IEC transient both set the hub's time series; "
+                                     "give one")
+
+    def _check_table(self):
+        put = object.__setattr__
+        z = _strictly_increasing("profile table heights (m)", self.table_heights_m)
+        if z[0] <= 0.0:
+            raise ParameterError(f"profile table height {z[0]:g} m is at or below the ground; heights must be > 0 m")
+        put(self, "table_heights_m", z)
+        put(self, "table_speeds_m_s", _column("profile table speeds (m/s)", self.table_speeds_m_s, len(z),
+                                              check_nonnegative))
+        if len(self.table_speeds_m_s) != len(z):
+            raise ParameterError(f"the profile table has {len(z)} heights but no speeds")
+        put(self, "table_directions_deg", _column("profile table directions (deg)", self.table_directions_deg, len(z)))
+        if self.table_directions_deg and self.veer_deg_per_m:
+            raise ParameterError("give the veer either as a rate or as the table's direction column, not both")
+
+    def _check_history(self):
+        put = object.__setattr__
+        t = _strictly_increasing("mean-history times (s)", self.history_times_s)
+        put(self, "history_times_s", t)
+        put(self, "history_speeds_m_s", _column("mean-history speeds (m/s)", self.history_speeds_m_s, len(t),
+                                                check_nonnegative))
+        if len(self.history_speeds_m_s) != len(t):
+            raise ParameterError(f"the mean history has {len(t)} times but no speeds")
+        put(self, "history_directions_deg", _column("mean-history directions (deg)", self.history_directions_deg, len(t)))
+
+    @property
+    def has_history(self) -> bool:
+        """Whether a hub-height time history is given."""
+        return bool(self.history_times_s)
+
+    @property
+    def turns(self) -> bool:
+        """Whether any angle can be non-zero (veer rate, table directions, history or transient directions)."""
+        return bool(self.veer_deg_per_m or self.table_directions_deg or self.history_directions_deg
+                    or (self.transient is not None and self.transient.kind in ("EDC", "ECD")))
+
+    @property
+    def varies(self) -> bool:
+        """Whether the mean changes in time or turns (else only u gets a fixed profile)."""
+        return self.has_history or self.turns or self.transient is not None
+
+    def speed_ratio(self, heights_m, hub_height_m: float) -> np.ndarray:
+        """Profile ratio U(h) / U(h_hub) [-] at ``heights_m`` [m].
+
+        Parameters
+        ----------
+        heights_m : array_like
+            Heights above ground [m].
+        hub_height_m : float
+            Hub height [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            The ratio, shape of ``heights_m``.
+
+        Raises
+        ------
+        ParameterError
+            When a height (or the hub) is outside the table, at or below d + z0 of the log law, or
+            the table's speed at hub height is 0.
+        """
+        h = np.asarray(heights_m, dtype=float)
+        if self.profile == "power":
+            return formulas.power_law_ratio(h, hub_height_m, self.shear_exponent)
+        if self.profile == "log":
+            floor = self.displacement_m + self.roughness_m
+            low = min(float(h.min(initial=hub_height_m)), hub_height_m)
+            if low <= floor:
+                raise ParameterError(f"height {low:g} m is at or below d + z0 = {floor:g} m, where the log law "
+                                     "has no positive speed; lower d or z0, or raise the hub height")
+            return formulas.log_law_ratio(h, hub_height_m, self.roughness_m, self.displacement_m)
+        self._check_covered(h, hub_height_m)
+        if np.interp(hub_height_m, self.table_heights_m, self.table_speeds_m_s) <= 0.0:
+            raise ParameterError(f"the profile table's speed at hub height {hub_height_m:g} m is 0; it sets the "
+                                 "profile's shape relative to the hub")
+        return formulas.table_ratio(h, self.table_heights_m, self.table_speeds_m_s, hub_height_m)
+
+    def _check_covered(self, h, hub_height_m):
+        lo, hi = self.table_heights_m[0], self.table_heights_m[-1]
+        for label, value in (("grid height", float(h.min(initial=hub_height_m))),
+                             ("grid height", float(h.max(initial=hub_height_m))), ("hub height", hub_height_m)):
+            if not lo <= value <= hi:
+                raise ParameterError(f"{label} {value:g} m is outside the profile table's heights [{lo:g}, {hi:g}] m")
+
+    def veer_deg(self, heights_m, hub_height_m: float) -> np.ndarray:
+        """Veer angle theta(h) [deg] at ``heights_m`` (0 at the hub), counter-clockwise seen from above.
+
+        Parameters
+        ----------
+        heights_m : array_like
+            Heights above ground [m] (inside the table when the table gives directions).
+        hub_height_m : float
+            Hub height [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            theta [deg], shape of ``heights_m``.
+        """
+        h = np.asarray(heights_m, dtype=float)
+        if self.table_directions_deg:
+            self._check_covered(h, hub_height_m)
+            d = np.interp(h, self.table_heights_m, self.table_directions_deg)
+            return d - np.interp(hub_height_m, self.table_heights_m, self.table_directions_deg)
+        return formulas.linear_veer_deg(h, hub_height_m, self.veer_deg_per_m)
+
+    def hub_history(self, times_s, U_m_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """Hub speed [m/s] and direction [deg] at ``times_s``: the history's, else ``U_m_s`` and 0.
+
+        Parameters
+        ----------
+        times_s : array_like
+            Times at the turbine [s].
+        U_m_s : float
+            The store's mean speed [m/s], used without a history.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            (speed [m/s], direction [deg]), each of the shape of ``times_s``; linear between the
+            history's times, its end values held outside them; with a transient, the store's U and the
+            transient's direction (counter-clockwise).
+        """
+        t = np.asarray(times_s, dtype=float)
+        if not self.has_history:
+            turn = np.zeros(t.shape) if self.transient is None else -self.transient.at(t)["direction_deg"]
+            return np.full(t.shape, float(U_m_s)), turn
+        speed = np.interp(t, self.history_times_s, self.history_speeds_m_s)
+        direction = (np.interp(t, self.history_times_s, self.history_directions_deg)
+                     if self.history_directions_deg else np.zeros(t.shape))
+        return speed, direction
+
+    def transient_terms(self, times_s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The transient's additive speed terms at ``times_s`` [s]: (g, s_v, s_h) [m/s], zero without one.
+
+        Parameters
+        ----------
+        times_s : array_like
+            Times at the turbine [s].
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Uniform gust g, vertical and horizontal linear-shear speed changes across one rotor diameter.
+        """
+        t = np.asarray(times_s, dtype=float)
+        if self.transient is None:
+            return np.zeros(t.shape), np.zeros(t.shape), np.zeros(t.shape)
+        ev = self.transient.at(t)
+        return ev["gust_m_s"], ev["vshear_m_s"], ev["hshear_m_s"]
+
+    def full_uv(self, u, v, times_s, y_m, heights_m, U_m_s: float, hub_height_m: float):
+        """Full (u, v) [m/s] from fluctuations (u, v) at times, lateral positions and heights (all broadcast).
+
+        u + U_hub(t) r(h) + g(t) + s_v(t) (h - h_hub) / D + s_h(t) y / D, then (u, v) turned by veer(h) +
+        direction(t) (the module's formula; v unchanged without a turn).
+
+        Parameters
+        ----------
+        u, v : array_like
+            Fluctuations [m/s].
+        times_s, y_m, heights_m : array_like
+            Time at the turbine [s], lateral position [m] (+y left) and height above ground [m],
+            broadcastable with ``u``.
+        U_m_s : float
+            The store's mean speed [m/s].
+        hub_height_m : float
+            Hub height [m].
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            (u, v) [m/s].
+        """
+        t, h = np.asarray(times_s, dtype=float), np.asarray(heights_m, dtype=float)
+        speed, turn = self.hub_history(t, U_m_s)
+        gust, vshear, hshear = self.transient_terms(t)
+        diameter = self.transient.rotor_diameter_m if self.transient is not None else 1.0
+        u = u + speed * self.speed_ratio(h, hub_height_m)
+        u = u + (gust + vshear * (h - hub_height_m) / diameter + hshear * np.asarray(y_m, dtype=float) / diameter)
+        if not self.turns:
+            return u, v
+        return formulas.rotate_horizontal(u, v, self.veer_deg(h, hub_height_m) + turn)
+
+    def check_record(self, first_s: float, last_s: float) -> None:
+        """Refuse a history or transient with times outside the record [first_s, last_s] seen at the turbine.
+
+        Parameters
+        ----------
+        first_s, last_s : float
+            Times [s] at which the first and the last file slice reach the turbine.
+
+        Raises
+        ------
+        ParameterError
+            When a history time, or the transient's start or end, lies outside [first_s, last_s].
+        """
+        if self.transient is not None:
+            t0, t1 = self.transient.start_s, self.transient.start_s + self.transient.period_s
+            if t0 < first_s - 1e-9 or t1 > last_s + 1e-9:
+                raise ParameterError(f"the {self.transient.kind} from {t0:g} to {t1:g} s is outside the record "
+                                     f"[{first_s:g}, {last_s:g}] s seen at the turbine")
+        if self.has_history:
+            t0, t1 = self.history_times_s[0], self.history_times_s[-1]
+            if t0 < first_s - 1e-9 or t1 > last_s + 1e-9:
+                raise ParameterError(f"mean-history times [{t0:g}, {t1:g}] s are outside the record "
+                                     f"[{first_s:g}, {last_s:g}] s seen at the turbine")
+
+    def describe(self) -> str:
+        """One short line: profile, veer, history (the .bts description, the .sum title, `turbgen info`).
+
+        Returns
+        -------
+        str
+            E.g. "power-law shear alpha = 0.2" (the default, as earlier exports wrote it) or
+            "log law z0 = 0.03 m, d = 0 m; veer -0.1 deg/m; hub history hist.csv (41 points)".
+        """
+        if self.profile == "power":
+            out = [f"power-law shear alpha = {self.shear_exponent:g}"]
+        elif self.profile == "log":
+            out = [f"log law z0 = {self.roughness_m:g} m, d = {self.displacement_m:g} m"]
+        else:
+            out = [f"profile table {self.table_label} ({len(self.table_heights_m)} heights)".replace("  ", " ")]
+        if self.veer_deg_per_m:
+            out.append(f"veer {self.veer_deg_per_m:g} deg/m")
+        elif self.table_directions_deg:
+            out.append("veer from the table")
+        if self.has_history:
+            out.append(f"hub history {self.history_label} ({len(self.history_times_s)} points)".replace("  ", " "))
+        if self.transient is not None:
+            t = self.transient
+            out.append(f"IEC {t.kind} {t.iec_class} ({t.magnitude():.4g} {'deg' if t.kind in ('EDC', 'ECD') else 'm/s'}"
+                       f"{'' if t.kind == 'EOG' else f', sign {t.sign:+d}'}) from {t.start_s:g} s")
+        return "; ".join(out)
+
+    def to_attrs(self) -> dict:
+        """JSON-ready attributes (units in the key names) of the non-empty fields.
+
+        Returns
+        -------
+        dict
+            "profile" and the fields that apply, lists for the tables.
+        """
+        out = {"profile": self.profile}
+        for key, value in self.__dict__.items():
+            if key == "profile" or value in ((), "", None) or (key == "displacement_m" and self.profile != "log"):
+                continue
+            if key == "shear_exponent" and self.profile != "power":
+                continue
+            if key == "veer_deg_per_m" and not value:
+                continue
+            if key == "transient":
+                value = {f: getattr(value, f) for f in ("kind", "iec_class", "V_hub_m_s", "hub_height_m",
+                                                         "rotor_diameter_m", "start_s", "duration_s", "sign")}
+            out[key] = list(value) if isinstance(value, tuple) else value
+        return out

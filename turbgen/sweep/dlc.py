@@ -1,0 +1,142 @@
+"""Design-load-case sets: a DLC preset (turbgen.spec.dlc) run as one sweep, every field exported with its
+runner input files, and DIR/dlc_manifest.csv listing them for a load-case tool.
+
+    from turbgen.spec.dlc import DlcSet
+    from turbgen.sweep.dlc import make_dlc_plan, export_dlc
+    plan = make_dlc_plan(DlcSet("1.2", "IIB"), out="dlc12", grid={"hub_height": 90})
+    result = run_sweep(plan)
+    manifest = export_dlc(plan, DlcSet("1.2", "IIB"), result)
+
+The manifest columns: file (the wind file, relative to DIR), inflowwind_file, dlc, class, V_hub_m_s, TI
+(the load case's sigma1 / V_hub), sigma1_m_s, seed, model, store.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import replace
+from pathlib import Path
+
+from turbgen.errors import ParameterError, check_choice
+from turbgen.export import ExportRequest, export_store
+from turbgen.export.inflowwind_file import inflowwind_path
+from turbgen.runs.models import MODELS, get_model
+from turbgen.spec.dlc import DlcSet
+from turbgen.store.paths import check_output_path
+from turbgen.sweep.manifest import _atomic_write
+from turbgen.sweep.plan import PlannedRun, SweepPlan, check_plan_memory, grid_mapping, _check_grid_keys
+from turbgen.sweep.scheduler import check_scheduler_address
+
+DLC_MANIFEST = "dlc_manifest.csv"
+DLC_COLUMNS = ("file", "inflowwind_file", "dlc", "class", "V_hub_m_s", "TI", "sigma1_m_s", "seed", "model", "store")
+WIND_DIR = "wind"
+EXPORT_FORMATS = ("bts", "wnd", "hawc2")
+
+
+def make_dlc_plan(dlc: DlcSet, *, out, model: str = "kaimal", grid=None, chunk_t: int | None = None,
+                  workers: int | None = None, scheduler: str | None = None) -> SweepPlan:
+    """The sweep of a DLC set: one run per speed and seed, named ``{model}_dlc1.2-IIB_U12_seed3``.
+
+    Parameters
+    ----------
+    dlc : DlcSet
+        Load case, class, speeds, seeds.
+    out : str or os.PathLike
+        Sweep directory.
+    model : str, optional
+        "kaimal" (default; the standard's Annex C model) or "mann".
+    grid : Mapping, optional
+        Grid options with the sweep schema names (nt, dt, planes, ny, nz, dy, dz, hub_height).
+    chunk_t, workers, scheduler : optional
+        As for :func:`turbgen.sweep.make_plan`.
+
+    Returns
+    -------
+    SweepPlan
+        The plan (its ``presets`` holds the set's label).
+
+    Raises
+    ------
+    ParameterError
+        For an unknown model, bad grid options, an unusable ``out`` or a run that needs more memory
+        than is available here.
+    """
+    check_choice("model", model, tuple(MODELS))
+    grid = _check_grid_keys("grid", grid)
+    if scheduler:
+        check_scheduler_address(scheduler)
+    check_output_path(out, "out (sweep directory)", create_parents=True)
+    spec = get_model(model).spec
+    runs = []
+    for U in dlc.speeds_m_s():
+        first = spec.from_mapping({**dlc.run_mapping(model, U, dlc.seeds[0]), **grid_mapping(grid)})
+        for s in dlc.seeds:
+            runs.append(PlannedRun(model, dlc.label, U, s, first if s == dlc.seeds[0] else replace(first, seed=s)))
+    if not scheduler:
+        check_plan_memory(runs)
+    return SweepPlan(Path(out), (model,), (dlc.label,), dlc.speeds_m_s(), dlc.seeds, grid, {}, False, chunk_t,
+                     workers, scheduler or None, {}, tuple(runs))
+
+
+def export_dlc(plan: SweepPlan, dlc: DlcSet, result, fmt: str = "bts") -> Path:
+    """Export every complete field of the set to DIR/wind/ with its runner files and write DIR/dlc_manifest.csv.
+
+    An export whose files all exist is kept (the sweep is resumable); fields that failed are left out
+    of the manifest (the sweep's manifest.csv says why).
+
+    Parameters
+    ----------
+    plan : SweepPlan
+        The plan of :func:`make_dlc_plan`.
+    dlc : DlcSet
+        The set (for TI, sigma1 and the class).
+    result : SweepResult
+        What :func:`turbgen.sweep.run_sweep` returned.
+    fmt : str, optional
+        "bts" (default), "wnd" or "hawc2".
+
+    Returns
+    -------
+    pathlib.Path
+        DIR/dlc_manifest.csv.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown format or a failed export.
+    """
+    check_choice("format", fmt, EXPORT_FORMATS)
+    out = Path(plan.out)
+    wind = out / WIND_DIR
+    wind.mkdir(exist_ok=True)
+    complete = {r["name"] for r in result.records if r["status"] == "complete"}
+    rows = []
+    for pr in plan.runs:
+        if pr.name not in complete:
+            continue
+        target = wind / (f"{pr.name}.bts" if fmt == "bts" else pr.name)
+        files = _export_one(out / pr.store_name, fmt, target)
+        s1 = dlc.sigma1_m_s(pr.U_m_s)
+        rows.append({"file": files[0].relative_to(out).as_posix(), "inflowwind_file": files[1].relative_to(out).as_posix(),
+                     "dlc": dlc.dlc, "class": dlc.iec_class, "V_hub_m_s": f"{pr.U_m_s:g}", "TI": f"{s1 / pr.U_m_s:.6g}",
+                     "sigma1_m_s": f"{s1:.6g}", "seed": pr.seed, "model": pr.model, "store": pr.store_name})
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=DLC_COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    _atomic_write(out / DLC_MANIFEST, buf.getvalue())
+    return out / DLC_MANIFEST
+
+
+def _export_one(store: Path, fmt: str, target: Path) -> tuple[Path, Path]:
+    """(wind file, InflowWind input file) of one field, exported unless both exist already."""
+    stem = target.with_suffix("") if fmt == "bts" else target
+    first = {"bts": target, "wnd": Path(f"{target}.wnd"), "hawc2": Path(f"{target}_u.bin")}[fmt]
+    dat = inflowwind_path(stem, fmt)
+    if not (first.is_file() and dat.is_file()):
+        try:
+            export_store(store, fmt, target, ExportRequest(runner_files=True, overwrite=True))
+        except ParameterError as err:
+            raise ParameterError(f"exporting {store.name}: {err}") from None
+    return first, dat
