@@ -128,3 +128,11 @@ def test_docstring_examples(module):
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     assert result.failed == 0
     assert module is turbgen or result.attempted > 0
+
+
+def test_theory_namespace_names_resolve_and_its_examples_run():
+    import turbgen.theory as theory
+
+    for name in theory.__all__:
+        assert callable(getattr(theory, name)), name
+    assert doctest.testmod(theory).failed == 0
