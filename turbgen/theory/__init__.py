@@ -16,7 +16,7 @@ lidar_geometry    lidar beam geometry in the store frame: directions, focus poin
 lidar_weighting   probe-volume weighting along the beam (pulsed Gaussian, continuous-wave) and its transform
 lidar_preview     REWS, lidar and lidar-rotor spectra, gamma^2_RL (Guo et al. 2023 Eq. 29-35)
 lidar_lattice     the (k2, k3) lattice of a periodic synthesis box as the lidar spectra's quadrature
-lidar_control     cut-off of |G_RL|, coherence bandwidth, filter delay, buffer time (Fu et al. 2023)
+lidar_control     cut-off of ``|G_RL|``, coherence bandwidth, filter delay, buffer time (Fu et al. 2023)
 lidar_los         line-of-sight spectra (Kaimal) and the lidar TI correction
 ranges            allowed ranges of the inputs
 fitting           Kaimal spectra (Eq. 20), yz coherence (Eq. 21) and exponential longitudinal coherence (Eq. 22) fits
