@@ -182,7 +182,7 @@ def mann(
     {'t': 64, 'x': 2, 'y': 8, 'z': 8}
     >>> ds.attrs["parameters"]["length_scale_m"], ds.attrs["seed"]
     (30.0, 1)
-    >>> turbgen.mann(Lx=30)
+    >>> turbgen.mann(Lx=30)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     turbgen.errors.ParameterError: turbgen.mann() got unknown keyword(s) Lx; allowed: U, L, gamma, ...
