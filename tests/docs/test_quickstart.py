@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 from turbgen.cli import cli
@@ -60,3 +61,18 @@ def test_quickstart_matches_the_commands(tmp_path):
         np.testing.assert_array_equal(value, cli_bts[key], err_msg=key)
     sizes = [(tmp_path / "mann_small.bts").stat().st_size - len(api_text), (cmds / "mann_small.bts").stat().st_size - len(cli_text)]
     assert sizes[0] == sizes[1]
+
+
+@pytest.mark.parametrize("page", ["README.md", "docs/getting-started.md"])
+def test_first_python_example_runs(page, tmp_path):
+    """The first Python example of the README and of Getting started (at most 10 lines of code after the imports)
+    runs as written."""
+    import re
+
+    code = re.search(r"```python\n(.*?)```", (ROOT / page).read_text(), re.S).group(1)
+    lines = [line for line in code.splitlines() if line.strip() and not line.startswith("import ")]
+    assert len(lines) <= 10
+    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    run = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, env=env, timeout=600)
+    assert run.returncode == 0, run.stderr
+    assert "all metrics pass" in run.stdout and (tmp_path / "mann_small.bts").exists()  # both validate, export
