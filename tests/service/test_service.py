@@ -36,8 +36,13 @@ def server(tmp_path_factory):
 @pytest.fixture
 def browser(tmp_path):
     if CHROMEDRIVER is None or CHROMIUM is None:
-        pytest.fail("the page test needs chromium and chromedriver (apt-get install chromium chromium-driver; "
-                    ".ci/run installs them)")  # fmt: skip
+        # required in CI (.ci/run installs chromium and sets CI=true); a fresh machine without a browser skips it,
+        # with the reason shown by pytest's -ra summary, so the README's test command passes there
+        missing = ("the page test needs chromium and chromedriver (apt-get install chromium chromium-driver; "
+                   ".ci/run installs them)")  # fmt: skip
+        if os.environ.get("CI", "").lower() in ("1", "true", "yes"):
+            pytest.fail(missing)
+        pytest.skip(missing)
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 

@@ -17,20 +17,15 @@ from turbgen.spec.defaults import KAIMAL_GRID as G
 from turbgen.spec.kaimal import LONG_COMPONENTS, VW_COHERENCE, KaimalRun
 from turbgen.spec.preset_files import load_presets
 from turbgen.spec.preset_runs import kaimal_run_keys
+from turbgen.spec.run_inputs import KAIMAL_OPTIONS, KAIMAL_REPLACES
 from turbgen.store.paths import check_output_path
 from turbgen.store.writer import check_new_store
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS
 from turbgen.theory.kaimal import IEC_IREF
 from turbgen.theory.ranges import LIMITS
 
-# option name -> key of the run mapping (KaimalRun.from_mapping)
-_KEYS = {
-    "U": "U_m_s", "turb_class": "turb_class", "hub_height": "hub_height_m", "sigma": "sigma_m_s",
-    "lengths": "length_scales_m", "ayz": "a_yz", "lc": "lc_m", "long_model": "long_model", "ax": "a_x",
-    "bx": "b_x", "long_components": "long_components", "vw_coherence": "vw_coherence", "rescale": "rescale",
-    "seed": "seed",
-}
-_REPLACES = {"sigma_m_s": ("turb_class",)}  # typed sigmas: no class to record
+# option name -> key of the run mapping, and what typed sigmas replace (shared with the Python API)
+_KEYS, _REPLACES = KAIMAL_OPTIONS, KAIMAL_REPLACES
 
 
 def _three(name):

@@ -18,20 +18,15 @@ from turbgen.spec.defaults import MANN_GRID as G
 from turbgen.spec.mann import MannRun
 from turbgen.spec.preset_files import load_presets
 from turbgen.spec.preset_runs import mann_run_keys
+from turbgen.spec.run_inputs import MANN_OPTIONS, MANN_REPLACES
 from turbgen.store.paths import check_output_path
 from turbgen.store.writer import check_new_store
 from turbgen.theory.params import LIFETIMES
 from turbgen.theory.ranges import LIMITS
 
-# option name -> key of the run mapping (MannRun.from_mapping, schemas/mann-run.schema.json)
-_KEYS = {
-    "U": "U_m_s", "L": "length_scale_m", "gamma": "gamma", "evo": "evo_time_s", "lifetime": "lifetime",
-    "factor1": "factor1", "factor2": "factor2", "seed": "seed", "hub_height": "hub_height_m", "pad_yz": "pad_yz",
-    "ae": "ae", "sigma_u": "sigma_u_m_s", "ti": "ti",
-}  # fmt: skip
+# option name -> key of the run mapping, and what a typed energy level replaces (shared with the Python API)
+_KEYS, _REPLACES = MANN_OPTIONS, MANN_REPLACES
 _ENERGY = ("ae", "sigma_u", "ti")
-# a typed energy level replaces any from the run file or the preset
-_REPLACES = {key: ("ae", "sigma_u_m_s", "ti", "ae_from") for key in ("ae", "sigma_u_m_s", "ti")}
 
 
 def _evo(ctx, param, value):

@@ -12,9 +12,7 @@ import click
 
 from turbgen.cli.options import parse_floats, parse_range
 from turbgen.spec.config import read_config
-
-# option name -> key of the run mapping's grid table
-GRID_OPTIONS = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}
+from turbgen.spec.run_inputs import GRID_OPTIONS, merge_run_inputs
 
 
 def _list(parser, name):
@@ -67,16 +65,6 @@ def run_mapping(opt: Mapping, schema: str, keys: Mapping[str, str], preset_keys=
         replaces any other): one level, one source.
     x_m : plane positions [m] from --planes / --gates, or None.
     """
-    mapping = read_config(opt["config"], schema) if opt["config"] else {}
-    grid = dict(mapping.pop("grid", {}))
-    given = typed(opt, keys)
-    layers = [mapping, preset_keys(mapping, given) if preset_keys else {}]
-    for key in given:
-        for layer in layers:
-            for gone in (replaces or {}).get(key, ()):
-                layer.pop(gone, None)
-    merged = {**layers[0], **layers[1], **given}
-    grid.update(typed(opt, GRID_OPTIONS))
-    if x_m is not None:
-        grid["x_m"] = x_m
-    return {**merged, "grid": grid}
+    mapping = read_config(opt["config"], schema) if opt["config"] else None
+    return merge_run_inputs(mapping, typed(opt, keys), typed(opt, GRID_OPTIONS), preset_keys=preset_keys,
+                            replaces=replaces, x_m=x_m)

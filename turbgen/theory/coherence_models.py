@@ -75,7 +75,7 @@ def exponential_longitudinal(dx_m, f_hz, U_m_s: float, a_x: float, b_x: float):
     Parameters
     ----------
     dx_m : array_like
-        Longitudinal separation dx [m]; only |dx| is used.
+        Longitudinal separation dx [m]; only ``|dx|`` is used.
     f_hz : array_like
         Frequency [Hz] (broadcast against ``dx_m``).
     U_m_s : float
@@ -125,7 +125,7 @@ def simley_pao(dx_m, f_hz, U_m_s: float, sigma_total_m_s: float, length_u_m: flo
     Parameters
     ----------
     dx_m : array_like
-        Longitudinal separation dx [m]; only |dx| is used.
+        Longitudinal separation dx [m]; only ``|dx|`` is used.
     f_hz : array_like
         Frequency [Hz] (broadcast against ``dx_m``).
     U_m_s : float
@@ -160,7 +160,7 @@ def kristensen(dx_m, f_hz, U_m_s: float, sigma_total_m_s: float, length_u_m: flo
     Parameters
     ----------
     dx_m : array_like
-        Longitudinal separation dx [m]; only |dx| is used.
+        Longitudinal separation dx [m]; only ``|dx|`` is used.
     f_hz : array_like
         Frequency [Hz] (broadcast against ``dx_m``).
     U_m_s : float

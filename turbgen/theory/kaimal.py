@@ -20,7 +20,7 @@ def kaimal_spectrum(f_hz, sigma_m_s: float, length_scale_m: float, U_m_s: float)
     Parameters
     ----------
     f_hz : array_like
-        Frequency [Hz]; only |f| is used.
+        Frequency [Hz]; only ``|f|`` is used.
     sigma_m_s : float
         Standard deviation sigma of the velocity component [m/s].
     length_scale_m : float

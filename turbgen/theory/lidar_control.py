@@ -58,7 +58,7 @@ def _first_crossing(f: np.ndarray, y: np.ndarray, level: float) -> float:
 
 
 def cutoff_frequency_hz(f_hz, gain) -> float:
-    """The -3 dB cut-off: first frequency where |G_RL| drops below 10^(-3/20) (Guo et al. 2023 Table 5).
+    """The -3 dB cut-off: first frequency where ``|G_RL|`` drops below 10^(-3/20) (Guo et al. 2023 Table 5).
 
     Between the grid points: the root of the local cubic in log f (see _first_crossing; linear below 4 points).
 
@@ -67,7 +67,7 @@ def cutoff_frequency_hz(f_hz, gain) -> float:
     f_hz : array_like
         Increasing frequencies [Hz], > 0.
     gain : array_like
-        |G_RL| [-] at ``f_hz``.
+        ``|G_RL|`` [-] at ``f_hz``.
 
     Returns
     -------

@@ -88,7 +88,7 @@ def cross_spectrum(k1, params: MannParams, i: int, j: int, dy_m: float = 0.0, dz
 def yz_coherence(k1, params: MannParams, i: int, j: int, dy_m: float, dz_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Magnitude-squared coherence (Eq. 9) and un-squared co-coherence (Eq. 10) of Guo et al. (2023).
 
-    coh2 = |F_ij|^2 / (F_ii F_jj), cocoh = Re F_ij / sqrt(F_ii F_jj), with F_ij(k1, dy, dz).
+    ``coh2 = |F_ij|^2 / (F_ii F_jj)``, ``cocoh = Re F_ij / sqrt(F_ii F_jj)``, with F_ij(k1, dy, dz).
 
     Parameters
     ----------

@@ -24,7 +24,7 @@ def _decay(k, dt_s: float, params: MannParams):
 
 
 def space_time_tensor(k1, k2, k3, dt_s: float, params: MannParams) -> np.ndarray:
-    """Theta_ij(k, dt) = exp(-|dt|/tau_e(k)) Phi_ij(k) (Guo et al. 2023, Eq. 13).
+    """``Theta_ij(k, dt) = exp(-|dt|/tau_e(k)) Phi_ij(k)`` (Guo et al. 2023, Eq. 13).
 
     Equal to Phi_ij for frozen turbulence (``params.evo_time_s`` None) or dt = 0.
 
@@ -33,14 +33,14 @@ def space_time_tensor(k1, k2, k3, dt_s: float, params: MannParams) -> np.ndarray
     k1, k2, k3 : array_like
         Wavenumber components [rad/m] (broadcast together).
     dt_s : float
-        Time lag dt [s]; only |dt| is used.
+        Time lag dt [s]; only ``|dt|`` is used.
     params : MannParams
         Mann model parameters.
 
     Returns
     -------
     numpy.ndarray
-        (3, 3, *k.shape) Theta_ij [m^5 s^-2].
+        ``(3, 3, *k.shape)`` Theta_ij [m^5 s^-2].
 
     Raises
     ------
@@ -56,7 +56,7 @@ def space_time_tensor(k1, k2, k3, dt_s: float, params: MannParams) -> np.ndarray
 def longitudinal_coherence(f_hz, dx_m: float, U_m_s: float, params: MannParams) -> np.ndarray:
     """Magnitude-squared longitudinal coherence of u, planes dx apart at mean speed U (Guo et al. 2023, Eq. 16).
 
-    coh2(k1, dx) = |∫ Theta_11(k, dx/U) dk_perp|^2 / F11(k1)^2 with k1 = 2 pi f / U.
+    ``coh2(k1, dx) = |∫ Theta_11(k, dx/U) dk_perp|^2 / F11(k1)^2`` with k1 = 2 pi f / U.
 
     Parameters
     ----------

@@ -1,0 +1,138 @@
+"""The Python API (turbgen.mann, kaimal, open_store, validate, export, lidar): the CLI's fields to the bit, keywords
+resolved from the run schemas, one-line ParameterErrors, and its docstring examples."""
+
+import doctest
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import turbgen
+from turbgen.api import fields, keywords, products
+from turbgen.cli import cli
+from turbgen.errors import ParameterError, StoreError
+
+MANN_SMALL = {"nt": 64, "ny": 8, "nz": 8, "dy": 8.0, "planes": [0, 40, 80], "pad_yz": 1}
+MANN_ARGS = ["--nt", "64", "--ny", "8", "--nz", "8", "--dy", "8", "--planes", "0,40,80", "--pad-yz", "1"]
+
+
+def _cli_field(tmp_path, args, name="cli.zarr"):
+    out = tmp_path / name
+    r = CliRunner().invoke(cli, [*args, "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    return turbgen.open_store(out)
+
+
+def _assert_same_field(a, b):
+    for c in ("u", "v", "w"):
+        np.testing.assert_array_equal(a[c].values, b[c].values)  # bit for bit, not within a tolerance
+    assert a.attrs["parameters"] == b.attrs["parameters"]
+    assert a.attrs["grid"] == b.attrs["grid"]
+
+
+def test_mann_in_memory_is_the_cli_field(tmp_path):
+    api = turbgen.mann(L=30, gamma=2.5, evo=200, seed=4, U=12, ti=0.15, **MANN_SMALL)
+    cli_ds = _cli_field(tmp_path, ["mann", "--L", "30", "--gamma", "2.5", "--evo", "200", "--seed", "4", "--U", "12",
+                                   "--ti", "0.15", *MANN_ARGS])
+    _assert_same_field(api, cli_ds)
+    assert list(tmp_path.iterdir()) == [tmp_path / "cli.zarr"]  # nothing else written by the API
+
+
+def test_mann_preset_config_and_options_merge_as_in_the_cli(tmp_path):
+    # run file < preset < keywords: the file's L is replaced by the preset's, the preset's gamma by the keyword
+    config = tmp_path / "run.json"
+    config.write_text(json.dumps({"length_scale_m": 60, "seed": 7, "grid": {"nt": 64, "ny": 8, "nz": 8, "dy_m": 8}}))
+    api = turbgen.mann(config=config, preset="stable", gamma=2.0, planes=[0, 40], pad_yz=1, evo="frozen",
+                       out=tmp_path / "api.zarr")
+    cli_ds = _cli_field(tmp_path, ["mann", "--config", str(config), "--preset", "stable", "--gamma", "2",
+                                   "--planes", "0,40", "--pad-yz", "1", "--evo", "frozen"])
+    _assert_same_field(api, cli_ds)
+    p = api.attrs["parameters"]
+    assert (p["length_scale_m"], p["gamma"], p["evo_time_s"], api.attrs["seed"]) == (30.0, 2.0, None, 7)
+    assert api.encoding["source"].endswith("api.zarr")
+
+
+def test_gates_text_gives_the_cli_planes(tmp_path):
+    api = turbgen.mann(gates="50:100:13.3", nt=64, ny=8, nz=8, dy=8, pad_yz=1)
+    cli_ds = _cli_field(tmp_path, ["mann", "--gates", "50:100:13.3", "--nt", "64", "--ny", "8", "--nz", "8",
+                                   "--dy", "8", "--pad-yz", "1"])
+    _assert_same_field(api, cli_ds)
+    assert api.x.values.tolist() == [0.0, 50.0, 63.3, 76.6, 89.9]
+
+
+def test_kaimal_preset_is_the_cli_field(tmp_path):
+    api = turbgen.kaimal(U=12, preset="unstable", turb_class="B", seed=3, nt=128, ny=6, nz=6, planes=[0, 50])
+    cli_ds = _cli_field(tmp_path, ["kaimal", "--U", "12", "--preset", "unstable", "--class", "B", "--seed", "3",
+                                   "--nt", "128", "--ny", "6", "--nz", "6", "--planes", "0,50"])
+    _assert_same_field(api, cli_ds)
+
+
+def test_schema_keys_are_keywords_and_new_schema_keys_pass_through(monkeypatch):
+    given, grid, x_m = keywords.run_inputs("mann", {"length_scale_m": 30, "dt_s": 0.25, "evo": "frozen"})
+    assert given == {"length_scale_m": 30, "evo_time_s": None} and grid == {"dt_s": 0.25} and x_m is None
+    # a key another part of turbgen adds to the run schema is a keyword without a change here
+    schema = keywords.load_schema("mann-run")
+    schema["properties"]["conditional_mean"] = {"type": "boolean"}
+    monkeypatch.setattr(keywords, "load_schema", lambda name: schema)
+    assert keywords.run_inputs("mann", {"conditional_mean": True})[0] == {"conditional_mean": True}
+    assert "conditional_mean" in keywords.allowed_keywords("mann")
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: turbgen.mann(Lx=30), "unknown keyword(s) Lx; allowed: U, L, gamma, evo"),
+    (lambda: turbgen.kaimal(L=30), "turbgen.kaimal() got unknown keyword(s) L;"),
+    (lambda: turbgen.mann(ae=0.1, ti=0.1), "give one of `ae`, `sigma_u`, `ti`"),
+    (lambda: turbgen.mann(U=12, U_m_s=12), "got `U_m_s` twice"),
+    (lambda: turbgen.mann(planes=[0], gates=[50]), "give `planes` or `gates`, not both"),
+    (lambda: turbgen.mann(gates="50:10:1"), "step > 0 and stop >= start"),
+    (lambda: turbgen.mann(nt=1), "nt = 1 is outside the allowed range"),
+    (lambda: turbgen.mann(L=-5), "outside the allowed range"),
+    (lambda: turbgen.kaimal(presets_file="p.toml"), "`presets_file` needs `preset`"),
+])  # fmt: skip
+def test_bad_input_is_one_line_parameter_error(call, message):
+    with pytest.raises(ParameterError) as err:
+        call()
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def test_products_need_a_store(tmp_path):
+    ds = turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50])
+    with pytest.raises(ParameterError, match="made in memory"):
+        turbgen.validate(ds)
+    with pytest.raises(StoreError):
+        turbgen.export(tmp_path / "missing.zarr", "bts", tmp_path / "x.bts")
+    with pytest.raises(ParameterError, match="format = 'csv'"):
+        turbgen.export(turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50], out=tmp_path / "k.zarr"), "csv",
+                       tmp_path / "x.csv")
+
+
+def test_existing_out_is_not_replaced_without_overwrite(tmp_path):
+    out = tmp_path / "k.zarr"
+    first = turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50], out=out).u.values
+    with pytest.raises(StoreError, match="overwrite"):
+        turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50], seed=2, out=out)
+    np.testing.assert_array_equal(turbgen.open_store(out).u.values, first)
+
+
+def test_product_names_are_functions_and_packages():
+    import turbgen.validate.report as report  # the subpackage stays importable under the function's name
+
+    assert callable(turbgen.validate) and report.__name__ == "turbgen.validate.report"
+    assert "bts" in turbgen.export.EXPORTERS
+    assert "store" in str(__import__("inspect").signature(turbgen.lidar))
+
+
+@pytest.mark.parametrize("module", [turbgen, fields, products])
+def test_docstring_examples(module):
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    assert result.failed == 0
+    assert module is turbgen or result.attempted > 0
+
+
+def test_theory_namespace_names_resolve_and_its_examples_run():
+    import turbgen.theory as theory
+
+    for name in theory.__all__:
+        assert callable(getattr(theory, name)), name
+    assert doctest.testmod(theory).failed == 0

@@ -1,0 +1,322 @@
+"""``turbgen.mann``, ``turbgen.kaimal`` and ``turbgen.open_store``: fields as xarray Datasets.
+
+A run is built by the same rule as the commands' (turbgen.spec.run_inputs: run file < preset < keywords) and made by
+the same functions (turbgen.runs), so ``turbgen.mann(L=49, ...)`` and ``turbgen mann --L 49 ...`` give the same field
+to the bit.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+
+import xarray as xr
+
+from turbgen.api.keywords import run_inputs
+from turbgen.errors import ParameterError
+from turbgen.resources import available_memory_bytes, default_threads, parse_size, require_memory
+from turbgen.spec.defaults import KAIMAL_DEFAULTS
+from turbgen.spec.config import check_mapping, read_config
+from turbgen.spec.kaimal import KaimalRun
+from turbgen.spec.mann import MannRun
+from turbgen.spec.preset_files import load_presets
+from turbgen.spec.preset_runs import kaimal_run_keys, mann_run_keys
+from turbgen.spec.run_inputs import KAIMAL_REPLACES, MANN_ENERGY_KEYS, MANN_REPLACES, merge_run_inputs
+from turbgen.store import open_store as _open_field_store
+from turbgen.store.paths import check_output_path
+from turbgen.store.writer import check_new_store
+
+PathLike = str | os.PathLike
+
+
+def _file_mapping(config, schema: str) -> dict | None:
+    """A run file's content (a path to TOML/JSON) or a mapping of the same keys, checked against ``schema``."""
+    if config is None:
+        return None
+    if isinstance(config, Mapping):
+        return dict(check_mapping(dict(config), schema, "`config`"))
+    return read_config(config, schema)
+
+
+def _presets(preset, presets_file):
+    if presets_file is not None and preset is None:
+        raise ParameterError("`presets_file` needs `preset`")
+    return load_presets(presets_file) if presets_file is not None else None
+
+
+def _as_dataset(path: Path) -> xr.Dataset:
+    """The checked store at ``path`` as a lazy Dataset whose ``encoding["source"]`` is the store's path."""
+    fs = _open_field_store(path)
+    ds = xr.open_zarr(str(fs.path), consolidated=True)
+    ds.encoding["source"] = str(fs.path)
+    return ds
+
+
+def _in_memory(make, grid, name: str) -> xr.Dataset:
+    """Run ``make(path)`` into a store in a temporary directory and return its field loaded into memory."""
+    require_memory(3 * grid.nbytes_per_component(), f"the field in memory ({name})",
+                   "pass `out` to write a store instead, or lower `nt`, `ny`/`nz` or the number of planes")
+    with tempfile.TemporaryDirectory(prefix="turbgen-") as tmp:
+        path = Path(tmp) / name
+        make(path)
+        with _as_dataset(path) as ds:
+            loaded = ds.load()
+    loaded.encoding.pop("source", None)
+    return loaded
+
+
+def open_store(path: PathLike) -> xr.Dataset:
+    """Open a turbgen field store as a lazy ``xarray.Dataset``, after checking it.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The store directory (e.g. ``mann_U16_L49_G3.1_evo400_s1.zarr``).
+
+    Returns
+    -------
+    xarray.Dataset
+        u, v, w (t, x, y, z) [m/s] with coordinates t [s], x, y, z [m] and the store's attributes; lazy (dask).
+        ``encoding["source"]`` holds the store's path, so the Dataset can be given to :func:`turbgen.validate`,
+        :func:`turbgen.export` and :func:`turbgen.lidar`.
+
+    Raises
+    ------
+    StoreError
+        If ``path`` is not a complete, valid turbgen store (missing, partial, corrupted).
+
+    Examples
+    --------
+    >>> import tempfile, turbgen
+    >>> out = tempfile.mkdtemp() + "/box.zarr"
+    >>> _ = turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50], out=out)
+    >>> ds = turbgen.open_store(out)
+    >>> dict(ds.sizes)
+    {'t': 64, 'x': 2, 'y': 4, 'z': 4}
+    """
+    return _as_dataset(Path(path))
+
+
+def mann(
+    L: float | None = None,
+    gamma: float | None = None,
+    evo: float | str | None = None,
+    seed: int | None = None,
+    out: PathLike | None = None,
+    *,
+    config: PathLike | Mapping | None = None,
+    preset: str | None = None,
+    presets_file: PathLike | None = None,
+    overwrite: bool = False,
+    chunks: int | None = None,
+    threads: int | None = None,
+    stencil_cache: PathLike | None = None,
+    memory: int | str | None = None,
+    progress: bool = False,
+    **options,
+) -> xr.Dataset:
+    """A Mann space-time 4D field u(t, x, y, z) (Mann 1994; Guo et al. 2022): the field of ``turbgen mann``.
+
+    Keywords are the options of ``turbgen mann`` (``L``, ``gamma``, ``evo``, ``U``, ``nt``, ``dt``, ``ny``,
+    ``nz``, ``dy``, ``dz``, ``planes``, ``gates``, ``lifetime``, ``factor1``, ``factor2``, ``pad_yz``,
+    ``hub_height``, ``ae``, ``sigma_u``, ``ti``) or any key of a run file (schemas/mann-run.schema.json, e.g.
+    ``length_scale_m``, ``dt_s``). A keyword left at None is not given: it takes the run file's value, else the
+    preset's, else the default of turbgen/spec/defaults.py (L 49 m, Γ 3.1, γ 400 s, U 16 m/s, 4096 × 11 × 64 × 64
+    at dt 0.5 s, dy = dz 4.7 m, seed 1, the model σ_u of IEC class A).
+
+    Parameters
+    ----------
+    L : float, optional
+        Length scale L [m].
+    gamma : float, optional
+        Shear anisotropy Γ [-].
+    evo : float or str, optional
+        Eddy evolution time γ [s], or ``"frozen"``.
+    seed : int, optional
+        Random seed (>= 0).
+    out : str or os.PathLike, optional
+        Store to write. None: the field is returned in memory (no file is left).
+    config : str, os.PathLike or Mapping, optional
+        A run file (TOML/JSON) or a mapping of its keys; keywords override it.
+    preset : str, optional
+        Stability preset (``unstable``, ``neutral``, ``stable`` or one of ``presets_file``); keywords override it.
+    presets_file : str or os.PathLike, optional
+        User presets (TOML or JSON).
+    overwrite : bool, optional
+        Replace an existing store at ``out``.
+    chunks : int, optional
+        Time samples per store chunk; never changes the field.
+    threads : int, optional
+        Worker threads (default: all cores); never changes the field.
+    stencil_cache : str or os.PathLike, optional
+        Directory keeping the stencil per parameter set and grid (reused by later seeds).
+    memory : int or str, optional
+        Memory budget [bytes] or a size such as ``"4GiB"``; a field that does not fit is made out of core into
+        ``out``, the same field (default: the available memory).
+    progress : bool, optional
+        Show a progress bar on stderr.
+    **options
+        The other keywords named above.
+
+    Returns
+    -------
+    xarray.Dataset
+        u, v, w (t, x, y, z) [m/s], coordinates t [s], x, y, z [m], the store's attributes (``parameters``,
+        ``grid``, ``seed``, ...): in memory without ``out``, else the written store, opened lazily.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown keyword, a value outside its range, two energy levels (``ae``, ``sigma_u``, ``ti``), a field
+        that fits neither memory nor disk.
+    StoreError
+        For an existing ``out`` without ``overwrite``, or an ``out`` that is not a turbgen store with it.
+
+    Examples
+    --------
+    >>> import turbgen
+    >>> ds = turbgen.mann(L=30, gamma=3.1, evo=400, nt=64, ny=8, nz=8, dy=8, planes=[0, 40], pad_yz=1)
+    >>> dict(ds.sizes)
+    {'t': 64, 'x': 2, 'y': 8, 'z': 8}
+    >>> ds.attrs["parameters"]["length_scale_m"], ds.attrs["seed"]
+    (30.0, 1)
+    >>> turbgen.mann(Lx=30)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    turbgen.errors.ParameterError: turbgen.mann() got unknown keyword(s) Lx; allowed: U, L, gamma, ...
+    """
+    options.update(L=L, gamma=gamma, evo=evo, seed=seed)
+    given, grid, x_m = run_inputs("mann", options)
+    energy = [key for key in MANN_ENERGY_KEYS if key in given]
+    if len(energy) > 1:
+        raise ParameterError(f"give one of `ae`, `sigma_u`, `ti` (got {', '.join(energy)})")
+    user = _presets(preset, presets_file)
+    keys = None if preset is None else (lambda mapping, typed: mann_run_keys(preset, user=user))
+    run = MannRun.from_mapping(merge_run_inputs(_file_mapping(config, "mann-run"), given, grid, preset_keys=keys,
+                                                replaces=MANN_REPLACES, x_m=x_m))  # fmt: skip
+    make = _mann_maker(run, overwrite, chunks, threads, stencil_cache, memory, progress)
+    if out is None:
+        return _in_memory(make, run.grid, run.default_store_name())
+    make(Path(out))
+    return _as_dataset(Path(out))
+
+
+def _mann_maker(run: MannRun, overwrite, chunks, threads, stencil_cache, memory, progress):
+    """The function writing ``run`` to a path as ``turbgen mann`` does: in memory, or out of core when it does not
+    fit the budget (the same field)."""
+    from turbgen.runs.mann import run_mann
+    from turbgen.runs.mann_outofcore import plan_for_budget, remove_stale_scratch, run_mann_outofcore
+
+    threads = default_threads(threads)
+    budget = parse_size(memory, "`memory`") if isinstance(memory, str) else memory
+    budget = available_memory_bytes() if budget is None else budget
+
+    def make(out: Path) -> None:
+        check_output_path(out, "`out`")
+        plan = plan_for_budget(run, budget, threads, chunks, None, stencil_cache is None)
+        remove_stale_scratch(out)
+        check_new_store(out, run.grid, chunk_t=chunks, overwrite=overwrite,
+                        scratch_bytes=0 if plan is None else plan.scratch_bytes())  # fmt: skip
+        if plan is not None:
+            run_mann_outofcore(run, out, memory_bytes=plan.memory_bytes, overwrite=overwrite, chunk_t=chunks,
+                               progress=progress, threads=plan.threads, plan=plan)  # fmt: skip
+        else:
+            run_mann(run, out, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=threads,
+                     cache_dir=stencil_cache)  # fmt: skip
+
+    return make
+
+
+def kaimal(
+    U: float | None = None,
+    seed: int | None = None,
+    out: PathLike | None = None,
+    *,
+    config: PathLike | Mapping | None = None,
+    preset: str | None = None,
+    presets_file: PathLike | None = None,
+    overwrite: bool = False,
+    chunks: int | None = None,
+    threads: int | None = None,
+    progress: bool = False,
+    **options,
+) -> xr.Dataset:
+    """A Kaimal 4D field with longitudinal coherence (IEC 61400-1; Guo et al. 2023): the field of ``turbgen kaimal``.
+
+    Keywords are the options of ``turbgen kaimal`` (``U``, ``turb_class``, ``hub_height``, ``sigma``, ``lengths``,
+    ``ayz``, ``lc``, ``long_model``, ``ax``, ``bx``, ``long_components``, ``vw_coherence``, ``rescale``, ``nt``,
+    ``dt``, ``ny``, ``nz``, ``dy``, ``dz``, ``planes``, ``gates``) or any key of a run file
+    (schemas/kaimal-run.schema.json). A keyword left at None takes the run file's value, else the preset's, else
+    the default (U 16 m/s, class A, hub 90 m, 4096 × 11 × 31 × 31 at dt 0.5 s, dy = dz 5 m, seed 1).
+
+    Parameters
+    ----------
+    U : float, optional
+        Hub-height mean wind speed [m/s].
+    seed : int, optional
+        Random seed (>= 0).
+    out : str or os.PathLike, optional
+        Store to write. None: the field is returned in memory (no file is left).
+    config : str, os.PathLike or Mapping, optional
+        A run file (TOML/JSON) or a mapping of its keys; keywords override it.
+    preset : str, optional
+        Stability preset (``unstable``, ``neutral``, ``stable`` or one of ``presets_file``).
+    presets_file : str or os.PathLike, optional
+        User presets (TOML or JSON).
+    overwrite : bool, optional
+        Replace an existing store at ``out``.
+    chunks : int, optional
+        Time samples per store chunk; never changes the field.
+    threads : int, optional
+        FFT threads (default: all cores); never changes the field.
+    progress : bool, optional
+        Show a progress bar on stderr.
+    **options
+        The other keywords named above.
+
+    Returns
+    -------
+    xarray.Dataset
+        u, v, w (t, x, y, z) [m/s] with coordinates and the store's attributes: in memory without ``out``, else the
+        written store, opened lazily.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown keyword, a value outside its range, a field that fits neither memory nor disk.
+    StoreError
+        For an existing ``out`` without ``overwrite``, or an ``out`` that is not a turbgen store with it.
+
+    Examples
+    --------
+    >>> import turbgen
+    >>> ds = turbgen.kaimal(U=12, nt=128, ny=6, nz=6, planes=[0, 50, 100], seed=2)
+    >>> dict(ds.sizes), ds.attrs["model"]
+    ({'t': 128, 'x': 3, 'y': 6, 'z': 6}, 'kaimal')
+    """
+    from turbgen.runs.kaimal import kaimal_generator, plan_spill, run_kaimal
+
+    options.update(U=U, seed=seed)
+    given, grid, x_m = run_inputs("kaimal", options)
+    user = _presets(preset, presets_file)
+
+    def keys(mapping, typed):  # the preset's sigmas follow the run's U and a given class, as in turbgen kaimal
+        U_m_s = typed.get("U_m_s", mapping.get("U_m_s", KAIMAL_DEFAULTS["U_m_s"]))
+        return kaimal_run_keys(preset, U_m_s, user=user, turb_class=typed.get("turb_class"))
+
+    run = KaimalRun.from_mapping(merge_run_inputs(_file_mapping(config, "kaimal-run"), given, grid,
+                                                  preset_keys=None if preset is None else keys,
+                                                  replaces=KAIMAL_REPLACES, x_m=x_m))  # fmt: skip
+
+    def make(path: Path) -> None:
+        check_output_path(path, "`out`")
+        plan_spill(run.grid, path.absolute(), None, kaimal_generator(run, workers=threads).sampler_bytes())
+        check_new_store(path, run.grid, chunk_t=chunks, overwrite=overwrite)
+        run_kaimal(run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=threads)
+
+    if out is None:
+        return _in_memory(make, run.grid, f"kaimal_s{run.seed}.zarr")
+    make(Path(out))
+    return _as_dataset(Path(out))

@@ -1,0 +1,178 @@
+"""``turbgen.validate``, ``turbgen.export`` and ``turbgen.lidar``: what is made from a field store.
+
+Each takes a store as a path, a :class:`turbgen.store.FieldStore`, or a Dataset of :func:`turbgen.open_store` (or of
+``turbgen.mann`` / ``turbgen.kaimal`` with ``out``), and calls the library functions the commands call.
+"""
+
+from __future__ import annotations
+
+import os
+
+from turbgen.errors import ParameterError
+from turbgen.store import FieldStore, open_store as _open_field_store
+from turbgen.store.paths import check_output_path
+
+
+def field_store(store) -> FieldStore:
+    """The open FieldStore of ``store``: a path, a FieldStore, or a Dataset whose ``encoding["source"]`` is a store."""
+    if isinstance(store, FieldStore):
+        return store
+    if isinstance(store, (str, os.PathLike)):
+        return _open_field_store(store)
+    source = getattr(store, "encoding", {}).get("source")
+    if source is None:
+        raise ParameterError("the field has no store (it was made in memory): give `out` to turbgen.mann / "
+                             "turbgen.kaimal, or pass the store's path")  # fmt: skip
+    return _open_field_store(source)
+
+
+def validate(store, *, rotor_radius: float | None = None):
+    """Re-estimate a store's statistics and compare them with its model on its grid (``turbgen validate``).
+
+    Parameters
+    ----------
+    store : str, os.PathLike, FieldStore or xarray.Dataset
+        The store (a Dataset of :func:`turbgen.open_store`, or of ``turbgen.mann(..., out=...)``).
+    rotor_radius : float, optional
+        Rotor radius R [m] of the rotor-effective wind speed (default 63 m, or the largest disc inside a smaller
+        grid).
+
+    Returns
+    -------
+    turbgen.validate.ValidationReport
+        ``passed``, ``failed``, ``metrics``, ``table()``, ``to_dict()`` (the keys of ``turbgen validate --json``),
+        ``plots(directory)`` (one PNG per comparison: estimate, 95 % band, theory).
+
+    Raises
+    ------
+    StoreError
+        If the store is missing, incomplete or corrupted.
+    ParameterError
+        For bad input.
+
+    Examples
+    --------
+    >>> import tempfile, turbgen
+    >>> ds = turbgen.kaimal(nt=256, ny=6, nz=6, planes=[0, 50], out=tempfile.mkdtemp() + "/k.zarr")
+    >>> report = turbgen.validate(ds)
+    >>> report.passed, "spectrum_u" in [m.name for m in report.metrics]
+    (True, True)
+    """
+    from turbgen.validate import validate as run_validation
+
+    return run_validation(field_store(store), rotor_radius_m=rotor_radius)
+
+
+def export(store, format: str, out: str | os.PathLike, *, plane: int | None = None,
+           hub_height: float | None = None, shear_exponent: float | None = None, tower: bool = False,
+           periodic: bool = True, drop_below_ground: bool = False, overwrite: bool = False):
+    """Write a store for InflowWind, HAWC2, the lidar simulator, the 4D Mann scripts or HDF5 (``turbgen export``).
+
+    Parameters
+    ----------
+    store : str, os.PathLike, FieldStore or xarray.Dataset
+        The store.
+    format : str
+        ``bts``, ``wnd``, ``evo``, ``hawc2``, ``mt4d`` or ``hdf5``.
+    out : str or os.PathLike
+        Output file, or ROOT for wnd, evo and hawc2.
+    plane : int, optional
+        Plane index (default: the rotor plane, x = 0).
+    hub_height : float, optional
+        Hub height [m] (default: the store's).
+    shear_exponent : float, optional
+        Power-law exponent of the mean profile added to u (InflowWind formats; default 0.2).
+    tower : bool, optional
+        bts: add tower points down to the ground.
+    periodic : bool, optional
+        Flag bts/wnd/evo periodic in time.
+    drop_below_ground : bool, optional
+        Drop grid rows at or below the ground instead of refusing.
+    overwrite : bool, optional
+        Replace existing output files.
+
+    Returns
+    -------
+    turbgen.export.ExportResult
+        ``paths`` written, ``inflowwind_lines`` that load them, ``notes``.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown format, options the format does not use, an existing output without ``overwrite``, a grid
+        reaching the ground, too little disk.
+    StoreError
+        If the store is missing or incomplete.
+
+    Examples
+    --------
+    >>> import tempfile, turbgen
+    >>> tmp = tempfile.mkdtemp()
+    >>> ds = turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50], out=tmp + "/k.zarr")
+    >>> result = turbgen.export(ds, "bts", tmp + "/k.bts")
+    >>> result.inflowwind_lines[0].split()[:2]
+    ['3', 'WindType']
+    """
+    from turbgen.export import ExportRequest, export_store
+
+    check_output_path(out, "`out`")
+    request = ExportRequest(plane=plane, hub_height_m=hub_height, shear_exponent=shear_exponent, tower=tower,
+                            periodic=periodic, drop_below_ground=drop_below_ground, overwrite=overwrite)
+    return export_store(field_store(store), format, out, request)
+
+
+def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLike | None = None,
+          overwrite: bool = False, rotor_radius: float | None = None, mean_wind: bool = False, shear: float = 0.2):
+    """Measure a store with a virtual lidar and compare its preview quality with theory (``turbgen lidar``).
+
+    Parameters
+    ----------
+    store : str, os.PathLike, FieldStore or xarray.Dataset
+        The store; its planes must include the lidar's range gates.
+    lidar : str or os.PathLike, optional
+        A lidar preset (``nacelle-4beam``, ``spinner-cw``, ``spinner-pulsed``, ``nacelle-1beam``) or a TOML/JSON
+        lidar file (schemas/lidar.schema.json); default: the 4-beam pulsed lidar of Guo et al. (2023), Table 3.
+    out : str or os.PathLike, optional
+        Write the lidar dataset (zarr: v_los, u_LL, u_RR, every lidar parameter) here.
+    overwrite : bool, optional
+        Replace an existing ``out``.
+    rotor_radius : float, optional
+        Rotor radius R [m] of u_RR (default: the lidar's turbine if it fits the grid, else 63 m or the largest disc
+        inside a smaller grid).
+    mean_wind : bool, optional
+        Add the power-law mean wind to u before projecting.
+    shear : float, optional
+        Power-law shear exponent of ``mean_wind``.
+
+    Returns
+    -------
+    turbgen.lidar.report.LidarReport
+        ``passed``, ``to_dict()`` (the keys of ``turbgen lidar --json``), ``text()``, ``plots(directory)``.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown lidar, gates that are not planes of the store, a beam leaving the grid, an existing ``out``.
+    StoreError
+        If the store is missing or incomplete.
+
+    Examples
+    --------
+    >>> import tempfile, turbgen
+    >>> ds = turbgen.mann(nt=256, ny=16, nz=16, dy=8, gates="50:170:13.3", pad_yz=1,
+    ...                   out=tempfile.mkdtemp() + "/m.zarr")
+    >>> report = turbgen.lidar(ds)
+    >>> report.passed, sorted(report.to_dict())[:2]
+    (True, ['G_RL_simulated', 'G_RL_theory'])
+    """
+    from turbgen.lidar import report
+    from turbgen.lidar.dataset import check_output
+
+    fs = field_store(store)
+    if out is not None:
+        check_output(out, overwrite)
+    result = report.lidar_report(fs, None if lidar is None else str(lidar), rotor_radius_m=rotor_radius,
+                                 add_mean_wind=mean_wind, shear_exponent=shear)  # fmt: skip
+    if out is not None:
+        result.write(out, overwrite=overwrite)
+    return result

@@ -1,0 +1,116 @@
+"""How a run's inputs become one run mapping, for every front end (the CLI, the Python API): run file < preset <
+options given by the user; what none of them gives takes turbgen.spec.defaults (applied by the model's from_mapping).
+
+The option names are those of the commands (``turbgen mann --L 49`` is ``turbgen.mann(L=49)``); any key of the
+model's run schema (turbgen/schemas/<model>-run.schema.json, the keys of a ``--config`` file) is accepted under its
+own name too, so a key added to a run schema reaches the run without a new option name.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+# option name -> key of the run mapping (MannRun.from_mapping, schemas/mann-run.schema.json)
+MANN_OPTIONS = {
+    "U": "U_m_s", "L": "length_scale_m", "gamma": "gamma", "evo": "evo_time_s", "lifetime": "lifetime",
+    "factor1": "factor1", "factor2": "factor2", "seed": "seed", "hub_height": "hub_height_m", "pad_yz": "pad_yz",
+    "ae": "ae", "sigma_u": "sigma_u_m_s", "ti": "ti",
+}  # fmt: skip
+# option name -> key of the run mapping (KaimalRun.from_mapping, schemas/kaimal-run.schema.json)
+KAIMAL_OPTIONS = {
+    "U": "U_m_s", "turb_class": "turb_class", "hub_height": "hub_height_m", "sigma": "sigma_m_s",
+    "lengths": "length_scales_m", "ayz": "a_yz", "lc": "lc_m", "long_model": "long_model", "ax": "a_x",
+    "bx": "b_x", "long_components": "long_components", "vw_coherence": "vw_coherence", "rescale": "rescale",
+    "seed": "seed",
+}  # fmt: skip
+# option name -> key of the run mapping's grid table
+GRID_OPTIONS = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}
+
+# a given energy level replaces any from the run file or the preset: one level, one source
+MANN_ENERGY_KEYS = ("ae", "sigma_u_m_s", "ti")
+MANN_REPLACES = {key: ("ae", "sigma_u_m_s", "ti", "ae_from") for key in MANN_ENERGY_KEYS}
+# given sigmas: no class to record
+KAIMAL_REPLACES = {"sigma_m_s": ("turb_class",)}
+
+
+def merge_run_inputs(
+    file_mapping: Mapping | None,
+    given: Mapping,
+    grid_given: Mapping,
+    *,
+    preset_keys: Callable[[Mapping, Mapping], Mapping] | None = None,
+    replaces: Mapping[str, tuple] | None = None,
+    x_m=None,
+) -> dict:
+    """The run mapping of one run: the run file's keys, then the preset's, then the given ones.
+
+    Parameters
+    ----------
+    file_mapping : Mapping or None
+        The run file's content (already checked against the model's run schema), or None.
+    given : Mapping
+        Run-mapping keys given by the user (not None), outside ``grid``.
+    grid_given : Mapping
+        Keys of the ``grid`` table given by the user (``nt``, ``dt_s`` [s], ``ny``, ``nz``, ``dy_m`` [m], ``dz_m`` [m]).
+    preset_keys : callable, optional
+        ``preset_keys(file mapping, given)`` -> the preset's run keys; None without a preset.
+    replaces : Mapping, optional
+        Given key -> keys it removes from the run file and the preset (e.g. a given energy level replaces any other).
+    x_m : sequence of float, optional
+        Plane positions [m upstream] (from ``planes`` or ``gates``); None keeps the file's or the default.
+
+    Returns
+    -------
+    dict
+        The run mapping, with its ``grid`` table (for ``MannRun.from_mapping`` / ``KaimalRun.from_mapping``).
+    """
+    mapping = dict(file_mapping or {})
+    grid = dict(mapping.pop("grid", {}))
+    layers = [mapping, dict(preset_keys(mapping, given)) if preset_keys else {}]
+    for key in given:
+        for layer in layers:
+            for gone in (replaces or {}).get(key, ()):
+                layer.pop(gone, None)
+    grid.update(grid_given)
+    if x_m is not None:
+        grid["x_m"] = list(x_m)
+    return {**layers[0], **layers[1], **given, "grid": grid}
+
+
+def range_positions(text: str, name: str, limit: int) -> list[float]:
+    """'start:stop:step' -> start, start + step, ... <= stop [m] (inclusive, 1e-9 relative tolerance), each rounded to
+    9 decimals: the rule of the CLI's ``--gates``, so both give the same plane positions to the bit.
+
+    Parameters
+    ----------
+    text : str
+        'start:stop:step' in metres.
+    name : str
+        The input's name, for messages.
+    limit : int
+        Most values allowed (counted before the list is built).
+
+    Returns
+    -------
+    list of float
+        The positions [m].
+
+    Raises
+    ------
+    ParameterError
+        For a malformed text, a step <= 0, stop < start, a non-finite number or more than ``limit`` values.
+    """
+    import math
+
+    from turbgen.errors import ParameterError
+
+    try:
+        start, stop, step = (float(p) for p in text.split(":"))
+    except ValueError:
+        raise ParameterError(f"{name} = {text!r} is not start:stop:step (three numbers)") from None
+    if not (step > 0 and stop >= start and all(map(math.isfinite, (start, stop, step)))):
+        raise ParameterError(f"{name} = {text!r} needs finite numbers, step > 0 and stop >= start")
+    n = int(math.floor((stop - start) / step * (1 + 1e-9) + 1e-9)) + 1
+    if n > limit:
+        raise ParameterError(f"{name} = {text!r} gives {n} values, more than the maximum {limit}")
+    return [round(start + i * step, 9) for i in range(n)]
