@@ -24,7 +24,7 @@ import inspect
 import types
 from typing import TYPE_CHECKING
 
-__version__ = "0.1.0"
+from turbgen.version import __version__
 
 _FIELDS = ("mann", "kaimal", "open_store")
 # API functions named like a subpackage: turbgen.validate(...) calls the function, turbgen.validate.report is the

@@ -19,7 +19,8 @@ import warnings
 
 import click
 
-from turbgen import __version__, interruption
+from turbgen import interruption
+from turbgen.version import __version__
 from turbgen.errors import ParameterError, StoreError, TurbgenError
 
 

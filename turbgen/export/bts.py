@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from turbgen import __version__
+from turbgen.version import __version__
 from turbgen.export.inflowwind_file import InflowWindInput, inflowwind_path, write_inflowwind
 from turbgen.export.outputs import OutputSet
 from turbgen.export.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes

@@ -13,7 +13,7 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from turbgen import __version__
+from turbgen.version import __version__
 from turbgen.export.request import ifw_line
 
 WIND_TYPES = {2: "uniform wind file", 3: "TurbSim binary .bts", 4: "Bladed-style .wnd + .sum", 5: "HAWC binary"}

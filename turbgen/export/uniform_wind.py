@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from turbgen import __version__
+from turbgen.version import __version__
 from turbgen.export.inflowwind_file import InflowWindInput, inflowwind_path, write_inflowwind
 from turbgen.export.outputs import OutputSet
 from turbgen.spec.iec_transient import COLUMNS, IecTransient

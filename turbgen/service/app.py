@@ -13,7 +13,7 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 
-from turbgen import __version__
+from turbgen.version import __version__
 from turbgen.errors import TurbgenError
 from turbgen.service.catalog import Catalog
 from turbgen.service.cleanup import DEFAULT_STENCIL_CACHE_BYTES, remove_dead_work, trim_stencil_cache

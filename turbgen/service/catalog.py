@@ -17,7 +17,7 @@ import os
 import shutil
 from pathlib import Path
 
-from turbgen import __version__
+from turbgen.version import __version__
 from turbgen.errors import TurbgenError
 from turbgen.service.run_ids import valid_id
 from turbgen.store.temporaries import temp_name, temp_prefix

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import html
 
-from turbgen import __version__
+from turbgen.version import __version__
 from turbgen.spec.presets import BUILTIN_PRESETS
 
 _PAGE = """<!doctype html>

@@ -10,7 +10,7 @@ import hashlib
 import json
 import re
 
-from turbgen import __version__
+from turbgen.version import __version__
 from turbgen.errors import ParameterError
 from turbgen.spec.config import check_mapping
 from turbgen.store.layout import grid_to_attrs

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import zarr
 
-from turbgen import __version__
+from turbgen.version import __version__
 from turbgen.errors import StoreError, check_int
 from turbgen.grid import Grid
 from turbgen.resources import format_bytes, require_disk

@@ -17,7 +17,7 @@ import tempfile
 from datetime import datetime, timezone
 from pathlib import Path
 
-from turbgen import __version__
+from turbgen.version import __version__
 from turbgen.store import open_store
 from turbgen.store.temporaries import temp_prefix
 

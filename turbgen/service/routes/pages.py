@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter, Depends, Request
 from fastapi.responses import HTMLResponse
 
-from turbgen import __version__
+from turbgen.version import __version__
 from turbgen.service.pages import api_docs_html, index_html
 from turbgen.service.state import ServiceState, get_state
 
