@@ -1,0 +1,241 @@
+"""Gaussian conditioning of a Mann field on measurement streams, exact for the generator's discrete prior.
+
+Hoffman & Ribak (1991): with the prior u ~ N(0, C) (turbgen.synthesis.prior_spectrum), measurements
+d = H u + eps, eps ~ N(0, R) and S = H C H^T + R, a conditional sample is
+
+    u_c = u_s + C H^T S^-1 (d - H u_s - eps_s),      u_s ~ N(0, C), eps_s ~ N(0, R),
+
+and C H^T S^-1 d is the conditional mean. Here H is a set of *streams*: stream a is a fixed linear combination of
+field values at grid points (terms: component, y index, z index, weight) of one plane p_a, sampled at every stored
+time step n = 0 .. nt - 1. The stored time axis is the periodic xi axis of the synthesis box, so the covariance
+between two streams depends on the time lag only: S is block-circulant and the real FFT over time makes it
+block-diagonal, one Hermitian (streams x streams) matrix per slab i:
+
+    S_i[a, b] = nt sum_(t in a, t' in b) w_t w_t' G_i^(p_a p_b)[c_t, c_t'](y_t - y_t', z_t - z_t') + sigma_a^2 delta_ab,
+
+with G_i^(pq)(dy, dz) = sum_(j, l) rho_pq Phi_i exp(2 pi i (j dy / nyp + l dz / nzp)) (one inverse 2-D FFT per slab
+and plane pair; real part on the k1 = 0 / Nyquist slabs). Missing samples (NaN) break the circulant structure:
+S restricted to the observed samples is solved by conjugate gradients preconditioned with the circulant solve of the
+full streams (S v itself is exact by the same FFTs). C H^T w is one spectral synthesis: the weights are scattered
+into the (k2, k3) spectrum through the adjoint of the terms, multiplied by rho Phi and transformed back.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.synthesis.mann_stencil import MannStencil
+from turbgen.synthesis.prior_spectrum import ou_factors, slab_spectrum, slab_weight
+
+CG_TOLERANCE = 1e-10  # relative residual |S x - r| / |r| at which the conjugate gradients stop
+CG_MAX_ITERATIONS = 1000
+SINGULAR_RTOL = 1e-11  # eigenvalue / largest eigenvalue of S_i below which zero-noise measurements are dependent
+_BATCH_POINTS = 1 << 20  # (slab, k2, k3) points per batch of the synthesis of C H^T w
+
+
+@dataclass(frozen=True, eq=False)
+class Streams:
+    """Measurement streams on the stored grid (see module docstring).
+
+    Parameters
+    ----------
+    plane : numpy.ndarray of int, (M,)
+        Plane index of each stream (all its terms lie on it).
+    term_stream, term_component, term_iy, term_iz : numpy.ndarray of int, (T,)
+        For each term: its stream, component (0 u, 1 v, 2 w), y and z grid indices.
+    term_weight : numpy.ndarray of float, (T,)
+        The weight of each term [-] (bilinear interpolation weights times a projection on (u, v, w)).
+    names : tuple of str
+        A name per stream (for messages).
+    """
+
+    plane: np.ndarray
+    term_stream: np.ndarray
+    term_component: np.ndarray
+    term_iy: np.ndarray
+    term_iz: np.ndarray
+    term_weight: np.ndarray
+    names: tuple[str, ...]
+
+    @property
+    def n_streams(self) -> int:
+        """M, the number of streams."""
+        return len(self.plane)
+
+    def used_planes(self) -> np.ndarray:
+        """The plane indices that carry streams, sorted."""
+        return np.unique(self.plane)
+
+
+def measure(streams: Streams, plane: int, component: int, field: np.ndarray, out: np.ndarray) -> None:
+    """Add H's terms on (``plane``, ``component``) applied to ``field`` (nt, ny, nz) [m/s] into ``out`` (M, nt)."""
+    sel = np.flatnonzero((streams.plane[streams.term_stream] == plane) & (streams.term_component == component))
+    for t in sel:
+        out[streams.term_stream[t]] += streams.term_weight[t] * field[:, streams.term_iy[t], streams.term_iz[t]]
+
+
+def _lag_tables(stencil: MannStencil, i: int, times_s: np.ndarray, planes: np.ndarray) -> np.ndarray:
+    """G_i^(pq) for the used planes: (P, P, 3, 3, nyp, nzp) complex (real on the Hermitian slabs)."""
+    box = stencil.box
+    phi = slab_spectrum(stencil, i)
+    rho = ou_factors(stencil, i, times_s[planes])
+    g = np.fft.ifft2(rho[:, :, None, None] * phi[None, None], axes=(-2, -1)) * (box.nyp * box.nzp)
+    return g.real.astype(complex) if slab_weight(stencil, i) == 1.0 else g
+
+
+def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var) -> np.ndarray:
+    """The per-slab matrices S_i (nk1, M, M) complex128 [m^2 s^-2 times nt] of the block-circulant S.
+
+    Parameters
+    ----------
+    stencil : MannStencil
+        The run's stencil (with coefficients; with 1/tau_e for several evolving planes).
+    streams : Streams
+        The measurement streams.
+    times_s : array_like
+        The relative time x/U [s] of every plane of the run (storage order).
+    noise_var : array_like, (M,)
+        Measurement-noise variance sigma_a^2 [m^2 s^-2] of each stream (R = diag).
+    """
+    box = stencil.box
+    times = np.asarray(times_s, dtype=float)
+    planes = streams.used_planes()
+    slot = np.searchsorted(planes, streams.plane)[streams.term_stream]  # used-plane slot of each term
+    ta, tb = np.meshgrid(np.arange(len(streams.term_stream)), np.arange(len(streams.term_stream)), indexing="ij")
+    ta, tb = ta.ravel(), tb.ravel()
+    dy = (streams.term_iy[ta] - streams.term_iy[tb]) % box.nyp
+    dz = (streams.term_iz[ta] - streams.term_iz[tb]) % box.nzp
+    ww = streams.term_weight[ta] * streams.term_weight[tb]
+    sa, sb = streams.term_stream[ta], streams.term_stream[tb]
+    m = streams.n_streams
+    out = np.zeros((box.nk1, m, m), complex)
+    for i in range(box.nk1):
+        g = _lag_tables(stencil, i, times, planes)
+        vals = ww * g[slot[ta], slot[tb], streams.term_component[ta], streams.term_component[tb], dy, dz]
+        np.add.at(out[i], (sa, sb), vals)
+    out *= box.nt
+    out[:, np.arange(m), np.arange(m)] += np.asarray(noise_var, dtype=float)
+    return out
+
+
+def check_singular(cov: np.ndarray, names) -> None:
+    """Raise ParameterError naming the measurements that are linearly dependent (S_i singular on some slab)."""
+    for i in range(cov.shape[0]):
+        lam, vec = np.linalg.eigh(cov[i])
+        top = max(lam[-1], np.finfo(float).tiny)
+        if lam[0] <= SINGULAR_RTOL * top:
+            v = np.abs(vec[:, 0])
+            involved = [names[a] for a in np.flatnonzero(v > 0.1 * v.max())]
+            raise ParameterError(
+                "the measurements " + ", ".join(involved) + " are linearly dependent with zero noise (singular "
+                f"system at time-frequency index {i}): remove one of them or give a noise level > 0 (`--noise`)"
+            )
+
+
+def circulant_apply(cov: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """S v for full streams ``v`` (M, nt): FFT over time, S_i per slab, inverse FFT."""
+    spec = np.fft.rfft(v, axis=1)
+    return np.fft.irfft(np.einsum("iab,bi->ai", cov, spec), n=v.shape[1], axis=1)
+
+
+def circulant_solve(cov: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """S^-1 r for full streams ``r`` (M, nt): one dense solve per slab."""
+    spec = np.fft.rfft(r, axis=1).T[:, :, None]
+    return np.fft.irfft(np.linalg.solve(cov, spec)[:, :, 0].T, n=r.shape[1], axis=1)
+
+
+@dataclass(frozen=True)
+class SolveReport:
+    """How S x = r was solved: ``method`` 'circulant' (every sample observed) or 'pcg'; ``iterations`` of the
+    conjugate gradients (0 for the direct solve) and the final relative residual |S x - r| / |r| [-]."""
+
+    method: str
+    iterations: int
+    relative_residual: float
+
+
+def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, SolveReport]:
+    """x = S^-1 r on the observed samples, zero elsewhere: (x (M, nt), report).
+
+    Every sample observed: the exact per-slab solve. Otherwise preconditioned conjugate gradients on S restricted to
+    the observed samples, the circulant solve of the full streams (zero-filled) as preconditioner, stopping at
+    relative residual CG_TOLERANCE. Raises ParameterError if they do not converge in CG_MAX_ITERATIONS.
+    """
+    r = np.where(observed, r, 0.0)
+    norm = float(np.linalg.norm(r))
+    if observed.all():
+        x = circulant_solve(cov, r)
+        res = np.linalg.norm(circulant_apply(cov, x) - r) / norm if norm > 0 else 0.0
+        return x, SolveReport("circulant", 0, float(res))
+    x = np.zeros_like(r)
+    if norm == 0:
+        return x, SolveReport("pcg", 0, 0.0)
+    res = r.copy()
+    z = np.where(observed, circulant_solve(cov, res), 0.0)
+    p, rz = z.copy(), float(np.vdot(res, z))
+    for it in range(1, CG_MAX_ITERATIONS + 1):
+        sp = np.where(observed, circulant_apply(cov, p), 0.0)
+        alpha = rz / float(np.vdot(p, sp))
+        x += alpha * p
+        res -= alpha * sp
+        rel = float(np.linalg.norm(res)) / norm
+        if rel <= CG_TOLERANCE:
+            return x, SolveReport("pcg", it, rel)
+        z = np.where(observed, circulant_solve(cov, res), 0.0)
+        rz_new = float(np.vdot(res, z))
+        p = z + (rz_new / rz) * p
+        rz = rz_new
+    raise ParameterError(
+        f"the conditioning system did not converge in {CG_MAX_ITERATIONS} conjugate-gradient iterations (relative "
+        f"residual {rel:.2e} > {CG_TOLERANCE:g}): the measurements are nearly dependent; give a noise level > 0"
+    )
+
+
+def _scatter(streams: Streams, coef: np.ndarray, slot: int, planes, box, i0: int, i1: int) -> np.ndarray:
+    """H^T of the streams on used plane ``slot`` in the spectrum: (3, i1 - i0, nyp, nzp) complex."""
+    out = np.zeros((3, i1 - i0, box.nyp, box.nzp), complex)
+    on_plane = streams.plane[streams.term_stream] == planes[slot]
+    jy, lz = np.arange(box.nyp), np.arange(box.nzp)
+    for c in range(3):
+        sel = np.flatnonzero(on_plane & (streams.term_component == c))
+        if len(sel) == 0:
+            continue
+        ey = np.exp(-2j * np.pi * np.outer(streams.term_iy[sel], jy) / box.nyp)
+        ez = np.exp(-2j * np.pi * np.outer(streams.term_iz[sel], lz) / box.nzp)
+        yz = (ey[:, :, None] * ez[:, None, :]).reshape(len(sel), -1)
+        out[c] = (coef[sel, i0:i1].T @ yz).reshape(i1 - i0, box.nyp, box.nzp)
+    return out
+
+
+def weights_field(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, plane: int, ny: int,
+                  nz: int) -> np.ndarray:  # fmt: skip
+    """C H^T w on plane ``plane``, cropped to ny x nz: (3, nt, ny, nz) float64 [m/s per unit of w times m/s].
+
+    Parameters
+    ----------
+    weights : numpy.ndarray, (M, nt)
+        w, one value per stream and stored time step (e.g. S^-1 (d - H u_s - eps_s)).
+    times_s : array_like
+        Relative time x/U [s] of every plane of the run.
+    """
+    box = stencil.box
+    times = np.asarray(times_s, dtype=float)
+    planes = streams.used_planes()
+    coef = streams.term_weight[:, None] * np.fft.rfft(weights, axis=1)[streams.term_stream]
+    spec = np.zeros((3, box.nk1, ny, nz), complex)
+    step = max(1, _BATCH_POINTS // (box.nyp * box.nzp))
+    for i0 in range(0, box.nk1, step):
+        i1 = min(i0 + step, box.nk1)
+        scattered = [_scatter(streams, coef, s, planes, box, i0, i1) for s in range(len(planes))]
+        out = np.zeros((3, i1 - i0, box.nyp, box.nzp), complex)
+        for i in range(i0, i1):
+            phi = slab_spectrum(stencil, i)
+            rho = ou_factors(stencil, i, times[np.append(planes, plane)])[-1]  # rho between ``plane`` and each
+            for s in range(len(planes)):
+                out[:, i - i0] += np.einsum("cdjl,djl->cjl", rho[s] * phi, scattered[s][:, i - i0])
+        yz = np.fft.ifft2(out, axes=(-2, -1)) * (box.nyp * box.nzp)
+        spec[:, i0:i1] = yz[:, :, :ny, :nz]
+    return np.fft.irfft(spec, n=box.nt, axis=1) * box.nt
