@@ -134,15 +134,20 @@ def _measurement_noise(run: MannRun, placed: PlacedData) -> np.ndarray:
     return rng.standard_normal(placed.data.shape) * placed.noise_m_s[:, None]
 
 
-def solve_constraints(run: MannRun, stencil, placed: PlacedData, measured: np.ndarray | None,
-                      eps: np.ndarray | None) -> tuple[np.ndarray, cond.SolveReport]:  # fmt: skip
-    """x = S^-1 (d - H u_s - eps_s) (or S^-1 d when ``measured`` is None: the conditional mean), (M, nt).
+def stream_system(run: MannRun, stencil, placed: PlacedData) -> np.ndarray:
+    """The per-frequency matrices of S = H C H^T + R (turbgen.synthesis.conditioning.stream_covariance).
 
     Raises ParameterError when zero-noise measurements are linearly dependent (naming them)."""
-    times = run.plane_times_s()
-    cov = cond.stream_covariance(stencil, placed.streams, times, placed.noise_m_s**2)
+    cov = cond.stream_covariance(stencil, placed.streams, run.plane_times_s(), placed.noise_m_s**2)
     if np.any(placed.noise_m_s == 0):
         cond.check_singular(cov, placed.streams.names)
+    return cov
+
+
+def solve_constraints(cov: np.ndarray, placed: PlacedData, measured: np.ndarray | None,
+                      eps: np.ndarray | None) -> tuple[np.ndarray, cond.SolveReport]:  # fmt: skip
+    """x = S^-1 (d - H u_s - eps_s) (or S^-1 d when ``measured`` is None: the conditional mean), (M, nt), zero at the
+    missing samples."""
     observed = np.isfinite(placed.data)
     r = placed.data if measured is None else placed.data - measured - eps
     return cond.solve(cov, np.where(observed, r, 0.0), observed)
@@ -211,11 +216,12 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     require_memory(memory_estimate_bytes(run, threads) + extra, f"the constrained Mann run ({m} measurement streams)",
                    "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
     stencil = build_mann_stencil(run, cache_dir)
+    cov = stream_system(run, stencil, placed)
     gen = MannSnapshots(stencil, g.ny, g.nz, threads)
     measured = eps = None
     if not conditional_mean:
         measured, eps = _unconstrained_measurement(run, gen, placed), _measurement_noise(run, placed)
-    x, report = solve_constraints(run, stencil, placed, measured, eps)
+    x, report = solve_constraints(cov, placed, measured, eps)
     frozen = stencil.inv_tau is None
     kept: dict[int, np.ndarray] = {}
 
@@ -250,3 +256,18 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
         summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - (s1 / n) ** 2, 0.0))
         summary[f"mean_{c}"] = s1 / n
     return summary
+
+
+def describe_constraints(record: dict) -> list[str]:
+    """Lines saying how a store was conditioned (from its ``constraints`` record)."""
+    solver = record["solver"]
+    how = "direct per-frequency solve" if solver["method"] == "circulant" else (
+        f"conjugate gradients, {solver['iterations']} iterations")
+    what = "conditional mean" if record["conditional_mean"] else "conditional sample"
+    noise = sorted({s["noise_m_s"] for s in record["streams"]})
+    return [
+        f"constrained ({what}) on {len(record['streams'])} measured series, {record['n_samples']} samples from "
+        f"{', '.join(record['files'])}; noise sigma {', '.join(f'{v:g}' for v in noise)} m/s",
+        f"solve: {how}, relative residual {solver['relative_residual']:.1e}; field - data at the measurements: "
+        f"max {record['residual_max_m_s']:.2e} m/s, rms {record['residual_rms_m_s']:.2e} m/s",
+    ]
