@@ -226,7 +226,20 @@ class FieldStore:
             "units": a["units"],
             "size_on_disk_bytes": self.nbytes_on_disk(),
             "size_uncompressed_bytes": 3 * g.nbytes_per_component(),
+            "constraints": _constraints_summary(a.get("constraints")),
         }
+
+
+def _constraints_summary(c) -> dict | None:
+    """What ``turbgen info`` shows of a constrained store's ``constraints`` record (its data left out), or None."""
+    if c is None:
+        return None
+    return {
+        "kind": c["kind"], "files": c["files"], "conditional_mean": c["conditional_mean"],
+        "series": [{k: s[k] for k in ("name", "component", "x_m", "y_m", "z_m", "noise_m_s")} for s in c["streams"]],
+        "n_samples": c["n_samples"], "solver": c["solver"], "residual_max_m_s": c["residual_max_m_s"],
+        "residual_rms_m_s": c["residual_rms_m_s"],
+    }  # fmt: skip
 
 
 def _leftover_hint(path: Path) -> str:
