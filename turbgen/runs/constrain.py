@@ -161,6 +161,45 @@ def _unconstrained_measurement(run: MannRun, gen: MannSnapshots, placed: PlacedD
     return out
 
 
+def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarray, *, conditional_mean: bool = False,
+                       threads: int | None = None):  # fmt: skip
+    """The conditioned field of ``run``: (solver report, iterator of (plane index, component, field (nt, ny, nz)
+    float32 [m/s])), the generator's order; each array is fresh (it may be kept).
+
+    A conditional sample u_s + C H^T S^-1 (d - H u_s - eps_s): the first pass (here, before returning) generates u_s
+    and measures it, the iterator generates it again and adds the correction. ``conditional_mean``: C H^T S^-1 d.
+    ``cov``: stream_system(run, stencil, placed).
+    """
+    g = run.grid
+    gen = MannSnapshots(stencil, g.ny, g.nz, default_threads(threads))
+    measured = eps = None
+    if not conditional_mean:
+        measured, eps = _unconstrained_measurement(run, gen, placed), _measurement_noise(run, placed)
+    x, report = solve_constraints(cov, placed, measured, eps)
+    frozen = stencil.inv_tau is None
+    kept: dict[int, np.ndarray] = {}
+
+    def correction(ix: int) -> np.ndarray:
+        key = 0 if frozen else ix  # frozen: every plane is the same snapshot, and so is its correction
+        if key not in kept:
+            kept.clear()
+            kept[key] = cond.weights_field(stencil, placed.streams, x, run.plane_times_s(), ix, g.ny, g.nz)
+        return kept[key]
+
+    def planes():
+        if conditional_mean:
+            source = ((ix, comp, None) for ix in range(g.nx) for comp in COMPONENTS)
+        else:
+            source = gen.generate(run.seed, run.plane_times_s())
+        for ix, comp, field in source:
+            value = correction(ix)[COMPONENTS.index(comp)].astype(np.float32)
+            if field is not None:
+                value += field
+            yield ix, comp, value
+
+    return report, planes()
+
+
 def _record(files, placed: PlacedData, report: cond.SolveReport, remeasured: np.ndarray, conditional_mean: bool) -> dict:
     observed = np.isfinite(placed.data)
     resid = (remeasured - placed.data)[observed]
@@ -217,34 +256,12 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
                    "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
     stencil = build_mann_stencil(run, cache_dir)
     cov = stream_system(run, stencil, placed)
-    gen = MannSnapshots(stencil, g.ny, g.nz, threads)
-    measured = eps = None
-    if not conditional_mean:
-        measured, eps = _unconstrained_measurement(run, gen, placed), _measurement_noise(run, placed)
-    x, report = solve_constraints(cov, placed, measured, eps)
-    frozen = stencil.inv_tau is None
-    kept: dict[int, np.ndarray] = {}
-
-    def correction(ix: int) -> np.ndarray:
-        key = 0 if frozen else ix
-        if key not in kept:
-            kept.clear()
-            kept[key] = cond.weights_field(stencil, placed.streams, x, run.plane_times_s(), ix, g.ny, g.nz)
-        return kept[key]
-
-    if conditional_mean:
-        source = ((ix, comp, None) for ix in range(g.nx) for comp in COMPONENTS)
-    else:
-        source = gen.generate(run.seed, run.plane_times_s())
+    report, planes = conditioned_planes(run, stencil, placed, cov, conditional_mean=conditional_mean, threads=threads)
     remeasured = np.zeros(placed.data.shape)
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
     with create_store(Path(out), g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:
-        for ix, comp, field in source:
-            c = COMPONENTS.index(comp)
-            value = correction(ix)[c].astype(np.float32)
-            if field is not None:
-                value += field
-            cond.measure(placed.streams, ix, c, value, remeasured)
+        for ix, comp, value in planes:
+            cond.measure(placed.streams, ix, COMPONENTS.index(comp), value, remeasured)
             total, squares = writer.write(comp, ix, value, squares=True)
             sums[comp][0] += total
             sums[comp][1] += squares
