@@ -6,15 +6,20 @@ d = H u + eps, eps ~ N(0, R) and S = H C H^T + R, a conditional sample is
     u_c = u_s + C H^T S^-1 (d - H u_s - eps_s),      u_s ~ N(0, C), eps_s ~ N(0, R),
 
 and C H^T S^-1 d is the conditional mean. Here H is a set of *streams*: stream a is a fixed linear combination of
-field values at grid points (terms: component, y index, z index, weight) of one plane p_a, sampled at every stored
-time step n = 0 .. nt - 1. The stored time axis is the periodic xi axis of the synthesis box, so the covariance
-between two streams depends on the time lag only: S is block-circulant and the real FFT over time makes it
-block-diagonal, one Hermitian (streams x streams) matrix per slab i:
+field values of one plane p_a (terms: component, y index, z index, time shift s_t, weight):
+y_a(n) = sum_t w_t u_(c_t)(n + s_t, y_t, z_t), observed every q stored time steps, z_a(m) = y_a(o_a + m q),
+m = 0 .. nt/q - 1 (q = 1 for a point sensor; a lidar beam-gate measured once per scan; o_a its offset). The stored
+time axis is the periodic xi axis of the synthesis box, so the covariance between two streams depends on the lag
+only: S is block-circulant and the FFT over the nt/q samples makes it block-diagonal, one Hermitian
+(streams x streams) matrix per frequency j. At full rate, slab i gives
 
-    S_i[a, b] = nt sum_(t in a, t' in b) w_t w_t' G_i^(p_a p_b)[c_t, c_t'](y_t - y_t', z_t - z_t') + sigma_a^2 delta_ab,
+    L_i[a, b] = nt sum_(t in a, t' in b) w_t w_t' G_i^(p_a p_b)[c_t, c_t'](y_t - y_t', z_t - z_t') e^(2 pi i i (s_t - s_t') / nt)
 
 with G_i^(pq)(dy, dz) = sum_(j, l) rho_pq Phi_i exp(2 pi i (j dy / nyp + l dz / nzp)) (one inverse 2-D FFT per slab
-and plane pair; real part on the k1 = 0 / Nyquist slabs). Missing samples (NaN) break the circulant structure:
+and plane pair; real part on the k1 = 0 / Nyquist slabs), and L_(nt - i) = conj L_i; the decimated streams alias the
+q full-rate frequencies j + l nt/q onto j:
+S_j[a, b] = (1/q) sum_l L_(j + l nt/q)[a, b] e^(2 pi i (j + l nt/q)(o_a - o_b) / nt) + sigma_a^2 delta_ab.
+Missing samples (NaN) break the circulant structure:
 S restricted to the observed samples is solved by conjugate gradients preconditioned with the circulant solve of the
 full streams (S v itself is exact by the same FFTs). C H^T w is one spectral synthesis: the weights are scattered
 into the (k2, k3) spectrum through the adjoint of the terms, multiplied by rho Phi and transformed back.
@@ -47,9 +52,15 @@ class Streams:
     term_stream, term_component, term_iy, term_iz : numpy.ndarray of int, (T,)
         For each term: its stream, component (0 u, 1 v, 2 w), y and z grid indices.
     term_weight : numpy.ndarray of float, (T,)
-        The weight of each term [-] (bilinear interpolation weights times a projection on (u, v, w)).
+        The weight of each term [-] (interpolation weights times a projection on (u, v, w)).
     names : tuple of str
         A name per stream (for messages).
+    term_shift : numpy.ndarray of int, (T,), optional
+        Stored time steps s_t >= 0 by which each term is ahead of its stream's sample time (default 0).
+    decimation : int, optional
+        q: every stream is observed every q stored time steps (q divides nt; default 1).
+    offset : numpy.ndarray of int, (M,), optional
+        o_a in [0, q): the stored time step of each stream's first sample (default 0).
     """
 
     plane: np.ndarray
@@ -59,6 +70,15 @@ class Streams:
     term_iz: np.ndarray
     term_weight: np.ndarray
     names: tuple[str, ...]
+    term_shift: np.ndarray | None = None
+    decimation: int = 1
+    offset: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.term_shift is None:
+            object.__setattr__(self, "term_shift", np.zeros(len(self.term_stream), np.int64))
+        if self.offset is None:
+            object.__setattr__(self, "offset", np.zeros(len(self.plane), np.int64))
 
     @property
     def n_streams(self) -> int:
@@ -71,10 +91,14 @@ class Streams:
 
 
 def measure(streams: Streams, plane: int, component: int, field: np.ndarray, out: np.ndarray) -> None:
-    """Add H's terms on (``plane``, ``component``) applied to ``field`` (nt, ny, nz) [m/s] into ``out`` (M, nt)."""
+    """Add H's terms on (``plane``, ``component``) applied to ``field`` (nt, ny, nz) [m/s] into ``out`` (M, nt/q)."""
     sel = np.flatnonzero((streams.plane[streams.term_stream] == plane) & (streams.term_component == component))
+    nt, q = field.shape[0], streams.decimation
+    samples = np.arange(nt // q) * q
     for t in sel:
-        out[streams.term_stream[t]] += streams.term_weight[t] * field[:, streams.term_iy[t], streams.term_iz[t]]
+        a = streams.term_stream[t]
+        n = (streams.offset[a] + samples + streams.term_shift[t]) % nt
+        out[a] += streams.term_weight[t] * field[n, streams.term_iy[t], streams.term_iz[t]]
 
 
 def _lag_tables(stencil: MannStencil, i: int, times_s: np.ndarray, planes: np.ndarray) -> np.ndarray:
@@ -101,6 +125,8 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
         Measurement-noise variance sigma_a^2 [m^2 s^-2] of each stream (R = diag).
     """
     box = stencil.box
+    nt, q = box.nt, streams.decimation
+    n_dec = nt // q
     times = np.asarray(times_s, dtype=float)
     planes = streams.used_planes()
     slot = np.searchsorted(planes, streams.plane)[streams.term_stream]  # used-plane slot of each term
@@ -108,15 +134,20 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
     ta, tb = ta.ravel(), tb.ravel()
     dy = (streams.term_iy[ta] - streams.term_iy[tb]) % box.nyp
     dz = (streams.term_iz[ta] - streams.term_iz[tb]) % box.nzp
-    ww = streams.term_weight[ta] * streams.term_weight[tb]
+    ww = streams.term_weight[ta] * streams.term_weight[tb] * nt
+    dshift = 2j * np.pi * (streams.term_shift[ta] - streams.term_shift[tb]) / nt
     sa, sb = streams.term_stream[ta], streams.term_stream[tb]
     m = streams.n_streams
-    out = np.zeros((box.nk1, m, m), complex)
+    doff = 2j * np.pi * (streams.offset[:, None] - streams.offset[None, :]) / nt
+    out = np.zeros((n_dec, m, m), complex)
     for i in range(box.nk1):
         g = _lag_tables(stencil, i, times, planes)
         vals = ww * g[slot[ta], slot[tb], streams.term_component[ta], streams.term_component[tb], dy, dz]
-        np.add.at(out[i], (sa, sb), vals)
-    out *= box.nt
+        full = np.zeros((m, m), complex)
+        np.add.at(full, (sa, sb), vals * np.exp(i * dshift))
+        out[i % n_dec] += full * np.exp(i * doff) / q
+        if 0 < i and 2 * i != nt:  # the mirror frequency nt - i: L_(nt - i) = conj L_i
+            out[(nt - i) % n_dec] += full.conj() * np.exp((nt - i) * doff) / q
     out[:, np.arange(m), np.arange(m)] += np.asarray(noise_var, dtype=float)
     return out
 
@@ -131,20 +162,20 @@ def check_singular(cov: np.ndarray, names) -> None:
             involved = [names[a] for a in np.flatnonzero(v > 0.1 * v.max())]
             raise ParameterError(
                 "the measurements " + ", ".join(involved) + " are linearly dependent with zero noise (singular "
-                f"system at time-frequency index {i}): remove one of them or give a noise level > 0 (`--noise`)"
+                f"system at frequency index {i}): remove one of them or give a noise level > 0 (`--noise`)"
             )
 
 
 def circulant_apply(cov: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """S v for full streams ``v`` (M, nt): FFT over time, S_i per slab, inverse FFT."""
-    spec = np.fft.rfft(v, axis=1)
-    return np.fft.irfft(np.einsum("iab,bi->ai", cov, spec), n=v.shape[1], axis=1)
+    """S v for full streams ``v`` (M, nt/q): FFT over the samples, S_j per frequency, inverse FFT."""
+    spec = np.fft.fft(v, axis=1)
+    return np.fft.ifft(np.einsum("jab,bj->aj", cov, spec), axis=1).real
 
 
 def circulant_solve(cov: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """S^-1 r for full streams ``r`` (M, nt): one dense solve per slab."""
-    spec = np.fft.rfft(r, axis=1).T[:, :, None]
-    return np.fft.irfft(np.linalg.solve(cov, spec)[:, :, 0].T, n=r.shape[1], axis=1)
+    """S^-1 r for full streams ``r`` (M, nt/q): one dense solve per frequency."""
+    spec = np.fft.fft(r, axis=1).T[:, :, None]
+    return np.fft.ifft(np.linalg.solve(cov, spec)[:, :, 0].T, axis=1).real
 
 
 @dataclass(frozen=True)
@@ -216,15 +247,20 @@ def weights_field(stencil: MannStencil, streams: Streams, weights: np.ndarray, t
 
     Parameters
     ----------
-    weights : numpy.ndarray, (M, nt)
-        w, one value per stream and stored time step (e.g. S^-1 (d - H u_s - eps_s)).
+    weights : numpy.ndarray, (M, nt/q)
+        w, one value per stream sample (e.g. S^-1 (d - H u_s - eps_s)).
     times_s : array_like
         Relative time x/U [s] of every plane of the run.
     """
     box = stencil.box
     times = np.asarray(times_s, dtype=float)
     planes = streams.used_planes()
-    coef = streams.term_weight[:, None] * np.fft.rfft(weights, axis=1)[streams.term_stream]
+    q = streams.decimation
+    full = np.zeros((streams.n_streams, box.nt))
+    for a in range(streams.n_streams):  # the samples at their stored time steps o_a + m q
+        full[a, streams.offset[a] :: q] = weights[a]
+    shift = np.exp(-2j * np.pi * np.outer(streams.term_shift, np.arange(box.nk1)) / box.nt)
+    coef = streams.term_weight[:, None] * np.fft.rfft(full, axis=1)[streams.term_stream] * shift
     spec = np.zeros((3, box.nk1, ny, nz), complex)
     step = max(1, _BATCH_POINTS // (box.nyp * box.nzp))
     for i0 in range(0, box.nk1, step):
