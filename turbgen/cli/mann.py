@@ -98,9 +98,9 @@ def _dask_client(scheduler, workers: int):
 @click.option("--scheduler", help="Out-of-core runs only: dask scheduler address whose workers make the passes "
               "(they must see --out's directory; --memory then holds per worker), or 'local' for a LocalCluster "
               "of --threads single-threaded workers sharing --memory with this process.")  # fmt: skip
-@click.option("--constrain", "constrain", multiple=True, type=click.Path(dir_okay=False),
-              help="Condition the field on the measured point time series of this JSON file "
-              "(schemas/constraints.schema.json); repeatable. The field is a sample of the model conditioned on them "
+@click.option("--constrain", "constrain", multiple=True, type=click.Path(),
+              help="Condition the field on the measurements of FILE: point time series (JSON, "
+              "schemas/constraints.schema.json) or a `turbgen lidar --out` dataset; repeatable. The field is a sample of the model conditioned on them "
               "(Hoffman & Ribak 1991).")  # fmt: skip
 @click.option("--noise", type=float, help="With --constrain: measurement-noise sigma [m/s] >= 0 of every value "
               "(default: each file's noise_m_s, else 0 = the field passes through the data).")  # fmt: skip
@@ -128,14 +128,12 @@ def mann(**opt):
     plan = plan_for_budget(run, budget, threads, opt["chunks"], opt["scheduler"], opt["stencil_cache"] is None)
     constraints = None
     if opt["constrain"]:
-        from turbgen.spec.constraints import load_point_series
-
         if plan is not None or opt["scheduler"] is not None:
             raise click.UsageError("--constrain: constrained fields are made in one pass in memory; this field needs "
                                    "an out-of-core run (--memory/--scheduler), which cannot take constraints")
-        from turbgen.runs.constrain import place
+        from turbgen.runs.constrain import load_constraint, place
 
-        constraints = [load_point_series(path) for path in opt["constrain"]]
+        constraints = [load_constraint(path) for path in opt["constrain"]]
         place(run, constraints, opt["noise"])  # every check of the data against the run, before any output
     if opt["scheduler"] not in (None, "local"):  # one line within seconds, not dask's traceback after 30 s
         from turbgen.sweep.scheduler import check_scheduler_address

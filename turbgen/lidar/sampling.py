@@ -168,6 +168,8 @@ def check_measurements(fs, measurements) -> list[int]:
 def _interp_axis(coord0: float, step: float, n: int, values: np.ndarray):
     """Lower index and fraction of linear interpolation on a regular axis of n nodes."""
     f = (values - coord0) / step
+    f = np.where(np.abs(f - np.round(f)) <= 1e-9, np.round(f), f)  # a node within rounding is the node: the cell
+    # (and the constrained runs' scan pattern) does not depend on how T + x/U rounds
     i = np.clip(np.floor(f).astype(np.int64), 0, max(n - 2, 0))
     a = f - i
     if n == 1:

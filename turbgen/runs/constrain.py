@@ -91,41 +91,88 @@ def _on_grid(run: MannRun, t_s: np.ndarray, values: np.ndarray, x: float, where:
     return out
 
 
-def place(run: MannRun, files: list[PointSeries], noise_m_s: float | None = None) -> PlacedData:
-    """The streams and data of ``files`` on the grid of ``run`` (see the module docstring).
+@dataclass(frozen=True, eq=False)
+class PlacedStream:
+    """One measured series on the grid: ``terms`` (T, 5) rows (component, y index, z index, time shift [steps],
+    weight) of plane ``plane``, observed every ``decimation`` steps from ``offset``; ``data`` (nt / decimation,)
+    [m/s] (NaN: missing), ``noise_m_s`` [m/s], ``geometry`` (a record for the store, with its ``name``)."""
+
+    plane: int
+    terms: np.ndarray
+    decimation: int
+    offset: int
+    data: np.ndarray
+    noise_m_s: float
+    geometry: dict
+
+
+def _point_streams(run: MannRun, f: PointSeries, sigma: float) -> list[PlacedStream]:
+    g = run.grid
+    out = []
+    for s in f.sensors:
+        where = f"constraint file {f.source}, {s.name}"
+        z = s.z_m if s.z_m is not None else s.height_m - run.hub_height_m
+        p = _plane(run, s.x_m, where)
+        ty = _axis_terms(s.y_m, g.y(), g.dy_m, "y", where)
+        tz = _axis_terms(z, g.z(), g.dz_m, "z", where)
+        for comp, values in s.series.items():
+            c = COMPONENTS.index(comp)
+            shift = run.U_m_s if (comp == "u" and f.total_wind) else 0.0
+            on_grid = _on_grid(run, f.time_s, values - shift, s.x_m, where)
+            if not np.isfinite(on_grid).any():
+                raise ParameterError(f"{where}: {comp} has no value at the field's time steps")
+            terms = np.array([(c, iy, iz, 0, wy * wz) for iy, wy in ty for iz, wz in tz], dtype=float)
+            name = f"{Path(f.source).name}:{s.name}:{comp}"
+            out.append(PlacedStream(p, terms, 1, 0, on_grid, sigma, {
+                "name": name, "kind": "point", "component": comp, "x_m": s.x_m, "y_m": s.y_m, "z_m": z, "plane": p,
+                "noise_m_s": sigma, "mean_wind_subtracted_m_s": shift}))  # fmt: skip
+    return out
+
+
+def _combine(placed: list[PlacedStream], nt: int) -> PlacedData:
+    """One Streams of common decimation Q = lcm of the streams' (which must divide nt): a stream observed every q
+    steps becomes Q/q streams observed every Q steps from its offsets o + r q."""
+    big_q = math.lcm(*(s.decimation for s in placed))
+    if nt % big_q:
+        raise ParameterError(f"the measurements' sampling periods (every {big_q} time steps in common) do not divide "
+                             f"the record of {nt} steps: make the field with `nt` a multiple of {big_q}")  # fmt: skip
+    planes, terms, offsets, data, noise, geometry, names = [], [], [], [], [], [], []
+    for s in placed:
+        parts = big_q // s.decimation
+        for r in range(parts):
+            a = len(planes)
+            planes.append(s.plane)
+            offsets.append(s.offset + r * s.decimation)
+            terms.append(np.column_stack([np.full(len(s.terms), a), s.terms]))
+            data.append(s.data[r::parts])
+            noise.append(s.noise_m_s)
+            names.append(s.geometry["name"] if parts == 1 else f"{s.geometry['name']}[{r}/{parts}]")
+            geometry.append(s.geometry if parts == 1 else {**s.geometry, "name": names[-1]})
+    t = np.concatenate(terms)
+    as_int = [t[:, k].astype(np.int64) for k in range(5)]
+    streams = cond.Streams(np.array(planes, dtype=np.int64), as_int[0], as_int[1], as_int[2], as_int[3], t[:, 5],
+                           tuple(names), term_shift=as_int[4], decimation=big_q, offset=np.array(offsets, np.int64))
+    return PlacedData(streams, np.array(data), np.array(noise), tuple(geometry))
+
+
+def place(run: MannRun, files: list, noise_m_s: float | None = None) -> PlacedData:
+    """The streams and data of ``files`` (PointSeries, or turbgen.lidar.dataset.LidarData) on the grid of ``run``
+    (see the module docstring).
 
     ``noise_m_s`` (>= 0) replaces every file's own ``noise_m_s``; a file without one has noise 0.
     """
+    from turbgen.runs.constrain_lidar import lidar_streams
+
     if noise_m_s is not None and not (math.isfinite(noise_m_s) and noise_m_s >= 0):
         raise ParameterError(f"noise = {noise_m_s!r} m/s must be a finite number >= 0")
-    g = run.grid
-    planes, terms, data, noise, geometry, names = [], [], [], [], [], []
+    placed = []
     for f in files:
-        sigma = noise_m_s if noise_m_s is not None else (f.noise_m_s or 0.0)
-        for s in f.sensors:
-            where = f"constraint file {f.source}, {s.name}"
-            z = s.z_m if s.z_m is not None else s.height_m - run.hub_height_m
-            p = _plane(run, s.x_m, where)
-            ty = _axis_terms(s.y_m, g.y(), g.dy_m, "y", where)
-            tz = _axis_terms(z, g.z(), g.dz_m, "z", where)
-            for comp, values in s.series.items():
-                c = COMPONENTS.index(comp)
-                shift = run.U_m_s if (comp == "u" and f.total_wind) else 0.0
-                on_grid = _on_grid(run, f.time_s, values - shift, s.x_m, where)
-                if not np.isfinite(on_grid).any():
-                    raise ParameterError(f"{where}: {comp} has no value at the field's time steps")
-                a = len(planes)
-                planes.append(p)
-                terms += [(a, c, iy, iz, wy * wz) for iy, wy in ty for iz, wz in tz]
-                data.append(on_grid)
-                noise.append(sigma)
-                names.append(f"{Path(f.source).name}:{s.name}:{comp}")
-                geometry.append({"name": names[-1], "component": comp, "x_m": s.x_m, "y_m": s.y_m, "z_m": z,
-                                 "plane": p, "noise_m_s": sigma, "mean_wind_subtracted_m_s": shift})  # fmt: skip
-    t = np.array(terms, dtype=float).reshape(-1, 5)
-    streams = cond.Streams(np.array(planes, dtype=np.int64), t[:, 0].astype(np.int64), t[:, 1].astype(np.int64),
-                           t[:, 2].astype(np.int64), t[:, 3].astype(np.int64), t[:, 4], tuple(names))  # fmt: skip
-    return PlacedData(streams, np.array(data), np.array(noise), tuple(geometry))
+        if isinstance(f, PointSeries):
+            sigma = noise_m_s if noise_m_s is not None else (f.noise_m_s or 0.0)
+            placed += _point_streams(run, f, sigma)
+        else:
+            placed += lidar_streams(run, f, 0.0 if noise_m_s is None else noise_m_s)
+    return _combine(placed, run.grid.nt)
 
 
 def _measurement_noise(run: MannRun, placed: PlacedData) -> np.ndarray:
@@ -204,10 +251,12 @@ def _record(files, placed: PlacedData, report: cond.SolveReport, remeasured: np.
     observed = np.isfinite(placed.data)
     resid = (remeasured - placed.data)[observed]
     return {
-        "kind": "point-series",
+        "kind": sorted({s["kind"] for s in placed.geometry}),
         "files": [f.source for f in files],
         "conditional_mean": conditional_mean,
-        "interpolation": "linear onto the stored times t = T + x/U; bilinear in (y, z)",
+        "interpolation": "point series: linear onto the stored times t = T + x/U, bilinear in (y, z); lidar: the "
+                         "virtual lidar's own operator (probe volume, Taylor shift, linear in t, bilinear in y, z)",
+        "decimation": int(placed.streams.decimation),
         "streams": list(placed.geometry),
         "data_m_s": [[None if not math.isfinite(v) else float(v) for v in row] for row in placed.data],
         "n_samples": int(observed.sum()),
@@ -273,6 +322,20 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
         summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - (s1 / n) ** 2, 0.0))
         summary[f"mean_{c}"] = s1 / n
     return summary
+
+
+def load_constraint(path):
+    """A constraint file: a ``turbgen lidar --out`` dataset (a directory with v_los) or a point-series JSON file.
+
+    Raises
+    ------
+    ParameterError, StoreError
+        If the file is not readable or does not match its format.
+    """
+    from turbgen.lidar.dataset import is_lidar_dataset, read_dataset
+    from turbgen.spec.constraints import load_point_series
+
+    return read_dataset(path) if is_lidar_dataset(path) else load_point_series(path)
 
 
 def describe_constraints(record: dict) -> list[str]:
