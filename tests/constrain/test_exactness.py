@@ -129,7 +129,8 @@ def test_zero_noise_reproduces_the_data(evolving, scanned):
         field = weights_field(stencil, streams, x, times, p, NY, NZ)
         for c in range(3):
             measure(streams, p, c, field[c], remeasured)
-    np.testing.assert_allclose(remeasured, d, rtol=0, atol=1e-8)
+    # the correction's spectra are held in complex64 (the field is float32): ~1e-7 of the data's size
+    np.testing.assert_allclose(remeasured, d, rtol=0, atol=1e-6)
 
 
 def test_dependent_zero_noise_measurements_are_refused(frozen):

@@ -223,14 +223,16 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
     if not conditional_mean:
         measured, eps = _unconstrained_measurement(run, gen, placed), _measurement_noise(run, placed)
     x, report = solve_constraints(cov, placed, measured, eps)
-    frozen = stencil.inv_tau is None
+    frozen = stencil.inv_tau is None  # every plane is the same snapshot, and so is its correction
+    wanted = [0] if frozen else list(range(g.nx))
+    spectra = cond.correction_spectra(stencil, placed.streams, x, run.plane_times_s(), wanted, g.ny, g.nz)
     kept: dict[int, np.ndarray] = {}
 
     def correction(ix: int) -> np.ndarray:
-        key = 0 if frozen else ix  # frozen: every plane is the same snapshot, and so is its correction
+        key = 0 if frozen else ix
         if key not in kept:
             kept.clear()
-            kept[key] = cond.weights_field(stencil, placed.streams, x, run.plane_times_s(), ix, g.ny, g.nz)
+            kept[key] = cond.spectra_field(spectra[key], g.nt)
         return kept[key]
 
     def planes():
@@ -300,7 +302,14 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     placed = place(run, files, noise_m_s)
     g = run.grid
     m = placed.streams.n_streams
-    extra = synthesis_box(run).nk1 * m * m * 16 + 3 * synthesis_box(run).nk1 * g.ny * g.nz * 16 + 8 * m * g.nt * 8
+    box = synthesis_box(run)
+    frozen = run.params.evo_time_s is None or g.nx == 1
+    st = placed.streams
+    keys = len(np.unique(np.stack([st.term_stream, st.term_component, st.term_shift]), axis=1).T)
+    # S (nt/q frequencies x M x M), the correction's spectra of every plane (complex64), one plane's correction
+    # (float64), the stream arrays, the streams' (k2, k3) footprints and three slabs' transfer functions
+    extra = (g.nt * m * m * 16 + (1 if frozen else g.nx) * 3 * box.nk1 * g.ny * g.nz * 8 + 3 * g.nt * g.ny * g.nz * 8
+             + 8 * m * g.nt * 8 + (keys + 9 * m) * box.nyp * box.nzp * 16)  # fmt: skip
     require_memory(memory_estimate_bytes(run, threads) + extra, f"the constrained Mann run ({m} measurement streams)",
                    "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
     stencil = build_mann_stencil(run, cache_dir)

@@ -38,7 +38,6 @@ from turbgen.synthesis.prior_spectrum import ou_factors, slab_spectrum, slab_wei
 CG_TOLERANCE = 1e-10  # relative residual |S x - r| / |r| at which the conjugate gradients stop
 CG_MAX_ITERATIONS = 1000
 SINGULAR_RTOL = 1e-11  # eigenvalue / largest eigenvalue of S_i below which zero-noise measurements are dependent
-_BATCH_POINTS = 1 << 20  # (slab, k2, k3) points per batch of the synthesis of C H^T w
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,17 +100,55 @@ def measure(streams: Streams, plane: int, component: int, field: np.ndarray, out
         out[a] += streams.term_weight[t] * field[n, streams.term_iy[t], streams.term_iz[t]]
 
 
-def _lag_tables(stencil: MannStencil, i: int, times_s: np.ndarray, planes: np.ndarray) -> np.ndarray:
-    """G_i^(pq) for the used planes: (P, P, 3, 3, nyp, nzp) complex (real on the Hermitian slabs)."""
-    box = stencil.box
+@dataclass(frozen=True, eq=False)
+class _Footprints:
+    """The streams' terms grouped by (stream, component, shift) key, rows sorted by stream then component:
+    ``basis[k](j, l) = sum_t w_t exp(2 pi i (j y_t / nyp + l z_t / nzp))`` over the terms of key k (K, nyp nzp),
+    ``shift`` (K,), ``rows`` (K,) = 3 stream + component, ``starts``: first key of each distinct row ``present``."""
+
+    basis: np.ndarray
+    shift: np.ndarray
+    starts: np.ndarray
+    present: np.ndarray
+
+
+def _footprints(streams: Streams, box) -> _Footprints:
+    keys = np.stack([streams.term_stream, streams.term_component, streams.term_shift], axis=1)
+    uniq, inverse = np.unique(keys, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    ey = np.exp(2j * np.pi * np.outer(streams.term_iy, np.arange(box.nyp)) / box.nyp)
+    ez = np.exp(2j * np.pi * np.outer(streams.term_iz, np.arange(box.nzp)) / box.nzp)
+    basis = np.empty((len(uniq), box.nyp * box.nzp), complex)
+    order = np.argsort(inverse, kind="stable")
+    bounds = np.searchsorted(inverse[order], np.arange(len(uniq) + 1))
+    for k in range(len(uniq)):
+        sel = order[bounds[k] : bounds[k + 1]]
+        basis[k] = ((ey[sel].T * streams.term_weight[sel]) @ ez[sel]).ravel()
+    rows = 3 * uniq[:, 0] + uniq[:, 1]
+    starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]])
+    return _Footprints(basis, uniq[:, 2], starts, rows[starts])
+
+
+def _transfer(fp: _Footprints, i: int, nt: int, m: int) -> np.ndarray:
+    """A_i (M, 3, nyp nzp): the streams' transfer functions on slab i, sum over keys of e^(2 pi i i s / nt) basis."""
+    phase = np.exp(2j * np.pi * i * fp.shift / nt)
+    out = np.zeros((3 * m, fp.basis.shape[1]), complex)
+    out[fp.present] = np.add.reduceat(phase[:, None] * fp.basis, fp.starts, axis=0)
+    return out.reshape(m, 3, -1)
+
+
+def _slab_prior(stencil: MannStencil, i: int, times: np.ndarray) -> np.ndarray:
+    """rho_pq Phi_i (P, P, 3, 3, nyp nzp) for the planes at ``times``; Phi symmetrised under k -> -k on the
+    k1 = 0 / Nyquist slabs (their real part: see prior_spectrum)."""
     phi = slab_spectrum(stencil, i)
-    rho = ou_factors(stencil, i, times_s[planes])
-    g = np.fft.ifft2(rho[:, :, None, None] * phi[None, None], axes=(-2, -1)) * (box.nyp * box.nzp)
-    return g.real.astype(complex) if slab_weight(stencil, i) == 1.0 else g
+    if slab_weight(stencil, i) == 1.0:
+        phi = 0.5 * (phi + np.roll(phi[..., ::-1, ::-1], 1, axis=(-2, -1)))
+    rho = ou_factors(stencil, i, times)
+    return (rho[:, :, None, None] * phi[None, None]).reshape(len(times), len(times), 3, 3, -1)
 
 
 def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var) -> np.ndarray:
-    """The per-slab matrices S_i (nk1, M, M) complex128 [m^2 s^-2 times nt] of the block-circulant S.
+    """The per-frequency matrices S_j (nt/q, M, M) complex128 [m^2 s^-2 times nt] of the block-circulant S.
 
     Parameters
     ----------
@@ -123,28 +160,30 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
         The relative time x/U [s] of every plane of the run (storage order).
     noise_var : array_like, (M,)
         Measurement-noise variance sigma_a^2 [m^2 s^-2] of each stream (R = diag).
+
+    Notes
+    -----
+    L_i[a, b] = nt sum_(c, c', k2, k3) A_i[a, c] (rho Phi)_(c c') conj(A_i[b, c']) with the transfer functions A_i
+    of the streams (the same sum as over term pairs in the module docstring, arranged per (k2, k3)).
     """
     box = stencil.box
-    nt, q = box.nt, streams.decimation
+    nt, q, m = box.nt, streams.decimation, streams.n_streams
     n_dec = nt // q
     times = np.asarray(times_s, dtype=float)
     planes = streams.used_planes()
-    slot = np.searchsorted(planes, streams.plane)[streams.term_stream]  # used-plane slot of each term
-    ta, tb = np.meshgrid(np.arange(len(streams.term_stream)), np.arange(len(streams.term_stream)), indexing="ij")
-    ta, tb = ta.ravel(), tb.ravel()
-    dy = (streams.term_iy[ta] - streams.term_iy[tb]) % box.nyp
-    dz = (streams.term_iz[ta] - streams.term_iz[tb]) % box.nzp
-    ww = streams.term_weight[ta] * streams.term_weight[tb] * nt
-    dshift = 2j * np.pi * (streams.term_shift[ta] - streams.term_shift[tb]) / nt
-    sa, sb = streams.term_stream[ta], streams.term_stream[tb]
-    m = streams.n_streams
+    members = [np.flatnonzero(streams.plane == p) for p in planes]
+    fp = _footprints(streams, box)
     doff = 2j * np.pi * (streams.offset[:, None] - streams.offset[None, :]) / nt
     out = np.zeros((n_dec, m, m), complex)
     for i in range(box.nk1):
-        g = _lag_tables(stencil, i, times, planes)
-        vals = ww * g[slot[ta], slot[tb], streams.term_component[ta], streams.term_component[tb], dy, dz]
+        a = _transfer(fp, i, nt, m)
+        prior = _slab_prior(stencil, i, times[planes])
         full = np.zeros((m, m), complex)
-        np.add.at(full, (sa, sb), vals * np.exp(i * dshift))
+        for sp, ra in enumerate(members):
+            for sq, rb in enumerate(members):
+                b = np.einsum("cdj,bdj->bcj", prior[sp, sq], a[rb].conj())
+                full[np.ix_(ra, rb)] = a[ra].reshape(len(ra), -1) @ b.reshape(len(rb), -1).T
+        full *= nt
         out[i % n_dec] += full * np.exp(i * doff) / q
         if 0 < i and 2 * i != nt:  # the mirror frequency nt - i: L_(nt - i) = conj L_i
             out[(nt - i) % n_dec] += full.conj() * np.exp((nt - i) * doff) / q
@@ -225,25 +264,10 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tuple[np.ndar
     )
 
 
-def _scatter(streams: Streams, coef: np.ndarray, slot: int, planes, box, i0: int, i1: int) -> np.ndarray:
-    """H^T of the streams on used plane ``slot`` in the spectrum: (3, i1 - i0, nyp, nzp) complex."""
-    out = np.zeros((3, i1 - i0, box.nyp, box.nzp), complex)
-    on_plane = streams.plane[streams.term_stream] == planes[slot]
-    jy, lz = np.arange(box.nyp), np.arange(box.nzp)
-    for c in range(3):
-        sel = np.flatnonzero(on_plane & (streams.term_component == c))
-        if len(sel) == 0:
-            continue
-        ey = np.exp(-2j * np.pi * np.outer(streams.term_iy[sel], jy) / box.nyp)
-        ez = np.exp(-2j * np.pi * np.outer(streams.term_iz[sel], lz) / box.nzp)
-        yz = (ey[:, :, None] * ez[:, None, :]).reshape(len(sel), -1)
-        out[c] = (coef[sel, i0:i1].T @ yz).reshape(i1 - i0, box.nyp, box.nzp)
-    return out
-
-
-def weights_field(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, plane: int, ny: int,
-                  nz: int) -> np.ndarray:  # fmt: skip
-    """C H^T w on plane ``plane``, cropped to ny x nz: (3, nt, ny, nz) float64 [m/s per unit of w times m/s].
+def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
+                       nz: int) -> np.ndarray:  # fmt: skip
+    """The yz-transformed, cropped spectra of C H^T w on the planes ``planes_out``: (P_out, 3, nk1, ny, nz) complex64;
+    :func:`spectra_field` turns one plane's into the field.
 
     Parameters
     ----------
@@ -251,27 +275,46 @@ def weights_field(stencil: MannStencil, streams: Streams, weights: np.ndarray, t
         w, one value per stream sample (e.g. S^-1 (d - H u_s - eps_s)).
     times_s : array_like
         Relative time x/U [s] of every plane of the run.
+    planes_out : sequence of int
+        The plane indices wanted.
+
+    Notes
+    -----
+    Per slab: H^T w in the (k2, k3) spectrum of each measured plane q, F_q = sum_(a on q) W_a(i) conj(A_i[a]) (W the
+    FFT of the weights at full rate), then sum_q rho_pq Phi F_q, the inverse 2-D FFT and the crop; the real inverse
+    FFT along time is left to spectra_field (it keeps only the real part of the k1 = 0 / Nyquist slabs).
     """
     box = stencil.box
     times = np.asarray(times_s, dtype=float)
     planes = streams.used_planes()
-    q = streams.decimation
-    full = np.zeros((streams.n_streams, box.nt))
-    for a in range(streams.n_streams):  # the samples at their stored time steps o_a + m q
+    planes_out = list(planes_out)
+    members = [np.flatnonzero(streams.plane == p) for p in planes]
+    q, m = streams.decimation, streams.n_streams
+    full = np.zeros((m, box.nt))
+    for a in range(m):  # the samples at their stored time steps o_a + m q
         full[a, streams.offset[a] :: q] = weights[a]
-    shift = np.exp(-2j * np.pi * np.outer(streams.term_shift, np.arange(box.nk1)) / box.nt)
-    coef = streams.term_weight[:, None] * np.fft.rfft(full, axis=1)[streams.term_stream] * shift
-    spec = np.zeros((3, box.nk1, ny, nz), complex)
-    step = max(1, _BATCH_POINTS // (box.nyp * box.nzp))
-    for i0 in range(0, box.nk1, step):
-        i1 = min(i0 + step, box.nk1)
-        scattered = [_scatter(streams, coef, s, planes, box, i0, i1) for s in range(len(planes))]
-        out = np.zeros((3, i1 - i0, box.nyp, box.nzp), complex)
-        for i in range(i0, i1):
-            phi = slab_spectrum(stencil, i)
-            rho = ou_factors(stencil, i, times[np.append(planes, plane)])[-1]  # rho between ``plane`` and each
-            for s in range(len(planes)):
-                out[:, i - i0] += np.einsum("cdjl,djl->cjl", rho[s] * phi, scattered[s][:, i - i0])
-        yz = np.fft.ifft2(out, axes=(-2, -1)) * (box.nyp * box.nzp)
-        spec[:, i0:i1] = yz[:, :, :ny, :nz]
-    return np.fft.irfft(spec, n=box.nt, axis=1) * box.nt
+    spec_w = np.fft.rfft(full, axis=1)
+    fp = _footprints(streams, box)
+    out = np.zeros((len(planes_out), 3, box.nk1, ny, nz), np.complex64)
+    all_times = np.append(times[planes], times[planes_out])
+    n_in = len(planes)
+    for i in range(box.nk1):
+        a = _transfer(fp, i, box.nt, m)
+        f = np.stack([np.einsum("a,acj->cj", spec_w[ra, i], a[ra].conj()) for ra in members])  # (P_in, 3, J)
+        prior = _slab_prior(stencil, i, all_times)[n_in:, :n_in]  # rho between each output and measured plane
+        yz = np.einsum("pqcdj,qdj->pcj", prior, f).reshape(len(planes_out), 3, box.nyp, box.nzp)
+        yz = np.fft.ifft2(yz, axes=(-2, -1)) * (box.nyp * box.nzp)
+        out[:, :, i] = yz[:, :, :ny, :nz]
+    return out
+
+
+def spectra_field(spectra: np.ndarray, nt: int) -> np.ndarray:
+    """The field (3, nt, ny, nz) float64 [m/s] of one plane's cropped spectra (3, nk1, ny, nz) (correction_spectra)."""
+    return np.fft.irfft(spectra.astype(complex), n=nt, axis=1) * nt
+
+
+def weights_field(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, plane: int, ny: int,
+                  nz: int) -> np.ndarray:  # fmt: skip
+    """C H^T w on plane ``plane``, cropped to ny x nz: (3, nt, ny, nz) float64 (see correction_spectra)."""
+    spectra = correction_spectra(stencil, streams, weights, times_s, [plane], ny, nz)
+    return spectra_field(spectra[0], stencil.box.nt)
