@@ -33,7 +33,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.synthesis.mann_stencil import MannStencil
-from turbgen.synthesis.prior_spectrum import ou_factors, slab_spectrum, slab_weight
+from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_spectrum, slab_weight
 
 CG_TOLERANCE = 1e-10  # relative residual |S x - r| / |r| at which the conjugate gradients stop
 CG_MAX_ITERATIONS = 1000
@@ -102,14 +102,13 @@ def measure(streams: Streams, plane: int, component: int, field: np.ndarray, out
 
 @dataclass(frozen=True, eq=False)
 class _Footprints:
-    """The streams' terms grouped by (stream, component, shift) key, rows sorted by stream then component:
-    ``basis[k](j, l) = sum_t w_t exp(2 pi i (j y_t / nyp + l z_t / nzp))`` over the terms of key k (K, nyp nzp),
-    ``shift`` (K,), ``rows`` (K,) = 3 stream + component, ``starts``: first key of each distinct row ``present``."""
+    """The streams' terms grouped by (stream, component, shift) key: ``basis[k](j, l) = sum_t w_t
+    exp(2 pi i (j y_t / nyp + l z_t / nzp))`` over the terms of key k (K, nyp nzp), ``shift`` (K,) and ``row`` (K,)
+    = 3 stream + component of each key."""
 
     basis: np.ndarray
     shift: np.ndarray
-    starts: np.ndarray
-    present: np.ndarray
+    row: np.ndarray
 
 
 def _footprints(streams: Streams, box) -> _Footprints:
@@ -124,27 +123,44 @@ def _footprints(streams: Streams, box) -> _Footprints:
     for k in range(len(uniq)):
         sel = order[bounds[k] : bounds[k + 1]]
         basis[k] = ((ey[sel].T * streams.term_weight[sel]) @ ez[sel]).ravel()
-    rows = 3 * uniq[:, 0] + uniq[:, 1]
-    starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]])
-    return _Footprints(basis, uniq[:, 2], starts, rows[starts])
+    return _Footprints(basis, uniq[:, 2], 3 * uniq[:, 0] + uniq[:, 1])
 
 
 def _transfer(fp: _Footprints, i: int, nt: int, m: int) -> np.ndarray:
     """A_i (M, 3, nyp nzp): the streams' transfer functions on slab i, sum over keys of e^(2 pi i i s / nt) basis."""
+    from scipy import sparse
+
     phase = np.exp(2j * np.pi * i * fp.shift / nt)
-    out = np.zeros((3 * m, fp.basis.shape[1]), complex)
-    out[fp.present] = np.add.reduceat(phase[:, None] * fp.basis, fp.starts, axis=0)
-    return out.reshape(m, 3, -1)
+    mix = sparse.csr_matrix((phase, (fp.row, np.arange(len(fp.row)))), shape=(3 * m, len(fp.row)))
+    return np.asarray(mix @ fp.basis).reshape(m, 3, -1)
 
 
-def _slab_prior(stencil: MannStencil, i: int, times: np.ndarray) -> np.ndarray:
-    """rho_pq Phi_i (P, P, 3, 3, nyp nzp) for the planes at ``times``; Phi symmetrised under k -> -k on the
-    k1 = 0 / Nyquist slabs (their real part: see prior_spectrum)."""
+def _slab_phi(stencil: MannStencil, i: int) -> np.ndarray:
+    """Phi_i (3, 3, nyp nzp), symmetrised under k -> -k on the k1 = 0 / Nyquist slabs (their real part: see
+    prior_spectrum)."""
     phi = slab_spectrum(stencil, i)
     if slab_weight(stencil, i) == 1.0:
         phi = 0.5 * (phi + np.roll(phi[..., ::-1, ::-1], 1, axis=(-2, -1)))
-    rho = ou_factors(stencil, i, times)
-    return (rho[:, :, None, None] * phi[None, None]).reshape(len(times), len(times), 3, 3, -1)
+    return phi.reshape(3, 3, -1)
+
+
+def _phi_times(phi: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Phi v per (k2, k3) point: phi (3, 3, J), v (n, 3, J) -> (n, 3, J)."""
+    out = np.zeros(v.shape, complex)
+    for c in range(3):
+        for d in range(3):
+            out[:, c] += phi[c, d] * v[:, d]
+    return out
+
+
+def _rho(stencil: MannStencil, i: int, times_a: np.ndarray, times_b: np.ndarray) -> np.ndarray:
+    """exp(-|t_a - t_b| / tau_e) (Pa, Pb, nyp nzp) of slab i (ones for frozen turbulence)."""
+    box = stencil.box
+    inv_tau = slab_inv_tau(stencil, i)
+    if inv_tau is None:
+        return np.ones((len(times_a), len(times_b), box.nyp * box.nzp))
+    lag = np.abs(times_a[:, None] - times_b[None, :])
+    return np.exp(-lag[:, :, None] * inv_tau.reshape(1, 1, -1))
 
 
 def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var) -> np.ndarray:
@@ -177,12 +193,13 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
     out = np.zeros((n_dec, m, m), complex)
     for i in range(box.nk1):
         a = _transfer(fp, i, nt, m)
-        prior = _slab_prior(stencil, i, times[planes])
+        b = _phi_times(_slab_phi(stencil, i), a.conj())  # Phi conj(A) of every stream
+        rho = _rho(stencil, i, times[planes], times[planes])
         full = np.zeros((m, m), complex)
         for sp, ra in enumerate(members):
             for sq, rb in enumerate(members):
-                b = np.einsum("cdj,bdj->bcj", prior[sp, sq], a[rb].conj())
-                full[np.ix_(ra, rb)] = a[ra].reshape(len(ra), -1) @ b.reshape(len(rb), -1).T
+                left = (a[ra] * rho[sp, sq]).reshape(len(ra), -1)
+                full[np.ix_(ra, rb)] = left @ b[rb].reshape(len(rb), -1).T
         full *= nt
         out[i % n_dec] += full * np.exp(i * doff) / q
         if 0 < i and 2 * i != nt:  # the mirror frequency nt - i: L_(nt - i) = conj L_i
@@ -296,13 +313,16 @@ def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarr
     spec_w = np.fft.rfft(full, axis=1)
     fp = _footprints(streams, box)
     out = np.zeros((len(planes_out), 3, box.nk1, ny, nz), np.complex64)
-    all_times = np.append(times[planes], times[planes_out])
-    n_in = len(planes)
     for i in range(box.nk1):
         a = _transfer(fp, i, box.nt, m)
-        f = np.stack([np.einsum("a,acj->cj", spec_w[ra, i], a[ra].conj()) for ra in members])  # (P_in, 3, J)
-        prior = _slab_prior(stencil, i, all_times)[n_in:, :n_in]  # rho between each output and measured plane
-        yz = np.einsum("pqcdj,qdj->pcj", prior, f).reshape(len(planes_out), 3, box.nyp, box.nzp)
+        # F_q = sum_(a on q) W_a(i) conj(A_i[a]), (P_in, 3, J)
+        f = np.stack([(spec_w[ra, i].conj() @ a[ra].reshape(len(ra), -1)).reshape(3, -1) for ra in members]).conj()
+        g = _phi_times(_slab_phi(stencil, i), f)  # (P_in, 3, J)
+        rho = _rho(stencil, i, times[planes_out], times[planes])  # between each output and measured plane
+        yz = np.zeros((len(planes_out), 3, g.shape[-1]), complex)
+        for sq in range(len(planes)):
+            yz += rho[:, sq, None, :] * g[sq][None]
+        yz = yz.reshape(len(planes_out), 3, box.nyp, box.nzp)
         yz = np.fft.ifft2(yz, axes=(-2, -1)) * (box.nyp * box.nzp)
         out[:, :, i] = yz[:, :, :ny, :nz]
     return out
