@@ -186,6 +186,15 @@ def test_bad_constraints_are_one_line_exit_2_nothing_written(tmp_path, case):
     assert not (tmp_path / "c.zarr").exists()
 
 
+def test_out_of_core_runs_refuse_constraints(tmp_path):
+    path = _write(tmp_path / "m.json", _mast(np.arange(0.0, 20.0, 0.5)))
+    res = CliRunner().invoke(cli, ["mann", *SMALL, "--constrain", path, "--scheduler", "local", "--out",
+                                   str(tmp_path / "c.zarr")], prog_name="turbgen")  # fmt: skip
+    lines = res.stderr.strip().splitlines()
+    assert res.exit_code == 2 and len(lines) == 1 and "cannot take constraints" in lines[0], res.output
+    assert not (tmp_path / "c.zarr").exists()
+
+
 def test_dependent_zero_noise_series_are_refused_and_nothing_written(tmp_path):
     path = _write(tmp_path / "m.json", _mast(np.arange(0.0, 20.0, 0.5)))
     res = CliRunner().invoke(cli, ["mann", *SMALL, "--constrain", path, "--constrain", path, "--out",

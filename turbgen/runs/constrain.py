@@ -67,8 +67,9 @@ def _plane(run: MannRun, x: float, where: str) -> int:
     xs = run.grid.x()
     i = int(np.argmin(np.abs(xs - x)))
     if abs(xs[i] - x) > PLANE_TOL_M * max(1.0, abs(x)):
-        raise ParameterError(f"{where}: x = {x:g} m is not a plane of the run (planes: "
-                             f"{', '.join(f'{v:g}' for v in xs)} m); make the field with a plane there (`x_m`)")  # fmt: skip
+        planes = ", ".join(f"{v:g}" for v in xs)
+        raise ParameterError(f"{where}: x = {x:g} m is not a plane of the run (planes: {planes} m); make the field "
+                             "with a plane there (`x_m`)")  # fmt: skip
     return i
 
 
@@ -249,7 +250,8 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
     return report, planes()
 
 
-def _record(files, placed: PlacedData, report: cond.SolveReport, remeasured: np.ndarray, conditional_mean: bool) -> dict:
+def _record(files, placed: PlacedData, report: cond.SolveReport, remeasured: np.ndarray,
+            conditional_mean: bool) -> dict:  # fmt: skip
     observed = np.isfinite(placed.data)
     resid = (remeasured - placed.data)[observed]
     return {

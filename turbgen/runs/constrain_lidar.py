@@ -33,7 +33,8 @@ def _scan_step(data: LidarData, dt_s: float, where: str) -> int:
     q = int(round(float(period.mean()) / dt_s))
     if q < 1 or np.abs(period - q * dt_s).max() > 1e-6 * dt_s:
         raise ParameterError(f"{where}: the scan period ({float(period.mean()):g} s) is not a whole number of the "
-                             f"field's time steps (dt = {dt_s:g} s): make the field with a dt that divides it")  # fmt: skip
+                             f"field's time steps (dt = {dt_s:g} s): make the field with a dt that divides "
+                             "it")  # fmt: skip
     return q
 
 
@@ -69,7 +70,8 @@ def lidar_streams(run, data: LidarData, sigma: float) -> list:
     where = f"lidar dataset {data.source}"
     if abs(data.U_m_s - run.U_m_s) > 1e-9 * run.U_m_s:
         raise ParameterError(f"{where}: measured a field with U = {data.U_m_s:g} m/s, this run has U = "
-                             f"{run.U_m_s:g} m/s; the probe volume's Taylor shift depends on U: use the same U")  # fmt: skip
+                             f"{run.U_m_s:g} m/s; the probe volume's Taylor shift depends on U: use the same "
+                             "U")  # fmt: skip
     description = lidar_from_mapping(data.lidar, where)
     ms = measurements_of(description)
     try:
@@ -82,8 +84,9 @@ def lidar_streams(run, data: LidarData, sigma: float) -> list:
     times = np.stack([data.time_s[:, beams.index(m.beam)] for m in ms], axis=1)
     if (times.max() + max(m.points_m()[:, 0].max() for m in ms) / run.U_m_s > (g.nt - 1) * g.dt_s + 1e-9
             or times.min() < 0):  # fmt: skip
-        raise ParameterError(f"{where}: its measurements fall outside the field's record 0 .. {(g.nt - 1) * g.dt_s:g} s "
-                             "(stored time T + x/U)")  # fmt: skip
+        end = (g.nt - 1) * g.dt_s
+        raise ParameterError(f"{where}: its measurements fall outside the field's record 0 .. {end:g} s (stored "
+                             "time T + x/U)")  # fmt: skip
     q = _scan_step(data, g.dt_s, where)
     op = los_operator(g, run.U_m_s, ms, planes, times)
     mean = mean_wind_los(ms, run.U_m_s, run.hub_height_m, data.shear_exponent) if data.mean_wind_added else None

@@ -13,7 +13,8 @@ time axis is the periodic xi axis of the synthesis box, so the covariance betwee
 only: S is block-circulant and the FFT over the nt/q samples makes it block-diagonal, one Hermitian
 (streams x streams) matrix per frequency j. At full rate, slab i gives
 
-    L_i[a, b] = nt sum_(t in a, t' in b) w_t w_t' G_i^(p_a p_b)[c_t, c_t'](y_t - y_t', z_t - z_t') e^(2 pi i i (s_t - s_t') / nt)
+    L_i[a, b] = nt sum_(t in a, t' in b) w_t w_t' G_i^(p_a p_b)[c_t, c_t'](y_t - y_t', z_t - z_t')
+                * e^(2 pi i i (s_t - s_t') / nt)
 
 with G_i^(pq)(dy, dz) = sum_(j, l) rho_pq Phi_i exp(2 pi i (j dy / nyp + l dz / nzp)) (one inverse 2-D FFT per slab
 and plane pair; real part on the k1 = 0 / Nyquist slabs), and L_(nt - i) = conj L_i; the decimated streams alias the
