@@ -189,18 +189,18 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
     times = np.asarray(times_s, dtype=float)
     planes = streams.used_planes()
     members = [np.flatnonzero(streams.plane == p) for p in planes]
+    slot = np.searchsorted(planes, streams.plane)
     fp = _footprints(streams, box)
     doff = 2j * np.pi * (streams.offset[:, None] - streams.offset[None, :]) / nt
     out = np.zeros((n_dec, m, m), complex)
     for i in range(box.nk1):
         a = _transfer(fp, i, nt, m)
         b = _phi_times(_slab_phi(stencil, i), a.conj())  # Phi conj(A) of every stream
-        rho = _rho(stencil, i, times[planes], times[planes])
-        full = np.zeros((m, m), complex)
-        for sp, ra in enumerate(members):
-            for sq, rb in enumerate(members):
-                left = (a[ra] * rho[sp, sq]).reshape(len(ra), -1)
-                full[np.ix_(ra, rb)] = left @ b[rb].reshape(len(rb), -1).T
+        rho = _rho(stencil, i, times[planes], times[planes])[slot]  # (M, P, J): from each stream's plane
+        full = np.empty((m, m), complex)
+        for sq, rb in enumerate(members):  # the columns of the streams on plane q
+            left = (a * rho[:, sq, None, :]).reshape(m, -1)
+            full[:, rb] = left @ b[rb].reshape(len(rb), -1).T
         full *= nt
         out[i % n_dec] += full * np.exp(i * doff) / q
         if 0 < i and 2 * i != nt:  # the mirror frequency nt - i: L_(nt - i) = conj L_i
