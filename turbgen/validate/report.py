@@ -18,7 +18,7 @@ JSON (``to_dict``; keys are stable, units in the names)::
     metrics           name -> title, quantity, passed, max_abs_z, z_crit, n_tests,
                       worst {label, band_hz, estimate, expected, sigma, z}, tests [same keys ...]
     seconds           estimate, theory (alongside the estimates when run in parallel), verdict, total [s]
-    constraints_note  for a store conditioned on measurements: what the verdict means then (else null)
+    constraints_note  only for a store conditioned on measurements: what the verdict means then
 """
 
 from __future__ import annotations
@@ -92,6 +92,7 @@ def to_dict(report) -> dict:
     """The JSON-serialisable result of ``report`` (a ValidationReport; keys and units in the module docstring)."""
     est = report.estimates
     g = est.grid
+    note = constraints_note(report.store.attrs)
     return {
         "schema": SCHEMA,
         "store": str(report.store.path),
@@ -114,8 +115,7 @@ def to_dict(report) -> dict:
         "components": components(report),
         "metrics": {m.name: _metric_dict(m) for m in report.metrics},
         "seconds": report.seconds,
-        "constraints_note": constraints_note(report.store.attrs),
-    }
+    } | ({} if note is None else {"constraints_note": note})
 
 
 def constraints_note(attrs) -> str | None:
