@@ -16,7 +16,7 @@ from turbgen.runs.mann import build_mann_stencil
 from turbgen.spec.constraints import point_series_from_mapping
 from turbgen.spec.mann import MannRun
 from turbgen.store import open_store
-from turbgen.synthesis.prior_spectrum import ou_factors, slab_spectrum, slab_weight
+from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_spectrum, slab_weight
 from turbgen.validate import validate
 
 GRID = {"nt": 128, "dt_s": 0.5, "x_m": [0.0, 40.0], "ny": 4, "nz": 4, "dy_m": 10.0}
@@ -75,6 +75,14 @@ def test_zero_noise_store_reproduces_the_data(tmp_path):
     assert "the check applies only when the data came from the same model" in validate(fs, workers=1).table()
 
 
+def _ou_factors(stencil, i, times):
+    """exp(-|t_p - t_q| / tau_e) (P, P, nyp, nzp) of slab i (Guo et al. 2023, Eq. 13-14; ones when frozen)."""
+    inv_tau = slab_inv_tau(stencil, i)
+    if inv_tau is None:
+        return np.ones((len(times), len(times), stencil.box.nyp, stencil.box.nzp))
+    return np.exp(-np.abs(times[:, None] - times[None, :])[:, :, None, None] * inv_tau[None, None])
+
+
 def _dense_prior(stencil, run):
     """Prior covariance of the stored field flattened (plane, component, t, y, z), by summing
     Re w_i rho Phi exp(i k r) over the box explicitly (one loop over slabs)."""
@@ -86,7 +94,7 @@ def _dense_prior(stencil, run):
     ey = np.exp(2j * np.pi * np.outer(y, jy) / box.nyp)
     ez = np.exp(2j * np.pi * np.outer(z, lz) / box.nzp)
     for i in range(box.nk1):
-        phi, rho = slab_spectrum(stencil, i), ou_factors(stencil, i, run.plane_times_s())
+        phi, rho = slab_spectrum(stencil, i), _ou_factors(stencil, i, run.plane_times_s())
         en = np.exp(2j * np.pi * i * n / box.nt)
         for a in range(len(idx)):
             kernel = rho[p[a]][p] * phi[c[a]][c]  # (points, nyp, nzp)

@@ -55,18 +55,3 @@ def slab_inv_tau(stencil: MannStencil, i: int) -> np.ndarray | None:
     half = stencil.inv_tau[i - stencil.slab0].astype(float)
     return expand_k2(half, box.nyp, False, np.empty((box.nyp, box.nzp)))
 
-
-def ou_factors(stencil: MannStencil, i: int, times_s: np.ndarray) -> np.ndarray:
-    """rho_pq = exp(-|t_p - t_q| / tau_e) of slab ``i`` for snapshot times ``times_s`` [s]: (P, P, nyp, nzp).
-
-    Frozen turbulence (no 1/tau_e in the stencil, or one time): all ones (every plane is the same snapshot).
-    """
-    t = np.asarray(times_s, dtype=float)
-    box = stencil.box
-    inv_tau = slab_inv_tau(stencil, i) if len(t) > 1 else None
-    if inv_tau is None:
-        return np.ones((len(t), len(t), box.nyp, box.nzp))
-    lag = np.abs(t[:, None] - t[None, :])
-    with np.errstate(invalid="ignore"):  # inv_tau = 0 at k = 0 (tau_e infinite): rho = 1 there
-        rho = np.exp(-lag[:, :, None, None] * inv_tau[None, None])
-    return np.nan_to_num(rho, nan=1.0)
