@@ -61,6 +61,15 @@ def _lines(s: dict) -> list[str]:
     units = s["units"]
     pw = max((len(k) for k in s["parameters"]), default=0)
     out += [f"  {k:<{pw}}  {_value(v)}{_unit(units.get(k, ''))}" for k, v in s["parameters"].items()]
+    c = s.get("constraints")
+    if c is not None:
+        solver = c["solver"]
+        out.append(f"constraints  {'conditional mean' if c['conditional_mean'] else 'conditional sample'} on "
+                   f"{len(c['series'])} series, {c['n_samples']} samples ({', '.join(c['files'])}); solve "
+                   f"{solver['method']}, {solver['iterations']} iterations, relative residual "
+                   f"{solver['relative_residual']:.1e}; field - data max {c['residual_max_m_s']:.2e} m/s")  # fmt: skip
+        out += [f"  {m['name']}: x {m['x_m']:g} m, y {m['y_m']:g} m, z {m['z_m']:g} m, noise {m['noise_m_s']:g} m/s"
+                for m in c["series"]]
     return out
 
 

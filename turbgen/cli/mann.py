@@ -93,8 +93,18 @@ def _dask_client(scheduler, workers: int):
 @click.option("--scheduler", help="Out-of-core runs only: dask scheduler address whose workers make the passes "
               "(they must see --out's directory; --memory then holds per worker), or 'local' for a LocalCluster "
               "of --threads single-threaded workers sharing --memory with this process.")  # fmt: skip
+@click.option("--constrain", "constrain", multiple=True, type=click.Path(),
+              help="Condition the field on the measurements of FILE: point time series (JSON, "
+              "schemas/constraints.schema.json) or a `turbgen lidar --out` dataset; repeatable. The field is a "
+              "sample of the model conditioned on them (Hoffman & Ribak 1991).")  # fmt: skip
+@click.option("--noise", type=float, help="With --constrain: measurement-noise sigma [m/s] >= 0 of every value "
+              "(default: each file's noise_m_s, else 0 = the field passes through the data).")  # fmt: skip
+@click.option("--conditional-mean", "conditional_mean", is_flag=True,
+              help="With --constrain: write the conditional mean (the optimal linear reconstruction, no random part).")
 def mann(**opt):
     """Mann space-time 4D field: yz-planes at the rotor and range gates, evolving with upstream distance."""
+    if not opt["constrain"] and (opt["noise"] is not None or opt["conditional_mean"]):
+        raise click.UsageError("--noise and --conditional-mean need --constrain FILE")
     typed_energy = [name for name in _ENERGY if opt[name] is not None]
     if len(typed_energy) > 1:
         raise click.UsageError(f"give one of --ae, --sigma-u, --ti (got {', '.join(typed_energy)})")
@@ -111,6 +121,15 @@ def mann(**opt):
     budget = parse_size(opt["memory"], "--memory") if opt["memory"] is not None else resources.available_memory_bytes()
     # a budget too small fails here, before any output
     plan = plan_for_budget(run, budget, threads, opt["chunks"], opt["scheduler"], opt["stencil_cache"] is None)
+    constraints = None
+    if opt["constrain"]:
+        if plan is not None or opt["scheduler"] is not None:
+            raise click.UsageError("--constrain: constrained fields are made in one pass in memory; this field needs "
+                                   "an out-of-core run (--memory/--scheduler), which cannot take constraints")
+        from turbgen.runs.constrain import load_constraint, place
+
+        constraints = [load_constraint(path) for path in opt["constrain"]]
+        place(run, constraints, opt["noise"])  # every check of the data against the run, before any output
     if opt["scheduler"] not in (None, "local"):  # one line within seconds, not dask's traceback after 30 s
         from turbgen.sweep.scheduler import check_scheduler_address
 
@@ -134,6 +153,14 @@ def mann(**opt):
             s = run_mann_outofcore(run, out, memory_bytes=plan.memory_bytes, overwrite=opt["overwrite"],
                                    chunk_t=opt["chunks"], progress=sys.stderr.isatty(), threads=plan.threads,
                                    plan=plan, client=client)  # fmt: skip
+    elif constraints is not None:
+        from turbgen.runs.constrain import describe_constraints, run_mann_constrained
+
+        s = run_mann_constrained(run, out, constraints, noise_m_s=opt["noise"], conditional_mean=opt["conditional_mean"],
+                                 overwrite=opt["overwrite"], chunk_t=opt["chunks"], threads=threads,
+                                 cache_dir=opt["stencil_cache"])  # fmt: skip
+        for line in describe_constraints(s["constraints"]):
+            click.echo(f"  {line}")
     else:
         s = run_mann(run, out, overwrite=opt["overwrite"], chunk_t=opt["chunks"], progress=sys.stderr.isatty(),
                      threads=threads, cache_dir=opt["stencil_cache"])  # fmt: skip

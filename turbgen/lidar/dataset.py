@@ -17,6 +17,7 @@ import json
 import os
 import secrets
 import shutil
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -141,3 +142,64 @@ def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: 
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return path
+
+
+@dataclass(frozen=True, eq=False)
+class LidarData:
+    """What ``turbgen lidar --out`` wrote, as needed to constrain a field with it.
+
+    Parameters
+    ----------
+    v_los : numpy.ndarray
+        (scan, beam, gate) [m/s], beams in increasing beam number.
+    time_s : numpy.ndarray
+        (scan, beam) physical measurement times [s].
+    lidar : dict
+        The lidar description's fields (turbgen.lidar.description.lidar_from_mapping rebuilds it).
+    mean_wind_added : bool
+        Whether v_los includes the power-law mean wind (``shear_exponent`` [-]).
+    shear_exponent : float
+        Its exponent alpha [-].
+    U_m_s : float
+        The mean wind of the store the lidar measured [m/s].
+    source : str
+        The dataset's path.
+    """
+
+    v_los: np.ndarray
+    time_s: np.ndarray
+    lidar: dict
+    mean_wind_added: bool
+    shear_exponent: float
+    U_m_s: float
+    source: str
+
+
+def is_lidar_dataset(path) -> bool:
+    """Whether ``path`` is a directory holding a lidar dataset (a ``v_los`` array)."""
+    return (Path(path) / "v_los" / "zarr.json").is_file()
+
+
+def read_dataset(path) -> LidarData:
+    """Read a complete lidar dataset written by :func:`write_dataset`.
+
+    Raises
+    ------
+    StoreError
+        If ``path`` is not a complete lidar dataset.
+    """
+    import zarr
+
+    p = Path(path)
+    try:
+        group = zarr.open_group(str(p), mode="r")
+        attrs = dict(group.attrs)
+        if attrs.get(MARKER) is not True:
+            raise StoreError(f"{p} is not a complete lidar dataset (no completeness marker)")
+        lidar = attrs["lidar"]
+        return LidarData(np.asarray(group["v_los"][...], float), np.asarray(group["time_s"][...], float),
+                         json.loads(lidar) if isinstance(lidar, str) else dict(lidar),
+                         bool(attrs["mean_wind_added"]), float(attrs["shear_exponent"]), float(attrs["U_m_s"]),
+                         str(p))  # fmt: skip
+    except (KeyError, ValueError, OSError, zarr.errors.BaseZarrError) as exc:
+        raise StoreError(f"{p} is not a readable lidar dataset ({type(exc).__name__}: {exc})") from None

@@ -171,6 +171,8 @@ def check_measurements(fs, measurements) -> list[int]:
 def _interp_axis(coord0: float, step: float, n: int, values: np.ndarray):
     """Lower index and fraction of linear interpolation on a regular axis of n nodes."""
     f = (values - coord0) / step
+    f = np.where(np.abs(f - np.round(f)) <= 1e-9, np.round(f), f)  # a node within rounding is the node: the cell
+    # (and the constrained runs' scan pattern) does not depend on how T + x/U rounds
     i = np.clip(np.floor(f).astype(np.int64), 0, max(n - 2, 0))
     a = f - i
     if n == 1:
@@ -247,11 +249,39 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
     col = {b: i for i, b in enumerate(order.tolist())}
     bi = {b: i for i, b in enumerate(beams)}
     gi = {gg: i for i, gg in enumerate(gates)}
-    v_los = np.zeros((n_scan, nb, ng))
-    n1 = np.zeros((nb, ng))
     time_out = np.zeros((n_scan, nb))
     for b in beams:
         time_out[:, bi[b]] = T[:, col[b]]
+    if mean_wind is not None and add_mean_wind:
+        # veer and time-varying means rotate (u, v) per probe point: the profile's own path (MeanWind.full_uv)
+        v_los, n1 = _sample_with_mean_wind(fs, measurements, planes, T, col, bi, gi, (n_scan, nb, ng), mean_wind)
+    else:
+        op = los_operator(g, U, measurements, planes, np.stack([T[:, col[m.beam]] for m in measurements], axis=1))
+
+        def read(c, ix, t, y, z):  # each plane read once, only the span its points need
+            return np.asarray(fs.array(c)[t[0] : t[1], ix, y[0] : y[1], z[0] : z[1]], dtype=np.float64)
+
+        los = apply_los(op, read)
+        if add_mean_wind:
+            los = los + mean_wind_los(measurements, U, fs.hub_height_m, shear_exponent)[None, :]
+        v_los = np.zeros((n_scan, nb, ng))
+        n1 = np.zeros((nb, ng))
+        for j, m in enumerate(measurements):
+            v_los[:, bi[m.beam], gi[m.gate]] = los[:, j]
+            n1[bi[m.beam], gi[m.gate]] = m.n[0]
+    gx = np.array([g.x_m[next(planes[j] for j, m in enumerate(measurements) if m.gate == gg)] for gg in gates], float)
+    if mean_wind is not None and add_mean_wind:
+        return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, True, mean_wind.shear_exponent,
+                            mean_wind.describe())
+    return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, add_mean_wind, shear_exponent)
+
+
+def _sample_with_mean_wind(fs, measurements, planes, T, col, bi, gi, dims, mean_wind):
+    """v_los (n_scan, nb, ng) and n_1 (nb, ng) of fluctuations plus ``mean_wind`` at every probe point and stored time."""
+    g, U = fs.grid, fs.U_m_s
+    n_scan, nb, ng = dims
+    v_los = np.zeros((n_scan, nb, ng))
+    n1 = np.zeros((nb, ng))
     y0, z0 = g.y()[0], g.z()[0]
     by_plane: dict[int, list[int]] = {}
     for j, ix in enumerate(planes):
@@ -284,27 +314,10 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
                     for dz_, wz in ((0, 1 - az), (1, az)):
                         zz = np.minimum(jz + dz_, shape[2] - 1)
                         corners.append(((ii * shape[1] + yy) * shape[2] + zz, wt * (wy * wz)))
-            los = 0.0
-            if mean_wind is not None and add_mean_wind:
-                los = _with_mean_wind(mean_wind, fs, box, corners, n, t, p)
-            for c, nc in zip("uvw", n):
-                if nc == 0.0 or (mean_wind is not None and add_mean_wind):
-                    continue
-                flat = box[c].ravel()
-                val = sum(w * flat[idx] for idx, w in corners)
-                if c == "u" and add_mean_wind:
-                    h = fs.hub_height_m + p[:, 2]
-                    if np.any(h <= 0):
-                        raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
-                    val = val + U * (h / fs.hub_height_m) ** shear_exponent
-                los = los + nc * val
+            los = _with_mean_wind(mean_wind, fs, box, corners, n, t, p)
             v_los[:, bi[m.beam], gi[m.gate]] = los @ np.asarray(m.weights, float)
             n1[bi[m.beam], gi[m.gate]] = n[0]
-    gx = np.array([g.x_m[next(planes[j] for j, m in enumerate(measurements) if m.gate == gg)] for gg in gates], float)
-    if mean_wind is not None and add_mean_wind:
-        return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, True, mean_wind.shear_exponent,
-                            mean_wind.describe())
-    return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, add_mean_wind, shear_exponent)
+    return v_los, n1
 
 
 def _with_mean_wind(mean_wind, fs, box, corners, n, t, p) -> np.ndarray:
@@ -318,3 +331,101 @@ def _with_mean_wind(mean_wind, fs, box, corners, n, t, p) -> np.ndarray:
     vals = {c: sum(w * box[c].ravel()[idx] for idx, w in corners) for c in "uvw"}
     u, v = mean_wind.full_uv(vals["u"], vals["v"], t, p[None, :, 1], h[None, :], fs.U_m_s, fs.hub_height_m)
     return n[0] * u + n[1] * v + n[2] * vals["w"]
+@dataclass(frozen=True, eq=False)
+class LosOperator:
+    """The virtual lidar as a sparse linear map of the field: v_los[s, j] = sum_r weight[s, j, r] n_j[c]
+    field[c, plane[j], t_index[s, j, r], y_index[j, r], z_index[j, r]] over the components c (n_j[c] != 0).
+
+    r runs over the probe points times the 8 corners of their (t, y, z) cell (weights: probe-volume weight times the
+    trilinear weights; linear in stored time, bilinear in y, z). Fluctuations only (no mean wind).
+    """
+
+    plane: np.ndarray  # (J,) plane index of each measurement
+    n: np.ndarray  # (J, 3) projection vectors
+    t_index: np.ndarray  # (n_scan, J, R)
+    y_index: np.ndarray  # (J, R)
+    z_index: np.ndarray  # (J, R)
+    weight: np.ndarray  # (n_scan, J, R)
+
+
+def los_operator(grid, U_m_s: float, measurements, planes, times_s: np.ndarray) -> LosOperator:
+    """The operator of ``measurements`` (on ``planes``) at physical times ``times_s`` (n_scan, J) [s].
+
+    A probe point at upstream distance x' of gate g measured at physical time T is the stored sample
+    t = T + x'/U of the plane of gate g (module docstring); indices are clipped to the grid (where the clipped
+    corner's weight is 0).
+    """
+    g = grid
+    y0, z0 = g.y()[0], g.z()[0]
+    n_scan, n_meas = times_s.shape
+    per = [m.points_m() for m in measurements]
+    k_max = max(len(p) for p in per)
+    t_index = np.zeros((n_scan, n_meas, 8 * k_max), np.int64)
+    weight = np.zeros((n_scan, n_meas, 8 * k_max))
+    y_index = np.zeros((n_meas, 8 * k_max), np.int64)
+    z_index = np.zeros((n_meas, 8 * k_max), np.int64)
+    for j, (m, p) in enumerate(zip(measurements, per)):
+        k = len(p)
+        t = times_s[:, j, None] + p[None, :, 0] / U_m_s  # (n_scan, k) stored time
+        it, at = _interp_axis(0.0, g.dt_s, g.nt, t)
+        jy, ay = _interp_axis(y0, g.dy_m, g.ny, p[:, 1])
+        jz, az = _interp_axis(z0, g.dz_m, g.nz, p[:, 2])
+        w = np.asarray(m.weights, float)
+        r = 0
+        for dt_, wt in ((0, 1 - at), (1, at)):
+            for dy_, wy in ((0, 1 - ay), (1, ay)):
+                for dz_, wz in ((0, 1 - az), (1, az)):
+                    t_index[:, j, r : r + k] = np.minimum(it + dt_, g.nt - 1)
+                    y_index[j, r : r + k] = np.minimum(jy + dy_, g.ny - 1)
+                    z_index[j, r : r + k] = np.minimum(jz + dz_, g.nz - 1)
+                    weight[:, j, r : r + k] = wt * (wy * wz) * w
+                    r += k
+    return LosOperator(np.asarray(planes, np.int64), np.array([m.n for m in measurements], float), t_index,
+                       y_index, z_index, weight)  # fmt: skip
+
+
+def apply_los(op: LosOperator, read) -> np.ndarray:
+    """v_los (n_scan, J) of the field given by ``read(component, plane, (t0, t1), (y0, y1), (z0, z1))`` -> the
+    float64 block [t0, t1) x [y0, y1) x [z0, z1) of that plane (each plane read once, only the span its points
+    need)."""
+    out = np.zeros(op.weight.shape[:2])
+    for ix in np.unique(op.plane):
+        js = np.flatnonzero(op.plane == ix)
+        t = (int(op.t_index[:, js].min()), int(op.t_index[:, js].max()) + 1)
+        y = (int(op.y_index[js].min()), int(op.y_index[js].max()) + 1)
+        z = (int(op.z_index[js].min()), int(op.z_index[js].max()) + 1)
+        for c, name in enumerate("uvw"):
+            if not np.any(op.n[js, c]):
+                continue
+            block = read(name, int(ix), t, y, z)
+            for j in js:
+                if op.n[j, c] == 0.0:
+                    continue
+                vals = block[op.t_index[:, j] - t[0], op.y_index[j] - y[0], op.z_index[j] - z[0]]
+                out[:, j] += op.n[j, c] * np.einsum("sr,sr->s", op.weight[:, j], vals)
+    return out
+
+
+def adjoint_los(op: LosOperator, v: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """H^T v: the field (nx, 3, nt, ny, nz) float64 (``shape``) that the values ``v`` (n_scan, J) scatter back to
+    through the same weights, so that <H x, v> = <x, H^T v>."""
+    out = np.zeros(shape)
+    for j in range(op.weight.shape[1]):
+        for c in range(3):
+            if op.n[j, c] == 0.0:
+                continue
+            np.add.at(out[op.plane[j], c], (op.t_index[:, j], op.y_index[j][None], op.z_index[j][None]),
+                      op.n[j, c] * op.weight[:, j] * v[:, j, None])  # fmt: skip
+    return out
+
+
+def mean_wind_los(measurements, U_m_s: float, hub_height_m: float, shear_exponent: float) -> np.ndarray:
+    """The line-of-sight speed (J,) [m/s] of the power-law mean wind U (h / h_hub)^alpha alone, per measurement
+    (what ``add_mean_wind`` adds to v_los). Raises ParameterError for a probe point below the ground."""
+    out = np.zeros(len(measurements))
+    for j, m in enumerate(measurements):
+        h = hub_height_m + m.points_m()[:, 2]
+        if np.any(h <= 0):
+            raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+        out[j] = m.n[0] * (np.asarray(m.weights, float) @ (U_m_s * (h / hub_height_m) ** shear_exponent))
+    return out

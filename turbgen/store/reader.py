@@ -202,7 +202,8 @@ class FieldStore:
         dict
             path, complete, model, turbgen_version, created_utc, grid, shape_t_x_y_z, duration_s [s],
             width_y_m [m], height_z_m [m], chunk_t, U_m_s [m/s], hub_height_m [m], seed, frame,
-            frame_note, parameters, units, size_on_disk_bytes and size_uncompressed_bytes [bytes].
+            frame_note, parameters, units, size_on_disk_bytes and size_uncompressed_bytes [bytes]; ``constraints``
+            (series, solver, residual [m/s]) only for a store conditioned on measurements.
         """
         g, a = self.grid, self.attrs
         return {
@@ -226,7 +227,17 @@ class FieldStore:
             "units": a["units"],
             "size_on_disk_bytes": self.nbytes_on_disk(),
             "size_uncompressed_bytes": 3 * g.nbytes_per_component(),
-        }
+        } | ({} if "constraints" not in a else {"constraints": _constraints_summary(a["constraints"])})
+
+
+def _constraints_summary(c) -> dict:
+    """What ``turbgen info`` shows of a constrained store's ``constraints`` record (its data left out)."""
+    return {
+        "kind": c["kind"], "files": c["files"], "conditional_mean": c["conditional_mean"],
+        "series": [{k: s[k] for k in ("name", "component", "x_m", "y_m", "z_m", "noise_m_s")} for s in c["streams"]],
+        "n_samples": c["n_samples"], "solver": c["solver"], "residual_max_m_s": c["residual_max_m_s"],
+        "residual_rms_m_s": c["residual_rms_m_s"],
+    }  # fmt: skip
 
 
 def _leftover_hint(path: Path) -> str:

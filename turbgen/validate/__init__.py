@@ -20,6 +20,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
+from turbgen.errors import ParameterError
 from turbgen.store import FieldStore, open_store
 from turbgen.validate.estimators import Estimates, plan_estimates, run_estimates
 from turbgen.validate.expectations import theory_for
@@ -101,6 +102,13 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
         On an unreadable store or bad input.
     """
     fs = store if isinstance(store, FieldStore) else open_store(store)
+    constraints = fs.attrs.get("constraints")
+    if constraints is not None and constraints.get("conditional_mean"):
+        raise ParameterError(
+            f"{fs.path} holds the conditional mean of a constrained run (--conditional-mean), a smoothed "
+            "reconstruction rather than a sample of the model: its statistics are not the model's, so it cannot be "
+            "validated (validate a conditional sample instead)"
+        )
     t0 = time.perf_counter()
     planned = plan_estimates(fs, rotor_radius_m=rotor_radius_m, nperseg=nperseg)
     parallel = (workers or os.cpu_count() or 1) > 1

@@ -18,6 +18,7 @@ JSON (``to_dict``; keys are stable, units in the names)::
     metrics           name -> title, quantity, passed, max_abs_z, z_crit, n_tests,
                       worst {label, band_hz, estimate, expected, sigma, z}, tests [same keys ...]
     seconds           estimate, theory (alongside the estimates when run in parallel), verdict, total [s]
+    constraints_note  only for a store conditioned on measurements: what the verdict means then
 """
 
 from __future__ import annotations
@@ -91,6 +92,7 @@ def to_dict(report) -> dict:
     """The JSON-serialisable result of ``report`` (a ValidationReport; keys and units in the module docstring)."""
     est = report.estimates
     g = est.grid
+    note = constraints_note(report.store.attrs)
     return {
         "schema": SCHEMA,
         "store": str(report.store.path),
@@ -113,7 +115,22 @@ def to_dict(report) -> dict:
         "components": components(report),
         "metrics": {m.name: _metric_dict(m) for m in report.metrics},
         "seconds": report.seconds,
-    }
+    } | ({} if note is None else {"constraints_note": note})
+
+
+def constraints_note(attrs) -> str | None:
+    """For a store conditioned on measurements (its ``constraints`` attribute), what the validation means; else None.
+
+    A conditional sample u_s + C H^T S^-1 (d - H u_s - eps_s) is marginally a sample of the prior when d itself is a
+    measurement of a field of the same model (Hoffman & Ribak 1991); for other data its statistics are pulled
+    towards the data's.
+    """
+    c = attrs.get("constraints")
+    if c is None:
+        return None
+    return (f"constrained on {len(c['streams'])} measured series: the check applies only when the data came from the "
+            "same model (then the conditioned field is marginally a sample of it); measured data that differ from the "
+            "model pull the field's statistics towards theirs")
 
 
 def _fmt_band(t: Check) -> str:
@@ -147,6 +164,9 @@ def table(report) -> str:
                      f"{len(m.checks):5d}  {worst}")
     verdict = "all metrics pass" if report.passed else f"FAILED: {', '.join(report.failed)}"
     lines += ["", f"result  {verdict} (per-metric false-failure probability {ALPHA:g})"]
+    note = constraints_note(report.store.attrs)
+    if note is not None:
+        lines.append(f"note    {note}")
     return "\n".join(lines)
 
 

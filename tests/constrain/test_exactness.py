@@ -1,0 +1,143 @@
+"""Exactness of the fast conditioning path (turbgen.synthesis.conditioning) against dense Gaussian conditioning on
+the prior covariance measured from the generator itself (tests/constrain/brute_force.py), on tiny grids.
+
+Tolerances: the brute-force covariance comes from float32 fields (relative round-off ~1e-7 of the largest
+variance); the fast path works in float64 from the same float32 stencil. Gains are compared relative to their
+largest entry at 1e-5 (the float32 round-off amplified by the condition number of S, < 1e2 here).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from brute_force import dense_gain, generator_covariance
+from turbgen.errors import ParameterError
+from turbgen.synthesis.conditioning import Streams, check_singular, measure, solve, stream_covariance, weights_field
+from turbgen.synthesis.mann_stencil import BoxShape, build_stencil
+from turbgen.theory.params import MannParams
+
+NY = NZ = 2
+BOX = BoxShape(16, 10.0, 4, 4, 10.0, 10.0)
+
+
+def _setup(evo, times):
+    params = MannParams(ae=1.0, length_scale_m=30.0, gamma=3.1, evo_time_s=evo)
+    stencil = build_stencil(params, BOX, evolving=evo is not None)
+    with pytest.MonkeyPatch.context() as mp:
+        cov = generator_covariance(mp, stencil, NY, NZ, times)
+    return stencil, np.asarray(times, float), cov
+
+
+@pytest.fixture(scope="module")
+def frozen():
+    return _setup(None, [0.0])
+
+
+@pytest.fixture(scope="module")
+def evolving():
+    return _setup(20.0, [0.0, 2.0, 5.0])
+
+
+def _streams(n_planes, scanned=False):
+    # u at (0, 1) of the first plane; w bilinear between (0, 0) and (1, 0) of the last plane; a projection
+    # 0.6 u + 0.8 v at (1, 1) of the middle plane. ``scanned``: as a lidar's beam-gates, observed every 4th time
+    # step from offsets 1, 3, 0, terms ahead in time by 0, 2, 5, 1, 3 steps (probe points along the beam)
+    last, mid = n_planes - 1, n_planes // 2
+    if scanned:
+        return Streams(np.array([0, last, mid]), np.array([0, 1, 1, 2, 2]), np.array([0, 2, 2, 0, 1]),
+                       np.array([0, 0, 1, 1, 1]), np.array([1, 0, 0, 1, 1]), np.array([1.0, 0.3, 0.7, 0.6, 0.8]),
+                       ("a", "b", "c"), term_shift=np.array([0, 2, 5, 1, 3]), decimation=4,
+                       offset=np.array([1, 3, 0]))  # fmt: skip
+    return Streams(
+        plane=np.array([0, last, mid]),
+        term_stream=np.array([0, 1, 1, 2, 2]),
+        term_component=np.array([0, 2, 2, 0, 1]),
+        term_iy=np.array([0, 0, 1, 1, 1]),
+        term_iz=np.array([1, 0, 0, 1, 1]),
+        term_weight=np.array([1.0, 0.3, 0.7, 0.6, 0.8]),
+        names=("a", "b", "c"),
+    )
+
+
+def _dense_h(streams, n_planes, nt):
+    """H (M nt/q, N) on the field flattened as (plane, component, t, y, z), by applying measure() to unit fields."""
+    n = n_planes * 3 * nt * NY * NZ
+    n_dec = nt // streams.decimation
+    h = np.zeros((streams.n_streams * n_dec, n))
+    for col in range(n):
+        p, c, rest = col // (3 * nt * NY * NZ), (col // (nt * NY * NZ)) % 3, col % (nt * NY * NZ)
+        field = np.zeros(nt * NY * NZ)
+        field[rest] = 1.0
+        out = np.zeros((streams.n_streams, n_dec))
+        measure(streams, p, c, field.reshape(nt, NY, NZ), out)
+        h[:, col] = out.ravel()
+    return h
+
+
+def _fast_gain(stencil, streams, times, noise_var, observed):
+    cov = stream_covariance(stencil, streams, times, noise_var)
+    cols, iterations = [], []
+    for k in np.flatnonzero(observed.ravel()):
+        r = np.zeros(observed.size)
+        r[k] = 1.0
+        x, report = solve(cov, r.reshape(observed.shape), observed)
+        iterations.append(report.iterations)
+        assert report.relative_residual <= 1e-9
+        field = [weights_field(stencil, streams, x, times, p, NY, NZ) for p in range(len(times))]
+        cols.append(np.ravel(field))
+    return np.array(cols).T, iterations
+
+
+@pytest.mark.parametrize("case", ["frozen", "evolving"])
+@pytest.mark.parametrize("gaps", [False, True])
+@pytest.mark.parametrize("scanned", [False, True])
+def test_gain_and_conditional_covariance_match_dense_conditioning(case, gaps, scanned, request):
+    stencil, times, cov = request.getfixturevalue(case)
+    streams = _streams(len(times), scanned)
+    nt = BOX.nt
+    n_dec = nt // streams.decimation
+    h = _dense_h(streams, len(times), nt)
+    noise = np.array([0.01, 0.0, 0.04])
+    observed = np.ones((3, n_dec), bool)
+    if gaps:
+        observed[0, 1:3] = False
+        observed[2, n_dec - 1] = False
+    keep = observed.ravel()
+    k_fast, iterations = _fast_gain(stencil, streams, times, noise, observed)
+    k_ref = dense_gain(cov, h[keep], np.repeat(noise, n_dec)[keep])
+    np.testing.assert_allclose(k_fast, k_ref, rtol=0, atol=1e-5 * np.abs(k_ref).max())
+    if gaps:
+        assert max(iterations) > 0  # the gaps were solved by the conjugate gradients
+    # conditional covariance of the sample u_s + K (d - H u_s - eps_s): (I - K H) C (I - K H)^T + K R K^T
+    ikh = np.eye(len(cov)) - k_fast @ h[keep]
+    post_fast = ikh @ cov @ ikh.T + k_fast @ np.diag(np.repeat(noise, n_dec)[keep]) @ k_fast.T
+    post_ref = cov - k_ref @ h[keep] @ cov
+    np.testing.assert_allclose(post_fast, post_ref, rtol=0, atol=1e-5 * np.abs(cov).max())
+
+
+@pytest.mark.parametrize("scanned", [False, True])
+def test_zero_noise_reproduces_the_data(evolving, scanned):
+    stencil, times, cov = evolving
+    streams = _streams(len(times), scanned)
+    n_dec = BOX.nt // streams.decimation
+    cov_s = stream_covariance(stencil, streams, times, np.zeros(3))
+    d = np.random.default_rng(5).normal(size=(3, n_dec))
+    x, _ = solve(cov_s, d, np.ones((3, n_dec), bool))
+    remeasured = np.zeros((3, n_dec))
+    for p in range(len(times)):
+        field = weights_field(stencil, streams, x, times, p, NY, NZ)
+        for c in range(3):
+            measure(streams, p, c, field[c], remeasured)
+    # the correction's spectra are held in complex64 (the field is float32): ~1e-7 of the data's size
+    np.testing.assert_allclose(remeasured, d, rtol=0, atol=1e-6)
+
+
+def test_dependent_zero_noise_measurements_are_refused(frozen):
+    stencil, times, _ = frozen
+    s = _streams(1)
+    twice = Streams(np.array([0, 0]), np.array([0, 1]), np.array([0, 0]), np.array([0, 0]), np.array([1, 1]),
+                    np.array([1.0, 1.0]), ("mast.json u", "copy.json u"))
+    with pytest.raises(ParameterError, match="mast.json u, copy.json u are linearly dependent"):
+        check_singular(stream_covariance(stencil, twice, times, np.zeros(2)), twice.names)
+    check_singular(stream_covariance(stencil, s, times, np.zeros(3)), s.names)  # independent: no error

@@ -1,0 +1,364 @@
+"""Constrained Mann runs: a field conditioned on measured point time series (Hoffman & Ribak 1991).
+
+    summary = run_mann_constrained(run, "mast.zarr", [load_point_series("mast.json")], noise_m_s=0.1)
+
+Placing the data on the grid: a sensor at (x, y, z) belongs to the plane at x (x must be a plane of the run); its
+value at physical time T is the stored sample t = T + x / U of that plane (convected frame, Guo et al. 2023
+Sect. 5.1.2). The series is linearly *interpolated* onto the stored times n dt (a stored time outside the data's span,
+or next to a missing value, is missing); points between grid nodes are bilinear in (y, z) (as the virtual lidar
+reads a store). With ``total_wind`` the run's mean wind U (uniform, no shear profile) is subtracted from u.
+
+The field: pass 1 generates the unconstrained sample u_s and measures it (H u_s), nothing is kept; the system
+S x = d - H u_s - eps_s is solved (turbgen.synthesis.conditioning); pass 2 generates the same u_s again (same seed,
+bit-identical) and adds C H^T x plane by plane while writing. ``conditional_mean=True`` writes C H^T S^-1 d only
+(the optimal linear reconstruction, no random part). The store gets a ``constraints`` attribute: the data on the
+grid, geometry, noise, the solver's report and the residual at the measurements.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.lidar.sampling import PLANE_TOL_M
+from turbgen.resources import default_threads, require_memory
+from turbgen.runs.mann import build_mann_stencil, memory_estimate_bytes
+from turbgen.spec.constraints import COMPONENTS, PointSeries
+from turbgen.spec.mann import MannRun
+from turbgen.store import create_store
+from turbgen.synthesis import conditioning as cond
+from turbgen.synthesis.mann_spacetime import MannSnapshots
+from turbgen.synthesis.mann_stencil import synthesis_box
+
+_NOISE_KEY = 0x636F6E73  # "cons": the stream of the measurement-noise sample eps_s, keyed with the run's seed
+
+
+@dataclass(frozen=True, eq=False)
+class PlacedData:
+    """Measurements on the run's grid: the streams, the data (M, nt) [m/s] (NaN: missing), the noise sigma (M,)
+    [m/s] and a geometry record per stream (for the store)."""
+
+    streams: cond.Streams
+    data: np.ndarray
+    noise_m_s: np.ndarray
+    geometry: tuple[dict, ...]
+
+
+def _axis_terms(value: float, coords: np.ndarray, step: float, what: str, where: str) -> list[tuple[int, float]]:
+    """(index, weight) of the linear interpolation at ``value`` on the regular ``coords``; refuses outside them."""
+    lo, hi = coords[0], coords[-1]
+    tol = 1e-9 * max(1.0, abs(step))
+    if not lo - tol <= value <= hi + tol:
+        raise ParameterError(f"{where}: {what} = {value:g} m is outside the field ({lo:g} .. {hi:g} m)")
+    if len(coords) == 1:
+        return [(0, 1.0)]
+    f = min(max((value - lo) / step, 0.0), len(coords) - 1.0)
+    i = min(int(math.floor(f)), len(coords) - 2)
+    frac = f - i
+    return [(j, w) for j, w in ((i, 1.0 - frac), (i + 1, frac)) if w != 0.0]
+
+
+def _plane(run: MannRun, x: float, where: str) -> int:
+    xs = run.grid.x()
+    i = int(np.argmin(np.abs(xs - x)))
+    if abs(xs[i] - x) > PLANE_TOL_M * max(1.0, abs(x)):
+        planes = ", ".join(f"{v:g}" for v in xs)
+        raise ParameterError(f"{where}: x = {x:g} m is not a plane of the run (planes: {planes} m); make the field "
+                             "with a plane there (`x_m`)")  # fmt: skip
+    return i
+
+
+def _on_grid(run: MannRun, t_s: np.ndarray, values: np.ndarray, x: float, where: str) -> np.ndarray:
+    """The series interpolated linearly onto the stored times of the plane at x (NaN outside its span or next to a
+    missing value); refuses data whose stored times leave the record [0, (nt - 1) dt]."""
+    g = run.grid
+    stored = t_s + x / run.U_m_s
+    end = (g.nt - 1) * g.dt_s
+    if stored[0] < -1e-9 * g.dt_s or stored[-1] > end + 1e-9 * g.dt_s:
+        raise ParameterError(f"{where}: its samples fall at stored times {stored[0]:g} .. {stored[-1]:g} s "
+                             f"(time + x/U), outside the field's record 0 .. {end:g} s")  # fmt: skip
+    tn = g.t()
+    k = np.clip(np.searchsorted(stored, tn, side="right") - 1, 0, len(stored) - 2)
+    frac = (tn - stored[k]) / (stored[k + 1] - stored[k])
+    out = values[k] * (1.0 - frac) + values[k + 1] * frac
+    exact_left = frac == 0.0
+    out[exact_left] = values[k[exact_left]]  # a sample on a stored time needs no neighbour
+    out[(tn < stored[0]) | (tn > stored[-1])] = math.nan
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class PlacedStream:
+    """One measured series on the grid: ``terms`` (T, 5) rows (component, y index, z index, time shift [steps],
+    weight) of plane ``plane``, observed every ``decimation`` steps from ``offset``; ``data`` (nt / decimation,)
+    [m/s] (NaN: missing), ``noise_m_s`` [m/s], ``geometry`` (a record for the store, with its ``name``)."""
+
+    plane: int
+    terms: np.ndarray
+    decimation: int
+    offset: int
+    data: np.ndarray
+    noise_m_s: float
+    geometry: dict
+
+
+def _point_streams(run: MannRun, f: PointSeries, sigma: float) -> list[PlacedStream]:
+    g = run.grid
+    out = []
+    for s in f.sensors:
+        where = f"constraint file {f.source}, {s.name}"
+        z = s.z_m if s.z_m is not None else s.height_m - run.hub_height_m
+        p = _plane(run, s.x_m, where)
+        ty = _axis_terms(s.y_m, g.y(), g.dy_m, "y", where)
+        tz = _axis_terms(z, g.z(), g.dz_m, "z", where)
+        for comp, values in s.series.items():
+            c = COMPONENTS.index(comp)
+            shift = run.U_m_s if (comp == "u" and f.total_wind) else 0.0
+            on_grid = _on_grid(run, f.time_s, values - shift, s.x_m, where)
+            if not np.isfinite(on_grid).any():
+                raise ParameterError(f"{where}: {comp} has no value at the field's time steps")
+            terms = np.array([(c, iy, iz, 0, wy * wz) for iy, wy in ty for iz, wz in tz], dtype=float)
+            name = f"{Path(f.source).name}:{s.name}:{comp}"
+            out.append(PlacedStream(p, terms, 1, 0, on_grid, sigma, {
+                "name": name, "kind": "point", "component": comp, "x_m": s.x_m, "y_m": s.y_m, "z_m": z, "plane": p,
+                "noise_m_s": sigma, "mean_wind_subtracted_m_s": shift}))  # fmt: skip
+    return out
+
+
+def _combine(placed: list[PlacedStream], nt: int) -> PlacedData:
+    """One Streams of common decimation Q = lcm of the streams' (which must divide nt): a stream observed every q
+    steps becomes Q/q streams observed every Q steps from its offsets o + r q."""
+    big_q = math.lcm(*(s.decimation for s in placed))
+    if nt % big_q:
+        raise ParameterError(f"the measurements' sampling periods (every {big_q} time steps in common) do not divide "
+                             f"the record of {nt} steps: make the field with `nt` a multiple of {big_q}")  # fmt: skip
+    planes, terms, offsets, data, noise, geometry, names = [], [], [], [], [], [], []
+    for s in placed:
+        parts = big_q // s.decimation
+        for r in range(parts):
+            a = len(planes)
+            planes.append(s.plane)
+            offsets.append(s.offset + r * s.decimation)
+            terms.append(np.column_stack([np.full(len(s.terms), a), s.terms]))
+            data.append(s.data[r::parts])
+            noise.append(s.noise_m_s)
+            names.append(s.geometry["name"] if parts == 1 else f"{s.geometry['name']}[{r}/{parts}]")
+            geometry.append(s.geometry if parts == 1 else {**s.geometry, "name": names[-1]})
+    t = np.concatenate(terms)
+    as_int = [t[:, k].astype(np.int64) for k in range(5)]
+    streams = cond.Streams(np.array(planes, dtype=np.int64), as_int[0], as_int[1], as_int[2], as_int[3], t[:, 5],
+                           tuple(names), term_shift=as_int[4], decimation=big_q, offset=np.array(offsets, np.int64))
+    return PlacedData(streams, np.array(data), np.array(noise), tuple(geometry))
+
+
+def place(run: MannRun, files: list, noise_m_s: float | None = None) -> PlacedData:
+    """The streams and data of ``files`` (PointSeries, or turbgen.lidar.dataset.LidarData) on the grid of ``run``
+    (see the module docstring).
+
+    ``noise_m_s`` (>= 0) replaces every file's own ``noise_m_s``; a file without one has noise 0.
+    """
+    from turbgen.runs.constrain_lidar import lidar_streams
+
+    if noise_m_s is not None and not (math.isfinite(noise_m_s) and noise_m_s >= 0):
+        raise ParameterError(f"noise = {noise_m_s!r} m/s must be a finite number >= 0")
+    placed = []
+    for f in files:
+        if isinstance(f, PointSeries):
+            sigma = noise_m_s if noise_m_s is not None else (f.noise_m_s or 0.0)
+            placed += _point_streams(run, f, sigma)
+        else:
+            placed += lidar_streams(run, f, 0.0 if noise_m_s is None else noise_m_s)
+    return _combine(placed, run.grid.nt)
+
+
+def _measurement_noise(run: MannRun, placed: PlacedData) -> np.ndarray:
+    """eps_s ~ N(0, R) (M, nt), from its own stream keyed by the run's seed (the same on every machine)."""
+    rng = np.random.Generator(np.random.SFC64(np.random.SeedSequence((run.seed, _NOISE_KEY))))
+    return rng.standard_normal(placed.data.shape) * placed.noise_m_s[:, None]
+
+
+def stream_system(run: MannRun, stencil, placed: PlacedData) -> np.ndarray:
+    """The per-frequency matrices of S = H C H^T + R (turbgen.synthesis.conditioning.stream_covariance).
+
+    Raises ParameterError when zero-noise measurements are linearly dependent (naming them)."""
+    cov = cond.stream_covariance(stencil, placed.streams, run.plane_times_s(), placed.noise_m_s**2)
+    if np.any(placed.noise_m_s == 0):
+        cond.check_singular(cov, placed.streams.names)
+    return cov
+
+
+def solve_constraints(cov: np.ndarray, placed: PlacedData, measured: np.ndarray | None,
+                      eps: np.ndarray | None) -> tuple[np.ndarray, cond.SolveReport]:  # fmt: skip
+    """x = S^-1 (d - H u_s - eps_s) (or S^-1 d when ``measured`` is None: the conditional mean), (M, nt), zero at the
+    missing samples."""
+    observed = np.isfinite(placed.data)
+    r = placed.data if measured is None else placed.data - measured - eps
+    return cond.solve(cov, np.where(observed, r, 0.0), observed)
+
+
+def _unconstrained_measurement(run: MannRun, gen: MannSnapshots, placed: PlacedData) -> np.ndarray:
+    """Pass 1: H u_s of the unconstrained sample of the run's seed (nothing is kept)."""
+    out = np.zeros(placed.data.shape)
+    for ix, comp, field in gen.generate(run.seed, run.plane_times_s()):
+        cond.measure(placed.streams, ix, COMPONENTS.index(comp), field, out)
+    return out
+
+
+def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarray, *, conditional_mean: bool = False,
+                       threads: int | None = None):  # fmt: skip
+    """The conditioned field of ``run``: (solver report, iterator of (plane index, component, field (nt, ny, nz)
+    float32 [m/s])), the generator's order; each array is fresh (it may be kept).
+
+    A conditional sample u_s + C H^T S^-1 (d - H u_s - eps_s): the first pass (here, before returning) generates u_s
+    and measures it, the iterator generates it again and adds the correction. ``conditional_mean``: C H^T S^-1 d.
+    ``cov``: stream_system(run, stencil, placed).
+    """
+    g = run.grid
+    gen = MannSnapshots(stencil, g.ny, g.nz, default_threads(threads))
+    measured = eps = None
+    if not conditional_mean:
+        measured, eps = _unconstrained_measurement(run, gen, placed), _measurement_noise(run, placed)
+    x, report = solve_constraints(cov, placed, measured, eps)
+    frozen = stencil.inv_tau is None  # every plane is the same snapshot, and so is its correction
+    wanted = [0] if frozen else list(range(g.nx))
+    spectra = cond.correction_spectra(stencil, placed.streams, x, run.plane_times_s(), wanted, g.ny, g.nz)
+    kept: dict[int, np.ndarray] = {}
+
+    def correction(ix: int) -> np.ndarray:
+        key = 0 if frozen else ix
+        if key not in kept:
+            kept.clear()
+            kept[key] = cond.spectra_field(spectra[key], g.nt)
+        return kept[key]
+
+    def planes():
+        if conditional_mean:
+            source = ((ix, comp, None) for ix in range(g.nx) for comp in COMPONENTS)
+        else:
+            source = gen.generate(run.seed, run.plane_times_s())
+        for ix, comp, field in source:
+            value = correction(ix)[COMPONENTS.index(comp)].astype(np.float32)
+            if field is not None:
+                value += field
+            yield ix, comp, value
+
+    return report, planes()
+
+
+def _record(files, placed: PlacedData, report: cond.SolveReport, remeasured: np.ndarray,
+            conditional_mean: bool) -> dict:  # fmt: skip
+    observed = np.isfinite(placed.data)
+    resid = (remeasured - placed.data)[observed]
+    return {
+        "kind": sorted({s["kind"] for s in placed.geometry}),
+        "files": [f.source for f in files],
+        "conditional_mean": conditional_mean,
+        "interpolation": "point series: linear onto the stored times t = T + x/U, bilinear in (y, z); lidar: the "
+                         "virtual lidar's own operator (probe volume, Taylor shift, linear in t, bilinear in y, z)",
+        "decimation": int(placed.streams.decimation),
+        "streams": list(placed.geometry),
+        "data_m_s": [[None if not math.isfinite(v) else float(v) for v in row] for row in placed.data],
+        "n_samples": int(observed.sum()),
+        "solver": {"method": report.method, "iterations": report.iterations,
+                   "relative_residual": report.relative_residual, "tolerance": cond.CG_TOLERANCE},
+        "residual_max_m_s": float(np.abs(resid).max()),
+        "residual_rms_m_s": float(np.sqrt(np.mean(resid**2))),
+    }  # fmt: skip
+
+
+def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m_s: float | None = None,
+                         conditional_mean: bool = False, overwrite: bool = False, chunk_t: int | None = None,
+                         threads: int | None = None, cache_dir=None) -> dict:  # fmt: skip
+    """Generate ``run`` conditioned on the point series ``files`` into a new store at ``out``.
+
+    Parameters
+    ----------
+    run : MannRun
+        The run (its seed draws u_s and eps_s).
+    out : str or path-like
+        The new store.
+    files : list of PointSeries
+        The measurements (turbgen.spec.constraints.load_point_series).
+    noise_m_s : float, optional
+        Measurement-noise sigma [m/s] >= 0 for every value, replacing the files' own.
+    conditional_mean : bool
+        Write the conditional mean C H^T S^-1 d (no random part) instead of a conditional sample.
+
+    Returns
+    -------
+    dict
+        path, seconds, sigma_/mean_ u/v/w [m/s] and ``constraints`` (the record written to the store).
+
+    Raises
+    ------
+    ParameterError
+        For measurements off the field, all missing, noise < 0, dependent zero-noise measurements; nothing written.
+    """
+    t_start = time.perf_counter()
+    threads = default_threads(threads)
+    placed = place(run, files, noise_m_s)
+    g = run.grid
+    m = placed.streams.n_streams
+    box = synthesis_box(run)
+    frozen = run.params.evo_time_s is None or g.nx == 1
+    st = placed.streams
+    keys = len(np.unique(np.stack([st.term_stream, st.term_component, st.term_shift]), axis=1).T)
+    # S (nt/q frequencies x M x M), the correction's spectra of every plane (complex64), one plane's correction
+    # (float64), the stream arrays, the streams' (k2, k3) footprints and three slabs' transfer functions
+    extra = (g.nt * m * m * 16 + (1 if frozen else g.nx) * 3 * box.nk1 * g.ny * g.nz * 8 + 3 * g.nt * g.ny * g.nz * 8
+             + 8 * m * g.nt * 8 + (keys + 9 * m) * box.nyp * box.nzp * 16)  # fmt: skip
+    require_memory(memory_estimate_bytes(run, threads) + extra, f"the constrained Mann run ({m} measurement streams)",
+                   "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
+    stencil = build_mann_stencil(run, cache_dir)
+    cov = stream_system(run, stencil, placed)
+    report, planes = conditioned_planes(run, stencil, placed, cov, conditional_mean=conditional_mean, threads=threads)
+    remeasured = np.zeros(placed.data.shape)
+    sums = {c: [0.0, 0.0] for c in COMPONENTS}
+    with create_store(Path(out), g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:
+        for ix, comp, value in planes:
+            cond.measure(placed.streams, ix, COMPONENTS.index(comp), value, remeasured)
+            total, squares = writer.write(comp, ix, value, squares=True)
+            sums[comp][0] += total
+            sums[comp][1] += squares
+        record = _record(files, placed, report, remeasured, conditional_mean)
+        writer.add_attrs(constraints=record)
+    n = g.nt * g.nx * g.ny * g.nz
+    summary = {"path": str(out), "seconds": time.perf_counter() - t_start, "constraints": record}
+    for c, (s1, s2) in sums.items():
+        summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - (s1 / n) ** 2, 0.0))
+        summary[f"mean_{c}"] = s1 / n
+    return summary
+
+
+def load_constraint(path):
+    """A constraint file: a ``turbgen lidar --out`` dataset (a directory with v_los) or a point-series JSON file.
+
+    Raises
+    ------
+    ParameterError, StoreError
+        If the file is not readable or does not match its format.
+    """
+    from turbgen.lidar.dataset import is_lidar_dataset, read_dataset
+    from turbgen.spec.constraints import load_point_series
+
+    return read_dataset(path) if is_lidar_dataset(path) else load_point_series(path)
+
+
+def describe_constraints(record: dict) -> list[str]:
+    """Lines saying how a store was conditioned (from its ``constraints`` record)."""
+    solver = record["solver"]
+    how = "direct per-frequency solve" if solver["method"] == "circulant" else (
+        f"conjugate gradients, {solver['iterations']} iterations")
+    what = "conditional mean" if record["conditional_mean"] else "conditional sample"
+    noise = sorted({s["noise_m_s"] for s in record["streams"]})
+    return [
+        f"constrained ({what}) on {len(record['streams'])} measured series, {record['n_samples']} samples from "
+        f"{', '.join(record['files'])}; noise sigma {', '.join(f'{v:g}' for v in noise)} m/s",
+        f"solve: {how}, relative residual {solver['relative_residual']:.1e}; field - data at the measurements: "
+        f"max {record['residual_max_m_s']:.2e} m/s, rms {record['residual_rms_m_s']:.2e} m/s",
+    ]

@@ -1,0 +1,110 @@
+"""Lidar line-of-sight data as constraints: a ``turbgen lidar --out`` dataset placed on a run's grid.
+
+The measurement operator is the virtual lidar's own (turbgen.lidar.sampling.los_operator: discrete probe-volume
+weights, Taylor shift within the probe volume to the stored time t = T + x'/U of the gate's plane, linear in t,
+bilinear in y, z), rebuilt from the lidar description and measurement times the dataset holds. Each beam-gate is one
+stream observed once per scan: the scan period must be a whole number q of the field's time steps, so that every scan
+uses the same weights q steps later (conditioning.Streams with decimation q, time-shifted terms). If the dataset
+includes the mean wind (``mean_wind_added``), its line-of-sight part (turbgen.lidar.sampling.mean_wind_los, with the
+run's U and hub height and the dataset's shear exponent) is subtracted.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.lidar.dataset import LidarData
+from turbgen.lidar.description import lidar_from_mapping
+from turbgen.lidar.run import measurements_of
+from turbgen.lidar.sampling import check_measurements, los_operator, mean_wind_los
+
+_WEIGHT_TOL = 1e-9  # weights of one term that differ by less between scans are the same (rounding of T + x'/U)
+
+
+def _scan_step(data: LidarData, dt_s: float, where: str) -> int:
+    """q: the scan period in time steps (whole, the same for every beam and scan)."""
+    period = np.diff(data.time_s, axis=0)
+    if period.size == 0:
+        raise ParameterError(f"{where}: one scan only; at least two are needed")
+    q = int(round(float(period.mean()) / dt_s))
+    if q < 1 or np.abs(period - q * dt_s).max() > 1e-6 * dt_s:
+        raise ParameterError(f"{where}: the scan period ({float(period.mean()):g} s) is not a whole number of the "
+                             f"field's time steps (dt = {dt_s:g} s): make the field with a dt that divides "
+                             "it")  # fmt: skip
+    return q
+
+
+def _terms(op, j: int, q: int, where: str) -> tuple[np.ndarray, int]:
+    """Merged terms (T, 5) (component, y, z, shift, weight) of measurement j and its first stored time step."""
+    weight = op.weight[:, j]  # (n_scan, R)
+    t_index = op.t_index[:, j]
+    live = np.abs(weight).max(axis=0) > 0
+    steps = t_index[:, live] - t_index[0, live][None, :]
+    expected = q * np.arange(weight.shape[0])[:, None]
+    same = np.abs(weight[:, live] - weight[0, live][None, :]).max(initial=0.0) <= _WEIGHT_TOL
+    if not same or not np.array_equal(steps, np.broadcast_to(expected, steps.shape)):
+        raise ParameterError(f"{where}: the measurement times do not repeat every {q} time steps with the same "
+                             "weights; the lidar cannot be placed on this grid")  # fmt: skip
+    t0 = t_index[0, live]
+    first = int(t0.min())
+    rows = {}
+    for c in range(3):
+        if op.n[j, c] == 0.0:
+            continue
+        for r in np.flatnonzero(live):
+            key = (c, int(op.y_index[j, r]), int(op.z_index[j, r]), int(op.t_index[0, j, r]) - first)
+            rows[key] = rows.get(key, 0.0) + op.n[j, c] * weight[0, r]
+    terms = np.array([(*k, w) for k, w in sorted(rows.items()) if w != 0.0], dtype=float)
+    return terms, first
+
+
+def lidar_streams(run, data: LidarData, sigma: float) -> list:
+    """The beam-gates of ``data`` as PlacedStreams of ``run`` (noise sigma [m/s] each)."""
+    from turbgen.runs.constrain import PlacedStream
+
+    g = run.grid
+    where = f"lidar dataset {data.source}"
+    if abs(data.U_m_s - run.U_m_s) > 1e-9 * run.U_m_s:
+        raise ParameterError(f"{where}: measured a field with U = {data.U_m_s:g} m/s, this run has U = "
+                             f"{run.U_m_s:g} m/s; the probe volume's Taylor shift depends on U: use the same "
+                             "U")  # fmt: skip
+    description = lidar_from_mapping(data.lidar, where)
+    ms = measurements_of(description)
+    try:
+        planes = check_measurements(SimpleNamespace(grid=g), ms)
+    except ParameterError as exc:
+        raise ParameterError(f"{where}: {exc}") from None
+    beams = sorted({m.beam for m in ms})
+    gates = sorted({m.gate for m in ms})
+    n_scan = data.v_los.shape[0]
+    times = np.stack([data.time_s[:, beams.index(m.beam)] for m in ms], axis=1)
+    if (times.max() + max(m.points_m()[:, 0].max() for m in ms) / run.U_m_s > (g.nt - 1) * g.dt_s + 1e-9
+            or times.min() < 0):  # fmt: skip
+        end = (g.nt - 1) * g.dt_s
+        raise ParameterError(f"{where}: its measurements fall outside the field's record 0 .. {end:g} s (stored "
+                             "time T + x/U)")  # fmt: skip
+    q = _scan_step(data, g.dt_s, where)
+    op = los_operator(g, run.U_m_s, ms, planes, times)
+    mean = mean_wind_los(ms, run.U_m_s, run.hub_height_m, data.shear_exponent) if data.mean_wind_added else None
+    n_dec = g.nt // q if g.nt % q == 0 else None
+    if n_dec is None:
+        raise ParameterError(f"{where}: the scan period ({q} time steps) does not divide the record of {g.nt} steps: "
+                             f"make the field with `nt` a multiple of {q}")  # fmt: skip
+    out = []
+    for j, m in enumerate(ms):
+        terms, first = _terms(op, j, q, where)
+        values = data.v_los[:, beams.index(m.beam), gates.index(m.gate)] - (0.0 if mean is None else mean[j])
+        series = np.full(n_dec, np.nan)
+        series[first // q + np.arange(n_scan)] = values
+        name = f"{Path(data.source).name}:beam{m.beam}:gate{m.gate}"
+        focus = m.points_m()[len(m.offsets_m) // 2]
+        out.append(PlacedStream(planes[j], terms, q, first % q, series, sigma, {
+            "name": name, "kind": "lidar", "component": "los", "beam": m.beam, "gate": m.gate,
+            "x_m": float(g.x_m[planes[j]]), "y_m": float(focus[1]), "z_m": float(focus[2]), "n": list(m.n),
+            "plane": planes[j], "noise_m_s": sigma,
+            "mean_wind_subtracted": bool(data.mean_wind_added)}))  # fmt: skip
+    return out
