@@ -6,8 +6,6 @@ GitHub and in an editor, and the command blocks are extracted and run by tests/d
 pydata-sphinx-theme as the scientific-Python projects' (numpy, scipy, xarray) theme.
 """
 
-from pathlib import Path
-
 import turbgen
 
 project = "turbgen"
@@ -26,8 +24,3 @@ numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 autodoc_typehints = "none"  # the numpydoc Parameters sections give types and units
 
-# Pages written on other branches (mean wind and exports, constrained fields) are listed in the index's toctree;
-# until they are merged here, their entries are the only "nonexisting document" references allowed.
-_LATER = ("inflow", "constrained-fields")
-if any(not (Path(__file__).parent / f"{name}.md").exists() for name in _LATER):
-    suppress_warnings = ["toc.not_readable"]
