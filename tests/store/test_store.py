@@ -206,7 +206,7 @@ def test_overwrite_never_replaces_a_non_store(tmp_path):
     precious = tmp_path / "results"
     precious.mkdir()
     (precious / "thesis.tex").write_text("x")
-    with pytest.raises(StoreError, match="not a turbgen store; refusing"):
+    with pytest.raises(StoreError, match="not a turbgen store; it will not be replaced"):
         create_store(precious, GRID, ATTRS, overwrite=True)
     assert (precious / "thesis.tex").read_text() == "x"
 
