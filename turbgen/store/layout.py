@@ -72,8 +72,8 @@ FRAME_NOTE = (
 
 # Attributes the caller of create_store supplies / the writer adds / the marker.
 CALLER_ATTRS = ("model", "parameters", "units", "seed", "U_m_s", "hub_height_m")
-RMS_ATTR = "rms_m_s"  # written by the writer with the marker (older stores lack it)
-WRITER_ATTRS = ("turbgen_version", "created_utc", "layout_version", "frame", "frame_note", "grid", RMS_ATTR)
+WRITER_ATTRS = ("turbgen_version", "created_utc", "layout_version", "frame", "frame_note", "grid")
+RMS_ATTR = "rms_m_s"  # also set by the writer, with the marker (optional: older stores lack it)
 MARKER = "turbgen_complete"
 
 DEFAULT_CHUNK_T_MAX = 1024

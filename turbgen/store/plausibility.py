@@ -13,7 +13,8 @@ that attribute.
 
 Why 100 rms: turbgen's fields are Gaussian (linear in Gaussian noise), so the largest |value| among n
 samples is about sqrt(2 ln n) rms: 7.4 rms for n = 10^12, far more samples than a store holds. A value
-of 100 rms has probability below exp(-5000); it is corrupted data, not turbulence.
+of 100 rms has probability below exp(-5000); it is corrupted data, not turbulence. (A value the writer
+itself wrote is inside its own rms: at most sqrt(n) rms. The check finds values changed after the write.)
 """
 
 from __future__ import annotations
