@@ -291,9 +291,11 @@ CASES = [
     # --- issue 27 sect. 3: tracebacks ---
     ("serve-memory-nan", ["serve", "--memory-budget", "nan"], ["--memory-budget", "nan", "not a finite number"]),
     # stores that decode but hold nonsense (workdir fixture): a finite garbage chunk, attributes out of range
-    ("validate-garbage-chunk", ["validate", "garbage.zarr"], ["garbage.zarr", "3e+38", "u, plane index 0", "corrupted"]),
+    ("validate-garbage-chunk", ["validate", "garbage.zarr"],
+     ["garbage.zarr", "3e+38", "u, plane index 0", "corrupted"]),
     ("info-garbage-chunk", ["info", "garbage.zarr"], ["garbage.zarr", "3e+38", "corrupted"]),
-    ("export-garbage-chunk", ["export", "garbage.zarr", "--format", "bts", "--out", "g.bts"], ["garbage.zarr", "3e+38"]),
+    ("export-garbage-chunk", ["export", "garbage.zarr", "--format", "bts", "--out", "g.bts"],
+     ["garbage.zarr", "3e+38"]),
     ("validate-garbage-no-rms", ["validate", "garbage_old.zarr"], ["garbage_old.zarr", "3e+38", "mean wind"]),
     ("validate-U-1e308", ["validate", "fast.zarr"], ["fast.zarr", "U_m_s", "1e+308", "[0.5, 100]"]),
     ("info-U-1e308", ["info", "fast.zarr"], ["fast.zarr", "1e+308", "[0.5, 100]"]),
@@ -306,12 +308,15 @@ CASES = [
     ("mann-config-dev-zero", ["mann", "--config", "/dev/zero"], ["/dev/zero", "not a regular file"]),
     ("mann-presets-file-dev-zero", ["mann", "--preset", "neutral", "--presets-file", "/dev/zero"],
      ["/dev/zero", "not a regular file (a character device)"]),
-    ("kaimal-config-huge", ["kaimal", "--config", "huge.toml"], ["huge.toml", "at most 1048576 bytes", "2097150 bytes"]),
+    ("kaimal-config-huge", ["kaimal", "--config", "huge.toml"],
+     ["huge.toml", "at most 1048576 bytes", "2097150 bytes"]),
     ("sweep-config-huge", ["sweep", "--config", "huge.toml"], ["huge.toml", "1048576"]),
-    ("mann-out-in-store", ["mann", *SMALL, "--out", "mann.zarr/inner.zarr"], ["mann.zarr/inner.zarr", "inside the store"]),
+    ("mann-out-in-store", ["mann", *SMALL, "--out", "mann.zarr/inner.zarr"],
+     ["mann.zarr/inner.zarr", "inside the store"]),
     ("kaimal-out-deep-in-store", ["kaimal", *SMALL, "--out", "mann.zarr/u/k.zarr"], ["inside the store"]),
     ("validate-plots-in-store", ["validate", "mann.zarr", "--plots", "mann.zarr/plots"], ["inside the store"]),
-    ("sweep-out-store", [*SWEEP, *SMALL, "--out", "mann.zarr"], ["mann.zarr", "is a field store, not a sweep directory"]),
+    ("sweep-out-store", [*SWEEP, *SMALL, "--out", "mann.zarr"],
+     ["mann.zarr", "is a field store, not a sweep directory"]),
     ("sweep-out-in-store", [*SWEEP, *SMALL, "--out", "mann.zarr/sw"], ["inside the store"]),
     ("theory-lidar-beam-rate-tiny", ["theory", "lidar", "--lidar", "slow_lidar.toml"],
      ["beam_rate_hz", "1e-300", "[0.001, 1000]"]),
@@ -321,13 +326,17 @@ CASES = [
     ("lidar-optimize-pitch-nan-default-grid", ["lidar", "optimize", "--pitch-delay", "nan"], ["pitch-delay", "nan"]),
     ("lidar-optimize-pitch-neg", ["lidar", "optimize", "--pitch-delay", "-1e300", "--ranges", "100", "--cones", "10"],
      ["-1e+300", "[0, 10]"]),
-    ("lidar-optimize-ranges-huge", ["lidar", "optimize", "--ranges", "100:1e300:1"], ["'100:1e300:1'", "1e+300", "500"]),
+    ("lidar-optimize-ranges-huge", ["lidar", "optimize", "--ranges", "100:1e300:1"],
+     ["'100:1e300:1'", "1e+300", "500"]),
     # --- misleading ---
     ("mann-gates-1e300", ["mann", "--gates", "50:1e300:1"], ["'50:1e300:1'", "about 1e+300 values", "256"]),
     ("sweep-seeds-1e300", [*SWEEP[:-1], "1-" + "9" * 300, "--out", "sw"], ["about 1e+300 values", "10000"]),
-    ("mann-out-is-a-file", ["mann", *SMALL, "--out", "afile"], ["afile", "not a turbgen store", "will not be replaced"]),
-    ("kaimal-out-is-a-file", ["kaimal", *SMALL, "--out", "afile"], ["afile", "not a turbgen store", "will not be replaced"]),
-    ("lidar-out-is-a-file", ["lidar", "mann.zarr", "--out", "afile"], ["afile", "not a zarr dataset", "will not be replaced"]),
+    ("mann-out-is-a-file", ["mann", *SMALL, "--out", "afile"],
+     ["afile", "not a turbgen store", "will not be replaced"]),
+    ("kaimal-out-is-a-file", ["kaimal", *SMALL, "--out", "afile"],
+     ["afile", "not a turbgen store", "will not be replaced"]),
+    ("lidar-out-is-a-file", ["lidar", "mann.zarr", "--out", "afile"],
+     ["afile", "not a zarr dataset", "will not be replaced"]),
 ]
 
 SWEEP_FILE = 'models = ["mann"]\npresets = ["neutral"]\nspeeds = [10]\nseeds = {seeds}\n{out}'
@@ -594,7 +603,8 @@ def test_grid_options_help_shows_the_ranges_that_are_enforced(command):
     refuses values (issue 27: the help said [1, 16384] where [2, 4096] was enforced)."""
     res = CliRunner().invoke(cli, [command, "--help"], prog_name="turbgen", terminal_width=200)
     assert res.exit_code == 0, res.output
-    lines = {line.split()[0]: " ".join(line.split()) for line in res.output.splitlines() if line.strip().startswith("--")}
+    lines = {line.split()[0]: " ".join(line.split()) for line in res.output.splitlines()
+             if line.strip().startswith("--")}
     for option, key in (("--nt", "nt"), ("--dt", "dt_s"), ("--ny", "ny"), ("--nz", "nz"), ("--dy", "dy_m"),
                         ("--dz", "dz_m")):
         assert ranges.RANGES[key].text() in lines[option], (option, lines[option])

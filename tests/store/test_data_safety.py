@@ -558,8 +558,8 @@ STARTING = [(signal.SIGINT, 1.0), (signal.SIGINT, 3.5), (signal.SIGINT, 5.0), (s
 @pytest.mark.parametrize("sig,after", STARTING, ids=[f"{s.name}-{a:g}s" for s, a in STARTING])
 def test_sweep_interrupted_while_its_workers_start_prints_one_line(sig, after, tmp_path):
     # issue 27: Ctrl-C while the local cluster starts reached the half-started worker processes (a traceback
-    # from each import), the cluster's close (AssertionError: Status.init) and left resource_tracker's
-    # leaked-semaphore warning after the error line. The signal is sent to the group as a terminal does,
+    # from each import, "Nanny failed to start") and the cluster's close (AssertionError: Status.init); the issue
+    # also saw resource_tracker's leaked-semaphore warning after the error line. Sent to the group as a terminal does,
     # ``after`` seconds after the manifest is written: on the 2-core CI machine the workers were being spawned
     # 3.5 and 5 s after it (6 tracebacks each before the fix); 1 s is before the spawn.
     d = tmp_path / "sw"

@@ -69,8 +69,8 @@ def _make_client(plan: SweepPlan, n: int, processes: bool):
     # alone, which shuts the workers down, instead of ~80 lines of tracebacks from every worker. Until the workers
     # ignore them, the signals are blocked (a worker process inherits the mask of the thread that starts it, so one
     # still importing never sees them either); a signal that came meanwhile is raised when they are unblocked,
-    # with the cluster up and closed in order (a Ctrl-C during the start-up left tracebacks of half-started
-    # workers, of the cluster's close and resource_tracker's leaked-semaphore warning after the one-line error)
+    # with the cluster up and closed in order (a Ctrl-C during the start-up printed tracebacks of the half-started
+    # workers and of the cluster's close around the one-line error)
     deferring = processes and threading.current_thread() is threading.main_thread()
     mask = signal.pthread_sigmask(signal.SIG_BLOCK, DEFERRED_SIGNALS) if deferring else None
     try:
