@@ -296,6 +296,7 @@ CASES = [
     ("info-garbage-chunk", ["info", "garbage.zarr"], ["garbage.zarr", "3e+38", "corrupted"]),
     ("export-garbage-chunk", ["export", "garbage.zarr", "--format", "bts", "--out", "g.bts"],
      ["garbage.zarr", "3e+38"]),
+    ("lidar-garbage-chunk", ["lidar", "garbage.zarr", "--lidar", "axial_lidar.toml"], ["garbage.zarr", "3e+38"]),
     ("validate-garbage-no-rms", ["validate", "garbage_old.zarr"], ["garbage_old.zarr", "3e+38", "mean wind"]),
     ("validate-U-1e308", ["validate", "fast.zarr"], ["fast.zarr", "U_m_s", "1e+308", "[0.5, 100]"]),
     ("info-U-1e308", ["info", "fast.zarr"], ["fast.zarr", "1e+308", "[0.5, 100]"]),
@@ -367,6 +368,9 @@ def workdir(tmp_path_factory):
     (root / "no_out.toml").write_text(SWEEP_FILE.format(seeds="[1]", out=""))
     (root / "huge.toml").write_text("# padding\n" * (2 * 2**20 // 10))  # 2.0 MiB of comments
     (root / "slow_lidar.toml").write_text(SLOW_LIDAR)
+    # one beam along the shaft to the 50 m plane, 4 Hz: fits the small store (lidar run on it: exit 0)
+    (root / "axial_lidar.toml").write_text(SLOW_LIDAR.replace("1e-300", "4.0").replace("100.0", "50.0")
+                                           .replace("63.0", "5.0") + "fwhm_m = 1.0\n")
     _corrupt_copies(root)
     return root
 
