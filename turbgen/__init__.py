@@ -63,6 +63,10 @@ class _Product:
     def __getattr__(self, attr):
         return getattr(self._package(), attr)
 
+    # vars(turbgen.validate) is the subpackage's namespace, as for a module (tools such as pytest's monkeypatch read
+    # and restore attributes through it)
+    __dict__ = property(lambda self: vars(self._package()))  # type: ignore[assignment]
+
     def __setattr__(self, attr, value):
         setattr(self._package(), attr, value)
 

@@ -136,3 +136,19 @@ def test_theory_namespace_names_resolve_and_its_examples_run():
     for name in theory.__all__:
         assert callable(getattr(theory, name)), name
     assert doctest.testmod(theory).failed == 0
+
+
+def test_attributes_patched_through_a_product_name_are_restored():
+    # pytest (>= 9) restores what monkeypatch changed through the object's __dict__: vars(turbgen.export) must be the
+    # subpackage's namespace, or the undo deletes the subpackage's attribute (require_disk vanished for later tests)
+    import importlib
+
+    from _pytest.monkeypatch import MonkeyPatch
+
+    package = importlib.import_module("turbgen.export")
+    original = package.require_disk
+    patch = MonkeyPatch()
+    patch.setattr("turbgen.export.require_disk", lambda *a, **k: None)
+    assert package.require_disk is not original
+    patch.undo()
+    assert package.require_disk is original and vars(turbgen.export) is vars(package)

@@ -12,6 +12,7 @@ A subprocess case checks the installed console script prints the same single lin
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -287,6 +288,56 @@ CASES = [
     ("info-bogus", ["info", "mann.zarr", "--bogus"], ["--bogus"]),
     ("group-bogus", ["--bogus"], ["--bogus"]),
     ("group-nosuch", ["nosuch"], ["'nosuch'"]),
+    # --- issue 27 sect. 3: tracebacks ---
+    ("serve-memory-nan", ["serve", "--memory-budget", "nan"], ["--memory-budget", "nan", "not a finite number"]),
+    # stores that decode but hold nonsense (workdir fixture): a finite garbage chunk, attributes out of range
+    ("validate-garbage-chunk", ["validate", "garbage.zarr"],
+     ["garbage.zarr", "3e+38", "u, plane index 0", "corrupted"]),
+    ("info-garbage-chunk", ["info", "garbage.zarr"], ["garbage.zarr", "3e+38", "corrupted"]),
+    ("export-garbage-chunk", ["export", "garbage.zarr", "--format", "bts", "--out", "g.bts"],
+     ["garbage.zarr", "3e+38"]),
+    ("lidar-garbage-chunk", ["lidar", "garbage.zarr", "--lidar", "axial_lidar.toml"], ["garbage.zarr", "3e+38"]),
+    ("validate-garbage-no-rms", ["validate", "garbage_old.zarr"], ["garbage_old.zarr", "3e+38", "mean wind"]),
+    ("validate-U-1e308", ["validate", "fast.zarr"], ["fast.zarr", "U_m_s", "1e+308", "[0.5, 100]"]),
+    ("info-U-1e308", ["info", "fast.zarr"], ["fast.zarr", "1e+308", "[0.5, 100]"]),
+    ("export-U-1e308", ["export", "fast.zarr", "--format", "bts", "--out", "f.bts"], ["fast.zarr", "1e+308"]),
+    ("export-wnd-U-1e308", ["export", "fast.zarr", "--format", "wnd", "--out", "f.wnd"], ["1e+308"]),
+    # --- accepted nonsense ---
+    ("info-L-neg", ["info", "negative_L.zarr"], ["negative_L.zarr", "length_scale_m", "-5", "[1, 1000]"]),
+    ("validate-L-neg", ["validate", "negative_L.zarr"], ["negative_L.zarr", "length_scale_m", "-5", "[1, 1000]"]),
+    ("export-L-neg", ["export", "negative_L.zarr", "--format", "hdf5", "--out", "l.h5"], ["-5", "[1, 1000]"]),
+    ("mann-config-dev-zero", ["mann", "--config", "/dev/zero"], ["/dev/zero", "not a regular file"]),
+    ("mann-presets-file-dev-zero", ["mann", "--preset", "neutral", "--presets-file", "/dev/zero"],
+     ["/dev/zero", "not a regular file (a character device)"]),
+    ("kaimal-config-huge", ["kaimal", "--config", "huge.toml"],
+     ["huge.toml", "at most 1048576 bytes", "2097150 bytes"]),
+    ("sweep-config-huge", ["sweep", "--config", "huge.toml"], ["huge.toml", "1048576"]),
+    ("mann-out-in-store", ["mann", *SMALL, "--out", "mann.zarr/inner.zarr"],
+     ["mann.zarr/inner.zarr", "inside the store"]),
+    ("kaimal-out-deep-in-store", ["kaimal", *SMALL, "--out", "mann.zarr/u/k.zarr"], ["inside the store"]),
+    ("validate-plots-in-store", ["validate", "mann.zarr", "--plots", "mann.zarr/plots"], ["inside the store"]),
+    ("sweep-out-store", [*SWEEP, *SMALL, "--out", "mann.zarr"],
+     ["mann.zarr", "is a field store, not a sweep directory"]),
+    ("sweep-out-in-store", [*SWEEP, *SMALL, "--out", "mann.zarr/sw"], ["inside the store"]),
+    ("theory-lidar-beam-rate-tiny", ["theory", "lidar", "--lidar", "slow_lidar.toml"],
+     ["beam_rate_hz", "1e-300", "[0.001, 1000]"]),
+    ("lidar-run-beam-rate-tiny", ["lidar", "mann.zarr", "--lidar", "slow_lidar.toml"], ["beam_rate_hz", "1e-300"]),
+    ("lidar-optimize-pitch-nan", ["lidar", "optimize", "--pitch-delay", "nan", "--ranges", "100", "--cones", "10"],
+     ["pitch-delay", "nan", "not a finite number"]),
+    ("lidar-optimize-pitch-nan-default-grid", ["lidar", "optimize", "--pitch-delay", "nan"], ["pitch-delay", "nan"]),
+    ("lidar-optimize-pitch-neg", ["lidar", "optimize", "--pitch-delay", "-1e300", "--ranges", "100", "--cones", "10"],
+     ["-1e+300", "[0, 10]"]),
+    ("lidar-optimize-ranges-huge", ["lidar", "optimize", "--ranges", "100:1e300:1"],
+     ["'100:1e300:1'", "1e+300", "500"]),
+    # --- misleading ---
+    ("mann-gates-1e300", ["mann", "--gates", "50:1e300:1"], ["'50:1e300:1'", "about 1e+300 values", "256"]),
+    ("sweep-seeds-1e300", [*SWEEP[:-1], "1-" + "9" * 300, "--out", "sw"], ["about 1e+300 values", "10000"]),
+    ("mann-out-is-a-file", ["mann", *SMALL, "--out", "afile"],
+     ["afile", "not a turbgen store", "will not be replaced"]),
+    ("kaimal-out-is-a-file", ["kaimal", *SMALL, "--out", "afile"],
+     ["afile", "not a turbgen store", "will not be replaced"]),
+    ("lidar-out-is-a-file", ["lidar", "mann.zarr", "--out", "afile"],
+     ["afile", "not a zarr dataset", "will not be replaced"]),
 ]
 
 SWEEP_FILE = 'models = ["mann"]\npresets = ["neutral"]\nspeeds = [10]\nseeds = {seeds}\n{out}'
@@ -315,7 +366,50 @@ def workdir(tmp_path_factory):
     (root / "seeds_huge.toml").write_text(SWEEP_FILE.format(seeds='"1-100000000"', out='out = "sw"'))
     (root / "seeds_back.toml").write_text(SWEEP_FILE.format(seeds='"9-2"', out='out = "sw"'))
     (root / "no_out.toml").write_text(SWEEP_FILE.format(seeds="[1]", out=""))
+    (root / "huge.toml").write_text("# padding\n" * (2 * 2**20 // 10))  # 2.0 MiB of comments
+    (root / "slow_lidar.toml").write_text(SLOW_LIDAR)
+    # one beam along the shaft to the 50 m plane, 4 Hz: fits the small store (lidar run on it: exit 0)
+    (root / "axial_lidar.toml").write_text(SLOW_LIDAR.replace("1e-300", "4.0").replace("100.0", "50.0")
+                                           .replace("63.0", "5.0") + "fwhm_m = 1.0\n")
+    _corrupt_copies(root)
     return root
+
+
+SLOW_LIDAR = """kind = "pulsed"
+mount = "nacelle"
+ranges_m = [100.0]
+beam_rate_hz = 1e-300
+rotor_radius_m = 63.0
+azimuth_deg = [0.0]
+elevation_deg = [0.0]
+"""
+
+
+def _corrupt_copies(root: Path) -> None:
+    """Copies of mann.zarr that still decode: a chunk of finite garbage (3e38 in every other value of the first
+    chunk of u at plane 0, with and without the writer's rms attribute), U = 1e308, L = -5."""
+    import json
+    import shutil
+
+    import numpy as np
+
+    def copy(name, edit=None, garbage=False):
+        dst = root / name
+        shutil.copytree(root / "mann.zarr", dst)
+        if garbage:
+            chunk = dst / "u" / "c" / "0" / "0" / "0" / "0"
+            values = np.fromfile(chunk, dtype="<f4")
+            values[::2] = 3e38
+            values.tofile(chunk)
+        if edit is not None:
+            meta = json.loads((dst / "zarr.json").read_text())
+            edit(meta["attributes"])
+            (dst / "zarr.json").write_text(json.dumps(meta))
+
+    copy("garbage.zarr", garbage=True)
+    copy("garbage_old.zarr", lambda a: a.pop("rms_m_s", None), garbage=True)  # a store written before rms_m_s
+    copy("fast.zarr", lambda a: a.update(U_m_s=1e308))
+    copy("negative_L.zarr", lambda a: a["parameters"].update(length_scale_m=-5))
 
 
 @pytest.mark.parametrize("args, expected", [pytest.param(a, e, id=i) for i, a, e in CASES])
@@ -331,6 +425,8 @@ def test_bad_input_is_one_line_exit_2_nothing_written(workdir, monkeypatch, args
     assert "Traceback" not in res.output
     for text in expected:
         assert text in err_lines[0], (text, err_lines[0])
+    for digits in re.findall(r"\d{30,}", err_lines[0]):  # no unreadable number beyond those the user typed
+        assert any(digits in str(a) for a in args), err_lines[0]
     assert _listing(workdir) == before
 
 
@@ -503,3 +599,36 @@ def test_scheduler_at_a_port_where_a_server_answers_other_bytes(workdir, monkeyp
     assert address in res.stderr and "no dask scheduler answered" in res.stderr
     assert _listing(workdir) == before
     srv.close()
+
+
+@pytest.mark.parametrize("command", ["mann", "kaimal", "sweep"])
+def test_grid_options_help_shows_the_ranges_that_are_enforced(command):
+    """The help of --nt, --dt, --ny, --nz, --dy, --dz shows the interval of turbgen.theory.ranges, the one that
+    refuses values (issue 27: the help said [1, 16384] where [2, 4096] was enforced)."""
+    res = CliRunner().invoke(cli, [command, "--help"], prog_name="turbgen", terminal_width=200)
+    assert res.exit_code == 0, res.output
+    lines = {line.split()[0]: " ".join(line.split()) for line in res.output.splitlines()
+             if line.strip().startswith("--")}
+    for option, key in (("--nt", "nt"), ("--dt", "dt_s"), ("--ny", "ny"), ("--nz", "nz"), ("--dy", "dy_m"),
+                        ("--dz", "dz_m")):
+        assert ranges.RANGES[key].text() in lines[option], (option, lines[option])
+
+
+def test_lidar_optimize_and_serve_help_show_their_ranges():
+    res = CliRunner().invoke(cli, ["lidar", "optimize", "--help"], prog_name="turbgen", terminal_width=200)
+    assert "[0, 10]" in " ".join(res.output.split()), res.output
+
+
+@pytest.mark.parametrize("args", [["validate", "mann.zarr"], ["info", "mann.zarr"]], ids=["validate", "info"])
+def test_ctrl_c_on_a_command_that_writes_nothing_says_only_interrupted(workdir, monkeypatch, args):
+    """Ctrl-C (KeyboardInterrupt) in a command that writes no output: 'interrupted', exit 130, and no claim that
+    unfinished output was removed (issue 27)."""
+    def interrupt(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("turbgen.cli.validate.run_validation", interrupt)
+    monkeypatch.setattr("turbgen.cli.info.open_store", interrupt)
+    monkeypatch.chdir(workdir)
+    res = CliRunner().invoke(cli, args, prog_name="turbgen")
+    assert res.exit_code == 130, res.output
+    assert res.stderr.strip().splitlines() == ["Error: interrupted"]

@@ -207,7 +207,7 @@ def test_overwrite_never_replaces_a_non_store(tmp_path):
     precious = tmp_path / "results"
     precious.mkdir()
     (precious / "thesis.tex").write_text("x")
-    with pytest.raises(StoreError, match="not a turbgen store; refusing"):
+    with pytest.raises(StoreError, match="not a turbgen store; it will not be replaced"):
         create_store(precious, GRID, ATTRS, overwrite=True)
     assert (precious / "thesis.tex").read_text() == "x"
 
@@ -426,3 +426,42 @@ def test_a_stop_request_publishes_nothing(tmp_path, monkeypatch):
             cancellation.request_stop(SystemExit(143))
     assert info.value.code == 143
     assert siblings(path) == [] and not path.exists()
+
+
+# -- plausibility (issue 27: garbage that decodes) ----------------------------------------------------------
+def test_writer_records_the_rms_of_each_component_and_readers_refuse_values_beyond_100_times_it(tmp_path):
+    data = field()
+    data["w"] *= 0.5
+    path = write_store(tmp_path / "f.zarr", data, chunk_t=4)
+    rms = open_store(path).attrs["rms_m_s"]
+    for c in layout.COMPONENTS:  # float64 sums of the float32 blocks: equal to float32 round-off
+        assert rms[c] == pytest.approx(float(np.sqrt(np.mean(data[c].astype(np.float64) ** 2))), rel=1e-12)
+    # a value changed after the write (the writer's rms includes every value it writes, so a written value
+    # can exceed it only sqrt(n) times): v at t 5, plane 1, y 2, z 0 in chunk file v/c/1/1/0/0 (t 4-7, raw)
+    chunk = path / "v" / "c" / "1" / "1" / "0" / "0"
+    values = np.fromfile(chunk, dtype="<f4")
+    values[(1 * GRID.ny + 2) * GRID.nz + 0] = 101 * rms["v"]
+    values.tofile(chunk)
+    fs = open_store(path)
+    with pytest.raises(StoreError, match=r"implausible value .* at v, plane index 1, t index 5, y index 2, z index 0 "
+                                         r"\(beyond 100 x its rms .*chunk file v/c/1/1/0/0\)"):
+        fs.check_chunks()
+    fs.read_plane("v", 0)  # the other planes read
+
+
+def test_read_span_of_any_time_range(tmp_path):
+    # a span starting inside a chunk read the chunks after it shifted (rows left unread: issue 27 review)
+    data = field()
+    fs = open_store(write_store(tmp_path / "f.zarr", data, chunk_t=4))
+    for t0 in range(GRID.nt):
+        for t1 in range(t0 + 1, GRID.nt + 1):
+            np.testing.assert_array_equal(fs.read_span("v", 1, t0, t1), data["v"][t0:t1, 1], err_msg=f"{t0}-{t1}")
+
+
+def test_out_of_range_attributes_are_refused_on_open(tmp_path):
+    path = write_store(tmp_path / "f.zarr", field())
+    meta = json.loads((path / "zarr.json").read_text())
+    meta["attributes"]["hub_height_m"] = 1e9
+    (path / "zarr.json").write_text(json.dumps(meta))
+    with pytest.raises(StoreError, match=r"is corrupted: attribute hub_height_m: hub height \(m\) = 1e\+09 is outside"):
+        open_store(path)

@@ -139,7 +139,7 @@ def test_lock_refuses_a_live_owner_and_takes_over_a_dead_one(tmp_path):
         assert json.loads((tmp_path / LOCK_NAME).read_text())["pid"] == os.getpid()  # names its owner
         with pytest.raises(SweepLockedError, match=f"pid {os.getpid()}"):
             SweepLock(tmp_path).acquire()
-    assert (tmp_path / LOCK_NAME).read_text() == ""  # released: emptied (filelock leaves the file)
+    assert not (tmp_path / LOCK_NAME).exists()  # released: removed while held
     # a lock file left by a killed sweep holds no OS lock any more (whatever it names): taken over
     (tmp_path / LOCK_NAME).write_text(json.dumps({"host": "elsewhere", "pid": _dead_pid()}))
     with SweepLock(tmp_path) as lock:

@@ -117,7 +117,7 @@ class TurbgenGroup(click.Group):
                 raise
             _quiet_shutdown()
             what = "interrupted" if sig == signal.SIGINT else f"terminated ({signal.Signals(sig).name})"
-            click.echo(f"Error: {what}; unfinished output was removed", err=True)
+            click.echo(_stopped_line(ctx, what), err=True)
             ctx.exit(128 + sig)
 
     def _invoke_one_line(self, ctx):
@@ -129,17 +129,29 @@ class TurbgenGroup(click.Group):
             raise _one_line(exc) from None
         except KeyboardInterrupt:  # Ctrl-C: writers have removed their temporaries; conventional exit 130
             _quiet_shutdown()
-            click.echo("Error: interrupted; unfinished output was removed", err=True)
+            click.echo(_stopped_line(ctx, "interrupted"), err=True)
             ctx.exit(130)
         except SystemExit as exc:  # SIGTERM / SIGHUP turned into SystemExit(128 + signum) by the writers
             if exc.code in (128 + signal.SIGTERM, 128 + signal.SIGHUP):
                 _quiet_shutdown()
                 name = signal.Signals(exc.code - 128).name
-                click.echo(f"Error: terminated ({name}); unfinished output was removed", err=True)
+                click.echo(_stopped_line(ctx, f"terminated ({name})"), err=True)
             raise
         except OSError as exc:  # a file-system error the library did not word itself (read-only, missing dir)
             where = f"{exc.filename}: " if exc.filename else ""
             raise UserError(f"{where}{exc.strerror or type(exc).__name__} (errno {exc.errno})") from None
+
+
+# commands whose outputs are written under temporary names that an interruption removes (others write nothing,
+# or only plots, and must not claim a removal)
+PUBLISHING_COMMANDS = ("mann", "kaimal", "export", "sweep")
+
+
+def _stopped_line(ctx, what: str) -> str:
+    """The one line of an interrupted or terminated command; it says unfinished output was removed only for a
+    command that writes its output under temporary names (PUBLISHING_COMMANDS)."""
+    removed = ctx.invoked_subcommand in PUBLISHING_COMMANDS
+    return f"Error: {what}" + ("; unfinished output was removed" if removed else "")
 
 
 def _one_line(exc: click.ClickException) -> click.ClickException:

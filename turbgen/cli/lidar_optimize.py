@@ -6,7 +6,8 @@ import json
 
 import click
 
-from turbgen.cli.options import parse_floats
+from turbgen.cli.options import count_text, parse_floats
+from turbgen.lidar.optimize import PITCH_DELAY_RANGE_S
 
 
 @click.command("optimize")
@@ -21,7 +22,8 @@ from turbgen.cli.options import parse_floats
               help="Measurement ranges x [m]: a,b,c or start:stop:step.")
 @click.option("--cones", "cones_text", default="10:30:2", show_default=True,
               help="Half-cone angles [deg]: a,b,c or start:stop:step.")
-@click.option("--pitch-delay", type=float, default=0.9, show_default=True, help="Pitch actuator delay T_pitch [s].")
+@click.option("--pitch-delay", type=float, default=0.9, show_default=True,
+              help="Pitch actuator delay T_pitch [s], in [{:g}, {:g}].".format(*PITCH_DELAY_RANGE_S))
 @click.option("--json", "as_json", is_flag=True, help="Print every candidate and the optimum as JSON.")
 def optimize(lidar_name, U, ae, L, gamma, evo, ranges_text, cones_text, pitch_delay, as_json):
     """Maximise k_0.5 over range x half-cone angle subject to T_buffer >= 0 (Mann space-time theory)."""
@@ -60,8 +62,8 @@ def _grid(text: str, option: str) -> list[float]:
         parts = parse_floats(text.replace(":", ","), option)
         if len(parts) != 3 or parts[2] <= 0 or parts[1] < parts[0]:
             raise ParameterError(f"{option} {text!r}: give start:stop:step with step > 0 and stop >= start")
-        n = int((parts[1] - parts[0]) / parts[2] + 1e-9) + 1
+        n = (parts[1] - parts[0]) / parts[2] + 1e-9 + 1.0  # a float: 100:1e300:1 has ~1e300 values
         if n > 500:
-            raise ParameterError(f"{option} {text!r}: {n} values, at most 500")
-        return [parts[0] + i * parts[2] for i in range(n)]
+            raise ParameterError(f"{option} {text!r}: {count_text(n)} values, at most 500")
+        return [parts[0] + i * parts[2] for i in range(int(n))]
     return parse_floats(text, option)

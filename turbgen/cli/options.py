@@ -6,7 +6,31 @@ import math
 
 import click
 
-from turbgen.theory.ranges import LIMITS
+from turbgen.theory.ranges import LIMITS, RANGES
+
+
+class FiniteFloatRange(click.FloatRange):
+    """click.FloatRange that also refuses nan (every comparison with nan is false, so FloatRange lets it through)."""
+
+    def convert(self, value, param, ctx):
+        v = super().convert(value, param, ctx)
+        if not math.isfinite(v):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return v
+
+
+def range_help(key: str) -> str:
+    """The allowed interval of RANGES[key] for an option's help, e.g. "[2, 4096]": the interval the check enforces."""
+    return RANGES[key].text()
+
+
+def count_text(n: float) -> str:
+    """A count for a message: exact up to 10^12, else three digits and the power of ten ("about 1e+300"; ``n`` may
+    be an int beyond the float range)."""
+    if n <= 10**12:
+        return str(int(n))
+    e = math.floor(math.log10(n))
+    return f"about {n / 10**e:.3g}e+{e}"
 
 
 def _limit(name: str) -> tuple[str, int]:
@@ -45,10 +69,12 @@ def parse_range(text: str, name: str) -> list[float]:
         raise click.BadParameter(f"{text!r} is not start:stop:step (three numbers)", param_hint=name) from None
     if not (step > 0 and stop >= start and all(map(math.isfinite, (start, stop, step)))):
         raise click.BadParameter(f"{text!r} needs finite numbers, step > 0 and stop >= start", param_hint=name)
-    n = int(math.floor((stop - start) / step * (1 + 1e-9) + 1e-9)) + 1
+    n = math.floor((stop - start) / step * (1 + 1e-9) + 1e-9) + 1.0  # a float: 50:1e300:1 has ~1e300 values
     _, limit = _limit(name)
     if n > limit:
-        raise click.BadParameter(f"{text!r} gives {n} values, more than the maximum {limit}", param_hint=name)
+        raise click.BadParameter(f"{text!r} gives {count_text(n)} values, more than the maximum {limit}",
+                                 param_hint=name)
+    n = int(n)
     return [round(start + i * step, 9) for i in range(n)]
 
 
@@ -75,7 +101,8 @@ def parse_ints(text: str, name: str) -> list[int]:
         raise click.BadParameter(f"{text!r} holds no integer", param_hint=name)
     count = sum(hi - lo + 1 for lo, hi in ranges)
     if count > limit:
-        raise click.BadParameter(f"{text!r} gives {count} values, more than the maximum {limit}", param_hint=name)
+        raise click.BadParameter(f"{text!r} gives {count_text(count)} values, more than the maximum {limit}",
+                                 param_hint=name)
     out: set[int] = set()
     for lo, hi in ranges:
         out.update(range(lo, hi + 1))

@@ -10,7 +10,7 @@ from collections.abc import Mapping
 
 import click
 
-from turbgen.cli.options import parse_floats, parse_range
+from turbgen.cli.options import parse_floats, parse_range, range_help
 from turbgen.spec.config import read_config
 from turbgen.spec.run_inputs import GRID_OPTIONS, merge_run_inputs
 
@@ -21,18 +21,20 @@ def _list(parser, name):
 
 def grid_options(defaults: Mapping):
     """Decorator adding --planes, --gates, --nt, --dt, --ny, --nz, --dy, --dz, their help showing ``defaults``
-    (the model's grid table of turbgen.spec.defaults)."""
+    (the model's grid table of turbgen.spec.defaults) and the allowed ranges (turbgen.theory.ranges, the table
+    the checks use)."""
     opts = [
         click.option("--planes", callback=_list(parse_floats, "--planes"),
                      help="Plane positions x [m upstream], e.g. 0,50,100."),
         click.option("--gates", callback=_list(parse_range, "--gates"),
                      help="Range gates start:stop:step [m]; planes = rotor 0 + gates (default 50:170:13.3)."),
-        click.option("--nt", type=int, help=f"Time samples (default {defaults['nt']})."),
-        click.option("--dt", type=float, help=f"Time step [s] (default {defaults['dt_s']:g}; dx = U dt)."),
-        click.option("--ny", type=int, help=f"Lateral points (default {defaults['ny']})."),
-        click.option("--nz", type=int, help=f"Vertical points (default {defaults['nz']})."),
-        click.option("--dy", type=float, help=f"Lateral spacing [m] (default {defaults['dy_m']:g})."),
-        click.option("--dz", type=float, help="Vertical spacing [m] (default: --dy)."),
+        click.option("--nt", type=int, help=f"Time samples, {range_help('nt')} (default {defaults['nt']})."),
+        click.option("--dt", type=float,
+                     help=f"Time step [s], {range_help('dt_s')} (default {defaults['dt_s']:g}; dx = U dt)."),
+        click.option("--ny", type=int, help=f"Lateral points, {range_help('ny')} (default {defaults['ny']})."),
+        click.option("--nz", type=int, help=f"Vertical points, {range_help('nz')} (default {defaults['nz']})."),
+        click.option("--dy", type=float, help=f"Lateral spacing [m], {range_help('dy_m')} (default {defaults['dy_m']:g})."),
+        click.option("--dz", type=float, help=f"Vertical spacing [m], {range_help('dz_m')} (default: --dy)."),
     ]
 
     def add(f):

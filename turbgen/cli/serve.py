@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from turbgen.cli.options import FiniteFloatRange
 from turbgen.errors import ParameterError
 from turbgen.service.limits import DEFAULT_MAX_QUEUE, DEFAULT_MEMORY_BUDGET_BYTES, is_loopback, read_token
 
@@ -22,7 +23,7 @@ from turbgen.service.limits import DEFAULT_MAX_QUEUE, DEFAULT_MEMORY_BUDGET_BYTE
 @click.option("--scheduler", help="Address of an existing dask scheduler (its workers must see --root).")
 @click.option("--token-file", type=click.Path(dir_okay=False, exists=True),
               help="File whose first line is the bearer token every mutating request (POST, DELETE) must carry.")
-@click.option("--memory-budget", "memory_gb", type=click.FloatRange(0.01, 4096), default=DEFAULT_MEMORY_BUDGET_BYTES / 2**30,
+@click.option("--memory-budget", "memory_gb", type=FiniteFloatRange(0.01, 4096), default=DEFAULT_MEMORY_BUDGET_BYTES / 2**30,
               show_default=True, help="Largest memory estimate [GiB] a submitted run may have (413 above).")  # fmt: skip
 @click.option("--max-queue", type=click.IntRange(1, 100000), default=DEFAULT_MAX_QUEUE, show_default=True,
               help="Runs queued or running at once (429 with Retry-After above).")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from turbgen.cli.options import parse_floats, parse_ints, parse_range, plane_positions
+from turbgen.cli.options import parse_floats, parse_ints, parse_range, plane_positions, range_help
 
 
 def _split(text: str | None) -> list[str] | None:
@@ -19,14 +19,14 @@ def _split(text: str | None) -> list[str] | None:
 @click.option("--speeds", help="hub-height mean wind speeds [m/s], e.g. 12,16 or 12:24:2")
 @click.option("--seeds", help="seeds, e.g. 1-21 or 1,4,7")
 @click.option("--presets-file", type=click.Path(dir_okay=False), help="user presets (TOML or JSON)")
-@click.option("--nt", type=int, help="time steps (default: as turbgen mann / kaimal)")
-@click.option("--dt", type=float, help="time step [s]")
+@click.option("--nt", type=int, help=f"time steps, {range_help('nt')} (default: as turbgen mann / kaimal)")
+@click.option("--dt", type=float, help=f"time step [s], {range_help('dt_s')}")
 @click.option("--planes", help="plane positions x [m upstream], e.g. 0,50,100")
 @click.option("--gates", help="range gates start:stop:step [m]; planes = rotor 0 + gates")
-@click.option("--ny", type=int, help="lateral points")
-@click.option("--nz", type=int, help="vertical points")
-@click.option("--dy", type=float, help="lateral spacing [m]")
-@click.option("--dz", type=float, help="vertical spacing [m]")
+@click.option("--ny", type=int, help=f"lateral points, {range_help('ny')}")
+@click.option("--nz", type=int, help=f"vertical points, {range_help('nz')}")
+@click.option("--dy", type=float, help=f"lateral spacing [m], {range_help('dy_m')}")
+@click.option("--dz", type=float, help=f"vertical spacing [m], {range_help('dz_m')}")
 @click.option("--hub-height", type=float, help="hub height [m]")
 @click.option("--chunks", type=int, help="time chunk length of the stores")
 @click.option("--workers", type=int, help="LocalCluster worker processes (default: one per core)")

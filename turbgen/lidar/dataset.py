@@ -50,12 +50,14 @@ def check_output(path, overwrite: bool) -> Path:
         directory is missing or not writable.
     """
     path = Path(path).expanduser().absolute()
+    # a path that is not a lidar dataset is never replaced, so `overwrite` is no remedy there: not suggested
+    if path.exists() and not (path / "zarr.json").is_file():
+        raise StoreError(f"{path} exists and is not a zarr dataset; it will not be replaced (choose another `out`)")
+    if path.exists() and not (path / "v_los" / "zarr.json").is_file():  # e.g. the field store being measured
+        raise StoreError(f"{path} exists and is not a lidar dataset (no v_los); it will not be replaced "
+                         "(choose another `out`)")
     if path.exists() and not overwrite:
         raise StoreError(f"{path} already exists; use `overwrite` to replace it")
-    if path.exists() and not (path / "zarr.json").is_file():
-        raise StoreError(f"{path} exists and is not a zarr dataset; refusing to replace it")
-    if path.exists() and not (path / "v_los" / "zarr.json").is_file():  # e.g. the field store being measured
-        raise StoreError(f"{path} exists and is not a lidar dataset (no v_los); refusing to replace it")
     if not path.parent.is_dir():
         raise StoreError(f"output directory {path.parent} does not exist")
     if not os.access(path.parent, os.W_OK):

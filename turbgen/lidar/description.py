@@ -32,6 +32,9 @@ from turbgen.theory.lidar_weighting import cw_discrete, pulsed_discrete, rayleig
 KINDS = ("pulsed", "cw")
 MOUNTS = ("nacelle", "spinner")
 MAX_MEASUREMENTS = 4096  # beams x gates
+# beams per second [Hz]: from a slow scanning lidar (one beam in 1000 s) to a fast CW one; beyond, the scan time
+# and the buffer time of the preview are not a lidar's (1e-300 Hz gave a buffer time of 300 digits)
+BEAM_RATE_RANGE_HZ = (1e-3, 1e3)
 
 
 @dataclass(frozen=True)
@@ -52,7 +55,8 @@ class LidarDescription:
         Upstream distances x of the range gates [m], each in [1, 5000] (spinner: measurement range along
         the shaft axis; the focus distance is x / cos(half cone)).
     beam_rate_hz : float
-        Beams measured per second [Hz] (> 0), one beam at a time (all gates of a beam at once).
+        Beams measured per second [Hz], in BEAM_RATE_RANGE_HZ = [0.001, 1000], one beam at a time (all gates of
+        a beam at once).
     rotor_radius_m : float
         Radius R [m] of the rotor whose effective wind speed the lidar previews, in [1, 500].
     azimuth_deg, elevation_deg : tuple of float, optional
@@ -104,7 +108,7 @@ class LidarDescription:
             raise ParameterError("lidar ranges_m: give at least one range gate")
         for x in self.ranges_m:
             check_range("lidar range (m)", x, 1.0, 5000.0)
-        check_positive("lidar beam_rate_hz", self.beam_rate_hz)
+        check_range("lidar beam_rate_hz", self.beam_rate_hz, *BEAM_RATE_RANGE_HZ)
         check_range("rotor radius (m)", self.rotor_radius_m, 1.0, 500.0)
         check_range("lidar fwhm_m", self.fwhm_m, 0.1, 1000.0)
         check_range("lidar wavelength_m", self.wavelength_m, 1e-7, 1e-4)

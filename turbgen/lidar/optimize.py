@@ -14,13 +14,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from turbgen.errors import ParameterError
+from turbgen.errors import ParameterError, check_range
 from turbgen.lidar.description import LidarDescription
 from turbgen.theory.lidar_control import buffer_time_s, coherence_bandwidth_rad_m, cutoff_frequency_hz
 from turbgen.theory.lidar_preview import mann_preview_spectra
 from turbgen.theory.params import MannParams
 
 MAX_CANDIDATES = 2000
+PITCH_DELAY_RANGE_S = (0.0, 10.0)  # allowed T_pitch [s]: a pitch actuator's delay (0.9 s for the IEA 15 MW)
 
 
 @dataclass(frozen=True)
@@ -63,7 +64,7 @@ def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch
     U_m_s : float
         Mean wind speed U [m/s].
     pitch_delay_s : float, optional
-        Pitch actuator delay T_pitch [s] (default 0.9, IEA 15 MW).
+        Pitch actuator delay T_pitch [s] (default 0.9, IEA 15 MW), in PITCH_DELAY_RANGE_S.
     f_delay_hz : float, optional
         Frequency [Hz] of the filter delay (Fu et al. 2023 Eq. 30; default 0.025).
     f_hz : array_like, optional
@@ -77,8 +78,10 @@ def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch
     Raises
     ------
     ParameterError
-        For non-positive frequencies or a beam that does not look upstream.
+        For non-positive frequencies, a beam that does not look upstream or ``pitch_delay_s`` outside
+        PITCH_DELAY_RANGE_S.
     """
+    pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)
     S = mann_preview_spectra(f_hz, lidar.measurement_points(), params, U_m_s, lidar.rotor_radius_m)
     k05 = coherence_bandwidth_rad_m(S.f_hz, S.coh2_RL, U_m_s)
     fc = cutoff_frequency_hz(S.f_hz, S.G_RL)
@@ -104,7 +107,7 @@ def optimize_spinner(lidar: LidarDescription, params: MannParams, U_m_s: float, 
     half_cones_deg : iterable of float
         Half-cone angles phi to try [deg].
     pitch_delay_s : float, optional
-        Pitch actuator delay T_pitch [s] (default 0.9).
+        Pitch actuator delay T_pitch [s] (default 0.9), in PITCH_DELAY_RANGE_S.
     progress : callable, optional
         Called with 1 after each candidate.
 
@@ -117,8 +120,9 @@ def optimize_spinner(lidar: LidarDescription, params: MannParams, U_m_s: float, 
     ------
     ParameterError
         If the lidar is not a spinner lidar, the grid is empty or has more than MAX_CANDIDATES
-        candidates, or a candidate's geometry is invalid.
+        candidates, a candidate's geometry is invalid or ``pitch_delay_s`` is outside PITCH_DELAY_RANGE_S.
     """
+    pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)  # before any candidate
     if lidar.mount != "spinner":
         raise ParameterError(f"lidar {lidar.name!r}: the range x half-cone search is for spinner lidars")
     ranges = [float(x) for x in ranges_m]

@@ -295,7 +295,9 @@ def _sample_with_mean_wind(fs, measurements, planes, T, col, bi, gi, dims, mean_
         z_lo, z_hi = int(iz.min()), min(int(iz.max()) + 2, g.nz)
         t_lo = max(0, int(math.floor((T.min() + allp[:, 0].min() / U) / g.dt_s)))
         t_hi = min(g.nt, int(math.ceil((T.max() + allp[:, 0].max() / U) / g.dt_s)) + 2)
-        box = {c: np.asarray(fs.array(c)[t_lo:t_hi, ix, y_lo:y_hi, z_lo:z_hi], dtype=np.float64) for c in "uvw"}
+        # checked reads (a corrupted chunk, NaN or an implausible value is a one-line StoreError), whole yz planes
+        # as the chunks hold them
+        box = {c: np.asarray(fs.read_span(c, ix, t_lo, t_hi)[:, y_lo:y_hi, z_lo:z_hi], dtype=np.float64) for c in "uvw"}
         for j, p in zip(idx, pts):
             m = measurements[j]
             Tm = T[:, col[m.beam]]  # (n_scan,)

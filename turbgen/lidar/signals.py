@@ -83,12 +83,11 @@ def rotor_average(fs, radius_m: float, t_s: np.ndarray, chunk: int | None = None
         raise ParameterError(f"the store has no rotor plane x = 0 (planes: {', '.join(f'{v:g}' for v in xs)} m)")
     ix = int(np.argmin(np.abs(xs)))
     mask = rotor_mask(g, radius_m)
-    arr = fs.array("u")
     chunk = chunk or fs.chunk_t
     series = np.empty(g.nt)
     s1 = s2 = 0.0
-    for t0 in range(0, g.nt, chunk):
-        block = np.asarray(arr[t0 : t0 + chunk, ix], dtype=np.float64)[:, mask]
+    for t0 in range(0, g.nt, chunk):  # checked reads: a corrupted chunk, NaN or an implausible value is refused
+        block = np.asarray(fs.read_span("u", ix, t0, min(t0 + chunk, g.nt)), dtype=np.float64)[:, mask]
         series[t0 : t0 + block.shape[0]] = block.mean(axis=1)
         s1 = s1 + block.sum(axis=0)
         s2 = s2 + (block**2).sum(axis=0)

@@ -9,12 +9,20 @@ from __future__ import annotations
 
 import importlib.resources
 import json
+import os
+import stat
 import tomllib
 from pathlib import Path
 
 import jsonschema
 
 from turbgen.errors import ParameterError
+
+# Largest run, sweep, preset or lidar file [bytes]: such files hold a few KiB; beyond this it is the wrong file
+# (`--config /dev/zero` read until the OOM killer stopped it at 21 GB)
+MAX_CONFIG_BYTES = 2**20
+_NOT_REGULAR = ((stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"),
+                (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
 
 
 def load_schema(name: str) -> dict:
@@ -105,15 +113,12 @@ def read_config(path, schema_name: str | None = None) -> dict:
     Raises
     ------
     ParameterError
-        If the file cannot be read, is not valid TOML/JSON, does not satisfy the schema, or (without a
-        schema) does not hold a table at the top level.
+        If the file cannot be read, is not a regular file (or a pipe), holds more than MAX_CONFIG_BYTES, is not
+        valid TOML/JSON, does not satisfy the schema, or (without a schema) does not hold a table at the top level.
     """
     p = Path(path)
     kind = "JSON" if p.suffix.lower() == ".json" else "TOML"
-    try:
-        text = p.read_bytes()
-    except OSError as exc:
-        raise ParameterError(f"config {p}: cannot read it ({exc.strerror or exc})") from None
+    text = _read_capped(p)
     try:
         data = json.loads(text) if kind == "JSON" else tomllib.loads(text.decode())
     except (ValueError, UnicodeDecodeError) as exc:
@@ -124,3 +129,28 @@ def read_config(path, schema_name: str | None = None) -> dict:
     if not isinstance(data, dict):
         raise ParameterError(f"config {p}: must hold a table/object at the top level")
     return data
+
+
+def _read_capped(p: Path) -> bytes:
+    """The bytes of the config file ``p``: a regular file or a pipe (e.g. ``<(...)``), at most MAX_CONFIG_BYTES.
+
+    Raises
+    ------
+    ParameterError
+        If ``p`` cannot be read, is a directory, device or socket, or holds more than MAX_CONFIG_BYTES.
+    """
+    try:
+        mode = os.stat(p).st_mode
+        for is_kind, what in _NOT_REGULAR:
+            if is_kind(mode):
+                raise ParameterError(f"config {p}: not a regular file ({what}); give a TOML or JSON file")
+        with open(p, "rb") as f:
+            text = f.read(MAX_CONFIG_BYTES + 1)  # a pipe has no size to check first
+            size = os.fstat(f.fileno()).st_size
+    except OSError as exc:
+        raise ParameterError(f"config {p}: cannot read it ({exc.strerror or exc})") from None
+    if len(text) > MAX_CONFIG_BYTES:
+        have = f"{size} bytes" if size > MAX_CONFIG_BYTES else "more bytes than that (a pipe)"
+        raise ParameterError(f"config {p}: a config file may hold at most {MAX_CONFIG_BYTES} bytes "
+                             f"({MAX_CONFIG_BYTES / 2**20:g} MiB); it holds {have}")
+    return text

@@ -52,8 +52,8 @@ def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None, out: np.
         raise ValueError(f"out must be C-contiguous float32 of shape {(t1 - t0, *arr.shape[2:])}")
     nd_buffer = default_buffer_prototype().nd_buffer
     step = arr.chunks[0]
-    for a in range(t0, t1, step):
-        b = min(a - a % step + step, t1)
+    starts = [t0, *range(t0 - t0 % step + step, t1, step)]  # t0, then the chunk starts after it
+    for a, b in zip(starts, [*starts[1:], t1]):
         chunk_file = f"{name}/c/{a // step}/{ix}/0/0"
         block = out[a - t0 : b - t0]
         file = raw_chunk_path(arr, (a // step, ix, 0, 0)) if a % step == 0 and b - a == step else None

@@ -15,8 +15,9 @@ MAX_NAME_BYTES = 200
 def check_output_path(path, what: str = "--out", *, create_parents: bool = False) -> Path:
     """``path`` as a Path if a file or directory can be created there, else ParameterError naming it.
 
-    Refused: an empty path, a name longer than MAX_NAME_BYTES, an ancestor that is a file, and (unless
-    ``create_parents``: the caller makes missing directories) a parent that does not exist.
+    Refused: an empty path, a name longer than MAX_NAME_BYTES, an ancestor that is a file or a zarr store (an
+    output inside a store would be taken for part of it), and (unless ``create_parents``: the caller makes
+    missing directories) a parent that does not exist.
     (Existence of ``path`` itself and --overwrite are the writers' business.)
 
     Parameters
@@ -47,12 +48,60 @@ def check_output_path(path, what: str = "--out", *, create_parents: bool = False
         raise ParameterError(
             f"{what}: the name {name[:40]!r}... is {len(os.fsencode(name))} bytes long; the maximum is {MAX_NAME_BYTES}"
         )
-    parent = p.absolute().parent
+    parent = Path(os.path.abspath(p)).parent  # '..' folded: a.zarr/../b.zarr is not inside a.zarr
     for ancestor in (parent, *parent.parents):
         if ancestor.exists():
             if not ancestor.is_dir():
                 raise ParameterError(f"{what} = {text!r}: {str(ancestor)!r} is a file, not a directory")
             break
+    store = enclosing_store(parent)
+    if store is not None:
+        raise ParameterError(f"{what} = {text!r} is inside the store {str(store)!r}; write it beside the store")
     if not parent.exists() and not create_parents:
         raise ParameterError(f"{what} = {text!r}: output directory {str(parent)!r} does not exist")
+    return p
+
+
+def enclosing_store(directory: Path) -> Path | None:
+    """The nearest of ``directory`` and its ancestors that is a zarr store or array (holds zarr.json), or None.
+
+    Parameters
+    ----------
+    directory : pathlib.Path
+        An absolute directory path (it need not exist).
+
+    Returns
+    -------
+    pathlib.Path or None
+        That store directory, or None when no existing directory on the way up holds a zarr.json.
+    """
+    for d in (directory, *directory.parents):
+        if (d / "zarr.json").is_file():
+            return d
+    return None
+
+
+def check_output_dir(path, what: str) -> Path:
+    """:func:`check_output_path` for a directory of outputs (a sweep's): also refuses a zarr store itself.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output directory (``~`` is expanded; missing parents are created by the caller).
+    what : str
+        Name of the option in messages.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path`` with ``~`` expanded.
+
+    Raises
+    ------
+    ParameterError
+        For any path :func:`check_output_path` refuses, or a field store (or other zarr node) at ``path``.
+    """
+    p = check_output_path(path, what, create_parents=True)
+    if (p / "zarr.json").is_file():
+        raise ParameterError(f"{what} = {str(path)!r} is a field store, not a sweep directory; give another directory")
     return p

@@ -6,7 +6,8 @@ u, v, w and coordinates t, x, y, z exist with the grid's shapes, dtypes and valu
 chunk file is present (a partially copied store is refused). Each failure is one-line StoreError.
 Data are checked as they are read (:func:`read_checked`): a chunk that does not decode (truncated,
 overwritten) or holds NaN (the writer never stores NaN or inf) is reported as "corrupted chunk at
-..." / "NaN at ..." naming the component, plane, time index and chunk file.
+..." / "NaN at ..." naming the component, plane, time index and chunk file; attributes out of the allowed
+ranges and values beyond 100 times the recorded rms are refused too (``plausibility``).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from turbgen.errors import ParameterError, StoreError
 from turbgen.grid import Grid
 from turbgen.store import layout
 from turbgen.store.checked_reads import read_checked
+from turbgen.store.plausibility import amplitude_limits, check_amplitudes, check_attributes
 from turbgen.store.temporaries import parse_temp, pid_alive, temp_prefix
 
 
@@ -33,6 +35,7 @@ class FieldStore:
         self.grid = grid
         self.attrs = attrs
         self._group = group
+        self._limits = amplitude_limits(attrs)
 
     def __repr__(self) -> str:
         g = self.grid
@@ -161,11 +164,43 @@ class FieldStore:
         ParameterError
             For an unknown component or a plane index out of range.
         StoreError
-            For a corrupted chunk or one holding NaN/inf.
+            For a corrupted chunk, one holding NaN/inf or an implausible value.
         """
         if not 0 <= ix < self.grid.nx:
             raise ParameterError(f"plane index = {ix} is outside [0, {self.grid.nx - 1}]")
-        return read_checked(self.array(component), ix, 0, self.grid.nt, self.path)
+        return self.read_span(component, ix, 0, self.grid.nt)
+
+    def read_span(self, component: str, ix: int, t0: int, t1: int, out: np.ndarray | None = None) -> np.ndarray:
+        """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t, ny, nz), read and checked chunk by chunk.
+
+        A chunk must decode and hold finite values (:func:`read_checked`), each no larger in magnitude than
+        AMPLITUDE_RMS times the component's recorded rms (:mod:`turbgen.store.plausibility`).
+
+        Parameters
+        ----------
+        component : str
+            "u", "v" or "w".
+        ix : int
+            Plane index in [0, nx - 1].
+        t0, t1 : int
+            First and end (exclusive) time index.
+        out : numpy.ndarray, optional
+            C-contiguous float32 (t1 - t0, ny, nz) buffer the values are decoded into; default a new array.
+
+        Returns
+        -------
+        numpy.ndarray
+            float32 array (t1 - t0, ny, nz) of velocity fluctuations [m/s]: ``out`` if given.
+
+        Raises
+        ------
+        StoreError
+            For a corrupted chunk, one holding NaN/inf or an implausible value.
+        """
+        arr = self.array(component)
+        block = read_checked(arr, ix, t0, t1, self.path, out=out)
+        check_amplitudes(block, component, self._limits[component], self.path, ix, t0, arr.chunks[0])
+        return block
 
     def check_chunks(self) -> None:
         """Decode every chunk of u, v, w (StoreError naming the first corrupted chunk or NaN).
@@ -177,12 +212,11 @@ class FieldStore:
         Raises
         ------
         StoreError
-            At the first chunk that does not decode or holds NaN/inf.
+            At the first chunk that does not decode, holds NaN/inf or an implausible value.
         """
         for c in layout.COMPONENTS:
-            arr = self.array(c)
             for ix in range(self.grid.nx):
-                read_checked(arr, ix, 0, self.grid.nt, self.path)
+                self.read_plane(c, ix)
 
     def nbytes_on_disk(self) -> int:
         """Total size of the store's files [bytes].
@@ -333,6 +367,7 @@ def open_store(path) -> FieldStore:
             "regenerate it"
         )
     layout.validate_attrs(attrs, where=f"{path} is corrupted", error=StoreError)
+    check_attributes(attrs, where=f"{path} is corrupted")
     try:
         grid = layout.grid_from_attrs(attrs["grid"])
     except ParameterError as exc:

@@ -14,6 +14,7 @@ of earlier writers of ``path`` that were killed (SIGKILL) are removed when the n
 from __future__ import annotations
 
 import datetime as _dt
+import math
 import os
 import threading
 from pathlib import Path
@@ -76,6 +77,7 @@ class StoreWriter:
         self._arrays: dict[str, zarr.Array] = {}
         self._written = {c: np.zeros((grid.nx, grid.nt), dtype=bool) for c in layout.COMPONENTS}
         self._bookkeeping = threading.Lock()
+        self._squares: dict[tuple, float] = {}  # (component, ix, t0, t1) -> the block's float64 sum of squares
         self._plane_locks = {(c, ix): threading.Lock() for c in layout.COMPONENTS for ix in range(grid.nx)}
 
     # -- context protocol -------------------------------------------------------------------
@@ -197,6 +199,7 @@ class StoreWriter:
                 finish_before_raising(self._arrays[component].__setitem__, (slice(t0, t1), ix), block)
         with self._bookkeeping:
             self._written[component][ix, t0:t1] = True
+            self._squares[(component, ix, t0, t1)] = sum_sq
         return (total, sum_sq) if squares else total
 
     # -- internals --------------------------------------------------------------------------
@@ -249,9 +252,20 @@ class StoreWriter:
         self._install()
 
     def _mark_complete(self) -> None:
+        self._group.attrs[layout.RMS_ATTR] = self._rms()
         self._group.attrs[layout.MARKER] = True  # the completeness marker, written last ...
         layout.silence_consolidated_metadata_warning()
         zarr.consolidate_metadata(str(self._tmp))  # ... together with the consolidated metadata
+
+    def _rms(self) -> dict[str, float]:
+        """Root mean square [m/s] of each component over the store, from the sums of squares of the written
+        blocks (added in sorted order: the same value however threads interleaved the writes). Readers refuse
+        values beyond ``plausibility.AMPLITUDE_RMS`` times it."""
+        n = self.grid.nx * self.grid.nt * self.grid.ny * self.grid.nz
+        total = {c: 0.0 for c in layout.COMPONENTS}
+        for key in sorted(self._squares):
+            total[key[0]] += self._squares[key]
+        return {c: math.sqrt(total[c] / n) for c in layout.COMPONENTS}
 
     def _install(self) -> None:
         """Rename the finished temporary directory to ``path`` (swapping out an old store if allowed)."""
@@ -317,10 +331,11 @@ def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: 
         chunk_t = layout.default_chunk_t(grid.nt)
     chunk_t = check_int("chunks (time samples per chunk)", chunk_t, 1, grid.nt)
     if path.exists() or path.is_symlink():
+        if not looks_like_turbgen_store(path):  # never replaced, so `overwrite` is no remedy: not suggested
+            kind = "a directory" if path.is_dir() else "a file"
+            raise StoreError(f"{path} is {kind}, not a turbgen store; it will not be replaced (choose another `out`)")
         if not overwrite:
             raise StoreError(f"{path} already exists; use `overwrite` to replace it")
-        if not looks_like_turbgen_store(path):
-            raise StoreError(f"{path} exists and is not a turbgen store; refusing to replace it")
     if not path.parent.is_dir():
         raise StoreError(f"output directory {path.parent} does not exist")
     if not os.access(path.parent, os.W_OK):

@@ -2,8 +2,10 @@
 
 ``DIR/.turbgen-sweep.lock`` is an OS file lock (flock; filelock's soft lock where the file system has none), so a
 sweep that dies, even by SIGKILL, holds nothing any more. While held, the file names its owner's host, pid and start
-time (JSON) for the refusal message; on release it is emptied and left in place (filelock never unlinks a Unix lock
-file: a waiter could otherwise lock a removed inode while a third process locks a new one).
+time (JSON) for the refusal message. On release it is removed while still held, so a sweep (or a refused one) leaves
+nothing behind: filelock itself never unlinks a Unix lock file, because a *blocking* waiter could then lock the removed
+inode while a third process locks a new one; a SweepLock never waits (a second sweep is refused at once), so a
+process that opened the old file fails its attempt and is refused, as it would be while the lock is held.
 """
 
 from __future__ import annotations
@@ -79,7 +81,7 @@ class SweepLock:
         return self
 
     def release(self) -> None:
-        """Release the lock (the lock file is emptied, not removed).
+        """Release the lock, removing its file first (see the module docstring).
 
         Returns
         -------
@@ -87,7 +89,7 @@ class SweepLock:
         """
         if self._lock.is_locked:
             try:
-                os.truncate(self.path, 0)
+                self.path.unlink(missing_ok=True)
             finally:
                 self._lock.release()
 

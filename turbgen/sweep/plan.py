@@ -18,7 +18,7 @@ from turbgen.errors import ParameterError, check_int
 from turbgen.runs.models import MODELS, get_model
 from turbgen.spec.presets import StabilityPreset, get_preset
 from turbgen.spec.preset_runs import run_keys
-from turbgen.store.paths import check_output_path
+from turbgen.store.paths import check_output_dir
 from turbgen.sweep.scheduler import check_scheduler_address
 from turbgen.theory import ranges
 from turbgen.theory.params import check_wind_speed
@@ -349,7 +349,7 @@ def _check_execution(out, chunk_t, workers, scheduler, lidar):
         raise ParameterError("workers and scheduler exclude each other (the scheduler's cluster has its own workers)")
     if scheduler:
         check_scheduler_address(scheduler)
-    check_output_path(out, "out (sweep directory)", create_parents=True)
+    check_output_dir(out, "out (sweep directory)")
     description = None
     if lidar is not None:
         from turbgen.lidar.description import load_lidar

@@ -66,13 +66,34 @@ def _make_client(plan: SweepPlan, n: int, processes: bool):
             resource_tracker.ensure_running()
         finally:
             signal.signal(signal.SIGHUP, old)
-    cluster = loopback_cluster(n, 1, processes)
-    client = Client(cluster)
-    if processes:
-        # a terminal's Ctrl-C (hang-up, or a kill of the group) goes to the whole process group: let it reach the sweep
-        # alone, which shuts the workers down, instead of ~80 lines of tracebacks from every worker
-        client.run(_ignore_interrupts)
+    # a terminal's Ctrl-C (hang-up, or a kill of the group) goes to the whole process group: let it reach the sweep
+    # alone, which shuts the workers down, instead of ~80 lines of tracebacks from every worker. Until the workers
+    # ignore them, the signals are blocked (a worker process inherits the mask of the thread that starts it, so one
+    # still importing never sees them either); a signal that came meanwhile is raised when they are unblocked,
+    # with the cluster up and closed in order (a Ctrl-C during the start-up printed tracebacks of the half-started
+    # workers and of the cluster's close around the one-line error)
+    deferring = processes and threading.current_thread() is threading.main_thread()
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, DEFERRED_SIGNALS) if deferring else None
+    try:
+        cluster = loopback_cluster(n, 1, processes)
+        client = Client(cluster)
+        if processes:
+            client.run(_ignore_interrupts)
+    except BaseException:
+        if mask is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        raise
+    if mask is not None:
+        try:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)  # raises a signal that came during the start-up
+        except BaseException:
+            client.close()
+            cluster.close()
+            raise
     return client, cluster
+
+
+DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 def _ignore_interrupts() -> None:
@@ -80,9 +101,18 @@ def _ignore_interrupts() -> None:
 
     A worker killed by a group-wide SIGTERM leaves its semaphores to multiprocessing's resource
     tracker, which then warns about them on the terminal after the sweep's own one-line message.
+    A worker whose heartbeat meets the scheduler closing (the sweep interrupted) does not print that
+    failure's traceback either: the heartbeat is retried, and the sweep records every run's own error.
     """
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, signal.SIG_IGN)
+    logging.getLogger("distributed.worker").addFilter(_no_heartbeat_failure)
+
+
+def _no_heartbeat_failure(record: logging.LogRecord) -> bool:
+    """Logging filter of the workers: False for distributed's "Failed to communicate with scheduler during
+    heartbeat" (a traceback at the interrupted sweep's shutdown), True for every other record."""
+    return not str(record.msg).startswith("Failed to communicate with scheduler during heartbeat")
 
 
 def _check_out(out: Path) -> None:

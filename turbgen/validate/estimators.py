@@ -39,7 +39,6 @@ from tqdm import tqdm
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
 from turbgen.store.chunk_files import empty_aligned
-from turbgen.store.checked_reads import read_checked
 from turbgen.validate.point_sets import (
     LONG_POINTS_PER_AXIS,
     check_rotor_radius,
@@ -203,10 +202,10 @@ class _ReadBuffers:
         return bufs[component][:n_t]
 
 
-def _task(arrays, buffers: _ReadBuffers, ix: int, t0: int, t1: int, setup: WelchSetup, seps, mask, iy, iz) -> dict:
+def _task(fs, buffers: _ReadBuffers, ix: int, t0: int, t1: int, setup: WelchSetup, seps, mask, iy, iz) -> dict:
     """Sums of one plane over one span [t0, t1) (``span_sums``): each stored chunk is read once
-    (read_checked: corrupted chunks and NaN give a one-line StoreError)."""
-    data = {c: read_checked(arrays[c], ix, t0, t1, out=buffers.get(c, t1 - t0)) for c in COMPONENTS}
+    (FieldStore.read_span: corrupted chunks, NaN and implausible values give a one-line StoreError)."""
+    data = {c: fs.read_span(c, ix, t0, t1, out=buffers.get(c, t1 - t0)) for c in COMPONENTS}
     return span_sums(data, setup.window, segment_starts(t1 - t0, setup), seps, mask, iy, iz)  # keeps no view of data
 
 
@@ -337,14 +336,13 @@ def run_estimates(fs, est: Estimates, workers: int | None = None) -> Estimates:
     """
     g, setup = est.grid, est.setup
     spans = _spans(fs, setup)
-    arrays = {c: fs.array(c) for c in COMPONENTS}
     buffers = _ReadBuffers((max(t1 - t0 for t0, t1 in spans), g.ny, g.nz))
     task = dask.delayed(_task, pure=False)
     pairs = dask.delayed(_plane_pairs, pure=False)
     strip = dask.delayed(_without_sub, pure=False)
     per_span = []
     for t0, t1 in spans:
-        parts = [task(arrays, buffers, ix, t0, t1, setup, est.separations, est.rotor_mask, est.long_iy, est.long_iz)
+        parts = [task(fs, buffers, ix, t0, t1, setup, est.separations, est.rotor_mask, est.long_iy, est.long_iz)
                  for ix in range(g.nx)]
         # the kept sub-lattice spectra feed the plane-pair sums only; the output holds the small sums
         per_span.append(([strip(p) for p in parts], pairs([p["sub"] for p in parts])))

@@ -1,0 +1,122 @@
+"""Physical plausibility of a store that decodes: attributes within the allowed ranges, values within
+AMPLITUDE_RMS times the root mean square its writer recorded.
+
+A store can pass every structural check, decode, and hold only finite numbers, yet be garbage: a chunk
+overwritten with 3e38 (which ``info`` called complete and the .bts export wrote as every other sample 0),
+an attribute ``U_m_s`` = 1e308 or ``length_scale_m`` = -5 edited by hand (tracebacks deep in the validator
+and the exporters). :func:`check_attributes` refuses such attributes when the store is opened, so that
+``info``, ``validate`` and ``export`` refuse them alike, with the message of the range table
+(turbgen.theory.ranges) that refuses the same value on input. :func:`check_amplitudes` refuses values
+beyond AMPLITUDE_RMS times the component's root mean square (attribute ``rms_m_s``, recorded by the
+writer from the sums of its finiteness check), or times the mean wind speed for stores written before
+that attribute.
+
+Why 100 rms: turbgen's fields are Gaussian (linear in Gaussian noise), so the largest |value| among n
+samples is about sqrt(2 ln n) rms: 7.4 rms for n = 10^12, far more samples than a store holds. A value
+of 100 rms has probability below exp(-5000); it is corrupted data, not turbulence. (A value the writer
+itself wrote is inside its own rms: at most sqrt(n) rms. The check finds values changed after the write.)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from turbgen.errors import ParameterError, StoreError
+from turbgen.store.layout import RMS_ATTR
+from turbgen.theory import ranges
+
+AMPLITUDE_RMS = 100.0  # largest plausible |value| / rms (module docstring)
+
+
+def check_attributes(attrs: Mapping, where: str) -> None:
+    """StoreError unless the store's U_m_s, hub_height_m and every parameter the range table knows are in range.
+
+    The run parameters are checked against turbgen.theory.ranges (lists element by element; None, e.g. a frozen
+    field's evolution time, is skipped); parameters the table does not know are left to the run's own spec.
+
+    Parameters
+    ----------
+    attrs : Mapping
+        The store's root attributes (already valid against the field schema).
+    where : str
+        Message prefix, e.g. "<path> is corrupted".
+
+    Raises
+    ------
+    StoreError
+        "<where>: attribute <name>: <the range table's message>" for the first value out of range.
+    """
+    checks = [(key, key, attrs[key]) for key in ("U_m_s", "hub_height_m")]
+    params = attrs.get("parameters", {})
+    checks += [(f"parameters/{key}", key, value) for key, value in params.items() if key in ranges.RANGES]
+    for name, key, value in checks:
+        for v in value if isinstance(value, list) else [value]:
+            if v is None:
+                continue
+            try:
+                ranges.check(key, v)
+            except ParameterError as exc:
+                raise StoreError(f"{where}: attribute {name}: {exc}") from None
+
+
+def amplitude_limits(attrs: Mapping) -> dict[str, tuple[float, str]]:
+    """Largest plausible |value| [m/s] of each component, and what it is based on (for messages).
+
+    Parameters
+    ----------
+    attrs : Mapping
+        The store's root attributes (already checked by :func:`check_attributes`).
+
+    Returns
+    -------
+    dict of str to (float, str)
+        component -> (AMPLITUDE_RMS x its recorded rms [m/s], or AMPLITUDE_RMS x U_m_s [m/s] for a store
+        without ``rms_m_s``; the basis as text).
+    """
+    rms = attrs.get(RMS_ATTR)
+    if isinstance(rms, Mapping):
+        return {c: (AMPLITUDE_RMS * float(r), f"{AMPLITUDE_RMS:g} x its rms {float(r):.3g} m/s") for c, r in rms.items()}
+    U = float(attrs["U_m_s"])
+    basis = f"{AMPLITUDE_RMS:g} x the mean wind {U:g} m/s (a store without {RMS_ATTR})"
+    return {c: (AMPLITUDE_RMS * U, basis) for c in ("u", "v", "w")}
+
+
+def check_amplitudes(block: np.ndarray, component: str, limit: tuple[float, str], where, ix: int, t0: int,
+                     chunk_t: int) -> None:
+    """StoreError at the first value of ``block`` whose magnitude exceeds ``limit`` (one pass: its max and min).
+
+    Parameters
+    ----------
+    block : numpy.ndarray
+        float32 (t, ny, nz) values [m/s] of plane ``ix`` from time index ``t0``, already checked finite.
+    component : str
+        "u", "v" or "w".
+    limit : (float, str)
+        The component's entry of :func:`amplitude_limits`.
+    where : str or os.PathLike
+        The store, named first in the message.
+    ix, t0 : int
+        Plane index and time index of ``block[0]``.
+    chunk_t : int
+        Time samples per chunk (to name the chunk file).
+
+    Raises
+    ------
+    StoreError
+        "implausible value ... at <component>, plane index, t, y, z index (beyond <basis>; chunk file ...)".
+    """
+    bound, basis = limit
+    if block.size == 0 or max(float(block.max()), -float(block.min())) <= bound:
+        return
+    it, iy, iz = (int(i) for i in np.argwhere(np.abs(block) > bound)[0])
+    t = t0 + it
+    value = float(block[it, iy, iz])
+    shown = f"{value:.3g}" if math.isfinite(value) else str(value)
+    raise StoreError(
+        f"{where}: implausible value {shown} m/s at {component}, plane index {ix}, t index {t}, y index {iy}, "
+        f"z index {iz} (beyond {basis}; chunk file {component}/c/{t // chunk_t}/{ix}/0/0); the data are "
+        "corrupted, regenerate the store"
+    )
