@@ -97,8 +97,8 @@ def _unconstrained_measurement(run: KaimalRun, placed: PlacedData, threads: int 
 def kaimal_conditioned_planes(run: KaimalRun, placed: PlacedData, cov: np.ndarray, *, conditional_mean: bool = False,
                               threads: int | None = None):  # fmt: skip
     """The conditioned field of ``run``: (solver report, generator, iterator of (component, plane index, field
-    (nt, ny, nz) float32 [m/s])); ``generator`` is the one making the field (its ``report`` is complete once the
-    iterator is exhausted).
+    (nt, ny, nz) float32 [m/s])); ``generator`` is the one whose samplers made the field (u_s's, or with
+    ``conditional_mean`` the correction's alone; its ``report`` is complete once the iterator is exhausted).
 
     A conditional sample u_s + C H^T S^-1 (d - H u_s - eps_s) (pass 1 here, before returning; the iterator makes u_s
     again and adds the correction), or with ``conditional_mean`` C H^T S^-1 d. ``cov``: kaimal_stream_system.
@@ -121,7 +121,7 @@ def kaimal_conditioned_planes(run: KaimalRun, placed: PlacedData, cov: np.ndarra
                     value += field
                 yield comp, ix, value
 
-    return report, gen, planes()
+    return report, prior if conditional_mean else gen, planes()
 
 
 def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float | None = None,
