@@ -113,10 +113,10 @@ def kaimal_conditioned_planes(run: KaimalRun, placed: PlacedData, cov: np.ndarra
 
     def planes():
         for comp in COMPONENTS:
-            spectra = kcond.correction_spectra(prior, placed.streams, x, comp)
+            fix = kcond.correction(prior, placed.streams, x, comp)
             source = (((ix, None) for ix in range(g.nx)) if conditional_mean else gen.component_planes(comp))
             for ix, field in source:
-                value = kcond.spectra_field(spectra[ix], g.nt).astype(np.float32)
+                value = fix.field(ix, g.nt).astype(np.float32)
                 if field is not None:
                     value += field
                 yield comp, ix, value
@@ -158,11 +158,12 @@ def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float
     placed, record_mean = without_record_mean(place(run, files, noise_m_s))
     g = run.grid
     m = placed.streams.n_streams
-    # S (nt/q x M x M), one component's correction spectra (complex64), one plane's correction (float64), the stream
-    # arrays, besides the generator's in-memory run
+    # S (nt/q x M x M), one component's correction spectra on the measured planes (complex64) and its longitudinal
+    # factors, one plane's correction (float64 spectrum and field), the stream arrays, besides the generator's run
     sampler = kaimal_generator(run, workers=threads).sampler_bytes()
-    extra = (g.nt // placed.streams.decimation * m * m * 16 + g.nx * (g.nt // 2 + 1) * g.ny * g.nz * 8
-             + g.nt * g.ny * g.nz * 8 + 8 * m * g.nt * 8)  # fmt: skip
+    nf, q = g.nt // 2 + 1, len(placed.streams.used_planes())
+    extra = (g.nt // placed.streams.decimation * m * m * 16 + q * nf * g.ny * g.nz * 8 + nf * g.nx * q * 8
+             + nf * g.ny * g.nz * 16 + g.nt * g.ny * g.nz * 8 + 8 * m * g.nt * 8)  # fmt: skip
     require_memory(memory_needed(g, sampler=sampler) + extra, f"the constrained Kaimal run ({m} measurement streams)",
                    "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
     cov = kaimal_stream_system(run, placed)

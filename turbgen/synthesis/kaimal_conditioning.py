@@ -14,7 +14,8 @@ turbgen.synthesis.conditioning (same Streams, same circulant/PCG solve) give one
 frequency: L_k[a, b] = h_k G_k[p_a, p_b] sum_c (A_kc R_kc A_kc^H)[a, b], A_kc[a, j] = sum of the weights
 w_t e^(2 pi i k s_t / nt) of stream a's terms of component c at point j, aliased onto the decimated streams' frequencies
 as there. C H^T w is one extra synthesis: per bin X_kp = (h_k / nt) R_k sum_b G_k[p, p_b] W_b(k) conj(A_kc[b]) (W the
-rfft of the weights at full rate), then the same real inverse FFT (norm "forward") as the generator's.
+rfft of the weights at full rate), kept per measured plane q before G_k mixes it into every plane p, then the same
+real inverse FFT (norm "forward") as the generator's.
 """
 
 from __future__ import annotations
@@ -183,9 +184,32 @@ def stream_covariance(gen: KaimalEvo, streams: Streams, noise_var) -> np.ndarray
     return out
 
 
-def correction_spectra(gen: KaimalEvo, streams: Streams, weights: np.ndarray, component: str) -> np.ndarray:
-    """The spectra X (nx, nf, ny, nz) complex64 of C H^T w for one component on every plane; :func:`spectra_field`
-    turns one plane's into the field.
+@dataclass(frozen=True, eq=False)
+class Correction:
+    """C H^T w of one component in spectral form: ``spectra`` Y (Q, nf, ny, nz) complex64, the yz-correlated
+    spectra of the Q measured planes ``planes``, and ``long`` G_k[p, q] (nf, nx, Q) [-] or None (planes
+    independent): plane p's spectrum is X_kp = sum_q G_k[p, q] Y_kq (:meth:`field`)."""
+
+    planes: np.ndarray
+    spectra: np.ndarray
+    long: np.ndarray | None
+
+    def field(self, plane: int, nt: int) -> np.ndarray:
+        """The correction on ``plane``, (nt, ny, nz) float64 [m/s]: the generator's real inverse FFT (norm
+        "forward")."""
+        if self.long is None:
+            hit = np.flatnonzero(self.planes == plane)
+            if hit.size == 0:
+                return np.zeros((nt, *self.spectra.shape[2:]))
+            spec = self.spectra[hit[0]].astype(complex)
+        else:
+            spec = np.einsum("kq,qkyz->kyz", self.long[:, plane], self.spectra.astype(complex))
+        return scipy.fft.irfft(spec, n=nt, axis=0, norm="forward")
+
+
+def correction(gen: KaimalEvo, streams: Streams, weights: np.ndarray, component: str) -> Correction:
+    """C H^T w for one component (:class:`Correction`): per bin, the weights scattered through the adjoint of the
+    streams' terms on each measured plane, times R_k (the sampler's A A^H) and h_k / nt.
 
     Parameters
     ----------
@@ -200,25 +224,24 @@ def correction_spectra(gen: KaimalEvo, streams: Streams, weights: np.ndarray, co
     """
     g = gen.grid
     nt, m = g.nt, streams.n_streams
-    out = np.zeros((g.nx, gen.nf, g.ny, g.nz), np.complex64)
     terms = _ComponentTerms.of(streams, COMPONENTS.index(component), g.nz)
+    planes = streams.used_planes()
+    mixed = component in gen.long_components and g.nx > 1
+    spectra = np.zeros((len(planes), gen.nf, g.ny, g.nz), np.complex64)
+    long = np.zeros((gen.nf, g.nx, len(planes))) if mixed else None
     if terms is None:
-        return out
+        return Correction(planes, spectra, long)
     full = np.zeros((m, nt))
     for a in range(m):  # the samples at their stored time steps o_a + m q
         full[a, streams.offset[a] :: streams.decimation] = weights[a]
     spec_w = np.fft.rfft(full, axis=1)
-    planes = np.arange(g.nx)
+    on_plane = (planes[:, None] == streams.plane[None, :]).astype(float)  # (Q, M)
     flat = terms.iy * g.nz + terms.iz
     for b in component_prior(gen, component):
         a = terms.transfer(b.k, nt, m)
-        f = _coupling(b, planes, streams.plane) @ (spec_w[:, b.k, None] * a.conj())  # (nx, n_points)
-        grid = np.zeros((g.nx, g.ny * g.nz), complex)
-        grid[:, flat] = f
-        out[:, b.k] = b.apply(grid.reshape(g.nx, g.ny, g.nz)) * (b.weight / nt)
-    return out
-
-
-def spectra_field(spectra: np.ndarray, nt: int) -> np.ndarray:
-    """The field (nt, ny, nz) float64 [m/s] of one plane's spectra (nf, ny, nz): the generator's real inverse FFT."""
-    return scipy.fft.irfft(spectra.astype(complex), n=nt, axis=0, norm="forward")
+        grid = np.zeros((len(planes), g.ny * g.nz), complex)
+        grid[:, flat] = on_plane @ (spec_w[:, b.k, None] * a.conj())  # H^T w on each measured plane
+        spectra[:, b.k] = b.apply(grid.reshape(len(planes), g.ny, g.nz)) * (b.weight / nt)
+        if mixed:
+            long[b.k] = b.long[:, planes]
+    return Correction(planes, spectra, long)
