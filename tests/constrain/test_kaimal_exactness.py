@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from turbgen.runs.constrain import PlacedData, _measurement_noise
-from turbgen.runs.constrain_kaimal import kaimal_conditioned_planes, kaimal_stream_system
+from turbgen.runs.constrain import _measurement_noise
+from turbgen.runs.constrain_kaimal import KaimalPlaced, kaimal_conditioned_planes, kaimal_stream_system
 from turbgen.runs.kaimal import kaimal_generator
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.synthesis import conditioning as cond
@@ -58,8 +58,10 @@ def _dense_h(streams, nt, nx, ny, nz) -> np.ndarray:
 
 
 def _placed(data):
+    """The streams with noise NOISE, each its own full-rate series (its record mean direction at frequency 0)."""
     streams = _streams()
-    return PlacedData(streams, data, np.full(streams.n_streams, NOISE), tuple({"name": n} for n in streams.names))
+    return KaimalPlaced(streams, data, np.full(streams.n_streams, NOISE), tuple({"name": n} for n in streams.names),
+                        full_rate=tuple(np.array([a]) for a in range(streams.n_streams)))  # fmt: skip
 
 
 def _field(planes, g) -> np.ndarray:

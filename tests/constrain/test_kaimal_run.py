@@ -41,6 +41,15 @@ def _mast(t_s, total=True, U=16.0):
     }  # fmt: skip
 
 
+def _bilinear(field, g, y, z):
+    """field (nt, ny, nz) at (y, z), bilinear."""
+    fy, fz = (y - g.y()[0]) / g.dy_m, (z - g.z()[0]) / g.dz_m
+    iy, iz = int(fy), int(fz)
+    ay, az = fy - iy, fz - iz
+    return ((1 - ay) * (1 - az) * field[:, iy, iz] + ay * (1 - az) * field[:, iy + 1, iz]
+            + (1 - ay) * az * field[:, iy, iz + 1] + ay * az * field[:, iy + 1, iz + 1])  # fmt: skip
+
+
 def _remeasured(fs, placed) -> np.ndarray:
     out = np.zeros(placed.data.shape)
     for c, comp in enumerate(COMPONENTS):
@@ -103,14 +112,24 @@ def test_zero_noise_lidar_loop_remeasures_the_data(tmp_path):
                    prog_name="turbgen")  # fmt: skip
     assert res.exit_code == 0, res.output
     lidar("truth.zarr", "truth_lidar.zarr")
+    t = np.arange(0.0, 127.75, 0.25)  # a full-rate point series too: split into 4 streams every 4 steps
+    mast = {"kind": "point-series", "time_s": list(t), "sensors": [
+        {"name": "hub", "x_m": 0.0, "y_m": 2.0, "z_m": -3.0, "u_m_s": list(1.5 + np.sin(t / 4.0))}]}  # fmt: skip
+    mast_path = _write(tmp_path / "mast.json", mast)
     res = r.invoke(cli, ["kaimal", *LIDAR_GRID, "--seed", "2", "--constrain", str(tmp_path / "truth_lidar.zarr"),
-                         "--out", str(tmp_path / "c.zarr")], prog_name="turbgen")  # fmt: skip
+                         "--constrain", mast_path, "--out", str(tmp_path / "c.zarr")], prog_name="turbgen")
     assert res.exit_code == 0, res.output
     lidar("c.zarr", "re.zarr")
     truth, again = read_dataset(tmp_path / "truth_lidar.zarr").v_los, read_dataset(tmp_path / "re.zarr").v_los
     assert np.isfinite(truth).sum() > 20
     np.testing.assert_allclose(again, truth, rtol=0, atol=1e-4)
-    assert not any(open_store(tmp_path / "c.zarr").attrs["constraints"]["record_mean_removed_m_s"])
+    fs = open_store(tmp_path / "c.zarr")
+    removed = fs.attrs["constraints"]["record_mean_removed_m_s"]
+    series = [s["name"] for s in fs.attrs["constraints"]["streams"]]
+    assert sum(":hub:" in n for n in series) == 4 and all((":hub:" in n) == (v != 0) for n, v in zip(series, removed))
+    u = _bilinear(fs.read_plane("u", 0).astype(float), fs.grid, 2.0, -3.0)
+    expected = np.interp(fs.grid.t(), t, 1.5 + np.sin(t / 4.0))
+    np.testing.assert_allclose(u, expected - expected.mean(), rtol=0, atol=1e-4)
 
 
 def _write(path, mapping):

@@ -109,10 +109,11 @@ def kaimal(**opt):
     plan_spill(g, Path(out).absolute(), None, sampler)
     constraints = None
     if opt["constrain"]:
-        from turbgen.runs.constrain import load_constraint, place
+        from turbgen.runs.constrain import load_constraint
+        from turbgen.runs.constrain_kaimal import place_kaimal
 
         constraints = [load_constraint(path) for path in opt["constrain"]]
-        place(run, constraints, opt["noise"])  # every check of the data against the run, before any output
+        place_kaimal(run, constraints, opt["noise"])  # every check of the data against the run, before any output
     check_new_store(out, g, chunk_t=opt["chunks"], overwrite=opt["overwrite"])
     k = run.kaimal
     click.echo(f"turbgen kaimal: U {run.U_m_s:g} m/s, sigma {', '.join(f'{s:.3g}' for s in k.sigma_m_s)} m/s, "

@@ -3,7 +3,7 @@ Ribak 1991).
 
     summary = run_kaimal_constrained(run, "mast.zarr", [load_point_series("mast.json")], noise_m_s=0.1)
 
-The data are placed on the grid exactly as for Mann runs (turbgen.runs.constrain.place: plane at x, stored time
+The data are placed on the grid exactly as for Mann runs (turbgen.runs.constrain.placed_streams: plane at x, stored time
 T + x/U, linear in time, bilinear in (y, z); the virtual lidar's own operator for LOS data), and solved with the same
 circulant / preconditioned-conjugate-gradient solver; only the prior differs: the Kaimal generator's own per-bin
 covariance (turbgen.synthesis.kaimal_conditioning). Pass 1 generates the unconstrained sample u_s of the run's seed and
@@ -12,23 +12,25 @@ plane while writing. ``conditional_mean=True`` writes C H^T S^-1 d only. The sto
 record as a constrained Mann store (turbgen info and turbgen validate read it).
 
 Record means: the Kaimal synthesis has no bin 0 (v_0 = 0), so every point's record mean is exactly 0 in every field it
-makes, and a full-rate stream's record mean is no property of the field. Each full-rate stream's mean over its
-observed samples is therefore removed from the data (recorded as ``record_mean_removed_m_s``; ``residual_*`` are then
-against the data minus it); the conditioning on the rest is exact (with_mean_offset, kaimal_solve), and with zero
-noise the field reproduces the data minus that mean.
+makes, and the record mean of a series observed at every stored step (a point series; a lidar scanning every step)
+is no property of the field. Each such series' mean over its observed samples is therefore removed from the data
+(place_kaimal; recorded as ``record_mean_removed_m_s``; ``residual_*`` are then against the data minus it); the
+conditioning on the rest is exact (with_mean_offset, kaimal_solve), and with zero noise the field reproduces the data
+minus that mean. Series observed every q > 1 steps keep their mean (the field's decimated series have one).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
+from dataclasses import fields as fields_of
 from pathlib import Path
 
 import numpy as np
 
 from turbgen.resources import require_memory
-from turbgen.runs.constrain import PlacedData, _measurement_noise, _record, place
+from turbgen.runs.constrain import PlacedData, _measurement_noise, _record, combine_streams, placed_streams
 from turbgen.runs.kaimal import kaimal_generator, memory_needed, store_attrs
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import create_store
@@ -37,31 +39,55 @@ from turbgen.synthesis import kaimal_conditioning as kcond
 from turbgen.synthesis.kaimal_evo import COMPONENTS
 
 
-def kaimal_stream_system(run: KaimalRun, placed: PlacedData) -> np.ndarray:
+@dataclass(frozen=True, eq=False)
+class KaimalPlaced(PlacedData):
+    """Measurements on a Kaimal run's grid (:func:`place_kaimal`): PlacedData whose full-rate series have their record
+    mean removed. ``full_rate``: for every series observed at every stored step, the indices of the streams it was
+    split into (one, or Q of them when other streams are observed every Q steps); ``record_mean_m_s`` (M,) [m/s]:
+    the mean removed from each stream's series (0 for the others)."""
+
+    full_rate: tuple = ()
+    record_mean_m_s: np.ndarray | None = None
+
+
+def place_kaimal(run: KaimalRun, files: list, noise_m_s: float | None = None) -> KaimalPlaced:
+    """turbgen.runs.constrain.place for a Kaimal run, the record mean of every full-rate series (over its observed
+    samples) removed before the streams are combined (module docstring)."""
+    series = placed_streams(run, files, noise_m_s)
+    means = [float(np.mean(s.data[np.isfinite(s.data)])) if s.decimation == 1 else 0.0 for s in series]
+    placed = combine_streams([replace(s, data=s.data - m) for s, m in zip(series, means)], run.grid.nt)
+    parts = [placed.streams.decimation // s.decimation for s in series]  # consecutive streams per series
+    start = np.concatenate([[0], np.cumsum(parts)])
+    full_rate = tuple(np.arange(start[i], start[i + 1]) for i, s in enumerate(series) if s.decimation == 1)
+    fields = {f.name: getattr(placed, f.name) for f in fields_of(PlacedData)}
+    return KaimalPlaced(**fields, full_rate=full_rate, record_mean_m_s=np.repeat(means, parts))
+
+
+def kaimal_stream_system(run: KaimalRun, placed: KaimalPlaced) -> np.ndarray:
     """The per-frequency matrices of S = H C H^T + R for ``run``'s prior (kaimal_conditioning.stream_covariance).
 
-    Raises ParameterError when zero-noise measurements are linearly dependent (naming them; frequency 0 of full-rate
-    streams aside, see :func:`with_mean_offset`)."""
+    Raises ParameterError when zero-noise measurements are linearly dependent (naming them; the record means of
+    full-rate series aside, see :func:`with_mean_offset`)."""
     cov = kcond.stream_covariance(kaimal_generator(run, workers=1), placed.streams, placed.noise_m_s**2)
     if np.any(placed.noise_m_s == 0):
         cond.check_singular(with_mean_offset(cov, placed), placed.streams.names)
     return cov
 
 
-def with_mean_offset(cov: np.ndarray, placed: PlacedData) -> np.ndarray:
-    """``cov`` with, for full-rate streams, each stream's mean diagonal value over the frequencies added at frequency
-    0 (bin 0 alone there, which the field does not have: S_0 is R only, singular with zero noise). It changes only
-    the frequency-0 part of S^-1 r, which C H^T never sees; the solver uses it where every sample is observed and as
-    the preconditioner otherwise (module docstring)."""
-    if placed.streams.decimation != 1:
-        return cov
+def with_mean_offset(cov: np.ndarray, placed: KaimalPlaced) -> np.ndarray:
+    """``cov`` plus, at frequency 0, tau^2 v v^T for every full-rate series: v the indicator of its streams (the
+    direction of its record mean, which the field does not have: S_0 v = R v, 0 with zero noise), tau^2 its streams'
+    mean diagonal value over the frequencies (a scale). With the record mean removed, and a noise common to the
+    series' streams, it changes S^-1 r only along v, which C H^T never sees (C H^T v = 0); the solver uses it where
+    every sample is observed and as the preconditioner otherwise (module docstring)."""
     out = cov.copy()
-    diag = np.arange(placed.streams.n_streams)
-    out[0, diag, diag] += cov[:, diag, diag].real.mean(axis=0)
+    for group in placed.full_rate:
+        tau2 = float(np.mean(cov[:, group, group].real))
+        out[0, group[:, None], group[None, :]] += tau2
     return out
 
 
-def kaimal_solve(cov: np.ndarray, placed: PlacedData, measured: np.ndarray | None,
+def kaimal_solve(cov: np.ndarray, placed: KaimalPlaced, measured: np.ndarray | None,
                  eps: np.ndarray | None) -> tuple[np.ndarray, cond.SolveReport]:  # fmt: skip
     """x = S^-1 (d - H u_s - eps_s) (or S^-1 d when ``measured`` is None), (M, nt/q), zero at the missing samples:
     the circulant solve of :func:`with_mean_offset` when every sample is observed, else conjugate gradients on the
@@ -75,16 +101,7 @@ def kaimal_solve(cov: np.ndarray, placed: PlacedData, measured: np.ndarray | Non
     return cond.solve(cov, r, observed, preconditioner=pre)
 
 
-def without_record_mean(placed: PlacedData) -> tuple[PlacedData, np.ndarray]:
-    """(the data minus each stream's mean over its observed samples, those means (M,) [m/s]) for full-rate streams;
-    the data and zeros otherwise (module docstring)."""
-    if placed.streams.decimation != 1:
-        return placed, np.zeros(placed.streams.n_streams)
-    mean = np.array([float(np.mean(row[np.isfinite(row)])) for row in placed.data])
-    return replace(placed, data=placed.data - mean[:, None]), mean
-
-
-def _unconstrained_measurement(run: KaimalRun, placed: PlacedData, threads: int | None) -> np.ndarray:
+def _unconstrained_measurement(run: KaimalRun, placed: KaimalPlaced, threads: int | None) -> np.ndarray:
     """Pass 1: H u_s of the unconstrained sample of the run's seed (nothing is kept)."""
     gen = kaimal_generator(run, workers=threads)
     out = np.zeros(placed.data.shape)
@@ -94,7 +111,7 @@ def _unconstrained_measurement(run: KaimalRun, placed: PlacedData, threads: int 
     return out
 
 
-def kaimal_conditioned_planes(run: KaimalRun, placed: PlacedData, cov: np.ndarray, *, conditional_mean: bool = False,
+def kaimal_conditioned_planes(run: KaimalRun, placed: KaimalPlaced, cov: np.ndarray, *, conditional_mean: bool = False,
                               threads: int | None = None):  # fmt: skip
     """The conditioned field of ``run``: (solver report, generator, iterator of (component, plane index, field
     (nt, ny, nz) float32 [m/s])); ``generator`` is the one whose samplers made the field (u_s's, or with
@@ -155,7 +172,7 @@ def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float
         For measurements off the field, all missing, noise < 0, dependent zero-noise measurements; nothing written.
     """
     t_start = time.perf_counter()
-    placed, record_mean = without_record_mean(place(run, files, noise_m_s))
+    placed = place_kaimal(run, files, noise_m_s)
     g = run.grid
     m = placed.streams.n_streams
     # S (nt/q x M x M), one component's correction spectra on the measured planes (complex64) and its longitudinal
@@ -178,7 +195,7 @@ def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float
             sums[comp][0] += total
             sums[comp][1] += squares
         record = _record(files, placed, report, remeasured, conditional_mean)
-        record["record_mean_removed_m_s"] = [float(v) for v in record_mean]
+        record["record_mean_removed_m_s"] = [float(v) for v in placed.record_mean_m_s]
         writer.add_attrs(synthesis_report=gen.report, constraints=record)
     n = g.nt * g.nx * g.ny * g.nz
     summary = {"path": str(out), "seconds": time.perf_counter() - t_start, "constraints": record}
