@@ -110,10 +110,12 @@ def kaimal(**opt):
     constraints = None
     if opt["constrain"]:
         from turbgen.runs.constrain import load_constraint
-        from turbgen.runs.constrain_kaimal import place_kaimal
+        from turbgen.runs.constrain_kaimal import constrained_memory_bytes, place_kaimal, require_constrained_memory
 
         constraints = [load_constraint(path) for path in opt["constrain"]]
-        place_kaimal(run, constraints, opt["noise"])  # every check of the data against the run, before any output
+        # every check of the data against the run, and of the memory, before any output
+        placed = place_kaimal(run, constraints, opt["noise"])
+        require_constrained_memory(run, placed, opt["threads"])
     check_new_store(out, g, chunk_t=opt["chunks"], overwrite=opt["overwrite"])
     k = run.kaimal
     click.echo(f"turbgen kaimal: U {run.U_m_s:g} m/s, sigma {', '.join(f'{s:.3g}' for s in k.sigma_m_s)} m/s, "
@@ -121,7 +123,9 @@ def kaimal(**opt):
                f"long {run.long_model} {run.effective_long_parameters()} on {run.long_components}, seed {run.seed}")
     click.echo(f"  grid (t, x, y, z) = {g.nt} x {g.nx} x {g.ny} x {g.nz}, dt {g.dt_s:g} s, dy {g.dy_m:g} m, "
                f"dz {g.dz_m:g} m, planes x = {', '.join(f'{x:g}' for x in g.x_m)} m")
-    click.echo(f"  memory ~{format_bytes(memory_needed(g, sampler=sampler))}, output {format_bytes(3 * g.nbytes_per_component())} "
+    memory = memory_needed(g, sampler=sampler) if constraints is None else constrained_memory_bytes(run, placed,
+                                                                                                   opt["threads"])
+    click.echo(f"  memory ~{format_bytes(memory)}, output {format_bytes(3 * g.nbytes_per_component())} "
                f"float32 -> {out}")
     if constraints is not None:
         from turbgen.runs.constrain import describe_constraints

@@ -141,6 +141,26 @@ def kaimal_conditioned_planes(run: KaimalRun, placed: KaimalPlaced, cov: np.ndar
     return report, prior if conditional_mean else gen, planes()
 
 
+def constrained_memory_bytes(run: KaimalRun, placed: KaimalPlaced, threads: int | None = None) -> int:
+    """Peak bytes of a constrained run: the generator's in-memory run plus S (nt/q x M x M complex), one component's
+    correction spectra on the measured planes (complex64) and its longitudinal factors, one plane's correction
+    (float64 spectrum and field) and the stream arrays."""
+    g, m = run.grid, placed.streams.n_streams
+    sampler = kaimal_generator(run, workers=threads).sampler_bytes()
+    nf, q = g.nt // 2 + 1, len(placed.streams.used_planes())
+    extra = (g.nt // placed.streams.decimation * m * m * 16 + q * nf * g.ny * g.nz * 8 + nf * g.nx * q * 8
+             + nf * g.ny * g.nz * 16 + g.nt * g.ny * g.nz * 8 + 8 * m * g.nt * 8)  # fmt: skip
+    return memory_needed(g, sampler=sampler) + extra
+
+
+def require_constrained_memory(run: KaimalRun, placed: KaimalPlaced, threads: int | None = None) -> None:
+    """Refuse (ParameterError) a constrained run whose :func:`constrained_memory_bytes` exceed the available memory
+    (constrained runs keep the spectrum in memory: no scratch file)."""
+    require_memory(constrained_memory_bytes(run, placed, threads),
+                   f"the constrained Kaimal run ({placed.streams.n_streams} measurement streams)",
+                   "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
+
+
 def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float | None = None,
                            conditional_mean: bool = False, overwrite: bool = False, chunk_t: int | None = None,
                            threads: int | None = None) -> dict:  # fmt: skip
@@ -174,15 +194,7 @@ def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float
     t_start = time.perf_counter()
     placed = place_kaimal(run, files, noise_m_s)
     g = run.grid
-    m = placed.streams.n_streams
-    # S (nt/q x M x M), one component's correction spectra on the measured planes (complex64) and its longitudinal
-    # factors, one plane's correction (float64 spectrum and field), the stream arrays, besides the generator's run
-    sampler = kaimal_generator(run, workers=threads).sampler_bytes()
-    nf, q = g.nt // 2 + 1, len(placed.streams.used_planes())
-    extra = (g.nt // placed.streams.decimation * m * m * 16 + q * nf * g.ny * g.nz * 8 + nf * g.nx * q * 8
-             + nf * g.ny * g.nz * 16 + g.nt * g.ny * g.nz * 8 + 8 * m * g.nt * 8)  # fmt: skip
-    require_memory(memory_needed(g, sampler=sampler) + extra, f"the constrained Kaimal run ({m} measurement streams)",
-                   "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
+    require_constrained_memory(run, placed, threads)
     cov = kaimal_stream_system(run, placed)
     report, gen, planes = kaimal_conditioned_planes(run, placed, cov, conditional_mean=conditional_mean,
                                                     threads=threads)  # fmt: skip
