@@ -74,8 +74,19 @@ def _three(name):
 @click.option("--overwrite", is_flag=True, help="Replace an existing store.")
 @click.option("--rescale", is_flag=True, help="Scale spectra so the expected sigma is the nominal one (recorded in "
               "the store); default: spectra follow Eq. 11 over the resolved band.")
+@click.option("--constrain", "constrain", multiple=True, type=click.Path(),
+              help="Condition the field on the measurements of FILE: point time series (JSON, "
+              "schemas/constraints.schema.json) or a `turbgen lidar --out` dataset; repeatable. The field is a "
+              "sample of the model conditioned on them (Hoffman & Ribak 1991); each full-rate series' record mean "
+              "is removed first (the field has zero record mean).")  # fmt: skip
+@click.option("--noise", type=float, help="With --constrain: measurement-noise sigma [m/s] >= 0 of every value "
+              "(default: each file's noise_m_s, else 0 = the field passes through the data).")  # fmt: skip
+@click.option("--conditional-mean", "conditional_mean", is_flag=True,
+              help="With --constrain: write the conditional mean (the optimal linear reconstruction, no random part).")
 def kaimal(**opt):
     """Kaimal 4D field: IEC spectra and yz coherence per plane, exponential longitudinal coherence between planes."""
+    if not opt["constrain"] and (opt["noise"] is not None or opt["conditional_mean"]):
+        raise click.UsageError("--noise and --conditional-mean need --constrain FILE")
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
     user = load_presets(opt["presets_file"]) if opt["presets_file"] else None
@@ -96,6 +107,15 @@ def kaimal(**opt):
     check_output_path(out)
     sampler = kaimal_generator(run, workers=opt["threads"]).sampler_bytes()
     plan_spill(g, Path(out).absolute(), None, sampler)
+    constraints = None
+    if opt["constrain"]:
+        from turbgen.runs.constrain import load_constraint
+        from turbgen.runs.constrain_kaimal import constrained_memory_bytes, place_kaimal, require_constrained_memory
+
+        constraints = [load_constraint(path) for path in opt["constrain"]]
+        # every check of the data against the run, and of the memory, before any output
+        placed = place_kaimal(run, constraints, opt["noise"])
+        require_constrained_memory(run, placed, opt["threads"])
     check_new_store(out, g, chunk_t=opt["chunks"], overwrite=opt["overwrite"])
     k = run.kaimal
     click.echo(f"turbgen kaimal: U {run.U_m_s:g} m/s, sigma {', '.join(f'{s:.3g}' for s in k.sigma_m_s)} m/s, "
@@ -103,10 +123,22 @@ def kaimal(**opt):
                f"long {run.long_model} {run.effective_long_parameters()} on {run.long_components}, seed {run.seed}")
     click.echo(f"  grid (t, x, y, z) = {g.nt} x {g.nx} x {g.ny} x {g.nz}, dt {g.dt_s:g} s, dy {g.dy_m:g} m, "
                f"dz {g.dz_m:g} m, planes x = {', '.join(f'{x:g}' for x in g.x_m)} m")
-    click.echo(f"  memory ~{format_bytes(memory_needed(g, sampler=sampler))}, output {format_bytes(3 * g.nbytes_per_component())} "
+    memory = memory_needed(g, sampler=sampler) if constraints is None else constrained_memory_bytes(run, placed,
+                                                                                                   opt["threads"])
+    click.echo(f"  memory ~{format_bytes(memory)}, output {format_bytes(3 * g.nbytes_per_component())} "
                f"float32 -> {out}")
-    s = run_kaimal(run, out, overwrite=opt["overwrite"], chunk_t=opt["chunks"], progress=sys.stderr.isatty(),
-                   threads=opt["threads"])
+    if constraints is not None:
+        from turbgen.runs.constrain import describe_constraints
+        from turbgen.runs.constrain_kaimal import run_kaimal_constrained
+
+        s = run_kaimal_constrained(run, out, constraints, noise_m_s=opt["noise"],
+                                   conditional_mean=opt["conditional_mean"], overwrite=opt["overwrite"],
+                                   chunk_t=opt["chunks"], threads=opt["threads"])  # fmt: skip
+        for line in describe_constraints(s["constraints"]):
+            click.echo(f"  {line}")
+    else:
+        s = run_kaimal(run, out, overwrite=opt["overwrite"], chunk_t=opt["chunks"], progress=sys.stderr.isatty(),
+                       threads=opt["threads"])
     exp = ", ".join(f"{v:.3f}" for v in s["expected_sigma"])
     clip = ""
     if s["yz_clip_error"] > 0 or s["long_clip_error"] > 0:

@@ -130,9 +130,9 @@ def _point_streams(run: MannRun, f: PointSeries, sigma: float) -> list[PlacedStr
     return out
 
 
-def _combine(placed: list[PlacedStream], nt: int) -> PlacedData:
+def combine_streams(placed: list[PlacedStream], nt: int) -> PlacedData:
     """One Streams of common decimation Q = lcm of the streams' (which must divide nt): a stream observed every q
-    steps becomes Q/q streams observed every Q steps from its offsets o + r q."""
+    steps becomes Q/q consecutive streams observed every Q steps from its offsets o + r q."""
     big_q = math.lcm(*(s.decimation for s in placed))
     if nt % big_q:
         raise ParameterError(f"the measurements' sampling periods (every {big_q} time steps in common) do not divide "
@@ -162,6 +162,12 @@ def place(run: MannRun, files: list, noise_m_s: float | None = None) -> PlacedDa
 
     ``noise_m_s`` (>= 0) replaces every file's own ``noise_m_s``; a file without one has noise 0.
     """
+    return combine_streams(placed_streams(run, files, noise_m_s), run.grid.nt)
+
+
+def placed_streams(run, files: list, noise_m_s: float | None = None) -> list[PlacedStream]:
+    """Every measured series of ``files`` on the grid of ``run`` (a MannRun or KaimalRun), one PlacedStream each, in
+    file order: :func:`place` before the streams are combined (:func:`combine_streams`)."""
     from turbgen.runs.constrain_lidar import lidar_streams
 
     if noise_m_s is not None and not (math.isfinite(noise_m_s) and noise_m_s >= 0):
@@ -173,7 +179,7 @@ def place(run: MannRun, files: list, noise_m_s: float | None = None) -> PlacedDa
             placed += _point_streams(run, f, sigma)
         else:
             placed += lidar_streams(run, f, 0.0 if noise_m_s is None else noise_m_s)
-    return _combine(placed, run.grid.nt)
+    return placed
 
 
 def _measurement_noise(run: MannRun, placed: PlacedData) -> np.ndarray:

@@ -245,13 +245,17 @@ class SolveReport:
     relative_residual: float
 
 
-def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, SolveReport]:
+def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
+          preconditioner: np.ndarray | None = None) -> tuple[np.ndarray, SolveReport]:  # fmt: skip
     """x = S^-1 r on the observed samples, zero elsewhere: (x (M, nt), report).
 
     Every sample observed: the exact per-slab solve. Otherwise preconditioned conjugate gradients on S restricted to
     the observed samples, the circulant solve of the full streams (zero-filled) as preconditioner, stopping at
     relative residual CG_TOLERANCE. Raises ParameterError if they do not converge in CG_MAX_ITERATIONS.
+    ``preconditioner``: other per-frequency matrices for that circulant solve (default ``cov``; for a ``cov``
+    singular on some frequency whose full streams are never all observed).
     """
+    pre = cov if preconditioner is None else preconditioner
     r = np.where(observed, r, 0.0)
     norm = float(np.linalg.norm(r))
     if observed.all():
@@ -262,7 +266,7 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tuple[np.ndar
     if norm == 0:
         return x, SolveReport("pcg", 0, 0.0)
     res = r.copy()
-    z = np.where(observed, circulant_solve(cov, res), 0.0)
+    z = np.where(observed, circulant_solve(pre, res), 0.0)
     p, rz = z.copy(), float(np.vdot(res, z))
     for it in range(1, CG_MAX_ITERATIONS + 1):
         sp = np.where(observed, circulant_apply(cov, p), 0.0)
@@ -272,7 +276,7 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tuple[np.ndar
         rel = float(np.linalg.norm(res)) / norm
         if rel <= CG_TOLERANCE:
             return x, SolveReport("pcg", it, rel)
-        z = np.where(observed, circulant_solve(cov, res), 0.0)
+        z = np.where(observed, circulant_solve(pre, res), 0.0)
         rz_new = float(np.vdot(res, z))
         p = z + (rz_new / rz) * p
         rz = rz_new
