@@ -362,3 +362,33 @@ def describe_constraints(record: dict) -> list[str]:
         f"solve: {how}, relative residual {solver['relative_residual']:.1e}; field - data at the measurements: "
         f"max {record['residual_max_m_s']:.2e} m/s, rms {record['residual_rms_m_s']:.2e} m/s",
     ]
+
+
+def load_constraints(files) -> list:
+    """Each of ``files`` loaded (:func:`load_constraint`); PointSeries / LidarData given already loaded are kept."""
+    return [load_constraint(f) if isinstance(f, (str, Path)) or hasattr(f, "__fspath__") else f for f in files]
+
+
+def constraint_digest(placed: PlacedData, conditional_mean: bool) -> str:
+    """8 hex digits of SHA-256 over the data as placed on the grid (values, noise, where each stream measures) and
+    ``conditional_mean``: the content, not the files' paths, so two runs conditioned on different data never share a
+    name and the same data under another path gives the same one."""
+    import hashlib
+    import json
+
+    h = hashlib.sha256()
+    h.update(np.ascontiguousarray(placed.data, dtype="<f8").tobytes())
+    h.update(np.ascontiguousarray(placed.noise_m_s, dtype="<f8").tobytes())
+    st = placed.streams
+    for a in (st.plane, st.term_stream, st.term_component, st.term_iy, st.term_iz, st.term_shift, st.offset):
+        h.update(np.ascontiguousarray(0 if a is None else a, dtype="<i8").tobytes())
+    h.update(np.ascontiguousarray(st.term_weight, dtype="<f8").tobytes())
+    h.update(json.dumps([int(st.decimation), bool(conditional_mean)]).encode())
+    return h.hexdigest()[:8]
+
+
+def constrained_store_name(run: MannRun, placed: PlacedData, conditional_mean: bool) -> str:
+    """The default store name of a constrained run: the run's own with ``_c<digest of the data>`` (and ``mean`` for
+    the conditional mean), e.g. mann_U16_L49_G3.1_evo400_s2_c1a2b3c4.zarr."""
+    base = run.default_store_name().removesuffix(".zarr")
+    return f"{base}_c{constraint_digest(placed, conditional_mean)}{'mean' if conditional_mean else ''}.zarr"

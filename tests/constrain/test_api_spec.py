@@ -1,0 +1,101 @@
+"""Constraints through the Python API and the run spec: turbgen.mann(constrain=...) is the field of
+`turbgen mann --constrain` to the bit, a run file's `constrain` keys are the options, store names carry a digest of
+the data, the service refuses constraints."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import turbgen
+from turbgen.cli import cli
+from turbgen.errors import ParameterError
+
+MAST = Path(__file__).parents[2] / "examples" / "mast.json"
+SMALL = {"U": 12, "nt": 64, "ny": 6, "nz": 6, "dy": 8, "planes": [0, 40], "pad_yz": 1, "seed": 2, "threads": 1}
+SMALL_CLI = ["--U", "12", "--nt", "64", "--ny", "6", "--nz", "6", "--dy", "8", "--planes", "0,40", "--pad-yz", "1",
+             "--seed", "2", "--threads", "1"]  # fmt: skip
+
+
+def _fields(ds):
+    return np.stack([ds[c].values for c in "uvw"])
+
+
+@pytest.mark.parametrize("mean", [False, True])
+def test_api_equals_the_cli_to_the_bit(tmp_path, mean):
+    out = tmp_path / "cli.zarr"
+    flags = ["--conditional-mean"] if mean else []
+    res = CliRunner().invoke(cli, ["mann", *SMALL_CLI, "--constrain", str(MAST), "--noise", "0.1", *flags,
+                                   "--out", str(out)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    api = turbgen.mann(**SMALL, constrain=[MAST], noise=0.1, conditional_mean=mean)
+    cli_field = _fields(turbgen.open_store(out))
+    np.testing.assert_array_equal(_fields(api), cli_field)
+    assert api.attrs["constraints"]["conditional_mean"] is mean
+    # a constraint loaded beforehand is the same constraint
+    from turbgen.runs.constrain import load_constraint
+
+    loaded = turbgen.mann(**SMALL, constrain=[load_constraint(MAST)], noise=0.1, conditional_mean=mean)
+    np.testing.assert_array_equal(_fields(loaded), cli_field)
+    plain = _fields(turbgen.mann(**SMALL))
+    assert not np.array_equal(plain, cli_field)  # the constraint changed the field
+
+
+def test_run_file_keys_are_the_options(tmp_path, monkeypatch):
+    """A run file's constrain (relative to the file), noise_m_s and conditional_mean = the typed options; the default
+    store name carries the data's digest, not the path: a copy of the file gives the same name, other data another."""
+    data_dir = tmp_path / "data"
+    data_dir.mkdir()
+    shutil.copy(MAST, data_dir / "m.json")
+    run_file = tmp_path / "run.json"
+    run_file.write_text(json.dumps({"U_m_s": 12, "seed": 2, "pad_yz": 1, "constrain": ["data/m.json"],
+                                    "noise_m_s": 0.1, "grid": {"nt": 64, "ny": 6, "nz": 6, "dy_m": 8,
+                                                               "x_m": [0, 40]}}))  # fmt: skip
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)  # the run file's paths are relative to it, not to the working directory
+    res = CliRunner().invoke(cli, ["mann", "--config", str(run_file), "--threads", "1"])
+    assert res.exit_code == 0, res.output
+    (name,) = [p.name for p in work.glob("*.zarr")]
+    assert name.startswith("mann_U12_L49_G3.1_evo400_s2_p") and "_c" in name
+    from_file = _fields(turbgen.open_store(work / name))
+    np.testing.assert_array_equal(from_file, _fields(turbgen.mann(config=run_file, threads=1)))
+    np.testing.assert_array_equal(from_file, _fields(turbgen.mann(**SMALL, constrain=[MAST], noise=0.1)))
+
+    from turbgen.runs.constrain import constrained_store_name, load_constraints, place
+    from turbgen.spec.mann import MannRun
+
+    run = MannRun.from_mapping({"U_m_s": 12, "seed": 2, "pad_yz": 1, "grid": {"nt": 64, "ny": 6, "nz": 6,
+                                                                               "dy_m": 8, "x_m": [0, 40]}})  # fmt: skip
+    names = {constrained_store_name(run, place(run, load_constraints([f]), 0.1), False)
+             for f in (MAST, data_dir / "m.json")}
+    assert names == {name}
+    other = json.loads(MAST.read_text())
+    other["sensors"][0]["w_m_s"][3] += 0.01
+    (data_dir / "o.json").write_text(json.dumps(other))
+    assert constrained_store_name(run, place(run, load_constraints([data_dir / "o.json"]), 0.1), False) != name
+    assert constrained_store_name(run, place(run, load_constraints([MAST]), 0.1), True) != name
+    assert run.default_store_name() != name
+
+
+def test_noise_without_constrain_is_refused(tmp_path):
+    with pytest.raises(ParameterError, match="needs constraints"):
+        turbgen.mann(**SMALL, noise=0.1)
+    with pytest.raises(ParameterError, match="noise_m_s = -1"):
+        turbgen.mann(**SMALL, constrain=[MAST], noise=-1)
+    res = CliRunner().invoke(cli, ["mann", *SMALL_CLI, "--conditional-mean", "--out", str(tmp_path / "x.zarr")])
+    assert res.exit_code == 2 and "needs constraints" in res.output and not (tmp_path / "x.zarr").exists()
+
+
+def test_service_refuses_constraints():
+    from turbgen.service.run_ids import build_run
+
+    with pytest.raises(ParameterError, match="constrain.*not taken by the service"):
+        build_run({"model": "mann", "constrain": ["/etc/passwd"]})
+    with pytest.raises(ParameterError, match="noise_m_s.*not taken by the service"):
+        build_run({"model": "mann", "noise_m_s": 0.1})
