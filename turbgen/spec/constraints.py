@@ -129,7 +129,7 @@ def split_constraint_keys(mapping: dict) -> tuple[dict, ConstraintRequest | None
         return rest, None
     if noise is not None and (isinstance(noise, bool) or not isinstance(noise, (int, float))
                               or not (math.isfinite(noise) and noise >= 0)):  # fmt: skip
-        raise ParameterError(f"noise_m_s = {noise!r} m/s must be a finite number >= 0")
+        raise ParameterError(f"noise = {noise!r} m/s must be a finite number >= 0")
     return rest, ConstraintRequest(tuple(files), None if noise is None else float(noise), mean)
 
 
