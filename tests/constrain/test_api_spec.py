@@ -99,3 +99,39 @@ def test_service_refuses_constraints():
         build_run({"model": "mann", "constrain": ["/etc/passwd"]})
     with pytest.raises(ParameterError, match="noise_m_s.*not taken by the service"):
         build_run({"model": "mann", "noise_m_s": 0.1})
+
+
+def test_sweep_conditions_every_run_on_the_same_files(tmp_path):
+    """A sweep file's constrain keys: every Mann run is `turbgen mann --preset P --U U --seed S --constrain` to the
+    bit, under a store name that differs from the unconstrained run's by the digest of the data."""
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    from turbgen.sweep import plan_from_mapping, run_sweep
+
+    shutil.copy(MAST, tmp_path / "m.json")
+    sweep = {"out": "sw", "models": ["mann"], "presets": ["neutral"], "speeds": [12.0], "seeds": [1, 2],
+             "grid": {"nt": 64, "planes": [0.0, 40.0], "ny": 4, "nz": 4, "dy": 8.0}, "constrain": ["m.json"],
+             "noise_m_s": 0.1}  # fmt: skip
+    plan = plan_from_mapping(sweep, base_dir=tmp_path)
+    plain = plan_from_mapping({k: v for k, v in sweep.items() if k not in ("constrain", "noise_m_s")},
+                              base_dir=tmp_path)  # fmt: skip
+    names = [r.store_name for r in plan.runs]
+    assert all(n.startswith("mann_neutral_U12_seed") and "_c" in n for n in names)
+    assert not set(names) & {r.store_name for r in plain.runs}
+    assert plan.to_dict()["constraints"]["noise_m_s"] == 0.1
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
+                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:  # fmt: skip
+        result = run_sweep(plan, client=client, progress=False)
+    assert result.ok
+    single = tmp_path / "single.zarr"
+    res = CliRunner().invoke(cli, ["mann", "--preset", "neutral", "--U", "12", "--seed", "2", "--nt", "64",
+                                   "--planes", "0,40", "--ny", "4", "--nz", "4", "--dy", "8", "--threads", "1",
+                                   "--constrain", str(MAST), "--noise", "0.1", "--out", str(single)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    swept = turbgen.open_store(tmp_path / "sw" / names[1])
+    np.testing.assert_array_equal(_fields(swept), _fields(turbgen.open_store(single)))
+    assert swept.attrs["constraints"]["n_samples"] == 128
+    with pytest.raises(ParameterError, match="Mann runs only"):
+        plan_from_mapping({**sweep, "models": ["mann", "kaimal"]}, base_dir=tmp_path)
