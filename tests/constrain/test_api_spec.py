@@ -53,7 +53,7 @@ def test_run_file_keys_are_the_options(tmp_path, monkeypatch):
     data_dir.mkdir()
     shutil.copy(MAST, data_dir / "m.json")
     run_file = tmp_path / "run.json"
-    run_file.write_text(json.dumps({"U_m_s": 12, "seed": 2, "pad_yz": 1, "constrain": ["data/m.json"],
+    run_file.write_text(json.dumps({"U_m_s": 12, "seed": 2, "pad_yz": 1, "ti": 0.15, "constrain": ["data/m.json"],
                                     "noise_m_s": 0.1, "grid": {"nt": 64, "ny": 6, "nz": 6, "dy_m": 8,
                                                                "x_m": [0, 40]}}))  # fmt: skip
     work = tmp_path / "work"
@@ -65,12 +65,12 @@ def test_run_file_keys_are_the_options(tmp_path, monkeypatch):
     assert name.startswith("mann_U12_L49_G3.1_evo400_s2_p") and "_c" in name
     from_file = _fields(turbgen.open_store(work / name))
     np.testing.assert_array_equal(from_file, _fields(turbgen.mann(config=run_file, threads=1)))
-    np.testing.assert_array_equal(from_file, _fields(turbgen.mann(**SMALL, constrain=[MAST], noise=0.1)))
+    np.testing.assert_array_equal(from_file, _fields(turbgen.mann(**SMALL, ti=0.15, constrain=[MAST], noise=0.1)))
 
     from turbgen.runs.constrain import constrained_store_name, load_constraints, place
     from turbgen.spec.mann import MannRun
 
-    run = MannRun.from_mapping({"U_m_s": 12, "seed": 2, "pad_yz": 1, "grid": {"nt": 64, "ny": 6, "nz": 6,
+    run = MannRun.from_mapping({"U_m_s": 12, "seed": 2, "pad_yz": 1, "ti": 0.15, "grid": {"nt": 64, "ny": 6, "nz": 6,
                                                                                "dy_m": 8, "x_m": [0, 40]}})  # fmt: skip
     names = {constrained_store_name(run, place(run, load_constraints([f]), 0.1), False)
              for f in (MAST, data_dir / "m.json")}
@@ -135,3 +135,38 @@ def test_sweep_conditions_every_run_on_the_same_files(tmp_path):
     assert swept.attrs["constraints"]["n_samples"] == 128
     with pytest.raises(ParameterError, match="Mann runs only"):
         plan_from_mapping({**sweep, "models": ["mann", "kaimal"]}, base_dir=tmp_path)
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.1])
+def test_energy_level_estimated_from_the_data(tmp_path, noise):
+    """No ae, sigma_u, ti or class: ae is estimated from the data. Data drawn from the model (a field of known ae
+    read at grid nodes, plus noise of the stated sigma) are N(0, S(a)), so d^T S(a)^-1 d ~ chi^2_n and the estimate's
+    relative standard deviation is sqrt(2 / n) (exactly without noise; to first order with noise much smaller than
+    the signal): 4 of them."""
+    from turbgen.spec.constraints import point_series_from_mapping
+
+    grid = dict(U=12, nt=64, ny=6, nz=6, dy=8, planes=[0, 40], pad_yz=1, threads=1)
+    truth = turbgen.mann(seed=5, sigma_u=1.7, **grid)
+    rng = np.random.default_rng(11)
+    sensors = []
+    for iy, iz, x in [(1, 1, 0), (4, 2, 0), (2, 4, 1), (3, 3, 1)]:
+        s = {"name": f"p{iy}{iz}{x}", "x_m": float(truth.x[x]), "y_m": float(truth.y[iy]), "z_m": float(truth.z[iz])}
+        for c in "uvw":
+            s[f"{c}_m_s"] = list(truth[c].values[:, x, iy, iz].astype(float) + noise * rng.standard_normal(64))
+        sensors.append(s)
+    t = truth.t.values
+    # a sensor at x is the stored sample t + x / U: its physical times are t - x / U; keep the ones in the record
+    series = []
+    for s in sensors:
+        lead = s["x_m"] / 12.0
+        keep = t - lead >= 0
+        comps = {f"{c}_m_s": list(np.asarray(s[f"{c}_m_s"])[keep]) for c in "uvw"}
+        series.append(point_series_from_mapping({"kind": "point-series", "time_s": list(t[keep] - lead),
+                                                 "noise_m_s": noise, "sensors": [{**s, **comps}]}, s["name"]))
+    c = turbgen.mann(seed=6, constrain=series, **grid)
+    n = c.attrs["constraints"]["n_samples"]
+    ae_true, ae_hat = truth.attrs["parameters"]["ae"], c.attrs["parameters"]["ae"]
+    assert c.attrs["derived"]["ae_from"].startswith("estimated from the constraint data")
+    assert abs(ae_hat / ae_true - 1) <= 4 * np.sqrt(2 / n), (ae_hat, ae_true, n)
+    given = turbgen.mann(seed=6, constrain=series, sigma_u=1.7, **grid)
+    assert given.attrs["parameters"]["ae"] == ae_true  # a given level is used as given

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import tempfile
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 
 import xarray as xr
@@ -167,6 +168,8 @@ def mann(
         constraints already loaded (turbgen.runs.constrain.load_constraint). The field is a sample of the model
         conditioned on them (``conditional_mean=False``), made in memory in one pass (``memory`` is not used).
         Also the run file's key ``constrain``.
+        When none of ``ae``, ``sigma_u``, ``ti`` or an IEC class (``turb_class``, a preset) is given, the energy
+        level ae is estimated from the data (``attrs["derived"]["ae_from"]`` says so, with the model sigma_u).
     noise : float, optional
         With ``constrain``: measurement-noise sigma [m/s] >= 0 of every value (default: each file's
         ``noise_m_s``, else 0: the field passes through the data); the run file's ``noise_m_s``.
@@ -225,10 +228,14 @@ def mann(
     keys = None if preset is None else (lambda mapping, typed: mann_run_keys(preset, user=user))
     mapping, request = split_constraint_keys(merge_run_inputs(_file_mapping(config, "mann-run"), given, grid,
                                                               preset_keys=keys, replaces=MANN_REPLACES, x_m=x_m))
-    run = MannRun.from_mapping(mapping)
     if request is None:
+        run = MannRun.from_mapping(mapping)
         make = _mann_maker(run, overwrite, chunks, threads, stencil_cache, memory, progress)
     else:
+        from turbgen.runs.constrain import load_constraints, with_energy_from_data
+
+        request = replace(request, files=tuple(load_constraints(request.files)))
+        run = with_energy_from_data(mapping, list(request.files), request.noise_m_s, stencil_cache)
         make = _constrained_maker(run, request, overwrite, chunks, threads, stencil_cache)
     if out is None:
         return _in_memory(make, run.grid, run.default_store_name())
@@ -266,9 +273,9 @@ def _constrained_maker(run: MannRun, request, overwrite, chunks, threads, stenci
     """The function writing ``run`` conditioned on ``request`` (a ConstraintRequest) as ``turbgen mann --constrain``
     does (turbgen.runs.constrain.run_mann_constrained, in memory, one pass); the data are checked against the run
     before anything is written."""
-    from turbgen.runs.constrain import load_constraints, place, run_mann_constrained
+    from turbgen.runs.constrain import place, run_mann_constrained
 
-    constraints = load_constraints(request.files)
+    constraints = list(request.files)  # loaded
     place(run, constraints, request.noise_m_s)
 
     def make(out: Path) -> None:

@@ -115,12 +115,15 @@ def mann(**opt):
                    else lambda mapping, given: mann_run_keys(opt["preset"], user=user))  # fmt: skip
     mapping = run_mapping(opt, "mann-run", _KEYS, preset_keys, _REPLACES, plane_positions(opt["planes"], opt["gates"]))
     mapping, request = split_constraint_keys(mapping)  # --constrain/--noise/--conditional-mean or the run file's
-    run = MannRun.from_mapping(mapping)
     constraints = out = None
-    if request is not None:
-        from turbgen.runs.constrain import constrained_store_name, load_constraints, place
+    if request is None:
+        run = MannRun.from_mapping(mapping)
+    else:
+        from turbgen.runs.constrain import constrained_store_name, load_constraints, place, with_energy_from_data
 
         constraints = load_constraints(request.files)
+        # no ae, sigma_u, ti or IEC class given: ae estimated from the data (printed with the run below)
+        run = with_energy_from_data(mapping, constraints, request.noise_m_s, opt["stencil_cache"])
         placed = place(run, constraints, request.noise_m_s)  # every check of the data against the run, before output
         out = constrained_store_name(run, placed, request.conditional_mean)
     out = opt["out"] if opt["out"] is not None else out or run.default_store_name()
@@ -143,6 +146,9 @@ def mann(**opt):
     click.echo("turbgen mann")
     for line in describe(run, out, threads):
         click.echo(f"  {line}")
+    if run.ae_from.startswith("estimated"):
+        click.echo("  sigma_u: none of --ae, --sigma-u, --ti or an IEC class given, so the energy level was "
+                   "estimated from the constraint data (see ae above)")
     if plan is None and opt["scheduler"] is not None:
         click.echo(f"  --scheduler {opt['scheduler']} not used: the field fits the memory budget in one pass")
     for path in stale:
