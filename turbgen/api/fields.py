@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import tempfile
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 
 import xarray as xr
@@ -19,6 +20,7 @@ from turbgen.errors import ParameterError
 from turbgen.resources import available_memory_bytes, default_threads, parse_size, require_memory
 from turbgen.spec.defaults import KAIMAL_DEFAULTS
 from turbgen.spec.config import check_mapping, read_config
+from turbgen.spec.constraints import resolve_constraint_paths, split_constraint_keys
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
 from turbgen.spec.preset_files import load_presets
@@ -37,7 +39,7 @@ def _file_mapping(config, schema: str) -> dict | None:
         return None
     if isinstance(config, Mapping):
         return dict(check_mapping(dict(config), schema, "`config`"))
-    return read_config(config, schema)
+    return resolve_constraint_paths(read_config(config, schema), Path(config).parent)
 
 
 def _presets(preset, presets_file):
@@ -115,6 +117,9 @@ def mann(
     stencil_cache: PathLike | None = None,
     memory: int | str | None = None,
     progress: bool = False,
+    constrain=None,
+    noise: float | None = None,
+    conditional_mean: bool | None = None,
     **options,
 ) -> xr.Dataset:
     """A Mann space-time 4D field u(t, x, y, z) (Mann 1994; Guo et al. 2022): the field of ``turbgen mann``.
@@ -157,6 +162,19 @@ def mann(
         ``out``, the same field (default: the available memory).
     progress : bool, optional
         Show a progress bar on stderr.
+    constrain : list, optional
+        Condition the field on measurements (Hoffman & Ribak 1991), as ``turbgen mann --constrain``: constraint
+        files (point time series JSON, schemas/constraints.schema.json, or ``turbgen lidar --out`` datasets) or
+        constraints already loaded (turbgen.runs.constrain.load_constraint). The field is a sample of the model
+        conditioned on them (``conditional_mean=False``), made in memory in one pass (``memory`` is not used).
+        Also the run file's key ``constrain``.
+        When none of ``ae``, ``sigma_u``, ``ti`` or an IEC class (``turb_class``, a preset) is given, the energy
+        level ae is estimated from the data (``attrs["derived"]["ae_from"]`` says so, with the model sigma_u).
+    noise : float, optional
+        With ``constrain``: measurement-noise sigma [m/s] >= 0 of every value (default: each file's
+        ``noise_m_s``, else 0: the field passes through the data); the run file's ``noise_m_s``.
+    conditional_mean : bool, optional
+        With ``constrain``: return the conditional mean (the optimal linear reconstruction, no random part).
     **options
         The other keywords named above.
 
@@ -164,13 +182,16 @@ def mann(
     -------
     xarray.Dataset
         u, v, w (t, x, y, z) [m/s], coordinates t [s], x, y, z [m], the store's attributes (``parameters``,
-        ``grid``, ``seed``, ...): in memory without ``out``, else the written store, opened lazily.
+        ``grid``, ``seed``, ...): in memory without ``out``, else the written store, opened lazily. A constrained
+        field has the attribute ``constraints`` (the data on the grid, noise, solver report, residual at the
+        measurements).
 
     Raises
     ------
     ParameterError
         For an unknown keyword, a value outside its range, two energy levels (``ae``, ``sigma_u``, ``ti``), a field
-        that fits neither memory nor disk.
+        that fits neither memory nor disk; a constraint file that does not match its format, measurements outside
+        the field, dependent zero-noise measurements, ``noise`` < 0 or ``noise`` without ``constrain``.
     StoreError
         For an existing ``out`` without ``overwrite``, or an ``out`` that is not a turbgen store with it.
 
@@ -182,21 +203,40 @@ def mann(
     {'t': 64, 'x': 2, 'y': 8, 'z': 8}
     >>> ds.attrs["parameters"]["length_scale_m"], ds.attrs["seed"]
     (30.0, 1)
+
+    Conditioned on a hub-height sonic (examples/mast.json: u as total wind and w at the rotor plane, 2 Hz for
+    32 s, noise 0.05 m/s), the field follows the data at the measurements:
+
+    >>> from pathlib import Path
+    >>> mast = Path(turbgen.__file__).parents[1] / "examples" / "mast.json"
+    >>> c = turbgen.mann(U=12, nt=64, ny=8, nz=8, dy=8, planes=[0, 40], pad_yz=1, constrain=[mast])
+    >>> record = c.attrs["constraints"]
+    >>> record["n_samples"], record["residual_rms_m_s"] < 0.1
+    (128, True)
     >>> turbgen.mann(Lx=30)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     turbgen.errors.ParameterError: turbgen.mann() got unknown keyword(s) Lx; allowed: U, L, gamma, ...
     """
-    options.update(L=L, gamma=gamma, evo=evo, seed=seed)
+    options.update(L=L, gamma=gamma, evo=evo, seed=seed, constrain=constrain, noise=noise,
+                   conditional_mean=conditional_mean)
     given, grid, x_m = run_inputs("mann", options)
     energy = [key for key in MANN_ENERGY_KEYS if key in given]
     if len(energy) > 1:
         raise ParameterError(f"give one of `ae`, `sigma_u`, `ti` (got {', '.join(energy)})")
     user = _presets(preset, presets_file)
     keys = None if preset is None else (lambda mapping, typed: mann_run_keys(preset, user=user))
-    run = MannRun.from_mapping(merge_run_inputs(_file_mapping(config, "mann-run"), given, grid, preset_keys=keys,
-                                                replaces=MANN_REPLACES, x_m=x_m))  # fmt: skip
-    make = _mann_maker(run, overwrite, chunks, threads, stencil_cache, memory, progress)
+    mapping, request = split_constraint_keys(merge_run_inputs(_file_mapping(config, "mann-run"), given, grid,
+                                                              preset_keys=keys, replaces=MANN_REPLACES, x_m=x_m))
+    if request is None:
+        run = MannRun.from_mapping(mapping)
+        make = _mann_maker(run, overwrite, chunks, threads, stencil_cache, memory, progress)
+    else:
+        from turbgen.runs.constrain import load_constraints, with_energy_from_data
+
+        request = replace(request, files=tuple(load_constraints(request.files)))
+        run = with_energy_from_data(mapping, list(request.files), request.noise_m_s, stencil_cache)
+        make = _constrained_maker(run, request, overwrite, chunks, threads, stencil_cache)
     if out is None:
         return _in_memory(make, run.grid, run.default_store_name())
     make(Path(out))
@@ -225,6 +265,25 @@ def _mann_maker(run: MannRun, overwrite, chunks, threads, stencil_cache, memory,
         else:
             run_mann(run, out, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=threads,
                      cache_dir=stencil_cache)  # fmt: skip
+
+    return make
+
+
+def _constrained_maker(run: MannRun, request, overwrite, chunks, threads, stencil_cache):
+    """The function writing ``run`` conditioned on ``request`` (a ConstraintRequest) as ``turbgen mann --constrain``
+    does (turbgen.runs.constrain.run_mann_constrained, in memory, one pass); the data are checked against the run
+    before anything is written."""
+    from turbgen.runs.constrain import place, run_mann_constrained
+
+    constraints = list(request.files)  # loaded
+    place(run, constraints, request.noise_m_s)
+
+    def make(out: Path) -> None:
+        check_output_path(out, "`out`")
+        check_new_store(out, run.grid, chunk_t=chunks, overwrite=overwrite)
+        run_mann_constrained(run, out, constraints, noise_m_s=request.noise_m_s,
+                             conditional_mean=request.conditional_mean, overwrite=overwrite, chunk_t=chunks,
+                             threads=default_threads(threads), cache_dir=stencil_cache)  # fmt: skip
 
     return make
 

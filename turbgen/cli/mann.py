@@ -13,6 +13,7 @@ from turbgen.cli.run_options import grid_options, run_mapping
 from turbgen.resources import default_threads, parse_size
 from turbgen.runs.mann import describe, run_mann
 from turbgen.runs.mann_outofcore import local_cluster, plan_for_budget, remove_stale_scratch
+from turbgen.spec.constraints import split_constraint_keys
 from turbgen.spec.defaults import MANN_DEFAULTS as D
 from turbgen.spec.defaults import MANN_GRID as G
 from turbgen.spec.mann import MannRun
@@ -79,7 +80,8 @@ def _dask_client(scheduler, workers: int):
 @click.option("--seed", type=int, help=f"Random seed >= 0 (default {D['seed']}).")
 @click.option("--hub-height", "hub_height", type=float, help=f"Hub height [m] (default {D['hub_height_m']:g}).")
 @click.option("--out", type=click.Path(), help="Output store (default mann_U<U>_L<L>_G<Gamma>_evo<gamma>_s<seed>.zarr, plus "
-              "_p<digest> when other parameters differ from the defaults).")
+              "_p<digest> when other parameters differ from the defaults, and _c<digest of the data> when "
+              "constrained).")
 @click.option("--chunks", type=int, help="Time samples per store chunk (default min(nt, 1024)); never changes the field.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing store.")
 @click.option("--config", type=click.Path(dir_okay=False), help="JSON/TOML run file (schemas/mann-run.schema.json); "
@@ -103,8 +105,6 @@ def _dask_client(scheduler, workers: int):
               help="With --constrain: write the conditional mean (the optimal linear reconstruction, no random part).")
 def mann(**opt):
     """Mann space-time 4D field: yz-planes at the rotor and range gates, evolving with upstream distance."""
-    if not opt["constrain"] and (opt["noise"] is not None or opt["conditional_mean"]):
-        raise click.UsageError("--noise and --conditional-mean need --constrain FILE")
     typed_energy = [name for name in _ENERGY if opt[name] is not None]
     if len(typed_energy) > 1:
         raise click.UsageError(f"give one of --ae, --sigma-u, --ti (got {', '.join(typed_energy)})")
@@ -114,22 +114,27 @@ def mann(**opt):
     preset_keys = (None if opt["preset"] is None
                    else lambda mapping, given: mann_run_keys(opt["preset"], user=user))  # fmt: skip
     mapping = run_mapping(opt, "mann-run", _KEYS, preset_keys, _REPLACES, plane_positions(opt["planes"], opt["gates"]))
-    run = MannRun.from_mapping(mapping)
-    out = opt["out"] if opt["out"] is not None else run.default_store_name()
+    mapping, request = split_constraint_keys(mapping)  # --constrain/--noise/--conditional-mean or the run file's
+    constraints = out = None
+    if request is None:
+        run = MannRun.from_mapping(mapping)
+    else:
+        from turbgen.runs.constrain import constrained_store_name, load_constraints, place, with_energy_from_data
+
+        constraints = load_constraints(request.files)
+        # no ae, sigma_u, ti or IEC class given: ae estimated from the data (printed with the run below)
+        run = with_energy_from_data(mapping, constraints, request.noise_m_s, opt["stencil_cache"])
+        placed = place(run, constraints, request.noise_m_s)  # every check of the data against the run, before output
+        out = constrained_store_name(run, placed, request.conditional_mean)
+    out = opt["out"] if opt["out"] is not None else out or run.default_store_name()
     check_output_path(out)
     threads = default_threads(opt["threads"])
     budget = parse_size(opt["memory"], "--memory") if opt["memory"] is not None else resources.available_memory_bytes()
     # a budget too small fails here, before any output
     plan = plan_for_budget(run, budget, threads, opt["chunks"], opt["scheduler"], opt["stencil_cache"] is None)
-    constraints = None
-    if opt["constrain"]:
-        if plan is not None or opt["scheduler"] is not None:
-            raise click.UsageError("--constrain: constrained fields are made in one pass in memory; this field needs "
-                                   "an out-of-core run (--memory/--scheduler), which cannot take constraints")
-        from turbgen.runs.constrain import load_constraint, place
-
-        constraints = [load_constraint(path) for path in opt["constrain"]]
-        place(run, constraints, opt["noise"])  # every check of the data against the run, before any output
+    if constraints is not None and (plan is not None or opt["scheduler"] is not None):
+        raise click.UsageError("--constrain: constrained fields are made in one pass in memory; this field needs "
+                               "an out-of-core run (--memory/--scheduler), which cannot take constraints")
     if opt["scheduler"] not in (None, "local"):  # one line within seconds, not dask's traceback after 30 s
         from turbgen.sweep.scheduler import check_scheduler_address
 
@@ -141,6 +146,9 @@ def mann(**opt):
     click.echo("turbgen mann")
     for line in describe(run, out, threads):
         click.echo(f"  {line}")
+    if run.ae_from.startswith("estimated"):
+        click.echo("  sigma_u: none of --ae, --sigma-u, --ti or an IEC class given, so the energy level was "
+                   "estimated from the constraint data (see ae above)")
     if plan is None and opt["scheduler"] is not None:
         click.echo(f"  --scheduler {opt['scheduler']} not used: the field fits the memory budget in one pass")
     for path in stale:
@@ -156,7 +164,8 @@ def mann(**opt):
     elif constraints is not None:
         from turbgen.runs.constrain import describe_constraints, run_mann_constrained
 
-        s = run_mann_constrained(run, out, constraints, noise_m_s=opt["noise"], conditional_mean=opt["conditional_mean"],
+        s = run_mann_constrained(run, out, constraints, noise_m_s=request.noise_m_s,
+                                 conditional_mean=request.conditional_mean,
                                  overwrite=opt["overwrite"], chunk_t=opt["chunks"], threads=threads,
                                  cache_dir=opt["stencil_cache"])  # fmt: skip
         for line in describe_constraints(s["constraints"]):

@@ -7,11 +7,13 @@ the options' help), so no option carries a default of its own.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 
 import click
 
 from turbgen.cli.options import parse_floats, parse_range, range_help
 from turbgen.spec.config import read_config
+from turbgen.spec.constraints import resolve_constraint_paths
 from turbgen.spec.run_inputs import GRID_OPTIONS, merge_run_inputs
 
 
@@ -48,10 +50,11 @@ def grid_options(defaults: Mapping):
 def typed(opt: Mapping, names: Mapping[str, str]) -> dict:
     """Run-mapping key -> value of the options typed on the command line (``names``: option -> key).
 
-    An option is typed when its value is not None (flags: when set); 'frozen' stands for None.
+    An option is typed when its value is not None (flags: when set; repeatable options: when given at least once,
+    as a list); 'frozen' stands for None.
     """
-    return {key: None if opt[name] == "frozen" else opt[name] for name, key in names.items()
-            if opt[name] is not None and opt[name] is not False}
+    return {key: list(opt[name]) if isinstance(opt[name], tuple) else None if opt[name] == "frozen" else opt[name]
+            for name, key in names.items() if opt[name] is not None and opt[name] is not False and opt[name] != ()}
 
 
 def run_mapping(opt: Mapping, schema: str, keys: Mapping[str, str], preset_keys=None,
@@ -68,5 +71,7 @@ def run_mapping(opt: Mapping, schema: str, keys: Mapping[str, str], preset_keys=
     x_m : plane positions [m] from --planes / --gates, or None.
     """
     mapping = read_config(opt["config"], schema) if opt["config"] else None
+    if mapping is not None:
+        mapping = resolve_constraint_paths(mapping, Path(opt["config"]).parent)
     return merge_run_inputs(mapping, typed(opt, keys), typed(opt, GRID_OPTIONS), preset_keys=preset_keys,
                             replaces=replaces, x_m=x_m)

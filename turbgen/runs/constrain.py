@@ -368,3 +368,84 @@ def describe_constraints(record: dict) -> list[str]:
         f"solve: {how}, relative residual {solver['relative_residual']:.1e}; field - data at the measurements: "
         f"max {record['residual_max_m_s']:.2e} m/s, rms {record['residual_rms_m_s']:.2e} m/s",
     ]
+
+
+def load_constraints(files) -> list:
+    """Each of ``files`` loaded (:func:`load_constraint`); PointSeries / LidarData given already loaded are kept."""
+    return [load_constraint(f) if isinstance(f, (str, Path)) or hasattr(f, "__fspath__") else f for f in files]
+
+
+def constraint_digest(placed: PlacedData, conditional_mean: bool) -> str:
+    """8 hex digits of SHA-256 over the data as placed on the grid (values, noise, where each stream measures) and
+    ``conditional_mean``: the content, not the files' paths, so two runs conditioned on different data never share a
+    name and the same data under another path gives the same one."""
+    import hashlib
+    import json
+
+    h = hashlib.sha256()
+    h.update(np.ascontiguousarray(placed.data, dtype="<f8").tobytes())
+    h.update(np.ascontiguousarray(placed.noise_m_s, dtype="<f8").tobytes())
+    st = placed.streams
+    for a in (st.plane, st.term_stream, st.term_component, st.term_iy, st.term_iz, st.term_shift, st.offset):
+        h.update(np.ascontiguousarray(0 if a is None else a, dtype="<i8").tobytes())
+    h.update(np.ascontiguousarray(st.term_weight, dtype="<f8").tobytes())
+    h.update(json.dumps([int(st.decimation), bool(conditional_mean)]).encode())
+    return h.hexdigest()[:8]
+
+
+def constrained_store_name(run: MannRun, placed: PlacedData, conditional_mean: bool) -> str:
+    """The default store name of a constrained run: the run's own with ``_c<digest of the data>`` (and ``mean`` for
+    the conditional mean), e.g. mann_U16_L49_G3.1_evo400_s2_c1a2b3c4.zarr."""
+    base = run.default_store_name().removesuffix(".zarr")
+    return f"{base}_c{constraint_digest(placed, conditional_mean)}{'mean' if conditional_mean else ''}.zarr"
+
+
+ENERGY_KEYS = ("ae", "sigma_u_m_s", "ti", "turb_class")  # a run mapping with none of them: ae from the data
+_AE_TOLERANCE = 1e-6  # relative change of the fixed-point iteration of estimate_ae at which it stops
+_AE_ITERATIONS = 50
+
+
+def estimate_ae(run: MannRun, placed: PlacedData, cache_dir=None) -> tuple[float, int]:
+    """alpha*eps^(2/3) [m^(4/3) s^-2] of the data, and the fixed-point iterations used.
+
+    The data d (n observed values) are N(0, S(a)) under the run's prior with ae = a: S(a) = (a / a_0) (S_0 - R) + R,
+    S_0 the system of ``run`` (its ae = a_0). The estimate solves d^T S(a)^-1 d = n: without noise (R = 0) in one
+    step, a = a_0 d^T S_0^-1 d / n, the maximum-likelihood estimate (d^T S^-1 d ~ chi^2_n, so its relative standard
+    deviation is sqrt(2 / n) when the data come from the model); with noise by the iteration a <- a d^T S(a)^-1 d / n,
+    which converges monotonically (a d^T S(a)^-1 d increases with a, more slowly than a).
+    """
+    stencil = build_mann_stencil(run, cache_dir)
+    a0 = run.params.ae
+    cov0 = stream_system(run, stencil, placed)
+    m = placed.streams.n_streams
+    noise = np.zeros_like(cov0)
+    noise[:, np.arange(m), np.arange(m)] = placed.noise_m_s**2
+    signal = cov0 - noise
+    n = int(np.isfinite(placed.data).sum())
+    a = a0
+    for it in range(1, _AE_ITERATIONS + 1):
+        cov = signal * (a / a0) + noise
+        x, _ = solve_constraints(cov, placed, None, None)
+        quad = float(np.sum(np.where(np.isfinite(placed.data), placed.data, 0.0) * x))
+        new = a * quad / n
+        if abs(new - a) <= _AE_TOLERANCE * a or not placed.noise_m_s.any():
+            return new, it
+        a = new
+    raise ParameterError(f"the energy level ae estimated from the data did not converge in {_AE_ITERATIONS} "
+                         f"iterations (last {a:.4g} m^(4/3)/s^2): give sigma_u, ti or ae")  # fmt: skip
+
+
+def with_energy_from_data(mapping: dict, constraints: list, noise_m_s: float | None, cache_dir=None) -> MannRun:
+    """The run of ``mapping``; when it gives no energy level (ae, sigma_u_m_s, ti, turb_class), ae is estimated
+    from the constraint data (:func:`estimate_ae`, starting from the default IEC class A level) and recorded in
+    the run's ``ae_from``."""
+    from turbgen.theory.mann_spectra import variances
+
+    run = MannRun.from_mapping(mapping)
+    if any(key in mapping for key in ENERGY_KEYS):
+        return run
+    ae, iterations = estimate_ae(run, place(run, constraints, noise_m_s), cache_dir)
+    est = MannRun.from_mapping({**mapping, "ae": ae})  # the record's model sigma_u (Mann 1994, Eq. 8 over k)
+    how = (f"estimated from the constraint data (d^T S^-1 d = n, {iterations} iteration(s)): model sigma_u = "
+           f"{math.sqrt(variances(est.params)['uu']):.4g} m/s")  # fmt: skip
+    return MannRun.from_mapping({**mapping, "ae": ae, "ae_from": how})

@@ -13,6 +13,7 @@ import re
 from turbgen.version import __version__
 from turbgen.errors import ParameterError
 from turbgen.spec.config import check_mapping
+from turbgen.spec.constraints import CONSTRAINT_KEYS
 from turbgen.store.layout import grid_to_attrs
 
 _ID = re.compile(r"^[0-9a-f]{24}$")
@@ -46,6 +47,10 @@ def build_run(body) -> tuple[str, object]:
     entry = _model(model)
     preset = body.pop("preset", None)
     check_mapping(body, f"{model}-run", "run config")
+    refused = [key for key in CONSTRAINT_KEYS if key in body]
+    if refused:  # the server never opens paths a client names; conditioning is a local run (CLI, API, sweep)
+        raise ParameterError(f"{', '.join(refused)}: constrained fields are not taken by the service (it does not "
+                             "read files named by a client); make them with `turbgen mann --constrain` or a sweep")
     if preset is not None:
         from turbgen.spec.preset_runs import run_keys
 

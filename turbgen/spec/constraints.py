@@ -90,3 +90,55 @@ def load_point_series(path) -> PointSeries:
     except ValueError as exc:
         raise ParameterError(f"constraint file {p}: not valid JSON ({str(exc).splitlines()[0]})") from None
     return point_series_from_mapping(data, str(p))
+
+
+# the keys of a Mann run mapping (schemas/mann-run.schema.json) that condition the field; MannRun itself is the prior
+CONSTRAINT_KEYS = ("constrain", "noise_m_s", "conditional_mean")
+
+
+@dataclass(frozen=True)
+class ConstraintRequest:
+    """What a run mapping asks to condition the field on: ``files`` (paths, or constraints already loaded:
+    PointSeries / turbgen.lidar.dataset.LidarData), ``noise_m_s`` [m/s] (None: each file's own) and
+    ``conditional_mean`` (write the conditional mean instead of a conditional sample)."""
+
+    files: tuple
+    noise_m_s: float | None = None
+    conditional_mean: bool = False
+
+
+def split_constraint_keys(mapping: dict) -> tuple[dict, ConstraintRequest | None]:
+    """(the run mapping without the constraint keys, the ConstraintRequest or None when ``constrain`` is absent or
+    empty).
+
+    Raises
+    ------
+    ParameterError
+        For ``noise_m_s`` or ``conditional_mean`` without ``constrain``, a ``constrain`` that is not a list, a
+        negative or non-finite ``noise_m_s``.
+    """
+    rest = {k: v for k, v in mapping.items() if k not in CONSTRAINT_KEYS}
+    files = mapping.get("constrain") or ()
+    if isinstance(files, (str, Path)) or not isinstance(files, (list, tuple)):
+        files = (files,) if files else ()
+    noise, mean = mapping.get("noise_m_s"), bool(mapping.get("conditional_mean", False))
+    if not files:
+        if noise is not None or mean:
+            raise ParameterError("a measurement noise (noise_m_s) or conditional_mean needs constraints: give "
+                                  "constrain (--constrain FILE)")
+        return rest, None
+    if noise is not None and (isinstance(noise, bool) or not isinstance(noise, (int, float))
+                              or not (math.isfinite(noise) and noise >= 0)):  # fmt: skip
+        raise ParameterError(f"noise = {noise!r} m/s must be a finite number >= 0")
+    return rest, ConstraintRequest(tuple(files), None if noise is None else float(noise), mean)
+
+
+def resolve_constraint_paths(mapping: dict, base_dir) -> dict:
+    """``mapping`` with the relative paths of its ``constrain`` list taken from ``base_dir`` (a run file's paths
+    are relative to the run file)."""
+    files = mapping.get("constrain")
+    if not isinstance(files, list):
+        return mapping
+    base = Path(base_dir)
+    return {**mapping, "constrain": [str(base / f) if isinstance(f, str) and not Path(f).is_absolute() else f
+                                     for f in files]}  # fmt: skip

@@ -15,6 +15,7 @@ MANN_OPTIONS = {
     "U": "U_m_s", "L": "length_scale_m", "gamma": "gamma", "evo": "evo_time_s", "lifetime": "lifetime",
     "factor1": "factor1", "factor2": "factor2", "seed": "seed", "hub_height": "hub_height_m", "pad_yz": "pad_yz",
     "ae": "ae", "sigma_u": "sigma_u_m_s", "ti": "ti",
+    "constrain": "constrain", "noise": "noise_m_s", "conditional_mean": "conditional_mean",
 }  # fmt: skip
 # option name -> key of the run mapping (KaimalRun.from_mapping, schemas/kaimal-run.schema.json)
 KAIMAL_OPTIONS = {

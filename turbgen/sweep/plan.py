@@ -16,6 +16,7 @@ from pathlib import Path
 
 from turbgen.errors import ParameterError, check_int
 from turbgen.runs.models import MODELS, get_model
+from turbgen.spec.constraints import ConstraintRequest
 from turbgen.spec.presets import StabilityPreset, get_preset
 from turbgen.spec.preset_runs import run_keys
 from turbgen.store.paths import check_output_dir
@@ -125,16 +126,18 @@ class PlannedRun:
     U_m_s: float
     seed: int
     run: object
+    constraint_tag: str = ""  # constrained runs: "c" + the digest of the data on the run's grid (+ "mean")
 
     @property
     def store_name(self) -> str:
-        """The run's store name (:func:`store_name`).
+        """The run's store name (:func:`store_name`, with ``_<constraint_tag>`` for a constrained run).
 
         Returns
         -------
         str
         """
-        return store_name(self.model, self.preset, self.U_m_s, self.seed)
+        name = store_name(self.model, self.preset, self.U_m_s, self.seed)
+        return name if not self.constraint_tag else f"{name.removesuffix('.zarr')}_{self.constraint_tag}.zarr"
 
     @property
     def name(self) -> str:
@@ -193,6 +196,7 @@ class SweepPlan:
     user_presets: Mapping[str, StabilityPreset] = field(default_factory=dict)
     runs: tuple[PlannedRun, ...] = ()
     lidar: str | None = None  # lidar preset or file run on every field (turbgen lidar)
+    constraints: ConstraintRequest | None = None  # every run conditioned on the same files (Mann only)
 
     def grid_options(self, model: str) -> dict:
         """Grid options of ``model``'s runs (its table over the common one; missing = command default).
@@ -229,7 +233,10 @@ class SweepPlan:
             "chunks": self.chunk_t,
             "user_presets": sorted(self.user_presets),
             "n_runs": len(self.runs),
-        }
+            **({} if self.constraints is None else {"constraints": {
+                "constrain": [str(f) for f in self.constraints.files], "noise_m_s": self.constraints.noise_m_s,
+                "conditional_mean": self.constraints.conditional_mean}}),
+        }  # fmt: skip
 
 
 def _unique(name: str, values) -> tuple:
@@ -264,6 +271,7 @@ def make_plan(
     scheduler: str | None = None,
     user_presets: Mapping[str, StabilityPreset] | None = None,
     lidar: str | None = None,
+    constraints: ConstraintRequest | None = None,
 ) -> SweepPlan:
     """Check a sweep definition and build all its runs (ParameterError on the first bad value).
 
@@ -290,6 +298,10 @@ def make_plan(
         User presets by name.
     lidar : str, optional
         Lidar preset or file run on every field.
+    constraints : ConstraintRequest, optional
+        Condition every run (Mann only) on the same files (turbgen.spec.constraints); each run's data are placed
+        on its grid here (a bad file or a measurement off the field fails before any run) and its store name gets
+        the digest of those data.
 
     Returns
     -------
@@ -318,10 +330,32 @@ def make_plan(
             raise ParameterError(f"grid table {m!r} is not one of {', '.join(MODELS)}")
     chunk_t, workers, lidar_description = _check_execution(out, chunk_t, workers, scheduler, lidar)
     runs = _planned_runs(models, presets, speeds, seeds, lambda m: {**grid, **model_grid.get(m, {})}, user)
+    if constraints is not None:
+        runs = _constrained_runs(runs, constraints)
     _check_runs(runs, speeds, chunk_t, lidar_description, local=not scheduler)
     return SweepPlan(Path(out), models, presets, speeds, seeds, grid, model_grid, bool(validate), chunk_t, workers,
                      scheduler or None, user, runs=tuple(runs),
-                     lidar=None if lidar is None else str(lidar))  # fmt: skip
+                     lidar=None if lidar is None else str(lidar), constraints=constraints)  # fmt: skip
+
+
+def _constrained_runs(runs: list[PlannedRun], constraints: ConstraintRequest) -> list[PlannedRun]:
+    """``runs`` with their constraint tags: the data placed on each run's grid (checked), digested with the noise."""
+    from turbgen.runs.constrain import constrained_store_name, load_constraints, place
+
+    others = sorted({r.model for r in runs} - {"mann"})
+    if others:
+        raise ParameterError(f"constrain: the sweep conditions Mann runs only (models also has {', '.join(others)})")
+    loaded = load_constraints(constraints.files)
+    tags: dict = {}
+    out = []
+    for r in runs:
+        key = replace(r.run, seed=0)  # the seed does not move the data
+        if key not in tags:
+            name = constrained_store_name(r.run, place(r.run, loaded, constraints.noise_m_s),
+                                          constraints.conditional_mean)  # fmt: skip
+            tags[key] = name.removesuffix(".zarr").rpartition("_")[2]
+        out.append(replace(r, constraint_tag=tags[key]))
+    return out
 
 
 def _check_models_presets(models, presets, user) -> tuple[tuple, tuple]:

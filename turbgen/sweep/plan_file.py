@@ -8,6 +8,7 @@ from pathlib import Path
 from turbgen.errors import ParameterError
 from turbgen.runs.models import MODELS
 from turbgen.spec.config import check_mapping, read_config
+from turbgen.spec.constraints import CONSTRAINT_KEYS, resolve_constraint_paths, split_constraint_keys
 from turbgen.spec.preset_files import load_presets, presets_from_mapping
 from turbgen.spec.presets import StabilityPreset
 from turbgen.sweep.plan import SweepPlan, make_plan
@@ -98,6 +99,7 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
         scheduler=data.get("scheduler"),
         user_presets=user,
         lidar=data.get("lidar"),
+        constraints=_constraints(data, base),
     )
     kw.update({k: v for k, v in overrides.items() if v is not None})
     if kw["out"] is None:
@@ -105,6 +107,12 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
     if overrides.get("scheduler"):
         kw["workers"] = overrides.get("workers")
     return make_plan(**kw)
+
+
+def _constraints(data: Mapping, base: Path):
+    """The sweep file's ConstraintRequest (paths relative to the file), or None without ``constrain``."""
+    keys = {key: data[key] for key in CONSTRAINT_KEYS if key in data}
+    return split_constraint_keys(resolve_constraint_paths(keys, base))[1]
 
 
 def plan_from_file(path: str | Path, **overrides) -> SweepPlan:

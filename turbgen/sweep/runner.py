@@ -214,10 +214,10 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
                     rec["status"] = "complete"
                     continue
                 tasks[pr.name] = RunTask(pr.model, pr.run, str(path), False, plan.chunk_t, plan.validate, False,
-                                         lidar=plan.lidar)
+                                         lidar=plan.lidar, constraints=plan.constraints)
                 continue
             tasks[pr.name] = RunTask(pr.model, pr.run, str(path), state == "incomplete", plan.chunk_t, plan.validate,
-                                     lidar=plan.lidar)
+                                     lidar=plan.lidar, constraints=plan.constraints)
         need = sum(3 * t.run.grid.nbytes_per_component() for t in tasks.values() if t.generate)
         if need:
             n_gen = sum(t.generate for t in tasks.values())
@@ -270,7 +270,9 @@ def _execute(plan, tasks, records, save, result, client, processes, progress, th
         pending = []
         for name, task in tasks.items():
             part, skey = None, None
-            build = MODELS[task.model].shared_part(task.run, task.threads, task.memory_bytes) if task.generate else None
+            # a constrained run builds its own stencil (turbgen.runs.constrain): no shared part
+            build = (MODELS[task.model].shared_part(task.run, task.threads, task.memory_bytes)
+                     if task.generate and task.constraints is None else None)  # fmt: skip
             if build is not None:
                 skey = MODELS[task.model].shared_key(by_name[name].run)
                 if skey not in shared:

@@ -37,6 +37,8 @@ class RunTask:
         Memory budget of one run [bytes]: a Mann run that does not fit goes out of core.
     lidar : str, optional
         Lidar preset or file to run on the field (turbgen lidar).
+    constraints : ConstraintRequest, optional
+        Condition the (Mann) field on these files (turbgen.runs.constrain.run_mann_constrained, in memory).
     """
 
     model: str
@@ -49,6 +51,7 @@ class RunTask:
     threads: int | None = None  # threads of one run (None: os.cpu_count(); never changes the field)
     memory_bytes: int | None = None  # memory budget of one run: a Mann run that does not fit goes out of core
     lidar: str | None = None  # lidar preset or file to run on the field (turbgen lidar)
+    constraints: object = None  # a ConstraintRequest (turbgen.spec.constraints): a constrained Mann run
 
 
 def one_line(exc: BaseException) -> str:
@@ -132,6 +135,16 @@ def lidar_store(path: str, lidar: str) -> dict:
             "max_abs_z": d["verdict"]["max_abs_z"], "z_crit": d["verdict"]["z_crit"]}
 
 
+def _run_constrained(task: RunTask) -> dict:
+    """The constrained Mann run of ``task`` (as ``turbgen mann --constrain``), its summary."""
+    from turbgen.runs.constrain import load_constraints, run_mann_constrained
+
+    c = task.constraints
+    return run_mann_constrained(task.run, task.path, load_constraints(c.files), noise_m_s=c.noise_m_s,
+                                conditional_mean=c.conditional_mean, overwrite=task.overwrite, chunk_t=task.chunk_t,
+                                threads=task.threads)  # fmt: skip
+
+
 def execute_run(task: RunTask, shared=None) -> dict:
     """Worker side: generate one field, checksum it, optionally validate it. Never raises.
 
@@ -152,7 +165,10 @@ def execute_run(task: RunTask, shared=None) -> dict:
     t0 = time.perf_counter()
     out: dict = {"status": "failed"}
     try:
-        if task.generate:
+        if task.generate and task.constraints is not None:
+            summary = _run_constrained(task)
+            out["sigma_m_s"] = [float(summary[f"sigma_{c}"]) for c in "uvw"]
+        elif task.generate:
             summary = MODELS[task.model].run(task.run, task.path, overwrite=task.overwrite, chunk_t=task.chunk_t,
                                              threads=task.threads, memory_bytes=task.memory_bytes, shared=shared)
             sig = [summary.get(f"sigma_{c}") for c in "uvw"]
