@@ -1,6 +1,6 @@
 """Virtual lidar: line-of-sight speeds sampled from a field store along the beams.
 
-Frame (the store's, README "Convected frame"): x upstream distance from the rotor [m], y to the
+Frame (the store's, docs/store.md, "Convected frame"): x upstream distance from the rotor [m], y to the
 left looking downwind, z up from the hub; u downwind. A measurement (one beam, one range gate)
 returns v_los = sum_k w_k n . (u, v, w)(p_k), with n the projection vector (v_los = +u for a beam
 looking straight upstream) and p_k = focus + s_k d the probe-volume points at offsets s_k [m] along

@@ -4,8 +4,8 @@ Parameters outside these ranges are refused with one line naming the value and t
 (``ParameterError``; CLI exit code 2) before anything is computed or written. The ranges are
 what the models and generators are meant for (atmospheric boundary layer, wind-turbine and lidar
 scales), not what happens to compute: e.g. L = 1e-9 m or 1e6 m gives a field whose variance is
-far from the model's on any grid turbgen can hold, dt = 1e12 s an all-zero field. README
-("Safety") shows this table; tests/cli/test_bad_input.py checks that every bound is enforced and that
+far from the model's on any grid turbgen can hold, dt = 1e12 s an all-zero field. docs/store.md
+("Limits and ranges") shows this table; tests/cli/test_bad_input.py checks that every bound is enforced and that
 the run-file JSON Schemas (types, looser bounds) never refuse a value this table allows.
 """
 
