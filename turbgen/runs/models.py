@@ -13,6 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from turbgen.errors import ParameterError
+from turbgen.resources import available_memory_bytes
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
 
@@ -110,8 +111,13 @@ def _kaimal_memory(run: KaimalRun, threads: int) -> int:
 def _kaimal_least_memory(run: KaimalRun) -> int:
     from turbgen.runs.kaimal import kaimal_generator, memory_needed
 
+    floor = min(memory_needed(run.grid), memory_needed(run.grid, True))  # memory or disk, samplers not counted
+    available = available_memory_bytes()
+    if available is not None and floor > available:
+        # the samplers only add: refused without planning a torus per frequency (minutes for 8 M bins)
+        return floor
     sampler = kaimal_generator(run, workers=1).sampler_bytes()
-    return min(memory_needed(run.grid, sampler=sampler), memory_needed(run.grid, True, sampler))  # memory or disk
+    return min(memory_needed(run.grid, sampler=sampler), memory_needed(run.grid, True, sampler))
 
 
 MODELS: dict[str, Model] = {
