@@ -100,7 +100,7 @@ def test_disk_space_is_checked_before_anything_is_written(tmp_path, monkeypatch)
 def _vmhwm_run(args, cwd, kill_when=None):
     """Run the CLI in a subprocess printing its VmHWM [KiB]; kill -9 it once kill_when(cwd) is true."""
     code = (
-        "import sys\nfrom turbgen.cli import cli\ntry:\n    cli.main(sys.argv[1:], standalone_mode=False)\nfinally:\n"
+        "import sys\nfrom turbgen.cli import main\nsys.argv[0] = 'turbgen'\ntry:\n    main()\nfinally:\n"
         "    print('VmHWM', open('/proc/self/status').read().split('VmHWM:')[1].split()[0], file=sys.stderr)\n"
     )
     proc = subprocess.Popen([sys.executable, "-c", code, *args], cwd=cwd, stdout=subprocess.PIPE,
@@ -170,9 +170,9 @@ def test_local_cluster_plan_shares_the_budget_with_this_process():
 def test_local_cluster_run_stays_within_the_shared_budget(tmp_path):
     # this process's peak plus each worker's (the largest child's) bounds what the processes held at once
     code = (
-        "import resource, sys\nfrom turbgen.cli import cli\ncli.main(sys.argv[1:], standalone_mode=False)\n"
-        "hwm = int(open('/proc/self/status').read().split('VmHWM:')[1].split()[0])\n"
-        "print('KIB', hwm, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n"
+        "import resource, sys\nfrom turbgen.cli import main\nsys.argv[0] = 'turbgen'\ntry:\n    main()\nfinally:\n"
+        "    hwm = int(open('/proc/self/status').read().split('VmHWM:')[1].split()[0])\n"
+        "    print('KIB', hwm, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n"
     )
     args = ["mann", "--nt", "6144", "--ny", "48", "--nz", "48", "--planes", "0,50,100", "--threads", "2",
             "--scheduler", "local", "--memory", "1280MiB", "--out", "a.zarr"]  # fmt: skip

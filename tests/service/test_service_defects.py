@@ -49,8 +49,8 @@ def test_a_failed_runs_error_shows_no_server_path_and_no_cli_advice(token_server
     assert token_server.call("POST", "/runs", body, headers=AUTH)[0] == 202
     state = token_server.wait(rid, states=("failed",), timeout_s=60)  # wait() stops on failed only when asked
     error = state["error"]
-    assert f"/runs/{rid}/store already exists" in error, error
-    for leak in (str(token_server.root), str(token_server.root.resolve()), "`out`", "overwrite"):
+    assert f"/runs/{rid}/store is a file, not a turbgen store; it will not be replaced" in error, error
+    for leak in (str(token_server.root), str(token_server.root.resolve()), "`out`", "overwrite", "catalog"):
         assert leak not in error, (leak, error)
     listed = {r["id"]: r for r in token_server.call("GET", "/runs")[2]["runs"]}
     assert listed[rid]["error"] == error

@@ -66,6 +66,7 @@ _CLI_ADVICE = (
     ("; use `overwrite` to replace it", ""),
     (" (use `overwrite`)", ""),
     ("choose another `out` or lower", "or lower"),
+    ("; it will not be replaced (choose another `out`)", "; it will not be replaced"),
     ("`out`", "the server's catalog"),
     ("pass `drop_below_ground`", "pass ?drop_below_ground=true"),
     ("raise `hub_height` above", "submit a run with hub_height_m above"),

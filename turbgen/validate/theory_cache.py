@@ -4,7 +4,7 @@ The theory and the expected Welch estimates depend on the store's model, paramet
 options of the estimates (rotor radius, segment length), never on the seed or the data: a sweep validating
 20 seeds of one configuration computes them once (for a Mann store they cost more than the estimates, which
 they also slow down when run beside them). The key is every attribute of the store but
-its seed and creation time (any other difference, e.g. another turbgen version, makes a new entry), and
+its seed, creation time and the data's measured rms (any other difference, e.g. another turbgen version, makes a new entry), and
 the entries are kept in this process only (sweep workers, the service, library loops), a few at a time.
 """
 
@@ -15,7 +15,7 @@ import threading
 from collections import OrderedDict
 
 ENTRIES = 4  # a theory with its expectations is a few MB
-_SEED_ONLY = ("seed", "created_utc")
+_SEED_ONLY = ("seed", "created_utc", "rms_m_s")  # rms_m_s: what the writer measured of the data
 _lock = threading.Lock()
 _entries: OrderedDict = OrderedDict()
 
