@@ -120,9 +120,11 @@ def _vmhwm_run(args, cwd, kill_when=None):
 
 def test_peak_memory_stays_within_the_budget(tmp_path):
     run = MannRun.from_mapping({"grid": {"nt": 2048, "ny": 48, "nz": 48, "x_m": [0.0, 50.0, 100.0]}, "ae": 0.3})
-    budget = 300 * 2**20
+    # a budget above the console script's resident base (300.2 MiB needed in a fresh virtualenv) and below 2/3 of the
+    # in-memory estimate
+    budget = 320 * 2**20
     assert memory_estimate_bytes(run, 2) > 1.5 * budget  # in memory it would not fit
-    hwm_kib = _vmhwm_run([*MID_ARGS, "--memory", "300MiB", "--out", "a.zarr"], tmp_path)
+    hwm_kib = _vmhwm_run([*MID_ARGS, "--memory", "320MiB", "--out", "a.zarr"], tmp_path)
     assert hwm_kib * 1024 <= budget, hwm_kib / 1024
     assert open_store(tmp_path / "a.zarr").attrs["turbgen_complete"] is True
 
@@ -195,7 +197,7 @@ def _pass2_started(d):  # the store's temporary directory holds chunks of u: pas
 
 @pytest.mark.parametrize("when", ["pass 1", "pass 2"])
 def test_kill_9_leaves_no_store_and_the_rerun_no_scratch(tmp_path, monkeypatch, when):
-    args = [*MID_ARGS, "--memory", "300MiB", "--out", "k.zarr"]
+    args = [*MID_ARGS, "--memory", "320MiB", "--out", "k.zarr"]
     started = (lambda d: bool(_scratch_dirs(d))) if when == "pass 1" else _pass2_started
     _vmhwm_run(args, tmp_path, kill_when=started)
     assert not (tmp_path / "k.zarr").exists()
