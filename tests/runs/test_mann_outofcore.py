@@ -132,8 +132,8 @@ def test_peak_memory_stays_within_the_budget(tmp_path):
 def test_peak_memory_stays_within_the_budget_when_ae_is_computed(tmp_path):
     # ae from the default sigma_u: its quadrature leaves ~70-125 MiB more resident than a given ae, which the plan
     # once ignored (a fixed 250 MiB for the interpreter: 438 MiB peak in this 380 MiB budget, 344 MiB in 340 MiB)
-    budget = 380 * 2**20
-    hwm_kib = _vmhwm_run(["mann", "--nt", "2048", "--ny", "32", "--nz", "32", "--memory", "380MiB", "--out", "a.zarr"],
+    budget = 420 * 2**20  # the plan asks 388.5 MiB at least in a fresh virtualenv (the merged command's imports)
+    hwm_kib = _vmhwm_run(["mann", "--nt", "2048", "--ny", "32", "--nz", "32", "--memory", "420MiB", "--out", "a.zarr"],
                          tmp_path)  # fmt: skip
     assert hwm_kib * 1024 <= budget, hwm_kib / 1024
     assert open_store(tmp_path / "a.zarr").attrs["turbgen_complete"] is True
