@@ -31,8 +31,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import pyfftw
 
 from turbgen.errors import ParameterError
+from turbgen.synthesis import conditioning_kernels as kernels
 from turbgen.synthesis.mann_stencil import MannStencil
 from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_spectrum, slab_weight
 
@@ -101,41 +103,6 @@ def measure(streams: Streams, plane: int, component: int, field: np.ndarray, out
         out[a] += streams.term_weight[t] * field[n, streams.term_iy[t], streams.term_iz[t]]
 
 
-@dataclass(frozen=True, eq=False)
-class _Footprints:
-    """The streams' terms grouped by (stream, component, shift) key: ``basis[k](j, l) = sum_t w_t
-    exp(2 pi i (j y_t / nyp + l z_t / nzp))`` over the terms of key k (K, nyp nzp), ``shift`` (K,) and ``row`` (K,)
-    = 3 stream + component of each key."""
-
-    basis: np.ndarray
-    shift: np.ndarray
-    row: np.ndarray
-
-
-def _footprints(streams: Streams, box) -> _Footprints:
-    keys = np.stack([streams.term_stream, streams.term_component, streams.term_shift], axis=1)
-    uniq, inverse = np.unique(keys, axis=0, return_inverse=True)
-    inverse = inverse.ravel()
-    ey = np.exp(2j * np.pi * np.outer(streams.term_iy, np.arange(box.nyp)) / box.nyp)
-    ez = np.exp(2j * np.pi * np.outer(streams.term_iz, np.arange(box.nzp)) / box.nzp)
-    basis = np.empty((len(uniq), box.nyp * box.nzp), complex)
-    order = np.argsort(inverse, kind="stable")
-    bounds = np.searchsorted(inverse[order], np.arange(len(uniq) + 1))
-    for k in range(len(uniq)):
-        sel = order[bounds[k] : bounds[k + 1]]
-        basis[k] = ((ey[sel].T * streams.term_weight[sel]) @ ez[sel]).ravel()
-    return _Footprints(basis, uniq[:, 2], 3 * uniq[:, 0] + uniq[:, 1])
-
-
-def _transfer(fp: _Footprints, i: int, nt: int, m: int) -> np.ndarray:
-    """A_i (M, 3, nyp nzp): the streams' transfer functions on slab i, sum over keys of e^(2 pi i i s / nt) basis."""
-    from scipy import sparse
-
-    phase = np.exp(2j * np.pi * i * fp.shift / nt)
-    mix = sparse.csr_matrix((phase, (fp.row, np.arange(len(fp.row)))), shape=(3 * m, len(fp.row)))
-    return np.asarray(mix @ fp.basis).reshape(m, 3, -1)
-
-
 def _slab_phi(stencil: MannStencil, i: int) -> np.ndarray:
     """Phi_i (3, 3, nyp nzp), symmetrised under k -> -k on the k1 = 0 / Nyquist slabs (their real part: see
     prior_spectrum)."""
@@ -145,23 +112,126 @@ def _slab_phi(stencil: MannStencil, i: int) -> np.ndarray:
     return phi.reshape(3, 3, -1)
 
 
-def _phi_times(phi: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Phi v per (k2, k3) point: phi (3, 3, J), v (n, 3, J) -> (n, 3, J)."""
-    out = np.zeros(v.shape, complex)
-    for c in range(3):
-        for d in range(3):
-            out[:, c] += phi[c, d] * v[:, d]
+LAG_DECIMALS = 9  # plane-time lags |t_p - t_q| equal to 1e-9 s share one lag covariance (evenly spaced gates)
+SLAB_GROUP = 8  # slabs transformed in one call
+PARALLEL_RTOL = 1e-12  # a stream's terms along one direction: component weights parallel to it to this relative
+DIRECTION_DECIMALS = 12
+
+
+@dataclass(frozen=True, eq=False)
+class _Keys:
+    """The streams' terms grouped per (stream, direction, y, z) node, sorted by stream: ``term_key`` (T,) the key of
+    each term (-1: a term carried by another of its node's components), ``term_weight`` (T,) its weight along the
+    key's direction, ``bounds`` (M + 1,) the keys of each stream, ``dir``/``iy``/``iz`` (K,) of each key and
+    ``directions`` (D, 3) the unit vectors."""
+
+    term_key: np.ndarray
+    term_weight: np.ndarray
+    bounds: np.ndarray
+    dir: np.ndarray
+    iy: np.ndarray
+    iz: np.ndarray
+    directions: np.ndarray
+
+
+def _stream_direction(streams: Streams, sel: np.ndarray) -> np.ndarray | None:
+    """The unit vector n with every (y, z, shift) group of the terms ``sel`` having component weights parallel to n
+    (a lidar beam's line of sight; a single component's axis), or None."""
+    rows = np.stack([streams.term_iy[sel], streams.term_iz[sel], streams.term_shift[sel]], axis=1)
+    uniq, inverse = np.unique(rows, axis=0, return_inverse=True)
+    vec = np.zeros((len(uniq), 3))
+    np.add.at(vec, (inverse.ravel(), streams.term_component[sel]), streams.term_weight[sel])
+    norms = np.linalg.norm(vec, axis=1)
+    n = vec[int(np.argmax(norms))] / norms.max()
+    along = vec @ n
+    off = np.linalg.norm(vec - along[:, None] * n[None], axis=1)
+    return n if np.all(off <= PARALLEL_RTOL * norms.max()) else None
+
+
+def _keys(streams: Streams) -> _Keys:
+    """Each stream along its own direction where its terms allow (_stream_direction), else per component."""
+    directions: list[tuple[float, ...]] = []
+    term_dir = np.empty(len(streams.term_stream), np.int64)
+    weight = np.zeros(len(streams.term_stream))
+    for a in range(streams.n_streams):
+        sel = np.flatnonzero(streams.term_stream == a)
+        n = _stream_direction(streams, sel)
+        # directions equal to DIRECTION_DECIMALS share their lag covariances (the beam of every gate)
+        vectors = [tuple(np.round(n, DIRECTION_DECIMALS))] if n is not None else [
+            tuple(np.eye(3)[c]) for c in range(3)]
+        for v in vectors:
+            if v not in directions:
+                directions.append(v)
+        if n is None:
+            term_dir[sel] = [directions.index(vectors[c]) for c in streams.term_component[sel]]
+            weight[sel] = streams.term_weight[sel]
+        else:  # the terms of the largest component of n carry each node's weight along n
+            big = int(np.argmax(np.abs(n)))
+            term_dir[sel] = directions.index(vectors[0])
+            weight[sel] = np.where(streams.term_component[sel] == big, streams.term_weight[sel] / n[big], 0.0)
+    rows = np.stack([streams.term_stream, term_dir, streams.term_iy, streams.term_iz], axis=1)
+    uniq, inverse = np.unique(rows, axis=0, return_inverse=True)
+    term_key = np.where(weight != 0.0, inverse.ravel(), -1).astype(np.int64)
+    bounds = np.searchsorted(uniq[:, 0], np.arange(streams.n_streams + 1)).astype(np.int64)
+    return _Keys(term_key, weight, bounds, *(np.ascontiguousarray(uniq[:, n]) for n in (1, 2, 3)),
+                 np.array(directions, dtype=float))  # fmt: skip
+
+
+def _lag_classes(times: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct plane-time lags |t_p - t_q| [s] between the streams' planes and the class (M, M) of each stream
+    pair."""
+    lag = np.round(np.abs(times[plane][:, None] - times[plane][None, :]), LAG_DECIMALS)
+    values, cls = np.unique(lag, return_inverse=True)
+    return values, cls.reshape(lag.shape).astype(np.int64)
+
+
+class _GroupFFT:
+    """Single-threaded FFTW_ESTIMATE plans over the last two axes of a slab group's arrays (one plan per group size,
+    the arrays reused): the same plan, hence the same rounding, whatever the thread count of the run."""
+
+    def __init__(self, tail: tuple[int, ...], real: bool, direction: str = "FFTW_FORWARD"):
+        self.tail, self.real, self.direction = tail, real, direction
+        self._plans: dict[int, tuple[np.ndarray, np.ndarray, pyfftw.FFTW]] = {}
+
+    def buffers(self, n: int) -> tuple[np.ndarray, np.ndarray, pyfftw.FFTW]:
+        """(input, output, plan) for a group of ``n`` slabs (the output is the input for a complex transform)."""
+        if n not in self._plans:
+            shape = (n, *self.tail)
+            if self.real:
+                inp = pyfftw.empty_aligned(shape, np.float64)
+                out = pyfftw.empty_aligned((*shape[:-1], shape[-1] // 2 + 1), np.complex128)
+            else:
+                inp = out = pyfftw.empty_aligned(shape, np.complex128)
+            plan = pyfftw.FFTW(inp, out, axes=(-2, -1), direction=self.direction, flags=("FFTW_ESTIMATE",), threads=1)
+            self._plans[n] = (inp, out, plan)
+        return self._plans[n]
+
+
+def _lag_spectra(stencil: MannStencil, slabs: range, lags: np.ndarray, directions: np.ndarray,
+                 transform: _GroupFFT) -> np.ndarray:  # fmt: skip
+    """The real 2-D DFTs (len(slabs), classes, D (D + 1) / 2, nyp, nzp // 2 + 1) of exp(-lag / tau_e) n^T Phi_i n'
+    per lag class and direction pair (n, n') (_direction_pairs order); the array is reused by the next call."""
+    box = stencil.box
+    first, second = np.triu_indices(len(directions))
+    x, out, plan = transform.buffers(len(slabs))
+    for b, i in enumerate(slabs):
+        phi = _slab_phi(stencil, i).reshape(3, 3, box.nyp, box.nzp)
+        x[b, 0] = np.einsum("pc,cdyz,pd->pyz", directions[first], phi, directions[second], optimize=True)
+        inv_tau = slab_inv_tau(stencil, i)
+        if inv_tau is None:
+            x[b, 1:] = x[b, 0]
+        else:
+            np.multiply(x[b, 0][None], np.exp(-lags[:, None, None] * inv_tau[None])[:, None], out=x[b])
+    plan.execute()
     return out
 
 
-def _rho(stencil: MannStencil, i: int, times_a: np.ndarray, times_b: np.ndarray) -> np.ndarray:
-    """exp(-|t_a - t_b| / tau_e) (Pa, Pb, nyp nzp) of slab i (ones for frozen turbulence)."""
-    box = stencil.box
-    inv_tau = slab_inv_tau(stencil, i)
-    if inv_tau is None:
-        return np.ones((len(times_a), len(times_b), box.nyp * box.nzp))
-    lag = np.abs(times_a[:, None] - times_b[None, :])
-    return np.exp(-lag[:, :, None] * inv_tau.reshape(1, 1, -1))
+def _direction_pairs(n_dir: int) -> np.ndarray:
+    """(D, D) the index of each direction pair among the D (D + 1) / 2 of np.triu_indices (symmetric)."""
+    out = np.empty((n_dir, n_dir), np.int64)
+    first, second = np.triu_indices(n_dir)
+    out[first, second] = out[second, first] = np.arange(len(first))
+    return out
 
 
 def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var) -> np.ndarray:
@@ -177,34 +247,36 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
         The relative time x/U [s] of every plane of the run (storage order).
     noise_var : array_like, (M,)
         Measurement-noise variance sigma_a^2 [m^2 s^-2] of each stream (R = diag).
-
     Notes
     -----
-    L_i[a, b] = nt sum_(c, c', k2, k3) A_i[a, c] (rho Phi)_(c c') conj(A_i[b, c']) with the transfer functions A_i
-    of the streams (the same sum as over term pairs in the module docstring, arranged per (k2, k3)).
+    L_i[a, b] as a sum over the streams' nodes of the lag covariances G_i of the prior between their planes (one
+    inverse 2-D DFT per distinct plane-time lag and component pair, turbgen.synthesis.conditioning_kernels), which
+    equals the sum over term pairs of the module docstring grouped by node.
     """
     box = stencil.box
     nt, q, m = box.nt, streams.decimation, streams.n_streams
     n_dec = nt // q
-    times = np.asarray(times_s, dtype=float)
-    planes = streams.used_planes()
-    members = [np.flatnonzero(streams.plane == p) for p in planes]
-    slot = np.searchsorted(planes, streams.plane)
-    fp = _footprints(streams, box)
+    keys = _keys(streams)
+    dir_pair = _direction_pairs(len(keys.directions))
+    lags, pair_class = _lag_classes(np.asarray(times_s, dtype=float), streams.plane)
     doff = 2j * np.pi * (streams.offset[:, None] - streams.offset[None, :]) / nt
     out = np.zeros((n_dec, m, m), complex)
-    for i in range(box.nk1):
-        a = _transfer(fp, i, nt, m)
-        b = _phi_times(_slab_phi(stencil, i), a.conj())  # Phi conj(A) of every stream
-        rho = _rho(stencil, i, times[planes], times[planes])[slot]  # (M, P, J): from each stream's plane
-        full = np.empty((m, m), complex)
-        for sq, rb in enumerate(members):  # the columns of the streams on plane q
-            left = (a * rho[:, sq, None, :]).reshape(m, -1)
-            full[:, rb] = left @ b[rb].reshape(len(rb), -1).T
-        full *= nt
-        out[i % n_dec] += full * np.exp(i * doff) / q
-        if 0 < i and 2 * i != nt:  # the mirror frequency nt - i: L_(nt - i) = conj L_i
-            out[(nt - i) % n_dec] += full.conj() * np.exp((nt - i) * doff) / q
+    full = np.empty((m, m), complex)
+    n_pairs = len(keys.directions) * (len(keys.directions) + 1) // 2
+    transform = _GroupFFT((len(lags), n_pairs, box.nyp, box.nzp), real=True)
+    for s0 in range(0, box.nk1, SLAB_GROUP):
+        slabs = range(s0, min(s0 + SLAB_GROUP, box.nk1))
+        spectra = _lag_spectra(stencil, slabs, lags, keys.directions, transform)
+        amp = np.empty((len(slabs), len(keys.dir)), complex)
+        kernels.key_amplitudes(keys.term_key, streams.term_shift, keys.term_weight, np.array(slabs, np.int64), nt,
+                               amp)  # fmt: skip
+        for b, i in enumerate(slabs):
+            kernels.pair_sums(amp[b], keys.bounds, keys.dir, keys.iy, keys.iz, dir_pair, pair_class, spectra[b],
+                              full)  # fmt: skip
+            full *= nt
+            out[i % n_dec] += full * np.exp(i * doff) / q
+            if 0 < i and 2 * i != nt:  # the mirror frequency nt - i: L_(nt - i) = conj L_i
+                out[(nt - i) % n_dec] += full.conj() * np.exp((nt - i) * doff) / q
     out[:, np.arange(m), np.arange(m)] += np.asarray(noise_var, dtype=float)
     return out
 
@@ -303,33 +375,47 @@ def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarr
     Notes
     -----
     Per slab: H^T w in the (k2, k3) spectrum of each measured plane q, F_q = sum_(a on q) W_a(i) conj(A_i[a]) (W the
-    FFT of the weights at full rate), then sum_q rho_pq Phi F_q, the inverse 2-D FFT and the crop; the real inverse
-    FFT along time is left to spectra_field (it keeps only the real part of the k1 = 0 / Nyquist slabs).
+    FFT of the weights at full rate; the forward 2-D DFT of the terms' amplitudes scattered on the grid), then
+    sum_q rho_pq F_q, multiplied by Phi, the inverse 2-D FFT and the crop. The sum over q runs as the
+    Ornstein-Uhlenbeck recursion along the planes in time order (rho_pq is the product of the factors between
+    neighbouring planes), forwards and backwards. The real inverse FFT along time is left to spectra_field (it keeps
+    only the real part of the k1 = 0 / Nyquist slabs).
     """
     box = stencil.box
     times = np.asarray(times_s, dtype=float)
-    planes = streams.used_planes()
     planes_out = list(planes_out)
-    members = [np.flatnonzero(streams.plane == p) for p in planes]
+    chain = sorted(set(planes_out) | {int(p) for p in streams.used_planes()}, key=lambda p: (times[p], p))
+    steps = np.diff(times[chain])
+    where = {p: n for n, p in enumerate(chain)}
+    rows = np.array([where[p] for p in planes_out], np.int64)  # the chain position of each wanted plane
+    term_row = np.array([where[int(p)] for p in streams.plane[streams.term_stream]], dtype=np.int64)
+    grid_index = np.ravel_multi_index((term_row, streams.term_component, streams.term_iy, streams.term_iz),
+                                      (len(chain), 3, box.nyp, box.nzp))  # fmt: skip
     q, m = streams.decimation, streams.n_streams
     full = np.zeros((m, box.nt))
     for a in range(m):  # the samples at their stored time steps o_a + m q
         full[a, streams.offset[a] :: q] = weights[a]
     spec_w = np.fft.rfft(full, axis=1)
-    fp = _footprints(streams, box)
     out = np.zeros((len(planes_out), 3, box.nk1, ny, nz), np.complex64)
-    for i in range(box.nk1):
-        a = _transfer(fp, i, box.nt, m)
-        # F_q = sum_(a on q) W_a(i) conj(A_i[a]), (P_in, 3, J)
-        f = np.stack([(spec_w[ra, i].conj() @ a[ra].reshape(len(ra), -1)).reshape(3, -1) for ra in members]).conj()
-        g = _phi_times(_slab_phi(stencil, i), f)  # (P_in, 3, J)
-        rho = _rho(stencil, i, times[planes_out], times[planes])  # between each output and measured plane
-        yz = np.zeros((len(planes_out), 3, g.shape[-1]), complex)
-        for sq in range(len(planes)):
-            yz += rho[:, sq, None, :] * g[sq][None]
-        yz = yz.reshape(len(planes_out), 3, box.nyp, box.nzp)
-        yz = np.fft.ifft2(yz, axes=(-2, -1)) * (box.nyp * box.nzp)
-        out[:, :, i] = yz[:, :, :ny, :nz]
+    forward = _GroupFFT((len(chain), 3, box.nyp, box.nzp), real=False)
+    backward = _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), real=False, direction="FFTW_BACKWARD")
+    for s0 in range(0, box.nk1, SLAB_GROUP):
+        slabs = np.arange(s0, min(s0 + SLAB_GROUP, box.nk1))
+        grid, _, plan = forward.buffers(len(slabs))
+        grid[...] = 0.0
+        kernels.scatter_terms(spec_w[:, slabs], streams.term_stream, grid_index, streams.term_shift,
+                              streams.term_weight, slabs, box.nt, grid.reshape(len(slabs), -1))  # fmt: skip
+        plan.execute()
+        f = grid.reshape(len(slabs), len(chain), 3, -1)
+        g, _, plan = backward.buffers(len(slabs))
+        for b, i in enumerate(slabs):
+            inv_tau = slab_inv_tau(stencil, int(i))
+            rho = (np.ones((len(steps), box.nyp * box.nzp)) if inv_tau is None
+                   else np.exp(-steps[:, None] * inv_tau.reshape(1, -1)))  # fmt: skip
+            kernels.chain_correction(f[b], rho, _slab_phi(stencil, int(i)), rows,
+                                     g[b].reshape(len(planes_out), 3, -1))  # fmt: skip
+        plan.execute()  # unnormalised: sum_(j, l) e^(+2 pi i (j y / nyp + l z / nzp))
+        out[:, :, slabs] = np.moveaxis(g[..., :ny, :nz], 0, 2)
     return out
 
 

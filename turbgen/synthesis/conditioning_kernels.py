@@ -1,0 +1,107 @@
+"""Compiled loops of the Mann conditioning (turbgen.synthesis.conditioning): the streams' node amplitudes per slab
+and the pair sums of the stream covariance from the lag covariances of the prior.
+
+A *key* groups the terms of one stream on one (y, z) node along one direction n (a lidar beam's line of sight, or a
+component's unit vector). On slab i its amplitude is P_k(i) = sum_(t in k) a_t exp(2 pi i i s_t / nt) (a_t the
+term's weight along n), and the stream covariance of the slab is
+
+    L_i[a, b] = sum_(k in a, k' in b) P_k conj(P_k') G_i^(n_k n_k')_(p_a p_b)(y_k - y_k', z_k - z_k'),
+
+with G the lag covariance along the two directions between the two planes (the inverse 2-D DFT of
+rho_pq n_k^T Phi_i n_k', given as the forward real DFT R of that real array: G(d) = conj R(d) for d_z in
+[0, nzp/2], G(d) = R(-d) otherwise).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+
+@numba.njit(nogil=True, cache=True)
+def key_amplitudes(term_key, term_shift, term_weight, slabs, nt, out):
+    """out[b, k] = P_k(slabs[b]) (complex128), the terms' weights times their time-shift phases summed per key."""
+    out[:] = 0.0
+    for b in range(len(slabs)):
+        i = slabs[b]
+        for t in range(len(term_key)):
+            if term_key[t] < 0:
+                continue
+            phase = 2.0 * np.pi * ((i * term_shift[t]) % nt) / nt
+            out[b, term_key[t]] += term_weight[t] * (np.cos(phase) + 1j * np.sin(phase))
+
+
+@numba.njit(nogil=True, cache=True)
+def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, lag, out):
+    """L[a, b] (out, (M, M) complex128) of one slab from the key amplitudes ``amp`` (K,), keys sorted by stream
+    (stream a holds keys bounds[a] .. bounds[a + 1]), and the real DFTs ``lag`` (classes, direction pairs, nyp,
+    nzp // 2 + 1); ``dir_pair`` (D, D) the index of a direction pair, ``pair_class`` (M, M) the lag class of a stream
+    pair. The pairs a <= b are summed, the others are their Hermitian conjugates."""
+    nyp, nzp = lag.shape[2], 2 * (lag.shape[3] - 1)
+    half = nzp // 2
+    m = len(bounds) - 1
+    for a in range(m):
+        for b in range(a, m):
+            cls = pair_class[a, b]
+            acc = 0.0j
+            for k in range(bounds[a], bounds[a + 1]):
+                pk = amp[k]
+                yk, zk, dk = key_iy[k], key_iz[k], key_dir[k]
+                part = 0.0j
+                for k2 in range(bounds[b], bounds[b + 1]):
+                    g = lag[cls, dir_pair[dk, key_dir[k2]]]
+                    dy = yk - key_iy[k2]
+                    dz = zk - key_iz[k2]
+                    if dy < 0:
+                        dy += nyp
+                    if dz < 0:
+                        dz += nzp
+                    if dz <= half:
+                        v = np.conj(g[dy, dz])
+                    else:
+                        v = g[(nyp - dy) % nyp, nzp - dz]
+                    part += np.conj(amp[k2]) * v
+                acc += pk * part
+            out[a, b] = acc
+            if b != a:
+                out[b, a] = np.conj(acc)
+
+
+@numba.njit(nogil=True, cache=True)
+def chain_correction(f, rho, phi, rows, out):
+    """out[r] = Phi sum_q rho_(rows[r] q) f_q per (k2, k3) point: ``f`` (P, 3, J) complex128 the planes' spectra in
+    time order, ``rho`` (P - 1, J) the Ornstein-Uhlenbeck factors between neighbours (their products are the factors
+    between any two planes), ``phi`` (3, 3, J) real symmetric, ``out`` (len(rows), 3, J) complex128.
+
+    The sum runs forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once."""
+    n_planes, n_points = f.shape[0], f.shape[2]
+    fwd = np.empty((n_planes, 3), np.complex128)
+    bwd = np.empty((n_planes, 3), np.complex128)
+    for j in range(n_points):
+        for c in range(3):
+            fwd[0, c] = f[0, c, j]
+            bwd[n_planes - 1, c] = f[n_planes - 1, c, j]
+        for p in range(1, n_planes):
+            for c in range(3):
+                fwd[p, c] = rho[p - 1, j] * fwd[p - 1, c] + f[p, c, j]
+        for p in range(n_planes - 2, -1, -1):
+            for c in range(3):
+                bwd[p, c] = rho[p, j] * bwd[p + 1, c] + f[p, c, j]
+        for r in range(len(rows)):
+            p = rows[r]
+            s0 = fwd[p, 0] + bwd[p, 0] - f[p, 0, j]
+            s1 = fwd[p, 1] + bwd[p, 1] - f[p, 1, j]
+            s2 = fwd[p, 2] + bwd[p, 2] - f[p, 2, j]
+            for c in range(3):
+                out[r, c, j] = phi[c, 0, j] * s0 + phi[c, 1, j] * s1 + phi[c, 2, j] * s2
+
+
+@numba.njit(nogil=True, cache=True)
+def scatter_terms(spec_w, term_stream, grid_index, term_shift, term_weight, slabs, nt, grid):
+    """grid[b, grid_index[t]] += W_a(i) w_t exp(-2 pi i i s_t / nt) for the slabs i = slabs[b] (``spec_w`` (M, B) the
+    streams' weight spectra on those slabs, ``grid`` (B, planes 3 nyp nzp) complex128, zeroed by the caller)."""
+    for b in range(len(slabs)):
+        i = slabs[b]
+        for t in range(len(term_stream)):
+            phase = -2.0 * np.pi * ((i * term_shift[t]) % nt) / nt
+            grid[b, grid_index[t]] += spec_w[term_stream[t], b] * term_weight[t] * (np.cos(phase) + 1j * np.sin(phase))
