@@ -94,7 +94,7 @@ def test_constrained_field_reproduces_the_lidar_data(loop):
     np.testing.assert_allclose(again, truth, rtol=0, atol=1e-4)
 
 
-def test_residuals_of_noisy_lidar_data_have_the_noise_variance(loop):
+def test_residuals_of_noisy_lidar_data_have_the_noise_variance(loop, tmp_path):
     # d = H u_t + eps_t with u_t a field of the model and eps_t ~ N(0, sigma^2): then the residual
     # d - H u_c = R S^-1 (d - H u_s - eps_s) + eps_s of a conditional sample has covariance exactly R = sigma^2 I
     # (Hoffman & Ribak 1991; E[(d - H u_s - eps_s)(...)^T] = 2 S), i.e. independent N(0, sigma^2) residuals. Their
@@ -109,7 +109,7 @@ def test_residuals_of_noisy_lidar_data_have_the_noise_variance(loop):
     eps_t = np.random.default_rng(11).normal(size=base.data.shape) * sigma
     placed = PlacedData(base.streams, base.data + eps_t, base.noise_m_s, base.geometry)
     stencil = build_mann_stencil(run)
-    _, planes = conditioned_planes(run, stencil, placed, stream_system(run, stencil, placed), threads=1)
+    _, planes = conditioned_planes(run, stencil, placed, stream_system(run, stencil, placed), tmp_path, threads=1)
     remeasured = np.zeros(placed.data.shape)
     for ix, comp, value in planes:
         measure(placed.streams, ix, "uvw".index(comp), value.astype(float), remeasured)

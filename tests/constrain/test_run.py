@@ -104,7 +104,7 @@ def _dense_prior(stencil, run):
 
 
 @pytest.mark.slow
-def test_ensemble_of_conditional_samples_matches_dense_conditioning():
+def test_ensemble_of_conditional_samples_matches_dense_conditioning(tmp_path):
     # 400 seeds on a 32 x 2 planes x 2 x 2 field, one sensor (u and w) with noise 0.3 m/s
     grid = {"nt": 32, "dt_s": 0.5, "x_m": [0.0, 16.0], "ny": 2, "nz": 2, "dy_m": 10.0}
     t = np.arange(0.0, 14.0, 0.5)
@@ -118,7 +118,7 @@ def test_ensemble_of_conditional_samples_matches_dense_conditioning():
     samples = []
     for seed in range(400):
         run = MannRun.from_mapping({"seed": seed, "grid": grid})
-        _, planes = conditioned_planes(run, stencil, placed, cov_s, threads=1)
+        _, planes = conditioned_planes(run, stencil, placed, cov_s, tmp_path, threads=1)
         field = np.zeros((2, 3, 32, 2, 2))
         for ix, comp, value in planes:
             field[ix, "uvw".index(comp)] = value

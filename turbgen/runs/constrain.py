@@ -26,7 +26,8 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.lidar.sampling import PLANE_TOL_M
-from turbgen.resources import default_threads, require_memory
+from turbgen.resources import default_threads, require_disk, require_memory
+from turbgen.runs.correction_scratch import CorrectionScratch
 from turbgen.runs.mann import build_mann_stencil, memory_estimate_bytes
 from turbgen.spec.constraints import COMPONENTS, PointSeries
 from turbgen.spec.mann import MannRun
@@ -215,14 +216,15 @@ def _unconstrained_measurement(run: MannRun, gen: MannSnapshots, placed: PlacedD
     return out
 
 
-def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarray, *, conditional_mean: bool = False,
-                       threads: int | None = None):  # fmt: skip
+def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarray, scratch_dir: Path, *,
+                       conditional_mean: bool = False, threads: int | None = None):  # fmt: skip
     """The conditioned field of ``run``: (solver report, iterator of (plane index, component, field (nt, ny, nz)
     float32 [m/s])), the generator's order; each array is fresh (it may be kept).
 
     A conditional sample u_s + C H^T S^-1 (d - H u_s - eps_s): the first pass (here, before returning) generates u_s
-    and measures it, the iterator generates it again and adds the correction. ``conditional_mean``: C H^T S^-1 d.
-    ``cov``: stream_system(run, stencil, placed).
+    and measures it, the iterator generates it again and adds the correction, read plane by plane from a scratch
+    file in ``scratch_dir`` (turbgen.runs.correction_scratch; it lives as long as the iterator).
+    ``conditional_mean``: C H^T S^-1 d. ``cov``: stream_system(run, stencil, placed).
     """
     g = run.grid
     gen = MannSnapshots(stencil, g.ny, g.nz, default_threads(threads))
@@ -232,28 +234,32 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
     x, report = solve_constraints(cov, placed, measured, eps)
     frozen = stencil.inv_tau is None  # every plane is the same snapshot, and so is its correction
     wanted = [0] if frozen else list(range(g.nx))
-    spectra = cond.correction_spectra(stencil, placed.streams, x, run.plane_times_s(), wanted, g.ny, g.nz)
-    kept: dict[int, np.ndarray] = {}
-
-    def correction(ix: int) -> np.ndarray:
-        key = 0 if frozen else ix
-        if key not in kept:
-            kept.clear()
-            kept[key] = cond.spectra_field(spectra[key], g.nt)
-        return kept[key]
+    box = stencil.box
 
     def planes():
-        if conditional_mean:
-            source = ((ix, comp, None) for ix in range(g.nx) for comp in COMPONENTS)
-        else:
-            source = gen.generate(run.seed, run.plane_times_s())
-        for ix, comp, field in source:
-            value = correction(ix)[COMPONENTS.index(comp)].astype(np.float32)
-            if field is not None:
-                value += field
-            yield ix, comp, value
+        with CorrectionScratch(scratch_dir, (len(wanted), 3, box.nk1, g.ny, g.nz)) as scratch:
+            for slabs, block in cond.correction_blocks(stencil, placed.streams, x, run.plane_times_s(), wanted, g.ny,
+                                                       g.nz):  # fmt: skip
+                scratch.write(slabs, block)
+            if conditional_mean:
+                source = ((ix, comp, None) for ix in range(g.nx) for comp in COMPONENTS)
+            else:
+                source = gen.generate(run.seed, run.plane_times_s())
+            for ix, comp, field in source:
+                spectra = scratch.read(0 if frozen else ix, COMPONENTS.index(comp))
+                value = cond.spectra_field(spectra, g.nt).astype(np.float32)
+                if field is not None:
+                    value += field
+                yield ix, comp, value
 
     return report, planes()
+
+
+def correction_disk_bytes(run: MannRun) -> int:
+    """The size [bytes] of the correction's scratch file of ``run`` (turbgen.runs.correction_scratch)."""
+    g = run.grid
+    frozen = run.params.evo_time_s is None or g.nx == 1
+    return CorrectionScratch.nbytes(((1 if frozen else g.nx), 3, g.nt // 2 + 1, g.ny, g.nz))
 
 
 def _record(files, placed: PlacedData, report: cond.SolveReport, remeasured: np.ndarray,
@@ -311,18 +317,19 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     g = run.grid
     m = placed.streams.n_streams
     box = synthesis_box(run)
-    frozen = run.params.evo_time_s is None or g.nx == 1
-    st = placed.streams
-    keys = len(np.unique(np.stack([st.term_stream, st.term_component, st.term_shift]), axis=1).T)
-    # S (nt/q frequencies x M x M), the correction's spectra of every plane (complex64), one plane's correction
-    # (float64), the stream arrays, the streams' (k2, k3) footprints and three slabs' transfer functions
-    extra = (g.nt * m * m * 16 + (1 if frozen else g.nx) * 3 * box.nk1 * g.ny * g.nz * 8 + 3 * g.nt * g.ny * g.nz * 8
-             + 8 * m * g.nt * 8 + (keys + 9 * m) * box.nyp * box.nzp * 16)  # fmt: skip
+    # S (nt/q frequencies x M x M), one plane component's correction (spectra and float64 field), the stream arrays,
+    # and a slab group's workspace of the conditioning
+    extra = (g.nt * m * m * 16 + g.nt * g.ny * g.nz * 12 + 8 * m * g.nt * 8
+             + cond.workspace_bytes(box, placed.streams, run.plane_times_s(), g.nx))  # fmt: skip
     require_memory(memory_estimate_bytes(run, threads) + extra, f"the constrained Mann run ({m} measurement streams)",
                    "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
+    store_bytes = 3 * g.nt * g.nx * g.ny * g.nz * 4
+    require_disk(Path(out), correction_disk_bytes(run) + store_bytes, "the constrained Mann run (its store and the "
+                 "correction's scratch file)", "free space or choose another `out`")  # fmt: skip
     stencil = build_mann_stencil(run, cache_dir)
     cov = stream_system(run, stencil, placed)
-    report, planes = conditioned_planes(run, stencil, placed, cov, conditional_mean=conditional_mean, threads=threads)
+    report, planes = conditioned_planes(run, stencil, placed, cov, Path(out).absolute().parent,
+                                        conditional_mean=conditional_mean, threads=threads)  # fmt: skip
     remeasured = np.zeros(placed.data.shape)
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
     with create_store(Path(out), g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:

@@ -28,6 +28,7 @@ into the (k2, k3) spectrum through the adjoint of the terms, multiplied by rho P
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -358,10 +359,11 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
     )
 
 
-def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
-                       nz: int) -> np.ndarray:  # fmt: skip
-    """The yz-transformed, cropped spectra of C H^T w on the planes ``planes_out``: (P_out, 3, nk1, ny, nz) complex64;
-    :func:`spectra_field` turns one plane's into the field.
+def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
+                      nz: int) -> Iterator[tuple[range, np.ndarray]]:  # fmt: skip
+    """The yz-transformed, cropped spectra of C H^T w on the planes ``planes_out``, group of slabs by group: yields
+    (slabs, block (P_out, 3, len(slabs), ny, nz) complex64), the block reused by the next group (see
+    :func:`correction_spectra` for all of them at once).
 
     Parameters
     ----------
@@ -396,7 +398,7 @@ def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarr
     for a in range(m):  # the samples at their stored time steps o_a + m q
         full[a, streams.offset[a] :: q] = weights[a]
     spec_w = np.fft.rfft(full, axis=1)
-    out = np.zeros((len(planes_out), 3, box.nk1, ny, nz), np.complex64)
+    block = np.empty((len(planes_out), 3, SLAB_GROUP, ny, nz), np.complex64)
     forward = _GroupFFT((len(chain), 3, box.nyp, box.nzp), real=False)
     backward = _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), real=False, direction="FFTW_BACKWARD")
     for s0 in range(0, box.nk1, SLAB_GROUP):
@@ -415,13 +417,38 @@ def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarr
             kernels.chain_correction(f[b], rho, _slab_phi(stencil, int(i)), rows,
                                      g[b].reshape(len(planes_out), 3, -1))  # fmt: skip
         plan.execute()  # unnormalised: sum_(j, l) e^(+2 pi i (j y / nyp + l z / nzp))
-        out[:, :, slabs] = np.moveaxis(g[..., :ny, :nz], 0, 2)
+        part = block[:, :, : len(slabs)]
+        part[...] = np.moveaxis(g[..., :ny, :nz], 0, 2)
+        yield range(int(slabs[0]), int(slabs[-1]) + 1), part
+
+
+def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
+                       nz: int) -> np.ndarray:  # fmt: skip
+    """The yz-transformed, cropped spectra of C H^T w on the planes ``planes_out``: (P_out, 3, nk1, ny, nz) complex64
+    (:func:`correction_blocks` gathered); :func:`spectra_field` turns one plane's into the field."""
+    out = np.empty((len(list(planes_out)), 3, stencil.box.nk1, ny, nz), np.complex64)
+    for slabs, block in correction_blocks(stencil, streams, weights, times_s, planes_out, ny, nz):
+        out[:, :, slabs.start : slabs.stop] = block
     return out
 
 
+def workspace_bytes(box, streams: Streams, times_s, n_out: int) -> int:
+    """Bytes of the larger slab-group workspace of :func:`stream_covariance` (lag spectra, real input and half
+    spectrum) and :func:`correction_blocks` (forward and backward grids, the block) for ``n_out`` planes out."""
+    keys = _keys(streams)
+    lags, _ = _lag_classes(np.asarray(times_s, dtype=float), streams.plane)
+    n_dir = len(keys.directions)
+    points = box.nyp * box.nzp
+    lag = SLAB_GROUP * len(lags) * n_dir * (n_dir + 1) // 2 * (points * 8 + box.nyp * (box.nzp // 2 + 1) * 16)
+    chain = n_out + len(streams.used_planes())
+    correction = SLAB_GROUP * (chain + 2 * n_out) * 3 * points * 16
+    return max(lag, correction)
+
+
 def spectra_field(spectra: np.ndarray, nt: int) -> np.ndarray:
-    """The field (3, nt, ny, nz) float64 [m/s] of one plane's cropped spectra (3, nk1, ny, nz) (correction_spectra)."""
-    return np.fft.irfft(spectra.astype(complex), n=nt, axis=1) * nt
+    """The field (..., nt, ny, nz) float64 [m/s] of cropped spectra (..., nk1, ny, nz), e.g. one plane's
+    (3, nk1, ny, nz) of correction_spectra."""
+    return np.fft.irfft(spectra.astype(complex), n=nt, axis=-3) * nt
 
 
 def weights_field(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, plane: int, ny: int,

@@ -1,0 +1,62 @@
+"""The correction of a constrained Mann run kept on disk between its computation and the writing pass.
+
+The correction C H^T w (turbgen.synthesis.conditioning.correction_blocks) comes slab group by slab group, for every
+plane at once, while the writing pass needs it plane by plane: its cropped spectra (planes, 3, nk1, ny, nz)
+complex64, as large as the field itself, go to an anonymous file next to the output (unlinked at creation: the
+system frees it when the run ends, however it ends) instead of memory.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+
+class CorrectionScratch:
+    """Cropped spectra of shape (planes, 3, nk1, ny, nz) complex64 in an anonymous scratch file in ``directory``.
+
+    Use as a context manager; :meth:`write` takes the blocks of correction_blocks, :meth:`read` returns one plane's
+    component.
+    """
+
+    def __init__(self, directory: Path, shape: tuple[int, int, int, int, int]):
+        self.shape = shape
+        self._file = tempfile.TemporaryFile(dir=directory)
+        self._point = shape[3] * shape[4] * 8  # bytes of one slab of one plane and component
+
+    def __enter__(self) -> CorrectionScratch:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._file.close()
+
+    @staticmethod
+    def nbytes(shape: tuple[int, ...]) -> int:
+        """The file's size [bytes] for spectra of ``shape``."""
+        return int(np.prod(shape)) * 8
+
+    def _offset(self, plane: int, component: int, slab: int) -> int:
+        return ((plane * 3 + component) * self.shape[2] + slab) * self._point
+
+    def write(self, slabs: range, block: np.ndarray) -> None:
+        """Store ``block`` (planes, 3, len(slabs), ny, nz) complex64 at ``slabs``."""
+        fd = self._file.fileno()
+        for p in range(block.shape[0]):
+            for c in range(3):
+                data = np.ascontiguousarray(block[p, c], dtype=np.complex64)
+                os.pwrite(fd, memoryview(data).cast("B"), self._offset(p, c, slabs.start))
+
+    def read(self, plane: int, component: int) -> np.ndarray:
+        """The spectra (nk1, ny, nz) complex64 of ``component`` on ``plane`` (position in the stored planes)."""
+        out = np.empty(self.shape[2:], np.complex64)
+        view = memoryview(out).cast("B")
+        fd, done, start = self._file.fileno(), 0, self._offset(plane, component, 0)
+        while done < len(view):
+            n = os.preadv(fd, [view[done:]], start + done)
+            if n == 0:
+                raise OSError(f"the correction's scratch file ended early (plane {plane}, component {component})")
+            done += n
+        return out
