@@ -118,9 +118,9 @@ def quantum(fmt: str, root: Path) -> np.ndarray:
     return np.full(3, big * 2.0**-23)
 
 
-def run_driver(folder: Path, ifw_dat: Path, t_end_s: float, dt_s: float = 0.1) -> np.ndarray:
-    """Run the driver on ``ifw_dat`` at POINTS for t = 0, dt, ..., t_end; (N, 7) rows T X Y Z U V W."""
-    (folder / "points.txt").write_text("# X Y Z\n" + "".join(f"{x} {y} {z}\n" for x, y, z in POINTS))
+def run_driver(folder: Path, ifw_dat: Path, t_end_s: float, dt_s: float = 0.1, points=POINTS) -> np.ndarray:
+    """Run the driver on ``ifw_dat`` at ``points`` for t = 0, dt, ..., t_end; (N, 7) rows T X Y Z U V W."""
+    (folder / "points.txt").write_text("# X Y Z\n" + "".join(f"{x} {y} {z}\n" for x, y, z in points))
     steps = int(round(t_end_s / dt_s))
     (folder / "driver.inp").write_text("\n".join([
         "turbgen export check", "InflowWind driver input file.", "   f  Echo", "=" * 40,
@@ -142,7 +142,7 @@ def run_driver(folder: Path, ifw_dat: Path, t_end_s: float, dt_s: float = 0.1) -
         if len(values) == 7:
             rows.append(values)
     out = np.array(rows)
-    assert len(out) == (steps + 1) * len(POINTS)
+    assert len(out) == (steps + 1) * len(points)
     return out
 
 
@@ -190,3 +190,32 @@ def test_driver_reads_the_store_plus_mean_wind(store, tmp_path, fmt, periodic, p
     print(f"\n{fmt} periodic={periodic} {profile} veer={veer:g} history={history}: max |error| u, v, w = "
           f"{err[0]:.2e}, {err[1]:.2e}, {err[2]:.2e} m/s (bound {tol[0]:.1e}, {tol[1]:.1e}, {tol[2]:.1e})")
     assert np.all(err <= tol), (err, tol)
+
+
+# points for the uniform-wind transients: the hub, across the rotor (D = 80 m) left, right, above and below
+UNIFORM_POINTS = [(0.0, 0.0, 90.0), (0.0, 35.0, 90.0), (0.0, -35.0, 70.0), (0.0, 10.0, 125.0), (0.0, -20.0, 55.0)]
+
+
+@pytest.mark.parametrize("kind, sign", [("eog", "+"), ("edc", "-"), ("ecd", "+"), ("ews-v", "+"), ("ews-h", "-")])
+def test_driver_reads_the_uniform_transients(tmp_path, kind, sign):
+    from turbgen.spec.iec_transient import IecTransient
+
+    hub, D, V = 90.0, 80.0, 12.0
+    args = ["transient", kind, "--class", "IIB", "--U", str(V), "--hub-height", str(hub), "--rotor-diameter", str(D),
+            "--start", "2", "--duration", "30", "--sign", sign, "--out", str(tmp_path / "wind" / "event.hh")]
+    (tmp_path / "wind").mkdir()
+    res = CliRunner().invoke(cli, args)
+    assert res.exit_code == 0, res.output
+    got = run_driver(tmp_path, tmp_path / "wind" / "event_InflowWind_uniform.dat", 20.0, 0.05, UNIFORM_POINTS)
+    # the standard's formulas (IEC 61400-1 Ed. 4 Sect. 6.3.3) at the driver's times, which are rows of the file
+    ev = IecTransient(kind.upper(), "IIB", V, hub, D, start_s=2.0, duration_s=30.0, sign=1 if sign == "+" else -1)
+    t, y, z = got[:, 0], got[:, 2], got[:, 3]
+    e = ev.at(t)
+    speed = V * (z / hub) ** 0.2 + e["gust_m_s"] + e["vshear_m_s"] * (z - hub) / D + e["hshear_m_s"] * y / D
+    delta = np.deg2rad(e["direction_deg"])  # clockwise seen from above, as InflowWind's WindDir
+    want = np.column_stack([speed * np.cos(delta), -speed * np.sin(delta), np.zeros_like(t)])
+    err = np.abs(got[:, 4:] - want).max(axis=0)
+    # bound: the file's 10 significant digits (5e-10 relative, of speeds < 40 m/s) and the driver's F16.8 print
+    print(f"\nuniform {kind.upper()} sign {sign}: max |error| u, v, w = {err[0]:.2e}, {err[1]:.2e}, {err[2]:.2e} m/s")
+    assert np.all(err <= 1e-8 + 40 * 5e-10), err
+    assert np.ptp(got[:, 4]) > 1.0 or np.ptp(got[:, 5]) > 1.0  # the event is in the record the driver read
