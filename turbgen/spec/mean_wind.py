@@ -417,3 +417,30 @@ class MeanWind:
                                                          "rotor_diameter_m", "start_s", "duration_s", "sign")}
             out[key] = list(value) if isinstance(value, tuple) else value
         return out
+
+    @classmethod
+    def from_attrs(cls, attrs: dict) -> "MeanWind":
+        """The MeanWind whose :meth:`to_attrs` is ``attrs`` (a dataset's or store's record).
+
+        Parameters
+        ----------
+        attrs : dict
+            As written by :meth:`to_attrs`.
+
+        Returns
+        -------
+        MeanWind
+            The same mean wind (validated again).
+
+        Raises
+        ------
+        ParameterError
+            For keys that are not fields, or values outside their ranges.
+        """
+        fields = dict(attrs)
+        unknown = sorted(set(fields) - set(cls.__dataclass_fields__))
+        if unknown:
+            raise ParameterError(f"mean-wind record has unknown keys {', '.join(unknown)}")
+        if fields.get("transient") is not None:
+            fields["transient"] = IecTransient(**fields["transient"])
+        return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in fields.items()})
