@@ -73,22 +73,28 @@ def profile_and_veer(profile: str, veer: float, heights: np.ndarray) -> tuple[np
     return ratio, veer * (z - HUB)
 
 
-def expected(store_path, profile: str, veer: float, history: bool, periodic: bool, t_x_y_z: np.ndarray) -> np.ndarray:
-    """(N, 3) full velocities [m/s] at rows (T, X, Y, Z): node values (fluctuation + mean, turned by the veer and the
-    history's direction at the time the slice reaches the turbine), trilinear in (slice time, y, z) at InflowWind's
-    Taylor-shifted slice time."""
+def expected(store_path, profile: str, veer: float, history: bool, periodic: bool, t_x_y_z: np.ndarray,
+             event=None) -> np.ndarray:
+    """(N, 3) full velocities [m/s] at rows (T, X, Y, Z): node values (fluctuation + mean + an IEC ``event``'s speed
+    terms, turned by the veer and the history's or event's direction at the time the slice reaches the turbine),
+    trilinear in (slice time, y, z) at InflowWind's Taylor-shifted slice time."""
     fs = open_store(store_path)
     f = {c: fs.read_plane(c, 0).astype(np.float64) for c in "uvw"}
-    heights = HUB + fs.grid.z()
+    heights, y_nodes = HUB + fs.grid.z(), fs.grid.y()
     ratio, angle = profile_and_veer(profile, veer, heights)
     init_x = 0.0 if periodic else 0.5 * (NY - 1) * DY
-    speed, turn = np.full(NT, U), np.zeros(NT)
-    if history:  # slice k reaches the turbine at k dt - InitX / U
+    at_turbine = DT * np.arange(NT) - init_x / U  # slice k reaches the turbine at k dt - InitX / U
+    speed, turn, extra = np.full(NT, U), np.zeros(NT), np.zeros((NT, NY, NZ))
+    if history:
         ht, hu, hd = (np.array(c) for c in zip(*HISTORY))
-        at_turbine = DT * np.arange(NT) - init_x / U
         speed, turn = np.interp(at_turbine, ht, hu), np.interp(at_turbine, ht, hd)
+    if event is not None:  # IEC directions are clockwise seen from above: the turn is minus it
+        e, D = event.at(at_turbine), event.rotor_diameter_m
+        turn = turn - e["direction_deg"]
+        extra = (e["gust_m_s"][:, None, None] + e["vshear_m_s"][:, None, None] * (heights - HUB)[None, None, :] / D
+                 + e["hshear_m_s"][:, None, None] * y_nodes[None, :, None] / D)
     a = np.deg2rad(angle[None, None, :] + turn[:, None, None])
-    ut = f["u"] + speed[:, None, None] * ratio[None, None, :]
+    ut = f["u"] + speed[:, None, None] * ratio[None, None, :] + extra
     nodes = np.stack([ut * np.cos(a) - f["v"] * np.sin(a), ut * np.sin(a) + f["v"] * np.cos(a), f["w"]], axis=-1)
     t, x, y, z = t_x_y_z.T
     ft = (t + (init_x - x) / U) / DT
@@ -219,3 +225,67 @@ def test_driver_reads_the_uniform_transients(tmp_path, kind, sign):
     print(f"\nuniform {kind.upper()} sign {sign}: max |error| u, v, w = {err[0]:.2e}, {err[1]:.2e}, {err[2]:.2e} m/s")
     assert np.all(err <= 1e-8 + 40 * 5e-10), err
     assert np.ptp(got[:, 4]) > 1.0 or np.ptp(got[:, 5]) > 1.0  # the event is in the record the driver read
+
+
+# below the grid (bottom row 26 m): tower points at 26, 22, ..., 2 m; y is ignored there; below 2 m linear to 0
+TOWER_POINTS = [(0.0, 0.0, 24.0), (0.0, 3.0, 13.0), (-5.0, 0.0, 7.5), (6.0, -2.0, 1.0)]
+
+
+def test_driver_reads_the_tower_points(store, tmp_path):
+    path, _, _ = store
+    out = tmp_path / "wind" / "tower.bts"
+    out.parent.mkdir()
+    res = CliRunner().invoke(cli, ["export", str(path), "--format", "bts", "--out", str(out), "--tower",
+                                   "--profile", "log:z0=0.05", "--veer", "-0.2"])
+    assert res.exit_code == 0, res.output
+    got = run_driver(tmp_path, out.with_name("tower_InflowWind_bts.dat"), 20.0, 0.1, TOWER_POINTS)
+    # the tower column: the lowest row's fluctuations at y = 0 (mean of the two middle columns, ny even) plus the mean
+    # wind at each tower height, turned by the veer there
+    fs = open_store(path)
+    heights = 26.0 - DZ * np.arange(7)
+    f = {c: 0.5 * (fs.read_plane(c, 0)[:, NY // 2 - 1, 0] + fs.read_plane(c, 0)[:, NY // 2, 0]).astype(float)
+         for c in "uvw"}
+    ratio, angle = profile_and_veer("log:z0=0.05,d=0", -0.2, heights)
+    a = np.deg2rad(angle)[None, :]
+    ut = f["u"][:, None] + U * ratio[None, :]
+    vt = np.repeat(f["v"][:, None], 7, axis=1)
+    nodes = np.stack([ut * np.cos(a) - vt * np.sin(a), ut * np.sin(a) + vt * np.cos(a),
+                      np.repeat(f["w"][:, None], 7, axis=1)], axis=-1)  # (nt, ntwr, 3)
+    want = np.zeros((len(got), 3))
+    for i, (t, x, _, z) in enumerate(got[:, :4]):
+        ft = np.mod((t - x / U) / DT, NT)
+        k0 = int(math.floor(ft))
+        wt = ft - k0
+        at_time = (1 - wt) * nodes[k0 % NT] + wt * nodes[(k0 + 1) % NT]  # (ntwr, 3)
+        if z < heights[-1]:
+            want[i] = at_time[-1] * z / heights[-1]  # linear to 0 at the ground
+        else:
+            j = min(int((heights[0] - z) // DZ), 5)
+            wz = (heights[j] - z) / DZ
+            want[i] = (1 - wz) * at_time[j] + wz * at_time[j + 1]
+    err = np.abs(got[:, 4:] - want).max(axis=0)
+    tol = 0.5 * quantum("bts", out.with_suffix("")) + 8 * 2.0**-24 * np.abs(want).max(axis=0) + 1e-8
+    print(f"\nbts tower points, log law + veer: max |error| u, v, w = {err[0]:.2e}, {err[1]:.2e}, {err[2]:.2e} m/s")
+    assert np.all(err <= tol), (err, tol)
+
+
+@pytest.mark.parametrize("fmt, kind, sign", [("bts", "ECD", "+"), ("hawc2", "EWS-H", "-"), ("wnd", "EWS-V", "+")])
+def test_driver_reads_a_superimposed_transient(store, tmp_path, fmt, kind, sign):
+    from turbgen.spec.iec_transient import IecTransient
+
+    path, _, _ = store
+    suffix = ".bts" if fmt == "bts" else ""
+    root = tmp_path / "wind" / f"event{suffix}"
+    root.parent.mkdir()
+    res = CliRunner().invoke(cli, ["export", str(path), "--format", fmt, "--out", str(root), "--transient", kind,
+                                   "--iec-class", "IIB", "--rotor-diameter", "24", "--transient-start", "3",
+                                   "--transient-sign", sign, "--profile", "power:0.14"])
+    assert res.exit_code == 0, res.output
+    stem = root.with_suffix("") if fmt == "bts" else root
+    got = run_driver(tmp_path, stem.with_name(f"{stem.name}_InflowWind_{fmt}.dat"), 20.0)
+    event = IecTransient(kind, "IIB", U, HUB, 24.0, start_s=3.0, duration_s=(NT - 1) * DT, sign=1 if sign == "+" else -1)
+    want = expected(path, "power:0.14", 0.0, False, True, got[:, :4], event)
+    err = np.abs(got[:, 4:] - want).max(axis=0)
+    tol = 0.5 * quantum(fmt, stem) + 8 * 2.0**-24 * np.abs(want).max(axis=0) + 1e-8
+    print(f"\n{fmt} + {kind} ({sign}): max |error| u, v, w = {err[0]:.2e}, {err[1]:.2e}, {err[2]:.2e} m/s")
+    assert np.all(err <= tol), (err, tol)
