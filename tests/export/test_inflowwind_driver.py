@@ -265,7 +265,8 @@ def test_driver_reads_the_tower_points(store, tmp_path):
             want[i] = (1 - wz) * at_time[j] + wz * at_time[j + 1]
     err = np.abs(got[:, 4:] - want).max(axis=0)
     tol = 0.5 * quantum("bts", out.with_suffix("")) + 8 * 2.0**-24 * np.abs(want).max(axis=0) + 1e-8
-    print(f"\nbts tower points, log law + veer: max |error| u, v, w = {err[0]:.2e}, {err[1]:.2e}, {err[2]:.2e} m/s")
+    print(f"\nbts tower points, log law + veer: max |error| u, v, w = {err[0]:.2e}, {err[1]:.2e}, {err[2]:.2e} m/s "
+          f"(bound {tol[0]:.1e}, {tol[1]:.1e}, {tol[2]:.1e})")
     assert np.all(err <= tol), (err, tol)
 
 
@@ -287,5 +288,6 @@ def test_driver_reads_a_superimposed_transient(store, tmp_path, fmt, kind, sign)
     want = expected(path, "power:0.14", 0.0, False, True, got[:, :4], event)
     err = np.abs(got[:, 4:] - want).max(axis=0)
     tol = 0.5 * quantum(fmt, stem) + 8 * 2.0**-24 * np.abs(want).max(axis=0) + 1e-8
-    print(f"\n{fmt} + {kind} ({sign}): max |error| u, v, w = {err[0]:.2e}, {err[1]:.2e}, {err[2]:.2e} m/s")
+    print(f"\n{fmt} + {kind} ({sign}): max |error| u, v, w = {err[0]:.2e}, {err[1]:.2e}, {err[2]:.2e} m/s "
+          f"(bound {tol[0]:.1e}, {tol[1]:.1e}, {tol[2]:.1e})")
     assert np.all(err <= tol), (err, tol)
