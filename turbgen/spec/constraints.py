@@ -55,6 +55,13 @@ class PointSeries:
     source: str
     mean_wind: MeanWind | None = None
 
+    def __post_init__(self):
+        if self.total_wind and self.mean_wind is None:  # the exports' default mean wind
+            object.__setattr__(self, "mean_wind", MeanWind())
+        if not self.total_wind and self.mean_wind is not None:
+            raise ParameterError(f"constraint file {self.source}: a mean wind describes total-wind data; set "
+                                 "total_wind")
+
 
 def point_series_from_mapping(data, source: str) -> PointSeries:
     """A PointSeries from a schema-valid mapping; ParameterError naming ``source`` for any bad content."""
