@@ -12,10 +12,11 @@ import pytest
 
 from turbgen.errors import ParameterError
 from turbgen.export import ExportRequest, export_store, read_hawc2
-from turbgen.runs.constrain import run_mann_constrained
+from turbgen.runs.constrain import describe_constraints, run_mann_constrained
 from turbgen.spec.constraints import load_point_series, point_series_from_mapping
 from turbgen.spec.mann import MannRun
 from turbgen.spec.mean_wind import MeanWind
+from turbgen.store import open_store
 
 U, HUB, DT = 16.0, 150.0, 0.5
 GRID = {"nt": 128, "dt_s": DT, "x_m": [0.0, 40.0], "ny": 4, "nz": 4, "dy_m": 10.0}  # z nodes -15, -5, 5, 15 m
@@ -57,6 +58,9 @@ def test_constrained_field_exported_with_the_mean_wind_gives_back_the_total_wind
     run = MannRun.from_mapping({"seed": 4, "U_m_s": U, "hub_height_m": HUB, "grid": GRID})
     series = load_point_series(path)  # the history's file is found beside the constraint file
     run_mann_constrained(run, tmp_path / "c.zarr", [series], threads=1)
+    lines = describe_constraints(open_store(tmp_path / "c.zarr").attrs["constraints"])
+    assert lines[-1].startswith("total-wind data: mean wind removed: log law z0 = 0.03 m, d = 0 m; veer -0.3 deg/m; "
+                                "hub history hub.csv (3 points)")
     ht, hu, hd = zip(*HISTORY)
     wind = MeanWind(profile="log", roughness_m=Z0, veer_deg_per_m=VEER, history_times_s=ht, history_speeds_m_s=hu,
                     history_directions_deg=hd)
