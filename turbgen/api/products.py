@@ -64,9 +64,16 @@ def validate(store, *, rotor_radius: float | None = None):
 
 
 def export(store, format: str, out: str | os.PathLike, *, plane: int | None = None,
-           hub_height: float | None = None, shear_exponent: float | None = None, tower: bool = False,
-           periodic: bool = True, drop_below_ground: bool = False, overwrite: bool = False):
+           hub_height: float | None = None, shear_exponent: float | None = None, profile: str | None = None,
+           veer: float | None = None, mean_history: str | os.PathLike | None = None, transient: str | None = None,
+           iec_class: str | None = None, rotor_diameter: float | None = None, transient_start: float = 10.0,
+           transient_sign: str = "+", tower: bool = False, periodic: bool = True, drop_below_ground: bool = False,
+           runner_files: bool = False, overwrite: bool = False):
     """Write a store for InflowWind, HAWC2, the lidar simulator, the 4D Mann scripts or HDF5 (``turbgen export``).
+
+    The keywords are ``turbgen export``'s options, made into the request by the same function
+    (:func:`turbgen.export.options.export_request`), so the mean wind is the one definition of
+    :class:`turbgen.spec.mean_wind.MeanWind`.
 
     Parameters
     ----------
@@ -82,12 +89,30 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
         Hub height [m] (default: the store's).
     shear_exponent : float, optional
         Power-law exponent of the mean profile added to u (InflowWind formats; default 0.2).
+    profile : str, optional
+        ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE`` (CSV z [m], U [m/s] [, direction deg]).
+    veer : float, optional
+        Direction change with height [deg/m], counter-clockwise seen from above.
+    mean_history : str or os.PathLike, optional
+        CSV of t [s], U [m/s] [, direction deg] at hub height.
+    transient : str, optional
+        Superimposed IEC transient: EOG, EDC, ECD, EWS-V or EWS-H (needs ``iec_class``, ``rotor_diameter``).
+    iec_class : str, optional
+        Turbine class and turbulence category, e.g. "IIB".
+    rotor_diameter : float, optional
+        Rotor diameter D [m].
+    transient_start : float, optional
+        Time the transient reaches the turbine [s] (default 10).
+    transient_sign : str, optional
+        "+" or "-": the standard's sense of the transient (default "+").
     tower : bool, optional
         bts: add tower points down to the ground.
     periodic : bool, optional
         Flag bts/wnd/evo periodic in time.
     drop_below_ground : bool, optional
         Drop grid rows at or below the ground instead of refusing.
+    runner_files : bool, optional
+        Also write the InflowWind input file (bts, wnd, hawc2) and the HAWC2 block (hawc2); default False.
     overwrite : bool, optional
         Replace existing output files.
 
@@ -100,7 +125,7 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
     ------
     ParameterError
         For an unknown format, options the format does not use, an existing output without ``overwrite``, a grid
-        reaching the ground, too little disk.
+        reaching the ground, too little disk, a malformed profile or values outside their ranges.
     StoreError
         If the store is missing or incomplete.
 
@@ -109,16 +134,22 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
     >>> import tempfile, turbgen
     >>> tmp = tempfile.mkdtemp()
     >>> ds = turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50], out=tmp + "/k.zarr")
-    >>> result = turbgen.export(ds, "bts", tmp + "/k.bts")
+    >>> result = turbgen.export(ds, "bts", tmp + "/k.bts", profile="log:z0=0.03", veer=-0.1)
     >>> result.inflowwind_lines[0].split()[:2]
     ['3', 'WindType']
     """
-    from turbgen.export import ExportRequest, export_store
+    from turbgen.export import export_store
+    from turbgen.export.options import ExportOptions, export_request
 
     check_output_path(out, "`out`")
-    request = ExportRequest(plane=plane, hub_height_m=hub_height, shear_exponent=shear_exponent, tower=tower,
-                            periodic=periodic, drop_below_ground=drop_below_ground, overwrite=overwrite)
-    return export_store(field_store(store), format, out, request)
+    fs = field_store(store)
+    opts = ExportOptions(plane=plane, hub_height_m=hub_height, shear_exponent=shear_exponent, profile=profile,
+                         veer_deg_per_m=veer, mean_history=None if mean_history is None else str(mean_history),
+                         transient=transient, iec_class=iec_class, rotor_diameter_m=rotor_diameter,
+                         transient_start_s=transient_start, transient_sign=transient_sign, tower=tower,
+                         periodic=periodic, drop_below_ground=drop_below_ground, runner_files=runner_files,
+                         overwrite=overwrite)
+    return export_store(fs, format, out, export_request(fs, format, opts))
 
 
 def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLike | None = None,

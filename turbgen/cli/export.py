@@ -5,10 +5,9 @@ from __future__ import annotations
 
 import click
 
-from turbgen.export import EXPORTERS, ExportRequest, export_store
-from turbgen.errors import ParameterError
+from turbgen.export import EXPORTERS, export_store
+from turbgen.export.options import ExportOptions, export_request
 from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT
-from turbgen.spec.mean_wind_files import mean_wind_from_options
 from turbgen.store.paths import check_output_path
 
 
@@ -57,15 +56,12 @@ def export(store, fmt, out, plane, hub_height, shear, profile, veer, mean_histor
            overwrite):
     """Export STORE to --format; prints the InflowWind input-file lines that load the result."""
     check_output_path(out)
-    if shear is not None and profile is not None:
-        raise ParameterError(f"--shear-exponent {shear:g} and --profile {profile} both set the profile; give one")
-    if shear is not None and (veer is not None or mean_history is not None):
-        profile, shear = f"power:{shear!r}", None
-    event = _transient(store, transient, iec_class, rotor_diameter, transient_start, transient_sign, hub_height)
-    mean_wind = mean_wind_from_options(profile, veer, mean_history, event)
-    request = ExportRequest(plane=plane, hub_height_m=hub_height, shear_exponent=shear, tower=tower,
-                            periodic=periodic, drop_below_ground=drop_below_ground, overwrite=overwrite,
-                            mean_wind=mean_wind, runner_files=runner_files and fmt in ("bts", "wnd", "hawc2"))
+    opts = ExportOptions(plane=plane, hub_height_m=hub_height, shear_exponent=shear, profile=profile,
+                         veer_deg_per_m=veer, mean_history=mean_history, transient=transient, iec_class=iec_class,
+                         rotor_diameter_m=rotor_diameter, transient_start_s=transient_start,
+                         transient_sign=transient_sign, tower=tower, periodic=periodic,
+                         drop_below_ground=drop_below_ground, runner_files=runner_files, overwrite=overwrite)
+    request = export_request(store, fmt, opts)
     result = export_store(store, fmt, out, request)
     for p in result.paths:
         click.echo(f"wrote {p}", err=True)
@@ -77,20 +73,3 @@ def export(store, fmt, out, plane, hub_height, shear, profile, veer, mean_histor
     for line in result.inflowwind_lines:
         click.echo(line)
 
-
-def _transient(store, kind, iec_class, rotor_diameter, start, sign, hub_height):
-    """The IEC transient of the --transient options at the store's U and hub height (None without --transient)."""
-    extra = [n for n, v in (("--iec-class", iec_class), ("--rotor-diameter", rotor_diameter)) if v is not None]
-    if kind is None:
-        if extra:
-            raise ParameterError(f"{' and '.join(extra)} belong to --transient")
-        return None
-    if iec_class is None or rotor_diameter is None:
-        raise ParameterError(f"--transient {kind.upper()} needs --iec-class and --rotor-diameter")
-    from turbgen.spec.iec_transient import IecTransient
-    from turbgen.store import open_store
-
-    fs = open_store(store)
-    return IecTransient(kind, iec_class, fs.U_m_s, fs.hub_height_m if hub_height is None else hub_height,
-                        rotor_diameter, start_s=start, duration_s=(fs.grid.nt - 1) * fs.grid.dt_s,
-                        sign=1 if sign == "+" else -1)

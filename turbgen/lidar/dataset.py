@@ -166,6 +166,9 @@ class LidarData:
         The mean wind of the store the lidar measured [m/s].
     source : str
         The dataset's path.
+    mean_wind : dict, optional
+        The added mean wind's record (:meth:`turbgen.spec.mean_wind.MeanWind.to_attrs`); None: the power law with
+        ``shear_exponent`` (datasets of earlier versions, or no mean wind added).
     """
 
     v_los: np.ndarray
@@ -175,6 +178,7 @@ class LidarData:
     shear_exponent: float
     U_m_s: float
     source: str
+    mean_wind: dict | None = None
 
 
 def is_lidar_dataset(path) -> bool:
@@ -198,10 +202,10 @@ def read_dataset(path) -> LidarData:
         attrs = dict(group.attrs)
         if attrs.get(MARKER) is not True:
             raise StoreError(f"{p} is not a complete lidar dataset (no completeness marker)")
-        lidar = attrs["lidar"]
+        lidar, wind = attrs["lidar"], attrs.get("mean_wind")
         return LidarData(np.asarray(group["v_los"][...], float), np.asarray(group["time_s"][...], float),
                          json.loads(lidar) if isinstance(lidar, str) else dict(lidar),
                          bool(attrs["mean_wind_added"]), float(attrs["shear_exponent"]), float(attrs["U_m_s"]),
-                         str(p))  # fmt: skip
+                         str(p), json.loads(wind) if isinstance(wind, str) else wind)  # fmt: skip
     except (KeyError, ValueError, OSError, zarr.errors.BaseZarrError) as exc:
         raise StoreError(f"{p} is not a readable lidar dataset ({type(exc).__name__}: {exc})") from None

@@ -231,6 +231,7 @@ class LidarReport:
             "rotor_radius_m": r.rotor_radius_m,
             "mean_wind_added": bool(r.samples.mean_wind_added),
             "shear_exponent": float(r.samples.shear_exponent),
+            "mean_wind": r.samples.mean_wind_record,
             "U_m_s": self.U_m_s,
             "ti_lidar_uncorrected": r.ti_lidar,
             "ti_rotor": r.ti_rotor,

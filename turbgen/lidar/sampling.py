@@ -92,6 +92,9 @@ class LidarSamples:
         Power-law exponent alpha [-] used when the mean wind was added.
     mean_wind : str, optional
         The mean wind added, described (:meth:`turbgen.spec.mean_wind.MeanWind.describe`); "" when none.
+    mean_wind_record : dict, optional
+        That mean wind's :meth:`turbgen.spec.mean_wind.MeanWind.to_attrs` (None: the power law with
+        ``shear_exponent``, or none added).
     """
 
     v_los: np.ndarray
@@ -101,6 +104,7 @@ class LidarSamples:
     mean_wind_added: bool
     shear_exponent: float
     mean_wind: str = ""
+    mean_wind_record: dict | None = None
 
 
 def _plane_index(grid, x: float, beam: int, gate: int) -> int:
@@ -272,7 +276,7 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
     gx = np.array([g.x_m[next(planes[j] for j, m in enumerate(measurements) if m.gate == gg)] for gg in gates], float)
     if mean_wind is not None and add_mean_wind:
         return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, True, mean_wind.shear_exponent,
-                            mean_wind.describe())
+                            mean_wind.describe(), mean_wind.to_attrs())
     return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, add_mean_wind, shear_exponent)
 
 
@@ -418,6 +422,49 @@ def adjoint_los(op: LosOperator, v: np.ndarray, shape: tuple[int, ...]) -> np.nd
                 continue
             np.add.at(out[op.plane[j], c], (op.t_index[:, j], op.y_index[j][None], op.z_index[j][None]),
                       op.n[j, c] * op.weight[:, j] * v[:, j, None])  # fmt: skip
+    return out
+
+
+def mean_wind_los_series(measurements, times_s: np.ndarray, U_m_s: float, hub_height_m: float, mean_wind) -> np.ndarray:
+    """The line-of-sight speed (n_scan, J) [m/s] of ``mean_wind`` alone (a MeanWind that does not turn), per scan
+    and measurement: what ``sample`` adds to v_los with that mean wind, each probe point at its stored time
+    T + x / U.
+
+    Parameters
+    ----------
+    measurements : sequence of Measurement
+        The J measurements.
+    times_s : numpy.ndarray
+        Physical measurement times (n_scan, J) [s].
+    U_m_s : float
+        The field's mean speed [m/s] (Taylor shift).
+    hub_height_m : float
+        Hub height [m].
+    mean_wind : MeanWind
+        The mean wind; it must not turn (with a turn the fluctuations' projection changes too).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_scan, J) [m/s].
+
+    Raises
+    ------
+    ParameterError
+        For a turning mean wind or a probe point below the ground.
+    """
+    if mean_wind.turns:
+        raise ParameterError(f"lidar: the mean wind turns ({mean_wind.describe()}), which turns the fluctuations' "
+                             "line of sight too; its line-of-sight part alone is not defined")
+    out = np.zeros(np.shape(times_s))
+    for j, m in enumerate(measurements):
+        p = m.points_m()
+        h = hub_height_m + p[:, 2]
+        if np.any(h <= 0):
+            raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+        t = times_s[:, j][:, None] + p[None, :, 0] / U_m_s
+        u, _ = mean_wind.full_uv(0.0, 0.0, t, p[None, :, 1], h[None, :], U_m_s, hub_height_m)
+        out[:, j] = m.n[0] * (u @ np.asarray(m.weights, float))
     return out
 
 

@@ -6,7 +6,8 @@ Placing the data on the grid: a sensor at (x, y, z) belongs to the plane at x (x
 value at physical time T is the stored sample t = T + x / U of that plane (convected frame, Guo et al. 2023
 Sect. 5.1.2). The series is linearly *interpolated* onto the stored times n dt (a stored time outside the data's span,
 or next to a missing value, is missing); points between grid nodes are bilinear in (y, z) (as the virtual lidar
-reads a store). With ``total_wind`` the run's mean wind U (uniform, no shear profile) is subtracted from u.
+reads a store). With ``total_wind`` the mean wind (turbgen.spec.constraints.sensor_fluctuations: the exports' MeanWind,
+default power law alpha 0.2, or the file's ``mean_wind``) is taken from u (and v when it turns).
 
 The field: pass 1 generates the unconstrained sample u_s and measures it (H u_s), nothing is kept; the system
 S x = d - H u_s - eps_s is solved (turbgen.synthesis.conditioning); pass 2 generates the same u_s again (same seed,
@@ -29,7 +30,7 @@ from turbgen.lidar.sampling import PLANE_TOL_M
 from turbgen.resources import default_threads, require_disk, require_memory
 from turbgen.runs.correction_scratch import CorrectionScratch
 from turbgen.runs.mann import build_mann_stencil, memory_estimate_bytes
-from turbgen.spec.constraints import COMPONENTS, PointSeries
+from turbgen.spec.constraints import COMPONENTS, PointSeries, sensor_fluctuations
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.synthesis import conditioning as cond
@@ -117,17 +118,18 @@ def _point_streams(run: MannRun, f: PointSeries, sigma: float) -> list[PlacedStr
         p = _plane(run, s.x_m, where)
         ty = _axis_terms(s.y_m, g.y(), g.dy_m, "y", where)
         tz = _axis_terms(z, g.z(), g.dz_m, "z", where)
-        for comp, values in s.series.items():
+        series, shift = sensor_fluctuations(f, s, run.U_m_s, run.hub_height_m)
+        for comp, values in series.items():
             c = COMPONENTS.index(comp)
-            shift = run.U_m_s if (comp == "u" and f.total_wind) else 0.0
-            on_grid = _on_grid(run, f.time_s, values - shift, s.x_m, where)
+            on_grid = _on_grid(run, f.time_s, values, s.x_m, where)
             if not np.isfinite(on_grid).any():
                 raise ParameterError(f"{where}: {comp} has no value at the field's time steps")
             terms = np.array([(c, iy, iz, 0, wy * wz) for iy, wy in ty for iz, wz in tz], dtype=float)
             name = f"{Path(f.source).name}:{s.name}:{comp}"
             out.append(PlacedStream(p, terms, 1, 0, on_grid, sigma, {
                 "name": name, "kind": "point", "component": comp, "x_m": s.x_m, "y_m": s.y_m, "z_m": z, "plane": p,
-                "noise_m_s": sigma, "mean_wind_subtracted_m_s": shift}))  # fmt: skip
+                "noise_m_s": sigma, "mean_wind_subtracted_m_s": shift if comp == "u" else 0.0,
+                "mean_wind": f.mean_wind.describe() if f.total_wind else ""}))  # fmt: skip
     return out
 
 
@@ -369,12 +371,13 @@ def describe_constraints(record: dict) -> list[str]:
         f"conjugate gradients, {solver['iterations']} iterations")
     what = "conditional mean" if record["conditional_mean"] else "conditional sample"
     noise = sorted({s["noise_m_s"] for s in record["streams"]})
+    winds = sorted({s["mean_wind"] for s in record["streams"] if s.get("mean_wind")})
     return [
         f"constrained ({what}) on {len(record['streams'])} measured series, {record['n_samples']} samples from "
         f"{', '.join(record['files'])}; noise sigma {', '.join(f'{v:g}' for v in noise)} m/s",
         f"solve: {how}, relative residual {solver['relative_residual']:.1e}; field - data at the measurements: "
         f"max {record['residual_max_m_s']:.2e} m/s, rms {record['residual_rms_m_s']:.2e} m/s",
-    ]
+    ] + [f"total-wind data: mean wind removed: {w} (export with it to get the data back)" for w in winds]
 
 
 def load_constraints(files) -> list:

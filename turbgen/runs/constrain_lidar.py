@@ -5,8 +5,10 @@ weights, Taylor shift within the probe volume to the stored time t = T + x'/U of
 bilinear in y, z), rebuilt from the lidar description and measurement times the dataset holds. Each beam-gate is one
 stream observed once per scan: the scan period must be a whole number q of the field's time steps, so that every scan
 uses the same weights q steps later (conditioning.Streams with decimation q, time-shifted terms). If the dataset
-includes the mean wind (``mean_wind_added``), its line-of-sight part (turbgen.lidar.sampling.mean_wind_los, with the
-run's U and hub height and the dataset's shear exponent) is subtracted.
+includes the mean wind (``mean_wind_added``), its line-of-sight part at the run's U and hub height is subtracted: the
+MeanWind the dataset records (profile, hub history; turbgen.lidar.sampling.mean_wind_los_series, per scan), or the
+power law with its shear exponent for datasets without that record. A mean wind that turns (veer, directions) is
+refused: it turned the measured fluctuations' line of sight as well.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ from turbgen.errors import ParameterError
 from turbgen.lidar.dataset import LidarData
 from turbgen.lidar.description import lidar_from_mapping
 from turbgen.lidar.run import measurements_of
-from turbgen.lidar.sampling import check_measurements, los_operator, mean_wind_los
+from turbgen.lidar.sampling import check_measurements, los_operator, mean_wind_los, mean_wind_los_series
+from turbgen.spec.mean_wind import MeanWind
 
 _WEIGHT_TOL = 1e-9  # weights of one term that differ by less between scans are the same (rounding of T + x'/U)
 
@@ -62,6 +65,21 @@ def _terms(op, j: int, q: int, where: str) -> tuple[np.ndarray, int]:
     return terms, first
 
 
+def _mean_los(data: LidarData, ms, times: np.ndarray, run, where: str) -> np.ndarray | None:
+    """(n_scan, J) line-of-sight speed [m/s] of the mean wind the dataset added (None: none added): its recorded
+    MeanWind (the power law with its exponent for datasets without the record); a turning one is refused."""
+    if not data.mean_wind_added:
+        return None
+    if data.mean_wind is None:
+        return np.broadcast_to(mean_wind_los(ms, run.U_m_s, run.hub_height_m, data.shear_exponent), times.shape)
+    wind = MeanWind.from_attrs(data.mean_wind)
+    if wind.turns:
+        raise ParameterError(f"{where}: its mean wind turns ({wind.describe()}), which turned the measured "
+                             "fluctuations' line of sight per height and time; make the dataset without veer or "
+                             "directions to constrain a field with it")  # fmt: skip
+    return mean_wind_los_series(ms, times, run.U_m_s, run.hub_height_m, wind)
+
+
 def lidar_streams(run, data: LidarData, sigma: float) -> list:
     """The beam-gates of ``data`` as PlacedStreams of ``run`` (noise sigma [m/s] each)."""
     from turbgen.runs.constrain import PlacedStream
@@ -89,7 +107,7 @@ def lidar_streams(run, data: LidarData, sigma: float) -> list:
                              "time T + x/U)")  # fmt: skip
     q = _scan_step(data, g.dt_s, where)
     op = los_operator(g, run.U_m_s, ms, planes, times)
-    mean = mean_wind_los(ms, run.U_m_s, run.hub_height_m, data.shear_exponent) if data.mean_wind_added else None
+    mean = _mean_los(data, ms, times, run, where)
     n_dec = g.nt // q if g.nt % q == 0 else None
     if n_dec is None:
         raise ParameterError(f"{where}: the scan period ({q} time steps) does not divide the record of {g.nt} steps: "
@@ -97,7 +115,7 @@ def lidar_streams(run, data: LidarData, sigma: float) -> list:
     out = []
     for j, m in enumerate(ms):
         terms, first = _terms(op, j, q, where)
-        values = data.v_los[:, beams.index(m.beam), gates.index(m.gate)] - (0.0 if mean is None else mean[j])
+        values = data.v_los[:, beams.index(m.beam), gates.index(m.gate)] - (0.0 if mean is None else mean[:, j])
         series = np.full(n_dec, np.nan)
         series[first // q + np.arange(n_scan)] = values
         name = f"{Path(data.source).name}:beam{m.beam}:gate{m.gate}"

@@ -4,8 +4,11 @@
 
 A file holds the sample times (physical time [s] from the start of the field, any rate) and one or more sensors at
 (x, y, z) (z relative to the hub, or height above ground) with any of u, v, w [m/s]; missing values are null (NaN
-here). ``total_wind`` says u is the total wind speed (the run's mean wind U is subtracted when it is placed on the
-grid); v and w are always fluctuations. turbgen.runs.constrain places the data on the run's grid.
+here). ``total_wind`` says the data hold the total wind: the mean wind of the exports
+(:class:`turbgen.spec.mean_wind.MeanWind`; default the power law, alpha 0.2, or the file's ``mean_wind``: the
+`turbgen export` options ``profile``, ``veer_deg_per_m``, ``mean_history``) at the run's U and hub height is taken
+from u, and from v when it turns (:func:`sensor_fluctuations`); w is always a fluctuation. turbgen.runs.constrain
+places the data on the run's grid.
 """
 
 from __future__ import annotations
@@ -19,6 +22,8 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.spec.config import check_mapping
+from turbgen.spec.mean_wind import MeanWind
+from turbgen.spec.mean_wind_files import mean_wind_from_options
 
 COMPONENTS = ("u", "v", "w")
 
@@ -38,8 +43,9 @@ class PointSensor:
 
 @dataclass(frozen=True, eq=False)
 class PointSeries:
-    """A constraint file: ``time_s`` (strictly increasing) [s], ``sensors``, ``total_wind`` (u holds U + u'),
-    ``noise_m_s`` [m/s] (None: not given), ``source`` (the file, for messages and the store)."""
+    """A constraint file: ``time_s`` (strictly increasing) [s], ``sensors``, ``total_wind`` (the data hold the mean
+    wind), ``noise_m_s`` [m/s] (None: not given), ``source`` (the file, for messages and the store), ``mean_wind``
+    (the mean wind in the data: the file's, else the exports' default; None without ``total_wind``)."""
 
     name: str
     time_s: np.ndarray
@@ -47,6 +53,14 @@ class PointSeries:
     total_wind: bool
     noise_m_s: float | None
     source: str
+    mean_wind: MeanWind | None = None
+
+    def __post_init__(self):
+        if self.total_wind and self.mean_wind is None:  # the exports' default mean wind
+            object.__setattr__(self, "mean_wind", MeanWind())
+        if not self.total_wind and self.mean_wind is not None:
+            raise ParameterError(f"constraint file {self.source}: a mean wind describes total-wind data; set "
+                                 "total_wind")
 
 
 def point_series_from_mapping(data, source: str) -> PointSeries:
@@ -70,8 +84,83 @@ def point_series_from_mapping(data, source: str) -> PointSeries:
                 raise ParameterError(f"{where}: {name} {c}_m_s has no value (all missing)")
             series[c] = v
         sensors.append(PointSensor(name, float(s["x_m"]), float(s["y_m"]), s.get("z_m"), s.get("height_m"), series))
-    return PointSeries(data.get("name", Path(source).stem), t, tuple(sensors), bool(data.get("total_wind", False)),
-                       data.get("noise_m_s"), source)  # fmt: skip
+    total = bool(data.get("total_wind", False))
+    return PointSeries(data.get("name", Path(source).stem), t, tuple(sensors), total, data.get("noise_m_s"), source,
+                       _mean_wind(data.get("mean_wind"), total, where, Path(source).parent))  # fmt: skip
+
+
+def _mean_wind(spec, total: bool, where: str, folder: Path) -> MeanWind | None:
+    """The file's ``mean_wind`` (files named relative to the constraint file), the default without one; None without
+    ``total_wind``."""
+    if spec is not None and not total:
+        raise ParameterError(f"{where}: mean_wind describes total-wind data; set total_wind true or drop it")
+    if not total:
+        return None
+    spec = spec or {}
+    profile, history = spec.get("profile"), spec.get("mean_history")
+    if profile is not None and profile.partition(":")[0].strip().lower() == "table":
+        profile = "table:" + str(folder / profile.partition(":")[2].strip())
+    try:
+        wind = mean_wind_from_options(profile, spec.get("veer_deg_per_m"),
+                                      None if history is None else folder / history)
+    except ParameterError as exc:
+        raise ParameterError(f"{where}: mean_wind: {exc}") from None
+    return wind or MeanWind()
+
+
+def sensor_fluctuations(f: PointSeries, s: PointSensor, U_m_s: float, hub_height_m: float) -> tuple[dict, float]:
+    """The sensor's series as fluctuations [m/s], and the time-mean of the mean u taken from them [m/s].
+
+    With ``total_wind``, the file's mean wind (:meth:`turbgen.spec.mean_wind.MeanWind.fluctuation_uv`) at the sensor's
+    height and y, at the stored time T + x / U (the time that slice reaches the turbine in a periodic export, as
+    `turbgen lidar --mean-wind` and the exports use it), is taken from u, and from v when the mean wind turns;
+    a value missing in u or v is then missing in both.
+
+    Parameters
+    ----------
+    f : PointSeries
+        The constraint file.
+    s : PointSensor
+        One of its sensors.
+    U_m_s : float
+        The run's mean speed [m/s].
+    hub_height_m : float
+        The run's hub height [m].
+
+    Returns
+    -------
+    tuple of (dict, float)
+        Component -> fluctuation series [m/s] (NaN: missing), and the mean u removed [m/s] (0 without
+        ``total_wind``).
+
+    Raises
+    ------
+    ParameterError
+        When the mean wind turns (veer, history directions) and the sensor lacks u or v, or its height is one the
+        profile does not cover.
+    """
+    if not f.total_wind:
+        return dict(s.series), 0.0
+    where = f"constraint file {f.source}, {s.name}"
+    wind = f.mean_wind
+    height = s.height_m if s.height_m is not None else hub_height_m + s.z_m
+    if wind.turns and ("u" in s.series) != ("v" in s.series):
+        raise ParameterError(f"{where}: the mean wind turns ({wind.describe()}), which mixes u and v: give both for "
+                             "total-wind data")
+    stored = f.time_s + s.x_m / U_m_s
+    u = s.series.get("u", np.zeros_like(stored))
+    v = s.series.get("v")
+    try:
+        fu, fv = wind.fluctuation_uv(u, v, stored, s.y_m, height, U_m_s, hub_height_m)
+        removed = float(np.mean(wind.hub_history(stored, U_m_s)[0]) * wind.speed_ratio(height, hub_height_m))
+    except ParameterError as exc:
+        raise ParameterError(f"{where}: {exc}") from None
+    out = dict(s.series)
+    if "u" in s.series:
+        out["u"] = fu
+    if wind.turns and "v" in s.series:
+        out["v"] = fv
+    return out, removed if "u" in s.series else 0.0
 
 
 def load_point_series(path) -> PointSeries:

@@ -312,6 +312,39 @@ class MeanWind:
             return u, v
         return formulas.rotate_horizontal(u, v, self.veer_deg(h, hub_height_m) + turn)
 
+    def fluctuation_uv(self, u, v, times_s, y_m, heights_m, U_m_s: float, hub_height_m: float):
+        """Fluctuations (u', v') [m/s] from total (u, v): the inverse of :meth:`full_uv`.
+
+        (u, v) turned back by veer(h) + direction(t), then U_hub(t) r(h) + g(t) + s_v(t) (h - h_hub) / D +
+        s_h(t) y / D taken from u (v unchanged without a turn).
+
+        Parameters
+        ----------
+        u, v : array_like
+            Total velocity components [m/s] (v may be None when the mean wind does not turn).
+        times_s, y_m, heights_m : array_like
+            Time at the turbine [s], lateral position [m] (+y left) and height above ground [m], broadcastable
+            with ``u``.
+        U_m_s : float
+            The field's mean speed [m/s].
+        hub_height_m : float
+            Hub height [m].
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            (u', v') [m/s] (v' is ``v`` as given without a turn).
+        """
+        t, h = np.asarray(times_s, dtype=float), np.asarray(heights_m, dtype=float)
+        speed, turn = self.hub_history(t, U_m_s)
+        if self.turns:
+            u, v = formulas.rotate_horizontal(u, v, -(self.veer_deg(h, hub_height_m) + turn))
+        gust, vshear, hshear = self.transient_terms(t)
+        diameter = self.transient.rotor_diameter_m if self.transient is not None else 1.0
+        u = u - speed * self.speed_ratio(h, hub_height_m)
+        u = u - (gust + vshear * (h - hub_height_m) / diameter + hshear * np.asarray(y_m, dtype=float) / diameter)
+        return u, v
+
     def check_record(self, first_s: float, last_s: float) -> None:
         """Refuse a history or transient with times outside the record [first_s, last_s] seen at the turbine.
 
@@ -384,3 +417,30 @@ class MeanWind:
                                                          "rotor_diameter_m", "start_s", "duration_s", "sign")}
             out[key] = list(value) if isinstance(value, tuple) else value
         return out
+
+    @classmethod
+    def from_attrs(cls, attrs: dict) -> "MeanWind":
+        """The MeanWind whose :meth:`to_attrs` is ``attrs`` (a dataset's or store's record).
+
+        Parameters
+        ----------
+        attrs : dict
+            As written by :meth:`to_attrs`.
+
+        Returns
+        -------
+        MeanWind
+            The same mean wind (validated again).
+
+        Raises
+        ------
+        ParameterError
+            For keys that are not fields, or values outside their ranges.
+        """
+        fields = dict(attrs)
+        unknown = sorted(set(fields) - set(cls.__dataclass_fields__))
+        if unknown:
+            raise ParameterError(f"mean-wind record has unknown keys {', '.join(unknown)}")
+        if fields.get("transient") is not None:
+            fields["transient"] = IecTransient(**fields["transient"])
+        return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in fields.items()})

@@ -1,5 +1,6 @@
 """Mean-wind options as text: ``power:0.2``, ``log:z0=0.03,d=0``, ``table:FILE`` and the CSV files
-of a profile table (z, U [, direction]) and of a hub-height history (t, U [, direction]).
+of a profile table (z, U [, direction]) and of a hub-height history (t, U [, direction]), or the same rows
+given inline (``a,b[,c];a,b[,c]``: the service, which reads no client path).
 
 CSV files: comma- or whitespace-separated numbers, one row per line; lines starting with ``#`` and
 a first line that is not numeric (a header) are skipped.
@@ -40,8 +41,60 @@ def read_columns(path, what: str, names: tuple[str, ...]) -> list[tuple[float, .
         text = Path(path).read_text()
     except (OSError, UnicodeDecodeError) as err:
         raise ParameterError(f"{what} {str(path)!r} cannot be read: {getattr(err, 'strerror', None) or err}") from None
-    rows, header_allowed = [], True
-    for number, line in enumerate(text.splitlines(), 1):
+    return columns_from_lines(text.splitlines(), f"{what} {str(path)!r}", names)
+
+
+def inline_columns(text: str, what: str, names: tuple[str, ...]) -> list[tuple[float, ...]]:
+    """The columns of rows given inline: ``"a,b[,c];a,b[,c];..."`` (the CSV file's rows joined by ';').
+
+    Parameters
+    ----------
+    text : str
+        The rows, separated by ';', numbers by ',' or blanks.
+    what : str
+        What the rows are (for messages), e.g. "profile table".
+    names : tuple of str
+        Column names (for messages).
+
+    Returns
+    -------
+    list of tuple of float
+        The columns (2 or 3).
+
+    Raises
+    ------
+    ParameterError
+        When a row is not numeric, rows differ in length or a row does not hold 2 or 3 values.
+    """
+    return columns_from_lines(text.split(";"), what, names, header=False)
+
+
+def columns_from_lines(lines, where: str, names: tuple[str, ...], header: bool = True) -> list[tuple[float, ...]]:
+    """The columns of CSV lines (``#`` comments and, with ``header``, a non-numeric first line skipped).
+
+    Parameters
+    ----------
+    lines : iterable of str
+        The rows.
+    where : str
+        Where they come from (for messages).
+    names : tuple of str
+        Column names (for messages).
+    header : bool, optional
+        Whether a first non-numeric line is a header to skip (default True).
+
+    Returns
+    -------
+    list of tuple of float
+        The columns (2 or 3).
+
+    Raises
+    ------
+    ParameterError
+        When a row is not numeric, rows differ in length or a row does not hold 2 or 3 values.
+    """
+    rows, header_allowed, unit = [], header, "line" if header else "row"
+    for number, line in enumerate(lines, 1):
         line = line.split("#", 1)[0].strip()
         if not line:
             continue
@@ -50,25 +103,28 @@ def read_columns(path, what: str, names: tuple[str, ...]) -> list[tuple[float, .
             rows.append(tuple(float(f) for f in fields))
         except ValueError:
             if not header_allowed:
-                raise ParameterError(f"{what} {str(path)!r} line {number}: {line!r} is not numeric") from None
+                raise ParameterError(f"{where} {unit} {number}: {line!r} is not numeric") from None
             continue  # a header line
         finally:
             header_allowed = False
         if len(rows[-1]) not in (2, 3) or len(rows[-1]) != len(rows[0]):
-            raise ParameterError(f"{what} {str(path)!r} line {number} has {len(rows[-1])} values; every row holds "
+            raise ParameterError(f"{where} {unit} {number} has {len(rows[-1])} values; every row holds "
                                  f"{', '.join(names[:2])} [, {names[2]}]")
     if not rows:
-        raise ParameterError(f"{what} {str(path)!r} holds no rows of {', '.join(names[:2])} [, {names[2]}]")
+        raise ParameterError(f"{where} holds no rows of {', '.join(names[:2])} [, {names[2]}]")
     return [tuple(c) for c in zip(*rows)]
 
 
-def profile_fields(text: str) -> dict:
+def profile_fields(text: str, inline: bool = False) -> dict:
     """MeanWind fields of a profile option: ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``.
 
     Parameters
     ----------
     text : str
         The option's value.
+    inline : bool, optional
+        ``table:ROWS`` holds the table's rows (``z,U[,dir];...``) instead of a file name (the service reads
+        no client path).
 
     Returns
     -------
@@ -102,14 +158,18 @@ def profile_fields(text: str) -> dict:
             raise ParameterError(f"profile {text!r}: the log law needs z0, e.g. log:z0=0.03")
         return {"profile": "log", "roughness_m": fields["z0"], "displacement_m": fields.get("d", 0.0)}
     if kind == "table" and value:
-        cols = read_columns(value, "profile table", ("z (m)", "U (m/s)", "direction (deg)"))
+        names = ("z (m)", "U (m/s)", "direction (deg)")
+        cols = (inline_columns(value, "profile table", names) if inline
+                else read_columns(value, "profile table", names))
         return {"profile": "table", "table_heights_m": cols[0], "table_speeds_m_s": cols[1],
-                "table_directions_deg": cols[2] if len(cols) == 3 else (), "table_label": Path(value).name}
-    raise ParameterError(f"profile {text!r} is not one of power:ALPHA, log:z0=Z0[,d=D], table:FILE")
+                "table_directions_deg": cols[2] if len(cols) == 3 else (),
+                "table_label": "inline" if inline else Path(value).name}
+    table = "table:z,U[,dir];..." if inline else "table:FILE"
+    raise ParameterError(f"profile {text!r} is not one of power:ALPHA, log:z0=Z0[,d=D], {table}")
 
 
 def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | None = None,
-                           history=None, transient=None) -> MeanWind | None:
+                           history=None, transient=None, *, inline: bool = False) -> MeanWind | None:
     """The MeanWind of the export options, or None when none is given (the exports' default power law).
 
     Parameters
@@ -122,6 +182,8 @@ def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | N
         CSV of t [s], U [m/s] [, direction (deg)] at hub height.
     transient : IecTransient, optional
         An IEC transient to superimpose.
+    inline : bool, optional
+        The table (``table:ROWS``) and the history hold their rows (``a,b[,c];...``), not file names.
 
     Returns
     -------
@@ -135,13 +197,15 @@ def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | N
     """
     if profile is None and veer_deg_per_m is None and history is None and transient is None:
         return None
-    fields = profile_fields(profile) if profile is not None else {}
+    fields = profile_fields(profile, inline) if profile is not None else {}
     if veer_deg_per_m is not None:
         fields["veer_deg_per_m"] = veer_deg_per_m
     if history is not None:
-        cols = read_columns(history, "mean history", ("t (s)", "U (m/s)", "direction (deg)"))
+        names = ("t (s)", "U (m/s)", "direction (deg)")
+        cols = inline_columns(history, "mean history", names) if inline else read_columns(history, "mean history", names)
         fields.update(history_times_s=cols[0], history_speeds_m_s=cols[1],
-                      history_directions_deg=cols[2] if len(cols) == 3 else (), history_label=Path(history).name)
+                      history_directions_deg=cols[2] if len(cols) == 3 else (),
+                      history_label="inline" if inline else Path(history).name)
     if transient is not None:
         fields["transient"] = transient
     return MeanWind(**fields)

@@ -24,8 +24,8 @@ from turbgen.export.inflowwind_file import inflowwind_path
 from turbgen.runs.models import MODELS, get_model
 from turbgen.spec.dlc import DlcSet
 from turbgen.store.paths import check_output_path
-from turbgen.sweep.manifest import _atomic_write
-from turbgen.sweep.plan import PlannedRun, SweepPlan, check_plan_memory, grid_mapping, _check_grid_keys
+from turbgen.sweep.manifest import atomic_write
+from turbgen.sweep.plan import PlannedRun, SweepPlan, check_grid_keys, check_plan_memory, grid_mapping
 from turbgen.sweep.scheduler import check_scheduler_address
 
 DLC_MANIFEST = "dlc_manifest.csv"
@@ -63,7 +63,7 @@ def make_dlc_plan(dlc: DlcSet, *, out, model: str = "kaimal", grid=None, chunk_t
         than is available here.
     """
     check_choice("model", model, tuple(MODELS))
-    grid = _check_grid_keys("grid", grid)
+    grid = check_grid_keys("grid", grid)
     if scheduler:
         check_scheduler_address(scheduler)
     check_output_path(out, "out (sweep directory)", create_parents=True)
@@ -125,7 +125,7 @@ def export_dlc(plan: SweepPlan, dlc: DlcSet, result, fmt: str = "bts") -> Path:
     writer = csv.DictWriter(buf, fieldnames=DLC_COLUMNS, lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
-    _atomic_write(out / DLC_MANIFEST, buf.getvalue())
+    atomic_write(out / DLC_MANIFEST, buf.getvalue())
     return out / DLC_MANIFEST
 
 

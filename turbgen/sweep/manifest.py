@@ -98,7 +98,21 @@ def _umask() -> int:
     return 0o022
 
 
-def _atomic_write(path: Path, text: str) -> None:
+def atomic_write(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` under a temporary name in its folder, fsync it, then rename it into place.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file to (re)place.
+    text : str
+        Its content.
+
+    Raises
+    ------
+    OSError
+        When the file cannot be written; the temporary file is removed and ``path`` is untouched.
+    """
     # a temporary name of this process ('.NAME.tmp-PID-...': removed by the next sweep if we are killed),
     # and the mode an ordinary file gets (0644 under umask 022), like the stores beside it
     fd, tmp = tempfile.mkstemp(prefix=f"{temp_prefix(path)}{os.getpid()}-", dir=path.parent)
@@ -173,8 +187,8 @@ def write_manifest(directory: str | Path, sweep: dict, records: list[dict]) -> N
         "counts": counts,
         "runs": records,
     }
-    _atomic_write(d / MANIFEST_JSON, json.dumps(doc, indent=1, sort_keys=False) + "\n")
-    _atomic_write(d / MANIFEST_CSV, _csv_text(records))
+    atomic_write(d / MANIFEST_JSON, json.dumps(doc, indent=1, sort_keys=False) + "\n")
+    atomic_write(d / MANIFEST_CSV, _csv_text(records))
 
 
 def read_manifest(directory: str | Path) -> dict | None:

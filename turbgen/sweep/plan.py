@@ -248,7 +248,26 @@ def _unique(name: str, values) -> tuple:
     return values
 
 
-def _check_grid_keys(where: str, opts: Mapping | None) -> dict:
+def check_grid_keys(where: str, opts: Mapping | None) -> dict:
+    """A copy of the grid options ``opts`` (None: empty) after refusing keys outside GRID_KEYS.
+
+    Parameters
+    ----------
+    where : str
+        What the options belong to (for the message), e.g. "grid" or a model name.
+    opts : Mapping, optional
+        Grid option -> value.
+
+    Returns
+    -------
+    dict
+        The options.
+
+    Raises
+    ------
+    ParameterError
+        Naming the unknown keys and the allowed ones.
+    """
     opts = dict(opts or {})
     unknown = sorted(set(opts) - set(GRID_KEYS))
     if unknown:
@@ -323,8 +342,8 @@ def make_plan(
                        "runs (models x presets x speeds x seeds)")  # fmt: skip
     speeds = _unique("speeds", (check_wind_speed(u) for u in speeds))
     seeds = _unique("seeds", (ranges.check("seed", s) for s in seeds))
-    grid = _check_grid_keys("grid", grid)
-    model_grid = {m: _check_grid_keys(m, g) for m, g in (model_grid or {}).items() if g}
+    grid = check_grid_keys("grid", grid)
+    model_grid = {m: check_grid_keys(m, g) for m, g in (model_grid or {}).items() if g}
     for m in model_grid:
         if m not in MODELS:
             raise ParameterError(f"grid table {m!r} is not one of {', '.join(MODELS)}")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 from functools import partial
 from pathlib import Path
@@ -21,23 +22,46 @@ EXPORT_FORMATS = ("bts", "wnd", "evo", "hawc2", "mt4d", "hdf5")
 
 @router.get("/runs/{rid}/export")
 def export(rid: str, format: str, http: Request, plane: int | None = None, drop_below_ground: bool = False,
+           hub_height: float | None = None, shear_exponent: float | None = None, profile: str | None = None,
+           veer: float | None = None, mean_history: str | None = None, transient: str | None = None,
+           iec_class: str | None = None, rotor_diameter: float | None = None, transient_start: float = 10.0,
+           transient_sign: str = "+", tower: bool = False, periodic: bool = True, runner_files: bool = False,
            store: Path = Depends(complete_store), state: ServiceState = Depends(get_state)):  # fmt: skip
     """The store exported (made on first request, cached); several files come as one .zip.
 
-    ``drop_below_ground`` drops the grid rows at or below the ground (a run with a low hub height), as
-    `turbgen export --drop-below-ground`; without it such a run is refused (422).
+    The keys are `turbgen export`'s options (the same checks, one mean-wind definition; a bad value is a 422):
+    ``drop_below_ground`` drops the grid rows at or below the ground (a run with a low hub height; without it such a
+    run is refused), ``hub_height`` [m], ``shear_exponent``, ``profile`` (``power:ALPHA``, ``log:z0=Z0[,d=D]`` or
+    ``table:z,U[,dir];z,U[,dir];...``: the table's rows inline), ``veer`` [deg/m], ``mean_history``
+    (``t,U[,dir];...`` inline), ``transient`` (EOG, EDC, ECD, EWS-V, EWS-H) with ``iec_class``, ``rotor_diameter``
+    [m], ``transient_start`` [s], ``transient_sign`` (+/-), ``tower``, ``periodic``, ``runner_files`` (the
+    InflowWind input file and HAWC2 block in the .zip; default false).
     """
     if format not in EXPORT_FORMATS:
         raise ParameterError(f"format: {format!r} is not one of {', '.join(EXPORT_FORMATS)}")
-    from turbgen.export import ExportRequest
+    from turbgen.export.options import ExportOptions, export_request
 
-    request = ExportRequest(plane=plane, drop_below_ground=drop_below_ground,
-                            source_label=f"/runs/{rid}/store")  # not the catalog's path here  # fmt: skip
-    key = format + ("" if plane is None else f"-plane{plane}") + ("-above-ground" if drop_below_ground else "")
-    final = state.catalog.run_dir(rid) / "exports" / key
+    opts = ExportOptions(plane=plane, hub_height_m=hub_height, shear_exponent=shear_exponent, profile=profile,
+                         veer_deg_per_m=veer, mean_history=mean_history, transient=transient, iec_class=iec_class,
+                         rotor_diameter_m=rotor_diameter, transient_start_s=transient_start,
+                         transient_sign=transient_sign, tower=tower, periodic=periodic,
+                         drop_below_ground=drop_below_ground, runner_files=runner_files)
+    request = export_request(store, format, opts, inline=True,
+                             source_label=f"/runs/{rid}/store")  # not the catalog's path here  # fmt: skip
+    final = state.catalog.run_dir(rid) / "exports" / _export_key(format, opts)
     cached_product(state, http, rid, final, Path.is_dir, partial(build_export, store, rid, format, request))
     (single,) = [p for p in final.iterdir() if not p.name.startswith(".")]
     return FileResponse(single, filename=single.name, media_type="application/octet-stream")
+
+
+def _export_key(fmt: str, opts) -> str:
+    """The cached export's folder name: format, plane, above-ground, then a digest of any other option given."""
+    other = {k: v for k, v in opts.given().items() if k not in ("plane", "drop_below_ground", "runner_files")}
+    if opts.runner_files:  # the service's default is False (the command line's True)
+        other["runner_files"] = True
+    digest = hashlib.sha256(json.dumps(other, sort_keys=True).encode()).hexdigest()[:12] if other else ""
+    return (fmt + ("" if opts.plane is None else f"-plane{opts.plane}")
+            + ("-above-ground" if opts.drop_below_ground else "") + (f"-o{digest}" if digest else ""))
 
 
 def _validation_dir(state: ServiceState, request: Request, rid: str, store: Path) -> Path:
