@@ -97,7 +97,8 @@ def _dask_client(scheduler, workers: int):
               "of --threads single-threaded workers sharing --memory with this process.")  # fmt: skip
 @click.option("--constrain", "constrain", multiple=True, type=click.Path(),
               help="Condition the field on the measurements of FILE: point time series (JSON, "
-              "schemas/constraints.schema.json) or a `turbgen lidar --out` dataset; repeatable. The field is a "
+              "schemas/constraints.schema.json), a `turbgen lidar --out` dataset or a line-of-sight CSV file; "
+              "repeatable. The field is a "
               "sample of the model conditioned on them (Hoffman & Ribak 1991).")  # fmt: skip
 @click.option("--noise", type=float, help="With --constrain: measurement-noise sigma [m/s] >= 0 of every value "
               "(default: each file's noise_m_s, else 0 = the field passes through the data).")  # fmt: skip

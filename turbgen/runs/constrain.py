@@ -351,7 +351,8 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
 
 
 def load_constraint(path):
-    """A constraint file: a ``turbgen lidar --out`` dataset (a directory with v_los) or a point-series JSON file.
+    """A constraint file: a ``turbgen lidar --out`` dataset (a directory with v_los), a line-of-sight CSV file
+    (turbgen.lidar.los_csv) or a point-series JSON file.
 
     Raises
     ------
@@ -359,9 +360,12 @@ def load_constraint(path):
         If the file is not readable or does not match its format.
     """
     from turbgen.lidar.dataset import is_lidar_dataset, read_dataset
+    from turbgen.lidar.los_csv import is_los_csv, read_los_csv
     from turbgen.spec.constraints import load_point_series
 
-    return read_dataset(path) if is_lidar_dataset(path) else load_point_series(path)
+    if is_lidar_dataset(path):
+        return read_dataset(path)
+    return read_los_csv(path) if is_los_csv(path) else load_point_series(path)
 
 
 def describe_constraints(record: dict) -> list[str]:

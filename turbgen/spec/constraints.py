@@ -86,10 +86,10 @@ def point_series_from_mapping(data, source: str) -> PointSeries:
         sensors.append(PointSensor(name, float(s["x_m"]), float(s["y_m"]), s.get("z_m"), s.get("height_m"), series))
     total = bool(data.get("total_wind", False))
     return PointSeries(data.get("name", Path(source).stem), t, tuple(sensors), total, data.get("noise_m_s"), source,
-                       _mean_wind(data.get("mean_wind"), total, where, Path(source).parent))  # fmt: skip
+                       mean_wind_spec(data.get("mean_wind"), total, where, Path(source).parent))  # fmt: skip
 
 
-def _mean_wind(spec, total: bool, where: str, folder: Path) -> MeanWind | None:
+def mean_wind_spec(spec, total: bool, where: str, folder: Path) -> MeanWind | None:
     """The file's ``mean_wind`` (files named relative to the constraint file), the default without one; None without
     ``total_wind``."""
     if spec is not None and not total:

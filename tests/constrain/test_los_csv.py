@@ -1,0 +1,116 @@
+"""Line-of-sight data as a plain CSV file (turbgen.lidar.los_csv): the same constraint as the dataset it was written
+from, and one-line refusals of malformed files."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from turbgen.cli import cli
+from turbgen.errors import ParameterError
+from turbgen.lidar.dataset import read_dataset
+from turbgen.lidar.los_csv import read_los_csv
+from turbgen.runs.constrain import place
+from turbgen.spec.mann import MannRun
+from turbgen.store import open_store
+
+LIDAR = {"name": "small", "kind": "pulsed", "mount": "nacelle", "ranges_m": [20, 40], "beam_rate_hz": 1.0,
+         "rotor_radius_m": 10, "azimuth_deg": [10, -10], "elevation_deg": [5, -5], "fwhm_m": 4}  # fmt: skip
+GRID = ["--nt", "256", "--ny", "8", "--nz", "8", "--dy", "5", "--planes", "0,20,40", "--threads", "1"]
+HEADER = "# measured by the small lidar\n# lidar = small.json\n# U_m_s = 16\n# total_wind = true\n"
+
+
+def _write_csv(path, v_los, time_s, header=HEADER, drop=()):
+    rows = ["time_s,beam,gate,v_los_m_s"]
+    for s in range(v_los.shape[0]):
+        for b in range(v_los.shape[1]):
+            for g in range(v_los.shape[2]):
+                if (s, b, g) not in drop:
+                    rows.append(f"{float(time_s[s, b])!r},{b},{g},{float(v_los[s, b, g])!r}")
+    path.write_text(header + "\n".join(rows) + "\n")
+
+
+@pytest.fixture(scope="module")
+def record(tmp_path_factory):
+    d = tmp_path_factory.mktemp("csv")
+    (d / "small.json").write_text(json.dumps(LIDAR))
+    r = CliRunner()
+    for args in (["mann", *GRID, "--seed", "1", "--out", str(d / "truth.zarr")],
+                 ["lidar", "run", str(d / "truth.zarr"), "--lidar", str(d / "small.json"), "--rotor-radius", "10",
+                  "--mean-wind", "--out", str(d / "truth_lidar.zarr")]):  # fmt: skip
+        res = r.invoke(cli, args, prog_name="turbgen")
+        assert res.exit_code in (0, 1), res.output  # lidar run: 1 = its coherence verdict, not an error
+    data = read_dataset(d / "truth_lidar.zarr")
+    _write_csv(d / "los.csv", data.v_los, data.time_s)
+    return d, data
+
+
+def test_csv_places_the_same_streams_and_data_as_the_dataset(record):
+    d, data = record
+    run = MannRun.from_mapping({"grid": {"nt": 256, "dt_s": 0.5, "x_m": [0.0, 20.0, 40.0], "ny": 8, "nz": 8,
+                                         "dy_m": 5.0}})  # fmt: skip
+    a, b = place(run, [data]), place(run, [read_los_csv(d / "los.csv")])
+    np.testing.assert_array_equal(a.data, b.data)
+    for name in ("plane", "term_stream", "term_component", "term_iy", "term_iz", "term_shift", "term_weight", "offset"):
+        np.testing.assert_array_equal(getattr(a.streams, name), getattr(b.streams, name))
+
+
+def test_field_constrained_by_the_csv_equals_the_dataset_one(record):
+    d, _ = record
+    r = CliRunner()
+    for src, out in (("truth_lidar.zarr", "a.zarr"), ("los.csv", "b.zarr")):
+        res = r.invoke(cli, ["mann", *GRID, "--seed", "2", "--constrain", str(d / src), "--out", str(d / out)],
+                       prog_name="turbgen")  # fmt: skip
+        assert res.exit_code == 0, res.output
+    a, b = open_store(d / "a.zarr"), open_store(d / "b.zarr")
+    for comp in "uvw":
+        np.testing.assert_array_equal(a.read_plane(comp, 2), b.read_plane(comp, 2))
+
+
+def test_missing_samples_are_gaps(record):
+    d, data = record
+    _write_csv(d / "gaps.csv", data.v_los, data.time_s)
+    text = (d / "gaps.csv").read_text().splitlines()
+    text[6] = ",".join(text[6].split(",")[:3]) + ","  # an empty v_los
+    (d / "gaps.csv").write_text("\n".join(text) + "\n")
+    got = read_los_csv(d / "gaps.csv").v_los
+    assert np.isnan(got).sum() == 1 and np.isfinite(got).sum() == data.v_los.size - 1
+
+
+@pytest.mark.parametrize("header, rows_drop, message", [
+    ("# U_m_s = 16\n", (), "the header must give `# lidar"),
+    ("# lidar = small.json\n", (), "the header must give `# U_m_s"),
+    (HEADER + "# colour = red\n", (), "unknown header key 'colour'"),
+    (HEADER.replace("true", "maybe"), (), "total_wind = 'maybe' must be true or false"),
+    (HEADER.replace("U_m_s = 16", "U_m_s = -3"), (), "U_m_s = -3 must be > 0"),
+    (HEADER, ((0, 1, 1),), "every beam and gate needs the same number of scans"),
+])  # fmt: skip
+def test_malformed_files_are_refused_in_one_line(record, tmp_path, header, rows_drop, message):
+    d, data = record
+    (tmp_path / "small.json").write_text(json.dumps(LIDAR))
+    _write_csv(tmp_path / "bad.csv", data.v_los, data.time_s, header=header, drop=rows_drop)
+    with pytest.raises(ParameterError, match=message.replace("(", r"\(")) as exc:
+        read_los_csv(tmp_path / "bad.csv")
+    assert "\n" not in str(exc.value)
+
+
+def test_beam_index_outside_the_lidar_and_unequal_gate_times_are_refused(record, tmp_path):
+    d, data = record
+    (tmp_path / "small.json").write_text(json.dumps(LIDAR))
+    _write_csv(tmp_path / "b.csv", data.v_los, data.time_s)
+    lines = (tmp_path / "b.csv").read_text().splitlines()
+    lines[5] = lines[5].replace(",0,0,", ",7,0,", 1)
+    (tmp_path / "b.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(ParameterError, match=r"beam = 7 is not an index of the lidar's 2 beams \(0 .. 1\)"):
+        read_los_csv(tmp_path / "b.csv")
+    t = data.time_s.copy()
+    _write_csv(tmp_path / "t.csv", data.v_los, t)
+    lines = (tmp_path / "t.csv").read_text().splitlines()
+    first = lines[5].split(",")  # scan 0, beam 0, gate 0: another time than gate 1
+    lines[5] = ",".join([str(float(first[0]) + 0.25), *first[1:]])
+    (tmp_path / "t.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(ParameterError, match="the gates of beam 0 are not measured at the same times"):
+        read_los_csv(tmp_path / "t.csv")
