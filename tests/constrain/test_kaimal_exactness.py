@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from turbgen.runs.constrain import _measurement_noise
+from turbgen.runs.constrain import measurement_noise
 from turbgen.runs.constrain_kaimal import KaimalPlaced, kaimal_conditioned_planes, kaimal_stream_system
 from turbgen.runs.kaimal import kaimal_generator
 from turbgen.spec.kaimal import KaimalRun
@@ -138,7 +138,7 @@ def test_conditional_sample_is_prior_sample_plus_dense_update(prior):
     sample = _field(planes, g)
     gen = kaimal_generator(run, workers=1)
     u_s = _field(((c, ix, p) for c in COMPONENTS for ix, p in gen.component_planes(c)), g)
-    eps = _measurement_noise(run, placed).ravel()[obs]
+    eps = measurement_noise(run, placed).ravel()[obs]
     expected = u_s + gain @ (data.ravel()[obs] - h @ u_s - eps)
     np.testing.assert_allclose(sample, expected, atol=1e-5 * np.abs(expected).max())
     assert np.abs(sample - u_s).max() > 0.1  # the update is not negligible

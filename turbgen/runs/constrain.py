@@ -185,7 +185,7 @@ def placed_streams(run, files: list, noise_m_s: float | None = None) -> list[Pla
     return placed
 
 
-def _measurement_noise(run: MannRun, placed: PlacedData) -> np.ndarray:
+def measurement_noise(run: MannRun, placed: PlacedData) -> np.ndarray:
     """eps_s ~ N(0, R) (M, nt), from its own stream keyed by the run's seed (the same on every machine)."""
     rng = np.random.Generator(np.random.SFC64(np.random.SeedSequence((run.seed, _NOISE_KEY))))
     return rng.standard_normal(placed.data.shape) * placed.noise_m_s[:, None]
@@ -232,7 +232,7 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
     gen = MannSnapshots(stencil, g.ny, g.nz, default_threads(threads))
     measured = eps = None
     if not conditional_mean:
-        measured, eps = _unconstrained_measurement(run, gen, placed), _measurement_noise(run, placed)
+        measured, eps = _unconstrained_measurement(run, gen, placed), measurement_noise(run, placed)
     x, report = solve_constraints(cov, placed, measured, eps)
     frozen = stencil.inv_tau is None  # every plane is the same snapshot, and so is its correction
     wanted = [0] if frozen else list(range(g.nx))
@@ -264,8 +264,10 @@ def correction_disk_bytes(run: MannRun) -> int:
     return CorrectionScratch.nbytes(((1 if frozen else g.nx), 3, g.nt // 2 + 1, g.ny, g.nz))
 
 
-def _record(files, placed: PlacedData, report: cond.SolveReport, remeasured: np.ndarray,
-            conditional_mean: bool) -> dict:  # fmt: skip
+def constraint_record(files, placed: PlacedData, report: cond.SolveReport, remeasured: np.ndarray,
+                      conditional_mean: bool) -> dict:  # fmt: skip
+    """The store's ``constraints`` record: the data on the grid, geometry, noise, the solver's report and the
+    residual ``remeasured`` - data at the observed measurements [m/s] (Mann and Kaimal runs alike)."""
     observed = np.isfinite(placed.data)
     resid = (remeasured - placed.data)[observed]
     return {
@@ -340,7 +342,7 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
             total, squares = writer.write(comp, ix, value, squares=True)
             sums[comp][0] += total
             sums[comp][1] += squares
-        record = _record(files, placed, report, remeasured, conditional_mean)
+        record = constraint_record(files, placed, report, remeasured, conditional_mean)
         writer.add_attrs(constraints=record)
     n = g.nt * g.nx * g.ny * g.nz
     summary = {"path": str(out), "seconds": time.perf_counter() - t_start, "constraints": record}

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.resources import require_memory
-from turbgen.runs.constrain import PlacedData, _measurement_noise, _record, combine_streams, placed_streams
+from turbgen.runs.constrain import PlacedData, combine_streams, constraint_record, measurement_noise, placed_streams
 from turbgen.runs.kaimal import kaimal_generator, memory_needed, store_attrs
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import create_store
@@ -123,7 +123,7 @@ def kaimal_conditioned_planes(run: KaimalRun, placed: KaimalPlaced, cov: np.ndar
     g = run.grid
     measured = eps = None
     if not conditional_mean:
-        measured, eps = _unconstrained_measurement(run, placed, threads), _measurement_noise(run, placed)
+        measured, eps = _unconstrained_measurement(run, placed, threads), measurement_noise(run, placed)
     x, report = kaimal_solve(cov, placed, measured, eps)
     gen = kaimal_generator(run, workers=threads)
     prior = kaimal_generator(run, workers=1)  # its samplers for C H^T x (the field's generator keeps its own report)
@@ -206,7 +206,7 @@ def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float
             total, squares = writer.write(comp, ix, value, squares=True)
             sums[comp][0] += total
             sums[comp][1] += squares
-        record = _record(files, placed, report, remeasured, conditional_mean)
+        record = constraint_record(files, placed, report, remeasured, conditional_mean)
         record["record_mean_removed_m_s"] = [float(v) for v in placed.record_mean_m_s]
         writer.add_attrs(synthesis_report=gen.report, constraints=record)
     n = g.nt * g.nx * g.ny * g.nz
