@@ -141,3 +141,21 @@ def test_dependent_zero_noise_measurements_are_refused(frozen):
     with pytest.raises(ParameterError, match="mast.json u, copy.json u are linearly dependent"):
         check_singular(stream_covariance(stencil, twice, times, np.zeros(2)), twice.names)
     check_singular(stream_covariance(stencil, s, times, np.zeros(3)), s.names)  # independent: no error
+
+
+@pytest.mark.parametrize("scanned", [False, True])
+def test_thread_count_does_not_change_a_bit(evolving, scanned, monkeypatch):
+    # slab groups run concurrently and are summed in slab order; groups of 2 slabs give several groups here
+    import turbgen.synthesis.conditioning as cond
+
+    monkeypatch.setattr(cond, "SLAB_GROUP", 2)
+    stencil, times, _ = evolving
+    streams = _streams(3, scanned)
+    one, two = (cond.stream_covariance(stencil, streams, times, np.full(3, 0.01), threads=t) for t in (1, 2))
+    np.testing.assert_array_equal(one, two)
+    w = np.random.default_rng(5).normal(size=(3, BOX.nt // streams.decimation))
+    blocks = [[b for _, b in cond.correction_blocks(stencil, streams, w, times, [0, 1, 2], NY, NZ, threads=t)]
+              for t in (1, 2)]  # fmt: skip
+    assert len(blocks[0]) > 1
+    for a, b in zip(*blocks):
+        np.testing.assert_array_equal(a, b)

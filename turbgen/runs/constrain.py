@@ -191,11 +191,13 @@ def measurement_noise(run: MannRun, placed: PlacedData) -> np.ndarray:
     return rng.standard_normal(placed.data.shape) * placed.noise_m_s[:, None]
 
 
-def stream_system(run: MannRun, stencil, placed: PlacedData) -> np.ndarray:
-    """The per-frequency matrices of S = H C H^T + R (turbgen.synthesis.conditioning.stream_covariance).
+def stream_system(run: MannRun, stencil, placed: PlacedData, threads: int | None = None) -> np.ndarray:
+    """The per-frequency matrices of S = H C H^T + R (turbgen.synthesis.conditioning.stream_covariance), ``threads``
+    slab groups at once (default: the machine's).
 
     Raises ParameterError when zero-noise measurements are linearly dependent (naming them)."""
-    cov = cond.stream_covariance(stencil, placed.streams, run.plane_times_s(), placed.noise_m_s**2)
+    cov = cond.stream_covariance(stencil, placed.streams, run.plane_times_s(), placed.noise_m_s**2,
+                                 default_threads(threads))  # fmt: skip
     if np.any(placed.noise_m_s == 0):
         cond.check_singular(cov, placed.streams.names)
     return cov
@@ -241,7 +243,7 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
     def planes():
         with CorrectionScratch(scratch_dir, (len(wanted), 3, box.nk1, g.ny, g.nz)) as scratch:
             for slabs, block in cond.correction_blocks(stencil, placed.streams, x, run.plane_times_s(), wanted, g.ny,
-                                                       g.nz):  # fmt: skip
+                                                       g.nz, gen.threads):  # fmt: skip
                 scratch.write(slabs, block)
             if conditional_mean:
                 source = ((ix, comp, None) for ix in range(g.nx) for comp in COMPONENTS)
@@ -331,7 +333,7 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     require_disk(Path(out), correction_disk_bytes(run) + store_bytes, "the constrained Mann run (its store and the "
                  "correction's scratch file)", "free space or choose another `out`")  # fmt: skip
     stencil = build_mann_stencil(run, cache_dir)
-    cov = stream_system(run, stencil, placed)
+    cov = stream_system(run, stencil, placed, threads)
     report, planes = conditioned_planes(run, stencil, placed, cov, Path(out).absolute().parent,
                                         conditional_mean=conditional_mean, threads=threads)  # fmt: skip
     remeasured = np.zeros(placed.data.shape)

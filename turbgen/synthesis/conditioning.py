@@ -28,7 +28,10 @@ into the (k2, k3) spectrum through the adjoint of the terms, multiplied by rho P
 
 from __future__ import annotations
 
+import queue
+from collections import deque
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -235,7 +238,7 @@ def _direction_pairs(n_dir: int) -> np.ndarray:
     return out
 
 
-def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var) -> np.ndarray:
+def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var, threads: int = 1) -> np.ndarray:
     """The per-frequency matrices S_j (nt/q, M, M) complex128 [m^2 s^-2 times nt] of the block-circulant S.
 
     Parameters
@@ -261,25 +264,59 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
     dir_pair = _direction_pairs(len(keys.directions))
     lags, pair_class = _lag_classes(np.asarray(times_s, dtype=float), streams.plane)
     doff = 2j * np.pi * (streams.offset[:, None] - streams.offset[None, :]) / nt
-    out = np.zeros((n_dec, m, m), complex)
-    full = np.empty((m, m), complex)
     n_pairs = len(keys.directions) * (len(keys.directions) + 1) // 2
-    transform = _GroupFFT((len(lags), n_pairs, box.nyp, box.nzp), real=True)
-    for s0 in range(0, box.nk1, SLAB_GROUP):
-        slabs = range(s0, min(s0 + SLAB_GROUP, box.nk1))
+
+    def group(transform: _GroupFFT, slabs: range) -> list[np.ndarray]:  # L_i of the group's slabs
         spectra = _lag_spectra(stencil, slabs, lags, keys.directions, transform)
         amp = np.empty((len(slabs), len(keys.dir)), complex)
         kernels.key_amplitudes(keys.term_key, streams.term_shift, keys.term_weight, np.array(slabs, np.int64), nt,
                                amp)  # fmt: skip
-        for b, i in enumerate(slabs):
+        fulls = [np.empty((m, m), complex) for _ in slabs]
+        for b in range(len(slabs)):
             kernels.pair_sums(amp[b], keys.bounds, keys.dir, keys.iy, keys.iz, dir_pair, pair_class, spectra[b],
-                              full)  # fmt: skip
+                              fulls[b])  # fmt: skip
+        return fulls
+
+    out = np.zeros((n_dec, m, m), complex)
+    groups = [range(s0, min(s0 + SLAB_GROUP, box.nk1)) for s0 in range(0, box.nk1, SLAB_GROUP)]
+    workspace = lambda: _GroupFFT((len(lags), n_pairs, box.nyp, box.nzp), real=True)  # noqa: E731
+    for slabs, fulls in zip(groups, _ordered_map(group, groups, threads, workspace)):
+        for i, full in zip(slabs, fulls):  # summed in slab order: the same bits for any thread count
             full *= nt
             out[i % n_dec] += full * np.exp(i * doff) / q
             if 0 < i and 2 * i != nt:  # the mirror frequency nt - i: L_(nt - i) = conj L_i
                 out[(nt - i) % n_dec] += full.conj() * np.exp((nt - i) * doff) / q
     out[:, np.arange(m), np.arange(m)] += np.asarray(noise_var, dtype=float)
     return out
+
+
+def _ordered_map(fn, items: list, threads: int, workspace) -> Iterator:
+    """fn(ws, item) for every item, in order; up to ``threads`` items at once, each with a workspace ws of its own
+    (``workspace()``), and at most ``threads`` finished results waiting for the consumer."""
+    if threads <= 1:
+        ws = workspace()
+        for item in items:
+            yield fn(ws, item)
+        return
+    spare: queue.SimpleQueue = queue.SimpleQueue()
+    for _ in range(threads):
+        spare.put(workspace())
+
+    def task(item):
+        ws = spare.get()
+        try:
+            return fn(ws, item)
+        finally:
+            spare.put(ws)
+
+    with ThreadPoolExecutor(threads) as pool:
+        pending: deque = deque()
+        for item in items:
+            pending.append(pool.submit(task, item))
+            if len(pending) > threads:
+                yield pending.popleft().result()
+        while pending:
+            yield pending.popleft().result()
 
 
 def check_singular(cov: np.ndarray, names) -> None:
@@ -360,10 +397,10 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
 
 
 def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
-                      nz: int) -> Iterator[tuple[range, np.ndarray]]:  # fmt: skip
+                      nz: int, threads: int = 1) -> Iterator[tuple[range, np.ndarray]]:  # fmt: skip
     """The yz-transformed, cropped spectra of C H^T w on the planes ``planes_out``, group of slabs by group: yields
-    (slabs, block (P_out, 3, len(slabs), ny, nz) complex64), the block reused by the next group (see
-    :func:`correction_spectra` for all of them at once).
+    (slabs, block (P_out, 3, len(slabs), ny, nz) complex64), ``threads`` groups computed at once (the result does
+    not depend on it; see :func:`correction_spectra` for all of them at once).
 
     Parameters
     ----------
@@ -373,6 +410,8 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
         Relative time x/U [s] of every plane of the run.
     planes_out : sequence of int
         The plane indices wanted.
+    threads : int
+        Slab groups computed at once.
 
     Notes
     -----
@@ -398,28 +437,30 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
     for a in range(m):  # the samples at their stored time steps o_a + m q
         full[a, streams.offset[a] :: q] = weights[a]
     spec_w = np.fft.rfft(full, axis=1)
-    block = np.empty((len(planes_out), 3, SLAB_GROUP, ny, nz), np.complex64)
-    forward = _GroupFFT((len(chain), 3, box.nyp, box.nzp), real=False)
-    backward = _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), real=False, direction="FFTW_BACKWARD")
-    for s0 in range(0, box.nk1, SLAB_GROUP):
-        slabs = np.arange(s0, min(s0 + SLAB_GROUP, box.nk1))
-        grid, _, plan = forward.buffers(len(slabs))
+
+    def group(transforms: tuple[_GroupFFT, _GroupFFT], slabs: range) -> np.ndarray:  # the group's block
+        grid, _, plan = transforms[0].buffers(len(slabs))
         grid[...] = 0.0
-        kernels.scatter_terms(spec_w[:, slabs], streams.term_stream, grid_index, streams.term_shift,
-                              streams.term_weight, slabs, box.nt, grid.reshape(len(slabs), -1))  # fmt: skip
+        index = np.array(slabs, np.int64)
+        kernels.scatter_terms(spec_w[:, index], streams.term_stream, grid_index, streams.term_shift,
+                              streams.term_weight, index, box.nt, grid.reshape(len(slabs), -1))  # fmt: skip
         plan.execute()
         f = grid.reshape(len(slabs), len(chain), 3, -1)
-        g, _, plan = backward.buffers(len(slabs))
+        g, _, plan = transforms[1].buffers(len(slabs))
         for b, i in enumerate(slabs):
-            inv_tau = slab_inv_tau(stencil, int(i))
+            inv_tau = slab_inv_tau(stencil, i)
             rho = (np.ones((len(steps), box.nyp * box.nzp)) if inv_tau is None
                    else np.exp(-steps[:, None] * inv_tau.reshape(1, -1)))  # fmt: skip
-            kernels.chain_correction(f[b], rho, _slab_phi(stencil, int(i)), rows,
-                                     g[b].reshape(len(planes_out), 3, -1))  # fmt: skip
+            kernels.chain_correction(f[b], rho, _slab_phi(stencil, i), rows, g[b].reshape(len(planes_out), 3, -1))
         plan.execute()  # unnormalised: sum_(j, l) e^(+2 pi i (j y / nyp + l z / nzp))
-        part = block[:, :, : len(slabs)]
-        part[...] = np.moveaxis(g[..., :ny, :nz], 0, 2)
-        yield range(int(slabs[0]), int(slabs[-1]) + 1), part
+        return np.moveaxis(g[..., :ny, :nz], 0, 2).astype(np.complex64)
+
+    def workspace() -> tuple[_GroupFFT, _GroupFFT]:
+        return (_GroupFFT((len(chain), 3, box.nyp, box.nzp), real=False),
+                _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), real=False, direction="FFTW_BACKWARD"))
+
+    groups = [range(s0, min(s0 + SLAB_GROUP, box.nk1)) for s0 in range(0, box.nk1, SLAB_GROUP)]
+    yield from zip(groups, _ordered_map(group, groups, threads, workspace))
 
 
 def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
