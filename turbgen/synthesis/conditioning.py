@@ -39,6 +39,7 @@ import pyfftw
 
 from turbgen.errors import ParameterError
 from turbgen.synthesis import conditioning_kernels as kernels
+from turbgen.synthesis.mann_oracle import slab_factor
 from turbgen.synthesis.mann_stencil import MannStencil
 from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_spectrum, slab_weight
 
@@ -215,17 +216,15 @@ def _lag_spectra(stencil: MannStencil, slabs: range, lags: np.ndarray, direction
                  transform: _GroupFFT) -> np.ndarray:  # fmt: skip
     """The real 2-D DFTs (len(slabs), classes, D (D + 1) / 2, nyp, nzp // 2 + 1) of exp(-lag / tau_e) n^T Phi_i n'
     per lag class and direction pair (n, n') (_direction_pairs order); the array is reused by the next call."""
-    box = stencil.box
     first, second = np.triu_indices(len(directions))
     x, out, plan = transform.buffers(len(slabs))
-    for b, i in enumerate(slabs):
-        phi = _slab_phi(stencil, i).reshape(3, 3, box.nyp, box.nzp)
-        x[b, 0] = np.einsum("pc,cdyz,pd->pyz", directions[first], phi, directions[second], optimize=True)
+    for b, i in enumerate(slabs):  # n^T Phi n' = 2 (C^T n) . (C^T n'), C the slab's factor (prior_spectrum)
         inv_tau = slab_inv_tau(stencil, i)
-        if inv_tau is None:
-            x[b, 1:] = x[b, 0]
-        else:
-            np.multiply(x[b, 0][None], np.exp(-lags[:, None, None] * inv_tau[None])[:, None], out=x[b])
+        inv_tau = np.empty(0) if inv_tau is None else inv_tau.reshape(-1)
+        flat = x[b].reshape(len(lags), len(first), -1)
+        kernels.lag_inputs(slab_factor(stencil, i).reshape(3, 3, -1), directions, first, second, lags, inv_tau, flat)
+        if slab_weight(stencil, i) == 1.0:  # symmetrised under k -> -k, as _slab_phi (1/tau_e is even in k)
+            x[b] = 0.5 * (x[b] + np.roll(x[b][..., ::-1, ::-1], 1, axis=(-2, -1)))
     plan.execute()
     return out
 

@@ -105,3 +105,32 @@ def scatter_terms(spec_w, term_stream, grid_index, term_shift, term_weight, slab
         for t in range(len(term_stream)):
             phase = -2.0 * np.pi * ((i * term_shift[t]) % nt) / nt
             grid[b, grid_index[t]] += spec_w[term_stream[t], b] * term_weight[t] * (np.cos(phase) + 1j * np.sin(phase))
+
+
+@numba.njit(nogil=True, cache=True)
+def lag_inputs(factor, directions, first, second, lags, inv_tau, x):
+    """x[l, p, j] = exp(-lags[l] inv_tau[j]) 2 (C^T n_first[p]) . (C^T n_second[p]) at every (k2, k3) point j of a
+    slab: ``factor`` C (3, 3, J) (prior_spectrum: Phi = 2 C C^T), ``directions`` (D, 3), ``inv_tau`` (J,) 1/tau_e
+    [1/s] (empty: frozen turbulence, factor 1), ``x`` (classes, pairs, J) float64. Loops run along j innermost."""
+    n_dir, n_points = directions.shape[0], factor.shape[2]
+    along = np.zeros((n_dir, 3, n_points))
+    for d in range(n_dir):
+        for k in range(3):
+            for c in range(3):
+                w = directions[d, c]
+                if w != 0.0:
+                    for j in range(n_points):
+                        along[d, k, j] += w * factor[c, k, j]
+    psi = np.zeros((len(first), n_points))
+    for p in range(len(first)):
+        for k in range(3):
+            for j in range(n_points):
+                psi[p, j] += 2.0 * along[first[p], k, j] * along[second[p], k, j]
+    rho = np.ones(n_points)
+    for lag in range(len(lags)):
+        if len(inv_tau):
+            for j in range(n_points):
+                rho[j] = np.exp(-lags[lag] * inv_tau[j])
+        for p in range(len(first)):
+            for j in range(n_points):
+                x[lag, p, j] = psi[p, j] * rho[j]
