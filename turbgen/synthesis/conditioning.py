@@ -41,7 +41,7 @@ from turbgen.errors import ParameterError
 from turbgen.synthesis import conditioning_kernels as kernels
 from turbgen.synthesis.mann_oracle import slab_factor
 from turbgen.synthesis.mann_stencil import MannStencil
-from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_spectrum, slab_weight
+from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_weight
 
 CG_TOLERANCE = 1e-10  # relative residual |S x - r| / |r| at which the conjugate gradients stop
 CG_MAX_ITERATIONS = 1000
@@ -109,12 +109,19 @@ def measure(streams: Streams, plane: int, component: int, field: np.ndarray, out
 
 
 def _slab_phi(stencil: MannStencil, i: int) -> np.ndarray:
-    """Phi_i (3, 3, nyp nzp), symmetrised under k -> -k on the k1 = 0 / Nyquist slabs (their real part: see
-    prior_spectrum)."""
-    phi = slab_spectrum(stencil, i)
+    """Phi_i = 2 C C^T (3, 3, nyp nzp) (prior_spectrum.slab_spectrum, elementwise), symmetrised under k -> -k on the
+    k1 = 0 / Nyquist slabs (their real part: see prior_spectrum)."""
+    c = slab_factor(stencil, i).reshape(3, 3, -1)
+    phi = np.empty_like(c)
+    for a in range(3):
+        for b in range(a, 3):
+            phi[a, b] = 2.0 * (c[a, 0] * c[b, 0] + c[a, 1] * c[b, 1] + c[a, 2] * c[b, 2])
+            phi[b, a] = phi[a, b]
     if slab_weight(stencil, i) == 1.0:
-        phi = 0.5 * (phi + np.roll(phi[..., ::-1, ::-1], 1, axis=(-2, -1)))
-    return phi.reshape(3, 3, -1)
+        box = stencil.box
+        grid = phi.reshape(3, 3, box.nyp, box.nzp)
+        phi = (0.5 * (grid + np.roll(grid[..., ::-1, ::-1], 1, axis=(-2, -1)))).reshape(3, 3, -1)
+    return phi
 
 
 LAG_DECIMALS = 9  # plane-time lags |t_p - t_q| equal to 1e-9 s share one lag covariance (evenly spaced gates)
@@ -191,25 +198,41 @@ def _lag_classes(times: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 class _GroupFFT:
-    """Single-threaded FFTW_ESTIMATE plans over the last two axes of a slab group's arrays (one plan per group size,
-    the arrays reused): the same plan, hence the same rounding, whatever the thread count of the run."""
+    """Single-threaded FFTW_ESTIMATE plans over the last two axes of a slab group's arrays (one per group size, the
+    arrays reused): the same plans, hence the same rounding, whatever the thread count of the run. ``keep_z``: a
+    complex transform exact on the columns z < keep_z only (along z on every row, then along y on those columns)."""
 
-    def __init__(self, tail: tuple[int, ...], real: bool, direction: str = "FFTW_FORWARD"):
-        self.tail, self.real, self.direction = tail, real, direction
-        self._plans: dict[int, tuple[np.ndarray, np.ndarray, pyfftw.FFTW]] = {}
+    def __init__(self, tail: tuple[int, ...], real: bool, direction: str = "FFTW_FORWARD", keep_z: int | None = None):
+        self.tail, self.real, self.direction, self.keep_z = tail, real, direction, keep_z
+        self._plans: dict[int, tuple[np.ndarray, np.ndarray, _Plan]] = {}
 
-    def buffers(self, n: int) -> tuple[np.ndarray, np.ndarray, pyfftw.FFTW]:
+    def buffers(self, n: int) -> tuple[np.ndarray, np.ndarray, _Plan]:
         """(input, output, plan) for a group of ``n`` slabs (the output is the input for a complex transform)."""
         if n not in self._plans:
             shape = (n, *self.tail)
+            flags = ("FFTW_ESTIMATE",)
             if self.real:
                 inp = pyfftw.empty_aligned(shape, np.float64)
                 out = pyfftw.empty_aligned((*shape[:-1], shape[-1] // 2 + 1), np.complex128)
+                plans = [pyfftw.FFTW(inp, out, axes=(-2, -1), direction=self.direction, flags=flags, threads=1)]
             else:
                 inp = out = pyfftw.empty_aligned(shape, np.complex128)
-            plan = pyfftw.FFTW(inp, out, axes=(-2, -1), direction=self.direction, flags=("FFTW_ESTIMATE",), threads=1)
-            self._plans[n] = (inp, out, plan)
+                kept = inp if self.keep_z is None else inp[..., : self.keep_z]
+                plans = [pyfftw.FFTW(inp, inp, axes=(-1,), direction=self.direction, flags=flags, threads=1),
+                         pyfftw.FFTW(kept, kept, axes=(-2,), direction=self.direction, flags=flags, threads=1)]
+            self._plans[n] = (inp, out, _Plan(plans))
         return self._plans[n]
+
+
+class _Plan:
+    """FFTW plans executed in turn."""
+
+    def __init__(self, plans: list):
+        self._plans = plans
+
+    def execute(self) -> None:
+        for plan in self._plans:
+            plan.execute()
 
 
 def _lag_spectra(stencil: MannStencil, slabs: range, lags: np.ndarray, directions: np.ndarray,
@@ -450,13 +473,14 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
             inv_tau = slab_inv_tau(stencil, i)
             rho = (np.ones((len(steps), box.nyp * box.nzp)) if inv_tau is None
                    else np.exp(-steps[:, None] * inv_tau.reshape(1, -1)))  # fmt: skip
-            kernels.chain_correction(f[b], rho, _slab_phi(stencil, i), rows, g[b].reshape(len(planes_out), 3, -1))
+            kernels.chain_correction(f[b].view(np.float64), rho, _slab_phi(stencil, i), rows,
+                                     g[b].reshape(len(planes_out), 3, -1).view(np.float64))  # fmt: skip
         plan.execute()  # unnormalised: sum_(j, l) e^(+2 pi i (j y / nyp + l z / nzp))
         return np.moveaxis(g[..., :ny, :nz], 0, 2).astype(np.complex64)
 
     def workspace() -> tuple[_GroupFFT, _GroupFFT]:
-        return (_GroupFFT((len(chain), 3, box.nyp, box.nzp), real=False),
-                _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), real=False, direction="FFTW_BACKWARD"))
+        back = _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), real=False, direction="FFTW_BACKWARD", keep_z=nz)
+        return _GroupFFT((len(chain), 3, box.nyp, box.nzp), real=False), back
 
     groups = [range(s0, min(s0 + SLAB_GROUP, box.nk1)) for s0 in range(0, box.nk1, SLAB_GROUP)]
     yield from zip(groups, _ordered_map(group, groups, threads, workspace))

@@ -69,31 +69,39 @@ def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, lag, o
 
 @numba.njit(nogil=True, cache=True)
 def chain_correction(f, rho, phi, rows, out):
-    """out[r] = Phi sum_q rho_(rows[r] q) f_q per (k2, k3) point: ``f`` (P, 3, J) complex128 the planes' spectra in
-    time order, ``rho`` (P - 1, J) the Ornstein-Uhlenbeck factors between neighbours (their products are the factors
-    between any two planes), ``phi`` (3, 3, J) real symmetric, ``out`` (len(rows), 3, J) complex128.
+    """out[r] = Phi sum_q rho_(rows[r] q) f_q per (k2, k3) point: ``f`` (P, 3, 2 J) float64 the planes' complex
+    spectra in time order as (real, imaginary) pairs, ``rho`` (P - 1, J) the Ornstein-Uhlenbeck factors between
+    neighbours (their products are the factors between any two planes), ``phi`` (3, 3, J) real symmetric, ``out``
+    (len(rows), 3, 2 J) float64 pairs.
 
-    The sum runs forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once."""
-    n_planes, n_points = f.shape[0], f.shape[2]
-    fwd = np.empty((n_planes, 3), np.complex128)
-    bwd = np.empty((n_planes, 3), np.complex128)
-    for j in range(n_points):
+    The sum runs forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once.
+    Real arithmetic along the points innermost (rho and Phi are real)."""
+    n_planes, n_values = f.shape[0], f.shape[2]
+    block = 512  # values per block: the block's planes stay in cache through the three passes
+    fwd = np.empty((n_planes, 3, block))
+    bwd = np.empty((n_planes, 3, block))
+    for v0 in range(0, n_values, block):
+        nv = min(block, n_values - v0)
         for c in range(3):
-            fwd[0, c] = f[0, c, j]
-            bwd[n_planes - 1, c] = f[n_planes - 1, c, j]
+            for v in range(nv):
+                fwd[0, c, v] = f[0, c, v0 + v]
+                bwd[n_planes - 1, c, v] = f[n_planes - 1, c, v0 + v]
         for p in range(1, n_planes):
             for c in range(3):
-                fwd[p, c] = rho[p - 1, j] * fwd[p - 1, c] + f[p, c, j]
+                for v in range(nv):
+                    fwd[p, c, v] = rho[p - 1, (v0 + v) >> 1] * fwd[p - 1, c, v] + f[p, c, v0 + v]
         for p in range(n_planes - 2, -1, -1):
             for c in range(3):
-                bwd[p, c] = rho[p, j] * bwd[p + 1, c] + f[p, c, j]
+                for v in range(nv):
+                    bwd[p, c, v] = rho[p, (v0 + v) >> 1] * bwd[p + 1, c, v] + f[p, c, v0 + v]
         for r in range(len(rows)):
             p = rows[r]
-            s0 = fwd[p, 0] + bwd[p, 0] - f[p, 0, j]
-            s1 = fwd[p, 1] + bwd[p, 1] - f[p, 1, j]
-            s2 = fwd[p, 2] + bwd[p, 2] - f[p, 2, j]
             for c in range(3):
-                out[r, c, j] = phi[c, 0, j] * s0 + phi[c, 1, j] * s1 + phi[c, 2, j] * s2
+                for v in range(nv):
+                    j = (v0 + v) >> 1
+                    out[r, c, v0 + v] = (phi[c, 0, j] * (fwd[p, 0, v] + bwd[p, 0, v] - f[p, 0, v0 + v])
+                                         + phi[c, 1, j] * (fwd[p, 1, v] + bwd[p, 1, v] - f[p, 1, v0 + v])
+                                         + phi[c, 2, j] * (fwd[p, 2, v] + bwd[p, 2, v] - f[p, 2, v0 + v]))  # fmt: skip
 
 
 @numba.njit(nogil=True, cache=True)
