@@ -50,7 +50,7 @@ def synthesis(run) -> None:
     from turbgen.synthesis.mann_stencil import build_stencil, synthesis_box
 
     if run.grid.nx == 1 or run.params.evo_time_s is None:
-        stencil = build_stencil(run.params, synthesis_box(run), on_demand=True)
+        stencil = build_stencil(run.params, synthesis_box(run), storage="on_demand")
     else:
         stencil = build_mann_stencil(run)
     gen = MannSnapshots(stencil, run.grid.ny, run.grid.nz, default_threads(None), buffers=2)

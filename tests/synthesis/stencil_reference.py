@@ -3,7 +3,7 @@
 ``reference_axis_cells`` is the former slab-by-slab ``turbgen.synthesis.mann_cells.axis_cells`` (now batched).
 
 ``reference_unit_factors`` is the former ``turbgen.synthesis.mann_stencil._unit_coefficients`` operation by
-operation; ``reference_coefficients`` applies the energy as ``unit_stencil.apply_energy`` does. The compiled
+operation; ``reference_coefficients`` applies the energy as ``mann_stencil.apply_energy`` does. The compiled
 kernel evaluates the same float64 operations in the same order point by point, except that log, exp and arctan
 come from the C library instead of numpy's SIMD loops (they differ in the last bit of a few per cent of values).
 """

@@ -27,16 +27,31 @@ from turbgen.store.memory import MemoryWriter
 from turbgen.synthesis.mann_spacetime import COMPONENTS, MannSnapshots, snapshot_memory_bytes
 from turbgen.synthesis.mann_stencil import MannStencil, build_stencil, stencil_nbytes, synthesis_box
 from turbgen.synthesis.random_streams import complex_normal
-from turbgen.synthesis.unit_stencil import UnitMannStencil, scale_stencil
 
 _BUILD_SCRATCH = 64 * 2**20  # float64 temporaries of the stencil-building batches (all threads)
 
 
-def build_mann_stencil(run: MannRun, cache_dir: str | Path | None = None) -> MannStencil:
-    """The per-parameter-set part of a run (the same for runs differing only in seed)."""
+def build_mann_stencil(run: MannRun, cache_dir: str | Path | None = None, *, energy: str = "scaled") -> MannStencil:
+    """The stencil of ``run`` in memory: the per-parameter-set part of a run (the same for runs differing only in
+    seed; with ``energy="unit"`` also for runs differing in ae, through MannStencil.scaled).
+
+    synthesis.mann_stencil.build_stencil on the run's synthesis box (without 1/tau_e for one plane), or, with
+    ``cache_dir``, through the stencil cache (turbgen.runs.stencil_cache): the same numbers.
+    """
+    box, evolving = synthesis_box(run), run.grid.nx > 1
     if cache_dir is None:
-        return build_stencil(run.params, synthesis_box(run), evolving=run.grid.nx > 1)
-    return cached_stencil(run.params, synthesis_box(run), cache_dir, evolving=run.grid.nx > 1)
+        return build_stencil(run.params, box, energy=energy, evolving=evolving)
+    return cached_stencil(run.params, box, cache_dir, energy=energy, evolving=evolving)
+
+
+def shared_stencil_key(run: MannRun) -> tuple:
+    """What the unit stencil of ``run`` depends on (hashable): runs with equal keys share it (the sweep)."""
+    return run.params.with_ae(1.0), synthesis_box(run), run.grid.nx > 1
+
+
+def shared_stencil_nbytes(run: MannRun) -> int:
+    """Bytes [B] of the unit stencil of ``run`` (held by a sweep's worker besides the run's own scaled stencil)."""
+    return stencil_nbytes(synthesis_box(run), run.grid.nx > 1 and run.params.evo_time_s is not None, "unit")
 
 
 def _evolving(run: MannRun) -> bool:
@@ -92,26 +107,26 @@ def _touch_while_loading_kernels(gen: MannSnapshots) -> None:
         touched.result()
 
 
-def _checked_stencil(run: MannRun, stencil) -> None:
-    """Refuse a given stencil (MannStencil or UnitMannStencil) built for another run than ``run``."""
+def _checked_stencil(run: MannRun, stencil: MannStencil | None) -> None:
+    """Refuse a given stencil built for another run than ``run`` (a unit stencil: for another but in ae)."""
     if stencil is None:
         return
-    same = stencil.params.with_ae(1.0) == run.params.with_ae(1.0) if isinstance(stencil, UnitMannStencil) else \
-        stencil.params == run.params
-    if not same or stencil.box != synthesis_box(run):
+    unit = stencil.energy == "unit"
+    params = run.params.with_ae(1.0) if unit else run.params
+    if stencil.params != params or stencil.box != synthesis_box(run) or stencil.slab_range != (0, stencil.box.nk1):
         raise ParameterError("the given stencil was built for other parameters or another grid than this run")
     if stencil.inv_tau is None and _evolving(run):
         raise ParameterError("the given stencil was built for one plane (evolving=False); this run evolves planes")
 
 
-def _run_stencil(run: MannRun, stencil, cache_dir) -> MannStencil:
-    """The stencil ``run`` is made with: ``stencil`` (a UnitMannStencil scaled to the run's ae), else one snapshot's
+def _run_stencil(run: MannRun, stencil: MannStencil | None, cache_dir) -> MannStencil:
+    """The stencil ``run`` is made with: ``stencil`` (a unit stencil scaled to the run's ae), else one snapshot's
     computed on demand (each slab is used once), else built (or read from ``cache_dir``)."""
-    if isinstance(stencil, UnitMannStencil):
-        return scale_stencil(stencil, run.params)
-    if stencil is None and cache_dir is None and not _evolving(run):
-        return build_stencil(run.params, synthesis_box(run), on_demand=True)
-    return stencil if stencil is not None else build_mann_stencil(run, cache_dir)
+    if stencil is not None:
+        return stencil.scaled(run.params)
+    if cache_dir is None and not _evolving(run):
+        return build_stencil(run.params, synthesis_box(run), storage="on_demand")
+    return build_mann_stencil(run, cache_dir)
 
 
 def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress: bool) -> dict:
@@ -173,7 +188,7 @@ def run_mann(
     overwrite: bool = False,
     chunk_t: int | None = None,
     progress: bool = False,
-    stencil: MannStencil | UnitMannStencil | None = None,
+    stencil: MannStencil | None = None,
     threads: int | None = None,
     cache_dir: str | Path | None = None,
 ) -> dict:
@@ -181,7 +196,7 @@ def run_mann(
 
     Memory is checked before anything is allocated; planes are written as they are produced;
     an exception (or Ctrl-C) leaves no store at ``out``. ``stencil`` (from build_mann_stencil of a
-    run with the same parameters and grid) skips the stencil computation, a UnitMannStencil (of a run
+    run with the same parameters and grid) skips the stencil computation, a unit stencil (energy "unit", of a run
     differing at most in ae and seed) leaves only its scaling to ae. ``threads`` defaults
     to os.cpu_count() and does not change the field.
     """
@@ -204,7 +219,7 @@ def mann_in_memory(
     run: MannRun,
     *,
     progress: bool = False,
-    stencil: MannStencil | UnitMannStencil | None = None,
+    stencil: MannStencil | None = None,
     threads: int | None = None,
     cache_dir: str | Path | None = None,
 ):

@@ -95,7 +95,7 @@ def mann_factors(k1, k2, k3, beta_half, inv_tau_half, e, arctan, unit, energy, s
     beta_half, written mirrored into ``inv_tau`` (b, nh, nzp); an empty ``inv_tau`` skips it.
 
     ``unit`` True: (f0, f1, f2, f3) = (e, k30, c1, c2) of mann_stencil.slab_factors (float64, ae-free).
-    False: (A, P, Z1, Z2) = (e, k30 e, c1 e, c2 e) ``energy`` ``scale`` as unit_stencil.apply_energy forms
+    False: (A, P, Z1, Z2) = (e, k30 e, c1 e, c2 e) ``energy`` ``scale`` as mann_stencil.apply_energy forms
     them, with A = 0 on the k3 axis; the output's dtype (float32) rounds them.
     """
     nzp = k3.size
