@@ -16,6 +16,7 @@ import turbgen.runs.stencil_cache as stencil_cache
 from turbgen.cli import cli
 from turbgen.store import open_store
 from turbgen.sweep.manifest import read_manifest
+from turbgen.synthesis.mann_oracle import slab_factor
 from turbgen.synthesis.mann_spacetime import mann_box
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil, stencil_key
 from turbgen.theory.params import MannParams
@@ -56,11 +57,12 @@ def test_scaled_unit_stencil_is_bit_identical_to_a_direct_build(ae):
     assert _same_bits(part.coef, direct.coef[:, 16:32])
     unit_part = build_stencil(params, BOX, energy="unit", slabs=(16, 32)).scaled(params)
     assert _same_bits(unit_part.coef, part.coef) and _same_bits(unit_part.inv_tau, part.inv_tau)
+    assert _same_bits(slab_factor(part, 20), slab_factor(direct, 20))  # slab 20 is row 4 of the part
     assert direct.scaled(params) is direct  # a scaled stencil serves its own parameters only
     with pytest.raises(ValueError, match="other parameters"):
         direct.scaled(params.with_ae(2 * ae))
     with pytest.raises(ValueError, match="no coefficients"):
-        unit.coefficients(0, 4)
+        slab_factor(unit, 0)
 
 
 @pytest.mark.parametrize("evo_time_s", [20.0, None])
@@ -70,6 +72,8 @@ def test_a_stencil_computed_on_demand_gives_the_stored_stencils_field(evo_time_s
     on_demand = build_stencil(params, BOX, storage="on_demand")
     assert on_demand.coef is None and on_demand.slab_range == stored.slab_range == (0, BOX.nk1)
     assert _same_bits(on_demand.cell_factor, stored.cell_factor)
+    for i in (0, 1, BOX.nk1 - 1):  # the prior's factor (conditioning, oracle) from either storage
+        assert _same_bits(slab_factor(on_demand, i), slab_factor(stored, i))
     reference = mann_box(stored, 6, 5, seed=3)
     for threads in (1, 2):  # batches computed by whichever thread: the same coefficients
         assert _same_bits(mann_box(on_demand, 6, 5, seed=3, threads=threads), reference)

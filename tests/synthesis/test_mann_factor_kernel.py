@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from stencil_reference import reference_axis_cells, reference_coefficients, reference_unit_factors
-from turbgen.synthesis import mann_cells, mann_stencil
+from turbgen.synthesis import mann_cells, mann_factors, mann_stencil
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil
 from turbgen.theory.eddy_lifetime import TABLE_KL_MAX, TABLE_KL_MIN, LifetimeTable
 from turbgen.theory.params import MannParams
@@ -76,7 +76,7 @@ def test_compiled_spline_is_from_ksq(kind, parameter):
     ksq = np.concatenate([(kl / L) ** 2, [0.0, (TABLE_KL_MIN / L) ** 2, (TABLE_KL_MAX / L) ** 2]])
     with np.errstate(divide="ignore"):
         log_kl_sq = np.log(ksq * (L * L))
-    got = mann_stencil._table_half(table, log_kl_sq, lambda: ksq, L)
+    got = mann_factors._table_half(table, log_kl_sq, lambda: ksq, L)
     assert _same_bits(got, table.from_ksq(ksq, L))
     assert np.isinf(got[-3]) and np.count_nonzero((kl < TABLE_KL_MIN) | (kl >= TABLE_KL_MAX)) > 1000
 
