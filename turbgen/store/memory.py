@@ -40,8 +40,6 @@ class MemoryWriter:
         For attributes create_store would refuse.
     """
 
-    path = None  # no store
-
     def __init__(self, grid: Grid, attrs: dict):
         self.grid = grid
         self._attrs = with_writer_attrs(validated_caller_attrs(attrs, grid), grid)
