@@ -39,6 +39,61 @@ def test_mann_in_memory_is_the_cli_field(tmp_path):
     assert list(tmp_path.iterdir()) == [tmp_path / "cli.zarr"]  # nothing else written by the API
 
 
+def _assert_same_dataset(memory, stored):
+    """The in-memory Dataset is what xarray.open_zarr of the store loads: values to the bit, coordinates, dtypes and
+    every attribute (of the field, its variables and coordinates) but the creation time."""
+    assert dict(memory.sizes) == dict(stored.sizes) and list(memory.data_vars) == list(stored.data_vars)
+    for name in [*memory.data_vars, *memory.coords]:
+        assert memory[name].dims == stored[name].dims and memory[name].dtype == stored[name].dtype, name
+        np.testing.assert_array_equal(memory[name].values, stored[name].values)
+        assert memory[name].attrs == stored[name].attrs, name
+    differing = {k for k in memory.attrs.keys() | stored.attrs.keys() if memory.attrs.get(k) != stored.attrs.get(k)}
+    assert differing <= {"created_utc"}, differing
+
+
+def _no_store(*args, **kwargs):
+    raise AssertionError("the field went through a store")
+
+
+def test_mann_in_memory_is_the_cli_store_without_writing_one(tmp_path, monkeypatch):
+    monkeypatch.setattr(fields, "_through_store", _no_store)
+    api = turbgen.mann(L=30, gamma=2.5, evo=200, seed=4, U=12, ti=0.15, **MANN_SMALL)
+    cli_ds = _cli_field(tmp_path, ["mann", "--L", "30", "--gamma", "2.5", "--evo", "200", "--seed", "4", "--U", "12",
+                                   "--ti", "0.15", *MANN_ARGS])
+    _assert_same_dataset(api, cli_ds.load())
+    frozen = turbgen.mann(evo="frozen", nt=64, ny=8, nz=8, dy=8, planes=[0], pad_yz=1, seed=2)  # on-demand stencil
+    _assert_same_dataset(frozen, _cli_field(tmp_path, ["mann", "--evo", "frozen", "--nt", "64", "--ny", "8", "--nz",
+                                                       "8", "--dy", "8", "--planes", "0", "--pad-yz", "1", "--seed",
+                                                       "2"], "frozen.zarr").load())
+
+
+def test_a_mann_field_that_does_not_fit_with_its_run_goes_through_a_store(monkeypatch):
+    from turbgen.runs.mann import memory_estimate_bytes
+    from turbgen.runs.mann_outofcore import base_bytes
+    from turbgen.spec.mann import MannRun
+
+    run = MannRun.from_mapping({"grid": {"nt": 64, "ny": 8, "nz": 8, "dy_m": 8.0, "x_m": [0, 40, 80]}, "pad_yz": 1})
+    need = memory_estimate_bytes(run, 2) + 3 * run.grid.nbytes_per_component()
+    # base_bytes: what the process holds (resident memory now), so the budget is taken with a margin of 1 MiB
+    assert fields._mann_fits(run, 2, None, need + base_bytes() + 2**20)
+    assert not fields._mann_fits(run, 2, None, need + base_bytes() - 2**20)
+    direct = turbgen.mann(**MANN_SMALL)
+    monkeypatch.setattr(fields, "_mann_fits", lambda *args: False)
+    _assert_same_dataset(direct, turbgen.mann(**MANN_SMALL))
+
+
+def test_kaimal_in_memory_is_the_cli_store_and_falls_back_to_a_store(tmp_path, monkeypatch):
+    args = {"U": 12, "seed": 3, "nt": 128, "ny": 6, "nz": 6, "planes": [0, 50]}
+    with monkeypatch.context() as m:
+        m.setattr(fields, "_through_store", _no_store)
+        api = turbgen.kaimal(**args)
+    cli_ds = _cli_field(tmp_path, ["kaimal", "--U", "12", "--seed", "3", "--nt", "128", "--ny", "6", "--nz", "6",
+                                   "--planes", "0,50"])
+    _assert_same_dataset(api, cli_ds.load())
+    monkeypatch.setattr(fields, "available_memory_bytes", lambda: 1000)  # too little: through a store
+    _assert_same_dataset(api, turbgen.kaimal(**args))
+
+
 def test_mann_preset_config_and_options_merge_as_in_the_cli(tmp_path):
     # run file < preset < keywords: the file's L is replaced by the preset's, the preset's gamma by the keyword
     config = tmp_path / "run.json"

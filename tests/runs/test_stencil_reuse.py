@@ -16,9 +16,9 @@ import turbgen.runs.stencil_cache as stencil_cache
 from turbgen.cli import cli
 from turbgen.store import open_store
 from turbgen.sweep.manifest import read_manifest
+from turbgen.synthesis.mann_oracle import slab_factor
 from turbgen.synthesis.mann_spacetime import mann_box
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil, stencil_key
-from turbgen.synthesis.unit_stencil import build_unit_stencil, scale_stencil
 from turbgen.theory.params import MannParams
 
 BOX = BoxShape(nt=64, dx_m=4.0, nyp=12, nzp=10, dy_m=6.0, dz_m=5.0)
@@ -32,7 +32,7 @@ def _counting(monkeypatch, module, name: str) -> list:
     original = getattr(module, name)
 
     def wrapper(*args, **kwargs):
-        calls.append(args)
+        calls.append(kwargs)
         return original(*args, **kwargs)
 
     monkeypatch.setattr(module, name, wrapper)
@@ -47,26 +47,39 @@ def _same_bits(a: np.ndarray, b: np.ndarray) -> bool:
 def test_scaled_unit_stencil_is_bit_identical_to_a_direct_build(ae):
     params = PARAMS.with_ae(ae)
     direct = build_stencil(params, BOX)
-    scaled = scale_stencil(build_unit_stencil(PARAMS.with_ae(9.0), BOX), params)
+    unit = build_stencil(PARAMS.with_ae(9.0), BOX, energy="unit")
+    assert unit.params.ae == 1.0 and unit.coef.dtype == np.float64 and unit.cell_factor is None
+    scaled = unit.scaled(params)
     assert _same_bits(direct.coef, scaled.coef)
     assert _same_bits(direct.inv_tau, scaled.inv_tau)
     assert _same_bits(direct.cell_factor, scaled.cell_factor) and np.array_equal(direct.cell_index, scaled.cell_index)
     part = build_stencil(params, BOX, slabs=(16, 32))  # out-of-core parts: the same numbers
     assert _same_bits(part.coef, direct.coef[:, 16:32])
+    unit_part = build_stencil(params, BOX, energy="unit", slabs=(16, 32)).scaled(params)
+    assert _same_bits(unit_part.coef, part.coef) and _same_bits(unit_part.inv_tau, part.inv_tau)
+    assert _same_bits(slab_factor(part, 20), slab_factor(direct, 20))  # slab 20 is row 4 of the part
+    assert direct.scaled(params) is direct  # a scaled stencil serves its own parameters only
+    with pytest.raises(ValueError, match="other parameters"):
+        direct.scaled(params.with_ae(2 * ae))
+    with pytest.raises(ValueError, match="no coefficients"):
+        slab_factor(unit, 0)
 
 
 @pytest.mark.parametrize("evo_time_s", [20.0, None])
 def test_a_stencil_computed_on_demand_gives_the_stored_stencils_field(evo_time_s):
     params = MannParams(ae=0.3, length_scale_m=30.0, gamma=3.2, evo_time_s=evo_time_s)
     stored = build_stencil(params, BOX, evolving=False)
-    on_demand = build_stencil(params, BOX, on_demand=True)
+    on_demand = build_stencil(params, BOX, storage="on_demand")
     assert on_demand.coef is None and on_demand.slab_range == stored.slab_range == (0, BOX.nk1)
     assert _same_bits(on_demand.cell_factor, stored.cell_factor)
+    for i in (0, 1, BOX.nk1 - 1):  # the prior's factor (conditioning, oracle) from either storage
+        assert _same_bits(slab_factor(on_demand, i), slab_factor(stored, i))
     reference = mann_box(stored, 6, 5, seed=3)
     for threads in (1, 2):  # batches computed by whichever thread: the same coefficients
         assert _same_bits(mann_box(on_demand, 6, 5, seed=3, threads=threads), reference)
-    with pytest.raises(ValueError, match="whole box"):
-        build_stencil(params, BOX, on_demand=True, slabs=(0, 16))
+    for bad in ({"slabs": (0, 16)}, {"energy": "unit"}):
+        with pytest.raises(ValueError, match="scaled stencil of the whole box"):
+            build_stencil(params, BOX, storage="on_demand", **bad)
 
 
 def test_the_key_ignores_ae_and_nothing_else():
@@ -74,7 +87,7 @@ def test_the_key_ignores_ae_and_nothing_else():
     assert stencil_key(PARAMS, BOX, True) != stencil_key(MannParams(0.3, 31.0, 3.2, evo_time_s=20.0), BOX, True)
     assert stencil_key(PARAMS, BOX, True) != stencil_key(PARAMS, BOX, False)
     with pytest.raises(ValueError, match="other parameters"):
-        scale_stencil(build_unit_stencil(PARAMS, BOX), MannParams(0.3, 31.0, 3.2, evo_time_s=20.0))
+        build_stencil(PARAMS, BOX, energy="unit").scaled(MannParams(0.3, 31.0, 3.2, evo_time_s=20.0))
 
 
 def test_field_scales_with_the_square_root_of_ae():
@@ -88,7 +101,7 @@ def test_field_scales_with_the_square_root_of_ae():
 
 
 def test_disk_cache_serves_every_ae_from_one_build(tmp_path, monkeypatch):
-    builds = _counting(monkeypatch, stencil_cache, "build_unit_stencil")
+    builds = _counting(monkeypatch, stencil_cache, "build_stencil")
     for ae in (0.3, 0.6, 1.2):
         got = stencil_cache.cached_stencil(PARAMS.with_ae(ae), BOX, tmp_path)
         assert _same_bits(got.coef, build_stencil(PARAMS.with_ae(ae), BOX).coef)
@@ -115,14 +128,13 @@ def test_sweep_over_iec_class_at_one_speed_builds_the_stencil_once(tmp_path, mon
     presets = tmp_path / "classes.toml"
     presets.write_text("".join(f'[{name}]\nturb_class = "{c}"\nmann = {{ L = 30.0, gamma = 3.2, evo = 20.0 }}\n'
                                for name, c in CLASSES.items()))  # fmt: skip
-    unit_builds = _counting(monkeypatch, stencil_cache, "build_unit_stencil")
-    direct_builds = _counting(monkeypatch, runs_mann, "build_stencil")
+    builds = _counting(monkeypatch, runs_mann, "build_stencil")  # the sweep's and run_mann's (no stencil cache)
     out = tmp_path / "sweep"
     res = CliRunner().invoke(cli, ["sweep", "--model", "mann", "--presets-file", str(presets),
                                    "--preset", ",".join(CLASSES), "--speeds", "12", "--seeds", "1", *CLI_GRID,
                                    "--scheduler", in_process_scheduler, "--out", str(out)])  # fmt: skip
     assert res.exit_code == 0, res.output
-    assert len(unit_builds) == 1 and direct_builds == []
+    assert [kwargs.get("energy") for kwargs in builds] == ["unit"]  # one unit stencil, no run built its own
     runs = read_manifest(out)["runs"]
     assert len(runs) == 3 and all(r["status"] == "complete" for r in runs)
     aes = {r["parameters"]["ae"] for r in runs}

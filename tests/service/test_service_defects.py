@@ -309,14 +309,14 @@ def test_no_page_loads_anything_from_another_host(token_server):
 
 def test_a_stencil_cache_hit_renews_the_entry_for_the_lru_cap(tmp_path):
     # the cap evicts by modification time: a hit must count as a use, or the most used stencil goes first
-    from turbgen.runs.stencil_cache import cached_unit_stencil
+    from turbgen.runs.stencil_cache import cached_stencil
     from turbgen.synthesis.mann_stencil import BoxShape
     from turbgen.theory.params import MannParams
 
     box = BoxShape(nt=16, dx_m=4.0, nyp=6, nzp=6, dy_m=6.0, dz_m=5.0)
     params = MannParams(ae=0.3, length_scale_m=30.0, gamma=3.2, evo_time_s=20.0)
-    cached_unit_stencil(params, box, tmp_path)
+    cached_stencil(params, box, tmp_path, energy="unit")
     (entry,) = tmp_path.glob("mann-stencil-*.npy")
     os.utime(entry, (1e9, 1e9))  # used long ago
-    cached_unit_stencil(params, box, tmp_path)  # a hit
+    cached_stencil(params, box, tmp_path, energy="unit")  # a hit
     assert entry.stat().st_mtime > time.time() - 60

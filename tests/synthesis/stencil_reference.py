@@ -3,7 +3,7 @@
 ``reference_axis_cells`` is the former slab-by-slab ``turbgen.synthesis.mann_cells.axis_cells`` (now batched).
 
 ``reference_unit_factors`` is the former ``turbgen.synthesis.mann_stencil._unit_coefficients`` operation by
-operation; ``reference_coefficients`` applies the energy as ``unit_stencil.apply_energy`` does. The compiled
+operation; ``reference_coefficients`` applies the energy as ``mann_factors.apply_energy`` does. The compiled
 kernel evaluates the same float64 operations in the same order point by point, except that log, exp and arctan
 come from the C library instead of numpy's SIMD loops (they differ in the last bit of a few per cent of values).
 """
@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from turbgen.synthesis.mann_cells import CELL_K1_FACTOR, CELL_RADIUS, _cell_rule, _gauss_rule
-from turbgen.synthesis.mann_stencil import BoxShape, energy_scale
+from turbgen.synthesis.box_shape import BoxShape
+from turbgen.synthesis.mann_factors import energy_scale
 from turbgen.theory.eddy_lifetime import evolution_lifetime_table, shear_lifetime_table
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams

@@ -12,9 +12,8 @@ import numpy as np
 import pytest
 
 from stencil_reference import reference_axis_cells, reference_coefficients, reference_unit_factors
-from turbgen.synthesis import mann_cells, mann_stencil
+from turbgen.synthesis import mann_cells, mann_factors, mann_stencil
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil
-from turbgen.synthesis.unit_stencil import build_unit_stencil
 from turbgen.theory.eddy_lifetime import TABLE_KL_MAX, TABLE_KL_MIN, LifetimeTable
 from turbgen.theory.params import MannParams
 
@@ -47,8 +46,8 @@ def test_stencil_is_bit_identical_to_the_numpy_reference(params_name, box_name):
     assert _same_bits(got.coef, coef)
     assert (got.inv_tau is None) if inv_tau is None else _same_bits(got.inv_tau, inv_tau)
     factors, unit_inv_tau = reference_unit_factors(params.with_ae(1.0), box, with_tau)
-    unit = build_unit_stencil(params, box)
-    assert _same_bits(unit.factors, factors)
+    unit = build_stencil(params, box, energy="unit")
+    assert _same_bits(unit.coef, factors)
     assert (unit.inv_tau is None) if unit_inv_tau is None else _same_bits(unit.inv_tau, unit_inv_tau.astype(np.float32))
     assert np.count_nonzero(got.coef[:2]) > got.coef[:2].size // 2  # A and P: not trivially equal
 
@@ -77,7 +76,7 @@ def test_compiled_spline_is_from_ksq(kind, parameter):
     ksq = np.concatenate([(kl / L) ** 2, [0.0, (TABLE_KL_MIN / L) ** 2, (TABLE_KL_MAX / L) ** 2]])
     with np.errstate(divide="ignore"):
         log_kl_sq = np.log(ksq * (L * L))
-    got = mann_stencil._table_half(table, log_kl_sq, lambda: ksq, L)
+    got = mann_factors._table_half(table, log_kl_sq, lambda: ksq, L)
     assert _same_bits(got, table.from_ksq(ksq, L))
     assert np.isinf(got[-3]) and np.count_nonzero((kl < TABLE_KL_MIN) | (kl >= TABLE_KL_MAX)) > 1000
 

@@ -56,8 +56,10 @@ def _as_dataset(path: Path) -> xr.Dataset:
     return ds
 
 
-def _in_memory(make, grid, name: str) -> xr.Dataset:
-    """Run ``make(path)`` into a store in a temporary directory and return its field loaded into memory."""
+def _through_store(make, grid, name: str) -> xr.Dataset:
+    """Run ``make(path)`` into a store in a temporary directory and return its field loaded into memory: a field
+    made without ``out`` whose run does not fit in memory together with the field (out of core, or a Kaimal spectrum
+    in a scratch file)."""
     require_memory(3 * grid.nbytes_per_component(), f"the field in memory ({name})",
                    "pass `out` to write a store instead, or lower `nt`, `ny`/`nz` or the number of planes")
     with tempfile.TemporaryDirectory(prefix="turbgen-") as tmp:
@@ -142,7 +144,9 @@ def mann(
     seed : int, optional
         Random seed (>= 0).
     out : str or os.PathLike, optional
-        Store to write. None: the field is returned in memory (no file is left).
+        Store to write. None: the field is returned in memory (no file is left), made straight into the Dataset
+        when the run's one-pass arrays and the field fit ``memory``, else through a temporary store (out of core)
+        loaded back; a constrained field always goes through a temporary store. The same values either way.
     config : str, os.PathLike or Mapping, optional
         A run file (TOML/JSON) or a mapping of its keys; keywords override it.
     preset : str, optional
@@ -230,6 +234,10 @@ def mann(
                                                               preset_keys=keys, replaces=MANN_REPLACES, x_m=x_m))
     if request is None:
         run = MannRun.from_mapping(mapping)
+        if out is None and _mann_fits(run, threads, stencil_cache, memory):
+            from turbgen.runs.mann import mann_in_memory
+
+            return mann_in_memory(run, progress=progress, threads=default_threads(threads), cache_dir=stencil_cache)[0]
         make = _mann_maker(run, overwrite, chunks, threads, stencil_cache, memory, progress)
     else:
         from turbgen.runs.constrain import load_constraints, with_energy_from_data
@@ -238,9 +246,25 @@ def mann(
         run = with_energy_from_data(mapping, list(request.files), request.noise_m_s, stencil_cache)
         make = _constrained_maker(run, request, overwrite, chunks, threads, stencil_cache)
     if out is None:
-        return _in_memory(make, run.grid, run.default_store_name())
+        return _through_store(make, run.grid, run.default_store_name())
     make(Path(out))
     return _as_dataset(Path(out))
+
+
+def _budget(memory) -> int | None:
+    """The memory budget [bytes]: ``memory`` (bytes or a size such as "4GiB") or the available memory (None: unknown)."""
+    budget = parse_size(memory, "`memory`") if isinstance(memory, str) else memory
+    return available_memory_bytes() if budget is None else budget
+
+
+def _mann_fits(run: MannRun, threads, stencil_cache, memory) -> bool:
+    """Whether ``run`` is made in memory straight into its Dataset (turbgen.runs.mann.mann_in_memory): its one-pass
+    arrays, the field and what the process holds (as the out-of-core planner counts them) fit the budget."""
+    from turbgen.runs.mann_outofcore import fits_in_memory
+
+    budget = _budget(memory)
+    field_bytes = 3 * run.grid.nbytes_per_component()
+    return budget is None or fits_in_memory(run, budget - field_bytes, default_threads(threads), stencil_cache is None)
 
 
 def _mann_maker(run: MannRun, overwrite, chunks, threads, stencil_cache, memory, progress):
@@ -250,8 +274,7 @@ def _mann_maker(run: MannRun, overwrite, chunks, threads, stencil_cache, memory,
     from turbgen.runs.mann_outofcore import plan_for_budget, remove_stale_scratch, run_mann_outofcore
 
     threads = default_threads(threads)
-    budget = parse_size(memory, "`memory`") if isinstance(memory, str) else memory
-    budget = available_memory_bytes() if budget is None else budget
+    budget = _budget(memory)
 
     def make(out: Path) -> None:
         check_output_path(out, "`out`")
@@ -317,7 +340,9 @@ def kaimal(
     seed : int, optional
         Random seed (>= 0).
     out : str or os.PathLike, optional
-        Store to write. None: the field is returned in memory (no file is left).
+        Store to write. None: the field is returned in memory (no file is left), made straight into the Dataset
+        when the run's arrays (spectrum in memory) and the field fit 80 % of the available memory, else through a
+        temporary store loaded back (the spectrum in a scratch file). The same values either way.
     config : str, os.PathLike or Mapping, optional
         A run file (TOML/JSON) or a mapping of its keys; keywords override it.
     preset : str, optional
@@ -355,7 +380,7 @@ def kaimal(
     >>> dict(ds.sizes), ds.attrs["model"]
     ({'t': 128, 'x': 3, 'y': 6, 'z': 6}, 'kaimal')
     """
-    from turbgen.runs.kaimal import kaimal_generator, plan_spill, run_kaimal
+    from turbgen.runs.kaimal import in_memory_bytes, kaimal_generator, kaimal_in_memory, plan_spill, run_kaimal
 
     options.update(U=U, seed=seed)
     given, grid, x_m = run_inputs("kaimal", options)
@@ -376,6 +401,11 @@ def kaimal(
         run_kaimal(run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=threads)
 
     if out is None:
-        return _in_memory(make, run.grid, f"kaimal_s{run.seed}.zarr")
+        # straight into the Dataset when the run's arrays with the spectrum in memory and the field fit 80 % of the
+        # available memory (the rule by which run_kaimal keeps its spectrum in memory), else through a store
+        available = available_memory_bytes()
+        if available is None or in_memory_bytes(run) <= 0.8 * available:
+            return kaimal_in_memory(run, progress=progress, threads=threads)[0]
+        return _through_store(make, run.grid, f"kaimal_s{run.seed}.zarr")
     make(Path(out))
     return _as_dataset(Path(out))

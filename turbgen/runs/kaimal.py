@@ -21,6 +21,7 @@ from turbgen.resources import available_memory_bytes, format_bytes, require_memo
 from turbgen.runs.scratch import FileSpectrum
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import create_store
+from turbgen.store.memory import MemoryWriter
 from turbgen.synthesis.kaimal_evo import (
     COMPONENTS,
     FREQ_CHUNK,
@@ -124,28 +125,16 @@ def _touch_while_loading_noise(pool: ThreadPoolExecutor, ring: PlaneRing, spectr
     touched.result()
 
 
-def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | None = None,
-               progress: bool = False, threads: int | None = None, spill: bool | None = None) -> dict:
-    """Generate the field of ``run`` into the store ``out``; return a summary dict.
-
-    ``threads``: FFT workers (default all cores); the field does not depend on it.
-    ``spill``: keep each component's spectrum in an unlinked scratch file next to ``out`` instead
-    of memory (None: only when it would not fit in 80 % of the available memory); the field is the same.
-
-    Summary: path, sigma_u/v/w (realised, all points and planes) [m/s], expected_sigma [m/s],
-    seconds, and the synthesis report (yz_clip_error, long_clip_error: 0 when exact).
-    """
+def _fill(w, run: KaimalRun, gen: KaimalEvo, spill: bool, scratch_dir: Path | None, progress: bool) -> dict:
+    """Every plane of ``run`` from ``gen`` into the writer ``w`` (StoreWriter or MemoryWriter), its synthesis report
+    added to the attributes; returns {component: [sum of squares, count]}. ``spill``: each component's spectrum in
+    a scratch file in ``scratch_dir``."""
     g = run.grid
-    out = Path(out)
-    gen = kaimal_generator(run, workers=threads)
-    spill = plan_spill(g, out.absolute(), spill, gen.sampler_bytes())
-    attrs = store_attrs(run, gen)
-    t0 = time.perf_counter()
     sums = {c: [0.0, 0] for c in COMPONENTS}
-    with create_store(Path(out), g, attrs, chunk_t=chunk_t, overwrite=overwrite) as w, contextlib.ExitStack() as stack:
+    with contextlib.ExitStack() as stack:
         # one spectrum buffer for the three components in turn
         if spill:
-            buffer = stack.enter_context(FileSpectrum(out.absolute().parent, g.nx, gen.nf, g.ny, g.nz))
+            buffer = stack.enter_context(FileSpectrum(scratch_dir, g.nx, gen.nf, g.ny, g.nz))
         else:
             buffer = InMemorySpectrum(g.nx, gen.nf, g.ny, g.nz)
         tick = None
@@ -172,12 +161,63 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
                     pending.popleft().result()
         while pending:
             pending.popleft().result()
-        # clipping of any embedding is recorded with the field, never only printed
-        w.add_attrs(synthesis_report=gen.report)
-        path = w.path
-    summary = {"path": str(path), "seconds": time.perf_counter() - t0, "spilled": spill}
+    # clipping of any embedding is recorded with the field, never only printed
+    w.add_attrs(synthesis_report=gen.report)
+    return sums
+
+
+def _summary(gen: KaimalEvo, sums: dict, path, t0: float, spill: bool) -> dict:
+    summary = {"path": None if path is None else str(path), "seconds": time.perf_counter() - t0, "spilled": spill}
     for c in COMPONENTS:
         summary[f"sigma_{c}"] = math.sqrt(sums[c][0] / sums[c][1])
     summary["expected_sigma"] = [math.sqrt(gen.expected_variance(c)) for c in COMPONENTS]
     summary.update(gen.report)
     return summary
+
+
+def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | None = None,
+               progress: bool = False, threads: int | None = None, spill: bool | None = None) -> dict:
+    """Generate the field of ``run`` into the store ``out``; return a summary dict.
+
+    ``threads``: FFT workers (default all cores); the field does not depend on it.
+    ``spill``: keep each component's spectrum in an unlinked scratch file next to ``out`` instead
+    of memory (None: only when it would not fit in 80 % of the available memory); the field is the same.
+
+    Summary: path, sigma_u/v/w (realised, all points and planes) [m/s], expected_sigma [m/s],
+    seconds, and the synthesis report (yz_clip_error, long_clip_error: 0 when exact).
+    """
+    g = run.grid
+    out = Path(out)
+    gen = kaimal_generator(run, workers=threads)
+    spill = plan_spill(g, out.absolute(), spill, gen.sampler_bytes())
+    attrs = store_attrs(run, gen)
+    t0 = time.perf_counter()
+    with create_store(Path(out), g, attrs, chunk_t=chunk_t, overwrite=overwrite) as w:
+        sums = _fill(w, run, gen, spill, out.absolute().parent, progress)
+        path = w.path
+    return _summary(gen, sums, path, t0, spill)
+
+
+def in_memory_bytes(run: KaimalRun, gen: KaimalEvo | None = None) -> int:
+    """Bytes [B] kaimal_in_memory allocates: the run's arrays (memory_needed, spectrum in memory) and the field's
+    3 float32 components (``gen``: this run's generator, if already built)."""
+    gen = gen or kaimal_generator(run)
+    return memory_needed(run.grid, sampler=gen.sampler_bytes()) + 3 * run.grid.nbytes_per_component()
+
+
+def kaimal_in_memory(run: KaimalRun, *, progress: bool = False, threads: int | None = None):
+    """The field of ``run`` in memory, as the store run_kaimal writes would open: (xarray.Dataset, summary).
+
+    The same values, coordinates and attributes (but ``created_utc``) as ``xarray.open_zarr`` of run_kaimal's store
+    (turbgen.store.memory.MemoryWriter); the spectrum is kept in memory; the summary's path is None. Raises
+    ParameterError when in_memory_bytes exceeds the available memory.
+    """
+    gen = kaimal_generator(run, workers=threads)
+    g = run.grid
+    require_memory(in_memory_bytes(run, gen), f"the Kaimal run ({g.nx} planes x {g.nt} x {g.ny} x {g.nz}) and its "
+                   "field in memory", "lower `nt`, `ny`/`nz` or the number of planes")  # fmt: skip
+    attrs = store_attrs(run, gen)
+    t0 = time.perf_counter()
+    with MemoryWriter(g, attrs) as w:
+        sums = _fill(w, run, gen, False, None, progress)
+    return w.dataset, _summary(gen, sums, None, t0, False)

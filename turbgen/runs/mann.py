@@ -23,19 +23,35 @@ from turbgen.resources import default_threads, format_bytes, require_memory
 from turbgen.runs.stencil_cache import cached_stencil
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
+from turbgen.store.memory import MemoryWriter
 from turbgen.synthesis.mann_spacetime import COMPONENTS, MannSnapshots, snapshot_memory_bytes
 from turbgen.synthesis.mann_stencil import MannStencil, build_stencil, stencil_nbytes, synthesis_box
 from turbgen.synthesis.random_streams import complex_normal
-from turbgen.synthesis.unit_stencil import UnitMannStencil, scale_stencil
 
 _BUILD_SCRATCH = 64 * 2**20  # float64 temporaries of the stencil-building batches (all threads)
 
 
-def build_mann_stencil(run: MannRun, cache_dir: str | Path | None = None) -> MannStencil:
-    """The per-parameter-set part of a run (the same for runs differing only in seed)."""
+def build_mann_stencil(run: MannRun, cache_dir: str | Path | None = None, *, energy: str = "scaled") -> MannStencil:
+    """The stencil of ``run`` in memory: the per-parameter-set part of a run (the same for runs differing only in
+    seed; with ``energy="unit"`` also for runs differing in ae, through MannStencil.scaled).
+
+    synthesis.mann_stencil.build_stencil on the run's synthesis box (without 1/tau_e for one plane), or, with
+    ``cache_dir``, through the stencil cache (turbgen.runs.stencil_cache): the same numbers.
+    """
+    box, evolving = synthesis_box(run), run.grid.nx > 1
     if cache_dir is None:
-        return build_stencil(run.params, synthesis_box(run), evolving=run.grid.nx > 1)
-    return cached_stencil(run.params, synthesis_box(run), cache_dir, evolving=run.grid.nx > 1)
+        return build_stencil(run.params, box, energy=energy, evolving=evolving)
+    return cached_stencil(run.params, box, cache_dir, energy=energy, evolving=evolving)
+
+
+def shared_stencil_key(run: MannRun) -> tuple:
+    """What the unit stencil of ``run`` depends on (hashable): runs with equal keys share it (the sweep)."""
+    return run.params.with_ae(1.0), synthesis_box(run), run.grid.nx > 1
+
+
+def shared_stencil_nbytes(run: MannRun) -> int:
+    """Bytes [B] of the unit stencil of ``run`` (held by a sweep's worker besides the run's own scaled stencil)."""
+    return stencil_nbytes(synthesis_box(run), run.grid.nx > 1 and run.params.evo_time_s is not None, "unit")
 
 
 def _evolving(run: MannRun) -> bool:
@@ -91,6 +107,80 @@ def _touch_while_loading_kernels(gen: MannSnapshots) -> None:
         touched.result()
 
 
+def _checked_stencil(run: MannRun, stencil: MannStencil | None) -> None:
+    """Refuse a given stencil built for another run than ``run`` (a unit stencil: for another but in ae)."""
+    if stencil is None:
+        return
+    unit = stencil.energy == "unit"
+    params = run.params.with_ae(1.0) if unit else run.params
+    if stencil.params != params or stencil.box != synthesis_box(run) or stencil.slab_range != (0, stencil.box.nk1):
+        raise ParameterError("the given stencil was built for other parameters or another grid than this run")
+    if stencil.inv_tau is None and _evolving(run):
+        raise ParameterError("the given stencil was built for one plane (evolving=False); this run evolves planes")
+
+
+def _run_stencil(run: MannRun, stencil: MannStencil | None, cache_dir) -> MannStencil:
+    """The stencil ``run`` is made with: ``stencil`` (a unit stencil scaled to the run's ae), else one snapshot's
+    computed on demand (each slab is used once), else built (or read from ``cache_dir``)."""
+    if stencil is not None:
+        return stencil.scaled(run.params)
+    if cache_dir is None and not _evolving(run):
+        return build_stencil(run.params, synthesis_box(run), storage="on_demand")
+    return build_mann_stencil(run, cache_dir)
+
+
+def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress: bool) -> dict:
+    """Every plane of ``run`` from ``stencil`` into ``writer`` (a StoreWriter or MemoryWriter); returns
+    {component: [float64 sum, sum of squares]} of the written values."""
+    g = run.grid
+    sums = {c: [0.0, 0.0] for c in COMPONENTS}
+    gen = MannSnapshots(stencil, g.ny, g.nz, threads, buffers=2)
+    if stencil.coef is None:  # one snapshot, its stencil computed on demand: no compiled code has run yet
+        _touch_while_loading_kernels(gen)
+    show = progress and sys.stderr.isatty()
+    bar = tqdm(total=g.nx, unit="plane", desc="mann", file=sys.stderr, disable=not show)
+    # One write in flight while the generator computes the next item (it alternates two buffers);
+    # leaving the pool waits for that write, so an exception never races the writer's clean-up.
+    with bar, ThreadPoolExecutor(1) as background:
+        pending = None
+
+        def write_and_sum(comp, ix, field):  # in the background, with the next item's synthesis
+            total, squares = writer.write(comp, ix, field, squares=True)  # the sums of its finiteness check
+            sums[comp][0] += total
+            sums[comp][1] += squares
+
+        for done, (ix, comp, field) in enumerate(gen.generate(run.seed, run.plane_times_s()), start=1):
+            if pending is not None:
+                pending.result()
+            pending = background.submit(write_and_sum, comp, ix, field)
+            if done % 3 == 0:
+                bar.update(1)
+        if pending is not None:
+            pending.result()
+    return sums
+
+
+def _summary(run: MannRun, sums: dict, path, t_start: float) -> dict:
+    g = run.grid
+    n = g.nt * g.nx * g.ny * g.nz
+    summary = {"path": None if path is None else str(path), "seconds": time.perf_counter() - t_start}
+    for c, (s1, s2) in sums.items():
+        mean = s1 / n
+        summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - mean * mean, 0.0))
+        summary[f"mean_{c}"] = mean
+    return summary
+
+
+def _require_memory(run: MannRun, threads: int, stencil, field_bytes: int = 0) -> None:
+    g, box = run.grid, synthesis_box(run)
+    require_memory(
+        memory_estimate_bytes(run, threads, with_stencil=stencil is None) + field_bytes,
+        f"the Mann run ({g.nt} x {g.ny} x {g.nz}, synthesis box {box.nt} x {box.nyp} x {box.nzp})"
+        + (" and its field in memory" if field_bytes else ""),
+        "lower `nt`, `ny`/`nz` or `pad_yz`",
+    )
+
+
 def run_mann(
     run: MannRun,
     out: str | Path,
@@ -98,7 +188,7 @@ def run_mann(
     overwrite: bool = False,
     chunk_t: int | None = None,
     progress: bool = False,
-    stencil: MannStencil | UnitMannStencil | None = None,
+    stencil: MannStencil | None = None,
     threads: int | None = None,
     cache_dir: str | Path | None = None,
 ) -> dict:
@@ -106,65 +196,43 @@ def run_mann(
 
     Memory is checked before anything is allocated; planes are written as they are produced;
     an exception (or Ctrl-C) leaves no store at ``out``. ``stencil`` (from build_mann_stencil of a
-    run with the same parameters and grid) skips the stencil computation, a UnitMannStencil (of a run
+    run with the same parameters and grid) skips the stencil computation, a unit stencil (energy "unit", of a run
     differing at most in ae and seed) leaves only its scaling to ae. ``threads`` defaults
     to os.cpu_count() and does not change the field.
     """
     t_start = time.perf_counter()
     gen_threads = default_threads(threads)
-    unit, stencil = (stencil, None) if isinstance(stencil, UnitMannStencil) else (None, stencil)
-    if unit is not None and (unit.params != run.params.with_ae(1.0) or unit.box != synthesis_box(run)):
-        raise ParameterError("the given unit stencil was built for other parameters or another grid than this run")
-    if unit is not None and unit.inv_tau is None and run.params.evo_time_s is not None and run.grid.nx > 1:
-        raise ParameterError("the given stencil was built for one plane (evolving=False); this run evolves planes")
-    if stencil is not None and (stencil.params != run.params or stencil.box != synthesis_box(run)):
-        raise ParameterError("the given stencil was built for other parameters or another grid than this run")
-    if stencil is not None and stencil.inv_tau is None and run.params.evo_time_s is not None and run.grid.nx > 1:
-        raise ParameterError("the given stencil was built for one plane (evolving=False); this run evolves planes")
-    g, box = run.grid, synthesis_box(run)
-    require_memory(
-        memory_estimate_bytes(run, gen_threads, with_stencil=stencil is None),
-        f"the Mann run ({g.nt} x {g.ny} x {g.nz}, synthesis box {box.nt} x {box.nyp} x {box.nzp})",
-        "lower `nt`, `ny`/`nz` or `pad_yz`",
-    )
+    _checked_stencil(run, stencil)
+    _require_memory(run, gen_threads, stencil)
     path = Path(out)
-    sums = {c: [0.0, 0.0] for c in COMPONENTS}
-    with create_store(path, g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:
-        if unit is not None:
-            stencil = scale_stencil(unit, run.params)
-        elif stencil is None and cache_dir is None and not _evolving(run):
-            # one snapshot uses each slab of the stencil once: compute it batch by batch in the generator
-            stencil = build_stencil(run.params, box, on_demand=True)
-        elif stencil is None:
-            stencil = build_mann_stencil(run, cache_dir)
-        gen = MannSnapshots(stencil, g.ny, g.nz, gen_threads, buffers=2)
-        if stencil.coef is None:  # one snapshot, its stencil computed on demand: no compiled code has run yet
-            _touch_while_loading_kernels(gen)
-        show = progress and sys.stderr.isatty()
-        bar = tqdm(total=g.nx, unit="plane", desc="mann", file=sys.stderr, disable=not show)
-        # One write in flight while the generator computes the next item (it alternates two buffers);
-        # leaving the pool waits for that write, so an exception never races the store's clean-up.
-        with bar, ThreadPoolExecutor(1) as background:
-            pending = None
+    with create_store(path, run.grid, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:
+        sums = _generate(writer, run, _run_stencil(run, stencil, cache_dir), gen_threads, progress)
+    return _summary(run, sums, path, t_start)
 
-            def write_and_sum(comp, ix, field):  # in the background, with the next item's synthesis
-                total, squares = writer.write(comp, ix, field, squares=True)  # the sums of its finiteness check
-                sums[comp][0] += total
-                sums[comp][1] += squares
 
-            for done, (ix, comp, field) in enumerate(gen.generate(run.seed, run.plane_times_s()), start=1):
-                if pending is not None:
-                    pending.result()
-                pending = background.submit(write_and_sum, comp, ix, field)
-                if done % 3 == 0:
-                    bar.update(1)
-            if pending is not None:
-                pending.result()
-    n = g.nt * g.nx * g.ny * g.nz
-    summary = {"path": str(path), "seconds": time.perf_counter() - t_start}
-    for c, (s1, s2) in sums.items():
-        mean = s1 / n
-        summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - mean * mean, 0.0))
-        summary[f"mean_{c}"] = mean
-    return summary
+def in_memory_bytes(run: MannRun, threads: int, with_stencil: bool = True) -> int:
+    """Bytes [B] mann_in_memory allocates: the run's (memory_estimate_bytes) and the field's 3 float32 components."""
+    return memory_estimate_bytes(run, threads, with_stencil) + 3 * run.grid.nbytes_per_component()
 
+
+def mann_in_memory(
+    run: MannRun,
+    *,
+    progress: bool = False,
+    stencil: MannStencil | None = None,
+    threads: int | None = None,
+    cache_dir: str | Path | None = None,
+):
+    """The field of ``run`` in memory, as the store run_mann writes would open: (xarray.Dataset, summary).
+
+    The same values, coordinates and attributes (but ``created_utc``) as ``xarray.open_zarr`` of run_mann's store
+    (turbgen.store.memory.MemoryWriter); the arguments as run_mann's; the summary's path is None. Raises
+    ParameterError when in_memory_bytes exceeds the available memory.
+    """
+    t_start = time.perf_counter()
+    gen_threads = default_threads(threads)
+    _checked_stencil(run, stencil)
+    _require_memory(run, gen_threads, stencil, 3 * run.grid.nbytes_per_component())
+    with MemoryWriter(run.grid, run.to_attrs()) as writer:
+        sums = _generate(writer, run, _run_stencil(run, stencil, cache_dir), gen_threads, progress)
+    return writer.dataset, _summary(run, sums, None, t_start)

@@ -8,6 +8,7 @@ validator (a layer above) keeps its own name -> expected-statistics table keyed 
 
 from __future__ import annotations
 
+import functools
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -79,19 +80,19 @@ def _mann_memory(run: MannRun, threads: int) -> int:
 def _mann_shared(run: MannRun, threads: int | None, memory_bytes: int | None):
     if _mann_out_of_core(run, threads, memory_bytes):
         return None
-    from turbgen.runs.stencil_cache import build_shared_stencil
+    from turbgen.runs.mann import build_mann_stencil
 
-    return build_shared_stencil
+    return functools.partial(build_mann_stencil, energy="unit")  # picklable: a sweep's workers build it
 
 
 def _mann_shared_key(run: MannRun):
-    from turbgen.runs.stencil_cache import shared_stencil_key
+    from turbgen.runs.mann import shared_stencil_key
 
     return shared_stencil_key(run)
 
 
 def _mann_shared_bytes(run: MannRun) -> int:
-    from turbgen.runs.stencil_cache import shared_stencil_nbytes
+    from turbgen.runs.mann import shared_stencil_nbytes
 
     return shared_stencil_nbytes(run)
 

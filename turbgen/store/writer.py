@@ -165,21 +165,8 @@ class StoreWriter:
         """
         if self._tmp is None:
             raise RuntimeError("StoreWriter.write outside its 'with' block")
-        if component not in self._arrays:
-            raise ValueError(f"component {component!r} is not one of {layout.COMPONENTS}")
         g = self.grid
-        if not 0 <= ix < g.nx:
-            raise ValueError(f"plane index {ix} outside [0, {g.nx - 1}]")
-        block = np.asarray(data, dtype=np.float32)
-        if block.ndim != 3 or block.shape[1:] != (g.ny, g.nz) or not 0 <= t0 <= g.nt - block.shape[0]:
-            raise ValueError(
-                f"block of shape {block.shape} at t0={t0} does not fit plane shape ({g.nt}, {g.ny}, {g.nz})"
-            )
-        from turbgen.store.block_sums import block_sums  # numba: only for commands that write fields
-
-        total, sum_sq = block_sums(block)
-        if not np.isfinite(total):
-            raise ValueError(f"{component} plane {ix}: block at t0={t0} contains NaN or inf")
+        block, total, sum_sq = checked_block(g, component, ix, data, t0)
         t1 = t0 + block.shape[0]
         aligned = t0 % self.chunk_t == 0 and (t1 % self.chunk_t == 0 or t1 == g.nt)
         if aligned:  # chunk by chunk: whole chunks of raw stores as files by direct I/O (chunk_files), others
@@ -205,15 +192,7 @@ class StoreWriter:
     # -- internals --------------------------------------------------------------------------
     def _create(self, root: Path) -> None:
         g = self.grid
-        attrs = dict(self._attrs)
-        attrs.update(
-            turbgen_version=__version__,
-            created_utc=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-            layout_version=layout.LAYOUT_VERSION,
-            frame=layout.FRAME,
-            frame_note=layout.FRAME_NOTE,
-            grid=layout.grid_to_attrs(g),
-        )
+        attrs = with_writer_attrs(self._attrs, g)
         group = zarr.open_group(str(root), mode="w-", zarr_format=3, attributes=attrs)
         for name, values in layout.coordinates(g).items():
             arr = group.create_array(
@@ -258,14 +237,7 @@ class StoreWriter:
         zarr.consolidate_metadata(str(self._tmp))  # ... together with the consolidated metadata
 
     def _rms(self) -> dict[str, float]:
-        """Root mean square [m/s] of each component over the store, from the sums of squares of the written
-        blocks (added in sorted order: the same value however threads interleaved the writes). Readers refuse
-        values beyond ``plausibility.AMPLITUDE_RMS`` times it."""
-        n = self.grid.nx * self.grid.nt * self.grid.ny * self.grid.nz
-        total = {c: 0.0 for c in layout.COMPONENTS}
-        for key in sorted(self._squares):
-            total[key[0]] += self._squares[key]
-        return {c: math.sqrt(total[c] / n) for c in layout.COMPONENTS}
+        return rms_from_squares(self._squares, self.grid)
 
     def _install(self) -> None:
         """Rename the finished temporary directory to ``path`` (swapping out an old store if allowed)."""
@@ -282,6 +254,91 @@ class StoreWriter:
         if self._tmp is not None:
             remove_path(self._tmp)
             self._tmp = None
+
+
+def with_writer_attrs(attrs: dict, grid: Grid) -> dict:
+    """The caller's checked ``attrs`` with the attributes the writer adds when it creates a store.
+
+    Parameters
+    ----------
+    attrs : dict
+        Checked caller attributes (check_caller_attrs).
+    grid : Grid
+        The field grid.
+
+    Returns
+    -------
+    dict
+        ``attrs`` plus turbgen_version, created_utc (now, ISO 8601), layout_version, frame, frame_note, grid.
+    """
+    return {**attrs, "turbgen_version": __version__,
+            "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+            "layout_version": layout.LAYOUT_VERSION, "frame": layout.FRAME, "frame_note": layout.FRAME_NOTE,
+            "grid": layout.grid_to_attrs(grid)}  # fmt: skip
+
+
+def validated_caller_attrs(attrs: dict, grid: Grid) -> dict:
+    """The caller's ``attrs`` checked (check_caller_attrs) and, with the writer's, against the field schema.
+
+    Raises
+    ------
+    ValueError
+        For attributes that lack a required key or a parameter's unit, set writer attributes, are not
+        JSON-serialisable, or do not match the schema.
+    """
+    full = check_caller_attrs(attrs)
+    layout.validate_attrs({**with_writer_attrs(full, grid), layout.MARKER: True}, where="store attrs", error=ValueError)
+    return full
+
+
+def rms_from_squares(squares: dict, grid: Grid) -> dict[str, float]:
+    """Root mean square [m/s] of each component over the field (the ``rms_m_s`` attribute).
+
+    Parameters
+    ----------
+    squares : dict
+        (component, ix, t0, t1) -> the float64 sum of squares [m^2/s^2] of the block written there.
+    grid : Grid
+        The field grid.
+
+    Returns
+    -------
+    dict
+        component -> rms [m/s]; the blocks' sums are added in sorted key order, so the value does not depend on
+        how threads interleaved the writes. Readers refuse values beyond ``plausibility.AMPLITUDE_RMS`` times it.
+    """
+    n = grid.nx * grid.nt * grid.ny * grid.nz
+    total = {c: 0.0 for c in layout.COMPONENTS}
+    for key in sorted(squares):
+        total[key[0]] += squares[key]
+    return {c: math.sqrt(total[c] / n) for c in layout.COMPONENTS}
+
+
+def checked_block(grid: Grid, component: str, ix: int, data, t0: int) -> tuple[np.ndarray, float, float]:
+    """``data`` as the float32 block a writer stores at (``component``, plane ``ix``, time ``t0``), with its float64
+    sum [m/s] and sum of squares [m^2/s^2].
+
+    Raises
+    ------
+    ValueError
+        For an unknown component, a plane index out of range, a block that does not fit the plane, or a block
+        containing NaN or inf.
+    """
+    if component not in layout.COMPONENTS:
+        raise ValueError(f"component {component!r} is not one of {layout.COMPONENTS}")
+    if not 0 <= ix < grid.nx:
+        raise ValueError(f"plane index {ix} outside [0, {grid.nx - 1}]")
+    block = np.asarray(data, dtype=np.float32)
+    if block.ndim != 3 or block.shape[1:] != (grid.ny, grid.nz) or not 0 <= t0 <= grid.nt - block.shape[0]:
+        raise ValueError(
+            f"block of shape {block.shape} at t0={t0} does not fit plane shape ({grid.nt}, {grid.ny}, {grid.nz})"
+        )
+    from turbgen.store.block_sums import block_sums  # numba: only for commands that write fields
+
+    total, sum_sq = block_sums(block)
+    if not np.isfinite(total):
+        raise ValueError(f"{component} plane {ix}: block at t0={t0} contains NaN or inf")
+    return block, total, sum_sq
 
 
 def _raise_disk_error(exc: BaseException, path: Path) -> None:
@@ -390,20 +447,6 @@ def create_store(
         When ``path`` exists and ``overwrite`` is False, ``path`` exists and is not a turbgen store,
         or the output directory does not exist or is not writable.
     """
-    full = check_caller_attrs(attrs)
-    layout.validate_attrs(
-        {
-            **full,
-            "turbgen_version": __version__,
-            "created_utc": "2000-01-01T00:00:00+00:00",
-            "layout_version": layout.LAYOUT_VERSION,
-            "frame": layout.FRAME,
-            "frame_note": layout.FRAME_NOTE,
-            "grid": layout.grid_to_attrs(grid),
-            layout.MARKER: True,
-        },
-        where="store attrs",
-        error=ValueError,
-    )
+    full = validated_caller_attrs(attrs, grid)
     path, chunk_t = check_new_store(path, grid, chunk_t=chunk_t, overwrite=overwrite)
     return StoreWriter(path, grid, full, chunk_t, overwrite)

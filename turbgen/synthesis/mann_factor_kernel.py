@@ -3,7 +3,7 @@
 A few passes over a batch of slabs (small enough to stay in the core's cache) instead of ~40 whole-array
 numpy passes and their memory traffic. The loops evaluate the float64 operations of the
 former numpy code in the same order (tests/synthesis/stencil_reference.py keeps it as the reference); log,
-exp and arctan are left to numpy's ufuncs between the loops (mann_stencil.slab_factors), on arrays of the
+exp and arctan are left to numpy's ufuncs between the loops (mann_factors.slab_factors), on arrays of the
 arguments these loops write: numpy's SIMD log, exp and arctan are faster than the C library's
 scalar ones a compiled loop would call, and round like those of the numpy code, so the stencil keeps its
 bits. ``error_model="numpy"``: a division by zero gives inf or nan as in numpy (k = 0 and the k1 = 0 slab,
@@ -94,8 +94,8 @@ def mann_factors(k1, k2, k3, beta_half, inv_tau_half, e, arctan, unit, energy, s
     the arctan of its ``t_arg``. ``inv_tau_half`` (b, nh, nzp//2 + 1) 1/tau_e [1/s] on the same columns as
     beta_half, written mirrored into ``inv_tau`` (b, nh, nzp); an empty ``inv_tau`` skips it.
 
-    ``unit`` True: (f0, f1, f2, f3) = (e, k30, c1, c2) of mann_stencil.slab_factors (float64, ae-free).
-    False: (A, P, Z1, Z2) = (e, k30 e, c1 e, c2 e) ``energy`` ``scale`` as unit_stencil.apply_energy forms
+    ``unit`` True: (f0, f1, f2, f3) = (e, k30, c1, c2) of mann_factors.slab_factors (float64, ae-free).
+    False: (A, P, Z1, Z2) = (e, k30 e, c1 e, c2 e) ``energy`` ``scale`` as mann_factors.apply_energy forms
     them, with A = 0 on the k3 axis; the output's dtype (float32) rounds them.
     """
     nzp = k3.size
@@ -121,7 +121,7 @@ def mann_factors(k1, k2, k3, beta_half, inv_tau_half, e, arctan, unit, energy, s
                     k0sq = k30 * k30 + q
                     ee = e[i, j, l]
                     # zeta1 = C1 - (k2/k1) C2, zeta2 = (k2/k1) C1 + C2 of Mann (1994) Eq. 13-17
-                    # (mann_stencil.slab_factors)
+                    # (mann_factors.slab_factors)
                     c1 = bk1 * k30 - 2.0 * k30 * k30
                     c1 = (c1 + k0sq) * (bk1 * kk1) / (ksq * q)
                     c2 = arctan[i, j, l]

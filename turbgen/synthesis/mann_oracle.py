@@ -14,13 +14,13 @@ from turbgen.synthesis.mann_stencil import _ODD, MannStencil, expand_k2, w_coeff
 def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
     """The full factor C (3, 3, nyp, nzp) [float64, times sqrt(dk/2)] of slab ``i``: compact form + axis cells.
 
-    For tests and the discrete oracle: E[u_hat u_hat^H] = 2 C C^T on every stored point.
+    For tests and the discrete oracle: E[u_hat u_hat^H] = 2 C C^T on every stored point. Any scaled stencil (stored,
+    a part holding slab ``i``, or computed on demand: MannStencil.coefficients); a unit stencil is refused (ValueError).
     """
     box = stencil.box
-    full = [
-        expand_k2(stencil.coef[n, i].astype(float), box.nyp, _ODD[n], np.empty((box.nyp, box.nzp)))
-        for n in range(4)
-    ]
+    scratch = None if stencil.coef is not None else np.empty((4, 1, box.nk2_half, box.nzp), np.float32)
+    coef, j = stencil.coefficients(i, i + 1, scratch)
+    full = [expand_k2(coef[n, j].astype(float), box.nyp, _ODD[n], np.empty((box.nyp, box.nzp))) for n in range(4)]
     a, p, z1, z2 = full
     k1 = box.k1()[i]
     k2 = box.k2()[:, None] * np.ones((1, box.nzp))

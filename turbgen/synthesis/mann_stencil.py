@@ -13,6 +13,12 @@ E|n|^2 = 2), and W = a k0^2/k^2 = (A^2 q + P^2) / (A k^2), q = k1^2 + k2^2, rebu
 (k0^2 = q + k30^2, k30 = P/A). Under k2 -> -k2 the coefficients A, P, Z1 are even and Z2 is odd,
 so only rows k2 >= 0 are stored: 4 float32 numbers per (k1 >= 0, k2 >= 0, k3), i.e. 1/4 of the
 full 8-entry float32 factor on the whole half spectrum.
+
+One object, one build function: ``build_stencil(params, box, energy=..., storage=..., slabs=...)`` makes a
+MannStencil whose energy is "scaled" (the float32 coefficients above, for ae) or "unit" (the float64 ae-free factors
+(e, k30, c1, c2), which serve every ae bit-identically through :meth:`MannStencil.scaled`; Mann.rs and hipersim
+likewise build for ae = 1 and scale), stored in memory, computed on demand slab batch by slab batch (one snapshot),
+or for some slabs only (out-of-core parts). No I/O here: turbgen.runs.stencil_cache keeps unit stencils on disk.
 """
 
 from __future__ import annotations
@@ -27,9 +33,11 @@ import numpy as np
 
 from turbgen.synthesis.box_shape import BoxShape
 from turbgen.synthesis.mann_cells import axis_cells
-from turbgen.theory.eddy_lifetime import evolution_lifetime_table, shear_lifetime_table
+from turbgen.synthesis.mann_factors import apply_energy, energy_scale, slab_factors
 from turbgen.theory.params import MannParams
 
+ENERGIES = ("scaled", "unit")
+STORAGES = ("memory", "on_demand")
 STENCIL_VERSION = 5  # 3: lifetime tables, Mann (1994) Eq. 13-17; 4: arctan; 5: ae-free float64 factors
 _ODD = (False, False, False, True)  # parity of A, P, Z1, Z2 under k2 -> -k2
 _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0.5 MiB per temporary)
@@ -37,22 +45,29 @@ _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0
 
 @dataclass(frozen=True, eq=False)
 class MannStencil:
-    """Compact factor ``coef`` (4, nk1, nyp//2+1, nzp) float32 (A, P, Z1, Z2), ``inv_tau`` = 1/tau_e [1/s] (None if
-    frozen or built with evolving=False: then it serves single snapshots only),
-    and the cell-averaged factors near the k1 axis: ``cell_index`` (ncell, 3) int (slab, row, column),
-    sorted by slab, and ``cell_factor`` (ncell, 3, 3) float32 (times sqrt(dk1 dk2 dk3 / 2)), which
-    replace the compact factor at those points.
+    """The stencil of ``params`` on ``box``; make it with :func:`build_stencil`.
 
-    ``coef`` None (``build_stencil(on_demand=True)``): the coefficients are computed slab batch by slab batch
-    when used (:meth:`coefficients`): the same numbers, for a single snapshot, which uses each slab once."""
+    ``energy`` "scaled": ``coef`` (4, slabs, nyp//2+1, nzp) float32 holds (A, P, Z1, Z2) for params.ae, or is None
+    (storage "on_demand": computed slab batch by slab batch when used, :meth:`coefficients`: the same numbers, for a
+    single snapshot, which uses each slab once); ``cell_index`` (ncell, 3) int (slab, row, column), sorted by slab,
+    and ``cell_factor`` (ncell, 3, 3) float32 (times sqrt(dk1 dk2 dk3 / 2)) are the cell-averaged factors near the
+    k1 axis, which replace the compact factor at those points.
+    ``energy`` "unit": ``coef`` (4, slabs, nyp//2+1, nzp) float64 holds the ae-free factors (e, k30, c1, c2) of
+    slab_factors, ``params`` carry ae = 1 and there are no axis cells (their eigen-decomposition is not linear in
+    ae to the last bit): :meth:`scaled` makes the stencil of any ae from it.
+    ``inv_tau`` = 1/tau_e [1/s] float32 on the same points (None if frozen or built with evolving=False: then it
+    serves single snapshots only; it does not depend on ae). ``slab0``: coef and inv_tau hold slabs slab0 ..
+    slab0 + coef.shape[1] (a part of the box: out-of-core runs).
+    """
 
     params: MannParams
     box: BoxShape
     coef: np.ndarray | None
     inv_tau: np.ndarray | None
-    cell_index: np.ndarray
-    cell_factor: np.ndarray
-    slab0: int = 0  # coef / inv_tau hold slabs slab0 .. slab0 + coef.shape[1] (a part of the box: out-of-core runs)
+    cell_index: np.ndarray | None
+    cell_factor: np.ndarray | None
+    slab0: int = 0
+    energy: str = "scaled"
 
     @property
     def slab_range(self) -> tuple[int, int]:
@@ -65,8 +80,10 @@ class MannStencil:
 
         ``coef`` itself, or, for a stencil computed on demand, ``scratch`` (4, >= i1 - i0, nyp//2+1, nzp) float32
         with slabs [i0, i1) computed into its first slabs by the operations build_stencil uses (the same numbers,
-        whatever the batch).
+        whatever the batch). A unit stencil has none: scale it first (:meth:`scaled`).
         """
+        if self.energy != "scaled":
+            raise ValueError("a unit stencil has no coefficients: use its scaled(params)")
         if self.coef is not None:
             return self.coef, i0 - self.slab0
         slab_factors(self.params, self.box, i0, i1, scratch[:, : i1 - i0], None, energy_scale(self.params))
@@ -77,6 +94,39 @@ class MannStencil:
         slabs = self.cell_index[:, 0]
         return slice(int(np.searchsorted(slabs, i0)), int(np.searchsorted(slabs, i1)))
 
+    def scaled(self, params: MannParams) -> "MannStencil":
+        """The stencil of ``params`` (ae [m^(4/3) s^-2] included) in memory.
+
+        A unit stencil: its factors times the energy by the float64 operations a direct build applies
+        (apply_energy), then rounded to float32, so the result equals build_stencil(params, box) bit for bit
+        (sharing inv_tau); the axis cells are computed for ``params``. A scaled stencil: itself, if built for
+        ``params``.
+
+        Raises
+        ------
+        ValueError
+            If ``params`` differ from those of the stencil in more than ae (a scaled stencil: at all).
+        """
+        if self.energy == "scaled":
+            if params != self.params:
+                raise ValueError("the stencil was built for other parameters")
+            return self
+        if params.with_ae(1.0) != self.params:
+            raise ValueError("the unit stencil was built for other parameters than ae")
+        box, first, end = self.box, *self.slab_range
+        scale = np.sqrt(np.prod(box.dk()) / 2.0)
+        energy = energy_scale(params)
+        k1_all = box.k1()
+        coef = np.empty((4, end - first, box.nk2_half, box.nzp), dtype=np.float32)
+
+        def batch(i0: int, i1: int) -> None:
+            part = slice(i0 - first, i1 - first)
+            work = np.empty((4, i1 - i0, box.nk2_half, box.nzp))
+            coef[:, part] = apply_energy(self.coef[:, part], energy, k1_all[i0:i1, None, None], scale, work)
+
+        index, factor = slab_batches(box, first, end, batch, lambda: axis_cells(params, box))
+        return MannStencil(params, box, coef, self.inv_tau, index, factor, first)
+
 
 def synthesis_box(run) -> BoxShape:
     """The periodic synthesis box of a Mann run (``turbgen.spec.mann.MannRun``): (nt, dx = U dt) x
@@ -85,10 +135,12 @@ def synthesis_box(run) -> BoxShape:
     return BoxShape(g.nt, run.U_m_s * g.dt_s, run.pad_yz * g.ny, run.pad_yz * g.nz, g.dy_m, g.dz_m)
 
 
-def stencil_nbytes(box: BoxShape, with_tau: bool) -> int:
-    """Bytes held by the stencil of ``box`` (for memory estimates before building it)."""
-    per = box.nk1 * box.nk2_half * box.nzp * 4
-    return per * (5 if with_tau else 4)
+def stencil_nbytes(box: BoxShape, with_tau: bool, energy: str = "scaled") -> int:
+    """Bytes [B] held by the stencil of ``box`` stored in memory (for memory estimates before building it): four
+    float32 coefficients ("scaled") or float64 factors ("unit") per stored point, and float32 1/tau_e if
+    ``with_tau``."""
+    per = box.nk1 * box.nk2_half * box.nzp
+    return per * ((16 if energy == "scaled" else 32) + (4 if with_tau else 0))
 
 
 def expand_k2(half: np.ndarray, nyp: int, odd: bool, out: np.ndarray) -> np.ndarray:
@@ -118,90 +170,6 @@ def w_coefficient(a, p, q, ksq, out, scratch):
     return out
 
 
-def _table_half(table, log_kl_sq: np.ndarray, ksq, length_scale_m: float) -> np.ndarray:
-    """``table.from_ksq`` from ln(|k|^2 L^2) ``log_kl_sq``: the compiled spline (mann_factor_kernel.table_spline, the
-    operations of from_ksq), and ``table.exact`` outside the table's range (k = 0 among them) as from_ksq does;
-    ``ksq()`` gives |k|^2 [rad^2/m^2] shaped like ``log_kl_sq`` (needed only there)."""
-    from turbgen.synthesis.mann_factor_kernel import table_spline
-
-    out = np.empty_like(log_kl_sq)
-    if table_spline(log_kl_sq, 0.5 / table.h, table.x0 / table.h, table.h, table.n_intervals, *table.coefficients, out):
-        outside = np.isnan(out)
-        out[outside] = table.exact(np.sqrt(ksq()[outside]) * length_scale_m)
-    return out
-
-
-def slab_factors(params: MannParams, box: BoxShape, i0: int, i1: int, out, inv_tau, energy: float | None) -> None:
-    """The factors of slabs [i0, i1) of ``box`` into the four arrays ``out`` (i1 - i0, nyp//2+1, nzp).
-
-    ``energy`` None: the energy-free factors (e, k30, c1, c2) (float64), independent of ae: with
-    a = e sqrt(ae L^(17/3) / (4 pi)) the coefficients are A = a, P = k30 a, Z1 = c1 a, Z2 = c2 a
-    (see unit_stencil.apply_energy), where e = (1 + (k0 L)^2)^(-17/12) and c1, c2 are zeta1, zeta2 of Mann (1994)
-    Eq. 13-17 (the formulas of theory.mann_tensor._distortion with its exact limits), with
-    beta = Gamma tau~(|k| L) and tau_e from the lifetime tables (relative error <= 1e-6,
-    theory.eddy_lifetime.TABLE_REL_ERROR) instead of Mann (1994) Eq. 4 / 6 / 15 point by point. At k = 0
-    all four are 0 (no energy). ``energy`` = energy_scale(params): (A, P, Z1, Z2) times sqrt(dk1 dk2 dk3 / 2)
-    as unit_stencil.apply_energy forms them from the factors (out float32). ``inv_tau`` (i1 - i0, nyp//2+1, nzp)
-    float32 gets 1/tau_e [1/s], or None.
-
-    Compiled loops (mann_factor_kernel) and numpy's log, exp and arctan on the batch. |k|^2, beta and
-    tau_e are even in k3 and computed on the columns k3 >= 0 and the Nyquist only: fftfreq is exactly
-    antisymmetric, so |k|^2 on column l equals that on column nzp - l.
-    """
-    from turbgen.synthesis import mann_factor_kernel as kernel
-
-    L = params.length_scale_m
-    k1, k2, k3 = box.k1()[i0:i1], box.k2()[: box.nk2_half], box.k3()
-    k3_half = k3[: box.nzp // 2 + 1]
-    half = (k1.size, k2.size, k3_half.size)
-
-    def ksq() -> np.ndarray:
-        squares = np.empty(half)
-        kernel.squared_wavenumbers(k1, k2, k3_half, 1.0, squares)
-        return squares
-
-    log_kl_sq = np.empty(half)
-    kernel.squared_wavenumbers(k1, k2, k3_half, L * L, log_kl_sq)
-    with np.errstate(divide="ignore"):
-        np.log(log_kl_sq, out=log_kl_sq)  # -inf at k = 0
-    if params.gamma == 0.0:
-        beta = np.zeros(half)
-    else:
-        beta = _table_half(shear_lifetime_table(params), log_kl_sq, ksq, L)
-        beta *= params.gamma
-    if inv_tau is None:
-        inv_tau_half, inv_tau = np.empty((0, 0, 0)), np.empty((0, 0, 0), np.float32)
-    else:
-        inv_tau_half = _table_half(evolution_lifetime_table(params), log_kl_sq, ksq, L)
-        inv_tau_half *= params.evo_time_s  # tau_e [s] (inf at k = 0)
-        np.divide(1.0, inv_tau_half, out=inv_tau_half)
-    e = np.empty(out[0].shape)
-    arctan = np.empty(out[0].shape)
-    kernel.transcendental_arguments(k1, k2, k3, beta, L * L, e, arctan)
-    with np.errstate(invalid="ignore"):  # nan at k = 0 (beta = inf there; replaced by 0)
-        np.log(e, out=e)
-        e *= -17.0 / 12.0
-        np.exp(e, out=e)
-        np.arctan(arctan, out=arctan)
-    out = [np.asarray(f) for f in out]  # plain arrays (the stencil cache passes a memory map)
-    kernel.mann_factors(k1, k2, k3, beta, inv_tau_half, e, arctan, energy is None, 1.0 if energy is None else energy,
-                        np.sqrt(np.prod(box.dk()) / 2.0), *out, inv_tau)
-
-
-def energy_scale(params: MannParams) -> float:
-    """The factor a / e = sqrt(ae L^(17/3) / (4 pi)) of the von Karman amplitude (Mann 1998, Eq. 46).
-
-    Parameters
-    ----------
-    params : ae [m^(4/3) s^-2] and length_scale_m [m] are used.
-
-    Returns
-    -------
-    float : [m^(7/2) s^-1] float64; the only place where ae enters the stencil's coefficients.
-    """
-    return np.sqrt(params.ae * params.length_scale_m ** (17.0 / 3.0) / (4.0 * np.pi))
-
-
 def build_step(box: BoxShape) -> int:
     """Slabs per stencil-building batch: batches start at multiples of it (also when building a part)."""
     return max(1, _BUILD_POINTS // (box.nk2_half * box.nzp))
@@ -222,20 +190,26 @@ def slab_batches(box: BoxShape, first: int, end: int, batch, side=None):
         return None if pending is None else pending.result()
 
 
-def _build(params: MannParams, box: BoxShape, with_tau: bool, slabs=None, cells=None) -> MannStencil:
+def _build(params: MannParams, box: BoxShape, energy: str, with_tau: bool, slabs, cells, factors) -> MannStencil:
+    """A stencil stored in memory (see build_stencil): coefficients or unit factors of slabs [first, end)."""
     first, end = (0, box.nk1) if slabs is None else slabs
-    nh, nzp = box.nk2_half, box.nzp
-    energy = energy_scale(params)
-    coef = np.empty((4, end - first, nh, nzp), dtype=np.float32)
-    inv_tau = np.empty((end - first, nh, nzp), dtype=np.float32) if with_tau else None
+    shape = (4, end - first, box.nk2_half, box.nzp)
+    unit = energy == "unit"
+    params = params.with_ae(1.0) if unit else params
+    if factors is not None and (factors.shape != shape or factors.dtype != np.float64 or not unit):
+        raise ValueError(f"`factors` must be a float64 array {shape} of a unit stencil")
+    coef = (np.empty(shape) if factors is None else factors) if unit else np.empty(shape, dtype=np.float32)
+    inv_tau = np.empty(shape[1:], dtype=np.float32) if with_tau else None
+    scale = None if unit else energy_scale(params)
 
     def batch(i0: int, i1: int) -> None:
         part = slice(i0 - first, i1 - first)
-        slab_factors(params, box, i0, i1, coef[:, part], None if inv_tau is None else inv_tau[part], energy)
+        slab_factors(params, box, i0, i1, coef[:, part], None if inv_tau is None else inv_tau[part], scale)
 
-    computed = slab_batches(box, first, end, batch, None if cells is not None else lambda: axis_cells(params, box))
-    index, factor = cells if cells is not None else computed
-    return MannStencil(params, box, coef, inv_tau, index, factor, first)
+    side = None if unit or cells is not None else (lambda: axis_cells(params, box))
+    computed = slab_batches(box, first, end, batch, side)
+    index, factor = (None, None) if unit else cells if cells is not None else computed
+    return MannStencil(params, box, coef, inv_tau, index, factor, first, energy)
 
 
 def stencil_key(params: MannParams, box: BoxShape, with_tau: bool) -> str:
@@ -251,23 +225,53 @@ def build_stencil(
     params: MannParams,
     box: BoxShape,
     *,
+    energy: str = "scaled",
+    storage: str = "memory",
     evolving: bool = True,
     slabs: tuple[int, int] | None = None,
     cells=None,
-    on_demand: bool = False,
+    factors: np.ndarray | None = None,
 ) -> MannStencil:
-    """The stencil of ``params`` on ``box`` (computed; turbgen.runs.stencil_cache keeps it on disk).
+    """The stencil of ``params`` on ``box`` (computed; turbgen.runs.stencil_cache keeps unit stencils on disk).
 
-    ``evolving=False`` skips 1/tau_e (1/6 of the memory): enough for a single snapshot (one plane).
-    ``slabs=(first, end)``: only those k1 slabs (the same numbers as those slabs of the whole stencil:
-    every point is computed by the same elementwise operations); ``cells``: (cell_index, cell_factor) of axis_cells, to
-    compute them once for many parts. ``on_demand=True`` (implies evolving=False; not with ``slabs``): only the
-    axis cells are computed now, the coefficients when a generator uses them (MannStencil.coefficients), so a
-    single snapshot never holds the stencil's 16 bytes per stored point, nor writes and reads them back.
+    Parameters
+    ----------
+    params : MannParams
+        Mann parameters; ae [m^(4/3) s^-2] is ignored for a unit stencil (which carries ae = 1).
+    box : BoxShape
+        The synthesis box.
+    energy : {"scaled", "unit"}
+        "scaled": the float32 coefficients of ``params``' ae with the axis cells; "unit": the ae-free float64
+        factors, for every ae through MannStencil.scaled (bit-identical to a direct build; twice the bytes).
+    storage : {"memory", "on_demand"}
+        "on_demand" (scaled only, the whole box, implies evolving=False): only the axis cells are computed now, the
+        coefficients when a generator uses them (MannStencil.coefficients), so a single snapshot never holds the
+        stencil's bytes, nor writes and reads them back.
+    evolving : bool
+        False skips 1/tau_e (1/6 of a scaled stencil's memory): enough for a single snapshot (one plane).
+    slabs : (int, int), optional
+        (first, end): only those k1 slabs (the same numbers as those slabs of the whole stencil: every point is
+        computed by the same elementwise operations).
+    cells : (numpy.ndarray, numpy.ndarray), optional
+        (cell_index, cell_factor) of axis_cells, to compute them once for many parts (scaled only).
+    factors : numpy.ndarray, optional
+        A float64 array (4, slabs, nyp//2+1, nzp) to hold a unit stencil's factors (e.g. a memory-mapped file).
+
+    Returns
+    -------
+    MannStencil
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``energy`` or ``storage``, an on-demand stencil of a unit energy or of some slabs only, or
+        ``factors`` of the wrong shape or type.
     """
-    if on_demand:
-        if slabs is not None:
-            raise ValueError("a stencil computed on demand covers the whole box (no slabs)")
+    if energy not in ENERGIES or storage not in STORAGES:
+        raise ValueError(f"energy must be one of {ENERGIES} and storage one of {STORAGES} (got {energy}, {storage})")
+    if storage == "on_demand":
+        if energy != "scaled" or slabs is not None or factors is not None:
+            raise ValueError("a stencil computed on demand is a scaled stencil of the whole box")
         index, factor = cells if cells is not None else axis_cells(params, box)
         return MannStencil(params, box, None, None, index, factor)
-    return _build(params, box, evolving and params.evo_time_s is not None, slabs, cells)
+    return _build(params, box, energy, evolving and params.evo_time_s is not None, slabs, cells, factors)

@@ -33,7 +33,7 @@ def slab_spectrum(stencil: MannStencil, i: int) -> np.ndarray:
     Parameters
     ----------
     stencil : MannStencil
-        A stencil holding its coefficients (not computed on demand).
+        A scaled stencil (energy "scaled"; stored or computed on demand).
     i : int
         Slab index (FFT index along the time axis), 0 <= i <= nt // 2.
 

@@ -1,0 +1,108 @@
+"""A field kept in memory as the ``xarray.Dataset`` its store would open to: the writer's interface, no file.
+
+    with MemoryWriter(grid, attrs) as w:
+        w.write("u", ix, block)            # as StoreWriter.write
+    ds = w.dataset                         # u, v, w (t, x, y, z), coordinates and attributes of the store
+
+The same checks (finite blocks of the plane's shape, every sample written), the same float32 values and the same
+attributes (the caller's, the writer's, ``rms_m_s`` from the same sums, the marker) as
+:class:`turbgen.store.writer.StoreWriter` and a store opened by ``xarray.open_zarr`` -- only ``created_utc``
+differs (the time it was made). Used by ``turbgen.mann()`` / ``turbgen.kaimal()`` without ``out``.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+
+import numpy as np
+
+from turbgen.grid import Grid
+from turbgen.store import layout
+from turbgen.store.attributes import jsonable
+from turbgen.store.writer import checked_block, rms_from_squares, validated_caller_attrs, with_writer_attrs
+
+
+class MemoryWriter:
+    """Context manager collecting one field in memory; :attr:`dataset` after its ``with`` block.
+
+    Parameters
+    ----------
+    grid : Grid
+        The field grid.
+    attrs : dict
+        Caller attributes as for :func:`turbgen.store.create_store` (model, parameters, units, seed, U_m_s,
+        hub_height_m).
+
+    Raises
+    ------
+    ValueError
+        For attributes create_store would refuse.
+    """
+
+    def __init__(self, grid: Grid, attrs: dict):
+        self.grid = grid
+        self._attrs = with_writer_attrs(validated_caller_attrs(attrs, grid), grid)
+        self._arrays = {c: np.empty(grid.shape, dtype=np.float32) for c in layout.COMPONENTS}
+        self._written = {c: np.zeros((grid.nx, grid.nt), dtype=bool) for c in layout.COMPONENTS}
+        self._squares: dict[tuple, float] = {}
+        self._bookkeeping = threading.Lock()
+        self.dataset = None
+
+    def __enter__(self) -> "MemoryWriter":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        if exc_type is None:
+            self._finish()
+        self._arrays = None  # an unfinished field is dropped
+        return False
+
+    def add_attrs(self, **attrs) -> None:
+        """Add attributes known only after generation, as StoreWriter.add_attrs.
+
+        Raises
+        ------
+        ValueError
+            When an attribute is already set or is the completeness marker.
+        """
+        clash = [k for k in attrs if k in self._attrs or k == layout.MARKER]
+        if clash:
+            raise ValueError(f"store attrs {clash} are already set")
+        self._attrs.update(attrs)
+
+    def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0, squares: bool = False):
+        """Keep ``data`` (nt_block, ny, nz) as ``component`` at plane ``ix``, time ``t0``: as StoreWriter.write.
+
+        Returns
+        -------
+        float or tuple of float
+            The block's float64 sum [m/s]; with ``squares``, (sum [m/s], sum of squares [m^2/s^2]).
+
+        Raises
+        ------
+        ValueError
+            For an unknown component, a plane index out of range, a block that does not fit the plane, or a
+            block containing NaN or inf.
+        """
+        block, total, sum_sq = checked_block(self.grid, component, ix, data, t0)
+        t1 = t0 + block.shape[0]
+        self._arrays[component][t0:t1, ix] = block
+        with self._bookkeeping:
+            self._written[component][ix, t0:t1] = True
+            self._squares[(component, ix, t0, t1)] = sum_sq
+        return (total, sum_sq) if squares else total
+
+    def _finish(self) -> None:
+        import xarray as xr
+
+        for c, done in self._written.items():
+            if not done.all():
+                ix, it = np.argwhere(~done)[0]
+                raise RuntimeError(f"{c} at plane x = {self.grid.x_m[ix]:g} m was not written from t index {it}")
+        attrs = {**self._attrs, layout.RMS_ATTR: rms_from_squares(self._squares, self.grid), layout.MARKER: True}
+        coords = {name: (name, values.astype(layout.COORD_DTYPE), dict(layout.COORD_ATTRS[name]))
+                  for name, values in layout.coordinates(self.grid).items()}  # fmt: skip
+        variables = {c: (layout.DIMS, self._arrays[c], dict(layout.COMPONENT_ATTRS[c])) for c in layout.COMPONENTS}
+        # through JSON, as a store's attributes are read back (lists for tuples, plain numbers)
+        self.dataset = xr.Dataset(variables, coords=coords, attrs=json.loads(json.dumps(jsonable(attrs), allow_nan=False)))
