@@ -229,3 +229,26 @@ def test_conditional_mean_store_shown_by_info_and_refused_by_validate(tmp_path):
     fs = open_store(out)
     u = fs.read_plane("u", 0)
     assert np.abs(u).max() < 5.0 and fs.attrs["constraints"]["conditional_mean"] is True
+
+
+def test_progress_bars_on_a_terminal_and_none_otherwise(tmp_path, capsys, monkeypatch):
+    run = MannRun.from_mapping({"seed": 3, "grid": GRID})
+    files = [point_series_from_mapping(_mast(np.arange(0.0, 25.0, 0.25)), "mast.json")]
+    run_mann_constrained(run, tmp_path / "quiet.zarr", files, threads=1, progress=True)
+    assert capsys.readouterr().err == ""  # not a terminal: no bar
+    monkeypatch.setattr(type(__import__("sys").stderr), "isatty", lambda self: True, raising=False)
+    run_mann_constrained(run, tmp_path / "shown.zarr", files, threads=1, progress=True)
+    err = capsys.readouterr().err
+    for stage in ("system", "pass 1", "correction", "write"):
+        assert f"{stage}: 100%" in err, err
+
+
+def test_a_sample_at_the_last_time_step_next_to_a_gap_is_kept():
+    # the value at t = (nt - 1) dt with its previous value missing was dropped (linear weights 0 x NaN)
+    run = MannRun.from_mapping({"seed": 3, "grid": GRID})
+    u = [None] * GRID["nt"]
+    u[-1] = 1.5
+    mapping = {"kind": "point-series", "name": "last", "time_s": [0.5 * i for i in range(GRID["nt"])],
+               "sensors": [{"name": "m", "x_m": 0.0, "y_m": 0.0, "z_m": 0.0, "u_m_s": u}]}  # fmt: skip
+    placed = place(run, [point_series_from_mapping(mapping, "last.json")])
+    assert np.isfinite(placed.data).sum() == 1 and placed.data[0, -1] == 1.5

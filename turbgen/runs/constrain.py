@@ -19,11 +19,13 @@ grid, geometry, noise, the solver's report and the residual at the measurements.
 from __future__ import annotations
 
 import math
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from turbgen.errors import ParameterError
 from turbgen.lidar.sampling import PLANE_TOL_M
@@ -88,8 +90,9 @@ def _on_grid(run: MannRun, t_s: np.ndarray, values: np.ndarray, x: float, where:
     k = np.clip(np.searchsorted(stored, tn, side="right") - 1, 0, len(stored) - 2)
     frac = (tn - stored[k]) / (stored[k + 1] - stored[k])
     out = values[k] * (1.0 - frac) + values[k + 1] * frac
-    exact_left = frac == 0.0
-    out[exact_left] = values[k[exact_left]]  # a sample on a stored time needs no neighbour
+    exact_left, exact_right = frac == 0.0, frac == 1.0  # a sample on a stored time needs no neighbour
+    out[exact_left] = values[k[exact_left]]
+    out[exact_right] = values[k[exact_right] + 1]  # the last sample (NaN * 0 of a missing neighbour is NaN)
     out[(tn < stored[0]) | (tn > stored[-1])] = math.nan
     return out
 
@@ -191,13 +194,15 @@ def measurement_noise(run: MannRun, placed: PlacedData) -> np.ndarray:
     return rng.standard_normal(placed.data.shape) * placed.noise_m_s[:, None]
 
 
-def stream_system(run: MannRun, stencil, placed: PlacedData, threads: int | None = None) -> np.ndarray:
+def stream_system(run: MannRun, stencil, placed: PlacedData, threads: int | None = None,
+                  progress: bool = False) -> np.ndarray:  # fmt: skip
     """The per-frequency matrices of S = H C H^T + R (turbgen.synthesis.conditioning.stream_covariance), ``threads``
     slab groups at once (default: the machine's).
 
     Raises ParameterError when zero-noise measurements are linearly dependent (naming them)."""
-    cov = cond.stream_covariance(stencil, placed.streams, run.plane_times_s(), placed.noise_m_s**2,
-                                 default_threads(threads))  # fmt: skip
+    with _bar("system", stencil.box.nk1, "slab", progress) as bar:
+        cov = cond.stream_covariance(stencil, placed.streams, run.plane_times_s(), placed.noise_m_s**2,
+                                     default_threads(threads), bar.update)  # fmt: skip
     if np.any(placed.noise_m_s == 0):
         cond.check_singular(cov, placed.streams.names)
     return cov
@@ -212,16 +217,25 @@ def solve_constraints(cov: np.ndarray, placed: PlacedData, measured: np.ndarray 
     return cond.solve(cov, np.where(observed, r, 0.0), observed)
 
 
-def _unconstrained_measurement(run: MannRun, gen: MannSnapshots, placed: PlacedData) -> np.ndarray:
+def _bar(desc: str, total: int, unit: str, show: bool):
+    """A progress bar on standard error (only on a terminal and when ``show``)."""
+    return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, disable=not (show and sys.stderr.isatty()))
+
+
+def _unconstrained_measurement(run: MannRun, gen: MannSnapshots, placed: PlacedData,
+                               progress: bool = False) -> np.ndarray:  # fmt: skip
     """Pass 1: H u_s of the unconstrained sample of the run's seed (nothing is kept)."""
     out = np.zeros(placed.data.shape)
-    for ix, comp, field in gen.generate(run.seed, run.plane_times_s()):
-        cond.measure(placed.streams, ix, COMPONENTS.index(comp), field, out)
+    with _bar("pass 1", run.grid.nx, "plane", progress) as bar:
+        for ix, comp, field in gen.generate(run.seed, run.plane_times_s()):
+            cond.measure(placed.streams, ix, COMPONENTS.index(comp), field, out)
+            bar.update(int(comp == COMPONENTS[-1]))
     return out
 
 
 def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarray, scratch_dir: Path, *,
-                       conditional_mean: bool = False, threads: int | None = None):  # fmt: skip
+                       conditional_mean: bool = False, threads: int | None = None,
+                       progress: bool = False):  # fmt: skip
     """The conditioned field of ``run``: (solver report, iterator of (plane index, component, field (nt, ny, nz)
     float32 [m/s])), the generator's order; each array is fresh (it may be kept).
 
@@ -234,7 +248,7 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
     gen = MannSnapshots(stencil, g.ny, g.nz, default_threads(threads))
     measured = eps = None
     if not conditional_mean:
-        measured, eps = _unconstrained_measurement(run, gen, placed), measurement_noise(run, placed)
+        measured, eps = _unconstrained_measurement(run, gen, placed, progress), measurement_noise(run, placed)
     x, report = solve_constraints(cov, placed, measured, eps)
     frozen = stencil.inv_tau is None  # every plane is the same snapshot, and so is its correction
     wanted = [0] if frozen else list(range(g.nx))
@@ -242,9 +256,11 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
 
     def planes():
         with CorrectionScratch(scratch_dir, (len(wanted), 3, box.nk1, g.ny, g.nz)) as scratch:
-            for slabs, block in cond.correction_blocks(stencil, placed.streams, x, run.plane_times_s(), wanted, g.ny,
-                                                       g.nz, gen.threads):  # fmt: skip
-                scratch.write(slabs, block)
+            with _bar("correction", box.nk1, "slab", progress) as bar:
+                for slabs, block in cond.correction_blocks(stencil, placed.streams, x, run.plane_times_s(), wanted,
+                                                           g.ny, g.nz, gen.threads):  # fmt: skip
+                    scratch.write(slabs, block)
+                    bar.update(len(slabs))
             if conditional_mean:
                 source = ((ix, comp, None) for ix in range(g.nx) for comp in COMPONENTS)
             else:
@@ -291,7 +307,7 @@ def constraint_record(files, placed: PlacedData, report: cond.SolveReport, remea
 
 def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m_s: float | None = None,
                          conditional_mean: bool = False, overwrite: bool = False, chunk_t: int | None = None,
-                         threads: int | None = None, cache_dir=None) -> dict:  # fmt: skip
+                         threads: int | None = None, cache_dir=None, progress: bool = False) -> dict:  # fmt: skip
     """Generate ``run`` conditioned on the point series ``files`` into a new store at ``out``.
 
     Parameters
@@ -306,6 +322,8 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
         Measurement-noise sigma [m/s] >= 0 for every value, replacing the files' own.
     conditional_mean : bool
         Write the conditional mean C H^T S^-1 d (no random part) instead of a conditional sample.
+    progress : bool
+        Progress bars of the stages (system, pass 1, correction, write) on standard error, on a terminal.
 
     Returns
     -------
@@ -333,17 +351,23 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     require_disk(Path(out), correction_disk_bytes(run) + store_bytes, "the constrained Mann run (its store and the "
                  "correction's scratch file)", "free space or choose another `out`")  # fmt: skip
     stencil = build_mann_stencil(run, cache_dir)
-    cov = stream_system(run, stencil, placed, threads)
+    cov = stream_system(run, stencil, placed, threads, progress)
     report, planes = conditioned_planes(run, stencil, placed, cov, Path(out).absolute().parent,
-                                        conditional_mean=conditional_mean, threads=threads)  # fmt: skip
+                                        conditional_mean=conditional_mean, threads=threads,
+                                        progress=progress)  # fmt: skip
     remeasured = np.zeros(placed.data.shape)
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
     with create_store(Path(out), g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:
-        for ix, comp, value in planes:
+        bar = None
+        for ix, comp, value in planes:  # the first item comes after the correction (its own bar)
+            bar = bar or _bar("write", g.nx, "plane", progress)
+            bar.update(int(comp == COMPONENTS[-1]))
             cond.measure(placed.streams, ix, COMPONENTS.index(comp), value, remeasured)
             total, squares = writer.write(comp, ix, value, squares=True)
             sums[comp][0] += total
             sums[comp][1] += squares
+        if bar is not None:
+            bar.close()
         record = constraint_record(files, placed, report, remeasured, conditional_mean)
         writer.add_attrs(constraints=record)
     n = g.nt * g.nx * g.ny * g.nz

@@ -260,7 +260,8 @@ def _direction_pairs(n_dir: int) -> np.ndarray:
     return out
 
 
-def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var, threads: int = 1) -> np.ndarray:
+def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var, threads: int = 1,
+                      progress=None) -> np.ndarray:  # fmt: skip
     """The per-frequency matrices S_j (nt/q, M, M) complex128 [m^2 s^-2 times nt] of the block-circulant S.
 
     Parameters
@@ -308,6 +309,8 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
             out[i % n_dec] += full * np.exp(i * doff) / q
             if 0 < i and 2 * i != nt:  # the mirror frequency nt - i: L_(nt - i) = conj L_i
                 out[(nt - i) % n_dec] += full.conj() * np.exp((nt - i) * doff) / q
+        if progress is not None:
+            progress(len(slabs))
     out[:, np.arange(m), np.arange(m)] += np.asarray(noise_var, dtype=float)
     return out
 
