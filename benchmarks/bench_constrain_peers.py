@@ -2,7 +2,7 @@
 
     python benchmarks/bench_constrain_peers.py             # frozen 3D box 1024 x 32 x 32 at 5 m, N = 50, 200, 500
     python benchmarks/bench_constrain_peers.py --quick     # 128 x 12 x 12, N = 20, to check the script
-    python benchmarks/bench_constrain_peers.py --n 50 --tools turbgen,mannrs
+    python benchmarks/bench_constrain_peers.py --n 50 --tools turbgen,mannrs --grid 1024,16,16 --timeout 300
 
 Needs the `bench` extra (pip install pyconturb hipersim mannrs).
 
@@ -85,8 +85,9 @@ def _run_turbgen(case: dict, d: str) -> np.ndarray:
     except SystemExit as exc:
         if exc.code:
             raise RuntimeError(f"turbgen exited with {exc.code}") from None
-    u = open_store(out).read_plane("u", 0)
-    return u[pts[:, 0], pts[:, 1], pts[:, 2]]
+    fs = open_store(out)
+    u, solver = fs.read_plane("u", 0), fs.attrs["constraints"]["solver"]
+    return u[pts[:, 0], pts[:, 1], pts[:, 2]], {"solver": f"{solver['method']} {solver['iterations']} it."}
 
 
 def _run_mannrs(case: dict, d: str) -> np.ndarray:
@@ -220,7 +221,8 @@ def _fmt(r: dict) -> str:
     if "max_err" in r:
         full = ("" if "full_series_max_err" not in r else f"; full series: max {r['full_series_max_err']:.1e}, "
                 f"minus the series' mean {r['full_series_max_err_minus_mean']:.1e}")
-        return f"{t}  {mem}  max {r['max_err']:.1e}  rms {r['rms_err']:.1e} m/s{full}"
+        solver = f"; {r['solver']}" if "solver" in r else ""
+        return f"{t}  {mem}  max {r['max_err']:.1e}  rms {r['rms_err']:.1e} m/s{full}{solver}"
     return f"{t}  {mem}  FAILED: {r['error']}"
 
 
@@ -228,6 +230,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="128 x 12 x 12, N = 20")
     ap.add_argument("--n", default=None, help="comma-separated N (default 50,200,500)")
+    ap.add_argument("--grid", default=None, help="NT,NY,NZ of the box (default 1024,32,32)")
     ap.add_argument("--tools", default=",".join(TOOLS))
     ap.add_argument("--timeout", type=float, default=600.0, help="per tool and case [s]")
     ap.add_argument("--child", nargs=3, metavar=("TOOL", "CASE", "OUT"), help=argparse.SUPPRESS)
@@ -235,7 +238,8 @@ def main() -> None:
     if opt.child:
         _child(*opt.child)
         return
-    grid = {"nt": 128, "ny": 12, "nz": 12} if opt.quick else {"nt": 1024, "ny": 32, "nz": 32}
+    sizes = opt.grid or ("128,12,12" if opt.quick else "1024,32,32")
+    grid = dict(zip(("nt", "ny", "nz"), (int(v) for v in sizes.split(","))))
     ns = [int(v) for v in (opt.n or ("20" if opt.quick else "50,200,500")).split(",")]
     tools = [t for t in opt.tools.split(",") if t]
     print(f"load average {os.getloadavg()}  grid {grid['nt']} x {grid['ny']} x {grid['nz']} at {D_M} m, "
@@ -253,8 +257,9 @@ def main() -> None:
                     continue
                 r = _spawn(tool, case_path, d, opt.timeout)
                 print(f"N={n:4d}  {tool:9s} wall {r['wall_s']:7.1f} s | {_fmt(r)}", flush=True)
-                if "error" in r and os.path.exists(log := os.path.join(d, f"{tool}.log")):
-                    print("   " + "".join(open(log).readlines()[-3:]).strip().replace("\n", "\n   "))
+                log = os.path.join(d, f"{tool}.log")
+                if "error" in r and os.path.exists(log) and (tail := "".join(open(log).readlines()[-3:]).strip()):
+                    print("   " + tail.replace("\n", "\n   "))
     print(f"load average {os.getloadavg()}")
 
 
