@@ -117,13 +117,11 @@ def _run_hipersim(case: dict, d: str) -> np.ndarray:
 
 def _run_pyconturb(case: dict, d: str) -> np.ndarray:
     import pandas as pd
-    from pyconturb import TimeConstraint, gen_turb
+    from pyconturb import TimeConstraint, gen_spat_grid, gen_turb
     from pyconturb.sig_models import constant_sig
     from pyconturb.wind_profiles import constant_profile
 
     nt, y, z = case["nt"], np.array(case["y_m"]), HUB_M + np.array(case["z_m"])
-    from pyconturb._utils import gen_spat_grid  # noqa: PLC0415 (the package's own grid helper)
-
     spat = gen_spat_grid(y, z, comps=[0])
     t = np.arange(nt) * DT_S
     cols = {f"mast{m}": [0.0, 0.0, y[iy], z[iz], *(U_M_S + np.array(case["mast_u"][m]))]
