@@ -222,7 +222,7 @@ def _bar(desc: str, total: int, unit: str, show: bool):
     return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, disable=not (show and sys.stderr.isatty()))
 
 
-def _unconstrained_measurement(run: MannRun, gen: MannSnapshots, placed: PlacedData,
+def unconstrained_measurement(run: MannRun, gen: MannSnapshots, placed: PlacedData,
                                progress: bool = False) -> np.ndarray:  # fmt: skip
     """Pass 1: H u_s of the unconstrained sample of the run's seed (nothing is kept)."""
     out = np.zeros(placed.data.shape)
@@ -248,7 +248,7 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
     gen = MannSnapshots(stencil, g.ny, g.nz, default_threads(threads))
     measured = eps = None
     if not conditional_mean:
-        measured, eps = _unconstrained_measurement(run, gen, placed, progress), measurement_noise(run, placed)
+        measured, eps = unconstrained_measurement(run, gen, placed, progress), measurement_noise(run, placed)
     x, report = solve_constraints(cov, placed, measured, eps)
     frozen = stencil.inv_tau is None  # every plane is the same snapshot, and so is its correction
     wanted = [0] if frozen else list(range(g.nx))

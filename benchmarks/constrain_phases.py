@@ -1,0 +1,73 @@
+"""Where a lidar-constrained Mann run spends its time, phase by phase, on a grid of your choice.
+
+    python benchmarks/constrain_phases.py WORKDIR                      # the default grid: 4096 x 11 x 64 x 64
+    python benchmarks/constrain_phases.py WORKDIR --nt 512 --ny 16 --dy 8
+
+WORKDIR receives the truth (seed 1, IEC class A given explicitly) and its virtual-lidar record (the Table 3 lidar,
+`turbgen.lidar`) unless they are there already; then seed 2 is conditioned on that record step by step as
+turbgen.runs.constrain does it (placing, stencil, the per-frequency system S, pass 1, the solve, the correction,
+pass 2 without adding), each step's wall time printed. The end-to-end cases (plain, sample, mean, each in a new
+process) are timed as in benchmarks/constrain.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import turbgen
+from turbgen.runs.constrain import (load_constraints, measurement_noise, place, solve_constraints, stream_system,
+                                    unconstrained_measurement)  # fmt: skip
+from turbgen.runs.mann import build_mann_stencil
+from turbgen.spec.mann import MannRun
+from turbgen.synthesis import conditioning as cond
+from turbgen.synthesis.mann_spacetime import MannSnapshots
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("workdir", type=Path)
+    ap.add_argument("--nt", type=int, default=4096)
+    ap.add_argument("--ny", type=int, default=64)
+    ap.add_argument("--dy", type=float, default=4.7)
+    ap.add_argument("--threads", type=int, default=2)
+    a = ap.parse_args()
+    w = a.workdir
+    w.mkdir(exist_ok=True)
+    common = dict(nt=a.nt, ny=a.ny, nz=a.ny, dy=a.dy, gates="50:170:13.3", turb_class="A")
+    if not (w / "truth_lidar.zarr").exists():
+        turbgen.mann(seed=1, out=w / "truth.zarr", overwrite=True, **common)
+        turbgen.lidar(w / "truth.zarr", out=w / "truth_lidar.zarr")
+    run = MannRun.from_mapping({"grid": {"nt": a.nt, "ny": a.ny, "nz": a.ny, "dy_m": a.dy}, "turb_class": "A",
+                                "seed": 2})  # fmt: skip
+    t0 = time.perf_counter()
+
+    def lap(name: str) -> None:
+        nonlocal t0
+        print(f"{name:<34} {time.perf_counter() - t0:7.2f} s", flush=True)
+        t0 = time.perf_counter()
+
+    placed = place(run, load_constraints([w / "truth_lidar.zarr"]))
+    lap(f"place ({placed.streams.n_streams} streams)")
+    stencil = build_mann_stencil(run, None)
+    lap("stencil")
+    cov = stream_system(run, stencil, placed, a.threads)
+    lap("system S")
+    g = run.grid
+    gen = MannSnapshots(stencil, g.ny, g.nz, a.threads)
+    measured = unconstrained_measurement(run, gen, placed)
+    lap("pass 1 (generate, measure u_s)")
+    x, report = solve_constraints(cov, placed, measured, measurement_noise(run, placed))
+    lap(f"solve ({report.method}, {report.iterations} it.)")
+    for _ in cond.correction_blocks(stencil, placed.streams, x, run.plane_times_s(), list(range(g.nx)), g.ny, g.nz,
+                                    a.threads):  # fmt: skip
+        pass
+    lap("correction C H^T w")
+    for _ in gen.generate(run.seed, run.plane_times_s()):
+        pass
+    lap("pass 2 (generate only)")
+
+
+if __name__ == "__main__":
+    main()
