@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from test_lidar_constraints import GRID, LIDAR, loop  # noqa: F401  (the truth and its lidar record)
 from turbgen.cli import cli
 from turbgen.errors import ParameterError
 from turbgen.lidar.dataset import read_dataset
@@ -17,9 +18,6 @@ from turbgen.runs.constrain import place
 from turbgen.spec.mann import MannRun
 from turbgen.store import open_store
 
-LIDAR = {"name": "small", "kind": "pulsed", "mount": "nacelle", "ranges_m": [20, 40], "beam_rate_hz": 1.0,
-         "rotor_radius_m": 10, "azimuth_deg": [10, -10], "elevation_deg": [5, -5], "fwhm_m": 4}  # fmt: skip
-GRID = ["--nt", "256", "--ny", "8", "--nz", "8", "--dy", "5", "--planes", "0,20,40", "--threads", "1"]
 HEADER = "# measured by the small lidar\n# lidar = small.json\n# U_m_s = 16\n# total_wind = true\n"
 
 
@@ -34,18 +32,10 @@ def _write_csv(path, v_los, time_s, header=HEADER, drop=()):
 
 
 @pytest.fixture(scope="module")
-def record(tmp_path_factory):
-    d = tmp_path_factory.mktemp("csv")
-    (d / "small.json").write_text(json.dumps(LIDAR))
-    r = CliRunner()
-    for args in (["mann", *GRID, "--seed", "1", "--out", str(d / "truth.zarr")],
-                 ["lidar", "run", str(d / "truth.zarr"), "--lidar", str(d / "small.json"), "--rotor-radius", "10",
-                  "--mean-wind", "--out", str(d / "truth_lidar.zarr")]):  # fmt: skip
-        res = r.invoke(cli, args, prog_name="turbgen")
-        assert res.exit_code in (0, 1), res.output  # lidar run: 1 = its coherence verdict, not an error
-    data = read_dataset(d / "truth_lidar.zarr")
-    _write_csv(d / "los.csv", data.v_los, data.time_s)
-    return d, data
+def record(loop):
+    data = read_dataset(loop / "truth_lidar.zarr")
+    _write_csv(loop / "los.csv", data.v_los, data.time_s)
+    return loop, data
 
 
 def test_csv_places_the_same_streams_and_data_as_the_dataset(record):
