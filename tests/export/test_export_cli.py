@@ -26,7 +26,8 @@ def run(*args):
 @pytest.mark.parametrize("fmt,out,files,key", [
     ("bts", "f.bts", ["f.bts", "f_InflowWind_bts.dat"], "FileName_BTS"),
     ("wnd", "r", ["r.wnd", "r.sum", "r_InflowWind_wnd.dat"], "FilenameRoot"),
-    ("evo", "lid.evo", ["lid.evo", "lid.wnd", "lid.sum"], "EvolutionFlag"),
+    ("evo", "lid.evo", ["lid.evo", "lid.wnd", "lid.sum", "lid_InflowWind_evo.dat", "lid_LidarSim_evolution.txt"],
+     "EvolutionFlag"),
     ("hawc2", "box", ["box_u.bin", "box_v.bin", "box_w.bin", "box_InflowWind_hawc2.dat", "box_wind.htc"], "FileName_u"),
     ("mt4d", "f.mt4d", ["f.mt4d"], "not read by InflowWind"),
     ("hdf5", "f.h5", ["f.h5"], "not read by InflowWind"),

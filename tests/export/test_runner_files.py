@@ -5,6 +5,7 @@ wherever the export ran; the HAWC2 wind block; the start shift of non-periodic f
 from __future__ import annotations
 
 import os
+import shlex
 from pathlib import Path
 
 import numpy as np
@@ -60,6 +61,48 @@ def test_wnd_input_file(store, tmp_path):
     assert dat.read_text().splitlines()[1].startswith("NOT PERIODIC: starts 0.4 s upstream")
 
 
+def read_evolution_section(path: Path) -> tuple[list[str], list[str]]:
+    """The section as the fork's LidarSim reader takes it: '!' lines skipped, then by position the
+    separator and the first token (list-directed: a quoted string is one token) of the next two lines."""
+    lines = [ln for ln in path.read_text().splitlines() if not ln.lstrip().startswith("!")]
+    assert len(lines) == 3
+    return [lines[0], *(shlex.split(ln)[0] for ln in lines[1:])], [ln.split()[1] for ln in lines[1:]]
+
+
+def test_evo_input_file_and_lidarsim_section(store, tmp_path, monkeypatch):
+    path, _ = store
+    (tmp_path / "run" / "wind").mkdir(parents=True)
+    monkeypatch.chdir(tmp_path / "run")  # the export runs here, with a relative --out
+    r = export_store(path, "evo", "wind/lid", ExportRequest(runner_files=True))
+    wind = tmp_path / "run" / "wind"
+    assert [Path(p).name for p in r.paths] == ["lid.evo", "lid.wnd", "lid.sum", "lid_InflowWind_evo.dat",
+                                               "lid_LidarSim_evolution.txt"]
+    monkeypatch.chdir(tmp_path)  # read from elsewhere: both files' paths must still resolve
+    ifw = parse(wind / "lid_InflowWind_evo.dat")  # the wnd export's file, for the rotor-plane .wnd
+    assert ifw["WindType"] == 4 and ifw["RefHt"] == HUB and ifw["TowerFile"] is False
+    root = Path(ifw["FileNameRoot"])
+    assert Path(str(root) + ".wnd").resolve() == (wind / "lid.wnd").resolve()
+    assert Path(str(root) + ".sum").resolve() == (wind / "lid.sum").resolve()
+    (sep, flag, evo), keys = read_evolution_section(wind / "lid_LidarSim_evolution.txt")
+    assert "Wind Evolution" in sep and keys == ["EvolutionFlag", "EvolutionFilenameRoot"] and flag == "True"
+    assert Path(evo).is_absolute() and Path(evo).resolve() == (wind / "lid.evo").resolve()
+    assert all(Path(evo).with_suffix(ext).is_file() for ext in (".wnd", ".sum"))  # the fork's ROOT = path - .evo
+    assert len(r.usage) == 2 and "InflowFile" in r.usage[0] and r.usage[1].startswith("LidarSim (FUAS fork): paste")
+    assert evo in "\n".join(r.inflowwind_lines)  # the printed lines give the same absolute path
+
+
+def test_existing_lidarsim_section_is_not_overwritten(store, tmp_path):
+    path, _ = store
+    (tmp_path / "lid_LidarSim_evolution.txt").write_text("mine\n")
+    res = CliRunner().invoke(cli, ["export", str(path), "--format", "evo", "--out", str(tmp_path / "lid")])
+    assert res.exit_code == 2 and "lid_LidarSim_evolution.txt" in res.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["lid_LidarSim_evolution.txt"]
+    res = CliRunner().invoke(cli, ["export", str(path), "--format", "evo", "--out", str(tmp_path / "lid"),
+                                   "--overwrite"])
+    assert res.exit_code == 0 and "use: LidarSim (FUAS fork): paste" in res.output
+    assert "EvolutionFlag" in (tmp_path / "lid_LidarSim_evolution.txt").read_text()
+
+
 def test_hawc2_input_file_and_htc_block(store, tmp_path):
     path, _ = store
     r = export_store(path, "hawc2", tmp_path / "box", ExportRequest(runner_files=True))
@@ -108,4 +151,4 @@ def test_runner_files_refused_where_there_is_none(store, tmp_path):
     from turbgen.errors import ParameterError
 
     with pytest.raises(ParameterError, match="runner_files"):
-        export_store(store[0], "evo", tmp_path / "e", ExportRequest(runner_files=True))
+        export_store(store[0], "mt4d", tmp_path / "e.mt4d", ExportRequest(runner_files=True))

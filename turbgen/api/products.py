@@ -112,7 +112,8 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
     drop_below_ground : bool, optional
         Drop grid rows at or below the ground instead of refusing.
     runner_files : bool, optional
-        Also write the InflowWind input file (bts, wnd, hawc2) and the HAWC2 block (hawc2); default False.
+        Also write the InflowWind input file (bts, wnd, evo, hawc2), the HAWC2 block (hawc2) and the
+        LidarSim Wind Evolution section (evo); default False.
     overwrite : bool, optional
         Replace existing output files.
 

@@ -48,8 +48,9 @@ from turbgen.store.paths import check_output_path
 @click.option("--drop-below-ground", is_flag=True, help="Drop grid rows at or below the ground instead of refusing.")
 @click.option("--runner-files/--no-runner-files", "runner_files", default=True, show_default=True,
               help="Also write the runners' input files beside the wind files: OUT_InflowWind_FORMAT.dat, a complete "
-                   "InflowWind v5 input file (bts, wnd, hawc2; wind-file names relative to it) and OUT_wind.htc, a "
-                   "HAWC2 wind + mann block (hawc2).")
+                   "InflowWind v5 input file (bts, wnd, evo, hawc2; wind-file names relative to it), OUT_wind.htc, a "
+                   "HAWC2 wind + mann block (hawc2), and OUT_LidarSim_evolution.txt, the LidarSim input file's "
+                   "Wind Evolution section (evo).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 def export(store, fmt, out, plane, hub_height, shear, profile, veer, mean_history, transient, iec_class,
            rotor_diameter, transient_start, transient_sign, tower, periodic, drop_below_ground, runner_files,

@@ -117,8 +117,8 @@ def _check_applicable(fmt: str, request: ExportRequest) -> None:
     given = []
     if request.tower and fmt != "bts":
         given.append("`tower` (bts only)")
-    if request.runner_files and fmt not in ("bts", "wnd", "hawc2"):
-        given.append("`runner_files` (bts, wnd, hawc2 only)")
+    if request.runner_files and fmt not in ("bts", "wnd", "evo", "hawc2"):
+        given.append("`runner_files` (bts, wnd, evo, hawc2 only)")
     if not request.periodic and fmt not in ("bts", "wnd", "evo"):
         given.append("`no_periodic` (bts, wnd, evo only; HAWC boxes are always periodic)")
     if fmt in WHOLE_FIELD:

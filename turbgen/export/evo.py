@@ -17,10 +17,12 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.errors import ParameterError
+from turbgen.export.inflowwind_file import inflowwind_path
+from turbgen.export.lidarsim_file import evolution_section_lines, lidarsim_section_path, write_lidarsim_section
 from turbgen.export.outputs import OutputSet
-from turbgen.export.request import ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
+from turbgen.export.request import ExportRequest, ExportResult, Plane, mean_wind_notes
 from turbgen.export.wnd import (BladedStats, WndHeader, bladed_raw, check_even_nt, export_root, from_bladed,
-                                inflowwind_lines, read_wnd, root_file, write_pair)
+                                inflowwind_lines, read_wnd, root_file, write_pair, write_wnd_inflowwind)
 
 MAX_PLANES = 30  # the reader copies the distances into a fixed 30-element buffer
 
@@ -74,14 +76,15 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
     out : str or os.PathLike
         ROOT, or a path ending in .evo, .wnd or .sum (the extension is dropped).
     req : ExportRequest
-        Plane for the .wnd (default the rotor plane), hub height, shear exponent, periodic and
-        overwrite options.
+        Plane for the .wnd (default the rotor plane), hub height, shear exponent, periodic, runner
+        files and overwrite options.
 
     Returns
     -------
     ExportResult
-        The paths ROOT.evo, ROOT.wnd, ROOT.sum, the InflowWind (WindType 4) and lidar-simulator
-        input lines, and notes.
+        The paths ROOT.evo, ROOT.wnd, ROOT.sum (and with ``req.runner_files`` the InflowWind v5 input
+        file ROOT_InflowWind_evo.dat and the LidarSim section ROOT_LidarSim_evolution.txt, one usage
+        line each), the InflowWind (WindType 4) and lidar-simulator input lines, and notes.
 
     Raises
     ------
@@ -97,7 +100,10 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
     check_even_nt(g.nt)
     dist, rounded = plane_distances(g.x_m)
     paths = [root_file(root, ".evo"), root_file(root, ".wnd"), root_file(root, ".sum")]
+    if req.runner_files:
+        paths += [inflowwind_path(root, "evo"), lidarsim_section_path(root)]
     shift = req.start_shift_s(fs)
+    usage = []
     with OutputSet(paths, overwrite=req.overwrite) as files:
         stats = BladedStats()
         for ix in range(g.nx):  # pass 1: one TI scaling that fits every plane
@@ -116,10 +122,11 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
                                title=f"turbgen 4D export: the .wnd holds plane x = {g.x_m[ix]:g} m"
                                + ("" if lay.mean_wind is None else f", {lay.wind.describe()}"))
                 del plane  # free it before the next plane is read
-    lines = inflowwind_lines(root) + (
-        "LidarSim input file, section ---- Wind Evolution ----:",
-        ifw_line(True, "EvolutionFlag", "read the 4D field"),
-        ifw_line(paths[0], "EvolutionFilenameRoot", "the .evo file, ROOT.wnd and ROOT.sum beside it"))
+        if req.runner_files:
+            usage += [write_wnd_inflowwind(files, paths[3], root, lay, fs.U_m_s, x_m=g.x_m[ix_rotor], shift_s=shift),
+                      write_lidarsim_section(files, paths[4], paths[0])]
+    lines = inflowwind_lines(root) + ("LidarSim input file, section ---- Wind Evolution ----:",
+                                      *evolution_section_lines(paths[0]))
     notes = [f"ROOT.evo holds {g.nx} planes at {dist.tolist()} m upstream (the simulator picks the nearest to -X, "
              "X measured from the tower axis)",
              f"ROOT.wnd holds plane x = {g.x_m[ix_rotor]:g} m; the turbine's InflowWind must use WindType 3 or 4",
@@ -129,7 +136,7 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
                      "(the simulator samples the stored eddy-time series of the nearest plane)")
     if lay.z_first:
         notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
-    return ExportResult(tuple(paths), lines, tuple(notes))
+    return ExportResult(tuple(paths), lines, tuple(notes), tuple(usage))
 
 
 def read_evo(path) -> dict:

@@ -13,7 +13,7 @@ from turbgen.errors import ParameterError
 from turbgen.export.request import ExportRequest
 from turbgen.spec.mean_wind_files import mean_wind_from_options
 
-RUNNER_FORMATS = ("bts", "wnd", "hawc2")
+RUNNER_FORMATS = ("bts", "wnd", "evo", "hawc2")
 TRANSIENTS = ("EOG", "EDC", "ECD", "EWS-V", "EWS-H")
 
 
@@ -48,7 +48,7 @@ class ExportOptions:
     tower, periodic, drop_below_ground, overwrite : bool
         As :class:`turbgen.export.ExportRequest`.
     runner_files : bool
-        Write the runners' input files for the formats that have them (bts, wnd, hawc2; default True).
+        Write the runners' input files for the formats that have them (bts, wnd, evo, hawc2; default True).
     """
 
     plane: int | None = None

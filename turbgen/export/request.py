@@ -44,7 +44,8 @@ class ExportRequest:
         the power law with ``shear_exponent``. Refused together with ``shear_exponent``.
     runner_files : bool, optional
         Also write the runners' input files beside the wind files: a complete InflowWind v5 input file
-        ``<out>_InflowWind_<format>.dat`` (bts, wnd, hawc2) and a HAWC2 ``<out>_wind.htc`` block (hawc2);
+        ``<out>_InflowWind_<format>.dat`` (bts, wnd, evo, hawc2), a HAWC2 ``<out>_wind.htc`` block (hawc2)
+        and the LidarSim input file's Wind Evolution section ``<out>_LidarSim_evolution.txt`` (evo);
         default False.
 
     Raises

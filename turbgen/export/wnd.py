@@ -319,6 +319,39 @@ def inflowwind_lines(root: Path) -> tuple[str, ...]:
             ifw_line(False, "TowerFile", "no ROOT.twr"))
 
 
+def write_wnd_inflowwind(files: OutputSet, path: Path, root: Path, lay, U_m_s: float, *, x_m: float,
+                         shift_s: float) -> str:
+    """Write the InflowWind v5 input file (WindType 4, FilenameRoot ``root``) of ROOT.wnd + ROOT.sum.
+
+    Parameters
+    ----------
+    files : OutputSet
+        The export's output set (``path`` among its paths).
+    path : pathlib.Path
+        Final path of the input file.
+    root : pathlib.Path
+        ROOT of ROOT.wnd and ROOT.sum (written relative to the input file's folder).
+    lay : VerticalLayout
+        Hub height (RefHt) and the mean wind (described in the title).
+    U_m_s : float
+        Mean hub speed [m/s].
+    x_m : float
+        Position of the plane the .wnd holds [m] (in the title).
+    shift_s : float
+        Start shift of a non-periodic file [s] (0 when periodic), stated at the head of the title.
+
+    Returns
+    -------
+    str
+        The one line that tells the user how to use it.
+    """
+    title = f"turbgen {root.name}.wnd: plane x = {x_m:g} m, {lay.wind.describe()}"
+    if shift_s:
+        title = f"NOT PERIODIC: starts {shift_s:.6g} s upstream (InitX/U). " + title
+    return write_inflowwind(files, path, InflowWindInput(4, lay.hub_height_m, U_m_s, {"FilenameRoot": root},
+                                                        title=title))
+
+
 def root_file(root: Path, ext: str) -> Path:
     """ROOT + ``ext``, the name InflowWind and the lidar simulator open for FilenameRoot ROOT.
 
@@ -399,11 +432,7 @@ def export_wnd(fs, out, req: ExportRequest) -> ExportResult:
         write_pair(files, root, plane, header, lay, periodic=req.periodic,
                    title=f"turbgen export: plane x = {g.x_m[ix]:g} m, {lay.wind.describe()}")
         if req.runner_files:
-            title = f"turbgen {root.name}.wnd: plane x = {g.x_m[ix]:g} m, {lay.wind.describe()}"
-            if shift:
-                title = f"NOT PERIODIC: starts {shift:.6g} s upstream (InitX/U). " + title
-            usage.append(write_inflowwind(files, paths[2], InflowWindInput(
-                4, lay.hub_height_m, fs.U_m_s, {"FilenameRoot": root}, title=title)))
+            usage.append(write_wnd_inflowwind(files, paths[2], root, lay, fs.U_m_s, x_m=g.x_m[ix], shift_s=shift))
     notes = [f"plane x = {g.x_m[ix]:g} m in eddy time: slice k is stored t index k",
              *mean_wind_notes(lay, shift, g.nt, g.dt_s)]
     if lay.z_first:
