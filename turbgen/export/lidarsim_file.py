@@ -74,7 +74,9 @@ def write_lidarsim_section(files, path: Path, evo_path) -> str:
             "! Paste the lines below in place of that section (the lines after the weighting table, before",
             "! Measurement availability). The fork skips lines starting with '!'. It opens the .evo path as written,",
             "! relative to the folder OpenFAST runs in (not to the LidarSim file): it is written absolute.",
-            "! The turbine's InflowWind must use WindType 3 or 4 (the export's _InflowWind_evo.dat loads ROOT.wnd)."]
+            "! The turbine's InflowWind must use WindType 3 or 4: FilenameRoot = ROOT of the .evo loads ROOT.wnd. The",
+            "! export's _InflowWind_evo.dat is in v5 layout; the fork reads the OpenFAST 3.0 one by position: delete",
+            "! its VelInterpCubic line and its LIDAR Parameters section there."]
     files.temp(path).write_text("\n".join([*head, *evolution_section_lines(evo_path)]) + "\n")
     return (f"LidarSim (FUAS fork): paste \"{path}\" in place of the Wind Evolution section of the LidarSim input "
             "file (SWELidarFile in the .fst); its .evo path is absolute since the fork resolves it against the "
