@@ -88,6 +88,7 @@ def test_inline_table_and_history_as_the_library(served, tmp_path):
     ({"transient": "EOG"}, "needs --iec-class and --rotor-diameter"),
     ({"transient": "gust", "iec_class": "IIB", "rotor_diameter": 80}, "is not one of EOG"),
     ({"format": "mt4d", "veer": 0.1}, "does not use"),
+    ({"format": "evo", "runner_files": "true"}, "absolute path, which the service does not reveal"),
 ])
 def test_bad_values_are_422_and_nothing_is_cached(served, query, message):
     srv, rid, store = served

@@ -39,6 +39,10 @@ def export(rid: str, format: str, http: Request, plane: int | None = None, drop_
     """
     if format not in EXPORT_FORMATS:
         raise ParameterError(f"format: {format!r} is not one of {', '.join(EXPORT_FORMATS)}")
+    if format == "evo" and runner_files:  # its LidarSim section names the .evo by an absolute path on this server
+        raise ParameterError("runner_files: the evo export's LidarSim section holds the .evo's absolute path, which "
+                             "the service does not reveal; export evo without runner_files and point the section "
+                             "at your copy (see `turbgen export --format evo`)")  # fmt: skip
     from turbgen.export.options import ExportOptions, export_request
 
     opts = ExportOptions(plane=plane, hub_height_m=hub_height, shear_exponent=shear_exponent, profile=profile,
