@@ -16,14 +16,19 @@ only: S is block-circulant and the FFT over the nt/q samples makes it block-diag
     L_i[a, b] = nt sum_(t in a, t' in b) w_t w_t' G_i^(p_a p_b)[c_t, c_t'](y_t - y_t', z_t - z_t')
                 * e^(2 pi i i (s_t - s_t') / nt)
 
-with G_i^(pq)(dy, dz) = sum_(j, l) rho_pq Phi_i exp(2 pi i (j dy / nyp + l dz / nzp)) (one inverse 2-D FFT per slab
-and plane pair; real part on the k1 = 0 / Nyquist slabs), and L_(nt - i) = conj L_i; the decimated streams alias the
+with G_i^(pq)(dy, dz) = sum_(j, l) rho_pq Phi_i exp(2 pi i (j dy / nyp + l dz / nzp)) (real part on the k1 = 0 /
+Nyquist slabs), rho_pq = exp(-|t_p - t_q| / tau_e) (Guo et al. 2023, Eq. 13-14), and L_(nt - i) = conj L_i. The sum
+runs over the streams' grid nodes: the terms of a stream along one direction n (a lidar's line of sight, or a
+component axis) are grouped per (y, z) node, and G projected on each pair of directions is one real 2-D FFT per slab,
+distinct plane-time lag and direction pair (turbgen.synthesis.conditioning_kernels). The decimated streams alias the
 q full-rate frequencies j + l nt/q onto j:
 S_j[a, b] = (1/q) sum_l L_(j + l nt/q)[a, b] e^(2 pi i (j + l nt/q)(o_a - o_b) / nt) + sigma_a^2 delta_ab.
 Missing samples (NaN) break the circulant structure:
 S restricted to the observed samples is solved by conjugate gradients preconditioned with the circulant solve of the
 full streams (S v itself is exact by the same FFTs). C H^T w is one spectral synthesis: the weights are scattered
-into the (k2, k3) spectrum through the adjoint of the terms, multiplied by rho Phi and transformed back.
+onto the grid of each measured plane through the adjoint of the terms and transformed into the (k2, k3) spectrum,
+summed over the planes with rho_pq by the Ornstein-Uhlenbeck recursion along them, multiplied by Phi and transformed
+back.
 """
 
 from __future__ import annotations
