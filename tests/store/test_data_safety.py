@@ -403,7 +403,8 @@ EXPORT_CASES = [*(("hdf5", "x.h5", ["x.h5"], s) for s in SIGNALS),  # the three-
                   for s in (signal.SIGKILL, signal.SIGTERM))]
 ONE_PLANE = ("bts", "wnd", "hawc2")
 RUNNER_FILES = {"bts": ["r_InflowWind_bts.dat"], "wnd": ["r_InflowWind_wnd.dat"],
-                "hawc2": ["h_InflowWind_hawc2.dat", "h_wind.htc"]}
+                "hawc2": ["h_InflowWind_hawc2.dat", "h_wind.htc"],
+                "evo": ["lid_InflowWind_evo.dat", "lid_LidarSim_evolution.txt"]}
 
 
 @pytest.mark.parametrize("fmt,out,names,sig", EXPORT_CASES, ids=[f"{c[0]}-{c[3].name}" for c in EXPORT_CASES])
