@@ -233,3 +233,27 @@ def test_noise_stream_checksum_is_pinned():
     for shape in [(4, 3, 128, 128), (3, 65, 128), (7,), (3, 5, 6), (20000,)]:
         h.update(complex_normal(1, 2, 3, np.empty(shape, np.complex64)).tobytes())
     assert h.hexdigest() == "7c62e72ab3336d5f50a09b22418fc8ef3434b3fed0ca43f08fc6466a4f7629a9"
+
+
+def test_addend_is_added_before_the_time_transform(small):
+    """generate's addend: the sample plus the unnormalised real inverse FFT along k1 of the added spectra (to float32
+    round-off), plane by plane; ``seed=None`` gives the addend's field alone; the sample itself is unchanged."""
+    box = small.box
+    ny, nz, times = 5, 6, [0.0, 7.0, 3.0]
+    rng = np.random.default_rng(5)
+    add = {(ix, c): (rng.normal(size=(box.nk1, ny * nz)) + 1j * rng.normal(size=(box.nk1, ny * nz))).astype(np.complex64)
+           for ix in range(3) for c in range(3)}  # fmt: skip
+    gen = MannSnapshots(small, ny, nz, threads=2)
+    plain = {(ix, comp): f.copy() for ix, comp, f in gen.generate(3, times)}
+    summed = {(ix, comp): f.copy() for ix, comp, f in gen.generate(3, times, lambda ix, c: add[(ix, c)])}
+    alone = {(ix, comp): f.copy() for ix, comp, f in gen.generate(None, times, lambda ix, c: add[(ix, c)])}
+    for (ix, comp), base in plain.items():
+        a = add[(ix, "uvw".index(comp))].astype(complex).reshape(box.nk1, ny, nz)
+        expect = np.fft.irfft(a, n=box.nt, axis=0) * box.nt
+        scale = np.abs(expect).max()
+        assert np.abs(alone[(ix, comp)] - expect).max() < 1e-5 * scale
+        assert np.abs(summed[(ix, comp)] - base - expect).max() < 1e-5 * (scale + np.abs(base).max())
+    again = {(ix, comp): f.copy() for ix, comp, f in gen.generate(3, times)}  # the addend left nothing behind
+    assert all(np.array_equal(plain[k], again[k]) for k in plain)
+    with pytest.raises(ValueError, match="shape"):
+        next(gen.generate(3, times, lambda ix, c: add[(ix, c)][:-1]))

@@ -237,11 +237,12 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
                        conditional_mean: bool = False, threads: int | None = None,
                        progress: bool = False):  # fmt: skip
     """The conditioned field of ``run``: (solver report, iterator of (plane index, component, field (nt, ny, nz)
-    float32 [m/s])), the generator's order; each array is fresh (it may be kept).
+    float32 [m/s])), the generator's order; each array is a reused buffer: consume it before asking for the next.
 
     A conditional sample u_s + C H^T S^-1 (d - H u_s - eps_s): the first pass (here, before returning) generates u_s
     and measures it, the iterator generates it again and adds the correction, read plane by plane from a scratch
-    file in ``scratch_dir`` (turbgen.runs.correction_scratch; it lives as long as the iterator).
+    file in ``scratch_dir`` (turbgen.runs.correction_scratch; it lives as long as the iterator), its spectra added to
+    the sample's before their transform along time (MannSnapshots.generate's addend).
     ``conditional_mean``: C H^T S^-1 d. ``cov``: stream_system(run, stencil, placed).
     """
     g = run.grid
@@ -261,16 +262,11 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
                                                            g.ny, g.nz, gen.threads):  # fmt: skip
                     scratch.write(slabs, block)
                     bar.update(len(slabs))
-            if conditional_mean:
-                source = ((ix, comp, None) for ix in range(g.nx) for comp in COMPONENTS)
-            else:
-                source = gen.generate(run.seed, run.plane_times_s())
-            for ix, comp, field in source:
-                spectra = scratch.read(0 if frozen else ix, COMPONENTS.index(comp))
-                value = cond.spectra_field(spectra, g.nt).astype(np.float32)
-                if field is not None:
-                    value += field
-                yield ix, comp, value
+            def addend(ix: int, c: int) -> np.ndarray:  # added to the sample's spectra before their time transform
+                return scratch.read(0 if frozen else ix, c).reshape(box.nk1, g.ny * g.nz)
+
+            seed = None if conditional_mean else run.seed
+            yield from gen.generate(seed, run.plane_times_s(), addend)
 
     return report, planes()
 
@@ -341,10 +337,10 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     g = run.grid
     m = placed.streams.n_streams
     box = synthesis_box(run)
-    # S (nt/q frequencies x M x M), one plane component's correction (spectra and float64 field), the stream arrays,
-    # and a slab group's workspace of the conditioning
-    extra = (g.nt * m * m * 16 + g.nt * g.ny * g.nz * 12 + 8 * m * g.nt * 8
-             + cond.workspace_bytes(box, placed.streams, run.plane_times_s(), g.nx))  # fmt: skip
+    # S (nt/q frequencies x M x M), one plane component's correction spectra (read from the scratch file), the stream
+    # arrays and a slab group's workspace of the conditioning
+    extra = (g.nt * m * m * 16 + (g.nt // 2 + 1) * g.ny * g.nz * 8 + 8 * m * g.nt * 8
+             + cond.workspace_bytes(box, placed.streams, g.nx))  # fmt: skip
     require_memory(memory_estimate_bytes(run, threads) + extra, f"the constrained Mann run ({m} measurement streams)",
                    "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
     store_bytes = 3 * g.nt * g.nx * g.ny * g.nz * 4

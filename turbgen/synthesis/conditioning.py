@@ -205,10 +205,12 @@ def _lag_classes(times: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.n
 class _GroupFFT:
     """Single-threaded FFTW_ESTIMATE plans over the last two axes of a slab group's arrays (one per group size, the
     arrays reused): the same plans, hence the same rounding, whatever the thread count of the run. ``keep_z``: a
-    complex transform exact on the columns z < keep_z only (along z on every row, then along y on those columns)."""
+    complex transform exact on the columns z < keep_z only (along z on every row, then along y on those columns);
+    ``rows`` (first, end): of an input zero outside those rows (along z on them only, then along y)."""
 
-    def __init__(self, tail: tuple[int, ...], real: bool, direction: str = "FFTW_FORWARD", keep_z: int | None = None):
-        self.tail, self.real, self.direction, self.keep_z = tail, real, direction, keep_z
+    def __init__(self, tail: tuple[int, ...], real: bool, direction: str = "FFTW_FORWARD", keep_z: int | None = None,
+                 rows: tuple[int, int] | None = None):  # fmt: skip
+        self.tail, self.real, self.direction, self.keep_z, self.rows = tail, real, direction, keep_z, rows
         self._plans: dict[int, tuple[np.ndarray, np.ndarray, _Plan]] = {}
 
     def buffers(self, n: int) -> tuple[np.ndarray, np.ndarray, _Plan]:
@@ -223,7 +225,8 @@ class _GroupFFT:
             else:
                 inp = out = pyfftw.empty_aligned(shape, np.complex128)
                 kept = inp if self.keep_z is None else inp[..., : self.keep_z]
-                plans = [pyfftw.FFTW(inp, inp, axes=(-1,), direction=self.direction, flags=flags, threads=1),
+                nonzero = inp if self.rows is None else inp[..., self.rows[0] : self.rows[1], :]
+                plans = [pyfftw.FFTW(nonzero, nonzero, axes=(-1,), direction=self.direction, flags=flags, threads=1),
                          pyfftw.FFTW(kept, kept, axes=(-2,), direction=self.direction, flags=flags, threads=1)]
             self._plans[n] = (inp, out, _Plan(plans))
         return self._plans[n]
@@ -240,21 +243,27 @@ class _Plan:
             plan.execute()
 
 
-def _lag_spectra(stencil: MannStencil, slabs: range, lags: np.ndarray, directions: np.ndarray,
-                 transform: _GroupFFT) -> np.ndarray:  # fmt: skip
-    """The real 2-D DFTs (len(slabs), classes, D (D + 1) / 2, nyp, nzp // 2 + 1) of exp(-lag / tau_e) n^T Phi_i n'
-    per lag class and direction pair (n, n') (_direction_pairs order); the array is reused by the next call."""
-    first, second = np.triu_indices(len(directions))
-    x, out, plan = transform.buffers(len(slabs))
-    for b, i in enumerate(slabs):  # n^T Phi n' = 2 (C^T n) . (C^T n'), C the slab's factor (prior_spectrum)
-        inv_tau = slab_inv_tau(stencil, i)
-        inv_tau = np.empty(0) if inv_tau is None else inv_tau.reshape(-1)
-        flat = x[b].reshape(len(lags), len(first), -1)
-        kernels.lag_inputs(slab_factor(stencil, i).reshape(3, 3, -1), directions, first, second, lags, inv_tau, flat)
-        if slab_weight(stencil, i) == 1.0:  # symmetrised under k -> -k, as _slab_phi (1/tau_e is even in k)
-            x[b] = 0.5 * (x[b] + np.roll(x[b][..., ::-1, ::-1], 1, axis=(-2, -1)))
-    plan.execute()
-    return out
+def _slab_system(stencil: MannStencil, i: int, lags: np.ndarray, keys: _Keys, amp: np.ndarray, dir_pair: np.ndarray,
+                 pair_class: np.ndarray, transform: _GroupFFT, out: np.ndarray) -> None:  # fmt: skip
+    """L_i (``out``, (M, M) complex128, zeroed here) of slab ``i``: per lag class, the real 2-D DFTs (D (D + 1) / 2,
+    nyp, nzp // 2 + 1) of exp(-lag / tau_e) n^T Phi_i n' per direction pair (n, n') (_direction_pairs order), then
+    the pair sums of the streams of that class (one class at a time: the DFTs stay in cache). ``amp`` (K,): the key
+    amplitudes on the slab."""
+    first, second = np.triu_indices(len(keys.directions))
+    x, spectra, plan = transform.buffers(1)
+    flat = x[0].reshape(len(first), -1)
+    psi = np.empty_like(flat)  # n^T Phi n' = 2 (C^T n) . (C^T n'), C the slab's factor (prior_spectrum)
+    kernels.direction_products(slab_factor(stencil, i).reshape(3, 3, -1), keys.directions, first, second, psi)
+    inv_tau = slab_inv_tau(stencil, i)
+    inv_tau = np.empty(0) if inv_tau is None else inv_tau.reshape(-1)
+    symmetric = slab_weight(stencil, i) == 1.0  # symmetrised under k -> -k, as _slab_phi (1/tau_e is even in k)
+    out[...] = 0.0
+    for cls, lag in enumerate(lags):
+        kernels.lag_input(psi, lag, inv_tau, flat)
+        if symmetric:
+            x[0] = 0.5 * (x[0] + np.roll(x[0][..., ::-1, ::-1], 1, axis=(-2, -1)))
+        plan.execute()
+        kernels.pair_sums(amp, keys.bounds, keys.dir, keys.iy, keys.iz, dir_pair, pair_class, cls, spectra[0], out)
 
 
 def _direction_pairs(n_dir: int) -> np.ndarray:
@@ -295,19 +304,17 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
     n_pairs = len(keys.directions) * (len(keys.directions) + 1) // 2
 
     def group(transform: _GroupFFT, slabs: range) -> list[np.ndarray]:  # L_i of the group's slabs
-        spectra = _lag_spectra(stencil, slabs, lags, keys.directions, transform)
         amp = np.empty((len(slabs), len(keys.dir)), complex)
         kernels.key_amplitudes(keys.term_key, streams.term_shift, keys.term_weight, np.array(slabs, np.int64), nt,
                                amp)  # fmt: skip
         fulls = [np.empty((m, m), complex) for _ in slabs]
-        for b in range(len(slabs)):
-            kernels.pair_sums(amp[b], keys.bounds, keys.dir, keys.iy, keys.iz, dir_pair, pair_class, spectra[b],
-                              fulls[b])  # fmt: skip
+        for b, i in enumerate(slabs):
+            _slab_system(stencil, i, lags, keys, amp[b], dir_pair, pair_class, transform, fulls[b])
         return fulls
 
     out = np.zeros((n_dec, m, m), complex)
     groups = [range(s0, min(s0 + SLAB_GROUP, box.nk1)) for s0 in range(0, box.nk1, SLAB_GROUP)]
-    workspace = lambda: _GroupFFT((len(lags), n_pairs, box.nyp, box.nzp), real=True)  # noqa: E731
+    workspace = lambda: _GroupFFT((n_pairs, box.nyp, box.nzp), real=True)  # noqa: E731
     for slabs, fulls in zip(groups, _ordered_map(group, groups, threads, workspace)):
         for i, full in zip(slabs, fulls):  # summed in slab order: the same bits for any thread count
             full *= nt
@@ -457,6 +464,7 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
     planes_out = list(planes_out)
     chain = sorted(set(planes_out) | {int(p) for p in streams.used_planes()}, key=lambda p: (times[p], p))
     steps = np.diff(times[chain])
+    distinct, step_class = np.unique(steps, return_inverse=True)
     where = {p: n for n, p in enumerate(chain)}
     rows = np.array([where[p] for p in planes_out], np.int64)  # the chain position of each wanted plane
     term_row = np.array([where[int(p)] for p in streams.plane[streams.term_stream]], dtype=np.int64)
@@ -479,8 +487,8 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
         g, _, plan = transforms[1].buffers(len(slabs))
         for b, i in enumerate(slabs):
             inv_tau = slab_inv_tau(stencil, i)
-            rho = (np.ones((len(steps), box.nyp * box.nzp)) if inv_tau is None
-                   else np.exp(-steps[:, None] * inv_tau.reshape(1, -1)))  # fmt: skip
+            rho = (np.ones((len(steps), box.nyp * box.nzp)) if inv_tau is None  # exp once per distinct step
+                   else np.exp(-distinct[:, None] * inv_tau.reshape(1, -1))[step_class])  # fmt: skip
             kernels.chain_correction(f[b].view(np.float64), rho, _slab_phi(stencil, i), rows,
                                      g[b].reshape(len(planes_out), 3, -1).view(np.float64))  # fmt: skip
         plan.execute()  # unnormalised: sum_(j, l) e^(+2 pi i (j y / nyp + l z / nzp))
@@ -488,7 +496,8 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
 
     def workspace() -> tuple[_GroupFFT, _GroupFFT]:
         back = _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), real=False, direction="FFTW_BACKWARD", keep_z=nz)
-        return _GroupFFT((len(chain), 3, box.nyp, box.nzp), real=False), back
+        rows = (int(streams.term_iy.min()), int(streams.term_iy.max()) + 1)  # H^T w is zero on the other rows
+        return _GroupFFT((len(chain), 3, box.nyp, box.nzp), real=False, rows=rows), back
 
     groups = [range(s0, min(s0 + SLAB_GROUP, box.nk1)) for s0 in range(0, box.nk1, SLAB_GROUP)]
     yield from zip(groups, _ordered_map(group, groups, threads, workspace))
@@ -504,14 +513,14 @@ def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarr
     return out
 
 
-def workspace_bytes(box, streams: Streams, times_s, n_out: int) -> int:
-    """Bytes of the larger slab-group workspace of :func:`stream_covariance` (lag spectra, real input and half
-    spectrum) and :func:`correction_blocks` (forward and backward grids, the block) for ``n_out`` planes out."""
+def workspace_bytes(box, streams: Streams, n_out: int) -> int:
+    """Bytes of the larger slab-group workspace of :func:`stream_covariance` (one slab's lag spectra: the direction
+    products, the real input and its half spectrum) and :func:`correction_blocks` (forward and backward grids, the
+    block) for ``n_out`` planes out."""
     keys = _keys(streams)
-    lags, _ = _lag_classes(np.asarray(times_s, dtype=float), streams.plane)
     n_dir = len(keys.directions)
     points = box.nyp * box.nzp
-    lag = SLAB_GROUP * len(lags) * n_dir * (n_dir + 1) // 2 * (points * 8 + box.nyp * (box.nzp // 2 + 1) * 16)
+    lag = n_dir * (n_dir + 1) // 2 * (2 * points * 8 + box.nyp * (box.nzp // 2 + 1) * 16)
     chain = n_out + len(streams.used_planes())
     correction = SLAB_GROUP * (chain + 2 * n_out) * 3 * points * 16
     return max(lag, correction)

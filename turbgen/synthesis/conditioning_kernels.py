@@ -32,24 +32,26 @@ def key_amplitudes(term_key, term_shift, term_weight, slabs, nt, out):
 
 
 @numba.njit(nogil=True, cache=True)
-def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, lag, out):
-    """L[a, b] (out, (M, M) complex128) of one slab from the key amplitudes ``amp`` (K,), keys sorted by stream
-    (stream a holds keys bounds[a] .. bounds[a + 1]), and the real DFTs ``lag`` (classes, direction pairs, nyp,
-    nzp // 2 + 1); ``dir_pair`` (D, D) the index of a direction pair, ``pair_class`` (M, M) the lag class of a stream
-    pair. The pairs a <= b are summed, the others are their Hermitian conjugates."""
-    nyp, nzp = lag.shape[2], 2 * (lag.shape[3] - 1)
+def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, cls, lag, out):
+    """Add to L[a, b] (out, (M, M) complex128) of one slab the stream pairs of lag class ``cls``, from the key
+    amplitudes ``amp`` (K,), keys sorted by stream (stream a holds keys bounds[a] .. bounds[a + 1]), and that class's
+    real DFTs ``lag`` (direction pairs, nyp, nzp // 2 + 1); ``dir_pair`` (D, D) the index of a direction pair,
+    ``pair_class`` (M, M) the lag class of a stream pair. The pairs a <= b are summed, the others are their Hermitian
+    conjugates."""
+    nyp, nzp = lag.shape[1], 2 * (lag.shape[2] - 1)
     half = nzp // 2
     m = len(bounds) - 1
     for a in range(m):
         for b in range(a, m):
-            cls = pair_class[a, b]
+            if pair_class[a, b] != cls:
+                continue
             acc = 0.0j
             for k in range(bounds[a], bounds[a + 1]):
                 pk = amp[k]
                 yk, zk, dk = key_iy[k], key_iz[k], key_dir[k]
                 part = 0.0j
                 for k2 in range(bounds[b], bounds[b + 1]):
-                    g = lag[cls, dir_pair[dk, key_dir[k2]]]
+                    g = lag[dir_pair[dk, key_dir[k2]]]
                     dy = yk - key_iy[k2]
                     dz = zk - key_iz[k2]
                     if dy < 0:
@@ -62,9 +64,9 @@ def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, lag, o
                         v = g[(nyp - dy) % nyp, nzp - dz]
                     part += np.conj(amp[k2]) * v
                 acc += pk * part
-            out[a, b] = acc
+            out[a, b] += acc
             if b != a:
-                out[b, a] = np.conj(acc)
+                out[b, a] += np.conj(acc)
 
 
 @numba.njit(nogil=True, cache=True)
@@ -75,51 +77,65 @@ def chain_correction(f, rho, phi, rows, out):
     (len(rows), 3, 2 J) float64 pairs.
 
     The sum runs forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once.
-    Real arithmetic along the points innermost (rho and Phi are real)."""
+    Real arithmetic (rho and Phi are real), in blocks of points whose planes stay in cache through the passes, with
+    rho and Phi repeated per (real, imaginary) value so the innermost loops run over contiguous values."""
     n_planes, n_values = f.shape[0], f.shape[2]
-    block = 512  # values per block: the block's planes stay in cache through the three passes
+    block = 512  # values (256 points)
     fwd = np.empty((n_planes, 3, block))
     bwd = np.empty((n_planes, 3, block))
+    rb = np.empty((max(n_planes - 1, 1), block))
+    pb = np.empty((3, 3, block))
+    s = np.empty((3, block))
     for v0 in range(0, n_values, block):
         nv = min(block, n_values - v0)
+        for p in range(n_planes - 1):
+            for v in range(nv):
+                rb[p, v] = rho[p, (v0 + v) >> 1]
         for c in range(3):
+            for d in range(3):
+                for v in range(nv):
+                    pb[c, d, v] = phi[c, d, (v0 + v) >> 1]
             for v in range(nv):
                 fwd[0, c, v] = f[0, c, v0 + v]
                 bwd[n_planes - 1, c, v] = f[n_planes - 1, c, v0 + v]
         for p in range(1, n_planes):
             for c in range(3):
                 for v in range(nv):
-                    fwd[p, c, v] = rho[p - 1, (v0 + v) >> 1] * fwd[p - 1, c, v] + f[p, c, v0 + v]
+                    fwd[p, c, v] = rb[p - 1, v] * fwd[p - 1, c, v] + f[p, c, v0 + v]
         for p in range(n_planes - 2, -1, -1):
             for c in range(3):
                 for v in range(nv):
-                    bwd[p, c, v] = rho[p, (v0 + v) >> 1] * bwd[p + 1, c, v] + f[p, c, v0 + v]
+                    bwd[p, c, v] = rb[p, v] * bwd[p + 1, c, v] + f[p, c, v0 + v]
         for r in range(len(rows)):
             p = rows[r]
+            for d in range(3):
+                for v in range(nv):
+                    s[d, v] = fwd[p, d, v] + bwd[p, d, v] - f[p, d, v0 + v]
             for c in range(3):
                 for v in range(nv):
-                    j = (v0 + v) >> 1
-                    out[r, c, v0 + v] = (phi[c, 0, j] * (fwd[p, 0, v] + bwd[p, 0, v] - f[p, 0, v0 + v])
-                                         + phi[c, 1, j] * (fwd[p, 1, v] + bwd[p, 1, v] - f[p, 1, v0 + v])
-                                         + phi[c, 2, j] * (fwd[p, 2, v] + bwd[p, 2, v] - f[p, 2, v0 + v]))  # fmt: skip
+                    out[r, c, v0 + v] = pb[c, 0, v] * s[0, v] + pb[c, 1, v] * s[1, v] + pb[c, 2, v] * s[2, v]
 
 
 @numba.njit(nogil=True, cache=True)
 def scatter_terms(spec_w, term_stream, grid_index, term_shift, term_weight, slabs, nt, grid):
     """grid[b, grid_index[t]] += W_a(i) w_t exp(-2 pi i i s_t / nt) for the slabs i = slabs[b] (``spec_w`` (M, B) the
-    streams' weight spectra on those slabs, ``grid`` (B, planes 3 nyp nzp) complex128, zeroed by the caller)."""
+    streams' weight spectra on those slabs, ``grid`` (B, planes 3 nyp nzp) complex128, zeroed by the caller); the
+    phases once per slab and distinct shift."""
+    phases = np.empty(term_shift.max() + 1, np.complex128)
     for b in range(len(slabs)):
         i = slabs[b]
+        for shift in range(len(phases)):
+            phase = -2.0 * np.pi * ((i * shift) % nt) / nt
+            phases[shift] = np.cos(phase) + 1j * np.sin(phase)
         for t in range(len(term_stream)):
-            phase = -2.0 * np.pi * ((i * term_shift[t]) % nt) / nt
-            grid[b, grid_index[t]] += spec_w[term_stream[t], b] * term_weight[t] * (np.cos(phase) + 1j * np.sin(phase))
+            grid[b, grid_index[t]] += spec_w[term_stream[t], b] * term_weight[t] * phases[term_shift[t]]
 
 
 @numba.njit(nogil=True, cache=True)
-def lag_inputs(factor, directions, first, second, lags, inv_tau, x):
-    """x[l, p, j] = exp(-lags[l] inv_tau[j]) 2 (C^T n_first[p]) . (C^T n_second[p]) at every (k2, k3) point j of a
-    slab: ``factor`` C (3, 3, J) (prior_spectrum: Phi = 2 C C^T), ``directions`` (D, 3), ``inv_tau`` (J,) 1/tau_e
-    [1/s] (empty: frozen turbulence, factor 1), ``x`` (classes, pairs, J) float64. Loops run along j innermost."""
+def direction_products(factor, directions, first, second, psi):
+    """psi[p, j] = 2 (C^T n_first[p]) . (C^T n_second[p]) = n^T Phi n' at every (k2, k3) point j of a slab:
+    ``factor`` C (3, 3, J) (prior_spectrum: Phi = 2 C C^T), ``directions`` (D, 3), ``psi`` (pairs, J) float64. Loops
+    run along j innermost."""
     n_dir, n_points = directions.shape[0], factor.shape[2]
     along = np.zeros((n_dir, 3, n_points))
     for d in range(n_dir):
@@ -129,16 +145,24 @@ def lag_inputs(factor, directions, first, second, lags, inv_tau, x):
                 if w != 0.0:
                     for j in range(n_points):
                         along[d, k, j] += w * factor[c, k, j]
-    psi = np.zeros((len(first), n_points))
+    psi[:] = 0.0
     for p in range(len(first)):
         for k in range(3):
             for j in range(n_points):
                 psi[p, j] += 2.0 * along[first[p], k, j] * along[second[p], k, j]
-    rho = np.ones(n_points)
-    for lag in range(len(lags)):
-        if len(inv_tau):
-            for j in range(n_points):
-                rho[j] = np.exp(-lags[lag] * inv_tau[j])
-        for p in range(len(first)):
-            for j in range(n_points):
-                x[lag, p, j] = psi[p, j] * rho[j]
+
+
+@numba.njit(nogil=True, cache=True)
+def lag_input(psi, lag, inv_tau, x):
+    """x[p, j] = exp(-lag inv_tau[j]) psi[p, j]: ``psi`` (pairs, J) (direction_products), ``lag`` [s], ``inv_tau``
+    (J,) 1/tau_e [1/s] (empty: frozen turbulence, factor 1), ``x`` (pairs, J) float64."""
+    n_points = psi.shape[1]
+    if len(inv_tau) == 0:
+        x[:] = psi
+        return
+    rho = np.empty(n_points)
+    for j in range(n_points):
+        rho[j] = np.exp(-lag * inv_tau[j])
+    for p in range(psi.shape[0]):
+        for j in range(n_points):
+            x[p, j] = psi[p, j] * rho[j]

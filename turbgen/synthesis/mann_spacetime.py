@@ -157,7 +157,7 @@ class MannSnapshots:
         self._scratch: queue.SimpleQueue | None = None
 
     # -- public -------------------------------------------------------------------------
-    def generate(self, seed: int, times_s) -> Iterator[tuple[int, str, np.ndarray]]:
+    def generate(self, seed: int | None, times_s, addend=None) -> Iterator[tuple[int, str, np.ndarray]]:
         """Yield (plane index, component, field (nt, ny, nz) float32) for every plane and component.
 
         ``times_s`` are the planes' relative times x/U [s] in storage order. Planes come in time
@@ -166,18 +166,26 @@ class MannSnapshots:
         buffer: consume it before asking for the next item. With ``buffers=2`` two buffers alternate,
         so an array stays valid while the next item is produced (a background write of it must end
         before the item after next is asked for).
+
+        ``addend(plane index, component index)``: cropped spectra (nk1, ny nz) complex64 (the layout of
+        turbgen.synthesis.conditioning.correction_blocks) added to the snapshot's before the transform along
+        k1, so the yielded field is the sample plus their unnormalised real inverse FFT (frozen: called for the
+        first plane only). ``seed=None`` (with an addend): no sample, the addend's field alone.
         """
         times = np.asarray(times_s, dtype=float)
         order = [int(i) for i in np.argsort(times, kind="stable")]
         frozen = self.stencil.params.evo_time_s is None
         if not frozen and self.stencil.inv_tau is None and len(order) > 1:
             raise ParameterError("this stencil was built with evolving=False: it serves one plane only")
-        self._allocate(n_snapshots=1 if frozen else len(order))
+        if seed is None and addend is None:
+            raise ValueError("generate needs a seed, an addend or both")
+        self._allocate(n_snapshots=1 if frozen or seed is None else len(order))  # no sample: no OU state
         with ThreadPoolExecutor(self.threads) as pool:
             if frozen:
                 self._synthesise(pool, seed, 0, None)
                 for c in range(3):
-                    out = self._transform(pool, c, single=True)
+                    add = None if addend is None else addend(order[0], c)
+                    out = self._transform(pool, c, single=True, add=add, sample=seed is not None)
                     for ix in order:
                         yield ix, COMPONENTS[c], out
                 return
@@ -187,7 +195,9 @@ class MannSnapshots:
                 self._synthesise(pool, seed, m, dt)
                 previous = times[ix]
                 for c in range(3):
-                    yield ix, COMPONENTS[c], self._transform(pool, c, single=len(order) == 1)
+                    add = None if addend is None else addend(ix, c)
+                    yield ix, COMPONENTS[c], self._transform(pool, c, single=len(order) == 1, add=add,
+                                                             sample=seed is not None)  # fmt: skip
 
     def spectra(self, seed: int, times_s) -> Iterator[tuple[int, np.ndarray]]:
         """Yield (snapshot number m in time order, cropped spectra (3, ny nz, n_slabs) complex64) of this
@@ -244,13 +254,17 @@ class MannSnapshots:
         for _ in pool.map(task, items):
             pass
 
-    def _synthesise(self, pool, seed: int, m: int, dt: float | None) -> None:
+    def _synthesise(self, pool, seed: int | None, m: int, dt: float | None) -> None:
+        if seed is None:  # no sample: the addend alone (_rows)
+            return
         self._run(pool, lambda s, i0: self._task(s, seed, m, dt, i0), range(self._first, self._end, TASK_SLABS))
 
-    def _transform(self, pool, c: int, single: bool) -> np.ndarray:
+    def _transform(self, pool, c: int, single: bool, add: np.ndarray | None = None,
+                   sample: bool = True) -> np.ndarray:  # fmt: skip
         """Component ``c`` of the current snapshot into the next of the output buffers; of a ``single`` snapshot
         (no spectra follow), components 1 and 2 go into the spectra of components 0 and 1, transformed already,
-        so one output plane is allocated instead of two (every yielded plane stays valid as long as before)."""
+        so one output plane is allocated instead of two (every yielded plane stays valid as long as before).
+        ``add`` (nk1, ny nz): spectra added first (``sample=False``: taken instead of the snapshot's)."""
         if single and c > 0:
             flat = self._spectra[c - 1].view(np.float32).reshape(-1)  # >= (nt + 2) ny nz floats
             out = flat[: self.box.nt * self.ny * self.nz].reshape(self.box.nt, self.ny, self.nz)
@@ -261,7 +275,9 @@ class MannSnapshots:
                 self._outputs.append(pyfftw.empty_aligned((self.box.nt, self.ny, self.nz), np.float32, n=_PAGE))
             out = self._outputs[k]
         rows = range(0, self.ny * self.nz, ROW_BLOCK)
-        self._run(pool, lambda s, r0: self._rows(s, c, r0, out), rows)
+        if add is not None and add.shape != (self.box.nk1, self.ny * self.nz):
+            raise ValueError(f"the addend's shape {add.shape} is not (nk1, ny nz) = {(self.box.nk1, self.ny * self.nz)}")
+        self._run(pool, lambda s, r0: self._rows(s, c, r0, out, add, sample), rows)
         return out
 
     def _task(self, s: _Scratch, seed: int, m: int, dt: float | None, i0: int) -> None:
@@ -301,10 +317,15 @@ class MannSnapshots:
         s.yz_transform(b)
         crop_into_pencils(uh, self.ny, self.nz, self._spectra, j0)
 
-    def _rows(self, s: _Scratch, c: int, r0: int, output: np.ndarray) -> None:
+    def _rows(self, s: _Scratch, c: int, r0: int, output: np.ndarray, add: np.ndarray | None = None,
+              sample: bool = True) -> None:  # fmt: skip
         r1 = min(r0 + ROW_BLOCK, self.ny * self.nz)
         n = r1 - r0
         spectra = self._spectra[c, r0:r1, : self.box.nk1]
+        if add is not None and sample:
+            spectra += add[:, r0:r1].T
+        elif add is not None:
+            spectra[...] = add[:, r0:r1].T
         plan = s.t_plan(n)
         plan.update_arrays(spectra, s.rows[:n])
         plan.execute()
