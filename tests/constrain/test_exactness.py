@@ -13,7 +13,9 @@ import pytest
 
 from brute_force import dense_gain, generator_covariance
 from turbgen.errors import ParameterError
-from turbgen.synthesis.conditioning import Streams, check_singular, measure, solve, stream_covariance, weights_field
+from turbgen.synthesis.conditioning import (Streams, check_singular, measure, measure_spectra, solve, spectra_samples,
+                                            stream_covariance, weights_field)  # fmt: skip
+from turbgen.synthesis.mann_spacetime import MannSnapshots
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil
 from turbgen.theory.params import MannParams
 
@@ -159,3 +161,23 @@ def test_thread_count_does_not_change_a_bit(evolving, scanned, monkeypatch):
     assert len(blocks[0]) > 1
     for a, b in zip(*blocks):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("scanned", [False, True])
+def test_spectral_measurement_equals_measuring_the_field(evolving, scanned):
+    """Pass 1 measures the snapshots' spectra (measure_spectra, spectra_samples): the same H u as measure() on the
+    generated planes, to float32 round-off of the field (the field's own transform is float32)."""
+    stencil, times, _ = evolving
+    streams = _streams(len(times), scanned)
+    gen = MannSnapshots(stencil, NY, NZ, threads=1)
+    nt = stencil.box.nt
+    direct = np.zeros((streams.n_streams, nt // streams.decimation))
+    for ix, comp, field in gen.generate(7, times):
+        measure(streams, ix, "uvw".index(comp), field.astype(float), direct)
+    spec = np.zeros((streams.n_streams, nt // 2 + 1), complex)
+    order = np.argsort(times, kind="stable")
+    for m, spectra in gen.spectra(7, times):
+        measure_spectra(streams, int(order[m]), spectra, NZ, nt, spec)
+    spectral = spectra_samples(streams, spec, nt)
+    assert np.abs(spectral - direct).max() < 1e-5 * np.abs(direct).max()
+    assert np.abs(direct).max() > 0

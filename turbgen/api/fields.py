@@ -299,14 +299,14 @@ def _constrained_maker(run: MannRun, request, overwrite, chunks, threads, stenci
     from turbgen.runs.constrain import place, run_mann_constrained
 
     constraints = list(request.files)  # loaded
-    place(run, constraints, request.noise_m_s)
+    placed = place(run, constraints, request.noise_m_s)
 
     def make(out: Path) -> None:
         check_output_path(out, "`out`")
         check_new_store(out, run.grid, chunk_t=chunks, overwrite=overwrite)
         run_mann_constrained(run, out, constraints, noise_m_s=request.noise_m_s,
                              conditional_mean=request.conditional_mean, overwrite=overwrite, chunk_t=chunks,
-                             threads=default_threads(threads), cache_dir=stencil_cache)  # fmt: skip
+                             threads=default_threads(threads), cache_dir=stencil_cache, placed=placed)  # fmt: skip
 
     return make
 

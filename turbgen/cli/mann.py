@@ -168,7 +168,8 @@ def mann(**opt):
         s = run_mann_constrained(run, out, constraints, noise_m_s=request.noise_m_s,
                                  conditional_mean=request.conditional_mean,
                                  overwrite=opt["overwrite"], chunk_t=opt["chunks"], threads=threads,
-                                 cache_dir=opt["stencil_cache"], progress=sys.stderr.isatty())  # fmt: skip
+                                 cache_dir=opt["stencil_cache"], progress=sys.stderr.isatty(),
+                                 placed=placed)  # fmt: skip
         for line in describe_constraints(s["constraints"]):
             click.echo(f"  {line}")
     else:

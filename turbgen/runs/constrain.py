@@ -224,13 +224,19 @@ def _bar(desc: str, total: int, unit: str, show: bool):
 
 def unconstrained_measurement(run: MannRun, gen: MannSnapshots, placed: PlacedData,
                                progress: bool = False) -> np.ndarray:  # fmt: skip
-    """Pass 1: H u_s of the unconstrained sample of the run's seed (nothing is kept)."""
-    out = np.zeros(placed.data.shape)
-    with _bar("pass 1", run.grid.nx, "plane", progress) as bar:
-        for ix, comp, field in gen.generate(run.seed, run.plane_times_s()):
-            cond.measure(placed.streams, ix, COMPONENTS.index(comp), field, out)
-            bar.update(int(comp == COMPONENTS[-1]))
-    return out
+    """Pass 1: H u_s of the unconstrained sample of the run's seed (nothing is kept), measured on the snapshots'
+    spectra before their transform along time (only the measured streams are transformed)."""
+    g = run.grid
+    times = run.plane_times_s()
+    order = [int(i) for i in np.argsort(times, kind="stable")]
+    frozen = run.params.evo_time_s is None
+    spec = np.zeros((placed.streams.n_streams, g.nt // 2 + 1), complex)
+    with _bar("pass 1", g.nx, "plane", progress) as bar:
+        for m, spectra in gen.spectra(run.seed, times):
+            for ix in order if frozen else [order[m]]:  # frozen: the one snapshot is every plane
+                cond.measure_spectra(placed.streams, ix, spectra, g.nz, g.nt, spec)
+                bar.update(1)
+    return cond.spectra_samples(placed.streams, spec, g.nt)
 
 
 def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarray, scratch_dir: Path, *,
@@ -303,7 +309,8 @@ def constraint_record(files, placed: PlacedData, report: cond.SolveReport, remea
 
 def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m_s: float | None = None,
                          conditional_mean: bool = False, overwrite: bool = False, chunk_t: int | None = None,
-                         threads: int | None = None, cache_dir=None, progress: bool = False) -> dict:  # fmt: skip
+                         threads: int | None = None, cache_dir=None, progress: bool = False,
+                         placed: PlacedData | None = None) -> dict:  # fmt: skip
     """Generate ``run`` conditioned on the point series ``files`` into a new store at ``out``.
 
     Parameters
@@ -320,6 +327,8 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
         Write the conditional mean C H^T S^-1 d (no random part) instead of a conditional sample.
     progress : bool
         Progress bars of the stages (system, pass 1, correction, write) on standard error, on a terminal.
+    placed : PlacedData, optional
+        ``place(run, files, noise_m_s)`` when the caller has it already (it checked the data before any output).
 
     Returns
     -------
@@ -333,7 +342,7 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     """
     t_start = time.perf_counter()
     threads = default_threads(threads)
-    placed = place(run, files, noise_m_s)
+    placed = place(run, files, noise_m_s) if placed is None else placed
     g = run.grid
     m = placed.streams.n_streams
     box = synthesis_box(run)

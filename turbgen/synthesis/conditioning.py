@@ -113,6 +113,34 @@ def measure(streams: Streams, plane: int, component: int, field: np.ndarray, out
         out[a] += streams.term_weight[t] * field[n, streams.term_iy[t], streams.term_iz[t]]
 
 
+def measure_spectra(streams: Streams, plane: int, spectra: np.ndarray, nz: int, nt: int, out: np.ndarray) -> None:
+    """Add the time spectra of H's terms on ``plane`` into ``out`` (M, nk1) complex128, from the cropped spectra
+    (3, ny nz, nk1) of that plane's snapshot (MannSnapshots.spectra: the field before its transform along time):
+    Y_a(i) = sum_t w_t U_(c_t)(i, y_t, z_t) exp(2 pi i i s_t / nt). :func:`spectra_samples` turns them into H u."""
+    sel = np.flatnonzero(streams.plane[streams.term_stream] == plane)
+    if len(sel) == 0:
+        return
+    sel = sel[np.argsort(streams.term_stream[sel], kind="stable")]
+    nk1 = spectra.shape[-1]
+    shift = streams.term_shift[sel]
+    phase = np.exp(2j * np.pi * ((np.arange(nk1)[None, :] * np.arange(shift.max() + 1)[:, None]) % nt) / nt)
+    values = spectra[streams.term_component[sel], streams.term_iy[sel] * nz + streams.term_iz[sel]]
+    values = values * (streams.term_weight[sel, None] * phase[shift])
+    stream = streams.term_stream[sel]
+    starts = np.flatnonzero(np.r_[True, stream[1:] != stream[:-1]])
+    out[stream[starts]] += np.add.reduceat(values, starts, axis=0)
+
+
+def spectra_samples(streams: Streams, spectra: np.ndarray, nt: int) -> np.ndarray:
+    """H u (M, nt/q) [m/s] from the streams' time spectra (M, nk1) of :func:`measure_spectra`: their unnormalised
+    real inverse FFT (as the generator's transform along time: the imaginary parts at k1 = 0 and Nyquist are
+    ignored), sampled at each stream's stored time steps o_a + m q."""
+    full = np.fft.irfft(spectra, n=nt, axis=1) * nt
+    q = streams.decimation
+    index = streams.offset[:, None] + np.arange(nt // q)[None, :] * q
+    return np.take_along_axis(full, index, axis=1)
+
+
 def _slab_phi(stencil: MannStencil, i: int) -> np.ndarray:
     """Phi_i = 2 C C^T (3, 3, nyp nzp) (prior_spectrum.slab_spectrum, elementwise), symmetrised under k -> -k on the
     k1 = 0 / Nyquist slabs (their real part: see prior_spectrum)."""
