@@ -233,7 +233,7 @@ def _lag_classes(times: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.n
 class _GroupFFT:
     """Single-threaded FFTW_ESTIMATE plans over the last two axes of a slab group's arrays (one per group size, the
     arrays reused): the same plans, hence the same rounding, whatever the thread count of the run. ``keep_z``: a
-    complex transform exact on the columns z < keep_z only (along z on every row, then along y on those columns);
+    transform exact on the (output) columns z < keep_z only (along z on every row, then along y on those columns);
     ``rows`` (first, end): of an input zero outside those rows (along z on them only, then along y)."""
 
     def __init__(self, tail: tuple[int, ...], real: bool, direction: str = "FFTW_FORWARD", keep_z: int | None = None,
@@ -249,7 +249,12 @@ class _GroupFFT:
             if self.real:
                 inp = pyfftw.empty_aligned(shape, np.float64)
                 out = pyfftw.empty_aligned((*shape[:-1], shape[-1] // 2 + 1), np.complex128)
-                plans = [pyfftw.FFTW(inp, out, axes=(-2, -1), direction=self.direction, flags=flags, threads=1)]
+                if self.keep_z is None:
+                    plans = [pyfftw.FFTW(inp, out, axes=(-2, -1), direction=self.direction, flags=flags, threads=1)]
+                else:  # along z, then along y on the kept columns only
+                    kept = out[..., : self.keep_z]
+                    plans = [pyfftw.FFTW(inp, out, axes=(-1,), direction=self.direction, flags=flags, threads=1),
+                             pyfftw.FFTW(kept, kept, axes=(-2,), direction=self.direction, flags=flags, threads=1)]
             else:
                 inp = out = pyfftw.empty_aligned(shape, np.complex128)
                 kept = inp if self.keep_z is None else inp[..., : self.keep_z]
@@ -342,7 +347,9 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
 
     out = np.zeros((n_dec, m, m), complex)
     groups = [range(s0, min(s0 + SLAB_GROUP, box.nk1)) for s0 in range(0, box.nk1, SLAB_GROUP)]
-    workspace = lambda: _GroupFFT((n_pairs, box.nyp, box.nzp), real=True)  # noqa: E731
+    # the pair sums read the lag covariances at |z_k - z_k'| < the keys' extent in z only
+    keep_z = min(int(keys.iz.max() - keys.iz.min()) + 1, box.nzp // 2 + 1)
+    workspace = lambda: _GroupFFT((n_pairs, box.nyp, box.nzp), real=True, keep_z=keep_z)  # noqa: E731
     for slabs, fulls in zip(groups, _ordered_map(group, groups, threads, workspace)):
         for i, full in zip(slabs, fulls):  # summed in slab order: the same bits for any thread count
             full *= nt

@@ -35,9 +35,9 @@ def key_amplitudes(term_key, term_shift, term_weight, slabs, nt, out):
 def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, cls, lag, out):
     """Add to L[a, b] (out, (M, M) complex128) of one slab the stream pairs of lag class ``cls``, from the key
     amplitudes ``amp`` (K,), keys sorted by stream (stream a holds keys bounds[a] .. bounds[a + 1]), and that class's
-    real DFTs ``lag`` (direction pairs, nyp, nzp // 2 + 1); ``dir_pair`` (D, D) the index of a direction pair,
-    ``pair_class`` (M, M) the lag class of a stream pair. The pairs a <= b are summed, the others are their Hermitian
-    conjugates."""
+    real DFTs ``lag`` (direction pairs, nyp, nzp // 2 + 1; read at |dz| < the keys' extent in z only); ``dir_pair``
+    (D, D) the index of a direction pair, ``pair_class`` (M, M) the lag class of a stream pair. The pairs a <= b are
+    summed, the others are their Hermitian conjugates."""
     nyp, nzp = lag.shape[1], 2 * (lag.shape[2] - 1)
     half = nzp // 2
     m = len(bounds) - 1
