@@ -406,9 +406,10 @@ def check_singular(cov: np.ndarray, names) -> None:
 
 
 def circulant_apply(cov: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """S v for full streams ``v`` (M, nt/q): FFT over the samples, S_j per frequency, inverse FFT."""
-    spec = np.fft.fft(v, axis=1)
-    return np.fft.ifft(np.einsum("jab,bj->aj", cov, spec), axis=1).real
+    """S v for full streams ``v`` (M, nt/q): FFT over the samples, S_j per frequency, inverse FFT (``cov`` may be
+    other per-frequency matrices, e.g. the inverses of S_j)."""
+    spec = np.fft.fft(v, axis=1).T[:, :, None]
+    return np.fft.ifft(np.matmul(cov, spec)[:, :, 0].T, axis=1).real
 
 
 def circulant_solve(cov: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -432,8 +433,8 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
     """x = S^-1 r on the observed samples, zero elsewhere: (x (M, nt), report).
 
     Every sample observed: the exact per-slab solve. Otherwise preconditioned conjugate gradients on S restricted to
-    the observed samples, the circulant solve of the full streams (zero-filled) as preconditioner, stopping at
-    relative residual CG_TOLERANCE. Raises ParameterError if they do not converge in CG_MAX_ITERATIONS.
+    the observed samples, the circulant solve of the full streams (zero-filled; S_j inverted once) as preconditioner,
+    stopping at relative residual CG_TOLERANCE. Raises ParameterError if they do not converge in CG_MAX_ITERATIONS.
     ``preconditioner``: other per-frequency matrices for that circulant solve (default ``cov``; for a ``cov``
     singular on some frequency whose full streams are never all observed).
     """
@@ -447,8 +448,10 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
     x = np.zeros_like(r)
     if norm == 0:
         return x, SolveReport("pcg", 0, 0.0)
+    inverse = np.linalg.inv(pre)  # the preconditioner's per-frequency inverses, once (Hermitian to round-off)
+    inverse = 0.5 * (inverse + np.conj(np.swapaxes(inverse, 1, 2)))
     res = r.copy()
-    z = np.where(observed, circulant_solve(pre, res), 0.0)
+    z = np.where(observed, circulant_apply(inverse, res), 0.0)
     p, rz = z.copy(), float(np.vdot(res, z))
     for it in range(1, CG_MAX_ITERATIONS + 1):
         sp = np.where(observed, circulant_apply(cov, p), 0.0)
@@ -458,7 +461,7 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
         rel = float(np.linalg.norm(res)) / norm
         if rel <= CG_TOLERANCE:
             return x, SolveReport("pcg", it, rel)
-        z = np.where(observed, circulant_solve(pre, res), 0.0)
+        z = np.where(observed, circulant_apply(inverse, res), 0.0)
         rz_new = float(np.vdot(res, z))
         p = z + (rz_new / rz) * p
         rz = rz_new
