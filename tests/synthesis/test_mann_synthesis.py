@@ -257,3 +257,18 @@ def test_addend_is_added_before_the_time_transform(small):
     assert all(np.array_equal(plain[k], again[k]) for k in plain)
     with pytest.raises(ValueError, match="shape"):
         next(gen.generate(3, times, lambda ix, c: add[(ix, c)][:-1]))
+
+
+def test_target_receives_the_same_field(small):
+    """generate's target: the planes transformed straight into the caller's whole field hold the same bits as the
+    yielded buffers; a target that is not a view of (nt, ny, nz) float32 planes is refused."""
+    box = small.box
+    ny, nz, times = 5, 6, [0.0, 7.0, 3.0]
+    gen = MannSnapshots(small, ny, nz, threads=2)
+    plain = {(ix, comp): f.copy() for ix, comp, f in gen.generate(3, times)}
+    whole = np.full((3, box.nt, len(times), ny, nz), np.nan, np.float32)  # the store layout (t, x, y, z)
+    for ix, comp, f in gen.generate(3, times, target=lambda ix, c: whole[c, :, ix]):
+        assert np.shares_memory(f, whole)
+    assert all(np.array_equal(whole["uvw".index(comp), :, ix], f) for (ix, comp), f in plain.items())
+    with pytest.raises(ValueError, match="target"):
+        next(gen.generate(3, times, target=lambda ix, c: whole[c, :, ix, :, ::-1]))  # z reversed: no flat view

@@ -129,9 +129,10 @@ def _run_stencil(run: MannRun, stencil: MannStencil | None, cache_dir) -> MannSt
     return build_mann_stencil(run, cache_dir)
 
 
-def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress: bool) -> dict:
+def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress: bool, in_place: bool = False) -> dict:
     """Every plane of ``run`` from ``stencil`` into ``writer`` (a StoreWriter or MemoryWriter); returns
-    {component: [float64 sum, sum of squares]} of the written values."""
+    {component: [float64 sum, sum of squares]} of the written values. ``in_place`` (a MemoryWriter): the planes are
+    transformed straight into the writer's field (MemoryWriter.plane), not copied there."""
     g = run.grid
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
     gen = MannSnapshots(stencil, g.ny, g.nz, threads, buffers=2)
@@ -149,7 +150,8 @@ def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress
             sums[comp][0] += total
             sums[comp][1] += squares
 
-        for done, (ix, comp, field) in enumerate(gen.generate(run.seed, run.plane_times_s()), start=1):
+        target = (lambda ix, c: writer.plane(COMPONENTS[c], ix)) if in_place else None
+        for done, (ix, comp, field) in enumerate(gen.generate(run.seed, run.plane_times_s(), target=target), start=1):
             if pending is not None:
                 pending.result()
             pending = background.submit(write_and_sum, comp, ix, field)
@@ -234,5 +236,5 @@ def mann_in_memory(
     _checked_stencil(run, stencil)
     _require_memory(run, gen_threads, stencil, 3 * run.grid.nbytes_per_component())
     with MemoryWriter(run.grid, run.to_attrs()) as writer:
-        sums = _generate(writer, run, _run_stencil(run, stencil, cache_dir), gen_threads, progress)
+        sums = _generate(writer, run, _run_stencil(run, stencil, cache_dir), gen_threads, progress, in_place=True)
     return writer.dataset, _summary(run, sums, None, t_start)

@@ -87,11 +87,19 @@ class MemoryWriter:
         """
         block, total, sum_sq = checked_block(self.grid, component, ix, data, t0)
         t1 = t0 + block.shape[0]
-        self._arrays[component][t0:t1, ix] = block
+        dest = self._arrays[component][t0:t1, ix]
+        if not _same_array(block, dest):  # not made in place (see plane)
+            dest[...] = block
         with self._bookkeeping:
             self._written[component][ix, t0:t1] = True
             self._squares[(component, ix, t0, t1)] = sum_sq
         return (total, sum_sq) if squares else total
+
+    def plane(self, component: str, ix: int) -> np.ndarray:
+        """The place (nt, ny, nz) float32 of ``component`` at plane ``ix`` in the field: a generator may write the
+        plane there (turbgen.synthesis.mann_spacetime.MannSnapshots.generate's ``target``); :meth:`write` of that
+        array then checks and counts it without copying."""
+        return self._arrays[component][:, ix]
 
     def _finish(self) -> None:
         import xarray as xr
@@ -106,3 +114,9 @@ class MemoryWriter:
         variables = {c: (layout.DIMS, self._arrays[c], dict(layout.COMPONENT_ATTRS[c])) for c in layout.COMPONENTS}
         # through JSON, as a store's attributes are read back (lists for tuples, plain numbers)
         self.dataset = xr.Dataset(variables, coords=coords, attrs=json.loads(json.dumps(jsonable(attrs), allow_nan=False)))
+
+
+def _same_array(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether ``a`` and ``b`` are the same values in memory (same start, shape and strides)."""
+    return (a.__array_interface__["data"][0] == b.__array_interface__["data"][0] and a.shape == b.shape
+            and a.strides == b.strides)  # fmt: skip

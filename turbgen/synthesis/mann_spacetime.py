@@ -157,7 +157,7 @@ class MannSnapshots:
         self._scratch: queue.SimpleQueue | None = None
 
     # -- public -------------------------------------------------------------------------
-    def generate(self, seed: int | None, times_s, addend=None) -> Iterator[tuple[int, str, np.ndarray]]:
+    def generate(self, seed: int | None, times_s, addend=None, target=None) -> Iterator[tuple[int, str, np.ndarray]]:
         """Yield (plane index, component, field (nt, ny, nz) float32) for every plane and component.
 
         ``times_s`` are the planes' relative times x/U [s] in storage order. Planes come in time
@@ -171,6 +171,10 @@ class MannSnapshots:
         turbgen.synthesis.conditioning.correction_blocks) added to the snapshot's before the transform along
         k1, so the yielded field is the sample plus their unnormalised real inverse FFT (frozen: called for the
         first plane only). ``seed=None`` (with an addend): no sample, the addend's field alone.
+
+        ``target(plane index, component index)``: the array (nt, ny, nz) float32, (y, z) contiguous, the field is
+        transformed into (e.g. its place in the caller's whole field: no copy) and which is yielded (frozen: the
+        first plane's, yielded for every plane).
         """
         times = np.asarray(times_s, dtype=float)
         order = [int(i) for i in np.argsort(times, kind="stable")]
@@ -185,7 +189,8 @@ class MannSnapshots:
                 self._synthesise(pool, seed, 0, None)
                 for c in range(3):
                     add = None if addend is None else addend(order[0], c)
-                    out = self._transform(pool, c, single=True, add=add, sample=seed is not None)
+                    dest = None if target is None else target(order[0], c)
+                    out = self._transform(pool, c, single=True, add=add, sample=seed is not None, dest=dest)
                     for ix in order:
                         yield ix, COMPONENTS[c], out
                 return
@@ -196,8 +201,9 @@ class MannSnapshots:
                 previous = times[ix]
                 for c in range(3):
                     add = None if addend is None else addend(ix, c)
+                    dest = None if target is None else target(ix, c)
                     yield ix, COMPONENTS[c], self._transform(pool, c, single=len(order) == 1, add=add,
-                                                             sample=seed is not None)  # fmt: skip
+                                                             sample=seed is not None, dest=dest)  # fmt: skip
 
     def spectra(self, seed: int, times_s) -> Iterator[tuple[int, np.ndarray]]:
         """Yield (snapshot number m in time order, cropped spectra (3, ny nz, n_slabs) complex64) of this
@@ -259,13 +265,16 @@ class MannSnapshots:
             return
         self._run(pool, lambda s, i0: self._task(s, seed, m, dt, i0), range(self._first, self._end, TASK_SLABS))
 
-    def _transform(self, pool, c: int, single: bool, add: np.ndarray | None = None,
-                   sample: bool = True) -> np.ndarray:  # fmt: skip
+    def _transform(self, pool, c: int, single: bool, add: np.ndarray | None = None, sample: bool = True,
+                   dest: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
         """Component ``c`` of the current snapshot into the next of the output buffers; of a ``single`` snapshot
         (no spectra follow), components 1 and 2 go into the spectra of components 0 and 1, transformed already,
         so one output plane is allocated instead of two (every yielded plane stays valid as long as before).
-        ``add`` (nk1, ny nz): spectra added first (``sample=False``: taken instead of the snapshot's)."""
-        if single and c > 0:
+        ``add`` (nk1, ny nz): spectra added first (``sample=False``: taken instead of the snapshot's); ``dest``: the
+        output array instead of a buffer."""
+        if dest is not None:
+            out = dest
+        elif single and c > 0:
             flat = self._spectra[c - 1].view(np.float32).reshape(-1)  # >= (nt + 2) ny nz floats
             out = flat[: self.box.nt * self.ny * self.nz].reshape(self.box.nt, self.ny, self.nz)
         else:
@@ -274,10 +283,15 @@ class MannSnapshots:
             while len(self._outputs) <= k:  # page-aligned planes, allocated when first needed
                 self._outputs.append(pyfftw.empty_aligned((self.box.nt, self.ny, self.nz), np.float32, n=_PAGE))
             out = self._outputs[k]
-        rows = range(0, self.ny * self.nz, ROW_BLOCK)
-        if add is not None and add.shape != (self.box.nk1, self.ny * self.nz):
-            raise ValueError(f"the addend's shape {add.shape} is not (nk1, ny nz) = {(self.box.nk1, self.ny * self.nz)}")
-        self._run(pool, lambda s, r0: self._rows(s, c, r0, out, add, sample), rows)
+        points = self.ny * self.nz
+        rows = range(0, points, ROW_BLOCK)
+        if add is not None and add.shape != (self.box.nk1, points):
+            raise ValueError(f"the addend's shape {add.shape} is not (nk1, ny nz) = {(self.box.nk1, points)}")
+        shape = (self.box.nt, self.ny, self.nz)
+        flat = out.reshape(shape[0], -1) if out.shape == shape and out.dtype == np.float32 else None
+        if flat is None or not np.may_share_memory(flat, out):  # a reshape that copied would drop the field
+            raise ValueError(f"the target must be a float32 array of shape {shape} with contiguous (y, z) planes")
+        self._run(pool, lambda s, r0: self._rows(s, c, r0, flat, add, sample), rows)
         return out
 
     def _task(self, s: _Scratch, seed: int, m: int, dt: float | None, i0: int) -> None:
@@ -319,6 +333,7 @@ class MannSnapshots:
 
     def _rows(self, s: _Scratch, c: int, r0: int, output: np.ndarray, add: np.ndarray | None = None,
               sample: bool = True) -> None:  # fmt: skip
+        """Rows [r0, r0 + ROW_BLOCK) of component ``c`` transformed along k1 into ``output`` (nt, ny nz)."""
         r1 = min(r0 + ROW_BLOCK, self.ny * self.nz)
         n = r1 - r0
         spectra = self._spectra[c, r0:r1, : self.box.nk1]
@@ -333,7 +348,7 @@ class MannSnapshots:
         # column hits the same cache sets
         staged = s.staged[:n, : self.box.nt]
         staged[...] = s.rows[:n]
-        output.reshape(self.box.nt, -1)[:, r0:r1] = staged.T
+        output[:, r0:r1] = staged.T
 
 
 class PencilTransform:
