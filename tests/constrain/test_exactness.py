@@ -181,3 +181,21 @@ def test_spectral_measurement_equals_measuring_the_field(evolving, scanned):
     spectral = spectra_samples(streams, spec, nt)
     assert np.abs(spectral - direct).max() < 1e-5 * np.abs(direct).max()
     assert np.abs(direct).max() > 0
+
+
+def test_unconverged_conjugate_gradients_are_refused(evolving, monkeypatch):
+    """Gaps: PCG stops at CG_MAX_ITERATIONS with one line naming the residual reached (here 1 iteration)."""
+    import turbgen.synthesis.conditioning as conditioning
+
+    stencil, times, _ = evolving
+    streams = _streams(len(times))
+    nt = stencil.box.nt
+    cov = stream_covariance(stencil, streams, times, np.zeros(streams.n_streams))
+    observed = np.ones((streams.n_streams, nt), bool)
+    observed[0, ::3] = False
+    r = np.random.default_rng(3).normal(size=observed.shape)
+    x, report = solve(cov, r, observed)
+    assert report.method == "pcg" and report.iterations > 1
+    monkeypatch.setattr(conditioning, "CG_MAX_ITERATIONS", 1)
+    with pytest.raises(ParameterError, match=r"did not converge in 1 conjugate-gradient iterations \(relative residual"):
+        solve(cov, r, observed)
