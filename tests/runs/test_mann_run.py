@@ -97,8 +97,8 @@ def test_a_stencil_of_other_parameters_is_refused(tmp_path):
 def test_interruption_leaves_no_store(tmp_path, monkeypatch):
     real = MannSnapshots.generate
 
-    def broken(self, seed, times):
-        for n, item in enumerate(real(self, seed, times)):
+    def broken(self, seed, times, **options):
+        for n, item in enumerate(real(self, seed, times, **options)):
             if n == 4:
                 raise KeyboardInterrupt
             yield item
