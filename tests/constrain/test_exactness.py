@@ -199,3 +199,32 @@ def test_unconverged_conjugate_gradients_are_refused(evolving, monkeypatch):
     monkeypatch.setattr(conditioning, "CG_MAX_ITERATIONS", 1)
     with pytest.raises(ParameterError, match=r"did not converge in 1 conjugate-gradient iterations \(relative residual"):
         solve(cov, r, observed)
+
+
+@pytest.mark.parametrize("gap_start", [False, True])
+def test_solve_with_gaps_equals_the_dense_solve(evolving, monkeypatch, gap_start):
+    """S_oo x = r with 30 % of the samples missing at random, by conjugate gradients from zero or from the
+    precision-matrix start (_gap_start, forced either way): the dense solve of S restricted to the observed samples
+    (S built column by column from circulant_apply) to the solver's tolerance times cond(S_oo)."""
+    import turbgen.synthesis.conditioning as conditioning
+
+    stencil, times, _ = evolving
+    streams = _streams(len(times))
+    nt = stencil.box.nt
+    cov = stream_covariance(stencil, streams, times, np.zeros(streams.n_streams))
+    shape = (streams.n_streams, nt)
+    dense = np.stack([conditioning.circulant_apply(cov, e.reshape(shape)).ravel() for e in np.eye(np.prod(shape))], 1)
+    rng = np.random.default_rng(4)
+    observed = rng.random(shape) >= 0.3
+    r = np.where(observed, rng.normal(size=shape), 0.0)
+    o = observed.ravel()
+    expect = np.zeros(o.size)
+    expect[o] = np.linalg.solve(dense[np.ix_(o, o)], r.ravel()[o])
+    monkeypatch.setattr(conditioning, "GAP_START_FRACTION", 0.0 if gap_start else 1.0)
+    x, report = solve(cov, r, observed)
+    bound = 10 * conditioning.CG_TOLERANCE * np.linalg.cond(dense[np.ix_(o, o)])
+    assert report.method == "pcg" and report.relative_residual <= conditioning.CG_TOLERANCE
+    assert np.abs(x.ravel() - expect).max() <= bound * np.abs(expect).max(), (report, bound)
+    if gap_start:  # the start alone is the solution to its inner tolerance (1e-12) times the conditioning
+        start, _ = conditioning._gap_start(np.linalg.inv(cov[: nt // 2 + 1]), r, observed)
+        assert np.abs(start.ravel() - expect).max() <= 1e2 * bound * np.abs(expect).max()

@@ -52,6 +52,10 @@ CG_TOLERANCE = 1e-10  # relative residual |S x - r| / |r| at which the conjugate
 # the full Table 3 lidar record on the default grid with 20 % of its samples missing at random needs ~1200 (the
 # circulant preconditioner knows nothing of the gaps); an iteration costs two FFTs of the streams and M x M products
 CG_MAX_ITERATIONS = 5000
+# missing fraction above which conjugate gradients start from the precision-matrix solve (solve, _gap_start): the
+# default lidar record with its last far gates missing (0.7 %) converges in ~60 iterations without it, ~560 with it;
+# with 20 % missing at random ~1200 without it, ~550 with it
+GAP_START_FRACTION = 1 / 16
 SINGULAR_RTOL = 1e-11  # eigenvalue / largest eigenvalue of S_i below which zero-noise measurements are dependent
 
 
@@ -440,6 +444,9 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
     Every sample observed: the exact per-slab solve. Otherwise preconditioned conjugate gradients on S restricted to
     the observed samples, the circulant solve of the full streams (zero-filled; S_j inverted once) as preconditioner,
     stopping at relative residual CG_TOLERANCE. Raises ParameterError if they do not converge in CG_MAX_ITERATIONS.
+    With many samples missing (> GAP_START_FRACTION) and no ``preconditioner`` they start from :func:`_gap_start`
+    (the report counts its iterations too): with m missing the preconditioned operator is the identity plus a term of
+    rank <= m (T_oo S_oo = I - T_om S_mo, T = S^-1), so few gaps need few iterations, many gaps up to m.
     ``preconditioner``: other per-frequency matrices for that circulant solve (default ``cov``; for a ``cov``
     singular on some frequency whose full streams are never all observed).
     """
@@ -450,22 +457,67 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
         x = circulant_solve(cov, r)
         res = np.linalg.norm(circulant_apply(cov, x) - r) / norm if norm > 0 else 0.0
         return x, SolveReport("circulant", 0, float(res))
-    x = np.zeros_like(r)
     if norm == 0:
-        return x, SolveReport("pcg", 0, 0.0)
+        return np.zeros_like(r), SolveReport("pcg", 0, 0.0)
     inverse = np.linalg.inv(pre[: r.shape[1] // 2 + 1])  # the preconditioner's inverses once (Hermitian to round-off)
     inverse = 0.5 * (inverse + np.conj(np.swapaxes(inverse, 1, 2)))
-    res = r.copy()
+    many_gaps = preconditioner is None and (~observed).sum() > GAP_START_FRACTION * observed.size
+    x, start = _gap_start(inverse, r, observed) if many_gaps else (np.zeros_like(r), 0)
+    return _pcg(cov, inverse, r, observed, x, start)
+
+
+def _gap_start(inverse: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, int]:
+    """An approximation of S_oo^-1 r through the precision matrix T = S^-1 of the full streams (circulant: ``inverse``
+    per frequency): S_oo^-1 = T_oo - T_om T_mm^-1 T_mo (the Schur complement; o observed, m missing samples), the
+    T_mm system solved by Jacobi-preconditioned conjugate gradients to 1e-12. T is far better conditioned on
+    scattered gaps than S on the observed samples (the default lidar record with 20 % missing at random: ~540
+    iterations of one circulant product against ~1200 of two). Returns (x, iterations)."""
+    missing = ~observed
+    n = r.shape[1]
+    weights = np.full(inverse.shape[0], 2.0)  # T's diagonal per stream: the mean of (S_j^-1)_aa over all j
+    weights[0] = 1.0
+    if n % 2 == 0:
+        weights[-1] = 1.0
+    diag = np.einsum("j,jaa->a", weights, inverse).real / n
+    b = np.where(missing, circulant_apply(inverse, r), 0.0)
+    y, res = np.zeros_like(r), b.copy()
+    z = np.where(missing, res / diag[:, None], 0.0)
+    p, rz, norm = z.copy(), float(np.vdot(res, z)), float(np.linalg.norm(b))
+    it = 0
+    while norm > 0 and it < CG_MAX_ITERATIONS:
+        it += 1
+        tp = np.where(missing, circulant_apply(inverse, p), 0.0)
+        alpha = rz / float(np.vdot(p, tp))
+        y += alpha * p
+        res -= alpha * tp
+        if np.linalg.norm(res) <= 1e-12 * norm:
+            break
+        z = np.where(missing, res / diag[:, None], 0.0)
+        rz_new = float(np.vdot(res, z))
+        p = z + (rz_new / rz) * p
+        rz = rz_new
+    return np.where(observed, circulant_apply(inverse, r - y), 0.0), it
+
+
+def _pcg(cov: np.ndarray, inverse: np.ndarray, r: np.ndarray, observed: np.ndarray, x: np.ndarray,
+         start: int) -> tuple[np.ndarray, SolveReport]:  # fmt: skip
+    """Conjugate gradients on S_oo x = r from ``x``, preconditioned by the circulant ``inverse``; ``start``: the
+    iterations spent on ``x`` already (reported with these)."""
+    norm = float(np.linalg.norm(r))
+    res = r - np.where(observed, circulant_apply(cov, x), 0.0)
+    rel = float(np.linalg.norm(res)) / norm
+    if rel <= CG_TOLERANCE:
+        return x, SolveReport("pcg", start, rel)
     z = np.where(observed, circulant_apply(inverse, res), 0.0)
     p, rz = z.copy(), float(np.vdot(res, z))
     for it in range(1, CG_MAX_ITERATIONS + 1):
         sp = np.where(observed, circulant_apply(cov, p), 0.0)
         alpha = rz / float(np.vdot(p, sp))
-        x += alpha * p
+        x = x + alpha * p
         res -= alpha * sp
         rel = float(np.linalg.norm(res)) / norm
         if rel <= CG_TOLERANCE:
-            return x, SolveReport("pcg", it, rel)
+            return x, SolveReport("pcg", start + it, rel)
         z = np.where(observed, circulant_apply(inverse, res), 0.0)
         rz_new = float(np.vdot(res, z))
         p = z + (rz_new / rz) * p
