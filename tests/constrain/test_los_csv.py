@@ -104,3 +104,66 @@ def test_beam_index_outside_the_lidar_and_unequal_gate_times_are_refused(record,
     (tmp_path / "t.csv").write_text("\n".join(lines) + "\n")
     with pytest.raises(ParameterError, match="the gates of beam 0 are not measured at the same times"):
         read_los_csv(tmp_path / "t.csv")
+
+
+def _netcdf(path, data, engine, attrs=None, drop=None):
+    import xarray as xr
+
+    s, b, g = np.meshgrid(*(np.arange(n) for n in data.v_los.shape), indexing="ij")
+    columns = {"time_s": data.time_s[s, b].ravel(), "beam": b.ravel(), "gate": g.ravel(),
+               "v_los_m_s": data.v_los.ravel()}  # fmt: skip
+    if drop:
+        columns.pop(drop)
+    attrs = {"lidar": "small.json", "U_m_s": 16.0, "total_wind": 1} if attrs is None else attrs
+    xr.Dataset({k: ("sample", v) for k, v in columns.items()}, attrs=attrs).to_netcdf(path, engine=engine)
+
+
+@pytest.mark.parametrize("engine", ["h5netcdf", "scipy"])  # netCDF4/HDF5 and netCDF3 files
+def test_netcdf_places_the_same_streams_and_data_as_the_dataset(record, engine):
+    from turbgen.lidar.los_netcdf import read_los_netcdf
+    from turbgen.runs.constrain import load_constraint
+
+    d, data = record
+    _netcdf(d / f"los_{engine}.nc", data, engine)
+    got = load_constraint(d / f"los_{engine}.nc")
+    assert got.v_los.shape == data.v_los.shape
+    run = MannRun.from_mapping({"grid": {"nt": 256, "dt_s": 0.5, "x_m": [0.0, 20.0, 40.0], "ny": 8, "nz": 8,
+                                         "dy_m": 5.0}})  # fmt: skip
+    a, b = place(run, [data]), place(run, [read_los_netcdf(d / f"los_{engine}.nc")])
+    np.testing.assert_array_equal(a.data, b.data)
+    np.testing.assert_array_equal(a.streams.term_weight, b.streams.term_weight)
+
+
+@pytest.mark.parametrize("attrs, drop, message", [
+    ({"U_m_s": 16.0}, None, "the header must give `# lidar"),
+    ({"lidar": "small.json", "U_m_s": 16.0, "colour": "red"}, None, "unknown global attribute 'colour'"),
+    (None, "gate", r"the variables must be time_s, beam, gate, v_los_m_s \(missing gate\)"),
+])  # fmt: skip
+def test_malformed_netcdf_is_refused_in_one_line(record, tmp_path, attrs, drop, message):
+    from turbgen.lidar.los_netcdf import read_los_netcdf
+
+    d, data = record
+    (tmp_path / "small.json").write_text(json.dumps(LIDAR))
+    _netcdf(tmp_path / "bad.nc", data, "h5netcdf", attrs, drop)
+    with pytest.raises(ParameterError, match=message) as exc:
+        read_los_netcdf(tmp_path / "bad.nc")
+    assert "\n" not in str(exc.value)
+    (tmp_path / "text.nc").write_text("not netCDF\n")
+    with pytest.raises(ParameterError, match="not readable as netCDF"):
+        read_los_netcdf(tmp_path / "text.nc")
+
+
+def test_the_documented_netcdf_example_runs(tmp_path, monkeypatch):
+    """docs/constrained-fields.md's Python example writes a netCDF table that the reader's checks accept up to the
+    lidar file (which the page leaves to the user): run as written."""
+    import re
+    from pathlib import Path
+
+    from turbgen.lidar.los_netcdf import read_los_netcdf
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "constrained-fields.md").read_text()
+    block = re.search(r"The same table as a netCDF file.*?```python\n(.*?)```", page, re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    exec(compile(block, "constrained-fields.md", "exec"), {})
+    with pytest.raises(ParameterError, match="mylidar.toml"):  # the one thing missing: the user's lidar file
+        read_los_netcdf(tmp_path / "los.nc")

@@ -139,6 +139,15 @@ def read_los_csv(path) -> LidarData:
     path = Path(path).expanduser()
     where = f"line-of-sight file {path}"
     header, table = _rows(path, where)
+    return los_record(path, header, table, where)
+
+
+def los_record(path: Path, header: dict, table: np.ndarray, where: str) -> LidarData:
+    """The record of a line-of-sight table (n, 4) of COLUMNS with its HEADER_KEYS (strings), read from ``path``
+    (lidar and mean-history files relative to it): every check of :func:`read_los_csv` after the parsing."""
+    for key in ("lidar", "U_m_s"):
+        if key not in header:
+            raise ParameterError(f"{where}: the header must give `# {key} = ...` (see docs/constrained-fields.md)")
     key = header["lidar"]
     lidar = load_lidar(key if Path(key).suffix.lower() not in (".toml", ".json") else path.parent / key)
     try:

@@ -384,8 +384,8 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
 
 
 def load_constraint(path):
-    """A constraint file: a ``turbgen lidar --out`` dataset (a directory with v_los), a line-of-sight CSV file
-    (turbgen.lidar.los_csv) or a point-series JSON file.
+    """A constraint file: a ``turbgen lidar --out`` dataset (a directory with v_los), a line-of-sight CSV or netCDF
+    file (turbgen.lidar.los_csv, turbgen.lidar.los_netcdf) or a point-series JSON file.
 
     Raises
     ------
@@ -394,10 +394,13 @@ def load_constraint(path):
     """
     from turbgen.lidar.dataset import is_lidar_dataset, read_dataset
     from turbgen.lidar.los_csv import is_los_csv, read_los_csv
+    from turbgen.lidar.los_netcdf import is_los_netcdf, read_los_netcdf
     from turbgen.spec.constraints import load_point_series
 
     if is_lidar_dataset(path):
         return read_dataset(path)
+    if is_los_netcdf(path):
+        return read_los_netcdf(path)
     return read_los_csv(path) if is_los_csv(path) else load_point_series(path)
 
 
