@@ -27,16 +27,26 @@ def _fields(ds):
 
 
 @pytest.mark.parametrize("mean", [False, True])
-def test_api_equals_the_cli_to_the_bit(tmp_path, mean):
+def test_api_equals_the_cli_to_the_bit(tmp_path, mean, monkeypatch):
+    import turbgen.api.fields as fields
+
     out = tmp_path / "cli.zarr"
     flags = ["--conditional-mean"] if mean else []
     res = CliRunner().invoke(cli, ["mann", *SMALL_CLI, "--constrain", str(MAST), "--noise", "0.1", *flags,
                                    "--out", str(out)])  # fmt: skip
     assert res.exit_code == 0, res.output
-    api = turbgen.mann(**SMALL, constrain=[MAST], noise=0.1, conditional_mean=mean)
-    cli_field = _fields(turbgen.open_store(out))
+    with monkeypatch.context() as m:  # in memory: no temporary store
+        m.setattr(fields, "_through_store", lambda *a: pytest.fail("went through a store"))
+        api = turbgen.mann(**SMALL, constrain=[MAST], noise=0.1, conditional_mean=mean)
+    store = turbgen.open_store(out)
+    cli_field = _fields(store)
     np.testing.assert_array_equal(_fields(api), cli_field)
     assert api.attrs["constraints"]["conditional_mean"] is mean
+    differ = {k for k in set(api.attrs) | set(store.attrs) if api.attrs.get(k) != store.attrs.get(k)}
+    assert differ <= {"created_utc"}, differ  # the Dataset the store opens to, made without a store
+    # a budget too small for the field in memory: made through a temporary store, the same field
+    np.testing.assert_array_equal(_fields(turbgen.mann(**SMALL, constrain=[MAST], noise=0.1, conditional_mean=mean,
+                                                       memory=2**20)), cli_field)  # fmt: skip
     # a constraint loaded beforehand is the same constraint
     from turbgen.runs.constrain import load_constraint
 

@@ -146,7 +146,8 @@ def mann(
     out : str or os.PathLike, optional
         Store to write. None: the field is returned in memory (no file is left), made straight into the Dataset
         when the run's one-pass arrays and the field fit ``memory``, else through a temporary store (out of core)
-        loaded back; a constrained field always goes through a temporary store. The same values either way.
+        loaded back (a constrained field: straight into the Dataset when the run and the field fit ``memory``, its
+        correction's scratch file in the temporary directory). The same values either way.
     config : str, os.PathLike or Mapping, optional
         A run file (TOML/JSON) or a mapping of its keys; keywords override it.
     preset : str, optional
@@ -240,11 +241,17 @@ def mann(
             return mann_in_memory(run, progress=progress, threads=default_threads(threads), cache_dir=stencil_cache)[0]
         make = _mann_maker(run, overwrite, chunks, threads, stencil_cache, memory, progress)
     else:
-        from turbgen.runs.constrain import load_constraints, with_energy_from_data
+        from turbgen.runs.constrain import load_constraints, mann_constrained_in_memory, place, with_energy_from_data
 
         request = replace(request, files=tuple(load_constraints(request.files)))
         run = with_energy_from_data(mapping, list(request.files), request.noise_m_s, stencil_cache)
-        make = _constrained_maker(run, request, overwrite, chunks, threads, stencil_cache)
+        placed = place(run, list(request.files), request.noise_m_s)  # every check of the data, before any output
+        if out is None and _constrained_fits(run, placed, threads, memory):
+            return mann_constrained_in_memory(run, list(request.files), noise_m_s=request.noise_m_s,
+                                              conditional_mean=request.conditional_mean,
+                                              threads=default_threads(threads), cache_dir=stencil_cache,
+                                              progress=progress, placed=placed)[0]  # fmt: skip
+        make = _constrained_maker(run, request, placed, overwrite, chunks, threads, stencil_cache)
     if out is None:
         return _through_store(make, run.grid, run.default_store_name())
     make(Path(out))
@@ -265,6 +272,16 @@ def _mann_fits(run: MannRun, threads, stencil_cache, memory) -> bool:
     budget = _budget(memory)
     field_bytes = 3 * run.grid.nbytes_per_component()
     return budget is None or fits_in_memory(run, budget - field_bytes, default_threads(threads), stencil_cache is None)
+
+
+def _constrained_fits(run: MannRun, placed, threads, memory) -> bool:
+    """Whether the constrained ``run`` is made in memory (turbgen.runs.constrain.mann_constrained_in_memory): what
+    it holds and its field fit the budget."""
+    from turbgen.runs.constrain import constrained_memory_bytes
+
+    budget = _budget(memory)
+    needed = constrained_memory_bytes(run, placed, default_threads(threads)) + 3 * run.grid.nbytes_per_component()
+    return budget is None or needed <= budget
 
 
 def _mann_maker(run: MannRun, overwrite, chunks, threads, stencil_cache, memory, progress):
@@ -292,14 +309,13 @@ def _mann_maker(run: MannRun, overwrite, chunks, threads, stencil_cache, memory,
     return make
 
 
-def _constrained_maker(run: MannRun, request, overwrite, chunks, threads, stencil_cache):
+def _constrained_maker(run: MannRun, request, placed, overwrite, chunks, threads, stencil_cache):
     """The function writing ``run`` conditioned on ``request`` (a ConstraintRequest) as ``turbgen mann --constrain``
-    does (turbgen.runs.constrain.run_mann_constrained, in memory, one pass); the data are checked against the run
-    before anything is written."""
-    from turbgen.runs.constrain import place, run_mann_constrained
+    does (turbgen.runs.constrain.run_mann_constrained); ``placed``: the data placed on the run's grid (checked
+    before anything is written)."""
+    from turbgen.runs.constrain import run_mann_constrained
 
     constraints = list(request.files)  # loaded
-    placed = place(run, constraints, request.noise_m_s)
 
     def make(out: Path) -> None:
         check_output_path(out, "`out`")

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,6 +36,7 @@ from turbgen.runs.mann import build_mann_stencil, memory_estimate_bytes
 from turbgen.spec.constraints import COMPONENTS, PointSeries, sensor_fluctuations
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
+from turbgen.store.memory import MemoryWriter
 from turbgen.synthesis import conditioning as cond
 from turbgen.synthesis.mann_spacetime import MannSnapshots
 from turbgen.synthesis.mann_stencil import synthesis_box
@@ -344,25 +346,77 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     threads = default_threads(threads)
     placed = place(run, files, noise_m_s) if placed is None else placed
     g = run.grid
-    m = placed.streams.n_streams
-    box = synthesis_box(run)
-    # S (nt/q frequencies x M x M), one plane component's correction spectra (read from the scratch file), the stream
-    # arrays and a slab group's workspace of the conditioning
-    extra = (g.nt * m * m * 16 + (g.nt // 2 + 1) * g.ny * g.nz * 8 + 8 * m * g.nt * 8
-             + cond.workspace_bytes(box, placed.streams, g.nx))  # fmt: skip
-    require_memory(memory_estimate_bytes(run, threads) + extra, f"the constrained Mann run ({m} measurement streams)",
+    require_memory(constrained_memory_bytes(run, placed, threads),
+                   f"the constrained Mann run ({placed.streams.n_streams} measurement streams)",
                    "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
     store_bytes = 3 * g.nt * g.nx * g.ny * g.nz * 4
     require_disk(Path(out), correction_disk_bytes(run) + store_bytes, "the constrained Mann run (its store and the "
                  "correction's scratch file)", "free space or choose another `out`")  # fmt: skip
+    opener = lambda: create_store(Path(out), g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite)  # noqa: E731
+    record, sums = _write_conditioned(opener, run, files, placed, Path(out).absolute().parent,
+                                      conditional_mean=conditional_mean, threads=threads, cache_dir=cache_dir,
+                                      progress=progress)  # fmt: skip
+    return _summary(str(out), t_start, record, sums, g)
+
+
+def mann_constrained_in_memory(run: MannRun, files: list, *, noise_m_s: float | None = None,
+                               conditional_mean: bool = False, threads: int | None = None, cache_dir=None,
+                               progress: bool = False, placed: PlacedData | None = None):  # fmt: skip
+    """The field of :func:`run_mann_constrained` in memory, as its store would open: (xarray.Dataset, summary).
+
+    The same values and attributes (but ``created_utc``) as ``xarray.open_zarr`` of that store
+    (turbgen.store.memory.MemoryWriter); the arguments as run_mann_constrained's; the correction's scratch file goes
+    to the system's temporary directory. The summary's path is None.
+
+    Raises
+    ------
+    ParameterError
+        As run_mann_constrained, and when the run with its field does not fit the available memory.
+    """
+    t_start = time.perf_counter()
+    threads = default_threads(threads)
+    placed = place(run, files, noise_m_s) if placed is None else placed
+    g = run.grid
+    require_memory(constrained_memory_bytes(run, placed, threads) + 3 * g.nbytes_per_component(),
+                   f"the constrained Mann run in memory ({placed.streams.n_streams} measurement streams)",
+                   "pass `out` to write a store, or lower `nt`, `ny`/`nz` or the number of measured series")
+    scratch_dir = Path(tempfile.gettempdir())
+    require_disk(scratch_dir, correction_disk_bytes(run), "the correction's scratch file of the constrained Mann run",
+                 "free space in the temporary directory (TMPDIR)")  # fmt: skip
+    holder: list = []
+
+    def opener():
+        holder.append(MemoryWriter(g, run.to_attrs()))
+        return holder[0]
+
+    record, sums = _write_conditioned(opener, run, files, placed, scratch_dir, conditional_mean=conditional_mean,
+                                      threads=threads, cache_dir=cache_dir, progress=progress)  # fmt: skip
+    return holder[0].dataset, _summary(None, t_start, record, sums, g)
+
+
+def constrained_memory_bytes(run: MannRun, placed: PlacedData, threads: int) -> int:
+    """Bytes a constrained Mann run of ``placed`` holds besides its output: the generator's, S (nt/q frequencies x M
+    x M), one plane component's correction spectra (read from the scratch file), the stream arrays and a slab group's
+    workspace of the conditioning."""
+    g, m = run.grid, placed.streams.n_streams
+    extra = (g.nt * m * m * 16 + (g.nt // 2 + 1) * g.ny * g.nz * 8 + 8 * m * g.nt * 8
+             + cond.workspace_bytes(synthesis_box(run), placed.streams, g.nx))  # fmt: skip
+    return memory_estimate_bytes(run, threads) + extra
+
+
+def _write_conditioned(open_writer, run: MannRun, files, placed: PlacedData, scratch_dir: Path, *,
+                       conditional_mean: bool, threads: int, cache_dir, progress: bool) -> tuple[dict, dict]:
+    """The conditioned field of ``run`` into the writer ``open_writer()`` returns (a context manager: a store's or a
+    MemoryWriter), opened once the system is solved; returns (the constraints record, {component: [sum, sum of
+    squares]})."""
+    g = run.grid
     stencil = build_mann_stencil(run, cache_dir)
     cov = stream_system(run, stencil, placed, threads, progress)
-    report, planes = conditioned_planes(run, stencil, placed, cov, Path(out).absolute().parent,
-                                        conditional_mean=conditional_mean, threads=threads,
-                                        progress=progress)  # fmt: skip
+    report, planes = conditioned_planes(run, stencil, placed, cov, scratch_dir, conditional_mean=conditional_mean,
+                                        threads=threads, progress=progress)  # fmt: skip
     remeasured = np.zeros(placed.data.shape)
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
-    with create_store(Path(out), g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:
+    with open_writer() as writer:
         bar = None
         for ix, comp, value in planes:  # the first item comes after the correction (its own bar)
             bar = bar or _bar("write", g.nx, "plane", progress)
@@ -375,8 +429,12 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
             bar.close()
         record = constraint_record(files, placed, report, remeasured, conditional_mean)
         writer.add_attrs(constraints=record)
+    return record, sums
+
+
+def _summary(path: str | None, t_start: float, record: dict, sums: dict, g) -> dict:
     n = g.nt * g.nx * g.ny * g.nz
-    summary = {"path": str(out), "seconds": time.perf_counter() - t_start, "constraints": record}
+    summary = {"path": path, "seconds": time.perf_counter() - t_start, "constraints": record}
     for c, (s1, s2) in sums.items():
         summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - (s1 / n) ** 2, 0.0))
         summary[f"mean_{c}"] = s1 / n
