@@ -137,39 +137,11 @@ def _write(path, mapping):
     return str(path)
 
 
-def _bad_cases():
-    t = np.arange(0.0, 20.0, 0.5)
-    good = _mast(t)
-    outside_y = json.loads(json.dumps(good))
-    outside_y["sensors"][0]["y_m"] = 100.0
-    late = json.loads(json.dumps(good))
-    late["time_s"] = list(t + 100.0)
-    empty = json.loads(json.dumps(good))
-    empty["sensors"][1]["v_m_s"] = [None] * len(t)
-    off_plane = json.loads(json.dumps(good))
-    off_plane["sensors"][1]["x_m"] = 20.0
-    return [
-        ("schema", {"kind": "point-series", "time_s": [0, 1], "sensors": [{"x_m": 0, "y_m": 0}]}, [],
-         ["constraint file", "sensors"]),
-        ("outside-y", outside_y, [], ["y = 100 m is outside the field"]),
-        ("outside-time", late, [], ["outside the field's record"]),
-        ("all-missing", empty, [], ["v_m_s has no value"]),
-        ("not-a-plane", off_plane, [], ["x = 20 m is not a plane of the run"]),
-        ("noise-negative", good, ["--noise", "-0.5"], ["noise = -0.5 m/s must be a finite number >= 0"]),
-    ]  # fmt: skip
-
-
 @pytest.mark.parametrize("case", range(6))
 def test_bad_constraints_are_one_line_exit_2_nothing_written(tmp_path, case):
-    name, mapping, extra, expected = _bad_cases()[case]
-    path = _write(tmp_path / f"{name}.json", mapping)
-    res = CliRunner().invoke(cli, ["kaimal", *SMALL, "--constrain", path, *extra, "--out", str(tmp_path / "c.zarr")],
-                             prog_name="turbgen")  # fmt: skip
-    lines = res.stderr.strip().splitlines()
-    assert res.exit_code == 2 and len(lines) == 1 and res.stdout == "", (res.exit_code, res.output)
-    for text in expected:
-        assert text in lines[0], (text, lines[0])
-    assert not (tmp_path / "c.zarr").exists()
+    from test_run import assert_refused, bad_cases
+
+    assert_refused(tmp_path, ["kaimal", *SMALL], bad_cases(_mast(np.arange(0.0, 20.0, 0.5)))[case])
 
 
 def test_dependent_zero_noise_series_are_refused_and_nothing_written(tmp_path):

@@ -160,16 +160,17 @@ def _write(path, mapping):
     return str(path)
 
 
-def _bad_cases(tmp_path):
-    t = np.arange(0.0, 20.0, 0.5)
-    good = _mast(t)
-    outside_y = json.loads(json.dumps(good))
+def bad_cases(mast) -> list:
+    """(name, file mapping, extra options, expected texts) of the refused constraint files, from a good ``mast``
+    mapping (shared with the Kaimal runs' test)."""
+    t = np.asarray(mast["time_s"])
+    outside_y = json.loads(json.dumps(mast))
     outside_y["sensors"][0]["y_m"] = 100.0
-    late = json.loads(json.dumps(good))
+    late = json.loads(json.dumps(mast))
     late["time_s"] = list(t + 100.0)
-    empty = json.loads(json.dumps(good))
+    empty = json.loads(json.dumps(mast))
     empty["sensors"][1]["v_m_s"] = [None] * len(t)
-    off_plane = json.loads(json.dumps(good))
+    off_plane = json.loads(json.dumps(mast))
     off_plane["sensors"][1]["x_m"] = 20.0
     return [
         ("schema", {"kind": "point-series", "time_s": [0, 1], "sensors": [{"x_m": 0, "y_m": 0}]}, [],
@@ -178,21 +179,27 @@ def _bad_cases(tmp_path):
         ("outside-time", late, [], ["outside the field's record"]),
         ("all-missing", empty, [], ["v_m_s has no value"]),
         ("not-a-plane", off_plane, [], ["x = 20 m is not a plane of the run"]),
-        ("noise-negative", good, ["--noise", "-0.5"], ["noise = -0.5 m/s must be a finite number >= 0"]),
+        ("noise-negative", mast, ["--noise", "-0.5"], ["noise = -0.5 m/s must be a finite number >= 0"]),
     ]  # fmt: skip
 
 
-@pytest.mark.parametrize("case", range(6))
-def test_bad_constraints_are_one_line_exit_2_nothing_written(tmp_path, case):
-    name, mapping, extra, expected = _bad_cases(tmp_path)[case]
+def assert_refused(tmp_path, command: list, case) -> None:
+    """``turbgen *command --constrain FILE`` with the bad case ``case`` (of bad_cases): one line on standard error,
+    exit 2, nothing on standard output and no store."""
+    name, mapping, extra, expected = case
     path = _write(tmp_path / f"{name}.json", mapping)
-    res = CliRunner().invoke(cli, ["mann", *SMALL, "--constrain", path, *extra, "--out", str(tmp_path / "c.zarr")],
+    res = CliRunner().invoke(cli, [*command, "--constrain", path, *extra, "--out", str(tmp_path / "c.zarr")],
                              prog_name="turbgen")  # fmt: skip
     lines = res.stderr.strip().splitlines()
     assert res.exit_code == 2 and len(lines) == 1 and res.stdout == "", (res.exit_code, res.output)
     for text in expected:
         assert text in lines[0], (text, lines[0])
     assert not (tmp_path / "c.zarr").exists()
+
+
+@pytest.mark.parametrize("case", range(6))
+def test_bad_constraints_are_one_line_exit_2_nothing_written(tmp_path, case):
+    assert_refused(tmp_path, ["mann", *SMALL], bad_cases(_mast(np.arange(0.0, 20.0, 0.5)))[case])
 
 
 def test_out_of_core_runs_refuse_constraints(tmp_path):
