@@ -52,17 +52,19 @@ def _header(lines: list[str], where: str) -> dict:
         if key not in HEADER_KEYS:
             raise ParameterError(f"{where}: unknown header key {key!r} (allowed: {', '.join(HEADER_KEYS)})")
         keys[key] = value.strip()
-    for key in ("lidar", "U_m_s"):
-        if key not in keys:
-            raise ParameterError(f"{where}: the header must give `# {key} = ...` (see docs/constrained-fields.md)")
     return keys
 
 
-def _rows(path: Path, where: str) -> tuple[dict, np.ndarray]:
+def check_file(path: Path, where: str) -> None:
+    """Refuse a ``path`` that is not an existing file of at most MAX_BYTES (before it is read)."""
     if not path.is_file():
         raise ParameterError(f"{where}: {'is not a file' if path.exists() else 'does not exist'}")
     if path.stat().st_size > MAX_BYTES:
         raise ParameterError(f"{where}: larger than {MAX_BYTES // 2**20} MiB")
+
+
+def _rows(path: Path, where: str) -> tuple[dict, np.ndarray]:
+    check_file(path, where)
     with open(path, newline="", encoding="utf-8") as fh:
         text = fh.read().splitlines()
     comments = [line for line in text if line.startswith("#")]

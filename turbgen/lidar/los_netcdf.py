@@ -21,7 +21,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.lidar.dataset import LidarData
-from turbgen.lidar.los_csv import COLUMNS, HEADER_KEYS, MAX_BYTES, los_record
+from turbgen.lidar.los_csv import COLUMNS, HEADER_KEYS, check_file, los_record
 
 SUFFIXES = (".nc", ".nc4", ".netcdf")
 
@@ -67,10 +67,7 @@ def read_los_netcdf(path) -> LidarData:
 
     path = Path(path).expanduser()
     where = f"line-of-sight file {path}"
-    if not path.is_file():
-        raise ParameterError(f"{where}: {'is not a file' if path.exists() else 'does not exist'}")
-    if path.stat().st_size > MAX_BYTES:
-        raise ParameterError(f"{where}: larger than {MAX_BYTES // 2**20} MiB")
+    check_file(path, where)
     try:
         with xr.open_dataset(path, decode_times=False) as ds:
             ds.load()

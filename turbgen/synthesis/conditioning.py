@@ -480,22 +480,8 @@ def _gap_start(inverse: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tupl
         weights[-1] = 1.0
     diag = np.einsum("j,jaa->a", weights, inverse).real / n
     b = np.where(missing, circulant_apply(inverse, r), 0.0)
-    y, res = np.zeros_like(r), b.copy()
-    z = np.where(missing, res / diag[:, None], 0.0)
-    p, rz, norm = z.copy(), float(np.vdot(res, z)), float(np.linalg.norm(b))
-    it = 0
-    while norm > 0 and it < CG_MAX_ITERATIONS:
-        it += 1
-        tp = np.where(missing, circulant_apply(inverse, p), 0.0)
-        alpha = rz / float(np.vdot(p, tp))
-        y += alpha * p
-        res -= alpha * tp
-        if np.linalg.norm(res) <= 1e-12 * norm:
-            break
-        z = np.where(missing, res / diag[:, None], 0.0)
-        rz_new = float(np.vdot(res, z))
-        p = z + (rz_new / rz) * p
-        rz = rz_new
+    y, it, _ = _conjugate_gradients(lambda v: np.where(missing, circulant_apply(inverse, v), 0.0),
+                                    lambda v: np.where(missing, v / diag[:, None], 0.0), b, np.zeros_like(r), 1e-12)
     return np.where(observed, circulant_apply(inverse, r - y), 0.0), it
 
 
@@ -503,30 +489,45 @@ def _pcg(cov: np.ndarray, inverse: np.ndarray, r: np.ndarray, observed: np.ndarr
          start: int) -> tuple[np.ndarray, SolveReport]:  # fmt: skip
     """Conjugate gradients on S_oo x = r from ``x``, preconditioned by the circulant ``inverse``; ``start``: the
     iterations spent on ``x`` already (reported with these)."""
-    norm = float(np.linalg.norm(r))
-    res = r - np.where(observed, circulant_apply(cov, x), 0.0)
-    rel = float(np.linalg.norm(res)) / norm
+    x, it, rel = _conjugate_gradients(lambda v: np.where(observed, circulant_apply(cov, v), 0.0),
+                                      lambda v: np.where(observed, circulant_apply(inverse, v), 0.0), r, x,
+                                      CG_TOLERANCE)  # fmt: skip
     if rel <= CG_TOLERANCE:
-        return x, SolveReport("pcg", start, rel)
-    z = np.where(observed, circulant_apply(inverse, res), 0.0)
-    p, rz = z.copy(), float(np.vdot(res, z))
-    for it in range(1, CG_MAX_ITERATIONS + 1):
-        sp = np.where(observed, circulant_apply(cov, p), 0.0)
-        alpha = rz / float(np.vdot(p, sp))
-        x = x + alpha * p
-        res -= alpha * sp
-        rel = float(np.linalg.norm(res)) / norm
-        if rel <= CG_TOLERANCE:
-            return x, SolveReport("pcg", start + it, rel)
-        z = np.where(observed, circulant_apply(inverse, res), 0.0)
-        rz_new = float(np.vdot(res, z))
-        p = z + (rz_new / rz) * p
-        rz = rz_new
+        return x, SolveReport("pcg", start + it, rel)
     raise ParameterError(
         f"the conditioning system did not converge in {CG_MAX_ITERATIONS} conjugate-gradient iterations (relative "
         f"residual {rel:.2e} > {CG_TOLERANCE:g}): the measurements are nearly dependent or too many are missing for "
         "the preconditioner; give a noise level > 0"
     )
+
+
+def _conjugate_gradients(apply, precondition, b: np.ndarray, x: np.ndarray,
+                         tolerance: float) -> tuple[np.ndarray, int, float]:  # fmt: skip
+    """Preconditioned conjugate gradients on A x = b from ``x`` (``apply``: A v; ``precondition``: M^-1 v, both
+    zero outside the unknowns): (x, iterations, relative residual |b - A x| / |b| of the recursion), stopping at
+    ``tolerance`` or after CG_MAX_ITERATIONS (the residual then above it)."""
+    norm = float(np.linalg.norm(b))
+    if norm == 0:
+        return x, 0, 0.0
+    res = b - apply(x)
+    rel = float(np.linalg.norm(res)) / norm
+    if rel <= tolerance:
+        return x, 0, rel
+    z = precondition(res)
+    p, rz = z.copy(), float(np.vdot(res, z))
+    for it in range(1, CG_MAX_ITERATIONS + 1):
+        ap = apply(p)
+        alpha = rz / float(np.vdot(p, ap))
+        x = x + alpha * p
+        res -= alpha * ap
+        rel = float(np.linalg.norm(res)) / norm
+        if rel <= tolerance:
+            return x, it, rel
+        z = precondition(res)
+        rz_new = float(np.vdot(res, z))
+        p = z + (rz_new / rz) * p
+        rz = rz_new
+    return x, CG_MAX_ITERATIONS, rel
 
 
 def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
