@@ -1,6 +1,6 @@
 """Constraints through the Python API and the run spec: turbgen.mann(constrain=...) is the field of
 `turbgen mann --constrain` to the bit, a run file's `constrain` keys are the options, store names carry a digest of
-the data, the service refuses constraints."""
+the data, the service takes uploads by id, never paths."""
 
 from __future__ import annotations
 
@@ -102,13 +102,25 @@ def test_noise_without_constrain_is_refused(tmp_path):
     assert res.exit_code == 2 and "needs constraints" in res.output and not (tmp_path / "x.zarr").exists()
 
 
-def test_service_refuses_constraints():
-    from turbgen.service.run_ids import build_run
+def test_service_takes_upload_ids_not_paths():
+    from turbgen.service.run_ids import build_run, canonical_mapping, run_from_canonical
 
-    with pytest.raises(ParameterError, match="constrain.*not taken by the service"):
+    with pytest.raises(ParameterError, match="constrain.*takes the id of uploaded measurements.*not a file"):
         build_run({"model": "mann", "constrain": ["/etc/passwd"]})
-    with pytest.raises(ParameterError, match="noise_m_s.*not taken by the service"):
+    with pytest.raises(ParameterError, match="needs constraints"):
         build_run({"model": "mann", "noise_m_s": 0.1})
+    with pytest.raises(ParameterError, match="'constrain' was unexpected"):  # the sweep and service condition Mann
+        build_run({"model": "kaimal", "constrain": ["0" * 24]})
+    model, run, keys = build_run({"model": "mann", "seed": 3, "constrain": ["ab" * 12], "noise_m_s": 0.2})
+    # canonical: conditional_mean only when true; no energy level given: ae from the data, as the CLI
+    assert keys == {"constrain": ["ab" * 12], "noise_m_s": 0.2, "energy_from_data": True}
+    mapping = canonical_mapping(run, keys)
+    assert "ae" not in mapping and mapping["energy_from_data"] is True
+    assert run_from_canonical(model, mapping) == (run, keys)  # a restarted server re-queues the same request
+    _, run, keys = build_run({"model": "mann", "ti": 0.1, "constrain": ["ab" * 12], "conditional_mean": True})
+    assert keys == {"constrain": ["ab" * 12], "conditional_mean": True}
+    assert run_from_canonical(model, canonical_mapping(run, keys)) == (run, keys)
+    assert build_run({"model": "mann", "seed": 3})[2] == {}
 
 
 def test_sweep_conditions_every_run_on_the_same_files(tmp_path):

@@ -52,7 +52,7 @@ class Server:
         validation, which imports and compiles in a fresh server, on a loaded machine)."""
         data = raw if raw is not None else (None if body is None else json.dumps(body).encode())
         req = urllib.request.Request(self.url + path, data=data, method=method, headers=headers or {})
-        if data is not None and "Content-Type" not in req.headers:
+        if data is not None and not req.has_header("Content-type"):  # urllib keeps header names capitalize()d
             req.add_header("Content-Type", "application/json")
         try:
             with urllib.request.urlopen(req, timeout=timeout_s) as r:

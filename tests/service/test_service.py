@@ -277,3 +277,84 @@ def test_lidar_on_a_served_run(server):
     server.wait(tiny)
     status, _, body = server.call("GET", f"/runs/{tiny}/lidar", timeout_s=60)
     assert status == 422 and "lidar" in body["detail"] and "pytest-of" not in body["detail"]  # no server path
+
+
+MAST = os.path.join(os.path.dirname(__file__), "..", "..", "examples", "mast.json")
+SMALL_RUN = {"seed": 2, "U_m_s": 12.0, "pad_yz": 1, "grid": {"nt": 64, "ny": 6, "nz": 6, "dy_m": 8.0, "x_m": [0, 40]}}
+
+
+def _upload(server, data: bytes, ctype: str):
+    return server.call("POST", "/constraints", raw=data, headers={"Content-Type": ctype})
+
+
+def test_constrained_run_from_an_upload_is_the_cli_field(server, tmp_path):
+    """POST /constraints keeps the content (same bytes, same id); a run naming its id is `turbgen mann --constrain
+    FILE` to the bit, and its run id depends on the data."""
+    data = open(MAST, "rb").read()
+    status, _, up = _upload(server, data, "application/json")
+    assert status == 201 and up["kind"] == "point series" and up["series"] == 2 and up["values"] == 128, up
+    status, _, again = _upload(server, data, "application/json")
+    assert status == 200 and again == up
+    assert server.call("GET", f"/constraints/{up['id']}")[2] == up
+    cfg = {"model": "mann", **SMALL_RUN, "constrain": [up["id"]], "noise_m_s": 0.1}
+    status, _, out = server.call("POST", "/runs", cfg)
+    assert status == 202, out
+    s = server.wait(out["id"], timeout_s=120)
+    assert s["parameters"]["constrain"] == [up["id"]] and s["parameters"]["noise_m_s"] == 0.1
+    unconstrained = server.call("POST", "/runs", {"model": "mann", **SMALL_RUN})[2]["id"]
+    other = _upload(server, data.replace(b'"noise_m_s": 0.05', b'"noise_m_s": 0.06'), "application/json")[2]["id"]
+    assert len({out["id"], unconstrained, server.call("POST", "/runs", {**cfg, "constrain": [other]})[2]["id"]}) == 3
+    (tmp_path / "run.json").write_text(json.dumps(SMALL_RUN))
+    _cli(["mann", "--config", "run.json", "--constrain", os.path.abspath(MAST), "--noise", "0.1", "--out", "cli.zarr"],
+         tmp_path)
+    served, local = open_store(server.root / "runs" / out["id"] / "store.zarr"), open_store(tmp_path / "cli.zarr")
+    for c in "uvw":
+        np.testing.assert_array_equal(served.array(c)[...], local.array(c)[...])
+    assert served.attrs["constraints"]["residual_max_m_s"] == local.attrs["constraints"]["residual_max_m_s"]
+    sweep = {"models": ["mann"], "presets": ["neutral"], "speeds": [12], "seeds": [5], "constrain": [up["id"]],
+             "grid": {"nt": 64, "ny": 6, "nz": 6, "dy": 8.0, "planes": [0, 40]}}  # fmt: skip
+    status, _, sw = server.call("POST", "/sweeps", sweep)
+    assert status == 202, sw
+    s = server.wait(sw["runs"][0]["id"], timeout_s=120)
+    assert s["parameters"]["constrain"] == [up["id"]] and "constraints" in open_store(
+        server.root / "runs" / sw["runs"][0]["id"] / "store.zarr").attrs
+
+
+def _los_csv(header: str, n_gates: int = 10) -> bytes:
+    rows = ["time_s,beam,gate,v_los_m_s"] + [f"{s + 0.25 * b},{b},{g},{0.1 * g}" for s in range(2) for b in range(4)
+                                             for g in range(n_gates)]  # fmt: skip
+    return (header + "\n".join(rows) + "\n").encode()
+
+
+def test_uploads_that_name_files_or_are_malformed_are_refused(server):
+    """The service opens no path a client names: not in a run's or a sweep's constrain, not through an upload's
+    lidar, mean history or table profile; each refusal is one line, 4xx."""
+    status, _, up = _upload(server, _los_csv("# lidar = nacelle-4beam\n# U_m_s = 12\n"), "text/csv")
+    assert status == 201 and up["kind"] == "line of sight" and up["series"] == 40 and up["values"] == 80, up
+    kept = sorted(os.listdir(server.root / "constraints"))
+    secret = "# lidar = nacelle-4beam\n# U_m_s = 12\n"
+    total = secret + "# total_wind = true\n"
+    refused = [
+        (_los_csv("# lidar = my.toml\n# U_m_s = 12\n"), "text/csv", 422, "lidar = 'my.toml' must be a preset"),
+        (_los_csv(total + "# mean_history = /etc/hosts\n"), "text/csv", 422, "mean_history names"),
+        (_los_csv(total + "# profile = table:/etc/hosts\n"), "text/csv", 422, "names a file"),
+        (_los_csv(secret, n_gates=9), "text/csv", 422, "gate"),
+        (b'{"mean_wind": {"mean_history": "/etc/hosts"}}', "application/json", 422, "mean_history names a file"),
+        (b"[1, 2", "application/json", 422, "not valid JSON"),
+        (b"time_s\n", "text/plain", 415, "Content-Type must be one of application/json, text/csv"),
+    ]
+    for data, ctype, code, match in refused:
+        status, _, out = _upload(server, data, ctype)
+        assert status == code and match in out["detail"] and "\n" not in out["detail"], (match, status, out)
+    assert sorted(os.listdir(server.root / "constraints")) == kept  # nothing written for a refused upload
+    for path, body in (("/runs", {"model": "mann", **SMALL_RUN, "constrain": ["/etc/hosts"]}),
+                       ("/sweeps", {"models": ["mann"], "presets": ["neutral"], "speeds": [12], "seeds": [1],
+                                    "constrain": ["/etc/hosts"]}),
+                       ("/runs", {"model": "mann", **SMALL_RUN, "constrain": ["0" * 24]})):  # fmt: skip
+        status, _, out = server.call("POST", path, body)
+        assert status == 422 and "uploaded measurements" in out["detail"], (path, out)
+    assert server.call("GET", "/constraints/" + "0" * 24)[0] == 404
+    mast = _upload(server, open(MAST, "rb").read(), "application/json")[2]["id"]
+    off = {"model": "mann", **SMALL_RUN, "grid": {**SMALL_RUN["grid"], "x_m": [20, 40]}, "constrain": [mast]}
+    status, _, out = server.call("POST", "/runs", off)  # the sonic at x = 0: off the field, refused at submission
+    assert status == 422 and f"/constraints/{mast}" in out["detail"] and str(server.root) not in out["detail"], out

@@ -23,8 +23,8 @@ def _kaimal(seed, **extra):
 def _rid(body):
     from turbgen.service.run_ids import build_run, canonical_mapping, run_id
 
-    model, run = build_run(body)
-    return run_id(model, canonical_mapping(run))
+    model, run, constraints = build_run(body)
+    return run_id(model, canonical_mapping(run, constraints))
 
 
 @pytest.fixture(scope="module")

@@ -204,7 +204,7 @@ def test_a_preset_request_builds_the_run_of_the_cli_and_the_sweep(model):
     from turbgen.service.run_ids import build_run
     from turbgen.sweep.plan import build_run as sweep_run
 
-    name, run = build_run({"model": model, "preset": "stable", "U_m_s": 12.0, "seed": 4})
+    name, run, _ = build_run({"model": model, "preset": "stable", "U_m_s": 12.0, "seed": 4})
     assert name == model
     assert run.to_attrs() == sweep_run(model, "stable", 12.0, 4).to_attrs()
 

@@ -42,7 +42,8 @@ def is_los_csv(path) -> bool:
     return Path(path).suffix.lower() == ".csv"
 
 
-def _header(lines: list[str], where: str) -> dict:
+def parse_header(lines: list[str], where: str) -> dict:
+    """The HEADER_KEYS of the comment lines ``lines`` (``# key = value``; other comments ignored) as strings."""
     keys = {}
     for line in lines:
         key, sep, value = line.lstrip("#").partition("=")
@@ -66,7 +67,11 @@ def check_file(path: Path, where: str) -> None:
 def _rows(path: Path, where: str) -> tuple[dict, np.ndarray]:
     check_file(path, where)
     with open(path, newline="", encoding="utf-8") as fh:
-        text = fh.read().splitlines()
+        return parse_table(fh.read().splitlines(), where)
+
+
+def parse_table(text: list[str], where: str) -> tuple[dict, np.ndarray]:
+    """(header, table (n, 4) of COLUMNS) of a CSV file's lines ``text``; ParameterError naming ``where``."""
     comments = [line for line in text if line.startswith("#")]
     body = [line for line in text if line.strip() and not line.startswith("#")]
     reader = csv.reader(body)
@@ -83,7 +88,7 @@ def _rows(path: Path, where: str) -> tuple[dict, np.ndarray]:
             raise ParameterError(f"{where}: data row {n} holds a value that is not a number: {row}") from None
     if not values:
         raise ParameterError(f"{where}: no data rows")
-    return _header(comments, where), np.array(values)
+    return parse_header(comments, where), np.array(values)
 
 
 def _grid(table: np.ndarray, n_beams: int, n_gates: int, where: str) -> tuple[np.ndarray, np.ndarray]:

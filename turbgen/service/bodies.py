@@ -39,14 +39,7 @@ async def read_json(request: Request):
     media = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if media != "application/json":
         raise LimitError(415, f"request body: Content-Type must be application/json, not {media or 'missing'!r}")
-    length = request.headers.get("content-length")
-    if length is not None and (not length.isdigit() or int(length) > MAX_BODY_BYTES):
-        raise LimitError(413, f"request body over {MAX_BODY_BYTES} bytes")
-    try:
-        data = await asyncio.wait_for(_read_body(request), BODY_TIMEOUT_S)
-    except TimeoutError:
-        raise LimitError(408, f"request body not received within {BODY_TIMEOUT_S:g} s",
-                         {"Connection": "close"}) from None  # fmt: skip
+    data = await _bounded_body(request, MAX_BODY_BYTES)
     try:
         value = json.loads(data)
     except RecursionError:  # the decoder itself recurses: thousands of nested arrays
@@ -57,10 +50,39 @@ async def read_json(request: Request):
     return value
 
 
-async def _read_body(request: Request) -> bytearray:
+async def read_upload(request: Request, types, max_bytes: int) -> tuple[str, bytes]:
+    """(content type, body) of an upload whose content type is one of ``types``, at most ``max_bytes``.
+
+    The types are never a form encoding or text/plain (see :func:`read_json`: those need no CORS preflight).
+
+    Raises
+    ------
+    LimitError
+        415 for another content type, 413 for a body over ``max_bytes``, 408 for one not received within
+        BODY_TIMEOUT_S.
+    """
+    media = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if media not in types:
+        raise LimitError(415, f"request body: Content-Type must be one of {', '.join(types)}, not "
+                         f"{media or 'missing'!r}")  # fmt: skip
+    return media, bytes(await _bounded_body(request, max_bytes))
+
+
+async def _bounded_body(request: Request, max_bytes: int) -> bytearray:
+    length = request.headers.get("content-length")
+    if length is not None and (not length.isdigit() or int(length) > max_bytes):
+        raise LimitError(413, f"request body over {max_bytes} bytes")
+    try:
+        return await asyncio.wait_for(_read_body(request, max_bytes), BODY_TIMEOUT_S)
+    except TimeoutError:
+        raise LimitError(408, f"request body not received within {BODY_TIMEOUT_S:g} s",
+                         {"Connection": "close"}) from None  # fmt: skip
+
+
+async def _read_body(request: Request, max_bytes: int) -> bytearray:
     data = bytearray()
     async for chunk in request.stream():
         data += chunk
-        if len(data) > MAX_BODY_BYTES:
-            raise LimitError(413, f"request body over {MAX_BODY_BYTES} bytes")
+        if len(data) > max_bytes:
+            raise LimitError(413, f"request body over {max_bytes} bytes")
     return data

@@ -20,6 +20,7 @@ from pathlib import Path
 from turbgen.version import __version__
 from turbgen.errors import TurbgenError
 from turbgen.service.run_ids import valid_id
+from turbgen.service.uploads import ConstraintUploads
 from turbgen.store.temporaries import temp_name, temp_prefix
 
 STORE = "store.zarr"
@@ -69,6 +70,7 @@ class Catalog:
         self.runs.mkdir(parents=True, exist_ok=True)
         self.work = self.root / "work"
         self.work.mkdir(exist_ok=True)
+        self.uploads = ConstraintUploads(self.root)  # measurements uploaded for constrained runs
         self._complete: set[str] = set()  # ids whose store opened as complete (a published store stays so)
 
     def run_dir(self, rid: str) -> Path:

@@ -1,13 +1,13 @@
 """Start-up clean-up of a server's root, and the size cap of its stencil cache.
 
-Every writer of the service works under a temporary name with its process id
-(``.NAME.tmp-PID-XXXXXXXX``, turbgen.store.temporaries): a killed server (kill -9, power loss) leaves them
-behind. Start-up removes those whose process is gone, in ``ROOT/work`` (derived products), ``ROOT/runs`` (runs
-being deleted), each run's directory, its ``exports`` and ``lidar`` (written there by earlier versions), and in
-``ROOT/stencils`` when the runs execute in this process (with --scheduler the stencil builders are the
-scheduler's workers, whose process ids are not this host's). Earlier versions also named validation and export
-temporaries ``.tmp-XXXXXXXX`` without a process id: only a server writes them and start-up is before it writes,
-so start-up removes them all.
+Every writer of the service works under a temporary name with its process id (``.NAME.tmp-PID-XXXXXXXX``,
+turbgen.store.temporaries): a killed server (kill -9, power loss) leaves them behind. Start-up removes those whose
+process is gone, in ``ROOT/work`` (derived products), ``ROOT/runs`` (runs being deleted), ``ROOT/constraints``
+(uploads), each run's directory, its ``exports`` and ``lidar`` (written there by earlier versions), and in
+``ROOT/stencils`` when the runs execute in this process (with --scheduler the stencil builders are the scheduler's
+workers, whose process ids are not this host's). Earlier versions also named validation and export temporaries
+``.tmp-XXXXXXXX`` without a process id: only a server writes them and start-up is before it writes, so start-up
+removes them all.
 """
 
 from __future__ import annotations
@@ -39,7 +39,8 @@ def remove_dead_work(catalog: Catalog, *, stencils: bool) -> list[Path]:
     list of Path
         The removed paths.
     """
-    removed = remove_dead_temporaries(catalog.work) + remove_dead_temporaries(catalog.runs)
+    removed = (remove_dead_temporaries(catalog.work) + remove_dead_temporaries(catalog.runs)
+               + remove_dead_temporaries(catalog.uploads.dir))  # fmt: skip
     for run_dir in catalog.runs.iterdir():
         if not valid_id(run_dir.name) or not run_dir.is_dir():
             continue

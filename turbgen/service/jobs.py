@@ -13,11 +13,13 @@ from pathlib import Path
 
 from turbgen.service.catalog import Catalog, write_json_atomic
 from turbgen.service.run_ids import canonical_mapping, run_from_canonical
+from turbgen.spec.constraints import ConstraintRequest
 
 _STENCIL_LOCK = threading.Lock()  # one stencil build at a time: a second request for it waits and reuses it
 
 
-def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: int | None = None) -> dict:
+def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: int | None = None,
+            constraints: ConstraintRequest | None = None, energy_from_data: bool = False) -> dict:
     """Worker side: generate ``run`` into the store ``out`` by the CLI's library path; the run summary.
 
     A shared part (a Mann stencil) is built one at a time per process, cached in ``stencil_cache``, which is
@@ -35,6 +37,10 @@ def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: 
         Directory of cached shared parts.
     stencil_cache_bytes : int, optional
         Size cap of ``stencil_cache`` [bytes] (None: no cap).
+    constraints : ConstraintRequest, optional
+        Condition the (Mann) field on these files, as ``turbgen mann --constrain`` (it builds its own stencil).
+    energy_from_data : bool
+        With ``constraints``: ae is estimated from the data (the request gave no energy level).
 
     Returns
     -------
@@ -49,6 +55,16 @@ def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: 
     """
     from turbgen.runs.models import get_model
 
+    if constraints is not None:
+        from turbgen.runs.constrain import load_constraints, run_mann_constrained, with_energy_from_data
+
+        files = load_constraints(constraints.files)
+        if energy_from_data:
+            mapping = {k: v for k, v in canonical_mapping(run).items() if k not in ("ae", "ae_from")}
+            run = with_energy_from_data(mapping, files, constraints.noise_m_s, stencil_cache)
+        summary = run_mann_constrained(run, out, files, noise_m_s=constraints.noise_m_s,
+                                       conditional_mean=constraints.conditional_mean, cache_dir=stencil_cache)
+        return _scalars(summary)
     entry = get_model(model)
     build_shared = entry.shared_part(run, None, None)
     shared = None
@@ -58,7 +74,10 @@ def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: 
         with _STENCIL_LOCK:
             shared = build_shared(run, stencil_cache)
             trim_stencil_cache(Path(stencil_cache), stencil_cache_bytes)  # the entry just used is the most recent
-    summary = entry.run(run, out, shared=shared)
+    return _scalars(entry.run(run, out, shared=shared))
+
+
+def _scalars(summary: dict) -> dict:
     return {k: v for k, v in summary.items() if isinstance(v, (int, float, str, bool, list)) and k != "path"}
 
 
@@ -106,7 +125,7 @@ class Jobs:
         self.active: dict[str, object] = {}
         self.computations = 0  # runs handed to dask since start (duplicates are joined, not counted)
 
-    def submit(self, rid: str, model: str, run, preset: str | None = None) -> str:
+    def submit(self, rid: str, model: str, run, preset: str | None = None, constraints: dict | None = None) -> str:
         """'complete' (already in the catalog), 'joined' (queued/running) or 'queued' (new computation).
 
         Parameters
@@ -119,6 +138,8 @@ class Jobs:
             The run.
         preset : str, optional
             Preset label for listing.
+        constraints : dict, optional
+            The run's constraint keys (turbgen.service.run_ids.constraint_keys: upload ids).
 
         Returns
         -------
@@ -137,15 +158,20 @@ class Jobs:
                 return "complete"
             if len(self.active) >= self.max_queue:
                 raise QueueFull(f"{len(self.active)} runs are queued or running (the server's --max-queue)")
-            self.catalog.record(rid, model, canonical_mapping(run), preset)
-            self._start(rid, model, run)
+            self.catalog.record(rid, model, canonical_mapping(run, constraints), preset)
+            self._start(rid, model, run, constraints)
             return "queued"
 
-    def _start(self, rid: str, model: str, run) -> None:
+    def _start(self, rid: str, model: str, run, constraints: dict | None = None) -> None:
         self.catalog.clear_partial(rid)
         out = str(self.catalog.store_path(rid))
         cache = str(self.catalog.root / "stencils")
-        fut = self.client.submit(execute, model, run, out, cache, self.stencil_cache_bytes,
+        request = None
+        if constraints:
+            request = ConstraintRequest(tuple(str(p) for p in self.catalog.uploads.paths(constraints["constrain"])),
+                                        constraints.get("noise_m_s"), constraints.get("conditional_mean", False))
+        fut = self.client.submit(execute, model, run, out, cache, self.stencil_cache_bytes, request,
+                                 bool(constraints and constraints.get("energy_from_data")),
                                  key=f"turbgen-run-{rid}-{uuid.uuid4().hex[:8]}", pure=False)  # fmt: skip
         self.active[rid] = fut
         self.computations += 1
@@ -217,11 +243,12 @@ class Jobs:
                 continue
             try:
                 req = self.catalog.request(rid)
-                run = run_from_canonical(req["model"], req["run"])
+                run, constraints = run_from_canonical(req["model"], req["run"])
+                self.catalog.uploads.paths(constraints.get("constrain", ()))  # its data are still there
             except Exception as exc:  # an unreadable request is recorded as a failure, never retried blindly
                 self.catalog.mark_failed(rid, f"cannot re-queue: {one_line(exc)}")
                 continue
             with self.lock:
-                self._start(rid, req["model"], run)
+                self._start(rid, req["model"], run, constraints)
             requeued.append(rid)
         return requeued

@@ -1,7 +1,8 @@
 """Service run requests and their ids.
 
 A run id is the first 24 hex digits of the SHA-256 of the canonical JSON of (model, run parameters,
-grid, turbgen version); the seed is one of the parameters. Identical requests give the same id.
+grid, constraint keys, turbgen version); the seed is one of the parameters, the constraint keys name the
+uploaded data by the digest of their content. Identical requests give the same id.
 """
 
 from __future__ import annotations
@@ -13,17 +14,21 @@ import re
 from turbgen.version import __version__
 from turbgen.errors import ParameterError
 from turbgen.spec.config import check_mapping
-from turbgen.spec.constraints import CONSTRAINT_KEYS
+from turbgen.spec.constraints import CONSTRAINT_KEYS, split_constraint_keys
 from turbgen.store.layout import grid_to_attrs
 
 _ID = re.compile(r"^[0-9a-f]{24}$")
+SERVICE_KEYS = (*CONSTRAINT_KEYS, "energy_from_data")  # the constraint keys of a recorded request
+ENERGY_KEYS = ("ae", "sigma_u_m_s", "ti", "turb_class")  # a constrained request with none: ae from the data
 
 
-def build_run(body) -> tuple[str, object]:
-    """(model, MannRun | KaimalRun) from a request body: {"model": ..., "preset": ..., <run config keys>}.
+def build_run(body) -> tuple[str, object, dict]:
+    """(model, MannRun | KaimalRun, constraints) from a request body: {"model": ..., "preset": ..., <run config
+    keys>}.
 
     The run config keys are those of ``turbgen mann|kaimal --config`` (schemas/<model>-run.schema.json);
-    ``preset`` sets the stability keys as ``--preset`` does (at the body's U), given keys override it.
+    ``preset`` sets the stability keys as ``--preset`` does (at the body's U), given keys override it. A Mann
+    run's ``constrain`` names uploaded measurements by id (turbgen.service.uploads), not files.
 
     Parameters
     ----------
@@ -32,13 +37,15 @@ def build_run(body) -> tuple[str, object]:
 
     Returns
     -------
-    tuple of (str, MannRun or KaimalRun)
-        The model name and the run.
+    tuple of (str, MannRun or KaimalRun, dict)
+        The model name, the run and its constraint keys in canonical form (:func:`constraint_keys`; empty for an
+        unconstrained run).
 
     Raises
     ------
     ParameterError
-        Naming the bad field: not an object, unknown model or preset, schema violation or a value out of range.
+        Naming the bad field: not an object, unknown model or preset, schema violation, a value out of range or a
+        ``constrain`` entry that is not an upload id.
     """
     if not isinstance(body, dict):
         raise ParameterError("request body: expected a JSON object with the run config")
@@ -47,10 +54,9 @@ def build_run(body) -> tuple[str, object]:
     entry = _model(model)
     preset = body.pop("preset", None)
     check_mapping(body, f"{model}-run", "run config")
-    refused = [key for key in CONSTRAINT_KEYS if key in body]
-    if refused:  # the server never opens paths a client names; conditioning is a local run (CLI, API, sweep)
-        raise ParameterError(f"{', '.join(refused)}: constrained fields are not taken by the service (it does not "
-                             "read files named by a client); make them with `turbgen mann --constrain` or a sweep")
+    constraints = constraint_keys({key: body.pop(key) for key in CONSTRAINT_KEYS if key in body})
+    if constraints and model != "mann":
+        raise ParameterError(f"constrain: the service conditions Mann runs only, not {model}")
     if preset is not None:
         from turbgen.spec.preset_runs import run_keys
 
@@ -60,7 +66,32 @@ def build_run(body) -> tuple[str, object]:
         if isinstance(U, bool) or not isinstance(U, (int, float)):  # a bad U is reported by from_mapping below
             U = entry.spec.from_mapping({}).U_m_s
         body = {**run_keys(model, preset, U), **body}
-    return model, entry.spec.from_mapping(body)
+    if constraints and not any(key in body for key in ENERGY_KEYS):
+        constraints["energy_from_data"] = True  # as `turbgen mann --constrain`: ae estimated from the data (worker)
+    return model, entry.spec.from_mapping(body), constraints
+
+
+def constraint_keys(mapping: dict) -> dict:
+    """The constraint keys of a run request in canonical form: ``constrain`` (upload ids), ``noise_m_s`` when given,
+    ``conditional_mean`` and ``energy_from_data`` (no energy level given: ae is estimated from the data as
+    ``turbgen mann --constrain`` does) when true; {} without constraints.
+
+    Raises
+    ------
+    ParameterError
+        For an entry of ``constrain`` that is not an upload id (the server opens no path a client names), or the
+        checks of :func:`turbgen.spec.constraints.split_constraint_keys`.
+    """
+    request = split_constraint_keys({k: v for k, v in mapping.items() if k != "energy_from_data"})[1]
+    if request is None:
+        return {}
+    for n, cid in enumerate(request.files):
+        if not isinstance(cid, str) or not valid_id(cid):
+            raise ParameterError(f"constrain[{n}] = {cid!r}: the service takes the id of uploaded measurements "
+                                 "(POST /constraints), not a file")
+    return {"constrain": list(request.files), **({} if request.noise_m_s is None else {"noise_m_s": request.noise_m_s}),
+            **({"conditional_mean": True} if request.conditional_mean else {}),
+            **({"energy_from_data": True} if mapping.get("energy_from_data") else {})}  # fmt: skip
 
 
 def _model(name):
@@ -72,20 +103,26 @@ def _model(name):
     return MODELS[name]
 
 
-def canonical_mapping(run) -> dict:
-    """The run mapping that rebuilds ``run`` exactly: its parameters (seed included) and its grid.
+def canonical_mapping(run, constraints: dict | None = None) -> dict:
+    """The run mapping that rebuilds ``run`` exactly: its parameters (seed included), its grid and the constraint
+    keys.
 
     Parameters
     ----------
     run : MannRun or KaimalRun
         The run.
+    constraints : dict, optional
+        Its constraint keys (:func:`constraint_keys`).
 
     Returns
     -------
     dict
-        ``run.parameters()`` plus ``grid`` (store attribute form).
+        ``run.parameters()`` plus ``grid`` (store attribute form) and ``constraints``.
     """
-    return {**run.parameters(), "grid": grid_to_attrs(run.grid)}
+    constraints = constraints or {}
+    drop = ("ae", "ae_from") if constraints.get("energy_from_data") else ()  # the worker estimates it
+    return {**{k: v for k, v in run.parameters().items() if k not in drop}, "grid": grid_to_attrs(run.grid),
+            **constraints}
 
 
 def run_from_canonical(model: str, mapping: dict):
@@ -100,14 +137,17 @@ def run_from_canonical(model: str, mapping: dict):
 
     Returns
     -------
-    MannRun or KaimalRun
+    tuple of (MannRun or KaimalRun, dict)
+        The run and its constraint keys.
 
     Raises
     ------
     ParameterError
         For an unknown model, key or a value out of range.
     """
-    return _model(model).spec.from_mapping(mapping)
+    constraints = constraint_keys({key: mapping[key] for key in SERVICE_KEYS if key in mapping})
+    rest = {key: value for key, value in mapping.items() if key not in SERVICE_KEYS}
+    return _model(model).spec.from_mapping(rest), constraints
 
 
 def run_id(model: str, mapping: dict) -> str:

@@ -86,13 +86,15 @@ def public_text(text: str, catalog: Catalog) -> str:
     Returns
     -------
     str
-        ``ROOT/runs/<id>/store.zarr`` as ``/runs/<id>/store``, ``ROOT/runs/<id>`` as ``/runs/<id>``, any other path
+        ``ROOT/runs/<id>/store.zarr`` as ``/runs/<id>/store``, ``ROOT/runs/<id>`` as ``/runs/<id>``, an upload
+        ``ROOT/constraints/<id>.json`` as ``/constraints/<id>``, any other path
         under the root as ``<server root>/...``, and the advice of :data:`_CLI_ADVICE` rewritten.
     """
     for root in dict.fromkeys((catalog.root, catalog.root.resolve())):
         runs = re.escape(str(root / "runs"))
         text = re.sub(runs + r"/([0-9a-f]{24})/store\.zarr\b", r"/runs/\1/store", text)
         text = re.sub(runs + r"/([0-9a-f]{24})\b", r"/runs/\1", text)
+        text = re.sub(re.escape(str(root / "constraints")) + r"/([0-9a-f]{24})\.(json|csv)\b", r"/constraints/\1", text)
         text = text.replace(str(root), "<server root>")
     for advice, instead in _CLI_ADVICE:
         text = text.replace(advice, instead)

@@ -7,10 +7,11 @@ from pathlib import Path
 
 from fastapi import APIRouter, Depends, Request
 from fastapi.responses import FileResponse, JSONResponse
+from starlette.concurrency import run_in_threadpool
 
 from turbgen.service.bodies import read_json
 from turbgen.service.jobs import QueueFull
-from turbgen.service.limits import RETRY_AFTER_S, LimitError, check_memory
+from turbgen.service.limits import RETRY_AFTER_S, LimitError, check_constrained_memory, check_memory
 from turbgen.service.run_ids import build_run, canonical_mapping, run_id
 from turbgen.service.state import ServiceState, complete_store, get_state, not_found, require_token
 from turbgen.service.status import links, run_status
@@ -21,15 +22,19 @@ NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")  # a path component the serv
 
 @router.post("/runs", status_code=202, dependencies=[Depends(require_token)])
 async def submit(request: Request, state: ServiceState = Depends(get_state)):
-    """Submit a run config (the JSON `turbgen mann|kaimal --config` takes, plus "model" and "preset")."""
+    """Submit a run config (the JSON `turbgen mann|kaimal --config` takes, plus "model" and "preset"; a Mann run's
+    ``constrain`` names measurements uploaded with POST /constraints by id)."""
     body = await read_json(request)
-    model, run = build_run(body)
+    model, run, constraints = build_run(body)
     preset = body.get("preset") if isinstance(body, dict) else None
-    rid = run_id(model, canonical_mapping(run))
-    if not state.catalog.is_complete(rid):  # a complete run is served, never recomputed
+    rid = run_id(model, canonical_mapping(run, constraints))
+    if constraints and not state.catalog.is_complete(rid):  # the data placed on the grid: refused before queueing
+        files = [str(p) for p in state.catalog.uploads.paths(constraints["constrain"])]
+        await run_in_threadpool(check_constrained_memory, run, files, constraints, state.settings.memory_budget_bytes)
+    elif not state.catalog.is_complete(rid):  # a complete run is served, never recomputed
         check_memory(model, run, state.settings.memory_budget_bytes)
     try:
-        submitted = state.jobs.submit(rid, model, run, preset)
+        submitted = state.jobs.submit(rid, model, run, preset, constraints)
     except QueueFull as exc:
         raise LimitError(429, str(exc), {"Retry-After": str(RETRY_AFTER_S)}) from None
     code = 200 if submitted == "complete" else 202
