@@ -358,24 +358,28 @@ def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_
     coef = (meas.weights[..., None] * meas.n[:, None, :] / (M * meas.n[:, None, :1])).reshape(M * K, 3)
     yr, zr = rotor_points(R, rotor_spacing_m)
     r_rl = np.hypot(yr[:, None] - py[None, :], zr[:, None] - pz[None, :])
+    # the coherences are functions of the separations: evaluated once per distinct value (the same numbers)
+    r_ll, r_ll_of = np.unique(r_ll, return_inverse=True)
+    dx_ll, dx_ll_of = np.unique(dx_ll, return_inverse=True)
+    r_rl, r_rl_of = np.unique(r_rl, return_inverse=True)
+    white, same_plane = same_point.astype(float), (dx_ll[dx_ll_of] < 1e-9).astype(float)
     S_LL = np.empty(f.size)
     S_RL = np.empty(f.size, dtype=complex)
     for m, fm in enumerate(f):
         ph = np.exp(2j * np.pi * fm * delay_s)
+        coh_u = exponential_yz(r_ll, fm, U, kparams.a_yz, kparams.lc_m)[r_ll_of]
+        gx_coherent = long_coherence(dx_ll, fm)[dx_ll_of]
         total = 0.0
         for c in range(3):
             S_c = kaimal_spectrum(fm, kparams.sigma_m_s[c], kparams.length_scales_m[c], U)
-            if c == 0 or vw_coherence:
-                coh = exponential_yz(r_ll, fm, U, kparams.a_yz, kparams.lc_m)
-            else:
-                coh = same_point.astype(float)
-            gx = long_coherence(dx_ll, fm) if "uvw"[c] in long_components else (dx_ll < 1e-9).astype(float)
+            coh = coh_u if c == 0 or vw_coherence else white
+            gx = gx_coherent if "uvw"[c] in long_components else same_plane
             a = coef[:, c] * ph
             total += S_c * np.real(a @ (coh * gx) @ a.conj())
         S_LL[m] = total
         S_1 = kaimal_spectrum(fm, kparams.sigma_m_s[0], kparams.length_scales_m[0], U)
         gx_r = long_coherence(gate_x, fm) if "u" in long_components else (gate_x < 1e-9).astype(float)
-        coh_r = exponential_yz(r_rl, fm, U, kparams.a_yz, kparams.lc_m)
+        coh_r = exponential_yz(r_rl, fm, U, kparams.a_yz, kparams.lc_m)[r_rl_of]
         S_RL[m] = S_1 * (coh_r.mean(axis=0) * gx_r) @ (coef[:, 0] * ph).conj()
     S_RR = rews_spectrum_kaimal(f, kparams, U, yr, zr)
     return PreviewSpectra(f, S_RR, S_LL, S_RL)
