@@ -13,8 +13,8 @@ import pytest
 
 from brute_force import dense_gain, generator_covariance
 from turbgen.errors import ParameterError
-from turbgen.synthesis.conditioning import (Streams, check_singular, measure, measure_spectra, solve, spectra_samples,
-                                            stream_covariance, weights_field)  # fmt: skip
+from turbgen.synthesis.conditioning import (Streams, check_singular, circulant_apply, measure, measure_spectra, solve,
+                                            spectra_samples, stream_covariance, weights_field)  # fmt: skip
 from turbgen.synthesis.mann_spacetime import MannSnapshots
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil
 from turbgen.theory.params import MannParams
@@ -60,6 +60,17 @@ def _streams(n_planes, scanned=False):
         term_weight=np.array([1.0, 0.3, 0.7, 0.6, 0.8]),
         names=("a", "b", "c"),
     )
+
+
+def _four_direction_streams(n_planes):
+    """Streams along four directions (ten direction pairs: S is built from Phi's components): u at (0, 1) of the first
+    plane, 0.6 u + 0.8 v at (1, 1) of the middle one, 0.6 u - 0.8 w bilinear between (0, 0) and (1, 0) of the last,
+    0.48 u - 0.6 v + 0.64 w at (1, 0) of the first."""
+    last, mid = n_planes - 1, n_planes // 2
+    terms = [(0, 0, 0, 1, 1.0), (1, 0, 1, 1, 0.6), (1, 1, 1, 1, 0.8), (2, 0, 0, 0, 0.18), (2, 2, 0, 0, -0.24),
+             (2, 0, 1, 0, 0.42), (2, 2, 1, 0, -0.56), (3, 0, 1, 0, 0.48), (3, 1, 1, 0, -0.6), (3, 2, 1, 0, 0.64)]
+    stream, comp, iy, iz, weight = (np.array(v) for v in zip(*terms))
+    return Streams(np.array([0, mid, last, 0]), stream, comp, iy, iz, weight.astype(float), ("a", "b", "c", "d"))
 
 
 def _dense_h(streams, n_planes, nt):
@@ -213,7 +224,7 @@ def test_solve_with_gaps_equals_the_dense_solve(evolving, monkeypatch, gap_start
     nt = stencil.box.nt
     cov = stream_covariance(stencil, streams, times, np.zeros(streams.n_streams))
     shape = (streams.n_streams, nt)
-    dense = np.stack([conditioning.circulant_apply(cov, e.reshape(shape)).ravel() for e in np.eye(np.prod(shape))], 1)
+    dense = _circulant_dense(cov, shape)
     rng = np.random.default_rng(4)
     observed = rng.random(shape) >= 0.3
     r = np.where(observed, rng.normal(size=shape), 0.0)
@@ -228,3 +239,41 @@ def test_solve_with_gaps_equals_the_dense_solve(evolving, monkeypatch, gap_start
     if gap_start:  # the start alone is the solution to its inner tolerance (1e-12) times the conditioning
         start, _ = conditioning._gap_start(np.linalg.inv(cov[: nt // 2 + 1]), r, observed)
         assert np.abs(start.ravel() - expect).max() <= 1e2 * bound * np.abs(expect).max()
+
+
+def _circulant_dense(cov, shape):
+    return np.stack([circulant_apply(cov, e.reshape(shape)).ravel() for e in np.eye(np.prod(shape))], 1)
+
+
+@pytest.mark.parametrize("case", ["frozen", "evolving"])
+def test_phis_components_give_h_c_ht_plus_r(case, request):
+    """Four directions: S from Phi's six components (even and odd in k2, the transform along y halved by the
+    parity: _component_basis, _LagTransform) equals H C H^T + R of the dense prior (built from the float32
+    generator: its round-off, ~1e-7 relative, is the tolerance's scale)."""
+    import turbgen.synthesis.conditioning as conditioning
+
+    stencil, times, cov = request.getfixturevalue(case)
+    streams = _four_direction_streams(len(times))
+    assert conditioning._basis(conditioning._keys(streams).directions).n_even == conditioning.N_EVEN  # components
+    noise = np.full(streams.n_streams, 0.01)
+    fast = _circulant_dense(stream_covariance(stencil, streams, times, noise), (streams.n_streams, BOX.nt))
+    h = _dense_h(streams, len(times), BOX.nt)
+    ref = h @ cov @ h.T + np.diag(np.repeat(noise, BOX.nt))
+    assert np.abs(fast - ref).max() <= 1e-6 * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("ny_box", [4, 5])
+def test_phis_components_equal_the_direction_pairs(ny_box, monkeypatch):
+    """The component basis (with the parity for an even box width, without it for an odd one) and the direction
+    pairs' own transforms (forced) give the same S to round-off, the k1 = 0 and Nyquist slabs included."""
+    import turbgen.synthesis.conditioning as conditioning
+
+    params = MannParams(ae=1.0, length_scale_m=30.0, gamma=3.1, evo_time_s=20.0)
+    stencil = build_stencil(params, BoxShape(16, 10.0, ny_box, 4, 10.0, 10.0), evolving=True)
+    times = np.array([0.0, 2.0, 5.0])
+    streams = _four_direction_streams(len(times))
+    noise = np.zeros(streams.n_streams)
+    components = stream_covariance(stencil, streams, times, noise)
+    monkeypatch.setattr(conditioning, "_basis", conditioning._direction_basis)
+    pairs = stream_covariance(stencil, streams, times, noise)
+    assert np.abs(components - pairs).max() <= 1e-13 * np.abs(pairs).max()

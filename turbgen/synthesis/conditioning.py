@@ -20,7 +20,9 @@ with G_i^(pq)(dy, dz) = sum_(j, l) rho_pq Phi_i exp(2 pi i (j dy / nyp + l dz / 
 Nyquist slabs), rho_pq = exp(-|t_p - t_q| / tau_e) (Guo et al. 2023, Eq. 13-14), and L_(nt - i) = conj L_i. The sum
 runs over the streams' grid nodes: the terms of a stream along one direction n (a lidar's line of sight, or a
 component axis) are grouped per (y, z) node, and G projected on each pair of directions is one real 2-D FFT per slab,
-distinct plane-time lag and direction pair (turbgen.synthesis.conditioning_kernels). The decimated streams alias the
+distinct plane-time lag and direction pair (turbgen.synthesis.conditioning_kernels); beyond six direction pairs, the
+six of Phi's components are transformed instead and combined, each even or odd in k2 (Mann 1994: y -> -y turns v),
+so only the rows k2 >= 0 are transformed, along y by a cosine or sine transform. The decimated streams alias the
 q full-rate frequencies j + l nt/q onto j:
 S_j[a, b] = (1/q) sum_l L_(j + l nt/q)[a, b] e^(2 pi i (j + l nt/q)(o_a - o_b) / nt) + sigma_a^2 delta_ab.
 Missing samples (NaN) break the circulant structure:
@@ -237,37 +239,27 @@ def _lag_classes(times: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 class _GroupFFT:
-    """Single-threaded FFTW_ESTIMATE plans over the last two axes of a slab group's arrays (one per group size, the
-    arrays reused): the same plans, hence the same rounding, whatever the thread count of the run. ``keep_z``: a
-    transform exact on the (output) columns z < keep_z only (along z on every row, then along y on those columns);
-    ``rows`` (first, end): of an input zero outside those rows (along z on them only, then along y)."""
+    """Single-threaded FFTW_ESTIMATE complex plans over the last two axes of a slab group's arrays (one per group size,
+    the arrays reused, transformed in place): the same plans, hence the same rounding, whatever the thread count of
+    the run. ``keep_z``: a transform exact on the (output) columns z < keep_z only (along z on every row, then along
+    y on those columns); ``rows`` (first, end): of an input zero outside those rows (along z on them only, then
+    along y)."""
 
-    def __init__(self, tail: tuple[int, ...], real: bool, direction: str = "FFTW_FORWARD", keep_z: int | None = None,
+    def __init__(self, tail: tuple[int, ...], direction: str = "FFTW_FORWARD", keep_z: int | None = None,
                  rows: tuple[int, int] | None = None):  # fmt: skip
-        self.tail, self.real, self.direction, self.keep_z, self.rows = tail, real, direction, keep_z, rows
-        self._plans: dict[int, tuple[np.ndarray, np.ndarray, _Plan]] = {}
+        self.tail, self.direction, self.keep_z, self.rows = tail, direction, keep_z, rows
+        self._plans: dict[int, tuple[np.ndarray, _Plan]] = {}
 
-    def buffers(self, n: int) -> tuple[np.ndarray, np.ndarray, _Plan]:
-        """(input, output, plan) for a group of ``n`` slabs (the output is the input for a complex transform)."""
+    def buffers(self, n: int) -> tuple[np.ndarray, _Plan]:
+        """(array, plan) for a group of ``n`` slabs."""
         if n not in self._plans:
-            shape = (n, *self.tail)
             flags = ("FFTW_ESTIMATE",)
-            if self.real:
-                inp = pyfftw.empty_aligned(shape, np.float64)
-                out = pyfftw.empty_aligned((*shape[:-1], shape[-1] // 2 + 1), np.complex128)
-                if self.keep_z is None:
-                    plans = [pyfftw.FFTW(inp, out, axes=(-2, -1), direction=self.direction, flags=flags, threads=1)]
-                else:  # along z, then along y on the kept columns only
-                    kept = out[..., : self.keep_z]
-                    plans = [pyfftw.FFTW(inp, out, axes=(-1,), direction=self.direction, flags=flags, threads=1),
-                             pyfftw.FFTW(kept, kept, axes=(-2,), direction=self.direction, flags=flags, threads=1)]
-            else:
-                inp = out = pyfftw.empty_aligned(shape, np.complex128)
-                kept = inp if self.keep_z is None else inp[..., : self.keep_z]
-                nonzero = inp if self.rows is None else inp[..., self.rows[0] : self.rows[1], :]
-                plans = [pyfftw.FFTW(nonzero, nonzero, axes=(-1,), direction=self.direction, flags=flags, threads=1),
-                         pyfftw.FFTW(kept, kept, axes=(-2,), direction=self.direction, flags=flags, threads=1)]
-            self._plans[n] = (inp, out, _Plan(plans))
+            inp = pyfftw.empty_aligned((n, *self.tail), np.complex128)
+            kept = inp if self.keep_z is None else inp[..., : self.keep_z]
+            nonzero = inp if self.rows is None else inp[..., self.rows[0] : self.rows[1], :]
+            plans = [pyfftw.FFTW(nonzero, nonzero, axes=(-1,), direction=self.direction, flags=flags, threads=1),
+                     pyfftw.FFTW(kept, kept, axes=(-2,), direction=self.direction, flags=flags, threads=1)]
+            self._plans[n] = (inp, _Plan(plans))
         return self._plans[n]
 
 
@@ -282,27 +274,106 @@ class _Plan:
             plan.execute()
 
 
-def _slab_system(stencil: MannStencil, i: int, lags: np.ndarray, keys: _Keys, amp: np.ndarray, dir_pair: np.ndarray,
-                 pair_class: np.ndarray, transform: _GroupFFT, out: np.ndarray) -> None:  # fmt: skip
-    """L_i (``out``, (M, M) complex128, zeroed here) of slab ``i``: per lag class, the real 2-D DFTs (D (D + 1) / 2,
-    nyp, nzp // 2 + 1) of exp(-lag / tau_e) n^T Phi_i n' per direction pair (n, n') (_direction_pairs order), then
-    the pair sums of the streams of that class (one class at a time: the DFTs stay in cache). ``amp`` (K,): the key
-    amplitudes on the slab."""
-    first, second = np.triu_indices(len(keys.directions))
-    x, spectra, plan = transform.buffers(1)
-    flat = x[0].reshape(len(first), -1)
-    psi = np.empty_like(flat)  # n^T Phi n' = 2 (C^T n) . (C^T n'), C the slab's factor (prior_spectrum)
-    kernels.direction_products(slab_factor(stencil, i).reshape(3, 3, -1), keys.directions, first, second, psi)
-    inv_tau = slab_inv_tau(stencil, i)
-    inv_tau = np.empty(0) if inv_tau is None else inv_tau.reshape(-1)
+# Phi's components (a, b), the four even in k2 first (Phi_12 and Phi_23 are odd: y -> -y turns v)
+COMPONENT_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 2), (0, 1), (1, 2))
+N_EVEN = 4
+
+
+@dataclass(frozen=True, eq=False)
+class _Basis:
+    """The lag covariances transformed per slab and lag: the direction pairs' own (``directions`` the keys', W the
+    identity) or, with more than six direction pairs, Phi's six components (``directions`` the axes): then each
+    direction pair's is sum_b weights[p, b] of them. ``first``/``second`` (B,) the directions of each basis input,
+    ``n_even`` how many lead that are even in k2 (all but the odd components' two; every one for direction pairs)."""
+
+    directions: np.ndarray
+    first: np.ndarray
+    second: np.ndarray
+    weights: np.ndarray
+    n_even: int
+
+    @property
+    def n(self) -> int:
+        return len(self.first)
+
+
+def _basis(directions: np.ndarray) -> _Basis:
+    """The cheaper basis for these directions: their pairs' own up to six pairs, Phi's components beyond."""
+    n_pairs = len(directions) * (len(directions) + 1) // 2
+    return _direction_basis(directions) if n_pairs <= len(COMPONENT_PAIRS) else _component_basis(directions)
+
+
+def _direction_basis(directions: np.ndarray) -> _Basis:
+    first, second = np.triu_indices(len(directions))
+    return _Basis(directions, first, second, np.eye(len(first)), len(first))
+
+
+def _component_basis(directions: np.ndarray) -> _Basis:
+    first, second = np.triu_indices(len(directions))
+    a, b = (np.array(v) for v in zip(*COMPONENT_PAIRS))
+    n, m = directions[first], directions[second]  # n^T Phi n' = sum_(a <= b) (n_a n'_b + n_b n'_a [a != b]) Phi_ab
+    weights = n[:, a] * m[:, b] + np.where(a != b, n[:, b] * m[:, a], 0.0)
+    return _Basis(np.eye(3), a, b, weights, N_EVEN)
+
+
+class _LagTransform:
+    """The real 2-D DFTs of one slab's lag inputs (B, rows, nzp) into (B, rows, nzp // 2 + 1), exact on the columns
+    z < keep_z: along z, then along y on those columns (single-threaded FFTW_ESTIMATE plans, the same rounding for
+    any thread count). With ``parity`` (Phi's components, nyp even) the inputs are the rows k2 = 0 .. nyp/2 only and
+    the transform along y is a DCT-I (even components) or a DST-I on rows 1 .. nyp/2 - 1 (odd ones), which
+    kernels.combine_pairs completes; ``out`` (P, nyp, nzp // 2 + 1) receives the direction pairs'."""
+
+    def __init__(self, basis: _Basis, n_pairs: int, nyp: int, nzp: int, keep_z: int):
+        self.parity = basis.n_even < basis.n and nyp % 2 == 0
+        self.rows = nyp // 2 + 1 if self.parity else nyp
+        self.keep_z = keep_z
+        flags = ("FFTW_ESTIMATE",)
+        self.x = pyfftw.empty_aligned((basis.n, self.rows, nzp), np.float64)
+        self.z = pyfftw.empty_aligned((basis.n, self.rows, nzp // 2 + 1), np.complex128)
+        self.out = np.zeros((n_pairs, nyp, nzp // 2 + 1), np.complex128)
+        plans = [pyfftw.FFTW(self.x, self.z, axes=(-1,), flags=flags, threads=1)]
+        kept = self.z[..., :keep_z]
+        if not self.parity:
+            plans.append(pyfftw.FFTW(kept, kept, axes=(-2,), flags=flags, threads=1))
+        else:
+            even = kept[: basis.n_even].view(np.float64)  # (real, imaginary) pairs: the real transform of each
+            plans.append(pyfftw.FFTW(even, even, axes=(-2,), direction=["FFTW_REDFT00"], flags=flags, threads=1))
+            if nyp > 2:
+                odd = kept[basis.n_even :, 1 : nyp // 2].view(np.float64)
+                plans.append(pyfftw.FFTW(odd, odd, axes=(-2,), direction=["FFTW_RODFT00"], flags=flags, threads=1))
+        self._plans = plans
+
+    def execute(self) -> None:
+        for plan in self._plans:
+            plan.execute()
+
+
+def _slab_system(stencil: MannStencil, i: int, lags: np.ndarray, keys: _Keys, basis: _Basis, amp: np.ndarray,
+                 dir_pair: np.ndarray, pair_class: np.ndarray, transform: _LagTransform, ext_y: int,
+                 out: np.ndarray) -> None:  # fmt: skip
+    """L_i (``out``, (M, M) complex128, zeroed here) of slab ``i``: per lag class, the real 2-D DFTs of
+    exp(-lag / tau_e) times the basis inputs (n^T Phi n' of the direction pairs, or Phi's components: _Basis),
+    combined into the direction pairs' (kernels.combine_pairs), then the pair sums of the streams of that class (one
+    class at a time: the DFTs stay in cache). ``amp`` (K,): the key amplitudes on the slab."""
+    box = stencil.box
     symmetric = slab_weight(stencil, i) == 1.0  # symmetrised under k -> -k, as _slab_phi (1/tau_e is even in k)
+    rows = box.nyp if symmetric else transform.rows  # symmetrised on the whole plane, then cut to the rows used
+    factor = slab_factor(stencil, i).reshape(3, 3, box.nyp, box.nzp)[:, :, :rows].reshape(3, 3, -1)
+    psi = np.empty((basis.n, rows * box.nzp))  # 2 (C^T n) . (C^T n'), C the slab's factor (prior_spectrum)
+    kernels.direction_products(factor, basis.directions, basis.first, basis.second, psi)
+    inv_tau = slab_inv_tau(stencil, i)
+    inv_tau = np.empty(0) if inv_tau is None else inv_tau.reshape(box.nyp, box.nzp)[:rows].reshape(-1)
+    x = np.empty((basis.n, rows, box.nzp)) if symmetric else transform.x
     out[...] = 0.0
     for cls, lag in enumerate(lags):
-        kernels.lag_input(psi, lag, inv_tau, flat)
+        kernels.lag_input(psi, lag, inv_tau, x.reshape(basis.n, -1))
         if symmetric:
-            x[0] = 0.5 * (x[0] + np.roll(x[0][..., ::-1, ::-1], 1, axis=(-2, -1)))
-        plan.execute()
-        kernels.pair_sums(amp, keys.bounds, keys.dir, keys.iy, keys.iz, dir_pair, pair_class, cls, spectra[0], out)
+            transform.x[...] = (0.5 * (x + np.roll(x[..., ::-1, ::-1], 1, axis=(-2, -1))))[:, : transform.rows]
+        transform.execute()
+        kernels.combine_pairs(transform.z, basis.weights, basis.n_even, transform.parity, ext_y, transform.keep_z,
+                              transform.out)  # fmt: skip
+        kernels.pair_sums(amp, keys.bounds, keys.dir, keys.iy, keys.iz, dir_pair, pair_class, cls, transform.out,
+                          out)  # fmt: skip
 
 
 def _direction_pairs(n_dir: int) -> np.ndarray:
@@ -330,32 +401,35 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
     Notes
     -----
     L_i[a, b] as a sum over the streams' nodes of the lag covariances G_i of the prior between their planes (one
-    inverse 2-D DFT per distinct plane-time lag and component pair, turbgen.synthesis.conditioning_kernels), which
-    equals the sum over term pairs of the module docstring grouped by node.
+    inverse 2-D DFT per distinct plane-time lag and basis input: direction pair or Phi's component, _Basis;
+    turbgen.synthesis.conditioning_kernels), which equals the sum over term pairs of the module docstring grouped by
+    node.
     """
     box = stencil.box
     nt, q, m = box.nt, streams.decimation, streams.n_streams
     n_dec = nt // q
     keys = _keys(streams)
     dir_pair = _direction_pairs(len(keys.directions))
+    basis = _basis(keys.directions)
     lags, pair_class = _lag_classes(np.asarray(times_s, dtype=float), streams.plane)
     doff = 2j * np.pi * (streams.offset[:, None] - streams.offset[None, :]) / nt
     n_pairs = len(keys.directions) * (len(keys.directions) + 1) // 2
+    ext_y = int(keys.iy.max() - keys.iy.min()) + 1  # the pair sums read |y_k - y_k'| < ext_y
 
-    def group(transform: _GroupFFT, slabs: range) -> list[np.ndarray]:  # L_i of the group's slabs
+    def group(transform: _LagTransform, slabs: range) -> list[np.ndarray]:  # L_i of the group's slabs
         amp = np.empty((len(slabs), len(keys.dir)), complex)
         kernels.key_amplitudes(keys.term_key, streams.term_shift, keys.term_weight, np.array(slabs, np.int64), nt,
                                amp)  # fmt: skip
         fulls = [np.empty((m, m), complex) for _ in slabs]
         for b, i in enumerate(slabs):
-            _slab_system(stencil, i, lags, keys, amp[b], dir_pair, pair_class, transform, fulls[b])
+            _slab_system(stencil, i, lags, keys, basis, amp[b], dir_pair, pair_class, transform, ext_y, fulls[b])
         return fulls
 
     out = np.zeros((n_dec, m, m), complex)
     groups = [range(s0, min(s0 + SLAB_GROUP, box.nk1)) for s0 in range(0, box.nk1, SLAB_GROUP)]
     # the pair sums read the lag covariances at |z_k - z_k'| < the keys' extent in z only
     keep_z = min(int(keys.iz.max() - keys.iz.min()) + 1, box.nzp // 2 + 1)
-    workspace = lambda: _GroupFFT((n_pairs, box.nyp, box.nzp), real=True, keep_z=keep_z)  # noqa: E731
+    workspace = lambda: _LagTransform(basis, n_pairs, box.nyp, box.nzp, keep_z)  # noqa: E731
     for slabs, fulls in zip(groups, _ordered_map(group, groups, threads, workspace)):
         for i, full in zip(slabs, fulls):  # summed in slab order: the same bits for any thread count
             full *= nt
@@ -574,14 +648,14 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
     spec_w = np.fft.rfft(full, axis=1)
 
     def group(transforms: tuple[_GroupFFT, _GroupFFT], slabs: range) -> np.ndarray:  # the group's block
-        grid, _, plan = transforms[0].buffers(len(slabs))
+        grid, plan = transforms[0].buffers(len(slabs))
         grid[...] = 0.0
         index = np.array(slabs, np.int64)
         kernels.scatter_terms(spec_w[:, index], streams.term_stream, grid_index, streams.term_shift,
                               streams.term_weight, index, box.nt, grid.reshape(len(slabs), -1))  # fmt: skip
         plan.execute()
         f = grid.reshape(len(slabs), len(chain), 3, -1)
-        g, _, plan = transforms[1].buffers(len(slabs))
+        g, plan = transforms[1].buffers(len(slabs))
         for b, i in enumerate(slabs):
             inv_tau = slab_inv_tau(stencil, i)
             rho = (np.ones((len(steps), box.nyp * box.nzp)) if inv_tau is None  # exp once per distinct step
@@ -592,9 +666,9 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
         return np.moveaxis(g[..., :ny, :nz], 0, 2).astype(np.complex64)
 
     def workspace() -> tuple[_GroupFFT, _GroupFFT]:
-        back = _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), real=False, direction="FFTW_BACKWARD", keep_z=nz)
+        back = _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), direction="FFTW_BACKWARD", keep_z=nz)
         rows = (int(streams.term_iy.min()), int(streams.term_iy.max()) + 1)  # H^T w is zero on the other rows
-        return _GroupFFT((len(chain), 3, box.nyp, box.nzp), real=False, rows=rows), back
+        return _GroupFFT((len(chain), 3, box.nyp, box.nzp), rows=rows), back
 
     groups = [range(s0, min(s0 + SLAB_GROUP, box.nk1)) for s0 in range(0, box.nk1, SLAB_GROUP)]
     yield from zip(groups, _ordered_map(group, groups, threads, workspace))
@@ -611,13 +685,15 @@ def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarr
 
 
 def workspace_bytes(box, streams: Streams, n_out: int) -> int:
-    """Bytes of the larger slab-group workspace of :func:`stream_covariance` (one slab's lag spectra: the direction
-    products, the real input and its half spectrum) and :func:`correction_blocks` (forward and backward grids, the
-    block) for ``n_out`` planes out."""
+    """Bytes of the larger slab-group workspace of :func:`stream_covariance` (a slab's basis inputs and their
+    half spectra, the direction pairs' DFTs; on the k1 = 0 / Nyquist slabs the inputs of the whole plane) and
+    :func:`correction_blocks` (forward and backward grids, the block) for ``n_out`` planes out."""
     keys = _keys(streams)
     n_dir = len(keys.directions)
-    points = box.nyp * box.nzp
-    lag = n_dir * (n_dir + 1) // 2 * (2 * points * 8 + box.nyp * (box.nzp // 2 + 1) * 16)
+    n_pairs = n_dir * (n_dir + 1) // 2
+    basis = _basis(keys.directions).n
+    points, half = box.nyp * box.nzp, box.nyp * (box.nzp // 2 + 1)
+    lag = basis * (4 * points * 8 + half * 16) + n_pairs * half * 16  # psi, inputs (whole plane: twice), spectra
     chain = n_out + len(streams.used_planes())
     correction = SLAB_GROUP * (chain + 2 * n_out) * 3 * points * 16
     return max(lag, correction)

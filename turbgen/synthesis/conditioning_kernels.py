@@ -166,3 +166,47 @@ def lag_input(psi, lag, inv_tau, x):
     for p in range(psi.shape[0]):
         for j in range(n_points):
             x[p, j] = psi[p, j] * rho[j]
+
+
+@numba.njit(nogil=True, cache=True)
+def combine_pairs(z, weights, n_even, parity, ext_y, keep_z, out):
+    """The direction pairs' lag DFTs R^(n n') = sum_b weights[p, b] R_b (``out`` (P, nyp, nzp // 2 + 1) complex128,
+    rows |dy| < ext_y and columns < keep_z only: what pair_sums reads) from the basis DFTs in ``z`` (B, rows,
+    nzp // 2 + 1).
+
+    Without ``parity``, z holds R_b on every row (rows = nyp). With ``parity`` (nyp even, rows = nyp / 2 + 1), the
+    basis is Phi's components ordered even in k2 first (``n_even`` of them), and z holds them transformed along z
+    and then along y by a DCT-I (even: R(dy) = R(-dy) = z[dy]) or, for the odd ones, a DST-I on rows 1 .. nyp/2 - 1
+    (Y(dy) = z[dy]) with rows 0 and nyp/2 untouched: R(+-dy) = z[0] + (-1)^dy z[nyp/2] -+ i Y(dy)."""
+    n_pairs, nyp = out.shape[0], out.shape[1]
+    n_basis = z.shape[0]
+    half = nyp // 2
+    last = min(ext_y - 1, half) if parity else ext_y - 1
+    for p in range(n_pairs):
+        for dy in range(last + 1):
+            up, down = dy, (nyp - dy) % nyp
+            sign = 1.0 - 2.0 * (dy % 2)
+            for dz in range(keep_z):
+                if not parity:
+                    acc_up = 0.0j
+                    acc_down = 0.0j
+                    for b in range(n_basis):
+                        w = weights[p, b]
+                        acc_up += w * z[b, up, dz]
+                        acc_down += w * z[b, down, dz]
+                    out[p, up, dz] = acc_up
+                    out[p, down, dz] = acc_down
+                    continue
+                even = 0.0j
+                for b in range(n_even):
+                    even += weights[p, b] * z[b, dy, dz]
+                sym = 0.0j
+                anti = 0.0j
+                for b in range(n_even, n_basis):
+                    w = weights[p, b]
+                    sym += w * (z[b, 0, dz] + sign * z[b, half, dz])
+                    if 0 < dy < half:
+                        y = z[b, dy, dz]
+                        anti += w * (y.imag - 1j * y.real)  # -i Y
+                out[p, up, dz] = even + sym + anti
+                out[p, down, dz] = even + sym - anti
