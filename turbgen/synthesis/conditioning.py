@@ -318,19 +318,24 @@ def _component_basis(directions: np.ndarray) -> _Basis:
 
 class _LagTransform:
     """The real 2-D DFTs of one slab's lag inputs (B, rows, nzp) into (B, rows, nzp // 2 + 1), exact on the columns
-    z < keep_z: along z, then along y on those columns (single-threaded FFTW_ESTIMATE plans, the same rounding for
-    any thread count). With ``parity`` (Phi's components, nyp even) the inputs are the rows k2 = 0 .. nyp/2 only and
-    the transform along y is a DCT-I (even components) or a DST-I on rows 1 .. nyp/2 - 1 (odd ones), which
-    kernels.combine_pairs completes; ``out`` (P, nyp, nzp // 2 + 1) receives the direction pairs'."""
+    z < keep_z = min(e_z, nzp // 2 + 1): along z, then along y on those columns (single-threaded FFTW_ESTIMATE plans,
+    the same rounding for any thread count). With ``parity`` (Phi's components, nyp even) the inputs are the rows
+    k2 = 0 .. nyp/2 only and the transform along y is a DCT-I (even components) or a DST-I on rows 1 .. nyp/2 - 1
+    (odd ones), which kernels.lag_window completes. ``window`` (B, 2 e_y - 1, 2 e_z - 1) receives the lag
+    covariances over the separations the keys span (e_y, e_z: their extents), ``pairs`` (P, ...) the direction
+    pairs' (the window itself for the direction basis)."""
 
-    def __init__(self, basis: _Basis, n_pairs: int, nyp: int, nzp: int, keep_z: int):
+    def __init__(self, basis: _Basis, n_pairs: int, nyp: int, nzp: int, extent: tuple[int, int]):
+        self.basis, self.nzp = basis, nzp
         self.parity = basis.n_even < basis.n and nyp % 2 == 0
         self.rows = nyp // 2 + 1 if self.parity else nyp
-        self.keep_z = keep_z
+        keep_z = min(extent[1], nzp // 2 + 1)
         flags = ("FFTW_ESTIMATE",)
         self.x = pyfftw.empty_aligned((basis.n, self.rows, nzp), np.float64)
         self.z = pyfftw.empty_aligned((basis.n, self.rows, nzp // 2 + 1), np.complex128)
-        self.out = np.zeros((n_pairs, nyp, nzp // 2 + 1), np.complex128)
+        self.window = np.empty((basis.n, 2 * extent[0] - 1, 2 * extent[1] - 1), np.complex128)
+        self.identity = basis.weights.shape == (basis.n, basis.n) and np.array_equal(basis.weights, np.eye(basis.n))
+        self.pairs = self.window if self.identity else np.empty((n_pairs, *self.window.shape[1:]), np.complex128)
         plans = [pyfftw.FFTW(self.x, self.z, axes=(-1,), flags=flags, threads=1)]
         kept = self.z[..., :keep_z]
         if not self.parity:
@@ -343,18 +348,23 @@ class _LagTransform:
                 plans.append(pyfftw.FFTW(odd, odd, axes=(-2,), direction=["FFTW_RODFT00"], flags=flags, threads=1))
         self._plans = plans
 
-    def execute(self) -> None:
+    def execute(self) -> np.ndarray:
+        """Transform ``x``; the direction pairs' lag covariances over the window (``pairs``)."""
         for plan in self._plans:
             plan.execute()
+        kernels.lag_window(self.z, self.basis.n_even, self.parity, self.nzp, self.window)
+        if not self.identity:
+            flat = lambda a: a.reshape(len(a), -1).view(np.float64)  # noqa: E731
+            kernels.combine_pairs(flat(self.window), self.basis.weights, flat(self.pairs))
+        return self.pairs
 
 
 def _slab_system(stencil: MannStencil, i: int, lags: np.ndarray, keys: _Keys, basis: _Basis, amp: np.ndarray,
-                 dir_pair: np.ndarray, pair_class: np.ndarray, transform: _LagTransform, ext_y: int,
-                 out: np.ndarray) -> None:  # fmt: skip
+                 dir_pair: np.ndarray, pair_class: np.ndarray, transform: _LagTransform, out: np.ndarray) -> None:
     """L_i (``out``, (M, M) complex128, zeroed here) of slab ``i``: per lag class, the real 2-D DFTs of
     exp(-lag / tau_e) times the basis inputs (n^T Phi n' of the direction pairs, or Phi's components: _Basis),
-    combined into the direction pairs' (kernels.combine_pairs), then the pair sums of the streams of that class (one
-    class at a time: the DFTs stay in cache). ``amp`` (K,): the key amplitudes on the slab."""
+    the direction pairs' lag covariances over the keys' separations, then the pair sums of the streams of that
+    class (one class at a time: the DFTs stay in cache). ``amp`` (K,): the key amplitudes on the slab."""
     box = stencil.box
     symmetric = slab_weight(stencil, i) == 1.0  # symmetrised under k -> -k, as _slab_phi (1/tau_e is even in k)
     rows = box.nyp if symmetric else transform.rows  # symmetrised on the whole plane, then cut to the rows used
@@ -369,11 +379,8 @@ def _slab_system(stencil: MannStencil, i: int, lags: np.ndarray, keys: _Keys, ba
         kernels.lag_input(psi, lag, inv_tau, x.reshape(basis.n, -1))
         if symmetric:
             transform.x[...] = (0.5 * (x + np.roll(x[..., ::-1, ::-1], 1, axis=(-2, -1))))[:, : transform.rows]
-        transform.execute()
-        kernels.combine_pairs(transform.z, basis.weights, basis.n_even, transform.parity, ext_y, transform.keep_z,
-                              transform.out)  # fmt: skip
-        kernels.pair_sums(amp, keys.bounds, keys.dir, keys.iy, keys.iz, dir_pair, pair_class, cls, transform.out,
-                          out)  # fmt: skip
+        pairs = transform.execute()
+        kernels.pair_sums(amp, keys.bounds, keys.dir, keys.iy, keys.iz, dir_pair, pair_class, cls, pairs, out)
 
 
 def _direction_pairs(n_dir: int) -> np.ndarray:
@@ -414,7 +421,7 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
     lags, pair_class = _lag_classes(np.asarray(times_s, dtype=float), streams.plane)
     doff = 2j * np.pi * (streams.offset[:, None] - streams.offset[None, :]) / nt
     n_pairs = len(keys.directions) * (len(keys.directions) + 1) // 2
-    ext_y = int(keys.iy.max() - keys.iy.min()) + 1  # the pair sums read |y_k - y_k'| < ext_y
+    extent = (int(np.ptp(keys.iy)) + 1, int(np.ptp(keys.iz)) + 1)  # the pair sums read |y_k - y_k'| < extent[0], ...
 
     def group(transform: _LagTransform, slabs: range) -> list[np.ndarray]:  # L_i of the group's slabs
         amp = np.empty((len(slabs), len(keys.dir)), complex)
@@ -422,14 +429,12 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
                                amp)  # fmt: skip
         fulls = [np.empty((m, m), complex) for _ in slabs]
         for b, i in enumerate(slabs):
-            _slab_system(stencil, i, lags, keys, basis, amp[b], dir_pair, pair_class, transform, ext_y, fulls[b])
+            _slab_system(stencil, i, lags, keys, basis, amp[b], dir_pair, pair_class, transform, fulls[b])
         return fulls
 
     out = np.zeros((n_dec, m, m), complex)
     groups = [range(s0, min(s0 + SLAB_GROUP, box.nk1)) for s0 in range(0, box.nk1, SLAB_GROUP)]
-    # the pair sums read the lag covariances at |z_k - z_k'| < the keys' extent in z only
-    keep_z = min(int(keys.iz.max() - keys.iz.min()) + 1, box.nzp // 2 + 1)
-    workspace = lambda: _LagTransform(basis, n_pairs, box.nyp, box.nzp, keep_z)  # noqa: E731
+    workspace = lambda: _LagTransform(basis, n_pairs, box.nyp, box.nzp, extent)  # noqa: E731
     for slabs, fulls in zip(groups, _ordered_map(group, groups, threads, workspace)):
         for i, full in zip(slabs, fulls):  # summed in slab order: the same bits for any thread count
             full *= nt

@@ -7,9 +7,10 @@ term's weight along n), and the stream covariance of the slab is
 
     L_i[a, b] = sum_(k in a, k' in b) P_k conj(P_k') G_i^(n_k n_k')_(p_a p_b)(y_k - y_k', z_k - z_k'),
 
-with G the lag covariance along the two directions between the two planes (the inverse 2-D DFT of
-rho_pq n_k^T Phi_i n_k', given as the forward real DFT R of that real array: G(d) = conj R(d) for d_z in
-[0, nzp/2], G(d) = R(-d) otherwise).
+with G the lag covariance along the two directions between the two planes: the inverse 2-D DFT of
+rho_pq n_k^T Phi_i n_k', G(d) = conj R(d) = R(-d) with R the forward real DFT of that real array (or a combination of
+the DFTs of Phi's components: :func:`lag_window`, :func:`combine_pairs`), laid out over the window of separations
+the keys span.
 """
 
 from __future__ import annotations
@@ -35,11 +36,11 @@ def key_amplitudes(term_key, term_shift, term_weight, slabs, nt, out):
 def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, cls, lag, out):
     """Add to L[a, b] (out, (M, M) complex128) of one slab the stream pairs of lag class ``cls``, from the key
     amplitudes ``amp`` (K,), keys sorted by stream (stream a holds keys bounds[a] .. bounds[a + 1]), and that class's
-    real DFTs ``lag`` (direction pairs, nyp, nzp // 2 + 1; read at |dz| < the keys' extent in z only); ``dir_pair``
-    (D, D) the index of a direction pair, ``pair_class`` (M, M) the lag class of a stream pair. The pairs a <= b are
-    summed, the others are their Hermitian conjugates."""
-    nyp, nzp = lag.shape[1], 2 * (lag.shape[2] - 1)
-    half = nzp // 2
+    lag covariances ``lag`` (direction pairs, 2 e_y - 1, 2 e_z - 1): G(dy, dz) at [dy + e_y - 1, dz + e_z - 1] for
+    |dy| < e_y, |dz| < e_z (the keys' extents, :func:`lag_window`); ``dir_pair`` (D, D) the index of a direction
+    pair, ``pair_class`` (M, M) the lag class of a stream pair. The pairs a <= b are summed, the others are their
+    Hermitian conjugates."""
+    cy, cz = (lag.shape[1] - 1) // 2, (lag.shape[2] - 1) // 2
     m = len(bounds) - 1
     for a in range(m):
         for b in range(a, m):
@@ -47,23 +48,11 @@ def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, cls, l
                 continue
             acc = 0.0j
             for k in range(bounds[a], bounds[a + 1]):
-                pk = amp[k]
-                yk, zk, dk = key_iy[k], key_iz[k], key_dir[k]
+                yk, zk, dk = key_iy[k] + cy, key_iz[k] + cz, key_dir[k]
                 part = 0.0j
                 for k2 in range(bounds[b], bounds[b + 1]):
-                    g = lag[dir_pair[dk, key_dir[k2]]]
-                    dy = yk - key_iy[k2]
-                    dz = zk - key_iz[k2]
-                    if dy < 0:
-                        dy += nyp
-                    if dz < 0:
-                        dz += nzp
-                    if dz <= half:
-                        v = np.conj(g[dy, dz])
-                    else:
-                        v = g[(nyp - dy) % nyp, nzp - dz]
-                    part += np.conj(amp[k2]) * v
-                acc += pk * part
+                    part += np.conj(amp[k2]) * lag[dir_pair[dk, key_dir[k2]], yk - key_iy[k2], zk - key_iz[k2]]
+                acc += amp[k] * part
             out[a, b] += acc
             if b != a:
                 out[b, a] += np.conj(acc)
@@ -169,44 +158,63 @@ def lag_input(psi, lag, inv_tau, x):
 
 
 @numba.njit(nogil=True, cache=True)
-def combine_pairs(z, weights, n_even, parity, ext_y, keep_z, out):
-    """The direction pairs' lag DFTs R^(n n') = sum_b weights[p, b] R_b (``out`` (P, nyp, nzp // 2 + 1) complex128,
-    rows |dy| < ext_y and columns < keep_z only: what pair_sums reads) from the basis DFTs in ``z`` (B, rows,
-    nzp // 2 + 1).
+def lag_window(z, n_even, parity, nzp, out):
+    """The lag covariances G_b(dy, dz) = conj R_b(dy, dz) of the basis inputs (``out`` (B, 2 e_y - 1, 2 e_z - 1),
+    [dy + e_y - 1, dz + e_z - 1], |dy| < e_y, |dz| < e_z, periodic in nyp and nzp) from their DFTs R_b in ``z``
+    (B, rows, nzp // 2 + 1), read at the columns < min(e_z, nzp // 2 + 1) only (R(-d) = conj R(d) gives the others).
 
     Without ``parity``, z holds R_b on every row (rows = nyp). With ``parity`` (nyp even, rows = nyp / 2 + 1), the
     basis is Phi's components ordered even in k2 first (``n_even`` of them), and z holds them transformed along z
     and then along y by a DCT-I (even: R(dy) = R(-dy) = z[dy]) or, for the odd ones, a DST-I on rows 1 .. nyp/2 - 1
-    (Y(dy) = z[dy]) with rows 0 and nyp/2 untouched: R(+-dy) = z[0] + (-1)^dy z[nyp/2] -+ i Y(dy)."""
-    n_pairs, nyp = out.shape[0], out.shape[1]
-    n_basis = z.shape[0]
+    (Y(dy) = z[dy]) with rows 0 and nyp/2 untouched: R(+-dy) = z[0] + (-1)^dy z[nyp/2] -+ i Y(dy), 0 <= dy <= nyp/2."""
+    n_basis, ny_w, nz_w = out.shape
+    cy, cz = (ny_w - 1) // 2, (nz_w - 1) // 2
+    nyp = 2 * (z.shape[1] - 1) if parity else z.shape[1]
+    half_z = nzp // 2
+    kept = min(cz + 1, half_z + 1)
+    plus = np.empty(kept, np.complex128)  # R(dy, col) and R(-dy, col) of one window row
+    minus = np.empty(kept, np.complex128)
+    for b in range(n_basis):
+        for i in range(ny_w):
+            dy = (i - cy) % nyp
+            _basis_row(z, b, dy, n_even, parity, nyp, plus)
+            _basis_row(z, b, (nyp - dy) % nyp, n_even, parity, nyp, minus)
+            col = (-cz) % nzp
+            for j in range(nz_w):  # G(d) = conj R(d) = R(-d): R's stored half has the columns <= nzp / 2
+                out[b, i, j] = np.conj(plus[col]) if col <= half_z else minus[nzp - col]
+                col += 1
+                if col == nzp:
+                    col = 0
+
+
+@numba.njit(nogil=True, cache=True, inline="always")
+def _basis_row(z, b, dy, n_even, parity, nyp, out):
+    """out[col] = R_b(dy, col) for the columns of ``out`` (see lag_window)."""
+    if not parity or b < n_even:
+        row = dy if not parity or dy <= nyp // 2 else nyp - dy
+        for col in range(len(out)):
+            out[col] = z[b, row, col]
+        return
     half = nyp // 2
-    last = min(ext_y - 1, half) if parity else ext_y - 1
+    row = dy if dy <= half else nyp - dy
+    sign = 1.0 - 2.0 * (row % 2)
+    turn = 0.0 if row == 0 or row == half else (1.0 if dy <= half else -1.0)  # -+ i Y
+    for col in range(len(out)):
+        y = z[b, row, col]
+        out[col] = z[b, 0, col] + sign * z[b, half, col] + turn * (y.imag - 1j * y.real)
+
+
+@numba.njit(nogil=True, cache=True)
+def combine_pairs(window, weights, out):
+    """out[p] = sum_b weights[p, b] window[b]: the direction pairs' lag covariances from the basis inputs' (``window``
+    (B, ...) and ``out`` (P, ...) as flat float64 views)."""
+    n_pairs, n_basis = weights.shape
     for p in range(n_pairs):
-        for dy in range(last + 1):
-            up, down = dy, (nyp - dy) % nyp
-            sign = 1.0 - 2.0 * (dy % 2)
-            for dz in range(keep_z):
-                if not parity:
-                    acc_up = 0.0j
-                    acc_down = 0.0j
-                    for b in range(n_basis):
-                        w = weights[p, b]
-                        acc_up += w * z[b, up, dz]
-                        acc_down += w * z[b, down, dz]
-                    out[p, up, dz] = acc_up
-                    out[p, down, dz] = acc_down
-                    continue
-                even = 0.0j
-                for b in range(n_even):
-                    even += weights[p, b] * z[b, dy, dz]
-                sym = 0.0j
-                anti = 0.0j
-                for b in range(n_even, n_basis):
-                    w = weights[p, b]
-                    sym += w * (z[b, 0, dz] + sign * z[b, half, dz])
-                    if 0 < dy < half:
-                        y = z[b, dy, dz]
-                        anti += w * (y.imag - 1j * y.real)  # -i Y
-                out[p, up, dz] = even + sym + anti
-                out[p, down, dz] = even + sym - anti
+        row = out[p]
+        row[:] = 0.0
+        for b in range(n_basis):
+            w = weights[p, b]
+            if w != 0.0:
+                src = window[b]
+                for n in range(len(row)):
+                    row[n] += w * src[n]
