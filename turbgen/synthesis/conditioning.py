@@ -641,6 +641,7 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
     chain = sorted(set(planes_out) | {int(p) for p in streams.used_planes()}, key=lambda p: (times[p], p))
     steps = np.diff(times[chain])
     distinct, step_class = np.unique(steps, return_inverse=True)
+    step_class = step_class.reshape(-1).astype(np.int64)
     where = {p: n for n, p in enumerate(chain)}
     rows = np.array([where[p] for p in planes_out], np.int64)  # the chain position of each wanted plane
     term_row = np.array([where[int(p)] for p in streams.plane[streams.term_stream]], dtype=np.int64)
@@ -663,9 +664,9 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
         g, plan = transforms[1].buffers(len(slabs))
         for b, i in enumerate(slabs):
             inv_tau = slab_inv_tau(stencil, i)
-            rho = (np.ones((len(steps), box.nyp * box.nzp)) if inv_tau is None  # exp once per distinct step
-                   else np.exp(-distinct[:, None] * inv_tau.reshape(1, -1))[step_class])  # fmt: skip
-            kernels.chain_correction(f[b].view(np.float64), rho, _slab_phi(stencil, i), rows,
+            rho = (np.ones((len(distinct), box.nyp * box.nzp)) if inv_tau is None  # exp once per distinct step
+                   else np.exp(-distinct[:, None] * inv_tau.reshape(1, -1)))  # fmt: skip
+            kernels.chain_correction(f[b].view(np.float64), rho, step_class, _slab_phi(stencil, i), rows,
                                      g[b].reshape(len(planes_out), 3, -1).view(np.float64))  # fmt: skip
         plan.execute()  # unnormalised: sum_(j, l) e^(+2 pi i (j y / nyp + l z / nzp))
         return np.moveaxis(g[..., :ny, :nz], 0, 2).astype(np.complex64)

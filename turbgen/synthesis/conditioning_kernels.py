@@ -59,50 +59,62 @@ def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, cls, l
 
 
 @numba.njit(nogil=True, cache=True)
-def chain_correction(f, rho, phi, rows, out):
+def chain_correction(f, rho, step, phi, rows, out):
     """out[r] = Phi sum_q rho_(rows[r] q) f_q per (k2, k3) point: ``f`` (P, 3, 2 J) float64 the planes' complex
-    spectra in time order as (real, imaginary) pairs, ``rho`` (P - 1, J) the Ornstein-Uhlenbeck factors between
-    neighbours (their products are the factors between any two planes), ``phi`` (3, 3, J) real symmetric, ``out``
-    (len(rows), 3, 2 J) float64 pairs.
+    spectra in time order as (real, imaginary) pairs, ``rho`` (S, J) the Ornstein-Uhlenbeck factors of the S distinct
+    steps between neighbours and ``step`` (P - 1,) the step of each neighbour pair (their products are the factors
+    between any two planes), ``phi`` (3, 3, J) real symmetric, ``out`` (len(rows), 3, 2 J) float64 pairs.
 
     The sum runs forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once.
     Real arithmetic (rho and Phi are real), in blocks of points whose planes stay in cache through the passes, with
-    rho and Phi repeated per (real, imaginary) value so the innermost loops run over contiguous values."""
+    rho and Phi repeated per (real, imaginary) value so the innermost loops run over contiguous rows."""
     n_planes, n_values = f.shape[0], f.shape[2]
     block = 512  # values (256 points)
     fwd = np.empty((n_planes, 3, block))
     bwd = np.empty((n_planes, 3, block))
     rb = np.empty((max(n_planes - 1, 1), block))
     pb = np.empty((3, 3, block))
-    s = np.empty((3, block))
+    total = np.empty((3, block))
     for v0 in range(0, n_values, block):
         nv = min(block, n_values - v0)
         for p in range(n_planes - 1):
-            for v in range(nv):
-                rb[p, v] = rho[p, (v0 + v) >> 1]
+            _expand(rho[step[p]], v0, nv, rb[p])
         for c in range(3):
             for d in range(3):
-                for v in range(nv):
-                    pb[c, d, v] = phi[c, d, (v0 + v) >> 1]
-            for v in range(nv):
-                fwd[0, c, v] = f[0, c, v0 + v]
-                bwd[n_planes - 1, c, v] = f[n_planes - 1, c, v0 + v]
+                _expand(phi[c, d], v0, nv, pb[c, d])
+            fwd[0, c, :nv] = f[0, c, v0 : v0 + nv]
+            bwd[n_planes - 1, c, :nv] = f[n_planes - 1, c, v0 : v0 + nv]
         for p in range(1, n_planes):
             for c in range(3):
-                for v in range(nv):
-                    fwd[p, c, v] = rb[p - 1, v] * fwd[p - 1, c, v] + f[p, c, v0 + v]
+                _step(rb[p - 1], fwd[p - 1, c], f[p, c, v0 : v0 + nv], fwd[p, c])
         for p in range(n_planes - 2, -1, -1):
             for c in range(3):
-                for v in range(nv):
-                    bwd[p, c, v] = rb[p, v] * bwd[p + 1, c, v] + f[p, c, v0 + v]
+                _step(rb[p], bwd[p + 1, c], f[p, c, v0 : v0 + nv], bwd[p, c])
         for r in range(len(rows)):
             p = rows[r]
             for d in range(3):
+                a, b, g, t = fwd[p, d], bwd[p, d], f[p, d, v0 : v0 + nv], total[d]
                 for v in range(nv):
-                    s[d, v] = fwd[p, d, v] + bwd[p, d, v] - f[p, d, v0 + v]
+                    t[v] = a[v] + b[v] - g[v]
+            s0, s1, s2 = total[0], total[1], total[2]
             for c in range(3):
+                o, q0, q1, q2 = out[r, c, v0 : v0 + nv], pb[c, 0], pb[c, 1], pb[c, 2]
                 for v in range(nv):
-                    out[r, c, v0 + v] = pb[c, 0, v] * s[0, v] + pb[c, 1, v] * s[1, v] + pb[c, 2, v] * s[2, v]
+                    o[v] = q0[v] * s0[v] + q1[v] * s1[v] + q2[v] * s2[v]
+
+
+@numba.njit(nogil=True, cache=True, inline="always")
+def _expand(per_point, v0, nv, out):
+    """out[v] = per_point[(v0 + v) // 2]: one value per (real, imaginary) pair."""
+    for v in range(nv):
+        out[v] = per_point[(v0 + v) >> 1]
+
+
+@numba.njit(nogil=True, cache=True, inline="always")
+def _step(rho, previous, fresh, out):
+    """out = rho previous + fresh over the block."""
+    for v in range(len(fresh)):
+        out[v] = rho[v] * previous[v] + fresh[v]
 
 
 @numba.njit(nogil=True, cache=True)
