@@ -356,7 +356,7 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     record, sums = _write_conditioned(opener, run, files, placed, Path(out).absolute().parent,
                                       conditional_mean=conditional_mean, threads=threads, cache_dir=cache_dir,
                                       progress=progress)  # fmt: skip
-    return _summary(str(out), t_start, record, sums, g)
+    return conditioned_summary(str(out), t_start, record, sums, g)
 
 
 def mann_constrained_in_memory(run: MannRun, files: list, *, noise_m_s: float | None = None,
@@ -391,7 +391,7 @@ def mann_constrained_in_memory(run: MannRun, files: list, *, noise_m_s: float | 
 
     record, sums = _write_conditioned(opener, run, files, placed, scratch_dir, conditional_mean=conditional_mean,
                                       threads=threads, cache_dir=cache_dir, progress=progress)  # fmt: skip
-    return holder[0].dataset, _summary(None, t_start, record, sums, g)
+    return holder[0].dataset, conditioned_summary(None, t_start, record, sums, g)
 
 
 def constrained_memory_bytes(run: MannRun, placed: PlacedData, threads: int) -> int:
@@ -414,25 +414,36 @@ def _write_conditioned(open_writer, run: MannRun, files, placed: PlacedData, scr
     cov = stream_system(run, stencil, placed, threads, progress)
     report, planes = conditioned_planes(run, stencil, placed, cov, scratch_dir, conditional_mean=conditional_mean,
                                         threads=threads, progress=progress)  # fmt: skip
-    remeasured = np.zeros(placed.data.shape)
-    sums = {c: [0.0, 0.0] for c in COMPONENTS}
     with open_writer() as writer:
-        bar = None
-        for ix, comp, value in planes:  # the first item comes after the correction (its own bar)
-            bar = bar or _bar("write", g.nx, "plane", progress)
-            bar.update(int(comp == COMPONENTS[-1]))
-            cond.measure(placed.streams, ix, COMPONENTS.index(comp), value, remeasured)
-            total, squares = writer.write(comp, ix, value, squares=True)
-            sums[comp][0] += total
-            sums[comp][1] += squares
-        if bar is not None:
-            bar.close()
+        remeasured, sums = write_planes(writer, placed, planes, lambda: _bar("write", g.nx, "plane", progress))
         record = constraint_record(files, placed, report, remeasured, conditional_mean)
         writer.add_attrs(constraints=record)
     return record, sums
 
 
-def _summary(path: str | None, t_start: float, record: dict, sums: dict, g) -> dict:
+def write_planes(writer, placed: PlacedData, planes, bar=None) -> tuple[np.ndarray, dict]:
+    """Write the conditioned ``planes`` ((plane index, component, field (nt, ny, nz)) [m/s]) with ``writer`` and
+    measure them again: (H u_c (M, nt/q), {component: [sum, sum of squares]}). ``bar()``: a progress bar (one step
+    per plane), made when the first plane arrives (after the correction's own bar)."""
+    remeasured = np.zeros(placed.data.shape)
+    sums = {c: [0.0, 0.0] for c in COMPONENTS}
+    progress = None
+    for ix, comp, value in planes:
+        progress = progress or (bar() if bar is not None else None)
+        if progress is not None:
+            progress.update(int(comp == COMPONENTS[-1]))
+        cond.measure(placed.streams, ix, COMPONENTS.index(comp), value, remeasured)
+        total, squares = writer.write(comp, ix, value, squares=True)
+        sums[comp][0] += total
+        sums[comp][1] += squares
+    if progress is not None:
+        progress.close()
+    return remeasured, sums
+
+
+def conditioned_summary(path: str | None, t_start: float, record: dict, sums: dict, g) -> dict:
+    """A constrained run's summary: path, seconds, ``constraints`` (the record) and sigma_/mean_ u/v/w [m/s] of the
+    field from the sums of :func:`write_planes`."""
     n = g.nt * g.nx * g.ny * g.nz
     summary = {"path": path, "seconds": time.perf_counter() - t_start, "constraints": record}
     for c, (s1, s2) in sums.items():

@@ -30,7 +30,8 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.resources import require_memory
-from turbgen.runs.constrain import PlacedData, combine_streams, constraint_record, measurement_noise, placed_streams
+from turbgen.runs.constrain import (PlacedData, combine_streams, conditioned_summary, constraint_record, measurement_noise,
+                                    placed_streams, write_planes)  # fmt: skip
 from turbgen.runs.kaimal import kaimal_generator, memory_needed, store_attrs
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import create_store
@@ -198,22 +199,12 @@ def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float
     cov = kaimal_stream_system(run, placed)
     report, gen, planes = kaimal_conditioned_planes(run, placed, cov, conditional_mean=conditional_mean,
                                                     threads=threads)  # fmt: skip
-    remeasured = np.zeros(placed.data.shape)
-    sums = {c: [0.0, 0.0] for c in COMPONENTS}
     with create_store(Path(out), g, store_attrs(run, gen), chunk_t=chunk_t, overwrite=overwrite) as writer:
-        for comp, ix, value in planes:
-            cond.measure(placed.streams, ix, COMPONENTS.index(comp), value, remeasured)
-            total, squares = writer.write(comp, ix, value, squares=True)
-            sums[comp][0] += total
-            sums[comp][1] += squares
+        remeasured, sums = write_planes(writer, placed, ((ix, comp, value) for comp, ix, value in planes))
         record = constraint_record(files, placed, report, remeasured, conditional_mean)
         record["record_mean_removed_m_s"] = [float(v) for v in placed.record_mean_m_s]
         writer.add_attrs(synthesis_report=gen.report, constraints=record)
-    n = g.nt * g.nx * g.ny * g.nz
-    summary = {"path": str(out), "seconds": time.perf_counter() - t_start, "constraints": record}
-    for c, (s1, s2) in sums.items():
-        summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - (s1 / n) ** 2, 0.0))
-        summary[f"mean_{c}"] = s1 / n
+    summary = conditioned_summary(str(out), t_start, record, sums, g)
     summary["expected_sigma"] = [math.sqrt(gen.expected_variance(c)) for c in COMPONENTS]
     summary.update(gen.report)
     return summary
