@@ -50,6 +50,7 @@ from turbgen.theory.eddy_lifetime import evolution_lifetime_s
 from turbgen.theory.kaimal import kaimal_spectrum
 from turbgen.theory.lidar_geometry import Measurements
 from turbgen.theory.lidar_lattice import BoxLattice, lattice_tensor, lattice_wavenumbers
+from turbgen.theory.lidar_preview_kernel import node_sums
 from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import KaimalParams, MannParams, check_wind_speed
@@ -157,51 +158,33 @@ class _Lidar:
     def __init__(self, meas: Measurements, k2: np.ndarray, k3: np.ndarray, nu_max: float):
         x_gate = meas.focus_m[:, 0]
         self.xs, gate_of = np.unique(np.round(x_gate, 6), return_inverse=True)
-        n_g = self.xs.size
-        self.nu_tab, self.tables, table_of = _weight_table(meas, nu_max)
+        self.gate_of = gate_of.ravel().astype(np.int64)
+        nu, tables, table_of = _weight_table(meas, nu_max)
+        self.nu_step, self.tables = float(nu[1] - nu[0]), np.array(tables, dtype=float)
         # measurements that share a LOS vector and a probe volume share phi_hat(k . n) (a beam's gates)
-        self.beams, beam_of = np.unique(np.hstack([meas.n.round(12), table_of[:, None]]), axis=0,
-                                        return_inverse=True)
-        self.beam_of = beam_of.ravel()
-        scale = meas.n / (meas.count * meas.n[:, :1])  # n_i / (M n_i1)
+        beams, beam_of = np.unique(np.hstack([meas.n.round(12), table_of[:, None]]), axis=0, return_inverse=True)
+        self.beams, self.beam_table = np.ascontiguousarray(beams[:, :3]), beams[:, 3].astype(np.int64)
+        self.beam_of = beam_of.ravel().astype(np.int64)
+        self.scale = meas.n / (meas.count * meas.n[:, :1])  # n_i / (M n_i1)
         # exp(i (k2 y_i + k3 z_i)) does not depend on k1: once per measurement (complex64 halves the memory)
         self.phase = np.exp(1j * (k2[None] * meas.focus_m[:, 1, None] + k3[None] * meas.focus_m[:, 2, None]))
         self.phase = self.phase.astype(np.complex64)
-        mix = np.zeros((n_g, 3, meas.count), dtype=np.complex64)
-        mix[gate_of.ravel(), :, np.arange(meas.count)] = scale
-        self.mix = mix.reshape(3 * n_g, meas.count)
-
-    def transfer(self, k1: float, k2: np.ndarray, k3: np.ndarray) -> np.ndarray:
-        """A_g,l(k) = sum_{i in gate g} n_il / (M n_i1) phi_hat_i(k . n_i) exp(i (k2 y_i + k3 z_i)): (gates, 3, nodes)."""
-        hat = np.stack([np.interp(np.abs(k1 * b[0] + k2 * b[1] + k3 * b[2]), self.nu_tab, self.tables[int(b[3])])
-                        for b in self.beams]).astype(np.float32)
-        return (self.mix @ (hat[self.beam_of] * self.phase)).reshape(self.xs.size, 3, -1)
 
 
 def _node_spectra(lidar: _Lidar, k1: float, k2, k3, phi_w, inv_tau, rotor, U: float):
     """Two-sided (in k1) S_RR, S_LL, S_RL of Eq. 24, 29, 32 as sums over (k2, k3) nodes with weights in ``phi_w``.
 
-    The decay D_gh = exp(-s |x_g - x_h|), s = 1 / (U tau_e), is summed by the recursion over the sorted
-    gates C_h = sum_{g<h} D_gh A_g = exp(-s (x_h - x_{h-1})) (C_{h-1} + A_{h-1}) (only decaying factors):
-    sum_{g,h} D_gh A_g^T Phi conj(A_h) = sum_h (A_h + 2 C_h)^T Phi conj(A_h) in its real part, O(gates) per node.
+    A_g,l(k) = sum_{i in gate g} n_il / (M n_i1) phi_hat_i(k . n_i) exp(i (k2 y_i + k3 z_i)). The decay
+    D_gh = exp(-s |x_g - x_h|), s = 1 / (U tau_e), is summed by the recursion over the sorted gates
+    C_h = sum_{g<h} D_gh A_g = exp(-s (x_h - x_{h-1})) (C_{h-1} + A_{h-1}) (only decaying factors):
+    sum_{g,h} D_gh A_g^T Phi conj(A_h) = sum_h (A_h + 2 C_h)^T Phi conj(A_h) in its real part, O(gates) per node
+    (turbgen.theory.lidar_preview_kernel, one node at a time).
     """
-    A = lidar.transfer(k1, k2, k3)
-    phi32 = phi_w.astype(np.float32)
-    Ac = A.conj()
-    PhiA = np.stack([sum(phi32[l, c] * Ac[:, c] for c in range(3)) for l in range(3)], axis=1)  # Phi conj(A_h)
-    s = (inv_tau / U).astype(np.float32)
-    C = np.zeros_like(A[0])
-    d = np.exp(-s * np.float32(lidar.xs[0]))  # D_g = exp(-s x_g), the decay from gate g to the rotor
-    rl = np.zeros_like(A[0, 0])
-    S_LL = 0.0
-    for h, x in enumerate(lidar.xs):
-        if h:
-            step = np.exp(-s * np.float32(x - lidar.xs[h - 1]))
-            C = step * (C + A[h - 1])
-            d = d * step
-        S_LL += float(np.real(((A[h] + 2 * C) * PhiA[h]).sum()))
-        rl += d * PhiA[h, 0]
-    S_RL = complex((rl * rotor.astype(np.float32)).sum())
+    S_LL, S_RL = node_sums(float(k1), np.ascontiguousarray(k2, dtype=float), np.ascontiguousarray(k3, dtype=float),
+                           lidar.beams, lidar.beam_table, lidar.beam_of, lidar.nu_step, lidar.tables, lidar.phase,
+                           lidar.gate_of, lidar.scale, lidar.xs.astype(float), np.ascontiguousarray(phi_w, dtype=float),
+                           np.ascontiguousarray(inv_tau, dtype=float), np.ascontiguousarray(rotor, dtype=float),
+                           float(U))  # fmt: skip
     S_RR = float((rotor**2 * phi_w[0, 0]).sum())
     return S_RR, S_LL, S_RL
 
