@@ -358,3 +358,7 @@ def test_uploads_that_name_files_or_are_malformed_are_refused(server):
     off = {"model": "mann", **SMALL_RUN, "grid": {**SMALL_RUN["grid"], "x_m": [20, 40]}, "constrain": [mast]}
     status, _, out = server.call("POST", "/runs", off)  # the sonic at x = 0: off the field, refused at submission
     assert status == 422 and f"/constraints/{mast}" in out["detail"] and str(server.root) not in out["detail"], out
+    big = {"model": "mann", **SMALL_RUN, "grid": {"nt": 65536, "dt_s": 0.5, "ny": 64, "nz": 64, "x_m": [0, 40]},
+           "constrain": [mast]}  # fmt: skip
+    status, _, out = server.call("POST", "/runs", big)  # over the server's memory budget with its conditioning
+    assert status == 413 and "the constrained run (2 measurement streams) needs about" in out["detail"], out

@@ -162,45 +162,30 @@ def check_memory(model: str, run, budget_bytes: int) -> int:
     from turbgen.runs.models import get_model
 
     need = run_memory_bytes(model, run)
-    if need > budget_bytes:
-        fields = get_model(model).memory_fields.replace("`", "")
-        raise LimitError(413, f"grid: the run needs about {format_bytes(need)} of memory, over the server's budget of "
-                         f"{format_bytes(budget_bytes)}; lower {fields} (or start the server with a larger "
-                         "--memory-budget)")
+    _refuse_over_budget(need, budget_bytes, "the run", get_model(model).memory_fields.replace("`", ""))
     return need
 
 
 def check_constrained_memory(run, files: list, constraints: dict, budget_bytes: int) -> int:
-    """The data of a constrained Mann run placed on its grid (ParameterError for measurements off the field, all
-    missing, ...), then LimitError 413 as :func:`check_memory` when the run with its conditioning does not fit.
-
-    Parameters
-    ----------
-    run : MannRun
-        The run.
-    files : list of str
-        The uploads' files.
-    constraints : dict
-        The run's constraint keys (turbgen.service.run_ids.constraint_keys).
-    budget_bytes : int
-        The server's memory budget [bytes].
-
-    Returns
-    -------
-    int
-        The run's estimated memory [bytes].
-    """
+    """The data of a constrained Mann ``run`` (the uploads' ``files``, its constraint keys ``constraints``) placed on
+    its grid (ParameterError for measurements off the field, all missing, ...), then LimitError 413 as
+    :func:`check_memory` when the run with its conditioning does not fit ``budget_bytes``; its estimated memory
+    [bytes]."""
     from turbgen.resources import default_threads
     from turbgen.runs.constrain import constrained_memory_bytes, load_constraints, place
 
     placed = place(run, load_constraints(files), constraints.get("noise_m_s"))
     need = constrained_memory_bytes(run, placed, default_threads(None))
-    if need > budget_bytes:
-        raise LimitError(413, f"grid: the constrained run ({placed.streams.n_streams} measurement streams) needs about "
-                         f"{format_bytes(need)} of memory, over the server's budget of {format_bytes(budget_bytes)}; "
-                         "lower nt, ny/nz or pad_yz, or measure fewer series (or start the server with a larger "
-                         "--memory-budget)")  # fmt: skip
+    _refuse_over_budget(need, budget_bytes, f"the constrained run ({placed.streams.n_streams} measurement streams)",
+                        "nt, ny/nz or pad_yz, or measure fewer series")  # fmt: skip
     return need
+
+
+def _refuse_over_budget(need: int, budget_bytes: int, what: str, lower: str) -> None:
+    if need > budget_bytes:
+        raise LimitError(413, f"grid: {what} needs about {format_bytes(need)} of memory, over the server's budget of "
+                         f"{format_bytes(budget_bytes)}; lower {lower} (or start the server with a larger "
+                         "--memory-budget)")  # fmt: skip
 
 
 def check_json_depth(value, limit: int = MAX_JSON_DEPTH) -> None:
