@@ -68,7 +68,7 @@ def main() -> None:
     lap("system S")
     g = run.grid
     gen = MannSnapshots(stencil, g.ny, g.nz, a.threads)
-    measured = unconstrained_measurement(run, gen, placed)
+    measured = unconstrained_measurement(run, stencil, placed, a.threads)
     lap("pass 1 (generate, measure u_s)")
     x, report = solve_constraints(cov, placed, measured, measurement_noise(run, placed))
     lap(f"solve ({report.method}, {report.iterations} it.)")

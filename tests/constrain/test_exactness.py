@@ -13,8 +13,9 @@ import pytest
 
 from brute_force import dense_gain, generator_covariance
 from turbgen.errors import ParameterError
-from turbgen.synthesis.conditioning import (Streams, check_singular, circulant_apply, measure, measure_spectra, solve,
-                                            spectra_samples, stream_covariance, weights_field)  # fmt: skip
+from turbgen.synthesis.conditioning import (Streams, check_singular, circulant_apply, measure, measure_spectra,
+                                            measured_points, solve, spectra_samples, stream_covariance,
+                                            weights_field)  # fmt: skip
 from turbgen.synthesis.mann_spacetime import MannSnapshots
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil
 from turbgen.theory.params import MannParams
@@ -192,6 +193,17 @@ def test_spectral_measurement_equals_measuring_the_field(evolving, scanned):
     spectral = spectra_samples(streams, spec, nt)
     assert np.abs(spectral - direct).max() < 1e-5 * np.abs(direct).max()
     assert np.abs(direct).max() > 0
+    # a generator keeping the measured points only (pass 1 of a constrained run): the same spectra there, bit for bit
+    points = measured_points(streams, NZ)
+    kept = MannSnapshots(stencil, NY, NZ, threads=1, points=points)
+    from_points = np.zeros_like(spec)
+    for (m, full), (_, part) in zip(gen.spectra(7, times), kept.spectra(7, times)):
+        assert part.shape[1] == len(points) <= NY * NZ
+        np.testing.assert_array_equal(part, full[:, points])
+        measure_spectra(streams, int(order[m]), part, NZ, nt, from_points, points)
+    np.testing.assert_array_equal(from_points, spec)
+    with pytest.raises(ValueError, match="spectra only"):
+        next(kept.generate(7, times))
 
 
 def test_unconverged_conjugate_gradients_are_refused(evolving, monkeypatch):

@@ -224,19 +224,22 @@ def _bar(desc: str, total: int, unit: str, show: bool):
     return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, disable=not (show and sys.stderr.isatty()))
 
 
-def unconstrained_measurement(run: MannRun, gen: MannSnapshots, placed: PlacedData,
+def unconstrained_measurement(run: MannRun, stencil, placed: PlacedData, threads: int,
                                progress: bool = False) -> np.ndarray:  # fmt: skip
     """Pass 1: H u_s of the unconstrained sample of the run's seed (nothing is kept), measured on the snapshots'
-    spectra before their transform along time (only the measured streams are transformed)."""
+    spectra before their transform along time, kept at the measured points only (only the measured streams are
+    transformed)."""
     g = run.grid
     times = run.plane_times_s()
     order = [int(i) for i in np.argsort(times, kind="stable")]
     frozen = run.params.evo_time_s is None
+    points = cond.measured_points(placed.streams, g.nz)
+    gen = MannSnapshots(stencil, g.ny, g.nz, threads, points=points)
     spec = np.zeros((placed.streams.n_streams, g.nt // 2 + 1), complex)
     with _bar("pass 1", g.nx, "plane", progress) as bar:
         for m, spectra in gen.spectra(run.seed, times):
             for ix in order if frozen else [order[m]]:  # frozen: the one snapshot is every plane
-                cond.measure_spectra(placed.streams, ix, spectra, g.nz, g.nt, spec)
+                cond.measure_spectra(placed.streams, ix, spectra, g.nz, g.nt, spec, points)
                 bar.update(1)
     return cond.spectra_samples(placed.streams, spec, g.nt)
 
@@ -257,7 +260,8 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
     gen = MannSnapshots(stencil, g.ny, g.nz, default_threads(threads))
     measured = eps = None
     if not conditional_mean:
-        measured, eps = unconstrained_measurement(run, gen, placed, progress), measurement_noise(run, placed)
+        measured = unconstrained_measurement(run, stencil, placed, gen.threads, progress)
+        eps = measurement_noise(run, placed)
     x, report = solve_constraints(cov, placed, measured, eps)
     frozen = stencil.inv_tau is None  # every plane is the same snapshot, and so is its correction
     wanted = [0] if frozen else list(range(g.nx))

@@ -121,9 +121,11 @@ def measure(streams: Streams, plane: int, component: int, field: np.ndarray, out
         out[a] += streams.term_weight[t] * field[n, streams.term_iy[t], streams.term_iz[t]]
 
 
-def measure_spectra(streams: Streams, plane: int, spectra: np.ndarray, nz: int, nt: int, out: np.ndarray) -> None:
+def measure_spectra(streams: Streams, plane: int, spectra: np.ndarray, nz: int, nt: int, out: np.ndarray,
+                    points: np.ndarray | None = None) -> None:  # fmt: skip
     """Add the time spectra of H's terms on ``plane`` into ``out`` (M, nk1) complex128, from the cropped spectra
-    (3, ny nz, nk1) of that plane's snapshot (MannSnapshots.spectra: the field before its transform along time):
+    (3, ny nz, nk1) of that plane's snapshot (MannSnapshots.spectra: the field before its transform along time), or
+    of the sorted cropped points y nz + z ``points`` only (3, len(points), nk1; :func:`measured_points`):
     Y_a(i) = sum_t w_t U_(c_t)(i, y_t, z_t) exp(2 pi i i s_t / nt). :func:`spectra_samples` turns them into H u."""
     sel = np.flatnonzero(streams.plane[streams.term_stream] == plane)
     if len(sel) == 0:
@@ -132,11 +134,17 @@ def measure_spectra(streams: Streams, plane: int, spectra: np.ndarray, nz: int, 
     nk1 = spectra.shape[-1]
     shift = streams.term_shift[sel]
     phase = np.exp(2j * np.pi * ((np.arange(nk1)[None, :] * np.arange(shift.max() + 1)[:, None]) % nt) / nt)
-    values = spectra[streams.term_component[sel], streams.term_iy[sel] * nz + streams.term_iz[sel]]
+    point = streams.term_iy[sel] * nz + streams.term_iz[sel]
+    values = spectra[streams.term_component[sel], point if points is None else np.searchsorted(points, point)]
     values = values * (streams.term_weight[sel, None] * phase[shift])
     stream = streams.term_stream[sel]
     starts = np.flatnonzero(np.r_[True, stream[1:] != stream[:-1]])
     out[stream[starts]] += np.add.reduceat(values, starts, axis=0)
+
+
+def measured_points(streams: Streams, nz: int) -> np.ndarray:
+    """The sorted cropped points y nz + z the streams' terms read (MannSnapshots' ``points``)."""
+    return np.unique(streams.term_iy * nz + streams.term_iz)
 
 
 def spectra_samples(streams: Streams, spectra: np.ndarray, nt: int) -> np.ndarray:

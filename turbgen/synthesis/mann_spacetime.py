@@ -28,7 +28,7 @@ from turbgen.errors import ParameterError
 from turbgen.resources import default_threads
 from turbgen.synthesis.mann_product import ou_product
 from turbgen.synthesis.mann_stencil import BoxShape, MannStencil
-from turbgen.synthesis.pencil_crop import crop_into_pencils
+from turbgen.synthesis.pencil_crop import crop_into_pencils, gather_points
 from turbgen.synthesis.random_streams import complex_normal
 
 
@@ -135,7 +135,8 @@ class MannSnapshots:
     for any value (random streams per (seed, snapshot, slab), fixed batches and FFT plans).
     """
 
-    def __init__(self, stencil: MannStencil, ny: int, nz: int, threads: int | None = None, buffers: int = 1):
+    def __init__(self, stencil: MannStencil, ny: int, nz: int, threads: int | None = None, buffers: int = 1,
+                 points: np.ndarray | None = None):  # fmt: skip
         box = stencil.box
         if not (1 <= ny <= box.nyp and 1 <= nz <= box.nzp):
             raise ParameterError(f"ny, nz = {ny}, {nz} must not exceed the synthesis box {box.nyp} x {box.nzp}")
@@ -155,6 +156,8 @@ class MannSnapshots:
         self._outputs: list[np.ndarray] = []
         self._n_out = 0
         self._scratch: queue.SimpleQueue | None = None
+        # the cropped points y nz + z kept by :meth:`spectra` (None: all); such a generator yields no fields
+        self._points = None if points is None else np.divmod(np.asarray(points, dtype=np.int64), nz)
 
     # -- public -------------------------------------------------------------------------
     def generate(self, seed: int | None, times_s, addend=None, target=None) -> Iterator[tuple[int, str, np.ndarray]]:
@@ -183,6 +186,8 @@ class MannSnapshots:
             raise ParameterError("this stencil was built with evolving=False: it serves one plane only")
         if seed is None and addend is None:
             raise ValueError("generate needs a seed, an addend or both")
+        if self._points is not None:
+            raise ValueError("a generator made with points yields their spectra only (spectra)")
         self._allocate(n_snapshots=1 if frozen or seed is None else len(order))  # no sample: no OU state
         with ThreadPoolExecutor(self.threads) as pool:
             if frozen:
@@ -210,7 +215,8 @@ class MannSnapshots:
         stencil's slabs, for the snapshots at ``times_s`` in time order (frozen: one snapshot, m = 0).
 
         The first pass of an out-of-core run: the same numbers as the whole-box generator holds in its
-        spectrum buffer before the transform along k1. The array is reused: consume it first.
+        spectrum buffer before the transform along k1. The array is reused: consume it first. A generator made with
+        ``points`` keeps those only: (3, len(points), n_slabs).
         """
         times = np.sort(np.asarray(times_s, dtype=float), kind="stable")
         frozen = self.stencil.params.evo_time_s is None
@@ -236,9 +242,10 @@ class MannSnapshots:
     def _allocate(self, n_snapshots: int) -> None:
         box = self.box
         if self._spectra is None:
-            whole = self._n_slabs == box.nk1
+            whole = self._n_slabs == box.nk1 and self._points is None
+            n_points = self.ny * self.nz if self._points is None else len(self._points[0])
             # page-aligned (whole box): output planes in it (_transform) go to a direct-I/O writer without a bounce copy
-            self._spectra = pyfftw.empty_aligned((3, self.ny * self.nz, _padded_nk1(self._n_slabs)), np.complex64,
+            self._spectra = pyfftw.empty_aligned((3, n_points, _padded_nk1(self._n_slabs)), np.complex64,
                                                  n=_PAGE if whole else _ALIGN)  # fmt: skip
             self._scratch = queue.SimpleQueue()
             for _ in range(self.threads):
@@ -329,7 +336,10 @@ class MannSnapshots:
         for i in self._hermitian_slabs.intersection(range(i0, i1)):
             hermitian_complete(uh[i - i0])
         s.yz_transform(b)
-        crop_into_pencils(uh, self.ny, self.nz, self._spectra, j0)
+        if self._points is None:
+            crop_into_pencils(uh, self.ny, self.nz, self._spectra, j0)
+        else:
+            gather_points(uh, self._points[0], self._points[1], self._spectra, j0)
 
     def _rows(self, s: _Scratch, c: int, r0: int, output: np.ndarray, add: np.ndarray | None = None,
               sample: bool = True) -> None:  # fmt: skip

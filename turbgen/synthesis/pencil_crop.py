@@ -28,3 +28,14 @@ def crop_into_pencils(uhat, ny, nz, spectra, j0):
                 row = spectra[c, y * nz + z]
                 for j in range(b):
                     row[j0 + j] = uhat[j, c, y, z]
+
+
+@numba.njit(nogil=True, cache=True)
+def gather_points(uhat, iy, iz, spectra, j0):
+    """spectra[c, p, j0 + j] = uhat[j, c, iy[p], iz[p]]: the pencils of the points (iy, iz) only (of b slabs)."""
+    b = uhat.shape[0]
+    for c in range(3):
+        for p in range(len(iy)):
+            row = spectra[c, p]
+            for j in range(b):
+                row[j0 + j] = uhat[j, c, iy[p], iz[p]]
