@@ -167,3 +167,16 @@ def test_the_documented_netcdf_example_runs(tmp_path, monkeypatch):
     exec(compile(block, "constrained-fields.md", "exec"), {})
     with pytest.raises(ParameterError, match="mylidar.toml"):  # the one thing missing: the user's lidar file
         read_los_netcdf(tmp_path / "los.nc")
+
+
+def test_times_drifting_from_the_scan_period_are_refused(record):
+    """Every scan period within 1e-6 dt of whole time steps, but the scans drift by 5e-7 dt each: the probe points'
+    weights no longer repeat (sampling.repeats_every), refused in one line; the record as written places."""
+    d, data = record
+    run = MannRun.from_mapping({"grid": {"nt": 256, "dt_s": 0.5, "x_m": [0.0, 20.0, 40.0], "ny": 8, "nz": 8,
+                                         "dy_m": 5.0}})  # fmt: skip
+    drift = 5e-7 * 0.5 * np.arange(data.time_s.shape[0])[:, None]
+    _write_csv(d / "drift.csv", data.v_los, data.time_s + drift)
+    with pytest.raises(ParameterError, match="do not repeat every 4 time steps with the same weights"):
+        place(run, [read_los_csv(d / "drift.csv")])
+    place(run, [read_los_csv(d / "los.csv")])

@@ -13,10 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from turbgen.errors import ParameterError
-from turbgen.lidar import compare, sampling, signals
+from turbgen.lidar import sampling
 from turbgen.lidar.sampling import Measurement
-from turbgen.validate.estimators import WelchSetup
-from turbgen.validate.point_sets import check_rotor_radius
 
 
 def measurements_of(description) -> list[Measurement]:
@@ -180,6 +178,11 @@ def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shea
         For a rotor radius that does not fit the grid, a lidar that does not fit the store (see
         :func:`turbgen.lidar.sampling.sample`), a store without a plane x = 0, or a signal too short.
     """
+    # the estimators here only: placing lidar data (constrained runs) needs this module but not scipy.signal
+    from turbgen.lidar import compare, signals
+    from turbgen.validate.estimators import WelchSetup
+    from turbgen.validate.point_sets import check_rotor_radius
+
     g = fs.grid
     radius = check_rotor_radius(g, rotor_radius_m)
     ms = measurements_of(description)

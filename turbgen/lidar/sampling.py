@@ -390,6 +390,26 @@ def los_operator(grid, U_m_s: float, measurements, planes, times_s: np.ndarray) 
                        y_index, z_index, weight)  # fmt: skip
 
 
+def repeats_every(grid, U_m_s: float, measurements, times_s: np.ndarray, q: int, tol: float) -> bool:
+    """Whether the probe points of ``measurements`` at times ``times_s`` (n_scan, J) [s] fall, scan after scan, q
+    stored time steps later with the same weights (to ``tol``) as in the first scan: then :func:`los_operator` of the
+    first scan, shifted by s q steps, is the operator of scan s."""
+    g = grid
+    for j, m in enumerate(measurements):
+        p, w = m.points_m(), np.abs(np.asarray(m.weights, float))
+        it, at = _interp_axis(0.0, g.dt_s, g.nt, times_s[:, j, None] + p[None, :, 0] / U_m_s)
+        _, ay = _interp_axis(g.y()[0], g.dy_m, g.ny, p[:, 1])
+        _, az = _interp_axis(g.z()[0], g.dz_m, g.nz, p[:, 2])
+        live = w > 0
+        scale = w * np.maximum(ay, 1 - ay) * np.maximum(az, 1 - az)  # the largest weight a time fraction multiplies
+        steps = it[:, live] - it[0, live][None, :]
+        if not np.array_equal(steps, np.broadcast_to(q * np.arange(len(it))[:, None], steps.shape)):
+            return False
+        if (np.abs(at - at[0][None, :]) * scale[None, :]).max(initial=0.0) > tol:
+            return False
+    return True
+
+
 def apply_los(op: LosOperator, read) -> np.ndarray:
     """v_los (n_scan, J) of the field given by ``read(component, plane, (t0, t1), (y0, y1), (z0, z1))`` -> the
     float64 block [t0, t1) x [y0, y1) x [z0, z1) of that plane (each plane read once, only the span its points

@@ -22,7 +22,8 @@ from turbgen.errors import ParameterError
 from turbgen.lidar.dataset import LidarData
 from turbgen.lidar.description import lidar_from_mapping
 from turbgen.lidar.run import measurements_of
-from turbgen.lidar.sampling import check_measurements, los_operator, mean_wind_los, mean_wind_los_series
+from turbgen.lidar.sampling import (check_measurements, los_operator, mean_wind_los, mean_wind_los_series,
+                                    repeats_every)  # fmt: skip
 from turbgen.spec.mean_wind import MeanWind
 
 _WEIGHT_TOL = 1e-9  # weights of one term that differ by less between scans are the same (rounding of T + x'/U)
@@ -41,26 +42,19 @@ def _scan_step(data: LidarData, dt_s: float, where: str) -> int:
     return q
 
 
-def _terms(op, j: int, q: int, where: str) -> tuple[np.ndarray, int]:
-    """Merged terms (T, 5) (component, y, z, shift, weight) of measurement j and its first stored time step."""
-    weight = op.weight[:, j]  # (n_scan, R)
-    t_index = op.t_index[:, j]
-    live = np.abs(weight).max(axis=0) > 0
-    steps = t_index[:, live] - t_index[0, live][None, :]
-    expected = q * np.arange(weight.shape[0])[:, None]
-    same = np.abs(weight[:, live] - weight[0, live][None, :]).max(initial=0.0) <= _WEIGHT_TOL
-    if not same or not np.array_equal(steps, np.broadcast_to(expected, steps.shape)):
-        raise ParameterError(f"{where}: the measurement times do not repeat every {q} time steps with the same "
-                             "weights; the lidar cannot be placed on this grid")  # fmt: skip
-    t0 = t_index[0, live]
-    first = int(t0.min())
+def _terms(op, j: int) -> tuple[np.ndarray, int]:
+    """Merged terms (T, 5) (component, y, z, shift, weight) of measurement j and its first stored time step, from the
+    operator of the first scan (the others repeat it: sampling.repeats_every)."""
+    weight = op.weight[0, j]
+    live = weight != 0
+    first = int(op.t_index[0, j, live].min())
     rows = {}
     for c in range(3):
         if op.n[j, c] == 0.0:
             continue
         for r in np.flatnonzero(live):
             key = (c, int(op.y_index[j, r]), int(op.z_index[j, r]), int(op.t_index[0, j, r]) - first)
-            rows[key] = rows.get(key, 0.0) + op.n[j, c] * weight[0, r]
+            rows[key] = rows.get(key, 0.0) + op.n[j, c] * weight[r]
     terms = np.array([(*k, w) for k, w in sorted(rows.items()) if w != 0.0], dtype=float)
     return terms, first
 
@@ -106,7 +100,10 @@ def lidar_streams(run, data: LidarData, sigma: float) -> list:
         raise ParameterError(f"{where}: its measurements fall outside the field's record 0 .. {end:g} s (stored "
                              "time T + x/U)")  # fmt: skip
     q = _scan_step(data, g.dt_s, where)
-    op = los_operator(g, run.U_m_s, ms, planes, times)
+    if not repeats_every(g, run.U_m_s, ms, times, q, _WEIGHT_TOL):
+        raise ParameterError(f"{where}: the measurement times do not repeat every {q} time steps with the same "
+                             "weights; the lidar cannot be placed on this grid")  # fmt: skip
+    op = los_operator(g, run.U_m_s, ms, planes, times[:1])
     mean = _mean_los(data, ms, times, run, where)
     n_dec = g.nt // q if g.nt % q == 0 else None
     if n_dec is None:
@@ -114,7 +111,7 @@ def lidar_streams(run, data: LidarData, sigma: float) -> list:
                              f"make the field with `nt` a multiple of {q}")  # fmt: skip
     out = []
     for j, m in enumerate(ms):
-        terms, first = _terms(op, j, q, where)
+        terms, first = _terms(op, j)
         values = data.v_los[:, beams.index(m.beam), gates.index(m.gate)] - (0.0 if mean is None else mean[:, j])
         series = np.full(n_dec, np.nan)
         series[first // q + np.arange(n_scan)] = values
