@@ -354,6 +354,9 @@ def test_uploads_that_name_files_or_are_malformed_are_refused(server):
         status, _, out = server.call("POST", path, body)
         assert status == 422 and "uploaded measurements" in out["detail"], (path, out)
     assert server.call("GET", "/constraints/" + "0" * 24)[0] == 404
+    assert server.call("DELETE", f"/constraints/{up['id']}")[2] == {"id": up["id"], "deleted": True}
+    assert server.call("GET", f"/constraints/{up['id']}")[0] == 404
+    assert server.call("DELETE", f"/constraints/{up['id']}")[0] == 404
     mast = _upload(server, open(MAST, "rb").read(), "application/json")[2]["id"]
     off = {"model": "mann", **SMALL_RUN, "grid": {**SMALL_RUN["grid"], "x_m": [20, 40]}, "constrain": [mast]}
     status, _, out = server.call("POST", "/runs", off)  # the sonic at x = 0: off the field, refused at submission
@@ -362,3 +365,25 @@ def test_uploads_that_name_files_or_are_malformed_are_refused(server):
            "constrain": [mast]}  # fmt: skip
     status, _, out = server.call("POST", "/runs", big)  # over the server's memory budget with its conditioning
     assert status == 413 and "the constrained run (2 measurement streams) needs about" in out["detail"], out
+
+
+def test_an_upload_a_queued_run_needs_is_not_deleted(tmp_path):
+    """DELETE /constraints/<id> answers 409 while a queued or running run is conditioned on the upload, and removes
+    it once that run has finished."""
+    import threading
+    from types import SimpleNamespace
+
+    from turbgen.service.catalog import Catalog
+    from turbgen.service.limits import LimitError
+    from turbgen.service.routes.constraints import delete_upload
+
+    catalog = Catalog(tmp_path)
+    cid, _, _ = catalog.uploads.add("application/json", open(MAST, "rb").read())
+    rid = "ab" * 12
+    catalog.record(rid, "mann", {"seed": 1, "constrain": [cid]})
+    state = SimpleNamespace(catalog=catalog, jobs=SimpleNamespace(lock=threading.Lock(), active={rid: None}))
+    with pytest.raises(LimitError, match=f"run {rid} is queued or running on these measurements"):
+        delete_upload(cid, state)
+    assert catalog.uploads.path(cid).is_file()
+    state.jobs.active.clear()
+    assert delete_upload(cid, state) == {"id": cid, "deleted": True} and not list(catalog.uploads.dir.iterdir())
