@@ -292,13 +292,15 @@ class _Basis:
     """The lag covariances transformed per slab and lag: the direction pairs' own (``directions`` the keys', W the
     identity) or, with more than six direction pairs, Phi's six components (``directions`` the axes): then each
     direction pair's is sum_b weights[p, b] of them. ``first``/``second`` (B,) the directions of each basis input,
-    ``n_even`` how many lead that are even in k2 (all but the odd components' two; every one for direction pairs)."""
+    ``n_even`` how many lead that are even in k2 (all but the odd components' two; every one for direction pairs),
+    ``is_pairs`` whether the inputs are the direction pairs themselves (nothing to combine)."""
 
     directions: np.ndarray
     first: np.ndarray
     second: np.ndarray
     weights: np.ndarray
     n_even: int
+    is_pairs: bool
 
     @property
     def n(self) -> int:
@@ -313,7 +315,7 @@ def _basis(directions: np.ndarray) -> _Basis:
 
 def _direction_basis(directions: np.ndarray) -> _Basis:
     first, second = np.triu_indices(len(directions))
-    return _Basis(directions, first, second, np.eye(len(first)), len(first))
+    return _Basis(directions, first, second, np.eye(len(first)), len(first), True)
 
 
 def _component_basis(directions: np.ndarray) -> _Basis:
@@ -321,7 +323,7 @@ def _component_basis(directions: np.ndarray) -> _Basis:
     a, b = (np.array(v) for v in zip(*COMPONENT_PAIRS))
     n, m = directions[first], directions[second]  # n^T Phi n' = sum_(a <= b) (n_a n'_b + n_b n'_a [a != b]) Phi_ab
     weights = n[:, a] * m[:, b] + np.where(a != b, n[:, b] * m[:, a], 0.0)
-    return _Basis(np.eye(3), a, b, weights, N_EVEN)
+    return _Basis(np.eye(3), a, b, weights, N_EVEN, False)
 
 
 class _LagTransform:
@@ -342,8 +344,7 @@ class _LagTransform:
         self.x = pyfftw.empty_aligned((basis.n, self.rows, nzp), np.float64)
         self.z = pyfftw.empty_aligned((basis.n, self.rows, nzp // 2 + 1), np.complex128)
         self.window = np.empty((basis.n, 2 * extent[0] - 1, 2 * extent[1] - 1), np.complex128)
-        self.identity = basis.weights.shape == (basis.n, basis.n) and np.array_equal(basis.weights, np.eye(basis.n))
-        self.pairs = self.window if self.identity else np.empty((n_pairs, *self.window.shape[1:]), np.complex128)
+        self.pairs = self.window if basis.is_pairs else np.empty((n_pairs, *self.window.shape[1:]), np.complex128)
         plans = [pyfftw.FFTW(self.x, self.z, axes=(-1,), flags=flags, threads=1)]
         kept = self.z[..., :keep_z]
         if not self.parity:
@@ -361,7 +362,7 @@ class _LagTransform:
         for plan in self._plans:
             plan.execute()
         kernels.lag_window(self.z, self.basis.n_even, self.parity, self.nzp, self.window)
-        if not self.identity:
+        if not self.basis.is_pairs:
             flat = lambda a: a.reshape(len(a), -1).view(np.float64)  # noqa: E731
             kernels.combine_pairs(flat(self.window), self.basis.weights, flat(self.pairs))
         return self.pairs
