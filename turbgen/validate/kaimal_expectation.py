@@ -44,16 +44,66 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
         Line (cross-)variances [m^2 s^-2] and correlation sums rho_bar [-] (module docstring).
     """
     km = kaimal_model_from_attrs(attrs)
-    kp, long_model, long_components = km.params, km.long_model, km.long_components
-    grid, mask = design.grid, design.rotor_mask
+    kp, long_components = km.params, km.long_components
+    grid = design.grid
     U = float(attrs["U_m_s"])
+    yz_coh, long_fn = _coherences(km, U)
+    line_f = line_frequencies(grid.nt, grid.dt_s)
+    auto = _auto_lines(km, grid, line_f, U)
+    seps = design.separations
+    yz = {c: {(a, b): auto[c] * yz_coh(c, math.hypot(a * grid.dy_m, b * grid.dz_m), line_f) for a, b in seps}
+          for c in COMPONENTS}  # fmt: skip
+    long = {dx: auto["u"] * long_fn(dx, line_f) for dx in plane_separations(grid)}
+    # Eq. 25: S_RR = S_1 / n_R^2 sum_ij coh(r_ij, f), summed over the rotor pairs per lag
+    counts = rotor_pair_counts(grid, design.rotor_mask)
+    radius = lag_radius(grid)
+    sel = counts > 0
+    rews_factor = np.array([np.sum(counts[sel] * exponential_yz(radius[sel], f, U, kp.a_yz, kp.lc_m)) for f in line_f])
+    rews = auto["u"] * rews_factor / design.rotor_mask.sum() ** 2
+    node_f = design.node_freqs()
+    acc, rho_rews = _node_correlations(design, node_f, yz_coh, long_fn, long_components)
+    modes = _kaimal_modes(km, grid, line_f, yz_coh, long_fn)
+
+    def reference() -> dict:  # continuous Kaimal spectra (plots only)
+        return {f"spectrum_{c}": (line_f[1:], kaimal_spectrum(line_f[1:], kp.sigma_m_s[i], kp.length_scales_m[i], U))
+                for i, c in enumerate(COMPONENTS)}  # fmt: skip
+
+    band = design.band(U)
+    band["note"] = (
+        f"Kaimal lines f_j = j/(nt dt) up to the Nyquist frequency {band['f_max_hz']:g} Hz; "
+        + ("spectra rescaled to the nominal sigma (store attribute rescale)" if km.rescale
+           else "variance = the Kaimal integral over the resolved band (no rescaling)")
+    )  # fmt: skip
+    return Theory(
+        model="kaimal", nt=grid.nt, line_f=line_f, auto=auto, yz=yz, long=long, rews=rews, node_f=node_f,
+        rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
+        sigma_model=dict(zip(COMPONENTS, kp.sigma_m_s)), band=band, long_components=long_components,
+        uw=np.zeros(line_f.size), rho_uw=np.zeros(node_f.size),  # u and w are synthesised independently
+        reference=reference, variance_modes=modes,
+    )  # fmt: skip
+
+
+def _coherences(km, U: float):
+    """(yz_coh(component, r [m], f [Hz]), long_fn(dx [m], f [Hz])): the run's lateral coherency (Eq. 12, un-squared;
+    v and w incoherent unless ``vw_coherent``) and its longitudinal coherency model."""
+    kp, long_model = km.params, km.long_model
     if long_model == "exp":
         long_fn = lambda dx, f: LONGITUDINAL_MODELS["exp"](dx, f, U, km.a_x, km.b_x)  # noqa: E731
     else:
         s_tot = math.sqrt(sum(s * s for s in kp.sigma_m_s))
         long_fn = lambda dx, f: LONGITUDINAL_MODELS[long_model](dx, f, U, s_tot, kp.length_scales_m[0])  # noqa: E731
-    nt = grid.nt
-    line_f = line_frequencies(nt, grid.dt_s)
+
+    def yz_coh(c, r_m, f):
+        if c == "u" or km.vw_coherent:
+            return exponential_yz(r_m, f, U, kp.a_yz, kp.lc_m)  # Eq. 12, un-squared
+        return np.where(np.asarray(r_m) == 0, 1.0, 0.0) * np.ones_like(f)
+
+    return yz_coh, long_fn
+
+
+def _auto_lines(km, grid, line_f: np.ndarray, U: float) -> dict:
+    """Component -> the variance [m^2 s^-2] of each record line of the Kaimal spectrum (rescaled if the run was)."""
+    kp, nt = km.params, grid.nt
     df = line_f[1]
     auto = {}
     lo = np.maximum(line_f - df / 2.0, 0.0)
@@ -66,25 +116,12 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
         if km.rescale:
             lines *= kp.sigma_m_s[i] ** 2 / np.sum(pair_weights(nt) * lines)
         auto[c] = lines
+    return auto
 
-    def yz_coh(c, r_m, f):
-        if c == "u" or km.vw_coherent:
-            return exponential_yz(r_m, f, U, kp.a_yz, kp.lc_m)  # Eq. 12, un-squared
-        return np.where(np.asarray(r_m) == 0, 1.0, 0.0) * np.ones_like(f)
 
-    seps = design.separations
-    yz = {c: {(a, b): auto[c] * yz_coh(c, math.hypot(a * grid.dy_m, b * grid.dz_m), line_f) for a, b in seps}
-          for c in COMPONENTS}
-    long = {dx: auto["u"] * long_fn(dx, line_f) for dx in plane_separations(grid)}
-    # Eq. 25: S_RR = S_1 / n_R^2 sum_ij coh(r_ij, f), summed over the rotor pairs per lag
-    counts = rotor_pair_counts(grid, mask)
-    radius = lag_radius(grid)
-    sel = counts > 0
-    n_r = mask.sum()
-    rews_factor = np.array([np.sum(counts[sel] * exponential_yz(radius[sel], f, U, kp.a_yz, kp.lc_m)) for f in line_f])
-    rews = auto["u"] * rews_factor / n_r**2
-
-    node_f = design.node_freqs()
+def _node_correlations(design: SamplingDesign, node_f: np.ndarray, yz_coh, long_fn, long_components):
+    """(RhoAccumulator of the coherencies at all lags, rho_bar of the planes' REWS series (nodes x nodes))."""
+    grid = design.grid
     acc = RhoAccumulator(design, node_f.size)
     lag_r = lag_radius(grid)
     for c in COMPONENTS:
@@ -98,31 +135,20 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
     for dx, mult in plane_separations(grid).items():
         g_x = long_fn(dx, node_f) if dx > 0 else np.ones(node_f.size)
         rho_rews += mult * np.outer(g_x, g_x) / grid.nx**2
-    # top modes of the lowest lines' coherency matrices (variance law); v, w white: all modes equal, none needed
+    return acc, rho_rews
+
+
+def _kaimal_modes(km, grid, line_f: np.ndarray, yz_coh, long_fn) -> dict:
+    """Top modes of the lowest lines' coherency matrices (variance law); v, w white: all modes equal, none needed."""
     modes = {}
-    if grid.nx * grid.ny * grid.nz <= MAX_MODE_POINTS:
-        for c in COMPONENTS if km.vw_coherent else ("u",):
-            def lags(dx, f, c=c):
-                g_x = 1.0 if dx == 0 else long_fn(dx, f) if c in long_components else 0.0
-                return yz_coh(c, lag_r, np.full(lag_r.shape, f)) * g_x
+    if grid.nx * grid.ny * grid.nz > MAX_MODE_POINTS:
+        return modes
+    lag_r = lag_radius(grid)
+    for c in COMPONENTS if km.vw_coherent else ("u",):
+        def lags(dx, f, c=c):
+            g_x = 1.0 if dx == 0 else long_fn(dx, f) if c in km.long_components else 0.0
+            return yz_coh(c, lag_r, np.full(lag_r.shape, f)) * g_x
 
-            modes[c] = np.array([top_modes(coherency_matrix({dx: lags(dx, f) for dx in plane_separations(grid)}, grid))
-                                 for f in line_f[1 : N_MODE_LINES + 1]])
-
-    def reference() -> dict:  # continuous Kaimal spectra (plots only)
-        return {f"spectrum_{c}": (line_f[1:], kaimal_spectrum(line_f[1:], kp.sigma_m_s[i], kp.length_scales_m[i], U))
-                for i, c in enumerate(COMPONENTS)}
-
-    band = design.band(U)
-    band["note"] = (
-        f"Kaimal lines f_j = j/(nt dt) up to the Nyquist frequency {band['f_max_hz']:g} Hz; "
-        + ("spectra rescaled to the nominal sigma (store attribute rescale)" if km.rescale
-           else "variance = the Kaimal integral over the resolved band (no rescaling)")
-    )
-    return Theory(
-        model="kaimal", nt=nt, line_f=line_f, auto=auto, yz=yz, long=long, rews=rews, node_f=node_f,
-        rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
-        sigma_model=dict(zip(COMPONENTS, kp.sigma_m_s)), band=band, long_components=long_components,
-        uw=np.zeros(line_f.size), rho_uw=np.zeros(node_f.size),  # u and w are synthesised independently
-        reference=reference, variance_modes=modes,
-    )
+        modes[c] = np.array([top_modes(coherency_matrix({dx: lags(dx, f) for dx in plane_separations(grid)}, grid))
+                             for f in line_f[1 : N_MODE_LINES + 1]])  # fmt: skip
+    return modes

@@ -124,23 +124,48 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
     Theory
         Lattice sums per record line [m^2 s^-2] (interpolated from k1 nodes on long records) and rho_bar [-].
     """
-    grid, seps, mask = design.grid, design.separations, design.rotor_mask
+    grid = design.grid
     params = mann_params_from_attrs(attrs)
     box = mann_box_from_attrs(attrs, grid)
     U = float(attrs["U_m_s"])
     lat = MannLattice(params, grid, box, U)
-    nt = grid.nt
-    line_f = line_frequencies(nt, grid.dt_s)
+    line_f = line_frequencies(grid.nt, grid.dt_s)
     k1_lines = 2 * np.pi * line_f / U
-    if line_f.size * box.nyp * box.nzp <= EXACT_LATTICE_POINTS:
-        k1_nodes = k1_lines
-    else:
-        k1_nodes = np.concatenate([[0.0], np.geomspace(k1_lines[1], k1_lines[-1], N_LINE_NODES)])
     dxs = plane_separations(grid)
     # rotor average transfer |H_R|^2 on the lattice (the grid's rotor points inside the box)
     mask_box = np.zeros((box.nyp, box.nzp))
-    mask_box[: grid.ny, : grid.nz] = mask
-    h2 = np.abs(np.fft.fft2(mask_box)) ** 2 / mask.sum() ** 2
+    mask_box[: grid.ny, : grid.nz] = design.rotor_mask
+    h2 = np.abs(np.fft.fft2(mask_box)) ** 2 / design.rotor_mask.sum() ** 2
+    lines = _line_sums(lat, design, k1_lines, dxs, h2, U)
+    # the continuous model band-limited to the grid (sigma_i metrics), smooth in k1: interpolated log-log
+    bl_k1 = np.geomspace(k1_lines[1], k1_lines[-1], N_RHO_NODES)
+    band_lim = band_limited_spectra(params, grid, bl_k1)
+    auto_model = {}
+    for i, c in enumerate(COMPONENTS):
+        spline = CubicSpline(np.log(bl_k1), np.log(band_lim[i]))
+        auto_model[c] = np.concatenate([[0.0], np.exp(spline(np.log(k1_lines[1:]))) * lat.dk1])
+    node_f = design.node_freqs()
+    acc, rho_rews = _node_correlations(lat, design, node_f, dxs, h2, U)
+    modes = _variance_modes(lat, grid, dxs, k1_lines[1 : N_MODE_LINES + 1], U, box.nyp * box.nzp)
+    var = variances(params)
+    return Theory(
+        model="mann", nt=grid.nt, line_f=line_f, **lines, node_f=node_f,
+        rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
+        sigma_model={c: math.sqrt(var[c + c]) for c in COMPONENTS}, band=_band(design, box, U), rho_uw=acc.uw,
+        long_components="u", auto_model=auto_model, reference=partial(_mann_reference, params, design, U),
+        variance_modes=modes,
+    )  # fmt: skip
+
+
+def _line_sums(lat: MannLattice, design: SamplingDesign, k1_lines: np.ndarray, dxs: dict, h2: np.ndarray,
+               U: float) -> dict:  # fmt: skip
+    """Theory's per-line lattice sums {auto, yz, long, rews, uw} [m^2 s^-2]: summed at every record line on small
+    lattices, else at N_LINE_NODES k1 nodes and interpolated (auto spectra log-log, the others as ratios to them)."""
+    grid, seps = design.grid, design.separations
+    if k1_lines.size * lat.box.nyp * lat.box.nzp <= EXACT_LATTICE_POINTS:
+        k1_nodes = k1_lines
+    else:
+        k1_nodes = np.concatenate([[0.0], np.geomspace(k1_lines[1], k1_lines[-1], N_LINE_NODES)])
     phase = {s: np.exp(1j * (lat.k2 * s[0] * grid.dy_m + lat.k3 * s[1] * grid.dz_m)) for s in seps}
     nn = k1_nodes.size
     f_nodes = {c: np.empty(nn) for c in COMPONENTS}
@@ -163,24 +188,21 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
     def ratio_lines(values, ref):
         return values if exact else _interp_lines(k1_nodes, values / ref, k1_lines, False)
 
-    # the continuous model band-limited to the grid (sigma_i metrics), smooth in k1: interpolated log-log
-    bl_k1 = np.geomspace(k1_lines[1], k1_lines[-1], N_RHO_NODES)
-    band_lim = band_limited_spectra(params, grid, bl_k1)
-    auto_model = {}
-    for i, c in enumerate(COMPONENTS):
-        spline = CubicSpline(np.log(bl_k1), np.log(band_lim[i]))
-        auto_model[c] = np.concatenate([[0.0], np.exp(spline(np.log(k1_lines[1:]))) * lat.dk1])
     norm13 = np.sqrt(f_nodes["u"] * f_nodes["w"])
     uw = f13 if exact else ratio_lines(f13, norm13) * np.sqrt(auto["u"] * auto["w"])
     yz = {c: {s: yz_nodes[c][s] if exact else ratio_lines(yz_nodes[c][s], f_nodes[c]) * auto[c] for s in seps}
-          for c in COMPONENTS}
+          for c in COMPONENTS}  # fmt: skip
     long = {dx: v if exact else ratio_lines(v, f_nodes["u"]) * auto["u"] for dx, v in long_nodes.items()}
     rews = rews_nodes if exact else ratio_lines(rews_nodes, f_nodes["u"]) * auto["u"]
+    return {"auto": auto, "yz": yz, "long": long, "rews": rews, "uw": uw}
 
-    # correlation sums at pairs of nodes: coherencies over all lags from the 2-D FFT of Theta_ii on the lattice
-    node_f = design.node_freqs()
+
+def _node_correlations(lat: MannLattice, design: SamplingDesign, node_f: np.ndarray, dxs: dict, h2: np.ndarray,
+                       U: float) -> tuple[RhoAccumulator, np.ndarray]:  # fmt: skip
+    """Correlation sums at pairs of frequency nodes: the coherencies over all lags from the 2-D FFT of Theta_ii on
+    the lattice (RhoAccumulator), and rho_bar of the rotor-effective wind (nodes x nodes)."""
+    grid = design.grid
     acc = RhoAccumulator(design, node_f.size)
-    size = box.nyp * box.nzp
     slabs = [(phi[[0, 1, 2, 0], [0, 1, 2, 2]].copy(), inv_tau) for _, phi, inv_tau in lat.slabs(2 * np.pi * node_f / U)]
     phis = np.stack([p for p, _ in slabs])  # (nn, 4, nyp, nzp): Phi_11, Phi_22, Phi_33, Phi_13
     inv_taus = np.stack([t for _, t in slabs])  # (nn, nyp, nzp)
@@ -198,7 +220,12 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
         acc.add_uw(np.abs(lags(3)) ** 2 / (diag[:, 0] * diag[:, 2])[:, None, None], mult)
         c_r = np.sum(phis[:, 0] * decay * h2, axis=(1, 2)) / r0
         rho_rews += mult * np.outer(c_r, c_r) / grid.nx**2
-    modes = _variance_modes(lat, grid, dxs, k1_lines[1 : N_MODE_LINES + 1], U, size)
+    return acc, rho_rews
+
+
+def _band(design: SamplingDesign, box, U: float) -> dict:
+    """The design's band [rad/m] with the box's extent and lattice spacing, and a note saying what was summed."""
+    grid = design.grid
     band = design.band(U)
     band.update(
         box_y_m=box.nyp * grid.dy_m,
@@ -211,14 +238,7 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
             f"({box.nyp * grid.dy_m:g} m x {box.nzp * grid.dz_m:g} m)"
         ),
     )
-    var = variances(params)
-    return Theory(
-        model="mann", nt=nt, line_f=line_f, auto=auto, yz=yz, long=long, rews=rews, node_f=node_f,
-        rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
-        sigma_model={c: math.sqrt(var[c + c]) for c in COMPONENTS}, band=band, uw=uw, rho_uw=acc.uw,
-        long_components="u", auto_model=auto_model, reference=partial(_mann_reference, params, design, U),
-        variance_modes=modes,
-    )
+    return band
 
 
 def _variance_modes(lat: MannLattice, grid: Grid, dxs: dict, k1: np.ndarray, U: float, size: int) -> dict:
