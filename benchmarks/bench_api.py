@@ -12,7 +12,9 @@ Against each, in the same process: ``synthesis``, the runs layer's synthesis wit
 it (the stencil as run_mann chooses it: on demand for one snapshot, else built; MannSnapshots with run_mann's
 threads and two buffers; every plane yielded and dropped). This is the in-memory figure of bench_mann.py's box case
 (the paper case of bench_mann.py also writes a store). Both are warm (imports, compiled kernels and a first call
-excluded) and timed alternately ``--repeat`` times; the fastest of each and their ratio to the synthesis are printed
+excluded) and timed alternately ``--repeat`` times, with two more references: ``synthesis + the field's memory``
+(the synthesis after allocating and writing three float32 arrays of the field's shape: what returning the field
+costs whatever computes it) and ``run_mann to a store`` (the store in a temporary directory); the fastest of each and their ratio to the synthesis are printed
 (the machine may be shared: the ratio of the two in one process is the comparable figure). The load average is
 printed before and after. ``--through-store``: also the field made as turbgen.mann() made it before (a store in a
 temporary directory, loaded back).
@@ -58,6 +60,27 @@ def synthesis(run) -> None:
         pass
 
 
+def synthesis_keeping(run) -> None:
+    """:func:`synthesis` plus the fresh memory of the field the API returns: three float32 arrays of the grid's shape
+    allocated and written once (what any function returning the field pays, measured apart from the API's code)."""
+    import numpy as np
+
+    field = [np.empty(run.grid.shape, dtype=np.float32) for _ in range(3)]
+    for a in field:
+        a.fill(0.0)
+    synthesis(run)
+
+
+def store_run(run) -> None:
+    """``run_mann`` of ``run`` into a store in a temporary directory (the paper case's figure of bench_mann.py)."""
+    import tempfile
+
+    from turbgen.runs.mann import run_mann
+
+    with tempfile.TemporaryDirectory(dir=os.environ.get("BENCH_TMP")) as tmp:
+        run_mann(run, os.path.join(tmp, "f.zarr"))
+
+
 def through_store(kw: dict) -> None:
     """The field as turbgen.mann() made it without ``out`` before it was made in memory: a store in a temporary
     directory, loaded back."""
@@ -79,9 +102,11 @@ def measure(case: str, nt: int | None, repeat: int, store: bool) -> dict:
     ds = turbgen.mann(**kw)  # warm: imports, compiled kernels, first touch of the process's memory
     run = MannRun.from_attrs(ds.attrs)
     del ds
-    calls = {"api": lambda: turbgen.mann(**kw), "synthesis": lambda: synthesis(run)}
+    calls = {"api": lambda: turbgen.mann(**kw), "synthesis": lambda: synthesis(run),
+             "synthesis + the field's memory": lambda: synthesis_keeping(run),
+             "run_mann to a store": lambda: store_run(run)}  # fmt: skip
     if store:
-        calls["through a store"] = lambda: through_store(kw)
+        calls["through a store (loaded)"] = lambda: through_store(kw)
     for call in list(calls.values())[1:]:
         call()
     seconds = {name: [] for name in calls}

@@ -8,6 +8,9 @@ The same checks (finite blocks of the plane's shape, every sample written), the 
 attributes (the caller's, the writer's, ``rms_m_s`` from the same sums, the marker) as
 :class:`turbgen.store.writer.StoreWriter` and a store opened by ``xarray.open_zarr`` -- only ``created_utc``
 differs (the time it was made). Used by ``turbgen.mann()`` / ``turbgen.kaimal()`` without ``out``.
+
+The arrays are (t, x, y, z) as a store's, held plane by plane in memory (each plane's (t, y, z) block contiguous, as
+the generators write them): ``numpy.ascontiguousarray`` gives a C-ordered copy where one is needed.
 """
 
 from __future__ import annotations
@@ -43,7 +46,12 @@ class MemoryWriter:
     def __init__(self, grid: Grid, attrs: dict):
         self.grid = grid
         self._attrs = with_writer_attrs(validated_caller_attrs(attrs, grid), grid)
-        self._arrays = {c: np.empty(grid.shape, dtype=np.float32) for c in layout.COMPONENTS}
+        # plane-major memory: each plane's (t, y, z) block is contiguous, so a generator writes it as it writes its own
+        # buffers (a plane of a C-ordered (t, x, y, z) array is strided by nx
+        # planes, which slows the generator's transposing copy: benchmarks/README.md, bench_api)
+        nt, nx, ny, nz = grid.shape
+        self._arrays = {c: np.empty((nx, nt, ny, nz), dtype=np.float32).transpose(1, 0, 2, 3)
+                        for c in layout.COMPONENTS}  # fmt: skip
         self._written = {c: np.zeros((grid.nx, grid.nt), dtype=bool) for c in layout.COMPONENTS}
         self._squares: dict[tuple, float] = {}
         self._bookkeeping = threading.Lock()
