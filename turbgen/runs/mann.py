@@ -90,20 +90,22 @@ def describe(run: MannRun, out: str | Path, threads: int, with_stencil: bool = T
     ]
 
 
-def _touch_while_loading_kernels(gen: MannSnapshots) -> None:
+def _touch_while_loading_kernels(gen: MannSnapshots, output: bool = True) -> None:
     """First touch of a single snapshot's buffers (0.5 GiB for an 8192 x 64 x 64 box) while the compiled noise loads.
 
     numba's first call in a process sets up its typing registries (Python, holding the GIL), and a first touch of
     fresh memory can be slow and erratic (numpy's fills leave the GIL): the spectra are touched in a thread
     meanwhile, then the output
     plane here (on two cores when the kernels were loaded already, as in a sweep's worker). Returns when all is
-    touched, so no fill races the synthesis; the field is the same.
+    touched, so no fill races the synthesis; the field is the same. ``output=False``: the planes go to the caller's
+    arrays (generate's ``target``), so no output plane is allocated.
     """
-    spectra, output = gen.single_buffers()
+    spectra, plane = gen.single_buffers(output)
     with ThreadPoolExecutor(1) as pool:
         touched = pool.submit(spectra.fill, 0)
         complex_normal(0, 0, 0, np.empty(1, dtype=np.complex64))  # the stream is discarded: only the load counts
-        output.fill(0.0)
+        if plane is not None:
+            plane.fill(0.0)
         touched.result()
 
 
@@ -137,7 +139,7 @@ def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
     gen = MannSnapshots(stencil, g.ny, g.nz, threads, buffers=2)
     if stencil.coef is None:  # one snapshot, its stencil computed on demand: no compiled code has run yet
-        _touch_while_loading_kernels(gen)
+        _touch_while_loading_kernels(gen, output=not in_place)
     show = progress and sys.stderr.isatty()
     bar = tqdm(total=g.nx, unit="plane", desc="mann", file=sys.stderr, disable=not show)
     # One write in flight while the generator computes the next item (it alternates two buffers);

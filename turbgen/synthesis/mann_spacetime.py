@@ -229,14 +229,14 @@ class MannSnapshots:
                 self._synthesise(pool, seed, m, None if m == 0 else float(t - times[m - 1]))
                 yield m, self._spectra[:, :, : self._n_slabs]
 
-    def single_buffers(self) -> tuple[np.ndarray, np.ndarray]:
+    def single_buffers(self, output: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
         """Allocate now what a single snapshot uses and return it: (spectra, output plane), so a caller can touch that
         fresh memory ahead of :meth:`generate` (writing them changes nothing: every value is written before it is
-        read)."""
+        read). ``output=False`` (for :meth:`generate` with a ``target``): no output plane, None in its place."""
         self._allocate(n_snapshots=1)
-        if not self._outputs:
+        if output and not self._outputs:
             self._outputs.append(pyfftw.empty_aligned((self.box.nt, self.ny, self.nz), np.float32, n=_PAGE))
-        return self._spectra, self._outputs[0]
+        return self._spectra, self._outputs[0] if output else None
 
     # -- internals ------------------------------------------------------------------------
     def _allocate(self, n_snapshots: int) -> None:
