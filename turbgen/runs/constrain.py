@@ -22,6 +22,7 @@ import math
 import sys
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -248,7 +249,8 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
                        conditional_mean: bool = False, threads: int | None = None,
                        progress: bool = False):  # fmt: skip
     """The conditioned field of ``run``: (solver report, iterator of (plane index, component, field (nt, ny, nz)
-    float32 [m/s])), the generator's order; each array is a reused buffer: consume it before asking for the next.
+    float32 [m/s])), the generator's order; two reused buffers alternate: an array stays valid until the item after
+    the next is asked for.
 
     A conditional sample u_s + C H^T S^-1 (d - H u_s - eps_s): the first pass (here, before returning) generates u_s
     and measures it, the iterator generates it again and adds the correction, read plane by plane from a scratch
@@ -257,7 +259,7 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
     ``conditional_mean``: C H^T S^-1 d. ``cov``: stream_system(run, stencil, placed).
     """
     g = run.grid
-    gen = MannSnapshots(stencil, g.ny, g.nz, default_threads(threads))
+    gen = MannSnapshots(stencil, g.ny, g.nz, default_threads(threads), buffers=2)  # write_planes' background writes
     measured = eps = None
     if not conditional_mean:
         measured = unconstrained_measurement(run, stencil, placed, gen.threads, progress)
@@ -419,27 +421,44 @@ def _write_conditioned(open_writer, run: MannRun, files, placed: PlacedData, scr
     report, planes = conditioned_planes(run, stencil, placed, cov, scratch_dir, conditional_mean=conditional_mean,
                                         threads=threads, progress=progress)  # fmt: skip
     with open_writer() as writer:
-        remeasured, sums = write_planes(writer, placed, planes, lambda: _bar("write", g.nx, "plane", progress))
+        remeasured, sums = write_planes(writer, placed, planes, lambda: _bar("write", g.nx, "plane", progress),
+                                        background=True)  # fmt: skip
         record = constraint_record(files, placed, report, remeasured, conditional_mean)
         writer.add_attrs(constraints=record)
     return record, sums
 
 
-def write_planes(writer, placed: PlacedData, planes, bar=None) -> tuple[np.ndarray, dict]:
+def write_planes(writer, placed: PlacedData, planes, bar=None, background: bool = False) -> tuple[np.ndarray, dict]:
     """Write the conditioned ``planes`` ((plane index, component, field (nt, ny, nz)) [m/s]) with ``writer`` and
     measure them again: (H u_c (M, nt/q), {component: [sum, sum of squares]}). ``bar()``: a progress bar (one step
-    per plane), made when the first plane arrives (after the correction's own bar)."""
+    per plane), made when the first plane arrives (after the correction's own bar). ``background``: each plane is
+    measured and written in a thread while the next is made (the planes must come in two alternating buffers, as
+    MannSnapshots' with ``buffers=2``); the results do not depend on it."""
     remeasured = np.zeros(placed.data.shape)
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
     progress = None
-    for ix, comp, value in planes:
-        progress = progress or (bar() if bar is not None else None)
-        if progress is not None:
-            progress.update(int(comp == COMPONENTS[-1]))
+
+    def keep(ix: int, comp: str, value: np.ndarray) -> None:
         cond.measure(placed.streams, ix, COMPONENTS.index(comp), value, remeasured)
         total, squares = writer.write(comp, ix, value, squares=True)
         sums[comp][0] += total
         sums[comp][1] += squares
+
+    # at most one plane in flight; leaving the pool waits for it, so an exception never races the writer's clean-up
+    with ThreadPoolExecutor(1) as pool:
+        pending = None
+        for ix, comp, value in planes:
+            progress = progress or (bar() if bar is not None else None)
+            if progress is not None:
+                progress.update(int(comp == COMPONENTS[-1]))
+            if pending is not None:
+                pending.result()
+            if background:
+                pending = pool.submit(keep, ix, comp, value)
+            else:
+                keep(ix, comp, value)
+        if pending is not None:
+            pending.result()
     if progress is not None:
         progress.close()
     return remeasured, sums
