@@ -251,7 +251,7 @@ class _GroupFFT:
     the arrays reused, transformed in place): the same plans, hence the same rounding, whatever the thread count of
     the run. ``keep_z``: a transform exact on the (output) columns z < keep_z only (along z on every row, then along
     y on those columns); ``rows`` (first, end): of an input zero outside those rows (along z on them only, then
-    along y)."""
+    along y). Single precision: the correction they carry is added to the float32 field's complex64 spectra."""
 
     def __init__(self, tail: tuple[int, ...], direction: str = "FFTW_FORWARD", keep_z: int | None = None,
                  rows: tuple[int, int] | None = None):  # fmt: skip
@@ -262,7 +262,7 @@ class _GroupFFT:
         """(array, plan) for a group of ``n`` slabs."""
         if n not in self._plans:
             flags = ("FFTW_ESTIMATE",)
-            inp = pyfftw.empty_aligned((n, *self.tail), np.complex128)
+            inp = pyfftw.empty_aligned((n, *self.tail), np.complex64)
             kept = inp if self.keep_z is None else inp[..., : self.keep_z]
             nonzero = inp if self.rows is None else inp[..., self.rows[0] : self.rows[1], :]
             plans = [pyfftw.FFTW(nonzero, nonzero, axes=(-1,), direction=self.direction, flags=flags, threads=1),
@@ -675,10 +675,10 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
             inv_tau = slab_inv_tau(stencil, i)
             rho = (np.ones((len(distinct), box.nyp * box.nzp)) if inv_tau is None  # exp once per distinct step
                    else np.exp(-distinct[:, None] * inv_tau.reshape(1, -1)))  # fmt: skip
-            kernels.chain_correction(f[b].view(np.float64), rho, step_class, _slab_phi(stencil, i), rows,
-                                     g[b].reshape(len(planes_out), 3, -1).view(np.float64))  # fmt: skip
+            kernels.chain_correction(f[b].view(np.float32), rho, step_class, _slab_phi(stencil, i), rows,
+                                     g[b].reshape(len(planes_out), 3, -1).view(np.float32))  # fmt: skip
         plan.execute()  # unnormalised: sum_(j, l) e^(+2 pi i (j y / nyp + l z / nzp))
-        return np.moveaxis(g[..., :ny, :nz], 0, 2).astype(np.complex64)
+        return np.moveaxis(g[..., :ny, :nz], 0, 2).copy()
 
     def workspace() -> tuple[_GroupFFT, _GroupFFT]:
         back = _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), direction="FFTW_BACKWARD", keep_z=nz)
@@ -710,7 +710,7 @@ def workspace_bytes(box, streams: Streams, n_out: int) -> int:
     points, half = box.nyp * box.nzp, box.nyp * (box.nzp // 2 + 1)
     lag = basis * (4 * points * 8 + half * 16) + n_pairs * half * 16  # psi, inputs (whole plane: twice), spectra
     chain = n_out + len(streams.used_planes())
-    correction = SLAB_GROUP * (chain + 2 * n_out) * 3 * points * 16
+    correction = SLAB_GROUP * (chain + 2 * n_out) * 3 * points * 8
     return max(lag, correction)
 
 

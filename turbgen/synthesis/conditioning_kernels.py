@@ -60,10 +60,11 @@ def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, cls, l
 
 @numba.njit(nogil=True, cache=True)
 def chain_correction(f, rho, step, phi, rows, out):
-    """out[r] = Phi sum_q rho_(rows[r] q) f_q per (k2, k3) point: ``f`` (P, 3, 2 J) float64 the planes' complex
+    """out[r] = Phi sum_q rho_(rows[r] q) f_q per (k2, k3) point: ``f`` (P, 3, 2 J) float32 the planes' complex
     spectra in time order as (real, imaginary) pairs, ``rho`` (S, J) the Ornstein-Uhlenbeck factors of the S distinct
     steps between neighbours and ``step`` (P - 1,) the step of each neighbour pair (their products are the factors
-    between any two planes), ``phi`` (3, 3, J) real symmetric, ``out`` (len(rows), 3, 2 J) float64 pairs.
+    between any two planes), ``phi`` (3, 3, J) real symmetric, ``out`` (len(rows), 3, 2 J) float32 pairs (the sums
+    run in float64).
 
     The sum runs forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once.
     Real arithmetic (rho and Phi are real), in blocks of points whose planes stay in cache through the passes, with
@@ -120,7 +121,7 @@ def _step(rho, previous, fresh, out):
 @numba.njit(nogil=True, cache=True)
 def scatter_terms(spec_w, term_stream, grid_index, term_shift, term_weight, slabs, nt, grid):
     """grid[b, grid_index[t]] += W_a(i) w_t exp(-2 pi i i s_t / nt) for the slabs i = slabs[b] (``spec_w`` (M, B) the
-    streams' weight spectra on those slabs, ``grid`` (B, planes 3 nyp nzp) complex128, zeroed by the caller); the
+    streams' weight spectra on those slabs, ``grid`` (B, planes 3 nyp nzp) complex64, zeroed by the caller); the
     phases once per slab and distinct shift."""
     phases = np.empty(term_shift.max() + 1, np.complex128)
     for b in range(len(slabs)):
