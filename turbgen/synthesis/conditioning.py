@@ -157,17 +157,28 @@ def spectra_samples(streams: Streams, spectra: np.ndarray, nt: int) -> np.ndarra
     return np.take_along_axis(full, index, axis=1)
 
 
+def _slab_components(stencil: MannStencil, i: int, rows: int) -> np.ndarray:
+    """Phi_i = 2 C C^T's six components (6, rows nzp) float64 in COMPONENT_PAIRS order on the rows 0 .. rows - 1 of
+    slab ``i`` (prior_spectrum.slab_spectrum's values, the same operations: kernels.slab_components)."""
+    box = stencil.box
+    scratch = None if stencil.coef is not None else np.empty((4, 1, box.nk2_half, box.nzp), np.float32)
+    coef, j = stencil.coefficients(i, i + 1, scratch)
+    cells = stencil.cells_in(i, i + 1)
+    out = np.empty((len(COMPONENT_PAIRS), rows, box.nzp))
+    kernels.slab_components(coef, j, float(box.k1()[i]), box.k2(), box.k3() ** 2, stencil.cell_index[cells, 1],
+                            stencil.cell_index[cells, 2], stencil.cell_factor[cells].astype(float), out)  # fmt: skip
+    return out.reshape(len(COMPONENT_PAIRS), -1)
+
+
 def _slab_phi(stencil: MannStencil, i: int) -> np.ndarray:
     """Phi_i = 2 C C^T (3, 3, nyp nzp) (prior_spectrum.slab_spectrum, elementwise), symmetrised under k -> -k on the
     k1 = 0 / Nyquist slabs (their real part: see prior_spectrum)."""
-    c = slab_factor(stencil, i).reshape(3, 3, -1)
-    phi = np.empty_like(c)
-    for a in range(3):
-        for b in range(a, 3):
-            phi[a, b] = 2.0 * (c[a, 0] * c[b, 0] + c[a, 1] * c[b, 1] + c[a, 2] * c[b, 2])
-            phi[b, a] = phi[a, b]
+    box = stencil.box
+    components = _slab_components(stencil, i, box.nyp)
+    phi = np.empty((3, 3, components.shape[1]))
+    for n, (a, b) in enumerate(COMPONENT_PAIRS):
+        phi[a, b] = phi[b, a] = components[n]
     if slab_weight(stencil, i) == 1.0:
-        box = stencil.box
         grid = phi.reshape(3, 3, box.nyp, box.nzp)
         phi = (0.5 * (grid + np.roll(grid[..., ::-1, ::-1], 1, axis=(-2, -1)))).reshape(3, 3, -1)
     return phi
@@ -377,9 +388,12 @@ def _slab_system(stencil: MannStencil, i: int, lags: np.ndarray, keys: _Keys, ba
     box = stencil.box
     symmetric = slab_weight(stencil, i) == 1.0  # symmetrised under k -> -k, as _slab_phi (1/tau_e is even in k)
     rows = box.nyp if symmetric else transform.rows  # symmetrised on the whole plane, then cut to the rows used
-    factor = slab_factor(stencil, i).reshape(3, 3, box.nyp, box.nzp)[:, :, :rows].reshape(3, 3, -1)
-    psi = np.empty((basis.n, rows * box.nzp))  # 2 (C^T n) . (C^T n'), C the slab's factor (prior_spectrum)
-    kernels.direction_products(factor, basis.directions, basis.first, basis.second, psi)
+    if basis.is_pairs:  # 2 (C^T n) . (C^T n') = n^T Phi n', C the slab's factor (prior_spectrum)
+        factor = slab_factor(stencil, i).reshape(3, 3, box.nyp, box.nzp)[:, :, :rows].reshape(3, 3, -1)
+        psi = np.empty((basis.n, rows * box.nzp))
+        kernels.direction_products(factor, basis.directions, basis.first, basis.second, psi)
+    else:  # Phi's components themselves
+        psi = _slab_components(stencil, i, rows)
     inv_tau = slab_inv_tau(stencil, i)
     inv_tau = np.empty(0) if inv_tau is None else inv_tau.reshape(box.nyp, box.nzp)[:rows].reshape(-1)
     x = np.empty((basis.n, rows, box.nzp)) if symmetric else transform.x

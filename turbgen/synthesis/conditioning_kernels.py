@@ -231,3 +231,45 @@ def combine_pairs(window, weights, out):
                 src = window[b]
                 for n in range(len(row)):
                     row[n] += w * src[n]
+
+
+@numba.njit(nogil=True, cache=True)
+def slab_components(coef, j, k1, k2, k3sq, cell_row, cell_col, cell_factor, out):
+    """Phi = 2 C C^T's six components (COMPONENT_PAIRS order: 11, 22, 33, 13, 12, 23) of one slab on its rows
+    0 .. R - 1 (``out`` (6, R, nzp) float64), from the stencil's compact coefficients: ``coef`` (4, S, nyp//2 + 1,
+    nzp) float32 (A, P, Z1, Z2; Z2 odd in k2, the rows k2 < 0 read from their mirror), ``j`` the slab in it, ``k1``
+    [rad/m], ``k2`` (nyp,) and ``k3sq`` (nzp,) [rad/m, rad^2/m^2]; the axis cells' factors (n, 3, 3) float64 at
+    (``cell_row``, ``cell_col``) replace the compact form. The same operations as mann_oracle.slab_factor followed
+    by the products (u = P n1 - A k2 n2 + Z1 (k2 n0 - k1 n1), v = -P n0 + A k1 n2 + Z2 (k2 n0 - k1 n1),
+    w = W (k2 n0 - k1 n1), W = (A^2 q + P^2) / (A k^2)), one point at a time."""
+    nyp, half = len(k2), coef.shape[2] - 1
+    c = np.empty((3, 3))
+    for r in range(out.shape[1]):
+        src, sign = (r, 1.0) if r <= half else (nyp - r, -1.0)
+        kk2 = k2[r]
+        q = k1 * k1 + kk2 * kk2
+        for col in range(out.shape[2]):
+            a = np.float64(coef[0, j, src, col])
+            p = np.float64(coef[1, j, src, col])
+            z1 = np.float64(coef[2, j, src, col])
+            z2 = sign * np.float64(coef[3, j, src, col])
+            den = a * (q + k3sq[col])
+            w = (a * a * q + p * p) / den if den != 0.0 else 0.0
+            c[0, 0], c[0, 1], c[0, 2] = z1 * kk2, p - z1 * k1, -a * kk2
+            c[1, 0], c[1, 1], c[1, 2] = -p + z2 * kk2, -z2 * k1, a * k1
+            c[2, 0], c[2, 1], c[2, 2] = w * kk2, -w * k1, 0.0
+            _phi_of(c, out, r, col)
+    for n in range(len(cell_row)):
+        if cell_row[n] < out.shape[1]:
+            _phi_of(cell_factor[n], out, cell_row[n], cell_col[n])
+
+
+@numba.njit(nogil=True, cache=True, inline="always")
+def _phi_of(c, out, r, col):
+    """out[:, r, col] = the six components of 2 c c^T."""
+    out[0, r, col] = 2.0 * (c[0, 0] * c[0, 0] + c[0, 1] * c[0, 1] + c[0, 2] * c[0, 2])
+    out[1, r, col] = 2.0 * (c[1, 0] * c[1, 0] + c[1, 1] * c[1, 1] + c[1, 2] * c[1, 2])
+    out[2, r, col] = 2.0 * (c[2, 0] * c[2, 0] + c[2, 1] * c[2, 1] + c[2, 2] * c[2, 2])
+    out[3, r, col] = 2.0 * (c[0, 0] * c[2, 0] + c[0, 1] * c[2, 1] + c[0, 2] * c[2, 2])
+    out[4, r, col] = 2.0 * (c[0, 0] * c[1, 0] + c[0, 1] * c[1, 1] + c[0, 2] * c[1, 2])
+    out[5, r, col] = 2.0 * (c[1, 0] * c[2, 0] + c[1, 1] * c[2, 1] + c[1, 2] * c[2, 2])
