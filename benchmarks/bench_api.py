@@ -14,8 +14,9 @@ threads and two buffers; every plane yielded and dropped). This is the in-memory
 (the paper case of bench_mann.py also writes a store). Both are warm (imports, compiled kernels and a first call
 excluded) and timed alternately ``--repeat`` times, with two more references: ``synthesis + the field's memory``
 (the synthesis after allocating and writing three float32 arrays of the field's shape: what returning the field
-costs whatever computes it) and ``run_mann to a store`` (the store in a temporary directory); the fastest of each and their ratio to the synthesis are printed
-(the machine may be shared: the ratio of the two in one process is the comparable figure). The load average is
+costs whatever computes it) and ``run_mann to a store`` (the store in a temporary directory); the fastest of each
+and their ratio to the synthesis are printed (the machine may be shared: ratios within one process are the
+comparable figures). The load average is
 printed before and after. ``--through-store``: also the field made as turbgen.mann() made it before (a store in a
 temporary directory, loaded back).
 """
