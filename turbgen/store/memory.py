@@ -47,8 +47,8 @@ class MemoryWriter:
         self.grid = grid
         self._attrs = with_writer_attrs(validated_caller_attrs(attrs, grid), grid)
         # plane-major memory: each plane's (t, y, z) block is contiguous, so a generator writes it as it writes its own
-        # buffers (a plane of a C-ordered (t, x, y, z) array is strided by nx
-        # planes, which slows the generator's transposing copy: benchmarks/README.md, bench_api)
+        # buffers (a plane of a C-ordered (t, x, y, z) array is strided by nx planes, which slows the generator's
+        # transposing copy: benchmarks/README.md, bench_api)
         nt, nx, ny, nz = grid.shape
         self._arrays = {c: np.empty((nx, nt, ny, nz), dtype=np.float32).transpose(1, 0, 2, 3)
                         for c in layout.COMPONENTS}  # fmt: skip
