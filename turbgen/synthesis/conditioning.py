@@ -395,15 +395,37 @@ def _slab_system(stencil: MannStencil, i: int, lags: np.ndarray, keys: _Keys, ba
     else:  # Phi's components themselves
         psi = _slab_components(stencil, i, rows)
     inv_tau = slab_inv_tau(stencil, i)
-    inv_tau = np.empty(0) if inv_tau is None else inv_tau.reshape(box.nyp, box.nzp)[:rows].reshape(-1)
+    inv_tau = None if inv_tau is None else inv_tau.reshape(box.nyp, box.nzp)[:rows].reshape(-1)
     x = np.empty((basis.n, rows, box.nzp)) if symmetric else transform.x
     out[...] = 0.0
-    for cls, lag in enumerate(lags):
-        kernels.lag_input(psi, lag, inv_tau, x.reshape(basis.n, -1))
+    for cls, rho in enumerate(_lag_factors(lags, inv_tau, psi.shape[1])):
+        kernels.lag_input(psi, rho, x.reshape(basis.n, -1))
         if symmetric:
             transform.x[...] = (0.5 * (x + np.roll(x[..., ::-1, ::-1], 1, axis=(-2, -1))))[:, : transform.rows]
         pairs = transform.execute()
         kernels.pair_sums(amp, keys.bounds, keys.dir, keys.iy, keys.iz, dir_pair, pair_class, cls, pairs, out)
+
+
+def _lag_factors(lags: np.ndarray, inv_tau: np.ndarray | None, n_points: int) -> Iterator[np.ndarray]:
+    """exp(-lag / tau_e) (J,) on a slab's J points for each lag class in turn (ones: frozen turbulence, ``inv_tau``
+    None). Lags evenly spaced to LAG_DECIMALS, 0, d, 2 d, ... (gates on evenly spaced planes), as the powers of
+    exp(-d / tau_e), one exp per point: the generator's own Ornstein-Uhlenbeck factor between planes n steps apart is
+    that product (mann_spacetime). The array yielded is updated in place for the next class."""
+    if inv_tau is None:
+        ones = np.ones(n_points)
+        yield from (ones for _ in lags)
+        return
+    n = np.arange(len(lags))
+    even = len(lags) > 2 and lags[0] == 0.0 and np.all(np.abs(lags - n * lags[1]) <= n * 10.0**-LAG_DECIMALS)
+    rho, step = np.empty(n_points), np.empty(n_points)
+    for cls, lag in enumerate(lags):
+        if even and cls >= 2:
+            kernels.times_into(rho, step)
+        else:
+            kernels.lag_factors(lag, inv_tau, rho)
+            if cls == 1:
+                step[:] = rho
+        yield rho
 
 
 def _direction_pairs(n_dir: int) -> np.ndarray:

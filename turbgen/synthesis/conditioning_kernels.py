@@ -155,19 +155,25 @@ def direction_products(factor, directions, first, second, psi):
 
 
 @numba.njit(nogil=True, cache=True)
-def lag_input(psi, lag, inv_tau, x):
-    """x[p, j] = exp(-lag inv_tau[j]) psi[p, j]: ``psi`` (pairs, J) (direction_products), ``lag`` [s], ``inv_tau``
-    (J,) 1/tau_e [1/s] (empty: frozen turbulence, factor 1), ``x`` (pairs, J) float64."""
-    n_points = psi.shape[1]
-    if len(inv_tau) == 0:
-        x[:] = psi
-        return
-    rho = np.empty(n_points)
-    for j in range(n_points):
-        rho[j] = np.exp(-lag * inv_tau[j])
+def lag_input(psi, rho, x):
+    """x[p, j] = rho[j] psi[p, j]: ``psi`` (B, J) the basis inputs, ``rho`` (J,) the lag's factors, ``x`` (B, J)."""
     for p in range(psi.shape[0]):
-        for j in range(n_points):
+        for j in range(psi.shape[1]):
             x[p, j] = psi[p, j] * rho[j]
+
+
+@numba.njit(nogil=True, cache=True)
+def lag_factors(lag, inv_tau, rho):
+    """rho[j] = exp(-lag inv_tau[j]) [1/s x s]."""
+    for j in range(len(inv_tau)):
+        rho[j] = np.exp(-lag * inv_tau[j])
+
+
+@numba.njit(nogil=True, cache=True)
+def times_into(a, b):
+    """a[j] *= b[j]."""
+    for j in range(len(a)):
+        a[j] *= b[j]
 
 
 @numba.njit(nogil=True, cache=True)
