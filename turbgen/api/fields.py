@@ -161,7 +161,8 @@ def mann(
     threads : int, optional
         Worker threads (default: all cores); never changes the field.
     stencil_cache : str or os.PathLike, optional
-        Directory keeping the stencil per parameter set and grid (reused by later seeds).
+        Directory keeping the stencil per parameter set and grid and, with ``constrain``, the system of the
+        measurements (both reused by later seeds).
     memory : int or str, optional
         Memory budget [bytes] or a size such as ``"4GiB"``; a field that does not fit is made out of core into
         ``out``, the same field (default: the available memory).

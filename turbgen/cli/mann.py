@@ -88,7 +88,8 @@ def _dask_client(scheduler, workers: int):
               "options typed on the command line override it.")  # fmt: skip
 @click.option("--threads", type=click.IntRange(min=1, max=LIMITS["threads"]), help="Worker threads (default: all cores); never changes the field.")
 @click.option("--stencil-cache", type=click.Path(file_okay=False),
-              help="Directory caching the stencil per parameter set and grid (reused by later seeds).")
+              help="Directory caching the stencil per parameter set and grid, and with --constrain the system of the "
+              "measurements (reused by later seeds).")
 @click.option("--memory", help="Memory budget, e.g. 256MiB, 4GiB (default: the available memory). A field whose "
               "snapshot does not fit is made out of core, in two passes through scratch files next to --out "
               "(the same field).")  # fmt: skip

@@ -34,6 +34,7 @@ from turbgen.lidar.sampling import PLANE_TOL_M
 from turbgen.resources import default_threads, require_disk, require_memory
 from turbgen.runs.correction_scratch import CorrectionScratch
 from turbgen.runs.mann import build_mann_stencil, memory_estimate_bytes
+from turbgen.runs.stencil_cache import cached_system, system_key
 from turbgen.spec.constraints import COMPONENTS, PointSeries, sensor_fluctuations
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
@@ -198,16 +199,32 @@ def measurement_noise(run: MannRun, placed: PlacedData) -> np.ndarray:
 
 
 def stream_system(run: MannRun, stencil, placed: PlacedData, threads: int | None = None,
-                  progress: bool = False) -> np.ndarray:  # fmt: skip
+                  progress: bool = False, cache_dir=None) -> np.ndarray:  # fmt: skip
     """The per-frequency matrices of S = H C H^T + R (turbgen.synthesis.conditioning.stream_covariance), ``threads``
-    slab groups at once (default: the machine's).
+    slab groups at once (default: the machine's). ``cache_dir``: H C H^T read from the stencil cache, or computed
+    and kept there (turbgen.runs.stencil_cache.cached_system; the same bits either way).
 
     Raises ParameterError when zero-noise measurements are linearly dependent (naming them)."""
-    with _bar("system", stencil.box.nk1, "slab", progress) as bar:
-        cov = cond.stream_covariance(stencil, placed.streams, run.plane_times_s(), placed.noise_m_s**2,
-                                     default_threads(threads), bar.update)  # fmt: skip
+    streams, times = placed.streams, run.plane_times_s()
+
+    def compute() -> np.ndarray:
+        with _bar("system", stencil.box.nk1, "slab", progress) as bar:
+            return cond.stream_covariance(stencil, streams, times, np.zeros(streams.n_streams),
+                                          default_threads(threads), bar.update)  # fmt: skip
+
+    if cache_dir is None:
+        cov = compute()
+    else:
+        arrays = {name: getattr(streams, name) for name in ("plane", "term_stream", "term_component", "term_iy",
+                                                              "term_iz", "term_weight", "term_shift", "offset")}
+        arrays["decimation"] = np.array(streams.decimation)
+        key = system_key(run.params, stencil.box, stencil.inv_tau is not None, times, arrays)
+        shape = (stencil.box.nt // streams.decimation, streams.n_streams, streams.n_streams)
+        cov = cached_system(cache_dir, key, shape, compute)
+    m = np.arange(streams.n_streams)
+    cov[:, m, m] += placed.noise_m_s**2
     if np.any(placed.noise_m_s == 0):
-        cond.check_singular(cov, placed.streams.names)
+        cond.check_singular(cov, streams.names)
     return cov
 
 
@@ -417,7 +434,7 @@ def _write_conditioned(open_writer, run: MannRun, files, placed: PlacedData, scr
     squares]})."""
     g = run.grid
     stencil = build_mann_stencil(run, cache_dir)
-    cov = stream_system(run, stencil, placed, threads, progress)
+    cov = stream_system(run, stencil, placed, threads, progress, cache_dir)
     report, planes = conditioned_planes(run, stencil, placed, cov, scratch_dir, conditional_mean=conditional_mean,
                                         threads=threads, progress=progress)  # fmt: skip
     with open_writer() as writer:
@@ -558,7 +575,7 @@ def estimate_ae(run: MannRun, placed: PlacedData, cache_dir=None) -> tuple[float
     """
     stencil = build_mann_stencil(run, cache_dir)
     a0 = run.params.ae
-    cov0 = stream_system(run, stencil, placed)
+    cov0 = stream_system(run, stencil, placed, cache_dir=cache_dir)
     m = placed.streams.n_streams
     noise = np.zeros_like(cov0)
     noise[:, np.arange(m), np.arange(m)] = placed.noise_m_s**2

@@ -6,12 +6,20 @@ serve another parameter set, and serves every ae (MannStencil.scaled). An entry 
 four float64 factors and, for evolving fields, 1/tau_e as a fifth (float64) array; it is built straight into the
 file and read back memory-mapped, so the factors never have to be resident. Entries are written to a temporary name
 and renamed; an unreadable or mismatched entry is rebuilt and replaced.
+
+The same directory keeps the per-frequency system S - R = H C H^T of constrained runs (:func:`cached_system`,
+``mann-stencil-system-KEY.npy``): it depends on the run's model and grid and on the measurement geometry, not on the
+seed or the data values, so every seed conditioned on the same measurements reads it instead of computing it again.
 """
 
 from __future__ import annotations
 
 import contextlib
+import hashlib
+import json
 import os
+from collections.abc import Callable
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -82,3 +90,45 @@ def _unit(params: MannParams, box: BoxShape, data: np.ndarray, with_tau: bool) -
     """The unit stencil of a mapped cache entry: factors (4, ...) float64 and 1/tau_e as float32 in memory."""
     inv_tau = data[4].astype(np.float32) if with_tau else None
     return MannStencil(params.with_ae(1.0), box, data[:4], inv_tau, None, None, energy="unit")
+
+
+SYSTEM_VERSION = 1  # part of a system entry's key: change it when stream_covariance's arithmetic changes
+
+
+def system_key(params: MannParams, box: BoxShape, with_tau: bool, times_s, arrays: dict) -> str:
+    """Hash of everything the system H C H^T of a constrained run depends on (cache file name): every parameter, ae
+    included, the box, the planes' relative times [s] and the streams' ``arrays`` (name -> array: planes, terms,
+    shifts, weights, decimation, offsets)."""
+    h = hashlib.sha256(json.dumps({"v": SYSTEM_VERSION, "params": asdict(params), "box": asdict(box),
+                                   "tau": with_tau}, sort_keys=True).encode())  # fmt: skip
+    for name, value in sorted({"times_s": np.asarray(times_s, dtype=np.float64), **arrays}.items()):
+        a = np.ascontiguousarray(value)
+        h.update(f"{name}:{a.dtype.str}:{a.shape}".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()[:24]
+
+
+def cached_system(cache_dir: str | Path, key: str, shape: tuple[int, ...], compute: Callable[[], np.ndarray]
+                  ) -> np.ndarray:  # fmt: skip
+    """The system (complex128, ``shape``) of ``key`` read from ``cache_dir``, or ``compute()`` d and stored there
+    (a temporary name, then renamed; an unreadable or mismatched entry is computed again and replaced). The entry
+    holds exactly the computed array: a run reading it gets the same bits as one computing it."""
+    path = Path(cache_dir) / f"mann-stencil-system-{key}.npy"
+    try:
+        data = np.load(path)
+        if data.shape == shape and data.dtype == np.complex128:
+            with contextlib.suppress(OSError):  # the hit renews the entry's recency (a size-capped cache evicts by it)
+                os.utime(path)
+            return data
+    except (OSError, ValueError):
+        pass  # missing or unreadable entry: computed and replaced
+    data = compute()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = temp_name(path)
+    try:
+        with open(tmp, "wb") as f:
+            np.save(f, data)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return data

@@ -20,7 +20,7 @@ from turbgen.service.catalog import Catalog
 from turbgen.service.run_ids import valid_id
 from turbgen.store.temporaries import remove_dead_temporaries
 
-STENCIL_GLOB = "mann-stencil-*.npy"  # the entries of turbgen.runs.stencil_cache
+STENCIL_GLOB = "mann-stencil-*.npy"  # the entries of turbgen.runs.stencil_cache (stencils and systems)
 DEFAULT_STENCIL_CACHE_BYTES = 4 * 2**30
 
 
