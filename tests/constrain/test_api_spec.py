@@ -145,8 +145,10 @@ def test_sweep_conditions_every_run_on_the_same_files(tmp_path):
     assert plan.to_dict()["constraints"]["noise_m_s"] == 0.1
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
                       silence_logs=logging.ERROR) as cluster, Client(cluster) as client:  # fmt: skip
-        result = run_sweep(plan, client=client, progress=False)
+        result = run_sweep(plan, client=client, progress=False, stencil_cache=tmp_path / "cache")
     assert result.ok
+    # the seeds shared one system (the key has no seed); the fields are the uncached command's, below
+    assert len(list((tmp_path / "cache").glob("mann-stencil-system-*.npy"))) == 1
     single = tmp_path / "single.zarr"
     res = CliRunner().invoke(cli, ["mann", "--preset", "neutral", "--U", "12", "--seed", "2", "--nt", "64",
                                    "--planes", "0,40", "--ny", "4", "--nz", "4", "--dy", "8", "--threads", "1",
@@ -157,6 +159,10 @@ def test_sweep_conditions_every_run_on_the_same_files(tmp_path):
     assert swept.attrs["constraints"]["n_samples"] == 128
     with pytest.raises(ParameterError, match="Mann runs only"):
         plan_from_mapping({**sweep, "models": ["mann", "kaimal"]}, base_dir=tmp_path)
+    res = CliRunner().invoke(cli, ["sweep", "--model", "mann", "--preset", "neutral", "--speeds", "12", "--seeds", "1",
+                                   "--out", str(tmp_path / "plain"), "--stencil-cache", str(tmp_path / "c2")])
+    assert res.exit_code == 2 and "--stencil-cache is for a sweep with constrain" in res.output
+    assert not (tmp_path / "plain").exists() and not (tmp_path / "c2").exists()
 
 
 @pytest.mark.parametrize("noise", [0.0, 0.1])

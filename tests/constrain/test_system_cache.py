@@ -83,3 +83,17 @@ def test_another_geometry_or_energy_is_another_entry_and_a_broken_entry_is_repla
     np.testing.assert_array_equal(_field(tmp_path / "d.zarr"), first)
     run_mann_constrained(run, tmp_path / "e.zarr", [_mast()], threads=1, cache_dir=cache)
     assert len(counted) == 4  # the replaced entry serves again
+
+
+def test_a_cache_that_cannot_keep_the_system_warns_and_gives_the_same_system(tmp_path):
+    from turbgen.runs.constrain import place, stream_system
+    from turbgen.runs.mann import build_mann_stencil
+
+    run = MannRun.from_mapping({"seed": 1, "grid": GRID})
+    stencil, placed = build_mann_stencil(run), place(run, [_mast()])
+    blocked = tmp_path / "a-file"
+    blocked.write_text("not a directory")
+    with pytest.warns(RuntimeWarning, match="did not keep the system"):
+        cov = stream_system(run, stencil, placed, threads=1, cache_dir=blocked)
+    np.testing.assert_array_equal(cov, stream_system(run, stencil, placed, threads=1))
+    assert blocked.read_text() == "not a directory"

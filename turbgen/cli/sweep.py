@@ -46,9 +46,12 @@ def _split(text: str | None) -> list[str] | None:
               help="--dlc: format of the exported wind files.")
 @click.option("--memory", help="memory budget of each run, e.g. 4GiB: Mann fields that do not fit are made out of "
               "core (turbgen mann --memory), the same fields")  # fmt: skip
+@click.option("--stencil-cache", type=click.Path(file_okay=False),
+              help="a sweep with constrain: directory caching the stencil and the system of the measurements, which "
+              "its seeds then share (turbgen mann --stencil-cache); the workers must see it at the same path")
 def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, gates, ny, nz, dy, dz, hub_height,
           chunks, workers, scheduler, validate, lidar, out, dlc, iec_class, v_in, v_out, export_format,
-          memory):  # fmt: skip
+          memory, stencil_cache):  # fmt: skip
     """Generate every field of a sweep (resumable: complete stores are kept), write DIR/manifest.json/.csv.
 
     Either --config FILE (command-line --out, --workers, --scheduler, --validate and --chunks
@@ -75,7 +78,8 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
     if dlc is not None:
         given = [n for n, v in [("--config", config), ("--preset", presets), ("--speeds", speeds),
                                 ("--presets-file", presets_file), ("--lidar", lidar), ("--memory", memory),
-                                ("--validate", validate)] if v is not None]  # fmt: skip
+                                ("--validate", validate), ("--stencil-cache", stencil_cache)]
+                 if v is not None]  # fmt: skip
         if given or not iec_class or not out or (models is not None and "," in models):
             raise click.UsageError(f"--dlc takes --class, --out and one --model; it sets presets and speeds itself"
                                    f"{' (remove ' + ', '.join(given) + ')' if given else ''}")
@@ -114,7 +118,10 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
 
     budget = parse_size(memory, "--memory") if memory is not None else None
     check_memory_budget(plan.runs, budget, plan.chunk_t)  # (run_sweep checks it too) before any line is printed
-    result = run_sweep(plan, progress=True, memory_bytes=budget)
+    if stencil_cache is not None and plan.constraints is None:
+        raise click.UsageError("--stencil-cache is for a sweep with constrain (the runs of other sweeps share their "
+                               "stencil already)")  # fmt: skip
+    result = run_sweep(plan, progress=True, memory_bytes=budget, stencil_cache=stencil_cache)
     click.echo(summary_table(result))
     if not result.ok:
         raise click.exceptions.Exit(1)

@@ -18,6 +18,7 @@ import contextlib
 import hashlib
 import json
 import os
+import warnings
 from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
@@ -111,8 +112,9 @@ def system_key(params: MannParams, box: BoxShape, with_tau: bool, times_s, array
 def cached_system(cache_dir: str | Path, key: str, shape: tuple[int, ...], compute: Callable[[], np.ndarray]
                   ) -> np.ndarray:  # fmt: skip
     """The system (complex128, ``shape``) of ``key`` read from ``cache_dir``, or ``compute()`` d and stored there
-    (a temporary name, then renamed; an unreadable or mismatched entry is computed again and replaced). The entry
-    holds exactly the computed array: a run reading it gets the same bits as one computing it."""
+    (a temporary name, then renamed; an unreadable or mismatched entry is computed again and replaced; a cache that
+    cannot keep it gives a RuntimeWarning). The entry holds exactly the computed array: a run reading it gets the
+    same bits as one computing it."""
     path = Path(cache_dir) / f"mann-stencil-system-{key}.npy"
     try:
         data = np.load(path)
@@ -123,12 +125,15 @@ def cached_system(cache_dir: str | Path, key: str, shape: tuple[int, ...], compu
     except (OSError, ValueError):
         pass  # missing or unreadable entry: computed and replaced
     data = compute()
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temp_name(path)
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         with open(tmp, "wb") as f:
             np.save(f, data)
         os.replace(tmp, path)
+    except OSError as exc:  # a cache that cannot keep the entry (full, read-only) does not fail the run
+        warnings.warn(f"the stencil cache {cache_dir} did not keep the system ({exc})", RuntimeWarning, stacklevel=2)
     finally:
-        tmp.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
     return data

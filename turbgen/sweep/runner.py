@@ -141,7 +141,8 @@ def _settle_interrupted(plan: SweepPlan, records: dict) -> None:
 
 
 def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress: bool = True,
-              threads: int | None = None, memory_bytes: int | None = None) -> SweepResult:
+              threads: int | None = None, memory_bytes: int | None = None,
+              stencil_cache: str | os.PathLike | None = None) -> SweepResult:
     """Run every planned field that has no complete store yet; write DIR/manifest.{json,csv}.
 
     Parameters
@@ -161,6 +162,10 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
     memory_bytes : int, optional
         Memory budget of each run [bytes] (`turbgen sweep --memory`): Mann runs that do not fit are
         made out of core (the same fields).
+    stencil_cache : str or os.PathLike, optional
+        `turbgen sweep --stencil-cache`: the constrained runs' stencil cache (turbgen.runs.stencil_cache), where the
+        seeds conditioned on the same measurements share their stencil and system (the same fields); the workers
+        must see it at the same path.
 
     Returns
     -------
@@ -217,7 +222,8 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
                                          lidar=plan.lidar, constraints=plan.constraints)
                 continue
             tasks[pr.name] = RunTask(pr.model, pr.run, str(path), state == "incomplete", plan.chunk_t, plan.validate,
-                                     lidar=plan.lidar, constraints=plan.constraints)
+                                     lidar=plan.lidar, constraints=plan.constraints,
+                                     cache_dir=None if stencil_cache is None else os.fspath(stencil_cache))
         need = sum(3 * t.run.grid.nbytes_per_component() for t in tasks.values() if t.generate)
         if need:
             n_gen = sum(t.generate for t in tasks.values())

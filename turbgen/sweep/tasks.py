@@ -39,6 +39,9 @@ class RunTask:
         Lidar preset or file to run on the field (turbgen lidar).
     constraints : ConstraintRequest, optional
         Condition the (Mann) field on these files (turbgen.runs.constrain.run_mann_constrained, in memory).
+    cache_dir : str, optional
+        A constrained run's stencil cache (turbgen.runs.stencil_cache): its stencil and its system, shared by the
+        seeds conditioned on the same measurements.
     """
 
     model: str
@@ -52,6 +55,7 @@ class RunTask:
     memory_bytes: int | None = None  # memory budget of one run: a Mann run that does not fit goes out of core
     lidar: str | None = None  # lidar preset or file to run on the field (turbgen lidar)
     constraints: object = None  # a ConstraintRequest (turbgen.spec.constraints): a constrained Mann run
+    cache_dir: str | None = None  # a constrained run's stencil cache
 
 
 def one_line(exc: BaseException) -> str:
@@ -142,7 +146,7 @@ def _run_constrained(task: RunTask) -> dict:
     c = task.constraints
     return run_mann_constrained(task.run, task.path, load_constraints(c.files), noise_m_s=c.noise_m_s,
                                 conditional_mean=c.conditional_mean, overwrite=task.overwrite, chunk_t=task.chunk_t,
-                                threads=task.threads)  # fmt: skip
+                                threads=task.threads, cache_dir=task.cache_dir)  # fmt: skip
 
 
 def execute_run(task: RunTask, shared=None) -> dict:
