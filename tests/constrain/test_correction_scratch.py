@@ -24,3 +24,22 @@ def test_blocks_written_by_slab_group_read_back_by_plane_and_component(tmp_path)
 
 def test_size_is_that_of_the_complex64_spectra():
     assert CorrectionScratch.nbytes((11, 3, 2049, 64, 64)) == 11 * 3 * 2049 * 64 * 64 * 8
+
+
+def test_reader_reads_ahead_in_the_given_order_and_refuses_another(tmp_path):
+    import pytest
+
+    rng = np.random.default_rng(4)
+    shape = (3, 3, 9, 4, 5)
+    whole = (rng.normal(size=shape) + 1j * rng.normal(size=shape)).astype(np.complex64)
+    order = [(p, c) for p in (2, 0, 1) for c in range(3)]  # planes in time order, not storage order
+    with CorrectionScratch(tmp_path, shape) as scratch:
+        scratch.write(range(9), whole)
+        read = scratch.reader(order)
+        for p, c in order:
+            np.testing.assert_array_equal(read(p, c), whole[p, c])
+        with pytest.raises(ValueError, match="out of the order given"):
+            read(0, 0)  # beyond the keys
+        read = scratch.reader(order)
+        with pytest.raises(ValueError, match="plane 0 component 0 asked for out of the order given"):
+            read(0, 0)  # the first key is (2, 0)

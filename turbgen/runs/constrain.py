@@ -293,8 +293,12 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
                                                            g.ny, g.nz, gen.threads):  # fmt: skip
                     scratch.write(slabs, block)
                     bar.update(len(slabs))
+            # read ahead in the generator's order: planes in time order, a plane's components in turn (frozen: one)
+            order = [int(i) for i in np.argsort(run.plane_times_s(), kind="stable")]
+            read = scratch.reader([(0 if frozen else ix, c) for ix in order[: 1 if frozen else None] for c in range(3)])
+
             def addend(ix: int, c: int) -> np.ndarray:  # added to the sample's spectra before their time transform
-                return scratch.read(0 if frozen else ix, c).reshape(box.nk1, g.ny * g.nz)
+                return read(0 if frozen else ix, c).reshape(box.nk1, g.ny * g.nz)
 
             seed = None if conditional_mean else run.seed
             yield from gen.generate(seed, run.plane_times_s(), addend)

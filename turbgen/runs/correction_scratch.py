@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Callable, Iterable
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -19,18 +21,21 @@ class CorrectionScratch:
     """Cropped spectra of shape (planes, 3, nk1, ny, nz) complex64 in an anonymous scratch file in ``directory``.
 
     Use as a context manager; :meth:`write` takes the blocks of correction_blocks, :meth:`read` returns one plane's
-    component.
+    component, :meth:`reader` reads them in a given order, each ahead in a background thread.
     """
 
     def __init__(self, directory: Path, shape: tuple[int, int, int, int, int]):
         self.shape = shape
         self._file = tempfile.TemporaryFile(dir=directory)
         self._point = shape[3] * shape[4] * 8  # bytes of one slab of one plane and component
+        self._io: ThreadPoolExecutor | None = None
 
     def __enter__(self) -> CorrectionScratch:
         return self
 
     def __exit__(self, *exc) -> None:
+        if self._io is not None:
+            self._io.shutdown(wait=True, cancel_futures=True)
         self._file.close()
 
     @staticmethod
@@ -49,9 +54,10 @@ class CorrectionScratch:
                 data = np.ascontiguousarray(block[p, c], dtype=np.complex64)
                 os.pwrite(fd, memoryview(data).cast("B"), self._offset(p, c, slabs.start))
 
-    def read(self, plane: int, component: int) -> np.ndarray:
-        """The spectra (nk1, ny, nz) complex64 of ``component`` on ``plane`` (position in the stored planes)."""
-        out = np.empty(self.shape[2:], np.complex64)
+    def read(self, plane: int, component: int, out: np.ndarray | None = None) -> np.ndarray:
+        """The spectra (nk1, ny, nz) complex64 of ``component`` on ``plane`` (position in the stored planes), into
+        ``out`` if given."""
+        out = np.empty(self.shape[2:], np.complex64) if out is None else out
         view = memoryview(out).cast("B")
         fd, done, start = self._file.fileno(), 0, self._offset(plane, component, 0)
         while done < len(view):
@@ -60,3 +66,25 @@ class CorrectionScratch:
                 raise OSError(f"the correction's scratch file ended early (plane {plane}, component {component})")
             done += n
         return out
+
+    def reader(self, keys: Iterable[tuple[int, int]]) -> Callable[[int, int], np.ndarray]:
+        """A function (plane, component) -> :meth:`read` of it, to be called for ``keys`` in that order: each is
+        read in a background thread while the one before is used (pass 2 transforms a component while the next is
+        read). Two buffers alternate: an array stays valid until the next call."""
+        keys = list(keys)
+        if self._io is None:
+            self._io = ThreadPoolExecutor(1, thread_name_prefix="turbgen-correction-read")
+        buffers = [np.empty(self.shape[2:], np.complex64) for _ in range(min(2, len(keys)))]
+        state = {"n": 0, "next": self._io.submit(self.read, *keys[0], buffers[0]) if keys else None}
+
+        def read(plane: int, component: int) -> np.ndarray:
+            n = state["n"]
+            if n >= len(keys) or keys[n] != (plane, component):
+                raise ValueError(f"plane {plane} component {component} asked for out of the order given")
+            out = state["next"].result()
+            if n + 1 < len(keys):  # into the buffer of call n - 1, no longer in use
+                state["next"] = self._io.submit(self.read, *keys[n + 1], buffers[(n + 1) % 2])
+            state["n"] = n + 1
+            return out
+
+        return read
