@@ -254,11 +254,20 @@ def unconstrained_measurement(run: MannRun, stencil, placed: PlacedData, threads
     points = cond.measured_points(placed.streams, g.nz)
     gen = MannSnapshots(stencil, g.ny, g.nz, threads, points=points)
     spec = np.zeros((placed.streams.n_streams, g.nt // 2 + 1), complex)
-    with _bar("pass 1", g.nx, "plane", progress) as bar:
+
+    def measure(m: int, spectra: np.ndarray) -> None:
+        for ix in order if frozen else [order[m]]:  # frozen: the one snapshot is every plane
+            cond.measure_spectra(placed.streams, ix, spectra, g.nz, g.nt, spec, points)
+            bar.update(1)
+
+    # each snapshot measured in a thread while the next is made (the generator's two alternating point buffers)
+    with _bar("pass 1", g.nx, "plane", progress) as bar, ThreadPoolExecutor(1) as measurer:
+        pending = None
         for m, spectra in gen.spectra(run.seed, times):
-            for ix in order if frozen else [order[m]]:  # frozen: the one snapshot is every plane
-                cond.measure_spectra(placed.streams, ix, spectra, g.nz, g.nt, spec, points)
-                bar.update(1)
+            if pending is not None:
+                pending.result()
+            pending = measurer.submit(measure, m, spectra)
+        pending.result()
     return cond.spectra_samples(placed.streams, spec, g.nt)
 
 

@@ -216,7 +216,8 @@ class MannSnapshots:
 
         The first pass of an out-of-core run: the same numbers as the whole-box generator holds in its
         spectrum buffer before the transform along k1. The array is reused: consume it first. A generator made with
-        ``points`` keeps those only: (3, len(points), n_slabs).
+        ``points`` keeps those only: (3, len(points), n_slabs), in two buffers that alternate: an array stays valid
+        while the next snapshot is made (e.g. measured in a thread meanwhile), until the one after is asked for.
         """
         times = np.sort(np.asarray(times_s, dtype=float), kind="stable")
         frozen = self.stencil.params.evo_time_s is None
@@ -224,8 +225,10 @@ class MannSnapshots:
             raise ParameterError("this stencil was built with evolving=False: it serves one plane only")
         times = times[:1] if frozen else times
         self._allocate(n_snapshots=len(times))
+        alternate = [self._spectra] if self._points is None else [self._spectra, np.empty_like(self._spectra)]
         with ThreadPoolExecutor(self.threads) as pool:
             for m, t in enumerate(times):
+                self._spectra = alternate[m % len(alternate)]  # where _batch gathers this snapshot
                 self._synthesise(pool, seed, m, None if m == 0 else float(t - times[m - 1]))
                 yield m, self._spectra[:, :, : self._n_slabs]
 
