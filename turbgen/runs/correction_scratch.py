@@ -8,13 +8,14 @@ system frees it when the run ends, however it ends) instead of memory.
 
 from __future__ import annotations
 
-import os
 import tempfile
 from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
+
+from turbgen.runs.scratch import read_at, write_at
 
 
 class CorrectionScratch:
@@ -51,21 +52,13 @@ class CorrectionScratch:
         fd = self._file.fileno()
         for p in range(block.shape[0]):
             for c in range(3):
-                data = np.ascontiguousarray(block[p, c], dtype=np.complex64)
-                os.pwrite(fd, memoryview(data).cast("B"), self._offset(p, c, slabs.start))
+                write_at(fd, np.asarray(block[p, c], dtype=np.complex64), self._offset(p, c, slabs.start))
 
     def read(self, plane: int, component: int, out: np.ndarray | None = None) -> np.ndarray:
         """The spectra (nk1, ny, nz) complex64 of ``component`` on ``plane`` (position in the stored planes), into
         ``out`` if given."""
         out = np.empty(self.shape[2:], np.complex64) if out is None else out
-        view = memoryview(out).cast("B")
-        fd, done, start = self._file.fileno(), 0, self._offset(plane, component, 0)
-        while done < len(view):
-            n = os.preadv(fd, [view[done:]], start + done)
-            if n == 0:
-                raise OSError(f"the correction's scratch file ended early (plane {plane}, component {component})")
-            done += n
-        return out
+        return read_at(self._file.fileno(), out, self._offset(plane, component, 0))
 
     def reader(self, keys: Iterable[tuple[int, int]]) -> Callable[[int, int], np.ndarray]:
         """A function (plane, component) -> :meth:`read` of it, to be called for ``keys`` in that order: each is
