@@ -28,6 +28,16 @@ from turbgen.errors import ParameterError, check_range
 PLANE_TOL_M = 1e-6
 
 
+def weighted_sum(values: np.ndarray, weights) -> np.ndarray:
+    """sum_k values[..., k] weights[k]: elementwise products, then numpy's pairwise sum along the last axis.
+
+    The same bits on every CPU and for a row of any batch: a BLAS dot or matrix-vector product (``values @ weights``)
+    sums in the order its kernel picks (OpenBLAS's AVX-512, AVX2 and SSE kernels differ in the last bits), and the
+    lidar data a field is constrained on must be the same numbers whichever file (dataset, CSV) carried them.
+    """
+    return np.add.reduce(np.asarray(values, float) * np.asarray(weights, float), axis=-1)
+
+
 @dataclass(frozen=True)
 class Measurement:
     """One beam-gate of a lidar.
@@ -321,7 +331,7 @@ def _sample_with_mean_wind(fs, measurements, planes, T, col, bi, gi, dims, mean_
                         zz = np.minimum(jz + dz_, shape[2] - 1)
                         corners.append(((ii * shape[1] + yy) * shape[2] + zz, wt * (wy * wz)))
             los = _with_mean_wind(mean_wind, fs, box, corners, n, t, p)
-            v_los[:, bi[m.beam], gi[m.gate]] = los @ np.asarray(m.weights, float)
+            v_los[:, bi[m.beam], gi[m.gate]] = weighted_sum(los, m.weights)
             n1[bi[m.beam], gi[m.gate]] = n[0]
     return v_los, n1
 
@@ -428,7 +438,7 @@ def apply_los(op: LosOperator, read) -> np.ndarray:
                 if op.n[j, c] == 0.0:
                     continue
                 vals = block[op.t_index[:, j] - t[0], op.y_index[j] - y[0], op.z_index[j] - z[0]]
-                out[:, j] += op.n[j, c] * np.einsum("sr,sr->s", op.weight[:, j], vals)
+                out[:, j] += op.n[j, c] * np.add.reduce(op.weight[:, j] * vals, axis=-1)
     return out
 
 
@@ -484,7 +494,7 @@ def mean_wind_los_series(measurements, times_s: np.ndarray, U_m_s: float, hub_he
             raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
         t = times_s[:, j][:, None] + p[None, :, 0] / U_m_s
         u, _ = mean_wind.full_uv(0.0, 0.0, t, p[None, :, 1], h[None, :], U_m_s, hub_height_m)
-        out[:, j] = m.n[0] * (u @ np.asarray(m.weights, float))
+        out[:, j] = m.n[0] * weighted_sum(u, m.weights)
     return out
 
 
@@ -496,5 +506,5 @@ def mean_wind_los(measurements, U_m_s: float, hub_height_m: float, shear_exponen
         h = hub_height_m + m.points_m()[:, 2]
         if np.any(h <= 0):
             raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
-        out[j] = m.n[0] * (np.asarray(m.weights, float) @ (U_m_s * (h / hub_height_m) ** shear_exponent))
+        out[j] = m.n[0] * weighted_sum(U_m_s * (h / hub_height_m) ** shear_exponent, m.weights)
     return out

@@ -524,18 +524,64 @@ def _ordered_map(fn, items: list, threads: int, workspace) -> Iterator:
 def check_singular(cov: np.ndarray, names) -> None:
     """Raise ParameterError naming the measurements that are linearly dependent (S_i singular on some slab).
 
-    The frequencies up to the middle only: the streams are real, so S_(n - i) = conj S_i has the same eigenvalues."""
-    lam = np.linalg.eigvalsh(cov[: cov.shape[0] // 2 + 1])  # all at once; the eigenvectors of a singular one below
+    The frequencies up to the middle only: the streams are real, so S_(n - i) = conj S_i has the same eigenvalues.
+    Which measurements the message names is decided with margins (:func:`dependent_set`), not by the last bits of an
+    eigenvector, so every CPU and BLAS kernel names the same ones."""
+    lam = np.linalg.eigvalsh(cov[: cov.shape[0] // 2 + 1])  # all at once
     top = np.maximum(lam[:, -1], np.finfo(float).tiny)
     singular = np.flatnonzero(lam[:, 0] <= SINGULAR_RTOL * top)
     if len(singular):
         i = int(singular[0])
-        v = np.abs(np.linalg.eigh(cov[i])[1][:, 0])  # the dependent combination: the first eigenvector
-        involved = [names[a] for a in np.flatnonzero(v > 0.1 * v.max())]
+        involved = [names[a] for a in dependent_set(cov[i])]
         raise ParameterError(
             "the measurements " + ", ".join(involved) + " are linearly dependent with zero noise (singular "
             f"system at frequency index {i}): remove one of them or give a noise level > 0 (`--noise`)"
         )
+
+
+DEPENDENT_RTOL = 1e-8  # residual variance / variance at or below which a measurement is a combination of earlier ones
+INVOLVED_RTOL = 1e-5  # share (|c_k| sigma_k / sigma_a) above which an earlier measurement is part of that combination
+
+
+def dependent_set(s: np.ndarray) -> list[int]:
+    """The smallest dependent set of the Hermitian S >= 0 (M, M), by a deterministic rule: the first measurement a
+    (in the order given) whose residual variance given the independent ones before it is <= DEPENDENT_RTOL of its
+    variance (a Cholesky factorisation in the given order that skips such pivots), and the earlier ones that
+    combination uses (share > INVOLVED_RTOL); indices in increasing order.
+
+    Round-off moves residuals and shares by ~1e-15 relative, far from both thresholds for measurements that are
+    exactly dependent (a repeated sensor, a sum of others), so the set does not depend on the CPU or BLAS kernel. If
+    no residual is that small (S nearly, not exactly, singular), the first measurement whose residual is within a
+    factor 10 of the smallest one is taken."""
+    m = s.shape[0]
+    var = np.real(np.diag(s)).copy()
+    low = np.zeros((m, m), complex)  # L of the independent pivots so far: S_II = L L^H
+    basis: list[int] = []
+    rho = np.ones(m)
+    for a in range(m):
+        k = len(basis)
+        y = np.linalg.solve(low[:k, :k], s[basis, a]) if k else np.zeros(0, complex)  # L^-1 S_Ia
+        resid = max(var[a] - float(np.real(np.vdot(y, y))), 0.0)
+        rho[a] = resid / var[a] if var[a] > 0 else 0.0
+        if rho[a] <= DEPENDENT_RTOL:
+            coef = np.linalg.solve(low[:k, :k].conj().T, y) if k else y  # S_II^-1 S_Ia = L^-H L^-1 S_Ia
+            share = np.abs(coef) * np.sqrt(var[basis] / var[a]) if var[a] > 0 else np.zeros(k)
+            return sorted({*(b for b, w in zip(basis, share) if w > INVOLVED_RTOL), a})
+        low[k, :k] = y.conj()
+        low[k, k] = np.sqrt(resid)
+        basis.append(a)
+    a = int(np.flatnonzero(rho <= 10 * rho.min())[0])
+    return sorted({*_involved(s, [b for b in basis if b < a], a, var), a})
+
+
+def _involved(s: np.ndarray, basis: list[int], a: int, var: np.ndarray) -> list[int]:
+    """The measurements of ``basis`` that the least-squares combination of measurement ``a`` uses (share >
+    INVOLVED_RTOL)."""
+    if not basis:
+        return []
+    c = np.linalg.solve(s[np.ix_(basis, basis)], s[basis, a])
+    share = np.abs(c) * np.sqrt(var[basis]) / np.sqrt(max(var[a], np.finfo(float).tiny))
+    return [b for b, w in zip(basis, share) if w > INVOLVED_RTOL]
 
 
 def circulant_apply(cov: np.ndarray, v: np.ndarray) -> np.ndarray:
