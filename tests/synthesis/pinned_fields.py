@@ -27,12 +27,16 @@ CASES = {
 
 
 def fingerprint() -> str:
-    """What decides the last bits of a float32 field: numpy/scipy/pyfftw builds and the CPU's SIMD."""
+    """What decides the last bits of a float32 field: numpy/scipy/pyfftw builds and whether the CPU has AVX2 and FMA.
+
+    AVX-512 is not part of it: numpy's AVX-512 and AVX2 float32 kernels and OpenBLAS's SkylakeX and Haswell kernels
+    gave the pinned fields bit for bit (an AVX-512 machine ran this suite), so such a machine checks the bits too;
+    test_cpu_kernels runs every OpenBLAS kernel the machine offers."""
     import pyfftw
     import scipy
 
     flags = Path("/proc/cpuinfo").read_text().split("flags", 1)[-1].split("\n", 1)[0] if Path("/proc/cpuinfo").exists() else ""
-    simd = ",".join(f for f in ("avx512f", "avx2", "fma") if f" {f}" in flags)
+    simd = ",".join(f for f in ("avx2", "fma") if f" {f}" in flags)
     return (f"{platform.machine()} numpy {np.__version__} scipy {scipy.__version__} pyfftw {pyfftw.__version__} "
             f"simd {simd}")
 

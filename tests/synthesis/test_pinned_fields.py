@@ -1,8 +1,9 @@
 """The fields of a few fixed commands are pinned (tests/synthesis/data/pinned_fields.npz): a refactor must not
 change a single bit of them.
 
-Bit identity holds for one build of numpy/scipy/pyfftw on one kind of CPU (SIMD exp/sqrt/FFT kernels
-round differently); on another fingerprint the fields must agree to float32 round-off: a few ulps
+Bit identity holds for one build of numpy/scipy/pyfftw on CPUs with AVX2 and FMA, AVX-512 ones included
+(pinned_fields.fingerprint); on an older CPU (numpy's baseline SIMD exp/sin kernels round differently) or other
+library builds the fields must agree to float32 round-off: a few ulps
 of the accumulated FFT, bounded here by 1e-5 of the component's standard deviation (a changed seed
 stream, parameter or normalisation moves values by O(1) standard deviations).
 """
