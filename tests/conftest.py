@@ -40,3 +40,31 @@ def _no_kept_validator_theory(request):
         kept.clear()
     _theory_kept_for = request.module if keep else None
     yield
+
+
+@pytest.fixture()
+def small_disk(tmp_path):
+    """A factory of tiny file systems: ``small_disk("3M")`` mounts a tmpfs of that size (the full-disk tests meet a
+    real ENOSPC, and with a writable map of a sparse file, a real SIGBUS); unmounted after the test. Skips, saying
+    why, where mounting is impossible (not root, no tmpfs)."""
+    import subprocess
+
+    mounted = []
+
+    def make(size: str):
+        where = tmp_path / f"disk{len(mounted)}"
+        where.mkdir()
+        try:
+            done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(where)],
+                                  capture_output=True, text=True)  # fmt: skip
+            why = done.stderr.strip() or f"mount exited {done.returncode}"
+        except OSError as exc:
+            done, why = None, str(exc)
+        if done is None or done.returncode != 0:
+            pytest.skip(f"cannot mount a {size} tmpfs for a real full disk: {why}")
+        mounted.append(where)
+        return where
+
+    yield make
+    for where in mounted:
+        subprocess.run(["umount", "-l", str(where)], capture_output=True)

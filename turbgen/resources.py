@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from turbgen import oscalls
 from turbgen.errors import ParameterError
 
 
@@ -29,46 +30,6 @@ def format_bytes(n: float) -> str:
     return f"{n:.0f} B" if i == 0 else f"{n:.1f} {units[i]}"
 
 
-def resident_bytes(status: Path = Path("/proc/self/status")) -> int | None:
-    """This process's resident memory now [bytes] (VmRSS), or None where /proc does not tell (not Linux)."""
-    try:
-        for line in status.read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) * 1024  # the value is in kB
-    except (OSError, ValueError, IndexError):
-        return None
-    return None
-
-
-def _meminfo_available(meminfo: Path) -> int | None:
-    try:
-        for line in meminfo.read_text().splitlines():
-            if line.startswith("MemAvailable:"):
-                return int(line.split()[1]) * 1024  # the value is in kB
-    except (OSError, ValueError, IndexError):
-        return None
-    return None
-
-
-def _read_int(path: Path) -> int | None:
-    try:
-        return int(path.read_text().strip())
-    except (OSError, ValueError):  # missing file, or "max" (no limit)
-        return None
-
-
-def _cgroup_headroom(root: Path) -> int | None:
-    """Limit minus usage of this process's memory cgroup (v2, then v1), or None if unlimited."""
-    for limit_file, usage_file in (
-        ("memory.max", "memory.current"),
-        ("memory/memory.limit_in_bytes", "memory/memory.usage_in_bytes"),
-    ):
-        limit, usage = _read_int(root / limit_file), _read_int(root / usage_file)
-        if limit is not None and usage is not None and limit < 2**60:  # v1 reports "no limit" as ~2^63
-            return max(limit - usage, 0)
-    return None
-
-
 def _sysconf_available() -> int | None:
     try:
         return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
@@ -76,18 +37,16 @@ def _sysconf_available() -> int | None:
         return None
 
 
-def available_memory_bytes(
-    meminfo: Path = Path("/proc/meminfo"), cgroup_root: Path = Path("/sys/fs/cgroup")
-) -> int | None:
+def available_memory_bytes(meminfo: Path = oscalls.PROC_MEMINFO, cgroup_root: Path = oscalls.CGROUP_ROOT) -> int | None:
     """Memory [bytes] this process can still allocate, or None if it cannot be determined.
 
     Linux: MemAvailable from /proc/meminfo, capped by the container's cgroup limit minus usage.
     Elsewhere: free physical pages from ``os.sysconf`` (an underestimate: excludes caches).
     """
-    system = _meminfo_available(meminfo)
+    system = oscalls.meminfo_available_bytes(meminfo)
     if system is None:
         system = _sysconf_available()
-    headroom = _cgroup_headroom(cgroup_root)
+    headroom = oscalls.cgroup_headroom_bytes(cgroup_root)
     known = [v for v in (system, headroom) if v is not None]
     return min(known) if known else None
 
@@ -113,11 +72,7 @@ def available_disk_bytes(path) -> int | None:
     p = Path(path).expanduser().absolute()
     while not p.exists() and p != p.parent:
         p = p.parent
-    try:
-        st = os.statvfs(p)
-    except OSError:
-        return None
-    return st.f_bavail * st.f_frsize
+    return oscalls.disk_free_bytes(p)
 
 
 def require_disk(path, nbytes: int, what: str, hint: str) -> int | None:

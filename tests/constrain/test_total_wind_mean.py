@@ -90,7 +90,7 @@ def test_default_mean_wind_is_the_exports_power_law(tmp_path):
 @pytest.mark.parametrize("change, message", [
     ({"total_wind": False}, "mean_wind describes total-wind data"),
     ({"mean_wind": {"profile": "log:z0=-1"}}, "log-law roughness z0 (m)"),
-    ({"mean_wind": {"profile": "table:missing.csv"}}, "cannot be read"),
+    ({"mean_wind": {"profile": "table:missing.csv"}}, "missing.csv: does not exist"),
     ({"mean_wind": {"veer_deg_per_m": 99}}, "veer (deg/m)"),
     ({"mean_wind": {"profile": "power:0.2", "shear": 1}}, "shear"),
 ])

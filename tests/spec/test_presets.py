@@ -133,5 +133,5 @@ def test_unknown_preset_and_unreadable_file(tmp_path):
     bad.write_text("[presets\n")
     with pytest.raises(ParameterError, match="not valid TOML"):
         load_presets(bad)
-    with pytest.raises(ParameterError, match="cannot read"):
+    with pytest.raises(ParameterError, match="missing.toml: does not exist"):
         load_presets(tmp_path / "missing.toml")

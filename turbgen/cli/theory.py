@@ -12,6 +12,7 @@ import numpy as np
 from turbgen.cli.options import parse_floats
 from turbgen.errors import ParameterError
 from turbgen.spec.defaults import MANN_DEFAULTS as D
+from turbgen.store.temporaries import write_atomically
 from turbgen.theory import ranges
 from turbgen.theory.params import LIFETIMES, MannParams, check_wind_speed
 
@@ -138,8 +139,10 @@ def _plot(path, x, curves: dict, xlabel: str, ylabel: str, logy=False):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     fig.tight_layout()
-    fig.savefig(path, format="png", dpi=120)
-    plt.close(fig)
+    try:
+        write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=120), "--plot")
+    finally:
+        plt.close(fig)
 
 
 @click.group()

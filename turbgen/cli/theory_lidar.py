@@ -10,6 +10,7 @@ import numpy as np
 from turbgen.cli.options import parse_floats
 from turbgen.errors import ParameterError
 from turbgen.spec.defaults import MANN_DEFAULTS
+from turbgen.store.temporaries import write_atomically
 
 
 @click.command("lidar")
@@ -70,8 +71,6 @@ def _plot(path, out):
     a2.legend()
     fig.tight_layout()
     try:
-        fig.savefig(path, dpi=110)
-    except OSError as exc:
-        raise ParameterError(f"--plot {path}: cannot write it ({exc.strerror or exc})") from None
+        write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110), "--plot")
     finally:
         plt.close(fig)

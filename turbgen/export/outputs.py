@@ -10,20 +10,18 @@ outputs starts.
 
 from __future__ import annotations
 
-import ctypes
 import errno
 import os
 import secrets
 from pathlib import Path
 
+from turbgen import oscalls
 from turbgen.errors import ParameterError
 from turbgen.store.paths import check_output_path
-from turbgen.resources import require_disk
+from turbgen.resources import available_disk_bytes, require_disk
 from turbgen.cancellation import raise_if_stop_requested
 from turbgen.store.temporaries import (TEMP_MARK, remove_dead_temporaries,
                                        report_removed)
-
-_FALLOC_FL_KEEP_SIZE = 1
 
 
 class OutputSet:
@@ -102,7 +100,8 @@ class OutputSet:
         """Reserve ``nbytes`` of disk for the (already created) temporary of ``path`` without changing its size.
 
         So that a library that cannot survive a failed write (HDF5 aborts the process when it cannot
-        flush on close) never meets a full disk. A no-op where fallocate(2) is unavailable.
+        flush on close) never meets a full disk. Where fallocate(2) is unavailable (turbgen.oscalls), the file
+        system's free space is checked instead.
 
         Parameters
         ----------
@@ -123,14 +122,10 @@ class OutputSet:
         """
         fd = os.open(self.temp(path), os.O_WRONLY)
         try:
-            fn = getattr(ctypes.CDLL(None, use_errno=True), "fallocate", None)
-            if fn is None:
-                return
-            fn.argtypes = (ctypes.c_int, ctypes.c_int, ctypes.c_longlong, ctypes.c_longlong)
-            if fn(fd, _FALLOC_FL_KEEP_SIZE, 0, int(nbytes)) != 0:
-                err = ctypes.get_errno()
-                if err not in (errno.EOPNOTSUPP, errno.ENOSYS, errno.EINVAL):
-                    raise OSError(err, os.strerror(err), str(self.temp(path)))
+            if not oscalls.reserve(fd, int(nbytes), keep_size=True, name=str(self.temp(path))):
+                free = available_disk_bytes(self.temp(path))
+                if free is not None and nbytes > free:
+                    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self.temp(path)))
         finally:
             os.close(fd)
 
@@ -158,9 +153,9 @@ class OutputSet:
                 return False
         self._cleanup()
         if isinstance(exc, OSError):
-            reason = exc.strerror or (str(exc).splitlines() or [type(exc).__name__])[0]
+            reason = write_failure(exc)
             where = ", ".join(str(p) for p in self.paths)
-            raise ParameterError(f"writing {where} failed: {reason} (errno {exc.errno}); nothing was written") from None
+            raise ParameterError(f"writing {where} failed: {reason}; nothing was written") from None
         return False
 
     def _cleanup(self):
@@ -169,3 +164,15 @@ class OutputSet:
                 t.unlink(missing_ok=True)
             except OSError:
                 pass  # e.g. a read-only directory where the temporary was never created
+
+
+def write_failure(exc: OSError) -> str:
+    """The reason of a failed write in a few words: the system's message of its errno (a library's own, e.g.
+    HDF5's many lines, only as its first line); a short write (numpy's tofile, which gives no errno) says the disk
+    is probably full."""
+    if exc.errno:
+        return f"{os.strerror(exc.errno)} (errno {exc.errno})"
+    text = (str(exc).splitlines() or [type(exc).__name__])[0]
+    if "requested and" in text and "written" in text:  # numpy: "N requested and M written", the disk took no more
+        return f"a short write ({text}): the disk is probably full"
+    return text

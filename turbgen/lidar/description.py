@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.errors import ParameterError, check_choice, check_positive, check_range
+from turbgen.input_files import LIDAR_FILE, check_input
 from turbgen.spec.config import check_mapping, read_config
 from turbgen.theory.lidar_geometry import Measurements, los_vectors, nacelle_directions, spinner_directions
 from turbgen.theory.lidar_weighting import cw_discrete, pulsed_discrete, rayleigh_length_m
@@ -304,10 +305,9 @@ def load_lidar(name_or_path) -> LidarDescription:
     if key in PRESETS:
         return PRESETS[key]
     path = Path(key)
-    if path.suffix.lower() in (".toml", ".json") and not path.is_file():
-        raise ParameterError(f"lidar file {key!r} {'is not a file' if path.exists() else 'does not exist'}")
     if path.suffix.lower() not in (".toml", ".json"):
         raise ParameterError(f"lidar {key!r} is neither a preset ({', '.join(PRESETS)}) nor a .toml/.json file")
+    check_input(path, LIDAR_FILE)  # a regular file: read_config reads it again (no FIFO, no device, size cap)
     return lidar_from_mapping(read_config(path, "lidar"), where=path.stem)
 
 

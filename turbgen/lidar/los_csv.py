@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.errors import ParameterError
+from turbgen.input_files import LINE_OF_SIGHT, read_input_text
 from turbgen.lidar.dataset import LidarData
 from turbgen.lidar.description import load_lidar
 from turbgen.lidar.run import lidar_attrs
@@ -34,7 +35,6 @@ from turbgen.spec.constraints import mean_wind_spec
 
 COLUMNS = ("time_s", "beam", "gate", "v_los_m_s")
 HEADER_KEYS = ("lidar", "U_m_s", "total_wind", "profile", "mean_history")
-MAX_BYTES = 256 * 2**20  # a CSV file larger than this is refused before it is read
 
 
 def is_los_csv(path) -> bool:
@@ -56,18 +56,8 @@ def parse_header(lines: list[str], where: str) -> dict:
     return keys
 
 
-def check_file(path: Path, where: str) -> None:
-    """Refuse a ``path`` that is not an existing file of at most MAX_BYTES (before it is read)."""
-    if not path.is_file():
-        raise ParameterError(f"{where}: {'is not a file' if path.exists() else 'does not exist'}")
-    if path.stat().st_size > MAX_BYTES:
-        raise ParameterError(f"{where}: larger than {MAX_BYTES // 2**20} MiB")
-
-
 def _rows(path: Path, where: str) -> tuple[dict, np.ndarray]:
-    check_file(path, where)
-    with open(path, newline="", encoding="utf-8") as fh:
-        return parse_table(fh.read().splitlines(), where)
+    return parse_table(read_input_text(path, LINE_OF_SIGHT).splitlines(), where)
 
 
 def parse_table(text: list[str], where: str) -> tuple[dict, np.ndarray]:

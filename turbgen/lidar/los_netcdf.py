@@ -21,7 +21,8 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.lidar.dataset import LidarData
-from turbgen.lidar.los_csv import COLUMNS, HEADER_KEYS, check_file, los_record
+from turbgen.input_files import LINE_OF_SIGHT, check_input
+from turbgen.lidar.los_csv import COLUMNS, HEADER_KEYS, los_record
 
 SUFFIXES = (".nc", ".nc4", ".netcdf")
 
@@ -67,7 +68,7 @@ def read_los_netcdf(path) -> LidarData:
 
     path = Path(path).expanduser()
     where = f"line-of-sight file {path}"
-    check_file(path, where)
+    check_input(path, LINE_OF_SIGHT)
     try:
         with xr.open_dataset(path, decode_times=False) as ds:
             ds.load()

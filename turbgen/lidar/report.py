@@ -20,6 +20,7 @@ import numpy as np
 from turbgen.errors import ParameterError
 from turbgen.lidar import compare
 from turbgen.lidar.run import LidarRun, lidar_attrs, run_lidar
+from turbgen.store.temporaries import write_atomically
 from turbgen.validate.checks import MetricResult
 
 DEFAULT_LIDAR = "nacelle-4beam"
@@ -290,8 +291,10 @@ class LidarReport:
         a2.legend(fontsize=8)
         fig.tight_layout()
         path = directory / "lidar_coherence.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        try:
+            write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110), "the plot")
+        finally:
+            plt.close(fig)
         return [path]
 
 

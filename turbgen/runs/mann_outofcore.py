@@ -38,7 +38,8 @@ import numpy as np
 from tqdm import tqdm
 
 from turbgen.errors import ParameterError
-from turbgen.resources import default_threads, format_bytes, require_disk, resident_bytes
+from turbgen.oscalls import resident_bytes
+from turbgen.resources import default_threads, format_bytes, require_disk
 from turbgen.runs.scratch import read_at, write_at
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store

@@ -4,8 +4,9 @@ A wrapper of synthesis.mann_stencil.build_stencil (the I/O it leaves out). The f
 the unit stencil depends on (synthesis.mann_stencil.stencil_key: all parameters but ae), so a cache entry can never
 serve another parameter set, and serves every ae (MannStencil.scaled). An entry ``mann-stencil-KEY.npy`` holds the
 four float64 factors and, for evolving fields, 1/tau_e as a fifth (float64) array; it is built straight into the
-file and read back memory-mapped, so the factors never have to be resident. Entries are written to a temporary name
-and renamed; an unreadable or mismatched entry is rebuilt and replaced.
+file batch by batch (ordinary writes into reserved space, never a writable map) and read back memory-mapped, so
+the factors never have to be resident. Entries are written to a temporary name and renamed; an unreadable or
+mismatched entry is rebuilt and replaced; a full disk is a one-line ParameterError.
 
 The same directory keeps the per-frequency system S - R = H C H^T of constrained runs (:func:`cached_system`,
 ``mann-stencil-system-KEY.npy``): it depends on the run's model and grid and on the measurement geometry, not on the
@@ -15,7 +16,9 @@ seed or the data values, so every seed conditioned on the same measurements read
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
+import io
 import json
 import os
 import warnings
@@ -25,8 +28,12 @@ from pathlib import Path
 
 import numpy as np
 
+from turbgen import oscalls
+from turbgen.errors import ParameterError
+from turbgen.resources import require_disk
+from turbgen.runs.scratch import write_at
 from turbgen.store.temporaries import temp_name
-from turbgen.synthesis.mann_stencil import BoxShape, MannStencil, build_stencil, stencil_key
+from turbgen.synthesis.mann_stencil import BoxShape, MannStencil, build_step, build_stencil, stencil_key
 from turbgen.theory.params import MannParams
 
 
@@ -71,18 +78,46 @@ def cached_stencil(
     return unit if energy == "unit" else unit.scaled(params)
 
 
+ENTRY_BATCH_BYTES = 64 * 2**20  # an entry is built and written this many bytes of slabs at a time
+
+
 def _build_entry(params: MannParams, box: BoxShape, path: Path, shape: tuple, evolving: bool) -> None:
-    """Build the unit stencil into a temporary file next to ``path``, then rename it to ``path``."""
+    """Build the unit stencil into a temporary file next to ``path``, then rename it to ``path``.
+
+    Batches of k1 slabs are built in memory (build_stencil's ``slabs``: the same numbers as the whole stencil's)
+    and written with ordinary writes into a file whose space is reserved first: no writable map of a file that may
+    be sparse, which a full disk turns into SIGBUS. A full disk is a one-line ParameterError; nothing is left.
+    """
     path.parent.mkdir(parents=True, exist_ok=True)
+    header = io.BytesIO()
+    np.lib.format.write_array_header_2_0(header, {"descr": "<f8", "fortran_order": False, "shape": shape})
+    head = header.getvalue()
+    slab_bytes = int(np.prod(shape[2:])) * 8
+    nbytes = len(head) + shape[0] * shape[1] * slab_bytes
+    what, hint = f"the stencil cache entry {path}", "free space or choose another `stencil_cache`"
+    require_disk(path.parent, nbytes, what, hint)
     tmp = temp_name(path)
     try:
-        mapped = np.lib.format.open_memmap(tmp, mode="w+", dtype=np.float64, shape=shape)
-        unit = build_stencil(params, box, energy="unit", evolving=evolving, factors=mapped[:4])
-        if shape[0] == 5:
-            mapped[4] = unit.inv_tau  # float32 -> float64 -> float32 is exact
-        mapped.flush()
-        del mapped, unit
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        try:
+            oscalls.reserve(fd, nbytes, keep_size=False, name=str(tmp))
+            write_at(fd, np.frombuffer(head, np.uint8), 0)
+            step = build_step(box)
+            batch = max(step, ENTRY_BATCH_BYTES // (shape[0] * slab_bytes) // step * step)
+            for i0 in range(0, shape[1], batch):
+                i1 = min(i0 + batch, shape[1])
+                part = build_stencil(params, box, energy="unit", evolving=evolving, slabs=(i0, i1))
+                arrays = [*part.coef, *([part.inv_tau.astype(np.float64)] if shape[0] == 5 else [])]
+                for j, a in enumerate(arrays):  # float32 -> float64 -> float32 is exact for 1/tau_e
+                    write_at(fd, a, len(head) + (j * shape[1] + i0) * slab_bytes)
+            os.fsync(fd)
+        finally:
+            os.close(fd)
         os.replace(tmp, path)
+    except OSError as exc:
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+            raise ParameterError(f"{what}: the disk is full ({exc.strerror}); {hint}") from None
+        raise
     finally:
         tmp.unlink(missing_ok=True)
 

@@ -3,6 +3,9 @@
     ROOT/runs/<id>/request.json   model + canonical run mapping (written atomically before queueing)
     ROOT/runs/<id>/store.zarr     the field (published atomically by runs/; complete or absent)
     ROOT/runs/<id>/failed.json    the one-line reason of a failed run
+    ROOT/runs/<id>/starts.json    how many times the run was started (a run that brings its server down is failed
+                                  after MAX_STARTS, not re-queued forever)
+    ROOT/runs/<id>/.failure-room  4 KiB kept until failed.json is written, so a full disk can still record it
     ROOT/runs/<id>/exports/<fmt>  cached exports;  ROOT/runs/<id>/validation/  report.json + PNG plots
     ROOT/work/                    derived products being computed (temporary names, turbgen.service.derived)
     ROOT/stencils/                the Mann stencil cache of the runs (size-capped, turbgen.service.cleanup)
@@ -12,6 +15,7 @@ Run ids: turbgen.service.run_ids.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -24,6 +28,8 @@ from turbgen.service.uploads import ConstraintUploads
 from turbgen.store.temporaries import temp_name, temp_prefix
 
 STORE = "store.zarr"
+STARTS = "starts.json"
+FAILURE_ROOM, FAILURE_ROOM_BYTES = ".failure-room", 4096
 
 
 def write_json_atomic(path: Path, data) -> None:
@@ -176,6 +182,8 @@ class Catalog:
         (d / "failed.json").unlink(missing_ok=True)
         if not (d / "request.json").is_file():
             write_json_atomic(d / "request.json", {"model": model, "run": mapping, "preset": preset, "turbgen": __version__})
+        with contextlib.suppress(OSError):  # room for failed.json, released when it is written (a full disk)
+            (d / FAILURE_ROOM).write_bytes(bytes(FAILURE_ROOM_BYTES))
 
     def is_complete(self, rid: str) -> bool:
         """True when the store is published and opens as a complete turbgen store (remembered once true).
@@ -250,7 +258,42 @@ class Catalog:
         KeyError
             If ``rid`` is not a well-formed id.
         """
-        write_json_atomic(self.run_dir(rid) / "failed.json", {"error": reason})
+        d = self.run_dir(rid)
+        (d / FAILURE_ROOM).unlink(missing_ok=True)  # on a full disk, the room kept for this record
+        write_json_atomic(d / "failed.json", {"error": reason})
+
+    def starts(self, rid: str) -> int:
+        """How many times run ``rid`` was started (by this server or one before it); 0 if never or unknown.
+
+        Parameters
+        ----------
+        rid : str
+            Run id.
+
+        Returns
+        -------
+        int
+        """
+        try:
+            return int(json.loads((self.run_dir(rid) / STARTS).read_text())["starts"])
+        except (OSError, ValueError, KeyError, TypeError):
+            return 0
+
+    def count_start(self, rid: str) -> None:
+        """Record one more start of run ``rid`` (kept across restarts: a run that takes its server down is not
+        started forever; best effort: a disk too full to record it fails the run anyway).
+
+        Parameters
+        ----------
+        rid : str
+            Run id.
+
+        Returns
+        -------
+        None
+        """
+        with contextlib.suppress(OSError):
+            write_json_atomic(self.run_dir(rid) / STARTS, {"starts": self.starts(rid) + 1})
 
     def clear_partial(self, rid: str) -> None:
         """Remove temporaries a killed run left (the writer's temp siblings of the store).

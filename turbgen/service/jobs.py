@@ -2,7 +2,8 @@
 
 A run is submitted once (under a lock) and tracked until its future finishes; a duplicate request
 for a queued or running id joins it, a complete store is never recomputed. After a restart,
-``resume`` re-queues every recorded run that has neither a complete store nor a failure.
+``resume`` re-queues every recorded run that has neither a complete store nor a failure, unless it was started
+MAX_STARTS times already (a run that takes its server down each time would otherwise be re-queued forever).
 """
 
 from __future__ import annotations
@@ -11,10 +12,11 @@ import threading
 import uuid
 from pathlib import Path
 
-from turbgen.service.catalog import Catalog, write_json_atomic
+from turbgen.service.catalog import FAILURE_ROOM, Catalog, write_json_atomic
 from turbgen.service.run_ids import canonical_mapping, run_from_canonical
 from turbgen.spec.constraints import ConstraintRequest
 
+MAX_STARTS = 3  # a run started this often without finishing (its server died each time) is failed, not re-queued
 _STENCIL_LOCK = threading.Lock()  # one stencil build at a time: a second request for it waits and reuses it
 
 
@@ -164,6 +166,7 @@ class Jobs:
 
     def _start(self, rid: str, model: str, run, constraints: dict | None = None) -> None:
         self.catalog.clear_partial(rid)
+        self.catalog.count_start(rid)
         out = str(self.catalog.store_path(rid))
         cache = str(self.catalog.root / "stencils")
         request = None
@@ -182,6 +185,7 @@ class Jobs:
             try:
                 summary = fut.result()
                 write_json_atomic(self.catalog.run_dir(rid) / "summary.json", summary)
+                (self.catalog.run_dir(rid) / FAILURE_ROOM).unlink(missing_ok=True)  # a complete run needs none
             except Exception as exc:
                 if not self.catalog.is_complete(rid):
                     self.catalog.mark_failed(rid, one_line(exc))
@@ -240,6 +244,10 @@ class Jobs:
                 self.catalog.clear_partial(rid)
                 continue
             if self.catalog.failure(rid) is not None:
+                continue
+            if self.catalog.starts(rid) >= MAX_STARTS:
+                self.catalog.mark_failed(rid, f"not re-queued: the server stopped while running it {MAX_STARTS} times "
+                                              "(killed, out of memory or a full disk?); delete it to try again")
                 continue
             try:
                 req = self.catalog.request(rid)

@@ -7,6 +7,8 @@ import hmac
 import ipaddress
 import threading
 
+from turbgen.input_files import TOKEN, read_input_text
+from turbgen.spec.config import nested_deeper_than
 from turbgen.resources import format_bytes
 
 MAX_BODY_BYTES = 64 * 1024
@@ -74,11 +76,11 @@ def read_token(path) -> str:
     ------
     ValueError
         If the token is shorter than 16 characters.
-    OSError
-        If the file cannot be read.
+    ParameterError
+        If the file cannot be read, is not a regular file or is larger than 4 KiB (turbgen.input_files).
     """
-    with open(path) as f:
-        token = f.readline().strip()
+    lines = read_input_text(path, TOKEN).splitlines()
+    token = lines[0].strip() if lines else ""
     if len(token) < 16:
         raise ValueError(f"token file {path}: the token must be at least 16 characters")
     return token
@@ -192,15 +194,8 @@ def check_json_depth(value, limit: int = MAX_JSON_DEPTH) -> None:
     """LimitError 422 if ``value`` (parsed JSON) nests arrays/objects deeper than ``limit``, checked without
     recursion: validating a deeper body recursed past Python's limit (a 60 KB body of 30000 nested arrays gave 500).
     """
-    stack = [(value, 1)]
-    while stack:
-        item, depth = stack.pop()
-        children = item.values() if isinstance(item, dict) else item if isinstance(item, list) else ()
-        for child in children:
-            if isinstance(child, (dict, list)):
-                if depth + 1 > limit:
-                    raise LimitError(422, f"request body: arrays and objects nested deeper than {limit} levels")
-                stack.append((child, depth + 1))
+    if nested_deeper_than(value, limit):
+        raise LimitError(422, f"request body: arrays and objects nested deeper than {limit} levels")
 
 
 class DerivedLimiter:

@@ -9,20 +9,16 @@ from __future__ import annotations
 
 import importlib.resources
 import json
-import os
-import stat
 import tomllib
 from pathlib import Path
 
 import jsonschema
 
 from turbgen.errors import ParameterError
+from turbgen.input_files import CONFIG, read_input
 
-# Largest run, sweep, preset or lidar file [bytes]: such files hold a few KiB; beyond this it is the wrong file
-# (`--config /dev/zero` read until the OOM killer stopped it at 21 GB)
-MAX_CONFIG_BYTES = 2**20
-_NOT_REGULAR = ((stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"),
-                (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+MAX_CONFIG_BYTES = CONFIG.max_bytes  # such files hold a few KiB (`--config /dev/zero` once read 21 GB)
+MAX_NESTING = 64  # levels of tables/arrays in a TOML/JSON file: turbgen's own files need 4
 
 
 def load_schema(name: str) -> dict:
@@ -113,17 +109,11 @@ def read_config(path, schema_name: str | None = None) -> dict:
     Raises
     ------
     ParameterError
-        If the file cannot be read, is not a regular file (or a pipe), holds more than MAX_CONFIG_BYTES, is not
-        valid TOML/JSON, does not satisfy the schema, or (without a schema) does not hold a table at the top level.
+        If the file cannot be read, is not a regular file (turbgen.input_files), holds more than MAX_CONFIG_BYTES,
+        is not valid TOML/JSON or nested deeper than MAX_NESTING, does not satisfy the schema, or (without a schema) does not hold a table at the top level.
     """
     p = Path(path)
-    kind = "JSON" if p.suffix.lower() == ".json" else "TOML"
-    text = _read_capped(p)
-    try:
-        data = json.loads(text) if kind == "JSON" else tomllib.loads(text.decode())
-    except (ValueError, UnicodeDecodeError) as exc:
-        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ParameterError(f"config {p}: not valid {kind} ({first})") from None
+    data = parse_document(read_input(p, CONFIG), "JSON" if p.suffix.lower() == ".json" else "TOML", f"config {p}")
     if schema_name is not None:
         return check_mapping(data, schema_name, f"config {p}")
     if not isinstance(data, dict):
@@ -131,26 +121,36 @@ def read_config(path, schema_name: str | None = None) -> dict:
     return data
 
 
-def _read_capped(p: Path) -> bytes:
-    """The bytes of the config file ``p``: a regular file or a pipe (e.g. ``<(...)``), at most MAX_CONFIG_BYTES.
+def parse_document(text: bytes, kind: str, where: str):
+    """The value of the JSON or TOML document ``text`` (``kind`` "JSON" or "TOML"), nested at most MAX_NESTING deep.
 
     Raises
     ------
     ParameterError
-        If ``p`` cannot be read, is a directory, device or socket, or holds more than MAX_CONFIG_BYTES.
+        Naming ``where``, when ``text`` is not valid ``kind`` (or not UTF-8) or is nested deeper than MAX_NESTING
+        (a parser's RecursionError included).
     """
+    nested = ParameterError(f"{where}: nested deeper than {MAX_NESTING} levels of tables/arrays")
     try:
-        mode = os.stat(p).st_mode
-        for is_kind, what in _NOT_REGULAR:
-            if is_kind(mode):
-                raise ParameterError(f"config {p}: not a regular file ({what}); give a TOML or JSON file")
-        with open(p, "rb") as f:
-            text = f.read(MAX_CONFIG_BYTES + 1)  # a pipe has no size to check first
-            size = os.fstat(f.fileno()).st_size
-    except OSError as exc:
-        raise ParameterError(f"config {p}: cannot read it ({exc.strerror or exc})") from None
-    if len(text) > MAX_CONFIG_BYTES:
-        have = f"{size} bytes" if size > MAX_CONFIG_BYTES else "more bytes than that (a pipe)"
-        raise ParameterError(f"config {p}: a config file may hold at most {MAX_CONFIG_BYTES} bytes "
-                             f"({MAX_CONFIG_BYTES / 2**20:g} MiB); it holds {have}")
-    return text
+        data = json.loads(text) if kind == "JSON" else tomllib.loads(text.decode())
+    except RecursionError:
+        raise nested from None
+    except (ValueError, UnicodeDecodeError) as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ParameterError(f"{where}: not valid {kind} ({first})") from None
+    if nested_deeper_than(data, MAX_NESTING):
+        raise nested
+    return data
+
+
+def nested_deeper_than(data, limit: int) -> bool:
+    """True when ``data`` (parsed JSON/TOML) nests dicts/lists more than ``limit`` levels, found without recursion
+    (validating a deeper value would recurse past Python's limit)."""
+    stack = [(data, 1)]
+    while stack:
+        value, depth = stack.pop()
+        if isinstance(value, (dict, list)):
+            if depth > limit:
+                return True
+            stack.extend((v, depth + 1) for v in (value.values() if isinstance(value, dict) else value))
+    return False

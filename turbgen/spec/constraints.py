@@ -13,7 +13,6 @@ places the data on the run's grid.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,7 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.errors import ParameterError
-from turbgen.spec.config import check_mapping
+from turbgen.input_files import CONSTRAINTS, read_input
+from turbgen.spec.config import check_mapping, parse_document
 from turbgen.spec.mean_wind import MeanWind
 from turbgen.spec.mean_wind_files import mean_wind_from_options
 
@@ -169,15 +169,11 @@ def load_point_series(path) -> PointSeries:
     Raises
     ------
     ParameterError
-        If the file cannot be read, is not JSON, does not satisfy the schema, or holds inconsistent values.
+        If the file cannot be read or is not a regular file (turbgen.input_files), is not JSON (or nested too
+        deeply), does not satisfy the schema, or holds inconsistent values.
     """
     p = Path(path)
-    try:
-        data = json.loads(p.read_bytes())
-    except OSError as exc:
-        raise ParameterError(f"constraint file {p}: cannot read it ({exc.strerror or exc})") from None
-    except ValueError as exc:
-        raise ParameterError(f"constraint file {p}: not valid JSON ({str(exc).splitlines()[0]})") from None
+    data = parse_document(read_input(p, CONSTRAINTS), "JSON", f"constraint file {p}")
     return point_series_from_mapping(data, str(p))
 
 

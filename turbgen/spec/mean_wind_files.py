@@ -11,18 +11,19 @@ from __future__ import annotations
 from pathlib import Path
 
 from turbgen.errors import ParameterError
+from turbgen.input_files import MEAN_HISTORY, PROFILE_TABLE, InputKind, read_input_text
 from turbgen.spec.mean_wind import MeanWind
 
 
-def read_columns(path, what: str, names: tuple[str, ...]) -> list[tuple[float, ...]]:
+def read_columns(path, kind: InputKind, names: tuple[str, ...]) -> list[tuple[float, ...]]:
     """The columns of the CSV ``path``: 2 or 3 numbers per row.
 
     Parameters
     ----------
     path : str or os.PathLike
         The file.
-    what : str
-        What the file is (for messages), e.g. "profile table".
+    kind : turbgen.input_files.InputKind
+        What the file is (its name for messages, e.g. "profile table", and its size cap).
     names : tuple of str
         Column names (for messages), e.g. ("z (m)", "U (m/s)", "direction (deg)").
 
@@ -34,14 +35,10 @@ def read_columns(path, what: str, names: tuple[str, ...]) -> list[tuple[float, .
     Raises
     ------
     ParameterError
-        When the file cannot be read, a row is not numeric, rows differ in length or a row does not
+        When the file cannot be read, is not a regular file or is too large (turbgen.input_files), a row is not numeric, rows differ in length or a row does not
         hold 2 or 3 values.
     """
-    try:
-        text = Path(path).read_text()
-    except (OSError, UnicodeDecodeError) as err:
-        raise ParameterError(f"{what} {str(path)!r} cannot be read: {getattr(err, 'strerror', None) or err}") from None
-    return columns_from_lines(text.splitlines(), f"{what} {str(path)!r}", names)
+    return columns_from_lines(read_input_text(path, kind).splitlines(), f"{kind.name} {str(path)!r}", names)
 
 
 def inline_columns(text: str, what: str, names: tuple[str, ...]) -> list[tuple[float, ...]]:
@@ -160,7 +157,7 @@ def profile_fields(text: str, inline: bool = False) -> dict:
     if kind == "table" and value:
         names = ("z (m)", "U (m/s)", "direction (deg)")
         cols = (inline_columns(value, "profile table", names) if inline
-                else read_columns(value, "profile table", names))
+                else read_columns(value, PROFILE_TABLE, names))
         return {"profile": "table", "table_heights_m": cols[0], "table_speeds_m_s": cols[1],
                 "table_directions_deg": cols[2] if len(cols) == 3 else (),
                 "table_label": "inline" if inline else Path(value).name}
@@ -202,7 +199,7 @@ def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | N
         fields["veer_deg_per_m"] = veer_deg_per_m
     if history is not None:
         names = ("t (s)", "U (m/s)", "direction (deg)")
-        cols = inline_columns(history, "mean history", names) if inline else read_columns(history, "mean history", names)
+        cols = inline_columns(history, "mean history", names) if inline else read_columns(history, MEAN_HISTORY, names)
         fields.update(history_times_s=cols[0], history_speeds_m_s=cols[1],
                       history_directions_deg=cols[2] if len(cols) == 3 else (),
                       history_label="inline" if inline else Path(history).name)

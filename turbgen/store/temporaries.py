@@ -11,14 +11,14 @@ outright leaves garbage of a dead writer, never a complete-looking output.
 
 from __future__ import annotations
 
-import ctypes
-import ctypes.util
 import errno
 import os
 import secrets
 import shutil
 import sys
 from pathlib import Path
+
+from turbgen import oscalls
 
 TEMP_MARK = ".tmp-"
 
@@ -77,16 +77,7 @@ def pid_alive(pid: int) -> bool:
         return False
     except PermissionError:
         return True
-    return not _is_zombie(pid)
-
-
-def _is_zombie(pid: int) -> bool:
-    """A killed process not yet reaped (state Z in /proc/PID/stat; False where /proc is absent)."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return False
-    return stat.rsplit(")", 1)[-1].split()[0] == "Z"
+    return not oscalls.is_zombie(pid)
 
 
 def parse_temp(name: str) -> tuple[str, int] | None:
@@ -191,27 +182,6 @@ def report_removed(removed) -> None:
         print(line, file=sys.stderr)
 
 
-_RENAME_NOREPLACE, _RENAME_EXCHANGE, _AT_FDCWD = 1, 2, -100
-
-
-def _renameat2(src: Path, dst: Path, flags: int) -> bool:
-    """renameat2(2) with ``flags``; False when the C library or the filesystem lacks it."""
-    libc_name = ctypes.util.find_library("c")
-    if not libc_name or not sys.platform.startswith("linux"):
-        return False
-    libc = ctypes.CDLL(libc_name, use_errno=True)
-    fn = getattr(libc, "renameat2", None)
-    if fn is None:
-        return False
-    fn.argtypes = (ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint)
-    if fn(_AT_FDCWD, os.fsencode(src), _AT_FDCWD, os.fsencode(dst), flags) == 0:
-        return True
-    err = ctypes.get_errno()
-    if err in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP):
-        return False
-    raise OSError(err, os.strerror(err), str(dst))
-
-
 def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
     """Move the finished temporary ``tmp`` to ``path`` atomically.
 
@@ -247,13 +217,13 @@ def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
     tmp, path = Path(tmp), Path(path)
     exists = path.exists() or path.is_symlink()
     if not replace or not exists:
-        if _renameat2(tmp, path, _RENAME_NOREPLACE):
+        if oscalls.rename_noreplace(tmp, path):
             return None
         if path.exists() or path.is_symlink():
             raise FileExistsError(errno.EEXIST, "exists", str(path))
         os.rename(tmp, path)
         return None
-    if _renameat2(tmp, path, _RENAME_EXCHANGE):
+    if oscalls.rename_exchange(tmp, path):
         return tmp
     old = temp_name(path)
     os.rename(path, old)
@@ -267,3 +237,41 @@ def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
             raise FileExistsError(errno.EEXIST, "another writer replaced it meanwhile", str(path)) from None
         raise
     return old
+
+
+def write_atomically(path: Path, write, what: str) -> Path:
+    """Write the file ``path`` through ``write(tmp)`` under a temporary name, then rename it into place (replacing an
+    older one): a failed write (a full disk) leaves neither a partial file nor the temporary.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The final file.
+    write : callable
+        ``write(tmp)`` writes the whole file at the path ``tmp`` (whose name has no meaningful suffix: give the
+        format explicitly, e.g. ``fig.savefig(tmp, format="png")``).
+    what : str
+        What the file is, for the error (e.g. "the plot").
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ParameterError
+        One line naming ``path`` when the file system refuses the write (ENOSPC, EACCES, ...).
+    """
+    from turbgen.errors import ParameterError
+
+    path = Path(path)
+    tmp = temp_name(path)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise ParameterError(f"{what} {path}: cannot write it ({exc.strerror or exc})") from None
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path

@@ -17,6 +17,7 @@ import tempfile
 from datetime import datetime, timezone
 from pathlib import Path
 
+from turbgen import oscalls
 from turbgen.version import __version__
 from turbgen.store import open_store
 from turbgen.store.temporaries import temp_prefix
@@ -87,17 +88,6 @@ def store_checksum(path: str | Path) -> str:
     return "sha256:" + h.hexdigest()
 
 
-def _umask() -> int:
-    """The process umask, read without changing it (os.umask would briefly set it for every thread)."""
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("Umask:"):
-                return int(line.split()[1], 8)
-    except (OSError, ValueError, IndexError):
-        pass
-    return 0o022
-
-
 def atomic_write(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` under a temporary name in its folder, fsync it, then rename it into place.
 
@@ -117,7 +107,7 @@ def atomic_write(path: Path, text: str) -> None:
     # and the mode an ordinary file gets (0644 under umask 022), like the stores beside it
     fd, tmp = tempfile.mkstemp(prefix=f"{temp_prefix(path)}{os.getpid()}-", dir=path.parent)
     try:
-        os.fchmod(fd, 0o666 & ~_umask())
+        os.fchmod(fd, 0o666 & ~oscalls.umask())
         with os.fdopen(fd, "w", newline="") as fh:
             fh.write(text)
             fh.flush()

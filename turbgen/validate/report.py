@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.validate.estimators import COMPONENTS
+from turbgen.store.temporaries import write_atomically
 from turbgen.validate.checks import ALPHA, Check, Curve, MetricResult
 
 SCHEMA = "turbgen-validate/1"
@@ -234,8 +235,10 @@ def plots(report, directory) -> list[Path]:
                      fontsize=9)
         fig.tight_layout()
         path = out_dir / f"{m.name}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        try:
+            write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110), "the plot")
+        finally:
+            plt.close(fig)
         files.append(path)
     return files
 

@@ -1,0 +1,147 @@
+"""The one place where a file a user names is opened for reading (``--config``, ``--constrain``, ``--mean-history``,
+``--profile table:FILE``, ``--presets-file``, ``--lidar FILE``, lidar CSV records, the service's uploads, the
+exports ``info`` reads back).
+
+Rule: a regular file (a symbolic link to one is fine) of at most a size cap per kind of file. A FIFO, a device, a
+socket or a directory is refused before anything is read (it is opened non-blocking, so a FIFO without a writer
+never blocks the open, and checked on the open descriptor), and so is a file larger than its cap (at most cap + 1
+bytes are ever read, so neither /dev/zero nor a file growing meanwhile can exhaust memory). The refusal is one
+ParameterError line naming the path and the rule.
+
+    text = read_input(path, CONFIG)                # bytes
+    check_input(path, LINE_OF_SIGHT)                  # the checks only, for a reader of its own (numpy, zarr)
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from dataclasses import dataclass
+from pathlib import Path
+
+from turbgen.errors import ParameterError
+
+
+@dataclass(frozen=True)
+class InputKind:
+    """A kind of input file: ``name`` for messages (e.g. "config") and its size cap ``max_bytes`` [bytes]."""
+
+    name: str
+    max_bytes: int
+
+
+def _mib(n: float) -> int:
+    return int(n * 2**20)
+
+
+CONFIG = InputKind("config", _mib(1))  # run, sweep and presets files (TOML/JSON)
+LIDAR_FILE = InputKind("lidar file", _mib(1))  # a lidar description (TOML/JSON)
+CONSTRAINTS = InputKind("constraint file", _mib(64))  # measured point series (JSON)
+LINE_OF_SIGHT = InputKind("line-of-sight file", _mib(256))  # a v_los record (CSV or netCDF)
+MEAN_HISTORY = InputKind("mean history", _mib(64))  # hub-height speed and direction over time
+PROFILE_TABLE = InputKind("profile table", _mib(1))  # z, U[, direction] rows
+EXPORTED = InputKind("exported file", 2**40)  # a .bts/.wnd/.sum/.dat read back by `info` (a cap for devices only)
+TOKEN = InputKind("token file", 4096)
+
+_NOT_REGULAR = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO or pipe"), (stat.S_ISCHR, "a character device"),
+                (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))  # fmt: skip
+
+
+def _refuse(path, kind: InputKind, why: str) -> ParameterError:
+    return ParameterError(f"{kind.name} {path}: {why}")
+
+
+def _check_mode(path, kind: InputKind, st: os.stat_result) -> None:
+    for is_kind, what in _NOT_REGULAR:
+        if is_kind(st.st_mode):
+            raise _refuse(path, kind, f"not a regular file ({what}); give a regular file")
+    if st.st_size > kind.max_bytes:
+        raise _too_large(path, kind, f"{st.st_size} bytes")
+
+
+def _too_large(path, kind: InputKind, have: str) -> ParameterError:
+    cap = kind.max_bytes
+    shown = f"{cap} bytes ({cap / 2**20:g} MiB)" if cap >= 2**20 else f"{cap} bytes"
+    return _refuse(path, kind, f"a {kind.name} may hold at most {shown}; it holds {have}")
+
+
+def _os_error(path, kind: InputKind, exc: OSError) -> ParameterError:
+    if isinstance(exc, FileNotFoundError):
+        return _refuse(path, kind, "does not exist")
+    return _refuse(path, kind, f"cannot read it ({exc.strerror or exc})")
+
+
+def check_input(path, kind: InputKind) -> Path:
+    """Refuse ``path`` unless it is a regular file of at most ``kind.max_bytes`` (nothing is opened or read).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    kind : InputKind
+        What it is and its size cap.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ParameterError
+        One line naming ``path`` and the rule.
+    """
+    try:
+        st = os.stat(path)
+    except OSError as exc:
+        raise _os_error(path, kind, exc) from None
+    _check_mode(path, kind, st)
+    return Path(path)
+
+
+def read_input(path, kind: InputKind) -> bytes:
+    """The bytes of the regular file ``path``, refused (before reading) when it is anything else or larger than
+    ``kind.max_bytes``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    kind : InputKind
+        What it is and its size cap.
+
+    Returns
+    -------
+    bytes
+        Its content.
+
+    Raises
+    ------
+    ParameterError
+        One line naming ``path`` and the rule (missing, unreadable, not a regular file, too large).
+    """
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        fd = os.open(path, flags)
+    except OSError as exc:
+        raise _os_error(path, kind, exc) from None
+    try:
+        _check_mode(path, kind, os.fstat(fd))
+        with os.fdopen(fd, "rb", closefd=False) as f:
+            data = f.read(kind.max_bytes + 1)
+    except OSError as exc:
+        raise _os_error(path, kind, exc) from None
+    finally:
+        os.close(fd)
+    if len(data) > kind.max_bytes:  # it grew since fstat
+        raise _too_large(path, kind, "more bytes than that")
+    return data
+
+
+def read_input_text(path, kind: InputKind) -> str:
+    """:func:`read_input` decoded as UTF-8 (ParameterError naming ``path`` when it is not UTF-8 text)."""
+    data = read_input(path, kind)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise _refuse(path, kind, f"not UTF-8 text (byte {exc.start})") from None

@@ -1,0 +1,215 @@
+"""The operating-system calls that only some systems have (Linux), each with its portable fallback, in one place.
+
+* :func:`rename_noreplace` / :func:`rename_exchange`: renameat2(2) (atomic publication without clobbering, or
+  swapping an old output with a new one); False where it is missing, and the caller renames in two steps.
+* :func:`reserve`: fallocate(2) / posix_fallocate(3), so that a full disk is met when the space is asked for, not in
+  the middle of a write a library cannot survive; a no-op where missing (the writes themselves then meet ENOSPC).
+* :func:`resident_bytes`, :func:`meminfo_available_bytes`, :func:`cgroup_headroom_bytes`, :func:`is_zombie`,
+  :func:`umask`: reads of /proc and /sys/fs/cgroup; None (or the portable answer) where they do not exist.
+* :func:`disk_free_bytes`: statvfs(2) (the space an unprivileged writer may use), else shutil.disk_usage.
+
+``TURBGEN_PORTABLE=1`` in the environment (read at every call) makes every function take its fallback, as on a
+system without these calls, so the portable paths are exercised on Linux too (tests/store/test_portable.py).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import errno
+import os
+import shutil
+import sys
+from pathlib import Path
+
+PORTABLE_ENV = "TURBGEN_PORTABLE"
+
+PROC_STATUS = Path("/proc/self/status")
+PROC_MEMINFO = Path("/proc/meminfo")
+CGROUP_ROOT = Path("/sys/fs/cgroup")
+
+_RENAME_NOREPLACE, _RENAME_EXCHANGE, _AT_FDCWD = 1, 2, -100
+_FALLOC_FL_KEEP_SIZE = 1
+_UNSUPPORTED = (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP, errno.ENOTSUP)
+
+
+def portable() -> bool:
+    """True when ``TURBGEN_PORTABLE`` is set to anything but "" or "0": every function here takes its fallback."""
+    return os.environ.get(PORTABLE_ENV, "") not in ("", "0")
+
+
+def _linux() -> bool:
+    return sys.platform.startswith("linux") and not portable()
+
+
+def _libc_function(name: str):
+    """The C library's function ``name`` (errno kept), or None where it is missing or the fallbacks are forced."""
+    if not _linux():
+        return None
+    libc_name = ctypes.util.find_library("c")
+    return getattr(ctypes.CDLL(libc_name, use_errno=True), name, None) if libc_name else None
+
+
+def _renameat2(src: Path, dst: Path, flags: int) -> bool:
+    """renameat2(2) with ``flags``; False when the C library or the file system lacks it."""
+    fn = _libc_function("renameat2")
+    if fn is None:
+        return False
+    fn.argtypes = (ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint)
+    if fn(_AT_FDCWD, os.fsencode(src), _AT_FDCWD, os.fsencode(dst), flags) == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in _UNSUPPORTED:
+        return False
+    raise OSError(err, os.strerror(err), str(dst))
+
+
+def rename_noreplace(src: Path, dst: Path) -> bool:
+    """Rename ``src`` to ``dst`` in one step unless ``dst`` exists (FileExistsError then).
+
+    Returns
+    -------
+    bool
+        False, with nothing done, where renameat2(2) with RENAME_NOREPLACE is not available.
+    """
+    return _renameat2(src, dst, _RENAME_NOREPLACE)
+
+
+def rename_exchange(src: Path, dst: Path) -> bool:
+    """Swap ``src`` and ``dst`` (both existing) in one step.
+
+    Returns
+    -------
+    bool
+        False, with nothing done, where renameat2(2) with RENAME_EXCHANGE is not available.
+    """
+    return _renameat2(src, dst, _RENAME_EXCHANGE)
+
+
+def reserve(fd: int, nbytes: int, *, keep_size: bool, name: str = "") -> bool:
+    """Allocate ``nbytes`` of disk from offset 0 of the open file ``fd``, so that later writes (or a library's
+    flush) cannot meet a full disk.
+
+    Parameters
+    ----------
+    fd : int
+        A file open for writing.
+    nbytes : int
+        Bytes to allocate.
+    keep_size : bool
+        True: the file's size is left as it is (fallocate(2) FALLOC_FL_KEEP_SIZE, Linux); False: the file grows to
+        at least ``nbytes`` (posix_fallocate(3)).
+    name : str
+        The file's name, for the error.
+
+    Returns
+    -------
+    bool
+        True if the space is reserved; False where the system or the file system cannot reserve it (the writes
+        then meet ENOSPC themselves).
+
+    Raises
+    ------
+    OSError
+        ENOSPC (or EDQUOT) when the space is not there.
+    """
+    if nbytes <= 0:
+        return True
+    if keep_size:
+        fn = _libc_function("fallocate")
+        if fn is None:
+            return False
+        fn.argtypes = (ctypes.c_int, ctypes.c_int, ctypes.c_longlong, ctypes.c_longlong)
+        err = 0 if fn(fd, _FALLOC_FL_KEEP_SIZE, 0, int(nbytes)) == 0 else ctypes.get_errno()
+    else:
+        if portable() or not hasattr(os, "posix_fallocate"):
+            return False
+        try:
+            os.posix_fallocate(fd, 0, int(nbytes))
+            err = 0
+        except OSError as exc:
+            err = exc.errno or 0
+    if err in _UNSUPPORTED:
+        return False
+    if err:
+        raise OSError(err, os.strerror(err), name or None)
+    return True
+
+
+def _proc_field(path: Path, key: str) -> str | None:
+    """The first value after ``key:`` in a /proc file, or None where it is missing, unreadable or forced off."""
+    if portable():
+        return None
+    try:
+        for line in path.read_text().splitlines():
+            if line.startswith(key + ":"):
+                return line.split()[1]
+    except (OSError, IndexError):
+        return None
+    return None
+
+
+def resident_bytes(status: Path = PROC_STATUS) -> int | None:
+    """This process's resident memory now [bytes] (VmRSS), or None where /proc does not tell (not Linux)."""
+    value = _proc_field(status, "VmRSS")
+    return int(value) * 1024 if value is not None and value.isdigit() else None  # the value is in kB
+
+
+def meminfo_available_bytes(meminfo: Path = PROC_MEMINFO) -> int | None:
+    """MemAvailable of /proc/meminfo [bytes], or None where it is missing."""
+    value = _proc_field(meminfo, "MemAvailable")
+    return int(value) * 1024 if value is not None and value.isdigit() else None  # the value is in kB
+
+
+def _read_int(path: Path) -> int | None:
+    try:
+        return int(path.read_text().strip())
+    except (OSError, ValueError):  # missing file, or "max" (no limit)
+        return None
+
+
+def cgroup_headroom_bytes(root: Path = CGROUP_ROOT) -> int | None:
+    """Limit minus usage of this process's memory cgroup (v2, then v1) [bytes], or None if unlimited or unknown."""
+    if portable():
+        return None
+    for limit_file, usage_file in (
+        ("memory.max", "memory.current"),
+        ("memory/memory.limit_in_bytes", "memory/memory.usage_in_bytes"),
+    ):
+        limit, usage = _read_int(root / limit_file), _read_int(root / usage_file)
+        if limit is not None and usage is not None and limit < 2**60:  # v1 reports "no limit" as ~2^63
+            return max(limit - usage, 0)
+    return None
+
+
+def is_zombie(pid: int) -> bool:
+    """A killed process not yet reaped (state Z in /proc/PID/stat); False where /proc does not tell."""
+    if portable():
+        return False
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[-1].split()[0] == "Z"
+
+
+def umask() -> int:
+    """The process umask, read without changing it (os.umask would briefly set it for every thread); 0o022 where
+    /proc does not tell."""
+    value = _proc_field(PROC_STATUS, "Umask")
+    try:
+        return int(value, 8) if value is not None else 0o022
+    except ValueError:
+        return 0o022
+
+
+def disk_free_bytes(path: Path) -> int | None:
+    """Bytes an unprivileged writer can still put on the existing ``path``'s file system (statvfs f_bavail), else
+    shutil.disk_usage's free bytes; None if neither tells."""
+    try:
+        if hasattr(os, "statvfs") and not portable():
+            st = os.statvfs(path)
+            return st.f_bavail * st.f_frsize
+        return shutil.disk_usage(path).free
+    except OSError:
+        return None
