@@ -21,6 +21,7 @@ this module (and the seeds are fixed, so the outcome is deterministic).
 """
 
 import copy
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -33,7 +34,7 @@ from turbgen.theory.coherence_models import exponential_yz
 from turbgen.theory.lattice import line_frequencies
 from turbgen.validate import estimators, verdict
 from turbgen.validate.band_checks import Bands
-from turbgen.validate.estimators import Estimates, WelchSetup, plan_estimates, run_estimates, segment_starts
+from turbgen.validate.estimators import Estimates, WelchSetup, plan_estimates, segment_starts
 from turbgen.validate.span_sums import span_sums
 from turbgen.validate.kaimal_expectation import kaimal_theory
 from turbgen.validate.prediction import SamplingDesign, Theory
@@ -163,20 +164,8 @@ GRID_K = Grid(512, 0.5, (0.0, 20.0, 5000.0), 4, 4, 10.0, 10.0)  # planes 0-20 m 
 R_K = 150  # realisations: relative se of an empirical variance ~ sqrt(2 / R_K) = 12 %
 
 
-class _MemoryStore:
-    """What the validator's estimators read of a store: grid, time chunk and plane spans (component -> (nx, nt, ny,
-    nz) float32)."""
-
-    def __init__(self, data: dict):
-        self.grid, self.chunk_t, self.data = GRID_K, GRID_K.nt, data
-
-    def read_span(self, component, ix, t0, t1, out=None):
-        out[...] = self.data[component][ix, t0:t1]
-        return out
-
-
 def _kaimal_factors(run: KaimalRun, f):
-    """(nl, N, N) real A_j with A_j A_j^T the u coherency matrix of line j between all points (planes, y, z):
+    """(nl, N, N) real lower-triangular A_j with A_j A_j^T the u coherency matrix of line j between all points (planes, y, z):
     the IEC exponential yz coherence (Guo et al. 2023, Eq. 12, un-squared) times the run's longitudinal one."""
     g = GRID_K
     x, y, z = (a.ravel() for a in np.meshgrid(np.asarray(g.x_m), g.y(), g.z(), indexing="ij"))
@@ -184,8 +173,7 @@ def _kaimal_factors(run: KaimalRun, f):
     dx = np.abs(x[:, None] - x[None, :])
     coh = exponential_yz(r[None], f[:, None, None], U_K, run.kaimal.a_yz, run.kaimal.lc_m)
     coh = coh * run.long_coherence()(dx[None], f[:, None, None])
-    lam, vec = np.linalg.eigh(coh)
-    return vec * np.sqrt(np.clip(lam, 0.0, None))[:, None, :]
+    return np.linalg.cholesky(coh)  # unique (an eigen-factor is not, where eigenvalues are close)
 
 
 def _kaimal_fields(rng, th: Theory, run: KaimalRun, n: int) -> list:
@@ -218,7 +206,7 @@ def kaimal():
     """R_K Kaimal fields estimated by the validator, the theory, and the verdict's checks of the first."""
     run = KaimalRun(kaimal=kaimal_params(U_K, "A", 90.0), grid=GRID_K, U_m_s=U_K, seed=1)
     assert run.vw_coherence == "white" and run.long_components == "u"
-    plan = plan_estimates(_MemoryStore({}), rotor_radius_m=15.0)
+    plan = plan_estimates(SimpleNamespace(grid=GRID_K, chunk_t=GRID_K.nt), rotor_radius_m=15.0)  # one span
     th = kaimal_theory({**run.to_attrs(), "grid": grid_to_attrs(GRID_K)}, SamplingDesign.of(plan))
     fields = _kaimal_fields(np.random.default_rng(37), th, run, R_K)
     ests = [_estimate(plan, d) for d in fields]
