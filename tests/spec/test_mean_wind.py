@@ -81,6 +81,14 @@ def test_bad_definitions_are_refused_in_one_line(fields, msg):
     assert msg in str(err.value) and "\n" not in str(err.value)
 
 
+def test_a_height_exactly_at_d_plus_z0_is_refused():
+    # ln((h - d) / z0) = 0 there: the log law's speed is 0, not a profile; just above it is positive
+    w = MeanWind(profile="log", roughness_m=0.5, displacement_m=10.0)  # d + z0 = 10.5 exactly in floating point
+    with pytest.raises(ParameterError, match="height 10.5 m is at or below d \\+ z0 = 10.5 m"):
+        w.speed_ratio([10.5, 90.0], HUB)
+    assert 0.0 < w.speed_ratio([10.5 + 1e-9], HUB)[0] < 1e-8
+
+
 def test_heights_the_profile_does_not_cover_are_refused():
     with pytest.raises(ParameterError, match="at or below d \\+ z0 = 10.5 m"):
         MeanWind(profile="log", roughness_m=0.5, displacement_m=10.0).speed_ratio([8.0, 90.0], HUB)
