@@ -151,10 +151,9 @@ def test_bad_input_is_one_line_parameter_error(call, message):
     assert message in str(err.value) and "\n" not in str(err.value)
 
 
-def test_products_need_a_store(tmp_path):
-    ds = turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50])
-    with pytest.raises(ParameterError, match="made in memory"):
-        turbgen.validate(ds)
+def test_products_refuse_what_is_not_a_field(tmp_path):
+    with pytest.raises(StoreError, match="not a complete turbgen field"):
+        turbgen.validate(turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50]).drop_attrs())
     with pytest.raises(StoreError):
         turbgen.export(tmp_path / "missing.zarr", "bts", tmp_path / "x.bts")
     with pytest.raises(ParameterError, match="format = 'csv'"):

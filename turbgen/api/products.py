@@ -21,8 +21,9 @@ def field_store(store) -> FieldStore:
         return _open_field_store(store)
     source = getattr(store, "encoding", {}).get("source")
     if source is None:
-        raise ParameterError("the field has no store (it was made in memory): give `out` to turbgen.mann / "
-                             "turbgen.kaimal, or pass the store's path")  # fmt: skip
+        from turbgen.store.memory_field import memory_field
+
+        return memory_field(store)
     return _open_field_store(source)
 
 

@@ -348,4 +348,4 @@ def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, sh
     metric = compare.coherence_metric(run.welch["f_hz"], run.welch["coh2_RL"], np.nan_to_num(coh2_th), n_eff)
     numbers = compare.preview_numbers(np.concatenate([[0.0], f]), np.concatenate([[1.0], th.coh2_RL]),
                                       np.concatenate([[th.G_RL[0]], th.G_RL]), fs.U_m_s)
-    return LidarReport(str(fs.path), desc, run, f, th.coh2_RL, th.G_RL, numbers, metric, fs.U_m_s)
+    return LidarReport(fs.label, desc, run, f, th.coh2_RL, th.G_RL, numbers, metric, fs.U_m_s)
