@@ -14,6 +14,7 @@ for the same inputs, bit for bit (the same run functions of turbgen.runs).
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Iterable, Iterator
 from dataclasses import replace
 from pathlib import Path
@@ -84,10 +85,14 @@ class MannGenerator:
                  hub_height_m: float = MANN_DEFAULTS["hub_height_m"], pad_yz: int = MANN_DEFAULTS["pad_yz"],
                  threads: int | None = None):  # fmt: skip
         from turbgen.runs.mann import build_mann_stencil
+        from turbgen.synthesis.mann_spacetime import MannSnapshots
 
         self.run = MannRun(params, grid, U_m_s, MANN_DEFAULTS["seed"], hub_height_m, pad_yz)
         self.threads = default_threads(threads)
         self._stencil = build_mann_stencil(self.run)
+        # its buffers and FFT plans are made by the first field and kept for the next seeds
+        self._snapshots = MannSnapshots(self._stencil, grid.ny, grid.nz, self.threads, buffers=2)
+        self._lock = threading.Lock()  # one field at a time: the snapshots' buffers serve each in turn
 
     def __repr__(self) -> str:
         r = self.run
@@ -106,9 +111,16 @@ class MannGenerator:
 
     @property
     def nbytes(self) -> int:
-        """Bytes [B] the generator holds between fields (its stencil)."""
-        s = self._stencil
-        return int(s.coef.nbytes + (0 if s.inv_tau is None else s.inv_tau.nbytes))
+        """Bytes [B] the generator holds between fields: its stencil and the synthesis buffers (made by the first
+        field)."""
+        from turbgen.synthesis.mann_spacetime import snapshot_memory_bytes
+        from turbgen.synthesis.mann_stencil import synthesis_box
+
+        s, g = self._stencil, self.run.grid
+        snapshots = 1 if s.inv_tau is None else g.nx
+        return int(s.coef.nbytes + (0 if s.inv_tau is None else s.inv_tau.nbytes)
+                   + snapshot_memory_bytes(synthesis_box(self.run), g.ny, g.nz, snapshots, self.threads, buffers=2,
+                                           coefficients=False))  # fmt: skip
 
     def field(self, seed: int = MANN_DEFAULTS["seed"], *, out: PathLike | None = None, overwrite: bool = False,
               chunks: int | None = None, progress: bool = False) -> xr.Dataset:  # fmt: skip
@@ -143,7 +155,9 @@ class MannGenerator:
 
         run = replace(self.run, seed=seed)
         if out is None:
-            return mann_in_memory(run, progress=progress, stencil=self._stencil, threads=self.threads)[0]
+            with self._lock:
+                return mann_in_memory(run, progress=progress, stencil=self._stencil, threads=self.threads,
+                                      snapshots=self._snapshots)[0]  # fmt: skip
         return _written(out, run.grid, overwrite, chunks, lambda path: run_mann(
             run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, stencil=self._stencil,
             threads=self.threads))
