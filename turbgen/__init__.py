@@ -15,6 +15,7 @@ The Python API (the same runs, the same bits as the ``turbgen`` commands; turbge
     validate        the store against its model (a report)
     export          bts, wnd, evo, hawc2, mt4d, hdf5
     lidar           a virtual lidar on a store
+    info            what ``turbgen info`` shows of a store, a field or an exported file
     theory          the pure theory functions: spectra, coherences, lidar preview
     errors          ParameterError, StoreError (both TurbgenError)
 
@@ -31,6 +32,7 @@ from typing import TYPE_CHECKING
 from turbgen.version import __version__
 
 _FIELDS = ("mann", "kaimal", "open_store")
+_INFO = ("info",)
 # public typed objects: name -> module
 _OBJECTS = {"MannParams": "turbgen.theory.params", "KaimalParams": "turbgen.theory.params", "Grid": "turbgen.grid",
             "MannGenerator": "turbgen.api.generator", "KaimalGenerator": "turbgen.api.generator"}
@@ -38,13 +40,13 @@ _OBJECTS = {"MannParams": "turbgen.theory.params", "KaimalParams": "turbgen.theo
 # subpackage's module (see _Package)
 _PRODUCTS = ("validate", "export", "lidar")
 _MODULES = ("theory", "errors", "api")
-__all__ = ["__version__", *_FIELDS, *_PRODUCTS, *_OBJECTS, "theory", "errors"]
+__all__ = ["__version__", *_FIELDS, *_PRODUCTS, *_INFO, *_OBJECTS, "theory", "errors"]
 
 if TYPE_CHECKING:
     from turbgen import errors, theory
     from turbgen.api.generator import KaimalGenerator, MannGenerator
     from turbgen.api.fields import kaimal, mann, open_store
-    from turbgen.api.products import export, lidar, validate
+    from turbgen.api.products import export, info, lidar, validate
     from turbgen.grid import Grid
     from turbgen.theory.params import KaimalParams, MannParams
 
@@ -100,6 +102,8 @@ class _Package(types.ModuleType):
 def __getattr__(name: str):
     if name in _FIELDS:
         return getattr(importlib.import_module("turbgen.api.fields"), name)
+    if name in _INFO:
+        return getattr(importlib.import_module("turbgen.api.products"), name)
     if name in _OBJECTS:
         return getattr(importlib.import_module(_OBJECTS[name]), name)
     if name in _MODULES:

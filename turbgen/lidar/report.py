@@ -241,6 +241,27 @@ class LidarReport:
         }
         return write_dataset(out, r.samples, r.t_arrival_s, r.u_LL, r.u_RR, attrs, overwrite=overwrite)
 
+    def data(self):
+        """The measurements as a constraint (``turbgen.mann(constrain=[report])``), in memory: the
+        :class:`turbgen.lidar.dataset.LidarData` that :meth:`write` and reading the dataset back give (v_los rounded
+        to float32 as stored, the attributes through JSON as stored).
+
+        Returns
+        -------
+        turbgen.lidar.dataset.LidarData
+            v_los [m/s], times [s], the lidar, the mean wind added, U [m/s]; ``source`` the field's label.
+        """
+        import json
+
+        from turbgen.lidar.dataset import LidarData
+        from turbgen.store.attributes import jsonable
+
+        r = self.run.samples
+        stored = json.loads(json.dumps(jsonable({"lidar": self.to_dict()["lidar"], "mean_wind": r.mean_wind_record})))
+        return LidarData(r.v_los.astype(np.float32).astype(float), np.asarray(r.time_s, float), stored["lidar"],
+                         bool(r.mean_wind_added), float(r.shear_exponent), float(self.U_m_s), self.store,
+                         stored["mean_wind"])  # fmt: skip
+
     def plots(self, directory) -> list[Path]:
         """gamma^2_RL and |G_RL|: simulated (95 % band of the estimator) against theory, MCB and cut-off marked.
 
