@@ -7,10 +7,15 @@ theory, and exports for OpenFAST / HAWC2 / lidar simulators.
 The Python API (the same runs, the same bits as the ``turbgen`` commands; turbgen.api):
 
     mann, kaimal    a field as an xarray.Dataset (in memory, or written to a store with ``out``)
+    MannGenerator, KaimalGenerator
+                    one parameter set and grid, a field per seed (the seed-free part made once)
+    MannParams, KaimalParams, Grid
+                    the frozen, validated parameter sets and grid (units in the field names)
     open_store      a store as a lazy xarray.Dataset, after checking it
     validate        the store against its model (a report)
     export          bts, wnd, evo, hawc2, mt4d, hdf5
     lidar           a virtual lidar on a store
+    info            what ``turbgen info`` shows of a store, a field or an exported file
     theory          the pure theory functions: spectra, coherences, lidar preview
     errors          ParameterError, StoreError (both TurbgenError)
 
@@ -27,16 +32,23 @@ from typing import TYPE_CHECKING
 from turbgen.version import __version__
 
 _FIELDS = ("mann", "kaimal", "open_store")
+_INFO = ("info",)
+# public typed objects: name -> module
+_OBJECTS = {"MannParams": "turbgen.theory.params", "KaimalParams": "turbgen.theory.params", "Grid": "turbgen.grid",
+            "MannGenerator": "turbgen.api.generator", "KaimalGenerator": "turbgen.api.generator"}
 # API functions named like a subpackage: turbgen.validate(...) calls the function, turbgen.validate.report is the
 # subpackage's module (see _Package)
 _PRODUCTS = ("validate", "export", "lidar")
 _MODULES = ("theory", "errors", "api")
-__all__ = ["__version__", *_FIELDS, *_PRODUCTS, "theory", "errors"]
+__all__ = ["__version__", *_FIELDS, *_PRODUCTS, *_INFO, *_OBJECTS, "theory", "errors"]
 
 if TYPE_CHECKING:
     from turbgen import errors, theory
+    from turbgen.api.generator import KaimalGenerator, MannGenerator
     from turbgen.api.fields import kaimal, mann, open_store
-    from turbgen.api.products import export, lidar, validate
+    from turbgen.api.products import export, info, lidar, validate
+    from turbgen.grid import Grid
+    from turbgen.theory.params import KaimalParams, MannParams
 
 
 class _Product:
@@ -90,6 +102,10 @@ class _Package(types.ModuleType):
 def __getattr__(name: str):
     if name in _FIELDS:
         return getattr(importlib.import_module("turbgen.api.fields"), name)
+    if name in _INFO:
+        return getattr(importlib.import_module("turbgen.api.products"), name)
+    if name in _OBJECTS:
+        return getattr(importlib.import_module(_OBJECTS[name]), name)
     if name in _MODULES:
         return importlib.import_module(f"turbgen.{name}")
     raise AttributeError(f"module 'turbgen' has no attribute {name!r}")

@@ -123,22 +123,18 @@ def test_kaimal_preset_is_the_cli_field(tmp_path):
     _assert_same_field(api, cli_ds)
 
 
-def test_schema_keys_are_keywords_and_new_schema_keys_pass_through(monkeypatch):
-    given, grid, x_m = keywords.run_inputs("mann", {"length_scale_m": 30, "dt_s": 0.25, "evo": "frozen"})
+def test_keywords_are_the_option_names_and_run_file_keys_go_in_config(tmp_path):
+    given, grid, x_m = keywords.run_inputs("mann", {"L": 30, "dt": 0.25, "evo": "frozen", "conditional_mean": False})
     assert given == {"length_scale_m": 30, "evo_time_s": None} and grid == {"dt_s": 0.25} and x_m is None
-    # a key another part of turbgen adds to the run schema is a keyword without a change here
-    schema = keywords.load_schema("mann-run")
-    schema["properties"]["conditional_mean"] = {"type": "boolean"}
-    monkeypatch.setattr(keywords, "load_schema", lambda name: schema)
-    assert keywords.run_inputs("mann", {"conditional_mean": True})[0] == {"conditional_mean": True}
-    assert "conditional_mean" in keywords.allowed_keywords("mann")
+    with pytest.raises(TypeError, match="length_scale_m"):
+        turbgen.mann(length_scale_m=30)
+    _assert_same_field(turbgen.mann(config={"length_scale_m": 30, "grid": {"dt_s": 0.25}}, **MANN_SMALL),
+                       turbgen.mann(L=30, dt=0.25, **MANN_SMALL))
 
 
 @pytest.mark.parametrize("call, message", [
-    (lambda: turbgen.mann(Lx=30), "unknown keyword(s) Lx; allowed: U, L, gamma, evo"),
-    (lambda: turbgen.kaimal(L=30), "turbgen.kaimal() got unknown keyword(s) L;"),
     (lambda: turbgen.mann(ae=0.1, ti=0.1), "give one of `ae`, `sigma_u`, `ti`"),
-    (lambda: turbgen.mann(U=12, U_m_s=12), "got `U_m_s` twice"),
+    (lambda: turbgen.kaimal(noise=0.1), "`noise` and `conditional_mean` need `constrain`"),
     (lambda: turbgen.mann(planes=[0], gates=[50]), "give `planes` or `gates`, not both"),
     (lambda: turbgen.mann(gates="50:10:1"), "step > 0 and stop >= start"),
     (lambda: turbgen.mann(nt=1), "nt = 1 is outside the allowed range"),
@@ -151,10 +147,9 @@ def test_bad_input_is_one_line_parameter_error(call, message):
     assert message in str(err.value) and "\n" not in str(err.value)
 
 
-def test_products_need_a_store(tmp_path):
-    ds = turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50])
-    with pytest.raises(ParameterError, match="made in memory"):
-        turbgen.validate(ds)
+def test_products_refuse_what_is_not_a_field(tmp_path):
+    with pytest.raises(StoreError, match="not a complete turbgen field"):
+        turbgen.validate(turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50]).drop_attrs())
     with pytest.raises(StoreError):
         turbgen.export(tmp_path / "missing.zarr", "bts", tmp_path / "x.bts")
     with pytest.raises(ParameterError, match="format = 'csv'"):

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -110,28 +110,43 @@ def mann(
     seed: int | None = None,
     out: PathLike | None = None,
     *,
-    config: PathLike | Mapping | None = None,
+    U: float | None = None,
+    ae: float | None = None,
+    sigma_u: float | None = None,
+    ti: float | None = None,
+    planes: Sequence[float] | float | None = None,
+    gates: Sequence[float] | str | None = None,
+    nt: int | None = None,
+    dt: float | None = None,
+    ny: int | None = None,
+    nz: int | None = None,
+    dy: float | None = None,
+    dz: float | None = None,
+    lifetime: str | None = None,
+    factor1: float | None = None,
+    factor2: float | None = None,
+    pad_yz: int | None = None,
+    hub_height: float | None = None,
     preset: str | None = None,
     presets_file: PathLike | None = None,
+    config: PathLike | Mapping | None = None,
     overwrite: bool = False,
     chunks: int | None = None,
     threads: int | None = None,
     stencil_cache: PathLike | None = None,
     memory: int | str | None = None,
-    progress: bool = False,
-    constrain=None,
+    constrain: Sequence | None = None,
     noise: float | None = None,
-    conditional_mean: bool | None = None,
-    **options,
+    conditional_mean: bool = False,
+    progress: bool = False,
 ) -> xr.Dataset:
     """A Mann space-time 4D field u(t, x, y, z) (Mann 1994; Guo et al. 2022): the field of ``turbgen mann``.
 
-    Keywords are the options of ``turbgen mann`` (``L``, ``gamma``, ``evo``, ``U``, ``nt``, ``dt``, ``ny``,
-    ``nz``, ``dy``, ``dz``, ``planes``, ``gates``, ``lifetime``, ``factor1``, ``factor2``, ``pad_yz``,
-    ``hub_height``, ``ae``, ``sigma_u``, ``ti``) or any key of a run file (schemas/mann-run.schema.json, e.g.
-    ``length_scale_m``, ``dt_s``). A keyword left at None is not given: it takes the run file's value, else the
-    preset's, else the default of turbgen/spec/defaults.py (L 49 m, Γ 3.1, γ 400 s, U 16 m/s, 4096 × 11 × 64 × 64
-    at dt 0.5 s, dy = dz 4.7 m, seed 1, the model σ_u of IEC class A).
+    The keywords are the options of ``turbgen mann``, with the same names, meanings and defaults (the keys of a
+    run file, e.g. ``length_scale_m``, go in ``config``). A keyword left at None is not given: it takes the run
+    file's value, else the preset's, else the default of turbgen/spec/defaults.py (L 49 m, Γ 3.1, γ 400 s, U 16 m/s,
+    4096 × 11 × 64 × 64 at dt 0.5 s, dy = dz 4.7 m, seed 1, the model σ_u of IEC class A).
+    :class:`turbgen.MannGenerator` makes further seeds of one parameter set without building the stencil again.
 
     Parameters
     ----------
@@ -143,6 +158,29 @@ def mann(
         Eddy evolution time γ [s], or ``"frozen"``.
     seed : int, optional
         Random seed (>= 0).
+    U : float, optional
+        Mean wind speed [m/s].
+    ae, sigma_u, ti : float, optional
+        The energy level, one of: αε^(2/3) [m^(4/3) s^-2], the model σ_u [m/s], or σ_u / U [-] (default: the IEC
+        class A NTM σ_1 as model σ_u).
+    planes : sequence of float, optional
+        Plane positions x [m upstream], e.g. ``[0, 50, 100]``.
+    gates : sequence of float or str, optional
+        Range gates [m] (``"start:stop:step"`` as the command's); planes = rotor 0 + gates.
+    nt, ny, nz : int, optional
+        Time samples, lateral and vertical points.
+    dt : float, optional
+        Time step [s] (dx = U dt).
+    dy, dz : float, optional
+        Lateral and vertical spacing [m] (dz default: dy).
+    lifetime : {"guo", "mann"}, optional
+        Eddy lifetime model.
+    factor1, factor2 : float, optional
+        Guo lifetime small-k slope and τ_e large-k slope factors [-].
+    pad_yz : int, optional
+        Synthesis box this many times wider in y and z, cropped.
+    hub_height : float, optional
+        Hub height [m].
     out : str or os.PathLike, optional
         Store to write. None: the field is returned in memory (no file is left), made straight into the Dataset
         when the run's one-pass arrays and the field fit ``memory``, else through a temporary store (out of core)
@@ -181,8 +219,6 @@ def mann(
         ``noise_m_s``, else 0: the field passes through the data); the run file's ``noise_m_s``.
     conditional_mean : bool, optional
         With ``constrain``: return the conditional mean (the optimal linear reconstruction, no random part).
-    **options
-        The other keywords named above.
 
     Returns
     -------
@@ -219,13 +255,11 @@ def mann(
     >>> record = c.attrs["constraints"]
     >>> record["n_samples"], record["residual_rms_m_s"] < 0.1
     (128, True)
-    >>> turbgen.mann(Lx=30)  # doctest: +ELLIPSIS
-    Traceback (most recent call last):
-    ...
-    turbgen.errors.ParameterError: turbgen.mann() got unknown keyword(s) Lx; allowed: U, L, gamma, ...
     """
-    options.update(L=L, gamma=gamma, evo=evo, seed=seed, constrain=constrain, noise=noise,
-                   conditional_mean=conditional_mean)
+    options = dict(L=L, gamma=gamma, evo=evo, seed=seed, U=U, ae=ae, sigma_u=sigma_u, ti=ti, planes=planes,
+                   gates=gates, nt=nt, dt=dt, ny=ny, nz=nz, dy=dy, dz=dz, lifetime=lifetime, factor1=factor1,
+                   factor2=factor2, pad_yz=pad_yz, hub_height=hub_height, constrain=constrain, noise=noise,
+                   conditional_mean=conditional_mean)  # fmt: skip
     given, grid, x_m = run_inputs("mann", options)
     energy = [key for key in MANN_ENERGY_KEYS if key in given]
     if len(energy) > 1:
@@ -333,22 +367,43 @@ def kaimal(
     seed: int | None = None,
     out: PathLike | None = None,
     *,
-    config: PathLike | Mapping | None = None,
+    turb_class: str | None = None,
+    hub_height: float | None = None,
+    sigma: Sequence[float] | None = None,
+    lengths: Sequence[float] | None = None,
+    ayz: float | None = None,
+    lc: float | None = None,
+    long_model: str | None = None,
+    ax: float | None = None,
+    bx: float | None = None,
+    long_components: str | None = None,
+    vw_coherence: str | None = None,
+    rescale: bool = False,
+    planes: Sequence[float] | float | None = None,
+    gates: Sequence[float] | str | None = None,
+    nt: int | None = None,
+    dt: float | None = None,
+    ny: int | None = None,
+    nz: int | None = None,
+    dy: float | None = None,
+    dz: float | None = None,
     preset: str | None = None,
     presets_file: PathLike | None = None,
+    config: PathLike | Mapping | None = None,
     overwrite: bool = False,
     chunks: int | None = None,
     threads: int | None = None,
+    constrain: Sequence | None = None,
+    noise: float | None = None,
+    conditional_mean: bool = False,
     progress: bool = False,
-    **options,
 ) -> xr.Dataset:
     """A Kaimal 4D field with longitudinal coherence (IEC 61400-1; Guo et al. 2023): the field of ``turbgen kaimal``.
 
-    Keywords are the options of ``turbgen kaimal`` (``U``, ``turb_class``, ``hub_height``, ``sigma``, ``lengths``,
-    ``ayz``, ``lc``, ``long_model``, ``ax``, ``bx``, ``long_components``, ``vw_coherence``, ``rescale``, ``nt``,
-    ``dt``, ``ny``, ``nz``, ``dy``, ``dz``, ``planes``, ``gates``) or any key of a run file
-    (schemas/kaimal-run.schema.json). A keyword left at None takes the run file's value, else the preset's, else
-    the default (U 16 m/s, class A, hub 90 m, 4096 × 11 × 31 × 31 at dt 0.5 s, dy = dz 5 m, seed 1).
+    The keywords are the options of ``turbgen kaimal``, with the same names, meanings and defaults (``turb_class``
+    is ``--class``; the keys of a run file go in ``config``). A keyword left at None takes the run file's value,
+    else the preset's, else the default (U 16 m/s, class A, hub 90 m, 4096 × 11 × 31 × 31 at dt 0.5 s, dy = dz 5 m,
+    seed 1).
 
     Parameters
     ----------
@@ -356,6 +411,26 @@ def kaimal(
         Hub-height mean wind speed [m/s].
     seed : int, optional
         Random seed (>= 0).
+    turb_class : {"A+", "A", "B", "C"}, optional
+        IEC turbulence class (``--class``).
+    hub_height : float, optional
+        Hub height [m].
+    sigma, lengths : sequence of three floats, optional
+        Explicit σ_u, σ_v, σ_w [m/s] (instead of the class's) and Kaimal lengths L1, L2, L3 [m].
+    ayz, lc : float, optional
+        yz coherence decay a_yz [-] and scale Lc [m].
+    long_model : {"exp", "simley-pao", "kristensen"}, optional
+        Longitudinal coherence model.
+    ax, bx : float, optional
+        a_x [-] and b_x [1/m] of the exp model.
+    long_components : {"u", "uvw"}, optional
+        Components given the longitudinal coherence.
+    vw_coherence : {"white", "exp"}, optional
+        yz coherence of v and w.
+    rescale : bool, optional
+        Scale the spectra so the expected σ is the nominal one.
+    planes, gates, nt, dt, ny, nz, dy, dz : optional
+        The grid, as for :func:`mann`.
     out : str or os.PathLike, optional
         Store to write. None: the field is returned in memory (no file is left), made straight into the Dataset
         when the run's arrays (spectrum in memory) and the field fit 80 % of the available memory, else through a
@@ -372,10 +447,16 @@ def kaimal(
         Time samples per store chunk; never changes the field.
     threads : int, optional
         FFT threads (default: all cores); never changes the field.
+    constrain : list, optional
+        Condition the field on measurements (Hoffman & Ribak 1991), as ``turbgen kaimal --constrain``: point time
+        series JSON files, ``turbgen lidar --out`` datasets, or what :func:`turbgen.lidar` returned (in memory).
+        Each full-rate series' record mean is removed first.
+    noise : float, optional
+        With ``constrain``: measurement-noise σ [m/s] >= 0 of every value (default: each file's, else 0).
+    conditional_mean : bool, optional
+        With ``constrain``: return the conditional mean (no random part).
     progress : bool, optional
         Show a progress bar on stderr.
-    **options
-        The other keywords named above.
 
     Returns
     -------
@@ -386,7 +467,8 @@ def kaimal(
     Raises
     ------
     ParameterError
-        For an unknown keyword, a value outside its range, a field that fits neither memory nor disk.
+        For a value outside its range, a field that fits neither memory nor disk, ``noise`` or
+        ``conditional_mean`` without ``constrain``, constraint data that do not match the run.
     StoreError
         For an existing ``out`` without ``overwrite``, or an ``out`` that is not a turbgen store with it.
 
@@ -399,7 +481,12 @@ def kaimal(
     """
     from turbgen.runs.kaimal import in_memory_bytes, kaimal_generator, kaimal_in_memory, plan_spill, run_kaimal
 
-    options.update(U=U, seed=seed)
+    options = dict(U=U, seed=seed, turb_class=turb_class, hub_height=hub_height, sigma=sigma, lengths=lengths,
+                   ayz=ayz, lc=lc, long_model=long_model, ax=ax, bx=bx, long_components=long_components,
+                   vw_coherence=vw_coherence, rescale=rescale, planes=planes, gates=gates, nt=nt, dt=dt, ny=ny, nz=nz,
+                   dy=dy, dz=dz)  # fmt: skip
+    if not constrain and (noise is not None or conditional_mean):
+        raise ParameterError("`noise` and `conditional_mean` need `constrain`")
     given, grid, x_m = run_inputs("kaimal", options)
     user = _presets(preset, presets_file)
 
@@ -410,6 +497,13 @@ def kaimal(
     run = KaimalRun.from_mapping(merge_run_inputs(_file_mapping(config, "kaimal-run"), given, grid,
                                                   preset_keys=None if preset is None else keys,
                                                   replaces=KAIMAL_REPLACES, x_m=x_m))  # fmt: skip
+
+    if constrain:
+        make = _kaimal_constrained_maker(run, constrain, noise, conditional_mean, overwrite, chunks, threads)
+        if out is None:  # the conditioned field is made into a store (a temporary one, loaded back)
+            return _through_store(make, run.grid, f"kaimal_s{run.seed}.zarr")
+        make(Path(out))
+        return _as_dataset(Path(out))
 
     def make(path: Path) -> None:
         check_output_path(path, "`out`")
@@ -426,3 +520,22 @@ def kaimal(
         return _through_store(make, run.grid, f"kaimal_s{run.seed}.zarr")
     make(Path(out))
     return _as_dataset(Path(out))
+
+
+def _kaimal_constrained_maker(run: KaimalRun, constrain, noise, conditional_mean: bool, overwrite, chunks, threads):
+    """The function writing ``run`` conditioned on ``constrain`` to a path as ``turbgen kaimal --constrain`` does
+    (turbgen.runs.constrain_kaimal.run_kaimal_constrained); the data are loaded, placed and the memory checked here,
+    before anything is written."""
+    from turbgen.runs.constrain import load_constraints
+    from turbgen.runs.constrain_kaimal import place_kaimal, require_constrained_memory, run_kaimal_constrained
+
+    constraints = load_constraints([constrain] if isinstance(constrain, (str, os.PathLike)) else constrain)
+    require_constrained_memory(run, place_kaimal(run, constraints, noise), threads)
+
+    def make(path: Path) -> None:
+        check_output_path(path, "`out`")
+        check_new_store(path, run.grid, chunk_t=chunks, overwrite=overwrite)
+        run_kaimal_constrained(run, path, constraints, noise_m_s=noise, conditional_mean=conditional_mean,
+                               overwrite=overwrite, chunk_t=chunks, threads=threads)  # fmt: skip
+
+    return make

@@ -1,9 +1,8 @@
-"""The keywords of ``turbgen.mann`` / ``turbgen.kaimal`` as run-mapping keys, data-driven.
+"""The keywords of ``turbgen.mann`` / ``turbgen.kaimal`` as run-mapping keys.
 
-Accepted, for a model: the command's option names (turbgen.spec.run_inputs: ``L``, ``gamma``, ``evo``, ``U``, ``nt``,
-``dt``, ``ny``, ``nz``, ``dy``, ``dz``, ...), ``planes`` and ``gates``, and every key of the model's run schema
-(turbgen/schemas/<model>-run.schema.json) and of its ``grid`` table under its own name. A key added to a run schema is
-therefore a keyword at once; anything else is refused, naming the keywords allowed.
+The keywords are the commands' option names (turbgen.spec.run_inputs: ``L``, ``gamma``, ``evo``, ``U``, ``nt``,
+``dt``, ``ny``, ``nz``, ``dy``, ``dz``, ...) with ``planes`` and ``gates``; a run file's keys (``length_scale_m``, ...)
+are given through ``config``.
 """
 
 from __future__ import annotations
@@ -11,25 +10,13 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from turbgen.errors import ParameterError
-from turbgen.spec.config import load_schema
 from turbgen.spec.run_inputs import GRID_OPTIONS, KAIMAL_OPTIONS, MANN_OPTIONS, range_positions
 from turbgen.theory.ranges import LIMITS
 
 _ALIASES = {"mann": MANN_OPTIONS, "kaimal": KAIMAL_OPTIONS}
 PLANE_KEYWORDS = ("planes", "gates")
-
-
-def schema_keys(model: str) -> tuple[frozenset, frozenset]:
-    """The run keys and the grid keys of ``model``'s run schema (``grid`` itself excluded)."""
-    props = load_schema(f"{model}-run")["properties"]
-    return frozenset(props) - {"grid"}, frozenset(props["grid"]["properties"])
-
-
-def allowed_keywords(model: str) -> list[str]:
-    """Every keyword ``turbgen.<model>(...)`` takes for the run, sorted: option names first, then schema keys."""
-    run_keys, grid_keys = schema_keys(model)
-    options = [*_ALIASES[model], *GRID_OPTIONS, *PLANE_KEYWORDS]
-    return options + sorted((run_keys | grid_keys) - set(options))
+# flags: False is "not given", as an option not typed on the command line (a run file's true stays)
+_FLAGS = ("rescale", "conditional_mean")
 
 
 def _evo_value(value):
@@ -54,40 +41,30 @@ def _plane_positions(planes, gates) -> list[float] | None:
 
 
 def run_inputs(model: str, options: Mapping) -> tuple[dict, dict, list[float] | None]:
-    """Split keyword values into (run keys, grid keys, plane positions [m] or None); None values are "not given".
+    """Split keyword values into (run keys, grid keys, plane positions [m] or None); None values (and a flag's
+    False) are "not given".
 
     Parameters
     ----------
     model : str
         "mann" or "kaimal".
     options : Mapping
-        Keyword -> value, as passed to ``turbgen.mann`` / ``turbgen.kaimal``.
+        Option name -> value, as passed to ``turbgen.mann`` / ``turbgen.kaimal``.
 
     Returns
     -------
     tuple
         (run-mapping keys given, grid-table keys given, plane positions [m upstream] or None).
-
-    Raises
-    ------
-    ParameterError
-        For keywords the model does not take (naming them and the allowed ones).
     """
     aliases = _ALIASES[model]
-    run_keys, grid_keys = schema_keys(model)
-    unknown = sorted(set(options) - set(aliases) - set(GRID_OPTIONS) - set(PLANE_KEYWORDS) - run_keys - grid_keys)
-    if unknown:
-        raise ParameterError(f"turbgen.{model}() got unknown keyword(s) {', '.join(unknown)}; "
-                             f"allowed: {', '.join(allowed_keywords(model))}")  # fmt: skip
     given, grid = {}, {}
     for name, value in options.items():
-        if value is None or name in PLANE_KEYWORDS:
+        if value is None or name in PLANE_KEYWORDS or (name in _FLAGS and value is False):
             continue
         if name == "evo":
             value = _evo_value(value)
-        table, key = (grid, GRID_OPTIONS.get(name, name)) if name in GRID_OPTIONS or name in grid_keys else \
-            (given, aliases.get(name, name))
-        if key in table:
-            raise ParameterError(f"turbgen.{model}() got `{key}` twice (as {name} and under another name)")
-        table[key] = value
+        if name in GRID_OPTIONS:
+            grid[GRID_OPTIONS[name]] = value
+        else:
+            given[aliases[name]] = value
     return given, grid, _plane_positions(options.get("planes"), options.get("gates"))

@@ -1,38 +1,51 @@
-"""``turbgen.validate``, ``turbgen.export`` and ``turbgen.lidar``: what is made from a field store.
+"""``turbgen.validate``, ``turbgen.export``, ``turbgen.lidar`` and ``turbgen.info``: what is made from a field.
 
-Each takes a store as a path, a :class:`turbgen.store.FieldStore`, or a Dataset of :func:`turbgen.open_store` (or of
-``turbgen.mann`` / ``turbgen.kaimal`` with ``out``), and calls the library functions the commands call.
+Each takes a store as a path, a :class:`turbgen.store.FieldStore`, a Dataset of :func:`turbgen.open_store`, or a
+field made in memory (``turbgen.mann`` / ``turbgen.kaimal`` without ``out``, a generator's field: read from its arrays,
+no file written), and calls the library functions the commands call, with the commands' options as keywords.
 """
 
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 from turbgen.errors import ParameterError
 from turbgen.store import FieldStore, open_store as _open_field_store
 from turbgen.store.paths import check_output_path
 
 
+DECODE_LIMIT_BYTES = 256 * 2**20  # info decodes every chunk of a store up to this size on disk
+
+
 def field_store(store) -> FieldStore:
-    """The open FieldStore of ``store``: a path, a FieldStore, or a Dataset whose ``encoding["source"]`` is a store."""
+    """The open FieldStore of ``store``: a path, a FieldStore, a Dataset whose ``encoding["source"]`` is a store, or
+    a field in memory (turbgen.store.memory_field.MemoryField over its arrays)."""
     if isinstance(store, FieldStore):
         return store
     if isinstance(store, (str, os.PathLike)):
         return _open_field_store(store)
     source = getattr(store, "encoding", {}).get("source")
     if source is None:
-        raise ParameterError("the field has no store (it was made in memory): give `out` to turbgen.mann / "
-                             "turbgen.kaimal, or pass the store's path")  # fmt: skip
+        from turbgen.store.memory_field import memory_field
+
+        return memory_field(store)
     return _open_field_store(source)
 
 
-def validate(store, *, rotor_radius: float | None = None):
+def validate(store, *, plots: str | os.PathLike | None = None, overwrite: bool = False,
+             rotor_radius: float | None = None):
     """Re-estimate a store's statistics and compare them with its model on its grid (``turbgen validate``).
 
     Parameters
     ----------
     store : str, os.PathLike, FieldStore or xarray.Dataset
-        The store (a Dataset of :func:`turbgen.open_store`, or of ``turbgen.mann(..., out=...)``).
+        The store, or a field (``turbgen.mann(...)``, in memory or with ``out``).
+    plots : str or os.PathLike, optional
+        Write one PNG per comparison (estimate, 95 % band, theory) into this directory (PNGs already there need
+        ``overwrite``).
+    overwrite : bool, optional
+        Replace PNGs already in the ``plots`` directory.
     rotor_radius : float, optional
         Rotor radius R [m] of the rotor-effective wind speed (default 63 m, or the largest disc inside a smaller
         grid).
@@ -52,15 +65,36 @@ def validate(store, *, rotor_radius: float | None = None):
 
     Examples
     --------
-    >>> import tempfile, turbgen
-    >>> ds = turbgen.kaimal(nt=256, ny=6, nz=6, planes=[0, 50], out=tempfile.mkdtemp() + "/k.zarr")
+    >>> import turbgen
+    >>> ds = turbgen.kaimal(nt=256, ny=6, nz=6, planes=[0, 50])
     >>> report = turbgen.validate(ds)
     >>> report.passed, "spectrum_u" in [m.name for m in report.metrics]
     (True, True)
     """
     from turbgen.validate import validate as run_validation
 
-    return run_validation(field_store(store), rotor_radius_m=rotor_radius)
+    fs = field_store(store)
+    if plots is not None:
+        check_plots_dir(plots, overwrite)
+    report = run_validation(fs, rotor_radius_m=rotor_radius)
+    if plots is not None:
+        report.plots(plots)
+    return report
+
+
+def check_plots_dir(plots_dir: str | os.PathLike, overwrite: bool, name: str = "`plots`") -> None:
+    """Refuse (one line, before any work) a plots path that is a file, unwritable, or holds PNGs without
+    ``overwrite``."""
+    p = Path(plots_dir)
+    if p.exists():
+        if not p.is_dir():
+            raise ParameterError(f"{name} = {str(plots_dir)!r} is a file, not a directory")
+        if not os.access(p, os.W_OK):
+            raise ParameterError(f"{name} = {str(plots_dir)!r} is not writable")
+        if not overwrite and any(p.glob("*.png")):
+            raise ParameterError(f"{name} = {str(plots_dir)!r} already holds PNG files; pass overwrite to replace them")
+        return
+    check_output_path(plots_dir, name, create_parents=True)  # report.plots makes missing directories
 
 
 def export(store, format: str, out: str | os.PathLike, *, plane: int | None = None,
@@ -68,7 +102,7 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
            veer: float | None = None, mean_history: str | os.PathLike | None = None, transient: str | None = None,
            iec_class: str | None = None, rotor_diameter: float | None = None, transient_start: float = 10.0,
            transient_sign: str = "+", tower: bool = False, periodic: bool = True, drop_below_ground: bool = False,
-           runner_files: bool = False, overwrite: bool = False):
+           runner_files: bool = True, overwrite: bool = False):
     """Write a store for InflowWind, HAWC2, the lidar simulator, the 4D Mann scripts or HDF5 (``turbgen export``).
 
     The keywords are ``turbgen export``'s options, made into the request by the same function
@@ -113,7 +147,7 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
         Drop grid rows at or below the ground instead of refusing.
     runner_files : bool, optional
         Also write the InflowWind input file (bts, wnd, evo, hawc2), the HAWC2 block (hawc2) and the
-        LidarSim Wind Evolution section (evo); default False.
+        LidarSim Wind Evolution section (evo); default True, as the command's.
     overwrite : bool, optional
         Replace existing output files.
 
@@ -154,7 +188,9 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
 
 
 def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLike | None = None,
-          overwrite: bool = False, rotor_radius: float | None = None, mean_wind: bool = False, shear: float = 0.2):
+          overwrite: bool = False, rotor_radius: float | None = None, mean_wind: bool = False, shear: float = 0.2,
+          profile: str | None = None, veer: float | None = None, mean_history: str | os.PathLike | None = None,
+          plots: str | os.PathLike | None = None):
     """Measure a store with a virtual lidar and compare its preview quality with theory (``turbgen lidar``).
 
     Parameters
@@ -175,6 +211,15 @@ def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLi
         Add the power-law mean wind to u before projecting.
     shear : float, optional
         Power-law shear exponent of ``mean_wind``.
+    profile : str, optional
+        ``mean_wind`` profile as :func:`export` takes it: ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``
+        (replaces ``shear``).
+    veer : float, optional
+        ``mean_wind`` veer [deg/m].
+    mean_history : str or os.PathLike, optional
+        ``mean_wind`` hub-height history CSV (t, U [, direction]).
+    plots : str or os.PathLike, optional
+        Write the gamma^2_RL and |G_RL| plots (simulated with 95 % band, theory) into this directory.
 
     Returns
     -------
@@ -200,11 +245,66 @@ def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLi
     from turbgen.lidar import report
     from turbgen.lidar.dataset import check_output
 
+    wind = lidar_mean_wind(mean_wind, shear, profile, veer, mean_history)
     fs = field_store(store)
     if out is not None:
         check_output(out, overwrite)
     result = report.lidar_report(fs, None if lidar is None else str(lidar), rotor_radius_m=rotor_radius,
-                                 add_mean_wind=mean_wind, shear_exponent=shear)  # fmt: skip
+                                 add_mean_wind=mean_wind, shear_exponent=shear, mean_wind=wind)  # fmt: skip
     if out is not None:
         result.write(out, overwrite=overwrite)
+    if plots is not None:
+        result.plots(plots)
     return result
+
+
+def lidar_mean_wind(add: bool, shear_exponent: float, profile, veer, history):
+    """The MeanWind of the lidar's ``profile`` / ``veer`` / ``mean_history`` (None when none is given: the power law
+    of ``shear_exponent``); each needs ``mean_wind`` (``add``)."""
+    from turbgen.spec.mean_wind_files import mean_wind_from_options
+
+    given = [n for n, v in (("--profile", profile), ("--veer", veer), ("--mean-history", history)) if v is not None]
+    if given and not add:
+        raise ParameterError(f"{', '.join(given)} belong to --mean-wind")
+    if profile is None and given:
+        profile = f"power:{shear_exponent!r}"
+    return mean_wind_from_options(profile, veer, None if history is None else str(history))
+
+
+def info(store) -> dict:
+    """What ``turbgen info`` shows of a store, a field or an exported file, as JSON-serialisable values.
+
+    Parameters
+    ----------
+    store : str, os.PathLike, FieldStore or xarray.Dataset
+        A store, a field (in memory or opened), or an exported .bts, InflowWind .dat or .sum file.
+
+    Returns
+    -------
+    dict
+        A field: model, grid, shape_t_x_y_z, duration_s [s], U_m_s [m/s], seed, parameters, units,
+        size_on_disk_bytes (0 in memory), ... and chunks_decoded (whether every value was read and checked: stores
+        up to 256 MiB on disk, and every field in memory). A file: its header rows.
+
+    Raises
+    ------
+    StoreError
+        If the store is missing, incomplete or corrupted (a value that does not decode or is not finite).
+
+    Examples
+    --------
+    >>> import turbgen
+    >>> s = turbgen.info(turbgen.kaimal(nt=64, ny=4, nz=4, planes=[0, 50]))
+    >>> s["model"], s["shape_t_x_y_z"], s["path"], s["chunks_decoded"]
+    ('kaimal', [64, 2, 4, 4], None, True)
+    """
+    if isinstance(store, (str, os.PathLike)) and Path(store).expanduser().is_file():
+        from turbgen.export.describe import file_summary
+
+        return dict(file_summary(Path(store).expanduser().absolute()))
+    fs = field_store(store)
+    summary = fs.summary()
+    summary["chunks_decoded"] = summary["size_on_disk_bytes"] <= DECODE_LIMIT_BYTES
+    if summary["chunks_decoded"]:
+        fs.check_chunks()
+    return summary

@@ -7,11 +7,9 @@ from pathlib import Path
 
 import click
 
+from turbgen.api.products import info as store_info
 from turbgen.resources import format_bytes
-from turbgen.store import open_store
 from turbgen.store.temporaries import remove_dead_temporaries, report_removed
-
-DECODE_LIMIT_BYTES = 256 * 2**20  # stores up to this size on disk have every chunk decoded
 
 
 def _value(v) -> str:
@@ -100,11 +98,7 @@ def info(store: str, as_json: bool):
     report_removed(remove_dead_temporaries(path.parent, [path.name]))
     if path.is_dir() and not (path / "zarr.json").is_file():
         report_removed(remove_dead_temporaries(path))  # e.g. a sweep directory
-    fs = open_store(path)
-    summary = fs.summary()
-    summary["chunks_decoded"] = summary["size_on_disk_bytes"] <= DECODE_LIMIT_BYTES
-    if summary["chunks_decoded"]:
-        fs.check_chunks()
+    summary = store_info(path)
     if as_json:
         click.echo(json.dumps(summary, indent=2))
     else:

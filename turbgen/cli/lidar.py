@@ -77,12 +77,13 @@ def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_expone
     Exit code 0 when the simulated coherence agrees with theory, 1 when it departs beyond the
     estimator's uncertainty, 2 for usage errors (nothing written).
     """
+    from turbgen.api.products import lidar_mean_wind
     from turbgen.lidar import report
     from turbgen.lidar.dataset import check_output
     from turbgen.store import open_store
 
     try:
-        wind = _mean_wind(mean_wind, shear_exponent, profile, veer, mean_history)
+        wind = lidar_mean_wind(mean_wind, shear_exponent, profile, veer, mean_history)
         fs = open_store(store)
         if out is not None:
             check_output(out, overwrite)
@@ -101,15 +102,3 @@ def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_expone
     click.echo(json.dumps(result.to_dict(), indent=1) if as_json else result.text())
     sys.exit(0 if result.passed else 1)
 
-
-def _mean_wind(add: bool, shear_exponent: float, profile, veer, history):
-    """The MeanWind of --profile/--veer/--mean-history (None when none is given: --shear's power law)."""
-    from turbgen.errors import ParameterError
-    from turbgen.spec.mean_wind_files import mean_wind_from_options
-
-    given = [n for n, v in (("--profile", profile), ("--veer", veer), ("--mean-history", history)) if v is not None]
-    if given and not add:
-        raise ParameterError(f"{', '.join(given)} belong to --mean-wind")
-    if profile is None and given:
-        profile = f"power:{shear_exponent!r}"
-    return mean_wind_from_options(profile, veer, history)

@@ -3,30 +3,12 @@
 from __future__ import annotations
 
 import json
-import os
 import sys
-from pathlib import Path
 
 import click
 
+from turbgen.api.products import check_plots_dir
 from turbgen.validate import DEFAULT_ROTOR_RADIUS_M, validate as run_validation
-
-
-def _check_plots_dir(plots_dir: str, overwrite: bool) -> None:
-    """Refuse (one line, before validating) a --plots path that is a file, unwritable, or holds PNGs."""
-    from turbgen.errors import ParameterError
-    from turbgen.store.paths import check_output_path
-
-    p = Path(plots_dir)
-    if p.exists():
-        if not p.is_dir():
-            raise ParameterError(f"--plots = {plots_dir!r} is a file, not a directory")
-        if not os.access(p, os.W_OK):
-            raise ParameterError(f"--plots = {plots_dir!r} is not writable")
-        if not overwrite and any(p.glob("*.png")):
-            raise ParameterError(f"--plots = {plots_dir!r} already holds PNG files; pass --overwrite to replace them")
-        return
-    check_output_path(plots_dir, "--plots", create_parents=True)  # report.plots makes missing directories
 
 
 @click.command("validate")
@@ -46,7 +28,7 @@ def validate(store, as_json, plots_dir, overwrite, rotor_radius):
     that is not a complete turbgen store.
     """
     if plots_dir is not None:
-        _check_plots_dir(plots_dir, overwrite)
+        check_plots_dir(plots_dir, overwrite, "--plots")
     report = run_validation(store, rotor_radius_m=rotor_radius)
     if plots_dir is not None:
         files = report.plots(plots_dir)

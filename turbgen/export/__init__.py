@@ -72,10 +72,10 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
     _check_applicable(fmt, request)
     if not isinstance(store, FieldStore):
         store = open_store(store)
-    if Path(store.path).resolve() in Path(out).resolve().parents:
+    if store.path is not None and Path(store.path).resolve() in Path(out).resolve().parents:
         raise ParameterError(f"`out` = {str(out)!r} is inside the store {str(store.path)!r}; write the export beside it")
     need = export_bytes(fmt, store.grid)
-    require_disk(out, need, f"the {fmt} export of {store.path.name}",
+    require_disk(out, need, f"the {fmt} export of {Path(store.label).name}",
                  "free space there or choose another `out`")
     return EXPORTERS[fmt](store, out, request)
 

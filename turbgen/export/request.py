@@ -68,7 +68,7 @@ class ExportRequest:
 
     def source(self, fs) -> str:
         """The source store's name in the exports: ``source_label``, or the store's path."""
-        return str(fs.path) if self.source_label is None else self.source_label
+        return fs.label if self.source_label is None else self.source_label
 
     def __post_init__(self):
         if self.plane is not None:

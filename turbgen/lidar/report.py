@@ -242,6 +242,27 @@ class LidarReport:
         }
         return write_dataset(out, r.samples, r.t_arrival_s, r.u_LL, r.u_RR, attrs, overwrite=overwrite)
 
+    def data(self):
+        """The measurements as a constraint (``turbgen.mann(constrain=[report])``), in memory: the
+        :class:`turbgen.lidar.dataset.LidarData` that :meth:`write` and reading the dataset back give (v_los rounded
+        to float32 as stored, the attributes through JSON as stored).
+
+        Returns
+        -------
+        turbgen.lidar.dataset.LidarData
+            v_los [m/s], times [s], the lidar, the mean wind added, U [m/s]; ``source`` the field's label.
+        """
+        import json
+
+        from turbgen.lidar.dataset import LidarData
+        from turbgen.store.attributes import jsonable
+
+        r = self.run.samples
+        stored = json.loads(json.dumps(jsonable({"lidar": self.to_dict()["lidar"], "mean_wind": r.mean_wind_record})))
+        return LidarData(r.v_los.astype(np.float32).astype(float), np.asarray(r.time_s, float), stored["lidar"],
+                         bool(r.mean_wind_added), float(r.shear_exponent), float(self.U_m_s), self.store,
+                         stored["mean_wind"])  # fmt: skip
+
     def plots(self, directory) -> list[Path]:
         """gamma^2_RL and |G_RL|: simulated (95 % band of the estimator) against theory, MCB and cut-off marked.
 
@@ -351,4 +372,4 @@ def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, sh
     metric = compare.coherence_metric(run.welch["f_hz"], run.welch["coh2_RL"], np.nan_to_num(coh2_th), n_eff)
     numbers = compare.preview_numbers(np.concatenate([[0.0], f]), np.concatenate([[1.0], th.coh2_RL]),
                                       np.concatenate([[th.G_RL[0]], th.G_RL]), fs.U_m_s)
-    return LidarReport(str(fs.path), desc, run, f, th.coh2_RL, th.G_RL, numbers, metric, fs.U_m_s)
+    return LidarReport(fs.label, desc, run, f, th.coh2_RL, th.G_RL, numbers, metric, fs.U_m_s)

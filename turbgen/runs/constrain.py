@@ -543,8 +543,12 @@ def describe_constraints(record: dict) -> list[str]:
 
 
 def load_constraints(files) -> list:
-    """Each of ``files`` loaded (:func:`load_constraint`); PointSeries / LidarData given already loaded are kept."""
-    return [load_constraint(f) if isinstance(f, (str, Path)) or hasattr(f, "__fspath__") else f for f in files]
+    """Each of ``files`` loaded (:func:`load_constraint`); PointSeries / LidarData given already loaded are kept, and a
+    lidar report of a field in memory (turbgen.lidar.report.LidarReport) gives its measurements (its ``data()``)."""
+    from turbgen.lidar.report import LidarReport
+
+    return [load_constraint(f) if isinstance(f, (str, Path)) or hasattr(f, "__fspath__")
+            else f.data() if isinstance(f, LidarReport) else f for f in files]  # fmt: skip
 
 
 def constraint_digest(placed: PlacedData, conditional_mean: bool) -> str:

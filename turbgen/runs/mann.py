@@ -131,13 +131,15 @@ def _run_stencil(run: MannRun, stencil: MannStencil | None, cache_dir) -> MannSt
     return build_mann_stencil(run, cache_dir)
 
 
-def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress: bool, in_place: bool = False) -> dict:
+def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress: bool, in_place: bool = False,
+              gen: MannSnapshots | None = None) -> dict:  # fmt: skip
     """Every plane of ``run`` from ``stencil`` into ``writer`` (a StoreWriter or MemoryWriter); returns
     {component: [float64 sum, sum of squares]} of the written values. ``in_place`` (a MemoryWriter): the planes are
-    transformed straight into the writer's field (MemoryWriter.plane), not copied there."""
+    transformed straight into the writer's field (MemoryWriter.plane), not copied there. ``gen``: the snapshot
+    generator on ``stencil`` (its buffers and plans kept from an earlier seed; default a new one)."""
     g = run.grid
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
-    gen = MannSnapshots(stencil, g.ny, g.nz, threads, buffers=2)
+    gen = gen or MannSnapshots(stencil, g.ny, g.nz, threads, buffers=2)
     if stencil.coef is None:  # one snapshot, its stencil computed on demand: no compiled code has run yet
         _touch_while_loading_kernels(gen, output=not in_place)
     show = progress and sys.stderr.isatty()
@@ -226,17 +228,26 @@ def mann_in_memory(
     stencil: MannStencil | None = None,
     threads: int | None = None,
     cache_dir: str | Path | None = None,
+    snapshots: MannSnapshots | None = None,
 ):
     """The field of ``run`` in memory, as the store run_mann writes would open: (xarray.Dataset, summary).
 
     The same values, coordinates and attributes (but ``created_utc``) as ``xarray.open_zarr`` of run_mann's store
-    (turbgen.store.memory.MemoryWriter); the arguments as run_mann's; the summary's path is None. Raises
-    ParameterError when in_memory_bytes exceeds the available memory.
+    (turbgen.store.memory.MemoryWriter); the arguments as run_mann's; the summary's path is None. ``snapshots``:
+    a snapshot generator on ``stencil`` (MannSnapshots(stencil, ny, nz, threads, buffers=2)) whose buffers and plans
+    an earlier seed made: the same field, without allocating them again. Raises ParameterError when in_memory_bytes
+    exceeds the available memory.
     """
     t_start = time.perf_counter()
     gen_threads = default_threads(threads)
     _checked_stencil(run, stencil)
-    _require_memory(run, gen_threads, stencil, 3 * run.grid.nbytes_per_component())
+    if snapshots is not None and (stencil is None or snapshots.stencil is not stencil):
+        raise ValueError("`snapshots` must be a generator on the given stencil")
+    if snapshots is None:
+        _require_memory(run, gen_threads, stencil, 3 * run.grid.nbytes_per_component())
+    else:  # the run's buffers are held already: the field
+        require_memory(3 * run.grid.nbytes_per_component(), "the Mann field in memory", "lower `nt` or `ny`/`nz`")
     with MemoryWriter(run.grid, run.to_attrs()) as writer:
-        sums = _generate(writer, run, _run_stencil(run, stencil, cache_dir), gen_threads, progress, in_place=True)
+        sums = _generate(writer, run, _run_stencil(run, stencil, cache_dir), gen_threads, progress, in_place=True,
+                         gen=snapshots)  # fmt: skip
     return writer.dataset, _summary(run, sums, None, t_start)

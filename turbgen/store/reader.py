@@ -42,6 +42,17 @@ class FieldStore:
         return f"FieldStore({str(self.path)!r}, model={self.model!r}, shape={g.shape})"
 
     @property
+    def label(self) -> str:
+        """How messages and reports name the field: the store's path.
+
+        Returns
+        -------
+        str
+            The store's path.
+        """
+        return str(self.path)
+
+    @property
     def model(self) -> str:
         """The turbulence model of the field.
 

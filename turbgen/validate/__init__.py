@@ -105,7 +105,7 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
     constraints = fs.attrs.get("constraints")
     if constraints is not None and constraints.get("conditional_mean"):
         raise ParameterError(
-            f"{fs.path} holds the conditional mean of a constrained run (--conditional-mean), a smoothed "
+            f"{fs.label} holds the conditional mean of a constrained run (--conditional-mean), a smoothed "
             "reconstruction rather than a sample of the model: its statistics are not the model's, so it cannot be "
             "validated (validate a conditional sample instead)"
         )

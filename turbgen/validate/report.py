@@ -96,7 +96,7 @@ def to_dict(report) -> dict:
     note = constraints_note(report.store.attrs)
     return {
         "schema": SCHEMA,
-        "store": str(report.store.path),
+        "store": report.store.label,
         "model": report.store.model,
         "passed": report.passed,
         "failed": report.failed,
@@ -145,7 +145,7 @@ def table(report) -> str:
     """Readable multi-line summary of ``report`` (a ValidationReport) for the terminal."""
     est, band = report.estimates, report.theory.band
     lines = [
-        f"store   {report.store.path} ({report.store.model})",
+        f"store   {report.store.label} ({report.store.model})",
         f"welch   {est.setup.nperseg} samples/segment (Hann, 50 %), {est.n_segments} segments "
         f"(~{est.effective_segments:.1f} independent); band {band['f_min_hz']:.3g}-{band['f_max_hz']:.3g} Hz",
         f"grid    {band['note']}",

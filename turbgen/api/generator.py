@@ -1,0 +1,300 @@
+"""Reusable generators: what does not depend on the seed is made once, then one field per seed.
+
+    g = turbgen.MannGenerator(turbgen.MannParams(ae=0.1, length_scale_m=49, gamma=3.1), turbgen.Grid(...))
+    for ds in g.fields(range(10)):      # xarray Datasets, as turbgen.mann(...) returns them
+        ...
+
+:class:`MannGenerator` builds the Mann stencil (the per-wavenumber factors of the sheared tensor, Mann 1994, Eq. 46,
+with the evolution rates of Guo et al. 2022) once in memory in its constructor; each :meth:`MannGenerator.field` draws
+only the random coefficients and transforms them. :class:`KaimalGenerator` checks its run once and makes each seed's
+field by the one Kaimal synthesis. Both give the fields of ``turbgen.mann`` / ``turbgen.kaimal`` and of the commands
+for the same inputs, bit for bit (the same run functions of turbgen.runs).
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Iterable, Iterator
+from dataclasses import replace
+from pathlib import Path
+
+import xarray as xr
+
+from turbgen.grid import Grid
+from turbgen.resources import default_threads
+from turbgen.spec.defaults import KAIMAL_DEFAULTS, MANN_DEFAULTS
+from turbgen.spec.kaimal import KaimalRun
+from turbgen.spec.mann import MannRun
+from turbgen.theory.params import KaimalParams, MannParams
+
+PathLike = str | os.PathLike
+
+
+def _written(path: PathLike, grid: Grid, overwrite: bool, chunks: int | None, write) -> xr.Dataset:
+    """``write(path)`` after the checks of a new store at ``path``; the store opened lazily (turbgen.open_store)."""
+    from turbgen.api.fields import open_store
+    from turbgen.store.paths import check_output_path
+    from turbgen.store.writer import check_new_store
+
+    check_output_path(path, "`out`")
+    check_new_store(path, grid, chunk_t=chunks, overwrite=overwrite)
+    write(Path(path))
+    return open_store(path)
+
+
+class MannGenerator:
+    """Mann space-time fields (Mann 1994; Guo et al. 2022) of one parameter set and grid, one per seed.
+
+    The stencil is built once, in memory, by the constructor (about 4 float32 numbers per wavenumber of the
+    synthesis box: :attr:`nbytes`); each further field costs its random coefficients and transforms only.
+
+    Parameters
+    ----------
+    params : MannParams
+        ae [m^(4/3) s^-2], length_scale_m [m], gamma [-], lifetime, factor1, factor2, evo_time_s [s] (None: frozen).
+    grid : Grid
+        nt samples dt_s [s] apart, planes x_m [m upstream], ny x nz points dy_m x dz_m [m].
+    U_m_s : float, optional
+        Mean wind speed [m/s] (dx = U dt; planes at x are t = x / U apart). Default 16.
+    hub_height_m : float, optional
+        Hub height [m] recorded with the field (exports). Default 150.
+    pad_yz : int, optional
+        The synthesis box is pad_yz times wider in y and z than the grid (cropped). Default 2.
+    threads : int, optional
+        Worker threads (default: all cores); never changes the field.
+
+    Raises
+    ------
+    ParameterError
+        For a value outside its range, or a stencil that does not fit the available memory.
+
+    Examples
+    --------
+    >>> import turbgen
+    >>> g = turbgen.MannGenerator(turbgen.MannParams(ae=0.1, length_scale_m=30, gamma=3.1),
+    ...                           turbgen.Grid(nt=64, dt_s=0.5, x_m=(0, 40), ny=8, nz=8, dy_m=8, dz_m=8), pad_yz=1)
+    >>> a, b = g.fields([1, 2])
+    >>> dict(a.sizes), b.attrs["seed"]
+    ({'t': 64, 'x': 2, 'y': 8, 'z': 8}, 2)
+    >>> bool((g.field(seed=1).u == a.u).all())
+    True
+    """
+
+    def __init__(self, params: MannParams, grid: Grid, U_m_s: float = MANN_DEFAULTS["U_m_s"], *,
+                 hub_height_m: float = MANN_DEFAULTS["hub_height_m"], pad_yz: int = MANN_DEFAULTS["pad_yz"],
+                 threads: int | None = None):  # fmt: skip
+        from turbgen.runs.mann import build_mann_stencil
+        from turbgen.synthesis.mann_spacetime import MannSnapshots
+
+        self.run = MannRun(params, grid, U_m_s, MANN_DEFAULTS["seed"], hub_height_m, pad_yz)
+        self.threads = default_threads(threads)
+        self._stencil = build_mann_stencil(self.run)
+        # its buffers and FFT plans are made by the first field and kept for the next seeds
+        self._snapshots = MannSnapshots(self._stencil, grid.ny, grid.nz, self.threads, buffers=2)
+        self._lock = threading.Lock()  # one field at a time: the snapshots' buffers serve each in turn
+
+    def __repr__(self) -> str:
+        r = self.run
+        return f"MannGenerator({r.params!r}, {r.grid!r}, U_m_s={r.U_m_s!r}, hub_height_m={r.hub_height_m!r}, " \
+               f"pad_yz={r.pad_yz!r})"
+
+    @property
+    def params(self) -> MannParams:
+        """The Mann parameters."""
+        return self.run.params
+
+    @property
+    def grid(self) -> Grid:
+        """The field grid."""
+        return self.run.grid
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes [B] the generator holds between fields: its stencil and the synthesis buffers (made by the first
+        field)."""
+        from turbgen.synthesis.mann_spacetime import snapshot_memory_bytes
+        from turbgen.synthesis.mann_stencil import synthesis_box
+
+        s, g = self._stencil, self.run.grid
+        snapshots = 1 if s.inv_tau is None else g.nx
+        return int(s.coef.nbytes + (0 if s.inv_tau is None else s.inv_tau.nbytes)
+                   + snapshot_memory_bytes(synthesis_box(self.run), g.ny, g.nz, snapshots, self.threads, buffers=2,
+                                           coefficients=False))  # fmt: skip
+
+    def field(self, seed: int = MANN_DEFAULTS["seed"], *, out: PathLike | None = None, overwrite: bool = False,
+              chunks: int | None = None, progress: bool = False) -> xr.Dataset:  # fmt: skip
+        """The field of ``seed``: u, v, w (t, x, y, z) [m/s] with the attributes of ``turbgen.mann``'s.
+
+        Parameters
+        ----------
+        seed : int, optional
+            Random seed (>= 0). Default 1.
+        out : str or os.PathLike, optional
+            Write the field to a new store there and return it opened lazily; default: in memory.
+        overwrite : bool, optional
+            Replace an existing store at ``out``.
+        chunks : int, optional
+            Time samples per store chunk (with ``out``); never changes the field.
+        progress : bool, optional
+            Show a progress bar on stderr.
+
+        Returns
+        -------
+        xarray.Dataset
+            The field, as ``turbgen.mann(...)`` returns it for the same inputs.
+
+        Raises
+        ------
+        ParameterError
+            For a seed outside [0, 2^63 - 1] or a field that does not fit the available memory.
+        StoreError
+            For an existing ``out`` without ``overwrite``.
+        """
+        from turbgen.runs.mann import mann_in_memory, run_mann
+
+        run = replace(self.run, seed=seed)
+        if out is None:
+            with self._lock:
+                return mann_in_memory(run, progress=progress, stencil=self._stencil, threads=self.threads,
+                                      snapshots=self._snapshots)[0]  # fmt: skip
+        return _written(out, run.grid, overwrite, chunks, lambda path: run_mann(
+            run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, stencil=self._stencil,
+            threads=self.threads))
+
+    def fields(self, seeds: Iterable[int]) -> Iterator[xr.Dataset]:
+        """The field of each of ``seeds`` in memory, one at a time (:meth:`field`).
+
+        Parameters
+        ----------
+        seeds : iterable of int
+            Random seeds (>= 0).
+
+        Yields
+        ------
+        xarray.Dataset
+            The field of each seed, in order.
+        """
+        for seed in seeds:
+            yield self.field(seed)
+
+
+class KaimalGenerator:
+    """Kaimal 4D fields (IEC 61400-1 spectra and yz coherence; longitudinal coherence of Guo et al. 2023, Eq. 18) of
+    one parameter set and grid, one per seed: the run checked once, each field made by the Kaimal synthesis of
+    ``turbgen.kaimal``.
+
+    Parameters
+    ----------
+    params : KaimalParams
+        sigma_m_s (u, v, w) [m/s], length_scales_m (L1, L2, L3) [m], a_yz [-], lc_m [m]
+        (:func:`turbgen.spec.kaimal.kaimal_params` gives the IEC values of a class and hub height).
+    grid : Grid
+        nt samples dt_s [s] apart, planes x_m [m upstream], ny x nz points dy_m x dz_m [m].
+    U_m_s : float, optional
+        Hub-height mean wind speed [m/s]. Default 16.
+    hub_height_m : float, optional
+        Hub height [m] recorded with the field. Default 90.
+    long_model : {"exp", "simley-pao", "kristensen"}, optional
+        Longitudinal coherence model. Default "exp".
+    a_x, b_x : float, optional
+        a_x [-] and b_x [1/m] of the "exp" model (default 1.8, 1.49e-4: Guo et al. 2023, Table 2, neutral).
+    long_components : {"u", "uvw"}, optional
+        Components given the longitudinal coherence. Default "u".
+    vw_coherence : {"white", "exp"}, optional
+        v, w incoherent in yz (IEC) or with the u coherence. Default "white".
+    rescale : bool, optional
+        Scale the spectra so the expected sigma is the nominal one.
+    threads : int, optional
+        FFT threads (default: all cores); never changes the field.
+
+    Raises
+    ------
+    ParameterError
+        For a value outside its range.
+
+    Examples
+    --------
+    >>> import turbgen
+    >>> from turbgen.spec.kaimal import kaimal_params
+    >>> g = turbgen.KaimalGenerator(kaimal_params(12.0), turbgen.Grid(nt=64, dt_s=0.5, x_m=(0, 50), ny=4, nz=4,
+    ...                             dy_m=5, dz_m=5), U_m_s=12)
+    >>> [ds.attrs["seed"] for ds in g.fields([3, 4])]
+    [3, 4]
+    """
+
+    def __init__(self, params: KaimalParams, grid: Grid, U_m_s: float = KAIMAL_DEFAULTS["U_m_s"], *,
+                 hub_height_m: float = KAIMAL_DEFAULTS["hub_height_m"], long_model: str = KAIMAL_DEFAULTS["long_model"],
+                 a_x: float | None = None, b_x: float | None = None,
+                 long_components: str = KAIMAL_DEFAULTS["long_components"],
+                 vw_coherence: str = KAIMAL_DEFAULTS["vw_coherence"], rescale: bool = False,
+                 threads: int | None = None):  # fmt: skip
+        self.run = KaimalRun(params, grid, U_m_s, KAIMAL_DEFAULTS["seed"], hub_height_m, long_model, a_x, b_x,
+                             long_components, rescale, vw_coherence)  # fmt: skip
+        self.threads = threads
+
+    def __repr__(self) -> str:
+        return f"KaimalGenerator({self.run.kaimal!r}, {self.run.grid!r}, U_m_s={self.run.U_m_s!r})"
+
+    @property
+    def params(self) -> KaimalParams:
+        """The Kaimal parameters."""
+        return self.run.kaimal
+
+    @property
+    def grid(self) -> Grid:
+        """The field grid."""
+        return self.run.grid
+
+    def field(self, seed: int = KAIMAL_DEFAULTS["seed"], *, out: PathLike | None = None, overwrite: bool = False,
+              chunks: int | None = None, progress: bool = False) -> xr.Dataset:  # fmt: skip
+        """The field of ``seed``: u, v, w (t, x, y, z) [m/s] with the attributes of ``turbgen.kaimal``'s.
+
+        Parameters
+        ----------
+        seed : int, optional
+            Random seed (>= 0). Default 1.
+        out : str or os.PathLike, optional
+            Write the field to a new store there and return it opened lazily; default: in memory.
+        overwrite : bool, optional
+            Replace an existing store at ``out``.
+        chunks : int, optional
+            Time samples per store chunk (with ``out``); never changes the field.
+        progress : bool, optional
+            Show a progress bar on stderr.
+
+        Returns
+        -------
+        xarray.Dataset
+            The field, as ``turbgen.kaimal(...)`` returns it for the same inputs.
+
+        Raises
+        ------
+        ParameterError
+            For a seed outside [0, 2^63 - 1] or a field that does not fit the available memory.
+        StoreError
+            For an existing ``out`` without ``overwrite``.
+        """
+        from turbgen.runs.kaimal import kaimal_in_memory, run_kaimal
+
+        run = replace(self.run, seed=seed)
+        if out is None:
+            return kaimal_in_memory(run, progress=progress, threads=self.threads)[0]
+        return _written(out, run.grid, overwrite, chunks, lambda path: run_kaimal(
+            run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=self.threads))
+
+    def fields(self, seeds: Iterable[int]) -> Iterator[xr.Dataset]:
+        """The field of each of ``seeds`` in memory, one at a time (:meth:`field`).
+
+        Parameters
+        ----------
+        seeds : iterable of int
+            Random seeds (>= 0).
+
+        Yields
+        ------
+        xarray.Dataset
+            The field of each seed, in order.
+        """
+        for seed in seeds:
+            yield self.field(seed)
