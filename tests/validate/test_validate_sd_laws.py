@@ -14,10 +14,9 @@ deviation of the first failing comparison in standard errors (se, below; the cor
 |   | test_longitudinal_coherence_of_independent_planes |
 | 4 u-w co-spectrum sd without its cross term rho_uw (``_uw``) | test_uw_cospectrum_sd_and_law (9.4 se) |
 | 5 co-coherence equivalent samples (1 - c*c) / (2 v) (``_uw``) | test_uw_cospectrum_sd_and_law (z^2: -34 se) |
-| 6 one-point covariance, not the point-averaged one, for the | test_band_sd_of_the_averaged_spectra[u, v, w] (-510 se) |
-|   spectra / longitudinal / yz coherences / REWS (``expectations``, | test_longitudinal_coherence_of_independent_planes (-205) |
-|   ``judge``), or for all (``Bands.averaged_cov``) | test_yz_coherence_of_independent_points (-490) |
-|   | test_band_sd_of_the_averaged_spectra[rews] (-16 se) |
+| 6 one-point covariance, not the point-averaged one, for the | test_band_sd_of_the_averaged_spectra[u, v, w] |
+|   spectra / longitudinal / yz coherences / REWS (``expectations``, | (-510 se), ..._of_independent_planes (-205), |
+|   ``judge``), or for all (``Bands.averaged_cov``) | ..._of_independent_points (-490), ...[rews] (-16) |
 | 7 neighbouring-bin correlation counted once, co-spectrum (``_uw``) | test_uw_cospectrum_sd_and_law (7.0 se) |
 |   or band sums (``Bands.sum_var``) | test_one_point_spectrum_band_sd (7.3 se), and others |
 
