@@ -19,6 +19,8 @@ deviation of the first failing comparison in standard errors (se, below; the cor
 |   ``judge``), or for all (``Bands.averaged_cov``) | ..._of_independent_points (-490), ...[rews] (-16) |
 | 7 neighbouring-bin correlation counted once, co-spectrum (``_uw``) | test_uw_cospectrum_sd_and_law (7.0 se) |
 |   or band sums (``Bands.sum_var``) | test_one_point_spectrum_band_sd (7.3 se), and others |
+| also: remaining modes without rho_bar (``variance_law.gamma_terms``) | test_variance_sd_and_law_... |
+| also: lag 0 counted twice in the correlation sums (``pair_sums.weighted_gram``) | 7 tests |
 
 Realisations are drawn from the validator's own null model, independently of the generators: the periodic
 line process of ``prediction`` (circular Gaussian line amplitudes, E|Y_j|^2 = L_j, real at j = 0 and at the
