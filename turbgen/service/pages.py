@@ -6,20 +6,41 @@ reference rendered from the OpenAPI description.
 from __future__ import annotations
 
 import html
+import json
 from pathlib import Path
 
 STATIC = Path(__file__).parent / "static"
 
 
 def static_files() -> frozenset:
-    """The names of the pages' static files (HTML, JavaScript, CSS in turbgen/service/static, package data).
+    """The names of the scripts and style sheets of the pages (turbgen/service/static, package data).
 
     Returns
     -------
     frozenset of str
         File names; no other name is served under /static/.
     """
-    return frozenset(p.name for p in STATIC.iterdir() if p.suffix in (".html", ".js", ".css"))
+    return frozenset(p.name for p in STATIC.iterdir() if p.suffix in (".js", ".css"))
+
+
+def page_html(name: str, form: dict) -> str:
+    """The page ``name`` of turbgen/service/static with what its script builds from (GET /form.json) in it, so the
+    form is there once the page has loaded.
+
+    Parameters
+    ----------
+    name : str
+        "index.html" or "run.html".
+    form : dict
+        The form description (JSON-able).
+
+    Returns
+    -------
+    str
+        The HTML page.
+    """
+    data = json.dumps(form).replace("<", "\\u003c")  # no "</script>" can end the block early
+    return (STATIC / name).read_text().replace("{form}", data)
 
 
 _DOCS = """<!doctype html>

@@ -10,19 +10,19 @@ from turbgen.version import __version__
 from turbgen.service.form import form_description
 from turbgen.service.form_request import form_request
 from turbgen.service.limits import check_memory
-from turbgen.service.pages import STATIC, api_docs_html, static_files
+from turbgen.service.pages import STATIC, api_docs_html, page_html, static_files
 from turbgen.service.routes.products import EXPORT_FORMATS
 from turbgen.service.run_ids import build_run
 from turbgen.service.state import ServiceState, get_state, not_found
 
 router = APIRouter()
-_MEDIA = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8"}
+_MEDIA = {".js": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8"}
 
 
 @router.get("/", response_class=HTMLResponse, include_in_schema=False)
-def index():
+def index(state: ServiceState = Depends(get_state)):
     """The catalog page with the run form."""
-    return FileResponse(STATIC / "index.html", media_type=_MEDIA[".html"])
+    return HTMLResponse(page_html("index.html", form(state)))
 
 
 @router.get("/runs/{rid}/view", response_class=HTMLResponse, include_in_schema=False)
@@ -30,7 +30,7 @@ def run_page(rid: str, state: ServiceState = Depends(get_state)):
     """The page of run ``rid``: its parameters, the field (time series, yz snapshots), exports, lidar, validation."""
     if not state.catalog.exists(rid):
         raise not_found()
-    return FileResponse(STATIC / "run.html", media_type=_MEDIA[".html"])
+    return HTMLResponse(page_html("run.html", form(state)))
 
 
 @router.get("/static/{name}", include_in_schema=False)

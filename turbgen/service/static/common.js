@@ -22,20 +22,26 @@ async function getJSON(url) {
   return body;
 }
 
-// an image made by the server (a header carries the token): shown in <img>, or the server's message in `err`
+// an image made by the server (a header carries the token): shown in <img>, or the server's message in `err`;
+// true once shown, false for an error, null when a later request for the same <img> replaced this one
 async function loadImage(img, url, err) {
+  img.dataset.want = url;
   const r = await fetch(url, {headers: authHeaders()});
+  if (img.dataset.want !== url) return null;
   if (!r.ok) {
     const body = await r.json().catch(() => ({detail: String(r.status)}));
     err.textContent = body.detail;
     return false;
   }
+  const blob = await r.blob();
+  if (img.dataset.want !== url) return null;
   err.textContent = '';
   const old = img.src;
-  img.src = URL.createObjectURL(await r.blob());
+  const shown = new Promise((ok) => { img.onload = () => ok(true); img.onerror = () => ok(false); });
+  img.src = URL.createObjectURL(blob);
   img.dataset.url = url;
   if (old.startsWith('blob:')) URL.revokeObjectURL(old);
-  return new Promise((ok) => { img.onload = () => ok(true); img.onerror = () => ok(false); });
+  return shown;
 }
 
 function bytes(n) {

@@ -70,9 +70,12 @@ function fieldOf(detail) {
 let timer = null;
 function schedulePreview() { clearTimeout(timer); timer = setTimeout(preview, 250); }
 
+let asked = 0;  // previews answered out of order: only the latest is shown
 async function preview() {
+  const n = ++asked;
   const r = await fetch('/form/request?' + formQuery());
   const out = await r.json();
+  if (n !== asked) return r.ok ? out : null;
   if (!r.ok) { showFieldError(out.detail); return null; }
   showFieldError(null);
   $('#command').textContent = out.command;
@@ -126,7 +129,7 @@ function row(run) {
     `<td>${text(run.preset || '')}</td><td>${text(run.U_m_s)}</td><td>${text(run.seed)}</td><td>${params(run)}</td>` +
     `<td>${g.nt} &times; ${(g.x_m || []).length} &times; ${g.ny} &times; ${g.nz}, dt ${g.dt_s} s</td>` +
     `<td class="status">${text(run.status)}</td><td><progress max="100" value="${pct}"></progress> ${pct} %</td>` +
-    `<td>${bytes(run.size_bytes)}</td><td>${run.status === 'complete' ? `<code class="store-url">xr.open_zarr("${text(store)}")</code>` : ''}</td>` +
+    `<td>${bytes(run.size_bytes)}</td><td>${run.status === 'complete' ? `<code class="store-url">${text(store)}</code>` : ''}</td>` +
     `<td>${actions}</td></tr>`;
 }
 
@@ -158,8 +161,8 @@ async function showPlots(id) {
     v.plots.map(u => '<img class="plot" alt="validation plot" src="' + u + '">').join('');
 }
 
-async function start() {
-  FORM = await getJSON('/form.json');
+function start() {
+  FORM = JSON.parse($('#form-data').textContent);  // /form.json, in the page: the form exists once it has loaded
   $('#version').textContent = FORM.turbgen;
   $('#token-row').hidden = !FORM.token_required;
   $('#f-preset').innerHTML += FORM.models.mann.find(f => f.name === 'preset').choices.map(c => `<option>${text(c)}</option>`).join('');

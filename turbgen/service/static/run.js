@@ -16,9 +16,12 @@ function showParameters(run) {
 }
 
 async function showSeries() {
-  const q = new URLSearchParams({plane: $('#plane').value, y: $('#y').value, z: $('#z').value});
+  const q = String(new URLSearchParams({plane: $('#plane').value, y: $('#y').value, z: $('#z').value}));
+  const box = $('#series');
+  box.dataset.want = q;
   let s;
   try { s = await getJSON(BASE + '/series?' + q); } catch (e) { $('#series-message').textContent = e.message; return; }
+  if (box.dataset.want !== q) return;  // a later point was asked for meanwhile
   $('#series-message').textContent = '';
   const t = s.u.map((_, i) => i * s.dt_s);
   $('#point').textContent = `x = ${s.x_m} m, y = ${s.y_m} m, z = ${s.z_m} m`;
@@ -51,7 +54,7 @@ async function play() {
   const n = RUN.grid.nt, stride = Math.max(1, Math.round(n / 100));
   while (playing === token) {
     $('#t').value = (+$('#t').value + stride) % n;
-    if (!await showSnapshot()) break;
+    if (await showSnapshot() === false) break;
     await new Promise(ok => setTimeout(ok, 150));
   }
 }
@@ -119,7 +122,7 @@ function setUp(run, form) {
 async function start() {
   $('#rid').textContent = RID;
   $('#store-url').textContent = `xr.open_zarr("${location.origin}${BASE}/store")`;
-  const form = await getJSON('/form.json');
+  const form = JSON.parse($('#form-data').textContent);  // /form.json, in the page
   $('#token-row').hidden = !form.token_required;
   while (true) {
     try { RUN = await getJSON(BASE); } catch (e) { $('#run-message').textContent = e.message; return; }
