@@ -109,3 +109,16 @@ def test_a_bad_value_is_refused_naming_its_field(values, message):
     with pytest.raises(ParameterError) as err:
         form_request("mann", values)
     assert str(err.value) == message
+
+
+def test_the_snapshot_marks_the_measurement_points_of_its_plane_only():
+    from types import SimpleNamespace
+
+    from turbgen.service.field_view import _measurement_points
+
+    streams = [{"name": "a", "x_m": 0.0, "y_m": 1.0, "z_m": 2.0}, {"name": "b", "x_m": 50.0, "y_m": 0.0, "z_m": 0.0},
+               {"name": "los", "x_m": 0.0, "y_m": None, "z_m": None}]  # fmt: skip
+    constrained = SimpleNamespace(attrs={"constraints": {"streams": streams}})
+    assert [s["name"] for s in _measurement_points(constrained, 0.0)] == ["a"]
+    assert [s["name"] for s in _measurement_points(constrained, 50.0)] == ["b"]
+    assert _measurement_points(SimpleNamespace(attrs={}), 0.0) == []

@@ -212,3 +212,28 @@ def test_the_pages_load_nothing_from_another_host_and_refuse_other_names(server)
         assert status == 200 and not external.search(page.decode()) and "cdn" not in page.decode().lower(), path
     for path in ("/static/..%2Fform.py", "/static/form.py", "/static/index.html", "/runs/000000000000000000000000/view"):
         assert server.call("GET", path)[0] == 404, path
+
+
+@pytest.mark.slow
+def test_the_run_page_shows_the_lidar_against_theory_and_the_validation(server, browser):  # noqa: F811
+    """A field wide enough for the nacelle lidar's beams (16 x 16 points 8 m apart, the 11 default planes)."""
+    from selenium.webdriver.common.by import By
+
+    run = {"model": "mann", "U_m_s": 12.0, "seed": 4, "grid": {"nt": 1024, "ny": 16, "nz": 16, "dy_m": 8.0}}
+    rid = server.call("POST", "/runs", run)[2]["id"]
+    server.wait(rid, timeout_s=180)
+    browser.get(f"{server.url}/runs/{rid}/view")
+    _until(lambda: browser.find_elements(By.CSS_SELECTOR, "#series polyline.curve"), 60, "no time series")
+    browser.find_element(By.ID, "run-lidar").click()
+    verdict = _until(lambda: browser.find_elements(By.CSS_SELECTOR, "#lidar-report p"), 120, "no lidar report")
+    report = server.call("GET", f"/runs/{rid}/lidar?lidar=nacelle-4beam")[2]["report"]  # cached: the same
+    assert verdict[0].text.startswith("coherence γ²RL: " + ("passed" if report["verdict"]["passed"] else "failed"))
+    names = [c.get_attribute("data-name") for c in browser.find_elements(By.CSS_SELECTOR, "#lidar-report .curve")]
+    assert names == ["simulated", "theory"]
+    browser.find_element(By.ID, "validate").click()
+    imgs = _until(lambda: browser.find_elements(By.CSS_SELECTOR, "#validation img.plot"), 180, "no validation plots")
+    _until(lambda: all(_js(browser, "return arguments[0].complete && arguments[0].naturalWidth", i) for i in imgs),
+           60, "the validation plots did not load")  # fmt: skip
+    passed = server.call("GET", f"/runs/{rid}")[2]["validation"]["passed"]
+    assert browser.find_element(By.ID, "validation-status").text == ("passed" if passed else "failed")
+    _screenshot(browser, "service-products", "#complete")

@@ -59,9 +59,10 @@ function fieldOf(detail) {
   let best = null, at = Infinity;
   for (const f of FORM.models[$('#model').value]) {
     const key = f.key.replace(/^grid\./, '');
-    for (const m of [f.name + ':', f.name + ' =', f.flag, key, 'grid.' + key, f.label]) {
-      const i = m ? detail.indexOf(m) : -1;
-      if (i >= 0 && i < at) { at = i; best = f.name; }
+    for (const m of [f.name, f.flag, key, 'grid.' + key, f.label]) {
+      if (!m) continue;  // a whole word: "nt" is not the "nt" of "points"
+      const found = new RegExp('(^|[^\\w.-])' + m.replace(/[.*+?^${}()|[\]\\]/g, '\\$&') + '(?![\\w])').exec(detail);
+      if (found && found.index < at) { at = found.index; best = f.name; }
     }
   }
   return best && $(`#groups .field[data-name="${best}"]`);
