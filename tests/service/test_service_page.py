@@ -5,7 +5,9 @@ of docs/service.md there."""
 
 from __future__ import annotations
 
+import json
 import os
+import tomllib
 import zipfile
 from pathlib import Path
 
@@ -193,6 +195,9 @@ def test_the_token_still_guards_what_starts_a_computation(tmp_path):
             assert srv.call("GET", path, headers=auth)[0] == 200, path
             assert srv.call("GET", path)[0] == 200, path  # made: readable by anyone who may read the store
         assert srv.call("GET", f"/runs/{rid}/view")[0] == 200
+        lidar = {"kind": "pulsed", "mount": "nacelle", "ranges_m": [50.0], "beam_rate_hz": 1.0, "rotor_radius_m": 10.0,
+                 "azimuth_deg": [0.0], "elevation_deg": [0.0], "fwhm_m": 30.0}  # fmt: skip
+        assert srv.call("POST", f"/runs/{rid}/lidar", lidar)[0] == 401
         assert srv.call("DELETE", f"/runs/{rid}")[0] == 401
         assert srv.call("DELETE", f"/runs/{rid}", headers=auth)[0] == 200
     finally:
@@ -215,7 +220,7 @@ def test_the_pages_load_nothing_from_another_host_and_refuse_other_names(server)
 
 
 @pytest.mark.slow
-def test_the_run_page_shows_the_lidar_against_theory_and_the_validation(server, browser):  # noqa: F811
+def test_the_run_page_shows_the_lidar_against_theory_and_the_validation(server, browser, tmp_path):  # noqa: F811
     """A field wide enough for the nacelle lidar's beams (16 x 16 points 8 m apart, the 11 default planes)."""
     from selenium.webdriver.common.by import By
 
@@ -225,11 +230,22 @@ def test_the_run_page_shows_the_lidar_against_theory_and_the_validation(server, 
     browser.get(f"{server.url}/runs/{rid}/view")
     _until(lambda: browser.find_elements(By.CSS_SELECTOR, "#series polyline.curve"), 60, "no time series")
     browser.find_element(By.ID, "run-lidar").click()
-    verdict = _until(lambda: browser.find_elements(By.CSS_SELECTOR, "#lidar-report p"), 120, "no lidar report")
+    verdict = "#lidar-report p.passed, #lidar-report p.failed"
+    _until(lambda: browser.find_elements(By.CSS_SELECTOR, verdict), 120, "no lidar report")
     report = server.call("GET", f"/runs/{rid}/lidar?lidar=nacelle-4beam")[2]["report"]  # cached: the same
-    assert verdict[0].text.startswith("coherence γ²RL: " + ("passed" if report["verdict"]["passed"] else "failed"))
+    shown = browser.find_element(By.CSS_SELECTOR, verdict).text
+    assert shown.startswith("coherence γ²RL: " + ("passed" if report["verdict"]["passed"] else "failed")), shown
     names = [c.get_attribute("data-name") for c in browser.find_elements(By.CSS_SELECTOR, "#lidar-report .curve")]
     assert names == ["simulated", "theory"]
+    # a lidar file of the user's (examples/mylidar.toml as JSON): its content is sent, no path
+    lidar = tomllib.loads((Path(__file__).parents[2] / "examples" / "mylidar.toml").read_text())
+    (tmp_path / "mylidar.json").write_text(json.dumps(lidar))
+    browser.find_element(By.ID, "lidar-file").send_keys(str(tmp_path / "mylidar.json"))
+    name = "return document.querySelector('#lidar-report .lidar-name')?.textContent"
+    _until(lambda: _js(browser, name) == "my-2beam-pulsed", 120, "no report of the lidar file")
+    status, _, mine = server.call("POST", f"/runs/{rid}/lidar", lidar)
+    assert status == 200 and mine["report"]["lidar"]["ranges_m"] == [50.0, 103.2, 156.4]
+    assert len(list((server.root / "runs" / rid / "lidar").iterdir())) == 2  # the preset's and the file's, cached
     browser.find_element(By.ID, "validate").click()
     imgs = _until(lambda: browser.find_elements(By.CSS_SELECTOR, "#validation img.plot"), 180, "no validation plots")
     _until(lambda: all(_js(browser, "return arguments[0].complete && arguments[0].naturalWidth", i) for i in imgs),

@@ -74,11 +74,25 @@ async function makeExport(fmt) {
 
 async function runLidar() {
   $('#lidar-message').textContent = 'measuring ...';
-  let d;
-  try { d = await getJSON(`${BASE}/lidar?lidar=${encodeURIComponent($('#lidar').value)}`); } catch (e) { $('#lidar-message').textContent = e.message; return; }
+  try { showLidar(await getJSON(`${BASE}/lidar?lidar=${encodeURIComponent($('#lidar').value)}`)); } catch (e) { $('#lidar-message').textContent = e.message; }
+}
+
+// a lidar file of the user's: its content is the body of POST /runs/<id>/lidar (the server reads no client path)
+async function runLidarFile(input) {
+  const file = input.files[0];
+  if (!file) return;
+  $('#lidar-message').textContent = 'measuring with ' + file.name + ' ...';
+  const r = await fetch(BASE + '/lidar', {method: 'POST', headers: authHeaders({'Content-Type': 'application/json'}), body: await file.text()});
+  const out = await r.json().catch(() => ({detail: r.status + ' ' + r.statusText}));
+  input.value = '';
+  if (!r.ok) { $('#lidar-message').textContent = out.detail; return; }
+  showLidar(out);
+}
+
+function showLidar(d) {
   $('#lidar-message').textContent = '';
   const r = d.report, s = r.simulated, t = r.theory, v = r.verdict, num = (x) => x == null ? '-' : (+x).toFixed(4);
-  $('#lidar-report').innerHTML = `<p class="${v.passed ? 'passed' : 'failed'}">coherence &gamma;&sup2;<sub>RL</sub>: ` +
+  $('#lidar-report').innerHTML = `<p class="lidar-name">${text(d.lidar)}</p><p class="${v.passed ? 'passed' : 'failed'}">coherence &gamma;&sup2;<sub>RL</sub>: ` +
     `${v.passed ? 'passed' : 'failed'} (max |z| ${num(v.max_abs_z)}, z_crit ${num(v.z_crit)}, ${v.n_tests} bins)</p>` +
     `<table><tr><th></th><th>simulated</th><th>theory</th></tr><tr><th>k<sub>0.5</sub> [rad/m]</th><td>${num(s.k05_rad_m)}</td><td>${num(t.k05_rad_m)}</td></tr>` +
     `<tr><th>cut-off [Hz]</th><td>${num(s.cutoff_hz)}</td><td>${num(t.cutoff_hz)}</td></tr>` +
@@ -113,6 +127,7 @@ function setUp(run, form) {
   $('#play').onclick = play;
   $('#snapshot').onclick = pickPoint;
   $('#run-lidar').onclick = runLidar;
+  $('#lidar-file').onchange = () => runLidarFile($('#lidar-file'));
   $('#validate').onclick = validate;
   $('#complete').hidden = false;
   showSeries();
