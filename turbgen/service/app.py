@@ -19,7 +19,7 @@ from turbgen.service.catalog import Catalog
 from turbgen.service.cleanup import DEFAULT_STENCIL_CACHE_BYTES, remove_dead_work, trim_stencil_cache
 from turbgen.service.jobs import Jobs
 from turbgen.service.limits import DERIVED_RUNNING, DERIVED_WAITING, LimitError, is_loopback
-from turbgen.service.routes import constraints, pages, products, runs, sweeps
+from turbgen.service.routes import constraints, field, pages, products, runs, sweeps
 from turbgen.service.state import ServiceSettings, ServiceState
 from turbgen.service.status import public_text
 
@@ -79,7 +79,7 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
     _add_error_handlers(app)
     if loopback_only:
         app.middleware("http")(_loopback_host)
-    for module in (pages, runs, sweeps, products, constraints):
+    for module in (pages, runs, sweeps, products, field, constraints):
         app.include_router(module.router)
     return app
 

@@ -142,8 +142,8 @@ def build_validation(store: Path, tmp: Path) -> None:
     (tmp / "report.json").write_text(json.dumps(rep.to_dict(), indent=1))
 
 
-def build_lidar(store: Path, rid: str, lidar: str, tmp: Path) -> None:
-    """`turbgen lidar --json` of ``store`` for the lidar preset ``lidar`` into the new file ``tmp``.
+def build_lidar(store: Path, rid: str, lidar, tmp: Path) -> None:
+    """`turbgen lidar --json` of ``store`` for the lidar preset (or description) ``lidar`` into the new file ``tmp``.
 
     Parameters
     ----------
@@ -151,8 +151,8 @@ def build_lidar(store: Path, rid: str, lidar: str, tmp: Path) -> None:
         The run's complete store.
     rid : str
         Run id (the report names its store /runs/<id>/store).
-    lidar : str
-        A lidar preset name.
+    lidar : str or turbgen.lidar.description.LidarDescription
+        A lidar preset name, or a lidar a client described (never a path).
     tmp : Path
         The file to write.
     """

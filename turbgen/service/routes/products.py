@@ -9,12 +9,14 @@ from pathlib import Path
 
 from fastapi import APIRouter, Depends, Request
 from fastapi.responses import FileResponse
+from starlette.concurrency import run_in_threadpool
 
 from turbgen.errors import ParameterError
+from turbgen.service.bodies import read_json
 from turbgen.service.derived import build_export, build_lidar, build_validation, cached_product
 from turbgen.service.limits import LimitError
 from turbgen.service.routes.runs import NAME
-from turbgen.service.state import ServiceState, complete_store, get_state, not_found
+from turbgen.service.state import ServiceState, complete_store, get_state, not_found, require_token
 
 router = APIRouter()
 EXPORT_FORMATS = ("bts", "wnd", "evo", "hawc2", "mt4d", "hdf5")
@@ -97,6 +99,24 @@ def lidar(rid: str, request: Request, lidar: str = "nacelle-4beam", store: Path 
     cached_product(state, request, rid, final, Path.is_file, partial(build_lidar, store, rid, lidar))  # paths in a
     # refusal (TurbgenError, 422) are shown as URLs by the application's handler
     return {"id": rid, "lidar": lidar, "report": json.loads(final.read_text())}
+
+
+@router.post("/runs/{rid}/lidar", dependencies=[Depends(require_token)])
+async def lidar_file(rid: str, request: Request, store: Path = Depends(complete_store),
+                     state: ServiceState = Depends(get_state)):  # fmt: skip
+    """`turbgen lidar --json` on the run's store for the lidar a client describes: the body is the content of a
+    lidar file (JSON, schemas/lidar.schema.json); computed once per description, cached."""
+    from turbgen.lidar.description import lidar_from_mapping
+
+    body = await read_json(request)
+    if not isinstance(body, dict):
+        raise ParameterError("request body: expected a JSON object with the lidar description")
+    description = lidar_from_mapping(body, where="lidar file")
+    digest = hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()[:24]
+    final = state.catalog.run_dir(rid) / "lidar" / f"file-{digest}.json"
+    await run_in_threadpool(cached_product, state, request, rid, final, Path.is_file,
+                            partial(build_lidar, store, rid, description))  # fmt: skip
+    return {"id": rid, "lidar": description.name, "report": json.loads(final.read_text())}
 
 
 @router.get("/runs/{rid}/plots/{name}")

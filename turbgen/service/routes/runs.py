@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from datetime import datetime, timezone
 from pathlib import Path
 
 from fastapi import APIRouter, Depends, Request
@@ -44,11 +45,13 @@ async def submit(request: Request, state: ServiceState = Depends(get_state)):
 @router.get("/runs")
 def list_runs(model: str | None = None, preset: str | None = None, U: float | None = None, seed: int | None = None,
               state: ServiceState = Depends(get_state)):  # fmt: skip
-    """The catalog, optionally filtered by model, preset (as submitted), U [m/s] and seed."""
+    """The catalog, newest first, optionally filtered by model, preset (as submitted), U [m/s] and seed: per run its
+    status and progress, parameters, grid, submission time (``submitted_utc``) and, once complete, the store's size."""
     rows = []
     for rid in state.catalog.ids():
         try:
             s = run_status(state.catalog, state.jobs, rid)
+            submitted = (state.catalog.run_dir(rid) / "request.json").stat().st_mtime
         except (OSError, ValueError, KeyError):
             continue
         p = s["parameters"]
@@ -56,9 +59,31 @@ def list_runs(model: str | None = None, preset: str | None = None, U: float | No
                   and (U is None or p.get("U_m_s") == U) and (seed is None or p.get("seed") == seed))
         if not wanted:
             continue
-        rows.append({k: s.get(k) for k in ("id", "model", "status", "progress", "error")} |
-                    {"preset": s["preset"], "U_m_s": p.get("U_m_s"), "seed": p.get("seed")})  # fmt: skip
+        rows.append({k: s.get(k) for k in ("id", "model", "status", "progress", "error", "parameters", "grid")} |
+                    {"preset": s["preset"], "U_m_s": p.get("U_m_s"), "seed": p.get("seed"),
+                     "submitted_utc": _utc(submitted), "size_bytes": _store_size(state, rid, s["status"])})  # fmt: skip
+    rows.sort(key=lambda r: r["submitted_utc"], reverse=True)
     return {"runs": rows}
+
+
+_SIZES: dict = {}  # (run id, the store's mtime) -> size [bytes]: a complete store never changes
+
+
+def _store_size(state: ServiceState, rid: str, status: str) -> int | None:
+    if status != "complete":
+        return None
+    store = state.catalog.store_path(rid)
+    try:
+        key = (rid, store.stat().st_mtime_ns)
+        if key not in _SIZES:
+            _SIZES[key] = sum(f.stat().st_size for f in store.rglob("*") if f.is_file())
+    except OSError:
+        return None
+    return _SIZES[key]
+
+
+def _utc(seconds: float) -> str:
+    return datetime.fromtimestamp(seconds, timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
 
 @router.get("/runs/{rid}")

@@ -1,0 +1,117 @@
+"""The field itself, as the run's page shows it: small products read from a complete store, made on first request and
+cached under the run's directory (turbgen.service.derived.cached_product).
+
+- ``series``: u, v, w time series at one (y, z) point of one plane (JSON; every ``step``-th sample of a record longer
+  than :data:`MAX_SERIES_SAMPLES`);
+- ``snapshot``: a yz image of one component at one time step and plane (PNG), on a colour scale of +- 3 sigma of the
+  run so frames of an animation compare; the measurement points of a constrained field at that plane are marked.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+
+MAX_SERIES_SAMPLES = 65536
+COMPONENTS = ("u", "v", "w")
+
+
+def check_index(name: str, value: int, size: int) -> int:
+    """``value`` if it indexes an axis of ``size`` entries, else a ParameterError naming it and the range.
+
+    Parameters
+    ----------
+    name : str
+        The index's name (``plane``, ``y``, ``z``, ``t``).
+    value : int
+        The index.
+    size : int
+        Entries along the axis.
+
+    Returns
+    -------
+    int
+        ``value``.
+    """
+    if not 0 <= value < size:
+        raise ParameterError(f"{name} = {value} is outside [0, {size - 1}]")
+    return value
+
+
+def build_series(store: Path, plane: int, iy: int, iz: int, tmp: Path) -> None:
+    """u, v, w at grid point (plane, iy, iz) of ``store`` as JSON into the new file ``tmp``.
+
+    Parameters
+    ----------
+    store : Path
+        A complete store.
+    plane, iy, iz : int
+        Plane, lateral and vertical index (checked by the caller).
+    tmp : Path
+        The file to write: ``x_m``, ``y_m``, ``z_m`` [m], ``dt_s`` [s] of the samples shown, ``step``, ``nt`` and
+        the lists ``u``, ``v``, ``w`` [m/s] (fluctuations, as stored).
+    """
+    from turbgen.store import open_store
+
+    fs = open_store(store)
+    g = fs.grid
+    step = -(-g.nt // MAX_SERIES_SAMPLES)
+    out = {"plane": plane, "y": iy, "z": iz, "x_m": float(g.x_m[plane]), "y_m": float(g.y()[iy]),
+           "z_m": float(g.z()[iz]), "dt_s": g.dt_s * step, "step": step, "nt": g.nt}  # fmt: skip
+    for c in COMPONENTS:
+        values = np.asarray(fs.array(c)[::step, plane, iy, iz], dtype=float)
+        out[c] = [round(v, 5) for v in values.tolist()]
+    tmp.write_text(json.dumps(out))
+
+
+def build_snapshot(store: Path, component: str, plane: int, it: int, sigma: float | None, tmp: Path) -> None:
+    """The yz image of ``component`` at time index ``it`` of plane ``plane`` as a PNG into the new file ``tmp``.
+
+    Parameters
+    ----------
+    store : Path
+        A complete store.
+    component : str
+        "u", "v" or "w".
+    plane, it : int
+        Plane and time index (checked by the caller).
+    sigma : float or None
+        The run's standard deviation of ``component`` [m/s] (colour scale +- 3 sigma); None: the frame's own.
+    tmp : Path
+        The file to write.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from turbgen.store import open_store
+
+    fs = open_store(store)
+    g = fs.grid
+    frame = np.asarray(fs.array(component)[it, plane], dtype=float)  # (ny, nz)
+    lim = 3.0 * (sigma if sigma else float(frame.std()) or 1.0)
+    y, z = g.y(), g.z()
+    fig, ax = plt.subplots(figsize=(5.2, 4.2), dpi=90)
+    mesh = ax.pcolormesh(y, z, frame.T, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="nearest")
+    fig.colorbar(mesh, ax=ax, label=f"{component} [m/s]")
+    for s in _measurement_points(fs, float(g.x_m[plane])):
+        ax.plot(s["y_m"], s["z_m"], "k+", markersize=12, markeredgewidth=2)
+    ax.set(xlabel="y [m]", ylabel="z [m]", aspect="equal",
+           title=f"{component} at t = {it * g.dt_s:g} s, x = {g.x_m[plane]:g} m")  # fmt: skip
+    fig.tight_layout()
+    with open(tmp, "wb") as f:
+        fig.savefig(f, format="png")
+    plt.close(fig)
+
+
+def _measurement_points(fs, x_m: float) -> list[dict]:
+    """The measurement points of a constrained store on the plane at ``x_m`` (none for other stores)."""
+    record = fs.attrs.get("constraints")
+    if not record:
+        return []
+    return [s for s in record["streams"] if s.get("y_m") is not None and abs(s["x_m"] - x_m) < 1e-6]
