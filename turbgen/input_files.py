@@ -1,6 +1,6 @@
 """The one place where a file a user names is opened for reading (``--config``, ``--constrain``, ``--mean-history``,
-``--profile table:FILE``, ``--presets-file``, ``--lidar FILE``, lidar CSV records, the service's uploads, the
-exports ``info`` reads back).
+``--profile table:FILE``, ``--presets-file``, ``--lidar FILE``, line-of-sight records, ``serve --token-file``, the
+service's uploads).
 
 Rule: a regular file (a symbolic link to one is fine) of at most a size cap per kind of file. A FIFO, a device, a
 socket or a directory is refused before anything is read (it is opened non-blocking, so a FIFO without a writer
@@ -40,7 +40,6 @@ CONSTRAINTS = InputKind("constraint file", _mib(64))  # measured point series (J
 LINE_OF_SIGHT = InputKind("line-of-sight file", _mib(256))  # a v_los record (CSV or netCDF)
 MEAN_HISTORY = InputKind("mean history", _mib(64))  # hub-height speed and direction over time
 PROFILE_TABLE = InputKind("profile table", _mib(1))  # z, U[, direction] rows
-EXPORTED = InputKind("exported file", 2**40)  # a .bts/.wnd/.sum/.dat read back by `info` (a cap for devices only)
 TOKEN = InputKind("token file", 4096)
 
 _NOT_REGULAR = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO or pipe"), (stat.S_ISCHR, "a character device"),

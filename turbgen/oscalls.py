@@ -7,6 +7,7 @@
 * :func:`resident_bytes`, :func:`meminfo_available_bytes`, :func:`cgroup_headroom_bytes`, :func:`is_zombie`,
   :func:`umask`: reads of /proc and /sys/fs/cgroup; None (or the portable answer) where they do not exist.
 * :func:`disk_free_bytes`: statvfs(2) (the space an unprivileged writer may use), else shutil.disk_usage.
+* :func:`direct_io_flag`: O_DIRECT (reads and writes bypassing the page cache), else 0 (buffered I/O).
 
 ``TURBGEN_PORTABLE=1`` in the environment (read at every call) makes every function take its fallback, as on a
 system without these calls, so the portable paths are exercised on Linux too (tests/store/test_portable.py).
@@ -213,3 +214,9 @@ def disk_free_bytes(path: Path) -> int | None:
         return shutil.disk_usage(path).free
     except OSError:
         return None
+
+
+def direct_io_flag() -> int:
+    """``os.O_DIRECT`` (Linux: reads and writes that bypass the page cache), or 0 where it is missing or the
+    fallbacks are forced (the caller then uses buffered I/O)."""
+    return 0 if portable() else getattr(os, "O_DIRECT", 0)

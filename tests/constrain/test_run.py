@@ -179,7 +179,8 @@ def bad_cases(mast) -> list:
         ("outside-time", late, [], ["outside the field's record"]),
         ("all-missing", empty, [], ["v_m_s has no value"]),
         ("not-a-plane", off_plane, [], ["x = 20 m is not a plane of the run"]),
-        ("noise-negative", mast, ["--noise", "-0.5"], ["noise = -0.5 m/s must be a finite number >= 0"]),
+        ("noise-negative", mast, ["--noise", "-0.5"], ["noise = -0.5 m/s must be a finite number in [0, 100]"]),
+        ("noise-1e308", mast, ["--noise", "1e308"], ["noise = 1e+308 m/s must be a finite number in [0, 100]"]),
     ]  # fmt: skip
 
 
@@ -197,7 +198,7 @@ def assert_refused(tmp_path, command: list, case) -> None:
     assert not (tmp_path / "c.zarr").exists()
 
 
-@pytest.mark.parametrize("case", range(6))
+@pytest.mark.parametrize("case", range(7))
 def test_bad_constraints_are_one_line_exit_2_nothing_written(tmp_path, case):
     assert_refused(tmp_path, ["mann", *SMALL], bad_cases(_mast(np.arange(0.0, 20.0, 0.5)))[case])
 

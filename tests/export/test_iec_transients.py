@@ -99,6 +99,7 @@ def test_read_by_weio_and_openfast_io(tmp_path):
     (dict(kind="EOG", V_hub_m_s=42.0, iec_class="IIIB"), "outside the allowed range (0, 37.5]"),
     (dict(sign=2), "must be +1 or -1"),
     (dict(dt_s=5.0), "dt (s) = 5 is outside"),
+    (dict(dt_s=1e-9), "dt (s) = 1e-09 is outside the allowed range [0.001,"),  # once a 78 GiB allocation
     (dict(rotor_diameter_m=200.0), "reaches the ground"),
 ])
 def test_bad_events_are_refused(args, msg):
@@ -112,6 +113,10 @@ def test_cli_exit_2_nothing_written(tmp_path):
     res = CliRunner().invoke(cli, ["transient", "ecd", "--class", "IIB", "--U", "12", "--hub-height", "90",
                                    "--rotor-diameter", "126", "--start", "55", "--out", str(tmp_path / "e.hh")])
     assert res.exit_code == 2 and "outside the record" in res.output and len(res.output.strip().splitlines()) == 1
+    assert not list(tmp_path.iterdir())
+    res = CliRunner().invoke(cli, ["transient", "eog", "--class", "IA", "--U", "12", "--hub-height", "90",
+                                   "--rotor-diameter", "126", "--dt", "1e-9", "--out", str(tmp_path / "e.hh")])
+    assert res.exit_code == 2 and "dt (s) = 1e-09" in res.output and len(res.output.strip().splitlines()) == 1
     assert not list(tmp_path.iterdir())
     res = CliRunner().invoke(cli, ["transient", "ews-v", "--class", "IA", "--U", "20", "--hub-height", "90",
                                    "--rotor-diameter", "126", "--sign", "-", "--out", str(tmp_path / "e.hh")])

@@ -117,3 +117,17 @@ def _wait_failed(srv, rid: str, timeout_s: float = 300.0) -> dict:
             return s
         time.sleep(0.2)
     raise AssertionError(f"run {rid} neither failed nor completed within {timeout_s} s")
+
+
+def test_a_run_that_cannot_be_recorded_is_refused_with_507(tmp_path, small_disk):
+    from turbgen.service.limits import LimitError
+
+    disk = small_disk("1M")
+    catalog = Catalog(disk / "root")
+    _fill(disk / "filler")
+    model, run, constraints = build_run({"model": "mann", "seed": 9, "U_m_s": 10.0, "grid": dict(TINY_GRID)})
+    rid = run_id(model, canonical_mapping(run, constraints))
+    with pytest.raises(LimitError) as err:
+        Jobs(catalog, _NoClient(), max_queue=4).submit(rid, model, run, None, constraints)
+    assert err.value.status == 507 and "cannot record the run" in str(err.value)
+    assert catalog.ids() == []

@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 import zarr
 
+from turbgen import oscalls
 from turbgen.errors import StoreError
 from turbgen.grid import Grid
-from turbgen.store import chunk_files, open_store
+from turbgen.store import open_store
 from turbgen.store import writer as writer_module
 from turbgen.store.chunk_files import empty_aligned, raw_chunk_path, read_chunk_file, write_chunk_file
 from turbgen.store.checked_reads import read_checked
@@ -33,7 +34,7 @@ def _arrays():
 @pytest.mark.parametrize("direct", [True, False], ids=["direct", "buffered"])
 def test_written_file_holds_the_c_order_bytes(tmp_path, monkeypatch, name, direct):
     if not direct:
-        monkeypatch.setattr(chunk_files, "_O_DIRECT", 0)
+        monkeypatch.setenv("TURBGEN_PORTABLE", "1")  # turbgen.oscalls: no O_DIRECT, buffered calls
     data = _arrays()[name]
     path = tmp_path / "a" / "c" / "0" / "0"
     path.parent.mkdir(parents=True)
@@ -49,12 +50,13 @@ def test_written_file_holds_the_c_order_bytes(tmp_path, monkeypatch, name, direc
 
 
 def test_a_file_system_refusing_o_direct_gets_buffered_calls(tmp_path, monkeypatch):
-    if not chunk_files._O_DIRECT:
+    o_direct = oscalls.direct_io_flag()
+    if not o_direct:
         pytest.skip("no O_DIRECT on this platform")
     real_open, refused = os.open, []
 
     def open_(path, flags, *args):
-        if flags & chunk_files._O_DIRECT:
+        if flags & o_direct:
             refused.append(path)
             raise OSError(errno.EINVAL, "Invalid argument")
         return real_open(path, flags, *args)

@@ -26,7 +26,7 @@ from click.testing import CliRunner
 from turbgen import interruption
 from turbgen.cli import cli
 from turbgen.errors import StoreError
-from turbgen.store import open_store, temporaries
+from turbgen.store import open_store
 from turbgen.sweep import SweepLock
 from turbgen.store.temporaries import parse_temp, pid_alive, remove_dead_temporaries
 

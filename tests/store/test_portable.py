@@ -1,6 +1,6 @@
-"""The portable fallbacks of turbgen.oscalls (issue 36 §5): with TURBGEN_PORTABLE=1 every Linux-only call (renameat2,
-fallocate, /proc and cgroup reads, statvfs) takes the path of a system without it, and the store and data-safety
-tests' key cases still pass."""
+"""The portable fallbacks of turbgen.oscalls (issue 36 §5): with TURBGEN_PORTABLE=1 every Linux-only call
+(renameat2, fallocate, /proc and cgroup reads, statvfs, O_DIRECT) takes the path of a system without it, and the
+store and data-safety tests' key cases still pass."""
 
 from __future__ import annotations
 
@@ -44,7 +44,7 @@ def test_every_fallback_is_taken_when_forced(tmp_path, portable):
         assert not oscalls.reserve(f.fileno(), 2**20, keep_size=False)
     assert src.stat().st_size == 3  # nothing allocated
     assert oscalls.resident_bytes() is None and oscalls.meminfo_available_bytes() is None
-    assert oscalls.cgroup_headroom_bytes() is None and oscalls.umask() == 0o022
+    assert oscalls.cgroup_headroom_bytes() is None and oscalls.umask() == 0o022 and oscalls.direct_io_flag() == 0
     assert oscalls.disk_free_bytes(tmp_path) == __import__("shutil").disk_usage(tmp_path).free
     assert pid_alive(os.getpid()) and not oscalls.is_zombie(os.getpid())
 
@@ -76,14 +76,16 @@ def test_a_reservation_the_system_cannot_make_checks_the_free_space(tmp_path, po
 
 # not the zombie case: without /proc a killed, unreaped writer counts as alive (its temporary is left, never a
 # live writer's removed); not the renameat2 variant of the racing overwrites (the same as two-renames here)
-KEY_CASES = "full_disk or two-renames or publish_killed or dead_writers or enospc or batches"
+KEY_CASES = "full_disk or two-renames or publish_killed or dead_writers or enospc or batches or c_order_bytes"
 
 
 def test_the_key_store_and_safety_cases_pass_with_the_fallbacks_forced():
-    """The full-disk, atomic-publication and dead-writer cases of tests/store/test_data_safety.py and the stencil
-    cache's tests/runs/test_disk_full.py, run again in a child pytest with TURBGEN_PORTABLE=1."""
+    """The full-disk, atomic-publication and dead-writer cases of tests/store/test_data_safety.py, the chunk files'
+    round trip (buffered, without O_DIRECT) and the stencil cache's tests/runs/test_disk_full.py, run again in a
+    child pytest with TURBGEN_PORTABLE=1."""
     done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-k", KEY_CASES,
-                           "tests/store/test_data_safety.py", "tests/runs/test_disk_full.py"],
+                           "tests/store/test_data_safety.py", "tests/store/test_chunk_files.py",
+                           "tests/runs/test_disk_full.py"],
                           cwd=ROOT, capture_output=True, text=True, timeout=900,
                           env={**os.environ, oscalls.PORTABLE_ENV: "1"})  # fmt: skip
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]

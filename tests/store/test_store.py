@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import zarr
 
-from turbgen import resources
+from turbgen import oscalls, resources
 from turbgen.errors import ParameterError, StoreError, TurbgenError
 from turbgen.grid import Grid
 from turbgen.store import FieldStore, create_store, layout, open_store, physical_time_view
@@ -369,9 +369,9 @@ def test_require_memory_message_names_need_available_and_option(monkeypatch):
 def test_resident_bytes_reads_vmrss(tmp_path):
     status = tmp_path / "status"
     status.write_text("Name:\tpython\nVmHWM:\t  300000 kB\nVmRSS:\t  123456 kB\n")
-    assert resources.resident_bytes(status) == 123456 * 1024
-    assert resources.resident_bytes(tmp_path / "absent") is None
-    assert resources.resident_bytes() > 10 * 2**20  # this interpreter (Linux)
+    assert oscalls.resident_bytes(status) == 123456 * 1024
+    assert oscalls.resident_bytes(tmp_path / "absent") is None
+    assert oscalls.resident_bytes() > 10 * 2**20  # this interpreter (Linux)
 
 
 def test_available_memory_reads_meminfo_and_cgroup(tmp_path):

@@ -32,12 +32,25 @@ def _plane_positions(planes, gates) -> list[float] | None:
     if planes is not None and gates is not None:
         raise ParameterError("give `planes` or `gates`, not both")
     if planes is not None:
-        return [float(x) for x in ([planes] if isinstance(planes, (int, float)) else planes)]
+        return _positions(planes, "`planes`")
     if gates is None:
         return None
     if isinstance(gates, str):
         gates = range_positions(gates, "`gates`", LIMITS["planes"] - 1)
-    return [0.0, *(float(x) for x in gates)]
+    return [0.0, *_positions(gates, "`gates`")]
+
+
+def _positions(values, name: str) -> list[float]:
+    """``values`` (a number or a flat sequence of numbers) as floats; ParameterError naming ``name`` otherwise (a
+    string, nested lists, None inside)."""
+    items = [values] if isinstance(values, (int, float)) else values
+    try:
+        if isinstance(items, (str, bytes)) or any(isinstance(x, (str, bytes, bool)) for x in items):
+            raise TypeError
+        return [float(x) for x in items]
+    except (TypeError, ValueError):
+        shown = repr(values) if len(repr(values)) <= 60 else repr(values)[:57] + "..."
+        raise ParameterError(f"{name} = {shown} must be a number or a sequence of numbers x [m], e.g. [0, 50]") from None
 
 
 def run_inputs(model: str, options: Mapping) -> tuple[dict, dict, list[float] | None]:

@@ -19,7 +19,7 @@ from turbgen.store.paths import check_output_path
 @click.option("--start", type=float, default=10.0, show_default=True, help="Time the event starts [s].")
 @click.option("--duration", type=float, default=60.0, show_default=True,
               help="Length of the file [s]; the event must end within it.")
-@click.option("--dt", type=float, default=0.05, show_default=True, help="Row spacing during the event [s].")
+@click.option("--dt", type=float, default=0.05, show_default=True, help="Row spacing during the event [s], [0.001, T/4].")
 @click.option("--sign", type=click.Choice(["+", "-"]), default="+", show_default=True,
               help="The standard's +-: sense of the direction change (EDC, ECD) or of the shear (EWS).")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), help="Uniform wind file to write, e.g. eog.hh.")

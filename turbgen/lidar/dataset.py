@@ -207,5 +207,6 @@ def read_dataset(path) -> LidarData:
                          json.loads(lidar) if isinstance(lidar, str) else dict(lidar),
                          bool(attrs["mean_wind_added"]), float(attrs["shear_exponent"]), float(attrs["U_m_s"]),
                          str(p), json.loads(wind) if isinstance(wind, str) else wind)  # fmt: skip
-    except (KeyError, ValueError, OSError, zarr.errors.BaseZarrError) as exc:
-        raise StoreError(f"{p} is not a readable lidar dataset ({type(exc).__name__}: {exc})") from None
+    except (KeyError, ValueError, OSError, RuntimeError, zarr.errors.BaseZarrError) as exc:  # RuntimeError: a chunk
+        first = (str(exc).splitlines() or [""])[0]  # that does not decompress (numcodecs' Zstd error)
+        raise StoreError(f"{p} is not a readable lidar dataset ({type(exc).__name__}: {first})") from None

@@ -35,7 +35,7 @@ from turbgen.resources import default_threads, require_disk, require_memory
 from turbgen.runs.correction_scratch import CorrectionScratch
 from turbgen.runs.mann import build_mann_stencil, memory_estimate_bytes
 from turbgen.runs.stencil_cache import cached_system, system_key
-from turbgen.spec.constraints import COMPONENTS, PointSeries, sensor_fluctuations
+from turbgen.spec.constraints import COMPONENTS, PointSeries, check_noise, sensor_fluctuations
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.store.memory import MemoryWriter
@@ -180,8 +180,7 @@ def placed_streams(run, files: list, noise_m_s: float | None = None) -> list[Pla
     file order: :func:`place` before the streams are combined (:func:`combine_streams`)."""
     from turbgen.runs.constrain_lidar import lidar_streams
 
-    if noise_m_s is not None and not (math.isfinite(noise_m_s) and noise_m_s >= 0):
-        raise ParameterError(f"noise = {noise_m_s!r} m/s must be a finite number >= 0")
+    noise_m_s = check_noise(noise_m_s)
     placed = []
     for f in files:
         if isinstance(f, PointSeries):
@@ -544,11 +543,27 @@ def describe_constraints(record: dict) -> list[str]:
 
 def load_constraints(files) -> list:
     """Each of ``files`` loaded (:func:`load_constraint`); PointSeries / LidarData given already loaded are kept, and a
-    lidar report of a field in memory (turbgen.lidar.report.LidarReport) gives its measurements (its ``data()``)."""
+    lidar report of a field in memory (turbgen.lidar.report.LidarReport) gives its measurements (its ``data()``).
+
+    Raises
+    ------
+    ParameterError
+        For an item that is none of these (e.g. ``constrain=[5]``).
+    """
+    from turbgen.lidar.dataset import LidarData
     from turbgen.lidar.report import LidarReport
 
-    return [load_constraint(f) if isinstance(f, (str, Path)) or hasattr(f, "__fspath__")
-            else f.data() if isinstance(f, LidarReport) else f for f in files]  # fmt: skip
+    def one(f):
+        if isinstance(f, (str, Path)) or hasattr(f, "__fspath__"):
+            return load_constraint(f)
+        if isinstance(f, (PointSeries, LidarData)):
+            return f
+        if isinstance(f, LidarReport):
+            return f.data()
+        raise ParameterError(f"constrain item {f!r:.60} is neither a constraint file's path, a PointSeries, "
+                             "LidarData nor a lidar report (turbgen.runs.constrain.load_constraint)")
+
+    return [one(f) for f in files]
 
 
 def constraint_digest(placed: PlacedData, conditional_mean: bool) -> str:

@@ -84,6 +84,8 @@ def lidar_streams(run, data: LidarData, sigma: float) -> list:
         raise ParameterError(f"{where}: measured a field with U = {data.U_m_s:g} m/s, this run has U = "
                              f"{run.U_m_s:g} m/s; the probe volume's Taylor shift depends on U: use the same "
                              "U")  # fmt: skip
+    if not np.isfinite(data.v_los).any():  # nothing to condition on (an empty reduction further on)
+        raise ParameterError(f"{where}: v_los has no value (every line-of-sight value is missing or NaN)")
     description = lidar_from_mapping(data.lidar, where)
     ms = measurements_of(description)
     try:

@@ -107,7 +107,9 @@ def _build_entry(params: MannParams, box: BoxShape, path: Path, shape: tuple, ev
             for i0 in range(0, shape[1], batch):
                 i1 = min(i0 + batch, shape[1])
                 part = build_stencil(params, box, energy="unit", evolving=evolving, slabs=(i0, i1))
-                arrays = [*part.coef, *([part.inv_tau.astype(np.float64)] if shape[0] == 5 else [])]
+                arrays = list(np.asarray(part.coef))
+                if shape[0] == 5:
+                    arrays.append(np.asarray(part.inv_tau, dtype=np.float64))
                 for j, a in enumerate(arrays):  # float32 -> float64 -> float32 is exact for 1/tau_e
                     write_at(fd, a, len(head) + (j * shape[1] + i0) * slab_bytes)
             os.fsync(fd)

@@ -13,6 +13,7 @@ import uuid
 from pathlib import Path
 
 from turbgen.service.catalog import FAILURE_ROOM, Catalog, write_json_atomic
+from turbgen.service.limits import LimitError
 from turbgen.service.run_ids import canonical_mapping, run_from_canonical
 from turbgen.spec.constraints import ConstraintRequest
 
@@ -152,6 +153,8 @@ class Jobs:
         ------
         QueueFull
             If ``max_queue`` runs are already queued or running.
+        LimitError
+            507 when the run cannot be recorded (the server's disk is full).
         """
         with self.lock:
             if rid in self.active:
@@ -160,7 +163,10 @@ class Jobs:
                 return "complete"
             if len(self.active) >= self.max_queue:
                 raise QueueFull(f"{len(self.active)} runs are queued or running (the server's --max-queue)")
-            self.catalog.record(rid, model, canonical_mapping(run, constraints), preset)
+            try:
+                self.catalog.record(rid, model, canonical_mapping(run, constraints), preset)
+            except OSError as exc:  # nothing queued: the run could not even be recorded (a full or read-only disk)
+                raise LimitError(507, f"the server cannot record the run ({exc.strerror or exc}); try later") from None
             self._start(rid, model, run, constraints)
             return "queued"
 

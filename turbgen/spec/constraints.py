@@ -179,6 +179,7 @@ def load_point_series(path) -> PointSeries:
 
 # the keys of a Mann run mapping (schemas/mann-run.schema.json) that condition the field; MannRun itself is the prior
 CONSTRAINT_KEYS = ("constrain", "noise_m_s", "conditional_mean")
+MAX_NOISE_M_S = 100.0  # the schemas' maximum of noise_m_s: beyond it no measurement is left (1e308 overflowed)
 
 
 @dataclass(frozen=True)
@@ -200,7 +201,7 @@ def split_constraint_keys(mapping: dict) -> tuple[dict, ConstraintRequest | None
     ------
     ParameterError
         For ``noise_m_s`` or ``conditional_mean`` without ``constrain``, a ``constrain`` that is not a list, a
-        negative or non-finite ``noise_m_s``.
+        ``noise_m_s`` that is not a finite number in [0, MAX_NOISE_M_S].
     """
     rest = {k: v for k, v in mapping.items() if k not in CONSTRAINT_KEYS}
     files = mapping.get("constrain") or ()
@@ -212,10 +213,15 @@ def split_constraint_keys(mapping: dict) -> tuple[dict, ConstraintRequest | None
             raise ParameterError("a measurement noise (noise_m_s) or conditional_mean needs constraints: give "
                                   "constrain (--constrain FILE)")
         return rest, None
+    return rest, ConstraintRequest(tuple(files), check_noise(noise), mean)
+
+
+def check_noise(noise) -> float | None:
+    """``noise`` [m/s] as a float (None stays None); ParameterError unless a finite number in [0, MAX_NOISE_M_S]."""
     if noise is not None and (isinstance(noise, bool) or not isinstance(noise, (int, float))
-                              or not (math.isfinite(noise) and noise >= 0)):  # fmt: skip
-        raise ParameterError(f"noise = {noise!r} m/s must be a finite number >= 0")
-    return rest, ConstraintRequest(tuple(files), None if noise is None else float(noise), mean)
+                              or not (math.isfinite(noise) and 0 <= noise <= MAX_NOISE_M_S)):  # fmt: skip
+        raise ParameterError(f"noise = {noise!r} m/s must be a finite number in [0, {MAX_NOISE_M_S:g}]")
+    return None if noise is None else float(noise)
 
 
 def resolve_constraint_paths(mapping: dict, base_dir) -> dict:

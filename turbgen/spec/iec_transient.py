@@ -51,6 +51,8 @@ def parse_class(text: str) -> tuple[str, str]:
     return m.group(1), m.group(2)
 
 
+MIN_DT_S = 0.001  # finest row spacing [s], as the fields' --dt
+
 @dataclass(frozen=True)
 class IecTransient:
     """One IEC event at hub speed V_hub, validated at construction.
@@ -72,7 +74,7 @@ class IecTransient:
     duration_s : float
         Length of the file [s]; the event must end within it.
     dt_s : float
-        Row spacing during the event [s], in (0, T/4].
+        Row spacing during the event [s], in [MIN_DT_S, T/4] (at most 12 000 event rows).
     sign : int
         +1 or -1: the standard's "+-" (direction change sense, shear sense); EOG takes +1 only.
 
@@ -106,7 +108,8 @@ class IecTransient:
                                  f"{self.hub_height_m:g} m")
         put(self, "duration_s", check_positive("duration (s)", self.duration_s))
         period = PERIODS_S[self.kind]
-        put(self, "dt_s", check_range("dt (s)", self.dt_s, 0.0, period / 4, lo_open=True))
+        # at least MIN_DT_S: the rows are allocated and written (dt = 1e-9 s once asked numpy for 78 GiB)
+        put(self, "dt_s", check_range("dt (s)", self.dt_s, MIN_DT_S, period / 4))
         put(self, "start_s", check_range("transient start (s)", self.start_s, 0.0, self.duration_s))
         if self.start_s + period > self.duration_s:
             raise ParameterError(f"the {self.kind} ({period:g} s) starting at {self.start_s:g} s ends at "

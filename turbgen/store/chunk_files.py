@@ -29,8 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
+from turbgen import oscalls
+
 ALIGN = 4096  # a multiple of every logical block size in use (512, 4096)
-_O_DIRECT = getattr(os, "O_DIRECT", 0)
 _REFUSED = (errno.EINVAL, errno.EOPNOTSUPP, errno.ENOTSUP)
 _local = threading.local()
 
@@ -127,9 +128,10 @@ def write_chunk_file(path: Path, data: np.ndarray) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     data = np.ascontiguousarray(data)
     nbytes = data.nbytes
-    if _O_DIRECT and nbytes:
+    direct = oscalls.direct_io_flag()
+    if direct and nbytes:
         try:
-            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | _O_DIRECT, 0o644)
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | direct, 0o644)
         except OSError as exc:
             if exc.errno not in _REFUSED:
                 raise
@@ -178,9 +180,10 @@ def read_chunk_file(path: Path, out: np.ndarray) -> None:
     if size != nbytes:
         raise ValueError(f"{path} holds {size} bytes, a chunk {nbytes}")
     dest = out.reshape(-1).view(np.uint8)
-    if _O_DIRECT and nbytes:
+    direct = oscalls.direct_io_flag()
+    if direct and nbytes:
         try:
-            fd = os.open(path, os.O_RDONLY | _O_DIRECT)
+            fd = os.open(path, os.O_RDONLY | direct)
         except OSError as exc:
             if exc.errno not in _REFUSED:
                 raise

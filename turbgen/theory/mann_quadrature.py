@@ -99,7 +99,13 @@ def _separated_cut(sd: float) -> float:
 
 
 def check_k1(k1) -> np.ndarray:
-    k1 = np.atleast_1d(np.asarray(k1, dtype=float))
+    """``k1`` [rad/m] as a float array of at least one value; ParameterError for none, non-numbers or non-finite."""
+    try:
+        k1 = np.atleast_1d(np.asarray(k1, dtype=float))
+    except (TypeError, ValueError):
+        raise ParameterError(f"k1 (rad/m) = {k1!r:.60} must be finite numbers") from None
+    if k1.size == 0:
+        raise ParameterError("k1 (rad/m) is empty: give at least one wavenumber")
     if not np.all(np.isfinite(k1)):
         raise ParameterError("k1 (rad/m) must be finite numbers")
     return k1
