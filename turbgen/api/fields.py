@@ -16,7 +16,7 @@ from pathlib import Path
 import xarray as xr
 
 from turbgen.api.keywords import run_inputs
-from turbgen.errors import ParameterError
+from turbgen.errors import ParameterError, check_int
 from turbgen.resources import available_memory_bytes, default_threads, parse_size, require_memory
 from turbgen.spec.defaults import KAIMAL_DEFAULTS
 from turbgen.spec.config import check_mapping, read_config
@@ -261,8 +261,11 @@ def mann(
 
 def _budget(memory) -> int | None:
     """The memory budget [bytes]: ``memory`` (bytes or a size such as "4GiB") or the available memory (None: unknown)."""
-    budget = parse_size(memory, "`memory`") if isinstance(memory, str) else memory
-    return available_memory_bytes() if budget is None else budget
+    if memory is None:
+        return available_memory_bytes()
+    if isinstance(memory, str):
+        return parse_size(memory, "`memory`")
+    return check_int("`memory` (bytes)", memory, 1)  # -5 is no budget to raise, but a mistake
 
 
 def _mann_fits(run: MannRun, threads, stencil_cache, memory) -> bool:

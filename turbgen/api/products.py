@@ -17,6 +17,8 @@ def field_store(store) -> FieldStore:
     """The open FieldStore of ``store``: a path, a FieldStore, or a Dataset whose ``encoding["source"]`` is a store."""
     if isinstance(store, FieldStore):
         return store
+    if store is None:
+        raise ParameterError("store = None; give a store path, a FieldStore or a Dataset of turbgen.open_store")
     if isinstance(store, (str, os.PathLike)):
         return _open_field_store(store)
     source = getattr(store, "encoding", {}).get("source")

@@ -41,7 +41,12 @@ def _limit(name: str) -> tuple[str, int]:
 
 def parse_floats(text: str, name: str) -> list[float]:
     """'a,b,c' -> [a, b, c] (finite floats, at most the option's LIMITS count)."""
-    items = [v for v in text.split(",") if v.strip()]
+    items = text.split(",")
+    if not text.strip():
+        raise click.BadParameter(f"{text!r} holds no number", param_hint=name)
+    if not all(v.strip() for v in items):  # '0,,50' or '0,50,': a value left out, not a list of two
+        raise click.BadParameter(f"{text!r} has an empty entry (write numbers separated by single commas)",
+                                 param_hint=name)
     _, limit = _limit(name)
     if len(items) > limit:
         raise click.BadParameter(f"{len(items)} values is more than the maximum {limit}", param_hint=name)
@@ -52,8 +57,6 @@ def parse_floats(text: str, name: str) -> list[float]:
             raise click.BadParameter(f"{v.strip()!r} in {text!r} is not a number", param_hint=name) from None
         if not math.isfinite(x):
             raise click.BadParameter(f"{v.strip()!r} in {text!r} is not a finite number", param_hint=name)
-    if not items:
-        raise click.BadParameter(f"{text!r} holds no number", param_hint=name)
     return [float(v) for v in items]
 
 
@@ -83,7 +86,11 @@ def parse_ints(text: str, name: str) -> list[int]:
     counted before any range is expanded)."""
     _, limit = _limit(name)
     ranges: list[tuple[int, int]] = []
-    for part in text.split(","):
+    parts = text.split(",")
+    if text.strip() and not all(p.strip() for p in parts):  # '1,,3': a value left out
+        raise click.BadParameter(f"{text!r} has an empty entry (write integers separated by single commas)",
+                                 param_hint=name)
+    for part in parts:
         part = part.strip()
         if not part:
             continue

@@ -24,6 +24,7 @@ from turbgen.errors import ParameterError
 from turbgen.spec.config import check_mapping
 from turbgen.spec.mean_wind import MeanWind
 from turbgen.spec.mean_wind_files import mean_wind_from_options
+from turbgen.theory import ranges
 
 COMPONENTS = ("u", "v", "w")
 
@@ -80,6 +81,7 @@ def point_series_from_mapping(data, source: str) -> PointSeries:
             v = np.array([math.nan if x is None else x for x in s[f"{c}_m_s"]], dtype=float)
             if len(v) != len(t):
                 raise ParameterError(f"{where}: {name} {c}_m_s has {len(v)} values for {len(t)} times")
+            ranges.check_values("measured_m_s", v, f"{where}: {name} {c}_m_s")
             if not np.isfinite(v).any():
                 raise ParameterError(f"{where}: {name} {c}_m_s has no value (all missing)")
             series[c] = v
@@ -163,6 +165,12 @@ def sensor_fluctuations(f: PointSeries, s: PointSensor, U_m_s: float, hub_height
     return out, removed if "u" in s.series else 0.0
 
 
+def _refuse_constant(name: str):
+    """json.loads's hook for NaN, Infinity and -Infinity (not JSON; Python's reader takes them): refused, so that an
+    infinite value is not taken for a missing one."""
+    raise ValueError(f"{name} is not a JSON number (write null for a missing value)")
+
+
 def load_point_series(path) -> PointSeries:
     """Read and check a constraint file (JSON, schemas/constraints.schema.json).
 
@@ -173,7 +181,7 @@ def load_point_series(path) -> PointSeries:
     """
     p = Path(path)
     try:
-        data = json.loads(p.read_bytes())
+        data = json.loads(p.read_bytes(), parse_constant=_refuse_constant)
     except OSError as exc:
         raise ParameterError(f"constraint file {p}: cannot read it ({exc.strerror or exc})") from None
     except ValueError as exc:
