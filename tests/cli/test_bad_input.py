@@ -515,6 +515,28 @@ def test_a_refusal_of_1001_sensors_is_a_short_line(workdir, monkeypatch):
     assert res.exit_code == 2 and len(res.stderr) < 200, res.stderr[:300]
 
 
+def test_serve_on_a_busy_port_is_refused_before_anything_is_made_or_printed(workdir, monkeypatch):
+    """`serve --port <busy>` printed "listening on ..." and created --root before failing (issue 37): the port is
+    bound first. Loopback only."""
+    import socket
+
+    pytest.importorskip("uvicorn")
+    busy = socket.socket()
+    busy.bind(("127.0.0.1", 0))
+    busy.listen(1)
+    port = busy.getsockname()[1]
+    monkeypatch.chdir(workdir)
+    before = _listing(workdir)
+    try:
+        res = CliRunner().invoke(cli, ["serve", "--port", str(port), "--root", "newroot"], prog_name="turbgen")
+    finally:
+        busy.close()
+    assert res.exit_code == 2 and res.stdout == "", res.output
+    assert res.stderr.strip().splitlines() == [res.stderr.strip()] and f"--port {port}" in res.stderr
+    assert "cannot listen on 127.0.0.1" in res.stderr and "listening" not in res.output
+    assert _listing(workdir) == before
+
+
 @pytest.mark.parametrize("args", [[], ["theory"], ["fit"]])
 def test_group_without_command_shows_its_help(args):
     res = CliRunner().invoke(cli, args, prog_name="turbgen")
