@@ -53,7 +53,7 @@ def test_linear_veer_and_history():
 def test_describe_default_is_the_earlier_exports_text():
     assert MeanWind().describe() == "power-law shear alpha = 0.2"
     assert MeanWind(profile="log", roughness_m=0.03, veer_deg_per_m=0.05).describe() == \
-        "log law z0 = 0.03 m, d = 0 m; veer 0.05 deg/m"
+        "log law z0 = 0.03 m, d = 0 m; veer 0.05 deg/m; angles ccw from above"
     assert MeanWind(profile="log", roughness_m=0.03).to_attrs() == {"profile": "log", "roughness_m": 0.03,
                                                                     "displacement_m": 0.0}
 

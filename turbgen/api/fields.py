@@ -351,7 +351,7 @@ def kaimal(
     ``ayz``, ``lc``, ``long_model``, ``ax``, ``bx``, ``long_components``, ``vw_coherence``, ``rescale``, ``nt``,
     ``dt``, ``ny``, ``nz``, ``dy``, ``dz``, ``planes``, ``gates``) or any key of a run file
     (schemas/kaimal-run.schema.json). A keyword left at None takes the run file's value, else the preset's, else
-    the default (U 16 m/s, class A, hub 90 m, 4096 × 11 × 31 × 31 at dt 0.5 s, dy = dz 5 m, seed 1).
+    the default (U 16 m/s, class A, hub 150 m, 4096 × 11 × 31 × 31 at dt 0.5 s, dy = dz 5 m, seed 1).
 
     Parameters
     ----------

@@ -19,6 +19,16 @@ class FiniteFloatRange(click.FloatRange):
         return v
 
 
+def evo_seconds(ctx, param, value):
+    """Callback of a model's --evo: seconds, or 'frozen' / 'none' (frozen turbulence, no evolution lifetime) -> None."""
+    if value is None or value.strip().lower() in ("frozen", "none"):
+        return None
+    try:
+        return float(value)
+    except ValueError:
+        raise click.BadParameter(f"{value!r} is not a number of seconds or 'frozen'") from None
+
+
 def range_help(key: str) -> str:
     """The allowed interval of RANGES[key] for an option's help, e.g. "[2, 4096]": the interval the check enforces."""
     return RANGES[key].text()
@@ -125,3 +135,28 @@ def plane_positions(planes: list[float] | None, gates: list[float] | None) -> li
     if gates is not None:
         return [0.0, *gates]
     return None
+
+
+def iec_class_options(help_text: str):
+    """``--iec-class`` (turbine class and turbulence category, e.g. IIB) and its deprecated alias ``--class`` (hidden).
+
+    ``kaimal --class`` is the turbulence class alone (A, B, ...); ``sweep`` and ``transient`` called the turbine
+    class ``--class`` too, the one word for two things. The decorated command gets ``iec_class`` and ``class_alias``;
+    :func:`resolve_iec_class` merges them.
+    """
+    def decorate(f):
+        f = click.option("--class", "class_alias", hidden=True, default=None,
+                         help="Deprecated alias of --iec-class.")(f)
+        return click.option("--iec-class", "iec_class", default=None, help=help_text)(f)
+
+    return decorate
+
+
+def resolve_iec_class(iec_class: str | None, class_alias: str | None, command: str) -> str | None:
+    """The turbine class given as --iec-class or, with a warning on stderr, as the deprecated --class."""
+    if iec_class is not None and class_alias is not None:
+        raise click.UsageError("give --iec-class only (--class is its deprecated alias)")
+    if class_alias is not None:
+        click.echo(f"turbgen {command}: warning: --class is deprecated here, write --iec-class {class_alias} (the "
+                   "turbine class and turbulence category; `turbgen kaimal --class` is the turbulence class)", err=True)
+    return class_alias if iec_class is None else iec_class

@@ -41,7 +41,9 @@ DEFAULT_B_X = 1.49e-4
 KAIMAL_DEFAULTS = {
     "U_m_s": 16.0,
     "turb_class": "A",
-    "hub_height_m": 90.0,
+    # the same default hub height as Mann's (which needs it for its 296 m box): no Kaimal statistic changes with it
+    # (IEC Lambda1 = 42 m at every hub height above 60 m), only the heights the exports write
+    "hub_height_m": 150.0,
     "long_model": "exp",
     "long_components": "u",
     "vw_coherence": "white",

@@ -30,6 +30,12 @@ from turbgen.theory import ranges
 
 PROFILES = ("power", "log", "table")
 DEFAULT_SHEAR_EXPONENT = 0.2
+# The two senses of a wind direction in the files turbgen reads and writes (issue 37: both named wherever one is used):
+# the veer rate and the direction columns of profile tables and mean histories turn (u, v) counter-clockwise seen
+# from above, TurbSim's sense (northern-hemisphere veer is negative); InflowWind's WindDir and PropagationDir, and so
+# the uniform files' WindDir and the IEC transients' "+" sense (EDC, ECD), are clockwise seen from above.
+CCW_NOTE = "counter-clockwise seen from above (TurbSim's sense; InflowWind's WindDir is clockwise)"
+CW_NOTE = "clockwise seen from above (InflowWind's WindDir sense; --veer and direction columns are counter-clockwise)"
 VEER_LIMIT_DEG_PER_M = 5.0  # |rate| beyond this turns the flow by > 90 deg over 18 m: surely a unit mistake
 DIRECTION_LIMIT_DEG = 360.0  # a direction column: a compass bearing or an angle relative to the hub, within one turn
 
@@ -390,7 +396,8 @@ class MeanWind:
         -------
         str
             E.g. "power-law shear alpha = 0.2" (the default, as earlier exports wrote it) or
-            "log law z0 = 0.03 m, d = 0 m; veer -0.1 deg/m; hub history hist.csv (41 points)".
+            "log law z0 = 0.03 m, d = 0 m; veer -0.1 deg/m; hub history hist.csv (41 points); angles ccw from above";
+            a transient's direction change (EDC, ECD) is named clockwise, InflowWind's sense.
         """
         if self.profile == "power":
             out = [f"power-law shear alpha = {self.shear_exponent:g}"]
@@ -404,10 +411,14 @@ class MeanWind:
             out.append("veer from the table")
         if self.has_history:
             out.append(f"hub history {self.history_label} ({len(self.history_times_s)} points)".replace("  ", " "))
+        if self.veer_deg_per_m or self.table_directions_deg or self.history_directions_deg:
+            out.append("angles ccw from above")  # the written files name the sense (CCW_NOTE)
         if self.transient is not None:
             t = self.transient
-            out.append(f"IEC {t.kind} {t.iec_class} ({t.magnitude():.4g} {'deg' if t.kind in ('EDC', 'ECD') else 'm/s'}"
-                       f"{'' if t.kind == 'EOG' else f', sign {t.sign:+d}'}) from {t.start_s:g} s")
+            turn = t.kind in ("EDC", "ECD")
+            out.append(f"IEC {t.kind} {t.iec_class} ({t.magnitude():.4g} {'deg' if turn else 'm/s'}"
+                       f"{'' if t.kind == 'EOG' else f', sign {t.sign:+d}'}{' = cw from above' if turn else ''}) "
+                       f"from {t.start_s:g} s")
         return "; ".join(out)
 
     def to_attrs(self) -> dict:
