@@ -44,7 +44,8 @@ def _is_number(value) -> bool:
 def check_finite(name: str, value) -> float:
     """Return ``value`` as float, or raise if it is not a finite number."""
     if not _is_number(value):
-        raise ParameterError(f"{name} = {value!r} is {'a bool, not a number' if _is_bool(value) else 'not a finite number'}")
+        what = "a bool, not a number" if _is_bool(value) else "not a finite number"
+        raise ParameterError(f"{name} = {value!r} is {what}")
     return float(value)
 
 
@@ -92,7 +93,8 @@ def check_int(name: str, value, lo: int, hi: int | None = None) -> int:
     except (TypeError, ValueError, OverflowError):
         ok = False
     if not ok:
-        raise ParameterError(f"{name} = {value!r} is {'a bool, not an integer' if _is_bool(value) else 'not an integer'}")
+        what = "a bool, not an integer" if _is_bool(value) else "not an integer"
+        raise ParameterError(f"{name} = {value!r} is {what}")
     if iv < lo or (hi is not None and iv > hi):
         upper = f", {hi}]" if hi is not None else ", ∞)"
         raise ParameterError(f"{name} = {value!r} is outside the allowed range [{lo}{upper}")

@@ -37,8 +37,8 @@ def _split(text: str | None) -> list[str] | None:
               "its k_0.5, cut-off and coherence verdict in the manifest")
 @click.option("--out", type=click.Path(file_okay=False), help="output directory (stores and manifest)")
 @click.option("--dlc", type=click.Choice(["1.1", "1.2", "1.3"]), default=None,
-              help="IEC 61400-1 design-load-case set: 1.1/1.2 (NTM) or 1.3 (ETM) at --iec-class, speeds --v-in..--v-out in "
-                   "2 m/s steps, --seeds (default 1-6), one --model (default kaimal); every field is exported to "
+              help="IEC 61400-1 design-load-case set: 1.1/1.2 (NTM) or 1.3 (ETM) at --iec-class, speeds "
+                   "--v-in..--v-out in 2 m/s steps, --seeds (default 1-6), one --model (default kaimal); every field is exported to "
                    "OUT/wind/ with its InflowWind input file and listed in OUT/dlc_manifest.csv.")
 @iec_class_options("--dlc: turbine class and turbulence category, e.g. IIB.")
 @click.option("--v-in", "v_in", type=float, default=4.0, show_default=True, help="--dlc: cut-in speed V_in [m/s].")

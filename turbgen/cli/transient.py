@@ -29,8 +29,8 @@ from turbgen.store.paths import check_output_path
 @click.option("--runner-files/--no-runner-files", default=True, show_default=True,
               help="Also write OUT_InflowWind_uniform.dat (InflowWind v5, WindType 2) beside it.")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-def transient(kind, iec_class, class_alias, V_hub, hub_height, rotor_diameter, start, duration, dt, sign, out, runner_files,
-              overwrite):
+def transient(kind, iec_class, class_alias, V_hub, hub_height, rotor_diameter, start, duration, dt, sign, out,
+              runner_files, overwrite):
     """Write the IEC 61400-1 Ed. 4 event KIND (EOG, EDC, ECD, EWS-V, EWS-H; Sect. 6.3.3) at V_hub as a uniform wind file.
 
     The normal wind profile (alpha 0.2) is included; parameters (sigma1, Lambda1, V_e1) come from the

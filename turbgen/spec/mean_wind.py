@@ -169,8 +169,8 @@ class MeanWind:
                                                 _speed))
         if len(self.history_speeds_m_s) != len(t):
             raise ParameterError(f"the mean history has {len(t)} times but no speeds")
-        put(self, "history_directions_deg", _column("mean-history directions (deg)", self.history_directions_deg, len(t),
-                                                    _direction))
+        put(self, "history_directions_deg", _column("mean-history directions (deg)", self.history_directions_deg,
+                                                    len(t), _direction))
 
     @property
     def has_history(self) -> bool:
