@@ -27,7 +27,14 @@ class StoreError(TurbgenError, ValueError):
     """A path that is not a complete, readable turbgen store (or would be overwritten)."""
 
 
+def _is_bool(value) -> bool:
+    """True for Python and numpy booleans: numbers to ``float()`` and ``int()``, never a meant value (U=True)."""
+    return isinstance(value, bool) or type(value).__name__ in ("bool", "bool_")
+
+
 def _is_number(value) -> bool:
+    if _is_bool(value):
+        return False
     try:
         return math.isfinite(float(value))
     except (TypeError, ValueError):
@@ -37,7 +44,8 @@ def _is_number(value) -> bool:
 def check_finite(name: str, value) -> float:
     """Return ``value`` as float, or raise if it is not a finite number."""
     if not _is_number(value):
-        raise ParameterError(f"{name} = {value!r} is not a finite number")
+        what = "a bool, not a number" if _is_bool(value) else "not a finite number"
+        raise ParameterError(f"{name} = {value!r} is {what}")
     return float(value)
 
 
@@ -81,11 +89,12 @@ def check_int(name: str, value, lo: int, hi: int | None = None) -> int:
     try:
         iv = int(value)
         # a Python int is exact at any size (float() would round it and call 2**63 "not an integer")
-        ok = isinstance(value, int) and not isinstance(value, bool) or float(value) == iv
+        ok = not _is_bool(value) and (isinstance(value, int) or float(value) == iv)
     except (TypeError, ValueError, OverflowError):
         ok = False
     if not ok:
-        raise ParameterError(f"{name} = {value!r} is not an integer")
+        what = "a bool, not an integer" if _is_bool(value) else "not an integer"
+        raise ParameterError(f"{name} = {value!r} is {what}")
     if iv < lo or (hi is not None and iv > hi):
         upper = f", {hi}]" if hi is not None else ", ∞)"
         raise ParameterError(f"{name} = {value!r} is outside the allowed range [{lo}{upper}")

@@ -72,7 +72,7 @@ CASES = [
     ("mann-nt-huge", ["mann", "--nt", "99999999999"], ["99999999999"]),
     ("mann-nt-text", ["mann", "--nt", "1.5"], ["'1.5'", "--nt"]),
     ("mann-ny-1", ["mann", "--ny", "1"], ["ny = 1", "[2, 4096]"]),
-    ("mann-ny-0", ["mann", "--ny", "0"], ["ny = 0"]),
+    ("mann-ny-0", ["mann", "--ny", "0"], ["ny = 0", "[2, 4096]"]),  # issue 37: said [1, 16384], the Grid's range
     ("mann-nz-99999", ["mann", "--nz", "99999"], ["nz = 99999"]),
     ("mann-dy-1e9", ["mann", "--dy", "1e9"], ["dy (m) = 1e+09", "[0.01, 1000]"]),
     ("mann-dy-0", ["mann", "--dy", "0"], ["dy (m) = 0"]),
@@ -147,7 +147,7 @@ CASES = [
     ("kaimal-nt-1", ["kaimal", "--nt", "1"], ["nt = 1"]),
     ("kaimal-dt-1e12", ["kaimal", "--dt", "1e12"], ["dt (s) = 1e+12"]),
     ("kaimal-ny-1", ["kaimal", "--ny", "1"], ["ny = 1"]),
-    ("kaimal-nz-0", ["kaimal", "--nz", "0"], ["nz = 0"]),
+    ("kaimal-nz-0", ["kaimal", "--nz", "0"], ["nz = 0", "[2, 4096]"]),
     ("kaimal-dy-1e9", ["kaimal", "--dy", "1e9"], ["dy (m) = 1e+09"]),
     ("kaimal-dz-0", ["kaimal", "--dz", "0"], ["dz (m) = 0"]),
     ("kaimal-planes-neg", ["kaimal", "--planes", "-50,0"], ["-50"]),
@@ -338,6 +338,34 @@ CASES = [
      ["afile", "not a turbgen store", "will not be replaced"]),
     ("lidar-out-is-a-file", ["lidar", "mann.zarr", "--out", "afile"],
      ["afile", "not a zarr dataset", "will not be replaced"]),
+    # --- issue 37 section 3: accepted nonsense (files written by _issue37_files) ---
+    ("mann-ae-1e-300", ["mann", *SMALL, "--ae", "1e-300"], ["1e-300", "[1e-06, 100]"]),  # a field of float32 zeros
+    ("mann-planes-empty-entry", ["mann", "--planes", "0,,50"], ["'0,,50'", "empty entry"]),
+    ("mann-planes-trailing-comma", ["mann", "--planes", "0,50,"], ["'0,50,'", "empty entry"]),
+    ("sweep-seeds-empty-entry", [*SWEEP[:-1], "1,,3", "--out", "sw"], ["'1,,3'", "empty entry"]),
+    ("export-history-direction-1e308", ["export", "mann.zarr", "--format", "bts", "--out", "h.bts",
+                                        "--mean-history", "history_dir_huge.csv"], ["1e+308", "[-360, 360]"]),
+    ("export-history-speed-1e308", ["export", "mann.zarr", "--format", "bts", "--out", "h.bts",
+                                    "--mean-history", "history_speed_huge.csv"], ["1e+308", "[0, 150]"]),
+    ("mann-constrain-infinity", ["mann", *SMALL, "--ae", "0.3", "--constrain", "c_infinity.json", "--out", "c.zarr"],
+     ["c_infinity.json", "Infinity", "null"]),
+    ("mann-constrain-nan-literal", ["mann", *SMALL, "--ae", "0.3", "--constrain", "c_nan.json", "--out", "c.zarr"],
+     ["c_nan.json", "NaN", "null"]),
+    ("mann-constrain-1e30", ["mann", *SMALL, "--ae", "0.3", "--constrain", "c_1e30.json", "--out", "c.zarr"],
+     ["c_1e30.json", "hub u_m_s", "1e+30", "[-150, 150]", "index 1"]),
+    ("mann-constrain-los-inf", ["mann", *SMALL, "--ae", "0.3", "--constrain", "los_inf.csv", "--out", "c.zarr"],
+     ["los_inf.csv", "v_los", "inf", "not a finite number"]),
+    ("mann-constrain-los-1e30", ["mann", *SMALL, "--ae", "0.3", "--constrain", "los_1e30.csv", "--out", "c.zarr"],
+     ["los_1e30.csv", "v_los", "1e+30", "[-150, 150]"]),
+    ("mann-constrain-1001-sensors", ["mann", *SMALL, "--ae", "0.3", "--constrain", "c_1001.json", "--out", "c.zarr"],
+     ["sensors: a list of 1001 items is too long (at most 1000)"]),
+    ("info-garbage-sum", ["info", "garbage.sum"], ["garbage.sum", "not a .sum InflowWind can read"]),
+    ("info-truncated-bts", ["info", "truncated.bts"], ["truncated.bts", "truncated or corrupted", "1000 bytes"]),
+    ("info-array-meta-garbage", ["info", "badmeta.zarr"], ["badmeta.zarr", "u/zarr.json unreadable"]),
+    ("validate-array-meta-garbage", ["validate", "badmeta.zarr"], ["badmeta.zarr", "u/zarr.json unreadable"]),
+    ("export-array-meta-garbage", ["export", "badmeta.zarr", "--format", "bts", "--out", "b.bts"],
+     ["badmeta.zarr", "u/zarr.json unreadable"]),
+    ("info-array-meta-differs", ["info", "othermeta.zarr"], ["othermeta.zarr", "v/zarr.json differs"]),
 ]
 
 SWEEP_FILE = 'models = ["mann"]\npresets = ["neutral"]\nspeeds = [10]\nseeds = {seeds}\n{out}'
@@ -372,7 +400,46 @@ def workdir(tmp_path_factory):
     (root / "axial_lidar.toml").write_text(SLOW_LIDAR.replace("1e-300", "4.0").replace("100.0", "50.0")
                                            .replace("63.0", "5.0") + "fwhm_m = 1.0\n")
     _corrupt_copies(root)
+    _issue37_files(root)
     return root
+
+
+def _issue37_files(root: Path) -> None:
+    """Inputs refused since issue 37: mean histories, constraint files and line-of-sight records holding
+    non-numbers or implausible values, 1001 sensors, a garbage .sum, a truncated .bts and stores whose array
+    metadata is garbage or differs from the consolidated copy."""
+    import json
+    import shutil
+
+    (root / "history_dir_huge.csv").write_text("t,U,dir\n0,16,0\n100,16,1e308\n")
+    (root / "history_speed_huge.csv").write_text("t,U\n0,16\n100,1e308\n")
+    series = {"kind": "point-series", "time_s": [0.0, 0.5, 1.0],
+              "sensors": [{"name": "hub", "x_m": 0.0, "y_m": 0.0, "z_m": 0.0, "u_m_s": [0.5, "X", -0.2]}]}
+    for name, value in (("c_infinity.json", "Infinity"), ("c_nan.json", "NaN"), ("c_1e30.json", "1e30")):
+        (root / name).write_text(json.dumps(series).replace('"X"', value))
+    many = {**series, "sensors": [{**series["sensors"][0], "name": f"s{i}", "u_m_s": [0.1, 0.2, 0.3]}
+                                  for i in range(1001)]}  # fmt: skip
+    (root / "c_1001.json").write_text(json.dumps(many))
+    rows = "".join(f"{0.25 * k},0,0,{{}}\n" for k in range(8))
+    for name, value in (("los_inf.csv", "inf"), ("los_1e30.csv", "1e30")):
+        values = ["0.1"] * 8
+        values[3] = value
+        (root / name).write_text("# lidar = axial_lidar.toml\n# U_m_s = 16\ntime_s,beam,gate,v_los_m_s\n"
+                                 + rows.format(*values))
+    (root / "garbage.sum").write_bytes(bytes(range(256)) * 2)
+    res = CliRunner().invoke(cli, ["export", str(root / "mann.zarr"), "--format", "bts", "--out",
+                                   str(root / "whole.bts")])
+    assert res.exit_code == 0, res.output
+    (root / "truncated.bts").write_bytes((root / "whole.bts").read_bytes()[:1000])
+    for written in root.glob("whole*"):
+        written.unlink()
+    shutil.copytree(root / "mann.zarr", root / "badmeta.zarr")
+    (root / "badmeta.zarr" / "u" / "zarr.json").write_text("garbage\n")
+    shutil.copytree(root / "mann.zarr", root / "othermeta.zarr")
+    meta_file = root / "othermeta.zarr" / "v" / "zarr.json"
+    meta = json.loads(meta_file.read_text())
+    meta["fill_value"] = 1.0  # consistent JSON, but not the array the consolidated metadata describes
+    meta_file.write_text(json.dumps(meta))
 
 
 SLOW_LIDAR = """kind = "pulsed"
@@ -439,6 +506,35 @@ def test_an_output_that_may_not_be_replaced_is_refused_before_the_banner(workdir
     res = CliRunner().invoke(cli, [command, *SMALL, "--out", out, *overwrite], prog_name="turbgen")
     assert res.exit_code == 2 and res.stdout == "", res.output
     assert len(res.stderr.strip().splitlines()) == 1 and out in res.stderr
+
+
+def test_a_refusal_of_1001_sensors_is_a_short_line(workdir, monkeypatch):
+    """The schema's message quoted every sensor: a 537 KB line for 1001 sensors (issue 37); now the count."""
+    monkeypatch.chdir(workdir)
+    res = CliRunner().invoke(cli, ["mann", *SMALL, "--ae", "0.3", "--constrain", "c_1001.json", "--out", "c.zarr"])
+    assert res.exit_code == 2 and len(res.stderr) < 200, res.stderr[:300]
+
+
+def test_serve_on_a_busy_port_is_refused_before_anything_is_made_or_printed(workdir, monkeypatch):
+    """`serve --port <busy>` printed "listening on ..." and created --root before failing (issue 37): the port is
+    bound first. Loopback only."""
+    import socket
+
+    pytest.importorskip("uvicorn")
+    busy = socket.socket()
+    busy.bind(("127.0.0.1", 0))
+    busy.listen(1)
+    port = busy.getsockname()[1]
+    monkeypatch.chdir(workdir)
+    before = _listing(workdir)
+    try:
+        res = CliRunner().invoke(cli, ["serve", "--port", str(port), "--root", "newroot"], prog_name="turbgen")
+    finally:
+        busy.close()
+    assert res.exit_code == 2 and res.stdout == "", res.output
+    assert res.stderr.strip().splitlines() == [res.stderr.strip()] and f"--port {port}" in res.stderr
+    assert "cannot listen on 127.0.0.1" in res.stderr and "listening" not in res.output
+    assert _listing(workdir) == before
 
 
 @pytest.mark.parametrize("args", [[], ["theory"], ["fit"]])

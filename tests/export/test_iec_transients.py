@@ -110,15 +110,15 @@ def test_bad_events_are_refused(args, msg):
 
 
 def test_cli_exit_2_nothing_written(tmp_path):
-    res = CliRunner().invoke(cli, ["transient", "ecd", "--class", "IIB", "--U", "12", "--hub-height", "90",
+    res = CliRunner().invoke(cli, ["transient", "ecd", "--iec-class", "IIB", "--U", "12", "--hub-height", "90",
                                    "--rotor-diameter", "126", "--start", "55", "--out", str(tmp_path / "e.hh")])
     assert res.exit_code == 2 and "outside the record" in res.output and len(res.output.strip().splitlines()) == 1
     assert not list(tmp_path.iterdir())
-    res = CliRunner().invoke(cli, ["transient", "eog", "--class", "IA", "--U", "12", "--hub-height", "90",
+    res = CliRunner().invoke(cli, ["transient", "eog", "--iec-class", "IA", "--U", "12", "--hub-height", "90",
                                    "--rotor-diameter", "126", "--dt", "1e-9", "--out", str(tmp_path / "e.hh")])
     assert res.exit_code == 2 and "dt (s) = 1e-09" in res.output and len(res.output.strip().splitlines()) == 1
     assert not list(tmp_path.iterdir())
-    res = CliRunner().invoke(cli, ["transient", "ews-v", "--class", "IA", "--U", "20", "--hub-height", "90",
+    res = CliRunner().invoke(cli, ["transient", "ews-v", "--iec-class", "IA", "--U", "20", "--hub-height", "90",
                                    "--rotor-diameter", "126", "--sign", "-", "--out", str(tmp_path / "e.hh")])
     assert res.exit_code == 0, res.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["e.hh", "e_InflowWind_uniform.dat"]

@@ -207,8 +207,8 @@ def test_driver_reads_the_uniform_transients(tmp_path, kind, sign):
     from turbgen.spec.iec_transient import IecTransient
 
     hub, D, V = 90.0, 80.0, 12.0
-    args = ["transient", kind, "--class", "IIB", "--U", str(V), "--hub-height", str(hub), "--rotor-diameter", str(D),
-            "--start", "2", "--duration", "30", "--sign", sign, "--out", str(tmp_path / "wind" / "event.hh")]
+    args = ["transient", kind, "--iec-class", "IIB", "--U", str(V), "--hub-height", str(hub),
+            "--rotor-diameter", str(D), "--start", "2", "--duration", "30", "--sign", sign, "--out", str(tmp_path / "wind" / "event.hh")]
     (tmp_path / "wind").mkdir()
     res = CliRunner().invoke(cli, args)
     assert res.exit_code == 0, res.output

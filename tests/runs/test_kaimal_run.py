@@ -30,7 +30,7 @@ def test_defaults_are_the_paper_case():
     g = run.grid
     assert (g.nt, g.dt_s, g.ny, g.nz, g.dy_m, g.dz_m) == (4096, 0.5, 31, 31, 5.0, 5.0)
     assert g.x_m == tuple(DEFAULT_PLANES_M) and g.nx == 11
-    assert (run.U_m_s, run.seed, run.hub_height_m, run.long_model) == (16.0, 1, 90.0, "exp")
+    assert (run.U_m_s, run.seed, run.hub_height_m, run.long_model) == (16.0, 1, 150.0, "exp")
     assert (run.a_x, run.b_x) == (DEFAULT_A_X, DEFAULT_B_X) == (1.8, 1.49e-4)
     k = run.kaimal
     assert k.length_scales_m[0] == pytest.approx(8.1 * 42) and k.lc_m == pytest.approx(8.1 * 42) and k.a_yz == 12

@@ -53,7 +53,7 @@ def test_linear_veer_and_history():
 def test_describe_default_is_the_earlier_exports_text():
     assert MeanWind().describe() == "power-law shear alpha = 0.2"
     assert MeanWind(profile="log", roughness_m=0.03, veer_deg_per_m=0.05).describe() == \
-        "log law z0 = 0.03 m, d = 0 m; veer 0.05 deg/m"
+        "log law z0 = 0.03 m, d = 0 m; veer 0.05 deg/m; angles ccw from above"
     assert MeanWind(profile="log", roughness_m=0.03).to_attrs() == {"profile": "log", "roughness_m": 0.03,
                                                                     "displacement_m": 0.0}
 
@@ -73,7 +73,13 @@ def test_describe_default_is_the_earlier_exports_text():
     ({"veer_deg_per_m": 30.0}, "veer (deg/m) = 30 is outside"),
     ({"roughness_m": 0.1}, "belong to the log profile"),
     ({"history_times_s": (0.0, 2.0, 2.0), "history_speeds_m_s": (1.0, 2.0, 3.0)}, "increase strictly"),
-    ({"history_times_s": (0.0, 2.0), "history_speeds_m_s": (1.0, -2.0)}, "must be >= 0"),
+    ({"history_times_s": (0.0, 2.0), "history_speeds_m_s": (1.0, -2.0)}, "= -2 is outside the allowed range [0, 150]"),
+    # issue 37: a direction of 1e308 deg and a speed of 1e308 m/s were accepted
+    ({"history_times_s": (0.0, 2.0), "history_speeds_m_s": (1.0, 2.0), "history_directions_deg": (0.0, 1e308)},
+     "mean-history directions (deg) = 1e+308 is outside the allowed range [-360, 360]"),
+    ({"history_times_s": (0.0, 2.0), "history_speeds_m_s": (1.0, 1e308)}, "speeds (m/s) = 1e+308 is outside"),
+    ({"profile": "table", "table_heights_m": (10.0, 50.0), "table_speeds_m_s": (1.0, 2.0),
+      "table_directions_deg": (0.0, -400.0)}, "profile table directions (deg) = -400 is outside"),
 ])
 def test_bad_definitions_are_refused_in_one_line(fields, msg):
     with pytest.raises(ParameterError, match=None) as err:

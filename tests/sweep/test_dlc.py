@@ -44,7 +44,7 @@ def test_bad_sets_refused(args, msg):
 def test_dlc12_class_iib_as_one_sweep(tmp_path):
     reader = pytest.importorskip("openfast_io.FAST_reader")
     out = tmp_path / "dlc12"
-    res = CliRunner().invoke(cli, ["sweep", "--dlc", "1.2", "--class", "IIB", "--v-in", "4", "--v-out", "8",
+    res = CliRunner().invoke(cli, ["sweep", "--dlc", "1.2", "--iec-class", "IIB", "--v-in", "4", "--v-out", "8",
                                    "--seeds", "1-2", "--nt", "32", "--dt", "0.5", "--ny", "4", "--nz", "4",
                                    "--dy", "8", "--planes", "0", "--hub-height", "90", "--workers", "1",
                                    "--out", str(out)])
@@ -71,7 +71,7 @@ def test_dlc12_class_iib_as_one_sweep(tmp_path):
     files = sorted(p.name for p in (out / "wind").iterdir())
     assert len(files) == 2 * len(planned)  # a .bts and its input file per field, nothing else
     before = {p.name: p.stat().st_mtime_ns for p in (out / "wind").iterdir()}
-    res = CliRunner().invoke(cli, ["sweep", "--dlc", "1.2", "--class", "IIB", "--v-in", "4", "--v-out", "8",
+    res = CliRunner().invoke(cli, ["sweep", "--dlc", "1.2", "--iec-class", "IIB", "--v-in", "4", "--v-out", "8",
                                    "--seeds", "1-2", "--nt", "32", "--dt", "0.5", "--ny", "4", "--nz", "4",
                                    "--dy", "8", "--planes", "0", "--hub-height", "90", "--workers", "1",
                                    "--out", str(out)])
@@ -81,8 +81,8 @@ def test_dlc12_class_iib_as_one_sweep(tmp_path):
 
 def test_dlc_needs_class_and_refuses_presets(tmp_path):
     res = CliRunner().invoke(cli, ["sweep", "--dlc", "1.2", "--out", str(tmp_path / "d")])
-    assert res.exit_code == 2 and "--class" in res.output
-    res = CliRunner().invoke(cli, ["sweep", "--dlc", "1.2", "--class", "IIB", "--preset", "neutral",
+    assert res.exit_code == 2 and "--iec-class" in res.output
+    res = CliRunner().invoke(cli, ["sweep", "--dlc", "1.2", "--iec-class", "IIB", "--preset", "neutral",
                                    "--out", str(tmp_path / "d")])
     assert res.exit_code == 2 and "--preset" in res.output
     assert not (tmp_path / "d").exists()

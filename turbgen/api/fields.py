@@ -16,7 +16,7 @@ from pathlib import Path
 import xarray as xr
 
 from turbgen.api.keywords import run_inputs
-from turbgen.errors import ParameterError
+from turbgen.errors import ParameterError, check_int
 from turbgen.resources import available_memory_bytes, default_threads, parse_size, require_memory
 from turbgen.spec.defaults import KAIMAL_DEFAULTS
 from turbgen.spec.config import check_mapping, read_config
@@ -295,8 +295,11 @@ def mann(
 
 def _budget(memory) -> int | None:
     """The memory budget [bytes]: ``memory`` (bytes or a size such as "4GiB") or the available memory (None: unknown)."""
-    budget = parse_size(memory, "`memory`") if isinstance(memory, str) else memory
-    return available_memory_bytes() if budget is None else budget
+    if memory is None:
+        return available_memory_bytes()
+    if isinstance(memory, str):
+        return parse_size(memory, "`memory`")
+    return check_int("`memory` (bytes)", memory, 1)  # -5 is no budget to raise, but a mistake
 
 
 def _mann_fits(run: MannRun, threads, stencil_cache, memory) -> bool:
@@ -402,7 +405,7 @@ def kaimal(
 
     The keywords are the options of ``turbgen kaimal``, with the same names, meanings and defaults (``turb_class``
     is ``--class``; the keys of a run file go in ``config``). A keyword left at None takes the run file's value,
-    else the preset's, else the default (U 16 m/s, class A, hub 90 m, 4096 × 11 × 31 × 31 at dt 0.5 s, dy = dz 5 m,
+    else the preset's, else the default (U 16 m/s, class A, hub 150 m, 4096 × 11 × 31 × 31 at dt 0.5 s, dy = dz 5 m,
     seed 1).
 
     Parameters

@@ -23,6 +23,8 @@ def field_store(store) -> FieldStore:
     a field in memory (turbgen.store.memory_field.MemoryField over its arrays)."""
     if isinstance(store, FieldStore):
         return store
+    if store is None:
+        raise ParameterError("store = None; give a store path, a FieldStore or a Dataset of turbgen.open_store")
     if isinstance(store, (str, os.PathLike)):
         return _open_field_store(store)
     source = getattr(store, "encoding", {}).get("source")

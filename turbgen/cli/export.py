@@ -8,6 +8,7 @@ import click
 from turbgen.export import EXPORTERS, export_store
 from turbgen.export.options import ExportOptions, export_request
 from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT
+from turbgen.spec.mean_wind import CCW_NOTE, CW_NOTE
 from turbgen.store.paths import check_output_path
 
 
@@ -25,13 +26,14 @@ from turbgen.store.paths import check_output_path
 @click.option("--profile", "profile", default=None, metavar="KIND:VALUE",
               help="Mean profile added (InflowWind/HAWC2 formats): power:ALPHA | log:z0=Z0[,d=D] (roughness and "
                    "displacement, m) | table:FILE (CSV rows z [m], U [m/s] [, direction deg]; speeds scaled so the "
-                   "table's value at hub height is the hub mean). Default power:0.2.")
+                   f"table's value at hub height is the hub mean; directions {CCW_NOTE}). Default power:0.2.")
 @click.option("--veer", "veer", type=float, default=None, metavar="DEG_PER_M",
-              help="Direction change with height [deg/m], (u, v) turned per height about the hub, counter-clockwise "
-                   "seen from above (northern-hemisphere veer is negative).")
+              help=f"Direction change with height [deg/m], (u, v) turned per height about the hub, {CCW_NOTE}: "
+                   "northern-hemisphere veer is negative.")
 @click.option("--mean-history", "mean_history", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="Hub-height mean history: CSV rows t [s], U [m/s] [, direction deg] at the turbine (times within "
-                   "the record; linear between rows, end values held); the advection speed stays the store's U.")
+                   "the record; linear between rows, end values held); the advection speed stays the store's U; "
+                   f"directions {CCW_NOTE}.")
 @click.option("--transient", type=click.Choice(["EOG", "EDC", "ECD", "EWS-V", "EWS-H"], case_sensitive=False),
               default=None, help="Superimpose an IEC 61400-1 Ed. 4 transient (Sect. 6.3.3) at the store's U and hub "
                                  "height, from --transient-start; needs --iec-class and --rotor-diameter. It rides "
@@ -41,7 +43,7 @@ from turbgen.store.paths import check_output_path
 @click.option("--transient-start", type=float, default=10.0, show_default=True,
               help="--transient: time the event reaches the turbine [s].")
 @click.option("--transient-sign", type=click.Choice(["+", "-"]), default="+", show_default=True,
-              help="--transient: the standard's +- (direction change sense, shear sense).")
+              help=f"--transient: the standard's +-: the shear's sense (EWS) or the direction change's, + {CW_NOTE}.")
 @click.option("--tower", is_flag=True, help="bts: add tower points down to the ground.")
 @click.option("--periodic/--no-periodic", default=True, show_default=True,
               help="Flag bts/wnd/evo periodic in time (InflowWind wraps instead of starting half a grid upstream).")
@@ -67,7 +69,7 @@ def export(store, fmt, out, plane, hub_height, shear, profile, veer, mean_histor
     for p in result.paths:
         click.echo(f"wrote {p}", err=True)
     for note in result.notes:
-        click.echo(f"note: {note}", err=True)
+        click.echo(note if note.startswith("warning: ") else f"note: {note}", err=True)
     for line in result.usage:
         click.echo(f"use: {line}", err=True)
     click.echo("InflowWind input-file lines:")

@@ -14,6 +14,7 @@ import sys
 import click
 
 from turbgen.errors import TurbgenError
+from turbgen.spec.mean_wind import CCW_NOTE
 
 # subcommands from other modules, imported on use; a module not in this build is not listed
 EXTERNAL = {"optimize": ("turbgen.cli.lidar_optimize", "optimize")}
@@ -64,9 +65,11 @@ def lidar():
 @click.option("--profile", default=None, metavar="KIND:VALUE",
               help="--mean-wind profile as turbgen export takes it: power:ALPHA | log:z0=Z0[,d=D] | table:FILE "
                    "(replaces --shear)")
-@click.option("--veer", type=float, default=None, metavar="DEG_PER_M", help="--mean-wind veer [deg/m], as turbgen export")
+@click.option("--veer", type=float, default=None, metavar="DEG_PER_M",
+              help=f"--mean-wind veer [deg/m], as turbgen export: {CCW_NOTE}")
 @click.option("--mean-history", type=click.Path(dir_okay=False), default=None, metavar="FILE",
-              help="--mean-wind hub-height history CSV (t, U [, direction]), as turbgen export")
+              help="--mean-wind hub-height history CSV (t, U [, direction]), as turbgen export; directions "
+                   f"{CCW_NOTE}")
 @click.option("--json", "as_json", is_flag=True, help="print the result as JSON instead of text")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False, path_type=str), default=None,
               help="write gamma^2_RL and |G_RL| plots (simulated with 95 % band, theory) into this directory")

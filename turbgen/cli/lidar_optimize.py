@@ -6,7 +6,7 @@ import json
 
 import click
 
-from turbgen.cli.options import count_text, parse_floats
+from turbgen.cli.options import count_text, evo_seconds, parse_floats
 from turbgen.lidar.optimize import PITCH_DELAY_RANGE_S
 
 
@@ -17,7 +17,8 @@ from turbgen.lidar.optimize import PITCH_DELAY_RANGE_S
 @click.option("--ae", type=float, default=0.2882, show_default=True, help="αε^(2/3) [m^(4/3) s^-2].")
 @click.option("--L", "L", type=float, default=49.0, show_default=True, help="Mann length scale L [m].")
 @click.option("--gamma", type=float, default=3.1, show_default=True, help="Shear anisotropy Γ [-].")
-@click.option("--evo", type=float, default=400.0, show_default=True, help="Evolution time constant γ [s].")
+@click.option("--evo", default="400", show_default=True, callback=evo_seconds,
+              help="Evolution time constant γ [s], or 'frozen' (no evolution).")
 @click.option("--ranges", "ranges_text", default="100:300:20", show_default=True,
               help="Measurement ranges x [m]: a,b,c or start:stop:step.")
 @click.option("--cones", "cones_text", default="10:30:2", show_default=True,

@@ -19,6 +19,16 @@ class FiniteFloatRange(click.FloatRange):
         return v
 
 
+def evo_seconds(ctx, param, value):
+    """Callback of a model's --evo: seconds, or 'frozen' / 'none' (frozen turbulence, no evolution lifetime) -> None."""
+    if value is None or value.strip().lower() in ("frozen", "none"):
+        return None
+    try:
+        return float(value)
+    except ValueError:
+        raise click.BadParameter(f"{value!r} is not a number of seconds or 'frozen'") from None
+
+
 def range_help(key: str) -> str:
     """The allowed interval of RANGES[key] for an option's help, e.g. "[2, 4096]": the interval the check enforces."""
     return RANGES[key].text()
@@ -41,7 +51,12 @@ def _limit(name: str) -> tuple[str, int]:
 
 def parse_floats(text: str, name: str) -> list[float]:
     """'a,b,c' -> [a, b, c] (finite floats, at most the option's LIMITS count)."""
-    items = [v for v in text.split(",") if v.strip()]
+    items = text.split(",")
+    if not text.strip():
+        raise click.BadParameter(f"{text!r} holds no number", param_hint=name)
+    if not all(v.strip() for v in items):  # '0,,50' or '0,50,': a value left out, not a list of two
+        raise click.BadParameter(f"{text!r} has an empty entry (write numbers separated by single commas)",
+                                 param_hint=name)
     _, limit = _limit(name)
     if len(items) > limit:
         raise click.BadParameter(f"{len(items)} values is more than the maximum {limit}", param_hint=name)
@@ -52,8 +67,6 @@ def parse_floats(text: str, name: str) -> list[float]:
             raise click.BadParameter(f"{v.strip()!r} in {text!r} is not a number", param_hint=name) from None
         if not math.isfinite(x):
             raise click.BadParameter(f"{v.strip()!r} in {text!r} is not a finite number", param_hint=name)
-    if not items:
-        raise click.BadParameter(f"{text!r} holds no number", param_hint=name)
     return [float(v) for v in items]
 
 
@@ -83,7 +96,11 @@ def parse_ints(text: str, name: str) -> list[int]:
     counted before any range is expanded)."""
     _, limit = _limit(name)
     ranges: list[tuple[int, int]] = []
-    for part in text.split(","):
+    parts = text.split(",")
+    if text.strip() and not all(p.strip() for p in parts):  # '1,,3': a value left out
+        raise click.BadParameter(f"{text!r} has an empty entry (write integers separated by single commas)",
+                                 param_hint=name)
+    for part in parts:
         part = part.strip()
         if not part:
             continue
@@ -118,3 +135,28 @@ def plane_positions(planes: list[float] | None, gates: list[float] | None) -> li
     if gates is not None:
         return [0.0, *gates]
     return None
+
+
+def iec_class_options(help_text: str):
+    """``--iec-class`` (turbine class and turbulence category, e.g. IIB) and its deprecated alias ``--class`` (hidden).
+
+    ``kaimal --class`` is the turbulence class alone (A, B, ...); ``sweep`` and ``transient`` called the turbine
+    class ``--class`` too, the one word for two things. The decorated command gets ``iec_class`` and ``class_alias``;
+    :func:`resolve_iec_class` merges them.
+    """
+    def decorate(f):
+        f = click.option("--class", "class_alias", hidden=True, default=None,
+                         help="Deprecated alias of --iec-class.")(f)
+        return click.option("--iec-class", "iec_class", default=None, help=help_text)(f)
+
+    return decorate
+
+
+def resolve_iec_class(iec_class: str | None, class_alias: str | None, command: str) -> str | None:
+    """The turbine class given as --iec-class or, with a warning on stderr, as the deprecated --class."""
+    if iec_class is not None and class_alias is not None:
+        raise click.UsageError("give --iec-class only (--class is its deprecated alias)")
+    if class_alias is not None:
+        click.echo(f"turbgen {command}: warning: --class is deprecated here, write --iec-class {class_alias} (the "
+                   "turbine class and turbulence category; `turbgen kaimal --class` is the turbulence class)", err=True)
+    return class_alias if iec_class is None else iec_class

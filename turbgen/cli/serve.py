@@ -60,19 +60,24 @@ def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue
         from turbgen.sweep.scheduler import check_scheduler_address
 
         check_scheduler_address(scheduler)
-    from dask.distributed import Client
+    from turbgen.service.server import listening_socket, run_server, service_cluster
 
-    from turbgen.service.app import create_app
-    from turbgen.service.server import run_server, service_cluster
+    sock = listening_socket(host, port)  # a port in use: refused before --root, the cluster or any output
+    try:
+        from dask.distributed import Client
 
-    client = Client(scheduler) if scheduler else Client(service_cluster(workers))
-    app = create_app(Path(root), client, token=token, memory_budget=int(memory_gb * 2**30), max_queue=max_queue,
-                     loopback_only=is_loopback(host), stencil_cache_bytes=stencil_cache_bytes,
-                     own_cluster=not scheduler)  # fmt: skip
-    requeued = app.state.jobs.resume()
-    click.echo(f"turbgen serve: catalog {Path(root).absolute()}, {len(requeued)} interrupted run(s) re-queued, "
-               f"{len(app.state.removed)} temporary file(s) of stopped processes or evicted stencil(s) removed")
-    url_host = f"[{host}]" if ":" in host else host  # an IPv6 literal in a URL needs brackets
-    click.echo(f"turbgen serve: listening on http://{url_host}:{port}/ (API docs at /docs)")
-    run_server(app, host, port)
-    client.close()
+        from turbgen.service.app import create_app
+
+        client = Client(scheduler) if scheduler else Client(service_cluster(workers))
+        app = create_app(Path(root), client, token=token, memory_budget=int(memory_gb * 2**30), max_queue=max_queue,
+                         loopback_only=is_loopback(host), stencil_cache_bytes=stencil_cache_bytes,
+                         own_cluster=not scheduler)  # fmt: skip
+        requeued = app.state.jobs.resume()
+        click.echo(f"turbgen serve: catalog {Path(root).absolute()}, {len(requeued)} interrupted run(s) re-queued, "
+                   f"{len(app.state.removed)} temporary file(s) of stopped processes or evicted stencil(s) removed")
+        url_host = f"[{host}]" if ":" in host else host  # an IPv6 literal in a URL needs brackets
+        click.echo(f"turbgen serve: listening on http://{url_host}:{sock.getsockname()[1]}/ (API docs at /docs)")
+        run_server(app, sock, host)
+        client.close()
+    finally:
+        sock.close()

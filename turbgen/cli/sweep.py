@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import click
 
-from turbgen.cli.options import parse_floats, parse_ints, parse_range, plane_positions, range_help
+from turbgen.cli.options import (iec_class_options, parse_floats, parse_ints, parse_range, plane_positions, range_help,
+                                 resolve_iec_class)
 
 
 def _split(text: str | None) -> list[str] | None:
@@ -36,10 +37,10 @@ def _split(text: str | None) -> list[str] | None:
               "its k_0.5, cut-off and coherence verdict in the manifest")
 @click.option("--out", type=click.Path(file_okay=False), help="output directory (stores and manifest)")
 @click.option("--dlc", type=click.Choice(["1.1", "1.2", "1.3"]), default=None,
-              help="IEC 61400-1 design-load-case set: 1.1/1.2 (NTM) or 1.3 (ETM) at --class, speeds --v-in..--v-out in "
-                   "2 m/s steps, --seeds (default 1-6), one --model (default kaimal); every field is exported to "
+              help="IEC 61400-1 design-load-case set: 1.1/1.2 (NTM) or 1.3 (ETM) at --iec-class, speeds "
+                   "--v-in..--v-out in 2 m/s steps, --seeds (default 1-6), one --model (default kaimal); every field is exported to "
                    "OUT/wind/ with its InflowWind input file and listed in OUT/dlc_manifest.csv.")
-@click.option("--class", "iec_class", help="--dlc: turbine class and turbulence category, e.g. IIB.")
+@iec_class_options("--dlc: turbine class and turbulence category, e.g. IIB.")
 @click.option("--v-in", "v_in", type=float, default=4.0, show_default=True, help="--dlc: cut-in speed V_in [m/s].")
 @click.option("--v-out", "v_out", type=float, default=24.0, show_default=True, help="--dlc: cut-out speed V_out [m/s].")
 @click.option("--export-format", type=click.Choice(["bts", "wnd", "hawc2"]), default="bts", show_default=True,
@@ -50,7 +51,7 @@ def _split(text: str | None) -> list[str] | None:
               help="a sweep with constrain: directory caching the stencil and the system of the measurements, which "
               "its seeds then share (turbgen mann --stencil-cache); the workers must see it at the same path")
 def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, gates, ny, nz, dy, dz, hub_height,
-          chunks, workers, scheduler, validate, lidar, out, dlc, iec_class, v_in, v_out, export_format,
+          chunks, workers, scheduler, validate, lidar, out, dlc, iec_class, class_alias, v_in, v_out, export_format,
           memory, stencil_cache):  # fmt: skip
     """Generate every field of a sweep (resumable: complete stores are kept), write DIR/manifest.json/.csv.
 
@@ -75,13 +76,14 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
     )
     if x_m is not None:
         grid["planes"] = x_m
+    iec_class = resolve_iec_class(iec_class, class_alias, "sweep")
     if dlc is not None:
         given = [n for n, v in [("--config", config), ("--preset", presets), ("--speeds", speeds),
                                 ("--presets-file", presets_file), ("--lidar", lidar), ("--memory", memory),
                                 ("--validate", validate), ("--stencil-cache", stencil_cache)]
                  if v is not None]  # fmt: skip
         if given or not iec_class or not out or (models is not None and "," in models):
-            raise click.UsageError(f"--dlc takes --class, --out and one --model; it sets presets and speeds itself"
+            raise click.UsageError(f"--dlc takes --iec-class, --out and one --model; it sets presets and speeds itself"
                                    f"{' (remove ' + ', '.join(given) + ')' if given else ''}")
         return _run_dlc(dlc, iec_class, v_in, v_out, seeds, (models or "kaimal").strip(), grid, chunks, workers,
                         scheduler, out, export_format)

@@ -9,22 +9,12 @@ import os
 import click
 import numpy as np
 
-from turbgen.cli.options import parse_floats
+from turbgen.cli.options import evo_seconds, parse_floats
 from turbgen.errors import ParameterError
 from turbgen.spec.defaults import MANN_DEFAULTS as D
 from turbgen.store.temporaries import write_atomically
 from turbgen.theory import ranges
 from turbgen.theory.params import LIFETIMES, MannParams, check_wind_speed
-
-
-def _evo(ctx, param, value):
-    """--evo: seconds, or 'frozen' / 'none' (frozen turbulence, no evolution lifetime) -> None."""
-    if value is None or value.strip().lower() in ("frozen", "none"):
-        return None
-    try:
-        return float(value)
-    except ValueError:
-        raise click.BadParameter(f"{value!r} is not a number of seconds or 'frozen'") from None
 
 
 def _ranged(key: str, label: str):
@@ -50,8 +40,13 @@ def _plot_path(ctx, param, value):
     return value
 
 
-def _mann_options(f):
-    """Model and evaluation-point options shared by every theory/fit command."""
+def _model_options(f_default: str):
+    """The decorator adding the model and evaluation-point options shared by every theory/fit command, with the
+    command's own default frequency grid ``f_default`` in the help of --f (stated once, where it holds)."""
+    return lambda f: _with_options(f, f_default)
+
+
+def _with_options(f, f_default: str):
     opts = [
         click.option("--L", "L", type=float, default=D["length_scale_m"], show_default=True, help="Mann length scale L [m]."),
         click.option("--gamma", type=float, default=D["gamma"], show_default=True, help="Shear anisotropy Γ [-]."),
@@ -64,12 +59,12 @@ def _mann_options(f):
         click.option("--factor1", type=float, default=D["factor1"], show_default=True, help="Small-k lifetime slope -factor1."),
         click.option("--factor2", type=float, default=D["factor2"], show_default=True,
                      help="Large-k slope -(2/3)factor2 of the evolution lifetime."),
-        click.option("--evo", default=f"{D['evo_time_s']:g}", show_default=True, callback=_evo,
+        click.option("--evo", default=f"{D['evo_time_s']:g}", show_default=True, callback=evo_seconds,
                      help="Evolution time constant γ [s], or 'frozen' (no evolution)."),
         click.option("--U", "U", type=float, default=D["U_m_s"], show_default=True, help="Mean wind speed U [m/s]."),
         click.option("--k1", "k1_text", default=None, help="Wavenumbers a,b,c [rad/m] (instead of --f)."),
-        click.option("--f", "f_text", default=None, help="Frequencies a,b,c [Hz]; default 40 log-spaced, 1e-3..1 Hz."),
-        click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON (keys: README, theory)."),
+        click.option("--f", "f_text", default=None, help=f"Frequencies a,b,c [Hz]; default {f_default}."),
+        click.option("--json", "as_json", is_flag=True, help="Print the result as JSON instead of a table."),
         click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None, callback=_plot_path,
                      help="Write a PNG plot (Guo et al. 2023, Fig. 2 style); an existing file needs --overwrite."),
         click.option("--overwrite", is_flag=True, is_eager=True, expose_value=False, callback=_remember_overwrite,
@@ -78,6 +73,9 @@ def _mann_options(f):
     for opt in reversed(opts):
         f = opt(f)
     return f
+
+
+_mann_options = _model_options("40 log-spaced, 1e-3..1 Hz")
 
 
 def _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U) -> MannParams:
@@ -150,7 +148,7 @@ def theory():
     """Evaluate model spectra and coherences (Mann, space-time, Kaimal)."""
 
 
-@theory.command()
+@theory.command(short_help="Mann one-point spectra F_ij(k1) (two-sided, m^3 s^-2).")
 @_mann_options
 def spectra(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path):
     """Mann one-point spectra F_ij(k1) (two-sided, m^3 s^-2; Guo et al. 2023, Eq. 8)."""
@@ -166,7 +164,7 @@ def spectra(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_te
         _plot(plot_path, f, curves, "f [Hz]", "f S(f) [m² s⁻²]")
 
 
-@theory.command()
+@theory.command(short_help="yz-plane coherence of the Mann model: coh2 and co-coherence.")
 @_mann_options
 @click.option("--dy", type=float, callback=_ranged("separation_m", "--dy (m)"), default=20.0, show_default=True, help="Lateral separation [m].")
 @click.option("--dz", type=float, callback=_ranged("separation_m", "--dz (m)"), default=20.0, show_default=True, help="Vertical separation [m].")
@@ -185,7 +183,7 @@ def coherence(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_
         _plot(plot_path, f, {"coh²": (coh2, "-"), "co-coherence": (cocoh, "--")}, "f [Hz]", "coherence [-]")
 
 
-@theory.command()
+@theory.command(short_help="Longitudinal (magnitude-squared) coherence of u from the space-time tensor.")
 @_mann_options
 @click.option("--dx", type=float, callback=_ranged("separation_m", "--dx (m)"), default=100.0, show_default=True, help="Longitudinal separation [m].")
 def longitudinal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path,
@@ -201,7 +199,7 @@ def longitudinal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, 
         _plot(plot_path, f, {f"coh² (Δx = {dx:g} m)": (coh2, "-")}, "f [Hz]", "coherence [-]")
 
 
-@theory.command()
+@theory.command(short_help="Rotor-effective wind speed spectrum of the Mann model (two-sided).")
 @_mann_options
 @click.option("--radius", type=float, callback=_ranged("rotor_radius_m", "--radius (m)"), default=63.0, show_default=True, help="Rotor radius R [m].")
 def rews(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path, radius):
@@ -224,12 +222,12 @@ def fit():
     """Fit Kaimal / exponential-coherence models to the Mann (space-time) model."""
 
 
-@fit.command()
-@_mann_options
+@fit.command(short_help="Kaimal sigma_i, L_i and IEC a_yz, Lc fitted to the Mann model.")
+@_model_options("1000 linear steps, 1e-3..1 Hz (Eq. 20)")
 def kaimal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path):
     """Kaimal σ_i, L_i (Guo et al. 2023, Eq. 20) and IEC a_yz, Lc (Eq. 21, dy = dz = 20 m) fitted to the Mann model.
 
-    --f / --k1 set the Eq. 20 grid (default 1e-3..1 Hz in 1e-3 Hz steps).
+    --f / --k1 set the Eq. 20 grid.
     """
     from turbgen.theory.fitting import fit_kaimal_spectra, fit_yz_coherence
     from turbgen.theory.kaimal import kaimal_spectrum
@@ -260,13 +258,13 @@ def kaimal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_tex
         _plot(plot_path, f, curves, "f [Hz]", "f S(f) [m² s⁻²]")
 
 
-@fit.command()
-@_mann_options
+@fit.command(short_help="a_x, b_x of the exponential longitudinal coherence (space-time fit).")
+@_model_options("60 log-spaced, 3e-4..0.5 Hz")
 @click.option("--dx", type=float, callback=_ranged("separation_m", "--dx (m)"), default=100.0, show_default=True, help="Longitudinal separation [m].")
 def evolution(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path, dx):
     """a_x, b_x of the exponential longitudinal coherence (Eq. 18) fitted to the space-time model (Eq. 22).
 
-    --f / --k1 set the fitting grid (default 60 log-spaced frequencies, 3e-4..0.5 Hz).
+    --f / --k1 set the fitting grid.
     """
     from turbgen.theory.coherence_models import exponential_longitudinal
     from turbgen.theory.fitting import LONG_F_HZ, fit_longitudinal

@@ -8,6 +8,7 @@ import struct
 from pathlib import Path
 
 from turbgen.errors import ParameterError
+from turbgen.export.wnd_summary import read_sum
 
 _BTS = struct.Struct("<h4i6f6fi")
 SUFFIXES = (".bts", ".dat", ".sum")
@@ -38,19 +39,39 @@ def file_summary(path) -> list[tuple[str, str]]:
         if p.suffix.lower() == ".dat":
             return _inflowwind(p)
         if p.suffix.lower() == ".sum":
-            return [("file", str(p)), ("title", p.read_text(errors="replace").splitlines()[0])]
+            return _summary(p)
     except (OSError, IndexError, struct.error, UnicodeDecodeError) as err:
         raise ParameterError(f"{str(p)!r} cannot be read as an export: {getattr(err, 'strerror', None) or err}") from None
     raise ParameterError(f"{str(p)!r} is neither a store nor a file of {', '.join(SUFFIXES)}")
 
 
+def _summary(p: Path) -> list[tuple[str, str]]:
+    """The rows of a .sum: its title and the values InflowWind parses (read as InflowWind reads them)."""
+    try:
+        values = read_sum(p)
+    except (IndexError, ValueError, AttributeError):  # a key missing or malformed (read_sum), or not text
+        raise ParameterError(f"{str(p)!r} is not a .sum InflowWind can read (no hub height, UBar and TI(u/v/w) "
+                             "lines)") from None
+    ti = "/".join(f"{v:g}" for v in values["ti_percent"])
+    return [("file", f"{p} (.sum, {'periodic' if values['periodic'] else 'NOT periodic'})"),
+            ("title", p.read_text().splitlines()[0]),
+            ("wind", f"UBar {values['U_m_s']:g} m/s, hub height {values['hub_height_m']:g} m, TI u/v/w {ti} %, "
+                     f"clockwise {'T' if values['clockwise'] else 'F'}")]
+
+
 def _bts(p: Path) -> list[tuple[str, str]]:
+    size = p.stat().st_size
     with open(p, "rb") as f:
         head = f.read(_BTS.size)
         ident, nz, ny, ntwr, nt, dz, dy, dt, uhub, zhub, zbot, *rest = _BTS.unpack(head)
-        text = f.read(rest[-1]).decode("ascii", "replace")
+        text = f.read(max(rest[-1], 0)).decode("ascii", "replace")
     if ident not in (7, 8):
         raise ParameterError(f"{str(p)!r} is not a TurbSim .bts (header ID {ident}, not 7 or 8)")
+    # the velocities: int16 u, v, w at each grid point and tower point of every time step (Jonkman 2009, App. B)
+    expected = _BTS.size + rest[-1] + 2 * 3 * nt * (ny * nz + ntwr)
+    if min(nz, ny, nt, ntwr + 1, rest[-1] + 1) <= 0 or size != expected:
+        raise ParameterError(f"{str(p)!r} is truncated or corrupted: {size} bytes, its header ({nt} x {ny} x {nz} "
+                             f"points, {ntwr} tower points) needs {expected}")
     return [("file", f"{p} (TurbSim .bts, {'periodic' if ident == 8 else 'NOT periodic'})"),
             ("grid", f"(t, y, z) = {nt} x {ny} x {nz}, dt {dt:g} s, dy {dy:g} m, dz {dz:g} m, {ntwr} tower points"),
             ("wind", f"U {uhub:g} m/s (advection speed), hub height {zhub:g} m, bottom row {zbot:g} m"),

@@ -198,6 +198,6 @@ def runner_files(files, fs, req: ExportRequest, plane: Plane, lay, paths: dict, 
     files.temp(htc).write_text(hawc2_wind_block(
         paths=paths, folder=htc.absolute().parent, U_m_s=fs.U_m_s, ti=ti, centre_m=lay.centre_m, nt=g.nt, ny=g.ny,
         nz=lay.nz, dx_m=fs.U_m_s * g.dt_s, dy_m=g.dy_m, dz_m=g.dz_m, description=desc))
-    usage.append(f"HAWC2: paste \"{htc}\" in place of the htc's wind block (box names relative to its folder: run "
-                 "HAWC2 there or adjust them; check the box read direction of your HAWC2 version)")
+    usage.append(f"HAWC2: paste \"{htc}\" in place of the htc's wind block (box names relative to {htc.parent}: run "
+                 "HAWC2 there or prefix them; check the box read direction of your HAWC2 version)")
     return usage

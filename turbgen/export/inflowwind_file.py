@@ -224,7 +224,8 @@ def hawc2_wind_block(*, paths: dict, folder: Path, U_m_s: float, ti: float, cent
     rel = {c: "./" + _rel(p, folder) for c, p in paths.items()}
     return "\n".join([
         f"; {description}",
-        "; paste in place of the htc's wind block; file names relative to the folder HAWC2 runs in",
+        "; paste in place of the htc's wind block; the box file names are relative to the folder of this file:",
+        "; run HAWC2 in that folder, or prefix them with the path from the folder HAWC2 runs in",
         "begin wind ;",
         "  density 1.225 ;",
         f"  wsp {U_m_s:.10g} ;",

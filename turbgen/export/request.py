@@ -9,7 +9,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError, check_int
 from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT, VerticalLayout, vertical_layout
-from turbgen.spec.mean_wind import MeanWind
+from turbgen.spec.mean_wind import CCW_NOTE, MeanWind
 from turbgen.theory import ranges
 
 COMPONENTS = ("u", "v", "w")
@@ -67,8 +67,12 @@ class ExportRequest:
     runner_files: bool = False
 
     def source(self, fs) -> str:
-        """The source store's name in the exports: ``source_label``, or the store's path."""
-        return fs.label if self.source_label is None else self.source_label
+        """The source store's name in the exports: ``source_label``, else the store directory's name (not its absolute
+        path: the same store and options give the same files on any machine, in any directory), or the in-memory
+        field's label."""
+        if self.source_label is not None:
+            return self.source_label
+        return fs.path.name if getattr(fs, "path", None) is not None else fs.label
 
     def __post_init__(self):
         if self.plane is not None:
@@ -308,12 +312,16 @@ def mean_wind_notes(lay: VerticalLayout, shift_s: float, nt: int, dt_s: float) -
     if lay.mean_wind is not None:
         notes.append(f"mean wind: {wind.describe()}")
     if wind.turns:
-        notes.append("veer/direction turn (mean + fluctuations) per height and time, counter-clockwise seen from "
-                     "above (+y = left looking downwind), as TurbSim does")
+        notes.append(f"veer/direction turn (mean + fluctuations) per height and time, {CCW_NOTE} (+y = left looking "
+                     "downwind)")
     if wind.transient is not None:
         notes.append(f"{wind.transient.describe()}, superimposed: it rides on the slices (slice k carries the event at "
                      "the time it reaches the turbine); the advection speed in the file stays the store's U, so "
                      "Taylor's shift uses the hub mean and a point X m upstream sees the event X/U s earlier")
+        if not shift_s:  # periodic: InflowWind (and HAWC2) wrap the file in time
+            notes.append(f"warning: the file is periodic, so the {wind.transient.kind} recurs every {nt * dt_s:g} s "
+                         "record when a simulation runs longer; export with --no-periodic (periodic=False) for one "
+                         "event (HAWC2 boxes are always periodic: simulate at most one record)")
     if wind.has_history:
         notes.append("the hub-height history rides on the slices (slice k carries the history at the time it "
                      "reaches the turbine); the advection speed in the file stays the store's U, so Taylor's "

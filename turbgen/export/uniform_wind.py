@@ -15,6 +15,7 @@ from turbgen.version import __version__
 from turbgen.export.inflowwind_file import InflowWindInput, inflowwind_path, write_inflowwind
 from turbgen.export.outputs import OutputSet
 from turbgen.spec.iec_transient import COLUMNS, IecTransient
+from turbgen.spec.mean_wind import CW_NOTE
 
 _UNITS = ("s", "m/s", "deg", "m/s", "-", "-", "-", "m/s")
 
@@ -35,7 +36,7 @@ def uniform_text(event: IecTransient) -> str:
     cols = event.columns()
     head = [f"! {event.describe()}",
             f"! written by turbgen {__version__}; RefHt_Uni = hub height {event.hub_height_m:g} m, "
-            f"RefLength = rotor diameter {event.rotor_diameter_m:g} m; WindDir positive clockwise seen from above",
+            f"RefLength = rotor diameter {event.rotor_diameter_m:g} m; WindDir positive {CW_NOTE}",
             "! " + " ".join(f"{c}[{u}]" for c, u in zip(COLUMNS, _UNITS))]
     rows = np.column_stack([cols[c] for c in COLUMNS])
     body = [" ".join(f"{v + 0.0:.10g}" for v in row) for row in rows]  # + 0.0: no "-0"

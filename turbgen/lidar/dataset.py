@@ -22,8 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from turbgen.errors import StoreError
+from turbgen.errors import ParameterError, StoreError
 from turbgen.store.attributes import jsonable
+from turbgen.theory import ranges
 
 MARKER = "turbgen_lidar_complete"
 
@@ -180,6 +181,10 @@ class LidarData:
     source: str
     mean_wind: dict | None = None
 
+    def __post_init__(self):
+        # NaN is a missing sample; inf or 1e30 m/s is no measurement (the field would follow it)
+        ranges.check_values("measured_m_s", self.v_los, f"lidar record {self.source}: v_los")
+
 
 def is_lidar_dataset(path) -> bool:
     """Whether ``path`` is a directory holding a lidar dataset (a ``v_los`` array)."""
@@ -207,6 +212,8 @@ def read_dataset(path) -> LidarData:
                          json.loads(lidar) if isinstance(lidar, str) else dict(lidar),
                          bool(attrs["mean_wind_added"]), float(attrs["shear_exponent"]), float(attrs["U_m_s"]),
                          str(p), json.loads(wind) if isinstance(wind, str) else wind)  # fmt: skip
+    except ParameterError:  # it reads, but a value is no measurement (LidarData)
+        raise
     except (KeyError, ValueError, OSError, RuntimeError, zarr.errors.BaseZarrError) as exc:  # RuntimeError: a chunk
         first = (str(exc).splitlines() or [""])[0]  # that does not decompress (numcodecs' Zstd error)
         raise StoreError(f"{p} is not a readable lidar dataset ({type(exc).__name__}: {first})") from None

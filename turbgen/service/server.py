@@ -41,21 +41,63 @@ async def _stop_http_servers(cluster) -> None:
             server.stop()
 
 
-def run_server(app, host: str, port: int) -> None:
-    """Serve ``app`` on ``host``:``port`` until interrupted (uvicorn with :func:`server_config`).
+def listening_socket(host: str, port: int):
+    """A socket bound to ``host``:``port`` (as uvicorn binds: SO_REUSEADDR, the first address of ``host``), made
+    before anything else of the server, so that a port in use is refused before the catalog directory or the cluster
+    exist and before "listening on" is printed.
+
+    Parameters
+    ----------
+    host : str
+        Address to bind.
+    port : int
+        TCP port (0: a free one).
+
+    Returns
+    -------
+    socket.socket
+        Bound, not yet listening (uvicorn listens on it); close it if the server does not start.
+
+    Raises
+    ------
+    ParameterError
+        When the address cannot be bound (in use, not an address of this machine, a privileged port).
+    """
+    import socket
+
+    from turbgen.errors import ParameterError
+
+    try:
+        family, kind, proto, _, address = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM,
+                                                             flags=socket.AI_PASSIVE)[0]  # fmt: skip
+        sock = socket.socket(family, kind, proto)
+    except OSError as exc:
+        raise ParameterError(f"--host {host}: not an address to listen on ({exc.strerror or exc})") from None
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind(address)
+    except OSError as exc:
+        sock.close()
+        raise ParameterError(f"--port {port}: cannot listen on {host}:{port} ({exc.strerror or exc}; another server "
+                             "there? choose another --port)") from None  # fmt: skip
+    return sock
+
+
+def run_server(app, sock, host: str) -> None:
+    """Serve ``app`` on the bound socket ``sock`` until interrupted (uvicorn with :func:`server_config`).
 
     Parameters
     ----------
     app : fastapi.FastAPI
         The application (:func:`turbgen.service.app.create_app`).
+    sock : socket.socket
+        The socket of :func:`listening_socket`.
     host : str
-        Address to bind.
-    port : int
-        TCP port.
+        Its address (for uvicorn's configuration).
     """
     import uvicorn
 
-    uvicorn.Server(server_config(app, host, port)).run()
+    uvicorn.Server(server_config(app, host, sock.getsockname()[1])).run(sockets=[sock])
 
 
 HEADER_TIMEOUT_S = 5.0  # a connection must deliver a complete request head within this (then it is closed)

@@ -74,8 +74,24 @@ def check_mapping(data, schema_name: str, where: str) -> dict:
         if err.validator == "pattern":  # say what is expected (the schema's description), not the raw regex
             expected = _description(validator.schema, err.absolute_schema_path)
             message = f"{err.instance!r} is not valid" + (f"; expected {expected}" if expected else "")
+        message = message.replace(repr(err.instance), _short(err.instance))
+        if err.validator == "maxItems":
+            message += f" (at most {err.validator_value})"
         raise ParameterError(f"{where}: {at}: {' '.join(message.split())}")
     return data
+
+
+def _short(instance, limit: int = 80) -> str:
+    """``repr(instance)``, or for a long one what it is ("a list of 1001 items"): a message of a 1001-sensor file
+    quoted every sensor (537 KB on one line)."""
+    text = repr(instance)
+    if len(text) <= limit:
+        return text
+    if isinstance(instance, (list, tuple)):
+        return f"a list of {len(instance)} items"
+    if isinstance(instance, dict):
+        return f"an object of {len(instance)} keys ({', '.join(map(repr, list(instance)[:5]))}, ...)"
+    return text[:limit] + "..."
 
 
 def _description(schema: dict, path) -> str | None:
@@ -132,7 +148,7 @@ def parse_document(text: bytes, kind: str, where: str):
     """
     nested = ParameterError(f"{where}: nested deeper than {MAX_NESTING} levels of tables/arrays")
     try:
-        data = json.loads(text) if kind == "JSON" else tomllib.loads(text.decode())
+        data = json.loads(text, parse_constant=_refuse_constant) if kind == "JSON" else tomllib.loads(text.decode())
     except RecursionError:
         raise nested from None
     except (ValueError, UnicodeDecodeError) as exc:
@@ -141,6 +157,12 @@ def parse_document(text: bytes, kind: str, where: str):
     if nested_deeper_than(data, MAX_NESTING):
         raise nested
     return data
+
+
+def _refuse_constant(name: str):
+    """json.loads's hook for NaN, Infinity and -Infinity (not JSON; Python's reader takes them): refused, so that an
+    infinite value is not taken for a missing one."""
+    raise ValueError(f"{name} is not a JSON number (write null for a missing value)")
 
 
 def nested_deeper_than(data, limit: int) -> bool:

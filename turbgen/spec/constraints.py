@@ -24,6 +24,7 @@ from turbgen.input_files import CONSTRAINTS, read_input
 from turbgen.spec.config import check_mapping, parse_document
 from turbgen.spec.mean_wind import MeanWind
 from turbgen.spec.mean_wind_files import mean_wind_from_options
+from turbgen.theory import ranges
 
 COMPONENTS = ("u", "v", "w")
 
@@ -80,6 +81,7 @@ def point_series_from_mapping(data, source: str) -> PointSeries:
             v = np.array([math.nan if x is None else x for x in s[f"{c}_m_s"]], dtype=float)
             if len(v) != len(t):
                 raise ParameterError(f"{where}: {name} {c}_m_s has {len(v)} values for {len(t)} times")
+            ranges.check_values("measured_m_s", v, f"{where}: {name} {c}_m_s")
             if not np.isfinite(v).any():
                 raise ParameterError(f"{where}: {name} {c}_m_s has no value (all missing)")
             series[c] = v

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from turbgen.grid import Grid
+from turbgen.theory import ranges
 
 # Rotor (x = 0) plus the lidar range gates 50 to 170 m in steps of 13.3 m: 11 planes [m upstream].
 GATES_M = tuple(round(50.0 + 13.3 * i, 9) for i in range(10))
@@ -40,7 +41,9 @@ DEFAULT_B_X = 1.49e-4
 KAIMAL_DEFAULTS = {
     "U_m_s": 16.0,
     "turb_class": "A",
-    "hub_height_m": 90.0,
+    # the same default hub height as Mann's (which needs it for its 296 m box): no Kaimal statistic changes with it
+    # (IEC Lambda1 = 42 m at every hub height above 60 m), only the heights the exports write
+    "hub_height_m": 150.0,
     "long_model": "exp",
     "long_components": "u",
     "vw_coherence": "white",
@@ -65,14 +68,18 @@ def grid_from_mapping(given: Mapping | Grid | None, defaults: Mapping) -> Grid:
     Returns
     -------
     Grid
-        The grid (not checked against turbgen.theory.ranges here; the run classes do that).
+        The grid (sizes and spacings of a mapping checked against turbgen.theory.ranges, so a refusal names the
+        run's range, not the store grid's looser one; the run classes check the planes).
 
     Raises
     ------
     ParameterError
-        If the plane positions are empty or contain a duplicate (Grid's own checks).
+        If a size or spacing is outside its range, or the plane positions are empty or contain a duplicate.
     """
     if isinstance(given, Grid):
         return given
     g = {**defaults, **(given or {})}
+    for key in ("nt", "dt_s", "ny", "nz", "dy_m", "dz_m"):  # the run's ranges, before Grid's looser store checks
+        if g.get(key) is not None:
+            ranges.check(key, g[key])
     return Grid(g["nt"], g["dt_s"], tuple(g["x_m"]), g["ny"], g["nz"], g["dy_m"], g.get("dz_m", g["dy_m"]))

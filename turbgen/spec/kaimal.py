@@ -50,7 +50,7 @@ class KaimalRun:
     seed : int
         Random seed, in [0, 2^63 - 1].
     hub_height_m : float, optional
-        Hub height [m], in [1, 1000]; default 90.
+        Hub height [m], in [1, 1000]; default 150 (as Mann's, turbgen.spec.defaults).
     long_model : {"exp", "simley-pao", "kristensen"}, optional
         "exp" (Guo et al. 2023, Eq. 18 with a_x [-], b_x [1/m]; defaults Table 2 neutral,
         gamma = 400 s), "simley-pao" (Eq. 18 with the Simley and Pao 2015 parameters) or "kristensen"
@@ -78,7 +78,7 @@ class KaimalRun:
     grid: Grid
     U_m_s: float
     seed: int
-    hub_height_m: float = 90.0
+    hub_height_m: float = 150.0
     long_model: str = "exp"
     a_x: float | None = None
     b_x: float | None = None

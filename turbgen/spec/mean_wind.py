@@ -26,10 +26,18 @@ import numpy as np
 from turbgen.errors import ParameterError, check_choice, check_finite, check_nonnegative, check_positive, check_range
 from turbgen.spec.iec_transient import IecTransient
 from turbgen.theory import mean_wind as formulas
+from turbgen.theory import ranges
 
 PROFILES = ("power", "log", "table")
 DEFAULT_SHEAR_EXPONENT = 0.2
+# The two senses of a wind direction in the files turbgen reads and writes (issue 37: both named wherever one is used):
+# the veer rate and the direction columns of profile tables and mean histories turn (u, v) counter-clockwise seen
+# from above, TurbSim's sense (northern-hemisphere veer is negative); InflowWind's WindDir and PropagationDir, and so
+# the uniform files' WindDir and the IEC transients' "+" sense (EDC, ECD), are clockwise seen from above.
+CCW_NOTE = "counter-clockwise seen from above (TurbSim's sense; InflowWind's WindDir is clockwise)"
+CW_NOTE = "clockwise seen from above (InflowWind's WindDir sense; --veer and direction columns are counter-clockwise)"
 VEER_LIMIT_DEG_PER_M = 5.0  # |rate| beyond this turns the flow by > 90 deg over 18 m: surely a unit mistake
+DIRECTION_LIMIT_DEG = 360.0  # a direction column: a compass bearing or an angle relative to the hub, within one turn
 
 
 def _strictly_increasing(name: str, values) -> tuple:
@@ -40,6 +48,16 @@ def _strictly_increasing(name: str, values) -> tuple:
         if not b > a:
             raise ParameterError(f"{name} must increase strictly: {a:g} is followed by {b:g}")
     return vals
+
+
+def _direction(name: str, value) -> float:
+    """A direction [deg] within one turn either way (a compass bearing or a relative angle); 1e308 is no direction."""
+    return check_range(name, value, -DIRECTION_LIMIT_DEG, DIRECTION_LIMIT_DEG)
+
+
+def _speed(name: str, value) -> float:
+    """A mean speed [m/s] >= 0 and a plausible wind (turbgen.theory.ranges "measured_m_s")."""
+    return check_range(name, value, 0.0, ranges.RANGES["measured_m_s"].hi)
 
 
 def _column(name: str, values, n: int, check=check_finite) -> tuple:
@@ -135,10 +153,11 @@ class MeanWind:
             raise ParameterError(f"profile table height {z[0]:g} m is at or below the ground; heights must be > 0 m")
         put(self, "table_heights_m", z)
         put(self, "table_speeds_m_s", _column("profile table speeds (m/s)", self.table_speeds_m_s, len(z),
-                                              check_nonnegative))
+                                              _speed))
         if len(self.table_speeds_m_s) != len(z):
             raise ParameterError(f"the profile table has {len(z)} heights but no speeds")
-        put(self, "table_directions_deg", _column("profile table directions (deg)", self.table_directions_deg, len(z)))
+        put(self, "table_directions_deg", _column("profile table directions (deg)", self.table_directions_deg, len(z),
+                                                  _direction))
         if self.table_directions_deg and self.veer_deg_per_m:
             raise ParameterError("give the veer either as a rate or as the table's direction column, not both")
 
@@ -147,10 +166,11 @@ class MeanWind:
         t = _strictly_increasing("mean-history times (s)", self.history_times_s)
         put(self, "history_times_s", t)
         put(self, "history_speeds_m_s", _column("mean-history speeds (m/s)", self.history_speeds_m_s, len(t),
-                                                check_nonnegative))
+                                                _speed))
         if len(self.history_speeds_m_s) != len(t):
             raise ParameterError(f"the mean history has {len(t)} times but no speeds")
-        put(self, "history_directions_deg", _column("mean-history directions (deg)", self.history_directions_deg, len(t)))
+        put(self, "history_directions_deg", _column("mean-history directions (deg)", self.history_directions_deg,
+                                                    len(t), _direction))
 
     @property
     def has_history(self) -> bool:
@@ -376,7 +396,8 @@ class MeanWind:
         -------
         str
             E.g. "power-law shear alpha = 0.2" (the default, as earlier exports wrote it) or
-            "log law z0 = 0.03 m, d = 0 m; veer -0.1 deg/m; hub history hist.csv (41 points)".
+            "log law z0 = 0.03 m, d = 0 m; veer -0.1 deg/m; hub history hist.csv (41 points); angles ccw from above";
+            a transient's direction change (EDC, ECD) is named clockwise, InflowWind's sense.
         """
         if self.profile == "power":
             out = [f"power-law shear alpha = {self.shear_exponent:g}"]
@@ -390,10 +411,14 @@ class MeanWind:
             out.append("veer from the table")
         if self.has_history:
             out.append(f"hub history {self.history_label} ({len(self.history_times_s)} points)".replace("  ", " "))
+        if self.veer_deg_per_m or self.table_directions_deg or self.history_directions_deg:
+            out.append("angles ccw from above")  # the written files name the sense (CCW_NOTE)
         if self.transient is not None:
             t = self.transient
-            out.append(f"IEC {t.kind} {t.iec_class} ({t.magnitude():.4g} {'deg' if t.kind in ('EDC', 'ECD') else 'm/s'}"
-                       f"{'' if t.kind == 'EOG' else f', sign {t.sign:+d}'}) from {t.start_s:g} s")
+            turn = t.kind in ("EDC", "ECD")
+            out.append(f"IEC {t.kind} {t.iec_class} ({t.magnitude():.4g} {'deg' if turn else 'm/s'}"
+                       f"{'' if t.kind == 'EOG' else f', sign {t.sign:+d}'}{' = cw from above' if turn else ''}) "
+                       f"from {t.start_s:g} s")
         return "; ".join(out)
 
     def to_attrs(self) -> dict:

@@ -39,7 +39,9 @@ def check_output_path(path, what: str = "--out", *, create_parents: bool = False
     ParameterError
         For any refused path (one line naming it).
     """
-    text = os.fspath(path) if path is not None else ""
+    if path is None:
+        raise ParameterError(f"{what} = None; give a file or directory name")
+    text = os.fspath(path)
     if not str(text).strip():
         raise ParameterError(f"{what} = {text!r} is empty; give a file or directory name")
     p = Path(text).expanduser()

@@ -62,6 +62,31 @@ def check_attributes(attrs: Mapping, where: str) -> None:
                 raise StoreError(f"{where}: attribute {name}: {exc}") from None
 
 
+def spread_warnings(attrs: Mapping) -> list[str]:
+    """Warnings for a recorded rms beyond the largest standard deviation a run may ask for (``sigma_m_s`` of
+    turbgen.theory.ranges, 30 m/s): a field made from implausible inputs (e.g. constraint values of 1e30 m/s gave
+    sigma_u = 2.6e29 m/s), or an extreme corner of the Mann ranges (ae 100, L 1000 m). The data decode and are
+    consistent, so ``info`` shows the store and warns instead of refusing it.
+
+    Parameters
+    ----------
+    attrs : Mapping
+        The store's root attributes.
+
+    Returns
+    -------
+    list of str
+        One sentence per component whose ``rms_m_s`` exceeds the limit (empty without ``rms_m_s``).
+    """
+    rms = attrs.get(RMS_ATTR)
+    if not isinstance(rms, Mapping):
+        return []
+    hi = ranges.RANGES["sigma_m_s"].hi
+    return [f"{c}: rms {float(r):.3g} m/s is implausible for atmospheric turbulence (beyond {hi:g} m/s, the largest "
+            "standard deviation a run accepts); check the run's parameters or its constraint data"
+            for c, r in rms.items() if not float(r) <= hi]
+
+
 def amplitude_limits(attrs: Mapping) -> dict[str, tuple[float, str]]:
     """Largest plausible |value| [m/s] of each component, and what it is based on (for messages).
 

@@ -23,7 +23,7 @@ from turbgen.errors import ParameterError, StoreError
 from turbgen.grid import Grid
 from turbgen.store import layout
 from turbgen.store.checked_reads import read_checked
-from turbgen.store.plausibility import amplitude_limits, check_amplitudes, check_attributes
+from turbgen.store.plausibility import amplitude_limits, check_amplitudes, check_attributes, spread_warnings
 from turbgen.store.temporaries import parse_temp, pid_alive, temp_prefix
 
 
@@ -247,7 +247,8 @@ class FieldStore:
         dict
             path, complete, model, turbgen_version, created_utc, grid, shape_t_x_y_z, duration_s [s],
             width_y_m [m], height_z_m [m], chunk_t, U_m_s [m/s], hub_height_m [m], seed, frame,
-            frame_note, parameters, units, size_on_disk_bytes and size_uncompressed_bytes [bytes]; ``constraints``
+            frame_note, parameters, units, size_on_disk_bytes and size_uncompressed_bytes [bytes], warnings (an
+            implausible recorded rms: :func:`turbgen.store.plausibility.spread_warnings`); ``constraints``
             (series, solver, residual [m/s]) only for a store conditioned on measurements.
         """
         g, a = self.grid, self.attrs
@@ -272,6 +273,7 @@ class FieldStore:
             "units": a["units"],
             "size_on_disk_bytes": self.nbytes_on_disk(),
             "size_uncompressed_bytes": 3 * g.nbytes_per_component(),
+            "warnings": spread_warnings(a),
         } | ({} if "constraints" not in a else {"constraints": _constraints_summary(a["constraints"])})
 
 
@@ -302,10 +304,25 @@ def _count_files(directory: Path) -> int:
     return sum(len(files) for _, _, files in os.walk(directory))
 
 
-def _check_arrays(path: Path, group: zarr.Group, grid: Grid) -> None:
+def _check_array_metadata(path: Path, name: str, consolidated: dict | None) -> None:
+    """StoreError unless ``name``/zarr.json is the array's JSON metadata, the same as the root's consolidated copy.
+
+    Readers go by the consolidated copy, so a garbage ``u/zarr.json`` passed info, validate and export, while any
+    reader that opens the array itself (zarr without consolidation, other tools) fails on it."""
+    meta_file = path / name / "zarr.json"
+    if not meta_file.is_file():
+        raise StoreError(f"{path} is incomplete: {name}/zarr.json is missing (partial copy?)")
+    try:
+        meta = json.loads(meta_file.read_text())
+    except (OSError, ValueError) as exc:
+        raise StoreError(f"{path} is corrupted: {name}/zarr.json unreadable ({type(exc).__name__})") from None
+    if consolidated is not None and meta != consolidated.get(name):
+        raise StoreError(f"{path} is corrupted: {name}/zarr.json differs from the metadata consolidated in zarr.json")
+
+
+def _check_arrays(path: Path, group: zarr.Group, grid: Grid, consolidated: dict | None) -> None:
     for name in (*layout.COMPONENTS, *layout.DIMS):
-        if not (path / name / "zarr.json").is_file():
-            raise StoreError(f"{path} is incomplete: {name}/zarr.json is missing (partial copy?)")
+        _check_array_metadata(path, name, consolidated)
     for c in layout.COMPONENTS:
         arr = group.get(c)
         if not isinstance(arr, zarr.Array):
@@ -386,7 +403,7 @@ def open_store(path) -> FieldStore:
     try:
         layout.silence_consolidated_metadata_warning()
         group = zarr.open_group(str(path), mode="r")
-        _check_arrays(path, group, grid)
+        _check_arrays(path, group, grid, (meta.get("consolidated_metadata") or {}).get("metadata"))
     except StoreError:
         raise
     except Exception as exc:  # any zarr/JSON failure inside the store is corruption

@@ -85,7 +85,10 @@ RANGES: dict[str, Range] = {
     "seed": Range("seed", 0, 2**63 - 1, "64-bit SeedSequence entropy", integer=True),
     "pad_yz": Range("pad-yz", 1, 8, "synthesis box width / output width", integer=True),
     # Mann model (Mann 1994; Guo et al. 2022)
-    "ae": Range("ae (alpha*eps^(2/3), m^(4/3)/s^2)", 0.0, 100.0, "spectral energy level", lo_open=True),
+    # ae >= 1e-6: alpha eps^(2/3) with alpha = 1.7 and eps = 4e-10 m^2/s^3, far below the dissipation of the calmest
+    # measured boundary layers (~1e-6 m^2/s^3); there sigma_u = 5 mm/s at L = 49 m, Gamma = 3.1, while an ae of
+    # 1e-300 gave a field of float32 zeros (the validator then failed with NaN)
+    "ae": Range("ae (alpha*eps^(2/3), m^(4/3)/s^2)", 1e-6, 100.0, "spectral energy level (eps >= 4e-10 m^2/s^3)"),
     "length_scale_m": Range("L (length scale, m)", 1.0, 1000.0, "energy-containing eddies of the ABL"),
     "gamma": Range("gamma (Gamma, -)", 0.0, 20.0, "shear anisotropy (0 = isotropic)"),
     "evo_time_s": Range("evo (gamma, s)", 1.0, 1e5, "eddy evolution time (or 'frozen')"),
@@ -108,6 +111,8 @@ RANGES: dict[str, Range] = {
     "dy_m": Range("dy (m)", 0.01, 1000.0, "lateral spacing"),
     "dz_m": Range("dz (m)", 0.01, 1000.0, "vertical spacing"),
     "x_m": Range("planes (x, m upstream)", 0.0, 10000.0, "rotor 0, positive upstream; increasing"),
+    # measurements a field is conditioned on: fluctuations or total wind, point series and lidar v_los
+    "measured_m_s": Range("measured wind (m/s)", -150.0, 150.0, "each constraint value (record gust: 113 m/s)"),
     # theory evaluation points and separations
     "separation_m": Range("separation (m)", 0.0, 10000.0, "dx, dy, dz of `turbgen theory` / `fit`"),
     "rotor_radius_m": Range("rotor radius (m)", 0.5, 500.0, "rotor-effective wind speed disc"),
@@ -152,6 +157,37 @@ def check(key: str, value, label: str | None = None):
         If ``key`` is not in RANGES.
     """
     return RANGES[key].check(value, label)
+
+
+def check_values(key: str, values, where: str) -> None:
+    """Check every value of an array against ``RANGES[key]``; NaN (a missing value) passes, +-inf does not.
+
+    Parameters
+    ----------
+    key : str
+        Key of RANGES, e.g. "measured_m_s".
+    values : array_like
+        The values, in the SI unit of that range.
+    where : str
+        Message prefix naming the array, e.g. "constraint file mast.json, hub u_m_s".
+
+    Raises
+    ------
+    ParameterError
+        "<where>: <label> = <value> (index i) is ..." for the first value outside the range.
+    """
+    import numpy as np
+
+    r = RANGES[key]
+    v = np.asarray(values, dtype=float)
+    bad = ~np.isnan(v) & ~((v >= r.lo) & (v <= r.hi))
+    if bad.any():
+        index = tuple(int(i) for i in np.argwhere(bad)[0])
+        try:
+            r.check(float(v[index]))
+        except ParameterError as exc:
+            shown = index[0] if len(index) == 1 else index
+            raise ParameterError(f"{where}: {exc} (index {shown})") from None
 
 
 def check_count(key: str, n: int, what: str | None = None) -> int:
@@ -229,4 +265,4 @@ def markdown_table() -> str:
     return "\n".join(rows)
 
 
-__all__ = ["LIMITS", "RANGES", "Range", "check", "check_count", "check_grid", "markdown_table"]
+__all__ = ["LIMITS", "RANGES", "Range", "check", "check_count", "check_grid", "check_values", "markdown_table"]

@@ -26,20 +26,27 @@ async def submit(request: Request, state: ServiceState = Depends(get_state)):
     """Submit a run config (the JSON `turbgen mann|kaimal --config` takes, plus "model" and "preset"; a Mann run's
     ``constrain`` names measurements uploaded with POST /constraints by id)."""
     body = await read_json(request)
+    # in a thread: building a run computes its energy level (numba compiles on a cold start) and submitting writes
+    # to the catalog; on the event loop that held every other request, whose body timers then expired (issue 37)
+    rid, submitted = await run_in_threadpool(_accept, body, state)
+    code = 200 if submitted == "complete" else 202
+    return JSONResponse({"id": rid, "submitted": submitted, **links(rid)}, status_code=code)
+
+
+def _accept(body, state: ServiceState) -> tuple[str, str]:
+    """Check and queue the run of a POST /runs body: (its id, how it was submitted)."""
     model, run, constraints = build_run(body)
     preset = body.get("preset") if isinstance(body, dict) else None
     rid = run_id(model, canonical_mapping(run, constraints))
     if constraints and not state.catalog.is_complete(rid):  # the data placed on the grid: refused before queueing
         files = [str(p) for p in state.catalog.uploads.paths(constraints["constrain"])]
-        await run_in_threadpool(check_constrained_memory, run, files, constraints, state.settings.memory_budget_bytes)
+        check_constrained_memory(run, files, constraints, state.settings.memory_budget_bytes)
     elif not state.catalog.is_complete(rid):  # a complete run is served, never recomputed
         check_memory(model, run, state.settings.memory_budget_bytes)
     try:
-        submitted = state.jobs.submit(rid, model, run, preset, constraints)
+        return rid, state.jobs.submit(rid, model, run, preset, constraints)
     except QueueFull as exc:
         raise LimitError(429, str(exc), {"Retry-After": str(RETRY_AFTER_S)}) from None
-    code = 200 if submitted == "complete" else 202
-    return JSONResponse({"id": rid, "submitted": submitted, **links(rid)}, status_code=code)
 
 
 @router.get("/runs")
