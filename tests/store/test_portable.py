@@ -83,7 +83,7 @@ def test_the_key_store_and_safety_cases_pass_with_the_fallbacks_forced():
     """The full-disk, atomic-publication and dead-writer cases of tests/store/test_data_safety.py, the chunk files'
     round trip (buffered, without O_DIRECT) and the stencil cache's tests/runs/test_disk_full.py, run again in a
     child pytest with TURBGEN_PORTABLE=1."""
-    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-k", KEY_CASES,
+    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider", "-k", KEY_CASES,
                            "tests/store/test_data_safety.py", "tests/store/test_chunk_files.py",
                            "tests/runs/test_disk_full.py"],
                           cwd=ROOT, capture_output=True, text=True, timeout=900,
