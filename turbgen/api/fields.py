@@ -340,6 +340,7 @@ def kaimal(
     chunks: int | None = None,
     threads: int | None = None,
     progress: bool = False,
+    spectrum=None,
     **options,
 ) -> xr.Dataset:
     """A Kaimal 4D field with longitudinal coherence (IEC 61400-1; Guo et al. 2023): the field of ``turbgen kaimal``.
@@ -374,6 +375,12 @@ def kaimal(
         FFT threads (default: all cores); never changes the field.
     progress : bool, optional
         Show a progress bar on stderr.
+    spectrum : str, os.PathLike, Mapping, sequence or callable, optional
+        User spectra of u, v, w in place of the Kaimal ones (``turbgen kaimal --spectrum``): a CSV file or a table
+        (a mapping or four arrays ``f_hz``, ``S_u``, ``S_v``, ``S_w``: band-mean one-sided PSDs [m^2/s] covering the
+        run's lines 1/(nt dt) to 1/(2 dt), interpolated linearly), or a callable ``S(f_hz) -> (3, n)`` [m^2/s],
+        averaged over each line's band (turbgen.theory.user_spectra). The store records the band means, so
+        ``attrs["parameters"]["spectrum"]`` remakes the field without the callable.
     **options
         The other keywords named above.
 
@@ -399,7 +406,7 @@ def kaimal(
     """
     from turbgen.runs.kaimal import in_memory_bytes, kaimal_generator, kaimal_in_memory, plan_spill, run_kaimal
 
-    options.update(U=U, seed=seed)
+    options.update(U=U, seed=seed, spectrum=spectrum)
     given, grid, x_m = run_inputs("kaimal", options)
     user = _presets(preset, presets_file)
 

@@ -41,6 +41,9 @@ def _model_spectra(fs, description, f_hz, radius_m: float):
         return preview_spectra("mann", description, fs.U_m_s, f_hz=f_hz, radius_m=radius_m,
                                mann=mann_params_from_attrs(fs.attrs), box=box)
     km = kaimal_model_from_attrs(fs.attrs)
+    if km.spectrum is not None:
+        raise ParameterError("lidar theory has the Kaimal spectra only; this store was made with user spectra "
+                             "(its parameter `spectrum`)")
     if km.long_model != "exp":
         raise ParameterError(f"lidar theory supports the exponential longitudinal coherence only "
                              f"(store has long_model = {km.long_model!r})")
