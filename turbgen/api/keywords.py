@@ -12,23 +12,28 @@ from collections.abc import Mapping
 
 from turbgen.errors import ParameterError
 from turbgen.spec.config import load_schema
-from turbgen.spec.run_inputs import GRID_OPTIONS, KAIMAL_OPTIONS, MANN_OPTIONS, range_positions
+from turbgen.spec.models import declaration, resolve
+from turbgen.spec.run_inputs import GRID_OPTIONS, range_positions
 from turbgen.theory.ranges import LIMITS
 
-_ALIASES = {"mann": MANN_OPTIONS, "kaimal": KAIMAL_OPTIONS}
 PLANE_KEYWORDS = ("planes", "gates")
+
+
+def _aliases(model: str) -> dict:
+    """Option name -> run key of ``model`` (its declared ``options``, turbgen.spec.models)."""
+    return resolve(declaration(model).options, "spec")
 
 
 def schema_keys(model: str) -> tuple[frozenset, frozenset]:
     """The run keys and the grid keys of ``model``'s run schema (``grid`` itself excluded)."""
-    props = load_schema(f"{model}-run")["properties"]
+    props = load_schema(declaration(model).schema)["properties"]
     return frozenset(props) - {"grid"}, frozenset(props["grid"]["properties"])
 
 
 def allowed_keywords(model: str) -> list[str]:
     """Every keyword ``turbgen.<model>(...)`` takes for the run, sorted: option names first, then schema keys."""
     run_keys, grid_keys = schema_keys(model)
-    options = [*_ALIASES[model], *GRID_OPTIONS, *PLANE_KEYWORDS]
+    options = [*_aliases(model), *GRID_OPTIONS, *PLANE_KEYWORDS]
     return options + sorted((run_keys | grid_keys) - set(options))
 
 
@@ -73,7 +78,7 @@ def run_inputs(model: str, options: Mapping) -> tuple[dict, dict, list[float] | 
     ParameterError
         For keywords the model does not take (naming them and the allowed ones).
     """
-    aliases = _ALIASES[model]
+    aliases = _aliases(model)
     run_keys, grid_keys = schema_keys(model)
     unknown = sorted(set(options) - set(aliases) - set(GRID_OPTIONS) - set(PLANE_KEYWORDS) - run_keys - grid_keys)
     if unknown:
