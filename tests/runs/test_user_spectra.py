@@ -159,3 +159,24 @@ def test_a_callable_of_the_wrong_shape_and_rescale_are_refused():
         turbgen.kaimal(**SMALL, spectrum=site_density, rescale=True)
     with pytest.raises(ParameterError, match="first line must name the columns"):
         turbgen.kaimal(**SMALL, spectrum=__file__)
+
+
+def test_a_sweep_with_a_spectrum_file_makes_the_field_of_the_command(tmp_path):
+    from turbgen.runs.models import get_model
+    from turbgen.sweep.plan_file import plan_from_mapping
+
+    f = np.geomspace(1e-3, 2.0, 40)
+    _write_csv(tmp_path / "site.csv", f, site_density(f))
+    plan = plan_from_mapping({"out": "sweep", "models": ["kaimal", "mann"], "presets": ["neutral"], "speeds": [12],
+                              "seeds": [5], "spectrum": "site.csv", "grid": {"nt": 128, "ny": 4, "nz": 4, "dy": 8},
+                              "kaimal": {"planes": [0, 50]}, "mann": {"planes": [0, 50]}},
+                             base_dir=tmp_path)  # fmt: skip
+    by_model = {r.model: r.run for r in plan.runs}
+    assert by_model["mann"].model == "mann" and plan.to_dict()["spectrum"] == str(tmp_path / "site.csv")
+    get_model("kaimal").run(by_model["kaimal"], tmp_path / "swept.zarr")
+    single = turbgen.kaimal(preset="neutral", U=12, seed=5, nt=128, ny=4, nz=4, dy=8, planes=[0, 50],
+                            spectrum=tmp_path / "site.csv")
+    swept = open_store(tmp_path / "swept.zarr")
+    assert swept.attrs["parameters"]["spectrum"] == single.attrs["parameters"]["spectrum"]
+    for c in "uvw":
+        np.testing.assert_array_equal(swept.read_plane(c, 1), single[c].values[:, 1])
