@@ -20,9 +20,10 @@ points into the wrong layer fails at once, and a lower layer never reaches up th
 * turbgen.lidar.preview ``MODELS`` / ``preview_spectra`` and turbgen.lidar.report: ``preview`` and ``store_preview``;
 * turbgen.cli ``COMMANDS``: ``command``; turbgen.api.keywords: ``options``.
 
-A further model is one declaration here plus its own modules: spec (run class), schema, synthesis, runs (its
-``RUNNER``), validate (its theory) and cli (its command); lidar previews are optional (None: the lidar commands
-refuse the model in one line).
+A further model is one declaration here (the one existing file it edits) plus six files of its own: spec (its run
+class), schema, synthesis, runs (its Model), validate (its theory) and cli (its command). Lidar previews are optional
+(None: ``turbgen lidar`` refuses its stores in one line); its one-call ``turbgen.<name>()`` is a function of
+turbgen.api (two more files) and sweeps need its presets (turbgen.spec.presets, preset_runs).
 """
 
 from __future__ import annotations
