@@ -72,10 +72,12 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
 
 def mann_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, radius_m: float, frozen: bool,
                  mann: MannParams | None = None, box: BoxLattice | None = None) -> PreviewSpectra:
-    """The Mann model's preview spectra (Guo et al. 2023, Eq. 28-30): :func:`preview_spectra`'s arguments, and
+    """The Mann model's preview spectra (turbgen.theory.lidar_preview.mann_preview_spectra), its ``preview``.
 
     Parameters
     ----------
+    lidar, U_m_s, preset, f_hz, radius_m, frozen
+        As :func:`preview_spectra` (``radius_m`` given).
     mann : MannParams, optional
         Explicit Mann parameters instead of the preset's.
     box : BoxLattice, optional
@@ -96,7 +98,7 @@ def mann_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, ra
 def kaimal_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, radius_m: float, frozen: bool,
                    kaimal: KaimalParams | None = None, a_x: float | None = None, b_x: float | None = None,
                    long_components: str = "uvw", vw_coherence: bool = True) -> PreviewSpectra:
-    """The Kaimal model's preview spectra: :func:`preview_spectra`'s arguments, and
+    """The Kaimal model's preview spectra (turbgen.theory.lidar_preview.kaimal_preview_spectra), its ``preview``.
 
     Defaults follow Guo et al. (2023) Eq. 31/33 (Chen et al. 2022): the yz and the longitudinal coherences act on
     all three components (``vw_coherence``, ``long_components``); with coherence on u only (the IEC / turbgen kaimal
@@ -104,6 +106,8 @@ def kaimal_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, 
 
     Parameters
     ----------
+    lidar, U_m_s, preset, f_hz, radius_m, frozen
+        As :func:`preview_spectra` (``radius_m`` given).
     kaimal : KaimalParams, optional
         Explicit Kaimal parameters instead of the preset's.
     a_x, b_x : float, optional

@@ -12,7 +12,6 @@ import os
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 
-from turbgen.errors import ParameterError
 from turbgen.resources import available_memory_bytes
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
