@@ -43,9 +43,8 @@ from turbgen.synthesis.random_streams import keyed_complex_normal
 from turbgen.synthesis.square_root import principal_sqrt
 from turbgen.theory.coherence_models import exponential_yz, exponential_yz_decay_length_m
 from turbgen.theory.kaimal import kaimal_band_variance
-from turbgen.theory.lattice import line_frequencies
+from turbgen.theory.lattice import line_bands, line_frequencies
 from turbgen.theory.params import KaimalParams
-from turbgen.theory.user_spectra import line_bands
 
 COMPONENTS = ("u", "v", "w")
 # frequency bins per random stream; part of the definition of the field for a given seed -- never change

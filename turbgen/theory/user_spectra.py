@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from turbgen.errors import ParameterError
-from turbgen.theory.lattice import line_frequencies
+from turbgen.theory.lattice import line_bands, line_frequencies
 
 COLUMNS = ("f_hz", "S_u", "S_v", "S_w")
 # nodes per band of a callable's quadrature: error ~ rho^(-2 n) for a pole at rho band half-widths (Kaimal, 64 x 0.5 s,
@@ -32,26 +32,6 @@ COLUMNS = ("f_hz", "S_u", "S_v", "S_w")
 GAUSS_NODES = 16
 # how far [df] the ends of a table may fall short of the run's lowest and highest lines (digits lost in a file)
 COVER_SLACK = 1e-6
-
-
-def line_bands(nt: int, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """Edges of each line's band, lines k = 0 .. nt // 2.
-
-    Parameters
-    ----------
-    nt : int
-        Samples of the periodic record.
-    dt_s : float
-        Sampling interval [s].
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        (lo, hi) [Hz]: [(k - 1/2) df, (k + 1/2) df] clipped to [0, 1/(2 dt)], df = 1 / (nt dt).
-    """
-    df = 1.0 / (nt * dt_s)
-    k = np.arange(nt // 2 + 1)
-    return np.maximum(k - 0.5, 0.0) * df, np.minimum((k + 0.5) * df, 0.5 / dt_s)
 
 
 def _check_values(name: str, f_hz: np.ndarray, values: np.ndarray) -> None:
