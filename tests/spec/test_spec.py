@@ -76,9 +76,3 @@ def test_registry_names_each_model_once():
     with pytest.raises(ParameterError, match="not one of mann, kaimal"):
         get_model("karman")
 
-
-def test_every_registered_model_has_a_validator_theory():
-    from turbgen.runs.models import MODELS
-    from turbgen.validate.expectations import THEORIES
-
-    assert set(THEORIES) == set(MODELS)

@@ -400,6 +400,7 @@ def kaimal(
     noise: float | None = None,
     conditional_mean: bool = False,
     progress: bool = False,
+    spectrum=None,
 ) -> xr.Dataset:
     """A Kaimal 4D field with longitudinal coherence (IEC 61400-1; Guo et al. 2023): the field of ``turbgen kaimal``.
 
@@ -460,6 +461,12 @@ def kaimal(
         With ``constrain``: return the conditional mean (no random part).
     progress : bool, optional
         Show a progress bar on stderr.
+    spectrum : str, os.PathLike, Mapping, sequence or callable, optional
+        User spectra of u, v, w in place of the Kaimal ones (``turbgen kaimal --spectrum``): a CSV file or a table
+        (a mapping or four arrays ``f_hz``, ``S_u``, ``S_v``, ``S_w``: band-mean one-sided PSDs [m^2/s] covering the
+        run's lines 1/(nt dt) to 1/(2 dt), interpolated linearly), or a callable ``S(f_hz) -> (3, n)`` [m^2/s],
+        averaged over each line's band (turbgen.theory.user_spectra). The store records the band means, so
+        ``attrs["parameters"]["spectrum"]`` remakes the field without the callable.
 
     Returns
     -------
@@ -487,7 +494,7 @@ def kaimal(
     options = dict(U=U, seed=seed, turb_class=turb_class, hub_height=hub_height, sigma=sigma, lengths=lengths,
                    ayz=ayz, lc=lc, long_model=long_model, ax=ax, bx=bx, long_components=long_components,
                    vw_coherence=vw_coherence, rescale=rescale, planes=planes, gates=gates, nt=nt, dt=dt, ny=ny, nz=nz,
-                   dy=dy, dz=dz)  # fmt: skip
+                   dy=dy, dz=dz, spectrum=spectrum)  # fmt: skip
     if not constrain and (noise is not None or conditional_mean):
         raise ParameterError("`noise` and `conditional_mean` need `constrain`")
     given, grid, x_m = run_inputs("kaimal", options)

@@ -10,13 +10,18 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from turbgen.errors import ParameterError
-from turbgen.spec.run_inputs import GRID_OPTIONS, KAIMAL_OPTIONS, MANN_OPTIONS, range_positions
+from turbgen.spec.models import declaration, resolve
+from turbgen.spec.run_inputs import GRID_OPTIONS, range_positions
 from turbgen.theory.ranges import LIMITS
 
-_ALIASES = {"mann": MANN_OPTIONS, "kaimal": KAIMAL_OPTIONS}
 PLANE_KEYWORDS = ("planes", "gates")
 # flags: False is "not given", as an option not typed on the command line (a run file's true stays)
 _FLAGS = ("rescale", "conditional_mean")
+
+
+def _aliases(model: str) -> dict:
+    """Option name -> run key of ``model`` (its declared ``options``, turbgen.spec.models)."""
+    return resolve(declaration(model).options, "spec")
 
 
 def _evo_value(value):
@@ -69,7 +74,7 @@ def run_inputs(model: str, options: Mapping) -> tuple[dict, dict, list[float] | 
     tuple
         (run-mapping keys given, grid-table keys given, plane positions [m upstream] or None).
     """
-    aliases = _ALIASES[model]
+    aliases = _aliases(model)
     given, grid = {}, {}
     for name, value in options.items():
         if value is None or name in PLANE_KEYWORDS or (name in _FLAGS and value is False):

@@ -22,6 +22,7 @@ import click
 from turbgen import interruption
 from turbgen.version import __version__
 from turbgen.errors import ParameterError, StoreError, TurbgenError
+from turbgen.spec.models import DECLARATIONS
 
 
 # click >= 8.2 raises this (a UsageError) to print the help of a group called without a command
@@ -64,14 +65,14 @@ def user_error(exc: TurbgenError) -> UserError:
 _startup_collector_paused = False
 
 # command name -> (module, attribute); modules are imported only when their command runs (or for --help),
-# so `turbgen info` does not pay for importing the FFT and synthesis stack
+# so `turbgen info` does not pay for importing the FFT and synthesis stack; a model's command is declared with it
+# (turbgen.spec.models)
 COMMANDS = {
+    **{d.name: tuple(d.command.split(":")) for d in DECLARATIONS},
     "export": ("turbgen.cli.export", "export"),
     "fit": ("turbgen.cli.theory", "fit"),
     "info": ("turbgen.cli.info", "info"),
-    "kaimal": ("turbgen.cli.kaimal", "kaimal"),
     "lidar": ("turbgen.cli.lidar", "lidar"),
-    "mann": ("turbgen.cli.mann", "mann"),
     "serve": ("turbgen.cli.serve", "serve"),
     "sweep": ("turbgen.cli.sweep", "sweep"),
     "theory": ("turbgen.cli.theory", "theory"),
@@ -144,7 +145,7 @@ class TurbgenGroup(click.Group):
 
 # commands whose outputs are written under temporary names that an interruption removes (others write nothing,
 # or only plots, and must not claim a removal)
-PUBLISHING_COMMANDS = ("mann", "kaimal", "export", "sweep")
+PUBLISHING_COMMANDS = (*(d.name for d in DECLARATIONS), "export", "sweep")
 
 
 def _stopped_line(ctx, what: str) -> str:

@@ -17,6 +17,8 @@ def _value(v) -> str:
         return f"{v:g}"
     if isinstance(v, list):
         return ", ".join(_value(x) for x in v)
+    if isinstance(v, dict) and len(v.get("f_hz") or ()) > 8:  # a user spectrum's table (turbgen.theory.user_spectra)
+        return f"table of {', '.join(v)} on {len(v['f_hz'])} lines, {v['f_hz'][0]:g} to {v['f_hz'][-1]:g} Hz"
     if isinstance(v, dict):
         return json.dumps(v)
     return str(v)

@@ -62,6 +62,10 @@ def _three(name):
 @click.option("--vw-coherence", type=click.Choice(VW_COHERENCE),
               help="v, w in the yz plane: white (IEC / TurbSim IECKAI) or exp (extension: u's coherence); "
               f"default {D['vw_coherence']}.")
+@click.option("--spectrum", type=click.Path(dir_okay=False),
+              help="User spectra instead of the Kaimal ones: a CSV file with the columns f_hz,S_u,S_v,S_w (one-sided "
+              "PSDs [m^2/s], band means, e.g. a measured site spectrum) covering the run's lines 1/(nt dt) to "
+              "1/(2 dt); recorded in the store.")
 @grid_options(G)
 @click.option("--chunks", type=int,
               help="Time samples per store chunk (default min(nt, 1024)); never changes the field.")
@@ -118,8 +122,11 @@ def kaimal(**opt):
         require_constrained_memory(run, placed, opt["threads"])
     check_new_store(out, g, chunk_t=opt["chunks"], overwrite=opt["overwrite"])
     k = run.kaimal
-    click.echo(f"turbgen kaimal: U {run.U_m_s:g} m/s, sigma {', '.join(f'{s:.3g}' for s in k.sigma_m_s)} m/s, "
-               f"L {', '.join(f'{s:.4g}' for s in k.length_scales_m)} m, a_yz {k.a_yz:g}, Lc {k.lc_m:g} m, "
+    spectra = f"user spectra {opt['spectrum'] or '(run file)'}"
+    if run.spectrum is None:
+        spectra = (f"sigma {', '.join(f'{s:.3g}' for s in k.sigma_m_s)} m/s, "
+                   f"L {', '.join(f'{s:.4g}' for s in k.length_scales_m)} m")
+    click.echo(f"turbgen kaimal: U {run.U_m_s:g} m/s, {spectra}, a_yz {k.a_yz:g}, Lc {k.lc_m:g} m, "
                f"long {run.long_model} {run.effective_long_parameters()} on {run.long_components}, seed {run.seed}")
     click.echo(f"  grid (t, x, y, z) = {g.nt} x {g.nx} x {g.ny} x {g.nz}, dt {g.dt_s:g} s, dy {g.dy_m:g} m, "
                f"dz {g.dz_m:g} m, planes x = {', '.join(f'{x:g}' for x in g.x_m)} m")

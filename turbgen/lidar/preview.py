@@ -14,6 +14,7 @@ import numpy as np
 
 from turbgen.errors import check_choice
 from turbgen.lidar.description import LidarDescription
+from turbgen.spec.models import DECLARATIONS, declaration, resolve
 from turbgen.spec.preset_runs import kaimal_settings_for, mann_params_for
 from turbgen.theory.coherence_models import exponential_longitudinal
 from turbgen.theory.lidar_control import buffer_time_s, coherence_bandwidth_rad_m, cutoff_frequency_hz, filter_delay_s
@@ -21,26 +22,21 @@ from turbgen.theory.lidar_lattice import BoxLattice
 from turbgen.theory.lidar_preview import PreviewSpectra, kaimal_preview_spectra, mann_preview_spectra
 from turbgen.theory.params import KaimalParams, MannParams
 
-MODELS = ("mann", "kaimal")
+MODELS = tuple(d.name for d in DECLARATIONS if d.preview is not None)  # the models with a preview theory
 DEFAULT_F_HZ = np.geomspace(0.005, 0.3, 60)
 
 
 def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset: str = "neutral",
                     f_hz=DEFAULT_F_HZ, radius_m: float | None = None, frozen: bool = False,
-                    mann: MannParams | None = None, kaimal: KaimalParams | None = None,
-                    a_x: float | None = None, b_x: float | None = None,
-                    long_components: str = "uvw", vw_coherence: bool = True,
-                    box: BoxLattice | None = None) -> PreviewSpectra:
+                    **options) -> PreviewSpectra:
     """S_RR, S_LL, S_RL of ``lidar`` for the preset's model parameters at U (or explicit ones).
 
-    Kaimal defaults follow Guo et al. (2023) Eq. 31/33 (Chen et al. 2022): the yz and the longitudinal
-    coherences act on all three components (``vw_coherence``, ``long_components``); with coherence
-    on u only (the IEC / turbgen kaimal store default) the cut-offs come out 6-13 % higher.
+    The model's ``preview`` (turbgen.spec.models): :func:`mann_preview` or :func:`kaimal_preview`.
 
     Parameters
     ----------
-    model : {"mann", "kaimal"}
-        Turbulence model.
+    model : str
+        Turbulence model, one of :data:`MODELS`.
     lidar : LidarDescription
         The lidar.
     U_m_s : float
@@ -53,19 +49,9 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
         Rotor radius R [m]; default the lidar's ``rotor_radius_m``.
     frozen : bool, optional
         Frozen turbulence (Mann: no eddy lifetime; Kaimal: a_x = b_x = 0).
-    mann : MannParams, optional
-        Explicit Mann parameters instead of the preset's.
-    kaimal : KaimalParams, optional
-        Explicit Kaimal parameters instead of the preset's.
-    a_x, b_x : float, optional
-        Explicit longitudinal-coherence decay parameters [-] (exponential model) instead of the preset's.
-    long_components : str, optional
-        Components the longitudinal coherence acts on (default "uvw").
-    vw_coherence : bool, optional
-        Apply the yz coherence to v and w as well (default True).
-    box : BoxLattice, optional
-        Mann only: sum over this periodic box's (k2, k3) lattice (what a synthesised box holds) instead of
-        the continuous integral (default).
+    **options
+        The model's own keywords (:func:`mann_preview`: ``mann``, ``box``; :func:`kaimal_preview`: ``kaimal``,
+        ``a_x``, ``b_x``, ``long_components``, ``vw_coherence``).
 
     Returns
     -------
@@ -80,12 +66,62 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
     """
     check_choice("model", model, MODELS)
     R = lidar.rotor_radius_m if radius_m is None else radius_m
-    meas = lidar.measurement_points()
-    if model == "mann":
-        params = mann if mann is not None else mann_params_for(preset, U_m_s)
-        if frozen:
-            params = replace(params, evo_time_s=None)
-        return mann_preview_spectra(f_hz, meas, params, U_m_s, R, box=box)
+    preview = resolve(declaration(model).preview, "lidar")
+    return preview(lidar, U_m_s, preset=preset, f_hz=f_hz, radius_m=R, frozen=frozen, **options)
+
+
+def mann_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, radius_m: float, frozen: bool,
+                 mann: MannParams | None = None, box: BoxLattice | None = None) -> PreviewSpectra:
+    """The Mann model's preview spectra (turbgen.theory.lidar_preview.mann_preview_spectra), its ``preview``.
+
+    Parameters
+    ----------
+    lidar, U_m_s, preset, f_hz, radius_m, frozen
+        As :func:`preview_spectra` (``radius_m`` given).
+    mann : MannParams, optional
+        Explicit Mann parameters instead of the preset's.
+    box : BoxLattice, optional
+        Sum over this periodic box's (k2, k3) lattice (what a synthesised box holds) instead of the continuous
+        integral (default).
+
+    Returns
+    -------
+    PreviewSpectra
+        S_RR, S_LL, S_RL at ``f_hz``.
+    """
+    params = mann if mann is not None else mann_params_for(preset, U_m_s)
+    if frozen:
+        params = replace(params, evo_time_s=None)
+    return mann_preview_spectra(f_hz, lidar.measurement_points(), params, U_m_s, radius_m, box=box)
+
+
+def kaimal_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, radius_m: float, frozen: bool,
+                   kaimal: KaimalParams | None = None, a_x: float | None = None, b_x: float | None = None,
+                   long_components: str = "uvw", vw_coherence: bool = True) -> PreviewSpectra:
+    """The Kaimal model's preview spectra (turbgen.theory.lidar_preview.kaimal_preview_spectra), its ``preview``.
+
+    Defaults follow Guo et al. (2023) Eq. 31/33 (Chen et al. 2022): the yz and the longitudinal coherences act on
+    all three components (``vw_coherence``, ``long_components``); with coherence on u only (the IEC / turbgen kaimal
+    store default) the cut-offs come out 6-13 % higher.
+
+    Parameters
+    ----------
+    lidar, U_m_s, preset, f_hz, radius_m, frozen
+        As :func:`preview_spectra` (``radius_m`` given).
+    kaimal : KaimalParams, optional
+        Explicit Kaimal parameters instead of the preset's.
+    a_x, b_x : float, optional
+        Explicit longitudinal-coherence decay parameters [-] (exponential model) instead of the preset's.
+    long_components : str, optional
+        Components the longitudinal coherence acts on (default "uvw").
+    vw_coherence : bool, optional
+        Apply the yz coherence to v and w as well (default True).
+
+    Returns
+    -------
+    PreviewSpectra
+        S_RR, S_LL, S_RL at ``f_hz``.
+    """
     settings = kaimal_settings_for(preset, U_m_s)
     kp = kaimal if kaimal is not None else settings.kaimal
     ax = settings.a_x if a_x is None else a_x
@@ -96,8 +132,8 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
     def long_coherence(dx_m, f):
         return exponential_longitudinal(dx_m, f, U_m_s, ax, bx)
 
-    return kaimal_preview_spectra(f_hz, meas, kp, U_m_s, R, long_coherence, long_components=long_components,
-                                  vw_coherence=vw_coherence)
+    return kaimal_preview_spectra(f_hz, lidar.measurement_points(), kp, U_m_s, radius_m, long_coherence,
+                                  long_components=long_components, vw_coherence=vw_coherence)
 
 
 def summarise(spectra: PreviewSpectra, lidar: LidarDescription, U_m_s: float, *,

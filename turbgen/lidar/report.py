@@ -20,6 +20,7 @@ import numpy as np
 from turbgen.errors import ParameterError
 from turbgen.lidar import compare
 from turbgen.lidar.run import LidarRun, lidar_attrs, run_lidar
+from turbgen.spec.models import declaration, resolve
 from turbgen.store.temporaries import write_atomically
 from turbgen.validate.checks import MetricResult
 
@@ -30,18 +31,35 @@ F_THEORY_MAX_HZ = 0.5
 
 
 def _model_spectra(fs, description, f_hz, radius_m: float):
-    """PreviewSpectra of the store's model at f_hz > 0: Mann on its box's lattice, Kaimal as synthesised."""
+    """PreviewSpectra of the store's model at f_hz > 0: its declared ``store_preview`` (turbgen.spec.models)."""
+    reference = declaration(fs.model, "store model").store_preview
+    if reference is None:
+        raise ParameterError(f"store model {fs.model!r} has no lidar theory")
+    return resolve(reference, "lidar")(fs, description, f_hz, radius_m)
+
+
+def mann_store_preview(fs, description, f_hz, radius_m: float):
+    """PreviewSpectra of a Mann store at f_hz > 0 [Hz]: on its box's lattice, for rotor radius ``radius_m`` [m]."""
     from turbgen.lidar.preview import preview_spectra
     from turbgen.theory.lidar_lattice import BoxLattice
-    from turbgen.validate.store_run import kaimal_model_from_attrs, mann_box_from_attrs, mann_params_from_attrs
+    from turbgen.validate.store_run import mann_box_from_attrs, mann_params_from_attrs
 
     g = fs.grid
-    if fs.model == "mann":
-        b = mann_box_from_attrs(fs.attrs, g)
-        box = BoxLattice(b.nyp, b.nzp, g.dy_m, g.dz_m, g.nt * g.dt_s)
-        return preview_spectra("mann", description, fs.U_m_s, f_hz=f_hz, radius_m=radius_m,
-                               mann=mann_params_from_attrs(fs.attrs), box=box)
+    b = mann_box_from_attrs(fs.attrs, g)
+    box = BoxLattice(b.nyp, b.nzp, g.dy_m, g.dz_m, g.nt * g.dt_s)
+    return preview_spectra("mann", description, fs.U_m_s, f_hz=f_hz, radius_m=radius_m,
+                           mann=mann_params_from_attrs(fs.attrs), box=box)
+
+
+def kaimal_store_preview(fs, description, f_hz, radius_m: float):
+    """PreviewSpectra of a Kaimal store at f_hz > 0 [Hz] as synthesised, for rotor radius ``radius_m`` [m]."""
+    from turbgen.lidar.preview import preview_spectra
+    from turbgen.validate.store_run import kaimal_model_from_attrs
+
     km = kaimal_model_from_attrs(fs.attrs)
+    if km.spectrum is not None:
+        raise ParameterError("lidar theory has the Kaimal spectra only; this store was made with user spectra "
+                             "(its parameter `spectrum`)")
     if km.long_model != "exp":
         raise ParameterError(f"lidar theory supports the exponential longitudinal coherence only "
                              f"(store has long_model = {km.long_model!r})")

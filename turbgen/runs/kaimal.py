@@ -37,7 +37,8 @@ def kaimal_generator(run: KaimalRun, workers: int | None = None) -> KaimalEvo:
     """The synthesis object of ``run`` (``workers``: FFT threads; the field does not depend on them)."""
     return KaimalEvo(run.kaimal, run.grid, run.U_m_s, run.seed, long_coherence=run.long_coherence(),
                      long_components=run.long_components, coherent_vw=run.vw_coherence == "exp",
-                     rescale=run.rescale, workers=workers)
+                     rescale=run.rescale, workers=workers,
+                     variances=None if run.spectrum is None else run.spectrum.line_variances())
 
 
 def store_attrs(run: KaimalRun, gen: KaimalEvo | None = None) -> dict:

@@ -1,22 +1,21 @@
-"""The model registry: model name -> what a run is (spec class), how it runs, what memory it needs.
+"""How a model runs: model name -> what a run is (spec class), how it runs, what memory it needs.
 
-Looked up once by the sweep (planning and execution) and the service instead of switching on the
-model's name. The registry lives here, in runs/, because its entries hold run functions; the
-validator (a layer above) keeps its own name -> expected-statistics table keyed by the same names
-(turbgen.validate), so imports stay one-way (theory <- spec <- runs <- validate).
+Looked up by the sweep (planning and execution) and the service instead of switching on the model's name. The
+models are declared in turbgen.spec.models; ``MODELS`` resolves each declaration's ``runner`` (a :class:`Model`:
+:data:`MANN` and :data:`KAIMAL` here, a further model's in its own runs module) when it is first asked for.
 """
 
 from __future__ import annotations
 
 import functools
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 
-from turbgen.errors import ParameterError
 from turbgen.resources import available_memory_bytes
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
+from turbgen.spec.models import declaration, model_names, resolve
 
 
 @dataclass(frozen=True)
@@ -121,16 +120,30 @@ def _kaimal_least_memory(run: KaimalRun) -> int:
     return min(memory_needed(run.grid, sampler=sampler), memory_needed(run.grid, True, sampler))
 
 
-MODELS: dict[str, Model] = {
-    "mann": Model("mann", MannRun, _run_mann, _mann_memory, lambda run: _mann_memory(run, 1),
-                  "`nt`, `ny`/`nz` or `pad_yz`", _mann_shared, _mann_shared_key, _mann_shared_bytes, out_of_core=True),
-    "kaimal": Model("kaimal", KaimalRun, _run_kaimal, _kaimal_memory, _kaimal_least_memory,
-                    "`nt`, `ny`/`nz` or the number of planes", lambda run, threads, memory_bytes: None),
-}
+MANN = Model("mann", MannRun, _run_mann, _mann_memory, lambda run: _mann_memory(run, 1),
+             "`nt`, `ny`/`nz` or `pad_yz`", _mann_shared, _mann_shared_key, _mann_shared_bytes, out_of_core=True)
+KAIMAL = Model("kaimal", KaimalRun, _run_kaimal, _kaimal_memory, _kaimal_least_memory,
+               "`nt`, `ny`/`nz` or the number of planes", lambda run, threads, memory_bytes: None)
+
+
+class _Runners(Mapping):
+    """Model name -> :class:`Model`, over the declared models (turbgen.spec.models), each resolved when asked for."""
+
+    def __getitem__(self, name: str) -> Model:
+        if name not in model_names():
+            raise KeyError(name)
+        return resolve(declaration(name).runner, "runs")
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(model_names())
+
+    def __len__(self) -> int:
+        return len(model_names())
+
+
+MODELS: Mapping[str, Model] = _Runners()
 
 
 def get_model(name: str) -> Model:
     """The registry entry of ``name``; ParameterError listing the models otherwise."""
-    if name not in MODELS:
-        raise ParameterError(f"model = {name!r} is not one of {', '.join(MODELS)}")
-    return MODELS[name]
+    return MODELS[declaration(name).name]

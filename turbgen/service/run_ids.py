@@ -54,6 +54,8 @@ def build_run(body) -> tuple[str, object, dict]:
     entry = _model(model)
     preset = body.pop("preset", None)
     check_mapping(body, f"{model}-run", "run config")
+    if isinstance(body.get("spectrum"), str):  # a path would read the server's files
+        raise ParameterError("spectrum: the service takes the table itself ({f_hz, S_u, S_v, S_w}), not a file name")
     constraints = constraint_keys({key: body.pop(key) for key in CONSTRAINT_KEYS if key in body})
     if constraints and model != "mann":
         raise ParameterError(f"constrain: the service conditions Mann runs only, not {model}")

@@ -227,11 +227,14 @@ def check_noise(noise) -> float | None:
 
 
 def resolve_constraint_paths(mapping: dict, base_dir) -> dict:
-    """``mapping`` with the relative paths of its ``constrain`` list taken from ``base_dir`` (a run file's paths
-    are relative to the run file)."""
+    """``mapping`` with the relative paths of its ``constrain`` list and of its ``spectrum`` file (a Kaimal run) taken
+    from ``base_dir`` (a run file's paths are relative to the run file)."""
+    base = Path(base_dir)
+    spectrum = mapping.get("spectrum")
+    if isinstance(spectrum, str) and not Path(spectrum).is_absolute():
+        mapping = {**mapping, "spectrum": str(base / spectrum)}
     files = mapping.get("constrain")
     if not isinstance(files, list):
         return mapping
-    base = Path(base_dir)
     return {**mapping, "constrain": [str(base / f) if isinstance(f, str) and not Path(f).is_absolute() else f
                                      for f in files]}  # fmt: skip

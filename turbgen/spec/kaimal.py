@@ -16,10 +16,12 @@ from turbgen.errors import ParameterError, check_choice
 from turbgen.grid import Grid
 from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X, KAIMAL_DEFAULTS, KAIMAL_GRID, grid_from_mapping
 from turbgen.spec.naming import run_digest
+from turbgen.spec.user_spectrum import line_spectrum
 from turbgen.theory import ranges
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS, simley_pao_parameters
 from turbgen.theory.kaimal import iec_kaimal_params
 from turbgen.theory.params import KaimalParams, check_wind_speed
+from turbgen.theory.user_spectra import LineSpectrum
 
 LONG_COMPONENTS = ("u", "uvw")
 VW_COHERENCE = ("white", "exp")
@@ -28,6 +30,7 @@ UNITS = {
     "a_yz": "1", "lc_m": "m", "long_model": "", "a_x": "1", "b_x": "m-1", "long_components": "",
     "vw_coherence": "", "rescale": "", "seed": "1", "effective_long_parameters": "a_x: 1, b_x: m-1",
     "resolved_band_hz": "Hz", "expected_sigma_m_s": "m s-1", "rescale_factors": "1", "freq_chunk": "1",
+    "spectrum": "f_hz: Hz, S_u S_v S_w: m2 s-1 (band means on the run's lines)",
 }  # fmt: skip
 # the store's 'derived' attribute (worked out from the inputs; older stores kept them among the parameters)
 DERIVED_KEYS = ("effective_long_parameters", "resolved_band_hz", "expected_sigma_m_s", "rescale_factors",
@@ -67,11 +70,15 @@ class KaimalRun:
         exponential coherence with the same a_yz, Lc).
     turb_class : str, optional
         IEC class the sigmas came from (recorded only; None for explicit sigmas).
+    spectrum : LineSpectrum, optional
+        User spectra of u, v, w on the grid's lines (turbgen.theory.user_spectra) in place of the Kaimal spectra of
+        ``kaimal``, whose sigmas and lengths then enter only the Simley-Pao and Kristensen coherences.
 
     Raises
     ------
     ParameterError
-        For a value outside its range, an unknown model choice, or a_x / b_x with a model other than "exp".
+        For a value outside its range, an unknown model choice, a_x / b_x with a model other than "exp", or
+        ``rescale`` with ``spectrum``.
     """
 
     kaimal: KaimalParams
@@ -86,6 +93,7 @@ class KaimalRun:
     rescale: bool = False
     vw_coherence: str = "white"
     turb_class: str | None = None
+    spectrum: LineSpectrum | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "U_m_s", check_wind_speed(self.U_m_s))
@@ -103,6 +111,11 @@ class KaimalRun:
         elif self.a_x is not None or self.b_x is not None:
             raise ParameterError(f"a_x / b_x apply to long_model exp only, not {self.long_model!r}")
         object.__setattr__(self, "rescale", bool(self.rescale))
+        if self.spectrum is not None:
+            if self.rescale:
+                raise ParameterError("rescale = true applies to the Kaimal spectra, not to a user spectrum (scale "
+                                     "the spectrum instead)")
+            object.__setattr__(self, "spectrum", line_spectrum(self.spectrum, self.grid))
 
     @property
     def model(self) -> str:
@@ -192,7 +205,8 @@ class KaimalRun:
         -------
         dict
             U_m_s [m/s], turb_class, hub_height_m [m], sigma_m_s [m/s], length_scales_m [m], a_yz [-],
-            lc_m [m], long_model, a_x [-], b_x [1/m], long_components, vw_coherence, rescale, seed.
+            lc_m [m], long_model, a_x [-], b_x [1/m], long_components, vw_coherence, rescale, seed, and with a user
+            spectrum ``spectrum``: its band means on the lines (LineSpectrum.to_table).
         """
         k = self.kaimal
         return {
@@ -210,6 +224,7 @@ class KaimalRun:
             "vw_coherence": self.vw_coherence,
             "rescale": self.rescale,
             "seed": self.seed,
+            **({} if self.spectrum is None else {"spectrum": self.spectrum.to_table()}),
         }
 
     def to_attrs(self, derived: Mapping | None = None) -> dict:
@@ -271,7 +286,8 @@ class KaimalRun:
         """A run from a (schema-valid) mapping: the keys of :meth:`parameters` plus ``grid``.
 
         Missing keys take turbgen.spec.defaults; ``turb_class`` + ``hub_height_m`` give the IEC
-        sigmas and length scales unless ``sigma_m_s`` / ``length_scales_m`` are given.
+        sigmas and length scales unless ``sigma_m_s`` / ``length_scales_m`` are given. ``spectrum`` may be any form
+        turbgen.spec.user_spectrum.line_spectrum takes (a CSV path, a table, a callable).
 
         Parameters
         ----------
@@ -299,7 +315,8 @@ class KaimalRun:
         return cls(kaimal=kaimal, grid=grid, U_m_s=v["U_m_s"], seed=v["seed"], hub_height_m=v["hub_height_m"],
                    long_model=v["long_model"], a_x=d.get("a_x"), b_x=d.get("b_x"),
                    long_components=v["long_components"], rescale=v["rescale"], vw_coherence=v["vw_coherence"],
-                   turb_class=d.get("turb_class") or (None if explicit else KAIMAL_DEFAULTS["turb_class"]))
+                   turb_class=d.get("turb_class") or (None if explicit else KAIMAL_DEFAULTS["turb_class"]),
+                   spectrum=line_spectrum(d.get("spectrum"), grid))
 
 
 def kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float = 90.0, sigma_m_s=None,

@@ -22,7 +22,7 @@ KAIMAL_OPTIONS = {
     "U": "U_m_s", "turb_class": "turb_class", "hub_height": "hub_height_m", "sigma": "sigma_m_s",
     "lengths": "length_scales_m", "ayz": "a_yz", "lc": "lc_m", "long_model": "long_model", "ax": "a_x",
     "bx": "b_x", "long_components": "long_components", "vw_coherence": "vw_coherence", "rescale": "rescale",
-    "seed": "seed",
+    "seed": "seed", "spectrum": "spectrum",
 }  # fmt: skip
 # option name -> key of the run mapping's grid table
 GRID_OPTIONS = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}

@@ -12,7 +12,7 @@ One zarr v3 group holds one field::
 Group attributes (JSON Schema: ``turbgen/schemas/field.schema.json``):
 
     turbgen_version, created_utc (ISO 8601), layout_version (int)
-    model ("mann" | "kaimal"), parameters {name: value}, units {name: unit}, seed (int),
+    model (a declared model: "mann" | "kaimal", turbgen.spec.models), parameters {name: value}, units {name: unit}, seed (int),
     U_m_s, hub_height_m, frame = "convected", frame_note, grid {nt, dt_s, x_m, ny, nz, dy_m, dz_m}
     rms_m_s {u, v, w}          root mean square of each component [m/s] (stores since 2026-11-26; readers
                                refuse values beyond 100 times it: turbgen.store.plausibility)
@@ -34,6 +34,7 @@ import warnings
 import jsonschema
 
 from turbgen.grid import Grid
+from turbgen.spec.models import model_names
 
 
 def silence_consolidated_metadata_warning() -> None:
@@ -48,7 +49,7 @@ LAYOUT_VERSION = 1
 
 COMPONENTS = ("u", "v", "w")
 DIMS = ("t", "x", "y", "z")
-MODELS = ("mann", "kaimal")
+MODELS = model_names()
 DTYPE = "float32"
 COORD_DTYPE = "float64"
 
@@ -241,6 +242,8 @@ def validate_attrs(attrs: dict, *, where: str, error: type[Exception]) -> None:
         shortened to 160 characters).
     """
     err = jsonschema.exceptions.best_match(_validator().iter_errors(attrs))
+    if err is None and attrs["model"] not in MODELS:  # the schema takes a string: the models are declared in spec
+        raise error(f"{where}: attribute model: {attrs['model']!r} is not one of {', '.join(MODELS)}")
     if err is not None:
         at = "/".join(str(p) for p in err.absolute_path) or "(top level)"
         msg = " ".join(err.message.split())

@@ -16,9 +16,12 @@ from pathlib import Path
 
 from turbgen.errors import ParameterError, check_int
 from turbgen.runs.models import MODELS, get_model
+from turbgen.spec.config import load_schema
 from turbgen.spec.constraints import ConstraintRequest
+from turbgen.spec.models import declaration
 from turbgen.spec.presets import StabilityPreset, get_preset
 from turbgen.spec.preset_runs import run_keys
+from turbgen.spec.user_spectrum import read_spectrum_csv
 from turbgen.store.paths import check_output_dir
 from turbgen.sweep.scheduler import check_scheduler_address
 from turbgen.theory import ranges
@@ -30,7 +33,7 @@ _GRID_NAMES = {"nt": "nt", "dt": "dt_s", "planes": "x_m", "ny": "ny", "nz": "nz"
 
 
 def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int, grid: Mapping | None = None,
-              *, user: Mapping[str, StabilityPreset] | None = None):
+              *, user: Mapping[str, StabilityPreset] | None = None, spectrum=None):
     """The MannRun / KaimalRun of one preset run, exactly as ``turbgen mann|kaimal --preset`` builds it.
 
     Parameters
@@ -48,6 +51,9 @@ def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int
         hub_height [m]); missing ones take the model's defaults (turbgen.spec.defaults; dz defaults to dy).
     user : Mapping of str to StabilityPreset, optional
         User presets.
+    spectrum : optional
+        The run's ``spectrum`` key (a model whose run schema has one: a CSV path or a table, as
+        ``turbgen kaimal --spectrum``).
 
     Returns
     -------
@@ -60,6 +66,8 @@ def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int
     """
     spec = get_model(model).spec
     mapping = {"U_m_s": U_m_s, "seed": seed, **grid_mapping(grid)}
+    if spectrum is not None:
+        mapping["spectrum"] = spectrum
     return spec.from_mapping({**run_keys(model, preset, U_m_s, user=user), **mapping})
 
 
@@ -197,6 +205,7 @@ class SweepPlan:
     runs: tuple[PlannedRun, ...] = ()
     lidar: str | None = None  # lidar preset or file run on every field (turbgen lidar)
     constraints: ConstraintRequest | None = None  # every run conditioned on the same files (Mann only)
+    spectrum: str | None = None  # user spectra CSV of the runs of models that take one (Kaimal)
 
     def grid_options(self, model: str) -> dict:
         """Grid options of ``model``'s runs (its table over the common one; missing = command default).
@@ -233,6 +242,7 @@ class SweepPlan:
             "chunks": self.chunk_t,
             "user_presets": sorted(self.user_presets),
             "n_runs": len(self.runs),
+            **({} if self.spectrum is None else {"spectrum": self.spectrum}),
             **({} if self.constraints is None else {"constraints": {
                 "constrain": [str(f) for f in self.constraints.files], "noise_m_s": self.constraints.noise_m_s,
                 "conditional_mean": self.constraints.conditional_mean}}),
@@ -291,6 +301,7 @@ def make_plan(
     user_presets: Mapping[str, StabilityPreset] | None = None,
     lidar: str | None = None,
     constraints: ConstraintRequest | None = None,
+    spectrum: str | Path | None = None,
 ) -> SweepPlan:
     """Check a sweep definition and build all its runs (ParameterError on the first bad value).
 
@@ -321,6 +332,9 @@ def make_plan(
         Condition every run (Mann only) on the same files (turbgen.spec.constraints); each run's data are placed
         on its grid here (a bad file or a measurement off the field fails before any run) and its store name gets
         the digest of those data.
+    spectrum : str or Path, optional
+        User spectra CSV (columns f_hz, S_u, S_v, S_w) of the runs of every model whose run schema takes a
+        ``spectrum`` (Kaimal), as ``turbgen kaimal --spectrum``; read once, checked against each run's grid.
 
     Returns
     -------
@@ -348,13 +362,15 @@ def make_plan(
         if m not in MODELS:
             raise ParameterError(f"grid table {m!r} is not one of {', '.join(MODELS)}")
     chunk_t, workers, lidar_description = _check_execution(out, chunk_t, workers, scheduler, lidar)
-    runs = _planned_runs(models, presets, speeds, seeds, lambda m: {**grid, **model_grid.get(m, {})}, user)
+    table = None if spectrum is None else read_spectrum_csv(spectrum)
+    runs = _planned_runs(models, presets, speeds, seeds, lambda m: {**grid, **model_grid.get(m, {})}, user, table)
     if constraints is not None:
         runs = _constrained_runs(runs, constraints)
     _check_runs(runs, speeds, chunk_t, lidar_description, local=not scheduler)
     return SweepPlan(Path(out), models, presets, speeds, seeds, grid, model_grid, bool(validate), chunk_t, workers,
                      scheduler or None, user, runs=tuple(runs),
-                     lidar=None if lidar is None else str(lidar), constraints=constraints)  # fmt: skip
+                     lidar=None if lidar is None else str(lidar), constraints=constraints,
+                     spectrum=None if spectrum is None else str(spectrum))  # fmt: skip
 
 
 def _constrained_runs(runs: list[PlannedRun], constraints: ConstraintRequest) -> list[PlannedRun]:
@@ -411,16 +427,19 @@ def _check_execution(out, chunk_t, workers, scheduler, lidar):
     return chunk_t, workers, description
 
 
-def _planned_runs(models, presets, speeds, seeds, grid_options, user) -> list[PlannedRun]:
-    """Every run in nested order models x presets x speeds x seeds (``grid_options(model)``: its grid options)."""
+def _planned_runs(models, presets, speeds, seeds, grid_options, user, table=None) -> list[PlannedRun]:
+    """Every run in nested order models x presets x speeds x seeds (``grid_options(model)``: its grid options;
+    ``table``: (f_hz, S) of a user spectrum, given to the models whose run schema takes one)."""
     runs = []
     for m in models:
         opts = grid_options(m)
+        takes = table is not None and "spectrum" in load_schema(declaration(m).schema)["properties"]
+        spectrum = (table[0], *table[1]) if takes else None
         for p in presets:
             for U in speeds:
                 # the seed changes nothing but the random streams: build the run once, then swap the seed
                 # (10 000 seeds plan in a second instead of minutes of identical ae quadratures)
-                first = build_run(m, p, U, seeds[0], opts, user=user)
+                first = build_run(m, p, U, seeds[0], opts, user=user, spectrum=spectrum)
                 for s in seeds:
                     runs.append(PlannedRun(m, p, U, s, first if s == seeds[0] else replace(first, seed=s)))
     return runs

@@ -100,6 +100,7 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
         user_presets=user,
         lidar=data.get("lidar"),
         constraints=_constraints(data, base),
+        spectrum=str(base / data["spectrum"]) if "spectrum" in data else None,
     )
     kw.update({k: v for k, v in overrides.items() if v is not None})
     if kw["out"] is None:

@@ -43,7 +43,7 @@ from turbgen.synthesis.random_streams import keyed_complex_normal
 from turbgen.synthesis.square_root import principal_sqrt
 from turbgen.theory.coherence_models import exponential_yz, exponential_yz_decay_length_m
 from turbgen.theory.kaimal import kaimal_band_variance
-from turbgen.theory.lattice import line_frequencies
+from turbgen.theory.lattice import line_bands, line_frequencies
 from turbgen.theory.params import KaimalParams
 
 COMPONENTS = ("u", "v", "w")
@@ -62,11 +62,7 @@ def bin_variances(nt: int, dt_s: float, sigma_m_s: float, length_scale_m: float,
     Bin k covers [(k - 1/2) df, (k + 1/2) df], clipped at the Nyquist frequency 1/(2 dt), so the
     sum is the band integral from df/2 to 1/(2 dt).
     """
-    df = 1.0 / (nt * dt_s)
-    k = np.arange(nt // 2 + 1)
-    lo = np.maximum(k - 0.5, 0.0) * df
-    hi = np.minimum((k + 0.5) * df, 0.5 / dt_s)
-    v = kaimal_band_variance(lo, hi, sigma_m_s, length_scale_m, U_m_s)
+    v = kaimal_band_variance(*line_bands(nt, dt_s), sigma_m_s, length_scale_m, U_m_s)
     v[0] = 0.0
     return v
 
@@ -198,6 +194,9 @@ class KaimalEvo:
     long_components : components mixed between planes ("u" or "uvw").
     coherent_vw : v, w get the u yz coherence (extension; IEC / TurbSim IECKAI: white).
     rescale : scale each component's spectrum so its expected variance is the nominal sigma^2.
+    variances : (3, nt // 2 + 1) variance of each line's band [m^2 s^-2] of u, v, w (a user spectrum,
+        turbgen.theory.user_spectra.LineSpectrum.line_variances; line 0 must be 0); None: the Kaimal spectra of
+        ``kaimal`` (Eq. 11 integrated over the bands). ``rescale`` applies to either.
     """
 
     def __init__(
@@ -213,6 +212,7 @@ class KaimalEvo:
         long_components: str = "u",
         coherent_vw: bool = False,
         rescale: bool = False,
+        variances=None,
         workers: int | None = None,
     ):
         self.kaimal, self.grid, self.U_m_s, self.seed = kaimal, grid, U_m_s, seed
@@ -233,7 +233,10 @@ class KaimalEvo:
         self.variances = {}
         self.rescale_factors = {}
         for i, c in enumerate(COMPONENTS):
-            v = bin_variances(grid.nt, grid.dt_s, kaimal.sigma_m_s[i], kaimal.length_scales_m[i], U_m_s)
+            if variances is None:
+                v = bin_variances(grid.nt, grid.dt_s, kaimal.sigma_m_s[i], kaimal.length_scales_m[i], U_m_s)
+            else:
+                v = np.asarray(variances[i], dtype=float)
             factor = kaimal.sigma_m_s[i] ** 2 / v.sum() if rescale and v.sum() > 0 else 1.0
             self.variances[c] = v * factor
             self.rescale_factors[c] = factor

@@ -31,6 +31,24 @@ def line_frequencies(nt: int, dt_s: float) -> np.ndarray:
     return np.arange(nt // 2 + 1) / (nt * dt_s)
 
 
+def line_bands(nt: int, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Edges of the band each line stands for (whose variance a generator gives it), lines j = 0 .. nt // 2.
+
+    Parameters
+    ----------
+    nt, dt_s : int, float
+        As :func:`line_frequencies`.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (lo, hi) [Hz]: [(j - 1/2) df, (j + 1/2) df] clipped to [0, 1/(2 dt)], df = 1 / (nt dt).
+    """
+    df = 1.0 / (nt * dt_s)
+    j = np.arange(nt // 2 + 1)
+    return np.maximum(j - 0.5, 0.0) * df, np.minimum((j + 0.5) * df, 0.5 / dt_s)
+
+
 def pair_weights(nt: int) -> np.ndarray:
     """Weight of each line j = 0 .. nt // 2 in a sum over the full (two-sided) spectrum.
 

@@ -14,14 +14,8 @@ points and segments the estimates used (``prediction.SamplingDesign``):
 
 from __future__ import annotations
 
-from turbgen.errors import ParameterError
-from turbgen.validate.kaimal_expectation import kaimal_theory
-from turbgen.validate.mann_expectation import mann_theory
+from turbgen.spec.models import declaration, resolve
 from turbgen.validate.prediction import SamplingDesign, Theory
-
-# model name (turbgen.runs.models.MODELS, the store's ``model`` attribute) -> its predictions; kept here,
-# beside the generators' registry, so that imports stay one-way (runs never imports validate)
-THEORIES = {"mann": mann_theory, "kaimal": kaimal_theory}
 
 
 def theory_for(fs, design: SamplingDesign) -> Theory:
@@ -37,8 +31,12 @@ def theory_for(fs, design: SamplingDesign) -> Theory:
     Returns
     -------
     Theory
-        Line (cross-)variances [m^2 s^-2] and correlation sums rho_bar [-].
+        Line (cross-)variances [m^2 s^-2] and correlation sums rho_bar [-]: the model's ``validator_theory``
+        (turbgen.spec.models).
+
+    Raises
+    ------
+    ParameterError
+        For a model that is not declared.
     """
-    if fs.model not in THEORIES:
-        raise ParameterError(f"store model {fs.model!r} has no validator theory (known: {', '.join(THEORIES)})")
-    return THEORIES[fs.model](fs.attrs, design)
+    return resolve(declaration(fs.model, "store model").validator_theory, "validate")(fs.attrs, design)

@@ -9,7 +9,8 @@ cross-covariance is L_j coh(r, f_j) with the IEC exponential coherence (Eq. 12, 
 the store says (white, or the same exponential); between planes the store's longitudinal model
 (Eq. 18 / Simley and Pao / Kristensen, un-squared, zero phase in the convected frame) for the
 components it was applied to, independent otherwise. The rotor-effective wind speed follows Eq. 25
-over the rotor points of the grid.
+over the rotor points of the grid. A store made with user spectra (its ``spectrum`` parameter: band means on the
+lines, turbgen.theory.user_spectra) has L_j = (1/2) S_j times the band's width in place of the Kaimal integral.
 """
 
 from __future__ import annotations
@@ -64,7 +65,9 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
     acc, rho_rews = _node_correlations(design, node_f, yz_coh, long_fn, long_components)
     modes = _kaimal_modes(km, grid, line_f, yz_coh, long_fn)
 
-    def reference() -> dict:  # continuous Kaimal spectra (plots only)
+    def reference() -> dict:  # continuous Kaimal spectra, or the user's band means (plots only)
+        if km.spectrum is not None:
+            return {f"spectrum_{c}": (line_f[1:], np.asarray(km.spectrum.S_m2_s[i])) for i, c in enumerate(COMPONENTS)}
         return {f"spectrum_{c}": (line_f[1:], kaimal_spectrum(line_f[1:], kp.sigma_m_s[i], kp.length_scales_m[i], U))
                 for i, c in enumerate(COMPONENTS)}  # fmt: skip
 
@@ -72,12 +75,15 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
     band["note"] = (
         f"Kaimal lines f_j = j/(nt dt) up to the Nyquist frequency {band['f_max_hz']:g} Hz; "
         + ("spectra rescaled to the nominal sigma (store attribute rescale)" if km.rescale
+           else "the user spectra recorded in the store (band means)" if km.spectrum is not None
            else "variance = the Kaimal integral over the resolved band (no rescaling)")
     )  # fmt: skip
+    sigma = kp.sigma_m_s if km.spectrum is None else [math.sqrt(np.sum(pair_weights(grid.nt) * auto[c]))
+                                                      for c in COMPONENTS]  # the user spectra's resolved band
     return Theory(
         model="kaimal", nt=grid.nt, line_f=line_f, auto=auto, yz=yz, long=long, rews=rews, node_f=node_f,
         rho_all=acc.all, rho_yz=acc.yz, rho_long=acc.long, rho_rews=rho_rews,
-        sigma_model=dict(zip(COMPONENTS, kp.sigma_m_s)), band=band, long_components=long_components,
+        sigma_model=dict(zip(COMPONENTS, sigma)), band=band, long_components=long_components,
         uw=np.zeros(line_f.size), rho_uw=np.zeros(node_f.size),  # u and w are synthesised independently
         reference=reference, variance_modes=modes,
     )  # fmt: skip
@@ -102,8 +108,11 @@ def _coherences(km, U: float):
 
 
 def _auto_lines(km, grid, line_f: np.ndarray, U: float) -> dict:
-    """Component -> the variance [m^2 s^-2] of each record line of the Kaimal spectrum (rescaled if the run was)."""
+    """Component -> the variance [m^2 s^-2] of each record line of the Kaimal spectrum (rescaled if the run was) or
+    of the store's user spectra."""
     kp, nt = km.params, grid.nt
+    if km.spectrum is not None:  # the generator's band variances, shared by the +-f_j pair
+        return {c: v / pair_weights(nt) for c, v in zip(COMPONENTS, km.spectrum.line_variances())}
     df = line_f[1]
     auto = {}
     lo = np.maximum(line_f - df / 2.0, 0.0)

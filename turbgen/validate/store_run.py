@@ -13,6 +13,7 @@ from turbgen.grid import Grid
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
 from turbgen.theory.params import KaimalParams, MannParams
+from turbgen.theory.user_spectra import LineSpectrum
 
 
 @dataclass(frozen=True)
@@ -41,6 +42,8 @@ class KaimalModel:
         True if each spectrum was rescaled to the nominal sigma_i.
     a_x, b_x : float or None
         Coefficients of the exponential longitudinal coherence (``long_model == "exp"``), else None.
+    spectrum : LineSpectrum or None
+        The user spectra the store was made with (band means on its lines), or None for the Kaimal spectra.
     """
 
     params: KaimalParams
@@ -50,6 +53,7 @@ class KaimalModel:
     rescale: bool
     a_x: float | None = None
     b_x: float | None = None
+    spectrum: LineSpectrum | None = None
 
 
 def mann_params_from_attrs(attrs: dict) -> MannParams:
@@ -85,4 +89,4 @@ def kaimal_model_from_attrs(attrs: dict) -> KaimalModel:
     """
     run = KaimalRun.from_attrs(attrs)
     return KaimalModel(run.kaimal, run.long_model, run.long_components, run.vw_coherence == "exp", run.rescale,
-                       run.a_x, run.b_x)
+                       run.a_x, run.b_x, run.spectrum)

@@ -1,0 +1,115 @@
+"""The ``spectrum`` of a Kaimal run as given (a CSV file, arrays, a mapping or a callable) -> its LineSpectrum.
+
+What the forms mean (band means, quadrature of a callable, interpolation of a table) is in
+turbgen.theory.user_spectra. The CSV file has a header line naming the columns ``f_hz,S_u,S_v,S_w`` (in any order;
+lines starting with ``#`` and blank lines are skipped) and one row per frequency [Hz], PSDs in m^2/s.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.grid import Grid
+from turbgen.theory.user_spectra import COLUMNS, LineSpectrum
+
+
+def read_spectrum_csv(path) -> tuple[np.ndarray, np.ndarray]:
+    """(f_hz (n,), S (3, n)) of a spectrum CSV file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Frequencies [Hz] and S_u, S_v, S_w [m^2/s], as written (checked by LineSpectrum.from_table).
+
+    Raises
+    ------
+    ParameterError
+        If the file cannot be read, lacks the header or has a row that is not four numbers.
+    """
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParameterError(f"spectrum file {path}: cannot be read ({exc.__class__.__name__}: {exc})") from None
+    rows = [(n, line.strip()) for n, line in enumerate(text.splitlines(), 1)
+            if line.strip() and not line.lstrip().startswith("#")]  # fmt: skip
+    header = [name.strip() for name in rows[0][1].split(",")] if rows else []
+    if sorted(header) != sorted(COLUMNS):
+        raise ParameterError(f"spectrum file {path}: the first line must name the columns {','.join(COLUMNS)} "
+                             f"(got {','.join(header) or 'nothing'})")
+    values = []
+    for n, line in rows[1:]:
+        cells = line.split(",")
+        try:
+            if len(cells) != len(COLUMNS):
+                raise ValueError(f"{len(cells)} values")
+            values.append([float(cell) for cell in cells])
+        except ValueError as exc:
+            raise ParameterError(f"spectrum file {path}: line {n} is not {len(COLUMNS)} numbers ({exc})") from None
+    table = np.array(values, dtype=float).reshape(-1, len(COLUMNS))
+    columns = {name: table[:, i] for i, name in enumerate(header)}
+    return columns["f_hz"], np.stack([columns[c] for c in COLUMNS[1:]])
+
+
+def _from_mapping(value: Mapping) -> tuple:
+    keys = set(value)
+    if keys != set(COLUMNS):
+        raise ParameterError(f"spectrum mapping: keys {', '.join(sorted(map(str, keys)))}; needs exactly "
+                             f"{', '.join(COLUMNS)}")
+    return value["f_hz"], [value[c] for c in COLUMNS[1:]]
+
+
+def line_spectrum(value, grid: Grid) -> LineSpectrum | None:
+    """The band means of ``value`` on ``grid``'s lines.
+
+    Parameters
+    ----------
+    value : None, LineSpectrum, str, os.PathLike, Mapping, sequence or callable
+        A CSV file; a mapping of ``f_hz``, ``S_u``, ``S_v``, ``S_w`` (the form a store records); four arrays
+        (f_hz, S_u, S_v, S_w); or a callable ``S(f_hz) -> (3, n)`` [m^2/s]. None: no user spectrum.
+    grid : Grid
+        The run's grid (its record: nt, dt_s [s]).
+
+    Returns
+    -------
+    LineSpectrum or None
+        The spectrum the run synthesises.
+
+    Raises
+    ------
+    ParameterError
+        For a value of none of these forms, or a table or callable LineSpectrum refuses.
+    """
+    if value is None:
+        return None
+    if isinstance(value, LineSpectrum):
+        if (value.nt, value.dt_s) != (grid.nt, grid.dt_s):
+            raise ParameterError(f"spectrum: made for nt {value.nt}, dt {value.dt_s:g} s; the run has nt {grid.nt}, "
+                                 f"dt {grid.dt_s:g} s")
+        return value
+    if isinstance(value, (str, os.PathLike)):
+        f, S = read_spectrum_csv(value)
+    elif isinstance(value, Mapping):
+        f, S = _from_mapping(value)
+    elif isinstance(value, Callable):
+        return LineSpectrum.from_callable(value, grid.nt, grid.dt_s)
+    else:
+        try:
+            f, *S = value
+        except (TypeError, ValueError):
+            raise ParameterError(f"spectrum: {type(value).__name__} is not a CSV path, a mapping or arrays of "
+                                 f"{', '.join(COLUMNS)}, or a callable S(f_hz) -> (3, n)") from None
+    try:
+        f, S = np.asarray(f, dtype=float), np.asarray(S, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"spectrum: the table is not numbers ({exc})") from None
+    return LineSpectrum.from_table(f, S, grid.nt, grid.dt_s)

@@ -1,0 +1,183 @@
+"""User spectra of the Kaimal-type generator: a site's u, v, w spectra in place of the Kaimal form.
+
+A run's record holds spectral lines f_k = k df, df = 1 / (nt dt) (turbgen.theory.lattice). The generator gives
+line k the variance of its band [f_k - df/2, f_k + df/2], the last band clipped at the Nyquist frequency 1/(2 dt),
+as it does with the Kaimal spectrum of Guo et al. (2023, Eq. 11) integrated in closed form. A user spectrum is
+therefore reduced to the mean one-sided PSD of each band, S_k [m^2/s] (lines k = 1 .. nf - 1; line 0, the record
+mean, carries no variance), whose band variance is S_k times the band's width:
+
+* a callable ``S(f_hz) -> (3, n)`` is a density: S_k is its mean over the band by Gauss-Legendre quadrature with
+  ``GAUSS_NODES`` nodes (exact to round-off for a spectrum analytic over the band, such as Eq. 11, whose pole lies
+  at f = -U / (6 L) < 0);
+* a table (f_hz, S_u, S_v, S_w) holds band means at its frequencies (what a measured, Welch-averaged spectrum is):
+  S_k is its linear interpolation at f_k; a table given on the run's lines is the band means as they are.
+
+:class:`LineSpectrum` (the run's lines and S_k) is what a run records in its store: a re-run, the validator and
+sweeps read the same numbers without the callable or the file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.theory.lattice import line_bands, line_frequencies
+
+COLUMNS = ("f_hz", "S_u", "S_v", "S_w")
+# nodes per band of a callable's quadrature: error ~ rho^(-2 n) for a pole at rho band half-widths (Kaimal, 64 x 0.5 s,
+# L = 340 m: rho ~ 4.8, 1e-22)
+GAUSS_NODES = 16
+# how far [df] the ends of a table may fall short of the run's lowest and highest lines (digits lost in a file)
+COVER_SLACK = 1e-6
+
+
+def _check_values(name: str, f_hz: np.ndarray, values: np.ndarray) -> None:
+    """ParameterError naming the first non-finite or negative PSD value."""
+    bad = ~np.isfinite(values) | (values < 0)
+    if bad.any():
+        c, j = np.argwhere(bad)[0]
+        raise ParameterError(f"{name}: {COLUMNS[1 + c]} = {float(values[c, j])!r} at f = {f_hz[j]:g} Hz; a PSD "
+                             "[m^2/s] must be finite and >= 0")
+
+
+@dataclass(frozen=True)
+class LineSpectrum:
+    """Band-mean one-sided PSDs of u, v, w on a run's lines k = 1 .. nt // 2.
+
+    Parameters
+    ----------
+    nt : int
+        Samples of the run's record.
+    dt_s : float
+        Its sampling interval [s].
+    S_m2_s : tuple of tuple of float
+        (3, nt // 2) band means S_k [m^2/s] of u, v, w at f_k = k / (nt dt), k >= 1.
+    """
+
+    nt: int
+    dt_s: float
+    S_m2_s: tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]
+
+    def __post_init__(self):
+        values = np.asarray(self.S_m2_s, dtype=float)
+        if values.shape != (3, self.nt // 2):
+            raise ParameterError(f"spectrum: {values.shape} band means for {self.nt // 2} lines; needs (3, "
+                                 f"{self.nt // 2}) (u, v, w at f_k = k / (nt dt), k = 1 .. nt // 2)")
+        _check_values("spectrum", self.f_hz, values)
+
+    @property
+    def f_hz(self) -> np.ndarray:
+        """The lines f_k [Hz], k = 1 .. nt // 2."""
+        return line_frequencies(self.nt, self.dt_s)[1:]
+
+    def line_variances(self) -> np.ndarray:
+        """Variance of each line's band [m^2 s^-2], (3, nt // 2 + 1), line 0 (the mean) zero."""
+        lo, hi = line_bands(self.nt, self.dt_s)
+        out = np.zeros((3, lo.size))
+        out[:, 1:] = np.asarray(self.S_m2_s, dtype=float) * (hi - lo)[1:]
+        return out
+
+    def to_table(self) -> dict:
+        """The record of the store: ``f_hz`` [Hz] and ``S_u``, ``S_v``, ``S_w`` [m^2/s] as lists (JSON).
+
+        Returns
+        -------
+        dict
+            Column name -> values; :meth:`from_table` on the same grid gives this spectrum back exactly.
+        """
+        return {"f_hz": self.f_hz.tolist(), **{c: list(s) for c, s in zip(COLUMNS[1:], self.S_m2_s)}}
+
+    @classmethod
+    def from_values(cls, nt: int, dt_s: float, values) -> "LineSpectrum":
+        """The spectrum of band means ``values`` (3, nt // 2) [m^2/s]."""
+        values = np.asarray(values, dtype=float)
+        return cls(nt, float(dt_s), tuple(tuple(row) for row in values.tolist()))
+
+    @classmethod
+    def from_callable(cls, S: Callable, nt: int, dt_s: float) -> "LineSpectrum":
+        """Band means of the density ``S(f_hz) -> (3, n)`` [m^2/s] over each line's band (Gauss-Legendre).
+
+        Parameters
+        ----------
+        S : callable
+            One-sided PSDs of u, v, w [m^2/s] at the frequencies it is given (n values [Hz], all > 0); called once.
+        nt, dt_s : int, float
+            The run's record (samples, interval [s]).
+
+        Returns
+        -------
+        LineSpectrum
+            The band means.
+
+        Raises
+        ------
+        ParameterError
+            If ``S`` does not return (3, n) finite values >= 0.
+        """
+        lo, hi = (edge[1:] for edge in line_bands(nt, dt_s))
+        x, w = np.polynomial.legendre.leggauss(GAUSS_NODES)
+        nodes = 0.5 * (lo + hi)[:, None] + 0.5 * (hi - lo)[:, None] * x[None, :]
+        try:
+            values = np.asarray(S(nodes.ravel()), dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"spectrum: the callable failed on {nodes.size} frequencies [Hz]: {exc}") from None
+        if values.shape != (3, nodes.size):
+            raise ParameterError(f"spectrum: the callable returned shape {values.shape} for {nodes.size} "
+                                 f"frequencies; needs (3, {nodes.size}) (S_u, S_v, S_w [m^2/s])")
+        _check_values("spectrum (callable)", nodes.ravel(), values)
+        values = values.reshape(3, *nodes.shape)
+        mean = np.zeros((3, lo.size))
+        for i in range(GAUSS_NODES):  # one fixed order of the sum: the same bits on every machine
+            mean += (0.5 * w[i]) * values[:, :, i]
+        return cls.from_values(nt, dt_s, mean)
+
+    @classmethod
+    def from_table(cls, f_hz, S_m2_s, nt: int, dt_s: float) -> "LineSpectrum":
+        """Band means at the run's lines from a table of band means, interpolated linearly.
+
+        Parameters
+        ----------
+        f_hz : array_like
+            (n,) increasing frequencies [Hz], >= 0, from at most the lowest line df = 1/(nt dt) to at least the
+            highest, nt // 2 df.
+        S_m2_s : array_like
+            (3, n) one-sided PSDs S_u, S_v, S_w [m^2/s], finite and >= 0.
+        nt, dt_s : int, float
+            The run's record (samples, interval [s]).
+
+        Returns
+        -------
+        LineSpectrum
+            The band means on the run's lines (the table's own values where it is given on them).
+
+        Raises
+        ------
+        ParameterError
+            For a wrong shape, non-finite or negative values, frequencies not increasing, or a table that does not
+            cover the run's lines.
+        """
+        f = np.asarray(f_hz, dtype=float)
+        S = np.asarray(S_m2_s, dtype=float)
+        if f.ndim != 1 or f.size < 1 or S.shape != (3, f.size):
+            raise ParameterError(f"spectrum table: f_hz of shape {f.shape} and S_u, S_v, S_w of shape {S.shape}; "
+                                 "needs n frequencies and (3, n) values (columns f_hz, S_u, S_v, S_w)")
+        if not np.isfinite(f).all() or (f < 0).any():
+            j = int(np.argmax(~np.isfinite(f) | (f < 0)))
+            raise ParameterError(f"spectrum table: f_hz[{j}] = {float(f[j])!r}; frequencies [Hz] must be finite and "
+                                 ">= 0")
+        if (np.diff(f) <= 0).any():
+            j = int(np.argmax(np.diff(f) <= 0)) + 1
+            raise ParameterError(f"spectrum table: f_hz[{j}] = {f[j]:g} Hz follows {f[j - 1]:g} Hz; frequencies "
+                                 "must increase")
+        _check_values("spectrum table", f, S)
+        lines = line_frequencies(nt, dt_s)[1:]
+        slack = COVER_SLACK / (nt * dt_s)
+        if f[0] > lines[0] + slack or f[-1] < lines[-1] - slack:
+            raise ParameterError(f"spectrum table: covers {f[0]:g} to {f[-1]:g} Hz; the run's lines need {lines[0]:g} "
+                                 f"Hz (1/(nt dt)) to {lines[-1]:g} Hz (the highest line: 1/(2 dt) for an even nt)")
+        if f.size == lines.size and np.array_equal(f, lines):
+            return cls.from_values(nt, dt_s, S)
+        return cls.from_values(nt, dt_s, [np.interp(lines, f, row) for row in S])
