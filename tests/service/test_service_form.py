@@ -33,7 +33,8 @@ NOT_A_RUN_OPTION = {
     "config": "the form is the run file: every key of the run schema is a field",
     "presets_file": "a client's file is not read; the built-in presets are offered",
 }
-KAIMAL_NOT_IN_SERVICE = {"constrain", "noise", "conditional_mean"}  # the service conditions Mann runs only
+# the service conditions Mann runs only; a user spectrum is a table sent in the request body (form.NOT_IN_FORM)
+KAIMAL_NOT_IN_SERVICE = {"constrain", "noise", "conditional_mean", "spectrum"}
 COMMANDS = {"mann": (mann, MannRun, MANN_OPTIONS, MANN_REPLACES), "kaimal": (kaimal, KaimalRun, KAIMAL_OPTIONS,
                                                                           KAIMAL_REPLACES)}  # fmt: skip
 
