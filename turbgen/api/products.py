@@ -92,7 +92,8 @@ def check_plots_dir(plots_dir: str | os.PathLike, overwrite: bool, name: str = "
         if not os.access(p, os.W_OK):
             raise ParameterError(f"{name} = {str(plots_dir)!r} is not writable")
         if not overwrite and any(p.glob("*.png")):
-            raise ParameterError(f"{name} = {str(plots_dir)!r} already holds PNG files; pass overwrite to replace them")
+            flag = "--overwrite" if name.startswith("--") else "overwrite=True"
+            raise ParameterError(f"{name} = {str(plots_dir)!r} already holds PNG files; pass {flag} to replace them")
         return
     check_output_path(plots_dir, name, create_parents=True)  # report.plots makes missing directories
 
