@@ -33,6 +33,10 @@ from turbgen.store.writer import check_new_store
 PathLike = str | os.PathLike
 
 
+def _path(path: PathLike | None) -> Path | None:
+    return None if path is None else Path(path)
+
+
 def _file_mapping(config, schema: str) -> dict | None:
     """A run file's content (a path to TOML/JSON) or a mapping of the same keys, checked against ``schema``."""
     if config is None:
@@ -273,7 +277,8 @@ def mann(
         if out is None and _mann_fits(run, threads, stencil_cache, memory):
             from turbgen.runs.mann import mann_in_memory
 
-            return mann_in_memory(run, progress=progress, threads=default_threads(threads), cache_dir=stencil_cache)[0]
+            return mann_in_memory(run, progress=progress, threads=default_threads(threads),
+                                  cache_dir=_path(stencil_cache))[0]
         make = _mann_maker(run, overwrite, chunks, threads, stencil_cache, memory, progress)
     else:
         from turbgen.runs.constrain import load_constraints, mann_constrained_in_memory, place, with_energy_from_data
@@ -479,8 +484,6 @@ def kaimal(
     >>> dict(ds.sizes), ds.attrs["model"]
     ({'t': 128, 'x': 3, 'y': 6, 'z': 6}, 'kaimal')
     """
-    from turbgen.runs.kaimal import in_memory_bytes, kaimal_generator, kaimal_in_memory, plan_spill, run_kaimal
-
     options = dict(U=U, seed=seed, turb_class=turb_class, hub_height=hub_height, sigma=sigma, lengths=lengths,
                    ayz=ayz, lc=lc, long_model=long_model, ax=ax, bx=bx, long_components=long_components,
                    vw_coherence=vw_coherence, rescale=rescale, planes=planes, gates=gates, nt=nt, dt=dt, ny=ny, nz=nz,
@@ -500,10 +503,25 @@ def kaimal(
 
     if constrain:
         make = _kaimal_constrained_maker(run, constrain, noise, conditional_mean, overwrite, chunks, threads)
-        if out is None:  # the conditioned field is made into a store (a temporary one, loaded back)
-            return _through_store(make, run.grid, f"kaimal_s{run.seed}.zarr")
-        make(Path(out))
-        return _as_dataset(Path(out))
+    else:
+        # straight into the Dataset when the run's arrays with the spectrum in memory and the field fit 80 % of the
+        # available memory (the rule by which run_kaimal keeps its spectrum in memory), else through a store
+        from turbgen.runs.kaimal import in_memory_bytes, kaimal_in_memory
+
+        available = available_memory_bytes()
+        if out is None and (available is None or in_memory_bytes(run) <= 0.8 * available):
+            return kaimal_in_memory(run, progress=progress, threads=threads)[0]
+        make = _kaimal_maker(run, overwrite, chunks, threads, progress)
+    if out is None:  # a conditioned field, or one that does not fit: through a temporary store, loaded back
+        return _through_store(make, run.grid, f"kaimal_s{run.seed}.zarr")
+    make(Path(out))
+    return _as_dataset(Path(out))
+
+
+def _kaimal_maker(run: KaimalRun, overwrite, chunks, threads, progress):
+    """The function writing ``run`` to a path as ``turbgen kaimal`` does (the spectrum in a scratch file when it
+    does not fit in memory)."""
+    from turbgen.runs.kaimal import kaimal_generator, plan_spill, run_kaimal
 
     def make(path: Path) -> None:
         check_output_path(path, "`out`")
@@ -511,16 +529,7 @@ def kaimal(
         check_new_store(path, run.grid, chunk_t=chunks, overwrite=overwrite)
         run_kaimal(run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=threads)
 
-    if out is None:
-        # straight into the Dataset when the run's arrays with the spectrum in memory and the field fit 80 % of the
-        # available memory (the rule by which run_kaimal keeps its spectrum in memory), else through a store
-        available = available_memory_bytes()
-        if available is None or in_memory_bytes(run) <= 0.8 * available:
-            return kaimal_in_memory(run, progress=progress, threads=threads)[0]
-        return _through_store(make, run.grid, f"kaimal_s{run.seed}.zarr")
-    make(Path(out))
-    return _as_dataset(Path(out))
-
+    return make
 
 def _kaimal_constrained_maker(run: KaimalRun, constrain, noise, conditional_mean: bool, overwrite, chunks, threads):
     """The function writing ``run`` conditioned on ``constrain`` to a path as ``turbgen kaimal --constrain`` does

@@ -23,7 +23,6 @@ import xarray as xr
 
 from turbgen.grid import Grid
 from turbgen.resources import default_threads
-from turbgen.spec.defaults import KAIMAL_DEFAULTS, MANN_DEFAULTS
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
 from turbgen.theory.params import KaimalParams, MannParams
@@ -81,13 +80,13 @@ class MannGenerator:
     True
     """
 
-    def __init__(self, params: MannParams, grid: Grid, U_m_s: float = MANN_DEFAULTS["U_m_s"], *,
-                 hub_height_m: float = MANN_DEFAULTS["hub_height_m"], pad_yz: int = MANN_DEFAULTS["pad_yz"],
+    def __init__(self, params: MannParams, grid: Grid, U_m_s: float = 16.0, *,
+                 hub_height_m: float = 150.0, pad_yz: int = 2,
                  threads: int | None = None):  # fmt: skip
         from turbgen.runs.mann import build_mann_stencil
         from turbgen.synthesis.mann_spacetime import MannSnapshots
 
-        self.run = MannRun(params, grid, U_m_s, MANN_DEFAULTS["seed"], hub_height_m, pad_yz)
+        self.run = MannRun(params, grid, U_m_s, 1, hub_height_m, pad_yz)
         self.threads = default_threads(threads)
         self._stencil = build_mann_stencil(self.run)
         # its buffers and FFT plans are made by the first field and kept for the next seeds
@@ -118,11 +117,12 @@ class MannGenerator:
 
         s, g = self._stencil, self.run.grid
         snapshots = 1 if s.inv_tau is None else g.nx
-        return int(s.coef.nbytes + (0 if s.inv_tau is None else s.inv_tau.nbytes)
+        coef = 0 if s.coef is None else s.coef.nbytes  # built: never None
+        return int(coef + (0 if s.inv_tau is None else s.inv_tau.nbytes)
                    + snapshot_memory_bytes(synthesis_box(self.run), g.ny, g.nz, snapshots, self.threads, buffers=2,
                                            coefficients=False))  # fmt: skip
 
-    def field(self, seed: int = MANN_DEFAULTS["seed"], *, out: PathLike | None = None, overwrite: bool = False,
+    def field(self, seed: int = 1, *, out: PathLike | None = None, overwrite: bool = False,
               chunks: int | None = None, progress: bool = False) -> xr.Dataset:  # fmt: skip
         """The field of ``seed``: u, v, w (t, x, y, z) [m/s] with the attributes of ``turbgen.mann``'s.
 
@@ -223,13 +223,13 @@ class KaimalGenerator:
     [3, 4]
     """
 
-    def __init__(self, params: KaimalParams, grid: Grid, U_m_s: float = KAIMAL_DEFAULTS["U_m_s"], *,
-                 hub_height_m: float = KAIMAL_DEFAULTS["hub_height_m"], long_model: str = KAIMAL_DEFAULTS["long_model"],
+    def __init__(self, params: KaimalParams, grid: Grid, U_m_s: float = 16.0, *,
+                 hub_height_m: float = 90.0, long_model: str = "exp",
                  a_x: float | None = None, b_x: float | None = None,
-                 long_components: str = KAIMAL_DEFAULTS["long_components"],
-                 vw_coherence: str = KAIMAL_DEFAULTS["vw_coherence"], rescale: bool = False,
+                 long_components: str = "u",
+                 vw_coherence: str = "white", rescale: bool = False,
                  threads: int | None = None):  # fmt: skip
-        self.run = KaimalRun(params, grid, U_m_s, KAIMAL_DEFAULTS["seed"], hub_height_m, long_model, a_x, b_x,
+        self.run = KaimalRun(params, grid, U_m_s, 1, hub_height_m, long_model, a_x, b_x,
                              long_components, rescale, vw_coherence)  # fmt: skip
         self.threads = threads
 
@@ -246,7 +246,7 @@ class KaimalGenerator:
         """The field grid."""
         return self.run.grid
 
-    def field(self, seed: int = KAIMAL_DEFAULTS["seed"], *, out: PathLike | None = None, overwrite: bool = False,
+    def field(self, seed: int = 1, *, out: PathLike | None = None, overwrite: bool = False,
               chunks: int | None = None, progress: bool = False) -> xr.Dataset:  # fmt: skip
         """The field of ``seed``: u, v, w (t, x, y, z) [m/s] with the attributes of ``turbgen.kaimal``'s.
 
