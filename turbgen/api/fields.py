@@ -20,7 +20,7 @@ from turbgen.errors import ParameterError
 from turbgen.resources import available_memory_bytes, default_threads, parse_size, require_memory
 from turbgen.spec.defaults import KAIMAL_DEFAULTS
 from turbgen.spec.config import check_mapping, read_config
-from turbgen.spec.constraints import resolve_constraint_paths, split_constraint_keys
+from turbgen.spec.constraints import ConstraintRequest, resolve_constraint_paths, split_constraint_keys
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
 from turbgen.spec.preset_files import load_presets
@@ -264,14 +264,7 @@ def mann(
                    gates=gates, nt=nt, dt=dt, ny=ny, nz=nz, dy=dy, dz=dz, lifetime=lifetime, factor1=factor1,
                    factor2=factor2, pad_yz=pad_yz, hub_height=hub_height, constrain=constrain, noise=noise,
                    conditional_mean=conditional_mean)  # fmt: skip
-    given, grid, x_m = run_inputs("mann", options)
-    energy = [key for key in MANN_ENERGY_KEYS if key in given]
-    if len(energy) > 1:
-        raise ParameterError(f"give one of `ae`, `sigma_u`, `ti` (got {', '.join(energy)})")
-    user = _presets(preset, presets_file)
-    keys = None if preset is None else (lambda mapping, typed: mann_run_keys(preset, user=user))
-    mapping, request = split_constraint_keys(merge_run_inputs(_file_mapping(config, "mann-run"), given, grid,
-                                                              preset_keys=keys, replaces=MANN_REPLACES, x_m=x_m))
+    mapping, request = mann_run_mapping(options, config, preset, presets_file)
     if request is None:
         run = MannRun.from_mapping(mapping)
         if out is None and _mann_fits(run, threads, stencil_cache, memory):
@@ -296,6 +289,74 @@ def mann(
         return _through_store(make, run.grid, run.default_store_name())
     make(Path(out))
     return _as_dataset(Path(out))
+
+
+def mann_run_mapping(options: Mapping, config: PathLike | Mapping | None = None, preset: str | None = None,
+                     presets_file: PathLike | None = None) -> tuple[dict, ConstraintRequest | None]:
+    """The run mapping of ``turbgen.mann`` and ``turbgen mann`` (run file < preset < options) and the constraint
+    request (None: unconstrained).
+
+    Parameters
+    ----------
+    options : Mapping
+        Option name -> value (``L``, ``evo``, ``nt``, ``planes``, ``constrain``, ...; None: not given).
+    config, preset, presets_file : optional
+        The run file (or mapping), the stability preset and the user presets file.
+
+    Returns
+    -------
+    tuple
+        (mapping for MannRun.from_mapping, ConstraintRequest or None).
+
+    Raises
+    ------
+    ParameterError
+        For two energy levels, ``presets_file`` without ``preset``, a bad run file or value.
+    """
+    given, grid, x_m = run_inputs("mann", options)
+    energy = [key for key in MANN_ENERGY_KEYS if key in given]
+    if len(energy) > 1:
+        raise ParameterError(f"give one of `ae`, `sigma_u`, `ti` (got {', '.join(energy)})")
+    user = _presets(preset, presets_file)
+    keys = None if preset is None else (lambda mapping, typed: mann_run_keys(preset, user=user))
+    return split_constraint_keys(merge_run_inputs(_file_mapping(config, "mann-run"), given, grid, preset_keys=keys,
+                                                  replaces=MANN_REPLACES, x_m=x_m))  # fmt: skip
+
+
+def kaimal_run(options: Mapping, config: PathLike | Mapping | None = None, preset: str | None = None,
+               presets_file: PathLike | None = None) -> tuple[KaimalRun, dict]:
+    """The run of ``turbgen.kaimal`` and ``turbgen kaimal`` (run file < preset < options).
+
+    Parameters
+    ----------
+    options : Mapping
+        Option name -> value (``U``, ``turb_class``, ``nt``, ``planes``, ...; None: not given).
+    config, preset, presets_file : optional
+        The run file (or mapping), the stability preset and the user presets file.
+
+    Returns
+    -------
+    tuple
+        (KaimalRun, the preset's keys as resolved at the run's U and class: {} without a preset).
+
+    Raises
+    ------
+    ParameterError
+        For ``presets_file`` without ``preset``, a bad run file or value.
+    """
+    given, grid, x_m = run_inputs("kaimal", options)
+    user = _presets(preset, presets_file)
+    resolved: dict = {}
+
+    def keys(mapping, typed):  # the preset's sigmas follow the run's U and a given class
+        U_m_s = typed.get("U_m_s", mapping.get("U_m_s", KAIMAL_DEFAULTS["U_m_s"]))
+        resolved.update(kaimal_run_keys(preset, U_m_s, user=user, turb_class=typed.get("turb_class")))
+        return dict(resolved)
+
+    run = KaimalRun.from_mapping(merge_run_inputs(_file_mapping(config, "kaimal-run"), given, grid,
+                                                  preset_keys=None if preset is None else keys,
+                                                  replaces=KAIMAL_REPLACES, x_m=x_m))  # fmt: skip
+    return run, resolved
 
 
 def _budget(memory) -> int | None:
@@ -490,17 +551,7 @@ def kaimal(
                    dy=dy, dz=dz)  # fmt: skip
     if not constrain and (noise is not None or conditional_mean):
         raise ParameterError("`noise` and `conditional_mean` need `constrain`")
-    given, grid, x_m = run_inputs("kaimal", options)
-    user = _presets(preset, presets_file)
-
-    def keys(mapping, typed):  # the preset's sigmas follow the run's U and a given class, as in turbgen kaimal
-        U_m_s = typed.get("U_m_s", mapping.get("U_m_s", KAIMAL_DEFAULTS["U_m_s"]))
-        return kaimal_run_keys(preset, U_m_s, user=user, turb_class=typed.get("turb_class"))
-
-    run = KaimalRun.from_mapping(merge_run_inputs(_file_mapping(config, "kaimal-run"), given, grid,
-                                                  preset_keys=None if preset is None else keys,
-                                                  replaces=KAIMAL_REPLACES, x_m=x_m))  # fmt: skip
-
+    run, _ = kaimal_run(options, config, preset, presets_file)
     if constrain:
         make = _kaimal_constrained_maker(run, constrain, noise, conditional_mean, overwrite, chunks, threads)
     else:

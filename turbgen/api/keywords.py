@@ -19,6 +19,11 @@ PLANE_KEYWORDS = ("planes", "gates")
 _FLAGS = ("rescale", "conditional_mean")
 
 
+def _no_files(name: str, value) -> bool:
+    """An empty ``constrain`` (the command's repeatable option not given): not given, so a run file's list stays."""
+    return name == "constrain" and isinstance(value, (list, tuple)) and not value
+
+
 def _evo_value(value):
     """'frozen' (or 'none') -> None, the evolution time of frozen turbulence; other values as given."""
     if isinstance(value, str) and value.strip().lower() in ("frozen", "none"):
@@ -42,7 +47,7 @@ def _plane_positions(planes, gates) -> list[float] | None:
 
 def run_inputs(model: str, options: Mapping) -> tuple[dict, dict, list[float] | None]:
     """Split keyword values into (run keys, grid keys, plane positions [m] or None); None values (and a flag's
-    False) are "not given".
+    False, an empty ``constrain``) are "not given".
 
     Parameters
     ----------
@@ -59,7 +64,7 @@ def run_inputs(model: str, options: Mapping) -> tuple[dict, dict, list[float] | 
     aliases = _ALIASES[model]
     given, grid = {}, {}
     for name, value in options.items():
-        if value is None or name in PLANE_KEYWORDS or (name in _FLAGS and value is False):
+        if value is None or name in PLANE_KEYWORDS or (name in _FLAGS and value is False) or _no_files(name, value):
             continue
         if name == "evo":
             value = _evo_value(value)

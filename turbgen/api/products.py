@@ -220,7 +220,8 @@ def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLi
     mean_history : str or os.PathLike, optional
         ``mean_wind`` hub-height history CSV (t, U [, direction]).
     plots : str or os.PathLike, optional
-        Write the gamma^2_RL and |G_RL| plots (simulated with 95 % band, theory) into this directory.
+        Write the plots of gamma^2_RL and of the magnitude of G_RL (simulated with 95 % band, theory) into this
+        directory.
 
     Returns
     -------
