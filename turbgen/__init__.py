@@ -69,7 +69,7 @@ class _Product:
         return self._function()(*args, **kwargs)
 
     # help(), inspect.signature() and Sphinx see the function
-    __doc__ = property(lambda self: self._function().__doc__)  # type: ignore[assignment]
+    __doc__ = property(lambda self: self._function().__doc__)
     __signature__ = property(lambda self: inspect.signature(self._function()))
 
     def __getattr__(self, attr):
@@ -77,7 +77,7 @@ class _Product:
 
     # vars(turbgen.validate) is the subpackage's namespace, as for a module (tools such as pytest's monkeypatch read
     # and restore attributes through it)
-    __dict__ = property(lambda self: vars(self._package()))  # type: ignore[assignment]
+    __dict__ = property(lambda self: vars(self._package()))
 
     def __setattr__(self, attr, value):
         setattr(self._package(), attr, value)

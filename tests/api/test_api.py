@@ -9,7 +9,7 @@ import pytest
 from click.testing import CliRunner
 
 import turbgen
-from turbgen.api import fields, keywords, products
+from turbgen.api import fields, generator, keywords, products
 from turbgen.cli import cli
 from turbgen.errors import ParameterError, StoreError
 
@@ -173,7 +173,7 @@ def test_product_names_are_functions_and_packages():
     assert "store" in str(__import__("inspect").signature(turbgen.lidar))
 
 
-@pytest.mark.parametrize("module", [turbgen, fields, products])
+@pytest.mark.parametrize("module", [turbgen, fields, products, generator])
 def test_docstring_examples(module):
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     assert result.failed == 0

@@ -724,7 +724,7 @@ def test_ctrl_c_on_a_command_that_writes_nothing_says_only_interrupted(workdir, 
         raise KeyboardInterrupt
 
     monkeypatch.setattr("turbgen.cli.validate.run_validation", interrupt)
-    monkeypatch.setattr("turbgen.cli.info.open_store", interrupt)
+    monkeypatch.setattr("turbgen.cli.info.store_info", interrupt)
     monkeypatch.chdir(workdir)
     res = CliRunner().invoke(cli, args, prog_name="turbgen")
     assert res.exit_code == 130, res.output

@@ -88,29 +88,19 @@ def _set(args: list[str], name: str, value) -> list[str]:
 
 def _default_out(cmd: str, args: list[str]) -> str:
     """The store name ``turbgen cmd args`` writes when no --out is given (computed by the command's own code)."""
+    from turbgen.api.fields import kaimal_run, mann_run_mapping
     from turbgen.cli import cli
-    from turbgen.cli.options import plane_positions
-    from turbgen.cli.run_options import run_mapping
-    from turbgen.spec.kaimal import KaimalRun
+    from turbgen.cli import kaimal as kaimal_cli
+    from turbgen.cli import mann as mann_cli
     from turbgen.spec.mann import MannRun
-    from turbgen.spec.preset_runs import kaimal_run_keys, mann_run_keys
-    from turbgen.spec.run_inputs import KAIMAL_OPTIONS, KAIMAL_REPLACES, MANN_OPTIONS, MANN_REPLACES
 
     opt = cli.get_command(None, cmd).make_context(cmd, list(args)).params
-    x_m = plane_positions(opt["planes"], opt["gates"])
+    files = (opt["config"], opt["preset"], opt["presets_file"])
     if cmd == "mann":
-        keys = None if opt["preset"] is None else (lambda mapping, given: mann_run_keys(opt["preset"]))
-        return MannRun.from_mapping(run_mapping(opt, "mann-run", MANN_OPTIONS, keys, MANN_REPLACES, x_m)).default_store_name()
-    found = {}
-
-    def kaimal_keys(mapping, given):
-        found.update(kaimal_run_keys(opt["preset"], given.get("U_m_s", mapping.get("U_m_s", 16.0)),
-                                     turb_class=given.get("turb_class")))
-        return dict(found)
-
-    run = KaimalRun.from_mapping(run_mapping(opt, "kaimal-run", KAIMAL_OPTIONS,
-                                             kaimal_keys if opt["preset"] else None, KAIMAL_REPLACES, x_m))
-    return run.default_store_name(opt["preset"], found or None)
+        mapping, _ = mann_run_mapping({name: opt[name] for name in mann_cli.RUN_OPTIONS}, *files)
+        return MannRun.from_mapping(mapping).default_store_name()
+    run, preset_keys = kaimal_run({name: opt[name] for name in kaimal_cli.RUN_OPTIONS}, *files)
+    return run.default_store_name(opt["preset"], preset_keys or None)
 
 
 def small(words: list[str]) -> list[str]:

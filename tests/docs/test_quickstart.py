@@ -76,3 +76,17 @@ def test_first_python_example_runs(page, tmp_path):
     run = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, env=env, timeout=600)
     assert run.returncode == 0, run.stderr
     assert "all metrics pass" in run.stdout and (tmp_path / "mann_small.bts").exists()  # both validate, export
+
+
+def test_api_guide_runs_as_written(tmp_path):
+    """The Python blocks of docs/api.md (the notebook path), run in order in one process as written."""
+    import re
+
+    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "api.md").read_text(), re.S)
+    assert len(blocks) >= 3
+    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    run = subprocess.run([sys.executable, "-c", "\n".join(blocks)], cwd=tmp_path, capture_output=True, text=True,
+                         env=env, timeout=900)
+    assert run.returncode == 0, run.stderr
+    assert "all metrics pass" in run.stdout and "True [256, 11, 16, 16]" in run.stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["field.bts", "field_InflowWind_bts.dat"]  # no store

@@ -20,7 +20,7 @@ from turbgen.errors import ParameterError, check_int
 from turbgen.resources import available_memory_bytes, default_threads, parse_size, require_memory
 from turbgen.spec.defaults import KAIMAL_DEFAULTS
 from turbgen.spec.config import check_mapping, read_config
-from turbgen.spec.constraints import resolve_constraint_paths, split_constraint_keys
+from turbgen.spec.constraints import ConstraintRequest, resolve_constraint_paths, split_constraint_keys
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
 from turbgen.spec.preset_files import load_presets
@@ -31,6 +31,10 @@ from turbgen.store.paths import check_output_path
 from turbgen.store.writer import check_new_store
 
 PathLike = str | os.PathLike
+
+
+def _path(path: PathLike | None) -> Path | None:
+    return None if path is None else Path(path)
 
 
 def _file_mapping(config, schema: str) -> dict | None:
@@ -260,20 +264,14 @@ def mann(
                    gates=gates, nt=nt, dt=dt, ny=ny, nz=nz, dy=dy, dz=dz, lifetime=lifetime, factor1=factor1,
                    factor2=factor2, pad_yz=pad_yz, hub_height=hub_height, constrain=constrain, noise=noise,
                    conditional_mean=conditional_mean)  # fmt: skip
-    given, grid, x_m = run_inputs("mann", options)
-    energy = [key for key in MANN_ENERGY_KEYS if key in given]
-    if len(energy) > 1:
-        raise ParameterError(f"give one of `ae`, `sigma_u`, `ti` (got {', '.join(energy)})")
-    user = _presets(preset, presets_file)
-    keys = None if preset is None else (lambda mapping, typed: mann_run_keys(preset, user=user))
-    mapping, request = split_constraint_keys(merge_run_inputs(_file_mapping(config, "mann-run"), given, grid,
-                                                              preset_keys=keys, replaces=MANN_REPLACES, x_m=x_m))
+    mapping, request = mann_run_mapping(options, config, preset, presets_file)
     if request is None:
         run = MannRun.from_mapping(mapping)
         if out is None and _mann_fits(run, threads, stencil_cache, memory):
             from turbgen.runs.mann import mann_in_memory
 
-            return mann_in_memory(run, progress=progress, threads=default_threads(threads), cache_dir=stencil_cache)[0]
+            return mann_in_memory(run, progress=progress, threads=default_threads(threads),
+                                  cache_dir=_path(stencil_cache))[0]
         make = _mann_maker(run, overwrite, chunks, threads, stencil_cache, memory, progress)
     else:
         from turbgen.runs.constrain import load_constraints, mann_constrained_in_memory, place, with_energy_from_data
@@ -291,6 +289,74 @@ def mann(
         return _through_store(make, run.grid, run.default_store_name())
     make(Path(out))
     return _as_dataset(Path(out))
+
+
+def mann_run_mapping(options: Mapping, config: PathLike | Mapping | None = None, preset: str | None = None,
+                     presets_file: PathLike | None = None) -> tuple[dict, ConstraintRequest | None]:
+    """The run mapping of ``turbgen.mann`` and ``turbgen mann`` (run file < preset < options) and the constraint
+    request (None: unconstrained).
+
+    Parameters
+    ----------
+    options : Mapping
+        Option name -> value (``L``, ``evo``, ``nt``, ``planes``, ``constrain``, ...; None: not given).
+    config, preset, presets_file : optional
+        The run file (or mapping), the stability preset and the user presets file.
+
+    Returns
+    -------
+    tuple
+        (mapping for MannRun.from_mapping, ConstraintRequest or None).
+
+    Raises
+    ------
+    ParameterError
+        For two energy levels, ``presets_file`` without ``preset``, a bad run file or value.
+    """
+    given, grid, x_m = run_inputs("mann", options)
+    energy = [key for key in MANN_ENERGY_KEYS if key in given]
+    if len(energy) > 1:
+        raise ParameterError(f"give one of `ae`, `sigma_u`, `ti` (got {', '.join(energy)})")
+    user = _presets(preset, presets_file)
+    keys = None if preset is None else (lambda mapping, typed: mann_run_keys(preset, user=user))
+    return split_constraint_keys(merge_run_inputs(_file_mapping(config, "mann-run"), given, grid, preset_keys=keys,
+                                                  replaces=MANN_REPLACES, x_m=x_m))  # fmt: skip
+
+
+def kaimal_run(options: Mapping, config: PathLike | Mapping | None = None, preset: str | None = None,
+               presets_file: PathLike | None = None) -> tuple[KaimalRun, dict]:
+    """The run of ``turbgen.kaimal`` and ``turbgen kaimal`` (run file < preset < options).
+
+    Parameters
+    ----------
+    options : Mapping
+        Option name -> value (``U``, ``turb_class``, ``nt``, ``planes``, ...; None: not given).
+    config, preset, presets_file : optional
+        The run file (or mapping), the stability preset and the user presets file.
+
+    Returns
+    -------
+    tuple
+        (KaimalRun, the preset's keys as resolved at the run's U and class: {} without a preset).
+
+    Raises
+    ------
+    ParameterError
+        For ``presets_file`` without ``preset``, a bad run file or value.
+    """
+    given, grid, x_m = run_inputs("kaimal", options)
+    user = _presets(preset, presets_file)
+    resolved: dict = {}
+
+    def keys(mapping, typed):  # the preset's sigmas follow the run's U and a given class
+        U_m_s = typed.get("U_m_s", mapping.get("U_m_s", KAIMAL_DEFAULTS["U_m_s"]))
+        resolved.update(kaimal_run_keys(preset, U_m_s, user=user, turb_class=typed.get("turb_class")))
+        return dict(resolved)
+
+    run = KaimalRun.from_mapping(merge_run_inputs(_file_mapping(config, "kaimal-run"), given, grid,
+                                                  preset_keys=None if preset is None else keys,
+                                                  replaces=KAIMAL_REPLACES, x_m=x_m))  # fmt: skip
+    return run, resolved
 
 
 def _budget(memory) -> int | None:
@@ -489,31 +555,34 @@ def kaimal(
     >>> dict(ds.sizes), ds.attrs["model"]
     ({'t': 128, 'x': 3, 'y': 6, 'z': 6}, 'kaimal')
     """
-    from turbgen.runs.kaimal import in_memory_bytes, kaimal_generator, kaimal_in_memory, plan_spill, run_kaimal
-
     options = dict(U=U, seed=seed, turb_class=turb_class, hub_height=hub_height, sigma=sigma, lengths=lengths,
                    ayz=ayz, lc=lc, long_model=long_model, ax=ax, bx=bx, long_components=long_components,
                    vw_coherence=vw_coherence, rescale=rescale, planes=planes, gates=gates, nt=nt, dt=dt, ny=ny, nz=nz,
                    dy=dy, dz=dz, spectrum=spectrum)  # fmt: skip
     if not constrain and (noise is not None or conditional_mean):
         raise ParameterError("`noise` and `conditional_mean` need `constrain`")
-    given, grid, x_m = run_inputs("kaimal", options)
-    user = _presets(preset, presets_file)
-
-    def keys(mapping, typed):  # the preset's sigmas follow the run's U and a given class, as in turbgen kaimal
-        U_m_s = typed.get("U_m_s", mapping.get("U_m_s", KAIMAL_DEFAULTS["U_m_s"]))
-        return kaimal_run_keys(preset, U_m_s, user=user, turb_class=typed.get("turb_class"))
-
-    run = KaimalRun.from_mapping(merge_run_inputs(_file_mapping(config, "kaimal-run"), given, grid,
-                                                  preset_keys=None if preset is None else keys,
-                                                  replaces=KAIMAL_REPLACES, x_m=x_m))  # fmt: skip
-
+    run, _ = kaimal_run(options, config, preset, presets_file)
     if constrain:
         make = _kaimal_constrained_maker(run, constrain, noise, conditional_mean, overwrite, chunks, threads)
-        if out is None:  # the conditioned field is made into a store (a temporary one, loaded back)
-            return _through_store(make, run.grid, f"kaimal_s{run.seed}.zarr")
-        make(Path(out))
-        return _as_dataset(Path(out))
+    else:
+        # straight into the Dataset when the run's arrays with the spectrum in memory and the field fit 80 % of the
+        # available memory (the rule by which run_kaimal keeps its spectrum in memory), else through a store
+        from turbgen.runs.kaimal import in_memory_bytes, kaimal_in_memory
+
+        available = available_memory_bytes()
+        if out is None and (available is None or in_memory_bytes(run) <= 0.8 * available):
+            return kaimal_in_memory(run, progress=progress, threads=threads)[0]
+        make = _kaimal_maker(run, overwrite, chunks, threads, progress)
+    if out is None:  # a conditioned field, or one that does not fit: through a temporary store, loaded back
+        return _through_store(make, run.grid, f"kaimal_s{run.seed}.zarr")
+    make(Path(out))
+    return _as_dataset(Path(out))
+
+
+def _kaimal_maker(run: KaimalRun, overwrite, chunks, threads, progress):
+    """The function writing ``run`` to a path as ``turbgen kaimal`` does (the spectrum in a scratch file when it
+    does not fit in memory)."""
+    from turbgen.runs.kaimal import kaimal_generator, plan_spill, run_kaimal
 
     def make(path: Path) -> None:
         check_output_path(path, "`out`")
@@ -521,16 +590,7 @@ def kaimal(
         check_new_store(path, run.grid, chunk_t=chunks, overwrite=overwrite)
         run_kaimal(run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=threads)
 
-    if out is None:
-        # straight into the Dataset when the run's arrays with the spectrum in memory and the field fit 80 % of the
-        # available memory (the rule by which run_kaimal keeps its spectrum in memory), else through a store
-        available = available_memory_bytes()
-        if available is None or in_memory_bytes(run) <= 0.8 * available:
-            return kaimal_in_memory(run, progress=progress, threads=threads)[0]
-        return _through_store(make, run.grid, f"kaimal_s{run.seed}.zarr")
-    make(Path(out))
-    return _as_dataset(Path(out))
-
+    return make
 
 def _kaimal_constrained_maker(run: KaimalRun, constrain, noise, conditional_mean: bool, overwrite, chunks, threads):
     """The function writing ``run`` conditioned on ``constrain`` to a path as ``turbgen kaimal --constrain`` does

@@ -18,12 +18,12 @@ import threading
 from collections.abc import Iterable, Iterator
 from dataclasses import replace
 from pathlib import Path
+from typing import Generic, TypeVar
 
 import xarray as xr
 
 from turbgen.grid import Grid
 from turbgen.resources import default_threads
-from turbgen.spec.defaults import KAIMAL_DEFAULTS, MANN_DEFAULTS
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
 from turbgen.theory.params import KaimalParams, MannParams
@@ -43,7 +43,79 @@ def _written(path: PathLike, grid: Grid, overwrite: bool, chunks: int | None, wr
     return open_store(path)
 
 
-class MannGenerator:
+RunT = TypeVar("RunT", MannRun, KaimalRun)
+
+
+class _Generator(Generic[RunT]):
+    """What both generators share: a run whose seed is replaced per field."""
+
+    run: RunT
+
+    @property
+    def grid(self) -> Grid:
+        """The field grid."""
+        return self.run.grid
+
+    def _in_memory(self, run: RunT, progress: bool) -> xr.Dataset:
+        raise NotImplementedError
+
+    def _to_store(self, run: RunT, path: Path, overwrite: bool, chunks: int | None, progress: bool) -> None:
+        raise NotImplementedError
+
+    def field(self, seed: int = 1, *, out: PathLike | None = None, overwrite: bool = False,
+              chunks: int | None = None, progress: bool = False) -> xr.Dataset:  # fmt: skip
+        """The field of ``seed``: u, v, w (t, x, y, z) [m/s] with the attributes of ``turbgen.mann``'s (of
+        ``turbgen.kaimal``'s for the Kaimal generator).
+
+        Parameters
+        ----------
+        seed : int, optional
+            Random seed (>= 0). Default 1.
+        out : str or os.PathLike, optional
+            Write the field to a new store there and return it opened lazily; default: in memory.
+        overwrite : bool, optional
+            Replace an existing store at ``out``.
+        chunks : int, optional
+            Time samples per store chunk (with ``out``); never changes the field.
+        progress : bool, optional
+            Show a progress bar on stderr.
+
+        Returns
+        -------
+        xarray.Dataset
+            The field, as ``turbgen.mann(...)`` / ``turbgen.kaimal(...)`` returns it for the same inputs.
+
+        Raises
+        ------
+        ParameterError
+            For a seed outside [0, 2^63 - 1] or a field that does not fit the available memory.
+        StoreError
+            For an existing ``out`` without ``overwrite``.
+        """
+        run = replace(self.run, seed=seed)
+        if out is None:
+            return self._in_memory(run, progress)
+        return _written(out, run.grid, overwrite, chunks,
+                        lambda path: self._to_store(run, path, overwrite, chunks, progress))
+
+    def fields(self, seeds: Iterable[int]) -> Iterator[xr.Dataset]:
+        """The field of each of ``seeds`` in memory, one at a time (:meth:`field`).
+
+        Parameters
+        ----------
+        seeds : iterable of int
+            Random seeds (>= 0).
+
+        Yields
+        ------
+        xarray.Dataset
+            The field of each seed, in order.
+        """
+        for seed in seeds:
+            yield self.field(seed)
+
+
+class MannGenerator(_Generator[MannRun]):
     """Mann space-time fields (Mann 1994; Guo et al. 2022) of one parameter set and grid, one per seed.
 
     The stencil is built once, in memory, by the constructor (about 4 float32 numbers per wavenumber of the
@@ -81,13 +153,13 @@ class MannGenerator:
     True
     """
 
-    def __init__(self, params: MannParams, grid: Grid, U_m_s: float = MANN_DEFAULTS["U_m_s"], *,
-                 hub_height_m: float = MANN_DEFAULTS["hub_height_m"], pad_yz: int = MANN_DEFAULTS["pad_yz"],
+    def __init__(self, params: MannParams, grid: Grid, U_m_s: float = 16.0, *,
+                 hub_height_m: float = 150.0, pad_yz: int = 2,
                  threads: int | None = None):  # fmt: skip
         from turbgen.runs.mann import build_mann_stencil
         from turbgen.synthesis.mann_spacetime import MannSnapshots
 
-        self.run = MannRun(params, grid, U_m_s, MANN_DEFAULTS["seed"], hub_height_m, pad_yz)
+        self.run = MannRun(params, grid, U_m_s, 1, hub_height_m, pad_yz)
         self.threads = default_threads(threads)
         self._stencil = build_mann_stencil(self.run)
         # its buffers and FFT plans are made by the first field and kept for the next seeds
@@ -105,11 +177,6 @@ class MannGenerator:
         return self.run.params
 
     @property
-    def grid(self) -> Grid:
-        """The field grid."""
-        return self.run.grid
-
-    @property
     def nbytes(self) -> int:
         """Bytes [B] the generator holds between fields: its stencil and the synthesis buffers (made by the first
         field)."""
@@ -118,68 +185,25 @@ class MannGenerator:
 
         s, g = self._stencil, self.run.grid
         snapshots = 1 if s.inv_tau is None else g.nx
-        return int(s.coef.nbytes + (0 if s.inv_tau is None else s.inv_tau.nbytes)
+        coef = 0 if s.coef is None else s.coef.nbytes  # built: never None
+        return int(coef + (0 if s.inv_tau is None else s.inv_tau.nbytes)
                    + snapshot_memory_bytes(synthesis_box(self.run), g.ny, g.nz, snapshots, self.threads, buffers=2,
                                            coefficients=False))  # fmt: skip
 
-    def field(self, seed: int = MANN_DEFAULTS["seed"], *, out: PathLike | None = None, overwrite: bool = False,
-              chunks: int | None = None, progress: bool = False) -> xr.Dataset:  # fmt: skip
-        """The field of ``seed``: u, v, w (t, x, y, z) [m/s] with the attributes of ``turbgen.mann``'s.
+    def _in_memory(self, run: MannRun, progress: bool) -> xr.Dataset:
+        from turbgen.runs.mann import mann_in_memory
 
-        Parameters
-        ----------
-        seed : int, optional
-            Random seed (>= 0). Default 1.
-        out : str or os.PathLike, optional
-            Write the field to a new store there and return it opened lazily; default: in memory.
-        overwrite : bool, optional
-            Replace an existing store at ``out``.
-        chunks : int, optional
-            Time samples per store chunk (with ``out``); never changes the field.
-        progress : bool, optional
-            Show a progress bar on stderr.
+        with self._lock:
+            return mann_in_memory(run, progress=progress, stencil=self._stencil, threads=self.threads,
+                                  snapshots=self._snapshots)[0]  # fmt: skip
 
-        Returns
-        -------
-        xarray.Dataset
-            The field, as ``turbgen.mann(...)`` returns it for the same inputs.
+    def _to_store(self, run: MannRun, path: Path, overwrite: bool, chunks: int | None, progress: bool) -> None:
+        from turbgen.runs.mann import run_mann
 
-        Raises
-        ------
-        ParameterError
-            For a seed outside [0, 2^63 - 1] or a field that does not fit the available memory.
-        StoreError
-            For an existing ``out`` without ``overwrite``.
-        """
-        from turbgen.runs.mann import mann_in_memory, run_mann
+        run_mann(run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, stencil=self._stencil,
+                 threads=self.threads)
 
-        run = replace(self.run, seed=seed)
-        if out is None:
-            with self._lock:
-                return mann_in_memory(run, progress=progress, stencil=self._stencil, threads=self.threads,
-                                      snapshots=self._snapshots)[0]  # fmt: skip
-        return _written(out, run.grid, overwrite, chunks, lambda path: run_mann(
-            run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, stencil=self._stencil,
-            threads=self.threads))
-
-    def fields(self, seeds: Iterable[int]) -> Iterator[xr.Dataset]:
-        """The field of each of ``seeds`` in memory, one at a time (:meth:`field`).
-
-        Parameters
-        ----------
-        seeds : iterable of int
-            Random seeds (>= 0).
-
-        Yields
-        ------
-        xarray.Dataset
-            The field of each seed, in order.
-        """
-        for seed in seeds:
-            yield self.field(seed)
-
-
-class KaimalGenerator:
+class KaimalGenerator(_Generator[KaimalRun]):
     """Kaimal 4D fields (IEC 61400-1 spectra and yz coherence; longitudinal coherence of Guo et al. 2023, Eq. 18) of
     one parameter set and grid, one per seed: the run checked once, each field made by the Kaimal synthesis of
     ``turbgen.kaimal``.
@@ -223,13 +247,13 @@ class KaimalGenerator:
     [3, 4]
     """
 
-    def __init__(self, params: KaimalParams, grid: Grid, U_m_s: float = KAIMAL_DEFAULTS["U_m_s"], *,
-                 hub_height_m: float = KAIMAL_DEFAULTS["hub_height_m"], long_model: str = KAIMAL_DEFAULTS["long_model"],
+    def __init__(self, params: KaimalParams, grid: Grid, U_m_s: float = 16.0, *,
+                 hub_height_m: float = 90.0, long_model: str = "exp",
                  a_x: float | None = None, b_x: float | None = None,
-                 long_components: str = KAIMAL_DEFAULTS["long_components"],
-                 vw_coherence: str = KAIMAL_DEFAULTS["vw_coherence"], rescale: bool = False,
+                 long_components: str = "u",
+                 vw_coherence: str = "white", rescale: bool = False,
                  threads: int | None = None):  # fmt: skip
-        self.run = KaimalRun(params, grid, U_m_s, KAIMAL_DEFAULTS["seed"], hub_height_m, long_model, a_x, b_x,
+        self.run = KaimalRun(params, grid, U_m_s, 1, hub_height_m, long_model, a_x, b_x,
                              long_components, rescale, vw_coherence)  # fmt: skip
         self.threads = threads
 
@@ -241,60 +265,12 @@ class KaimalGenerator:
         """The Kaimal parameters."""
         return self.run.kaimal
 
-    @property
-    def grid(self) -> Grid:
-        """The field grid."""
-        return self.run.grid
+    def _in_memory(self, run: KaimalRun, progress: bool) -> xr.Dataset:
+        from turbgen.runs.kaimal import kaimal_in_memory
 
-    def field(self, seed: int = KAIMAL_DEFAULTS["seed"], *, out: PathLike | None = None, overwrite: bool = False,
-              chunks: int | None = None, progress: bool = False) -> xr.Dataset:  # fmt: skip
-        """The field of ``seed``: u, v, w (t, x, y, z) [m/s] with the attributes of ``turbgen.kaimal``'s.
+        return kaimal_in_memory(run, progress=progress, threads=self.threads)[0]
 
-        Parameters
-        ----------
-        seed : int, optional
-            Random seed (>= 0). Default 1.
-        out : str or os.PathLike, optional
-            Write the field to a new store there and return it opened lazily; default: in memory.
-        overwrite : bool, optional
-            Replace an existing store at ``out``.
-        chunks : int, optional
-            Time samples per store chunk (with ``out``); never changes the field.
-        progress : bool, optional
-            Show a progress bar on stderr.
+    def _to_store(self, run: KaimalRun, path: Path, overwrite: bool, chunks: int | None, progress: bool) -> None:
+        from turbgen.runs.kaimal import run_kaimal
 
-        Returns
-        -------
-        xarray.Dataset
-            The field, as ``turbgen.kaimal(...)`` returns it for the same inputs.
-
-        Raises
-        ------
-        ParameterError
-            For a seed outside [0, 2^63 - 1] or a field that does not fit the available memory.
-        StoreError
-            For an existing ``out`` without ``overwrite``.
-        """
-        from turbgen.runs.kaimal import kaimal_in_memory, run_kaimal
-
-        run = replace(self.run, seed=seed)
-        if out is None:
-            return kaimal_in_memory(run, progress=progress, threads=self.threads)[0]
-        return _written(out, run.grid, overwrite, chunks, lambda path: run_kaimal(
-            run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=self.threads))
-
-    def fields(self, seeds: Iterable[int]) -> Iterator[xr.Dataset]:
-        """The field of each of ``seeds`` in memory, one at a time (:meth:`field`).
-
-        Parameters
-        ----------
-        seeds : iterable of int
-            Random seeds (>= 0).
-
-        Yields
-        ------
-        xarray.Dataset
-            The field of each seed, in order.
-        """
-        for seed in seeds:
-            yield self.field(seed)
+        run_kaimal(run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=self.threads)

@@ -24,6 +24,11 @@ def _aliases(model: str) -> dict:
     return resolve(declaration(model).options, "spec")
 
 
+def _no_files(name: str, value) -> bool:
+    """An empty ``constrain`` (the command's repeatable option not given): not given, so a run file's list stays."""
+    return name == "constrain" and isinstance(value, (list, tuple)) and not value
+
+
 def _evo_value(value):
     """'frozen' (or 'none') -> None, the evolution time of frozen turbulence; other values as given."""
     if isinstance(value, str) and value.strip().lower() in ("frozen", "none"):
@@ -60,7 +65,7 @@ def _positions(values, name: str) -> list[float]:
 
 def run_inputs(model: str, options: Mapping) -> tuple[dict, dict, list[float] | None]:
     """Split keyword values into (run keys, grid keys, plane positions [m] or None); None values (and a flag's
-    False) are "not given".
+    False, an empty ``constrain``) are "not given".
 
     Parameters
     ----------
@@ -77,7 +82,7 @@ def run_inputs(model: str, options: Mapping) -> tuple[dict, dict, list[float] | 
     aliases = _aliases(model)
     given, grid = {}, {}
     for name, value in options.items():
-        if value is None or name in PLANE_KEYWORDS or (name in _FLAGS and value is False):
+        if value is None or name in PLANE_KEYWORDS or (name in _FLAGS and value is False) or _no_files(name, value):
             continue
         if name == "evo":
             value = _evo_value(value)

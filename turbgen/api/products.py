@@ -94,7 +94,8 @@ def check_plots_dir(plots_dir: str | os.PathLike, overwrite: bool, name: str = "
         if not os.access(p, os.W_OK):
             raise ParameterError(f"{name} = {str(plots_dir)!r} is not writable")
         if not overwrite and any(p.glob("*.png")):
-            raise ParameterError(f"{name} = {str(plots_dir)!r} already holds PNG files; pass overwrite to replace them")
+            flag = "--overwrite" if name.startswith("--") else "overwrite=True"
+            raise ParameterError(f"{name} = {str(plots_dir)!r} already holds PNG files; pass {flag} to replace them")
         return
     check_output_path(plots_dir, name, create_parents=True)  # report.plots makes missing directories
 
@@ -221,7 +222,8 @@ def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLi
     mean_history : str or os.PathLike, optional
         ``mean_wind`` hub-height history CSV (t, U [, direction]).
     plots : str or os.PathLike, optional
-        Write the gamma^2_RL and |G_RL| plots (simulated with 95 % band, theory) into this directory.
+        Write the plots of gamma^2_RL and of the magnitude of G_RL (simulated with 95 % band, theory) into this
+        directory.
 
     Returns
     -------

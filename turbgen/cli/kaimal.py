@@ -8,24 +8,22 @@ from pathlib import Path
 import click
 
 from turbgen.cli.options import parse_floats, plane_positions
-from turbgen.cli.run_options import grid_options, run_mapping
+from turbgen.cli.run_options import grid_options
 from turbgen.resources import format_bytes
 from turbgen.runs.kaimal import kaimal_generator, memory_needed, plan_spill, run_kaimal
 from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X
 from turbgen.spec.defaults import KAIMAL_DEFAULTS as D
 from turbgen.spec.defaults import KAIMAL_GRID as G
-from turbgen.spec.kaimal import LONG_COMPONENTS, VW_COHERENCE, KaimalRun
-from turbgen.spec.preset_files import load_presets
-from turbgen.spec.preset_runs import kaimal_run_keys
-from turbgen.spec.run_inputs import KAIMAL_OPTIONS, KAIMAL_REPLACES
+from turbgen.spec.kaimal import LONG_COMPONENTS, VW_COHERENCE
+from turbgen.spec.run_inputs import GRID_OPTIONS, KAIMAL_OPTIONS
 from turbgen.store.paths import check_output_path
 from turbgen.store.writer import check_new_store
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS
 from turbgen.theory.kaimal import IEC_IREF
 from turbgen.theory.ranges import LIMITS
 
-# option name -> key of the run mapping, and what typed sigmas replace (shared with the Python API)
-_KEYS, _REPLACES = KAIMAL_OPTIONS, KAIMAL_REPLACES
+# the options that make the run (turbgen.api.fields.kaimal_run)
+RUN_OPTIONS = (*KAIMAL_OPTIONS, *GRID_OPTIONS, "planes", "gates")
 
 
 def _three(name):
@@ -93,17 +91,12 @@ def kaimal(**opt):
         raise click.UsageError("--noise and --conditional-mean need --constrain FILE")
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
-    user = load_presets(opt["presets_file"]) if opt["presets_file"] else None
-    preset_keys = {}  # the preset's keys as resolved at the run's U (they also name the default store)
+    plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
+    from turbgen.api.fields import kaimal_run
 
-    def get_keys(mapping, given):  # the preset's sigmas follow the run's U and a typed class
-        U = given.get("U_m_s", mapping.get("U_m_s", D["U_m_s"]))
-        preset_keys.update(kaimal_run_keys(opt["preset"], U, user=user, turb_class=given.get("turb_class")))
-        return dict(preset_keys)
-
-    mapping = run_mapping(opt, "kaimal-run", _KEYS, get_keys if opt["preset"] is not None else None, _REPLACES,
-                          plane_positions(opt["planes"], opt["gates"]))
-    run = KaimalRun.from_mapping(mapping)
+    # the run as turbgen.kaimal makes it, and the preset's keys at its U (they also name the default store)
+    run, preset_keys = kaimal_run({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],
+                                  opt["presets_file"])  # fmt: skip
     g = run.grid
     out = opt["out"] if opt["out"] is not None else run.default_store_name(opt["preset"], preset_keys or None)
     # refusals before anything is printed, in run_kaimal's order: a coherence too costly to sample, a spectrum that

@@ -9,24 +9,21 @@ import click
 
 from turbgen import resources
 from turbgen.cli.options import plane_positions
-from turbgen.cli.run_options import grid_options, run_mapping
+from turbgen.cli.run_options import grid_options
 from turbgen.resources import default_threads, parse_size
 from turbgen.runs.mann import describe, run_mann
 from turbgen.runs.mann_outofcore import local_cluster, plan_for_budget, remove_stale_scratch
-from turbgen.spec.constraints import split_constraint_keys
 from turbgen.spec.defaults import MANN_DEFAULTS as D
 from turbgen.spec.defaults import MANN_GRID as G
 from turbgen.spec.mann import MannRun
-from turbgen.spec.preset_files import load_presets
-from turbgen.spec.preset_runs import mann_run_keys
-from turbgen.spec.run_inputs import MANN_OPTIONS, MANN_REPLACES
+from turbgen.spec.run_inputs import GRID_OPTIONS, MANN_OPTIONS
 from turbgen.store.paths import check_output_path
 from turbgen.store.writer import check_new_store
 from turbgen.theory.params import LIFETIMES
 from turbgen.theory.ranges import LIMITS
 
-# option name -> key of the run mapping, and what a typed energy level replaces (shared with the Python API)
-_KEYS, _REPLACES = MANN_OPTIONS, MANN_REPLACES
+# the options that make the run (turbgen.api.fields.mann_run_mapping)
+RUN_OPTIONS = (*MANN_OPTIONS, *GRID_OPTIONS, "planes", "gates")
 _ENERGY = ("ae", "sigma_u", "ti")
 
 
@@ -112,11 +109,12 @@ def mann(**opt):
         raise click.UsageError(f"give one of --ae, --sigma-u, --ti (got {', '.join(typed_energy)})")
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
-    user = load_presets(opt["presets_file"]) if opt["presets_file"] else None
-    preset_keys = (None if opt["preset"] is None
-                   else lambda mapping, given: mann_run_keys(opt["preset"], user=user))  # fmt: skip
-    mapping = run_mapping(opt, "mann-run", _KEYS, preset_keys, _REPLACES, plane_positions(opt["planes"], opt["gates"]))
-    mapping, request = split_constraint_keys(mapping)  # --constrain/--noise/--conditional-mean or the run file's
+    plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
+    from turbgen.api.fields import mann_run_mapping
+
+    # the run as turbgen.mann makes it; --constrain/--noise/--conditional-mean or the run file's
+    mapping, request = mann_run_mapping({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],
+                                        opt["presets_file"])  # fmt: skip
     constraints = out = None
     if request is None:
         run = MannRun.from_mapping(mapping)

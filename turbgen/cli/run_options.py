@@ -1,20 +1,16 @@
-"""One rule for turning `turbgen mann|kaimal` options into a run mapping: run file < preset < typed options.
-
-Missing keys take the defaults of turbgen.spec.defaults (applied by the model's from_mapping, shown in
-the options' help), so no option carries a default of its own.
+"""The grid options of `turbgen mann|kaimal`. Their values make the run by the rule of the Python API
+(turbgen.api.fields.mann_run_mapping / kaimal_run: run file < preset < typed options); missing keys take the defaults
+of turbgen.spec.defaults (applied by the model's from_mapping, shown in the options' help), so no option carries a
+default of its own.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from pathlib import Path
 
 import click
 
 from turbgen.cli.options import parse_floats, parse_range, range_help
-from turbgen.spec.config import read_config
-from turbgen.spec.constraints import resolve_constraint_paths
-from turbgen.spec.run_inputs import GRID_OPTIONS, merge_run_inputs
 
 
 def _list(parser, name):
@@ -45,33 +41,3 @@ def grid_options(defaults: Mapping):
         return f
 
     return add
-
-
-def typed(opt: Mapping, names: Mapping[str, str]) -> dict:
-    """Run-mapping key -> value of the options typed on the command line (``names``: option -> key).
-
-    An option is typed when its value is not None (flags: when set; repeatable options: when given at least once,
-    as a list); 'frozen' stands for None.
-    """
-    return {key: list(opt[name]) if isinstance(opt[name], tuple) else None if opt[name] == "frozen" else opt[name]
-            for name, key in names.items() if opt[name] is not None and opt[name] is not False and opt[name] != ()}
-
-
-def run_mapping(opt: Mapping, schema: str, keys: Mapping[str, str], preset_keys=None,
-                replaces: Mapping[str, tuple] | None = None, x_m=None) -> dict:
-    """The run mapping of a command: the ``--config`` file, then the preset's keys, then typed options.
-
-    Parameters
-    ----------
-    opt : the command's option values; ``opt["config"]`` is the run file (checked against ``schema``).
-    keys : option name -> run-mapping key of the model's options.
-    preset_keys : callable(mapping so far, typed keys) -> the preset's run keys, or None without --preset.
-    replaces : typed key -> keys it removes from the file and the preset (e.g. a typed energy level
-        replaces any other): one level, one source.
-    x_m : plane positions [m] from --planes / --gates, or None.
-    """
-    mapping = read_config(opt["config"], schema) if opt["config"] else None
-    if mapping is not None:
-        mapping = resolve_constraint_paths(mapping, Path(opt["config"]).parent)
-    return merge_run_inputs(mapping, typed(opt, keys), typed(opt, GRID_OPTIONS), preset_keys=preset_keys,
-                            replaces=replaces, x_m=x_m)
