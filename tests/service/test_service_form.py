@@ -10,8 +10,8 @@ import pytest
 
 from turbgen.cli.kaimal import kaimal
 from turbgen.cli.mann import mann
-from turbgen.cli.options import plane_positions
-from turbgen.cli.run_options import run_mapping
+from turbgen.api.fields import kaimal_run, mann_run_mapping
+from turbgen.cli import kaimal as kaimal_cli, mann as mann_cli
 from turbgen.errors import ParameterError
 from turbgen.service.form import form_description, form_fields
 from turbgen.service.form_request import form_request
@@ -34,6 +34,7 @@ NOT_A_RUN_OPTION = {
     "presets_file": "a client's file is not read; the built-in presets are offered",
 }
 # the service conditions Mann runs only; a user spectrum is a table sent in the request body (form.NOT_IN_FORM)
+RUN_OPTIONS = {"mann": mann_cli.RUN_OPTIONS, "kaimal": kaimal_cli.RUN_OPTIONS}
 KAIMAL_NOT_IN_SERVICE = {"constrain", "noise", "conditional_mean", "spectrum"}
 COMMANDS = {"mann": (mann, MannRun, MANN_OPTIONS, MANN_REPLACES), "kaimal": (kaimal, KaimalRun, KAIMAL_OPTIONS,
                                                                           KAIMAL_REPLACES)}  # fmt: skip
@@ -83,11 +84,13 @@ def test_the_command_and_the_python_call_make_the_run_of_the_body(model):
     words = shlex.split(out["command"])
     assert words[:2] == ["turbgen", model]
     opt = command.make_context(model, words[2:]).params
+    # the run as the command makes it from its options (turbgen.api.fields.mann_run_mapping / kaimal_run)
+    given_options = {name: opt[name] for name in RUN_OPTIONS[model]}
+    if model == "mann":
+        assert MannRun.from_mapping(mann_run_mapping(given_options, None, opt["preset"])[0]) == run
+    else:
+        assert kaimal_run(given_options, None, opt["preset"])[0] == run
     from turbgen.spec.preset_runs import run_keys
-
-    preset = lambda mapping, given: run_keys(model, opt["preset"], given.get("U_m_s", 16.0))  # noqa: E731
-    mapping = run_mapping(opt, f"{model}-run", options, preset, replaces, plane_positions(opt["planes"], opt["gates"]))
-    assert spec.from_mapping(mapping) == run
     # the Python call's keywords, taken as turbgen.<model>() takes them
     call = ast.parse(out["python"]).body[1].value
     assert ast.unparse(call.func) == f"turbgen.{model}"
