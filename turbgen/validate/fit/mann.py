@@ -1,7 +1,7 @@
 """Fit ae, L and Gamma of the Mann (1994) model to the Welch spectra of measured or generated data.
 
 Weighted least squares over the band estimates of F_uu, F_vv, F_ww and the u-w co-spectrum (``spectra``), each
-band's residuals whitened by the estimators' covariance at the model's expected spectrum (``BandSpectra.covariance``),
+residuals whitened by the estimators' covariance at the model's expected spectrum (``BandSpectra.full_covariance``),
 so that sum r^2 is chi^2 with n_bands - n_parameters degrees of freedom when the model holds. The parameters are x =
 (ln ae, ln L, Gamma) within the ranges of ``turbgen.theory.ranges``; scipy.optimize.least_squares (trust region
 reflective, bounds) minimises; the weights and (for a store) the lattice / continuous ratio of the grid model are
@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
 from turbgen.spec.defaults import MANN_DEFAULTS
@@ -61,13 +62,14 @@ def _start(bands: BandSpectra, model: BandModel, used: tuple, held: dict) -> dic
 
 def _solve(bands, model, used, free, held, p):
     """One weighted least-squares pass at the weights of ``p``: (solution, new parameters)."""
-    chol = np.linalg.cholesky(_covariance_at(bands, model, used, p))  # (nbands, k, k)
+    e = model.expected(p["ae"], p["length_scale_m"], p["gamma"])
+    chol = np.linalg.cholesky(bands.full_covariance(used, e))
 
     def resid(x):
         q = _params(x, free, held)
         e = model.expected(q["ae"], q["length_scale_m"], q["gamma"])
-        r = np.stack([bands.values[s] - e[s] for s in used], axis=1)[..., None]
-        return np.linalg.solve(chol, r)[..., 0].ravel()  # whitened: L^-1 r per band
+        r = np.stack([bands.values[s] - e[s] for s in used], axis=1).ravel()  # band-major
+        return solve_triangular(chol, r, lower=True)  # whitened: L^-1 r
 
     x0 = np.array([math.log(p[n]) if n != "gamma" else p[n] for n in free])
     lo, hi = _bounds(free)

@@ -15,7 +15,8 @@ expected spectrum S itself comes from the model (``MannFit`` re-weights with the
 follow the noise of the estimates. The co-spectrum Re S_uw has the one-point variance (S_uu S_ww + Re S_uw^2) / (2
 K_eff) (Bendat & Piersol 2010, Sect. 9.1) times the geometric mean of the u and w rho_bar; the estimates of one
 band covary (Isserlis 1918: Cov(P_uu, P_ww) = C^2, Cov(P_uu, C) = S_uu C at one point, C the co-spectrum; v is
-uncorrelated with u and w at one point, F_12 = F_23 = 0), scaled in the same way: ``BandSpectra.covariance``.
+uncorrelated with u and w at one point, F_12 = F_23 = 0), scaled in the same way: ``BandSpectra.covariance``; and
+neighbouring bands covary through the correlation of neighbouring Hann bins: ``BandSpectra.full_covariance``.
 """
 
 from __future__ import annotations
@@ -56,6 +57,9 @@ class BandSpectra:
         auto-spectrum estimate is factor S^2, that of the co-spectrum factor (S_uu S_ww + C^2) / 2.
     segments : dict
         Component -> complete segments used per column (summed over columns).
+    band_corr : numpy.ndarray
+        (nbands, nbands) correlation of the band averages from the correlation of Hann bins up to 3 apart
+        (neighbouring single-bin bands at low frequencies correlate by 4/9).
     """
 
     setup: WelchSetup
@@ -65,6 +69,7 @@ class BandSpectra:
     values: dict
     var_factor: dict
     segments: dict
+    band_corr: np.ndarray
 
     def band_mean(self, binned: np.ndarray) -> np.ndarray:
         """(nbins,) values averaged over each band."""
@@ -89,6 +94,18 @@ class BandSpectra:
                 if (s, t) in cross and t in used:
                     cov[:, i, j] = cov[:, j, i] = np.sqrt(f[s] * f[t]) * cross[(s, t)]
         return cov
+
+    def full_covariance(self, used: tuple, expected: dict) -> np.ndarray:
+        """(nbands k, nbands k) covariance of all band estimates (band-major: index band * k + spectrum): the
+        per-band covariances (``covariance``) joined across bands by ``band_corr``, each cross-band pair of spectra
+        with the mean of the two bands' correlations of that pair."""
+        cov = self.covariance(used, expected)
+        sd = np.sqrt(np.diagonal(cov, axis1=1, axis2=2))  # (nb, k)
+        corr = cov / (sd[:, :, None] * sd[:, None, :])
+        nb, k = sd.shape
+        pair = 0.5 * (corr[:, None] + corr[None, :])  # (nb, nb, k, k)
+        full = self.band_corr[:, :, None, None] * pair * sd[:, None, :, None] * sd[None, :, None, :]
+        return full.transpose(0, 2, 1, 3).reshape(nb * k, nb * k)
 
 
 def band_bins(nperseg: int) -> tuple:
@@ -153,7 +170,8 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
                              "samples")
     setup = WelchSetup(n, data.dt_s)
     bands = band_bins(n)
-    r = np.array([setup.bin_rho2(d) for d in range(4)])
+    gram = _band_gram(bands, np.array([setup.bin_rho2(d) for d in range(4)]))
+    gain = np.diag(gram)
     values, factor, segs, dft = {}, {}, {}, {}
     for c, x in data.series.items():
         X, ok = _segment_dfts(x, setup)
@@ -166,7 +184,7 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
         values[c + c] = np.array([psd[b].mean() for b in bands])
         k_eff = setup.effective_segments(int(k.sum()), int(k.sum() - x.shape[1])) / x.shape[1]
         rho = _rho_bar(X, bands)
-        factor[c + c] = rho * np.array([_band_gain(b.size, r) for b in bands]) / k_eff
+        factor[c + c] = rho * gain / k_eff
     if data.uw_columns:
         (xu, oku), (xw, okw) = dft["u"], dft["w"]
         iu, iw = (np.array(v) for v in zip(*data.uw_columns))
@@ -176,9 +194,16 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
         values["uw"] = np.array([co[b].mean() for b in bands])
         factor["uw"] = np.sqrt(factor["uu"] * factor["ww"])
     f = setup.freqs
-    return BandSpectra(setup, nt, bands, np.array([f[b].mean() for b in bands]), values, factor, segs)
+    return BandSpectra(setup, nt, bands, np.array([f[b].mean() for b in bands]), values, factor, segs,
+                       gram / np.sqrt(np.outer(gain, gain)))
 
 
-def _band_gain(n: int, r: np.ndarray) -> float:
-    """Variance of the mean of n neighbouring Welch bins / the variance of one (bin correlations r_d, d < 4)."""
-    return float(n + 2 * sum((n - d) * r[d] for d in range(1, min(n, r.size)))) / n**2
+def _band_gram(bands: tuple, r: np.ndarray) -> np.ndarray:
+    """(nbands, nbands) covariance of the band means of unit-variance bins correlated r_d at d bins apart (d < 4)."""
+    nbins = bands[-1][-1] + 1
+    lag = np.abs(np.arange(nbins)[:, None] - np.arange(nbins)[None, :])
+    rb = np.where(lag < r.size, r[np.minimum(lag, r.size - 1)], 0.0)
+    m = np.zeros((len(bands), nbins))
+    for i, b in enumerate(bands):
+        m[i, b] = 1.0 / b.size
+    return m @ rb @ m.T
