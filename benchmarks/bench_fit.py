@@ -10,7 +10,8 @@ realisations its binomial standard error is sqrt(0.95 0.05 / n). The sensor fits
 turbgen field, whose point spectra lack the wavenumbers beyond the grid's Nyquist and below its box: the bias this
 gives is what the grid model removes, and it shows in their coverage.
 
-    python benchmarks/bench_fit.py --n 50 --out benchmarks/fit_results.jsonl
+    python benchmarks/bench_fit.py --n 50 --out benchmarks/fit_results.jsonl [--kinds grid --seed0 1007]
+    python benchmarks/fit_summary.py benchmarks/fit_results.jsonl
 """
 
 from __future__ import annotations
@@ -53,14 +54,17 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=50, help="realisations per case")
     ap.add_argument("--seed0", type=int, default=1000)
     ap.add_argument("--out", default="benchmarks/fit_results.jsonl")
+    ap.add_argument("--kinds", default="grid,mast4,sonic1", help="fits to run, of grid, mast4, sonic1")
     a = ap.parse_args()
     with open(a.out, "a") as fh:
         for seed in range(a.seed0, a.seed0 + a.n):  # cases interleaved: a stopped run covers both
             for case in CASES:
                 ae, L, G = case
                 ds = turbgen.mann(L=L, gamma=G, ae=ae, seed=seed, **GRID)
-                for kind, data, kw in (("grid", ds, {}), ("mast4", sensors(ds, 4), {"U": GRID["U"]}),
-                                       ("sonic1", sensors(ds, 1), {"U": GRID["U"]})):
+                fits = {"grid": (ds, {}), "mast4": (sensors(ds, 4), {"U": GRID["U"]}),
+                        "sonic1": (sensors(ds, 1), {"U": GRID["U"]})}
+                for kind in a.kinds.split(","):
+                    data, kw = fits[kind]
                     t0 = time.perf_counter()
                     fit = turbgen.fit_mann(data, **kw)
                     row = {"case": case, "seed": seed, "kind": kind, "seconds": time.perf_counter() - t0,
