@@ -79,7 +79,8 @@ def detrended(x: np.ndarray, where) -> tuple[np.ndarray, list]:
     out = x - (slope * t + (sx - slope * st) / n)
     rise, sigma = np.abs(slope) * (x.shape[0] - 1), np.sqrt(np.nanmean(out**2, axis=0))
     notes = [f"{where(k)}: a trend of {rise[k]:.3g} m/s over the record, more than its standard deviation "
-             f"{sigma[k]:.3g} m/s, was removed (the record may not be stationary)" for k in np.flatnonzero(rise > sigma)]
+             f"{sigma[k]:.3g} m/s, was removed (the record may not be stationary)"
+             for k in np.flatnonzero(rise > sigma)]
     return out, notes
 
 

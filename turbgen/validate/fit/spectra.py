@@ -164,6 +164,9 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
         nt / 4], or a component has fewer than MIN_SEGMENTS complete segments per column (gaps).
     """
     nt = data.nt
+    if nt < 4 * MIN_NPERSEG:
+        raise ParameterError(f"{data.source}: {nt} samples are too short a record to fit (needs >= {4 * MIN_NPERSEG}: "
+                             f"4 Welch segments of {MIN_NPERSEG} for the lowest band)")
     n = nperseg or default_nperseg(nt)
     if not MIN_NPERSEG <= n <= nt // 4:
         raise ParameterError(f"nperseg = {n} is outside [{MIN_NPERSEG}, nt/4 = {nt // 4}] for a record of {nt} "

@@ -47,7 +47,8 @@ def build_table(path=TABLE_PATH) -> None:
 
 @lru_cache(maxsize=1)
 def load_table() -> np.ndarray:
-    """(len(GAMMA_NODES), 4, len(X_NODES)) columns (``table_column``) from TABLE_PATH, checked against the nodes of this module."""
+    """(len(GAMMA_NODES), 4, len(X_NODES)) columns (``table_column``) from TABLE_PATH, checked against the nodes of
+    this module."""
     with np.load(TABLE_PATH) as t:
         if not (np.array_equal(t["x_nodes"], X_NODES) and np.array_equal(t["gamma_nodes"], GAMMA_NODES)):
             raise ParameterError(f"{TABLE_PATH} was built for other nodes: rebuild it (python -m "
