@@ -108,6 +108,8 @@ def __getattr__(name: str):
         return getattr(importlib.import_module(_OBJECTS[name]), name)
     if name in _MODULES:
         return importlib.import_module(f"turbgen.{name}")
+    if name == "fit_mann":  # the Mann model fitted to data (turbgen.api.fit)
+        return importlib.import_module("turbgen.api.fit").fit_mann
     raise AttributeError(f"module 'turbgen' has no attribute {name!r}")
 
 

@@ -219,7 +219,7 @@ def rews(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text,
 
 @click.group()
 def fit():
-    """Fit Kaimal / exponential-coherence models to the Mann (space-time) model."""
+    """Fit Kaimal / exponential-coherence models to the Mann (space-time) model, or the Mann model to data."""
 
 
 @fit.command(short_help="Kaimal sigma_i, L_i and IEC a_yz, Lc fitted to the Mann model.")
@@ -287,10 +287,12 @@ def evolution(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_
               "f [Hz]", "coh² [-]")
 
 
-def _attach_lidar():
+def _attach_subcommands():
+    from turbgen.cli.fit_data import fit_mann_command
     from turbgen.cli.theory_lidar import lidar_theory
 
     theory.add_command(lidar_theory)
+    fit.add_command(fit_mann_command)
 
 
-_attach_lidar()
+_attach_subcommands()

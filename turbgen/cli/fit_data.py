@@ -1,0 +1,62 @@
+"""`turbgen fit mann DATA`: the Mann model fitted to a point-series file or a store."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from turbgen.errors import ParameterError
+
+PLOT_NAME = "fit_mann.png"
+
+
+def _plots_dir(ctx, param, value):
+    """--plots: a directory that can be made, without an existing plot unless --overwrite (checked first)."""
+    if value is None:
+        return None
+    from turbgen.store.paths import check_output_path
+
+    p = check_output_path(value, "--plots", create_parents=True)
+    if p.exists() and not p.is_dir():
+        raise ParameterError(f"--plots = {value!r} is a file, not a directory")
+    if (p / PLOT_NAME).exists() and not ctx.meta.get("fit_overwrite"):
+        raise ParameterError(f"--plots = {value!r} holds {PLOT_NAME}; pass --overwrite to replace it")
+    return p
+
+
+def _remember_overwrite(ctx, param, value):
+    ctx.meta["fit_overwrite"] = value
+
+
+@click.command("mann")
+@click.argument("data", type=click.Path())
+@click.option("--U", "U", type=float, default=None,
+              help="Mean wind speed U [m/s] of k1 = 2 pi f / U for fluctuation data (default: the mean of u of "
+                   "total-wind data; a store holds its own).")
+@click.option("--nperseg", type=int, default=None, help="Welch segment length [samples] (default ~nt/8, a power of 2).")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON: {name: {value, ci95, held}}, chi2_dof, flags, ...")
+@click.option("--plots", "plots", type=click.Path(), default=None, callback=_plots_dir,
+              help=f"Directory for {PLOT_NAME}: the band spectra with 95 % bars and the fitted model.")
+@click.option("--overwrite", is_flag=True, is_eager=True, expose_value=False, callback=_remember_overwrite,
+              help=f"Replace an existing {PLOT_NAME} in --plots.")
+@click.pass_context
+def fit_mann_command(ctx, data, U, nperseg, as_json, plots):
+    """Fit ae, L, Gamma of the Mann model to DATA: a point-series JSON file (sensors with u, v, w) or a store.
+
+    Weighted least squares over the Welch spectra of u, v, w and the u-w co-spectrum, each band weighted by the
+    estimator's covariance; a store against its grid's expectation, sensors against the continuous model. Prints
+    the values with 95 % intervals and chi2/dof; exit 2 with one line when the fit is flagged (no convergence, a
+    range boundary).
+    """
+    from turbgen.api.fit import fit_mann
+
+    result = fit_mann(data, U=U, nperseg=nperseg)
+    click.echo(json.dumps(result.to_dict()) if as_json else result.table())
+    if plots is not None:
+        plots.mkdir(parents=True, exist_ok=True)
+        result.plot(plots / PLOT_NAME)
+    if result.flags:
+        click.echo(f"Error: the fit is not reliable: {'; '.join(result.flags)}", err=True)
+        ctx.exit(2)

@@ -1,0 +1,139 @@
+"""The result of fitting the Mann model to data: values with 95 % intervals, goodness of fit, flags, a figure."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from turbgen.theory.params import MannParams
+
+SPECTRUM_LABELS = {"uu": "u", "vv": "v", "ww": "w", "uw": "-uw (co-spectrum)"}
+
+
+@dataclass(frozen=True)
+class FitValue:
+    """A fitted parameter: ``value``, its 95 % interval ``ci95`` (lo, hi) and ``sd_fit`` (the standard deviation of
+    the fitted variable: of ln ae and ln L, of Gamma itself); ``ci95`` and ``sd_fit`` are None for a held value."""
+
+    value: float
+    ci95: tuple | None
+    sd_fit: float | None
+
+    @property
+    def held(self) -> bool:
+        return self.ci95 is None
+
+    def to_dict(self) -> dict:
+        return {"value": self.value, "ci95": None if self.ci95 is None else list(self.ci95), "held": self.held}
+
+
+@dataclass(frozen=True, eq=False)
+class MannFit:
+    """Mann (1994) parameters fitted to measured or generated data (``turbgen.fit_mann``).
+
+    Attributes
+    ----------
+    ae : FitValue
+        alpha eps^(2/3) [m^(4/3) s^-2].
+    length_scale_m : FitValue
+        Length scale L [m].
+    gamma : FitValue
+        Shear anisotropy Gamma [-].
+    chi2_dof : float
+        Sum of squared whitened residuals / ``dof`` (about 1 +- sqrt(2 / dof) when the model holds).
+    dof : int
+        Bands fitted minus free parameters.
+    flags : tuple of str
+        Problems that make the values unreliable (no convergence, a range boundary); empty when none.
+    notes : tuple of str
+        What the fit held or assumed (e.g. Gamma held for one component).
+    model : str
+        "grid" (the lattice sum over a turbgen store's box) or "continuous" (sensor data).
+    U_m_s : float
+        Mean wind speed [m/s] of k1 = 2 pi f / U.
+    source : str
+        The data fitted.
+    nperseg : int
+        Welch segment length [samples].
+    f_hz : numpy.ndarray
+        Band centres [Hz].
+    data, fitted, sd : dict
+        Spectrum ("uu", "vv", "ww", "uw") -> band estimates, the fitted model's expectation of them and their
+        standard deviations, one-sided [m^2 s^-2 Hz^-1].
+    """
+
+    ae: FitValue
+    length_scale_m: FitValue
+    gamma: FitValue
+    chi2_dof: float
+    dof: int
+    flags: tuple
+    notes: tuple
+    model: str
+    U_m_s: float
+    source: str
+    nperseg: int
+    f_hz: np.ndarray
+    data: dict
+    fitted: dict
+    sd: dict
+
+    @property
+    def ok(self) -> bool:
+        """True when nothing is flagged."""
+        return not self.flags
+
+    @property
+    def params(self) -> MannParams:
+        """The fitted values as MannParams (frozen turbulence: the spectra do not fix an evolution time)."""
+        return MannParams(self.ae.value, self.length_scale_m.value, self.gamma.value)
+
+    def to_dict(self) -> dict:
+        """JSON-ready: {"ae": {"value", "ci95", "held"}, "length_scale_m": .., "gamma": .., "chi2_dof", ...}."""
+        out = {n: getattr(self, n).to_dict() for n in ("ae", "length_scale_m", "gamma")}
+        out.update(chi2_dof=self.chi2_dof, dof=self.dof, flags=list(self.flags), notes=list(self.notes),
+                   model=self.model, U_m_s=self.U_m_s, source=self.source, nperseg=self.nperseg,
+                   spectra=sorted(self.data))
+        return out
+
+    def table(self) -> str:
+        """Terminal text: one line per parameter, the goodness of fit, flags and notes."""
+        lines = [f"# Mann fit of {self.source} ({self.model} model, U = {self.U_m_s:.4g} m/s, "
+                 f"spectra {', '.join(self.data)})"]
+        for name, unit in (("ae", "m^(4/3) s^-2"), ("length_scale_m", "m"), ("gamma", "-")):
+            v = getattr(self, name)
+            ci = "held (not identified)" if v.held else f"95 % interval [{v.ci95[0]:.4g}, {v.ci95[1]:.4g}]"
+            lines.append(f"{name:>15s} = {v.value:10.4g} {unit:13s} {ci}")
+        lines.append(f"chi2/dof = {self.chi2_dof:.3g} (dof {self.dof}; 1 +- {math.sqrt(2 / max(self.dof, 1)):.2g} "
+                     "expected when the model holds)")
+        lines += [f"note: {n}" for n in self.notes] + [f"FLAG: {f}" for f in self.flags]
+        return "\n".join(lines)
+
+    def plot(self, path) -> None:
+        """Write a PNG of the band spectra (f S(f), error bars +- 1.96 sd) and the fitted model to ``path``."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(7, 4.5))
+        f = self.f_hz
+        for k, (s, label) in enumerate((s, SPECTRUM_LABELS[s]) for s in SPECTRUM_LABELS if s in self.data):
+            sign = -1.0 if s == "uw" else 1.0
+            color = f"C{k}"
+            ax.errorbar(f, sign * f * self.data[s], yerr=1.96 * f * self.sd[s], fmt="o", ms=3, color=color,
+                        label=f"{label} data")
+            ax.plot(f, sign * f * self.fitted[s], "-", color=color, label=f"{label} fitted ({self.model})")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("f [Hz]")
+        ax.set_ylabel("f S(f) [m² s⁻²]")
+        ax.set_title(f"L = {self.length_scale_m.value:.3g} m, Γ = {self.gamma.value:.3g}, "
+                     f"αε^(2/3) = {self.ae.value:.3g}, χ²/dof = {self.chi2_dof:.2f}", fontsize=9)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(path, format="png", dpi=120)
+        plt.close(fig)
