@@ -33,9 +33,10 @@ from turbgen.version import __version__
 
 _FIELDS = ("mann", "kaimal", "open_store")
 _INFO = ("info",)
-# public typed objects: name -> module
+# public typed objects and functions of their own modules: name -> module
 _OBJECTS = {"MannParams": "turbgen.theory.params", "KaimalParams": "turbgen.theory.params", "Grid": "turbgen.grid",
-            "MannGenerator": "turbgen.api.generator", "KaimalGenerator": "turbgen.api.generator"}
+            "MannGenerator": "turbgen.api.generator", "KaimalGenerator": "turbgen.api.generator",
+            "fit_mann": "turbgen.api.fit"}
 # API functions named like a subpackage: turbgen.validate(...) calls the function, turbgen.validate.report is the
 # subpackage's module (see _Package)
 _PRODUCTS = ("validate", "export", "lidar")
@@ -46,6 +47,7 @@ if TYPE_CHECKING:
     from turbgen import errors, theory
     from turbgen.api.generator import KaimalGenerator, MannGenerator
     from turbgen.api.fields import kaimal, mann, open_store
+    from turbgen.api.fit import fit_mann
     from turbgen.api.products import export, info, lidar, validate
     from turbgen.grid import Grid
     from turbgen.theory.params import KaimalParams, MannParams
@@ -108,8 +110,6 @@ def __getattr__(name: str):
         return getattr(importlib.import_module(_OBJECTS[name]), name)
     if name in _MODULES:
         return importlib.import_module(f"turbgen.{name}")
-    if name == "fit_mann":  # the Mann model fitted to data (turbgen.api.fit)
-        return importlib.import_module("turbgen.api.fit").fit_mann
     raise AttributeError(f"module 'turbgen' has no attribute {name!r}")
 
 
