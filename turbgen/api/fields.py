@@ -15,6 +15,7 @@ from pathlib import Path
 
 import xarray as xr
 
+from turbgen import fft
 from turbgen.api.keywords import run_inputs
 from turbgen.errors import ParameterError
 from turbgen.resources import available_memory_bytes, default_threads, parse_size, require_memory
@@ -103,6 +104,7 @@ def open_store(path: PathLike) -> xr.Dataset:
     return _as_dataset(Path(path))
 
 
+@fft.selected_by_keyword
 def mann(
     L: float | None = None,
     gamma: float | None = None,
@@ -122,6 +124,7 @@ def mann(
     constrain=None,
     noise: float | None = None,
     conditional_mean: bool | None = None,
+    fft_backend: str | None = None,
     **options,
 ) -> xr.Dataset:
     """A Mann space-time 4D field u(t, x, y, z) (Mann 1994; Guo et al. 2022): the field of ``turbgen mann``.
@@ -181,6 +184,9 @@ def mann(
         ``noise_m_s``, else 0: the field passes through the data); the run file's ``noise_m_s``.
     conditional_mean : bool, optional
         With ``constrain``: return the conditional mean (the optimal linear reconstruction, no random part).
+    fft_backend : str, optional
+        FFT backend (turbgen.fft: ``"pyfftw"``, ``"scipy"`` or a registered one; default: the environment variable
+        TURBGEN_FFT_BACKEND, else pyfftw); changes the field at float32 round-off only, recorded in its attributes.
     **options
         The other keywords named above.
 
@@ -328,6 +334,7 @@ def _constrained_maker(run: MannRun, request, placed, overwrite, chunks, threads
     return make
 
 
+@fft.selected_by_keyword
 def kaimal(
     U: float | None = None,
     seed: int | None = None,
@@ -340,6 +347,7 @@ def kaimal(
     chunks: int | None = None,
     threads: int | None = None,
     progress: bool = False,
+    fft_backend: str | None = None,
     **options,
 ) -> xr.Dataset:
     """A Kaimal 4D field with longitudinal coherence (IEC 61400-1; Guo et al. 2023): the field of ``turbgen kaimal``.
@@ -374,6 +382,8 @@ def kaimal(
         FFT threads (default: all cores); never changes the field.
     progress : bool, optional
         Show a progress bar on stderr.
+    fft_backend : str, optional
+        FFT backend, as :func:`mann`'s.
     **options
         The other keywords named above.
 

@@ -6,11 +6,13 @@ the options' help), so no option carries a default of its own.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from pathlib import Path
 
 import click
 
+from turbgen import fft
 from turbgen.cli.options import parse_floats, parse_range, range_help
 from turbgen.spec.config import read_config
 from turbgen.spec.constraints import resolve_constraint_paths
@@ -75,3 +77,19 @@ def run_mapping(opt: Mapping, schema: str, keys: Mapping[str, str], preset_keys=
         mapping = resolve_constraint_paths(mapping, Path(opt["config"]).parent)
     return merge_run_inputs(mapping, typed(opt, keys), typed(opt, GRID_OPTIONS), preset_keys=preset_keys,
                             replaces=replaces, x_m=x_m)
+
+
+def fft_backend_option(command):
+    """Decorator adding --fft-backend: the command's body runs with that FFT backend (turbgen.fft.use; default: the
+    TURBGEN_FFT_BACKEND environment variable, else pyfftw). An unknown name is a one-line error before any output.
+    Place it right under ``@click.command()``."""
+
+    @click.option("--fft-backend", "fft_backend",
+                  help=f"FFT backend: {', '.join(fft.names())} (default: ${fft.ENVIRONMENT_VARIABLE}, else "
+                  f"{fft.DEFAULT}); changes the field at float32 round-off only, recorded in the store.")  # fmt: skip
+    @functools.wraps(command)
+    def with_backend(fft_backend, **opt):
+        with fft.use(fft_backend):
+            return command(**opt)
+
+    return with_backend

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from turbgen.cli.options import parse_floats, parse_ints, parse_range, plane_positions, range_help
+from turbgen.cli.run_options import fft_backend_option
 
 
 def _split(text: str | None) -> list[str] | None:
@@ -12,6 +13,7 @@ def _split(text: str | None) -> list[str] | None:
 
 
 @click.command()
+@fft_backend_option
 @click.option("--config", "config", type=click.Path(dir_okay=False),
               help="sweep file (TOML or JSON, schemas/sweep.schema.json)")
 @click.option("--model", "models", help="mann, kaimal or mann,kaimal")

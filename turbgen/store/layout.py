@@ -12,6 +12,8 @@ One zarr v3 group holds one field::
 Group attributes (JSON Schema: ``turbgen/schemas/field.schema.json``):
 
     turbgen_version, created_utc (ISO 8601), layout_version (int)
+    fft_backend                the FFT backend that made the field (turbgen.fft; stores since 2026-11-28): an input
+                               of the run like its seed, changing the field at float32 round-off only
     model ("mann" | "kaimal"), parameters {name: value}, units {name: unit}, seed (int),
     U_m_s, hub_height_m, frame = "convected", frame_note, grid {nt, dt_s, x_m, ny, nz, dy_m, dz_m}
     rms_m_s {u, v, w}          root mean square of each component [m/s] (stores since 2026-11-26; readers
@@ -72,7 +74,7 @@ FRAME_NOTE = (
 
 # Attributes the caller of create_store supplies / the writer adds / the marker.
 CALLER_ATTRS = ("model", "parameters", "units", "seed", "U_m_s", "hub_height_m")
-WRITER_ATTRS = ("turbgen_version", "created_utc", "layout_version", "frame", "frame_note", "grid")
+WRITER_ATTRS = ("turbgen_version", "created_utc", "layout_version", "fft_backend", "frame", "frame_note", "grid")
 RMS_ATTR = "rms_m_s"  # also set by the writer, with the marker (optional: older stores lack it)
 MARKER = "turbgen_complete"
 
