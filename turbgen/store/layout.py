@@ -74,7 +74,8 @@ FRAME_NOTE = (
 
 # Attributes the caller of create_store supplies / the writer adds / the marker.
 CALLER_ATTRS = ("model", "parameters", "units", "seed", "U_m_s", "hub_height_m")
-WRITER_ATTRS = ("turbgen_version", "created_utc", "layout_version", "fft_backend", "frame", "frame_note", "grid")
+WRITER_ATTRS = ("turbgen_version", "created_utc", "layout_version", "frame", "frame_note", "grid")
+FFT_ATTR = "fft_backend"  # also set by the writer (optional: older stores lack it)
 RMS_ATTR = "rms_m_s"  # also set by the writer, with the marker (optional: older stores lack it)
 MARKER = "turbgen_complete"
 

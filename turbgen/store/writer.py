@@ -275,7 +275,7 @@ def with_writer_attrs(attrs: dict, grid: Grid) -> dict:
     """
     return {**attrs, "turbgen_version": __version__,
             "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-            "layout_version": layout.LAYOUT_VERSION, "fft_backend": fft.current(), "frame": layout.FRAME, "frame_note": layout.FRAME_NOTE,
+            "layout_version": layout.LAYOUT_VERSION, layout.FFT_ATTR: fft.current(), "frame": layout.FRAME, "frame_note": layout.FRAME_NOTE,
             "grid": layout.grid_to_attrs(grid)}  # fmt: skip
 
 
