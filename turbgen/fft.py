@@ -44,7 +44,6 @@ _P = ParamSpec("_P")
 _R = TypeVar("_R")
 
 
-
 class _Selection:
     """The backend :func:`use` selected and how many calls hold it (process-wide, behind a lock)."""
 
