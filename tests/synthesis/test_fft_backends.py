@@ -10,6 +10,7 @@ normalisation, a conjugation) moves values by O(1) standard deviations, ~10^5 ti
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -179,3 +180,15 @@ def test_one_backend_at_a_time_in_a_process():
             with fft.use("pyfftw"):
                 pass
     assert fft.current() == before
+
+
+def test_no_module_but_the_seam_calls_an_fft_library():
+    """No module of turbgen but turbgen/fft.py imports or calls numpy.fft, scipy.fft or pyfftw; the one exception is
+    the command's start-up (turbgen/cli/__init__.py imports pyfftw without its dask interface: no transform)."""
+    root = Path(turbgen.__file__).parent
+    use = re.compile(r"\b(np|numpy|scipy)\.fft\.\w|\bpyfftw\.\w|^\s*(import (pyfftw|scipy\.fft|numpy\.fft)|"
+                     r"from (pyfftw|scipy\.fft|numpy\.fft)\b|from (scipy|numpy) import fft)", re.M)  # fmt: skip
+    hits = {str(p.relative_to(root)): use.findall(p.read_text()) for p in root.rglob("*.py")}
+    hits = {name: found for name, found in hits.items() if found}
+    assert set(hits) == {"fft.py", "cli/__init__.py"}, hits
+    assert len(hits["cli/__init__.py"]) == 1  # `import pyfftw`, nothing called
