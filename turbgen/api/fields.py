@@ -15,6 +15,7 @@ from pathlib import Path
 
 import xarray as xr
 
+from turbgen import fft
 from turbgen.api.keywords import run_inputs
 from turbgen.errors import ParameterError, check_int
 from turbgen.resources import available_memory_bytes, default_threads, parse_size, require_memory
@@ -107,6 +108,7 @@ def open_store(path: PathLike) -> xr.Dataset:
     return _as_dataset(Path(path))
 
 
+@fft.selected_by_keyword
 def mann(
     L: float | None = None,
     gamma: float | None = None,
@@ -143,6 +145,7 @@ def mann(
     noise: float | None = None,
     conditional_mean: bool = False,
     progress: bool = False,
+    fft_backend: str | None = None,
 ) -> xr.Dataset:
     """A Mann space-time 4D field u(t, x, y, z) (Mann 1994; Guo et al. 2022): the field of ``turbgen mann``.
 
@@ -223,6 +226,9 @@ def mann(
         ``noise_m_s``, else 0: the field passes through the data); the run file's ``noise_m_s``.
     conditional_mean : bool, optional
         With ``constrain``: return the conditional mean (the optimal linear reconstruction, no random part).
+    fft_backend : str, optional
+        FFT backend (turbgen.fft: ``"pyfftw"``, ``"scipy"`` or a registered one; default: the environment variable
+        TURBGEN_FFT_BACKEND, else pyfftw); changes the field at float32 round-off only, recorded in its attributes.
 
     Returns
     -------
@@ -431,6 +437,7 @@ def _constrained_maker(run: MannRun, request, placed, overwrite, chunks, threads
     return make
 
 
+@fft.selected_by_keyword
 def kaimal(
     U: float | None = None,
     seed: int | None = None,
@@ -467,6 +474,7 @@ def kaimal(
     conditional_mean: bool = False,
     progress: bool = False,
     spectrum=None,
+    fft_backend: str | None = None,
 ) -> xr.Dataset:
     """A Kaimal 4D field with longitudinal coherence (IEC 61400-1; Guo et al. 2023): the field of ``turbgen kaimal``.
 
@@ -533,6 +541,8 @@ def kaimal(
         run's lines 1/(nt dt) to 1/(2 dt), interpolated linearly), or a callable ``S(f_hz) -> (3, n)`` [m^2/s],
         averaged over each line's band (turbgen.theory.user_spectra). The store records the band means, so
         ``attrs["parameters"]["spectrum"]`` remakes the field without the callable.
+    fft_backend : str, optional
+        FFT backend, as :func:`mann`'s.
 
     Returns
     -------

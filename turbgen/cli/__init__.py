@@ -185,7 +185,8 @@ def cli(ctx):
 
 def _import_pyfftw_lean() -> None:
     """Import pyfftw without its optional dask interface, for this command's process only (the application's
-    start-up, not the library's: the core imports pyfftw plainly).
+    start-up, not the library's: turbgen.fft imports pyfftw plainly). Without pyfftw installed, nothing (the scipy
+    FFT backend needs none; the pyfftw backend says it is missing when asked for).
 
     pyfftw's package __init__ imports dask.array, and through it pandas, whenever dask is installed, for an interface
     turbgen never uses; that import added over a second to every command and ~60 MiB of resident memory, which
@@ -197,6 +198,8 @@ def _import_pyfftw_lean() -> None:
     sys.modules["dask.array.fft"] = None  # pyfftw's `from dask.array.fft import ...` raises ImportError at once
     try:
         import pyfftw  # noqa: F401
+    except ImportError:
+        pass
     finally:
         del sys.modules["dask.array.fft"]
 

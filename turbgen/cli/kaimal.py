@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from turbgen.cli.options import parse_floats, plane_positions
-from turbgen.cli.run_options import grid_options
+from turbgen.cli.run_options import fft_backend_option, grid_options
 from turbgen.resources import format_bytes
 from turbgen.runs.kaimal import kaimal_generator, memory_needed, plan_spill, run_kaimal
 from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X
@@ -38,6 +38,7 @@ def _three(name):
 
 
 @click.command()
+@fft_backend_option
 @click.option("--U", "U", type=float, help=f"Hub-height mean wind speed [m/s] (default {D['U_m_s']:g}).")
 @click.option("--class", "turb_class", type=click.Choice(list(IEC_IREF)),
               help=f"IEC turbulence class (NTM sigma_1 = Iref (0.75 U + 5.6); default {D['turb_class']}).")

@@ -9,7 +9,7 @@ import click
 
 from turbgen import resources
 from turbgen.cli.options import plane_positions
-from turbgen.cli.run_options import grid_options
+from turbgen.cli.run_options import fft_backend_option, grid_options
 from turbgen.resources import default_threads, parse_size
 from turbgen.runs.mann import describe, run_mann
 from turbgen.runs.mann_outofcore import local_cluster, plan_for_budget, remove_stale_scratch
@@ -56,6 +56,7 @@ def _dask_client(scheduler, workers: int):
 
 
 @click.command()
+@fft_backend_option
 @click.option("--L", "L", type=float, help=f"Length scale L [m] (default {D['length_scale_m']:g}).")
 @click.option("--gamma", type=float, help=f"Shear anisotropy Gamma [-] (default {D['gamma']:g}).")
 @click.option("--evo", callback=_evo, help=f"Evolution time gamma [s] of tau_e (Eq. 15), or 'frozen' "

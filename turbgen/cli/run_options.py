@@ -6,10 +6,12 @@ default of its own.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 
 import click
 
+from turbgen import fft
 from turbgen.cli.options import parse_floats, parse_range, range_help
 
 
@@ -41,3 +43,19 @@ def grid_options(defaults: Mapping):
         return f
 
     return add
+
+
+def fft_backend_option(command):
+    """Decorator adding --fft-backend: the command's body runs with that FFT backend (turbgen.fft.use; default: the
+    TURBGEN_FFT_BACKEND environment variable, else pyfftw). An unknown name is a one-line error before any output.
+    Place it right under ``@click.command()``."""
+
+    @click.option("--fft-backend", "fft_backend",
+                  help=f"FFT backend: {', '.join(fft.names())} (default: ${fft.ENVIRONMENT_VARIABLE}, else "
+                  f"{fft.DEFAULT}); changes the field at float32 round-off only, recorded in the store.")  # fmt: skip
+    @functools.wraps(command)
+    def with_backend(fft_backend, **opt):
+        with fft.use(fft_backend):
+            return command(**opt)
+
+    return with_backend

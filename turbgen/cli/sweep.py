@@ -6,6 +6,7 @@ import click
 
 from turbgen.cli.options import (iec_class_options, parse_floats, parse_ints, parse_range, plane_positions, range_help,
                                  resolve_iec_class)
+from turbgen.cli.run_options import fft_backend_option
 
 
 def _split(text: str | None) -> list[str] | None:
@@ -13,6 +14,7 @@ def _split(text: str | None) -> list[str] | None:
 
 
 @click.command()
+@fft_backend_option
 @click.option("--config", "config", type=click.Path(dir_okay=False),
               help="sweep file (TOML or JSON, schemas/sweep.schema.json)")
 @click.option("--model", "models", help="mann, kaimal or mann,kaimal")

@@ -11,8 +11,8 @@ u_RR (Guo et al. 2023, Eq. 23): u averaged over the rotor disc of the plane x = 
 from __future__ import annotations
 
 import numpy as np
-import scipy.fft
 
+from turbgen import fft
 from turbgen.errors import ParameterError
 from turbgen.validate.estimators import WelchSetup, segment_starts
 from turbgen.validate.point_sets import rotor_mask
@@ -150,8 +150,8 @@ def welch_rl(u_ll: np.ndarray, u_rr: np.ndarray, setup: WelchSetup) -> dict:
     for s in starts:
         a = u_ll[s : s + setup.nperseg]
         b = u_rr[s : s + setup.nperseg]
-        A = scipy.fft.rfft((a - a.mean()) * w)
-        B = scipy.fft.rfft((b - b.mean()) * w)
+        A = fft.oneshot().rfft((a - a.mean()) * w)
+        B = fft.oneshot().rfft((b - b.mean()) * w)
         sll = sll + np.abs(A) ** 2
         srr = srr + np.abs(B) ** 2
         srl = srl + B * np.conj(A)

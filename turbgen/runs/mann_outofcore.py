@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from turbgen import fft
 from turbgen.errors import ParameterError
 from turbgen.oscalls import resident_bytes
 from turbgen.resources import default_threads, format_bytes, require_disk
@@ -307,10 +308,12 @@ def run_mann_outofcore(
     and the scratch files is checked first; an exception leaves neither a store nor scratch files.
     ``client``: a dask.distributed Client: the parts of pass 1 and the blocks of pass 2 run as its tasks
     (its workers must see the output's directory; ``memory_bytes`` and ``threads`` then hold per task),
-    the store is written by this process. Without it both passes run here.
+    the store is written by this process. Without it both passes run here. The FFT backend selected here
+    (turbgen.fft.current) is the one the tasks use, wherever they run.
     """
     t_start = time.perf_counter()
     threads = default_threads(threads)
+    backend = fft.current()
     plan = plan or OutOfCorePlan(run, memory_bytes, threads, chunk_t)
     if client is not None and plan.plane_in_memory:  # workers hand planes over through the plane file
         plan.plane_in_memory = False
@@ -337,7 +340,7 @@ def run_mann_outofcore(
                 _File(plane_path, n_blocks * g.nt * plan.block_points * _F32).close()
             cells = axis_cells(run.params, synthesis_box(run))
             with tqdm(total=plan.n_parts, unit="part", desc="mann pass 1", file=sys.stderr, disable=not show) as bar:
-                args = (run, plan, str(spectra_path), cells, times, threads)
+                args = (run, plan, str(spectra_path), cells, times, threads, backend)
                 _map(client, lambda part: pass1_part(*args, part), range(plan.n_parts), bar)
             del cells
             plane = np.empty((g.nt, plan.points), np.float32) if plan.plane_in_memory else None  # after pass 1
@@ -346,11 +349,11 @@ def run_mann_outofcore(
                     targets = [order[m]] if plan.evolving else order  # frozen: the one snapshot is every plane
                     for c, comp in enumerate(COMPONENTS):
                         if plane is not None:
-                            pass2_blocks(run, plan, str(spectra_path), None, m, c, range(n_blocks), plane)
+                            pass2_blocks(run, plan, str(spectra_path), None, m, c, range(n_blocks), backend, plane)
                         else:
                             blocks = [range(b, b + 1) for b in range(n_blocks)]
                             args2 = (run, plan, str(spectra_path), str(plane_path), m, c)
-                            _map(client, lambda bl: pass2_blocks(*args2, bl), blocks, None)
+                            _map(client, lambda bl: pass2_blocks(*args2, bl, backend), blocks, None)
                         with _File(plane_path) if plane is None else nullcontext() as plane_file:
                             for ix in targets:
                                 _write_plane(writer, comp, ix, plane, plane_file, plan, g, sums)
@@ -390,13 +393,15 @@ def _spectra_offset(plan: OutOfCorePlan, m: int, c: int, part: int, point: int =
     return (((m * 3 + c) * plan.n_parts + part) * plan.points + point) * plan.slabs_per_part * _C64
 
 
-def pass1_part(run: MannRun, plan: OutOfCorePlan, spectra_path: str, cells, times, threads: int, part: int) -> None:
-    """Pass 1 for one part of k1 slabs: its stencil, snapshots in time order, cropped spectra to the scratch file."""
+def pass1_part(run: MannRun, plan: OutOfCorePlan, spectra_path: str, cells, times, threads: int, fft_backend: str,
+               part: int) -> None:  # fmt: skip
+    """Pass 1 for one part of k1 slabs: its stencil, snapshots in time order, cropped spectra to the scratch file
+    (``fft_backend``: turbgen.fft's name)."""
     box, g = synthesis_box(run), run.grid
     S = plan.slabs_per_part
     first, end = part * S, min((part + 1) * S, box.nk1)
     stencil = build_stencil(run.params, box, evolving=plan.evolving, slabs=(first, end), cells=cells)
-    gen = MannSnapshots(stencil, g.ny, g.nz, threads)
+    gen = MannSnapshots(stencil, g.ny, g.nz, threads, fft_backend=fft_backend)
     with _File(Path(spectra_path)) as spectra_file:
         for m, spectra in gen.spectra(run.seed, times):
             for c in range(3):
@@ -409,12 +414,12 @@ def pass1_part(run: MannRun, plan: OutOfCorePlan, spectra_path: str, cells, time
 
 
 def pass2_blocks(run, plan: OutOfCorePlan, spectra_path: str, plane_path: str | None, m: int, c: int, blocks,
-                 plane: np.ndarray | None = None) -> None:  # fmt: skip
-    """Pass 2 for blocks of (y, z) points of snapshot m, component c: read back, transform along k1, into ``plane``
-    (nt, points) or, without it, into the plane scratch file (block, t, point)."""
+                 fft_backend: str, plane: np.ndarray | None = None) -> None:  # fmt: skip
+    """Pass 2 for blocks of (y, z) points of snapshot m, component c: read back, transform along k1 (``fft_backend``:
+    turbgen.fft's name), into ``plane`` (nt, points) or, without it, into the plane scratch file (block, t, point)."""
     g, box = run.grid, synthesis_box(run)
     S, P, B = plan.slabs_per_part, plan.points, plan.block_points
-    transform = PencilTransform(g.nt, P)
+    transform = PencilTransform(g.nt, P, fft_backend)
     parts = np.empty((plan.n_parts, B, S), np.complex64)
     spectra = np.empty((B, plan.n_parts * S), np.complex64)
     block_out = np.empty((g.nt, B), np.float32) if plane is None else None

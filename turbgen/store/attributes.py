@@ -41,7 +41,7 @@ def check_caller_attrs(attrs: dict) -> dict:
     missing = [k for k in layout.CALLER_ATTRS if k not in attrs]
     if missing:
         raise ValueError(f"store attrs lack {missing} (required: {list(layout.CALLER_ATTRS)})")
-    reserved = [k for k in (*layout.WRITER_ATTRS, layout.RMS_ATTR, layout.MARKER) if k in attrs]
+    reserved = [k for k in (*layout.WRITER_ATTRS, layout.FFT_ATTR, layout.RMS_ATTR, layout.MARKER) if k in attrs]
     if reserved:
         raise ValueError(f"store attrs {reserved} are set by the writer, do not pass them")
     out = jsonable(dict(attrs))

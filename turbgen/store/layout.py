@@ -12,7 +12,10 @@ One zarr v3 group holds one field::
 Group attributes (JSON Schema: ``turbgen/schemas/field.schema.json``):
 
     turbgen_version, created_utc (ISO 8601), layout_version (int)
-    model (a declared model: "mann" | "kaimal", turbgen.spec.models), parameters {name: value}, units {name: unit}, seed (int),
+    fft_backend                the FFT backend that made the field (turbgen.fft; stores since 2026-11-28): an input
+                               of the run like its seed, changing the field at float32 round-off only
+    model (a declared model: "mann" | "kaimal", turbgen.spec.models), parameters {name: value}, units {name: unit},
+    seed (int),
     U_m_s, hub_height_m, frame = "convected", frame_note, grid {nt, dt_s, x_m, ny, nz, dy_m, dz_m}
     rms_m_s {u, v, w}          root mean square of each component [m/s] (stores since 2026-11-26; readers
                                refuse values beyond 100 times it: turbgen.store.plausibility)
@@ -74,6 +77,7 @@ FRAME_NOTE = (
 # Attributes the caller of create_store supplies / the writer adds / the marker.
 CALLER_ATTRS = ("model", "parameters", "units", "seed", "U_m_s", "hub_height_m")
 WRITER_ATTRS = ("turbgen_version", "created_utc", "layout_version", "frame", "frame_note", "grid")
+FFT_ATTR = "fft_backend"  # also set by the writer (optional: older stores lack it)
 RMS_ATTR = "rms_m_s"  # also set by the writer, with the marker (optional: older stores lack it)
 MARKER = "turbgen_complete"
 

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import zarr
 
+from turbgen import fft
 from turbgen.version import __version__
 from turbgen.errors import StoreError, check_int
 from turbgen.grid import Grid
@@ -269,11 +270,12 @@ def with_writer_attrs(attrs: dict, grid: Grid) -> dict:
     Returns
     -------
     dict
-        ``attrs`` plus turbgen_version, created_utc (now, ISO 8601), layout_version, frame, frame_note, grid.
+        ``attrs`` plus turbgen_version, created_utc (now, ISO 8601), layout_version, fft_backend (the one selected
+        now: turbgen.fft.current), frame, frame_note, grid.
     """
     return {**attrs, "turbgen_version": __version__,
             "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-            "layout_version": layout.LAYOUT_VERSION, "frame": layout.FRAME, "frame_note": layout.FRAME_NOTE,
+            "layout_version": layout.LAYOUT_VERSION, layout.FFT_ATTR: fft.current(), "frame": layout.FRAME, "frame_note": layout.FRAME_NOTE,
             "grid": layout.grid_to_attrs(grid)}  # fmt: skip
 
 

@@ -33,6 +33,7 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+from turbgen import fft
 from turbgen.errors import ParameterError
 from turbgen.interruption import exit_on_signals
 from turbgen.resources import require_disk
@@ -269,6 +270,8 @@ def _execute(plan, tasks, records, save, result, client, processes, progress, th
             threads = max(1, (os.cpu_count() or 1) // n)
     if threads is not None:
         tasks = {name: replace(t, threads=threads) for name, t in tasks.items()}
+    backend = fft.current()  # the sweep's FFT backend, carried to its workers (other processes do not see it)
+    tasks = {name: replace(t, fft_backend=backend) for name, t in tasks.items()}
     try:
         by_name = {pr.name: pr for pr in plan.runs}
         shared: dict = {}  # shared key -> [future of the shared part, runs still to use it]

@@ -6,6 +6,7 @@ import os
 import time
 from dataclasses import dataclass, replace
 
+from turbgen import fft
 from turbgen.resources import available_memory_bytes
 from turbgen.runs.models import MODELS
 from turbgen.sweep.manifest import store_checksum
@@ -42,6 +43,8 @@ class RunTask:
     cache_dir : str, optional
         A constrained run's stencil cache (turbgen.runs.stencil_cache): its stencil and its system, shared by the
         seeds conditioned on the same measurements.
+    fft_backend : str, optional
+        The FFT backend of the run (turbgen.fft; None: the worker's current one).
     """
 
     model: str
@@ -56,6 +59,7 @@ class RunTask:
     lidar: str | None = None  # lidar preset or file to run on the field (turbgen lidar)
     constraints: object = None  # a ConstraintRequest (turbgen.spec.constraints): a constrained Mann run
     cache_dir: str | None = None  # a constrained run's stencil cache
+    fft_backend: str | None = None  # the FFT backend of the run (None: the worker's current one)
 
 
 def one_line(exc: BaseException) -> str:
@@ -169,30 +173,36 @@ def execute_run(task: RunTask, shared=None) -> dict:
     t0 = time.perf_counter()
     out: dict = {"status": "failed"}
     try:
-        if task.generate and task.constraints is not None:
-            summary = _run_constrained(task)
-            out["sigma_m_s"] = [float(summary[f"sigma_{c}"]) for c in "uvw"]
-        elif task.generate:
-            summary = MODELS[task.model].run(task.run, task.path, overwrite=task.overwrite, chunk_t=task.chunk_t,
-                                             threads=task.threads, memory_bytes=task.memory_bytes, shared=shared)
-            sig = [summary.get(f"sigma_{c}") for c in "uvw"]
-            out["sigma_m_s"] = [None if s is None else float(s) for s in sig]
-        out["checksum"] = store_checksum(task.path)
-        if task.validate:
-            try:
-                out["validation"] = validate_store(task.path, task.threads)
-            except Exception as exc:  # a validator crash is recorded, the field itself is fine
-                out["validation"] = {"passed": False, "error": one_line(exc)}
-        if task.lidar:
-            try:
-                out["lidar"] = lidar_store(task.path, task.lidar)
-            except Exception as exc:  # recorded like a validator crash: the field itself is fine
-                out["lidar"] = {"passed": False, "error": one_line(exc)}
+        with fft.use(task.fft_backend):
+            _execute_run(task, shared, out)
         out["status"] = "complete"
     except Exception as exc:
         out["error"] = one_line(exc)
     out["duration_s"] = round(time.perf_counter() - t0, 3)
     return out
+
+
+def _execute_run(task: RunTask, shared, out: dict) -> None:
+    """execute_run's steps, their results into ``out``."""
+    if task.generate and task.constraints is not None:
+        summary = _run_constrained(task)
+        out["sigma_m_s"] = [float(summary[f"sigma_{c}"]) for c in "uvw"]
+    elif task.generate:
+        summary = MODELS[task.model].run(task.run, task.path, overwrite=task.overwrite, chunk_t=task.chunk_t,
+                                         threads=task.threads, memory_bytes=task.memory_bytes, shared=shared)
+        sig = [summary.get(f"sigma_{c}") for c in "uvw"]
+        out["sigma_m_s"] = [None if s is None else float(s) for s in sig]
+    out["checksum"] = store_checksum(task.path)
+    if task.validate:
+        try:
+            out["validation"] = validate_store(task.path, task.threads)
+        except Exception as exc:  # a validator crash is recorded, the field itself is fine
+            out["validation"] = {"passed": False, "error": one_line(exc)}
+    if task.lidar:
+        try:
+            out["lidar"] = lidar_store(task.path, task.lidar)
+        except Exception as exc:  # recorded like a validator crash: the field itself is fine
+            out["lidar"] = {"passed": False, "error": one_line(exc)}
 
 
 def task_bytes(task: RunTask) -> int:

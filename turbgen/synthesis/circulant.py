@@ -41,7 +41,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.fft
+from turbgen import fft
 
 from turbgen.errors import ParameterError
 from turbgen.synthesis.square_root import principal_sqrt
@@ -69,8 +69,8 @@ MAX_DENSE_FLOPS = 1.2e12
 
 
 def fft_size(n: int) -> int:
-    """Smallest FFT-friendly (11-smooth, scipy.fft.next_fast_len) integer >= n, at least 1."""
-    return int(scipy.fft.next_fast_len(max(int(n), 1)))
+    """Smallest FFT-friendly (11-smooth, turbgen.fft.next_fast_len) integer >= n, at least 1."""
+    return fft.next_fast_len(max(int(n), 1))
 
 
 def torus_size(n: int, h_m: float, decay_length_m: float) -> int:
@@ -168,11 +168,13 @@ class Embedding:
         """(My, Mz) of the circulant torus, or (N, 1) for a dense factor."""
         return self.scale.shape if self.scale is not None else (self.ny * self.nz, 1)
 
-    def sample(self, xi: np.ndarray, workers: int | None = None, overwrite: bool = False) -> np.ndarray:
+    def sample(self, xi: np.ndarray, workers: int | None = None, overwrite: bool = False,
+               transforms=None) -> np.ndarray:  # fmt: skip
         """Map standard complex normals xi (..., *torus_shape) to coefficients (..., ny, nz) with covariance C.
 
         ``overwrite``: xi (C-contiguous) may be used as the work array (its values are destroyed and the
-        result may be a view of it): no temporaries of the torus size, the same values.
+        result may be a view of it): no temporaries of the torus size, the same values. ``transforms``: the
+        one-shot transforms of an FFT backend (turbgen.fft.oneshot; default: the current backend's).
         """
         if self.chol is not None:
             z = np.einsum("ij,...j->...i", self.chol.astype(xi.real.dtype), xi[..., 0])
@@ -181,8 +183,9 @@ class Embedding:
         w = np.multiply(xi, scale, out=xi) if overwrite else xi * scale
         # only the ny x nz corner is needed: FFT along z, keep nz columns, then FFT along y (in place:
         # w is ours, a copy or the caller's work array)
-        w = scipy.fft.fft(w, axis=-1, workers=workers, overwrite_x=True)[..., : self.nz]
-        return scipy.fft.fft(w, axis=-2, workers=workers, overwrite_x=overwrite)[..., : self.ny, :]
+        transforms = transforms or fft.oneshot()
+        w = transforms.fft(w, axis=-1, workers=workers, overwrite_x=True)[..., : self.nz]
+        return transforms.fft(w, axis=-2, workers=workers, overwrite_x=overwrite)[..., : self.ny, :]
 
 
 def torus_cap(ny: int, nz: int) -> int:
@@ -267,7 +270,7 @@ def embed_many(kernels, ny: int, nz: int, dy_m: float, dz_m: float, decay_length
         stack = np.empty((j - i, my, mz))
         for b in range(i, j):
             stack[b - i] = torus_kernel(kernels[b], ny, nz, dy_m, dz_m, my, mz, smooth)
-        lam = scipy.fft.fft2(stack, overwrite_x=True).real
+        lam = fft.oneshot().fft2(stack, overwrite_x=True).real
         m = my * mz
         for b in range(i, j):
             one = lam[b - i]
@@ -297,7 +300,7 @@ def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: fl
         raise ValueError(f"a {my} x {mz} torus for a {ny} x {nz} grid: check_sampling_cost should have refused it")
     enlarged = 0
     while True:
-        lam = scipy.fft.fft2(torus_kernel(kernel, ny, nz, dy_m, dz_m, my, mz, smooth)).real
+        lam = fft.oneshot().fft2(torus_kernel(kernel, ny, nz, dy_m, dz_m, my, mz, smooth)).real
         lam_max = float(lam.max())
         neg = lam < -EIG_RTOL * lam_max
         if not neg.any():

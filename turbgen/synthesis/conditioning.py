@@ -42,8 +42,8 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
-import pyfftw
 
+from turbgen import fft
 from turbgen.errors import ParameterError
 from turbgen.synthesis import conditioning_kernels as kernels
 from turbgen.synthesis.mann_oracle import slab_factor
@@ -151,7 +151,7 @@ def spectra_samples(streams: Streams, spectra: np.ndarray, nt: int) -> np.ndarra
     """H u (M, nt/q) [m/s] from the streams' time spectra (M, nk1) of :func:`measure_spectra`: their unnormalised
     real inverse FFT (as the generator's transform along time: the imaginary parts at k1 = 0 and Nyquist are
     ignored), sampled at each stream's stored time steps o_a + m q."""
-    full = np.fft.irfft(spectra, n=nt, axis=1) * nt
+    full = fft.oneshot().irfft(spectra, n=nt, axis=1) * nt
     q = streams.decimation
     index = streams.offset[:, None] + np.arange(nt // q)[None, :] * q
     return np.take_along_axis(full, index, axis=1)
@@ -258,32 +258,30 @@ def _lag_classes(times: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 class _GroupFFT:
-    """Single-threaded FFTW_ESTIMATE complex plans over the last two axes of a slab group's arrays (one per group size,
-    the arrays reused, transformed in place): the same plans, hence the same rounding, whatever the thread count of
-    the run. ``keep_z``: a transform exact on the (output) columns z < keep_z only (along z on every row, then along
+    """Single-threaded complex plans of ``backend`` over the last two axes of a slab group's arrays (one per group
+    size, the arrays reused, transformed in place): the same plans, hence the same rounding, whatever the thread count
+    of the run. ``keep_z``: a transform exact on the (output) columns z < keep_z only (along z on every row, then along
     y on those columns); ``rows`` (first, end): of an input zero outside those rows (along z on them only, then
     along y). Single precision: the correction they carry is added to the float32 field's complex64 spectra."""
 
-    def __init__(self, tail: tuple[int, ...], direction: str = "FFTW_FORWARD", keep_z: int | None = None,
-                 rows: tuple[int, int] | None = None):  # fmt: skip
-        self.tail, self.direction, self.keep_z, self.rows = tail, direction, keep_z, rows
+    def __init__(self, tail: tuple[int, ...], backend: fft.FFTBackend, kind: str = "c2c_forward",
+                 keep_z: int | None = None, rows: tuple[int, int] | None = None):  # fmt: skip
+        self.tail, self.backend, self.kind, self.keep_z, self.rows = tail, backend, kind, keep_z, rows
         self._plans: dict[int, tuple[np.ndarray, _Plan]] = {}
 
     def buffers(self, n: int) -> tuple[np.ndarray, _Plan]:
         """(array, plan) for a group of ``n`` slabs."""
         if n not in self._plans:
-            flags = ("FFTW_ESTIMATE",)
-            inp = pyfftw.empty_aligned((n, *self.tail), np.complex64)
+            inp = self.backend.empty((n, *self.tail), np.complex64)
             kept = inp if self.keep_z is None else inp[..., : self.keep_z]
             nonzero = inp if self.rows is None else inp[..., self.rows[0] : self.rows[1], :]
-            plans = [pyfftw.FFTW(nonzero, nonzero, axes=(-1,), direction=self.direction, flags=flags, threads=1),
-                     pyfftw.FFTW(kept, kept, axes=(-2,), direction=self.direction, flags=flags, threads=1)]
+            plans = [self.backend.plan(self.kind, nonzero, nonzero, -1), self.backend.plan(self.kind, kept, kept, -2)]
             self._plans[n] = (inp, _Plan(plans))
         return self._plans[n]
 
 
 class _Plan:
-    """FFTW plans executed in turn."""
+    """Plans executed in turn."""
 
     def __init__(self, plans: list):
         self._plans = plans
@@ -346,26 +344,26 @@ class _LagTransform:
     covariances over the separations the keys span (e_y, e_z: their extents), ``pairs`` (P, ...) the direction
     pairs' (the window itself for the direction basis)."""
 
-    def __init__(self, basis: _Basis, n_pairs: int, nyp: int, nzp: int, extent: tuple[int, int]):
+    def __init__(self, basis: _Basis, n_pairs: int, nyp: int, nzp: int, extent: tuple[int, int],
+                 backend: fft.FFTBackend):  # fmt: skip
         self.basis, self.nzp = basis, nzp
         self.parity = basis.n_even < basis.n and nyp % 2 == 0
         self.rows = nyp // 2 + 1 if self.parity else nyp
         keep_z = min(extent[1], nzp // 2 + 1)
-        flags = ("FFTW_ESTIMATE",)
-        self.x = pyfftw.empty_aligned((basis.n, self.rows, nzp), np.float64)
-        self.z = pyfftw.empty_aligned((basis.n, self.rows, nzp // 2 + 1), np.complex128)
+        self.x = backend.empty((basis.n, self.rows, nzp), np.float64)
+        self.z = backend.empty((basis.n, self.rows, nzp // 2 + 1), np.complex128)
         self.window = np.empty((basis.n, 2 * extent[0] - 1, 2 * extent[1] - 1), np.complex128)
         self.pairs = self.window if basis.is_pairs else np.empty((n_pairs, *self.window.shape[1:]), np.complex128)
-        plans = [pyfftw.FFTW(self.x, self.z, axes=(-1,), flags=flags, threads=1)]
+        plans = [backend.plan("r2c", self.x, self.z, -1)]
         kept = self.z[..., :keep_z]
         if not self.parity:
-            plans.append(pyfftw.FFTW(kept, kept, axes=(-2,), flags=flags, threads=1))
+            plans.append(backend.plan("c2c_forward", kept, kept, -2))
         else:
             even = kept[: basis.n_even].view(np.float64)  # (real, imaginary) pairs: the real transform of each
-            plans.append(pyfftw.FFTW(even, even, axes=(-2,), direction=["FFTW_REDFT00"], flags=flags, threads=1))
+            plans.append(backend.plan("dct1", even, even, -2))
             if nyp > 2:
                 odd = kept[basis.n_even :, 1 : nyp // 2].view(np.float64)
-                plans.append(pyfftw.FFTW(odd, odd, axes=(-2,), direction=["FFTW_RODFT00"], flags=flags, threads=1))
+                plans.append(backend.plan("dst1", odd, odd, -2))
         self._plans = plans
 
     def execute(self) -> np.ndarray:
@@ -479,7 +477,8 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
 
     out = np.zeros((n_dec, m, m), complex)
     groups = [range(s0, min(s0 + SLAB_GROUP, box.nk1)) for s0 in range(0, box.nk1, SLAB_GROUP)]
-    workspace = lambda: _LagTransform(basis, n_pairs, box.nyp, box.nzp, extent)  # noqa: E731
+    backend = fft.backend()
+    workspace = lambda: _LagTransform(basis, n_pairs, box.nyp, box.nzp, extent, backend)  # noqa: E731
     for slabs, fulls in zip(groups, _ordered_map(group, groups, threads, workspace)):
         for i, full in zip(slabs, fulls):  # summed in slab order: the same bits for any thread count
             full *= nt
@@ -589,15 +588,15 @@ def circulant_apply(cov: np.ndarray, v: np.ndarray) -> np.ndarray:
     are real: S_(n - j) = conj S_j), inverse real FFT. ``cov`` may be other per-frequency matrices with the same
     symmetry, e.g. the inverses of S_j (only its first nt/(2q) + 1 are read)."""
     n = v.shape[1]
-    spec = np.fft.rfft(v, axis=1).T[:, :, None]
-    return np.fft.irfft(np.matmul(cov[: len(spec)], spec)[:, :, 0].T, n=n, axis=1)
+    spec = fft.oneshot().rfft(v, axis=1).T[:, :, None]
+    return fft.oneshot().irfft(np.matmul(cov[: len(spec)], spec)[:, :, 0].T, n=n, axis=1)
 
 
 def circulant_solve(cov: np.ndarray, r: np.ndarray) -> np.ndarray:
     """S^-1 r for full streams ``r`` (M, nt/q): one dense solve per frequency j <= nt/(2q) (as circulant_apply)."""
     n = r.shape[1]
-    spec = np.fft.rfft(r, axis=1).T[:, :, None]
-    return np.fft.irfft(np.linalg.solve(cov[: len(spec)], spec)[:, :, 0].T, n=n, axis=1)
+    spec = fft.oneshot().rfft(r, axis=1).T[:, :, None]
+    return fft.oneshot().irfft(np.linalg.solve(cov[: len(spec)], spec)[:, :, 0].T, n=n, axis=1)
 
 
 @dataclass(frozen=True)
@@ -729,7 +728,7 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
     neighbouring planes), forwards and backwards. The real inverse FFT along time is left to spectra_field (it keeps
     only the real part of the k1 = 0 / Nyquist slabs).
     """
-    box = stencil.box
+    box, backend = stencil.box, fft.backend()  # resolved once: every workspace with the same backend
     times = np.asarray(times_s, dtype=float)
     planes_out = list(planes_out)
     chain = sorted(set(planes_out) | {int(p) for p in streams.used_planes()}, key=lambda p: (times[p], p))
@@ -745,7 +744,7 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
     full = np.zeros((m, box.nt))
     for a in range(m):  # the samples at their stored time steps o_a + m q
         full[a, streams.offset[a] :: q] = weights[a]
-    spec_w = np.fft.rfft(full, axis=1)
+    spec_w = fft.oneshot().rfft(full, axis=1)
 
     def group(transforms: tuple[_GroupFFT, _GroupFFT], slabs: range) -> np.ndarray:  # the group's block
         grid, plan = transforms[0].buffers(len(slabs))
@@ -766,9 +765,9 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
         return np.moveaxis(g[..., :ny, :nz], 0, 2).copy()
 
     def workspace() -> tuple[_GroupFFT, _GroupFFT]:
-        back = _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), direction="FFTW_BACKWARD", keep_z=nz)
+        back = _GroupFFT((len(planes_out), 3, box.nyp, box.nzp), backend, "c2c_backward", keep_z=nz)
         rows = (int(streams.term_iy.min()), int(streams.term_iy.max()) + 1)  # H^T w is zero on the other rows
-        return _GroupFFT((len(chain), 3, box.nyp, box.nzp), rows=rows), back
+        return _GroupFFT((len(chain), 3, box.nyp, box.nzp), backend, rows=rows), back
 
     groups = [range(s0, min(s0 + SLAB_GROUP, box.nk1)) for s0 in range(0, box.nk1, SLAB_GROUP)]
     yield from zip(groups, _ordered_map(group, groups, threads, workspace))
@@ -802,7 +801,7 @@ def workspace_bytes(box, streams: Streams, n_out: int) -> int:
 def spectra_field(spectra: np.ndarray, nt: int) -> np.ndarray:
     """The field (..., nt, ny, nz) float64 [m/s] of cropped spectra (..., nk1, ny, nz), e.g. one plane's
     (3, nk1, ny, nz) of correction_spectra."""
-    return np.fft.irfft(spectra.astype(complex), n=nt, axis=-3) * nt
+    return fft.oneshot().irfft(spectra.astype(complex), n=nt, axis=-3) * nt
 
 
 def weights_field(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, plane: int, ny: int,

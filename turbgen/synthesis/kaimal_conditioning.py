@@ -24,8 +24,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.fft
 
+from turbgen import fft
 from turbgen.synthesis.circulant import Embedding
 from turbgen.synthesis.conditioning import Streams
 from turbgen.synthesis.kaimal_evo import COMPONENTS, FREQ_CHUNK, KaimalEvo, longitudinal_factors
@@ -51,7 +51,7 @@ class BinPrior:
         if self.torus_power is None:
             return ((iy[:, None] == iy[None, :]) & (iz[:, None] == iz[None, :])).astype(float)
         my, mz = self.torus_power.shape
-        lag = scipy.fft.fft2(self.torus_power).real  # sum_m scale_m^2 e^(-2 pi i m r / M): E[Z(y) Z(y')^*] / 2
+        lag = fft.oneshot().fft2(self.torus_power).real  # sum_m scale_m^2 e^(-2 pi i m r / M): E[Z(y) Z(y')^*] / 2
         return lag[(iy[:, None] - iy[None, :]) % my, (iz[:, None] - iz[None, :]) % mz]
 
     def apply(self, f: np.ndarray) -> np.ndarray:
@@ -65,8 +65,8 @@ class BinPrior:
         my, mz = self.torus_power.shape
         pad = np.zeros((p, my, mz), complex)
         pad[:, :ny, :nz] = f
-        g = scipy.fft.ifft2(pad, norm="forward")  # sum_y f(y) e^(+2 pi i m y / M): the sampler's adjoint
-        return scipy.fft.fft2(self.torus_power * g)[:, :ny, :nz]
+        g = fft.oneshot().ifft2(pad, norm="forward")  # sum_y f(y) e^(+2 pi i m y / M): the sampler's adjoint
+        return fft.oneshot().fft2(self.torus_power * g)[:, :ny, :nz]
 
 
 def _realised(e: Embedding | None) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -204,7 +204,7 @@ class Correction:
             spec = self.spectra[hit[0]].astype(complex)
         else:
             spec = np.einsum("kq,qkyz->kyz", self.long[:, plane], self.spectra.astype(complex))
-        return scipy.fft.irfft(spec, n=nt, axis=0, norm="forward")
+        return fft.oneshot().irfft(spec, n=nt, axis=0, norm="forward")
 
 
 def correction(gen: KaimalEvo, streams: Streams, weights: np.ndarray, component: str) -> Correction:
@@ -234,7 +234,7 @@ def correction(gen: KaimalEvo, streams: Streams, weights: np.ndarray, component:
     full = np.zeros((m, nt))
     for a in range(m):  # the samples at their stored time steps o_a + m q
         full[a, streams.offset[a] :: streams.decimation] = weights[a]
-    spec_w = np.fft.rfft(full, axis=1)
+    spec_w = fft.oneshot().rfft(full, axis=1)
     on_plane = (planes[:, None] == streams.plane[None, :]).astype(float)  # (Q, M)
     flat = terms.iy * g.nz + terms.iz
     for b in component_prior(gen, component):

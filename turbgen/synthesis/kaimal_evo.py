@@ -35,8 +35,8 @@ from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 
 import numpy as np
-import scipy.fft
 
+from turbgen import fft
 from turbgen.grid import Grid
 from turbgen.synthesis.circulant import Embedding, check_sampling_cost, dense_sampled, embed_many
 from turbgen.synthesis.random_streams import keyed_complex_normal
@@ -88,7 +88,7 @@ def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarra
 
 
 def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int = 1,
-                      out: np.ndarray | None = None) -> np.ndarray:
+                      out: np.ndarray | None = None, transforms=None) -> np.ndarray:  # fmt: skip
     """One plane's field from its yz coefficients: ``irfft(spec * amp[:, None, None], n=nt, axis=0, norm="forward")``.
 
     Computed on contiguous blocks of about 1 MiB of columns: pocketfft reads and writes time columns
@@ -107,6 +107,8 @@ def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int =
         FFT threads (the values do not depend on them).
     out : numpy.ndarray, optional
         Where to write the field ((nt, ny, nz) float32, C-contiguous; default: a new array).
+    transforms : namespace, optional
+        The one-shot transforms of an FFT backend (turbgen.fft.oneshot; default: the current backend's).
 
     Returns
     -------
@@ -118,9 +120,10 @@ def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int =
     out = np.empty((nt, flat.shape[1]), dtype=np.float32) if out is None else out.reshape(nt, flat.shape[1])
     step = max(16, (1 << 20) // (8 * nf))
     column_amp = amp[:, None]
+    transforms = transforms or fft.oneshot()
     for j in range(0, flat.shape[1], step):
         block = flat[:, j:j + step] * column_amp
-        out[:, j:j + step] = scipy.fft.irfft(block, n=nt, axis=0, norm="forward", overwrite_x=True, workers=workers)
+        out[:, j:j + step] = transforms.irfft(block, n=nt, axis=0, norm="forward", overwrite_x=True, workers=workers)
     return out.reshape(nt, *spec.shape[1:])
 
 
@@ -197,6 +200,8 @@ class KaimalEvo:
     variances : (3, nt // 2 + 1) variance of each line's band [m^2 s^-2] of u, v, w (a user spectrum,
         turbgen.theory.user_spectra.LineSpectrum.line_variances; line 0 must be 0); None: the Kaimal spectra of
         ``kaimal`` (Eq. 11 integrated over the bands). ``rescale`` applies to either.
+    fft_backend : the FFT backend's name (turbgen.fft; None: the current one): one-shot transforms, the same bits
+        for both built-in backends.
     """
 
     def __init__(
@@ -214,6 +219,7 @@ class KaimalEvo:
         rescale: bool = False,
         variances=None,
         workers: int | None = None,
+        fft_backend: str | None = None,
     ):
         self.kaimal, self.grid, self.U_m_s, self.seed = kaimal, grid, U_m_s, seed
         self.long_coherence = long_coherence
@@ -227,6 +233,7 @@ class KaimalEvo:
         self.long_components = long_components
         self.coherent_vw = coherent_vw
         self.workers = workers or os.cpu_count()
+        self.transforms = fft.oneshot(fft_backend)  # resolved once: every plane of the run with the same backend
         self.freqs = bin_frequencies(grid.nt, grid.dt_s)
         self.nf = self.freqs.size
         self.n_chunks = -(-self.nf // FREQ_CHUNK)
@@ -332,9 +339,9 @@ class KaimalEvo:
             if sampler is None:
                 out[i:j] = xi
             elif sampler.chol is not None:
-                out[i] = sampler.sample(xi[0], 1)
+                out[i] = sampler.sample(xi[0], 1, transforms=self.transforms)
             else:
-                out[i:j] = sampler.sample(xi, 1, overwrite=True)  # planes already run in parallel
+                out[i:j] = sampler.sample(xi, 1, overwrite=True, transforms=self.transforms)  # planes run in parallel
 
     def _mix_and_put(self, ks: range, block: np.ndarray, spectrum) -> None:
         """Mix the planes' coefficients of bins ``ks`` (``block`` (nx, nb, ny, nz)) with the longitudinal
@@ -418,7 +425,7 @@ class KaimalEvo:
                 spec = spectrum.get(p)
                 if g.nt % 2 == 0:
                     spec[-1] = spec[-1].real
-                return inverse_transform(spec, amp, g.nt, fft_workers, out)
+                return inverse_transform(spec, amp, g.nt, fft_workers, out, self.transforms)
 
             def submit(p):  # buffers are taken here, in plane order, never in the pool's threads
                 return pool.submit(transform, p, None if ring is None else ring.take())

@@ -22,8 +22,8 @@ from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
-import pyfftw
 
+from turbgen import fft
 from turbgen.errors import ParameterError
 from turbgen.resources import default_threads
 from turbgen.synthesis.mann_product import ou_product
@@ -42,10 +42,6 @@ ROW_BLOCK = 64  # (y, z) rows per real inverse FFT along k1
 _ALIGN = 64
 _PAGE = 4096
 _SQRT_HALF = np.float32(np.sqrt(0.5))
-
-
-def _aligned(shape, dtype) -> np.ndarray:
-    return pyfftw.empty_aligned(shape, dtype=dtype, n=_ALIGN)
 
 
 def _padded_nk1(nk1: int) -> int:
@@ -81,10 +77,14 @@ def hermitian_complete(slab: np.ndarray) -> None:
 
 
 class _Scratch:
-    """Per-thread buffers and FFTW plans (all plans built in the calling thread: the planner is not thread-safe)."""
+    """Per-thread buffers and FFT plans of ``backend`` (all plans built in the calling thread: FFTW's planner is not
+    thread-safe)."""
 
-    def __init__(self, box: BoxShape, nt: int, nz: int, n_slabs: int, coefficients: bool = False):
+    def __init__(self, box: BoxShape, nt: int, nz: int, n_slabs: int, backend: fft.FFTBackend,
+                 coefficients: bool = False):  # fmt: skip
         b, nyp, nzp = SLAB_BATCH, box.nyp, box.nzp
+        self._fft = backend
+        _aligned = backend.empty
         # a task's stencil coefficients, for a stencil computed on demand
         self.coef = _aligned((4, TASK_SLABS, box.nk2_half, nzp), np.float32) if coefficients else None
         self.noise = _aligned((b, 3, nyp, nzp), np.complex64)
@@ -94,15 +94,11 @@ class _Scratch:
         self.staged = None  # rows re-strided for the transposing copy (allocated with the plans along k1)
         # Pruned 2-D inverse transform: along z on all nyp rows, then along y only on the nz kept columns
         # (3/4 of the full 2-D transform's work for pad-yz 2).
-        self._yz: dict[int, tuple[pyfftw.FFTW, pyfftw.FFTW]] = {}
+        self._yz: dict[int, tuple[fft.Plan, fft.Plan]] = {}
         for n in {min(b, n_slabs), n_slabs % b} - {0}:
             view, kept = self.uhat[:n], self.uhat[:n, :, :, :nz]
-            flags = ("FFTW_ESTIMATE",)
-            self._yz[n] = (
-                pyfftw.FFTW(view, view, axes=(3,), direction="FFTW_BACKWARD", flags=flags, threads=1),
-                pyfftw.FFTW(kept, kept, axes=(2,), direction="FFTW_BACKWARD", flags=flags, threads=1),
-            )
-        self._t: dict[int, pyfftw.FFTW] = {}
+            self._yz[n] = (backend.plan("c2c_backward", view, view, 3), backend.plan("c2c_backward", kept, kept, 2))
+        self._t: dict[int, fft.Plan] = {}
 
     def yz_transform(self, n: int) -> None:
         """Inverse transform of uhat[:n] over (k2, k3), exact on the kept columns z < nz only."""
@@ -113,18 +109,11 @@ class _Scratch:
     def plan_rows(self, spectra: np.ndarray) -> None:
         """Plans for blocks of ROW_BLOCK rows and for the last, shorter block of ``spectra`` (3, rows, nk1)."""
         rows = spectra.shape[1]
-        self.staged = _aligned((ROW_BLOCK, self.rows.shape[1] + 16), np.float32)
+        self.staged = self._fft.empty((ROW_BLOCK, self.rows.shape[1] + 16), np.float32)
         for n in {min(ROW_BLOCK, rows), rows % ROW_BLOCK} - {0}:
-            self._t[n] = pyfftw.FFTW(
-                spectra[0, :n],
-                self.rows[:n],
-                axes=(1,),
-                direction="FFTW_BACKWARD",
-                flags=("FFTW_ESTIMATE", "FFTW_DESTROY_INPUT"),
-                threads=1,
-            )
+            self._t[n] = self._fft.plan("c2r", spectra[0, :n], self.rows[:n], 1)
 
-    def t_plan(self, n: int) -> pyfftw.FFTW:
+    def t_plan(self, n: int) -> fft.Plan:
         return self._t[n]
 
 
@@ -132,11 +121,12 @@ class MannSnapshots:
     """Generator of Mann space-time snapshots on one stencil, cropped to ny x nz.
 
     ``threads`` only decides how many fixed work units run at once: the field is bit-identical
-    for any value (random streams per (seed, snapshot, slab), fixed batches and FFT plans).
+    for any value (random streams per (seed, snapshot, slab), fixed batches and FFT plans). ``fft_backend``
+    (turbgen.fft; None: the current one) changes it at float32 round-off.
     """
 
     def __init__(self, stencil: MannStencil, ny: int, nz: int, threads: int | None = None, buffers: int = 1,
-                 points: np.ndarray | None = None):  # fmt: skip
+                 points: np.ndarray | None = None, fft_backend: str | None = None):  # fmt: skip
         box = stencil.box
         if not (1 <= ny <= box.nyp and 1 <= nz <= box.nzp):
             raise ParameterError(f"ny, nz = {ny}, {nz} must not exceed the synthesis box {box.nyp} x {box.nzp}")
@@ -146,6 +136,7 @@ class MannSnapshots:
             raise ValueError(f"a part of the stencil must start at a multiple of {SLAB_BATCH} slabs")
         self._n_slabs = self._end - self._first
         self.threads = default_threads(threads)
+        self._fft = fft.backend(fft_backend)
         self._k1 = box.k1().astype(np.float32)
         self._k2 = box.k2().astype(np.float32)
         self._k3sq = (box.k3() ** 2).astype(np.float32)
@@ -238,7 +229,7 @@ class MannSnapshots:
         read). ``output=False`` (for :meth:`generate` with a ``target``): no output plane, None in its place."""
         self._allocate(n_snapshots=1)
         if output and not self._outputs:
-            self._outputs.append(pyfftw.empty_aligned((self.box.nt, self.ny, self.nz), np.float32, n=_PAGE))
+            self._outputs.append(self._fft.empty((self.box.nt, self.ny, self.nz), np.float32, _PAGE))
         return self._spectra, self._outputs[0] if output else None
 
     # -- internals ------------------------------------------------------------------------
@@ -248,16 +239,16 @@ class MannSnapshots:
             whole = self._n_slabs == box.nk1 and self._points is None
             n_points = self.ny * self.nz if self._points is None else len(self._points[0])
             # page-aligned (whole box): output planes in it (_transform) go to a direct-I/O writer without a bounce copy
-            self._spectra = pyfftw.empty_aligned((3, n_points, _padded_nk1(self._n_slabs)), np.complex64,
-                                                 n=_PAGE if whole else _ALIGN)  # fmt: skip
+            self._spectra = self._fft.empty((3, n_points, _padded_nk1(self._n_slabs)), np.complex64,
+                                            _PAGE if whole else _ALIGN)  # fmt: skip
             self._scratch = queue.SimpleQueue()
             for _ in range(self.threads):
-                scratch = _Scratch(box, box.nt, self.nz, self._n_slabs, coefficients=self.stencil.coef is None)
+                scratch = _Scratch(box, box.nt, self.nz, self._n_slabs, self._fft, coefficients=self.stencil.coef is None)
                 if whole:
                     scratch.plan_rows(self._spectra[:, :, : box.nk1])
                 self._scratch.put(scratch)
         if n_snapshots > 1 and self._state is None:
-            self._state = _aligned((self._n_slabs, 3, box.nyp, box.nzp), np.complex64)
+            self._state = self._fft.empty((self._n_slabs, 3, box.nyp, box.nzp), np.complex64, _ALIGN)
 
     def _run(self, pool, fn, items) -> None:
         def task(item):
@@ -291,7 +282,7 @@ class MannSnapshots:
             k = self._n_out % self._n_buffers
             self._n_out += 1
             while len(self._outputs) <= k:  # page-aligned planes, allocated when first needed
-                self._outputs.append(pyfftw.empty_aligned((self.box.nt, self.ny, self.nz), np.float32, n=_PAGE))
+                self._outputs.append(self._fft.empty((self.box.nt, self.ny, self.nz), np.float32, _PAGE))
             out = self._outputs[k]
         points = self.ny * self.nz
         rows = range(0, points, ROW_BLOCK)
@@ -354,9 +345,7 @@ class MannSnapshots:
             spectra += add[:, r0:r1].T
         elif add is not None:
             spectra[...] = add[:, r0:r1].T
-        plan = s.t_plan(n)
-        plan.update_arrays(spectra, s.rows[:n])
-        plan.execute()
+        s.t_plan(n).execute(spectra, s.rows[:n])
         # Transposed through rows whose stride is not a power of two: read straight from s.rows (nt = 2^p) every
         # column hits the same cache sets
         staged = s.staged[:n, : self.box.nt]
@@ -366,22 +355,16 @@ class MannSnapshots:
 
 class PencilTransform:
     """The real inverse FFT along k1 of (y, z) points, block by block exactly as MannSnapshots does it (the same
-    plans on buffers of the same layout), for the second pass of out-of-core runs."""
+    plans on buffers of the same layout), for the second pass of out-of-core runs; ``fft_backend`` as MannSnapshots'."""
 
-    def __init__(self, nt: int, n_points: int):
+    def __init__(self, nt: int, n_points: int, fft_backend: str | None = None):
+        backend = fft.backend(fft_backend)
         self.nt, self.nk1 = nt, nt // 2 + 1
-        self._buf = _aligned((ROW_BLOCK, _padded_nk1(self.nk1)), np.complex64)
-        self._rows = _aligned((ROW_BLOCK, nt), np.float32)
+        self._buf = backend.empty((ROW_BLOCK, _padded_nk1(self.nk1)), np.complex64)
+        self._rows = backend.empty((ROW_BLOCK, nt), np.float32)
         self._plans = {}
         for n in {min(ROW_BLOCK, n_points), n_points % ROW_BLOCK} - {0}:
-            self._plans[n] = pyfftw.FFTW(
-                self._buf[:n, : self.nk1],
-                self._rows[:n],
-                axes=(1,),
-                direction="FFTW_BACKWARD",
-                flags=("FFTW_ESTIMATE", "FFTW_DESTROY_INPUT"),
-                threads=1,
-            )
+            self._plans[n] = backend.plan("c2r", self._buf[:n, : self.nk1], self._rows[:n], 1)
 
     def __call__(self, spectra: np.ndarray, out: np.ndarray) -> None:
         """``spectra`` (n, nk1) complex64 of one block (n = ROW_BLOCK, or the last block's size) -> ``out`` (nt, n)."""

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from turbgen import fft
+
 
 def line_frequencies(nt: int, dt_s: float) -> np.ndarray:
     """Frequencies of the record's spectral lines.
@@ -105,4 +107,4 @@ def k3_wavenumbers(nzp: int, dz_m: float) -> np.ndarray:
     numpy.ndarray
         (nzp,) k3 [rad/m] in numpy ``fftfreq`` order (the Nyquist column negative for even nzp).
     """
-    return np.fft.fftfreq(nzp, d=dz_m) * 2 * np.pi
+    return fft.fftfreq(nzp, d=dz_m) * 2 * np.pi

@@ -35,6 +35,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.special import jv
 
+from turbgen import fft
 from turbgen.errors import ParameterError, check_finite
 from turbgen.theory.eddy_lifetime import shear_distortion_beta
 from turbgen.theory.params import MannParams
@@ -236,7 +237,7 @@ def _jacobi_anger(samples, z, theta_d: float):
     c_n are the angular Fourier coefficients (FFT); orders with J_n(max z) < ~1e-17 are skipped.
     """
     n_theta = samples.shape[-1]
-    c = np.fft.fft(samples, axis=-1) / n_theta
+    c = fft.oneshot().fft(samples, axis=-1) / n_theta
     z_max = float(np.max(z))
     n_max = int(min(n_theta // 2 - 1, np.ceil(z_max + 12.0 * np.cbrt(z_max) + 25.0)))
     orders = np.arange(-n_max, n_max + 1)

@@ -31,11 +31,11 @@ from functools import cached_property
 
 import dask
 import numpy as np
-import scipy.fft
 from scipy.signal import get_window
 from dask.callbacks import Callback
 from tqdm import tqdm
 
+from turbgen import fft
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
 from turbgen.store.chunk_files import empty_aligned
@@ -74,7 +74,7 @@ class WelchSetup:
     @property
     def freqs(self) -> np.ndarray:
         """Welch bin frequencies [Hz], 0 .. 1/(2 dt)."""
-        return np.fft.rfftfreq(self.nperseg, self.dt_s)
+        return fft.rfftfreq(self.nperseg, self.dt_s)
 
     @property
     def scale(self) -> np.ndarray:
@@ -246,7 +246,7 @@ def welch_series(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, int, int
     acc = np.zeros(setup.nperseg // 2 + 1)
     for s in starts:
         seg = x[s : s + setup.nperseg]
-        spec = scipy.fft.rfft((seg - seg.mean(axis=0)) * w, axis=0)
+        spec = fft.oneshot().rfft((seg - seg.mean(axis=0)) * w, axis=0)
         acc += (np.abs(spec) ** 2).mean(axis=1)
     k = len(starts)
     return acc * setup.scale / k, k, max(k - 1, 0)

@@ -20,6 +20,7 @@ from functools import partial
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from turbgen import fft
 from turbgen.grid import Grid
 from turbgen.theory.lattice import line_frequencies
 from turbgen.theory.mann_spectra import one_point_spectra, variances
@@ -135,7 +136,7 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
     # rotor average transfer |H_R|^2 on the lattice (the grid's rotor points inside the box)
     mask_box = np.zeros((box.nyp, box.nzp))
     mask_box[: grid.ny, : grid.nz] = design.rotor_mask
-    h2 = np.abs(np.fft.fft2(mask_box)) ** 2 / design.rotor_mask.sum() ** 2
+    h2 = np.abs(fft.oneshot().fft2(mask_box)) ** 2 / design.rotor_mask.sum() ** 2
     lines = _line_sums(lat, design, k1_lines, dxs, h2, U)
     # the continuous model band-limited to the grid (sigma_i metrics), smooth in k1: interpolated log-log
     bl_k1 = np.geomspace(k1_lines[1], k1_lines[-1], N_RHO_NODES)
@@ -250,7 +251,7 @@ def _variance_modes(lat: MannLattice, grid: Grid, dxs: dict, k1: np.ndarray, U: 
     for _, phi, inv_tau in lat.slabs(k1):
         decay = {dx: np.exp(-dx / U * inv_tau) for dx in dxs}
         for i, c in enumerate(COMPONENTS):
-            lags = {dx: box_lags(np.fft.ifft2(phi[i, i] * d) * size, grid.ny, grid.nz) / phi[i, i].sum()
+            lags = {dx: box_lags(fft.oneshot().ifft2(phi[i, i] * d) * size, grid.ny, grid.nz) / phi[i, i].sum()
                     for dx, d in decay.items()}
             out[c].append(top_modes(coherency_matrix(lags, grid)))
     return {c: np.array(v) for c, v in out.items()}

@@ -12,8 +12,8 @@ exact covariance of averaged Welch estimates needs (``welch_variance``); rho_bar
 from __future__ import annotations
 
 import numpy as np
-import scipy.fft
 
+from turbgen import fft
 from turbgen.grid import Grid
 from turbgen.validate.estimators import COMPONENTS
 from turbgen.validate.prediction import SamplingDesign, dx_key
@@ -143,9 +143,9 @@ def pair_sum(coh: np.ndarray, counts: np.ndarray) -> np.ndarray:
 def rotor_pair_counts(grid: Grid, mask: np.ndarray) -> np.ndarray:
     """Pairs of rotor points (``mask``, (ny, nz) bool) per lag, as :func:`rect_pair_counts` (mask autocorrelation)."""
     sy, sz = 2 * grid.ny - 1, 2 * grid.nz - 1
-    f = np.fft.rfft2(mask.astype(float), s=(sy, sz))
-    ac = np.fft.irfft2(np.abs(f) ** 2, s=(sy, sz))
-    return np.round(np.fft.fftshift(ac, axes=(0, 1)))
+    f = fft.oneshot().rfft2(mask.astype(float), s=(sy, sz))
+    ac = fft.oneshot().irfft2(np.abs(f) ** 2, s=(sy, sz))
+    return np.round(fft.fftshift(ac, axes=(0, 1)))
 
 
 def box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
@@ -156,13 +156,13 @@ def box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
 
 
 def real_box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
-    """``box_lags(numpy.fft.ifft2(field2d) * size, ny, nz)`` for a real field (..., nyp, nzp), with half the
+    """``box_lags(ifft2(field2d) * size, ny, nz)`` for a real field (..., nyp, nzp), with half the
     transform: for real input ifft2 x size = conj(fft2), Hermitian, so the half spectrum of rfft2 holds the
     lags dz >= 0 and F(dy, -dz) = conj(F(-dy, dz)) the others (full transform when nzp < 2 nz - 1)."""
     nyp, nzp = field2d.shape[-2:]
     if nzp < 2 * nz - 1:
-        return box_lags(np.fft.ifft2(field2d) * (nyp * nzp), ny, nz)
-    half = np.conj(scipy.fft.rfft2(field2d, workers=1))  # (..., nyp, nzp // 2 + 1): dz = 0 .. nzp / 2
+        return box_lags(fft.oneshot().ifft2(field2d) * (nyp * nzp), ny, nz)
+    half = np.conj(fft.oneshot().rfft2(field2d, workers=1))  # (..., nyp, nzp // 2 + 1): dz = 0 .. nzp / 2
     rows = np.concatenate([half[..., nyp - ny + 1 :, :nz], half[..., :ny, :nz]], axis=-2)  # dy = -(ny - 1) .. ny - 1
     neg = np.conj(rows[..., ::-1, :0:-1])  # dz = -(nz - 1) .. -1: F(dy, -m) = conj(F(-dy, m))
     return np.concatenate([neg, rows], axis=-1)

@@ -9,7 +9,8 @@ conj(X_p) X_{p+d} of each separation, and the u-w cross-products; per point, the
 from __future__ import annotations
 
 import numpy as np
-import scipy.fft
+
+from turbgen import fft
 
 COMPONENTS = ("u", "v", "w")
 
@@ -75,7 +76,7 @@ def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy
             else:
                 mean = data[c][s : s + n].mean(axis=0, dtype=np.float64).astype(np.float32)
             window_segment(data[c], s, w, mean, seg_buf)
-            x = scipy.fft.rfft(seg_buf, axis=0, workers=1)  # (nf, ny + 1, nz): row ny is never read
+            x = fft.oneshot().rfft(seg_buf, axis=0, workers=1)  # (nf, ny + 1, nz): row ny is never read
             spec[c] = x
             spectrum_sums(x.view(np.float32), ny, sep_a, sep_b, total[c], part_a[c], part_b[c], cross[c])
         cross_sum(spec["u"].view(np.float32), spec["w"].view(np.float32), ny, uw)
