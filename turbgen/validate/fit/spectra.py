@@ -25,8 +25,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.fft
 
+from turbgen import fft
 from turbgen.errors import ParameterError
 from turbgen.validate.estimators import MIN_NPERSEG, WelchSetup, default_nperseg, segment_starts
 from turbgen.validate.fit.data import FitData
@@ -124,7 +124,7 @@ def _segment_dfts(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, np.ndar
     segs = np.where(ok[..., None], segs, 0.0)
     segs -= segs.mean(axis=2, keepdims=True)
     segs *= setup.window
-    return scipy.fft.rfft(segs, axis=2).transpose(0, 2, 1), ok
+    return fft.oneshot().rfft(segs, axis=2).transpose(0, 2, 1), ok
 
 
 def _rho_bar(X: np.ndarray, bands: tuple) -> np.ndarray:
