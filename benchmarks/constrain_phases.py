@@ -42,7 +42,7 @@ def main() -> None:
     a = ap.parse_args()
     w = a.workdir
     w.mkdir(exist_ok=True)
-    common = dict(nt=a.nt, ny=a.ny, nz=a.ny, dy=a.dy, gates="50:170:13.3", turb_class="A")
+    common = dict(nt=a.nt, ny=a.ny, nz=a.ny, dy=a.dy, gates="50:170:13.3", config={"turb_class": "A"})
     if not (w / "truth_lidar.zarr").exists():
         turbgen.mann(seed=1, out=w / "truth.zarr", overwrite=True, **common)
         turbgen.lidar(w / "truth.zarr", out=w / "truth_lidar.zarr")

@@ -52,7 +52,7 @@ def make_fields(work: Path, nt: int, ny: int, dy: float, threads: int | None) ->
     """truth (seed 1), its lidar dataset, seed 2 plain, conditioned (sample) and the conditional mean; seconds."""
     # the IEC class A level of the defaults given explicitly: the prior's ae is the truth's (none given, a
     # constrained run would estimate it from the data)
-    common = dict(nt=nt, ny=ny, nz=ny, dy=dy, gates="50:170:13.3", turb_class="A", threads=threads)
+    common = dict(nt=nt, ny=ny, nz=ny, dy=dy, gates="50:170:13.3", config={"turb_class": "A"}, threads=threads)
     seconds = {}
 
     def timed(name, fn):

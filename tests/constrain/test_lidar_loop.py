@@ -11,7 +11,7 @@ import turbgen
 from turbgen.lidar import signals
 from turbgen.store import open_store
 
-SMALL = dict(nt=256, ny=16, nz=16, dy=8.0, gates="50:170:13.3", turb_class="A", threads=1)  # the truth's ae
+SMALL = dict(nt=256, ny=16, nz=16, dy=8.0, gates="50:170:13.3", config={"turb_class": "A"}, threads=1)  # the truth's ae
 
 
 def _coherence_error(coh2: np.ndarray, n_eff: float) -> np.ndarray:
