@@ -40,6 +40,7 @@ CONSTRAINTS = InputKind("constraint file", _mib(64))  # measured point series (J
 LINE_OF_SIGHT = InputKind("line-of-sight file", _mib(256))  # a v_los record (CSV or netCDF)
 MEAN_HISTORY = InputKind("mean history", _mib(64))  # hub-height speed and direction over time
 PROFILE_TABLE = InputKind("profile table", _mib(1))  # z, U[, direction] rows
+SPECTRUM = InputKind("spectrum file", _mib(16))  # f_hz, S_u, S_v, S_w rows (a user spectrum)
 TOKEN = InputKind("token file", 4096)
 
 _NOT_REGULAR = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO or pipe"), (stat.S_ISCHR, "a character device"),

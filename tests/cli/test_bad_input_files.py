@@ -55,7 +55,7 @@ def files(tmp_path_factory):
     root = tmp_path_factory.mktemp("bad_files")
     fifos = []
     for name in ("run.toml", "run.json", "points.json", "los.csv", "los.nc", "table.csv", "history.csv",
-                 "lidar.toml", "presets.toml", "token", "sweep.toml"):  # fmt: skip
+                 "lidar.toml", "presets.toml", "token", "sweep.toml", "spectrum.csv"):  # fmt: skip
         os.mkfifo(root / f"fifo_{name}")
         fifos.append(root / f"fifo_{name}")
     for name, size in (("big_points.json", CONSTRAINTS.max_bytes + 1), ("big_table.csv", PROFILE_TABLE.max_bytes + 1),
@@ -91,6 +91,8 @@ CASES = [  # (id, args with {d} for the directory, substrings of the single erro
     ("lidar-file-fifo", ["lidar", "{store}", "--lidar", "{d}/fifo_lidar.toml"], [FIFO_RULE]),
     ("serve-token-file-fifo", ["serve", "--token-file", "{d}/fifo_token", "--port", "0", "--root", "{d}/srv"],
      ["token file", FIFO_RULE]),
+    ("kaimal-spectrum-fifo", ["kaimal", *SMALL, "--spectrum", "{d}/fifo_spectrum.csv"], ["spectrum file", FIFO_RULE]),
+    ("kaimal-spectrum-dev-zero", ["kaimal", *SMALL, "--spectrum", "/dev/zero"], ["spectrum file", DEVICE_RULE]),
     ("config-dev-zero", ["mann", "--config", "/dev/zero"], ["/dev/zero", DEVICE_RULE]),
     ("constrain-dev-zero", ["mann", *SMALL, "--constrain", "/dev/zero"], ["/dev/zero", DEVICE_RULE]),
     ("constrain-dev-urandom", ["mann", *SMALL, "--constrain", "/dev/urandom"], ["/dev/urandom", DEVICE_RULE]),

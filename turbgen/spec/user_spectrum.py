@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Mapping
-from pathlib import Path
 
 import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
+from turbgen.input_files import SPECTRUM, read_input_text
 from turbgen.theory.user_spectra import COLUMNS, LineSpectrum
 
 
@@ -36,10 +36,7 @@ def read_spectrum_csv(path) -> tuple[np.ndarray, np.ndarray]:
     ParameterError
         If the file cannot be read, lacks the header or has a row that is not four numbers.
     """
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ParameterError(f"spectrum file {path}: cannot be read ({exc.__class__.__name__}: {exc})") from None
+    text = read_input_text(path, SPECTRUM)  # a regular file of at most its cap (a FIFO or device: refused)
     rows = [(n, line.strip()) for n, line in enumerate(text.splitlines(), 1)
             if line.strip() and not line.lstrip().startswith("#")]  # fmt: skip
     header = [name.strip() for name in rows[0][1].split(",")] if rows else []
