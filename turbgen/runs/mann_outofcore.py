@@ -59,8 +59,10 @@ from turbgen.synthesis.mann_stencil import build_stencil, synthesis_box
 BASE_BYTES = 250 * 2**20  # the interpreter with turbgen, numpy, scipy, zarr, pyfftw loaded (VmHWM measured 165 MiB,
 # 197 MiB in a fresh virtualenv) + slack
 # what a run allocates after it is planned besides the planned arrays: the axis cells' temporaries (~100 k tensor
-# nodes at a time: +30 MiB of resident memory measured on a 2048 x 64 x 64 box), FFTW plans, zarr's buffers
-LATE_BYTES = 48 * 2**20
+# nodes at a time: +30 MiB of resident memory measured on a 2048 x 64 x 64 box), FFTW plans, zarr's buffers, and the
+# compiled kernels' library pages mapped when they load (libllvmlite.so is 40 MiB resident after the imports in a
+# long-installed environment, 85 MiB in a freshly installed one, whose files the page cache holds in larger pieces)
+LATE_BYTES = 96 * 2**20
 # what a LocalCluster adds to the process that starts it: distributed (imported: +13 MiB), its scheduler (+2 MiB)
 # and multiprocessing's resource tracker process (15 MiB), measured
 LOCAL_CLUSTER_BYTES = 32 * 2**20
