@@ -27,9 +27,9 @@ RUN = """
 import json, sys, time
 import numpy as np
 from turbgen.store import open_store
-from turbgen.lidar.description import load_lidar
-from turbgen.lidar.run import run_lidar
-from turbgen.lidar.report import store_theory
+from turbgen.virtual_lidar.description import load_lidar
+from turbgen.virtual_lidar.run import run_lidar
+from turbgen.virtual_lidar.report import store_theory
 fs = open_store(sys.argv[1])
 t0 = time.perf_counter()
 for t in range(0, fs.grid.nt, fs.chunk_t):

@@ -9,8 +9,8 @@ import time
 
 import numpy as np
 
-from turbgen.lidar.description import PRESETS
-from turbgen.lidar.preview import preview_spectra
+from turbgen.virtual_lidar.description import PRESETS
+from turbgen.virtual_lidar.preview import preview_spectra
 from turbgen.theory.lidar_control import cutoff_frequency_hz
 
 

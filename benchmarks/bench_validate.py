@@ -10,7 +10,7 @@ with the wall time, the CPU time of all threads, the split estimate / theory / v
 runs in its own thread while the store is read, so its seconds overlap the estimate's), the 1-minute
 load average at the end (a loaded machine stretches the wall time), the peak RSS, the store size and
 the verdict; then the wall time of validating the store again in the same process, as the next seed of a
-sweep is (``again_wall_s``: the predictions are kept, turbgen.validate.theory_cache); and the wall time of the
+sweep is (``again_wall_s``: the predictions are kept, turbgen.validation.theory_cache); and the wall time of the
 command `turbgen validate --json STORE` in a new process (``cli_wall_s``: what a user waits for, process start and
 imports included). The uncompressed default field is 3 x 738 MiB; the validator reads it chunk by chunk
 (one task per plane and span of time chunks), so its memory follows the chunks, not the field.
@@ -37,7 +37,7 @@ run_mann(run, sys.argv[1])
 
 VALIDATE = """
 import json, os, resource, sys, time
-from turbgen.validate import validate
+from turbgen.validation import validate
 t0, c0 = time.perf_counter(), time.process_time()
 r = validate(sys.argv[1], rotor_radius_m=float(sys.argv[2]))
 wall, cpu = time.perf_counter() - t0, time.process_time() - c0

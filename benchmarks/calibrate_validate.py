@@ -40,7 +40,7 @@ from scipy.stats import beta, binom
 from turbgen.runs.kaimal import run_kaimal
 from turbgen.runs.mann import build_mann_stencil, run_mann
 from turbgen.sweep.plan import build_run
-from turbgen.validate import ALPHA, validate
+from turbgen.validation import ALPHA, validate
 
 SMALL = {"ny": 12, "nz": 12, "dy": 10.0, "dz": 10.0}
 TINY = {"ny": 8, "nz": 8, "dy": 12.0, "dz": 12.0}

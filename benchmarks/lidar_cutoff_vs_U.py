@@ -14,8 +14,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from turbgen.lidar.description import PRESETS
-from turbgen.lidar.preview import preview_spectra
+from turbgen.virtual_lidar.description import PRESETS
+from turbgen.virtual_lidar.preview import preview_spectra
 from turbgen.theory.lidar_control import cutoff_frequency_hz
 
 PAPER_16 = {("mann", "unstable"): 0.0544, ("mann", "neutral"): 0.0490, ("mann", "stable"): 0.0455,

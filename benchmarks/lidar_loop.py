@@ -11,7 +11,7 @@ Guo et al. 2023 Eq. 23, on the lidar's arrival-time grid) and for a hub-height s
 plane), each field is compared with the truth's:
 
 - magnitude-squared coherence with the truth's signal (Welch, the lidar report's segments), against the preview
-  theory's gamma^2_RL of the truth's store (turbgen.lidar.report.store_theory: u_LL vs u_RR of what the box holds).
+  theory's gamma^2_RL of the truth's store (turbgen.virtual_lidar.report.store_theory: u_LL vs u_RR of what the box holds).
   The conditional mean mu = E[T | d] has cov(mu, T) = var(mu), so its coherence with T is the fraction of T's
   spectrum explained by *all* the data: >= gamma^2_RL, which u_LL (one linear function of the data) explains.
   A conditional sample mu + r, r independent of T with the posterior variance, has coherence (gamma^2_mu)^2.
@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 import turbgen
-from turbgen.lidar import signals
+from turbgen.virtual_lidar import signals
 from turbgen.store import open_store
 
 

@@ -29,13 +29,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from turbgen.lidar import compare, signals
-from turbgen.lidar.description import load_lidar
-from turbgen.lidar.report import store_theory
-from turbgen.lidar.run import measurements_of
-from turbgen.lidar.sampling import sample
+from turbgen.virtual_lidar import compare, signals
+from turbgen.virtual_lidar.description import load_lidar
+from turbgen.virtual_lidar.report import store_theory
+from turbgen.virtual_lidar.run import measurements_of
+from turbgen.virtual_lidar.sampling import sample
 from turbgen.store import open_store
-from turbgen.validate.estimators import WelchSetup
+from turbgen.validation.estimators import WelchSetup
 
 ROOT = Path(__file__).resolve().parents[1]
 NPERSEG = 256  # lidar steps of 0.25 s: 64 s segments, ~63 half-overlapping segments per 2048 s field

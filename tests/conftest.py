@@ -27,7 +27,7 @@ _theory_kept_for = None  # the module whose tests share the validator's kept pre
 
 @pytest.fixture(autouse=True)
 def _no_kept_validator_theory(request):
-    """Every test starts without predictions kept by an earlier one (turbgen.validate.theory_cache): a test that
+    """Every test starts without predictions kept by an earlier one (turbgen.validation.theory_cache): a test that
     monkeypatches the validator's internals must compute its theory afresh. A module that sets
     ``KEEP_VALIDATOR_THEORY = True`` (it patches nothing of the validator) keeps them from one of its tests to the
     next, as a sweep keeps them between stores that differ only in seed; its first test starts without any."""
@@ -35,7 +35,7 @@ def _no_kept_validator_theory(request):
 
     global _theory_kept_for
     keep = getattr(request.module, "KEEP_VALIDATOR_THEORY", False)
-    kept = sys.modules.get("turbgen.validate.theory_cache")
+    kept = sys.modules.get("turbgen.validation.theory_cache")
     if kept is not None and not (keep and _theory_kept_for is request.module):
         kept.clear()
     _theory_kept_for = request.module if keep else None

@@ -25,8 +25,6 @@ Names are imported on first use, so ``import turbgen`` (and every command) stays
 from __future__ import annotations
 
 import importlib
-import inspect
-import types
 from typing import TYPE_CHECKING
 
 from turbgen.version import __version__
@@ -37,8 +35,8 @@ _INFO = ("info",)
 _OBJECTS = {"MannParams": "turbgen.theory.params", "KaimalParams": "turbgen.theory.params", "Grid": "turbgen.grid",
             "MannGenerator": "turbgen.api.generator", "KaimalGenerator": "turbgen.api.generator",
             "fit_mann": "turbgen.api.fit"}
-# API functions named like a subpackage: turbgen.validate(...) calls the function, turbgen.validate.report is the
-# subpackage's module (see _Package)
+# what is made from a field (turbgen.api.products); the packages behind them are turbgen.validation,
+# turbgen.exporters and turbgen.virtual_lidar
 _PRODUCTS = ("validate", "export", "lidar")
 _MODULES = ("theory", "errors", "api")
 __all__ = ["__version__", *_FIELDS, *_PRODUCTS, *_INFO, *_OBJECTS, "theory", "errors"]
@@ -53,58 +51,10 @@ if TYPE_CHECKING:
     from turbgen.theory.params import KaimalParams, MannParams
 
 
-class _Product:
-    # ``turbgen.validate`` (``export``, ``lidar``): the API function (turbgen.api.products) and a subpackage share
-    # one name, so ``turbgen.validate(store)`` calls the function while attribute reads and writes go to the
-    # subpackage (imported on first use): ``import turbgen.validate.report`` and ``turbgen.export.EXPORTERS`` work.
-
-    def __init__(self, name: str):
-        object.__setattr__(self, "_name", name)
-
-    def _function(self):
-        return getattr(importlib.import_module("turbgen.api.products"), self._name)
-
-    def _package(self):
-        return importlib.import_module(f"turbgen.{self._name}")
-
-    def __call__(self, *args, **kwargs):
-        return self._function()(*args, **kwargs)
-
-    # help(), inspect.signature() and Sphinx see the function
-    __doc__ = property(lambda self: self._function().__doc__)
-    __signature__ = property(lambda self: inspect.signature(self._function()))
-
-    def __getattr__(self, attr):
-        return getattr(self._package(), attr)
-
-    # vars(turbgen.validate) is the subpackage's namespace, as for a module (tools such as pytest's monkeypatch read
-    # and restore attributes through it)
-    __dict__ = property(lambda self: vars(self._package()))
-
-    def __setattr__(self, attr, value):
-        setattr(self._package(), attr, value)
-
-    def __delattr__(self, attr):
-        delattr(self._package(), attr)
-
-    def __repr__(self) -> str:
-        return f"<turbgen.{self._name}: function turbgen.api.products.{self._name} and package turbgen.{self._name}>"
-
-
-class _Package(types.ModuleType):
-    """The ``turbgen`` module: importing a subpackage named like an API function keeps the function's name bound to
-    its _Product (the import system sets ``turbgen.<name>`` to the subpackage, which this ignores)."""
-
-    def __setattr__(self, name, value):
-        if name in _PRODUCTS and isinstance(value, types.ModuleType):
-            return
-        super().__setattr__(name, value)
-
-
 def __getattr__(name: str):
     if name in _FIELDS:
         return getattr(importlib.import_module("turbgen.api.fields"), name)
-    if name in _INFO:
+    if name in _INFO or name in _PRODUCTS:
         return getattr(importlib.import_module("turbgen.api.products"), name)
     if name in _OBJECTS:
         return getattr(importlib.import_module(_OBJECTS[name]), name)
@@ -117,5 +67,3 @@ def __dir__():
     return sorted({*globals(), *__all__})
 
 
-validate, export, lidar = (_Product(name) for name in _PRODUCTS)
-importlib.import_module(__name__).__class__ = _Package

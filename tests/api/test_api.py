@@ -165,11 +165,12 @@ def test_existing_out_is_not_replaced_without_overwrite(tmp_path):
     np.testing.assert_array_equal(turbgen.open_store(out).u.values, first)
 
 
-def test_product_names_are_functions_and_packages():
-    import turbgen.validate.report as report  # the subpackage stays importable under the function's name
+def test_product_names_are_functions_beside_their_packages():
+    import turbgen.validation.report  # importing a package behind a product leaves the product's name alone
 
-    assert callable(turbgen.validate) and report.__name__ == "turbgen.validate.report"
-    assert "bts" in turbgen.export.EXPORTERS
+    assert callable(turbgen.validate) and callable(turbgen.export) and callable(turbgen.lidar)
+    assert turbgen.validate.__module__ == "turbgen.api.products"
+    assert "bts" in turbgen.exporters.EXPORTERS
     assert "store" in str(__import__("inspect").signature(turbgen.lidar))
 
 
@@ -186,19 +187,3 @@ def test_theory_namespace_names_resolve_and_its_examples_run():
     for name in theory.__all__:
         assert callable(getattr(theory, name)), name
     assert doctest.testmod(theory).failed == 0
-
-
-def test_attributes_patched_through_a_product_name_are_restored():
-    # pytest (>= 9) restores what monkeypatch changed through the object's __dict__: vars(turbgen.export) must be the
-    # subpackage's namespace, or the undo deletes the subpackage's attribute (require_disk vanished for later tests)
-    import importlib
-
-    from _pytest.monkeypatch import MonkeyPatch
-
-    package = importlib.import_module("turbgen.export")
-    original = package.require_disk
-    patch = MonkeyPatch()
-    patch.setattr("turbgen.export.require_disk", lambda *a, **k: None)
-    assert package.require_disk is not original
-    patch.undo()
-    assert package.require_disk is original and vars(turbgen.export) is vars(package)

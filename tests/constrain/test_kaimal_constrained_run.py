@@ -11,7 +11,7 @@ import pytest
 from click.testing import CliRunner
 
 from turbgen.cli import cli
-from turbgen.lidar.dataset import read_dataset
+from turbgen.virtual_lidar.dataset import read_dataset
 from turbgen.runs.constrain import place
 from turbgen.runs.constrain_kaimal import run_kaimal_constrained
 from turbgen.spec.constraints import point_series_from_mapping
@@ -19,7 +19,7 @@ from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import open_store
 from turbgen.synthesis import conditioning as cond
 from turbgen.synthesis.kaimal_evo import COMPONENTS
-from turbgen.validate import validate
+from turbgen.validation import validate
 
 GRID = {"nt": 128, "dt_s": 0.5, "x_m": [0.0, 40.0], "ny": 4, "nz": 4, "dy_m": 10.0, "dz_m": 10.0}
 SMALL = ["--U", "16", "--nt", "128", "--ny", "4", "--nz", "4", "--dy", "10", "--dz", "10", "--planes", "0,40",

@@ -11,10 +11,10 @@ import pytest
 from click.testing import CliRunner
 
 from turbgen.cli import cli
-from turbgen.lidar.dataset import read_dataset
-from turbgen.lidar.description import lidar_from_mapping
-from turbgen.lidar.run import measurements_of
-from turbgen.lidar.sampling import adjoint_los, apply_los, check_measurements, los_operator
+from turbgen.virtual_lidar.dataset import read_dataset
+from turbgen.virtual_lidar.description import lidar_from_mapping
+from turbgen.virtual_lidar.run import measurements_of
+from turbgen.virtual_lidar.sampling import adjoint_los, apply_los, check_measurements, los_operator
 from turbgen.runs.constrain import place
 from turbgen.spec.mann import MannRun
 from turbgen.synthesis.conditioning import measure

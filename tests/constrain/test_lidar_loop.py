@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import turbgen
-from turbgen.lidar import signals
+from turbgen.virtual_lidar import signals
 from turbgen.store import open_store
 
 SMALL = dict(nt=256, ny=16, nz=16, dy=8.0, gates="50:170:13.3", config={"turb_class": "A"}, threads=1)  # the truth's ae

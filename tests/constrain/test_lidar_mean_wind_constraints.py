@@ -12,7 +12,7 @@ from click.testing import CliRunner
 
 from test_lidar_constraints import GRID, LIDAR
 from turbgen.cli import cli
-from turbgen.lidar.dataset import read_dataset
+from turbgen.virtual_lidar.dataset import read_dataset
 from turbgen.spec.mean_wind import MeanWind
 
 # the Mann default U is 16 m/s; the record is 256 x 0.5 s

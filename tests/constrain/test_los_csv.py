@@ -1,4 +1,4 @@
-"""Line-of-sight data as a plain CSV file (turbgen.lidar.los_csv): the same constraint as the dataset it was written
+"""Line-of-sight data as a plain CSV file (turbgen.virtual_lidar.los_csv): the same constraint as the dataset it was written
 from, and one-line refusals of malformed files."""
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from click.testing import CliRunner
 from test_lidar_constraints import GRID, LIDAR, loop  # noqa: F401  (the truth and its lidar record)
 from turbgen.cli import cli
 from turbgen.errors import ParameterError
-from turbgen.lidar.dataset import read_dataset
-from turbgen.lidar.los_csv import read_los_csv
+from turbgen.virtual_lidar.dataset import read_dataset
+from turbgen.virtual_lidar.los_csv import read_los_csv
 from turbgen.runs.constrain import place
 from turbgen.spec.mann import MannRun
 from turbgen.store import open_store
@@ -120,7 +120,7 @@ def _netcdf(path, data, engine, attrs=None, drop=None):
 
 @pytest.mark.parametrize("engine", ["h5netcdf", "scipy"])  # netCDF4/HDF5 and netCDF3 files
 def test_netcdf_places_the_same_streams_and_data_as_the_dataset(record, engine):
-    from turbgen.lidar.los_netcdf import read_los_netcdf
+    from turbgen.virtual_lidar.los_netcdf import read_los_netcdf
     from turbgen.runs.constrain import load_constraint
 
     d, data = record
@@ -140,7 +140,7 @@ def test_netcdf_places_the_same_streams_and_data_as_the_dataset(record, engine):
     (None, "gate", r"the variables must be time_s, beam, gate, v_los_m_s \(missing gate\)"),
 ])  # fmt: skip
 def test_malformed_netcdf_is_refused_in_one_line(record, tmp_path, attrs, drop, message):
-    from turbgen.lidar.los_netcdf import read_los_netcdf
+    from turbgen.virtual_lidar.los_netcdf import read_los_netcdf
 
     d, data = record
     (tmp_path / "small.json").write_text(json.dumps(LIDAR))
@@ -159,7 +159,7 @@ def test_the_documented_netcdf_example_runs(tmp_path, monkeypatch):
     import re
     from pathlib import Path
 
-    from turbgen.lidar.los_netcdf import read_los_netcdf
+    from turbgen.virtual_lidar.los_netcdf import read_los_netcdf
 
     page = (Path(__file__).resolve().parents[2] / "docs" / "constrained-fields.md").read_text()
     block = re.search(r"The same table as a netCDF file.*?```python\n(.*?)```", page, re.S).group(1)

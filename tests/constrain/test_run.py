@@ -17,7 +17,7 @@ from turbgen.spec.constraints import point_series_from_mapping
 from turbgen.spec.mann import MannRun
 from turbgen.store import open_store
 from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_spectrum, slab_weight
-from turbgen.validate import validate
+from turbgen.validation import validate
 
 GRID = {"nt": 128, "dt_s": 0.5, "x_m": [0.0, 40.0], "ny": 4, "nz": 4, "dy_m": 10.0}
 SMALL = ["--nt", "128", "--ny", "4", "--nz", "4", "--dy", "10", "--planes", "0,40", "--threads", "1"]

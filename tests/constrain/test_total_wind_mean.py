@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from turbgen.errors import ParameterError
-from turbgen.export import ExportRequest, export_store, read_hawc2
+from turbgen.exporters import ExportRequest, export_store, read_hawc2
 from turbgen.runs.constrain import describe_constraints, run_mann_constrained
 from turbgen.spec.constraints import load_point_series, point_series_from_mapping
 from turbgen.spec.mann import MannRun

@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 from turbgen.cli import cli
-from turbgen.export import read_bts
+from turbgen.exporters import read_bts
 from turbgen.store import open_store
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from turbgen.export.bts import int16_scaling, quantise, tower_heights
+from turbgen.exporters.bts import int16_scaling, quantise, tower_heights
 
 
 def test_int16_range_ends_and_saturation():

@@ -9,7 +9,7 @@ from click.testing import CliRunner
 
 import turbgen
 from turbgen.cli import cli
-from turbgen.export.bts import read_bts
+from turbgen.exporters.bts import read_bts
 
 CCW, CW = "counter-clockwise seen from above", "clockwise seen from above"
 

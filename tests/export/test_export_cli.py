@@ -9,7 +9,7 @@ from click.testing import CliRunner
 
 from export_fixtures import make_store
 from turbgen.cli import cli
-from turbgen.export import ExportRequest, export_store
+from turbgen.exporters import ExportRequest, export_store
 from turbgen.store import FieldStore
 
 

@@ -12,7 +12,7 @@ import pytest
 
 from export_fixtures import make_store
 from turbgen.errors import ParameterError
-from turbgen.export import (ExportRequest, export_store, read_bts, read_evo, read_hawc2, read_hdf5, read_mt4d,
+from turbgen.exporters import (ExportRequest, export_store, read_bts, read_evo, read_hawc2, read_hdf5, read_mt4d,
                             read_sum, read_wnd)
 
 HUB, U, ALPHA = 20.0, 10.0, 0.2

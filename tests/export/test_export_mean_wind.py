@@ -12,7 +12,7 @@ from click.testing import CliRunner
 
 from export_fixtures import make_store
 from turbgen.cli import cli
-from turbgen.export import ExportRequest, export_store, read_bts, read_hawc2, read_wnd
+from turbgen.exporters import ExportRequest, export_store, read_bts, read_hawc2, read_wnd
 from turbgen.spec.mean_wind import MeanWind
 
 HUB, U, NT, DT = 20.0, 10.0, 64, 0.1
@@ -177,7 +177,7 @@ def test_mean_wind_refused_by_formats_without_a_mean(store, tmp_path):
 
 
 def test_sum_title_cannot_fake_a_key(store, tmp_path):
-    from turbgen.export import read_sum
+    from turbgen.exporters import read_sum
 
     path, _ = store
     wind = MeanWind(profile="table", table_heights_m=(5.0, 40.0), table_speeds_m_s=(8.0, 11.0),

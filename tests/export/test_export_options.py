@@ -10,8 +10,8 @@ import turbgen
 from export_fixtures import make_store
 from turbgen.cli import cli
 from turbgen.errors import ParameterError
-from turbgen.export import ExportRequest, export_store
-from turbgen.export.options import ExportOptions, export_request
+from turbgen.exporters import ExportRequest, export_store
+from turbgen.exporters.options import ExportOptions, export_request
 from turbgen.spec.mean_wind import MeanWind
 
 

@@ -13,7 +13,7 @@ from click.testing import CliRunner
 from export_fixtures import make_store
 from turbgen.cli import cli
 from turbgen.errors import ParameterError
-from turbgen.export import ExportRequest, export_store, read_bts, read_hawc2
+from turbgen.exporters import ExportRequest, export_store, read_bts, read_hawc2
 from turbgen.spec.iec_transient import IecTransient
 from turbgen.spec.mean_wind import MeanWind
 

@@ -13,7 +13,7 @@ from click.testing import CliRunner
 
 from turbgen.cli import cli
 from turbgen.errors import ParameterError
-from turbgen.export.uniform_wind import export_transient, read_uniform
+from turbgen.exporters.uniform_wind import export_transient, read_uniform
 from turbgen.spec.iec_transient import IecTransient
 
 HUB, D, V = 90.0, 126.0, 12.0

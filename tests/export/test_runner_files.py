@@ -14,7 +14,7 @@ from click.testing import CliRunner
 
 from export_fixtures import make_store
 from turbgen.cli import cli
-from turbgen.export import ExportRequest, export_store, read_bts
+from turbgen.exporters import ExportRequest, export_store, read_bts
 
 reader = pytest.importorskip("openfast_io.FAST_reader")
 HUB, U = 20.0, 10.0

@@ -7,13 +7,13 @@ import pytest
 from click.testing import CliRunner
 
 from turbgen.cli import cli
-from turbgen.lidar import compare, signals
-from turbgen.lidar.description import load_lidar
-from turbgen.lidar.report import store_theory
-from turbgen.lidar.run import measurements_of, run_lidar
-from turbgen.lidar.sampling import sample
+from turbgen.virtual_lidar import compare, signals
+from turbgen.virtual_lidar.description import load_lidar
+from turbgen.virtual_lidar.report import store_theory
+from turbgen.virtual_lidar.run import measurements_of, run_lidar
+from turbgen.virtual_lidar.sampling import sample
 from turbgen.store import open_store
-from turbgen.validate.estimators import WelchSetup
+from turbgen.validation.estimators import WelchSetup
 
 # Small fields: the default 4096 x 64 x 64 Mann store takes 20 s (idle) to 190 s (shared box) to
 # generate, so 10 of them do not fit the test budget. nt = 1024 x 32 x 32 (rotor R = 63 m and the
@@ -120,12 +120,12 @@ def test_time_domain_matches_frequency_domain_and_shuffled_planes_fail(stores):
     expected = store_theory(fs, desc, f[1:-1], desc.rotor_radius_m, setup, n_samples)
     th = np.concatenate([[0.0], expected.coh2_RL, [0.0]])
     # Equivalent independent segments per bin: the rule of thumb's 13.3 per field, except 10.5 in bin 1, where
-    # the window collects the large low-frequency lines (turbgen.lidar.welch_expectation.effective_segments).
+    # the window collects the large low-frequency lines (turbgen.virtual_lidar.welch_expectation.effective_segments).
     n_bins = np.concatenate([[n_eff], len(SEEDS) * expected.n_eff, [n_eff]])
     # The theory is the expected Welch estimate of what the 64 x 64 (padded) box holds: its (k2, k3) lattice
     # summed and the record's lines weighted by the window (against the continuous theory at the bin centres
     # the 68 seeds 11..78 pooled were at z -4.4, +5.4, +5.5 in bins 1-3 under the delta method; against this
-    # one -2.5, +0.5, +2.3). Tested from bin 1 with Goodman's law of the estimate (turbgen.lidar.compare): the
+    # one -2.5, +0.5, +2.3). Tested from bin 1 with Goodman's law of the estimate (turbgen.virtual_lidar.compare): the
     # seeds, fixed before, sit at gamma^2 = 0.908 vs 0.949 in bin 1, z = -2.8 (the delta method with the rule's
     # n_eff said -4.16; a Monte-Carlo of the estimator puts such an ensemble at its 0.19 % quantile, z -2.9).
     ok = compare.coherence_metric(f, coh2, th, n_bins)
@@ -167,6 +167,6 @@ def test_out_never_replaces_a_field_store(tiny_store):
 @pytest.mark.parametrize("shear", ["nan", "inf", "50"])
 def test_bad_shear_exponent_is_exit_2(tiny_store, shear):
     # found with `--mean-wind --shear nan`: NaN lidar TI and a coherence FAIL at |z| 37 (exit 1) instead of
-    # a usage error; the range is the exports' (turbgen.export.shear.vertical_layout)
+    # a usage error; the range is the exports' (turbgen.exporters.shear.vertical_layout)
     r = CliRunner().invoke(cli, ["lidar", str(tiny_store), "--mean-wind", "--shear", shear])
     assert r.exit_code == 2 and len(r.output.strip().splitlines()) == 1 and "shear exponent" in r.output, r.output

@@ -5,12 +5,12 @@ import pytest
 from scipy.special import hyp2f1
 from scipy.stats import norm
 
-from turbgen.lidar import compare, signals
-from turbgen.lidar.welch_expectation import effective_segments, weigh_lines
-from turbgen.validate.distributions import coh2_moments, coh2_quantile, coh2_tails, coh2_z
-from turbgen.validate.estimators import WelchSetup, segment_starts
-from turbgen.validate.welch_kernel import WelchKernel
-from turbgen.validate.welch_variance import WelchCovariance
+from turbgen.virtual_lidar import compare, signals
+from turbgen.virtual_lidar.welch_expectation import effective_segments, weigh_lines
+from turbgen.validation.distributions import coh2_moments, coh2_quantile, coh2_tails, coh2_z
+from turbgen.validation.estimators import WelchSetup, segment_starts
+from turbgen.validation.welch_kernel import WelchKernel
+from turbgen.validation.welch_variance import WelchCovariance
 
 
 def _segment_coherence(rng, g2, n, trials):
@@ -98,7 +98,7 @@ def test_metric_z_is_the_laws_normal_score():
 
 
 def test_effective_segments_match_the_exact_welch_covariance():
-    # independent implementation: turbgen.validate.welch_variance (E^2 / Var of one point's Welch estimate)
+    # independent implementation: turbgen.validation.welch_variance (E^2 / Var of one point's Welch estimate)
     setup, nt = WelchSetup(64, 1.0), 1024
     lines = np.arange(1, nt // 2) / nt
     S = 1 / (1 + (lines / 0.01) ** 2) ** (5 / 6)

@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from turbgen.lidar import compare, signals
-from turbgen.validate.estimators import WelchSetup
+from turbgen.virtual_lidar import compare, signals
+from turbgen.validation.estimators import WelchSetup
 
 
 def pair(coh2, n, seed):

@@ -9,8 +9,8 @@ from click.testing import CliRunner
 
 from test_lidar_sampling import GRID, U, make_store, schedule
 from turbgen.cli import cli
-from turbgen.lidar import sampling
-from turbgen.lidar.sampling import Measurement
+from turbgen.virtual_lidar import sampling
+from turbgen.virtual_lidar.sampling import Measurement
 from turbgen.spec.mean_wind import MeanWind
 
 HUB = 100.0

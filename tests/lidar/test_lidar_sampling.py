@@ -5,11 +5,11 @@ import pytest
 
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
-from turbgen.lidar import sampling, signals
-from turbgen.lidar.sampling import Measurement
+from turbgen.virtual_lidar import sampling, signals
+from turbgen.virtual_lidar.sampling import Measurement
 from turbgen.store import create_store, layout, open_store
-from turbgen.validate.estimators import WelchSetup
-from turbgen.validate.point_sets import rotor_mask
+from turbgen.validation.estimators import WelchSetup
+from turbgen.validation.point_sets import rotor_mask
 
 U = 20.0
 GRID = Grid(nt=64, dt_s=0.5, x_m=(0.0, 40.0, 80.0), ny=9, nz=7, dy_m=5.0, dz_m=5.0)  # x/U = 0, 4, 8 samples

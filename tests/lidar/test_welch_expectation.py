@@ -3,12 +3,12 @@
 import numpy as np
 import pytest
 
-from turbgen.lidar.description import PRESETS
-from turbgen.lidar.welch_expectation import expected_welch, theory_nodes, weigh_lines
+from turbgen.virtual_lidar.description import PRESETS
+from turbgen.virtual_lidar.welch_expectation import expected_welch, theory_nodes, weigh_lines
 from turbgen.spec.preset_runs import mann_params_for
 from turbgen.theory.lidar_lattice import BoxLattice
 from turbgen.theory.lidar_preview import PreviewSpectra, mann_preview_spectra
-from turbgen.validate.estimators import WelchSetup
+from turbgen.validation.estimators import WelchSetup
 
 SETUP = WelchSetup(64, 0.25)
 RECORD_S = 128.0  # 8 lines per Welch bin

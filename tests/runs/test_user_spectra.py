@@ -27,7 +27,7 @@ from turbgen.store.layout import CALLER_ATTRS
 from turbgen.theory.kaimal import iec_kaimal_params, kaimal_band_variance, kaimal_spectrum
 from turbgen.theory.lattice import line_bands
 from turbgen.theory.user_spectra import LineSpectrum
-from turbgen.validate import validate
+from turbgen.validation import validate
 
 SMALL = dict(U=12, nt=128, ny=6, nz=6, planes=[0, 50, 100], seed=2)
 IEC = iec_kaimal_params(12.0)

@@ -19,7 +19,7 @@ import xarray as xr
 
 from service_server import TINY_GRID, Server
 
-from turbgen.export import export_store, read_bts, read_hawc2
+from turbgen.exporters import export_store, read_bts, read_hawc2
 from turbgen.store import open_store
 
 CHROMEDRIVER = shutil.which("chromedriver")

@@ -131,7 +131,7 @@ def test_stencil_cache_trim_keeps_the_most_recent_entry(tmp_path):
 
 
 class _SlowValidation:
-    """Stands in for turbgen.validate.validate: each call blocks until ``release`` (at most 60 s) and counts."""
+    """Stands in for turbgen.validation.validate: each call blocks until ``release`` (at most 60 s) and counts."""
 
     def __init__(self):
         self.release = threading.Event()
@@ -157,7 +157,7 @@ class _Report:
 @pytest.fixture
 def slow_server(tmp_path, monkeypatch):
     """An in-process server with one complete Kaimal run whose validation blocks until released."""
-    import turbgen.validate
+    import turbgen.validation
     from inprocess_server import InProcessServer
 
     fake = _SlowValidation()
@@ -232,7 +232,7 @@ def test_a_low_hub_height_run_exports_with_drop_below_ground(tmp_path):
         assert status == 200, data
         bts = tmp_path / "out.bts"
         bts.write_bytes(data)
-        from turbgen.export.bts import read_bts
+        from turbgen.exporters.bts import read_bts
 
         z = read_bts(bts)["z"]
         assert z.min() > 0 and len(z) == TINY_GRID["nz"] - 2, z

@@ -13,7 +13,7 @@ import pytest
 
 from service_server import TINY_GRID, Server
 
-from turbgen.export import ExportRequest, export_store, read_bts, read_hawc2
+from turbgen.exporters import ExportRequest, export_store, read_bts, read_hawc2
 from turbgen.spec.mean_wind import MeanWind
 
 TABLE = ((100.0, 8.5, 3.0), (150.0, 10.0, 0.0), (200.0, 11.0, -4.0))  # z [m], U [m/s], direction [deg]

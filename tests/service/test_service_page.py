@@ -18,7 +18,7 @@ import xarray as xr
 from service_server import Server
 from test_service import _until, browser  # noqa: F401  (the fixture: headless chromium)
 
-from turbgen.export import export_store, read_bts
+from turbgen.exporters import export_store, read_bts
 from turbgen.service.form import form_fields
 from turbgen.store import open_store
 

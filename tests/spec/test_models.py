@@ -7,7 +7,7 @@ from turbgen.spec.models import DECLARATIONS, declaration, model_names, resolve
 
 # declaration field -> the layer its reference must lie in (the layers of pyproject.toml's import contract)
 LAYERS = {"spec": "spec", "options": "spec", "replaces": "spec", "command": "cli", "runner": "runs",
-          "synthesis": "synthesis", "validator_theory": "validate", "preview": "lidar", "store_preview": "lidar"}
+          "synthesis": "synthesis", "validator_theory": "validation", "preview": "virtual_lidar", "store_preview": "virtual_lidar"}
 
 
 @pytest.mark.parametrize("d", DECLARATIONS, ids=lambda d: d.name)
@@ -26,7 +26,7 @@ def test_every_reference_resolves_in_its_layer(d):
 
 def test_the_readers_list_the_declared_models():
     from turbgen.cli import COMMANDS
-    from turbgen.lidar.preview import MODELS as PREVIEW
+    from turbgen.virtual_lidar.preview import MODELS as PREVIEW
     from turbgen.runs.models import MODELS as RUNNERS
     from turbgen.store.layout import MODELS as STORE
 
@@ -36,8 +36,8 @@ def test_the_readers_list_the_declared_models():
 
 
 def test_a_reference_outside_its_layer_and_an_unknown_model_are_refused():
-    with pytest.raises(ValueError, match="is not a turbgen.validate attribute"):
-        resolve(declaration("kaimal").runner, "validate")
+    with pytest.raises(ValueError, match="is not a turbgen.validation attribute"):
+        resolve(declaration("kaimal").runner, "validation")
     with pytest.raises(ParameterError, match="store model = 'karman' is not one of mann, kaimal"):
         declaration("karman", "store model")
 

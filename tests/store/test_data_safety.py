@@ -116,7 +116,7 @@ def test_hdf5_export_onto_a_full_disk_is_one_line_and_leaves_nothing(store, tmp_
         # disk check passed, disk full meanwhile: HDF5 used to abort (exit 134/139) at close; the
         # file is reserved first now, so the failure is a Python error. Subprocess: a crash must not kill pytest.
         (d / "fill").write_bytes(b"\0" * 700_000)
-        code = ("from turbgen.export.hdf5 import export_hdf5; from turbgen.export import ExportRequest;"
+        code = ("from turbgen.exporters.hdf5 import export_hdf5; from turbgen.exporters import ExportRequest;"
                 "from turbgen.store import open_store;"
                 f"export_hdf5(open_store({str(store)!r}), {str(d / 'x.h5')!r}, ExportRequest())")
         p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=ENV)
@@ -148,7 +148,7 @@ def test_overwrite_and_evo_export_onto_a_full_disk_keep_the_old_output(store, tm
         one_line_error(cli_run(*KAIMAL, "--seed", "2", "--overwrite", "--out", target), match="No space left")
         np.testing.assert_array_equal(open_store(target).read_plane("u", 1), before)
         assert leftovers(d) == []
-        monkeypatch.setattr("turbgen.export.require_disk", lambda *a, **k: None)
+        monkeypatch.setattr("turbgen.exporters.require_disk", lambda *a, **k: None)
         (d / "fill").write_bytes(b"\0" * max(0, int(size * 1.5) - size - 150_000))
         one_line_error(cli_run("export", store, "--format", "evo", "--out", d / "lid.evo"), match="No space left")
         assert sorted(x.name for x in d.iterdir()) == ["fill", "k.zarr"]
@@ -428,8 +428,8 @@ def test_a_signal_whose_exit_the_library_replaced_is_still_reported_as_the_signa
     # KeyboardInterrupt) into TypeError (seen in CI: a traceback and exit 1), and an exception raised in a
     # weakref callback is only printed, the export going on to publish (seen in CI: exit 0 and x.h5); the
     # CLI must still report the signal, exit 128 + signum, publish nothing
-    import turbgen.export as export
-    from turbgen.export.hdf5 import export_hdf5
+    import turbgen.exporters as export
+    from turbgen.exporters.hdf5 import export_hdf5
 
     def swallowing_library(fs, out, req):
         def attr_write(*args):

@@ -61,7 +61,7 @@ def test_publish_without_renameat2_never_clobbers_and_replaces_in_two_renames(tm
 
 
 def test_a_reservation_the_system_cannot_make_checks_the_free_space(tmp_path, portable, monkeypatch):
-    from turbgen.export import outputs
+    from turbgen.exporters import outputs
 
     target = tmp_path / "x.h5"
     monkeypatch.setattr(outputs, "available_disk_bytes", lambda path: 1000)

@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from turbgen.cli import cli
 from turbgen.errors import ParameterError
-from turbgen.export import read_bts
+from turbgen.exporters import read_bts
 from turbgen.spec.dlc import DlcSet
 from turbgen.store import open_store
 

@@ -30,8 +30,8 @@ def _cli(args: list) -> str:
 
 def lidar_case(d: Path) -> dict[str, np.ndarray]:
     """Truth -> virtual lidar dataset -> its CSV copy -> the field conditioned on the dataset (plane 2)."""
-    from turbgen.lidar.dataset import read_dataset
-    from turbgen.lidar.los_csv import read_los_csv
+    from turbgen.virtual_lidar.dataset import read_dataset
+    from turbgen.virtual_lidar.los_csv import read_los_csv
     from turbgen.runs.constrain import place
     from turbgen.spec.mann import MannRun
     from turbgen.store import open_store

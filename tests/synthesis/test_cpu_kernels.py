@@ -7,7 +7,7 @@ What holds, and is asserted:
 - Mann fields: bit-identical under every kernel (their dense factors' eigen-decompositions do not reach the last
   bit of the float32 field), and equal to the pinned fields when the library builds are the pinned ones.
 - The virtual lidar's record of a field, and a lidar record placed from its CSV copy: bit-identical (fixed-order
-  sums, turbgen.lidar.sampling.weighted_sum); the dependent-measurement refusal names the same measurements.
+  sums, turbgen.virtual_lidar.sampling.weighted_sum); the dependent-measurement refusal names the same measurements.
 - Kaimal fields: the planes are mixed by a float32 matrix product (OpenBLAS sgemm), and fields conditioned on data
   go through dense float64 solves: to float32 round-off on another kernel, bounded as in test_pinned_fields by 1e-5
   of the component's standard deviation (a changed stream or parameter moves values by O(1) standard deviations).

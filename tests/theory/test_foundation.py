@@ -94,7 +94,7 @@ def test_cli_imports_commands_lazily():
         "from turbgen.cli import cli\n"
         "r = CliRunner().invoke(cli, ['info', '--help'])\n"
         "assert r.exit_code == 0, r.output\n"
-        "print(sorted(m for m in ('pyfftw', 'turbgen.synthesis', 'turbgen.validate', 'dask.distributed') "
+        "print(sorted(m for m in ('pyfftw', 'turbgen.synthesis', 'turbgen.validation', 'dask.distributed') "
         "if m in sys.modules))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -7,8 +7,8 @@ import pytest
 from click.testing import CliRunner
 
 from turbgen.errors import ParameterError
-from turbgen.lidar.description import PRESETS, LidarDescription, load_lidar
-from turbgen.lidar.preview import preview_spectra
+from turbgen.virtual_lidar.description import PRESETS, LidarDescription, load_lidar
+from turbgen.virtual_lidar.preview import preview_spectra
 from turbgen.spec.preset_runs import mann_params_for
 from turbgen.theory.kaimal import kaimal_spectrum
 from turbgen.theory.lidar_geometry import Measurements, los_vectors, nacelle_directions, spinner_directions
@@ -200,7 +200,7 @@ def test_fu2023_spinner_optima():
     """Fu et al. (2023) at their optima (U = 18 m/s, ae 0.2882, L 49 m, Gamma 3.1, gamma 400 s): both
     spinner lidars reach k_0.5 ~ 0.014 rad/m; buffer times 0.7 s (CW) and 1.62 s (pulsed) with
     T_pitch = 0.9 s and f_delay = 0.025 Hz. Ours: 0.0139 / 0.0144 rad/m, 0.67 / 1.63 s."""
-    from turbgen.lidar.optimize import evaluate
+    from turbgen.virtual_lidar.optimize import evaluate
 
     p = MannParams(0.2882, 49.0, 3.1, evo_time_s=400.0)
     cw = evaluate(PRESETS["spinner-cw"], p, 18.0)

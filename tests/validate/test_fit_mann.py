@@ -16,7 +16,7 @@ from turbgen.errors import ParameterError
 from turbgen.spec.constraints import PointSensor, PointSeries
 from turbgen.theory.mann_spectra import one_point_spectra
 from turbgen.theory.params import MannParams
-from turbgen.validate.fit.table import GAMMA_NODES, load_table, scaled_spectra, table_column
+from turbgen.validation.fit.table import GAMMA_NODES, load_table, scaled_spectra, table_column
 
 Z999 = 3.2905267314919255  # standard normal 99.95 % quantile: the two-sided 99.9 % interval
 TRUTH = (0.08, 30.0, 3.2)  # ae, L, Gamma of the recovery fields

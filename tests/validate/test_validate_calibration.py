@@ -16,13 +16,13 @@ from scipy.stats import binom, chi2
 from turbgen.runs.kaimal import run_kaimal
 from turbgen.runs.mann import run_mann
 from turbgen.sweep.plan import build_run
-from turbgen.validate import ALPHA, theory_cache, validate
+from turbgen.validation import ALPHA, theory_cache, validate
 from turbgen.theory.coherence_models import exponential_yz
-from turbgen.validate.distributions import coh2_tails, coh2_z, cospectrum_tails, phase_sf
-from turbgen.validate.estimators import WelchSetup, segment_starts
-from turbgen.validate.variance_law import gamma_sum_tails, gamma_terms
-from turbgen.validate.welch_kernel import WelchKernel
-from turbgen.validate.welch_variance import WelchCovariance
+from turbgen.validation.distributions import coh2_tails, coh2_z, cospectrum_tails, phase_sf
+from turbgen.validation.estimators import WelchSetup, segment_starts
+from turbgen.validation.variance_law import gamma_sum_tails, gamma_terms
+from turbgen.validation.welch_kernel import WelchKernel
+from turbgen.validation.welch_variance import WelchCovariance
 
 ISSUE_GRID = {"nt": 512, "ny": 12, "nz": 12, "dy": 10.0, "dz": 10.0, "planes": [0.0, 50.0]}
 
@@ -225,7 +225,7 @@ def test_reduced_calibration(tmp_path):
 
 def test_long_records_fall_back_to_the_rule_of_thumb(tmp_path, monkeypatch):
     # when the exact Welch sums are too long (very long records) the K_eff model is used; same verdict here
-    import turbgen.validate.welch_variance as wv
+    import turbgen.validation.welch_variance as wv
 
     path = _field(tmp_path, "kaimal", 10.0, 102)
     exact = validate(path, workers=1)

@@ -17,7 +17,7 @@ from turbgen.runs.mann import run_mann
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store, open_store
 from turbgen.store.layout import CALLER_ATTRS
-from turbgen.validate import validate
+from turbgen.validation import validate
 
 GRID = {"nt": 2048, "dt_s": 0.5, "x_m": [0.0, 20.0, 60.0], "ny": 16, "nz": 16, "dy_m": 8.0, "dz_m": 8.0}
 R = 40.0  # rotor radius inside the 120 m grid

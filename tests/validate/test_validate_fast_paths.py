@@ -7,11 +7,11 @@ import scipy.fft
 
 from turbgen.runs.mann import run_mann
 from turbgen.spec.mann import MannRun
-from turbgen.validate import theory_cache, validate
-from turbgen.validate.estimators import WelchSetup, segment_starts
-from turbgen.validate.pair_sums import box_lags, pair_sum, real_box_lags, rect_pair_counts, set_pair_counts
-from turbgen.validate.span_sums import COMPONENTS, span_sums
-from turbgen.validate.welch_sums import point_moments, window_segment
+from turbgen.validation import theory_cache, validate
+from turbgen.validation.estimators import WelchSetup, segment_starts
+from turbgen.validation.pair_sums import box_lags, pair_sum, real_box_lags, rect_pair_counts, set_pair_counts
+from turbgen.validation.span_sums import COMPONENTS, span_sums
+from turbgen.validation.welch_sums import point_moments, window_segment
 
 
 def test_span_sums_equal_the_definition():
@@ -130,7 +130,7 @@ def test_top_modes_equal_the_full_eigenproblem_also_for_low_rank(rank):
     # a fully coherent plane (Kaimal a_yz = 0, allowed) has a rank-1 coherency matrix; the subspace
     # iteration's Cholesky QR failed on it ("Matrix is not positive definite") for N > 32 points.
     # rank None: a full-rank exponential coherence exp(-0.05 r) on a 5 x 10 grid, 4 m apart
-    from turbgen.validate.variance_law import N_MODES, top_modes
+    from turbgen.validation.variance_law import N_MODES, top_modes
 
     rng = np.random.default_rng(5)
     n = 50

@@ -55,14 +55,14 @@ from turbgen.spec.kaimal import KaimalRun, kaimal_params
 from turbgen.store.layout import grid_to_attrs
 from turbgen.theory.coherence_models import exponential_yz
 from turbgen.theory.lattice import line_frequencies
-from turbgen.validate import estimators, verdict
-from turbgen.validate.band_checks import Bands
-from turbgen.validate.estimators import Estimates, WelchSetup, plan_estimates, segment_starts
-from turbgen.validate.span_sums import span_sums
-from turbgen.validate.kaimal_expectation import kaimal_theory
-from turbgen.validate.prediction import SamplingDesign, Theory
-from turbgen.validate.welch_kernel import WelchKernel
-from turbgen.validate.welch_variance import WelchCovariance
+from turbgen.validation import estimators, verdict
+from turbgen.validation.band_checks import Bands
+from turbgen.validation.estimators import Estimates, WelchSetup, plan_estimates, segment_starts
+from turbgen.validation.span_sums import span_sums
+from turbgen.validation.kaimal_expectation import kaimal_theory
+from turbgen.validation.prediction import SamplingDesign, Theory
+from turbgen.validation.welch_kernel import WelchKernel
+from turbgen.validation.welch_variance import WelchCovariance
 
 N_SE = 4.5  # allowed standard errors of an empirical moment (module docstring)
 

@@ -6,11 +6,11 @@ import scipy.signal
 
 from turbgen.grid import Grid
 from turbgen.errors import ParameterError
-from turbgen.validate.band_checks import COHERENCE_FLOOR, coherence_stats
-from turbgen.validate.estimators import WelchSetup, default_nperseg, plan_spans, welch_series
-from turbgen.validate.pair_sums import rect_pair_counts, set_pair_counts
-from turbgen.validate.point_sets import check_rotor_radius, default_separations, rotor_mask
-from turbgen.validate.welch_kernel import WelchKernel
+from turbgen.validation.band_checks import COHERENCE_FLOOR, coherence_stats
+from turbgen.validation.estimators import WelchSetup, default_nperseg, plan_spans, welch_series
+from turbgen.validation.pair_sums import rect_pair_counts, set_pair_counts
+from turbgen.validation.point_sets import check_rotor_radius, default_separations, rotor_mask
+from turbgen.validation.welch_kernel import WelchKernel
 
 
 def test_hann_correlations_match_welch_1967():
@@ -138,8 +138,8 @@ def test_kaimal_rews_lines_equal_eq25_of_the_theory_module():
     from turbgen.theory.kaimal import kaimal_spectrum
     from turbgen.theory.rotor_effective import rews_spectrum_kaimal
     from turbgen.store.layout import grid_to_attrs
-    from turbgen.validate.kaimal_expectation import kaimal_theory
-    from turbgen.validate.prediction import SamplingDesign
+    from turbgen.validation.kaimal_expectation import kaimal_theory
+    from turbgen.validation.prediction import SamplingDesign
 
     g = Grid(nt=512, dt_s=0.5, x_m=(0.0, 30.0), ny=12, nz=10, dy_m=7.0, dz_m=9.0)
     run = KaimalRun(kaimal=kaimal_params(14.0, "A", 90.0), grid=g, U_m_s=14.0, seed=1)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 
-from turbgen.validate.fit import MannFit, fit_mann_data, load_fit_data
+from turbgen.validation.fit import MannFit, fit_mann_data, load_fit_data
 
 
 def fit_mann(data, *, U: float | None = None, nperseg: int | None = None) -> MannFit:
@@ -28,7 +28,7 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None) -> Man
 
     Returns
     -------
-    turbgen.validate.fit.MannFit
+    turbgen.validation.fit.MannFit
         ``ae``, ``length_scale_m``, ``gamma`` (each ``value`` and ``ci95``), ``chi2_dof``, ``flags`` (no
         convergence, a range boundary: ``ok`` is False), ``notes``, ``to_dict()``, ``table()``, ``plot(path)``.
 

@@ -54,7 +54,7 @@ def validate(store, *, plots: str | os.PathLike | None = None, overwrite: bool =
 
     Returns
     -------
-    turbgen.validate.ValidationReport
+    turbgen.validation.ValidationReport
         ``passed``, ``failed``, ``metrics``, ``table()``, ``to_dict()`` (the keys of ``turbgen validate --json``),
         ``plots(directory)`` (one PNG per comparison: estimate, 95 % band, theory).
 
@@ -73,7 +73,7 @@ def validate(store, *, plots: str | os.PathLike | None = None, overwrite: bool =
     >>> report.passed, "spectrum_u" in [m.name for m in report.metrics]
     (True, True)
     """
-    from turbgen.validate import validate as run_validation
+    from turbgen.validation import validate as run_validation
 
     fs = field_store(store)
     if plots is not None:
@@ -109,7 +109,7 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
     """Write a store for InflowWind, HAWC2, the lidar simulator, the 4D Mann scripts or HDF5 (``turbgen export``).
 
     The keywords are ``turbgen export``'s options, made into the request by the same function
-    (:func:`turbgen.export.options.export_request`), so the mean wind is the one definition of
+    (:func:`turbgen.exporters.options.export_request`), so the mean wind is the one definition of
     :class:`turbgen.spec.mean_wind.MeanWind`.
 
     Parameters
@@ -156,7 +156,7 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
 
     Returns
     -------
-    turbgen.export.ExportResult
+    turbgen.exporters.ExportResult
         ``paths`` written, ``inflowwind_lines`` that load them, ``notes``.
 
     Raises
@@ -176,8 +176,8 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
     >>> result.inflowwind_lines[0].split()[:2]
     ['3', 'WindType']
     """
-    from turbgen.export import export_store
-    from turbgen.export.options import ExportOptions, export_request
+    from turbgen.exporters import export_store
+    from turbgen.exporters.options import ExportOptions, export_request
 
     check_output_path(out, "`out`")
     fs = field_store(store)
@@ -227,7 +227,7 @@ def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLi
 
     Returns
     -------
-    turbgen.lidar.report.LidarReport
+    turbgen.virtual_lidar.report.LidarReport
         ``passed``, ``to_dict()`` (the keys of ``turbgen lidar --json``), ``text()``, ``plots(directory)``.
 
     Raises
@@ -246,8 +246,8 @@ def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLi
     >>> report.passed, sorted(report.to_dict())[:2]
     (True, ['G_RL_simulated', 'G_RL_theory'])
     """
-    from turbgen.lidar import report
-    from turbgen.lidar.dataset import check_output
+    from turbgen.virtual_lidar import report
+    from turbgen.virtual_lidar.dataset import check_output
 
     wind = lidar_mean_wind(mean_wind, shear, profile, veer, mean_history)
     fs = field_store(store)
@@ -303,7 +303,7 @@ def info(store) -> dict:
     ('kaimal', [64, 2, 4, 4], None, True)
     """
     if isinstance(store, (str, os.PathLike)) and Path(store).expanduser().is_file():
-        from turbgen.export.describe import file_summary
+        from turbgen.exporters.describe import file_summary
 
         return dict(file_summary(Path(store).expanduser().absolute()))
     fs = field_store(store)

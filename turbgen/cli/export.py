@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import click
 
-from turbgen.export import EXPORTERS, export_store
-from turbgen.export.options import ExportOptions, export_request
-from turbgen.export.shear import DEFAULT_SHEAR_EXPONENT
+from turbgen.exporters import EXPORTERS, export_store
+from turbgen.exporters.options import ExportOptions, export_request
+from turbgen.exporters.shear import DEFAULT_SHEAR_EXPONENT
 from turbgen.spec.mean_wind import CCW_NOTE, CW_NOTE
 from turbgen.store.paths import check_output_path
 

@@ -89,7 +89,7 @@ def info(store: str, as_json: bool):
     """
     path = Path(store).expanduser().absolute()
     if path.is_file():
-        from turbgen.export.describe import file_summary
+        from turbgen.exporters.describe import file_summary
 
         rows = file_summary(path)
         if as_json:

@@ -81,8 +81,8 @@ def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_expone
     estimator's uncertainty, 2 for usage errors (nothing written).
     """
     from turbgen.api.products import lidar_mean_wind
-    from turbgen.lidar import report
-    from turbgen.lidar.dataset import check_output
+    from turbgen.virtual_lidar import report
+    from turbgen.virtual_lidar.dataset import check_output
     from turbgen.store import open_store
 
     try:

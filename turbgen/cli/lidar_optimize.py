@@ -7,7 +7,7 @@ import json
 import click
 
 from turbgen.cli.options import count_text, evo_seconds, parse_floats
-from turbgen.lidar.optimize import PITCH_DELAY_RANGE_S
+from turbgen.virtual_lidar.optimize import PITCH_DELAY_RANGE_S
 
 
 @click.command("optimize")
@@ -30,8 +30,8 @@ def optimize(lidar_name, U, ae, L, gamma, evo, ranges_text, cones_text, pitch_de
     """Maximise k_0.5 over range x half-cone angle subject to T_buffer >= 0 (Mann space-time theory)."""
     from tqdm import tqdm
 
-    from turbgen.lidar.description import load_lidar
-    from turbgen.lidar.optimize import optimize_spinner
+    from turbgen.virtual_lidar.description import load_lidar
+    from turbgen.virtual_lidar.optimize import optimize_spinner
     from turbgen.theory.params import MannParams
 
     lidar = load_lidar(lidar_name)

@@ -28,8 +28,8 @@ from turbgen.store.temporaries import write_atomically
               help="Write a PNG of gamma^2_RL and |G_RL| (Guo et al. 2023 Fig. 4 style).")
 def lidar_theory(model, preset, U, lidar_name, radius, f_text, frozen, as_json, plot_path):
     """Lidar-rotor coherence gamma^2_RL, Wiener gain |G_RL|, -3 dB cut-off and k_0.5 of a lidar."""
-    from turbgen.lidar.description import load_lidar
-    from turbgen.lidar.preview import DEFAULT_F_HZ, preview_spectra, summarise
+    from turbgen.virtual_lidar.description import load_lidar
+    from turbgen.virtual_lidar.preview import DEFAULT_F_HZ, preview_spectra, summarise
 
     lidar = load_lidar(lidar_name)
     f = np.array(parse_floats(f_text, "--f")) if f_text is not None else DEFAULT_F_HZ

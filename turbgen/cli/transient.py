@@ -6,7 +6,7 @@ from __future__ import annotations
 import click
 
 from turbgen.cli.options import iec_class_options, resolve_iec_class
-from turbgen.export.uniform_wind import export_transient
+from turbgen.exporters.uniform_wind import export_transient
 from turbgen.spec.iec_transient import KINDS, IecTransient
 from turbgen.spec.mean_wind import CW_NOTE
 from turbgen.store.paths import check_output_path

@@ -8,7 +8,7 @@ import sys
 import click
 
 from turbgen.api.products import check_plots_dir
-from turbgen.validate import DEFAULT_ROTOR_RADIUS_M, validate as run_validation
+from turbgen.validation import DEFAULT_ROTOR_RADIUS_M, validate as run_validation
 
 
 @click.command("validate")

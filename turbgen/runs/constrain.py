@@ -30,7 +30,7 @@ import numpy as np
 from tqdm import tqdm
 
 from turbgen.errors import ParameterError
-from turbgen.lidar.sampling import PLANE_TOL_M
+from turbgen.virtual_lidar.sampling import PLANE_TOL_M
 from turbgen.resources import default_threads, require_disk, require_memory
 from turbgen.runs.correction_scratch import CorrectionScratch
 from turbgen.runs.mann import build_mann_stencil, memory_estimate_bytes
@@ -167,7 +167,7 @@ def combine_streams(placed: list[PlacedStream], nt: int) -> PlacedData:
 
 
 def place(run: MannRun, files: list, noise_m_s: float | None = None) -> PlacedData:
-    """The streams and data of ``files`` (PointSeries, or turbgen.lidar.dataset.LidarData) on the grid of ``run``
+    """The streams and data of ``files`` (PointSeries, or turbgen.virtual_lidar.dataset.LidarData) on the grid of ``run``
     (see the module docstring).
 
     ``noise_m_s`` (>= 0) replaces every file's own ``noise_m_s``; a file without one has noise 0.
@@ -506,16 +506,16 @@ def conditioned_summary(path: str | None, t_start: float, record: dict, sums: di
 
 def load_constraint(path):
     """A constraint file: a ``turbgen lidar --out`` dataset (a directory with v_los), a line-of-sight CSV or netCDF
-    file (turbgen.lidar.los_csv, turbgen.lidar.los_netcdf) or a point-series JSON file.
+    file (turbgen.virtual_lidar.los_csv, turbgen.virtual_lidar.los_netcdf) or a point-series JSON file.
 
     Raises
     ------
     ParameterError, StoreError
         If the file is not readable or does not match its format.
     """
-    from turbgen.lidar.dataset import is_lidar_dataset, read_dataset
-    from turbgen.lidar.los_csv import is_los_csv, read_los_csv
-    from turbgen.lidar.los_netcdf import is_los_netcdf, read_los_netcdf
+    from turbgen.virtual_lidar.dataset import is_lidar_dataset, read_dataset
+    from turbgen.virtual_lidar.los_csv import is_los_csv, read_los_csv
+    from turbgen.virtual_lidar.los_netcdf import is_los_netcdf, read_los_netcdf
     from turbgen.spec.constraints import load_point_series
 
     if is_lidar_dataset(path):
@@ -543,15 +543,15 @@ def describe_constraints(record: dict) -> list[str]:
 
 def load_constraints(files) -> list:
     """Each of ``files`` loaded (:func:`load_constraint`); PointSeries / LidarData given already loaded are kept, and a
-    lidar report of a field in memory (turbgen.lidar.report.LidarReport) gives its measurements (its ``data()``).
+    lidar report of a field in memory (turbgen.virtual_lidar.report.LidarReport) gives its measurements (its ``data()``).
 
     Raises
     ------
     ParameterError
         For an item that is none of these (e.g. ``constrain=[5]``).
     """
-    from turbgen.lidar.dataset import LidarData
-    from turbgen.lidar.report import LidarReport
+    from turbgen.virtual_lidar.dataset import LidarData
+    from turbgen.virtual_lidar.report import LidarReport
 
     def one(f):
         if isinstance(f, (str, Path)) or hasattr(f, "__fspath__"):

@@ -1,12 +1,12 @@
 """Lidar line-of-sight data as constraints: a ``turbgen lidar --out`` dataset placed on a run's grid.
 
-The measurement operator is the virtual lidar's own (turbgen.lidar.sampling.los_operator: discrete probe-volume
+The measurement operator is the virtual lidar's own (turbgen.virtual_lidar.sampling.los_operator: discrete probe-volume
 weights, Taylor shift within the probe volume to the stored time t = T + x'/U of the gate's plane, linear in t,
 bilinear in y, z), rebuilt from the lidar description and measurement times the dataset holds. Each beam-gate is one
 stream observed once per scan: the scan period must be a whole number q of the field's time steps, so that every scan
 uses the same weights q steps later (conditioning.Streams with decimation q, time-shifted terms). If the dataset
 includes the mean wind (``mean_wind_added``), its line-of-sight part at the run's U and hub height is subtracted: the
-MeanWind the dataset records (profile, hub history; turbgen.lidar.sampling.mean_wind_los_series, per scan), or the
+MeanWind the dataset records (profile, hub history; turbgen.virtual_lidar.sampling.mean_wind_los_series, per scan), or the
 power law with its shear exponent for datasets without that record. A mean wind that turns (veer, directions) is
 refused: it turned the measured fluctuations' line of sight as well.
 """
@@ -19,10 +19,10 @@ from types import SimpleNamespace
 import numpy as np
 
 from turbgen.errors import ParameterError
-from turbgen.lidar.dataset import LidarData
-from turbgen.lidar.description import lidar_from_mapping
-from turbgen.lidar.run import measurements_of
-from turbgen.lidar.sampling import (check_measurements, los_operator, mean_wind_los, mean_wind_los_series,
+from turbgen.virtual_lidar.dataset import LidarData
+from turbgen.virtual_lidar.description import lidar_from_mapping
+from turbgen.virtual_lidar.run import measurements_of
+from turbgen.virtual_lidar.sampling import (check_measurements, los_operator, mean_wind_los, mean_wind_los_series,
                                     repeats_every)  # fmt: skip
 from turbgen.spec.mean_wind import MeanWind
 

@@ -104,12 +104,12 @@ def build_export(store: Path, rid: str, fmt: str, request, tmp: Path) -> None:
         Run id (names the files).
     fmt : str
         Export format.
-    request : turbgen.export.ExportRequest
+    request : turbgen.exporters.ExportRequest
         Export options.
     tmp : Path
         The directory to create.
     """
-    from turbgen.export import export_store
+    from turbgen.exporters import export_store
 
     tmp.mkdir()
     name = f"{rid}.{fmt}" if fmt in ("bts", "hdf5") else rid
@@ -134,7 +134,7 @@ def build_validation(store: Path, tmp: Path) -> None:
     tmp : Path
         The directory to create.
     """
-    from turbgen.validate import validate
+    from turbgen.validation import validate
 
     rep = validate(store)
     tmp.mkdir()
@@ -151,12 +151,12 @@ def build_lidar(store: Path, rid: str, lidar, tmp: Path) -> None:
         The run's complete store.
     rid : str
         Run id (the report names its store /runs/<id>/store).
-    lidar : str or turbgen.lidar.description.LidarDescription
+    lidar : str or turbgen.virtual_lidar.description.LidarDescription
         A lidar preset name, or a lidar a client described (never a path).
     tmp : Path
         The file to write.
     """
-    from turbgen.lidar.report import lidar_report
+    from turbgen.virtual_lidar.report import lidar_report
     from turbgen.store import open_store
 
     report = lidar_report(open_store(store), lidar).to_dict()

@@ -2,7 +2,7 @@
 
 The server never opens a path a client names, so a constrained run cannot name its data files as
 ``turbgen mann --constrain FILE`` does. Instead the client uploads the *content* of a point-series JSON file
-(schemas/constraints.schema.json) or of a line-of-sight CSV file (turbgen.lidar.los_csv), the server checks it as
+(schemas/constraints.schema.json) or of a line-of-sight CSV file (turbgen.virtual_lidar.los_csv), the server checks it as
 ``--constrain`` would and keeps it as ``ROOT/constraints/<id>.json|.csv``, the id being 24 hex digits of the
 SHA-256 of the content (uploading the same bytes twice gives the same id). A run request then names the ids in
 ``constrain``; they enter the run id, so two runs conditioned on different data never share one.
@@ -102,7 +102,7 @@ class ConstraintUploads:
 
 def describe(path: Path) -> dict:
     """:func:`_summary` of a kept upload."""
-    from turbgen.lidar.los_csv import read_los_csv
+    from turbgen.virtual_lidar.los_csv import read_los_csv
     from turbgen.spec.constraints import load_point_series
 
     return _summary(load_point_series(path) if path.suffix == ".json" else read_los_csv(path))
@@ -138,10 +138,10 @@ def _point_series(data: bytes, where: str):
 
 
 def _line_of_sight(data: bytes, where: str):
-    """The LidarData of a line-of-sight CSV upload (as turbgen.lidar.los_csv reads a file); refused when its header
+    """The LidarData of a line-of-sight CSV upload (as turbgen.virtual_lidar.los_csv reads a file); refused when its header
     names a file (a lidar file, a mean history, a table profile)."""
-    from turbgen.lidar.description import PRESETS
-    from turbgen.lidar.los_csv import los_record, parse_table
+    from turbgen.virtual_lidar.description import PRESETS
+    from turbgen.virtual_lidar.los_csv import los_record, parse_table
 
     try:
         text = data.decode("utf-8")

@@ -187,7 +187,7 @@ MAX_NOISE_M_S = 100.0  # the schemas' maximum of noise_m_s: beyond it no measure
 @dataclass(frozen=True)
 class ConstraintRequest:
     """What a run mapping asks to condition the field on: ``files`` (paths, or constraints already loaded:
-    PointSeries / turbgen.lidar.dataset.LidarData), ``noise_m_s`` [m/s] (None: each file's own) and
+    PointSeries / turbgen.virtual_lidar.dataset.LidarData), ``noise_m_s`` [m/s] (None: each file's own) and
     ``conditional_mean`` (write the conditional mean instead of a conditional sample)."""
 
     files: tuple

@@ -3,7 +3,7 @@
 A :class:`MeanWind` is a vertical profile (power law, log law or a user table of height -> speed
 [, direction]), an optional veer (a rate in deg/m, or the table's directions) and an optional hub-height
 time history (t -> U [, direction]). Every InflowWind/HAWC2 export applies it the same way
-(:func:`turbgen.export.request.Plane`): at height h and slice time t,
+(:func:`turbgen.exporters.request.Plane`): at height h and slice time t,
 
     U(t, y, h) = U_hub(t) * r(h) + g(t) + s_v(t) (h - h_hub) / D + s_h(t) y / D,
     theta(t, h) = veer(h) + direction(t),

@@ -9,15 +9,15 @@ Why references. The layers import downwards only (cli/service/sweep -> api -> ru
 store -> synthesis -> spec -> theory; import-linter checks it). The registry must sit where every reader can see it
 (the store checks a store's ``model`` attribute; spec is below it), so it cannot import the layers above. A
 reference is resolved by :func:`resolve` with the layer it must lie in, named by the caller, which is that layer or
-one above it: the validator asks for ``"validate"`` references, the lidar for ``"lidar"`` ones, the runs for
+one above it: the validator asks for ``"validation"`` references, the lidar for ``"virtual_lidar"`` ones, the runs for
 ``"spec"`` and ``"runs"`` ones. :func:`resolve` refuses a reference outside the layer named, so a declaration that
 points into the wrong layer fails at once, and a lower layer never reaches up through the registry
 (tests/spec/test_models.py resolves every reference of every declaration from its layer). The readers are:
 
 * turbgen.store.layout ``MODELS`` (the store's ``model`` attribute): the names;
 * turbgen.runs.models ``MODELS`` / ``get_model`` (sweeps, the service): ``runner``;
-* turbgen.validate.expectations ``theory_for``: ``validator_theory``;
-* turbgen.lidar.preview ``MODELS`` / ``preview_spectra`` and turbgen.lidar.report: ``preview`` and ``store_preview``;
+* turbgen.validation.expectations ``theory_for``: ``validator_theory``;
+* turbgen.virtual_lidar.preview ``MODELS`` / ``preview_spectra`` and turbgen.virtual_lidar.report: ``preview`` and ``store_preview``;
 * turbgen.cli ``COMMANDS``: ``command``; turbgen.api.keywords: ``options``.
 
 A further model is one declaration here (the one existing file it edits) plus six files of its own: spec (its run
@@ -58,12 +58,12 @@ class ModelDeclaration:
     synthesis : str
         ``turbgen.synthesis`` reference: the generator class (documentation; resolved by the registry's test).
     validator_theory : str
-        ``turbgen.validate`` reference: ``theory(attrs, design) -> Theory``.
+        ``turbgen.validation`` reference: ``theory(attrs, design) -> Theory``.
     preview : str or None
-        ``turbgen.lidar`` reference: ``preview(lidar, U_m_s, *, preset, f_hz, radius_m, frozen, **options)`` ->
+        ``turbgen.virtual_lidar`` reference: ``preview(lidar, U_m_s, *, preset, f_hz, radius_m, frozen, **options)`` ->
         PreviewSpectra, the theory of ``turbgen theory lidar``; None: not available.
     store_preview : str or None
-        ``turbgen.lidar`` reference: ``store_preview(fs, description, f_hz, radius_m)`` -> PreviewSpectra of a
+        ``turbgen.virtual_lidar`` reference: ``store_preview(fs, description, f_hz, radius_m)`` -> PreviewSpectra of a
         store as synthesised (``turbgen lidar``); None: not available.
     """
 
@@ -86,16 +86,16 @@ DECLARATIONS: tuple[ModelDeclaration, ...] = (
         options="turbgen.spec.run_inputs:MANN_OPTIONS", replaces="turbgen.spec.run_inputs:MANN_REPLACES",
         command="turbgen.cli.mann:mann", runner="turbgen.runs.models:MANN",
         synthesis="turbgen.synthesis.mann_spacetime:MannSnapshots",
-        validator_theory="turbgen.validate.mann_expectation:mann_theory",
-        preview="turbgen.lidar.preview:mann_preview", store_preview="turbgen.lidar.report:mann_store_preview",
+        validator_theory="turbgen.validation.mann_expectation:mann_theory",
+        preview="turbgen.virtual_lidar.preview:mann_preview", store_preview="turbgen.virtual_lidar.report:mann_store_preview",
     ),
     ModelDeclaration(
         name="kaimal", schema="kaimal-run", spec="turbgen.spec.kaimal:KaimalRun",
         options="turbgen.spec.run_inputs:KAIMAL_OPTIONS", replaces="turbgen.spec.run_inputs:KAIMAL_REPLACES",
         command="turbgen.cli.kaimal:kaimal", runner="turbgen.runs.models:KAIMAL",
         synthesis="turbgen.synthesis.kaimal_evo:KaimalEvo",
-        validator_theory="turbgen.validate.kaimal_expectation:kaimal_theory",
-        preview="turbgen.lidar.preview:kaimal_preview", store_preview="turbgen.lidar.report:kaimal_store_preview",
+        validator_theory="turbgen.validation.kaimal_expectation:kaimal_theory",
+        preview="turbgen.virtual_lidar.preview:kaimal_preview", store_preview="turbgen.virtual_lidar.report:kaimal_store_preview",
     ),
 )
 _BY_NAME = {d.name: d for d in DECLARATIONS}
@@ -145,7 +145,7 @@ def resolve(reference: str, layer: str):
     reference : str
         ``"turbgen.<layer>.<module>:<attribute>"``.
     layer : str
-        The layer the reference must lie in (``"spec"``, ``"runs"``, ``"validate"``, ``"lidar"``, ``"cli"``, ...): the
+        The layer the reference must lie in (``"spec"``, ``"runs"``, ``"validation"``, ``"virtual_lidar"``, ``"cli"``, ...): the
         caller's own layer or one below it, never one above.
 
     Returns

@@ -19,8 +19,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from turbgen.errors import ParameterError, check_choice
-from turbgen.export import ExportRequest, export_store
-from turbgen.export.inflowwind_file import inflowwind_path
+from turbgen.exporters import ExportRequest, export_store
+from turbgen.exporters.inflowwind_file import inflowwind_path
 from turbgen.runs.models import MODELS, get_model
 from turbgen.spec.dlc import DlcSet
 from turbgen.store.paths import check_output_path

@@ -421,7 +421,7 @@ def _check_execution(out, chunk_t, workers, scheduler, lidar):
     check_output_dir(out, "out (sweep directory)")
     description = None
     if lidar is not None:
-        from turbgen.lidar.description import load_lidar
+        from turbgen.virtual_lidar.description import load_lidar
 
         description = load_lidar(lidar)  # a bad preset or file fails here, before any run
     return chunk_t, workers, description
@@ -451,7 +451,7 @@ def _check_runs(runs, speeds, chunk_t, lidar_description, *, local: bool) -> Non
         for nt in sorted({r.run.grid.nt for r in runs}):
             check_int("chunks (time samples per chunk)", chunk_t, 1, nt)
     if lidar_description is not None:  # gates on planes, beams inside the field: refused before any field is made
-        from turbgen.lidar.run import check_lidar_fits
+        from turbgen.virtual_lidar.run import check_lidar_fits
 
         for g in {r.run.grid for r in runs}:
             check_lidar_fits(lidar_description, g)

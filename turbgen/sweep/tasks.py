@@ -101,7 +101,7 @@ def validate_store(path: str, threads: int | None = None) -> dict:
     ParameterError
         For bad input to the validator (e.g. a grid too small for it).
     """
-    from turbgen.validate import validate
+    from turbgen.validation import validate
 
     rep = validate(path, workers=threads)
     return {
@@ -135,7 +135,7 @@ def lidar_store(path: str, lidar: str) -> dict:
     StoreError
         If ``path`` is not a complete, readable store.
     """
-    from turbgen.lidar.report import lidar_report
+    from turbgen.virtual_lidar.report import lidar_report
     from turbgen.store import open_store
 
     d = lidar_report(open_store(path), lidar).to_dict()

@@ -6,7 +6,7 @@ k0 -> Gamma a / L finite, so with dk1 << dk2, dk3 (long boxes) the point rule pu
 energy in the cells (k1, 0, 0): sigma_w^2 of the default paper box came out 76 % above the model.
 Cells with |k2| <= CELL_RADIUS dk2, |k3| <= CELL_RADIUS dk3 and |k1| <= CELL_K1_FACTOR max(dk2, dk3)
 use a square root of the cell-averaged tensor instead (tensor-product Gauss rules, graded towards
-the k1 axis down to the scale |k1|). turbgen.validate.mann_lattice integrates these cells with its own
+the k1 axis down to the scale |k1|). turbgen.validation.mann_lattice integrates these cells with its own
 rule on purpose (an independent check of this one: an error in either shows instead of cancelling);
 do not share the rules.
 """

@@ -17,7 +17,7 @@ carries the cell average over k1 in [k1 - dk1/2, k1 + dk1/2] (the record's line 
 2 pi / (U T)) times dk2 dk3. The cell rule here (CELL_RADIUS, CELL_K1_FACTOR, CELL_GAUSS, the grading
 towards the axis) is this module's own: turbgen.synthesis and turbgen.validate integrate the same cells
 with two other rules, so an error in any of them shows as a disagreement. Do not share them. (Measured:
-the cell integrals here change by < 2e-5 under a twice finer rule; turbgen.validate.mann_lattice's
+the cell integrals here change by < 2e-5 under a twice finer rule; turbgen.validation.mann_lattice's
 differ from them by up to 1 % in single cells at 1/64 Hz.)
 """
 

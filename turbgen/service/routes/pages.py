@@ -46,7 +46,7 @@ def form(state: ServiceState = Depends(get_state)):
     """What the run form is built from: per model its fields (the commands' option names, with the run-mapping key,
     group, kind, unit, allowed range, default and meaning), whether a token is needed, the export formats and the
     lidar presets."""
-    from turbgen.lidar.description import PRESETS
+    from turbgen.virtual_lidar.description import PRESETS
 
     return form_description(token_required=state.settings.token is not None) | {
         "export_formats": list(EXPORT_FORMATS), "lidar_presets": list(PRESETS), "turbgen": __version__}

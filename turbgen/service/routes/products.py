@@ -45,7 +45,7 @@ def export(rid: str, format: str, http: Request, plane: int | None = None, drop_
         raise ParameterError("runner_files: the evo export's LidarSim section holds the .evo's absolute path, which "
                              "the service does not reveal; export evo without runner_files and point the section "
                              "at your copy (see `turbgen export --format evo`)")  # fmt: skip
-    from turbgen.export.options import ExportOptions, export_request
+    from turbgen.exporters.options import ExportOptions, export_request
 
     opts = ExportOptions(plane=plane, hub_height_m=hub_height, shear_exponent=shear_exponent, profile=profile,
                          veer_deg_per_m=veer, mean_history=mean_history, transient=transient, iec_class=iec_class,
@@ -91,7 +91,7 @@ def validation(rid: str, request: Request, store: Path = Depends(complete_store)
 def lidar(rid: str, request: Request, lidar: str = "nacelle-4beam", store: Path = Depends(complete_store),
           state: ServiceState = Depends(get_state)):  # fmt: skip
     """`turbgen lidar --json` on the run's store for a lidar *preset* (computed once per preset, cached)."""
-    from turbgen.lidar.description import PRESETS
+    from turbgen.virtual_lidar.description import PRESETS
 
     if lidar not in PRESETS:  # presets only: no client-supplied file path reaches the filesystem
         raise LimitError(422, f"lidar = {lidar!r} is not one of {', '.join(PRESETS)}")
@@ -106,7 +106,7 @@ async def lidar_file(rid: str, request: Request, store: Path = Depends(complete_
                      state: ServiceState = Depends(get_state)):  # fmt: skip
     """`turbgen lidar --json` on the run's store for the lidar a client describes: the body is the content of a
     lidar file (JSON, schemas/lidar.schema.json); computed once per description, cached."""
-    from turbgen.lidar.description import lidar_from_mapping
+    from turbgen.virtual_lidar.description import lidar_from_mapping
 
     body = await read_json(request)
     if not isinstance(body, dict):

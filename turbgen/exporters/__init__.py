@@ -1,0 +1,132 @@
+"""Exports of a turbgen store to the files aeroelastic and lidar simulators read
+(each format's own documentation is cited in its module: TurbSim and InflowWind user guides, the HAWC2 manual,
+Mann 1998, the 4D generators and lidar-simulator sources).
+
+Formats: ``bts`` (TurbSim, InflowWind WindType 3), ``wnd`` (Bladed-style .wnd + .sum, WindType 4),
+``evo`` (lidar-simulator 4D set ROOT.evo/.wnd/.sum), ``hawc2`` (three float32 .bin, WindType 5),
+``mt4d`` (4D Mann generator layout), ``hdf5`` (whole field for MATLAB/Python). Each export reads
+one plane from the store at a time, writes under temporary names renamed on success, and returns
+the InflowWind input-file lines that load the result.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from turbgen.exporters.bts import export_bts, read_bts
+from turbgen.exporters.evo import export_evo, read_evo
+from turbgen.exporters.hawc2 import export_hawc2, read_hawc2
+from turbgen.exporters.hdf5 import export_hdf5, read_hdf5
+from turbgen.exporters.mt4d import export_mt4d, read_mt4d
+from turbgen.exporters.request import ExportRequest, ExportResult
+from turbgen.exporters.wnd import export_wnd, read_wnd
+from turbgen.exporters.wnd_summary import read_sum
+from turbgen.errors import ParameterError, check_choice
+from turbgen.resources import require_disk
+from turbgen.store import FieldStore, open_store
+
+WHOLE_FIELD = ("mt4d", "hdf5")  # every plane, stored fluctuations
+EXPORTERS = {"bts": export_bts, "wnd": export_wnd, "evo": export_evo, "hawc2": export_hawc2,
+             "mt4d": export_mt4d, "hdf5": export_hdf5}
+
+__all__ = ["EXPORTERS", "ExportRequest", "ExportResult", "export_store", "read_bts", "read_evo", "read_hawc2",
+           "read_hdf5", "read_mt4d", "read_sum", "read_wnd"]
+
+
+def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> ExportResult:
+    """Export ``store`` (a path or an open FieldStore) in format ``fmt`` to ``out``.
+
+    Checks that the options apply to the format and that the export fits on the disk, then calls
+    the format's exporter (``EXPORTERS[fmt]``).
+
+    Parameters
+    ----------
+    store : str, os.PathLike or FieldStore
+        The store, or its path (opened with :func:`turbgen.store.open_store`).
+    fmt : str
+        One of "bts", "wnd", "evo", "hawc2", "mt4d", "hdf5".
+    out : str or os.PathLike
+        The output file, or ROOT for the multi-file formats (wnd, evo, hawc2).
+    request : ExportRequest, optional
+        Export options; default ``ExportRequest()``.
+
+    Returns
+    -------
+    ExportResult
+        The files written, the InflowWind input-file lines that load them, and notes.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown format, options the format does not use, an ``out`` ending with a path
+        separator, an output inside the store, too little free disk, an existing output without
+        ``request.overwrite``, a grid reaching the ground, and other bad requests.
+    StoreError
+        For a missing or incomplete store.
+    """
+    check_choice("format", fmt, tuple(EXPORTERS))
+    if isinstance(out, str) and out.endswith(("/", os.sep)):
+        raise ParameterError(f"`out` = {out!r} names a directory; give the file (or ROOT) to write")
+    request = request or ExportRequest()
+    _check_applicable(fmt, request)
+    if not isinstance(store, FieldStore):
+        store = open_store(store)
+    if store.path is not None and Path(store.path).resolve() in Path(out).resolve().parents:
+        raise ParameterError(f"`out` = {str(out)!r} is inside the store {str(store.path)!r}; write the export beside it")
+    need = export_bytes(fmt, store.grid)
+    require_disk(out, need, f"the {fmt} export of {Path(store.label).name}",
+                 "free space there or choose another `out`")
+    return EXPORTERS[fmt](store, out, request)
+
+
+# bytes per stored value and whether every plane is written, per format
+_SIZE = {"bts": (2, False), "wnd": (2, False), "hawc2": (4, False), "evo": (2, True), "mt4d": (4, True),
+         "hdf5": (4, True)}
+
+
+def export_bytes(fmt: str, grid) -> int:
+    """Upper bound of the size [bytes] of an export of a store with ``grid`` (checked against free disk).
+
+    Parameters
+    ----------
+    fmt : str
+        Export format, a key of ``EXPORTERS``.
+    grid : Grid
+        The store grid.
+
+    Returns
+    -------
+    int
+        Size bound [bytes]: the stored values (one plane, or every plane for evo, mt4d, hdf5) at the
+        format's item size, plus the rotor .wnd for evo and 1 MiB for headers and HDF5 metadata.
+
+    Raises
+    ------
+    KeyError
+        For an unknown ``fmt``.
+    """
+    itemsize, all_planes = _SIZE[fmt]
+    values = 3 * grid.nt * grid.ny * grid.nz * (grid.nx if all_planes else 1)
+    extra = 3 * grid.nt * grid.ny * grid.nz * 2 if fmt == "evo" else 0  # evo also writes the rotor .wnd
+    return values * itemsize + extra + (1 << 20)  # + headers, HDF5 metadata
+
+
+def _check_applicable(fmt: str, request: ExportRequest) -> None:
+    """Refuse options that the format would silently ignore."""
+    given = []
+    if request.tower and fmt != "bts":
+        given.append("`tower` (bts only)")
+    if request.runner_files and fmt not in ("bts", "wnd", "evo", "hawc2"):
+        given.append("`runner_files` (bts, wnd, evo, hawc2 only)")
+    if not request.periodic and fmt not in ("bts", "wnd", "evo"):
+        given.append("`no_periodic` (bts, wnd, evo only; HAWC boxes are always periodic)")
+    if fmt in WHOLE_FIELD:
+        if request.plane is not None:
+            given.append("`plane`")
+        if (request.hub_height_m is not None or request.drop_below_ground or request.shear_exponent is not None
+                or request.mean_wind is not None):
+            given.append("`hub_height`/`shear_exponent`/`drop_below_ground` or a mean wind (profile, veer, history): "
+                         "no mean profile is added")
+    if given:
+        raise ParameterError(f"`format` {fmt} does not use {'; '.join(given)}")

@@ -1,0 +1,203 @@
+"""HAWC2 / Mann binary box (InflowWind WindType 5; the HAWC2 user manual's Mann turbulence box, Mann 1998, and
+OpenFAST's InflowWind documentation of the HAWC format).
+
+Three headerless little-endian float32 files ROOT_u.bin, ROOT_v.bin, ROOT_w.bin per plane, each
+nx*ny*nz values with z fastest (bottom up), then y stored REVERSED (+W/2 first), then x = time
+(the first x-plane reaches the turbine first). The files hold u - URef, v, w of the full field
+(mean + shear + fluctuations) and are loaded with WindProfile = 0, ScaleMethod = 0, which
+reproduces the field exactly (InflowWind v5 input keys; WindProfile = -1 is rejected by v5, ScaleMethod != 0
+removes the shear).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.exporters.inflowwind_file import (InflowWindInput, hawc2_wind_block, inflowwind_path,
+                                            write_inflowwind)
+from turbgen.exporters.outputs import OutputSet
+from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
+
+
+def component_paths(root) -> dict[str, Path]:
+    """ROOT_u.bin, ROOT_v.bin, ROOT_w.bin.
+
+    Parameters
+    ----------
+    root : str or os.PathLike
+        Path root of the three files.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        {"u": ROOT_u.bin, "v": ROOT_v.bin, "w": ROOT_w.bin}.
+    """
+    root = Path(root)
+    return {c: root.with_name(f"{root.name}_{c}.bin") for c in COMPONENTS}
+
+
+def write_hawc2(paths: dict, plane: Plane, U_ref: float) -> None:
+    """Write ``plane`` as HAWC boxes holding u - U_ref, v, w (full velocities).
+
+    Each file is little-endian float32 with z fastest, then y reversed, then time.
+
+    Parameters
+    ----------
+    paths : dict
+        {"u", "v", "w": path} of the files to write.
+    plane : Plane
+        The yz-plane to write.
+    U_ref : float
+        Reference wind speed subtracted from u [m/s].
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    OSError
+        When a file cannot be written.
+    """
+    for c in COMPONENTS:
+        with open(paths[c], "wb") as f:
+            for a, b in plane.blocks(8 * plane.ny * plane.nz):
+                box = plane.full(c, a, b) - (U_ref if c == "u" else 0.0)
+                np.ascontiguousarray(box[:, ::-1, :], dtype="<f4").tofile(f)
+
+
+def read_hawc2(root, shape, U_ref: float) -> dict:
+    """Read ROOT_{u,v,w}.bin of ``shape`` (nt, ny, nz) back as velocities.
+
+    Parameters
+    ----------
+    root : str or os.PathLike
+        Path root of the three files.
+    shape : tuple of int
+        (nt, ny, nz) of each box.
+    U_ref : float
+        Reference wind speed added back to u [m/s].
+
+    Returns
+    -------
+    dict
+        {"u", "v", "w": float64 array (nt, ny, nz) [m/s]} with y ascending, u including U_ref (as
+        InflowWind with WindProfile = 0).
+
+    Raises
+    ------
+    OSError
+        When a file cannot be read.
+    ValueError
+        When a file does not hold ``shape`` values.
+    """
+    out = {}
+    for c, p in component_paths(root).items():
+        box = np.fromfile(p, dtype="<f4").reshape(shape)[:, ::-1, :].astype(np.float64)
+        out[c] = box + U_ref if c == "u" else box
+    return out
+
+
+def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
+    """Export one plane of store ``fs`` to ROOT_{u,v,w}.bin.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    out : str or os.PathLike
+        ROOT, or a path ending in .bin (the extension is dropped).
+    req : ExportRequest
+        Plane, hub height, shear exponent and overwrite options.
+
+    Returns
+    -------
+    ExportResult
+        The three paths, the InflowWind lines (WindType 5, WindProfile 0, ScaleMethod 0) and notes.
+
+    Raises
+    ------
+    ParameterError
+        For a plane index out of range or a store without a rotor plane, a grid reaching the ground
+        (without ``drop_below_ground``), an existing output without ``overwrite``, a bad output
+        path, or a failed write.
+    """
+    root = Path(out)
+    if root.suffix.lower() == ".bin":
+        root = root.with_suffix("")
+    ix, lay = req.plane_index(fs), req.layout(fs)
+    g = fs.grid
+    paths = component_paths(root)
+    dat, htc = inflowwind_path(root, "hawc2"), root.with_name(root.name + "_wind.htc")
+    usage = []
+    with OutputSet([*paths.values(), dat, htc] if req.runner_files else paths.values(),
+                   overwrite=req.overwrite) as files:
+        plane = Plane(fs, ix, lay)
+        write_hawc2({c: files.temp(p) for c, p in paths.items()}, plane, fs.U_m_s)
+        if req.runner_files:
+            usage += runner_files(files, fs, req, plane, lay, paths, dat, htc)
+    keys = [(paths["u"], "FileName_u", "u - URef"), (paths["v"], "FileName_v", "v"), (paths["w"], "FileName_w", "w"),
+            (g.nt, "nx", "number of grids in x (time)"), (g.ny, "ny", "number of grids in y"),
+            (lay.nz, "nz", "number of grids in z"), (fs.U_m_s * g.dt_s, "dx", "distance between x points (m) = URef*dt"),
+            (g.dy_m, "dy", "(m)"), (g.dz_m, "dz", "(m)"),
+            (lay.centre_m, "RefHt_HAWC", "height of the grid's vertical centre (m)"),
+            (0, "ScaleMethod", "0 = no scaling (keeps the shear stored in the files)"),
+            (1.0, "SFx", "unused"), (1.0, "SFy", "unused"), (1.0, "SFz", "unused"),
+            (0.0, "SigmaFx", "unused"), (0.0, "SigmaFy", "unused"), (0.0, "SigmaFz", "unused"),
+            (fs.U_m_s, "URef", "mean u at hub height (m/s), also the advection speed"),
+            (0, "WindProfile", "0 = constant: the mean profile is already in the files"),
+            (lay.shear_exponent, "PLExp_HAWC", "unused with WindProfile 0"), (0.03, "Z0", "unused with WindProfile 0"),
+            (0.0, "XOffset", "(m)")]
+    lines = (ifw_line(5, "WindType", "switch for wind file type (5 = HAWC binary)"),
+             ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
+             *[ifw_line(v, k, c) for v, k, c in keys])
+    notes = [f"plane x = {g.x_m[ix]:g} m in eddy time; HAWC boxes are always periodic in time",
+             "written for InflowWind: the first x-plane reaches the turbine first and u - URef already holds the "
+             "shear; in HAWC2 itself switch its shear off and check the box read direction (changed in v13.1)",
+             *mean_wind_notes(lay, 0.0, g.nt, g.dt_s)]
+    if lay.z_first:
+        notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
+    written = (*paths.values(), dat, htc) if req.runner_files else tuple(paths.values())
+    return ExportResult(written, lines, tuple(notes), tuple(usage))
+
+
+def runner_files(files, fs, req: ExportRequest, plane: Plane, lay, paths: dict, dat: Path, htc: Path) -> list[str]:
+    """Write the InflowWind v5 input file and the HAWC2 wind block of a HAWC2 export (through ``files``).
+
+    Parameters
+    ----------
+    files : OutputSet
+        The export's output set (holding ``dat`` and ``htc``).
+    fs : FieldStore
+        The open store.
+    req : ExportRequest
+        The export request.
+    plane : Plane
+        The exported plane (its u fluctuations give the block's tint).
+    lay : VerticalLayout
+        Kept rows and mean wind.
+    paths : dict
+        {"u", "v", "w": final path} of the boxes.
+    dat, htc : pathlib.Path
+        Final paths of the input file and of the wind block.
+
+    Returns
+    -------
+    list of str
+        One usage line per file.
+    """
+    g = fs.grid
+    desc = f"turbgen {htc.name}: plane of {req.source(fs)}, {lay.wind.describe()}"
+    keys = {"nx": g.nt, "ny": g.ny, "nz": lay.nz, "dx": fs.U_m_s * g.dt_s, "dy": g.dy_m, "dz": g.dz_m,
+            "RefHt_HAWC": lay.centre_m, "PLExp_HAWC": lay.shear_exponent}
+    files_ifw = {"FileName_u": paths["u"], "FileName_v": paths["v"], "FileName_w": paths["w"]}
+    usage = [write_inflowwind(files, dat, InflowWindInput(5, lay.hub_height_m, fs.U_m_s, files_ifw, keys, title=desc))]
+    ti = float(np.std(plane.fluct["u"], dtype=np.float64)) / fs.U_m_s
+    files.temp(htc).write_text(hawc2_wind_block(
+        paths=paths, folder=htc.absolute().parent, U_m_s=fs.U_m_s, ti=ti, centre_m=lay.centre_m, nt=g.nt, ny=g.ny,
+        nz=lay.nz, dx_m=fs.U_m_s * g.dt_s, dy_m=g.dy_m, dz_m=g.dz_m, description=desc))
+    usage.append(f"HAWC2: paste \"{htc}\" in place of the htc's wind block (box names relative to {htc.parent}: run "
+                 "HAWC2 there or prefix them; check the box read direction of your HAWC2 version)")
+    return usage

@@ -1,0 +1,114 @@
+"""HDF5 copy of the whole 4D field (h5py): u, v, w, the coordinates t, x, y, z and the store's
+attributes.
+
+MATLAB reverses the dimensions of a row-major HDF5 dataset, so the velocity datasets are stored
+with C shape (nz, ny, nx, nt): MATLAB's ``h5read(f, '/u')`` returns (nt, nx, ny, nz), the
+store's documented (t, x, y, z) order, while h5py/NumPy see (z, y, x, t). Values are the stored
+fluctuations (no mean, no shear), float32; the convected frame of the store is kept (attribute
+frame_note). Written plane by plane, one component-plane in memory.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from turbgen.exporters.outputs import OutputSet
+from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult
+
+_COORDS = {"t": ("s", "eddy (convected-frame) time"), "x": ("m", "upstream distance from the rotor"),
+           "y": ("m", "lateral, +y left looking downwind"), "z": ("m", "vertical relative to hub height, up")}
+_CHUNK_BYTES = 1 << 22
+DIMENSION_ORDER = "MATLAB h5read: (t, x, y, z); row-major (h5py/NumPy): (z, y, x, t)"
+
+
+def _attr_value(value):
+    """HDF5-storable attribute: numbers, strings and bools as they are, anything else as JSON."""
+    if isinstance(value, (bool, int, float, str, np.number)):
+        return value
+    return json.dumps(value)
+
+
+def export_hdf5(fs, out, req: ExportRequest) -> ExportResult:
+    """Export the whole store ``fs`` to ``out`` (.h5).
+
+    Datasets u, v, w are float32 fluctuations [m/s] of C shape (nz, ny, nx, nt) (MATLAB's ``h5read``
+    gives (nt, nx, ny, nz)), with dimension scales t, x, y, z and the store's attributes; written
+    plane by plane, one component-plane in memory. The disk space is reserved first.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    out : str or os.PathLike
+        The HDF5 file to write.
+    req : ExportRequest
+        Only ``overwrite`` is used.
+
+    Returns
+    -------
+    ExportResult
+        The written path, a line saying InflowWind does not read HDF5, and a note on the
+        dimension order.
+
+    Raises
+    ------
+    ParameterError
+        For an existing output without ``overwrite``, a bad output path, or a failed write (e.g.
+        ENOSPC when reserving the space).
+    """
+    out = Path(out)
+    g = fs.grid
+    coords = {"t": g.t(), "x": g.x(), "y": g.y(), "z": g.z()}
+    ct = max(1, min(g.nt, _CHUNK_BYTES // (4 * g.ny * g.nz)))
+    with OutputSet([out], overwrite=req.overwrite) as files, h5py.File(files.temp(out), "w") as h5:
+        # HDF5 aborts the process (double free) when it cannot flush on close, e.g. on a full disk:
+        # reserve the whole file first, so that ENOSPC comes here, as a Python error, or never
+        files.reserve(out, 3 * g.nbytes_per_component() + g.nbytes_per_component() // 32 + (1 << 20))
+        for name, value in fs.attrs.items():
+            h5.attrs[name] = _attr_value(value)
+        h5.attrs["dimension_order"] = DIMENSION_ORDER
+        h5.attrs["source_store"] = req.source(fs)
+        for name, (unit, long_name) in _COORDS.items():
+            d = h5.create_dataset(name, data=coords[name])
+            d.attrs.update(units=unit, long_name=long_name)
+            d.make_scale(name)
+        for c in COMPONENTS:
+            d = h5.create_dataset(c, shape=(g.nz, g.ny, g.nx, g.nt), dtype="<f4", chunks=(g.nz, g.ny, 1, ct))
+            d.attrs.update(units="m/s", long_name=f"{c} velocity fluctuation", dimension_order=DIMENSION_ORDER)
+            for k, name in enumerate("zyxt"):
+                d.dims[k].attach_scale(h5[name])
+            for ix in range(g.nx):
+                d[:, :, ix, :] = fs.read_plane(c, ix).transpose(2, 1, 0)
+    lines = ("(HDF5 is not read by InflowWind: use --format wnd/bts/hawc2 for the rotor plane, evo for the lidar simulator)",)
+    notes = ["MATLAB: u = h5read(file, '/u') gives (t, x, y, z); h5py gives (z, y, x, t)"]
+    return ExportResult((out,), lines, tuple(notes))
+
+
+def read_hdf5(path) -> dict:
+    """Read an export back.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The HDF5 file written by :func:`export_hdf5`.
+
+    Returns
+    -------
+    dict
+        u, v, w (nt, nx, ny, nz) float32 [m/s], coordinates t [s], x, y, z [m], and attrs (dict of the
+        file attributes).
+
+    Raises
+    ------
+    OSError
+        When the file cannot be opened as HDF5.
+    """
+    with h5py.File(path, "r") as h5:
+        out = {c: h5[c][...].transpose(3, 2, 1, 0) for c in COMPONENTS}
+        out.update({name: h5[name][...] for name in _COORDS})
+        out["attrs"] = dict(h5.attrs)
+    return out

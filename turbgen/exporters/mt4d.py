@@ -1,0 +1,83 @@
+"""``.mt4d``: the headerless float32 layout of the 4D Mann turbulence generator
+(MSCA-LIKE/4D-Mann-Turbulence-Generator, its MannTurb4D writer; Guo et al. 2022).
+
+Fortran order z fastest, then y, then x, then snapshot slot, then component (u, v, w), i.e. a
+MATLAB ``reshape(data, [nz ny n1 nslots 3])``. Mapping from the store: slot k = plane k (slot
+time t_k = x_k / U), the box's x axis = eddy time REVERSED (x increases downwind, so the turbine
+reads the largest x first: box x index i holds stored t index nt-1-i), y and z ascending (+y left,
+z relative to the hub). Fluctuations only, as the generator writes them (no mean, no shear).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.exporters.outputs import OutputSet
+from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult
+
+
+def export_mt4d(fs, out, req: ExportRequest) -> ExportResult:
+    """Export every plane of store ``fs`` to ``out`` (.mt4d); one component-plane in memory.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    out : str or os.PathLike
+        The ``.mt4d`` file to write.
+    req : ExportRequest
+        Only ``overwrite`` is used.
+
+    Returns
+    -------
+    ExportResult
+        The written path, a line saying InflowWind does not read .mt4d, and notes giving the box
+        sizes, slot times t_k = x_k/U [s] and the MATLAB ``reshape`` call.
+
+    Raises
+    ------
+    ParameterError
+        For an existing output without ``overwrite``, a bad output path, or a failed write.
+    """
+    out = Path(out)
+    g = fs.grid
+    with OutputSet([out], overwrite=req.overwrite) as files, open(files.temp(out), "wb") as f:
+        for c in COMPONENTS:
+            for ix in range(g.nx):
+                np.ascontiguousarray(fs.read_plane(c, ix)[::-1], dtype="<f4").tofile(f)
+    slots = ", ".join(f"{x / fs.U_m_s:g}" for x in g.x_m)
+    lines = ("(.mt4d is not read by InflowWind: use --format wnd/bts/hawc2 for the rotor plane, evo for the lidar simulator)",)
+    notes = [f"n1 (x = reversed eddy time) = {g.nt}, n2 = {g.ny}, n3 = {g.nz}, Nt (slots = planes) = {g.nx}; "
+             f"Lx = {g.nt * fs.U_m_s * g.dt_s:g} m, Ly = {g.ny * g.dy_m:g} m, Lz = {g.nz * g.dz_m:g} m",
+             f"slot times t_k = x_k/U = [{slots}] s for planes x = {list(g.x_m)} m",
+             f"MATLAB: reshape(fread(fid, inf, 'float32'), [{g.nz} {g.ny} {g.nt} {g.nx} 3])"]
+    return ExportResult((out,), lines, tuple(notes))
+
+
+def read_mt4d(path, shape) -> dict:
+    """Read an ``.mt4d`` of store ``shape`` (nt, nx, ny, nz) back in store orientation.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.mt4d`` file.
+    shape : tuple of int
+        (nt, nx, ny, nz) of the store it was exported from.
+
+    Returns
+    -------
+    dict
+        {"u", "v", "w": float32 array (nt, nx, ny, nz) [m/s]} (eddy time ascending).
+
+    Raises
+    ------
+    OSError
+        When the file cannot be read.
+    ValueError
+        When the file does not hold 3 * nt * nx * ny * nz values.
+    """
+    nt, nx, ny, nz = shape
+    data = np.fromfile(path, dtype="<f4").reshape(3, nx, nt, ny, nz)
+    return {c: data[k, :, ::-1].transpose(1, 0, 2, 3) for k, c in enumerate(COMPONENTS)}

@@ -1,0 +1,147 @@
+"""The export options as `turbgen export` and the service's export endpoint take them, made into one
+:class:`turbgen.exporters.ExportRequest` (and so one :class:`turbgen.spec.mean_wind.MeanWind`) by one function.
+
+The service gives the profile table and the mean history inline (``z,U[,dir];...``), the command line as files;
+everything else is the same keys with the same checks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from turbgen.errors import ParameterError
+from turbgen.exporters.request import ExportRequest
+from turbgen.spec.mean_wind_files import mean_wind_from_options
+
+RUNNER_FORMATS = ("bts", "wnd", "evo", "hawc2")
+TRANSIENTS = ("EOG", "EDC", "ECD", "EWS-V", "EWS-H")
+
+
+@dataclass(frozen=True)
+class ExportOptions:
+    """The export options as typed (None: not given), before they are checked.
+
+    Parameters
+    ----------
+    plane : int, optional
+        Plane index (default: the rotor plane).
+    hub_height_m : float, optional
+        Hub height [m] (default: the store's).
+    shear_exponent : float, optional
+        Power-law alpha [-].
+    profile : str, optional
+        ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE`` (inline: ``table:z,U[,dir];...``).
+    veer_deg_per_m : float, optional
+        Veer rate [deg/m].
+    mean_history : str, optional
+        CSV file of t [s], U [m/s] [, direction deg] (inline: ``t,U[,dir];...``).
+    transient : str, optional
+        IEC transient: EOG, EDC, ECD, EWS-V or EWS-H.
+    iec_class : str, optional
+        Turbine class and turbulence category of the transient, e.g. "IIB".
+    rotor_diameter_m : float, optional
+        Rotor diameter D [m] of the transient.
+    transient_start_s : float
+        Time the transient reaches the turbine [s] (default 10).
+    transient_sign : str
+        "+" or "-": the standard's sense of the transient (default "+").
+    tower, periodic, drop_below_ground, overwrite : bool
+        As :class:`turbgen.exporters.ExportRequest`.
+    runner_files : bool
+        Write the runners' input files for the formats that have them (bts, wnd, evo, hawc2; default True).
+    """
+
+    plane: int | None = None
+    hub_height_m: float | None = None
+    shear_exponent: float | None = None
+    profile: str | None = None
+    veer_deg_per_m: float | None = None
+    mean_history: str | None = None
+    transient: str | None = None
+    iec_class: str | None = None
+    rotor_diameter_m: float | None = None
+    transient_start_s: float = 10.0
+    transient_sign: str = "+"
+    tower: bool = False
+    periodic: bool = True
+    drop_below_ground: bool = False
+    runner_files: bool = True
+    overwrite: bool = False
+
+    def given(self) -> dict:
+        """The options that differ from their defaults (a cache key of the service).
+
+        Returns
+        -------
+        dict
+            Option name -> value.
+        """
+        default = asdict(ExportOptions())
+        return {k: v for k, v in asdict(self).items() if v != default[k]}
+
+
+def export_request(store, fmt: str, opts: ExportOptions, *, inline: bool = False,
+                   source_label: str | None = None) -> ExportRequest:
+    """The ExportRequest of ``opts`` for ``store`` in format ``fmt``.
+
+    Parameters
+    ----------
+    store : str, os.PathLike or FieldStore
+        The store (opened only for a transient, which takes its U and hub height).
+    fmt : str
+        The export format.
+    opts : ExportOptions
+        The options.
+    inline : bool, optional
+        The profile table and the mean history hold their rows, not file names (the service).
+    source_label : str, optional
+        How the exports name their source store (see ExportRequest).
+
+    Returns
+    -------
+    ExportRequest
+        The checked request.
+
+    Raises
+    ------
+    ParameterError
+        For both a shear exponent and a profile, transient options without a transient (or a transient without
+        them), a malformed profile or table, and values outside their ranges.
+    StoreError
+        For a transient on a missing or incomplete store.
+    """
+    profile, shear = opts.profile, opts.shear_exponent
+    if shear is not None and profile is not None:
+        raise ParameterError(f"--shear-exponent {shear:g} and --profile {profile} both set the profile; give one")
+    if shear is not None and (opts.veer_deg_per_m is not None or opts.mean_history is not None):
+        profile, shear = f"power:{shear!r}", None
+    event = _transient(store, opts)
+    mean_wind = mean_wind_from_options(profile, opts.veer_deg_per_m, opts.mean_history, event, inline=inline)
+    return ExportRequest(plane=opts.plane, hub_height_m=opts.hub_height_m, shear_exponent=shear, tower=opts.tower,
+                         periodic=opts.periodic, drop_below_ground=opts.drop_below_ground, overwrite=opts.overwrite,
+                         source_label=source_label, mean_wind=mean_wind,
+                         runner_files=opts.runner_files and fmt in RUNNER_FORMATS)
+
+
+def _transient(store, opts: ExportOptions):
+    """The IEC transient of the options at the store's U and hub height (None without ``transient``)."""
+    extra = [n for n, v in (("--iec-class (iec_class)", opts.iec_class),
+                            ("--rotor-diameter (rotor_diameter_m)", opts.rotor_diameter_m)) if v is not None]
+    if opts.transient is None:
+        if extra:
+            raise ParameterError(f"{' and '.join(extra)} belong to --transient (transient)")
+        return None
+    kind = str(opts.transient).upper()
+    if kind not in TRANSIENTS:
+        raise ParameterError(f"transient {opts.transient!r} is not one of {', '.join(TRANSIENTS)}")
+    if opts.iec_class is None or opts.rotor_diameter_m is None:
+        raise ParameterError(f"--transient {kind} needs --iec-class and --rotor-diameter (iec_class, rotor_diameter_m)")
+    if opts.transient_sign not in ("+", "-"):
+        raise ParameterError(f"transient sign {opts.transient_sign!r} is not '+' or '-'")
+    from turbgen.spec.iec_transient import IecTransient
+    from turbgen.store import FieldStore, open_store
+
+    fs = store if isinstance(store, FieldStore) else open_store(store)
+    hub = fs.hub_height_m if opts.hub_height_m is None else opts.hub_height_m
+    return IecTransient(kind, opts.iec_class, fs.U_m_s, hub, opts.rotor_diameter_m, start_s=opts.transient_start_s,
+                        duration_s=(fs.grid.nt - 1) * fs.grid.dt_s, sign=1 if opts.transient_sign == "+" else -1)

@@ -1,0 +1,329 @@
+"""What the user asked for (one validated, frozen request) and what an export produced."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError, check_int
+from turbgen.exporters.shear import DEFAULT_SHEAR_EXPONENT, VerticalLayout, vertical_layout
+from turbgen.spec.mean_wind import CCW_NOTE, MeanWind
+from turbgen.theory import ranges
+
+COMPONENTS = ("u", "v", "w")
+
+
+@dataclass(frozen=True)
+class ExportRequest:
+    """Options shared by all formats.
+
+    Parameters
+    ----------
+    plane : int, optional
+        Index into the store's planes (None = the rotor plane, x = 0).
+    hub_height_m : float, optional
+        Overrides the store's hub height [m], in the range of ``turbgen.theory.ranges`` ([1, 1000]).
+    shear_exponent : float, optional
+        Power-law alpha [-]; None (default): ``DEFAULT_SHEAR_EXPONENT``. Given, it is refused by the
+        formats without a mean profile, even at the default value.
+    tower : bool, optional
+        Add .bts tower points.
+    periodic : bool, optional
+        Flag the file periodic in time (InflowWind wraps); default True.
+    drop_below_ground : bool, optional
+        Drop grid rows at or below the ground instead of refusing.
+    overwrite : bool, optional
+        Replace existing outputs.
+    source_label : str, optional
+        How the exports name their source store (the .bts description, the HDF5 ``source_store``); default its
+        path. The service gives ``/runs/<id>/store``, not its catalog's path on the server.
+    mean_wind : MeanWind, optional
+        Profile, veer and hub-height history added by the InflowWind/HAWC2 formats; None (default):
+        the power law with ``shear_exponent``. Refused together with ``shear_exponent``.
+    runner_files : bool, optional
+        Also write the runners' input files beside the wind files: a complete InflowWind v5 input file
+        ``<out>_InflowWind_<format>.dat`` (bts, wnd, evo, hawc2), a HAWC2 ``<out>_wind.htc`` block (hawc2)
+        and the LidarSim input file's Wind Evolution section ``<out>_LidarSim_evolution.txt`` (evo);
+        default False.
+
+    Raises
+    ------
+    ParameterError
+        For a non-integer ``plane``, a ``hub_height_m`` outside its range, or both ``mean_wind`` and
+        ``shear_exponent``.
+    """
+
+    plane: int | None = None
+    hub_height_m: float | None = None
+    shear_exponent: float | None = None
+    tower: bool = False
+    periodic: bool = True
+    drop_below_ground: bool = False
+    overwrite: bool = False
+    source_label: str | None = None
+    mean_wind: MeanWind | None = None
+    runner_files: bool = False
+
+    def source(self, fs) -> str:
+        """The source store's name in the exports: ``source_label``, else the store directory's name (not its absolute
+        path: the same store and options give the same files on any machine, in any directory), or the in-memory
+        field's label."""
+        if self.source_label is not None:
+            return self.source_label
+        return fs.path.name if getattr(fs, "path", None) is not None else fs.label
+
+    def __post_init__(self):
+        if self.plane is not None:
+            # the range [0, nx - 1] depends on the store: checked in plane_index
+            object.__setattr__(self, "plane", check_int("plane", self.plane, -(2**63), 2**63))
+        if self.hub_height_m is not None:
+            object.__setattr__(self, "hub_height_m", ranges.check("hub_height_m", self.hub_height_m))
+        if self.mean_wind is not None and self.shear_exponent is not None:
+            raise ParameterError("give the shear exponent either as `shear_exponent` or in `mean_wind`, not both")
+        if self.mean_wind is not None and not isinstance(self.mean_wind, MeanWind):
+            raise ParameterError(f"`mean_wind` = {self.mean_wind!r} is not a turbgen.spec.mean_wind.MeanWind")
+
+    def plane_index(self, fs) -> int:
+        """The plane to export from store ``fs`` (default: the plane at x = 0).
+
+        Parameters
+        ----------
+        fs : FieldStore
+            The open store.
+
+        Returns
+        -------
+        int
+            Plane index in [0, nx - 1].
+
+        Raises
+        ------
+        ParameterError
+            When ``plane`` is None and the store has no plane at x = 0 m, or ``plane`` is out of range.
+        """
+        xs = fs.grid.x_m
+        if self.plane is None:
+            if 0.0 not in xs:
+                raise ParameterError(f"store has no rotor plane (x = 0 m) among x = {list(xs)}; choose one with `plane` 0..{len(xs) - 1}")
+            return xs.index(0.0)
+        if not 0 <= self.plane < len(xs):
+            raise ParameterError(f"plane = {self.plane} is outside the allowed range [0, {len(xs) - 1}] (x = {list(xs)} m)")
+        return self.plane
+
+    def layout(self, fs) -> VerticalLayout:
+        """Rows to export and the mean profile, for store ``fs``.
+
+        Parameters
+        ----------
+        fs : FieldStore
+            The open store; its hub height is used unless ``hub_height_m`` is set.
+
+        Returns
+        -------
+        VerticalLayout
+            See :func:`turbgen.exporters.shear.vertical_layout`.
+
+        Raises
+        ------
+        ParameterError
+            For a grid reaching the ground without ``drop_below_ground``, a bad shear exponent, heights
+            the mean-wind profile does not cover, or a mean history outside the record.
+        """
+        hub = fs.hub_height_m if self.hub_height_m is None else self.hub_height_m
+        alpha = DEFAULT_SHEAR_EXPONENT if self.shear_exponent is None else self.shear_exponent
+        lay = vertical_layout(fs.grid, hub, alpha, drop_below_ground=self.drop_below_ground,
+                              mean_wind=self.mean_wind)
+        g = fs.grid
+        event = lay.wind.transient
+        if event is not None and (not np.isclose(event.V_hub_m_s, fs.U_m_s, rtol=1e-9, atol=0.0)
+                                  or not np.isclose(event.hub_height_m, lay.hub_height_m, rtol=1e-9, atol=0.0)):
+            raise ParameterError(f"the {event.kind} is set for V_hub {event.V_hub_m_s:g} m/s at hub height "
+                                 f"{event.hub_height_m:g} m, but the field has U {fs.U_m_s:g} m/s at "
+                                 f"{lay.hub_height_m:g} m: superimpose it at the field's own hub speed and height")
+        lay.wind.check_record(0.0, (g.nt - 1) * g.dt_s - self.start_shift_s(fs))
+        return lay
+
+    def start_shift_s(self, fs) -> float:
+        """Time [s] by which InflowWind starts a file upstream: half the grid width / U when not periodic, else 0.
+
+        InflowWind reads slice k (0-based) at X = 0 at time k dt - InitX / U with InitX = (ny - 1) dy / 2
+        for a non-periodic .bts/.wnd (file-formats.md section 1); HAWC boxes are always periodic.
+
+        Parameters
+        ----------
+        fs : FieldStore
+            The open store.
+
+        Returns
+        -------
+        float
+            InitX / U [s] (0 when periodic).
+        """
+        g = fs.grid
+        return 0.0 if self.periodic else 0.5 * (g.ny - 1) * g.dy_m / fs.U_m_s
+
+
+@dataclass(frozen=True)
+class ExportResult:
+    """Files written, the InflowWind input-file lines that load them, remarks for the user, and one line
+    per runner input file saying how to use it."""
+
+    paths: tuple[Path, ...]
+    inflowwind_lines: tuple[str, ...]
+    notes: tuple[str, ...] = field(default=())
+    usage: tuple[str, ...] = field(default=())
+
+
+class Plane:
+    """One yz-plane as stored (float32 fluctuations, kept rows only) plus the mean wind.
+
+    Full velocities are made in float64 one time block at a time, so memory stays at about one
+    stored plane. Without veer, history or transient only u gets the profile's mean (the exports' bits of
+    earlier versions); with them (u, v) = rotate((U(t, y, h) + u', v'), veer(h) + direction(t)) as
+    :mod:`turbgen.spec.mean_wind` defines, t the time slice k reaches the turbine (``first_slice_s`` + k dt).
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    ix : int
+        Plane index.
+    layout : VerticalLayout
+        Kept rows and the mean profile.
+    first_slice_s : float, optional
+        Time [s] at which slice 0 reaches the turbine (minus the start shift of a non-periodic file).
+
+    Raises
+    ------
+    ParameterError
+        For a plane index out of range.
+    StoreError
+        When a chunk of the plane is corrupted or holds NaN/inf.
+    """
+
+    def __init__(self, fs, ix: int, layout: VerticalLayout, first_slice_s: float = 0.0):
+        self.fluct = {c: fs.read_plane(c, ix)[:, :, layout.z_first:] for c in COMPONENTS}
+        self.mean_u = layout.mean_u(fs.U_m_s)
+        self.nt, self.ny, self.nz = self.fluct["u"].shape
+        self.wind = layout.wind
+        self.varying = self.wind.varies
+        self.times_s = first_slice_s + fs.grid.dt_s * np.arange(self.nt)
+        self.y_m, self.heights_m = fs.grid.y(), layout.heights_m
+        self.U_m_s, self.hub_height_m = fs.U_m_s, layout.hub_height_m
+
+    def full(self, c: str, a: int = 0, b: int | None = None) -> np.ndarray:
+        """Full velocity [m/s] of component ``c`` for time steps a..b-1, float64 (b - a, ny, nz).
+
+        Parameters
+        ----------
+        c : str
+            "u", "v" or "w"; w is the stored fluctuation, u (and v, with veer or a history direction)
+            carry the mean wind.
+        a : int, optional
+            First time index (default 0).
+        b : int, optional
+            End time index, exclusive (default None: to the end).
+
+        Returns
+        -------
+        numpy.ndarray
+            float64 array (b - a, ny, nz) [m/s].
+        """
+        v = self.fluct[c][a:b].astype(np.float64)
+        if not self.varying:
+            if c == "u":
+                v += self.mean_u[None, None, :]
+            return v
+        if c == "w":
+            return v
+        u, other = self.wind.full_uv(self.fluct["u"][a:b].astype(np.float64), self.fluct["v"][a:b].astype(np.float64),
+                                     self.times_s[a:b, None, None], self.y_m[None, :, None],
+                                     self.heights_m[None, None, :], self.U_m_s, self.hub_height_m)
+        return u if c == "u" else other
+
+    def blocks(self, bytes_per_step: int, budget: int = 1 << 24):
+        """(a, b) time blocks of at most ``budget`` bytes at ``bytes_per_step`` each.
+
+        Parameters
+        ----------
+        bytes_per_step : int
+            Bytes one time step takes [bytes].
+        budget : int, optional
+            Largest block [bytes]; default 16 MiB (at least one step per block).
+
+        Returns
+        -------
+        list of tuple of (int, int)
+            Consecutive half-open time ranges [a, b) covering 0..nt.
+        """
+        step = max(1, budget // max(1, bytes_per_step))
+        return [(a, min(self.nt, a + step)) for a in range(0, self.nt, step)]
+
+
+def ifw_line(value, key: str, comment: str) -> str:
+    """One InflowWind input-file line: value, key name (second token), description.
+
+    Parameters
+    ----------
+    value : object
+        The value; strings and paths are quoted, floats written with 10 significant digits.
+    key : str
+        The InflowWind key name.
+    comment : str
+        Description after the key.
+
+    Returns
+    -------
+    str
+        The line, value right-aligned in 20 characters.
+    """
+    text = f'"{value}"' if isinstance(value, (str, Path)) else (str(value) if not isinstance(value, float) else f"{value:.10g}")
+    return f"{text:>20}   {key:<15} - {comment}"
+
+
+def mean_wind_notes(lay: VerticalLayout, shift_s: float, nt: int, dt_s: float) -> list[str]:
+    """What the printed summary says about the mean wind and the time origin of an export.
+
+    Parameters
+    ----------
+    lay : VerticalLayout
+        The exported rows and mean wind.
+    shift_s : float
+        Start shift InitX / U [s] (0 for a periodic file).
+    nt : int
+        Number of time slices.
+    dt_s : float
+        Time step [s].
+
+    Returns
+    -------
+    list of str
+        Notes: the start shift (non-periodic files), the mean wind when it is not the default power
+        law, and how a hub-height history meets Taylor's shift.
+    """
+    notes = []
+    if shift_s:
+        notes.append(f"not periodic: InflowWind starts the file {shift_s:.6g} s upstream (InitX/U, half the grid "
+                     f"width over U): slice k reaches the turbine at t = k*{dt_s:g} - {shift_s:.6g} s; usable "
+                     f"record at the turbine 0 to {(nt - 1) * dt_s - shift_s:.6g} s")
+    wind = lay.wind
+    if lay.mean_wind is not None:
+        notes.append(f"mean wind: {wind.describe()}")
+    if wind.turns:
+        notes.append(f"veer/direction turn (mean + fluctuations) per height and time, {CCW_NOTE} (+y = left looking "
+                     "downwind)")
+    if wind.transient is not None:
+        notes.append(f"{wind.transient.describe()}, superimposed: it rides on the slices (slice k carries the event at "
+                     "the time it reaches the turbine); the advection speed in the file stays the store's U, so "
+                     "Taylor's shift uses the hub mean and a point X m upstream sees the event X/U s earlier")
+        if not shift_s:  # periodic: InflowWind (and HAWC2) wrap the file in time
+            notes.append(f"warning: the file is periodic, so the {wind.transient.kind} recurs every {nt * dt_s:g} s "
+                         "record when a simulation runs longer; export with --no-periodic (periodic=False) for one "
+                         "event (HAWC2 boxes are always periodic: simulate at most one record)")
+    if wind.has_history:
+        notes.append("the hub-height history rides on the slices (slice k carries the history at the time it "
+                     "reaches the turbine); the advection speed in the file stays the store's U, so Taylor's "
+                     "shift uses the hub mean and a point X m upstream sees each change X/U s earlier")
+    return notes

@@ -1,0 +1,440 @@
+"""Bladed-style ``.wnd`` + TurbSim-style ``.sum`` (InflowWind WindType 4; Jonkman 2009, TurbSim User's Guide
+v1.50, and OpenFAST's InflowWind documentation); the same pair carries the header for the lidar simulator's
+``.evo`` (turbgen.exporters.evo).
+
+``.wnd``: new-style 104-byte header (ID -99, TurbType 4), then per time step nz*ny*3 int16 with
+the component fastest, then y (from -W/2, +y left), then z (from the bottom). Velocity =
+U (o + 1e-5 TI% raw), o = (1, 0, 0); no Bladed left-hand rule, so v has InflowWind's sign both
+in InflowWind and in the lidar simulator's ``.evo`` reader (which never negates v).
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.exporters.inflowwind_file import InflowWindInput, inflowwind_path, write_inflowwind
+from turbgen.exporters.outputs import OutputSet
+from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
+from turbgen.exporters.wnd_summary import sum_text
+
+_HEADER = struct.Struct("<hhi6f3fi4f4i6f")
+_OFFSET = {"u": 1.0, "v": 0.0, "w": 0.0}
+_RAW_LIMIT = 32000.0  # keeps |raw| below the int16 limit with margin
+
+
+class BladedStats:
+    """Running per-component statistics that fix the Bladed TI scaling: the largest |deviation|
+    from U*o (full velocity) and the variance of the fluctuations."""
+
+    def __init__(self):
+        self.maxdev = dict.fromkeys(COMPONENTS, 0.0)
+        self.sums = {c: [0, 0.0, 0.0] for c in COMPONENTS}
+
+    def add(self, plane: Plane, U_m_s: float) -> None:
+        """Include one plane.
+
+        Updates the largest |full velocity - U*o| and the running sums of the fluctuations, per component.
+
+        Parameters
+        ----------
+        plane : Plane
+            The yz-plane to include.
+        U_m_s : float
+            Mean wind speed [m/s] (the U of the scaling).
+
+        Returns
+        -------
+        None
+        """
+        for c in COMPONENTS:
+            s = self.sums[c]
+            for a, b in plane.blocks(8 * plane.ny * plane.nz):
+                dev = np.abs(plane.full(c, a, b) - U_m_s * _OFFSET[c]).max()
+                self.maxdev[c] = max(self.maxdev[c], float(dev))
+                fluct = plane.fluct[c][a:b].astype(np.float64)
+                s[0] += fluct.size
+                s[1] += float(fluct.sum())
+                s[2] += float(np.square(fluct).sum())
+
+    def ti_percent(self, U_m_s: float) -> tuple[float, float, float]:
+        """TI [%] per component: the fluctuations' sigma/U, enlarged where needed so that every raw value fits.
+
+        Every raw value fits in +-32000 (raw = dev 1e5 / (U TI%)); at least 1e-3 %.
+
+        Parameters
+        ----------
+        U_m_s : float
+            Mean wind speed [m/s].
+
+        Returns
+        -------
+        tuple of (float, float, float)
+            TI of u, v, w [%], rounded to float32 (the header's float32 value, used by every reader).
+        """
+        out = []
+        for c in COMPONENTS:
+            n, s1, s2 = self.sums[c]
+            sigma = np.sqrt(max(s2 / n - (s1 / n) ** 2, 0.0))
+            ti = max(100.0 * sigma / U_m_s, self.maxdev[c] * 1e5 / (U_m_s * _RAW_LIMIT), 1e-3)
+            out.append(float(np.float32(ti)))  # the header's float32 value, used by every reader
+        return tuple(out)
+
+
+def bladed_raw(plane: Plane, a: int, b: int, U_m_s: float, ti: tuple) -> np.ndarray:
+    """int16 block (b - a, nz, ny, 3) for time steps a..b-1 (component fastest, then y, z).
+
+    raw = (V / U - o) 1e5 / TI%, rounded and saturated to the int16 range, o = (1, 0, 0).
+
+    Parameters
+    ----------
+    plane : Plane
+        The yz-plane.
+    a : int
+        First time index.
+    b : int
+        End time index (exclusive).
+    U_m_s : float
+        Mean wind speed of the scaling [m/s].
+    ti : tuple of float
+        TI of u, v, w [%].
+
+    Returns
+    -------
+    numpy.ndarray
+        Little-endian int16 array (b - a, nz, ny, 3).
+    """
+    raw = [np.clip(np.rint((plane.full(c, a, b) / U_m_s - _OFFSET[c]) * 1e5 / t), -32768, 32767)
+           for c, t in zip(COMPONENTS, ti)]
+    return np.stack(raw, axis=-1).astype("<i2").transpose(0, 2, 1, 3)
+
+
+def from_bladed(raw: np.ndarray, U_m_s: float, ti: tuple) -> dict:
+    """Velocities from raw int16 (..., 3): V = U (o + 1e-5 TI% raw).
+
+    Parameters
+    ----------
+    raw : numpy.ndarray
+        Raw values with the component (u, v, w) last, shape (..., 3).
+    U_m_s : float
+        Mean wind speed of the scaling [m/s].
+    ti : tuple of float
+        TI of u, v, w [%].
+
+    Returns
+    -------
+    dict
+        {"u", "v", "w": float64 array of shape raw.shape[:-1] [m/s]}.
+    """
+    return {c: U_m_s * (_OFFSET[c] + 1e-5 * t * raw[..., k]) for k, (c, t) in enumerate(zip(COMPONENTS, ti))}
+
+
+@dataclass(frozen=True)
+class WndHeader:
+    """The grid and scaling of a ``.wnd`` (dz, dy, dx [m], nt, U [m/s], TI [%], nz, ny)."""
+
+    nz: int
+    ny: int
+    nt: int
+    dz_m: float
+    dy_m: float
+    dx_m: float
+    U_m_s: float
+    ti_percent: tuple
+    zref_m: float = 0.0
+
+    def pack(self) -> bytes:
+        """The 104-byte new-style header (little-endian ``<hhi6f3fi4f4i6f``).
+
+        ID -99, TurbType 4, 3 components, zref [m], TI [%], dz, dy, dx [m], nt/2, U [m/s], nz, ny; the
+        remaining fields are zero.
+
+        Returns
+        -------
+        bytes
+            The packed header.
+        """
+        return _HEADER.pack(-99, 4, 3, 0.0, 0.0, self.zref_m, *self.ti_percent, self.dz_m, self.dy_m, self.dx_m,
+                            self.nt // 2, self.U_m_s, 0.0, 0.0, 0.0, 0, 0, self.nz, self.ny, *([0.0] * 6))
+
+    @classmethod
+    def unpack(cls, raw: bytes) -> "WndHeader":
+        """Header read from the first 104 bytes of a ``.wnd``.
+
+        Parameters
+        ----------
+        raw : bytes
+            The file contents (at least the header).
+
+        Returns
+        -------
+        WndHeader
+            Grid and scaling; nt = 2 * the stored nt/2.
+
+        Raises
+        ------
+        ParameterError
+            When the file is not a new-style TurbType-4 .wnd (ID -99, type 4).
+        struct.error
+            When ``raw`` is shorter than the header.
+        """
+        h = _HEADER.unpack_from(raw, 0)
+        if h[0] != -99 or h[1] != 4:
+            raise ParameterError(f"not a new-style TurbType-4 .wnd (ID {h[0]}, type {h[1]})")
+        return cls(nz=h[19], ny=h[20], nt=2 * h[12], dz_m=h[9], dy_m=h[10], dx_m=h[11], U_m_s=h[13],
+                   ti_percent=tuple(h[6:9]), zref_m=h[5])
+
+
+def write_wnd(path, plane: Plane, header: WndHeader) -> None:
+    """Header plus the time steps of ``plane``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.wnd`` file to write.
+    plane : Plane
+        The yz-plane to write.
+    header : WndHeader
+        Grid and scaling (U, TI) of the file.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    OSError
+        When the file cannot be written.
+    """
+    with open(path, "wb") as f:
+        f.write(header.pack())
+        for a, b in plane.blocks(8 * plane.ny * plane.nz):
+            f.write(np.ascontiguousarray(bladed_raw(plane, a, b, header.U_m_s, header.ti_percent)).tobytes())
+
+
+def read_wnd(path) -> dict:
+    """Read a ``.wnd`` written by :func:`write_wnd`: header and u, v, w (nt, ny, nz) [m/s].
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.wnd`` file.
+
+    Returns
+    -------
+    dict
+        u, v, w float64 (nt, ny, nz) [m/s] and header (:class:`WndHeader`).
+
+    Raises
+    ------
+    ParameterError
+        When the file is not a new-style TurbType-4 .wnd.
+    OSError
+        When the file cannot be read.
+    """
+    raw = Path(path).read_bytes()
+    h = WndHeader.unpack(raw)
+    data = np.frombuffer(raw, dtype="<i2", offset=_HEADER.size).reshape(-1, h.nz, h.ny, 3)
+    out = from_bladed(data.transpose(0, 2, 1, 3), h.U_m_s, h.ti_percent)
+    out["header"] = h
+    return out
+
+
+def check_even_nt(nt: int) -> None:
+    """The lidar simulator reads nt = 2 * nt_half steps from the .wnd header: nt must be even.
+
+    Parameters
+    ----------
+    nt : int
+        Number of time steps.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    ParameterError
+        When ``nt`` is odd.
+    """
+    if nt % 2:
+        raise ParameterError(f"nt = {nt} is odd; the .wnd header stores nt/2, so the Bladed/evo export needs an even nt")
+
+
+def write_pair(files: OutputSet, root: Path, plane: Plane, header: WndHeader, lay, *, periodic: bool, title: str) -> None:
+    """Write ROOT.wnd and ROOT.sum (through the temporary names of ``files``).
+
+    Parameters
+    ----------
+    files : OutputSet
+        The output set holding ROOT.wnd and ROOT.sum.
+    root : pathlib.Path
+        ROOT (without extension).
+    plane : Plane
+        The yz-plane to write.
+    header : WndHeader
+        Grid and scaling of the .wnd.
+    lay : VerticalLayout
+        Hub height and kept rows (for the .sum hub height and height offset).
+    periodic : bool
+        Mark the .sum PERIODIC.
+    title : str
+        First line of the .sum.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    OSError
+        When a file cannot be written.
+    """
+    write_wnd(files.temp(root_file(root, ".wnd")), plane, header)
+    files.temp(root_file(root, ".sum")).write_text(sum_text(
+        hub_height_m=lay.hub_height_m, U_m_s=header.U_m_s, ti_percent=header.ti_percent,
+        height_offset_m=lay.hub_height_m - lay.centre_m, periodic=periodic, title=title))
+
+
+def inflowwind_lines(root: Path) -> tuple[str, ...]:
+    """WindType 4 lines for FilenameRoot ``root``.
+
+    Parameters
+    ----------
+    root : pathlib.Path
+        ROOT of ROOT.wnd and ROOT.sum.
+
+    Returns
+    -------
+    tuple of str
+        WindType, PropagationDir, FilenameRoot and TowerFile (False: no ROOT.twr) lines.
+    """
+    return (ifw_line(4, "WindType", "switch for wind file type (4 = Bladed-style .wnd + .sum)"),
+            ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
+            ifw_line(str(root), "FilenameRoot", "root of ROOT.wnd and ROOT.sum"),
+            ifw_line(False, "TowerFile", "no ROOT.twr"))
+
+
+def write_wnd_inflowwind(files: OutputSet, path: Path, root: Path, lay, U_m_s: float, *, x_m: float,
+                         shift_s: float) -> str:
+    """Write the InflowWind v5 input file (WindType 4, FilenameRoot ``root``) of ROOT.wnd + ROOT.sum.
+
+    Parameters
+    ----------
+    files : OutputSet
+        The export's output set (``path`` among its paths).
+    path : pathlib.Path
+        Final path of the input file.
+    root : pathlib.Path
+        ROOT of ROOT.wnd and ROOT.sum (written relative to the input file's folder).
+    lay : VerticalLayout
+        Hub height (RefHt) and the mean wind (described in the title).
+    U_m_s : float
+        Mean hub speed [m/s].
+    x_m : float
+        Position of the plane the .wnd holds [m] (in the title).
+    shift_s : float
+        Start shift of a non-periodic file [s] (0 when periodic), stated at the head of the title.
+
+    Returns
+    -------
+    str
+        The one line that tells the user how to use it.
+    """
+    title = f"turbgen {root.name}.wnd: plane x = {x_m:g} m, {lay.wind.describe()}"
+    if shift_s:
+        title = f"NOT PERIODIC: starts {shift_s:.6g} s upstream (InitX/U). " + title
+    return write_inflowwind(files, path, InflowWindInput(4, lay.hub_height_m, U_m_s, {"FilenameRoot": root},
+                                                        title=title))
+
+
+def root_file(root: Path, ext: str) -> Path:
+    """ROOT + ``ext``, the name InflowWind and the lidar simulator open for FilenameRoot ROOT.
+
+    Appended, not substituted: ``Path.with_suffix`` would turn the root ``case_U16.5`` into
+    ``case_U16.wnd``, a file the printed FilenameRoot line never loads.
+
+    Parameters
+    ----------
+    root : pathlib.Path
+        ROOT (without extension).
+    ext : str
+        Extension with its dot, e.g. ".wnd".
+
+    Returns
+    -------
+    pathlib.Path
+        ROOT with ``ext`` appended.
+    """
+    return root.with_name(root.name + ext)
+
+
+def export_root(out) -> Path:
+    """``out`` without a .wnd/.sum/.evo extension.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        Output path given by the user.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out`` with a .wnd, .sum or .evo extension (any case) removed, else unchanged.
+    """
+    out = Path(out)
+    return out.with_suffix("") if out.suffix.lower() in (".wnd", ".sum", ".evo") else out
+
+
+def export_wnd(fs, out, req: ExportRequest) -> ExportResult:
+    """Export one plane of store ``fs`` to ROOT.wnd + ROOT.sum.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    out : str or os.PathLike
+        ROOT, or a path ending in .wnd, .sum or .evo (the extension is dropped).
+    req : ExportRequest
+        Plane, hub height, shear exponent, periodic and overwrite options.
+
+    Returns
+    -------
+    ExportResult
+        The two paths, the InflowWind lines (WindType 4) and notes.
+
+    Raises
+    ------
+    ParameterError
+        For an odd nt, a plane index out of range or a store without a rotor plane, a grid reaching
+        the ground (without ``drop_below_ground``), an existing output without ``overwrite``, a bad
+        output path, or a failed write.
+    """
+    root = export_root(out)
+    ix, lay = req.plane_index(fs), req.layout(fs)
+    g = fs.grid
+    check_even_nt(g.nt)
+    paths = [root_file(root, ".wnd"), root_file(root, ".sum")]
+    if req.runner_files:
+        paths.append(inflowwind_path(root, "wnd"))
+    usage = []
+    with OutputSet(paths, overwrite=req.overwrite) as files:
+        shift = req.start_shift_s(fs)
+        plane = Plane(fs, ix, lay, -shift)
+        stats = BladedStats()
+        stats.add(plane, fs.U_m_s)
+        header = WndHeader(nz=lay.nz, ny=g.ny, nt=g.nt, dz_m=g.dz_m, dy_m=g.dy_m, dx_m=fs.U_m_s * g.dt_s,
+                           U_m_s=fs.U_m_s, ti_percent=stats.ti_percent(fs.U_m_s), zref_m=lay.centre_m)
+        write_pair(files, root, plane, header, lay, periodic=req.periodic,
+                   title=f"turbgen export: plane x = {g.x_m[ix]:g} m, {lay.wind.describe()}")
+        if req.runner_files:
+            usage.append(write_wnd_inflowwind(files, paths[2], root, lay, fs.U_m_s, x_m=g.x_m[ix], shift_s=shift))
+    notes = [f"plane x = {g.x_m[ix]:g} m in eddy time: slice k is stored t index k",
+             *mean_wind_notes(lay, shift, g.nt, g.dt_s)]
+    if lay.z_first:
+        notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
+    return ExportResult(tuple(paths), inflowwind_lines(root), tuple(notes), tuple(usage))

@@ -1,0 +1,149 @@
+"""Validation of a field store against its model: ``turbgen validate STORE``.
+
+    from turbgen.validation import validate
+    report = validate("mann.zarr", rotor_radius_m=63.0)
+    report.passed, report.to_dict(), report.table(), report.plots("figs/")
+
+Modules: ``estimators`` (Welch estimates with dask over the store's chunks; the sums of one task in
+``span_sums``, compiled loops in ``welch_sums``), ``expectations`` (the model's prediction on the store's grid, for the
+``prediction.SamplingDesign`` of the estimates; split into ``kaimal_expectation``, ``mann_expectation``,
+``mann_lattice``, ``welch_kernel``, ``pair_sums``, ``store_run``), ``verdict`` (tolerances from the
+estimators' statistical uncertainty, pass/fail), ``report`` (terminal table, JSON, PNG plots). The theory
+and the verdict's expected estimates need only the sampling design, so ``validate`` computes them in a
+thread of their own while the store is read.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+from turbgen.errors import ParameterError
+from turbgen.store import FieldStore, open_store
+from turbgen.validation.estimators import Estimates, plan_estimates, run_estimates
+from turbgen.validation.expectations import theory_for
+from turbgen.validation.point_sets import DEFAULT_ROTOR_RADIUS_M
+from turbgen.validation.prediction import SamplingDesign, Theory
+from turbgen.validation.checks import ALPHA, MetricResult
+from turbgen.validation.theory_cache import cached, theory_key
+from turbgen.validation.verdict import Expectations, expectations, judge
+
+
+@dataclass
+class ValidationReport:
+    """Everything a validation found: estimates, theory, per-metric results, timing [s]."""
+
+    store: FieldStore
+    estimates: Estimates
+    theory: Theory
+    metrics: list[MetricResult]
+    seconds: dict
+
+    @property
+    def passed(self) -> bool:
+        """True if every metric passes."""
+        return all(m.passed for m in self.metrics)
+
+    @property
+    def failed(self) -> list[str]:
+        """Names of the failed metrics."""
+        return [m.name for m in self.metrics if not m.passed]
+
+    def metric(self, name: str) -> MetricResult:
+        return next(m for m in self.metrics if m.name == name)
+
+    def to_dict(self) -> dict:
+        from turbgen.validation.report import to_dict
+
+        return to_dict(self)
+
+    def table(self) -> str:
+        from turbgen.validation.report import table
+
+        return table(self)
+
+    def plots(self, directory) -> list:
+        from turbgen.validation.report import plots
+
+        return plots(self, directory)
+
+
+def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None = None,
+             workers: int | None = None) -> ValidationReport:
+    """Validate a store against its model.
+
+    Parameters
+    ----------
+    store : str, pathlib.Path or FieldStore
+        The store.
+    rotor_radius_m : float, optional
+        Rotor radius R [m] of the rotor-effective wind speed; None: 63 m, or the largest disc a smaller
+        grid holds (widened to the nearest grid points when it holds none).
+    nperseg : int, optional
+        Welch segment length [samples]; None: ``estimators.default_nperseg``.
+    workers : int, optional
+        dask threads; None: the CPU count. With more than one, the theory is computed in a thread of
+        its own while the store is read (it needs only the estimates' sampling design), and the verdict
+        uses two threads.
+
+    Returns
+    -------
+    ValidationReport
+        Estimates, predictions, metrics and timings [s]: ``estimate``, ``theory`` (the model, the expected
+        Welch estimates and their covariance; overlapping the estimates when computed alongside; ~0 when
+        kept from a store of this process that differs only in seed: ``theory_kept`` True), ``verdict``
+        and ``total`` (wall time of the validation).
+
+    Raises
+    ------
+    StoreError, ParameterError
+        On an unreadable store or bad input.
+    """
+    fs = store if isinstance(store, FieldStore) else open_store(store)
+    constraints = fs.attrs.get("constraints")
+    if constraints is not None and constraints.get("conditional_mean"):
+        raise ParameterError(
+            f"{fs.label} holds the conditional mean of a constrained run (--conditional-mean), a smoothed "
+            "reconstruction rather than a sample of the model: its statistics are not the model's, so it cannot be "
+            "validated (validate a conditional sample instead)"
+        )
+    t0 = time.perf_counter()
+    planned = plan_estimates(fs, rotor_radius_m=rotor_radius_m, nperseg=nperseg)
+    parallel = (workers or os.cpu_count() or 1) > 1
+    key = theory_key(fs.model, fs.attrs, rotor_radius_m=rotor_radius_m, nperseg=nperseg)
+    if parallel:
+        with ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-theory") as pool:
+            theory = pool.submit(_timed, cached, key, lambda: _theory(fs, planned))
+            est = run_estimates(fs, planned, workers)
+            t1 = time.perf_counter()
+            ((th, expected), kept), theory_s = theory.result()
+    else:
+        est = run_estimates(fs, planned, workers)
+        t1 = time.perf_counter()
+        ((th, expected), kept), theory_s = _timed(cached, key, lambda: _theory(fs, planned))
+    t2 = time.perf_counter()
+    metrics = judge(est, th, parallel, expected)
+    t3 = time.perf_counter()
+    seconds = {"estimate": t1 - t0, "theory": theory_s, "verdict": t3 - t2, "total": t3 - t0,
+               "theory_kept": kept}  # fmt: skip
+    return ValidationReport(fs, est, th, metrics, seconds)
+
+
+def _theory(fs, planned: Estimates) -> tuple[Theory, Expectations]:
+    """The model's predictions for the planned estimates, and the expected Welch estimates and covariances
+    the verdict compares them with (both need only the sampling design; ``planned`` is only read; kept for
+    stores differing only in seed by ``theory_cache``)."""
+    th = theory_for(fs, SamplingDesign.of(planned))
+    return th, expectations(planned, th)
+
+
+def _timed(fn, *args):
+    """fn(*args) and its wall time [s]."""
+    t0 = time.perf_counter()
+    out = fn(*args)
+    return out, time.perf_counter() - t0
+
+
+__all__ = ["ALPHA", "DEFAULT_ROTOR_RADIUS_M", "ValidationReport", "validate"]

@@ -1,0 +1,12 @@
+"""Fitting the Mann model to measured or generated data: ``turbgen fit mann DATA``, ``turbgen.fit_mann``.
+
+Modules: ``data`` (point-series files and stores as detrended fluctuation series), ``spectra`` (Welch band estimates
+and their variances), ``table`` (the one-point spectra tabulated in k1 L and Gamma), ``model`` (expected band
+estimates: continuous, or on a store's lattice), ``mann`` (the weighted least-squares fit), ``result`` (MannFit).
+"""
+
+from turbgen.validation.fit.data import FitData, load_fit_data
+from turbgen.validation.fit.mann import fit_mann_data
+from turbgen.validation.fit.result import FitValue, MannFit
+
+__all__ = ["FitData", "FitValue", "MannFit", "fit_mann_data", "load_fit_data"]

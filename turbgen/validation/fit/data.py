@@ -1,0 +1,193 @@
+"""The series a fit reads: fluctuations of u, v, w at one or more points, from a point-series file or a store.
+
+A point-series file (turbgen.spec.constraints, the ``turbgen mann --constrain`` format) holds sensors with any of
+u, v, w; a store holds u, v, w on its grid (a sub-lattice of at most STORE_POINTS_PER_AXIS^2 points per plane is
+read: the Welch averages over it are unbiased and the fit's variances are those of the same points). A store's
+records are periodic and stationary by construction and are used as they are (each Welch segment loses its mean, as
+in the validator); a sensor's series is detrended (its least-squares line through the finite values removed: a
+total-wind u loses its mean, a slow drift its trend), and a trend larger than the series' standard deviation is
+said in the result's notes (such a record may not be stationary). Missing values (NaN) stay missing: the Welch
+estimates skip the segments that hold them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.spec.constraints import COMPONENTS, PointSeries, load_point_series
+from turbgen.theory import ranges
+from turbgen.validation.point_sets import long_sublattice
+from turbgen.validation.store_run import MannBox
+
+STORE_POINTS_PER_AXIS = 8  # points per axis and plane read from a store (the spectra are averaged over them)
+UNIFORM_RTOL = 1e-6  # sample times are uniform when every step is within this of the mean step
+
+
+@dataclass(frozen=True, eq=False)
+class FitData:
+    """Fluctuation series to fit a model to.
+
+    Attributes
+    ----------
+    source : str
+        The file or store read (for messages and the result).
+    dt_s : float
+        Sampling interval [s].
+    U_m_s : float
+        Mean wind speed [m/s] of Taylor's hypothesis k1 = 2 pi f / U.
+    series : dict
+        Component ("u", "v", "w") -> (nt, P) fluctuations [m/s] of the P points holding it (NaN: missing).
+    uw_columns : tuple
+        (column of u, column of w) pairs of the points holding both (the u-w cross-spectrum).
+    box : MannBox or None
+        The periodic box of a turbgen Mann store (fit to the grid's discrete expectation), None for sensor data.
+    grid : turbgen.grid.Grid or None
+        The store's grid (with ``box``), None for sensor data.
+    notes : tuple of str
+        What was done to the data (trends removed, missing values).
+    """
+
+    source: str
+    dt_s: float
+    U_m_s: float
+    series: dict
+    uw_columns: tuple
+    box: MannBox | None = None
+    grid: object = None
+    notes: tuple = ()
+
+    @property
+    def nt(self) -> int:
+        return next(iter(self.series.values())).shape[0]
+
+
+def detrended(x: np.ndarray, where) -> tuple[np.ndarray, list]:
+    """The columns of ``x`` (nt, P) [m/s] minus their least-squares lines through their finite values, and a note
+    for every column whose line rises over the record by more than the standard deviation about it (``where(k)``
+    names column k).
+    """
+    ok = np.isfinite(x)
+    w = ok.astype(float)
+    t = np.arange(x.shape[0], dtype=float)[:, None]
+    xz = np.where(ok, x, 0.0)
+    n, st, sx = w.sum(0), (w * t).sum(0), xz.sum(0)
+    slope = (n * (t * xz).sum(0) - st * sx) / (n * (w * t * t).sum(0) - st**2)
+    out = x - (slope * t + (sx - slope * st) / n)
+    rise, sigma = np.abs(slope) * (x.shape[0] - 1), np.sqrt(np.nanmean(out**2, axis=0))
+    notes = [f"{where(k)}: a trend of {rise[k]:.3g} m/s over the record, more than its standard deviation "
+             f"{sigma[k]:.3g} m/s, was removed (the record may not be stationary)"
+             for k in np.flatnonzero(rise > sigma)]
+    return out, notes
+
+
+def data_from_points(ps: PointSeries, U_m_s: float | None = None) -> FitData:
+    """FitData of a point-series file: every sensor's u, v, w, detrended (module docstring).
+
+    Parameters
+    ----------
+    ps : PointSeries
+        The file (uniform sample times).
+    U_m_s : float, optional
+        Mean wind speed [m/s]; default the mean of u for total-wind data (needed otherwise).
+
+    Raises
+    ------
+    ParameterError
+        Non-uniform sample times, or no U for fluctuation data.
+    """
+    where = f"point-series file {ps.source}"
+    steps = np.diff(ps.time_s)
+    dt = float(steps.mean())
+    if np.any(np.abs(steps - dt) > UNIFORM_RTOL * dt):
+        raise ParameterError(f"{where}: time_s is not uniformly sampled (steps {steps.min():g} to {steps.max():g} s); "
+                             "the Welch spectra need one sampling interval")
+    if U_m_s is None:
+        u_means = [np.nanmean(s.series["u"]) for s in ps.sensors if "u" in s.series]
+        if not ps.total_wind or not u_means:
+            raise ParameterError(f"{where}: the data are fluctuations: give the mean wind speed U (--U) for "
+                                 "k1 = 2 pi f / U")
+        U_m_s = float(np.mean(u_means))
+    U = ranges.check("U_m_s", U_m_s, "U (mean wind speed, m/s)")
+    series, notes = {}, []
+    for c in COMPONENTS:
+        names = [s.name for s in ps.sensors if c in s.series]
+        if names:
+            cols = np.stack([s.series[c] for s in ps.sensors if c in s.series], axis=1)
+            series[c], more = detrended(cols, lambda k, c=c, names=names: f"{names[k]} {c}")
+            notes += more
+    with_u = [s for s in ps.sensors if "u" in s.series]
+    with_w = [s for s in ps.sensors if "w" in s.series]
+    uw = tuple((with_u.index(s), with_w.index(s)) for s in ps.sensors if s in with_u and s in with_w)
+    gaps = [f"{s.name} {c}: {int(np.isnan(v).sum())} missing values (Welch segments holding them are skipped)"
+            for s in ps.sensors for c, v in s.series.items() if np.isnan(v).any()]
+    return FitData(ps.source, dt, U, series, uw, notes=tuple(notes + gaps))
+
+
+def data_from_store(fs) -> FitData:
+    """FitData of a field store: u, v, w at a sub-lattice of every plane (module docstring).
+
+    Parameters
+    ----------
+    fs : turbgen.store.FieldStore
+        The store; a turbgen Mann store also gives its periodic box (its ``pad_yz``) for the grid's expectation.
+    """
+    return _grid_data(lambda c, ix: fs.read_span(c, ix, 0, fs.grid.nt), fs.grid, fs.attrs, str(fs.path))
+
+
+def data_from_dataset(ds) -> FitData:
+    """FitData of a field as an xarray.Dataset of ``turbgen.mann`` / ``turbgen.kaimal`` / ``turbgen.open_store``
+    (in memory or not; its attributes are the store's)."""
+    from turbgen.grid import Grid
+
+    g = dict(ds.attrs["grid"])
+    grid = Grid(**{**g, "x_m": tuple(g["x_m"])})
+    return _grid_data(lambda c, ix: ds[c].isel(x=ix).values, grid, ds.attrs,
+                      ds.encoding.get("source", "the field in memory"))
+
+
+def _grid_data(read, grid, attrs: dict, source: str) -> FitData:
+    """FitData of a field on a grid: ``read(component, ix)`` -> (nt, ny, nz) of plane ix; the box from ``attrs``."""
+    from turbgen.validation.store_run import mann_box_from_attrs
+
+    g = grid
+    iy, iz = long_sublattice(g.ny, STORE_POINTS_PER_AXIS), long_sublattice(g.nz, STORE_POINTS_PER_AXIS)
+    series = {}
+    for c in COMPONENTS:
+        planes = [np.asarray(read(c, ix))[:, iy][:, :, iz].reshape(g.nt, -1) for ix in range(g.nx)]
+        series[c] = np.concatenate(planes, axis=1).astype(float)
+    n = series["u"].shape[1]
+    box = mann_box_from_attrs(attrs, g) if attrs.get("model") == "mann" else MannBox(g.ny, g.nz)
+    return FitData(source, g.dt_s, float(attrs["U_m_s"]), series, tuple((k, k) for k in range(n)), box, g)
+
+
+def load_fit_data(data, U_m_s: float | None = None) -> FitData:
+    """FitData of ``data``: a PointSeries, a FieldStore, an xarray.Dataset of a field, or the path of a point-series
+    JSON file or of a store.
+
+    Raises
+    ------
+    ParameterError
+        For an unreadable or invalid file, a path that is neither a JSON file nor a directory, or ``U_m_s`` given
+        for a field (it holds its own).
+    turbgen.errors.StoreError
+        For a directory that is not a complete turbgen store.
+    """
+    from turbgen.store import FieldStore, open_store
+
+    if isinstance(data, PointSeries):
+        return data_from_points(data, U_m_s)
+    if isinstance(data, (str, Path)):
+        p = Path(data).expanduser()
+        if not p.is_dir():
+            if p.suffix.lower() != ".json" and p.exists():
+                raise ParameterError(f"DATA = {str(data)!r} is neither a point-series JSON file nor a store "
+                                     "directory")
+            return data_from_points(load_point_series(p), U_m_s)
+        data = open_store(p)
+    if U_m_s is not None:
+        raise ParameterError(f"U = {U_m_s!r}: a field holds its own mean wind speed; drop --U / U")
+    return data_from_store(data) if isinstance(data, FieldStore) else data_from_dataset(data)

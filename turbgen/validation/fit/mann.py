@@ -1,0 +1,175 @@
+"""Fit ae, L and Gamma of the Mann (1994) model to the Welch spectra of measured or generated data.
+
+Weighted least squares over the band estimates of F_uu, F_vv, F_ww and the u-w co-spectrum (``spectra``), each
+residuals whitened by the estimators' covariance at the model's expected spectrum (``BandSpectra.full_covariance``),
+so that sum r^2 is chi^2 with n_bands - n_parameters degrees of freedom when the model holds. The parameters are x =
+(ln ae, ln L, Gamma) within the ranges of ``turbgen.theory.ranges``; scipy.optimize.least_squares (trust region
+reflective, bounds) minimises; the weights and (for a store) the lattice / continuous ratio of the grid model are
+updated from the fitted parameters and the fit repeated until the parameters move by less than MOVE_TOL standard
+deviations (iteratively re-weighted least squares, at most PASSES passes). The covariance of x is (J^T J)^-1 of the
+whitened residuals (the Gauss-Newton covariance, J^T W J with W the inverse estimator variances); the 95 % intervals
+are x +- 1.96 sd, exponentiated for ae and L.
+
+Identifiability: Gamma (the anisotropy) needs at least two velocity components' spectra; with one it is held at the
+default and the result says so. A fit that does not converge or ends on a range boundary is flagged.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.linalg import solve_triangular
+from scipy.optimize import least_squares
+
+from turbgen.spec.defaults import MANN_DEFAULTS
+from turbgen.theory import ranges
+from turbgen.theory.params import MannParams
+from turbgen.validation.fit.data import FitData
+from turbgen.validation.fit.model import BandModel
+from turbgen.validation.fit.result import FitValue, MannFit
+from turbgen.validation.fit.spectra import SPECTRA, BandSpectra, estimate_bands
+
+Z95 = 1.959963984540054  # standard normal 97.5 % quantile
+PASSES = 6
+MOVE_TOL = 0.05  # re-weighting stops when no parameter moved by more than this many standard deviations
+AE_MIN = 1e-6  # lower end of the fitted ae [m^(4/3) s^-2] (the range's open 0)
+NAMES = ("ae", "length_scale_m", "gamma")
+
+
+def _bounds(free: tuple) -> tuple[np.ndarray, np.ndarray]:
+    r = ranges.RANGES
+    lo = {"ae": math.log(AE_MIN), "length_scale_m": math.log(r["length_scale_m"].lo), "gamma": r["gamma"].lo}
+    hi = {"ae": math.log(r["ae"].hi), "length_scale_m": math.log(r["length_scale_m"].hi), "gamma": r["gamma"].hi}
+    return np.array([lo[n] for n in free]), np.array([hi[n] for n in free])
+
+
+def _params(x: np.ndarray, free: tuple, held: dict) -> dict:
+    p = dict(held)
+    for n, v in zip(free, x):
+        p[n] = math.exp(v) if n != "gamma" else float(v)
+    return p
+
+
+def _start(bands: BandSpectra, model: BandModel, used: tuple, held: dict) -> dict:
+    """Starting point: L and Gamma at the defaults (or held), ae matching the data's band spectra in the mean."""
+    p = {"length_scale_m": MANN_DEFAULTS["length_scale_m"], "gamma": MANN_DEFAULTS["gamma"], **held, "ae": 1.0}
+    e = model.expected(p["ae"], p["length_scale_m"], p["gamma"])
+    ratios = np.concatenate([bands.values[s] / e[s] for s in used if s != "uw"])
+    p["ae"] = float(np.clip(np.median(ratios), 10 * AE_MIN, ranges.RANGES["ae"].hi / 10))
+    return p
+
+
+def _solve(bands, model, used, free, held, p):
+    """One weighted least-squares pass at the weights of ``p``: (solution, new parameters)."""
+    e = model.expected(p["ae"], p["length_scale_m"], p["gamma"])
+    chol = np.linalg.cholesky(bands.full_covariance(used, e))
+
+    def resid(x):
+        q = _params(x, free, held)
+        e = model.expected(q["ae"], q["length_scale_m"], q["gamma"])
+        r = np.stack([bands.values[s] - e[s] for s in used], axis=1).ravel()  # band-major
+        return solve_triangular(chol, r, lower=True)  # whitened: L^-1 r
+
+    x0 = np.array([math.log(p[n]) if n != "gamma" else p[n] for n in free])
+    lo, hi = _bounds(free)
+    sol = least_squares(resid, np.clip(x0, lo, hi), bounds=(lo, hi), x_scale=1.0, diff_step=1e-4, xtol=1e-10,
+                        ftol=1e-10, gtol=1e-10, max_nfev=200)
+    return sol, _params(sol.x, free, held)
+
+
+def _covariance_at(bands, model, used, p) -> np.ndarray:
+    e = model.expected(p["ae"], p["length_scale_m"], p["gamma"])
+    return bands.covariance(used, e)
+
+
+def fit_mann_data(data: FitData, nperseg: int | None = None) -> MannFit:
+    """Fit the Mann model to ``data`` (module docstring).
+
+    Parameters
+    ----------
+    data : FitData
+        Fluctuation series (``turbgen.validation.fit.data.load_fit_data``).
+    nperseg : int, optional
+        Welch segment length [samples]; default ``estimators.default_nperseg``.
+
+    Returns
+    -------
+    MannFit
+        Values, 95 % intervals, chi^2 / dof, flags, the band spectra and the fitted model.
+
+    Raises
+    ------
+    ParameterError
+        For a record too short or too gappy for the Welch estimates (``spectra.estimate_bands``).
+    """
+    bands = estimate_bands(data, nperseg)
+    model = BandModel(bands, data.U_m_s, data.grid, data.box)
+    used = tuple(s for s in SPECTRA if s in bands.values)
+    notes = list(data.notes)
+    held = {}
+    if sum(s != "uw" for s in used) < 2:
+        held["gamma"] = MANN_DEFAULTS["gamma"]
+        notes.append(f"gamma is not identified by the spectrum of one component ({used[0][0]}): held at "
+                     f"{held['gamma']:g}")
+    free = tuple(n for n in NAMES if n not in held)
+    p = _start(bands, model, used, held)
+    if model.kind == "grid":  # the continuous fit first: the lattice ratio at a point near the answer
+        p = _solve(bands, model, used, free, held, p)[1]
+    converged = False
+    for _ in range(PASSES):
+        model.update_ratio(MannParams(**p))
+        sol, q = _solve(bands, model, used, free, held, p)
+        cov = _covariance(sol.jac)
+        sd = np.sqrt(np.diag(cov))
+        moved = np.abs(np.array([_x(q, n) - _x(p, n) for n in free])) / np.maximum(sd, 1e-300)
+        p = q
+        if sol.status > 0 and np.all(moved < MOVE_TOL):
+            converged = True
+            break
+    return _result(data, bands, model, used, free, held, p, sol, cov, converged, notes)
+
+
+def _x(p: dict, n: str) -> float:
+    return p[n] if n == "gamma" else math.log(p[n])
+
+
+def _covariance(jac: np.ndarray) -> np.ndarray:
+    """(J^T J)^-1 of the whitened residuals; infinite variances where J^T J is singular (unidentified)."""
+    jtj = jac.T @ jac
+    try:
+        cov = np.linalg.inv(jtj)
+    except np.linalg.LinAlgError:
+        return np.full(jtj.shape, np.inf)
+    return np.where(np.isfinite(cov), cov, np.inf)
+
+
+def _result(data, bands, model, used, free, held, p, sol, cov, converged, notes) -> MannFit:
+    """The MannFit of a finished fit: intervals, chi^2 / dof, flags."""
+    sd = np.sqrt(np.abs(np.diag(cov)))
+    values, flags = {}, []
+    lo, hi = _bounds(free)
+    for k, n in enumerate(free):
+        a, b = sol.x[k] - Z95 * sd[k], sol.x[k] + Z95 * sd[k]
+        ci = (a, b) if n == "gamma" else (math.exp(a) if math.isfinite(a) else 0.0, math.exp(b))
+        values[n] = FitValue(p[n], (float(ci[0]), float(ci[1])), float(sd[k]))
+        if sol.active_mask[k] != 0 or min(sol.x[k] - lo[k], hi[k] - sol.x[k]) < 1e-6:
+            r = ranges.RANGES[n]
+            flags.append(f"{n} = {p[n]:.4g} is on the boundary of its range [{r.lo:g}, {r.hi:g}]")
+    for n, v in held.items():
+        values[n] = FitValue(v, None, None)
+    if not converged:
+        flags.append(f"the fit did not converge ({sol.message.rstrip('.')}; {PASSES} re-weighting passes)")
+    dof = int(sol.fun.size - len(free))
+    e = model.expected(p["ae"], p["length_scale_m"], p["gamma"])
+    seg_m = bands.setup.nperseg * bands.setup.dt_s * data.U_m_s
+    if seg_m < 2 * math.pi * p["length_scale_m"]:
+        notes.append(f"the Welch segments ({seg_m:.4g} m of flow) are shorter than 2 pi L = "
+                     f"{2 * math.pi * p['length_scale_m']:.4g} m: the spectral peak is below the lowest band")
+    return MannFit(
+        ae=values["ae"], length_scale_m=values["length_scale_m"], gamma=values["gamma"],
+        chi2_dof=float(np.sum(sol.fun**2) / max(dof, 1)), dof=dof, flags=tuple(flags), notes=tuple(notes),
+        model=model.kind, U_m_s=data.U_m_s, source=data.source, nperseg=bands.setup.nperseg, f_hz=bands.f_hz,
+        data={s: bands.values[s] for s in used}, fitted={s: e[s] for s in used},
+        sd=dict(zip(used, np.sqrt(np.diagonal(_covariance_at(bands, model, used, p), axis1=1, axis2=2)).T)),
+    )  # fmt: skip

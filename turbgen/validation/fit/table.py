@@ -1,0 +1,91 @@
+"""The Mann one-point spectra tabulated in (k1 L, Gamma): what makes a fit take seconds.
+
+The one-point spectra scale exactly as F_ij(k1; ae, L, Gamma) = ae L^(5/3) f_ij(k1 L, Gamma): the Mann (1994) tensor
+(Eq. 13-17) depends on k and L only through k L, its energy spectrum being ae k^(-5/3) times a function of k L, and
+the quadrature over (k2, k3) of F_ij (Eq. 8 of Guo et al. 2023) then gives a function of k1 L. f_ij (ae = 1, L = 1 m)
+is tabulated by ``turbgen.theory.mann_spectra.one_point_spectra`` on X_NODES (8 per decade of k1 L) times
+GAMMA_NODES (0 .. 20, the range of Gamma, steps GAMMA_STEP) and interpolated: cubic spline in log k1 L of log f_ii
+and of the u-w correlation spectrum f_13 / sqrt(f_11 f_33), four-node Lagrange cubic in Gamma; beyond the largest
+k1 L the inertial-range slopes (-5/3, and -7/3 for f_13) continue it. Built by
+``python -m turbgen.validation.fit.table`` into TABLE_PATH (shipped with the package; tests/validate/test_fit_table.py
+recomputes columns of it and compares the interpolation with direct quadrature).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from turbgen.errors import ParameterError
+from turbgen.theory import ranges
+from turbgen.theory.mann_spectra import one_point_spectra
+from turbgen.theory.params import MannParams
+
+NAMES = {"uu": "F11", "vv": "F22", "ww": "F33", "uw": "F13"}
+X_NODES = np.geomspace(1e-5, 1e5, 81)  # k1 L nodes
+GAMMA_STEP = 0.25
+GAMMA_NODES = np.arange(0.0, ranges.RANGES["gamma"].hi + GAMMA_STEP / 2, GAMMA_STEP)
+TABLE_PATH = Path(__file__).with_name("mann_table.npz")
+
+
+def table_column(gamma: float) -> np.ndarray:
+    """(4, len(X_NODES)) log f_11, log f_22, log f_33 and rho_13 = f_13 / sqrt(f_11 f_33) at Gamma = ``gamma``
+    (ae = 1, L = 1 m; rho_13 is tabulated rather than log |f_13|: f_13 = 0 at Gamma = 0)."""
+    f = one_point_spectra(X_NODES, MannParams(1.0, 1.0, float(gamma)))
+    rho = f["F13"] / np.sqrt(f["F11"] * f["F33"]) if gamma > 0 else np.zeros(X_NODES.size)
+    return np.stack([np.log(f["F11"]), np.log(f["F22"]), np.log(f["F33"]), rho])
+
+
+def build_table(path=TABLE_PATH) -> None:
+    """Write the table (every Gamma node) to ``path`` (a .npz file)."""
+    cols = np.stack([table_column(g) for g in GAMMA_NODES])
+    np.savez_compressed(path, log_f=cols, x_nodes=X_NODES, gamma_nodes=GAMMA_NODES)
+
+
+@lru_cache(maxsize=1)
+def load_table() -> np.ndarray:
+    """(len(GAMMA_NODES), 4, len(X_NODES)) columns (``table_column``) from TABLE_PATH, checked against the nodes of
+    this module."""
+    with np.load(TABLE_PATH) as t:
+        if not (np.array_equal(t["x_nodes"], X_NODES) and np.array_equal(t["gamma_nodes"], GAMMA_NODES)):
+            raise ParameterError(f"{TABLE_PATH} was built for other nodes: rebuild it (python -m "
+                                 "turbgen.validation.fit.table)")
+        return t["log_f"]
+
+
+def scaled_spectra(x: np.ndarray, gamma: float) -> dict:
+    """f_ij(k1 L, Gamma) (module docstring) at ``x`` = k1 L > 0, two-sided [m^3 s^-2 per ae L^(5/3)]; F13 < 0.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        k1 L [-], > 0.
+    gamma : float
+        Gamma [-], in the range of Gamma.
+
+    Returns
+    -------
+    dict
+        "uu", "vv", "ww", "uw" -> f(x) like ``x``.
+    """
+    g = ranges.check("gamma", gamma, "Gamma (fitted, -)")
+    last = GAMMA_NODES.size - 1
+    i0 = int(np.clip(np.floor(g / GAMMA_STEP) - 1, 0, last - 3))
+    nodes = np.arange(i0, i0 + 4)
+    t = g / GAMMA_STEP
+    weights = np.array([np.prod([(t - nodes[m]) / (nodes[k] - nodes[m]) for m in range(4) if m != k])
+                        for k in range(4)])
+    cols = np.tensordot(weights, load_table()[nodes], axes=1)  # (4, nx)
+    lx, top = np.log(x), np.log(X_NODES[-1])
+    spline = CubicSpline(np.log(X_NODES), cols, axis=1)(np.clip(lx, np.log(X_NODES[0]), top))
+    out = {n: np.exp(spline[k] - 5.0 / 3.0 * np.maximum(lx - top, 0.0)) for k, n in enumerate(("uu", "vv", "ww"))}
+    rho = spline[3] * np.exp(-2.0 / 3.0 * np.maximum(lx - top, 0.0))  # F13 ~ k1^(-7/3) in the inertial range
+    out["uw"] = rho * np.sqrt(out["uu"] * out["ww"])
+    return out
+
+
+if __name__ == "__main__":
+    build_table()

@@ -1,0 +1,128 @@
+"""The Mann tensor on the (k2, k3) lattice of the generator's periodic box, slab by slab in k1.
+
+The generator samples the spectral tensor Phi_ij (Mann 1994, Eq. 13-17; Guo et al. 2023, Eq. 8) on
+the lattice of its periodic (xi = U t, y, z) box; the lattice itself (wavenumbers in FFT order) is
+shared with the generator (turbgen.theory.lattice). The tensor is evaluated here from turbgen.theory,
+not from the generator's stencil, so the validator checks the generator's factorisation too.
+
+The quadrature of the cells around the k1 axis (CELL_RADIUS, CELL_GAUSS, ``_graded``) is deliberately
+*not* shared with turbgen.synthesis.mann_stencil (``_cell_rule``): the generator and the validator
+integrate those cells with two independent rules (different grading depth, different extent in k1),
+so an error in either shows up as a disagreement instead of cancelling out. Do not merge them.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from turbgen.grid import Grid
+from turbgen.theory.eddy_lifetime import evolution_lifetime_s
+from turbgen.theory.lattice import k2_wavenumbers, k3_wavenumbers
+from turbgen.theory.mann_tensor import sheared_tensor
+from turbgen.theory.params import MannParams
+from turbgen.validation.store_run import MannBox
+
+CELL_RADIUS = 2  # cells |k2| <= 2 dk2, |k3| <= 2 dk3 around the k1 axis are integrated, not point-sampled
+CELL_K1_MAX = 8.0  # ... for |k1| <= 8 max(dk2, dk3); beyond, Phi is smooth on the cell scale there
+CELL_GAUSS = 4
+
+
+@lru_cache(maxsize=8)
+def _leggauss(n: int):
+    return np.polynomial.legendre.leggauss(n)
+
+
+def _gauss(a: float, b: float, n: int = CELL_GAUSS):
+    x, w = _leggauss(n)
+    return 0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w
+
+
+def _graded(center: float, width: float, scale: float):
+    """Nodes/weights over a cell of ``width`` around ``center``; halving panels towards 0 down to ``scale``."""
+    if center != 0.0:
+        return _gauss(center - width / 2, center + width / 2)
+    edges = [width / 2]
+    while edges[-1] > scale and len(edges) < 40:
+        edges.append(edges[-1] / 2)
+    edges = np.array([0.0, *edges[::-1]])
+    x = np.concatenate([_gauss(a, b)[0] for a, b in zip(edges[:-1], edges[1:])])
+    w = np.concatenate([_gauss(a, b)[1] for a, b in zip(edges[:-1], edges[1:])])
+    return np.concatenate([-x[::-1], x]), np.concatenate([w[::-1], w])
+
+
+class MannLattice:
+    """Mann tensor and space-time decay on the (k2, k3) lattice of the box, slab by slab in k1.
+
+    Each lattice point stands for its cell: the point value Phi(k) dk1 dk2 dk3 is used except in
+    the cells around the k1 axis at small k1, where Phi varies strongly inside a cell (on the axis
+    Phi_33 = E(k0)/(4 pi k1^2) with k0 -> Gamma a / L finite) and the cell integral is computed
+    (Gauss rules graded towards the axis down to the scale |k1|; Mann 1998). The generator does the
+    same (turbgen.synthesis.mann_stencil), with its own rule, so this is an independent check of it.
+
+    Parameters
+    ----------
+    params : MannParams
+        The Mann model.
+    grid : Grid
+        The store's grid (dt [s], dy, dz [m]).
+    box : MannBox
+        The generator's periodic box (nyp x nzp points).
+    U : float
+        Mean wind speed [m/s] (k1 = 2 pi f / U).
+    """
+
+    def __init__(self, params: MannParams, grid: Grid, box: MannBox, U: float):
+        self.params, self.grid, self.box, self.U = params, grid, box, U
+        # (k2, k3) lattice [rad/m], (nyp, nzp) each, FFT order (k2 Nyquist positive, as synthesised)
+        self.k2, self.k3 = np.meshgrid(
+            k2_wavenumbers(box.nyp, grid.dy_m), k3_wavenumbers(box.nzp, grid.dz_m), indexing="ij"
+        )
+        self.dk1 = dk1 = 2 * np.pi / (grid.nt * grid.dt_s * U)
+        self.dk2, self.dk3 = 2 * np.pi / (box.nyp * grid.dy_m), 2 * np.pi / (box.nzp * grid.dz_m)
+        self.dk = dk1 * self.dk2 * self.dk3
+        self.r2 = min(CELL_RADIUS, (box.nyp - 1) // 2)
+        self.r3 = min(CELL_RADIUS, (box.nzp - 1) // 2)
+
+    def _axis_cells(self, k1: float) -> np.ndarray:
+        """∫_cell Phi dk over the (2 r2 + 1) x (2 r3 + 1) cells around the axis at k1, (3, 3, 2r2+1, 2r3+1)."""
+        x1, w1 = _gauss(k1 - self.dk1 / 2, k1 + self.dk1 / 2, 2)
+        scale = max(abs(k1), self.dk1 / 4)
+        rules2 = [_graded(j * self.dk2, self.dk2, scale) for j in range(-self.r2, self.r2 + 1)]
+        rules3 = [_graded(l * self.dk3, self.dk3, scale) for l in range(-self.r3, self.r3 + 1)]
+        pts, wts, starts = [], [], []
+        for x2, w2 in rules2:
+            for x3, w3 in rules3:
+                starts.append(sum(p.shape[1] for p in pts))
+                g = np.meshgrid(x1, x2, x3, indexing="ij")
+                pts.append(np.stack([a.ravel() for a in g]))
+                wts.append((w1[:, None, None] * w2[None, :, None] * w3[None, None, :]).ravel())
+        k = np.concatenate(pts, axis=1)
+        phi = sheared_tensor(k[0], k[1], k[2], self.params) * np.concatenate(wts)  # one call for all cells
+        cells = np.add.reduceat(phi, starts, axis=2)
+        return cells.reshape(3, 3, len(rules2), len(rules3))
+
+    def slabs(self, k1: np.ndarray, batch: int = 8):
+        """Yield (index, Phi (3, 3, nyp, nzp) times dk1 dk2 dk3 (cell integrals), 1/tau_e (nyp, nzp) [1/s]) per k1."""
+        iy = np.arange(-self.r2, self.r2 + 1) % self.box.nyp
+        iz = np.arange(-self.r3, self.r3 + 1) % self.box.nzp
+        k1_cells = CELL_K1_MAX * max(self.dk2, self.dk3)
+        for i0 in range(0, k1.size, batch):
+            kk = k1[i0 : i0 + batch][:, None, None]
+            # the generator's slab of time frequency f holds k1 = -2 pi f / U (time reversal, see
+            # synthesis.mann_stencil); Phi(-k1, k2, k3) differs from Phi(k1, k2, k3) on the unpaired Nyquist rows
+            phi = sheared_tensor(-kk, self.k2[None], self.k3[None], self.params) * self.dk
+            kmag = np.sqrt(kk * kk + self.k2[None] ** 2 + self.k3[None] ** 2)
+            with np.errstate(divide="ignore"):
+                inv_tau = 1.0 / evolution_lifetime_s(kmag, self.params)  # Eq. 15 (0 when frozen)
+            for n in range(kk.shape[0]):
+                p = phi[:, :, n]
+                k1n = float(kk[n, 0, 0])
+                if k1n <= k1_cells:
+                    cells = self._axis_cells(-k1n)
+                    if k1n == 0.0:
+                        cells[:, :, self.r2, self.r3] = 0.0  # the box mean (k = 0) carries no energy
+                    p[:, :, iy[:, None], iz[None, :]] = cells
+                yield i0 + n, p, inv_tau[n]
+

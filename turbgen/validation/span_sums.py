@@ -1,0 +1,91 @@
+"""The sums one validator task takes over one plane and one span of time (``estimators``).
+
+Every Welch segment's spectra are computed once per component (float32 FFT) and feed all the sums, each
+taken in one compiled pass over the spectra (``welch_sums``): per frequency, the sum of |X|^2 over the
+plane and over the first and second points of every yz separation's pairs, the cross-products
+conj(X_p) X_{p+d} of each separation, and the u-w cross-products; per point, the moments over time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from turbgen import fft
+
+COMPONENTS = ("u", "v", "w")
+
+
+def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy: np.ndarray, iz: np.ndarray) -> dict:
+    """Moment and Welch sums of one plane over one span.
+
+    Parameters
+    ----------
+    data : dict
+        Component -> float32 (t, ny, nz) velocities [m/s] of the span.
+    window : numpy.ndarray
+        (nperseg,) Welch window (mean removed per segment).
+    starts : iterable of int
+        Start samples of the segments in the span.
+    seps : sequence of (int, int)
+        yz separations (a, b) in grid steps.
+    mask : numpy.ndarray
+        (ny, nz) bool, the rotor points (rotor-effective wind speed).
+    iy, iz : numpy.ndarray
+        Grid indices of the sub-lattice whose spectra are kept for the plane pairs.
+
+    Returns
+    -------
+    dict
+        ``sum``, ``sum2`` (component -> (ny, nz) [m/s], [m^2 s^-2] summed over t); ``rews`` (t,) [m/s];
+        unscaled Welch sums over segments and points [m^2 s^-2 s^2]: ``auto`` (component -> (nf,)),
+        ``yz`` (component -> {(a, b): [cross (nf,) complex, A (nf,), B (nf,)]}), ``uw`` (nf,) complex;
+        ``sub`` (segments, nf, sub-lattice points) complex64 spectra of u.
+    """
+    from turbgen.validation.welch_sums import cross_sum, point_moments, spectrum_sums, window_segment
+
+    out = {"sum": {}, "sum2": {}}
+    n = window.size
+    hop = n // 2
+    mask_index = np.flatnonzero(mask)
+    blocks = {}  # sums over blocks of hop samples: the segments (starts on multiples of hop) are 2 blocks if n = 2 hop
+    for c, d in data.items():
+        out["sum"][c], out["sum2"][c], blocks[c], masked = point_moments(d, mask_index, hop)
+        if c == "u":
+            out["rews"] = masked
+    w = window.astype(np.float32)
+    nf = n // 2 + 1
+    ny, nz = data["u"].shape[1:]
+    sep_a = np.array([a for a, _ in seps], np.int64)
+    sep_b = np.array([b for _, b in seps], np.int64)
+    total = {c: np.zeros(nf) for c in COMPONENTS}  # sums over segments and points of |X|^2
+    part_a = {c: np.zeros((len(seps), nf)) for c in COMPONENTS}  # ... over the first points of each separation
+    part_b = {c: np.zeros((len(seps), nf)) for c in COMPONENTS}  # ... over the second points
+    cross = {c: np.zeros((len(seps), nf, 2)) for c in COMPONENTS}
+    uw = np.zeros((nf, 2))
+    sub = []
+    # reused: (segment - its mean) * window in the rows y < ny. The spare row ny makes the stride along t of the
+    # FFT's input and output not a multiple of 4 KiB on power-of-two planes (64 x 64 x 4 B = 16 KiB), so that
+    # the transform's strided reads and writes do not all fall into a few cache sets (a cheaper FFT for 1/64 more
+    # lanes). The spectra of the plane are the same bits.
+    seg_buf = np.zeros((n, ny + 1, nz), np.float32)
+    for s in starts:
+        spec = {}
+        for c in COMPONENTS:
+            if n == 2 * hop and s % hop == 0:
+                mean = ((blocks[c][s // hop] + blocks[c][s // hop + 1]) / n).astype(np.float32)
+            else:
+                mean = data[c][s : s + n].mean(axis=0, dtype=np.float64).astype(np.float32)
+            window_segment(data[c], s, w, mean, seg_buf)
+            x = fft.oneshot().rfft(seg_buf, axis=0, workers=1)  # (nf, ny + 1, nz): row ny is never read
+            spec[c] = x
+            spectrum_sums(x.view(np.float32), ny, sep_a, sep_b, total[c], part_a[c], part_b[c], cross[c])
+        cross_sum(spec["u"].view(np.float32), spec["w"].view(np.float32), ny, uw)
+        sub.append(spec["u"][:, iy][:, :, iz].reshape(nf, -1))
+    out["auto"] = total
+    out["yz"] = {
+        c: {s: [cross[c][k, :, 0] + 1j * cross[c][k, :, 1], part_a[c][k], part_b[c][k]] for k, s in enumerate(seps)}
+        for c in COMPONENTS
+    }
+    out["uw"] = uw[:, 0] + 1j * uw[:, 1]
+    out["sub"] = np.stack(sub) if sub else np.zeros((0, nf, iy.size * iz.size), np.complex64)
+    return out

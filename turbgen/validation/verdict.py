@@ -1,0 +1,297 @@
+"""Pass/fail per metric, with tolerances derived from the statistical uncertainty of each estimator.
+
+Null hypothesis: the field is a realisation of the store's model on the store's grid
+(``expectations``). Every comparison is turned into a normal score z (from its exact or
+moment-matched law, so |z| > z means the same tail probability for every test); a metric fails
+when any of its |z| exceeds z_crit = Phi^-1(1 - ALPHA / (2 n)), n the number of comparisons in the
+metric (Bonferroni: valid whatever the correlation between the comparisons), so a correct field
+fails a given metric with probability <= ALPHA. No fixed fudge factor enters. The false-failure
+rate as measured over ~500 correct fields (nt 256 .. 4096, 2 .. 11 planes, both models) is in
+benchmarks/calibration.md (``benchmarks/calibrate_validate.py``).
+
+Uncertainties (Gaussian fields; derivations in the comments below):
+* Welch covariance (``welch_variance``): the one-point Welch estimate of the model's line process is
+  a quadratic form in the line amplitudes, so its covariance between bins m, m' is exact (Isserlis)
+  for the record's actual segment starts: overlap for a coloured spectrum, correlation of
+  non-overlapping segments where the spectrum varies within a bin (the lowest bins of short records:
+  nt = 512 has ~12 instead of the rule-of-thumb 14.3 equivalent segments at bin 1), per-segment mean
+  removal, coloured neighbouring bins. (Very long records fall back to the rule of thumb
+  K_eff = K / (1 + 2 (1/36) K_adj / K), Hann bin correlations 4/9, 1/36, accurate there.)
+* Averaging over points/planes does not multiply the number of independent samples by the
+  number of points: the covariance of the Welch estimate averaged over a point set is the same
+  Isserlis sum with the pair's line cross-covariances L_q coh_pq(f_q) inside the line sums
+  (``welch_variance``, module docstring), computed from the two-frequency correlation sum
+  R(nu_i, nu_j) = sum_pq coh_pq(nu_i) conj(coh_pq(nu_j)) / N^2 of the set (``Theory.rho_*``). The
+  one-frequency rule "one-point covariance x rho_bar(f_m)" (rho_bar = R(f_m, f_m), 1 for fully coherent
+  points, 1/N for independent ones) underestimated the sd of the lowest bins by 25-30 % (the bins collect
+  lower, more coherent lines by leakage); it remains the fallback of very long records.
+* Auto-spectra and REWS spectra, per band (bins grouped ~5 per decade): the band mean has the exact
+  mean and variance above; compared as chi2_nu / nu with nu = 2 E^2 / Var (Satterthwaite).
+* Variance: one-sided line pair j contributes 2|Z_j|^2 (exponential, variance (2 L_j)^2), so
+  Var(sigma^2 estimate) = sum_j (w_j L_j)^2 rho_bar(f_j); its law is a sum of gamma terms with the top
+  eigen-modes of the lowest lines exact (``variance_law``: one chi2 with nu = 2 E^2/Var had far too light an
+  upper tail when the coherent lowest lines of u dominate, z 4.6 for an exact 3.3).
+* Coherences (yz and between planes), per band: the band-pooled sample coherency
+  C = sum cross / sqrt(sum A sum B) is the sample coherency of n_band equivalent independent samples,
+  n_band = (sum E_m)^2 / Var(sum of the point-averaged auto-spectrum over the band); |C|^2 is compared
+  with Goodman's exact law of the sample magnitude-squared coherence and arg C with the exact
+  (Rice) phase law (``distributions``), not with delta-method normal laws: at low coherence
+  (n gamma2 of order 10) |C|^2 is a noncentral chi2 with 2 degrees of freedom whose lower tail is far
+  heavier than any Gaussian or gamma law with the same moments (a 1e-4 event looked like z = -5.6),
+  and the phase is heavy-tailed as well. Near unit coherence (frozen planes) the delta method with
+  the float32 resolution floor is used (``band_checks.coherence_stats``: Var coh2 = 2 g (1-g)^2/n + bias^2,
+  Var phase = (1-g)/(2 n g)).
+* u-w co-spectrum: Var of the point average <= E_u E_w (sqrt(rho_u rho_w) + rho_uw) / (2 K_m)
+  (Cauchy-Schwarz on the Isserlis covariance; rho_uw the mean |u-w coherency|^2 over pairs; K_m the
+  exact equivalent segments of bin m); the band-pooled co-coherence is compared with the exact
+  variance-gamma law of that many equivalent samples (exponential, not Gaussian, tails).
+
+Approximations, stated: coherencies interpolated linearly in log f between the rho nodes (and taken at
+|f| for the negative-frequency lines) in the averaged Welch covariance; rho_bar at the bin centre in the
+u-w bound and the very-long-record fallback; the equivalent-samples description of point-averaged
+coherences (exact for independent points or one point; with the exact averaged covariance it is
+conservative in the lowest bins: yz coh2 z sd 0.8-0.9 there); the gamma law for the spectra's band
+means; per-line gamma terms beyond the top modes of the lowest lines for the variances.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import Future, ThreadPoolExecutor
+from contextlib import nullcontext
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2
+
+from turbgen.validation.band_checks import Bands, coherence_stats
+from turbgen.validation.checks import Check, Curve, MetricResult
+from turbgen.validation.distributions import cospectrum_z, normal_score
+from turbgen.validation.estimators import COMPONENTS, Estimates, segment_starts
+from turbgen.validation.prediction import Theory
+from turbgen.validation.variance_law import gamma_sum_tails, gamma_terms
+from turbgen.validation.welch_kernel import WelchKernel
+from turbgen.validation.welch_variance import WelchCovariance
+
+FLOAT32_FLOOR = 1e-6  # relative resolution of float32 data (tolerance on a mean that is exactly 0)
+
+
+def _band95(est, sd):
+    return est - 1.96 * sd, est + 1.96 * sd
+
+
+@dataclass
+class Expectations:
+    """The theory side of the verdict: expected Welch estimates and the covariances of the point-averaged
+    estimates (``welch_kernel``, ``welch_variance``) for the planned segments; needs the theory and the
+    sampling design, not the data."""
+
+    kernel: WelchKernel
+    bands: Bands
+    exp_auto: dict  # component -> (nf,) expected auto-spectrum [m^2 s^-2 Hz^-1]
+    cov: dict  # component -> {lag: covariance of the one-point estimate}
+    cov_all: dict  # component -> covariance of the spectrum averaged over all points and planes
+    cov_yz: dict  # component -> {separation: covariance averaged over the first points of its pairs}
+    cov_long: dict  # covariance of the u spectrum averaged over the plane-pair sub-lattice of one plane
+    exp_rews: np.ndarray  # (nf,) expected REWS spectrum
+    rews_cov: dict  # covariance of the REWS spectrum (planes' series averaged)
+
+
+def expectations(est: Estimates, th: Theory) -> Expectations:
+    """The expected estimates and their covariances for the planned estimates ``est`` (``plan_estimates``: the
+    segments are known before the data are read), under the theory ``th``."""
+    kernel = WelchKernel(est.setup, est.grid.nt)
+    bands = Bands(est)
+    f = est.freqs
+    starts = est.starts or tuple(range(0, est.n_segments * est.setup.hop, est.setup.hop))
+    wcov = WelchCovariance(est.setup, est.grid.nt, starts)
+    exp_auto = {c: kernel.apply(th.auto[c]) for c in COMPONENTS}
+    cov = {c: bands.cov(wcov, th.auto[c], exp_auto[c]) for c in COMPONENTS}  # one point
+    terms = {c: wcov.node_terms(th.auto[c], th.node_f) for c in COMPONENTS}
+
+    def averaged(c, rho2, w=wcov, t=None, one=None):  # covariance of the estimate averaged over a point set
+        t = terms[c] if t is None else t
+        return bands.averaged_cov(w, t, cov[c] if one is None else one, rho2, th.rho(rho2, f))
+
+    cov_all = {c: averaged(c, th.rho_all[c]) for c in COMPONENTS}
+    cov_yz = {c: {s: averaged(c, th.rho_yz[c][s]) for s in est.separations} for c in COMPONENTS}
+    cov_long = averaged("u", th.rho_long)
+    exp_r = kernel.apply(th.rews)
+    rews_w = WelchCovariance(est.setup, est.grid.nt, segment_starts(est.grid.nt, est.setup))  # one span: whole record
+    rews_one = bands.cov(rews_w, th.rews, exp_r)
+    if not rews_w.feasible:  # rule of thumb: the REWS series has its own segment count
+        rews_one = {d: v * bands.k_eff / est.rews_effective_segments for d, v in rews_one.items()}
+    rews_cov = averaged("u", th.rho_rews, rews_w, rews_w.node_terms(th.rews, th.node_f), rews_one)
+    return Expectations(kernel, bands, exp_auto, cov, cov_all, cov_yz, cov_long, exp_r, rews_cov)
+
+
+def judge(est: Estimates, th: Theory, parallel: bool = False, expected: Expectations | None = None
+          ) -> list[MetricResult]:
+    """Pass/fail of every metric of the store (module docstring).
+
+    Parameters
+    ----------
+    est : Estimates
+        What was estimated from the store.
+    th : Theory
+        What the store's model predicts for the same sampling design.
+    parallel : bool
+        Judge the longitudinal coherence (the plane pairs: most of the exact-law evaluations) in a second
+        thread while the other metrics are judged; the results are the same.
+    expected : Expectations, optional
+        ``expectations(est, th)`` if already computed (e.g. alongside the estimates).
+
+    Returns
+    -------
+    list of MetricResult
+        Mean, variances, spectra, yz and longitudinal coherences, u-w co-spectrum, REWS spectrum.
+    """
+    ex = expected if expected is not None else expectations(est, th)
+    kernel, bands, exp_auto = ex.kernel, ex.bands, ex.exp_auto
+    f = est.freqs
+    out = [_mean(est, th), *(_variance(est, th, c) for c in COMPONENTS)]
+    second = ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-verdict") if parallel else nullcontext()
+    with second as pool:
+        longitudinal = (pool.submit if pool else _done)(_longitudinal, est, th, kernel, bands, exp_auto["u"],
+                                                        ex.cov_long)
+        for c in COMPONENTS:
+            out.append(_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c],
+                                 ex.cov_all[c], bands, f))
+        for c in COMPONENTS:
+            out.append(_yz(est, th, kernel, bands, c, exp_auto[c], ex.cov_yz[c]))
+        uw = _uw(est, th, kernel, bands, exp_auto, ex.cov)
+        rews = _spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
+                         est.rews_psd, ex.exp_rews, ex.rews_cov, bands, f)
+        out += [longitudinal.result(), uw, rews]
+    return out
+
+
+def _done(fn, *args) -> Future:
+    """fn(*args) now, as a completed Future."""
+    fut = Future()
+    fut.set_result(fn(*args))
+    return fut
+
+
+def _mean(est: Estimates, th: Theory) -> MetricResult:
+    # The grand mean is the average of the j = 0 lines Z_0 (variance L_0 per point); averaging over
+    # points can only lower the variance, so sd = sqrt(L_0) is conservative.
+    checks = []
+    for c in COMPONENTS:
+        sd = np.sqrt(th.auto[c][0] + (FLOAT32_FLOOR**2) * th.variance(c))
+        checks.append(Check(c, None, est.mean[c], 0.0, float(sd), float(est.mean[c] / sd)))
+    return MetricResult("mean", "mean of u, v, w", "m/s", checks)
+
+
+def _variance(est: Estimates, th: Theory, c: str) -> MetricResult:
+    # One-sided line pair j: 2|Z_j|^2 is exponential with variance (2 L_j)^2; the point/plane
+    # average multiplies it by rho_bar(f_j). Expected: the lines the grid (Mann: the box lattice) holds.
+    # Law: a sum of gamma terms, the top modes of the lowest lines exact (``variance_law``).
+    lines = th.auto[c][1:] * th.pair_weights[1:]
+    rho = th.rho(th.rho_all[c], th.line_f[1:])
+    var = np.sum(lines**2 * rho)
+    e = th.variance(c)
+    z = float(normal_score(*gamma_sum_tails(est.variance[c], *gamma_terms(lines, rho, th.variance_modes.get(c)))))
+    sd = float(np.sqrt(var))
+    t = Check(f"sigma_{c}^2", None, est.variance[c], e, sd, z)
+    return MetricResult(f"sigma_{c}", f"variance of {c} (sigma_{c}, TI)", "m^2/s^2", [t])
+
+
+def _spectrum(name, title, estimate, expected, cov, bands: Bands, f) -> MetricResult:
+    # band mean ratio estimate/expected ~ chi2_nu/nu with nu = 2 E^2 / Var (exact covariance of the point average)
+    checks = bands.spectrum_checks(name.split("_")[-1], estimate, expected, cov)
+    b = bands.bins
+    nu = 2.0 * expected[b] ** 2 / cov[0][b]  # 95 % interval of a chi2_nu/nu estimate (always positive)
+    lo, hi = estimate[b] * nu / chi2.ppf(0.975, nu), estimate[b] * nu / chi2.ppf(0.025, nu)
+    curve = Curve(name, f[b], estimate[b], expected[b], lo, hi)
+    return MetricResult(name, title, "m^2/s^2/Hz", checks, [curve])
+
+
+def _sep_label(est: Estimates, s) -> str:
+    return f"dy={s[0] * est.grid.dy_m:g}m dz={s[1] * est.grid.dz_m:g}m"
+
+
+def _yz(est, th, kernel, bands, c, exp_auto, covs) -> MetricResult:
+    # covs: separation -> covariance of the auto-spectrum averaged over the first points of its pairs
+    checks, curves = [], []
+    b = bands.bins
+    f = est.freqs
+    for s in est.separations:
+        cc, pa, pb = est.yz[c][s]
+        coh2 = np.abs(cc) ** 2 / (pa * pb)
+        phase = np.angle(cc)
+        rho = kernel.apply(th.yz[c][s]) / exp_auto
+        lab = _sep_label(est, s)
+        checks += bands.coherence_checks(lab, cc, pa, pb, rho, exp_auto, covs[s])
+        st = coherence_stats(rho, exp_auto**2 / covs[s][0])  # per-bin bands for the plots
+        for name, e, m, sd in (("coh2", coh2, st["coh2_mean"], st["coh2_sd"]),
+                               ("phase", phase, np.angle(rho), st["phase_sd"])):
+            lo, hi = _band95(e[b], sd[b])
+            curves.append(Curve(f"{name} {lab}", f[b], e[b], m[b], lo, hi))
+    return MetricResult(f"yz_coherence_{c}", f"yz coherence of {c} (magnitude-squared and phase)", "-, rad",
+                        checks, curves)
+
+
+
+def _longitudinal(est, th, kernel, bands, exp_auto_u, cov_u) -> MetricResult:
+    # cov_u: covariance of the u auto-spectrum averaged over the plane-pair sub-lattice of one plane
+    checks, curves = [], []
+    g = est.grid
+    b = bands.bins
+    f = est.freqs
+    n_bins = exp_auto_u**2 / cov_u[0]
+    for p in range(g.nx):
+        for q in range(p + 1, g.nx):
+            cross = est.long_cross[p, q]
+            coh2 = np.abs(cross) ** 2 / (est.long_auto[p] * est.long_auto[q])
+            phase = np.angle(cross)
+            rho = kernel.apply(th.long_lines(g.x_m[q] - g.x_m[p])) / exp_auto_u
+            lab = f"x={g.x_m[p]:g}m-{g.x_m[q]:g}m"
+            # expected phase arg(rho) = 0 in the convected frame of the store
+            checks += bands.coherence_checks(lab, cross, est.long_auto[p], est.long_auto[q], rho, exp_auto_u, cov_u)
+            st = coherence_stats(rho, n_bins)
+            lo, hi = _band95(coh2[b], st["coh2_sd"][b])
+            curves.append(Curve(f"coh2 {lab}", f[b], coh2[b], st["coh2_mean"][b], lo, hi))
+            lo, hi = _band95(phase[b], st["phase_sd"][b])
+            curves.append(Curve(f"phase {lab}", f[b], phase[b], np.zeros(b.size), lo, hi))
+    return MetricResult("longitudinal_coherence_u",
+                        "longitudinal coherence of u between planes (magnitude-squared and phase, convected frame)",
+                        "-, rad", checks, curves)
+
+
+def _uw(est, th, kernel, bands, exp_auto, cov) -> MetricResult:
+    # Per bin: Var(co) <= E_u E_w (sqrt(rho_u rho_w) + rho_uw) / (2 K_m) (Cauchy-Schwarz on the Isserlis
+    # covariance, exact for one point), K_m = sqrt(K_u K_w) the exact equivalent segments of the u and w
+    # Welch estimates (K_x = E_x^2 / Var_x one point); neighbouring bins correlated as sqrt(corr_u corr_w).
+    # Per band the pooled co-coherence sum co / sqrt(sum E_u sum E_w) is compared with the exact
+    # variance-gamma law of n_band equivalent samples (``distributions.cospectrum_tails``).
+    f = est.freqs
+    b = bands.bins
+    exp = kernel.apply(th.uw)
+    eu, ew = exp_auto["u"], exp_auto["w"]
+    norm_uw = np.sqrt(eu * ew)
+    rho = np.sqrt(th.rho(th.rho_all["u"], f) * th.rho(th.rho_all["w"], f)) + th.rho(th.rho_uw, f)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k_m = np.sqrt(eu**2 / cov["u"][0] * ew**2 / cov["w"][0])
+        sd = np.nan_to_num(norm_uw * np.sqrt(rho / (2.0 * k_m)))
+        corr = {d: np.nan_to_num(np.sqrt(np.clip(cov["u"][d] / np.sqrt(cov["u"][0][: f.size - d] * cov["u"][0][d:]), 0, 1)
+                                         * np.clip(cov["w"][d] / np.sqrt(cov["w"][0][: f.size - d] * cov["w"][0][d:]),
+                                                   0, 1)))
+                for d in cov["u"]}
+    co = est.uw.real
+    checks = []
+    for g in bands.groups:
+        var = 0.0
+        for d, r in corr.items():
+            m = g[g + d <= g[-1]]
+            part = np.sum(sd[m] * sd[m + d] * r[m])
+            var += part if d == 0 else 2.0 * part
+        scale = np.sqrt(np.sum(eu[g]) * np.sum(ew[g]))
+        x, c = float(np.sum(co[g]) / scale), float(np.sum(exp[g]) / scale)
+        v = var / scale**2
+        n_band = (1.0 + c * c) / (2.0 * v)
+        z = float(cospectrum_z(x, c, n_band))
+        checks.append(Check("co-spectrum/sqrt(SuSw)", (float(f[g[0]]), float(f[g[-1]])), x, c, float(np.sqrt(v)), z))
+    lo, hi = _band95(co[b], sd[b])
+    curve = Curve("uw_cross_spectrum", f[b], co[b], exp[b], lo, hi)
+    return MetricResult("uw_cross_spectrum", "u-w co-spectrum (Reynolds stress; 0 for Kaimal)", "m^2/s^2/Hz",
+                        checks, [curve])

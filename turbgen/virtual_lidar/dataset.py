@@ -1,0 +1,219 @@
+"""The lidar output dataset: a small zarr group, xarray-readable, written atomically.
+
+Variables (named dims, units in attributes):
+    v_los (scan, beam, gate)  line-of-sight speed [m s-1], positive towards the lidar (+u for a beam
+                              looking straight upstream); time_s (scan, beam) its physical time [s]
+    u_LL (t_arrival)          lidar estimate of the rotor-effective wind speed [m s-1], aligned to
+                              rotor arrival (stored/eddy time of the rotor plane)
+    u_RR (t_arrival)          u averaged over the rotor disc at x = 0 [m s-1]
+    gate_x_m (gate), n1 (beam, gate)
+Attributes: every lidar parameter, the store it came from, mean_wind_added, TI values.
+Publishing: written under a hidden temporary name in the output directory, then renamed.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import secrets
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError, StoreError
+from turbgen.store.attributes import jsonable
+from turbgen.theory import ranges
+
+MARKER = "turbgen_lidar_complete"
+
+
+def check_output(path, overwrite: bool) -> Path:
+    """Refuse an existing output without overwrite, or a missing/unwritable directory (before any work).
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output dataset path (``~`` expanded, made absolute).
+    overwrite : bool
+        Allow replacing an existing lidar dataset.
+
+    Returns
+    -------
+    pathlib.Path
+        The absolute output path.
+
+    Raises
+    ------
+    StoreError
+        If ``path`` exists and ``overwrite`` is False, exists and is not a lidar dataset, or its parent
+        directory is missing or not writable.
+    """
+    path = Path(path).expanduser().absolute()
+    # a path that is not a lidar dataset is never replaced, so `overwrite` is no remedy there: not suggested
+    if path.exists() and not (path / "zarr.json").is_file():
+        raise StoreError(f"{path} exists and is not a zarr dataset; it will not be replaced (choose another `out`)")
+    if path.exists() and not (path / "v_los" / "zarr.json").is_file():  # e.g. the field store being measured
+        raise StoreError(f"{path} exists and is not a lidar dataset (no v_los); it will not be replaced "
+                         "(choose another `out`)")
+    if path.exists() and not overwrite:
+        raise StoreError(f"{path} already exists; use `overwrite` to replace it")
+    if not path.parent.is_dir():
+        raise StoreError(f"output directory {path.parent} does not exist")
+    if not os.access(path.parent, os.W_OK):
+        raise StoreError(f"output directory {path.parent} is not writable")
+    return path
+
+
+def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: bool = False) -> Path:
+    """Write the lidar dataset to ``path`` atomically; returns the absolute path.
+
+    Written under a hidden temporary name in the output directory, the completeness marker set last,
+    then renamed into place (an existing dataset is replaced only after the new one is complete).
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output zarr directory.
+    samples : LidarSamples
+        Sampled line-of-sight speeds (v_los [m/s], time_s [s], gates_x_m [m], n1 [-]).
+    t_arrival : numpy.ndarray
+        Rotor arrival time axis [s] of ``u_ll`` and ``u_rr``.
+    u_ll : numpy.ndarray
+        Lidar estimate u_LL of the rotor-effective wind speed [m/s].
+    u_rr : numpy.ndarray
+        Rotor-disc average u_RR at x = 0 [m/s].
+    attrs : dict
+        Dataset attributes; dict, list and tuple values are stored as JSON strings.
+    overwrite : bool, optional
+        Replace an existing lidar dataset (default False).
+
+    Returns
+    -------
+    pathlib.Path
+        The absolute path of the dataset.
+
+    Raises
+    ------
+    StoreError
+        As :func:`check_output`: existing output without ``overwrite``, or a missing/unwritable directory.
+    """
+    import xarray as xr
+
+    path = check_output(path, overwrite)
+    nb, ng = samples.v_los.shape[1:]
+    ds = xr.Dataset(
+        {
+            "v_los": (("scan", "beam", "gate"), samples.v_los.astype(np.float32),
+                      {"units": "m s-1", "long_name": "line-of-sight speed, positive towards the lidar"}),
+            "u_LL": (("t_arrival",), u_ll.astype(np.float32),
+                     {"units": "m s-1", "long_name": "lidar estimate of the rotor-effective wind speed (moving full-scan window)"}),
+            "u_RR": (("t_arrival",), u_rr.astype(np.float32),
+                     {"units": "m s-1", "long_name": "u averaged over the rotor disc at x = 0"}),
+            "n1": (("beam", "gate"), samples.n1, {"units": "1", "long_name": "longitudinal component of the beam vector"}),
+        },
+        coords={
+            "time_s": (("scan", "beam"), samples.time_s, {"units": "s", "long_name": "physical time of the measurement"}),
+            "t_arrival": (("t_arrival",), t_arrival, {"units": "s", "long_name": "rotor arrival time (eddy time of plane x = 0)"}),
+            "gate_x_m": (("gate",), samples.gates_x_m, {"units": "m", "long_name": "upstream distance of the range gate"}),
+            "beam": (("beam",), np.arange(nb)),
+            "gate": (("gate",), np.arange(ng)),
+        },
+        attrs={k: json.dumps(jsonable(v)) if isinstance(v, (dict, list, tuple)) else jsonable(v) for k, v in attrs.items()},
+    )
+    tmp = path.parent / f".{path.name}.tmp-{os.getpid()}-{secrets.token_hex(4)}"
+    try:
+        import zarr
+
+        from turbgen.store.layout import silence_consolidated_metadata_warning
+
+        silence_consolidated_metadata_warning()
+
+        ds.attrs[MARKER] = False
+        ds.to_zarr(tmp, mode="w", consolidated=True)
+        zarr.open_group(str(tmp), mode="r+").attrs[MARKER] = True  # the completeness marker, last
+        zarr.consolidate_metadata(str(tmp))
+        if path.exists():
+            old = path.parent / f".{path.name}.old-{os.getpid()}-{secrets.token_hex(4)}"
+            os.rename(path, old)
+            os.rename(tmp, path)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.rename(tmp, path)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return path
+
+
+@dataclass(frozen=True, eq=False)
+class LidarData:
+    """What ``turbgen lidar --out`` wrote, as needed to constrain a field with it.
+
+    Parameters
+    ----------
+    v_los : numpy.ndarray
+        (scan, beam, gate) [m/s], beams in increasing beam number.
+    time_s : numpy.ndarray
+        (scan, beam) physical measurement times [s].
+    lidar : dict
+        The lidar description's fields (turbgen.virtual_lidar.description.lidar_from_mapping rebuilds it).
+    mean_wind_added : bool
+        Whether v_los includes the power-law mean wind (``shear_exponent`` [-]).
+    shear_exponent : float
+        Its exponent alpha [-].
+    U_m_s : float
+        The mean wind of the store the lidar measured [m/s].
+    source : str
+        The dataset's path.
+    mean_wind : dict, optional
+        The added mean wind's record (:meth:`turbgen.spec.mean_wind.MeanWind.to_attrs`); None: the power law with
+        ``shear_exponent`` (datasets of earlier versions, or no mean wind added).
+    """
+
+    v_los: np.ndarray
+    time_s: np.ndarray
+    lidar: dict
+    mean_wind_added: bool
+    shear_exponent: float
+    U_m_s: float
+    source: str
+    mean_wind: dict | None = None
+
+    def __post_init__(self):
+        # NaN is a missing sample; inf or 1e30 m/s is no measurement (the field would follow it)
+        ranges.check_values("measured_m_s", self.v_los, f"lidar record {self.source}: v_los")
+
+
+def is_lidar_dataset(path) -> bool:
+    """Whether ``path`` is a directory holding a lidar dataset (a ``v_los`` array)."""
+    return (Path(path) / "v_los" / "zarr.json").is_file()
+
+
+def read_dataset(path) -> LidarData:
+    """Read a complete lidar dataset written by :func:`write_dataset`.
+
+    Raises
+    ------
+    StoreError
+        If ``path`` is not a complete lidar dataset.
+    """
+    import zarr
+
+    p = Path(path)
+    try:
+        group = zarr.open_group(str(p), mode="r")
+        attrs = dict(group.attrs)
+        if attrs.get(MARKER) is not True:
+            raise StoreError(f"{p} is not a complete lidar dataset (no completeness marker)")
+        lidar, wind = attrs["lidar"], attrs.get("mean_wind")
+        return LidarData(np.asarray(group["v_los"][...], float), np.asarray(group["time_s"][...], float),
+                         json.loads(lidar) if isinstance(lidar, str) else dict(lidar),
+                         bool(attrs["mean_wind_added"]), float(attrs["shear_exponent"]), float(attrs["U_m_s"]),
+                         str(p), json.loads(wind) if isinstance(wind, str) else wind)  # fmt: skip
+    except ParameterError:  # it reads, but a value is no measurement (LidarData)
+        raise
+    except (KeyError, ValueError, OSError, RuntimeError, zarr.errors.BaseZarrError) as exc:  # RuntimeError: a chunk
+        first = (str(exc).splitlines() or [""])[0]  # that does not decompress (numcodecs' Zstd error)
+        raise StoreError(f"{p} is not a readable lidar dataset ({type(exc).__name__}: {first})") from None

@@ -1,0 +1,91 @@
+"""Measured line-of-sight data as a netCDF file, for constraining a field (``turbgen mann --constrain FILE.nc``).
+
+The same table as the CSV file of turbgen.virtual_lidar.los_csv, as netCDF: four variables along one dimension (any name),
+``time_s`` [s], ``beam`` and ``gate`` (indices of the lidar's ``azimuth_deg`` and ``ranges_m``, from 0) and
+``v_los_m_s`` [m/s] (NaN or the variable's fill value: a missing sample), and the CSV header's keys as global
+attributes (``lidar`` and ``U_m_s`` required; ``total_wind`` (true/false or 1/0), ``profile``, ``mean_history``)::
+
+    import xarray as xr
+    xr.Dataset({"time_s": ("sample", t), "beam": ("sample", b), "gate": ("sample", g), "v_los_m_s": ("sample", v)},
+               attrs={"lidar": "mylidar.toml", "U_m_s": 16.0}).to_netcdf("los.nc")
+
+Read by xarray with whichever netCDF engine is installed (netCDF3 files need none beyond scipy; netCDF4/HDF5 files
+need ``h5netcdf`` or ``netCDF4``: ``pip install "turbgen[netcdf]"``). The result is the same LidarData as the CSV's.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.virtual_lidar.dataset import LidarData
+from turbgen.input_files import LINE_OF_SIGHT, check_input
+from turbgen.virtual_lidar.los_csv import COLUMNS, HEADER_KEYS, los_record
+
+SUFFIXES = (".nc", ".nc4", ".netcdf")
+
+
+def is_los_netcdf(path) -> bool:
+    """Whether ``path`` names a netCDF file (by its suffix)."""
+    return Path(path).suffix.lower() in SUFFIXES
+
+
+def _header(attrs: dict, where: str) -> dict:
+    unknown = sorted(set(attrs) - set(HEADER_KEYS))
+    if unknown:
+        raise ParameterError(f"{where}: unknown global attribute {unknown[0]!r} (allowed: {', '.join(HEADER_KEYS)})")
+    header = {}
+    for key, value in attrs.items():
+        value = value.item() if isinstance(value, np.generic) else value
+        if key == "total_wind" and not isinstance(value, str):
+            value = {1: "true", 0: "false"}.get(value, str(value))
+        header[key] = str(value)
+    return header
+
+
+def read_los_netcdf(path) -> LidarData:
+    """The line-of-sight record of a netCDF file (module docstring) as :class:`LidarData`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The netCDF file.
+
+    Returns
+    -------
+    LidarData
+        v_los (scan, beam, gate) [m/s], time_s (scan, beam) [s], the lidar's parameters, the mean wind.
+
+    Raises
+    ------
+    ParameterError
+        If the file is not readable netCDF (or no engine for it is installed), a variable or attribute is missing,
+        unknown or malformed, or the record fails a check of turbgen.virtual_lidar.los_csv.read_los_csv.
+    """
+    import xarray as xr
+
+    path = Path(path).expanduser()
+    where = f"line-of-sight file {path}"
+    check_input(path, LINE_OF_SIGHT)
+    try:
+        with xr.open_dataset(path, decode_times=False) as ds:
+            ds.load()
+    except (OSError, ValueError) as exc:  # not netCDF, or no engine installed for its format
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ParameterError(f"{where}: not readable as netCDF ({reason}); netCDF4 files need "
+                             '`pip install "turbgen[netcdf]"`') from None  # fmt: skip
+    missing = [name for name in COLUMNS if name not in ds.variables]
+    if missing:
+        raise ParameterError(f"{where}: the variables must be {', '.join(COLUMNS)} (missing {', '.join(missing)})")
+    columns = [ds[name] for name in COLUMNS]
+    if any(c.ndim != 1 or c.dims != columns[0].dims for c in columns):
+        raise ParameterError(f"{where}: {', '.join(COLUMNS)} must be 1-D along the same dimension")
+    try:
+        table = np.column_stack([np.asarray(c.values, dtype=float) for c in columns])
+    except (TypeError, ValueError):
+        raise ParameterError(f"{where}: {', '.join(COLUMNS)} must hold numbers") from None
+    if len(table) == 0:
+        raise ParameterError(f"{where}: no samples")
+    return los_record(path, _header(dict(ds.attrs), where), table, where)

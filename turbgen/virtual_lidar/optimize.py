@@ -1,0 +1,141 @@
+"""Brute-force search of a spinner lidar's range and half-cone angle (Fu et al. 2023 Sect. 3.5, Eq. 31).
+
+maximise k_0.5 (the measurement coherence bandwidth) over the measurement range x and the half-cone
+angle phi subject to T_buffer = x/U - T_scan/2 - T_filter - T_pitch >= 0, where T_filter is the delay
+of the first-order low-pass filter at the -3 dB cut-off of |G_RL| (Eq. 30, f_delay = 0.025 Hz) and
+T_pitch = 0.9 s (the IEA 15 MW pitch actuator, Fu et al. 2023 Sect. 3.3). Each candidate's k_0.5
+and cut-off come from one evaluation of the Mann space-time theory on SEARCH_F_HZ (crossings
+interpolated in log f).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from turbgen.errors import ParameterError, check_range
+from turbgen.virtual_lidar.description import LidarDescription
+from turbgen.theory.lidar_control import buffer_time_s, coherence_bandwidth_rad_m, cutoff_frequency_hz
+from turbgen.theory.lidar_preview import mann_preview_spectra
+from turbgen.theory.params import MannParams
+
+MAX_CANDIDATES = 2000
+PITCH_DELAY_RANGE_S = (0.0, 10.0)  # allowed T_pitch [s]: a pitch actuator's delay (0.9 s for the IEA 15 MW)
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One evaluated lidar geometry of the search.
+
+    Parameters
+    ----------
+    range_m : float
+        Measurement range x [m].
+    half_cone_deg : float
+        Half-cone angle phi [deg].
+    k05_rad_m : float
+        Measurement coherence bandwidth k_0.5 [rad/m] (nan if gamma^2 never reaches 0.5).
+    cutoff_hz : float
+        -3 dB cut-off of |G_RL| [Hz] (nan if none).
+    buffer_time_s : float
+        T_buffer [s] (Fu et al. 2023 Eq. 31; nan without a cut-off).
+    """
+    range_m: float
+    half_cone_deg: float
+    k05_rad_m: float
+    cutoff_hz: float
+    buffer_time_s: float
+
+
+SEARCH_F_HZ = np.geomspace(2e-3, 0.25, 28)  # one spectral evaluation per candidate; crossings interpolated
+
+
+def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch_delay_s: float = 0.9,
+             f_delay_hz: float = 0.025, f_hz=SEARCH_F_HZ) -> Candidate:
+    """k_0.5, -3 dB cut-off and buffer time of one lidar (single range gate) for the Mann model.
+
+    Parameters
+    ----------
+    lidar : LidarDescription
+        The lidar; its first range gate is the measurement range x [m].
+    params : MannParams
+        Mann model parameters.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    pitch_delay_s : float, optional
+        Pitch actuator delay T_pitch [s] (default 0.9, IEA 15 MW), in PITCH_DELAY_RANGE_S.
+    f_delay_hz : float, optional
+        Frequency [Hz] of the filter delay (Fu et al. 2023 Eq. 30; default 0.025).
+    f_hz : array_like, optional
+        Frequencies [Hz] of the spectral evaluation (default SEARCH_F_HZ).
+
+    Returns
+    -------
+    Candidate
+        The lidar's range, half-cone angle, k_0.5, cut-off and buffer time.
+
+    Raises
+    ------
+    ParameterError
+        For non-positive frequencies, a beam that does not look upstream or ``pitch_delay_s`` outside
+        PITCH_DELAY_RANGE_S.
+    """
+    pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)
+    S = mann_preview_spectra(f_hz, lidar.measurement_points(), params, U_m_s, lidar.rotor_radius_m)
+    k05 = coherence_bandwidth_rad_m(S.f_hz, S.coh2_RL, U_m_s)
+    fc = cutoff_frequency_hz(S.f_hz, S.G_RL)
+    x = lidar.ranges_m[0]
+    tb = buffer_time_s(x, U_m_s, lidar.scan_time_s, fc, pitch_delay_s, f_delay_hz) if np.isfinite(fc) else np.nan
+    return Candidate(x, lidar.half_cone_deg, k05, fc, tb)
+
+
+def optimize_spinner(lidar: LidarDescription, params: MannParams, U_m_s: float, ranges_m, half_cones_deg,
+                     *, pitch_delay_s: float = 0.9, progress=None) -> tuple[list[Candidate], Candidate | None]:
+    """All candidates of the grid and the best one with T_buffer >= 0 (None if no candidate has it).
+
+    Parameters
+    ----------
+    lidar : LidarDescription
+        A spinner lidar; range and half-cone angle are replaced per candidate.
+    params : MannParams
+        Mann model parameters.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    ranges_m : iterable of float
+        Measurement ranges x to try [m].
+    half_cones_deg : iterable of float
+        Half-cone angles phi to try [deg].
+    pitch_delay_s : float, optional
+        Pitch actuator delay T_pitch [s] (default 0.9), in PITCH_DELAY_RANGE_S.
+    progress : callable, optional
+        Called with 1 after each candidate.
+
+    Returns
+    -------
+    tuple of (list of Candidate, Candidate or None)
+        Every candidate (range-major) and the feasible one with the largest k_0.5.
+
+    Raises
+    ------
+    ParameterError
+        If the lidar is not a spinner lidar, the grid is empty or has more than MAX_CANDIDATES
+        candidates, a candidate's geometry is invalid or ``pitch_delay_s`` is outside PITCH_DELAY_RANGE_S.
+    """
+    pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)  # before any candidate
+    if lidar.mount != "spinner":
+        raise ParameterError(f"lidar {lidar.name!r}: the range x half-cone search is for spinner lidars")
+    ranges = [float(x) for x in ranges_m]
+    cones = [float(c) for c in half_cones_deg]
+    if not ranges or not cones or len(ranges) * len(cones) > MAX_CANDIDATES:
+        raise ParameterError(f"lidar optimize: {len(ranges)} ranges x {len(cones)} angles must be 1 to "
+                             f"{MAX_CANDIDATES} candidates")
+    out = []
+    for x in ranges:
+        for c in cones:
+            out.append(evaluate(replace(lidar, ranges_m=(x,), half_cone_deg=c), params, U_m_s,
+                                pitch_delay_s=pitch_delay_s))
+            if progress is not None:
+                progress(1)
+    feasible = [c for c in out if np.isfinite(c.k05_rad_m) and c.buffer_time_s >= 0]
+    return out, (max(feasible, key=lambda c: c.k05_rad_m) if feasible else None)

@@ -1,0 +1,180 @@
+"""Preview quality of a lidar for a turbulence model: the theory behind `turbgen theory lidar`.
+
+One call evaluates the lidar-rotor spectra of ``turbgen.theory.lidar_preview`` for a stability preset
+(Guo et al. 2023 Table 1/2) at a mean wind speed and summarises what a lidar-assisted-control
+design needs: gamma^2_RL, |G_RL|, the -3 dB cut-off of |G_RL| (the first-order low-pass filter to
+use), the measurement coherence bandwidth k_0.5 and d_eddy,min, the filter delay and the buffer time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from turbgen.errors import check_choice
+from turbgen.virtual_lidar.description import LidarDescription
+from turbgen.spec.models import DECLARATIONS, declaration, resolve
+from turbgen.spec.preset_runs import kaimal_settings_for, mann_params_for
+from turbgen.theory.coherence_models import exponential_longitudinal
+from turbgen.theory.lidar_control import buffer_time_s, coherence_bandwidth_rad_m, cutoff_frequency_hz, filter_delay_s
+from turbgen.theory.lidar_lattice import BoxLattice
+from turbgen.theory.lidar_preview import PreviewSpectra, kaimal_preview_spectra, mann_preview_spectra
+from turbgen.theory.params import KaimalParams, MannParams
+
+MODELS = tuple(d.name for d in DECLARATIONS if d.preview is not None)  # the models with a preview theory
+DEFAULT_F_HZ = np.geomspace(0.005, 0.3, 60)
+
+
+def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset: str = "neutral",
+                    f_hz=DEFAULT_F_HZ, radius_m: float | None = None, frozen: bool = False,
+                    **options) -> PreviewSpectra:
+    """S_RR, S_LL, S_RL of ``lidar`` for the preset's model parameters at U (or explicit ones).
+
+    The model's ``preview`` (turbgen.spec.models): :func:`mann_preview` or :func:`kaimal_preview`.
+
+    Parameters
+    ----------
+    model : str
+        Turbulence model, one of :data:`MODELS`.
+    lidar : LidarDescription
+        The lidar.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    preset : str, optional
+        Stability preset giving the model parameters at U (default "neutral").
+    f_hz : array_like, optional
+        Frequencies [Hz] (> 0); default 60 log-spaced from 0.005 to 0.3 Hz.
+    radius_m : float, optional
+        Rotor radius R [m]; default the lidar's ``rotor_radius_m``.
+    frozen : bool, optional
+        Frozen turbulence (Mann: no eddy lifetime; Kaimal: a_x = b_x = 0).
+    **options
+        The model's own keywords (:func:`mann_preview`: ``mann``, ``box``; :func:`kaimal_preview`: ``kaimal``,
+        ``a_x``, ``b_x``, ``long_components``, ``vw_coherence``).
+
+    Returns
+    -------
+    PreviewSpectra
+        S_RR, S_LL, S_RL at ``f_hz``.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown model or preset, a wind speed out of range, non-positive frequencies, or a beam
+        that does not look upstream.
+    """
+    check_choice("model", model, MODELS)
+    R = lidar.rotor_radius_m if radius_m is None else radius_m
+    preview = resolve(declaration(model).preview, "virtual_lidar")
+    return preview(lidar, U_m_s, preset=preset, f_hz=f_hz, radius_m=R, frozen=frozen, **options)
+
+
+def mann_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, radius_m: float, frozen: bool,
+                 mann: MannParams | None = None, box: BoxLattice | None = None) -> PreviewSpectra:
+    """The Mann model's preview spectra (turbgen.theory.lidar_preview.mann_preview_spectra), its ``preview``.
+
+    Parameters
+    ----------
+    lidar, U_m_s, preset, f_hz, radius_m, frozen
+        As :func:`preview_spectra` (``radius_m`` given).
+    mann : MannParams, optional
+        Explicit Mann parameters instead of the preset's.
+    box : BoxLattice, optional
+        Sum over this periodic box's (k2, k3) lattice (what a synthesised box holds) instead of the continuous
+        integral (default).
+
+    Returns
+    -------
+    PreviewSpectra
+        S_RR, S_LL, S_RL at ``f_hz``.
+    """
+    params = mann if mann is not None else mann_params_for(preset, U_m_s)
+    if frozen:
+        params = replace(params, evo_time_s=None)
+    return mann_preview_spectra(f_hz, lidar.measurement_points(), params, U_m_s, radius_m, box=box)
+
+
+def kaimal_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, radius_m: float, frozen: bool,
+                   kaimal: KaimalParams | None = None, a_x: float | None = None, b_x: float | None = None,
+                   long_components: str = "uvw", vw_coherence: bool = True) -> PreviewSpectra:
+    """The Kaimal model's preview spectra (turbgen.theory.lidar_preview.kaimal_preview_spectra), its ``preview``.
+
+    Defaults follow Guo et al. (2023) Eq. 31/33 (Chen et al. 2022): the yz and the longitudinal coherences act on
+    all three components (``vw_coherence``, ``long_components``); with coherence on u only (the IEC / turbgen kaimal
+    store default) the cut-offs come out 6-13 % higher.
+
+    Parameters
+    ----------
+    lidar, U_m_s, preset, f_hz, radius_m, frozen
+        As :func:`preview_spectra` (``radius_m`` given).
+    kaimal : KaimalParams, optional
+        Explicit Kaimal parameters instead of the preset's.
+    a_x, b_x : float, optional
+        Explicit longitudinal-coherence decay parameters [-] (exponential model) instead of the preset's.
+    long_components : str, optional
+        Components the longitudinal coherence acts on (default "uvw").
+    vw_coherence : bool, optional
+        Apply the yz coherence to v and w as well (default True).
+
+    Returns
+    -------
+    PreviewSpectra
+        S_RR, S_LL, S_RL at ``f_hz``.
+    """
+    settings = kaimal_settings_for(preset, U_m_s)
+    kp = kaimal if kaimal is not None else settings.kaimal
+    ax = settings.a_x if a_x is None else a_x
+    bx = settings.b_x if b_x is None else b_x
+    if frozen:
+        ax, bx = 0.0, 0.0
+
+    def long_coherence(dx_m, f):
+        return exponential_longitudinal(dx_m, f, U_m_s, ax, bx)
+
+    return kaimal_preview_spectra(f_hz, lidar.measurement_points(), kp, U_m_s, radius_m, long_coherence,
+                                  long_components=long_components, vw_coherence=vw_coherence)
+
+
+def summarise(spectra: PreviewSpectra, lidar: LidarDescription, U_m_s: float, *,
+              pitch_delay_s: float = 0.0, f_delay_hz: float = 0.025) -> dict:
+    """The design numbers of a lidar: JSON-ready (keys f, coh2_RL, G_RL, k05_rad_m, cutoff_hz, ...).
+
+    Parameters
+    ----------
+    spectra : PreviewSpectra
+        Lidar-rotor spectra (see :func:`preview_spectra`).
+    lidar : LidarDescription
+        The lidar (scan time and shortest range).
+    U_m_s : float
+        Mean wind speed U [m/s].
+    pitch_delay_s : float, optional
+        Pitch actuator delay T_pitch [s] in the buffer time (default 0).
+    f_delay_hz : float, optional
+        Frequency [Hz] at which the low-pass filter's delay is taken (default 0.025).
+
+    Returns
+    -------
+    dict
+        ``f`` [Hz], ``coh2_RL`` [-], ``G_RL`` [-], ``k05_rad_m`` [rad/m], ``cutoff_hz`` [Hz],
+        ``d_eddy_min_m`` [m], ``scan_time_s`` [s] (non-finite values as None), plus ``filter_delay_s`` [s]
+        and ``buffer_time_s`` [s] when the cut-off exists.
+    """
+    f = spectra.f_hz
+    cutoff = cutoff_frequency_hz(f, spectra.G_RL)
+    k05 = coherence_bandwidth_rad_m(f, spectra.coh2_RL, U_m_s)
+    out = {
+        "f": f.tolist(),
+        "coh2_RL": spectra.coh2_RL.tolist(),
+        "G_RL": spectra.G_RL.tolist(),
+        "k05_rad_m": k05,
+        "cutoff_hz": cutoff,
+        "d_eddy_min_m": 2.0 * np.pi / k05 if np.isfinite(k05) and k05 > 0 else float("nan"),
+        "scan_time_s": lidar.scan_time_s,
+    }
+    out = {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in out.items()}
+    if np.isfinite(cutoff):
+        out["filter_delay_s"] = filter_delay_s(cutoff, f_delay_hz)
+        out["buffer_time_s"] = buffer_time_s(min(lidar.ranges_m), U_m_s, lidar.scan_time_s, cutoff,
+                                             pitch_delay_s, f_delay_hz)
+    return out

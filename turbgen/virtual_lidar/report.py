@@ -1,0 +1,393 @@
+"""`turbgen lidar STORE`: the virtual lidar's result against the preview theory of the store's own model.
+
+Theory: ``turbgen.virtual_lidar.preview.preview_spectra`` with the store's model parameters (read from its
+attributes as ``turbgen validate`` does), with the same discrete probe-volume weights as the sampling;
+for a Mann store summed over the (k2, k3) lattice of its periodic synthesis box (what the box holds:
+at the lowest bin of a 32 x 32 store gamma^2_RL is ~0.005 below the continuous integral of
+`turbgen theory lidar`); then the expected Welch estimate at each bin, the record's lines weighted by
+the Hann window with the segment mean removed (turbgen.virtual_lidar.welch_expectation; +0.02..0.04 in the
+second and third bins of 64 s segments). Verdict: ``turbgen.virtual_lidar.compare.coherence_metric``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.virtual_lidar import compare
+from turbgen.virtual_lidar.run import LidarRun, lidar_attrs, run_lidar
+from turbgen.spec.models import declaration, resolve
+from turbgen.store.temporaries import write_atomically
+from turbgen.validation.checks import MetricResult
+
+DEFAULT_LIDAR = "nacelle-4beam"
+# Theory is evaluated at the Welch bins up to this frequency only (its cost grows with the bins;
+# gamma^2_RL of any preset is < 0.01 well below it, and the verdict skips bins with gamma^2 < MIN_COH2)
+F_THEORY_MAX_HZ = 0.5
+
+
+def _model_spectra(fs, description, f_hz, radius_m: float):
+    """PreviewSpectra of the store's model at f_hz > 0: its declared ``store_preview`` (turbgen.spec.models)."""
+    reference = declaration(fs.model, "store model").store_preview
+    if reference is None:
+        raise ParameterError(f"store model {fs.model!r} has no lidar theory")
+    return resolve(reference, "virtual_lidar")(fs, description, f_hz, radius_m)
+
+
+def mann_store_preview(fs, description, f_hz, radius_m: float):
+    """PreviewSpectra of a Mann store at f_hz > 0 [Hz]: on its box's lattice, for rotor radius ``radius_m`` [m]."""
+    from turbgen.virtual_lidar.preview import preview_spectra
+    from turbgen.theory.lidar_lattice import BoxLattice
+    from turbgen.validation.store_run import mann_box_from_attrs, mann_params_from_attrs
+
+    g = fs.grid
+    b = mann_box_from_attrs(fs.attrs, g)
+    box = BoxLattice(b.nyp, b.nzp, g.dy_m, g.dz_m, g.nt * g.dt_s)
+    return preview_spectra("mann", description, fs.U_m_s, f_hz=f_hz, radius_m=radius_m,
+                           mann=mann_params_from_attrs(fs.attrs), box=box)
+
+
+def kaimal_store_preview(fs, description, f_hz, radius_m: float):
+    """PreviewSpectra of a Kaimal store at f_hz > 0 [Hz] as synthesised, for rotor radius ``radius_m`` [m]."""
+    from turbgen.virtual_lidar.preview import preview_spectra
+    from turbgen.validation.store_run import kaimal_model_from_attrs
+
+    km = kaimal_model_from_attrs(fs.attrs)
+    if km.spectrum is not None:
+        raise ParameterError("lidar theory has the Kaimal spectra only; this store was made with user spectra "
+                             "(its parameter `spectrum`)")
+    if km.long_model != "exp":
+        raise ParameterError(f"lidar theory supports the exponential longitudinal coherence only "
+                             f"(store has long_model = {km.long_model!r})")
+    return preview_spectra("kaimal", description, fs.U_m_s, f_hz=f_hz, radius_m=radius_m, kaimal=km.params,
+                           a_x=km.a_x, b_x=km.b_x, long_components=km.long_components, vw_coherence=km.vw_coherent)
+
+
+def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int | None = None):
+    """The expected Welch S_RR, S_LL, S_RL of ``description`` on the store at the bins f_hz > 0.
+
+    The store's model and parameters are read from its attributes. A Mann store's spectra are summed
+    over the (k2, k3) lattice of its periodic synthesis box (turbgen.theory.lidar_lattice: what the box
+    holds, which at the lowest bins differs from the continuous integral of `turbgen theory lidar`);
+    either model's spectra are then weighted over the record's lines as the Welch estimate weights them
+    (turbgen.virtual_lidar.welch_expectation).
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store (model and parameters read from its attributes).
+    description : LidarDescription
+        The lidar.
+    f_hz : array_like
+        Welch bin frequencies [Hz] (> 0).
+    radius_m : float
+        Rotor radius R [m].
+    setup : WelchSetup
+        The Welch estimate's segment length and time step [s].
+    n_samples : int, optional
+        Samples of the lidar signal; if given, the result's ``n_eff`` holds the equivalent independent
+        segments of its gamma^2_RL per bin (turbgen.virtual_lidar.welch_expectation.effective_segments).
+
+    Returns
+    -------
+    ExpectedWelch
+        Expected Welch S_RR, S_LL, S_RL at ``f_hz`` [m^2 s^-2 Hz^-1] (and ``n_eff`` [-] if asked for).
+
+    Raises
+    ------
+    ParameterError
+        If a Kaimal store's longitudinal coherence is not the exponential model.
+    """
+    from turbgen.virtual_lidar.welch_expectation import expected_welch, theory_nodes
+
+    record_s = fs.grid.nt * fs.grid.dt_s
+    nodes, _ = theory_nodes(f_hz, setup, record_s)
+    return expected_welch(_model_spectra(fs, description, nodes, radius_m), f_hz, setup, record_s, n_samples)
+
+
+@dataclass
+class LidarReport:
+    """The virtual lidar's result on a store against the theory (see :func:`lidar_report`).
+
+    Parameters
+    ----------
+    store : str
+        Path of the store.
+    lidar : LidarDescription or object
+        The lidar.
+    run : LidarRun
+        The simulated run.
+    f_hz : numpy.ndarray
+        Welch bins 1 .. up to F_THEORY_MAX_HZ where the theory is evaluated [Hz].
+    coh2_theory : numpy.ndarray
+        Theoretical gamma^2_RL [-] at ``f_hz`` (of the expected Welch spectra, see :func:`store_theory`).
+    G_theory : numpy.ndarray
+        Theoretical |G_RL| [-] at ``f_hz`` (likewise).
+    theory_numbers : dict
+        k05_rad_m [rad/m], d_eddy_min_m [m], cutoff_hz [Hz] of the theory.
+    metric : MetricResult
+        The coherence verdict.
+    U_m_s : float
+        Mean wind speed U [m/s].
+    """
+    store: str
+    lidar: object
+    run: LidarRun
+    f_hz: np.ndarray  # Welch bins 1 .. up to F_THEORY_MAX_HZ (where the theory is evaluated)
+    coh2_theory: np.ndarray
+    G_theory: np.ndarray
+    theory_numbers: dict
+    metric: MetricResult
+    U_m_s: float
+
+    @property
+    def passed(self) -> bool:
+        """Whether the coherence metric passed.
+
+        Returns
+        -------
+        bool
+            True if every tested bin has |z| <= z_crit.
+        """
+        return self.metric.passed
+
+    def to_dict(self) -> dict:
+        """The report, JSON-ready.
+
+        Returns
+        -------
+        dict
+            Store, lidar parameters, rotor radius [m], mean-wind settings, scans, Welch setup, TIs [-],
+            simulated and theoretical numbers, the curves (bins 1 .. Nyquist-1 simulated, ``f_theory`` [Hz])
+            and the verdict.
+        """
+        r, w = self.run, self.run.welch
+        sl = slice(1, -1)
+        worst = self.metric.worst
+        return {
+            "store": self.store,
+            "lidar": lidar_attrs(self.lidar),
+            "rotor_radius_m": r.rotor_radius_m,
+            "mean_wind_added": r.samples.mean_wind_added,
+            "shear_exponent": r.samples.shear_exponent if r.samples.mean_wind_added else None,
+            "n_scans": int(r.samples.v_los.shape[0]),
+            "welch": {"nperseg": int(w["f_hz"].size * 2 - 2), "n_segments": int(w["n_segments"]),
+                      "n_eff": float(w["n_eff"])},
+            "ti_lidar_uncorrected": r.ti_lidar,
+            "ti_rotor": r.ti_rotor,
+            "simulated": r.simulated,
+            "theory": self.theory_numbers,
+            "f_simulated": w["f_hz"][sl].tolist(),
+            "coh2_RL_simulated": w["coh2_RL"][sl].tolist(),
+            "G_RL_simulated": w["G_RL"][sl].tolist(),
+            "f_theory": self.f_hz.tolist(),
+            "coh2_RL_theory": self.coh2_theory.tolist(),
+            "G_RL_theory": self.G_theory.tolist(),
+            "verdict": {"passed": self.passed, "max_abs_z": self.metric.max_abs_z, "z_crit": self.metric.z_crit,
+                        "n_tests": len(self.metric.checks),
+                        "worst_f_hz": None if worst is None else worst.band_hz[0]},
+        }
+
+    def text(self) -> str:
+        """A short human-readable summary: k_0.5 and cut-off simulated vs theory, TIs and the verdict.
+
+        Returns
+        -------
+        str
+            Several lines of text.
+        """
+        d = self.to_dict()
+
+        def num(v, fmt):
+            return "-" if v is None else format(v, fmt)
+
+        s, t = d["simulated"], d["theory"]
+        lines = [
+            f"lidar {getattr(self.lidar, 'name', '')} on {self.store}",
+            f"  scans {d['n_scans']}, Welch segments {d['welch']['n_segments']} (n_eff {d['welch']['n_eff']:.1f}), "
+            f"rotor radius {d['rotor_radius_m']:g} m, mean wind {'added' if d['mean_wind_added'] else 'not added'}",
+            f"  {'':22s}{'simulated':>12s}{'theory':>12s}",
+            f"  {'k_0.5 [rad/m]':22s}{num(s['k05_rad_m'], '12.4f')}{num(t['k05_rad_m'], '12.4f')}",
+            f"  {'cut-off [Hz]':22s}{num(s['cutoff_hz'], '12.4f')}{num(t['cutoff_hz'], '12.4f')}",
+            f"  TI lidar (uncorrected) {d['ti_lidar_uncorrected']:.4f}, TI rotor {d['ti_rotor']:.4f}",
+            f"  coherence gamma^2_RL: {'PASS' if self.passed else 'FAIL'} (max |z| {d['verdict']['max_abs_z']:.2f}, "
+            f"z_crit {d['verdict']['z_crit']:.2f}, {d['verdict']['n_tests']} bins)",
+        ]
+        return "\n".join(lines)
+
+    def write(self, out, overwrite: bool = False) -> Path:
+        """Write the lidar dataset (``turbgen.virtual_lidar.dataset``) with the report's numbers as attributes.
+
+        Parameters
+        ----------
+        out : str or path-like
+            Output zarr directory.
+        overwrite : bool, optional
+            Replace an existing lidar dataset (default False).
+
+        Returns
+        -------
+        pathlib.Path
+            The absolute path of the dataset.
+
+        Raises
+        ------
+        StoreError
+            If ``out`` exists without ``overwrite``, is not a zarr dataset, or its directory is missing or
+            not writable.
+        """
+        from turbgen.virtual_lidar.dataset import write_dataset
+
+        r = self.run
+        d = self.to_dict()
+        attrs = {
+            "source_store": self.store,
+            "lidar": d["lidar"],
+            "rotor_radius_m": r.rotor_radius_m,
+            "mean_wind_added": bool(r.samples.mean_wind_added),
+            "shear_exponent": float(r.samples.shear_exponent),
+            "mean_wind": r.samples.mean_wind_record,
+            "U_m_s": self.U_m_s,
+            "ti_lidar_uncorrected": r.ti_lidar,
+            "ti_rotor": r.ti_rotor,
+            "simulated": d["simulated"],
+            "theory": d["theory"],
+            "verdict": d["verdict"],
+        }
+        return write_dataset(out, r.samples, r.t_arrival_s, r.u_LL, r.u_RR, attrs, overwrite=overwrite)
+
+    def data(self):
+        """The measurements as a constraint (``turbgen.mann(constrain=[report])``), in memory: the
+        :class:`turbgen.virtual_lidar.dataset.LidarData` that :meth:`write` and reading the dataset back give (v_los rounded
+        to float32 as stored, the attributes through JSON as stored).
+
+        Returns
+        -------
+        turbgen.virtual_lidar.dataset.LidarData
+            v_los [m/s], times [s], the lidar, the mean wind added, U [m/s]; ``source`` the field's label.
+        """
+        import json
+
+        from turbgen.virtual_lidar.dataset import LidarData
+        from turbgen.store.attributes import jsonable
+
+        r = self.run.samples
+        stored = json.loads(json.dumps(jsonable({"lidar": self.to_dict()["lidar"], "mean_wind": r.mean_wind_record})))
+        return LidarData(r.v_los.astype(np.float32).astype(float), np.asarray(r.time_s, float), stored["lidar"],
+                         bool(r.mean_wind_added), float(r.shear_exponent), float(self.U_m_s), self.store,
+                         stored["mean_wind"])  # fmt: skip
+
+    def plots(self, directory) -> list[Path]:
+        """gamma^2_RL and |G_RL|: simulated (95 % band of the estimator) against theory, MCB and cut-off marked.
+
+        The style of Guo et al. 2023 Fig. 4 and Fu et al. 2023 Fig. 6.
+
+        Parameters
+        ----------
+        directory : str or path-like
+            Directory for the figure (created if missing).
+
+        Returns
+        -------
+        list of pathlib.Path
+            The written ``lidar_coherence.png``.
+        """
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        c = self.metric.curves[0]
+        w = self.run.welch
+        fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.4, 6.4), sharex=True)
+        a1.fill_between(c.f_hz, np.clip(c.lower, 0, 1), np.clip(c.upper, 0, 1), color="C0", alpha=0.25,
+                        label="theory ± 1.96 sd of the estimator")
+        a1.semilogx(c.f_hz, c.estimate, "k.-", lw=0.8, ms=3, label="simulated (Welch)")
+        a1.semilogx(self.f_hz, self.coh2_theory, "C0", label="theory")
+        a1.axhline(0.5, color="0.5", ls=":")
+        sim, th = self.run.simulated, self.theory_numbers
+        for v, ls in ((sim.get("k05_rad_m"), "--"), (th.get("k05_rad_m"), "-")):
+            if v:
+                a1.axvline(v * self.U_m_s / (2 * math.pi), color="C3", ls=ls, lw=0.8)
+        a1.set_ylabel(r"$\gamma^2_{RL}$ [-]")
+        a1.set_ylim(0, 1.05)
+        a1.legend(fontsize=8)
+        a1.set_title(f"{getattr(self.lidar, 'name', 'lidar')}: {'PASS' if self.passed else 'FAIL'}")
+        a2.semilogx(w["f_hz"][1:-1], w["G_RL"][1:-1], "k.-", lw=0.8, ms=3, label="simulated")
+        a2.semilogx(self.f_hz, self.G_theory, "C0", label="theory")
+        a2.axhline(1 / math.sqrt(2), color="0.5", ls=":")
+        for v, ls in ((sim.get("cutoff_hz"), "--"), (th.get("cutoff_hz"), "-")):
+            if v:
+                a2.axvline(v, color="C3", ls=ls, lw=0.8)
+        a2.set_xlabel("f [Hz]")
+        a2.set_ylabel(r"$|G_{RL}|$ [-]")
+        a2.legend(fontsize=8)
+        fig.tight_layout()
+        path = directory / "lidar_coherence.png"
+        try:
+            write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110), "the plot")
+        finally:
+            plt.close(fig)
+        return [path]
+
+
+def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, shear_exponent=0.2,
+                 nperseg=None, mean_wind=None) -> LidarReport:
+    """Run the virtual lidar on the open store ``fs`` and compare with theory.
+
+    Rotor radius: the option, else the lidar's turbine if it fits the grid, else the validator's default.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store.
+    lidar : LidarDescription or str, optional
+        A lidar, a preset name or a lidar file; default DEFAULT_LIDAR.
+    rotor_radius_m : float, optional
+        Rotor radius R [m] (0 < R <= half the smaller grid extent).
+    add_mean_wind : bool, optional
+        Add the power-law mean wind to u before sampling (default False).
+    shear_exponent : float, optional
+        Power-law exponent alpha [-] of the mean wind (default 0.2).
+    nperseg : int, optional
+        Welch segment length [samples]; default :func:`turbgen.virtual_lidar.run.default_nperseg`.
+    mean_wind : MeanWind, optional
+        With ``add_mean_wind``: this mean wind instead of the power law.
+
+    Returns
+    -------
+    LidarReport
+        Simulated run, theory at the Welch bins up to F_THEORY_MAX_HZ and the verdict.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown lidar, a lidar that does not fit the store, a signal too short, or a store whose
+        model the lidar theory does not support.
+    """
+    from turbgen.virtual_lidar.description import LidarDescription, load_lidar
+
+    desc = lidar if isinstance(lidar, LidarDescription) else load_lidar(lidar or DEFAULT_LIDAR)
+    if rotor_radius_m is None:
+        g = fs.grid
+        half = min((g.ny - 1) * g.dy_m, (g.nz - 1) * g.dz_m) / 2.0
+        rotor_radius_m = desc.rotor_radius_m if desc.rotor_radius_m <= half else None
+    run = run_lidar(fs, desc, rotor_radius_m=rotor_radius_m, add_mean_wind=add_mean_wind,
+                    shear_exponent=shear_exponent, nperseg=nperseg, mean_wind=mean_wind)
+    fw = run.welch["f_hz"]
+    f = fw[1:-1][fw[1:-1] <= F_THEORY_MAX_HZ]
+    th = store_theory(fs, desc, f, run.rotor_radius_m, run.welch["setup"], run.u_LL.size)
+    coh2_th = np.full(fw.size, np.nan)
+    coh2_th[1 : 1 + f.size] = th.coh2_RL
+    n_eff = np.full(fw.size, run.welch["n_eff"])  # (bins above F_THEORY_MAX_HZ are not tested)
+    n_eff[1 : 1 + f.size] = th.n_eff
+    metric = compare.coherence_metric(run.welch["f_hz"], run.welch["coh2_RL"], np.nan_to_num(coh2_th), n_eff)
+    numbers = compare.preview_numbers(np.concatenate([[0.0], f]), np.concatenate([[1.0], th.coh2_RL]),
+                                      np.concatenate([[th.G_RL[0]], th.G_RL]), fs.U_m_s)
+    return LidarReport(fs.label, desc, run, f, th.coh2_RL, th.G_RL, numbers, metric, fs.U_m_s)

@@ -1,0 +1,174 @@
+"""Lidar and rotor signals from sampled line-of-sight speeds, and their Welch coherence.
+
+u_LL (Guo et al. 2023, Eq. 28 without its stray outer factor; Guo et al. 2024, Eq. 23): the mean
+over all beams and gates of v_los,i / n_i1, each taken from the most recent full scan (moving
+window, zero-order hold per beam) and aligned by its leading time x_i/U (Guo et al. 2023,
+Sect. 5.1.1: the measurement of gate i reaches the rotor x_i/U later). In the convected frame the
+arrival time of a measurement at physical time T is the stored time T + x_i/U.
+u_RR (Guo et al. 2023, Eq. 23): u averaged over the rotor disc of the plane x = 0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from turbgen import fft
+from turbgen.errors import ParameterError
+from turbgen.validation.estimators import WelchSetup, segment_starts
+from turbgen.validation.point_sets import rotor_mask
+
+
+def lidar_estimate(samples, U_m_s: float):
+    """(arrival time axis [s], u_LL [m/s]) on the scan-step grid (step = scan period / beams).
+
+    Parameters
+    ----------
+    samples : LidarSamples
+        Sampled line-of-sight speeds; every n_1 must be non-zero.
+    U_m_s : float
+        Mean wind speed U [m/s] (the leading time of gate i is x_i / U).
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, numpy.ndarray)
+        Arrival times [s] (stored time of the rotor plane), from the first time every beam-gate has a sample
+        to the last time all still have one, and u_LL [m/s] at those times.
+    """
+    v, T = samples.v_los.astype(float), samples.time_s
+    n_scan, nb, ng = v.shape
+    step = float(np.median(np.diff(np.sort(T.ravel()))))
+    lead = samples.gates_x_m / U_m_s  # (ng,)
+    arrivals = T[:, :, None] + lead[None, None, :]  # (n_scan, nb, ng)
+    a0 = arrivals[0].max()  # every beam-gate has a first sample
+    a1 = arrivals[-1].min()
+    grid = a0 + step * np.arange(int(np.floor((a1 - a0) / step + 1e-9)) + 1)
+    est = np.zeros(grid.size)
+    for b in range(nb):
+        for g in range(ng):
+            k = np.searchsorted(arrivals[:, b, g], grid + 1e-9, side="right") - 1
+            est += v[k, b, g] / samples.n1[b, g]
+    return grid, est / (nb * ng)
+
+
+def rotor_average(fs, radius_m: float, t_s: np.ndarray, chunk: int | None = None) -> tuple[np.ndarray, float]:
+    """u averaged over the rotor disc of the plane x = 0 at t_s [s], and the rotor-averaged TI.
+
+    u_RR is interpolated linearly in time; TI_R = mean over disc points of sigma_u / U (Schlipf et
+    al. 2020, Eq. 3) over the whole record. Reads the rotor plane one time chunk at a time.
+
+    Parameters
+    ----------
+    fs : FieldStore
+        The open store; must have a plane at x = 0.
+    radius_m : float
+        Rotor radius R [m] of the disc.
+    t_s : numpy.ndarray
+        Stored times [s] at which u_RR is returned.
+    chunk : int, optional
+        Time steps read at once; default the store's time chunk.
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, float)
+        u_RR at ``t_s`` [m/s] and TI_R [-].
+
+    Raises
+    ------
+    ParameterError
+        If the store has no rotor plane x = 0.
+    """
+    g = fs.grid
+    xs = g.x()
+    if not np.any(np.abs(xs) < 1e-9):
+        raise ParameterError(f"the store has no rotor plane x = 0 (planes: {', '.join(f'{v:g}' for v in xs)} m)")
+    ix = int(np.argmin(np.abs(xs)))
+    mask = rotor_mask(g, radius_m)
+    chunk = chunk or fs.chunk_t
+    series = np.empty(g.nt)
+    s1 = s2 = 0.0
+    for t0 in range(0, g.nt, chunk):  # checked reads: a corrupted chunk, NaN or an implausible value is refused
+        block = np.asarray(fs.read_span("u", ix, t0, min(t0 + chunk, g.nt)), dtype=np.float64)[:, mask]
+        series[t0 : t0 + block.shape[0]] = block.mean(axis=1)
+        s1 = s1 + block.sum(axis=0)
+        s2 = s2 + (block**2).sum(axis=0)
+    var = np.maximum(s2 / g.nt - (s1 / g.nt) ** 2, 0.0)
+    return np.interp(t_s, g.t(), series), float(np.mean(np.sqrt(var)) / fs.U_m_s)
+
+
+def lidar_ti(samples, U_m_s: float) -> float:
+    """Lidar TI without spectral correction: mean over beams and gates of sigma(v_los / n1) / U.
+
+    Schlipf et al. 2020, Eq. 3 applied to the lidar; the c_TI correction of their Eq. 8 is not applied.
+
+    Parameters
+    ----------
+    samples : LidarSamples
+        Sampled line-of-sight speeds.
+    U_m_s : float
+        Mean wind speed U [m/s].
+
+    Returns
+    -------
+    float
+        Uncorrected lidar turbulence intensity [-].
+    """
+    v = samples.v_los.astype(float) / samples.n1[None]
+    return float(np.mean(v.std(axis=0)) / U_m_s)
+
+
+def welch_rl(u_ll: np.ndarray, u_rr: np.ndarray, setup: WelchSetup) -> dict:
+    """Welch S_LL, S_RR, S_RL, gamma^2_RL, |G_RL| = |S_RL| / S_LL and the effective segment count.
+
+    Segment means are removed, so a mean wind does not enter.
+
+    Parameters
+    ----------
+    u_ll : numpy.ndarray
+        Lidar estimate u_LL [m/s] on a regular time grid.
+    u_rr : numpy.ndarray
+        Rotor-effective wind speed u_RR [m/s] on the same grid.
+    setup : WelchSetup
+        Segment length [samples] and time step [s] (Hann window, 50 % overlap).
+
+    Returns
+    -------
+    dict
+        ``f_hz`` [Hz]; one-sided PSDs ``S_LL``, ``S_RR`` [m^2 s^-2 Hz^-1] and cross-spectrum ``S_RL``
+        (complex); ``coh2_RL`` [-]; ``G_RL`` [-]; ``n_segments``; ``n_eff`` (effective independent segments);
+        ``setup`` (the WelchSetup).
+
+    Raises
+    ------
+    ParameterError
+        If the signal gives fewer than two segments.
+    """
+    starts = segment_starts(u_ll.size, setup)
+    if len(starts) < 2:
+        raise ParameterError(f"lidar signal of {u_ll.size} samples is too short for segments of {setup.nperseg}")
+    w = setup.window
+    sll = srr = srl = 0.0
+    for s in starts:
+        a = u_ll[s : s + setup.nperseg]
+        b = u_rr[s : s + setup.nperseg]
+        A = fft.oneshot().rfft((a - a.mean()) * w)
+        B = fft.oneshot().rfft((b - b.mean()) * w)
+        sll = sll + np.abs(A) ** 2
+        srr = srr + np.abs(B) ** 2
+        srl = srl + B * np.conj(A)
+    k = len(starts)
+    scale = setup.scale / k
+    sll, srr, srl = sll * scale, srr * scale, srl * scale
+    with np.errstate(divide="ignore", invalid="ignore"):
+        coh2 = np.abs(srl) ** 2 / (sll * srr)
+        gain = np.abs(srl) / sll
+    return {
+        "f_hz": setup.freqs,
+        "S_LL": sll,
+        "S_RR": srr,
+        "S_RL": srl,
+        "coh2_RL": coh2,
+        "G_RL": gain,
+        "n_segments": k,
+        "n_eff": setup.effective_segments(k, k - 1),
+        "setup": setup,
+    }
