@@ -1,0 +1,105 @@
+"""`turbgen fit mann` beside wetb's `fit_mann_model_spectra` on turbgen fields with known (ae, L, Gamma).
+
+Per realisation (frozen Mann field, one plane, 8192 x 16 x 16 points, dx = U dt = 6 m, dy = dz = 6 m):
+  box     turbgen: the field against the Mann tensor summed over its generator's box (grid-aware);
+          wetb: `fit_mann_model_spectra(*spectra(1 / dx, u, v, w))` over the 256 columns (the continuous model);
+  sonic1  one hub series of u, v, w: turbgen against the continuous model, wetb as above; reported is whether
+          wetb's values lie inside turbgen's 95 % intervals.
+wetb (the DTU Wind Energy Toolbox, PyPI `wetb`) is a benchmark peer only: `pip install --no-deps wetb` suffices
+for its mann_parameters module (numpy, scipy).
+
+    python benchmarks/bench_fit_wetb.py --n 10 --out /tmp/fit_wetb.jsonl
+    python benchmarks/bench_fit_wetb.py --summary /tmp/fit_wetb.jsonl
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+
+import turbgen
+from bench_fit import sensors
+
+CASES = [(0.08, 30.0, 3.2), (0.05, 60.0, 2.0)]  # (ae, L, Gamma) of the fields
+U_M_S, DT_S, DY_M = 12.0, 0.5, 6.0
+NAMES = ("ae", "length_scale_m", "gamma")
+
+
+def wetb_fit(dx_m: float, u, v, w) -> tuple[list[float], float]:
+    from wetb.wind.turbulence.mann_parameters import fit_mann_model_spectra
+    from wetb.wind.turbulence.spectra import spectra
+
+    t0 = time.process_time()
+    ae, L, G = fit_mann_model_spectra(*spectra(1.0 / dx_m, u, v, w))
+    return [float(ae), float(L), float(G)], time.process_time() - t0
+
+
+def turbgen_fit(data, **kw) -> tuple[dict, float]:
+    t0 = time.process_time()
+    fit = turbgen.fit_mann(data, **kw)
+    return {n: {"value": getattr(fit, n).value, "ci95": list(getattr(fit, n).ci95)} for n in NAMES}, \
+        time.process_time() - t0
+
+
+def realisation(case, seed: int) -> list[dict]:
+    ae, L, G = case
+    ds = turbgen.mann(L=L, gamma=G, ae=ae, seed=seed, nt=8192, dt=DT_S, ny=16, nz=16, dy=DY_M, dz=DY_M, planes=[0],
+                      evo=None, U=U_M_S)
+    cols = {c: ds[c].values[:, 0].reshape(ds.sizes["t"], -1).astype(float) for c in "uvw"}
+    sonic = sensors(ds, 1)
+    rows = []
+    for kind, tg_data, kw, arrays in (("box", ds, {}, cols),
+                                      ("sonic1", sonic, {"U": U_M_S}, sonic.sensors[0].series)):
+        tg, tg_cpu = turbgen_fit(tg_data, **kw)
+        wb, wb_cpu = wetb_fit(U_M_S * DT_S, arrays["u"], arrays["v"], arrays["w"])
+        rows.append({"case": case, "seed": seed, "kind": kind, "turbgen": tg, "turbgen_cpu_s": tg_cpu,
+                     "wetb": dict(zip(NAMES, wb)), "wetb_cpu_s": wb_cpu})
+    return rows
+
+
+def summary(path: str) -> None:
+    rows = [json.loads(line) for line in open(path)]
+    print("| (ae, L, Γ) | data | n | turbgen error ae / L / Γ (mean ± sd) | wetb error ae / L / Γ (mean ± sd) "
+          "| wetb inside turbgen's 95 % (ae / L / Γ) | CPU s per fit turbgen / wetb |")
+    print("|---|---|---|---|---|---|---|")
+    for case in CASES:
+        for kind in ("box", "sonic1"):
+            sel = [r for r in rows if tuple(r["case"]) == case and r["kind"] == kind]
+            if not sel:
+                continue
+
+            def err(tool):
+                e = np.array([[r[tool][n]["value"] if tool == "turbgen" else r[tool][n] for n in NAMES]
+                              for r in sel]) / np.array(case) - 1
+                return " / ".join(f"{100 * m:+.1f} ± {100 * s:.1f} %" for m, s in zip(e.mean(0), e.std(0, ddof=1)))
+
+            inside = [np.mean([r["turbgen"][n]["ci95"][0] <= r["wetb"][n] <= r["turbgen"][n]["ci95"][1]
+                               for r in sel]) for n in NAMES]
+            cpu = f"{np.median([r['turbgen_cpu_s'] for r in sel]):.1f} / {np.median([r['wetb_cpu_s'] for r in sel]):.1f}"
+            print(f"| {case} | {kind} | {len(sel)} | {err('turbgen')} | {err('wetb')} | "
+                  + " / ".join(f"{100 * x:.0f} %" for x in inside) + f" | {cpu} |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--n", type=int, default=10, help="realisations per case")
+    ap.add_argument("--seed0", type=int, default=2000)
+    ap.add_argument("--out", default="fit_wetb.jsonl")
+    ap.add_argument("--summary", help="print the table of a results file and stop")
+    a = ap.parse_args()
+    if a.summary:
+        summary(a.summary)
+        return
+    with open(a.out, "a") as fh:
+        for seed in range(a.seed0, a.seed0 + a.n):
+            for case in CASES:
+                for row in realisation(case, seed):
+                    fh.write(json.dumps(row) + "\n")
+                    fh.flush()
+
+
+if __name__ == "__main__":
+    main()
