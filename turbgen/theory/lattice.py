@@ -1,14 +1,15 @@
 """Geometry of the periodic record and box that both generators synthesise and the validator sums over.
 
-A record of nt samples spaced dt [s] is a sum of spectral *lines* at f_j = j / (nt dt), j = 0 .. nt/2
-(a real field: the lines -f_j are the complex conjugates). The Mann box is periodic in y and z as well:
-nyp x nzp points spaced dy, dz [m], whose wavenumbers form a lattice in FFT order (Mann 1998, Sec. 2).
-These facts are shared by turbgen.synthesis (which synthesises on them) and turbgen.validate (which
-predicts the synthesised field's statistics on them); the quadrature of the cells near the k1 axis is
-not here: synthesis and validate compute it with deliberately separate rules.
+A record of nt samples spaced dt [s] is a sum of spectral *lines* at f_j = j / (nt dt), j = 0 .. nt/2;
+the Mann box is periodic in y and z as well, its wavenumbers a lattice in FFT order (Mann 1998, Sec. 2).
+:func:`cell_rule` integrates a lattice cell; each user (synthesis, validation, lidar preview) chooses
+its own nodes and grading, so the three integrate the cells near the k1 axis with independent rules and
+an error in one shows as a disagreement.
 """
 
 from __future__ import annotations
+
+from functools import lru_cache
 
 import numpy as np
 
@@ -108,3 +109,48 @@ def k3_wavenumbers(nzp: int, dz_m: float) -> np.ndarray:
         (nzp,) k3 [rad/m] in numpy ``fftfreq`` order (the Nyquist column negative for even nzp).
     """
     return fft.fftfreq(nzp, d=dz_m) * 2 * np.pi
+
+
+@lru_cache(maxsize=8)
+def _legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    return np.polynomial.legendre.leggauss(n)
+
+
+def gauss_panel(a: float, b: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes and weights of the n-point Gauss-Legendre rule on [a, b]."""
+    x, w = _legendre(n)
+    return 0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w
+
+
+def cell_rule(center: float, width: float, n: int, floor: float, ratio: float, max_panels: int):
+    """Gauss-Legendre nodes and weights over the cell [center - width/2, center + width/2].
+
+    A cell centred on 0 (where Phi peaks on the k1 axis) is split, on each side, into panels shrinking
+    by ``ratio`` towards 0 while the innermost is wider than ``floor`` (at most ``max_panels`` panels).
+
+    Parameters
+    ----------
+    center, width : float
+        The cell [rad/m].
+    n : int
+        Nodes per panel.
+    floor, ratio : float
+        Grading of a cell on 0: the width [rad/m] down to which panels shrink, and their ratio.
+    max_panels : int
+        Most panels per side.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Nodes [rad/m] and weights [rad/m].
+    """
+    if center != 0.0:
+        return gauss_panel(center - width / 2, center + width / 2, n)
+    edges = [width / 2]
+    while edges[-1] > floor and len(edges) < max_panels:
+        edges.append(edges[-1] / ratio)
+    edges = np.array([0.0, *edges[::-1]])
+    parts = [gauss_panel(a, b, n) for a, b in zip(edges[:-1], edges[1:])]
+    x = np.concatenate([p[0] for p in parts])
+    w = np.concatenate([p[1] for p in parts])
+    return np.concatenate([-x[::-1], x]), np.concatenate([w[::-1], w])
