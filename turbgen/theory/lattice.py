@@ -17,35 +17,14 @@ from turbgen import fft
 
 
 def line_frequencies(nt: int, dt_s: float) -> np.ndarray:
-    """Frequencies of the record's spectral lines.
-
-    Parameters
-    ----------
-    nt : int
-        Samples of the periodic record.
-    dt_s : float
-        Sampling interval [s].
-
-    Returns
-    -------
-    numpy.ndarray
-        (nt // 2 + 1,) f_j = j / (nt dt) [Hz], j = 0 .. nt // 2 (the rfft bins).
-    """
+    """(nt // 2 + 1,) frequencies f_j = j / (nt dt) [Hz] of the record's lines (the rfft bins), ``dt_s`` [s]."""
     return np.arange(nt // 2 + 1) / (nt * dt_s)
 
 
 def line_bands(nt: int, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """Edges of the band each line stands for (whose variance a generator gives it), lines j = 0 .. nt // 2.
+    """(lo, hi) [Hz]: the band each line j stands for (whose variance a generator gives it).
 
-    Parameters
-    ----------
-    nt, dt_s : int, float
-        As :func:`line_frequencies`.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        (lo, hi) [Hz]: [(j - 1/2) df, (j + 1/2) df] clipped to [0, 1/(2 dt)], df = 1 / (nt dt).
+    [(j - 1/2) df, (j + 1/2) df] clipped to [0, 1/(2 dt)], df = 1 / (nt dt); arguments as :func:`line_frequencies`.
     """
     df = 1.0 / (nt * dt_s)
     j = np.arange(nt // 2 + 1)
@@ -53,18 +32,9 @@ def line_bands(nt: int, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def pair_weights(nt: int) -> np.ndarray:
-    """Weight of each line j = 0 .. nt // 2 in a sum over the full (two-sided) spectrum.
+    """(nt // 2 + 1,) weights [-] of the lines in a sum over the two-sided spectrum.
 
-    Parameters
-    ----------
-    nt : int
-        Samples of the periodic record.
-
-    Returns
-    -------
-    numpy.ndarray
-        (nt // 2 + 1,) weights [-]: 2 (the lines +-f_j together), 1 for j = 0 and for the single
-        Nyquist line of an even nt.
+    2 (the lines +-f_j together), 1 for j = 0 and for the single Nyquist line of an even nt.
     """
     w = np.full(nt // 2 + 1, 2.0)
     w[0] = 1.0
@@ -74,40 +44,16 @@ def pair_weights(nt: int) -> np.ndarray:
 
 
 def k2_wavenumbers(nyp: int, dy_m: float) -> np.ndarray:
-    """Lateral wavenumbers of a periodic box of nyp points spaced dy_m [m].
+    """(nyp,) lateral wavenumbers k2 [rad/m] of a periodic box of nyp points spaced ``dy_m`` [m], in FFT order.
 
-    Parameters
-    ----------
-    nyp : int
-        Points of the periodic box in y.
-    dy_m : float
-        Lateral spacing [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        (nyp,) k2 [rad/m] in FFT order: j dk2 for j <= nyp // 2 (the Nyquist row stored positive, as
-        synthesised), else (j - nyp) dk2, with dk2 = 2 pi / (nyp dy).
+    j dk2 for j <= nyp // 2 (the Nyquist row positive, as synthesised), else (j - nyp) dk2; dk2 = 2 pi / (nyp dy).
     """
     j = np.arange(nyp)
     return np.where(j <= nyp // 2, j, j - nyp) * (2 * np.pi / (nyp * dy_m))
 
 
 def k3_wavenumbers(nzp: int, dz_m: float) -> np.ndarray:
-    """Vertical wavenumbers of a periodic box of nzp points spaced dz_m [m].
-
-    Parameters
-    ----------
-    nzp : int
-        Points of the periodic box in z.
-    dz_m : float
-        Vertical spacing [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        (nzp,) k3 [rad/m] in numpy ``fftfreq`` order (the Nyquist column negative for even nzp).
-    """
+    """(nzp,) vertical wavenumbers k3 [rad/m] of nzp points spaced ``dz_m`` [m], ``fftfreq`` order."""
     return fft.fftfreq(nzp, d=dz_m) * 2 * np.pi
 
 

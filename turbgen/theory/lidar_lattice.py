@@ -35,11 +35,11 @@ class BoxLattice:
     Parameters
     ----------
     nyp, nzp : int
-        Points of the periodic box in y and z (the padded synthesis box, not the stored grid).
+        Points of the periodic (padded) box in y and z, not the stored grid's.
     dy_m, dz_m : float
         Lateral and vertical spacing [m].
     record_s : float
-        Length of the periodic record nt dt [s] (the k1 cell of the axis cells is 2 pi / (U record_s)).
+        Length nt dt of the periodic record [s] (the axis cells' k1 width is 2 pi / (U record_s)).
     """
 
     nyp: int
@@ -56,13 +56,7 @@ class BoxLattice:
         check_positive("record length (s)", self.record_s)
 
     def spacings(self) -> tuple[float, float]:
-        """The lattice spacings.
-
-        Returns
-        -------
-        tuple of float
-            (dk2, dk3) = (2 pi / (nyp dy), 2 pi / (nzp dz)) [rad/m].
-        """
+        """(dk2, dk3) = (2 pi / (nyp dy), 2 pi / (nzp dz)) [rad/m]."""
         return 2 * np.pi / (self.nyp * self.dy_m), 2 * np.pi / (self.nzp * self.dz_m)
 
 
@@ -86,41 +80,16 @@ def _axis_cells(k1: float, dk1: float, dk2: float, dk3: float, r2: int, r3: int,
 
 
 def lattice_wavenumbers(box: BoxLattice) -> tuple[np.ndarray, np.ndarray]:
-    """The box's (k2, k3) lattice, flattened.
-
-    Parameters
-    ----------
-    box : BoxLattice
-        The periodic box.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        k2, k3 [rad/m], each (nyp nzp,), row-major over the FFT orders of turbgen.theory.lattice.
-    """
+    """The box's lattice k2, k3 [rad/m], each (nyp nzp,), row-major over the FFT orders of turbgen.theory.lattice."""
     k2, k3 = np.meshgrid(k2_wavenumbers(box.nyp, box.dy_m), k3_wavenumbers(box.nzp, box.dz_m), indexing="ij")
     return k2.ravel(), k3.ravel()
 
 
 def lattice_tensor(box: BoxLattice, k1: float, params: MannParams, U_m_s: float):
-    """Phi times dk2 dk3 on the box's (k2, k3) lattice at k1, the axis cells integrated (module docstring).
+    """Phi dk2 dk3 [m^3 s^-2], (3, 3, nyp nzp), on the box's lattice at k1 [rad/m], the axis cells integrated.
 
-    Parameters
-    ----------
-    box : BoxLattice
-        The periodic box.
-    k1 : float
-        Streamwise wavenumber [rad/m].
-    params : MannParams
-        The Mann model.
-    U_m_s : float
-        Mean wind speed U [m/s] (the record's line spacing dk1 = 2 pi / (U T)).
-
-    Returns
-    -------
-    numpy.ndarray
-        Phi dk2 dk3 [m^3 s^-2] (3, 3, nyp nzp) at the nodes of :func:`lattice_wavenumbers`, a density in
-        k1 like Phi itself.
+    At the nodes of :func:`lattice_wavenumbers`, a density in k1 like Phi; ``U_m_s`` [m/s] sets the record's
+    line spacing dk1 = 2 pi / (U T) (module docstring).
     """
     dk2, dk3 = box.spacings()
     k2, k3 = (k.reshape(box.nyp, box.nzp) for k in lattice_wavenumbers(box))
