@@ -1,25 +1,16 @@
-"""The FFT seam: every transform turbgen makes goes through the backend this module selects.
+"""The FFT seam: every transform turbgen makes goes through the backend this module selects (docs/fft.md).
 
-A backend (:class:`FFTBackend`) gives three things:
+A backend (:class:`FFTBackend`) gives ``empty(shape, dtype, align)``, aligned buffers (so the plans'
+rounding does not depend on where an allocation fell); ``plan(kind, inp, out, axis)``, an unnormalised
+single-threaded transform along one axis (FFTW's conventions), made once and executed many times, one
+plan set per worker thread, so the field is the same for any thread count; and ``oneshot``, scipy.fft's
+functions for transforms made once. Built in: ``pyfftw`` (the default; one-shot transforms by
+scipy.fft) and ``scipy``; others are added with :func:`register`.
 
-* ``empty(shape, dtype, align)``: the buffers planned transforms run on (64-byte or page aligned, so the plans'
-  rounding does not depend on where an allocation happened to fall);
-* ``plan(kind, inp, out, axis)``: an unnormalised single-threaded transform along one axis (FFTW's conventions: the
-  inverse carries no 1/n), made once and executed many times (:class:`Plan`); the synthesis runs such plans in its
-  own worker threads, one plan set per thread, so the field is the same for any thread count;
-* ``oneshot``: a namespace with scipy.fft's functions and signatures (``fft``, ``rfft``, ``irfft``, ``fft2``, ...)
-  for the transforms made once, of analysis data or small systems; their ``workers`` are the caller's threads.
-
-Built in: ``pyfftw`` (the default: FFTW plans; one-shot transforms by scipy.fft, whose numbers the analyses and the
-Kaimal synthesis were pinned with) and ``scipy`` (scipy.fft throughout; needs no pyfftw). A further backend (e.g.
-cupy on a GPU) is a class with these three members, added with :func:`register`; see docs/fft.md.
-
-Which backend runs: the one named by :func:`use` for the calls running it (``--fft-backend``, ``fft_backend=``), else
-the environment variable ``TURBGEN_FFT_BACKEND``, else ``pyfftw``. The selection holds for the whole process while
-such a call runs (a run's work hops between threads: its writer's, its worker pools'), so two calls asking for
-different backends at once are refused. Objects that plan transforms resolve it once, when made, and keep it.
-The backend changes a field at float32 round-off only; with the same backend, seed and parameters the bits are
-the same for any thread count.
+The backend is :func:`use`'s (``--fft-backend``, ``fft_backend=``), else ``TURBGEN_FFT_BACKEND``'s,
+else ``pyfftw``; a selection holds for the whole process while its call runs (a run's work hops between
+threads), so two calls asking for different backends at once are refused. It changes a field at
+float32 round-off only.
 """
 
 from __future__ import annotations
@@ -57,8 +48,7 @@ _selected = _Selection()
 
 
 class Plan(Protocol):
-    """A planned transform: ``execute()`` on the arrays it was planned with, or on others of the same shape,
-    strides, dtype and alignment (``execute(inp, out)``)."""
+    """A planned transform: ``execute()`` on its arrays, or ``execute(inp, out)`` on others of the same layout."""
 
     def execute(self, inp: np.ndarray | None = None, out: np.ndarray | None = None) -> None: ...
 
@@ -136,8 +126,7 @@ class _FFTWPlan:
 
 
 class PyfftwBackend:
-    """FFTW through pyfftw for planned transforms (FFTW_ESTIMATE: the same plan, hence the same rounding, in every
-    process); scipy.fft for one-shot transforms."""
+    """pyfftw for planned transforms (FFTW_ESTIMATE: the same plan in every process); scipy.fft for the others."""
 
     name = "pyfftw"
     _DIRECTIONS = {"c2c_forward": "FFTW_FORWARD", "c2c_backward": "FFTW_BACKWARD", "r2c": "FFTW_FORWARD",

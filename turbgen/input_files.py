@@ -1,12 +1,10 @@
-"""The one place where a file a user names is opened for reading (``--config``, ``--constrain``, ``--mean-history``,
-``--profile table:FILE``, ``--presets-file``, ``--lidar FILE``, line-of-sight records, ``serve --token-file``, the
-service's uploads).
+"""The one place where a file a user names is opened for reading (``--config``, ``--constrain``, tables,
+histories, lidar files, line-of-sight records, ``serve --token-file``, the service's uploads).
 
-Rule: a regular file (a symbolic link to one is fine) of at most a size cap per kind of file. A FIFO, a device, a
-socket or a directory is refused before anything is read (it is opened non-blocking, so a FIFO without a writer
-never blocks the open, and checked on the open descriptor), and so is a file larger than its cap (at most cap + 1
-bytes are ever read, so neither /dev/zero nor a file growing meanwhile can exhaust memory). The refusal is one
-ParameterError line naming the path and the rule.
+Rule: a regular file (or a link to one) of at most a size cap per kind. A FIFO, a device, a socket or a
+directory is refused before anything is read (opened non-blocking, checked on the descriptor), and so
+is a larger file (at most cap + 1 bytes are read, so neither /dev/zero nor a growing file can exhaust
+memory): one ParameterError line naming the path and the rule.
 
     text = read_input(path, CONFIG)                # bytes
     check_input(path, LINE_OF_SIGHT)                  # the checks only, for a reader of its own (numpy, zarr)
@@ -72,25 +70,7 @@ def _os_error(path, kind: InputKind, exc: OSError) -> ParameterError:
 
 
 def check_input(path, kind: InputKind) -> Path:
-    """Refuse ``path`` unless it is a regular file of at most ``kind.max_bytes`` (nothing is opened or read).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
-    kind : InputKind
-        What it is and its size cap.
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-
-    Raises
-    ------
-    ParameterError
-        One line naming ``path`` and the rule.
-    """
+    """``path``, or ParameterError unless it is a regular file of at most ``kind.max_bytes`` (none read)."""
     try:
         st = os.stat(path)
     except OSError as exc:
@@ -100,26 +80,7 @@ def check_input(path, kind: InputKind) -> Path:
 
 
 def read_input(path, kind: InputKind) -> bytes:
-    """The bytes of the regular file ``path``, refused (before reading) when it is anything else or larger than
-    ``kind.max_bytes``.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
-    kind : InputKind
-        What it is and its size cap.
-
-    Returns
-    -------
-    bytes
-        Its content.
-
-    Raises
-    ------
-    ParameterError
-        One line naming ``path`` and the rule (missing, unreadable, not a regular file, too large).
-    """
+    """The bytes of the regular file ``path``; ParameterError, before reading, for others or > ``kind.max_bytes``."""
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
     try:
         fd = os.open(path, flags)

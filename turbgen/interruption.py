@@ -1,10 +1,7 @@
 """Interruption handling of the applications (command line, sweep): signals become exceptions, writers are told.
 
-Application layer: the library (theory ... lidar) installs no signal handler and no ``sys.unraisablehook``; its
-writers stay safe anyway (temporary names, atomic publish, :mod:`turbgen.cancellation`). Within
-:func:`exit_on_signals`, SIGTERM and SIGHUP raise ``SystemExit(128 + signum)`` in the main thread so that
-``with``-block clean-up runs as it does for Ctrl-C (``KeyboardInterrupt``), and each signal is recorded
-(:func:`received_signal`) and passed to the writers as a stop request.
+Application layer only: the library installs no signal handler and no ``sys.unraisablehook``; its writers
+are safe anyway (temporary names, atomic publish, :mod:`turbgen.cancellation`).
 """
 
 from __future__ import annotations
@@ -20,27 +17,16 @@ _received: list[int] = []
 
 
 def received_signal() -> int | None:
-    """The signal number that :func:`exit_on_signals` turned into an exception, if one arrived.
+    """The last signal number :func:`exit_on_signals` turned into an exception, or None.
 
-    Library code running when the signal lands may replace the ``SystemExit`` (``KeyboardInterrupt`` for
-    SIGINT) with an exception of its own (h5py turns an exception raised inside an attribute write into
-    ``TypeError``); the CLI asks this to report the interruption, not the replacement.
-
-    Returns
-    -------
-    int or None
-        The last signal number received, or None.
+    Library code may replace that exception with its own (h5py turns one raised inside an attribute write
+    into ``TypeError``); the CLI asks this to report the interruption, not the replacement.
     """
     return _received[-1] if _received else None
 
 
 def forget_signals() -> None:
-    """Forget the signals recorded so far and their stop requests (the CLI calls it when a command starts).
-
-    Returns
-    -------
-    None
-    """
+    """Forget the signals recorded so far and their stop requests (the CLI calls it when a command starts)."""
     _received.clear()
     clear_stop_requests()
 
@@ -57,10 +43,10 @@ def _exit_on_signal(signum, frame):
 
 
 def _quiet_about_signals(unraisable) -> None:
-    """sys.unraisablehook: say nothing about our signal's exception where Python could not raise it (a
-    weakref callback, a ``__del__``: "Exception ignored in ..." and a traceback); the writers' publish check
-    (:func:`turbgen.cancellation.raise_if_stop_requested`) acts on it instead. Anything else goes to the
-    default hook."""
+    """sys.unraisablehook: silent about our signal's exception where Python could not raise it (a weakref
+    callback, a ``__del__``), which the writers' publish check acts on instead; anything else goes to the
+    default hook.
+    """
     if stop_requested() is not None and issubclass(unraisable.exc_type, (SystemExit, KeyboardInterrupt)):
         return
     sys.__unraisablehook__(unraisable)
@@ -68,24 +54,12 @@ def _quiet_about_signals(unraisable) -> None:
 
 @contextlib.contextmanager
 def exit_on_signals():
-    """Within the block, SIGTERM and SIGHUP raise SystemExit(128 + signum) in the main thread, and SIGINT raises
-    KeyboardInterrupt as usual; each is recorded for :func:`received_signal` and requested as a stop of the writers.
+    """Within the block SIGTERM and SIGHUP raise SystemExit(128 + signum) in the main thread, SIGINT KeyboardInterrupt.
 
-    Only default handlers are replaced (a caller's own handler, or an ignored signal as under ``nohup``, is kept);
-    outside the main thread this does nothing (Python delivers signals to the main thread only). The previous
-    handlers and ``sys.unraisablehook`` are restored, and the stop requests cleared, on leaving the block (the
-    writers within it have acted on them; :func:`received_signal` still tells what arrived).
-
-    Yields
-    ------
-    None
-
-    Raises
-    ------
-    SystemExit
-        Code 128 + signum, when SIGTERM or SIGHUP arrives within the block.
-    KeyboardInterrupt
-        When SIGINT arrives within the block.
+    So ``with``-block clean-up runs as for Ctrl-C; each signal is recorded for :func:`received_signal` and
+    requested as a stop of the writers. Only default handlers are replaced (a caller's own, or an ignored
+    signal under ``nohup``, is kept); outside the main thread nothing is done. The handlers and
+    ``sys.unraisablehook`` are restored and the stop requests cleared on leaving the block.
     """
     old = {}
     hook = sys.unraisablehook

@@ -1,16 +1,10 @@
 """The operating-system calls that only some systems have (Linux), each with its portable fallback, in one place.
 
-* :func:`rename_noreplace` / :func:`rename_exchange`: renameat2(2) (atomic publication without clobbering, or
-  swapping an old output with a new one); False where it is missing, and the caller renames in two steps.
-* :func:`reserve`: fallocate(2) / posix_fallocate(3), so that a full disk is met when the space is asked for, not in
-  the middle of a write a library cannot survive; a no-op where missing (the writes themselves then meet ENOSPC).
-* :func:`resident_bytes`, :func:`meminfo_available_bytes`, :func:`cgroup_headroom_bytes`, :func:`is_zombie`,
-  :func:`umask`: reads of /proc and /sys/fs/cgroup; None (or the portable answer) where they do not exist.
-* :func:`disk_free_bytes`: statvfs(2) (the space an unprivileged writer may use), else shutil.disk_usage.
-* :func:`direct_io_flag`: O_DIRECT (reads and writes bypassing the page cache), else 0 (buffered I/O).
-
-``TURBGEN_PORTABLE=1`` in the environment (read at every call) makes every function take its fallback, as on a
-system without these calls, so the portable paths are exercised on Linux too (tests/store/test_portable.py).
+renameat2(2) (atomic publication without clobbering, or swapping outputs), fallocate(2) (a full disk met
+when the space is asked for, not in the middle of a library's write), reads of /proc and
+/sys/fs/cgroup, statvfs(2) and O_DIRECT; where missing, each function says so (False, None, 0) or gives
+the portable answer. ``TURBGEN_PORTABLE=1`` (read at every call) forces the fallbacks, so the portable
+paths are exercised on Linux too (tests/store/test_portable.py).
 """
 
 from __future__ import annotations
@@ -66,53 +60,21 @@ def _renameat2(src: Path, dst: Path, flags: int) -> bool:
 
 
 def rename_noreplace(src: Path, dst: Path) -> bool:
-    """Rename ``src`` to ``dst`` in one step unless ``dst`` exists (FileExistsError then).
-
-    Returns
-    -------
-    bool
-        False, with nothing done, where renameat2(2) with RENAME_NOREPLACE is not available.
-    """
+    """Rename ``src`` to ``dst`` in one step unless ``dst`` exists (FileExistsError); False without renameat2."""
     return _renameat2(src, dst, _RENAME_NOREPLACE)
 
 
 def rename_exchange(src: Path, dst: Path) -> bool:
-    """Swap ``src`` and ``dst`` (both existing) in one step.
-
-    Returns
-    -------
-    bool
-        False, with nothing done, where renameat2(2) with RENAME_EXCHANGE is not available.
-    """
+    """Swap the existing ``src`` and ``dst`` in one step; False, nothing done, without renameat2 RENAME_EXCHANGE."""
     return _renameat2(src, dst, _RENAME_EXCHANGE)
 
 
 def reserve(fd: int, nbytes: int, *, keep_size: bool, name: str = "") -> bool:
-    """Allocate ``nbytes`` of disk from offset 0 of the open file ``fd``, so that later writes (or a library's
-    flush) cannot meet a full disk.
+    """Allocate ``nbytes`` of disk from offset 0 of the open file ``fd``, so later writes cannot meet a full disk.
 
-    Parameters
-    ----------
-    fd : int
-        A file open for writing.
-    nbytes : int
-        Bytes to allocate.
-    keep_size : bool
-        True: the file's size is left as it is (fallocate(2) FALLOC_FL_KEEP_SIZE, Linux); False: the file grows to
-        at least ``nbytes`` (posix_fallocate(3)).
-    name : str
-        The file's name, for the error.
-
-    Returns
-    -------
-    bool
-        True if the space is reserved; False where the system or the file system cannot reserve it (the writes
-        then meet ENOSPC themselves).
-
-    Raises
-    ------
-    OSError
-        ENOSPC (or EDQUOT) when the space is not there.
+    With ``keep_size`` the file's size stays (fallocate(2) FALLOC_FL_KEEP_SIZE), else it grows to at least
+    ``nbytes`` (posix_fallocate(3)). Returns False where the space cannot be reserved (the writes then meet
+    ENOSPC themselves); raises OSError (ENOSPC, EDQUOT, naming ``name``) when the space is not there.
     """
     if nbytes <= 0:
         return True
@@ -195,8 +157,7 @@ def is_zombie(pid: int) -> bool:
 
 
 def umask() -> int:
-    """The process umask, read without changing it (os.umask would briefly set it for every thread); 0o022 where
-    /proc does not tell."""
+    """The process umask read from /proc without changing it (os.umask would set it for every thread); else 0o022."""
     value = _proc_field(PROC_STATUS, "Umask")
     try:
         return int(value, 8) if value is not None else 0o022
@@ -205,8 +166,7 @@ def umask() -> int:
 
 
 def disk_free_bytes(path: Path) -> int | None:
-    """Bytes an unprivileged writer can still put on the existing ``path``'s file system (statvfs f_bavail), else
-    shutil.disk_usage's free bytes; None if neither tells."""
+    """Bytes an unprivileged writer can still put on ``path``'s file system (statvfs f_bavail); None if unknown."""
     try:
         if hasattr(os, "statvfs") and not portable():
             st = os.statvfs(path)
@@ -217,6 +177,5 @@ def disk_free_bytes(path: Path) -> int | None:
 
 
 def direct_io_flag() -> int:
-    """``os.O_DIRECT`` (Linux: reads and writes that bypass the page cache), or 0 where it is missing or the
-    fallbacks are forced (the caller then uses buffered I/O)."""
+    """``os.O_DIRECT`` (I/O bypassing the page cache), or 0 where missing or forced off (buffered I/O)."""
     return 0 if portable() else getattr(os, "O_DIRECT", 0)

@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from turbgen.synthesis.mann_cells import CELL_K1_FACTOR, CELL_RADIUS, _cell_rule, _gauss_rule
+from turbgen.synthesis.mann_cells import CELL_K1_FACTOR, CELL_RADIUS, _cell_rule
+from turbgen.theory.lattice import gauss_panel
 from turbgen.synthesis.box_shape import BoxShape
 from turbgen.synthesis.mann_factors import energy_scale
 from turbgen.theory.eddy_lifetime import evolution_lifetime_table, shear_lifetime_table
@@ -115,7 +116,7 @@ def reference_axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray,
     index, factor = [], []
     for i in range(n_slabs):
         k1c = box.k1()[i]
-        x1, w1 = _gauss_rule(k1c - dk1 / 2, k1c + dk1 / 2, 2)
+        x1, w1 = gauss_panel(k1c - dk1 / 2, k1c + dk1 / 2, 2)
         scale = max(abs(k1c), dk1 / 4)
         rules2 = [_cell_rule(j * dk2, dk2, scale) for j in js]
         rules3 = [_cell_rule(l * dk3, dk3, scale) for l in ls]

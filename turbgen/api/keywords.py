@@ -37,8 +37,7 @@ def _evo_value(value):
 
 
 def _plane_positions(planes, gates) -> list[float] | None:
-    """x [m] from ``planes`` (as given) or ``gates`` (the rotor plane 0 added; a sequence, or 'start:stop:step' as
-    the CLI's --gates), or None."""
+    """x [m] from ``planes`` (as given) or ``gates`` (0 added; a sequence or 'start:stop:step' as --gates), or None."""
     if planes is not None and gates is not None:
         raise ParameterError("give `planes` or `gates`, not both")
     if planes is not None:
@@ -51,8 +50,7 @@ def _plane_positions(planes, gates) -> list[float] | None:
 
 
 def _positions(values, name: str) -> list[float]:
-    """``values`` (a number or a flat sequence of numbers) as floats; ParameterError naming ``name`` otherwise (a
-    string, nested lists, None inside)."""
+    """``values`` (a number or a flat sequence of numbers) as floats; ParameterError naming ``name`` otherwise."""
     items = [values] if isinstance(values, (int, float)) else values
     try:
         if isinstance(items, (str, bytes)) or any(isinstance(x, (str, bytes, bool)) for x in items):
@@ -64,20 +62,10 @@ def _positions(values, name: str) -> list[float]:
 
 
 def run_inputs(model: str, options: Mapping) -> tuple[dict, dict, list[float] | None]:
-    """Split keyword values into (run keys, grid keys, plane positions [m] or None); None values (and a flag's
-    False, an empty ``constrain``) are "not given".
+    """(run-mapping keys given, grid keys given, plane positions [m upstream] or None) of ``model``'s keywords.
 
-    Parameters
-    ----------
-    model : str
-        "mann" or "kaimal".
-    options : Mapping
-        Option name -> value, as passed to ``turbgen.mann`` / ``turbgen.kaimal``.
-
-    Returns
-    -------
-    tuple
-        (run-mapping keys given, grid-table keys given, plane positions [m upstream] or None).
+    ``options`` maps option names to the values passed to ``turbgen.mann`` / ``turbgen.kaimal``; None (and a
+    flag's False, an empty ``constrain``) is "not given".
     """
     aliases = _aliases(model)
     given, grid = {}, {}

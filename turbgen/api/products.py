@@ -1,8 +1,7 @@
 """``turbgen.validate``, ``turbgen.export``, ``turbgen.lidar`` and ``turbgen.info``: what is made from a field.
 
-Each takes a store as a path, a :class:`turbgen.store.FieldStore`, a Dataset of :func:`turbgen.open_store`, or a
-field made in memory (``turbgen.mann`` / ``turbgen.kaimal`` without ``out``, a generator's field: read from its arrays,
-no file written), and calls the library functions the commands call, with the commands' options as keywords.
+Each takes a store path, a FieldStore, a Dataset of :func:`turbgen.open_store` or a field in memory (read from
+its arrays, no file written), and calls what the commands call, with the commands' options as keywords.
 """
 
 from __future__ import annotations
@@ -19,8 +18,7 @@ DECODE_LIMIT_BYTES = 256 * 2**20  # info decodes every chunk of a store up to th
 
 
 def field_store(store) -> FieldStore:
-    """The open FieldStore of ``store``: a path, a FieldStore, a Dataset whose ``encoding["source"]`` is a store, or
-    a field in memory (turbgen.store.memory_field.MemoryField over its arrays)."""
+    """The open FieldStore of a path, a FieldStore, an opened store's Dataset or a field in memory (MemoryField)."""
     if isinstance(store, FieldStore):
         return store
     if store is None:
@@ -44,19 +42,16 @@ def validate(store, *, plots: str | os.PathLike | None = None, overwrite: bool =
     store : str, os.PathLike, FieldStore or xarray.Dataset
         The store, or a field (``turbgen.mann(...)``, in memory or with ``out``).
     plots : str or os.PathLike, optional
-        Write one PNG per comparison (estimate, 95 % band, theory) into this directory (PNGs already there need
-        ``overwrite``).
+        Write one PNG per comparison (estimate, 95 % band, theory) into this directory.
     overwrite : bool, optional
-        Replace PNGs already in the ``plots`` directory.
+        Replace PNGs already in ``plots``.
     rotor_radius : float, optional
-        Rotor radius R [m] of the rotor-effective wind speed (default 63 m, or the largest disc inside a smaller
-        grid).
+        Rotor radius R [m] of the rotor-effective wind speed (default 63 m, or the largest disc in the grid).
 
     Returns
     -------
     turbgen.validation.ValidationReport
-        ``passed``, ``failed``, ``metrics``, ``table()``, ``to_dict()`` (the keys of ``turbgen validate --json``),
-        ``plots(directory)`` (one PNG per comparison: estimate, 95 % band, theory).
+        ``passed``, ``failed``, ``metrics``, ``table()``, ``to_dict()`` (``turbgen validate --json``), ``plots(dir)``.
 
     Raises
     ------
@@ -85,8 +80,7 @@ def validate(store, *, plots: str | os.PathLike | None = None, overwrite: bool =
 
 
 def check_plots_dir(plots_dir: str | os.PathLike, overwrite: bool, name: str = "`plots`") -> None:
-    """Refuse (one line, before any work) a plots path that is a file, unwritable, or holds PNGs without
-    ``overwrite``."""
+    """Refuse, before any work, a plots path that is a file, unwritable, or holds PNGs without ``overwrite``."""
     p = Path(plots_dir)
     if p.exists():
         if not p.is_dir():
@@ -109,8 +103,7 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
     """Write a store for InflowWind, HAWC2, the lidar simulator, the 4D Mann scripts or HDF5 (``turbgen export``).
 
     The keywords are ``turbgen export``'s options, made into the request by the same function
-    (:func:`turbgen.exporters.options.export_request`), so the mean wind is the one definition of
-    :class:`turbgen.spec.mean_wind.MeanWind`.
+    (:func:`turbgen.exporters.options.export_request`); the mean wind is :class:`turbgen.spec.mean_wind.MeanWind`.
 
     Parameters
     ----------
@@ -132,16 +125,14 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
         Direction change with height [deg/m], counter-clockwise seen from above.
     mean_history : str or os.PathLike, optional
         CSV of t [s], U [m/s] [, direction deg] at hub height.
-    transient : str, optional
-        Superimposed IEC transient: EOG, EDC, ECD, EWS-V or EWS-H (needs ``iec_class``, ``rotor_diameter``).
-    iec_class : str, optional
-        Turbine class and turbulence category, e.g. "IIB".
+    transient, iec_class : str, optional
+        Superimposed IEC transient (EOG, EDC, ECD, EWS-V or EWS-H) and class, e.g. "IIB".
     rotor_diameter : float, optional
-        Rotor diameter D [m].
+        Rotor diameter D [m] (with ``transient``).
     transient_start : float, optional
-        Time the transient reaches the turbine [s] (default 10).
+        Time the transient reaches the turbine [s].
     transient_sign : str, optional
-        "+" or "-": the standard's sense of the transient (default "+").
+        "+" or "-": the standard's sense of the transient.
     tower : bool, optional
         bts: add tower points down to the ground.
     periodic : bool, optional
@@ -149,8 +140,7 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
     drop_below_ground : bool, optional
         Drop grid rows at or below the ground instead of refusing.
     runner_files : bool, optional
-        Also write the InflowWind input file (bts, wnd, evo, hawc2), the HAWC2 block (hawc2) and the
-        LidarSim Wind Evolution section (evo); default True, as the command's.
+        Also write the InflowWind input file, the HAWC2 block (hawc2) and the LidarSim section (evo).
     overwrite : bool, optional
         Replace existing output files.
 
@@ -162,8 +152,8 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
     Raises
     ------
     ParameterError
-        For an unknown format, options the format does not use, an existing output without ``overwrite``, a grid
-        reaching the ground, too little disk, a malformed profile or values outside their ranges.
+        For an unknown format or options it does not use, an existing output, a grid reaching the ground, too
+        little disk or values outside their ranges.
     StoreError
         If the store is missing or incomplete.
 
@@ -208,22 +198,16 @@ def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLi
     overwrite : bool, optional
         Replace an existing ``out``.
     rotor_radius : float, optional
-        Rotor radius R [m] of u_RR (default: the lidar's turbine if it fits the grid, else 63 m or the largest disc
-        inside a smaller grid).
+        Rotor radius R [m] of u_RR (default: the lidar's turbine if it fits the grid, else as :func:`validate`).
     mean_wind : bool, optional
-        Add the power-law mean wind to u before projecting.
+        Add the mean wind to u before projecting: the power law of ``shear``, or ``profile``, ``veer`` and
+        ``mean_history`` as :func:`export` takes them.
     shear : float, optional
-        Power-law shear exponent of ``mean_wind``.
-    profile : str, optional
-        ``mean_wind`` profile as :func:`export` takes it: ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``
-        (replaces ``shear``).
-    veer : float, optional
-        ``mean_wind`` veer [deg/m].
-    mean_history : str or os.PathLike, optional
-        ``mean_wind`` hub-height history CSV (t, U [, direction]).
+        Power-law shear exponent.
+    profile, veer, mean_history : optional
+        As :func:`export`.
     plots : str or os.PathLike, optional
-        Write the plots of gamma^2_RL and of the magnitude of G_RL (simulated with 95 % band, theory) into this
-        directory.
+        Write the plots of gamma^2_RL and ``|G_RL|`` (simulated with 95 % band, theory) into this directory.
 
     Returns
     -------
@@ -263,8 +247,7 @@ def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLi
 
 
 def lidar_mean_wind(add: bool, shear_exponent: float, profile, veer, history):
-    """The MeanWind of the lidar's ``profile`` / ``veer`` / ``mean_history`` (None when none is given: the power law
-    of ``shear_exponent``); each needs ``mean_wind`` (``add``)."""
+    """The MeanWind of the lidar's ``profile``, ``veer``, ``mean_history`` (each needs ``add``); None without them."""
     from turbgen.spec.mean_wind_files import mean_wind_from_options
 
     given = [n for n, v in (("--profile", profile), ("--veer", veer), ("--mean-history", history)) if v is not None]
@@ -287,8 +270,8 @@ def info(store) -> dict:
     -------
     dict
         A field: model, grid, shape_t_x_y_z, duration_s [s], U_m_s [m/s], seed, parameters, units,
-        size_on_disk_bytes (0 in memory), ... and chunks_decoded (whether every value was read and checked: stores
-        up to 256 MiB on disk, and every field in memory). A file: its header rows.
+        size_on_disk_bytes, ... and chunks_decoded (every value read and checked: up to DECODE_LIMIT_BYTES on
+        disk, and in memory). A file: its header rows.
 
     Raises
     ------

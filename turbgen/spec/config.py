@@ -1,8 +1,7 @@
 """The one reader of TOML/JSON files: run files (``--config``), sweep files and preset files.
 
-Files are validated against a JSON Schema of turbgen/schemas/ (the repository's schemas/ links
-there), e.g. mann-run.schema.json. Any problem is a ParameterError naming the file and the
-offending key.
+Files are validated against a JSON Schema of turbgen/schemas/ (e.g. mann-run.schema.json); any
+problem is a ParameterError naming the file and the offending key.
 """
 
 from __future__ import annotations
@@ -17,54 +16,19 @@ import jsonschema
 from turbgen.errors import ParameterError
 from turbgen.input_files import CONFIG, read_input
 
-MAX_CONFIG_BYTES = CONFIG.max_bytes  # such files hold a few KiB (`--config /dev/zero` once read 21 GB)
 MAX_NESTING = 64  # levels of tables/arrays in a TOML/JSON file: turbgen's own files need 4
 
 
 def load_schema(name: str) -> dict:
-    """The JSON Schema ``turbgen/schemas/<name>.schema.json``.
-
-    Parameters
-    ----------
-    name : str
-        Schema name without suffix, e.g. "mann-run".
-
-    Returns
-    -------
-    dict
-        The parsed schema.
-
-    Raises
-    ------
-    FileNotFoundError
-        If turbgen has no such schema.
-    """
+    """The JSON Schema ``turbgen/schemas/<name>.schema.json`` (FileNotFoundError if there is none)."""
     return json.loads(importlib.resources.files("turbgen").joinpath(f"schemas/{name}.schema.json").read_text())
 
 
 def check_mapping(data, schema_name: str, where: str) -> dict:
-    """``data`` if it satisfies the schema, else ParameterError '<where>: <key path>: <message>'.
+    """``data`` if it satisfies the schema ``schema_name``, else ParameterError '<where>: <key path>: <message>'.
 
-    For a failed ``pattern`` the message gives the schema's description of what is expected, not the regex.
-
-    Parameters
-    ----------
-    data : object
-        The mapping (a file's content, a request body, ...).
-    schema_name : str
-        A schema of turbgen/schemas/, e.g. "mann-run".
-    where : str
-        Where ``data`` comes from, first in the message.
-
-    Returns
-    -------
-    dict
-        ``data`` itself.
-
-    Raises
-    ------
-    ParameterError
-        If ``data`` does not satisfy the schema (the best-matching error, with its key path).
+    The best-matching error is reported; a failed ``pattern`` gives the schema's description of what is
+    expected, not the regex.
     """
     validator = jsonschema.Draft202012Validator(load_schema(schema_name))
     err = jsonschema.exceptions.best_match(validator.iter_errors(data))
@@ -82,8 +46,7 @@ def check_mapping(data, schema_name: str, where: str) -> dict:
 
 
 def _short(instance, limit: int = 80) -> str:
-    """``repr(instance)``, or for a long one what it is ("a list of 1001 items"): a message of a 1001-sensor file
-    quoted every sensor (537 KB on one line)."""
+    """``repr(instance)``, or for a long one what it is ("a list of 1001 items"), so a message stays one short line."""
     text = repr(instance)
     if len(text) <= limit:
         return text
@@ -108,25 +71,13 @@ def _description(schema: dict, path) -> str | None:
 
 
 def read_config(path, schema_name: str | None = None) -> dict:
-    """The mapping in a TOML (``.toml``) or JSON (``.json``) file, validated against ``schema_name`` if given.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file; any suffix other than .json is read as TOML.
-    schema_name : str, optional
-        A schema of turbgen/schemas/ (e.g. "mann-run"), or None for a top-level table only.
-
-    Returns
-    -------
-    dict
-        The file's top-level table.
+    """The top-level table of a TOML or JSON (``.json``) file, validated against ``schema_name`` if given.
 
     Raises
     ------
     ParameterError
-        If the file cannot be read, is not a regular file (turbgen.input_files), holds more than MAX_CONFIG_BYTES,
-        is not valid TOML/JSON or nested deeper than MAX_NESTING, does not satisfy the schema, or (without a schema) does not hold a table at the top level.
+        If the file cannot be read, is not a regular file or too large (turbgen.input_files), is not valid
+        TOML/JSON or nested deeper than MAX_NESTING, fails the schema, or (without one) holds no table.
     """
     p = Path(path)
     data = parse_document(read_input(p, CONFIG), "JSON" if p.suffix.lower() == ".json" else "TOML", f"config {p}")
@@ -138,13 +89,10 @@ def read_config(path, schema_name: str | None = None) -> dict:
 
 
 def parse_document(text: bytes, kind: str, where: str):
-    """The value of the JSON or TOML document ``text`` (``kind`` "JSON" or "TOML"), nested at most MAX_NESTING deep.
+    """The value of the JSON or TOML (``kind``) document ``text``, nested at most MAX_NESTING deep.
 
-    Raises
-    ------
-    ParameterError
-        Naming ``where``, when ``text`` is not valid ``kind`` (or not UTF-8) or is nested deeper than MAX_NESTING
-        (a parser's RecursionError included).
+    ParameterError naming ``where`` for invalid text (or not UTF-8) or deeper nesting (a parser's
+    RecursionError included).
     """
     nested = ParameterError(f"{where}: nested deeper than {MAX_NESTING} levels of tables/arrays")
     try:
@@ -160,14 +108,12 @@ def parse_document(text: bytes, kind: str, where: str):
 
 
 def _refuse_constant(name: str):
-    """json.loads's hook for NaN, Infinity and -Infinity (not JSON; Python's reader takes them): refused, so that an
-    infinite value is not taken for a missing one."""
+    """json.loads's hook for NaN and +-Infinity (not JSON): refused, not taken for a missing value."""
     raise ValueError(f"{name} is not a JSON number (write null for a missing value)")
 
 
 def nested_deeper_than(data, limit: int) -> bool:
-    """True when ``data`` (parsed JSON/TOML) nests dicts/lists more than ``limit`` levels, found without recursion
-    (validating a deeper value would recurse past Python's limit)."""
+    """Whether ``data`` nests dicts/lists more than ``limit`` levels, found without recursion."""
     stack = [(data, 1)]
     while stack:
         value, depth = stack.pop()

@@ -2,13 +2,11 @@
 
     series = load_point_series("mast.json")
 
-A file holds the sample times (physical time [s] from the start of the field, any rate) and one or more sensors at
-(x, y, z) (z relative to the hub, or height above ground) with any of u, v, w [m/s]; missing values are null (NaN
-here). ``total_wind`` says the data hold the total wind: the mean wind of the exports
-(:class:`turbgen.spec.mean_wind.MeanWind`; default the power law, alpha 0.2, or the file's ``mean_wind``: the
-`turbgen export` options ``profile``, ``veer_deg_per_m``, ``mean_history``) at the run's U and hub height is taken
-from u, and from v when it turns (:func:`sensor_fluctuations`); w is always a fluctuation. turbgen.runs.constrain
-places the data on the run's grid.
+A file holds sample times (physical time [s] from the start of the field, any rate) and sensors at
+(x, y, z) (z from the hub, or height above ground) with any of u, v, w [m/s], null for missing (NaN
+here). With ``total_wind`` the data hold the total wind, whose mean (the exports' MeanWind, or the
+file's ``mean_wind``) is taken off by :func:`sensor_fluctuations`. turbgen.runs.constrain places the
+data on the run's grid.
 """
 
 from __future__ import annotations
@@ -31,8 +29,9 @@ COMPONENTS = ("u", "v", "w")
 
 @dataclass(frozen=True, eq=False)
 class PointSensor:
-    """One sensor: position x_m [m upstream], y_m [m], z_m [m from the hub] or height_m [m above ground] (exactly one
-    of them not None), and ``series``: component ("u", "v", "w") -> values [m/s] (NaN: missing)."""
+    """One sensor: x_m [m upstream], y_m [m], and z_m [m from the hub] or height_m [m above ground] (one of
+    them), and ``series``: component ("u", "v", "w") -> values [m/s] (NaN: missing).
+    """
 
     name: str
     x_m: float
@@ -44,9 +43,10 @@ class PointSensor:
 
 @dataclass(frozen=True, eq=False)
 class PointSeries:
-    """A constraint file: ``time_s`` (strictly increasing) [s], ``sensors``, ``total_wind`` (the data hold the mean
-    wind), ``noise_m_s`` [m/s] (None: not given), ``source`` (the file, for messages and the store), ``mean_wind``
-    (the mean wind in the data: the file's, else the exports' default; None without ``total_wind``)."""
+    """A constraint file: ``time_s`` (strictly increasing) [s], ``sensors``, ``total_wind``, ``noise_m_s``
+    [m/s] (None: not given), ``source`` (the file), ``mean_wind`` (the mean in total-wind data: the file's,
+    else the exports' default).
+    """
 
     name: str
     time_s: np.ndarray
@@ -92,8 +92,7 @@ def point_series_from_mapping(data, source: str) -> PointSeries:
 
 
 def mean_wind_spec(spec, total: bool, where: str, folder: Path) -> MeanWind | None:
-    """The file's ``mean_wind`` (files named relative to the constraint file), the default without one; None without
-    ``total_wind``."""
+    """The file's ``mean_wind`` (files relative to ``folder``), else the default; None without ``total``."""
     if spec is not None and not total:
         raise ParameterError(f"{where}: mean_wind describes total-wind data; set total_wind true or drop it")
     if not total:
@@ -111,35 +110,13 @@ def mean_wind_spec(spec, total: bool, where: str, folder: Path) -> MeanWind | No
 
 
 def sensor_fluctuations(f: PointSeries, s: PointSensor, U_m_s: float, hub_height_m: float) -> tuple[dict, float]:
-    """The sensor's series as fluctuations [m/s], and the time-mean of the mean u taken from them [m/s].
+    """The sensor's series as fluctuations [m/s] (component -> series), and the time-mean of the mean u removed [m/s].
 
-    With ``total_wind``, the file's mean wind (:meth:`turbgen.spec.mean_wind.MeanWind.fluctuation_uv`) at the sensor's
-    height and y, at the stored time T + x / U (the time that slice reaches the turbine in a periodic export, as
-    `turbgen lidar --mean-wind` and the exports use it), is taken from u, and from v when the mean wind turns;
-    a value missing in u or v is then missing in both.
-
-    Parameters
-    ----------
-    f : PointSeries
-        The constraint file.
-    s : PointSensor
-        One of its sensors.
-    U_m_s : float
-        The run's mean speed [m/s].
-    hub_height_m : float
-        The run's hub height [m].
-
-    Returns
-    -------
-    tuple of (dict, float)
-        Component -> fluctuation series [m/s] (NaN: missing), and the mean u removed [m/s] (0 without
-        ``total_wind``).
-
-    Raises
-    ------
-    ParameterError
-        When the mean wind turns (veer, history directions) and the sensor lacks u or v, or its height is one the
-        profile does not cover.
+    With ``total_wind``, the mean wind (:meth:`MeanWind.fluctuation_uv`) at the sensor's height and y and
+    at the stored time T + x / U (when that slice reaches the turbine in a periodic export, as the exports
+    use it) is taken from u, and from v when it turns; a value missing in u or v is then missing in both.
+    ParameterError when the mean wind turns and the sensor lacks u or v, or the profile does not cover
+    its height. ``U_m_s`` [m/s] and ``hub_height_m`` [m] are the run's.
     """
     if not f.total_wind:
         return dict(s.series), 0.0
@@ -166,13 +143,8 @@ def sensor_fluctuations(f: PointSeries, s: PointSensor, U_m_s: float, hub_height
 
 
 def load_point_series(path) -> PointSeries:
-    """Read and check a constraint file (JSON, schemas/constraints.schema.json).
-
-    Raises
-    ------
-    ParameterError
-        If the file cannot be read or is not a regular file (turbgen.input_files), is not JSON (or nested too
-        deeply), does not satisfy the schema, or holds inconsistent values.
+    """Read and check a constraint file (JSON); ParameterError if it cannot be read, is not a regular file,
+    not JSON, nested too deeply, fails the schema or holds inconsistent values.
     """
     p = Path(path)
     data = parse_document(read_input(p, CONSTRAINTS), "JSON", f"constraint file {p}")
@@ -181,14 +153,15 @@ def load_point_series(path) -> PointSeries:
 
 # the keys of a Mann run mapping (schemas/mann-run.schema.json) that condition the field; MannRun itself is the prior
 CONSTRAINT_KEYS = ("constrain", "noise_m_s", "conditional_mean")
-MAX_NOISE_M_S = 100.0  # the schemas' maximum of noise_m_s: beyond it no measurement is left (1e308 overflowed)
+MAX_NOISE_M_S = 100.0  # the schemas' maximum of noise_m_s
 
 
 @dataclass(frozen=True)
 class ConstraintRequest:
-    """What a run mapping asks to condition the field on: ``files`` (paths, or constraints already loaded:
-    PointSeries / turbgen.virtual_lidar.dataset.LidarData), ``noise_m_s`` [m/s] (None: each file's own) and
-    ``conditional_mean`` (write the conditional mean instead of a conditional sample)."""
+    """What a run mapping asks to condition the field on: ``files`` (paths, or loaded PointSeries /
+    LidarData), ``noise_m_s`` [m/s] (None: each file's own), ``conditional_mean`` (the conditional mean
+    instead of a conditional sample).
+    """
 
     files: tuple
     noise_m_s: float | None = None
@@ -196,14 +169,9 @@ class ConstraintRequest:
 
 
 def split_constraint_keys(mapping: dict) -> tuple[dict, ConstraintRequest | None]:
-    """(the run mapping without the constraint keys, the ConstraintRequest or None when ``constrain`` is absent or
-    empty).
+    """(the run mapping without the constraint keys, its ConstraintRequest or None without ``constrain``).
 
-    Raises
-    ------
-    ParameterError
-        For ``noise_m_s`` or ``conditional_mean`` without ``constrain``, a ``constrain`` that is not a list, a
-        ``noise_m_s`` that is not a finite number in [0, MAX_NOISE_M_S].
+    ParameterError for ``noise_m_s`` or ``conditional_mean`` without ``constrain``, or a bad noise.
     """
     rest = {k: v for k, v in mapping.items() if k not in CONSTRAINT_KEYS}
     files = mapping.get("constrain") or ()
@@ -227,8 +195,7 @@ def check_noise(noise) -> float | None:
 
 
 def resolve_constraint_paths(mapping: dict, base_dir) -> dict:
-    """``mapping`` with the relative paths of its ``constrain`` list and of its ``spectrum`` file (a Kaimal run) taken
-    from ``base_dir`` (a run file's paths are relative to the run file)."""
+    """``mapping`` with relative ``constrain`` and ``spectrum`` paths under ``base_dir`` (the run file's folder)."""
     base = Path(base_dir)
     spectrum = mapping.get("spectrum")
     if isinstance(spectrum, str) and not Path(spectrum).is_absolute():

@@ -1,10 +1,8 @@
-"""IEC 61400-1 Ed. 4 design-load-case sets of turbulent fields (Table 2): DLC 1.1 and 1.2 with the normal
-turbulence model, 1.3 with the extreme turbulence model; hub speeds V_in .. V_out in 2 m/s steps, 6 seeds
-each, at the turbine class's I_ref.
+"""IEC 61400-1 Ed. 4 design-load-case sets of turbulent fields (Table 2): DLC 1.1, 1.2 (NTM) and 1.3 (ETM).
 
-Each run is the neutral stability preset's model shape (Mann L, Gamma, lifetime; Kaimal coherence) with
-its variance set to the load case's sigma1 at V_hub: NTM sigma1 = I_ref (0.75 V_hub + 5.6) (Sect. 6.3.2.3),
-ETM (:func:`turbgen.theory.iec_transients.etm_sigma1_m_s`); Kaimal sigma2 = 0.8 sigma1, sigma3 = 0.5 sigma1
+Hub speeds V_in .. V_out in 2 m/s steps, 6 seeds each, at the turbine class's I_ref. Each run is the
+neutral preset's model shape with its variance set to the load case's sigma1 at V_hub (NTM: Sect.
+6.3.2.3; ETM: :func:`turbgen.theory.iec_transients.etm_sigma1_m_s`); Kaimal sigma2,3 = 0.8, 0.5 sigma1
 and the length scales from Lambda1(hub) (Annex C).
 """
 
@@ -26,7 +24,7 @@ SPEED_STEP_M_S = 2.0
 
 @dataclass(frozen=True)
 class DlcSet:
-    """A DLC set: load case, class, speeds and seeds (validated at construction).
+    """A DLC set: load case, class, speeds and seeds (validated at construction; ParameterError otherwise).
 
     Parameters
     ----------
@@ -35,15 +33,9 @@ class DlcSet:
     iec_class : str
         Turbine class and turbulence category, e.g. "IIB".
     v_in_m_s, v_out_m_s : float
-        Cut-in and cut-out hub speeds [m/s], 0.5 <= V_in <= V_out <= V_ref; the speeds are V_in,
-        V_in + 2, ... and V_out.
+        Cut-in and cut-out hub speeds [m/s], 0.5 <= V_in <= V_out <= V_ref.
     seeds : tuple of int
-        Random seeds (default 1..6).
-
-    Raises
-    ------
-    ParameterError
-        For an unknown load case or class, speeds out of range or in the wrong order, no seeds.
+        Random seeds, distinct.
     """
 
     dlc: str
@@ -92,22 +84,10 @@ class DlcSet:
         return iec.etm_sigma1_m_s(V_hub_m_s, IEC_IREF[self.category], iec.V_REF_M_S[turbine])
 
     def run_mapping(self, model: str, V_hub_m_s: float, seed: int) -> dict:
-        """The run mapping (MannRun/KaimalRun.from_mapping keys) of one field of the set.
+        """The run mapping of one field of ``model`` ("mann" or "kaimal") at hub speed ``V_hub_m_s`` [m/s] and ``seed``.
 
-        Parameters
-        ----------
-        model : str
-            "mann" or "kaimal".
-        V_hub_m_s : float
-            Hub speed [m/s].
-        seed : int
-            Random seed.
-
-        Returns
-        -------
-        dict
-            The neutral preset's keys with the variance set to the load case's sigma1 (Mann: model
-            sigma_u; Kaimal: sigma1, 0.8 sigma1, 0.5 sigma1 and the IEC length scales of the hub height).
+        The neutral preset's keys with the load case's sigma1 (Mann: model sigma_u; Kaimal: sigma1, 0.8 sigma1,
+        0.5 sigma1 and the IEC length scales of the hub height).
         """
         keys = dict(run_keys(model, "neutral", V_hub_m_s))
         s1 = self.sigma1_m_s(V_hub_m_s)

@@ -1,12 +1,11 @@
-"""An IEC 61400-1 Ed. 4 deterministic transient (EOG, EDC, ECD, EWS), its parameters from the turbine
-class and V_hub, as the columns of an InflowWind uniform wind file (WindType 2, what IECWind writes).
+"""An IEC 61400-1 Ed. 4 deterministic transient (EOG, EDC, ECD, EWS) from the turbine class and V_hub.
 
-InflowWind's uniform wind at (X, Y, Z) and time t (OpenFAST IfW_UniformWind; Delta positive clockwise
-seen from above, so v = -V_h sin(Delta)):
-V_h = V (Z/RefHt)^VShr + V HLinShr/RefLength (Y cos Delta + X sin Delta) + V VLinShr/RefLength (Z - RefHt) + VGust.
-Each event is written so that V_h is the standard's formula exactly at every row: V = V_hub, VShr = alpha
-(the normal wind profile, 0.2), the EOG and ECD speed changes in VGust (uniform over the rotor, as in the
-standard), the EDC and ECD direction in Delta, the EWS shear in VLinShr or HLinShr with RefLength = D.
+Written as the columns of an InflowWind uniform wind file (WindType 2, what IECWind writes), whose
+horizontal speed at (X, Y, Z) and t is (OpenFAST IfW_UniformWind; Delta clockwise seen from above)
+V_h = V (Z/RefHt)^VShr + V HLinShr/RefLength (Y cos Delta + X sin Delta) + V VLinShr/RefLength (Z - RefHt) + VGust;
+with V = V_hub, VShr = 0.2 (the normal wind profile), the EOG and ECD speed changes in VGust, the EDC
+and ECD direction in Delta and the EWS shear in VLinShr or HLinShr with RefLength = D, V_h is the
+standard's formula exactly at every row.
 """
 
 from __future__ import annotations
@@ -28,22 +27,9 @@ NWP_EXPONENT = 0.2  # normal wind profile exponent (Sect. 6.3.2.2)
 
 
 def parse_class(text: str) -> tuple[str, str]:
-    """("II", "B") from "IIB": turbine class I/II/III and turbulence category A+/A/B/C.
+    """("II", "B") from "IIB" (also "IA+", "III C"): turbine class I/II/III and turbulence category A+/A/B/C.
 
-    Parameters
-    ----------
-    text : str
-        Class and category, e.g. "IIB", "IA+", "III C".
-
-    Returns
-    -------
-    tuple of str
-        (turbine class, turbulence category).
-
-    Raises
-    ------
-    ParameterError
-        When ``text`` is not a class I, II or III followed by A+, A, B or C.
+    Raises ParameterError for anything else.
     """
     m = re.fullmatch(r"\s*(III|II|I)\s*(A\+|A|B|C)\s*", str(text).upper())
     if not m:
@@ -64,19 +50,15 @@ class IecTransient:
     iec_class : str
         Turbine class and turbulence category, e.g. "IIB".
     V_hub_m_s : float
-        Hub-height mean speed [m/s], in (0, V_ref] (so below V_e1 = 1.12 V_ref: the EOG gust is positive).
-    hub_height_m : float
-        Hub height [m], > 0.
-    rotor_diameter_m : float
-        Rotor diameter D [m], > 0.
-    start_s : float
-        Time the event starts in the file [s], >= 0.
-    duration_s : float
-        Length of the file [s]; the event must end within it.
+        Hub-height mean speed [m/s], in (0, V_ref] (below V_e1 = 1.12 V_ref: the EOG gust is positive).
+    hub_height_m, rotor_diameter_m : float
+        Hub height and rotor diameter D [m], > 0, the rotor clear of the ground.
+    start_s, duration_s : float
+        Start of the event and length of the file [s]; the event ends within the file.
     dt_s : float
-        Row spacing during the event [s], in [MIN_DT_S, T/4] (at most 12 000 event rows).
+        Row spacing during the event [s], in [MIN_DT_S, T/4].
     sign : int
-        +1 or -1: the standard's "+-" (direction change sense, shear sense); EOG takes +1 only.
+        +1 or -1: the standard's "+-" (direction change or shear sense); EOG takes +1 only.
 
     Raises
     ------
@@ -108,7 +90,7 @@ class IecTransient:
                                  f"{self.hub_height_m:g} m")
         put(self, "duration_s", check_positive("duration (s)", self.duration_s))
         period = PERIODS_S[self.kind]
-        # at least MIN_DT_S: the rows are allocated and written (dt = 1e-9 s once asked numpy for 78 GiB)
+        # at least MIN_DT_S: the rows are allocated and written
         put(self, "dt_s", check_range("dt (s)", self.dt_s, MIN_DT_S, period / 4))
         put(self, "start_s", check_range("transient start (s)", self.start_s, 0.0, self.duration_s))
         if self.start_s + period > self.duration_s:
@@ -167,18 +149,12 @@ class IecTransient:
     def at(self, t_s) -> dict:
         """The event at times ``t_s`` [s] of the record (the event's clock is t - start).
 
-        Parameters
-        ----------
-        t_s : array_like
-            Times [s].
-
         Returns
         -------
         dict
-            "gust_m_s": speed change uniform over the rotor [m/s] (EOG, ECD); "direction_deg": direction,
-            positive clockwise seen from above as in InflowWind (EDC, ECD); "vshear_m_s", "hshear_m_s": speed
-            change across one rotor diameter, times (z - z_hub) / D or y / D (EWS-V, EWS-H); arrays of the
-            shape of ``t_s``, zero where the event has none.
+            "gust_m_s": speed change uniform over the rotor [m/s] (EOG, ECD); "direction_deg": direction
+            clockwise seen from above, as InflowWind (EDC, ECD); "vshear_m_s", "hshear_m_s": speed change
+            across one diameter, times (z - z_hub) / D or y / D (EWS-V, EWS-H); zero where the event has none.
         """
         tau = np.asarray(t_s, dtype=float) - self.start_s
         zero = np.zeros_like(tau)
@@ -197,13 +173,9 @@ class IecTransient:
         return out
 
     def columns(self) -> dict:
-        """The uniform-wind columns at :meth:`times_s` (keys ``COLUMNS``).
+        """The uniform-wind columns (keys ``COLUMNS``) at :meth:`times_s`, in s, m/s, deg, m/s, -, -, -, m/s.
 
-        Returns
-        -------
-        dict
-            Column name -> float array [s, m/s, deg, m/s, -, -, -, m/s]; the EWS shear is written as
-            LinVShear / HorizShear = (speed change across D) / V_hub with RefLength = D.
+        The EWS shear is LinVShear / HorizShear = (speed change across D) / V_hub with RefLength = D.
         """
         t = self.times_s()
         ev = self.at(t)

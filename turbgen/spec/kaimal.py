@@ -1,8 +1,8 @@
 """What a Kaimal 4D run is: IEC spectra + yz coherence, longitudinal coherence, grid, speed and seed.
 
 ``KaimalRun.from_mapping`` reads a run file / request / preset mapping (schemas/kaimal-run.schema.json)
-and applies turbgen.spec.defaults; ``to_attrs`` / ``from_attrs`` write and read the store attributes.
-turbgen.runs.kaimal generates the field.
+with turbgen.spec.defaults; ``to_attrs`` / ``from_attrs`` write and read the store attributes;
+turbgen.runs.kaimal generates the field. Values are checked against turbgen.theory.ranges.
 """
 
 from __future__ import annotations
@@ -47,38 +47,36 @@ class KaimalRun:
     kaimal : KaimalParams
         sigma_u, sigma_v, sigma_w [m/s], Kaimal lengths L1..L3 [m], a_yz [-], Lc [m] (Guo et al. 2023, Eq. 11-12).
     grid : Grid
-        The run's grid, checked against turbgen.theory.ranges.
+        The run's grid.
     U_m_s : float
-        Hub-height mean wind speed [m/s], in [0.5, 100].
+        Hub-height mean wind speed [m/s].
     seed : int
-        Random seed, in [0, 2^63 - 1].
+        Random seed.
     hub_height_m : float, optional
-        Hub height [m], in [1, 1000]; default 150 (as Mann's, turbgen.spec.defaults).
+        Hub height [m].
     long_model : {"exp", "simley-pao", "kristensen"}, optional
-        "exp" (Guo et al. 2023, Eq. 18 with a_x [-], b_x [1/m]; defaults Table 2 neutral,
-        gamma = 400 s), "simley-pao" (Eq. 18 with the Simley and Pao 2015 parameters) or "kristensen"
-        (Kristensen 1979).
+        Eq. 18 with a_x, b_x (Guo et al. 2023; defaults Table 2 neutral), Eq. 18 with the Simley and Pao
+        (2015) parameters, or Kristensen (1979).
     a_x, b_x : float, optional
-        Eq. 18 parameters a_x [-] in (0, 100] and b_x [1/m] in [0, 1]; "exp" only (default 1.8, 1.49e-4).
+        Eq. 18 parameters a_x [-] and b_x [1/m], "exp" only.
     long_components : {"u", "uvw"}, optional
-        "u" (evoTurb) or "uvw": components given the longitudinal coherence.
+        Components given the longitudinal coherence ("u": evoTurb).
     rescale : bool, optional
-        Scale each component's spectrum so its expected variance is the nominal sigma^2
-        (default: the spectrum follows Eq. 11 and the variance is its resolved-band integral).
+        Scale each spectrum so the expected variance is the nominal sigma^2 (else the resolved-band
+        integral of Eq. 11).
     vw_coherence : {"white", "exp"}, optional
-        "white" (IEC / TurbSim IECKAI: v, w incoherent in yz) or "exp" (extension: the u
-        exponential coherence with the same a_yz, Lc).
+        v, w incoherent in yz (IEC / TurbSim IECKAI) or given the u coherence (extension).
     turb_class : str, optional
-        IEC class the sigmas came from (recorded only; None for explicit sigmas).
+        IEC class the sigmas came from (recorded only).
     spectrum : LineSpectrum, optional
-        User spectra of u, v, w on the grid's lines (turbgen.theory.user_spectra) in place of the Kaimal spectra of
-        ``kaimal``, whose sigmas and lengths then enter only the Simley-Pao and Kristensen coherences.
+        User spectra of u, v, w on the grid's lines (turbgen.theory.user_spectra) in place of Kaimal's;
+        the sigmas and lengths then enter only the Simley-Pao and Kristensen coherences.
 
     Raises
     ------
     ParameterError
-        For a value outside its range, an unknown model choice, a_x / b_x with a model other than "exp", or
-        ``rescale`` with ``spectrum``.
+        For a value outside its range, an unknown choice, a_x / b_x with another model, or ``rescale``
+        with ``spectrum``.
     """
 
     kaimal: KaimalParams
@@ -119,47 +117,23 @@ class KaimalRun:
 
     @property
     def model(self) -> str:
-        """The model name ("kaimal"), the key of turbgen.runs.models.MODELS.
-
-        Returns
-        -------
-        str
-            "kaimal".
-        """
+        """The model name, "kaimal" (the key of turbgen.runs.models.MODELS)."""
         return "kaimal"
 
     @property
     def sigma_total_m_s(self) -> float:
-        """sqrt(sigma_u^2 + sigma_v^2 + sigma_w^2) [m/s] (Simley-Pao and Kristensen models).
-
-        Returns
-        -------
-        float
-            Total standard deviation [m/s].
-        """
+        """sqrt(sigma_u^2 + sigma_v^2 + sigma_w^2) [m/s] (Simley-Pao and Kristensen models)."""
         return math.sqrt(sum(s * s for s in self.kaimal.sigma_m_s))
 
     def long_coherence(self):
-        """gamma_x(dx_m, f_hz), un-squared, of the chosen longitudinal model.
-
-        Returns
-        -------
-        callable
-            ``f(dx_m, f_hz)``: coherence [-] at separation dx [m] and frequency f [Hz].
-        """
+        """The chosen un-squared longitudinal coherence as ``f(dx_m, f_hz)`` [-]."""
         if self.long_model == "exp":
             return partial(LONGITUDINAL_MODELS["exp"], U_m_s=self.U_m_s, a_x=self.a_x, b_x=self.b_x)
         return partial(LONGITUDINAL_MODELS[self.long_model], U_m_s=self.U_m_s,
                        sigma_total_m_s=self.sigma_total_m_s, length_u_m=self.kaimal.length_scales_m[0])
 
     def effective_long_parameters(self) -> dict:
-        """The a_x, b_x actually used (Simley-Pao derives them; Kristensen has none).
-
-        Returns
-        -------
-        dict
-            ``a_x`` [-] and ``b_x`` [1/m], or empty for "kristensen".
-        """
+        """The a_x [-], b_x [1/m] actually used (Simley-Pao derives them; empty for Kristensen)."""
         if self.long_model == "simley-pao":
             a_x, b_x = simley_pao_parameters(self.sigma_total_m_s, self.U_m_s, self.kaimal.length_scales_m[0])
             return {"a_x": a_x, "b_x": b_x}
@@ -168,23 +142,10 @@ class KaimalRun:
         return {}
 
     def default_store_name(self, preset: str | None = None, preset_keys: Mapping | None = None) -> str:
-        """A readable store name, e.g. kaimal_U16_A_s1.zarr or kaimal_U16_stable_s1.zarr.
+        """A readable store name, e.g. kaimal_U16_A_s1.zarr or kaimal_U16_stable_s1.zarr (``preset`` named).
 
-        Runs that differ from the named ones (U, class or preset, seed) in anything the name does not
-        show (sigmas, lengths, coherence models, grid, ...) get ``_p<8 hex digits>`` of everything that
-        determines the field appended, so two different fields never share a default name.
-
-        Parameters
-        ----------
-        preset : str, optional
-            Preset name shown in the name instead of the class.
-        preset_keys : Mapping, optional
-            The preset's run keys (from turbgen.spec.preset_runs.kaimal_run_keys).
-
-        Returns
-        -------
-        str
-            The store name, ending in ``.zarr``.
+        A run that differs from the named one (U, class or preset with its ``preset_keys``, seed) in anything
+        else gets ``_p<8 hex digits>`` of everything that determines the field, so two fields never share it.
         """
         label = preset or self.turb_class or "sigma"
         base = f"kaimal_U{self.U_m_s:g}_{label}_s{self.seed}"
@@ -199,14 +160,9 @@ class KaimalRun:
         return f"{base}_p{run_digest(self.parameters(), self.grid)}.zarr"
 
     def parameters(self) -> dict:
-        """Every input parameter (JSON values), the keys :meth:`from_mapping` reads back.
+        """Every input parameter as JSON values, the keys :meth:`from_mapping` reads back.
 
-        Returns
-        -------
-        dict
-            U_m_s [m/s], turb_class, hub_height_m [m], sigma_m_s [m/s], length_scales_m [m], a_yz [-],
-            lc_m [m], long_model, a_x [-], b_x [1/m], long_components, vw_coherence, rescale, seed, and with a user
-            spectrum ``spectrum``: its band means on the lines (LineSpectrum.to_table).
+        A user spectrum appears as its band means on the lines (LineSpectrum.to_table).
         """
         k = self.kaimal
         return {
@@ -228,19 +184,10 @@ class KaimalRun:
         }
 
     def to_attrs(self, derived: Mapping | None = None) -> dict:
-        """model / parameters / derived / units / seed / U_m_s / hub_height_m attributes of the store.
+        """The store attributes (model, parameters, derived, units, seed, U_m_s, hub_height_m; not the grid).
 
-        Parameters
-        ----------
-        derived : Mapping, optional
-            Values the generator worked out (resolved_band_hz [Hz], expected_sigma_m_s [m/s],
-            rescale_factors, freq_chunk; see turbgen.runs.kaimal.store_attrs), recorded next to
-            effective_long_parameters in the ``derived`` attribute.
-
-        Returns
-        -------
-        dict
-            The store attributes (without the grid); None parameters are left out.
+        ``derived`` holds what the generator worked out (turbgen.runs.kaimal.store_attrs), recorded with
+        effective_long_parameters; None parameters are left out.
         """
         params = {key: v for key, v in self.parameters().items() if v is not None}
         out = {"effective_long_parameters": self.effective_long_parameters(), **(derived or {})}
@@ -256,24 +203,9 @@ class KaimalRun:
 
     @classmethod
     def from_attrs(cls, attrs: Mapping) -> "KaimalRun":
-        """The run of a store from its ``parameters`` and ``grid`` attributes.
+        """The run that wrote a store, from its ``parameters`` and ``grid`` attributes (derived values ignored).
 
-        Derived values, also those older stores kept among the parameters, are not inputs and are ignored.
-
-        Parameters
-        ----------
-        attrs : Mapping
-            The store's attributes.
-
-        Returns
-        -------
-        KaimalRun
-            The run that wrote the store.
-
-        Raises
-        ------
-        ParameterError
-            If the attributes lack the Kaimal run or hold invalid values.
+        Raises ParameterError if the attributes lack the Kaimal run or hold invalid values.
         """
         try:
             inputs = {k: v for k, v in attrs["parameters"].items() if k not in DERIVED_KEYS}
@@ -285,24 +217,9 @@ class KaimalRun:
     def from_mapping(cls, d: Mapping) -> "KaimalRun":
         """A run from a (schema-valid) mapping: the keys of :meth:`parameters` plus ``grid``.
 
-        Missing keys take turbgen.spec.defaults; ``turb_class`` + ``hub_height_m`` give the IEC
-        sigmas and length scales unless ``sigma_m_s`` / ``length_scales_m`` are given. ``spectrum`` may be any form
-        turbgen.spec.user_spectrum.line_spectrum takes (a CSV path, a table, a callable).
-
-        Parameters
-        ----------
-        d : Mapping
-            The run mapping (units as in :meth:`parameters`).
-
-        Returns
-        -------
-        KaimalRun
-            The run.
-
-        Raises
-        ------
-        ParameterError
-            For an unknown key or a value outside its range (turbgen.theory.ranges).
+        Missing keys take turbgen.spec.defaults; ``turb_class`` and ``hub_height_m`` give the IEC sigmas and
+        lengths unless given; ``spectrum`` is any form turbgen.spec.user_spectrum.line_spectrum takes.
+        ParameterError for an unknown key or a value outside its range.
         """
         unknown = set(d) - _INPUT_KEYS - {"grid"}
         if unknown:
@@ -321,34 +238,20 @@ class KaimalRun:
 
 def kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float = 90.0, sigma_m_s=None,
                   length_scales_m=None, a_yz: float | None = None, lc_m: float | None = None) -> KaimalParams:
-    """IEC Kaimal parameters of a class and hub height, with any of them given explicitly instead.
+    """IEC Kaimal parameters of a class and hub height, any of them replaced by an explicit value.
 
     Parameters
     ----------
     U_m_s : float
-        Hub-height mean wind speed [m/s], in [0.5, 100].
+        Hub-height mean wind speed [m/s].
     turb_class : str, optional
-        IEC class "A+", "A" (default), "B" or "C".
+        IEC class "A+", "A", "B" or "C".
     hub_height_m : float, optional
-        Hub height [m] (> 0; default 90).
-    sigma_m_s : sequence of float, optional
-        (sigma_u, sigma_v, sigma_w) [m/s], each in [0.001, 30]; None: the IEC values.
-    length_scales_m : sequence of float, optional
-        Kaimal L1, L2, L3 [m], each in [0.1, 10000]; None: the IEC values.
-    a_yz : float, optional
-        yz coherence decay [-], in [0, 1e4]; None: the IEC value.
-    lc_m : float, optional
-        Coherence scale Lc [m], in [0.1, 10000]; None: the IEC value.
-
-    Returns
-    -------
-    KaimalParams
-        The parameters.
-
-    Raises
-    ------
-    ParameterError
-        For an unknown class, a value outside its range, or sigmas / lengths not three values.
+        Hub height [m].
+    sigma_m_s, length_scales_m : sequence of float, optional
+        (sigma_u, sigma_v, sigma_w) [m/s] and Kaimal L1, L2, L3 [m]; None: the IEC values.
+    a_yz, lc_m : float, optional
+        yz coherence decay [-] and scale Lc [m]; None: the IEC values.
     """
     iec = iec_kaimal_params(U_m_s, turb_class, hub_height_m)
     return KaimalParams(

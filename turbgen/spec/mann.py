@@ -2,9 +2,9 @@
 
     run = MannRun.from_mapping({"length_scale_m": 49, "gamma": 3.1, "evo_time_s": 400})
 
-``from_mapping`` reads a run file / request / preset mapping (schemas/mann-run.schema.json) and applies
-the defaults; ``to_attrs`` / ``from_attrs`` write and read the store attributes. turbgen.runs.mann
-generates the field.
+``from_mapping`` reads a run file / request / preset mapping (schemas/mann-run.schema.json) with the
+defaults; ``to_attrs`` / ``from_attrs`` write and read the store attributes; turbgen.runs.mann
+generates the field. Values are checked against turbgen.theory.ranges.
 """
 
 from __future__ import annotations
@@ -39,23 +39,17 @@ class MannRun:
     params : MannParams
         Mann parameters (ae, L, Gamma, lifetimes, evolution time gamma [s]).
     grid : Grid
-        Planes x_m [m upstream], nt samples dt_s [s] apart (dx = U dt), ny x nz points dy_m, dz_m [m];
-        checked against turbgen.theory.ranges.
+        Planes x_m [m upstream], nt samples dt_s [s] apart (dx = U dt), ny x nz points dy_m, dz_m [m].
     U_m_s : float
-        Mean wind speed [m/s], in [0.5, 100].
+        Mean wind speed [m/s].
     seed : int
-        Random seed, in [0, 2^63 - 1].
+        Random seed.
     hub_height_m : float, optional
-        Hub height [m] (metadata for exports), in [1, 1000]; default 150.
+        Hub height [m] (metadata for exports).
     pad_yz : int, optional
-        The synthesis box is pad_yz times wider in y and z than the output (cropped), in [1, 8]; default 2.
+        The synthesis box is pad_yz times wider in y and z than the output (cropped).
     ae_from : str, optional
         How ae was chosen (text, recorded in the store).
-
-    Raises
-    ------
-    ParameterError
-        If a value or the grid is outside its range (turbgen.theory.ranges).
     """
 
     params: MannParams
@@ -74,33 +68,18 @@ class MannRun:
 
     @property
     def model(self) -> str:
-        """The model name ("mann"), the key of turbgen.runs.models.MODELS.
-
-        Returns
-        -------
-        str
-            "mann".
-        """
+        """The model name, "mann" (the key of turbgen.runs.models.MODELS)."""
         return "mann"
 
     def plane_times_s(self) -> np.ndarray:
-        """Relative snapshot time t_n = x_n / U [s] of each plane, in storage order.
-
-        Returns
-        -------
-        numpy.ndarray
-            t_n [s], one per plane.
-        """
+        """Relative snapshot time t_n = x_n / U [s] of each plane, in storage order."""
         return self.grid.x() / self.U_m_s
 
     def parameters(self) -> dict:
-        """The keys of the run mapping that rebuild this run (with its grid), ae_from included.
+        """The keys of the run mapping that rebuild this run with its grid, ae_from included.
 
-        Returns
-        -------
-        dict
-            ae [m^(4/3) s^-2], length_scale_m [m], gamma [-], lifetime, factor1/2 [-], evo_time_s [s] (None:
-            frozen), U_m_s [m/s], seed, hub_height_m [m], pad_yz, ae_from.
+        ae [m^(4/3) s^-2], length_scale_m [m], gamma [-], lifetime, factor1/2 [-], evo_time_s [s] (None:
+        frozen), U_m_s [m/s], seed, hub_height_m [m], pad_yz, ae_from.
         """
         p = self.params
         return {
@@ -110,14 +89,9 @@ class MannRun:
         }  # fmt: skip
 
     def to_attrs(self) -> dict:
-        """model / parameters / derived / units / seed / U_m_s / hub_height_m attributes of the store.
+        """The store attributes (model, parameters, derived, units, seed, U_m_s, hub_height_m; not the grid).
 
         ``parameters`` holds the inputs, ``derived`` what was worked out from them (``ae_from``).
-
-        Returns
-        -------
-        dict
-            The store attributes (without the grid).
         """
         params = self.parameters()
         derived = {key: params.pop(key) for key in DERIVED_KEYS}
@@ -133,24 +107,10 @@ class MannRun:
 
     @classmethod
     def from_attrs(cls, attrs: Mapping) -> "MannRun":
-        """The run of a store from its attributes (``parameters``, ``derived``, ``grid``).
+        """The run that wrote a store, from its ``parameters``, ``derived`` and ``grid`` attributes.
 
-        Stores written before the ``derived`` attribute (``ae_from`` among the parameters) are read too.
-
-        Parameters
-        ----------
-        attrs : Mapping
-            The store's attributes.
-
-        Returns
-        -------
-        MannRun
-            The run that wrote the store.
-
-        Raises
-        ------
-        ParameterError
-            If the attributes lack the Mann run or hold invalid values.
+        Stores with ``ae_from`` among the parameters are read too; ParameterError if the attributes lack the
+        Mann run or hold invalid values.
         """
         try:
             return cls.from_mapping({**attrs["parameters"], **attrs.get("derived", {}), "grid": attrs["grid"]})
@@ -160,14 +120,8 @@ class MannRun:
     def default_store_name(self) -> str:
         """A readable store name from the parameters, e.g. mann_U16_L49_G3.1_evo400_s1.zarr.
 
-        Runs that differ from the named ones only in parameters the name does not show (lifetime,
-        factor1/2, energy level, grid, pad-yz, hub height) get ``_p<8 hex digits>`` of everything
-        that determines the field appended, so two different fields never share a default name.
-
-        Returns
-        -------
-        str
-            The store name, ending in ``.zarr``.
+        A run that differs from the named one in anything the name does not show gets ``_p<8 hex digits>``
+        of everything that determines the field, so two fields never share it.
         """
         p = self.params
         evo = "frozen" if p.evo_time_s is None else f"{p.evo_time_s:g}"
@@ -182,25 +136,11 @@ class MannRun:
     def from_mapping(cls, d: Mapping) -> "MannRun":
         """A run from a (schema-valid) mapping; missing keys take turbgen.spec.defaults.
 
-        The energy level (turbgen.spec.energy.resolve_ae): ``ae`` if given, else the ae giving the
-        model sigma_u = ``sigma_u_m_s``, else ``ti`` * U, else the IEC NTM sigma_1 of ``turb_class``
-        (default A) at U.
-
-        Parameters
-        ----------
-        d : Mapping
-            Keys of :meth:`parameters` (ae_from only with ae), ``sigma_u_m_s`` [m/s], ``ti`` [-],
-            ``turb_class`` and ``grid`` (see turbgen.spec.defaults.grid_from_mapping).
-
-        Returns
-        -------
-        MannRun
-            The run.
-
-        Raises
-        ------
-        ParameterError
-            For an unknown key or a value outside its range (turbgen.theory.ranges).
+        The keys are those of :meth:`parameters` (ae_from only with ae), ``sigma_u_m_s`` [m/s], ``ti`` [-],
+        ``turb_class`` and ``grid`` (turbgen.spec.defaults.grid_from_mapping). The energy level
+        (turbgen.spec.energy.resolve_ae): ``ae`` if given, else for sigma_u = ``sigma_u_m_s``, else ``ti`` U,
+        else the IEC NTM sigma_1 of ``turb_class`` at U. ParameterError for an unknown key or a value outside
+        its range.
         """
         unknown = set(d) - _INPUT_KEYS
         if unknown:

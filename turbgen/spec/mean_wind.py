@@ -1,20 +1,18 @@
 """The mean wind an export adds to the stored fluctuations: one frozen, validated definition.
 
-A :class:`MeanWind` is a vertical profile (power law, log law or a user table of height -> speed
-[, direction]), an optional veer (a rate in deg/m, or the table's directions) and an optional hub-height
-time history (t -> U [, direction]). Every InflowWind/HAWC2 export applies it the same way
-(:func:`turbgen.exporters.request.Plane`): at height h and slice time t,
+A :class:`MeanWind` is a vertical profile (power law, log law or a table of height -> speed
+[, direction]), an optional veer and an optional hub-height time history. Every InflowWind/HAWC2
+export applies it the same way: at height h and slice time t,
 
     U(t, y, h) = U_hub(t) * r(h) + g(t) + s_v(t) (h - h_hub) / D + s_h(t) y / D,
     theta(t, h) = veer(h) + direction(t),
     (u, v) = rotate((U(t, y, h) + u', v'), theta)        (Jonkman 2009, TurbSim's per-height rotation)
 
-where r(h) = U(h)/U(h_hub) is the profile's ratio (:mod:`turbgen.theory.mean_wind`), U_hub(t) the
-history's speed (the store's U without a history), g, s_v, s_h and the transient's direction the
-superimposed IEC transient's (:class:`turbgen.spec.iec_transient.IecTransient`, zero without one), u', v'
-the stored fluctuations, and angles turn counter-clockwise seen from above (towards +y, left looking
-downwind; an IEC direction, clockwise in InflowWind, enters with its sign flipped so both mean the same
-turn); w is unchanged.
+with r(h) = U(h)/U(h_hub) (:mod:`turbgen.theory.mean_wind`), U_hub(t) the history's speed (else the
+store's U), g, s_v, s_h and the direction of a superimposed IEC transient
+(:class:`turbgen.spec.iec_transient.IecTransient`), u', v' the stored fluctuations; w is unchanged.
+Angles turn counter-clockwise seen from above (CCW_NOTE); an IEC direction, clockwise in InflowWind,
+enters with its sign flipped.
 """
 
 from __future__ import annotations
@@ -30,10 +28,8 @@ from turbgen.theory import ranges
 
 PROFILES = ("power", "log", "table")
 DEFAULT_SHEAR_EXPONENT = 0.2
-# The two senses of a wind direction in the files turbgen reads and writes (issue 37: both named wherever one is used):
-# the veer rate and the direction columns of profile tables and mean histories turn (u, v) counter-clockwise seen
-# from above, TurbSim's sense (northern-hemisphere veer is negative); InflowWind's WindDir and PropagationDir, and so
-# the uniform files' WindDir and the IEC transients' "+" sense (EDC, ECD), are clockwise seen from above.
+# the two senses of a wind direction, named wherever one is used: turbgen's veer and direction columns turn
+# counter-clockwise seen from above; InflowWind's WindDir, PropagationDir and the IEC transients' "+" clockwise
 CCW_NOTE = "counter-clockwise seen from above (TurbSim's sense; InflowWind's WindDir is clockwise)"
 CW_NOTE = "clockwise seen from above (InflowWind's WindDir sense; --veer and direction columns are counter-clockwise)"
 VEER_LIMIT_DEG_PER_M = 5.0  # |rate| beyond this turns the flow by > 90 deg over 18 m: surely a unit mistake
@@ -51,7 +47,7 @@ def _strictly_increasing(name: str, values) -> tuple:
 
 
 def _direction(name: str, value) -> float:
-    """A direction [deg] within one turn either way (a compass bearing or a relative angle); 1e308 is no direction."""
+    """A direction [deg] within one turn either way (a compass bearing or a relative angle)."""
     return check_range(name, value, -DIRECTION_LIMIT_DEG, DIRECTION_LIMIT_DEG)
 
 
@@ -74,35 +70,28 @@ class MeanWind:
     Parameters
     ----------
     profile : str
-        "power" (``shear_exponent``), "log" (``roughness_m``, ``displacement_m``) or "table"
-        (``table_heights_m``, ``table_speeds_m_s`` and optionally ``table_directions_deg``).
-    shear_exponent : float
-        Power-law alpha [-] in [-1, 1] (profile "power"); default 0.2.
-    roughness_m : float
-        Roughness length z0 [m], > 0 (profile "log").
-    displacement_m : float
-        Displacement height d [m], >= 0 (profile "log").
+        "power" (``shear_exponent`` in [-1, 1]), "log" (``roughness_m`` > 0, ``displacement_m`` >= 0)
+        or "table" (the ``table_*`` columns).
+    shear_exponent, roughness_m, displacement_m : float
+        Power-law alpha [-]; log-law z0 and d [m].
     table_heights_m, table_speeds_m_s, table_directions_deg : tuple of float
-        The user table: heights above ground [m] (> 0, strictly increasing), speeds [m/s] (>= 0; only
-        their ratio to the value at hub height is used) and optionally directions [deg] (veer =
-        direction(h) - direction(hub), counter-clockwise seen from above).
+        Heights above ground [m] (> 0, strictly increasing), speeds [m/s] (>= 0; only the ratio to hub
+        height counts) and optionally directions [deg] (veer = direction(h) - direction(hub)).
     veer_deg_per_m : float
         Linear veer rate [deg/m], |rate| <= 5; negative = clockwise with height (northern hemisphere).
     history_times_s, history_speeds_m_s, history_directions_deg : tuple of float
-        Hub-height history: times at the turbine [s] (strictly increasing), hub speeds [m/s] (>= 0) and
-        optionally directions [deg] (counter-clockwise seen from above); linear between the times, the
-        end values held outside them.
+        Hub-height history: strictly increasing times at the turbine [s], speeds [m/s] (>= 0), optional
+        directions [deg]; linear between the times, the end values held outside them.
     table_label, history_label : str
         Where the table and the history came from (a file name), for descriptions.
     transient : IecTransient, optional
-        An IEC 61400-1 transient superimposed on the mean (its V_hub and hub height must be the store's);
-        excludes a history.
+        An IEC 61400-1 transient on the mean (the store's V_hub and hub height); excludes a history.
 
     Raises
     ------
     ParameterError
-        For a value outside its range, a table or history not increasing in height/time, columns of
-        different lengths, or parameters that belong to another profile.
+        For a value outside its range, columns not increasing or of different lengths, or parameters of
+        another profile.
     """
 
     profile: str = "power"
@@ -179,35 +168,20 @@ class MeanWind:
 
     @property
     def turns(self) -> bool:
-        """Whether any angle can be non-zero (veer rate, table directions, history or transient directions)."""
+        """Whether any angle can be non-zero (veer, table or history directions, EDC/ECD transient)."""
         return bool(self.veer_deg_per_m or self.table_directions_deg or self.history_directions_deg
                     or (self.transient is not None and self.transient.kind in ("EDC", "ECD")))
 
     @property
     def varies(self) -> bool:
-        """Whether the mean changes in time or turns (else only u gets a fixed profile)."""
+        """Whether the mean changes in time or turns (else u only gets a fixed profile)."""
         return self.has_history or self.turns or self.transient is not None
 
     def speed_ratio(self, heights_m, hub_height_m: float) -> np.ndarray:
         """Profile ratio U(h) / U(h_hub) [-] at ``heights_m`` [m].
 
-        Parameters
-        ----------
-        heights_m : array_like
-            Heights above ground [m].
-        hub_height_m : float
-            Hub height [m].
-
-        Returns
-        -------
-        numpy.ndarray
-            The ratio, shape of ``heights_m``.
-
-        Raises
-        ------
-        ParameterError
-            When a height (or the hub) is outside the table, at or below d + z0 of the log law, or
-            the table's speed at hub height is 0.
+        Raises ParameterError for a height (or the hub) outside the table or at or below d + z0 of the log
+        law, or a table speed of 0 at hub height.
         """
         h = np.asarray(heights_m, dtype=float)
         if self.profile == "power":
@@ -233,20 +207,7 @@ class MeanWind:
                 raise ParameterError(f"{label} {value:g} m is outside the profile table's heights [{lo:g}, {hi:g}] m")
 
     def veer_deg(self, heights_m, hub_height_m: float) -> np.ndarray:
-        """Veer angle theta(h) [deg] at ``heights_m`` (0 at the hub), counter-clockwise seen from above.
-
-        Parameters
-        ----------
-        heights_m : array_like
-            Heights above ground [m] (inside the table when the table gives directions).
-        hub_height_m : float
-            Hub height [m].
-
-        Returns
-        -------
-        numpy.ndarray
-            theta [deg], shape of ``heights_m``.
-        """
+        """Veer angle theta(h) [deg] at ``heights_m`` [m], 0 at the hub (inside the table when it gives directions)."""
         h = np.asarray(heights_m, dtype=float)
         if self.table_directions_deg:
             self._check_covered(h, hub_height_m)
@@ -255,21 +216,9 @@ class MeanWind:
         return formulas.linear_veer_deg(h, hub_height_m, self.veer_deg_per_m)
 
     def hub_history(self, times_s, U_m_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """Hub speed [m/s] and direction [deg] at ``times_s``: the history's, else ``U_m_s`` and 0.
+        """Hub speed [m/s] and direction [deg] at ``times_s`` [s] at the turbine.
 
-        Parameters
-        ----------
-        times_s : array_like
-            Times at the turbine [s].
-        U_m_s : float
-            The store's mean speed [m/s], used without a history.
-
-        Returns
-        -------
-        tuple of numpy.ndarray
-            (speed [m/s], direction [deg]), each of the shape of ``times_s``; linear between the
-            history's times, its end values held outside them; with a transient, the store's U and the
-            transient's direction (counter-clockwise).
+        The history's (linear, end values held), else ``U_m_s`` with 0, or with a transient's direction.
         """
         t = np.asarray(times_s, dtype=float)
         if not self.has_history:
@@ -281,18 +230,7 @@ class MeanWind:
         return speed, direction
 
     def transient_terms(self, times_s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The transient's additive speed terms at ``times_s`` [s]: (g, s_v, s_h) [m/s], zero without one.
-
-        Parameters
-        ----------
-        times_s : array_like
-            Times at the turbine [s].
-
-        Returns
-        -------
-        tuple of numpy.ndarray
-            Uniform gust g, vertical and horizontal linear-shear speed changes across one rotor diameter.
-        """
+        """The transient's gust and shear changes across D, (g, s_v, s_h) [m/s], at ``times_s`` [s] (or zeros)."""
         t = np.asarray(times_s, dtype=float)
         if self.transient is None:
             return np.zeros(t.shape), np.zeros(t.shape), np.zeros(t.shape)
@@ -300,27 +238,16 @@ class MeanWind:
         return ev["gust_m_s"], ev["vshear_m_s"], ev["hshear_m_s"]
 
     def full_uv(self, u, v, times_s, y_m, heights_m, U_m_s: float, hub_height_m: float):
-        """Full (u, v) [m/s] from fluctuations (u, v) at times, lateral positions and heights (all broadcast).
-
-        u + U_hub(t) r(h) + g(t) + s_v(t) (h - h_hub) / D + s_h(t) y / D, then (u, v) turned by veer(h) +
-        direction(t) (the module's formula; v unchanged without a turn).
+        """Full (u, v) [m/s] from fluctuations by the module's formula (v unchanged without a turn).
 
         Parameters
         ----------
         u, v : array_like
             Fluctuations [m/s].
         times_s, y_m, heights_m : array_like
-            Time at the turbine [s], lateral position [m] (+y left) and height above ground [m],
-            broadcastable with ``u``.
-        U_m_s : float
-            The store's mean speed [m/s].
-        hub_height_m : float
-            Hub height [m].
-
-        Returns
-        -------
-        tuple of numpy.ndarray
-            (u, v) [m/s].
+            Time at the turbine [s], lateral position [m] (+y left), height above ground [m]; broadcast with u.
+        U_m_s, hub_height_m : float
+            The store's mean speed [m/s] and hub height [m].
         """
         t, h = np.asarray(times_s, dtype=float), np.asarray(heights_m, dtype=float)
         speed, turn = self.hub_history(t, U_m_s)
@@ -333,27 +260,9 @@ class MeanWind:
         return formulas.rotate_horizontal(u, v, self.veer_deg(h, hub_height_m) + turn)
 
     def fluctuation_uv(self, u, v, times_s, y_m, heights_m, U_m_s: float, hub_height_m: float):
-        """Fluctuations (u', v') [m/s] from total (u, v): the inverse of :meth:`full_uv`.
+        """Fluctuations (u', v') [m/s] from total (u, v): the inverse of :meth:`full_uv`, same arguments.
 
-        (u, v) turned back by veer(h) + direction(t), then U_hub(t) r(h) + g(t) + s_v(t) (h - h_hub) / D +
-        s_h(t) y / D taken from u (v unchanged without a turn).
-
-        Parameters
-        ----------
-        u, v : array_like
-            Total velocity components [m/s] (v may be None when the mean wind does not turn).
-        times_s, y_m, heights_m : array_like
-            Time at the turbine [s], lateral position [m] (+y left) and height above ground [m], broadcastable
-            with ``u``.
-        U_m_s : float
-            The field's mean speed [m/s].
-        hub_height_m : float
-            Hub height [m].
-
-        Returns
-        -------
-        tuple of numpy.ndarray
-            (u', v') [m/s] (v' is ``v`` as given without a turn).
+        ``v`` may be None when the mean wind does not turn (then returned as given).
         """
         t, h = np.asarray(times_s, dtype=float), np.asarray(heights_m, dtype=float)
         speed, turn = self.hub_history(t, U_m_s)
@@ -366,17 +275,8 @@ class MeanWind:
         return u, v
 
     def check_record(self, first_s: float, last_s: float) -> None:
-        """Refuse a history or transient with times outside the record [first_s, last_s] seen at the turbine.
-
-        Parameters
-        ----------
-        first_s, last_s : float
-            Times [s] at which the first and the last file slice reach the turbine.
-
-        Raises
-        ------
-        ParameterError
-            When a history time, or the transient's start or end, lies outside [first_s, last_s].
+        """Refuse (ParameterError) a history or transient with times outside [first_s, last_s] [s], the times at
+        which the first and last file slices reach the turbine.
         """
         if self.transient is not None:
             t0, t1 = self.transient.start_s, self.transient.start_s + self.transient.period_s
@@ -390,14 +290,10 @@ class MeanWind:
                                      f"[{first_s:g}, {last_s:g}] s seen at the turbine")
 
     def describe(self) -> str:
-        """One short line: profile, veer, history (the .bts description, the .sum title, `turbgen info`).
+        """One short line: profile, veer, history, transient (the .bts description, the .sum title, `turbgen info`).
 
-        Returns
-        -------
-        str
-            E.g. "power-law shear alpha = 0.2" (the default, as earlier exports wrote it) or
-            "log law z0 = 0.03 m, d = 0 m; veer -0.1 deg/m; hub history hist.csv (41 points); angles ccw from above";
-            a transient's direction change (EDC, ECD) is named clockwise, InflowWind's sense.
+        E.g. "log law z0 = 0.03 m, d = 0 m; veer -0.1 deg/m; hub history hist.csv (41 points); angles ccw from
+        above"; a transient's direction change is named clockwise, InflowWind's sense.
         """
         if self.profile == "power":
             out = [f"power-law shear alpha = {self.shear_exponent:g}"]
@@ -422,13 +318,7 @@ class MeanWind:
         return "; ".join(out)
 
     def to_attrs(self) -> dict:
-        """JSON-ready attributes (units in the key names) of the non-empty fields.
-
-        Returns
-        -------
-        dict
-            "profile" and the fields that apply, lists for the tables.
-        """
+        """JSON-ready attributes (units in the key names) of the fields that apply, lists for the tables."""
         out = {"profile": self.profile}
         for key, value in self.__dict__.items():
             if key == "profile" or value in ((), "", None) or (key == "displacement_m" and self.profile != "log"):
@@ -445,23 +335,7 @@ class MeanWind:
 
     @classmethod
     def from_attrs(cls, attrs: dict) -> "MeanWind":
-        """The MeanWind whose :meth:`to_attrs` is ``attrs`` (a dataset's or store's record).
-
-        Parameters
-        ----------
-        attrs : dict
-            As written by :meth:`to_attrs`.
-
-        Returns
-        -------
-        MeanWind
-            The same mean wind (validated again).
-
-        Raises
-        ------
-        ParameterError
-            For keys that are not fields, or values outside their ranges.
-        """
+        """The MeanWind of :meth:`to_attrs` output (validated again; ParameterError for unknown keys)."""
         fields = dict(attrs)
         unknown = sorted(set(fields) - set(cls.__dataclass_fields__))
         if unknown:

@@ -1,9 +1,11 @@
-"""Mean-wind options as text: ``power:0.2``, ``log:z0=0.03,d=0``, ``table:FILE`` and the CSV files
-of a profile table (z, U [, direction]) and of a hub-height history (t, U [, direction]), or the same rows
-given inline (``a,b[,c];a,b[,c]``: the service, which reads no client path).
+"""Mean-wind options as text (``power:0.2``, ``log:z0=0.03,d=0``, ``table:FILE``) and their CSV files.
 
-CSV files: comma- or whitespace-separated numbers, one row per line; lines starting with ``#`` and
-a first line that is not numeric (a header) are skipped.
+A profile table holds rows z, U [, direction], a hub-height history t, U [, direction]: comma- or
+whitespace-separated numbers, one row per line, ``#`` comments and a non-numeric first line (a header)
+skipped; or the same rows inline (``a,b[,c];a,b[,c]``: the service, which reads no client path).
+Every reader returns the 2 or 3 columns and raises ParameterError for a row that is not numeric,
+rows of different lengths or a row without 2 or 3 values; ``names`` are the columns' names for
+messages, e.g. ("z (m)", "U (m/s)", "direction (deg)").
 """
 
 from __future__ import annotations
@@ -16,80 +18,20 @@ from turbgen.spec.mean_wind import MeanWind
 
 
 def read_columns(path, kind: InputKind, names: tuple[str, ...]) -> list[tuple[float, ...]]:
-    """The columns of the CSV ``path``: 2 or 3 numbers per row.
+    """The columns of the CSV ``path``, a file of ``kind`` (turbgen.input_files: its name and size cap).
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
-    kind : turbgen.input_files.InputKind
-        What the file is (its name for messages, e.g. "profile table", and its size cap).
-    names : tuple of str
-        Column names (for messages), e.g. ("z (m)", "U (m/s)", "direction (deg)").
-
-    Returns
-    -------
-    list of tuple of float
-        The columns (2 or 3).
-
-    Raises
-    ------
-    ParameterError
-        When the file cannot be read, is not a regular file or is too large (turbgen.input_files), a row is not numeric, rows differ in length or a row does not
-        hold 2 or 3 values.
+    Also raises ParameterError when the file cannot be read, is not a regular file or is too large.
     """
     return columns_from_lines(read_input_text(path, kind).splitlines(), f"{kind.name} {str(path)!r}", names)
 
 
 def inline_columns(text: str, what: str, names: tuple[str, ...]) -> list[tuple[float, ...]]:
-    """The columns of rows given inline: ``"a,b[,c];a,b[,c];..."`` (the CSV file's rows joined by ';').
-
-    Parameters
-    ----------
-    text : str
-        The rows, separated by ';', numbers by ',' or blanks.
-    what : str
-        What the rows are (for messages), e.g. "profile table".
-    names : tuple of str
-        Column names (for messages).
-
-    Returns
-    -------
-    list of tuple of float
-        The columns (2 or 3).
-
-    Raises
-    ------
-    ParameterError
-        When a row is not numeric, rows differ in length or a row does not hold 2 or 3 values.
-    """
+    """The columns of rows given inline, ``"a,b[,c];a,b[,c];..."``; ``what`` names them in messages."""
     return columns_from_lines(text.split(";"), what, names, header=False)
 
 
 def columns_from_lines(lines, where: str, names: tuple[str, ...], header: bool = True) -> list[tuple[float, ...]]:
-    """The columns of CSV lines (``#`` comments and, with ``header``, a non-numeric first line skipped).
-
-    Parameters
-    ----------
-    lines : iterable of str
-        The rows.
-    where : str
-        Where they come from (for messages).
-    names : tuple of str
-        Column names (for messages).
-    header : bool, optional
-        Whether a first non-numeric line is a header to skip (default True).
-
-    Returns
-    -------
-    list of tuple of float
-        The columns (2 or 3).
-
-    Raises
-    ------
-    ParameterError
-        When a row is not numeric, rows differ in length or a row does not hold 2 or 3 values.
-    """
+    """The columns of CSV ``lines`` from ``where`` (with ``header``, a non-numeric first line is skipped)."""
     rows, header_allowed, unit = [], header, "line" if header else "row"
     for number, line in enumerate(lines, 1):
         line = line.split("#", 1)[0].strip()
@@ -113,25 +55,10 @@ def columns_from_lines(lines, where: str, names: tuple[str, ...], header: bool =
 
 
 def profile_fields(text: str, inline: bool = False) -> dict:
-    """MeanWind fields of a profile option: ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``.
+    """:class:`MeanWind` keyword arguments of a profile option: ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``.
 
-    Parameters
-    ----------
-    text : str
-        The option's value.
-    inline : bool, optional
-        ``table:ROWS`` holds the table's rows (``z,U[,dir];...``) instead of a file name (the service reads
-        no client path).
-
-    Returns
-    -------
-    dict
-        Keyword arguments of :class:`MeanWind` (the table read from its file).
-
-    Raises
-    ------
-    ParameterError
-        For an unknown kind, a malformed value or an unreadable table.
+    With ``inline``, ``table:ROWS`` holds the rows (``z,U[,dir];...``) instead of a file name. ParameterError
+    for an unknown kind, a malformed value or an unreadable table.
     """
     kind, _, value = text.partition(":")
     kind = kind.strip().lower()
@@ -172,7 +99,7 @@ def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | N
     Parameters
     ----------
     profile : str, optional
-        ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE`` (default: power law, alpha 0.2).
+        ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``.
     veer_deg_per_m : float, optional
         Linear veer rate [deg/m].
     history : str or os.PathLike, optional
@@ -180,12 +107,7 @@ def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | N
     transient : IecTransient, optional
         An IEC transient to superimpose.
     inline : bool, optional
-        The table (``table:ROWS``) and the history hold their rows (``a,b[,c];...``), not file names.
-
-    Returns
-    -------
-    MeanWind or None
-        None when no option is given.
+        The table and the history hold their rows (``a,b[,c];...``), not file names.
 
     Raises
     ------

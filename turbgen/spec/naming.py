@@ -9,20 +9,7 @@ from turbgen.grid import Grid
 
 
 def run_digest(parameters: dict, grid: Grid) -> str:
-    """8 hex digits of SHA-256 over the run's parameters and grid (canonical JSON): equal runs, equal digest.
-
-    Parameters
-    ----------
-    parameters : dict
-        The run's parameters (JSON values; others are hashed as their ``str``).
-    grid : Grid
-        The run's grid.
-
-    Returns
-    -------
-    str
-        Eight lowercase hex digits.
-    """
+    """8 hex digits of SHA-256 over the run's parameters (JSON; others as ``str``) and grid."""
     doc = {"parameters": parameters, "grid": {"nt": grid.nt, "dt_s": grid.dt_s, "x_m": list(grid.x_m),
                                               "ny": grid.ny, "nz": grid.nz, "dy_m": grid.dy_m, "dz_m": grid.dz_m}}
     return hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode()).hexdigest()[:8]

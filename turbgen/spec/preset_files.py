@@ -1,9 +1,10 @@
-"""User stability presets from TOML or JSON files.
+"""User stability presets from TOML or JSON files (the built-in ones: turbgen.spec.presets).
 
-A file holds ``{"presets": {NAME: {...}}}`` (or the mapping NAME -> {...} directly), each entry with an
-optional ``mann`` table (L, gamma, evo, factor1, lifetime, ae_ref) and an optional ``kaimal`` table
-(sigma_ratios, length_scales_m, a_yz, lc_m, a_x, b_x), plus ``turb_class`` (IEC class, default "A") and
-``source`` (free text). The built-in presets are in turbgen.spec.presets.
+A file holds ``{"presets": {NAME: {...}}}`` (or NAME -> {...} directly), each entry with an optional
+``mann`` table (L, gamma, evo, factor1, lifetime, ae_ref), an optional ``kaimal`` table (sigma_ratios,
+length_scales_m, a_yz, lc_m, a_x, b_x), ``turb_class`` (default "A") and ``source`` (free text). Bad
+names (built-in, or not a word of letters, digits, '-', '_'), unknown or missing keys and values
+outside their ranges raise ParameterError.
 """
 
 from __future__ import annotations
@@ -26,24 +27,7 @@ def _table(data: Mapping, where: str, allowed: set[str]) -> dict:
 
 
 def preset_from_mapping(name: str, data: Mapping) -> StabilityPreset:
-    """Build a preset from a plain mapping (one entry of a user preset file).
-
-    Parameters
-    ----------
-    name : str
-        New preset name: letters, digits, '-' or '_', not a built-in name.
-    data : Mapping
-        Optional ``mann`` and ``kaimal`` tables, ``turb_class``, ``source`` (see the module docstring).
-
-    Returns
-    -------
-    StabilityPreset
-
-    Raises
-    ------
-    ParameterError
-        For a bad or built-in name, an unknown or missing key, or a value outside its range.
-    """
+    """The StabilityPreset ``name`` of one entry ``data`` of a user preset file."""
     if not isinstance(name, str) or not name or not name.replace("-", "").replace("_", "").isalnum():
         raise ParameterError(f"preset name {name!r} must be a non-empty word of letters, digits, '-' or '_'")
     if name in BUILTIN_PRESETS:
@@ -74,22 +58,7 @@ def preset_from_mapping(name: str, data: Mapping) -> StabilityPreset:
 
 
 def presets_from_mapping(data: Mapping) -> dict[str, StabilityPreset]:
-    """``{"presets": {NAME: {...}}}`` or ``{NAME: {...}}`` -> {name: StabilityPreset}.
-
-    Parameters
-    ----------
-    data : Mapping
-        The content of a user preset file.
-
-    Returns
-    -------
-    dict of str to StabilityPreset
-
-    Raises
-    ------
-    ParameterError
-        If the table is not a mapping or an entry is invalid (see :func:`preset_from_mapping`).
-    """
+    """{name: StabilityPreset} of a user preset file's content."""
     table = data.get("presets", data) if isinstance(data, Mapping) else data
     if not isinstance(table, Mapping):
         raise ParameterError("user presets must be a table/object NAME -> parameters")
@@ -97,20 +66,5 @@ def presets_from_mapping(data: Mapping) -> dict[str, StabilityPreset]:
 
 
 def load_presets(path: str | Path) -> dict[str, StabilityPreset]:
-    """Read user presets from a TOML or JSON file.
-
-    Parameters
-    ----------
-    path : str or Path
-        The file (``.json`` is JSON, anything else TOML).
-
-    Returns
-    -------
-    dict of str to StabilityPreset
-
-    Raises
-    ------
-    ParameterError
-        If the file is unreadable or invalid, or a preset is invalid.
-    """
+    """{name: StabilityPreset} of a user preset file (``.json`` is JSON, anything else TOML)."""
     return presets_from_mapping(read_config(path))

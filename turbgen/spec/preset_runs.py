@@ -1,5 +1,10 @@
-"""What a stability preset (turbgen.spec.presets) gives each model's run at a mean wind speed:
-Mann parameters, Kaimal settings, and the run keys the CLI, sweeps and the service merge.
+"""What a stability preset (turbgen.spec.presets) gives each model's run at a mean wind speed.
+
+Mann parameters, Kaimal settings, and the run keys ``turbgen mann|kaimal --preset``, sweeps and the
+service merge, so all build the same run. ``preset`` is a name (built-in or in ``user``, see
+:func:`turbgen.spec.presets.get_preset`) or a StabilityPreset; U_m_s is the mean wind speed [m/s].
+Unknown presets, presets without the model's parameters and values outside their ranges raise
+ParameterError.
 """
 
 from __future__ import annotations
@@ -31,32 +36,12 @@ def mann_params_for(
     lifetime: str | None = None,
     factor2: float | None = None,
 ) -> MannParams:
-    """MannParams of ``preset`` at mean speed U [m/s]; explicit (non-None) arguments override the preset.
+    """MannParams of ``preset`` at U_m_s; explicit (non-None) arguments override the preset.
 
-    Unless ``ae`` is given, alpha*eps^(2/3) is re-derived so that the model sigma_u equals the
-    IEC NTM sigma_1 = Iref (0.75 U + 5.6) of the preset's class (Guo et al. 2023, Sect. 2.4): the run
-    mapping of :func:`mann_run_keys` resolved by MannRun.from_mapping, as ``turbgen mann --preset``
-    and the sweep do.
-
-    Parameters
-    ----------
-    preset : str or StabilityPreset
-        Preset name (built-in or in ``user``) or the preset itself.
-    U_m_s : float
-        Mean wind speed U [m/s], in [0.5, 100].
-    user : Mapping of str to StabilityPreset, optional
-        User presets (see :func:`get_preset`).
-    ae, length_scale_m, gamma, evo_time_s, factor1, lifetime, factor2 : optional
-        Overrides: ae [m^(4/3) s^-2], L [m], Gamma [-], gamma [s], factor1/2 [-], lifetime model.
-
-    Returns
-    -------
-    MannParams
-
-    Raises
-    ------
-    ParameterError
-        For an unknown preset, one without Mann parameters, or a value outside its range.
+    Unless ``ae`` is given, alpha*eps^(2/3) is re-derived so that the model sigma_u equals the IEC NTM
+    sigma_1 = Iref (0.75 U + 5.6) of the preset's class (Guo et al. 2023, Sect. 2.4), as MannRun.from_mapping
+    resolves :func:`mann_run_keys`. Overrides: ae [m^(4/3) s^-2], L [m], Gamma [-], gamma [s], factor1/2 [-],
+    lifetime model.
     """
     given = {"ae": ae, "length_scale_m": length_scale_m, "gamma": gamma, "evo_time_s": evo_time_s,
              "factor1": factor1, "lifetime": lifetime, "factor2": factor2}
@@ -77,30 +62,11 @@ def kaimal_settings_for(
     a_x: float | None = None,
     b_x: float | None = None,
 ) -> KaimalSettings:
-    """Kaimal parameters of ``preset`` at mean speed U [m/s]; explicit arguments override the preset.
+    """KaimalSettings of ``preset`` at U_m_s; explicit arguments override the preset.
 
-    sigma_1 = Iref (0.75 U + 5.6) (IEC class of the preset), sigma_2,3 = sigma_1 x preset ratios;
-    the longitudinal model is the exponential Eq. 18 with the preset's Table 2 a_x, b_x.
-
-    Parameters
-    ----------
-    preset : str or StabilityPreset
-        Preset name (built-in or in ``user``) or the preset itself.
-    U_m_s : float
-        Mean wind speed U [m/s], in [0.5, 100].
-    user : Mapping of str to StabilityPreset, optional
-        User presets (see :func:`get_preset`).
-    sigma_m_s, length_scales_m, a_yz, lc_m, a_x, b_x : optional
-        Overrides: sigmas [m/s], L1..L3 [m], a_yz [-], Lc [m], a_x [-], b_x [1/m].
-
-    Returns
-    -------
-    KaimalSettings
-
-    Raises
-    ------
-    ParameterError
-        For an unknown preset, one without Kaimal parameters, or a value outside its range.
+    sigma_1 = Iref (0.75 U + 5.6) (IEC class of the preset), sigma_2,3 = sigma_1 x the preset's ratios;
+    exponential longitudinal coherence (Eq. 18) with the preset's Table 2 a_x, b_x. Overrides: sigmas
+    [m/s], L1..L3 [m], a_yz [-], Lc [m], a_x [-], b_x [1/m].
     """
     p = _resolve(preset, user)
     if p.kaimal is None:
@@ -119,27 +85,10 @@ def kaimal_settings_for(
 
 
 def mann_run_keys(preset: str | StabilityPreset, *, user: Mapping[str, StabilityPreset] | None = None) -> dict:
-    """The keys of a Mann run mapping (turbgen.spec.mann.MannRun.from_mapping) that ``preset`` sets.
+    """The keys of a Mann run mapping (MannRun.from_mapping) that ``preset`` sets.
 
-    length_scale_m, gamma, evo_time_s, factor1, lifetime and turb_class: the run derives ae from
-    the model variance for the class's sigma_1 at its U (the same ae as :func:`mann_params_for`).
-    Used by ``turbgen mann --preset`` and by the sweep, so both build the same run.
-
-    Parameters
-    ----------
-    preset : str or StabilityPreset
-        Preset name (built-in or in ``user``) or the preset itself.
-    user : Mapping of str to StabilityPreset, optional
-        User presets (see :func:`get_preset`).
-
-    Returns
-    -------
-    dict
-
-    Raises
-    ------
-    ParameterError
-        For an unknown preset or one without Mann parameters.
+    length_scale_m, gamma, evo_time_s, factor1, lifetime and turb_class: the run derives ae for the
+    class's sigma_1 at its U (the ae of :func:`mann_params_for`).
     """
     p = _resolve(preset, user)
     if p.mann is None:
@@ -162,31 +111,10 @@ def kaimal_run_keys(
     user: Mapping[str, StabilityPreset] | None = None,
     turb_class: str | None = None,
 ) -> dict:
-    """The keys of a Kaimal run mapping (turbgen.spec.kaimal.KaimalRun.from_mapping) that ``preset`` sets.
+    """The keys of a Kaimal run mapping (KaimalRun.from_mapping) that ``preset`` sets at U_m_s.
 
-    sigma_m_s, length_scales_m, a_yz, lc_m, long_model, a_x, b_x; ``turb_class`` (default: the
-    preset's) sets sigma_1. Used by ``turbgen kaimal --preset`` and by the sweep, so both build
-    the same run.
-
-    Parameters
-    ----------
-    preset : str or StabilityPreset
-        Preset name (built-in or in ``user``) or the preset itself.
-    U_m_s : float
-        Mean wind speed U [m/s], in [0.5, 100].
-    user : Mapping of str to StabilityPreset, optional
-        User presets (see :func:`get_preset`).
-    turb_class : str, optional
-        IEC class overriding the preset's.
-
-    Returns
-    -------
-    dict
-
-    Raises
-    ------
-    ParameterError
-        For an unknown preset or class, one without Kaimal parameters, or U outside its range.
+    sigma_m_s, length_scales_m, a_yz, lc_m, long_model, a_x, b_x; ``turb_class`` overrides the preset's
+    class, which sets sigma_1.
     """
     p = _resolve(preset, user)
     if turb_class is not None:
@@ -205,25 +133,9 @@ def kaimal_run_keys(
 
 def run_keys(model: str, preset: str | StabilityPreset, U_m_s: float, *,
              user: Mapping[str, StabilityPreset] | None = None, turb_class: str | None = None) -> dict:
-    """The run-mapping keys ``preset`` sets for ``model`` ("mann" or "kaimal") at U [m/s].
+    """The run-mapping keys ``preset`` sets for ``model`` ("mann" or "kaimal"; another raises ParameterError).
 
-    :func:`mann_run_keys` or :func:`kaimal_run_keys` (``turb_class`` overrides a Kaimal preset's class).
-
-    Parameters
-    ----------
-    model : {"mann", "kaimal"}
-        The model.
-    preset, U_m_s, user, turb_class : optional
-        As :func:`kaimal_run_keys` (U [m/s]); Mann uses ``preset`` and ``user`` only.
-
-    Returns
-    -------
-    dict
-
-    Raises
-    ------
-    ParameterError
-        For a model without presets, or as :func:`mann_run_keys` / :func:`kaimal_run_keys`.
+    :func:`mann_run_keys` (``preset`` and ``user`` only) or :func:`kaimal_run_keys`.
     """
     if model == "mann":
         return mann_run_keys(preset, user=user)

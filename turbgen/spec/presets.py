@@ -1,30 +1,19 @@
-"""Atmospheric-stability presets for both models (Guo et al. 2023, Tables 1 and 2).
+"""Atmospheric-stability presets for both models (Guo, Schlipf and Cheng 2023, Wind Energ. Sci. 8, 149-171).
 
-Sources of every number (Guo, Schlipf and Cheng 2023, Wind Energ. Sci. 8, 149-171: lidar-assisted control under various turbulence characteristics):
+Sources of the numbers:
 
-* Mann alpha*eps^(2/3), L, Gamma: Table 1 (after Pena 2019), at the reference speed U = 16 m/s.
-  alpha*eps^(2/3) is NOT taken from the table: the paper scales it "such that the turbulence
-  intensity corresponds to the IEC 61400-1:2019 class 1A definition" (Sect. 2.4, 5.1.2), so it
-  is re-derived here from the model variance (turbgen.theory.mann_spectra.ae_for_sigma_u) for
-  sigma_u = 0.16 (0.75 U + 5.6) at every U; the table value is kept for comparison only
-  (the re-derived value is within a few % of it at 16 m/s).
-* Evolution time constant gamma = 600 / 400 / 200 s for unstable / neutral / stable (Sect. 2.4).
-* factor1 = 0.8 (Guo lifetime small-k slope -0.8) for the stable class: the 4D Mann turbulence
-  generator's stable preset (its stable class needs the slope b1 = -0.8);
-  1.0 (the Mann-like slope) otherwise.
-* Kaimal L1, L2, L3, a_yz, Lc and sigma_2/sigma_1, sigma_3/sigma_1: Table 1 (fitted to the Mann
-  spectra and co-coherence, Eqs. 20-21). The neutral class is the IEC 61400-1 set (Sect. 2.4:
-  "we chose the parameters listed by the IEC"), so its ratios are exactly 0.8 and 0.5 and its
-  length scales 8.1/2.7/0.66 Lambda1 with Lambda1 = 42 m (Table 1: 2.25/2.82, 1.41/2.82, 340.2,
-  113.4, 27.72 m). sigma_1 = 0.16 (0.75 U + 5.6) (IEC class A) at every U; sigma_2, sigma_3
-  keep the Table 1 ratios to sigma_1 (Sect. 5.1.2: "sigma_1, sigma_2 and sigma_3 are adjusted
-  according to the mean wind").
-* Kaimal longitudinal coherence a_x, b_x (exponential model, Eq. 18): Table 2, the column of the
-  class's gamma (unstable 600 s: 4.1, 7.67e-5; neutral 400 s: 1.8, 1.49e-4; stable 200 s:
-  1.6, 9.18e-4 1/m). They are
-  fitted at U = 16 m/s and Delta x = 100 m and used unchanged at other speeds, as in the paper.
+* Mann L, Gamma: Table 1 (after Pena 2019), at U = 16 m/s. alpha*eps^(2/3) is re-derived at every U
+  from the model variance for sigma_u = 0.16 (0.75 U + 5.6), as the paper scales it to IEC class 1A
+  (Sect. 2.4, 5.1.2); Table 1's value (``ae_ref``) is kept for comparison only.
+* Evolution time gamma = 600 / 400 / 200 s for unstable / neutral / stable (Sect. 2.4); factor1 = 0.8
+  for stable (the 4D Mann turbulence generator's stable preset), else 1.
+* Kaimal L1..L3, a_yz, Lc and sigma_2/sigma_1, sigma_3/sigma_1: Table 1 (fits to the Mann model,
+  Eq. 20-21); the neutral class is the IEC 61400-1 set (Sect. 2.4), Lambda1 = 42 m. sigma_1 follows
+  IEC class A at every U, sigma_2,3 keep the ratios (Sect. 5.1.2).
+* Kaimal a_x, b_x (Eq. 18): Table 2 in the column of the class's gamma, fitted at U = 16 m/s and
+  dx = 100 m and used unchanged at other speeds, as in the paper.
 
-User presets (TOML or JSON files): turbgen.spec.preset_files. What a preset gives each model's run:
+User presets (TOML or JSON): turbgen.spec.preset_files; what a preset gives each model's run:
 turbgen.spec.preset_runs.
 """
 
@@ -37,8 +26,6 @@ from turbgen.errors import ParameterError, check_choice, check_nonnegative, chec
 from turbgen.theory.kaimal import IEC_IREF, IEC_LENGTH_FACTORS, IEC_SIGMA_RATIOS
 from turbgen.theory.params import KaimalParams, MannParams
 
-REFERENCE_U_M_S = 16.0  # Guo et al. 2023, Table 1 caption: "with the mean wind speed of 16 m/s"
-
 
 @dataclass(frozen=True)
 class MannPreset:
@@ -47,18 +34,18 @@ class MannPreset:
     Parameters
     ----------
     length_scale_m, gamma, evo_time_s : float
-        L [m], Gamma [-] and evolution time gamma [s] (ranges of turbgen.theory.ranges).
+        L [m], Gamma [-] and evolution time gamma [s].
     factor1 : float, optional
-        The small-k slope of the Guo lifetime is -factor1 [-] (default 1).
+        The small-k slope of the Guo lifetime is -factor1 [-].
     lifetime : {"guo", "mann"}, optional
-        Lifetime model (default "guo").
+        Lifetime model.
     ae_ref : float, optional
         Table 1 alpha*eps^(2/3) at 16 m/s [m^(4/3) s^-2] (> 0), for comparison only.
 
     Raises
     ------
     ParameterError
-        If a value is outside its range.
+        If a value is outside its range (turbgen.theory.ranges).
     """
 
     length_scale_m: float
@@ -66,10 +53,9 @@ class MannPreset:
     evo_time_s: float
     factor1: float = 1.0
     lifetime: str = "guo"
-    ae_ref: float | None = None  # Table 1 alpha*eps^(2/3) at 16 m/s [m^(4/3) s^-2], for comparison only
+    ae_ref: float | None = None
 
     def __post_init__(self):
-        # Validate with the one place that checks Mann parameters (ae is a placeholder here).
         MannParams(1.0, self.length_scale_m, self.gamma, self.lifetime, self.factor1, evo_time_s=self.evo_time_s)
         if self.ae_ref is not None:
             check_positive("ae_ref (m^(4/3)/s^2)", self.ae_ref)
@@ -84,12 +70,7 @@ class KaimalPreset:
     sigma_ratios, length_scales_m : tuple of float
         sigma_1..3 / sigma_1 [-] and Kaimal L1..L3 [m].
     a_yz, lc_m, a_x, b_x : float
-        yz coherence a_yz [-] and Lc [m]; Eq. 18 a_x [-] (>= 0) and b_x [1/m] (>= 0).
-
-    Raises
-    ------
-    ParameterError
-        If a value is outside its range.
+        yz coherence a_yz [-] and Lc [m]; Eq. 18 a_x [-] and b_x [1/m] (>= 0).
     """
 
     sigma_ratios: tuple[float, float, float]
@@ -109,23 +90,16 @@ class KaimalPreset:
 
 @dataclass(frozen=True)
 class StabilityPreset:
-    """A named stability class: Mann and/or Kaimal parameters, the IEC class that sets the TI.
+    """A named stability class: Mann and/or Kaimal parameters, and the IEC class that sets the TI.
 
     Parameters
     ----------
     name : str
         Preset name.
-    mann : MannPreset or None
-        Mann parameters.
-    kaimal : KaimalPreset or None
-        Kaimal parameters (at least one of ``mann``, ``kaimal`` is given).
+    mann, kaimal : MannPreset or KaimalPreset or None
+        The models' parameters, at least one given.
     turb_class, source : str, optional
-        IEC class "A+", "A" (default), "B" or "C"; where the numbers come from.
-
-    Raises
-    ------
-    ParameterError
-        For an unknown class or neither ``mann`` nor ``kaimal``.
+        IEC class "A+", "A", "B" or "C"; where the numbers come from.
     """
 
     name: str
@@ -142,16 +116,8 @@ class StabilityPreset:
 
 @dataclass(frozen=True)
 class KaimalSettings:
-    """What a Kaimal run takes from a preset: spectra/yz coherence and the exponential a_x, b_x.
-
-    Parameters
-    ----------
-    kaimal : KaimalParams
-        Spectra and yz coherence (sigmas [m/s], L1..L3 [m], a_yz [-], Lc [m]).
-    long_model : str
-        Longitudinal coherence model ("exp").
-    a_x, b_x : float
-        Eq. 18 parameters a_x [-] and b_x [1/m].
+    """What a Kaimal run takes from a preset: spectra/yz coherence (``kaimal``), the longitudinal model
+    ("exp") and its Eq. 18 parameters a_x [-], b_x [1/m].
     """
 
     kaimal: KaimalParams
@@ -208,24 +174,7 @@ BUILTIN_PRESETS: dict[str, StabilityPreset] = _builtin()
 
 
 def get_preset(name: str, user: Mapping[str, StabilityPreset] | None = None) -> StabilityPreset:
-    """Built-in or user preset by name; ParameterError listing the known names otherwise.
-
-    Parameters
-    ----------
-    name : str
-        Preset name.
-    user : Mapping of str to StabilityPreset, optional
-        User presets (shadowing built-in ones of the same name).
-
-    Returns
-    -------
-    StabilityPreset
-
-    Raises
-    ------
-    ParameterError
-        If ``name`` is not a known preset.
-    """
+    """Built-in or ``user`` preset (shadowing built-ins) by name; ParameterError listing the known names otherwise."""
     known = {**BUILTIN_PRESETS, **(user or {})}
     if name not in known:
         raise ParameterError(f"preset = {name!r} is not one of {', '.join(known)}")

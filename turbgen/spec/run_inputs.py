@@ -1,9 +1,8 @@
-"""How a run's inputs become one run mapping, for every front end (the CLI, the Python API): run file < preset <
-options given by the user; what none of them gives takes turbgen.spec.defaults (applied by the model's from_mapping).
+"""How a run's inputs become one run mapping for every front end: run file < preset < the user's options.
 
-The option names are those of the commands (``turbgen mann --L 49`` is ``turbgen.mann(L=49)``); any key of the
-model's run schema (turbgen/schemas/<model>-run.schema.json, the keys of a ``--config`` file) is accepted under its
-own name too, so a key added to a run schema reaches the run without a new option name.
+What none of them gives takes turbgen.spec.defaults (in the model's from_mapping). The option names
+are the commands' (``turbgen mann --L 49`` is ``turbgen.mann(L=49)``); any key of the model's run
+schema is accepted under its own name too, so a key added to a schema needs no new option.
 """
 
 from __future__ import annotations
@@ -43,27 +42,22 @@ def merge_run_inputs(
     replaces: Mapping[str, tuple] | None = None,
     x_m=None,
 ) -> dict:
-    """The run mapping of one run: the run file's keys, then the preset's, then the given ones.
+    """The run mapping of one run, with its ``grid`` table: the run file's keys, then the preset's, then the given ones.
 
     Parameters
     ----------
     file_mapping : Mapping or None
-        The run file's content (already checked against the model's run schema), or None.
+        The run file's content (schema-checked), or None.
     given : Mapping
         Run-mapping keys given by the user (not None), outside ``grid``.
     grid_given : Mapping
-        Keys of the ``grid`` table given by the user (``nt``, ``dt_s`` [s], ``ny``, ``nz``, ``dy_m`` [m], ``dz_m`` [m]).
+        Keys of the ``grid`` table given by the user (``nt``, ``dt_s`` [s], ``ny``, ``nz``, ``dy_m``, ``dz_m`` [m]).
     preset_keys : callable, optional
         ``preset_keys(file mapping, given)`` -> the preset's run keys; None without a preset.
     replaces : Mapping, optional
-        Given key -> keys it removes from the run file and the preset (e.g. a given energy level replaces any other).
+        Given key -> keys it removes from the run file and the preset (one energy level, one source).
     x_m : sequence of float, optional
-        Plane positions [m upstream] (from ``planes`` or ``gates``); None keeps the file's or the default.
-
-    Returns
-    -------
-    dict
-        The run mapping, with its ``grid`` table (for ``MannRun.from_mapping`` / ``KaimalRun.from_mapping``).
+        Plane positions [m upstream]; None keeps the file's or the default.
     """
     mapping = dict(file_mapping or {})
     grid = dict(mapping.pop("grid", {}))
@@ -79,27 +73,11 @@ def merge_run_inputs(
 
 
 def range_positions(text: str, name: str, limit: int) -> list[float]:
-    """'start:stop:step' -> start, start + step, ... <= stop [m] (inclusive, 1e-9 relative tolerance), each rounded to
-    9 decimals: the rule of the CLI's ``--gates``, so both give the same plane positions to the bit.
+    """'start:stop:step' [m] -> start, start + step, ... <= stop (1e-9 relative tolerance), rounded to 9 decimals.
 
-    Parameters
-    ----------
-    text : str
-        'start:stop:step' in metres.
-    name : str
-        The input's name, for messages.
-    limit : int
-        Most values allowed (counted before the list is built).
-
-    Returns
-    -------
-    list of float
-        The positions [m].
-
-    Raises
-    ------
-    ParameterError
-        For a malformed text, a step <= 0, stop < start, a non-finite number or more than ``limit`` values.
+    The rule of the CLI's ``--gates``, so both give the same plane positions to the bit. ParameterError for
+    a malformed text, step <= 0, stop < start, a non-finite number or more than ``limit`` values
+    (``name`` names the input).
     """
     import math
 

@@ -1,8 +1,8 @@
 """The ``spectrum`` of a Kaimal run as given (a CSV file, arrays, a mapping or a callable) -> its LineSpectrum.
 
-What the forms mean (band means, quadrature of a callable, interpolation of a table) is in
-turbgen.theory.user_spectra. The CSV file has a header line naming the columns ``f_hz,S_u,S_v,S_w`` (in any order;
-lines starting with ``#`` and blank lines are skipped) and one row per frequency [Hz], PSDs in m^2/s.
+The forms' meaning is in turbgen.theory.user_spectra. The CSV file has a header naming the columns
+``f_hz,S_u,S_v,S_w`` (any order; ``#`` lines and blank lines skipped) and one row per frequency [Hz],
+PSDs in m^2/s.
 """
 
 from __future__ import annotations
@@ -19,22 +19,9 @@ from turbgen.theory.user_spectra import COLUMNS, LineSpectrum
 
 
 def read_spectrum_csv(path) -> tuple[np.ndarray, np.ndarray]:
-    """(f_hz (n,), S (3, n)) of a spectrum CSV file.
+    """(f_hz (n,) [Hz], S (3, n) [m^2/s]) of a spectrum CSV file, as written.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        Frequencies [Hz] and S_u, S_v, S_w [m^2/s], as written (checked by LineSpectrum.from_table).
-
-    Raises
-    ------
-    ParameterError
-        If the file cannot be read, lacks the header or has a row that is not four numbers.
+    ParameterError if the file cannot be read, lacks the header or has a row that is not four numbers.
     """
     text = read_input_text(path, SPECTRUM)  # a regular file of at most its cap (a FIFO or device: refused)
     rows = [(n, line.strip()) for n, line in enumerate(text.splitlines(), 1)
@@ -66,25 +53,11 @@ def _from_mapping(value: Mapping) -> tuple:
 
 
 def line_spectrum(value, grid: Grid) -> LineSpectrum | None:
-    """The band means of ``value`` on ``grid``'s lines.
+    """The band means of ``value`` on ``grid``'s lines (None: no user spectrum).
 
-    Parameters
-    ----------
-    value : None, LineSpectrum, str, os.PathLike, Mapping, sequence or callable
-        A CSV file; a mapping of ``f_hz``, ``S_u``, ``S_v``, ``S_w`` (the form a store records); four arrays
-        (f_hz, S_u, S_v, S_w); or a callable ``S(f_hz) -> (3, n)`` [m^2/s]. None: no user spectrum.
-    grid : Grid
-        The run's grid (its record: nt, dt_s [s]).
-
-    Returns
-    -------
-    LineSpectrum or None
-        The spectrum the run synthesises.
-
-    Raises
-    ------
-    ParameterError
-        For a value of none of these forms, or a table or callable LineSpectrum refuses.
+    ``value`` is a CSV path; a mapping of ``f_hz``, ``S_u``, ``S_v``, ``S_w`` (what a store records); four
+    arrays; a callable ``S(f_hz) -> (3, n)`` [m^2/s]; or a LineSpectrum of the same record. ParameterError
+    for anything else, or a table or callable LineSpectrum refuses.
     """
     if value is None:
         return None

@@ -13,11 +13,10 @@ do not share the rules.
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import numpy as np
 
 from turbgen.theory.eddy_lifetime import shear_lifetime_table
+from turbgen.theory.lattice import cell_rule, gauss_panel
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
 from turbgen.synthesis.box_shape import BoxShape
@@ -29,35 +28,16 @@ _CELL_GAUSS = 4
 _CELL_SLABS = 16  # slabs per tensor evaluation (~100 k nodes)
 
 
-@lru_cache(maxsize=4)
-def _unit_gauss(n: int) -> tuple[np.ndarray, np.ndarray]:
-    return np.polynomial.legendre.leggauss(n)
-
-
-def _gauss_rule(a: float, b: float, n: int = _CELL_GAUSS) -> tuple[np.ndarray, np.ndarray]:
-    x, w = _unit_gauss(n)
-    return 0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w
-
-
 def _cell_rule(center: float, width: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
-    """Nodes/weights over [center - width/2, center + width/2]; graded towards 0 (down to ``scale``) if center = 0."""
-    if center != 0.0:
-        return _gauss_rule(center - width / 2, center + width / 2)
-    edges = [width / 2]
-    while edges[-1] > 2 * scale and len(edges) < 30:
-        edges.append(edges[-1] / 2)
-    edges = np.array([0.0, *edges[::-1]])
-    parts = [_gauss_rule(a, b) for a, b in zip(edges[:-1], edges[1:])]
-    x = np.concatenate([p[0] for p in parts])
-    w = np.concatenate([p[1] for p in parts])
-    return np.concatenate([-x[::-1], x]), np.concatenate([w[::-1], w])
+    """The synthesis's rule over a cell: graded by halves towards the k1 axis down to 2 ``scale``."""
+    return cell_rule(center, width, _CELL_GAUSS, 2 * scale, 2.0, 30)
 
 
 def _slab_nodes(box: BoxShape, k1c: float, js: np.ndarray, ls: np.ndarray, off_axis: dict):
     """Quadrature nodes (k1, k2, k3) [rad/m], weights and cell numbers (row-major over js x ls) of the cells of the
     slab at k1 = ``k1c``; ``off_axis[(2, j)]`` / ``[(3, l)]``: the rules of the cells j, l != 0 (the same on every slab)."""
     dk1, dk2, dk3 = box.dk()
-    x1, w1 = _gauss_rule(k1c - dk1 / 2, k1c + dk1 / 2, 2)
+    x1, w1 = gauss_panel(k1c - dk1 / 2, k1c + dk1 / 2, 2)
     scale = max(abs(k1c), dk1 / 4)
     rules2 = [off_axis[(2, j)] if j else _cell_rule(j * dk2, dk2, scale) for j in js]
     rules3 = [off_axis[(3, l)] if l else _cell_rule(l * dk3, dk3, scale) for l in ls]

@@ -11,7 +11,7 @@ mann_spectra      one-point and cross-spectra F_ij(k1, dy, dz) by quadrature (Eq
 mann_quadrature   the (k2, k3) quadrature of Eq. 8: radial nodes, angular integrals of the sheared tensor
 space_time        space-time tensor Theta (Eq. 13) and longitudinal coherence (Eq. 16)
 rotor_effective   rotor-effective wind speed spectra (Eq. 24 Mann, Eq. 25 Kaimal)
-lattice           line frequencies, pair weights and box wavenumbers of the periodic record/box
+lattice           line frequencies, pair weights, box wavenumbers and the Gauss rule of its cells
 lidar_geometry    lidar beam geometry in the store frame: directions, focus points, measurements
 lidar_weighting   probe-volume weighting along the beam (pulsed Gaussian, continuous-wave) and its transform
 lidar_preview     REWS, lidar and lidar-rotor spectra, gamma^2_RL (Guo et al. 2023 Eq. 29-35)

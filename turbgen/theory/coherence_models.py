@@ -1,14 +1,8 @@
 """Coherence models as small plain functions (the pyconturb style).
 
-All return the *un-squared* (magnitude) coherence, i.e. the correlation coefficient of the
-Fourier amplitudes that a synthesis uses directly; square it to compare with a
-magnitude-squared estimate. Separations in m, frequencies in Hz, speeds in m/s.
-
-yz-plane:      exponential_yz                          (IEC 61400-1; Guo et al. (2023), Eq. 12),
-               exponential_yz_decay_length_m           (its bound exp(-r / decay), for the embedding)
-longitudinal:  exponential_longitudinal(a_x, b_x)      (Guo et al. 2023, Eq. 18)
-               simley_pao(sigma_total, L_u)            (Simley & Pao 2015 LES parameters of Eq. 18)
-               kristensen(sigma_total, L_u)            (Kristensen 1979)
+All return the *un-squared* (magnitude) coherence, the correlation of the Fourier amplitudes that a
+synthesis uses directly: square it to compare with a magnitude-squared estimate. Separations r, dx in
+m (only |dx| counts), frequencies in Hz (broadcast against the separations), speeds in m/s.
 """
 
 from __future__ import annotations
@@ -17,27 +11,21 @@ import numpy as np
 
 
 def exponential_yz(r_m, f_hz, U_m_s: float, a_yz: float = 12.0, lc_m: float = 340.2):
-    """Un-squared IEC yz coherence coh(r, f) = exp(-a_yz r sqrt((f/U)^2 + (0.12/Lc)^2)).
-
-    Its square is Guo et al. (2023), Eq. 12 (IEC 61400-1 exponential coherence).
+    """Un-squared IEC yz coherence exp(-a_yz r sqrt((f/U)^2 + (0.12/Lc)^2)) (squared: Guo et al. 2023, Eq. 12).
 
     Parameters
     ----------
-    r_m : array_like
-        Separation r in the yz plane [m].
-    f_hz : array_like
-        Frequency [Hz] (broadcast against ``r_m``).
+    r_m, f_hz : array_like
+        Separation in the yz plane [m] and frequency [Hz].
     U_m_s : float
-        Mean wind speed U [m/s].
-    a_yz : float, optional
-        Coherence decrement a_yz [-] (IEC 61400-1: 12).
-    lc_m : float, optional
-        Coherence scale parameter Lc [m] (IEC 61400-1: 8.1 Lambda_1; default 340.2 m).
+        Mean wind speed [m/s].
+    a_yz, lc_m : float, optional
+        Coherence decrement [-] and scale parameter Lc = 8.1 Lambda_1 [m] (IEC 61400-1).
 
     Returns
     -------
     numpy.ndarray
-        Un-squared (magnitude) coherence [-], shape of the broadcast of ``r_m`` and ``f_hz``.
+        Coherence [-], broadcast shape of ``r_m`` and ``f_hz``.
     """
     r = np.asarray(r_m, dtype=float)
     f = np.asarray(f_hz, dtype=float)
@@ -45,50 +33,30 @@ def exponential_yz(r_m, f_hz, U_m_s: float, a_yz: float = 12.0, lc_m: float = 34
 
 
 def exponential_yz_decay_length_m(f_hz: float, U_m_s: float, a_yz: float = 12.0, lc_m: float = 340.2) -> float:
-    """Decay length of exponential_yz at ``f_hz``: coh(r) = exp(-r / decay) with decay = 1 / (a_yz kappa).
+    """Decay length 1 / (a_yz kappa) [m] of :func:`exponential_yz` at ``f_hz``: coh(r) = exp(-r / decay).
 
-    Parameters
-    ----------
-    f_hz : float
-        Frequency [Hz].
-    U_m_s : float
-        Mean wind speed U [m/s].
-    a_yz : float, optional
-        Coherence decrement [-] (IEC 61400-1: 12).
-    lc_m : float, optional
-        Coherence scale parameter Lc [m] (IEC 61400-1: 8.1 Lambda_1).
-
-    Returns
-    -------
-    float
-        decay [m], with kappa = sqrt((f/U)^2 + (0.12/Lc)^2) [1/m]; infinite for a_yz = 0 (full coherence).
+    kappa = sqrt((f/U)^2 + (0.12/Lc)^2) [1/m]; infinite for a_yz = 0 (full coherence).
     """
     kappa = np.hypot(f_hz / U_m_s, 0.12 / lc_m)
     return 1.0 / (a_yz * kappa) if a_yz > 0 else np.inf
 
 
 def exponential_longitudinal(dx_m, f_hz, U_m_s: float, a_x: float, b_x: float):
-    """Un-squared longitudinal coherence gamma_x = sqrt(exp(-a_x dx sqrt((f/U)^2 + b_x^2))).
-
-    The square is Guo et al. (2023), Eq. 18.
+    """Un-squared longitudinal coherence sqrt(exp(-a_x dx sqrt((f/U)^2 + b_x^2))) (squared: Guo et al. 2023, Eq. 18).
 
     Parameters
     ----------
-    dx_m : array_like
-        Longitudinal separation dx [m]; only ``|dx|`` is used.
-    f_hz : array_like
-        Frequency [Hz] (broadcast against ``dx_m``).
+    dx_m, f_hz : array_like
+        Longitudinal separation [m] and frequency [Hz].
     U_m_s : float
-        Mean wind speed U [m/s].
-    a_x : float
-        Decay parameter a_x [-].
-    b_x : float
-        Distance term b_x [1/m].
+        Mean wind speed [m/s].
+    a_x, b_x : float
+        Decay parameter [-] and distance term [1/m].
 
     Returns
     -------
     numpy.ndarray
-        gamma_x [-], shape of the broadcast of ``dx_m`` and ``f_hz``.
+        gamma_x [-], broadcast shape of ``dx_m`` and ``f_hz``.
     """
     dx = np.abs(np.asarray(dx_m, dtype=float))
     f = np.asarray(f_hz, dtype=float)
@@ -96,50 +64,16 @@ def exponential_longitudinal(dx_m, f_hz, U_m_s: float, a_x: float, b_x: float):
 
 
 def simley_pao_parameters(sigma_total_m_s: float, U_m_s: float, length_u_m: float) -> tuple[float, float]:
-    """Parameters (a_x, b_x) of Guo et al. (2023) Eq. 18 from the LES fit of Simley & Pao (2015).
+    """(a_x [-], b_x [1/m]) of Guo et al. (2023) Eq. 18 from the LES fit of Simley & Pao (2015).
 
-    a_x = 8.4 sigma/U + 0.05, b_x = 0.25 L_u^-1.24.
-
-    Parameters
-    ----------
-    sigma_total_m_s : float
-        sigma_total = sqrt(s1^2 + s2^2 + s3^2) [m/s].
-    U_m_s : float
-        Mean wind speed U [m/s].
-    length_u_m : float
-        Longitudinal length scale L_u [m] (IEC: 8.1 Lambda1).
-
-    Returns
-    -------
-    tuple of float
-        (a_x [-], b_x [1/m]) with L_u in m.
+    a_x = 8.4 sigma_total / U + 0.05, b_x = 0.25 L_u^-1.24, with sigma_total = sqrt(s1^2 + s2^2 + s3^2)
+    [m/s] and L_u = 8.1 Lambda1 [m].
     """
     return 8.4 * sigma_total_m_s / U_m_s + 0.05, 0.25 * length_u_m**-1.24
 
 
 def simley_pao(dx_m, f_hz, U_m_s: float, sigma_total_m_s: float, length_u_m: float):
-    """Un-squared longitudinal coherence of Eq. 18 (Guo et al. 2023) with the Simley-Pao (2015) LES parameters.
-
-    sigma_total = sqrt(s1^2+s2^2+s3^2), L_u = 8.1 Lambda1 (see simley_pao_parameters).
-
-    Parameters
-    ----------
-    dx_m : array_like
-        Longitudinal separation dx [m]; only ``|dx|`` is used.
-    f_hz : array_like
-        Frequency [Hz] (broadcast against ``dx_m``).
-    U_m_s : float
-        Mean wind speed U [m/s].
-    sigma_total_m_s : float
-        sigma_total [m/s].
-    length_u_m : float
-        Longitudinal length scale L_u [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        gamma_x [-], shape of the broadcast of ``dx_m`` and ``f_hz``.
-    """
+    """Un-squared coherence of Eq. 18 (Guo et al. 2023) with :func:`simley_pao_parameters`."""
     a_x, b_x = simley_pao_parameters(sigma_total_m_s, U_m_s, length_u_m)
     return exponential_longitudinal(dx_m, f_hz, U_m_s, a_x, b_x)
 
@@ -153,27 +87,9 @@ def _kristensen_g(xi):
 def kristensen(dx_m, f_hz, U_m_s: float, sigma_total_m_s: float, length_u_m: float):
     """Un-squared longitudinal coherence of Kristensen (1979).
 
-    gamma^2 = exp(-2 alpha G(xi)) (1 - exp(-1/(2 alpha^m xi^2)))^2 with xi = f L_u / U,
-    alpha = sigma_total dx / (U L_u), m = 2 if alpha <= 1 else 1. Returns gamma; dx = 0 or f = 0 gives
-    the limit 1 (full coherence).
-
-    Parameters
-    ----------
-    dx_m : array_like
-        Longitudinal separation dx [m]; only ``|dx|`` is used.
-    f_hz : array_like
-        Frequency [Hz] (broadcast against ``dx_m``).
-    U_m_s : float
-        Mean wind speed U [m/s].
-    sigma_total_m_s : float
-        sigma_total = sqrt(s1^2 + s2^2 + s3^2) [m/s].
-    length_u_m : float
-        Longitudinal length scale L_u [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        gamma [-], shape of the broadcast of ``dx_m`` and ``f_hz``.
+    gamma^2 = exp(-2 alpha G(xi)) (1 - exp(-1/(2 alpha^m xi^2)))^2, xi = f L_u / U,
+    alpha = sigma_total dx / (U L_u), m = 2 if alpha <= 1 else 1; dx = 0 or f = 0 give 1.
+    ``sigma_total_m_s`` [m/s] and ``length_u_m`` [m] as :func:`simley_pao_parameters`.
     """
     dx = np.abs(np.asarray(dx_m, dtype=float))
     f = np.asarray(f_hz, dtype=float)

@@ -1,7 +1,8 @@
 """Eddy lifetimes of the Mann model and of its space-time extension (Guo et al. 2023, Sect. 2.1, 2.3.1).
 
-All functions are vectorised over the wavenumber magnitude and return non-dimensional
-lifetimes (tau * dU/dz / Gamma for the shear lifetimes) or seconds (evolution lifetime).
+Vectorised over |k|; shear lifetimes are non-dimensional (tau~ = tau dU/dz / Gamma), the evolution
+lifetime in seconds. Synthesis evaluates them on tens of millions of wavenumbers, so it uses the
+cubic-spline tables (:class:`LifetimeTable`) instead.
 """
 
 from __future__ import annotations
@@ -19,17 +20,9 @@ GUO_A = float(hyp2f1(1.0 / 3.0, 17.0 / 6.0, 4.0 / 3.0, -1.0) ** -0.5)
 
 
 def mann_lifetime(kL):
-    """Non-dimensional Mann lifetime (kL)^(-2/3) [2F1(1/3,17/6;4/3;-(kL)^-2)]^(-1/2) (Guo et al. 2023, Eq. 4).
+    """Mann lifetime tau~ = (kL)^(-2/3) [2F1(1/3,17/6;4/3;-(kL)^-2)]^(-1/2) [-] (Guo et al. 2023, Eq. 4).
 
-    Parameters
-    ----------
-    kL : array_like
-        Wavenumber magnitude times length scale, |k| L [-].
-
-    Returns
-    -------
-    numpy.ndarray
-        tau~ = tau dU/dz / Gamma [-], shaped like ``kL``; inf where kL <= 0.
+    ``kL`` is |k| L [-] (array_like); inf where kL <= 0.
     """
     kL = np.asarray(kL, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -38,26 +31,16 @@ def mann_lifetime(kL):
 
 
 def guo_lifetime(kL, factor1: float = 1.0):
-    """Non-dimensional Guo lifetime a (kL)^b1 ((kL)^10 + 1)^((b2 - b1)/10), b1 = -factor1, b2 = -2/3 (Eq. 6).
+    """Guo lifetime tau~ = a (kL)^b1 ((kL)^10 + 1)^((b2 - b1)/10) [-] (Guo et al. 2023, Eq. 6-7).
 
-    Guo et al. (2023), Eq. 6, with a = GUO_A (Eq. 7). Evaluated in logarithms so large kL stays finite.
+    b1 = -factor1, b2 = -2/3.
 
-    Parameters
-    ----------
-    kL : array_like
-        Wavenumber magnitude times length scale, |k| L [-].
-    factor1 : float, optional
-        Small-k slope is -factor1 [-] (default 1).
-
-    Returns
-    -------
-    numpy.ndarray
-        tau~ = tau dU/dz / Gamma [-], shaped like ``kL``; inf where kL <= 0.
+    ``kL`` is |k| L [-] (array_like), ``factor1`` the small-k slope magnitude; evaluated in logarithms so
+    large kL stays finite; inf where kL <= 0.
     """
     kL = np.asarray(kL, dtype=float)
     b1, b2 = -factor1, -2.0 / 3.0
     with np.errstate(divide="ignore", over="ignore"):
-        # (kL)^10 overflows for kL > ~1e30; evaluate in logs so large kL stays finite.
         log_kL = np.log(kL)
         log_tail = np.logaddexp(10.0 * log_kL, 0.0) * (b2 - b1) / 10.0
         out = GUO_A * np.exp(b1 * log_kL + log_tail)
@@ -65,22 +48,10 @@ def guo_lifetime(kL, factor1: float = 1.0):
 
 
 def shear_distortion_beta(k, params: MannParams):
-    """beta(k) = Gamma * tau~(kL), the non-dimensional distortion time (Guo et al. (2023) after Eq. 4).
+    """Non-dimensional distortion time beta(k) = Gamma tau~(kL) [-] (Guo et al. 2023, after Eq. 4).
 
-    tau~ is the Mann (Eq. 4) or Guo (Eq. 6) lifetime per ``params.lifetime``.
-
-    Parameters
-    ----------
-    k : array_like
-        Wavenumber magnitude |k| [rad/m].
-    params : MannParams
-        Mann model parameters (length_scale_m, gamma, lifetime, factor1 are used).
-
-    Returns
-    -------
-    numpy.ndarray
-        beta [-], shaped like ``k``; zero everywhere for Gamma = 0 (isotropic: no distortion, also
-        where tau = inf at k = 0), else inf at k = 0.
+    tau~ is Eq. 4 or 6 per ``params.lifetime``; ``k`` is |k| [rad/m]. Zero everywhere for Gamma = 0
+    (isotropic: no distortion, also at k = 0), else inf at k = 0.
     """
     kL = np.asarray(k, dtype=float) * params.length_scale_m
     if params.lifetime == "mann":
@@ -93,23 +64,10 @@ def shear_distortion_beta(k, params: MannParams):
 
 
 def evolution_lifetime_s(k, params: MannParams):
-    """Evolution lifetime tau_e(k) [s] = gamma a (kL)^-1 ((kL)^10 + 1)^((1 - 2 factor2/3)/10) (Eq. 15).
+    """Evolution lifetime tau_e(k) = gamma a (kL)^-1 ((kL)^10 + 1)^((1 - 2 factor2/3)/10) [s] (Guo et al. 2023, Eq. 15).
 
-    Guo et al. (2023), Eq. 15, with gamma = ``params.evo_time_s`` and a = GUO_A.
-    factor2 = 3.5 gives the paper's exponent -2/15 (large-k slope -7/3).
-
-    Parameters
-    ----------
-    k : array_like
-        Wavenumber magnitude |k| [rad/m].
-    params : MannParams
-        Mann model parameters (length_scale_m, factor2, evo_time_s are used).
-
-    Returns
-    -------
-    numpy.ndarray
-        tau_e [s], shaped like ``k``. Infinite when the parameters are frozen (evo_time_s is None) or
-        at k = 0.
+    gamma = ``params.evo_time_s``; factor2 = 3.5 gives the paper's exponent -2/15. ``k`` is |k| [rad/m].
+    Infinite for frozen parameters (evo_time_s None) and at k = 0.
     """
     kL = np.asarray(k, dtype=float) * params.length_scale_m
     if params.evo_time_s is None:
@@ -121,24 +79,13 @@ def evolution_lifetime_s(k, params: MannParams):
     return np.where(kL > 0, out, np.inf)
 
 
-# -- Tabulated lifetimes ------------------------------------------------------------------------------
-# Every lifetime above depends on kL only. Synthesis evaluates them on tens of millions of wavenumbers
-# (the hypergeometric function of Eq. 4 is costly per point), so it uses a not-a-knot cubic spline
-# of tau~ against x = ln(kL) on a uniform grid of step h = TABLE_STEP[kind] instead. Its relative error is
-# of order (5/384) h^4 max|d^4 tau~/dx^4| / tau~, largest for the lifetimes with the sharp (kL)^10
-# knee (Eq. 6 and 15 with a large slope change). Measured on 2e6 random kL over the table's range for
-# the Mann lifetime, the Guo lifetime with factor1 in [0.1, 3] and the evolution lifetime with factor2
-# in [0.01, 10]: at most 1.4e-7 (h = 1/64 for Eq. 4 and 6, 1/128 for Eq. 15, whose factor2 = 10
-# gives the sharpest knee: 2.6e-6 at h = 1/64); tests/theory/test_lifetime_table.py checks <= TABLE_REL_ERROR.
-# Outside [TABLE_KL_MIN, TABLE_KL_MAX] the exact function is evaluated (kL < 1e-6 would need e.g. a
-# 1e7 m long box at L = 1 m).
 TABLE_KL_MIN, TABLE_KL_MAX = 1e-6, 1e6
 TABLE_STEP = {"mann": 1.0 / 64.0, "guo": 1.0 / 64.0, "evolution": 1.0 / 128.0}  # grid steps in ln(kL)
-TABLE_REL_ERROR = 1e-6  # documented bound on |tau_table / tau - 1| (tested)
+TABLE_REL_ERROR = 1e-6  # bound on |tau_table / tau - 1| (tested)
 
 
 def _evolution_shape(kL, factor2: float):
-    """Non-dimensional evolution lifetime tau_e / gamma = a (kL)^-1 ((kL)^10 + 1)^((1 - 2 factor2/3)/10) (Eq. 15)."""
+    """tau_e / gamma [-] of Eq. 15."""
     kL = np.asarray(kL, dtype=float)
     expo = (1.0 - 2.0 * factor2 / 3.0) / 10.0
     with np.errstate(divide="ignore", over="ignore"):
@@ -148,30 +95,30 @@ def _evolution_shape(kL, factor2: float):
 
 
 class LifetimeTable:
-    """Cubic spline of tau~ over x = ln(kL) on a uniform grid (accuracy: TABLE_REL_ERROR, see above).
+    """Not-a-knot cubic spline of tau~ over x = ln(kL) on a uniform grid (relative error <= TABLE_REL_ERROR).
 
-    ``table.from_ksq(ksq, L)`` with |k|^2 [rad^2/m^2] and L [m] returns tau~(|k| L), float64, shaped
-    like ``ksq`` (inf at k = 0). Outside [TABLE_KL_MIN, TABLE_KL_MAX] the exact function is evaluated.
+    The step TABLE_STEP[kind] bounds the error (5/384) h^4 max|d^4 tau~/dx^4| / tau~, largest at the
+    (kL)^10 knee of Eq. 6 and 15 (tests/theory/test_lifetime_table.py checks the bound); outside
+    [TABLE_KL_MIN, TABLE_KL_MAX] the exact function is evaluated.
 
     Parameters
     ----------
     kind : str
-        "mann" (Guo et al. 2023, Eq. 4), "guo" (Eq. 6, ``parameter`` = factor1) or "evolution" (Eq. 15
-        divided by gamma [s], ``parameter`` = factor2).
+        "mann" (Guo et al. 2023, Eq. 4), "guo" (Eq. 6) or "evolution" (Eq. 15 over gamma).
     parameter : float, optional
-        factor1 or factor2 [-] (default 1; unused for "mann").
+        factor1 ("guo") or factor2 ("evolution") [-].
 
     Attributes
     ----------
     x0, h : float
-        First node ln(TABLE_KL_MIN) and step of the grid in x = ln(kL) [-].
+        First node ln(TABLE_KL_MIN) and step in x [-].
     n_intervals : int
-        Intervals of the grid; interval i is [x0 + i h, x0 + (i + 1) h).
+        Intervals of the grid, i: [x0 + i h, x0 + (i + 1) h).
     coefficients : tuple of numpy.ndarray
-        (c3, c2, c1, c0), each (n_intervals,) float64: tau~ = ((c3 d + c2) d + c1) d + c0 with d = x - x_i,
-        evaluated in that order by from_ksq (and by the compiled stencil kernel, which must agree with it).
+        (c3, c2, c1, c0) per interval: tau~ = ((c3 d + c2) d + c1) d + c0, d = x - x_i, in that order (the
+        compiled stencil kernel must agree with :meth:`from_ksq`).
     exact : callable
-        The exact function of kL, used outside the table's range.
+        The exact function of kL.
 
     Raises
     ------
@@ -196,19 +143,9 @@ class LifetimeTable:
         self.n_intervals = n - 1
 
     def from_ksq(self, ksq, length_scale_m: float) -> np.ndarray:
-        """tau~(|k| L) from |k|^2 (any shape); exact outside the table's range, inf at k = 0.
+        """tau~(|k| L) [-] (tau_e / gamma for "evolution") from ``ksq`` = |k|^2 [rad^2/m^2] (any shape) and L [m].
 
-        Parameters
-        ----------
-        ksq : array_like
-            Squared wavenumber magnitude |k|^2 [rad^2/m^2], any shape.
-        length_scale_m : float
-            Length scale L [m].
-
-        Returns
-        -------
-        numpy.ndarray
-            tau~ [-] (tau_e / gamma for kind "evolution"), float64, shaped like ``ksq``.
+        float64 shaped like ``ksq``; exact outside the table's range, inf at k = 0.
         """
         ksq = np.asarray(ksq, dtype=float)
         with np.errstate(divide="ignore"):
@@ -235,55 +172,15 @@ class LifetimeTable:
 
 @lru_cache(maxsize=16)
 def lifetime_table(kind: str, parameter: float = 1.0) -> LifetimeTable:
-    """The (cached) LifetimeTable of ``kind`` and ``parameter`` (built in well under a second).
-
-    Parameters
-    ----------
-    kind : str
-        "mann", "guo" or "evolution" (see LifetimeTable).
-    parameter : float, optional
-        factor1 ("guo") or factor2 ("evolution") [-]; default 1.
-
-    Returns
-    -------
-    LifetimeTable
-        The table, shared between calls with the same arguments (lru_cache).
-
-    Raises
-    ------
-    ValueError
-        If ``kind`` is unknown.
-    """
+    """The cached :class:`LifetimeTable` of ``kind`` and ``parameter``."""
     return LifetimeTable(kind, parameter)
 
 
 def shear_lifetime_table(params: MannParams) -> LifetimeTable:
-    """The table of tau~ for beta = Gamma tau~(kL) of ``params`` (Eq. 4, or Eq. 6 with its factor1).
-
-    Parameters
-    ----------
-    params : MannParams
-        Mann model parameters (lifetime and factor1 are used).
-
-    Returns
-    -------
-    LifetimeTable
-        The cached table of the non-dimensional shear lifetime tau~ [-] (Guo et al. 2023, Eq. 4 or 6).
-    """
+    """The cached table of tau~ for beta = Gamma tau~(kL) of ``params`` (Guo et al. 2023, Eq. 4 or 6)."""
     return lifetime_table("mann") if params.lifetime == "mann" else lifetime_table("guo", float(params.factor1))
 
 
 def evolution_lifetime_table(params: MannParams) -> LifetimeTable:
-    """The table of tau_e / gamma (Guo et al. 2023, Eq. 15 with ``params.factor2``).
-
-    Parameters
-    ----------
-    params : MannParams
-        Mann model parameters (factor2 is used).
-
-    Returns
-    -------
-    LifetimeTable
-        The cached table of tau_e / gamma [-]; multiply by gamma = evo_time_s for tau_e [s].
-    """
+    """The cached table of tau_e / gamma [-] (Guo et al. 2023, Eq. 15; times evo_time_s for seconds)."""
     return lifetime_table("evolution", float(params.factor2))

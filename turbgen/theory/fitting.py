@@ -1,13 +1,7 @@
 """Kaimal / exponential-coherence models fitted to the Mann space-time model (Guo et al. 2023, Sect. 2.4).
 
-fit_kaimal_spectra  Eq. 20: (sigma_i, L_i) of Eq. 11 to the Mann spectra, weights 1/k1 as written.
-fit_yz_coherence    Eq. 21: (a_yz, Lc) of the un-squared IEC coherence to the Mann co-coherence of u
-                    at dy = dz = 20 m, weights 1/k1.
-fit_longitudinal    Eq. 22: (a_x, b_x) of Eq. 18 to the space-time longitudinal coherence at dx = 100 m,
-                    weights 1/f. The paper does not say which side is squared; fitting the squared
-                    model (Eq. 18) to the squared coherence (Eq. 16) reproduces its Table 2
-                    (tested in tests/theory), so that is what is done.
-The paper does not state its frequency grids; the defaults below are documented in the README.
+The paper does not state its frequency grids; the defaults below are documented in the README. Fit
+frequencies must be at least 3 finite values > 0 and U inside turbgen.theory.ranges (else ParameterError).
 """
 
 from __future__ import annotations
@@ -22,9 +16,7 @@ from turbgen.theory.mann_spectra import one_point_spectra, yz_coherence
 from turbgen.theory.params import MannParams, check_wind_speed
 from turbgen.theory.space_time import longitudinal_coherence
 
-# Default fitting grids [Hz]. Eq. 20 on a LINEAR grid: the 1/k1 weights then give every
-# logarithmic band the same weight ("equivalent weighting", Guo et al. (2023) after Eq. 21); this
-# reproduces Table 1's fitted L2, L3 within 2 % (README, theory).
+# default fitting grids [Hz] (README, theory)
 SPECTRA_F_HZ = np.arange(1, 1001) * 1e-3
 YZ_F_HZ = np.logspace(-3, 0, 40)
 LONG_F_HZ = np.logspace(np.log10(3e-4), np.log10(0.5), 60)
@@ -40,28 +32,23 @@ def _grid(f_hz, default) -> np.ndarray:
 def fit_kaimal_spectra(params: MannParams, U_m_s: float, f_hz=None) -> dict:
     """Kaimal (sigma_i [m/s], L_i [m]) per component fitted to the Mann spectra (Guo et al. 2023, Eq. 20).
 
-    Minimises sum_n (1/k1_n) (S_i(f_n) f_n - 2 F_ii(k1_n) k1_n)^2 with k1 = 2 pi f / U (S_i the one-sided
-    Kaimal spectrum of Eq. 11, F_ii the two-sided Mann spectrum). For a given L_i the best sigma_i^2 is
-    linear least squares; L_i is found by a bounded 1-D search in ln L (0.1 m to 1e5 m).
+    Minimises sum_n (1/k1_n) (S_i(f_n) f_n - 2 F_ii(k1_n) k1_n)^2, k1 = 2 pi f / U: for each L_i the best
+    sigma_i^2 is linear least squares, L_i a bounded search in ln L (0.1 m to 1e5 m). On the default linear
+    grid the 1/k1 weights give every logarithmic band the same weight ("equivalent weighting", after Eq. 21).
 
     Parameters
     ----------
     params : MannParams
         Mann model parameters.
     U_m_s : float
-        Mean wind speed U [m/s].
+        Mean wind speed [m/s].
     f_hz : array_like, optional
-        Fit frequencies [Hz], at least 3 finite values > 0; default SPECTRA_F_HZ (1 mHz to 1 Hz, linear).
+        Fit frequencies [Hz]; default SPECTRA_F_HZ (1 mHz to 1 Hz, linear).
 
     Returns
     -------
     dict
         {"sigma_m_s": (s1, s2, s3) [m/s], "length_scales_m": (L1, L2, L3) [m], "f_hz": grid [Hz]}.
-
-    Raises
-    ------
-    ParameterError
-        If ``U_m_s`` is outside the allowed range or ``f_hz`` is not at least 3 finite values > 0.
     """
     U = check_wind_speed(U_m_s)
     f = _grid(f_hz, SPECTRA_F_HZ)
@@ -85,32 +72,20 @@ def fit_kaimal_spectra(params: MannParams, U_m_s: float, f_hz=None) -> dict:
 
 
 def fit_yz_coherence(params: MannParams, U_m_s: float, f_hz=None, dy_m: float = 20.0, dz_m: float = 20.0):
-    """(a_yz, Lc [m]) of the un-squared IEC coherence fitted to the Mann co-coherence of u (Guo et al. 2023, Eq. 21).
+    """(a_yz [-], Lc [m]) of the IEC coherence fitted to the Mann co-coherence of u (Guo et al. 2023, Eq. 21).
 
-    Minimises sum_n (1/k1_n) (gamma_yz(f_n) - cocoh_11(k1_n, dy, dz))^2, k1 = 2 pi f / U, with gamma_yz
-    the un-squared coherence of Eq. 12 (exponential_yz) at r = sqrt(dy^2 + dz^2).
+    Minimises sum_n (1/k1_n) (gamma_yz(f_n) - cocoh_11(k1_n, dy, dz))^2 at r = sqrt(dy^2 + dz^2) > 0.
 
     Parameters
     ----------
     params : MannParams
         Mann model parameters.
     U_m_s : float
-        Mean wind speed U [m/s].
+        Mean wind speed [m/s].
     f_hz : array_like, optional
-        Fit frequencies [Hz], at least 3 finite values > 0; default YZ_F_HZ (40 log-spaced, 1 mHz to 1 Hz).
+        Fit frequencies [Hz]; default YZ_F_HZ (40 log-spaced, 1 mHz to 1 Hz).
     dy_m, dz_m : float, optional
-        Lateral and vertical separation [m] (default 20 m each).
-
-    Returns
-    -------
-    tuple of float
-        (a_yz [-], Lc [m]).
-
-    Raises
-    ------
-    ParameterError
-        If ``U_m_s`` is outside the allowed range, ``f_hz`` is not at least 3 finite values > 0, dy or dz
-        is not finite, or the separation sqrt(dy^2 + dz^2) is 0.
+        Lateral and vertical separation [m].
     """
     U = check_wind_speed(U_m_s)
     f = _grid(f_hz, YZ_F_HZ)
@@ -130,30 +105,19 @@ def fit_yz_coherence(params: MannParams, U_m_s: float, f_hz=None, dy_m: float = 
 def fit_longitudinal(params: MannParams, U_m_s: float, dx_m: float = 100.0, f_hz=None):
     """(a_x [-], b_x [1/m]) of Eq. 18 fitted to the space-time longitudinal coherence (Guo et al. 2023, Eq. 22).
 
-    Minimises sum_n (1/f_n) (gamma_x^2(dx, f_n) - coh2_11(f_n, dx))^2: the squared model against the
-    magnitude-squared coherence (Eq. 16), log-spaced f from 3e-4 to 0.5 Hz by default.
+    Minimises sum_n (1/f_n) (gamma_x^2(dx, f_n) - coh2_11(f_n, dx))^2: the paper does not say which side is
+    squared; the squared model against the magnitude-squared coherence (Eq. 16) reproduces its Table 2.
 
     Parameters
     ----------
     params : MannParams
-        Mann model parameters; ``evo_time_s`` must be set.
+        Mann model parameters with ``evo_time_s`` set (frozen turbulence has coh = 1: ParameterError).
     U_m_s : float
-        Mean wind speed U [m/s].
+        Mean wind speed [m/s].
     dx_m : float, optional
-        Longitudinal separation dx [m] (default 100 m).
+        Longitudinal separation [m], > 0.
     f_hz : array_like, optional
-        Fit frequencies [Hz], at least 3 finite values > 0; default LONG_F_HZ (60 values).
-
-    Returns
-    -------
-    tuple of float
-        (a_x [-], b_x [1/m]), both >= 0.
-
-    Raises
-    ------
-    ParameterError
-        If the turbulence is frozen (``params.evo_time_s`` is None: coh = 1), ``U_m_s`` is outside the
-        allowed range, ``dx_m`` is not > 0 or ``f_hz`` is not at least 3 finite values > 0.
+        Fit frequencies [Hz]; default LONG_F_HZ (60 log-spaced, 3e-4 to 0.5 Hz).
     """
     if params.evo_time_s is None:
         raise ParameterError("evo (gamma, s) is needed to fit a longitudinal coherence (frozen turbulence has coh = 1)")

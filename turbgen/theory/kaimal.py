@@ -21,17 +21,15 @@ def kaimal_spectrum(f_hz, sigma_m_s: float, length_scale_m: float, U_m_s: float)
     ----------
     f_hz : array_like
         Frequency [Hz]; only ``|f|`` is used.
-    sigma_m_s : float
-        Standard deviation sigma of the velocity component [m/s].
+    sigma_m_s, U_m_s : float
+        Standard deviation of the component and mean wind speed [m/s].
     length_scale_m : float
         Kaimal integral length scale L [m].
-    U_m_s : float
-        Mean wind speed U [m/s].
 
     Returns
     -------
     numpy.ndarray
-        One-sided PSD S(f) [m^2 s^-2 Hz^-1], shaped like ``f_hz``; ∫_0^inf S df = sigma^2.
+        S(f) [m^2 s^-2 Hz^-1], shaped like ``f_hz``; ∫_0^inf S df = sigma^2.
     """
     f = np.asarray(f_hz, dtype=float)
     n = length_scale_m / U_m_s
@@ -39,26 +37,9 @@ def kaimal_spectrum(f_hz, sigma_m_s: float, length_scale_m: float, U_m_s: float)
 
 
 def kaimal_band_variance(f_lo_hz, f_hi_hz, sigma_m_s: float, length_scale_m: float, U_m_s: float):
-    """Variance ∫ S(f) df of the Kaimal spectrum between f_lo and f_hi, closed form, vectorised.
+    """Variance ∫ S(f) df [m^2 s^-2] of :func:`kaimal_spectrum` between ``f_lo_hz`` and ``f_hi_hz`` [Hz], closed form.
 
-    The antiderivative of Eq. 11 (Guo et al. 2023) is -sigma^2 (1 + 6 f L/U)^(-2/3) (zero at f = inf);
-    f_lo = 0, f_hi = inf gives sigma^2.
-
-    Parameters
-    ----------
-    f_lo_hz, f_hi_hz : array_like
-        Lower and upper band edges [Hz] (broadcast against each other).
-    sigma_m_s : float
-        Standard deviation sigma of the velocity component [m/s].
-    length_scale_m : float
-        Kaimal integral length scale L [m].
-    U_m_s : float
-        Mean wind speed U [m/s].
-
-    Returns
-    -------
-    numpy.ndarray
-        Band variance [m^2 s^-2], shaped like the broadcast of ``f_lo_hz`` and ``f_hi_hz``.
+    The antiderivative of Eq. 11 (Guo et al. 2023) is -sigma^2 (1 + 6 f L/U)^(-2/3); the edges broadcast.
     """
     n = length_scale_m / U_m_s
     lo = np.asarray(f_lo_hz, dtype=float)
@@ -67,47 +48,16 @@ def kaimal_band_variance(f_lo_hz, f_hi_hz, sigma_m_s: float, length_scale_m: flo
 
 
 def iec_lambda1_m(hub_height_m: float) -> float:
-    """Longitudinal turbulence scale parameter Lambda1 of IEC 61400-1: 0.7 z_hub below 60 m, else 42 m.
-
-    Parameters
-    ----------
-    hub_height_m : float
-        Hub height z_hub [m].
-
-    Returns
-    -------
-    float
-        Lambda1 [m].
-
-    Raises
-    ------
-    ParameterError
-        If ``hub_height_m`` is not a finite number > 0.
-    """
+    """IEC 61400-1 longitudinal scale parameter Lambda1 [m]: 0.7 z_hub below 60 m, else 42 m."""
     z = check_positive("hub height (m)", hub_height_m)
     return 0.7 * z if z < 60.0 else 42.0
 
 
 def iec_sigma1_m_s(U_m_s: float, turb_class: str = "A") -> float:
-    """Normal-turbulence-model standard deviation sigma1 = Iref (0.75 U + 5.6) (IEC 61400-1).
+    """NTM standard deviation sigma1 = Iref (0.75 U + 5.6) [m/s] (IEC 61400-1) at hub speed U [m/s].
 
-    Parameters
-    ----------
-    U_m_s : float
-        Hub-height mean wind speed U [m/s].
-    turb_class : str, optional
-        Turbulence class "A+", "A" (default), "B" or "C" (Iref = 0.18, 0.16, 0.14, 0.12).
-
-    Returns
-    -------
-    float
-        sigma1 [m/s].
-
-    Raises
-    ------
-    ParameterError
-        If ``turb_class`` is not one of the classes or ``U_m_s`` is outside the allowed range
-        (turbgen.theory.ranges).
+    ``turb_class`` "A+", "A", "B" or "C" sets Iref = 0.18, 0.16, 0.14, 0.12; ParameterError for another
+    class or a speed outside turbgen.theory.ranges.
     """
     check_choice("class", turb_class, tuple(IEC_IREF))
     return IEC_IREF[turb_class] * (0.75 * check_wind_speed(U_m_s) + 5.6)
@@ -121,21 +71,16 @@ def iec_kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float =
     Parameters
     ----------
     U_m_s : float
-        Hub-height mean wind speed U [m/s].
+        Hub-height mean wind speed [m/s].
     turb_class : str, optional
-        Turbulence class "A+", "A" (default), "B" or "C".
+        Turbulence class "A+", "A", "B" or "C".
     hub_height_m : float, optional
-        Hub height [m] (default 90 m), which sets Lambda1.
+        Hub height [m], which sets Lambda1.
 
     Returns
     -------
     KaimalParams
         sigma_m_s [m/s], length_scales_m [m], a_yz [-] and lc_m [m].
-
-    Raises
-    ------
-    ParameterError
-        If the class, the wind speed or the hub height is invalid (see iec_sigma1_m_s, iec_lambda1_m).
     """
     lam = iec_lambda1_m(hub_height_m)
     s1 = iec_sigma1_m_s(U_m_s, turb_class)

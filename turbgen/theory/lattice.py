@@ -1,14 +1,15 @@
 """Geometry of the periodic record and box that both generators synthesise and the validator sums over.
 
-A record of nt samples spaced dt [s] is a sum of spectral *lines* at f_j = j / (nt dt), j = 0 .. nt/2
-(a real field: the lines -f_j are the complex conjugates). The Mann box is periodic in y and z as well:
-nyp x nzp points spaced dy, dz [m], whose wavenumbers form a lattice in FFT order (Mann 1998, Sec. 2).
-These facts are shared by turbgen.synthesis (which synthesises on them) and turbgen.validate (which
-predicts the synthesised field's statistics on them); the quadrature of the cells near the k1 axis is
-not here: synthesis and validate compute it with deliberately separate rules.
+A record of nt samples spaced dt [s] is a sum of spectral *lines* at f_j = j / (nt dt), j = 0 .. nt/2;
+the Mann box is periodic in y and z as well, its wavenumbers a lattice in FFT order (Mann 1998, Sec. 2).
+:func:`cell_rule` integrates a lattice cell; each user (synthesis, validation, lidar preview) chooses
+its own nodes and grading, so the three integrate the cells near the k1 axis with independent rules and
+an error in one shows as a disagreement.
 """
 
 from __future__ import annotations
+
+from functools import lru_cache
 
 import numpy as np
 
@@ -16,35 +17,14 @@ from turbgen import fft
 
 
 def line_frequencies(nt: int, dt_s: float) -> np.ndarray:
-    """Frequencies of the record's spectral lines.
-
-    Parameters
-    ----------
-    nt : int
-        Samples of the periodic record.
-    dt_s : float
-        Sampling interval [s].
-
-    Returns
-    -------
-    numpy.ndarray
-        (nt // 2 + 1,) f_j = j / (nt dt) [Hz], j = 0 .. nt // 2 (the rfft bins).
-    """
+    """(nt // 2 + 1,) frequencies f_j = j / (nt dt) [Hz] of the record's lines (the rfft bins), ``dt_s`` [s]."""
     return np.arange(nt // 2 + 1) / (nt * dt_s)
 
 
 def line_bands(nt: int, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """Edges of the band each line stands for (whose variance a generator gives it), lines j = 0 .. nt // 2.
+    """(lo, hi) [Hz]: the band each line j stands for (whose variance a generator gives it).
 
-    Parameters
-    ----------
-    nt, dt_s : int, float
-        As :func:`line_frequencies`.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        (lo, hi) [Hz]: [(j - 1/2) df, (j + 1/2) df] clipped to [0, 1/(2 dt)], df = 1 / (nt dt).
+    [(j - 1/2) df, (j + 1/2) df] clipped to [0, 1/(2 dt)], df = 1 / (nt dt); arguments as :func:`line_frequencies`.
     """
     df = 1.0 / (nt * dt_s)
     j = np.arange(nt // 2 + 1)
@@ -52,18 +32,9 @@ def line_bands(nt: int, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def pair_weights(nt: int) -> np.ndarray:
-    """Weight of each line j = 0 .. nt // 2 in a sum over the full (two-sided) spectrum.
+    """(nt // 2 + 1,) weights [-] of the lines in a sum over the two-sided spectrum.
 
-    Parameters
-    ----------
-    nt : int
-        Samples of the periodic record.
-
-    Returns
-    -------
-    numpy.ndarray
-        (nt // 2 + 1,) weights [-]: 2 (the lines +-f_j together), 1 for j = 0 and for the single
-        Nyquist line of an even nt.
+    2 (the lines +-f_j together), 1 for j = 0 and for the single Nyquist line of an even nt.
     """
     w = np.full(nt // 2 + 1, 2.0)
     w[0] = 1.0
@@ -73,38 +44,59 @@ def pair_weights(nt: int) -> np.ndarray:
 
 
 def k2_wavenumbers(nyp: int, dy_m: float) -> np.ndarray:
-    """Lateral wavenumbers of a periodic box of nyp points spaced dy_m [m].
+    """(nyp,) lateral wavenumbers k2 [rad/m] of a periodic box of nyp points spaced ``dy_m`` [m], in FFT order.
 
-    Parameters
-    ----------
-    nyp : int
-        Points of the periodic box in y.
-    dy_m : float
-        Lateral spacing [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        (nyp,) k2 [rad/m] in FFT order: j dk2 for j <= nyp // 2 (the Nyquist row stored positive, as
-        synthesised), else (j - nyp) dk2, with dk2 = 2 pi / (nyp dy).
+    j dk2 for j <= nyp // 2 (the Nyquist row positive, as synthesised), else (j - nyp) dk2; dk2 = 2 pi / (nyp dy).
     """
     j = np.arange(nyp)
     return np.where(j <= nyp // 2, j, j - nyp) * (2 * np.pi / (nyp * dy_m))
 
 
 def k3_wavenumbers(nzp: int, dz_m: float) -> np.ndarray:
-    """Vertical wavenumbers of a periodic box of nzp points spaced dz_m [m].
+    """(nzp,) vertical wavenumbers k3 [rad/m] of nzp points spaced ``dz_m`` [m], ``fftfreq`` order."""
+    return fft.fftfreq(nzp, d=dz_m) * 2 * np.pi
+
+
+@lru_cache(maxsize=8)
+def _legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    return np.polynomial.legendre.leggauss(n)
+
+
+def gauss_panel(a: float, b: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes and weights of the n-point Gauss-Legendre rule on [a, b]."""
+    x, w = _legendre(n)
+    return 0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w
+
+
+def cell_rule(center: float, width: float, n: int, floor: float, ratio: float, max_panels: int):
+    """Gauss-Legendre nodes and weights over the cell [center - width/2, center + width/2].
+
+    A cell centred on 0 (where Phi peaks on the k1 axis) is split, on each side, into panels shrinking
+    by ``ratio`` towards 0 while the innermost is wider than ``floor`` (at most ``max_panels`` panels).
 
     Parameters
     ----------
-    nzp : int
-        Points of the periodic box in z.
-    dz_m : float
-        Vertical spacing [m].
+    center, width : float
+        The cell [rad/m].
+    n : int
+        Nodes per panel.
+    floor, ratio : float
+        Grading of a cell on 0: the width [rad/m] down to which panels shrink, and their ratio.
+    max_panels : int
+        Most panels per side.
 
     Returns
     -------
-    numpy.ndarray
-        (nzp,) k3 [rad/m] in numpy ``fftfreq`` order (the Nyquist column negative for even nzp).
+    tuple of numpy.ndarray
+        Nodes [rad/m] and weights [rad/m].
     """
-    return fft.fftfreq(nzp, d=dz_m) * 2 * np.pi
+    if center != 0.0:
+        return gauss_panel(center - width / 2, center + width / 2, n)
+    edges = [width / 2]
+    while edges[-1] > floor and len(edges) < max_panels:
+        edges.append(edges[-1] / ratio)
+    edges = np.array([0.0, *edges[::-1]])
+    parts = [gauss_panel(a, b, n) for a, b in zip(edges[:-1], edges[1:])]
+    x = np.concatenate([p[0] for p in parts])
+    w = np.concatenate([p[1] for p in parts])
+    return np.concatenate([-x[::-1], x]), np.concatenate([w[::-1], w])

@@ -1,35 +1,24 @@
 """The (k2, k3) quadrature of a periodic synthesis box, for the lidar preview spectra of what the box holds.
 
-A Mann field synthesised on a periodic box of nyp x nzp points spaced dy, dz [m] (Mann 1998, Sec. 2)
-has its energy on the lattice k2 = j dk2, k3 = l dk3 (turbgen.theory.lattice), each point standing
-for its cell dk2 dk3: the box misses the lateral wavenumbers below dk2 = 2 pi / (nyp dy),
-dk3 = 2 pi / (nzp dz) and holds Phi at the lattice points only. At k1 comparable to dk2, dk3 the lidar-
-rotor coherence is shaped by exactly those wavenumbers, and the lattice sum differs from the continuous
-integral (Guo et al. 2023 Eq. 24, 29, 32): gamma^2_RL of the Table 3 lidar is 0.005-0.006 lower at
-1/64-1/32 Hz for a 64 x 64 box of 4.7 m (turbgen.theory.lidar_preview). Summed over the lattice, the
-spectra are the expectation of the box's field (the lattice is symmetric under k -> -k but for the
-unpaired Nyquist rows, which averaged signals do not see, so the generator's time reversal does not
-enter); they converge to the continuous integral as the box grows.
+A Mann field synthesised on a periodic box of nyp x nzp points spaced dy, dz [m] holds Phi on the lattice
+k2 = j dk2, k3 = l dk3 only (Mann 1998, Sec. 2; turbgen.theory.lattice), missing the lateral wavenumbers
+below dk2 = 2 pi / (nyp dy), dk3 = 2 pi / (nzp dz). At k1 comparable to dk2, dk3 those shape the
+lidar-rotor coherence (Guo et al. 2023, Eq. 24, 29, 32), so the lattice sum, the expectation of the box's
+field, differs from the continuous integral; the two converge as the box grows.
 
-Each lattice point carries Phi(k) dk2 dk3, except the cells around the k1 axis at small |k1|, where
-Phi varies strongly within a cell (on the axis Phi_33 = E(k0) / (4 pi k1^2)): there the lattice point
-carries the cell average over k1 in [k1 - dk1/2, k1 + dk1/2] (the record's line spacing, dk1 =
-2 pi / (U T)) times dk2 dk3. The cell rule here (CELL_RADIUS, CELL_K1_FACTOR, CELL_GAUSS, the grading
-towards the axis) is this module's own: turbgen.synthesis and turbgen.validate integrate the same cells
-with two other rules, so an error in any of them shows as a disagreement. Do not share them. (Measured:
-the cell integrals here change by < 2e-5 under a twice finer rule; turbgen.validation.mann_lattice's
-differ from them by up to 1 % in single cells at 1/64 Hz.)
+Each lattice point carries Phi(k) dk2 dk3, except the cells around the k1 axis at small |k1|, where Phi
+varies strongly within a cell: there it carries the cell average over k1 in [k1 - dk1/2, k1 + dk1/2]
+(dk1 = 2 pi / (U T)) times dk2 dk3. The grading (CELL_RADIUS, CELL_K1_FACTOR, CELL_GAUSS, GRADING) is this
+module's own, distinct from the generator's and the validator's, so an error in any of them shows.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
-
 import numpy as np
 
 from turbgen.errors import check_int, check_positive
-from turbgen.theory.lattice import k2_wavenumbers, k3_wavenumbers
+from turbgen.theory.lattice import cell_rule, gauss_panel, k2_wavenumbers, k3_wavenumbers
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
 
@@ -46,11 +35,11 @@ class BoxLattice:
     Parameters
     ----------
     nyp, nzp : int
-        Points of the periodic box in y and z (the padded synthesis box, not the stored grid).
+        Points of the periodic (padded) box in y and z, not the stored grid's.
     dy_m, dz_m : float
         Lateral and vertical spacing [m].
     record_s : float
-        Length of the periodic record nt dt [s] (the k1 cell of the axis cells is 2 pi / (U record_s)).
+        Length nt dt of the periodic record [s] (the axis cells' k1 width is 2 pi / (U record_s)).
     """
 
     nyp: int
@@ -67,46 +56,16 @@ class BoxLattice:
         check_positive("record length (s)", self.record_s)
 
     def spacings(self) -> tuple[float, float]:
-        """The lattice spacings.
-
-        Returns
-        -------
-        tuple of float
-            (dk2, dk3) = (2 pi / (nyp dy), 2 pi / (nzp dz)) [rad/m].
-        """
+        """(dk2, dk3) = (2 pi / (nyp dy), 2 pi / (nzp dz)) [rad/m]."""
         return 2 * np.pi / (self.nyp * self.dy_m), 2 * np.pi / (self.nzp * self.dz_m)
-
-
-@lru_cache(maxsize=4)
-def _unit_rule(n: int):
-    return np.polynomial.legendre.leggauss(n)
-
-
-def _panel(a: float, b: float, n: int = CELL_GAUSS):
-    x, w = _unit_rule(n)
-    return 0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w
-
-
-def _cell_rule(center: float, width: float, scale: float):
-    """Nodes and weights over [center - width/2, center + width/2]; graded towards 0 if center is 0."""
-    if center != 0.0:
-        return _panel(center - width / 2, center + width / 2)
-    edges = [width / 2]
-    while edges[-1] > scale and len(edges) < 60:
-        edges.append(edges[-1] / GRADING)
-    edges = np.array([0.0, *edges[::-1]])
-    parts = [_panel(a, b) for a, b in zip(edges[:-1], edges[1:])]
-    x = np.concatenate([p[0] for p in parts])
-    w = np.concatenate([p[1] for p in parts])
-    return np.concatenate([-x[::-1], x]), np.concatenate([w[::-1], w])
 
 
 def _axis_cells(k1: float, dk1: float, dk2: float, dk3: float, r2: int, r3: int, params: MannParams):
     """(1/dk1) ∫_cell Phi dk over the (2 r2 + 1) x (2 r3 + 1) cells around the axis at k1: (3, 3, 2r2+1, 2r3+1)."""
-    x1, w1 = _panel(k1 - dk1 / 2, k1 + dk1 / 2, 3)
+    x1, w1 = gauss_panel(k1 - dk1 / 2, k1 + dk1 / 2, 3)
     scale = max(abs(k1), dk1 / 4) / GRADING
-    rules2 = [_cell_rule(j * dk2, dk2, scale) for j in range(-r2, r2 + 1)]
-    rules3 = [_cell_rule(l * dk3, dk3, scale) for l in range(-r3, r3 + 1)]
+    rules2 = [cell_rule(j * dk2, dk2, CELL_GAUSS, scale, GRADING, 60) for j in range(-r2, r2 + 1)]
+    rules3 = [cell_rule(l * dk3, dk3, CELL_GAUSS, scale, GRADING, 60) for l in range(-r3, r3 + 1)]
     x2, w2 = np.concatenate([r[0] for r in rules2]), np.concatenate([r[1] for r in rules2])
     x3, w3 = np.concatenate([r[0] for r in rules3]), np.concatenate([r[1] for r in rules3])
     c2 = np.repeat(np.arange(len(rules2)), [r[0].size for r in rules2])
@@ -121,41 +80,16 @@ def _axis_cells(k1: float, dk1: float, dk2: float, dk3: float, r2: int, r3: int,
 
 
 def lattice_wavenumbers(box: BoxLattice) -> tuple[np.ndarray, np.ndarray]:
-    """The box's (k2, k3) lattice, flattened.
-
-    Parameters
-    ----------
-    box : BoxLattice
-        The periodic box.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        k2, k3 [rad/m], each (nyp nzp,), row-major over the FFT orders of turbgen.theory.lattice.
-    """
+    """The box's lattice k2, k3 [rad/m], each (nyp nzp,), row-major over the FFT orders of turbgen.theory.lattice."""
     k2, k3 = np.meshgrid(k2_wavenumbers(box.nyp, box.dy_m), k3_wavenumbers(box.nzp, box.dz_m), indexing="ij")
     return k2.ravel(), k3.ravel()
 
 
 def lattice_tensor(box: BoxLattice, k1: float, params: MannParams, U_m_s: float):
-    """Phi times dk2 dk3 on the box's (k2, k3) lattice at k1, the axis cells integrated (module docstring).
+    """Phi dk2 dk3 [m^3 s^-2], (3, 3, nyp nzp), on the box's lattice at k1 [rad/m], the axis cells integrated.
 
-    Parameters
-    ----------
-    box : BoxLattice
-        The periodic box.
-    k1 : float
-        Streamwise wavenumber [rad/m].
-    params : MannParams
-        The Mann model.
-    U_m_s : float
-        Mean wind speed U [m/s] (the record's line spacing dk1 = 2 pi / (U T)).
-
-    Returns
-    -------
-    numpy.ndarray
-        Phi dk2 dk3 [m^3 s^-2] (3, 3, nyp nzp) at the nodes of :func:`lattice_wavenumbers`, a density in
-        k1 like Phi itself.
+    At the nodes of :func:`lattice_wavenumbers`, a density in k1 like Phi; ``U_m_s`` [m/s] sets the record's
+    line spacing dk1 = 2 pi / (U T) (module docstring).
     """
     dk2, dk3 = box.spacings()
     k2, k3 = (k.reshape(box.nyp, box.nzp) for k in lattice_wavenumbers(box))

@@ -1,5 +1,6 @@
-"""Line-of-sight spectra of a lidar in a Kaimal field and the lidar turbulence-intensity correction
-(Guo et al. 2023 Sect. 3; the measurement geometry of turbgen.theory.lidar_geometry).
+"""Line-of-sight spectra of a lidar in a Kaimal field and the lidar turbulence-intensity correction.
+
+Guo et al. 2023, Sect. 3; Schlipf et al. 2020; the geometry of turbgen.theory.lidar_geometry.
 """
 
 from __future__ import annotations
@@ -15,10 +16,10 @@ from turbgen.theory.params import KaimalParams, check_wind_speed
 
 def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: float, *,
                        vw_coherence: bool = False) -> np.ndarray:
-    """One-sided spectra S_los,i(f) of each measurement's line-of-sight speed, IEC Kaimal model.
+    """One-sided spectra S_los,i(f) [m^2 s^-2 Hz^-1], (M, n_f), of each measurement's line-of-sight speed.
 
-    Includes the probe volume (Schlipf et al. 2020 Eq. 2, 6; Taylor within the probe volume); u is
-    coherent in the yz plane (IEC exponential), v, w are spatially white unless ``vw_coherence``.
+    IEC Kaimal model through the probe volume (Schlipf et al. 2020, Eq. 2, 6; Taylor within it): u is
+    coherent in the yz plane, v and w are spatially white unless ``vw_coherence``.
 
     Parameters
     ----------
@@ -27,21 +28,11 @@ def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: f
     meas : Measurements
         The lidar's measurements.
     kparams : KaimalParams
-        Kaimal spectra and IEC yz coherence parameters.
+        Kaimal spectra and IEC yz coherence.
     U_m_s : float
-        Mean wind speed U [m/s].
+        Mean wind speed [m/s].
     vw_coherence : bool, optional
-        Give v and w the yz coherence of u too (default False).
-
-    Returns
-    -------
-    numpy.ndarray
-        (M, n_f) one-sided spectra [m^2 s^-2 Hz^-1].
-
-    Raises
-    ------
-    ParameterError
-        If ``U_m_s`` is outside the allowed range.
+        Give v and w the yz coherence of u.
     """
     f = np.atleast_1d(np.asarray(f_hz, dtype=float))
     U = check_wind_speed(U_m_s)
@@ -65,39 +56,22 @@ def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: f
 
 def lidar_ti_correction(meas: Measurements, kparams: KaimalParams, U_m_s: float, *, averaging_s: float = 600.0,
                         f_scan_hz: float = 1.0, f_max_hz: float = 1.0, n_f: int = 120) -> np.ndarray:
-    """TI correction factor c_TI = sigma_u / sigma_L per measurement (Schlipf et al. 2020 Eq. 6-8).
+    """TI correction factor c_TI = sigma_u / sigma_L [-] per measurement, (M,) (Schlipf et al. 2020, Eq. 6-8).
 
-    sigma_L^2 = ∫_{1/T}^{f_scan} S_los df (the lidar sees each point f_scan times a second, through its
-    probe volume and the beam angle), sigma_u^2 = ∫_{1/T}^{f_max} S_u df (the wind field's u up to its
-    highest frequency). The lidar TI estimate multiplies each LOS standard deviation by its c_TI.
+    sigma_L^2 = ∫_{1/T}^{f_scan} S_los df (each point seen f_scan times a second, through its probe volume
+    and beam angle), sigma_u^2 = ∫_{1/T}^{f_max} S_u df; the lidar TI multiplies each LOS standard
+    deviation by its c_TI.
 
     Parameters
     ----------
-    meas : Measurements
-        The lidar's measurements.
-    kparams : KaimalParams
-        Kaimal spectra and IEC yz coherence parameters.
-    U_m_s : float
-        Mean wind speed U [m/s].
+    meas, kparams, U_m_s
+        As :func:`kaimal_los_spectra`.
     averaging_s : float, optional
-        Averaging time T [s] (default 600 s).
-    f_scan_hz : float, optional
-        Rate f_scan at which each point is measured [Hz] (default 1 Hz).
-    f_max_hz : float, optional
-        Highest frequency f_max of the wind field [Hz] (default 1 Hz).
+        Averaging time T [s].
+    f_scan_hz, f_max_hz : float, optional
+        Rate at which each point is measured and highest frequency of the field [Hz]; f_scan > 1/T.
     n_f : int, optional
-        Log-spaced frequencies of the sigma_L^2 quadrature (default 120).
-
-    Returns
-    -------
-    numpy.ndarray
-        (M,) c_TI [-].
-
-    Raises
-    ------
-    ParameterError
-        If ``averaging_s``, ``f_scan_hz`` or ``f_max_hz`` is not > 0, f_scan <= 1/T, or ``U_m_s`` is
-        outside the allowed range.
+        Log-spaced frequencies of the sigma_L^2 quadrature.
     """
     from turbgen.theory.kaimal import kaimal_band_variance
 

@@ -1,40 +1,27 @@
 """Lidar preview quality: rotor-effective wind speed (REWS) spectra, lidar-rotor coherence, Wiener gain.
 
-Signals (Guo et al. 2023 Sect. 3; Fu et al. 2023 Sect. 2.4):
-* u_RR, the rotor-averaged u over a disc of radius R at x = 0 (Eq. 23);
-* u_LL = (1/M) sum_i v_los,i / n_i1 over the M measurements of one full scan (Eq. 28 without the
-  stray outer factor; Fu et al. 2023 Eq. 23), v_los,i = sum_s w_is n_i . u(focus_i + s d_i);
-* each measurement shifted by its own preview time x_i/U (the buffer), so the longitudinal lag
-  x_i is not a phase: what remains between a gate and the rotor, or two gates, is the eddies'
-  evolution over |x_i - x_j|/U (Guo et al. 2023 Eq. 29, 32 with Delta t as in Fu et al. 2023 Eq. 25).
+Signals (Guo et al. 2023, Sect. 3; Fu et al. 2023, Sect. 2.4): u_RR, the mean u over the rotor disc of
+radius R at x = 0 (Eq. 23); u_LL = (1/M) sum_i v_los,i / n_i1 over the M measurements of one scan (Eq. 28
+without its stray outer factor; Fu et al. 2023, Eq. 23). Each measurement is shifted by its preview time
+x_i / U, so what remains between a gate and the rotor is the eddies' evolution over |x_i - x_j| / U
+(Eq. 29, 32 with Delta t as in Fu et al. 2023, Eq. 25).
 
-Mann model (space-time tensor Theta = exp(-|dt|/tau_e(|k|)) Phi, Guo et al. 2022), two-sided in k1:
+Mann model (space-time tensor, Guo et al. 2022), two-sided in k1:
   S_LL(k1) = ∫ sum_{g,h} D(k, |x_g - x_h|/U) A_g(k)^T Phi(k) A_h(k)^* dk_perp        (Eq. 29)
   S_RL(k1) = ∫ sum_g D(k, x_g/U) r(kappa) sum_m Phi_1m(k) A_g,m(k)^* dk_perp          (Eq. 32)
   S_RR(k1) = ∫ r(kappa)^2 Phi_11(k) dk_perp                                           (Eq. 24)
 with A_g(k) = sum_{i in gate g} n_i phi_hat_i(k . n_i) exp(i (k2 y_i + k3 z_i)) / (M n_i1), the rotor
-filter r = 2 J1(kappa R) / (kappa R) and D = exp(-dt / tau_e(|k|)) (1 for frozen turbulence).
-Quadrature: polar (kappa, theta); kappa in Gauss-Legendre panels (log-spaced below KAPPA_SPLIT,
-PANEL_WIDTH wide above, up to KAPPA_MAX), theta with the trapezoid rule (N_THETA nodes, spectral for
-the periodic integrand). All three spectra use the same nodes, so their quadrature errors largely
-cancel in the coherence; against twice-refined nodes gamma^2 and |G_RL| of the Table 3 lidar change
-by < 1e-4 (tests/theory/test_lidar_theory.py). KAPPA_MAX = 1 rad/m suits averaged signals (probe volumes
-and the rotor disc damp higher kappa); a single *point* loses the inertial tail (~2 % of F11 at
-k1 = 0.08 rad/m) unless kappa_max is raised.
-With ``box`` the (k2, k3) integral is instead the sum over the lattice of a periodic synthesis box
-(turbgen.theory.lidar_lattice): the spectra of what such a box holds, for comparing with a synthesised
-field; it tends to the polar quadrature as the box grows. Both use the same node algebra (_node_spectra),
-the decay between gates summed by a recursion over the sorted gates.
+filter r = 2 J1(kappa R) / (kappa R) and D = exp(-dt / tau_e(|k|)) (1 for frozen turbulence). The
+(k2, k3) integral is a polar quadrature (Gauss-Legendre panels in kappa up to KAPPA_MAX, trapezoid in
+theta), the same nodes for all three spectra so their errors largely cancel in the coherence; or, with
+``box``, the sum over the lattice of a periodic synthesis box (turbgen.theory.lidar_lattice). KAPPA_MAX
+suits averaged signals; a single *point* loses the inertial tail unless ``kappa_max`` is raised.
 
-Kaimal model (direct product, Guo et al. 2023 Eq. 25, 31, 33): S_c(f) coh_yz(r, f) gamma_x(dx, f)
-between the probe-volume samples (Taylor within the probe volume: a sample s metres along the beam
-from focus i is taken from the plane of gate i, shifted by its upstream offset / U), the rotor
-points on a square grid inside the disc.
+Kaimal model (direct product, Guo et al. 2023, Eq. 25, 31, 33): S_c(f) coh_yz(r, f) gamma_x(dx, f)
+between the probe-volume samples (Taylor within the probe volume), the rotor on a square grid.
 
-Derived quantities: gamma^2_RL = |S_RL|^2 / (S_RR S_LL) (magnitude-squared, Eq. 34) and
-|G_RL| = |S_RL| / S_LL (Eq. 35); the control design from them (cut-off, coherence bandwidth, filter delay,
-buffer time) is in turbgen.theory.lidar_control, line-of-sight spectra and the lidar TI correction in
-turbgen.theory.lidar_los.
+gamma^2_RL = |S_RL|^2 / (S_RR S_LL) (Eq. 34), |G_RL| = |S_RL| / S_LL (Eq. 35); the control design from
+them is in turbgen.theory.lidar_control, line-of-sight spectra in turbgen.theory.lidar_los.
 """
 
 from __future__ import annotations
@@ -48,6 +35,7 @@ from turbgen.errors import ParameterError, check_positive
 from turbgen.theory.coherence_models import exponential_yz
 from turbgen.theory.eddy_lifetime import evolution_lifetime_s
 from turbgen.theory.kaimal import kaimal_spectrum
+from turbgen.theory.lattice import gauss_panel
 from turbgen.theory.lidar_geometry import Measurements
 from turbgen.theory.lidar_lattice import BoxLattice, lattice_tensor, lattice_wavenumbers
 from turbgen.theory.lidar_preview_kernel import node_sums
@@ -66,18 +54,14 @@ N_THETA = 160
 
 @dataclass(frozen=True)
 class PreviewSpectra:
-    """One-sided spectra in frequency [m^2 s^-2 Hz^-1] of u_RR, u_LL and their cross-spectrum.
+    """One-sided spectra of u_RR, u_LL and their cross-spectrum.
 
     Parameters
     ----------
     f_hz : numpy.ndarray
         (n_f,) frequencies [Hz].
-    S_RR : numpy.ndarray
-        (n_f,) spectrum of the rotor-effective wind speed u_RR [m^2 s^-2 Hz^-1].
-    S_LL : numpy.ndarray
-        (n_f,) spectrum of the lidar estimate u_LL [m^2 s^-2 Hz^-1].
-    S_RL : numpy.ndarray
-        (n_f,) complex cross-spectrum of u_RR and u_LL [m^2 s^-2 Hz^-1].
+    S_RR, S_LL, S_RL : numpy.ndarray
+        (n_f,) spectra of u_RR and u_LL, complex cross-spectrum [m^2 s^-2 Hz^-1].
     """
 
     f_hz: np.ndarray
@@ -87,24 +71,12 @@ class PreviewSpectra:
 
     @property
     def coh2_RL(self) -> np.ndarray:
-        """gamma^2_RL = |S_RL|^2 / (S_RR S_LL) (Guo et al. 2023 Eq. 34, magnitude-squared).
-
-        Returns
-        -------
-        numpy.ndarray
-            Magnitude-squared lidar-rotor coherence [-], shaped like ``f_hz``.
-        """
+        """Magnitude-squared lidar-rotor coherence |S_RL|^2 / (S_RR S_LL) [-] (Guo et al. 2023, Eq. 34)."""
         return np.abs(self.S_RL) ** 2 / (self.S_RR * self.S_LL)
 
     @property
     def G_RL(self) -> np.ndarray:
-        """Wiener gain |G_RL| = |S_RL| / S_LL (Guo et al. 2023 Eq. 35).
-
-        Returns
-        -------
-        numpy.ndarray
-            |G_RL| [-], shaped like ``f_hz``.
-        """
+        """Wiener gain |G_RL| = |S_RL| / S_LL [-] (Guo et al. 2023, Eq. 35)."""
         return np.abs(self.S_RL) / self.S_LL
 
 
@@ -122,14 +94,14 @@ def _check(f_hz, meas: Measurements, U_m_s: float, radius_m: float):
 
 
 def _radial_nodes(kappa_max: float = KAPPA_MAX, panel: float = PANEL_WIDTH):
-    g, gw = np.polynomial.legendre.leggauss(N_GAUSS)
     nodes, weights = [], []
     edges = np.exp(np.arange(np.log(KAPPA_LO), np.log(KAPPA_SPLIT), 1.0))
     edges = np.append(edges, KAPPA_SPLIT)
     edges = np.concatenate([edges, np.arange(KAPPA_SPLIT + panel, kappa_max + 0.5 * panel, panel)])
     for a, b in zip(edges[:-1], edges[1:]):
-        nodes.append(0.5 * (b - a) * g + 0.5 * (b + a))
-        weights.append(0.5 * (b - a) * gw)
+        x, w = gauss_panel(a, b, N_GAUSS)
+        nodes.append(x)
+        weights.append(w)
     kappa = np.concatenate(nodes)
     return kappa, np.concatenate(weights) * kappa  # kappa dkappa
 
@@ -172,13 +144,11 @@ class _Lidar:
 
 
 def _node_spectra(lidar: _Lidar, k1: float, k2, k3, phi_w, inv_tau, rotor, U: float):
-    """Two-sided (in k1) S_RR, S_LL, S_RL of Eq. 24, 29, 32 as sums over (k2, k3) nodes with weights in ``phi_w``.
+    """Two-sided S_RR, S_LL, S_RL (Eq. 24, 29, 32) as sums over (k2, k3) nodes weighted by ``phi_w``.
 
-    A_g,l(k) = sum_{i in gate g} n_il / (M n_i1) phi_hat_i(k . n_i) exp(i (k2 y_i + k3 z_i)). The decay
-    D_gh = exp(-s |x_g - x_h|), s = 1 / (U tau_e), is summed by the recursion over the sorted gates
-    C_h = sum_{g<h} D_gh A_g = exp(-s (x_h - x_{h-1})) (C_{h-1} + A_{h-1}) (only decaying factors):
-    sum_{g,h} D_gh A_g^T Phi conj(A_h) = sum_h (A_h + 2 C_h)^T Phi conj(A_h) in its real part, O(gates) per node
-    (turbgen.theory.lidar_preview_kernel, one node at a time).
+    The decay D_gh = exp(-s |x_g - x_h|), s = 1 / (U tau_e), is summed by a recursion over the sorted gates,
+    C_h = exp(-s (x_h - x_{h-1})) (C_{h-1} + A_{h-1}), so sum_{g,h} D_gh A_g^T Phi conj(A_h) is the real part
+    of sum_h (A_h + 2 C_h)^T Phi conj(A_h): O(gates) per node (turbgen.theory.lidar_preview_kernel).
     """
     S_LL, S_RL = node_sums(float(k1), np.ascontiguousarray(k2, dtype=float), np.ascontiguousarray(k3, dtype=float),
                            lidar.beams, lidar.beam_table, lidar.beam_of, lidar.nu_step, lidar.tables, lidar.phase,
@@ -192,45 +162,35 @@ def _node_spectra(lidar: _Lidar, k1: float, k2, k3, phi_w, inv_tau, rotor, U: fl
 def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: float, radius_m: float,
                          *, kappa_max: float = KAPPA_MAX, n_theta: int = N_THETA,
                          panel_width: float = PANEL_WIDTH, box: BoxLattice | None = None) -> PreviewSpectra:
-    """S_RR, S_LL, S_RL of the Mann space-time tensor for a lidar and a rotor of radius R (module docstring).
-
-    Guo et al. 2023 Eq. 24, 29, 32, integrated over (k2, k3) on the polar (kappa, theta) quadrature of
-    the module docstring, or summed over the lattice of a periodic synthesis box (``box``,
-    turbgen.theory.lidar_lattice): the spectra of what that box holds.
+    """S_RR, S_LL, S_RL of the Mann space-time tensor for a lidar and a rotor (Guo et al. 2023, Eq. 24, 29, 32).
 
     Parameters
     ----------
     f_hz : array_like
-        Frequencies [Hz] (k1 = 2 pi f / U), positive.
+        Positive frequencies [Hz] (k1 = 2 pi f / U).
     meas : Measurements
         The lidar's measurements (one full scan).
     params : MannParams
-        Mann model parameters (with ``evo_time_s`` None: frozen turbulence, D = 1).
-    U_m_s : float
-        Mean wind speed U [m/s].
-    radius_m : float
-        Rotor radius R [m].
-    kappa_max : float, optional
-        Upper end of the radial quadrature [rad/m] (default KAPPA_MAX = 1 rad/m).
+        Mann model (``evo_time_s`` None: frozen turbulence).
+    U_m_s, radius_m : float
+        Mean wind speed U [m/s], rotor radius R [m].
+    kappa_max, panel_width : float, optional
+        Upper end of the radial quadrature and width of its panels above KAPPA_SPLIT [rad/m].
     n_theta : int, optional
-        Trapezoid nodes in angle (default N_THETA).
-    panel_width : float, optional
-        Width of the uniform Gauss-Legendre radial panels above KAPPA_SPLIT [rad/m] (default PANEL_WIDTH).
+        Trapezoid nodes in angle.
     box : BoxLattice, optional
-        Sum over this box's (k2, k3) lattice instead of the polar quadrature (then ``kappa_max``,
-        ``n_theta`` and ``panel_width`` are not used).
+        Sum over this box's (k2, k3) lattice instead (the spectra of what the box holds).
 
     Returns
     -------
     PreviewSpectra
-        One-sided spectra in f [m^2 s^-2 Hz^-1], each (n_f,); S_RL complex.
+        One-sided in f [m^2 s^-2 Hz^-1]; S_RL complex.
 
     Raises
     ------
     ParameterError
-        If ``f_hz`` is empty or not positive finite numbers, ``U_m_s`` is outside the allowed range,
-        ``radius_m`` is not > 0, ``meas`` has no measurements or a beam does not look upstream
-        (n_1 <= 1e-6: u_LL divides by n_1).
+        If ``f_hz`` is empty or not positive, U or R is invalid, ``meas`` is empty or a beam does not
+        look upstream (n_1 <= 1e-6: u_LL divides by n_1).
     """
     f, U, R = _check(f_hz, meas, U_m_s, radius_m)
     k1_all = 2.0 * np.pi * f / U
@@ -257,24 +217,9 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
 
 
 def rotor_points(radius_m: float, spacing_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(y, z) of a square grid inside the rotor disc of radius R.
+    """(y, z) [m] of a square grid of spacing ``spacing_m`` (default R/10) inside the disc of radius ``radius_m`` [m].
 
-    Parameters
-    ----------
-    radius_m : float
-        Rotor radius R [m].
-    spacing_m : float, optional
-        Grid spacing [m] (default R/10).
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        (y [m], z [m]), each (n_points,), the grid points with y^2 + z^2 <= R^2.
-
-    Raises
-    ------
-    ParameterError
-        If ``radius_m`` or a given ``spacing_m`` is not a finite number > 0.
+    Raises ParameterError if either is not a finite number > 0.
     """
     R = check_positive("rotor radius (m)", radius_m)
     h = R / 10.0 if spacing_m is None else check_positive("rotor grid spacing (m)", spacing_m)
@@ -288,46 +233,40 @@ def rotor_points(radius_m: float, spacing_m: float | None = None) -> tuple[np.nd
 def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: float, radius_m: float,
                            long_coherence, *, long_components: str = "u", vw_coherence: bool = False,
                            rotor_spacing_m: float | None = None) -> PreviewSpectra:
-    """S_RR, S_LL, S_RL of the Kaimal direct-product model (Guo et al. 2023 Eq. 25, 31, 33).
+    """S_RR, S_LL, S_RL of the Kaimal direct-product model (Guo et al. 2023, Eq. 25, 31, 33).
 
     u is coherent in the yz plane (IEC exponential, un-squared); v, w are spatially white unless
-    ``vw_coherence``. Within the probe volume Taylor's hypothesis applies; the rotor points are a
-    square grid inside the disc (rotor_points).
+    ``vw_coherence``; the rotor is the grid of :func:`rotor_points`.
 
     Parameters
     ----------
     f_hz : array_like
-        Frequencies [Hz], positive.
+        Positive frequencies [Hz].
     meas : Measurements
         The lidar's measurements (one full scan).
     kparams : KaimalParams
-        Kaimal spectra and IEC yz coherence parameters.
-    U_m_s : float
-        Mean wind speed U [m/s].
-    radius_m : float
-        Rotor radius R [m].
+        Kaimal spectra and IEC yz coherence.
+    U_m_s, radius_m : float
+        Mean wind speed U [m/s], rotor radius R [m].
     long_coherence : callable
-        long_coherence(dx_m, f_hz): un-squared longitudinal coherence [-] between planes dx [m] apart
-        at f [Hz] (e.g. ``lambda dx, f: exponential_longitudinal(dx, f, U, a_x, b_x)``), applied to the
-        components in ``long_components``; other components are independent between planes.
+        ``long_coherence(dx_m, f_hz)``: un-squared coherence [-] between planes dx [m] apart, for the
+        components in ``long_components`` (the others are independent between planes).
     long_components : str, optional
-        Components among "uvw" with longitudinal coherence (default "u").
+        Components among "uvw" with longitudinal coherence.
     vw_coherence : bool, optional
-        Give v and w the yz coherence of u too (default False).
+        Give v and w the yz coherence of u.
     rotor_spacing_m : float, optional
-        Spacing of the rotor grid [m] (default R/10).
+        Rotor grid spacing [m] (default R/10).
 
     Returns
     -------
     PreviewSpectra
-        One-sided spectra in f [m^2 s^-2 Hz^-1], each (n_f,); S_RL complex.
+        One-sided in f [m^2 s^-2 Hz^-1]; S_RL complex.
 
     Raises
     ------
     ParameterError
-        If ``f_hz`` is empty or not positive finite numbers, ``U_m_s`` is outside the allowed range,
-        ``radius_m`` is not > 0, ``meas`` has no measurements or a beam does not look upstream
-        (n_1 <= 1e-6: u_LL divides by n_1), or ``rotor_spacing_m`` is not > 0.
+        As :func:`mann_preview_spectra`, or if ``rotor_spacing_m`` is not > 0.
     """
     f, U, R = _check(f_hz, meas, U_m_s, radius_m)
     pts = meas.sample_points_m()  # (M, K, 3)

@@ -1,15 +1,10 @@
-"""Probe-volume weighting of a lidar along its beam.
+"""Probe-volume weighting of a lidar along its beam, continuous and discrete.
 
-Pulsed lidar: Gaussian weighting with standard deviation sigma_L = W_L / (2 sqrt(2 ln 2)) (FWHM W_L),
-phi(s) = exp(-s^2 / (2 sigma_L^2)) / (sigma_L sqrt(2 pi)), Fourier transform
-phi_hat(nu) = exp(-nu^2 sigma_L^2 / 2) (Guo et al. 2023 Eq. 27, 30; the extra |k.n| factor printed in
-Fu et al. 2023 Eq. 19 is a misprint).
-Continuous-wave lidar: Lorentzian phi(s) = z_R / (pi (z_R^2 + s^2)), phi_hat(nu) = exp(-|nu| z_R), with
-Rayleigh length z_R = lambda f_d^2 / (pi r_b^2) (Fu et al. 2023 Eq. 14-16).
-Discrete forms (Fu et al. 2023 Sect. 2.3): pulsed s in [-1.5 W_L, 1.5 W_L] in steps of 2.5 m,
-CW s in [-6 z_R, 6 z_R] in steps of 0.1 z_R, weights renormalised to sum 1. turbgen's theory and its
-virtual lidar both use these discrete weights, so the frequency and time domains see the same
-probe volume (the truncation drops ~10 % of the Lorentzian's weight, which matters for CW).
+Pulsed lidar: Gaussian of FWHM W_L (Guo et al. 2023, Eq. 27, 30; the extra |k.n| factor of Fu et al.
+2023, Eq. 19 is a misprint). Continuous-wave lidar: Lorentzian of Rayleigh length z_R (Fu et al. 2023,
+Eq. 14-16). The theory and the virtual lidar both use the discrete weights (Fu et al. 2023, Sect. 2.3),
+so the frequency and time domains see the same probe volume. Every function raises ParameterError for
+a width or length that is not a finite number > 0.
 """
 
 from __future__ import annotations
@@ -25,47 +20,24 @@ CW_STEP_ZR = 0.1
 
 
 def sigma_from_fwhm_m(fwhm_m: float) -> float:
-    """Standard deviation sigma_L = W_L / (2 sqrt(2 ln 2)) of the pulsed weighting (Guo et al. 2023 Eq. 27).
-
-    Parameters
-    ----------
-    fwhm_m : float
-        Full width at half maximum W_L [m].
-
-    Returns
-    -------
-    float
-        sigma_L [m].
-
-    Raises
-    ------
-    ParameterError
-        If ``fwhm_m`` is not a finite number > 0.
-    """
+    """Standard deviation sigma_L = W_L / (2 sqrt(2 ln 2)) [m] of the pulsed weighting (Guo et al. 2023, Eq. 27)."""
     return check_positive("FWHM W_L (m)", fwhm_m) / (2.0 * np.sqrt(2.0 * np.log(2.0)))
 
 
 def rayleigh_length_m(focus_distance_m, wavelength_m: float = 1.565e-6, beam_radius_m: float = 0.028):
-    """Rayleigh length z_R = lambda f_d^2 / (pi r_b^2) of a continuous-wave lidar (Fu et al. 2023 Eq. 15).
+    """Rayleigh length z_R = lambda f_d^2 / (pi r_b^2) of a continuous-wave lidar (Fu et al. 2023, Eq. 15).
 
     Parameters
     ----------
     focus_distance_m : array_like
         Focus distance f_d [m].
-    wavelength_m : float, optional
-        Laser wavelength lambda [m] (default 1.565e-6 m).
-    beam_radius_m : float, optional
-        Beam radius r_b [m] (default 0.028 m).
+    wavelength_m, beam_radius_m : float, optional
+        Laser wavelength lambda and beam radius r_b [m].
 
     Returns
     -------
     numpy.ndarray
         z_R [m], shaped like ``focus_distance_m``.
-
-    Raises
-    ------
-    ParameterError
-        If ``wavelength_m`` or ``beam_radius_m`` is not a finite number > 0.
     """
     check_positive("wavelength (m)", wavelength_m)
     check_positive("beam radius (m)", beam_radius_m)
@@ -73,24 +45,9 @@ def rayleigh_length_m(focus_distance_m, wavelength_m: float = 1.565e-6, beam_rad
 
 
 def gaussian_weight(s_m, fwhm_m: float):
-    """Continuous pulsed weighting phi(s) = exp(-s^2 / (2 sigma_L^2)) / (sigma_L sqrt(2 pi)) (Guo et al. 2023 Eq. 27).
+    """Pulsed weighting phi(s) = exp(-s^2 / (2 sigma_L^2)) / (sigma_L sqrt(2 pi)) [1/m] (Guo et al. 2023, Eq. 27).
 
-    Parameters
-    ----------
-    s_m : array_like
-        Position along the beam relative to the focus [m].
-    fwhm_m : float
-        Full width at half maximum W_L [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        phi(s) [1/m], shaped like ``s_m``.
-
-    Raises
-    ------
-    ParameterError
-        If ``fwhm_m`` is not a finite number > 0.
+    ``s_m`` [m] is the offset from the focus (array_like), ``fwhm_m`` the FWHM W_L [m].
     """
     sig = sigma_from_fwhm_m(fwhm_m)
     s = np.asarray(s_m, dtype=float)
@@ -98,48 +55,18 @@ def gaussian_weight(s_m, fwhm_m: float):
 
 
 def gaussian_transform(nu_rad_m, fwhm_m: float):
-    """Fourier transform of the Gaussian weighting, exp(-nu^2 sigma_L^2 / 2) (Guo et al. 2023 Eq. 30).
+    """Fourier transform exp(-nu^2 sigma_L^2 / 2) [-] of the Gaussian weighting (Guo et al. 2023, Eq. 30).
 
-    Parameters
-    ----------
-    nu_rad_m : array_like
-        Wavenumber along the beam nu [rad/m].
-    fwhm_m : float
-        Full width at half maximum W_L [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        phi_hat(nu) [-] (1 at nu = 0), shaped like ``nu_rad_m``.
-
-    Raises
-    ------
-    ParameterError
-        If ``fwhm_m`` is not a finite number > 0.
+    ``nu_rad_m`` [rad/m] is the wavenumber along the beam (array_like), ``fwhm_m`` the FWHM W_L [m].
     """
     sig = sigma_from_fwhm_m(fwhm_m)
     return np.exp(-0.5 * (np.asarray(nu_rad_m, dtype=float) * sig) ** 2)
 
 
 def lorentzian_weight(s_m, z_r_m: float):
-    """Continuous CW weighting phi(s) = z_R / (pi (z_R^2 + s^2)) (Fu et al. 2023 Eq. 14).
+    """CW weighting phi(s) = z_R / (pi (z_R^2 + s^2)) [1/m] (Fu et al. 2023, Eq. 14).
 
-    Parameters
-    ----------
-    s_m : array_like
-        Position along the beam relative to the focus [m].
-    z_r_m : float
-        Rayleigh length z_R [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        phi(s) [1/m], shaped like ``s_m``.
-
-    Raises
-    ------
-    ParameterError
-        If ``z_r_m`` is not a finite number > 0.
+    ``s_m`` [m] is the offset from the focus (array_like), ``z_r_m`` the Rayleigh length z_R [m].
     """
     z = check_positive("Rayleigh length z_R (m)", z_r_m)
     s = np.asarray(s_m, dtype=float)
@@ -147,47 +74,17 @@ def lorentzian_weight(s_m, z_r_m: float):
 
 
 def lorentzian_transform(nu_rad_m, z_r_m: float):
-    """Fourier transform of the Lorentzian weighting, exp(-|nu| z_R) (Fu et al. 2023 Eq. 16).
-
-    Parameters
-    ----------
-    nu_rad_m : array_like
-        Wavenumber along the beam nu [rad/m].
-    z_r_m : float
-        Rayleigh length z_R [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        phi_hat(nu) [-], shaped like ``nu_rad_m``.
-
-    Raises
-    ------
-    ParameterError
-        If ``z_r_m`` is not a finite number > 0.
-    """
+    """Fourier transform exp(-|nu| z_R) [-] of the Lorentzian at ``nu_rad_m`` [rad/m] (Fu et al. 2023, Eq. 16)."""
     return np.exp(-np.abs(np.asarray(nu_rad_m, dtype=float)) * check_positive("z_R (m)", z_r_m))
 
 
 def pulsed_discrete(fwhm_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """Truncated, discretised Gaussian (offsets [m], weights summing to 1) (Fu et al. 2023 Sect. 2.3).
-
-    Offsets s in [-1.5 W_L, 1.5 W_L] in steps of 2.5 m.
-
-    Parameters
-    ----------
-    fwhm_m : float
-        Full width at half maximum W_L [m].
+    """Gaussian of FWHM ``fwhm_m`` [m] sampled on [-1.5 W_L, 1.5 W_L] in steps of 2.5 m (Fu et al. 2023, Sect. 2.3).
 
     Returns
     -------
     tuple of numpy.ndarray
-        (offsets [m], weights [-]), each (2 n + 1,), the weights summing to 1.
-
-    Raises
-    ------
-    ParameterError
-        If ``fwhm_m`` is not a finite number > 0.
+        (offsets [m], weights [-] summing to 1), each (2 n + 1,).
     """
     half = PULSED_HALF_WIDTH_FWHM * check_positive("FWHM W_L (m)", fwhm_m)
     n = int(np.floor(half / PULSED_STEP_M + 1e-9))
@@ -197,24 +94,12 @@ def pulsed_discrete(fwhm_m: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def cw_discrete(z_r_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """Truncated, discretised Lorentzian (offsets [m], weights summing to 1) (Fu et al. 2023 Sect. 2.3).
-
-    Offsets s in [-6 z_R, 6 z_R] in steps of 0.1 z_R.
-
-    Parameters
-    ----------
-    z_r_m : float
-        Rayleigh length z_R [m].
+    """Lorentzian of Rayleigh length ``z_r_m`` [m] on [-6 z_R, 6 z_R] in steps of 0.1 z_R (Fu et al. 2023, Sect. 2.3).
 
     Returns
     -------
     tuple of numpy.ndarray
-        (offsets [m], weights [-]), each (121,), the weights summing to 1.
-
-    Raises
-    ------
-    ParameterError
-        If ``z_r_m`` is not a finite number > 0.
+        (offsets [m], weights [-] summing to 1), each (121,).
     """
     z = check_positive("Rayleigh length z_R (m)", z_r_m)
     n = int(round(CW_HALF_WIDTH_ZR / CW_STEP_ZR))
@@ -224,21 +109,19 @@ def cw_discrete(z_r_m: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def discrete_transform(nu_rad_m, offsets_m, weights):
-    """Transform of discrete weights: sum_r w_r exp(-i nu s_r) for symmetric weights, sum_r w_r cos(nu s_r).
+    """Transform sum_r w_r cos(nu s_r) [-] of symmetric discrete weights (= sum_r w_r exp(-i nu s_r)).
 
     Parameters
     ----------
     nu_rad_m : array_like
-        Wavenumber along the beam nu [rad/m], any shape.
-    offsets_m : array_like
-        (K,) offsets s_r along the beam [m], symmetric about 0.
-    weights : array_like
-        (K,) weights w_r [-].
+        Wavenumber along the beam [rad/m], any shape.
+    offsets_m, weights : array_like
+        (K,) offsets s_r [m], symmetric about 0, and weights w_r [-].
 
     Returns
     -------
     numpy.ndarray
-        Real transform [-], shaped like ``nu_rad_m``.
+        Shaped like ``nu_rad_m``.
     """
     nu = np.asarray(nu_rad_m, dtype=float)
     s = np.asarray(offsets_m, dtype=float)

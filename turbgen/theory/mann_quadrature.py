@@ -1,29 +1,22 @@
-"""The (k2, k3) quadrature behind the Mann spectra (Guo et al. 2023, Eq. 8, 16 and 24): radial nodes and
-angular integrals of the sheared tensor for every k1 (``perpendicular_quadrature``).
+"""The (k2, k3) quadrature behind the Mann spectra (Guo et al. 2023, Eq. 8, 16 and 24).
 
-Quadrature of F_ij(k1, dy, dz) = ∫ Phi_ij(k) exp(i(k2 dy + k3 dz)) dk2 dk3 (Eq. 8)
--------------------------------------------------------------------------------------
-Polar coordinates k2 = kappa cos(theta), k3 = kappa sin(theta); beta(|k|) is constant on circles.
-* Radial: Gauss-Legendre panels (N_GAUSS = 8 nodes, width PANEL_LN = 1 in ln kappa) over
-  kappa = s*[1e-6, 1e4], s = sqrt(k1^2 + L^-2) (the scale of the integrand at every k1), plus the
-  inertial tail beyond 1e4 s in closed form (integrand ~ kappa^(-8/3): without it the cut costs
-  ~1e-7). The lower end moves to 1e-3 |k1| when that is smaller: at k1 L << 1 the distortion puts a
-  finite part of F_ij at kappa ~ |k1| (F11(k1 -> 0) differs by 4x from the tensor's k1 = 0 plane;
-  k1 = 0 is evaluated as the limit, at k1 L = K1_ZERO).
-* Angle: trapezoid rule (periodic -> spectral accuracy) with N_THETA = 64 nodes for k1 L >= 0.3,
-  256 for 0.01 <= k1 L < 0.3 and 512 below: at k1 L << 1 the integrand has angular features of
-  width ~k1/kappa around k2 = 0.
-* With a separation d = sqrt(dy^2 + dz^2) > 0 the angular integral uses the angular Fourier
-  coefficients c_n(kappa) (FFT of the samples) and Jacobi-Anger,
+F_ij(k1, dy, dz) = ∫ Phi_ij(k) exp(i(k2 dy + k3 dz)) dk2 dk3 (Eq. 8) in polar coordinates
+k2 = kappa cos(theta), k3 = kappa sin(theta), on which beta(|k|) is constant:
+
+* Radial: Gauss-Legendre panels (N_GAUSS nodes, PANEL_LN wide in ln kappa) over kappa = s [X_LO, X_HI],
+  s = sqrt(k1^2 + L^-2) the integrand's scale, plus the kappa^(-8/3) inertial tail in closed form. At
+  k1 L << 1 the distortion puts a finite part of F_ij at kappa ~ |k1|, so the lower end moves to
+  1e-3 |k1|, and k1 = 0 is evaluated as the limit k1 -> 0 (at k1 L = K1_ZERO): the tensor's own k1 = 0
+  plane lacks that energy.
+* Angle: trapezoid rule (spectral for the periodic integrand), N_THETA nodes, more at small k1 L where
+  the integrand has angular features of width ~k1/kappa around k2 = 0.
+* With a separation d = sqrt(dy^2 + dz^2) > 0: Jacobi-Anger on the angular Fourier coefficients c_n,
   ∫ Phi e^{i kappa d cos(theta - theta_d)} dtheta = 2 pi sum_n c_n i^n J_n(kappa d) e^{i n theta_d},
-  exact in angle for any kappa d. Radially every panel is split (uniformly in ln kappa) so that no
-  sub-panel is wider than pi/d, and the range is cut where the dropped oscillating tail is
-  estimated below SEP_TAIL of F_ii (_separated_cut).
-Measured accuracy (tests/theory/test_theory_mann.py and a sweep over Gamma = 2.4-3.9, L = 30-140 m,
-k1 L in [1e-3, 1e3], against 2x the panels, 10-12 Gauss nodes, 256-1024 angles): F_ii <= 4e-6
-relative, F13 <= 1e-7 of sqrt(F11 F33); cross-spectra at dy, dz up to 60 m <= 7e-5 of F_ii
-(so coherences to ~1e-4 absolute); Gamma = 0 matches the isotropic closed form
-F11 = (9/55) ae (L^-2 + k1^2)^(-5/6) to 1e-6 relative.
+  exact in angle; radial sub-panels no wider than pi/d, the range cut where the dropped oscillating
+  tail is below SEP_TAIL of F_ii.
+
+tests/theory/test_theory_mann.py checks the accuracy against refined rules and, at Gamma = 0, the
+isotropic closed form F11 = (9/55) ae (L^-2 + k1^2)^(-5/6).
 """
 
 from __future__ import annotations
@@ -38,6 +31,7 @@ from scipy.special import jv
 from turbgen import fft
 from turbgen.errors import ParameterError, check_finite
 from turbgen.theory.eddy_lifetime import shear_distortion_beta
+from turbgen.theory.lattice import gauss_panel
 from turbgen.theory.params import MannParams
 
 N_GAUSS = 8  # Gauss-Legendre nodes per radial panel
@@ -54,8 +48,7 @@ _QUADRATURE_THREADS = min(os.cpu_count() or 1, 4)  # batches evaluated at once (
 @lru_cache(maxsize=8)
 def gauss(n: int):
     """Gauss-Legendre nodes and weights on [0, 1]."""
-    x, w = np.polynomial.legendre.leggauss(n)
-    return 0.5 * (x + 1.0), 0.5 * w
+    return gauss_panel(0.0, 1.0, n)
 
 
 @lru_cache(maxsize=64)
@@ -63,10 +56,9 @@ def _radial_rule(x_lo: float, x_hi: float, panel_ln: float, n_gauss: int, max_wi
                  split_below: float = np.inf, tail: bool = False):
     """Nodes x and weights w with ∫ g(x) x dx ≈ sum w g(x) on [x_lo, x_hi] (x = kappa / s).
 
-    Panels are uniform in ln x (width <= panel_ln); those starting below ``split_below`` are split
-    uniformly in ln x so that no sub-panel is wider than ``max_width_over_s`` in x. With ``tail``
-    a last node at x_hi with weight (3/5) x_hi^2 adds the inertial tail ∫_{x_hi}^inf g x dx of
-    g ~ x^(-11/3).
+    Panels uniform in ln x (width <= panel_ln); those starting below ``split_below`` are split so that no
+    sub-panel is wider than ``max_width_over_s``. With ``tail`` a last node at x_hi of weight (3/5) x_hi^2
+    adds ∫_{x_hi}^inf g x dx of g ~ x^(-11/3).
     """
     gx, gw = gauss(n_gauss)
     n_pan = int(np.ceil(np.log(x_hi / x_lo) / panel_ln))
@@ -89,9 +81,11 @@ def _radial_rule(x_lo: float, x_hi: float, panel_ln: float, n_gauss: int, max_wi
 
 
 def _separated_cut(sd: float) -> float:
-    """Radial cut x = kappa/s with a separation d (s d = ``sd``): the dropped tail is ~x^(-5/3) of F_ii
-    (the kappa^(-8/3) inertial tail of the integrand), reduced by ~(x s d)^(-3/2) by its oscillation
-    when x s d > 1; the cut keeps this estimate below SEP_TAIL (and between 4 s and X_HI s)."""
+    """Radial cut x = kappa/s with a separation d (s d = ``sd``), between 4 and X_HI.
+
+    The dropped tail is ~x^(-5/3) of F_ii, reduced by ~(x s d)^(-3/2) by its oscillation when x s d > 1;
+    the cut keeps this estimate below SEP_TAIL.
+    """
     sd = min(max(sd, 1e-300), 1e300)
     x = (SEP_TAIL * sd**1.5) ** (-6.0 / 19.0)
     if x * sd < 1.0:  # no cancellation to count on
@@ -116,11 +110,9 @@ def perpendicular_quadrature(
     k1, params: MannParams, pairs, dy_m: float = 0.0, dz_m: float = 0.0, resolve_m: float = 0.0,
     resolve_kappa_max: float = np.inf, _rule=None
 ):
-    """Angular integrals on the radial nodes of the (k2, k3) plane, for every k1.
+    """Angular integrals on the radial nodes of the (k2, k3) plane, for every k1 (module docstring).
 
-    Any radial weight that depends on |k| or kappa only (space-time decay, rotor average) is applied by
-    the caller. k1 = 0 is evaluated as the limit k1 -> 0 (at k1 L = K1_ZERO).
-    This is the engine behind Eq. 8, 16 and 24 of Guo et al. (2023) (module docstring: rule and accuracy).
+    Radial weights that depend on |k| or kappa only (space-time decay, rotor average) are the caller's.
 
     Parameters
     ----------
@@ -129,34 +121,29 @@ def perpendicular_quadrature(
     params : MannParams
         Mann model parameters.
     pairs : iterable of tuple of int
-        Tensor components (i, j), each index in 0..2, to integrate.
+        Tensor components (i, j), indices in 0..2.
     dy_m, dz_m : float, optional
-        Lateral and vertical separation dy, dz [m] (default 0: no separation).
+        Lateral and vertical separation [m].
     resolve_m : float, optional
-        (No separation only) the length [m] whose oscillation exp(i kappa resolve_m) the radial panels
-        resolve for kappa < ``resolve_kappa_max``; 0 (default) for none.
-    resolve_kappa_max : float or array_like, optional
-        [rad/m], scalar or per k1; the caller smooths its weight beyond.
+        Without separation: the length [m] whose oscillation exp(i kappa resolve_m) the radial panels
+        resolve below ``resolve_kappa_max`` [rad/m] (scalar or per k1); 0 for none.
     _rule : dict, optional
-        Internal overrides of the quadrature rule (x_lo, x_hi, x_hi_sep, panel_ln, n_gauss, n_theta).
+        Internal overrides (x_lo, x_hi, x_hi_sep, panel_ln, n_gauss, n_theta).
 
     Returns
     -------
-    kappa : numpy.ndarray
-        (len(k1), n_r) radial nodes [rad/m] (padding nodes carry zero weight).
-    weights : numpy.ndarray
-        (len(k1), n_r) weights [rad^2/m^2] with ∫ g(kappa) kappa dkappa ≈ sum weights * g(kappa).
+    kappa, weights : numpy.ndarray
+        (len(k1), n_r) radial nodes [rad/m] and weights [rad^2/m^2], ∫ g kappa dkappa ≈ sum weights g
+        (padding nodes carry zero weight).
     G : dict
-        G[(i, j)] = ∫_0^{2pi} Phi_ij(k1, kappa, theta) exp(i kappa d cos(theta - theta_d)) dtheta
-        [m^5 s^-2], (len(k1), n_r), complex if a separation is given, else real.
+        G[(i, j)] = ∫_0^{2pi} Phi_ij exp(i kappa d cos(theta - theta_d)) dtheta [m^5 s^-2], (len(k1), n_r),
+        complex with a separation.
 
     Raises
     ------
     ParameterError
-        If ``k1`` is not finite numbers or ``dy_m``, ``dz_m``, ``resolve_m`` is not a finite number.
+        If ``k1``, ``dy_m``, ``dz_m`` or ``resolve_m`` is not finite.
     """
-    # F_ij at k1 = 0 is taken as the limit k1 -> 0: as k1 -> 0 the shear distortion concentrates a
-    # finite amount of energy at |k| ~ k1, which the tensor's exact k1 = 0 plane (ζ1 = -β) lacks
     k1 = check_k1(k1)
     k1 = np.where(k1 == 0, K1_ZERO / params.length_scale_m, k1)
     dy = check_finite("dy (m)", dy_m)
@@ -170,8 +157,7 @@ def perpendicular_quadrature(
     panel_ln, n_gauss = rule.get("panel_ln", PANEL_LN), rule.get("n_gauss", N_GAUSS)
     kappa_res = np.broadcast_to(np.asarray(resolve_kappa_max, dtype=float), k1.shape)
     for s, k_res, k1_abs in zip(s_all, kappa_res, np.abs(k1)):
-        # at k1 L << 1 a finite part of F_ij sits at kappa ~ |k1| (shear distortion of |k| ~ k1):
-        # the grid starts three decades below |k1| (rounded to a power of 10 so rules are reused)
+        # three decades below |k1|, rounded to a power of 10 so rules are reused
         x_lo = min(rule.get("x_lo", X_LO), 10.0 ** np.floor(np.log10(1e-3 * k1_abs / s)))
         if d > 0:  # oscillating integrand: resolve it up to a cut that bounds the dropped tail
             cut = rule.get("x_hi_sep", _separated_cut(s * d))
@@ -224,8 +210,7 @@ def perpendicular_quadrature(
 
 
 def _angle_count(k1L, rule):
-    """Trapezoid nodes in angle: at |k1| L << 1 the integrand has angular features of width ~|k1|/kappa
-    around k2 = 0 (measured: 64 nodes leave 1e-2 on F22 at k1 L = 1e-3, 512 leave 1e-7)."""
+    """Trapezoid nodes in angle per k1 L: more below k1 L = 0.3 and 0.01 (module docstring)."""
     if "n_theta" in rule:
         return np.full(k1L.shape, int(rule["n_theta"]))
     return np.where(k1L >= 0.3, N_THETA, np.where(k1L >= 0.01, 4 * N_THETA, 8 * N_THETA))
@@ -234,7 +219,7 @@ def _angle_count(k1L, rule):
 def _jacobi_anger(samples, z, theta_d: float):
     """2 pi sum_n c_n i^n J_n(z) e^{i n theta_d} from equispaced angular samples (last axis).
 
-    c_n are the angular Fourier coefficients (FFT); orders with J_n(max z) < ~1e-17 are skipped.
+    c_n are the angular Fourier coefficients; orders with J_n(max z) < ~1e-17 are skipped.
     """
     n_theta = samples.shape[-1]
     c = fft.oneshot().fft(samples, axis=-1) / n_theta

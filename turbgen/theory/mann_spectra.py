@@ -1,12 +1,9 @@
 """One-point spectra, cross-spectra, coherences and variances of the Mann tensor (Guo et al. 2023, Eq. 8-10).
 
-Conventions: k1 in rad/m; spectra are TWO-SIDED in k1 [m^3 s^-2], so sigma_i^2 = ∫_{-inf}^{inf} F_ii dk1
-and the one-sided frequency spectrum is S_i(f) = 2 F_ii(k1) 2 pi / U (f S_i = 2 k1 F_ii).
-
-The (k2, k3) quadrature of Eq. 8 (rule and measured accuracy) is in turbgen.theory.mann_quadrature.
-
-Variances integrate F_ii over k1 with Gauss panels in ln(k1 L) on [1e-6, 1e5] plus the inertial
-tail (3/2) K F(K) beyond K = 1e5/L; at Gamma = 0 they match (1/3) B(5/2, 1/3) ae L^(2/3) to 1e-6.
+k1 in rad/m, finite (k1 = 0 is the limit k1 -> 0); spectra are TWO-SIDED in k1 [m^3 s^-2]:
+sigma_i^2 = ∫_{-inf}^{inf} F_ii dk1, and the one-sided frequency spectrum is S_i(f) = 2 F_ii(k1) 2 pi / U.
+The (k2, k3) quadrature of Eq. 8 is turbgen.theory.mann_quadrature. Components i, j are 0, 1, 2
+(u, v, w); anything else, or a k1 or separation that is not finite, raises ParameterError.
 """
 
 from __future__ import annotations
@@ -27,27 +24,19 @@ def _integrate(weights, values):
 
 
 def one_point_spectra(k1, params: MannParams) -> dict[str, np.ndarray]:
-    """Two-sided one-point spectra F11 F22 F33 F12 F13 F23 at k1 (Guo et al. 2023, Eq. 8 with dy = dz = 0).
-
-    sigma_i^2 = ∫_{-inf}^{inf} F_ii dk1; the one-sided frequency spectrum is S_i(f) = 2 F_ii(k1) 2 pi / U.
-    k1 = 0 is evaluated as the limit k1 -> 0.
+    """Two-sided one-point spectra at k1 (Guo et al. 2023, Eq. 8 with dy = dz = 0).
 
     Parameters
     ----------
     k1 : array_like
-        Longitudinal wavenumbers [rad/m], finite.
+        Longitudinal wavenumbers [rad/m].
     params : MannParams
         Mann model parameters.
 
     Returns
     -------
     dict of str to numpy.ndarray
-        Keys "F11", "F22", "F33", "F12", "F13", "F23"; each (len(k1),) [m^3 s^-2], two-sided in k1.
-
-    Raises
-    ------
-    ParameterError
-        If ``k1`` is not finite numbers.
+        "F11", "F22", "F33", "F12", "F13", "F23", each (len(k1),) [m^3 s^-2].
     """
     k1 = check_k1(k1)
     _, w, g = perpendicular_quadrature(k1, params, tuple(COMPONENTS.values()))
@@ -55,28 +44,18 @@ def one_point_spectra(k1, params: MannParams) -> dict[str, np.ndarray]:
 
 
 def cross_spectrum(k1, params: MannParams, i: int, j: int, dy_m: float = 0.0, dz_m: float = 0.0) -> np.ndarray:
-    """Complex cross-spectrum F_ij(k1, dy, dz), two-sided in k1 (Guo et al. 2023, Eq. 8).
+    """Complex two-sided cross-spectrum F_ij(k1, dy, dz) [m^3 s^-2], (len(k1),) (Guo et al. 2023, Eq. 8).
 
     Parameters
     ----------
     k1 : array_like
-        Longitudinal wavenumbers [rad/m], finite.
+        Longitudinal wavenumbers [rad/m].
     params : MannParams
         Mann model parameters.
     i, j : int
-        Velocity components, each in 0..2 (u, v, w).
+        Velocity components.
     dy_m, dz_m : float, optional
-        Lateral and vertical separation [m] (default 0).
-
-    Returns
-    -------
-    numpy.ndarray
-        (len(k1),) complex F_ij [m^3 s^-2].
-
-    Raises
-    ------
-    ParameterError
-        If ``i`` or ``j`` is not 0, 1 or 2, ``k1`` is not finite numbers or ``dy_m``, ``dz_m`` is not finite.
+        Lateral and vertical separation [m].
     """
     for name, v in (("i", i), ("j", j)):
         if v not in (0, 1, 2):
@@ -88,28 +67,8 @@ def cross_spectrum(k1, params: MannParams, i: int, j: int, dy_m: float = 0.0, dz
 def yz_coherence(k1, params: MannParams, i: int, j: int, dy_m: float, dz_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Magnitude-squared coherence (Eq. 9) and un-squared co-coherence (Eq. 10) of Guo et al. (2023).
 
-    ``coh2 = |F_ij|^2 / (F_ii F_jj)``, ``cocoh = Re F_ij / sqrt(F_ii F_jj)``, with F_ij(k1, dy, dz).
-
-    Parameters
-    ----------
-    k1 : array_like
-        Longitudinal wavenumbers [rad/m], finite.
-    params : MannParams
-        Mann model parameters.
-    i, j : int
-        Velocity components, each in 0..2 (u, v, w).
-    dy_m, dz_m : float
-        Lateral and vertical separation [m].
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        (coh2, cocoh) [-], each (len(k1),).
-
-    Raises
-    ------
-    ParameterError
-        If ``i`` or ``j`` is not 0, 1 or 2, ``k1`` is not finite numbers or ``dy_m``, ``dz_m`` is not finite.
+    ``coh2 = |F_ij|^2 / (F_ii F_jj)``, ``cocoh = Re F_ij / sqrt(F_ii F_jj)``, each (len(k1),) [-]; arguments as
+    :func:`cross_spectrum`.
     """
     k1 = check_k1(k1)
     fij = cross_spectrum(k1, params, i, j, dy_m, dz_m)
@@ -143,46 +102,19 @@ def _variances_cached(params: MannParams) -> tuple[float, float, float, float]:
 
 
 def variances(params: MannParams) -> dict[str, float]:
-    """sigma_u^2, sigma_v^2, sigma_w^2 and <uw> = ∫ F_ij dk1 over all k1 (keys uu vv ww uw).
+    """sigma_u^2, sigma_v^2, sigma_w^2 and <uw> = ∫ F_ij dk1 [m^2 s^-2] (keys uu vv ww uw), cached per ``params``.
 
-    Gauss panels in ln(k1 L) on [1e-6, 1e5] plus the inertial tail (module docstring); cached per
-    ``params``.
-
-    Parameters
-    ----------
-    params : MannParams
-        Mann model parameters.
-
-    Returns
-    -------
-    dict of str to float
-        {"uu", "vv", "ww", "uw"} [m^2 s^-2].
+    Gauss panels in ln(k1 L) on [1e-6, 1e5] plus the inertial tail (3/2) K F(K) beyond K = 1e5/L; at
+    Gamma = 0 they match (1/3) B(5/2, 1/3) ae L^(2/3) to 1e-6.
     """
     uu, vv, ww, uw = _variances_cached(params)
     return {"uu": uu, "vv": vv, "ww": ww, "uw": uw}
 
 
 def ae_for_sigma_u(sigma_u_m_s: float, params: MannParams) -> float:
-    """alpha*eps^(2/3) that gives sigma_u for the shape (L, Gamma, lifetime) of ``params``.
+    """alpha*eps^(2/3) [m^(4/3) s^-2] that gives ``sigma_u_m_s`` [m/s] for the shape (L, Gamma, lifetime) of ``params``.
 
-    Spectra are linear in ae, so ae = sigma_u^2 / sigma_u^2(ae = 1).
-
-    Parameters
-    ----------
-    sigma_u_m_s : float
-        Target standard deviation of u [m/s].
-    params : MannParams
-        Mann model parameters (their ae is ignored).
-
-    Returns
-    -------
-    float
-        ae [m^(4/3) s^-2].
-
-    Raises
-    ------
-    ParameterError
-        If ``sigma_u_m_s`` is not a finite number > 0.
+    Spectra are linear in ae, so ae = sigma_u^2 / sigma_u^2(ae = 1). Raises ParameterError for sigma_u <= 0.
     """
     sigma = check_positive("sigma_u (m/s)", sigma_u_m_s)
     unit = variances(params.with_ae(1.0))["uu"]  # spectra are linear in ae

@@ -1,8 +1,8 @@
 """The Mann (1994) uniform-shear spectral tensor and its square-root factor (Mann 1998).
 
-Wavenumbers in rad/m; the tensor in m^5 s^-2 (per unit dk1 dk2 dk3), so that
-sigma_i^2 = ∫ Phi_ii dk. Formulas: Mann (1994), Eq. 13-19; the square root as in Mann (1998).
-Outputs have the 3x3 component axes first: ``phi[i, j]`` is an array shaped like k1.
+Wavenumbers in rad/m (broadcast together); the tensor in m^5 s^-2 per unit dk1 dk2 dk3, so
+sigma_i^2 = ∫ Phi_ii dk (Mann 1994, Eq. 13-19). Outputs have the 3x3 component axes first:
+``phi[i, j]`` is shaped like k1. Exact limits are used on k1 = 0 and on the k3 axis; zero at k = 0.
 """
 
 from __future__ import annotations
@@ -15,32 +15,16 @@ from turbgen.theory.params import MannParams
 
 
 def von_karman_energy(k, ae: float, length_scale_m: float):
-    """von Karman energy spectrum E(k) = ae L^(5/3) (kL)^4 / (1 + (kL)^2)^(17/6) (Mann 1994).
-
-    Parameters
-    ----------
-    k : array_like
-        Wavenumber magnitude |k| [rad/m].
-    ae : float
-        alpha*eps^(2/3) [m^(4/3) s^-2].
-    length_scale_m : float
-        Length scale L [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        E(k) [m^3 s^-2], shaped like ``k``.
-    """
+    """von Karman spectrum E(k) = ae L^(5/3) (kL)^4 / (1 + (kL)^2)^(17/6) [m^3 s^-2] at |k| [rad/m] (Mann 1994)."""
     kL = np.asarray(k, dtype=float) * length_scale_m
     return ae * length_scale_m ** (5.0 / 3.0) * kL**4 / (1.0 + kL**2) ** (17.0 / 6.0)
 
 
 def _distortion(k1, k2, k3, params: MannParams, beta=None):
-    """Undistorted wavenumber and the rapid-distortion coefficients zeta1, zeta2 (Mann 1994 Eq. 15-17).
+    """Undistorted wavenumber and the rapid-distortion coefficients zeta1, zeta2 (Mann 1994, Eq. 15-17).
 
-    Returns (k1, k2, k0sq, k30, ksq, zeta1, zeta2, E0). Exact limits are used on k1 = 0 (zeta1 = -beta,
-    zeta2 = 0: the linear growth of u under shear) and on the k3 axis (q = 0: zeta = 0).
-    ``beta`` may be passed precomputed (it depends on |k| only; broadcastable to k1).
+    Returns (k1, k2, k0sq, k30, ksq, zeta1, zeta2, E0); on k1 = 0 zeta1 = -beta, zeta2 = 0 (the linear
+    growth of u under shear), on the k3 axis zeta = 0. ``beta`` may be precomputed (it depends on |k| only).
     """
     k1, k2, k3 = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (k1, k2, k3)))
     # |k| < 1e-30 rad/m carries no energy (E ~ k^4) but would underflow k^4: treat it as k = 0
@@ -76,23 +60,9 @@ def _distortion(k1, k2, k3, params: MannParams, beta=None):
 
 
 def sheared_tensor(k1, k2, k3, params: MannParams, beta=None):
-    """Phi_ij(k) of the sheared Mann tensor (Mann 1994 Eq. 19).
+    """Phi_ij(k) [m^5 s^-2], (3, 3, *k1.shape), of the sheared Mann tensor (Mann 1994, Eq. 19).
 
-    Exact limits are used on k1 = 0 and on the k3 axis; zero at k = 0.
-
-    Parameters
-    ----------
-    k1, k2, k3 : array_like
-        Wavenumber components [rad/m] (broadcast together).
-    params : MannParams
-        Mann model parameters.
-    beta : array_like, optional
-        Precomputed beta(|k|) [-] (see shear_distortion_beta), broadcastable to k1.
-
-    Returns
-    -------
-    numpy.ndarray
-        (3, 3, *k1.shape) Phi_ij [m^5 s^-2] (per unit dk1 dk2 dk3), symmetric in i, j.
+    ``beta`` optionally gives beta(|k|) [-] precomputed (see shear_distortion_beta), broadcastable to k1.
     """
     k1, k2, k0sq, k30, ksq, z1, z2, e0 = _distortion(k1, k2, k3, params, beta)
     q = k1 * k1 + k2 * k2
@@ -111,23 +81,11 @@ def sheared_tensor(k1, k2, k3, params: MannParams, beta=None):
 
 
 def tensor_factor(k1, k2, k3, params: MannParams):
-    """Real factor C(k) with C C^T = Phi (Mann 1998 Eq. 46-47).
+    """Real factor C(k) [m^(5/2) s^-1], (3, 3, *k1.shape), with C C^T = Phi (Mann 1998, Eq. 46-47).
 
     C = D(k) A(k0): A the isotropic factor sqrt(E(k0)/(4 pi))/k0^2 [[0, k30, -k2], [-k30, 0, k1],
-    [k2, -k1, 0]] and D = [[1, 0, zeta1], [0, 1, zeta2], [0, 0, k0^2/k^2]]. Multiply by
-    sqrt(dk1 dk2 dk3) for Fourier amplitudes on a grid. Zero at k = 0.
-
-    Parameters
-    ----------
-    k1, k2, k3 : array_like
-        Wavenumber components [rad/m] (broadcast together).
-    params : MannParams
-        Mann model parameters.
-
-    Returns
-    -------
-    numpy.ndarray
-        (3, 3, *k1.shape) C [m^(5/2) s^-1].
+    [k2, -k1, 0]] and D = [[1, 0, zeta1], [0, 1, zeta2], [0, 0, k0^2/k^2]]. Times sqrt(dk1 dk2 dk3) it
+    gives Fourier amplitudes on a grid.
     """
     k1, k2, k0sq, k30, ksq, z1, z2, e0 = _distortion(k1, k2, k3, params)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -146,18 +104,5 @@ def tensor_factor(k1, k2, k3, params: MannParams):
 
 
 def isotropic_variance(ae: float, length_scale_m: float) -> float:
-    """sigma_u^2 = sigma_v^2 = sigma_w^2 of the isotropic von Karman field, (1/3) B(5/2, 1/3) ae L^(2/3).
-
-    Parameters
-    ----------
-    ae : float
-        alpha*eps^(2/3) [m^(4/3) s^-2].
-    length_scale_m : float
-        Length scale L [m].
-
-    Returns
-    -------
-    float
-        Variance [m^2 s^-2].
-    """
+    """Component variance (1/3) B(5/2, 1/3) ae L^(2/3) [m^2 s^-2] of the isotropic von Karman field."""
     return beta_fn(2.5, 1.0 / 3.0) / 3.0 * ae * length_scale_m ** (2.0 / 3.0)

@@ -14,7 +14,8 @@ LIFETIMES = ("guo", "mann")
 class MannParams:
     """Mann (1994) sheared-tensor parameters plus the Guo et al. (2022) evolution lifetime.
 
-    Frozen dataclass, validated on construction against turbgen.theory.ranges.RANGES.
+    Frozen; validated on construction against turbgen.theory.ranges (ParameterError, also for an unknown
+    ``lifetime``).
 
     Parameters
     ----------
@@ -25,18 +26,13 @@ class MannParams:
     gamma : float
         Gamma [-], shear anisotropy (0 = isotropic).
     lifetime : str, optional
-        "guo" (Guo et al. 2023, Eq. 6, default) or "mann" (Eq. 4, hypergeometric).
+        "guo" (Guo et al. 2023, Eq. 6) or "mann" (Eq. 4, hypergeometric).
     factor1 : float, optional
-        Small-k slope of the Guo lifetime is -factor1 [-] (default 1; stable preset 0.8).
+        The Guo lifetime's small-k slope is -factor1 [-] (stable preset 0.8).
     factor2 : float, optional
-        Large-k slope of the evolution lifetime tau_e is -(2/3) factor2 [-] (default 3.5 = Eq. 15).
+        The evolution lifetime's large-k slope is -(2/3) factor2 [-] (3.5 = Eq. 15).
     evo_time_s : float or None, optional
-        gamma [s], evolution time constant of tau_e (Eq. 15), default 400 s; None = frozen turbulence.
-
-    Raises
-    ------
-    ParameterError
-        If a value is outside its range or ``lifetime`` is not "guo" or "mann".
+        gamma [s], time constant of tau_e (Eq. 15); None = frozen turbulence.
     """
 
     ae: float
@@ -48,7 +44,6 @@ class MannParams:
     evo_time_s: float | None = 400.0
 
     def __post_init__(self):
-        # ranges: turbgen.theory.ranges.RANGES (the one table of allowed parameter values)
         for key in ("ae", "length_scale_m", "gamma", "factor1", "factor2"):
             object.__setattr__(self, key, check(key, getattr(self, key)))
         check_choice("lifetime", self.lifetime, LIFETIMES)
@@ -56,23 +51,7 @@ class MannParams:
             object.__setattr__(self, "evo_time_s", check("evo_time_s", self.evo_time_s))
 
     def with_ae(self, ae: float) -> "MannParams":
-        """The same parameters with another energy level alpha*eps^(2/3).
-
-        Parameters
-        ----------
-        ae : float
-            alpha*eps^(2/3) [m^(4/3) s^-2].
-
-        Returns
-        -------
-        MannParams
-            A validated copy with ``ae`` replaced.
-
-        Raises
-        ------
-        ParameterError
-            If ``ae`` is outside the allowed range (turbgen.theory.ranges).
-        """
+        """A validated copy with the energy level ``ae`` [m^(4/3) s^-2] replaced."""
         return replace(self, ae=ae)
 
 
@@ -80,23 +59,19 @@ class MannParams:
 class KaimalParams:
     """Kaimal spectra (Guo et al. 2023, Eq. 11) and IEC yz coherence (Eq. 12) parameters.
 
-    Frozen dataclass, validated on construction against turbgen.theory.ranges.RANGES.
+    Frozen; validated on construction against turbgen.theory.ranges (ParameterError, also unless the
+    tuples hold three values).
 
     Parameters
     ----------
     sigma_m_s : tuple of float
-        (sigma_u, sigma_v, sigma_w) [m/s], standard deviations of the full spectrum.
+        (sigma_u, sigma_v, sigma_w) [m/s].
     length_scales_m : tuple of float
         (L1, L2, L3) [m], Kaimal integral length scales.
     a_yz : float, optional
         Coherence decay constant [-] (IEC: 12).
     lc_m : float, optional
-        Coherence scale parameter Lc [m] (IEC: 8.1 Lambda1; default 340.2 m).
-
-    Raises
-    ------
-    ParameterError
-        If ``sigma_m_s`` or ``length_scales_m`` does not hold three values, or a value is outside its range.
+        Coherence scale parameter Lc [m] (IEC: 8.1 Lambda1).
     """
 
     sigma_m_s: tuple[float, float, float]
@@ -107,7 +82,6 @@ class KaimalParams:
     def __post_init__(self):
         if len(self.sigma_m_s) != 3 or len(self.length_scales_m) != 3:
             raise ParameterError("sigma_m_s and length_scales_m need three values (u, v, w)")
-        # ranges: turbgen.theory.ranges.RANGES (the one table of allowed parameter values)
         object.__setattr__(
             self, "sigma_m_s", tuple(check("sigma_m_s", s, f"sigma_{c} (m/s)") for c, s in zip("uvw", self.sigma_m_s))
         )
@@ -121,23 +95,7 @@ class KaimalParams:
 
 
 def check_wind_speed(U) -> float:
-    """Mean wind speed U [m/s], 0.5 to 100 (turbgen.theory.ranges).
-
-    Parameters
-    ----------
-    U : float
-        Mean wind speed [m/s].
-
-    Returns
-    -------
-    float
-        U [m/s] as float.
-
-    Raises
-    ------
-    ParameterError
-        If ``U`` is not a finite number in [0.5, 100] m/s.
-    """
+    """Mean wind speed ``U`` [m/s] as float, or ParameterError outside its range (turbgen.theory.ranges)."""
     return check("U_m_s", U)
 
 

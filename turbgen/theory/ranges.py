@@ -1,12 +1,9 @@
 """The allowed range of every physical input parameter and the size limit of every list: one table.
 
-Parameters outside these ranges are refused with one line naming the value and the range
-(``ParameterError``; CLI exit code 2) before anything is computed or written. The ranges are
-what the models and generators are meant for (atmospheric boundary layer, wind-turbine and lidar
-scales), not what happens to compute: e.g. L = 1e-9 m or 1e6 m gives a field whose variance is
-far from the model's on any grid turbgen can hold, dt = 1e12 s an all-zero field. docs/store.md
-("Limits and ranges") shows this table; tests/cli/test_bad_input.py checks that every bound is enforced and that
-the run-file JSON Schemas (types, looser bounds) never refuse a value this table allows.
+Values outside are refused with one line naming the value and the range (``ParameterError``; CLI exit
+code 2) before anything is computed. The ranges are what the models are meant for (atmospheric
+boundary layer, wind-turbine and lidar scales), not what happens to compute. docs/store.md ("Limits
+and ranges") shows the table; tests/cli/test_bad_input.py checks every bound is enforced.
 """
 
 from __future__ import annotations
@@ -25,54 +22,28 @@ class Range:
     label : str
         Name in messages: option and unit.
     lo, hi : float
-        Bounds, in the parameter's SI unit.
+        Bounds.
     why : str
         One phrase for the README table.
-    lo_open : bool, optional
-        Exclude ``lo`` (default False).
-    integer : bool, optional
-        The parameter is an integer (default False).
+    lo_open, integer : bool, optional
+        Exclude ``lo``; the parameter is an integer.
     """
 
-    label: str  # name in messages: option and unit
+    label: str
     lo: float
     hi: float
-    why: str  # one phrase for the README table
+    why: str
     lo_open: bool = False
     integer: bool = False
 
     def check(self, value, label: str | None = None):
-        """``value`` as float (int for integer ranges), or ParameterError naming it and the range.
-
-        Parameters
-        ----------
-        value : float or int
-            The value, in the range's SI unit.
-        label : str, optional
-            Name in the message instead of ``self.label``.
-
-        Returns
-        -------
-        float or int
-            ``value`` as float, or as int for integer ranges.
-
-        Raises
-        ------
-        ParameterError
-            If ``value`` is not a finite number (an integer for integer ranges) within the range.
-        """
+        """``value`` as float (int for integer ranges), or ParameterError naming it (or ``label``) and the range."""
         if self.integer:
             return check_int(label or self.label, value, int(self.lo), int(self.hi))
         return check_range(label or self.label, value, self.lo, self.hi, lo_open=self.lo_open)
 
     def text(self) -> str:
-        """The range as text: '[lo, hi]' or '(lo, hi]'.
-
-        Returns
-        -------
-        str
-            The interval, e.g. '[0.5, 100]'.
-        """
+        """The range as text, '[lo, hi]' or '(lo, hi]'."""
         if self.integer:
             return f"[{int(self.lo)}, {int(self.hi)}]"
         return f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}]"
@@ -85,9 +56,7 @@ RANGES: dict[str, Range] = {
     "seed": Range("seed", 0, 2**63 - 1, "64-bit SeedSequence entropy", integer=True),
     "pad_yz": Range("pad-yz", 1, 8, "synthesis box width / output width", integer=True),
     # Mann model (Mann 1994; Guo et al. 2022)
-    # ae >= 1e-6: alpha eps^(2/3) with alpha = 1.7 and eps = 4e-10 m^2/s^3, far below the dissipation of the calmest
-    # measured boundary layers (~1e-6 m^2/s^3); there sigma_u = 5 mm/s at L = 49 m, Gamma = 3.1, while an ae of
-    # 1e-300 gave a field of float32 zeros (the validator then failed with NaN)
+    # ae >= 1e-6: eps = 4e-10 m^2/s^3, far below the calmest measured boundary layers (~1e-6 m^2/s^3)
     "ae": Range("ae (alpha*eps^(2/3), m^(4/3)/s^2)", 1e-6, 100.0, "spectral energy level (eps >= 4e-10 m^2/s^3)"),
     "length_scale_m": Range("L (length scale, m)", 1.0, 1000.0, "energy-containing eddies of the ABL"),
     "gamma": Range("gamma (Gamma, -)", 0.0, 20.0, "shear anisotropy (0 = isotropic)"),
@@ -133,43 +102,12 @@ LIMITS: dict[str, int] = {
 
 
 def check(key: str, value, label: str | None = None):
-    """Check ``value`` against ``RANGES[key]`` (``label`` replaces the table's name in the message).
-
-    Parameters
-    ----------
-    key : str
-        Key of RANGES, e.g. "U_m_s".
-    value : float or int
-        The value, in the SI unit of that range.
-    label : str, optional
-        Name in the message.
-
-    Returns
-    -------
-    float or int
-        ``value`` as float (int for integer ranges).
-
-    Raises
-    ------
-    ParameterError
-        If ``value`` is outside the range.
-    KeyError
-        If ``key`` is not in RANGES.
-    """
+    """``value`` checked against ``RANGES[key]`` (as :meth:`Range.check`; ``label`` names it in the message)."""
     return RANGES[key].check(value, label)
 
 
 def check_values(key: str, values, where: str) -> None:
     """Check every value of an array against ``RANGES[key]``; NaN (a missing value) passes, +-inf does not.
-
-    Parameters
-    ----------
-    key : str
-        Key of RANGES, e.g. "measured_m_s".
-    values : array_like
-        The values, in the SI unit of that range.
-    where : str
-        Message prefix naming the array, e.g. "constraint file mast.json, hub u_m_s".
 
     Raises
     ------
@@ -191,29 +129,7 @@ def check_values(key: str, values, where: str) -> None:
 
 
 def check_count(key: str, n: int, what: str | None = None) -> int:
-    """Refuse a list of ``n`` entries longer than ``LIMITS[key]`` (``what`` names it in the message).
-
-    Parameters
-    ----------
-    key : str
-        Key of LIMITS, e.g. "planes".
-    n : int
-        Number of entries.
-    what : str, optional
-        Name in the message (default ``key``).
-
-    Returns
-    -------
-    int
-        ``n``.
-
-    Raises
-    ------
-    ParameterError
-        If ``n`` exceeds the limit.
-    KeyError
-        If ``key`` is not in LIMITS.
-    """
+    """``n``, or ParameterError if a list of ``n`` entries (named ``what``) is longer than ``LIMITS[key]``."""
     limit = LIMITS[key]
     if n > limit:
         raise ParameterError(f"{what or key}: {n} values is more than the maximum {limit}")
@@ -223,19 +139,8 @@ def check_count(key: str, n: int, what: str | None = None) -> int:
 def check_grid(grid) -> None:
     """Check a run's grid (turbgen.grid.Grid) against the table: sizes, spacings, planes.
 
-    Plane positions must lie in the x range and be strictly increasing (stores and readers rely on
-    sorted x; a negative x would be downstream of the rotor, which no generator models).
-
-    Parameters
-    ----------
-    grid : turbgen.grid.Grid
-        The grid: nt, dt_s [s], ny, nz, dy_m [m], dz_m [m] and plane positions x_m [m upstream].
-
-    Raises
-    ------
-    ParameterError
-        If a size or spacing is outside its range, there are too many planes, or a plane position is
-        outside the x range or the positions are not strictly increasing.
+    Plane positions must lie in the x range and increase strictly (stores and readers rely on sorted x;
+    a negative x would be downstream of the rotor). Raises ParameterError otherwise.
     """
     check("nt", grid.nt)
     check("dt_s", grid.dt_s)
@@ -252,13 +157,7 @@ def check_grid(grid) -> None:
 
 
 def markdown_table() -> str:
-    """The README table: parameter, allowed range, meaning; then the list limits.
-
-    Returns
-    -------
-    str
-        A Markdown table, one row per RANGES entry and per LIMITS entry.
-    """
+    """The README table (parameter, allowed range, note), one row per RANGES and per LIMITS entry."""
     rows = ["| parameter | allowed range | note |", "|---|---|---|"]
     rows += [f"| {r.label} | {r.text()} | {r.why} |" for r in RANGES.values()]
     rows += [f"| number of {k} | at most {v:,} | |" for k, v in LIMITS.items()]

@@ -1,14 +1,11 @@
-"""The sheared Mann tensor (Mann 1994 Eq. 15-19) on the polar quadrature nodes of the (k2, k3) plane, compiled.
+"""The sheared Mann tensor (Mann 1994, Eq. 15-19) on the polar quadrature nodes of the (k2, k3) plane, compiled.
 
-``perpendicular_quadrature`` evaluates Phi_ij at every (k1, kappa, theta) node of its rule: ~10^7 points
-for the default energy level, ~4x that for validating a default store. The whole-array version
-(``mann_tensor.sheared_tensor``) makes ~40 passes over arrays of that size; here two compiled loops do the
-arithmetic point by point and only the transcendental functions run as numpy calls between them
-(``numpy.arctan2`` and ``von_karman_energy``'s powers: numpy's SIMD versions round differently from the C
-library's in the last bit of ~8 % of values, so keeping them makes every Phi_ij here bit-identical to
-``sheared_tensor``, tested). The expressions are those of ``mann_tensor._distortion`` and
-``sheared_tensor`` with the same operations in the same order, including the exact limits on k1 = 0, on
-the k3 axis and at k = 0.
+``perpendicular_quadrature`` evaluates Phi_ij at ~10^7 (k1, kappa, theta) nodes, where the whole-array
+``mann_tensor.sheared_tensor`` would make ~40 passes over arrays of that size. Here two compiled loops
+do the arithmetic point by point, with the operations of ``mann_tensor._distortion`` and
+``sheared_tensor`` in the same order (exact limits included); the transcendental functions stay numpy
+calls between them (numpy's SIMD versions round differently from the C library's), so every Phi_ij
+is bit-identical to ``sheared_tensor`` (tested).
 """
 
 from __future__ import annotations

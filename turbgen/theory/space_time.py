@@ -1,8 +1,7 @@
 """Space-time tensor and longitudinal coherence of Guo et al. (2022), as in Guo et al. (2023, Sect. 2.3.1).
 
-Theta_ij(k, dt) = exp(-dt / tau_e(|k|)) Phi_ij(k) (Eq. 13). Because tau_e depends on |k| only, the
-(k2, k3) integral of Theta_11 at fixed k1 uses the quadrature in mann_quadrature (angular integrals on
-circles kappa = const) with the radial factor exp(-dt/tau_e(sqrt(k1^2 + kappa^2))).
+tau_e depends on |k| only, so the (k2, k3) integral of Theta_11 at fixed k1 is the quadrature of
+turbgen.theory.mann_quadrature with the radial factor exp(-dt / tau_e(sqrt(k1^2 + kappa^2))).
 """
 
 from __future__ import annotations
@@ -17,35 +16,23 @@ from turbgen.theory.params import MannParams, check_wind_speed
 
 
 def _decay(k, dt_s: float, params: MannParams):
-    """exp(-dt/tau_e(k)); 1 for frozen turbulence or dt = 0 (tau_e = inf gives exp(-0))."""
+    """exp(-|dt| / tau_e(k)); 1 for frozen turbulence or dt = 0."""
     tau = evolution_lifetime_s(k, params)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(np.isfinite(tau), np.exp(-abs(dt_s) / tau), 1.0)
 
 
 def space_time_tensor(k1, k2, k3, dt_s: float, params: MannParams) -> np.ndarray:
-    """``Theta_ij(k, dt) = exp(-|dt|/tau_e(k)) Phi_ij(k)`` (Guo et al. 2023, Eq. 13).
-
-    Equal to Phi_ij for frozen turbulence (``params.evo_time_s`` None) or dt = 0.
+    """``Theta_ij(k, dt) = exp(-|dt|/tau_e(k)) Phi_ij(k)`` [m^5 s^-2], (3, 3, ...) (Guo et al. 2023, Eq. 13).
 
     Parameters
     ----------
     k1, k2, k3 : array_like
         Wavenumber components [rad/m] (broadcast together).
     dt_s : float
-        Time lag dt [s]; only ``|dt|`` is used.
+        Time lag [s], finite.
     params : MannParams
-        Mann model parameters.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(3, 3, *k.shape)`` Theta_ij [m^5 s^-2].
-
-    Raises
-    ------
-    ParameterError
-        If ``dt_s`` is not a finite number.
+        Mann model parameters (frozen turbulence: Theta = Phi).
     """
     dt = check_finite("dt (s)", dt_s)
     k1, k2, k3 = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (k1, k2, k3)))
@@ -54,30 +41,23 @@ def space_time_tensor(k1, k2, k3, dt_s: float, params: MannParams) -> np.ndarray
 
 
 def longitudinal_coherence(f_hz, dx_m: float, U_m_s: float, params: MannParams) -> np.ndarray:
-    """Magnitude-squared longitudinal coherence of u, planes dx apart at mean speed U (Guo et al. 2023, Eq. 16).
+    """Magnitude-squared coherence of u between planes dx apart (Guo et al. 2023, Eq. 16).
 
-    ``coh2(k1, dx) = |∫ Theta_11(k, dx/U) dk_perp|^2 / F11(k1)^2`` with k1 = 2 pi f / U.
+    ``coh2(k1, dx) = |∫ Theta_11(k, dx/U) dk_perp|^2 / F11(k1)^2``, k1 = 2 pi f / U; 1 for frozen turbulence.
 
     Parameters
     ----------
     f_hz : array_like
-        Frequencies f [Hz], finite.
-    dx_m : float
-        Longitudinal separation dx [m].
-    U_m_s : float
-        Mean wind speed U [m/s].
+        Frequencies [Hz], finite.
+    dx_m, U_m_s : float
+        Longitudinal separation [m] and mean wind speed [m/s].
     params : MannParams
-        Mann model parameters (frozen turbulence gives coh2 = 1).
+        Mann model parameters.
 
     Returns
     -------
     numpy.ndarray
         (len(f),) coh2 [-].
-
-    Raises
-    ------
-    ParameterError
-        If ``f_hz`` is not finite numbers, ``U_m_s`` is outside the allowed range or ``dx_m`` is not finite.
     """
     f = np.atleast_1d(np.asarray(f_hz, dtype=float))
     if not np.all(np.isfinite(f)):

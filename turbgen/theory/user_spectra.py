@@ -1,19 +1,13 @@
 """User spectra of the Kaimal-type generator: a site's u, v, w spectra in place of the Kaimal form.
 
-A run's record holds spectral lines f_k = k df, df = 1 / (nt dt) (turbgen.theory.lattice). The generator gives
-line k the variance of its band [f_k - df/2, f_k + df/2], the last band clipped at the Nyquist frequency 1/(2 dt),
-as it does with the Kaimal spectrum of Guo et al. (2023, Eq. 11) integrated in closed form. A user spectrum is
-therefore reduced to the mean one-sided PSD of each band, S_k [m^2/s] (lines k = 1 .. nf - 1; line 0, the record
-mean, carries no variance), whose band variance is S_k times the band's width:
-
-* a callable ``S(f_hz) -> (3, n)`` is a density: S_k is its mean over the band by Gauss-Legendre quadrature with
-  ``GAUSS_NODES`` nodes (exact to round-off for a spectrum analytic over the band, such as Eq. 11, whose pole lies
-  at f = -U / (6 L) < 0);
-* a table (f_hz, S_u, S_v, S_w) holds band means at its frequencies (what a measured, Welch-averaged spectrum is):
-  S_k is its linear interpolation at f_k; a table given on the run's lines is the band means as they are.
-
-:class:`LineSpectrum` (the run's lines and S_k) is what a run records in its store: a re-run, the validator and
-sweeps read the same numbers without the callable or the file.
+The generator gives line k of the record (f_k = k df, df = 1 / (nt dt); turbgen.theory.lattice) the
+variance of its band [f_k - df/2, f_k + df/2], as it does with the Kaimal spectrum (Guo et al. 2023,
+Eq. 11) integrated in closed form. A user spectrum is therefore reduced to the mean one-sided PSD S_k
+[m^2/s] of each band k >= 1 (line 0, the mean, carries no variance): a callable is a density, averaged
+over the band by Gauss-Legendre quadrature (exact to round-off for a spectrum analytic over the band);
+a table holds band means (a Welch-averaged measurement), interpolated linearly at f_k.
+:class:`LineSpectrum` is what a run records in its store, so a re-run and the validator read the same
+numbers without the callable or the file.
 """
 
 from __future__ import annotations
@@ -27,8 +21,7 @@ from turbgen.errors import ParameterError
 from turbgen.theory.lattice import line_bands, line_frequencies
 
 COLUMNS = ("f_hz", "S_u", "S_v", "S_w")
-# nodes per band of a callable's quadrature: error ~ rho^(-2 n) for a pole at rho band half-widths (Kaimal, 64 x 0.5 s,
-# L = 340 m: rho ~ 4.8, 1e-22)
+# nodes per band of a callable's quadrature: error ~ rho^(-2 n) for a pole rho band half-widths away
 GAUSS_NODES = 16
 # how far [df] the ends of a table may fall short of the run's lowest and highest lines (digits lost in a file)
 COVER_SLACK = 1e-6
@@ -54,7 +47,7 @@ class LineSpectrum:
     dt_s : float
         Its sampling interval [s].
     S_m2_s : tuple of tuple of float
-        (3, nt // 2) band means S_k [m^2/s] of u, v, w at f_k = k / (nt dt), k >= 1.
+        (3, nt // 2) band means S_k [m^2/s] of u, v, w at f_k = k / (nt dt).
     """
 
     nt: int
@@ -81,13 +74,7 @@ class LineSpectrum:
         return out
 
     def to_table(self) -> dict:
-        """The record of the store: ``f_hz`` [Hz] and ``S_u``, ``S_v``, ``S_w`` [m^2/s] as lists (JSON).
-
-        Returns
-        -------
-        dict
-            Column name -> values; :meth:`from_table` on the same grid gives this spectrum back exactly.
-        """
+        """The store's record: ``f_hz`` [Hz], ``S_u``, ``S_v``, ``S_w`` [m^2/s] as lists, for :meth:`from_table`."""
         return {"f_hz": self.f_hz.tolist(), **{c: list(s) for c, s in zip(COLUMNS[1:], self.S_m2_s)}}
 
     @classmethod
@@ -98,24 +85,9 @@ class LineSpectrum:
 
     @classmethod
     def from_callable(cls, S: Callable, nt: int, dt_s: float) -> "LineSpectrum":
-        """Band means of the density ``S(f_hz) -> (3, n)`` [m^2/s] over each line's band (Gauss-Legendre).
+        """Band means of the density ``S(f_hz) -> (3, n)`` [m^2/s] over each line's band (Gauss-Legendre, GAUSS_NODES).
 
-        Parameters
-        ----------
-        S : callable
-            One-sided PSDs of u, v, w [m^2/s] at the frequencies it is given (n values [Hz], all > 0); called once.
-        nt, dt_s : int, float
-            The run's record (samples, interval [s]).
-
-        Returns
-        -------
-        LineSpectrum
-            The band means.
-
-        Raises
-        ------
-        ParameterError
-            If ``S`` does not return (3, n) finite values >= 0.
+        ``S`` is called once, on frequencies > 0 [Hz]; ParameterError unless it returns (3, n) finite values >= 0.
         """
         lo, hi = (edge[1:] for edge in line_bands(nt, dt_s))
         x, w = np.polynomial.legendre.leggauss(GAUSS_NODES)
@@ -136,28 +108,21 @@ class LineSpectrum:
 
     @classmethod
     def from_table(cls, f_hz, S_m2_s, nt: int, dt_s: float) -> "LineSpectrum":
-        """Band means at the run's lines from a table of band means, interpolated linearly.
+        """Band means at the run's lines, interpolated linearly in a table of band means (exact on the run's lines).
 
         Parameters
         ----------
         f_hz : array_like
-            (n,) increasing frequencies [Hz], >= 0, from at most the lowest line df = 1/(nt dt) to at least the
-            highest, nt // 2 df.
+            (n,) increasing frequencies [Hz], >= 0, covering the lines df = 1/(nt dt) to nt // 2 df.
         S_m2_s : array_like
             (3, n) one-sided PSDs S_u, S_v, S_w [m^2/s], finite and >= 0.
         nt, dt_s : int, float
             The run's record (samples, interval [s]).
 
-        Returns
-        -------
-        LineSpectrum
-            The band means on the run's lines (the table's own values where it is given on them).
-
         Raises
         ------
         ParameterError
-            For a wrong shape, non-finite or negative values, frequencies not increasing, or a table that does not
-            cover the run's lines.
+            For a wrong shape, bad values, frequencies not increasing, or a table not covering the lines.
         """
         f = np.asarray(f_hz, dtype=float)
         S = np.asarray(S_m2_s, dtype=float)

@@ -5,21 +5,18 @@ the lattice of its periodic (xi = U t, y, z) box; the lattice itself (wavenumber
 shared with the generator (turbgen.theory.lattice). The tensor is evaluated here from turbgen.theory,
 not from the generator's stencil, so the validator checks the generator's factorisation too.
 
-The quadrature of the cells around the k1 axis (CELL_RADIUS, CELL_GAUSS, ``_graded``) is deliberately
-*not* shared with turbgen.synthesis.mann_stencil (``_cell_rule``): the generator and the validator
-integrate those cells with two independent rules (different grading depth, different extent in k1),
-so an error in either shows up as a disagreement instead of cancelling out. Do not merge them.
+The cells around the k1 axis are integrated with turbgen.theory.lattice.cell_rule, graded and sized
+here (CELL_RADIUS, CELL_GAUSS, halving panels) differently from the generator's (turbgen.synthesis.mann_cells),
+so an error in either shows up as a disagreement instead of cancelling out. Keep the parameters distinct.
 """
 
 from __future__ import annotations
-
-from functools import lru_cache
 
 import numpy as np
 
 from turbgen.grid import Grid
 from turbgen.theory.eddy_lifetime import evolution_lifetime_s
-from turbgen.theory.lattice import k2_wavenumbers, k3_wavenumbers
+from turbgen.theory.lattice import cell_rule, gauss_panel, k2_wavenumbers, k3_wavenumbers
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
 from turbgen.validation.store_run import MannBox
@@ -27,29 +24,6 @@ from turbgen.validation.store_run import MannBox
 CELL_RADIUS = 2  # cells |k2| <= 2 dk2, |k3| <= 2 dk3 around the k1 axis are integrated, not point-sampled
 CELL_K1_MAX = 8.0  # ... for |k1| <= 8 max(dk2, dk3); beyond, Phi is smooth on the cell scale there
 CELL_GAUSS = 4
-
-
-@lru_cache(maxsize=8)
-def _leggauss(n: int):
-    return np.polynomial.legendre.leggauss(n)
-
-
-def _gauss(a: float, b: float, n: int = CELL_GAUSS):
-    x, w = _leggauss(n)
-    return 0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w
-
-
-def _graded(center: float, width: float, scale: float):
-    """Nodes/weights over a cell of ``width`` around ``center``; halving panels towards 0 down to ``scale``."""
-    if center != 0.0:
-        return _gauss(center - width / 2, center + width / 2)
-    edges = [width / 2]
-    while edges[-1] > scale and len(edges) < 40:
-        edges.append(edges[-1] / 2)
-    edges = np.array([0.0, *edges[::-1]])
-    x = np.concatenate([_gauss(a, b)[0] for a, b in zip(edges[:-1], edges[1:])])
-    w = np.concatenate([_gauss(a, b)[1] for a, b in zip(edges[:-1], edges[1:])])
-    return np.concatenate([-x[::-1], x]), np.concatenate([w[::-1], w])
 
 
 class MannLattice:
@@ -87,10 +61,10 @@ class MannLattice:
 
     def _axis_cells(self, k1: float) -> np.ndarray:
         """∫_cell Phi dk over the (2 r2 + 1) x (2 r3 + 1) cells around the axis at k1, (3, 3, 2r2+1, 2r3+1)."""
-        x1, w1 = _gauss(k1 - self.dk1 / 2, k1 + self.dk1 / 2, 2)
+        x1, w1 = gauss_panel(k1 - self.dk1 / 2, k1 + self.dk1 / 2, 2)
         scale = max(abs(k1), self.dk1 / 4)
-        rules2 = [_graded(j * self.dk2, self.dk2, scale) for j in range(-self.r2, self.r2 + 1)]
-        rules3 = [_graded(l * self.dk3, self.dk3, scale) for l in range(-self.r3, self.r3 + 1)]
+        rules2 = [cell_rule(j * self.dk2, self.dk2, CELL_GAUSS, scale, 2.0, 40) for j in range(-self.r2, self.r2 + 1)]
+        rules3 = [cell_rule(l * self.dk3, self.dk3, CELL_GAUSS, scale, 2.0, 40) for l in range(-self.r3, self.r3 + 1)]
         pts, wts, starts = [], [], []
         for x2, w2 in rules2:
             for x3, w3 in rules3:
