@@ -17,6 +17,7 @@ from click.testing import CliRunner
 import turbgen
 from turbgen.cli import cli
 from turbgen.errors import ParameterError
+from turbgen.exporters import read_bts
 from turbgen.exporters.options import ExportOptions, export_request
 
 MAST = Path(__file__).resolve().parents[2] / "examples" / "mast-fit.json"
@@ -99,6 +100,14 @@ def test_export_takes_the_fitted_mean_wind_unless_given_one(replay, tmp_path):
     assert r.exit_code == 0, r.output
     assert f"note: mean wind fitted to the store's data (its fit record): --profile {fit['profile']}" in r.output
     assert (tmp_path / "r_InflowWind_bts.dat").is_file()
+    # the OpenFAST wind file gives the mast's total wind back: at the sensors' nodes the .bts (fluctuations plus the
+    # fitted profile and veer) equals the data within its int16 quantisation step (range / 65534 per component)
+    bts, data = read_bts(tmp_path / "r.bts"), json.loads(MAST.read_text())
+    for s in data["sensors"]:
+        iy, iz = int(np.argmin(abs(bts["y"] - s["y_m"]))), int(np.argmin(abs(bts["z"] - s["height_m"])))
+        for c in "uvw":
+            step = (bts[c].max() - bts[c].min()) / 65534
+            assert np.abs(bts[c][:, iy, iz] - np.array(s[f"{c}_m_s"])).max() <= step, (s["name"], c)
 
 
 def test_the_api_replays_the_same_field(replay):
