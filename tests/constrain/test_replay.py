@@ -132,3 +132,20 @@ def test_refusals(tmp_path):
         turbgen.mann(constrain=[MAST], fit=True, sigma_u=1.0)
     with pytest.raises(ParameterError, match="`fit` needs `constrain`"):
         turbgen.mann(fit=True)
+
+
+def test_one_height_keeps_the_files_mean_wind_at_the_data_s_speed():
+    """One sonic: no profile is fitted, so the file's mean wind (the default power law 0.2) stays and U is the hub
+    speed at which it meets the sonic's mean u."""
+    from turbgen.runs.replay import fitted_inputs
+    from turbgen.spec.constraints import point_series_from_mapping
+
+    data = json.loads(MAST.read_text())
+    data["sensors"] = data["sensors"][:1]  # 70.5 m
+    ps = point_series_from_mapping(data, "one.json")
+    mapping, (placed,), record = fitted_inputs({"hub_height_m": HUB}, [ps])
+    assert record["export"] == {} and placed.mean_wind == ps.mean_wind
+    u_mean = np.mean(data["sensors"][0]["u_m_s"])
+    # rounded to 6 significant digits (FIT_DIGITS): within half a unit of the 6th, 5e-6 relative
+    assert mapping["U_m_s"] == pytest.approx(u_mean * (HUB / 70.5) ** 0.2, rel=5e-6)
+    assert "one height" in record["fit"]["shear_exponent"]["reason"]

@@ -4,9 +4,10 @@ sensors of DATA (turbgen.validation.fit), then the field conditioned on the same
 The fitted ae, L and Gamma (rounded to FIT_DIGITS significant digits, so that the last bits of a least-squares fit
 never change the field) replace the run file's and the preset's; typed ones are refused. The evolution time is not
 fitted by the one-point spectra: it stays the given or default one. Without a typed U the run's U is the fitted
-power law's speed at the hub (one height: the mean u of the data). Total-wind data lose the fitted profile and veer
-(instead of the file's or the default mean wind), and the store's ``fit`` attribute records the fit, the data files'
-SHA-256 and the ``turbgen export`` options of that mean wind, which export uses when given none.
+power law's speed at the hub (one height: the hub speed at which the file's own mean wind meets the data's mean u).
+Total-wind data lose the fitted profile and veer (instead of the file's or the default mean wind), and the store's
+``fit`` attribute records the fit, the data files' SHA-256 and the ``turbgen export`` options of that mean wind,
+which export uses when given none.
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ from __future__ import annotations
 import hashlib
 from dataclasses import replace
 from pathlib import Path
+
+import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.spec.constraints import PointSeries
@@ -62,7 +65,7 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None) 
     out = {k: v for k, v in mapping.items() if k not in ("sigma_u_m_s", "ti")} | values
     out["ae_from"] = f"fitted to {Path(ps.source).name} (turbgen fit mann)"
     if "U_m_s" not in mapping:
-        out["U_m_s"] = float(f"{mean.U_hub_m_s or fit.U_m_s:.{FIT_DIGITS}g}")
+        out["U_m_s"] = float(f"{mean.U_hub_m_s or _hub_speed(ps, hub) or fit.U_m_s:.{FIT_DIGITS}g}")
     export = mean.export_options()
     if ps.total_wind and export:
         wind = ps.mean_wind
@@ -74,6 +77,16 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None) 
     record = {"fit": replace(fit, mean_wind=mean).to_dict(), "run": {k: out[k] for k in (*FITTED, "U_m_s")},
               "files": [{"path": ps.source, "sha256": _sha256(ps.source)}], "export": export}
     return out, [ps], record
+
+
+def _hub_speed(ps: PointSeries, hub: float) -> float | None:
+    """The hub speed [m/s] at which the file's own mean wind (the profile not fitted: one height) meets the
+    sensors' mean u; None for fluctuation data."""
+    if not ps.total_wind:
+        return None
+    s = [s for s in ps.sensors if "u" in s.series]
+    h = np.array([x.height_m if x.height_m is not None else hub + x.z_m for x in s])
+    return float(np.mean([np.nanmean(x.series["u"]) for x in s] / ps.mean_wind.speed_ratio(h, hub)))
 
 
 def describe_fit(record: dict) -> list[str]:
