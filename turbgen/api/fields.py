@@ -144,6 +144,7 @@ def mann(
     constrain: Sequence | None = None,
     noise: float | None = None,
     conditional_mean: bool = False,
+    fit: bool = False,
     progress: bool = False,
     fft_backend: str | None = None,
 ) -> xr.Dataset:
@@ -226,6 +227,10 @@ def mann(
         ``noise_m_s``, else 0: the field passes through the data); the run file's ``noise_m_s``.
     conditional_mean : bool, optional
         With ``constrain``: return the conditional mean (the optimal linear reconstruction, no random part).
+    fit : bool, optional
+        With ``constrain`` of one point-series file: replay it, as ``turbgen mann --fit`` (turbgen.runs.replay):
+        ae, L, Γ and the mean wind are fitted to the data and the field is conditioned with them (``L``, ``gamma``,
+        ``ae``, ``sigma_u``, ``ti`` are refused); ``attrs["fit"]`` records the fit.
     fft_backend : str, optional
         FFT backend (turbgen.fft: ``"pyfftw"``, ``"scipy"`` or a registered one; default: the environment variable
         TURBGEN_FFT_BACKEND, else pyfftw); changes the field at float32 round-off only, recorded in its attributes.
@@ -271,6 +276,8 @@ def mann(
                    factor2=factor2, pad_yz=pad_yz, hub_height=hub_height, constrain=constrain, noise=noise,
                    conditional_mean=conditional_mean)  # fmt: skip
     mapping, request = mann_run_mapping(options, config, preset, presets_file)
+    if fit and request is None:
+        raise ParameterError("`fit` needs `constrain` (the data to fit and replay)")
     if request is None:
         run = MannRun.from_mapping(mapping)
         if out is None and _mann_fits(run, threads, stencil_cache, memory):
@@ -283,14 +290,21 @@ def mann(
         from turbgen.runs.constrain import load_constraints, mann_constrained_in_memory, place, with_energy_from_data
 
         request = replace(request, files=tuple(load_constraints(request.files)))
+        fit_record = None
+        if fit:
+            from turbgen.runs.replay import check_fit_options, fitted_inputs
+
+            check_fit_options(options, prefix="")
+            mapping, files, fit_record = fitted_inputs(mapping, list(request.files))
+            request = replace(request, files=tuple(files))
         run = with_energy_from_data(mapping, list(request.files), request.noise_m_s, stencil_cache)
         placed = place(run, list(request.files), request.noise_m_s)  # every check of the data, before any output
         if out is None and _constrained_fits(run, placed, threads, memory):
             return mann_constrained_in_memory(run, list(request.files), noise_m_s=request.noise_m_s,
                                               conditional_mean=request.conditional_mean,
                                               threads=default_threads(threads), cache_dir=stencil_cache,
-                                              progress=progress, placed=placed)[0]  # fmt: skip
-        make = _constrained_maker(run, request, placed, overwrite, chunks, threads, stencil_cache)
+                                              progress=progress, placed=placed, fit=fit_record)[0]  # fmt: skip
+        make = _constrained_maker(run, request, placed, overwrite, chunks, threads, stencil_cache, fit_record)
     if out is None:
         return _through_store(make, run.grid, run.default_store_name())
     make(Path(out))
@@ -419,10 +433,10 @@ def _mann_maker(run: MannRun, overwrite, chunks, threads, stencil_cache, memory,
     return make
 
 
-def _constrained_maker(run: MannRun, request, placed, overwrite, chunks, threads, stencil_cache):
+def _constrained_maker(run: MannRun, request, placed, overwrite, chunks, threads, stencil_cache, fit=None):
     """The function writing ``run`` conditioned on ``request`` (a ConstraintRequest) as ``turbgen mann --constrain``
     does (turbgen.runs.constrain.run_mann_constrained); ``placed``: the data placed on the run's grid (checked
-    before anything is written)."""
+    before anything is written); ``fit``: the store's fit record (turbgen.runs.replay)."""
     from turbgen.runs.constrain import run_mann_constrained
 
     constraints = list(request.files)  # loaded
@@ -432,7 +446,8 @@ def _constrained_maker(run: MannRun, request, placed, overwrite, chunks, threads
         check_new_store(out, run.grid, chunk_t=chunks, overwrite=overwrite)
         run_mann_constrained(run, out, constraints, noise_m_s=request.noise_m_s,
                              conditional_mean=request.conditional_mean, overwrite=overwrite, chunk_t=chunks,
-                             threads=default_threads(threads), cache_dir=stencil_cache, placed=placed)  # fmt: skip
+                             threads=default_threads(threads), cache_dir=stencil_cache, placed=placed,
+                             fit=fit)  # fmt: skip
 
     return make
 

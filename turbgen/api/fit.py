@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 
 from turbgen.validation.fit import MannFit, fit_mann_data, load_fit_data
+from turbgen.validation.fit.mean_wind import fit_mean_wind
 
 
 def fit_mann(data, *, U: float | None = None, nperseg: int | None = None) -> MannFit:
@@ -13,7 +15,8 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None) -> Man
     The one-point spectra of u, v, w and the u-w co-spectrum are estimated (Welch, detrended), each band weighted by
     the estimator's own covariance; a turbgen store is fitted against the Mann tensor summed over its generator's box
     (what the grid can hold), sensor data against the continuous model (Mann 1994, Eq. 13-17; Guo et al. 2023,
-    Eq. 8).
+    Eq. 8). Total-wind sensor data also give their mean wind: power-law exponent, roughness length, veer and
+    turbulence intensity (``mean_wind``; turbgen.validation.fit.mean_wind).
 
     Parameters
     ----------
@@ -30,7 +33,8 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None) -> Man
     -------
     turbgen.validation.fit.MannFit
         ``ae``, ``length_scale_m``, ``gamma`` (each ``value`` and ``ci95``), ``chi2_dof``, ``flags`` (no
-        convergence, a range boundary: ``ok`` is False), ``notes``, ``to_dict()``, ``table()``, ``plot(path)``.
+        convergence, a range boundary: ``ok`` is False), ``notes``, ``mean_wind``, ``to_dict()``, ``table()``,
+        ``plot(path)``.
 
     Raises
     ------
@@ -47,4 +51,5 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None) -> Man
     """
     if isinstance(data, os.PathLike):
         data = os.fspath(data)
-    return fit_mann_data(load_fit_data(data, U), nperseg)
+    fd = load_fit_data(data, U)
+    return replace(fit_mann_data(fd, nperseg), mean_wind=fit_mean_wind(fd.points))

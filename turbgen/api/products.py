@@ -290,7 +290,7 @@ def info(store) -> dict:
 
         return dict(file_summary(Path(store).expanduser().absolute()))
     fs = field_store(store)
-    summary = fs.summary()
+    summary = fs.summary() | ({"fit": fs.attrs["fit"]} if "fit" in fs.attrs else {})  # a replay's fit record
     summary["chunks_decoded"] = summary["size_on_disk_bytes"] <= DECODE_LIMIT_BYTES
     if summary["chunks_decoded"]:
         fs.check_chunks()

@@ -70,6 +70,10 @@ def _lines(s: dict) -> list[str]:
                    f"{solver['relative_residual']:.1e}; field - data max {c['residual_max_m_s']:.2e} m/s")  # fmt: skip
         out += [f"  {m['name']}: x {m['x_m']:g} m, y {m['y_m']:g} m, z {m['z_m']:g} m, noise {m['noise_m_s']:g} m/s"
                 for m in c["series"]]
+    if "fit" in s:
+        from turbgen.runs.replay import describe_fit
+
+        out += [f"fit  {line}" for line in describe_fit(s["fit"])]
     out += [f"warning  {w}" for w in s.get("warnings", [])]
     return out
 

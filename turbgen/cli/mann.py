@@ -103,6 +103,11 @@ def _dask_client(scheduler, workers: int):
               "(default: each file's noise_m_s, else 0 = the field passes through the data).")  # fmt: skip
 @click.option("--conditional-mean", "conditional_mean", is_flag=True,
               help="With --constrain: write the conditional mean (the optimal linear reconstruction, no random part).")
+@click.option("--fit", "fit", is_flag=True,
+              help="With --constrain of one point-series file: replay it. L, Gamma, ae and the mean wind (power law, "
+              "veer) are fitted to the data first (turbgen fit mann) and the field is conditioned with them; --L, "
+              "--gamma, --ae, --sigma-u, --ti are refused. The store records the fit; turbgen export uses its mean "
+              "wind.")  # fmt: skip
 def mann(**opt):
     """Mann space-time 4D field: yz-planes at the rotor and range gates, evolving with upstream distance."""
     typed_energy = [name for name in _ENERGY if opt[name] is not None]
@@ -116,13 +121,20 @@ def mann(**opt):
     # the run as turbgen.mann makes it; --constrain/--noise/--conditional-mean or the run file's
     mapping, request = mann_run_mapping({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],
                                         opt["presets_file"])  # fmt: skip
-    constraints = out = None
+    constraints = out = fit = None
+    if opt["fit"] and request is None:
+        raise click.UsageError("--fit needs --constrain DATA (the data to fit and replay)")
     if request is None:
         run = MannRun.from_mapping(mapping)
     else:
         from turbgen.runs.constrain import constrained_store_name, load_constraints, place, with_energy_from_data
 
         constraints = load_constraints(request.files)
+        if opt["fit"]:
+            from turbgen.runs.replay import check_fit_options, fitted_inputs
+
+            check_fit_options(opt)
+            mapping, constraints, fit = fitted_inputs(mapping, constraints)
         # no ae, sigma_u, ti or IEC class given: ae estimated from the data (printed with the run below)
         run = with_energy_from_data(mapping, constraints, request.noise_m_s, opt["stencil_cache"])
         placed = place(run, constraints, request.noise_m_s)  # every check of the data against the run, before output
@@ -147,6 +159,10 @@ def mann(**opt):
     click.echo("turbgen mann")
     for line in describe(run, out, threads):
         click.echo(f"  {line}")
+    if fit is not None:
+        from turbgen.runs.replay import describe_fit
+
+        click.echo("\n".join(f"  {line}" for line in describe_fit(fit)))
     if run.ae_from.startswith("estimated"):
         click.echo("  sigma_u: none of --ae, --sigma-u, --ti or an IEC class given, so the energy level was "
                    "estimated from the constraint data (see ae above)")
@@ -169,7 +185,7 @@ def mann(**opt):
                                  conditional_mean=request.conditional_mean,
                                  overwrite=opt["overwrite"], chunk_t=opt["chunks"], threads=threads,
                                  cache_dir=opt["stencil_cache"], progress=sys.stderr.isatty(),
-                                 placed=placed)  # fmt: skip
+                                 placed=placed, fit=fit)  # fmt: skip
         for line in describe_constraints(s["constraints"]):
             click.echo(f"  {line}")
     else:

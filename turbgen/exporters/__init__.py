@@ -12,6 +12,7 @@ the InflowWind input-file lines that load the result.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 
 from turbgen.exporters.bts import export_bts, read_bts
@@ -77,7 +78,8 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
     need = export_bytes(fmt, store.grid)
     require_disk(out, need, f"the {fmt} export of {Path(store.label).name}",
                  "free space there or choose another `out`")
-    return EXPORTERS[fmt](store, out, request)
+    result = EXPORTERS[fmt](store, out, request)
+    return replace(result, notes=(*request.notes, *result.notes)) if request.notes else result
 
 
 # bytes per stored value and whether every plane is written, per format

@@ -82,7 +82,8 @@ class ExportOptions:
 
 def export_request(store, fmt: str, opts: ExportOptions, *, inline: bool = False,
                    source_label: str | None = None) -> ExportRequest:
-    """The ExportRequest of ``opts`` for ``store`` in format ``fmt``.
+    """The ExportRequest of ``opts`` for ``store`` in format ``fmt``; without a profile, shear exponent, veer or
+    history, a replayed store's fitted mean wind (:func:`fitted_mean_wind`), said in the request's notes.
 
     Parameters
     ----------
@@ -110,17 +111,34 @@ def export_request(store, fmt: str, opts: ExportOptions, *, inline: bool = False
     StoreError
         For a transient on a missing or incomplete store.
     """
-    profile, shear = opts.profile, opts.shear_exponent
+    profile, shear, veer = opts.profile, opts.shear_exponent, opts.veer_deg_per_m
+    notes: tuple = ()
+    if fmt in RUNNER_FORMATS and profile is shear is veer is opts.mean_history is None:  # the mean-wind formats
+        fitted = fitted_mean_wind(store)
+        profile, veer = fitted.get("profile"), fitted.get("veer_deg_per_m")
+        if fitted:
+            notes = ("mean wind fitted to the store's data (its fit record): "
+                     + " ".join(f"--{k.split('_')[0]} {v}" for k, v in fitted.items()) + "; give --profile/--veer to "
+                     "override",)
     if shear is not None and profile is not None:
         raise ParameterError(f"--shear-exponent {shear:g} and --profile {profile} both set the profile; give one")
-    if shear is not None and (opts.veer_deg_per_m is not None or opts.mean_history is not None):
+    if shear is not None and (veer is not None or opts.mean_history is not None):
         profile, shear = f"power:{shear!r}", None
     event = _transient(store, opts)
-    mean_wind = mean_wind_from_options(profile, opts.veer_deg_per_m, opts.mean_history, event, inline=inline)
+    mean_wind = mean_wind_from_options(profile, veer, opts.mean_history, event, inline=inline)
     return ExportRequest(plane=opts.plane, hub_height_m=opts.hub_height_m, shear_exponent=shear, tower=opts.tower,
                          periodic=opts.periodic, drop_below_ground=opts.drop_below_ground, overwrite=opts.overwrite,
                          source_label=source_label, mean_wind=mean_wind,
-                         runner_files=opts.runner_files and fmt in RUNNER_FORMATS)
+                         runner_files=opts.runner_files and fmt in RUNNER_FORMATS, notes=notes)
+
+
+def fitted_mean_wind(store) -> dict:
+    """The ``turbgen export`` options of the mean wind fitted to a replayed store's data (its ``fit`` record,
+    turbgen.runs.replay): {"profile": "power:ALPHA", "veer_deg_per_m": ..}; {} for other stores."""
+    from turbgen.store import FieldStore, open_store
+
+    fs = store if isinstance(store, FieldStore) else open_store(store)
+    return dict((fs.attrs.get("fit") or {}).get("export") or {})
 
 
 def _transient(store, opts: ExportOptions):

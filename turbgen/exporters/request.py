@@ -47,6 +47,8 @@ class ExportRequest:
         ``<out>_InflowWind_<format>.dat`` (bts, wnd, evo, hawc2), a HAWC2 ``<out>_wind.htc`` block (hawc2)
         and the LidarSim input file's Wind Evolution section ``<out>_LidarSim_evolution.txt`` (evo);
         default False.
+    notes : tuple of str, optional
+        Remarks on the request the export adds to its own (e.g. a mean wind taken from the store's fit record).
 
     Raises
     ------
@@ -65,6 +67,7 @@ class ExportRequest:
     source_label: str | None = None
     mean_wind: MeanWind | None = None
     runner_files: bool = False
+    notes: tuple = ()
 
     def source(self, fs) -> str:
         """The source store's name in the exports: ``source_label``, else the store directory's name (not its absolute

@@ -347,7 +347,7 @@ def constraint_record(files, placed: PlacedData, report: cond.SolveReport, remea
 def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m_s: float | None = None,
                          conditional_mean: bool = False, overwrite: bool = False, chunk_t: int | None = None,
                          threads: int | None = None, cache_dir=None, progress: bool = False,
-                         placed: PlacedData | None = None) -> dict:  # fmt: skip
+                         placed: PlacedData | None = None, fit: dict | None = None) -> dict:  # fmt: skip
     """Generate ``run`` conditioned on the point series ``files`` into a new store at ``out``.
 
     Parameters
@@ -366,6 +366,8 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
         Progress bars of the stages (system, pass 1, correction, write) on standard error, on a terminal.
     placed : PlacedData, optional
         ``place(run, files, noise_m_s)`` when the caller has it already (it checked the data before any output).
+    fit : dict, optional
+        The store's ``fit`` attribute: the record of the fit the run's parameters came from (turbgen.runs.replay).
 
     Returns
     -------
@@ -390,13 +392,14 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     opener = lambda: create_store(Path(out), g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite)  # noqa: E731
     record, sums = _write_conditioned(opener, run, files, placed, Path(out).absolute().parent,
                                       conditional_mean=conditional_mean, threads=threads, cache_dir=cache_dir,
-                                      progress=progress)  # fmt: skip
+                                      progress=progress, fit=fit)  # fmt: skip
     return conditioned_summary(str(out), t_start, record, sums, g)
 
 
 def mann_constrained_in_memory(run: MannRun, files: list, *, noise_m_s: float | None = None,
                                conditional_mean: bool = False, threads: int | None = None, cache_dir=None,
-                               progress: bool = False, placed: PlacedData | None = None):  # fmt: skip
+                               progress: bool = False, placed: PlacedData | None = None,
+                               fit: dict | None = None):  # fmt: skip
     """The field of :func:`run_mann_constrained` in memory, as its store would open: (xarray.Dataset, summary).
 
     The same values and attributes (but ``created_utc``) as ``xarray.open_zarr`` of that store
@@ -425,7 +428,7 @@ def mann_constrained_in_memory(run: MannRun, files: list, *, noise_m_s: float | 
         return holder[0]
 
     record, sums = _write_conditioned(opener, run, files, placed, scratch_dir, conditional_mean=conditional_mean,
-                                      threads=threads, cache_dir=cache_dir, progress=progress)  # fmt: skip
+                                      threads=threads, cache_dir=cache_dir, progress=progress, fit=fit)  # fmt: skip
     return holder[0].dataset, conditioned_summary(None, t_start, record, sums, g)
 
 
@@ -440,10 +443,11 @@ def constrained_memory_bytes(run: MannRun, placed: PlacedData, threads: int) -> 
 
 
 def _write_conditioned(open_writer, run: MannRun, files, placed: PlacedData, scratch_dir: Path, *,
-                       conditional_mean: bool, threads: int, cache_dir, progress: bool) -> tuple[dict, dict]:
+                       conditional_mean: bool, threads: int, cache_dir, progress: bool,
+                       fit: dict | None = None) -> tuple[dict, dict]:
     """The conditioned field of ``run`` into the writer ``open_writer()`` returns (a context manager: a store's or a
     MemoryWriter), opened once the system is solved; returns (the constraints record, {component: [sum, sum of
-    squares]})."""
+    squares]}). ``fit``: the store's ``fit`` attribute (none without)."""
     g = run.grid
     stencil = build_mann_stencil(run, cache_dir)
     cov = stream_system(run, stencil, placed, threads, progress, cache_dir)
@@ -453,7 +457,7 @@ def _write_conditioned(open_writer, run: MannRun, files, placed: PlacedData, scr
         remeasured, sums = write_planes(writer, placed, planes, lambda: _bar("write", g.nx, "plane", progress),
                                         background=True)  # fmt: skip
         record = constraint_record(files, placed, report, remeasured, conditional_mean)
-        writer.add_attrs(constraints=record)
+        writer.add_attrs(constraints=record, **({} if fit is None else {"fit": fit}))
     return record, sums
 
 

@@ -49,6 +49,8 @@ class FitData:
         The store's grid (with ``box``), None for sensor data.
     notes : tuple of str
         What was done to the data (trends removed, missing values).
+    points : PointSeries or None
+        The sensor data as read (their mean wind: turbgen.validation.fit.mean_wind), None for a field.
     """
 
     source: str
@@ -59,6 +61,7 @@ class FitData:
     box: MannBox | None = None
     grid: object = None
     notes: tuple = ()
+    points: PointSeries | None = None
 
     @property
     def nt(self) -> int:
@@ -124,7 +127,7 @@ def data_from_points(ps: PointSeries, U_m_s: float | None = None) -> FitData:
     uw = tuple((with_u.index(s), with_w.index(s)) for s in ps.sensors if s in with_u and s in with_w)
     gaps = [f"{s.name} {c}: {int(np.isnan(v).sum())} missing values (Welch segments holding them are skipped)"
             for s in ps.sensors for c, v in s.series.items() if np.isnan(v).any()]
-    return FitData(ps.source, dt, U, series, uw, notes=tuple(notes + gaps))
+    return FitData(ps.source, dt, U, series, uw, notes=tuple(notes + gaps), points=ps)
 
 
 def data_from_store(fs) -> FitData:

@@ -62,6 +62,8 @@ class MannFit:
     data, fitted, sd : dict
         Spectrum ("uu", "vv", "ww", "uw") -> band estimates, the fitted model's expectation of them and their
         standard deviations, one-sided [m^2 s^-2 Hz^-1].
+    mean_wind : turbgen.validation.fit.mean_wind.MeanWindFit or None
+        Shear exponent, roughness, veer and turbulence intensity of total-wind sensor data.
     """
 
     ae: FitValue
@@ -79,6 +81,7 @@ class MannFit:
     data: dict
     fitted: dict
     sd: dict
+    mean_wind: object = None
 
     @property
     def ok(self) -> bool:
@@ -96,7 +99,7 @@ class MannFit:
         out.update(chi2_dof=self.chi2_dof, dof=self.dof, flags=list(self.flags), notes=list(self.notes),
                    model=self.model, U_m_s=self.U_m_s, source=self.source, nperseg=self.nperseg,
                    spectra=sorted(self.data))
-        return out
+        return out | ({} if self.mean_wind is None else self.mean_wind.to_dict())
 
     def table(self) -> str:
         """Terminal text: one line per parameter, the goodness of fit, flags and notes."""
@@ -108,6 +111,7 @@ class MannFit:
             lines.append(f"{name:>15s} = {v.value:10.4g} {unit:13s} {ci}")
         lines.append(f"chi2/dof = {self.chi2_dof:.3g} (dof {self.dof}; 1 +- {math.sqrt(2 / max(self.dof, 1)):.2g} "
                      "expected when the model holds)")
+        lines += [] if self.mean_wind is None else ["mean wind:", *self.mean_wind.lines()]
         lines += [f"note: {n}" for n in self.notes] + [f"FLAG: {f}" for f in self.flags]
         return "\n".join(lines)
 

@@ -1,0 +1,151 @@
+"""Replay a measured event (issue 38 §2): `turbgen mann --constrain DATA --fit` fits the Mann model and the mean wind
+to the mast of examples/mast-fit.json, then conditions the field on the same data with them. The field passes
+through the data (at float32 round-off), validates against the fitted parameters, records the fit, and `turbgen
+export` takes the fitted profile and veer; the API's fit=True gives the same field."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import turbgen
+from turbgen.cli import cli
+from turbgen.errors import ParameterError
+from turbgen.exporters import read_bts
+from turbgen.exporters.options import ExportOptions, export_request
+
+MAST = Path(__file__).resolve().parents[2] / "examples" / "mast-fit.json"
+HUB = 88.5
+# the data's own resolution (the mast was cut from a 3 m grid at dt 0.5 s): y nodes (k - 7.5) 3 m, z nodes hub +
+# (k - 7) 3 m, so the sensors (y -1.5 m; 70.5, 82.5, 94.5, 106.5 m) sit on nodes iy 7 and iz 1, 5, 9, 13
+GRID = ["--nt", "1024", "--dt", "0.5", "--ny", "16", "--nz", "15", "--dy", "3", "--planes", "0", "--evo", "frozen",
+        "--hub-height", str(HUB)]
+NODES = {70.5: 1, 82.5: 5, 94.5: 9, 106.5: 13}
+
+
+@pytest.fixture(scope="module")
+def replay(tmp_path_factory):
+    out = tmp_path_factory.mktemp("replay") / "r.zarr"
+    r = CliRunner().invoke(cli, ["mann", "--constrain", str(MAST), "--fit", *GRID, "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    return out, r.output
+
+
+def test_the_field_passes_through_the_data(replay):
+    out, _ = replay
+    ds = turbgen.open_store(out)
+    fit, hub_u = ds.attrs["fit"], ds.attrs["U_m_s"]
+    alpha = float(fit["export"]["profile"].split(":")[1])
+    veer = fit["export"]["veer_deg_per_m"]
+    data = json.loads(MAST.read_text())
+    field = {c: ds[c].values[:, 0, 7, :] for c in "uvw"}  # (t, z) at y = -1.5 m
+    worst = bound = 0.0
+    for s in data["sensors"]:
+        h, iz = s["height_m"], NODES[s["height_m"]]
+        a = math.radians(-veer * (h - HUB))  # the fitted veer turned back, then the fitted power law removed
+        u, v = np.array(s["u_m_s"]), np.array(s["v_m_s"])
+        expected = {"u": u * math.cos(a) - v * math.sin(a) - hub_u * (h / HUB) ** alpha,
+                    "v": u * math.sin(a) + v * math.cos(a), "w": np.array(s["w_m_s"])}
+        for c in "uvw":
+            worst = max(worst, float(np.abs(field[c][:, iz] - expected[c]).max()))
+            bound = max(bound, float(np.abs(field[c][:, iz]).max()))
+    # float32 round-off: the field is made by float32 FFTs over the synthesis box (nt x 2 ny x 2 nz, pad-yz 2), whose
+    # error grows as eps32 log2(N) times the values' magnitude (Higham 2002, Sect. 24.1); the float64 solve adds a
+    # relative 1e-13 (the record's relative residual) and the float32 storage eps32 / 2
+    n_box = 1024 * (2 * 16) * (2 * 15)
+    tol = np.finfo(np.float32).eps * math.log2(n_box) * bound
+    assert worst <= tol, (worst, tol)
+    assert ds.attrs["constraints"]["residual_max_m_s"] <= tol
+
+
+def test_validate_passes_against_the_fitted_parameters(replay):
+    out, _ = replay
+    ds = turbgen.open_store(out)
+    run = ds.attrs["fit"]["run"]
+    assert {k: ds.attrs["parameters"][k] for k in ("ae", "length_scale_m", "gamma")} == \
+        {k: run[k] for k in ("ae", "length_scale_m", "gamma")}
+    report = turbgen.validate(out)
+    assert report.passed, report.table()
+
+
+def test_the_store_records_the_fit(replay):
+    out, printed = replay
+    fit = turbgen.open_store(out).attrs["fit"]
+    assert fit["files"] == [{"path": str(MAST), "sha256": hashlib.sha256(MAST.read_bytes()).hexdigest()}]
+    for k in ("ae", "length_scale_m", "gamma"):
+        lo, hi = fit["fit"][k]["ci95"]
+        assert lo < fit["run"][k] < hi and fit["run"][k] == float(f"{fit['fit'][k]['value']:.6g}")
+    assert fit["fit"]["flags"] == [] and fit["fit"]["shear_exponent"]["value"] is not None
+    assert set(fit["export"]) == {"profile", "veer_deg_per_m"}
+    assert "fitted to mast-fit.json" in printed
+    info = CliRunner().invoke(cli, ["info", str(out)]).output
+    assert "fit  fitted to mast-fit.json: L" in info and "turbgen export uses --profile power:" in info
+
+
+def test_export_takes_the_fitted_mean_wind_unless_given_one(replay, tmp_path):
+    out, _ = replay
+    fit = turbgen.open_store(out).attrs["fit"]["export"]
+    wind = export_request(out, "bts", ExportOptions()).mean_wind
+    assert (wind.profile, f"power:{wind.shear_exponent:.6g}", wind.veer_deg_per_m) == \
+        ("power", fit["profile"], fit["veer_deg_per_m"])
+    given = export_request(out, "bts", ExportOptions(profile="log:z0=0.1")).mean_wind
+    assert (given.profile, given.veer_deg_per_m) == ("log", 0.0)
+    r = CliRunner().invoke(cli, ["export", str(out), "--format", "bts", "--out", str(tmp_path / "r.bts")])
+    assert r.exit_code == 0, r.output
+    assert f"note: mean wind fitted to the store's data (its fit record): --profile {fit['profile']}" in r.output
+    assert (tmp_path / "r_InflowWind_bts.dat").is_file()
+    # the OpenFAST wind file gives the mast's total wind back: at the sensors' nodes the .bts (fluctuations plus the
+    # fitted profile and veer) equals the data within its int16 quantisation step (range / 65534 per component)
+    bts, data = read_bts(tmp_path / "r.bts"), json.loads(MAST.read_text())
+    for s in data["sensors"]:
+        iy, iz = int(np.argmin(abs(bts["y"] - s["y_m"]))), int(np.argmin(abs(bts["z"] - s["height_m"])))
+        for c in "uvw":
+            step = (bts[c].max() - bts[c].min()) / 65534
+            assert np.abs(bts[c][:, iy, iz] - np.array(s[f"{c}_m_s"])).max() <= step, (s["name"], c)
+
+
+def test_the_api_replays_the_same_field(replay):
+    out, _ = replay
+    ds = turbgen.mann(constrain=[MAST], fit=True, nt=1024, dt=0.5, ny=16, nz=15, dy=3, planes=[0], evo="frozen",
+                      hub_height=HUB)
+    stored = turbgen.open_store(out)
+    assert all(np.array_equal(ds[c].values, stored[c].values) for c in "uvw")
+    assert ds.attrs["fit"] == stored.attrs["fit"]
+
+
+def test_refusals(tmp_path):
+    r = CliRunner().invoke(cli, ["mann", "--constrain", str(MAST), "--fit", "--L", "30", "--gamma", "3",
+                                 "--out", str(tmp_path / "x.zarr")])
+    assert r.exit_code == 2 and r.output.strip().splitlines()[-1] == (
+        "Error: --L, --gamma with --fit (fit=True): the fit sets L, gamma and the energy level from the data; drop "
+        "them, or drop --fit")
+    r = CliRunner().invoke(cli, ["mann", "--fit", "--out", str(tmp_path / "x.zarr")])
+    assert r.exit_code == 2 and "--fit needs --constrain DATA" in r.output
+    assert not (tmp_path / "x.zarr").exists()
+    with pytest.raises(ParameterError, match="^sigma_u with --fit"):
+        turbgen.mann(constrain=[MAST], fit=True, sigma_u=1.0)
+    with pytest.raises(ParameterError, match="`fit` needs `constrain`"):
+        turbgen.mann(fit=True)
+
+
+def test_one_height_keeps_the_files_mean_wind_at_the_data_s_speed():
+    """One sonic: no profile is fitted, so the file's mean wind (the default power law 0.2) stays and U is the hub
+    speed at which it meets the sonic's mean u."""
+    from turbgen.runs.replay import fitted_inputs
+    from turbgen.spec.constraints import point_series_from_mapping
+
+    data = json.loads(MAST.read_text())
+    data["sensors"] = data["sensors"][:1]  # 70.5 m
+    ps = point_series_from_mapping(data, "one.json")
+    mapping, (placed,), record = fitted_inputs({"hub_height_m": HUB}, [ps])
+    assert record["export"] == {} and placed.mean_wind == ps.mean_wind
+    u_mean = np.mean(data["sensors"][0]["u_m_s"])
+    # rounded to 6 significant digits (FIT_DIGITS): within half a unit of the 6th, 5e-6 relative
+    assert mapping["U_m_s"] == pytest.approx(u_mean * (HUB / 70.5) ** 0.2, rel=5e-6)
+    assert "one height" in record["fit"]["shear_exponent"]["reason"]

@@ -1,0 +1,103 @@
+"""Replay a measured event (``turbgen mann --constrain DATA --fit``): the Mann model and the mean wind fitted to the
+sensors of DATA (turbgen.validation.fit), then the field conditioned on the same data with them.
+
+The fitted ae, L and Gamma (rounded to FIT_DIGITS significant digits, so that the last bits of a least-squares fit
+never change the field) replace the run file's and the preset's; typed ones are refused. The evolution time is not
+fitted by the one-point spectra: it stays the given or default one. Without a typed U the run's U is the fitted
+power law's speed at the hub (one height: the hub speed at which the file's own mean wind meets the data's mean u).
+Total-wind data lose the fitted profile and veer (instead of the file's or the default mean wind), and the store's
+``fit`` attribute records the fit, the data files' SHA-256 and the ``turbgen export`` options of that mean wind,
+which export uses when given none.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from turbgen.errors import ParameterError
+from turbgen.spec.constraints import PointSeries
+from turbgen.spec.mann import MannRun
+from turbgen.validation.fit.data import data_from_points
+from turbgen.validation.fit.mann import fit_mann_data
+from turbgen.validation.fit.mean_wind import fit_mean_wind
+
+FIT_DIGITS = 6
+FITTED = {"ae": "ae", "length_scale_m": "L", "gamma": "gamma"}  # run key -> option
+REFUSED = ("L", "gamma", "ae", "sigma_u", "ti")  # options --fit sets (the energy level among them)
+
+
+def check_fit_options(given: dict, prefix: str = "--") -> None:
+    """Refuse, in one line, the options ``--fit`` sets (``given``: option name -> value, None: not given)."""
+    typed = [f"{prefix}{n.replace('_', '-') if prefix == '--' else n}" for n in REFUSED if given.get(n) is not None]
+    if typed:
+        raise ParameterError(f"{', '.join(typed)} with --fit (fit=True): the fit sets L, gamma and the energy level "
+                             "from the data; drop them, or drop --fit")
+
+
+def _sha256(source: str) -> str | None:
+    p = Path(source)
+    return hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else None
+
+
+def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None) -> tuple[dict, list, dict]:
+    """(the run mapping with the fitted parameters, the constraints with the fitted mean wind, the ``fit`` record).
+
+    Raises
+    ------
+    ParameterError
+        For other than one point-series file, a fit that is flagged (no convergence, a range boundary) and the
+        fit's own refusals (too short a record, fluctuation data without U).
+    """
+    if len(constraints) != 1 or not isinstance(constraints[0], PointSeries):
+        raise ParameterError(f"--fit (fit=True) fits one point-series file; got {len(constraints)} constraint "
+                             "file(s) or a lidar record: fit them apart (turbgen fit mann) and give the values")
+    ps = constraints[0]
+    fit = fit_mann_data(data_from_points(ps, None if ps.total_wind else mapping.get("U_m_s")), nperseg)
+    if fit.flags:
+        raise ParameterError(f"--fit: the fit of {ps.source} is not reliable: {'; '.join(fit.flags)}")
+    hub = MannRun.from_mapping(mapping).hub_height_m
+    mean = fit_mean_wind(ps, hub)
+    values = {k: float(f"{getattr(fit, k).value:.{FIT_DIGITS}g}") for k in FITTED}
+    out = {k: v for k, v in mapping.items() if k not in ("sigma_u_m_s", "ti")} | values
+    out["ae_from"] = f"fitted to {Path(ps.source).name} (turbgen fit mann)"
+    if "U_m_s" not in mapping:
+        out["U_m_s"] = float(f"{mean.U_hub_m_s or _hub_speed(ps, hub) or fit.U_m_s:.{FIT_DIGITS}g}")
+    export = mean.export_options()
+    if ps.total_wind and export:
+        wind = ps.mean_wind
+        if "profile" in export:
+            wind = replace(wind, profile="power", shear_exponent=float(export["profile"][6:]), roughness_m=None,
+                           displacement_m=0.0, table_heights_m=(), table_speeds_m_s=(), table_directions_deg=(),
+                           table_label="")
+        ps = replace(ps, mean_wind=replace(wind, veer_deg_per_m=export.get("veer_deg_per_m", wind.veer_deg_per_m)))
+    record = {"fit": replace(fit, mean_wind=mean).to_dict(), "run": {k: out[k] for k in (*FITTED, "U_m_s")},
+              "files": [{"path": ps.source, "sha256": _sha256(ps.source)}], "export": export}
+    return out, [ps], record
+
+
+def _hub_speed(ps: PointSeries, hub: float) -> float | None:
+    """The hub speed [m/s] at which the file's own mean wind (the profile not fitted: one height) meets the
+    sensors' mean u; None for fluctuation data."""
+    if not ps.total_wind:
+        return None
+    s = [s for s in ps.sensors if "u" in s.series]
+    h = np.array([x.height_m if x.height_m is not None else hub + x.z_m for x in s])
+    return float(np.mean([np.nanmean(x.series["u"]) for x in s] / ps.mean_wind.speed_ratio(h, hub)))
+
+
+def describe_fit(record: dict) -> list[str]:
+    """Lines saying what a store's ``fit`` record fitted and applied."""
+    f, run = record["fit"], record["run"]
+    ci = lambda k: "held" if f[k]["ci95"] is None else f"[{f[k]['ci95'][0]:.4g}, {f[k]['ci95'][1]:.4g}]"  # noqa: E731
+    lines = [f"fitted to {', '.join(Path(x['path']).name for x in record['files'])}: L {run['length_scale_m']:g} m "
+             f"{ci('length_scale_m')}, gamma {run['gamma']:g} {ci('gamma')}, ae {run['ae']:g} {ci('ae')} (95 %), "
+             f"chi2/dof {f['chi2_dof']:.3g}; U {run['U_m_s']:g} m/s"]
+    mean = [f"{k} {f[k]['value']:.4g}" for k in ("shear_exponent", "veer_deg_per_m", "turbulence_intensity")
+            if f.get(k, {}).get("value") is not None]
+    exp = " ".join(f"--{k.split('_')[0]} {v}" for k, v in record["export"].items())
+    return lines + ([f"fitted mean wind: {', '.join(mean)}" + (f" (turbgen export uses {exp})" if exp else "")]
+                    if mean else [])
