@@ -96,8 +96,7 @@ def _add_error_handlers(app: FastAPI) -> None:
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request, exc: RequestValidationError):
-        # FastAPI's own check of query and path parameters (e.g. ?U=fast): one line as every other error, not
-        # its list of objects (the page showed "[object Object]")
+        # FastAPI's own check of query and path parameters (e.g. ?U=fast): one line as every other error
         parts = [f"{'.'.join(str(x) for x in e.get('loc', ()))}: {e.get('msg', 'invalid')}" for e in exc.errors()]
         return _error(422, "; ".join(parts) or "invalid request")
 
