@@ -35,15 +35,15 @@ class SamplingDesign:
     Attributes
     ----------
     grid : Grid
-        The store's grid (nt samples spaced dt [s]; planes x [m]; ny x nz points spaced dy, dz [m]).
+        The store's grid.
     setup : WelchSetup
         Welch segments (length, dt [s], window scale).
     separations : tuple of (int, int)
-        Lateral separations (a, b) in grid steps (a dy, b dz) of the yz coherences.
+        yz separations (a, b) [grid steps] of the yz coherences.
     rotor_mask : numpy.ndarray
-        (ny, nz) bool, the grid points inside the rotor disc (rotor-effective wind speed).
+        (ny, nz) bool, the grid points inside the rotor disc.
     long_iy, long_iz : numpy.ndarray
-        Indices of the sub-lattice of points whose plane-to-plane coherence is estimated.
+        Indices of the sub-lattice whose plane-to-plane coherence is estimated.
     """
 
     grid: Grid
@@ -137,13 +137,7 @@ def dx_key(dx_m: float) -> float:
 
 
 def plane_separations(grid: Grid) -> dict:
-    """Plane separations of the grid.
-
-    Returns
-    -------
-    dict
-        Distinct |x_p - x_q| [m] (``dx_key``) over ordered plane pairs -> number of such pairs.
-    """
+    """Distinct plane separations |x_p - x_q| [m] (``dx_key``) over ordered plane pairs -> number of such pairs."""
     out: dict = {}
     for xp in grid.x_m:
         for xq in grid.x_m:
