@@ -51,12 +51,11 @@ from turbgen.synthesis.mann_stencil import MannStencil
 from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_weight
 
 CG_TOLERANCE = 1e-10  # relative residual |S x - r| / |r| at which the conjugate gradients stop
-# the full Table 3 lidar record on the default grid with 20 % of its samples missing at random needs ~1200 (the
-# circulant preconditioner knows nothing of the gaps); an iteration costs two FFTs of the streams and M x M products
+# a bound on the conjugate gradients (the circulant preconditioner knows nothing of the gaps); an iteration costs
+# two FFTs of the streams and M x M products
 CG_MAX_ITERATIONS = 5000
-# missing fraction above which conjugate gradients start from the precision-matrix solve (solve, _gap_start): the
-# default lidar record with its last far gates missing (0.7 %) converges in ~60 iterations without it, ~560 with it;
-# with 20 % missing at random ~1200 without it, ~550 with it
+# missing fraction above which conjugate gradients start from the precision-matrix solve (solve, _gap_start): it
+# halves the iterations of many scattered gaps and costs iterations for a few
 GAP_START_FRACTION = 1 / 16
 SINGULAR_RTOL = 1e-11  # eigenvalue / largest eigenvalue of S_i below which zero-noise measurements are dependent
 
@@ -448,12 +447,6 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
         The relative time x/U [s] of every plane of the run (storage order).
     noise_var : array_like, (M,)
         Measurement-noise variance sigma_a^2 [m^2 s^-2] of each stream (R = diag).
-    Notes
-    -----
-    L_i[a, b] as a sum over the streams' nodes of the lag covariances G_i of the prior between their planes (one
-    inverse 2-D DFT per distinct plane-time lag and basis input: direction pair or Phi's component, _Basis;
-    turbgen.synthesis.conditioning_kernels), which equals the sum over term pairs of the module docstring grouped by
-    node.
     """
     box = stencil.box
     nt, q, m = box.nt, streams.decimation, streams.n_streams
@@ -641,9 +634,8 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
 def _gap_start(inverse: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, int]:
     """An approximation of S_oo^-1 r through the precision matrix T = S^-1 of the full streams (circulant: ``inverse``
     per frequency): S_oo^-1 = T_oo - T_om T_mm^-1 T_mo (the Schur complement; o observed, m missing samples), the
-    T_mm system solved by Jacobi-preconditioned conjugate gradients to 1e-12. T is far better conditioned on
-    scattered gaps than S on the observed samples (the default lidar record with 20 % missing at random: ~540
-    iterations of one circulant product against ~1200 of two). Returns (x, iterations)."""
+    T_mm system solved by Jacobi-preconditioned conjugate gradients to 1e-12 (T is far better conditioned on
+    scattered gaps than S on the observed samples). Returns (x, iterations)."""
     missing = ~observed
     n = r.shape[1]
     weights = np.full(inverse.shape[0], 2.0)  # T's diagonal per stream: the mean of (S_j^-1)_aa over all j
