@@ -437,16 +437,8 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
                       progress=None) -> np.ndarray:  # fmt: skip
     """The per-frequency matrices S_j (nt/q, M, M) complex128 [m^2 s^-2 times nt] of the block-circulant S.
 
-    Parameters
-    ----------
-    stencil : MannStencil
-        The run's stencil (with coefficients; with 1/tau_e for several evolving planes).
-    streams : Streams
-        The measurement streams.
-    times_s : array_like
-        The relative time x/U [s] of every plane of the run (storage order).
-    noise_var : array_like, (M,)
-        Measurement-noise variance sigma_a^2 [m^2 s^-2] of each stream (R = diag).
+    ``stencil`` with coefficients (and 1/tau_e for several evolving planes); ``times_s`` the relative time x/U [s] of
+    every plane (storage order); ``noise_var`` (M,) the measurement-noise variances sigma_a^2 [m^2 s^-2] (R = diag).
     """
     box = stencil.box
     nt, q, m = box.nt, streams.decimation, streams.n_streams
@@ -697,28 +689,13 @@ def _conjugate_gradients(apply, precondition, b: np.ndarray, x: np.ndarray,
 def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
                       nz: int, threads: int = 1) -> Iterator[tuple[range, np.ndarray]]:  # fmt: skip
     """The yz-transformed, cropped spectra of C H^T w on the planes ``planes_out``, group of slabs by group: yields
-    (slabs, block (P_out, 3, len(slabs), ny, nz) complex64), ``threads`` groups computed at once (the result does
-    not depend on it; see :func:`correction_spectra` for all of them at once).
+    (slabs, block (P_out, 3, len(slabs), ny, nz) complex64), ``threads`` groups computed at once (the result does not
+    depend on it; :func:`correction_spectra` gathers them).
 
-    Parameters
-    ----------
-    weights : numpy.ndarray, (M, nt/q)
-        w, one value per stream sample (e.g. S^-1 (d - H u_s - eps_s)).
-    times_s : array_like
-        Relative time x/U [s] of every plane of the run.
-    planes_out : sequence of int
-        The plane indices wanted.
-    threads : int
-        Slab groups computed at once.
-
-    Notes
-    -----
-    Per slab: H^T w in the (k2, k3) spectrum of each measured plane q, F_q = sum_(a on q) W_a(i) conj(A_i[a]) (W the
-    FFT of the weights at full rate; the forward 2-D DFT of the terms' amplitudes scattered on the grid), then
-    sum_q rho_pq F_q, multiplied by Phi, the inverse 2-D FFT and the crop. The sum over q runs as the
-    Ornstein-Uhlenbeck recursion along the planes in time order (rho_pq is the product of the factors between
-    neighbouring planes), forwards and backwards. The real inverse FFT along time is left to spectra_field (it keeps
-    only the real part of the k1 = 0 / Nyquist slabs).
+    ``weights`` (M, nt/q) are w, one value per stream sample (e.g. S^-1 (d - H u_s - eps_s)); ``times_s`` the relative
+    time x/U [s] of every plane. Per slab, F_q = sum_(a on q) W_a(i) conj(A_i[a]) on each measured plane q (W the FFT
+    of the weights at full rate), then sum_q rho_pq F_q by the Ornstein-Uhlenbeck recursion forwards and backwards,
+    times Phi, the inverse 2-D FFT and the crop. The real inverse FFT along time is left to spectra_field.
     """
     box, backend = stencil.box, fft.backend()  # resolved once: every workspace with the same backend
     times = np.asarray(times_s, dtype=float)
