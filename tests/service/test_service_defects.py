@@ -161,7 +161,7 @@ def slow_server(tmp_path, monkeypatch):
     from inprocess_server import InProcessServer
 
     fake = _SlowValidation()
-    monkeypatch.setattr(turbgen.validate, "validate", fake)
+    monkeypatch.setattr(turbgen.validation, "validate", fake)
     srv = InProcessServer(tmp_path / "root", derived_running=1, derived_waiting=1)
     try:
         rid = srv.call("POST", "/runs", _kaimal(5))[2]["id"]

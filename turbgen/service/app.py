@@ -47,23 +47,21 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
     max_queue : int
         Most runs queued or running at once.
     loopback_only : bool, optional
-        Answer only requests whose Host header names a loopback address (400 otherwise): a server bound
-        to 127.0.0.1 is then out of reach of DNS rebinding (a web page whose own name resolves to
-        127.0.0.1 would otherwise be same-origin with it and could submit and delete runs).
+        Answer only requests whose Host header names a loopback address (400 otherwise): a server bound to 127.0.0.1
+        is then out of reach of DNS rebinding (a web page whose name resolves to 127.0.0.1 would be same-origin).
     stencil_cache_bytes : int or None, optional
-        Size cap of ``root/stencils`` [bytes] (least recently used stencils evicted; None: no cap).
+        Size cap of ``root/stencils`` [bytes] (least recently used evicted; None: no cap).
     own_cluster : bool, optional
-        ``client`` is the service's own in-process cluster (:func:`turbgen.service.server.service_cluster`), not
-        an external scheduler: temporaries of dead processes in ``root/stencils`` are this host's.
+        ``client`` is the service's in-process cluster (:func:`turbgen.service.server.service_cluster`): temporaries
+        of dead processes in ``root/stencils`` are this host's.
     derived_running, derived_waiting : int, optional
-        Exports, validations and lidar reports computed at once, and requests that may wait for one (503 with
-        Retry-After beyond).
+        Exports, validations and lidar reports computed at once, and requests that may wait (503 beyond).
 
     Returns
     -------
     fastapi.FastAPI
-        The application (``app.state.service`` holds its state, ``app.state.jobs`` its job queue,
-        ``app.state.removed`` the temporaries of dead processes removed at start-up).
+        ``app.state.service`` holds its state, ``app.state.jobs`` its job queue, ``app.state.removed`` the
+        temporaries of dead processes removed at start-up.
     """
     settings = ServiceSettings(Path(root), token, memory_budget, max_queue, loopback_only, derived_running,
                                derived_waiting, stencil_cache_bytes, own_cluster)  # fmt: skip
@@ -98,8 +96,7 @@ def _add_error_handlers(app: FastAPI) -> None:
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request, exc: RequestValidationError):
-        # FastAPI's own check of query and path parameters (e.g. ?U=fast): one line as every other error, not
-        # its list of objects (the page showed "[object Object]")
+        # FastAPI's own check of query and path parameters (e.g. ?U=fast): one line as every other error
         parts = [f"{'.'.join(str(x) for x in e.get('loc', ()))}: {e.get('msg', 'invalid')}" for e in exc.errors()]
         return _error(422, "; ".join(parts) or "invalid request")
 

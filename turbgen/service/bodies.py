@@ -13,22 +13,10 @@ BODY_TIMEOUT_S = 10.0  # a request body (at most MAX_BODY_BYTES) must arrive wit
 
 
 async def read_json(request: Request):
-    """The request body as JSON, at most MAX_BODY_BYTES (LimitError 413 / 415 / 422 otherwise).
+    """The request body parsed as JSON, at most MAX_BODY_BYTES.
 
-    Only ``Content-Type: application/json``: any web page a user of a token-less loopback server visits
-    can POST a form or a no-cors fetch (text/plain, form encodings) to it without a CORS preflight, so
-    accepting those would let other sites queue and compute runs; a JSON body needs the preflight,
-    which this server never grants.
-
-    Parameters
-    ----------
-    request : fastapi.Request
-        The request.
-
-    Returns
-    -------
-    object
-        The parsed JSON value.
+    Only ``Content-Type: application/json``: any web page can POST a form or text/plain to a token-less loopback
+    server without a CORS preflight; a JSON body needs the preflight, which this server never grants.
 
     Raises
     ------
@@ -53,13 +41,7 @@ async def read_json(request: Request):
 async def read_upload(request: Request, types, max_bytes: int) -> tuple[str, bytes]:
     """(content type, body) of an upload whose content type is one of ``types``, at most ``max_bytes``.
 
-    The types are never a form encoding or text/plain (see :func:`read_json`: those need no CORS preflight).
-
-    Raises
-    ------
-    LimitError
-        415 for another content type, 413 for a body over ``max_bytes``, 408 for one not received within
-        BODY_TIMEOUT_S.
+    The types are never a form encoding or text/plain (see :func:`read_json`). LimitError 415, 413 or 408 as there.
     """
     media = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if media not in types:
@@ -85,11 +67,8 @@ async def _bounded_body(request: Request, max_bytes: int) -> bytearray:
 async def _next_within(chunks, waited: list) -> bytes | None:
     """The next chunk of the body (None at its end), or 408 once the client has had BODY_TIMEOUT_S in all.
 
-    The client's time is counted in ticks of BODY_TIMEOUT_S / 20, each by its nominal length: a tick the server
-    stretched by holding its event loop (a cold start under many simultaneous requests) counts no more. A wall-clock
-    deadline counted the server's own queueing: when the loop ran again the deadline was past while the arrived
-    body still needed a few loop passes through the middleware, so 25 of 60 clients that had sent their small body
-    at once got 408.
+    The client's time is counted in ticks of BODY_TIMEOUT_S / 20, each by its nominal length, so time the server
+    itself held its event loop (many simultaneous requests) is not charged to the client.
     """
     tick = BODY_TIMEOUT_S / 20
     read = asyncio.ensure_future(_next_chunk(chunks))

@@ -64,10 +64,12 @@ def write_json_atomic(path: Path, data) -> None:
 class Catalog:
     """The run directories under ``root``/runs.
 
+    Methods taking a run id ``rid`` raise KeyError if it is not a well-formed id.
+
     Parameters
     ----------
     root : Path
-        The server's --root (``root/runs`` is created if missing).
+        The server's --root (``root/runs`` and ``root/work`` are created if missing).
     """
 
     def __init__(self, root: Path):
@@ -80,77 +82,23 @@ class Catalog:
         self._complete: set[str] = set()  # ids whose store opened as complete (a published store stays so)
 
     def run_dir(self, rid: str) -> Path:
-        """Directory of run ``rid``.
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        Path
-
-        Raises
-        ------
-        KeyError
-            If ``rid`` is not a well-formed id.
-        """
+        """Directory of run ``rid``."""
         if not valid_id(rid):
             raise KeyError(rid)
         return self.runs / rid
 
     def store_path(self, rid: str) -> Path:
-        """Path of run ``rid``'s store.
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        Path
-
-        Raises
-        ------
-        KeyError
-            If ``rid`` is not a well-formed id.
-        """
+        """Path of run ``rid``'s store."""
         return self.run_dir(rid) / STORE
 
     def exists(self, rid: str) -> bool:
-        """True when ``rid`` is a well-formed id with a recorded request.
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        bool
-        """
+        """True when ``rid`` is a well-formed id with a recorded request."""
         return valid_id(rid) and (self.run_dir(rid) / "request.json").is_file()
 
     def request(self, rid: str) -> dict:
         """The recorded request of run ``rid`` (model, run mapping, preset, turbgen version).
 
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        dict
-
-        Raises
-        ------
-        KeyError
-            If ``rid`` is not a well-formed id.
-        OSError, ValueError
-            If request.json is missing or not valid JSON.
+        Raises OSError or ValueError if request.json is missing or not valid JSON.
         """
         return json.loads((self.run_dir(rid) / "request.json").read_text())
 
@@ -167,15 +115,6 @@ class Catalog:
             Canonical run mapping.
         preset : str, optional
             A label for listing only (the run mapping already holds what it set).
-
-        Returns
-        -------
-        None
-
-        Raises
-        ------
-        KeyError
-            If ``rid`` is not a well-formed id.
         """
         d = self.run_dir(rid)
         d.mkdir(exist_ok=True)
@@ -186,22 +125,7 @@ class Catalog:
             (d / FAILURE_ROOM).write_bytes(bytes(FAILURE_ROOM_BYTES))
 
     def is_complete(self, rid: str) -> bool:
-        """True when the store is published and opens as a complete turbgen store (remembered once true).
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        bool
-
-        Raises
-        ------
-        KeyError
-            If ``rid`` is not a well-formed id.
-        """
+        """True when the store is published and opens as a complete turbgen store (remembered once true)."""
         if rid in self._complete:
             return True
         path = self.store_path(rid)
@@ -217,22 +141,7 @@ class Catalog:
         return True
 
     def failure(self, rid: str) -> str | None:
-        """The recorded one-line reason of a failed run, or None.
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        str or None
-
-        Raises
-        ------
-        KeyError
-            If ``rid`` is not a well-formed id.
-        """
+        """The recorded one-line reason of a failed run, or None."""
         f = self.run_dir(rid) / "failed.json"
         try:
             return json.loads(f.read_text())["error"]
@@ -240,78 +149,28 @@ class Catalog:
             return None
 
     def mark_failed(self, rid: str, reason: str) -> None:
-        """Record run ``rid`` as failed with ``reason`` (failed.json, atomic).
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-        reason : str
-            One-line reason.
-
-        Returns
-        -------
-        None
-
-        Raises
-        ------
-        KeyError
-            If ``rid`` is not a well-formed id.
-        """
+        """Record run ``rid`` as failed with the one-line ``reason`` (failed.json, atomic)."""
         d = self.run_dir(rid)
         (d / FAILURE_ROOM).unlink(missing_ok=True)  # on a full disk, the room kept for this record
         write_json_atomic(d / "failed.json", {"error": reason})
 
     def starts(self, rid: str) -> int:
-        """How many times run ``rid`` was started (by this server or one before it); 0 if never or unknown.
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        int
-        """
+        """How many times run ``rid`` was started (by this server or one before it); 0 if never or unknown."""
         try:
             return int(json.loads((self.run_dir(rid) / STARTS).read_text())["starts"])
         except (OSError, ValueError, KeyError, TypeError):
             return 0
 
     def count_start(self, rid: str) -> None:
-        """Record one more start of run ``rid`` (kept across restarts: a run that takes its server down is not
-        started forever; best effort: a disk too full to record it fails the run anyway).
+        """Record one more start of run ``rid``, kept across restarts (see jobs.MAX_STARTS).
 
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        None
+        Best effort: a disk too full to record it fails the run anyway.
         """
         with contextlib.suppress(OSError):
             write_json_atomic(self.run_dir(rid) / STARTS, {"starts": self.starts(rid) + 1})
 
     def clear_partial(self, rid: str) -> None:
-        """Remove temporaries a killed run left (the writer's temp siblings of the store).
-
-        Parameters
-        ----------
-        rid : str
-            Run id (its directory must exist).
-
-        Returns
-        -------
-        None
-
-        Raises
-        ------
-        KeyError
-            If ``rid`` is not a well-formed id.
-        """
+        """Remove temporaries a killed run left (the writer's temp siblings of the store)."""
         d = self.run_dir(rid)
         prefix = temp_prefix(d / STORE)
         for p in d.iterdir():
@@ -319,32 +178,13 @@ class Catalog:
                 shutil.rmtree(p, ignore_errors=True) if p.is_dir() else p.unlink(missing_ok=True)
 
     def ids(self) -> list[str]:
-        """Ids of every recorded run, sorted.
-
-        Returns
-        -------
-        list of str
-        """
+        """Ids of every recorded run, sorted."""
         return sorted(p.name for p in self.runs.iterdir() if valid_id(p.name) and (p / "request.json").is_file())
 
     def delete(self, rid: str) -> None:
-        """Remove a run directory: renamed away first so no reader sees half of it.
+        """Remove a run directory, renamed away first so no reader sees half of it.
 
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        None
-
-        Raises
-        ------
-        KeyError
-            If ``rid`` is not a well-formed id.
-        OSError
-            If the directory does not exist.
+        Raises OSError if the directory does not exist.
         """
         d = self.run_dir(rid)
         self._complete.discard(rid)
@@ -353,24 +193,7 @@ class Catalog:
         shutil.rmtree(trash, ignore_errors=True)
 
     def progress(self, rid: str, n_chunks_total: int) -> int:
-        """Chunks already written to the temporary store of a running run (0 if none yet).
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-        n_chunks_total : int
-            Chunks of the complete store (upper bound of the count).
-
-        Returns
-        -------
-        int
-
-        Raises
-        ------
-        KeyError
-            If ``rid`` is not a well-formed id.
-        """
+        """Chunks already written to the temporary store of a running run, at most ``n_chunks_total`` (0 if none yet)."""
         d = self.run_dir(rid)
         prefix = temp_prefix(d / STORE)
         n = 0

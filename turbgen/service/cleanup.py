@@ -1,13 +1,10 @@
 """Start-up clean-up of a server's root, and the size cap of its stencil cache.
 
-Every writer of the service works under a temporary name with its process id (``.NAME.tmp-PID-XXXXXXXX``,
-turbgen.store.temporaries): a killed server (kill -9, power loss) leaves them behind. Start-up removes those whose
-process is gone, in ``ROOT/work`` (derived products), ``ROOT/runs`` (runs being deleted), ``ROOT/constraints``
-(uploads), each run's directory, its ``exports`` and ``lidar`` (written there by earlier versions), and in
-``ROOT/stencils`` when the runs execute in this process (with --scheduler the stencil builders are the scheduler's
-workers, whose process ids are not this host's). Earlier versions also named validation and export temporaries
-``.tmp-XXXXXXXX`` without a process id: only a server writes them and start-up is before it writes, so start-up
-removes them all.
+Every writer of the service works under a temporary name with its process id (turbgen.store.temporaries); a killed
+server leaves them behind. Start-up removes those whose process is gone in ``ROOT/work``, ``ROOT/runs``,
+``ROOT/constraints``, each run's directory and its ``exports`` and ``lidar``, and in ``ROOT/stencils`` when the runs
+execute in this process (with --scheduler the stencil builders' process ids are not this host's). Temporaries
+``.tmp-XXXXXXXX`` without a process id (older versions') are only written by a running server, so all are removed.
 """
 
 from __future__ import annotations
@@ -25,19 +22,8 @@ DEFAULT_STENCIL_CACHE_BYTES = 4 * 2**30
 
 
 def remove_dead_work(catalog: Catalog, *, stencils: bool) -> list[Path]:
-    """Remove the temporaries of dead processes under the catalog's root (see the module's docstring).
-
-    Parameters
-    ----------
-    catalog : Catalog
-        The server's catalog.
-    stencils : bool
-        Also in ``ROOT/stencils`` (the server's own cluster).
-
-    Returns
-    -------
-    list of Path
-        The removed paths.
+    """Remove the temporaries of dead processes under the catalog's root, also in ``ROOT/stencils`` if ``stencils``;
+    the removed paths.
     """
     removed = (remove_dead_temporaries(catalog.work) + remove_dead_temporaries(catalog.runs)
                + remove_dead_temporaries(catalog.uploads.dir))  # fmt: skip
@@ -52,7 +38,7 @@ def remove_dead_work(catalog: Catalog, *, stencils: bool) -> list[Path]:
 
 
 def _remove_unowned(directory: Path) -> list[Path]:
-    """Remove ``.tmp-*`` entries of ``directory`` (earlier versions' temporaries without a process id)."""
+    """Remove the ``.tmp-*`` entries (temporaries without a process id) of ``directory``."""
     removed = []
     for p in directory.glob(".tmp-*") if directory.is_dir() else ():
         if p.is_dir() and not p.is_symlink():
@@ -64,23 +50,11 @@ def _remove_unowned(directory: Path) -> list[Path]:
 
 
 def trim_stencil_cache(directory: Path, max_bytes: int | None) -> list[Path]:
-    """Evict the least recently used stencils of ``directory`` until its entries take at most ``max_bytes``.
+    """Evict the least recently used stencils of ``directory`` until its entries take at most ``max_bytes`` (None: no cap).
 
-    Recency is an entry's modification time, which the cache renews on every hit (turbgen.runs.stencil_cache);
-    the most recent entry is kept even when it alone is larger (the run using it needs it). A run that has an
-    evicted entry memory-mapped keeps reading it (the file is gone only when unmapped).
-
-    Parameters
-    ----------
-    directory : Path
-        The stencil cache (``ROOT/stencils``); missing is empty.
-    max_bytes : int or None
-        The cap [bytes]; None: no cap.
-
-    Returns
-    -------
-    list of Path
-        The evicted entries, oldest first.
+    Recency is the modification time, renewed on every hit (turbgen.runs.stencil_cache); the most recent entry is kept
+    even when larger (its run needs it). A run with an evicted entry memory-mapped keeps reading it. Returns the
+    evicted entries, oldest first.
     """
     if max_bytes is None or not directory.is_dir():
         return []

@@ -1,11 +1,10 @@
 """Products derived from a complete run (exports, validation report and plots, lidar reports): computed on first
 request, published atomically under the run's directory, served from there afterwards.
 
-A product is built under a temporary name in ``ROOT/work`` (``.<id>-<product>.tmp-PID-XXXXXXXX``, the writers'
-convention of turbgen.store.temporaries, so start-up removes what a killed server left) and published only if its
-run was not deleted meanwhile (a DELETE bumps the run's generation). At most ``running`` products are computed at
-once and ``waiting`` more wait for a slot; beyond, the request is answered 503 with Retry-After, so computations
-cannot occupy every worker thread of the server (the health check and the catalog stay responsive).
+A product is built under a temporary name in ``ROOT/work`` (turbgen.store.temporaries, so start-up removes what a
+killed server left) and published only if its run was not deleted meanwhile (a DELETE bumps the run's generation).
+:class:`~turbgen.service.limits.DerivedLimiter` bounds the computations, so the health check and the catalog stay
+responsive.
 """
 
 from __future__ import annotations
@@ -25,8 +24,8 @@ from turbgen.store.temporaries import publish, temp_name
 def cached_product(state: ServiceState, request: Request, rid: str, final: Path, ready, build) -> Path:
     """``final`` once ``ready(final)``; built first by ``build(tmp)`` and published when it is not.
 
-    One build per product at a time (a concurrent request for it waits and reuses it); nothing is published for a
-    run deleted meanwhile.
+    One build per product at a time (a concurrent request waits and reuses it); nothing is published for a run
+    deleted meanwhile.
 
     Parameters
     ----------
@@ -42,11 +41,6 @@ def cached_product(state: ServiceState, request: Request, rid: str, final: Path,
         ``ready(final)`` True when the product is complete.
     build : callable
         ``build(tmp)`` writes the product (file or directory) at the absent path ``tmp``.
-
-    Returns
-    -------
-    Path
-        ``final``.
 
     Raises
     ------
@@ -94,20 +88,8 @@ def _remove(path: Path) -> None:
 
 
 def build_export(store: Path, rid: str, fmt: str, request, tmp: Path) -> None:
-    """Export ``store`` in format ``fmt`` into the new directory ``tmp`` (several files as one .zip).
-
-    Parameters
-    ----------
-    store : Path
-        The run's complete store.
-    rid : str
-        Run id (names the files).
-    fmt : str
-        Export format.
-    request : turbgen.exporters.ExportRequest
-        Export options.
-    tmp : Path
-        The directory to create.
+    """Export the run ``rid``'s ``store`` in format ``fmt`` with the ExportRequest ``request`` into the new directory
+    ``tmp`` (files named by ``rid``; several files as one .zip).
     """
     from turbgen.exporters import export_store
 
@@ -124,16 +106,7 @@ def build_export(store: Path, rid: str, fmt: str, request, tmp: Path) -> None:
 
 
 def build_validation(store: Path, tmp: Path) -> None:
-    """The `turbgen validate` report of ``store`` (report.json) and its PNG plots (plots/) into the new directory
-    ``tmp``.
-
-    Parameters
-    ----------
-    store : Path
-        The run's complete store.
-    tmp : Path
-        The directory to create.
-    """
+    """The `turbgen validate` report of ``store`` (report.json) and its PNG plots (plots/) into the new directory ``tmp``."""
     from turbgen.validation import validate
 
     rep = validate(store)
@@ -143,18 +116,10 @@ def build_validation(store: Path, tmp: Path) -> None:
 
 
 def build_lidar(store: Path, rid: str, lidar, tmp: Path) -> None:
-    """`turbgen lidar --json` of ``store`` for the lidar preset (or description) ``lidar`` into the new file ``tmp``.
+    """`turbgen lidar --json` of run ``rid``'s ``store`` into the new file ``tmp``.
 
-    Parameters
-    ----------
-    store : Path
-        The run's complete store.
-    rid : str
-        Run id (the report names its store /runs/<id>/store).
-    lidar : str or turbgen.virtual_lidar.description.LidarDescription
-        A lidar preset name, or a lidar a client described (never a path).
-    tmp : Path
-        The file to write.
+    ``lidar`` is a preset name or a LidarDescription a client gave (never a path); the report names its store
+    /runs/<id>/store.
     """
     from turbgen.virtual_lidar.report import lidar_report
     from turbgen.store import open_store

@@ -1,5 +1,5 @@
 """The field itself, as the run's page shows it: small products read from a complete store, made on first request and
-cached under the run's directory (turbgen.service.derived.cached_product).
+cached (turbgen.service.derived.cached_product).
 
 - ``series``: u, v, w time series at one (y, z) point of one plane (JSON; every ``step``-th sample of a record longer
   than :data:`MAX_SERIES_SAMPLES`);
@@ -21,22 +21,7 @@ COMPONENTS = ("u", "v", "w")
 
 
 def check_index(name: str, value: int, size: int) -> int:
-    """``value`` if it indexes an axis of ``size`` entries, else a ParameterError naming it and the range.
-
-    Parameters
-    ----------
-    name : str
-        The index's name (``plane``, ``y``, ``z``, ``t``).
-    value : int
-        The index.
-    size : int
-        Entries along the axis.
-
-    Returns
-    -------
-    int
-        ``value``.
-    """
+    """``value`` if it indexes an axis ``name`` of ``size`` entries, else a ParameterError naming it and the range."""
     if not 0 <= value < size:
         raise ParameterError(f"{name} = {value} is outside [0, {size - 1}]")
     return value
@@ -45,15 +30,8 @@ def check_index(name: str, value: int, size: int) -> int:
 def build_series(store: Path, plane: int, iy: int, iz: int, tmp: Path) -> None:
     """u, v, w at grid point (plane, iy, iz) of ``store`` as JSON into the new file ``tmp``.
 
-    Parameters
-    ----------
-    store : Path
-        A complete store.
-    plane, iy, iz : int
-        Plane, lateral and vertical index (checked by the caller).
-    tmp : Path
-        The file to write: ``x_m``, ``y_m``, ``z_m`` [m], ``dt_s`` [s] of the samples shown, ``step``, ``nt`` and
-        the lists ``u``, ``v``, ``w`` [m/s] (fluctuations, as stored).
+    The JSON holds ``x_m``, ``y_m``, ``z_m`` [m], ``dt_s`` [s] of the samples shown, ``step``, ``nt`` and the lists
+    ``u``, ``v``, ``w`` [m/s] (fluctuations, as stored). The indices are checked by the caller.
     """
     from turbgen.store import open_store
 
@@ -71,18 +49,7 @@ def build_series(store: Path, plane: int, iy: int, iz: int, tmp: Path) -> None:
 def build_snapshot(store: Path, component: str, plane: int, it: int, sigma: float | None, tmp: Path) -> None:
     """The yz image of ``component`` at time index ``it`` of plane ``plane`` as a PNG into the new file ``tmp``.
 
-    Parameters
-    ----------
-    store : Path
-        A complete store.
-    component : str
-        "u", "v" or "w".
-    plane, it : int
-        Plane and time index (checked by the caller).
-    sigma : float or None
-        The run's standard deviation of ``component`` [m/s] (colour scale +- 3 sigma); None: the frame's own.
-    tmp : Path
-        The file to write.
+    ``sigma`` is the run's standard deviation of ``component`` [m/s] (colour scale +- 3 sigma); None: the frame's own.
     """
     import matplotlib
 

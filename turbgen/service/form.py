@@ -147,18 +147,8 @@ def _field(model: str, key: str, spec: dict, grid: bool) -> Field:
 
 
 def form_fields(model: str) -> list[Field]:
-    """The fields of ``model``'s run form: every key of its run schema (and of its grid table) but
-    :data:`NOT_IN_FORM`, the preset and the range gates.
-
-    Parameters
-    ----------
-    model : str
-        "mann" or "kaimal".
-
-    Returns
-    -------
-    list of Field
-        In the order of :data:`GROUPS`, the schema's order within a group.
+    """The fields of ``model``'s run form: every key of its run schema and grid table but :data:`NOT_IN_FORM`, plus the
+    preset and the range gates; in the order of :data:`GROUPS`, the schema's order within a group.
     """
     props = load_schema(f"{model}-run")["properties"]
     fields = [Field("preset", "preset", "model", "choice", help=_PRESET_HELP, choices=tuple(sorted(BUILTIN_PRESETS)))]
@@ -181,17 +171,8 @@ def _label(key: str) -> str:
 def form_description(token_required: bool) -> dict:
     """What the page builds its form from (GET /form.json).
 
-    Parameters
-    ----------
-    token_required : bool
-        Whether the server needs a bearer token (the page then asks for it).
-
-    Returns
-    -------
-    dict
-        ``models`` (model -> list of fields as dicts, each with its command-line ``flag`` and the ``label`` its
-        range check names it by), ``groups`` and
-        ``token_required``.
+    ``models`` (model -> fields as dicts, each with its command-line ``flag`` and the ``label`` its range check names
+    it by), ``groups`` and ``token_required`` (the page then asks for the token).
     """
     models = {m: [asdict(f) | {"flag": f.flag, "label": _label(f.key)} for f in form_fields(m)] for m in MODELS}
     return {"models": models, "groups": list(GROUPS), "token_required": token_required}

@@ -33,25 +33,11 @@ def _numbers(field: Field, text: str, count: int | None, limit: int) -> list[flo
 
 
 def parse_value(field: Field, text: str):
-    """The value of ``field`` typed as ``text`` (already stripped, not empty), as the request body holds it.
+    """The value of ``field`` typed as ``text`` (stripped, not empty), as the request body holds it.
 
-    Parameters
-    ----------
-    field : Field
-        The form field.
-    text : str
-        What was typed.
-
-    Returns
-    -------
-    object
-        A number, a string, a bool, a list of numbers (``planes``, ``gates``: the gates' plane positions with the
-        rotor 0 first) or a list of upload ids (``constrain``); None for a frozen ``evo``.
-
-    Raises
-    ------
-    ParameterError
-        Naming the field, for text that is not of its kind.
+    A number, a string, a bool, a list of numbers (``planes``; ``gates``: their plane positions with the rotor 0
+    first), a list of upload ids (``constrain``) or None for a frozen ``evo``. ParameterError naming the field for
+    text not of its kind.
     """
     if field.kind == "evo" and text.lower() in ("frozen", "none"):
         return None
@@ -75,24 +61,9 @@ def parse_value(field: Field, text: str):
 def form_request(model: str, values: Mapping[str, str]) -> dict:
     """The request body, command and Python call of the form's ``values`` (field name -> text; empty: not given).
 
-    Parameters
-    ----------
-    model : str
-        "mann" or "kaimal".
-    values : Mapping
-        Field name -> the text typed (names that are no field of the model are refused).
-
-    Returns
-    -------
-    dict
-        ``body`` (for POST /runs), ``command`` (`turbgen <model> ...`, the uploads as ``FILE``) and ``python``
-        (``turbgen.<model>(...)``).
-
-    Raises
-    ------
-    ParameterError
-        For an unknown model or field, or a value not of its field's kind (a value out of range is refused by the
-        run's own checks, :func:`turbgen.service.run_ids.build_run`).
+    Returns ``body`` (for POST /runs), ``command`` (`turbgen <model> ...`, the uploads as ``FILE``) and ``python``
+    (``turbgen.<model>(...)``). ParameterError for an unknown model or field, or a value not of its field's kind (a
+    value out of range is refused by :func:`turbgen.service.run_ids.build_run`).
     """
     if model not in MODELS:
         raise ParameterError(f"model: {model!r} is not one of {', '.join(MODELS)}")

@@ -25,8 +25,8 @@ def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: 
             constraints: ConstraintRequest | None = None, energy_from_data: bool = False) -> dict:
     """Worker side: generate ``run`` into the store ``out`` by the CLI's library path; the run summary.
 
-    A shared part (a Mann stencil) is built one at a time per process, cached in ``stencil_cache``, which is
-    then trimmed to ``stencil_cache_bytes`` (least recently used entries evicted).
+    A Mann stencil is built one at a time per process, cached in ``stencil_cache``, which is then trimmed to
+    ``stencil_cache_bytes`` (least recently used entries evicted).
 
     Parameters
     ----------
@@ -37,13 +37,13 @@ def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: 
     out : str
         Store path.
     stencil_cache : str
-        Directory of cached shared parts.
+        Directory of cached stencils.
     stencil_cache_bytes : int, optional
         Size cap of ``stencil_cache`` [bytes] (None: no cap).
     constraints : ConstraintRequest, optional
-        Condition the (Mann) field on these files, as ``turbgen mann --constrain`` (it builds its own stencil).
+        Condition the (Mann) field on these files, as ``turbgen mann --constrain``.
     energy_from_data : bool
-        With ``constraints``: ae is estimated from the data (the request gave no energy level).
+        With ``constraints``: ae is estimated from the data.
 
     Returns
     -------
@@ -53,8 +53,7 @@ def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: 
     Raises
     ------
     TurbgenError
-        Whatever the model's generator raises (e.g. StoreError, ParameterError); the job records it as
-        the run's failure.
+        Whatever the model's generator raises; the job records it as the run's failure.
     """
     from turbgen.runs.models import get_model
 
@@ -129,7 +128,7 @@ class Jobs:
         self.computations = 0  # runs handed to dask since start (duplicates are joined, not counted)
 
     def submit(self, rid: str, model: str, run, preset: str | None = None, constraints: dict | None = None) -> str:
-        """'complete' (already in the catalog), 'joined' (queued/running) or 'queued' (new computation).
+        """Submit run ``rid`` unless it is complete or active.
 
         Parameters
         ----------
@@ -142,12 +141,12 @@ class Jobs:
         preset : str, optional
             Preset label for listing.
         constraints : dict, optional
-            The run's constraint keys (turbgen.service.run_ids.constraint_keys: upload ids).
+            The run's constraint keys (upload ids, :func:`turbgen.service.run_ids.constraint_keys`).
 
         Returns
         -------
         str
-            "complete", "joined" or "queued".
+            "complete" (already in the catalog), "joined" (queued or running) or "queued" (a new computation).
 
         Raises
         ------
@@ -203,46 +202,21 @@ class Jobs:
                     del self.active[rid]
 
     def is_active(self, rid: str) -> bool:
-        """True while run ``rid`` is queued or running here.
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        bool
-        """
+        """True while run ``rid`` is queued or running here."""
         with self.lock:
             return rid in self.active
 
     def cancel(self, rid: str) -> None:
-        """Forget run ``rid`` and cancel its future (nothing if it is not active).
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        None
-        """
+        """Forget run ``rid`` and cancel its future (nothing if it is not active)."""
         with self.lock:
             fut = self.active.pop(rid, None)
         if fut is not None:
             fut.cancel()
 
     def resume(self) -> list[str]:
-        """Re-queue recorded runs that are neither complete nor failed (after a crash or kill -9).
+        """Re-queue recorded runs that are neither complete nor failed (after a crash or kill -9); their ids.
 
         A run whose request cannot be read back is marked failed, never retried blindly.
-
-        Returns
-        -------
-        list of str
-            Ids of the re-queued runs.
         """
         requeued = []
         for rid in self.catalog.ids():

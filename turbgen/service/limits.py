@@ -40,17 +40,7 @@ class LimitError(Exception):
 
 
 def is_loopback(host: str) -> bool:
-    """True for localhost and loopback addresses (127.0.0.0/8, ::1).
-
-    Parameters
-    ----------
-    host : str
-        Host name or IP address.
-
-    Returns
-    -------
-    bool
-    """
+    """True for localhost and loopback addresses (127.0.0.0/8, ::1)."""
     if host == "localhost":
         return True
     try:
@@ -60,24 +50,10 @@ def is_loopback(host: str) -> bool:
 
 
 def read_token(path) -> str:
-    """The bearer token in ``path`` (first line, stripped); ValueError if it is empty or too short.
+    """The bearer token in the file ``path`` (first line, stripped).
 
-    Parameters
-    ----------
-    path : str or path-like
-        The token file.
-
-    Returns
-    -------
-    str
-        The token (at least 16 characters).
-
-    Raises
-    ------
-    ValueError
-        If the token is shorter than 16 characters.
-    ParameterError
-        If the file cannot be read, is not a regular file or is larger than 4 KiB (turbgen.input_files).
+    Raises ValueError if it is shorter than 16 characters, ParameterError if the file cannot be read, is not a regular
+    file or is larger than 4 KiB (turbgen.input_files).
     """
     lines = read_input_text(path, TOKEN).splitlines()
     token = lines[0].strip() if lines else ""
@@ -87,23 +63,9 @@ def read_token(path) -> str:
 
 
 def check_token(expected: str | None, authorization: str | None) -> None:
-    """LimitError 401 unless ``authorization`` is 'Bearer <expected>' (no token configured: open).
+    """LimitError 401 (with WWW-Authenticate: Bearer) unless ``authorization`` is 'Bearer <expected>'.
 
-    Parameters
-    ----------
-    expected : str or None
-        The server's token; None accepts every request.
-    authorization : str or None
-        The request's Authorization header.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    LimitError
-        Status 401 (with WWW-Authenticate: Bearer) for a missing or wrong token.
+    ``expected`` None (no token configured) accepts every request.
     """
     if expected is None:
         return
@@ -114,24 +76,9 @@ def check_token(expected: str | None, authorization: str | None) -> None:
 
 
 def run_memory_bytes(model: str, run) -> int:
-    """Memory [bytes] the run allocates (the runs/ estimates the CLI checks before allocating).
+    """Memory [bytes] the run allocates with the default threads (the runs/ estimate the CLI checks before allocating).
 
-    Parameters
-    ----------
-    model : str
-        Model name ("mann" or "kaimal").
-    run : MannRun or KaimalRun
-        The run.
-
-    Returns
-    -------
-    int
-        Estimated memory [bytes] with the default number of threads.
-
-    Raises
-    ------
-    ParameterError
-        For an unknown model.
+    Raises ParameterError for an unknown model.
     """
     from turbgen.resources import default_threads
     from turbgen.runs.models import get_model
@@ -140,26 +87,9 @@ def run_memory_bytes(model: str, run) -> int:
 
 
 def check_memory(model: str, run, budget_bytes: int) -> int:
-    """LimitError 413 naming the estimate, the budget and what to change when the run does not fit.
+    """The run's estimated memory [bytes]; LimitError 413 if it exceeds ``budget_bytes``.
 
-    Parameters
-    ----------
-    model : str
-        Model name ("mann" or "kaimal").
-    run : MannRun or KaimalRun
-        The run.
-    budget_bytes : int
-        The server's memory budget [bytes].
-
-    Returns
-    -------
-    int
-        The run's estimated memory [bytes].
-
-    Raises
-    ------
-    LimitError
-        Status 413 if the estimate exceeds ``budget_bytes``.
+    The message names the estimate, the budget and what to change.
     """
     from turbgen.runs.models import get_model
 
@@ -169,10 +99,11 @@ def check_memory(model: str, run, budget_bytes: int) -> int:
 
 
 def check_constrained_memory(run, files: list, constraints: dict, budget_bytes: int) -> int:
-    """The data of a constrained Mann ``run`` (the uploads' ``files``, its constraint keys ``constraints``) placed on
-    its grid (ParameterError for measurements off the field, all missing, ...), then LimitError 413 as
-    :func:`check_memory` when the run with its conditioning does not fit ``budget_bytes``; its estimated memory
-    [bytes]."""
+    """:func:`check_memory` for a constrained Mann ``run``: its data placed on its grid, then the estimate checked.
+
+    ``files`` are the uploads, ``constraints`` the run's constraint keys; ParameterError for measurements off the
+    field, all missing, ...
+    """
     from turbgen.resources import default_threads
     from turbgen.runs.constrain import constrained_memory_bytes, load_constraints, place
 
@@ -191,8 +122,9 @@ def _refuse_over_budget(need: int, budget_bytes: int, what: str, lower: str) -> 
 
 
 def check_json_depth(value, limit: int = MAX_JSON_DEPTH) -> None:
-    """LimitError 422 if ``value`` (parsed JSON) nests arrays/objects deeper than ``limit``, checked without
-    recursion: validating a deeper body recursed past Python's limit (a 60 KB body of 30000 nested arrays gave 500).
+    """LimitError 422 if ``value`` (parsed JSON) nests arrays/objects deeper than ``limit``.
+
+    Checked without recursion: validating a deeper body would recurse past Python's limit.
     """
     if nested_deeper_than(value, limit):
         raise LimitError(422, f"request body: arrays and objects nested deeper than {limit} levels")
@@ -219,10 +151,7 @@ class DerivedLimiter:
     def admit(self):
         """Count the request among those computing or queued for a derived product for the block's duration.
 
-        Raises
-        ------
-        LimitError
-            503 with Retry-After when ``running + waiting`` requests are admitted already.
+        Raises LimitError 503 with Retry-After when ``running + waiting`` requests are admitted already.
         """
         with self._lock:
             if self._admitted >= self.running + self.waiting:

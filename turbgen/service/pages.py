@@ -13,31 +13,13 @@ STATIC = Path(__file__).parent / "static"
 
 
 def static_files() -> frozenset:
-    """The names of the scripts and style sheets of the pages (turbgen/service/static, package data).
-
-    Returns
-    -------
-    frozenset of str
-        File names; no other name is served under /static/.
-    """
+    """The names of the scripts and style sheets of the pages: no other name is served under /static/."""
     return frozenset(p.name for p in STATIC.iterdir() if p.suffix in (".js", ".css"))
 
 
 def page_html(name: str, form: dict) -> str:
-    """The page ``name`` of turbgen/service/static with what its script builds from (GET /form.json) in it, so the
-    form is there once the page has loaded.
-
-    Parameters
-    ----------
-    name : str
-        "index.html" or "run.html".
-    form : dict
-        The form description (JSON-able).
-
-    Returns
-    -------
-    str
-        The HTML page.
+    """The page ``name`` ("index.html" or "run.html") with the ``form`` description (GET /form.json) in it, so the form
+    is there once the page has loaded.
     """
     data = json.dumps(form).replace("<", "\\u003c")  # no "</script>" can end the block early
     return (STATIC / name).read_text().replace("{form}", data)
@@ -60,18 +42,8 @@ web page is <a href="/">/</a>.</p>
 
 
 def api_docs_html(openapi: dict) -> str:
-    """The API reference at /docs, rendered on the server from the OpenAPI description (no script, nothing loaded
-    from another host: FastAPI's own /docs loads Swagger UI from a CDN and shows nothing offline).
-
-    Parameters
-    ----------
-    openapi : dict
-        The application's OpenAPI description (``app.openapi()``).
-
-    Returns
-    -------
-    str
-        The HTML page: per operation its method, path, description and parameters.
+    """The API reference at /docs, rendered from the ``openapi`` description: per operation its method, path,
+    description and parameters (no script and nothing from another host, unlike FastAPI's Swagger UI).
     """
     esc = html.escape
     parts = []

@@ -23,23 +23,11 @@ ENERGY_KEYS = ("ae", "sigma_u_m_s", "ti", "turb_class")  # a constrained request
 
 
 def build_run(body) -> tuple[str, object, dict]:
-    """(model, MannRun | KaimalRun, constraints) from a request body: {"model": ..., "preset": ..., <run config
-    keys>}.
+    """(model, MannRun | KaimalRun, constraint keys) from a request body {"model": ..., "preset": ..., <run config keys>}.
 
-    The run config keys are those of ``turbgen mann|kaimal --config`` (schemas/<model>-run.schema.json);
-    ``preset`` sets the stability keys as ``--preset`` does (at the body's U), given keys override it. A Mann
-    run's ``constrain`` names uploaded measurements by id (turbgen.service.uploads), not files.
-
-    Parameters
-    ----------
-    body : dict
-        The request's JSON object; ``model`` defaults to "mann".
-
-    Returns
-    -------
-    tuple of (str, MannRun or KaimalRun, dict)
-        The model name, the run and its constraint keys in canonical form (:func:`constraint_keys`; empty for an
-        unconstrained run).
+    The run config keys are those of ``turbgen mann|kaimal --config`` (schemas/<model>-run.schema.json); ``preset`` sets
+    the stability keys as ``--preset`` does (at the body's U), given keys override it. ``model`` defaults to "mann". A
+    Mann run's ``constrain`` names uploaded measurements by id (turbgen.service.uploads), not files.
 
     Raises
     ------
@@ -74,15 +62,12 @@ def build_run(body) -> tuple[str, object, dict]:
 
 
 def constraint_keys(mapping: dict) -> dict:
-    """The constraint keys of a run request in canonical form: ``constrain`` (upload ids), ``noise_m_s`` when given,
-    ``conditional_mean`` and ``energy_from_data`` (no energy level given: ae is estimated from the data as
-    ``turbgen mann --constrain`` does) when true; {} without constraints.
+    """The constraint keys of a run request in canonical form ({} without constraints).
 
-    Raises
-    ------
-    ParameterError
-        For an entry of ``constrain`` that is not an upload id (the server opens no path a client names), or the
-        checks of :func:`turbgen.spec.constraints.split_constraint_keys`.
+    ``constrain`` (upload ids), ``noise_m_s`` when given, ``conditional_mean`` and ``energy_from_data`` (ae estimated
+    from the data, as ``turbgen mann --constrain`` without an energy level) when true. ParameterError for a
+    ``constrain`` entry that is not an upload id (the server opens no path a client names) and the checks of
+    :func:`turbgen.spec.constraints.split_constraint_keys`.
     """
     request = split_constraint_keys({k: v for k, v in mapping.items() if k != "energy_from_data"})[1]
     if request is None:
@@ -106,20 +91,8 @@ def _model(name):
 
 
 def canonical_mapping(run, constraints: dict | None = None) -> dict:
-    """The run mapping that rebuilds ``run`` exactly: its parameters (seed included), its grid and the constraint
-    keys.
-
-    Parameters
-    ----------
-    run : MannRun or KaimalRun
-        The run.
-    constraints : dict, optional
-        Its constraint keys (:func:`constraint_keys`).
-
-    Returns
-    -------
-    dict
-        ``run.parameters()`` plus ``grid`` (store attribute form) and ``constraints``.
+    """The run mapping that rebuilds ``run`` exactly: ``run.parameters()`` (seed included), ``grid`` (store attribute
+    form) and the constraint keys ``constraints`` (:func:`constraint_keys`).
     """
     constraints = constraints or {}
     drop = ("ae", "ae_from") if constraints.get("energy_from_data") else ()  # the worker estimates it
@@ -128,24 +101,9 @@ def canonical_mapping(run, constraints: dict | None = None) -> dict:
 
 
 def run_from_canonical(model: str, mapping: dict):
-    """Inverse of :func:`canonical_mapping` (used to re-queue runs after a restart).
+    """Inverse of :func:`canonical_mapping`: (run, constraint keys), to re-queue runs after a restart.
 
-    Parameters
-    ----------
-    model : str
-        Model name.
-    mapping : dict
-        A canonical mapping.
-
-    Returns
-    -------
-    tuple of (MannRun or KaimalRun, dict)
-        The run and its constraint keys.
-
-    Raises
-    ------
-    ParameterError
-        For an unknown model, key or a value out of range.
+    Raises ParameterError for an unknown model, key or a value out of range.
     """
     constraints = constraint_keys({key: mapping[key] for key in SERVICE_KEYS if key in mapping})
     rest = {key: value for key, value in mapping.items() if key not in SERVICE_KEYS}
@@ -153,33 +111,11 @@ def run_from_canonical(model: str, mapping: dict):
 
 
 def run_id(model: str, mapping: dict) -> str:
-    """24 hex digits of SHA-256 over the canonical JSON of model, mapping and turbgen version.
-
-    Parameters
-    ----------
-    model : str
-        Model name.
-    mapping : dict
-        The canonical run mapping (:func:`canonical_mapping`).
-
-    Returns
-    -------
-    str
-    """
+    """24 hex digits of SHA-256 over the canonical JSON of ``model``, the canonical ``mapping`` and turbgen version."""
     text = json.dumps({"model": model, "run": mapping, "turbgen": __version__}, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
 def valid_id(text: str) -> bool:
-    """True for a well-formed run id (anything else is answered 404 before touching the disk).
-
-    Parameters
-    ----------
-    text : str
-        Candidate id.
-
-    Returns
-    -------
-    bool
-    """
+    """True for a well-formed run id (anything else is answered 404 before touching the disk)."""
     return bool(_ID.match(text))

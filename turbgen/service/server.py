@@ -6,20 +6,9 @@ from __future__ import annotations
 def service_cluster(workers: int):
     """The dask cluster of a server without --scheduler: ``workers`` threads of this process, no listening socket.
 
-    Threads, not processes: a killed server leaves no orphan worker writing into its root. The scheduler and the
-    workers talk over inproc://; dask starts an HTTP server on each (health, /json/identity.json, /metrics, which
-    answer without the server's Host check or token) and has no option to leave them off, so they are stopped
-    right after the start: the server then listens on its own port only.
-
-    Parameters
-    ----------
-    workers : int
-        Runs computed at once.
-
-    Returns
-    -------
-    distributed.LocalCluster
-        Started; close it.
+    Threads, not processes: a killed server leaves no orphan worker writing into its root. Dask starts an HTTP server
+    on each node (answering without the server's Host check or token) with no option to leave them off, so they are
+    stopped right after the start. Returns the started LocalCluster; close it.
     """
     from turbgen.runs.local_cluster import loopback_cluster
 
@@ -33,8 +22,7 @@ def service_cluster(workers: int):
 
 
 async def _stop_http_servers(cluster) -> None:
-    """Stop listening on the HTTP servers of the scheduler and the workers of the in-process ``cluster`` (on its
-    event loop; the nodes' own close stops them again, which does nothing)."""
+    """Stop the HTTP servers of the in-process ``cluster``'s nodes (on its event loop)."""
     for node in (cluster.scheduler, *cluster.workers.values()):
         server = getattr(node, "http_server", None)
         if server is not None:
@@ -42,26 +30,11 @@ async def _stop_http_servers(cluster) -> None:
 
 
 def listening_socket(host: str, port: int):
-    """A socket bound to ``host``:``port`` (as uvicorn binds: SO_REUSEADDR, the first address of ``host``), made
-    before anything else of the server, so that a port in use is refused before the catalog directory or the cluster
-    exist and before "listening on" is printed.
+    """A socket bound to ``host``:``port`` as uvicorn binds (SO_REUSEADDR, the first address of ``host``).
 
-    Parameters
-    ----------
-    host : str
-        Address to bind.
-    port : int
-        TCP port (0: a free one).
-
-    Returns
-    -------
-    socket.socket
-        Bound, not yet listening (uvicorn listens on it); close it if the server does not start.
-
-    Raises
-    ------
-    ParameterError
-        When the address cannot be bound (in use, not an address of this machine, a privileged port).
+    Made before anything else of the server, so a port in use is refused before the catalog or the cluster exist.
+    Returned bound, not listening; close it if the server does not start. ParameterError when the address cannot be
+    bound (in use, not an address of this machine, a privileged port).
     """
     import socket
 
@@ -84,17 +57,7 @@ def listening_socket(host: str, port: int):
 
 
 def run_server(app, sock, host: str) -> None:
-    """Serve ``app`` on the bound socket ``sock`` until interrupted (uvicorn with :func:`server_config`).
-
-    Parameters
-    ----------
-    app : fastapi.FastAPI
-        The application (:func:`turbgen.service.app.create_app`).
-    sock : socket.socket
-        The socket of :func:`listening_socket`.
-    host : str
-        Its address (for uvicorn's configuration).
-    """
+    """Serve ``app`` on the bound socket ``sock`` (address ``host``) until interrupted, with :func:`server_config`."""
     import uvicorn
 
     uvicorn.Server(server_config(app, host, sock.getsockname()[1])).run(sockets=[sock])
@@ -107,23 +70,11 @@ MAX_HEADER_BYTES = 16 * 1024  # an incomplete request head larger than this is r
 
 
 def header_timeout_protocol(header_timeout_s: float):
-    """uvicorn's h11 protocol with a deadline for the request head: a connection that has not sent a complete
-    request head ``header_timeout_s`` after it opened (or after its last response) is closed.
+    """uvicorn's h11 protocol class with a deadline [s] for the request head.
 
-    uvicorn has a keep-alive timeout but none for a connection that sends nothing or half a request head: those were
-    held for ever. The deadline is checked every ``header_timeout_s``: a
-    connection whose request is being answered is left alone, one idle or stuck in a head since the last check is
-    closed (so within one to two periods).
-
-    Parameters
-    ----------
-    header_timeout_s : float
-        The deadline [s].
-
-    Returns
-    -------
-    type
-        The protocol class for ``uvicorn.Config(http=...)``.
+    uvicorn has a keep-alive timeout but none for a connection that sends nothing or half a head. Checked every
+    ``header_timeout_s``: a connection being answered is left alone, one idle or stuck in a head since the last check
+    is closed (so within one to two periods).
     """
     from uvicorn.protocols.http.h11_impl import H11Protocol
 
@@ -153,22 +104,8 @@ def header_timeout_protocol(header_timeout_s: float):
 
 
 def server_config(app, host: str, port: int, *, header_timeout_s: float = HEADER_TIMEOUT_S):
-    """The uvicorn configuration of `turbgen serve`: the head deadline, keep-alive and connection limits.
-
-    Parameters
-    ----------
-    app : fastapi.FastAPI
-        The application.
-    host : str
-        Address to bind.
-    port : int
-        TCP port.
-    header_timeout_s : float, optional
-        Deadline for a request head [s] (:func:`header_timeout_protocol`).
-
-    Returns
-    -------
-    uvicorn.Config
+    """The ``uvicorn.Config`` of `turbgen serve`: head deadline [s] (:func:`header_timeout_protocol`), keep-alive and
+    connection limits.
     """
     import uvicorn
 

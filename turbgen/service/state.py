@@ -53,18 +53,9 @@ class ServiceSettings:
 
 @dataclass
 class ServiceState:
-    """The server's shared state: settings, catalog, job queue and per-key locks.
+    """The server's shared state: settings, catalog, job queue, the bound on derived computations and per-key locks.
 
-    Parameters
-    ----------
-    settings : ServiceSettings
-        The server's settings.
-    catalog : Catalog
-        The run directories.
-    jobs : Jobs
-        The run queue on dask.
-    limiter : DerivedLimiter, optional
-        The bound on derived computations (default: from the settings).
+    ``limiter`` defaults to one built from the settings.
     """
 
     settings: ServiceSettings
@@ -80,115 +71,42 @@ class ServiceState:
             self.limiter = DerivedLimiter(self.settings.derived_running, self.settings.derived_waiting)
 
     def generation(self, rid: str) -> int:
-        """How often run ``rid`` was deleted since start-up (a product computed across a change is not published).
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-
-        Returns
-        -------
-        int
-        """
+        """How often run ``rid`` was deleted since start-up (a product computed across a change is not published)."""
         with self._guard:
             return self._generations.get(rid, 0)
 
     def deleted(self, rid: str) -> None:
-        """Record that run ``rid`` is being deleted (call it holding ``lock_for(rid)``).
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-        """
+        """Record that run ``rid`` is being deleted (call it holding ``lock_for(rid)``)."""
         with self._guard:
             self._generations[rid] = self._generations.get(rid, 0) + 1
 
     def lock_for(self, key: str) -> threading.Lock:
-        """The lock of ``key`` (a run id, or a run's derived product such as ``<id>/validation``).
-
-        Parameters
-        ----------
-        key : str
-            Lock name.
-
-        Returns
-        -------
-        threading.Lock
-            The same lock for the same key, for the server's lifetime.
-        """
+        """The lock of ``key`` (a run id, or a product such as ``<id>/validation``), the same for the server's lifetime."""
         with self._guard:
             return self._locks.setdefault(key, threading.Lock())
 
 
 def get_state(request: Request) -> ServiceState:
-    """FastAPI dependency: the application's :class:`ServiceState`.
-
-    Parameters
-    ----------
-    request : fastapi.Request
-        The request.
-
-    Returns
-    -------
-    ServiceState
-    """
+    """FastAPI dependency: the application's :class:`ServiceState`."""
     return request.app.state.service
 
 
 def require_token(request: Request, state: ServiceState = Depends(get_state)) -> None:
     """FastAPI dependency: LimitError 401 unless the request carries the server's bearer token (if it has one).
 
-    Mutating requests need it, and so does a request that starts a computation (a derived product not cached
-    yet): reading what exists stays open, starting work does not.
-
-    Parameters
-    ----------
-    request : fastapi.Request
-        The request.
-    state : ServiceState
-        The server's state.
-
-    Raises
-    ------
-    LimitError
-        Status 401 for a missing or wrong token.
+    Mutating requests need it, and so does a request that starts a computation (a derived product not cached yet):
+    reading what exists stays open, starting work does not.
     """
     check_token(state.settings.token, request.headers.get("authorization"))
 
 
 def not_found() -> LimitError:
-    """The one 404 of the service (never says which of run or file is missing).
-
-    Returns
-    -------
-    LimitError
-        Status 404.
-    """
+    """The one 404 of the service (never says which of run or file is missing)."""
     return LimitError(404, "no such run or file")
 
 
 def complete_store(rid: str, state: ServiceState = Depends(get_state)) -> Path:
-    """FastAPI dependency: the store of run ``rid`` when it exists and is complete (404 otherwise).
-
-    Parameters
-    ----------
-    rid : str
-        Run id (path parameter).
-    state : ServiceState
-        The server's state.
-
-    Returns
-    -------
-    Path
-        The store's path on the server (never shown to clients).
-
-    Raises
-    ------
-    LimitError
-        Status 404.
-    """
+    """FastAPI dependency: the server path of run ``rid``'s store when it exists and is complete (LimitError 404 otherwise)."""
     if not state.catalog.exists(rid) or not state.catalog.is_complete(rid):
         raise not_found()
     return state.catalog.store_path(rid)

@@ -12,27 +12,11 @@ from turbgen.store.temporaries import temp_prefix
 
 
 def run_status(catalog: Catalog, jobs: Jobs, rid: str) -> dict:
-    """Id, model, parameters, grid, status (complete / running / queued / failed / interrupted), progress, and the
-    summary, validation verdict or error where there is one.
+    """The JSON-able status of the recorded run ``rid``.
 
-    Parameters
-    ----------
-    catalog : Catalog
-        The run directories.
-    jobs : Jobs
-        The run queue.
-    rid : str
-        A recorded run id.
-
-    Returns
-    -------
-    dict
-        The JSON-able status.
-
-    Raises
-    ------
-    OSError, ValueError, KeyError
-        When the run's request cannot be read.
+    Id, model, parameters, grid, status (complete / running / queued / failed / interrupted), progress, and the
+    summary, validation verdict or error where there is one. OSError, ValueError or KeyError when the run's request
+    cannot be read.
     """
     req = catalog.request(rid)
     grid = req["run"]["grid"]
@@ -74,21 +58,11 @@ _CLI_ADVICE = (
 
 
 def public_text(text: str, catalog: Catalog) -> str:
-    """An error message as clients see it: the server's paths as URLs or ``<server root>``, no advice about CLI options.
+    """A library message (a run's failure, a refused export) as clients see it.
 
-    Parameters
-    ----------
-    text : str
-        A message of the library (a run's failure, a refused export).
-    catalog : Catalog
-        The catalog (its root is the path hidden).
-
-    Returns
-    -------
-    str
-        ``ROOT/runs/<id>/store.zarr`` as ``/runs/<id>/store``, ``ROOT/runs/<id>`` as ``/runs/<id>``, an upload
-        ``ROOT/constraints/<id>.json`` as ``/constraints/<id>``, any other path
-        under the root as ``<server root>/...``, and the advice of :data:`_CLI_ADVICE` rewritten.
+    ``ROOT/runs/<id>/store.zarr`` becomes ``/runs/<id>/store``, ``ROOT/runs/<id>`` ``/runs/<id>``, an upload
+    ``/constraints/<id>``, any other path under the catalog's root ``<server root>/...``; the advice of
+    :data:`_CLI_ADVICE` is rewritten.
     """
     for root in dict.fromkeys((catalog.root, catalog.root.resolve())):
         runs = re.escape(str(root / "runs"))
@@ -115,16 +89,5 @@ def _has_temp(catalog: Catalog, rid: str) -> bool:
 
 
 def links(rid: str) -> dict:
-    """The URLs of a run's status and store.
-
-    Parameters
-    ----------
-    rid : str
-        Run id.
-
-    Returns
-    -------
-    dict
-        ``status_url`` and ``store_url``.
-    """
+    """The URLs of a run's status and store: ``status_url`` and ``store_url``."""
     return {"status_url": f"/runs/{rid}", "store_url": f"/runs/{rid}/store"}

@@ -1,14 +1,10 @@
 """Measurements uploaded to `turbgen serve` (``POST /constraints``) for runs conditioned on them.
 
-The server never opens a path a client names, so a constrained run cannot name its data files as
-``turbgen mann --constrain FILE`` does. Instead the client uploads the *content* of a point-series JSON file
-(schemas/constraints.schema.json) or of a line-of-sight CSV file (turbgen.virtual_lidar.los_csv), the server checks it as
-``--constrain`` would and keeps it as ``ROOT/constraints/<id>.json|.csv``, the id being 24 hex digits of the
-SHA-256 of the content (uploading the same bytes twice gives the same id). A run request then names the ids in
-``constrain``; they enter the run id, so two runs conditioned on different data never share one.
-
-Content that names further files is refused: a lidar given as a .toml/.json file (a CSV's ``lidar`` must be a
-preset), a ``mean_history``, a ``table:`` profile.
+The server never opens a path a client names, so the client uploads the *content* of a point-series JSON file
+(schemas/constraints.schema.json) or of a line-of-sight CSV file (turbgen.virtual_lidar.los_csv); the server checks it
+as ``--constrain`` would and keeps it as ``ROOT/constraints/<id>.json|.csv``, the id being 24 hex digits of the
+SHA-256 of the content. A run request names the ids in ``constrain``; they enter the run id. Content that names
+further files is refused (a lidar .toml/.json file, a ``mean_history``, a ``table:`` profile).
 """
 
 from __future__ import annotations
@@ -30,26 +26,14 @@ MAX_UPLOAD_BYTES = 16 * 2**20  # a 2048 s record of 4 beams x 10 gates at 1 Hz i
 
 
 class ConstraintUploads:
-    """The uploaded measurements of a server, ``root/constraints``.
-
-    Parameters
-    ----------
-    root : Path
-        The server's --root.
-    """
+    """The uploaded measurements of a server, ``root/constraints`` (``root``: the server's --root)."""
 
     def __init__(self, root: Path):
         self.dir = Path(root).absolute() / "constraints"
         self.dir.mkdir(parents=True, exist_ok=True)
 
     def path(self, cid: str) -> Path:
-        """The file of upload ``cid``.
-
-        Raises
-        ------
-        KeyError
-            If ``cid`` is not a well-formed id or was not uploaded.
-        """
+        """The file of upload ``cid``; KeyError if ``cid`` is not a well-formed id or was not uploaded."""
         if valid_id(cid):
             for suffix in SUFFIXES.values():
                 p = self.dir / f"{cid}{suffix}"
@@ -69,19 +53,10 @@ class ConstraintUploads:
         return out
 
     def add(self, media: str, data: bytes) -> tuple[str, dict, bool]:
-        """Check and keep an upload: (its id, :func:`describe` of it, whether it is new).
+        """Check and keep an upload of content type ``media`` (a key of SUFFIXES): (its id, :func:`describe` of it, whether
+        it is new).
 
-        Parameters
-        ----------
-        media : str
-            Its content type, a key of SUFFIXES.
-        data : bytes
-            The file's content.
-
-        Raises
-        ------
-        ParameterError
-            If the content is not a valid constraint file of that type, or names another file.
+        Raises ParameterError if ``data`` is not a valid constraint file of that type, or names another file.
         """
         cid = hashlib.sha256(data).hexdigest()[:24]
         try:
@@ -109,8 +84,9 @@ def describe(path: Path) -> dict:
 
 
 def _summary(data) -> dict:
-    """What an upload holds: ``kind`` ("point series" | "line of sight"), ``series`` (sensor components or beam
-    gates), ``values`` (not missing) and ``duration_s`` (first to last sample time [s])."""
+    """What an upload holds: ``kind`` ("point series" | "line of sight"), ``series`` (sensor components or beam gates),
+    ``values`` (not missing) and ``duration_s`` (first to last sample time [s]).
+    """
     from turbgen.spec.constraints import PointSeries
 
     if isinstance(data, PointSeries):
@@ -122,8 +98,7 @@ def _summary(data) -> dict:
 
 
 def _point_series(data: bytes, where: str):
-    """The PointSeries of a JSON upload (as a constraint file is checked); refused when its mean wind names a
-    file."""
+    """The PointSeries of a JSON upload, checked as a constraint file; refused when its mean wind names a file."""
     from turbgen.spec.constraints import point_series_from_mapping
 
     try:
@@ -138,8 +113,7 @@ def _point_series(data: bytes, where: str):
 
 
 def _line_of_sight(data: bytes, where: str):
-    """The LidarData of a line-of-sight CSV upload (as turbgen.virtual_lidar.los_csv reads a file); refused when its header
-    names a file (a lidar file, a mean history, a table profile)."""
+    """The LidarData of a line-of-sight CSV upload; refused when its header names a file."""
     from turbgen.virtual_lidar.description import PRESETS
     from turbgen.virtual_lidar.los_csv import los_record, parse_table
 

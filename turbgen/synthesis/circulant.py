@@ -1,37 +1,25 @@
 """2-D circulant embedding of a distance-only coherence on a regular yz grid (exact Veers synthesis).
 
-On a regular ny x nz grid (spacings dy, dz) a coherence that depends only on the distance r
-between two points is embedded in an My x Mz torus (wrapped lags min(i, M - i) h). The torus
-covariance is circulant, its eigenvalues are the 2-D FFT of the wrapped kernel, and
+A coherence depending only on the distance r is embedded in an My x Mz torus (wrapped lags min(i, M - i) h). The
+torus covariance is circulant, its eigenvalues the 2-D FFT of the wrapped kernel, and
 
     Z = FFT2(sqrt(lam / (My Mz)) xi)[:ny, :nz],   xi complex standard normal (E|xi|^2 = 1),
 
-has covariance E[Z Z^H] = C (and E[Z Z^T] = 0) exactly when every eigenvalue is >= 0
-(Dietrich & Newsam 1997). Cost O(M^2 log M) per frequency instead of the O(N^3) Cholesky.
+has E[Z Z^H] = C (and E[Z Z^T] = 0) exactly when every eigenvalue is >= 0 (Dietrich & Newsam 1997); O(M^2 log M)
+per frequency instead of O(N^3).
 
-The torus period follows the frequency. Where the kernel decays within a few grid lengths (high
-frequencies) it is wrapped as it is (classical embedding): M h >= max(2 (N - 1) h, 12 / (a kappa(f))) with
-kappa = sqrt((f/U)^2 + (0.12/Lc)^2), rounded up to an FFT-friendly size, shrunk to N - 1 + 17/(a kappa h) where
-the kernel is below exp(-17) = 4e-8 within a few points: wrapped lags then change C by less than 4e-8, below the
-float32 rounding of the torus scales every bin is sampled with (2^-24 = 6e-8 relative). Where it stays
-high over the grid (low frequencies) the kernel is first multiplied on the torus by a smooth cut-off,
-phi(l_y) phi(l_z), equal to 1 on every lag the grid holds (|l| <= (N - 1) h per axis) and falling to 0 at half
-the period through a C-infinity step (smooth periodization, Bachmayr, Graham, Nguyen & Scheichl 2020): C on the
-grid is unchanged, and the torus needs only M h >= 2 (N - 1) h + 5 / (a kappa) instead of 12 / (a kappa) (the
-largest multiple of the decay length needed on grids of 11-64 points was 4.6: 3-6 x fewer torus points per
-low-frequency bin). Both rules are empirical, so the eigenvalues are checked at run time: the torus is enlarged
-while any is negative beyond rounding; if that does not help, small grids fall back to a dense square root,
-large grids clip the negative eigenvalues and the clipping error (an upper bound on the covariance error at any
-lag) is reported -- never silently.
+The torus period follows the frequency. A kernel decaying within a few grid lengths (high frequencies) is wrapped as
+it is (:func:`torus_size`; wrapped lags below exp(-17) = 4e-8 are under the float32 rounding of the torus scales).
+One staying high over the grid is first multiplied by a smooth cut-off equal to 1 on every lag the grid holds and
+falling to 0 at half the period through a C-infinity step (smooth periodization, Bachmayr, Graham, Nguyen &
+Scheichl 2020): C on the grid is unchanged and the torus much smaller (:func:`smooth_torus_size`). Both rules are
+empirical, so the eigenvalues are checked at run time: the torus is enlarged while any is negative beyond
+rounding; then small grids fall back to a dense square root, large grids clip and report the clipping error (a
+bound on the covariance error at any lag), never silently.
 
-A coherence that stays high far beyond the grid (a small a_yz or a large Lc) would need a torus much larger
-than the grid (a_yz = 0.5 on a 5 x 5 grid: 3312 x 3312 points per frequency with the cut-off, 0.5 GB; a_yz = 0.01 with
-Lc = 10 km: terabytes). A torus of more than :func:`torus_cap` points (MAX_TORUS_POINTS, or 4 x the grid's
-minimal torus) is not built: a grid of at most CHOLESKY_MAX_POINTS points is sampled with a dense square root
-of C instead (:func:`dense_embedding`), and :func:`check_sampling_cost` refuses, before anything is allocated,
-what neither can do in reasonable time and memory. On such small grids a bin also takes the dense factor wherever
-it costs fewer operations than the bin's torus (:func:`dense_sampled`): a 5 x 5 grid with a_yz = 0.5 needs tori of
-up to 1440 x 1440 points below the cap, against a 25 x 25 factor.
+A torus of more than :func:`torus_cap` points is not built: grids of at most CHOLESKY_MAX_POINTS points take a
+dense square root of C (:func:`dense_embedding`), also wherever it is cheaper than the bin's torus
+(:func:`dense_sampled`), and :func:`check_sampling_cost` refuses up front what neither can do.
 """
 
 from __future__ import annotations
@@ -54,17 +42,14 @@ MAX_ENLARGE = 4
 CHOLESKY_MAX_POINTS = 2500
 # kernel values below exp(-17) ~ 4e-8 count as zero when sizing the torus (the torus scales are float32: 6e-8)
 CUTOFF_DECAYS = 17.0
-# decay lengths of the smooth cut-off's torus beyond twice the grid (torus_plan; 4.6 was the largest needed on square
-# grids, up to 6 on strongly anisotropic ones: embed then adds one decay length per step)
+# decay lengths of the smooth cut-off's torus beyond twice the grid (torus_plan; embed adds one per enlarging step)
 SMOOTH_DECAYS = 5.0
-# tori larger than this and than 4 x the grid's minimal torus (torus_cap) are not built (16 MiB of complex64 per
-# frequency and plane, up to FREQ_CHUNK = 32 frequencies at once per thread, and their FFTs): a dense factor instead
+# tori larger than this and than 4 x the grid's minimal torus (torus_cap) are not built: a dense factor instead
 MAX_TORUS_POINTS = 1 << 21
-# operations of one dense factor per N^3: eigh with eigenvectors and the product V sqrt(Lambda) V^T (its measured
-# cost relative to a Cholesky factor: benchmarks/README.md, "Measurements behind design choices")
+# operations of one dense factor per N^3: eigh with eigenvectors and the product V sqrt(Lambda) V^T
+# (benchmarks/README.md, "Measurements behind design choices")
 DENSE_OPS_PER_N3 = 4.0
-# at most this many floating-point operations for the dense factors of one component (the grids accepted when the
-# factors were Cholesky's N^3 / 3 at 1e11 operations)
+# at most this many floating-point operations for the dense factors of one component
 MAX_DENSE_FLOPS = 1.2e12
 
 
@@ -76,9 +61,8 @@ def fft_size(n: int) -> int:
 def torus_size(n: int, h_m: float, decay_length_m: float) -> int:
     """Torus period M (points) for n points spaced h and a kernel <= exp(-r / decay_length).
 
-    M h >= max(2 (n - 1) h, 12 decay_length) (non-negative eigenvalues at low frequencies), except
-    that a kernel below exp(-CUTOFF_DECAYS) beyond (M - n + 1) h -- fast decay at high frequencies --
-    needs only M >= n - 1 + CUTOFF_DECAYS decay / h: wrapped lags then change C by < exp(-17) = 4e-8.
+    M h >= max(2 (n - 1) h, 12 decay_length) (non-negative eigenvalues at low frequencies), except that a kernel below
+    exp(-CUTOFF_DECAYS) beyond (M - n + 1) h needs only M >= n - 1 + CUTOFF_DECAYS decay / h.
     """
     if n == 1:
         return 1
@@ -90,10 +74,7 @@ def torus_size(n: int, h_m: float, decay_length_m: float) -> int:
 
 @functools.lru_cache(maxsize=16)
 def wrapped_distance(ny: int, nz: int, dy_m: float, dz_m: float, my: int, mz: int) -> np.ndarray:
-    """Distance [m] of every torus point (my x mz) from the origin, with wrapped lags min(i, M - i).
-
-    Cached (consecutive frequency bins share torus shapes); the array is read-only.
-    """
+    """Read-only distance [m] of every torus point (my x mz) from the origin, wrapped lags min(i, M - i) (cached)."""
     iy = np.arange(my)
     iz = np.arange(mz)
     ly = np.minimum(iy, my - iy) * dy_m
@@ -151,9 +132,9 @@ def grid_distances(ny: int, nz: int, dy_m: float, dz_m: float) -> np.ndarray:
 class Embedding:
     """Sampler of one correlation matrix C on the ny x nz grid.
 
-    Either circulant (``scale`` = sqrt(lam/(My Mz)) on the torus, ``chol`` None) or dense: ``chol`` (N x N) a
-    square root F of C (F F^T = C: its principal square root, see dense_embedding). ``clip_error`` bounds the absolute
-    covariance error left by clipped negative eigenvalues (0 when the embedding is exact).
+    Circulant (``scale`` = sqrt(lam/(My Mz)) on the torus, ``chol`` None) or dense (``chol`` the principal square root
+    of C, :func:`dense_embedding`). ``clip_error`` bounds the absolute covariance error left by clipped negative
+    eigenvalues (0 when exact).
     """
 
     ny: int
@@ -172,9 +153,9 @@ class Embedding:
                transforms=None) -> np.ndarray:  # fmt: skip
         """Map standard complex normals xi (..., *torus_shape) to coefficients (..., ny, nz) with covariance C.
 
-        ``overwrite``: xi (C-contiguous) may be used as the work array (its values are destroyed and the
-        result may be a view of it): no temporaries of the torus size, the same values. ``transforms``: the
-        one-shot transforms of an FFT backend (turbgen.fft.oneshot; default: the current backend's).
+        ``overwrite``: xi (C-contiguous) may serve as the work array (destroyed; the result may be a view of it), the
+        same values without temporaries. ``transforms``: an FFT backend's one-shot transforms (default: the current
+        backend's).
         """
         if self.chol is not None:
             z = np.einsum("ij,...j->...i", self.chol.astype(xi.real.dtype), xi[..., 0])
@@ -195,10 +176,9 @@ def torus_cap(ny: int, nz: int) -> int:
 
 
 def dense_is_cheaper(n_points: int, torus_points: int) -> bool:
-    """Whether a dense square root of a bin's n x n C costs fewer floating-point operations than its torus of
-    ``torus_points`` points M: the factor (DENSE_OPS_PER_N3 n^3) and one sample (~4 n^2), against the torus's eigenvalue FFT and
-    one sample's FFT (~5 M log2(M) each). True on small grids where the coherence needs a torus much larger than the
-    grid (e.g. 5 x 5 points with a_yz = 0.5: tori of up to 1440 x 1440 points)."""
+    """Whether a dense square root of a bin's n x n C costs fewer operations than its torus of ``torus_points`` points
+    M: DENSE_OPS_PER_N3 n^3 + 4 n^2 against ~10 M log2(M) for the eigenvalue and sample FFTs.
+    """
     m = max(int(torus_points), 2)
     return DENSE_OPS_PER_N3 * n_points**3 + 4.0 * n_points**2 <= 10.0 * m * math.log2(m)
 
@@ -214,23 +194,19 @@ def dense_sampled(ny: int, nz: int, torus_points: int, when_cheaper: bool = True
 
 
 def dense_embedding(kernel, ny: int, nz: int, dy_m: float, dz_m: float, enlarged: int = 0) -> Embedding:
-    """Sampler of C_ab = kernel(r_ab) with a dense square root F of C (F F^T = C): its principal square root
-    V sqrt(max(Lambda, 0)) V^T (turbgen.synthesis.square_root: unique, so the same on every CPU, also where rounding
-    leaves C numerically semi-definite, a coherence near 1 across the grid), with the clipped part's spectral norm
-    max|Lambda_neg| (a bound on the covariance error of every pair) as clip_error.
+    """Sampler of C_ab = kernel(r_ab) with its principal square root V sqrt(max(Lambda, 0)) V^T (turbgen.synthesis.
+    square_root: unique, so the same on every CPU, also where rounding leaves C semi-definite), with the clipped part's
+    spectral norm max|Lambda_neg| as clip_error.
     """
     root, clipped = principal_sqrt(kernel(grid_distances(ny, nz, dy_m, dz_m)))
     return Embedding(ny, nz, None, root, clipped, enlarged)
 
 
 def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m, what: str) -> list[int]:
-    """The torus points (My Mz) of every frequency; refuse (ParameterError) a coherence whose tori exceed
-    :func:`torus_cap` on a grid too large for dense factors (more than CHOLESKY_MAX_POINTS points, or more than
-    MAX_DENSE_FLOPS for all of them).
+    """The torus points (My Mz) at every frequency of decay length ``decay_lengths_m`` [m].
 
-    ``decay_lengths_m``: the decay length [m] at every frequency (:func:`embed`'s ``decay_length_m``); ``what``
-    names the coherence and its parameters for the message. Frequencies whose torus exceeds the cap get a dense
-    factor (:func:`embed`).
+    ParameterError (naming ``what``, the coherence and its parameters) for tori over :func:`torus_cap` on a grid too
+    large for dense factors (more than CHOLESKY_MAX_POINTS points, or more than MAX_DENSE_FLOPS for all of them).
     """
     n = ny * nz
     cap = torus_cap(ny, nz)
@@ -250,10 +226,10 @@ def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_length
 
 def embed_many(kernels, ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m,
                dense_when_cheaper: bool = True) -> list[Embedding]:
-    """:func:`embed` of every kernel with its decay length, the same embeddings bit for bit (tested), with one
-    batched FFT per run of consecutive kernels on the same torus: ~2x less CPU on the default Kaimal field's 2048
-    bins, where the per-call overhead of tori of 35-60 points per axis dominates. Kernels whose torus needs
-    enlarging, or that are sampled with a dense factor, go through :func:`embed` itself."""
+    """:func:`embed` of every kernel with its decay length, the same embeddings bit for bit, with one batched FFT per
+    run of consecutive kernels on the same torus (the per-call overhead dominates on small tori). Kernels whose torus
+    needs enlarging, or that are sampled densely, go through :func:`embed` itself.
+    """
     plans = [torus_plan(ny, nz, dy_m, dz_m, d) for d in decay_lengths_m]
     out: list[Embedding | None] = [None] * len(plans)
     i = 0
@@ -286,11 +262,9 @@ def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: fl
           dense_when_cheaper: bool = True) -> Embedding:
     """Embedding of C_ab = kernel(r_ab) (kernel(0) = 1, a function of distance in m).
 
-    decay_length_m : the kernel is <= exp(-r / decay_length_m) (IEC: 1/(a kappa)) [m]; inf for a
-    constant kernel. It sets the initial torus (:func:`torus_plan`: classical, or with the smooth cut-off). A
-    torus of more than :func:`torus_cap` points, or (``dense_when_cheaper``) one costing more than a dense factor
-    (:func:`dense_sampled`), is replaced by :func:`dense_embedding` (grids of at most CHOLESKY_MAX_POINTS points;
-    :func:`check_sampling_cost` refuses the others up front when their torus exceeds the cap).
+    The kernel is <= exp(-r / ``decay_length_m``) [m] (IEC: 1/(a kappa); inf for a constant kernel), which sets the
+    initial torus (:func:`torus_plan`). Tori over :func:`torus_cap`, or (``dense_when_cheaper``) costlier than a dense
+    factor, are replaced by :func:`dense_embedding` (:func:`dense_sampled`).
     """
     my, mz, smooth = torus_plan(ny, nz, dy_m, dz_m, decay_length_m)
     cap = torus_cap(ny, nz)

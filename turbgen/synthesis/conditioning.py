@@ -51,12 +51,11 @@ from turbgen.synthesis.mann_stencil import MannStencil
 from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_weight
 
 CG_TOLERANCE = 1e-10  # relative residual |S x - r| / |r| at which the conjugate gradients stop
-# the full Table 3 lidar record on the default grid with 20 % of its samples missing at random needs ~1200 (the
-# circulant preconditioner knows nothing of the gaps); an iteration costs two FFTs of the streams and M x M products
+# a bound on the conjugate gradients (the circulant preconditioner knows nothing of the gaps); an iteration costs
+# two FFTs of the streams and M x M products
 CG_MAX_ITERATIONS = 5000
-# missing fraction above which conjugate gradients start from the precision-matrix solve (solve, _gap_start): the
-# default lidar record with its last far gates missing (0.7 %) converges in ~60 iterations without it, ~560 with it;
-# with 20 % missing at random ~1200 without it, ~550 with it
+# missing fraction above which conjugate gradients start from the precision-matrix solve (solve, _gap_start): it
+# halves the iterations of many scattered gaps and costs iterations for a few
 GAP_START_FRACTION = 1 / 16
 SINGULAR_RTOL = 1e-11  # eigenvalue / largest eigenvalue of S_i below which zero-noise measurements are dependent
 
@@ -438,22 +437,8 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
                       progress=None) -> np.ndarray:  # fmt: skip
     """The per-frequency matrices S_j (nt/q, M, M) complex128 [m^2 s^-2 times nt] of the block-circulant S.
 
-    Parameters
-    ----------
-    stencil : MannStencil
-        The run's stencil (with coefficients; with 1/tau_e for several evolving planes).
-    streams : Streams
-        The measurement streams.
-    times_s : array_like
-        The relative time x/U [s] of every plane of the run (storage order).
-    noise_var : array_like, (M,)
-        Measurement-noise variance sigma_a^2 [m^2 s^-2] of each stream (R = diag).
-    Notes
-    -----
-    L_i[a, b] as a sum over the streams' nodes of the lag covariances G_i of the prior between their planes (one
-    inverse 2-D DFT per distinct plane-time lag and basis input: direction pair or Phi's component, _Basis;
-    turbgen.synthesis.conditioning_kernels), which equals the sum over term pairs of the module docstring grouped by
-    node.
+    ``stencil`` with coefficients (and 1/tau_e for several evolving planes); ``times_s`` the relative time x/U [s] of
+    every plane (storage order); ``noise_var`` (M,) the measurement-noise variances sigma_a^2 [m^2 s^-2] (R = diag).
     """
     box = stencil.box
     nt, q, m = box.nt, streams.decimation, streams.n_streams
@@ -641,9 +626,8 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
 def _gap_start(inverse: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, int]:
     """An approximation of S_oo^-1 r through the precision matrix T = S^-1 of the full streams (circulant: ``inverse``
     per frequency): S_oo^-1 = T_oo - T_om T_mm^-1 T_mo (the Schur complement; o observed, m missing samples), the
-    T_mm system solved by Jacobi-preconditioned conjugate gradients to 1e-12. T is far better conditioned on
-    scattered gaps than S on the observed samples (the default lidar record with 20 % missing at random: ~540
-    iterations of one circulant product against ~1200 of two). Returns (x, iterations)."""
+    T_mm system solved by Jacobi-preconditioned conjugate gradients to 1e-12 (T is far better conditioned on
+    scattered gaps than S on the observed samples). Returns (x, iterations)."""
     missing = ~observed
     n = r.shape[1]
     weights = np.full(inverse.shape[0], 2.0)  # T's diagonal per stream: the mean of (S_j^-1)_aa over all j
@@ -705,28 +689,13 @@ def _conjugate_gradients(apply, precondition, b: np.ndarray, x: np.ndarray,
 def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
                       nz: int, threads: int = 1) -> Iterator[tuple[range, np.ndarray]]:  # fmt: skip
     """The yz-transformed, cropped spectra of C H^T w on the planes ``planes_out``, group of slabs by group: yields
-    (slabs, block (P_out, 3, len(slabs), ny, nz) complex64), ``threads`` groups computed at once (the result does
-    not depend on it; see :func:`correction_spectra` for all of them at once).
+    (slabs, block (P_out, 3, len(slabs), ny, nz) complex64), ``threads`` groups computed at once (the result does not
+    depend on it; :func:`correction_spectra` gathers them).
 
-    Parameters
-    ----------
-    weights : numpy.ndarray, (M, nt/q)
-        w, one value per stream sample (e.g. S^-1 (d - H u_s - eps_s)).
-    times_s : array_like
-        Relative time x/U [s] of every plane of the run.
-    planes_out : sequence of int
-        The plane indices wanted.
-    threads : int
-        Slab groups computed at once.
-
-    Notes
-    -----
-    Per slab: H^T w in the (k2, k3) spectrum of each measured plane q, F_q = sum_(a on q) W_a(i) conj(A_i[a]) (W the
-    FFT of the weights at full rate; the forward 2-D DFT of the terms' amplitudes scattered on the grid), then
-    sum_q rho_pq F_q, multiplied by Phi, the inverse 2-D FFT and the crop. The sum over q runs as the
-    Ornstein-Uhlenbeck recursion along the planes in time order (rho_pq is the product of the factors between
-    neighbouring planes), forwards and backwards. The real inverse FFT along time is left to spectra_field (it keeps
-    only the real part of the k1 = 0 / Nyquist slabs).
+    ``weights`` (M, nt/q) are w, one value per stream sample (e.g. S^-1 (d - H u_s - eps_s)); ``times_s`` the relative
+    time x/U [s] of every plane. Per slab, F_q = sum_(a on q) W_a(i) conj(A_i[a]) on each measured plane q (W the FFT
+    of the weights at full rate), then sum_q rho_pq F_q by the Ornstein-Uhlenbeck recursion forwards and backwards,
+    times Phi, the inverse 2-D FFT and the crop. The real inverse FFT along time is left to spectra_field.
     """
     box, backend = stencil.box, fft.backend()  # resolved once: every workspace with the same backend
     times = np.asarray(times_s, dtype=float)

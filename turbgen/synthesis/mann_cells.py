@@ -3,7 +3,7 @@
 Cell-averaged tensor near the k1 axis (Mann 1998: the point value Phi(k) dk is a poor estimate of
 the cell integral where Phi varies within a cell). On the k1 axis Phi33 = E(k0) / (4 pi k1^2) with
 k0 -> Gamma a / L finite, so with dk1 << dk2, dk3 (long boxes) the point rule puts far too much
-energy in the cells (k1, 0, 0): sigma_w^2 of the default paper box came out 76 % above the model.
+energy in the cells (k1, 0, 0).
 Cells with |k2| <= CELL_RADIUS dk2, |k3| <= CELL_RADIUS dk3 and |k1| <= CELL_K1_FACTOR max(dk2, dk3)
 use a square root of the cell-averaged tensor instead (tensor-product Gauss rules, graded towards
 the k1 axis down to the scale |k1|). turbgen.validation.mann_lattice integrates these cells with its own

@@ -86,15 +86,8 @@ def slab_factors(params: MannParams, box: BoxShape, i0: int, i1: int, out, inv_t
 
 
 def energy_scale(params: MannParams) -> float:
-    """The factor a / e = sqrt(ae L^(17/3) / (4 pi)) of the von Karman amplitude (Mann 1998, Eq. 46).
-
-    Parameters
-    ----------
-    params : ae [m^(4/3) s^-2] and length_scale_m [m] are used.
-
-    Returns
-    -------
-    float : [m^(7/2) s^-1] float64; the only place where ae enters the stencil's coefficients.
+    """The factor a / e = sqrt(ae L^(17/3) / (4 pi)) [m^(7/2) s^-1] of the von Karman amplitude (Mann 1998, Eq. 46), from
+    ``params``' ae and length scale: the only place where ae enters the stencil's coefficients.
     """
     return np.sqrt(params.ae * params.length_scale_m ** (17.0 / 3.0) / (4.0 * np.pi))
 

@@ -35,8 +35,7 @@ from turbgen.synthesis.random_streams import complex_normal
 COMPONENTS = ("u", "v", "w")
 SLAB_BATCH = 4  # k1 slabs per work unit (fixed: it fixes the FFT plan shapes, hence the rounding)
 # slabs per task: SLAB_BATCH-slab units in turn, a stencil computed on demand for all of them at once (its
-# elementwise coefficients do not depend on the batch; per 4 slabs its ~10 numpy and compiled calls per batch, with
-# two threads contending for the GIL, cost noticeably more CPU)
+# elementwise coefficients do not depend on the batch; fewer, larger calls hold the GIL less)
 TASK_SLABS = 4 * SLAB_BATCH
 ROW_BLOCK = 64  # (y, z) rows per real inverse FFT along k1
 _ALIGN = 64

@@ -1,24 +1,17 @@
 """The Mann (1998) synthesis stencil of one parameter set and grid: C(k) and 1/tau_e(k), stored compactly.
 
-The box is (xi, y, z) with xi along the mean wind; the real FFT is taken along xi (= the time
-axis of a plane, dx = U dt), so the half spectrum holds slabs k1 >= 0 of shape (nyp, nzp).
-Time reversal: a plane sees the frozen box u(xi = -U t) (Taylor: u(X, T) = u_box(X - U T)), so
-the stored slab of FFT frequency index i holds the physical wavenumber k1 = -i dk1.
+The box, its half spectrum of k1 slabs and the sign of the stored k1: turbgen.synthesis.box_shape.
 
-Compact factor. With a = sqrt(E(k0)/(4 pi))/k0^2, m = k2 n0 - k1 n1 and C = D A (Mann 1998
-Eq. 46-47; turbgen.theory.mann_tensor.tensor_factor) the product u_hat = C n reads
+Compact factor. With a = sqrt(E(k0)/(4 pi))/k0^2, m = k2 n0 - k1 n1 and C = D A (Mann 1998 Eq. 46-47;
+turbgen.theory.mann_tensor.tensor_factor) the product u_hat = C n reads
     u_hat_u = P n1 - (A k2) n2 + Z1 m,   u_hat_v = -P n0 + (A k1) n2 + Z2 m,   u_hat_w = W m
-with A = a, P = a k30, Z1 = a zeta1, Z2 = a zeta2, all times sqrt(dk1 dk2 dk3 / 2) (the noise has
-E|n|^2 = 2), and W = a k0^2/k^2 = (A^2 q + P^2) / (A k^2), q = k1^2 + k2^2, rebuilt when used
-(k0^2 = q + k30^2, k30 = P/A). Under k2 -> -k2 the coefficients A, P, Z1 are even and Z2 is odd,
-so only rows k2 >= 0 are stored: 4 float32 numbers per (k1 >= 0, k2 >= 0, k3), i.e. 1/4 of the
-full 8-entry float32 factor on the whole half spectrum.
+with A = a, P = a k30, Z1 = a zeta1, Z2 = a zeta2, all times sqrt(dk1 dk2 dk3 / 2) (E|n|^2 = 2), and
+W = a k0^2/k^2 = (A^2 q + P^2) / (A k^2), q = k1^2 + k2^2, rebuilt when used. A, P, Z1 are even and Z2 odd under
+k2 -> -k2, so only rows k2 >= 0 are stored: 4 float32 numbers per (k1 >= 0, k2 >= 0, k3).
 
-One object, one build function: ``build_stencil(params, box, energy=..., storage=..., slabs=...)`` makes a
-MannStencil whose energy is "scaled" (the float32 coefficients above, for ae) or "unit" (the float64 ae-free factors
-(e, k30, c1, c2), which serve every ae bit-identically through :meth:`MannStencil.scaled`; Mann.rs and hipersim
-likewise build for ae = 1 and scale), stored in memory, computed on demand slab batch by slab batch (one snapshot),
-or for some slabs only (out-of-core parts). No I/O here: turbgen.runs.stencil_cache keeps unit stencils on disk.
+``build_stencil`` makes a MannStencil whose energy is "scaled" (the float32 coefficients for ae) or "unit" (the
+float64 ae-free factors (e, k30, c1, c2), serving every ae bit-identically through :meth:`MannStencil.scaled`),
+stored in memory, computed on demand, or for some slabs only. No I/O here (turbgen.runs.stencil_cache).
 """
 
 from __future__ import annotations
@@ -47,17 +40,13 @@ _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0
 class MannStencil:
     """The stencil of ``params`` on ``box``; make it with :func:`build_stencil`.
 
-    ``energy`` "scaled": ``coef`` (4, slabs, nyp//2+1, nzp) float32 holds (A, P, Z1, Z2) for params.ae, or is None
-    (storage "on_demand": computed slab batch by slab batch when used, :meth:`coefficients`: the same numbers, for a
-    single snapshot, which uses each slab once); ``cell_index`` (ncell, 3) int (slab, row, column), sorted by slab,
-    and ``cell_factor`` (ncell, 3, 3) float32 (times sqrt(dk1 dk2 dk3 / 2)) are the cell-averaged factors near the
-    k1 axis, which replace the compact factor at those points.
-    ``energy`` "unit": ``coef`` (4, slabs, nyp//2+1, nzp) float64 holds the ae-free factors (e, k30, c1, c2) of
-    slab_factors, ``params`` carry ae = 1 and there are no axis cells (their eigen-decomposition is not linear in
-    ae to the last bit): :meth:`scaled` makes the stencil of any ae from it.
-    ``inv_tau`` = 1/tau_e [1/s] float32 on the same points (None if frozen or built with evolving=False: then it
-    serves single snapshots only; it does not depend on ae). ``slab0``: coef and inv_tau hold slabs slab0 ..
-    slab0 + coef.shape[1] (a part of the box: out-of-core runs).
+    ``energy`` "scaled": ``coef`` (4, slabs, nyp//2+1, nzp) float32 holds (A, P, Z1, Z2) for params.ae, or None
+    (computed on demand, :meth:`coefficients`); ``cell_index`` (ncell, 3) (slab, row, column), sorted by slab, and
+    ``cell_factor`` (ncell, 3, 3) float32 are the cell-averaged factors near the k1 axis, replacing the compact factor
+    there. ``energy`` "unit": ``coef`` float64 holds the ae-free factors of slab_factors, ``params`` carry ae = 1 and
+    there are no axis cells (their eigen-decomposition is not linear in ae to the last bit). ``inv_tau`` = 1/tau_e
+    [1/s] float32 on the same points (None: frozen or built non-evolving, single snapshots only). ``slab0``: the first
+    slab coef and inv_tau hold (a part of the box: out-of-core runs).
     """
 
     params: MannParams
@@ -75,12 +64,11 @@ class MannStencil:
         return self.slab0, self.box.nk1 if self.coef is None else self.slab0 + self.coef.shape[1]
 
     def coefficients(self, i0: int, i1: int, scratch: np.ndarray | None = None) -> tuple[np.ndarray, int]:
-        """(A, P, Z1, Z2) of slabs [i0, i1): an array (4, slabs, nyp//2+1, nzp) float32 holding them and the index of
-        slab i0 in it.
+        """(A, P, Z1, Z2) of slabs [i0, i1): an array (4, slabs, nyp//2+1, nzp) float32 holding them and slab i0's index
+        in it.
 
-        ``coef`` itself, or, for a stencil computed on demand, ``scratch`` (4, >= i1 - i0, nyp//2+1, nzp) float32
-        with slabs [i0, i1) computed into its first slabs by the operations build_stencil uses (the same numbers,
-        whatever the batch). A unit stencil has none: scale it first (:meth:`scaled`).
+        ``coef`` itself or, on demand, ``scratch`` with the slabs computed by the operations build_stencil uses (the
+        same numbers whatever the batch). ValueError for a unit stencil (scale it first).
         """
         if self.energy != "scaled":
             raise ValueError("a unit stencil has no coefficients: use its scaled(params)")
@@ -97,15 +85,10 @@ class MannStencil:
     def scaled(self, params: MannParams) -> "MannStencil":
         """The stencil of ``params`` (ae [m^(4/3) s^-2] included) in memory.
 
-        A unit stencil: its factors times the energy by the float64 operations a direct build applies
-        (apply_energy), then rounded to float32, so the result equals build_stencil(params, box) bit for bit
-        (sharing inv_tau); the axis cells are computed for ``params``. A scaled stencil: itself, if built for
-        ``params``.
-
-        Raises
-        ------
-        ValueError
-            If ``params`` differ from those of the stencil in more than ae (a scaled stencil: at all).
+        From a unit stencil: its factors times the energy by the float64 operations of a direct build (apply_energy),
+        rounded to float32, so equal to build_stencil(params, box) bit for bit (sharing inv_tau); the axis cells
+        computed for ``params``. A scaled stencil returns itself. ValueError if ``params`` differ in more than ae
+        (scaled: at all).
         """
         if self.energy == "scaled":
             if params != self.params:
@@ -136,9 +119,9 @@ def synthesis_box(run) -> BoxShape:
 
 
 def stencil_nbytes(box: BoxShape, with_tau: bool, energy: str = "scaled") -> int:
-    """Bytes [B] held by the stencil of ``box`` stored in memory (for memory estimates before building it): four
-    float32 coefficients ("scaled") or float64 factors ("unit") per stored point, and float32 1/tau_e if
-    ``with_tau``."""
+    """Bytes [B] of the stencil of ``box`` in memory: four float32 coefficients ("scaled") or float64 factors ("unit")
+    per stored point, and float32 1/tau_e if ``with_tau``.
+    """
     per = box.nk1 * box.nk2_half * box.nzp
     return per * ((16 if energy == "scaled" else 32) + (4 if with_tau else 0))
 
@@ -176,9 +159,9 @@ def build_step(box: BoxShape) -> int:
 
 
 def slab_batches(box: BoxShape, first: int, end: int, batch, side=None):
-    """Call ``batch(i0, i1)`` on the building batches cut to [first, end), on all cores; return ``side()``
-    (None if not given), a task run in the same pool alongside the batches (the axis cells: mostly Python, so
-    it overlaps the batches, which leave the GIL in compiled loops and numpy)."""
+    """Call ``batch(i0, i1)`` on the building batches cut to [first, end) on all cores; return ``side()`` (None if not
+    given), run in the same pool alongside (the axis cells: mostly Python, overlapping the GIL-free batches).
+    """
     step = build_step(box)
 
     def one(i0: int) -> None:  # independent slab batches: threads only change who computes which
@@ -232,40 +215,33 @@ def build_stencil(
     cells=None,
     factors: np.ndarray | None = None,
 ) -> MannStencil:
-    """The stencil of ``params`` on ``box`` (computed; turbgen.runs.stencil_cache keeps unit stencils on disk).
+    """The stencil of ``params`` on ``box``.
 
     Parameters
     ----------
     params : MannParams
-        Mann parameters; ae [m^(4/3) s^-2] is ignored for a unit stencil (which carries ae = 1).
+        Mann parameters; ae [m^(4/3) s^-2] is ignored for a unit stencil.
     box : BoxShape
         The synthesis box.
     energy : {"scaled", "unit"}
-        "scaled": the float32 coefficients of ``params``' ae with the axis cells; "unit": the ae-free float64
-        factors, for every ae through MannStencil.scaled (bit-identical to a direct build; twice the bytes).
+        "scaled": float32 coefficients for ``params``' ae with the axis cells; "unit": the ae-free float64 factors, for
+        every ae through MannStencil.scaled (twice the bytes).
     storage : {"memory", "on_demand"}
-        "on_demand" (scaled only, the whole box, implies evolving=False): only the axis cells are computed now, the
-        coefficients when a generator uses them (MannStencil.coefficients), so a single snapshot never holds the
-        stencil's bytes, nor writes and reads them back.
+        "on_demand" (scaled, whole box, implies evolving=False): only the axis cells now, the coefficients when used.
     evolving : bool
-        False skips 1/tau_e (1/6 of a scaled stencil's memory): enough for a single snapshot (one plane).
+        False skips 1/tau_e: enough for a single snapshot.
     slabs : (int, int), optional
-        (first, end): only those k1 slabs (the same numbers as those slabs of the whole stencil: every point is
-        computed by the same elementwise operations).
+        (first, end): only those k1 slabs, the same numbers as in the whole stencil.
     cells : (numpy.ndarray, numpy.ndarray), optional
-        (cell_index, cell_factor) of axis_cells, to compute them once for many parts (scaled only).
+        (cell_index, cell_factor) of axis_cells, computed once for many parts (scaled only).
     factors : numpy.ndarray, optional
-        A float64 array (4, slabs, nyp//2+1, nzp) to hold a unit stencil's factors (e.g. a memory-mapped file).
-
-    Returns
-    -------
-    MannStencil
+        A float64 array (4, slabs, nyp//2+1, nzp) to hold a unit stencil's factors.
 
     Raises
     ------
     ValueError
-        For an unknown ``energy`` or ``storage``, an on-demand stencil of a unit energy or of some slabs only, or
-        ``factors`` of the wrong shape or type.
+        For an unknown ``energy`` or ``storage``, an on-demand stencil that is unit or partial, or ``factors`` of the
+        wrong shape or type.
     """
     if energy not in ENERGIES or storage not in STORAGES:
         raise ValueError(f"energy must be one of {ENERGIES} and storage one of {STORAGES} (got {energy}, {storage})")

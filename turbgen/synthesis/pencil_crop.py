@@ -8,18 +8,10 @@ import numba
 
 @numba.njit(nogil=True, cache=True)
 def crop_into_pencils(uhat, ny, nz, spectra, j0):
-    """spectra[c, y nz + z, j0 + j] = uhat[j, c, y, z] for y < ny, z < nz (the cropped spectra of b slabs).
+    """spectra[c, y nz + z, j0 + j] = uhat[j, c, y, z] for y < ny, z < nz: the cropped spectra of b slabs.
 
-    Parameters
-    ----------
-    uhat : ndarray, complex64 (b, 3, nyp, nzp)
-        The yz-transformed slabs [m/s].
-    ny, nz : int
-        Kept rows and columns.
-    spectra : ndarray, complex64 (3, ny nz, >= j0 + b)
-        The pencils along k1 [m/s].
-    j0 : int
-        Pencil index of the first slab.
+    ``uhat`` complex64 (b, 3, nyp, nzp) the yz-transformed slabs [m/s]; ``spectra`` complex64 (3, ny nz, >= j0 + b) the
+    pencils along k1; ``j0`` the pencil index of the first slab.
     """
     b = uhat.shape[0]
     for c in range(3):

@@ -28,20 +28,8 @@ def slab_weight(stencil: MannStencil, i: int) -> float:
 
 
 def slab_spectrum(stencil: MannStencil, i: int) -> np.ndarray:
-    """Phi_i = E[u_hat u_hat^H] = 2 C C^T of slab ``i``, (3, 3, nyp, nzp) float64 [m^2 s^-2].
-
-    Parameters
-    ----------
-    stencil : MannStencil
-        A scaled stencil (energy "scaled"; stored or computed on demand).
-    i : int
-        Slab index (FFT index along the time axis), 0 <= i <= nt // 2.
-
-    Returns
-    -------
-    numpy.ndarray
-        The spectral matrix per (k2, k3) point in FFT order, from the stencil's float32 coefficients and axis-cell
-        factors (mann_oracle.slab_factor).
+    """Phi_i = E[u_hat u_hat^H] = 2 C C^T of slab ``i`` (0 <= i <= nt // 2), (3, 3, nyp, nzp) float64 [m^2 s^-2] in FFT
+    order, from a scaled stencil's float32 coefficients and axis-cell factors (mann_oracle.slab_factor).
     """
     c = slab_factor(stencil, i)
     return 2.0 * np.einsum("ikyz,jkyz->ijyz", c, c)

@@ -29,35 +29,18 @@ def slab_key(seed: int, snapshot: int, slab: int) -> tuple[int, int, int]:
 
 
 def complex_normal(seed: int, snapshot: int, slab: int, out: np.ndarray) -> np.ndarray:
-    """Fill complex64 ``out`` (C-contiguous, any shape) with standard complex normals of one Mann slab.
-
-    Real and imaginary parts are independent N(0, 1) (so E|n|^2 = 2), drawn from the stream
-    keyed by (seed, snapshot, slab); components/rows follow in C order of ``out``.
+    """Fill complex64 ``out`` (C-contiguous, any shape) with the standard complex normals of Mann slab
+    (seed, snapshot, slab) (:func:`keyed_complex_normal`).
     """
     return keyed_complex_normal(slab_key(seed, snapshot, slab), out)
 
 
 def keyed_complex_normal(key: tuple[int, ...], out: np.ndarray) -> np.ndarray:
-    """Fill complex64 ``out`` (C-contiguous, any shape) with standard complex normals of the stream ``key``.
+    """Fill complex64 ``out`` (C-contiguous, any shape) in C order with the standard complex normals of stream ``key``.
 
-    Parameters
-    ----------
-    key : tuple of int
-        Entropy of the stream (``SeedSequence(key)`` seeds numpy's SFC64 generator); any fixed tuple of
-        non-negative integers naming the stream, never a call counter.
-    out : numpy.ndarray
-        complex64, C-contiguous; filled in C order.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``out``, whose real and imaginary parts are independent N(0, 1) (E|n|^2 = 2): the values of
-        ``Generator(SFC64(SeedSequence(key))).standard_normal(2 * out.size, dtype=np.float32)`` in pairs.
-
-    Raises
-    ------
-    ValueError
-        If ``out`` is not C-contiguous complex64 or an entry of ``key`` is negative.
+    ``key`` is any fixed tuple of non-negative integers naming the stream, never a call counter. Real and imaginary
+    parts are independent N(0, 1) (E|n|^2 = 2), the values of the module docstring's formula. ValueError if ``out`` is
+    not C-contiguous complex64 or an entry of ``key`` is negative.
     """
     if out.dtype != np.complex64 or not out.flags.c_contiguous:
         layout = "C-contiguous" if out.flags.c_contiguous else "non-contiguous"

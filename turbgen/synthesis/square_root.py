@@ -15,19 +15,8 @@ import numpy as np
 
 
 def principal_sqrt(c: np.ndarray) -> tuple[np.ndarray, float]:
-    """Principal square roots of symmetric (..., n, n) matrices and the size of the negative part clipped.
-
-    Parameters
-    ----------
-    c : numpy.ndarray
-        Symmetric matrices (..., n, n), float64.
-
-    Returns
-    -------
-    root : numpy.ndarray
-        V sqrt(max(Lambda, 0)) V^T, symmetric, (..., n, n) float64; ``root @ root`` = C where C >= 0.
-    clipped : float
-        max |Lambda_neg| over all matrices: the spectral norm of C - root @ root (0 when every C >= 0).
+    """(root, clipped): principal square roots V sqrt(max(Lambda, 0)) V^T of symmetric float64 (..., n, n) matrices, and
+    max |Lambda_neg| over them (the spectral norm of C - root @ root; 0 when every C >= 0).
     """
     lam, vec = np.linalg.eigh(c)
     root = (vec * np.sqrt(np.clip(lam, 0.0, None))[..., None, :]) @ np.swapaxes(vec, -1, -2)

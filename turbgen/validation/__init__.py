@@ -4,13 +4,10 @@
     report = validate("mann.zarr", rotor_radius_m=63.0)
     report.passed, report.to_dict(), report.table(), report.plots("figs/")
 
-Modules: ``estimators`` (Welch estimates with dask over the store's chunks; the sums of one task in
-``span_sums``, compiled loops in ``welch_sums``), ``expectations`` (the model's prediction on the store's grid, for the
-``prediction.SamplingDesign`` of the estimates; split into ``kaimal_expectation``, ``mann_expectation``,
-``mann_lattice``, ``welch_kernel``, ``pair_sums``, ``store_run``), ``verdict`` (tolerances from the
-estimators' statistical uncertainty, pass/fail), ``report`` (terminal table, JSON, PNG plots). The theory
-and the verdict's expected estimates need only the sampling design, so ``validate`` computes them in a
-thread of their own while the store is read.
+``estimators`` reads the Welch estimates (dask over the store's chunks), ``expectations`` gives the model's
+prediction for their ``prediction.SamplingDesign``, ``verdict`` the tolerances and pass/fail, ``report`` the table,
+JSON and plots. The theory needs only the sampling design, so it is computed in a thread of its own while the
+store is read.
 """
 
 from __future__ import annotations
@@ -79,27 +76,22 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
     store : str, pathlib.Path or FieldStore
         The store.
     rotor_radius_m : float, optional
-        Rotor radius R [m] of the rotor-effective wind speed; None: 63 m, or the largest disc a smaller
-        grid holds (widened to the nearest grid points when it holds none).
+        Rotor radius R [m] of the rotor-effective wind speed; None: 63 m, or the largest disc a smaller grid holds.
     nperseg : int, optional
         Welch segment length [samples]; None: ``estimators.default_nperseg``.
     workers : int, optional
-        dask threads; None: the CPU count. With more than one, the theory is computed in a thread of
-        its own while the store is read (it needs only the estimates' sampling design), and the verdict
-        uses two threads.
+        dask threads; None: the CPU count. With more than one the theory is computed alongside the estimates.
 
     Returns
     -------
     ValidationReport
-        Estimates, predictions, metrics and timings [s]: ``estimate``, ``theory`` (the model, the expected
-        Welch estimates and their covariance; overlapping the estimates when computed alongside; ~0 when
-        kept from a store of this process that differs only in seed: ``theory_kept`` True), ``verdict``
-        and ``total`` (wall time of the validation).
+        Estimates, predictions, metrics and timings [s] (``estimate``, ``theory``, ``verdict``, ``total``;
+        ``theory_kept`` True when the theory was kept from a store of this process differing only in seed).
 
     Raises
     ------
     StoreError, ParameterError
-        On an unreadable store or bad input.
+        On an unreadable store, bad input, or a conditional-mean store (not a sample of the model).
     """
     fs = store if isinstance(store, FieldStore) else open_store(store)
     constraints = fs.attrs.get("constraints")
@@ -132,9 +124,9 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
 
 
 def _theory(fs, planned: Estimates) -> tuple[Theory, Expectations]:
-    """The model's predictions for the planned estimates, and the expected Welch estimates and covariances
-    the verdict compares them with (both need only the sampling design; ``planned`` is only read; kept for
-    stores differing only in seed by ``theory_cache``)."""
+    """The model's predictions for the planned estimates and the expected Welch estimates and covariances the verdict
+    compares them with (``planned`` is only read).
+    """
     th = theory_for(fs, SamplingDesign.of(planned))
     return th, expectations(planned, th)
 

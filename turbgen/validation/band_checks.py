@@ -1,7 +1,5 @@
-"""Statistics of band-pooled Welch estimates: Welch bins grouped into log-spaced bands, and the normal score
-of each band's spectrum (gamma law) and coherence (Goodman's and the Rice phase law) comparison.
-
-The derivations are in the module docstring of ``verdict``.
+"""Statistics of band-pooled Welch estimates: Welch bins grouped into log-spaced bands, and the normal score of each
+band's spectrum (gamma law) and coherence (Goodman's and the Rice phase law) comparison (``verdict`` explains).
 """
 
 from __future__ import annotations
@@ -20,20 +18,8 @@ NEAR_UNIT = 1e-3  # 1 - |rho|^2 below this: delta method with the float32 floor 
 
 
 def chi2_z(ratio, nu):
-    """Normal score of an observed ``ratio`` under ratio ~ chi2_nu / nu.
-
-    Parameters
-    ----------
-    ratio : array_like
-        Estimate / expectation [-].
-    nu : array_like
-        Degrees of freedom [-].
-
-    Returns
-    -------
-    numpy.ndarray
-        z [-] with the probability of the smaller tail (two-sided tails kept symmetric in probability).
-    """
+    """Normal score [-] of an observed ``ratio`` under ratio ~ chi2_nu / nu (two-sided tails symmetric in
+    probability)."""
     ratio, nu = np.asarray(ratio, float), np.asarray(nu, float)
     lower = chi2.logcdf(nu * ratio, nu)
     upper = chi2.logsf(nu * ratio, nu)
@@ -41,20 +27,9 @@ def chi2_z(ratio, nu):
 
 
 def coherence_stats(rho, n):
-    """Mean and sd of the coh2, cocoh and phase estimators from n independent samples (delta method).
-
-    Parameters
-    ----------
-    rho : array_like
-        Complex coherency [-].
-    n : array_like
-        Equivalent independent samples [-].
-
-    Returns
-    -------
-    dict
-        Arrays ``coh2_mean``, ``coh2_sd``, ``cocoh_mean``, ``cocoh_sd`` [-] and ``phase_sd`` [rad]; the sds
-        are kept above the float32 resolution COHERENCE_FLOOR.
+    """Mean and sd of the coh2, cocoh and phase estimators from ``n`` independent samples of coherency ``rho`` (delta
+    method): ``coh2_mean``, ``coh2_sd``, ``cocoh_mean``, ``cocoh_sd`` [-], ``phase_sd`` [rad], the sds kept above the
+    float32 resolution COHERENCE_FLOOR.
     """
     rho = np.asarray(rho, complex)
     n = np.asarray(n, float)
@@ -96,10 +71,8 @@ def coherence_stats(rho, n):
 class Bands:
     """Welch bins 1 .. n/2-1 grouped into log-spaced bands; band statistics from the Welch covariance.
 
-    ``cov``: covariance of the Welch estimate averaged over a point set, lag d -> Cov(P_m, P_{m+d})
-    (``welch_variance``, exact for the record's segments and the set's two-frequency correlation sum), or
-    the rule-of-thumb model E_m E_m' r_d sqrt(rho_m rho_m') / K_eff (r_d the Hann bin correlations
-    1, 4/9, 1/36, rho_m = rho_bar at bin m) when the exact sums are too long (very long records).
+    A covariance is a dict lag d -> Cov(P_m, P_{m+d}): exact (``welch_variance``), or for very long records the rule of
+    thumb E_m E_m' r_d sqrt(rho_m rho_m') / K_eff (r_d the Hann bin correlations 1, 4/9, 1/36).
     """
 
     def __init__(self, est: Estimates):
@@ -157,12 +130,9 @@ class Bands:
     def coherence_checks(self, label, cross, auto_a, auto_b, rho_lines, exp_auto, cov) -> list[Check]:
         """Exact-law tests of the band-pooled sample coherency C = sum_g cross / sqrt(sum_g A sum_g B).
 
-        Its expectation is rho_band = sum_g rho_m E_m / sum_g E_m (E_m the expected auto-spectrum of both
-        point sets), and it is treated as the sample coherency of n_band independent samples with
-        n_band = (sum_g E_m)^2 / Var(sum_g A) (the equivalent number of independent periodograms of the
-        pooled, point-averaged auto-spectrum, exact Welch covariance). |C|^2 then follows Goodman's law and
-        arg C - arg rho_band the Rice phase law (``distributions``). Near unit coherence (1 - |rho|^2 <
-        NEAR_UNIT) the delta method with the float32 floor is used instead (``coherence_stats``).
+        Its expectation is rho_band = sum_g rho_m E_m / sum_g E_m, and it is the sample coherency of
+        n_band = (sum_g E_m)^2 / Var(sum_g A) independent samples: |C|^2 follows Goodman's law, arg C - arg rho_band the
+        Rice phase law (``distributions``); near unit coherence (1 - |rho|^2 < NEAR_UNIT) the delta method.
         """
         gs = self.groups
         c = np.array([np.sum(cross[g]) for g in gs])

@@ -1,26 +1,18 @@
 """Exact null distributions of the sample coherence and phase (tails the delta method gets wrong).
 
-Setting (Goodman 1963; Carter, Knapp & Nuttall 1973, IEEE Trans. Audio Electroacoust. 21(4)):
-n independent pairs (x_i, y_i) of circular complex Gaussian amplitudes with unit variances and
-complex coherency rho (gamma2 = |rho|^2). The sample coherency is C = sum conj(x) y / sqrt(sum|x|^2
-sum|y|^2), the sample magnitude-squared coherence g = |C|^2 and the sample phase arg C.
+Setting (Goodman 1963; Carter, Knapp & Nuttall 1973): n independent pairs (x_i, y_i) of circular complex Gaussian
+amplitudes with unit variances and complex coherency rho (gamma2 = |rho|^2); sample coherency
+C = sum conj(x) y / sqrt(sum|x|^2 sum|y|^2), magnitude-squared coherence g = |C|^2, phase arg C.
 
-Derivation used here (exact for integer n, and the natural extension to a real equivalent number
-of samples, Welch/Carter "equivalent degrees of freedom"): write y = beta x + e with
-|beta|^2 = gamma2, e ~ CN(0, 1 - gamma2) independent of x. Conditional on x, the regression of y on
-x splits sum|y|^2 into a regression part |beta |x| + e'|^2 (e' ~ CN(0, 1 - gamma2)) and an
-independent residual (1 - gamma2) chi2_{2(n-1)} / 2. Hence, with Q = 2 sum|x|^2 ~ chi2_{2n},
+Write y = beta x + e with |beta|^2 = gamma2, e ~ CN(0, 1 - gamma2). Conditional on Q = 2 sum|x|^2 ~ chi2_{2n}
+(exact for integer n, extended to a real equivalent number of samples):
 
     (n - 1) g / (1 - g) | Q  ~  F'(2, 2(n - 1); lambda = gamma2 Q / (1 - gamma2))   (noncentral F)
-    arg C - arg rho | Q      ~  phase of a + e', Rice SNR kappa = a^2 / E|e'|^2 = gamma2 Q / (2 (1 - gamma2)).
+    arg C - arg rho | Q      ~  Rice phase law with kappa = gamma2 Q / (2 (1 - gamma2)).
 
-The unconditional laws are the expectation over Q, computed with Gauss-Hermite nodes in the
-normal score of Q (so the extreme quantiles of Q that drive 1e-6 tails are sampled). At
-gamma2 = 0 the coherence law reduces to Beta(1, n - 1), the phase to the uniform law; as
-n gamma2 grows both approach the delta-method normal laws of ``band_checks.coherence_stats``.
-
-Tail probabilities are returned one-sided and turned into normal scores by ``normal_score``
-so they plug into the Bonferroni rule of ``verdict`` unchanged.
+The unconditional laws average over Q with Gauss-Hermite nodes in the normal score of Q (so the extreme quantiles
+driving 1e-6 tails are sampled). One-sided tails become normal scores (:func:`normal_score`) for the Bonferroni
+rule of ``verdict``.
 """
 
 from __future__ import annotations
@@ -53,21 +45,10 @@ def _q_nodes(n):
 
 
 def coh2_tails(g, gamma2, n):
-    """Tail probabilities of the sample magnitude-squared coherence G from n independent samples.
+    """(P(G <= g), P(G >= g)) of the sample magnitude-squared coherence G from n independent samples.
 
-    Parameters
-    ----------
-    g : array_like
-        Observed sample coherence [-], in [0, 1).
-    gamma2 : array_like
-        True magnitude-squared coherence [-], in [0, 1).
-    n : array_like
-        Equivalent number of independent samples (> 1, real). Arrays broadcast.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        (P(G <= g), P(G >= g)).
+    ``g`` observed [-] in [0, 1), ``gamma2`` true coherence [-] in [0, 1), ``n`` equivalent number of independent
+    samples (> 1, real); arrays broadcast.
     """
     g, gamma2, n = np.broadcast_arrays(*(np.asarray(a, float) for a in (g, gamma2, n)))
     g = np.clip(g, 0.0, 1.0 - 1e-15)
@@ -86,32 +67,17 @@ def coh2_tails(g, gamma2, n):
 
 
 def coh2_moments(gamma2, n):
-    """Mean and standard deviation of the sample magnitude-squared coherence G from n independent samples.
+    """(E G, sd G) [-] of the sample magnitude-squared coherence from n independent samples (arguments as
+    :func:`coh2_tails`).
 
-    G is a mixture of Beta(1 + j, n - 1) laws with j negative binomial, P(j) = (n)_j / j! gamma2^j
-    (1 - gamma2)^n (the hypergeometric series of Goodman's density; Carter, Knapp & Nuttall 1973), so
-    E[1 - G] = (n - 1) E1 and E[(1 - G)^2] = n (n - 1) (E1 - E2) with E1 = E[1 / (n + j)] and
-    E2 = E[1 / (n + j + 1)]. Through the generating function E[t^j] = ((1 - gamma2) / (1 - gamma2 t))^n
-    and u = (1 - gamma2) t / (1 - gamma2 t),
+    G is a mixture of Beta(1 + j, n - 1) laws with j negative binomial (Carter, Knapp & Nuttall 1973), so
+    E[1 - G] = (n - 1) E1 and E[(1 - G)^2] = n (n - 1) (E1 - E2), E1 = E[1 / (n + j)], E2 = E[1 / (n + j + 1)]. With
+    u = (1 - gamma2) t / (1 - gamma2 t) in the generating function,
 
         E1 = (1 - gamma2) int_0^1 u^(n-1) / d(u) du,   E1 - E2 = (1 - gamma2)^2 int_0^1 u^(n-1) (1 - u) / d(u)^2 du,
 
-    d(u) = 1 - gamma2 + gamma2 u; u = exp(-v / n) makes both Gauss-Laguerre integrals of smooth functions
-    (no hypergeometric function near its singular point, no cancellation; 1e-9 relative against
-    high-precision quadrature for n in [1.5, 1000], gamma2 in [0, 0.999]). E G = 1/n at gamma2 = 0
-    (Beta(1, n - 1)) and E G - gamma2 ~ (1 - gamma2)^2 / n for large n.
-
-    Parameters
-    ----------
-    gamma2 : array_like
-        True magnitude-squared coherence [-], in [0, 1).
-    n : array_like
-        Equivalent number of independent samples (> 1, real). Arrays broadcast.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        (E G, sd G) [-].
+    d(u) = 1 - gamma2 + gamma2 u; u = exp(-v / n) makes both smooth Gauss-Laguerre integrals (1e-9 relative for n in
+    [1.5, 1000], gamma2 in [0, 0.999]).
     """
     gamma2, n = np.broadcast_arrays(*(np.asarray(a, float) for a in (gamma2, n)))
     c, nn = gamma2[..., None], n[..., None]
@@ -149,8 +115,9 @@ def _rice_phase_pdf(phi, kappa):
 
 
 def _rice_phase_sf(t, kappa):
-    """P(|arg(a + e)| >= t), t in [0, pi]: 2 x the integral of the density over [t, pi], in two pieces
-    (the first a few standard deviations 1/sqrt(2 kappa) wide, where the tail mass sits)."""
+    """P(|arg(a + e)| >= t), t in [0, pi]: twice the density's integral over [t, pi], in two Gauss-Legendre pieces (the
+    first a few standard deviations 1/sqrt(2 kappa) wide, where the tail mass sits).
+    """
     t = np.asarray(t, float)
     width = np.minimum(np.pi - t, 10.0 / np.sqrt(2.0 * np.maximum(kappa, 1e-12)))
     total = 0.0
@@ -186,21 +153,19 @@ def coh2_z(g, gamma2, n):
 
 def phase_z(dphi, gamma2, n):
     """Signed normal score [-] of a phase deviation ``dphi`` [rad] (wrapped): sign(dphi) z with
-    P(|error| >= |dphi|) = 2 Phi(-z) under (gamma2, n) (:func:`phase_sf`)."""
+    P(|error| >= |dphi|) = 2 Phi(-z) under (gamma2, n) (:func:`phase_sf`).
+    """
     wrapped = (np.asarray(dphi, float) + np.pi) % (2.0 * np.pi) - np.pi
     return np.sign(wrapped) * norm.isf(np.maximum(phase_sf(dphi, gamma2, n), 1e-300) / 2.0)
 
 
 def cospectrum_tails(x, c, n):
-    """(P(X <= x), P(X >= x)) of the sample co-coherence X = Re sum conj(u_i) w_i / n of n independent
-    circular Gaussian pairs with unit variances and real coherency c (|c| < 1), E X = c.
+    """(P(X <= x), P(X >= x)) of the sample co-coherence X = Re sum conj(u_i) w_i / n of n independent circular
+    Gaussian pairs with unit variances and real coherency c (|c| < 1).
 
-    Re(conj(u) w) = (|u + w|^2 - |u - w|^2) / 4 with u + w, u - w independent (real c, equal variances),
-    so X = (a G1 - b G2) / n, G1, G2 ~ Gamma(n, 1) independent, a = (1 + c) / 2, b = (1 - c) / 2 (a
-    variance-gamma law, Var X = (1 + c^2) / (2 n)). Its tails are exponential, not Gaussian: with few
-    equivalent samples a normal z overstates a large co-spectrum deviation. Conditional on G2 the
-    probability is a regularised incomplete gamma function; G2 is integrated with Gauss-Hermite nodes
-    in its normal score.
+    X = (a G1 - b G2) / n with G1, G2 ~ Gamma(n, 1) independent, a = (1 + c) / 2, b = (1 - c) / 2 (a variance-gamma
+    law): its tails are exponential, so a normal z overstates a large deviation with few samples. Conditional on G2
+    the probability is a regularised incomplete gamma function; G2 is integrated with Gauss-Hermite nodes.
     """
     x, c, n = np.broadcast_arrays(*(np.asarray(v, float) for v in (x, c, n)))
     a, b = (1.0 + c) / 2.0, (1.0 - c) / 2.0

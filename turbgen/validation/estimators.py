@@ -1,23 +1,15 @@
 """Welch estimates from a field store, computed with dask over the store's time chunks.
 
-The field is never loaded whole. One task reads one plane over one *span* (a run of whole time
-chunks, ~4 Welch segments long; each chunk is decompressed exactly once) and returns small
-sums; the sums of all tasks are added up. Welch segments (Hann window, 50 % overlap, mean
-removed per segment) lie inside one span, so the segments straddling two spans are not used
-(the estimates say how many segments they averaged; the tolerances use that number).
+The field is never loaded whole: one task reads one plane over one *span* (whole time chunks, ~4 Welch segments,
+each chunk decompressed once) and returns small sums, which are added up. Welch segments (Hann window, 50 % overlap,
+mean removed per segment) lie inside one span; those straddling two spans are not used (the estimates count the
+segments averaged and the tolerances use that count).
 
-Estimated quantities (one-sided, [m^2 s^-2 Hz^-1] unless stated):
-* per-point record mean and variance of u, v, w (variance about the point's own record mean,
-  averaged over all points and planes);
-* one-point auto-spectra of u, v, w and the u-w cross-spectrum, averaged over segments, all
-  grid points and all planes;
-* yz cross-spectra of u, v, w for separations (a, b) grid steps (lateral, vertical): the sum of
-  conj(X(y, z)) X(y + a dy, z + b dz) over all pairs inside the grid, with the auto-spectra of
-  the two point sets; coherences follow in ``verdict``/``report`` as |C|^2 / (A B), Re C / sqrt(A B);
-* longitudinal cross-spectra of u between every pair of planes (same y, z, same stored time t,
-  i.e. in the convected frame of the store) on a sub-lattice of at most ~16 x 16 points;
-* the rotor-effective wind speed series of each plane (mean of u over the points within the
-  rotor radius, Guo et al. 2023, Eq. 23 on the grid) and its Welch spectrum averaged over planes.
+Estimated (one-sided, [m^2 s^-2 Hz^-1] unless stated): per-point mean and variance of u, v, w; one-point
+auto-spectra and the u-w cross-spectrum averaged over segments, points and planes; yz cross-spectra for separations
+(a, b) grid steps with the auto-spectra of both point sets; longitudinal cross-spectra of u between every pair of
+planes (same y, z and stored time, the convected frame) on a sub-lattice of at most ~16 x 16 points; the
+rotor-effective wind speed of each plane (Guo et al. 2023, Eq. 23 on the grid) and its Welch spectrum.
 """
 
 from __future__ import annotations
@@ -105,15 +97,8 @@ class WelchSetup:
 def default_nperseg(nt: int) -> int:
     """Default Welch segment length [samples] of a record of ``nt`` samples.
 
-    Returns
-    -------
-    int
-        The largest power of two <= nt / 8 (about 15 half-overlapping segments), within [32, MAX_NPERSEG].
-
-    Raises
-    ------
-    ParameterError
-        If nt < 4 MIN_NPERSEG.
+    The largest power of two <= nt / 8 (about 15 half-overlapping segments), within [32, MAX_NPERSEG]; ParameterError
+    if nt < 4 MIN_NPERSEG.
     """
     if nt < 4 * MIN_NPERSEG:
         raise ParameterError(f"nt = {nt} is too short to validate (needs >= {4 * MIN_NPERSEG} time steps)")
@@ -223,23 +208,9 @@ def _plane_pairs(subs: list[np.ndarray]) -> np.ndarray:
 
 
 def welch_series(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, int, int]:
-    """One-sided Welch PSD of the series ``x`` averaged over its columns (Welch 1967).
+    """One-sided Welch PSD (Welch 1967) of the (nt, m) series ``x`` [m/s], averaged over segments and columns.
 
-    Parameters
-    ----------
-    x : numpy.ndarray
-        (nt, m) series [m/s], one per column.
-    setup : WelchSetup
-        Segment length, dt [s], Hann window.
-
-    Returns
-    -------
-    psd : numpy.ndarray
-        (nperseg // 2 + 1,) one-sided PSD [m^2 s^-2 Hz^-1], averaged over segments and columns.
-    segments : int
-        Segments per column.
-    overlapping_pairs : int
-        Pairs of consecutive half-overlapping segments per column.
+    Returns (psd (nperseg // 2 + 1,) [m^2 s^-2 Hz^-1], segments per column, overlapping segment pairs per column).
     """
     starts = segment_starts(x.shape[0], setup)
     w = setup.window[:, None]
@@ -279,13 +250,12 @@ def plan_estimates(fs, *, rotor_radius_m: float | None = None, nperseg: int | No
     nperseg : int, optional
         Welch segment length [samples]; default ``default_nperseg(nt)``.
     separations : sequence of (int, int), optional
-        yz separations in grid steps; default ``point_sets.default_separations``.
+        yz separations [grid steps]; default ``point_sets.default_separations``.
 
     Returns
     -------
     Estimates
-        Welch setup (segment length, dt [s]), separations, rotor radius [m] and disc, plane-pair sub-lattice,
-        the segments averaged (start samples, counts; also those of the REWS series).
+        Welch setup, separations, rotor disc, plane-pair sub-lattice and the segments averaged.
 
     Raises
     ------
@@ -317,22 +287,8 @@ def _spans(fs, setup: WelchSetup) -> list[tuple[int, int]]:
 
 
 def run_estimates(fs, est: Estimates, workers: int | None = None) -> Estimates:
-    """Fill the planned estimates ``est`` (:func:`plan_estimates`) from the store, one dask task per
-    (span, plane) (module docstring).
-
-    Parameters
-    ----------
-    fs : turbgen.store.FieldStore
-        The store the plan was made for.
-    est : Estimates
-        The plan; filled in place.
-    workers : int, optional
-        dask threads; default the CPU count.
-
-    Returns
-    -------
-    Estimates
-        ``est``: means [m/s], variances [m^2 s^-2], one-sided (cross-)spectra [m^2 s^-2 Hz^-1].
+    """Fill the planned estimates ``est`` (:func:`plan_estimates`) in place from the store, one dask task per (span,
+    plane) on ``workers`` threads (default the CPU count); returns ``est``.
     """
     g, setup = est.grid, est.setup
     spans = _spans(fs, setup)

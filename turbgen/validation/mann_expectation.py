@@ -1,14 +1,11 @@
 """What a Mann store's model predicts for every estimate, on the lattice of the generator's box.
 
-The generator samples the spectral tensor on the lattice of its periodic (xi = U t, y, z) box, nt x
-nyp x nzp points spaced U dt, dy, dz (Guo et al. 2023, Eq. 8, 13, 24). The expected field therefore
-has L_j = sum over the (k2, k3) lattice of Phi_ii(k1_j, k2, k3) dk1 dk2 dk3, k1_j = 2 pi f_j / U: the
-Mann spectrum *as the grid resolves it* -- band-limited at the y, z Nyquist wavenumbers pi/dy, pi/dz
-and missing the wavenumbers below 2 pi/(nyp dy), 2 pi/(nzp dz) of the finite box (Mann 1998).
-Cross-covariances use exp(i(k2 dy + k3 dz)) and the space-time tensor Theta = exp(-dx/(U tau_e)) Phi
-(Guo et al. 2023, Eq. 13) between planes dx apart; the rotor-effective wind speed uses
-Phi_11 |H_R(k2, k3)|^2 with H_R the average of exp(i k.r) over the rotor points of the grid (Eq. 24
-with the grid's points instead of the continuous disc). The lattice sums are in
+The generator samples the spectral tensor on the lattice of its periodic (xi = U t, y, z) box, nt x nyp x nzp
+points spaced U dt, dy, dz (Guo et al. 2023, Eq. 8, 13, 24), so the expected field has L_j = sum over the (k2, k3)
+lattice of Phi_ii(k1_j, k2, k3) dk1 dk2 dk3, k1_j = 2 pi f_j / U: the Mann spectrum *as the grid resolves it*
+(band-limited at pi/dy, pi/dz, missing the wavenumbers below the finite box's; Mann 1998). Between planes dx apart
+the space-time tensor Theta = exp(-dx/(U tau_e)) Phi (Guo et al. 2023, Eq. 13) is used; the rotor-effective wind
+speed uses Phi_11 |H_R(k2, k3)|^2 over the grid's rotor points (Eq. 24). The lattice sums are in
 ``turbgen.validation.mann_lattice``.
 """
 
@@ -53,31 +50,12 @@ def _interp_lines(k1_nodes, values, k1_lines, positive: bool):
 
 
 def band_limited_spectra(params: MannParams, grid: Grid, k1: np.ndarray, n_theta: int = 24, n_panels: int = 24):
-    """Continuous F_ii(k1) = ∫ Phi_ii dk2 dk3 over the grid's Nyquist rectangle |k2| <= pi/dy, |k3| <= pi/dz.
+    """Continuous F_ii(k1) = int Phi_ii dk2 dk3 over the grid's Nyquist rectangle |k2| <= pi/dy, |k3| <= pi/dz.
 
-    Parameters
-    ----------
-    params : MannParams
-        The Mann model.
-    grid : Grid
-        The store's grid (dy, dz [m]).
-    k1 : numpy.ndarray
-        Streamwise wavenumbers [rad/m].
-    n_theta, n_panels : int
-        Gauss-Legendre nodes per angular sector and panels in ln kappa.
-
-    Returns
-    -------
-    numpy.ndarray
-        (3, len(k1)) F_11, F_22, F_33 [m^3 s^-2], two-sided in k1.
-
-    Notes
-    -----
-    Polar quadrature: Gauss-Legendre in angle on the
-    four sectors between the rectangle's corners (kappa_max(theta) = k_N / |cos| or / |sin| is smooth
-    inside each), Gauss panels in ln kappa from 1e-7 s to kappa_max (s = sqrt(k1^2 + L^-2)), which
-    resolves the peak of Phi_33 near kappa ~ k1 at small k1. This is the model the grid can represent,
-    without the point sampling of a finite box.
+    The model the grid can represent, without the point sampling of a finite box. Polar quadrature: Gauss-Legendre
+    (``n_theta`` nodes) in angle on the four sectors between the rectangle's corners, ``n_panels`` Gauss panels in
+    ln kappa from 1e-7 s (s = sqrt(k1^2 + L^-2)) to the rectangle's edge, resolving the peak of Phi_33 near kappa ~ k1.
+    Returns (3, len(k1)) F_11, F_22, F_33 [m^3 s^-2], two-sided in k1, for ``k1`` [rad/m].
     """
     kny, knz = np.pi / grid.dy_m, np.pi / grid.dz_m
     tc = np.arctan2(knz, kny)
@@ -113,17 +91,9 @@ def band_limited_spectra(params: MannParams, grid: Grid, k1: np.ndarray, n_theta
 def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
     """Mann space-time expectations on the lattice of the generator's box (module docstring).
 
-    Parameters
-    ----------
-    attrs : dict
-        Store attributes: the Mann ``parameters`` (with the box padding ``pad_yz``) and ``U_m_s`` [m/s].
-    design : SamplingDesign
-        The estimates' sampling design: grid, Welch segments, separations, rotor disc, sub-lattice.
-
-    Returns
-    -------
-    Theory
-        Lattice sums per record line [m^2 s^-2] (interpolated from k1 nodes on long records) and rho_bar [-].
+    ``attrs`` are the store attributes (the Mann ``parameters`` with ``pad_yz``, ``U_m_s`` [m/s]), ``design`` the
+    estimates' sampling design. Returns the Theory: lattice sums per record line [m^2 s^-2] (interpolated from k1 nodes
+    on long records) and the correlation sums [-].
     """
     grid = design.grid
     params = mann_params_from_attrs(attrs)
@@ -160,8 +130,9 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
 
 def _line_sums(lat: MannLattice, design: SamplingDesign, k1_lines: np.ndarray, dxs: dict, h2: np.ndarray,
                U: float) -> dict:  # fmt: skip
-    """Theory's per-line lattice sums {auto, yz, long, rews, uw} [m^2 s^-2]: summed at every record line on small
-    lattices, else at N_LINE_NODES k1 nodes and interpolated (auto spectra log-log, the others as ratios to them)."""
+    """Theory's per-line lattice sums {auto, yz, long, rews, uw} [m^2 s^-2]: at every record line on small lattices,
+    else at N_LINE_NODES k1 nodes, interpolated (auto spectra log-log, the others as ratios to them).
+    """
     grid, seps = design.grid, design.separations
     if k1_lines.size * lat.box.nyp * lat.box.nzp <= EXACT_LATTICE_POINTS:
         k1_nodes = k1_lines

@@ -1,12 +1,10 @@
 """Sums over the pairs of points of the grid, by lag: the correlation sums rho_bar of averaged estimates.
 
-All sums run over the (2 ny - 1, 2 nz - 1) grid of lags (dy, dz) between two points of one plane:
-a function of the lag (a coherence) times the number of point pairs of a set at that lag. For Gaussian
-fields Cov(|X_p|^2, |X_q|^2) = E|X_p|^2 E|X_q|^2 coh2_pq (Isserlis 1918), so the average of an
-estimate over N points has the one-point variance times rho_bar = sum_pq coh2_pq / N^2
-(``turbgen.validation.prediction``). The sums are kept at pairs of frequency nodes,
-R(nu_i, nu_j) = sum_pq coh_pq(nu_i) conj(coh_pq(nu_j)) / N^2 (coh_pq the complex coherency), which the
-exact covariance of averaged Welch estimates needs (``welch_variance``); rho_bar(nu) = R(nu, nu).
+All sums run over the (2 ny - 1, 2 nz - 1) grid of lags (dy, dz) between two points of one plane: a coherence times
+the number of point pairs of a set at that lag. For Gaussian fields Cov(|X_p|^2, |X_q|^2) = E|X_p|^2 E|X_q|^2
+coh2_pq (Isserlis 1918), so an average over N points has the one-point variance times rho_bar = sum_pq coh2_pq /
+N^2. The sums are kept at pairs of frequency nodes, R(nu_i, nu_j) = sum_pq coh_pq(nu_i) conj(coh_pq(nu_j)) / N^2,
+as the exact Welch covariance needs (``welch_variance``); rho_bar(nu) = R(nu, nu).
 """
 
 from __future__ import annotations
@@ -19,20 +17,7 @@ from turbgen.validation.estimators import COMPONENTS
 from turbgen.validation.prediction import SamplingDesign, dx_key
 
 def rect_pair_counts(ny: int, nz: int, my: int, mz: int) -> np.ndarray:
-    """Pairs of points of an my x mz rectangle of grid points per lag.
-
-    Parameters
-    ----------
-    ny, nz : int
-        Grid points in y and z (the lag grid is (2 ny - 1, 2 nz - 1), lags -(n-1) .. n-1 steps).
-    my, mz : int
-        Extent of the rectangle [points].
-
-    Returns
-    -------
-    numpy.ndarray
-        (2 ny - 1, 2 nz - 1) number of ordered point pairs per lag (float).
-    """
+    """(2 ny - 1, 2 nz - 1) number of ordered pairs of points of an my x mz rectangle of grid points per lag (float)."""
     dy = np.arange(-(ny - 1), ny)
     dz = np.arange(-(nz - 1), nz)
     return np.maximum(my - np.abs(dy), 0)[:, None] * np.maximum(mz - np.abs(dz), 0)[None, :].astype(float)
@@ -55,15 +40,8 @@ def lag_radius(grid: Grid) -> np.ndarray:
 
 
 class RhoAccumulator:
-    """Two-frequency sums R (nn, nn) over all ordered pairs of every averaged point set (module docstring);
-    the u-w sum ``uw`` (nn,) is one-frequency (|coherency|^2).
-
-    Parameters
-    ----------
-    design : SamplingDesign
-        The grid, the yz separations and the plane-pair sub-lattice (long_iy, long_iz) of the estimates.
-    nn : int
-        Frequency nodes of the sums.
+    """Two-frequency sums R (nn, nn) over all ordered pairs of every averaged point set of ``design`` at ``nn``
+    frequency nodes; the u-w sum ``uw`` (nn,) is one-frequency (|coherency|^2).
     """
 
     def __init__(self, design: SamplingDesign, nn: int):
@@ -82,9 +60,8 @@ class RhoAccumulator:
         self.uw = np.zeros(nn)
 
     def add(self, component: str, coh: np.ndarray, multiplicity: int, same_plane: bool) -> None:
-        """Add the coherency coh (all nodes, 2ny-1, 2nz-1) [-] between the points of two planes.
-
-        ``multiplicity``: number of ordered plane pairs with this separation.
+        """Add the coherency ``coh`` (nodes, 2ny-1, 2nz-1) [-] between the points of two planes, for ``multiplicity``
+        ordered plane pairs with this separation.
         """
         half = half_lags(coh)  # the real and imaginary parts once for all the point sets
         self.all[component] += multiplicity * weighted_gram(half, self.counts_all) / self.norm_all
@@ -99,8 +76,9 @@ class RhoAccumulator:
 
 
 def half_lags(coh: np.ndarray) -> np.ndarray:
-    """The centre and one half of the (point-symmetric) lag grid of ``coh`` (nn, 2 ny - 1, 2 nz - 1): flat
-    indices from the centre (lag 0) on, (nn, H) if real, [Re | Im] (nn, 2 H) if complex (``pair_sum``)."""
+    """The centre and one half of the (point-symmetric) lag grid of ``coh`` (nn, 2 ny - 1, 2 nz - 1), flat from lag 0
+    on: (nn, H) if real, [Re | Im] (nn, 2 H) if complex (``pair_sum``).
+    """
     flat = coh.reshape(coh.shape[0], -1)
     half = flat[:, (flat.shape[1] - 1) // 2 :]
     return np.concatenate([half.real, half.imag], axis=1) if np.iscomplexobj(half) else np.ascontiguousarray(half)
@@ -116,26 +94,12 @@ def weighted_gram(half: np.ndarray, counts: np.ndarray) -> np.ndarray:
 
 
 def pair_sum(coh: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """sum over lags of counts x coh(nu_i) conj(coh(nu_j)), real part (ordered pairs come in conjugate pairs).
+    """(nn, nn) symmetric sum over lags of counts x coh(nu_i) conj(coh(nu_j)), real part.
 
-    The lag grid is point-symmetric: flat index k holds lag l, index K - 1 - k lag -l, and counts(-l) =
-    counts(l) (pair (p, q) at l, pair (q, p) at -l). A coherency is Hermitian in the lag, coh(-l) =
-    conj(coh(l)) (it is the coherency of the pair (q, p)), so the terms at l and -l have the same real part:
-    the sum is the centre term plus twice the half-plane, Re(W C^H) = A A^T with the rows of A the real and
-    imaginary parts of coh x sqrt(weights) over the half (one symmetric BLAS product, a quarter of the
-    products of Re(W C^H) over the whole grid).
-
-    Parameters
-    ----------
-    coh : numpy.ndarray
-        (nn, 2 ny - 1, 2 nz - 1) coherency [-] at the nodes and lags, Hermitian in the lag.
-    counts : numpy.ndarray
-        (2 ny - 1, 2 nz - 1) pairs per lag, symmetric (``rect_pair_counts``, ``set_pair_counts``).
-
-    Returns
-    -------
-    numpy.ndarray
-        (nn, nn) symmetric sum.
+    The lag grid is point-symmetric with counts(-l) = counts(l), and a coherency is Hermitian in the lag, so the terms
+    at l and -l have the same real part: the sum is the centre term plus twice the half-plane, A A^T with the rows of
+    A the real and imaginary parts of coh x sqrt(weights) (one symmetric BLAS product). ``coh`` is (nn, 2 ny - 1,
+    2 nz - 1) [-], ``counts`` (2 ny - 1, 2 nz - 1) pairs per lag (``rect_pair_counts``, ``set_pair_counts``).
     """
     return weighted_gram(half_lags(coh), counts)
 
@@ -156,9 +120,11 @@ def box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
 
 
 def real_box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
-    """``box_lags(ifft2(field2d) * size, ny, nz)`` for a real field (..., nyp, nzp), with half the
-    transform: for real input ifft2 x size = conj(fft2), Hermitian, so the half spectrum of rfft2 holds the
-    lags dz >= 0 and F(dy, -dz) = conj(F(-dy, dz)) the others (full transform when nzp < 2 nz - 1)."""
+    """``box_lags(ifft2(field2d) * size, ny, nz)`` for a real field (..., nyp, nzp) with half the transform.
+
+    ifft2 x size = conj(fft2) for real input: rfft2 holds the lags dz >= 0 and F(dy, -dz) = conj(F(-dy, dz)) the
+    others (full transform when nzp < 2 nz - 1).
+    """
     nyp, nzp = field2d.shape[-2:]
     if nzp < 2 * nz - 1:
         return box_lags(fft.oneshot().ifft2(field2d) * (nyp * nzp), ny, nz)
@@ -169,19 +135,9 @@ def real_box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
 
 
 def coherency_matrix(lags: dict, grid: Grid) -> np.ndarray:
-    """Coherency matrix (N, N) between all points of all planes (ordered by plane, y, z).
+    """(nx ny nz, nx ny nz) coherency [-] between all points of all planes (ordered by plane, y, z).
 
-    Parameters
-    ----------
-    lags : dict
-        Plane separation ``dx_key(|x_p - x_q|)`` -> (2 ny - 1, 2 nz - 1) coherency at the yz lags [-].
-    grid : Grid
-        The store's grid.
-
-    Returns
-    -------
-    numpy.ndarray
-        (nx ny nz, nx ny nz) coherency between every two points [-].
+    ``lags`` maps the plane separation ``dx_key(|x_p - x_q|)`` to the (2 ny - 1, 2 nz - 1) coherency at the yz lags.
     """
     iy, iz = (a.ravel() for a in np.meshgrid(np.arange(grid.ny), np.arange(grid.nz), indexing="ij"))
     dy = iy[:, None] - iy[None, :] + grid.ny - 1

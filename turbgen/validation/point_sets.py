@@ -35,25 +35,8 @@ DEFAULT_ROTOR_RADIUS_M = 63.0  # NREL 5 MW reference turbine (Jonkman et al. 200
 
 
 def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
-    """The grid points inside the rotor disc around the hub.
-
-    Parameters
-    ----------
-    grid : Grid
-        The store's grid (y, z [m] relative to the hub).
-    radius_m : float
-        Rotor radius R [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        (ny, nz) bool, y^2 + z^2 <= R^2.
-
-    Raises
-    ------
-    ParameterError
-        If no grid point lies inside the disc.
-    """
+    """(ny, nz) bool, the grid points inside the rotor disc of radius ``radius_m`` [m] around the hub; ParameterError if
+    none."""
     y, z = grid.y(), grid.z()
     mask = y[:, None] ** 2 + z[None, :] ** 2 <= radius_m**2 * (1 + 1e-12)
     if not mask.any():
@@ -62,27 +45,11 @@ def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
 
 
 def check_rotor_radius(grid: Grid, radius_m: float | None) -> float:
-    """The rotor radius [m] to use: the disc must lie inside the grid, 0 < R <= half the smaller grid extent.
+    """The rotor radius R [m] to use: the disc must lie inside the grid, 0 < R <= half the smaller grid extent.
 
-    Parameters
-    ----------
-    grid : Grid
-        The store's grid.
-    radius_m : float or None
-        Requested radius [m]; None: the default 63 m (NREL 5 MW, Jonkman et al. 2009), or the largest
-        disc that fits a smaller grid, enlarged to the nearest grid points when that disc holds none
-        (e.g. 2 x 2 points, or 4 x 4 points with dz = 5 dy).
-
-    Returns
-    -------
-    float
-        The rotor radius R [m].
-
-    Raises
-    ------
-    ParameterError
-        If the requested radius is not in (0, half the smaller grid extent] or outside the range of
-        rotor radii (``turbgen.theory.ranges``, [0.5, 500] m).
+    ``radius_m`` None: the default 63 m (NREL 5 MW, Jonkman et al. 2009), or the largest disc that fits a smaller grid,
+    enlarged to the nearest grid points when it holds none. ParameterError for a radius outside (0, half extent] or
+    the range of rotor radii (``turbgen.theory.ranges``).
     """
     half = min((grid.ny - 1) * grid.dy_m, (grid.nz - 1) * grid.dz_m) / 2.0
     if radius_m is None:

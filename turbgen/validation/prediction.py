@@ -1,17 +1,10 @@
 """What the validator predicts, and on which sampling design: :class:`Theory` and :class:`SamplingDesign`.
 
-A field is described by the two-sided line variances L_j = E|Z_j|^2 [m^2 s^-2] of
-x(t) = sum_j Z_j exp(i 2 pi f_j t), f_j = j / (nt dt) (one-sided variance of a line pair: 2 L_j;
-turbgen.theory.lattice), and by the line cross-covariances E[conj(Z_j^a) Z_j^b] between two points
-or components.
-
-Correlation of estimates across points (for the tolerances in ``verdict``): for Gaussian fields,
-Cov(|X_p|^2, |X_q|^2) = E|X_p|^2 E|X_q|^2 coh2_pq (Isserlis 1918), so the average over N points (and
-planes) of one line's power has the variance of one point times rho_bar = sum_pq coh2_pq / N^2. A Welch
-bin mixes lines of different frequencies, so ``Theory.rho_*`` hold, for every averaged point set, the
-two-frequency sum R(nu_i, nu_j) = sum_pq coh_pq(nu_i) conj(coh_pq(nu_j)) / N^2 of the model's coherency
-between all the points (including different planes) at pairs of nodes ``node_f`` (``pair_sums``;
-rho_bar = its diagonal), from which ``welch_variance`` computes the exact covariance of averaged estimates.
+A field is described by the two-sided line variances L_j = E|Z_j|^2 [m^2 s^-2] of x(t) = sum_j Z_j exp(i 2 pi f_j t),
+f_j = j / (nt dt) (one-sided variance of a line pair: 2 L_j; turbgen.theory.lattice), and by the line
+cross-covariances E[conj(Z_j^a) Z_j^b] between two points or components. ``Theory.rho_*`` hold, for every averaged
+point set, the two-frequency correlation sums R(nu_i, nu_j) at the nodes ``node_f`` (``pair_sums``), from which
+``welch_variance`` computes the exact covariance of averaged estimates.
 """
 
 from __future__ import annotations
@@ -35,15 +28,15 @@ class SamplingDesign:
     Attributes
     ----------
     grid : Grid
-        The store's grid (nt samples spaced dt [s]; planes x [m]; ny x nz points spaced dy, dz [m]).
+        The store's grid.
     setup : WelchSetup
         Welch segments (length, dt [s], window scale).
     separations : tuple of (int, int)
-        Lateral separations (a, b) in grid steps (a dy, b dz) of the yz coherences.
+        yz separations (a, b) [grid steps] of the yz coherences.
     rotor_mask : numpy.ndarray
-        (ny, nz) bool, the grid points inside the rotor disc (rotor-effective wind speed).
+        (ny, nz) bool, the grid points inside the rotor disc.
     long_iy, long_iz : numpy.ndarray
-        Indices of the sub-lattice of points whose plane-to-plane coherence is estimated.
+        Indices of the sub-lattice whose plane-to-plane coherence is estimated.
     """
 
     grid: Grid
@@ -137,13 +130,7 @@ def dx_key(dx_m: float) -> float:
 
 
 def plane_separations(grid: Grid) -> dict:
-    """Plane separations of the grid.
-
-    Returns
-    -------
-    dict
-        Distinct |x_p - x_q| [m] (``dx_key``) over ordered plane pairs -> number of such pairs.
-    """
+    """Distinct plane separations |x_p - x_q| [m] (``dx_key``) over ordered plane pairs -> number of such pairs."""
     out: dict = {}
     for xp in grid.x_m:
         for xq in grid.x_m:

@@ -61,18 +61,8 @@ def _metric_dict(m: MetricResult) -> dict:
 
 
 def components(report) -> dict:
-    """Per component: mean [m/s], sigma [m/s] (estimated, expected on this grid, full model), TI [-].
-
-    Parameters
-    ----------
-    report : ValidationReport
-        The validation.
-
-    Returns
-    -------
-    dict
-        component -> dict of those values.
-    """
+    """Per component of ``report``: mean [m/s], sigma [m/s] (estimated, expected on this grid, band-limited, full
+    model), TI [-]."""
     est, th, U = report.estimates, report.theory, report.store.U_m_s
     out = {}
     for c in COMPONENTS:
@@ -122,9 +112,8 @@ def to_dict(report) -> dict:
 def constraints_note(attrs) -> str | None:
     """For a store conditioned on measurements (its ``constraints`` attribute), what the validation means; else None.
 
-    A conditional sample u_s + C H^T S^-1 (d - H u_s - eps_s) is marginally a sample of the prior when d itself is a
-    measurement of a field of the same model (Hoffman & Ribak 1991); for other data its statistics are pulled
-    towards the data's.
+    A conditional sample is marginally a sample of the prior when the data are a measurement of a field of the same
+    model (Hoffman & Ribak 1991); other data pull its statistics towards theirs.
     """
     c = attrs.get("constraints")
     if c is None:
@@ -189,20 +178,8 @@ def _premultiplied(c: Curve, reference) -> tuple[Curve, tuple | None]:
 
 
 def plots(report, directory) -> list[Path]:
-    """Plot every metric of a validation.
-
-    Parameters
-    ----------
-    report : ValidationReport
-        The validation.
-    directory : str or pathlib.Path
-        Where the PNG files go (created if missing).
-
-    Returns
-    -------
-    list of pathlib.Path
-        One PNG per metric with curves (estimate with its 95 % band, the expectation on the grid, the
-        continuous model where there is one).
+    """One PNG per metric with curves into ``directory`` (created if missing): the estimate with its 95 % band, the
+    expectation on the grid, the continuous model where there is one; the paths.
     """
     import matplotlib
 

@@ -27,19 +27,18 @@ def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy
     starts : iterable of int
         Start samples of the segments in the span.
     seps : sequence of (int, int)
-        yz separations (a, b) in grid steps.
+        yz separations (a, b) [grid steps].
     mask : numpy.ndarray
-        (ny, nz) bool, the rotor points (rotor-effective wind speed).
+        (ny, nz) bool, the rotor points.
     iy, iz : numpy.ndarray
         Grid indices of the sub-lattice whose spectra are kept for the plane pairs.
 
     Returns
     -------
     dict
-        ``sum``, ``sum2`` (component -> (ny, nz) [m/s], [m^2 s^-2] summed over t); ``rews`` (t,) [m/s];
-        unscaled Welch sums over segments and points [m^2 s^-2 s^2]: ``auto`` (component -> (nf,)),
-        ``yz`` (component -> {(a, b): [cross (nf,) complex, A (nf,), B (nf,)]}), ``uw`` (nf,) complex;
-        ``sub`` (segments, nf, sub-lattice points) complex64 spectra of u.
+        ``sum``, ``sum2`` (component -> (ny, nz) [m/s], [m^2 s^-2] summed over t); ``rews`` (t,) [m/s]; unscaled
+        Welch sums over segments and points: ``auto`` (component -> (nf,)), ``yz`` (component -> {(a, b): [cross
+        (nf,) complex, A, B]}), ``uw`` (nf,) complex; ``sub`` (segments, nf, sub-lattice points) complex64 u spectra.
     """
     from turbgen.validation.welch_sums import cross_sum, point_moments, spectrum_sums, window_segment
 

@@ -1,8 +1,5 @@
-"""The run a store describes, decoded from its attributes: the one place the validator reads them.
-
-The store's attributes are decoded by the run's own spec (turbgen.spec: ``MannRun.from_attrs``,
-``KaimalRun.from_attrs``, which also read older stores); here is the one place the validator asks
-for what it needs of them (the Mann tensor parameters and box, the Kaimal spectra and coherence models).
+"""The run a store describes, decoded from its attributes by the run's own spec (``MannRun.from_attrs``,
+``KaimalRun.from_attrs``): the one place the validator reads them.
 """
 
 from __future__ import annotations
@@ -33,17 +30,17 @@ class KaimalModel:
     params : KaimalParams
         sigma_i [m/s], length scales [m], yz coherence decrement a_yz [-] and scale lc [m].
     long_model : str
-        Longitudinal coherence model between planes (a key of theory.coherence_models.LONGITUDINAL_MODELS).
+        Longitudinal coherence model (a key of theory.coherence_models.LONGITUDINAL_MODELS).
     long_components : str
-        Components the longitudinal model was applied to (the others are independent between planes).
+        Components the longitudinal model applies to (the others are independent between planes).
     vw_coherent : bool
-        True if v and w have the exponential yz coherence of u, False if they are white in y, z.
+        True if v and w have the exponential yz coherence of u, False if white in y, z.
     rescale : bool
         True if each spectrum was rescaled to the nominal sigma_i.
     a_x, b_x : float or None
-        Coefficients of the exponential longitudinal coherence (``long_model == "exp"``), else None.
+        Coefficients of the exponential longitudinal coherence (``long_model == "exp"``).
     spectrum : LineSpectrum or None
-        The user spectra the store was made with (band means on its lines), or None for the Kaimal spectra.
+        The user spectra of the store (band means on its lines), or None for the Kaimal spectra.
     """
 
     params: KaimalParams
@@ -57,36 +54,18 @@ class KaimalModel:
 
 
 def mann_params_from_attrs(attrs: dict) -> MannParams:
-    """MannParams of a Mann store (its run, turbgen.spec.mann.MannRun.from_attrs).
-
-    Raises
-    ------
-    ParameterError
-        If the attributes lack a Mann parameter (not a turbgen Mann store).
-    """
+    """MannParams of a Mann store; ParameterError if the attributes lack one (not a turbgen Mann store)."""
     return MannRun.from_attrs(attrs).params
 
 
 def mann_box_from_attrs(attrs: dict, grid: Grid) -> MannBox:
-    """The synthesis box of a Mann store: pad_yz times the grid in y and z.
-
-    Raises
-    ------
-    ParameterError
-        If the attributes lack a Mann parameter.
-    """
+    """The synthesis box of a Mann store, pad_yz times the grid in y and z; ParameterError as above."""
     pad = MannRun.from_attrs(attrs).pad_yz
     return MannBox(pad * grid.ny, pad * grid.nz)
 
 
 def kaimal_model_from_attrs(attrs: dict) -> KaimalModel:
-    """The Kaimal model of a Kaimal store (its run, turbgen.spec.kaimal.KaimalRun.from_attrs).
-
-    Raises
-    ------
-    ParameterError
-        If the attributes lack a Kaimal parameter (not a turbgen Kaimal store).
-    """
+    """The Kaimal model of a Kaimal store; ParameterError if the attributes lack a Kaimal parameter."""
     run = KaimalRun.from_attrs(attrs)
     return KaimalModel(run.kaimal, run.long_model, run.long_components, run.vw_coherence == "exp", run.rescale,
                        run.a_x, run.b_x, run.spectrum)

@@ -1,25 +1,16 @@
 """Law of the point-averaged variance estimate as a sum of independent gamma terms (its tails exact where it matters).
 
-The estimate is s2 = (1/N) sum_p sum_{j >= 1} w_j |Z_jp|^2 over the N points (and planes) of the grid
-(variance about each point's record mean; w_j the pair weight of line j, ``Theory.pair_weights``). For
-line j the amplitudes (Z_j1 .. Z_jN) are circular Gaussian with covariance L_j C_j (C_j the model's
-coherency matrix between the points), so line j contributes sum_k w_j L_j mu_jk E_jk with E_jk ~ Exp(1)
-independent and mu_jk the eigenvalues of C_j / N (sum_k mu_jk = 1, sum_k mu_jk^2 = rho_bar(f_j)).
+The estimate is s2 = (1/N) sum_p sum_{j >= 1} w_j |Z_jp|^2 over the N points (and planes) of the grid (w_j the pair
+weight of line j, ``Theory.pair_weights``). The amplitudes of line j are circular Gaussian with covariance L_j C_j,
+so line j contributes sum_k w_j L_j mu_jk E_jk with E_jk ~ Exp(1) independent and mu_jk the eigenvalues of C_j / N
+(sum_k mu_jk = 1, sum_k mu_jk^2 = rho_bar(f_j)).
 
-One gamma law for the whole sum with the exact mean and variance (Satterthwaite) has far too light an
-upper tail when a few modes dominate: the lowest lines of u are coherent over the whole grid, so the
-top mode of line 1 alone carries ~18 % of the mean (Kaimal, U 10 m/s, nt 512, 12 x 12 x 2 planes);
-there an estimate 2.25 x its expectation scored z = 4.60 under that law, 3.33 under the exact one
-(saddlepoint of the exact eigenvalue sum, checked against 200 000 Monte-Carlo draws to 2 %).
-
-Here the top modes of the lowest N_MODE_LINES lines enter exactly (shape-1 terms, from the
-eigenvalues the expectation modules compute, ``Theory.variance_modes``) and every line's remaining
-modes are one gamma term with their exact mean and variance (exact when they are equal, e.g. the
-spatially white v, w of Kaimal: Gamma(N, w_j L_j / N)); mean and variance of the whole sum stay exact.
-With the top 4 modes of the lowest 4 lines the z above is the exact one to 0.01 (per-line gamma terms
-alone: 3.65). Grids of more than MAX_MODE_POINTS points (all planes) get the per-line gamma terms only (no
-eigenproblems): still too light an upper tail when the lowest lines dominate, but far less than one gamma.
-Tail probabilities by the Lugannani-Rice saddlepoint formula (Lugannani & Rice 1980; Butler 2007, Eq. 1.11).
+One moment-matched gamma law (Satterthwaite) has far too light an upper tail when a few modes dominate (the lowest
+lines of u are coherent over the whole grid). Here the top modes of the lowest N_MODE_LINES lines enter exactly
+(shape-1 terms, ``Theory.variance_modes``) and every line's remaining modes are one gamma term with their exact
+mean and variance (exact when they are equal, e.g. the spatially white v, w of Kaimal). Grids of more than
+MAX_MODE_POINTS points get the per-line gamma terms only. Tail probabilities by the Lugannani-Rice saddlepoint
+formula (Lugannani & Rice 1980; Butler 2007, Eq. 1.11).
 """
 
 from __future__ import annotations
@@ -38,13 +29,12 @@ REST_FLOOR = 1e-9  # a line's remaining modes holding less than this fraction of
 
 
 def top_modes(coherency: np.ndarray) -> np.ndarray:
-    """The N_MODES largest eigenvalues mu of a Hermitian coherency matrix C (N, N) divided by N [-], followed by
-    the exact sum of all squared eigenvalues ||C||_F^2 / N^2 (= rho_bar at the line, without interpolation).
+    """The N_MODES largest eigenvalues of a Hermitian coherency matrix C (N, N) divided by N [-], followed by the exact
+    ||C||_F^2 / N^2 (= rho_bar at the line).
 
-    Subspace iteration from a fixed random block of SUBSPACE vectors (Halko, Martinsson & Tropp 2011, Alg. 4.4)
-    and Rayleigh-Ritz: deterministic, O(N^2) per step instead of a full O(N^3) eigenproblem; the error of the
-    k-th value falls as (mu_{SUBSPACE+1} / mu_k)^(2 POWER_STEPS) (~1e-6 relative for the coherent lowest lines,
-    whose spectra fall fast; checked against full eigenproblems in the tests).
+    Subspace iteration from a fixed random block of SUBSPACE vectors (Halko, Martinsson & Tropp 2011, Alg. 4.4) and
+    Rayleigh-Ritz: deterministic, O(N^2) per step; the error of the k-th value falls as
+    (mu_{SUBSPACE+1} / mu_k)^(2 POWER_STEPS).
     """
     n = coherency.shape[0]
     if n <= 2 * SUBSPACE:
@@ -58,30 +48,23 @@ def top_modes(coherency: np.ndarray) -> np.ndarray:
 
 
 def _orthonormal(y: np.ndarray) -> np.ndarray:
-    """Orthonormal columns (N, k) spanning the columns of y (N, k): Householder QR, O(N k^2).
-
-    Not Cholesky QR: a coherency matrix of rank < k (a fully coherent plane, e.g. Kaimal a_yz = 0,
-    has rank 1 per plane) makes y^H y singular, and its Cholesky factor does not exist."""
+    """Orthonormal columns (N, k) spanning the columns of y (N, k) by Householder QR (a coherency matrix of rank < k
+    makes the Cholesky QR's y^H y singular).
+    """
     return np.linalg.qr(y)[0]
 
 
 def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray | None = None):
-    """Shapes and scales of the gamma terms of the variance estimate (module docstring).
+    """Shapes alpha [-] and scales theta [m^2 s^-2] of the gamma terms of the variance estimate (module docstring).
 
     Parameters
     ----------
     line_means : numpy.ndarray
-        (nl,) w_j L_j of lines j = 1 .. [m^2 s^-2] (expected contribution of each line).
+        (nl,) w_j L_j of lines j = 1 .. [m^2 s^-2].
     line_rho : numpy.ndarray
         (nl,) rho_bar(f_j) = sum_k mu_jk^2 [-].
     modes : numpy.ndarray, optional
-        (J, K + 1) top eigenvalues mu_jk of C_j / N for lines 1 .. J (J <= nl), last column the exact
-        rho_bar(f_j) (``top_modes``) [-]; it replaces ``line_rho`` for those lines.
-
-    Returns
-    -------
-    alpha, theta : numpy.ndarray
-        Shapes [-] and scales [m^2 s^-2]: the estimate is sum_i Gamma(alpha_i, theta_i).
+        (J, K + 1) ``top_modes`` of lines 1 .. J (J <= nl) [-]; the last column replaces ``line_rho`` there.
     """
     m = np.asarray(line_means, float)
     rho = np.asarray(line_rho, float)
@@ -103,17 +86,7 @@ def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray 
 def gamma_sum_tails(x: float, alpha: np.ndarray, theta: np.ndarray) -> tuple[float, float]:
     """(P(S <= x), P(S >= x)) of S = sum_i Gamma(alpha_i, theta_i), independent (saddlepoint, Lugannani-Rice).
 
-    Parameters
-    ----------
-    x : float
-        Observed value [units of theta].
-    alpha, theta : numpy.ndarray
-        Shapes [-] and scales of the terms.
-
-    Returns
-    -------
-    tuple of float
-        Lower and upper tail probabilities.
+    ``x`` is in the units of ``theta``; at the mean (0/0 in the formula) the moment-matched gamma law is used.
     """
     mean = float(np.sum(alpha * theta))
     var = float(np.sum(alpha * theta**2))

@@ -1,57 +1,29 @@
 """Pass/fail per metric, with tolerances derived from the statistical uncertainty of each estimator.
 
-Null hypothesis: the field is a realisation of the store's model on the store's grid
-(``expectations``). Every comparison is turned into a normal score z (from its exact or
-moment-matched law, so |z| > z means the same tail probability for every test); a metric fails
-when any of its |z| exceeds z_crit = Phi^-1(1 - ALPHA / (2 n)), n the number of comparisons in the
-metric (Bonferroni: valid whatever the correlation between the comparisons), so a correct field
-fails a given metric with probability <= ALPHA. No fixed fudge factor enters. The false-failure
-rate as measured over ~500 correct fields (nt 256 .. 4096, 2 .. 11 planes, both models) is in
-benchmarks/calibration.md (``benchmarks/calibrate_validate.py``).
+Null hypothesis: the field is a realisation of the store's model on the store's grid (``expectations``). Every
+comparison becomes a normal score z from its exact or moment-matched law; a metric fails when any |z| exceeds
+z_crit = Phi^-1(1 - ALPHA / (2 n)), n its number of comparisons (Bonferroni, valid whatever their correlation), so
+a correct field fails a metric with probability <= ALPHA; no fudge factor enters. The measured false-failure rate
+is in benchmarks/calibration.md (``benchmarks/calibrate_validate.py``).
 
-Uncertainties (Gaussian fields; derivations in the comments below):
-* Welch covariance (``welch_variance``): the one-point Welch estimate of the model's line process is
-  a quadratic form in the line amplitudes, so its covariance between bins m, m' is exact (Isserlis)
-  for the record's actual segment starts: overlap for a coloured spectrum, correlation of
-  non-overlapping segments where the spectrum varies within a bin (the lowest bins of short records:
-  nt = 512 has ~12 instead of the rule-of-thumb 14.3 equivalent segments at bin 1), per-segment mean
-  removal, coloured neighbouring bins. (Very long records fall back to the rule of thumb
-  K_eff = K / (1 + 2 (1/36) K_adj / K), Hann bin correlations 4/9, 1/36, accurate there.)
-* Averaging over points/planes does not multiply the number of independent samples by the
-  number of points: the covariance of the Welch estimate averaged over a point set is the same
-  Isserlis sum with the pair's line cross-covariances L_q coh_pq(f_q) inside the line sums
-  (``welch_variance``, module docstring), computed from the two-frequency correlation sum
-  R(nu_i, nu_j) = sum_pq coh_pq(nu_i) conj(coh_pq(nu_j)) / N^2 of the set (``Theory.rho_*``). The
-  one-frequency rule "one-point covariance x rho_bar(f_m)" (rho_bar = R(f_m, f_m), 1 for fully coherent
-  points, 1/N for independent ones) underestimated the sd of the lowest bins by 25-30 % (the bins collect
-  lower, more coherent lines by leakage); it remains the fallback of very long records.
-* Auto-spectra and REWS spectra, per band (bins grouped ~5 per decade): the band mean has the exact
-  mean and variance above; compared as chi2_nu / nu with nu = 2 E^2 / Var (Satterthwaite).
-* Variance: one-sided line pair j contributes 2|Z_j|^2 (exponential, variance (2 L_j)^2), so
-  Var(sigma^2 estimate) = sum_j (w_j L_j)^2 rho_bar(f_j); its law is a sum of gamma terms with the top
-  eigen-modes of the lowest lines exact (``variance_law``: one chi2 with nu = 2 E^2/Var had far too light an
-  upper tail when the coherent lowest lines of u dominate, z 4.6 for an exact 3.3).
-* Coherences (yz and between planes), per band: the band-pooled sample coherency
-  C = sum cross / sqrt(sum A sum B) is the sample coherency of n_band equivalent independent samples,
-  n_band = (sum E_m)^2 / Var(sum of the point-averaged auto-spectrum over the band); |C|^2 is compared
-  with Goodman's exact law of the sample magnitude-squared coherence and arg C with the exact
-  (Rice) phase law (``distributions``), not with delta-method normal laws: at low coherence
-  (n gamma2 of order 10) |C|^2 is a noncentral chi2 with 2 degrees of freedom whose lower tail is far
-  heavier than any Gaussian or gamma law with the same moments (a 1e-4 event looked like z = -5.6),
-  and the phase is heavy-tailed as well. Near unit coherence (frozen planes) the delta method with
-  the float32 resolution floor is used (``band_checks.coherence_stats``: Var coh2 = 2 g (1-g)^2/n + bias^2,
-  Var phase = (1-g)/(2 n g)).
-* u-w co-spectrum: Var of the point average <= E_u E_w (sqrt(rho_u rho_w) + rho_uw) / (2 K_m)
-  (Cauchy-Schwarz on the Isserlis covariance; rho_uw the mean |u-w coherency|^2 over pairs; K_m the
-  exact equivalent segments of bin m); the band-pooled co-coherence is compared with the exact
-  variance-gamma law of that many equivalent samples (exponential, not Gaussian, tails).
+Uncertainties (Gaussian fields):
 
-Approximations, stated: coherencies interpolated linearly in log f between the rho nodes (and taken at
-|f| for the negative-frequency lines) in the averaged Welch covariance; rho_bar at the bin centre in the
-u-w bound and the very-long-record fallback; the equivalent-samples description of point-averaged
-coherences (exact for independent points or one point; with the exact averaged covariance it is
-conservative in the lowest bins: yz coh2 z sd 0.8-0.9 there); the gamma law for the spectra's band
-means; per-line gamma terms beyond the top modes of the lowest lines for the variances.
+* Welch covariance: exact (Isserlis) for the record's segment starts and, for an average over points/planes, for
+  the set's two-frequency correlation sum R (``welch_variance``); the rule of thumb
+  K_eff = K / (1 + 2 (1/36) K_adj / K) with Hann bin correlations 4/9, 1/36 only for very long records.
+* Auto- and REWS spectra, per band (~5 bands per decade): chi2_nu / nu with nu = 2 E^2 / Var (Satterthwaite).
+* Variance: Var = sum_j (w_j L_j)^2 rho_bar(f_j); its law a sum of gamma terms with the top modes of the lowest
+  lines exact (``variance_law``).
+* Coherences (yz, between planes), per band: the band-pooled sample coherency of n_band equivalent samples,
+  n_band = (sum E_m)^2 / Var(sum of the averaged auto-spectrum), against Goodman's and the Rice phase law
+  (``distributions``); near unit coherence the delta method with the float32 floor (``band_checks``).
+* u-w co-spectrum: Var <= E_u E_w (sqrt(rho_u rho_w) + rho_uw) / (2 K_m) (Cauchy-Schwarz on the Isserlis
+  covariance), against the exact variance-gamma law of the co-coherence.
+
+Approximations: coherencies linear in log f between the rho nodes (at |f| for negative-frequency lines); rho_bar at
+the bin centre in the u-w bound and the long-record fallback; the equivalent-samples description of averaged
+coherences (conservative in the lowest bins); the gamma law of the spectra's band means; per-line gamma terms
+beyond the top modes for the variances.
 """
 
 from __future__ import annotations
@@ -81,9 +53,9 @@ def _band95(est, sd):
 
 @dataclass
 class Expectations:
-    """The theory side of the verdict: expected Welch estimates and the covariances of the point-averaged
-    estimates (``welch_kernel``, ``welch_variance``) for the planned segments; needs the theory and the
-    sampling design, not the data."""
+    """The theory side of the verdict: expected Welch estimates and the covariances of the point-averaged estimates for
+    the planned segments (needs the theory and the sampling design, not the data).
+    """
 
     kernel: WelchKernel
     bands: Bands
@@ -97,8 +69,7 @@ class Expectations:
 
 
 def expectations(est: Estimates, th: Theory) -> Expectations:
-    """The expected estimates and their covariances for the planned estimates ``est`` (``plan_estimates``: the
-    segments are known before the data are read), under the theory ``th``."""
+    """The :class:`Expectations` of the planned estimates ``est`` (:func:`plan_estimates`) under the theory ``th``."""
     kernel = WelchKernel(est.setup, est.grid.nt)
     bands = Bands(est)
     f = est.freqs
@@ -126,24 +97,11 @@ def expectations(est: Estimates, th: Theory) -> Expectations:
 
 def judge(est: Estimates, th: Theory, parallel: bool = False, expected: Expectations | None = None
           ) -> list[MetricResult]:
-    """Pass/fail of every metric of the store (module docstring).
+    """Pass/fail of every metric of the store (module docstring): mean, variances, spectra, yz and longitudinal
+    coherences, u-w co-spectrum, REWS spectrum.
 
-    Parameters
-    ----------
-    est : Estimates
-        What was estimated from the store.
-    th : Theory
-        What the store's model predicts for the same sampling design.
-    parallel : bool
-        Judge the longitudinal coherence (the plane pairs: most of the exact-law evaluations) in a second
-        thread while the other metrics are judged; the results are the same.
-    expected : Expectations, optional
-        ``expectations(est, th)`` if already computed (e.g. alongside the estimates).
-
-    Returns
-    -------
-    list of MetricResult
-        Mean, variances, spectra, yz and longitudinal coherences, u-w co-spectrum, REWS spectrum.
+    ``parallel`` judges the longitudinal coherence (most of the exact-law evaluations) in a second thread, with the
+    same results; ``expected`` is ``expectations(est, th)`` if already computed.
     """
     ex = expected if expected is not None else expectations(est, th)
     kernel, bands, exp_auto = ex.kernel, ex.bands, ex.exp_auto

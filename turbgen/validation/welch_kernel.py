@@ -20,12 +20,10 @@ KERNEL_BAND = 32  # Welch bins either side of a bin whose lines are summed (Hann
 class WelchKernel:
     """Expected one-sided Welch estimate of bins m = 0 .. n/2 as a weighted sum of spectral lines.
 
-    A segment's windowed, mean-removed DFT is X_m = sum_j Z_j G_m(f_j) with
-    G_m(f) = W(m/n - f dt) - e(f) W(m/n), W the window's DTFT and e(f) the segment mean of
-    exp(i 2 pi f t); so E[P_m] = scale_m sum_j |G_m(f_j)|^2 L_j over the lines +-f_j (the
-    line -f_j carries conj(L_j); G is periodic in f with period 1/dt, which folds the partners
-    of lines near the Nyquist frequency back). Lines more than KERNEL_BAND bins away are
-    ignored (Hann sidelobes fall as bin^-3).
+    A segment's windowed, mean-removed DFT is X_m = sum_j Z_j G_m(f_j) with G_m(f) = W(m/n - f dt) - e(f) W(m/n), W
+    the window's DTFT and e(f) the segment mean of exp(i 2 pi f t); so E[P_m] = scale_m sum_j |G_m(f_j)|^2 L_j over the
+    lines +-f_j (the line -f_j carries conj(L_j); G's period 1/dt folds partners near Nyquist back). Lines more than
+    KERNEL_BAND bins away are ignored.
 
     Parameters
     ----------
@@ -69,17 +67,8 @@ class WelchKernel:
         return cls._window_dtft(m / n - f * dt, n) - mean_e * cls._window_dtft(m / n + 0.0 * f, n)
 
     def apply(self, lines: np.ndarray) -> np.ndarray:
-        """Expected Welch estimate of a line process.
-
-        Parameters
-        ----------
-        lines : numpy.ndarray
-            (nt // 2 + 1,) two-sided line (cross-)variances L_j [m^2 s^-2], real or complex.
-
-        Returns
-        -------
-        numpy.ndarray
-            (n // 2 + 1,) expected one-sided Welch (cross-)spectrum [m^2 s^-2 Hz^-1].
+        """(n // 2 + 1,) expected one-sided Welch (cross-)spectrum [m^2 s^-2 Hz^-1] of the two-sided line
+        (cross-)variances ``lines`` (nt // 2 + 1,) [m^2 s^-2], real or complex.
         """
         lines = np.asarray(lines)
         vals = lines[self.idx]
@@ -89,21 +78,7 @@ class WelchKernel:
 
 
 def segment_gain(m, f_hz, setup: WelchSetup) -> np.ndarray:
-    """G_m(f): bin m of a segment's windowed, mean-removed DFT of exp(i 2 pi f t) (see :class:`WelchKernel`).
-
-    Parameters
-    ----------
-    m : array_like
-        Welch bin indices [-].
-    f_hz : array_like
-        Line frequencies [Hz] (any sign; broadcast against ``m``).
-    setup : WelchSetup
-        Segment length and sampling interval dt [s].
-
-    Returns
-    -------
-    numpy.ndarray
-        Complex gains [-]; the expected one-sided estimate of bin m is scale_m sum_j |G_m(f_j)|^2 L_j
-        over the lines +-f_j of (cross-)variance L_j.
+    """Complex gains G_m(f) [-] of Welch bins ``m`` for lines at ``f_hz`` [Hz] (any sign; broadcast): bin m of a
+    segment's windowed, mean-removed DFT of exp(i 2 pi f t) (:class:`WelchKernel`).
     """
     return WelchKernel._g(np.asarray(m), np.asarray(f_hz, dtype=float), setup.nperseg, setup.dt_s)

@@ -17,17 +17,11 @@ import numpy as np
 
 @numba.njit(nogil=True, cache=True)
 def point_moments(d, mask_index, block):
-    """Per-point sums over time of a float32 span (t, ny, nz), and the mean over the points ``mask_index``
-    (flat indices into ny nz) at every time step; all float64.
+    """Per-point float64 sums over time of a float32 span (t, ny, nz), and the mean over the points ``mask_index`` (flat
+    indices) at every time step.
 
-    Returns
-    -------
-    s, s2 : numpy.ndarray
-        (ny, nz) sum [m/s] and sum of squares [m^2 s^-2] over t.
-    block_sums : numpy.ndarray
-        (t // block, ny, nz) sums [m/s] over the whole blocks of ``block`` time steps (segment means).
-    masked_mean : numpy.ndarray
-        (t,) mean over the masked points [m/s].
+    Returns (s, s2) (ny, nz) sum [m/s] and sum of squares [m^2 s^-2]; the (t // block, ny, nz) sums over whole blocks
+    of ``block`` steps (segment means); the (t,) masked mean [m/s].
     """
     nt, ny, nz = d.shape
     npt = ny * nz
@@ -84,14 +78,11 @@ def window_segment(d, start, window, mean, out):
 
 @numba.njit(nogil=True, cache=True)
 def spectrum_sums(xv, ny, sep_a, sep_b, total, part_a, part_b, cross):
-    """Add one segment's spectral sums of one component (float32 view (nf, ny_x, 2 nz) of its spectra; the
-    rows y < ny are the plane, those after are not read).
+    """Add one segment's spectral sums of one component (float32 view (nf, ny_x, 2 nz); rows y >= ny are not read).
 
-    Adds, per frequency f (index 0 .. nf-1), into float64 arrays: ``total[f]`` sum of |X|^2 over the
-    plane; for separation k = (sep_a[k], sep_b[k]) grid steps, ``part_a[k, f]`` and ``part_b[k, f]``
-    sums of |X|^2 over the first (y < ny - a, z < nz - b) and second (y >= a, z >= b) points of the
-    pairs, and ``cross[k, f, 0 / 1]`` real / imaginary part of sum conj(X(y, z)) X(y + a, z + b).
-    The squares are summed over y per element (float32 cumulative column sums), then over z in float64.
+    Per frequency f, into float64 arrays: ``total[f]`` sum of |X|^2 over the plane; for separation
+    k = (sep_a[k], sep_b[k]) ``part_a[k, f]``, ``part_b[k, f]`` sums of |X|^2 over the first and second points of the
+    pairs, ``cross[k, f, 0 / 1]`` Re / Im of sum conj(X(y, z)) X(y + a, z + b).
     """
     nf, _, nz2 = xv.shape
     nz = nz2 // 2

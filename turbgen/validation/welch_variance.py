@@ -1,44 +1,28 @@
 """Exact covariance of Welch estimates of an nt-periodic Gaussian line process (short records).
 
-Theory side of the tolerances (independent of the generator): the model on the record is a
-sum of lines q = 0 .. nt-1 (frequency q / (nt dt), q > nt/2 the negative frequencies) with
-independent circular Gaussian amplitudes Y_q, E|Y_q|^2 = L_q and Y_{nt-q} = conj(Y_q) (real
-field). A segment starting at sample t0 has the windowed, mean-removed DFT
-
-    X_{t0, m} = sum_q Y_q c_m(q) exp(i 2 pi q t0 / nt),   c_m(q) = G_m(q / (nt dt))
-
-(G_m of ``welch_kernel.WelchKernel``: Hann DTFT minus the segment-mean term), so by Isserlis
+The model on the record is a sum of lines q = 0 .. nt-1 (frequency q / (nt dt), q > nt/2 negative) with independent
+circular Gaussian amplitudes Y_q, E|Y_q|^2 = L_q, Y_{nt-q} = conj(Y_q). A segment starting at sample t0 has the
+windowed, mean-removed DFT X_{t0, m} = sum_q Y_q c_m(q) exp(i 2 pi q t0 / nt), c_m(q) = G_m(q / (nt dt))
+(``welch_kernel.segment_gain``), so by Isserlis
 
     Cov(|X_{s,m}|^2, |X_{s',m'}|^2) = |A|^2 + |B|^2,
     A = sum_q L_q c_m(q) conj(c_m'(q)) e^{i 2 pi q D / nt},   B = sum_q L_q c_m(q) c_m'(nt - q) e^{i 2 pi q D / nt},
 
-D = t0_s - t0_s'. Summed over all segment pairs this is the exact variance of the Welch average of one
-point, including everything the "K_eff = K / (1 + 2 rho_w ...)" rule of thumb leaves out: the actual
-segment starts (segments lost at span edges), overlap for a coloured spectrum, correlation of
-non-overlapping segments where the spectrum varies within a bin (low bins of short records), the
-per-segment mean removal, and the correlation of neighbouring bins for a coloured spectrum.
+D = t0_s - t0_s'. Summed over all segment pairs this is the exact variance of the Welch average, including what
+the "K_eff = K / (1 + 2 rho_w ...)" rule of thumb leaves out: the actual segment starts, overlap for a coloured
+spectrum, the per-segment mean removal and the correlation of neighbouring bins.
 
-Averages over N points/planes (``averaged``): point p, q have line cross-covariances L_q coh_pq(f_q), so
-A and B of the pair carry coh_pq inside the line sum, and the covariance of the average is
+Averages over N points/planes (``averaged``): the covariance of the average is
+(1 / N^2) sum_pq (|A_pq|^2 + |B_pq|^2) = sum_ij a_i conj(a_j) R(nu_i, nu_j) (same for B), with coh_pq(f)
+interpolated linearly in log f between frequency nodes nu_i, a_i the line sums of A weighted by node i's
+interpolation weight, and R the two-frequency correlation sum of the point set (``Theory.rho_*``). One node per
+bin would miss that the lowest bins collect lines from ~0.3 f_m to ~2 f_m by leakage, where the coherence is
+higher. Lines at negative frequencies use R at |f| (exact for real coherences).
 
-    (1 / N^2) sum_pq (|A_pq|^2 + |B_pq|^2) = sum_ij a_i conj(a_j) R(nu_i, nu_j)   (same for B),
-
-with coh_pq(f) interpolated (linear in log f) between frequency nodes nu_i, a_i the line sums of A with
-line q weighted by the interpolation weight of node i, and R(nu_i, nu_j) = sum_pq coh_pq(nu_i)
-conj(coh_pq(nu_j)) / N^2 the two-frequency correlation sum of the point set (``Theory.rho_*``). Taking
-R(f_m, f_m) for every line instead (the one-node rule ``rho_bar(f_m) x one-point covariance``) misses
-that the lowest Welch bins collect lines from ~0.3 f_m to ~2 f_m by leakage, and the coherence of
-those lower lines is higher: measured over 400 correct Kaimal fields (nt 512, 12 x 12 x 2 planes) the
-spectrum_u z-scores of bins 1 and 2 had sd 1.20 and 1.34 under that rule (this sum: exact sd ratio
-1.25, 1.29). Lines at negative frequencies use R at |f| (exact for real coherences, e.g. Kaimal; for
-complex ones the leakage weight of those lines in bins >= 1 is small).
-
-Cost: lines within LINE_BAND Welch bins of each bin (Hann sidelobes: |c|^2 falls as bin^-6, so
-the neglected part is < 1e-6 of the sum), bin pairs up to MAX_LAG bins apart (beyond, |A|^2 + |B|^2 <
-1e-4 of the diagonal for a Hann window), all distinct start differences D. When that is more than
-MAX_WORK products the rule-of-thumb model is used (very long records: many segments, where it is accurate).
-The sums over D and over A, B do not depend on the point set, so ``node_terms`` folds them into one Gram
-matrix G_m = sum_D count_D (Re a Re a^T + Im a Im a^T) per bin and ``averaged`` is sum_ij G_m,ij R_ij.
+Cost: lines within LINE_BAND bins of each bin (Hann |c|^2 falls as bin^-6), bin pairs up to MAX_LAG apart, all
+distinct start differences D; above MAX_WORK products the rule of thumb is used (long records, where it is
+accurate). ``node_terms`` folds the sums over D, A and B into one Gram matrix G_m per bin and ``averaged`` is
+sum_ij G_m,ij R_ij.
 """
 
 from __future__ import annotations
@@ -48,29 +32,16 @@ import math
 import numpy as np
 
 from turbgen.validation.estimators import WelchSetup
+from turbgen.validation.welch_kernel import segment_gain
 
 LINE_BAND = 8  # Welch bins either side whose lines enter a bin's sums
 MAX_LAG = 3  # covariances kept between bins up to this many bins apart
 MAX_WORK = 6e7  # bins x lines x (lags x bin offsets) above which the rule-of-thumb model is used
 
 
-def _hann_dtft(nu, n):
-    """DTFT of the periodic Hann window at normalised frequency nu, and the Dirichlet kernel d used for it."""
-
-    def d(x):
-        zz = np.exp(-2j * np.pi * x)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            out = (1.0 - np.exp(-2j * np.pi * n * x)) / (1.0 - zz)  # zz^n as one exp
-        return np.where(np.abs(np.sin(np.pi * x)) < 1e-12, complex(n), out)
-
-    return 0.5 * d(nu) - 0.25 * d(nu - 1.0 / n) - 0.25 * d(nu + 1.0 / n), d
-
-
 class WelchCovariance:
-    """Covariance matrix (bins m, m' with |m - m'| <= MAX_LAG) of a Welch average over given segment starts.
-
-    ``cov(lines)`` returns a dict lag d -> (nbins - d,) array Cov(P_m, P_{m+d}) of the one-point one-sided
-    Welch estimate [(m^2 s^-2 Hz^-1)^2]; ``None`` when too expensive (see module docstring).
+    """Covariance (bins m, m' with |m - m'| <= MAX_LAG) of a Welch average over the segment ``starts`` of a record of
+    ``nt`` samples; ``feasible`` False when too expensive (module docstring).
     """
 
     def __init__(self, setup: WelchSetup, nt: int, starts):
@@ -95,19 +66,13 @@ class WelchCovariance:
         self.offsets = np.arange(-ext, ext + 1)
         q = self.base[:, None] + self.offsets[None, :]  # (nb, nq) extended line index
         self.q = np.mod(q, nt)
-        dt = setup.dt_s
-        f = q / (nt * dt)
-        w_m, d = _hann_dtft(m[:, None] / n - f * dt, n)
-        mean_e = d(-f * dt) / n
-        w0, _ = _hann_dtft(m[:, None] / n + 0.0 * f, n)
-        self.c = w_m - mean_e * w0  # (nb, nq): c_m(q), q = self.q
+        f = q / (nt * setup.dt_s)
+        self.c = segment_gain(m[:, None], f, setup)  # (nb, nq): c_m(q), q = self.q
         self.c[self.q == 0] = 0.0
         # lines farther than ``width`` from bin m's own base carry nothing for bin m
         self.c[np.abs(q - self.base[:, None]) > self.width] = 0.0
         # c_m(nt - q) on the same index window: the partner (negative) frequency of each q
-        fneg = -f
-        w_mn, _ = _hann_dtft(m[:, None] / n - fneg * dt, n)
-        self.cneg = w_mn - (d(-fneg * dt) / n) * w0
+        self.cneg = segment_gain(m[:, None], -f, setup)
         self.cneg[self.q == 0] = 0.0  # (not windowed: c_m(-q) matters where -q is near bin m, i.e. m near 0 or n/2)
         self.phase = np.exp(2j * np.pi * np.outer(self.lags, q.ravel()) / nt).reshape(self.lags.size, *q.shape)
 
@@ -118,21 +83,11 @@ class WelchCovariance:
         return np.asarray(lines_half, float)[j]
 
     def node_terms(self, lines_half: np.ndarray, node_f: np.ndarray) -> dict | None:
-        """Per-node line sums a_i of A and B (module docstring), gathered for ``averaged`` into the Gram
-        matrices G_m = sum over segment lags D (weighted by their count) and over A, B of
-        Re(a) Re(a)^T + Im(a) Im(a)^T, so that the covariance for any R is sum_ij G_m,ij R_ij.
+        """Lag d -> (nbins - d, nn, nn) Gram matrices G_m [(m^2 s^-2)^2] of the per-node line sums (module docstring),
+        so that the covariance for any R is sum_ij G_m,ij R_ij; None when too expensive.
 
-        Parameters
-        ----------
-        lines_half : numpy.ndarray
-            (nt // 2 + 1,) two-sided line variances L_j [m^2 s^-2].
-        node_f : numpy.ndarray
-            (nn,) increasing frequency nodes [Hz] of the correlation sums.
-
-        Returns
-        -------
-        dict or None
-            Lag d -> (nbins - d, nn, nn) G_m [(m^2 s^-2)^2]; None when too expensive.
+        ``lines_half`` (nt // 2 + 1,) are the two-sided line variances L_j [m^2 s^-2], ``node_f`` (nn,) the increasing
+        frequency nodes [Hz] of the correlation sums.
         """
         if not self.feasible:
             return None
@@ -157,19 +112,10 @@ class WelchCovariance:
         return out
 
     def averaged(self, terms: dict | None, rho2: np.ndarray) -> dict | None:
-        """Covariance of the Welch estimate averaged over a point set with two-frequency correlation sum ``rho2``.
+        """Lag d -> (nbins - d,) Cov(P_m, P_{m+d}) [(m^2 s^-2 Hz^-1)^2] of the Welch estimate averaged over a point set.
 
-        Parameters
-        ----------
-        terms : dict or None
-            ``node_terms`` of the line spectrum (None: too expensive, returned as None).
-        rho2 : numpy.ndarray
-            (nn, nn) R(nu_i, nu_j) [-] of the point set at the nodes of ``terms`` (all ones: one point).
-
-        Returns
-        -------
-        dict or None
-            Lag d -> (nbins - d,) Cov(P_m, P_{m+d}) of the point average [(m^2 s^-2 Hz^-1)^2].
+        ``terms`` from :meth:`node_terms` (None passes through), ``rho2`` (nn, nn) the point set's R(nu_i, nu_j) [-]
+        (all ones: one point).
         """
         if terms is None:
             return None
@@ -180,17 +126,8 @@ class WelchCovariance:
                 for lag, gram in terms.items()}
 
     def cov(self, lines_half: np.ndarray) -> dict | None:
-        """Covariance of the one-point Welch estimate of a line process.
-
-        Parameters
-        ----------
-        lines_half : numpy.ndarray
-            (nt // 2 + 1,) two-sided line variances L_j [m^2 s^-2], j = 0 .. nt // 2.
-
-        Returns
-        -------
-        dict or None
-            Lag d -> (nbins - d,) Cov(P_m, P_{m+d}) [(m^2 s^-2 Hz^-1)^2]; None when too expensive.
+        """Lag d -> (nbins - d,) Cov(P_m, P_{m+d}) [(m^2 s^-2 Hz^-1)^2] of the one-point Welch estimate of the line
+        variances ``lines_half`` (nt // 2 + 1,) [m^2 s^-2]; None when too expensive.
         """
         if not self.feasible:
             return None
@@ -213,8 +150,9 @@ class WelchCovariance:
 
 
 def _log_hat_weights(f: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-    """Weights (f.shape + (nn,)) of linear interpolation in log f between ``nodes`` [Hz] (clipped to their
-    range): sum_i w_i(f) g(nu_i) interpolates g at f as ``Theory.rho`` does; the weights sum to 1."""
+    """Weights (f.shape + (nn,)) of linear interpolation in log f between ``nodes`` [Hz] (clipped to their range), as
+    ``Theory.rho`` interpolates; they sum to 1.
+    """
     x = np.log(np.clip(f, nodes[0], nodes[-1]))
     xn = np.log(nodes)
     k = np.clip(np.searchsorted(xn, x, side="right") - 1, 0, nodes.size - 2)
