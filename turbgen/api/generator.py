@@ -229,6 +229,8 @@ class KaimalGenerator(_Generator[KaimalRun]):
         v, w incoherent in yz (IEC) or with the u coherence. Default "white".
     rescale : bool, optional
         Scale the spectra so the expected sigma is the nominal one.
+    coherence : Mapping or callable, optional
+        User yz coherence ``coh(f_hz, r_m, U_m_s)`` [-] or its table, as ``turbgen.kaimal``'s.
     threads : int, optional
         FFT threads (default: all cores); never changes the field.
 
@@ -251,10 +253,10 @@ class KaimalGenerator(_Generator[KaimalRun]):
                  hub_height_m: float = 90.0, long_model: str = "exp",
                  a_x: float | None = None, b_x: float | None = None,
                  long_components: str = "u",
-                 vw_coherence: str = "white", rescale: bool = False,
+                 vw_coherence: str = "white", rescale: bool = False, coherence=None,
                  threads: int | None = None):  # fmt: skip
         self.run = KaimalRun(params, grid, U_m_s, 1, hub_height_m, long_model, a_x, b_x,
-                             long_components, rescale, vw_coherence)  # fmt: skip
+                             long_components, rescale, vw_coherence, coherence=coherence)  # fmt: skip
         self.threads = threads
         from turbgen.runs.kaimal import kaimal_generator
 

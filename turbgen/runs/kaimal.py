@@ -38,7 +38,7 @@ def kaimal_generator(run: KaimalRun, workers: int | None = None, keep: bool = Fa
     seed-free part kept for KaimalEvo.reseeded)."""
     return KaimalEvo(run.kaimal, run.grid, run.U_m_s, run.seed, long_coherence=run.long_coherence(),
                      long_components=run.long_components, coherent_vw=run.vw_coherence == "exp",
-                     rescale=run.rescale, workers=workers, keep=keep,
+                     rescale=run.rescale, workers=workers, keep=keep, yz_coherence=run.coherence,
                      variances=None if run.spectrum is None else run.spectrum.line_variances())
 
 

@@ -13,6 +13,7 @@ from turbgen.grid import Grid
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
 from turbgen.theory.params import KaimalParams, MannParams
+from turbgen.theory.user_coherence import LineCoherence
 from turbgen.theory.user_spectra import LineSpectrum
 
 
@@ -44,6 +45,8 @@ class KaimalModel:
         Coefficients of the exponential longitudinal coherence (``long_model == "exp"``), else None.
     spectrum : LineSpectrum or None
         The user spectra the store was made with (band means on its lines), or None for the Kaimal spectra.
+    coherence : LineCoherence or None
+        The user yz coherence the store was made with, or None for the IEC exponential.
     """
 
     params: KaimalParams
@@ -54,6 +57,7 @@ class KaimalModel:
     a_x: float | None = None
     b_x: float | None = None
     spectrum: LineSpectrum | None = None
+    coherence: LineCoherence | None = None
 
 
 def mann_params_from_attrs(attrs: dict) -> MannParams:
@@ -89,4 +93,4 @@ def kaimal_model_from_attrs(attrs: dict) -> KaimalModel:
     """
     run = KaimalRun.from_attrs(attrs)
     return KaimalModel(run.kaimal, run.long_model, run.long_components, run.vw_coherence == "exp", run.rescale,
-                       run.a_x, run.b_x, run.spectrum)
+                       run.a_x, run.b_x, run.spectrum, run.coherence)
