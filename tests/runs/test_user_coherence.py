@@ -15,12 +15,13 @@ import turbgen
 from turbgen.errors import ParameterError
 from turbgen.runs.kaimal import kaimal_generator
 from turbgen.spec.kaimal import KaimalRun
-from turbgen.store import create_store, open_store
-from turbgen.store.layout import CALLER_ATTRS
+from turbgen.store import open_store
 from turbgen.synthesis.kaimal_conditioning import component_prior
 from turbgen.theory.coherence_models import exponential_yz
 from turbgen.theory.kaimal import iec_kaimal_params
 from turbgen.validation import validate
+
+from relabelled_store import without_parameter
 
 SMALL = dict(U=12, nt=128, ny=6, nz=6, dy=5, planes=[0, 50, 100], seed=2)
 IEC = iec_kaimal_params(12.0)
@@ -79,14 +80,7 @@ def test_validate_passes_against_the_stored_coherence_and_fails_against_the_iec_
     report = validate(site_store, rotor_radius_m=40.0)
     assert report.passed, report.table()
     # the same field declared an IEC-coherence field (the store's attributes without the table) fails its coherence
-    fs = open_store(site_store)
-    attrs = {k: fs.attrs[k] for k in CALLER_ATTRS}
-    attrs["parameters"] = {k: v for k, v in attrs["parameters"].items() if k != "coherence"}
-    plain = tmp_path / "plain.zarr"
-    with create_store(plain, fs.grid, attrs) as w:
-        for c in "uvw":
-            for ix in range(fs.grid.nx):
-                w.write(c, ix, fs.read_plane(c, ix))
+    plain = without_parameter(site_store, "coherence", tmp_path / "plain.zarr")
     failed = {m.name for m in validate(plain, rotor_radius_m=40.0).metrics if not m.passed}
     assert "yz_coherence_u" in failed and not {"spectrum_u", "yz_coherence_v"} & failed
 

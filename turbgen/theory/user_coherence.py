@@ -47,10 +47,8 @@ class LineCoherence:
 
     Parameters
     ----------
-    nt : int
-        Samples of the run's record.
-    dt_s : float
-        Its sampling interval [s].
+    nt, dt_s : int, float
+        The run's record: samples and interval [s].
     r_m : tuple of float
         (n,) increasing nodes [m], the first 0.
     coh : tuple of tuple of float
