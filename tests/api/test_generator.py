@@ -102,6 +102,29 @@ def test_kaimal_generator_is_turbgen_kaimal():
     assert turbgen.validate(a).metrics
 
 
+def test_kaimal_generator_builds_its_samplers_once(monkeypatch, tmp_path):
+    from turbgen.spec.kaimal import kaimal_params
+    from turbgen.synthesis import circulant, kaimal_evo
+
+    grid = turbgen.Grid(nt=128, dt_s=0.5, x_m=(0, 50, 100), ny=6, nz=6, dy_m=5, dz_m=5)
+    g = turbgen.KaimalGenerator(kaimal_params(12.0, "A", 90.0), grid, U_m_s=12, long_components="uvw",
+                                vw_coherence="exp")
+    first = g.field(seed=1)
+    built = []
+    monkeypatch.setattr(kaimal_evo, "embed_many", lambda *a, **k: built.append(1) or circulant.embed_many(*a, **k))
+    monkeypatch.setattr(kaimal_evo, "longitudinal_factors",
+                        lambda *a: built.append(1) or kaimal_evo.principal_sqrt(np.ones((1, 3, 3))))
+    further = [g.field(seed=2), g.field(seed=3, out=tmp_path / "s3.zarr").load()]
+    assert built == []  # neither samplers nor longitudinal factors made again
+    monkeypatch.undo()
+    for seed, ds in zip((2, 3), further):
+        ref = turbgen.kaimal(U=12, nt=128, ny=6, nz=6, dy=5, planes=[0, 50, 100], seed=seed, long_components="uvw",
+                             vw_coherence="exp")
+        for c in ("u", "v", "w"):
+            np.testing.assert_array_equal(ds[c].values, ref[c].values)
+        assert ds.attrs["synthesis_report"] == first.attrs["synthesis_report"] == ref.attrs["synthesis_report"]
+
+
 def test_bad_seed_is_one_line_parameter_error():
     g = turbgen.MannGenerator(turbgen.MannParams(ae=0.05, length_scale_m=30, gamma=3.1),
                               turbgen.Grid(nt=16, dt_s=0.5, x_m=(0,), ny=4, nz=4, dy_m=8, dz_m=8), pad_yz=1)

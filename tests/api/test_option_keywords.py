@@ -54,3 +54,19 @@ def test_info_of_a_field_in_memory_and_of_an_export(tmp_path):
     result = turbgen.export(ds, "bts", tmp_path / "k.bts")
     assert len(result.paths) == 2 and result.paths[1].name == "k_InflowWind_bts.dat"  # runner files by default
     assert dict(turbgen.info(tmp_path / "k.bts"))  # the export's header rows, as turbgen info shows them
+
+
+def test_kaimal_constrain_in_memory_is_the_field_written_with_out(tmp_path, monkeypatch):
+    from turbgen.runs import constrain_kaimal
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a temporary store was written")
+
+    monkeypatch.setattr(constrain_kaimal, "create_store", refuse)  # in memory: no store, not even a temporary one
+    api = turbgen.kaimal(U=12, seed=3, constrain=[MAST], conditional_mean=False, **KAIMAL)
+    monkeypatch.undo()
+    written = turbgen.kaimal(U=12, seed=3, constrain=[MAST], out=tmp_path / "k.zarr", **KAIMAL)
+    _same_values(api, written)
+    mine = {k: v for k, v in api.attrs.items() if k != "created_utc"}
+    assert mine == {k: v for k, v in written.attrs.items() if k != "created_utc"}
+    assert api.attrs["constraints"]["residual_rms_m_s"] < 0.5

@@ -22,12 +22,13 @@ from turbgen.cli import cli as main
 from turbgen.errors import ParameterError
 from turbgen.runs.kaimal import kaimal_generator
 from turbgen.spec.kaimal import KaimalRun
-from turbgen.store import create_store, open_store
-from turbgen.store.layout import CALLER_ATTRS
+from turbgen.store import open_store
 from turbgen.theory.kaimal import iec_kaimal_params, kaimal_band_variance, kaimal_spectrum
 from turbgen.theory.lattice import line_bands
 from turbgen.theory.user_spectra import LineSpectrum
 from turbgen.validation import validate
+
+from relabelled_store import without_parameter
 
 SMALL = dict(U=12, nt=128, ny=6, nz=6, planes=[0, 50, 100], seed=2)
 IEC = iec_kaimal_params(12.0)
@@ -114,14 +115,7 @@ def test_validate_passes_against_the_recorded_table_and_fails_against_kaimal(sit
     report = validate(site_store, rotor_radius_m=40.0)
     assert report.passed, report.table()
     # the same field declared a default Kaimal field (the store's attributes without the table) fails its spectra
-    fs = open_store(site_store)
-    attrs = {k: fs.attrs[k] for k in CALLER_ATTRS}
-    attrs["parameters"] = {k: v for k, v in attrs["parameters"].items() if k != "spectrum"}
-    plain = tmp_path / "plain.zarr"
-    with create_store(plain, fs.grid, attrs) as w:
-        for c in "uvw":
-            for ix in range(fs.grid.nx):
-                w.write(c, ix, fs.read_plane(c, ix))
+    plain = without_parameter(site_store, "spectrum", tmp_path / "plain.zarr")
     failed = {m.name for m in validate(plain, rotor_radius_m=40.0).metrics if not m.passed}
     assert {"spectrum_u", "spectrum_v", "spectrum_w"} <= failed
 

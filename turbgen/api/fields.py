@@ -489,6 +489,7 @@ def kaimal(
     conditional_mean: bool = False,
     progress: bool = False,
     spectrum=None,
+    coherence=None,
     fft_backend: str | None = None,
 ) -> xr.Dataset:
     """A Kaimal 4D field with longitudinal coherence (IEC 61400-1; Guo et al. 2023): the field of ``turbgen kaimal``.
@@ -527,7 +528,8 @@ def kaimal(
     out : str or os.PathLike, optional
         Store to write. None: the field is returned in memory (no file is left), made straight into the Dataset
         when the run's arrays (spectrum in memory) and the field fit 80 % of the available memory, else through a
-        temporary store loaded back (the spectrum in a scratch file). The same values either way.
+        temporary store loaded back (the spectrum in a scratch file); a constrained field always straight into the
+        Dataset. The same values either way.
     config : str, os.PathLike or Mapping, optional
         A run file (TOML/JSON) or a mapping of its keys; keywords override it.
     preset : str, optional
@@ -556,6 +558,11 @@ def kaimal(
         run's lines 1/(nt dt) to 1/(2 dt), interpolated linearly), or a callable ``S(f_hz) -> (3, n)`` [m^2/s],
         averaged over each line's band (turbgen.theory.user_spectra). The store records the band means, so
         ``attrs["parameters"]["spectrum"]`` remakes the field without the callable.
+    coherence : Mapping or callable, optional
+        User yz coherence [-] in place of the IEC exponential (u, and v, w with ``vw_coherence="exp"``): a callable
+        ``coh(f_hz, r_m, U_m_s)`` evaluated on the run's lines x the grid's separations, or a table ``{"f_hz",
+        "r_m", "coh"}`` (interpolated in f onto the lines; turbgen.theory.user_coherence). The store records the
+        values, so ``attrs["parameters"]["coherence"]`` remakes the field without the callable.
     fft_backend : str, optional
         FFT backend, as :func:`mann`'s.
 
@@ -587,8 +594,17 @@ def kaimal(
     if not constrain and (noise is not None or conditional_mean):
         raise ParameterError("`noise` and `conditional_mean` need `constrain`")
     run, _ = kaimal_run(options, config, preset, presets_file)
+    if coherence is not None:  # a keyword only (a callable or table), no option of the command
+        run = replace(run, coherence=coherence)
     if constrain:
-        make = _kaimal_constrained_maker(run, constrain, noise, conditional_mean, overwrite, chunks, threads)
+        from turbgen.runs.constrain import load_constraints
+        from turbgen.runs.constrain_kaimal import kaimal_constrained_in_memory
+
+        constraints = load_constraints([constrain] if isinstance(constrain, (str, os.PathLike)) else constrain)
+        if out is None:
+            return kaimal_constrained_in_memory(run, constraints, noise_m_s=noise, conditional_mean=conditional_mean,
+                                                threads=threads)[0]  # fmt: skip
+        make = _kaimal_constrained_maker(run, constraints, noise, conditional_mean, overwrite, chunks, threads)
     else:
         # straight into the Dataset when the run's arrays with the spectrum in memory and the field fit 80 % of the
         # available memory (the rule by which run_kaimal keeps its spectrum in memory), else through a store
@@ -598,7 +614,7 @@ def kaimal(
         if out is None and (available is None or in_memory_bytes(run) <= 0.8 * available):
             return kaimal_in_memory(run, progress=progress, threads=threads)[0]
         make = _kaimal_maker(run, overwrite, chunks, threads, progress)
-    if out is None:  # a conditioned field, or one that does not fit: through a temporary store, loaded back
+    if out is None:  # a field that does not fit: through a temporary store, loaded back
         return _through_store(make, run.grid, f"kaimal_s{run.seed}.zarr")
     make(Path(out))
     return _as_dataset(Path(out))
@@ -617,14 +633,12 @@ def _kaimal_maker(run: KaimalRun, overwrite, chunks, threads, progress):
 
     return make
 
-def _kaimal_constrained_maker(run: KaimalRun, constrain, noise, conditional_mean: bool, overwrite, chunks, threads):
-    """The function writing ``run`` conditioned on ``constrain`` to a path as ``turbgen kaimal --constrain`` does
-    (turbgen.runs.constrain_kaimal.run_kaimal_constrained); the data are loaded, placed and the memory checked here,
-    before anything is written."""
-    from turbgen.runs.constrain import load_constraints
+def _kaimal_constrained_maker(run: KaimalRun, constraints, noise, conditional_mean: bool, overwrite, chunks, threads):
+    """The function writing ``run`` conditioned on ``constraints`` (loaded) to a path as ``turbgen kaimal
+    --constrain`` does (turbgen.runs.constrain_kaimal.run_kaimal_constrained); the data are placed and the memory
+    checked here, before anything is written."""
     from turbgen.runs.constrain_kaimal import place_kaimal, require_constrained_memory, run_kaimal_constrained
 
-    constraints = load_constraints([constrain] if isinstance(constrain, (str, os.PathLike)) else constrain)
     require_constrained_memory(run, place_kaimal(run, constraints, noise), threads)
 
     def make(path: Path) -> None:

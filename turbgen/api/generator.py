@@ -6,8 +6,8 @@
 
 :class:`MannGenerator` builds the Mann stencil (the per-wavenumber factors of the sheared tensor, Mann 1994, Eq. 46,
 with the evolution rates of Guo et al. 2022) once in memory in its constructor; each :meth:`MannGenerator.field` draws
-only the random coefficients and transforms them. :class:`KaimalGenerator` checks its run once and makes each seed's
-field by the one Kaimal synthesis. Both give the fields of ``turbgen.mann`` / ``turbgen.kaimal`` and of the commands
+only the random coefficients and transforms them. :class:`KaimalGenerator` keeps its yz samplers (circulant tori or
+dense factors) and longitudinal factors from its first field on; a further seed draws and transforms only. Both give the fields of ``turbgen.mann`` / ``turbgen.kaimal`` and of the commands
 for the same inputs, bit for bit (the same run functions of turbgen.runs).
 """
 
@@ -205,8 +205,8 @@ class MannGenerator(_Generator[MannRun]):
 
 class KaimalGenerator(_Generator[KaimalRun]):
     """Kaimal 4D fields (IEC 61400-1 spectra and yz coherence; longitudinal coherence of Guo et al. 2023, Eq. 18) of
-    one parameter set and grid, one per seed: the run checked once, each field made by the Kaimal synthesis of
-    ``turbgen.kaimal``.
+    one parameter set and grid, one per seed: the run checked once, its yz samplers and longitudinal factors made by
+    the first field and kept (the default grid's: ~23 MiB), so a further seed costs its random draws and transforms.
 
     Parameters
     ----------
@@ -229,6 +229,8 @@ class KaimalGenerator(_Generator[KaimalRun]):
         v, w incoherent in yz (IEC) or with the u coherence. Default "white".
     rescale : bool, optional
         Scale the spectra so the expected sigma is the nominal one.
+    coherence : Mapping or callable, optional
+        User yz coherence ``coh(f_hz, r_m, U_m_s)`` [-] or its table, as ``turbgen.kaimal``'s.
     threads : int, optional
         FFT threads (default: all cores); never changes the field.
 
@@ -251,11 +253,15 @@ class KaimalGenerator(_Generator[KaimalRun]):
                  hub_height_m: float = 90.0, long_model: str = "exp",
                  a_x: float | None = None, b_x: float | None = None,
                  long_components: str = "u",
-                 vw_coherence: str = "white", rescale: bool = False,
+                 vw_coherence: str = "white", rescale: bool = False, coherence=None,
                  threads: int | None = None):  # fmt: skip
         self.run = KaimalRun(params, grid, U_m_s, 1, hub_height_m, long_model, a_x, b_x,
-                             long_components, rescale, vw_coherence)  # fmt: skip
+                             long_components, rescale, vw_coherence, coherence=coherence)  # fmt: skip
         self.threads = threads
+        from turbgen.runs.kaimal import kaimal_generator
+
+        self._evo = kaimal_generator(self.run, workers=threads, keep=True)
+        self._lock = threading.Lock()  # one field at a time: the kept samplers are made by the first
 
     def __repr__(self) -> str:
         return f"KaimalGenerator({self.run.kaimal!r}, {self.run.grid!r}, U_m_s={self.run.U_m_s!r})"
@@ -268,9 +274,12 @@ class KaimalGenerator(_Generator[KaimalRun]):
     def _in_memory(self, run: KaimalRun, progress: bool) -> xr.Dataset:
         from turbgen.runs.kaimal import kaimal_in_memory
 
-        return kaimal_in_memory(run, progress=progress, threads=self.threads)[0]
+        with self._lock:
+            return kaimal_in_memory(run, progress=progress, threads=self.threads, gen=self._evo.reseeded(run.seed))[0]
 
     def _to_store(self, run: KaimalRun, path: Path, overwrite: bool, chunks: int | None, progress: bool) -> None:
         from turbgen.runs.kaimal import run_kaimal
 
-        run_kaimal(run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=self.threads)
+        with self._lock:
+            run_kaimal(run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=self.threads,
+                       gen=self._evo.reseeded(run.seed))

@@ -35,6 +35,7 @@ from turbgen.runs.constrain import (PlacedData, combine_streams, conditioned_sum
 from turbgen.runs.kaimal import kaimal_generator, memory_needed, store_attrs
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import create_store
+from turbgen.store.memory import MemoryWriter
 from turbgen.synthesis import conditioning as cond
 from turbgen.synthesis import kaimal_conditioning as kcond
 from turbgen.synthesis.kaimal_evo import COMPONENTS
@@ -154,10 +155,11 @@ def constrained_memory_bytes(run: KaimalRun, placed: KaimalPlaced, threads: int 
     return memory_needed(g, sampler=sampler) + extra
 
 
-def require_constrained_memory(run: KaimalRun, placed: KaimalPlaced, threads: int | None = None) -> None:
-    """Refuse (ParameterError) a constrained run whose :func:`constrained_memory_bytes` exceed the available memory
-    (constrained runs keep the spectrum in memory: no scratch file)."""
-    require_memory(constrained_memory_bytes(run, placed, threads),
+def require_constrained_memory(run: KaimalRun, placed: KaimalPlaced, threads: int | None = None,
+                               field_bytes: int = 0) -> None:
+    """Refuse (ParameterError) a constrained run whose :func:`constrained_memory_bytes`, plus ``field_bytes`` (its
+    field in memory), exceed the available memory (constrained runs keep the spectrum in memory: no scratch file)."""
+    require_memory(constrained_memory_bytes(run, placed, threads) + field_bytes,
                    f"the constrained Kaimal run ({placed.streams.n_streams} measurement streams)",
                    "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
 
@@ -192,19 +194,39 @@ def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float
     ParameterError
         For measurements off the field, all missing, noise < 0, dependent zero-noise measurements; nothing written.
     """
+    return _conditioned(run, files, noise_m_s, conditional_mean, threads, str(out), lambda attrs: create_store(
+        Path(out), run.grid, attrs, chunk_t=chunk_t, overwrite=overwrite))[1]
+
+
+def kaimal_constrained_in_memory(run: KaimalRun, files: list, *, noise_m_s: float | None = None,
+                                 conditional_mean: bool = False, threads: int | None = None):  # fmt: skip
+    """The field of :func:`run_kaimal_constrained` in memory, as its store would open: (xarray.Dataset, summary).
+
+    The same values and attributes (but ``created_utc``) as that store (turbgen.store.memory.MemoryWriter); the
+    arguments as run_kaimal_constrained's; the summary's path is None. Raises ParameterError as it does, and when the
+    run with its field does not fit the available memory.
+    """
+    return _conditioned(run, files, noise_m_s, conditional_mean, threads, None,
+                        lambda attrs: MemoryWriter(run.grid, attrs))  # fmt: skip
+
+
+def _conditioned(run: KaimalRun, files: list, noise_m_s, conditional_mean: bool, threads, path, open_writer):
+    """(the writer's dataset or None, summary) of ``run`` conditioned on ``files`` into ``open_writer(attrs)`` (a
+    store's writer, or a MemoryWriter when ``path`` is None, whose field then also has to fit in memory)."""
     t_start = time.perf_counter()
     placed = place_kaimal(run, files, noise_m_s)
     g = run.grid
-    require_constrained_memory(run, placed, threads)
+    field_bytes = 0 if path is not None else 3 * g.nbytes_per_component()
+    require_constrained_memory(run, placed, threads, field_bytes)
     cov = kaimal_stream_system(run, placed)
     report, gen, planes = kaimal_conditioned_planes(run, placed, cov, conditional_mean=conditional_mean,
                                                     threads=threads)  # fmt: skip
-    with create_store(Path(out), g, store_attrs(run, gen), chunk_t=chunk_t, overwrite=overwrite) as writer:
+    with open_writer(store_attrs(run, gen)) as writer:
         remeasured, sums = write_planes(writer, placed, ((ix, comp, value) for comp, ix, value in planes))
         record = constraint_record(files, placed, report, remeasured, conditional_mean)
         record["record_mean_removed_m_s"] = [float(v) for v in placed.record_mean_m_s]
         writer.add_attrs(synthesis_report=gen.report, constraints=record)
-    summary = conditioned_summary(str(out), t_start, record, sums, g)
+    summary = conditioned_summary(path, t_start, record, sums, g)
     summary["expected_sigma"] = [math.sqrt(gen.expected_variance(c)) for c in COMPONENTS]
     summary.update(gen.report)
-    return summary
+    return getattr(writer, "dataset", None), summary

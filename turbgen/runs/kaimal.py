@@ -33,11 +33,12 @@ from turbgen.synthesis.kaimal_evo import (
 from turbgen.synthesis.random_streams import keyed_complex_normal
 
 
-def kaimal_generator(run: KaimalRun, workers: int | None = None) -> KaimalEvo:
-    """The synthesis object of ``run`` (``workers``: FFT threads; the field does not depend on them)."""
+def kaimal_generator(run: KaimalRun, workers: int | None = None, keep: bool = False) -> KaimalEvo:
+    """The synthesis object of ``run`` (``workers``: FFT threads; the field does not depend on them; ``keep``: its
+    seed-free part kept for KaimalEvo.reseeded)."""
     return KaimalEvo(run.kaimal, run.grid, run.U_m_s, run.seed, long_coherence=run.long_coherence(),
                      long_components=run.long_components, coherent_vw=run.vw_coherence == "exp",
-                     rescale=run.rescale, workers=workers,
+                     rescale=run.rescale, workers=workers, keep=keep, yz_coherence=run.coherence,
                      variances=None if run.spectrum is None else run.spectrum.line_variances())
 
 
@@ -177,7 +178,8 @@ def _summary(gen: KaimalEvo, sums: dict, path, t0: float, spill: bool) -> dict:
 
 
 def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | None = None,
-               progress: bool = False, threads: int | None = None, spill: bool | None = None) -> dict:
+               progress: bool = False, threads: int | None = None, spill: bool | None = None,
+               gen: KaimalEvo | None = None) -> dict:
     """Generate the field of ``run`` into the store ``out``; return a summary dict.
 
     ``threads``: FFT workers (default all cores); the field does not depend on it.
@@ -185,11 +187,12 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
     of memory (None: only when it would not fit in 80 % of the available memory); the field is the same.
 
     Summary: path, sigma_u/v/w (realised, all points and planes) [m/s], expected_sigma [m/s],
-    seconds, and the synthesis report (yz_clip_error, long_clip_error: 0 when exact).
+    seconds, and the synthesis report (yz_clip_error, long_clip_error: 0 when exact). ``gen``: this run's
+    generator, if already built (turbgen.KaimalGenerator's, reseeded).
     """
     g = run.grid
     out = Path(out)
-    gen = kaimal_generator(run, workers=threads)
+    gen = gen or kaimal_generator(run, workers=threads)
     spill = plan_spill(g, out.absolute(), spill, gen.sampler_bytes())
     attrs = store_attrs(run, gen)
     t0 = time.perf_counter()
@@ -206,14 +209,15 @@ def in_memory_bytes(run: KaimalRun, gen: KaimalEvo | None = None) -> int:
     return memory_needed(run.grid, sampler=gen.sampler_bytes()) + 3 * run.grid.nbytes_per_component()
 
 
-def kaimal_in_memory(run: KaimalRun, *, progress: bool = False, threads: int | None = None):
+def kaimal_in_memory(run: KaimalRun, *, progress: bool = False, threads: int | None = None,
+                     gen: KaimalEvo | None = None):
     """The field of ``run`` in memory, as the store run_kaimal writes would open: (xarray.Dataset, summary).
 
     The same values, coordinates and attributes (but ``created_utc``) as ``xarray.open_zarr`` of run_kaimal's store
     (turbgen.store.memory.MemoryWriter); the spectrum is kept in memory; the summary's path is None. Raises
-    ParameterError when in_memory_bytes exceeds the available memory.
+    ParameterError when in_memory_bytes exceeds the available memory. ``gen``: as run_kaimal's.
     """
-    gen = kaimal_generator(run, workers=threads)
+    gen = gen or kaimal_generator(run, workers=threads)
     g = run.grid
     require_memory(in_memory_bytes(run, gen), f"the Kaimal run ({g.nx} planes x {g.nt} x {g.ny} x {g.nz}) and its "
                    "field in memory", "lower `nt`, `ny`/`nz` or the number of planes")  # fmt: skip

@@ -34,6 +34,7 @@ NOT_IN_FORM = {
     ("mann", "ae_from"): "text the store records about how ae was set, not an input",
     ("mann", "turb_class"): "no option of `turbgen mann` (ae, sigma_u or ti set the energy level)",
     ("kaimal", "spectrum"): "a table of four columns: the request body's `spectrum` (f_hz, S_u, S_v, S_w), not a field",
+    ("kaimal", "coherence"): "a table (f_hz x r_m): the request body's `coherence` (f_hz, r_m, coh), not a field",
 }
 # fields that are no schema key: the preset (as --preset) and the range gates (as --gates, giving grid.x_m)
 _PRESET_HELP = "stability preset: sets the model's stability keys at U; fields given here override it"

@@ -16,11 +16,12 @@ from turbgen.errors import ParameterError, check_choice
 from turbgen.grid import Grid
 from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X, KAIMAL_DEFAULTS, KAIMAL_GRID, grid_from_mapping
 from turbgen.spec.naming import run_digest
-from turbgen.spec.user_spectrum import line_spectrum
+from turbgen.spec.user_spectrum import line_coherence, line_spectrum
 from turbgen.theory import ranges
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS, simley_pao_parameters
 from turbgen.theory.kaimal import iec_kaimal_params
 from turbgen.theory.params import KaimalParams, check_wind_speed
+from turbgen.theory.user_coherence import LineCoherence
 from turbgen.theory.user_spectra import LineSpectrum
 
 LONG_COMPONENTS = ("u", "uvw")
@@ -31,6 +32,7 @@ UNITS = {
     "vw_coherence": "", "rescale": "", "seed": "1", "effective_long_parameters": "a_x: 1, b_x: m-1",
     "resolved_band_hz": "Hz", "expected_sigma_m_s": "m s-1", "rescale_factors": "1", "freq_chunk": "1",
     "spectrum": "f_hz: Hz, S_u S_v S_w: m2 s-1 (band means on the run's lines)",
+    "coherence": "f_hz: Hz, r_m: m, coh: 1 (yz coherence on the run's lines)",
 }  # fmt: skip
 # the store's 'derived' attribute (worked out from the inputs; older stores kept them among the parameters)
 DERIVED_KEYS = ("effective_long_parameters", "resolved_band_hz", "expected_sigma_m_s", "rescale_factors",
@@ -71,6 +73,9 @@ class KaimalRun:
     spectrum : LineSpectrum, optional
         User spectra of u, v, w on the grid's lines (turbgen.theory.user_spectra) in place of Kaimal's;
         the sigmas and lengths then enter only the Simley-Pao and Kristensen coherences.
+    coherence : LineCoherence, optional
+        User yz coherence on the grid's lines (turbgen.theory.user_coherence) in place of the IEC exponential
+        (u, and v, w with vw_coherence "exp").
 
     Raises
     ------
@@ -92,6 +97,7 @@ class KaimalRun:
     vw_coherence: str = "white"
     turb_class: str | None = None
     spectrum: LineSpectrum | None = None
+    coherence: LineCoherence | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "U_m_s", check_wind_speed(self.U_m_s))
@@ -114,6 +120,7 @@ class KaimalRun:
                 raise ParameterError("rescale = true applies to the Kaimal spectra, not to a user spectrum (scale "
                                      "the spectrum instead)")
             object.__setattr__(self, "spectrum", line_spectrum(self.spectrum, self.grid))
+        object.__setattr__(self, "coherence", line_coherence(self.coherence, self.grid, self.U_m_s))
 
     @property
     def model(self) -> str:
@@ -162,7 +169,8 @@ class KaimalRun:
     def parameters(self) -> dict:
         """Every input parameter as JSON values, the keys :meth:`from_mapping` reads back.
 
-        A user spectrum appears as its band means on the lines (LineSpectrum.to_table).
+        A user spectrum appears as its band means on the lines (LineSpectrum.to_table), a user coherence as
+        LineCoherence.to_table.
         """
         k = self.kaimal
         return {
@@ -181,6 +189,7 @@ class KaimalRun:
             "rescale": self.rescale,
             "seed": self.seed,
             **({} if self.spectrum is None else {"spectrum": self.spectrum.to_table()}),
+            **({} if self.coherence is None else {"coherence": self.coherence.to_table()}),
         }
 
     def to_attrs(self, derived: Mapping | None = None) -> dict:
@@ -233,7 +242,7 @@ class KaimalRun:
                    long_model=v["long_model"], a_x=d.get("a_x"), b_x=d.get("b_x"),
                    long_components=v["long_components"], rescale=v["rescale"], vw_coherence=v["vw_coherence"],
                    turb_class=d.get("turb_class") or (None if explicit else KAIMAL_DEFAULTS["turb_class"]),
-                   spectrum=line_spectrum(d.get("spectrum"), grid))
+                   spectrum=line_spectrum(d.get("spectrum"), grid), coherence=d.get("coherence"))
 
 
 def kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float = 90.0, sigma_m_s=None,

@@ -1,4 +1,5 @@
-"""The ``spectrum`` of a Kaimal run as given (a CSV file, arrays, a mapping or a callable) -> its LineSpectrum.
+"""The ``spectrum`` (and ``coherence``) of a Kaimal run as given (a CSV file, arrays, a mapping or a callable) -> its
+LineSpectrum (LineCoherence).
 
 The forms' meaning is in turbgen.theory.user_spectra. The CSV file has a header naming the columns
 ``f_hz,S_u,S_v,S_w`` (any order; ``#`` lines and blank lines skipped) and one row per frequency [Hz],
@@ -15,6 +16,8 @@ import numpy as np
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
 from turbgen.input_files import SPECTRUM, read_input_text
+from turbgen.theory.user_coherence import COLUMNS as COHERENCE_COLUMNS
+from turbgen.theory.user_coherence import LineCoherence, grid_separations_m
 from turbgen.theory.user_spectra import COLUMNS, LineSpectrum
 
 
@@ -83,3 +86,37 @@ def line_spectrum(value, grid: Grid) -> LineSpectrum | None:
     except (TypeError, ValueError) as exc:
         raise ParameterError(f"spectrum: the table is not numbers ({exc})") from None
     return LineSpectrum.from_table(f, S, grid.nt, grid.dt_s)
+
+
+def line_coherence(value, grid: Grid, U_m_s: float) -> LineCoherence | None:
+    """The yz coherence ``value`` on ``grid``'s lines (turbgen.theory.user_coherence).
+
+    Parameters
+    ----------
+    value : None, LineCoherence, Mapping or callable
+        A mapping of ``f_hz``, ``r_m``, ``coh`` (the form a store records), or a callable ``coh(f_hz, r_m, U_m_s)``
+        [-] evaluated on the lines x the grid's separations. None: the IEC exponential coherence.
+    grid : Grid
+        The run's grid.
+    U_m_s : float
+        The run's mean wind speed [m/s] (given to a callable).
+
+    Returns
+    -------
+    LineCoherence or None
+        The coherence the run samples.
+
+    Raises
+    ------
+    ParameterError
+        For a value of none of these forms, or one LineCoherence refuses.
+    """
+    if value is None or isinstance(value, LineCoherence) and (value.nt, value.dt_s) == (grid.nt, grid.dt_s):
+        return value
+    if isinstance(value, Mapping) and set(value) == set(COHERENCE_COLUMNS):
+        return LineCoherence.from_table(value["f_hz"], value["r_m"], value["coh"], grid.nt, grid.dt_s)
+    if callable(value) and not isinstance(value, LineCoherence):
+        r_m = grid_separations_m(grid.ny, grid.nz, grid.dy_m, grid.dz_m)
+        return LineCoherence.from_callable(value, grid.nt, grid.dt_s, r_m, U_m_s)
+    raise ParameterError(f"coherence: {type(value).__name__} is not a mapping of {', '.join(COHERENCE_COLUMNS)} "
+                         "nor a callable coh(f_hz, r_m, U_m_s), or was made for another nt, dt")

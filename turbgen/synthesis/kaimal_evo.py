@@ -28,6 +28,7 @@ FIXED chunks of FREQ_CHUNK bins, so the field does not depend on how it is writt
 
 from __future__ import annotations
 
+import copy
 import os
 import threading
 from collections.abc import Callable, Iterator
@@ -202,6 +203,8 @@ class KaimalEvo:
         ``kaimal`` (Eq. 11 integrated over the bands). ``rescale`` applies to either.
     fft_backend : the FFT backend's name (turbgen.fft; None: the current one): one-shot transforms, the same bits
         for both built-in backends.
+    keep : keep the yz samplers and longitudinal factors (the seed-free part) once made, for :meth:`reseeded` copies
+        (the default grid's: ~23 MiB); the values do not change.
     """
 
     def __init__(
@@ -220,6 +223,7 @@ class KaimalEvo:
         variances=None,
         workers: int | None = None,
         fft_backend: str | None = None,
+        keep: bool = False,
     ):
         self.kaimal, self.grid, self.U_m_s, self.seed = kaimal, grid, U_m_s, seed
         self.long_coherence = long_coherence
@@ -234,6 +238,7 @@ class KaimalEvo:
         self.coherent_vw = coherent_vw
         self.workers = workers or os.cpu_count()
         self.transforms = fft.oneshot(fft_backend)  # resolved once: every plane of the run with the same backend
+        self._kept: dict | None = {} if keep else None
         self.freqs = bin_frequencies(grid.nt, grid.dt_s)
         self.nf = self.freqs.size
         self.n_chunks = -(-self.nf // FREQ_CHUNK)
@@ -253,6 +258,20 @@ class KaimalEvo:
         what = f"the yz coherence (a_yz = {kaimal.a_yz:g}, Lc = {kaimal.lc_m:g} m at U = {U_m_s:g} m/s)"
         decays = [self.yz_decay_length_m(f) for f in self.freqs[1:]]
         self._torus_points = check_sampling_cost(grid.ny, grid.nz, grid.dy_m, grid.dz_m, decays, what)
+
+    def reseeded(self, seed: int) -> "KaimalEvo":
+        """This generator for ``seed``: its kept samplers, factors and report shared, only the random streams new."""
+        out = copy.copy(self)
+        out.seed = seed
+        return out
+
+    def _once(self, key, make):
+        """``make()``, or with ``keep`` its value kept under ``key`` (made once; the report counts it once)."""
+        if self._kept is None:
+            return make()
+        if key not in self._kept:
+            self._kept[key] = make()
+        return self._kept[key]
 
     def sampler_bytes(self) -> int:
         """Peak bytes of the yz samplers while one frequency chunk is made: its bins' embeddings (float64 torus
@@ -347,11 +366,15 @@ class KaimalEvo:
         """Mix the planes' coefficients of bins ``ks`` (``block`` (nx, nb, ny, nz)) with the longitudinal
         coherence's factors and put them into ``spectrum``."""
         g, nx = self.grid, self.grid.nx
-        fac, err = longitudinal_factors(self.long_coherence, g.x_m, self.freqs[ks.start:ks.stop])
-        self.report["long_clip_error"] = max(self.report["long_clip_error"], err)
+
+        def factors():
+            fac, err = longitudinal_factors(self.long_coherence, g.x_m, self.freqs[ks.start:ks.stop])
+            self.report["long_clip_error"] = max(self.report["long_clip_error"], err)
+            return fac.astype(np.float32)
+
         flat = block.reshape(nx, len(ks), -1).transpose(1, 0, 2)
         # real factor: mixes real and imaginary parts alike (zero phase between planes)
-        mixed_block = fac.astype(np.float32) @ np.ascontiguousarray(flat).view(np.float32)
+        mixed_block = self._once(("x", ks.start), factors) @ np.ascontiguousarray(flat).view(np.float32)
         spectrum.put_chunk(ks.start, mixed_block.view(np.complex64).transpose(1, 0, 2).reshape(nx, len(ks), g.ny, g.nz))
 
     def component_planes(
@@ -390,7 +413,7 @@ class KaimalEvo:
             return range(max(1, chunk * FREQ_CHUNK), min(self.nf, (chunk + 1) * FREQ_CHUNK))
 
         def samplers(chunk: int):  # one pool thread, while the other threads fill the previous chunk's planes
-            return self._groups(self._embeddings(component, bins(chunk)))
+            return self._once((component, chunk), lambda: self._groups(self._embeddings(component, bins(chunk))))
 
         try:  # the pool is shut down however the generator ends (exception, early close)
             upcoming = pool.submit(samplers, 0)

@@ -10,7 +10,9 @@ the store says (white, or the same exponential); between planes the store's long
 (Eq. 18 / Simley and Pao / Kristensen, un-squared, zero phase in the convected frame) for the
 components it was applied to, independent otherwise. The rotor-effective wind speed follows Eq. 25
 over the rotor points of the grid. A store made with user spectra (its ``spectrum`` parameter: band means on the
-lines, turbgen.theory.user_spectra) has L_j = (1/2) S_j times the band's width in place of the Kaimal integral.
+lines, turbgen.theory.user_spectra) has L_j = (1/2) S_j times the band's width in place of the Kaimal integral; one
+made with a user yz coherence (its ``coherence`` parameter, turbgen.theory.user_coherence) has that table's values
+in place of Eq. 12.
 """
 
 from __future__ import annotations
@@ -59,7 +61,7 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
     counts = rotor_pair_counts(grid, design.rotor_mask)
     radius = lag_radius(grid)
     sel = counts > 0
-    rews_factor = np.array([np.sum(counts[sel] * exponential_yz(radius[sel], f, U, kp.a_yz, kp.lc_m)) for f in line_f])
+    rews_factor = np.array([np.sum(counts[sel] * yz_coh("u", radius[sel], f)) for f in line_f])
     rews = auto["u"] * rews_factor / design.rotor_mask.sum() ** 2
     node_f = design.node_freqs()
     acc, rho_rews = _node_correlations(design, node_f, yz_coh, long_fn, long_components)
@@ -100,6 +102,8 @@ def _coherences(km, U: float):
         long_fn = lambda dx, f: LONGITUDINAL_MODELS[long_model](dx, f, U, s_tot, kp.length_scales_m[0])  # noqa: E731
 
     def yz_coh(c, r_m, f):
+        if (c == "u" or km.vw_coherent) and km.coherence is not None:  # the store's table
+            return km.coherence(r_m, f)
         if c == "u" or km.vw_coherent:
             return exponential_yz(r_m, f, U, kp.a_yz, kp.lc_m)  # Eq. 12, un-squared
         return np.where(np.asarray(r_m) == 0, 1.0, 0.0) * np.ones_like(f)

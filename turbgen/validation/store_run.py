@@ -10,6 +10,7 @@ from turbgen.grid import Grid
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
 from turbgen.theory.params import KaimalParams, MannParams
+from turbgen.theory.user_coherence import LineCoherence
 from turbgen.theory.user_spectra import LineSpectrum
 
 
@@ -41,6 +42,8 @@ class KaimalModel:
         Coefficients of the exponential longitudinal coherence (``long_model == "exp"``).
     spectrum : LineSpectrum or None
         The user spectra of the store (band means on its lines), or None for the Kaimal spectra.
+    coherence : LineCoherence or None
+        The user yz coherence of the store, or None for the IEC exponential.
     """
 
     params: KaimalParams
@@ -51,6 +54,7 @@ class KaimalModel:
     a_x: float | None = None
     b_x: float | None = None
     spectrum: LineSpectrum | None = None
+    coherence: LineCoherence | None = None
 
 
 def mann_params_from_attrs(attrs: dict) -> MannParams:
@@ -68,4 +72,4 @@ def kaimal_model_from_attrs(attrs: dict) -> KaimalModel:
     """The Kaimal model of a Kaimal store; ParameterError if the attributes lack a Kaimal parameter."""
     run = KaimalRun.from_attrs(attrs)
     return KaimalModel(run.kaimal, run.long_model, run.long_components, run.vw_coherence == "exp", run.rescale,
-                       run.a_x, run.b_x, run.spectrum)
+                       run.a_x, run.b_x, run.spectrum, run.coherence)

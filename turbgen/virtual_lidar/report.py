@@ -57,9 +57,9 @@ def kaimal_store_preview(fs, description, f_hz, radius_m: float):
     from turbgen.validation.store_run import kaimal_model_from_attrs
 
     km = kaimal_model_from_attrs(fs.attrs)
-    if km.spectrum is not None:
-        raise ParameterError("lidar theory has the Kaimal spectra only; this store was made with user spectra "
-                             "(its parameter `spectrum`)")
+    if km.spectrum is not None or km.coherence is not None:
+        raise ParameterError("lidar theory has the Kaimal spectra and IEC coherence only; this store was made with "
+                             "a user spectrum or coherence (its parameter `spectrum` / `coherence`)")
     if km.long_model != "exp":
         raise ParameterError(f"lidar theory supports the exponential longitudinal coherence only "
                              f"(store has long_model = {km.long_model!r})")
