@@ -18,13 +18,13 @@ import io
 from dataclasses import replace
 from pathlib import Path
 
+from turbgen.atomic import write_file
 from turbgen.errors import ParameterError, check_choice
 from turbgen.exporters import ExportRequest, export_store
 from turbgen.exporters.inflowwind_file import inflowwind_path
 from turbgen.runs.models import MODELS, get_model
 from turbgen.spec.dlc import DlcSet
 from turbgen.store.paths import check_output_path
-from turbgen.sweep.manifest import atomic_write
 from turbgen.sweep.plan import PlannedRun, SweepPlan, check_grid_keys, check_plan_memory, grid_mapping
 from turbgen.sweep.scheduler import check_scheduler_address
 
@@ -125,7 +125,7 @@ def export_dlc(plan: SweepPlan, dlc: DlcSet, result, fmt: str = "bts") -> Path:
     writer = csv.DictWriter(buf, fieldnames=DLC_COLUMNS, lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
-    atomic_write(out / DLC_MANIFEST, buf.getvalue())
+    write_file(out / DLC_MANIFEST, buf.getvalue())
     return out / DLC_MANIFEST
 
 

@@ -12,15 +12,12 @@ import csv
 import hashlib
 import io
 import json
-import os
-import tempfile
 from datetime import datetime, timezone
 from pathlib import Path
 
-from turbgen import oscalls
+from turbgen.atomic import write_file
 from turbgen.version import __version__
 from turbgen.store import open_store
-from turbgen.store.temporaries import temp_prefix
 
 MANIFEST_JSON = "manifest.json"
 MANIFEST_CSV = "manifest.csv"
@@ -88,36 +85,6 @@ def store_checksum(path: str | Path) -> str:
     return "sha256:" + h.hexdigest()
 
 
-def atomic_write(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` under a temporary name in its folder, fsync it, then rename it into place.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The file to (re)place.
-    text : str
-        Its content.
-
-    Raises
-    ------
-    OSError
-        When the file cannot be written; the temporary file is removed and ``path`` is untouched.
-    """
-    # a temporary name of this process ('.NAME.tmp-PID-...': removed by the next sweep if we are killed),
-    # and the mode an ordinary file gets (0644 under umask 022), like the stores beside it
-    fd, tmp = tempfile.mkstemp(prefix=f"{temp_prefix(path)}{os.getpid()}-", dir=path.parent)
-    try:
-        os.fchmod(fd, 0o666 & ~oscalls.umask())
-        with os.fdopen(fd, "w", newline="") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def _validation_text(v) -> str:
     if v is None:
         return ""
@@ -177,8 +144,8 @@ def write_manifest(directory: str | Path, sweep: dict, records: list[dict]) -> N
         "counts": counts,
         "runs": records,
     }
-    atomic_write(d / MANIFEST_JSON, json.dumps(doc, indent=1, sort_keys=False) + "\n")
-    atomic_write(d / MANIFEST_CSV, _csv_text(records))
+    write_file(d / MANIFEST_JSON, json.dumps(doc, indent=1, sort_keys=False) + "\n")
+    write_file(d / MANIFEST_CSV, _csv_text(records))
 
 
 def read_manifest(directory: str | Path) -> dict | None:

@@ -34,7 +34,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from turbgen import fft
-from turbgen.errors import ParameterError
+from turbgen.errors import ParameterError, one_line
 from turbgen.interruption import exit_on_signals
 from turbgen.resources import require_disk
 from turbgen.runs.models import MODELS
@@ -45,7 +45,7 @@ from turbgen.sweep.manifest import read_manifest, utc_now, write_manifest
 from turbgen.sweep.plan import SweepPlan, check_memory_budget
 from turbgen.sweep.result import SweepResult, summary_table
 from turbgen.sweep.state import base_record, remove_dead_temps, store_state
-from turbgen.sweep.tasks import RunTask, default_workers, execute_run, one_line
+from turbgen.sweep.tasks import RunTask, default_workers, execute_run
 
 __all__ = ["SweepResult", "run_sweep", "summary_table"]
 

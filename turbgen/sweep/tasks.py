@@ -7,6 +7,7 @@ import time
 from dataclasses import dataclass, replace
 
 from turbgen import fft
+from turbgen.errors import one_line
 from turbgen.resources import available_memory_bytes
 from turbgen.runs.models import MODELS
 from turbgen.sweep.manifest import store_checksum
@@ -60,23 +61,6 @@ class RunTask:
     constraints: object = None  # a ConstraintRequest (turbgen.spec.constraints): a constrained Mann run
     cache_dir: str | None = None  # a constrained run's stencil cache
     fft_backend: str | None = None  # the FFT backend of the run (None: the worker's current one)
-
-
-def one_line(exc: BaseException) -> str:
-    """'ExceptionType: first line of its message' (for the manifest).
-
-    Parameters
-    ----------
-    exc : BaseException
-        The exception.
-
-    Returns
-    -------
-    str
-        One line.
-    """
-    text = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
 
 
 def validate_store(path: str, threads: int | None = None) -> dict:

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import json
 import os
-import secrets
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,6 +23,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError, StoreError
 from turbgen.store.attributes import jsonable
+from turbgen.store.temporaries import publish, temp_name
 from turbgen.theory import ranges
 
 MARKER = "turbgen_lidar_complete"
@@ -122,7 +122,7 @@ def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: 
         },
         attrs={k: json.dumps(jsonable(v)) if isinstance(v, (dict, list, tuple)) else jsonable(v) for k, v in attrs.items()},
     )
-    tmp = path.parent / f".{path.name}.tmp-{os.getpid()}-{secrets.token_hex(4)}"
+    tmp = temp_name(path)
     try:
         import zarr
 
@@ -134,13 +134,9 @@ def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: 
         ds.to_zarr(tmp, mode="w", consolidated=True)
         zarr.open_group(str(tmp), mode="r+").attrs[MARKER] = True  # the completeness marker, last
         zarr.consolidate_metadata(str(tmp))
-        if path.exists():
-            old = path.parent / f".{path.name}.old-{os.getpid()}-{secrets.token_hex(4)}"
-            os.rename(path, old)
-            os.rename(tmp, path)
+        old = publish(tmp, path, replace=True)  # an older dataset is swapped out in one step, then removed
+        if old is not None:
             shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.rename(tmp, path)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
