@@ -9,7 +9,7 @@ and line-of-sight sign: ``turbgen.theory.lidar_geometry``.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -231,8 +231,3 @@ def load_lidar(name_or_path) -> LidarDescription:
         raise ParameterError(f"lidar {key!r} is neither a preset ({', '.join(PRESETS)}) nor a .toml/.json file")
     check_input(path, LIDAR_FILE)  # a regular file: read_config reads it again (no FIFO, no device, size cap)
     return lidar_from_mapping(read_config(path, "lidar"), where=path.stem)
-
-
-def with_ranges(lidar: LidarDescription, ranges_m) -> LidarDescription:
-    """The same lidar with the range gates ``ranges_m`` [m] (checked as in LidarDescription)."""
-    return replace(lidar, ranges_m=tuple(float(x) for x in ranges_m))
