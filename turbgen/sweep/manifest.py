@@ -1,9 +1,8 @@
-"""The sweep manifest: DIR/manifest.json and DIR/manifest.csv, one record per planned run.
+"""The sweep manifest: DIR/manifest.json and DIR/manifest.csv, one record per planned run (docs/sweep.md).
 
-Each record: name, model, preset, U_m_s, seed, path (relative to DIR), status ("pending",
-"complete", "failed"), action ("ran" in this invocation, "skipped" = an existing complete store
-was kept, "none"), duration_s, checksum, sigma_m_s, validation summary, error, parameters,
-finished_utc. Both files are written to a temporary sibling and renamed (atomic on POSIX).
+Each record: name, model, preset, U_m_s, seed, path (relative to DIR), status ("pending", "complete",
+"failed"), action ("ran" in this invocation, "skipped" = an existing complete store was kept, "none"),
+duration_s, checksum, sigma_m_s, validation summary, lidar summary, error, parameters, finished_utc.
 """
 
 from __future__ import annotations
@@ -46,36 +45,15 @@ CSV_COLUMNS = (
 
 
 def utc_now() -> str:
-    """Current UTC time, ISO 8601 to the second.
-
-    Returns
-    -------
-    str
-        E.g. "2026-01-31T12:00:00+00:00".
-    """
+    """Current UTC time, ISO 8601 to the second ("2026-01-31T12:00:00+00:00")."""
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
 
 def store_checksum(path: str | Path) -> str:
-    """'sha256:<hex>' of the u, v, w float32 data (planes in stored order, C order), not of the files.
+    """'sha256:<64 hex digits>' of the u, v, w float32 data (planes in stored order, C order), not of the files.
 
-    Independent of chunking, compression and metadata (creation time), so two stores holding the
-    same field have the same checksum.
-
-    Parameters
-    ----------
-    path : str or Path
-        The store.
-
-    Returns
-    -------
-    str
-        "sha256:" followed by 64 hex digits.
-
-    Raises
-    ------
-    StoreError
-        If ``path`` is not a complete, readable store, or a chunk is corrupted or holds NaN/inf.
+    Independent of chunking, compression and metadata, so two stores holding the same field have the same
+    checksum. Raises StoreError for an incomplete or unreadable store, or a chunk that is corrupted or not finite.
     """
     fs = open_store(path)
     h = hashlib.sha256()
@@ -115,25 +93,8 @@ def _csv_text(records: list[dict]) -> str:
 
 
 def write_manifest(directory: str | Path, sweep: dict, records: list[dict]) -> None:
-    """Write manifest.json and manifest.csv for these records (atomically, JSON first).
-
-    Parameters
-    ----------
-    directory : str or Path
-        The sweep's output directory.
-    sweep : dict
-        The sweep definition (``SweepPlan.to_dict``).
-    records : list of dict
-        One manifest record per run (see the module docstring).
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    OSError
-        If a file cannot be written (the temporary is removed).
+    """Write manifest.json, then manifest.csv, of ``records`` for the sweep definition ``sweep`` (each file whole
+    or not at all; OSError if one cannot be written).
     """
     d = Path(directory)
     counts = {s: sum(r["status"] == s for r in records) for s in ("complete", "failed", "pending")}
@@ -149,18 +110,7 @@ def write_manifest(directory: str | Path, sweep: dict, records: list[dict]) -> N
 
 
 def read_manifest(directory: str | Path) -> dict | None:
-    """The previous manifest.json of DIR, or None when there is none (or it is unreadable).
-
-    Parameters
-    ----------
-    directory : str or Path
-        The sweep's output directory.
-
-    Returns
-    -------
-    dict or None
-        The manifest (with a ``runs`` list), or None.
-    """
+    """The previous manifest.json of DIR (with a ``runs`` list), or None when there is none or it is unreadable."""
     try:
         doc = json.loads((Path(directory) / MANIFEST_JSON).read_text())
     except (OSError, ValueError):
