@@ -4,8 +4,8 @@
   swapping an old output with a new one); False where it is missing, and the caller renames in two steps.
 * :func:`reserve`: fallocate(2) / posix_fallocate(3), so that a full disk is met when the space is asked for, not in
   the middle of a write a library cannot survive; a no-op where missing (the writes themselves then meet ENOSPC).
-* :func:`resident_bytes`, :func:`meminfo_available_bytes`, :func:`cgroup_headroom_bytes`, :func:`is_zombie`,
-  :func:`umask`: reads of /proc and /sys/fs/cgroup; None (or the portable answer) where they do not exist.
+* :func:`resident_bytes`, :func:`meminfo_available_bytes`, :func:`cgroup_headroom_bytes`, :func:`is_zombie`: reads
+  of /proc and /sys/fs/cgroup; None (or the portable answer) where they do not exist.
 * :func:`disk_free_bytes`: statvfs(2) (the space an unprivileged writer may use), else shutil.disk_usage.
 * :func:`direct_io_flag`: O_DIRECT (reads and writes bypassing the page cache), else 0 (buffered I/O).
 
@@ -192,16 +192,6 @@ def is_zombie(pid: int) -> bool:
     except OSError:
         return False
     return stat.rsplit(")", 1)[-1].split()[0] == "Z"
-
-
-def umask() -> int:
-    """The process umask, read without changing it (os.umask would briefly set it for every thread); 0o022 where
-    /proc does not tell."""
-    value = _proc_field(PROC_STATUS, "Umask")
-    try:
-        return int(value, 8) if value is not None else 0o022
-    except ValueError:
-        return 0o022
 
 
 def disk_free_bytes(path: Path) -> int | None:
