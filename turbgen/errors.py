@@ -27,6 +27,12 @@ class StoreError(TurbgenError, ValueError):
     """A path that is not a complete, readable turbgen store (or would be overwritten)."""
 
 
+def one_line(exc: BaseException) -> str:
+    """``'ExceptionType: message'`` with the message's whitespace collapsed to one line (a manifest's or a failed
+    run's ``error``)."""
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
 def _is_bool(value) -> bool:
     """True for Python and numpy booleans: numbers to ``float()`` and ``int()``, never a meant value (U=True)."""
     return isinstance(value, bool) or type(value).__name__ in ("bool", "bool_")

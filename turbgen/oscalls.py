@@ -156,15 +156,6 @@ def is_zombie(pid: int) -> bool:
     return stat.rsplit(")", 1)[-1].split()[0] == "Z"
 
 
-def umask() -> int:
-    """The process umask read from /proc without changing it (os.umask would set it for every thread); else 0o022."""
-    value = _proc_field(PROC_STATUS, "Umask")
-    try:
-        return int(value, 8) if value is not None else 0o022
-    except ValueError:
-        return 0o022
-
-
 def disk_free_bytes(path: Path) -> int | None:
     """Bytes an unprivileged writer can still put on ``path``'s file system (statvfs f_bavail); None if unknown."""
     try:

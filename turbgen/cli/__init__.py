@@ -1,9 +1,8 @@
 """turbgen command line: click commands only (parse, call the library, print).
 
-Errors the library reports to its user (``turbgen.errors.TurbgenError``) become one line on stderr
-with the run fields they name spelled as options (`nt` -> --nt, see :func:`as_options`) and the exit
-code of their class (EXIT_CODES). Each sub-module holds one command or command group, listed in
-COMMANDS and imported on use.
+Library errors (``turbgen.errors.TurbgenError``) become one line on stderr, run fields spelled as options
+(:func:`as_options`), exit code by class (EXIT_CODES). Each sub-module holds one command or group, listed
+in COMMANDS and imported on use.
 """
 
 from __future__ import annotations
@@ -64,9 +63,8 @@ def user_error(exc: TurbgenError) -> UserError:
 # main() (the console script) pauses the cyclic garbage collector until the command's module is imported
 _startup_collector_paused = False
 
-# command name -> (module, attribute); modules are imported only when their command runs (or for --help),
-# so `turbgen info` does not pay for importing the FFT and synthesis stack; a model's command is declared with it
-# (turbgen.spec.models)
+# command name -> (module, attribute), imported only when the command runs (or for --help); a model's command is
+# declared with the model (turbgen.spec.models)
 COMMANDS = {
     **{d.name: tuple(d.command.split(":")) for d in DECLARATIONS},
     "export": ("turbgen.cli.export", "export"),
@@ -93,9 +91,8 @@ class TurbgenGroup(click.Group):
         module, attr = COMMANDS[cmd_name]
         command = getattr(importlib.import_module(module), attr)
         if _startup_collector_paused and not gc.isenabled():
-            # the console script's imports (numpy, scipy, zarr, numba, click: ~10^6 objects that live as long as
-            # the process) go to the permanent generation, so the cyclic collector never traverses them again
-            # (its cost: benchmarks/README.md, "Measurements behind design choices")
+            # the console script's imports (~10^6 objects that live as long as the process) go to the permanent
+            # generation, so the cyclic collector never traverses them again
             gc.freeze()
             gc.enable()
         return command
@@ -185,13 +182,11 @@ def cli(ctx):
 
 def _import_pyfftw_lean() -> None:
     """Import pyfftw without its optional dask interface, for this command's process only (the application's
-    start-up, not the library's: turbgen.fft imports pyfftw plainly). Without pyfftw installed, nothing (the scipy
-    FFT backend needs none; the pyfftw backend says it is missing when asked for).
+    start-up, not the library's); nothing without pyfftw installed.
 
-    pyfftw's package __init__ imports dask.array, and through it pandas, whenever dask is installed, for an interface
-    turbgen never uses; that import added over a second to every command and ~60 MiB of resident memory, which
-    the out-of-core plans must leave to the process. The optional import is made to fail fast while pyfftw loads;
-    dask.array stays importable afterwards.
+    pyfftw's __init__ imports dask.array, and through it pandas, for an interface turbgen never uses: a second of
+    start-up and memory the out-of-core plans must leave to the process. That optional import is made to fail
+    fast while pyfftw loads; dask.array stays importable afterwards.
     """
     if "pyfftw" in sys.modules or "dask.array.fft" in sys.modules:
         return
@@ -207,11 +202,8 @@ def _import_pyfftw_lean() -> None:
 def main():
     """Console-script entry point (the cyclic garbage collector is paused until the command is imported)."""
     global _startup_collector_paused
-    # turbgen parallelises with its own thread pools; OpenBLAS threads (numpy's and scipy's libraries each start one
-    # per core) only oversubscribe the cores and spin between calls (benchmarks/README.md, "Measurements behind
-    # design choices"). Set before numpy loads OpenBLAS; a user's own setting is kept (dask's nanny sets the same
-    # for its workers). The fields keep their bits: OpenBLAS splits a product's rows and columns among its threads,
-    # not the sums (default Kaimal store with 2 and 1 threads: identical).
+    # turbgen parallelises with its own thread pools: OpenBLAS threads would only oversubscribe the cores (set before
+    # numpy loads OpenBLAS; a user's own setting is kept). The fields keep their bits (OpenBLAS does not split sums)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     _import_pyfftw_lean()
     _startup_collector_paused = True

@@ -1,8 +1,7 @@
 """`turbgen lidar STORE`: the virtual lidar on a field store; `turbgen lidar optimize` (lidar theory).
 
-The group takes either a subcommand (``run``, ``optimize``) or a STORE path as its first word:
-``turbgen lidar STORE ...`` is the same as ``turbgen lidar run STORE ...`` (a first word that is
-not a subcommand name is taken as the store).
+A first word that is not a subcommand (``run``, ``optimize``) is the store: ``turbgen lidar STORE`` is
+``turbgen lidar run STORE``.
 """
 
 from __future__ import annotations

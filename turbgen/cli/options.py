@@ -138,12 +138,8 @@ def plane_positions(planes: list[float] | None, gates: list[float] | None) -> li
 
 
 def iec_class_options(help_text: str):
-    """``--iec-class`` (turbine class and turbulence category, e.g. IIB) and its deprecated alias ``--class`` (hidden).
-
-    ``kaimal --class`` is the turbulence class alone (A, B, ...); ``sweep`` and ``transient`` called the turbine
-    class ``--class`` too, the one word for two things. The decorated command gets ``iec_class`` and ``class_alias``;
-    :func:`resolve_iec_class` merges them.
-    """
+    """``--iec-class`` (turbine class and turbulence category, e.g. IIB) and its deprecated hidden alias ``--class``
+    (which ``kaimal`` uses for the turbulence class alone); :func:`resolve_iec_class` merges the two arguments."""
     def decorate(f):
         f = click.option("--class", "class_alias", hidden=True, default=None,
                          help="Deprecated alias of --iec-class.")(f)

@@ -1,7 +1,5 @@
-"""The grid options of `turbgen mann|kaimal`. Their values make the run by the rule of the Python API
-(turbgen.api.fields.mann_run_mapping / kaimal_run: run file < preset < typed options); missing keys take the defaults
-of turbgen.spec.defaults (applied by the model's from_mapping, shown in the options' help), so no option carries a
-default of its own.
+"""The grid options of `turbgen mann|kaimal`, combined by the Python API's rule (turbgen.api.fields: run file <
+preset < typed options); no option carries a default of its own (turbgen.spec.defaults, shown in the help).
 """
 
 from __future__ import annotations

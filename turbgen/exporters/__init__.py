@@ -1,12 +1,9 @@
-"""Exports of a turbgen store to the files aeroelastic and lidar simulators read
-(each format's own documentation is cited in its module: TurbSim and InflowWind user guides, the HAWC2 manual,
-Mann 1998, the 4D generators and lidar-simulator sources).
+"""Exports of a turbgen store to the files aeroelastic and lidar simulators read (docs/export.md).
 
 Formats: ``bts`` (TurbSim, InflowWind WindType 3), ``wnd`` (Bladed-style .wnd + .sum, WindType 4),
 ``evo`` (lidar-simulator 4D set ROOT.evo/.wnd/.sum), ``hawc2`` (three float32 .bin, WindType 5),
-``mt4d`` (4D Mann generator layout), ``hdf5`` (whole field for MATLAB/Python). Each export reads
-one plane from the store at a time, writes under temporary names renamed on success, and returns
-the InflowWind input-file lines that load the result.
+``mt4d`` (4D Mann generator layout), ``hdf5`` (whole field for MATLAB/Python). Each format's own
+documentation is cited in its module.
 """
 
 from __future__ import annotations
@@ -38,13 +35,10 @@ __all__ = ["EXPORTERS", "ExportRequest", "ExportResult", "export_store", "read_b
 def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> ExportResult:
     """Export ``store`` (a path or an open FieldStore) in format ``fmt`` to ``out``.
 
-    Checks that the options apply to the format and that the export fits on the disk, then calls
-    the format's exporter (``EXPORTERS[fmt]``).
-
     Parameters
     ----------
     store : str, os.PathLike or FieldStore
-        The store, or its path (opened with :func:`turbgen.store.open_store`).
+        The store or its path.
     fmt : str
         One of "bts", "wnd", "evo", "hawc2", "mt4d", "hdf5".
     out : str or os.PathLike
@@ -55,14 +49,12 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
     Returns
     -------
     ExportResult
-        The files written, the InflowWind input-file lines that load them, and notes.
 
     Raises
     ------
     ParameterError
-        For an unknown format, options the format does not use, an ``out`` ending with a path
-        separator, an output inside the store, too little free disk, an existing output without
-        ``request.overwrite``, a grid reaching the ground, and other bad requests.
+        For an unknown format, options it does not use, an ``out`` inside the store or naming a directory,
+        too little free disk, an existing output without ``request.overwrite``, a grid reaching the ground.
     StoreError
         For a missing or incomplete store.
     """
@@ -88,25 +80,8 @@ _SIZE = {"bts": (2, False), "wnd": (2, False), "hawc2": (4, False), "evo": (2, T
 
 
 def export_bytes(fmt: str, grid) -> int:
-    """Upper bound of the size [bytes] of an export of a store with ``grid`` (checked against free disk).
-
-    Parameters
-    ----------
-    fmt : str
-        Export format, a key of ``EXPORTERS``.
-    grid : Grid
-        The store grid.
-
-    Returns
-    -------
-    int
-        Size bound [bytes]: the stored values (one plane, or every plane for evo, mt4d, hdf5) at the
-        format's item size, plus the rotor .wnd for evo and 1 MiB for headers and HDF5 metadata.
-
-    Raises
-    ------
-    KeyError
-        For an unknown ``fmt``.
+    """Upper bound [bytes] of an export of a store with ``grid``: its values at the format's item size (one
+    plane, or every plane for evo, mt4d, hdf5), the rotor .wnd of evo, 1 MiB for headers.
     """
     itemsize, all_planes = _SIZE[fmt]
     values = 3 * grid.nt * grid.ny * grid.nz * (grid.nx if all_planes else 1)

@@ -23,22 +23,9 @@ _HEADER = struct.Struct("<h4i6f6fi")
 
 
 def int16_scaling(vmin: float, vmax: float) -> tuple[float, float]:
-    """TurbSim's int16 scaling (slope, offset) as float32 values.
-
-    raw = slope*v + offset spans the int16 range for v in [vmin, vmax].
-
-    Parameters
-    ----------
-    vmin : float
-        Smallest velocity to represent [m/s].
-    vmax : float
-        Largest velocity to represent [m/s].
-
-    Returns
-    -------
-    tuple of (float, float)
-        ``(slope, offset)``, both rounded to float32: slope [1/(m/s)] (65535 / (vmax - vmin), or 1.0
-        when vmax <= vmin) and offset [-] (-32768 - slope*vmin).
+    """TurbSim's int16 scaling ``(slope, offset)``, both rounded to float32: raw = slope*v + offset spans the
+    int16 range for v in [vmin, vmax] [m/s]; slope = 65535 / (vmax - vmin) (1.0 when vmax <= vmin) [1/(m/s)],
+    offset = -32768 - slope*vmin.
     """
     slope = 65535.0 / (vmax - vmin) if vmax > vmin else 1.0
     slope = float(np.float32(slope))
@@ -46,41 +33,13 @@ def int16_scaling(vmin: float, vmax: float) -> tuple[float, float]:
 
 
 def quantise(values: np.ndarray, slope: float, offset: float) -> np.ndarray:
-    """int16 raw values for velocities ``values`` (rounded, saturated).
-
-    Parameters
-    ----------
-    values : numpy.ndarray
-        Velocities [m/s], any shape.
-    slope : float
-        Scaling slope [1/(m/s)], see :func:`int16_scaling`.
-    offset : float
-        Scaling offset [-].
-
-    Returns
-    -------
-    numpy.ndarray
-        Little-endian int16 array of the shape of ``values``: rint(values*slope + offset) clipped to
-        [-32768, 32767].
-    """
+    """Little-endian int16 rint(values*slope + offset) clipped to [-32768, 32767], for velocities [m/s]."""
     return np.clip(np.rint(values * slope + offset), -32768, 32767).astype("<i2")
 
 
 def tower_heights(bottom_m: float, dz_m: float) -> np.ndarray:
-    """Tower point heights [m]: bottom, bottom - dz, ... while above the ground (TurbSim User's Guide, tower points).
-
-    Parameters
-    ----------
-    bottom_m : float
-        Height of the lowest grid row above ground [m].
-    dz_m : float
-        Vertical grid spacing [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        Heights [m], shape (ntwr,), descending from ``bottom_m`` in steps of ``dz_m``, all above the
-        ground (empty when ``bottom_m`` <= 0).
+    """Tower point heights [m]: ``bottom_m``, bottom - dz, ... while above the ground (TurbSim User's Guide,
+    tower points); empty when ``bottom_m`` <= 0.
     """
     n = int(np.ceil(bottom_m / dz_m - 1e-6))
     return bottom_m - dz_m * np.arange(max(n, 0))
@@ -88,44 +47,11 @@ def tower_heights(bottom_m: float, dz_m: float) -> np.ndarray:
 
 def write_bts(path, plane: Plane, *, dy_m, dz_m, dt_s, U_m_s, hub_height_m, bottom_m, periodic: bool,
               description: str, tower: dict | None = None) -> None:
-    """Write ``plane`` (full velocities) and optional ``tower`` (u, v, w: (nt, ntwr) [m/s]) to ``path``.
+    """Write ``plane`` (full velocities) and the optional ``tower`` {"u", "v", "w": (nt, ntwr) [m/s]} to ``path``.
 
-    One int16 scaling per component covers the grid and the tower points.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        File to write (created or truncated).
-    plane : Plane
-        The yz-plane to write; its full velocities (mean + fluctuations) are quantised.
-    dy_m : float
-        Lateral grid spacing [m].
-    dz_m : float
-        Vertical grid spacing [m].
-    dt_s : float
-        Time step [s].
-    U_m_s : float
-        Mean wind speed at hub height [m/s].
-    hub_height_m : float
-        Hub height [m].
-    bottom_m : float
-        Height of the lowest grid row [m].
-    periodic : bool
-        Flag the file periodic in time (header ID 8, else 7).
-    description : str
-        Free text stored after the header (ASCII; other characters replaced).
-    tower : dict, optional
-        Tower-point velocities {"u", "v", "w": array (nt, ntwr) [m/s]}; None (default) for no tower
-        points.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    OSError
-        When the file cannot be written.
+    One int16 scaling per component covers the grid and the tower points. Spacings ``dy_m``, ``dz_m`` [m], time
+    step ``dt_s`` [s], hub speed ``U_m_s`` [m/s], ``hub_height_m`` and the lowest row ``bottom_m`` [m] go into the
+    header; ``periodic`` sets header ID 8 (else 7); ``description`` follows the header (ASCII, others replaced).
     """
     nt, ny, nz = plane.nt, plane.ny, plane.nz
     ntwr = 0 if tower is None else tower["u"].shape[1]
@@ -154,24 +80,14 @@ def write_bts(path, plane: Plane, *, dy_m, dz_m, dt_s, U_m_s, hub_height_m, bott
 
 
 def read_bts(path) -> dict:
-    """Read a ``.bts`` file back as velocities.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The ``.bts`` file.
+    """Read a ``.bts`` back as velocities.
 
     Returns
     -------
     dict
         u, v, w (nt, ny, nz) [m/s]; y (ny,) [m] (centred on 0), z (nz,) absolute heights [m]; dt_s [s],
-        U_m_s [m/s], hub_height_m [m], periodic (bool, header ID 8), id (the header ID), description
-        (str), and tower_z (ntwr,) [m], tower_u/v/w (nt, ntwr) [m/s].
-
-    Raises
-    ------
-    OSError
-        When the file cannot be read.
+        U_m_s [m/s], hub_height_m [m], periodic (header ID 8), id (the header ID), description, tower_z (ntwr,)
+        [m], tower_u/v/w (nt, ntwr) [m/s].
     """
     raw = Path(path).read_bytes()
     (ident, nz, ny, ntwr, nt, dz, dy, dt, uhub, zhub, zbot, *rest) = _HEADER.unpack_from(raw, 0)
@@ -192,29 +108,10 @@ def read_bts(path) -> dict:
 
 
 def tower_values(plane: Plane, heights_m: np.ndarray, layout, U_m_s: float) -> dict:
-    """Tower-point velocities (nt, ntwr) for a ``.bts``.
+    """Tower-point velocities {"u", "v", "w": (nt, ntwr) [m/s]} at ``heights_m`` for a ``.bts``.
 
-    The mean wind at each tower height (profile, veer and history, as on the grid) plus the
-    fluctuations of the lowest grid row at y = 0 (held constant below the grid — the store has no
-    data there). y = 0 is the centre column, or the
-    average of the two columns beside it when ny is even.
-
-    Parameters
-    ----------
-    plane : Plane
-        The exported yz-plane.
-    heights_m : numpy.ndarray
-        Tower point heights [m], shape (ntwr,), e.g. from :func:`tower_heights`.
-    layout : VerticalLayout
-        The vertical layout giving the mean wind (``layout.wind``).
-    U_m_s : float
-        Mean wind speed at hub height [m/s].
-
-    Returns
-    -------
-    dict
-        {"u", "v", "w": float64 array (nt, ntwr) [m/s]}; u (and v, with veer or a history
-        direction) carry the mean.
+    The mean wind at each tower height (profile, veer and history, as on the grid) plus the fluctuations of the
+    lowest grid row at y = 0 (the centre column, or the mean of the two beside it), held constant below the grid.
 
     Raises
     ------
@@ -235,28 +132,13 @@ def tower_values(plane: Plane, heights_m: np.ndarray, layout, U_m_s: float) -> d
 
 
 def export_bts(fs, out, req: ExportRequest) -> ExportResult:
-    """Export one plane of store ``fs`` to ``out`` (.bts).
-
-    Parameters
-    ----------
-    fs : FieldStore
-        The open store.
-    out : str or os.PathLike
-        The ``.bts`` file to write (written under a temporary name, renamed on success).
-    req : ExportRequest
-        Plane, hub height, shear exponent, tower, periodic and overwrite options.
-
-    Returns
-    -------
-    ExportResult
-        The written path, the InflowWind lines (WindType 3) and notes.
+    """Export one plane of store ``fs`` to the ``.bts`` file ``out``.
 
     Raises
     ------
     ParameterError
-        For a plane index out of range or a store without a rotor plane, a grid reaching the ground
-        (without ``drop_below_ground``), an existing output without ``overwrite``, a bad output
-        path, or a failed write.
+        For a bad plane, a grid reaching the ground without ``drop_below_ground``, an existing output without
+        ``overwrite``, a bad output path, or a failed write.
     """
     out = Path(out)
     ix, lay = req.plane_index(fs), req.layout(fs)

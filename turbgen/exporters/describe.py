@@ -17,20 +17,10 @@ SUFFIXES = (".bts", ".dat", ".sum")
 def file_summary(path) -> list[tuple[str, str]]:
     """(label, text) rows describing an exported ``.bts``, InflowWind ``.dat`` or ``.sum`` file.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
-
-    Returns
-    -------
-    list of tuple of (str, str)
-        Rows for printing.
-
     Raises
     ------
     ParameterError
-        When the file cannot be read, has another suffix, or is not a .bts / InflowWind input file.
+        When the file cannot be read, has another suffix, or is not a .bts / InflowWind input file / .sum.
     """
     p = Path(path)
     try:

@@ -1,13 +1,12 @@
-"""The 4D lidar-simulator set ROOT.evo + ROOT.wnd + ROOT.sum (FUAS OpenFAST3.0_LidSim forks),
-as read by the forks' LidarSim ``.evo`` reader (fengguoFUAS/OpenFAST3.0_LidSim; evoTurb, Guo et al. 2022).
+"""The 4D lidar-simulator set ROOT.evo + ROOT.wnd + ROOT.sum, as read by the LidarSim ``.evo`` reader of the
+FUAS OpenFAST3.0_LidSim forks (evoTurb, Guo et al. 2022).
 
-ROOT.evo, all little-endian int16: NL (<= 30), NL plane distances in whole metres (positive
-upstream), then for each plane, each time step, each z (bottom up), each y (from -W/2, since the
-.sum says CLOCKWISE = F), the components u, v, w (fastest) — the order the simulator's READER
-uses (evoTurb's writer uses another one). Scaling V = U (o + 1e-5 TI% raw) with U and TI from
-the ROOT.wnd header, which also carries the plane InflowWind uses at the rotor (WindType 4).
-The store's convected frame is exactly the simulator's "eddy index" time axis, so planes are
-written in stored t order.
+ROOT.evo, all little-endian int16: NL (<= 30), NL plane distances in whole metres (positive upstream),
+then for each plane, each time step, each z (bottom up), each y (from -W/2, the .sum says CLOCKWISE = F),
+the components u, v, w (fastest): the simulator's READER order (evoTurb's writer uses another). Scaling
+V = U (o + 1e-5 TI% raw) with U and TI from the ROOT.wnd header, which also carries the rotor plane for
+InflowWind (WindType 4). The store's convected frame is the simulator's "eddy index" time axis, so planes
+are written in stored t order.
 """
 
 from __future__ import annotations
@@ -28,27 +27,12 @@ MAX_PLANES = 30  # the reader copies the distances into a fixed 30-element buffe
 
 
 def plane_distances(x_m) -> tuple[np.ndarray, list[str]]:
-    """Plane distances as int16 whole metres (the format's unit) and a note for each rounded one.
-
-    Refuses what the format cannot hold (> 30 planes, |x| > 32767 m, planes merging on rounding).
-
-    Parameters
-    ----------
-    x_m : array_like
-        Upstream distances of the planes from the rotor [m], shape (nx,).
-
-    Returns
-    -------
-    distances : numpy.ndarray
-        Little-endian int16 array (nx,) of the distances rounded to whole metres [m].
-    rounded : list of str
-        One ``"x->r"`` note per distance changed by the rounding (empty when none was).
+    """Plane distances ``x_m`` [m] as int16 whole metres (the format's unit) and an ``"x->r"`` note per rounded one.
 
     Raises
     ------
     ParameterError
-        For more than ``MAX_PLANES`` (30) planes, a rounded distance beyond +-32767 m, or two planes
-        that coincide when rounded.
+        For more than ``MAX_PLANES`` (30) planes, a distance beyond +-32767 m, or planes merging on rounding.
     """
     x = np.asarray(x_m, dtype=float)
     if len(x) > MAX_PLANES:
@@ -63,36 +47,17 @@ def plane_distances(x_m) -> tuple[np.ndarray, list[str]]:
 
 
 def export_evo(fs, out, req: ExportRequest) -> ExportResult:
-    """Export every plane of store ``fs`` to ROOT.evo, and one plane to ROOT.wnd / ROOT.sum.
+    """Export every plane of store ``fs`` to ROOT.evo, and one plane (default the rotor) to ROOT.wnd / ROOT.sum.
 
-    The .wnd / .sum pair holds the chosen plane (default the rotor). Two passes over the store,
-    one plane in memory at a time: the first fixes one TI scaling that fits every plane, the second
-    writes the planes (plane, time, z, y, component order).
-
-    Parameters
-    ----------
-    fs : FieldStore
-        The open store.
-    out : str or os.PathLike
-        ROOT, or a path ending in .evo, .wnd or .sum (the extension is dropped).
-    req : ExportRequest
-        Plane for the .wnd (default the rotor plane), hub height, shear exponent, periodic, runner
-        files and overwrite options.
-
-    Returns
-    -------
-    ExportResult
-        The paths ROOT.evo, ROOT.wnd, ROOT.sum (and with ``req.runner_files`` the InflowWind v5 input
-        file ROOT_InflowWind_evo.dat and the LidarSim section ROOT_LidarSim_evolution.txt, one usage
-        line each), the InflowWind (WindType 4) and lidar-simulator input lines, and notes.
+    Two passes, one plane in memory at a time: the first fixes one TI scaling that fits every plane, the
+    second writes the planes. ``out``: ROOT, or a path ending in .evo, .wnd or .sum. With ``req.runner_files``
+    also ROOT_InflowWind_evo.dat and ROOT_LidarSim_evolution.txt.
 
     Raises
     ------
     ParameterError
-        For an odd nt, planes the .evo cannot hold (see :func:`plane_distances`), a plane index out
-        of range or a store without a rotor plane, a grid reaching the ground (without
-        ``drop_below_ground``), an existing output without ``overwrite``, a bad output path, or a
-        failed write.
+        For an odd nt, planes the .evo cannot hold (:func:`plane_distances`), a bad plane, a grid reaching
+        the ground without ``drop_below_ground``, an existing output without ``overwrite``, a failed write.
     """
     root = export_root(out)
     ix_rotor, lay = req.plane_index(fs), req.layout(fs)
@@ -140,24 +105,8 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
 
 
 def read_evo(path) -> dict:
-    """Read ROOT.evo with ROOT.wnd's header.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The ROOT.evo file; ROOT.wnd must lie beside it.
-
-    Returns
-    -------
-    dict
-        x_up (NL,) [m] (plane distances, positive upstream) and u, v, w (NL, nt, ny, nz) [m/s].
-
-    Raises
-    ------
-    ParameterError
-        When ROOT.wnd is not a new-style TurbType-4 .wnd.
-    OSError
-        When a file cannot be read.
+    """Read ROOT.evo with the header of ROOT.wnd beside it: x_up (NL,) [m] (positive upstream) and u, v, w
+    (NL, nt, ny, nz) [m/s].
     """
     path = Path(path)
     h = read_wnd(path.with_suffix(".wnd"))["header"]

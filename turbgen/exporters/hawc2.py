@@ -1,12 +1,11 @@
-"""HAWC2 / Mann binary box (InflowWind WindType 5; the HAWC2 user manual's Mann turbulence box, Mann 1998, and
+"""HAWC2 / Mann binary box (InflowWind WindType 5; the HAWC2 manual's Mann turbulence box, Mann 1998, and
 OpenFAST's InflowWind documentation of the HAWC format).
 
-Three headerless little-endian float32 files ROOT_u.bin, ROOT_v.bin, ROOT_w.bin per plane, each
-nx*ny*nz values with z fastest (bottom up), then y stored REVERSED (+W/2 first), then x = time
-(the first x-plane reaches the turbine first). The files hold u - URef, v, w of the full field
-(mean + shear + fluctuations) and are loaded with WindProfile = 0, ScaleMethod = 0, which
-reproduces the field exactly (InflowWind v5 input keys; WindProfile = -1 is rejected by v5, ScaleMethod != 0
-removes the shear).
+Three headerless little-endian float32 files ROOT_u.bin, ROOT_v.bin, ROOT_w.bin per plane, each nx*ny*nz
+values with z fastest (bottom up), then y stored REVERSED (+W/2 first), then x = time (the first x-plane
+reaches the turbine first). They hold u - URef, v, w of the full field (mean + shear + fluctuations), loaded
+with WindProfile = 0, ScaleMethod = 0, which reproduces the field exactly (v5 rejects WindProfile = -1;
+ScaleMethod != 0 removes the shear).
 """
 
 from __future__ import annotations
@@ -22,45 +21,13 @@ from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult, P
 
 
 def component_paths(root) -> dict[str, Path]:
-    """ROOT_u.bin, ROOT_v.bin, ROOT_w.bin.
-
-    Parameters
-    ----------
-    root : str or os.PathLike
-        Path root of the three files.
-
-    Returns
-    -------
-    dict of str to pathlib.Path
-        {"u": ROOT_u.bin, "v": ROOT_v.bin, "w": ROOT_w.bin}.
-    """
+    """{"u": ROOT_u.bin, "v": ROOT_v.bin, "w": ROOT_w.bin}."""
     root = Path(root)
     return {c: root.with_name(f"{root.name}_{c}.bin") for c in COMPONENTS}
 
 
 def write_hawc2(paths: dict, plane: Plane, U_ref: float) -> None:
-    """Write ``plane`` as HAWC boxes holding u - U_ref, v, w (full velocities).
-
-    Each file is little-endian float32 with z fastest, then y reversed, then time.
-
-    Parameters
-    ----------
-    paths : dict
-        {"u", "v", "w": path} of the files to write.
-    plane : Plane
-        The yz-plane to write.
-    U_ref : float
-        Reference wind speed subtracted from u [m/s].
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    OSError
-        When a file cannot be written.
-    """
+    """Write ``plane`` to the boxes ``paths`` {"u", "v", "w": path}: u - ``U_ref`` [m/s], v, w (full velocities)."""
     for c in COMPONENTS:
         with open(paths[c], "wb") as f:
             for a, b in plane.blocks(8 * plane.ny * plane.nz):
@@ -69,29 +36,8 @@ def write_hawc2(paths: dict, plane: Plane, U_ref: float) -> None:
 
 
 def read_hawc2(root, shape, U_ref: float) -> dict:
-    """Read ROOT_{u,v,w}.bin of ``shape`` (nt, ny, nz) back as velocities.
-
-    Parameters
-    ----------
-    root : str or os.PathLike
-        Path root of the three files.
-    shape : tuple of int
-        (nt, ny, nz) of each box.
-    U_ref : float
-        Reference wind speed added back to u [m/s].
-
-    Returns
-    -------
-    dict
-        {"u", "v", "w": float64 array (nt, ny, nz) [m/s]} with y ascending, u including U_ref (as
-        InflowWind with WindProfile = 0).
-
-    Raises
-    ------
-    OSError
-        When a file cannot be read.
-    ValueError
-        When a file does not hold ``shape`` values.
+    """Read ROOT_{u,v,w}.bin of ``shape`` (nt, ny, nz) as {"u", "v", "w": float64 [m/s]}, y ascending, u + ``U_ref``
+    (as InflowWind with WindProfile = 0).
     """
     out = {}
     for c, p in component_paths(root).items():
@@ -101,28 +47,13 @@ def read_hawc2(root, shape, U_ref: float) -> dict:
 
 
 def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
-    """Export one plane of store ``fs`` to ROOT_{u,v,w}.bin.
-
-    Parameters
-    ----------
-    fs : FieldStore
-        The open store.
-    out : str or os.PathLike
-        ROOT, or a path ending in .bin (the extension is dropped).
-    req : ExportRequest
-        Plane, hub height, shear exponent and overwrite options.
-
-    Returns
-    -------
-    ExportResult
-        The three paths, the InflowWind lines (WindType 5, WindProfile 0, ScaleMethod 0) and notes.
+    """Export one plane of store ``fs`` to ROOT_{u,v,w}.bin (``out``: ROOT, or a path ending in .bin).
 
     Raises
     ------
     ParameterError
-        For a plane index out of range or a store without a rotor plane, a grid reaching the ground
-        (without ``drop_below_ground``), an existing output without ``overwrite``, a bad output
-        path, or a failed write.
+        For a bad plane, a grid reaching the ground without ``drop_below_ground``, an existing output without
+        ``overwrite``, a bad output path, or a failed write.
     """
     root = Path(out)
     if root.suffix.lower() == ".bin":
@@ -164,29 +95,8 @@ def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
 
 
 def runner_files(files, fs, req: ExportRequest, plane: Plane, lay, paths: dict, dat: Path, htc: Path) -> list[str]:
-    """Write the InflowWind v5 input file and the HAWC2 wind block of a HAWC2 export (through ``files``).
-
-    Parameters
-    ----------
-    files : OutputSet
-        The export's output set (holding ``dat`` and ``htc``).
-    fs : FieldStore
-        The open store.
-    req : ExportRequest
-        The export request.
-    plane : Plane
-        The exported plane (its u fluctuations give the block's tint).
-    lay : VerticalLayout
-        Kept rows and mean wind.
-    paths : dict
-        {"u", "v", "w": final path} of the boxes.
-    dat, htc : pathlib.Path
-        Final paths of the input file and of the wind block.
-
-    Returns
-    -------
-    list of str
-        One usage line per file.
+    """Write the InflowWind v5 input file ``dat`` and the HAWC2 wind block ``htc`` of a HAWC2 export (through
+    ``files``); return one usage line per file. The block's tint is the plane's sigma_u / U.
     """
     g = fs.grid
     desc = f"turbgen {htc.name}: plane of {req.source(fs)}, {lay.wind.describe()}"

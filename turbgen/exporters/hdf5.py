@@ -1,11 +1,9 @@
-"""HDF5 copy of the whole 4D field (h5py): u, v, w, the coordinates t, x, y, z and the store's
-attributes.
+"""HDF5 copy of the whole 4D field (h5py): u, v, w, the coordinates t, x, y, z and the store's attributes.
 
-MATLAB reverses the dimensions of a row-major HDF5 dataset, so the velocity datasets are stored
-with C shape (nz, ny, nx, nt): MATLAB's ``h5read(f, '/u')`` returns (nt, nx, ny, nz), the
-store's documented (t, x, y, z) order, while h5py/NumPy see (z, y, x, t). Values are the stored
-fluctuations (no mean, no shear), float32; the convected frame of the store is kept (attribute
-frame_note). Written plane by plane, one component-plane in memory.
+MATLAB reverses the dimensions of a row-major HDF5 dataset, so the velocities are stored with C shape
+(nz, ny, nx, nt): MATLAB's ``h5read(f, '/u')`` returns (nt, nx, ny, nz), the store's (t, x, y, z), while
+h5py/NumPy see (z, y, x, t). Values are the stored float32 fluctuations (no mean, no shear) in the
+store's convected frame.
 """
 
 from __future__ import annotations
@@ -33,32 +31,14 @@ def _attr_value(value):
 
 
 def export_hdf5(fs, out, req: ExportRequest) -> ExportResult:
-    """Export the whole store ``fs`` to ``out`` (.h5).
+    """Export the whole store ``fs`` to the HDF5 file ``out`` (only ``req.overwrite`` is used).
 
-    Datasets u, v, w are float32 fluctuations [m/s] of C shape (nz, ny, nx, nt) (MATLAB's ``h5read``
-    gives (nt, nx, ny, nz)), with dimension scales t, x, y, z and the store's attributes; written
-    plane by plane, one component-plane in memory. The disk space is reserved first.
-
-    Parameters
-    ----------
-    fs : FieldStore
-        The open store.
-    out : str or os.PathLike
-        The HDF5 file to write.
-    req : ExportRequest
-        Only ``overwrite`` is used.
-
-    Returns
-    -------
-    ExportResult
-        The written path, a line saying InflowWind does not read HDF5, and a note on the
-        dimension order.
+    Written plane by plane, one component-plane in memory, after reserving the file's disk space.
 
     Raises
     ------
     ParameterError
-        For an existing output without ``overwrite``, a bad output path, or a failed write (e.g.
-        ENOSPC when reserving the space).
+        For an existing output without ``overwrite``, a bad output path, or a failed write (e.g. ENOSPC).
     """
     out = Path(out)
     g = fs.grid
@@ -89,24 +69,7 @@ def export_hdf5(fs, out, req: ExportRequest) -> ExportResult:
 
 
 def read_hdf5(path) -> dict:
-    """Read an export back.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The HDF5 file written by :func:`export_hdf5`.
-
-    Returns
-    -------
-    dict
-        u, v, w (nt, nx, ny, nz) float32 [m/s], coordinates t [s], x, y, z [m], and attrs (dict of the
-        file attributes).
-
-    Raises
-    ------
-    OSError
-        When the file cannot be opened as HDF5.
-    """
+    """Read an export back: u, v, w (nt, nx, ny, nz) float32 [m/s], t [s], x, y, z [m] and attrs (dict)."""
     with h5py.File(path, "r") as h5:
         out = {c: h5[c][...].transpose(3, 2, 1, 0) for c in COMPONENTS}
         out.update({name: h5[name][...] for name in _COORDS})

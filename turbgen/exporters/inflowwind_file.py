@@ -1,10 +1,8 @@
-"""A complete InflowWind v5 input file (file-formats.md section 6) for an exported wind file.
+"""A complete InflowWind v5 input file (OpenFAST InflowWind documentation) for an exported wind file.
 
-The v5 parser reads the keys in a fixed order, the key name being the second token; every section
-is written (the unused ones with inert values) so the file loads as is: ``InflowFile`` in the .fst
-names it. File names inside are relative to the input file's own folder, which is where InflowWind
-resolves them. The layout is also the one openfast-io's ``InputReader_OpenFAST.read_InflowWind``
-reads by position.
+The v5 parser reads the keys in a fixed order, the key name being the second token; every section is written
+(unused ones with inert values) so the file loads as is. File names inside are relative to the input file's
+folder, where InflowWind resolves them; openfast-io's ``read_InflowWind`` reads the same layout by position.
 """
 
 from __future__ import annotations
@@ -36,7 +34,7 @@ class InflowWindInput:
     hawc : dict, optional
         HAWC keys nx, ny, nz, dx, dy, dz, RefHt_HAWC, PLExp_HAWC (WindType 5).
     ref_length_m : float
-        RefLength [m] of a uniform wind file (its linear shears' reference length).
+        RefLength [m] of a uniform wind file.
     title : str
         Second line of the file (free text).
     """
@@ -55,20 +53,7 @@ def _rel(path, folder: Path) -> str:
 
 
 def inflowwind_text(spec: InflowWindInput, path) -> str:
-    """The InflowWind v5 input file ``path`` for ``spec``, wind-file names relative to its folder.
-
-    Parameters
-    ----------
-    spec : InflowWindInput
-        Wind type, heights, speeds and file paths.
-    path : str or os.PathLike
-        Where the input file will be (final path): the folder the file names are made relative to.
-
-    Returns
-    -------
-    str
-        The file text (newline-terminated).
-    """
+    """The text of the InflowWind v5 input file to be written at ``path`` (wind-file names relative to its folder)."""
     folder = Path(path).absolute().parent
     files = {k: _rel(v, folder) for k, v in spec.files.items()}
     L = ifw_line
@@ -147,43 +132,15 @@ def _hawc_lidar_output(spec: InflowWindInput, files: dict) -> list[str]:
 
 
 def inflowwind_path(stem_path, fmt: str) -> Path:
-    """The input file's name beside the wind files: ``<stem>_InflowWind_<fmt>.dat``.
-
-    The format in the name keeps the .bts and the .wnd export of one root from claiming the same file.
-
-    Parameters
-    ----------
-    stem_path : str or os.PathLike
-        The wind file without extension (or ROOT).
-    fmt : str
-        The export format ("bts", "wnd", "hawc2", "iec").
-
-    Returns
-    -------
-    pathlib.Path
-        ``<stem>_InflowWind_<fmt>.dat`` in the same folder.
+    """``<stem>_InflowWind_<fmt>.dat`` beside the wind files (the format in the name keeps the .bts and .wnd
+    exports of one root apart).
     """
     p = Path(stem_path)
     return p.with_name(f"{p.name}_InflowWind_{fmt}.dat")
 
 
 def write_inflowwind(files, path, spec: InflowWindInput) -> str:
-    """Write the input file through the temporary of ``path`` in the output set ``files``.
-
-    Parameters
-    ----------
-    files : OutputSet
-        The export's output set (``path`` among its paths).
-    path : pathlib.Path
-        Final path of the input file.
-    spec : InflowWindInput
-        What it says.
-
-    Returns
-    -------
-    str
-        The one line that tells the user how to use it.
-    """
+    """Write the input file ``path`` through its temporary in the output set ``files``; return its usage line."""
     files.temp(path).write_text(inflowwind_text(spec, path))
     return (f"OpenFAST: set InflowFile = \"{path}\" in the .fst (or run inflowwind_driver on it); its wind-file "
             "names are relative to its own folder")
@@ -194,32 +151,10 @@ def hawc2_wind_block(*, paths: dict, folder: Path, U_m_s: float, ti: float, cent
     """The HAWC2 htc ``begin wind`` block (with its ``begin mann`` sub-block) that loads an export's boxes.
 
     The boxes hold u - wsp with the mean profile included, so the block uses a constant shear
-    (``shear_format 1 0``), no scaling (``dont_scale 1``) and the box centre at the grid's centre
-    height (HAWC2's global z points down, hence -centre).
-
-    Parameters
-    ----------
-    paths : dict
-        {"u", "v", "w": path} of the boxes.
-    folder : pathlib.Path
-        Folder the file names are made relative to (HAWC2 resolves them from its working folder).
-    U_m_s : float
-        Mean hub speed wsp [m/s].
-    ti : float
-        Turbulence intensity sigma_u / U [-] of the exported plane (``tint``; unused with dont_scale).
-    centre_m : float
-        Height of the grid's vertical centre [m].
-    nt, ny, nz : int
-        Box size (x = time, y, z).
-    dx_m, dy_m, dz_m : float
-        Spacings [m] (dx = U dt).
-    description : str
-        Comment line at the top.
-
-    Returns
-    -------
-    str
-        The block text.
+    (``shear_format 1 0``), no scaling (``dont_scale 1``) and the box centre at the grid's centre height
+    ``centre_m`` [m] (HAWC2's global z points down, hence -centre). ``paths`` {"u", "v", "w": path} are written
+    relative to ``folder``; ``ti`` = sigma_u / U [-] (``tint``, unused with dont_scale); box size nt, ny, nz and
+    spacings [m] (dx = U dt); ``description`` is the comment line at the top.
     """
     rel = {c: "./" + _rel(p, folder) for c, p in paths.items()}
     return "\n".join([

@@ -1,12 +1,9 @@
 """The ``---- Wind Evolution ----`` section of the FUAS lidar-simulator forks' LidarSim input file
 (fengguoFUAS / SimonWeichFUAS OpenFAST3.0_LidSim, ``modules/lidarsim``) for an exported ROOT.evo.
 
-The fork reads the section by position: a separator line, the ``EvolutionFlag`` (logical), then the
-quoted ``.evo`` path with its extension (ROOT.wnd and ROOT.sum beside it). Before every line it skips
-lines whose first character is ``!``, so the explanatory ``!`` lines at the head of the file may be
-pasted with the section. The fork opens the path as written, without joining it to the LidarSim
-input file's folder: a relative path resolves against the folder OpenFAST runs in. The path is
-therefore written absolute.
+The fork reads the section by position: a separator line, ``EvolutionFlag`` (logical), the quoted
+``.evo`` path (ROOT.wnd and ROOT.sum beside it), skipping lines that start with ``!``. It opens the path
+as written, relative to the folder OpenFAST runs in, so the path is written absolute.
 """
 
 from __future__ import annotations
@@ -18,35 +15,13 @@ from turbgen.version import __version__
 
 
 def lidarsim_section_path(root) -> Path:
-    """The section file's name beside the wind files: ``<ROOT>_LidarSim_evolution.txt``.
-
-    Parameters
-    ----------
-    root : str or os.PathLike
-        ROOT of ROOT.evo.
-
-    Returns
-    -------
-    pathlib.Path
-        ``<ROOT>_LidarSim_evolution.txt`` in the same folder.
-    """
+    """``<ROOT>_LidarSim_evolution.txt`` beside the wind files."""
     p = Path(root)
     return p.with_name(f"{p.name}_LidarSim_evolution.txt")
 
 
 def evolution_section_lines(evo_path) -> tuple[str, ...]:
-    """The section's three lines as the fork reads them: separator, EvolutionFlag, the .evo path.
-
-    Parameters
-    ----------
-    evo_path : str or os.PathLike
-        The ROOT.evo file (made absolute: the fork resolves a relative path against its working folder).
-
-    Returns
-    -------
-    tuple of str
-        The separator line, ``True EvolutionFlag`` and the quoted absolute path.
-    """
+    """The section's three lines: separator, ``True EvolutionFlag`` and the quoted absolute ``evo_path``."""
     return ("---------------------- Wind Evolution --------------------",
             ifw_line(True, "EvolutionFlag", "flag whether evolution considered: read the 4D field"),
             ifw_line(str(Path(evo_path).absolute()), "EvolutionFilenameRoot",
@@ -54,22 +29,7 @@ def evolution_section_lines(evo_path) -> tuple[str, ...]:
 
 
 def write_lidarsim_section(files, path: Path, evo_path) -> str:
-    """Write the section file through the temporary of ``path`` in the output set ``files``.
-
-    Parameters
-    ----------
-    files : OutputSet
-        The export's output set (``path`` among its paths).
-    path : pathlib.Path
-        Final path of the section file.
-    evo_path : str or os.PathLike
-        The ROOT.evo file it points to.
-
-    Returns
-    -------
-    str
-        The one line that tells the user how to use it.
-    """
+    """Write the section file ``path`` through its temporary in ``files``; return its usage line."""
     head = [f"! turbgen {__version__}: the Wind Evolution section of the LidarSim input file (OpenFAST3.0_LidSim forks)",
             "! Paste the lines below in place of that section (the lines after the weighting table, before",
             "! Measurement availability). The fork skips lines starting with '!'. It opens the .evo path as written,",

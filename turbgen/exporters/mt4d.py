@@ -1,11 +1,10 @@
 """``.mt4d``: the headerless float32 layout of the 4D Mann turbulence generator
 (MSCA-LIKE/4D-Mann-Turbulence-Generator, its MannTurb4D writer; Guo et al. 2022).
 
-Fortran order z fastest, then y, then x, then snapshot slot, then component (u, v, w), i.e. a
-MATLAB ``reshape(data, [nz ny n1 nslots 3])``. Mapping from the store: slot k = plane k (slot
-time t_k = x_k / U), the box's x axis = eddy time REVERSED (x increases downwind, so the turbine
-reads the largest x first: box x index i holds stored t index nt-1-i), y and z ascending (+y left,
-z relative to the hub). Fluctuations only, as the generator writes them (no mean, no shear).
+Fortran order z fastest, then y, then x, then snapshot slot, then component (u, v, w): MATLAB
+``reshape(data, [nz ny n1 nslots 3])``. Slot k = plane k (slot time t_k = x_k / U); the box's x axis is
+eddy time REVERSED (x increases downwind: box x index i holds stored t index nt-1-i); y and z ascending
+(+y left, z relative to the hub). Fluctuations only (no mean, no shear), as the generator writes them.
 """
 
 from __future__ import annotations
@@ -19,22 +18,9 @@ from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult
 
 
 def export_mt4d(fs, out, req: ExportRequest) -> ExportResult:
-    """Export every plane of store ``fs`` to ``out`` (.mt4d); one component-plane in memory.
+    """Export every plane of store ``fs`` to the ``.mt4d`` file ``out`` (only ``req.overwrite`` is used).
 
-    Parameters
-    ----------
-    fs : FieldStore
-        The open store.
-    out : str or os.PathLike
-        The ``.mt4d`` file to write.
-    req : ExportRequest
-        Only ``overwrite`` is used.
-
-    Returns
-    -------
-    ExportResult
-        The written path, a line saying InflowWind does not read .mt4d, and notes giving the box
-        sizes, slot times t_k = x_k/U [s] and the MATLAB ``reshape`` call.
+    The notes give the box sizes, the slot times t_k = x_k/U [s] and the MATLAB ``reshape`` call.
 
     Raises
     ------
@@ -57,27 +43,7 @@ def export_mt4d(fs, out, req: ExportRequest) -> ExportResult:
 
 
 def read_mt4d(path, shape) -> dict:
-    """Read an ``.mt4d`` of store ``shape`` (nt, nx, ny, nz) back in store orientation.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The ``.mt4d`` file.
-    shape : tuple of int
-        (nt, nx, ny, nz) of the store it was exported from.
-
-    Returns
-    -------
-    dict
-        {"u", "v", "w": float32 array (nt, nx, ny, nz) [m/s]} (eddy time ascending).
-
-    Raises
-    ------
-    OSError
-        When the file cannot be read.
-    ValueError
-        When the file does not hold 3 * nt * nx * ny * nz values.
-    """
+    """Read an ``.mt4d`` of store ``shape`` (nt, nx, ny, nz) as {"u", "v", "w": float32 (nt, nx, ny, nz) [m/s]}."""
     nt, nx, ny, nz = shape
     data = np.fromfile(path, dtype="<f4").reshape(3, nx, nt, ny, nz)
     return {c: data[k, :, ::-1].transpose(1, 0, 2, 3) for k, c in enumerate(COMPONENTS)}

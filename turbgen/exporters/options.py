@@ -1,8 +1,6 @@
 """The export options as `turbgen export` and the service's export endpoint take them, made into one
-:class:`turbgen.exporters.ExportRequest` (and so one :class:`turbgen.spec.mean_wind.MeanWind`) by one function.
-
-The service gives the profile table and the mean history inline (``z,U[,dir];...``), the command line as files;
-everything else is the same keys with the same checks.
+:class:`turbgen.exporters.ExportRequest` by one function (the service gives the profile table and the mean
+history inline, ``z,U[,dir];...``; the command line as files).
 """
 
 from __future__ import annotations
@@ -36,19 +34,12 @@ class ExportOptions:
     mean_history : str, optional
         CSV file of t [s], U [m/s] [, direction deg] (inline: ``t,U[,dir];...``).
     transient : str, optional
-        IEC transient: EOG, EDC, ECD, EWS-V or EWS-H.
-    iec_class : str, optional
-        Turbine class and turbulence category of the transient, e.g. "IIB".
-    rotor_diameter_m : float, optional
-        Rotor diameter D [m] of the transient.
-    transient_start_s : float
-        Time the transient reaches the turbine [s] (default 10).
-    transient_sign : str
-        "+" or "-": the standard's sense of the transient (default "+").
+        IEC transient: EOG, EDC, ECD, EWS-V or EWS-H, with ``iec_class`` (e.g. "IIB"), ``rotor_diameter_m`` [m],
+        ``transient_start_s`` (when it reaches the turbine [s], default 10) and ``transient_sign`` ("+" or "-").
     tower, periodic, drop_below_ground, overwrite : bool
         As :class:`turbgen.exporters.ExportRequest`.
     runner_files : bool
-        Write the runners' input files for the formats that have them (bts, wnd, evo, hawc2; default True).
+        Write the runners' input files for bts, wnd, evo, hawc2 (default True).
     """
 
     plane: int | None = None
@@ -69,13 +60,7 @@ class ExportOptions:
     overwrite: bool = False
 
     def given(self) -> dict:
-        """The options that differ from their defaults (a cache key of the service).
-
-        Returns
-        -------
-        dict
-            Option name -> value.
-        """
+        """The options that differ from their defaults, name -> value (a cache key of the service)."""
         default = asdict(ExportOptions())
         return {k: v for k, v in asdict(self).items() if v != default[k]}
 
@@ -85,29 +70,14 @@ def export_request(store, fmt: str, opts: ExportOptions, *, inline: bool = False
     """The ExportRequest of ``opts`` for ``store`` in format ``fmt``; without a profile, shear exponent, veer or
     history, a replayed store's fitted mean wind (:func:`fitted_mean_wind`), said in the request's notes.
 
-    Parameters
-    ----------
-    store : str, os.PathLike or FieldStore
-        The store (opened only for a transient, which takes its U and hub height).
-    fmt : str
-        The export format.
-    opts : ExportOptions
-        The options.
-    inline : bool, optional
-        The profile table and the mean history hold their rows, not file names (the service).
-    source_label : str, optional
-        How the exports name their source store (see ExportRequest).
-
-    Returns
-    -------
-    ExportRequest
-        The checked request.
+    ``store`` is opened only for a transient (its U and hub height); ``inline``: the profile table and mean
+    history hold rows, not file names (the service); ``source_label`` as in ExportRequest.
 
     Raises
     ------
     ParameterError
-        For both a shear exponent and a profile, transient options without a transient (or a transient without
-        them), a malformed profile or table, and values outside their ranges.
+        For both a shear exponent and a profile, transient options without a transient (or the reverse), a
+        malformed profile or table, values outside their ranges.
     StoreError
         For a transient on a missing or incomplete store.
     """

@@ -1,11 +1,9 @@
-"""Atomic multi-file output: every file is written under a temporary sibling name and all are
-renamed into place only when every one of them was written completely.
+"""Atomic multi-file output: every file is written under a temporary sibling and all are renamed into place
+only when every one was written completely.
 
-Nothing at the final paths changes when an error (Ctrl-C, SIGTERM, SIGHUP, a full or read-only
-disk) happens, and existing files are never replaced unless ``overwrite`` is set (checked for all
-targets before anything is written). Errors of the file system become one-line ParameterErrors;
-temporaries of earlier exports killed with SIGKILL are removed when the next export of the same
-outputs starts.
+Nothing at the final paths changes on an error (Ctrl-C, SIGTERM, SIGHUP, a full or read-only disk);
+existing files are replaced only with ``overwrite`` (checked for all targets first). File-system errors
+become one-line ParameterErrors; temporaries of exports killed earlier are removed by the next export.
 """
 
 from __future__ import annotations
@@ -27,12 +25,9 @@ from turbgen.store.temporaries import (TEMP_MARK, remove_dead_temporaries,
 class OutputSet:
     """Context manager handing out temporary paths for a set of final paths.
 
-    >>> with OutputSet([a, b], overwrite=False) as out:
-    ...     write(out.temp(a)); write(out.temp(b))
-
-    On a normal exit every temporary is renamed to its final path; on an exception (or when a
-    temporary was not written) all temporaries are removed and the final paths are untouched.
-    Within the block SIGTERM and SIGHUP raise SystemExit.
+    ``with OutputSet([a, b], overwrite=False) as out: write(out.temp(a)); write(out.temp(b))``: on a normal
+    exit every temporary is renamed to its final path; on an exception (or a temporary not written) all are
+    removed and the final paths untouched.
 
     Parameters
     ----------
@@ -46,9 +41,9 @@ class OutputSet:
     Raises
     ------
     ParameterError
-        At construction: paths not distinct, a bad output path, a missing or non-writable output
-        directory, an output that is a directory or exists without ``overwrite``, too little free
-        disk. On exit: a file-system error (OSError) while writing or renaming, as one line.
+        At construction: paths not distinct, a bad output path, a missing or non-writable directory, an output
+        that is a directory or exists without ``overwrite``, too little free disk. On exit: a file-system error
+        while writing or renaming, as one line.
     RuntimeError
         On exit, when the exporter did not write the temporary of every path.
     """
@@ -77,48 +72,21 @@ class OutputSet:
         self._temps = {p: p.with_name(f".{p.name}{TEMP_MARK}{token}") for p in self.paths}
 
     def temp(self, path) -> Path:
-        """Temporary path to write instead of the final ``path``.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            One of the final paths of the set.
-
-        Returns
-        -------
-        pathlib.Path
-            The hidden temporary sibling ``.NAME.tmp-PID-XXXXXXXX``.
-
-        Raises
-        ------
-        KeyError
-            When ``path`` is not one of the set's paths.
+        """The hidden temporary sibling ``.NAME.tmp-PID-XXXXXXXX`` to write instead of the final ``path`` (KeyError
+        for a path not in the set).
         """
         return self._temps[Path(path)]
 
     def reserve(self, path, nbytes: int) -> None:
-        """Reserve ``nbytes`` of disk for the (already created) temporary of ``path`` without changing its size.
+        """Reserve ``nbytes`` of disk for the existing temporary of ``path`` without changing its size.
 
-        So that a library that cannot survive a failed write (HDF5 aborts the process when it cannot
-        flush on close) never meets a full disk. Where fallocate(2) is unavailable (turbgen.oscalls), the file
-        system's free space is checked instead.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            One of the final paths of the set; its temporary must exist.
-        nbytes : int
-            Bytes to reserve.
-
-        Returns
-        -------
-        None
+        So that a library that cannot survive a failed write (HDF5 aborts the process when it cannot flush on
+        close) never meets a full disk; without fallocate(2) (turbgen.oscalls) the free space is checked instead.
 
         Raises
         ------
         OSError
-            ENOSPC when the space is not there (other fallocate errors except EOPNOTSUPP, ENOSYS and
-            EINVAL too), or when the temporary cannot be opened.
+            ENOSPC when the space is not there (or another fallocate error but EOPNOTSUPP, ENOSYS and EINVAL).
         """
         fd = os.open(self.temp(path), os.O_WRONLY)
         try:

@@ -24,10 +24,9 @@ class ExportRequest:
     plane : int, optional
         Index into the store's planes (None = the rotor plane, x = 0).
     hub_height_m : float, optional
-        Overrides the store's hub height [m], in the range of ``turbgen.theory.ranges`` ([1, 1000]).
+        Overrides the store's hub height [m], in [1, 1000].
     shear_exponent : float, optional
-        Power-law alpha [-]; None (default): ``DEFAULT_SHEAR_EXPONENT``. Given, it is refused by the
-        formats without a mean profile, even at the default value.
+        Power-law alpha [-]; None: ``DEFAULT_SHEAR_EXPONENT``. Refused by formats without a mean profile.
     tower : bool, optional
         Add .bts tower points.
     periodic : bool, optional
@@ -37,18 +36,16 @@ class ExportRequest:
     overwrite : bool, optional
         Replace existing outputs.
     source_label : str, optional
-        How the exports name their source store (the .bts description, the HDF5 ``source_store``); default its
-        path. The service gives ``/runs/<id>/store``, not its catalog's path on the server.
+        How the exports name their source (the .bts description, HDF5 ``source_store``); default the store's name.
     mean_wind : MeanWind, optional
-        Profile, veer and hub-height history added by the InflowWind/HAWC2 formats; None (default):
-        the power law with ``shear_exponent``. Refused together with ``shear_exponent``.
+        Profile, veer and hub-height history added by the InflowWind/HAWC2 formats; None: the power law with
+        ``shear_exponent`` (refused together with it).
     runner_files : bool, optional
-        Also write the runners' input files beside the wind files: a complete InflowWind v5 input file
-        ``<out>_InflowWind_<format>.dat`` (bts, wnd, evo, hawc2), a HAWC2 ``<out>_wind.htc`` block (hawc2)
-        and the LidarSim input file's Wind Evolution section ``<out>_LidarSim_evolution.txt`` (evo);
-        default False.
+        Also write the InflowWind v5 input file ``<out>_InflowWind_<format>.dat`` (bts, wnd, evo, hawc2), a HAWC2
+        ``<out>_wind.htc`` block (hawc2) and the LidarSim Wind Evolution section ``<out>_LidarSim_evolution.txt``
+        (evo); default False.
     notes : tuple of str, optional
-        Remarks on the request the export adds to its own (e.g. a mean wind taken from the store's fit record).
+        Remarks the export adds to its own (e.g. a mean wind taken from the store's fit record).
 
     Raises
     ------
@@ -70,9 +67,9 @@ class ExportRequest:
     notes: tuple = ()
 
     def source(self, fs) -> str:
-        """The source store's name in the exports: ``source_label``, else the store directory's name (not its absolute
-        path: the same store and options give the same files on any machine, in any directory), or the in-memory
-        field's label."""
+        """The source's name in the exports: ``source_label``, else the store directory's name (not its absolute
+        path: the same files on any machine), or the in-memory field's label.
+        """
         if self.source_label is not None:
             return self.source_label
         return fs.path.name if getattr(fs, "path", None) is not None else fs.label
@@ -89,17 +86,7 @@ class ExportRequest:
             raise ParameterError(f"`mean_wind` = {self.mean_wind!r} is not a turbgen.spec.mean_wind.MeanWind")
 
     def plane_index(self, fs) -> int:
-        """The plane to export from store ``fs`` (default: the plane at x = 0).
-
-        Parameters
-        ----------
-        fs : FieldStore
-            The open store.
-
-        Returns
-        -------
-        int
-            Plane index in [0, nx - 1].
+        """The plane index in [0, nx - 1] to export from store ``fs`` (default: the plane at x = 0).
 
         Raises
         ------
@@ -116,23 +103,13 @@ class ExportRequest:
         return self.plane
 
     def layout(self, fs) -> VerticalLayout:
-        """Rows to export and the mean profile, for store ``fs``.
-
-        Parameters
-        ----------
-        fs : FieldStore
-            The open store; its hub height is used unless ``hub_height_m`` is set.
-
-        Returns
-        -------
-        VerticalLayout
-            See :func:`turbgen.exporters.shear.vertical_layout`.
+        """Rows to export and the mean profile for store ``fs`` (:func:`turbgen.exporters.shear.vertical_layout`).
 
         Raises
         ------
         ParameterError
-            For a grid reaching the ground without ``drop_below_ground``, a bad shear exponent, heights
-            the mean-wind profile does not cover, or a mean history outside the record.
+            For a grid reaching the ground without ``drop_below_ground``, a bad shear exponent, heights the
+            mean-wind profile does not cover, a transient at another speed or height, a history outside the record.
         """
         hub = fs.hub_height_m if self.hub_height_m is None else self.hub_height_m
         alpha = DEFAULT_SHEAR_EXPONENT if self.shear_exponent is None else self.shear_exponent
@@ -149,20 +126,10 @@ class ExportRequest:
         return lay
 
     def start_shift_s(self, fs) -> float:
-        """Time [s] by which InflowWind starts a file upstream: half the grid width / U when not periodic, else 0.
+        """Time [s] by which InflowWind starts a file upstream: InitX / U, 0 when periodic.
 
-        InflowWind reads slice k (0-based) at X = 0 at time k dt - InitX / U with InitX = (ny - 1) dy / 2
-        for a non-periodic .bts/.wnd (file-formats.md section 1); HAWC boxes are always periodic.
-
-        Parameters
-        ----------
-        fs : FieldStore
-            The open store.
-
-        Returns
-        -------
-        float
-            InitX / U [s] (0 when periodic).
+        InflowWind reads slice k at X = 0 at time k dt - InitX / U with InitX = (ny - 1) dy / 2 for a non-periodic
+        .bts/.wnd (InflowWind User's Guide); HAWC boxes are always periodic.
         """
         g = fs.grid
         return 0.0 if self.periodic else 0.5 * (g.ny - 1) * g.dy_m / fs.U_m_s
@@ -182,10 +149,10 @@ class ExportResult:
 class Plane:
     """One yz-plane as stored (float32 fluctuations, kept rows only) plus the mean wind.
 
-    Full velocities are made in float64 one time block at a time, so memory stays at about one
-    stored plane. Without veer, history or transient only u gets the profile's mean (the exports' bits of
-    earlier versions); with them (u, v) = rotate((U(t, y, h) + u', v'), veer(h) + direction(t)) as
-    :mod:`turbgen.spec.mean_wind` defines, t the time slice k reaches the turbine (``first_slice_s`` + k dt).
+    Full velocities are made in float64 one time block at a time (memory about one stored plane). Without
+    veer, history or transient only u gets the profile's mean; with them (u, v) = rotate((U(t, y, h) + u', v'),
+    veer(h) + direction(t)) as :mod:`turbgen.spec.mean_wind` defines, at the time slice k reaches the turbine
+    (``first_slice_s`` + k dt).
 
     Parameters
     ----------
@@ -197,13 +164,6 @@ class Plane:
         Kept rows and the mean profile.
     first_slice_s : float, optional
         Time [s] at which slice 0 reaches the turbine (minus the start shift of a non-periodic file).
-
-    Raises
-    ------
-    ParameterError
-        For a plane index out of range.
-    StoreError
-        When a chunk of the plane is corrupted or holds NaN/inf.
     """
 
     def __init__(self, fs, ix: int, layout: VerticalLayout, first_slice_s: float = 0.0):
@@ -217,22 +177,9 @@ class Plane:
         self.U_m_s, self.hub_height_m = fs.U_m_s, layout.hub_height_m
 
     def full(self, c: str, a: int = 0, b: int | None = None) -> np.ndarray:
-        """Full velocity [m/s] of component ``c`` for time steps a..b-1, float64 (b - a, ny, nz).
+        """Full velocity [m/s] of component ``c`` ("u", "v" or "w") for time steps a..b-1, float64 (b - a, ny, nz).
 
-        Parameters
-        ----------
-        c : str
-            "u", "v" or "w"; w is the stored fluctuation, u (and v, with veer or a history direction)
-            carry the mean wind.
-        a : int, optional
-            First time index (default 0).
-        b : int, optional
-            End time index, exclusive (default None: to the end).
-
-        Returns
-        -------
-        numpy.ndarray
-            float64 array (b - a, ny, nz) [m/s].
+        w is the stored fluctuation; u (and v, with veer or a history direction) carry the mean wind.
         """
         v = self.fluct[c][a:b].astype(np.float64)
         if not self.varying:
@@ -247,64 +194,24 @@ class Plane:
         return u if c == "u" else other
 
     def blocks(self, bytes_per_step: int, budget: int = 1 << 24):
-        """(a, b) time blocks of at most ``budget`` bytes at ``bytes_per_step`` each.
-
-        Parameters
-        ----------
-        bytes_per_step : int
-            Bytes one time step takes [bytes].
-        budget : int, optional
-            Largest block [bytes]; default 16 MiB (at least one step per block).
-
-        Returns
-        -------
-        list of tuple of (int, int)
-            Consecutive half-open time ranges [a, b) covering 0..nt.
+        """Consecutive half-open time ranges (a, b) covering 0..nt, each at most ``budget`` bytes (at least one step).
         """
         step = max(1, budget // max(1, bytes_per_step))
         return [(a, min(self.nt, a + step)) for a in range(0, self.nt, step)]
 
 
 def ifw_line(value, key: str, comment: str) -> str:
-    """One InflowWind input-file line: value, key name (second token), description.
-
-    Parameters
-    ----------
-    value : object
-        The value; strings and paths are quoted, floats written with 10 significant digits.
-    key : str
-        The InflowWind key name.
-    comment : str
-        Description after the key.
-
-    Returns
-    -------
-    str
-        The line, value right-aligned in 20 characters.
+    """One InflowWind input-file line: ``value`` right-aligned in 20 characters (strings and paths quoted, floats
+    with 10 significant digits), the ``key`` name, then `` - comment``.
     """
     text = f'"{value}"' if isinstance(value, (str, Path)) else (str(value) if not isinstance(value, float) else f"{value:.10g}")
     return f"{text:>20}   {key:<15} - {comment}"
 
 
 def mean_wind_notes(lay: VerticalLayout, shift_s: float, nt: int, dt_s: float) -> list[str]:
-    """What the printed summary says about the mean wind and the time origin of an export.
-
-    Parameters
-    ----------
-    lay : VerticalLayout
-        The exported rows and mean wind.
-    shift_s : float
-        Start shift InitX / U [s] (0 for a periodic file).
-    nt : int
-        Number of time slices.
-    dt_s : float
-        Time step [s].
-
-    Returns
-    -------
-    list of str
-        Notes: the start shift (non-periodic files), the mean wind when it is not the default power
-        law, and how a hub-height history meets Taylor's shift.
+    """The summary's notes on the mean wind and time origin of an export: the start shift ``shift_s`` [s] of a
+    non-periodic file, a mean wind other than the default power law, and how a history or transient meets
+    Taylor's shift.
     """
     notes = []
     if shift_s:

@@ -1,11 +1,9 @@
 """Mean wind profile and ground clearance for the InflowWind formats.
 
-The store holds zero-mean fluctuations with z relative to the hub. The InflowWind formats carry
-the full velocity, so the exporters add a mean at absolute height h = h_hub + z: by default the
-power law u(h) = U (h / h_hub)^alpha, or any :class:`turbgen.spec.mean_wind.MeanWind` (profile,
-veer, hub-height history). A grid reaching the ground (h <= 0) can carry neither the profile nor be
-read by InflowWind (its grid origin is the ground): it is refused unless the rows below ground
-are dropped explicitly.
+The store holds zero-mean fluctuations with z relative to the hub; the exporters add a mean at absolute
+height h = h_hub + z: by default the power law u(h) = U (h / h_hub)^alpha, or any
+:class:`turbgen.spec.mean_wind.MeanWind`. A grid reaching the ground (h <= 0) can neither carry the profile
+nor be read by InflowWind (its grid origin is the ground): refused unless the rows below are dropped.
 """
 
 from __future__ import annotations
@@ -36,64 +34,27 @@ class VerticalLayout:
 
     @property
     def wind(self) -> MeanWind:
-        """The mean wind (the power law with ``shear_exponent`` when none was given).
-
-        Returns
-        -------
-        MeanWind
-            The mean-wind definition applied by the exports.
-        """
+        """The mean wind (the power law with ``shear_exponent`` when none was given)."""
         return self.mean_wind if self.mean_wind is not None else MeanWind(shear_exponent=self.shear_exponent)
 
     @property
     def nz(self) -> int:
-        """Number of kept rows.
-
-        Returns
-        -------
-        int
-            Number of kept rows.
-        """
+        """Number of kept rows."""
         return len(self.heights_m)
 
     @property
     def bottom_m(self) -> float:
-        """Height of the lowest kept row [m].
-
-        Returns
-        -------
-        float
-            Absolute height of the lowest kept row [m].
-        """
+        """Height of the lowest kept row [m]."""
         return float(self.heights_m[0])
 
     @property
     def centre_m(self) -> float:
-        """Height of the vertical centre of the kept rows [m].
-
-        Returns
-        -------
-        float
-            Midpoint of the lowest and highest kept rows [m].
-        """
+        """Height of the vertical centre of the kept rows [m]."""
         return float(0.5 * (self.heights_m[0] + self.heights_m[-1]))
 
     def mean_u(self, U_m_s: float, heights_m=None) -> np.ndarray:
-        """Mean speed [m/s] of the profile at ``heights_m`` (default: the kept rows), before any veer.
-
-        u(h) = U r(h), r the profile's ratio U(h) / U(h_hub); the power law: r = (h / hub_height_m)^alpha.
-
-        Parameters
-        ----------
-        U_m_s : float
-            Mean wind speed at hub height [m/s].
-        heights_m : array_like, optional
-            Absolute heights [m]; default the kept rows (``self.heights_m``).
-
-        Returns
-        -------
-        numpy.ndarray
-            Mean u [m/s], shape of ``heights_m``.
+        """Mean speed [m/s] at ``heights_m`` (default: the kept rows), before any veer: u(h) = U r(h), r the
+        profile's ratio U(h) / U(h_hub).
         """
         h = self.heights_m if heights_m is None else np.asarray(heights_m, dtype=float)
         return U_m_s * self.wind.speed_ratio(h, self.hub_height_m)
@@ -101,12 +62,12 @@ class VerticalLayout:
 
 def vertical_layout(grid: Grid, hub_height_m, shear_exponent=DEFAULT_SHEAR_EXPONENT,
                     *, drop_below_ground: bool = False, mean_wind: MeanWind | None = None) -> VerticalLayout:
-    """Check the grid against the ground and return the rows to export.
+    """Check ``grid`` (z relative to the hub) against the ground and return the rows to export.
 
     Parameters
     ----------
     grid : Grid
-        The store grid (z relative to the hub).
+        The store grid.
     hub_height_m : float
         Hub height [m], > 0.
     shear_exponent : float, optional
@@ -116,17 +77,11 @@ def vertical_layout(grid: Grid, hub_height_m, shear_exponent=DEFAULT_SHEAR_EXPON
     mean_wind : MeanWind, optional
         Profile, veer and history (replaces ``shear_exponent``); checked against the kept heights.
 
-    Returns
-    -------
-    VerticalLayout
-        Hub height, exponent, index of the lowest kept row and the kept heights [m].
-
     Raises
     ------
     ParameterError
-        For a non-positive hub height, an exponent outside [-1, 1], a grid reaching the ground
-        without ``drop_below_ground``, a hub height that puts every row below ground, or kept heights
-        the profile does not cover (outside its table, below d + z0 of the log law).
+        For a non-positive hub height, an exponent outside [-1, 1], a grid reaching the ground without
+        ``drop_below_ground``, every row below ground, or kept heights the profile does not cover.
     """
     hub = check_positive("hub height (m)", hub_height_m)
     wind = mean_wind if mean_wind is not None else MeanWind(shear_exponent=shear_exponent)

@@ -21,18 +21,7 @@ _UNITS = ("s", "m/s", "deg", "m/s", "-", "-", "-", "m/s")
 
 
 def uniform_text(event: IecTransient) -> str:
-    """The uniform wind file of ``event``: ``!`` header lines and rows of 8 columns (``%.10g``).
-
-    Parameters
-    ----------
-    event : IecTransient
-        The transient.
-
-    Returns
-    -------
-    str
-        The file text.
-    """
+    """The uniform wind file of ``event``: ``!`` header lines, then rows of the 8 columns (``%.10g``)."""
     cols = event.columns()
     head = [f"! {event.describe()}",
             f"! written by turbgen {__version__}; RefHt_Uni = hub height {event.hub_height_m:g} m, "
@@ -44,36 +33,15 @@ def uniform_text(event: IecTransient) -> str:
 
 
 def read_uniform(path) -> dict:
-    """Columns of a uniform wind file (``!`` lines skipped).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
-
-    Returns
-    -------
-    dict
-        Column name (``COLUMNS``) -> float array.
-    """
+    """Columns of a uniform wind file, name (``COLUMNS``) -> float array (``!`` lines skipped)."""
     rows = [line.split() for line in Path(path).read_text().splitlines() if line.strip() and not line.startswith("!")]
     data = np.asarray(rows, dtype=float)
     return {c: data[:, k] for k, c in enumerate(COLUMNS)}
 
 
 def export_transient(event: IecTransient, out, *, overwrite: bool = False, runner_files: bool = True):
-    """Write ``event`` as a uniform wind file ``out`` and (by default) its InflowWind v5 input file beside it.
-
-    Parameters
-    ----------
-    event : IecTransient
-        The transient.
-    out : str or os.PathLike
-        The uniform wind file to write.
-    overwrite : bool, optional
-        Replace existing files.
-    runner_files : bool, optional
-        Also write ``<out stem>_InflowWind_uniform.dat`` (WindType 2, RefHt_Uni = hub, RefLength = D).
+    """Write ``event`` as the uniform wind file ``out`` and, with ``runner_files``, its InflowWind v5 input file
+    ``<out stem>_InflowWind_uniform.dat`` (WindType 2, RefHt_Uni = hub, RefLength = D).
 
     Returns
     -------

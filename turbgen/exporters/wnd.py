@@ -36,21 +36,7 @@ class BladedStats:
         self.sums = {c: [0, 0.0, 0.0] for c in COMPONENTS}
 
     def add(self, plane: Plane, U_m_s: float) -> None:
-        """Include one plane.
-
-        Updates the largest |full velocity - U*o| and the running sums of the fluctuations, per component.
-
-        Parameters
-        ----------
-        plane : Plane
-            The yz-plane to include.
-        U_m_s : float
-            Mean wind speed [m/s] (the U of the scaling).
-
-        Returns
-        -------
-        None
-        """
+        """Include one plane: the largest |full velocity - U*o| and the fluctuations' running sums per component."""
         for c in COMPONENTS:
             s = self.sums[c]
             for a, b in plane.blocks(8 * plane.ny * plane.nz):
@@ -62,19 +48,8 @@ class BladedStats:
                 s[2] += float(np.square(fluct).sum())
 
     def ti_percent(self, U_m_s: float) -> tuple[float, float, float]:
-        """TI [%] per component: the fluctuations' sigma/U, enlarged where needed so that every raw value fits.
-
-        Every raw value fits in +-32000 (raw = dev 1e5 / (U TI%)); at least 1e-3 %.
-
-        Parameters
-        ----------
-        U_m_s : float
-            Mean wind speed [m/s].
-
-        Returns
-        -------
-        tuple of (float, float, float)
-            TI of u, v, w [%], rounded to float32 (the header's float32 value, used by every reader).
+        """TI of u, v, w [%]: sigma/U, enlarged where needed so that every raw value fits in +-32000
+        (raw = dev 1e5 / (U TI%)), at least 1e-3 %; rounded to float32 (the header's value, used by every reader).
         """
         out = []
         for c in COMPONENTS:
@@ -86,27 +61,9 @@ class BladedStats:
 
 
 def bladed_raw(plane: Plane, a: int, b: int, U_m_s: float, ti: tuple) -> np.ndarray:
-    """int16 block (b - a, nz, ny, 3) for time steps a..b-1 (component fastest, then y, z).
+    """Little-endian int16 block (b - a, nz, ny, 3) of time steps a..b-1 (component fastest, then y, z).
 
-    raw = (V / U - o) 1e5 / TI%, rounded and saturated to the int16 range, o = (1, 0, 0).
-
-    Parameters
-    ----------
-    plane : Plane
-        The yz-plane.
-    a : int
-        First time index.
-    b : int
-        End time index (exclusive).
-    U_m_s : float
-        Mean wind speed of the scaling [m/s].
-    ti : tuple of float
-        TI of u, v, w [%].
-
-    Returns
-    -------
-    numpy.ndarray
-        Little-endian int16 array (b - a, nz, ny, 3).
+    raw = (V / U - o) 1e5 / TI%, rounded and saturated to the int16 range, o = (1, 0, 0); ``ti`` = TI of u, v, w [%].
     """
     raw = [np.clip(np.rint((plane.full(c, a, b) / U_m_s - _OFFSET[c]) * 1e5 / t), -32768, 32767)
            for c, t in zip(COMPONENTS, ti)]
@@ -114,22 +71,7 @@ def bladed_raw(plane: Plane, a: int, b: int, U_m_s: float, ti: tuple) -> np.ndar
 
 
 def from_bladed(raw: np.ndarray, U_m_s: float, ti: tuple) -> dict:
-    """Velocities from raw int16 (..., 3): V = U (o + 1e-5 TI% raw).
-
-    Parameters
-    ----------
-    raw : numpy.ndarray
-        Raw values with the component (u, v, w) last, shape (..., 3).
-    U_m_s : float
-        Mean wind speed of the scaling [m/s].
-    ti : tuple of float
-        TI of u, v, w [%].
-
-    Returns
-    -------
-    dict
-        {"u", "v", "w": float64 array of shape raw.shape[:-1] [m/s]}.
-    """
+    """Velocities {"u", "v", "w": float64 [m/s]} from raw int16 (..., 3): V = U (o + 1e-5 TI% raw)."""
     return {c: U_m_s * (_OFFSET[c] + 1e-5 * t * raw[..., k]) for k, (c, t) in enumerate(zip(COMPONENTS, ti))}
 
 
@@ -150,37 +92,19 @@ class WndHeader:
     def pack(self) -> bytes:
         """The 104-byte new-style header (little-endian ``<hhi6f3fi4f4i6f``).
 
-        ID -99, TurbType 4, 3 components, zref [m], TI [%], dz, dy, dx [m], nt/2, U [m/s], nz, ny; the
-        remaining fields are zero.
-
-        Returns
-        -------
-        bytes
-            The packed header.
+        ID -99, TurbType 4, 3 components, zref [m], TI [%], dz, dy, dx [m], nt/2, U [m/s], nz, ny; the rest zero.
         """
         return _HEADER.pack(-99, 4, 3, 0.0, 0.0, self.zref_m, *self.ti_percent, self.dz_m, self.dy_m, self.dx_m,
                             self.nt // 2, self.U_m_s, 0.0, 0.0, 0.0, 0, 0, self.nz, self.ny, *([0.0] * 6))
 
     @classmethod
     def unpack(cls, raw: bytes) -> "WndHeader":
-        """Header read from the first 104 bytes of a ``.wnd``.
-
-        Parameters
-        ----------
-        raw : bytes
-            The file contents (at least the header).
-
-        Returns
-        -------
-        WndHeader
-            Grid and scaling; nt = 2 * the stored nt/2.
+        """Header from the first 104 bytes of a ``.wnd`` (nt = 2 * the stored nt/2).
 
         Raises
         ------
         ParameterError
             When the file is not a new-style TurbType-4 .wnd (ID -99, type 4).
-        struct.error
-            When ``raw`` is shorter than the header.
         """
         h = _HEADER.unpack_from(raw, 0)
         if h[0] != -99 or h[1] != 4:
@@ -190,26 +114,7 @@ class WndHeader:
 
 
 def write_wnd(path, plane: Plane, header: WndHeader) -> None:
-    """Header plus the time steps of ``plane``.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The ``.wnd`` file to write.
-    plane : Plane
-        The yz-plane to write.
-    header : WndHeader
-        Grid and scaling (U, TI) of the file.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    OSError
-        When the file cannot be written.
-    """
+    """Write the ``.wnd`` at ``path``: the header, then the time steps of ``plane``."""
     with open(path, "wb") as f:
         f.write(header.pack())
         for a, b in plane.blocks(8 * plane.ny * plane.nz):
@@ -217,24 +122,12 @@ def write_wnd(path, plane: Plane, header: WndHeader) -> None:
 
 
 def read_wnd(path) -> dict:
-    """Read a ``.wnd`` written by :func:`write_wnd`: header and u, v, w (nt, ny, nz) [m/s].
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The ``.wnd`` file.
-
-    Returns
-    -------
-    dict
-        u, v, w float64 (nt, ny, nz) [m/s] and header (:class:`WndHeader`).
+    """Read a ``.wnd``: {"u", "v", "w": float64 (nt, ny, nz) [m/s], "header": :class:`WndHeader`}.
 
     Raises
     ------
     ParameterError
         When the file is not a new-style TurbType-4 .wnd.
-    OSError
-        When the file cannot be read.
     """
     raw = Path(path).read_bytes()
     h = WndHeader.unpack(raw)
@@ -245,54 +138,16 @@ def read_wnd(path) -> dict:
 
 
 def check_even_nt(nt: int) -> None:
-    """The lidar simulator reads nt = 2 * nt_half steps from the .wnd header: nt must be even.
-
-    Parameters
-    ----------
-    nt : int
-        Number of time steps.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    ParameterError
-        When ``nt`` is odd.
-    """
+    """Refuse an odd ``nt`` (ParameterError): the .wnd header stores nt/2 and readers take nt = 2 * nt/2."""
     if nt % 2:
         raise ParameterError(f"nt = {nt} is odd; the .wnd header stores nt/2, so the Bladed/evo export needs an even nt")
 
 
 def write_pair(files: OutputSet, root: Path, plane: Plane, header: WndHeader, lay, *, periodic: bool, title: str) -> None:
-    """Write ROOT.wnd and ROOT.sum (through the temporary names of ``files``).
+    """Write ROOT.wnd and ROOT.sum through the temporary names of ``files``.
 
-    Parameters
-    ----------
-    files : OutputSet
-        The output set holding ROOT.wnd and ROOT.sum.
-    root : pathlib.Path
-        ROOT (without extension).
-    plane : Plane
-        The yz-plane to write.
-    header : WndHeader
-        Grid and scaling of the .wnd.
-    lay : VerticalLayout
-        Hub height and kept rows (for the .sum hub height and height offset).
-    periodic : bool
-        Mark the .sum PERIODIC.
-    title : str
-        First line of the .sum.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    OSError
-        When a file cannot be written.
+    ``lay`` gives the .sum's hub height and height offset; ``periodic`` marks the .sum PERIODIC; ``title`` is its
+    first line.
     """
     write_wnd(files.temp(root_file(root, ".wnd")), plane, header)
     files.temp(root_file(root, ".sum")).write_text(sum_text(
@@ -301,18 +156,7 @@ def write_pair(files: OutputSet, root: Path, plane: Plane, header: WndHeader, la
 
 
 def inflowwind_lines(root: Path) -> tuple[str, ...]:
-    """WindType 4 lines for FilenameRoot ``root``.
-
-    Parameters
-    ----------
-    root : pathlib.Path
-        ROOT of ROOT.wnd and ROOT.sum.
-
-    Returns
-    -------
-    tuple of str
-        WindType, PropagationDir, FilenameRoot and TowerFile (False: no ROOT.twr) lines.
-    """
+    """WindType 4 InflowWind lines for FilenameRoot ``root`` (TowerFile False: no ROOT.twr)."""
     return (ifw_line(4, "WindType", "switch for wind file type (4 = Bladed-style .wnd + .sum)"),
             ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
             ifw_line(str(root), "FilenameRoot", "root of ROOT.wnd and ROOT.sum"),
@@ -321,29 +165,9 @@ def inflowwind_lines(root: Path) -> tuple[str, ...]:
 
 def write_wnd_inflowwind(files: OutputSet, path: Path, root: Path, lay, U_m_s: float, *, x_m: float,
                          shift_s: float) -> str:
-    """Write the InflowWind v5 input file (WindType 4, FilenameRoot ``root``) of ROOT.wnd + ROOT.sum.
+    """Write the InflowWind v5 input file ``path`` (WindType 4, FilenameRoot ``root``); return its usage line.
 
-    Parameters
-    ----------
-    files : OutputSet
-        The export's output set (``path`` among its paths).
-    path : pathlib.Path
-        Final path of the input file.
-    root : pathlib.Path
-        ROOT of ROOT.wnd and ROOT.sum (written relative to the input file's folder).
-    lay : VerticalLayout
-        Hub height (RefHt) and the mean wind (described in the title).
-    U_m_s : float
-        Mean hub speed [m/s].
-    x_m : float
-        Position of the plane the .wnd holds [m] (in the title).
-    shift_s : float
-        Start shift of a non-periodic file [s] (0 when periodic), stated at the head of the title.
-
-    Returns
-    -------
-    str
-        The one line that tells the user how to use it.
+    The title names the plane ``x_m`` [m] and the mean wind, and a non-periodic file's start shift ``shift_s`` [s].
     """
     title = f"turbgen {root.name}.wnd: plane x = {x_m:g} m, {lay.wind.describe()}"
     if shift_s:
@@ -353,66 +177,27 @@ def write_wnd_inflowwind(files: OutputSet, path: Path, root: Path, lay, U_m_s: f
 
 
 def root_file(root: Path, ext: str) -> Path:
-    """ROOT + ``ext``, the name InflowWind and the lidar simulator open for FilenameRoot ROOT.
+    """ROOT + ``ext`` (".wnd"), the name InflowWind and the lidar simulator open for FilenameRoot ROOT.
 
-    Appended, not substituted: ``Path.with_suffix`` would turn the root ``case_U16.5`` into
-    ``case_U16.wnd``, a file the printed FilenameRoot line never loads.
-
-    Parameters
-    ----------
-    root : pathlib.Path
-        ROOT (without extension).
-    ext : str
-        Extension with its dot, e.g. ".wnd".
-
-    Returns
-    -------
-    pathlib.Path
-        ROOT with ``ext`` appended.
+    Appended, not substituted: ``Path.with_suffix`` would turn the root ``case_U16.5`` into ``case_U16.wnd``.
     """
     return root.with_name(root.name + ext)
 
 
 def export_root(out) -> Path:
-    """``out`` without a .wnd/.sum/.evo extension.
-
-    Parameters
-    ----------
-    out : str or os.PathLike
-        Output path given by the user.
-
-    Returns
-    -------
-    pathlib.Path
-        ``out`` with a .wnd, .sum or .evo extension (any case) removed, else unchanged.
-    """
+    """``out`` without a .wnd, .sum or .evo extension (any case)."""
     out = Path(out)
     return out.with_suffix("") if out.suffix.lower() in (".wnd", ".sum", ".evo") else out
 
 
 def export_wnd(fs, out, req: ExportRequest) -> ExportResult:
-    """Export one plane of store ``fs`` to ROOT.wnd + ROOT.sum.
-
-    Parameters
-    ----------
-    fs : FieldStore
-        The open store.
-    out : str or os.PathLike
-        ROOT, or a path ending in .wnd, .sum or .evo (the extension is dropped).
-    req : ExportRequest
-        Plane, hub height, shear exponent, periodic and overwrite options.
-
-    Returns
-    -------
-    ExportResult
-        The two paths, the InflowWind lines (WindType 4) and notes.
+    """Export one plane of store ``fs`` to ROOT.wnd + ROOT.sum (``out``: ROOT, or ROOT.wnd/.sum/.evo).
 
     Raises
     ------
     ParameterError
-        For an odd nt, a plane index out of range or a store without a rotor plane, a grid reaching
-        the ground (without ``drop_below_ground``), an existing output without ``overwrite``, a bad
-        output path, or a failed write.
+        For an odd nt, a bad plane, a grid reaching the ground without ``drop_below_ground``, an existing output
+        without ``overwrite``, a bad output path, or a failed write.
     """
     root = export_root(out)
     ix, lay = req.plane_index(fs), req.layout(fs)

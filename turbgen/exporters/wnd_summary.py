@@ -1,6 +1,6 @@
-"""TurbSim-style ``.sum`` summary file of a ``.wnd`` export (Jonkman 2009, TurbSim User's Guide v1.50; the
-parser of OpenFAST's InflowWind for WindType 4): the lines
-InflowWind v5 and the lidar-simulator forks parse, written and read back in their order."""
+"""TurbSim-style ``.sum`` of a ``.wnd`` export (Jonkman 2009, TurbSim User's Guide v1.50): the lines InflowWind v5
+and the lidar-simulator forks parse for WindType 4, written and read back in their order.
+"""
 
 from __future__ import annotations
 
@@ -12,32 +12,11 @@ from turbgen.exporters.request import COMPONENTS
 
 def sum_text(*, hub_height_m: float, U_m_s: float, ti_percent, height_offset_m: float, periodic: bool,
              title: str) -> str:
-    """The ``.sum`` lines InflowWind (v5 and the lidar-simulator forks) parse, in their order.
+    """The ``.sum`` text: title, CLOCKWISE (F; the forks need it before the hub height), hub height [m], UBar [m/s],
+    the three TI lines [%], the height offset [m] (hub minus grid centre), then PERIODIC when ``periodic``.
 
-    CLOCKWISE (required by the forks, before the hub height; written as F), hub height, UBar, the
-    three TI lines, height offset, then PERIODIC (only when ``periodic``). No Bladed left-hand-rule
-    line.
-
-    Parameters
-    ----------
-    hub_height_m : float
-        Hub height [m].
-    U_m_s : float
-        Mean wind speed UBar [m/s].
-    ti_percent : sequence of float
-        TI of u, v, w [%].
-    height_offset_m : float
-        Height offset [m] (hub height minus the height of the grid centre).
-    periodic : bool
-        Add the "PERIODIC" line.
-    title : str
-        First line, free text; the keys the readers search for (e.g. a file name "periodic.csv" in a
-        mean-wind description) are broken up with a hyphen so that they cannot match.
-
-    Returns
-    -------
-    str
-        The file text, newline-terminated.
+    No Bladed left-hand-rule line. Keys in ``title`` (e.g. "periodic.csv" in a mean-wind description) are
+    broken with a hyphen so that a reader cannot match them.
     """
     lines = [_defuse(title),  # free text: must not contain the keys parsed below
              "",
@@ -62,25 +41,16 @@ def _defuse(title: str) -> str:
 
 
 def read_sum(path) -> dict:
-    """Parse a ``.sum`` the way InflowWind does (keys in order).
-
-    Clockwise, hub height, UBar, TI, height offset, periodic.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The ``.sum`` file.
+    """Parse a ``.sum`` as InflowWind does (keys in order).
 
     Returns
     -------
     dict
-        clockwise (bool), hub_height_m [m], U_m_s [m/s], ti_percent (3 floats) [%],
-        height_offset_m [m] (0 when absent), periodic (bool).
+        clockwise (bool), hub_height_m [m], U_m_s [m/s], ti_percent (3 floats) [%], height_offset_m [m] (0 when
+        absent), periodic (bool).
 
     Raises
     ------
-    OSError
-        When the file cannot be read.
     IndexError, ValueError, AttributeError
         When a key is missing or its value is malformed.
     """

@@ -21,6 +21,7 @@ import os
 import shutil
 from pathlib import Path
 
+from turbgen.atomic import write_file
 from turbgen.version import __version__
 from turbgen.errors import TurbgenError
 from turbgen.service.run_ids import valid_id
@@ -33,32 +34,8 @@ FAILURE_ROOM, FAILURE_ROOM_BYTES = ".failure-room", 4096
 
 
 def write_json_atomic(path: Path, data) -> None:
-    """Write JSON under a temporary name in the same directory and rename it into place.
-
-    Parameters
-    ----------
-    path : Path
-        Target file; its directory must exist.
-    data : object
-        JSON-able value.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    OSError
-        If the file cannot be written (the temporary is removed).
-    """
-    tmp = temp_name(path)  # .NAME.tmp-PID-XXXXXXXX: removed at start-up if this process dies before the rename
-    try:
-        with open(tmp, "x") as f:
-            json.dump(data, f, indent=1)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    """Write the JSON-able ``data`` to ``path`` whole or not at all (:func:`turbgen.atomic.write_file`)."""
+    write_file(path, json.dumps(data, indent=1))
 
 
 class Catalog:

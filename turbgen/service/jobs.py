@@ -12,6 +12,7 @@ import threading
 import uuid
 from pathlib import Path
 
+from turbgen.errors import one_line
 from turbgen.service.catalog import FAILURE_ROOM, Catalog, write_json_atomic
 from turbgen.service.limits import LimitError
 from turbgen.service.run_ids import canonical_mapping, run_from_canonical
@@ -81,22 +82,6 @@ def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: 
 
 def _scalars(summary: dict) -> dict:
     return {k: v for k, v in summary.items() if isinstance(v, (int, float, str, bool, list)) and k != "path"}
-
-
-def one_line(exc: BaseException) -> str:
-    """'ExceptionType: message' on one line (whitespace collapsed), for failed.json.
-
-    Parameters
-    ----------
-    exc : BaseException
-        The exception.
-
-    Returns
-    -------
-    str
-    """
-    text = " ".join(str(exc).split())
-    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
 class QueueFull(Exception):

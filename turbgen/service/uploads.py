@@ -11,15 +11,14 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 
+from turbgen.atomic import write_file
 from turbgen.errors import ParameterError
 from turbgen.service.limits import check_json_depth
 from turbgen.service.run_ids import valid_id
-from turbgen.store.temporaries import temp_name
 
 SUFFIXES = {"application/json": ".json", "text/csv": ".csv"}  # the content types an upload may have
 MAX_UPLOAD_BYTES = 16 * 2**20  # a 2048 s record of 4 beams x 10 gates at 1 Hz is ~3 MB of CSV
@@ -66,12 +65,7 @@ class ConstraintUploads:
         where = f"upload {cid}"
         info = _summary(_point_series(data, where) if media == "application/json" else _line_of_sight(data, where))
         final = self.dir / f"{cid}{SUFFIXES[media]}"
-        tmp = temp_name(final)  # a dead server's is removed at start-up (turbgen.service.cleanup)
-        try:
-            tmp.write_bytes(data)
-            os.replace(tmp, final)  # the same content under the same name: replacing a concurrent upload is harmless
-        finally:
-            tmp.unlink(missing_ok=True)
+        write_file(final, data)  # the same content under the same name: replacing a concurrent upload is harmless
         return cid, info, True
 
 

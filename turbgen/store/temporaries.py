@@ -13,47 +13,12 @@ from __future__ import annotations
 
 import errno
 import os
-import secrets
 import shutil
 import sys
 from pathlib import Path
 
 from turbgen import oscalls
-
-TEMP_MARK = ".tmp-"
-
-
-def temp_prefix(path: Path) -> str:
-    """Name prefix of the temporary siblings used while writing ``path``.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The final output path.
-
-    Returns
-    -------
-    str
-        ``.NAME.tmp-`` for ``path`` named NAME.
-    """
-    return f".{Path(path).name}{TEMP_MARK}"
-
-
-def temp_name(path: Path) -> Path:
-    """A fresh temporary sibling of ``path`` owned by this process.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The final output path.
-
-    Returns
-    -------
-    pathlib.Path
-        ``.NAME.tmp-PID-XXXXXXXX`` beside ``path`` (PID = this process, 8 random hex digits).
-    """
-    path = Path(path)
-    return path.parent / f"{temp_prefix(path)}{os.getpid()}-{secrets.token_hex(4)}"
+from turbgen.atomic import TEMP_MARK, temp_name, temp_prefix  # noqa: F401 (re-exported)
 
 
 def pid_alive(pid: int) -> bool:

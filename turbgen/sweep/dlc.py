@@ -18,13 +18,13 @@ import io
 from dataclasses import replace
 from pathlib import Path
 
+from turbgen.atomic import write_file
 from turbgen.errors import ParameterError, check_choice
 from turbgen.exporters import ExportRequest, export_store
 from turbgen.exporters.inflowwind_file import inflowwind_path
 from turbgen.runs.models import MODELS, get_model
 from turbgen.spec.dlc import DlcSet
 from turbgen.store.paths import check_output_path
-from turbgen.sweep.manifest import atomic_write
 from turbgen.sweep.plan import PlannedRun, SweepPlan, check_grid_keys, check_plan_memory, grid_mapping
 from turbgen.sweep.scheduler import check_scheduler_address
 
@@ -38,29 +38,10 @@ def make_dlc_plan(dlc: DlcSet, *, out, model: str = "kaimal", grid=None, chunk_t
                   workers: int | None = None, scheduler: str | None = None) -> SweepPlan:
     """The sweep of a DLC set: one run per speed and seed, named ``{model}_dlc1.2-IIB_U12_seed3``.
 
-    Parameters
-    ----------
-    dlc : DlcSet
-        Load case, class, speeds, seeds.
-    out : str or os.PathLike
-        Sweep directory.
-    model : str, optional
-        "kaimal" (default; the standard's Annex C model) or "mann".
-    grid : Mapping, optional
-        Grid options with the sweep schema names (nt, dt, planes, ny, nz, dy, dz, hub_height).
-    chunk_t, workers, scheduler : optional
-        As for :func:`turbgen.sweep.make_plan`.
-
-    Returns
-    -------
-    SweepPlan
-        The plan (its ``presets`` holds the set's label).
-
-    Raises
-    ------
-    ParameterError
-        For an unknown model, bad grid options, an unusable ``out`` or a run that needs more memory
-        than is available here.
+    ``model``: "kaimal" (default; the standard's Annex C model) or "mann"; ``grid``: the sweep schema's grid
+    options; ``chunk_t``, ``workers``, ``scheduler`` as for :func:`turbgen.sweep.make_plan`. The plan's
+    ``presets`` holds the set's label. Raises ParameterError for an unknown model, bad grid options, an
+    unusable ``out`` or a run that needs more memory than is available here.
     """
     check_choice("model", model, tuple(MODELS))
     grid = check_grid_keys("grid", grid)
@@ -80,31 +61,11 @@ def make_dlc_plan(dlc: DlcSet, *, out, model: str = "kaimal", grid=None, chunk_t
 
 
 def export_dlc(plan: SweepPlan, dlc: DlcSet, result, fmt: str = "bts") -> Path:
-    """Export every complete field of the set to DIR/wind/ with its runner files and write DIR/dlc_manifest.csv.
+    """Export every complete field of the set to DIR/wind/ in ``fmt`` ("bts", "wnd" or "hawc2") with its runner
+    files and write DIR/dlc_manifest.csv; return its path.
 
-    An export whose files all exist is kept (the sweep is resumable); fields that failed are left out
-    of the manifest (the sweep's manifest.csv says why).
-
-    Parameters
-    ----------
-    plan : SweepPlan
-        The plan of :func:`make_dlc_plan`.
-    dlc : DlcSet
-        The set (for TI, sigma1 and the class).
-    result : SweepResult
-        What :func:`turbgen.sweep.run_sweep` returned.
-    fmt : str, optional
-        "bts" (default), "wnd" or "hawc2".
-
-    Returns
-    -------
-    pathlib.Path
-        DIR/dlc_manifest.csv.
-
-    Raises
-    ------
-    ParameterError
-        For an unknown format or a failed export.
+    An export whose files all exist is kept (the sweep is resumable); failed fields are left out of the
+    manifest (the sweep's manifest.csv says why). ParameterError for an unknown format or a failed export.
     """
     check_choice("format", fmt, EXPORT_FORMATS)
     out = Path(plan.out)
@@ -125,7 +86,7 @@ def export_dlc(plan: SweepPlan, dlc: DlcSet, result, fmt: str = "bts") -> Path:
     writer = csv.DictWriter(buf, fieldnames=DLC_COLUMNS, lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
-    atomic_write(out / DLC_MANIFEST, buf.getvalue())
+    write_file(out / DLC_MANIFEST, buf.getvalue())
     return out / DLC_MANIFEST
 
 

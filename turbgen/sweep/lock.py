@@ -1,11 +1,10 @@
 """A lock that keeps two sweeps from writing the same output directory (the ``filelock`` package).
 
-``DIR/.turbgen-sweep.lock`` is an OS file lock (flock; filelock's soft lock where the file system has none), so a
-sweep that dies, even by SIGKILL, holds nothing any more. While held, the file names its owner's host, pid and start
-time (JSON) for the refusal message. On release it is removed while still held, so a sweep (or a refused one) leaves
-nothing behind: filelock itself never unlinks a Unix lock file, because a *blocking* waiter could then lock the removed
-inode while a third process locks a new one; a SweepLock never waits (a second sweep is refused at once), so a
-process that opened the old file fails its attempt and is refused, as it would be while the lock is held.
+``DIR/.turbgen-sweep.lock`` is an OS file lock (flock; filelock's soft lock where there is none), so a sweep
+that dies, even by SIGKILL, holds nothing any more. While held, the file names its owner's host, pid and
+start time (JSON) for the refusal message. On release it is removed while still held, so nothing is left
+behind; filelock itself never unlinks a Unix lock file because a *blocking* waiter could then lock the
+removed inode, but a SweepLock never waits (a second sweep is refused at once).
 """
 
 from __future__ import annotations
@@ -28,14 +27,7 @@ class SweepLockedError(TurbgenError):
 
 
 class SweepLock:
-    """Context manager holding DIR's sweep lock; released on exit.
-
-    Parameters
-    ----------
-    directory : str or Path
-        The sweep's output directory; the lock is ``directory/.turbgen-sweep.lock``. Entering the
-        context calls :meth:`acquire` (SweepLockedError if another sweep holds it).
-    """
+    """Context manager holding ``directory/.turbgen-sweep.lock``; entering calls :meth:`acquire`, exit releases."""
 
     def __init__(self, directory: str | Path):
         self.path = Path(directory) / LOCK_NAME
@@ -58,17 +50,9 @@ class SweepLock:
         return data if isinstance(data, dict) else {}
 
     def acquire(self) -> "SweepLock":
-        """Take the lock without waiting.
+        """Take the lock without waiting; return ``self``.
 
-        Returns
-        -------
-        SweepLock
-            ``self``.
-
-        Raises
-        ------
-        SweepLockedError
-            If another sweep (another process, or another SweepLock of this process) holds the directory.
+        Raises SweepLockedError if another sweep (another process, or another SweepLock of this process) holds it.
         """
         try:
             self._lock.acquire()
@@ -81,12 +65,7 @@ class SweepLock:
         return self
 
     def release(self) -> None:
-        """Release the lock, removing its file first (see the module docstring).
-
-        Returns
-        -------
-        None
-        """
+        """Release the lock, removing its file first (module docstring)."""
         if self._lock.is_locked:
             try:
                 self.path.unlink(missing_ok=True)

@@ -1,9 +1,8 @@
-"""The sweep manifest: DIR/manifest.json and DIR/manifest.csv, one record per planned run.
+"""The sweep manifest: DIR/manifest.json and DIR/manifest.csv, one record per planned run (docs/sweep.md).
 
-Each record: name, model, preset, U_m_s, seed, path (relative to DIR), status ("pending",
-"complete", "failed"), action ("ran" in this invocation, "skipped" = an existing complete store
-was kept, "none"), duration_s, checksum, sigma_m_s, validation summary, error, parameters,
-finished_utc. Both files are written to a temporary sibling and renamed (atomic on POSIX).
+Each record: name, model, preset, U_m_s, seed, path (relative to DIR), status ("pending", "complete",
+"failed"), action ("ran" in this invocation, "skipped" = an existing complete store was kept, "none"),
+duration_s, checksum, sigma_m_s, validation summary, lidar summary, error, parameters, finished_utc.
 """
 
 from __future__ import annotations
@@ -12,15 +11,12 @@ import csv
 import hashlib
 import io
 import json
-import os
-import tempfile
 from datetime import datetime, timezone
 from pathlib import Path
 
-from turbgen import oscalls
+from turbgen.atomic import write_file
 from turbgen.version import __version__
 from turbgen.store import open_store
-from turbgen.store.temporaries import temp_prefix
 
 MANIFEST_JSON = "manifest.json"
 MANIFEST_CSV = "manifest.csv"
@@ -49,36 +45,15 @@ CSV_COLUMNS = (
 
 
 def utc_now() -> str:
-    """Current UTC time, ISO 8601 to the second.
-
-    Returns
-    -------
-    str
-        E.g. "2026-01-31T12:00:00+00:00".
-    """
+    """Current UTC time, ISO 8601 to the second ("2026-01-31T12:00:00+00:00")."""
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
 
 def store_checksum(path: str | Path) -> str:
-    """'sha256:<hex>' of the u, v, w float32 data (planes in stored order, C order), not of the files.
+    """'sha256:<64 hex digits>' of the u, v, w float32 data (planes in stored order, C order), not of the files.
 
-    Independent of chunking, compression and metadata (creation time), so two stores holding the
-    same field have the same checksum.
-
-    Parameters
-    ----------
-    path : str or Path
-        The store.
-
-    Returns
-    -------
-    str
-        "sha256:" followed by 64 hex digits.
-
-    Raises
-    ------
-    StoreError
-        If ``path`` is not a complete, readable store, or a chunk is corrupted or holds NaN/inf.
+    Independent of chunking, compression and metadata, so two stores holding the same field have the same
+    checksum. Raises StoreError for an incomplete or unreadable store, or a chunk that is corrupted or not finite.
     """
     fs = open_store(path)
     h = hashlib.sha256()
@@ -86,36 +61,6 @@ def store_checksum(path: str | Path) -> str:
         for ix in range(fs.grid.nx):
             h.update(fs.read_plane(comp, ix).astype("<f4", copy=False).tobytes(order="C"))
     return "sha256:" + h.hexdigest()
-
-
-def atomic_write(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` under a temporary name in its folder, fsync it, then rename it into place.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The file to (re)place.
-    text : str
-        Its content.
-
-    Raises
-    ------
-    OSError
-        When the file cannot be written; the temporary file is removed and ``path`` is untouched.
-    """
-    # a temporary name of this process ('.NAME.tmp-PID-...': removed by the next sweep if we are killed),
-    # and the mode an ordinary file gets (0644 under umask 022), like the stores beside it
-    fd, tmp = tempfile.mkstemp(prefix=f"{temp_prefix(path)}{os.getpid()}-", dir=path.parent)
-    try:
-        os.fchmod(fd, 0o666 & ~oscalls.umask())
-        with os.fdopen(fd, "w", newline="") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def _validation_text(v) -> str:
@@ -148,25 +93,8 @@ def _csv_text(records: list[dict]) -> str:
 
 
 def write_manifest(directory: str | Path, sweep: dict, records: list[dict]) -> None:
-    """Write manifest.json and manifest.csv for these records (atomically, JSON first).
-
-    Parameters
-    ----------
-    directory : str or Path
-        The sweep's output directory.
-    sweep : dict
-        The sweep definition (``SweepPlan.to_dict``).
-    records : list of dict
-        One manifest record per run (see the module docstring).
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    OSError
-        If a file cannot be written (the temporary is removed).
+    """Write manifest.json, then manifest.csv, of ``records`` for the sweep definition ``sweep`` (each file whole
+    or not at all; OSError if one cannot be written).
     """
     d = Path(directory)
     counts = {s: sum(r["status"] == s for r in records) for s in ("complete", "failed", "pending")}
@@ -177,23 +105,12 @@ def write_manifest(directory: str | Path, sweep: dict, records: list[dict]) -> N
         "counts": counts,
         "runs": records,
     }
-    atomic_write(d / MANIFEST_JSON, json.dumps(doc, indent=1, sort_keys=False) + "\n")
-    atomic_write(d / MANIFEST_CSV, _csv_text(records))
+    write_file(d / MANIFEST_JSON, json.dumps(doc, indent=1, sort_keys=False) + "\n")
+    write_file(d / MANIFEST_CSV, _csv_text(records))
 
 
 def read_manifest(directory: str | Path) -> dict | None:
-    """The previous manifest.json of DIR, or None when there is none (or it is unreadable).
-
-    Parameters
-    ----------
-    directory : str or Path
-        The sweep's output directory.
-
-    Returns
-    -------
-    dict or None
-        The manifest (with a ``runs`` list), or None.
-    """
+    """The previous manifest.json of DIR (with a ``runs`` list), or None when there is none or it is unreadable."""
     try:
         doc = json.loads((Path(directory) / MANIFEST_JSON).read_text())
     except (OSError, ValueError):

@@ -1,11 +1,8 @@
 """A sweep definition: models x presets x speeds x seeds on one grid, from a TOML/JSON file or options.
 
-The file format is ``turbgen/schemas/sweep.schema.json``. Every planned run is built from the same
-run mapping as ``turbgen mann|kaimal --preset P --U U --seed S`` (the preset's keys from
-turbgen.spec.presets.run_keys, then the model's from_mapping), so the
-sweep's store and the single run hold the same field (tests/sweep/test_sweep.py checks it bit for bit).
-Store names are derived from the parameters that vary within a sweep:
-``{model}_{preset}_U{U:g}_seed{seed}.zarr`` (e.g. ``mann_neutral_U16_seed2.zarr``).
+The file format is ``turbgen/schemas/sweep.schema.json``. Every planned run is built from the same run
+mapping as ``turbgen mann|kaimal --preset P --U U --seed S``, so the sweep's store and the single run hold
+the same field. Store names: ``{model}_{preset}_U{U:g}_seed{seed}.zarr``.
 """
 
 from __future__ import annotations
@@ -47,17 +44,12 @@ def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int
     seed : int
         Random seed, in [0, 2^63 - 1].
     grid : Mapping, optional
-        Options with the sweep schema names (nt, dt [s], planes [m], ny, nz, dy [m], dz [m],
-        hub_height [m]); missing ones take the model's defaults (turbgen.spec.defaults; dz defaults to dy).
+        Options with the sweep schema names (nt, dt [s], planes [m], ny, nz, dy [m], dz [m], hub_height [m]);
+        missing ones take the model's defaults (dz defaults to dy).
     user : Mapping of str to StabilityPreset, optional
         User presets.
     spectrum : optional
-        The run's ``spectrum`` key (a model whose run schema has one: a CSV path or a table, as
-        ``turbgen kaimal --spectrum``).
-
-    Returns
-    -------
-    MannRun or KaimalRun
+        The run's ``spectrum`` (a CSV path or a table, as ``turbgen kaimal --spectrum``) for a model that takes one.
 
     Raises
     ------
@@ -72,17 +64,7 @@ def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int
 
 
 def grid_mapping(grid: Mapping | None) -> dict:
-    """The run-mapping keys of sweep grid options: {"grid": {...}} and "hub_height_m" when given.
-
-    Parameters
-    ----------
-    grid : Mapping, optional
-        Options with the sweep schema names (nt, dt, planes, ny, nz, dy, dz, hub_height).
-
-    Returns
-    -------
-    dict
-        ``{"grid": {nt, dt_s, x_m, ny, nz, dy_m, dz_m present}}`` plus ``hub_height_m`` when given.
+    """The run-mapping keys of sweep grid options: ``{"grid": {nt, dt_s, x_m, ...}}`` plus ``hub_height_m`` when given.
     """
     opts = dict(grid or {})
     g = {key: opts[name] for name, key in _GRID_NAMES.items() if name in opts}
@@ -95,39 +77,13 @@ def grid_mapping(grid: Mapping | None) -> dict:
 
 
 def store_name(model: str, preset: str, U_m_s: float, seed: int) -> str:
-    """Readable, stable store name of one run: ``mann_neutral_U16_seed2.zarr``.
-
-    Parameters
-    ----------
-    model, preset : str
-        Model and preset names.
-    U_m_s : float
-        Mean wind speed [m/s] (written with ``:g``).
-    seed : int
-        Random seed.
-
-    Returns
-    -------
-    str
-    """
+    """Readable, stable store name of one run: ``mann_neutral_U16_seed2.zarr`` (U written with ``:g``)."""
     return f"{model}_{preset}_U{U_m_s:g}_seed{seed}.zarr"
 
 
 @dataclass(frozen=True)
 class PlannedRun:
-    """One field of the sweep: the run object (MannRun or KaimalRun) and its store name.
-
-    Parameters
-    ----------
-    model, preset : str
-        Model and preset names.
-    U_m_s : float
-        Mean wind speed [m/s].
-    seed : int
-        Random seed.
-    run : MannRun or KaimalRun
-        The run.
-    """
+    """One field of the sweep: model, preset, U [m/s], seed, the run (MannRun or KaimalRun) and its store name."""
 
     model: str
     preset: str
@@ -138,56 +94,20 @@ class PlannedRun:
 
     @property
     def store_name(self) -> str:
-        """The run's store name (:func:`store_name`, with ``_<constraint_tag>`` for a constrained run).
-
-        Returns
-        -------
-        str
-        """
+        """The run's store name (:func:`store_name`, with ``_<constraint_tag>`` for a constrained run)."""
         name = store_name(self.model, self.preset, self.U_m_s, self.seed)
         return name if not self.constraint_tag else f"{name.removesuffix('.zarr')}_{self.constraint_tag}.zarr"
 
     @property
     def name(self) -> str:
-        """The run's name in the manifest: its store name without ``.zarr``.
-
-        Returns
-        -------
-        str
-        """
+        """The run's name in the manifest: its store name without ``.zarr``."""
         return self.store_name.removesuffix(".zarr")
 
 
 @dataclass(frozen=True)
 class SweepPlan:
-    """Validated sweep definition and its runs (models, presets, speeds, seeds in nested order).
-
-    Built by :func:`make_plan`, which checks every value.
-
-    Parameters
-    ----------
-    out : Path
-        Output directory.
-    models, presets : tuple of str
-        Model and preset names.
-    speeds_m_s : tuple of float
-        Mean wind speeds [m/s].
-    seeds : tuple of int
-        Random seeds.
-    grid, model_grid : Mapping, optional
-        Common grid options (sweep schema names); model name -> options overriding them.
-    validate : bool, optional
-        Validate every field.
-    chunk_t, workers : int, optional
-        Time steps per chunk; LocalCluster workers.
-    scheduler : str, optional
-        Address of a running dask scheduler.
-    user_presets : Mapping, optional
-        User presets by name.
-    runs : tuple of PlannedRun, optional
-        Every field, models x presets x speeds x seeds in nested order.
-    lidar : str, optional
-        Lidar preset or file run on every field.
+    """Validated sweep definition (built by :func:`make_plan`) and its runs: models x presets x speeds x seeds in
+    nested order. The fields are :func:`make_plan`'s arguments.
     """
 
     out: Path
@@ -208,28 +128,11 @@ class SweepPlan:
     spectrum: str | None = None  # user spectra CSV of the runs of models that take one (Kaimal)
 
     def grid_options(self, model: str) -> dict:
-        """Grid options of ``model``'s runs (its table over the common one; missing = command default).
-
-        Parameters
-        ----------
-        model : str
-            Model name.
-
-        Returns
-        -------
-        dict
-            Grid options with the sweep schema names.
-        """
+        """Grid options of ``model``'s runs (its table over the common one; missing = command default)."""
         return {**self.grid, **self.model_grid.get(model, {})}
 
     def to_dict(self) -> dict:
-        """JSON-ready definition (for the manifest).
-
-        Returns
-        -------
-        dict
-            Models, presets, speeds [m/s], seeds, grid tables, validate, lidar, chunks, user preset names, n_runs.
-        """
+        """The definition, JSON-ready, for the manifest."""
         return {
             "models": list(self.models),
             "presets": list(self.presets),
@@ -259,25 +162,7 @@ def _unique(name: str, values) -> tuple:
 
 
 def check_grid_keys(where: str, opts: Mapping | None) -> dict:
-    """A copy of the grid options ``opts`` (None: empty) after refusing keys outside GRID_KEYS.
-
-    Parameters
-    ----------
-    where : str
-        What the options belong to (for the message), e.g. "grid" or a model name.
-    opts : Mapping, optional
-        Grid option -> value.
-
-    Returns
-    -------
-    dict
-        The options.
-
-    Raises
-    ------
-    ParameterError
-        Naming the unknown keys and the allowed ones.
-    """
+    """A copy of the grid options ``opts`` (None: empty); ParameterError naming ``where`` for keys outside GRID_KEYS."""
     opts = dict(opts or {})
     unknown = sorted(set(opts) - set(GRID_KEYS))
     if unknown:
@@ -311,9 +196,9 @@ def make_plan(
         Output directory; it and missing parents are created when the sweep runs (checked here).
     models, presets, speeds, seeds : iterable
         Model names, preset names, mean wind speeds [m/s] in [0.5, 100], seeds in [0, 2^63 - 1]; each
-        non-empty, without duplicates, within turbgen.theory.ranges.LIMITS (speeds, seeds, runs).
+        non-empty, without duplicates, within turbgen.theory.ranges.LIMITS.
     grid : Mapping, optional
-        Common grid options (sweep schema names, see :func:`build_run`).
+        Common grid options (sweep schema names, :func:`build_run`).
     model_grid : Mapping, optional
         Model name -> grid options overriding ``grid``.
     validate : bool, optional
@@ -329,17 +214,10 @@ def make_plan(
     lidar : str, optional
         Lidar preset or file run on every field.
     constraints : ConstraintRequest, optional
-        Condition every run (Mann only) on the same files (turbgen.spec.constraints); each run's data are placed
-        on its grid here (a bad file or a measurement off the field fails before any run) and its store name gets
-        the digest of those data.
+        Condition every (Mann) run on the same files; each run's data are placed on its grid here (a bad file
+        fails before any run) and its store name gets the digest of those data.
     spectrum : str or Path, optional
-        User spectra CSV (columns f_hz, S_u, S_v, S_w) of the runs of every model whose run schema takes a
-        ``spectrum`` (Kaimal), as ``turbgen kaimal --spectrum``; read once, checked against each run's grid.
-
-    Returns
-    -------
-    SweepPlan
-        The checked plan with its runs.
+        User spectra CSV (f_hz, S_u, S_v, S_w) of the runs of every model that takes a ``spectrum`` (Kaimal).
 
     Raises
     ------
@@ -429,7 +307,8 @@ def _check_execution(out, chunk_t, workers, scheduler, lidar):
 
 def _planned_runs(models, presets, speeds, seeds, grid_options, user, table=None) -> list[PlannedRun]:
     """Every run in nested order models x presets x speeds x seeds (``grid_options(model)``: its grid options;
-    ``table``: (f_hz, S) of a user spectrum, given to the models whose run schema takes one)."""
+    ``table``: (f_hz, S) of a user spectrum for the models that take one).
+    """
     runs = []
     for m in models:
         opts = grid_options(m)
@@ -438,7 +317,6 @@ def _planned_runs(models, presets, speeds, seeds, grid_options, user, table=None
         for p in presets:
             for U in speeds:
                 # the seed changes nothing but the random streams: build the run once, then swap the seed
-                # (10 000 seeds plan in a second instead of minutes of identical ae quadratures)
                 first = build_run(m, p, U, seeds[0], opts, user=user, spectrum=spectrum)
                 for s in seeds:
                     runs.append(PlannedRun(m, p, U, s, first if s == seeds[0] else replace(first, seed=s)))
@@ -463,22 +341,8 @@ def _check_runs(runs, speeds, chunk_t, lidar_description, *, local: bool) -> Non
 
 
 def check_memory_budget(runs, memory_bytes: int | None, chunk_t: int | None = None) -> None:
-    """Refuse (one line) a per-run memory budget (`turbgen sweep --memory`) that a planned Mann run cannot be made
-    within even out of core, before anything is written (each run would otherwise fail in its worker).
-
-    Parameters
-    ----------
-    runs : iterable of PlannedRun
-        The planned runs.
-    memory_bytes : int or None
-        The budget of each run [bytes]; None: no budget, nothing to check.
-    chunk_t : int, optional
-        The sweep's time chunk (it sizes the out-of-core passes).
-
-    Raises
-    ------
-    ParameterError
-        Naming the first run, the least budget it needs and what to change.
+    """Refuse (one line, naming the run and the least budget it needs) a per-run budget ``memory_bytes``
+    (`turbgen sweep --memory`; None: no check) that a planned Mann run cannot be made within even out of core.
     """
     if memory_bytes is None:
         return
@@ -500,24 +364,8 @@ def check_memory_budget(runs, memory_bytes: int | None, chunk_t: int | None = No
 
 
 def check_plan_memory(runs) -> None:
-    """Refuse the sweep (one line) when any run needs more memory than is available here, before any starts.
-
-    Each run's smallest footprint (turbgen.runs.models: Mann with one thread, Kaimal with its spectrum
-    spilled to disk), checked once per distinct run apart from the seed.
-
-    Parameters
-    ----------
-    runs : iterable of PlannedRun
-        The planned runs.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    ParameterError
-        Naming the first run that does not fit and what to lower.
+    """Refuse the sweep (one line, naming the run and what to lower) when a run's smallest footprint
+    (turbgen.runs.models) exceeds the memory available here; checked once per run apart from the seed.
     """
     from turbgen.resources import available_memory_bytes, format_bytes
 

@@ -16,22 +16,9 @@ from turbgen.theory import ranges
 
 
 def parse_seeds(value) -> list[int]:
-    """A list of ints, or a text like '1-21' / '1-3,9' (format checked by the schema) -> sorted seeds.
+    """Sorted seeds of a list of ints or a text like '1-21' / '1-3,9' (ranges inclusive, merged).
 
-    Parameters
-    ----------
-    value : str or list of int
-        The seeds.
-
-    Returns
-    -------
-    list of int
-        Sorted seeds (a text's ranges inclusive and merged).
-
-    Raises
-    ------
-    ParameterError
-        For a range that runs backwards or more seeds than turbgen.theory.ranges.LIMITS["seeds"].
+    Raises ParameterError for a range that runs backwards or more seeds than ``ranges.LIMITS["seeds"]``.
     """
     if not isinstance(value, str):
         ranges.check_count("seeds", len(value))
@@ -51,28 +38,11 @@ def parse_seeds(value) -> list[int]:
 
 
 def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides) -> SweepPlan:
-    """Plan from a sweep mapping (file contents); non-None ``overrides`` replace the file's values.
+    """Plan from a sweep mapping (a file's content); non-None ``overrides`` (out, validate, workers, scheduler,
+    chunk_t) replace its values, a scheduler dropping the file's workers. Paths are relative to ``base_dir``.
 
-    Relative paths are relative to ``base_dir``.
-
-    Parameters
-    ----------
-    data : Mapping
-        Content of a sweep file (turbgen/schemas/sweep.schema.json).
-    base_dir : str or Path, optional
-        Directory of the sweep file (default ".").
-    **overrides
-        out, validate, workers, scheduler, chunk_t (see :func:`make_plan`); a scheduler drops the file's workers.
-
-    Returns
-    -------
-    SweepPlan
-
-    Raises
-    ------
-    ParameterError
-        If the mapping breaks the schema, a user preset is defined twice or invalid, no ``out`` is given,
-        or as :func:`make_plan`.
+    Raises ParameterError if the mapping breaks the schema, a user preset is defined twice or invalid, no
+    ``out`` is given, or as :func:`make_plan`.
     """
     check_mapping(data, "sweep", "sweep definition")
     base = Path(base_dir)
@@ -117,23 +87,6 @@ def _constraints(data: Mapping, base: Path):
 
 
 def plan_from_file(path: str | Path, **overrides) -> SweepPlan:
-    """Plan from a TOML or JSON sweep file (see :func:`plan_from_mapping`).
-
-    Parameters
-    ----------
-    path : str or Path
-        The sweep file.
-    **overrides
-        As :func:`plan_from_mapping`.
-
-    Returns
-    -------
-    SweepPlan
-
-    Raises
-    ------
-    ParameterError
-        If the file is unreadable or invalid, or as :func:`plan_from_mapping`.
-    """
+    """Plan from a TOML or JSON sweep file (:func:`plan_from_mapping`, paths relative to the file)."""
     data = read_config(path, "sweep")
     return plan_from_mapping(data, base_dir=Path(path).parent, **overrides)

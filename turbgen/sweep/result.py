@@ -10,20 +10,8 @@ import numpy as np
 
 @dataclass
 class SweepResult:
-    """Records of every planned run (manifest order) and what this invocation did.
-
-    Parameters
-    ----------
-    out : Path
-        The sweep's output directory.
-    records : list of dict
-        Manifest record of every planned run.
-    ran, skipped : int, optional
-        Runs generated now; existing complete stores kept.
-    seconds : float, optional
-        Wall time of the sweep [s].
-    failed : list of str, optional
-        Names of the runs that are not complete.
+    """Records of every planned run (manifest order) and what this invocation did: the output directory, the
+    records, runs generated (``ran``) and kept (``skipped``), wall time [s], names of the runs not complete.
     """
 
     out: Path
@@ -35,52 +23,24 @@ class SweepResult:
 
     @property
     def ok(self) -> bool:
-        """True when every planned run has a complete store.
-
-        Returns
-        -------
-        bool
-        """
+        """True when every planned run has a complete store."""
         return all(r["status"] == "complete" for r in self.records)
 
     @property
     def validation_failed(self) -> list[str]:
-        """Runs whose field failed validation (only when the sweep validates).
-
-        Returns
-        -------
-        list of str
-            Run names.
-        """
+        """Names of the runs whose field failed validation (only when the sweep validates)."""
         return [r["name"] for r in self.records if r.get("validation") and not r["validation"].get("passed")]
 
     @property
     def lidar_failed(self) -> list[str]:
-        """Runs whose virtual-lidar coherence departed from theory (only when the sweep runs a lidar).
-
-        Returns
-        -------
-        list of str
-            Run names.
-        """
+        """Names of the runs whose virtual-lidar coherence departed from theory (only with a lidar)."""
         return [r["name"] for r in self.records if r.get("lidar") and not r["lidar"].get("passed")]
 
 
 def summary_table(result: SweepResult) -> str:
-    """Plain-text table of every run (name, status, action, seconds, sigma_u, validation, error).
-
-    Followed by a totals line, and lines for failed validations, the lidar numbers (mean +- sd of
-    k_0.5 [rad/m] and cut-off [Hz] over the fields, with theory) and failed lidar checks.
-
-    Parameters
-    ----------
-    result : SweepResult
-        The sweep's outcome.
-
-    Returns
-    -------
-    str
-        The table, lines joined by newlines.
+    """Plain-text table of every run (name, status, action, seconds, sigma_u, validation, error), then the
+    totals, failed validations, the lidar numbers (mean +- sd of k_0.5 [rad/m] and cut-off [Hz], with theory)
+    and failed lidar checks.
     """
     rows = [("run", "status", "action", "seconds", "sigma_u", "validation", "error")]
     for r in result.records:

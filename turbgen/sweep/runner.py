@@ -1,25 +1,17 @@
-"""Execute a sweep plan on dask.distributed: resumable, idempotent, one lock per output directory.
+"""Execute a sweep plan on dask.distributed: resumable, idempotent, one lock per output directory (docs/sweep.md).
 
-* A LocalCluster sized to the machine (one single-threaded worker process per core, at most one
-  per run and as many as fit in 80 % of the available memory; each run gets cores/workers
-  threads) or an existing scheduler (plan.scheduler; its workers must see the output directory
-  at the same path).
-* Runs that share a part of their model (a Mann stencil: runs differing only in the seed or in ae,
-  i.e. TI or turbulence class, share one ae-free stencil; turbgen.runs.models) get it built once as a
-  dask task and passed to each run task (dask ships it to the workers that need it).
-* Before anything is submitted, every planned store is inspected: complete stores with the planned
-  parameters are kept ("skipped"), stores with other parameters are never overwritten (the run
-  is recorded as failed), incomplete stores are regenerated, and temporary directories left by
-  dead writers on this host are removed.
-* A planned store that exists with other parameters or another grid is never overwritten: the
-  sweep is refused before anything is written (the manifest keeps its records). Existing complete
-  stores with other time chunks than --chunks are kept and reported in one line.
-* A failing run is recorded with its error; the others continue. The manifest is rewritten
-  (atomically) after every finished run, so an interrupted sweep leaves an accurate record; records
-  of runs from earlier sweeps into the same directory that are not in this plan are kept.
-* Ctrl-C, SIGTERM, SIGHUP: the local workers ignore SIGINT/SIGHUP (the sweep shuts them down), every
-  run still pending is re-inspected on disk (a store its worker completed is recorded complete),
-  the manifest is saved and the interruption propagates (CLI: one line, exit 130 / 128 + signal).
+* A LocalCluster sized to the machine (one single-threaded worker process per core, at most one per run
+  and as many as fit in 80 % of the available memory) or an existing scheduler (its workers must see the
+  output directory at the same path).
+* Runs that share a part of their model (a Mann stencil, for runs differing only in seed or ae) get it
+  built once as a dask task and passed to each run task.
+* Before anything is submitted every planned store is inspected: complete stores with the planned
+  parameters are kept ("skipped"), incomplete ones regenerated, temporaries of dead writers removed; a
+  store with other parameters or grid refuses the sweep before anything is written.
+* A failing run is recorded with its error; the others continue. The manifest is rewritten atomically
+  after every finished run; records of earlier sweeps into the same directory are kept.
+* Ctrl-C, SIGTERM, SIGHUP: the local workers ignore them (the sweep shuts them down), pending runs are
+  re-inspected on disk, the manifest is saved and the interruption propagates.
 """
 
 from __future__ import annotations
@@ -34,7 +26,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from turbgen import fft
-from turbgen.errors import ParameterError
+from turbgen.errors import ParameterError, one_line
 from turbgen.interruption import exit_on_signals
 from turbgen.resources import require_disk
 from turbgen.runs.models import MODELS
@@ -45,7 +37,7 @@ from turbgen.sweep.manifest import read_manifest, utc_now, write_manifest
 from turbgen.sweep.plan import SweepPlan, check_memory_budget
 from turbgen.sweep.result import SweepResult, summary_table
 from turbgen.sweep.state import base_record, remove_dead_temps, store_state
-from turbgen.sweep.tasks import RunTask, default_workers, execute_run, one_line
+from turbgen.sweep.tasks import RunTask, default_workers, execute_run
 
 __all__ = ["SweepResult", "run_sweep", "summary_table"]
 
@@ -67,12 +59,9 @@ def _make_client(plan: SweepPlan, n: int, processes: bool):
             resource_tracker.ensure_running()
         finally:
             signal.signal(signal.SIGHUP, old)
-    # a terminal's Ctrl-C (hang-up, or a kill of the group) goes to the whole process group: let it reach the sweep
-    # alone, which shuts the workers down, instead of ~80 lines of tracebacks from every worker. Until the workers
-    # ignore them, the signals are blocked (a worker process inherits the mask of the thread that starts it, so one
-    # still importing never sees them either); a signal that came meanwhile is raised when they are unblocked,
-    # with the cluster up and closed in order (a Ctrl-C during the start-up printed tracebacks of the half-started
-    # workers and of the cluster's close around the one-line error)
+    # a terminal's Ctrl-C goes to the whole process group: only the sweep may see it (it shuts the workers down).
+    # The signals stay blocked until the workers ignore them (a worker inherits the starting thread's mask); one
+    # that came meanwhile is raised when they are unblocked, with the cluster up and then closed in order
     deferring = processes and threading.current_thread() is threading.main_thread()
     mask = signal.pthread_sigmask(signal.SIG_BLOCK, DEFERRED_SIGNALS) if deferring else None
     try:
@@ -98,12 +87,8 @@ DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 def _ignore_interrupts() -> None:
-    """Worker side (its main thread): ignore SIGINT, SIGTERM and SIGHUP; the sweep closes the workers.
-
-    A worker killed by a group-wide SIGTERM leaves its semaphores to multiprocessing's resource
-    tracker, which then warns about them on the terminal after the sweep's own one-line message.
-    A worker whose heartbeat meets the scheduler closing (the sweep interrupted) does not print that
-    failure's traceback either: the heartbeat is retried, and the sweep records every run's own error.
+    """Worker side (its main thread): ignore SIGINT, SIGTERM and SIGHUP (the sweep closes the workers) and drop
+    the heartbeat-failure traceback of a worker whose scheduler closes.
     """
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, signal.SIG_IGN)
@@ -112,7 +97,8 @@ def _ignore_interrupts() -> None:
 
 def _no_heartbeat_failure(record: logging.LogRecord) -> bool:
     """Logging filter of the workers: False for distributed's "Failed to communicate with scheduler during
-    heartbeat" (a traceback at the interrupted sweep's shutdown), True for every other record."""
+    heartbeat" (a traceback at an interrupted sweep's shutdown).
+    """
     return not str(record.msg).startswith("Failed to communicate with scheduler during heartbeat")
 
 
@@ -151,22 +137,19 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
     plan : SweepPlan
         The checked sweep.
     client : distributed.Client, optional
-        An existing client (otherwise one is made from plan.scheduler or a LocalCluster with
-        plan.workers processes, threads if ``processes`` is False).
+        An existing client (otherwise from plan.scheduler, or a LocalCluster of plan.workers).
     processes : bool, optional
         Worker processes (default True) or threads for the sweep's own LocalCluster.
     progress : bool, optional
         Show progress (default True).
     threads : int, optional
-        Threads of each run (default: cores / workers for the sweep's own LocalCluster, else all
-        cores); never changes the fields.
+        Threads of each run (default: cores / workers on the own LocalCluster, else all cores); never
+        changes the fields.
     memory_bytes : int, optional
-        Memory budget of each run [bytes] (`turbgen sweep --memory`): Mann runs that do not fit are
-        made out of core (the same fields).
+        Memory budget of each run [bytes] (`--memory`): Mann runs that do not fit are made out of core.
     stencil_cache : str or os.PathLike, optional
-        `turbgen sweep --stencil-cache`: the constrained runs' stencil cache (turbgen.runs.stencil_cache), where the
-        seeds conditioned on the same measurements share their stencil and system (the same fields); the workers
-        must see it at the same path.
+        The constrained runs' stencil cache (`--stencil-cache`), shared by the seeds conditioned on the same
+        measurements; the workers must see it at the same path.
 
     Returns
     -------
@@ -178,8 +161,8 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
     SweepLockedError
         Before touching anything, when another sweep holds DIR.
     ParameterError
-        If ``out`` cannot hold the sweep (a file, not creatable, read-only), a planned store exists with
-        other parameters or grid (nothing run, manifest unchanged), or the disk lacks space for the stores.
+        If ``out`` cannot hold the sweep, a planned store exists with other parameters or grid (nothing run,
+        manifest unchanged), or the disk lacks space for the stores.
     """
     t_start = time.perf_counter()
     out = plan.out

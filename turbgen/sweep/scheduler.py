@@ -6,29 +6,11 @@ from turbgen.errors import ParameterError
 
 
 def check_scheduler_address(address: str, timeout_s: float = 3.0, connect: bool = True) -> str:
-    """``address`` if a dask scheduler could listen there: 'tcp://host:port' (or tls://) reachable now.
+    """``address`` if a dask scheduler answers there now: 'tcp://host:port' or tls:// (tcp:// assumed without a scheme).
 
-    Refuses malformed addresses and closed ports in one line within ``timeout_s`` seconds (dask itself
-    retries for 30 s and then raises a traceback).
-
-    Parameters
-    ----------
-    address : str
-        Scheduler address (tcp:// assumed without a scheme).
-    timeout_s : float, optional
-        Connection timeout [s] (default 3).
-    connect : bool, optional
-        False: check the form of the address only (default True: also that a dask scheduler answers there).
-
-    Returns
-    -------
-    str
-        ``address``.
-
-    Raises
-    ------
-    ParameterError
-        If the address is malformed, nothing accepts connections there, or no dask scheduler answers.
+    Refuses malformed addresses, closed ports and other servers in one line (ParameterError) within
+    ``timeout_s`` [s] (dask itself retries for 30 s, then raises a traceback). ``connect`` False checks the form
+    only.
     """
     import socket
     from urllib.parse import urlsplit

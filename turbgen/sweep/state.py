@@ -25,19 +25,10 @@ def _identity(model, attrs: dict, grid: dict) -> dict:
 
 
 def store_state(path: Path, pr: PlannedRun) -> tuple[str, str | None]:
-    """('absent' | 'incomplete' | 'mismatch' | 'complete', detail) of a planned run's store.
+    """('absent' | 'incomplete' | 'mismatch' | 'complete', detail) of the store at ``path`` of planned run ``pr``.
 
-    Parameters
-    ----------
-    path : Path
-        Where the run's store belongs.
-    pr : PlannedRun
-        The planned run (its model, parameters and grid are compared with the store's).
-
-    Returns
-    -------
-    tuple of (str, str or None)
-        The state and a one-line detail (the store error, or which keys differ), None when absent or complete.
+    The detail is a one-line store error or which keys differ from the plan's model, parameters and grid; None
+    when absent or complete.
     """
     if not path.exists():
         return "absent", None
@@ -61,37 +52,15 @@ def store_state(path: Path, pr: PlannedRun) -> tuple[str, str | None]:
 
 
 def remove_dead_temps(directory: Path, names) -> list[Path]:
-    """Remove temporaries ('.NAME.tmp-PID-...') of stores ``names`` and of the manifests whose writer pid is dead.
-
-    Only writers on this host are checked.
-
-    Parameters
-    ----------
-    directory : Path
-        The sweep's output directory.
-    names : iterable of str
-        Store names of the plan.
-
-    Returns
-    -------
-    list of Path
-        The removed temporaries.
+    """Remove the temporaries ('.NAME.tmp-PID-...') of stores ``names`` and of the manifests whose writer (on this
+    host) is dead; return them.
     """
     return remove_dead_temporaries(directory, [*names, MANIFEST_JSON, MANIFEST_CSV])
 
 
 def base_record(pr: PlannedRun) -> dict:
-    """The manifest record of a planned run before it is inspected or run.
-
-    Parameters
-    ----------
-    pr : PlannedRun
-        The planned run.
-
-    Returns
-    -------
-    dict
-        Record with status "pending", action "none" and empty results (see turbgen.sweep.manifest).
+    """The manifest record of a planned run before it is inspected or run: status "pending", action "none", empty
+    results (turbgen.sweep.manifest).
     """
     return {
         "name": pr.name,

@@ -7,6 +7,7 @@ import time
 from dataclasses import dataclass, replace
 
 from turbgen import fft
+from turbgen.errors import one_line
 from turbgen.resources import available_memory_bytes
 from turbgen.runs.models import MODELS
 from turbgen.sweep.manifest import store_checksum
@@ -14,7 +15,7 @@ from turbgen.sweep.manifest import store_checksum
 
 @dataclass(frozen=True)
 class RunTask:
-    """What a worker needs for one run: generate (unless only checksumming an existing store).
+    """What a worker needs for one run (``generate`` False: only checksum, validate, lidar an existing store).
 
     Parameters
     ----------
@@ -31,20 +32,19 @@ class RunTask:
     validate : bool
         Run turbgen.validate on the store.
     generate : bool, optional
-        Generate the field (False: only checksum, validate, lidar an existing store).
+        Generate the field.
     threads : int, optional
         Threads of one run (None: os.cpu_count(); never changes the field).
     memory_bytes : int, optional
         Memory budget of one run [bytes]: a Mann run that does not fit goes out of core.
     lidar : str, optional
-        Lidar preset or file to run on the field (turbgen lidar).
+        Lidar preset or file to run on the field.
     constraints : ConstraintRequest, optional
-        Condition the (Mann) field on these files (turbgen.runs.constrain.run_mann_constrained, in memory).
+        Condition the (Mann) field on these files (turbgen.runs.constrain).
     cache_dir : str, optional
-        A constrained run's stencil cache (turbgen.runs.stencil_cache): its stencil and its system, shared by the
-        seeds conditioned on the same measurements.
+        A constrained run's stencil cache.
     fft_backend : str, optional
-        The FFT backend of the run (turbgen.fft; None: the worker's current one).
+        The run's FFT backend (None: the worker's current one).
     """
 
     model: str
@@ -54,52 +54,17 @@ class RunTask:
     chunk_t: int | None
     validate: bool
     generate: bool = True
-    threads: int | None = None  # threads of one run (None: os.cpu_count(); never changes the field)
-    memory_bytes: int | None = None  # memory budget of one run: a Mann run that does not fit goes out of core
-    lidar: str | None = None  # lidar preset or file to run on the field (turbgen lidar)
-    constraints: object = None  # a ConstraintRequest (turbgen.spec.constraints): a constrained Mann run
-    cache_dir: str | None = None  # a constrained run's stencil cache
-    fft_backend: str | None = None  # the FFT backend of the run (None: the worker's current one)
-
-
-def one_line(exc: BaseException) -> str:
-    """'ExceptionType: first line of its message' (for the manifest).
-
-    Parameters
-    ----------
-    exc : BaseException
-        The exception.
-
-    Returns
-    -------
-    str
-        One line.
-    """
-    text = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
+    threads: int | None = None
+    memory_bytes: int | None = None
+    lidar: str | None = None
+    constraints: object = None
+    cache_dir: str | None = None
+    fft_backend: str | None = None
 
 
 def validate_store(path: str, threads: int | None = None) -> dict:
-    """Summary of turbgen.validate on one store: passed, failed metrics, worst |z| vs critical z per metric.
-
-    Parameters
-    ----------
-    path : str
-        The store.
-    threads : int, optional
-        Workers of the validator.
-
-    Returns
-    -------
-    dict
-        ``passed``, ``failed``, ``max_abs_z`` (metric -> [max |z|, z_crit]) and ``seconds`` [s].
-
-    Raises
-    ------
-    StoreError
-        If ``path`` is not a complete, readable store.
-    ParameterError
-        For bad input to the validator (e.g. a grid too small for it).
+    """Summary of turbgen.validate on one store: ``passed``, ``failed``, ``max_abs_z`` (metric -> [max |z|,
+    z_crit]) and ``seconds``; StoreError or ParameterError as the validator raises them.
     """
     from turbgen.validation import validate
 
@@ -113,27 +78,8 @@ def validate_store(path: str, threads: int | None = None) -> dict:
 
 
 def lidar_store(path: str, lidar: str) -> dict:
-    """Summary of the virtual lidar on one store: verdict, simulated and theoretical k_0.5 and cut-off.
-
-    Parameters
-    ----------
-    path : str
-        The store.
-    lidar : str
-        Lidar preset or file.
-
-    Returns
-    -------
-    dict
-        ``passed``, ``simulated`` and ``theory`` (k05_rad_m [rad/m], d_eddy_min_m [m], cutoff_hz [Hz]),
-        ``max_abs_z``, ``z_crit``.
-
-    Raises
-    ------
-    ParameterError
-        For an unknown lidar or one that does not fit the store.
-    StoreError
-        If ``path`` is not a complete, readable store.
+    """Summary of the virtual lidar on one store: ``passed``, ``simulated`` and ``theory`` (k05_rad_m, d_eddy_min_m,
+    cutoff_hz), ``max_abs_z``, ``z_crit``; ParameterError for an unknown or unfitting lidar.
     """
     from turbgen.virtual_lidar.report import lidar_report
     from turbgen.store import open_store
@@ -154,14 +100,7 @@ def _run_constrained(task: RunTask) -> dict:
 
 
 def execute_run(task: RunTask, shared=None) -> dict:
-    """Worker side: generate one field, checksum it, optionally validate it. Never raises.
-
-    Parameters
-    ----------
-    task : RunTask
-        The run.
-    shared : object, optional
-        The part of the run shared between seeds (a Mann stencil), or None.
+    """Worker side: generate one field, checksum it, optionally validate it and run the lidar. Never raises.
 
     Returns
     -------
@@ -206,19 +145,8 @@ def _execute_run(task: RunTask, shared, out: dict) -> None:
 
 
 def task_bytes(task: RunTask) -> int:
-    """Peak memory [bytes] of one run with one thread (its generator's own estimate; a Mann stencil included).
-
-    At most its memory budget when the run can be made out of core within one.
-
-    Parameters
-    ----------
-    task : RunTask
-        The run.
-
-    Returns
-    -------
-    int
-        Memory [bytes].
+    """Peak memory [bytes] of one run with one thread (its generator's estimate, the shared Mann stencil included),
+    at most its budget when the run can be made out of core.
     """
     model = MODELS[task.model]
     need = model.memory_bytes(task.run, 1)
@@ -228,18 +156,7 @@ def task_bytes(task: RunTask) -> int:
 
 
 def default_workers(tasks) -> int:
-    """LocalCluster size: one worker per core, at most one per run, and as many as fit in 80 % of the memory.
-
-    Parameters
-    ----------
-    tasks : iterable of RunTask
-        The runs to execute.
-
-    Returns
-    -------
-    int
-        Number of workers (>= 1).
-    """
+    """LocalCluster size (>= 1): one worker per core, at most one per run, as many as fit in 80 % of the memory."""
     tasks = list(tasks)
     n = min(os.cpu_count() or 1, len(tasks))
     avail = available_memory_bytes()

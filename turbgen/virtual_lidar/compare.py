@@ -1,28 +1,13 @@
 """Simulated lidar-rotor coherence against theory, with the verdict machinery of ``turbgen validate``.
 
-The simulated gamma^2_RL is a Welch estimate. Under the null hypothesis "the field follows the theory"
-each bin's estimate follows Goodman's law of the sample coherence of n independent segments
-(Goodman 1963; Carter, Knapp & Nuttall 1973; ``turbgen.validation.distributions``) with the
-theory's gamma^2 and n the bin's equivalent number of independent segments, real-valued: per bin from
-the theory's line spectra and the actual segment starts (``turbgen.virtual_lidar.welch_expectation.
-effective_segments``; several seeds add theirs), or the rule of thumb ``WelchSetup.effective_segments``
-if a single n_eff is given. Each bin's z = Phi^-1 of the law's smaller tail at the estimate; the family
-fails at |z| > z_crit (Bonferroni, ALPHA of the validator), exactly as a validator metric. The expectation
-shown is the law's mean, the band its 2.5-97.5 % quantiles.
-
-Calibration (Monte-Carlo of the estimator: Gaussian lines with the expected spectra of a 512 s, 32 x 32
-Mann store through the same segments, Hann window and mean removal; 2e6 ensembles; bins 1-6 at
-gamma^2 0.95 .. 0.32): for 4 fields (n 42 in bin 1, 53.1-53.6 above) z has mean -0.012 .. -0.001, sd
-0.984 .. 1.000, and tail fractions at |z| = 3.8 of 0.63-1.06 x the normal one (3: 0.77-1.0; 2: 0.88-1.01;
-sd of these ratios from the MC count 0.08 at 3.8); for 1 field (n 10.5 / 13.3) 0.39-1.07 x at 3.8,
-0.57-0.99 x at 3 (slightly conservative in bin 1). The delta method with the rule's n (before) put 53 x the
-normal fraction below z = -3.8 in bin 1 (157 x for 1 field); Goodman's law with the rule's n still 4 x
-(bin 1 of 64 s segments collects the large low-frequency lines: 10.5 equivalent segments per field, not 13.3).
-Bins are compared only where the theory gives gamma^2 >= MIN_COH2 and n >= MIN_NEFF (kept from the
-delta-method verdict): below gamma^2 ~ 0.16 the same Monte-Carlo (bins 7-12, 1e6 single fields) puts 2-7 x
-the normal fraction below z = -3.8 for one field (n 13.3), and 1.7-2.1 x at gamma^2 0.06-0.04 for 4 fields
-(the Welch estimate's lower tail at low coherence is heavier than Goodman's law with an equivalent n);
-gamma^2 0.22 is still calibrated (0.9-1.0 x). MIN_NEFF was not re-tested.
+Under the null hypothesis "the field follows the theory" each bin's Welch gamma^2_RL follows Goodman's law of
+the sample coherence of n independent segments (Goodman 1963; Carter, Knapp & Nuttall 1973;
+``turbgen.validation.distributions``) with the theory's gamma^2 and n the bin's equivalent number of
+independent segments (``welch_expectation.effective_segments``, several seeds add theirs; or one given
+n_eff). Each bin's z = Phi^-1 of the law's smaller tail at the estimate; the family fails at |z| > z_crit
+(Bonferroni, ALPHA of the validator). The band shown is the law's 2.5-97.5 % quantiles. Bins are compared
+only where gamma^2 >= MIN_COH2 and n >= MIN_NEFF, where a Monte-Carlo of the estimator calibrated the law
+(docs/lidar.md, "Verdict"); below, the Welch estimate's lower tail is heavier than the law's.
 """
 
 from __future__ import annotations
@@ -39,32 +24,22 @@ BAND_P = (0.025, 0.975)  # probabilities of the plotted band's edges
 
 
 def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None = None) -> MetricResult:
-    """MetricResult comparing simulated and theoretical gamma^2_RL bin by bin (bins 1 .. Nyquist-1).
+    """MetricResult "lidar_coherence" comparing simulated and theoretical gamma^2_RL bin by bin (bins 1 .. Nyquist-1).
 
-    Bins are tested where the theory gives gamma^2 >= MIN_COH2 and f <= ``f_max_hz``, and only
-    where n_eff >= MIN_NEFF; each tested bin's z is the normal score of the simulated value under Goodman's
-    law of the estimate from n_eff independent segments (``turbgen.validation.distributions.coh2_z``), its
-    expectation and sd are that law's (``coh2_moments``). Where 1 - gamma^2 < NEAR_UNIT (or n_eff <= 1)
-    the delta method of ``turbgen.validation.band_checks.coherence_stats`` is used instead.
+    Bins are tested where the theory gives gamma^2 >= MIN_COH2, n_eff >= MIN_NEFF and f <= ``f_max_hz``; a bin's
+    z, expectation and sd are those of Goodman's law (``coh2_z``, ``coh2_moments``), or of the delta method
+    (``band_checks.coherence_stats``) where 1 - gamma^2 < NEAR_UNIT or n_eff <= 1.
 
     Parameters
     ----------
     f_hz : array_like
         Welch bin frequencies [Hz], 0 .. Nyquist.
-    coh2_sim : array_like
-        Simulated magnitude-squared coherence gamma^2_RL [-], one value per bin.
-    coh2_theory : array_like
-        Theoretical gamma^2_RL [-], one value per bin (clipped to [0, 1]).
+    coh2_sim, coh2_theory : array_like
+        Simulated and theoretical gamma^2_RL [-] per bin (the theory clipped to [0, 1]).
     n_eff : float or array_like
         Effective number of independent Welch segments [-], one for all bins or one per bin.
     f_max_hz : float, optional
-        Highest frequency tested [Hz]; None (default) tests up to Nyquist-1.
-
-    Returns
-    -------
-    MetricResult
-        Metric "lidar_coherence": one Check per tested bin and the curve with its 95 % band (the 2.5 %
-        and 97.5 % quantiles of the law).
+        Highest frequency tested [Hz]; None tests up to Nyquist-1.
     """
     f = np.asarray(f_hz, float)
     sim = np.asarray(coh2_sim, float)
@@ -91,23 +66,9 @@ def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None 
 
 
 def crossing(f_hz, values, level: float) -> float | None:
-    """First frequency [Hz] where ``values`` falls below ``level`` (linear interpolation), None if never.
+    """First frequency [Hz] where ``values`` falls below ``level`` (linear interpolation), bin 0 skipped.
 
-    Bin 0 is skipped; non-finite values never count as a crossing.
-
-    Parameters
-    ----------
-    f_hz : array_like
-        Frequencies [Hz], increasing.
-    values : array_like
-        Curve sampled at ``f_hz`` (e.g. gamma^2_RL or |G_RL|) [-].
-    level : float
-        Level to cross [-], in the units of ``values``.
-
-    Returns
-    -------
-    float or None
-        Crossing frequency [Hz]; ``f_hz[1]`` if bin 1 is already below; None if the curve never falls below.
+    ``f_hz[1]`` if bin 1 is already below; None if the curve never falls below (non-finite values never cross).
     """
     f, v = np.asarray(f_hz, float), np.asarray(values, float)
     below = np.nonzero((v[1:] < level) & np.isfinite(v[1:]))[0]
@@ -123,25 +84,8 @@ def crossing(f_hz, values, level: float) -> float | None:
 def preview_numbers(f_hz, coh2, gain, U_m_s: float) -> dict:
     """MCB k_0.5 [rad/m], d_eddy,min [m] and the -3 dB cut-off of |G_RL| [Hz] of one set of curves.
 
-    k_0.5 = 2 pi f_0.5 / U where gamma^2 = 0.5 (Guo et al. 2024 Eq. 26), d_eddy,min = 2 pi / k_0.5, and
-    the cut-off is where |G_RL| = 1/sqrt 2.
-
-    Parameters
-    ----------
-    f_hz : array_like
-        Frequencies [Hz], increasing (bin 0 is skipped, see :func:`crossing`).
-    coh2 : array_like
-        gamma^2_RL [-] at ``f_hz``.
-    gain : array_like
-        |G_RL| [-] at ``f_hz``.
-    U_m_s : float
-        Mean wind speed U [m/s].
-
-    Returns
-    -------
-    dict
-        ``k05_rad_m`` [rad/m], ``d_eddy_min_m`` [m] and ``cutoff_hz`` [Hz]; each None where its curve
-        never crosses its level.
+    k_0.5 = 2 pi f_0.5 / U where gamma^2 = 0.5 (Guo et al. 2024 Eq. 26), d_eddy,min = 2 pi / k_0.5, the cut-off
+    where |G_RL| = 1/sqrt 2; each None where its curve never crosses its level (:func:`crossing`).
     """
     f05 = crossing(f_hz, coh2, 0.5)
     fc = crossing(f_hz, gain, 1.0 / np.sqrt(2.0))

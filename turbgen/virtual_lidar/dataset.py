@@ -1,21 +1,16 @@
 """The lidar output dataset: a small zarr group, xarray-readable, written atomically.
 
-Variables (named dims, units in attributes):
-    v_los (scan, beam, gate)  line-of-sight speed [m s-1], positive towards the lidar (+u for a beam
-                              looking straight upstream); time_s (scan, beam) its physical time [s]
-    u_LL (t_arrival)          lidar estimate of the rotor-effective wind speed [m s-1], aligned to
-                              rotor arrival (stored/eddy time of the rotor plane)
-    u_RR (t_arrival)          u averaged over the rotor disc at x = 0 [m s-1]
-    gate_x_m (gate), n1 (beam, gate)
-Attributes: every lidar parameter, the store it came from, mean_wind_added, TI values.
-Publishing: written under a hidden temporary name in the output directory, then renamed.
+Variables (units in attributes): v_los (scan, beam, gate) line-of-sight speed [m s-1], positive towards the
+lidar; time_s (scan, beam) its physical time [s]; u_LL (t_arrival) the lidar estimate of the
+rotor-effective wind speed aligned to rotor arrival; u_RR (t_arrival) u averaged over the rotor disc at
+x = 0; gate_x_m (gate), n1 (beam, gate). Attributes: every lidar parameter, the source store, the mean
+wind added, the TIs.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import secrets
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,31 +19,20 @@ import numpy as np
 
 from turbgen.errors import ParameterError, StoreError
 from turbgen.store.attributes import jsonable
+from turbgen.store.temporaries import publish, temp_name
 from turbgen.theory import ranges
 
 MARKER = "turbgen_lidar_complete"
 
 
 def check_output(path, overwrite: bool) -> Path:
-    """Refuse an existing output without overwrite, or a missing/unwritable directory (before any work).
-
-    Parameters
-    ----------
-    path : str or path-like
-        Output dataset path (``~`` expanded, made absolute).
-    overwrite : bool
-        Allow replacing an existing lidar dataset.
-
-    Returns
-    -------
-    pathlib.Path
-        The absolute output path.
+    """The absolute output path (``~`` expanded), checked before any work.
 
     Raises
     ------
     StoreError
-        If ``path`` exists and ``overwrite`` is False, exists and is not a lidar dataset, or its parent
-        directory is missing or not writable.
+        If ``path`` exists without ``overwrite`` or is not a lidar dataset, or its directory is missing or not
+        writable.
     """
     path = Path(path).expanduser().absolute()
     # a path that is not a lidar dataset is never replaced, so `overwrite` is no remedy there: not suggested
@@ -67,37 +51,16 @@ def check_output(path, overwrite: bool) -> Path:
 
 
 def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: bool = False) -> Path:
-    """Write the lidar dataset to ``path`` atomically; returns the absolute path.
+    """Write the lidar dataset at ``path``; return its absolute path.
 
-    Written under a hidden temporary name in the output directory, the completeness marker set last,
-    then renamed into place (an existing dataset is replaced only after the new one is complete).
-
-    Parameters
-    ----------
-    path : str or path-like
-        Output zarr directory.
-    samples : LidarSamples
-        Sampled line-of-sight speeds (v_los [m/s], time_s [s], gates_x_m [m], n1 [-]).
-    t_arrival : numpy.ndarray
-        Rotor arrival time axis [s] of ``u_ll`` and ``u_rr``.
-    u_ll : numpy.ndarray
-        Lidar estimate u_LL of the rotor-effective wind speed [m/s].
-    u_rr : numpy.ndarray
-        Rotor-disc average u_RR at x = 0 [m/s].
-    attrs : dict
-        Dataset attributes; dict, list and tuple values are stored as JSON strings.
-    overwrite : bool, optional
-        Replace an existing lidar dataset (default False).
-
-    Returns
-    -------
-    pathlib.Path
-        The absolute path of the dataset.
+    Written under a temporary name, the completeness marker set last, then published (an existing dataset is
+    replaced only after the new one is complete). ``samples``: LidarSamples; ``t_arrival`` [s] the time axis of
+    ``u_ll`` and ``u_rr`` [m/s]; ``attrs``: dict, list and tuple values are stored as JSON strings.
 
     Raises
     ------
     StoreError
-        As :func:`check_output`: existing output without ``overwrite``, or a missing/unwritable directory.
+        As :func:`check_output`.
     """
     import xarray as xr
 
@@ -122,7 +85,7 @@ def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: 
         },
         attrs={k: json.dumps(jsonable(v)) if isinstance(v, (dict, list, tuple)) else jsonable(v) for k, v in attrs.items()},
     )
-    tmp = path.parent / f".{path.name}.tmp-{os.getpid()}-{secrets.token_hex(4)}"
+    tmp = temp_name(path)
     try:
         import zarr
 
@@ -134,13 +97,9 @@ def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: 
         ds.to_zarr(tmp, mode="w", consolidated=True)
         zarr.open_group(str(tmp), mode="r+").attrs[MARKER] = True  # the completeness marker, last
         zarr.consolidate_metadata(str(tmp))
-        if path.exists():
-            old = path.parent / f".{path.name}.old-{os.getpid()}-{secrets.token_hex(4)}"
-            os.rename(path, old)
-            os.rename(tmp, path)
+        old = publish(tmp, path, replace=True)  # an older dataset is swapped out in one step, then removed
+        if old is not None:
             shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.rename(tmp, path)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -154,22 +113,21 @@ class LidarData:
     Parameters
     ----------
     v_los : numpy.ndarray
-        (scan, beam, gate) [m/s], beams in increasing beam number.
+        (scan, beam, gate) [m/s], beams in increasing beam number; NaN a missing sample.
     time_s : numpy.ndarray
         (scan, beam) physical measurement times [s].
     lidar : dict
-        The lidar description's fields (turbgen.virtual_lidar.description.lidar_from_mapping rebuilds it).
+        The lidar description's fields (``description.lidar_from_mapping`` rebuilds it).
     mean_wind_added : bool
-        Whether v_los includes the power-law mean wind (``shear_exponent`` [-]).
+        Whether v_los includes a mean wind.
     shear_exponent : float
-        Its exponent alpha [-].
+        The power-law exponent alpha [-] of that mean wind.
     U_m_s : float
         The mean wind of the store the lidar measured [m/s].
     source : str
         The dataset's path.
     mean_wind : dict, optional
-        The added mean wind's record (:meth:`turbgen.spec.mean_wind.MeanWind.to_attrs`); None: the power law with
-        ``shear_exponent`` (datasets of earlier versions, or no mean wind added).
+        The added mean wind's ``MeanWind.to_attrs``; None: the power law with ``shear_exponent`` (or none added).
     """
 
     v_los: np.ndarray

@@ -1,25 +1,15 @@
 """What a lidar is: beams, range gates, probe volume, timing, and the turbine it serves.
 
-Presets
--------
-* ``nacelle-4beam`` — the four-beam pulsed nacelle lidar of Guo et al. (2023) Table 3: azimuth
-  +-14.4 deg, elevation +-14.0 deg (beam pairs (14.4, 14), (14.4, -14), (-14.4, -14), (-14.4, 14)),
-  10 range gates at upstream distances 50 ... 169.7 m every 13.3 m, one beam at a time at 1 Hz per
-  beam (a full scan in 1 s), Gaussian probe volume with FWHM 30 m; NREL 5 MW rotor, R = 63 m.
-* ``spinner-cw`` / ``spinner-pulsed`` — the single-beam spinner lidars of Fu et al. (2023) at their
-  optima (CW: range 190 m, half-cone 21 deg; pulsed: 220 m, 18 deg; lambda = 1.565 um,
-  r_b = 28 mm, W_L = 30 m), 32 scan positions per revolution at 4 Hz (7.56 rpm, Eq. 12), shaft tilt
-  6 deg; IEA 15 MW rotor, R = 120 m.
-* ``nacelle-1beam`` — one pulsed beam along the shaft at 100 m (Fu et al. 2023's single-beam
-  nacelle reference), IEA 15 MW rotor.
-
-A user lidar is a TOML or JSON file with the same fields (``schemas/lidar.schema.json``).
-The frame and the line-of-sight sign are those of ``turbgen.theory.lidar_geometry``.
+Presets (``PRESETS``, sources in their ``source`` field; docs/lidar.md): ``nacelle-4beam`` (Guo et al. 2023
+Table 3, NREL 5 MW rotor), ``spinner-cw`` and ``spinner-pulsed`` (the optima of Fu et al. 2023, IEA 15 MW
+rotor, 32 scan positions per revolution at 4 Hz, Eq. 12), ``nacelle-1beam`` (one pulsed beam along the shaft
+at 100 m). A user lidar is a TOML or JSON file with the same fields (``schemas/lidar.schema.json``). Frame
+and line-of-sight sign: ``turbgen.theory.lidar_geometry``.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -45,21 +35,20 @@ class LidarDescription:
     Parameters
     ----------
     name : str
-        Name of the lidar (a preset's key, or the file's stem).
+        A preset's key, or the file's stem.
     kind : {"pulsed", "cw"}
-        "pulsed" (Gaussian probe volume, FWHM ``fwhm_m``) or "cw" (Lorentzian, Rayleigh length
-        from ``wavelength_m``, ``beam_radius_m`` and the focus distance).
+        "pulsed" (Gaussian probe volume, FWHM ``fwhm_m``) or "cw" (Lorentzian, Rayleigh length from
+        ``wavelength_m``, ``beam_radius_m`` and the focus distance).
     mount : {"nacelle", "spinner"}
-        "nacelle" (beams from ``azimuth_deg``, ``elevation_deg``) or "spinner" (beams on a cone of
-        half-angle ``half_cone_deg`` at scan angles ``scan_deg``, tilted with the shaft by ``tilt_deg``).
+        "nacelle" (beams from ``azimuth_deg``, ``elevation_deg``) or "spinner" (a cone of half-angle
+        ``half_cone_deg`` at scan angles ``scan_deg``, tilted with the shaft by ``tilt_deg``).
     ranges_m : tuple of float
-        Upstream distances x of the range gates [m], each in [1, 5000] (spinner: measurement range along
-        the shaft axis; the focus distance is x / cos(half cone)).
+        Upstream distances x of the range gates [m], each in [1, 5000] (spinner: along the shaft axis; the
+        focus distance is x / cos(half cone)).
     beam_rate_hz : float
-        Beams measured per second [Hz], in BEAM_RATE_RANGE_HZ = [0.001, 1000], one beam at a time (all gates of
-        a beam at once).
+        Beams measured per second [Hz], in BEAM_RATE_RANGE_HZ, one beam at a time (all its gates at once).
     rotor_radius_m : float
-        Radius R [m] of the rotor whose effective wind speed the lidar previews, in [1, 500].
+        Radius R [m] of the previewed rotor, in [1, 500].
     azimuth_deg, elevation_deg : tuple of float, optional
         Nacelle beams: one azimuth and one elevation per beam [deg], each in [-80, 80].
     half_cone_deg : float, optional
@@ -80,8 +69,8 @@ class LidarDescription:
     Raises
     ------
     ParameterError
-        For a value outside its range, an unknown kind or mount, no range gate, beams without their
-        angles, or more than MAX_MEASUREMENTS beams x gates.
+        For a value outside its range, an unknown kind or mount, no range gate, beams without their angles,
+        or more than MAX_MEASUREMENTS beams x gates.
     """
 
     name: str
@@ -132,47 +121,25 @@ class LidarDescription:
 
     @property
     def n_beams(self) -> int:
-        """Number of beams (nacelle: azimuths; spinner: scan angles).
-
-        Returns
-        -------
-        int
-            Number of beams [-].
-        """
+        """Number of beams (nacelle: azimuths; spinner: scan angles)."""
         return len(self.azimuth_deg) if self.mount == "nacelle" else len(self.scan_deg)
 
     @property
     def scan_time_s(self) -> float:
-        """Time of one full scan (every beam once) [s].
-
-        Returns
-        -------
-        float
-            n_beams / beam_rate_hz [s].
-        """
+        """Time of one full scan, n_beams / beam_rate_hz [s]."""
         return self.n_beams / self.beam_rate_hz
 
     def directions(self) -> np.ndarray:
-        """Beam directions d (n_beams, 3) in (x upstream, y, z).
-
-        Returns
-        -------
-        numpy.ndarray
-            Unit beam directions (n_beams, 3) [-].
-        """
+        """Unit beam directions d (n_beams, 3) in (x upstream, y, z)."""
         if self.mount == "nacelle":
             return nacelle_directions(self.azimuth_deg, self.elevation_deg)
         return spinner_directions(self.half_cone_deg, self.scan_deg, self.tilt_deg)
 
     def measurement_points(self) -> Measurements:
-        """Every (beam, gate) measurement: LOS vector, focus point, probe-volume offsets and weights.
+        """Every (beam, gate) measurement, beam-major: LOS vector, focus, probe-volume offsets [m] and weights.
 
-        Returns
-        -------
-        Measurements
-            One row per beam-gate (beam-major); offsets [m] and weights [-] padded with zero weights to a
-            common length; focus [m] on the gate's plane x (nacelle) or at x / cos(half cone) along the beam
-            (spinner, Fu et al. 2023).
+        Offsets and weights are padded with zero weights to a common length; the focus lies on the gate's plane x
+        (nacelle) or at x / cos(half cone) along the beam (spinner, Fu et al. 2023).
         """
         d = self.directions()
         rows = []
@@ -201,35 +168,16 @@ class LidarDescription:
                             offsets_m=offsets, weights=weights, beam=beam, gate=gate)
 
     def schedule(self, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """Measurement times [s] from 0 to duration and the beam measured at each (one beam at a time).
+        """Measurement times k / beam_rate_hz [s] and beams k mod n_beams for k = 0 .. floor(duration * rate) - 1.
 
-        Parameters
-        ----------
-        duration_s : float
-            Duration [s] (> 0).
-
-        Returns
-        -------
-        tuple of (numpy.ndarray, numpy.ndarray)
-            Times k / beam_rate_hz [s] and beam index k mod n_beams, for k = 0 .. floor(duration * rate) - 1.
-
-        Raises
-        ------
-        ParameterError
-            If ``duration_s`` is not a finite number > 0.
+        Raises ParameterError if ``duration_s`` is not a finite number > 0.
         """
         n = int(np.floor(check_positive("duration (s)", duration_s) * self.beam_rate_hz + 1e-9))
         k = np.arange(n)
         return k / self.beam_rate_hz, k % self.n_beams
 
     def to_attrs(self) -> dict:
-        """Every field, JSON-ready (for a store's attributes or a report).
-
-        Returns
-        -------
-        dict
-            Field name -> value, tuples as lists.
-        """
+        """Every field, JSON-ready (tuples as lists), for a store's attributes or a report."""
         return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}
 
 
@@ -258,25 +206,12 @@ PRESETS: dict[str, LidarDescription] = {
         source="single pulsed beam along the axis (Fu et al. 2023 nacelle reference); IEA 15 MW rotor"),
 }
 
+
 def lidar_from_mapping(data: dict, where: str = "lidar") -> LidarDescription:
     """A LidarDescription from a mapping (a file's content), checked against schemas/lidar.schema.json.
 
-    Parameters
-    ----------
-    data : dict
-        The lidar's fields (lists become tuples); ``name`` defaults to ``where``.
-    where : str, optional
-        Where the mapping comes from, for error messages (default "lidar").
-
-    Returns
-    -------
-    LidarDescription
-        The checked lidar.
-
-    Raises
-    ------
-    ParameterError
-        If the mapping does not satisfy the schema or a value is out of range.
+    ``name`` defaults to ``where``, which also names the source in errors. Raises ParameterError if the mapping
+    does not satisfy the schema or a value is out of range.
     """
     data = dict(check_mapping(data, "lidar", where))
     data.setdefault("name", where)
@@ -284,22 +219,9 @@ def lidar_from_mapping(data: dict, where: str = "lidar") -> LidarDescription:
 
 
 def load_lidar(name_or_path) -> LidarDescription:
-    """A preset by name, or a TOML/JSON lidar file (``schemas/lidar.schema.json``).
+    """A preset by name, or a TOML/JSON lidar file (named after its stem unless it sets ``name``).
 
-    Parameters
-    ----------
-    name_or_path : str or path-like
-        A key of PRESETS, or the path of a ``.toml``/``.json`` file.
-
-    Returns
-    -------
-    LidarDescription
-        The preset or the file's lidar (named after the file's stem unless it sets ``name``).
-
-    Raises
-    ------
-    ParameterError
-        If it is neither a preset nor an existing .toml/.json file, or the file is unreadable or invalid.
+    Raises ParameterError if it is neither a preset nor an existing .toml/.json file, or the file is invalid.
     """
     key = str(name_or_path)
     if key in PRESETS:
@@ -309,26 +231,3 @@ def load_lidar(name_or_path) -> LidarDescription:
         raise ParameterError(f"lidar {key!r} is neither a preset ({', '.join(PRESETS)}) nor a .toml/.json file")
     check_input(path, LIDAR_FILE)  # a regular file: read_config reads it again (no FIFO, no device, size cap)
     return lidar_from_mapping(read_config(path, "lidar"), where=path.stem)
-
-
-def with_ranges(lidar: LidarDescription, ranges_m) -> LidarDescription:
-    """The same lidar with other range gates (used by the range search).
-
-    Parameters
-    ----------
-    lidar : LidarDescription
-        The lidar.
-    ranges_m : iterable of float
-        New range-gate distances [m], each in [1, 5000].
-
-    Returns
-    -------
-    LidarDescription
-        A copy with ``ranges_m`` replaced.
-
-    Raises
-    ------
-    ParameterError
-        If a range is out of [1, 5000] m, none is given, or beams x gates exceed MAX_MEASUREMENTS.
-    """
-    return replace(lidar, ranges_m=tuple(float(x) for x in ranges_m))

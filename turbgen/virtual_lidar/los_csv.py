@@ -1,6 +1,6 @@
 """Measured line-of-sight data as a plain CSV file, for constraining a field (``turbgen mann --constrain FILE.csv``).
 
-The file (documented in docs/constrained-fields.md)::
+The format (docs/constrained-fields.md)::
 
     # lidar = mylidar.toml        a preset name, or a .toml/.json lidar file relative to this one (required)
     # U_m_s = 16                  the mean wind speed [m/s] of the record (required; the run must use it)
@@ -9,13 +9,11 @@ The file (documented in docs/constrained-fields.md)::
     # mean_history = hub.csv      the hub-height history of total-wind data, relative to this file
     time_s,beam,gate,v_los_m_s
     0.0,0,0,15.21
-    ...
 
-One row per beam, gate and scan: ``beam`` and ``gate`` index the lidar's ``azimuth_deg`` and ``ranges_m`` (from 0),
-``time_s`` [s] is the physical time of the beam's pulse (the same for all its gates), ``v_los_m_s`` [m/s] positive
-towards the lidar; an empty value or NaN is a missing sample. Every beam has the same number of scans and every scan
-all gates. The result is the same :class:`turbgen.virtual_lidar.dataset.LidarData` as a ``turbgen lidar --out`` dataset's,
-so both are placed on the grid by the same operator.
+One row per beam, gate and scan: ``beam`` and ``gate`` index the lidar's ``azimuth_deg`` and ``ranges_m``,
+``time_s`` [s] is the physical time of the beam's pulse (the same for all its gates), ``v_los_m_s`` [m/s]
+positive towards the lidar, empty or NaN a missing sample. The result is the same
+:class:`turbgen.virtual_lidar.dataset.LidarData` as a ``turbgen lidar --out`` dataset's.
 """
 
 from __future__ import annotations
@@ -116,16 +114,6 @@ def _grid(table: np.ndarray, n_beams: int, n_gates: int, where: str) -> tuple[np
 
 def read_los_csv(path) -> LidarData:
     """The line-of-sight record of a CSV file (module docstring) as :class:`LidarData`.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The CSV file.
-
-    Returns
-    -------
-    LidarData
-        v_los (scan, beam, gate) [m/s], time_s (scan, beam) [s], the lidar's parameters, the mean wind.
 
     Raises
     ------

@@ -1,16 +1,14 @@
 """Measured line-of-sight data as a netCDF file, for constraining a field (``turbgen mann --constrain FILE.nc``).
 
-The same table as the CSV file of turbgen.virtual_lidar.los_csv, as netCDF: four variables along one dimension (any name),
-``time_s`` [s], ``beam`` and ``gate`` (indices of the lidar's ``azimuth_deg`` and ``ranges_m``, from 0) and
-``v_los_m_s`` [m/s] (NaN or the variable's fill value: a missing sample), and the CSV header's keys as global
-attributes (``lidar`` and ``U_m_s`` required; ``total_wind`` (true/false or 1/0), ``profile``, ``mean_history``)::
+The table of :mod:`turbgen.virtual_lidar.los_csv` as four 1-D variables along one dimension (``time_s``,
+``beam``, ``gate``, ``v_los_m_s``; NaN or the fill value a missing sample) and the CSV header's keys as global
+attributes (``total_wind`` may also be 1/0)::
 
     import xarray as xr
     xr.Dataset({"time_s": ("sample", t), "beam": ("sample", b), "gate": ("sample", g), "v_los_m_s": ("sample", v)},
                attrs={"lidar": "mylidar.toml", "U_m_s": 16.0}).to_netcdf("los.nc")
 
-Read by xarray with whichever netCDF engine is installed (netCDF3 files need none beyond scipy; netCDF4/HDF5 files
-need ``h5netcdf`` or ``netCDF4``: ``pip install "turbgen[netcdf]"``). The result is the same LidarData as the CSV's.
+netCDF3 files need only scipy; netCDF4/HDF5 files need ``h5netcdf`` or ``netCDF4`` (``turbgen[netcdf]``).
 """
 
 from __future__ import annotations
@@ -48,21 +46,11 @@ def _header(attrs: dict, where: str) -> dict:
 def read_los_netcdf(path) -> LidarData:
     """The line-of-sight record of a netCDF file (module docstring) as :class:`LidarData`.
 
-    Parameters
-    ----------
-    path : str or path-like
-        The netCDF file.
-
-    Returns
-    -------
-    LidarData
-        v_los (scan, beam, gate) [m/s], time_s (scan, beam) [s], the lidar's parameters, the mean wind.
-
     Raises
     ------
     ParameterError
-        If the file is not readable netCDF (or no engine for it is installed), a variable or attribute is missing,
-        unknown or malformed, or the record fails a check of turbgen.virtual_lidar.los_csv.read_los_csv.
+        If the file is not readable netCDF (or no engine for it is installed), a variable or attribute is
+        missing, unknown or malformed, or the record fails a check of ``los_csv.read_los_csv``.
     """
     import xarray as xr
 

@@ -1,11 +1,9 @@
 """Brute-force search of a spinner lidar's range and half-cone angle (Fu et al. 2023 Sect. 3.5, Eq. 31).
 
-maximise k_0.5 (the measurement coherence bandwidth) over the measurement range x and the half-cone
-angle phi subject to T_buffer = x/U - T_scan/2 - T_filter - T_pitch >= 0, where T_filter is the delay
-of the first-order low-pass filter at the -3 dB cut-off of |G_RL| (Eq. 30, f_delay = 0.025 Hz) and
-T_pitch = 0.9 s (the IEA 15 MW pitch actuator, Fu et al. 2023 Sect. 3.3). Each candidate's k_0.5
-and cut-off come from one evaluation of the Mann space-time theory on SEARCH_F_HZ (crossings
-interpolated in log f).
+Maximise k_0.5 over the measurement range x and the half-cone angle phi subject to
+T_buffer = x/U - T_scan/2 - T_filter - T_pitch >= 0, T_filter the delay of the first-order low-pass filter at
+the -3 dB cut-off of |G_RL| (Eq. 30, f_delay = 0.025 Hz), T_pitch = 0.9 s (IEA 15 MW, Sect. 3.3). Each
+candidate is one evaluation of the Mann space-time theory on SEARCH_F_HZ.
 """
 
 from __future__ import annotations
@@ -26,20 +24,8 @@ PITCH_DELAY_RANGE_S = (0.0, 10.0)  # allowed T_pitch [s]: a pitch actuator's del
 
 @dataclass(frozen=True)
 class Candidate:
-    """One evaluated lidar geometry of the search.
-
-    Parameters
-    ----------
-    range_m : float
-        Measurement range x [m].
-    half_cone_deg : float
-        Half-cone angle phi [deg].
-    k05_rad_m : float
-        Measurement coherence bandwidth k_0.5 [rad/m] (nan if gamma^2 never reaches 0.5).
-    cutoff_hz : float
-        -3 dB cut-off of |G_RL| [Hz] (nan if none).
-    buffer_time_s : float
-        T_buffer [s] (Fu et al. 2023 Eq. 31; nan without a cut-off).
+    """One evaluated lidar geometry: range x [m], half-cone phi [deg], k_0.5 [rad/m] (nan if gamma^2 never reaches
+    0.5), -3 dB cut-off of |G_RL| [Hz] and T_buffer [s] (Fu et al. 2023 Eq. 31; nan without a cut-off).
     """
     range_m: float
     half_cone_deg: float
@@ -53,33 +39,11 @@ SEARCH_F_HZ = np.geomspace(2e-3, 0.25, 28)  # one spectral evaluation per candid
 
 def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch_delay_s: float = 0.9,
              f_delay_hz: float = 0.025, f_hz=SEARCH_F_HZ) -> Candidate:
-    """k_0.5, -3 dB cut-off and buffer time of one lidar (single range gate) for the Mann model.
+    """The :class:`Candidate` of one lidar (its first range gate is x [m]) for the Mann model at U [m/s].
 
-    Parameters
-    ----------
-    lidar : LidarDescription
-        The lidar; its first range gate is the measurement range x [m].
-    params : MannParams
-        Mann model parameters.
-    U_m_s : float
-        Mean wind speed U [m/s].
-    pitch_delay_s : float, optional
-        Pitch actuator delay T_pitch [s] (default 0.9, IEA 15 MW), in PITCH_DELAY_RANGE_S.
-    f_delay_hz : float, optional
-        Frequency [Hz] of the filter delay (Fu et al. 2023 Eq. 30; default 0.025).
-    f_hz : array_like, optional
-        Frequencies [Hz] of the spectral evaluation (default SEARCH_F_HZ).
-
-    Returns
-    -------
-    Candidate
-        The lidar's range, half-cone angle, k_0.5, cut-off and buffer time.
-
-    Raises
-    ------
-    ParameterError
-        For non-positive frequencies, a beam that does not look upstream or ``pitch_delay_s`` outside
-        PITCH_DELAY_RANGE_S.
+    ``pitch_delay_s``: T_pitch [s] in PITCH_DELAY_RANGE_S; ``f_delay_hz``: where the filter delay is taken
+    (Fu et al. 2023 Eq. 30); ``f_hz``: the frequencies of the evaluation. Raises ParameterError for
+    non-positive frequencies, a beam that does not look upstream or a pitch delay out of range.
     """
     pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)
     S = mann_preview_spectra(f_hz, lidar.measurement_points(), params, U_m_s, lidar.rotor_radius_m)
@@ -92,35 +56,11 @@ def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch
 
 def optimize_spinner(lidar: LidarDescription, params: MannParams, U_m_s: float, ranges_m, half_cones_deg,
                      *, pitch_delay_s: float = 0.9, progress=None) -> tuple[list[Candidate], Candidate | None]:
-    """All candidates of the grid and the best one with T_buffer >= 0 (None if no candidate has it).
+    """Every candidate of the ``ranges_m`` [m] x ``half_cones_deg`` [deg] grid (range-major) and the feasible one
+    (T_buffer >= 0) with the largest k_0.5 (None if none is feasible).
 
-    Parameters
-    ----------
-    lidar : LidarDescription
-        A spinner lidar; range and half-cone angle are replaced per candidate.
-    params : MannParams
-        Mann model parameters.
-    U_m_s : float
-        Mean wind speed U [m/s].
-    ranges_m : iterable of float
-        Measurement ranges x to try [m].
-    half_cones_deg : iterable of float
-        Half-cone angles phi to try [deg].
-    pitch_delay_s : float, optional
-        Pitch actuator delay T_pitch [s] (default 0.9), in PITCH_DELAY_RANGE_S.
-    progress : callable, optional
-        Called with 1 after each candidate.
-
-    Returns
-    -------
-    tuple of (list of Candidate, Candidate or None)
-        Every candidate (range-major) and the feasible one with the largest k_0.5.
-
-    Raises
-    ------
-    ParameterError
-        If the lidar is not a spinner lidar, the grid is empty or has more than MAX_CANDIDATES
-        candidates, a candidate's geometry is invalid or ``pitch_delay_s`` is outside PITCH_DELAY_RANGE_S.
+    ``progress`` is called with 1 after each candidate. Raises ParameterError if the lidar is not a spinner,
+    the grid is empty or exceeds MAX_CANDIDATES, a geometry is invalid or the pitch delay is out of range.
     """
     pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)  # before any candidate
     if lidar.mount != "spinner":

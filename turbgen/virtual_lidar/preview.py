@@ -1,9 +1,8 @@
 """Preview quality of a lidar for a turbulence model: the theory behind `turbgen theory lidar`.
 
-One call evaluates the lidar-rotor spectra of ``turbgen.theory.lidar_preview`` for a stability preset
-(Guo et al. 2023 Table 1/2) at a mean wind speed and summarises what a lidar-assisted-control
-design needs: gamma^2_RL, |G_RL|, the -3 dB cut-off of |G_RL| (the first-order low-pass filter to
-use), the measurement coherence bandwidth k_0.5 and d_eddy,min, the filter delay and the buffer time.
+Evaluates the lidar-rotor spectra of ``turbgen.theory.lidar_preview`` for a stability preset (Guo et al.
+2023 Table 1/2) at a mean wind speed and summarises what a lidar-assisted-control design needs: gamma^2_RL,
+|G_RL|, its -3 dB cut-off, the coherence bandwidth k_0.5 and d_eddy,min, the filter delay and buffer time.
 """
 
 from __future__ import annotations
@@ -29,14 +28,12 @@ DEFAULT_F_HZ = np.geomspace(0.005, 0.3, 60)
 def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset: str = "neutral",
                     f_hz=DEFAULT_F_HZ, radius_m: float | None = None, frozen: bool = False,
                     **options) -> PreviewSpectra:
-    """S_RR, S_LL, S_RL of ``lidar`` for the preset's model parameters at U (or explicit ones).
-
-    The model's ``preview`` (turbgen.spec.models): :func:`mann_preview` or :func:`kaimal_preview`.
+    """S_RR, S_LL, S_RL of ``lidar`` at ``f_hz`` for the preset's model parameters at U (or explicit ones).
 
     Parameters
     ----------
     model : str
-        Turbulence model, one of :data:`MODELS`.
+        Turbulence model, one of :data:`MODELS`; its ``preview`` (turbgen.spec.models) is called.
     lidar : LidarDescription
         The lidar.
     U_m_s : float
@@ -50,19 +47,13 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
     frozen : bool, optional
         Frozen turbulence (Mann: no eddy lifetime; Kaimal: a_x = b_x = 0).
     **options
-        The model's own keywords (:func:`mann_preview`: ``mann``, ``box``; :func:`kaimal_preview`: ``kaimal``,
-        ``a_x``, ``b_x``, ``long_components``, ``vw_coherence``).
-
-    Returns
-    -------
-    PreviewSpectra
-        S_RR, S_LL, S_RL at ``f_hz``.
+        The model's own keywords (:func:`mann_preview`, :func:`kaimal_preview`).
 
     Raises
     ------
     ParameterError
-        For an unknown model or preset, a wind speed out of range, non-positive frequencies, or a beam
-        that does not look upstream.
+        For an unknown model or preset, a wind speed out of range, non-positive frequencies, or a beam that
+        does not look upstream.
     """
     check_choice("model", model, MODELS)
     R = lidar.rotor_radius_m if radius_m is None else radius_m
@@ -72,22 +63,10 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
 
 def mann_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, radius_m: float, frozen: bool,
                  mann: MannParams | None = None, box: BoxLattice | None = None) -> PreviewSpectra:
-    """The Mann model's preview spectra (turbgen.theory.lidar_preview.mann_preview_spectra), its ``preview``.
+    """The Mann model's ``preview``: ``lidar_preview.mann_preview_spectra`` (arguments as :func:`preview_spectra`).
 
-    Parameters
-    ----------
-    lidar, U_m_s, preset, f_hz, radius_m, frozen
-        As :func:`preview_spectra` (``radius_m`` given).
-    mann : MannParams, optional
-        Explicit Mann parameters instead of the preset's.
-    box : BoxLattice, optional
-        Sum over this periodic box's (k2, k3) lattice (what a synthesised box holds) instead of the continuous
-        integral (default).
-
-    Returns
-    -------
-    PreviewSpectra
-        S_RR, S_LL, S_RL at ``f_hz``.
+    ``mann`` replaces the preset's parameters; with ``box`` the sum runs over that periodic box's (k2, k3)
+    lattice (what a synthesised box holds) instead of the continuous integral.
     """
     params = mann if mann is not None else mann_params_for(preset, U_m_s)
     if frozen:
@@ -98,29 +77,11 @@ def mann_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, ra
 def kaimal_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, radius_m: float, frozen: bool,
                    kaimal: KaimalParams | None = None, a_x: float | None = None, b_x: float | None = None,
                    long_components: str = "uvw", vw_coherence: bool = True) -> PreviewSpectra:
-    """The Kaimal model's preview spectra (turbgen.theory.lidar_preview.kaimal_preview_spectra), its ``preview``.
+    """The Kaimal model's ``preview``: ``lidar_preview.kaimal_preview_spectra`` (arguments as :func:`preview_spectra`).
 
-    Defaults follow Guo et al. (2023) Eq. 31/33 (Chen et al. 2022): the yz and the longitudinal coherences act on
-    all three components (``vw_coherence``, ``long_components``); with coherence on u only (the IEC / turbgen kaimal
-    store default) the cut-offs come out 6-13 % higher.
-
-    Parameters
-    ----------
-    lidar, U_m_s, preset, f_hz, radius_m, frozen
-        As :func:`preview_spectra` (``radius_m`` given).
-    kaimal : KaimalParams, optional
-        Explicit Kaimal parameters instead of the preset's.
-    a_x, b_x : float, optional
-        Explicit longitudinal-coherence decay parameters [-] (exponential model) instead of the preset's.
-    long_components : str, optional
-        Components the longitudinal coherence acts on (default "uvw").
-    vw_coherence : bool, optional
-        Apply the yz coherence to v and w as well (default True).
-
-    Returns
-    -------
-    PreviewSpectra
-        S_RR, S_LL, S_RL at ``f_hz``.
+    Defaults follow Guo et al. (2023) Eq. 31/33 (Chen et al. 2022): the yz and longitudinal coherences act on all
+    three components (``vw_coherence``, ``long_components``). ``kaimal`` and ``a_x``, ``b_x`` [-] (exponential
+    longitudinal decay) replace the preset's values.
     """
     settings = kaimal_settings_for(preset, U_m_s)
     kp = kaimal if kaimal is not None else settings.kaimal
@@ -138,27 +99,11 @@ def kaimal_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, 
 
 def summarise(spectra: PreviewSpectra, lidar: LidarDescription, U_m_s: float, *,
               pitch_delay_s: float = 0.0, f_delay_hz: float = 0.025) -> dict:
-    """The design numbers of a lidar: JSON-ready (keys f, coh2_RL, G_RL, k05_rad_m, cutoff_hz, ...).
+    """The design numbers of a lidar, JSON-ready (non-finite values as None).
 
-    Parameters
-    ----------
-    spectra : PreviewSpectra
-        Lidar-rotor spectra (see :func:`preview_spectra`).
-    lidar : LidarDescription
-        The lidar (scan time and shortest range).
-    U_m_s : float
-        Mean wind speed U [m/s].
-    pitch_delay_s : float, optional
-        Pitch actuator delay T_pitch [s] in the buffer time (default 0).
-    f_delay_hz : float, optional
-        Frequency [Hz] at which the low-pass filter's delay is taken (default 0.025).
-
-    Returns
-    -------
-    dict
-        ``f`` [Hz], ``coh2_RL`` [-], ``G_RL`` [-], ``k05_rad_m`` [rad/m], ``cutoff_hz`` [Hz],
-        ``d_eddy_min_m`` [m], ``scan_time_s`` [s] (non-finite values as None), plus ``filter_delay_s`` [s]
-        and ``buffer_time_s`` [s] when the cut-off exists.
+    ``f`` [Hz], ``coh2_RL``, ``G_RL`` [-], ``k05_rad_m`` [rad/m], ``cutoff_hz`` [Hz], ``d_eddy_min_m`` [m],
+    ``scan_time_s`` [s], and where the cut-off exists ``filter_delay_s`` (taken at ``f_delay_hz``) and
+    ``buffer_time_s`` [s] (with the pitch actuator delay ``pitch_delay_s`` [s]).
     """
     f = spectra.f_hz
     cutoff = cutoff_frequency_hz(f, spectra.G_RL)

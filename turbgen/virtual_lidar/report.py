@@ -1,12 +1,9 @@
 """`turbgen lidar STORE`: the virtual lidar's result against the preview theory of the store's own model.
 
-Theory: ``turbgen.virtual_lidar.preview.preview_spectra`` with the store's model parameters (read from its
-attributes as ``turbgen validate`` does), with the same discrete probe-volume weights as the sampling;
-for a Mann store summed over the (k2, k3) lattice of its periodic synthesis box (what the box holds:
-at the lowest bin of a 32 x 32 store gamma^2_RL is ~0.005 below the continuous integral of
-`turbgen theory lidar`); then the expected Welch estimate at each bin, the record's lines weighted by
-the Hann window with the segment mean removed (turbgen.virtual_lidar.welch_expectation; +0.02..0.04 in the
-second and third bins of 64 s segments). Verdict: ``turbgen.virtual_lidar.compare.coherence_metric``.
+Theory: ``preview.preview_spectra`` with the store's model parameters and the sampling's discrete
+probe-volume weights, for a Mann store summed over the (k2, k3) lattice of its periodic synthesis box
+(what the box holds), then the expected Welch estimate at each bin (``welch_expectation``). Verdict:
+``compare.coherence_metric``.
 """
 
 from __future__ import annotations
@@ -68,13 +65,7 @@ def kaimal_store_preview(fs, description, f_hz, radius_m: float):
 
 
 def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int | None = None):
-    """The expected Welch S_RR, S_LL, S_RL of ``description`` on the store at the bins f_hz > 0.
-
-    The store's model and parameters are read from its attributes. A Mann store's spectra are summed
-    over the (k2, k3) lattice of its periodic synthesis box (turbgen.theory.lidar_lattice: what the box
-    holds, which at the lowest bins differs from the continuous integral of `turbgen theory lidar`);
-    either model's spectra are then weighted over the record's lines as the Welch estimate weights them
-    (turbgen.virtual_lidar.welch_expectation).
+    """The expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] of ``description`` on store ``fs`` at the bins ``f_hz`` > 0.
 
     Parameters
     ----------
@@ -83,24 +74,23 @@ def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int |
     description : LidarDescription
         The lidar.
     f_hz : array_like
-        Welch bin frequencies [Hz] (> 0).
+        Welch bin frequencies [Hz].
     radius_m : float
         Rotor radius R [m].
     setup : WelchSetup
         The Welch estimate's segment length and time step [s].
     n_samples : int, optional
-        Samples of the lidar signal; if given, the result's ``n_eff`` holds the equivalent independent
-        segments of its gamma^2_RL per bin (turbgen.virtual_lidar.welch_expectation.effective_segments).
+        Samples of the lidar signal; given, the result's ``n_eff`` holds the equivalent independent segments
+        of its gamma^2_RL per bin (``welch_expectation.effective_segments``).
 
     Returns
     -------
     ExpectedWelch
-        Expected Welch S_RR, S_LL, S_RL at ``f_hz`` [m^2 s^-2 Hz^-1] (and ``n_eff`` [-] if asked for).
 
     Raises
     ------
     ParameterError
-        If a Kaimal store's longitudinal coherence is not the exponential model.
+        If the store's model has no lidar theory, or a Kaimal store's options are outside it.
     """
     from turbgen.virtual_lidar.welch_expectation import expected_welch, theory_nodes
 
@@ -111,22 +101,20 @@ def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int |
 
 @dataclass
 class LidarReport:
-    """The virtual lidar's result on a store against the theory (see :func:`lidar_report`).
+    """The virtual lidar's result on a store against the theory (:func:`lidar_report`).
 
     Parameters
     ----------
     store : str
-        Path of the store.
+        The store's label (its path).
     lidar : LidarDescription or object
         The lidar.
     run : LidarRun
         The simulated run.
     f_hz : numpy.ndarray
         Welch bins 1 .. up to F_THEORY_MAX_HZ where the theory is evaluated [Hz].
-    coh2_theory : numpy.ndarray
-        Theoretical gamma^2_RL [-] at ``f_hz`` (of the expected Welch spectra, see :func:`store_theory`).
-    G_theory : numpy.ndarray
-        Theoretical |G_RL| [-] at ``f_hz`` (likewise).
+    coh2_theory, G_theory : numpy.ndarray
+        Theoretical gamma^2_RL and |G_RL| [-] at ``f_hz`` (of the expected Welch spectra).
     theory_numbers : dict
         k05_rad_m [rad/m], d_eddy_min_m [m], cutoff_hz [Hz] of the theory.
     metric : MetricResult
@@ -146,24 +134,12 @@ class LidarReport:
 
     @property
     def passed(self) -> bool:
-        """Whether the coherence metric passed.
-
-        Returns
-        -------
-        bool
-            True if every tested bin has |z| <= z_crit.
-        """
+        """Whether the coherence metric passed (every tested bin has |z| <= z_crit)."""
         return self.metric.passed
 
     def to_dict(self) -> dict:
-        """The report, JSON-ready.
-
-        Returns
-        -------
-        dict
-            Store, lidar parameters, rotor radius [m], mean-wind settings, scans, Welch setup, TIs [-],
-            simulated and theoretical numbers, the curves (bins 1 .. Nyquist-1 simulated, ``f_theory`` [Hz])
-            and the verdict.
+        """The report, JSON-ready: store, lidar, rotor radius [m], mean wind, scans, Welch setup, TIs [-], simulated
+        and theoretical numbers, the curves (simulated bins 1 .. Nyquist-1, ``f_theory`` [Hz]) and the verdict.
         """
         r, w = self.run, self.run.welch
         sl = slice(1, -1)
@@ -193,13 +169,7 @@ class LidarReport:
         }
 
     def text(self) -> str:
-        """A short human-readable summary: k_0.5 and cut-off simulated vs theory, TIs and the verdict.
-
-        Returns
-        -------
-        str
-            Several lines of text.
-        """
+        """A short summary: k_0.5 and cut-off simulated vs theory, the TIs and the verdict."""
         d = self.to_dict()
 
         def num(v, fmt):
@@ -220,25 +190,13 @@ class LidarReport:
         return "\n".join(lines)
 
     def write(self, out, overwrite: bool = False) -> Path:
-        """Write the lidar dataset (``turbgen.virtual_lidar.dataset``) with the report's numbers as attributes.
-
-        Parameters
-        ----------
-        out : str or path-like
-            Output zarr directory.
-        overwrite : bool, optional
-            Replace an existing lidar dataset (default False).
-
-        Returns
-        -------
-        pathlib.Path
-            The absolute path of the dataset.
+        """Write the lidar dataset (:mod:`turbgen.virtual_lidar.dataset`) ``out``, the report's numbers as attributes.
 
         Raises
         ------
         StoreError
-            If ``out`` exists without ``overwrite``, is not a zarr dataset, or its directory is missing or
-            not writable.
+            If ``out`` exists without ``overwrite``, is not a lidar dataset, or its directory is missing or not
+            writable.
         """
         from turbgen.virtual_lidar.dataset import write_dataset
 
@@ -261,14 +219,9 @@ class LidarReport:
         return write_dataset(out, r.samples, r.t_arrival_s, r.u_LL, r.u_RR, attrs, overwrite=overwrite)
 
     def data(self):
-        """The measurements as a constraint (``turbgen.mann(constrain=[report])``), in memory: the
-        :class:`turbgen.virtual_lidar.dataset.LidarData` that :meth:`write` and reading the dataset back give (v_los rounded
-        to float32 as stored, the attributes through JSON as stored).
-
-        Returns
-        -------
-        turbgen.virtual_lidar.dataset.LidarData
-            v_los [m/s], times [s], the lidar, the mean wind added, U [m/s]; ``source`` the field's label.
+        """The measurements as a constraint (``turbgen.mann(constrain=[report])``), in memory: the same
+        :class:`turbgen.virtual_lidar.dataset.LidarData` as :meth:`write` and reading back give (v_los rounded to
+        float32, attributes through JSON, as stored).
         """
         import json
 
@@ -282,19 +235,8 @@ class LidarReport:
                          stored["mean_wind"])  # fmt: skip
 
     def plots(self, directory) -> list[Path]:
-        """gamma^2_RL and |G_RL|: simulated (95 % band of the estimator) against theory, MCB and cut-off marked.
-
-        The style of Guo et al. 2023 Fig. 4 and Fu et al. 2023 Fig. 6.
-
-        Parameters
-        ----------
-        directory : str or path-like
-            Directory for the figure (created if missing).
-
-        Returns
-        -------
-        list of pathlib.Path
-            The written ``lidar_coherence.png``.
+        """Write ``lidar_coherence.png`` in ``directory``: gamma^2_RL and |G_RL| simulated (95 % band of the estimator)
+        against theory, k_0.5 and cut-off marked (the style of Guo et al. 2023 Fig. 4 and Fu et al. 2023 Fig. 6).
         """
         import matplotlib
 
@@ -341,8 +283,6 @@ def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, sh
                  nperseg=None, mean_wind=None) -> LidarReport:
     """Run the virtual lidar on the open store ``fs`` and compare with theory.
 
-    Rotor radius: the option, else the lidar's turbine if it fits the grid, else the validator's default.
-
     Parameters
     ----------
     fs : FieldStore
@@ -350,26 +290,21 @@ def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, sh
     lidar : LidarDescription or str, optional
         A lidar, a preset name or a lidar file; default DEFAULT_LIDAR.
     rotor_radius_m : float, optional
-        Rotor radius R [m] (0 < R <= half the smaller grid extent).
+        Rotor radius R [m]; default the lidar's turbine if it fits the grid, else the validator's default.
     add_mean_wind : bool, optional
         Add the power-law mean wind to u before sampling (default False).
     shear_exponent : float, optional
-        Power-law exponent alpha [-] of the mean wind (default 0.2).
+        Its exponent alpha [-] (default 0.2).
     nperseg : int, optional
-        Welch segment length [samples]; default :func:`turbgen.virtual_lidar.run.default_nperseg`.
+        Welch segment length [samples]; default ``run.default_nperseg``.
     mean_wind : MeanWind, optional
         With ``add_mean_wind``: this mean wind instead of the power law.
-
-    Returns
-    -------
-    LidarReport
-        Simulated run, theory at the Welch bins up to F_THEORY_MAX_HZ and the verdict.
 
     Raises
     ------
     ParameterError
-        For an unknown lidar, a lidar that does not fit the store, a signal too short, or a store whose
-        model the lidar theory does not support.
+        For an unknown lidar, a lidar that does not fit the store, a signal too short, or a store whose model
+        the lidar theory does not support.
     """
     from turbgen.virtual_lidar.description import LidarDescription, load_lidar
 

@@ -1,8 +1,7 @@
 """One virtual-lidar run on a store: sample -> u_LL, u_RR, TI -> Welch gamma^2_RL, |G_RL| -> dataset.
 
-Shared by ``turbgen lidar`` and ``turbgen sweep --lidar``. The lidar is described by an object
-with ``measurement_points()`` (per beam-gate: beam, gate, n, focus, probe offsets, weights) and
-``schedule(duration_s)`` -> (times_s, beam index), see ``turbgen.virtual_lidar.description``.
+Shared by ``turbgen lidar`` and ``turbgen sweep --lidar``. A lidar is any object with
+``measurement_points()`` and ``schedule(duration_s)`` (``turbgen.virtual_lidar.description``).
 """
 
 from __future__ import annotations
@@ -18,20 +17,8 @@ from turbgen.virtual_lidar.sampling import Measurement
 
 
 def measurements_of(description) -> list[Measurement]:
-    """The description's beam-gates as :class:`Measurement` rows.
-
-    Rows of ``turbgen.theory.lidar_geometry.Measurements``, each taken from the plane of its gate's
-    range ``ranges_m[gate]`` (if the description has ``ranges_m``).
-
-    Parameters
-    ----------
-    description : LidarDescription or object
-        Anything with ``measurement_points()`` (and optionally ``ranges_m`` [m]).
-
-    Returns
-    -------
-    list of Measurement
-        One per beam-gate.
+    """The description's beam-gates as :class:`Measurement` rows, each on the plane of its gate's range
+    ``ranges_m[gate]`` when the description has ``ranges_m``.
     """
     m = description.measurement_points()
     ranges = getattr(description, "ranges_m", None)
@@ -44,18 +31,7 @@ def measurements_of(description) -> list[Measurement]:
 
 
 def lidar_attrs(description) -> dict:
-    """Every parameter of the description (its ``to_attrs``, else its dataclass fields, else its repr).
-
-    Parameters
-    ----------
-    description : LidarDescription or object
-        The lidar description.
-
-    Returns
-    -------
-    dict
-        Parameter name -> value.
-    """
+    """Every parameter of the description: its ``to_attrs()``, else its dataclass fields, else its repr."""
     if hasattr(description, "to_attrs"):
         return dict(description.to_attrs())
     if dataclasses.is_dataclass(description):
@@ -65,7 +41,7 @@ def lidar_attrs(description) -> dict:
 
 @dataclass
 class LidarRun:
-    """The result of one virtual-lidar run (see :func:`run_lidar`).
+    """The result of one virtual-lidar run (:func:`run_lidar`).
 
     Parameters
     ----------
@@ -77,10 +53,8 @@ class LidarRun:
         Lidar estimate of the rotor-effective wind speed [m/s].
     u_RR : numpy.ndarray
         Rotor-disc average u at x = 0 [m/s].
-    ti_lidar : float
-        Uncorrected lidar turbulence intensity [-].
-    ti_rotor : float
-        Rotor-averaged turbulence intensity [-].
+    ti_lidar, ti_rotor : float
+        Uncorrected lidar and rotor-averaged turbulence intensities [-].
     welch : dict
         Output of :func:`turbgen.virtual_lidar.signals.welch_rl`.
     simulated : dict
@@ -100,22 +74,8 @@ class LidarRun:
 
 
 def default_nperseg(n: int) -> int:
-    """Largest power of two <= n / 8 (about 15 half-overlapping Welch segments), at least 16.
-
-    Parameters
-    ----------
-    n : int
-        Signal length [samples] (scan steps).
-
-    Returns
-    -------
-    int
-        Welch segment length [samples].
-
-    Raises
-    ------
-    ParameterError
-        If ``n`` < 64.
+    """Welch segment length [samples]: the largest power of two <= n / 8 (about 15 half-overlapping segments),
+    at least 16; ParameterError if ``n`` < 64.
     """
     if n < 64:
         raise ParameterError(f"lidar signal of {n} samples is too short (needs >= 64 scan steps)")
@@ -123,23 +83,8 @@ def default_nperseg(n: int) -> int:
 
 
 def check_lidar_fits(description, grid) -> None:
-    """Refuse a lidar whose gates are not planes of ``grid`` or whose probe volumes leave it (before any field exists).
-
-    Parameters
-    ----------
-    description : LidarDescription or object
-        The lidar (``measurement_points()``).
-    grid : Grid
-        The grid of the stores it will measure.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    ParameterError
-        As :func:`turbgen.virtual_lidar.sampling.check_measurements` (it reads only the store's grid).
+    """Refuse a lidar whose gates are not planes of ``grid`` or whose probe volumes leave it, before any field
+    exists (ParameterError, as ``sampling.check_measurements``).
     """
     from types import SimpleNamespace
 
@@ -158,25 +103,16 @@ def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shea
         The lidar (``measurement_points()`` and ``schedule(duration_s)``).
     rotor_radius_m : float, optional
         Rotor radius R [m] (0 < R <= half the smaller grid extent); None: the validator's default.
-    add_mean_wind : bool, optional
-        Add the power-law mean wind to u before sampling (default False).
-    shear_exponent : float, optional
-        Power-law exponent alpha [-] of the mean wind (default 0.2).
+    add_mean_wind, shear_exponent, mean_wind : optional
+        The mean wind added before sampling, as in :func:`turbgen.virtual_lidar.sampling.sample`.
     nperseg : int, optional
         Welch segment length [samples]; None: :func:`default_nperseg`.
-    mean_wind : MeanWind, optional
-        With ``add_mean_wind``: this mean wind instead of the power law (see :func:`turbgen.virtual_lidar.sampling.sample`).
-
-    Returns
-    -------
-    LidarRun
-        Samples, u_LL, u_RR, TIs, Welch spectra and the simulated k_0.5 and cut-off.
 
     Raises
     ------
     ParameterError
-        For a rotor radius that does not fit the grid, a lidar that does not fit the store (see
-        :func:`turbgen.virtual_lidar.sampling.sample`), a store without a plane x = 0, or a signal too short.
+        For a rotor radius that does not fit the grid, a lidar that does not fit the store, a store without a
+        plane x = 0, or a signal too short.
     """
     # the estimators here only: placing lidar data (constrained runs) needs this module but not scipy.signal
     from turbgen.virtual_lidar import compare, signals

@@ -1,19 +1,14 @@
 """Virtual lidar: line-of-sight speeds sampled from a field store along the beams.
 
-Frame (the store's, docs/store.md, "Convected frame"): x upstream distance from the rotor [m], y to the
-left looking downwind, z up from the hub; u downwind. A measurement (one beam, one range gate)
-returns v_los = sum_k w_k n . (u, v, w)(p_k), with n the projection vector (v_los = +u for a beam
-looking straight upstream) and p_k = focus + s_k d the probe-volume points at offsets s_k [m] along
-the geometric beam direction d (default: focus / |focus|, a lidar at the hub).
+Frame (docs/store.md, "Convected frame"): x upstream from the rotor [m], y left looking downwind, z up from
+the hub; u downwind. A measurement (one beam, one range gate) returns v_los = sum_k w_k n . (u, v, w)(p_k),
+n the projection vector (v_los = +u for a beam looking straight upstream), p_k = focus + s_k d the
+probe-volume points at offsets s_k [m] along the beam direction d (default focus / |focus|).
 
-Where a point lies on the 4D field (Guo et al. 2023, Sect. 5.1.2): every point of gate g's probe
-volume is taken from gate g's own plane x_g, with Taylor's frozen hypothesis within the probe
-volume: the field at upstream distance x' and physical time T is the field at x_g and physical time
-T + (x' - x_g)/U. In the convected frame the field at plane x_g and physical time T' is stored at
-t = T' + x_g/U, so the point is the stored sample t = T + x'/U of plane x_g (linear in t, bilinear
-in y, z). Gates must coincide with planes of the store; a beam may not leave the yz field.
-
-Memory: each plane is read once, only the time span and the yz box its points need.
+Every point of gate g's probe volume is taken from gate g's own plane x_g with Taylor's hypothesis within
+the probe volume (Guo et al. 2023, Sect. 5.1.2): the point x' at physical time T is the stored sample
+t = T + x'/U of plane x_g (linear in t, bilinear in y, z). Gates must be planes of the store; a beam may
+not leave the yz field. Each plane is read once, only the span its points need.
 """
 
 from __future__ import annotations
@@ -29,11 +24,10 @@ PLANE_TOL_M = 1e-6
 
 
 def weighted_sum(values: np.ndarray, weights) -> np.ndarray:
-    """sum_k values[..., k] weights[k]: elementwise products, then numpy's pairwise sum along the last axis.
+    """sum_k values[..., k] weights[k] as elementwise products and numpy's pairwise sum along the last axis.
 
-    The same bits on every CPU and for a row of any batch: a BLAS dot or matrix-vector product (``values @ weights``)
-    sums in the order its kernel picks (OpenBLAS's AVX-512, AVX2 and SSE kernels differ in the last bits), and the
-    lidar data a field is constrained on must be the same numbers whichever file (dataset, CSV) carried them.
+    The same bits on every CPU and for any batch row (a BLAS dot sums in the order its kernel picks): the lidar
+    data a field is constrained on must be the same numbers whichever file carried them.
     """
     return np.add.reduce(np.asarray(values, float) * np.asarray(weights, float), axis=-1)
 
@@ -47,7 +41,7 @@ class Measurement:
     beam, gate : int
         Beam and range-gate indices.
     n : tuple of float
-        Projection vector (3,) on (u, v, w) [-] (unit length).
+        Unit projection vector (3,) on (u, v, w) [-].
     focus_m : tuple of float
         (x, y, z) of the gate centre [m].
     offsets_m : tuple of float, optional
@@ -70,13 +64,7 @@ class Measurement:
     plane_x_m: float | None = None  # the gate's plane; default the focus x (a tilted beam's focus may lie off it)
 
     def points_m(self) -> np.ndarray:
-        """Probe-volume points (k, 3) [m].
-
-        Returns
-        -------
-        numpy.ndarray
-            Points focus + offset * direction, (k, 3) in (x upstream, y, z) [m], one row per offset.
-        """
+        """Probe-volume points focus + offset * direction, (k, 3) in (x upstream, y, z) [m]."""
         f = np.asarray(self.focus_m, float)
         d = np.asarray(self.direction, float) if self.direction is not None else f / np.linalg.norm(f)
         return f[None, :] + np.asarray(self.offsets_m, float)[:, None] * d[None, :]
@@ -84,7 +72,7 @@ class Measurement:
 
 @dataclass(frozen=True)
 class LidarSamples:
-    """v_los (n_scan, n_beam, n_gate) [m/s] at physical times time_s (n_scan, n_beam) [s].
+    """The sampled line-of-sight speeds.
 
     Parameters
     ----------
@@ -97,14 +85,13 @@ class LidarSamples:
     n1 : numpy.ndarray
         Longitudinal projection n_1 of each measurement (n_beam, n_gate) [-].
     mean_wind_added : bool
-        Whether the power-law mean wind was added to u.
+        Whether a mean wind was added to u.
     shear_exponent : float
-        Power-law exponent alpha [-] used when the mean wind was added.
+        Power-law exponent alpha [-] of the added mean wind.
     mean_wind : str, optional
-        The mean wind added, described (:meth:`turbgen.spec.mean_wind.MeanWind.describe`); "" when none.
+        The added mean wind described (``MeanWind.describe``); "" when none.
     mean_wind_record : dict, optional
-        That mean wind's :meth:`turbgen.spec.mean_wind.MeanWind.to_attrs` (None: the power law with
-        ``shear_exponent``, or none added).
+        Its ``MeanWind.to_attrs`` (None: the power law with ``shear_exponent``, or none added).
     """
 
     v_los: np.ndarray
@@ -131,26 +118,13 @@ def _plane_index(grid, x: float, beam: int, gate: int) -> int:
 
 
 def check_measurements(fs, measurements) -> list[int]:
-    """Validate geometry and weights against the store; the plane index of each measurement.
-
-    Parameters
-    ----------
-    fs : FieldStore
-        The open store.
-    measurements : sequence of Measurement
-        The lidar's beam-gates.
-
-    Returns
-    -------
-    list of int
-        Index of the store plane of each measurement's gate (its ``plane_x_m``, default the focus x).
+    """Check the measurements' geometry and weights against store ``fs``; return each one's plane index.
 
     Raises
     ------
     ParameterError
-        If weights are negative, not one per offset or do not sum to 1; if n is not a unit vector; if a
-        gate is not a plane of the store (within 1e-6 relative); if a probe point leaves the yz field or
-        reaches behind the rotor (x < 0).
+        For weights negative, not one per offset or not summing to 1; n not a unit vector; a gate that is not
+        a plane of the store (within 1e-6 relative); a probe point outside the yz field or behind the rotor.
     """
     g = fs.grid
     y, z = g.y(), g.z()
@@ -196,42 +170,39 @@ def _interp_axis(coord0: float, step: float, n: int, values: np.ndarray):
 
 def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = False,
            shear_exponent: float = 0.2, mean_wind=None) -> LidarSamples:
-    """Sample ``fs`` with ``measurements`` at the scan schedule (times_s [s], beam index per entry).
+    """Sample ``fs`` with ``measurements`` at the scan schedule ``times_s`` [s] (physical), ``beam_of_sample`` the
+    beam of each entry.
 
-    The schedule must be one beam at a time, cycling over all beams in a fixed order (a full scan =
-    n_beam consecutive entries); the entries whose stored times fall outside the store are dropped
-    at the end (whole scans only). add_mean_wind: add U (1 + z/h_hub)^alpha to u (False: fluctuations).
+    The schedule measures one beam at a time, cycling over all beams in a fixed order; entries whose stored
+    times fall outside the store are dropped at the end (whole scans only).
 
     Parameters
     ----------
     fs : FieldStore
-        The open store (its U [m/s], grid and hub height [m] are used).
+        The open store (its U [m/s], grid and hub height [m]).
     measurements : sequence of Measurement
         Every beam must have every gate.
-    times_s : array_like
-        Physical measurement times [s], one per schedule entry.
-    beam_of_sample : array_like
-        Beam index measured at each entry.
+    times_s, beam_of_sample : array_like
+        Measurement times [s] and the beam index of each schedule entry.
     add_mean_wind : bool, optional
         Add the power-law mean wind U (h / h_hub)^alpha to u (default False: fluctuations only).
     shear_exponent : float, optional
         Power-law exponent alpha [-] for ``add_mean_wind`` (default 0.2).
     mean_wind : MeanWind, optional
-        With ``add_mean_wind``: this mean wind (profile, veer, hub history, IEC transient) instead of the
-        power law, applied as the exports apply it (:meth:`turbgen.spec.mean_wind.MeanWind.full_uv`) at each
-        probe point and stored time (the time its slice reaches the rotor).
+        With ``add_mean_wind``: this mean wind instead of the power law, applied as the exports apply it
+        (``MeanWind.full_uv``) at each probe point and stored time.
 
     Returns
     -------
     LidarSamples
-        v_los of every whole scan that fits in the store, with times, gate planes and n_1.
+        Every whole scan that fits in the store.
 
     Raises
     ------
     ParameterError
-        For invalid measurements (see :func:`check_measurements`), a beam missing a gate, a schedule that
-        is not one beam at a time in a repeating order, a store too short for two scans, a shear exponent
-        outside [-1, 1] or not finite, or a probe point below the ground when adding the mean wind.
+        For bad measurements (:func:`check_measurements`), a beam missing a gate, a schedule that is not one
+        beam at a time in a repeating order, a store too short for two scans, a shear exponent outside
+        [-1, 1], or a probe point below the ground when adding the mean wind.
     """
     shear_exponent = check_range("shear exponent", shear_exponent, -1.0, 1.0)  # the exports' range
     g, U = fs.grid, fs.U_m_s
@@ -347,13 +318,15 @@ def _with_mean_wind(mean_wind, fs, box, corners, n, t, p) -> np.ndarray:
     vals = {c: sum(w * box[c].ravel()[idx] for idx, w in corners) for c in "uvw"}
     u, v = mean_wind.full_uv(vals["u"], vals["v"], t, p[None, :, 1], h[None, :], fs.U_m_s, fs.hub_height_m)
     return n[0] * u + n[1] * v + n[2] * vals["w"]
+
+
 @dataclass(frozen=True, eq=False)
 class LosOperator:
     """The virtual lidar as a sparse linear map of the field: v_los[s, j] = sum_r weight[s, j, r] n_j[c]
     field[c, plane[j], t_index[s, j, r], y_index[j, r], z_index[j, r]] over the components c (n_j[c] != 0).
 
-    r runs over the probe points times the 8 corners of their (t, y, z) cell (weights: probe-volume weight times the
-    trilinear weights; linear in stored time, bilinear in y, z). Fluctuations only (no mean wind).
+    r runs over the probe points times the 8 corners of their (t, y, z) cell (probe-volume weight times the
+    trilinear weights). Fluctuations only (no mean wind).
     """
 
     plane: np.ndarray  # (J,) plane index of each measurement
@@ -367,9 +340,7 @@ class LosOperator:
 def los_operator(grid, U_m_s: float, measurements, planes, times_s: np.ndarray) -> LosOperator:
     """The operator of ``measurements`` (on ``planes``) at physical times ``times_s`` (n_scan, J) [s].
 
-    A probe point at upstream distance x' of gate g measured at physical time T is the stored sample
-    t = T + x'/U of the plane of gate g (module docstring); indices are clipped to the grid (where the clipped
-    corner's weight is 0).
+    Indices are clipped to the grid where the clipped corner's weight is 0.
     """
     g = grid
     y0, z0 = g.y()[0], g.z()[0]
@@ -456,32 +427,13 @@ def adjoint_los(op: LosOperator, v: np.ndarray, shape: tuple[int, ...]) -> np.nd
 
 
 def mean_wind_los_series(measurements, times_s: np.ndarray, U_m_s: float, hub_height_m: float, mean_wind) -> np.ndarray:
-    """The line-of-sight speed (n_scan, J) [m/s] of ``mean_wind`` alone (a MeanWind that does not turn), per scan
-    and measurement: what ``sample`` adds to v_los with that mean wind, each probe point at its stored time
-    T + x / U.
-
-    Parameters
-    ----------
-    measurements : sequence of Measurement
-        The J measurements.
-    times_s : numpy.ndarray
-        Physical measurement times (n_scan, J) [s].
-    U_m_s : float
-        The field's mean speed [m/s] (Taylor shift).
-    hub_height_m : float
-        Hub height [m].
-    mean_wind : MeanWind
-        The mean wind; it must not turn (with a turn the fluctuations' projection changes too).
-
-    Returns
-    -------
-    numpy.ndarray
-        (n_scan, J) [m/s].
+    """The line-of-sight speed (n_scan, J) [m/s] of ``mean_wind`` alone, per scan and measurement (physical times
+    ``times_s`` (n_scan, J) [s], each probe point at its stored time T + x / U): what :func:`sample` adds.
 
     Raises
     ------
     ParameterError
-        For a turning mean wind or a probe point below the ground.
+        For a turning mean wind (it turns the fluctuations' projection too) or a probe point below the ground.
     """
     if mean_wind.turns:
         raise ParameterError(f"lidar: the mean wind turns ({mean_wind.describe()}), which turns the fluctuations' "

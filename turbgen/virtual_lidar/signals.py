@@ -19,20 +19,10 @@ from turbgen.validation.point_sets import rotor_mask
 
 
 def lidar_estimate(samples, U_m_s: float):
-    """(arrival time axis [s], u_LL [m/s]) on the scan-step grid (step = scan period / beams).
+    """(arrival times [s], u_LL [m/s]) on the scan-step grid (step = scan period / beams).
 
-    Parameters
-    ----------
-    samples : LidarSamples
-        Sampled line-of-sight speeds; every n_1 must be non-zero.
-    U_m_s : float
-        Mean wind speed U [m/s] (the leading time of gate i is x_i / U).
-
-    Returns
-    -------
-    tuple of (numpy.ndarray, numpy.ndarray)
-        Arrival times [s] (stored time of the rotor plane), from the first time every beam-gate has a sample
-        to the last time all still have one, and u_LL [m/s] at those times.
+    The arrival times (stored time of the rotor plane) run from the first time every beam-gate has a sample to
+    the last time all still have one; every n_1 of ``samples`` must be non-zero.
     """
     v, T = samples.v_los.astype(float), samples.time_s
     n_scan, nb, ng = v.shape
@@ -51,31 +41,11 @@ def lidar_estimate(samples, U_m_s: float):
 
 
 def rotor_average(fs, radius_m: float, t_s: np.ndarray, chunk: int | None = None) -> tuple[np.ndarray, float]:
-    """u averaged over the rotor disc of the plane x = 0 at t_s [s], and the rotor-averaged TI.
+    """u_RR [m/s] at the stored times ``t_s`` [s] (linear in time) and the rotor-averaged TI_R [-] of the disc of
+    radius ``radius_m`` [m] on the plane x = 0.
 
-    u_RR is interpolated linearly in time; TI_R = mean over disc points of sigma_u / U (Schlipf et
-    al. 2020, Eq. 3) over the whole record. Reads the rotor plane one time chunk at a time.
-
-    Parameters
-    ----------
-    fs : FieldStore
-        The open store; must have a plane at x = 0.
-    radius_m : float
-        Rotor radius R [m] of the disc.
-    t_s : numpy.ndarray
-        Stored times [s] at which u_RR is returned.
-    chunk : int, optional
-        Time steps read at once; default the store's time chunk.
-
-    Returns
-    -------
-    tuple of (numpy.ndarray, float)
-        u_RR at ``t_s`` [m/s] and TI_R [-].
-
-    Raises
-    ------
-    ParameterError
-        If the store has no rotor plane x = 0.
+    TI_R = mean over disc points of sigma_u / U over the whole record (Schlipf et al. 2020, Eq. 3). Reads the
+    plane ``chunk`` time steps at a time (default the store's time chunk); ParameterError without a plane x = 0.
     """
     g = fs.grid
     xs = g.x()
@@ -96,46 +66,22 @@ def rotor_average(fs, radius_m: float, t_s: np.ndarray, chunk: int | None = None
 
 
 def lidar_ti(samples, U_m_s: float) -> float:
-    """Lidar TI without spectral correction: mean over beams and gates of sigma(v_los / n1) / U.
-
-    Schlipf et al. 2020, Eq. 3 applied to the lidar; the c_TI correction of their Eq. 8 is not applied.
-
-    Parameters
-    ----------
-    samples : LidarSamples
-        Sampled line-of-sight speeds.
-    U_m_s : float
-        Mean wind speed U [m/s].
-
-    Returns
-    -------
-    float
-        Uncorrected lidar turbulence intensity [-].
+    """Uncorrected lidar TI [-]: mean over beams and gates of sigma(v_los / n1) / U (Schlipf et al. 2020, Eq. 3,
+    without the c_TI correction of their Eq. 8).
     """
     v = samples.v_los.astype(float) / samples.n1[None]
     return float(np.mean(v.std(axis=0)) / U_m_s)
 
 
 def welch_rl(u_ll: np.ndarray, u_rr: np.ndarray, setup: WelchSetup) -> dict:
-    """Welch S_LL, S_RR, S_RL, gamma^2_RL, |G_RL| = |S_RL| / S_LL and the effective segment count.
-
-    Segment means are removed, so a mean wind does not enter.
-
-    Parameters
-    ----------
-    u_ll : numpy.ndarray
-        Lidar estimate u_LL [m/s] on a regular time grid.
-    u_rr : numpy.ndarray
-        Rotor-effective wind speed u_RR [m/s] on the same grid.
-    setup : WelchSetup
-        Segment length [samples] and time step [s] (Hann window, 50 % overlap).
+    """Welch spectra of u_LL and u_RR [m/s] (one regular time grid) with the Hann window of ``setup``.
 
     Returns
     -------
     dict
-        ``f_hz`` [Hz]; one-sided PSDs ``S_LL``, ``S_RR`` [m^2 s^-2 Hz^-1] and cross-spectrum ``S_RL``
-        (complex); ``coh2_RL`` [-]; ``G_RL`` [-]; ``n_segments``; ``n_eff`` (effective independent segments);
-        ``setup`` (the WelchSetup).
+        ``f_hz`` [Hz]; one-sided ``S_LL``, ``S_RR`` [m^2 s^-2 Hz^-1] and ``S_RL`` (complex); ``coh2_RL``, ``G_RL``
+        = |S_RL| / S_LL [-]; ``n_segments``; ``n_eff`` (effective independent segments); ``setup``. Segment
+        means are removed, so a mean wind does not enter.
 
     Raises
     ------

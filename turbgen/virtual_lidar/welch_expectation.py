@@ -1,16 +1,14 @@
 """The expected Welch estimates of u_RR and u_LL spectra on a periodic record: what the estimator targets.
 
-A store's record of length T = nt dt is periodic, so u_RR and u_LL are sums of spectral lines at
-f_j = j / T (turbgen.theory.lattice), each of (cross-)variance L_j = S(f_j) / (2 T) for the one-sided
-spectra S of the preview theory. A Welch bin m is then a weighted sum of lines, with the weights
-|G_m(+-f_j)|^2 of the Hann window and the segment-mean removal (turbgen.validation.welch_kernel;
-Welch 1967). Near the lowest bins, where gamma^2_RL falls steeply, the window's main lobe (+-2 bins)
-mixes frequencies of different coherence: for 64 s segments on the Table 3 lidar it raises gamma^2
-of bins 2-3 by 0.02-0.04 above its value at the bin centre (about 1 sd of a 4-field ensemble).
+A store's record of length T = nt dt is periodic, so u_RR and u_LL are sums of spectral lines at f_j = j / T,
+each of (cross-)variance L_j = S(f_j) / (2 T) for the one-sided preview spectra S. A Welch bin m is a
+weighted sum of lines with the weights |G_m(+-f_j)|^2 of the Hann window and the segment-mean removal
+(turbgen.validation.welch_kernel; Welch 1967). Near the lowest bins, where gamma^2_RL falls steeply, the
+window's main lobe mixes frequencies of different coherence, which this expectation accounts for.
 
-The theory is evaluated at every line below bin 2 and at the bin centres above (BAND_BINS bins beyond
-the last requested bin), and interpolated to the other lines: log S_RR, log S_LL and the complex
-coherency S_RL / sqrt(S_RR S_LL) by cubic splines in log f (smooth on the bin scale).
+The theory is evaluated at every line below bin 2 and at the bin centres above (up to BAND_BINS bins beyond
+the last bin), and interpolated to the other lines: log S_RR, log S_LL and the complex coherency
+S_RL / sqrt(S_RR S_LL) by cubic splines in log f.
 """
 
 from __future__ import annotations
@@ -29,22 +27,8 @@ BAND_BINS = 6  # lines up to this many bins beyond the last bin (Hann leakage po
 
 
 def theory_nodes(f_bins_hz, setup: WelchSetup, record_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """(nodes, lines) [Hz]: where the theory is evaluated, and the record's lines the expectation sums over.
-
-    Parameters
-    ----------
-    f_bins_hz : array_like
-        Welch bin frequencies [Hz] (> 0) whose expectation is wanted.
-    setup : WelchSetup
-        Segment length and time step [s] of the Welch estimate.
-    record_s : float
-        Period T of the record [s] (lines at j / T).
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        Node frequencies (every line below bin 2, then the bin centres) and the lines j / T, j = 1 ..
-        up to BAND_BINS bins beyond the last bin [Hz].
+    """(nodes, lines) [Hz]: where the theory is evaluated (every line below bin 2, then the bin centres), and the
+    record's lines j / T (period ``record_s`` [s]) up to BAND_BINS bins beyond the last of ``f_bins_hz``.
     """
     df = 1.0 / (setup.nperseg * setup.dt_s)
     top = int(np.rint(np.max(f_bins_hz) / df)) + BAND_BINS
@@ -57,25 +41,8 @@ def theory_nodes(f_bins_hz, setup: WelchSetup, record_s: float) -> tuple[np.ndar
 
 
 def weigh_lines(S_RR, S_LL, S_RL, lines_hz, f_bins_hz, setup: WelchSetup, record_s: float) -> tuple:
-    """Expected Welch estimates at the bins of spectra given at the record's lines (module docstring).
-
-    Parameters
-    ----------
-    S_RR, S_LL, S_RL : array_like
-        One-sided spectra [m^2 s^-2 Hz^-1] at ``lines_hz`` (S_RL complex).
-    lines_hz : array_like
-        The lines j / T [Hz], j = 1, 2, ... (the mean, j = 0, is removed from every segment).
-    f_bins_hz : array_like
-        Welch bin frequencies [Hz] (> 0).
-    setup : WelchSetup
-        Segment length and time step [s] (Hann window, segment mean removed).
-    record_s : float
-        Period T of the record [s].
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        Expected one-sided Welch S_RR, S_LL (real) and S_RL (complex) at ``f_bins_hz`` [m^2 s^-2 Hz^-1].
+    """Expected one-sided Welch S_RR, S_LL (real), S_RL (complex) [m^2 s^-2 Hz^-1] at ``f_bins_hz`` of the spectra
+    given at the record's lines ``lines_hz`` = j / T, j >= 1 (the mean is removed from every segment).
     """
     lines = np.asarray(lines_hz, dtype=float)
     m = np.rint(np.asarray(f_bins_hz, dtype=float) * setup.nperseg * setup.dt_s).astype(int)
@@ -90,35 +57,21 @@ def weigh_lines(S_RR, S_LL, S_RL, lines_hz, f_bins_hz, setup: WelchSetup, record
 
 @dataclass(frozen=True)
 class ExpectedWelch(PreviewSpectra):
-    """Expected one-sided Welch S_RR, S_LL, S_RL at the bins (:class:`PreviewSpectra`) and, if asked for,
-    the equivalent independent segments ``n_eff`` [-] of one record's gamma^2_RL per bin (:func:`effective_segments`)."""
+    """Expected one-sided Welch S_RR, S_LL, S_RL at the bins (:class:`PreviewSpectra`) and, if asked for, the
+    equivalent independent segments ``n_eff`` [-] of one record's gamma^2_RL per bin (:func:`effective_segments`).
+    """
 
     n_eff: np.ndarray | None = None
 
 
 def expected_welch(spectra: PreviewSpectra, f_bins_hz, setup: WelchSetup, record_s: float,
                    n_samples: int | None = None) -> ExpectedWelch:
-    """Expected Welch S_RR, S_LL, S_RL at the bins from the theory at :func:`theory_nodes` (module docstring).
+    """Expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] at ``f_bins_hz`` from ``spectra``, the theory at the nodes of
+    :func:`theory_nodes`, for a record of period ``record_s`` [s].
 
-    Parameters
-    ----------
-    spectra : PreviewSpectra
-        The theory at the nodes of :func:`theory_nodes` (one-sided spectra [m^2 s^-2 Hz^-1]).
-    f_bins_hz : array_like
-        Welch bin frequencies [Hz] (> 0).
-    setup : WelchSetup
-        Segment length and time step [s] of the Welch estimate (Hann window, mean removed per segment).
-    record_s : float
-        Period T of the record [s].
-    n_samples : int, optional
-        Samples of the signal the Welch segments are cut from; if given, ``n_eff`` of the result is
-        :func:`effective_segments` (else None).
-
-    Returns
-    -------
-    ExpectedWelch
-        Expected one-sided Welch estimates at ``f_bins_hz`` [m^2 s^-2 Hz^-1]; their coh2_RL and G_RL are
-        what the Welch gamma^2_RL and |G_RL| estimate (to the estimator's own (1 - gamma^2)^2 / n bias).
+    Their coh2_RL and G_RL are what the Welch gamma^2_RL and |G_RL| estimate (to the estimator's own
+    (1 - gamma^2)^2 / n bias). With ``n_samples`` (the signal's length) the result's ``n_eff`` is
+    :func:`effective_segments`.
     """
     f_bins = np.asarray(f_bins_hz, dtype=float)
     nodes, lines = theory_nodes(f_bins, setup, record_s)
@@ -135,40 +88,20 @@ def expected_welch(spectra: PreviewSpectra, f_bins_hz, setup: WelchSetup, record
 
 
 def effective_segments(S_RR, S_LL, lines_hz, f_bins_hz, setup: WelchSetup, n_samples: int) -> np.ndarray:
-    """Equivalent number of independent segments of the Welch gamma^2_RL of one record, per bin.
+    """Equivalent number of independent segments [-] of the Welch gamma^2_RL of one record, per bin.
 
-    For each of u_RR and u_LL, n = E[P]^2 / Var[P] of its Welch estimate P of bin m over the actual
-    segment starts t_s of an ``n_samples`` signal (exact for Gaussian lines, Isserlis): the segment DFT is
+    For each of u_RR and u_LL, n = E[P]^2 / Var[P] of its Welch estimate P of bin m over the actual segment
+    starts t_s of an ``n_samples`` signal (exact for Gaussian lines, Isserlis): the segment DFT is
     F_s = sum_j a_j G_m(f_j) e^(i w_j t_s) + conj(a_j) G_m(-f_j) e^(-i w_j t_s), so with D = t_s - t_s'
 
         Cov(F_s, F_s') = sum_j L_j (|G_m(f_j)|^2 e^(i w_j D) + |G_m(-f_j)|^2 e^(-i w_j D)) = A(D),
         E[F_s F_s'] = sum_j L_j G_m(f_j) G_m(-f_j) 2 cos(w_j D) = B(D),
         Var[sum_s |F_s|^2] = sum_(s, s') |A(D)|^2 + |B(D)|^2,   E = K A(0)   (K segments)
 
-    (lines within BAND_BINS bins of the bin). It is what the rule of thumb ``WelchSetup.effective_segments``
-    (Welch 1967, white spectrum within the window) gets wrong where the spectrum is steep across the
-    window's lobe: 10.5 instead of 13.3 at the lowest 64 s bin of a 512 s Mann store (Monte-Carlo of the
-    estimator: 10.6-10.9), since bin 1 collects the large low-frequency lines. The returned value is
-    sqrt(n_RR n_LL), the n of Goodman's coherence law that calibrates the Welch gamma^2_RL (Monte-Carlo,
-    see ``turbgen.virtual_lidar.compare``). Independent records add their values.
-
-    Parameters
-    ----------
-    S_RR, S_LL : array_like
-        One-sided spectra [m^2 s^-2 Hz^-1] at ``lines_hz`` (any common scale).
-    lines_hz : array_like
-        The record's lines j / T [Hz], j = 1, 2, ... (increasing, evenly spaced).
-    f_bins_hz : array_like
-        Welch bin frequencies [Hz] (> 0).
-    setup : WelchSetup
-        Segment length and time step [s] (Hann window, segment mean removed).
-    n_samples : int
-        Samples of the signal the segments are cut from.
-
-    Returns
-    -------
-    numpy.ndarray
-        Equivalent independent segments [-] at ``f_bins_hz``.
+    (lines within BAND_BINS bins of the bin). Unlike the rule of thumb ``WelchSetup.effective_segments``
+    (Welch 1967, white spectrum within the window) it holds where the spectrum is steep across the window's
+    lobe. Returns sqrt(n_RR n_LL), the n of Goodman's coherence law (``turbgen.virtual_lidar.compare``);
+    independent records add their values. ``S_RR``, ``S_LL`` are given at the evenly spaced ``lines_hz``.
     """
     lines = np.asarray(lines_hz, dtype=float)
     m = np.rint(np.asarray(f_bins_hz, dtype=float) * setup.nperseg * setup.dt_s).astype(int)

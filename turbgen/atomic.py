@@ -1,0 +1,54 @@
+"""Temporary names of unfinished outputs and the one writer of small whole files (JSON, text, uploads).
+
+Every turbgen writer works under a hidden sibling ``.NAME.tmp-PID-XXXXXXXX`` (PID = the writing process) and
+renames it to ``NAME`` only when complete; :mod:`turbgen.store.temporaries` removes the temporaries of dead writers.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+from pathlib import Path
+
+TEMP_MARK = ".tmp-"
+
+
+def temp_prefix(path: Path) -> str:
+    """``.NAME.tmp-``: the name prefix of the temporary siblings used while writing ``path`` (named NAME)."""
+    return f".{Path(path).name}{TEMP_MARK}"
+
+
+def temp_name(path: Path) -> Path:
+    """A fresh temporary sibling ``.NAME.tmp-PID-XXXXXXXX`` of ``path`` owned by this process (8 random hex digits)."""
+    path = Path(path)
+    return path.parent / f"{temp_prefix(path)}{os.getpid()}-{secrets.token_hex(4)}"
+
+
+def write_file(path: Path, data: str | bytes) -> None:
+    """Write ``data`` to ``path`` whole or not at all: a temporary sibling, fsync, then a rename over ``path``.
+
+    The file gets an ordinary file's mode (0o666 less the umask) and a reader never sees it half written.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file to (re)place; its folder must exist.
+    data : str or bytes
+        Its content (str is written as UTF-8, newlines unchanged).
+
+    Raises
+    ------
+    OSError
+        When the file cannot be written; the temporary is removed and ``path`` is untouched.
+    """
+    tmp = temp_name(path)
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data.encode() if isinstance(data, str) else data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
