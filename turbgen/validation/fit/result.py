@@ -62,6 +62,8 @@ class MannFit:
     data, fitted, sd : dict
         Spectrum ("uu", "vv", "ww", "uw") -> band estimates, the fitted model's expectation of them and their
         standard deviations, one-sided [m^2 s^-2 Hz^-1].
+    bootstrap : dict or None
+        The parametric bootstrap (``turbgen.api.fit.bootstrap_sd``): {"B", "sd", "sd_fit"}; None when not run.
     """
 
     ae: FitValue
@@ -79,6 +81,7 @@ class MannFit:
     data: dict
     fitted: dict
     sd: dict
+    bootstrap: dict | None = None
 
     @property
     def ok(self) -> bool:
@@ -95,7 +98,7 @@ class MannFit:
         out = {n: getattr(self, n).to_dict() for n in ("ae", "length_scale_m", "gamma")}
         out.update(chi2_dof=self.chi2_dof, dof=self.dof, flags=list(self.flags), notes=list(self.notes),
                    model=self.model, U_m_s=self.U_m_s, source=self.source, nperseg=self.nperseg,
-                   spectra=sorted(self.data))
+                   spectra=sorted(self.data), **({"bootstrap": self.bootstrap} if self.bootstrap else {}))
         return out
 
     def table(self) -> str:
@@ -108,6 +111,10 @@ class MannFit:
             lines.append(f"{name:>15s} = {v.value:10.4g} {unit:13s} {ci}")
         lines.append(f"chi2/dof = {self.chi2_dof:.3g} (dof {self.dof}; 1 +- {math.sqrt(2 / max(self.dof, 1)):.2g} "
                      "expected when the model holds)")
+        if self.bootstrap:
+            b = self.bootstrap
+            lines.append(f"bootstrap sd (B = {b['B']}) / analytic sd: " + ", ".join(
+                f"{n} {b['sd'][n]:.3g} / {b['sd_fit'][n]:.3g}" for n in b["sd"]) + " (of ln ae, ln L, Gamma)")
         lines += [f"note: {n}" for n in self.notes] + [f"FLAG: {f}" for f in self.flags]
         return "\n".join(lines)
 
