@@ -108,3 +108,20 @@ def test_bootstrap_sd_agrees_with_the_analytic_sd():
     for n in NAMES:
         assert lo < b["sd"][n] / getattr(fit, n).sd_fit < hi, (n, b)
     assert "bootstrap sd (B = 8)" in fit.table() and fit.to_dict()["bootstrap"]["B"] == 8
+
+
+def test_points_and_bootstrap_bad_input_is_one_line(tmp_path):
+    """--point off the grid or malformed, --bootstrap of a point-series file or below 2: one Error line, exit 2."""
+    from click.testing import CliRunner
+
+    from turbgen.cli import cli
+
+    turbgen.mann(L=30, gamma=3.2, ae=0.08, nt=512, ny=6, nz=6, dy=6, dz=6, planes=[0], evo=None, U=12, seed=1,
+                 out=tmp_path / "s")
+    for args, text in ((["--point", "100,0"], "is not on the grid"), (["--point", "3;9"], "must be Y,Z"),
+                       (["--point", "3,9", "--point", "3.4,9"], "same grid point"),
+                       (["--bootstrap", "1"], "must be an integer >= 2")):
+        r = CliRunner().invoke(cli, ["fit", "mann", str(tmp_path / "s"), *args])
+        assert r.exit_code == 2 and text in r.output and len(r.output.strip().splitlines()) == 1, r.output
+    r = CliRunner().invoke(cli, ["fit", "mann", "examples/mast-fit.json", "--bootstrap", "3"])
+    assert r.exit_code == 2 and "holds point series, not a field" in r.output
