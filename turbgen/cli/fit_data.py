@@ -25,6 +25,15 @@ def _plots_dir(ctx, param, value):
     return p
 
 
+def _yz(text: str) -> tuple[float, float]:
+    """(y, z) [m] of a --point "Y,Z"."""
+    try:
+        y, z = (float(v) for v in text.split(","))
+    except ValueError:
+        raise ParameterError(f"--point {text!r} must be Y,Z: two numbers [m] separated by a comma") from None
+    return y, z
+
+
 def _remember_overwrite(ctx, param, value):
     ctx.meta["fit_overwrite"] = value
 
@@ -35,13 +44,19 @@ def _remember_overwrite(ctx, param, value):
               help="Mean wind speed U [m/s] of k1 = 2 pi f / U for fluctuation data (default: the mean of u of "
                    "total-wind data; a store holds its own).")
 @click.option("--nperseg", type=int, default=None, help="Welch segment length [samples] (default ~nt/8, a power of 2).")
+@click.option("--point", "points", multiple=True, metavar="Y,Z",
+              help="For a store: fit the series at this grid point (y, z) [m] of every plane (repeat for a mast) "
+                   "against the grid's expectation there; default a sub-lattice of 8 x 8 points.")
+@click.option("--bootstrap", type=int, default=0, metavar="B",
+              help="For a store: refit B fields made at the fitted parameters and print the bootstrap sd beside "
+                   "the analytic one (default 0: off).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON: {name: {value, ci95, held}}, chi2_dof, flags, ...")
 @click.option("--plots", "plots", type=click.Path(), default=None, callback=_plots_dir,
               help=f"Directory for {PLOT_NAME}: the band spectra with 95 % bars and the fitted model.")
 @click.option("--overwrite", is_flag=True, is_eager=True, expose_value=False, callback=_remember_overwrite,
               help=f"Replace an existing {PLOT_NAME} in --plots.")
 @click.pass_context
-def fit_mann_command(ctx, data, U, nperseg, as_json, plots):
+def fit_mann_command(ctx, data, U, nperseg, points, bootstrap, as_json, plots):
     """Fit ae, L, Gamma of the Mann model to DATA: a point-series JSON file (sensors with u, v, w) or a store.
 
     Weighted least squares over the Welch spectra of u, v, w and the u-w co-spectrum, each band weighted by the
@@ -51,7 +66,7 @@ def fit_mann_command(ctx, data, U, nperseg, as_json, plots):
     """
     from turbgen.api.fit import fit_mann
 
-    result = fit_mann(data, U=U, nperseg=nperseg)
+    result = fit_mann(data, U=U, nperseg=nperseg, points=[_yz(p) for p in points] or None, bootstrap=bootstrap)
     click.echo(json.dumps(result.to_dict()) if as_json else result.table())
     if plots is not None:
         plots.mkdir(parents=True, exist_ok=True)

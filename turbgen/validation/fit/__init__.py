@@ -2,7 +2,8 @@
 
 Modules: ``data`` (point-series files and stores as detrended fluctuation series), ``spectra`` (Welch band estimates
 and their variances), ``table`` (the one-point spectra tabulated in k1 L and Gamma), ``model`` (expected band
-estimates: continuous, or on a store's lattice), ``mann`` (the weighted least-squares fit), ``result`` (MannFit).
+estimates and cross-spectra between points: continuous, or on a store's lattice), ``covariance`` (the joint
+covariance of the band estimates), ``mann`` (the generalised least-squares fit), ``result`` (MannFit).
 """
 
 from turbgen.validation.fit.data import FitData, load_fit_data

@@ -51,6 +51,10 @@ class FitData:
         What was done to the data (trends removed, missing values).
     points : PointSeries or None
         The sensor data as read (their mean wind: turbgen.validation.fit.mean_wind), None for a field.
+    sites_m : numpy.ndarray
+        (N, 3) positions x, y, z [m] of the points (a height for z where the sensor gives one).
+    columns : dict
+        Component -> (P,) index into ``sites_m`` of each column of ``series`` (the covariance of point averages).
     """
 
     source: str
@@ -62,6 +66,8 @@ class FitData:
     grid: object = None
     notes: tuple = ()
     points: PointSeries | None = None
+    sites_m: np.ndarray | None = None
+    columns: dict | None = None
 
     @property
     def nt(self) -> int:
@@ -127,60 +133,101 @@ def data_from_points(ps: PointSeries, U_m_s: float | None = None) -> FitData:
     uw = tuple((with_u.index(s), with_w.index(s)) for s in ps.sensors if s in with_u and s in with_w)
     gaps = [f"{s.name} {c}: {int(np.isnan(v).sum())} missing values (Welch segments holding them are skipped)"
             for s in ps.sensors for c, v in s.series.items() if np.isnan(v).any()]
-    return FitData(ps.source, dt, U, series, uw, notes=tuple(notes + gaps), points=ps)
+    sites = np.array([(s.x_m, s.y_m, s.z_m if s.z_m is not None else s.height_m) for s in ps.sensors], float)
+    columns = {c: np.array([k for k, s in enumerate(ps.sensors) if c in s.series]) for c in series}
+    return FitData(ps.source, dt, U, series, uw, notes=tuple(notes + gaps), points=ps,
+                   sites_m=sites, columns=columns)
 
 
-def data_from_store(fs) -> FitData:
-    """FitData of a field store: u, v, w at a sub-lattice of every plane (module docstring).
+def data_from_store(fs, points=None) -> FitData:
+    """FitData of a field store: u, v, w at a sub-lattice of every plane, or at ``points`` (module docstring).
 
     Parameters
     ----------
     fs : turbgen.store.FieldStore
         The store; a turbgen Mann store also gives its periodic box (its ``pad_yz``) for the grid's expectation.
+    points : sequence of (y, z) [m], optional
+        Read these points of every plane (``grid_points``) instead of the sub-lattice: sensors cut from the field.
     """
-    return _grid_data(lambda c, ix: fs.read_span(c, ix, 0, fs.grid.nt), fs.grid, fs.attrs, str(fs.path))
+    return _grid_data(lambda c, ix: fs.read_span(c, ix, 0, fs.grid.nt), fs.grid, fs.attrs, str(fs.path), points)
 
 
-def data_from_dataset(ds) -> FitData:
+def data_from_dataset(ds, points=None) -> FitData:
     """FitData of a field as an xarray.Dataset of ``turbgen.mann`` / ``turbgen.kaimal`` / ``turbgen.open_store``
-    (in memory or not; its attributes are the store's)."""
+    (in memory or not; its attributes are the store's); ``points`` as in ``data_from_store``."""
     from turbgen.grid import Grid
 
     g = dict(ds.attrs["grid"])
     grid = Grid(**{**g, "x_m": tuple(g["x_m"])})
     return _grid_data(lambda c, ix: ds[c].isel(x=ix).values, grid, ds.attrs,
-                      ds.encoding.get("source", "the field in memory"))
+                      ds.encoding.get("source", "the field in memory"), points)
 
 
-def _grid_data(read, grid, attrs: dict, source: str) -> FitData:
-    """FitData of a field on a grid: ``read(component, ix)`` -> (nt, ny, nz) of plane ix; the box from ``attrs``."""
-    from turbgen.validation.store_run import mann_box_from_attrs
-
-    g = grid
-    iy, iz = long_sublattice(g.ny, STORE_POINTS_PER_AXIS), long_sublattice(g.nz, STORE_POINTS_PER_AXIS)
-    series = {}
-    for c in COMPONENTS:
-        planes = [np.asarray(read(c, ix))[:, iy][:, :, iz].reshape(g.nt, -1) for ix in range(g.nx)]
-        series[c] = np.concatenate(planes, axis=1).astype(float)
-    n = series["u"].shape[1]
-    box = mann_box_from_attrs(attrs, g) if attrs.get("model") == "mann" else MannBox(g.ny, g.nz)
-    return FitData(source, g.dt_s, float(attrs["U_m_s"]), series, tuple((k, k) for k in range(n)), box, g)
-
-
-def load_fit_data(data, U_m_s: float | None = None) -> FitData:
-    """FitData of ``data``: a PointSeries, a FieldStore, an xarray.Dataset of a field, or the path of a point-series
-    JSON file or of a store.
+def grid_points(grid, points) -> tuple[np.ndarray, np.ndarray]:
+    """(iy, iz) grid indices of the (y, z) [m] ``points`` (each within half a step of a grid point), or of the
+    sub-lattice of STORE_POINTS_PER_AXIS^2 points when ``points`` is None.
 
     Raises
     ------
     ParameterError
-        For an unreadable or invalid file, a path that is neither a JSON file nor a directory, or ``U_m_s`` given
-        for a field (it holds its own).
+        For a point farther than half a grid step from every grid point, or a repeated point.
+    """
+    if points is None:
+        iy, iz = long_sublattice(grid.ny, STORE_POINTS_PER_AXIS), long_sublattice(grid.nz, STORE_POINTS_PER_AXIS)
+        return np.repeat(iy, iz.size), np.tile(iz, iy.size)
+    yz = np.asarray(points, dtype=float).reshape(-1, 2)
+    iy = np.rint(yz[:, 0] / grid.dy_m + (grid.ny - 1) / 2).astype(int)
+    iz = np.rint(yz[:, 1] / grid.dz_m + (grid.nz - 1) / 2).astype(int)
+    far = (iy < 0) | (iy >= grid.ny) | (iz < 0) | (iz >= grid.nz)
+    off = np.maximum(np.abs(yz[:, 0] - grid.y()[np.clip(iy, 0, grid.ny - 1)]) / grid.dy_m,
+                     np.abs(yz[:, 1] - grid.z()[np.clip(iz, 0, grid.nz - 1)]) / grid.dz_m)
+    bad = np.flatnonzero(far | (off > 0.5 + 1e-9))
+    if bad.size:
+        y, z = yz[bad[0]]
+        raise ParameterError(f"point (y, z) = ({y:g}, {z:g}) m is not on the grid: y in [{grid.y()[0]:g}, "
+                             f"{grid.y()[-1]:g}] m step {grid.dy_m:g}, z in [{grid.z()[0]:g}, {grid.z()[-1]:g}] m "
+                             f"step {grid.dz_m:g}")
+    if len(set(zip(iy, iz))) < iy.size:
+        raise ParameterError(f"points = {yz.tolist()}: two of them are the same grid point")
+    return iy, iz
+
+
+def _grid_data(read, grid, attrs: dict, source: str, points=None) -> FitData:
+    """FitData of a field on a grid: ``read(component, ix)`` -> (nt, ny, nz) of plane ix; the box from ``attrs``."""
+    from turbgen.validation.store_run import mann_box_from_attrs
+
+    g = grid
+    iy, iz = grid_points(g, points)
+    series = {c: np.concatenate([np.asarray(read(c, ix))[:, iy, iz] for ix in range(g.nx)], axis=1).astype(float)
+              for c in COMPONENTS}  # fmt: skip
+    sites = np.array([(x, y, z) for x in g.x_m for y, z in zip(g.y()[iy], g.z()[iz])])
+    n = sites.shape[0]
+    box = mann_box_from_attrs(attrs, g) if attrs.get("model") == "mann" else MannBox(g.ny, g.nz)
+    cols = {c: np.arange(n) for c in COMPONENTS}
+    if points is not None:
+        source += f" at {iy.size} point(s) (y, z) = " + ", ".join(f"({y:g}, {z:g})" for y, z in
+                                                                  zip(g.y()[iy], g.z()[iz]))
+    return FitData(source, g.dt_s, float(attrs["U_m_s"]), series, tuple((k, k) for k in range(n)), box, g,
+                   sites_m=sites, columns=cols)
+
+
+def load_fit_data(data, U_m_s: float | None = None, points=None) -> FitData:
+    """FitData of ``data``: a PointSeries, a FieldStore, an xarray.Dataset of a field, or the path of a point-series
+    JSON file or of a store; ``points`` (y, z) [m] restrict a field to those grid points (``grid_points``).
+
+    Raises
+    ------
+    ParameterError
+        For an unreadable or invalid file, a path that is neither a JSON file nor a directory, ``U_m_s`` given
+        for a field (it holds its own), or ``points`` given for point series or off the grid.
     turbgen.errors.StoreError
         For a directory that is not a complete turbgen store.
     """
     from turbgen.store import FieldStore, open_store
 
+    if points is not None and (isinstance(data, PointSeries) or (isinstance(data, (str, Path))
+                                                              and not Path(data).expanduser().is_dir())):
+        raise ParameterError("points select grid points of a field; a point-series file is fitted at its sensors")
     if isinstance(data, PointSeries):
         return data_from_points(data, U_m_s)
     if isinstance(data, (str, Path)):
@@ -193,4 +240,4 @@ def load_fit_data(data, U_m_s: float | None = None) -> FitData:
         data = open_store(p)
     if U_m_s is not None:
         raise ParameterError(f"U = {U_m_s!r}: a field holds its own mean wind speed; drop --U / U")
-    return data_from_store(data) if isinstance(data, FieldStore) else data_from_dataset(data)
+    return data_from_store(data, points) if isinstance(data, FieldStore) else data_from_dataset(data, points)

@@ -1,13 +1,14 @@
 """Fit ae, L and Gamma of the Mann (1994) model to the Welch spectra of measured or generated data.
 
-Weighted least squares over the band estimates of F_uu, F_vv, F_ww and the u-w co-spectrum (``spectra``), each
-residuals whitened by the estimators' covariance at the model's expected spectrum (``BandSpectra.full_covariance``),
+Generalised least squares over the band estimates of F_uu, F_vv, F_ww and the u-w co-spectrum (``spectra``), the
+residuals whitened (Cholesky) by the estimates' joint covariance at the model's expected spectra and cross-spectra
+between the points (``covariance``: all four spectra of a band and neighbouring bands coupled),
 so that sum r^2 is chi^2 with n_bands - n_parameters degrees of freedom when the model holds. The parameters are x =
 (ln ae, ln L, Gamma) within the ranges of ``turbgen.theory.ranges``; scipy.optimize.least_squares (trust region
 reflective, bounds) minimises; the weights and (for a store) the lattice / continuous ratio of the grid model are
 updated from the fitted parameters and the fit repeated until the parameters move by less than MOVE_TOL standard
 deviations (iteratively re-weighted least squares, at most PASSES passes). The covariance of x is (J^T J)^-1 of the
-whitened residuals (the Gauss-Newton covariance, J^T W J with W the inverse estimator variances); the 95 % intervals
+whitened residuals (the Gauss-Newton covariance (J^T W J)^-1, W the inverse joint covariance); the 95 % intervals
 are x +- 1.96 sd, exponentiated for ae and L.
 
 Identifiability: Gamma (the anisotropy) needs at least two velocity components' spectra; with one it is held at the
@@ -25,6 +26,7 @@ from scipy.optimize import least_squares
 from turbgen.spec.defaults import MANN_DEFAULTS
 from turbgen.theory import ranges
 from turbgen.theory.params import MannParams
+from turbgen.validation.fit.covariance import isserlis, point_sets, separations
 from turbgen.validation.fit.data import FitData
 from turbgen.validation.fit.model import BandModel
 from turbgen.validation.fit.result import FitValue, MannFit
@@ -60,10 +62,17 @@ def _start(bands: BandSpectra, model: BandModel, used: tuple, held: dict) -> dic
     return p
 
 
-def _solve(bands, model, used, free, held, p):
-    """One weighted least-squares pass at the weights of ``p``: (solution, new parameters)."""
+def _isserlis_at(model, geometry, used, p) -> np.ndarray:
+    """The normalised covariance of the point averages (``covariance.isserlis``) at the parameters ``p``."""
+    seps, index, neg, sets = geometry
+    return isserlis(model.coherency(MannParams(**p), seps), index, neg, sets, used)
+
+
+def _solve(bands, model, used, free, held, p, iss):
+    """One generalised least-squares pass at the covariance of ``p`` (``iss``: its Isserlis terms): (solution, new
+    parameters)."""
     e = model.expected(p["ae"], p["length_scale_m"], p["gamma"])
-    chol = np.linalg.cholesky(bands.full_covariance(used, e))
+    chol = np.linalg.cholesky(bands.full_covariance(used, e, iss))
 
     def resid(x):
         q = _params(x, free, held)
@@ -78,12 +87,12 @@ def _solve(bands, model, used, free, held, p):
     return sol, _params(sol.x, free, held)
 
 
-def _covariance_at(bands, model, used, p) -> np.ndarray:
+def _covariance_at(bands, model, used, p, iss) -> np.ndarray:
     e = model.expected(p["ae"], p["length_scale_m"], p["gamma"])
-    return bands.covariance(used, e)
+    return bands.covariance(used, e, iss)
 
 
-def fit_mann_data(data: FitData, nperseg: int | None = None) -> MannFit:
+def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra | None = None) -> MannFit:
     """Fit the Mann model to ``data`` (module docstring).
 
     Parameters
@@ -92,6 +101,8 @@ def fit_mann_data(data: FitData, nperseg: int | None = None) -> MannFit:
         Fluctuation series (``turbgen.validation.fit.data.load_fit_data``).
     nperseg : int, optional
         Welch segment length [samples]; default ``estimators.default_nperseg``.
+    bands : BandSpectra, optional
+        Band estimates to fit instead of those of ``data`` (synthetic spectra with known noise: the tests).
 
     Returns
     -------
@@ -103,7 +114,7 @@ def fit_mann_data(data: FitData, nperseg: int | None = None) -> MannFit:
     ParameterError
         For a record too short or too gappy for the Welch estimates (``spectra.estimate_bands``).
     """
-    bands = estimate_bands(data, nperseg)
+    bands = estimate_bands(data, nperseg) if bands is None else bands
     model = BandModel(bands, data.U_m_s, data.grid, data.box)
     used = tuple(s for s in SPECTRA if s in bands.values)
     notes = list(data.notes)
@@ -113,13 +124,15 @@ def fit_mann_data(data: FitData, nperseg: int | None = None) -> MannFit:
         notes.append(f"gamma is not identified by the spectrum of one component ({used[0][0]}): held at "
                      f"{held['gamma']:g}")
     free = tuple(n for n in NAMES if n not in held)
+    geometry = (*separations(np.asarray(data.sites_m, float)), point_sets(data, used))
     p = _start(bands, model, used, held)
     if model.kind == "grid":  # the continuous fit first: the lattice ratio at a point near the answer
-        p = _solve(bands, model, used, free, held, p)[1]
+        p = _solve(bands, model, used, free, held, p, _isserlis_at(model, geometry, used, p))[1]
     converged = False
     for _ in range(PASSES):
         model.update_ratio(MannParams(**p))
-        sol, q = _solve(bands, model, used, free, held, p)
+        iss = _isserlis_at(model, geometry, used, p)
+        sol, q = _solve(bands, model, used, free, held, p, iss)
         cov = _covariance(sol.jac)
         sd = np.sqrt(np.diag(cov))
         moved = np.abs(np.array([_x(q, n) - _x(p, n) for n in free])) / np.maximum(sd, 1e-300)
@@ -127,7 +140,7 @@ def fit_mann_data(data: FitData, nperseg: int | None = None) -> MannFit:
         if sol.status > 0 and np.all(moved < MOVE_TOL):
             converged = True
             break
-    return _result(data, bands, model, used, free, held, p, sol, cov, converged, notes)
+    return _result(data, bands, model, used, free, held, p, sol, cov, converged, notes, iss)
 
 
 def _x(p: dict, n: str) -> float:
@@ -144,7 +157,7 @@ def _covariance(jac: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(cov), cov, np.inf)
 
 
-def _result(data, bands, model, used, free, held, p, sol, cov, converged, notes) -> MannFit:
+def _result(data, bands, model, used, free, held, p, sol, cov, converged, notes, iss) -> MannFit:
     """The MannFit of a finished fit: intervals, chi^2 / dof, flags."""
     sd = np.sqrt(np.abs(np.diag(cov)))
     values, flags = {}, []
@@ -171,5 +184,5 @@ def _result(data, bands, model, used, free, held, p, sol, cov, converged, notes)
         chi2_dof=float(np.sum(sol.fun**2) / max(dof, 1)), dof=dof, flags=tuple(flags), notes=tuple(notes),
         model=model.kind, U_m_s=data.U_m_s, source=data.source, nperseg=bands.setup.nperseg, f_hz=bands.f_hz,
         data={s: bands.values[s] for s in used}, fitted={s: e[s] for s in used},
-        sd=dict(zip(used, np.sqrt(np.diagonal(_covariance_at(bands, model, used, p), axis1=1, axis2=2)).T)),
+        sd=dict(zip(used, np.sqrt(np.diagonal(_covariance_at(bands, model, used, p, iss), axis1=1, axis2=2)).T)),
     )  # fmt: skip

@@ -7,13 +7,22 @@ continuous spectrum, at N_RATIO_NODES k1 nodes for given parameters (``MannFit``
 
 The expected Welch estimate of every bin is that of a periodic line process with these spectra
 (``welch_kernel.WelchKernel``: leakage and segment-mean removal in the lowest bins), averaged over the bands.
+
+``coherency`` gives the cross-spectra between points (the covariance of point averages, ``covariance``): on the
+lattice, a 2-D transform of the tensor over (k2, k3) (times the space-time decay between planes, Guo et al. 2023,
+Eq. 13); continuous, Eq. 8 of Guo et al. (2023) at each separation (frozen: the decay between sensors along x is
+not known, and ignoring it over-states their covariance, which errs towards wider intervals).
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from turbgen import fft
 from turbgen.theory.lattice import line_frequencies
+from turbgen.theory.mann_quadrature import perpendicular_quadrature
 from turbgen.theory.params import MannParams
 from turbgen.validation.fit.spectra import BandSpectra
 from turbgen.validation.fit.table import NAMES, scaled_spectra
@@ -21,6 +30,10 @@ from turbgen.validation.mann_lattice import MannLattice
 from turbgen.validation.welch_kernel import WelchKernel
 
 N_RATIO_NODES = 96
+PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+# Eq. 8 between sensors for the weights only: 4 Gauss nodes and 64 angles leave ~2e-4 of F_ii (7x faster)
+WEIGHT_RULE = {"n_gauss": 4, "n_theta": 64}
+REUSE_LN_L, REUSE_GAMMA = 0.05, 0.1  # cross-spectra between points are reused while L and Gamma stay this close
 
 
 class BandModel:
@@ -43,7 +56,8 @@ class BandModel:
         self.dk1 = 2 * np.pi / (nt * dt * U_m_s)
         self.kernel = WelchKernel(bands.setup, nt)
         self.ratio_k1 = np.geomspace(self.k1[0], self.k1[-1], N_RATIO_NODES)
-        self.ratio = None  # name -> (N_RATIO_NODES,) lattice / continuous, set by ``update_ratio``
+        self.ratio: dict | None = None  # name -> (N_RATIO_NODES,) lattice / continuous, set by ``update_ratio``
+        self._cross: tuple | None = None  # (params, separations, cross-spectra) of the last ``coherency``
 
     @property
     def kind(self) -> str:
@@ -78,4 +92,53 @@ class BandModel:
         for n, spec in self.line_spectra(ae, length_scale_m, gamma).items():
             lines = np.concatenate([[0.0], spec * self.dk1])  # line variances L_j = F(k1_j) dk1, j = 0 .. nt/2
             out[n] = self.bands.band_mean(self.kernel.apply(lines))
+        return out
+
+    def coherency(self, params: MannParams, seps_m: np.ndarray) -> np.ndarray:
+        """(nbands, 3, 3, D) complex coherency S_pq(d) / sqrt(S_pp(0) S_qq(0)) at each band's centre and the
+        separations ``seps_m`` (D, 3) [m] of x, y, z (module docstring; the tensor is real and symmetric, so
+        S_qp(d) = S_pq(d) and S_pq(-d) = conj S_pq(d))."""
+        k1 = 2 * np.pi * self.bands.f_hz / self.U
+        c = self._cross  # the cross-spectra only weight the fit: reused while the parameters stay close
+        if c is None or c[1] is not seps_m or abs(math.log(params.length_scale_m / c[0].length_scale_m)) > \
+                REUSE_LN_L or abs(params.gamma - c[0].gamma) > REUSE_GAMMA:
+            cross = self._continuous_cross if self.grid is None else self._lattice_cross
+            self._cross = c = (params, seps_m, cross(params, seps_m, k1))
+        s = c[2]
+        zero = np.flatnonzero(np.all(seps_m == 0, axis=1))[0]
+        diag = np.sqrt(np.abs(s[:, [0, 1, 2], [0, 1, 2], zero]))
+        return s / (diag[:, :, None, None] * diag[:, None, :, None])
+
+    def _lattice_cross(self, params, seps_m, k1) -> np.ndarray:
+        g = self.grid
+        lat = MannLattice(params, g, self.box, self.U)
+        ly = np.rint(seps_m[:, 1] / g.dy_m).astype(int) % self.box.nyp
+        lz = np.rint(seps_m[:, 2] / g.dz_m).astype(int) % self.box.nzp
+        dxs, which = np.unique(np.abs(seps_m[:, 0]), return_inverse=True)
+        out = np.zeros((k1.size, 3, 3, seps_m.shape[0]), complex)
+        for b, phi, inv_tau in lat.slabs(k1):
+            for m, dx in enumerate(dxs):
+                sel = which == m
+                decayed = phi[[p for p, _ in PAIRS], [q for _, q in PAIRS]]
+                if dx > 0:  # frozen: 1 / tau = 0; at k = 0 it may be inf
+                    decayed = decayed * np.exp(-dx / self.U * inv_tau)
+                lags = fft.oneshot().ifft2(decayed) * decayed[0].size  # sum Phi exp(i k.d) at lags d
+                for n, (p, q) in enumerate(PAIRS):
+                    out[b, p, q, sel] = out[b, q, p, sel] = lags[n][ly[sel], lz[sel]]
+        return out
+
+    def _continuous_cross(self, params, seps_m, k1) -> np.ndarray:
+        out = np.zeros((k1.size, 3, 3, seps_m.shape[0]), complex)
+        done: dict = {}
+        for d, (_, y, z) in enumerate(np.round(seps_m, 6) + 0.0):
+            if (y, z) not in done:
+                if (-y + 0.0, -z + 0.0) in done:
+                    done[(y, z)] = np.conj(done[(-y + 0.0, -z + 0.0)])
+                else:
+                    _, w, gq = perpendicular_quadrature(k1, params, PAIRS, float(y), float(z), _rule=WEIGHT_RULE)
+                    s = np.zeros((k1.size, 3, 3), complex)
+                    for p, q in PAIRS:
+                        s[:, p, q] = s[:, q, p] = (w * gq[(p, q)]).sum(axis=-1)
+                    done[(y, z)] = s
+            out[..., d] = done[(y, z)]
         return out

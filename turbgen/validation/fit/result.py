@@ -64,6 +64,8 @@ class MannFit:
         standard deviations, one-sided [m^2 s^-2 Hz^-1].
     mean_wind : turbgen.validation.fit.mean_wind.MeanWindFit or None
         Shear exponent, roughness, veer and turbulence intensity of total-wind sensor data.
+    bootstrap : dict or None
+        The parametric bootstrap (``turbgen.api.fit.bootstrap_sd``): {"B", "sd", "sd_fit"}; None when not run.
     """
 
     ae: FitValue
@@ -82,6 +84,7 @@ class MannFit:
     fitted: dict
     sd: dict
     mean_wind: object = None
+    bootstrap: dict | None = None
 
     @property
     def ok(self) -> bool:
@@ -98,7 +101,7 @@ class MannFit:
         out = {n: getattr(self, n).to_dict() for n in ("ae", "length_scale_m", "gamma")}
         out.update(chi2_dof=self.chi2_dof, dof=self.dof, flags=list(self.flags), notes=list(self.notes),
                    model=self.model, U_m_s=self.U_m_s, source=self.source, nperseg=self.nperseg,
-                   spectra=sorted(self.data))
+                   spectra=sorted(self.data), **({"bootstrap": self.bootstrap} if self.bootstrap else {}))
         return out | ({} if self.mean_wind is None else self.mean_wind.to_dict())
 
     def table(self) -> str:
@@ -112,6 +115,10 @@ class MannFit:
         lines.append(f"chi2/dof = {self.chi2_dof:.3g} (dof {self.dof}; 1 +- {math.sqrt(2 / max(self.dof, 1)):.2g} "
                      "expected when the model holds)")
         lines += [] if self.mean_wind is None else ["mean wind:", *self.mean_wind.lines()]
+        if self.bootstrap:
+            b = self.bootstrap
+            lines.append(f"bootstrap sd (B = {b['B']}) / analytic sd: " + ", ".join(
+                f"{n} {b['sd'][n]:.3g} / {b['sd_fit'][n]:.3g}" for n in b["sd"]) + " (of ln ae, ln L, Gamma)")
         lines += [f"note: {n}" for n in self.notes] + [f"FLAG: {f}" for f in self.flags]
         return "\n".join(lines)
 

@@ -5,18 +5,12 @@ default segment length ``default_nperseg``) is applied to every column; a segmen
 column is skipped for that column (Welch over the gaps). Bins are averaged into bands BANDS_PER_DECADE per decade
 (each lowest bin on its own), bins 1 .. n/2 - 1.
 
-Variances (the fit's weights): for a Gaussian process the periodograms of points a, b covary as |S_ab|^2 (Isserlis
-1918), so the average over P points of one bin has the one-point variance S^2 / K_eff (Welch 1967; K_eff from the
-segment overlap, ``WelchSetup.effective_segments``) times rho_bar = sum_ab coh2_ab / P^2, estimated from the data
-for every band (``_rho_bar``: from products of non-overlapping segments, free of the bias of coherence estimates);
-a band of n bins has the variance of one bin times
-(n + 2 sum_d (n - d) r_d) / n^2, with r_d the correlation of Hann bins d apart (``WelchSetup.bin_rho2``). The
-expected spectrum S itself comes from the model (``MannFit`` re-weights with the fitted model), so the weights do not
-follow the noise of the estimates. The co-spectrum Re S_uw has the one-point variance (S_uu S_ww + Re S_uw^2) / (2
-K_eff) (Bendat & Piersol 2010, Sect. 9.1) times the geometric mean of the u and w rho_bar; the estimates of one
-band covary (Isserlis 1918: Cov(P_uu, P_ww) = C^2, Cov(P_uu, C) = S_uu C at one point, C the co-spectrum; v is
-uncorrelated with u and w at one point, F_12 = F_23 = 0), scaled in the same way: ``BandSpectra.covariance``; and
-neighbouring bands covary through the correlation of neighbouring Hann bins: ``BandSpectra.full_covariance``.
+Variances (the fit's weights): one bin of one point's Welch estimate has the variance S^2 / K_eff (Welch 1967; K_eff
+from the segment overlap, ``WelchSetup.effective_segments``); a band of n bins that of one bin times
+(n + 2 sum_d (n - d) r_d) / n^2, with r_d the correlation of Hann bins d apart (``WelchSetup.bin_rho2``):
+``var_factor``. The joint covariance of the four spectra averaged over the points (``covariance``: Isserlis terms
+from the model's cross-spectra between the points) scales with it: ``BandSpectra.covariance``; neighbouring bands
+covary through the correlation of neighbouring Hann bins: ``BandSpectra.full_covariance``.
 """
 
 from __future__ import annotations
@@ -29,6 +23,7 @@ import numpy as np
 from turbgen import fft
 from turbgen.errors import ParameterError
 from turbgen.validation.estimators import MIN_NPERSEG, WelchSetup, default_nperseg, segment_starts
+from turbgen.validation.fit.covariance import joined
 from turbgen.validation.fit.data import FitData
 
 BANDS_PER_DECADE = 8
@@ -53,8 +48,8 @@ class BandSpectra:
     values : dict
         Spectrum ("uu", "vv", "ww", "uw") -> (nbands,) estimate (the co-spectrum Re S_uw for "uw").
     var_factor : dict
-        Spectrum -> (nbands,) the one-point variance factor times rho_bar and the band gain: the variance of an
-        auto-spectrum estimate is factor S^2, that of the co-spectrum factor (S_uu S_ww + C^2) / 2.
+        Spectrum -> (nbands,) the band gain over K_eff: the variance of one point's auto-spectrum estimate is
+        factor S^2, that of its co-spectrum factor (S_uu S_ww + C^2) / 2.
     segments : dict
         Component -> complete segments used per column (summed over columns).
     band_corr : numpy.ndarray
@@ -75,37 +70,18 @@ class BandSpectra:
         """(nbins,) values averaged over each band."""
         return np.array([binned[b].mean() for b in self.bands])
 
-    def covariance(self, used: tuple, expected: dict) -> np.ndarray:
-        """(nbands, k, k) covariance of the band estimates of the k spectra ``used`` given the expected band spectra
-        ``expected`` (module docstring)."""
-        f = self.var_factor
-        e = expected
-        c2 = e["uw"] ** 2 if "uw" in e else 0.0
-        var = {s: f[s] * e[s] ** 2 for s in ("uu", "vv", "ww") if s in used}
-        if "uw" in used:
-            var["uw"] = f["uw"] * (e["uu"] * e["ww"] + c2) / 2.0
-        # one point: Cov(P_uu, P_ww) = C^2, Cov(P_uu, Re C_uw) = S_uu C, Cov(P_ww, Re C_uw) = S_ww C (Isserlis 1918);
-        # the point average scales each by the geometric mean of the two estimates' factors
-        cross = {("uu", "ww"): c2, ("uu", "uw"): e["uu"] * e.get("uw", 0.0), ("ww", "uw"): e["ww"] * e.get("uw", 0.0)}
-        cov = np.zeros((self.f_hz.size, len(used), len(used)))
-        for i, s in enumerate(used):
-            cov[:, i, i] = var[s]
-            for j, t in enumerate(used):
-                if (s, t) in cross and t in used:
-                    cov[:, i, j] = cov[:, j, i] = np.sqrt(f[s] * f[t]) * cross[(s, t)]
-        return cov
+    def covariance(self, used: tuple, expected: dict, isserlis: np.ndarray) -> np.ndarray:
+        """(nbands, k, k) covariance of the band estimates of the k spectra ``used``: the normalised point-averaged
+        Isserlis terms ``isserlis`` (``covariance.isserlis``) times sqrt(S_i S_j S_k S_l) of the ``expected`` auto
+        spectra and the Welch factors of the two estimates."""
+        auto = {c: expected[c + c] for c in "uvw" if c + c in expected}
+        scale = np.stack([np.sqrt(auto[s[0]] * auto[s[1]] * self.var_factor[s]) for s in used], axis=1)  # (nb, k)
+        return isserlis * scale[:, :, None] * scale[:, None, :]
 
-    def full_covariance(self, used: tuple, expected: dict) -> np.ndarray:
+    def full_covariance(self, used: tuple, expected: dict, isserlis: np.ndarray) -> np.ndarray:
         """(nbands k, nbands k) covariance of all band estimates (band-major: index band * k + spectrum): the
-        per-band covariances (``covariance``) joined across bands by ``band_corr``, each cross-band pair of spectra
-        with the mean of the two bands' correlations of that pair."""
-        cov = self.covariance(used, expected)
-        sd = np.sqrt(np.diagonal(cov, axis1=1, axis2=2))  # (nb, k)
-        corr = cov / (sd[:, :, None] * sd[:, None, :])
-        nb, k = sd.shape
-        pair = 0.5 * (corr[:, None] + corr[None, :])  # (nb, nb, k, k)
-        full = self.band_corr[:, :, None, None] * pair * sd[:, None, :, None] * sd[None, :, None, :]
-        return full.transpose(0, 2, 1, 3).reshape(nb * k, nb * k)
+        per-band blocks (``covariance``) joined by ``band_corr`` (``turbgen.validation.fit.covariance.joined``)."""
+        return joined(self.covariance(used, expected, isserlis), self.band_corr)
 
 
 def band_bins(nperseg: int) -> tuple:
@@ -125,22 +101,6 @@ def _segment_dfts(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, np.ndar
     segs -= segs.mean(axis=2, keepdims=True)
     segs *= setup.window
     return fft.oneshot().rfft(segs, axis=2).transpose(0, 2, 1), ok
-
-
-def _rho_bar(X: np.ndarray, bands: tuple) -> np.ndarray:
-    """(nbands,) rho_bar = sum_ab coh2_ab / P^2 of the P columns of X (K, nf, P) per band (module docstring).
-
-    With G_ss' = sum_a conj(X_sa) X_s'a (segments s, s'), E|G_ss'|^2 = sum_ab |S_ab|^2 and E[G_ss G_s's'] = (sum_a
-    S_aa)^2 for independent segments (Isserlis 1918), so the ratio of their means over the segment pairs at least two
-    hops apart (no overlap) estimates rho_bar without the 1/K bias of a coherence estimate.
-    """
-    g = np.einsum("kfa,lfa->fkl", np.conj(X), X)  # (nf, K, K)
-    k = g.shape[1]
-    far = np.abs(np.arange(k)[:, None] - np.arange(k)[None, :]) >= 2
-    diag = np.real(np.einsum("fkk->fk", g))
-    num = (np.abs(g) ** 2)[:, far].sum(axis=1)
-    den = (diag[:, :, None] * diag[:, None, :])[:, far].sum(axis=1)
-    return np.array([np.clip(num[b].sum() / den[b].sum(), 1.0 / X.shape[2], 1.0) for b in bands])
 
 
 def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
@@ -186,8 +146,7 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
         psd = (np.abs(X) ** 2 * ok[:, None, :]).sum(axis=(0, 2)) * setup.scale / k.sum()
         values[c + c] = np.array([psd[b].mean() for b in bands])
         k_eff = setup.effective_segments(int(k.sum()), int(k.sum() - x.shape[1])) / x.shape[1]
-        rho = _rho_bar(X, bands)
-        factor[c + c] = rho * gain / k_eff
+        factor[c + c] = gain / k_eff
     if data.uw_columns:
         (xu, oku), (xw, okw) = dft["u"], dft["w"]
         iu, iw = (np.array(v) for v in zip(*data.uw_columns))
