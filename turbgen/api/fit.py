@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 
 from turbgen.validation.fit import MannFit, fit_mann_data, load_fit_data
+from turbgen.validation.fit.evolution import with_evolution
 
 
 def fit_mann(data, *, U: float | None = None, nperseg: int | None = None) -> MannFit:
@@ -47,4 +48,5 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None) -> Man
     """
     if isinstance(data, os.PathLike):
         data = os.fspath(data)
-    return fit_mann_data(load_fit_data(data, U), nperseg)
+    fit_data = load_fit_data(data, U)
+    return with_evolution(fit_data, fit_mann_data(fit_data, nperseg))

@@ -49,6 +49,8 @@ class FitData:
         The store's grid (with ``box``), None for sensor data.
     notes : tuple of str
         What was done to the data (trends removed, missing values).
+    u_xyz_m : tuple
+        (x [m upstream], y [m], z [m]) of every column of u (the longitudinal coherence: ``fit.evolution``).
     """
 
     source: str
@@ -59,6 +61,7 @@ class FitData:
     box: MannBox | None = None
     grid: object = None
     notes: tuple = ()
+    u_xyz_m: tuple = ()
 
     @property
     def nt(self) -> int:
@@ -124,7 +127,8 @@ def data_from_points(ps: PointSeries, U_m_s: float | None = None) -> FitData:
     uw = tuple((with_u.index(s), with_w.index(s)) for s in ps.sensors if s in with_u and s in with_w)
     gaps = [f"{s.name} {c}: {int(np.isnan(v).sum())} missing values (Welch segments holding them are skipped)"
             for s in ps.sensors for c, v in s.series.items() if np.isnan(v).any()]
-    return FitData(ps.source, dt, U, series, uw, notes=tuple(notes + gaps))
+    xyz = tuple((s.x_m, s.y_m, s.height_m if s.z_m is None else s.z_m) for s in with_u)
+    return FitData(ps.source, dt, U, series, uw, notes=tuple(notes + gaps), u_xyz_m=xyz)
 
 
 def data_from_store(fs) -> FitData:
@@ -161,7 +165,9 @@ def _grid_data(read, grid, attrs: dict, source: str) -> FitData:
         series[c] = np.concatenate(planes, axis=1).astype(float)
     n = series["u"].shape[1]
     box = mann_box_from_attrs(attrs, g) if attrs.get("model") == "mann" else MannBox(g.ny, g.nz)
-    return FitData(source, g.dt_s, float(attrs["U_m_s"]), series, tuple((k, k) for k in range(n)), box, g)
+    xyz = tuple((x, j * g.dy_m, k * g.dz_m) for x in g.x_m for j in iy for k in iz)
+    return FitData(source, g.dt_s, float(attrs["U_m_s"]), series, tuple((k, k) for k in range(n)), box, g,
+                   u_xyz_m=xyz)
 
 
 def load_fit_data(data, U_m_s: float | None = None) -> FitData:

@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from turbgen.theory.params import MannParams
+
+if TYPE_CHECKING:
+    from turbgen.validation.fit.evolution import EvoFit
 
 SPECTRUM_LABELS = {"uu": "u", "vv": "v", "ww": "w", "uw": "-uw (co-spectrum)"}
 
@@ -62,6 +66,8 @@ class MannFit:
     data, fitted, sd : dict
         Spectrum ("uu", "vv", "ww", "uw") -> band estimates, the fitted model's expectation of them and their
         standard deviations, one-sided [m^2 s^-2 Hz^-1].
+    evolution : turbgen.validation.fit.evolution.EvoFit or None
+        The eddy-evolution time fitted to the longitudinal coherence (None: no two points along x).
     """
 
     ae: FitValue
@@ -79,6 +85,7 @@ class MannFit:
     data: dict
     fitted: dict
     sd: dict
+    evolution: EvoFit | None = None
 
     @property
     def ok(self) -> bool:
@@ -96,6 +103,7 @@ class MannFit:
         out.update(chi2_dof=self.chi2_dof, dof=self.dof, flags=list(self.flags), notes=list(self.notes),
                    model=self.model, U_m_s=self.U_m_s, source=self.source, nperseg=self.nperseg,
                    spectra=sorted(self.data))
+        out["evo_time_s"] = self.evolution.to_dict() if self.evolution else {"value": None, "ci95": None, "held": True}
         return out
 
     def table(self) -> str:
@@ -106,6 +114,10 @@ class MannFit:
             v = getattr(self, name)
             ci = "held (not identified)" if v.held else f"95 % interval [{v.ci95[0]:.4g}, {v.ci95[1]:.4g}]"
             lines.append(f"{name:>15s} = {v.value:10.4g} {unit:13s} {ci}")
+        if self.evolution:
+            lo, hi = self.evolution.ci95
+            lines.append(f"{'evo_time_s':>15s} = {self.evolution.value_s:10.4g} {'s':13s} 95 % interval [{lo:.4g}, "
+                         f"{'inf (frozen)' if hi is None else f'{hi:.4g}'}]")
         lines.append(f"chi2/dof = {self.chi2_dof:.3g} (dof {self.dof}; 1 +- {math.sqrt(2 / max(self.dof, 1)):.2g} "
                      "expected when the model holds)")
         lines += [f"note: {n}" for n in self.notes] + [f"FLAG: {f}" for f in self.flags]
@@ -118,7 +130,10 @@ class MannFit:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        fig, ax = plt.subplots(figsize=(7, 4.5))
+        fig, axes = plt.subplots(1, 1 + bool(self.evolution), figsize=(7 + 5 * bool(self.evolution), 4.5), squeeze=False)
+        ax = axes[0, 0]
+        if self.evolution:
+            self.evolution.plot(axes[0, 1])
         f = self.f_hz
         for k, (s, label) in enumerate((s, SPECTRUM_LABELS[s]) for s in SPECTRUM_LABELS if s in self.data):
             sign = -1.0 if s == "uw" else 1.0
