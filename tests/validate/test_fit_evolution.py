@@ -40,7 +40,7 @@ def test_recovery_on_two_planes_100_m_apart(evolving):
     the side of the truth; fixed seed, deterministic); the frozen limit is excluded by far."""
     fit = turbgen.fit_mann(evolving)
     e = fit.evolution
-    assert e is not None and e.identified and e.separations_m == (100.0,)
+    assert e is not None and e.identified and e.pairs_m == ((0.0, 100.0),)
     lo, hi = (math.log(v) for v in e.ci95)
     x = math.log(e.value_s)
     half = (x - lo) if math.log(100.0) < x else (hi - x)
@@ -58,7 +58,7 @@ def test_frozen_field_is_said_not_identified(frozen, tmp_path):
     fit = turbgen.fit_mann(frozen)
     e = fit.evolution
     assert not e.identified and e.ci95[1] is None and e.chi2_frozen < 1
-    assert np.all(np.abs(e.data[100.0] - 1) < 1e-5)
+    assert np.all(np.abs(e.data[(0.0, 100.0)] - 1) < 1e-5)
     assert any("frozen (Taylor) limit is inside the 95 % interval" in n for n in fit.notes)
     d = json.loads(json.dumps(fit.to_dict()))["evo_time_s"]
     assert d["ci95"][1] is None and not d["identified"]
@@ -113,5 +113,5 @@ def test_cli_two_masts_json(evolving, tmp_path):
     r = CliRunner().invoke(cli, ["fit", "mann", str(path), "--U", "10", "--json"])
     out = json.loads(r.output.splitlines()[0])
     e = out["evo_time_s"]
-    assert e["separations_m"] == [100.0] and e["held"] is False
+    assert e["pairs_m"] == [[0.0, 100.0]] and e["held"] is False
     assert e["ci95"][0] < e["value"] and (e["ci95"][1] is None or e["value"] < e["ci95"][1])

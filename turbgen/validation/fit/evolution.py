@@ -62,14 +62,14 @@ class EvoFit:
         chi^2 at gamma and at the frozen limit (Taylor), with the same weights.
     dof : int
         Bands times pairs minus one.
-    separations_m : tuple
-        dx [m] of the fitted pairs of x.
+    pairs_m : tuple
+        (x_i, x_j) [m] of the fitted pairs of x values.
     message : str
         One line: identified or not, and why.
     f_hz : numpy.ndarray
         Band centres [Hz].
     data, fitted, sd : dict
-        dx -> (nbands,) co-coherence estimates, their expectation at gamma, their standard deviations.
+        (x_i, x_j) -> (nbands,) co-coherence estimates, their expectation at gamma, their standard deviations.
     """
 
     value_s: float
@@ -77,7 +77,7 @@ class EvoFit:
     chi2: float
     chi2_frozen: float
     dof: int
-    separations_m: tuple
+    pairs_m: tuple
     message: str
     f_hz: np.ndarray
     data: dict
@@ -91,14 +91,14 @@ class EvoFit:
     def to_dict(self) -> dict:
         return {"value": self.value_s, "ci95": list(self.ci95), "held": False, "identified": self.identified,
                 "chi2": self.chi2, "chi2_frozen": self.chi2_frozen, "dof": self.dof,
-                "separations_m": list(self.separations_m), "message": self.message}
+                "pairs_m": [list(p) for p in self.pairs_m], "message": self.message}
 
     def plot(self, ax) -> None:
-        """Co-coherence per separation with 95 % bars and the fitted model on ``ax``."""
-        for k, dx in enumerate(self.separations_m):
-            ax.errorbar(self.f_hz, self.data[dx], yerr=1.96 * self.sd[dx], fmt="o", ms=3, color=f"C{k}",
-                        label=f"dx = {dx:g} m data")
-            ax.plot(self.f_hz, self.fitted[dx], "-", color=f"C{k}", label=f"fitted, evo = {self.value_s:.3g} s")
+        """Co-coherence per pair of x with 95 % bars and the fitted model on ``ax``."""
+        for k, p in enumerate(self.pairs_m):
+            ax.errorbar(self.f_hz, self.data[p], yerr=1.96 * self.sd[p], fmt="o", ms=3, color=f"C{k}",
+                        label=f"x = {p[0]:g}, {p[1]:g} m data")
+            ax.plot(self.f_hz, self.fitted[p], "-", color=f"C{k}", label=f"fitted, evo = {self.value_s:.3g} s")
         ax.set_xscale("log")
         ax.set_xlabel("f [Hz]")
         ax.set_ylabel("co-coherence of u along x")
@@ -171,16 +171,19 @@ def _estimates(data: FitData, nperseg: int, pairs: dict):
     u = _aligned(data)
     bands = estimate_bands(replace(data, series={"u": u}, uw_columns=()), min(nperseg, u.shape[0] // 4))
     X, ok = _segment_dfts(u, bands.setup)
-    r, factor = [], []
-    for cols in pairs.values():
+    r, factor, of_x = [], [], {}
+    for (xa, _), cols in pairs.items():
         a, b = (np.array(c) for c in zip(*cols))
         both = (ok[:, a] & ok[:, b])[:, None, :]
         sums = [(v * both).sum(axis=(0, 2)) for v in (np.real(np.conj(X[:, :, a]) * X[:, :, b]),
                                                      np.abs(X[:, :, a]) ** 2, np.abs(X[:, :, b]) ** 2)]
         c, aa, bb = (bands.band_mean(s) for s in sums)
         r.append(c / np.sqrt(aa * bb))
-        one = replace(data, series={"u": u[:, a]}, uw_columns=())  # the point-correlation sum of one x
-        factor.append(estimate_bands(one, bands.setup.nperseg).var_factor["uu"])
+        key = (xa, tuple(a))  # the point-correlation sum of the points at one x
+        if key not in of_x:
+            one = replace(data, series={"u": u[:, a]}, uw_columns=())
+            of_x[key] = estimate_bands(one, bands.setup.nperseg).var_factor["uu"]
+        factor.append(of_x[key])
     return bands, np.array(r), np.array(factor)
 
 
@@ -304,10 +307,9 @@ def _result(problem: _Problem, bands, x: float, ci: list, c_min: float, chi2_fro
     else:
         msg = (f"evo_time_s identified; the frozen (Taylor) limit is excluded (chi2 {chi2_frozen:.4g} against "
                f"{c_min:.4g}, dof {dof})")
-    mean = problem.mean(gamma)
-    dxs = tuple(b - a for a, b in problem.seps)
-    return EvoFit(gamma, (lo, hi), c_min, chi2_frozen, dof, dxs, msg, bands.f_hz,
-                  dict(zip(dxs, problem.r)), dict(zip(dxs, mean)), dict(zip(dxs, problem.sd)))
+    seps = problem.seps
+    return EvoFit(gamma, (lo, hi), c_min, chi2_frozen, dof, seps, msg, bands.f_hz, dict(zip(seps, problem.r)),
+                  dict(zip(seps, problem.mean(gamma))), dict(zip(seps, problem.sd)))
 
 
 def with_evolution(data: FitData, fit):
