@@ -157,9 +157,7 @@ class CoherenceModel:
             self.rate = np.stack([inv_tau.ravel() for _, _, inv_tau in slabs])
 
     def expected(self, gamma_s: float, dx_m: float) -> np.ndarray:
-        """(nbands,) expected co-coherence at separation ``dx_m`` (before the estimator's bias); gamma inf: 1."""
-        if math.isinf(gamma_s):
-            return np.ones(len(self.bands.bands))
+        """(nbands,) expected co-coherence at separation ``dx_m`` (before the estimator's bias)."""
         node = (self.mass * np.exp(-self.rate * (dx_m / (self.U * gamma_s)))).sum(1) / self.mass.sum(1)
         rho = np.interp(np.log(self.k1), np.log(self.nodes), node)
         cross = self.bands.band_mean(self.kernel.apply(self.f11_lines * np.concatenate([[1.0], rho])))
