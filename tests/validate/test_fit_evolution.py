@@ -115,3 +115,16 @@ def test_cli_two_masts_json(evolving, tmp_path):
     e = out["evo_time_s"]
     assert e["pairs_m"] == [[0.0, 100.0]] and e["held"] is False
     assert e["ci95"][0] < e["value"] and (e["ci95"][1] is None or e["value"] < e["ci95"][1])
+
+
+def test_incoherent_masts_give_only_an_upper_bound():
+    """Independent noise at two masts 150 m apart: co-coherence 0, so gamma sits at the bottom of its range and only
+    an upper bound is said (the one-point fit of noise is flagged on its own)."""
+    rng = np.random.default_rng(3)
+    t = np.arange(1024) * 0.5
+    masts = [PointSensor(f"s{x:g}", x, 0.0, 0.0, None, {c: rng.standard_normal(t.size) for c in "uvw"})
+             for x in (0.0, 150.0)]
+    fit = turbgen.fit_mann(PointSeries("n", t, tuple(masts), False, None, "noise"), U=10.0)
+    e = fit.evolution
+    assert e.value_s == pytest.approx(1.0) and e.ci95[0] == 1.0 and e.ci95[1] < 100
+    assert e.message.startswith("evo_time_s not identified from below")

@@ -9,7 +9,7 @@ from turbgen.validation.fit.evolution import with_evolution
 
 
 def fit_mann(data, *, U: float | None = None, nperseg: int | None = None) -> MannFit:
-    """Fit ae, L and Gamma of the Mann (1994) model to the spectra of ``data`` by weighted least squares.
+    """Fit ae, L, Gamma (Mann 1994) to the spectra of ``data`` and the evolution time gamma to its x coherence.
 
     The one-point spectra of u, v, w and the u-w co-spectrum are estimated (Welch, detrended), each band weighted by
     the estimator's own covariance; a turbgen store is fitted against the Mann tensor summed over its generator's box
@@ -31,7 +31,9 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None) -> Man
     -------
     turbgen.validation.fit.MannFit
         ``ae``, ``length_scale_m``, ``gamma`` (each ``value`` and ``ci95``), ``chi2_dof``, ``flags`` (no
-        convergence, a range boundary: ``ok`` is False), ``notes``, ``to_dict()``, ``table()``, ``plot(path)``.
+        convergence, a range boundary: ``ok`` is False), ``notes``, ``to_dict()``, ``table()``, ``plot(path)``;
+        ``evolution``: the eddy-evolution time from the co-coherence of u at points along x (two masts, two
+        planes), None without such points (Guo et al. 2023, Eq. 13, 16).
 
     Raises
     ------

@@ -250,6 +250,11 @@ def fit_evolution(data: FitData, params: MannParams, sd_fit: dict, nperseg: int)
         "length_scale_m" -> sd of ln L, "gamma" -> sd of Gamma of the one-point fit (None: held).
     nperseg : int
         Welch segment length [samples] of the one-point fit.
+
+    Returns
+    -------
+    EvoFit or str
+        The fit, or why there is none (no two u points along x at one (y, z)).
     """
     pairs = x_pairs(data.u_xyz_m) if "u" in data.series else {}
     if not pairs:
@@ -298,8 +303,8 @@ def _result(problem: _Problem, bands, x: float, ci: list, c_min: float, chi2_fro
     hi = None if ci[1] is None else math.exp(ci[1])
     dof = problem.r.size - 1
     if hi is None:
-        msg = (f"evo_time_s not identified: the frozen (Taylor) limit is inside the 95 % interval (chi2 {chi2_frozen:.4g} "
-               f"frozen against {c_min:.4g} at best, dof {dof}); evo_time_s > {lo:.4g} s")
+        msg = (f"evo_time_s not identified: the frozen (Taylor) limit is inside the 95 % interval (chi2 "
+               f"{chi2_frozen:.4g} frozen against {c_min:.4g} at best, dof {dof}); evo_time_s > {lo:.4g} s")
     elif ci[0] is None:
         msg = f"evo_time_s not identified from below: coherence ~ 0 (pairs too far apart); evo_time_s < {hi:.4g} s"
     else:

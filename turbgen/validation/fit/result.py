@@ -130,7 +130,8 @@ class MannFit:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        fig, axes = plt.subplots(1, 1 + bool(self.evolution), figsize=(7 + 5 * bool(self.evolution), 4.5), squeeze=False)
+        panels = 1 + bool(self.evolution)
+        fig, axes = plt.subplots(1, panels, figsize=(7 + 5 * (panels - 1), 4.5), squeeze=False)
         ax = axes[0, 0]
         if self.evolution:
             self.evolution.plot(axes[0, 1])
