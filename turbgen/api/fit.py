@@ -10,12 +10,13 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.validation.fit import MannFit, fit_mann_data, load_fit_data
+from turbgen.validation.fit.evolution import with_evolution
 from turbgen.validation.fit.mean_wind import fit_mean_wind
 
 
 def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points=None,
              bootstrap: int = 0) -> MannFit:
-    """Fit ae, L and Gamma of the Mann (1994) model to the spectra of ``data`` by weighted least squares.
+    """Fit ae, L, Gamma (Mann 1994) to the spectra of ``data`` and the evolution time gamma to its x coherence.
 
     The one-point spectra of u, v, w and the u-w co-spectrum are estimated (Welch, detrended), each band weighted by
     the estimator's own covariance; a turbgen store is fitted against the Mann tensor summed over its generator's box
@@ -45,7 +46,8 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     turbgen.validation.fit.MannFit
         ``ae``, ``length_scale_m``, ``gamma`` (each ``value`` and ``ci95``), ``chi2_dof``, ``flags`` (no
         convergence, a range boundary: ``ok`` is False), ``notes``, ``mean_wind``, ``to_dict()``, ``table()``,
-        ``plot(path)``.
+        ``plot(path)``; ``evolution``: the eddy-evolution time from the co-coherence of u at points along x (two
+        masts, two planes), None without such points (Guo et al. 2023, Eq. 13, 16).
 
     Raises
     ------
@@ -69,7 +71,7 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     if bootstrap and fd.grid is None:
         raise ParameterError(f"bootstrap = {bootstrap}: the parametric bootstrap regenerates the data's grid; "
                              f"{fd.source} holds point series, not a field")
-    fit = replace(fit_mann_data(fd, nperseg), mean_wind=fit_mean_wind(fd.points))
+    fit = with_evolution(fd, replace(fit_mann_data(fd, nperseg), mean_wind=fit_mean_wind(fd.points)))
     return replace(fit, bootstrap=bootstrap_sd(fit, fd, bootstrap, points)) if bootstrap else fit
 
 

@@ -55,6 +55,8 @@ class FitData:
         (N, 3) positions x, y, z [m] of the points (a height for z where the sensor gives one).
     columns : dict
         Component -> (P,) index into ``sites_m`` of each column of ``series`` (the covariance of point averages).
+    u_xyz_m : tuple
+        (x [m upstream], y [m], z [m]) of every column of u (the longitudinal coherence: ``fit.evolution``).
     """
 
     source: str
@@ -68,6 +70,7 @@ class FitData:
     points: PointSeries | None = None
     sites_m: np.ndarray | None = None
     columns: dict | None = None
+    u_xyz_m: tuple = ()
 
     @property
     def nt(self) -> int:
@@ -136,7 +139,8 @@ def data_from_points(ps: PointSeries, U_m_s: float | None = None) -> FitData:
     sites = np.array([(s.x_m, s.y_m, s.z_m if s.z_m is not None else s.height_m) for s in ps.sensors], float)
     columns = {c: np.array([k for k, s in enumerate(ps.sensors) if c in s.series]) for c in series}
     return FitData(ps.source, dt, U, series, uw, notes=tuple(notes + gaps), points=ps,
-                   sites_m=sites, columns=columns)
+                   sites_m=sites, columns=columns,
+                   u_xyz_m=tuple(map(tuple, sites[columns["u"]])) if "u" in columns else ())
 
 
 def data_from_store(fs, points=None) -> FitData:
@@ -208,7 +212,7 @@ def _grid_data(read, grid, attrs: dict, source: str, points=None) -> FitData:
         source += f" at {iy.size} point(s) (y, z) = " + ", ".join(f"({y:g}, {z:g})" for y, z in
                                                                   zip(g.y()[iy], g.z()[iz]))
     return FitData(source, g.dt_s, float(attrs["U_m_s"]), series, tuple((k, k) for k in range(n)), box, g,
-                   sites_m=sites, columns=cols)
+                   sites_m=sites, columns=cols, u_xyz_m=tuple(map(tuple, sites)))
 
 
 def load_fit_data(data, U_m_s: float | None = None, points=None) -> FitData:

@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from turbgen.theory.params import MannParams
+
+if TYPE_CHECKING:
+    from turbgen.validation.fit.evolution import EvoFit
 
 SPECTRUM_LABELS = {"uu": "u", "vv": "v", "ww": "w", "uw": "-uw (co-spectrum)"}
 
@@ -66,6 +70,8 @@ class MannFit:
         Shear exponent, roughness, veer and turbulence intensity of total-wind sensor data.
     bootstrap : dict or None
         The parametric bootstrap (``turbgen.api.fit.bootstrap_sd``): {"B", "sd", "sd_fit"}; None when not run.
+    evolution : turbgen.validation.fit.evolution.EvoFit or None
+        The eddy-evolution time fitted to the longitudinal coherence (None: no two points along x).
     """
 
     ae: FitValue
@@ -85,6 +91,7 @@ class MannFit:
     sd: dict
     mean_wind: object = None
     bootstrap: dict | None = None
+    evolution: EvoFit | None = None
 
     @property
     def ok(self) -> bool:
@@ -102,6 +109,7 @@ class MannFit:
         out.update(chi2_dof=self.chi2_dof, dof=self.dof, flags=list(self.flags), notes=list(self.notes),
                    model=self.model, U_m_s=self.U_m_s, source=self.source, nperseg=self.nperseg,
                    spectra=sorted(self.data), **({"bootstrap": self.bootstrap} if self.bootstrap else {}))
+        out["evo_time_s"] = self.evolution.to_dict() if self.evolution else {"value": None, "ci95": None, "held": True}
         return out | ({} if self.mean_wind is None else self.mean_wind.to_dict())
 
     def table(self) -> str:
@@ -112,6 +120,10 @@ class MannFit:
             v = getattr(self, name)
             ci = "held (not identified)" if v.held else f"95 % interval [{v.ci95[0]:.4g}, {v.ci95[1]:.4g}]"
             lines.append(f"{name:>15s} = {v.value:10.4g} {unit:13s} {ci}")
+        if self.evolution:
+            lo, hi = self.evolution.ci95
+            lines.append(f"{'evo_time_s':>15s} = {self.evolution.value_s:10.4g} {'s':13s} 95 % interval [{lo:.4g}, "
+                         f"{'inf (frozen)' if hi is None else f'{hi:.4g}'}]")
         lines.append(f"chi2/dof = {self.chi2_dof:.3g} (dof {self.dof}; 1 +- {math.sqrt(2 / max(self.dof, 1)):.2g} "
                      "expected when the model holds)")
         lines += [] if self.mean_wind is None else ["mean wind:", *self.mean_wind.lines()]
@@ -129,7 +141,11 @@ class MannFit:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        fig, ax = plt.subplots(figsize=(7, 4.5))
+        panels = 1 + bool(self.evolution)
+        fig, axes = plt.subplots(1, panels, figsize=(7 + 5 * (panels - 1), 4.5), squeeze=False)
+        ax = axes[0, 0]
+        if self.evolution:
+            self.evolution.plot(axes[0, 1])
         f = self.f_hz
         for k, (s, label) in enumerate((s, SPECTRUM_LABELS[s]) for s in SPECTRUM_LABELS if s in self.data):
             sign = -1.0 if s == "uw" else 1.0

@@ -1,0 +1,130 @@
+"""The eddy-evolution time fitted to the longitudinal coherence (turbgen.validation.fit.evolution)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import turbgen
+from turbgen.cli import cli
+from turbgen.spec.constraints import PointSensor, PointSeries
+from turbgen.validation.fit import load_fit_data
+from turbgen.validation.fit.evolution import _aligned, x_pairs
+
+Z999_OVER_Z95 = 3.2905267314919255 / 1.959963984540054  # 99.9 % over 95 % two-sided normal quantiles
+GRID = dict(L=30.0, gamma=3.2, ae=0.08, nt=1024, ny=12, nz=12, dy=6, dz=6, planes=[0, 100], U=10.0, dt=0.5)
+
+
+@pytest.fixture(scope="module")
+def evolving():
+    return turbgen.mann(evo=100, seed=21, **GRID)
+
+
+@pytest.fixture(scope="module")
+def frozen():
+    return turbgen.mann(evo="frozen", seed=22, **GRID)
+
+
+def test_x_pairs_groups_points_at_one_y_z():
+    xyz = ((0.0, 0.0, 0.0), (100.0, 0.0, 0.0), (0.0, 6.0, 0.0), (50.0, 6.0, 0.0), (100.0, 6.0, 0.0), (0.0, 9.0, 0.0))
+    assert x_pairs(xyz) == {(0.0, 100.0): [(0, 1), (2, 4)], (0.0, 50.0): [(2, 3)], (50.0, 100.0): [(3, 4)]}
+    assert x_pairs(((0.0, 0.0, 0.0), (0.0, 0.0, 10.0))) == {}
+
+
+def test_recovery_on_two_planes_100_m_apart(evolving):
+    """The true gamma (100 s) lies within the 99.9 % interval (the 95 % one widened by 3.29 / 1.96 in ln gamma on
+    the side of the truth; fixed seed, deterministic); the frozen limit is excluded by far."""
+    fit = turbgen.fit_mann(evolving)
+    e = fit.evolution
+    assert e is not None and e.identified and e.pairs_m == ((0.0, 100.0),)
+    lo, hi = (math.log(v) for v in e.ci95)
+    x = math.log(e.value_s)
+    half = (x - lo) if math.log(100.0) < x else (hi - x)
+    assert abs(x - math.log(100.0)) <= Z999_OVER_Z95 * half, (e.value_s, e.ci95)
+    assert e.chi2_frozen - e.chi2 > 100 and e.chi2 / e.dof < 3
+    out = fit.to_dict()["evo_time_s"]
+    assert out["identified"] and out["ci95"][0] < out["value"] < out["ci95"][1]
+    assert any(n.startswith("evo_time_s identified") for n in fit.notes)
+    assert "evo_time_s =" in fit.table()
+
+
+def test_frozen_field_is_said_not_identified(frozen, tmp_path):
+    """Planes of a frozen field are the same series in the convected frame (co-coherence 1 at float32 round-off):
+    the interval reaches the frozen limit, and the result says so instead of a bounded gamma."""
+    fit = turbgen.fit_mann(frozen)
+    e = fit.evolution
+    assert not e.identified and e.ci95[1] is None and e.chi2_frozen < 1
+    assert np.all(np.abs(e.data[(0.0, 100.0)] - 1) < 1e-5)
+    assert any("frozen (Taylor) limit is inside the 95 % interval" in n for n in fit.notes)
+    d = json.loads(json.dumps(fit.to_dict()))["evo_time_s"]
+    assert d["ci95"][1] is None and not d["identified"]
+    assert "inf (frozen)" in fit.table()
+    fit.plot(tmp_path / "f.png")
+    assert (tmp_path / "f.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def _masts(ds, iz=(3, 8)) -> PointSeries:
+    """Two masts at the planes' (y, z) points, sampled at the same physical times: the mast at x sees at time T the
+    stored sample T + x / U (x / (U dt) = 20 samples here); the records are the common span."""
+    U, dt, nt = 10.0, 0.5, ds.sizes["t"]
+    lag = round(100.0 / (U * dt))
+    sensors = []
+    for k, x in enumerate((0.0, 100.0)):
+        shift = lag if k else 0
+        for z in iz:
+            series = {c: ds[c].values[shift: nt - lag + shift, k, 6, z].astype(float) for c in "uvw"}
+            sensors.append(PointSensor(f"x{x:g}z{z}", x, float(ds.y[6]), float(ds.z[z]), None, series))
+    return PointSeries("masts", ds.t.values[: nt - lag], tuple(sensors), False, None, "two masts")
+
+
+def test_sensor_series_are_aligned_by_taylors_delay(evolving):
+    """Sensor data are shifted back into the convected frame: the aligned columns are the stored ones (the span
+    both masts saw, 20 samples shorter than the file) up to the line each sensor's detrending removed."""
+    data = load_fit_data(_masts(evolving), U_m_s=10.0)
+    u = _aligned(data)
+    nt = evolving.sizes["t"]
+    assert u.shape[0] == nt - 40
+    for c, (k, z) in enumerate(((0, 3), (0, 8), (1, 3), (1, 8))):
+        line = u[:, c] - evolving.u.values[20 : nt - 20, k, 6, z]
+        assert np.max(np.abs(np.diff(line, 2))) < 1e-12
+
+
+def test_one_x_only_is_not_fitted_and_said(evolving):
+    """One mast (every sensor at x = 0): no pair along x; gamma is not fitted, the notes and the JSON say so."""
+    ps = _masts(evolving)
+    one = PointSeries("one", ps.time_s, ps.sensors[:2], False, None, "one mast")
+    fit = turbgen.fit_mann(one, U=10.0)
+    assert fit.evolution is None
+    assert any(n.startswith("evo_time_s not fitted: the data hold no two u series") for n in fit.notes)
+    assert fit.to_dict()["evo_time_s"] == {"value": None, "ci95": None, "held": True}
+
+
+def test_cli_two_masts_json(evolving, tmp_path):
+    """`turbgen fit mann` of a two-mast file prints evo_time_s with its interval (continuous model)."""
+    ps = _masts(evolving)
+    sensors = [{"name": s.name, "x_m": s.x_m, "y_m": s.y_m, "z_m": s.z_m,
+                **{f"{c}_m_s": list(v) for c, v in s.series.items()}} for s in ps.sensors]
+    path = tmp_path / "masts.json"
+    path.write_text(json.dumps({"kind": "point-series", "time_s": list(ps.time_s), "sensors": sensors}))
+    r = CliRunner().invoke(cli, ["fit", "mann", str(path), "--U", "10", "--json"])
+    out = json.loads(r.output.splitlines()[0])
+    e = out["evo_time_s"]
+    assert e["pairs_m"] == [[0.0, 100.0]] and e["held"] is False
+    assert e["ci95"][0] < e["value"] and (e["ci95"][1] is None or e["value"] < e["ci95"][1])
+
+
+def test_incoherent_masts_give_only_an_upper_bound():
+    """Independent noise at two masts 150 m apart: co-coherence 0, so gamma sits at the bottom of its range and only
+    an upper bound is said (the one-point fit of noise is flagged on its own)."""
+    rng = np.random.default_rng(3)
+    t = np.arange(1024) * 0.5
+    masts = [PointSensor(f"s{x:g}", x, 0.0, 0.0, None, {c: rng.standard_normal(t.size) for c in "uvw"})
+             for x in (0.0, 150.0)]
+    fit = turbgen.fit_mann(PointSeries("n", t, tuple(masts), False, None, "noise"), U=10.0)
+    e = fit.evolution
+    assert e.value_s == pytest.approx(1.0) and e.ci95[0] == 1.0 and e.ci95[1] < 100
+    assert e.message.startswith("evo_time_s not identified from below")

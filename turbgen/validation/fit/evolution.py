@@ -1,0 +1,337 @@
+"""Fit the eddy-evolution time gamma [s] (Guo et al. 2022) to the longitudinal coherence of u along x.
+
+Estimate: u points at one (y, z) and different x (sensors, or the planes of a store) form pairs; per pair of x
+values and band the co-coherence r = sum Re C_ij / sqrt(sum A_i sum A_j) pools the Welch cross- and auto-spectra
+(``spectra``' segments and bands) over the (y, z) points and the band's bins. A store is in the convected frame;
+sensor series are first shifted by whole samples of x / U (Taylor's delay; the rest, under dt / 2, is not
+corrected). Model: rho(k1, dx) = sum Phi_11 exp(-dx / (U tau_e(k))) / sum Phi_11 (Guo et al. 2023, Eq. 13, 16),
+summed over the store's lattice (``MannLattice``, the validator's "theo. (grid)") or over the continuous (k2, k3)
+plane (``perpendicular_quadrature``) with ae, L and Gamma held at their one-point fit (factor2 at its default);
+through the expected Welch estimate of every bin (``WelchKernel``) and the band means. Variance (delta method with
+Isserlis 1918 moments of complex Gaussian DFTs): r_m = rho_m + Z_m / S with Z_m = Re X_i* X_j - rho_m (|X_i|^2 +
+|X_j|^2) / 2, so Cov(r_m, r_n) = tr(M_m R M_n R) c, R the (x, x) coherencies and c the one-point variance factor
+of a band's auto-spectrum (1 / K_eff times the point-correlation sum and the band gain, ``spectra``); one pair
+gives (1 - rho^2)^2 c / 2, and E r = rho - rho (1 - rho^2) c / 4 to the same order. Bands covary through
+``BandSpectra.band_corr``.
+
+Fit: chi^2 over ln gamma on the range of evo (a scan, then a bounded refinement), weights at the fitted gamma
+(re-weighted until ln gamma moves < MOVE_TOL). The 95 % interval is where chi^2 <= min + 3.84 (profile), each side
+widened in quadrature by the shift of ln gamma when L and Gamma move by one standard deviation of their fit. An
+interval reaching the top of the range means the frozen field (Taylor, gamma -> inf) is not excluded: gamma is not
+identified, and the result says so beside chi^2 of the frozen limit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.linalg import solve_triangular
+from scipy.optimize import brentq, minimize_scalar
+
+from turbgen.theory import ranges
+from turbgen.theory.eddy_lifetime import evolution_lifetime_s
+from turbgen.theory.mann_quadrature import perpendicular_quadrature
+from turbgen.theory.params import MannParams
+from turbgen.validation.fit.data import FitData
+from turbgen.validation.fit.model import BandModel
+from turbgen.validation.fit.spectra import _segment_dfts, estimate_bands
+from turbgen.validation.mann_lattice import MannLattice
+
+Z95 = 1.959963984540054  # standard normal 97.5 % quantile
+CHI2_95 = Z95**2  # chi^2 quantile 0.95 of one degree of freedom
+N_NODES = 48  # k1 nodes of the coherence (interpolated to the record's lines)
+N_SCAN = 61  # ln gamma scan points over the range of evo
+MOVE_TOL, PASSES = 0.01, 6
+VAR_FLOOR = 1e-12  # float32 round-off of stored series: identical records give r = 1 within ~1e-7
+POS_TOL_M = 1e-3  # points closer than this in y and z share a (y, z)
+
+
+@dataclass(frozen=True, eq=False)
+class EvoFit:
+    """The eddy-evolution time fitted to longitudinal coherence (module docstring).
+
+    Attributes
+    ----------
+    value_s : float
+        gamma [s].
+    ci95 : tuple
+        (lo, hi) [s]; hi None when the frozen limit is inside the interval.
+    chi2, chi2_frozen : float
+        chi^2 at gamma and at the frozen limit (Taylor), with the same weights.
+    dof : int
+        Bands times pairs minus one.
+    pairs_m : tuple
+        (x_i, x_j) [m] of the fitted pairs of x values.
+    message : str
+        One line: identified or not, and why.
+    f_hz : numpy.ndarray
+        Band centres [Hz].
+    data, fitted, sd : dict
+        (x_i, x_j) -> (nbands,) co-coherence estimates, their expectation at gamma, their standard deviations.
+    """
+
+    value_s: float
+    ci95: tuple
+    chi2: float
+    chi2_frozen: float
+    dof: int
+    pairs_m: tuple
+    message: str
+    f_hz: np.ndarray
+    data: dict
+    fitted: dict
+    sd: dict
+
+    @property
+    def identified(self) -> bool:
+        return self.ci95[1] is not None
+
+    def to_dict(self) -> dict:
+        return {"value": self.value_s, "ci95": list(self.ci95), "held": False, "identified": self.identified,
+                "chi2": self.chi2, "chi2_frozen": self.chi2_frozen, "dof": self.dof,
+                "pairs_m": [list(p) for p in self.pairs_m], "message": self.message}
+
+    def plot(self, ax) -> None:
+        """Co-coherence per pair of x with 95 % bars and the fitted model on ``ax``."""
+        for k, p in enumerate(self.pairs_m):
+            ax.errorbar(self.f_hz, self.data[p], yerr=1.96 * self.sd[p], fmt="o", ms=3, color=f"C{k}",
+                        label=f"x = {p[0]:g}, {p[1]:g} m data")
+            ax.plot(self.f_hz, self.fitted[p], "-", color=f"C{k}", label=f"fitted, evo = {self.value_s:.3g} s")
+        ax.set_xscale("log")
+        ax.set_xlabel("f [Hz]")
+        ax.set_ylabel("co-coherence of u along x")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+
+
+def x_pairs(xyz: tuple) -> dict:
+    """(x_i, x_j) with x_i < x_j -> [(column at x_i, column at x_j)] of the u columns at one (y, z)."""
+    groups: dict = {}
+    for c, (x, y, z) in enumerate(xyz):
+        key = (round(y / POS_TOL_M), round(z / POS_TOL_M))
+        groups.setdefault(key, []).append((x, c))
+    out: dict = {}
+    for cols in groups.values():
+        cols.sort()
+        for a, (xa, ca) in enumerate(cols):
+            for xb, cb in cols[a + 1:]:
+                if xb - xa > POS_TOL_M:
+                    out.setdefault((xa, xb), []).append((ca, cb))
+    return out
+
+
+def _aligned(data: FitData) -> np.ndarray:
+    """u of ``data`` in the convected frame: sensor columns shifted by whole samples of x / U (module docstring)."""
+    u = data.series["u"]
+    if data.grid is not None:
+        return u
+    lag = np.array([round(x / (data.U_m_s * data.dt_s)) for x, _, _ in data.u_xyz_m])
+    lag -= lag.min()
+    n = u.shape[0] - lag.max()
+    return np.stack([u[lag.max() - s: lag.max() - s + n, c] for c, s in enumerate(lag)], axis=1)
+
+
+class CoherenceModel:
+    """Expected band co-coherence of pairs dx apart as a function of gamma, the other parameters held (module
+    docstring): per k1 node the Phi_11 masses and their decay rates at gamma = 1 s."""
+
+    def __init__(self, bands, data: FitData, params: MannParams):
+        self.bands, self.U = bands, data.U_m_s
+        band_model = BandModel(bands, data.U_m_s, data.grid, data.box)
+        band_model.update_ratio(params)
+        self.kernel, self.k1 = band_model.kernel, band_model.k1
+        f11 = band_model.line_spectra(params.ae, params.length_scale_m, params.gamma)["uu"]
+        self.f11_lines = np.concatenate([[0.0], f11 * band_model.dk1])
+        self.auto = bands.band_mean(self.kernel.apply(self.f11_lines))
+        self.nodes = np.geomspace(self.k1[0], self.k1[-1], N_NODES)
+        unit = replace(params, evo_time_s=1.0)
+        if data.grid is None:
+            kappa, w, g = perpendicular_quadrature(self.nodes, params, ((0, 0),))
+            self.mass = w * g[(0, 0)]
+            self.rate = 1.0 / evolution_lifetime_s(np.sqrt(self.nodes[:, None] ** 2 + kappa**2), unit)
+        else:
+            slabs = list(MannLattice(unit, data.grid, data.box, data.U_m_s).slabs(self.nodes))
+            self.mass = np.stack([phi[0, 0].ravel() for _, phi, _ in slabs])
+            self.rate = np.stack([inv_tau.ravel() for _, _, inv_tau in slabs])
+
+    def expected(self, gamma_s: float, dx_m: float) -> np.ndarray:
+        """(nbands,) expected co-coherence at separation ``dx_m`` (before the estimator's bias)."""
+        node = (self.mass * np.exp(-self.rate * (dx_m / (self.U * gamma_s)))).sum(1) / self.mass.sum(1)
+        rho = np.interp(np.log(self.k1), np.log(self.nodes), node)
+        cross = self.bands.band_mean(self.kernel.apply(self.f11_lines * np.concatenate([[1.0], rho])))
+        return cross / self.auto
+
+
+def _estimates(data: FitData, nperseg: int, pairs: dict):
+    """(bands of the aligned u, (npairs, nbands) co-coherences, (npairs, nbands) variance factors)."""
+    u = _aligned(data)
+    bands = estimate_bands(replace(data, series={"u": u}, uw_columns=()), min(nperseg, u.shape[0] // 4))
+    X, ok = _segment_dfts(u, bands.setup)
+    r, factor, of_x = [], [], {}
+    for (xa, _), cols in pairs.items():
+        a, b = (np.array(c) for c in zip(*cols))
+        both = (ok[:, a] & ok[:, b])[:, None, :]
+        sums = [(v * both).sum(axis=(0, 2)) for v in (np.real(np.conj(X[:, :, a]) * X[:, :, b]),
+                                                     np.abs(X[:, :, a]) ** 2, np.abs(X[:, :, b]) ** 2)]
+        c, aa, bb = (bands.band_mean(s) for s in sums)
+        r.append(c / np.sqrt(aa * bb))
+        key = (xa, tuple(a))  # the point-correlation sum of the points at one x
+        if key not in of_x:
+            one = replace(data, series={"u": u[:, a]}, uw_columns=())
+            of_x[key] = estimate_bands(one, bands.setup.nperseg).var_factor["uu"] * _rho_bar(X[:, :, a], bands.bands)
+        factor.append(of_x[key])
+    return bands, np.array(r), np.array(factor)
+
+
+def _rho_bar(X: np.ndarray, bands: tuple) -> np.ndarray:
+    """(nbands,) rho_bar = sum_ab coh2_ab / P^2 of the P columns of X (K, nf, P): the variance of a P-point average
+    of auto-spectrum estimates over that of one point. With G_ss' = sum_a conj(X_sa) X_s'a, E|G_ss'|^2 = sum_ab
+    |S_ab|^2 and E[G_ss G_s's'] = (sum_a S_aa)^2 for independent segments (Isserlis 1918): their means over segment
+    pairs at least two hops apart (no overlap) give rho_bar without the 1/K bias of a coherence estimate."""
+    g = np.einsum("kfa,lfa->fkl", np.conj(X), X)  # (nf, K, K)
+    far = np.abs(np.arange(g.shape[1])[:, None] - np.arange(g.shape[1])[None, :]) >= 2
+    diag = np.real(np.einsum("fkk->fk", g))
+    num = (np.abs(g) ** 2)[:, far].sum(axis=1)
+    den = (diag[:, :, None] * diag[:, None, :])[:, far].sum(axis=1)
+    return np.array([np.clip(num[b].sum() / den[b].sum(), 1.0 / X.shape[2], 1.0) for b in bands])
+
+
+class _Problem:
+    """chi^2 of the co-coherences against the model, weights at a given gamma."""
+
+    def __init__(self, model: CoherenceModel, seps: tuple, r: np.ndarray, factor: np.ndarray):
+        self.model, self.seps, self.r, self.factor = model, seps, r, factor
+        self.xs = sorted({x for pair in seps for x in pair})
+
+    def rho(self, gamma_s: float) -> dict:
+        dxs = {abs(b - a) for a in self.xs for b in self.xs}
+        return {dx: self.model.expected(gamma_s, dx) for dx in dxs}
+
+    def mean(self, gamma_s: float) -> np.ndarray:
+        rho = self.rho(gamma_s)
+        e = np.array([rho[b - a] for a, b in self.seps])
+        return e - e * (1 - e**2) * self.factor / 4
+
+    def set_weights(self, gamma_s: float) -> None:
+        """Cholesky factor of the (band, pair) covariance at ``gamma_s`` (module docstring)."""
+        rho = self.rho(gamma_s)
+        nx, nb, npair = len(self.xs), self.r.shape[1], len(self.seps)
+        cov = np.empty((nb, npair, npair))
+        for b in range(nb):
+            R = np.array([[rho[abs(q - p)][b] for q in self.xs] for p in self.xs])
+            M = np.zeros((npair, nx, nx))
+            for m, (p, q) in enumerate(self.seps):
+                i, j = self.xs.index(p), self.xs.index(q)
+                M[m, i, j] = M[m, j, i] = 0.5
+                M[m, i, i] = M[m, j, j] = -R[i, j] / 2
+            MR = M @ R
+            f = np.sqrt(np.outer(self.factor[:, b], self.factor[:, b]))
+            cov[b] = np.einsum("mij,nji->mn", MR, MR) * f + VAR_FLOOR * np.eye(npair)
+        sd = np.sqrt(np.diagonal(cov, axis1=1, axis2=2))
+        corr = cov / (sd[:, :, None] * sd[:, None, :])
+        pair = 0.5 * (corr[:, None] + corr[None, :])
+        full = self.model.bands.band_corr[:, :, None, None] * pair * sd[:, None, :, None] * sd[None, :, None, :]
+        self.sd = sd.T  # (npair, nb)
+        self.chol = np.linalg.cholesky(full.transpose(0, 2, 1, 3).reshape(nb * npair, nb * npair))
+
+    def chi2(self, ln_gamma: float) -> float:
+        res = (self.r - self.mean(math.exp(ln_gamma))).T.ravel()  # band-major, as the covariance
+        return float(np.sum(solve_triangular(self.chol, res, lower=True) ** 2))
+
+    def best(self, lo: float, hi: float) -> tuple[float, np.ndarray, np.ndarray]:
+        """(ln gamma at the least chi^2, scan points, chi^2 there) over [lo, hi]."""
+        grid = np.linspace(lo, hi, N_SCAN)
+        c = np.array([self.chi2(x) for x in grid])
+        k = int(np.argmin(c))
+        a, b = grid[max(k - 1, 0)], grid[min(k + 1, N_SCAN - 1)]
+        x = minimize_scalar(self.chi2, bounds=(a, b), method="bounded", options={"xatol": 1e-4}).x
+        return (x if self.chi2(x) <= c[k] else grid[k]), grid, c
+
+
+def fit_evolution(data: FitData, params: MannParams, sd_fit: dict, nperseg: int) -> EvoFit | str:
+    """gamma fitted to the longitudinal coherence of ``data`` (module docstring), or one line saying why not.
+
+    Parameters
+    ----------
+    data : FitData
+        The fit data (u and the positions of its columns).
+    params : MannParams
+        ae, L and Gamma of the one-point fit (held).
+    sd_fit : dict
+        "length_scale_m" -> sd of ln L, "gamma" -> sd of Gamma of the one-point fit (None: held).
+    nperseg : int
+        Welch segment length [samples] of the one-point fit.
+
+    Returns
+    -------
+    EvoFit or str
+        The fit, or why there is none (no two u points along x at one (y, z)).
+    """
+    pairs = x_pairs(data.u_xyz_m) if "u" in data.series else {}
+    if not pairs:
+        return ("evo_time_s not fitted: the data hold no two u series at one (y, z) and different x (two masts "
+                "along the wind or two planes are needed)")
+    seps = tuple(pairs)
+    bands, r, factor = _estimates(data, nperseg, pairs)
+    problem = _Problem(CoherenceModel(bands, data, params), seps, r, factor)
+    evo = ranges.RANGES["evo_time_s"]
+    lo, hi = math.log(evo.lo), math.log(evo.hi)
+    x = math.log(400.0)
+    for _ in range(PASSES):
+        problem.set_weights(math.exp(x))
+        x_new, grid, c = problem.best(lo, hi)
+        moved, x = abs(x_new - x), x_new
+        if moved < MOVE_TOL:
+            break
+    c_min = problem.chi2(x)
+    ends = [_profile_end(problem, x, c_min, grid, c, side) for side in (-1, 1)]
+    shift = 0.0
+    for name, step in (("length_scale_m", lambda p, s: replace(p, length_scale_m=p.length_scale_m * math.exp(s))),
+                       ("gamma", lambda p, s: replace(p, gamma=min(p.gamma + s, ranges.RANGES["gamma"].hi)))):
+        if sd_fit.get(name) and math.isfinite(sd_fit[name]) and all(e is not None for e in ends):
+            moved_model = _Problem(CoherenceModel(bands, data, step(params, sd_fit[name])), seps, r, factor)
+            moved_model.chol = problem.chol
+            shift += (moved_model.best(lo, hi)[0] - x) ** 2
+    ci = [None if e is None else x + side * math.hypot(e - x, Z95 * math.sqrt(shift)) for e, side in zip(ends, (-1, 1))]
+    chi2_frozen = float(np.sum(solve_triangular(problem.chol, (r - 1.0).T.ravel(), lower=True) ** 2))
+    return _result(problem, bands, x, ci, c_min, chi2_frozen, (lo, hi))
+
+
+def _profile_end(problem: _Problem, x: float, c_min: float, grid, c, side: int) -> float | None:
+    """ln gamma where chi^2 = c_min + CHI2_95 on ``side`` (-1 below x, +1 above); None: not reached in the range."""
+    level = c_min + CHI2_95
+    beyond = np.flatnonzero((side * (grid - x) > 0) & (c > level))
+    if beyond.size == 0:
+        return None
+    far = grid[beyond[0] if side > 0 else beyond[-1]]
+    return brentq(lambda t: problem.chi2(t) - level, x, far, xtol=1e-4)
+
+
+def _result(problem: _Problem, bands, x: float, ci: list, c_min: float, chi2_frozen: float, rng) -> EvoFit:
+    """EvoFit of a finished fit, with the one line saying whether gamma is identified."""
+    gamma = math.exp(x)
+    lo = math.exp(rng[0]) if ci[0] is None else math.exp(ci[0])
+    hi = None if ci[1] is None else math.exp(ci[1])
+    dof = problem.r.size - 1
+    if hi is None:
+        msg = (f"evo_time_s not identified: the frozen (Taylor) limit is inside the 95 % interval (chi2 "
+               f"{chi2_frozen:.4g} frozen against {c_min:.4g} at best, dof {dof}); evo_time_s > {lo:.4g} s")
+    elif ci[0] is None:
+        msg = f"evo_time_s not identified from below: coherence ~ 0 (pairs too far apart); evo_time_s < {hi:.4g} s"
+    else:
+        msg = (f"evo_time_s identified; the frozen (Taylor) limit is excluded (chi2 {chi2_frozen:.4g} against "
+               f"{c_min:.4g}, dof {dof})")
+    seps = problem.seps
+    return EvoFit(gamma, (lo, hi), c_min, chi2_frozen, dof, seps, msg, bands.f_hz, dict(zip(seps, problem.r)),
+                  dict(zip(seps, problem.mean(gamma))), dict(zip(seps, problem.sd)))
+
+
+def with_evolution(data: FitData, fit):
+    """``fit`` (a MannFit of ``data``) with ``evolution`` fitted, or a note saying why it was not."""
+    sd = {n: getattr(fit, n).sd_fit for n in ("length_scale_m", "gamma")}
+    evo = fit_evolution(data, fit.params, sd, fit.nperseg)
+    if isinstance(evo, str):
+        return replace(fit, notes=fit.notes + (evo,))
+    return replace(fit, evolution=evo, notes=fit.notes + (evo.message,))
