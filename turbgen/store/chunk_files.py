@@ -67,50 +67,49 @@ def empty_aligned(shape, dtype=np.float32) -> np.ndarray:
     return np.frombuffer(mmap.mmap(-1, _round_up(max(nbytes, 1))), np.uint8)[:nbytes].view(dtype).reshape(shape)
 
 
-def _direct_fd(array, coords, flags: int) -> tuple[Path, int] | None:
-    """The chunk file and a descriptor open with ``flags | O_DIRECT``, or None where the fast path declines."""
+def _direct(array, coords, flags: int, move) -> bool:
+    """``move(path, fd)`` on chunk ``coords``' file opened with ``flags | O_DIRECT`` (closed afterwards): True, or
+    False where the fast path declines or the file system refuses direct I/O."""
     path, direct = raw_chunk_path(array, coords), oscalls.direct_io_flag()
     if path is None or not direct:
-        return None
+        return False
     if flags & os.O_CREAT:
         path.parent.mkdir(parents=True, exist_ok=True)
     try:
-        return path, os.open(path, flags | direct, 0o644)
+        fd = os.open(path, flags | direct, 0o644)
+        try:
+            move(path, fd)
+        finally:
+            os.close(fd)
     except OSError as exc:
         if exc.errno in _REFUSED:
-            return None
+            return False
         raise
+    return True
 
 
 def write_chunk(array, coords: tuple[int, ...], data: np.ndarray) -> bool:
     """Write ``data``, the whole chunk ``coords`` of ``array`` (any layout; float32), as its file by direct I/O.
 
-    Returns False, with nothing written, where the fast path declines (the caller then writes through zarr).
+    Returns False where the fast path declines (the caller then writes through zarr).
     """
-    opened = _direct_fd(array, coords, os.O_WRONLY | os.O_CREAT | os.O_TRUNC)
-    if opened is None:
-        return False
-    fd, data = opened[1], np.ascontiguousarray(data)
-    nbytes = data.nbytes
-    try:
+    data = np.ascontiguousarray(data)
+    nbytes, padded = data.nbytes, _round_up(data.nbytes)
+
+    def move(path, fd):
         if _aligned(data):
             view = memoryview(data.reshape(-1).view(np.uint8))
         else:
-            buf = _bounce(_round_up(nbytes))
+            buf = _bounce(padded)
             buf[:nbytes] = data.reshape(-1).view(np.uint8)
-            buf[nbytes : _round_up(nbytes)] = 0
-            view = memoryview(buf[: _round_up(nbytes)])
+            buf[nbytes:padded] = 0
+            view = memoryview(buf[:padded])
         done = 0
         while done < len(view):
             done += os.write(fd, view[done:])
         os.ftruncate(fd, nbytes)
-    except OSError as exc:
-        if exc.errno in _REFUSED:
-            return False
-        raise
-    finally:
-        os.close(fd)
-    return True
+
+    return _direct(array, coords, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, move)
 
 
 def read_chunk(array, coords: tuple[int, ...], out: np.ndarray) -> bool:
@@ -119,15 +118,12 @@ def read_chunk(array, coords: tuple[int, ...], out: np.ndarray) -> bool:
     Returns False where the fast path declines (the caller then reads through zarr); FileNotFoundError for a
     missing file, ValueError for a file that does not hold exactly ``out.nbytes`` bytes.
     """
-    opened = _direct_fd(array, coords, os.O_RDONLY)
-    if opened is None:
-        return False
-    (path, fd), nbytes = opened, out.nbytes
-    try:
+    nbytes, dest = out.nbytes, out.reshape(-1).view(np.uint8)
+
+    def move(path, fd):
         size = os.fstat(fd).st_size
         if size != nbytes:
             raise ValueError(f"{path} holds {size} bytes, a chunk {nbytes}")
-        dest = out.reshape(-1).view(np.uint8)
         buf = dest if _aligned(out) else _bounce(_round_up(nbytes))[: _round_up(nbytes)]
         done = 0
         while done < nbytes:
@@ -137,10 +133,5 @@ def read_chunk(array, coords: tuple[int, ...], out: np.ndarray) -> bool:
             done += got
         if buf is not dest:
             dest[:] = buf[:nbytes]
-    except OSError as exc:
-        if exc.errno in _REFUSED:
-            return False
-        raise
-    finally:
-        os.close(fd)
-    return True
+
+    return _direct(array, coords, os.O_RDONLY, move)
