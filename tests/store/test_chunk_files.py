@@ -141,6 +141,22 @@ def test_raw_and_zarr_paths_give_the_same_store_and_reads(tmp_path, monkeypatch)
     assert np.array_equal(read_checked(arr, 0, 32, 64, out=empty_aligned((32, 5, 3))), planes["v"][32:64, 0])
 
 
+def test_a_compressed_store_goes_through_zarr_and_reads_the_same(tmp_path, monkeypatch):
+    """Blosc-lz4 + shuffle, the codec of older stores: the fast path declines and zarr writes and reads it."""
+    from zarr.codecs import BloscCodec
+
+    from turbgen.store import layout
+
+    grid = Grid(nt=64, dt_s=0.25, x_m=(0.0, 40.0), ny=4, nz=4, dy_m=2.0, dz_m=2.0)
+    planes = {c: np.random.default_rng(7).standard_normal(grid.shape).astype(np.float32) for c in ("u", "v", "w")}
+    monkeypatch.setattr(layout, "compressor", lambda: BloscCodec(cname="lz4", shuffle="shuffle"))
+    packed = open_store(_write_store(tmp_path / "packed.zarr", grid, planes, chunk_t=32))
+    assert packed.array("u").compressors and raw_chunk_path(packed.array("u"), (0, 0, 0, 0)) is None
+    for c in ("u", "v", "w"):
+        for ix in (0, 1):
+            assert np.array_equal(packed.read_plane(c, ix), planes[c][:, ix])
+
+
 @pytest.mark.parametrize("raw", [True, False], ids=["raw", "zarr"])
 def test_truncated_chunk_is_reported_as_corrupted(tmp_path, monkeypatch, raw):
     monkeypatch.setattr(chunk_files, "RAW", raw)
