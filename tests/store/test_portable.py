@@ -76,13 +76,14 @@ def test_a_reservation_the_system_cannot_make_checks_the_free_space(tmp_path, po
 
 # not the zombie case: without /proc a killed, unreaped writer counts as alive (its temporary is left, never a
 # live writer's removed); not the renameat2 variant of the racing overwrites (the same as two-renames here)
-KEY_CASES = "full_disk or two-renames or publish_killed or dead_writers or enospc or batches or c_order_bytes"
+KEY_CASES = ("full_disk or two-renames or publish_killed or dead_writers or enospc or batches or declines "
+             "or raw_and_zarr_paths")
 
 
 def test_the_key_store_and_safety_cases_pass_with_the_fallbacks_forced():
-    """The full-disk, atomic-publication and dead-writer cases of tests/store/test_data_safety.py, the chunk files'
-    round trip (buffered, without O_DIRECT) and the stencil cache's tests/runs/test_disk_full.py, run again in a
-    child pytest with TURBGEN_PORTABLE=1."""
+    """The full-disk, atomic-publication and dead-writer cases of tests/store/test_data_safety.py, a store written
+    and read through zarr (the raw-chunk path declines without O_DIRECT) and the stencil cache's
+    tests/runs/test_disk_full.py, run again in a child pytest with TURBGEN_PORTABLE=1."""
     done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider", "-k", KEY_CASES,
                            "tests/store/test_data_safety.py", "tests/store/test_chunk_files.py",
                            "tests/runs/test_disk_full.py"],

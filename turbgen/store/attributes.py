@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import zarr
 
 from turbgen.store import layout
 
@@ -28,12 +29,12 @@ def jsonable(value):
 
 
 def looks_like_turbgen_store(path: Path) -> bool:
+    """Whether ``path`` opens as a zarr v3 group with turbgen's attributes (complete or not)."""
+    layout.silence_consolidated_metadata_warning()
     try:
-        meta = json.loads((path / "zarr.json").read_text())
-    except (OSError, ValueError):
+        return "turbgen_version" in zarr.open_group(str(path), mode="r", zarr_format=3).attrs
+    except Exception:  # not a directory, no or garbage zarr.json, an array: not a store of ours
         return False
-    attrs = meta.get("attributes", {}) if isinstance(meta, dict) else {}
-    return isinstance(attrs, dict) and "turbgen_version" in attrs
 
 
 def check_caller_attrs(attrs: dict) -> dict:

@@ -1,6 +1,7 @@
 """Reading a plane of a store chunk by chunk with its data checked: a chunk that does not decode (truncated,
 overwritten) or holds NaN/inf (the writer never stores them) is a one-line StoreError naming the component,
-plane, time index and chunk file. Whole raw chunks are read by direct I/O (``chunk_files``)."""
+plane, time index and chunk file. Whole chunks by the raw-chunk fast path where it applies (``chunk_files``),
+all else through zarr."""
 
 from __future__ import annotations
 
@@ -9,40 +10,14 @@ import zarr
 from zarr.buffer import default_buffer_prototype
 
 from turbgen.errors import StoreError
-from turbgen.store.chunk_files import raw_chunk_path, read_chunk_file
+from turbgen.store.chunk_files import read_chunk
 
 
 def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None, out: np.ndarray | None = None) -> np.ndarray:
-    """Plane ``ix`` of a component array over t in [t0, t1), float32 (t, y, z), read one stored chunk at a time.
-
-    One-line StoreError when a chunk does not decode or holds NaN/inf.
-
-    Parameters
-    ----------
-    arr : zarr.Array
-        A component array (t, x, y, z) of a store.
-    ix : int
-        Plane index.
-    t0 : int
-        First time index.
-    t1 : int
-        End time index (exclusive).
-    path : str or os.PathLike, optional
-        Store path named in messages; default the array's store root.
-    out : numpy.ndarray, optional
-        C-contiguous float32 array (t1 - t0, ny, nz) the chunks are decoded into (a buffer reused across
-        reads saves a copy and fresh pages per read); default a new array.
-
-    Returns
-    -------
-    numpy.ndarray
-        float32 array (t1 - t0, ny, nz) [m/s]: ``out`` if given.
-
-    Raises
-    ------
-    StoreError
-        "corrupted chunk at ..." when a chunk does not decode, "NaN at ..." / "inf at ..." when it
-        holds non-finite values, naming the component, plane, time index and chunk file.
+    """Plane ``ix`` of a component array (t, x, y, z) over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], read one
+    stored chunk at a time into ``out`` (C-contiguous float32 of that shape, returned; default a new array): a
+    buffer reused across reads saves fresh pages per read. ``path`` names the store in messages (default the
+    array's store root). StoreError "corrupted chunk at ..." or "NaN at ..." / "inf at ..." as above.
     """
     name = arr.basename
     where = path if path is not None else getattr(arr.store, "root", None) or "store"
@@ -54,13 +29,11 @@ def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None, out: np.
     step = arr.chunks[0]
     starts = [t0, *range(t0 - t0 % step + step, t1, step)]  # t0, then the chunk starts after it
     for a, b in zip(starts, [*starts[1:], t1]):
-        chunk_file = f"{name}/c/{a // step}/{ix}/0/0"
+        chunk_file = f"{name}/{arr.metadata.encode_chunk_key((a // step, ix, 0, 0))}"
         block = out[a - t0 : b - t0]
-        file = raw_chunk_path(arr, (a // step, ix, 0, 0)) if a % step == 0 and b - a == step else None
         try:
-            if file is not None:  # a whole raw chunk: its file by direct I/O, no page-cache fill (chunk_files)
-                read_chunk_file(file, block)
-            else:
+            whole = a % step == 0 and b - a == step
+            if not (whole and read_chunk(arr, (a // step, ix, 0, 0), block)):
                 arr.get_basic_selection((slice(a, b), ix), out=nd_buffer.from_numpy_array(block))
         except Exception as exc:  # a decompression/decoding failure inside zarr, a missing or short chunk file
             raise StoreError(

@@ -1,21 +1,14 @@
-"""Raw chunk files of uncompressed stores, written and read with direct I/O (O_DIRECT) where the file system
-allows it, bypassing the page cache.
+"""The raw-chunk fast path of the store's I/O: whole chunks of uncompressed stores moved by direct I/O (O_DIRECT).
 
-An uncompressed float32 chunk of a zarr v3 array with the little-endian ``bytes`` codec is a file holding
-exactly the chunk's C-order bytes (``<array>/c/<it>/<ix>/0/0`` with the default "/" chunk key encoding),
-so the writer and the validator may move those bytes themselves. Why: filling the page cache (allocating and
-copying into fresh page-cache pages) is the most expensive step of writing a field, while direct I/O moves the
-same bytes with little CPU, time a background writer thread overlaps with the synthesis (the measurements:
-benchmarks/README.md, "Measurements behind design choices"). :func:`raw_chunk_path` is the one place that relies
-on zarr's v3 on-disk layout (the Zarr v3 specification's chunk key encoding and ``bytes`` codec, no private zarr
-API); tests/store/test_chunk_files.py compares the files with the ones zarr itself writes, so a zarr that lays
-chunks out otherwise fails there.
+Everything else goes through zarr's public API, and so does a chunk wherever this path declines (a compressed or
+foreign-endian array, no O_DIRECT: another platform or ``TURBGEN_PORTABLE=1``, a file system refusing it).
+Why it stays: for the default Mann field (2.2 GB) zarr's buffered chunk I/O took 3-4x the wall time and 5-6x the
+CPU of this path (benchmarks/bench_store_io.md). An uncompressed float32 chunk of a zarr v3 array with the
+``bytes`` codec is a file holding the chunk's C-order bytes at the key of the array's chunk key encoding (Zarr v3
+specification); tests/store/test_chunk_files.py checks that both paths give the same files and arrays.
 
-Direct I/O needs the buffer address, the file offset and the length to be multiples of the device's
-logical block: data that are not (a chunk of 31 x 31 points, an unaligned array) pass through a
-page-aligned bounce buffer, padded to a whole block and the file then truncated to its true length.
-Where the file system refuses O_DIRECT (tmpfs, some network file systems) the ordinary buffered calls
-are used. The bytes in the file are the same either way.
+Direct I/O needs the buffer, offset and length aligned to the device's logical block: other chunks pass through
+a page-aligned bounce buffer, padded to a whole block, the file then truncated to its length.
 """
 
 from __future__ import annotations
@@ -34,29 +27,17 @@ from turbgen import oscalls
 ALIGN = 4096  # a multiple of every logical block size in use (512, 4096)
 _REFUSED = (errno.EINVAL, errno.EOPNOTSUPP, errno.ENOTSUP)
 _local = threading.local()
+RAW = True  # False: every chunk through zarr (benchmarks/bench_store_io.py, the tests comparing both paths)
 
 
 def raw_chunk_path(array, coords: tuple[int, ...]) -> Path | None:
-    """The file of chunk ``coords`` of a zarr array if it holds the chunk's raw C-order bytes in this
-    machine's byte order (local store, no filters or compressors, ``bytes`` codec), else None.
-
-    Parameters
-    ----------
-    array : zarr.Array
-        A zarr v3 array.
-    coords : tuple of int
-        Chunk grid coordinates.
-
-    Returns
-    -------
-    pathlib.Path or None
-        The chunk file (it may not exist yet).
-    """
+    """The file of chunk ``coords`` of a zarr ``array`` when it holds the chunk's raw C-order bytes in this
+    machine's byte order (v3, local store, no filters or compressors, ``bytes`` codec) and ``RAW`` is set; else None."""
     from zarr.codecs import BytesCodec
     from zarr.storage import LocalStore
 
     serializer = getattr(array, "serializer", None)
-    if (array.metadata.zarr_format != 3 or not isinstance(array.store, LocalStore) or array.compressors
+    if (not RAW or array.metadata.zarr_format != 3 or not isinstance(array.store, LocalStore) or array.compressors
             or array.filters or not isinstance(serializer, BytesCodec)
             or (serializer.endian is not None and serializer.endian.value != sys.byteorder)):
         return None
@@ -80,129 +61,77 @@ def _bounce(nbytes: int) -> np.ndarray:
 
 
 def empty_aligned(shape, dtype=np.float32) -> np.ndarray:
-    """An uninitialised C-contiguous array whose data start on a page boundary (chunks of it whose byte
-    offsets and lengths are multiples of 4096 go to and from disk without a bounce copy).
-
-    Parameters
-    ----------
-    shape : tuple of int
-        Array shape.
-    dtype : numpy dtype, optional
-        Element type (default float32).
-
-    Returns
-    -------
-    numpy.ndarray
-        The array (its memory is an anonymous mapping, released with the array).
-    """
+    """An uninitialised C-contiguous array starting on a page boundary (an anonymous mapping): its whole chunks
+    go to and from disk without a bounce copy."""
     nbytes = int(np.prod(shape)) * np.dtype(dtype).itemsize
     return np.frombuffer(mmap.mmap(-1, _round_up(max(nbytes, 1))), np.uint8)[:nbytes].view(dtype).reshape(shape)
 
 
-def _write_all(fd: int, view: memoryview) -> None:
-    done = 0
-    while done < len(view):
-        done += os.write(fd, view[done:])
+def _direct(array, coords, flags: int, move) -> bool:
+    """``move(path, fd)`` on chunk ``coords``' file opened with ``flags | O_DIRECT`` (closed afterwards): True, or
+    False where the fast path declines or the file system refuses direct I/O."""
+    path, direct = raw_chunk_path(array, coords), oscalls.direct_io_flag()
+    if path is None or not direct:
+        return False
+    if flags & os.O_CREAT:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        fd = os.open(path, flags | direct, 0o644)
+        try:
+            move(path, fd)
+        finally:
+            os.close(fd)
+    except OSError as exc:
+        if exc.errno in _REFUSED:
+            return False
+        raise
+    return True
 
 
-def _read_all(fd: int, view: memoryview) -> int:
-    done = 0
-    while done < len(view):
-        got = os.readv(fd, [view[done:]])
-        if got == 0:
-            break
-        done += got
-    return done
+def write_chunk(array, coords: tuple[int, ...], data: np.ndarray) -> bool:
+    """Write ``data``, the whole chunk ``coords`` of ``array`` (any layout; float32), as its file by direct I/O.
 
-
-def write_chunk_file(path: Path, data: np.ndarray) -> None:
-    """Write the C-order bytes of ``data`` as the file ``path`` (parents created, an old file replaced).
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The chunk file.
-    data : numpy.ndarray
-        The chunk, any layout (a non-contiguous array is written in C order).
+    Returns False where the fast path declines (the caller then writes through zarr).
     """
-    path.parent.mkdir(parents=True, exist_ok=True)
     data = np.ascontiguousarray(data)
-    nbytes = data.nbytes
-    direct = oscalls.direct_io_flag()
-    if direct and nbytes:
-        try:
-            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | direct, 0o644)
-        except OSError as exc:
-            if exc.errno not in _REFUSED:
-                raise
+    nbytes, padded = data.nbytes, _round_up(data.nbytes)
+
+    def move(path, fd):
+        if _aligned(data):
+            view = memoryview(data.reshape(-1).view(np.uint8))
         else:
-            try:
-                if _aligned(data):
-                    _write_all(fd, memoryview(data.reshape(-1).view(np.uint8)))
-                else:
-                    padded = _round_up(nbytes)
-                    buf = _bounce(padded)
-                    buf[:nbytes] = data.reshape(-1).view(np.uint8)
-                    buf[nbytes:padded] = 0
-                    _write_all(fd, memoryview(buf[:padded]))
-                    os.ftruncate(fd, nbytes)
-                return
-            except OSError as exc:
-                if exc.errno not in _REFUSED:
-                    raise
-            finally:
-                os.close(fd)
-    with open(path, "wb") as f:  # buffered: no O_DIRECT here, or it was refused
-        f.write(memoryview(data.reshape(-1).view(np.uint8)))
+            buf = _bounce(padded)
+            buf[:nbytes] = data.reshape(-1).view(np.uint8)
+            buf[nbytes:padded] = 0
+            view = memoryview(buf[:padded])
+        done = 0
+        while done < len(view):
+            done += os.write(fd, view[done:])
+        os.ftruncate(fd, nbytes)
+
+    return _direct(array, coords, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, move)
 
 
-def read_chunk_file(path: Path, out: np.ndarray) -> None:
-    """Fill ``out`` (C-contiguous) with the bytes of the file ``path``, which must hold exactly ``out.nbytes``.
+def read_chunk(array, coords: tuple[int, ...], out: np.ndarray) -> bool:
+    """Fill ``out`` (C-contiguous, the whole chunk ``coords`` of ``array``) from its file by direct I/O.
 
-    Parameters
-    ----------
-    path : pathlib.Path
-        The chunk file.
-    out : numpy.ndarray
-        C-contiguous destination.
-
-    Raises
-    ------
-    FileNotFoundError
-        When the file does not exist.
-    ValueError
-        When the file's size is not ``out.nbytes``.
+    Returns False where the fast path declines (the caller then reads through zarr); FileNotFoundError for a
+    missing file, ValueError for a file that does not hold exactly ``out.nbytes`` bytes.
     """
-    if not out.flags.c_contiguous:
-        raise ValueError("read_chunk_file needs a C-contiguous out")
-    nbytes = out.nbytes
-    size = os.stat(path).st_size
-    if size != nbytes:
-        raise ValueError(f"{path} holds {size} bytes, a chunk {nbytes}")
-    dest = out.reshape(-1).view(np.uint8)
-    direct = oscalls.direct_io_flag()
-    if direct and nbytes:
-        try:
-            fd = os.open(path, os.O_RDONLY | direct)
-        except OSError as exc:
-            if exc.errno not in _REFUSED:
-                raise
-        else:
-            try:
-                if _aligned(out):
-                    got = _read_all(fd, memoryview(dest))
-                else:
-                    buf = _bounce(_round_up(nbytes))
-                    got = _read_all(fd, memoryview(buf[: _round_up(nbytes)]))
-                    dest[:] = buf[:nbytes]
-                if got != nbytes:
-                    raise ValueError(f"{path}: read {got} of {nbytes} bytes")
-                return
-            except OSError as exc:
-                if exc.errno not in _REFUSED:
-                    raise
-            finally:
-                os.close(fd)
-    with open(path, "rb", buffering=0) as f:
-        if f.readinto(dest) != nbytes:
-            raise ValueError(f"{path}: short read")
+    nbytes, dest = out.nbytes, out.reshape(-1).view(np.uint8)
+
+    def move(path, fd):
+        size = os.fstat(fd).st_size
+        if size != nbytes:
+            raise ValueError(f"{path} holds {size} bytes, a chunk {nbytes}")
+        buf = dest if _aligned(out) else _bounce(_round_up(nbytes))[: _round_up(nbytes)]
+        done = 0
+        while done < nbytes:
+            got = os.readv(fd, [memoryview(buf)[done:]])
+            if got == 0:
+                raise ValueError(f"{path}: read {done} of {nbytes} bytes")
+            done += got
+        if buf is not dest:
+            dest[:] = buf[:nbytes]
+
+    return _direct(array, coords, os.O_RDONLY, move)

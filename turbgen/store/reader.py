@@ -1,23 +1,15 @@
-"""Opening a field store: refuse anything that is not a complete, consistent turbgen store.
-
-``open_store(path)`` checks, in order: the path exists; it is a zarr v3 group written by turbgen;
-the completeness marker is set; the attributes match ``schemas/field.schema.json``; the arrays
-u, v, w and coordinates t, x, y, z exist with the grid's shapes, dtypes and values; and every
-chunk file is present (a partially copied store is refused). Each failure is one-line StoreError.
-Data are checked as they are read (:func:`read_checked`): a chunk that does not decode (truncated,
-overwritten) or holds NaN (the writer never stores NaN or inf) is reported as "corrupted chunk at
-..." / "NaN at ..." naming the component, plane, time index and chunk file; attributes out of the allowed
-ranges and values beyond 100 times the recorded rms are refused too (``plausibility``).
+"""Opening a field store through zarr's public API: :func:`open_store` refuses anything that is not a complete,
+consistent turbgen store, and :meth:`FieldStore.read_span` checks the data as it reads them (corrupted chunks, NaN,
+values beyond the recorded rms: ``plausibility``). Every refusal is a one-line StoreError.
 """
 
 from __future__ import annotations
 
-import json
-import os
 from pathlib import Path
 
 import numpy as np
 import zarr
+from zarr.buffer import default_buffer_prototype
 
 from turbgen.errors import ParameterError, StoreError
 from turbgen.grid import Grid
@@ -43,149 +35,62 @@ class FieldStore:
 
     @property
     def label(self) -> str:
-        """How messages and reports name the field: the store's path.
-
-        Returns
-        -------
-        str
-            The store's path.
-        """
+        """How messages and reports name the field: the store's path."""
         return str(self.path)
 
     @property
     def model(self) -> str:
-        """The turbulence model of the field.
-
-        Returns
-        -------
-        str
-            "mann" or "kaimal".
-        """
+        """The turbulence model of the field ("mann", "kaimal", ...)."""
         return self.attrs["model"]
 
     @property
     def U_m_s(self) -> float:
-        """Mean wind speed [m/s].
-
-        Returns
-        -------
-        float
-            Mean wind speed [m/s] (attribute U_m_s).
-        """
+        """Mean wind speed [m/s]."""
         return float(self.attrs["U_m_s"])
 
     @property
     def hub_height_m(self) -> float:
-        """Hub height above ground [m].
-
-        Returns
-        -------
-        float
-            Hub height above ground [m] (attribute hub_height_m).
-        """
+        """Hub height above ground [m]."""
         return float(self.attrs["hub_height_m"])
 
     @property
     def seed(self) -> int:
-        """Random seed of the field.
-
-        Returns
-        -------
-        int
-            The seed (attribute seed).
-        """
+        """Random seed of the field."""
         return int(self.attrs["seed"])
 
     @property
     def chunk_t(self) -> int:
-        """Time-chunk length of the u, v, w arrays.
-
-        Returns
-        -------
-        int
-            Time samples per chunk.
-        """
+        """Time samples per chunk of the u, v, w arrays."""
         return int(self.array("u").chunks[0])
 
     def array(self, component: str) -> zarr.Array:
-        """The zarr array of ``component`` ("u", "v" or "w"), dims (t, x, y, z), read-only.
-
-        Parameters
-        ----------
-        component : str
-            "u", "v" or "w".
-
-        Returns
-        -------
-        zarr.Array
-            float32 array (nt, nx, ny, nz) of the velocity fluctuations [m/s]. Reading it directly does
-            not check the data (use :meth:`read_plane` or :func:`read_checked`).
-
-        Raises
-        ------
-        ParameterError
-            For an unknown component.
-        """
+        """The zarr array (nt, nx, ny, nz) of float32 velocity fluctuations [m/s] of ``component`` ("u", "v" or "w"),
+        read-only; reading it directly does not check the data (:meth:`read_span` does). ParameterError for another
+        component."""
         if component not in layout.COMPONENTS:
             raise ParameterError(f"component = {component!r} is not one of {', '.join(layout.COMPONENTS)}")
         return self._group[component]
 
     def dask(self, component: str):
-        """``component`` as a dask array with the stored chunks (t, x, y, z).
-
-        Parameters
-        ----------
-        component : str
-            "u", "v" or "w".
-
-        Returns
-        -------
-        dask.array.Array
-            Lazy float32 array (nt, nx, ny, nz) [m/s].
-
-        Raises
-        ------
-        ParameterError
-            For an unknown component.
-        """
+        """``component`` as a lazy dask array (nt, nx, ny, nz) [m/s] with the stored chunks (data not checked)."""
         import dask.array as da
 
         arr = self.array(component)
         return da.from_zarr(arr, chunks=arr.chunks)
 
     def read_plane(self, component: str, ix: int) -> np.ndarray:
-        """One yz-plane time series, float32 array (nt, ny, nz), of plane index ``ix``.
-
-        Read and checked chunk by chunk (:func:`read_checked`).
-
-        Parameters
-        ----------
-        component : str
-            "u", "v" or "w".
-        ix : int
-            Plane index in [0, nx - 1].
-
-        Returns
-        -------
-        numpy.ndarray
-            float32 array (nt, ny, nz) of velocity fluctuations [m/s].
-
-        Raises
-        ------
-        ParameterError
-            For an unknown component or a plane index out of range.
-        StoreError
-            For a corrupted chunk, one holding NaN/inf or an implausible value.
-        """
+        """Plane ``ix`` of ``component`` over the whole time axis: :meth:`read_span` from 0 to nt; ParameterError
+        for a plane index outside [0, nx - 1]."""
         if not 0 <= ix < self.grid.nx:
             raise ParameterError(f"plane index = {ix} is outside [0, {self.grid.nx - 1}]")
         return self.read_span(component, ix, 0, self.grid.nt)
 
     def read_span(self, component: str, ix: int, t0: int, t1: int, out: np.ndarray | None = None) -> np.ndarray:
-        """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t, ny, nz), read and checked chunk by chunk.
+        """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], read and checked chunk
+        by chunk.
 
-        A chunk must decode and hold finite values (:func:`read_checked`), each no larger in magnitude than
-        AMPLITUDE_RMS times the component's recorded rms (:mod:`turbgen.store.plausibility`).
+        A chunk must decode and hold finite values (:func:`read_checked`), none larger in magnitude than
+        AMPLITUDE_RMS times the component's recorded rms (:mod:`turbgen.store.plausibility`); else StoreError.
 
         Parameters
         ----------
@@ -196,17 +101,7 @@ class FieldStore:
         t0, t1 : int
             First and end (exclusive) time index.
         out : numpy.ndarray, optional
-            C-contiguous float32 (t1 - t0, ny, nz) buffer the values are decoded into; default a new array.
-
-        Returns
-        -------
-        numpy.ndarray
-            float32 array (t1 - t0, ny, nz) of velocity fluctuations [m/s]: ``out`` if given.
-
-        Raises
-        ------
-        StoreError
-            For a corrupted chunk, one holding NaN/inf or an implausible value.
+            C-contiguous float32 (t1 - t0, ny, nz) buffer to read into (returned); default a new array.
         """
         arr = self.array(component)
         block = read_checked(arr, ix, t0, t1, self.path, out=out)
@@ -214,29 +109,13 @@ class FieldStore:
         return block
 
     def check_chunks(self) -> None:
-        """Decode every chunk of u, v, w (StoreError naming the first corrupted chunk or NaN).
-
-        Returns
-        -------
-        None
-
-        Raises
-        ------
-        StoreError
-            At the first chunk that does not decode, holds NaN/inf or an implausible value.
-        """
+        """Read and check every chunk of u, v, w: StoreError at the first corrupted, non-finite or implausible one."""
         for c in layout.COMPONENTS:
             for ix in range(self.grid.nx):
                 self.read_plane(c, ix)
 
     def nbytes_on_disk(self) -> int:
-        """Total size of the store's files [bytes].
-
-        Returns
-        -------
-        int
-            Sum of the sizes of all files under the store directory [bytes].
-        """
+        """Total size of the files under the store directory [bytes]."""
         return sum(f.stat().st_size for f in self.path.rglob("*") if f.is_file())
 
     def summary(self) -> dict:
@@ -300,33 +179,31 @@ def _leftover_hint(path: Path) -> str:
     return ""
 
 
-def _count_files(directory: Path) -> int:
-    return sum(len(files) for _, _, files in os.walk(directory))
+def _metadata_json(arr: zarr.Array) -> bytes:
+    return arr.metadata.to_buffer_dict(default_buffer_prototype())["zarr.json"].to_bytes()
 
 
-def _check_array_metadata(path: Path, name: str, consolidated: dict | None) -> None:
-    """StoreError unless ``name``/zarr.json is the array's JSON metadata, the same as the root's consolidated copy.
-
-    Readers go by the consolidated copy, so a garbage ``u/zarr.json`` passed info, validate and export, while any
-    reader that opens the array itself (zarr without consolidation, other tools) fails on it."""
-    meta_file = path / name / "zarr.json"
-    if not meta_file.is_file():
-        raise StoreError(f"{path} is incomplete: {name}/zarr.json is missing (partial copy?)")
+def _check_array_metadata(path: Path, name: str, group: zarr.Group, own: zarr.Group) -> None:
+    """StoreError unless array ``name`` read from its own zarr.json (``own``: the group opened unconsolidated) is
+    the array in the root's consolidated copy (``group``). Readers go by the consolidated copy, so a garbage
+    ``u/zarr.json`` would pass info, validate and export while any reader of the array itself fails on it."""
     try:
-        meta = json.loads(meta_file.read_text())
-    except (OSError, ValueError) as exc:
+        meta = _metadata_json(own[name])
+    except KeyError:
+        raise StoreError(f"{path} is incomplete: {name}/zarr.json is missing (partial copy?)") from None
+    except Exception as exc:
         raise StoreError(f"{path} is corrupted: {name}/zarr.json unreadable ({type(exc).__name__})") from None
-    if consolidated is not None and meta != consolidated.get(name):
+    consolidated = group.get(name)
+    if not isinstance(consolidated, zarr.Array) or _metadata_json(consolidated) != meta:
         raise StoreError(f"{path} is corrupted: {name}/zarr.json differs from the metadata consolidated in zarr.json")
 
 
-def _check_arrays(path: Path, group: zarr.Group, grid: Grid, consolidated: dict | None) -> None:
+def _check_arrays(path: Path, group: zarr.Group, grid: Grid) -> None:
+    own = zarr.open_group(str(path), mode="r", zarr_format=3, use_consolidated=False)
     for name in (*layout.COMPONENTS, *layout.DIMS):
-        _check_array_metadata(path, name, consolidated)
+        _check_array_metadata(path, name, group, own)
     for c in layout.COMPONENTS:
-        arr = group.get(c)
-        if not isinstance(arr, zarr.Array):
-            raise StoreError(f"{path} is corrupted: array {c!r} is missing")
+        arr = group[c]
         if arr.shape != grid.shape or arr.dtype != np.dtype(layout.DTYPE):
             raise StoreError(
                 f"{path} is corrupted: {c} has shape {arr.shape} {arr.dtype}, "
@@ -334,16 +211,15 @@ def _check_arrays(path: Path, group: zarr.Group, grid: Grid, consolidated: dict 
             )
         if tuple(arr.metadata.dimension_names or ()) != layout.DIMS or arr.chunks[1] != 1:
             raise StoreError(f"{path} is corrupted: {c} has dims {arr.metadata.dimension_names}, chunks {arr.chunks}")
-        expected = layout.n_chunks(grid, arr.chunks[0])
-        found = _count_files(path / c / "c")
+        expected, found = layout.n_chunks(grid, arr.chunks[0]), arr.nchunks_initialized
         if found != expected:
             raise StoreError(
                 f"{path} is incomplete: {c} has {found} of {expected} chunk files (partial copy?); "
                 "copy it again or regenerate it"
             )
     for name, values in layout.coordinates(grid).items():
-        arr = group.get(name)
-        if not isinstance(arr, zarr.Array) or arr.shape != values.shape:
+        arr = group[name]
+        if arr.shape != values.shape:
             raise StoreError(f"{path} is corrupted: coordinate {name!r} is missing or has the wrong length")
         if not np.allclose(arr[:], values, rtol=1e-9, atol=1e-9):
             raise StoreError(f"{path} is corrupted: coordinate {name!r} does not match the grid attributes")
@@ -352,9 +228,10 @@ def _check_arrays(path: Path, group: zarr.Group, grid: Grid, consolidated: dict 
 def open_store(path) -> FieldStore:
     """Open the complete turbgen field store at ``path`` read-only; one-line StoreError otherwise.
 
-    Checks, in order: the path exists; it is a zarr v3 group written by turbgen; the completeness
-    marker is set; the attributes match ``schemas/field.schema.json``; the arrays u, v, w and the
-    coordinates t, x, y, z have the grid's shapes, dtypes and values; every chunk file is present.
+    Checks, in order: the path exists; it is a zarr v3 group written by turbgen; the completeness marker is set;
+    the attributes match ``schemas/field.schema.json`` and the plausible ranges; every array's own metadata is the
+    consolidated copy; u, v, w and the coordinates have the grid's shapes, dtypes and values; every chunk is present
+    (a partial copy is refused).
 
     Parameters
     ----------
@@ -365,30 +242,24 @@ def open_store(path) -> FieldStore:
     -------
     FieldStore
         The validated store.
-
-    Raises
-    ------
-    StoreError
-        When the path is missing, a file, not a turbgen store, incomplete (no marker, missing
-        metadata or chunk files) or corrupted (unreadable metadata, invalid attributes or grid,
-        wrong arrays or coordinates).
     """
     path = Path(path).expanduser().absolute()
     if not path.exists():
         raise StoreError(f"{path}: no such store{_leftover_hint(path)}")
     if not path.is_dir():
         raise StoreError(f"{path} is a file, not a turbgen store (a zarr directory)")
-    meta_file = path / "zarr.json"
-    if not meta_file.is_file():
-        raise StoreError(f"{path} is not a turbgen store (no zarr.json)")
+    layout.silence_consolidated_metadata_warning()
     try:
-        meta = json.loads(meta_file.read_text())
-        attrs = meta["attributes"]
-        node = meta["node_type"]
-    except (OSError, ValueError, KeyError, TypeError) as exc:
+        group = zarr.open_group(str(path), mode="r", zarr_format=3)
+        attrs = group.attrs.asdict()
+    except zarr.errors.GroupNotFoundError:
+        raise StoreError(f"{path} is not a turbgen store (no zarr.json)") from None
+    except zarr.errors.ContainsArrayError:
+        raise StoreError(f"{path} is a zarr array but not a turbgen store") from None
+    except Exception as exc:  # garbage JSON, metadata zarr does not accept
         raise StoreError(f"{path} is corrupted: zarr.json unreadable ({type(exc).__name__})") from None
-    if node != "group" or not isinstance(attrs, dict) or "turbgen_version" not in attrs:
-        raise StoreError(f"{path} is a zarr {node} but not a turbgen store")
+    if "turbgen_version" not in attrs:
+        raise StoreError(f"{path} is a zarr group but not a turbgen store")
     if attrs.get(layout.MARKER) is not True:
         raise StoreError(
             f"{path} is incomplete (no completeness marker: the write was interrupted or the copy is partial); "
@@ -401,9 +272,7 @@ def open_store(path) -> FieldStore:
     except ParameterError as exc:
         raise StoreError(f"{path} is corrupted: grid attribute: {exc}") from None
     try:
-        layout.silence_consolidated_metadata_warning()
-        group = zarr.open_group(str(path), mode="r")
-        _check_arrays(path, group, grid, (meta.get("consolidated_metadata") or {}).get("metadata"))
+        _check_arrays(path, group, grid)
     except StoreError:
         raise
     except Exception as exc:  # any zarr/JSON failure inside the store is corruption

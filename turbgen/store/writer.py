@@ -1,4 +1,5 @@
-"""Writing a field store safely: temporary sibling directory, completeness marker last, atomic rename.
+"""Writing a field store safely through zarr's public API (whole raw chunks by ``chunk_files``' fast path):
+temporary sibling directory, completeness marker last, atomic rename.
 
     with create_store(path, grid, attrs, chunk_t=None, overwrite=False) as w:
         w.write("u", ix, block, t0)        # block (nt_block, ny, nz), any thread
@@ -29,7 +30,7 @@ from turbgen.grid import Grid
 from turbgen.resources import format_bytes, require_disk
 from turbgen.store import layout
 from turbgen.store.attributes import check_caller_attrs, jsonable, looks_like_turbgen_store
-from turbgen.store.chunk_files import raw_chunk_path, write_chunk_file
+from turbgen.store.chunk_files import write_chunk
 from turbgen.store.discard import finish_before_raising, remove_path
 from turbgen.cancellation import raise_if_stop_requested
 from turbgen.store.temporaries import (publish, remove_dead_temporaries,
@@ -38,34 +39,12 @@ from turbgen.store.paths import check_output_path
 
 
 class StoreWriter:
-    """Context manager writing one field store; use :func:`create_store` to make one.
+    """Context manager writing one field store; made by :func:`create_store`.
 
-    ``write`` may be called concurrently from several threads. Writes covering whole chunks
-    (different planes/components, or time blocks aligned to ``chunk_t``) run in parallel;
-    unaligned blocks of the same plane are serialised (zarr read-modify-writes partial chunks).
-    Every (component, plane, time sample) must be written before the ``with`` block ends.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        Final store path (absolute).
-    grid : Grid
-        The field grid.
-    attrs : dict
-        Checked caller attributes (see :func:`create_store`).
-    chunk_t : int
-        Time samples per chunk.
-    overwrite : bool
-        Replace an existing turbgen store at ``path``.
-
-    Raises
-    ------
-    StoreError
-        On entering or leaving the ``with`` block: a file-system error (disk full, read-only, ...) as
-        one line, or a non-store or unexpected store that appeared at ``path`` while writing.
-    RuntimeError
-        On leaving the ``with`` block, when some (component, plane, time sample) was not written
-        (nothing is written then).
+    ``write`` may be called from several threads: whole chunks (other planes or components, time blocks aligned to
+    ``chunk_t``) run in parallel, unaligned blocks of one plane one at a time (zarr read-modify-writes a partial
+    chunk). Every (component, plane, time sample) must be written before the ``with`` block ends, else
+    RuntimeError and nothing is published; a file-system error on entering or leaving is a one-line StoreError.
     """
 
     def __init__(self, path: Path, grid: Grid, attrs: dict, chunk_t: int, overwrite: bool):
@@ -108,24 +87,8 @@ class StoreWriter:
 
     # -- writing ----------------------------------------------------------------------------
     def add_attrs(self, **attrs) -> None:
-        """Add attributes known only after generation (e.g. a synthesis report); written before the marker.
-
-        Parameters
-        ----------
-        **attrs
-            Attribute name -> value; numpy values and tuples are stored as plain JSON types.
-
-        Returns
-        -------
-        None
-
-        Raises
-        ------
-        RuntimeError
-            When called outside the ``with`` block.
-        ValueError
-            When an attribute is already set or is the completeness marker.
-        """
+        """Add attributes known only after generation (e.g. a synthesis report), written before the marker; numpy
+        values and tuples are stored as plain JSON types. ValueError for one already set or the marker itself."""
         if self._tmp is None:
             raise RuntimeError("StoreWriter.add_attrs outside its 'with' block")
         clash = [k for k in attrs if k in self._group.attrs or k == layout.MARKER]
@@ -134,35 +97,17 @@ class StoreWriter:
         finish_before_raising(self._group.attrs.update, jsonable(attrs))
 
     def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0, squares: bool = False):
-        """Write ``data`` (nt_block, ny, nz) to ``component`` at plane index ``ix``, time ``t0``.
+        """Write ``data`` (nt_block, ny, nz) [m/s] as float32 to ``component`` at plane index ``ix``, time ``t0``.
 
-        Parameters
-        ----------
-        component : str
-            "u", "v" or "w".
-        ix : int
-            Plane index in [0, nx - 1].
-        data : array_like
-            Velocity fluctuations [m/s], shape (nt_block, ny, nz), stored as float32; must be finite.
-        t0 : int, optional
-            Time index of the first sample (default 0); t0 + nt_block <= nt.
-        squares : bool, optional
-            Also return the sum of squares (the same compiled pass computes both).
+        Whole chunks go by the raw-chunk fast path where it applies (:mod:`turbgen.store.chunk_files`), all else
+        through zarr. ValueError for an unknown component, a plane out of range, a block that does not fit, or a
+        block holding NaN or inf.
 
         Returns
         -------
         float or tuple of float
-            The sum of the block's values in float64 [m/s] (computed for the finiteness check; a caller
-            accumulating the mean can use it instead of summing the block again); with ``squares``,
-            (sum [m/s], sum of squares [m^2/s^2]).
-
-        Raises
-        ------
-        RuntimeError
-            When called outside the ``with`` block.
-        ValueError
-            For an unknown component, a plane index out of range, a block that does not fit the plane,
-            or a block containing NaN or inf.
+            The block's float64 sum [m/s] (from the finiteness check: a caller accumulating the mean need not sum
+            again); with ``squares``, (sum [m/s], sum of squares [m^2/s^2]).
         """
         if self._tmp is None:
             raise RuntimeError("StoreWriter.write outside its 'with' block")
@@ -170,18 +115,14 @@ class StoreWriter:
         block, total, sum_sq = checked_block(g, component, ix, data, t0)
         t1 = t0 + block.shape[0]
         aligned = t0 % self.chunk_t == 0 and (t1 % self.chunk_t == 0 or t1 == g.nt)
-        if aligned:  # chunk by chunk: whole chunks of raw stores as files by direct I/O (chunk_files), others
-            # through zarr, which stores a value shaped like its chunk as is (a larger block it copies into a
-            # fill-valued chunk buffer first; the last, shorter chunk is padded with the fill value)
+        if aligned:  # chunk by chunk: whole chunks by the raw fast path where it applies (chunk_files), else through
+            # zarr, which stores a value shaped like its chunk as is (the last, shorter chunk padded with the fill value)
             array = self._arrays[component]
             for a in range(t0, t1, self.chunk_t):
                 b = min(a + self.chunk_t, t1)
-                file = raw_chunk_path(array, (a // self.chunk_t, ix, 0, 0)) if b - a == self.chunk_t else None
-                if file is not None:
-                    write_chunk_file(file, block[a - t0 : b - t0])
-                else:
-                    finish_before_raising(array.__setitem__, (slice(a, b), slice(ix, ix + 1)),
-                                          block[a - t0 : b - t0, None])
+                part = block[a - t0 : b - t0]
+                if b - a < self.chunk_t or not write_chunk(array, (a // self.chunk_t, ix, 0, 0), part):
+                    finish_before_raising(array.__setitem__, (slice(a, b), slice(ix, ix + 1)), part[:, None])
         else:
             with self._plane_locks[(component, ix)]:
                 finish_before_raising(self._arrays[component].__setitem__, (slice(t0, t1), ix), block)
@@ -411,13 +352,12 @@ def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: 
 def create_store(
     path, grid: Grid, attrs: dict, *, chunk_t: int | None = None, overwrite: bool = False
 ) -> StoreWriter:
-    """A :class:`StoreWriter` for a new field store at ``path`` (use it as a context manager).
+    """A :class:`StoreWriter` for a new field store at ``path`` (a context manager; nothing is created before its
+    ``with`` block is entered).
 
-    ``attrs`` must hold model, parameters, units (a unit for every parameter), seed, U_m_s and
-    hub_height_m; the writer adds turbgen_version, created_utc, layout_version, frame, frame_note,
-    grid and finally the completeness marker. ``chunk_t`` is the time-chunk length (default
-    min(nt, 1024)). Raises StoreError before anything is created when ``path`` exists and
-    ``overwrite`` is False, or when ``path`` exists and is not a turbgen store (never replaced).
+    The writer adds turbgen_version, created_utc, layout_version, fft_backend, frame, frame_note, grid, rms_m_s and
+    last the completeness marker. Refusals as :func:`check_new_store`; ValueError for ``attrs`` that lack a
+    required key or a parameter's unit, set a writer attribute, are not JSON-serialisable or fail the schema.
 
     Parameters
     ----------
@@ -431,23 +371,6 @@ def create_store(
         Time samples per chunk, in [1, nt]; default min(nt, 1024).
     overwrite : bool, optional
         Replace an existing turbgen store at ``path`` (default False).
-
-    Returns
-    -------
-    StoreWriter
-        The writer; nothing is created before its ``with`` block is entered.
-
-    Raises
-    ------
-    ParameterError
-        For a bad output path, a ``chunk_t`` outside [1, nt], or too little free disk for the
-        uncompressed field.
-    ValueError
-        For attributes that lack a required key or a parameter's unit, set writer attributes, are
-        not JSON-serialisable, or do not match the schema.
-    StoreError
-        When ``path`` exists and ``overwrite`` is False, ``path`` exists and is not a turbgen store,
-        or the output directory does not exist or is not writable.
     """
     full = validated_caller_attrs(attrs, grid)
     path, chunk_t = check_new_store(path, grid, chunk_t=chunk_t, overwrite=overwrite)
