@@ -30,6 +30,32 @@ def test_an_interrupted_call_runs_to_its_end_before_the_exception_goes_on():
     assert done and done[0] <= raised  # the call had finished when KeyboardInterrupt left
 
 
+def test_an_interruption_while_the_helper_starts_never_leaves_the_call_running(monkeypatch):
+    """A signal landing in Thread.start() (the helper already running): formerly inside ThreadPoolExecutor.submit,
+    outside the wait, so a store's zarr.json was written after its temporary directory had been removed. Now the
+    call either never runs or ends before the exception goes on."""
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signals reach the main thread only")
+    real_start, began, done = threading.Thread.start, [], []
+
+    def start(self):
+        real_start(self)
+        time.sleep(0.05)  # the helper is running the call now
+        raise KeyboardInterrupt
+
+    def write():
+        began.append(1)
+        time.sleep(0.2)
+        done.append(1)
+
+    monkeypatch.setattr(threading.Thread, "start", start)
+    with pytest.raises(KeyboardInterrupt):
+        finish_before_raising(write)
+    assert began == done == [1]
+    time.sleep(0.3)
+    assert began == done == [1]
+
+
 def test_results_and_errors_of_the_call_pass_through():
     assert finish_before_raising(lambda a, b: a + b, 2, 3) == 5
     with pytest.raises(ValueError, match="bad"):

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import concurrent.futures
 import shutil
 import threading
 from pathlib import Path
@@ -15,32 +14,39 @@ def finish_before_raising(fn, *args):
     zarr performs a write in its own event-loop thread while the caller waits; an exception raised in the waiting
     thread (Ctrl-C's KeyboardInterrupt, an application's signal turned into SystemExit) would leave that I/O running,
     to recreate files in a temporary directory being removed. In the main thread (the only one Python raises such
-    exceptions in) ``fn`` therefore runs in a helper thread, and an interrupted wait waits for ``fn`` to end before
-    the exception goes on (a second interruption stops that wait). Other threads call ``fn`` directly.
-
-    Parameters
-    ----------
-    fn : callable
-        The zarr call (a write, a metadata update).
-    *args
-        Its arguments.
-
-    Returns
-    -------
-    object
-        What ``fn`` returns.
+    exceptions in) ``fn`` therefore runs in a helper thread, and an interruption, even one landing while the helper
+    starts, waits for a started ``fn`` to end before it goes on (a second interruption stops that wait). Other
+    threads call ``fn`` directly.
     """
     if threading.current_thread() is not threading.main_thread():
         return fn(*args)
-    pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="turbgen-zarr-call")
-    future = pool.submit(fn, *args)
+    done, lock, state, out = threading.Event(), threading.Lock(), ["pending"], []
+
+    def run():
+        with lock:
+            if state[0] == "cancelled":
+                return
+            state[0] = "running"
+        try:
+            out.append((True, fn(*args)))
+        except BaseException as exc:
+            out.append((False, exc))
+        finally:
+            done.set()
+
     try:
-        return future.result()
+        threading.Thread(target=run, name="turbgen-zarr-call").start()
+        done.wait()
     except BaseException:
-        concurrent.futures.wait([future])  # fn's own exception: done already; an interruption: fn finishes first
+        with lock:
+            running, state[0] = state[0] == "running", "cancelled"
+        if running:
+            done.wait()
         raise
-    finally:
-        pool.shutdown(wait=False)
+    ok, value = out[0]
+    if not ok:
+        raise value
+    return value
 
 
 def remove_path(path: Path) -> None:
