@@ -49,7 +49,11 @@ class ValidationReport:
         return [m.name for m in self.metrics if not m.passed]
 
     def metric(self, name: str) -> MetricResult:
-        return next(m for m in self.metrics if m.name == name)
+        """The metric called ``name``; KeyError naming the report's metrics otherwise."""
+        for m in self.metrics:
+            if m.name == name:
+                return m
+        raise KeyError(f"no metric {name!r} in this report; it has {', '.join(m.name for m in self.metrics)}")
 
     def to_dict(self) -> dict:
         from turbgen.validation.report import to_dict
