@@ -9,6 +9,8 @@ from dataclasses import replace
 import numpy as np
 
 from turbgen.errors import ParameterError
+from turbgen.exporters.field_files import FORMATS as WIND_FILES
+from turbgen.exporters.field_files import open_wind_file
 from turbgen.validation.fit import MannFit, fit_mann_data, load_fit_data
 from turbgen.validation.fit.evolution import with_evolution
 from turbgen.validation.fit.mean_wind import fit_mean_wind
@@ -28,7 +30,9 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     ----------
     data : str, os.PathLike, turbgen.spec.constraints.PointSeries, FieldStore or xarray.Dataset
         A point-series JSON file (the ``--constrain`` format: one or more sensors with any of u, v, w), a field
-        store, or a field as a Dataset (``turbgen.mann``, in memory or not, ``turbgen.open_store``).
+        store, a field as a Dataset (``turbgen.mann``, in memory or not, ``turbgen.open_store``), a TurbSim ``.bts``
+        or a HAWC2 ``.htc`` whose ``begin mann`` block names the boxes (fitted against the Mann tensor summed over
+        their periodic box, ``turbgen.exporters.field_files``).
     U : float, optional
         Mean wind speed [m/s] of k1 = 2 pi f / U for fluctuation data (default: the mean of u of total-wind data;
         a store holds its own).
@@ -65,6 +69,8 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     """
     if isinstance(data, os.PathLike):
         data = os.fspath(data)
+    if isinstance(data, str) and os.path.splitext(data)[1].lower() in WIND_FILES:
+        data = open_wind_file(data)
     if bootstrap and (isinstance(bootstrap, bool) or not isinstance(bootstrap, int) or bootstrap < 2):
         raise ParameterError(f"bootstrap = {bootstrap!r} must be an integer >= 2 (realisations), or 0 for none")
     fd = load_fit_data(data, U, points)

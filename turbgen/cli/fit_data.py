@@ -57,7 +57,8 @@ def _remember_overwrite(ctx, param, value):
               help=f"Replace an existing {PLOT_NAME} in --plots.")
 @click.pass_context
 def fit_mann_command(ctx, data, U, nperseg, points, bootstrap, as_json, plots):
-    """Fit ae, L, Gamma of the Mann model to DATA: a point-series JSON file (sensors with u, v, w) or a store.
+    """Fit ae, L, Gamma of the Mann model to DATA: a point-series JSON file (sensors with u, v, w), a store, a
+    TurbSim .bts, or a HAWC2 .htc whose mann block names the boxes.
 
     Weighted least squares over the Welch spectra of u, v, w and the u-w co-spectrum, each band weighted by the
     estimator's covariance; a store against its grid's expectation, sensors against the continuous model. Prints
