@@ -3,8 +3,10 @@
 Per realisation (frozen Mann field, one plane, 8192 x 16 x 16 points, dx = U dt = 6 m, dy = dz = 6 m):
   box     turbgen: the field against the Mann tensor summed over its generator's box (grid-aware);
           wetb: `fit_mann_model_spectra(*spectra(1 / dx, u, v, w))` over the 256 columns (the continuous model);
-  sonic1  one hub series of u, v, w: turbgen against the continuous model, wetb as above; reported is whether
-          wetb's values lie inside turbgen's 95 % intervals.
+  sonic   one sensor's u, v, w series (8192 samples at dt = 0.5 s) drawn from the continuous model's one-point
+          spectra F11, F22, F33 and co-spectrum F13 (Mann 1994) at the record's own wavenumbers (a sensor whose
+          spectra hold every wavenumber, unlike a point of a box): turbgen against the continuous model, wetb as
+          above; reported is whether wetb's values lie inside turbgen's 95 % intervals.
 wetb (the DTU Wind Energy Toolbox, PyPI `wetb`) is a benchmark peer only: `pip install --no-deps wetb` suffices
 for its mann_parameters module (numpy, scipy).
 
@@ -15,13 +17,16 @@ for its mann_parameters module (numpy, scipy).
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import time
 
 import numpy as np
 
 import turbgen
-from bench_fit import sensors
+from turbgen.spec.constraints import PointSensor, PointSeries
+from turbgen.theory.mann_spectra import one_point_spectra
+from turbgen.theory.params import MannParams
 
 CASES = [(0.08, 30.0, 3.2), (0.05, 60.0, 2.0)]  # (ae, L, Gamma) of the fields
 U_M_S, DT_S, DY_M = 12.0, 0.5, 6.0
@@ -44,15 +49,44 @@ def turbgen_fit(data, **kw) -> tuple[dict, float]:
         time.process_time() - t0
 
 
-def realisation(case, seed: int) -> list[dict]:
+@functools.lru_cache(maxsize=4)
+def _line_spectra(case: tuple, n: int) -> tuple[float, dict]:
+    """(dk [rad/m], the one-point spectra at the n-sample record's lines k_m = m dk, 0 < m < n / 2)."""
+    dk = 2 * np.pi / (n * U_M_S * DT_S)
+    return dk, one_point_spectra(dk * np.arange(1, n // 2), MannParams(*case))
+
+
+def sonic_series(case, seed: int, n: int = 8192) -> dict:
+    """u, v, w (n,) [m/s] of one point, periodic, Gaussian with the continuous model's one-point spectra at the
+    record's wavenumbers k_m = 2 pi m / (n dx): E|c_m|^2 = F(k_m) dk per line (two-sided F; the Nyquist line 0)."""
+    dk, F = _line_spectra(tuple(case), n)
+    rng = np.random.default_rng(seed)
+    z = (rng.standard_normal((3, n // 2 - 1)) + 1j * rng.standard_normal((3, n // 2 - 1))) / np.sqrt(2)
+    a = np.sqrt(F["F11"] * dk)  # u, w jointly: the Cholesky factor of dk [[F11, F13], [F13, F33]]
+    b = F["F13"] * dk / a
+    c_m = {"u": a * z[0], "v": np.sqrt(F["F22"] * dk) * z[1], "w": b * z[0] + np.sqrt(F["F33"] * dk - b * b) * z[2]}
+    out = {}
+    for name, c in c_m.items():
+        X = np.zeros(n // 2 + 1, complex)
+        X[1 : n // 2] = n * c
+        out[name] = np.fft.irfft(X, n)
+    return out
+
+
+def realisation(case, seed: int, kinds=("box", "sonic")) -> list[dict]:
     ae, L, G = case
-    ds = turbgen.mann(L=L, gamma=G, ae=ae, seed=seed, nt=8192, dt=DT_S, ny=16, nz=16, dy=DY_M, dz=DY_M, planes=[0],
-                      evo=None, U=U_M_S)
-    cols = {c: ds[c].values[:, 0].reshape(ds.sizes["t"], -1).astype(float) for c in "uvw"}
-    sonic = sensors(ds, 1)
+    todo = []
+    if "box" in kinds:
+        ds = turbgen.mann(L=L, gamma=G, ae=ae, seed=seed, nt=8192, dt=DT_S, ny=16, nz=16, dy=DY_M, dz=DY_M,
+                          planes=[0], evo=None, U=U_M_S)
+        todo.append(("box", ds, {}, {c: ds[c].values[:, 0].reshape(ds.sizes["t"], -1).astype(float) for c in "uvw"}))
+    if "sonic" in kinds:
+        series = sonic_series(case, seed)
+        sonic = PointSeries("sonic", DT_S * np.arange(8192), (PointSensor("s", 0.0, 0.0, 0.0, None, series),),
+                            total_wind=False, noise_m_s=None, source="bench_fit_wetb sonic")
+        todo.append(("sonic", sonic, {"U": U_M_S}, series))
     rows = []
-    for kind, tg_data, kw, arrays in (("box", ds, {}, cols),
-                                      ("sonic1", sonic, {"U": U_M_S}, sonic.sensors[0].series)):
+    for kind, tg_data, kw, arrays in todo:
         tg, tg_cpu = turbgen_fit(tg_data, **kw)
         wb, wb_cpu = wetb_fit(U_M_S * DT_S, arrays["u"], arrays["v"], arrays["w"])
         rows.append({"case": case, "seed": seed, "kind": kind, "turbgen": tg, "turbgen_cpu_s": tg_cpu,
@@ -66,7 +100,7 @@ def summary(path: str) -> None:
           "| wetb inside turbgen's 95 % (ae / L / Γ) | CPU s per fit turbgen / wetb |")
     print("|---|---|---|---|---|---|---|")
     for case in CASES:
-        for kind in ("box", "sonic1"):
+        for kind in ("box", "sonic"):
             sel = [r for r in rows if tuple(r["case"]) == case and r["kind"] == kind]
             if not sel:
                 continue
@@ -89,6 +123,7 @@ def main() -> None:
     ap.add_argument("--seed0", type=int, default=2000)
     ap.add_argument("--out", default="fit_wetb.jsonl")
     ap.add_argument("--summary", help="print the table of a results file and stop")
+    ap.add_argument("--kinds", default="box,sonic", help="comma-separated data kinds (box, sonic)")
     a = ap.parse_args()
     if a.summary:
         summary(a.summary)
@@ -96,7 +131,7 @@ def main() -> None:
     with open(a.out, "a") as fh:
         for seed in range(a.seed0, a.seed0 + a.n):
             for case in CASES:
-                for row in realisation(case, seed):
+                for row in realisation(case, seed, tuple(a.kinds.split(","))):
                     fh.write(json.dumps(row) + "\n")
                     fh.flush()
 
