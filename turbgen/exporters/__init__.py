@@ -1,9 +1,7 @@
 """Exports of a turbgen store to the files aeroelastic and lidar simulators read (docs/export.md).
 
-Formats: ``bts`` (TurbSim, InflowWind WindType 3), ``wnd`` (Bladed-style .wnd + .sum, WindType 4),
-``evo`` (lidar-simulator 4D set ROOT.evo/.wnd/.sum), ``hawc2`` (three float32 .bin, WindType 5),
-``mt4d`` (4D Mann generator layout), ``hdf5`` (whole field for MATLAB/Python). Each format's own
-documentation is cited in its module.
+Formats: ``bts`` (TurbSim, WindType 3), ``wnd`` (Bladed-style .wnd + .sum, WindType 4), ``evo`` (lidar-simulator
+4D set), ``hawc2`` (three float32 .bin, WindType 5), ``mt4d`` (4D Mann generator layout), ``hdf5`` (whole field).
 """
 
 from __future__ import annotations
@@ -53,8 +51,8 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
     Raises
     ------
     ParameterError
-        For an unknown format, options it does not use, an ``out`` inside the store or naming a directory,
-        too little free disk, an existing output without ``request.overwrite``, a grid reaching the ground.
+        For an unknown format, options it does not use, a bad ``out``, too little disk, an existing output
+        without ``request.overwrite``, a grid reaching the ground.
     StoreError
         For a missing or incomplete store.
     """
@@ -80,9 +78,7 @@ _SIZE = {"bts": (2, False), "wnd": (2, False), "hawc2": (4, False), "evo": (2, T
 
 
 def export_bytes(fmt: str, grid) -> int:
-    """Upper bound [bytes] of an export of a store with ``grid``: its values at the format's item size (one
-    plane, or every plane for evo, mt4d, hdf5), the rotor .wnd of evo, 1 MiB for headers.
-    """
+    """Upper bound [bytes] of an export of a store with ``grid`` in format ``fmt``."""
     itemsize, all_planes = _SIZE[fmt]
     values = 3 * grid.nt * grid.ny * grid.nz * (grid.nx if all_planes else 1)
     extra = 3 * grid.nt * grid.ny * grid.nz * 2 if fmt == "evo" else 0  # evo also writes the rotor .wnd

@@ -1,10 +1,9 @@
 """TurbSim binary full-field ``.bts`` (InflowWind WindType 3; Jonkman 2009, TurbSim User's Guide v1.50,
-NREL/TP-500-46198, appendix on the binary full-field format, and OpenFAST's InflowWind documentation).
+NREL/TP-500-46198, binary full-field appendix).
 
-Layout: 70-byte header ``<h4i6f6fi`` + description, then per time step (first step = first to
-reach the turbine) ny*nz*3 int16 with the component fastest, then y (from -W/2, +y left looking
-downwind), then z (from the bottom), followed by ntwr*3 int16 tower points. Velocity =
-(raw - offset) / slope per component.
+Layout: 70-byte header ``<h4i6f6fi`` + description, then per time step ny*nz*3 int16, component fastest, then y
+(from -W/2, +y left looking downwind), then z (from the bottom), then ntwr*3 int16 tower points; V = (raw -
+offset) / slope per component.
 """
 
 from __future__ import annotations
@@ -23,10 +22,8 @@ _HEADER = struct.Struct("<h4i6f6fi")
 
 
 def int16_scaling(vmin: float, vmax: float) -> tuple[float, float]:
-    """TurbSim's int16 scaling ``(slope, offset)``, both rounded to float32: raw = slope*v + offset spans the
-    int16 range for v in [vmin, vmax] [m/s]; slope = 65535 / (vmax - vmin) (1.0 when vmax <= vmin) [1/(m/s)],
-    offset = -32768 - slope*vmin.
-    """
+    """TurbSim's float32 int16 scaling ``(slope, offset)``: raw = slope v + offset spans the int16 range for v
+    in [vmin, vmax] [m/s]."""
     slope = 65535.0 / (vmax - vmin) if vmax > vmin else 1.0
     slope = float(np.float32(slope))
     return slope, float(np.float32(-32768.0 - slope * vmin))
@@ -38,9 +35,7 @@ def quantise(values: np.ndarray, slope: float, offset: float) -> np.ndarray:
 
 
 def tower_heights(bottom_m: float, dz_m: float) -> np.ndarray:
-    """Tower point heights [m]: ``bottom_m``, bottom - dz, ... while above the ground (TurbSim User's Guide,
-    tower points); empty when ``bottom_m`` <= 0.
-    """
+    """Tower point heights [m]: ``bottom_m``, bottom - dz, ... while above the ground."""
     n = int(np.ceil(bottom_m / dz_m - 1e-6))
     return bottom_m - dz_m * np.arange(max(n, 0))
 
@@ -49,9 +44,7 @@ def write_bts(path, plane: Plane, *, dy_m, dz_m, dt_s, U_m_s, hub_height_m, bott
               description: str, tower: dict | None = None) -> None:
     """Write ``plane`` (full velocities) and the optional ``tower`` {"u", "v", "w": (nt, ntwr) [m/s]} to ``path``.
 
-    One int16 scaling per component covers the grid and the tower points. Spacings ``dy_m``, ``dz_m`` [m], time
-    step ``dt_s`` [s], hub speed ``U_m_s`` [m/s], ``hub_height_m`` and the lowest row ``bottom_m`` [m] go into the
-    header; ``periodic`` sets header ID 8 (else 7); ``description`` follows the header (ASCII, others replaced).
+    One int16 scaling per component covers grid and tower; ``periodic`` sets header ID 8 (else 7).
     """
     nt, ny, nz = plane.nt, plane.ny, plane.nz
     ntwr = 0 if tower is None else tower["u"].shape[1]
@@ -110,13 +103,8 @@ def read_bts(path) -> dict:
 def tower_values(plane: Plane, heights_m: np.ndarray, layout, U_m_s: float) -> dict:
     """Tower-point velocities {"u", "v", "w": (nt, ntwr) [m/s]} at ``heights_m`` for a ``.bts``.
 
-    The mean wind at each tower height (profile, veer and history, as on the grid) plus the fluctuations of the
-    lowest grid row at y = 0 (the centre column, or the mean of the two beside it), held constant below the grid.
-
-    Raises
-    ------
-    ParameterError
-        When the profile does not cover the tower heights (a table, a log law's d + z0).
+    The mean wind at each tower height plus the fluctuations of the lowest grid row at y = 0, held constant
+    below the grid; ParameterError when the profile does not cover the tower heights.
     """
     cols = [(plane.ny - 1) // 2, plane.ny // 2]  # y = 0 is the centre column, or midway between two
     out = {}
@@ -132,14 +120,7 @@ def tower_values(plane: Plane, heights_m: np.ndarray, layout, U_m_s: float) -> d
 
 
 def export_bts(fs, out, req: ExportRequest) -> ExportResult:
-    """Export one plane of store ``fs`` to the ``.bts`` file ``out``.
-
-    Raises
-    ------
-    ParameterError
-        For a bad plane, a grid reaching the ground without ``drop_below_ground``, an existing output without
-        ``overwrite``, a bad output path, or a failed write.
-    """
+    """Export one plane of store ``fs`` to the ``.bts`` file ``out`` (errors: :func:`export_store`)."""
     out = Path(out)
     ix, lay = req.plane_index(fs), req.layout(fs)
     g = fs.grid

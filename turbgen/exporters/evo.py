@@ -1,12 +1,10 @@
 """The 4D lidar-simulator set ROOT.evo + ROOT.wnd + ROOT.sum, as read by the LidarSim ``.evo`` reader of the
 FUAS OpenFAST3.0_LidSim forks (evoTurb, Guo et al. 2022).
 
-ROOT.evo, all little-endian int16: NL (<= 30), NL plane distances in whole metres (positive upstream),
-then for each plane, each time step, each z (bottom up), each y (from -W/2, the .sum says CLOCKWISE = F),
-the components u, v, w (fastest): the simulator's READER order (evoTurb's writer uses another). Scaling
-V = U (o + 1e-5 TI% raw) with U and TI from the ROOT.wnd header, which also carries the rotor plane for
-InflowWind (WindType 4). The store's convected frame is the simulator's "eddy index" time axis, so planes
-are written in stored t order.
+ROOT.evo, little-endian int16: NL (<= 30), NL plane distances in whole metres (positive upstream), then per
+plane, time step, z (bottom up), y (from -W/2) the components u, v, w (fastest): the simulator's READER order.
+V = U (o + 1e-5 TI% raw) with U and TI from the ROOT.wnd header (which carries the rotor plane for InflowWind).
+The stored t axis is the simulator's "eddy index" time axis.
 """
 
 from __future__ import annotations
@@ -27,13 +25,8 @@ MAX_PLANES = 30  # the reader copies the distances into a fixed 30-element buffe
 
 
 def plane_distances(x_m) -> tuple[np.ndarray, list[str]]:
-    """Plane distances ``x_m`` [m] as int16 whole metres (the format's unit) and an ``"x->r"`` note per rounded one.
-
-    Raises
-    ------
-    ParameterError
-        For more than ``MAX_PLANES`` (30) planes, a distance beyond +-32767 m, or planes merging on rounding.
-    """
+    """Plane distances ``x_m`` [m] as int16 whole metres and an ``"x->r"`` note per rounded one; ParameterError
+    for more than ``MAX_PLANES`` planes, a distance beyond +-32767 m, or planes merging on rounding."""
     x = np.asarray(x_m, dtype=float)
     if len(x) > MAX_PLANES:
         raise ParameterError(f"{len(x)} planes: the lidar simulator's .evo reader holds at most {MAX_PLANES}")
@@ -49,15 +42,8 @@ def plane_distances(x_m) -> tuple[np.ndarray, list[str]]:
 def export_evo(fs, out, req: ExportRequest) -> ExportResult:
     """Export every plane of store ``fs`` to ROOT.evo, and one plane (default the rotor) to ROOT.wnd / ROOT.sum.
 
-    Two passes, one plane in memory at a time: the first fixes one TI scaling that fits every plane, the
-    second writes the planes. ``out``: ROOT, or a path ending in .evo, .wnd or .sum. With ``req.runner_files``
-    also ROOT_InflowWind_evo.dat and ROOT_LidarSim_evolution.txt.
-
-    Raises
-    ------
-    ParameterError
-        For an odd nt, planes the .evo cannot hold (:func:`plane_distances`), a bad plane, a grid reaching
-        the ground without ``drop_below_ground``, an existing output without ``overwrite``, a failed write.
+    Two passes, one plane in memory at a time: one TI scaling that fits every plane, then the planes. ``out``:
+    ROOT, or a path ending in .evo, .wnd or .sum.
     """
     root = export_root(out)
     ix_rotor, lay = req.plane_index(fs), req.layout(fs)
@@ -105,9 +91,7 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
 
 
 def read_evo(path) -> dict:
-    """Read ROOT.evo with the header of ROOT.wnd beside it: x_up (NL,) [m] (positive upstream) and u, v, w
-    (NL, nt, ny, nz) [m/s].
-    """
+    """Read ROOT.evo (header from ROOT.wnd): x_up (NL,) [m] upstream and u, v, w (NL, nt, ny, nz) [m/s]."""
     path = Path(path)
     h = read_wnd(path.with_suffix(".wnd"))["header"]
     raw = np.fromfile(path, dtype="<i2")

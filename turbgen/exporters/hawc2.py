@@ -1,11 +1,9 @@
 """HAWC2 / Mann binary box (InflowWind WindType 5; the HAWC2 manual's Mann turbulence box, Mann 1998, and
 OpenFAST's InflowWind documentation of the HAWC format).
 
-Three headerless little-endian float32 files ROOT_u.bin, ROOT_v.bin, ROOT_w.bin per plane, each nx*ny*nz
-values with z fastest (bottom up), then y stored REVERSED (+W/2 first), then x = time (the first x-plane
-reaches the turbine first). They hold u - URef, v, w of the full field (mean + shear + fluctuations), loaded
-with WindProfile = 0, ScaleMethod = 0, which reproduces the field exactly (v5 rejects WindProfile = -1;
-ScaleMethod != 0 removes the shear).
+Three headerless little-endian float32 files ROOT_{u,v,w}.bin, nx*ny*nz values, z fastest (bottom up), then y
+REVERSED (+W/2 first), then x = time (the first x-plane reaches the turbine first). They hold u - URef, v, w of
+the full field, loaded with WindProfile = 0, ScaleMethod = 0, which reproduce it exactly.
 """
 
 from __future__ import annotations
@@ -36,9 +34,7 @@ def write_hawc2(paths: dict, plane: Plane, U_ref: float) -> None:
 
 
 def read_hawc2(root, shape, U_ref: float) -> dict:
-    """Read ROOT_{u,v,w}.bin of ``shape`` (nt, ny, nz) as {"u", "v", "w": float64 [m/s]}, y ascending, u + ``U_ref``
-    (as InflowWind with WindProfile = 0).
-    """
+    """Read ROOT_{u,v,w}.bin of ``shape`` (nt, ny, nz) as {"u", "v", "w": float64 [m/s]}, y ascending, u + ``U_ref``."""
     out = {}
     for c, p in component_paths(root).items():
         box = np.fromfile(p, dtype="<f4").reshape(shape)[:, ::-1, :].astype(np.float64)
@@ -47,14 +43,7 @@ def read_hawc2(root, shape, U_ref: float) -> dict:
 
 
 def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
-    """Export one plane of store ``fs`` to ROOT_{u,v,w}.bin (``out``: ROOT, or a path ending in .bin).
-
-    Raises
-    ------
-    ParameterError
-        For a bad plane, a grid reaching the ground without ``drop_below_ground``, an existing output without
-        ``overwrite``, a bad output path, or a failed write.
-    """
+    """Export one plane of store ``fs`` to ROOT_{u,v,w}.bin (``out``: ROOT, or a path ending in .bin)."""
     root = Path(out)
     if root.suffix.lower() == ".bin":
         root = root.with_suffix("")
@@ -95,9 +84,7 @@ def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
 
 
 def runner_files(files, fs, req: ExportRequest, plane: Plane, lay, paths: dict, dat: Path, htc: Path) -> list[str]:
-    """Write the InflowWind v5 input file ``dat`` and the HAWC2 wind block ``htc`` of a HAWC2 export (through
-    ``files``); return one usage line per file. The block's tint is the plane's sigma_u / U.
-    """
+    """Write the InflowWind v5 input file ``dat`` and the HAWC2 wind block ``htc``; one usage line per file."""
     g = fs.grid
     desc = f"turbgen {htc.name}: plane of {req.source(fs)}, {lay.wind.describe()}"
     keys = {"nx": g.nt, "ny": g.ny, "nz": lay.nz, "dx": fs.U_m_s * g.dt_s, "dy": g.dy_m, "dz": g.dz_m,

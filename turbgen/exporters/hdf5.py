@@ -34,11 +34,6 @@ def export_hdf5(fs, out, req: ExportRequest) -> ExportResult:
     """Export the whole store ``fs`` to the HDF5 file ``out`` (only ``req.overwrite`` is used).
 
     Written plane by plane, one component-plane in memory, after reserving the file's disk space.
-
-    Raises
-    ------
-    ParameterError
-        For an existing output without ``overwrite``, a bad output path, or a failed write (e.g. ENOSPC).
     """
     out = Path(out)
     g = fs.grid

@@ -1,8 +1,7 @@
 """A complete InflowWind v5 input file (OpenFAST InflowWind documentation) for an exported wind file.
 
-The v5 parser reads the keys in a fixed order, the key name being the second token; every section is written
-(unused ones with inert values) so the file loads as is. File names inside are relative to the input file's
-folder, where InflowWind resolves them; openfast-io's ``read_InflowWind`` reads the same layout by position.
+The v5 parser reads the keys in a fixed order; every section is written (unused ones inert) so the file loads as
+is. File names inside are relative to the input file's folder, where InflowWind resolves them.
 """
 
 from __future__ import annotations
@@ -132,9 +131,7 @@ def _hawc_lidar_output(spec: InflowWindInput, files: dict) -> list[str]:
 
 
 def inflowwind_path(stem_path, fmt: str) -> Path:
-    """``<stem>_InflowWind_<fmt>.dat`` beside the wind files (the format in the name keeps the .bts and .wnd
-    exports of one root apart).
-    """
+    """``<stem>_InflowWind_<fmt>.dat`` beside the wind files (the format keeps exports of one root apart)."""
     p = Path(stem_path)
     return p.with_name(f"{p.name}_InflowWind_{fmt}.dat")
 
@@ -150,11 +147,9 @@ def hawc2_wind_block(*, paths: dict, folder: Path, U_m_s: float, ti: float, cent
                      nz: int, dx_m: float, dy_m: float, dz_m: float, description: str) -> str:
     """The HAWC2 htc ``begin wind`` block (with its ``begin mann`` sub-block) that loads an export's boxes.
 
-    The boxes hold u - wsp with the mean profile included, so the block uses a constant shear
-    (``shear_format 1 0``), no scaling (``dont_scale 1``) and the box centre at the grid's centre height
-    ``centre_m`` [m] (HAWC2's global z points down, hence -centre). ``paths`` {"u", "v", "w": path} are written
-    relative to ``folder``; ``ti`` = sigma_u / U [-] (``tint``, unused with dont_scale); box size nt, ny, nz and
-    spacings [m] (dx = U dt); ``description`` is the comment line at the top.
+    The boxes hold u - wsp with the mean profile, so: constant shear, no scaling, box centre at the grid's centre
+    height ``centre_m`` [m] (HAWC2's z points down). ``paths`` are written relative to ``folder``; ``ti`` =
+    sigma_u / U [-]; spacings [m].
     """
     rel = {c: "./" + _rel(p, folder) for c, p in paths.items()}
     return "\n".join([

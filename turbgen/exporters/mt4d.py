@@ -21,11 +21,6 @@ def export_mt4d(fs, out, req: ExportRequest) -> ExportResult:
     """Export every plane of store ``fs`` to the ``.mt4d`` file ``out`` (only ``req.overwrite`` is used).
 
     The notes give the box sizes, the slot times t_k = x_k/U [s] and the MATLAB ``reshape`` call.
-
-    Raises
-    ------
-    ParameterError
-        For an existing output without ``overwrite``, a bad output path, or a failed write.
     """
     out = Path(out)
     g = fs.grid

@@ -1,7 +1,4 @@
-"""The export options as `turbgen export` and the service's export endpoint take them, made into one
-:class:`turbgen.exporters.ExportRequest` by one function (the service gives the profile table and the mean
-history inline, ``z,U[,dir];...``; the command line as files).
-"""
+"""The export options of `turbgen export` and the service, made into one :class:`turbgen.exporters.ExportRequest`."""
 
 from __future__ import annotations
 
@@ -67,17 +64,14 @@ class ExportOptions:
 
 def export_request(store, fmt: str, opts: ExportOptions, *, inline: bool = False,
                    source_label: str | None = None) -> ExportRequest:
-    """The ExportRequest of ``opts`` for ``store`` in format ``fmt``; without a profile, shear exponent, veer or
-    history, a replayed store's fitted mean wind (:func:`fitted_mean_wind`), said in the request's notes.
-
-    ``store`` is opened only for a transient (its U and hub height); ``inline``: the profile table and mean
-    history hold rows, not file names (the service); ``source_label`` as in ExportRequest.
+    """The ExportRequest of ``opts`` for ``store`` in format ``fmt``; without any mean-wind option, a replayed
+    store's fitted mean wind (:func:`fitted_mean_wind`), said in the notes. ``inline``: the profile table and
+    history hold rows, not file names (the service).
 
     Raises
     ------
     ParameterError
-        For both a shear exponent and a profile, transient options without a transient (or the reverse), a
-        malformed profile or table, values outside their ranges.
+        For conflicting or malformed options, values outside their ranges.
     StoreError
         For a transient on a missing or incomplete store.
     """
@@ -103,8 +97,7 @@ def export_request(store, fmt: str, opts: ExportOptions, *, inline: bool = False
 
 
 def fitted_mean_wind(store) -> dict:
-    """The ``turbgen export`` options of the mean wind fitted to a replayed store's data (its ``fit`` record,
-    turbgen.runs.replay): {"profile": "power:ALPHA", "veer_deg_per_m": ..}; {} for other stores."""
+    """The export options {"profile", "veer_deg_per_m"} of a replayed store's ``fit`` record; {} for others."""
     from turbgen.store import FieldStore, open_store
 
     fs = store if isinstance(store, FieldStore) else open_store(store)

@@ -1,9 +1,7 @@
-"""Atomic multi-file output: every file is written under a temporary sibling and all are renamed into place
-only when every one was written completely.
+"""Atomic multi-file output: each file is written under a temporary sibling, all renamed into place once complete.
 
-Nothing at the final paths changes on an error (Ctrl-C, SIGTERM, SIGHUP, a full or read-only disk);
-existing files are replaced only with ``overwrite`` (checked for all targets first). File-system errors
-become one-line ParameterErrors; temporaries of exports killed earlier are removed by the next export.
+Nothing at the final paths changes on an error (Ctrl-C, SIGTERM, a full disk); temporaries of exports killed
+earlier are removed by the next export.
 """
 
 from __future__ import annotations
@@ -41,9 +39,8 @@ class OutputSet:
     Raises
     ------
     ParameterError
-        At construction: paths not distinct, a bad output path, a missing or non-writable directory, an output
-        that is a directory or exists without ``overwrite``, too little free disk. On exit: a file-system error
-        while writing or renaming, as one line.
+        At construction for a bad, existing (without ``overwrite``) or unwritable output or too little disk; on
+        exit for a file-system error, as one line.
     RuntimeError
         On exit, when the exporter did not write the temporary of every path.
     """
@@ -72,22 +69,13 @@ class OutputSet:
         self._temps = {p: p.with_name(f".{p.name}{TEMP_MARK}{token}") for p in self.paths}
 
     def temp(self, path) -> Path:
-        """The hidden temporary sibling ``.NAME.tmp-PID-XXXXXXXX`` to write instead of the final ``path`` (KeyError
-        for a path not in the set).
-        """
+        """The hidden temporary sibling ``.NAME.tmp-PID-XXXXXXXX`` to write instead of the final ``path``."""
         return self._temps[Path(path)]
 
     def reserve(self, path, nbytes: int) -> None:
-        """Reserve ``nbytes`` of disk for the existing temporary of ``path`` without changing its size.
-
-        So that a library that cannot survive a failed write (HDF5 aborts the process when it cannot flush on
-        close) never meets a full disk; without fallocate(2) (turbgen.oscalls) the free space is checked instead.
-
-        Raises
-        ------
-        OSError
-            ENOSPC when the space is not there (or another fallocate error but EOPNOTSUPP, ENOSYS and EINVAL).
-        """
+        """Reserve ``nbytes`` of disk for the existing temporary of ``path`` without changing its size (OSError
+        ENOSPC if missing): HDF5 aborts the process when it cannot flush on close. Without fallocate(2) the free
+        space is checked instead."""
         fd = os.open(self.temp(path), os.O_WRONLY)
         try:
             if not oscalls.reserve(fd, int(nbytes), keep_size=True, name=str(self.temp(path))):
@@ -135,9 +123,8 @@ class OutputSet:
 
 
 def write_failure(exc: OSError) -> str:
-    """The reason of a failed write in a few words: the system's message of its errno (a library's own, e.g.
-    HDF5's many lines, only as its first line); a short write (numpy's tofile, which gives no errno) says the disk
-    is probably full."""
+    """The reason of a failed write in a few words: its errno's message, else the first line of the library's
+    (numpy's short write without errno: the disk is probably full)."""
     if exc.errno:
         return f"{os.strerror(exc.errno)} (errno {exc.errno})"
     text = (str(exc).splitlines() or [type(exc).__name__])[0]

@@ -27,31 +27,22 @@ class ExportRequest:
         Overrides the store's hub height [m], in [1, 1000].
     shear_exponent : float, optional
         Power-law alpha [-]; None: ``DEFAULT_SHEAR_EXPONENT``. Refused by formats without a mean profile.
-    tower : bool, optional
-        Add .bts tower points.
-    periodic : bool, optional
-        Flag the file periodic in time (InflowWind wraps); default True.
-    drop_below_ground : bool, optional
-        Drop grid rows at or below the ground instead of refusing.
-    overwrite : bool, optional
-        Replace existing outputs.
+    tower, periodic, drop_below_ground, overwrite : bool, optional
+        Add .bts tower points; flag the file periodic in time (default True); drop rows at or below the ground
+        instead of refusing; replace existing outputs.
     source_label : str, optional
-        How the exports name their source (the .bts description, HDF5 ``source_store``); default the store's name.
+        How the exports name their source (.bts description, HDF5 ``source_store``); default the store's name.
     mean_wind : MeanWind, optional
-        Profile, veer and hub-height history added by the InflowWind/HAWC2 formats; None: the power law with
-        ``shear_exponent`` (refused together with it).
+        Profile, veer and hub-height history of the InflowWind/HAWC2 formats; None: the power law.
     runner_files : bool, optional
-        Also write the InflowWind v5 input file ``<out>_InflowWind_<format>.dat`` (bts, wnd, evo, hawc2), a HAWC2
-        ``<out>_wind.htc`` block (hawc2) and the LidarSim Wind Evolution section ``<out>_LidarSim_evolution.txt``
-        (evo); default False.
+        Also write the runners' input files (InflowWind .dat, HAWC2 .htc block, LidarSim evolution section).
     notes : tuple of str, optional
         Remarks the export adds to its own (e.g. a mean wind taken from the store's fit record).
 
     Raises
     ------
     ParameterError
-        For a non-integer ``plane``, a ``hub_height_m`` outside its range, or both ``mean_wind`` and
-        ``shear_exponent``.
+        For a non-integer ``plane``, ``hub_height_m`` out of range, or both ``mean_wind`` and ``shear_exponent``.
     """
 
     plane: int | None = None
@@ -67,9 +58,7 @@ class ExportRequest:
     notes: tuple = ()
 
     def source(self, fs) -> str:
-        """The source's name in the exports: ``source_label``, else the store directory's name (not its absolute
-        path: the same files on any machine), or the in-memory field's label.
-        """
+        """``source_label``, else the store directory's name (not its path: the same files on any machine)."""
         if self.source_label is not None:
             return self.source_label
         return fs.path.name if getattr(fs, "path", None) is not None else fs.label
@@ -86,13 +75,7 @@ class ExportRequest:
             raise ParameterError(f"`mean_wind` = {self.mean_wind!r} is not a turbgen.spec.mean_wind.MeanWind")
 
     def plane_index(self, fs) -> int:
-        """The plane index in [0, nx - 1] to export from store ``fs`` (default: the plane at x = 0).
-
-        Raises
-        ------
-        ParameterError
-            When ``plane`` is None and the store has no plane at x = 0 m, or ``plane`` is out of range.
-        """
+        """The plane index in [0, nx - 1] to export (default: the plane at x = 0); ParameterError if none."""
         xs = fs.grid.x_m
         if self.plane is None:
             if 0.0 not in xs:
@@ -103,14 +86,8 @@ class ExportRequest:
         return self.plane
 
     def layout(self, fs) -> VerticalLayout:
-        """Rows to export and the mean profile for store ``fs`` (:func:`turbgen.exporters.shear.vertical_layout`).
-
-        Raises
-        ------
-        ParameterError
-            For a grid reaching the ground without ``drop_below_ground``, a bad shear exponent, heights the
-            mean-wind profile does not cover, a transient at another speed or height, a history outside the record.
-        """
+        """Rows to export and the mean profile (:func:`turbgen.exporters.shear.vertical_layout`); ParameterError
+        for a grid reaching the ground, heights the profile misses, a transient at another U or hub height."""
         hub = fs.hub_height_m if self.hub_height_m is None else self.hub_height_m
         alpha = DEFAULT_SHEAR_EXPONENT if self.shear_exponent is None else self.shear_exponent
         lay = vertical_layout(fs.grid, hub, alpha, drop_below_ground=self.drop_below_ground,
@@ -126,19 +103,15 @@ class ExportRequest:
         return lay
 
     def start_shift_s(self, fs) -> float:
-        """Time [s] by which InflowWind starts a file upstream: InitX / U, 0 when periodic.
-
-        InflowWind reads slice k at X = 0 at time k dt - InitX / U with InitX = (ny - 1) dy / 2 for a non-periodic
-        .bts/.wnd (InflowWind User's Guide); HAWC boxes are always periodic.
-        """
+        """InitX / U [s], InitX = (ny - 1) dy / 2, by which InflowWind starts a non-periodic file upstream (its
+        User's Guide); 0 when periodic."""
         g = fs.grid
         return 0.0 if self.periodic else 0.5 * (g.ny - 1) * g.dy_m / fs.U_m_s
 
 
 @dataclass(frozen=True)
 class ExportResult:
-    """Files written, the InflowWind input-file lines that load them, remarks for the user, and one line
-    per runner input file saying how to use it."""
+    """Files written, the InflowWind lines that load them, remarks, and how to use each runner input file."""
 
     paths: tuple[Path, ...]
     inflowwind_lines: tuple[str, ...]
@@ -149,21 +122,9 @@ class ExportResult:
 class Plane:
     """One yz-plane as stored (float32 fluctuations, kept rows only) plus the mean wind.
 
-    Full velocities are made in float64 one time block at a time (memory about one stored plane). Without
-    veer, history or transient only u gets the profile's mean; with them (u, v) = rotate((U(t, y, h) + u', v'),
-    veer(h) + direction(t)) as :mod:`turbgen.spec.mean_wind` defines, at the time slice k reaches the turbine
-    (``first_slice_s`` + k dt).
-
-    Parameters
-    ----------
-    fs : FieldStore
-        The open store.
-    ix : int
-        Plane index.
-    layout : VerticalLayout
-        Kept rows and the mean profile.
-    first_slice_s : float, optional
-        Time [s] at which slice 0 reaches the turbine (minus the start shift of a non-periodic file).
+    Full velocities are made in float64 one time block at a time. With veer, history or transient (u, v) =
+    rotate((U(t, y, h) + u', v'), veer(h) + direction(t)) (:mod:`turbgen.spec.mean_wind`) at the time slice k
+    reaches the turbine, ``first_slice_s`` + k dt [s]; else only u gets the profile's mean.
     """
 
     def __init__(self, fs, ix: int, layout: VerticalLayout, first_slice_s: float = 0.0):
@@ -177,10 +138,7 @@ class Plane:
         self.U_m_s, self.hub_height_m = fs.U_m_s, layout.hub_height_m
 
     def full(self, c: str, a: int = 0, b: int | None = None) -> np.ndarray:
-        """Full velocity [m/s] of component ``c`` ("u", "v" or "w") for time steps a..b-1, float64 (b - a, ny, nz).
-
-        w is the stored fluctuation; u (and v, with veer or a history direction) carry the mean wind.
-        """
+        """Full velocity [m/s] of component ``c`` ("u", "v" or "w") for time steps a..b-1, float64 (b - a, ny, nz)."""
         v = self.fluct[c][a:b].astype(np.float64)
         if not self.varying:
             if c == "u":
@@ -194,25 +152,19 @@ class Plane:
         return u if c == "u" else other
 
     def blocks(self, bytes_per_step: int, budget: int = 1 << 24):
-        """Consecutive half-open time ranges (a, b) covering 0..nt, each at most ``budget`` bytes (at least one step).
-        """
+        """Consecutive half-open time ranges (a, b) covering 0..nt, each at most ``budget`` bytes (>= one step)."""
         step = max(1, budget // max(1, bytes_per_step))
         return [(a, min(self.nt, a + step)) for a in range(0, self.nt, step)]
 
 
 def ifw_line(value, key: str, comment: str) -> str:
-    """One InflowWind input-file line: ``value`` right-aligned in 20 characters (strings and paths quoted, floats
-    with 10 significant digits), the ``key`` name, then `` - comment``.
-    """
+    """One InflowWind input-file line: ``value`` right-aligned in 20 characters (strings quoted), ``key``, comment."""
     text = f'"{value}"' if isinstance(value, (str, Path)) else (str(value) if not isinstance(value, float) else f"{value:.10g}")
     return f"{text:>20}   {key:<15} - {comment}"
 
 
 def mean_wind_notes(lay: VerticalLayout, shift_s: float, nt: int, dt_s: float) -> list[str]:
-    """The summary's notes on the mean wind and time origin of an export: the start shift ``shift_s`` [s] of a
-    non-periodic file, a mean wind other than the default power law, and how a history or transient meets
-    Taylor's shift.
-    """
+    """The summary's notes on the start shift ``shift_s`` [s], a non-default mean wind, a history or transient."""
     notes = []
     if shift_s:
         notes.append(f"not periodic: InflowWind starts the file {shift_s:.6g} s upstream (InitX/U, half the grid "

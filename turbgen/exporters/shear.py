@@ -1,9 +1,8 @@
 """Mean wind profile and ground clearance for the InflowWind formats.
 
-The store holds zero-mean fluctuations with z relative to the hub; the exporters add a mean at absolute
-height h = h_hub + z: by default the power law u(h) = U (h / h_hub)^alpha, or any
-:class:`turbgen.spec.mean_wind.MeanWind`. A grid reaching the ground (h <= 0) can neither carry the profile
-nor be read by InflowWind (its grid origin is the ground): refused unless the rows below are dropped.
+The exporters add a mean at absolute height h = h_hub + z (default the power law U (h / h_hub)^alpha). A grid
+reaching the ground (h <= 0) can neither carry the profile nor be read by InflowWind: refused unless the rows
+below are dropped.
 """
 
 from __future__ import annotations
@@ -19,12 +18,8 @@ from turbgen.spec.mean_wind import DEFAULT_SHEAR_EXPONENT, MeanWind
 
 @dataclass(frozen=True)
 class VerticalLayout:
-    """Rows ``z_first..nz-1`` of a grid placed at ``hub_height_m`` with a mean-wind profile.
-
-    hub_height_m [m], shear_exponent [-] (of the power law; unused by the other profiles), z_first:
-    index of the lowest kept row, heights_m: absolute heights [m] of the kept rows (ascending),
-    mean_wind: the profile, veer and history (None: the power law with ``shear_exponent``).
-    """
+    """Rows ``z_first..nz-1`` (absolute ``heights_m`` [m]) of a grid at ``hub_height_m`` [m] with a mean wind
+    (None: the power law with ``shear_exponent`` [-])."""
 
     hub_height_m: float
     shear_exponent: float
@@ -53,9 +48,7 @@ class VerticalLayout:
         return float(0.5 * (self.heights_m[0] + self.heights_m[-1]))
 
     def mean_u(self, U_m_s: float, heights_m=None) -> np.ndarray:
-        """Mean speed [m/s] at ``heights_m`` (default: the kept rows), before any veer: u(h) = U r(h), r the
-        profile's ratio U(h) / U(h_hub).
-        """
+        """Mean speed U(h) [m/s] at ``heights_m`` (default: the kept rows), before any veer."""
         h = self.heights_m if heights_m is None else np.asarray(heights_m, dtype=float)
         return U_m_s * self.wind.speed_ratio(h, self.hub_height_m)
 
@@ -80,8 +73,8 @@ def vertical_layout(grid: Grid, hub_height_m, shear_exponent=DEFAULT_SHEAR_EXPON
     Raises
     ------
     ParameterError
-        For a non-positive hub height, an exponent outside [-1, 1], a grid reaching the ground without
-        ``drop_below_ground``, every row below ground, or kept heights the profile does not cover.
+        For a bad hub height or exponent, a grid reaching the ground without ``drop_below_ground``, or kept
+        heights the profile does not cover.
     """
     hub = check_positive("hub height (m)", hub_height_m)
     wind = mean_wind if mean_wind is not None else MeanWind(shear_exponent=shear_exponent)

@@ -47,11 +47,6 @@ def export_transient(event: IecTransient, out, *, overwrite: bool = False, runne
     -------
     tuple of (list of pathlib.Path, list of str)
         The paths written and one usage line per input file.
-
-    Raises
-    ------
-    ParameterError
-        For an existing output without ``overwrite``, a bad output path or a failed write.
     """
     out = Path(out)
     dat = inflowwind_path(out.with_suffix("") if out.suffix else out, "uniform")

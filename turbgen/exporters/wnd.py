@@ -2,10 +2,9 @@
 v1.50, and OpenFAST's InflowWind documentation); the same pair carries the header for the lidar simulator's
 ``.evo`` (turbgen.exporters.evo).
 
-``.wnd``: new-style 104-byte header (ID -99, TurbType 4), then per time step nz*ny*3 int16 with
-the component fastest, then y (from -W/2, +y left), then z (from the bottom). Velocity =
-U (o + 1e-5 TI% raw), o = (1, 0, 0); no Bladed left-hand rule, so v has InflowWind's sign both
-in InflowWind and in the lidar simulator's ``.evo`` reader (which never negates v).
+``.wnd``: 104-byte header (ID -99, TurbType 4), then per time step nz*ny*3 int16, component fastest, then y
+(from -W/2, +y left), then z (from the bottom); V = U (o + 1e-5 TI% raw), o = (1, 0, 0). No Bladed left-hand
+rule: v has InflowWind's sign (the lidar simulator's ``.evo`` reader never negates v either).
 """
 
 from __future__ import annotations
@@ -28,8 +27,7 @@ _RAW_LIMIT = 32000.0  # keeps |raw| below the int16 limit with margin
 
 
 class BladedStats:
-    """Running per-component statistics that fix the Bladed TI scaling: the largest |deviation|
-    from U*o (full velocity) and the variance of the fluctuations."""
+    """Running per-component largest |V - U o| and fluctuation variance, which fix the Bladed TI scaling."""
 
     def __init__(self):
         self.maxdev = dict.fromkeys(COMPONENTS, 0.0)
@@ -48,9 +46,7 @@ class BladedStats:
                 s[2] += float(np.square(fluct).sum())
 
     def ti_percent(self, U_m_s: float) -> tuple[float, float, float]:
-        """TI of u, v, w [%]: sigma/U, enlarged where needed so that every raw value fits in +-32000
-        (raw = dev 1e5 / (U TI%)), at least 1e-3 %; rounded to float32 (the header's value, used by every reader).
-        """
+        """TI of u, v, w [%]: sigma/U, enlarged so every raw value fits in +-32000, >= 1e-3 %, as float32."""
         out = []
         for c in COMPONENTS:
             n, s1, s2 = self.sums[c]
@@ -61,10 +57,7 @@ class BladedStats:
 
 
 def bladed_raw(plane: Plane, a: int, b: int, U_m_s: float, ti: tuple) -> np.ndarray:
-    """Little-endian int16 block (b - a, nz, ny, 3) of time steps a..b-1 (component fastest, then y, z).
-
-    raw = (V / U - o) 1e5 / TI%, rounded and saturated to the int16 range, o = (1, 0, 0); ``ti`` = TI of u, v, w [%].
-    """
+    """Int16 block (b - a, nz, ny, 3) of time steps a..b-1: raw = (V / U - o) 1e5 / TI% [``ti``], saturated."""
     raw = [np.clip(np.rint((plane.full(c, a, b) / U_m_s - _OFFSET[c]) * 1e5 / t), -32768, 32767)
            for c, t in zip(COMPONENTS, ti)]
     return np.stack(raw, axis=-1).astype("<i2").transpose(0, 2, 1, 3)
@@ -90,22 +83,13 @@ class WndHeader:
     zref_m: float = 0.0
 
     def pack(self) -> bytes:
-        """The 104-byte new-style header (little-endian ``<hhi6f3fi4f4i6f``).
-
-        ID -99, TurbType 4, 3 components, zref [m], TI [%], dz, dy, dx [m], nt/2, U [m/s], nz, ny; the rest zero.
-        """
+        """The 104-byte header: ID -99, TurbType 4, 3 components, zref, TI, dz, dy, dx, nt/2, U, nz, ny."""
         return _HEADER.pack(-99, 4, 3, 0.0, 0.0, self.zref_m, *self.ti_percent, self.dz_m, self.dy_m, self.dx_m,
                             self.nt // 2, self.U_m_s, 0.0, 0.0, 0.0, 0, 0, self.nz, self.ny, *([0.0] * 6))
 
     @classmethod
     def unpack(cls, raw: bytes) -> "WndHeader":
-        """Header from the first 104 bytes of a ``.wnd`` (nt = 2 * the stored nt/2).
-
-        Raises
-        ------
-        ParameterError
-            When the file is not a new-style TurbType-4 .wnd (ID -99, type 4).
-        """
+        """Header from the first 104 bytes of a ``.wnd``; ParameterError if not ID -99, TurbType 4."""
         h = _HEADER.unpack_from(raw, 0)
         if h[0] != -99 or h[1] != 4:
             raise ParameterError(f"not a new-style TurbType-4 .wnd (ID {h[0]}, type {h[1]})")
@@ -122,13 +106,7 @@ def write_wnd(path, plane: Plane, header: WndHeader) -> None:
 
 
 def read_wnd(path) -> dict:
-    """Read a ``.wnd``: {"u", "v", "w": float64 (nt, ny, nz) [m/s], "header": :class:`WndHeader`}.
-
-    Raises
-    ------
-    ParameterError
-        When the file is not a new-style TurbType-4 .wnd.
-    """
+    """Read a ``.wnd``: {"u", "v", "w": float64 (nt, ny, nz) [m/s], "header": :class:`WndHeader`}."""
     raw = Path(path).read_bytes()
     h = WndHeader.unpack(raw)
     data = np.frombuffer(raw, dtype="<i2", offset=_HEADER.size).reshape(-1, h.nz, h.ny, 3)
@@ -144,11 +122,7 @@ def check_even_nt(nt: int) -> None:
 
 
 def write_pair(files: OutputSet, root: Path, plane: Plane, header: WndHeader, lay, *, periodic: bool, title: str) -> None:
-    """Write ROOT.wnd and ROOT.sum through the temporary names of ``files``.
-
-    ``lay`` gives the .sum's hub height and height offset; ``periodic`` marks the .sum PERIODIC; ``title`` is its
-    first line.
-    """
+    """Write ROOT.wnd and ROOT.sum (hub height and offset from ``lay``) through the temporaries of ``files``."""
     write_wnd(files.temp(root_file(root, ".wnd")), plane, header)
     files.temp(root_file(root, ".sum")).write_text(sum_text(
         hub_height_m=lay.hub_height_m, U_m_s=header.U_m_s, ti_percent=header.ti_percent,
@@ -165,10 +139,7 @@ def inflowwind_lines(root: Path) -> tuple[str, ...]:
 
 def write_wnd_inflowwind(files: OutputSet, path: Path, root: Path, lay, U_m_s: float, *, x_m: float,
                          shift_s: float) -> str:
-    """Write the InflowWind v5 input file ``path`` (WindType 4, FilenameRoot ``root``); return its usage line.
-
-    The title names the plane ``x_m`` [m] and the mean wind, and a non-periodic file's start shift ``shift_s`` [s].
-    """
+    """Write the InflowWind v5 input file ``path`` (WindType 4, FilenameRoot ``root``); return its usage line."""
     title = f"turbgen {root.name}.wnd: plane x = {x_m:g} m, {lay.wind.describe()}"
     if shift_s:
         title = f"NOT PERIODIC: starts {shift_s:.6g} s upstream (InitX/U). " + title
@@ -177,10 +148,7 @@ def write_wnd_inflowwind(files: OutputSet, path: Path, root: Path, lay, U_m_s: f
 
 
 def root_file(root: Path, ext: str) -> Path:
-    """ROOT + ``ext`` (".wnd"), the name InflowWind and the lidar simulator open for FilenameRoot ROOT.
-
-    Appended, not substituted: ``Path.with_suffix`` would turn the root ``case_U16.5`` into ``case_U16.wnd``.
-    """
+    """ROOT + ``ext`` (".wnd"), appended: ``with_suffix`` would turn ``case_U16.5`` into ``case_U16.wnd``."""
     return root.with_name(root.name + ext)
 
 
@@ -191,14 +159,7 @@ def export_root(out) -> Path:
 
 
 def export_wnd(fs, out, req: ExportRequest) -> ExportResult:
-    """Export one plane of store ``fs`` to ROOT.wnd + ROOT.sum (``out``: ROOT, or ROOT.wnd/.sum/.evo).
-
-    Raises
-    ------
-    ParameterError
-        For an odd nt, a bad plane, a grid reaching the ground without ``drop_below_ground``, an existing output
-        without ``overwrite``, a bad output path, or a failed write.
-    """
+    """Export one plane of store ``fs`` to ROOT.wnd + ROOT.sum (``out``: ROOT, or ROOT.wnd/.sum/.evo)."""
     root = export_root(out)
     ix, lay = req.plane_index(fs), req.layout(fs)
     g = fs.grid

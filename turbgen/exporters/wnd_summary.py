@@ -12,11 +12,8 @@ from turbgen.exporters.request import COMPONENTS
 
 def sum_text(*, hub_height_m: float, U_m_s: float, ti_percent, height_offset_m: float, periodic: bool,
              title: str) -> str:
-    """The ``.sum`` text: title, CLOCKWISE (F; the forks need it before the hub height), hub height [m], UBar [m/s],
-    the three TI lines [%], the height offset [m] (hub minus grid centre), then PERIODIC when ``periodic``.
-
-    No Bladed left-hand-rule line. Keys in ``title`` (e.g. "periodic.csv" in a mean-wind description) are
-    broken with a hyphen so that a reader cannot match them.
+    """The ``.sum`` text: title, CLOCKWISE (F; the forks need it before the hub height), hub height [m], UBar
+    [m/s], TI [%], height offset [m] (hub minus grid centre), PERIODIC when ``periodic``; keys in ``title`` defused.
     """
     lines = [_defuse(title),  # free text: must not contain the keys parsed below
              "",

@@ -32,36 +32,9 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
                loopback_only: bool = False, stencil_cache_bytes: int | None = DEFAULT_STENCIL_CACHE_BYTES,
                own_cluster: bool = True, derived_running: int = DERIVED_RUNNING,
                derived_waiting: int = DERIVED_WAITING) -> FastAPI:
-    """The application over the catalog in ``root`` running jobs on the dask ``client``.
-
-    Parameters
-    ----------
-    root : Path
-        The catalog's root directory (``root/runs`` is created if missing).
-    client : distributed.Client
-        Client the runs are submitted to.
-    token : str, optional
-        Bearer token every mutating request must carry (None: open).
-    memory_budget : int
-        Memory budget of one run [bytes] (larger runs are refused with 413).
-    max_queue : int
-        Most runs queued or running at once.
-    loopback_only : bool, optional
-        Answer only requests whose Host header names a loopback address (400 otherwise): a server bound to 127.0.0.1
-        is then out of reach of DNS rebinding (a web page whose name resolves to 127.0.0.1 would be same-origin).
-    stencil_cache_bytes : int or None, optional
-        Size cap of ``root/stencils`` [bytes] (least recently used evicted; None: no cap).
-    own_cluster : bool, optional
-        ``client`` is the service's in-process cluster (:func:`turbgen.service.server.service_cluster`): temporaries
-        of dead processes in ``root/stencils`` are this host's.
-    derived_running, derived_waiting : int, optional
-        Exports, validations and lidar reports computed at once, and requests that may wait (503 beyond).
-
-    Returns
-    -------
-    fastapi.FastAPI
-        ``app.state.service`` holds its state, ``app.state.jobs`` its job queue, ``app.state.removed`` the
-        temporaries of dead processes removed at start-up.
+    """The application over the catalog in ``root`` running jobs on the dask ``client``; the other parameters
+    are :class:`~turbgen.service.state.ServiceSettings`'. ``app.state.service`` holds its state, ``app.state.jobs``
+    its job queue, ``app.state.removed`` the temporaries of dead processes removed at start-up.
     """
     settings = ServiceSettings(Path(root), token, memory_budget, max_queue, loopback_only, derived_running,
                                derived_waiting, stencil_cache_bytes, own_cluster)  # fmt: skip

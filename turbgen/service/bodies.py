@@ -67,8 +67,7 @@ async def _bounded_body(request: Request, max_bytes: int) -> bytearray:
 async def _next_within(chunks, waited: list) -> bytes | None:
     """The next chunk of the body (None at its end), or 408 once the client has had BODY_TIMEOUT_S in all.
 
-    The client's time is counted in ticks of BODY_TIMEOUT_S / 20, each by its nominal length, so time the server
-    itself held its event loop (many simultaneous requests) is not charged to the client.
+    Counted in ticks of nominal length, so time the server held its event loop is not charged to the client.
     """
     tick = BODY_TIMEOUT_S / 20
     read = asyncio.ensure_future(_next_chunk(chunks))

@@ -3,8 +3,7 @@
     ROOT/runs/<id>/request.json   model + canonical run mapping (written atomically before queueing)
     ROOT/runs/<id>/store.zarr     the field (published atomically by runs/; complete or absent)
     ROOT/runs/<id>/failed.json    the one-line reason of a failed run
-    ROOT/runs/<id>/starts.json    how many times the run was started (a run that brings its server down is failed
-                                  after MAX_STARTS, not re-queued forever)
+    ROOT/runs/<id>/starts.json    how many times the run was started (failed after jobs.MAX_STARTS)
     ROOT/runs/<id>/.failure-room  4 KiB kept until failed.json is written, so a full disk can still record it
     ROOT/runs/<id>/exports/<fmt>  cached exports;  ROOT/runs/<id>/validation/  report.json + PNG plots
     ROOT/work/                    derived products being computed (temporary names, turbgen.service.derived)
@@ -39,15 +38,8 @@ def write_json_atomic(path: Path, data) -> None:
 
 
 class Catalog:
-    """The run directories under ``root``/runs.
-
-    Methods taking a run id ``rid`` raise KeyError if it is not a well-formed id.
-
-    Parameters
-    ----------
-    root : Path
-        The server's --root (``root/runs`` and ``root/work`` are created if missing).
-    """
+    """The run directories under the server's --root ``root``/runs (created if missing); methods taking a run
+    id ``rid`` raise KeyError if it is not a well-formed id."""
 
     def __init__(self, root: Path):
         self.root = Path(root).absolute()
@@ -73,26 +65,12 @@ class Catalog:
         return valid_id(rid) and (self.run_dir(rid) / "request.json").is_file()
 
     def request(self, rid: str) -> dict:
-        """The recorded request of run ``rid`` (model, run mapping, preset, turbgen version).
-
-        Raises OSError or ValueError if request.json is missing or not valid JSON.
-        """
+        """The recorded request of run ``rid`` (model, run mapping, preset, turbgen version)."""
         return json.loads((self.run_dir(rid) / "request.json").read_text())
 
     def record(self, rid: str, model: str, mapping: dict, preset: str | None = None) -> None:
-        """Create the run directory with its request (atomic), clearing an earlier failure.
-
-        Parameters
-        ----------
-        rid : str
-            Run id.
-        model : str
-            Model name.
-        mapping : dict
-            Canonical run mapping.
-        preset : str, optional
-            A label for listing only (the run mapping already holds what it set).
-        """
+        """Create the run directory with its request (``model``, canonical run ``mapping``, ``preset`` label),
+        atomically, clearing an earlier failure."""
         d = self.run_dir(rid)
         d.mkdir(exist_ok=True)
         (d / "failed.json").unlink(missing_ok=True)
@@ -139,10 +117,7 @@ class Catalog:
             return 0
 
     def count_start(self, rid: str) -> None:
-        """Record one more start of run ``rid``, kept across restarts (see jobs.MAX_STARTS).
-
-        Best effort: a disk too full to record it fails the run anyway.
-        """
+        """Record one more start of run ``rid`` across restarts (best effort: a full disk fails the run anyway)."""
         with contextlib.suppress(OSError):
             write_json_atomic(self.run_dir(rid) / STARTS, {"starts": self.starts(rid) + 1})
 
@@ -159,10 +134,7 @@ class Catalog:
         return sorted(p.name for p in self.runs.iterdir() if valid_id(p.name) and (p / "request.json").is_file())
 
     def delete(self, rid: str) -> None:
-        """Remove a run directory, renamed away first so no reader sees half of it.
-
-        Raises OSError if the directory does not exist.
-        """
+        """Remove a run directory, renamed away first so no reader sees half of it."""
         d = self.run_dir(rid)
         self._complete.discard(rid)
         trash = temp_name(d)  # a temporary name: start-up removes it if this process dies before rmtree finishes

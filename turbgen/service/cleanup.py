@@ -1,10 +1,8 @@
 """Start-up clean-up of a server's root, and the size cap of its stencil cache.
 
-Every writer of the service works under a temporary name with its process id (turbgen.store.temporaries); a killed
-server leaves them behind. Start-up removes those whose process is gone in ``ROOT/work``, ``ROOT/runs``,
-``ROOT/constraints``, each run's directory and its ``exports`` and ``lidar``, and in ``ROOT/stencils`` when the runs
-execute in this process (with --scheduler the stencil builders' process ids are not this host's). Temporaries
-``.tmp-XXXXXXXX`` without a process id (older versions') are only written by a running server, so all are removed.
+Every writer works under a temporary name with its process id (turbgen.store.temporaries); start-up removes those
+whose process is gone, in ``ROOT/stencils`` only when the runs execute in this process (with --scheduler the
+builders' process ids are not this host's).
 """
 
 from __future__ import annotations
@@ -50,12 +48,8 @@ def _remove_unowned(directory: Path) -> list[Path]:
 
 
 def trim_stencil_cache(directory: Path, max_bytes: int | None) -> list[Path]:
-    """Evict the least recently used stencils of ``directory`` until its entries take at most ``max_bytes`` (None: no cap).
-
-    Recency is the modification time, renewed on every hit (turbgen.runs.stencil_cache); the most recent entry is kept
-    even when larger (its run needs it). A run with an evicted entry memory-mapped keeps reading it. Returns the
-    evicted entries, oldest first.
-    """
+    """Evict the least recently used stencils (modification time) of ``directory`` until they take at most
+    ``max_bytes`` (None: no cap), keeping the most recent; the evicted entries, oldest first."""
     if max_bytes is None or not directory.is_dir():
         return []
     entries = []

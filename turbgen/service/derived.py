@@ -1,10 +1,6 @@
-"""Products derived from a complete run (exports, validation report and plots, lidar reports): computed on first
-request, published atomically under the run's directory, served from there afterwards.
-
-A product is built under a temporary name in ``ROOT/work`` (turbgen.store.temporaries, so start-up removes what a
-killed server left) and published only if its run was not deleted meanwhile (a DELETE bumps the run's generation).
-:class:`~turbgen.service.limits.DerivedLimiter` bounds the computations, so the health check and the catalog stay
-responsive.
+"""Products derived from a complete run (exports, validation, lidar reports): computed on first request under a
+temporary name in ``ROOT/work``, published atomically under the run's directory unless the run was deleted
+meanwhile (a DELETE bumps the run's generation), served from there afterwards.
 """
 
 from __future__ import annotations
@@ -24,29 +20,8 @@ from turbgen.store.temporaries import publish, temp_name
 def cached_product(state: ServiceState, request: Request, rid: str, final: Path, ready, build) -> Path:
     """``final`` once ``ready(final)``; built first by ``build(tmp)`` and published when it is not.
 
-    One build per product at a time (a concurrent request waits and reuses it); nothing is published for a run
-    deleted meanwhile.
-
-    Parameters
-    ----------
-    state : ServiceState
-        The server's state.
-    request : fastapi.Request
-        The request (starting a computation needs the server's token).
-    rid : str
-        Run id.
-    final : Path
-        Where the product lies under the run's directory.
-    ready : callable
-        ``ready(final)`` True when the product is complete.
-    build : callable
-        ``build(tmp)`` writes the product (file or directory) at the absent path ``tmp``.
-
-    Raises
-    ------
-    LimitError
-        401 without the token, 503 when too many products are computed or queued, 404 when the run was deleted
-        while its product was computed.
+    One build per product at a time (a concurrent request waits and reuses it); starting one needs the token.
+    Raises LimitError 401 without it, 503 when too many are computing, 404 for a run deleted meanwhile.
     """
     if ready(final):
         return final
@@ -88,9 +63,7 @@ def _remove(path: Path) -> None:
 
 
 def build_export(store: Path, rid: str, fmt: str, request, tmp: Path) -> None:
-    """Export the run ``rid``'s ``store`` in format ``fmt`` with the ExportRequest ``request`` into the new directory
-    ``tmp`` (files named by ``rid``; several files as one .zip).
-    """
+    """Export ``store`` in format ``fmt`` into the new directory ``tmp`` (files named ``rid``; several as a .zip)."""
     from turbgen.exporters import export_store
 
     tmp.mkdir()
@@ -116,11 +89,7 @@ def build_validation(store: Path, tmp: Path) -> None:
 
 
 def build_lidar(store: Path, rid: str, lidar, tmp: Path) -> None:
-    """`turbgen lidar --json` of run ``rid``'s ``store`` into the new file ``tmp``.
-
-    ``lidar`` is a preset name or a LidarDescription a client gave (never a path); the report names its store
-    /runs/<id>/store.
-    """
+    """`turbgen lidar --json` of ``store`` into the new file ``tmp`` (``lidar``: a preset or a description)."""
     from turbgen.virtual_lidar.report import lidar_report
     from turbgen.store import open_store
 

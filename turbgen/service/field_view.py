@@ -1,10 +1,5 @@
-"""The field itself, as the run's page shows it: small products read from a complete store, made on first request and
-cached (turbgen.service.derived.cached_product).
-
-- ``series``: u, v, w time series at one (y, z) point of one plane (JSON; every ``step``-th sample of a record longer
-  than :data:`MAX_SERIES_SAMPLES`);
-- ``snapshot``: a yz image of one component at one time step and plane (PNG), on a colour scale of +- 3 sigma of the
-  run so frames of an animation compare; the measurement points of a constrained field at that plane are marked.
+"""The field as the run's page shows it, cached products of a complete store: a point's u, v, w series (JSON) and
+a yz snapshot (PNG, +- 3 sigma of the run so frames compare, a constrained field's measurement points marked).
 """
 
 from __future__ import annotations
@@ -30,8 +25,8 @@ def check_index(name: str, value: int, size: int) -> int:
 def build_series(store: Path, plane: int, iy: int, iz: int, tmp: Path) -> None:
     """u, v, w at grid point (plane, iy, iz) of ``store`` as JSON into the new file ``tmp``.
 
-    The JSON holds ``x_m``, ``y_m``, ``z_m`` [m], ``dt_s`` [s] of the samples shown, ``step``, ``nt`` and the lists
-    ``u``, ``v``, ``w`` [m/s] (fluctuations, as stored). The indices are checked by the caller.
+    The JSON holds ``x_m``, ``y_m``, ``z_m`` [m], ``dt_s`` [s], ``step``, ``nt`` and ``u``, ``v``, ``w`` [m/s]
+    (every ``step``-th sample of a record longer than :data:`MAX_SERIES_SAMPLES`).
     """
     from turbgen.store import open_store
 

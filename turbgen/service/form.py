@@ -1,10 +1,6 @@
-"""The run form of the service's page, generated from the run schemas (turbgen/schemas/<model>-run.schema.json), the
-option names of the commands (turbgen.spec.run_inputs) and the table of ranges the checks use
-(turbgen.theory.ranges.RANGES).
-
-Every schema key of a run becomes one field named as the command's option (``length_scale_m`` is ``L``,
-``hub_height_m`` is ``hub_height``; a ``-`` of an option written ``_``), grouped as the page shows it, with its range,
-unit and default. :data:`NOT_IN_FORM` lists the schema keys the form leaves out, with the reason.
+"""The run form of the service's page, generated from the run schemas, the commands' option names
+(turbgen.spec.run_inputs) and the range table (turbgen.theory.ranges.RANGES): one field per schema key but
+:data:`NOT_IN_FORM`, named as the command's option (``-`` written ``_``), with its range, unit and default.
 """
 
 from __future__ import annotations
@@ -51,23 +47,9 @@ _EXTRA = {
 
 @dataclass(frozen=True)
 class Field:
-    """One field of the run form.
-
-    Parameters
-    ----------
-    name : str
-        The command's option name with ``-`` written ``_`` (``L``, ``hub_height``): the form field's name.
-    key : str
-        Where the value goes in the request body: a run key, ``grid.<key>``, ``preset`` or ``gates``.
-    group : str
-        One of :data:`GROUPS`.
-    kind : str
-        number, integer, choice, flag, list3 (three numbers), positions (numbers), gates, evo or upload.
-    unit, range, default, help : str
-        Shown next to the field (the range as the checks enforce it).
-    choices : tuple of str
-        The values of a choice.
-    """
+    """One field of the run form: ``name`` the command's option (``L``, ``hub_height``), ``key`` where the value goes
+    in the request body (a run key, ``grid.<key>``, ``preset`` or ``gates``), ``group`` one of :data:`GROUPS`,
+    ``kind`` number, integer, choice, flag, list3, positions, gates, evo or upload; the rest shown beside it."""
 
     name: str
     key: str
@@ -148,9 +130,7 @@ def _field(model: str, key: str, spec: dict, grid: bool) -> Field:
 
 
 def form_fields(model: str) -> list[Field]:
-    """The fields of ``model``'s run form: every key of its run schema and grid table but :data:`NOT_IN_FORM`, plus the
-    preset and the range gates; in the order of :data:`GROUPS`, the schema's order within a group.
-    """
+    """The fields of ``model``'s run form (schema keys, preset, range gates) in the order of :data:`GROUPS`."""
     props = load_schema(f"{model}-run")["properties"]
     fields = [Field("preset", "preset", "model", "choice", help=_PRESET_HELP, choices=tuple(sorted(BUILTIN_PRESETS)))]
     fields += [_field(model, k, s, False) for k, s in props.items() if k != "grid" and (model, k) not in NOT_IN_FORM]
@@ -170,10 +150,7 @@ def _label(key: str) -> str:
 
 
 def form_description(token_required: bool) -> dict:
-    """What the page builds its form from (GET /form.json).
-
-    ``models`` (model -> fields as dicts, each with its command-line ``flag`` and the ``label`` its range check names
-    it by), ``groups`` and ``token_required`` (the page then asks for the token).
-    """
+    """What the page builds its form from (GET /form.json): ``models`` (model -> fields, each with its ``flag``
+    and range-check ``label``), ``groups`` and ``token_required``."""
     models = {m: [asdict(f) | {"flag": f.flag, "label": _label(f.key)} for f in form_fields(m)] for m in MODELS}
     return {"models": models, "groups": list(GROUPS), "token_required": token_required}

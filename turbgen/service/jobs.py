@@ -1,9 +1,7 @@
 """The service's job queue on dask.distributed: one computation per run id, joined by duplicates.
 
-A run is submitted once (under a lock) and tracked until its future finishes; a duplicate request
-for a queued or running id joins it, a complete store is never recomputed. After a restart,
-``resume`` re-queues every recorded run that has neither a complete store nor a failure, unless it was started
-MAX_STARTS times already (a run that takes its server down each time would otherwise be re-queued forever).
+A duplicate request for a queued or running id joins it; a complete store is never recomputed. After a restart,
+``resume`` re-queues every recorded run with neither a complete store nor a failure, unless started MAX_STARTS times.
 """
 
 from __future__ import annotations
@@ -24,37 +22,12 @@ _STENCIL_LOCK = threading.Lock()  # one stencil build at a time: a second reques
 
 def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: int | None = None,
             constraints: ConstraintRequest | None = None, energy_from_data: bool = False) -> dict:
-    """Worker side: generate ``run`` into the store ``out`` by the CLI's library path; the run summary.
+    """Worker side: generate ``run`` of ``model`` into the store ``out`` as the CLI does; the run summary's
+    JSON-able entries.
 
-    A Mann stencil is built one at a time per process, cached in ``stencil_cache``, which is then trimmed to
-    ``stencil_cache_bytes`` (least recently used entries evicted).
-
-    Parameters
-    ----------
-    model : str
-        Model name ("mann" or "kaimal").
-    run : MannRun or KaimalRun
-        The run.
-    out : str
-        Store path.
-    stencil_cache : str
-        Directory of cached stencils.
-    stencil_cache_bytes : int, optional
-        Size cap of ``stencil_cache`` [bytes] (None: no cap).
-    constraints : ConstraintRequest, optional
-        Condition the (Mann) field on these files, as ``turbgen mann --constrain``.
-    energy_from_data : bool
-        With ``constraints``: ae is estimated from the data.
-
-    Returns
-    -------
-    dict
-        The run summary's JSON-able scalar and list entries, without ``path``.
-
-    Raises
-    ------
-    TurbgenError
-        Whatever the model's generator raises; the job records it as the run's failure.
+    Mann stencils are built one at a time per process, cached in ``stencil_cache``, trimmed to
+    ``stencil_cache_bytes`` [bytes] (None: no cap). ``constraints``: condition the field on these files, ae
+    estimated from them with ``energy_from_data``. A TurbgenError is recorded as the run's failure.
     """
     from turbgen.runs.models import get_model
 
@@ -89,19 +62,8 @@ class QueueFull(Exception):
 
 
 class Jobs:
-    """Submitted runs by id (queued or running) on a dask client.
-
-    Parameters
-    ----------
-    catalog : Catalog
-        The run directories.
-    client : distributed.Client
-        Client the runs are submitted to.
-    max_queue : int
-        Most runs queued or running at once.
-    stencil_cache_bytes : int, optional
-        Size cap of the stencil cache ``root/stencils`` [bytes] (None: no cap).
-    """
+    """Submitted runs by id (queued or running) on the dask ``client``, at most ``max_queue`` at once;
+    ``stencil_cache_bytes`` caps the stencil cache ``root/stencils`` [bytes] (None: no cap)."""
 
     def __init__(self, catalog: Catalog, client, max_queue: int, stencil_cache_bytes: int | None = None):
         self.catalog = catalog
@@ -113,32 +75,11 @@ class Jobs:
         self.computations = 0  # runs handed to dask since start (duplicates are joined, not counted)
 
     def submit(self, rid: str, model: str, run, preset: str | None = None, constraints: dict | None = None) -> str:
-        """Submit run ``rid`` unless it is complete or active.
+        """Submit run ``rid`` (``preset``: a label for listing; ``constraints``: upload keys,
+        :func:`turbgen.service.run_ids.constraint_keys`) unless it is complete or active.
 
-        Parameters
-        ----------
-        rid : str
-            Run id (:func:`turbgen.service.run_ids.run_id`).
-        model : str
-            Model name.
-        run : MannRun or KaimalRun
-            The run.
-        preset : str, optional
-            Preset label for listing.
-        constraints : dict, optional
-            The run's constraint keys (upload ids, :func:`turbgen.service.run_ids.constraint_keys`).
-
-        Returns
-        -------
-        str
-            "complete" (already in the catalog), "joined" (queued or running) or "queued" (a new computation).
-
-        Raises
-        ------
-        QueueFull
-            If ``max_queue`` runs are already queued or running.
-        LimitError
-            507 when the run cannot be recorded (the server's disk is full).
+        Returns "complete", "joined" (queued or running) or "queued" (a new computation). Raises QueueFull at
+        ``max_queue`` runs, LimitError 507 when the run cannot be recorded (a full disk).
         """
         with self.lock:
             if rid in self.active:
@@ -199,10 +140,7 @@ class Jobs:
             fut.cancel()
 
     def resume(self) -> list[str]:
-        """Re-queue recorded runs that are neither complete nor failed (after a crash or kill -9); their ids.
-
-        A run whose request cannot be read back is marked failed, never retried blindly.
-        """
+        """Re-queue recorded runs that are neither complete nor failed (after a crash or kill -9); their ids."""
         requeued = []
         for rid in self.catalog.ids():
             if self.catalog.is_complete(rid):

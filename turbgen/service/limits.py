@@ -21,17 +21,7 @@ DERIVED_WAITING = 8  # more requests waiting for one of them; beyond: 503 (the s
 
 
 class LimitError(Exception):
-    """A request over a limit: HTTP ``status`` and a one-line message.
-
-    Parameters
-    ----------
-    status : int
-        HTTP status code of the answer (e.g. 401, 413, 422).
-    message : str
-        One-line message for the client.
-    headers : dict, optional
-        Extra response headers (e.g. WWW-Authenticate).
-    """
+    """A request over a limit: HTTP ``status``, a one-line ``message`` and extra response ``headers``."""
 
     def __init__(self, status: int, message: str, headers: dict | None = None):
         super().__init__(message)
@@ -50,11 +40,7 @@ def is_loopback(host: str) -> bool:
 
 
 def read_token(path) -> str:
-    """The bearer token in the file ``path`` (first line, stripped).
-
-    Raises ValueError if it is shorter than 16 characters, ParameterError if the file cannot be read, is not a regular
-    file or is larger than 4 KiB (turbgen.input_files).
-    """
+    """The bearer token in the file ``path`` (first line, stripped); ValueError if under 16 characters."""
     lines = read_input_text(path, TOKEN).splitlines()
     token = lines[0].strip() if lines else ""
     if len(token) < 16:
@@ -63,10 +49,7 @@ def read_token(path) -> str:
 
 
 def check_token(expected: str | None, authorization: str | None) -> None:
-    """LimitError 401 (with WWW-Authenticate: Bearer) unless ``authorization`` is 'Bearer <expected>'.
-
-    ``expected`` None (no token configured) accepts every request.
-    """
+    """LimitError 401 unless ``authorization`` is 'Bearer <expected>' (``expected`` None: no token, all pass)."""
     if expected is None:
         return
     scheme, _, given = (authorization or "").partition(" ")
@@ -76,10 +59,7 @@ def check_token(expected: str | None, authorization: str | None) -> None:
 
 
 def run_memory_bytes(model: str, run) -> int:
-    """Memory [bytes] the run allocates with the default threads (the runs/ estimate the CLI checks before allocating).
-
-    Raises ParameterError for an unknown model.
-    """
+    """Memory [bytes] the run allocates with the default threads (the estimate the CLI checks too)."""
     from turbgen.resources import default_threads
     from turbgen.runs.models import get_model
 
@@ -87,10 +67,7 @@ def run_memory_bytes(model: str, run) -> int:
 
 
 def check_memory(model: str, run, budget_bytes: int) -> int:
-    """The run's estimated memory [bytes]; LimitError 413 if it exceeds ``budget_bytes``.
-
-    The message names the estimate, the budget and what to change.
-    """
+    """The run's estimated memory [bytes]; LimitError 413 if it exceeds ``budget_bytes``."""
     from turbgen.runs.models import get_model
 
     need = run_memory_bytes(model, run)
@@ -99,11 +76,7 @@ def check_memory(model: str, run, budget_bytes: int) -> int:
 
 
 def check_constrained_memory(run, files: list, constraints: dict, budget_bytes: int) -> int:
-    """:func:`check_memory` for a constrained Mann ``run``: its data placed on its grid, then the estimate checked.
-
-    ``files`` are the uploads, ``constraints`` the run's constraint keys; ParameterError for measurements off the
-    field, all missing, ...
-    """
+    """:func:`check_memory` for a constrained Mann ``run`` with the uploaded ``files`` placed on its grid."""
     from turbgen.resources import default_threads
     from turbgen.runs.constrain import constrained_memory_bytes, load_constraints, place
 
@@ -122,24 +95,13 @@ def _refuse_over_budget(need: int, budget_bytes: int, what: str, lower: str) -> 
 
 
 def check_json_depth(value, limit: int = MAX_JSON_DEPTH) -> None:
-    """LimitError 422 if ``value`` (parsed JSON) nests arrays/objects deeper than ``limit``.
-
-    Checked without recursion: validating a deeper body would recurse past Python's limit.
-    """
+    """LimitError 422 if ``value`` (parsed JSON) nests arrays/objects deeper than ``limit`` (checked iteratively)."""
     if nested_deeper_than(value, limit):
         raise LimitError(422, f"request body: arrays and objects nested deeper than {limit} levels")
 
 
 class DerivedLimiter:
-    """At most ``running`` derived products computed at once and ``waiting`` more requests queued for them.
-
-    Parameters
-    ----------
-    running : int
-        Products computed at once (>= 1).
-    waiting : int
-        Requests that may wait for a slot (>= 0); more are refused.
-    """
+    """At most ``running`` (>= 1) derived products computed at once and ``waiting`` (>= 0) more requests queued."""
 
     def __init__(self, running: int, waiting: int):
         self.running, self.waiting = running, waiting
@@ -149,10 +111,7 @@ class DerivedLimiter:
 
     @contextlib.contextmanager
     def admit(self):
-        """Count the request among those computing or queued for a derived product for the block's duration.
-
-        Raises LimitError 503 with Retry-After when ``running + waiting`` requests are admitted already.
-        """
+        """Admit the request for the block's duration; LimitError 503 when ``running + waiting`` are admitted."""
         with self._lock:
             if self._admitted >= self.running + self.waiting:
                 raise LimitError(503, f"{self._admitted} exports, validations or lidar reports are being computed or "

@@ -18,9 +18,7 @@ def static_files() -> frozenset:
 
 
 def page_html(name: str, form: dict) -> str:
-    """The page ``name`` ("index.html" or "run.html") with the ``form`` description (GET /form.json) in it, so the form
-    is there once the page has loaded.
-    """
+    """The page ``name`` ("index.html" or "run.html") with the ``form`` description (GET /form.json) inlined."""
     data = json.dumps(form).replace("<", "\\u003c")  # no "</script>" can end the block early
     return (STATIC / name).read_text().replace("{form}", data)
 
@@ -42,9 +40,7 @@ web page is <a href="/">/</a>.</p>
 
 
 def api_docs_html(openapi: dict) -> str:
-    """The API reference at /docs, rendered from the ``openapi`` description: per operation its method, path,
-    description and parameters (no script and nothing from another host, unlike FastAPI's Swagger UI).
-    """
+    """The API reference at /docs from the ``openapi`` description (no script, nothing from another host)."""
     esc = html.escape
     parts = []
     for path, item in openapi.get("paths", {}).items():

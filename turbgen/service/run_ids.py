@@ -1,8 +1,7 @@
 """Service run requests and their ids.
 
-A run id is the first 24 hex digits of the SHA-256 of the canonical JSON of (model, run parameters,
-grid, constraint keys, turbgen version); the seed is one of the parameters, the constraint keys name the
-uploaded data by the digest of their content. Identical requests give the same id.
+A run id is the first 24 hex digits of the SHA-256 of the canonical JSON of (model, run parameters with the seed,
+grid, constraint keys naming uploads by content digest, turbgen version): identical requests give the same id.
 """
 
 from __future__ import annotations
@@ -25,15 +24,8 @@ ENERGY_KEYS = ("ae", "sigma_u_m_s", "ti", "turb_class")  # a constrained request
 def build_run(body) -> tuple[str, object, dict]:
     """(model, MannRun | KaimalRun, constraint keys) from a request body {"model": ..., "preset": ..., <run config keys>}.
 
-    The run config keys are those of ``turbgen mann|kaimal --config`` (schemas/<model>-run.schema.json); ``preset`` sets
-    the stability keys as ``--preset`` does (at the body's U), given keys override it. ``model`` defaults to "mann". A
-    Mann run's ``constrain`` names uploaded measurements by id (turbgen.service.uploads), not files.
-
-    Raises
-    ------
-    ParameterError
-        Naming the bad field: not an object, unknown model or preset, schema violation, a value out of range or a
-        ``constrain`` entry that is not an upload id.
+    The keys are those of ``turbgen mann|kaimal --config``; ``preset`` as ``--preset`` (given keys override it);
+    ``constrain`` names uploads by id, not files. Raises ParameterError naming the bad field.
     """
     if not isinstance(body, dict):
         raise ParameterError("request body: expected a JSON object with the run config")
@@ -62,13 +54,8 @@ def build_run(body) -> tuple[str, object, dict]:
 
 
 def constraint_keys(mapping: dict) -> dict:
-    """The constraint keys of a run request in canonical form ({} without constraints).
-
-    ``constrain`` (upload ids), ``noise_m_s`` when given, ``conditional_mean`` and ``energy_from_data`` (ae estimated
-    from the data, as ``turbgen mann --constrain`` without an energy level) when true. ParameterError for a
-    ``constrain`` entry that is not an upload id (the server opens no path a client names) and the checks of
-    :func:`turbgen.spec.constraints.split_constraint_keys`.
-    """
+    """The constraint keys of a run request in canonical form ({} without constraints): ``constrain`` (upload ids),
+    ``noise_m_s`` when given, ``conditional_mean`` and ``energy_from_data`` when true."""
     request = split_constraint_keys({k: v for k, v in mapping.items() if k != "energy_from_data"})[1]
     if request is None:
         return {}
@@ -91,9 +78,7 @@ def _model(name):
 
 
 def canonical_mapping(run, constraints: dict | None = None) -> dict:
-    """The run mapping that rebuilds ``run`` exactly: ``run.parameters()`` (seed included), ``grid`` (store attribute
-    form) and the constraint keys ``constraints`` (:func:`constraint_keys`).
-    """
+    """The run mapping that rebuilds ``run`` exactly: its parameters (seed included), ``grid`` and ``constraints``."""
     constraints = constraints or {}
     drop = ("ae", "ae_from") if constraints.get("energy_from_data") else ()  # the worker estimates it
     return {**{k: v for k, v in run.parameters().items() if k not in drop}, "grid": grid_to_attrs(run.grid),
@@ -101,10 +86,7 @@ def canonical_mapping(run, constraints: dict | None = None) -> dict:
 
 
 def run_from_canonical(model: str, mapping: dict):
-    """Inverse of :func:`canonical_mapping`: (run, constraint keys), to re-queue runs after a restart.
-
-    Raises ParameterError for an unknown model, key or a value out of range.
-    """
+    """Inverse of :func:`canonical_mapping`: (run, constraint keys), to re-queue runs after a restart."""
     constraints = constraint_keys({key: mapping[key] for key in SERVICE_KEYS if key in mapping})
     rest = {key: value for key, value in mapping.items() if key not in SERVICE_KEYS}
     return _model(model).spec.from_mapping(rest), constraints

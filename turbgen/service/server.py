@@ -6,9 +6,8 @@ from __future__ import annotations
 def service_cluster(workers: int):
     """The dask cluster of a server without --scheduler: ``workers`` threads of this process, no listening socket.
 
-    Threads, not processes: a killed server leaves no orphan worker writing into its root. Dask starts an HTTP server
-    on each node (answering without the server's Host check or token) with no option to leave them off, so they are
-    stopped right after the start. Returns the started LocalCluster; close it.
+    Threads, not processes: a killed server leaves no orphan worker writing into its root. Dask's per-node HTTP
+    servers (no Host check, no token) are stopped right after the start. Returns the started LocalCluster.
     """
     from turbgen.runs.local_cluster import loopback_cluster
 
@@ -32,9 +31,8 @@ async def _stop_http_servers(cluster) -> None:
 def listening_socket(host: str, port: int):
     """A socket bound to ``host``:``port`` as uvicorn binds (SO_REUSEADDR, the first address of ``host``).
 
-    Made before anything else of the server, so a port in use is refused before the catalog or the cluster exist.
-    Returned bound, not listening; close it if the server does not start. ParameterError when the address cannot be
-    bound (in use, not an address of this machine, a privileged port).
+    Made first, so a port in use is refused before the catalog or the cluster exist; returned bound, not listening.
+    ParameterError when the address cannot be bound.
     """
     import socket
 
@@ -72,9 +70,8 @@ MAX_HEADER_BYTES = 16 * 1024  # an incomplete request head larger than this is r
 def header_timeout_protocol(header_timeout_s: float):
     """uvicorn's h11 protocol class with a deadline [s] for the request head.
 
-    uvicorn has a keep-alive timeout but none for a connection that sends nothing or half a head. Checked every
-    ``header_timeout_s``: a connection being answered is left alone, one idle or stuck in a head since the last check
-    is closed (so within one to two periods).
+    uvicorn has none for a connection that sends nothing or half a head. Checked every ``header_timeout_s``: one
+    idle or stuck in a head since the last check is closed (within one to two periods).
     """
     from uvicorn.protocols.http.h11_impl import H11Protocol
 
@@ -104,9 +101,7 @@ def header_timeout_protocol(header_timeout_s: float):
 
 
 def server_config(app, host: str, port: int, *, header_timeout_s: float = HEADER_TIMEOUT_S):
-    """The ``uvicorn.Config`` of `turbgen serve`: head deadline [s] (:func:`header_timeout_protocol`), keep-alive and
-    connection limits.
-    """
+    """The ``uvicorn.Config`` of `turbgen serve`: head deadline [s], keep-alive and connection limits."""
     import uvicorn
 
     return uvicorn.Config(app, host=host, port=port, log_level="warning",

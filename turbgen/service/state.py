@@ -30,14 +30,13 @@ class ServiceSettings:
     max_queue : int
         Most runs queued or running at once (429 above).
     loopback_only : bool
-        Answer only requests whose Host header names a loopback address.
+        Answer only requests whose Host header names a loopback address (400 otherwise: no DNS rebinding).
     derived_running, derived_waiting : int
         Exports, validations and lidar reports computed at once, and requests that may wait for them (503 beyond).
     stencil_cache_bytes : int or None
         Size cap of ``root/stencils`` [bytes] (least recently used entries evicted; None: no cap).
     own_cluster : bool
-        The runs execute in this process (the service's own cluster, not --scheduler): temporaries of dead
-        processes in ``root/stencils`` are this host's and start-up may remove them.
+        The runs execute in this process (not --scheduler): start-up may remove dead temporaries in ``root/stencils``.
     """
 
     root: Path
@@ -53,10 +52,7 @@ class ServiceSettings:
 
 @dataclass
 class ServiceState:
-    """The server's shared state: settings, catalog, job queue, the bound on derived computations and per-key locks.
-
-    ``limiter`` defaults to one built from the settings.
-    """
+    """The server's shared state: settings, catalog, job queue, the bound on derived computations, per-key locks."""
 
     settings: ServiceSettings
     catalog: Catalog
@@ -81,7 +77,7 @@ class ServiceState:
             self._generations[rid] = self._generations.get(rid, 0) + 1
 
     def lock_for(self, key: str) -> threading.Lock:
-        """The lock of ``key`` (a run id, or a product such as ``<id>/validation``), the same for the server's lifetime."""
+        """The lock of ``key`` (a run id, or a product such as ``<id>/validation``) for the server's lifetime."""
         with self._guard:
             return self._locks.setdefault(key, threading.Lock())
 
@@ -92,11 +88,8 @@ def get_state(request: Request) -> ServiceState:
 
 
 def require_token(request: Request, state: ServiceState = Depends(get_state)) -> None:
-    """FastAPI dependency: LimitError 401 unless the request carries the server's bearer token (if it has one).
-
-    Mutating requests need it, and so does a request that starts a computation (a derived product not cached yet):
-    reading what exists stays open, starting work does not.
-    """
+    """FastAPI dependency: LimitError 401 unless the request carries the server's bearer token (if it has one):
+    mutating and computing requests need it, reading what exists does not."""
     check_token(state.settings.token, request.headers.get("authorization"))
 
 

@@ -12,12 +12,8 @@ from turbgen.store.temporaries import temp_prefix
 
 
 def run_status(catalog: Catalog, jobs: Jobs, rid: str) -> dict:
-    """The JSON-able status of the recorded run ``rid``.
-
-    Id, model, parameters, grid, status (complete / running / queued / failed / interrupted), progress, and the
-    summary, validation verdict or error where there is one. OSError, ValueError or KeyError when the run's request
-    cannot be read.
-    """
+    """The JSON-able status of the recorded run ``rid``: id, model, parameters, grid, status (complete / running /
+    queued / failed / interrupted), progress, and the summary, validation verdict or error where there is one."""
     req = catalog.request(rid)
     grid = req["run"]["grid"]
     out = {"id": rid, "model": req["model"], "parameters": {k: v for k, v in req["run"].items() if k != "grid"},
@@ -58,12 +54,8 @@ _CLI_ADVICE = (
 
 
 def public_text(text: str, catalog: Catalog) -> str:
-    """A library message (a run's failure, a refused export) as clients see it.
-
-    ``ROOT/runs/<id>/store.zarr`` becomes ``/runs/<id>/store``, ``ROOT/runs/<id>`` ``/runs/<id>``, an upload
-    ``/constraints/<id>``, any other path under the catalog's root ``<server root>/...``; the advice of
-    :data:`_CLI_ADVICE` is rewritten.
-    """
+    """A library message as clients see it: server paths made ``/runs/<id>[/store]``, ``/constraints/<id>`` or
+    ``<server root>/...``, the advice of :data:`_CLI_ADVICE` rewritten."""
     for root in dict.fromkeys((catalog.root, catalog.root.resolve())):
         runs = re.escape(str(root / "runs"))
         text = re.sub(runs + r"/([0-9a-f]{24})/store\.zarr\b", r"/runs/\1/store", text)

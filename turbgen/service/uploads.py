@@ -1,10 +1,8 @@
 """Measurements uploaded to `turbgen serve` (``POST /constraints``) for runs conditioned on them.
 
-The server never opens a path a client names, so the client uploads the *content* of a point-series JSON file
-(schemas/constraints.schema.json) or of a line-of-sight CSV file (turbgen.virtual_lidar.los_csv); the server checks it
-as ``--constrain`` would and keeps it as ``ROOT/constraints/<id>.json|.csv``, the id being 24 hex digits of the
-SHA-256 of the content. A run request names the ids in ``constrain``; they enter the run id. Content that names
-further files is refused (a lidar .toml/.json file, a ``mean_history``, a ``table:`` profile).
+The server opens no path a client names: the client uploads the *content* of a point-series JSON or line-of-sight
+CSV file, checked as ``--constrain`` would and kept as ``ROOT/constraints/<id>.json|.csv`` (id: 24 hex digits of
+its SHA-256). Content that names further files is refused.
 """
 
 from __future__ import annotations
@@ -52,11 +50,7 @@ class ConstraintUploads:
         return out
 
     def add(self, media: str, data: bytes) -> tuple[str, dict, bool]:
-        """Check and keep an upload of content type ``media`` (a key of SUFFIXES): (its id, :func:`describe` of it, whether
-        it is new).
-
-        Raises ParameterError if ``data`` is not a valid constraint file of that type, or names another file.
-        """
+        """Check and keep an upload of content type ``media`` (a key of SUFFIXES): (id, :func:`describe`, is new)."""
         cid = hashlib.sha256(data).hexdigest()[:24]
         try:
             return cid, describe(self.path(cid)), False
@@ -78,9 +72,8 @@ def describe(path: Path) -> dict:
 
 
 def _summary(data) -> dict:
-    """What an upload holds: ``kind`` ("point series" | "line of sight"), ``series`` (sensor components or beam gates),
-    ``values`` (not missing) and ``duration_s`` (first to last sample time [s]).
-    """
+    """What an upload holds: ``kind``, ``series`` (sensor components or beam gates), ``values`` (not missing),
+    ``duration_s`` [s]."""
     from turbgen.spec.constraints import PointSeries
 
     if isinstance(data, PointSeries):

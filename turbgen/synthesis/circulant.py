@@ -8,18 +8,12 @@ torus covariance is circulant, its eigenvalues the 2-D FFT of the wrapped kernel
 has E[Z Z^H] = C (and E[Z Z^T] = 0) exactly when every eigenvalue is >= 0 (Dietrich & Newsam 1997); O(M^2 log M)
 per frequency instead of O(N^3).
 
-The torus period follows the frequency. A kernel decaying within a few grid lengths (high frequencies) is wrapped as
-it is (:func:`torus_size`; wrapped lags below exp(-17) = 4e-8 are under the float32 rounding of the torus scales).
-One staying high over the grid is first multiplied by a smooth cut-off equal to 1 on every lag the grid holds and
-falling to 0 at half the period through a C-infinity step (smooth periodization, Bachmayr, Graham, Nguyen &
-Scheichl 2020): C on the grid is unchanged and the torus much smaller (:func:`smooth_torus_size`). Both rules are
-empirical, so the eigenvalues are checked at run time: the torus is enlarged while any is negative beyond
-rounding; then small grids fall back to a dense square root, large grids clip and report the clipping error (a
-bound on the covariance error at any lag), never silently.
-
-A torus of more than :func:`torus_cap` points is not built: grids of at most CHOLESKY_MAX_POINTS points take a
-dense square root of C (:func:`dense_embedding`), also wherever it is cheaper than the bin's torus
-(:func:`dense_sampled`), and :func:`check_sampling_cost` refuses up front what neither can do.
+The torus period follows the frequency: a fast-decaying kernel is wrapped as it is (:func:`torus_size`); one staying
+high over the grid is first multiplied by a C-infinity cut-off, 1 on every lag of the grid and 0 from half the
+period (smooth periodization, Bachmayr, Graham, Nguyen & Scheichl 2020; :func:`smooth_torus_size`). Both rules are
+empirical, so the torus is enlarged while an eigenvalue is negative beyond rounding; then small grids fall back to
+a dense square root (:func:`dense_embedding`, also where cheaper), large ones clip and report the clipping error.
+:func:`check_sampling_cost` refuses up front what neither can do.
 """
 
 from __future__ import annotations
@@ -59,11 +53,8 @@ def fft_size(n: int) -> int:
 
 
 def torus_size(n: int, h_m: float, decay_length_m: float) -> int:
-    """Torus period M (points) for n points spaced h and a kernel <= exp(-r / decay_length).
-
-    M h >= max(2 (n - 1) h, 12 decay_length) (non-negative eigenvalues at low frequencies), except that a kernel below
-    exp(-CUTOFF_DECAYS) beyond (M - n + 1) h needs only M >= n - 1 + CUTOFF_DECAYS decay / h.
-    """
+    """Torus period M (points) for n points spaced h and a kernel <= exp(-r / decay_length): M h >= max(2 (n - 1) h,
+    12 decay_length), or only n - 1 + CUTOFF_DECAYS decay / h where the kernel has decayed below float32 rounding."""
     if n == 1:
         return 1
     if not math.isfinite(decay_length_m):
@@ -130,12 +121,8 @@ def grid_distances(ny: int, nz: int, dy_m: float, dz_m: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Embedding:
-    """Sampler of one correlation matrix C on the ny x nz grid.
-
-    Circulant (``scale`` = sqrt(lam/(My Mz)) on the torus, ``chol`` None) or dense (``chol`` the principal square root
-    of C, :func:`dense_embedding`). ``clip_error`` bounds the absolute covariance error left by clipped negative
-    eigenvalues (0 when exact).
-    """
+    """Sampler of one correlation matrix C on the ny x nz grid: circulant (``scale`` = sqrt(lam/(My Mz))) or dense
+    (``chol`` the principal square root of C); ``clip_error`` bounds the covariance error of clipping (0: exact)."""
 
     ny: int
     nz: int
@@ -153,9 +140,7 @@ class Embedding:
                transforms=None) -> np.ndarray:  # fmt: skip
         """Map standard complex normals xi (..., *torus_shape) to coefficients (..., ny, nz) with covariance C.
 
-        ``overwrite``: xi (C-contiguous) may serve as the work array (destroyed; the result may be a view of it), the
-        same values without temporaries. ``transforms``: an FFT backend's one-shot transforms (default: the current
-        backend's).
+        ``overwrite``: xi (C-contiguous) may serve as the work array (destroyed); the same values.
         """
         if self.chol is not None:
             z = np.einsum("ij,...j->...i", self.chol.astype(xi.real.dtype), xi[..., 0])
@@ -176,17 +161,15 @@ def torus_cap(ny: int, nz: int) -> int:
 
 
 def dense_is_cheaper(n_points: int, torus_points: int) -> bool:
-    """Whether a dense square root of a bin's n x n C costs fewer operations than its torus of ``torus_points`` points
-    M: DENSE_OPS_PER_N3 n^3 + 4 n^2 against ~10 M log2(M) for the eigenvalue and sample FFTs.
-    """
+    """Whether a dense square root of a bin's n x n C (DENSE_OPS_PER_N3 n^3 + 4 n^2 operations) costs less than its
+    torus of M = ``torus_points`` (~10 M log2(M) for the FFTs)."""
     m = max(int(torus_points), 2)
     return DENSE_OPS_PER_N3 * n_points**3 + 4.0 * n_points**2 <= 10.0 * m * math.log2(m)
 
 
 def dense_sampled(ny: int, nz: int, torus_points: int, when_cheaper: bool = True) -> bool:
-    """Whether a bin whose torus would have ``torus_points`` points is sampled with a dense factor
-    (:func:`dense_embedding`) instead: grids of at most CHOLESKY_MAX_POINTS points, where the torus exceeds
-    :func:`torus_cap` or (``when_cheaper``) the dense factor costs less (:func:`dense_is_cheaper`)."""
+    """Whether a bin with a torus of ``torus_points`` is sampled densely instead: grids of at most
+    CHOLESKY_MAX_POINTS points, a torus over :func:`torus_cap` or (``when_cheaper``) a cheaper dense factor."""
     n = ny * nz
     if n > CHOLESKY_MAX_POINTS:
         return False
@@ -194,20 +177,15 @@ def dense_sampled(ny: int, nz: int, torus_points: int, when_cheaper: bool = True
 
 
 def dense_embedding(kernel, ny: int, nz: int, dy_m: float, dz_m: float, enlarged: int = 0) -> Embedding:
-    """Sampler of C_ab = kernel(r_ab) with its principal square root V sqrt(max(Lambda, 0)) V^T (turbgen.synthesis.
-    square_root: unique, so the same on every CPU, also where rounding leaves C semi-definite), with the clipped part's
-    spectral norm max|Lambda_neg| as clip_error.
-    """
+    """Sampler of C_ab = kernel(r_ab) by its principal square root V sqrt(max(Lambda, 0)) V^T (unique: the same on
+    every CPU), clip_error max|Lambda_neg|."""
     root, clipped = principal_sqrt(kernel(grid_distances(ny, nz, dy_m, dz_m)))
     return Embedding(ny, nz, None, root, clipped, enlarged)
 
 
 def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m, what: str) -> list[int]:
-    """The torus points (My Mz) at every frequency of decay length ``decay_lengths_m`` [m].
-
-    ParameterError (naming ``what``, the coherence and its parameters) for tori over :func:`torus_cap` on a grid too
-    large for dense factors (more than CHOLESKY_MAX_POINTS points, or more than MAX_DENSE_FLOPS for all of them).
-    """
+    """The torus points (My Mz) at every frequency of decay length ``decay_lengths_m`` [m]; ParameterError naming
+    ``what`` for tori over :func:`torus_cap` on a grid too large for dense factors."""
     n = ny * nz
     cap = torus_cap(ny, nz)
     decays = list(decay_lengths_m)
@@ -226,10 +204,7 @@ def check_sampling_cost(ny: int, nz: int, dy_m: float, dz_m: float, decay_length
 
 def embed_many(kernels, ny: int, nz: int, dy_m: float, dz_m: float, decay_lengths_m,
                dense_when_cheaper: bool = True) -> list[Embedding]:
-    """:func:`embed` of every kernel with its decay length, the same embeddings bit for bit, with one batched FFT per
-    run of consecutive kernels on the same torus (the per-call overhead dominates on small tori). Kernels whose torus
-    needs enlarging, or that are sampled densely, go through :func:`embed` itself.
-    """
+    """:func:`embed` of every kernel, bit for bit, with one batched FFT per run of kernels on the same torus."""
     plans = [torus_plan(ny, nz, dy_m, dz_m, d) for d in decay_lengths_m]
     out: list[Embedding | None] = [None] * len(plans)
     i = 0
@@ -263,8 +238,7 @@ def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: fl
     """Embedding of C_ab = kernel(r_ab) (kernel(0) = 1, a function of distance in m).
 
     The kernel is <= exp(-r / ``decay_length_m``) [m] (IEC: 1/(a kappa); inf for a constant kernel), which sets the
-    initial torus (:func:`torus_plan`). Tori over :func:`torus_cap`, or (``dense_when_cheaper``) costlier than a dense
-    factor, are replaced by :func:`dense_embedding` (:func:`dense_sampled`).
+    initial torus (:func:`torus_plan`).
     """
     my, mz, smooth = torus_plan(ny, nz, dy_m, dz_m, decay_length_m)
     cap = torus_cap(ny, nz)

@@ -3,34 +3,20 @@
 Hoffman & Ribak (1991): with the prior u ~ N(0, C) (turbgen.synthesis.prior_spectrum), measurements
 d = H u + eps, eps ~ N(0, R) and S = H C H^T + R, a conditional sample is
 
-    u_c = u_s + C H^T S^-1 (d - H u_s - eps_s),      u_s ~ N(0, C), eps_s ~ N(0, R),
+    u_c = u_s + C H^T S^-1 (d - H u_s - eps_s),      u_s ~ N(0, C), eps_s ~ N(0, R)
 
-and C H^T S^-1 d is the conditional mean. Here H is a set of *streams*: stream a is a fixed linear combination of
-field values of one plane p_a (terms: component, y index, z index, time shift s_t, weight):
-y_a(n) = sum_t w_t u_(c_t)(n + s_t, y_t, z_t), observed every q stored time steps, z_a(m) = y_a(o_a + m q),
-m = 0 .. nt/q - 1 (q = 1 for a point sensor; a lidar beam-gate measured once per scan; o_a its offset). The stored
-time axis is the periodic xi axis of the synthesis box, so the covariance between two streams depends on the lag
-only: S is block-circulant and the FFT over the nt/q samples makes it block-diagonal, one Hermitian
-(streams x streams) matrix per frequency j. At full rate, slab i gives
+(C H^T S^-1 d: the conditional mean). Stream a combines values of one plane p_a, y_a(n) = sum_t w_t
+u_(c_t)(n + s_t, y_t, z_t), observed as z_a(m) = y_a(o_a + m q). The stored time axis is periodic, so S is
+block-circulant: one Hermitian (streams x streams) matrix per frequency. At full rate, slab i gives
 
     L_i[a, b] = nt sum_(t in a, t' in b) w_t w_t' G_i^(p_a p_b)[c_t, c_t'](y_t - y_t', z_t - z_t')
                 * e^(2 pi i i (s_t - s_t') / nt)
 
 with G_i^(pq)(dy, dz) = sum_(j, l) rho_pq Phi_i exp(2 pi i (j dy / nyp + l dz / nzp)) (real part on the k1 = 0 /
-Nyquist slabs), rho_pq = exp(-|t_p - t_q| / tau_e) (Guo et al. 2023, Eq. 13-14), and L_(nt - i) = conj L_i. The sum
-runs over the streams' grid nodes: the terms of a stream along one direction n (a lidar's line of sight, or a
-component axis) are grouped per (y, z) node, and G projected on each pair of directions is one real 2-D FFT per slab,
-distinct plane-time lag and direction pair (turbgen.synthesis.conditioning_kernels); beyond six direction pairs, the
-six of Phi's components are transformed instead and combined, each even or odd in k2 (Mann 1994: y -> -y turns v),
-so only the rows k2 >= 0 are transformed, along y by a cosine or sine transform. The decimated streams alias the
-q full-rate frequencies j + l nt/q onto j:
+Nyquist slabs), rho_pq = exp(-|t_p - t_q| / tau_e) (Guo et al. 2023, Eq. 13-14), L_(nt - i) = conj L_i, and the
+decimated streams alias the q full-rate frequencies onto j:
 S_j[a, b] = (1/q) sum_l L_(j + l nt/q)[a, b] e^(2 pi i (j + l nt/q)(o_a - o_b) / nt) + sigma_a^2 delta_ab.
-Missing samples (NaN) break the circulant structure:
-S restricted to the observed samples is solved by conjugate gradients preconditioned with the circulant solve of the
-full streams (S v itself is exact by the same FFTs). C H^T w is one spectral synthesis: the weights are scattered
-onto the grid of each measured plane through the adjoint of the terms and transformed into the (k2, k3) spectrum,
-summed over the planes with rho_pq by the Ornstein-Uhlenbeck recursion along them, multiplied by Phi and transformed
-back.
+Gaps, the per-direction grouping of terms and C H^T w: docs/constrained-fields.md, "How it is solved".
 """
 
 from __future__ import annotations
@@ -51,36 +37,19 @@ from turbgen.synthesis.mann_stencil import MannStencil
 from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_weight
 
 CG_TOLERANCE = 1e-10  # relative residual |S x - r| / |r| at which the conjugate gradients stop
-# a bound on the conjugate gradients (the circulant preconditioner knows nothing of the gaps); an iteration costs
-# two FFTs of the streams and M x M products
+# a bound on the conjugate gradients (the circulant preconditioner knows nothing of the gaps)
 CG_MAX_ITERATIONS = 5000
-# missing fraction above which conjugate gradients start from the precision-matrix solve (solve, _gap_start): it
-# halves the iterations of many scattered gaps and costs iterations for a few
+# missing fraction above which conjugate gradients start from the precision-matrix solve (_gap_start)
 GAP_START_FRACTION = 1 / 16
 SINGULAR_RTOL = 1e-11  # eigenvalue / largest eigenvalue of S_i below which zero-noise measurements are dependent
 
 
 @dataclass(frozen=True, eq=False)
 class Streams:
-    """Measurement streams on the stored grid (see module docstring).
-
-    Parameters
-    ----------
-    plane : numpy.ndarray of int, (M,)
-        Plane index of each stream (all its terms lie on it).
-    term_stream, term_component, term_iy, term_iz : numpy.ndarray of int, (T,)
-        For each term: its stream, component (0 u, 1 v, 2 w), y and z grid indices.
-    term_weight : numpy.ndarray of float, (T,)
-        The weight of each term [-] (interpolation weights times a projection on (u, v, w)).
-    names : tuple of str
-        A name per stream (for messages).
-    term_shift : numpy.ndarray of int, (T,), optional
-        Stored time steps s_t >= 0 by which each term is ahead of its stream's sample time (default 0).
-    decimation : int, optional
-        q: every stream is observed every q stored time steps (q divides nt; default 1).
-    offset : numpy.ndarray of int, (M,), optional
-        o_a in [0, q): the stored time step of each stream's first sample (default 0).
-    """
+    """Measurement streams on the stored grid (module docstring): ``plane`` (M,) of each stream; per term (T,) its
+    ``term_stream``, ``term_component`` (0 u, 1 v, 2 w), ``term_iy``, ``term_iz``, ``term_weight`` [-] and
+    ``term_shift`` s_t >= 0 [stored steps] (default 0); ``names`` per stream (for messages); ``decimation`` q (divides
+    nt; default 1) and ``offset`` o_a in [0, q) (M,) of each stream's first sample (default 0)."""
 
     plane: np.ndarray
     term_stream: np.ndarray
@@ -257,11 +226,9 @@ def _lag_classes(times: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 class _GroupFFT:
-    """Single-threaded complex plans of ``backend`` over the last two axes of a slab group's arrays (one per group
-    size, the arrays reused, transformed in place): the same plans, hence the same rounding, whatever the thread count
-    of the run. ``keep_z``: a transform exact on the (output) columns z < keep_z only (along z on every row, then along
-    y on those columns); ``rows`` (first, end): of an input zero outside those rows (along z on them only, then
-    along y). Single precision: the correction they carry is added to the float32 field's complex64 spectra."""
+    """Single-threaded in-place complex64 plans over the last two axes of a slab group's arrays (one per group
+    size): the same rounding for any thread count. ``keep_z``: exact on the output columns z < keep_z only; ``rows``
+    (first, end): for an input zero outside those rows."""
 
     def __init__(self, tail: tuple[int, ...], backend: fft.FFTBackend, kind: str = "c2c_forward",
                  keep_z: int | None = None, rows: tuple[int, int] | None = None):  # fmt: skip
@@ -297,11 +264,9 @@ N_EVEN = 4
 
 @dataclass(frozen=True, eq=False)
 class _Basis:
-    """The lag covariances transformed per slab and lag: the direction pairs' own (``directions`` the keys', W the
-    identity) or, with more than six direction pairs, Phi's six components (``directions`` the axes): then each
-    direction pair's is sum_b weights[p, b] of them. ``first``/``second`` (B,) the directions of each basis input,
-    ``n_even`` how many lead that are even in k2 (all but the odd components' two; every one for direction pairs),
-    ``is_pairs`` whether the inputs are the direction pairs themselves (nothing to combine)."""
+    """The lag covariances transformed per slab and lag: the direction pairs' own (``is_pairs``) or Phi's six
+    components, each pair's then sum_b weights[p, b] of them. ``first``/``second`` (B,) the directions of each
+    input, the first ``n_even`` of them even in k2."""
 
     directions: np.ndarray
     first: np.ndarray
@@ -335,13 +300,10 @@ def _component_basis(directions: np.ndarray) -> _Basis:
 
 
 class _LagTransform:
-    """The real 2-D DFTs of one slab's lag inputs (B, rows, nzp) into (B, rows, nzp // 2 + 1), exact on the columns
-    z < keep_z = min(e_z, nzp // 2 + 1): along z, then along y on those columns (single-threaded FFTW_ESTIMATE plans,
-    the same rounding for any thread count). With ``parity`` (Phi's components, nyp even) the inputs are the rows
-    k2 = 0 .. nyp/2 only and the transform along y is a DCT-I (even components) or a DST-I on rows 1 .. nyp/2 - 1
-    (odd ones), which kernels.lag_window completes. ``window`` (B, 2 e_y - 1, 2 e_z - 1) receives the lag
-    covariances over the separations the keys span (e_y, e_z: their extents), ``pairs`` (P, ...) the direction
-    pairs' (the window itself for the direction basis)."""
+    """The real 2-D DFTs of one slab's lag inputs (B, rows, nzp), exact on the columns z < min(e_z, nzp // 2 + 1)
+    (single-threaded plans: the same rounding for any thread count). With ``parity`` (Phi's components, nyp even)
+    only the rows k2 >= 0 go in and y is a DCT-I (even components) or DST-I (odd ones). ``window`` (B, 2 e_y - 1,
+    2 e_z - 1) receives the lag covariances over the keys' extents, ``pairs`` (P, ...) the direction pairs'."""
 
     def __init__(self, basis: _Basis, n_pairs: int, nyp: int, nzp: int, extent: tuple[int, int],
                  backend: fft.FFTBackend):  # fmt: skip
@@ -404,10 +366,8 @@ def _slab_system(stencil: MannStencil, i: int, lags: np.ndarray, keys: _Keys, ba
 
 
 def _lag_factors(lags: np.ndarray, inv_tau: np.ndarray | None, n_points: int) -> Iterator[np.ndarray]:
-    """exp(-lag / tau_e) (J,) on a slab's J points for each lag class in turn (ones: frozen turbulence, ``inv_tau``
-    None). Lags evenly spaced to LAG_DECIMALS, 0, d, 2 d, ... (gates on evenly spaced planes), as the powers of
-    exp(-d / tau_e), one exp per point: the generator's own Ornstein-Uhlenbeck factor between planes n steps apart is
-    that product (mann_spacetime). The array yielded is updated in place for the next class."""
+    """exp(-lag / tau_e) (J,) on a slab's J points for each lag class in turn (ones if ``inv_tau`` is None); evenly
+    spaced lags as powers of exp(-d / tau_e), as the generator's Ornstein-Uhlenbeck recursion. Updated in place."""
     if inv_tau is None:
         ones = np.ones(n_points)
         yield from (ones for _ in lags)
@@ -508,9 +468,8 @@ def _ordered_map(fn, items: list, threads: int, workspace) -> Iterator:
 def check_singular(cov: np.ndarray, names) -> None:
     """Raise ParameterError naming the measurements that are linearly dependent (S_i singular on some slab).
 
-    The frequencies up to the middle only: the streams are real, so S_(n - i) = conj S_i has the same eigenvalues.
-    Which measurements the message names is decided with margins (:func:`dependent_set`), not by the last bits of an
-    eigenvector, so every CPU and BLAS kernel names the same ones."""
+    Frequencies up to the middle only (S_(n - i) = conj S_i); the names are decided with margins
+    (:func:`dependent_set`), so every CPU names the same ones."""
     lam = np.linalg.eigvalsh(cov[: cov.shape[0] // 2 + 1])  # all at once
     top = np.maximum(lam[:, -1], np.finfo(float).tiny)
     singular = np.flatnonzero(lam[:, 0] <= SINGULAR_RTOL * top)
@@ -528,15 +487,11 @@ INVOLVED_RTOL = 1e-5  # share (|c_k| sigma_k / sigma_a) above which an earlier m
 
 
 def dependent_set(s: np.ndarray) -> list[int]:
-    """The smallest dependent set of the Hermitian S >= 0 (M, M), by a deterministic rule: the first measurement a
-    (in the order given) whose residual variance given the independent ones before it is <= DEPENDENT_RTOL of its
-    variance (a Cholesky factorisation in the given order that skips such pivots), and the earlier ones that
-    combination uses (share > INVOLVED_RTOL); indices in increasing order.
-
-    Round-off moves residuals and shares by ~1e-15 relative, far from both thresholds for measurements that are
-    exactly dependent (a repeated sensor, a sum of others), so the set does not depend on the CPU or BLAS kernel. If
-    no residual is that small (S nearly, not exactly, singular), the first measurement whose residual is within a
-    factor 10 of the smallest one is taken."""
+    """The smallest dependent set of the Hermitian S >= 0 (M, M), increasing: the first measurement whose residual
+    variance given the independent ones before it is <= DEPENDENT_RTOL of its variance (pivoted Cholesky), and the
+    earlier ones its combination uses (share > INVOLVED_RTOL). Both thresholds are far from round-off for exactly
+    dependent measurements, so the set does not depend on the CPU; if none is that small, the first residual within
+    a factor 10 of the smallest."""
     m = s.shape[0]
     var = np.real(np.diag(s)).copy()
     low = np.zeros((m, m), complex)  # L of the independent pivots so far: S_II = L L^H
@@ -598,14 +553,10 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
           preconditioner: np.ndarray | None = None) -> tuple[np.ndarray, SolveReport]:  # fmt: skip
     """x = S^-1 r on the observed samples, zero elsewhere: (x (M, nt), report).
 
-    Every sample observed: the exact per-slab solve. Otherwise preconditioned conjugate gradients on S restricted to
-    the observed samples, the circulant solve of the full streams (zero-filled; S_j inverted once) as preconditioner,
-    stopping at relative residual CG_TOLERANCE. Raises ParameterError if they do not converge in CG_MAX_ITERATIONS.
-    With many samples missing (> GAP_START_FRACTION) and no ``preconditioner`` they start from :func:`_gap_start`
-    (the report counts its iterations too): with m missing the preconditioned operator is the identity plus a term of
-    rank <= m (T_oo S_oo = I - T_om S_mo, T = S^-1), so few gaps need few iterations, many gaps up to m.
-    ``preconditioner``: other per-frequency matrices for that circulant solve (default ``cov``; for a ``cov``
-    singular on some frequency whose full streams are never all observed).
+    Every sample observed: the exact per-frequency solve. Otherwise conjugate gradients on S restricted to the
+    observed samples, preconditioned by the circulant solve of ``preconditioner`` (default ``cov``), to CG_TOLERANCE
+    (ParameterError after CG_MAX_ITERATIONS); with more than GAP_START_FRACTION missing they start from
+    :func:`_gap_start` (T_oo S_oo = I - T_om S_mo, T = S^-1: m gaps need up to m iterations).
     """
     pre = cov if preconditioner is None else preconditioner
     r = np.where(observed, r, 0.0)
@@ -692,10 +643,9 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
     (slabs, block (P_out, 3, len(slabs), ny, nz) complex64), ``threads`` groups computed at once (the result does not
     depend on it; :func:`correction_spectra` gathers them).
 
-    ``weights`` (M, nt/q) are w, one value per stream sample (e.g. S^-1 (d - H u_s - eps_s)); ``times_s`` the relative
-    time x/U [s] of every plane. Per slab, F_q = sum_(a on q) W_a(i) conj(A_i[a]) on each measured plane q (W the FFT
-    of the weights at full rate), then sum_q rho_pq F_q by the Ornstein-Uhlenbeck recursion forwards and backwards,
-    times Phi, the inverse 2-D FFT and the crop. The real inverse FFT along time is left to spectra_field.
+    ``weights`` (M, nt/q): w, one value per stream sample (e.g. S^-1 (d - H u_s - eps_s)); ``times_s`` the relative
+    time x/U [s] of every plane. Per slab: the weights' spectra scattered onto each measured plane, summed with
+    rho_pq by the Ornstein-Uhlenbeck recursion, times Phi, inverse 2-D FFT and crop.
     """
     box, backend = stencil.box, fft.backend()  # resolved once: every workspace with the same backend
     times = np.asarray(times_s, dtype=float)
@@ -753,9 +703,8 @@ def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarr
 
 
 def workspace_bytes(box, streams: Streams, n_out: int) -> int:
-    """Bytes of the larger slab-group workspace of :func:`stream_covariance` (a slab's basis inputs and their
-    half spectra, the direction pairs' DFTs; on the k1 = 0 / Nyquist slabs the inputs of the whole plane) and
-    :func:`correction_blocks` (forward and backward grids, the block) for ``n_out`` planes out."""
+    """Bytes of the larger slab-group workspace of :func:`stream_covariance` and :func:`correction_blocks` (for
+    ``n_out`` planes out)."""
     keys = _keys(streams)
     n_dir = len(keys.directions)
     n_pairs = n_dir * (n_dir + 1) // 2

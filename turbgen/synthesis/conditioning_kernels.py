@@ -1,16 +1,10 @@
-"""Compiled loops of the Mann conditioning (turbgen.synthesis.conditioning): the streams' node amplitudes per slab
+"""Compiled loops of the Mann conditioning (turbgen.synthesis.conditioning): the streams' key amplitudes per slab
 and the pair sums of the stream covariance from the lag covariances of the prior.
 
-A *key* groups the terms of one stream on one (y, z) node along one direction n (a lidar beam's line of sight, or a
-component's unit vector). On slab i its amplitude is P_k(i) = sum_(t in k) a_t exp(2 pi i i s_t / nt) (a_t the
-term's weight along n), and the stream covariance of the slab is
-
-    L_i[a, b] = sum_(k in a, k' in b) P_k conj(P_k') G_i^(n_k n_k')_(p_a p_b)(y_k - y_k', z_k - z_k'),
-
-with G the lag covariance along the two directions between the two planes: the inverse 2-D DFT of
-rho_pq n_k^T Phi_i n_k', G(d) = conj R(d) = R(-d) with R the forward real DFT of that real array (or a combination of
-the DFTs of Phi's components: :func:`lag_window`, :func:`combine_pairs`), laid out over the window of separations
-the keys span.
+A *key* groups the terms of one stream on one (y, z) node along one direction n; on slab i its amplitude is
+P_k(i) = sum_(t in k) a_t exp(2 pi i i s_t / nt) (a_t the weight along n), and L_i[a, b] = sum_(k in a, k' in b)
+P_k conj(P_k') G_i^(n_k n_k')_(p_a p_b)(y_k - y_k', z_k - z_k'), G(d) = conj R(d) with R the real DFT of
+rho_pq n_k^T Phi_i n_k' (or combined from Phi's components: :func:`lag_window`, :func:`combine_pairs`).
 """
 
 from __future__ import annotations
@@ -66,9 +60,7 @@ def chain_correction(f, rho, step, phi, rows, out):
     between any two planes), ``phi`` (3, 3, J) real symmetric, ``out`` (len(rows), 3, 2 J) float32 pairs (the sums
     run in float64).
 
-    The sum runs forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once.
-    Real arithmetic (rho and Phi are real), in blocks of points whose planes stay in cache through the passes, with
-    rho and Phi repeated per (real, imaginary) value so the innermost loops run over contiguous rows."""
+    The sum runs forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once."""
     n_planes, n_values = f.shape[0], f.shape[2]
     block = 512  # values (256 points)
     fwd = np.empty((n_planes, 3, block))
@@ -245,9 +237,8 @@ def slab_components(coef, j, k1, k2, k3sq, cell_row, cell_col, cell_factor, out)
     0 .. R - 1 (``out`` (6, R, nzp) float64), from the stencil's compact coefficients: ``coef`` (4, S, nyp//2 + 1,
     nzp) float32 (A, P, Z1, Z2; Z2 odd in k2, the rows k2 < 0 read from their mirror), ``j`` the slab in it, ``k1``
     [rad/m], ``k2`` (nyp,) and ``k3sq`` (nzp,) [rad/m, rad^2/m^2]; the axis cells' factors (n, 3, 3) float64 at
-    (``cell_row``, ``cell_col``) replace the compact form. The same operations as mann_oracle.slab_factor followed
-    by the products (u = P n1 - A k2 n2 + Z1 (k2 n0 - k1 n1), v = -P n0 + A k1 n2 + Z2 (k2 n0 - k1 n1),
-    w = W (k2 n0 - k1 n1), W = (A^2 q + P^2) / (A k^2)), one point at a time."""
+    (``cell_row``, ``cell_col``) replace the compact form. The operations of mann_oracle.slab_factor, then the
+    products, one point at a time."""
     nyp, half = len(k2), coef.shape[2] - 1
     c = np.empty((3, 3))
     for r in range(out.shape[1]):

@@ -9,13 +9,10 @@ proper complex noise with E|xi|^2 = 2. Hence, exactly (Guo et al. 2023, Eq. 19 a
 
 with G_k = F_k F_k^T, R_k = A_k A_k^H the realised yz correlation (the torus's fft2(scale^2) at the wrapped lag,
 chol chol^T, or the identity for white v, w), h_(nt - k) = h_k = nt 2 amp_k^2 on the regular bins, nt amp_N^2 on the
-real Nyquist bin; components are independent. The covariance is diagonal in the bin, so the streams of
-turbgen.synthesis.conditioning (same Streams, same circulant/PCG solve) give one dense (streams x streams) matrix per
-frequency: L_k[a, b] = h_k G_k[p_a, p_b] sum_c (A_kc R_kc A_kc^H)[a, b], A_kc[a, j] = sum of the weights
-w_t e^(2 pi i k s_t / nt) of stream a's terms of component c at point j, aliased onto the decimated streams' frequencies
-as there. C H^T w is one extra synthesis: per bin X_kp = (h_k / nt) R_k sum_b G_k[p, p_b] W_b(k) conj(A_kc[b]) (W the
-rfft of the weights at full rate), kept per measured plane q before G_k mixes it into every plane p, then the same
-real inverse FFT (norm "forward") as the generator's.
+real Nyquist bin; components are independent. Diagonal in the bin, the streams of turbgen.synthesis.conditioning
+give one dense matrix per frequency, L_k[a, b] = h_k G_k[p_a, p_b] sum_c (A_kc R_kc A_kc^H)[a, b] (A_kc[a, j] the
+sum of w_t e^(2 pi i k s_t / nt) of stream a's terms of component c at point j), solved as there. C H^T w is one
+extra synthesis: X_kp = (h_k / nt) R_k sum_b G_k[p, p_b] W_b(k) conj(A_kc[b]), then the generator's inverse FFT.
 """
 
 from __future__ import annotations
@@ -91,11 +88,8 @@ def bin_weights(gen: KaimalEvo, component: str) -> np.ndarray:
 
 
 def component_prior(gen: KaimalEvo, component: str) -> Iterator[BinPrior]:
-    """The realised prior of ``component`` bin by bin (k = 1 .. nt // 2), from the generator's own samplers and
-    longitudinal factors, frequency chunk by frequency chunk as it makes them.
-
-    ``gen``: a generator of the run used only for this (its ``report`` counts the samplers it builds).
-    """
+    """The realised prior of ``component`` bin by bin (k = 1 .. nt // 2), from the samplers and longitudinal
+    factors of ``gen`` (a generator of the run used only for this), chunk by chunk as it makes them."""
     g = gen.grid
     h = bin_weights(gen, component)
     mixed = component in gen.long_components and g.nx > 1
@@ -151,18 +145,9 @@ def _coupling(b: BinPrior, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
 
 
 def stream_covariance(gen: KaimalEvo, streams: Streams, noise_var) -> np.ndarray:
-    """The per-frequency matrices S_j (nt/q, M, M) complex128 of S = H C H^T + R (the same layout as
-    turbgen.synthesis.conditioning.stream_covariance, for its solvers).
-
-    Parameters
-    ----------
-    gen : KaimalEvo
-        A generator of the run, used only for its samplers (component_prior).
-    streams : Streams
-        The measurement streams.
-    noise_var : array_like, (M,)
-        Measurement-noise variance sigma_a^2 [m^2 s^-2] of each stream.
-    """
+    """The per-frequency matrices S_j (nt/q, M, M) complex128 of S = H C H^T + R (the layout of
+    conditioning.stream_covariance), from the samplers of ``gen`` (a generator of the run used only for this) and
+    the noise variances ``noise_var`` (M,) [m^2 s^-2]."""
     g = gen.grid
     nt, q, m = g.nt, streams.decimation, streams.n_streams
     n_dec = nt // q
@@ -211,16 +196,7 @@ def correction(gen: KaimalEvo, streams: Streams, weights: np.ndarray, component:
     """C H^T w for one component (:class:`Correction`): per bin, the weights scattered through the adjoint of the
     streams' terms on each measured plane, times R_k (the sampler's A A^H) and h_k / nt.
 
-    Parameters
-    ----------
-    gen : KaimalEvo
-        A generator of the run, used only for its samplers (component_prior).
-    streams : Streams
-        The measurement streams.
-    weights : numpy.ndarray, (M, nt/q)
-        w, one value per stream sample (e.g. S^-1 (d - H u_s - eps_s)).
-    component : str
-        "u", "v" or "w".
+    ``gen`` as in :func:`stream_covariance`; ``weights`` (M, nt/q) w, one value per stream sample.
     """
     g = gen.grid
     nt, m = g.nt, streams.n_streams

@@ -4,26 +4,17 @@ Cross-spectrum between component c at (plane p, point a) and (plane q, point b) 
 
     S_c(f) coh_yz(r_ab, f) gamma_x(|x_p - x_q|, f),   zero phase between planes (convected frame).
 
-Per frequency bin k (f_k = k df exactly, df = 1/(nt dt); evoTurb mixes bin k with the coherence of
-(k + 1) df, an off-by-one avoided here):
-1. every plane gets independent yz coefficients with covariance coh_yz (u: a plain function
-   coh(r, f), by default the IEC exponential, Eq. 12 un-squared, by 2-D circulant embedding;
-   v, w: spatially white as IEC / TurbSim IECKAI, or the same coherence as an explicit extension);
-2. the real principal square root of the (n_planes x n_planes) matrix gamma_x(|x_p - x_q|, f_k)
-   mixes the planes (components in ``long_components``; others stay independent);
-3. amplitudes: 2 E|X_k|^2 = v_k, the integral of the one-sided Kaimal PSD (Eq. 11) over the bin
-   [(k - 1/2) df, (k + 1/2) df] (the Nyquist bin, real, over [f_N - df/2, f_N]); X_0 = 0.
-   The realised variance is then the band integral from df/2 to 1/(2 dt), not the nominal sigma^2
-   (``rescale`` multiplies the spectrum by sigma^2 / that integral instead);
+Per frequency bin k (f_k = k df exactly, df = 1/(nt dt); evoTurb's off-by-one bin k -> (k + 1) df avoided):
+1. every plane gets independent yz coefficients with covariance coh_yz (u: by default the IEC exponential,
+   Eq. 12 un-squared, by 2-D circulant embedding; v, w: spatially white as IEC, or u's coherence);
+2. the real principal square root of gamma_x(|x_p - x_q|, f_k) (planes x planes) mixes the planes
+   (components in ``long_components``);
+3. amplitudes: 2 E|X_k|^2 = v_k, the Kaimal PSD (Eq. 11) integrated over [(k - 1/2) df, (k + 1/2) df]; X_0 = 0.
+   The realised variance is the band integral from df/2 to 1/(2 dt) (``rescale``: scaled to sigma^2);
 4. inverse real FFT over time (float32).
 
-Memory: one component at a time. The mixed spectrum (n_planes, nf, ny, nz) complex64 is put frequency
-chunk by frequency chunk into a spectrum buffer and read back plane by plane for the inverse FFT:
-``InMemorySpectrum`` by default; the runs layer passes a file-backed buffer (turbgen.runs.scratch)
-when that array does not fit in memory, which bounds the memory by one frequency chunk of all
-planes plus one plane's spectrum. Random streams are numpy's SFC64 with its float32 Ziggurat normals
-(turbgen.synthesis.random_streams) keyed by SeedSequence((seed, component, plane, frequency chunk)) with
-FIXED chunks of FREQ_CHUNK bins, so the field does not depend on how it is written or on thread counts.
+One component at a time, through a spectrum buffer (in memory or file-backed); random streams keyed by (seed,
+component, plane, FIXED chunk of FREQ_CHUNK bins): the field does not depend on how it is written or on threads.
 """
 
 from __future__ import annotations
@@ -58,11 +49,8 @@ def bin_frequencies(nt: int, dt_s: float) -> np.ndarray:
 
 
 def bin_variances(nt: int, dt_s: float, sigma_m_s: float, length_scale_m: float, U_m_s: float) -> np.ndarray:
-    """v_k = integral of the Kaimal PSD (Eq. 11) over bin k [m^2 s^-2]; v_0 = 0 (zero mean).
-
-    Bin k covers [(k - 1/2) df, (k + 1/2) df], clipped at the Nyquist frequency 1/(2 dt), so the
-    sum is the band integral from df/2 to 1/(2 dt).
-    """
+    """v_k = integral of the Kaimal PSD (Eq. 11) over [(k - 1/2) df, (k + 1/2) df] clipped at 1/(2 dt) [m^2 s^-2];
+    v_0 = 0 (zero mean)."""
     v = kaimal_band_variance(*line_bands(nt, dt_s), sigma_m_s, length_scale_m, U_m_s)
     v[0] = 0.0
     return v
@@ -76,9 +64,8 @@ def resolved_band_hz(nt: int, dt_s: float) -> tuple[float, float]:
 def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarray, float]:
     """Real factors F_k (nf, P, P) with F_k F_k^T = G_k, G_k[p, q] = gamma_x(|x_p - x_q|, f_k).
 
-    F_k is the principal square root of G_k (turbgen.synthesis.square_root: the same on every CPU, where a Cholesky
-    factor with an eigenvector fallback switched on rounding at low frequencies, G_k -> all ones). Returns
-    (factors, max |G_clipped - G|): the spectral norm of the negative part clipped, 0 when every G_k >= 0.
+    F_k is the principal square root of G_k (the same on every CPU, also as G_k -> all ones at low frequencies).
+    Returns (factors, max |G_clipped - G|), the spectral norm of the negative part clipped.
     """
     x = np.asarray(x_m, dtype=float)
     f = np.asarray(f_hz, dtype=float)
@@ -92,29 +79,12 @@ def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int =
                       out: np.ndarray | None = None, transforms=None) -> np.ndarray:  # fmt: skip
     """One plane's field from its yz coefficients: ``irfft(spec * amp[:, None, None], n=nt, axis=0, norm="forward")``.
 
-    Computed on contiguous blocks of about 1 MiB of columns: pocketfft reads and writes time columns
-    strided by ny nz values otherwise, and the block copy applies the amplitudes. Columns are transformed
-    independently, so the blocks change no bit.
+    On contiguous blocks of ~1 MiB of columns (not strided time columns; the copy applies the amplitudes);
+    columns are independent, so the blocks change no bit.
 
-    Parameters
-    ----------
-    spec : numpy.ndarray
-        Coefficients Z (nf, ny, nz) complex64 [-], bins k = 0 .. nt // 2 (not modified).
-    amp : numpy.ndarray
-        Amplitude of each bin (nf,) float32 [m/s].
-    nt : int
-        Number of time samples.
-    workers : int, optional
-        FFT threads (the values do not depend on them).
-    out : numpy.ndarray, optional
-        Where to write the field ((nt, ny, nz) float32, C-contiguous; default: a new array).
-    transforms : namespace, optional
-        The one-shot transforms of an FFT backend (turbgen.fft.oneshot; default: the current backend's).
-
-    Returns
-    -------
-    numpy.ndarray
-        Velocity fluctuations (nt, ny, nz) float32 [m/s].
+    ``spec`` (nf, ny, nz) complex64 [-] (not modified), ``amp`` (nf,) float32 [m/s]; ``workers`` FFT threads (the
+    values do not depend on them); ``out`` (nt, ny, nz) float32 C-contiguous (default: new); ``transforms`` an FFT
+    backend's one-shot transforms. Returns the fluctuations (nt, ny, nz) float32 [m/s].
     """
     nf = spec.shape[0]
     flat = spec.reshape(nf, -1)
@@ -129,10 +99,7 @@ def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int =
 
 
 class InMemorySpectrum:
-    """Spectrum buffer (n_planes, nf, ny, nz) complex64 held in memory; bins never put are zero.
-
-    One buffer serves the components in turn: every bin but k = 0 (always zero) is put anew for each.
-    """
+    """Spectrum buffer (n_planes, nf, ny, nz) complex64 in memory, serving the components in turn (bin 0 stays 0)."""
 
     def __init__(self, nx: int, nf: int, ny: int, nz: int):
         self.data = np.zeros((nx, nf, ny, nz), dtype=np.complex64)
@@ -152,14 +119,11 @@ class InMemorySpectrum:
 
 
 class PlaneRing:
-    """``size`` (>= 4) field planes (nt, ny, nz) float32 handed out in turn to :meth:`KaimalEvo.component_planes`,
-    which then writes every plane into one of them instead of a new array: a run touches ``size`` planes' memory
-    instead of 3 nx fresh ones (the default field: 33 x 16 MB of page faults and kernel page zeroing, which perf
-    showed at ~12 % of the command's cycles), and may let the store's writes lag behind the synthesis.
+    """``size`` (>= 4) field planes (nt, ny, nz) float32 that :meth:`KaimalEvo.component_planes` writes into in
+    turn instead of new arrays (no page faults and zeroing of 3 nx fresh planes).
 
-    Only for a consumer that is done with plane k once it asks for plane k + size - 2, also across components (the
-    generator computes two planes ahead, so the buffer of plane k serves plane k + size, counted over the components
-    in turn); the runs layer keeps at most size - 3 writes pending.
+    Only for a consumer done with plane k once it asks for plane k + size - 2, across components too (the
+    generator computes two planes ahead); the runs layer keeps at most size - 3 writes pending.
     """
 
     def __init__(self, nt: int, ny: int, nz: int, size: int = 4):
@@ -189,22 +153,17 @@ class PlaneRing:
 class KaimalEvo:
     """Generator of one Kaimal 4D field, one component at a time, plane by plane.
 
-    long_coherence(dx_m, f_hz) -> un-squared gamma_x (a function of turbgen.theory.coherence_models).
-    yz_coherence(r_m, f_hz) -> un-squared yz coherence (1 at r = 0); None: exponential_yz with the
-        a_yz, lc_m of ``kaimal`` (IEC 61400-1).
-    yz_decay_length_m(f_hz) -> a length [m] with yz_coherence(r, f) <= exp(-r / length), which lets the
-        circulant embedding use a smaller torus; None: exponential_yz_decay_length_m for the default
-        coherence, else infinite (the minimal embedding 2 (n - 1), exact for any coherence).
+    long_coherence(dx_m, f_hz) -> un-squared gamma_x (turbgen.theory.coherence_models).
+    yz_coherence(r_m, f_hz) -> un-squared yz coherence (1 at r = 0); None: IEC exponential_yz of ``kaimal``.
+    yz_decay_length_m(f_hz) -> a length [m] with yz_coherence(r, f) <= exp(-r / length), for a smaller
+        embedding torus; None: the default coherence's, else infinite (minimal embedding, exact for any).
     long_components : components mixed between planes ("u" or "uvw").
     coherent_vw : v, w get the u yz coherence (extension; IEC / TurbSim IECKAI: white).
     rescale : scale each component's spectrum so its expected variance is the nominal sigma^2.
-    variances : (3, nt // 2 + 1) variance of each line's band [m^2 s^-2] of u, v, w (a user spectrum,
-        turbgen.theory.user_spectra.LineSpectrum.line_variances; line 0 must be 0); None: the Kaimal spectra of
-        ``kaimal`` (Eq. 11 integrated over the bands). ``rescale`` applies to either.
-    fft_backend : the FFT backend's name (turbgen.fft; None: the current one): one-shot transforms, the same bits
-        for both built-in backends.
-    keep : keep the yz samplers and longitudinal factors (the seed-free part) once made, for :meth:`reseeded` copies
-        (the default grid's: ~23 MiB); the values do not change.
+    variances : (3, nt // 2 + 1) band variances [m^2 s^-2] of u, v, w of a user spectrum (line 0 zero); None:
+        the Kaimal spectra of ``kaimal``.
+    fft_backend : the FFT backend's name (turbgen.fft; None: the current one).
+    keep : keep the seed-free yz samplers and longitudinal factors for :meth:`reseeded` copies.
     """
 
     def __init__(
@@ -274,10 +233,8 @@ class KaimalEvo:
         return self._kept[key]
 
     def sampler_bytes(self) -> int:
-        """Peak bytes of the yz samplers while one frequency chunk is made: its bins' embeddings (float64 torus
-        scales, or dense float64 N x N factors where circulant.dense_sampled) with their float32 stacked copies, the
-        next chunk's, made meanwhile, and each thread's complex64 noise over the chunk's tori (u is always sampled
-        this way; v, w too with coherent_vw, one component after the other)."""
+        """Peak bytes of the yz samplers while one frequency chunk is made: its bins' embeddings and float32
+        copies, the next chunk's made meanwhile, and each thread's complex64 noise over the chunk's tori."""
         g, n = self.grid, self.grid.ny * self.grid.nz
         per_bin = [(8 * n * n, n) if dense_sampled(g.ny, g.nz, points) else (12 * points, points)
                    for points in self._torus_points]
@@ -311,11 +268,8 @@ class KaimalEvo:
         return out
 
     def _groups(self, embs) -> list[tuple[int, int, tuple[int, int], object]]:
-        """Runs [i, j) of consecutive bins drawn and sampled together: (i, j, torus shape, sampler).
-
-        sampler: None (white), an Embedding with a dense factor (one bin), or one circulant
-        Embedding whose ``scale`` stacks the bins' float32 scales (one batched FFT).
-        """
+        """Runs [i, j) of consecutive bins sampled together: (i, j, torus shape, sampler); sampler None (white), a
+        dense-factor Embedding (one bin), or one circulant Embedding stacking the bins' float32 scales."""
         g = self.grid
         shapes = [(g.ny, g.nz) if e is None else e.torus_shape for e in embs]
         kinds = ["white" if e is None else "chol" if e.chol is not None else "circ" for e in embs]
@@ -382,11 +336,9 @@ class KaimalEvo:
     ) -> Iterator[tuple[int, np.ndarray]]:
         """Yield (plane index, field (nt, ny, nz) float32) for every plane of one component.
 
-        ``tick`` is called once per frequency chunk and once per plane (n_chunks + nx calls).
-        ``spectrum``: a buffer with chunk/put_chunk/get like :class:`InMemorySpectrum` (default: a new one);
-        one buffer may serve the components in turn, each after the previous one's planes were all yielded.
-        ``ring``: the planes are written into its buffers (see :class:`PlaneRing` for the consumer it needs);
-        default: a new array per plane. The values are the same.
+        ``tick`` is called once per frequency chunk and once per plane. ``spectrum``: a buffer like
+        :class:`InMemorySpectrum` (default: a new one). ``ring``: write the planes into its buffers
+        (:class:`PlaneRing`); default: a new array per plane. The values are the same.
         """
         g = self.grid
         nx = g.nx
@@ -398,8 +350,7 @@ class KaimalEvo:
         if g.nt % 2 == 0:  # the Nyquist coefficient is real: Re(Z) has unit variance, E X^2 = v
             amp[-1] = np.sqrt(self.variances[component][-1]).astype(np.float32)
         pool = ThreadPoolExecutor(max_workers=self.workers)
-        # one work array per pool thread for the torus noise, reused from chunk to chunk and sampled in place:
-        # three fresh arrays of up to ~70 MB per plane and chunk cost page faults and zeroing
+        # one work array per pool thread for the torus noise, reused from chunk to chunk and sampled in place
         local = threading.local()
 
         def work(n):
@@ -428,8 +379,7 @@ class KaimalEvo:
                     def fill(p, chunk=chunk, groups=groups, block=block):
                         self._chunk_coefficients(component, p, chunk, groups, block[p], work)
 
-                    # planes in parallel (NumPy's generators and the FFTs release the GIL); each plane has its
-                    # own random stream and its own slice of the block, so the result does not depend on the order
+                    # planes in parallel, each with its own random stream and block slice: order-independent
                     list(pool.map(fill, range(nx)))
                     if mixed and nx > 1:  # in the pool, alongside the next chunk's coefficients (disjoint bins)
                         mixing.append(pool.submit(self._mix_and_put, ks, block, spectrum))
@@ -440,8 +390,7 @@ class KaimalEvo:
             for done in mixing:
                 done.result()
             local = None  # the work arrays are not needed by the transforms
-            # two planes transformed at once (half the threads each; pocketfft's columns do not depend on the
-            # thread count), yielded in order: the amplitude pass runs in parallel too
+            # two planes transformed at once (half the threads each: the same bits), yielded in order
             fft_workers = max(1, self.workers // 2)
 
             def transform(p, out):

@@ -1,14 +1,9 @@
 """Cell-averaged Mann factors near the k1 axis, which replace the point factors of the stencil there.
 
-Cell-averaged tensor near the k1 axis (Mann 1998: the point value Phi(k) dk is a poor estimate of
-the cell integral where Phi varies within a cell). On the k1 axis Phi33 = E(k0) / (4 pi k1^2) with
-k0 -> Gamma a / L finite, so with dk1 << dk2, dk3 (long boxes) the point rule puts far too much
-energy in the cells (k1, 0, 0).
-Cells with |k2| <= CELL_RADIUS dk2, |k3| <= CELL_RADIUS dk3 and |k1| <= CELL_K1_FACTOR max(dk2, dk3)
-use a square root of the cell-averaged tensor instead (tensor-product Gauss rules, graded towards
-the k1 axis down to the scale |k1|). turbgen.validation.mann_lattice integrates these cells with its own
-rule on purpose (an independent check of this one: an error in either shows instead of cancelling);
-do not share the rules.
+On the k1 axis Phi33 = E(k0) / (4 pi k1^2) with k0 finite, so with dk1 << dk2, dk3 the point rule Phi(k) dk puts
+far too much energy in the cells (k1, 0, 0) (Mann 1998). Cells with |k2| <= CELL_RADIUS dk2, |k3| <= CELL_RADIUS
+dk3 and |k1| <= CELL_K1_FACTOR max(dk2, dk3) use a square root of the cell-averaged tensor (Gauss rules graded
+towards the axis). turbgen.validation.mann_lattice uses its own rule on purpose: do not share the rules.
 """
 
 from __future__ import annotations
@@ -58,10 +53,8 @@ def axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarra
     Phi_bar = (1/dV) ∫_cell Phi dk, factor V sqrt(Lambda) V^T (the principal square root, the same on every CPU: see
     turbgen.synthesis.square_root).
 
-    The nodes of all (k2, k3) cells of a slab are one outer product of the k1 rule with the concatenated
-    k2 and k3 rules; the nodes of _CELL_SLABS slabs are evaluated in one call and summed per cell by
-    np.bincount (in node order: the same sums as slab by slab). beta comes from the lifetime table (as in
-    the rest of the stencil).
+    The nodes of _CELL_SLABS slabs are evaluated in one call and summed per cell in node order (the same sums as
+    slab by slab).
     """
     dk1, dk2, dk3 = box.dk()
     r2 = min(CELL_RADIUS, (box.nyp - 1) // 2)

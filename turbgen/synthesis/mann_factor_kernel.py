@@ -1,13 +1,9 @@
 """Compiled per-point loops of the Mann stencil (turbgen.synthesis.mann_stencil): lifetimes and compact factors.
 
-A few passes over a batch of slabs (small enough to stay in the core's cache) instead of ~40 whole-array
-numpy passes and their memory traffic. The loops evaluate the float64 operations of the
-former numpy code in the same order (tests/synthesis/stencil_reference.py keeps it as the reference); log,
-exp and arctan are left to numpy's ufuncs between the loops (mann_factors.slab_factors), on arrays of the
-arguments these loops write: numpy's SIMD log, exp and arctan are faster than the C library's
-scalar ones a compiled loop would call, and round like those of the numpy code, so the stencil keeps its
-bits. ``error_model="numpy"``: a division by zero gives inf or nan as in numpy (k = 0 and the k1 = 0 slab,
-whose values are replaced by their limits) instead of raising.
+A few passes over a cache-sized batch of slabs, evaluating the float64 operations of the numpy reference
+(tests/synthesis/stencil_reference.py) in the same order; log, exp and arctan are left to numpy's ufuncs between
+the loops (mann_factors.slab_factors), which round as the reference does. ``error_model="numpy"``: a division by
+zero gives inf or nan (k = 0, the k1 = 0 slab: replaced by their limits) instead of raising.
 """
 
 from __future__ import annotations
@@ -32,10 +28,9 @@ def squared_wavenumbers(k1, k2, k3, factor, out):
 def table_spline(log_kl_sq, inv_2h, x0_h, step, n_intervals, c3, c2, c1, c0, out):
     """The lifetime table's spline at x = ln((kL)^2) / (2 h) - x0 / h grid steps, as LifetimeTable.from_ksq.
 
-    ``log_kl_sq`` and ``out``: C-contiguous arrays of one shape, ln(|k|^2 L^2) in, tau~ out (nan outside
-    the table's range, k = 0 among them: the caller evaluates the exact function there). ``inv_2h`` =
-    0.5 / h, ``x0_h`` = x0 / h, ``step`` = h, ``n_intervals`` and ``c3`` .. ``c0`` of the table.
-    Returns the number of points outside the range.
+    ``log_kl_sq`` ln(|k|^2 L^2) in, ``out`` tau~ (nan outside the table's range, k = 0 among them: the caller
+    evaluates the exact function there), both C-contiguous of one shape; the rest the table's. Returns the number of
+    points outside the range.
     """
     xs = log_kl_sq.reshape(-1)
     values = out.reshape(-1)
@@ -94,9 +89,8 @@ def mann_factors(k1, k2, k3, beta_half, inv_tau_half, e, arctan, unit, energy, s
     the arctan of its ``t_arg``. ``inv_tau_half`` (b, nh, nzp//2 + 1) 1/tau_e [1/s] on the same columns as
     beta_half, written mirrored into ``inv_tau`` (b, nh, nzp); an empty ``inv_tau`` skips it.
 
-    ``unit`` True: (f0, f1, f2, f3) = (e, k30, c1, c2) of mann_factors.slab_factors (float64, ae-free).
-    False: (A, P, Z1, Z2) = (e, k30 e, c1 e, c2 e) ``energy`` ``scale`` as mann_factors.apply_energy forms
-    them, with A = 0 on the k3 axis; the output's dtype (float32) rounds them.
+    ``unit``: (e, k30, c1, c2) (float64, ae-free); else (A, P, Z1, Z2) = (e, k30 e, c1 e, c2 e) ``energy``
+    ``scale`` as mann_factors.apply_energy forms them (A = 0 on the k3 axis), rounded by the float32 output.
     """
     nzp = k3.size
     h = nzp // 2

@@ -31,19 +31,11 @@ def _table_half(table, log_kl_sq: np.ndarray, ksq, length_scale_m: float) -> np.
 def slab_factors(params: MannParams, box: BoxShape, i0: int, i1: int, out, inv_tau, energy: float | None) -> None:
     """The factors of slabs [i0, i1) of ``box`` into the four arrays ``out`` (i1 - i0, nyp//2+1, nzp).
 
-    ``energy`` None: the energy-free factors (e, k30, c1, c2) (float64), independent of ae: with
-    a = e sqrt(ae L^(17/3) / (4 pi)) the coefficients are A = a, P = k30 a, Z1 = c1 a, Z2 = c2 a
-    (see apply_energy), where e = (1 + (k0 L)^2)^(-17/12) and c1, c2 are zeta1, zeta2 of Mann (1994)
-    Eq. 13-17 (the formulas of theory.mann_tensor._distortion with its exact limits), with
-    beta = Gamma tau~(|k| L) and tau_e from the lifetime tables (relative error <= 1e-6,
-    theory.eddy_lifetime.TABLE_REL_ERROR) instead of Mann (1994) Eq. 4 / 6 / 15 point by point. At k = 0
-    all four are 0 (no energy). ``energy`` = energy_scale(params): (A, P, Z1, Z2) times sqrt(dk1 dk2 dk3 / 2)
-    as apply_energy forms them from the factors (out float32). ``inv_tau`` (i1 - i0, nyp//2+1, nzp)
-    float32 gets 1/tau_e [1/s], or None.
-
-    Compiled loops (mann_factor_kernel) and numpy's log, exp and arctan on the batch. |k|^2, beta and
-    tau_e are even in k3 and computed on the columns k3 >= 0 and the Nyquist only: fftfreq is exactly
-    antisymmetric, so |k|^2 on column l equals that on column nzp - l.
+    ``energy`` None: the ae-free factors (e, k30, c1, c2) (float64): e = (1 + (k0 L)^2)^(-17/12), c1, c2 the
+    zeta1, zeta2 of Mann (1994) Eq. 13-17 with beta and tau_e from the lifetime tables (relative error <= 1e-6);
+    all 0 at k = 0. ``energy`` = energy_scale(params): (A, P, Z1, Z2) times sqrt(dk1 dk2 dk3 / 2) as
+    apply_energy forms them (out float32). ``inv_tau`` (i1 - i0, nyp//2+1, nzp) float32 gets 1/tau_e [1/s], or
+    None. |k|^2, beta and tau_e are computed on the columns k3 >= 0 only (even in k3).
     """
     from turbgen.synthesis import mann_factor_kernel as kernel
 
@@ -95,10 +87,8 @@ def energy_scale(params: MannParams) -> float:
 def apply_energy(unit: np.ndarray, energy: float, k1, scale: float, out: np.ndarray) -> np.ndarray:
     """(A, P, Z1, Z2) times sqrt(dk / 2) = ``scale`` into ``out`` (4, b, nh, nzp) float64 from the ``unit`` factors.
 
-    a = e ``energy`` (energy_scale), P = k30 a, Z1 = c1 a, Z2 = c2 a, A = a except on the k3 axis
-    (k1 = k2 = 0, where A is never used: m = 0 and k2 = 0). mann_factor_kernel.mann_factors applies the
-    energy by the same float64 operations in the same order when it builds a scaled stencil directly, so a scaled
-    unit stencil is bit-identical to a direct build.
+    a = e ``energy`` (energy_scale), P = k30 a, Z1 = c1 a, Z2 = c2 a, A = a except on the k3 axis (never used
+    there); the operations of a direct build (mann_factor_kernel.mann_factors), so the bits are the same.
     """
     a, p, z1, z2 = out
     np.multiply(unit[0], energy, out=a)

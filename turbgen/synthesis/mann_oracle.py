@@ -14,8 +14,7 @@ from turbgen.synthesis.mann_stencil import _ODD, MannStencil, expand_k2, w_coeff
 def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
     """The full factor C (3, 3, nyp, nzp) [float64, times sqrt(dk/2)] of slab ``i``: compact form + axis cells.
 
-    For tests and the discrete oracle: E[u_hat u_hat^H] = 2 C C^T on every stored point. Any scaled stencil (stored,
-    a part holding slab ``i``, or computed on demand: MannStencil.coefficients); a unit stencil is refused (ValueError).
+    Any scaled stencil (stored, a part holding slab ``i``, or on demand); ValueError for a unit stencil.
     """
     box = stencil.box
     scratch = None if stencil.coef is not None else np.empty((4, 1, box.nk2_half, box.nzp), np.float32)

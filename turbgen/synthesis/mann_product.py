@@ -1,17 +1,10 @@
 """Compiled inner loop of the Mann synthesis: the OU step of the noise and u_hat = C n on a batch of k1 slabs.
 
-One pass reads the noise state, the fresh noise and the compact factor rows once and writes the new state and u_hat
-once (numpy's whole-array passes cost 2-4x the arithmetic in memory traffic). Complex numbers are handled as their
-float32 (re, im) pairs: every factor is real, so re and im follow the same float32 operations, in the order of the
-numpy formulation (n <- rho n + sig fresh, then Mann 1998 Eq. 46-47 as written in mann_stencil), and the loops over a
-row run over re and im alike with the row's factors duplicated per pair (contiguous, so they vectorise).
-
-Bits: numpy multiplies complex64 by float32 as complex by (r + 0j), re = x r - y 0 and im = x 0 + y r. The extra
-terms are zeros, so every value is the same float32 number as x r and y r here; only the sign of a zero result can
-differ (e.g. numpy's (1 - 0j) 0 is 0 + 0j, here 0 - 0j). Such zeros (k1 = k2 = 0 in m and u_w, the k = 0 point) are
-added to non-zero terms by the transforms that follow, so the fields keep their bits.
-The stencil holds rows k2 >= 0 only; a row k2 < 0 reads the mirrored row (A, P, Z1, 1/tau_e and W are even in k2,
-Z2 is odd).
+One pass reads the noise state, fresh noise and factor rows once and writes the new state and u_hat once. Complex
+numbers are float32 (re, im) pairs: every factor is real, so re and im follow the same float32 operations in the
+order of the numpy formulation (n <- rho n + sig fresh, then Mann 1998 Eq. 46-47 as in mann_stencil): the same
+bits but for the sign of some zeros, which the transforms that follow add to non-zero terms. A row k2 < 0 reads
+the mirrored row (A, P, Z1, 1/tau_e and W are even in k2, Z2 is odd).
 """
 
 from __future__ import annotations
@@ -99,12 +92,8 @@ def ou_product(n, fresh, rho, sig, coef, j0, k1, k2, k3sq, uhat, evolve):
         The stencil's A, P, Z1, Z2 on the rows k2 >= 0 (mann_stencil): A, Z1, Z2 [m^2/s], P [m/s].
     j0 : int
         The stencil slab of the batch's first slab.
-    k1 : ndarray, float32 (b,)
-        k1 of the slabs [rad/m].
-    k2 : ndarray, float32 (nyp,)
-        k2 of all rows [rad/m].
-    k3sq : ndarray, float32 (nzp,)
-        k3^2 [rad^2/m^2].
+    k1, k2, k3sq : ndarray, float32 (b,), (nyp,), (nzp,)
+        k1 of the slabs, k2 of all rows [rad/m], k3^2 [rad^2/m^2].
     uhat : ndarray, float32 (b, 3, nyp, 2 nzp)
         Output u_hat (complex64 viewed as float32) [m/s].
     evolve : bool

@@ -6,13 +6,9 @@ are taken in time order and the Fourier noise follows the exact Ornstein-Uhlenbe
 so <u_hat(k, t) u_hat^*(k, t + dt)> = exp(-|dt| / tau_e) Phi(k) dk = Theta(k, dt) dk (Guo et al. (2023)
 Eq. 13-14) for every pair of planes, whatever their spacing.
 
-Work per snapshot, slab-wise over k1 in fixed batches (the same batches for any thread count):
-noise (or OU update) -> u_hat = C n (compact factor and axis cells, see mann_stencil) -> Hermitian completion of
-the k1 = 0 / Nyquist slabs -> inverse FFT along k3, then along k2 only for the kept z columns -> crop to
-ny x nz -> store into a (ny nz, k1) buffer; then one real inverse FFT along k1 per component (kept
-points only), in fixed row blocks.
-Memory scales with one snapshot: the OU state (3 complex64 per half-spectrum point), the stencil,
-three cropped spectra and one output plane (two when one is written while the next is computed).
+Per snapshot, over k1 in fixed slab batches (the same for any thread count): noise (or OU update) -> u_hat = C n
+(mann_stencil) -> Hermitian completion of the k1 = 0 / Nyquist slabs -> inverse FFT along k3, then k2 on the kept
+columns -> crop to ny x nz; then one real inverse FFT along k1 per component. Memory scales with one snapshot.
 """
 
 from __future__ import annotations
@@ -34,8 +30,7 @@ from turbgen.synthesis.random_streams import complex_normal
 
 COMPONENTS = ("u", "v", "w")
 SLAB_BATCH = 4  # k1 slabs per work unit (fixed: it fixes the FFT plan shapes, hence the rounding)
-# slabs per task: SLAB_BATCH-slab units in turn, a stencil computed on demand for all of them at once (its
-# elementwise coefficients do not depend on the batch; fewer, larger calls hold the GIL less)
+# slabs per task: SLAB_BATCH-slab units in turn, an on-demand stencil's coefficients computed for all at once
 TASK_SLABS = 4 * SLAB_BATCH
 ROW_BLOCK = 64  # (y, z) rows per real inverse FFT along k1
 _ALIGN = 64
@@ -50,8 +45,7 @@ def _padded_nk1(nk1: int) -> int:
 def snapshot_memory_bytes(box: BoxShape, ny: int, nz: int, n_snapshots: int, threads: int, buffers: int = 1,
                           coefficients: bool = False) -> int:  # fmt: skip
     """Bytes allocated by the generator (stored stencil excluded): OU state, cropped spectra, output, scratch;
-    ``coefficients``: with the batches of a stencil computed on demand (float32 coefficients and the float64
-    temporaries of computing them, ~48 bytes per stored point of a batch)."""
+    ``coefficients``: with the batches of a stencil computed on demand."""
     slab = box.nyp * box.nzp
     state = 3 * box.nk1 * slab * 8 if n_snapshots > 1 else 0
     spectra = 3 * ny * nz * _padded_nk1(box.nk1) * 8
@@ -65,9 +59,8 @@ def snapshot_memory_bytes(box: BoxShape, ny: int, nz: int, n_snapshots: int, thr
 def hermitian_complete(slab: np.ndarray) -> None:
     """Make the (..., nyp, nzp) spectra of a k1 = 0 or Nyquist slab Hermitian, in place, keeping E|.|^2.
 
-    u_hat(k) <- (u_hat(k) + conj u_hat(-k)) / sqrt(2): with C(-k) = -C(k) this is the noise relation
-    n(-k) = -conj n(k); self-conjugate points become sqrt(2) Re u_hat (real, same variance). Without
-    it the real inverse FFT keeps only the Hermitian part, i.e. half the energy of these slabs.
+    u_hat(k) <- (u_hat(k) + conj u_hat(-k)) / sqrt(2) (the noise relation n(-k) = -conj n(k), as C(-k) = -C(k));
+    without it the real inverse FFT keeps half the energy of these slabs.
     """
     mirror = np.roll(slab[..., ::-1, ::-1], 1, axis=(-2, -1))  # u_hat(-k2, -k3), a copy
     np.conjugate(mirror, out=mirror)
@@ -91,8 +84,7 @@ class _Scratch:
         self.rho, self.sig = _aligned((2, b, box.nk2_half, nzp), np.float32)  # OU factors on the rows k2 >= 0
         self.rows = _aligned((ROW_BLOCK, nt), np.float32)
         self.staged = None  # rows re-strided for the transposing copy (allocated with the plans along k1)
-        # Pruned 2-D inverse transform: along z on all nyp rows, then along y only on the nz kept columns
-        # (3/4 of the full 2-D transform's work for pad-yz 2).
+        # pruned 2-D inverse transform: along z on all nyp rows, then along y only on the nz kept columns
         self._yz: dict[int, tuple[fft.Plan, fft.Plan]] = {}
         for n in {min(b, n_slabs), n_slabs % b} - {0}:
             view, kept = self.uhat[:n], self.uhat[:n, :, :, :nz]
@@ -119,9 +111,8 @@ class _Scratch:
 class MannSnapshots:
     """Generator of Mann space-time snapshots on one stencil, cropped to ny x nz.
 
-    ``threads`` only decides how many fixed work units run at once: the field is bit-identical
-    for any value (random streams per (seed, snapshot, slab), fixed batches and FFT plans). ``fft_backend``
-    (turbgen.fft; None: the current one) changes it at float32 round-off.
+    The field is bit-identical for any ``threads`` (random streams per (seed, snapshot, slab), fixed batches and
+    plans); ``fft_backend`` (turbgen.fft) changes it at float32 round-off.
     """
 
     def __init__(self, stencil: MannStencil, ny: int, nz: int, threads: int | None = None, buffers: int = 1,
@@ -153,21 +144,13 @@ class MannSnapshots:
     def generate(self, seed: int | None, times_s, addend=None, target=None) -> Iterator[tuple[int, str, np.ndarray]]:
         """Yield (plane index, component, field (nt, ny, nz) float32) for every plane and component.
 
-        ``times_s`` are the planes' relative times x/U [s] in storage order. Planes come in time
-        order, all three components of a plane before the next plane (frozen turbulence: the single
-        snapshot is yielded once per plane, component by component). The yielded array is a reused
-        buffer: consume it before asking for the next item. With ``buffers=2`` two buffers alternate,
-        so an array stays valid while the next item is produced (a background write of it must end
-        before the item after next is asked for).
+        ``times_s``: the planes' relative times x/U [s] in storage order; planes come in time order (frozen: the
+        single snapshot once per plane). The yielded array is a reused buffer: consume it before asking for the next
+        item (``buffers=2``: before the item after next).
 
-        ``addend(plane index, component index)``: cropped spectra (nk1, ny nz) complex64 (the layout of
-        turbgen.synthesis.conditioning.correction_blocks) added to the snapshot's before the transform along
-        k1, so the yielded field is the sample plus their unnormalised real inverse FFT (frozen: called for the
-        first plane only). ``seed=None`` (with an addend): no sample, the addend's field alone.
-
-        ``target(plane index, component index)``: the array (nt, ny, nz) float32, (y, z) contiguous, the field is
-        transformed into (e.g. its place in the caller's whole field: no copy) and which is yielded (frozen: the
-        first plane's, yielded for every plane).
+        ``addend(plane, component)``: cropped spectra (nk1, ny nz) complex64 (conditioning.correction_blocks) added
+        before the transform along k1; ``seed=None``: the addend's field alone. ``target(plane, component)``: the
+        (nt, ny, nz) float32 array, (y, z) contiguous, to transform into and yield.
         """
         times = np.asarray(times_s, dtype=float)
         order = [int(i) for i in np.argsort(times, kind="stable")]
@@ -204,10 +187,8 @@ class MannSnapshots:
         """Yield (snapshot number m in time order, cropped spectra (3, ny nz, n_slabs) complex64) of this
         stencil's slabs, for the snapshots at ``times_s`` in time order (frozen: one snapshot, m = 0).
 
-        The first pass of an out-of-core run: the same numbers as the whole-box generator holds in its
-        spectrum buffer before the transform along k1. The array is reused: consume it first. A generator made with
-        ``points`` keeps those only: (3, len(points), n_slabs), in two buffers that alternate: an array stays valid
-        while the next snapshot is made (e.g. measured in a thread meanwhile), until the one after is asked for.
+        The first pass of an out-of-core run (the whole-box generator's numbers before the transform along k1). The
+        array is reused: consume it first. With ``points``: (3, len(points), n_slabs) in two alternating buffers.
         """
         times = np.sort(np.asarray(times_s, dtype=float), kind="stable")
         frozen = self.stencil.params.evo_time_s is None
@@ -223,9 +204,8 @@ class MannSnapshots:
                 yield m, self._spectra[:, :, : self._n_slabs]
 
     def single_buffers(self, output: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
-        """Allocate now what a single snapshot uses and return it: (spectra, output plane), so a caller can touch that
-        fresh memory ahead of :meth:`generate` (writing them changes nothing: every value is written before it is
-        read). ``output=False`` (for :meth:`generate` with a ``target``): no output plane, None in its place."""
+        """Allocate what a single snapshot uses, (spectra, output plane or None), for a caller to touch ahead of
+        :meth:`generate` (every value is written before it is read)."""
         self._allocate(n_snapshots=1)
         if output and not self._outputs:
             self._outputs.append(self._fft.empty((self.box.nt, self.ny, self.nz), np.float32, _PAGE))
@@ -267,11 +247,9 @@ class MannSnapshots:
 
     def _transform(self, pool, c: int, single: bool, add: np.ndarray | None = None, sample: bool = True,
                    dest: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
-        """Component ``c`` of the current snapshot into the next of the output buffers; of a ``single`` snapshot
-        (no spectra follow), components 1 and 2 go into the spectra of components 0 and 1, transformed already,
-        so one output plane is allocated instead of two (every yielded plane stays valid as long as before).
-        ``add`` (nk1, ny nz): spectra added first (``sample=False``: taken instead of the snapshot's); ``dest``: the
-        output array instead of a buffer."""
+        """Component ``c`` of the current snapshot into the next output buffer (``single`` snapshot: components 1, 2
+        into the spectra of 0, 1, transformed already); ``add`` (nk1, ny nz) added first (``sample=False``: instead);
+        ``dest``: the output array instead of a buffer."""
         if dest is not None:
             out = dest
         elif single and c > 0:

@@ -1,7 +1,5 @@
 """The Mann (1998) synthesis stencil of one parameter set and grid: C(k) and 1/tau_e(k), stored compactly.
 
-The box, its half spectrum of k1 slabs and the sign of the stored k1: turbgen.synthesis.box_shape.
-
 Compact factor. With a = sqrt(E(k0)/(4 pi))/k0^2, m = k2 n0 - k1 n1 and C = D A (Mann 1998 Eq. 46-47;
 turbgen.theory.mann_tensor.tensor_factor) the product u_hat = C n reads
     u_hat_u = P n1 - (A k2) n2 + Z1 m,   u_hat_v = -P n0 + (A k1) n2 + Z2 m,   u_hat_w = W m
@@ -9,9 +7,8 @@ with A = a, P = a k30, Z1 = a zeta1, Z2 = a zeta2, all times sqrt(dk1 dk2 dk3 / 
 W = a k0^2/k^2 = (A^2 q + P^2) / (A k^2), q = k1^2 + k2^2, rebuilt when used. A, P, Z1 are even and Z2 odd under
 k2 -> -k2, so only rows k2 >= 0 are stored: 4 float32 numbers per (k1 >= 0, k2 >= 0, k3).
 
-``build_stencil`` makes a MannStencil whose energy is "scaled" (the float32 coefficients for ae) or "unit" (the
-float64 ae-free factors (e, k30, c1, c2), serving every ae bit-identically through :meth:`MannStencil.scaled`),
-stored in memory, computed on demand, or for some slabs only. No I/O here (turbgen.runs.stencil_cache).
+``build_stencil`` makes one "scaled" (float32, for ae) or "unit" (float64 ae-free factors, every ae through
+:meth:`MannStencil.scaled`), in memory, on demand, or for some slabs. No I/O here (turbgen.runs.stencil_cache).
 """
 
 from __future__ import annotations
@@ -40,13 +37,11 @@ _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0
 class MannStencil:
     """The stencil of ``params`` on ``box``; make it with :func:`build_stencil`.
 
-    ``energy`` "scaled": ``coef`` (4, slabs, nyp//2+1, nzp) float32 holds (A, P, Z1, Z2) for params.ae, or None
-    (computed on demand, :meth:`coefficients`); ``cell_index`` (ncell, 3) (slab, row, column), sorted by slab, and
-    ``cell_factor`` (ncell, 3, 3) float32 are the cell-averaged factors near the k1 axis, replacing the compact factor
-    there. ``energy`` "unit": ``coef`` float64 holds the ae-free factors of slab_factors, ``params`` carry ae = 1 and
-    there are no axis cells (their eigen-decomposition is not linear in ae to the last bit). ``inv_tau`` = 1/tau_e
-    [1/s] float32 on the same points (None: frozen or built non-evolving, single snapshots only). ``slab0``: the first
-    slab coef and inv_tau hold (a part of the box: out-of-core runs).
+    ``energy`` "scaled": ``coef`` (4, slabs, nyp//2+1, nzp) float32 holds (A, P, Z1, Z2) for params.ae (None:
+    computed on demand); ``cell_index`` (ncell, 3) (slab, row, column), sorted by slab, and ``cell_factor`` (ncell, 3,
+    3) float32 are the cell-averaged factors near the k1 axis. "unit": ``coef`` float64 holds the ae-free factors,
+    ``params`` carry ae = 1, no axis cells (not linear in ae to the last bit). ``inv_tau`` = 1/tau_e [1/s] float32
+    (None: single snapshots only). ``slab0``: the first slab held (a part of the box: out-of-core runs).
     """
 
     params: MannParams
@@ -64,12 +59,8 @@ class MannStencil:
         return self.slab0, self.box.nk1 if self.coef is None else self.slab0 + self.coef.shape[1]
 
     def coefficients(self, i0: int, i1: int, scratch: np.ndarray | None = None) -> tuple[np.ndarray, int]:
-        """(A, P, Z1, Z2) of slabs [i0, i1): an array (4, slabs, nyp//2+1, nzp) float32 holding them and slab i0's index
-        in it.
-
-        ``coef`` itself or, on demand, ``scratch`` with the slabs computed by the operations build_stencil uses (the
-        same numbers whatever the batch). ValueError for a unit stencil (scale it first).
-        """
+        """(A, P, Z1, Z2) of slabs [i0, i1): (``coef``, or on demand ``scratch`` computed as build_stencil does, slab
+        i0's index in it). ValueError for a unit stencil (scale it first)."""
         if self.energy != "scaled":
             raise ValueError("a unit stencil has no coefficients: use its scaled(params)")
         if self.coef is not None:
@@ -85,10 +76,8 @@ class MannStencil:
     def scaled(self, params: MannParams) -> "MannStencil":
         """The stencil of ``params`` (ae [m^(4/3) s^-2] included) in memory.
 
-        From a unit stencil: its factors times the energy by the float64 operations of a direct build (apply_energy),
-        rounded to float32, so equal to build_stencil(params, box) bit for bit (sharing inv_tau); the axis cells
-        computed for ``params``. A scaled stencil returns itself. ValueError if ``params`` differ in more than ae
-        (scaled: at all).
+        From a unit stencil by the float64 operations of a direct build: build_stencil(params, box) bit for bit. A
+        scaled stencil returns itself. ValueError if ``params`` differ in more than ae (scaled: at all).
         """
         if self.energy == "scaled":
             if params != self.params:
@@ -119,9 +108,7 @@ def synthesis_box(run) -> BoxShape:
 
 
 def stencil_nbytes(box: BoxShape, with_tau: bool, energy: str = "scaled") -> int:
-    """Bytes [B] of the stencil of ``box`` in memory: four float32 coefficients ("scaled") or float64 factors ("unit")
-    per stored point, and float32 1/tau_e if ``with_tau``.
-    """
+    """Bytes [B] of the stencil of ``box`` in memory (``energy`` "scaled" or "unit", 1/tau_e if ``with_tau``)."""
     per = box.nk1 * box.nk2_half * box.nzp
     return per * ((16 if energy == "scaled" else 32) + (4 if with_tau else 0))
 
@@ -139,10 +126,7 @@ def expand_k2(half: np.ndarray, nyp: int, odd: bool, out: np.ndarray) -> np.ndar
 
 
 def w_coefficient(a, p, q, ksq, out, scratch):
-    """W = a k0^2 / k^2 = (A^2 q + P^2) / (A k^2) into ``out`` (0 where A k^2 = 0: there m = 0).
-
-    ``q`` = k1^2 + k2^2 and ``ksq`` = |k|^2 broadcast against ``a``; ``scratch`` like ``out``.
-    """
+    """W = a k0^2 / k^2 = (A^2 q + P^2) / (A k^2) into ``out`` (0 where A k^2 = 0), q = k1^2 + k2^2, ``ksq`` = |k|^2."""
     np.multiply(a, a, out=out)
     out *= q
     np.multiply(p, p, out=scratch)
@@ -159,9 +143,8 @@ def build_step(box: BoxShape) -> int:
 
 
 def slab_batches(box: BoxShape, first: int, end: int, batch, side=None):
-    """Call ``batch(i0, i1)`` on the building batches cut to [first, end) on all cores; return ``side()`` (None if not
-    given), run in the same pool alongside (the axis cells: mostly Python, overlapping the GIL-free batches).
-    """
+    """Call ``batch(i0, i1)`` on the building batches cut to [first, end) on all cores; return ``side()``, run
+    alongside in the same pool (None if not given)."""
     step = build_step(box)
 
     def one(i0: int) -> None:  # independent slab batches: threads only change who computes which
@@ -224,10 +207,10 @@ def build_stencil(
     box : BoxShape
         The synthesis box.
     energy : {"scaled", "unit"}
-        "scaled": float32 coefficients for ``params``' ae with the axis cells; "unit": the ae-free float64 factors, for
-        every ae through MannStencil.scaled (twice the bytes).
+        "scaled": float32 coefficients for ``params``' ae with the axis cells; "unit": the ae-free float64 factors,
+        for every ae through MannStencil.scaled.
     storage : {"memory", "on_demand"}
-        "on_demand" (scaled, whole box, implies evolving=False): only the axis cells now, the coefficients when used.
+        "on_demand" (scaled, whole box, not evolving): only the axis cells now, the coefficients when used.
     evolving : bool
         False skips 1/tau_e: enough for a single snapshot.
     slabs : (int, int), optional
@@ -236,12 +219,6 @@ def build_stencil(
         (cell_index, cell_factor) of axis_cells, computed once for many parts (scaled only).
     factors : numpy.ndarray, optional
         A float64 array (4, slabs, nyp//2+1, nzp) to hold a unit stencil's factors.
-
-    Raises
-    ------
-    ValueError
-        For an unknown ``energy`` or ``storage``, an on-demand stencil that is unit or partial, or ``factors`` of the
-        wrong shape or type.
     """
     if energy not in ENERGIES or storage not in STORAGES:
         raise ValueError(f"energy must be one of {ENERGIES} and storage one of {STORAGES} (got {energy}, {storage})")

@@ -1,18 +1,13 @@
 """Counter-keyed complex Gaussian noise: one independent stream per key -- (seed, snapshot, k1-slab) for
 Mann fields, (seed, component, plane, frequency chunk) for Kaimal fields.
 
-The stream of a slab depends only on its key, never on call order, chunking or threads, so a
-field is bit-identical however the work is split. Exactly (so other tools can reproduce a field): the n
-complex values of key ``key`` are
+A stream depends only on its key, never on call order, chunking or threads. The n complex values of ``key`` are
 
     numpy.random.Generator(numpy.random.SFC64(numpy.random.SeedSequence(key)))
         .standard_normal(2 n, dtype=numpy.float32).view(numpy.complex64)
 
-(real and imaginary parts interleaved, filled in C order of ``out``; the first m values of a longer stream
-are the stream of m values): numpy's SFC64 seeded by SeedSequence, and numpy's float32 Ziggurat
-(Marsaglia & Tsang 2000, 256 layers; exact sampling of N(0, 1) at float32 resolution). The compiled
-kernels (turbgen.synthesis.sfc64, turbgen.synthesis.ziggurat_normals) produce these bits inside compiled
-loops, where numpy's generator cannot be called (tested equal to numpy's bit for bit).
+(real and imaginary parts interleaved, in C order of ``out``), produced by compiled kernels
+(turbgen.synthesis.sfc64, turbgen.synthesis.ziggurat_normals) tested equal to numpy's bit for bit.
 """
 
 from __future__ import annotations
@@ -38,9 +33,8 @@ def complex_normal(seed: int, snapshot: int, slab: int, out: np.ndarray) -> np.n
 def keyed_complex_normal(key: tuple[int, ...], out: np.ndarray) -> np.ndarray:
     """Fill complex64 ``out`` (C-contiguous, any shape) in C order with the standard complex normals of stream ``key``.
 
-    ``key`` is any fixed tuple of non-negative integers naming the stream, never a call counter. Real and imaginary
-    parts are independent N(0, 1) (E|n|^2 = 2), the values of the module docstring's formula. ValueError if ``out`` is
-    not C-contiguous complex64 or an entry of ``key`` is negative.
+    ``key``: a fixed tuple of non-negative integers naming the stream. Real and imaginary parts are independent
+    N(0, 1) (E|n|^2 = 2).
     """
     if out.dtype != np.complex64 or not out.flags.c_contiguous:
         layout = "C-contiguous" if out.flags.c_contiguous else "non-contiguous"

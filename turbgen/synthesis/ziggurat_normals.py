@@ -1,16 +1,11 @@
 """float32 standard normals of one keyed SFC64 stream by the Ziggurat method, compiled (numba).
 
 The values equal numpy's ``Generator(SFC64(SeedSequence(key))).standard_normal(n, dtype=np.float32)``
-bit for bit (tested), inside compiled loops (numpy's generator cannot be called there). The algorithm (numpy's ``random_standard_normal_f``)
-is the Ziggurat method of Marsaglia & Tsang (2000, "The Ziggurat Method for Generating Random Variables",
-J. Stat. Softw. 5(8)) with 256 layers: each value takes one 32-bit word u of the stream (the low then the
-high half of each 64-bit SFC64 output): layer i = u & 255, sign bit (u >> 8) & 1, 23-bit magnitude
-m = u >> 9, x = m w_i; x is returned when m < k_i (98.5 % of words); otherwise the wedge of layer i is
-tested with one further word, or for i = 0 the tail beyond r is sampled by Marsaglia's exact method
-(Marsaglia & Tsang 2000, section "The tail"), and on rejection the draw restarts with a new word.
-The tables w_i, k_i, f_i come from r = 3.6541528853610088 and the layer area v = 4.92867323399e-3
-(Marsaglia & Tsang 2000, 256-layer constants) by their recursion, computed here at import in float64 and
-rounded to float32 / uint32 (k_i to nearest) -- they equal numpy's ``ziggurat_constants.h`` tables.
+bit for bit (tested), inside compiled loops. The algorithm (numpy's ``random_standard_normal_f``) is the 256-layer
+Ziggurat of Marsaglia & Tsang (2000, J. Stat. Softw. 5(8)): each value takes one 32-bit word u (low, then high half
+of each SFC64 output): layer i = u & 255, sign (u >> 8) & 1, x = (u >> 9) w_i, returned when u >> 9 < k_i; else
+the wedge (or for i = 0 the tail, by Marsaglia's exact method) is tested, and on rejection the draw restarts. The
+tables come from r = 3.6541528853610088 and v = 4.92867323399e-3 by their recursion, equal to numpy's.
 """
 
 from __future__ import annotations

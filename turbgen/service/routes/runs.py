@@ -26,8 +26,7 @@ async def submit(request: Request, state: ServiceState = Depends(get_state)):
     """Submit a run config (the JSON `turbgen mann|kaimal --config` takes, plus "model" and "preset"; a Mann run's
     ``constrain`` names measurements uploaded with POST /constraints by id)."""
     body = await read_json(request)
-    # in a thread: building a run computes its energy level (numba compiles on a cold start) and submitting writes
-    # to the catalog; on the event loop that held every other request, whose body timers then expired (issue 37)
+    # in a thread: building a run may compile (numba) and submitting writes; on the event loop it held every request
     rid, submitted = await run_in_threadpool(_accept, body, state)
     code = 200 if submitted == "complete" else 202
     return JSONResponse({"id": rid, "submitted": submitted, **links(rid)}, status_code=code)
