@@ -27,19 +27,7 @@ def temp_name(path: Path) -> Path:
 def write_file(path: Path, data: str | bytes) -> None:
     """Write ``data`` to ``path`` whole or not at all: a temporary sibling, fsync, then a rename over ``path``.
 
-    The file gets an ordinary file's mode (0o666 less the umask) and a reader never sees it half written.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The file to (re)place; its folder must exist.
-    data : str or bytes
-        Its content (str is written as UTF-8, newlines unchanged).
-
-    Raises
-    ------
-    OSError
-        When the file cannot be written; the temporary is removed and ``path`` is untouched.
+    Mode 0o666 less the umask; a str is written as UTF-8. OSError when it cannot be written (``path`` untouched).
     """
     tmp = temp_name(path)
     try:

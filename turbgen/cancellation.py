@@ -1,11 +1,8 @@
 """Cooperative cancellation of turbgen's writers: the application asks, the writers check before they publish.
 
-Writers (field stores, exports) work under temporary names and publish atomically, so an exception that
-leaves their ``with`` block publishes nothing. An application that stops a run (the command line on a
-signal, :mod:`turbgen.interruption`) also calls :func:`request_stop`, and every writer calls
+An application that stops a run (:mod:`turbgen.interruption`) calls :func:`request_stop`, and every writer calls
 :func:`raise_if_stop_requested` just before publishing, so an interruption swallowed on its way up (in a
-``__del__``, a weakref callback, a library's ``except``) still publishes nothing. The library installs no
-handler of any kind.
+``__del__``, a weakref callback, a library's ``except``) still publishes nothing.
 """
 
 from __future__ import annotations

@@ -1,13 +1,7 @@
-"""User-facing errors and the single place where scalar inputs are checked.
+"""User-facing errors (one line each) and the single place where scalar inputs are checked.
 
-Errors by meaning, all :class:`TurbgenError` (one line for the user):
-
-* :class:`ParameterError` (a ``ValueError``): a bad input value, naming it and the allowed range;
-* :class:`StoreError`: a path that is not a complete, readable store (or would be overwritten).
-
-Messages name the run's fields (``nt``, ``overwrite``, ...), written in backquotes where they tell
-the user what to change (e.g. "lower `nt`"); each front end spells them its own way (the CLI as
-options, ``--nt``) and maps the error classes to its exit codes.
+Messages name the run's fields in backquotes where they tell the user what to change (e.g. "lower `nt`"); each
+front end spells them its own way (the CLI as ``--nt``) and maps the error classes to its exit codes.
 """
 
 from __future__ import annotations

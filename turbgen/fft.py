@@ -1,16 +1,11 @@
 """The FFT seam: every transform turbgen makes goes through the backend this module selects (docs/fft.md).
 
-A backend (:class:`FFTBackend`) gives ``empty(shape, dtype, align)``, aligned buffers (so the plans'
-rounding does not depend on where an allocation fell); ``plan(kind, inp, out, axis)``, an unnormalised
-single-threaded transform along one axis (FFTW's conventions), made once and executed many times, one
-plan set per worker thread, so the field is the same for any thread count; and ``oneshot``, scipy.fft's
-functions for transforms made once. Built in: ``pyfftw`` (the default; one-shot transforms by
-scipy.fft) and ``scipy``; others are added with :func:`register`.
-
-The backend is :func:`use`'s (``--fft-backend``, ``fft_backend=``), else ``TURBGEN_FFT_BACKEND``'s,
-else ``pyfftw``; a selection holds for the whole process while its call runs (a run's work hops between
-threads), so two calls asking for different backends at once are refused. It changes a field at
-float32 round-off only.
+A backend (:class:`FFTBackend`) gives ``empty(shape, dtype, align)``, aligned buffers (so the plans' rounding
+does not depend on where an allocation fell); ``plan(kind, inp, out, axis)``, an unnormalised single-threaded
+transform along one axis (FFTW's conventions), one plan set per worker thread, so the field is the same for any
+thread count; and ``oneshot``, scipy.fft's functions. Built in: ``pyfftw`` (default) and ``scipy``; others via
+:func:`register`. A selection (:func:`use`) holds for the whole process while its call runs (a run's work hops
+between threads), so two calls asking for different backends at once are refused.
 """
 
 from __future__ import annotations

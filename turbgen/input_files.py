@@ -5,9 +5,6 @@ Rule: a regular file (or a link to one) of at most a size cap per kind. A FIFO, 
 directory is refused before anything is read (opened non-blocking, checked on the descriptor), and so
 is a larger file (at most cap + 1 bytes are read, so neither /dev/zero nor a growing file can exhaust
 memory): one ParameterError line naming the path and the rule.
-
-    text = read_input(path, CONFIG)                # bytes
-    check_input(path, LINE_OF_SIGHT)                  # the checks only, for a reader of its own (numpy, zarr)
 """
 
 from __future__ import annotations

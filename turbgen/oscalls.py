@@ -1,10 +1,8 @@
 """The operating-system calls that only some systems have (Linux), each with its portable fallback, in one place.
 
-renameat2(2) (atomic publication without clobbering, or swapping outputs), fallocate(2) (a full disk met
-when the space is asked for, not in the middle of a library's write), reads of /proc and
-/sys/fs/cgroup, statvfs(2) and O_DIRECT; where missing, each function says so (False, None, 0) or gives
-the portable answer. ``TURBGEN_PORTABLE=1`` (read at every call) forces the fallbacks, so the portable
-paths are exercised on Linux too (tests/store/test_portable.py).
+renameat2(2), fallocate(2) (a full disk met when the space is asked for, not mid-write), /proc and
+/sys/fs/cgroup, statvfs(2) and O_DIRECT; where missing, each function says so (False, None, 0) or gives the
+portable answer. ``TURBGEN_PORTABLE=1`` (read at every call) forces the fallbacks (tested on Linux too).
 """
 
 from __future__ import annotations
@@ -135,10 +133,8 @@ def cgroup_headroom_bytes(root: Path = CGROUP_ROOT) -> int | None:
     """Limit minus usage of this process's memory cgroup (v2, then v1) [bytes], or None if unlimited or unknown."""
     if portable():
         return None
-    for limit_file, usage_file in (
-        ("memory.max", "memory.current"),
-        ("memory/memory.limit_in_bytes", "memory/memory.usage_in_bytes"),
-    ):
+    for limit_file, usage_file in (("memory.max", "memory.current"),
+                                   ("memory/memory.limit_in_bytes", "memory/memory.usage_in_bytes")):
         limit, usage = _read_int(root / limit_file), _read_int(root / usage_file)
         if limit is not None and usage is not None and limit < 2**60:  # v1 reports "no limit" as ~2^63
             return max(limit - usage, 0)

@@ -1,10 +1,4 @@
-"""Available memory and disk space, and the checks made before anything large is allocated or written.
-
-    require_memory(nbytes, "the Mann snapshot (4096 x 128 x 128, 3 components)", "lower `nt` or `pad_yz`")
-    require_disk(out, nbytes, "the store (4096 x 5 x 64 x 64)", "free space or choose another `out`")
-
-raise ParameterError (CLI: one line, exit 2) when ``nbytes`` exceed the available memory / free disk.
-"""
+"""Available memory and disk space, and the checks (ParameterError) before anything large is allocated or written."""
 
 from __future__ import annotations
 
@@ -59,10 +53,8 @@ def require_memory(nbytes: int, what: str, hint: str) -> int | None:
     """
     available = available_memory_bytes()
     if available is not None and nbytes > available:
-        raise ParameterError(
-            f"{what} needs about {format_bytes(nbytes)} of memory but only {format_bytes(available)} "
-            f"is available; {hint}"
-        )
+        raise ParameterError(f"{what} needs about {format_bytes(nbytes)} of memory but only {format_bytes(available)} "
+                             f"is available; {hint}")
     return available
 
 
@@ -85,10 +77,8 @@ def require_disk(path, nbytes: int, what: str, hint: str) -> int | None:
     free = available_disk_bytes(path)
     if free is not None and nbytes > free:
         where = Path(path).expanduser().absolute()
-        raise ParameterError(
-            f"{what} needs about {format_bytes(nbytes)} of disk space but only {format_bytes(free)} "
-            f"is free at {where.parent if not where.is_dir() else where}; {hint}"
-        )
+        raise ParameterError(f"{what} needs about {format_bytes(nbytes)} of disk space but only {format_bytes(free)} "
+                             f"is free at {where.parent if not where.is_dir() else where}; {hint}")
     return free
 
 

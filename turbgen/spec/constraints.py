@@ -1,7 +1,5 @@
 """Constraint files: measured point time series a field is conditioned on (schemas/constraints.schema.json).
 
-    series = load_point_series("mast.json")
-
 A file holds sample times (physical time [s] from the start of the field, any rate) and sensors at
 (x, y, z) (z from the hub, or height above ground) with any of u, v, w [m/s], null for missing (NaN
 here). With ``total_wind`` the data hold the total wind, whose mean (the exports' MeanWind, or the

@@ -57,24 +57,9 @@ KAIMAL_GRID = {"nt": 4096, "dt_s": 0.5, "x_m": DEFAULT_PLANES_M, "ny": 31, "nz":
 def grid_from_mapping(given: Mapping | Grid | None, defaults: Mapping) -> Grid:
     """The grid of a run mapping's ``grid`` table: missing keys take ``defaults``; dz_m defaults to dy_m.
 
-    Parameters
-    ----------
-    given : Mapping or Grid or None
-        The ``grid`` table (keys nt, dt_s [s], x_m [m upstream], ny, nz, dy_m [m], dz_m [m]), a Grid
-        (returned as is), or None (all defaults).
-    defaults : Mapping
-        The model's default grid (MANN_GRID or KAIMAL_GRID, without dz_m).
-
-    Returns
-    -------
-    Grid
-        The grid (sizes and spacings of a mapping checked against turbgen.theory.ranges, so a refusal names the
-        run's range, not the store grid's looser one; the run classes check the planes).
-
-    Raises
-    ------
-    ParameterError
-        If a size or spacing is outside its range, or the plane positions are empty or contain a duplicate.
+    ``given`` is the ``grid`` table (nt, dt_s [s], x_m [m upstream], ny, nz, dy_m, dz_m [m]), a Grid (returned as
+    is) or None; ``defaults`` MANN_GRID or KAIMAL_GRID. Sizes and spacings are checked against the run's ranges
+    (turbgen.theory.ranges), not the store grid's looser ones: ParameterError.
     """
     if isinstance(given, Grid):
         return given

@@ -28,10 +28,8 @@ class DlcSet:
 
     Parameters
     ----------
-    dlc : str
-        "1.1", "1.2" (NTM) or "1.3" (ETM).
-    iec_class : str
-        Turbine class and turbulence category, e.g. "IIB".
+    dlc, iec_class : str
+        "1.1", "1.2" (NTM) or "1.3" (ETM); turbine class and turbulence category, e.g. "IIB".
     v_in_m_s, v_out_m_s : float
         Cut-in and cut-out hub speeds [m/s], 0.5 <= V_in <= V_out <= V_ref.
     seeds : tuple of int

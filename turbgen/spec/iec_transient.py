@@ -45,10 +45,8 @@ class IecTransient:
 
     Parameters
     ----------
-    kind : str
-        "EOG", "EDC", "ECD", "EWS-V" (vertical shear) or "EWS-H" (horizontal shear).
-    iec_class : str
-        Turbine class and turbulence category, e.g. "IIB".
+    kind, iec_class : str
+        "EOG", "EDC", "ECD", "EWS-V" or "EWS-H" (vertical / horizontal shear); turbine class and category, e.g. "IIB".
     V_hub_m_s : float
         Hub-height mean speed [m/s], in (0, V_ref] (below V_e1 = 1.12 V_ref: the EOG gust is positive).
     hub_height_m, rotor_diameter_m : float
@@ -147,14 +145,11 @@ class IecTransient:
         return np.unique(np.concatenate([[0.0], event, [self.duration_s]]))
 
     def at(self, t_s) -> dict:
-        """The event at times ``t_s`` [s] of the record (the event's clock is t - start).
+        """The event at times ``t_s`` [s] of the record (the event's clock is t - start), zero where it has none.
 
-        Returns
-        -------
-        dict
-            "gust_m_s": speed change uniform over the rotor [m/s] (EOG, ECD); "direction_deg": direction
-            clockwise seen from above, as InflowWind (EDC, ECD); "vshear_m_s", "hshear_m_s": speed change
-            across one diameter, times (z - z_hub) / D or y / D (EWS-V, EWS-H); zero where the event has none.
+        "gust_m_s": speed change uniform over the rotor [m/s] (EOG, ECD); "direction_deg": clockwise seen from
+        above, as InflowWind (EDC, ECD); "vshear_m_s", "hshear_m_s": speed change across D, times (z - z_hub) / D
+        or y / D (EWS-V, EWS-H).
         """
         tau = np.asarray(t_s, dtype=float) - self.start_s
         zero = np.zeros_like(tau)

@@ -1,10 +1,7 @@
 """What a Mann space-time run is: parameters + grid + seed (Guo et al. 2023, Sect. 2.3.1), apart from how it runs.
 
-    run = MannRun.from_mapping({"length_scale_m": 49, "gamma": 3.1, "evo_time_s": 400})
-
-``from_mapping`` reads a run file / request / preset mapping (schemas/mann-run.schema.json) with the
-defaults; ``to_attrs`` / ``from_attrs`` write and read the store attributes; turbgen.runs.mann
-generates the field. Values are checked against turbgen.theory.ranges.
+``from_mapping`` reads a run file / request / preset mapping (schemas/mann-run.schema.json); ``to_attrs`` /
+``from_attrs`` write and read the store attributes. Values are checked against turbgen.theory.ranges.
 """
 
 from __future__ import annotations
@@ -36,16 +33,10 @@ class MannRun:
 
     Parameters
     ----------
-    params : MannParams
-        Mann parameters (ae, L, Gamma, lifetimes, evolution time gamma [s]).
-    grid : Grid
-        Planes x_m [m upstream], nt samples dt_s [s] apart (dx = U dt), ny x nz points dy_m, dz_m [m].
-    U_m_s : float
-        Mean wind speed [m/s].
-    seed : int
-        Random seed.
-    hub_height_m : float, optional
-        Hub height [m] (metadata for exports).
+    params, grid : MannParams, Grid
+        Mann parameters and the run's grid (dx = U dt).
+    U_m_s, seed, hub_height_m : float, int, float
+        Mean wind speed [m/s], random seed, hub height [m] (metadata for exports).
     pad_yz : int, optional
         The synthesis box is pad_yz times wider in y and z than the output (cropped).
     ae_from : str, optional
@@ -76,11 +67,7 @@ class MannRun:
         return self.grid.x() / self.U_m_s
 
     def parameters(self) -> dict:
-        """The keys of the run mapping that rebuild this run with its grid, ae_from included.
-
-        ae [m^(4/3) s^-2], length_scale_m [m], gamma [-], lifetime, factor1/2 [-], evo_time_s [s] (None:
-        frozen), U_m_s [m/s], seed, hub_height_m [m], pad_yz, ae_from.
-        """
+        """The keys of the run mapping that rebuild this run with its grid, ae_from included (units: ``UNITS``)."""
         p = self.params
         return {
             "ae": p.ae, "length_scale_m": p.length_scale_m, "gamma": p.gamma, "lifetime": p.lifetime,
@@ -89,21 +76,12 @@ class MannRun:
         }  # fmt: skip
 
     def to_attrs(self) -> dict:
-        """The store attributes (model, parameters, derived, units, seed, U_m_s, hub_height_m; not the grid).
-
-        ``parameters`` holds the inputs, ``derived`` what was worked out from them (``ae_from``).
-        """
+        """The store attributes (model, parameters, derived ``ae_from``, units, seed, U_m_s, hub_height_m)."""
         params = self.parameters()
         derived = {key: params.pop(key) for key in DERIVED_KEYS}
-        return {
-            "model": "mann",
-            "parameters": params,
-            "derived": derived,
-            "units": {k: UNITS[k] for k in (*params, *derived)},
-            "seed": self.seed,
-            "U_m_s": self.U_m_s,
-            "hub_height_m": self.hub_height_m,
-        }
+        return {"model": "mann", "parameters": params, "derived": derived,
+                "units": {k: UNITS[k] for k in (*params, *derived)}, "seed": self.seed, "U_m_s": self.U_m_s,
+                "hub_height_m": self.hub_height_m}
 
     @classmethod
     def from_attrs(cls, attrs: Mapping) -> "MannRun":

@@ -69,11 +69,8 @@ class MeanWind:
 
     Parameters
     ----------
-    profile : str
-        "power" (``shear_exponent`` in [-1, 1]), "log" (``roughness_m`` > 0, ``displacement_m`` >= 0)
-        or "table" (the ``table_*`` columns).
-    shear_exponent, roughness_m, displacement_m : float
-        Power-law alpha [-]; log-law z0 and d [m].
+    profile, shear_exponent, roughness_m, displacement_m : str, float
+        "power" (alpha [-] in [-1, 1]), "log" (z0 > 0 and d >= 0 [m]) or "table" (the ``table_*`` columns).
     table_heights_m, table_speeds_m_s, table_directions_deg : tuple of float
         Heights above ground [m] (> 0, strictly increasing), speeds [m/s] (>= 0; only the ratio to hub
         height counts) and optionally directions [deg] (veer = direction(h) - direction(hub)).
@@ -86,12 +83,6 @@ class MeanWind:
         Where the table and the history came from (a file name), for descriptions.
     transient : IecTransient, optional
         An IEC 61400-1 transient on the mean (the store's V_hub and hub height); excludes a history.
-
-    Raises
-    ------
-    ParameterError
-        For a value outside its range, columns not increasing or of different lengths, or parameters of
-        another profile.
     """
 
     profile: str = "power"
@@ -237,6 +228,14 @@ class MeanWind:
         ev = self.transient.at(t)
         return ev["gust_m_s"], ev["vshear_m_s"], ev["hshear_m_s"]
 
+    def _added(self, t, y_m, h, U_m_s: float, hub_height_m: float):
+        """(U_hub(t) r(h), g + s_v (h - h_hub) / D + s_h y / D) [m/s] and the turn [deg] of the module's formula."""
+        speed, turn = self.hub_history(t, U_m_s)
+        gust, vshear, hshear = self.transient_terms(t)
+        diameter = self.transient.rotor_diameter_m if self.transient is not None else 1.0
+        shift = gust + vshear * (h - hub_height_m) / diameter + hshear * np.asarray(y_m, dtype=float) / diameter
+        return speed * self.speed_ratio(h, hub_height_m), shift, turn
+
     def full_uv(self, u, v, times_s, y_m, heights_m, U_m_s: float, hub_height_m: float):
         """Full (u, v) [m/s] from fluctuations by the module's formula (v unchanged without a turn).
 
@@ -249,12 +248,10 @@ class MeanWind:
         U_m_s, hub_height_m : float
             The store's mean speed [m/s] and hub height [m].
         """
-        t, h = np.asarray(times_s, dtype=float), np.asarray(heights_m, dtype=float)
-        speed, turn = self.hub_history(t, U_m_s)
-        gust, vshear, hshear = self.transient_terms(t)
-        diameter = self.transient.rotor_diameter_m if self.transient is not None else 1.0
-        u = u + speed * self.speed_ratio(h, hub_height_m)
-        u = u + (gust + vshear * (h - hub_height_m) / diameter + hshear * np.asarray(y_m, dtype=float) / diameter)
+        h = np.asarray(heights_m, dtype=float)
+        profile, shift, turn = self._added(np.asarray(times_s, dtype=float), y_m, h, U_m_s, hub_height_m)
+        u = u + profile
+        u = u + shift
         if not self.turns:
             return u, v
         return formulas.rotate_horizontal(u, v, self.veer_deg(h, hub_height_m) + turn)
@@ -264,14 +261,12 @@ class MeanWind:
 
         ``v`` may be None when the mean wind does not turn (then returned as given).
         """
-        t, h = np.asarray(times_s, dtype=float), np.asarray(heights_m, dtype=float)
-        speed, turn = self.hub_history(t, U_m_s)
+        h = np.asarray(heights_m, dtype=float)
+        profile, shift, turn = self._added(np.asarray(times_s, dtype=float), y_m, h, U_m_s, hub_height_m)
         if self.turns:
             u, v = formulas.rotate_horizontal(u, v, -(self.veer_deg(h, hub_height_m) + turn))
-        gust, vshear, hshear = self.transient_terms(t)
-        diameter = self.transient.rotor_diameter_m if self.transient is not None else 1.0
-        u = u - speed * self.speed_ratio(h, hub_height_m)
-        u = u - (gust + vshear * (h - hub_height_m) / diameter + hshear * np.asarray(y_m, dtype=float) / diameter)
+        u = u - profile
+        u = u - shift
         return u, v
 
     def check_record(self, first_s: float, last_s: float) -> None:

@@ -96,23 +96,9 @@ def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | N
                            history=None, transient=None, *, inline: bool = False) -> MeanWind | None:
     """The MeanWind of the export options, or None when none is given (the exports' default power law).
 
-    Parameters
-    ----------
-    profile : str, optional
-        ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``.
-    veer_deg_per_m : float, optional
-        Linear veer rate [deg/m].
-    history : str or os.PathLike, optional
-        CSV of t [s], U [m/s] [, direction (deg)] at hub height.
-    transient : IecTransient, optional
-        An IEC transient to superimpose.
-    inline : bool, optional
-        The table and the history hold their rows (``a,b[,c];...``), not file names.
-
-    Raises
-    ------
-    ParameterError
-        For a malformed option, an unreadable file or values outside their ranges.
+    ``profile`` as :func:`profile_fields`, ``veer_deg_per_m`` [deg/m], ``history`` a CSV of t [s], U [m/s]
+    [, direction (deg)] at hub height, ``transient`` an IecTransient; with ``inline`` the table and history hold
+    their rows (``a,b[,c];...``). ParameterError for a malformed option, unreadable file or value out of range.
     """
     if profile is None and veer_deg_per_m is None and history is None and transient is None:
         return None

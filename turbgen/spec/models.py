@@ -1,29 +1,15 @@
-"""The model registry: the one place where a turbulence model declares every part of it.
+"""The model registry: the one place where a turbulence model (``mann``, ``kaimal``) declares every part of it.
 
-A model (``mann``, ``kaimal``) is one :class:`ModelDeclaration` in :data:`DECLARATIONS`: its run spec, run schema,
-options, command, run (memory, out of core, shared part), synthesis, the validator's theory and the lidar preview
-theories. Every part but the name and the schema is a reference ``"turbgen.<layer>.<module>:<attribute>"``: the
-registry imports nothing (``turbgen --help`` reads it without numpy).
+Each part but the name and schema is a reference ``"turbgen.<layer>.<module>:<attribute>"``, so the registry imports
+nothing (``turbgen --help`` reads it without numpy) and sits low enough for every layer to read (the store checks a
+store's ``model``). :func:`resolve` imports a reference only from the layer its caller names (its own or one below:
+the validator asks for ``"validation"``, the lidar for ``"virtual_lidar"``, the runs for ``"spec"`` and ``"runs"``),
+so a declaration pointing into the wrong layer fails at once and no lower layer reaches up through the registry
+(tests/spec/test_models.py resolves every reference from its layer).
 
-Why references. The layers import downwards only (cli/service/sweep -> api -> runs -> lidar -> validate|export ->
-store -> synthesis -> spec -> theory; import-linter checks it). The registry must sit where every reader can see it
-(the store checks a store's ``model`` attribute; spec is below it), so it cannot import the layers above. A
-reference is resolved by :func:`resolve` with the layer it must lie in, named by the caller, which is that layer or
-one above it: the validator asks for ``"validation"`` references, the lidar for ``"virtual_lidar"`` ones, the runs for
-``"spec"`` and ``"runs"`` ones. :func:`resolve` refuses a reference outside the layer named, so a declaration that
-points into the wrong layer fails at once, and a lower layer never reaches up through the registry
-(tests/spec/test_models.py resolves every reference of every declaration from its layer). The readers are:
-
-* turbgen.store.layout ``MODELS`` (the store's ``model`` attribute): the names;
-* turbgen.runs.models ``MODELS`` / ``get_model`` (sweeps, the service): ``runner``;
-* turbgen.validation.expectations ``theory_for``: ``validator_theory``;
-* turbgen.virtual_lidar.preview ``MODELS`` / ``preview_spectra`` and turbgen.virtual_lidar.report: ``preview`` and ``store_preview``;
-* turbgen.cli ``COMMANDS``: ``command``; turbgen.api.keywords: ``options``.
-
-A further model is one declaration here (the one existing file it edits) plus six files of its own: spec (its run
-class), schema, synthesis, runs (its Model), validate (its theory) and cli (its command). Lidar previews are optional
-(None: ``turbgen lidar`` refuses its stores in one line); its one-call ``turbgen.<name>()`` is a function of
-turbgen.api (two more files) and sweeps need its presets (turbgen.spec.presets, preset_runs).
+A further model is one declaration here plus its own spec run class, schema, synthesis, runs Model, validator
+theory and cli command; lidar previews are optional (None: ``turbgen lidar`` refuses its stores in one line), and
+``turbgen.<name>()`` (turbgen.api) and sweep presets (turbgen.spec.presets, preset_runs) are extra.
 """
 
 from __future__ import annotations
@@ -40,31 +26,17 @@ class ModelDeclaration:
 
     Parameters
     ----------
-    name : str
-        The model's name: the store's ``model`` attribute, the command, ``turbgen.<name>``.
-    schema : str
-        Its run schema, turbgen/schemas/<schema>.schema.json (run files, service requests, keywords).
-    spec : str
-        ``turbgen.spec`` reference: the run class (``from_mapping``, ``to_attrs``, ``from_attrs``, ``parameters``).
-    options : str
-        ``turbgen.spec`` reference: the mapping command option / API keyword -> run-mapping key.
-    replaces : str
-        ``turbgen.spec`` reference: the mapping given run key -> keys it removes from the run file and the preset
-        (turbgen.spec.run_inputs.merge_run_inputs).
-    command : str
-        ``turbgen.cli`` reference: the click command.
-    runner : str
-        ``turbgen.runs`` reference: the turbgen.runs.models.Model (run, memory, shared part).
-    synthesis : str
-        ``turbgen.synthesis`` reference: the generator class (documentation; resolved by the registry's test).
-    validator_theory : str
-        ``turbgen.validation`` reference: ``theory(attrs, design) -> Theory``.
-    preview : str or None
-        ``turbgen.virtual_lidar`` reference: ``preview(lidar, U_m_s, *, preset, f_hz, radius_m, frozen, **options)`` ->
-        PreviewSpectra, the theory of ``turbgen theory lidar``; None: not available.
-    store_preview : str or None
-        ``turbgen.virtual_lidar`` reference: ``store_preview(fs, description, f_hz, radius_m)`` -> PreviewSpectra of a
-        store as synthesised (``turbgen lidar``); None: not available.
+    name, schema : str
+        The store's ``model`` attribute, the command, ``turbgen.<name>``; turbgen/schemas/<schema>.schema.json.
+    spec, options, replaces : str
+        ``turbgen.spec`` references: the run class (``from_mapping``, ``to_attrs``, ``from_attrs``, ``parameters``);
+        option / keyword -> run key; given run key -> keys it removes from the run file and the preset.
+    command, runner, synthesis, validator_theory : str
+        The click command; the turbgen.runs.models.Model; the generator class (resolved by the registry's test only);
+        ``theory(attrs, design) -> Theory``.
+    preview, store_preview : str or None
+        ``turbgen.virtual_lidar`` references (None: not available): ``preview(lidar, U_m_s, *, preset, f_hz,
+        radius_m, frozen, **options)`` and ``store_preview(fs, description, f_hz, radius_m)``, both -> PreviewSpectra.
     """
 
     name: str
@@ -102,61 +74,22 @@ _BY_NAME = {d.name: d for d in DECLARATIONS}
 
 
 def model_names() -> tuple[str, ...]:
-    """The declared models' names, in declaration order.
-
-    Returns
-    -------
-    tuple of str
-        ("mann", "kaimal").
-    """
+    """The declared models' names in declaration order: ("mann", "kaimal")."""
     return tuple(_BY_NAME)
 
 
 def declaration(name: str, what: str = "model") -> ModelDeclaration:
-    """The declaration of model ``name``.
-
-    Parameters
-    ----------
-    name : str
-        The model's name.
-    what : str, optional
-        How the value is named in the message (e.g. "store model").
-
-    Returns
-    -------
-    ModelDeclaration
-        Its declaration.
-
-    Raises
-    ------
-    ParameterError
-        Naming the value and the declared models.
-    """
+    """The declaration of model ``name``; ParameterError naming it as ``what`` (e.g. "store model") if unknown."""
     if name not in _BY_NAME:
         raise ParameterError(f"{what} = {name!r} is not one of {', '.join(_BY_NAME)}")
     return _BY_NAME[name]
 
 
 def resolve(reference: str, layer: str):
-    """The object a declaration's reference names, imported from ``layer``.
+    """The attribute ``reference`` (``"turbgen.<layer>.<module>:<attribute>"``) names, imported from ``layer``.
 
-    Parameters
-    ----------
-    reference : str
-        ``"turbgen.<layer>.<module>:<attribute>"``.
-    layer : str
-        The layer the reference must lie in (``"spec"``, ``"runs"``, ``"validation"``, ``"virtual_lidar"``, ``"cli"``, ...): the
-        caller's own layer or one below it, never one above.
-
-    Returns
-    -------
-    object
-        The attribute.
-
-    Raises
-    ------
-    ValueError
-        For a reference outside ``layer`` (a wrong declaration: a programming error, not user input).
+    ``layer`` ("spec", "runs", "validation", "virtual_lidar", "cli", ...) is the caller's own or one below it;
+    ValueError for a reference outside it (a wrong declaration, not user input).
     """
     module, _, attribute = reference.partition(":")
     if not module.startswith(f"turbgen.{layer}.") or not attribute:

@@ -40,18 +40,16 @@ def preset_from_mapping(name: str, data: Mapping) -> StabilityPreset:
             missing = {"L", "gamma", "evo"} - set(m)
             if missing:
                 raise ParameterError(f"preset {name!r} mann: missing {', '.join(sorted(missing))}")
-            mann = MannPreset(
-                m["L"], m["gamma"], m["evo"], m.get("factor1", 1.0), m.get("lifetime", "guo"), m.get("ae_ref")
-            )
+            mann = MannPreset(m["L"], m["gamma"], m["evo"], m.get("factor1", 1.0), m.get("lifetime", "guo"),
+                              m.get("ae_ref"))
         if "kaimal" in d:
             keys = {"sigma_ratios", "length_scales_m", "a_yz", "lc_m", "a_x", "b_x"}
             k = _table(d["kaimal"], f"preset {name!r} kaimal", keys)
             missing = keys - set(k)
             if missing:
                 raise ParameterError(f"preset {name!r} kaimal: missing {', '.join(sorted(missing))}")
-            kaimal = KaimalPreset(
-                tuple(k["sigma_ratios"]), tuple(k["length_scales_m"]), k["a_yz"], k["lc_m"], k["a_x"], k["b_x"]
-            )
+            kaimal = KaimalPreset(tuple(k["sigma_ratios"]), tuple(k["length_scales_m"]), k["a_yz"], k["lc_m"], k["a_x"],
+                                  k["b_x"])
     except TypeError as exc:
         raise ParameterError(f"preset {name!r}: {exc}") from None
     return StabilityPreset(name, mann, kaimal, d.get("turb_class", "A"), str(d.get("source", "user preset")))

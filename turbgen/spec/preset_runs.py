@@ -1,10 +1,8 @@
 """What a stability preset (turbgen.spec.presets) gives each model's run at a mean wind speed.
 
-Mann parameters, Kaimal settings, and the run keys ``turbgen mann|kaimal --preset``, sweeps and the
-service merge, so all build the same run. ``preset`` is a name (built-in or in ``user``, see
-:func:`turbgen.spec.presets.get_preset`) or a StabilityPreset; U_m_s is the mean wind speed [m/s].
-Unknown presets, presets without the model's parameters and values outside their ranges raise
-ParameterError.
+The run keys ``--preset``, sweeps and the service merge, so all build the same run. ``preset`` is a name
+(built-in or in ``user``: turbgen.spec.presets.get_preset) or a StabilityPreset; U_m_s [m/s]. Unknown presets,
+presets without the model's parameters and values outside their ranges raise ParameterError.
 """
 
 from __future__ import annotations
@@ -23,19 +21,10 @@ def _resolve(preset: str | StabilityPreset, user) -> StabilityPreset:
     return preset if isinstance(preset, StabilityPreset) else get_preset(preset, user)
 
 
-def mann_params_for(
-    preset: str | StabilityPreset,
-    U_m_s: float,
-    *,
-    user: Mapping[str, StabilityPreset] | None = None,
-    ae: float | None = None,
-    length_scale_m: float | None = None,
-    gamma: float | None = None,
-    evo_time_s: float | None = None,
-    factor1: float | None = None,
-    lifetime: str | None = None,
-    factor2: float | None = None,
-) -> MannParams:
+def mann_params_for(preset: str | StabilityPreset, U_m_s: float, *, user: Mapping[str, StabilityPreset] | None = None,
+                    ae: float | None = None, length_scale_m: float | None = None, gamma: float | None = None,
+                    evo_time_s: float | None = None, factor1: float | None = None, lifetime: str | None = None,
+                    factor2: float | None = None) -> MannParams:
     """MannParams of ``preset`` at U_m_s; explicit (non-None) arguments override the preset.
 
     Unless ``ae`` is given, alpha*eps^(2/3) is re-derived so that the model sigma_u equals the IEC NTM
@@ -50,18 +39,12 @@ def mann_params_for(
     return MannRun.from_mapping(mapping).params
 
 
-def kaimal_settings_for(
-    preset: str | StabilityPreset,
-    U_m_s: float,
-    *,
-    user: Mapping[str, StabilityPreset] | None = None,
-    sigma_m_s: tuple[float, float, float] | None = None,
-    length_scales_m: tuple[float, float, float] | None = None,
-    a_yz: float | None = None,
-    lc_m: float | None = None,
-    a_x: float | None = None,
-    b_x: float | None = None,
-) -> KaimalSettings:
+def kaimal_settings_for(preset: str | StabilityPreset, U_m_s: float, *,
+                        user: Mapping[str, StabilityPreset] | None = None,
+                        sigma_m_s: tuple[float, float, float] | None = None,
+                        length_scales_m: tuple[float, float, float] | None = None, a_yz: float | None = None,
+                        lc_m: float | None = None, a_x: float | None = None,
+                        b_x: float | None = None) -> KaimalSettings:
     """KaimalSettings of ``preset`` at U_m_s; explicit arguments override the preset.
 
     sigma_1 = Iref (0.75 U + 5.6) (IEC class of the preset), sigma_2,3 = sigma_1 x the preset's ratios;
@@ -75,12 +58,8 @@ def kaimal_settings_for(
     if sigma_m_s is None:
         s1 = iec_sigma1_m_s(check_wind_speed(U_m_s), p.turb_class)
         sigma_m_s = tuple(r * s1 for r in k.sigma_ratios)
-    params = KaimalParams(
-        sigma_m_s=tuple(sigma_m_s),
-        length_scales_m=k.length_scales_m if length_scales_m is None else tuple(length_scales_m),
-        a_yz=k.a_yz if a_yz is None else a_yz,
-        lc_m=k.lc_m if lc_m is None else lc_m,
-    )
+    params = KaimalParams(tuple(sigma_m_s), k.length_scales_m if length_scales_m is None else tuple(length_scales_m),
+                          k.a_yz if a_yz is None else a_yz, k.lc_m if lc_m is None else lc_m)
     return KaimalSettings(params, "exp", k.a_x if a_x is None else a_x, k.b_x if b_x is None else b_x)
 
 
@@ -94,23 +73,12 @@ def mann_run_keys(preset: str | StabilityPreset, *, user: Mapping[str, Stability
     if p.mann is None:
         raise ParameterError(f"preset {p.name!r} has no Mann parameters")
     m = p.mann
-    return {
-        "length_scale_m": m.length_scale_m,
-        "gamma": m.gamma,
-        "evo_time_s": m.evo_time_s,
-        "factor1": m.factor1,
-        "lifetime": m.lifetime,
-        "turb_class": p.turb_class,
-    }
+    return {"length_scale_m": m.length_scale_m, "gamma": m.gamma, "evo_time_s": m.evo_time_s, "factor1": m.factor1,
+            "lifetime": m.lifetime, "turb_class": p.turb_class}
 
 
-def kaimal_run_keys(
-    preset: str | StabilityPreset,
-    U_m_s: float,
-    *,
-    user: Mapping[str, StabilityPreset] | None = None,
-    turb_class: str | None = None,
-) -> dict:
+def kaimal_run_keys(preset: str | StabilityPreset, U_m_s: float, *, user: Mapping[str, StabilityPreset] | None = None,
+                    turb_class: str | None = None) -> dict:
     """The keys of a Kaimal run mapping (KaimalRun.from_mapping) that ``preset`` sets at U_m_s.
 
     sigma_m_s, length_scales_m, a_yz, lc_m, long_model, a_x, b_x; ``turb_class`` overrides the preset's
@@ -120,15 +88,8 @@ def kaimal_run_keys(
     if turb_class is not None:
         p = replace(p, turb_class=turb_class)
     s = kaimal_settings_for(p, U_m_s)
-    return {
-        "sigma_m_s": list(s.kaimal.sigma_m_s),
-        "length_scales_m": list(s.kaimal.length_scales_m),
-        "a_yz": s.kaimal.a_yz,
-        "lc_m": s.kaimal.lc_m,
-        "long_model": s.long_model,
-        "a_x": s.a_x,
-        "b_x": s.b_x,
-    }
+    return {"sigma_m_s": list(s.kaimal.sigma_m_s), "length_scales_m": list(s.kaimal.length_scales_m),
+            "a_yz": s.kaimal.a_yz, "lc_m": s.kaimal.lc_m, "long_model": s.long_model, "a_x": s.a_x, "b_x": s.b_x}
 
 
 def run_keys(model: str, preset: str | StabilityPreset, U_m_s: float, *,

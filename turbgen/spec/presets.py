@@ -13,8 +13,7 @@ Sources of the numbers:
 * Kaimal a_x, b_x (Eq. 18): Table 2 in the column of the class's gamma, fitted at U = 16 m/s and
   dx = 100 m and used unchanged at other speeds, as in the paper.
 
-User presets (TOML or JSON): turbgen.spec.preset_files; what a preset gives each model's run:
-turbgen.spec.preset_runs.
+User presets: turbgen.spec.preset_files; what a preset gives each model's run: turbgen.spec.preset_runs.
 """
 
 from __future__ import annotations
@@ -41,11 +40,6 @@ class MannPreset:
         Lifetime model.
     ae_ref : float, optional
         Table 1 alpha*eps^(2/3) at 16 m/s [m^(4/3) s^-2] (> 0), for comparison only.
-
-    Raises
-    ------
-    ParameterError
-        If a value is outside its range (turbgen.theory.ranges).
     """
 
     length_scale_m: float
@@ -94,10 +88,8 @@ class StabilityPreset:
 
     Parameters
     ----------
-    name : str
-        Preset name.
-    mann, kaimal : MannPreset or KaimalPreset or None
-        The models' parameters, at least one given.
+    name, mann, kaimal : str, MannPreset or None, KaimalPreset or None
+        Preset name and the models' parameters (at least one given).
     turb_class, source : str, optional
         IEC class "A+", "A", "B" or "C"; where the numbers come from.
     """
@@ -152,13 +144,8 @@ def _builtin() -> dict[str, StabilityPreset]:
         "neutral": StabilityPreset(
             "neutral",
             MannPreset(49.0, 3.1, _EVO_S["neutral"], ae_ref=0.311),
-            kaimal(
-                "neutral",
-                IEC_SIGMA_RATIOS,
-                tuple(c * _IEC_LAMBDA1_M for c in IEC_LENGTH_FACTORS),
-                12.0,
-                8.1 * _IEC_LAMBDA1_M,
-            ),
+            kaimal("neutral", IEC_SIGMA_RATIOS, tuple(c * _IEC_LAMBDA1_M for c in IEC_LENGTH_FACTORS), 12.0,
+                   8.1 * _IEC_LAMBDA1_M),
             source=_SOURCE.format(cls="neutral") + "; Kaimal = IEC 61400-1 NTM set",
         ),
         "stable": StabilityPreset(

@@ -46,12 +46,8 @@ def merge_run_inputs(
 
     Parameters
     ----------
-    file_mapping : Mapping or None
-        The run file's content (schema-checked), or None.
-    given : Mapping
-        Run-mapping keys given by the user (not None), outside ``grid``.
-    grid_given : Mapping
-        Keys of the ``grid`` table given by the user (``nt``, ``dt_s`` [s], ``ny``, ``nz``, ``dy_m``, ``dz_m`` [m]).
+    file_mapping, given, grid_given : Mapping
+        The run file's content (schema-checked) or None; the user's run keys (not None) and ``grid`` keys.
     preset_keys : callable, optional
         ``preset_keys(file mapping, given)`` -> the preset's run keys; None without a preset.
     replaces : Mapping, optional

@@ -1,9 +1,7 @@
-"""The ``spectrum`` (and ``coherence``) of a Kaimal run as given (a CSV file, arrays, a mapping or a callable) -> its
-LineSpectrum (LineCoherence).
+"""A Kaimal run's ``spectrum`` (``coherence``) as given -> its LineSpectrum (LineCoherence) of turbgen.theory.
 
-The forms' meaning is in turbgen.theory.user_spectra. The CSV file has a header naming the columns
-``f_hz,S_u,S_v,S_w`` (any order; ``#`` lines and blank lines skipped) and one row per frequency [Hz],
-PSDs in m^2/s.
+The CSV file has a header naming ``f_hz,S_u,S_v,S_w`` (any order; ``#`` and blank lines skipped) and one row per
+frequency [Hz], PSDs in m^2/s.
 """
 
 from __future__ import annotations
@@ -89,27 +87,11 @@ def line_spectrum(value, grid: Grid) -> LineSpectrum | None:
 
 
 def line_coherence(value, grid: Grid, U_m_s: float) -> LineCoherence | None:
-    """The yz coherence ``value`` on ``grid``'s lines (turbgen.theory.user_coherence).
+    """The yz coherence ``value`` on ``grid``'s lines (turbgen.theory.user_coherence); None: the IEC exponential.
 
-    Parameters
-    ----------
-    value : None, LineCoherence, Mapping or callable
-        A mapping of ``f_hz``, ``r_m``, ``coh`` (the form a store records), or a callable ``coh(f_hz, r_m, U_m_s)``
-        [-] evaluated on the lines x the grid's separations. None: the IEC exponential coherence.
-    grid : Grid
-        The run's grid.
-    U_m_s : float
-        The run's mean wind speed [m/s] (given to a callable).
-
-    Returns
-    -------
-    LineCoherence or None
-        The coherence the run samples.
-
-    Raises
-    ------
-    ParameterError
-        For a value of none of these forms, or one LineCoherence refuses.
+    ``value`` is a LineCoherence, a mapping of ``f_hz``, ``r_m``, ``coh`` (what a store records) or a callable
+    ``coh(f_hz, r_m, U_m_s)`` [-] evaluated on the lines x the grid's separations (``U_m_s`` the run's, m/s).
+    ParameterError for another form or values LineCoherence refuses.
     """
     if value is None or isinstance(value, LineCoherence) and (value.nt, value.dt_s) == (grid.nt, grid.dt_s):
         return value

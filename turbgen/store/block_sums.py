@@ -1,9 +1,6 @@
 """The float64 sum and sum of squares of a float32 block in one compiled pass (the writer's finiteness check).
 
-numpy's ``block.sum(dtype=np.float64)`` casts chunk by chunk and the sum of squares was a second pass
-(``np.einsum(..., dtype=np.float64)``; ``np.dot`` of float32: float32 accumulation and OpenBLAS threads spinning
-beside the generator's). Eight float64 accumulators per sum keep
-the loop at the speed of memory without reassociating anything behind our back (no fastmath): the result
+Eight float64 accumulators per sum keep the loop at memory speed without reassociation (no fastmath): the result
 depends only on the block's values and their order, never on threads or chunking.
 """
 
@@ -38,18 +35,7 @@ def _sums(flat):
 
 
 def block_sums(block: np.ndarray) -> tuple[float, float]:
-    """Sum and sum of squares of ``block``'s values, accumulated in float64.
-
-    Parameters
-    ----------
-    block : numpy.ndarray
-        float32 values of any shape (a non-contiguous block is copied first).
-
-    Returns
-    -------
-    tuple of float
-        (sum [unit of the values], sum of squares [unit^2]); not finite if any value is NaN or inf.
-    """
+    """(sum, sum of squares) of a float32 ``block``'s values, accumulated in float64; not finite for NaN or inf."""
     flat = np.ascontiguousarray(block, dtype=np.float32).reshape(-1)
     total, squares = _sums(flat)
     return float(total), float(squares)

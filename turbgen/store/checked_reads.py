@@ -36,17 +36,13 @@ def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None, out: np.
             if not (whole and read_chunk(arr, (a // step, ix, 0, 0), block)):
                 arr.get_basic_selection((slice(a, b), ix), out=nd_buffer.from_numpy_array(block))
         except Exception as exc:  # a decompression/decoding failure inside zarr, a missing or short chunk file
-            raise StoreError(
-                f"{where}: corrupted chunk at {name}, plane index {ix}, t index {a - a % step}-{b - 1} "
-                f"(file {chunk_file}: {type(exc).__name__}); regenerate the store"
-            ) from None
+            raise StoreError(f"{where}: corrupted chunk at {name}, plane index {ix}, t index {a - a % step}-{b - 1} "
+                             f"(file {chunk_file}: {type(exc).__name__}); regenerate the store") from None
         bad = ~np.isfinite(block)
         if bad.any():
             it, iy, iz = (int(i) for i in np.argwhere(bad)[0])
             what = "NaN" if np.isnan(block[it, iy, iz]) else "inf"
-            raise StoreError(
-                f"{where}: {what} at {name}, plane index {ix}, t index {a + it}, y index {iy}, z index {iz} "
-                f"({int(bad.sum())} non-finite values in chunk file {chunk_file}); the data are corrupted, "
-                "regenerate the store"
-            )
+            raise StoreError(f"{where}: {what} at {name}, plane index {ix}, t index {a + it}, y index {iy}, z index "
+                             f"{iz} ({int(bad.sum())} non-finite values in chunk file {chunk_file}); the data are "
+                             "corrupted, regenerate the store")
     return out

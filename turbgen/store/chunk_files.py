@@ -1,11 +1,9 @@
 """The raw-chunk fast path of the store's I/O: whole chunks of uncompressed stores moved by direct I/O (O_DIRECT).
 
 Everything else goes through zarr's public API, and so does a chunk wherever this path declines (a compressed or
-foreign-endian array, no O_DIRECT: another platform or ``TURBGEN_PORTABLE=1``, a file system refusing it).
-Why it stays: for the default Mann field (2.2 GB) zarr's buffered chunk I/O took 3-4x the wall time and 5-6x the
-CPU of this path (benchmarks/bench_store_io.md). An uncompressed float32 chunk of a zarr v3 array with the
-``bytes`` codec is a file holding the chunk's C-order bytes at the key of the array's chunk key encoding (Zarr v3
-specification); tests/store/test_chunk_files.py checks that both paths give the same files and arrays.
+foreign-endian array, no O_DIRECT: another platform or ``TURBGEN_PORTABLE=1``, a file system refusing it); why it
+stays: benchmarks/bench_store_io.md. An uncompressed chunk with the ``bytes`` codec is a file of its C-order bytes
+at the array's chunk key (Zarr v3 specification).
 
 Direct I/O needs the buffer, offset and length aligned to the device's logical block: other chunks pass through
 a page-aligned bounce buffer, padded to a whole block, the file then truncated to its length.

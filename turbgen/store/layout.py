@@ -1,29 +1,18 @@
-"""The turbgen field store layout (zarr v3): the one place that defines it.
+"""The turbgen field store layout (zarr v3): the one place that defines it (docs/store.md shows it).
 
 One zarr v3 group holds one field::
 
     <store>/zarr.json          group metadata: the attributes below + consolidated metadata
-    <store>/u, v, w            float32, shape (nt, nx, ny, nz), dimension_names ("t", "x", "y", "z"),
-                               chunks (chunk_t, 1, ny, nz) (default chunk_t = min(nt, 1024)),
-                               uncompressed (``compressor``), fill value NaN,
-                               every chunk written (so a missing chunk file means a partial copy)
+    <store>/u, v, w            float32 (nt, nx, ny, nz), dimension_names DIMS, chunks (chunk_t, 1, ny, nz),
+                               uncompressed, fill value NaN, every chunk written (a missing one: a partial copy)
     <store>/t, x, y, z         float64 1-D coordinates, dimension_names (name,), attrs units/long_name
 
-Group attributes (JSON Schema: ``turbgen/schemas/field.schema.json``):
-
-    turbgen_version, created_utc (ISO 8601), layout_version (int)
-    fft_backend                the FFT backend that made the field (turbgen.fft; stores since 2026-11-28): an input
-                               of the run like its seed, changing the field at float32 round-off only
-    model (a declared model: "mann" | "kaimal", turbgen.spec.models), parameters {name: value}, units {name: unit},
-    seed (int),
-    U_m_s, hub_height_m, frame = "convected", frame_note, grid {nt, dt_s, x_m, ny, nz, dy_m, dz_m}
-    rms_m_s {u, v, w}          root mean square of each component [m/s] (stores since 2026-11-26; readers
-                               refuse values beyond 100 times it: turbgen.store.plausibility)
-    turbgen_complete = true    -- the completeness marker, written last
-
-Frame: all planes share one eddy-time axis t ("convected frame"). The field at plane x (upstream
-distance, rotor = 0) and physical time T is the stored sample at t = T + x/U, i.e. a stored
-sample (t, x) happens at physical time T = t - x/U (``turbgen.store.physical_time_view``).
+Group attributes (JSON Schema ``turbgen/schemas/field.schema.json``): turbgen_version, created_utc (ISO 8601),
+layout_version, fft_backend (turbgen.fft; an input of the run like its seed, changing the field at float32
+round-off only; stores since 2026-11-28), model (turbgen.spec.models), parameters, units, seed, U_m_s,
+hub_height_m, frame = "convected" (the field at plane x and physical time T is the stored sample at
+t = T + x/U), frame_note, grid, rms_m_s {u, v, w} [m/s] (stores since 2026-11-26; turbgen.store.plausibility),
+and last the completeness marker turbgen_complete = true.
 """
 
 from __future__ import annotations
@@ -41,11 +30,11 @@ from turbgen.spec.models import model_names
 
 
 def silence_consolidated_metadata_warning() -> None:
-    """Ignore zarr's warning, at every consolidation of a v3 store, that consolidated metadata is not (yet) part of
-    the v3 specification: turbgen's stores use it knowingly (see above). Called before each consolidation or
-    open: a process-wide filter for that message only (adding it again replaces it). Not
-    ``warnings.catch_warnings()`` around the call: it is not thread-safe (the filters restored by one writer thread
-    drop those of another, which let the warning through in the racing-overwrite test)."""
+    """Ignore zarr's warning that consolidated metadata is not part of the v3 specification (used knowingly).
+
+    A process-wide filter for that message only, added before each consolidation or open (adding it again
+    replaces it); ``warnings.catch_warnings()`` is not thread-safe across writer threads.
+    """
     warnings.filterwarnings("ignore", message="Consolidated metadata is currently not part", category=UserWarning)
 
 LAYOUT_VERSION = 1
@@ -69,10 +58,8 @@ COORD_ATTRS = {
 }
 
 FRAME = "convected"
-FRAME_NOTE = (
-    "all planes share one eddy-time axis; the field at plane x and physical time T "
-    "is the stored sample at t = T + x/U"
-)
+FRAME_NOTE = ("all planes share one eddy-time axis; the field at plane x and physical time T "
+              "is the stored sample at t = T + x/U")
 
 # Attributes the caller of create_store supplies / the writer adds / the marker.
 CALLER_ATTRS = ("model", "parameters", "units", "seed", "U_m_s", "hub_height_m")
@@ -85,135 +72,42 @@ DEFAULT_CHUNK_T_MAX = 1024
 
 
 def compressor() -> None:
-    """Compressor of u, v, w: none (chunks stored raw).
+    """Compressor of u, v, w: none (``compressors=None``; chunks stored raw).
 
-    Turbulence in float32 has random low mantissa bits: Blosc-lz4 with byte shuffle (the codec of older
-    stores, which still read) kept 0.88-0.92 of the bytes of Mann and Kaimal fields, ~10 % of disk saved for
-    an order of magnitude more CPU per value than raw chunks (benchmarks/README.md). zarr readers decode
-    either layout.
-
-    Returns
-    -------
-    None
-        No compressor (``compressors=None`` in zarr.create_array).
+    float32 turbulence has random low mantissa bits: Blosc-lz4 + shuffle (older stores, still read) kept 0.88-0.92
+    of the bytes for an order of magnitude more CPU per value (benchmarks/README.md).
     """
     return None
 
 
 def default_chunk_t(nt: int) -> int:
-    """Default time-chunk length: min(nt, 1024) samples (16 MiB per chunk at 64 x 64).
-
-    Parameters
-    ----------
-    nt : int
-        Number of time samples of the grid.
-
-    Returns
-    -------
-    int
-        Samples per chunk, min(nt, ``DEFAULT_CHUNK_T_MAX``).
-    """
+    """Default time-chunk length: min(nt, DEFAULT_CHUNK_T_MAX = 1024) samples (16 MiB per chunk at 64 x 64)."""
     return min(nt, DEFAULT_CHUNK_T_MAX)
 
 
 def chunk_shape(grid: Grid, chunk_t: int) -> tuple[int, int, int, int]:
-    """Chunk shape of the u, v, w arrays: one plane, ``chunk_t`` samples, the whole yz-plane.
-
-    Parameters
-    ----------
-    grid : Grid
-        The store grid.
-    chunk_t : int
-        Time samples per chunk.
-
-    Returns
-    -------
-    tuple of int
-        (chunk_t, 1, ny, nz), in (t, x, y, z) order.
-    """
+    """Chunk shape (chunk_t, 1, ny, nz) of u, v, w: one plane, ``chunk_t`` samples, the whole yz-plane."""
     return (chunk_t, 1, grid.ny, grid.nz)
 
 
 def n_chunks(grid: Grid, chunk_t: int) -> int:
-    """Number of chunk files of one component array (all chunks are always written).
-
-    Parameters
-    ----------
-    grid : Grid
-        The store grid.
-    chunk_t : int
-        Time samples per chunk.
-
-    Returns
-    -------
-    int
-        ceil(nt / chunk_t) * nx.
-    """
+    """Number of chunk files ceil(nt / chunk_t) nx of one component array (all are always written)."""
     return math.ceil(grid.nt / chunk_t) * grid.nx
 
 
 def grid_to_attrs(grid: Grid) -> dict:
-    """The ``grid`` group attribute.
-
-    Parameters
-    ----------
-    grid : Grid
-        The store grid.
-
-    Returns
-    -------
-    dict
-        JSON-serialisable {nt, dt_s [s], x_m (list) [m], ny, nz, dy_m [m], dz_m [m]}.
-    """
-    return {
-        "nt": grid.nt,
-        "dt_s": grid.dt_s,
-        "x_m": list(grid.x_m),
-        "ny": grid.ny,
-        "nz": grid.nz,
-        "dy_m": grid.dy_m,
-        "dz_m": grid.dz_m,
-    }
+    """The ``grid`` group attribute {nt, dt_s [s], x_m (list) [m], ny, nz, dy_m [m], dz_m [m]}."""
+    return {"nt": grid.nt, "dt_s": grid.dt_s, "x_m": list(grid.x_m), "ny": grid.ny, "nz": grid.nz, "dy_m": grid.dy_m,
+            "dz_m": grid.dz_m}
 
 
 def grid_from_attrs(d: dict) -> Grid:
-    """Inverse of :func:`grid_to_attrs`.
-
-    Parameters
-    ----------
-    d : dict
-        The ``grid`` group attribute.
-
-    Returns
-    -------
-    Grid
-        The grid it describes.
-
-    Raises
-    ------
-    KeyError
-        When a key is missing.
-    ParameterError
-        When a value is not a valid grid parameter (checked by :class:`~turbgen.grid.Grid`).
-    """
-    return Grid(
-        nt=d["nt"], dt_s=d["dt_s"], x_m=tuple(d["x_m"]), ny=d["ny"], nz=d["nz"], dy_m=d["dy_m"], dz_m=d["dz_m"]
-    )
+    """Inverse of :func:`grid_to_attrs`; KeyError for a missing key, ParameterError for an invalid value."""
+    return Grid(nt=d["nt"], dt_s=d["dt_s"], x_m=tuple(d["x_m"]), ny=d["ny"], nz=d["nz"], dy_m=d["dy_m"], dz_m=d["dz_m"])
 
 
 def coordinates(grid: Grid) -> dict:
-    """Coordinate name -> float64 values, in ``DIMS`` order.
-
-    Parameters
-    ----------
-    grid : Grid
-        The store grid.
-
-    Returns
-    -------
-    dict of str to numpy.ndarray
-        t (nt,) [s], x (nx,) [m], y (ny,) [m], z (nz,) [m, relative to hub height].
-    """
+    """Coordinates in ``DIMS`` order: t (nt,) [s], x (nx,), y (ny,), z (nz,) [m, z relative to hub height]."""
     return {"t": grid.t(), "x": grid.x(), "y": grid.y(), "z": grid.z()}
 
 
@@ -226,24 +120,8 @@ def _validator():
 def validate_attrs(attrs: dict, *, where: str, error: type[Exception]) -> None:
     """Check group attributes against ``schemas/field.schema.json``; raise ``error`` (one line) if invalid.
 
-    Parameters
-    ----------
-    attrs : dict
-        The group attributes.
-    where : str
-        Message prefix naming the store or the caller.
-    error : type of Exception
-        Exception class raised for invalid attributes (e.g. StoreError, ValueError).
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    error
-        For the best-matching schema violation: "``where``: attribute PATH: message" (message
-        shortened to 160 characters).
+    The best-matching violation as "``where``: attribute PATH: message" (message cut to 160 characters);
+    ``error`` is the exception class (e.g. StoreError, ValueError).
     """
     err = jsonschema.exceptions.best_match(_validator().iter_errors(attrs))
     if err is None and attrs["model"] not in MODELS:  # the schema takes a string: the models are declared in spec

@@ -4,13 +4,10 @@
         w.write("u", ix, block)            # as StoreWriter.write
     ds = w.dataset                         # u, v, w (t, x, y, z), coordinates and attributes of the store
 
-The same checks (finite blocks of the plane's shape, every sample written), the same float32 values and the same
-attributes (the caller's, the writer's, ``rms_m_s`` from the same sums, the marker) as
-:class:`turbgen.store.writer.StoreWriter` and a store opened by ``xarray.open_zarr`` -- only ``created_utc``
-differs (the time it was made). Used by ``turbgen.mann()`` / ``turbgen.kaimal()`` without ``out``.
-
-The arrays are (t, x, y, z) as a store's, held plane by plane in memory (each plane's (t, y, z) block contiguous, as
-the generators write them): ``numpy.ascontiguousarray`` gives a C-ordered copy where one is needed.
+The same checks, float32 values and attributes (but ``created_utc``) as :class:`turbgen.store.writer.StoreWriter`
+and a store opened by ``xarray.open_zarr``. Used by ``turbgen.mann()`` / ``turbgen.kaimal()`` without ``out``.
+The (t, x, y, z) arrays are held plane by plane (each plane's (t, y, z) block contiguous, as the generators write
+them): ``numpy.ascontiguousarray`` gives a C-ordered copy where one is needed.
 """
 
 from __future__ import annotations
@@ -29,18 +26,7 @@ from turbgen.store.writer import checked_block, rms_from_squares, validated_call
 class MemoryWriter:
     """Context manager collecting one field in memory; :attr:`dataset` after its ``with`` block.
 
-    Parameters
-    ----------
-    grid : Grid
-        The field grid.
-    attrs : dict
-        Caller attributes as for :func:`turbgen.store.create_store` (model, parameters, units, seed, U_m_s,
-        hub_height_m).
-
-    Raises
-    ------
-    ValueError
-        For attributes create_store would refuse.
+    ``attrs`` as for :func:`turbgen.store.create_store` (ValueError where it would refuse them).
     """
 
     def __init__(self, grid: Grid, attrs: dict):
@@ -67,32 +53,14 @@ class MemoryWriter:
         return False
 
     def add_attrs(self, **attrs) -> None:
-        """Add attributes known only after generation, as StoreWriter.add_attrs.
-
-        Raises
-        ------
-        ValueError
-            When an attribute is already set or is the completeness marker.
-        """
+        """Add attributes known only after generation, as StoreWriter.add_attrs (ValueError for one already set)."""
         clash = [k for k in attrs if k in self._attrs or k == layout.MARKER]
         if clash:
             raise ValueError(f"store attrs {clash} are already set")
         self._attrs.update(attrs)
 
     def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0, squares: bool = False):
-        """Keep ``data`` (nt_block, ny, nz) as ``component`` at plane ``ix``, time ``t0``: as StoreWriter.write.
-
-        Returns
-        -------
-        float or tuple of float
-            The block's float64 sum [m/s]; with ``squares``, (sum [m/s], sum of squares [m^2/s^2]).
-
-        Raises
-        ------
-        ValueError
-            For an unknown component, a plane index out of range, a block that does not fit the plane, or a
-            block containing NaN or inf.
-        """
+        """Keep ``data`` (nt_block, ny, nz) as ``component`` at plane ``ix``, time ``t0``: as StoreWriter.write."""
         block, total, sum_sq = checked_block(self.grid, component, ix, data, t0)
         t1 = t0 + block.shape[0]
         dest = self._arrays[component][t0:t1, ix]

@@ -1,9 +1,6 @@
 """A field held in memory (an ``xarray.Dataset`` of ``turbgen.mann`` / ``turbgen.kaimal`` without ``out``, or of a
 generator) read through the interface of an opened store: validation, exports and the virtual lidar take either.
 
-    fs = memory_field(ds)            # checked as open_store checks a store: attributes, grid, arrays, coordinates
-    fs.read_span("u", 0, 0, 128)     # checked as a store's reads are: finite, plausible amplitudes
-
 No file is written: the readers use the Dataset's arrays. ``chunk_t`` is the chunk length the store of the same field
 would have (turbgen.store.layout.default_chunk_t), so what is read span by span (validation, lidar) is read in the
 same spans as from that store, and gives the same numbers.
@@ -50,13 +47,9 @@ class MemoryField(FieldStore):
         return da.from_array(self.array(component), chunks=(self.chunk_t, 1, self.grid.ny, self.grid.nz))
 
     def read_span(self, component: str, ix: int, t0: int, t1: int, out: np.ndarray | None = None) -> np.ndarray:
-        """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t, ny, nz), checked as a store's read is
-        (finite values of plausible amplitude): a copy, or ``out`` filled.
+        """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t, ny, nz): a copy, or ``out`` filled.
 
-        Raises
-        ------
-        StoreError
-            For NaN/inf or an implausible value (a Dataset changed after it was made).
+        Checked as a store's read is: StoreError for NaN/inf or an implausible value (a Dataset changed since).
         """
         block = self.array(component)[t0:t1, ix]
         out = np.array(block, dtype=np.float32, order="C") if out is None else _copied(block, out)
@@ -88,20 +81,8 @@ def memory_field(ds) -> MemoryField:
     """The field of the Dataset ``ds`` (u, v, w (t, x, y, z) float32 with a turbgen store's attributes), checked as
     :func:`turbgen.store.open_store` checks a store.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A field of ``turbgen.mann`` / ``turbgen.kaimal`` (or a generator's), in memory or lazy.
-
-    Returns
-    -------
-    MemoryField
-        Its arrays loaded into memory (a Dataset in memory: its own arrays, no copy).
-
-    Raises
-    ------
-    StoreError
-        When the Dataset lacks a turbgen field's attributes, components or coordinates, or they do not match its grid.
+    ``ds`` may be lazy (loaded; a Dataset in memory is not copied). StoreError when it lacks a turbgen field's
+    attributes, components or coordinates, or they do not match its grid.
 
     Examples
     --------

@@ -17,27 +17,8 @@ def check_output_path(path, what: str = "--out", *, create_parents: bool = False
 
     Refused: an empty path, a name longer than MAX_NAME_BYTES, an ancestor that is a file or a zarr store (an
     output inside a store would be taken for part of it), and (unless ``create_parents``: the caller makes
-    missing directories) a parent that does not exist.
-    (Existence of ``path`` itself and --overwrite are the writers' business.)
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The output path (``~`` is expanded).
-    what : str, optional
-        Name of the option in messages; default "--out".
-    create_parents : bool, optional
-        Accept a missing parent directory (the caller creates it).
-
-    Returns
-    -------
-    pathlib.Path
-        ``path`` with ``~`` expanded (not made absolute).
-
-    Raises
-    ------
-    ParameterError
-        For any refused path (one line naming it).
+    missing directories) a parent that does not exist; ``path`` itself and --overwrite are the writers' business.
+    Returns ``path`` with ``~`` expanded (not made absolute); ``what`` names the option in messages.
     """
     if path is None:
         raise ParameterError(f"{what} = None; give a file or directory name")
@@ -47,9 +28,8 @@ def check_output_path(path, what: str = "--out", *, create_parents: bool = False
     p = Path(text).expanduser()
     name = p.name or p.absolute().name
     if len(os.fsencode(name)) > MAX_NAME_BYTES:
-        raise ParameterError(
-            f"{what}: the name {name[:40]!r}... is {len(os.fsencode(name))} bytes long; the maximum is {MAX_NAME_BYTES}"
-        )
+        raise ParameterError(f"{what}: the name {name[:40]!r}... is {len(os.fsencode(name))} bytes long; the maximum "
+                             f"is {MAX_NAME_BYTES}")
     parent = Path(os.path.abspath(p)).parent  # '..' folded: a.zarr/../b.zarr is not inside a.zarr
     for ancestor in (parent, *parent.parents):
         if ancestor.exists():
@@ -65,18 +45,7 @@ def check_output_path(path, what: str = "--out", *, create_parents: bool = False
 
 
 def enclosing_store(directory: Path) -> Path | None:
-    """The nearest of ``directory`` and its ancestors that is a zarr store or array (holds zarr.json), or None.
-
-    Parameters
-    ----------
-    directory : pathlib.Path
-        An absolute directory path (it need not exist).
-
-    Returns
-    -------
-    pathlib.Path or None
-        That store directory, or None when no existing directory on the way up holds a zarr.json.
-    """
+    """The nearest of absolute ``directory`` (need not exist) and its ancestors holding a zarr.json, or None."""
     for d in (directory, *directory.parents):
         if (d / "zarr.json").is_file():
             return d
@@ -84,24 +53,9 @@ def enclosing_store(directory: Path) -> Path | None:
 
 
 def check_output_dir(path, what: str) -> Path:
-    """:func:`check_output_path` for a directory of outputs (a sweep's): also refuses a zarr store itself.
+    """:func:`check_output_path` for a directory of outputs (a sweep's; missing parents the caller creates).
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The output directory (``~`` is expanded; missing parents are created by the caller).
-    what : str
-        Name of the option in messages.
-
-    Returns
-    -------
-    pathlib.Path
-        ``path`` with ``~`` expanded.
-
-    Raises
-    ------
-    ParameterError
-        For any path :func:`check_output_path` refuses, or a field store (or other zarr node) at ``path``.
+    Also a ParameterError for a zarr store (or other zarr node) at ``path`` itself.
     """
     p = check_output_path(path, what, create_parents=True)
     if (p / "zarr.json").is_file():

@@ -1,15 +1,11 @@
 """Physical plausibility of a store that decodes: attributes within the allowed ranges, values within
 AMPLITUDE_RMS times the root mean square its writer recorded.
 
-A store can pass every structural check, decode, and hold only finite numbers, yet be garbage: a chunk
-overwritten with 3e38 (which ``info`` called complete and the .bts export wrote as every other sample 0),
-an attribute ``U_m_s`` = 1e308 or ``length_scale_m`` = -5 edited by hand (tracebacks deep in the validator
-and the exporters). :func:`check_attributes` refuses such attributes when the store is opened, so that
-``info``, ``validate`` and ``export`` refuse them alike, with the message of the range table
-(turbgen.theory.ranges) that refuses the same value on input. :func:`check_amplitudes` refuses values
-beyond AMPLITUDE_RMS times the component's root mean square (attribute ``rms_m_s``, recorded by the
-writer from the sums of its finiteness check), or times the mean wind speed for stores written before
-that attribute.
+A store can pass every structural check, decode and hold only finite numbers, yet be garbage: a chunk
+overwritten with 3e38, an attribute ``U_m_s`` = 1e308 or ``length_scale_m`` = -5 edited by hand.
+:func:`check_attributes` refuses such attributes on open (``info``, ``validate``, ``export`` alike) with the
+range table's message (turbgen.theory.ranges); :func:`check_amplitudes` refuses values beyond AMPLITUDE_RMS
+times the component's recorded ``rms_m_s`` (times the mean wind speed for stores without it).
 
 Why 100 rms: turbgen's fields are Gaussian (linear in Gaussian noise), so the largest |value| among n
 samples is about sqrt(2 ln n) rms: 7.4 rms for n = 10^12, far more samples than a store holds. A value
@@ -37,17 +33,7 @@ def check_attributes(attrs: Mapping, where: str) -> None:
     The run parameters are checked against turbgen.theory.ranges (lists element by element; None, e.g. a frozen
     field's evolution time, is skipped); parameters the table does not know are left to the run's own spec.
 
-    Parameters
-    ----------
-    attrs : Mapping
-        The store's root attributes (already valid against the field schema).
-    where : str
-        Message prefix, e.g. "<path> is corrupted".
-
-    Raises
-    ------
-    StoreError
-        "<where>: attribute <name>: <the range table's message>" for the first value out of range.
+    ``attrs`` are valid against the field schema; the message is "<where>: attribute <name>: <range message>".
     """
     checks = [(key, key, attrs[key]) for key in ("U_m_s", "hub_height_m")]
     params = attrs.get("parameters", {})
@@ -66,17 +52,7 @@ def spread_warnings(attrs: Mapping) -> list[str]:
     """Warnings for a recorded rms beyond the largest standard deviation a run may ask for (``sigma_m_s`` of
     turbgen.theory.ranges, 30 m/s): a field made from implausible inputs (e.g. constraint values of 1e30 m/s gave
     sigma_u = 2.6e29 m/s), or an extreme corner of the Mann ranges (ae 100, L 1000 m). The data decode and are
-    consistent, so ``info`` shows the store and warns instead of refusing it.
-
-    Parameters
-    ----------
-    attrs : Mapping
-        The store's root attributes.
-
-    Returns
-    -------
-    list of str
-        One sentence per component whose ``rms_m_s`` exceeds the limit (empty without ``rms_m_s``).
+    consistent, so ``info`` shows the store and warns (one sentence per component) instead of refusing it.
     """
     rms = attrs.get(RMS_ATTR)
     if not isinstance(rms, Mapping):
@@ -88,19 +64,7 @@ def spread_warnings(attrs: Mapping) -> list[str]:
 
 
 def amplitude_limits(attrs: Mapping) -> dict[str, tuple[float, str]]:
-    """Largest plausible |value| [m/s] of each component, and what it is based on (for messages).
-
-    Parameters
-    ----------
-    attrs : Mapping
-        The store's root attributes (already checked by :func:`check_attributes`).
-
-    Returns
-    -------
-    dict of str to (float, str)
-        component -> (AMPLITUDE_RMS x its recorded rms [m/s], or AMPLITUDE_RMS x U_m_s [m/s] for a store
-        without ``rms_m_s``; the basis as text).
-    """
+    """Component -> (largest plausible |value| [m/s], its basis as text): AMPLITUDE_RMS x rms_m_s (else x U_m_s)."""
     rms = attrs.get(RMS_ATTR)
     if isinstance(rms, Mapping):
         return {c: (AMPLITUDE_RMS * float(r), f"{AMPLITUDE_RMS:g} x its rms {float(r):.3g} m/s") for c, r in rms.items()}
@@ -113,25 +77,8 @@ def check_amplitudes(block: np.ndarray, component: str, limit: tuple[float, str]
                      chunk_t: int) -> None:
     """StoreError at the first value of ``block`` whose magnitude exceeds ``limit`` (one pass: its max and min).
 
-    Parameters
-    ----------
-    block : numpy.ndarray
-        float32 (t, ny, nz) values [m/s] of plane ``ix`` from time index ``t0``, already checked finite.
-    component : str
-        "u", "v" or "w".
-    limit : (float, str)
-        The component's entry of :func:`amplitude_limits`.
-    where : str or os.PathLike
-        The store, named first in the message.
-    ix, t0 : int
-        Plane index and time index of ``block[0]``.
-    chunk_t : int
-        Time samples per chunk (to name the chunk file).
-
-    Raises
-    ------
-    StoreError
-        "implausible value ... at <component>, plane index, t, y, z index (beyond <basis>; chunk file ...)".
+    ``block``: finite float32 (t, ny, nz) [m/s] of plane ``ix`` from time index ``t0``; ``limit`` the component's
+    :func:`amplitude_limits` entry; ``where`` names the store; ``chunk_t`` names the chunk file in the message.
     """
     bound, basis = limit
     if block.size == 0 or max(float(block.max()), -float(block.min())) <= bound:
@@ -140,8 +87,6 @@ def check_amplitudes(block: np.ndarray, component: str, limit: tuple[float, str]
     t = t0 + it
     value = float(block[it, iy, iz])
     shown = f"{value:.3g}" if math.isfinite(value) else str(value)
-    raise StoreError(
-        f"{where}: implausible value {shown} m/s at {component}, plane index {ix}, t index {t}, y index {iy}, "
-        f"z index {iz} (beyond {basis}; chunk file {component}/c/{t // chunk_t}/{ix}/0/0); the data are "
-        "corrupted, regenerate the store"
-    )
+    raise StoreError(f"{where}: implausible value {shown} m/s at {component}, plane index {ix}, t index {t}, y index "
+                     f"{iy}, z index {iz} (beyond {basis}; chunk file {component}/c/{t // chunk_t}/{ix}/0/0); the data "
+                     "are corrupted, regenerate the store")

@@ -91,17 +91,7 @@ class FieldStore:
 
         A chunk must decode and hold finite values (:func:`read_checked`), none larger in magnitude than
         AMPLITUDE_RMS times the component's recorded rms (:mod:`turbgen.store.plausibility`); else StoreError.
-
-        Parameters
-        ----------
-        component : str
-            "u", "v" or "w".
-        ix : int
-            Plane index in [0, nx - 1].
-        t0, t1 : int
-            First and end (exclusive) time index.
-        out : numpy.ndarray, optional
-            C-contiguous float32 (t1 - t0, ny, nz) buffer to read into (returned); default a new array.
+        ``out``: a C-contiguous float32 (t1 - t0, ny, nz) buffer to read into (returned).
         """
         arr = self.array(component)
         block = read_checked(arr, ix, t0, t1, self.path, out=out)
@@ -205,18 +195,14 @@ def _check_arrays(path: Path, group: zarr.Group, grid: Grid) -> None:
     for c in layout.COMPONENTS:
         arr = group[c]
         if arr.shape != grid.shape or arr.dtype != np.dtype(layout.DTYPE):
-            raise StoreError(
-                f"{path} is corrupted: {c} has shape {arr.shape} {arr.dtype}, "
-                f"the grid needs {grid.shape} {layout.DTYPE}"
-            )
+            raise StoreError(f"{path} is corrupted: {c} has shape {arr.shape} {arr.dtype}, the grid needs {grid.shape} "
+                             f"{layout.DTYPE}")
         if tuple(arr.metadata.dimension_names or ()) != layout.DIMS or arr.chunks[1] != 1:
             raise StoreError(f"{path} is corrupted: {c} has dims {arr.metadata.dimension_names}, chunks {arr.chunks}")
         expected, found = layout.n_chunks(grid, arr.chunks[0]), arr.nchunks_initialized
         if found != expected:
-            raise StoreError(
-                f"{path} is incomplete: {c} has {found} of {expected} chunk files (partial copy?); "
-                "copy it again or regenerate it"
-            )
+            raise StoreError(f"{path} is incomplete: {c} has {found} of {expected} chunk files (partial copy?); "
+                             "copy it again or regenerate it")
     for name, values in layout.coordinates(grid).items():
         arr = group[name]
         if arr.shape != values.shape:
@@ -231,17 +217,7 @@ def open_store(path) -> FieldStore:
     Checks, in order: the path exists; it is a zarr v3 group written by turbgen; the completeness marker is set;
     the attributes match ``schemas/field.schema.json`` and the plausible ranges; every array's own metadata is the
     consolidated copy; u, v, w and the coordinates have the grid's shapes, dtypes and values; every chunk is present
-    (a partial copy is refused).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The store directory (``~`` is expanded).
-
-    Returns
-    -------
-    FieldStore
-        The validated store.
+    (a partial copy is refused). ``~`` in ``path`` is expanded.
     """
     path = Path(path).expanduser().absolute()
     if not path.exists():
@@ -261,10 +237,8 @@ def open_store(path) -> FieldStore:
     if "turbgen_version" not in attrs:
         raise StoreError(f"{path} is a zarr group but not a turbgen store")
     if attrs.get(layout.MARKER) is not True:
-        raise StoreError(
-            f"{path} is incomplete (no completeness marker: the write was interrupted or the copy is partial); "
-            "regenerate it"
-        )
+        raise StoreError(f"{path} is incomplete (no completeness marker: the write was interrupted or the copy is "
+                         "partial); regenerate it")
     layout.validate_attrs(attrs, where=f"{path} is corrupted", error=StoreError)
     check_attributes(attrs, where=f"{path} is corrupted")
     try:
@@ -284,25 +258,9 @@ def open_store(path) -> FieldStore:
 def physical_time_view(path_or_fs):
     """The store as an ``xarray.Dataset`` with an extra 2-D coordinate ``T(t, x) = t - x/U`` [s].
 
-    The store is in the convected frame: all planes share one eddy-time axis ``t``. The stored
-    sample (t, x) is the field at plane x at physical time T = t - x/U (an eddy at x upstream
-    reaches the rotor x/U later), so e.g. ``ds.u.isel(x=i)`` plotted against ``ds.T.isel(x=i)`` is
-    the time series a sensor at plane i sees. Data stay lazy (dask).
-
-    Parameters
-    ----------
-    path_or_fs : str, os.PathLike or FieldStore
-        The store, or its path (opened with :func:`open_store`).
-
-    Returns
-    -------
-    xarray.Dataset
-        u, v, w (t, x, y, z) [m/s] with coordinates t [s], x, y, z [m] and T (t, x) [s].
-
-    Raises
-    ------
-    StoreError
-        When a path is given and it is not a complete, valid store.
+    The stored sample (t, x) is the field at plane x at physical time T = t - x/U (convected frame), so
+    ``ds.u.isel(x=i)`` against ``ds.T.isel(x=i)`` is the time series a sensor at plane i sees. Data stay lazy
+    (dask). ``path_or_fs`` is a FieldStore or a path for :func:`open_store` (StoreError).
     """
     import xarray as xr
 
@@ -311,6 +269,4 @@ def physical_time_view(path_or_fs):
     t = fs.grid.t()
     x = fs.grid.x()
     T = t[:, None] - x[None, :] / fs.U_m_s
-    return ds.assign_coords(
-        T=(("t", "x"), T, {"units": "s", "long_name": "physical time at plane x: T = t - x/U"})
-    )
+    return ds.assign_coords(T=(("t", "x"), T, {"units": "s", "long_name": "physical time at plane x: T = t - x/U"}))

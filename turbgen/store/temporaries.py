@@ -1,12 +1,7 @@
-"""Temporary names of unfinished outputs, the liveness of their writers, and atomic publication.
+"""Temporaries of unfinished outputs (turbgen.atomic), the liveness of their writers, and atomic publication.
 
-Every turbgen writer (field stores, exports, manifests) works under a hidden sibling name
-``.NAME.tmp-PID-XXXXXXXX`` (PID = the writing process) and renames it to ``NAME`` only when
-complete. A temporary whose PID is dead on this host (killed with SIGKILL, power loss) is garbage:
-:func:`remove_dead_temporaries` deletes it (the next write of the same output, ``turbgen info``
-and ``turbgen sweep`` call it and say so in one line). Signals are the application's business
-(:mod:`turbgen.interruption`): here an exception leaving a writer removes its temporary, and a process killed
-outright leaves garbage of a dead writer, never a complete-looking output.
+A temporary whose PID is dead on this host (SIGKILL, power loss) is garbage: :func:`remove_dead_temporaries` deletes
+it (the next write of the same output, ``turbgen info`` and ``turbgen sweep`` call it and say so in one line).
 """
 
 from __future__ import annotations
@@ -22,18 +17,7 @@ from turbgen.atomic import TEMP_MARK, temp_name, temp_prefix  # noqa: F401 (re-e
 
 
 def pid_alive(pid: int) -> bool:
-    """True if a process with this pid exists on this host (EPERM counts as alive, a zombie as dead).
-
-    Parameters
-    ----------
-    pid : int
-        Process id; values <= 0 are never alive.
-
-    Returns
-    -------
-    bool
-        Whether the process exists and is not a zombie.
-    """
+    """True if a process with this pid (> 0) exists on this host (EPERM counts as alive, a zombie as dead)."""
     if pid <= 0:
         return False
     try:
@@ -46,18 +30,7 @@ def pid_alive(pid: int) -> bool:
 
 
 def parse_temp(name: str) -> tuple[str, int] | None:
-    """(final name, writer pid) of a temporary name ``.NAME.tmp-PID-...``, else None.
-
-    Parameters
-    ----------
-    name : str
-        A file or directory name (no directory part).
-
-    Returns
-    -------
-    tuple of (str, int) or None
-        (NAME, PID), or None when ``name`` is not a temporary name.
-    """
+    """(NAME, PID) of a temporary file or directory name ``.NAME.tmp-PID-...`` (no directory part), else None."""
     if not name.startswith(".") or TEMP_MARK not in name:
         return None
     final, _, rest = name[1:].rpartition(TEMP_MARK)
@@ -68,22 +41,9 @@ def parse_temp(name: str) -> tuple[str, int] | None:
 
 
 def remove_dead_temporaries(directory, names=None) -> list[Path]:
-    """Delete temporaries in ``directory`` (of the outputs ``names``, or all) whose writer is dead.
+    """Delete the temporaries in ``directory`` (of the final ``names``, or all) whose writer is dead; the removed paths.
 
-    Unreadable directories and entries that vanish meanwhile are skipped, as are entries that cannot
-    be removed (read-only or foreign).
-
-    Parameters
-    ----------
-    directory : str or os.PathLike
-        Directory to clean.
-    names : iterable of str, optional
-        Final names whose temporaries may be removed; None (default) for all.
-
-    Returns
-    -------
-    list of pathlib.Path
-        The removed paths.
+    Unreadable directories, entries that vanish meanwhile and entries that cannot be removed are skipped.
     """
     directory = Path(directory)
     wanted = None if names is None else set(names)
@@ -101,27 +61,14 @@ def remove_dead_temporaries(directory, names=None) -> list[Path]:
                 shutil.rmtree(entry)
             else:
                 entry.unlink()
-        except FileNotFoundError:
+        except OSError:  # vanished, read-only or foreign: the caller's own write reports a real problem
             continue
-        except OSError:
-            continue  # read-only or foreign: leave it, the caller's own write reports the real problem
         removed.append(entry)
     return removed
 
 
 def removed_line(removed) -> str:
-    """One line naming the removed temporaries (empty when none).
-
-    Parameters
-    ----------
-    removed : iterable of pathlib.Path
-        Paths returned by :func:`remove_dead_temporaries`.
-
-    Returns
-    -------
-    str
-        The message, or "" when nothing was removed.
-    """
+    """One line naming the temporaries :func:`remove_dead_temporaries` removed ("" when none)."""
     removed = list(removed)
     if not removed:
         return ""
@@ -131,17 +78,7 @@ def removed_line(removed) -> str:
 
 
 def report_removed(removed) -> None:
-    """Print :func:`removed_line` on stderr when something was removed.
-
-    Parameters
-    ----------
-    removed : iterable of pathlib.Path
-        Paths returned by :func:`remove_dead_temporaries`.
-
-    Returns
-    -------
-    None
-    """
+    """Print :func:`removed_line` on stderr when something was removed."""
     line = removed_line(removed)
     if line:
         print(line, file=sys.stderr)
@@ -158,26 +95,8 @@ def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
     to a temporary name of this process, then the new one renamed in (a short window without
     ``path``; a writer losing a race against another one gets FileExistsError).
 
-    Parameters
-    ----------
-    tmp : str or os.PathLike
-        The finished temporary (file or directory), a sibling of ``path``.
-    path : str or os.PathLike
-        The final path.
-    replace : bool
-        Allow replacing an existing ``path``.
-
-    Returns
-    -------
-    pathlib.Path or None
-        Where the old output now lies (for the caller to delete), or None when nothing was replaced.
-
-    Raises
-    ------
-    FileExistsError
-        When ``path`` exists and ``replace`` is False, or another writer replaced it meanwhile.
-    OSError
-        For other rename failures.
+    ``tmp`` (file or directory) is a sibling of ``path``. Returns where the old output now lies, or None.
+    FileExistsError as above; OSError for other rename failures.
     """
     tmp, path = Path(tmp), Path(path)
     exists = path.exists() or path.is_symlink()
@@ -205,28 +124,11 @@ def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
 
 
 def write_atomically(path: Path, write, what: str) -> Path:
-    """Write the file ``path`` through ``write(tmp)`` under a temporary name, then rename it into place (replacing an
-    older one): a failed write (a full disk) leaves neither a partial file nor the temporary.
+    """Write the file ``path`` by ``write(tmp)`` under a temporary name, then rename it into place; returns ``path``.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The final file.
-    write : callable
-        ``write(tmp)`` writes the whole file at the path ``tmp`` (whose name has no meaningful suffix: give the
-        format explicitly, e.g. ``fig.savefig(tmp, format="png")``).
-    what : str
-        What the file is, for the error (e.g. "the plot").
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-
-    Raises
-    ------
-    ParameterError
-        One line naming ``path`` when the file system refuses the write (ENOSPC, EACCES, ...).
+    A failed write (a full disk) leaves neither a partial file nor the temporary. ``tmp``'s suffix means nothing
+    (give the format, e.g. ``fig.savefig(tmp, format="png")``). ParameterError naming ``what`` (e.g. "the plot")
+    and ``path`` when the file system refuses the write.
     """
     from turbgen.errors import ParameterError
 

@@ -137,49 +137,30 @@ class StoreWriter:
         attrs = with_writer_attrs(self._attrs, g)
         group = zarr.open_group(str(root), mode="w-", zarr_format=3, attributes=attrs)
         for name, values in layout.coordinates(g).items():
-            arr = group.create_array(
-                name,
-                shape=values.shape,
-                dtype=layout.COORD_DTYPE,
-                chunks=values.shape,
-                dimension_names=(name,),
-                attributes=layout.COORD_ATTRS[name],
-                compressors=None,
-            )
+            arr = group.create_array(name, shape=values.shape, dtype=layout.COORD_DTYPE, chunks=values.shape,
+                                     dimension_names=(name,), attributes=layout.COORD_ATTRS[name], compressors=None)
             arr[:] = values
         for c in layout.COMPONENTS:
             self._arrays[c] = group.create_array(
-                c,
-                shape=g.shape,
-                dtype=layout.DTYPE,
-                chunks=layout.chunk_shape(g, self.chunk_t),
-                dimension_names=layout.DIMS,
-                attributes=layout.COMPONENT_ATTRS[c],
-                compressors=layout.compressor(),
-                fill_value=np.nan,
-                config={"write_empty_chunks": True},
-            )
+                c, shape=g.shape, dtype=layout.DTYPE, chunks=layout.chunk_shape(g, self.chunk_t),
+                dimension_names=layout.DIMS, attributes=layout.COMPONENT_ATTRS[c], compressors=layout.compressor(),
+                fill_value=np.nan, config={"write_empty_chunks": True})
         self._group = group
 
     def _finish(self) -> None:
         for c, done in self._written.items():
             if not done.all():
                 ix, it = np.argwhere(~done)[0]
-                raise RuntimeError(
-                    f"store {self.path}: {c} at plane x = {self.grid.x_m[ix]:g} m was not written from "
-                    f"t index {it} ({int((~done).sum())} samples of {c} missing); nothing was written"
-                )
+                raise RuntimeError(f"store {self.path}: {c} at plane x = {self.grid.x_m[ix]:g} m was not written from "
+                                   f"t index {it} ({int((~done).sum())} samples of {c} missing); nothing was written")
         finish_before_raising(self._mark_complete)
         self._install()
 
     def _mark_complete(self) -> None:
-        self._group.attrs[layout.RMS_ATTR] = self._rms()
+        self._group.attrs[layout.RMS_ATTR] = rms_from_squares(self._squares, self.grid)
         self._group.attrs[layout.MARKER] = True  # the completeness marker, written last ...
         layout.silence_consolidated_metadata_warning()
         zarr.consolidate_metadata(str(self._tmp))  # ... together with the consolidated metadata
-
-    def _rms(self) -> dict[str, float]:
-        return rms_from_squares(self._squares, self.grid)
 
     def _install(self) -> None:
         """Rename the finished temporary directory to ``path`` (swapping out an old store if allowed)."""
@@ -199,21 +180,8 @@ class StoreWriter:
 
 
 def with_writer_attrs(attrs: dict, grid: Grid) -> dict:
-    """The caller's checked ``attrs`` with the attributes the writer adds when it creates a store.
-
-    Parameters
-    ----------
-    attrs : dict
-        Checked caller attributes (check_caller_attrs).
-    grid : Grid
-        The field grid.
-
-    Returns
-    -------
-    dict
-        ``attrs`` plus turbgen_version, created_utc (now, ISO 8601), layout_version, fft_backend (the one selected
-        now: turbgen.fft.current), frame, frame_note, grid.
-    """
+    """The caller's checked ``attrs`` plus what the writer adds: turbgen_version, created_utc (now, ISO 8601),
+    layout_version, fft_backend (turbgen.fft.current), frame, frame_note, grid."""
     return {**attrs, "turbgen_version": __version__,
             "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
             "layout_version": layout.LAYOUT_VERSION, layout.FFT_ATTR: fft.current(), "frame": layout.FRAME, "frame_note": layout.FRAME_NOTE,
@@ -223,11 +191,8 @@ def with_writer_attrs(attrs: dict, grid: Grid) -> dict:
 def validated_caller_attrs(attrs: dict, grid: Grid) -> dict:
     """The caller's ``attrs`` checked (check_caller_attrs) and, with the writer's, against the field schema.
 
-    Raises
-    ------
-    ValueError
-        For attributes that lack a required key or a parameter's unit, set writer attributes, are not
-        JSON-serialisable, or do not match the schema.
+    ValueError for attributes that lack a required key or a parameter's unit, set writer attributes, are not
+    JSON-serialisable, or do not match the schema.
     """
     full = check_caller_attrs(attrs)
     layout.validate_attrs({**with_writer_attrs(full, grid), layout.MARKER: True}, where="store attrs", error=ValueError)
@@ -235,20 +200,10 @@ def validated_caller_attrs(attrs: dict, grid: Grid) -> dict:
 
 
 def rms_from_squares(squares: dict, grid: Grid) -> dict[str, float]:
-    """Root mean square [m/s] of each component over the field (the ``rms_m_s`` attribute).
+    """Component -> root mean square [m/s] over the field (the ``rms_m_s`` attribute).
 
-    Parameters
-    ----------
-    squares : dict
-        (component, ix, t0, t1) -> the float64 sum of squares [m^2/s^2] of the block written there.
-    grid : Grid
-        The field grid.
-
-    Returns
-    -------
-    dict
-        component -> rms [m/s]; the blocks' sums are added in sorted key order, so the value does not depend on
-        how threads interleaved the writes. Readers refuse values beyond ``plausibility.AMPLITUDE_RMS`` times it.
+    ``squares`` maps (component, ix, t0, t1) to the block's float64 sum of squares [m^2/s^2]; summed in sorted key
+    order, so the value does not depend on how threads interleaved the writes.
     """
     n = grid.nx * grid.nt * grid.ny * grid.nz
     total = {c: 0.0 for c in layout.COMPONENTS}
@@ -261,11 +216,7 @@ def checked_block(grid: Grid, component: str, ix: int, data, t0: int) -> tuple[n
     """``data`` as the float32 block a writer stores at (``component``, plane ``ix``, time ``t0``), with its float64
     sum [m/s] and sum of squares [m^2/s^2].
 
-    Raises
-    ------
-    ValueError
-        For an unknown component, a plane index out of range, a block that does not fit the plane, or a block
-        containing NaN or inf.
+    ValueError for an unknown component, a plane index out of range, a block that does not fit, or NaN or inf.
     """
     if component not in layout.COMPONENTS:
         raise ValueError(f"component {component!r} is not one of {layout.COMPONENTS}")
@@ -273,9 +224,8 @@ def checked_block(grid: Grid, component: str, ix: int, data, t0: int) -> tuple[n
         raise ValueError(f"plane index {ix} outside [0, {grid.nx - 1}]")
     block = np.asarray(data, dtype=np.float32)
     if block.ndim != 3 or block.shape[1:] != (grid.ny, grid.nz) or not 0 <= t0 <= grid.nt - block.shape[0]:
-        raise ValueError(
-            f"block of shape {block.shape} at t0={t0} does not fit plane shape ({grid.nt}, {grid.ny}, {grid.nz})"
-        )
+        raise ValueError(f"block of shape {block.shape} at t0={t0} does not fit plane shape ({grid.nt}, {grid.ny}, "
+                         f"{grid.nz})")
     from turbgen.store.block_sums import block_sums  # numba: only for commands that write fields
 
     total, sum_sq = block_sums(block)
@@ -293,15 +243,14 @@ def _raise_disk_error(exc: BaseException, path: Path) -> None:
 
 def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: bool = False,
                     scratch_bytes: int = 0) -> tuple[Path, int]:
-    """What :func:`create_store` checks before it creates anything, for a command to call before it prints: then a
-    refusal is its only output.
+    """What :func:`create_store` checks before it creates anything (a command calls it before it prints).
+
+    Returns (absolute path, chunk_t). Dead writers' temporaries of ``path`` are removed (said on stderr) first.
 
     Parameters
     ----------
-    path : str or os.PathLike
-        The store directory to create.
-    grid : Grid
-        The field grid (the store's size, for the disk check).
+    path, grid : str or os.PathLike, Grid
+        The store directory to create and the field grid (its size for the disk check).
     chunk_t : int, optional
         Time samples per chunk, in [1, nt]; default min(nt, 1024).
     overwrite : bool, optional
@@ -309,22 +258,13 @@ def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: 
     scratch_bytes : int, optional
         Bytes of scratch files the run writes next to the store, counted with it in the disk check.
 
-    Returns
-    -------
-    (pathlib.Path, int)
-        The absolute path and the time-chunk length.
-
     Raises
     ------
     ParameterError
-        For a bad output path, a ``chunk_t`` outside [1, nt], or too little free disk for the uncompressed
-        field (and the scratch).
+        For a bad output path, a ``chunk_t`` outside [1, nt], or too little free disk.
     StoreError
-        When ``path`` exists and ``overwrite`` is False, exists and is not a turbgen store, or the output
-        directory does not exist or is not writable.
-
-    Temporaries of ``path`` left by dead writers are removed (and said on stderr) before the disk is checked,
-    as the next write of the same output does.
+        When ``path`` exists and ``overwrite`` is False or it is not a turbgen store, or the output directory does
+        not exist or is not writable.
     """
     path = check_output_path(path).absolute()
     if chunk_t is None:
@@ -349,28 +289,12 @@ def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: 
     return path, chunk_t
 
 
-def create_store(
-    path, grid: Grid, attrs: dict, *, chunk_t: int | None = None, overwrite: bool = False
-) -> StoreWriter:
-    """A :class:`StoreWriter` for a new field store at ``path`` (a context manager; nothing is created before its
-    ``with`` block is entered).
+def create_store(path, grid: Grid, attrs: dict, *, chunk_t: int | None = None, overwrite: bool = False) -> StoreWriter:
+    """A :class:`StoreWriter` (context manager) for a new field store at ``path``; nothing is created before ``with``.
 
-    The writer adds turbgen_version, created_utc, layout_version, fft_backend, frame, frame_note, grid, rms_m_s and
-    last the completeness marker. Refusals as :func:`check_new_store`; ValueError for ``attrs`` that lack a
-    required key or a parameter's unit, set a writer attribute, are not JSON-serialisable or fail the schema.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The store directory to create.
-    grid : Grid
-        The field grid.
-    attrs : dict
-        Caller attributes: model, parameters, units, seed, U_m_s [m/s], hub_height_m [m].
-    chunk_t : int, optional
-        Time samples per chunk, in [1, nt]; default min(nt, 1024).
-    overwrite : bool, optional
-        Replace an existing turbgen store at ``path`` (default False).
+    ``attrs`` holds model, parameters, units, seed, U_m_s [m/s], hub_height_m [m]; the writer adds the rest
+    (:func:`with_writer_attrs`), rms_m_s and last the completeness marker. Other arguments and refusals as
+    :func:`check_new_store`; ValueError for ``attrs`` :func:`validated_caller_attrs` refuses.
     """
     full = validated_caller_attrs(attrs, grid)
     path, chunk_t = check_new_store(path, grid, chunk_t=chunk_t, overwrite=overwrite)

@@ -16,7 +16,6 @@ from turbgen.theory.mann_spectra import one_point_spectra, yz_coherence
 from turbgen.theory.params import MannParams, check_wind_speed
 from turbgen.theory.space_time import longitudinal_coherence
 
-# default fitting grids [Hz] (README, theory)
 SPECTRA_F_HZ = np.arange(1, 1001) * 1e-3
 YZ_F_HZ = np.logspace(-3, 0, 40)
 LONG_F_HZ = np.logspace(np.log10(3e-4), np.log10(0.5), 60)
@@ -38,10 +37,8 @@ def fit_kaimal_spectra(params: MannParams, U_m_s: float, f_hz=None) -> dict:
 
     Parameters
     ----------
-    params : MannParams
-        Mann model parameters.
-    U_m_s : float
-        Mean wind speed [m/s].
+    params, U_m_s : MannParams, float
+        Mann model and mean wind speed [m/s].
     f_hz : array_like, optional
         Fit frequencies [Hz]; default SPECTRA_F_HZ (1 mHz to 1 Hz, linear).
 
@@ -78,10 +75,8 @@ def fit_yz_coherence(params: MannParams, U_m_s: float, f_hz=None, dy_m: float = 
 
     Parameters
     ----------
-    params : MannParams
-        Mann model parameters.
-    U_m_s : float
-        Mean wind speed [m/s].
+    params, U_m_s : MannParams, float
+        Mann model and mean wind speed [m/s].
     f_hz : array_like, optional
         Fit frequencies [Hz]; default YZ_F_HZ (40 log-spaced, 1 mHz to 1 Hz).
     dy_m, dz_m : float, optional
@@ -110,10 +105,8 @@ def fit_longitudinal(params: MannParams, U_m_s: float, dx_m: float = 100.0, f_hz
 
     Parameters
     ----------
-    params : MannParams
-        Mann model parameters with ``evo_time_s`` set (frozen turbulence has coh = 1: ParameterError).
-    U_m_s : float
-        Mean wind speed [m/s].
+    params, U_m_s : MannParams, float
+        Mann model with ``evo_time_s`` set (frozen: ParameterError) and mean wind speed [m/s].
     dx_m : float, optional
         Longitudinal separation [m], > 0.
     f_hz : array_like, optional

@@ -80,7 +80,6 @@ def iec_kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float =
     Returns
     -------
     KaimalParams
-        sigma_m_s [m/s], length_scales_m [m], a_yz [-] and lc_m [m].
     """
     lam = iec_lambda1_m(hub_height_m)
     s1 = iec_sigma1_m_s(U_m_s, turb_class)

@@ -74,21 +74,7 @@ def cell_rule(center: float, width: float, n: int, floor: float, ratio: float, m
     A cell centred on 0 (where Phi peaks on the k1 axis) is split, on each side, into panels shrinking
     by ``ratio`` towards 0 while the innermost is wider than ``floor`` (at most ``max_panels`` panels).
 
-    Parameters
-    ----------
-    center, width : float
-        The cell [rad/m].
-    n : int
-        Nodes per panel.
-    floor, ratio : float
-        Grading of a cell on 0: the width [rad/m] down to which panels shrink, and their ratio.
-    max_panels : int
-        Most panels per side.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        Nodes [rad/m] and weights [rad/m].
+    ``center``, ``width`` and ``floor`` in rad/m, ``n`` nodes per panel; returns nodes and weights [rad/m].
     """
     if center != 0.0:
         return gauss_panel(center - width / 2, center + width / 2, n)

@@ -58,15 +58,7 @@ def _first_crossing(f: np.ndarray, y: np.ndarray, level: float) -> float:
 def cutoff_frequency_hz(f_hz, gain) -> float:
     """The -3 dB cut-off [Hz]: first f where ``gain`` = ``|G_RL|`` drops below 10^(-3/20) (Guo et al. 2023, Table 5).
 
-    Parameters
-    ----------
-    f_hz, gain : array_like
-        Increasing frequencies [Hz] and the gain at them [-].
-
-    Returns
-    -------
-    float
-        f_hz[0] if the gain starts below the level, nan if it never drops (interpolation: _first_crossing).
+    ``f_hz`` increasing [Hz], ``gain`` [-] at them; f_hz[0] if the gain starts below the level, nan if it never drops.
     """
     return _first_crossing(np.asarray(f_hz, float), np.asarray(gain, float), MINUS_3_DB)
 
@@ -74,17 +66,7 @@ def cutoff_frequency_hz(f_hz, gain) -> float:
 def coherence_bandwidth_rad_m(f_hz, coh2, U_m_s: float) -> float:
     """MCB k_0.5 = 2 pi f_0.5 / U [rad/m], f_0.5 where gamma^2_RL drops below 0.5 (Fu et al. 2023, Eq. 26).
 
-    Parameters
-    ----------
-    f_hz, coh2 : array_like
-        Increasing frequencies [Hz] and magnitude-squared coherence gamma^2_RL [-] at them.
-    U_m_s : float
-        Mean wind speed [m/s].
-
-    Returns
-    -------
-    float
-        k_0.5 [rad/m]; nan if gamma^2 never drops below 0.5.
+    ``f_hz`` increasing [Hz], ``coh2`` gamma^2_RL [-] at them, ``U_m_s`` [m/s]; nan if gamma^2 never drops below 0.5.
     """
     return 2.0 * np.pi * _first_crossing(np.asarray(f_hz, float), np.asarray(coh2, float), 0.5) / U_m_s
 
@@ -101,10 +83,8 @@ def buffer_time_s(range_m: float, U_m_s: float, scan_time_s: float, cutoff_hz: f
 
     Parameters
     ----------
-    range_m : float
-        Preview distance x upstream of the rotor [m].
-    U_m_s : float
-        Mean wind speed [m/s].
+    range_m, U_m_s : float
+        Preview distance x upstream of the rotor [m] and mean wind speed [m/s].
     scan_time_s, pitch_delay_s : float
         Duration of one scan and pitch actuator delay [s].
     cutoff_hz, f_delay_hz : float

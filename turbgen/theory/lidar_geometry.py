@@ -20,20 +20,8 @@ from turbgen.errors import ParameterError
 def nacelle_directions(azimuth_deg, elevation_deg) -> np.ndarray:
     """Beam directions d = (cos beta cos phi, cos beta sin phi, sin beta) of a nacelle lidar (Guo et al. 2023, Fig. 3).
 
-    Parameters
-    ----------
-    azimuth_deg, elevation_deg : array_like
-        Azimuth phi (towards +y) and elevation beta (up) of each beam [deg], of equal shape.
-
-    Returns
-    -------
-    numpy.ndarray
-        (n_beams, 3) unit vectors (x upstream, y, z) [-].
-
-    Raises
-    ------
-    ParameterError
-        If the two differ in shape.
+    ``azimuth_deg`` phi (towards +y) and ``elevation_deg`` beta (up) [deg] per beam, of equal shape (else
+    ParameterError); returns (n_beams, 3) unit vectors (x upstream, y, z).
     """
     phi = np.radians(np.atleast_1d(np.asarray(azimuth_deg, dtype=float)))
     beta = np.radians(np.atleast_1d(np.asarray(elevation_deg, dtype=float)))
@@ -48,19 +36,8 @@ def spinner_directions(half_cone_deg: float, scan_deg, tilt_deg: float = 0.0) ->
     d = cos phi a + sin phi (cos theta e_y + sin theta e_perp), a = (cos tilt, 0, sin tilt),
     e_perp = (-sin tilt, 0, cos tilt): the cone around the shaft, tilted up with it (about y).
 
-    Parameters
-    ----------
-    half_cone_deg : float
-        Half-cone angle phi [deg].
-    scan_deg : array_like
-        Scan angles theta, from +y towards +z [deg].
-    tilt_deg : float, optional
-        Shaft tilt [deg].
-
-    Returns
-    -------
-    numpy.ndarray
-        (n_beams, 3) unit vectors (x upstream, y, z) [-], one row per scan angle.
+    ``half_cone_deg`` phi, ``scan_deg`` theta (from +y towards +z) and ``tilt_deg`` in degrees; returns one unit
+    vector (x upstream, y, z) per scan angle.
     """
     phi = np.radians(float(half_cone_deg))
     theta = np.radians(np.atleast_1d(np.asarray(scan_deg, dtype=float)))

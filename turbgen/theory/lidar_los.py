@@ -23,14 +23,10 @@ def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: f
 
     Parameters
     ----------
-    f_hz : array_like
-        Frequencies [Hz].
-    meas : Measurements
-        The lidar's measurements.
-    kparams : KaimalParams
-        Kaimal spectra and IEC yz coherence.
-    U_m_s : float
-        Mean wind speed [m/s].
+    f_hz, meas : array_like, Measurements
+        Frequencies [Hz] and the lidar's measurements.
+    kparams, U_m_s : KaimalParams, float
+        Kaimal spectra with IEC yz coherence, and mean wind speed [m/s].
     vw_coherence : bool, optional
         Give v and w the yz coherence of u.
     """

@@ -1,27 +1,19 @@
-"""Lidar preview quality: rotor-effective wind speed (REWS) spectra, lidar-rotor coherence, Wiener gain.
+"""Lidar preview quality: REWS spectra, lidar-rotor coherence and Wiener gain (Guo et al. 2023, Sect. 3).
 
-Signals (Guo et al. 2023, Sect. 3; Fu et al. 2023, Sect. 2.4): u_RR, the mean u over the rotor disc of
-radius R at x = 0 (Eq. 23); u_LL = (1/M) sum_i v_los,i / n_i1 over the M measurements of one scan (Eq. 28
-without its stray outer factor; Fu et al. 2023, Eq. 23). Each measurement is shifted by its preview time
-x_i / U, so what remains between a gate and the rotor is the eddies' evolution over |x_i - x_j| / U
-(Eq. 29, 32 with Delta t as in Fu et al. 2023, Eq. 25).
+u_RR is the mean u over the rotor disc of radius R at x = 0 (Eq. 23); u_LL = (1/M) sum_i v_los,i / n_i1
+over one scan's M measurements (Eq. 28 without its stray outer factor; Fu et al. 2023, Eq. 23), each shifted
+by its preview time x_i / U, so only the eddies' evolution over |x_i - x_j| / U remains (Eq. 29, 32).
 
-Mann model (space-time tensor, Guo et al. 2022), two-sided in k1:
-  S_LL(k1) = ∫ sum_{g,h} D(k, |x_g - x_h|/U) A_g(k)^T Phi(k) A_h(k)^* dk_perp        (Eq. 29)
-  S_RL(k1) = ∫ sum_g D(k, x_g/U) r(kappa) sum_m Phi_1m(k) A_g,m(k)^* dk_perp          (Eq. 32)
-  S_RR(k1) = ∫ r(kappa)^2 Phi_11(k) dk_perp                                           (Eq. 24)
-with A_g(k) = sum_{i in gate g} n_i phi_hat_i(k . n_i) exp(i (k2 y_i + k3 z_i)) / (M n_i1), the rotor
-filter r = 2 J1(kappa R) / (kappa R) and D = exp(-dt / tau_e(|k|)) (1 for frozen turbulence). The
-(k2, k3) integral is a polar quadrature (Gauss-Legendre panels in kappa up to KAPPA_MAX, trapezoid in
-theta), the same nodes for all three spectra so their errors largely cancel in the coherence; or, with
-``box``, the sum over the lattice of a periodic synthesis box (turbgen.theory.lidar_lattice). KAPPA_MAX
-suits averaged signals; a single *point* loses the inertial tail unless ``kappa_max`` is raised.
+Mann (space-time tensor, two-sided in k1), with A_g(k) = sum_{i in gate g} n_i phi_hat_i(k . n_i)
+exp(i (k2 y_i + k3 z_i)) / (M n_i1), r = 2 J1(kappa R) / (kappa R) and D = exp(-dt / tau_e(|k|)):
+  S_LL = ∫ sum_{g,h} D(k, |x_g - x_h|/U) A_g^T Phi A_h^* dk_perp   (Eq. 29)
+  S_RL = ∫ sum_g D(k, x_g/U) r sum_m Phi_1m A_g,m^* dk_perp         (Eq. 32)
+  S_RR = ∫ r^2 Phi_11 dk_perp                                       (Eq. 24)
+The (k2, k3) integral is one polar quadrature for all three (so errors cancel in the coherence), or with
+``box`` the lattice of a periodic synthesis box. A single *point* needs a larger ``kappa_max``.
 
-Kaimal model (direct product, Guo et al. 2023, Eq. 25, 31, 33): S_c(f) coh_yz(r, f) gamma_x(dx, f)
-between the probe-volume samples (Taylor within the probe volume), the rotor on a square grid.
-
-gamma^2_RL = |S_RL|^2 / (S_RR S_LL) (Eq. 34), |G_RL| = |S_RL| / S_LL (Eq. 35); the control design from
-them is in turbgen.theory.lidar_control, line-of-sight spectra in turbgen.theory.lidar_los.
+Kaimal (direct product, Eq. 25, 31, 33): S_c(f) coh_yz(r, f) gamma_x(dx, f) between the probe-volume
+samples, the rotor on a square grid. gamma^2_RL (Eq. 34), |G_RL| (Eq. 35).
 """
 
 from __future__ import annotations
@@ -54,15 +46,7 @@ N_THETA = 160
 
 @dataclass(frozen=True)
 class PreviewSpectra:
-    """One-sided spectra of u_RR, u_LL and their cross-spectrum.
-
-    Parameters
-    ----------
-    f_hz : numpy.ndarray
-        (n_f,) frequencies [Hz].
-    S_RR, S_LL, S_RL : numpy.ndarray
-        (n_f,) spectra of u_RR and u_LL, complex cross-spectrum [m^2 s^-2 Hz^-1].
-    """
+    """One-sided spectra of u_RR, u_LL and their complex cross-spectrum [m^2 s^-2 Hz^-1] at ``f_hz`` [Hz]."""
 
     f_hz: np.ndarray
     S_RR: np.ndarray
@@ -144,12 +128,7 @@ class _Lidar:
 
 
 def _node_spectra(lidar: _Lidar, k1: float, k2, k3, phi_w, inv_tau, rotor, U: float):
-    """Two-sided S_RR, S_LL, S_RL (Eq. 24, 29, 32) as sums over (k2, k3) nodes weighted by ``phi_w``.
-
-    The decay D_gh = exp(-s |x_g - x_h|), s = 1 / (U tau_e), is summed by a recursion over the sorted gates,
-    C_h = exp(-s (x_h - x_{h-1})) (C_{h-1} + A_{h-1}), so sum_{g,h} D_gh A_g^T Phi conj(A_h) is the real part
-    of sum_h (A_h + 2 C_h)^T Phi conj(A_h): O(gates) per node (turbgen.theory.lidar_preview_kernel).
-    """
+    """Two-sided S_RR, S_LL, S_RL (Eq. 24, 29, 32) as sums over (k2, k3) nodes weighted by ``phi_w``."""
     S_LL, S_RL = node_sums(float(k1), np.ascontiguousarray(k2, dtype=float), np.ascontiguousarray(k3, dtype=float),
                            lidar.beams, lidar.beam_table, lidar.beam_of, lidar.nu_step, lidar.tables, lidar.phase,
                            lidar.gate_of, lidar.scale, lidar.xs.astype(float), np.ascontiguousarray(phi_w, dtype=float),
@@ -167,15 +146,15 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
     Parameters
     ----------
     f_hz : array_like
-        Positive frequencies [Hz] (k1 = 2 pi f / U).
+        Positive frequencies [Hz].
     meas : Measurements
-        The lidar's measurements (one full scan).
+        One full scan's measurements.
     params : MannParams
         Mann model (``evo_time_s`` None: frozen turbulence).
     U_m_s, radius_m : float
         Mean wind speed U [m/s], rotor radius R [m].
     kappa_max, panel_width : float, optional
-        Upper end of the radial quadrature and width of its panels above KAPPA_SPLIT [rad/m].
+        Upper end of the radial quadrature and its panel width above KAPPA_SPLIT [rad/m].
     n_theta : int, optional
         Trapezoid nodes in angle.
     box : BoxLattice, optional
@@ -184,13 +163,11 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
     Returns
     -------
     PreviewSpectra
-        One-sided in f [m^2 s^-2 Hz^-1]; S_RL complex.
 
     Raises
     ------
     ParameterError
-        If ``f_hz`` is empty or not positive, U or R is invalid, ``meas`` is empty or a beam does not
-        look upstream (n_1 <= 1e-6: u_LL divides by n_1).
+        If ``f_hz`` is empty or not positive, U or R is invalid, ``meas`` is empty or a beam has n_1 <= 1e-6.
     """
     f, U, R = _check(f_hz, meas, U_m_s, radius_m)
     k1_all = 2.0 * np.pi * f / U
@@ -240,14 +217,10 @@ def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_
 
     Parameters
     ----------
-    f_hz : array_like
-        Positive frequencies [Hz].
-    meas : Measurements
-        The lidar's measurements (one full scan).
+    f_hz, meas, U_m_s, radius_m
+        As :func:`mann_preview_spectra`.
     kparams : KaimalParams
         Kaimal spectra and IEC yz coherence.
-    U_m_s, radius_m : float
-        Mean wind speed U [m/s], rotor radius R [m].
     long_coherence : callable
         ``long_coherence(dx_m, f_hz)``: un-squared coherence [-] between planes dx [m] apart, for the
         components in ``long_components`` (the others are independent between planes).
@@ -261,7 +234,6 @@ def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_
     Returns
     -------
     PreviewSpectra
-        One-sided in f [m^2 s^-2 Hz^-1]; S_RL complex.
 
     Raises
     ------

@@ -27,17 +27,7 @@ def sigma_from_fwhm_m(fwhm_m: float) -> float:
 def rayleigh_length_m(focus_distance_m, wavelength_m: float = 1.565e-6, beam_radius_m: float = 0.028):
     """Rayleigh length z_R = lambda f_d^2 / (pi r_b^2) of a continuous-wave lidar (Fu et al. 2023, Eq. 15).
 
-    Parameters
-    ----------
-    focus_distance_m : array_like
-        Focus distance f_d [m].
-    wavelength_m, beam_radius_m : float, optional
-        Laser wavelength lambda and beam radius r_b [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        z_R [m], shaped like ``focus_distance_m``.
+    z_R [m] shaped like ``focus_distance_m`` f_d [m]; ``wavelength_m`` lambda and ``beam_radius_m`` r_b [m].
     """
     check_positive("wavelength (m)", wavelength_m)
     check_positive("beam radius (m)", beam_radius_m)
@@ -79,12 +69,9 @@ def lorentzian_transform(nu_rad_m, z_r_m: float):
 
 
 def pulsed_discrete(fwhm_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """Gaussian of FWHM ``fwhm_m`` [m] sampled on [-1.5 W_L, 1.5 W_L] in steps of 2.5 m (Fu et al. 2023, Sect. 2.3).
+    """(offsets [m], weights [-] summing to 1): Gaussian of FWHM ``fwhm_m`` [m] on [-1.5 W_L, 1.5 W_L], 2.5 m steps.
 
-    Returns
-    -------
-    tuple of numpy.ndarray
-        (offsets [m], weights [-] summing to 1), each (2 n + 1,).
+    Fu et al. (2023), Sect. 2.3.
     """
     half = PULSED_HALF_WIDTH_FWHM * check_positive("FWHM W_L (m)", fwhm_m)
     n = int(np.floor(half / PULSED_STEP_M + 1e-9))
@@ -94,12 +81,9 @@ def pulsed_discrete(fwhm_m: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def cw_discrete(z_r_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """Lorentzian of Rayleigh length ``z_r_m`` [m] on [-6 z_R, 6 z_R] in steps of 0.1 z_R (Fu et al. 2023, Sect. 2.3).
+    """(offsets [m], weights [-] summing to 1), each (121,): Lorentzian of Rayleigh length ``z_r_m`` [m].
 
-    Returns
-    -------
-    tuple of numpy.ndarray
-        (offsets [m], weights [-] summing to 1), each (121,).
+    On [-6 z_R, 6 z_R] in steps of 0.1 z_R (Fu et al. 2023, Sect. 2.3).
     """
     z = check_positive("Rayleigh length z_R (m)", z_r_m)
     n = int(round(CW_HALF_WIDTH_ZR / CW_STEP_ZR))
@@ -111,17 +95,8 @@ def cw_discrete(z_r_m: float) -> tuple[np.ndarray, np.ndarray]:
 def discrete_transform(nu_rad_m, offsets_m, weights):
     """Transform sum_r w_r cos(nu s_r) [-] of symmetric discrete weights (= sum_r w_r exp(-i nu s_r)).
 
-    Parameters
-    ----------
-    nu_rad_m : array_like
-        Wavenumber along the beam [rad/m], any shape.
-    offsets_m, weights : array_like
-        (K,) offsets s_r [m], symmetric about 0, and weights w_r [-].
-
-    Returns
-    -------
-    numpy.ndarray
-        Shaped like ``nu_rad_m``.
+    ``nu_rad_m`` [rad/m] along the beam (the result has its shape); (K,) ``offsets_m`` s_r [m], symmetric about
+    0, and ``weights`` w_r [-].
     """
     nu = np.asarray(nu_rad_m, dtype=float)
     s = np.asarray(offsets_m, dtype=float)

@@ -14,9 +14,6 @@ k2 = kappa cos(theta), k3 = kappa sin(theta), on which beta(|k|) is constant:
   ∫ Phi e^{i kappa d cos(theta - theta_d)} dtheta = 2 pi sum_n c_n i^n J_n(kappa d) e^{i n theta_d},
   exact in angle; radial sub-panels no wider than pi/d, the range cut where the dropped oscillating
   tail is below SEP_TAIL of F_ii.
-
-tests/theory/test_theory_mann.py checks the accuracy against refined rules and, at Gamma = 0, the
-isotropic closed form F11 = (9/55) ae (L^-2 + k1^2)^(-5/6).
 """
 
 from __future__ import annotations
@@ -42,8 +39,6 @@ SEP_TAIL = 3e-5  # target size of the dropped radial tail with a separation (see
 K1_ZERO = 1e-8  # k1 L used for k1 = 0 (the limit; see perpendicular_quadrature)
 _CHUNK_POINTS = 400_000  # tensor evaluations per batch (bounds memory)
 _QUADRATURE_THREADS = min(os.cpu_count() or 1, 4)  # batches evaluated at once (memory: ~0.1 GB each)
-
-
 
 @lru_cache(maxsize=8)
 def gauss(n: int):
@@ -110,16 +105,12 @@ def perpendicular_quadrature(
     k1, params: MannParams, pairs, dy_m: float = 0.0, dz_m: float = 0.0, resolve_m: float = 0.0,
     resolve_kappa_max: float = np.inf, _rule=None
 ):
-    """Angular integrals on the radial nodes of the (k2, k3) plane, for every k1 (module docstring).
-
-    Radial weights that depend on |k| or kappa only (space-time decay, rotor average) are the caller's.
+    """Angular integrals on the radial nodes of the (k2, k3) plane, for every k1; radial weights are the caller's.
 
     Parameters
     ----------
-    k1 : array_like
-        Longitudinal wavenumbers [rad/m], finite.
-    params : MannParams
-        Mann model parameters.
+    k1, params : array_like, MannParams
+        Longitudinal wavenumbers [rad/m] and Mann model.
     pairs : iterable of tuple of int
         Tensor components (i, j), indices in 0..2.
     dy_m, dz_m : float, optional

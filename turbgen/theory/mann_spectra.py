@@ -28,10 +28,8 @@ def one_point_spectra(k1, params: MannParams) -> dict[str, np.ndarray]:
 
     Parameters
     ----------
-    k1 : array_like
-        Longitudinal wavenumbers [rad/m].
-    params : MannParams
-        Mann model parameters.
+    k1, params : array_like, MannParams
+        Longitudinal wavenumbers [rad/m] and Mann model.
 
     Returns
     -------
@@ -48,10 +46,8 @@ def cross_spectrum(k1, params: MannParams, i: int, j: int, dy_m: float = 0.0, dz
 
     Parameters
     ----------
-    k1 : array_like
-        Longitudinal wavenumbers [rad/m].
-    params : MannParams
-        Mann model parameters.
+    k1, params : array_like, MannParams
+        Longitudinal wavenumbers [rad/m] and Mann model.
     i, j : int
         Velocity components.
     dy_m, dz_m : float, optional

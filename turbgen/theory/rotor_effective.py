@@ -11,7 +11,6 @@ from turbgen.theory.kaimal import kaimal_spectrum
 from turbgen.theory.mann_quadrature import perpendicular_quadrature
 from turbgen.theory.params import KaimalParams, MannParams, check_wind_speed
 
-
 Z_SMOOTH, SMOOTH_S = 60.0, 6.0
 
 
@@ -44,12 +43,8 @@ def rews_spectrum_kaimal(f_hz, kparams: KaimalParams, U_m_s: float, y_m, z_m) ->
 
     Parameters
     ----------
-    f_hz : array_like
-        Frequencies [Hz].
-    kparams : KaimalParams
-        Kaimal spectra and IEC yz coherence.
-    U_m_s : float
-        Mean wind speed [m/s].
+    f_hz, kparams, U_m_s : array_like, KaimalParams, float
+        Frequencies [Hz], Kaimal spectra with IEC yz coherence, mean wind speed [m/s].
     y_m, z_m : array_like
         Positions of the n_R rotor points [m], equally long and finite.
 

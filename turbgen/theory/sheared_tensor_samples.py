@@ -1,11 +1,8 @@
 """The sheared Mann tensor (Mann 1994, Eq. 15-19) on the polar quadrature nodes of the (k2, k3) plane, compiled.
 
-``perpendicular_quadrature`` evaluates Phi_ij at ~10^7 (k1, kappa, theta) nodes, where the whole-array
-``mann_tensor.sheared_tensor`` would make ~40 passes over arrays of that size. Here two compiled loops
-do the arithmetic point by point, with the operations of ``mann_tensor._distortion`` and
-``sheared_tensor`` in the same order (exact limits included); the transcendental functions stay numpy
-calls between them (numpy's SIMD versions round differently from the C library's), so every Phi_ij
-is bit-identical to ``sheared_tensor`` (tested).
+Two compiled loops do ``mann_tensor.sheared_tensor``'s arithmetic point by point in the same order (instead of
+~40 whole-array passes over ~10^7 nodes); arctan, sqrt and E stay numpy calls between them (numpy's SIMD
+versions round differently from the C library's), so every Phi_ij is bit-identical (tested).
 """
 
 from __future__ import annotations
@@ -98,26 +95,19 @@ def sheared_tensor_on_circles(k1, kappa, beta, cos_t, sin_t, pairs, ae: float, l
 
     Parameters
     ----------
-    k1 : numpy.ndarray
-        (rows,) k1 [rad/m].
-    kappa : numpy.ndarray
-        (rows, nr) radial nodes [rad/m] of each row.
-    beta : numpy.ndarray
-        (rows, nr) shear distortion beta(|k|) [-] at each node (constant on a circle); non-finite -> 0.
+    k1, kappa, beta : numpy.ndarray
+        (rows,) k1 [rad/m]; (rows, nr) radial nodes [rad/m] and beta(|k|) [-] (non-finite -> 0).
     cos_t, sin_t : numpy.ndarray
         (n_theta,) cosine and sine of the angles.
     pairs : sequence of (int, int)
         Tensor components (i, j) wanted.
-    ae : float
-        alpha*eps^(2/3) [m^(4/3) s^-2].
-    length_scale_m : float
-        Length scale L [m].
+    ae, length_scale_m : float
+        alpha*eps^(2/3) [m^(4/3) s^-2] and L [m].
 
     Returns
     -------
     numpy.ndarray
-        (len(pairs), rows, nr, n_theta) float64 Phi_ij [m^5 s^-2], equal bit for bit to
-        ``mann_tensor.sheared_tensor`` at the same points with the same beta.
+        (len(pairs), rows, nr, n_theta) Phi_ij [m^5 s^-2], bit for bit ``mann_tensor.sheared_tensor``'s.
     """
     k1, kappa, beta, cos_t, sin_t = (np.ascontiguousarray(a, dtype=np.float64) for a in (k1, kappa, beta, cos_t, sin_t))
     shape = kappa.shape + cos_t.shape

@@ -52,7 +52,7 @@ def longitudinal_coherence(f_hz, dx_m: float, U_m_s: float, params: MannParams) 
     dx_m, U_m_s : float
         Longitudinal separation [m] and mean wind speed [m/s].
     params : MannParams
-        Mann model parameters.
+        Mann model.
 
     Returns
     -------

@@ -8,9 +8,8 @@ run records in its store: a re-run, the validator and sweeps read the same numbe
 * a callable ``coh(f_hz, r_m, U_m_s)`` is evaluated on the lines x the grid's distinct separations;
 * a table (``f_hz`` (m,), ``r_m`` (n,), ``coh`` (m, n)) is interpolated linearly in f onto the lines.
 
-Between nodes the coherence is linear in r, beyond the last node held (values the grid's separations do not see:
-they only shape the circulant embedding's torus, whose eigenvalues turbgen.synthesis.circulant checks). A
-callable's table holds every separation of the grid, so the field takes its values there exactly.
+Between nodes the coherence is linear in r, beyond the last node held (only the circulant embedding's torus sees
+those values; turbgen.synthesis.circulant checks its eigenvalues).
 """
 
 from __future__ import annotations

@@ -2,12 +2,10 @@
 
 The generator gives line k of the record (f_k = k df, df = 1 / (nt dt); turbgen.theory.lattice) the
 variance of its band [f_k - df/2, f_k + df/2], as it does with the Kaimal spectrum (Guo et al. 2023,
-Eq. 11) integrated in closed form. A user spectrum is therefore reduced to the mean one-sided PSD S_k
-[m^2/s] of each band k >= 1 (line 0, the mean, carries no variance): a callable is a density, averaged
-over the band by Gauss-Legendre quadrature (exact to round-off for a spectrum analytic over the band);
-a table holds band means (a Welch-averaged measurement), interpolated linearly at f_k.
-:class:`LineSpectrum` is what a run records in its store, so a re-run and the validator read the same
-numbers without the callable or the file.
+Eq. 11) integrated in closed form. So a user spectrum becomes the mean one-sided PSD S_k [m^2/s] of each
+band k >= 1: a callable's density averaged over the band by Gauss-Legendre quadrature, or a table of band
+means (a Welch-averaged measurement) interpolated linearly at f_k. A run records :class:`LineSpectrum` in
+its store, so a re-run and the validator need neither the callable nor the file.
 """
 
 from __future__ import annotations
@@ -42,10 +40,8 @@ class LineSpectrum:
 
     Parameters
     ----------
-    nt : int
-        Samples of the run's record.
-    dt_s : float
-        Its sampling interval [s].
+    nt, dt_s : int, float
+        The run's record: samples and sampling interval [s].
     S_m2_s : tuple of tuple of float
         (3, nt // 2) band means S_k [m^2/s] of u, v, w at f_k = k / (nt dt).
     """
