@@ -364,6 +364,9 @@ def kaimal_run(options: Mapping, config: PathLike | Mapping | None = None, prese
     ParameterError
         For ``presets_file`` without ``preset``, a bad run file or value.
     """
+    if options.get("sigma") is not None and options.get("spectrum") is not None:
+        raise ParameterError("`sigma` (--sigma) with `spectrum`: the user spectrum sets sigma_u, sigma_v, sigma_w "
+                             "(its integral over the run's lines); scale the spectrum instead")
     given, grid, x_m = run_inputs("kaimal", options)
     user = _presets(preset, presets_file)
     resolved: dict = {}

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 
 from turbgen.errors import ParameterError, check_choice
@@ -71,8 +71,9 @@ class KaimalRun:
     turb_class : str, optional
         IEC class the sigmas came from (recorded only).
     spectrum : LineSpectrum, optional
-        User spectra of u, v, w on the grid's lines (turbgen.theory.user_spectra) in place of Kaimal's;
-        the sigmas and lengths then enter only the Simley-Pao and Kristensen coherences.
+        User spectra of u, v, w on the grid's lines (turbgen.theory.user_spectra) in place of Kaimal's; the
+        sigmas become the spectrum's (its line variances summed) and, with L1, enter only the Simley-Pao and
+        Kristensen coherences.
     coherence : LineCoherence, optional
         User yz coherence on the grid's lines (turbgen.theory.user_coherence) in place of the IEC exponential
         (u, and v, w with vw_coherence "exp").
@@ -119,7 +120,12 @@ class KaimalRun:
             if self.rescale:
                 raise ParameterError("rescale = true applies to the Kaimal spectra, not to a user spectrum (scale "
                                      "the spectrum instead)")
-            object.__setattr__(self, "spectrum", line_spectrum(self.spectrum, self.grid))
+            spectrum = line_spectrum(self.spectrum, self.grid)
+            # the run's sigmas are the spectrum's as the lines realise it (recorded; Simley-Pao, Kristensen read them)
+            sigma = [ranges.check("sigma_m_s", math.sqrt(v), f"the spectrum's sigma_{c} (m/s)")
+                     for c, v in zip("uvw", spectrum.line_variances().sum(axis=1))]  # fmt: skip
+            object.__setattr__(self, "spectrum", spectrum)
+            object.__setattr__(self, "kaimal", replace(self.kaimal, sigma_m_s=tuple(sigma)))
         object.__setattr__(self, "coherence", line_coherence(self.coherence, self.grid, self.U_m_s))
 
     @property
