@@ -39,6 +39,7 @@ LINE_OF_SIGHT = InputKind("line-of-sight file", _mib(256))  # a v_los record (CS
 MEAN_HISTORY = InputKind("mean history", _mib(64))  # hub-height speed and direction over time
 PROFILE_TABLE = InputKind("profile table", _mib(1))  # z, U[, direction] rows
 SPECTRUM = InputKind("spectrum file", _mib(16))  # f_hz, S_u, S_v, S_w rows (a user spectrum)
+COHERENCE = InputKind("coherence file", _mib(16))  # f_hz, r_m, coh rows (a user yz coherence)
 TOKEN = InputKind("token file", 4096)
 
 _NOT_REGULAR = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO or pipe"), (stat.S_ISCHR, "a character device"),
