@@ -124,7 +124,7 @@ class FieldStore:
         Returns
         -------
         dict
-            path, complete, model, turbgen_version, created_utc, grid, shape_t_x_y_z, duration_s [s],
+            path, complete, model, turbgen_version, created_utc, fft_backend, grid, shape_t_x_y_z, duration_s [s],
             width_y_m [m], height_z_m [m], chunk_t, U_m_s [m/s], hub_height_m [m], seed, frame,
             frame_note, parameters, units, size_on_disk_bytes and size_uncompressed_bytes [bytes], warnings (an
             implausible recorded rms: :func:`turbgen.store.plausibility.spread_warnings`); ``constraints``
@@ -137,6 +137,7 @@ class FieldStore:
             "model": self.model,
             "turbgen_version": a["turbgen_version"],
             "created_utc": a["created_utc"],
+            "fft_backend": a.get(layout.FFT_ATTR),  # which round-off a re-run reproduces (None: an older store)
             "grid": layout.grid_to_attrs(g),
             "shape_t_x_y_z": list(g.shape),
             "duration_s": g.nt * g.dt_s,
