@@ -5,6 +5,7 @@ values beyond the recorded rms: ``plausibility``). Every refusal is a one-line S
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -224,6 +225,13 @@ def _check_arrays(path: Path, group: zarr.Group, grid: Grid) -> None:
             raise StoreError(f"{path} is corrupted: coordinate {name!r} is missing or has the wrong length")
         if not np.allclose(arr[:], values, rtol=1e-9, atol=1e-9):
             raise StoreError(f"{path} is corrupted: coordinate {name!r} does not match the grid attributes")
+
+
+def chunks_written(path) -> int:
+    """Chunks of u, v, w written so far to the store at ``path``, complete or being written: the files under their
+    ``c/`` folders (zarr v3's chunk keys): the count of zarr's ``nchunks_initialized``, which is slower (it matches
+    every possible chunk key against the listing) for the service's progress of every running run."""
+    return sum(len(files) for c in layout.COMPONENTS for _, _, files in os.walk(Path(path) / c / "c"))
 
 
 def open_store(path) -> FieldStore:
