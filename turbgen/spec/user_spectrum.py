@@ -138,5 +138,5 @@ def line_coherence(value, grid: Grid, U_m_s: float) -> LineCoherence | None:
         r_m = grid_separations_m(grid.ny, grid.nz, grid.dy_m, grid.dz_m)
         return LineCoherence.from_callable(value, grid.nt, grid.dt_s, r_m, U_m_s)
     raise ParameterError(f"coherence: {type(value).__name__} is not a CSV path, a mapping of "
-                         f"{', '.join(COHERENCE_COLUMNS)} nor a callable coh(f_hz, r_m, U_m_s), or was made for another "
-                         "nt, dt")
+                         f"{', '.join(COHERENCE_COLUMNS)} nor a callable coh(f_hz, r_m, U_m_s), or was made for "
+                         "another nt, dt")
