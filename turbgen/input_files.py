@@ -37,6 +37,7 @@ MEAN_HISTORY = InputKind("mean history", _mib(64))  # hub-height speed and direc
 PROFILE_TABLE = InputKind("profile table", _mib(1))  # z, U[, direction] rows
 SPECTRUM = InputKind("spectrum file", _mib(16))  # f_hz, S_u, S_v, S_w rows (a user spectrum)
 WIND_FILE = InputKind("wind file", 16 * 2**30)  # a .bts or HAWC2 box read back (turbgen fit DATA)
+COHERENCE = InputKind("coherence file", _mib(16))  # f_hz, r_m, coh rows (a user yz coherence)
 TOKEN = InputKind("token file", 4096)
 
 _NOT_REGULAR = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO or pipe"), (stat.S_ISCHR, "a character device"),

@@ -98,3 +98,29 @@ def test_a_bad_coherence_is_refused_in_one_line(name):
     with pytest.raises(ParameterError, match=message) as err:
         turbgen.kaimal(**SMALL, coherence=coh)
     assert "\n" not in str(err.value)
+
+
+def test_the_command_s_coherence_file_is_the_api_s_table(tmp_path):
+    from click.testing import CliRunner
+
+    from turbgen.cli import cli
+
+    ds = turbgen.kaimal(**SMALL, coherence=site_coherence)
+    table = ds.attrs["parameters"]["coherence"]
+    rows = [f"{r!r},{c!r},{f!r}" for f, row in zip(table["f_hz"], table["coh"]) for r, c in zip(table["r_m"], row)]
+    csv = tmp_path / "coh.csv"  # the columns and rows in any order; repr: the table's float64 values exactly
+    csv.write_text("# lines x separations\nr_m,coh,f_hz\n" + "\n".join(rows[::-1]) + "\n")
+    out = tmp_path / "cli.zarr"
+    args = ["kaimal", "--U", "12", "--nt", "128", "--ny", "6", "--nz", "6", "--dy", "5", "--planes", "0,50,100",
+            "--seed", "2", "--coherence", str(csv)]
+    r = CliRunner().invoke(cli, [*args, "--out", str(out)])
+    assert r.exit_code == 0 and "yz coherence" in r.output, r.output
+    fs = open_store(out)
+    assert fs.attrs["parameters"]["coherence"] == table
+    for c in "uvw":
+        np.testing.assert_array_equal(fs.read_plane(c, 1), ds[c].values[:, 1])
+    np.testing.assert_array_equal(turbgen.kaimal(**SMALL, coherence=csv).u.values, ds.u.values)
+    csv.write_text(csv.read_text().rsplit("\n", 2)[0] + "\n")  # a pair (f, r) missing
+    r = CliRunner().invoke(cli, [*args, "--out", str(tmp_path / "never.zarr")])
+    assert r.exit_code == 2 and "needs one row per pair" in r.output and r.output.count("\n") == 1, r.output
+    assert not (tmp_path / "never.zarr").exists()

@@ -92,6 +92,22 @@ def test_a_rerun_from_the_store_s_table_is_the_same_field(tmp_path):
         np.testing.assert_array_equal(x, y)
 
 
+def test_the_recorded_sigmas_are_the_spectrum_s_and_an_explicit_sigma_is_refused(site_store):
+    ds = turbgen.kaimal(**SMALL, spectrum=site_density, long_model="simley-pao")
+    run = KaimalRun.from_attrs(dict(ds.attrs))
+    # the spectrum's sigma as the generator realises it: its line variances summed (not the IEC class's 2.5 m/s)
+    sigma = np.sqrt(run.spectrum.line_variances().sum(axis=1))
+    for shown in (turbgen.info(ds)["parameters"]["sigma_m_s"], ds.attrs["derived"]["expected_sigma_m_s"]):
+        np.testing.assert_array_equal(shown, sigma)
+    assert run.sigma_total_m_s == np.sqrt(np.sum(sigma**2)) and not np.allclose(sigma, IEC.sigma_m_s, rtol=0.1)
+    # the command's summary shows them too; --sigma with --spectrum: one line, exit 2, nothing written
+    info = CliRunner().invoke(main, ["info", str(site_store)]).output
+    recorded = open_store(site_store).attrs["parameters"]["sigma_m_s"]
+    assert re.search(r"sigma_m_s +" + ", ".join(f"{s:g}" for s in recorded), info), info
+    r = CliRunner().invoke(main, ["kaimal", "--spectrum", "x.csv", "--sigma", "1,1,1", "--out", "never.zarr"])
+    assert r.exit_code == 2 and "scale the spectrum instead" in r.output and r.output.count("\n") == 1, r.output
+
+
 def _write_csv(path, f_hz, S, digits=8):
     rows = "\n".join(",".join(f"{v:.{digits}g}" for v in row) for row in np.column_stack([f_hz, *S]))
     path.write_text("# site spectra\nf_hz,S_u,S_v,S_w\n" + rows + "\n")

@@ -159,6 +159,25 @@ def test_unwritten_plane_is_not_installed(tmp_path):
     assert siblings(path) == []
 
 
+def test_chunks_written_counts_a_store_being_written_as_zarr_does(tmp_path):
+    from turbgen.service.catalog import Catalog
+    from turbgen.store.reader import chunks_written
+
+    data, catalog, rid = field(), Catalog(tmp_path), "0" * 24  # a run of the service, being made
+    catalog.record(rid, "mann", {})
+    path = catalog.store_path(rid)
+    with create_store(path, GRID, ATTRS, chunk_t=4) as w:  # 3 time chunks per plane
+        w.write("u", 0, data["u"][:, 0])
+        w.write("v", 2, data["v"][:8, 2], t0=0)  # 2 of the plane's chunks
+        (tmp,) = (p for p in path.parent.iterdir() if p.name.startswith(f".{path.name}"))
+        zarr_count = sum(zarr.open_array(str(tmp / c), mode="r").nchunks_initialized for c in layout.COMPONENTS)
+        assert chunks_written(tmp) == zarr_count == 5 and catalog.progress(rid, 4) == 4
+        for c in layout.COMPONENTS:
+            for ix in range(GRID.nx):
+                w.write(c, ix, data[c][:, ix])
+    assert chunks_written(path) == 3 * GRID.nx * 3 and catalog.progress(rid, 99) == 0  # published: no temporary
+
+
 @pytest.mark.parametrize(
     "change, match",
     [

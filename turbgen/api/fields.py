@@ -364,6 +364,9 @@ def kaimal_run(options: Mapping, config: PathLike | Mapping | None = None, prese
     ParameterError
         For ``presets_file`` without ``preset``, a bad run file or value.
     """
+    if options.get("sigma") is not None and options.get("spectrum") is not None:
+        raise ParameterError("`sigma` (--sigma) with `spectrum`: the user spectrum sets sigma_u, sigma_v, sigma_w "
+                             "(its integral over the run's lines); scale the spectrum instead")
     given, grid, x_m = run_inputs("kaimal", options)
     user = _presets(preset, presets_file)
     resolved: dict = {}
@@ -558,10 +561,11 @@ def kaimal(
         run's lines 1/(nt dt) to 1/(2 dt), interpolated linearly), or a callable ``S(f_hz) -> (3, n)`` [m^2/s],
         averaged over each line's band (turbgen.theory.user_spectra). The store records the band means, so
         ``attrs["parameters"]["spectrum"]`` remakes the field without the callable.
-    coherence : Mapping or callable, optional
+    coherence : str, os.PathLike, Mapping or callable, optional
         User yz coherence [-] in place of the IEC exponential (u, and v, w with ``vw_coherence="exp"``): a callable
         ``coh(f_hz, r_m, U_m_s)`` evaluated on the run's lines x the grid's separations, or a table ``{"f_hz",
-        "r_m", "coh"}`` (interpolated in f onto the lines; turbgen.theory.user_coherence). The store records the
+        "r_m", "coh"}`` or its CSV file (``turbgen kaimal --coherence``: columns f_hz,r_m,coh, a row per pair),
+        interpolated in f onto the lines (turbgen.theory.user_coherence). The store records the
         values, so ``attrs["parameters"]["coherence"]`` remakes the field without the callable.
     fft_backend : str, optional
         FFT backend, as :func:`mann`'s.
@@ -594,7 +598,7 @@ def kaimal(
     if not constrain and (noise is not None or conditional_mean):
         raise ParameterError("`noise` and `conditional_mean` need `constrain`")
     run, _ = kaimal_run(options, config, preset, presets_file)
-    if coherence is not None:  # a keyword only (a callable or table), no option of the command
+    if coherence is not None:  # as `turbgen kaimal --coherence` (a CSV file), or a callable or table
         run = replace(run, coherence=coherence)
     if constrain:
         from turbgen.runs.constrain import load_constraints

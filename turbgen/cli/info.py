@@ -39,7 +39,8 @@ def _lines(s: dict) -> list[str]:
             + ("every chunk decoded" if s.get("chunks_decoded") else "chunks not decoded (large store: validate reads them)"),
         ),
         ("model", f"{s['model']}, seed {s['seed']}"),
-        ("created", f"{s['created_utc']} by turbgen {s['turbgen_version']}"),
+        ("created", f"{s['created_utc']} by turbgen {s['turbgen_version']}"
+                    + (f", FFT backend {s['fft_backend']}" if s.get("fft_backend") else "")),
         (
             "grid",
             f"(t, x, y, z) = {' x '.join(map(str, s['shape_t_x_y_z']))}, u v w float32, "

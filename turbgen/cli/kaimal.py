@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import click
@@ -65,6 +66,10 @@ def _three(name):
               help="User spectra instead of the Kaimal ones: a CSV file with the columns f_hz,S_u,S_v,S_w (one-sided "
               "PSDs [m^2/s], band means, e.g. a measured site spectrum) covering the run's lines 1/(nt dt) to "
               "1/(2 dt); recorded in the store.")
+@click.option("--coherence", type=click.Path(dir_okay=False),
+              help="User yz coherence instead of the IEC exponential (u; v, w with --vw-coherence exp): a CSV file "
+              "with the columns f_hz,r_m,coh (un-squared [-], one row per frequency and separation [m]) covering the "
+              "run's lines, interpolated in f, linear in r; recorded in the store.")
 @grid_options(G)
 @click.option("--chunks", type=int,
               help="Time samples per store chunk (default min(nt, 1024)); never changes the field.")
@@ -98,6 +103,8 @@ def kaimal(**opt):
     # the run as turbgen.kaimal makes it, and the preset's keys at its U (they also name the default store)
     run, preset_keys = kaimal_run({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],
                                   opt["presets_file"])  # fmt: skip
+    if opt["coherence"] is not None:
+        run = replace(run, coherence=opt["coherence"])
     g = run.grid
     out = opt["out"] if opt["out"] is not None else run.default_store_name(opt["preset"], preset_keys or None)
     # refusals before anything is printed, in run_kaimal's order: a coherence too costly to sample, a spectrum that
@@ -120,7 +127,10 @@ def kaimal(**opt):
     if run.spectrum is None:
         spectra = (f"sigma {', '.join(f'{s:.3g}' for s in k.sigma_m_s)} m/s, "
                    f"L {', '.join(f'{s:.4g}' for s in k.length_scales_m)} m")
-    click.echo(f"turbgen kaimal: U {run.U_m_s:g} m/s, {spectra}, a_yz {k.a_yz:g}, Lc {k.lc_m:g} m, "
+    yz = f"a_yz {k.a_yz:g}, Lc {k.lc_m:g} m"
+    if run.coherence is not None:
+        yz = f"yz coherence {opt['coherence'] or '(run file)'}"
+    click.echo(f"turbgen kaimal: U {run.U_m_s:g} m/s, {spectra}, {yz}, "
                f"long {run.long_model} {run.effective_long_parameters()} on {run.long_components}, seed {run.seed}")
     click.echo(f"  grid (t, x, y, z) = {g.nt} x {g.nx} x {g.ny} x {g.nz}, dt {g.dt_s:g} s, dy {g.dy_m:g} m, "
                f"dz {g.dz_m:g} m, planes x = {', '.join(f'{x:g}' for x in g.x_m)} m")

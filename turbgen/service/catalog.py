@@ -25,6 +25,7 @@ from turbgen.version import __version__
 from turbgen.errors import TurbgenError
 from turbgen.service.run_ids import valid_id
 from turbgen.service.uploads import ConstraintUploads
+from turbgen.store.reader import chunks_written
 from turbgen.store.temporaries import temp_name, temp_prefix
 
 STORE = "store.zarr"
@@ -145,11 +146,5 @@ class Catalog:
         """Chunks already written to the temporary store of a running run, at most ``n_chunks_total`` (0 if none yet)."""
         d = self.run_dir(rid)
         prefix = temp_prefix(d / STORE)
-        n = 0
-        for p in d.iterdir() if d.is_dir() else ():
-            if p.name.startswith(prefix) and p.is_dir():
-                for comp in ("u", "v", "w"):
-                    c = p / comp / "c"
-                    if c.is_dir():
-                        n += sum(len(files) for _, _, files in os.walk(c))
+        n = sum(chunks_written(p) for p in (d.iterdir() if d.is_dir() else ()) if p.name.startswith(prefix))
         return min(n, n_chunks_total)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 
 from turbgen.errors import ParameterError, check_choice
@@ -48,22 +48,35 @@ class KaimalRun:
     ----------
     kaimal : KaimalParams
         sigma_u, sigma_v, sigma_w [m/s], Kaimal lengths L1..L3 [m], a_yz [-], Lc [m] (Guo et al. 2023, Eq. 11-12).
-    grid, U_m_s, seed, hub_height_m : Grid, float, int, float
-        The run's grid, hub-height mean wind speed [m/s], random seed, hub height [m].
-    long_model, a_x, b_x : {"exp", "simley-pao", "kristensen"}, float, float, optional
-        Guo et al. (2023) Eq. 18 with a_x [-], b_x [1/m] ("exp" only; default Table 2 neutral), Eq. 18 with the
-        Simley and Pao (2015) parameters, or Kristensen (1979).
+    grid : Grid
+        The run's grid.
+    U_m_s : float
+        Hub-height mean wind speed [m/s].
+    seed : int
+        Random seed.
+    hub_height_m : float, optional
+        Hub height [m].
+    long_model : {"exp", "simley-pao", "kristensen"}, optional
+        Eq. 18 with a_x, b_x (Guo et al. 2023; defaults Table 2 neutral), Eq. 18 with the Simley and Pao
+        (2015) parameters, or Kristensen (1979).
+    a_x, b_x : float, optional
+        Eq. 18 parameters a_x [-] and b_x [1/m], "exp" only.
     long_components : {"u", "uvw"}, optional
         Components given the longitudinal coherence ("u": evoTurb).
     rescale : bool, optional
-        Scale each spectrum so the expected variance is the nominal sigma^2 (else the resolved band's).
+        Scale each spectrum so the expected variance is the nominal sigma^2 (else the resolved-band
+        integral of Eq. 11).
     vw_coherence : {"white", "exp"}, optional
         v, w incoherent in yz (IEC / TurbSim IECKAI) or given the u coherence (extension).
     turb_class : str, optional
         IEC class the sigmas came from (recorded only).
-    spectrum, coherence : LineSpectrum, LineCoherence, optional
-        User u, v, w spectra / yz coherence on the grid's lines in place of Kaimal's / the IEC exponential (the
-        sigmas and lengths then enter only the Simley-Pao and Kristensen coherences).
+    spectrum : LineSpectrum, optional
+        User spectra of u, v, w on the grid's lines (turbgen.theory.user_spectra) in place of Kaimal's; the
+        sigmas become the spectrum's (its line variances summed) and, with L1, enter only the Simley-Pao and
+        Kristensen coherences.
+    coherence : LineCoherence, optional
+        User yz coherence on the grid's lines (turbgen.theory.user_coherence) in place of the IEC exponential
+        (u, and v, w with vw_coherence "exp").
 
     Raises
     ------
@@ -107,7 +120,12 @@ class KaimalRun:
             if self.rescale:
                 raise ParameterError("rescale = true applies to the Kaimal spectra, not to a user spectrum (scale "
                                      "the spectrum instead)")
-            object.__setattr__(self, "spectrum", line_spectrum(self.spectrum, self.grid))
+            spectrum = line_spectrum(self.spectrum, self.grid)
+            # the run's sigmas are the spectrum's as the lines realise it (recorded; Simley-Pao, Kristensen read them)
+            sigma = [ranges.check("sigma_m_s", math.sqrt(v), f"the spectrum's sigma_{c} (m/s)")
+                     for c, v in zip("uvw", spectrum.line_variances().sum(axis=1))]  # fmt: skip
+            object.__setattr__(self, "spectrum", spectrum)
+            object.__setattr__(self, "kaimal", replace(self.kaimal, sigma_m_s=tuple(sigma)))
         object.__setattr__(self, "coherence", line_coherence(self.coherence, self.grid, self.U_m_s))
 
     @property
@@ -239,8 +257,12 @@ def kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float = 90.
 
     Parameters
     ----------
-    U_m_s, turb_class, hub_height_m : float, str, float
-        Hub-height mean wind speed [m/s], IEC class ("A+", "A", "B", "C"), hub height [m].
+    U_m_s : float
+        Hub-height mean wind speed [m/s].
+    turb_class : str, optional
+        IEC class "A+", "A", "B" or "C".
+    hub_height_m : float, optional
+        Hub height [m].
     sigma_m_s, length_scales_m : sequence of float, optional
         (sigma_u, sigma_v, sigma_w) [m/s] and Kaimal L1, L2, L3 [m]; None: the IEC values.
     a_yz, lc_m : float, optional

@@ -1,7 +1,9 @@
-"""A Kaimal run's ``spectrum`` (``coherence``) as given -> its LineSpectrum (LineCoherence) of turbgen.theory.
+"""The ``spectrum`` (and ``coherence``) of a Kaimal run as given (a CSV file, arrays, a mapping or a callable) -> its
+LineSpectrum (LineCoherence).
 
-The CSV file has a header naming ``f_hz,S_u,S_v,S_w`` (any order; ``#`` and blank lines skipped) and one row per
-frequency [Hz], PSDs in m^2/s.
+The forms' meaning is in turbgen.theory.user_spectra (user_coherence). A spectrum CSV file has a header naming the
+columns ``f_hz,S_u,S_v,S_w`` (any order; ``#`` lines and blank lines skipped) and one row per frequency [Hz], PSDs
+in m^2/s; a coherence CSV file the columns ``f_hz,r_m,coh`` and one row per frequency [Hz] and separation [m].
 """
 
 from __future__ import annotations
@@ -13,36 +15,52 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
-from turbgen.input_files import SPECTRUM, read_input_text
+from turbgen.input_files import COHERENCE, SPECTRUM, InputKind, read_input_text
 from turbgen.theory.user_coherence import COLUMNS as COHERENCE_COLUMNS
 from turbgen.theory.user_coherence import LineCoherence, grid_separations_m
 from turbgen.theory.user_spectra import COLUMNS, LineSpectrum
 
 
-def read_spectrum_csv(path) -> tuple[np.ndarray, np.ndarray]:
-    """(f_hz (n,) [Hz], S (3, n) [m^2/s]) of a spectrum CSV file, as written.
-
-    ParameterError if the file cannot be read, lacks the header or has a row that is not four numbers.
-    """
-    text = read_input_text(path, SPECTRUM)  # a regular file of at most its cap (a FIFO or device: refused)
+def _read_csv(path, kind: InputKind, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """Column name -> values of a CSV file of ``kind`` with a header naming ``columns`` (any order; ``#`` lines and
+    blank lines skipped); ParameterError if it cannot be read, lacks the header or has a row that is not numbers."""
+    text = read_input_text(path, kind)  # a regular file of at most its cap (a FIFO or device: refused)
     rows = [(n, line.strip()) for n, line in enumerate(text.splitlines(), 1)
             if line.strip() and not line.lstrip().startswith("#")]  # fmt: skip
     header = [name.strip() for name in rows[0][1].split(",")] if rows else []
-    if sorted(header) != sorted(COLUMNS):
-        raise ParameterError(f"spectrum file {path}: the first line must name the columns {','.join(COLUMNS)} "
+    if sorted(header) != sorted(columns):
+        raise ParameterError(f"{kind.name} {path}: the first line must name the columns {','.join(columns)} "
                              f"(got {','.join(header) or 'nothing'})")
     values = []
     for n, line in rows[1:]:
         cells = line.split(",")
         try:
-            if len(cells) != len(COLUMNS):
+            if len(cells) != len(columns):
                 raise ValueError(f"{len(cells)} values")
             values.append([float(cell) for cell in cells])
         except ValueError as exc:
-            raise ParameterError(f"spectrum file {path}: line {n} is not {len(COLUMNS)} numbers ({exc})") from None
-    table = np.array(values, dtype=float).reshape(-1, len(COLUMNS))
-    columns = {name: table[:, i] for i, name in enumerate(header)}
+            raise ParameterError(f"{kind.name} {path}: line {n} is not {len(columns)} numbers ({exc})") from None
+    table = np.array(values, dtype=float).reshape(-1, len(columns))
+    return {name: table[:, i] for i, name in enumerate(header)}
+
+
+def read_spectrum_csv(path) -> tuple[np.ndarray, np.ndarray]:
+    """(f_hz (n,) [Hz], S (3, n) [m^2/s]) of a spectrum CSV file (columns f_hz,S_u,S_v,S_w), as written."""
+    columns = _read_csv(path, SPECTRUM, COLUMNS)
     return columns["f_hz"], np.stack([columns[c] for c in COLUMNS[1:]])
+
+
+def read_coherence_csv(path) -> dict:
+    """The coherence table ``{f_hz (m,), r_m (n,), coh (m, n)}`` of a CSV file with one row ``f_hz,r_m,coh`` [Hz, m,
+    -] per pair of its m frequencies and n separations (any order); ParameterError for a pair missing or repeated."""
+    columns = _read_csv(path, COHERENCE, COHERENCE_COLUMNS)
+    (f, i), (r, j) = (np.unique(columns[c], return_inverse=True) for c in COHERENCE_COLUMNS[:2])
+    coh = np.full((f.size, r.size), np.nan)
+    coh[i, j] = columns["coh"]
+    if i.size != f.size * r.size or np.isnan(coh).any():
+        raise ParameterError(f"coherence file {path}: {i.size} rows for {f.size} frequencies x {r.size} separations; "
+                             "needs one row per pair (f_hz, r_m)")
+    return {"f_hz": f, "r_m": r, "coh": coh}
 
 
 def _from_mapping(value: Mapping) -> tuple:
@@ -87,18 +105,38 @@ def line_spectrum(value, grid: Grid) -> LineSpectrum | None:
 
 
 def line_coherence(value, grid: Grid, U_m_s: float) -> LineCoherence | None:
-    """The yz coherence ``value`` on ``grid``'s lines (turbgen.theory.user_coherence); None: the IEC exponential.
+    """The yz coherence ``value`` on ``grid``'s lines (turbgen.theory.user_coherence).
 
-    ``value`` is a LineCoherence, a mapping of ``f_hz``, ``r_m``, ``coh`` (what a store records) or a callable
-    ``coh(f_hz, r_m, U_m_s)`` [-] evaluated on the lines x the grid's separations (``U_m_s`` the run's, m/s).
-    ParameterError for another form or values LineCoherence refuses.
+    Parameters
+    ----------
+    value : None, LineCoherence, str, os.PathLike, Mapping or callable
+        A mapping of ``f_hz``, ``r_m``, ``coh`` (the form a store records), a CSV file of it
+        (:func:`read_coherence_csv`), or a callable ``coh(f_hz, r_m, U_m_s)`` [-] evaluated on the lines x the
+        grid's separations. None: the IEC exponential coherence.
+    grid : Grid
+        The run's grid.
+    U_m_s : float
+        The run's mean wind speed [m/s] (given to a callable).
+
+    Returns
+    -------
+    LineCoherence or None
+        The coherence the run samples.
+
+    Raises
+    ------
+    ParameterError
+        For a value of none of these forms, or one LineCoherence refuses.
     """
     if value is None or isinstance(value, LineCoherence) and (value.nt, value.dt_s) == (grid.nt, grid.dt_s):
         return value
+    if isinstance(value, (str, os.PathLike)):
+        value = read_coherence_csv(value)
     if isinstance(value, Mapping) and set(value) == set(COHERENCE_COLUMNS):
         return LineCoherence.from_table(value["f_hz"], value["r_m"], value["coh"], grid.nt, grid.dt_s)
     if callable(value) and not isinstance(value, LineCoherence):
         r_m = grid_separations_m(grid.ny, grid.nz, grid.dy_m, grid.dz_m)
         return LineCoherence.from_callable(value, grid.nt, grid.dt_s, r_m, U_m_s)
-    raise ParameterError(f"coherence: {type(value).__name__} is not a mapping of {', '.join(COHERENCE_COLUMNS)} "
-                         "nor a callable coh(f_hz, r_m, U_m_s), or was made for another nt, dt")
+    raise ParameterError(f"coherence: {type(value).__name__} is not a CSV path, a mapping of "
+                         f"{', '.join(COHERENCE_COLUMNS)} nor a callable coh(f_hz, r_m, U_m_s), or was made for "
+                         "another nt, dt")

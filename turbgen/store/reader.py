@@ -5,6 +5,7 @@ values beyond the recorded rms: ``plausibility``). Every refusal is a one-line S
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -114,7 +115,7 @@ class FieldStore:
         Returns
         -------
         dict
-            path, complete, model, turbgen_version, created_utc, grid, shape_t_x_y_z, duration_s [s],
+            path, complete, model, turbgen_version, created_utc, fft_backend, grid, shape_t_x_y_z, duration_s [s],
             width_y_m [m], height_z_m [m], chunk_t, U_m_s [m/s], hub_height_m [m], seed, frame,
             frame_note, parameters, units, size_on_disk_bytes and size_uncompressed_bytes [bytes], warnings (an
             implausible recorded rms: :func:`turbgen.store.plausibility.spread_warnings`); ``constraints``
@@ -127,6 +128,7 @@ class FieldStore:
             "model": self.model,
             "turbgen_version": a["turbgen_version"],
             "created_utc": a["created_utc"],
+            "fft_backend": a.get(layout.FFT_ATTR),  # which round-off a re-run reproduces (None: an older store)
             "grid": layout.grid_to_attrs(g),
             "shape_t_x_y_z": list(g.shape),
             "duration_s": g.nt * g.dt_s,
@@ -209,6 +211,13 @@ def _check_arrays(path: Path, group: zarr.Group, grid: Grid) -> None:
             raise StoreError(f"{path} is corrupted: coordinate {name!r} is missing or has the wrong length")
         if not np.allclose(arr[:], values, rtol=1e-9, atol=1e-9):
             raise StoreError(f"{path} is corrupted: coordinate {name!r} does not match the grid attributes")
+
+
+def chunks_written(path) -> int:
+    """Chunks of u, v, w written so far to the store at ``path``, complete or being written: the files under their
+    ``c/`` folders (zarr v3's chunk keys): the count of zarr's ``nchunks_initialized``, which is slower (it matches
+    every possible chunk key against the listing) for the service's progress of every running run."""
+    return sum(len(files) for c in layout.COMPONENTS for _, _, files in os.walk(Path(path) / c / "c"))
 
 
 def open_store(path) -> FieldStore:

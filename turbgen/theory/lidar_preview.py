@@ -209,7 +209,7 @@ def rotor_points(radius_m: float, spacing_m: float | None = None) -> tuple[np.nd
 
 def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: float, radius_m: float,
                            long_coherence, *, long_components: str = "u", vw_coherence: bool = False,
-                           rotor_spacing_m: float | None = None) -> PreviewSpectra:
+                           rotor_spacing_m: float | None = None, spectra=None, yz_coherence=None) -> PreviewSpectra:
     """S_RR, S_LL, S_RL of the Kaimal direct-product model (Guo et al. 2023, Eq. 25, 31, 33).
 
     u is coherent in the yz plane (IEC exponential, un-squared); v, w are spatially white unless
@@ -230,6 +230,9 @@ def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_
         Give v and w the yz coherence of u.
     rotor_spacing_m : float, optional
         Rotor grid spacing [m] (default R/10).
+    spectra, yz_coherence : callable, optional
+        ``spectra(f_hz) -> (3, n)`` one-sided PSDs [m^2/s] and ``yz_coherence(r_m, f_hz)`` [-] (un-squared) in place
+        of the Kaimal spectra and IEC coherence of ``kparams`` (a store's user tables, turbgen.theory.user_spectra).
 
     Returns
     -------
@@ -241,6 +244,10 @@ def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_
         As :func:`mann_preview_spectra`, or if ``rotor_spacing_m`` is not > 0.
     """
     f, U, R = _check(f_hz, meas, U_m_s, radius_m)
+    if yz_coherence is None:
+        yz_coherence = lambda r_m, f_hz: exponential_yz(r_m, f_hz, U, kparams.a_yz, kparams.lc_m)  # noqa: E731
+    S = np.array([kaimal_spectrum(f, s, L, U) for s, L in zip(kparams.sigma_m_s, kparams.length_scales_m)]
+                 if spectra is None else spectra(f), dtype=float)  # fmt: skip
     pts = meas.sample_points_m()  # (M, K, 3)
     M, K = meas.weights.shape
     gate_x = np.repeat(meas.focus_m[:, 0], K)
@@ -261,19 +268,17 @@ def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_
     S_RL = np.empty(f.size, dtype=complex)
     for m, fm in enumerate(f):
         ph = np.exp(2j * np.pi * fm * delay_s)
-        coh_u = exponential_yz(r_ll, fm, U, kparams.a_yz, kparams.lc_m)[r_ll_of]
+        coh_u = yz_coherence(r_ll, fm)[r_ll_of]
         gx_coherent = long_coherence(dx_ll, fm)[dx_ll_of]
         total = 0.0
         for c in range(3):
-            S_c = kaimal_spectrum(fm, kparams.sigma_m_s[c], kparams.length_scales_m[c], U)
             coh = coh_u if c == 0 or vw_coherence else white
             gx = gx_coherent if "uvw"[c] in long_components else same_plane
             a = coef[:, c] * ph
-            total += S_c * np.real(a @ (coh * gx) @ a.conj())
+            total += S[c, m] * np.real(a @ (coh * gx) @ a.conj())
         S_LL[m] = total
-        S_1 = kaimal_spectrum(fm, kparams.sigma_m_s[0], kparams.length_scales_m[0], U)
         gx_r = long_coherence(gate_x, fm) if "u" in long_components else (gate_x < 1e-9).astype(float)
-        coh_r = exponential_yz(r_rl, fm, U, kparams.a_yz, kparams.lc_m)[r_rl_of]
-        S_RL[m] = S_1 * (coh_r.mean(axis=0) * gx_r) @ (coef[:, 0] * ph).conj()
-    S_RR = rews_spectrum_kaimal(f, kparams, U, yr, zr)
+        coh_r = yz_coherence(r_rl, fm)[r_rl_of]
+        S_RL[m] = S[0, m] * (coh_r.mean(axis=0) * gx_r) @ (coef[:, 0] * ph).conj()
+    S_RR = rews_spectrum_kaimal(f, kparams, U, yr, zr, s1=S[0], yz_coherence=yz_coherence)
     return PreviewSpectra(f, S_RR, S_LL, S_RL)

@@ -36,7 +36,8 @@ def rews_spectrum_mann(k1, params: MannParams, radius_m: float) -> np.ndarray:
     return (w * g[(0, 0)] * _disk_filter(kappa * R, z_smooth[:, None])).sum(axis=-1)
 
 
-def rews_spectrum_kaimal(f_hz, kparams: KaimalParams, U_m_s: float, y_m, z_m) -> np.ndarray:
+def rews_spectrum_kaimal(f_hz, kparams: KaimalParams, U_m_s: float, y_m, z_m, *, s1=None,
+                         yz_coherence=None) -> np.ndarray:
     """One-sided REWS spectrum of the Kaimal model over rotor points (Guo et al. 2023, Eq. 25).
 
     S_RR(f) = S_1(f) / n_R^2 sum_i sum_j gamma_yz(dyz_ij, f), with the un-squared IEC coherence.
@@ -47,6 +48,9 @@ def rews_spectrum_kaimal(f_hz, kparams: KaimalParams, U_m_s: float, y_m, z_m) ->
         Frequencies [Hz], Kaimal spectra with IEC yz coherence, mean wind speed [m/s].
     y_m, z_m : array_like
         Positions of the n_R rotor points [m], equally long and finite.
+    s1, yz_coherence : array_like or callable, optional
+        S_1 at ``f_hz`` [m^2/s] and ``yz_coherence(r_m, f_hz)`` [-] in place of the Kaimal u spectrum and IEC
+        coherence (a store's user tables).
 
     Returns
     -------
@@ -62,6 +66,10 @@ def rews_spectrum_kaimal(f_hz, kparams: KaimalParams, U_m_s: float, y_m, z_m) ->
     r = np.hypot(y[:, None] - y[None, :], z[:, None] - z[None, :])
     # the coherence depends on r only: sum over the distinct distances with their multiplicity
     r_unique, counts = np.unique(np.round(r, 9), return_counts=True)
-    coh = exponential_yz(r_unique[None, :], f[:, None], U, kparams.a_yz, kparams.lc_m)
-    s1 = kaimal_spectrum(f, kparams.sigma_m_s[0], kparams.length_scales_m[0], U)
+    if yz_coherence is None:
+        coh = exponential_yz(r_unique[None, :], f[:, None], U, kparams.a_yz, kparams.lc_m)
+    else:
+        coh = np.broadcast_to(yz_coherence(r_unique[None, :], f[:, None]), (f.size, r_unique.size))
+    if s1 is None:
+        s1 = kaimal_spectrum(f, kparams.sigma_m_s[0], kparams.length_scales_m[0], U)
     return s1 * (coh * counts).sum(axis=-1) / y.size**2

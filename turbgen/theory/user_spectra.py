@@ -62,6 +62,11 @@ class LineSpectrum:
         """The lines f_k [Hz], k = 1 .. nt // 2."""
         return line_frequencies(self.nt, self.dt_s)[1:]
 
+    def __call__(self, f_hz) -> np.ndarray:
+        """(3, n) PSDs [m^2/s] at ``f_hz`` [Hz]: the band means interpolated linearly (held beyond the lines), exactly
+        the band mean on a line (what the preview theory of a lidar on the store reads)."""
+        return np.array([np.interp(f_hz, self.f_hz, row) for row in self.S_m2_s])
+
     def line_variances(self) -> np.ndarray:
         """Variance of each line's band [m^2 s^-2], (3, nt // 2 + 1), line 0 (the mean) zero."""
         lo, hi = line_bands(self.nt, self.dt_s)

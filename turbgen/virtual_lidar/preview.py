@@ -76,12 +76,14 @@ def mann_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, ra
 
 def kaimal_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, radius_m: float, frozen: bool,
                    kaimal: KaimalParams | None = None, a_x: float | None = None, b_x: float | None = None,
-                   long_components: str = "uvw", vw_coherence: bool = True) -> PreviewSpectra:
+                   long_components: str = "uvw", vw_coherence: bool = True, spectra=None,
+                   yz_coherence=None) -> PreviewSpectra:
     """The Kaimal model's ``preview``: ``lidar_preview.kaimal_preview_spectra`` (arguments as :func:`preview_spectra`).
 
     Defaults follow Guo et al. (2023) Eq. 31/33 (Chen et al. 2022): the yz and longitudinal coherences act on all
     three components (``vw_coherence``, ``long_components``). ``kaimal`` and ``a_x``, ``b_x`` [-] (exponential
-    longitudinal decay) replace the preset's values.
+    longitudinal decay) replace the preset's values; ``spectra`` and ``yz_coherence`` (a store's LineSpectrum and
+    LineCoherence) the Kaimal spectra and IEC coherence.
     """
     settings = kaimal_settings_for(preset, U_m_s)
     kp = kaimal if kaimal is not None else settings.kaimal
@@ -94,7 +96,8 @@ def kaimal_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, 
         return exponential_longitudinal(dx_m, f, U_m_s, ax, bx)
 
     return kaimal_preview_spectra(f_hz, lidar.measurement_points(), kp, U_m_s, radius_m, long_coherence,
-                                  long_components=long_components, vw_coherence=vw_coherence)
+                                  long_components=long_components, vw_coherence=vw_coherence, spectra=spectra,
+                                  yz_coherence=yz_coherence)
 
 
 def summarise(spectra: PreviewSpectra, lidar: LidarDescription, U_m_s: float, *,

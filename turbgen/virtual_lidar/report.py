@@ -49,19 +49,18 @@ def mann_store_preview(fs, description, f_hz, radius_m: float):
 
 
 def kaimal_store_preview(fs, description, f_hz, radius_m: float):
-    """PreviewSpectra of a Kaimal store at f_hz > 0 [Hz] as synthesised, for rotor radius ``radius_m`` [m]."""
+    """PreviewSpectra of a Kaimal store at f_hz > 0 [Hz] as synthesised (its user spectrum and yz coherence tables,
+    if any, as the validator reads them), for rotor radius ``radius_m`` [m]."""
     from turbgen.virtual_lidar.preview import preview_spectra
     from turbgen.validation.store_run import kaimal_model_from_attrs
 
     km = kaimal_model_from_attrs(fs.attrs)
-    if km.spectrum is not None or km.coherence is not None:
-        raise ParameterError("lidar theory has the Kaimal spectra and IEC coherence only; this store was made with "
-                             "a user spectrum or coherence (its parameter `spectrum` / `coherence`)")
     if km.long_model != "exp":
         raise ParameterError(f"lidar theory supports the exponential longitudinal coherence only "
                              f"(store has long_model = {km.long_model!r})")
     return preview_spectra("kaimal", description, fs.U_m_s, f_hz=f_hz, radius_m=radius_m, kaimal=km.params,
-                           a_x=km.a_x, b_x=km.b_x, long_components=km.long_components, vw_coherence=km.vw_coherent)
+                           a_x=km.a_x, b_x=km.b_x, long_components=km.long_components, vw_coherence=km.vw_coherent,
+                           spectra=km.spectrum, yz_coherence=km.coherence)  # the store's user tables, if any
 
 
 def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int | None = None):
