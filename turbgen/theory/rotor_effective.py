@@ -46,12 +46,7 @@ def rews_spectrum_kaimal(f_hz, kparams: KaimalParams, U_m_s: float, y_m, z_m) ->
     f_hz, kparams, U_m_s : array_like, KaimalParams, float
         Frequencies [Hz], Kaimal spectra with IEC yz coherence, mean wind speed [m/s].
     y_m, z_m : array_like
-        Positions of the n_R rotor points [m], equally long and finite.
-
-    Returns
-    -------
-    numpy.ndarray
-        (len(f),) S_RR [m^2 s^-2 Hz^-1].
+        Positions of the n_R rotor points [m], equally long and finite; S_RR is [m^2 s^-2 Hz^-1].
     """
     U = check_wind_speed(U_m_s)
     y = np.ravel(np.asarray(y_m, dtype=float))
