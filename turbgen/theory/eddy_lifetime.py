@@ -97,33 +97,12 @@ def _evolution_shape(kL, factor2: float):
 class LifetimeTable:
     """Not-a-knot cubic spline of tau~ over x = ln(kL) on a uniform grid (relative error <= TABLE_REL_ERROR).
 
-    The step TABLE_STEP[kind] bounds the error (5/384) h^4 max|d^4 tau~/dx^4| / tau~, largest at the
-    (kL)^10 knee of Eq. 6 and 15 (tests/theory/test_lifetime_table.py checks the bound); outside
-    [TABLE_KL_MIN, TABLE_KL_MAX] the exact function is evaluated.
-
-    Parameters
-    ----------
-    kind : str
-        "mann" (Guo et al. 2023, Eq. 4), "guo" (Eq. 6) or "evolution" (Eq. 15 over gamma).
-    parameter : float, optional
-        factor1 ("guo") or factor2 ("evolution") [-].
-
-    Attributes
-    ----------
-    x0, h : float
-        First node ln(TABLE_KL_MIN) and step in x [-].
-    n_intervals : int
-        Intervals of the grid, i: [x0 + i h, x0 + (i + 1) h).
-    coefficients : tuple of numpy.ndarray
-        (c3, c2, c1, c0) per interval: tau~ = ((c3 d + c2) d + c1) d + c0, d = x - x_i, in that order (the
-        compiled stencil kernel must agree with :meth:`from_ksq`).
-    exact : callable
-        The exact function of kL.
-
-    Raises
-    ------
-    ValueError
-        If ``kind`` is not one of the three.
+    ``kind`` is "mann" (Guo et al. 2023, Eq. 4), "guo" (Eq. 6, ``parameter`` factor1) or "evolution" (Eq. 15
+    over gamma, ``parameter`` factor2); else ValueError. The step TABLE_STEP[kind] bounds the error (5/384) h^4
+    max|d^4 tau~/dx^4| / tau~, largest at the (kL)^10 knee (tests/theory/test_lifetime_table.py); outside
+    [TABLE_KL_MIN, TABLE_KL_MAX] the exact function is evaluated. Interval i is [x0 + i h, x0 + (i + 1) h) with
+    tau~ = ((c3 d + c2) d + c1) d + c0, d = x - x_i: ``coefficients`` (c3, c2, c1, c0), in the order the
+    compiled stencil kernel and :meth:`from_ksq` evaluate it.
     """
 
     def __init__(self, kind: str, parameter: float = 1.0):

@@ -20,16 +20,11 @@ def kaimal_spectrum(f_hz, sigma_m_s: float, length_scale_m: float, U_m_s: float)
     Parameters
     ----------
     f_hz : array_like
-        Frequency [Hz]; only ``|f|`` is used.
+        Frequency [Hz] (only ``|f|`` is used); S(f) [m^2 s^-2 Hz^-1] has its shape, ∫_0^inf S df = sigma^2.
     sigma_m_s, U_m_s : float
         Standard deviation of the component and mean wind speed [m/s].
     length_scale_m : float
         Kaimal integral length scale L [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        S(f) [m^2 s^-2 Hz^-1], shaped like ``f_hz``; ∫_0^inf S df = sigma^2.
     """
     f = np.asarray(f_hz, dtype=float)
     n = length_scale_m / U_m_s
@@ -70,12 +65,8 @@ def iec_kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float =
 
     Parameters
     ----------
-    U_m_s : float
-        Hub-height mean wind speed [m/s].
-    turb_class : str, optional
-        Turbulence class "A+", "A", "B" or "C".
-    hub_height_m : float, optional
-        Hub height [m], which sets Lambda1.
+    U_m_s, turb_class, hub_height_m : float, str, float
+        Hub-height mean wind speed [m/s], turbulence class ("A+", "A", "B", "C"), hub height [m] (sets Lambda1).
 
     Returns
     -------

@@ -34,10 +34,8 @@ class BoxLattice:
 
     Parameters
     ----------
-    nyp, nzp : int
-        Points of the periodic (padded) box in y and z, not the stored grid's.
-    dy_m, dz_m : float
-        Lateral and vertical spacing [m].
+    nyp, nzp, dy_m, dz_m : int, int, float, float
+        Points of the periodic (padded) box in y and z, not the stored grid's, and their spacings [m].
     record_s : float
         Length nt dt of the periodic record [s] (the axis cells' k1 width is 2 pi / (U record_s)).
     """

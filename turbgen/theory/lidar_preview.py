@@ -78,16 +78,11 @@ def _check(f_hz, meas: Measurements, U_m_s: float, radius_m: float):
 
 
 def _radial_nodes(kappa_max: float = KAPPA_MAX, panel: float = PANEL_WIDTH):
-    nodes, weights = [], []
-    edges = np.exp(np.arange(np.log(KAPPA_LO), np.log(KAPPA_SPLIT), 1.0))
-    edges = np.append(edges, KAPPA_SPLIT)
+    edges = np.append(np.exp(np.arange(np.log(KAPPA_LO), np.log(KAPPA_SPLIT), 1.0)), KAPPA_SPLIT)
     edges = np.concatenate([edges, np.arange(KAPPA_SPLIT + panel, kappa_max + 0.5 * panel, panel)])
-    for a, b in zip(edges[:-1], edges[1:]):
-        x, w = gauss_panel(a, b, N_GAUSS)
-        nodes.append(x)
-        weights.append(w)
-    kappa = np.concatenate(nodes)
-    return kappa, np.concatenate(weights) * kappa  # kappa dkappa
+    parts = [gauss_panel(a, b, N_GAUSS) for a, b in zip(edges[:-1], edges[1:])]
+    kappa = np.concatenate([x for x, _ in parts])
+    return kappa, np.concatenate([w for _, w in parts]) * kappa  # kappa dkappa
 
 
 def _weight_table(meas: Measurements, nu_max: float):

@@ -15,12 +15,13 @@ def node_sums(k1, k2, k3, beams, beam_table, beam_of, nu_step, tables, phase, ga
               inv_tau, rotor, U):  # fmt: skip
     """(S_LL, S_RL) summed over the nodes (two-sided in k1, the nodes' weights in ``phi_w``).
 
+    The decay D_gh = exp(-s |x_g - x_h|), s = 1 / (U tau_e), is summed by the recursion C_h = exp(-s (x_h -
+    x_{h-1})) (C_{h-1} + A_{h-1}): O(gates) per node.
+
     Parameters
     ----------
-    k1 : float
-        k1 [rad/m].
-    k2, k3 : (J,) float64
-        The nodes [rad/m].
+    k1, k2, k3 : float, (J,) float64
+        k1 and the nodes [rad/m].
     beams : (B, 3) float64
         The distinct line-of-sight vectors; ``beam_table`` (B,) the row of ``tables`` of each, ``beam_of`` (count,)
         the beam of each measurement.

@@ -123,17 +123,9 @@ def perpendicular_quadrature(
 
     Returns
     -------
-    kappa, weights : numpy.ndarray
-        (len(k1), n_r) radial nodes [rad/m] and weights [rad^2/m^2], ∫ g kappa dkappa ≈ sum weights g
-        (padding nodes carry zero weight).
-    G : dict
-        G[(i, j)] = ∫_0^{2pi} Phi_ij exp(i kappa d cos(theta - theta_d)) dtheta [m^5 s^-2], (len(k1), n_r),
-        complex with a separation.
-
-    Raises
-    ------
-    ParameterError
-        If ``k1``, ``dy_m``, ``dz_m`` or ``resolve_m`` is not finite.
+    kappa, weights, G : numpy.ndarray, numpy.ndarray, dict
+        (len(k1), n_r) radial nodes [rad/m] and weights [rad^2/m^2] (∫ g kappa dkappa ≈ sum weights g; padding
+        nodes weigh 0); G[(i, j)] = ∫_0^{2pi} Phi_ij exp(i kappa d cos(theta - theta_d)) dtheta [m^5 s^-2].
     """
     k1 = check_k1(k1)
     k1 = np.where(k1 == 0, K1_ZERO / params.length_scale_m, k1)

@@ -14,8 +14,7 @@ LIFETIMES = ("guo", "mann")
 class MannParams:
     """Mann (1994) sheared-tensor parameters plus the Guo et al. (2022) evolution lifetime.
 
-    Frozen; validated on construction against turbgen.theory.ranges (ParameterError, also for an unknown
-    ``lifetime``).
+    Validated against turbgen.theory.ranges (ParameterError, also for an unknown ``lifetime``).
 
     Parameters
     ----------
@@ -27,10 +26,8 @@ class MannParams:
         Gamma [-], shear anisotropy (0 = isotropic).
     lifetime : str, optional
         "guo" (Guo et al. 2023, Eq. 6) or "mann" (Eq. 4, hypergeometric).
-    factor1 : float, optional
-        The Guo lifetime's small-k slope is -factor1 [-] (stable preset 0.8).
-    factor2 : float, optional
-        The evolution lifetime's large-k slope is -(2/3) factor2 [-] (3.5 = Eq. 15).
+    factor1, factor2 : float, optional
+        Slopes [-]: Guo lifetime's small-k -factor1 (stable 0.8), evolution's large-k -(2/3) factor2 (Eq. 15: 3.5).
     evo_time_s : float or None, optional
         gamma [s], time constant of tau_e (Eq. 15); None = frozen turbulence.
     """
@@ -59,8 +56,7 @@ class MannParams:
 class KaimalParams:
     """Kaimal spectra (Guo et al. 2023, Eq. 11) and IEC yz coherence (Eq. 12) parameters.
 
-    Frozen; validated on construction against turbgen.theory.ranges (ParameterError, also unless the
-    tuples hold three values).
+    Validated against turbgen.theory.ranges (ParameterError, also unless the tuples hold three values).
 
     Parameters
     ----------
@@ -90,8 +86,8 @@ class KaimalParams:
             "length_scales_m",
             tuple(check("length_scales_m", s, f"L{i + 1} (Kaimal length, m)") for i, s in enumerate(self.length_scales_m)),
         )
-        object.__setattr__(self, "a_yz", check("a_yz", self.a_yz))
-        object.__setattr__(self, "lc_m", check("lc_m", self.lc_m))
+        for key in ("a_yz", "lc_m"):
+            object.__setattr__(self, key, check(key, getattr(self, key)))
 
 
 def check_wind_speed(U) -> float:

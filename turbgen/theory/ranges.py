@@ -19,12 +19,8 @@ class Range:
 
     Parameters
     ----------
-    label : str
-        Name in messages: option and unit.
-    lo, hi : float
-        Bounds.
-    why : str
-        One phrase for the README table.
+    label, lo, hi, why : str, float, float, str
+        Name in messages (option and unit), the bounds, one phrase for the README table.
     lo_open, integer : bool, optional
         Exclude ``lo``; the parameter is an integer.
     """

@@ -53,11 +53,6 @@ def longitudinal_coherence(f_hz, dx_m: float, U_m_s: float, params: MannParams) 
         Longitudinal separation [m] and mean wind speed [m/s].
     params : MannParams
         Mann model.
-
-    Returns
-    -------
-    numpy.ndarray
-        (len(f),) coh2 [-].
     """
     f = np.atleast_1d(np.asarray(f_hz, dtype=float))
     if not np.all(np.isfinite(f)):

@@ -113,10 +113,9 @@ class LineSpectrum:
 
         Parameters
         ----------
-        f_hz : array_like
-            (n,) increasing frequencies [Hz], >= 0, covering the lines df = 1/(nt dt) to nt // 2 df.
-        S_m2_s : array_like
-            (3, n) one-sided PSDs S_u, S_v, S_w [m^2/s], finite and >= 0.
+        f_hz, S_m2_s : array_like
+            (n,) increasing frequencies [Hz] >= 0 covering the lines df = 1/(nt dt) to nt // 2 df; (3, n) PSDs S_u,
+            S_v, S_w [m^2/s], finite and >= 0.
         nt, dt_s : int, float
             The run's record (samples, interval [s]).
 

@@ -112,20 +112,14 @@ class LidarData:
 
     Parameters
     ----------
-    v_los : numpy.ndarray
-        (scan, beam, gate) [m/s], beams in increasing beam number; NaN a missing sample.
-    time_s : numpy.ndarray
-        (scan, beam) physical measurement times [s].
+    v_los, time_s : numpy.ndarray
+        (scan, beam, gate) [m/s] (beams in increasing number, NaN missing); (scan, beam) physical times [s].
     lidar : dict
         The lidar description's fields (``description.lidar_from_mapping`` rebuilds it).
-    mean_wind_added : bool
-        Whether v_los includes a mean wind.
-    shear_exponent : float
-        The power-law exponent alpha [-] of that mean wind.
-    U_m_s : float
-        The mean wind of the store the lidar measured [m/s].
-    source : str
-        The dataset's path.
+    mean_wind_added, shear_exponent : bool, float
+        Whether v_los includes a mean wind, and its power-law exponent alpha [-].
+    U_m_s, source : float, str
+        The mean wind of the store the lidar measured [m/s]; the dataset's path.
     mean_wind : dict, optional
         The added mean wind's ``MeanWind.to_attrs``; None: the power law with ``shear_exponent`` (or none added).
     """

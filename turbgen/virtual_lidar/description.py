@@ -37,32 +37,22 @@ class LidarDescription:
     name : str
         A preset's key, or the file's stem.
     kind : {"pulsed", "cw"}
-        "pulsed" (Gaussian probe volume, FWHM ``fwhm_m``) or "cw" (Lorentzian, Rayleigh length from
-        ``wavelength_m``, ``beam_radius_m`` and the focus distance).
+        Gaussian probe volume (FWHM ``fwhm_m``) or Lorentzian (Rayleigh length from the CW fields and focus distance).
     mount : {"nacelle", "spinner"}
-        "nacelle" (beams from ``azimuth_deg``, ``elevation_deg``) or "spinner" (a cone of half-angle
-        ``half_cone_deg`` at scan angles ``scan_deg``, tilted with the shaft by ``tilt_deg``).
+        Beams from ``azimuth_deg``, ``elevation_deg``; or a cone of ``half_cone_deg`` at ``scan_deg``, ``tilt_deg``.
     ranges_m : tuple of float
         Upstream distances x of the range gates [m], each in [1, 5000] (spinner: along the shaft axis; the
         focus distance is x / cos(half cone)).
-    beam_rate_hz : float
-        Beams measured per second [Hz], in BEAM_RATE_RANGE_HZ, one beam at a time (all its gates at once).
-    rotor_radius_m : float
-        Radius R [m] of the previewed rotor, in [1, 500].
+    beam_rate_hz, rotor_radius_m : float
+        Beams per second [Hz] in BEAM_RATE_RANGE_HZ (one beam with all its gates at a time); rotor radius [m], [1, 500].
     azimuth_deg, elevation_deg : tuple of float, optional
         Nacelle beams: one azimuth and one elevation per beam [deg], each in [-80, 80].
-    half_cone_deg : float, optional
-        Spinner cone half-angle [deg], in [0, 80].
-    scan_deg : tuple of float, optional
-        Spinner scan angles [deg], at least one.
-    tilt_deg : float, optional
-        Spinner shaft tilt [deg], in [-30, 30].
+    half_cone_deg, scan_deg, tilt_deg : float, tuple of float, float, optional
+        Spinner cone half-angle [deg] in [0, 80], scan angles [deg] (at least one), shaft tilt [deg] in [-30, 30].
     fwhm_m : float, optional
         Pulsed probe-volume FWHM [m], in [0.1, 1000] (default 30).
-    wavelength_m : float, optional
-        CW laser wavelength [m], in [1e-7, 1e-4] (default 1.565e-6).
-    beam_radius_m : float, optional
-        CW beam radius at the lens [m], in [1e-4, 1] (default 0.028).
+    wavelength_m, beam_radius_m : float, optional
+        CW laser wavelength [m] in [1e-7, 1e-4] (1.565e-6) and beam radius at the lens [m] in [1e-4, 1] (0.028).
     source : str, optional
         Where the values come from (not compared).
 

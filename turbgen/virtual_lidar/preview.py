@@ -32,12 +32,8 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
 
     Parameters
     ----------
-    model : str
-        Turbulence model, one of :data:`MODELS`; its ``preview`` (turbgen.spec.models) is called.
-    lidar : LidarDescription
-        The lidar.
-    U_m_s : float
-        Mean wind speed U [m/s].
+    model, lidar, U_m_s : str, LidarDescription, float
+        One of :data:`MODELS` (its ``preview`` in turbgen.spec.models is called), the lidar, mean wind speed [m/s].
     preset : str, optional
         Stability preset giving the model parameters at U (default "neutral").
     f_hz : array_like, optional

@@ -68,14 +68,10 @@ def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int |
 
     Parameters
     ----------
-    fs : FieldStore
-        The open store (model and parameters read from its attributes).
-    description : LidarDescription
-        The lidar.
-    f_hz : array_like
-        Welch bin frequencies [Hz].
-    radius_m : float
-        Rotor radius R [m].
+    fs, description : FieldStore, LidarDescription
+        The open store (model and parameters from its attributes) and the lidar.
+    f_hz, radius_m : array_like, float
+        Welch bin frequencies [Hz]; rotor radius R [m].
     setup : WelchSetup
         The Welch estimate's segment length and time step [s].
     n_samples : int, optional
@@ -104,12 +100,8 @@ class LidarReport:
 
     Parameters
     ----------
-    store : str
-        The store's label (its path).
-    lidar : LidarDescription or object
-        The lidar.
-    run : LidarRun
-        The simulated run.
+    store, lidar, run : str, LidarDescription, LidarRun
+        The store's label (its path), the lidar and the simulated run.
     f_hz : numpy.ndarray
         Welch bins 1 .. up to F_THEORY_MAX_HZ where the theory is evaluated [Hz].
     coh2_theory, G_theory : numpy.ndarray
@@ -290,14 +282,8 @@ def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, sh
         A lidar, a preset name or a lidar file; default DEFAULT_LIDAR.
     rotor_radius_m : float, optional
         Rotor radius R [m]; default the lidar's turbine if it fits the grid, else the validator's default.
-    add_mean_wind : bool, optional
-        Add the power-law mean wind to u before sampling (default False).
-    shear_exponent : float, optional
-        Its exponent alpha [-] (default 0.2).
-    nperseg : int, optional
-        Welch segment length [samples]; default ``run.default_nperseg``.
-    mean_wind : MeanWind, optional
-        With ``add_mean_wind``: this mean wind instead of the power law.
+    add_mean_wind, shear_exponent, mean_wind, nperseg
+        As :func:`turbgen.virtual_lidar.run.run_lidar`.
 
     Raises
     ------

@@ -45,14 +45,10 @@ class LidarRun:
 
     Parameters
     ----------
-    samples : LidarSamples
-        Sampled line-of-sight speeds.
-    t_arrival_s : numpy.ndarray
-        Rotor arrival time axis [s].
-    u_LL : numpy.ndarray
-        Lidar estimate of the rotor-effective wind speed [m/s].
-    u_RR : numpy.ndarray
-        Rotor-disc average u at x = 0 [m/s].
+    samples, t_arrival_s : LidarSamples, numpy.ndarray
+        Sampled line-of-sight speeds; rotor arrival time axis [s].
+    u_LL, u_RR : numpy.ndarray
+        Lidar estimate of the rotor-effective wind speed and rotor-disc average u at x = 0 [m/s].
     ti_lidar, ti_rotor : float
         Uncorrected lidar and rotor-averaged turbulence intensities [-].
     welch : dict

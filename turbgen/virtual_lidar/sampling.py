@@ -40,14 +40,10 @@ class Measurement:
     ----------
     beam, gate : int
         Beam and range-gate indices.
-    n : tuple of float
-        Unit projection vector (3,) on (u, v, w) [-].
-    focus_m : tuple of float
-        (x, y, z) of the gate centre [m].
-    offsets_m : tuple of float, optional
-        Probe-volume points along the beam [m] (0 = focus); default (0,).
-    weights : tuple of float, optional
-        Their weights [-] (>= 0, sum 1); default (1,).
+    n, focus_m : tuple of float
+        Unit projection vector on (u, v, w) [-]; (x, y, z) of the gate centre [m].
+    offsets_m, weights : tuple of float, optional
+        Probe-volume points along the beam [m] (0 = focus) and their weights [-] (>= 0, sum 1); default (0,), (1,).
     direction : tuple of float, optional
         Geometric unit direction (x, y, z) of the beam [-]; default the focus direction seen from the hub.
     plane_x_m : float, optional
@@ -76,18 +72,12 @@ class LidarSamples:
 
     Parameters
     ----------
-    v_los : numpy.ndarray
-        Line-of-sight speeds (n_scan, n_beam, n_gate) [m/s], float32, positive towards the lidar.
-    time_s : numpy.ndarray
-        Physical time of each beam's measurement (n_scan, n_beam) [s].
-    gates_x_m : numpy.ndarray
-        Plane x of each range gate (n_gate,) [m].
-    n1 : numpy.ndarray
-        Longitudinal projection n_1 of each measurement (n_beam, n_gate) [-].
-    mean_wind_added : bool
-        Whether a mean wind was added to u.
-    shear_exponent : float
-        Power-law exponent alpha [-] of the added mean wind.
+    v_los, time_s : numpy.ndarray
+        float32 (n_scan, n_beam, n_gate) speeds [m/s] (positive towards the lidar); (n_scan, n_beam) physical times [s].
+    gates_x_m, n1 : numpy.ndarray
+        (n_gate,) plane x of each gate [m]; (n_beam, n_gate) longitudinal projection n_1 of each measurement [-].
+    mean_wind_added, shear_exponent : bool, float
+        Whether a mean wind was added to u, and its power-law exponent alpha [-].
     mean_wind : str, optional
         The added mean wind described (``MeanWind.describe``); "" when none.
     mean_wind_record : dict, optional
@@ -170,20 +160,15 @@ def _interp_axis(coord0: float, step: float, n: int, values: np.ndarray):
 
 def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = False,
            shear_exponent: float = 0.2, mean_wind=None) -> LidarSamples:
-    """Sample ``fs`` with ``measurements`` at the scan schedule ``times_s`` [s] (physical), ``beam_of_sample`` the
-    beam of each entry.
+    """Sample store ``fs`` with ``measurements`` (every beam with every gate) at the physical times ``times_s`` [s].
 
-    The schedule measures one beam at a time, cycling over all beams in a fixed order; entries whose stored
-    times fall outside the store are dropped at the end (whole scans only).
+    ``beam_of_sample`` is each entry's beam: one beam at a time, cycling over all beams in a fixed order; only the
+    whole scans whose stored times fit in the store are kept.
 
     Parameters
     ----------
-    fs : FieldStore
-        The open store (its U [m/s], grid and hub height [m]).
-    measurements : sequence of Measurement
-        Every beam must have every gate.
-    times_s, beam_of_sample : array_like
-        Measurement times [s] and the beam index of each schedule entry.
+    fs, measurements, times_s, beam_of_sample
+        As above.
     add_mean_wind : bool, optional
         Add the power-law mean wind U (h / h_hub)^alpha to u (default False: fluctuations only).
     shear_exponent : float, optional
@@ -195,7 +180,6 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
     Returns
     -------
     LidarSamples
-        Every whole scan that fits in the store.
 
     Raises
     ------
