@@ -119,35 +119,15 @@ def _settle_interrupted(plan: SweepPlan, records: dict) -> None:
 def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress: bool = True,
               threads: int | None = None, memory_bytes: int | None = None,
               stencil_cache: str | os.PathLike | None = None) -> SweepResult:
-    """Run every planned field that has no complete store yet; write DIR/manifest.{json,csv}.
+    """Run every planned field that has no complete store yet; write DIR/manifest.{json,csv}; return the SweepResult
+    (every run's record: failing runs are recorded, not raised).
 
-    Parameters
-    ----------
-    plan : SweepPlan
-    client : distributed.Client, optional
-        An existing client (default: from plan.scheduler, or a LocalCluster of plan.workers).
-    processes : bool, optional
-        Worker processes or threads for the sweep's own LocalCluster.
-    progress : bool, optional
-    threads : int, optional
-        Threads of each run (default: cores / workers on the own LocalCluster); never changes the fields.
-    memory_bytes : int, optional
-        Memory budget of each run [B]: Mann runs over it are made out of core.
-    stencil_cache : str or os.PathLike, optional
-        The constrained runs' stencil cache (the workers must see it at the same path).
-
-    Returns
-    -------
-    SweepResult
-        Every run's record; failing runs are recorded, not raised.
-
-    Raises
-    ------
-    SweepLockedError
-        When another sweep holds DIR.
-    ParameterError
-        If ``out`` cannot hold the sweep, a planned store has other parameters (nothing run), or the disk lacks
-        space for the stores.
+    ``client``: an existing dask Client (default: from plan.scheduler, or a LocalCluster of plan.workers, worker
+    processes unless ``processes`` is False). ``threads``: threads of each run (default: cores / workers on the own
+    cluster); never changes the fields. ``memory_bytes``: each run's budget [B] (Mann runs over it go out of core).
+    ``stencil_cache``: the constrained runs' stencil cache (the workers must see it at the same path).
+    SweepLockedError when another sweep holds DIR; ParameterError if ``out`` cannot hold the sweep, a planned store
+    has other parameters (nothing run) or the disk lacks space for the stores.
     """
     t_start = time.perf_counter()
     out = plan.out
