@@ -1,9 +1,5 @@
-"""``turbgen.mann``, ``turbgen.kaimal`` and ``turbgen.open_store``: fields as xarray Datasets.
-
-A run is built by the same rule as the commands' (turbgen.spec.run_inputs: run file < preset < keywords) and made by
-the same functions (turbgen.runs), so ``turbgen.mann(L=49, ...)`` and ``turbgen mann --L 49 ...`` give the same field
-to the bit.
-"""
+"""``turbgen.mann``, ``turbgen.kaimal`` and ``turbgen.open_store``: fields as xarray Datasets, built by the commands'
+rule (run file < preset < keywords) and made by the same functions (turbgen.runs): the same field to the bit."""
 
 from __future__ import annotations
 
@@ -62,9 +58,8 @@ def _as_dataset(path: Path) -> xr.Dataset:
 
 
 def _through_store(make, grid, name: str) -> xr.Dataset:
-    """Run ``make(path)`` into a store in a temporary directory and return its field loaded into memory: a field
-    made without ``out`` whose run does not fit in memory together with the field (out of core, or a Kaimal spectrum
-    in a scratch file)."""
+    """Run ``make(path)`` into a temporary store and return its field loaded into memory (a field without ``out``
+    whose run does not fit in memory together with the field)."""
     require_memory(3 * grid.nbytes_per_component(), f"the field in memory ({name})",
                    "pass `out` to write a store instead, or lower `nt`, `ny`/`nz` or the number of planes")
     with tempfile.TemporaryDirectory(prefix="turbgen-") as tmp:
@@ -109,52 +104,24 @@ def open_store(path: PathLike) -> xr.Dataset:
 
 
 @fft.selected_by_keyword
-def mann(
-    L: float | None = None,
-    gamma: float | None = None,
-    evo: float | str | None = None,
-    seed: int | None = None,
-    out: PathLike | None = None,
-    *,
-    U: float | None = None,
-    ae: float | None = None,
-    sigma_u: float | None = None,
-    ti: float | None = None,
-    planes: Sequence[float] | float | None = None,
-    gates: Sequence[float] | str | None = None,
-    nt: int | None = None,
-    dt: float | None = None,
-    ny: int | None = None,
-    nz: int | None = None,
-    dy: float | None = None,
-    dz: float | None = None,
-    lifetime: str | None = None,
-    factor1: float | None = None,
-    factor2: float | None = None,
-    pad_yz: int | None = None,
-    hub_height: float | None = None,
-    preset: str | None = None,
-    presets_file: PathLike | None = None,
-    config: PathLike | Mapping | None = None,
-    overwrite: bool = False,
-    chunks: int | None = None,
-    threads: int | None = None,
-    stencil_cache: PathLike | None = None,
-    memory: int | str | None = None,
-    constrain: Sequence | None = None,
-    noise: float | None = None,
-    conditional_mean: bool = False,
-    fit: bool = False,
-    progress: bool = False,
-    fft_backend: str | None = None,
-) -> xr.Dataset:
+def mann(L: float | None = None, gamma: float | None = None, evo: float | str | None = None,
+         seed: int | None = None, out: PathLike | None = None, *, U: float | None = None, ae: float | None = None,
+         sigma_u: float | None = None, ti: float | None = None, planes: Sequence[float] | float | None = None,
+         gates: Sequence[float] | str | None = None, nt: int | None = None, dt: float | None = None,
+         ny: int | None = None, nz: int | None = None, dy: float | None = None, dz: float | None = None,
+         lifetime: str | None = None, factor1: float | None = None, factor2: float | None = None,
+         pad_yz: int | None = None, hub_height: float | None = None, preset: str | None = None,
+         presets_file: PathLike | None = None, config: PathLike | Mapping | None = None, overwrite: bool = False,
+         chunks: int | None = None, threads: int | None = None, stencil_cache: PathLike | None = None,
+         memory: int | str | None = None, constrain: Sequence | None = None, noise: float | None = None,
+         conditional_mean: bool = False, fit: bool = False, progress: bool = False,
+         fft_backend: str | None = None) -> xr.Dataset:  # fmt: skip
     """A Mann space-time 4D field u(t, x, y, z) (Mann 1994; Guo et al. 2022): the field of ``turbgen mann``.
 
-    The keywords are the options of ``turbgen mann``, with the same names, meanings and defaults (the keys of a
-    run file, e.g. ``length_scale_m``, go in ``config``). A keyword left at None is not given: it takes the run
-    file's value, else the preset's, else the default of turbgen/spec/defaults.py (L 49 m, Γ 3.1, γ 400 s, U 16 m/s,
-    4096 × 11 × 64 × 64 at dt 0.5 s, dy = dz 4.7 m, seed 1, the model σ_u of IEC class A).
-    :class:`turbgen.MannGenerator` makes further seeds of one parameter set without building the stencil again.
+    The keywords are the options of ``turbgen mann`` with their names, meanings and defaults (docs/cli.md); run-file
+    keys (e.g. ``length_scale_m``) go in ``config``. A keyword left at None takes the run file's value, else the
+    preset's, else the default (turbgen/spec/defaults.py). :class:`turbgen.MannGenerator` makes further seeds without
+    building the stencil again.
 
     Parameters
     ----------
@@ -169,18 +136,15 @@ def mann(
     U : float, optional
         Mean wind speed [m/s].
     ae, sigma_u, ti : float, optional
-        The energy level, one of: αε^(2/3) [m^(4/3) s^-2], the model σ_u [m/s], or σ_u / U [-] (default: the IEC
-        class A NTM σ_1 as model σ_u).
+        One energy level: αε^(2/3) [m^(4/3) s^-2], the model σ_u [m/s] or σ_u / U [-] (default: IEC class A σ_1).
     planes : sequence of float, optional
-        Plane positions x [m upstream], e.g. ``[0, 50, 100]``.
+        Plane positions x [m upstream].
     gates : sequence of float or str, optional
-        Range gates [m] (``"start:stop:step"`` as the command's); planes = rotor 0 + gates.
+        Range gates [m] (``"start:stop:step"``); planes = rotor 0 + gates.
     nt, ny, nz : int, optional
         Time samples, lateral and vertical points.
-    dt : float, optional
-        Time step [s] (dx = U dt).
-    dy, dz : float, optional
-        Lateral and vertical spacing [m] (dz default: dy).
+    dt, dy, dz : float, optional
+        Time step [s] (dx = U dt), lateral and vertical spacing [m] (dz default: dy).
     lifetime : {"guo", "mann"}, optional
         Eddy lifetime model.
     factor1, factor2 : float, optional
@@ -190,65 +154,49 @@ def mann(
     hub_height : float, optional
         Hub height [m].
     out : str or os.PathLike, optional
-        Store to write. None: the field is returned in memory (no file is left), made straight into the Dataset
-        when the run's one-pass arrays and the field fit ``memory``, else through a temporary store (out of core)
-        loaded back (a constrained field: straight into the Dataset when the run and the field fit ``memory``, its
-        correction's scratch file in the temporary directory). The same values either way.
+        Store to write. None: the field in memory (no file left; through a temporary store when the run and the
+        field do not fit ``memory``): the same values either way.
     config : str, os.PathLike or Mapping, optional
-        A run file (TOML/JSON) or a mapping of its keys; keywords override it.
-    preset : str, optional
-        Stability preset (``unstable``, ``neutral``, ``stable`` or one of ``presets_file``); keywords override it.
-    presets_file : str or os.PathLike, optional
-        User presets (TOML or JSON).
+        A run file (TOML/JSON) or a mapping of its keys.
+    preset, presets_file : optional
+        Stability preset (``unstable``, ``neutral``, ``stable`` or one of ``presets_file``, TOML/JSON).
     overwrite : bool, optional
         Replace an existing store at ``out``.
-    chunks : int, optional
-        Time samples per store chunk; never changes the field.
-    threads : int, optional
-        Worker threads (default: all cores); never changes the field.
+    chunks, threads : int, optional
+        Time samples per store chunk, worker threads (default: all cores); neither changes the field.
     stencil_cache : str or os.PathLike, optional
-        Directory keeping the stencil per parameter set and grid and, with ``constrain``, the system of the
-        measurements (both reused by later seeds).
+        Directory keeping the stencil (and with ``constrain`` the measurement system) for later seeds.
     memory : int or str, optional
-        Memory budget [bytes] or a size such as ``"4GiB"``; a field that does not fit is made out of core into
-        ``out``, the same field (default: the available memory).
+        Memory budget [bytes] or a size such as ``"4GiB"`` (default: the available memory); a field over it is made
+        out of core, the same field.
+    constrain : list, optional
+        Condition the field on measurements (Hoffman & Ribak 1991): constraint files (point series JSON, ``turbgen
+        lidar --out`` datasets) or loaded constraints; made in memory in one pass. Without an energy level (``ae``,
+        ``sigma_u``, ``ti``, a class) ae is estimated from the data (``attrs["derived"]["ae_from"]``).
+    noise : float, optional
+        With ``constrain``: measurement-noise σ [m/s] >= 0 of every value (default: each file's, else 0).
+    conditional_mean : bool, optional
+        With ``constrain``: the conditional mean (no random part).
+    fit : bool, optional
+        With ``constrain`` of one point-series file: fit ae, L, Γ and the mean wind to it first
+        (turbgen.runs.replay; ``L``, ``gamma`` and the energy level are refused); ``attrs["fit"]`` records it.
     progress : bool, optional
         Show a progress bar on stderr.
-    constrain : list, optional
-        Condition the field on measurements (Hoffman & Ribak 1991), as ``turbgen mann --constrain``: constraint
-        files (point time series JSON, schemas/constraints.schema.json, or ``turbgen lidar --out`` datasets) or
-        constraints already loaded (turbgen.runs.constrain.load_constraint). The field is a sample of the model
-        conditioned on them (``conditional_mean=False``), made in memory in one pass (``memory`` is not used).
-        Also the run file's key ``constrain``.
-        When none of ``ae``, ``sigma_u``, ``ti`` or an IEC class (``turb_class``, a preset) is given, the energy
-        level ae is estimated from the data (``attrs["derived"]["ae_from"]`` says so, with the model sigma_u).
-    noise : float, optional
-        With ``constrain``: measurement-noise sigma [m/s] >= 0 of every value (default: each file's
-        ``noise_m_s``, else 0: the field passes through the data); the run file's ``noise_m_s``.
-    conditional_mean : bool, optional
-        With ``constrain``: return the conditional mean (the optimal linear reconstruction, no random part).
-    fit : bool, optional
-        With ``constrain`` of one point-series file: replay it, as ``turbgen mann --fit`` (turbgen.runs.replay):
-        ae, L, Γ and the mean wind are fitted to the data and the field is conditioned with them (``L``, ``gamma``,
-        ``ae``, ``sigma_u``, ``ti`` are refused); ``attrs["fit"]`` records the fit.
     fft_backend : str, optional
-        FFT backend (turbgen.fft: ``"pyfftw"``, ``"scipy"`` or a registered one; default: the environment variable
-        TURBGEN_FFT_BACKEND, else pyfftw); changes the field at float32 round-off only, recorded in its attributes.
+        FFT backend (``"pyfftw"``, ``"scipy"`` or registered; default: TURBGEN_FFT_BACKEND, else pyfftw); changes the
+        field at float32 round-off only.
 
     Returns
     -------
     xarray.Dataset
-        u, v, w (t, x, y, z) [m/s], coordinates t [s], x, y, z [m], the store's attributes (``parameters``,
-        ``grid``, ``seed``, ...): in memory without ``out``, else the written store, opened lazily. A constrained
-        field has the attribute ``constraints`` (the data on the grid, noise, solver report, residual at the
-        measurements).
+        u, v, w (t, x, y, z) [m/s], coordinates t [s], x, y, z [m] and the store's attributes; in memory without
+        ``out``, else the written store opened lazily. A constrained field has the attribute ``constraints``.
 
     Raises
     ------
     ParameterError
-        For an unknown keyword, a value outside its range, two energy levels (``ae``, ``sigma_u``, ``ti``), a field
-        that fits neither memory nor disk; a constraint file that does not match its format, measurements outside
-        the field, dependent zero-noise measurements, ``noise`` < 0 or ``noise`` without ``constrain``.
+        For an unknown keyword, a value outside its range, two energy levels, a field that fits neither memory nor
+        disk, constraint data that do not match their format or the field, ``noise`` without ``constrain``.
     StoreError
         For an existing ``out`` without ``overwrite``, or an ``out`` that is not a turbgen store with it.
 
@@ -261,8 +209,7 @@ def mann(
     >>> ds.attrs["parameters"]["length_scale_m"], ds.attrs["seed"]
     (30.0, 1)
 
-    Conditioned on a hub-height sonic (examples/mast.json: u as total wind and w at the rotor plane, 2 Hz for
-    32 s, noise 0.05 m/s), the field follows the data at the measurements:
+    Conditioned on a hub-height sonic (examples/mast.json), the field follows the data at the measurements:
 
     >>> from pathlib import Path
     >>> mast = Path(turbgen.__file__).parents[1] / "examples" / "mast.json"
@@ -313,26 +260,9 @@ def mann(
 
 def mann_run_mapping(options: Mapping, config: PathLike | Mapping | None = None, preset: str | None = None,
                      presets_file: PathLike | None = None) -> tuple[dict, ConstraintRequest | None]:
-    """The run mapping of ``turbgen.mann`` and ``turbgen mann`` (run file < preset < options) and the constraint
-    request (None: unconstrained).
-
-    Parameters
-    ----------
-    options : Mapping
-        Option name -> value (``L``, ``evo``, ``nt``, ``planes``, ``constrain``, ...; None: not given).
-    config, preset, presets_file : optional
-        The run file (or mapping), the stability preset and the user presets file.
-
-    Returns
-    -------
-    tuple
-        (mapping for MannRun.from_mapping, ConstraintRequest or None).
-
-    Raises
-    ------
-    ParameterError
-        For two energy levels, ``presets_file`` without ``preset``, a bad run file or value.
-    """
+    """The run mapping of ``turbgen.mann`` and ``turbgen mann`` (run file < preset < ``options``, option name ->
+    value or None) and the ConstraintRequest (None: unconstrained). ParameterError for two energy levels,
+    ``presets_file`` without ``preset``, a bad run file or value."""
     given, grid, x_m = run_inputs("mann", options)
     energy = [key for key in MANN_ENERGY_KEYS if key in given]
     if len(energy) > 1:
@@ -345,25 +275,8 @@ def mann_run_mapping(options: Mapping, config: PathLike | Mapping | None = None,
 
 def kaimal_run(options: Mapping, config: PathLike | Mapping | None = None, preset: str | None = None,
                presets_file: PathLike | None = None) -> tuple[KaimalRun, dict]:
-    """The run of ``turbgen.kaimal`` and ``turbgen kaimal`` (run file < preset < options).
-
-    Parameters
-    ----------
-    options : Mapping
-        Option name -> value (``U``, ``turb_class``, ``nt``, ``planes``, ...; None: not given).
-    config, preset, presets_file : optional
-        The run file (or mapping), the stability preset and the user presets file.
-
-    Returns
-    -------
-    tuple
-        (KaimalRun, the preset's keys as resolved at the run's U and class: {} without a preset).
-
-    Raises
-    ------
-    ParameterError
-        For ``presets_file`` without ``preset``, a bad run file or value.
-    """
+    """The KaimalRun of ``turbgen.kaimal`` and ``turbgen kaimal`` (run file < preset < ``options``) and the preset's
+    keys resolved at its U and class ({} without a preset). ParameterError as :func:`mann_run_mapping`."""
     if options.get("sigma") is not None and options.get("spectrum") is not None:
         raise ParameterError("`sigma` (--sigma) with `spectrum`: the user spectrum sets sigma_u, sigma_v, sigma_w "
                              "(its integral over the run's lines); scale the spectrum instead")
@@ -383,7 +296,7 @@ def kaimal_run(options: Mapping, config: PathLike | Mapping | None = None, prese
 
 
 def _budget(memory) -> int | None:
-    """The memory budget [bytes]: ``memory`` (bytes or a size such as "4GiB") or the available memory (None: unknown)."""
+    """The memory budget [B]: ``memory`` (bytes or a size such as "4GiB") or the available memory (None: unknown)."""
     if memory is None:
         return available_memory_bytes()
     if isinstance(memory, str):
@@ -392,8 +305,8 @@ def _budget(memory) -> int | None:
 
 
 def _mann_fits(run: MannRun, threads, stencil_cache, memory) -> bool:
-    """Whether ``run`` is made in memory straight into its Dataset (turbgen.runs.mann.mann_in_memory): its one-pass
-    arrays, the field and what the process holds (as the out-of-core planner counts them) fit the budget."""
+    """Whether ``run`` is made straight into its Dataset: its one-pass arrays, the field and what the process holds
+    fit the budget."""
     from turbgen.runs.mann_outofcore import fits_in_memory
 
     budget = _budget(memory)
@@ -402,8 +315,7 @@ def _mann_fits(run: MannRun, threads, stencil_cache, memory) -> bool:
 
 
 def _constrained_fits(run: MannRun, placed, threads, memory) -> bool:
-    """Whether the constrained ``run`` is made in memory (turbgen.runs.constrain.mann_constrained_in_memory): what
-    it holds and its field fit the budget."""
+    """Whether the constrained ``run`` and its field fit the budget in memory."""
     from turbgen.runs.constrain import constrained_memory_bytes
 
     budget = _budget(memory)
@@ -412,8 +324,7 @@ def _constrained_fits(run: MannRun, placed, threads, memory) -> bool:
 
 
 def _mann_maker(run: MannRun, overwrite, chunks, threads, stencil_cache, memory, progress):
-    """The function writing ``run`` to a path as ``turbgen mann`` does: in memory, or out of core when it does not
-    fit the budget (the same field)."""
+    """The function writing ``run`` to a path as ``turbgen mann`` does (out of core when over the budget)."""
     from turbgen.runs.mann import run_mann
     from turbgen.runs.mann_outofcore import plan_for_budget, remove_stale_scratch, run_mann_outofcore
 
@@ -437,9 +348,8 @@ def _mann_maker(run: MannRun, overwrite, chunks, threads, stencil_cache, memory,
 
 
 def _constrained_maker(run: MannRun, request, placed, overwrite, chunks, threads, stencil_cache, fit=None):
-    """The function writing ``run`` conditioned on ``request`` (a ConstraintRequest) as ``turbgen mann --constrain``
-    does (turbgen.runs.constrain.run_mann_constrained); ``placed``: the data placed on the run's grid (checked
-    before anything is written); ``fit``: the store's fit record (turbgen.runs.replay)."""
+    """The function writing ``run`` conditioned on ``request`` (files loaded, ``placed`` checked) as ``turbgen mann
+    --constrain`` does; ``fit``: the store's fit record."""
     from turbgen.runs.constrain import run_mann_constrained
 
     constraints = list(request.files)  # loaded
@@ -456,51 +366,22 @@ def _constrained_maker(run: MannRun, request, placed, overwrite, chunks, threads
 
 
 @fft.selected_by_keyword
-def kaimal(
-    U: float | None = None,
-    seed: int | None = None,
-    out: PathLike | None = None,
-    *,
-    turb_class: str | None = None,
-    hub_height: float | None = None,
-    sigma: Sequence[float] | None = None,
-    lengths: Sequence[float] | None = None,
-    ayz: float | None = None,
-    lc: float | None = None,
-    long_model: str | None = None,
-    ax: float | None = None,
-    bx: float | None = None,
-    long_components: str | None = None,
-    vw_coherence: str | None = None,
-    rescale: bool = False,
-    planes: Sequence[float] | float | None = None,
-    gates: Sequence[float] | str | None = None,
-    nt: int | None = None,
-    dt: float | None = None,
-    ny: int | None = None,
-    nz: int | None = None,
-    dy: float | None = None,
-    dz: float | None = None,
-    preset: str | None = None,
-    presets_file: PathLike | None = None,
-    config: PathLike | Mapping | None = None,
-    overwrite: bool = False,
-    chunks: int | None = None,
-    threads: int | None = None,
-    constrain: Sequence | None = None,
-    noise: float | None = None,
-    conditional_mean: bool = False,
-    progress: bool = False,
-    spectrum=None,
-    coherence=None,
-    fft_backend: str | None = None,
-) -> xr.Dataset:
+def kaimal(U: float | None = None, seed: int | None = None, out: PathLike | None = None, *,
+           turb_class: str | None = None, hub_height: float | None = None, sigma: Sequence[float] | None = None,
+           lengths: Sequence[float] | None = None, ayz: float | None = None, lc: float | None = None,
+           long_model: str | None = None, ax: float | None = None, bx: float | None = None,
+           long_components: str | None = None, vw_coherence: str | None = None, rescale: bool = False,
+           planes: Sequence[float] | float | None = None, gates: Sequence[float] | str | None = None,
+           nt: int | None = None, dt: float | None = None, ny: int | None = None, nz: int | None = None,
+           dy: float | None = None, dz: float | None = None, preset: str | None = None,
+           presets_file: PathLike | None = None, config: PathLike | Mapping | None = None, overwrite: bool = False,
+           chunks: int | None = None, threads: int | None = None, constrain: Sequence | None = None,
+           noise: float | None = None, conditional_mean: bool = False, progress: bool = False, spectrum=None,
+           coherence=None, fft_backend: str | None = None) -> xr.Dataset:  # fmt: skip
     """A Kaimal 4D field with longitudinal coherence (IEC 61400-1; Guo et al. 2023): the field of ``turbgen kaimal``.
 
-    The keywords are the options of ``turbgen kaimal``, with the same names, meanings and defaults (``turb_class``
-    is ``--class``; the keys of a run file go in ``config``). A keyword left at None takes the run file's value,
-    else the preset's, else the default (U 16 m/s, class A, hub 150 m, 4096 × 11 × 31 × 31 at dt 0.5 s, dy = dz 5 m,
-    seed 1).
+    The keywords are the options of ``turbgen kaimal`` (``turb_class`` is ``--class``), as for :func:`mann`; defaults:
+    U 16 m/s, class A, hub 150 m, 4096 × 11 × 31 × 31 at dt 0.5 s, dy = dz 5 m, seed 1.
 
     Parameters
     ----------
@@ -509,11 +390,11 @@ def kaimal(
     seed : int, optional
         Random seed (>= 0).
     turb_class : {"A+", "A", "B", "C"}, optional
-        IEC turbulence class (``--class``).
+        IEC turbulence class.
     hub_height : float, optional
         Hub height [m].
     sigma, lengths : sequence of three floats, optional
-        Explicit σ_u, σ_v, σ_w [m/s] (instead of the class's) and Kaimal lengths L1, L2, L3 [m].
+        Explicit σ_u, σ_v, σ_w [m/s] and Kaimal lengths L1, L2, L3 [m].
     ayz, lc : float, optional
         yz coherence decay a_yz [-] and scale Lc [m].
     long_model : {"exp", "simley-pao", "kristensen"}, optional
@@ -529,46 +410,23 @@ def kaimal(
     planes, gates, nt, dt, ny, nz, dy, dz : optional
         The grid, as for :func:`mann`.
     out : str or os.PathLike, optional
-        Store to write. None: the field is returned in memory (no file is left), made straight into the Dataset
-        when the run's arrays (spectrum in memory) and the field fit 80 % of the available memory, else through a
-        temporary store loaded back (the spectrum in a scratch file); a constrained field always straight into the
-        Dataset. The same values either way.
-    config : str, os.PathLike or Mapping, optional
-        A run file (TOML/JSON) or a mapping of its keys; keywords override it.
-    preset : str, optional
-        Stability preset (``unstable``, ``neutral``, ``stable`` or one of ``presets_file``).
-    presets_file : str or os.PathLike, optional
-        User presets (TOML or JSON).
-    overwrite : bool, optional
-        Replace an existing store at ``out``.
-    chunks : int, optional
-        Time samples per store chunk; never changes the field.
-    threads : int, optional
-        FFT threads (default: all cores); never changes the field.
+        Store to write. None: in memory (through a temporary store, spectrum in a scratch file, when the run and the
+        field do not fit 80 % of the available memory): the same values either way.
+    config, preset, presets_file, overwrite, chunks, threads, progress, fft_backend : optional
+        As for :func:`mann` (``threads``: FFT threads).
     constrain : list, optional
-        Condition the field on measurements (Hoffman & Ribak 1991), as ``turbgen kaimal --constrain``: point time
-        series JSON files, ``turbgen lidar --out`` datasets, or what :func:`turbgen.lidar` returned (in memory).
-        Each full-rate series' record mean is removed first.
-    noise : float, optional
-        With ``constrain``: measurement-noise σ [m/s] >= 0 of every value (default: each file's, else 0).
-    conditional_mean : bool, optional
-        With ``constrain``: return the conditional mean (no random part).
-    progress : bool, optional
-        Show a progress bar on stderr.
+        Condition the field on measurements (Hoffman & Ribak 1991): point series JSON files, ``turbgen lidar --out``
+        datasets or :func:`turbgen.lidar` reports; each full-rate series' record mean is removed first.
+    noise, conditional_mean : optional
+        As for :func:`mann`.
     spectrum : str, os.PathLike, Mapping, sequence or callable, optional
-        User spectra of u, v, w in place of the Kaimal ones (``turbgen kaimal --spectrum``): a CSV file or a table
-        (a mapping or four arrays ``f_hz``, ``S_u``, ``S_v``, ``S_w``: band-mean one-sided PSDs [m^2/s] covering the
-        run's lines 1/(nt dt) to 1/(2 dt), interpolated linearly), or a callable ``S(f_hz) -> (3, n)`` [m^2/s],
-        averaged over each line's band (turbgen.theory.user_spectra). The store records the band means, so
-        ``attrs["parameters"]["spectrum"]`` remakes the field without the callable.
+        User spectra of u, v, w (``--spectrum``): a CSV file or table (``f_hz``, ``S_u``, ``S_v``, ``S_w``: band-mean
+        one-sided PSDs [m^2/s] over the run's lines), or ``S(f_hz) -> (3, n)`` [m^2/s] averaged over each line's band
+        (turbgen.theory.user_spectra); the store records the band means.
     coherence : str, os.PathLike, Mapping or callable, optional
-        User yz coherence [-] in place of the IEC exponential (u, and v, w with ``vw_coherence="exp"``): a callable
-        ``coh(f_hz, r_m, U_m_s)`` evaluated on the run's lines x the grid's separations, or a table ``{"f_hz",
-        "r_m", "coh"}`` or its CSV file (``turbgen kaimal --coherence``: columns f_hz,r_m,coh, a row per pair),
-        interpolated in f onto the lines (turbgen.theory.user_coherence). The store records the
-        values, so ``attrs["parameters"]["coherence"]`` remakes the field without the callable.
-    fft_backend : str, optional
-        FFT backend, as :func:`mann`'s.
+        User yz coherence [-] (u, and v, w with ``vw_coherence="exp"``; ``--coherence``): ``coh(f_hz, r_m, U_m_s)``,
+        a table ``{"f_hz", "r_m", "coh"}`` or its CSV file (a row per pair) (turbgen.theory.user_coherence); the
+        store records the values.
 
     Returns
     -------
@@ -625,8 +483,7 @@ def kaimal(
 
 
 def _kaimal_maker(run: KaimalRun, overwrite, chunks, threads, progress):
-    """The function writing ``run`` to a path as ``turbgen kaimal`` does (the spectrum in a scratch file when it
-    does not fit in memory)."""
+    """The function writing ``run`` to a path as ``turbgen kaimal`` does (spectrum spilled when over memory)."""
     from turbgen.runs.kaimal import kaimal_generator, plan_spill, run_kaimal
 
     def make(path: Path) -> None:
@@ -638,9 +495,8 @@ def _kaimal_maker(run: KaimalRun, overwrite, chunks, threads, progress):
     return make
 
 def _kaimal_constrained_maker(run: KaimalRun, constraints, noise, conditional_mean: bool, overwrite, chunks, threads):
-    """The function writing ``run`` conditioned on ``constraints`` (loaded) to a path as ``turbgen kaimal
-    --constrain`` does (turbgen.runs.constrain_kaimal.run_kaimal_constrained); the data are placed and the memory
-    checked here, before anything is written."""
+    """The function writing ``run`` conditioned on the loaded ``constraints`` as ``turbgen kaimal --constrain``
+    does; data placed and memory checked here, before anything is written."""
     from turbgen.runs.constrain_kaimal import place_kaimal, require_constrained_memory, run_kaimal_constrained
 
     require_constrained_memory(run, place_kaimal(run, constraints, noise), threads)

@@ -4,11 +4,7 @@
     for ds in g.fields(range(10)):      # xarray Datasets, as turbgen.mann(...) returns them
         ...
 
-:class:`MannGenerator` builds the Mann stencil (the per-wavenumber factors of the sheared tensor, Mann 1994, Eq. 46,
-with the evolution rates of Guo et al. 2022) once in memory in its constructor; each :meth:`MannGenerator.field` draws
-only the random coefficients and transforms them. :class:`KaimalGenerator` keeps its yz samplers (circulant tori or
-dense factors) and longitudinal factors from its first field on; a further seed draws and transforms only. Both give the fields of ``turbgen.mann`` / ``turbgen.kaimal`` and of the commands
-for the same inputs, bit for bit (the same run functions of turbgen.runs).
+Both give the fields of ``turbgen.mann`` / ``turbgen.kaimal`` and the commands bit for bit (turbgen.runs).
 """
 
 from __future__ import annotations
@@ -64,8 +60,7 @@ class _Generator(Generic[RunT]):
 
     def field(self, seed: int = 1, *, out: PathLike | None = None, overwrite: bool = False,
               chunks: int | None = None, progress: bool = False) -> xr.Dataset:  # fmt: skip
-        """The field of ``seed``: u, v, w (t, x, y, z) [m/s] with the attributes of ``turbgen.mann``'s (of
-        ``turbgen.kaimal``'s for the Kaimal generator).
+        """The field of ``seed``: u, v, w (t, x, y, z) [m/s] as ``turbgen.mann(...)`` / ``turbgen.kaimal(...)`` returns it.
 
         Parameters
         ----------
@@ -83,7 +78,6 @@ class _Generator(Generic[RunT]):
         Returns
         -------
         xarray.Dataset
-            The field, as ``turbgen.mann(...)`` / ``turbgen.kaimal(...)`` returns it for the same inputs.
 
         Raises
         ------
@@ -99,18 +93,7 @@ class _Generator(Generic[RunT]):
                         lambda path: self._to_store(run, path, overwrite, chunks, progress))
 
     def fields(self, seeds: Iterable[int]) -> Iterator[xr.Dataset]:
-        """The field of each of ``seeds`` in memory, one at a time (:meth:`field`).
-
-        Parameters
-        ----------
-        seeds : iterable of int
-            Random seeds (>= 0).
-
-        Yields
-        ------
-        xarray.Dataset
-            The field of each seed, in order.
-        """
+        """Yield the field of each of ``seeds`` in memory, in order (:meth:`field`)."""
         for seed in seeds:
             yield self.field(seed)
 
@@ -118,8 +101,8 @@ class _Generator(Generic[RunT]):
 class MannGenerator(_Generator[MannRun]):
     """Mann space-time fields (Mann 1994; Guo et al. 2022) of one parameter set and grid, one per seed.
 
-    The stencil is built once, in memory, by the constructor (about 4 float32 numbers per wavenumber of the
-    synthesis box: :attr:`nbytes`); each further field costs its random coefficients and transforms only.
+    The constructor builds the stencil in memory (:attr:`nbytes`); each field then costs its random coefficients and
+    transforms only.
 
     Parameters
     ----------
@@ -128,9 +111,9 @@ class MannGenerator(_Generator[MannRun]):
     grid : Grid
         nt samples dt_s [s] apart, planes x_m [m upstream], ny x nz points dy_m x dz_m [m].
     U_m_s : float, optional
-        Mean wind speed [m/s] (dx = U dt; planes at x are t = x / U apart). Default 16.
+        Mean wind speed [m/s] (dx = U dt). Default 16.
     hub_height_m : float, optional
-        Hub height [m] recorded with the field (exports). Default 150.
+        Hub height [m] recorded with the field. Default 150.
     pad_yz : int, optional
         The synthesis box is pad_yz times wider in y and z than the grid (cropped). Default 2.
     threads : int, optional
@@ -178,17 +161,14 @@ class MannGenerator(_Generator[MannRun]):
 
     @property
     def nbytes(self) -> int:
-        """Bytes [B] the generator holds between fields: its stencil and the synthesis buffers (made by the first
-        field)."""
-        from turbgen.synthesis.mann_spacetime import snapshot_memory_bytes
+        """Bytes [B] held between fields: the stencil and the snapshot buffers (MannSnapshots.bytes_needed)."""
+        from turbgen.synthesis.mann_spacetime import MannSnapshots
         from turbgen.synthesis.mann_stencil import synthesis_box
 
         s, g = self._stencil, self.run.grid
         snapshots = 1 if s.inv_tau is None else g.nx
-        coef = 0 if s.coef is None else s.coef.nbytes  # built: never None
-        return int(coef + (0 if s.inv_tau is None else s.inv_tau.nbytes)
-                   + snapshot_memory_bytes(synthesis_box(self.run), g.ny, g.nz, snapshots, self.threads, buffers=2,
-                                           coefficients=False))  # fmt: skip
+        held = sum(a.nbytes for a in (s.coef, s.inv_tau) if a is not None)
+        return held + MannSnapshots.bytes_needed(synthesis_box(self.run), g.ny, g.nz, snapshots, self.threads, 2)
 
     def _in_memory(self, run: MannRun, progress: bool) -> xr.Dataset:
         from turbgen.runs.mann import mann_in_memory
@@ -204,17 +184,16 @@ class MannGenerator(_Generator[MannRun]):
                  threads=self.threads)
 
 class KaimalGenerator(_Generator[KaimalRun]):
-    """Kaimal 4D fields (IEC 61400-1 spectra and yz coherence; longitudinal coherence of Guo et al. 2023, Eq. 18) of
-    one parameter set and grid, one per seed: the run checked once, its yz samplers and longitudinal factors made by
-    the first field and kept (the default grid's: ~23 MiB), so a further seed costs its random draws and transforms.
+    """Kaimal 4D fields (IEC 61400-1; longitudinal coherence of Guo et al. 2023, Eq. 18) of one parameter set and
+    grid, one per seed: the yz samplers and longitudinal factors made by the first field are kept (~23 MiB for the
+    default grid), so a further seed costs its random draws and transforms only.
 
     Parameters
     ----------
     params : KaimalParams
-        sigma_m_s (u, v, w) [m/s], length_scales_m (L1, L2, L3) [m], a_yz [-], lc_m [m]
-        (:func:`turbgen.spec.kaimal.kaimal_params` gives the IEC values of a class and hub height).
+        sigma_m_s [m/s], length_scales_m [m], a_yz [-], lc_m [m] (:func:`turbgen.spec.kaimal.kaimal_params`: IEC values).
     grid : Grid
-        nt samples dt_s [s] apart, planes x_m [m upstream], ny x nz points dy_m x dz_m [m].
+        As :class:`MannGenerator`'s.
     U_m_s : float, optional
         Hub-height mean wind speed [m/s]. Default 16.
     hub_height_m : float, optional
@@ -222,7 +201,7 @@ class KaimalGenerator(_Generator[KaimalRun]):
     long_model : {"exp", "simley-pao", "kristensen"}, optional
         Longitudinal coherence model. Default "exp".
     a_x, b_x : float, optional
-        a_x [-] and b_x [1/m] of the "exp" model (default 1.8, 1.49e-4: Guo et al. 2023, Table 2, neutral).
+        a_x [-] and b_x [1/m] of the "exp" model (default: Guo et al. 2023, Table 2, neutral).
     long_components : {"u", "uvw"}, optional
         Components given the longitudinal coherence. Default "u".
     vw_coherence : {"white", "exp"}, optional
@@ -230,7 +209,7 @@ class KaimalGenerator(_Generator[KaimalRun]):
     rescale : bool, optional
         Scale the spectra so the expected sigma is the nominal one.
     coherence : Mapping or callable, optional
-        User yz coherence ``coh(f_hz, r_m, U_m_s)`` [-] or its table, as ``turbgen.kaimal``'s.
+        User yz coherence, as ``turbgen.kaimal``'s.
     threads : int, optional
         FFT threads (default: all cores); never changes the field.
 

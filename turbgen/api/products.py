@@ -1,8 +1,5 @@
-"""``turbgen.validate``, ``turbgen.export``, ``turbgen.lidar`` and ``turbgen.info``: what is made from a field.
-
-Each takes a store path, a FieldStore, a Dataset of :func:`turbgen.open_store` or a field in memory (read from
-its arrays, no file written), and calls what the commands call, with the commands' options as keywords.
-"""
+"""``turbgen.validate``, ``turbgen.export``, ``turbgen.lidar`` and ``turbgen.info``: what is made from a field (a store
+path, a FieldStore, a Dataset of :func:`turbgen.open_store` or a field in memory), as the commands make it."""
 
 from __future__ import annotations
 
@@ -102,13 +99,12 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
            runner_files: bool = True, overwrite: bool = False):
     """Write a store for InflowWind, HAWC2, the lidar simulator, the 4D Mann scripts or HDF5 (``turbgen export``).
 
-    The keywords are ``turbgen export``'s options, made into the request by the same function
-    (:func:`turbgen.exporters.options.export_request`); the mean wind is :class:`turbgen.spec.mean_wind.MeanWind`.
+    The keywords are ``turbgen export``'s options (turbgen.exporters.options.export_request); the mean wind is a
+    :class:`turbgen.spec.mean_wind.MeanWind`.
 
     Parameters
     ----------
     store : str, os.PathLike, FieldStore or xarray.Dataset
-        The store.
     format : str
         ``bts``, ``wnd``, ``evo``, ``hawc2``, ``mt4d`` or ``hdf5``.
     out : str or os.PathLike
@@ -126,7 +122,7 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
     mean_history : str or os.PathLike, optional
         CSV of t [s], U [m/s] [, direction deg] at hub height.
     transient, iec_class : str, optional
-        Superimposed IEC transient (EOG, EDC, ECD, EWS-V or EWS-H) and class, e.g. "IIB".
+        Superimposed IEC transient (EOG, EDC, ECD, EWS-V, EWS-H) and class, e.g. "IIB".
     rotor_diameter : float, optional
         Rotor diameter D [m] (with ``transient``).
     transient_start : float, optional
@@ -152,8 +148,8 @@ def export(store, format: str, out: str | os.PathLike, *, plane: int | None = No
     Raises
     ------
     ParameterError
-        For an unknown format or options it does not use, an existing output, a grid reaching the ground, too
-        little disk or values outside their ranges.
+        For an unknown format or unused options, an existing output, a grid reaching the ground, too little disk or
+        values outside their ranges.
     StoreError
         If the store is missing or incomplete.
 
@@ -192,20 +188,17 @@ def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLi
         The store; its planes must include the lidar's range gates.
     lidar : str or os.PathLike, optional
         A lidar preset (``nacelle-4beam``, ``spinner-cw``, ``spinner-pulsed``, ``nacelle-1beam``) or a TOML/JSON
-        lidar file (schemas/lidar.schema.json); default: the 4-beam pulsed lidar of Guo et al. (2023), Table 3.
+        lidar file; default: the 4-beam pulsed lidar of Guo et al. (2023), Table 3.
     out : str or os.PathLike, optional
-        Write the lidar dataset (zarr: v_los, u_LL, u_RR, every lidar parameter) here.
+        Write the lidar dataset (zarr: v_los, u_LL, u_RR, the lidar parameters) here; ``overwrite``: replace it.
     overwrite : bool, optional
-        Replace an existing ``out``.
     rotor_radius : float, optional
         Rotor radius R [m] of u_RR (default: the lidar's turbine if it fits the grid, else as :func:`validate`).
     mean_wind : bool, optional
-        Add the mean wind to u before projecting: the power law of ``shear``, or ``profile``, ``veer`` and
+        Add the mean wind to u before projecting: the power law of ``shear`` [-], or ``profile``, ``veer`` and
         ``mean_history`` as :func:`export` takes them.
     shear : float, optional
-        Power-law shear exponent.
     profile, veer, mean_history : optional
-        As :func:`export`.
     plots : str or os.PathLike, optional
         Write the plots of gamma^2_RL and ``|G_RL|`` (simulated with 95 % band, theory) into this directory.
 

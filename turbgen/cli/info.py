@@ -30,32 +30,23 @@ def _unit(u: str) -> str:
 
 def _lines(s: dict) -> list[str]:
     g = s["grid"]
+    decoded = "every chunk decoded" if s.get("chunks_decoded") else "chunks not decoded (large store: validate reads them)"
     rows = [
         ("store", s["path"]),
-        (
-            "status",
-            f"complete, {format_bytes(s['size_on_disk_bytes'])} on disk "
-            f"({format_bytes(s['size_uncompressed_bytes'])} uncompressed), "
-            + ("every chunk decoded" if s.get("chunks_decoded") else "chunks not decoded (large store: validate reads them)"),
-        ),
+        ("status", f"complete, {format_bytes(s['size_on_disk_bytes'])} on disk "
+                   f"({format_bytes(s['size_uncompressed_bytes'])} uncompressed), {decoded}"),
         ("model", f"{s['model']}, seed {s['seed']}"),
         ("created", f"{s['created_utc']} by turbgen {s['turbgen_version']}"
                     + (f", FFT backend {s['fft_backend']}" if s.get("fft_backend") else "")),
-        (
-            "grid",
-            f"(t, x, y, z) = {' x '.join(map(str, s['shape_t_x_y_z']))}, u v w float32, "
-            f"time chunks of {s['chunk_t']}",
-        ),
+        ("grid", f"(t, x, y, z) = {' x '.join(map(str, s['shape_t_x_y_z']))}, u v w float32, "
+                 f"time chunks of {s['chunk_t']}"),
         ("time", f"dt {g['dt_s']:g} s, duration {s['duration_s']:g} s"),
         ("planes", f"{len(g['x_m'])}: x = {_value(g['x_m'])} m upstream of the rotor"),
-        (
-            "y, z",
-            f"dy {g['dy_m']:g} m, dz {g['dz_m']:g} m; points span {s['width_y_m']:g} m (y) x "
-            f"{s['height_z_m']:g} m (z), centred on the hub",
-        ),
+        ("y, z", f"dy {g['dy_m']:g} m, dz {g['dz_m']:g} m; points span {s['width_y_m']:g} m (y) x "
+                 f"{s['height_z_m']:g} m (z), centred on the hub"),
         ("wind", f"U {s['U_m_s']:g} m/s, hub height {s['hub_height_m']:g} m"),
         ("frame", f"{s['frame']}: {s['frame_note']}"),
-    ]
+    ]  # fmt: skip
     width = max(len(k) for k, _ in rows)
     out = [f"{k:<{width}}  {v}" for k, v in rows]
     out.append("parameters")

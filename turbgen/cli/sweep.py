@@ -67,15 +67,10 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
     from turbgen.sweep import make_plan, plan_from_file, run_sweep, summary_table
     from turbgen.sweep.plan import check_memory_budget
 
-    grid = {
-        k: v
-        for k, v in dict(nt=nt, dt=dt, ny=ny, nz=nz, dy=dy, dz=dz, hub_height=hub_height).items()
-        if v is not None
-    }
-    x_m = plane_positions(
-        parse_floats(planes, "--planes") if planes is not None else None,
-        parse_range(gates, "--gates") if gates is not None else None,
-    )
+    grid = {k: v for k, v in dict(nt=nt, dt=dt, ny=ny, nz=nz, dy=dy, dz=dz, hub_height=hub_height).items()
+            if v is not None}  # fmt: skip
+    x_m = plane_positions(parse_floats(planes, "--planes") if planes is not None else None,
+                          parse_range(gates, "--gates") if gates is not None else None)  # fmt: skip
     if x_m is not None:
         grid["planes"] = x_m
     iec_class = resolve_iec_class(iec_class, class_alias, "sweep")
@@ -100,24 +95,13 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
         missing = [n for n, v in [("--model", models), ("--preset", presets), ("--speeds", speeds), ("--seeds", seeds),
                                   ("--out", out)] if v is None]  # fmt: skip
         if missing:
-            raise click.UsageError(
-                f"give --config FILE, or --model, --preset, --speeds, --seeds and --out (missing: {', '.join(missing)})"
-            )
+            raise click.UsageError(f"give --config FILE, or --model, --preset, --speeds, --seeds and --out (missing: "
+                                   f"{', '.join(missing)})")
         speed_list = parse_range(speeds, "--speeds") if ":" in speeds else parse_floats(speeds, "--speeds")
-        plan = make_plan(
-            out=out,
-            models=_split(models),
-            presets=_split(presets),
-            speeds=speed_list,
-            seeds=parse_ints(seeds, "--seeds"),
-            grid=grid,
-            validate=bool(validate),
-            chunk_t=chunks,
-            workers=workers,
-            scheduler=scheduler,
-            user_presets=load_presets(presets_file) if presets_file else None,
-            lidar=lidar,
-        )
+        plan = make_plan(out=out, models=_split(models), presets=_split(presets), speeds=speed_list,
+                         seeds=parse_ints(seeds, "--seeds"), grid=grid, validate=bool(validate), chunk_t=chunks,
+                         workers=workers, scheduler=scheduler, lidar=lidar,
+                         user_presets=load_presets(presets_file) if presets_file else None)  # fmt: skip
     from turbgen.resources import parse_size
 
     budget = parse_size(memory, "--memory") if memory is not None else None

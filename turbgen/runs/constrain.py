@@ -2,18 +2,14 @@
 
     summary = run_mann_constrained(run, "mast.zarr", [load_point_series("mast.json")], noise_m_s=0.1)
 
-Placing the data on the grid: a sensor at (x, y, z) belongs to the plane at x (x must be a plane of the run); its
-value at physical time T is the stored sample t = T + x / U of that plane (convected frame, Guo et al. 2023
-Sect. 5.1.2). The series is linearly *interpolated* onto the stored times n dt (a stored time outside the data's span,
-or next to a missing value, is missing); points between grid nodes are bilinear in (y, z) (as the virtual lidar
-reads a store). With ``total_wind`` the mean wind (turbgen.spec.constraints.sensor_fluctuations: the exports' MeanWind,
-default power law alpha 0.2, or the file's ``mean_wind``) is taken from u (and v when it turns).
+A sensor at (x, y, z) belongs to the plane at x; its value at time T is the stored sample t = T + x / U (convected
+frame, Guo et al. 2023 Sect. 5.1.2), interpolated linearly onto the stored times (missing outside the data's span or
+next to a missing value) and bilinearly in (y, z). ``total_wind`` data lose their mean wind first
+(turbgen.spec.constraints.sensor_fluctuations).
 
-The field: pass 1 generates the unconstrained sample u_s and measures it (H u_s), nothing is kept; the system
-S x = d - H u_s - eps_s is solved (turbgen.synthesis.conditioning); pass 2 generates the same u_s again (same seed,
-bit-identical) and adds C H^T x plane by plane while writing. ``conditional_mean=True`` writes C H^T S^-1 d only
-(the optimal linear reconstruction, no random part). The store gets a ``constraints`` attribute: the data on the
-grid, geometry, noise, the solver's report and the residual at the measurements.
+Pass 1 generates the sample u_s and measures H u_s; S x = d - H u_s - eps_s is solved (turbgen.synthesis.conditioning);
+pass 2 generates u_s again (bit-identical) and adds C H^T x while writing (``conditional_mean``: C H^T S^-1 d only).
+The store's ``constraints`` attribute records data, geometry, noise, solver report and residual.
 """
 
 from __future__ import annotations
@@ -33,7 +29,7 @@ from turbgen.errors import ParameterError
 from turbgen.virtual_lidar.sampling import PLANE_TOL_M
 from turbgen.resources import default_threads, require_disk, require_memory
 from turbgen.runs.correction_scratch import CorrectionScratch
-from turbgen.runs.mann import build_mann_stencil, memory_estimate_bytes
+from turbgen.runs.mann import build_mann_stencil, field_summary, memory_estimate_bytes
 from turbgen.runs.stencil_cache import cached_system, system_key
 from turbgen.spec.constraints import COMPONENTS, PointSeries, check_noise, sensor_fluctuations
 from turbgen.spec.mann import MannRun
@@ -48,8 +44,8 @@ _NOISE_KEY = 0x636F6E73  # "cons": the stream of the measurement-noise sample ep
 
 @dataclass(frozen=True, eq=False)
 class PlacedData:
-    """Measurements on the run's grid: the streams, the data (M, nt) [m/s] (NaN: missing), the noise sigma (M,)
-    [m/s] and a geometry record per stream (for the store)."""
+    """Measurements on the run's grid: streams, data (M, nt) [m/s] (NaN: missing), noise sigma (M,) [m/s] and a
+    geometry record per stream."""
 
     streams: cond.Streams
     data: np.ndarray
@@ -83,7 +79,7 @@ def _plane(run: MannRun, x: float, where: str) -> int:
 
 def _on_grid(run: MannRun, t_s: np.ndarray, values: np.ndarray, x: float, where: str) -> np.ndarray:
     """The series interpolated linearly onto the stored times of the plane at x (NaN outside its span or next to a
-    missing value); refuses data whose stored times leave the record [0, (nt - 1) dt]."""
+    missing value); refuses data outside the record [0, (nt - 1) dt]."""
     g = run.grid
     stored = t_s + x / run.U_m_s
     end = (g.nt - 1) * g.dt_s
@@ -104,8 +100,7 @@ def _on_grid(run: MannRun, t_s: np.ndarray, values: np.ndarray, x: float, where:
 @dataclass(frozen=True, eq=False)
 class PlacedStream:
     """One measured series on the grid: ``terms`` (T, 5) rows (component, y index, z index, time shift [steps],
-    weight) of plane ``plane``, observed every ``decimation`` steps from ``offset``; ``data`` (nt / decimation,)
-    [m/s] (NaN: missing), ``noise_m_s`` [m/s], ``geometry`` (a record for the store, with its ``name``)."""
+    weight) of plane ``plane``, observed every ``decimation`` steps from ``offset``; ``data`` [m/s] (NaN: missing)."""
 
     plane: int
     terms: np.ndarray
@@ -141,8 +136,8 @@ def _point_streams(run: MannRun, f: PointSeries, sigma: float) -> list[PlacedStr
 
 
 def combine_streams(placed: list[PlacedStream], nt: int) -> PlacedData:
-    """One Streams of common decimation Q = lcm of the streams' (which must divide nt): a stream observed every q
-    steps becomes Q/q consecutive streams observed every Q steps from its offsets o + r q."""
+    """One Streams of common decimation Q = lcm of the streams' (dividing nt): a stream observed every q steps
+    becomes Q/q streams observed every Q steps from o + r q."""
     big_q = math.lcm(*(s.decimation for s in placed))
     if nt % big_q:
         raise ParameterError(f"the measurements' sampling periods (every {big_q} time steps in common) do not divide "
@@ -167,17 +162,13 @@ def combine_streams(placed: list[PlacedStream], nt: int) -> PlacedData:
 
 
 def place(run: MannRun, files: list, noise_m_s: float | None = None) -> PlacedData:
-    """The streams and data of ``files`` (PointSeries, or turbgen.virtual_lidar.dataset.LidarData) on the grid of ``run``
-    (see the module docstring).
-
-    ``noise_m_s`` (>= 0) replaces every file's own ``noise_m_s``; a file without one has noise 0.
-    """
+    """The streams and data of ``files`` (PointSeries or LidarData) on the grid of ``run``; ``noise_m_s`` (>= 0)
+    replaces every file's own (default: the file's, else 0)."""
     return combine_streams(placed_streams(run, files, noise_m_s), run.grid.nt)
 
 
 def placed_streams(run, files: list, noise_m_s: float | None = None) -> list[PlacedStream]:
-    """Every measured series of ``files`` on the grid of ``run`` (a MannRun or KaimalRun), one PlacedStream each, in
-    file order: :func:`place` before the streams are combined (:func:`combine_streams`)."""
+    """Every series of ``files`` on the grid of ``run`` (MannRun or KaimalRun), in file order, not yet combined."""
     from turbgen.runs.constrain_lidar import lidar_streams
 
     noise_m_s = check_noise(noise_m_s)
@@ -199,11 +190,8 @@ def measurement_noise(run: MannRun, placed: PlacedData) -> np.ndarray:
 
 def stream_system(run: MannRun, stencil, placed: PlacedData, threads: int | None = None,
                   progress: bool = False, cache_dir=None) -> np.ndarray:  # fmt: skip
-    """The per-frequency matrices of S = H C H^T + R (turbgen.synthesis.conditioning.stream_covariance), ``threads``
-    slab groups at once (default: the machine's). ``cache_dir``: H C H^T read from the stencil cache, or computed
-    and kept there (turbgen.runs.stencil_cache.cached_system; the same bits either way).
-
-    Raises ParameterError when zero-noise measurements are linearly dependent (naming them)."""
+    """The per-frequency matrices of S = H C H^T + R (conditioning.stream_covariance), H C H^T read from or
+    kept in the stencil cache ``cache_dir`` (the same bits). ParameterError for dependent zero-noise measurements."""
     streams, times = placed.streams, run.plane_times_s()
 
     def compute() -> np.ndarray:
@@ -229,7 +217,7 @@ def stream_system(run: MannRun, stencil, placed: PlacedData, threads: int | None
 
 def solve_constraints(cov: np.ndarray, placed: PlacedData, measured: np.ndarray | None,
                       eps: np.ndarray | None) -> tuple[np.ndarray, cond.SolveReport]:  # fmt: skip
-    """x = S^-1 (d - H u_s - eps_s) (or S^-1 d when ``measured`` is None: the conditional mean), (M, nt), zero at the
+    """x = S^-1 (d - H u_s - eps_s) (``measured`` None: S^-1 d, the conditional mean), (M, nt), zero at the
     missing samples."""
     observed = np.isfinite(placed.data)
     r = placed.data if measured is None else placed.data - measured - eps
@@ -243,9 +231,8 @@ def _bar(desc: str, total: int, unit: str, show: bool):
 
 def unconstrained_measurement(run: MannRun, stencil, placed: PlacedData, threads: int,
                                progress: bool = False) -> np.ndarray:  # fmt: skip
-    """Pass 1: H u_s of the unconstrained sample of the run's seed (nothing is kept), measured on the snapshots'
-    spectra before their transform along time, kept at the measured points only (only the measured streams are
-    transformed)."""
+    """Pass 1: H u_s of the run's unconstrained sample, measured on the snapshots' spectra
+    before their transform along time (only the measured points are kept)."""
     g = run.grid
     times = run.plane_times_s()
     order = [int(i) for i in np.argsort(times, kind="stable")]
@@ -273,15 +260,11 @@ def unconstrained_measurement(run: MannRun, stencil, placed: PlacedData, threads
 def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarray, scratch_dir: Path, *,
                        conditional_mean: bool = False, threads: int | None = None,
                        progress: bool = False):  # fmt: skip
-    """The conditioned field of ``run``: (solver report, iterator of (plane index, component, field (nt, ny, nz)
-    float32 [m/s])), the generator's order; two reused buffers alternate: an array stays valid until the item after
-    the next is asked for.
+    """The conditioned field of ``run``: (solver report, iterator of (plane index, component, field
+    (nt, ny, nz) float32 [m/s])); two buffers alternate (an array is valid until the item after next).
 
-    A conditional sample u_s + C H^T S^-1 (d - H u_s - eps_s): the first pass (here, before returning) generates u_s
-    and measures it, the iterator generates it again and adds the correction, read plane by plane from a scratch
-    file in ``scratch_dir`` (turbgen.runs.correction_scratch; it lives as long as the iterator), its spectra added to
-    the sample's before their transform along time (MannSnapshots.generate's addend).
-    ``conditional_mean``: C H^T S^-1 d. ``cov``: stream_system(run, stencil, placed).
+    Pass 1 runs here; the iterator generates u_s again and adds the correction C H^T x, read from a scratch file in
+    ``scratch_dir`` and added to the spectra before their transform along time. ``cov``: stream_system's.
     """
     g = run.grid
     gen = MannSnapshots(stencil, g.ny, g.nz, default_threads(threads), buffers=2)  # write_planes' background writes
@@ -315,7 +298,7 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
 
 
 def correction_disk_bytes(run: MannRun) -> int:
-    """The size [bytes] of the correction's scratch file of ``run`` (turbgen.runs.correction_scratch)."""
+    """Bytes [B] of the correction's scratch file of ``run``."""
     g = run.grid
     frozen = run.params.evo_time_s is None or g.nx == 1
     return CorrectionScratch.nbytes(((1 if frozen else g.nx), 3, g.nt // 2 + 1, g.ny, g.nz))
@@ -324,7 +307,7 @@ def correction_disk_bytes(run: MannRun) -> int:
 def constraint_record(files, placed: PlacedData, report: cond.SolveReport, remeasured: np.ndarray,
                       conditional_mean: bool) -> dict:  # fmt: skip
     """The store's ``constraints`` record: the data on the grid, geometry, noise, the solver's report and the
-    residual ``remeasured`` - data at the observed measurements [m/s] (Mann and Kaimal runs alike)."""
+    residual ``remeasured`` - data [m/s] (Mann and Kaimal runs alike)."""
     observed = np.isfinite(placed.data)
     resid = (remeasured - placed.data)[observed]
     return {
@@ -348,36 +331,13 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
                          conditional_mean: bool = False, overwrite: bool = False, chunk_t: int | None = None,
                          threads: int | None = None, cache_dir=None, progress: bool = False,
                          placed: PlacedData | None = None, fit: dict | None = None) -> dict:  # fmt: skip
-    """Generate ``run`` conditioned on the point series ``files`` into a new store at ``out``.
+    """Generate ``run`` conditioned on the point series (or lidar data) ``files`` into a new store at ``out``.
 
-    Parameters
-    ----------
-    run : MannRun
-        The run (its seed draws u_s and eps_s).
-    out : str or path-like
-        The new store.
-    files : list of PointSeries
-        The measurements (turbgen.spec.constraints.load_point_series).
-    noise_m_s : float, optional
-        Measurement-noise sigma [m/s] >= 0 for every value, replacing the files' own.
-    conditional_mean : bool
-        Write the conditional mean C H^T S^-1 d (no random part) instead of a conditional sample.
-    progress : bool
-        Progress bars of the stages (system, pass 1, correction, write) on standard error, on a terminal.
-    placed : PlacedData, optional
-        ``place(run, files, noise_m_s)`` when the caller has it already (it checked the data before any output).
-    fit : dict, optional
-        The store's ``fit`` attribute: the record of the fit the run's parameters came from (turbgen.runs.replay).
-
-    Returns
-    -------
-    dict
-        path, seconds, sigma_/mean_ u/v/w [m/s] and ``constraints`` (the record written to the store).
-
-    Raises
-    ------
-    ParameterError
-        For measurements off the field, all missing, noise < 0, dependent zero-noise measurements; nothing written.
+    ``run``'s seed draws u_s and eps_s. ``noise_m_s``: measurement-noise sigma [m/s] >= 0 replacing the files' own.
+    ``conditional_mean``: write C H^T S^-1 d (no random part). ``progress``: bars of the stages on a terminal.
+    ``placed``: ``place(run, files, noise_m_s)`` if the caller has it; ``fit``: the store's ``fit`` record
+    (turbgen.runs.replay). Returns {path, seconds, sigma_/mean_ u/v/w [m/s], constraints}. ParameterError for
+    measurements off the field or all missing, noise < 0, dependent zero-noise measurements; nothing written.
     """
     t_start = time.perf_counter()
     threads = default_threads(threads)
@@ -393,23 +353,17 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     record, sums = _write_conditioned(opener, run, files, placed, Path(out).absolute().parent,
                                       conditional_mean=conditional_mean, threads=threads, cache_dir=cache_dir,
                                       progress=progress, fit=fit)  # fmt: skip
-    return conditioned_summary(str(out), t_start, record, sums, g)
+    return field_summary(str(out), t_start, sums, g, constraints=record)
 
 
 def mann_constrained_in_memory(run: MannRun, files: list, *, noise_m_s: float | None = None,
                                conditional_mean: bool = False, threads: int | None = None, cache_dir=None,
                                progress: bool = False, placed: PlacedData | None = None,
                                fit: dict | None = None):  # fmt: skip
-    """The field of :func:`run_mann_constrained` in memory, as its store would open: (xarray.Dataset, summary).
+    """The field of :func:`run_mann_constrained` in memory: (xarray.Dataset, summary with path None).
 
-    The same values and attributes (but ``created_utc``) as ``xarray.open_zarr`` of that store
-    (turbgen.store.memory.MemoryWriter); the arguments as run_mann_constrained's; the correction's scratch file goes
-    to the system's temporary directory. The summary's path is None.
-
-    Raises
-    ------
-    ParameterError
-        As run_mann_constrained, and when the run with its field does not fit the available memory.
+    Values and attributes as that store's (but ``created_utc``); the correction's scratch file goes to the temporary
+    directory. ParameterError as run_mann_constrained, and when the run with its field does not fit in memory.
     """
     t_start = time.perf_counter()
     threads = default_threads(threads)
@@ -429,13 +383,12 @@ def mann_constrained_in_memory(run: MannRun, files: list, *, noise_m_s: float | 
 
     record, sums = _write_conditioned(opener, run, files, placed, scratch_dir, conditional_mean=conditional_mean,
                                       threads=threads, cache_dir=cache_dir, progress=progress, fit=fit)  # fmt: skip
-    return holder[0].dataset, conditioned_summary(None, t_start, record, sums, g)
+    return holder[0].dataset, field_summary(None, t_start, sums, g, constraints=record)
 
 
 def constrained_memory_bytes(run: MannRun, placed: PlacedData, threads: int) -> int:
-    """Bytes a constrained Mann run of ``placed`` holds besides its output: the generator's, S (nt/q frequencies x M
-    x M), one plane component's correction spectra (read from the scratch file), the stream arrays and a slab group's
-    workspace of the conditioning."""
+    """Bytes [B] a constrained run holds besides its output: the generator's, S (nt/q x M x M
+    complex128), one plane component's correction spectra, the stream arrays and the conditioning's workspace."""
     g, m = run.grid, placed.streams.n_streams
     extra = (g.nt * m * m * 16 + (g.nt // 2 + 1) * g.ny * g.nz * 8 + 8 * m * g.nt * 8
              + cond.workspace_bytes(synthesis_box(run), placed.streams, g.nx))  # fmt: skip
@@ -445,9 +398,8 @@ def constrained_memory_bytes(run: MannRun, placed: PlacedData, threads: int) -> 
 def _write_conditioned(open_writer, run: MannRun, files, placed: PlacedData, scratch_dir: Path, *,
                        conditional_mean: bool, threads: int, cache_dir, progress: bool,
                        fit: dict | None = None) -> tuple[dict, dict]:
-    """The conditioned field of ``run`` into the writer ``open_writer()`` returns (a context manager: a store's or a
-    MemoryWriter), opened once the system is solved; returns (the constraints record, {component: [sum, sum of
-    squares]}). ``fit``: the store's ``fit`` attribute (none without)."""
+    """The conditioned field of ``run`` into ``open_writer()`` (a store's or MemoryWriter, opened once the
+    system is solved); returns (constraints record, {component: [sum, sum of squares]})."""
     g = run.grid
     stencil = build_mann_stencil(run, cache_dir)
     cov = stream_system(run, stencil, placed, threads, progress, cache_dir)
@@ -462,11 +414,9 @@ def _write_conditioned(open_writer, run: MannRun, files, placed: PlacedData, scr
 
 
 def write_planes(writer, placed: PlacedData, planes, bar=None, background: bool = False) -> tuple[np.ndarray, dict]:
-    """Write the conditioned ``planes`` ((plane index, component, field (nt, ny, nz)) [m/s]) with ``writer`` and
-    measure them again: (H u_c (M, nt/q), {component: [sum, sum of squares]}). ``bar()``: a progress bar (one step
-    per plane), made when the first plane arrives (after the correction's own bar). ``background``: each plane is
-    measured and written in a thread while the next is made (the planes must come in two alternating buffers, as
-    MannSnapshots' with ``buffers=2``); the results do not depend on it."""
+    """Write the conditioned ``planes`` with ``writer`` and measure them again: (H u_c (M, nt/q), {component:
+    [sum, sum of squares]}). ``bar()``: a progress bar made at the first plane. ``background``: each plane written in a
+    thread while the next is made (planes in two alternating buffers); the results are the same."""
     remeasured = np.zeros(placed.data.shape)
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
     progress = None
@@ -497,26 +447,9 @@ def write_planes(writer, placed: PlacedData, planes, bar=None, background: bool 
     return remeasured, sums
 
 
-def conditioned_summary(path: str | None, t_start: float, record: dict, sums: dict, g) -> dict:
-    """A constrained run's summary: path, seconds, ``constraints`` (the record) and sigma_/mean_ u/v/w [m/s] of the
-    field from the sums of :func:`write_planes`."""
-    n = g.nt * g.nx * g.ny * g.nz
-    summary = {"path": path, "seconds": time.perf_counter() - t_start, "constraints": record}
-    for c, (s1, s2) in sums.items():
-        summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - (s1 / n) ** 2, 0.0))
-        summary[f"mean_{c}"] = s1 / n
-    return summary
-
-
 def load_constraint(path):
-    """A constraint file: a ``turbgen lidar --out`` dataset (a directory with v_los), a line-of-sight CSV or netCDF
-    file (turbgen.virtual_lidar.los_csv, turbgen.virtual_lidar.los_netcdf) or a point-series JSON file.
-
-    Raises
-    ------
-    ParameterError, StoreError
-        If the file is not readable or does not match its format.
-    """
+    """A constraint file: a ``turbgen lidar --out`` dataset, a line-of-sight CSV or netCDF file, or a point-series
+    JSON file. ParameterError or StoreError if it does not match its format."""
     from turbgen.virtual_lidar.dataset import is_lidar_dataset, read_dataset
     from turbgen.virtual_lidar.los_csv import is_los_csv, read_los_csv
     from turbgen.virtual_lidar.los_netcdf import is_los_netcdf, read_los_netcdf
@@ -546,14 +479,8 @@ def describe_constraints(record: dict) -> list[str]:
 
 
 def load_constraints(files) -> list:
-    """Each of ``files`` loaded (:func:`load_constraint`); PointSeries / LidarData given already loaded are kept, and a
-    lidar report of a field in memory (turbgen.virtual_lidar.report.LidarReport) gives its measurements (its ``data()``).
-
-    Raises
-    ------
-    ParameterError
-        For an item that is none of these (e.g. ``constrain=[5]``).
-    """
+    """Each of ``files`` loaded (:func:`load_constraint`); PointSeries / LidarData are kept, a LidarReport gives
+    its ``data()``. ParameterError for anything else."""
     from turbgen.virtual_lidar.dataset import LidarData
     from turbgen.virtual_lidar.report import LidarReport
 
@@ -571,9 +498,8 @@ def load_constraints(files) -> list:
 
 
 def constraint_digest(placed: PlacedData, conditional_mean: bool) -> str:
-    """8 hex digits of SHA-256 over the data as placed on the grid (values, noise, where each stream measures) and
-    ``conditional_mean``: the content, not the files' paths, so two runs conditioned on different data never share a
-    name and the same data under another path gives the same one."""
+    """8 hex digits of SHA-256 over the data as placed (values, noise, geometry) and ``conditional_mean``: the
+    content, not the paths, names a constrained store."""
     import hashlib
     import json
 
@@ -589,8 +515,8 @@ def constraint_digest(placed: PlacedData, conditional_mean: bool) -> str:
 
 
 def constrained_store_name(run: MannRun, placed: PlacedData, conditional_mean: bool) -> str:
-    """The default store name of a constrained run: the run's own with ``_c<digest of the data>`` (and ``mean`` for
-    the conditional mean), e.g. mann_U16_L49_G3.1_evo400_s2_c1a2b3c4.zarr."""
+    """The run's default store name with ``_c<digest>`` (``mean`` for the conditional mean), e.g.
+    mann_U16_L49_G3.1_evo400_s2_c1a2b3c4.zarr."""
     base = run.default_store_name().removesuffix(".zarr")
     return f"{base}_c{constraint_digest(placed, conditional_mean)}{'mean' if conditional_mean else ''}.zarr"
 
@@ -603,11 +529,9 @@ _AE_ITERATIONS = 50
 def estimate_ae(run: MannRun, placed: PlacedData, cache_dir=None) -> tuple[float, int]:
     """alpha*eps^(2/3) [m^(4/3) s^-2] of the data, and the fixed-point iterations used.
 
-    The data d (n observed values) are N(0, S(a)) under the run's prior with ae = a: S(a) = (a / a_0) (S_0 - R) + R,
-    S_0 the system of ``run`` (its ae = a_0). The estimate solves d^T S(a)^-1 d = n: without noise (R = 0) in one
-    step, a = a_0 d^T S_0^-1 d / n, the maximum-likelihood estimate (d^T S^-1 d ~ chi^2_n, so its relative standard
-    deviation is sqrt(2 / n) when the data come from the model); with noise by the iteration a <- a d^T S(a)^-1 d / n,
-    which converges monotonically (a d^T S(a)^-1 d increases with a, more slowly than a).
+    With S(a) = (a / a_0) (S_0 - R) + R, the estimate solves d^T S(a)^-1 d = n (d ~ N(0, S(a))): without noise in one
+    step (the maximum-likelihood estimate; relative standard deviation sqrt(2 / n)), with noise by the monotone
+    iteration a <- a d^T S(a)^-1 d / n.
     """
     stencil = build_mann_stencil(run, cache_dir)
     a0 = run.params.ae
@@ -631,9 +555,8 @@ def estimate_ae(run: MannRun, placed: PlacedData, cache_dir=None) -> tuple[float
 
 
 def with_energy_from_data(mapping: dict, constraints: list, noise_m_s: float | None, cache_dir=None) -> MannRun:
-    """The run of ``mapping``; when it gives no energy level (ae, sigma_u_m_s, ti, turb_class), ae is estimated
-    from the constraint data (:func:`estimate_ae`, starting from the default IEC class A level) and recorded in
-    the run's ``ae_from``."""
+    """The run of ``mapping``; without an energy level (ENERGY_KEYS) its ae is estimated from the data
+    (:func:`estimate_ae`) and recorded in ``ae_from``."""
     from turbgen.theory.mann_spectra import variances
 
     run = MannRun.from_mapping(mapping)

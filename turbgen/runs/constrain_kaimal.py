@@ -1,22 +1,14 @@
-"""Constrained Kaimal runs: a Kaimal field conditioned on measured point time series or lidar LOS data (Hoffman &
-Ribak 1991).
+"""Constrained Kaimal runs: a Kaimal field conditioned on point time series or lidar LOS data (Hoffman & Ribak 1991).
 
     summary = run_kaimal_constrained(run, "mast.zarr", [load_point_series("mast.json")], noise_m_s=0.1)
 
-The data are placed on the grid exactly as for Mann runs (turbgen.runs.constrain.placed_streams: plane at x, stored time
-T + x/U, linear in time, bilinear in (y, z); the virtual lidar's own operator for LOS data), and solved with the same
-circulant / preconditioned-conjugate-gradient solver; only the prior differs: the Kaimal generator's own per-bin
-covariance (turbgen.synthesis.kaimal_conditioning). Pass 1 generates the unconstrained sample u_s of the run's seed and
-measures it (nothing kept); pass 2 generates it again (bit-identical) and adds C H^T S^-1 (d - H u_s - eps_s) plane by
-plane while writing. ``conditional_mean=True`` writes C H^T S^-1 d only. The store gets the same ``constraints``
-record as a constrained Mann store (turbgen info and turbgen validate read it).
+Data placement, solver, the two passes and the ``constraints`` record are those of turbgen.runs.constrain; only the
+prior differs: the Kaimal generator's per-bin covariance (turbgen.synthesis.kaimal_conditioning).
 
-Record means: the Kaimal synthesis has no bin 0 (v_0 = 0), so every point's record mean is exactly 0 in every field it
-makes, and the record mean of a series observed at every stored step (a point series; a lidar scanning every step)
-is no property of the field. Each such series' mean over its observed samples is therefore removed from the data
-(place_kaimal; recorded as ``record_mean_removed_m_s``; ``residual_*`` are then against the data minus it); the
-conditioning on the rest is exact (with_mean_offset, kaimal_solve), and with zero noise the field reproduces the data
-minus that mean. Series observed every q > 1 steps keep their mean (the field's decimated series have one).
+Record means: the synthesis has no bin 0, so every point's record mean is exactly 0 and a series observed at every
+stored step cannot be matched in its mean. That mean is removed from the data (place_kaimal;
+``record_mean_removed_m_s``, ``residual_*`` against the data minus it); the conditioning on the rest is exact
+(with_mean_offset, kaimal_solve). Series observed every q > 1 steps keep their mean.
 """
 
 from __future__ import annotations
@@ -30,8 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from turbgen.resources import require_memory
-from turbgen.runs.constrain import (PlacedData, combine_streams, conditioned_summary, constraint_record, measurement_noise,
-                                    placed_streams, write_planes)  # fmt: skip
+from turbgen.runs.constrain import (PlacedData, combine_streams, constraint_record, measurement_noise, placed_streams,
+                                    write_planes)  # fmt: skip
+from turbgen.runs.mann import field_summary
 from turbgen.runs.kaimal import kaimal_generator, memory_needed, store_attrs
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import create_store
@@ -43,18 +36,15 @@ from turbgen.synthesis.kaimal_evo import COMPONENTS
 
 @dataclass(frozen=True, eq=False)
 class KaimalPlaced(PlacedData):
-    """Measurements on a Kaimal run's grid (:func:`place_kaimal`): PlacedData whose full-rate series have their record
-    mean removed. ``full_rate``: for every series observed at every stored step, the indices of the streams it was
-    split into (one, or Q of them when other streams are observed every Q steps); ``record_mean_m_s`` (M,) [m/s]:
-    the mean removed from each stream's series (0 for the others)."""
+    """PlacedData of a Kaimal run (:func:`place_kaimal`). ``full_rate``: per series observed at every step, the
+    indices of the streams it was split into; ``record_mean_m_s`` (M,) [m/s]: the mean removed from each stream."""
 
     full_rate: tuple = ()
     record_mean_m_s: np.ndarray | None = None
 
 
 def place_kaimal(run: KaimalRun, files: list, noise_m_s: float | None = None) -> KaimalPlaced:
-    """turbgen.runs.constrain.place for a Kaimal run, the record mean of every full-rate series (over its observed
-    samples) removed before the streams are combined (module docstring)."""
+    """turbgen.runs.constrain.place with the record mean of every full-rate series removed first."""
     series = placed_streams(run, files, noise_m_s)
     means = [float(np.mean(s.data[np.isfinite(s.data)])) if s.decimation == 1 else 0.0 for s in series]
     placed = combine_streams([replace(s, data=s.data - m) for s, m in zip(series, means)], run.grid.nt)
@@ -66,10 +56,8 @@ def place_kaimal(run: KaimalRun, files: list, noise_m_s: float | None = None) ->
 
 
 def kaimal_stream_system(run: KaimalRun, placed: KaimalPlaced) -> np.ndarray:
-    """The per-frequency matrices of S = H C H^T + R for ``run``'s prior (kaimal_conditioning.stream_covariance).
-
-    Raises ParameterError when zero-noise measurements are linearly dependent (naming them; the record means of
-    full-rate series aside, see :func:`with_mean_offset`)."""
+    """The per-frequency S = H C H^T + R of ``run``'s prior (kaimal_conditioning.stream_covariance);
+    ParameterError for dependent zero-noise measurements (record means aside, :func:`with_mean_offset`)."""
     cov = kcond.stream_covariance(kaimal_generator(run, workers=1), placed.streams, placed.noise_m_s**2)
     if np.any(placed.noise_m_s == 0):
         cond.check_singular(with_mean_offset(cov, placed), placed.streams.names)
@@ -77,11 +65,9 @@ def kaimal_stream_system(run: KaimalRun, placed: KaimalPlaced) -> np.ndarray:
 
 
 def with_mean_offset(cov: np.ndarray, placed: KaimalPlaced) -> np.ndarray:
-    """``cov`` plus, at frequency 0, tau^2 v v^T for every full-rate series: v the indicator of its streams (the
-    direction of its record mean, which the field does not have: S_0 v = R v, 0 with zero noise), tau^2 its streams'
-    mean diagonal value over the frequencies (a scale). With the record mean removed, and a noise common to the
-    series' streams, it changes S^-1 r only along v, which C H^T never sees (C H^T v = 0); the solver uses it where
-    every sample is observed and as the preconditioner otherwise (module docstring)."""
+    """``cov`` plus tau^2 v v^T at frequency 0 per full-rate series (v: the indicator of its streams, the
+    direction of its record mean, which the field lacks; tau^2: their mean diagonal value). It changes S^-1 r only along
+    v, which C H^T never sees: the solver's matrix when every sample is observed, else its preconditioner."""
     out = cov.copy()
     for group in placed.full_rate:
         tau2 = float(np.mean(cov[:, group, group].real))
@@ -91,9 +77,8 @@ def with_mean_offset(cov: np.ndarray, placed: KaimalPlaced) -> np.ndarray:
 
 def kaimal_solve(cov: np.ndarray, placed: KaimalPlaced, measured: np.ndarray | None,
                  eps: np.ndarray | None) -> tuple[np.ndarray, cond.SolveReport]:  # fmt: skip
-    """x = S^-1 (d - H u_s - eps_s) (or S^-1 d when ``measured`` is None), (M, nt/q), zero at the missing samples:
-    the circulant solve of :func:`with_mean_offset` when every sample is observed, else conjugate gradients on the
-    exact S restricted to the observed samples with it as preconditioner."""
+    """x = S^-1 (d - H u_s - eps_s) (``measured`` None: S^-1 d), (M, nt/q), zero at the missing samples: the
+    circulant solve of :func:`with_mean_offset` when all is observed, else conjugate gradients preconditioned by it."""
     observed = np.isfinite(placed.data)
     r = placed.data if measured is None else placed.data - measured - eps
     r = np.where(observed, r, 0.0)
@@ -104,7 +89,7 @@ def kaimal_solve(cov: np.ndarray, placed: KaimalPlaced, measured: np.ndarray | N
 
 
 def _unconstrained_measurement(run: KaimalRun, placed: KaimalPlaced, threads: int | None) -> np.ndarray:
-    """Pass 1: H u_s of the unconstrained sample of the run's seed (nothing is kept)."""
+    """Pass 1: H u_s of the run's unconstrained sample (nothing kept)."""
     gen = kaimal_generator(run, workers=threads)
     out = np.zeros(placed.data.shape)
     for c, comp in enumerate(COMPONENTS):
@@ -115,13 +100,9 @@ def _unconstrained_measurement(run: KaimalRun, placed: KaimalPlaced, threads: in
 
 def kaimal_conditioned_planes(run: KaimalRun, placed: KaimalPlaced, cov: np.ndarray, *, conditional_mean: bool = False,
                               threads: int | None = None):  # fmt: skip
-    """The conditioned field of ``run``: (solver report, generator, iterator of (component, plane index, field
-    (nt, ny, nz) float32 [m/s])); ``generator`` is the one whose samplers made the field (u_s's, or with
-    ``conditional_mean`` the correction's alone; its ``report`` is complete once the iterator is exhausted).
-
-    A conditional sample u_s + C H^T S^-1 (d - H u_s - eps_s) (pass 1 here, before returning; the iterator makes u_s
-    again and adds the correction), or with ``conditional_mean`` C H^T S^-1 d. ``cov``: kaimal_stream_system.
-    """
+    """The conditioned field of ``run``: (solver report, generator, iterator of (component, plane index,
+    field (nt, ny, nz) float32 [m/s])); the generator made the field (its ``report`` complete after the iterator).
+    Pass 1 runs here. ``cov``: kaimal_stream_system's."""
     g = run.grid
     measured = eps = None
     if not conditional_mean:
@@ -144,9 +125,9 @@ def kaimal_conditioned_planes(run: KaimalRun, placed: KaimalPlaced, cov: np.ndar
 
 
 def constrained_memory_bytes(run: KaimalRun, placed: KaimalPlaced, threads: int | None = None) -> int:
-    """Peak bytes of a constrained run: the generator's in-memory run plus S (nt/q x M x M complex), one component's
-    correction spectra on the measured planes (complex64) and its longitudinal factors, one plane's correction
-    (float64 spectrum and field) and the stream arrays."""
+    """Peak bytes [B] of a constrained run: memory_needed plus S (nt/q x M x M complex128), one
+    component's correction spectra and longitudinal factors on the measured planes, one plane's correction and the
+    stream arrays."""
     g, m = run.grid, placed.streams.n_streams
     sampler = kaimal_generator(run, workers=threads).sampler_bytes()
     nf, q = g.nt // 2 + 1, len(placed.streams.used_planes())
@@ -157,8 +138,8 @@ def constrained_memory_bytes(run: KaimalRun, placed: KaimalPlaced, threads: int 
 
 def require_constrained_memory(run: KaimalRun, placed: KaimalPlaced, threads: int | None = None,
                                field_bytes: int = 0) -> None:
-    """Refuse (ParameterError) a constrained run whose :func:`constrained_memory_bytes`, plus ``field_bytes`` (its
-    field in memory), exceed the available memory (constrained runs keep the spectrum in memory: no scratch file)."""
+    """ParameterError when :func:`constrained_memory_bytes` plus ``field_bytes`` exceed the available
+    memory (the spectrum stays in memory)."""
     require_memory(constrained_memory_bytes(run, placed, threads) + field_bytes,
                    f"the constrained Kaimal run ({placed.streams.n_streams} measurement streams)",
                    "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
@@ -167,32 +148,10 @@ def require_constrained_memory(run: KaimalRun, placed: KaimalPlaced, threads: in
 def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float | None = None,
                            conditional_mean: bool = False, overwrite: bool = False, chunk_t: int | None = None,
                            threads: int | None = None) -> dict:  # fmt: skip
-    """Generate ``run`` conditioned on ``files`` into a new store at ``out``.
+    """Generate ``run`` conditioned on ``files`` (PointSeries or lidar data) into a new store at ``out``.
 
-    Parameters
-    ----------
-    run : KaimalRun
-        The run (its seed draws u_s and eps_s).
-    out : str or path-like
-        The new store.
-    files : list
-        The measurements: PointSeries (turbgen.spec.constraints.load_point_series) or lidar datasets
-        (turbgen.runs.constrain.load_constraint).
-    noise_m_s : float, optional
-        Measurement-noise sigma [m/s] >= 0 for every value, replacing the files' own.
-    conditional_mean : bool
-        Write the conditional mean C H^T S^-1 d (no random part) instead of a conditional sample.
-
-    Returns
-    -------
-    dict
-        path, seconds, sigma_/mean_ u/v/w [m/s], the synthesis report and ``constraints`` (the record written to the
-        store).
-
-    Raises
-    ------
-    ParameterError
-        For measurements off the field, all missing, noise < 0, dependent zero-noise measurements; nothing written.
+    Arguments, summary and errors as turbgen.runs.constrain.run_mann_constrained's, the summary with the synthesis
+    report.
     """
     return _conditioned(run, files, noise_m_s, conditional_mean, threads, str(out), lambda attrs: create_store(
         Path(out), run.grid, attrs, chunk_t=chunk_t, overwrite=overwrite))[1]
@@ -200,19 +159,15 @@ def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float
 
 def kaimal_constrained_in_memory(run: KaimalRun, files: list, *, noise_m_s: float | None = None,
                                  conditional_mean: bool = False, threads: int | None = None):  # fmt: skip
-    """The field of :func:`run_kaimal_constrained` in memory, as its store would open: (xarray.Dataset, summary).
-
-    The same values and attributes (but ``created_utc``) as that store (turbgen.store.memory.MemoryWriter); the
-    arguments as run_kaimal_constrained's; the summary's path is None. Raises ParameterError as it does, and when the
-    run with its field does not fit the available memory.
-    """
+    """The field of :func:`run_kaimal_constrained` in memory: (xarray.Dataset, summary with path
+    None); ParameterError also when the run with its field does not fit in memory."""
     return _conditioned(run, files, noise_m_s, conditional_mean, threads, None,
                         lambda attrs: MemoryWriter(run.grid, attrs))  # fmt: skip
 
 
 def _conditioned(run: KaimalRun, files: list, noise_m_s, conditional_mean: bool, threads, path, open_writer):
-    """(the writer's dataset or None, summary) of ``run`` conditioned on ``files`` into ``open_writer(attrs)`` (a
-    store's writer, or a MemoryWriter when ``path`` is None, whose field then also has to fit in memory)."""
+    """(dataset or None, summary) of ``run`` conditioned on ``files`` into ``open_writer(attrs)`` (a MemoryWriter
+    when ``path`` is None, whose field must fit in memory too)."""
     t_start = time.perf_counter()
     placed = place_kaimal(run, files, noise_m_s)
     g = run.grid
@@ -226,7 +181,7 @@ def _conditioned(run: KaimalRun, files: list, noise_m_s, conditional_mean: bool,
         record = constraint_record(files, placed, report, remeasured, conditional_mean)
         record["record_mean_removed_m_s"] = [float(v) for v in placed.record_mean_m_s]
         writer.add_attrs(synthesis_report=gen.report, constraints=record)
-    summary = conditioned_summary(path, t_start, record, sums, g)
+    summary = field_summary(path, t_start, sums, g, constraints=record)
     summary["expected_sigma"] = [math.sqrt(gen.expected_variance(c)) for c in COMPONENTS]
     summary.update(gen.report)
     return getattr(writer, "dataset", None), summary

@@ -1,14 +1,9 @@
 """Lidar line-of-sight data as constraints: a ``turbgen lidar --out`` dataset placed on a run's grid.
 
-The measurement operator is the virtual lidar's own (turbgen.virtual_lidar.sampling.los_operator: discrete probe-volume
-weights, Taylor shift within the probe volume to the stored time t = T + x'/U of the gate's plane, linear in t,
-bilinear in y, z), rebuilt from the lidar description and measurement times the dataset holds. Each beam-gate is one
-stream observed once per scan: the scan period must be a whole number q of the field's time steps, so that every scan
-uses the same weights q steps later (conditioning.Streams with decimation q, time-shifted terms). If the dataset
-includes the mean wind (``mean_wind_added``), its line-of-sight part at the run's U and hub height is subtracted: the
-MeanWind the dataset records (profile, hub history; turbgen.virtual_lidar.sampling.mean_wind_los_series, per scan), or the
-power law with its shear exponent for datasets without that record. A mean wind that turns (veer, directions) is
-refused: it turned the measured fluctuations' line of sight as well.
+The operator is the virtual lidar's own (virtual_lidar.sampling.los_operator), rebuilt from the dataset's lidar
+description and times. Each beam-gate is one stream observed once per scan, so the scan period must be a whole number
+q of time steps (Streams with decimation q). A mean wind the dataset added is subtracted along the line of sight
+(its recorded MeanWind, else the power law); a turning mean wind is refused (it turned the measured line of sight).
 """
 
 from __future__ import annotations
@@ -44,7 +39,7 @@ def _scan_step(data: LidarData, dt_s: float, where: str) -> int:
 
 def _terms(op, j: int) -> tuple[np.ndarray, int]:
     """Merged terms (T, 5) (component, y, z, shift, weight) of measurement j and its first stored time step, from the
-    operator of the first scan (the others repeat it: sampling.repeats_every)."""
+    first scan's operator (the others repeat it)."""
     weight = op.weight[0, j]
     live = weight != 0
     first = int(op.t_index[0, j, live].min())
@@ -60,8 +55,8 @@ def _terms(op, j: int) -> tuple[np.ndarray, int]:
 
 
 def _mean_los(data: LidarData, ms, times: np.ndarray, run, where: str) -> np.ndarray | None:
-    """(n_scan, J) line-of-sight speed [m/s] of the mean wind the dataset added (None: none added): its recorded
-    MeanWind (the power law with its exponent for datasets without the record); a turning one is refused."""
+    """(n_scan, J) line-of-sight speed [m/s] of the mean wind the dataset added (None: none); a turning one is
+    refused."""
     if not data.mean_wind_added:
         return None
     if data.mean_wind is None:

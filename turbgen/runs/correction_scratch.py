@@ -1,10 +1,6 @@
-"""The correction of a constrained Mann run kept on disk between its computation and the writing pass.
-
-The correction C H^T w (turbgen.synthesis.conditioning.correction_blocks) comes slab group by slab group, for every
-plane at once, while the writing pass needs it plane by plane: its cropped spectra (planes, 3, nk1, ny, nz)
-complex64, as large as the field itself, go to an anonymous file next to the output (unlinked at creation: the
-system frees it when the run ends, however it ends) instead of memory.
-"""
+"""The correction C H^T w of a constrained Mann run on disk between its computation (slab groups, all planes) and
+the writing pass (plane by plane): (planes, 3, nk1, ny, nz) complex64 in an anonymous file (freed however the run
+ends)."""
 
 from __future__ import annotations
 
@@ -19,11 +15,8 @@ from turbgen.runs.scratch import read_at, write_at
 
 
 class CorrectionScratch:
-    """Cropped spectra of shape (planes, 3, nk1, ny, nz) complex64 in an anonymous scratch file in ``directory``.
-
-    Use as a context manager; :meth:`write` takes the blocks of correction_blocks, :meth:`read` returns one plane's
-    component, :meth:`reader` reads them in a given order, each ahead in a background thread.
-    """
+    """Cropped spectra (planes, 3, nk1, ny, nz) complex64 in an anonymous file in ``directory`` (a context
+    manager)."""
 
     def __init__(self, directory: Path, shape: tuple[int, int, int, int, int]):
         self.shape = shape
@@ -55,15 +48,13 @@ class CorrectionScratch:
                 write_at(fd, np.asarray(block[p, c], dtype=np.complex64), self._offset(p, c, slabs.start))
 
     def read(self, plane: int, component: int, out: np.ndarray | None = None) -> np.ndarray:
-        """The spectra (nk1, ny, nz) complex64 of ``component`` on ``plane`` (position in the stored planes), into
-        ``out`` if given."""
+        """The spectra (nk1, ny, nz) of ``component`` on stored plane ``plane`` (into ``out`` if given)."""
         out = np.empty(self.shape[2:], np.complex64) if out is None else out
         return read_at(self._file.fileno(), out, self._offset(plane, component, 0))
 
     def reader(self, keys: Iterable[tuple[int, int]]) -> Callable[[int, int], np.ndarray]:
-        """A function (plane, component) -> :meth:`read` of it, to be called for ``keys`` in that order: each is
-        read in a background thread while the one before is used (pass 2 transforms a component while the next is
-        read). Two buffers alternate: an array stays valid until the next call."""
+        """A function (plane, component) -> :meth:`read`, called for ``keys`` in that order, each read
+        ahead in a background thread; two buffers alternate (an array is valid until the next call)."""
         keys = list(keys)
         if self._io is None:
             self._io = ThreadPoolExecutor(1, thread_name_prefix="turbgen-correction-read")

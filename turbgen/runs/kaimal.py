@@ -1,7 +1,4 @@
-"""Generating one Kaimal 4D run (turbgen.spec.kaimal.KaimalRun): KaimalEvo -> field store.
-
-Used by ``turbgen kaimal``, the sweep and the service, so all give bit-identical stores for the same run.
-"""
+"""One Kaimal 4D run (turbgen.spec.kaimal.KaimalRun): KaimalEvo -> store; shared by the CLI, sweep and service."""
 
 from __future__ import annotations
 
@@ -34,8 +31,8 @@ from turbgen.synthesis.random_streams import keyed_complex_normal
 
 
 def kaimal_generator(run: KaimalRun, workers: int | None = None, keep: bool = False) -> KaimalEvo:
-    """The synthesis object of ``run`` (``workers``: FFT threads; the field does not depend on them; ``keep``: its
-    seed-free part kept for KaimalEvo.reseeded)."""
+    """The synthesis object of ``run`` (``workers``: FFT threads, no effect on the field; ``keep``: its seed-free
+    part kept for KaimalEvo.reseeded)."""
     return KaimalEvo(run.kaimal, run.grid, run.U_m_s, run.seed, long_coherence=run.long_coherence(),
                      long_components=run.long_components, coherent_vw=run.vw_coherence == "exp",
                      rescale=run.rescale, workers=workers, keep=keep, yz_coherence=run.coherence,
@@ -43,9 +40,8 @@ def kaimal_generator(run: KaimalRun, workers: int | None = None, keep: bool = Fa
 
 
 def store_attrs(run: KaimalRun, gen: KaimalEvo | None = None) -> dict:
-    """The store attributes of ``run`` with what its generator derives: resolved band [Hz], expected
-    sigma [m/s] per component, rescale factors and the frequency chunk (``gen``: this run's generator,
-    if already built)."""
+    """The store attributes of ``run`` with what its generator (``gen``, if built) derives: resolved band [Hz],
+    expected sigma [m/s], rescale factors and frequency chunk."""
     gen = gen or kaimal_generator(run)
     lo, hi = resolved_band_hz(run.grid.nt, run.grid.dt_s)
     return run.to_attrs({
@@ -65,34 +61,30 @@ MAX_WRITE_BACKLOG = 8
 
 
 def ring_planes(grid: Grid, spill: bool = False) -> int:
-    """Planes of the run's PlaneRing: the two transformed ahead, the one yielded, and up to MAX_WRITE_BACKLOG (one
-    component's planes at most) waiting for the store; spilled runs (short of memory) let one write wait."""
+    """Planes of the run's PlaneRing: two transformed ahead, the one yielded and up to MAX_WRITE_BACKLOG waiting for
+    the store (one when spilled)."""
     return 3 + (1 if spill else min(grid.nx, MAX_WRITE_BACKLOG))
 
 
 def memory_needed(grid: Grid, spill: bool = False, sampler: int = 0) -> int:
-    """Peak bytes of a run's arrays: one component's spectrum (nx, nf, ny, nz) complex64 -- or, with
-    ``spill`` (the spectrum in a scratch file), one frequency chunk of all planes with its mixing
-    copies -- plus the field planes of the run's ring (:func:`ring_planes`: in flight and waiting for the store,
-    also while the next component is made) and the larger of the yz samplers of one chunk (``sampler``:
+    """Peak bytes [B] of a run's arrays: one component's spectrum (``spill``: one frequency chunk of all planes and
+    its mixing copies), the PlaneRing, and the larger of one chunk's yz samplers (``sampler``:
     KaimalEvo.sampler_bytes) and the spectrum copies of the two planes transformed at once."""
-    nf = grid.nt // 2 + 1
-    plane = grid.ny * grid.nz
-    in_flight = ring_planes(grid, spill) * grid.nt * plane * 4 + max(3 * nf * plane * 8, sampler)
+    g, nf = grid, grid.nt // 2 + 1
+    in_flight = PlaneRing.bytes_needed(g.nt, g.ny, g.nz, ring_planes(g, spill)) + max(3 * nf * g.ny * g.nz * 8, sampler)
     if spill:
-        return 3 * grid.nx * FREQ_CHUNK * plane * 8 + in_flight
-    return grid.nx * nf * plane * 8 + in_flight
+        return 3 * InMemorySpectrum.bytes_needed(g.nx, FREQ_CHUNK, g.ny, g.nz) + in_flight
+    return spectrum_bytes(g) + in_flight
 
 
 def spectrum_bytes(grid: Grid) -> int:
-    """Bytes of one component's spectrum (nx, nf, ny, nz) complex64 (in memory, or the scratch file)."""
-    return grid.nx * (grid.nt // 2 + 1) * grid.ny * grid.nz * 8
+    """Bytes [B] of one component's spectrum (nx, nf, ny, nz) complex64 (in memory or the scratch file)."""
+    return InMemorySpectrum.bytes_needed(grid.nx, grid.nt // 2 + 1, grid.ny, grid.nz)
 
 
 def plan_spill(grid: Grid, out: Path, spill: bool | None, sampler: int) -> bool:
-    """Whether the spectrum goes to a scratch file next to ``out`` (``spill`` None: when it would not fit in 80 % of
-    the available memory); refuses (ParameterError) a spectrum that fits neither memory nor, spilled, the disk.
-    ``sampler``: the generator's sampler_bytes."""
+    """Whether the spectrum goes to a scratch file next to ``out`` (``spill`` None: when memory_needed exceeds 80 %
+    of the available memory). ParameterError if it fits neither memory nor, spilled, the disk."""
     what = f"the Kaimal spectrum ({grid.nx} planes x {grid.nt // 2 + 1} bins x {grid.ny} x {grid.nz})"
     if spill is None:
         available = available_memory_bytes()
@@ -110,13 +102,8 @@ def plan_spill(grid: Grid, out: Path, spill: bool | None, sampler: int) -> bool:
 
 
 def _touch_while_loading_noise(pool: ThreadPoolExecutor, ring: PlaneRing, spectrum: InMemorySpectrum | None) -> None:
-    """Touch the in-memory spectrum in ``pool`` while this thread loads the compiled noise, then touches the ring.
-
-    The first compiled call of a process sets up numba's typing registries (Python, holding the GIL), and a first
-    touch of fresh memory can be slow and erratic (numpy's fills leave the GIL): side by side, the touch hides
-    behind the load instead of slowing the synthesis, and in a process that has loaded it already (a sweep's
-    worker) the two halves are touched on two cores. Returns when all is touched, so no fill races the synthesis.
-    """
+    """Touch the spectrum (in ``pool``) and the ring while this thread loads the compiled noise (as
+    runs.mann._touch_while_loading_kernels); returns when all is touched."""
     if spectrum is None:  # spilled: the spectrum is a file
         touched = pool.submit(ring.touch)
     else:
@@ -128,9 +115,8 @@ def _touch_while_loading_noise(pool: ThreadPoolExecutor, ring: PlaneRing, spectr
 
 
 def _fill(w, run: KaimalRun, gen: KaimalEvo, spill: bool, scratch_dir: Path | None, progress: bool) -> dict:
-    """Every plane of ``run`` from ``gen`` into the writer ``w`` (StoreWriter or MemoryWriter), its synthesis report
-    added to the attributes; returns {component: [sum of squares, count]}. ``spill``: each component's spectrum in
-    a scratch file in ``scratch_dir``."""
+    """Every plane of ``run`` into the writer ``w``, the synthesis report added to its attributes; returns {component:
+    [sum of squares, count]}. ``spill``: spectra in a scratch file in ``scratch_dir``."""
     g = run.grid
     sums = {c: [0.0, 0] for c in COMPONENTS}
     with contextlib.ExitStack() as stack:
@@ -182,13 +168,10 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
                gen: KaimalEvo | None = None) -> dict:
     """Generate the field of ``run`` into the store ``out``; return a summary dict.
 
-    ``threads``: FFT workers (default all cores); the field does not depend on it.
-    ``spill``: keep each component's spectrum in an unlinked scratch file next to ``out`` instead
-    of memory (None: only when it would not fit in 80 % of the available memory); the field is the same.
-
-    Summary: path, sigma_u/v/w (realised, all points and planes) [m/s], expected_sigma [m/s],
-    seconds, and the synthesis report (yz_clip_error, long_clip_error: 0 when exact). ``gen``: this run's
-    generator, if already built (turbgen.KaimalGenerator's, reseeded).
+    ``threads``: FFT workers (default all cores). ``spill``: each component's spectrum in an unlinked scratch file
+    next to ``out`` (None: when it would not fit in 80 % of the available memory). Neither changes the field.
+    ``gen``: this run's generator, if built. Summary: path, sigma_u/v/w and expected_sigma [m/s], seconds, spilled
+    and the synthesis report (yz_clip_error, long_clip_error: 0 when exact).
     """
     g = run.grid
     out = Path(out)
@@ -203,19 +186,18 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
 
 
 def in_memory_bytes(run: KaimalRun, gen: KaimalEvo | None = None) -> int:
-    """Bytes [B] kaimal_in_memory allocates: the run's arrays (memory_needed, spectrum in memory) and the field's
-    3 float32 components (``gen``: this run's generator, if already built)."""
+    """Bytes [B] kaimal_in_memory allocates: memory_needed (spectrum in memory) and the field's 3 float32
+    components."""
     gen = gen or kaimal_generator(run)
     return memory_needed(run.grid, sampler=gen.sampler_bytes()) + 3 * run.grid.nbytes_per_component()
 
 
 def kaimal_in_memory(run: KaimalRun, *, progress: bool = False, threads: int | None = None,
                      gen: KaimalEvo | None = None):
-    """The field of ``run`` in memory, as the store run_kaimal writes would open: (xarray.Dataset, summary).
+    """The field of ``run`` in memory as run_kaimal's store would open: (xarray.Dataset, summary with path None).
 
-    The same values, coordinates and attributes (but ``created_utc``) as ``xarray.open_zarr`` of run_kaimal's store
-    (turbgen.store.memory.MemoryWriter); the spectrum is kept in memory; the summary's path is None. Raises
-    ParameterError when in_memory_bytes exceeds the available memory. ``gen``: as run_kaimal's.
+    The same values and attributes (but ``created_utc``); the spectrum stays in memory. ParameterError when
+    in_memory_bytes exceeds the available memory.
     """
     gen = gen or kaimal_generator(run, workers=threads)
     g = run.grid

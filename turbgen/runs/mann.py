@@ -1,10 +1,9 @@
-"""Generating one Mann space-time run (turbgen.spec.mann.MannRun): stencil -> snapshots -> zarr store.
+"""One Mann space-time run (turbgen.spec.mann.MannRun): stencil -> snapshots -> zarr store.
 
-    run = MannRun.from_mapping({"length_scale_m": 49, "gamma": 3.1, "evo_time_s": 400})
-    summary = run_mann(run, "mann.zarr", progress=True)
+    summary = run_mann(MannRun.from_mapping({"length_scale_m": 49, "evo_time_s": 400}), "mann.zarr")
 
-Used by ``turbgen mann``, the sweep and the service, so all give bit-identical stores. The stencil
-(build_mann_stencil) depends on everything but the seed and can be shared between seeds.
+Shared by ``turbgen mann``, the sweep and the service (bit-identical stores); the stencil depends on all but the
+seed and can be shared between seeds.
 """
 
 from __future__ import annotations
@@ -24,7 +23,7 @@ from turbgen.runs.stencil_cache import cached_stencil
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.store.memory import MemoryWriter
-from turbgen.synthesis.mann_spacetime import COMPONENTS, MannSnapshots, snapshot_memory_bytes
+from turbgen.synthesis.mann_spacetime import COMPONENTS, MannSnapshots
 from turbgen.synthesis.mann_stencil import MannStencil, build_stencil, stencil_nbytes, synthesis_box
 from turbgen.synthesis.random_streams import complex_normal
 
@@ -32,12 +31,8 @@ _BUILD_SCRATCH = 64 * 2**20  # float64 temporaries of the stencil-building batch
 
 
 def build_mann_stencil(run: MannRun, cache_dir: str | Path | None = None, *, energy: str = "scaled") -> MannStencil:
-    """The stencil of ``run`` in memory: the per-parameter-set part of a run (the same for runs differing only in
-    seed; with ``energy="unit"`` also for runs differing in ae, through MannStencil.scaled).
-
-    synthesis.mann_stencil.build_stencil on the run's synthesis box (without 1/tau_e for one plane), or, with
-    ``cache_dir``, through the stencil cache (turbgen.runs.stencil_cache): the same numbers.
-    """
+    """The stencil of ``run`` in memory (the same for runs differing only in seed; ``energy="unit"``: also in
+    ae, through MannStencil.scaled), built or read from the stencil cache ``cache_dir`` (the same numbers)."""
     box, evolving = synthesis_box(run), run.grid.nx > 1
     if cache_dir is None:
         return build_stencil(run.params, box, energy=energy, evolving=evolving)
@@ -50,24 +45,21 @@ def shared_stencil_key(run: MannRun) -> tuple:
 
 
 def shared_stencil_nbytes(run: MannRun) -> int:
-    """Bytes [B] of the unit stencil of ``run`` (held by a sweep's worker besides the run's own scaled stencil)."""
+    """Bytes [B] of the unit stencil of ``run`` (a sweep's worker holds it besides the run's scaled one)."""
     return stencil_nbytes(synthesis_box(run), run.grid.nx > 1 and run.params.evo_time_s is not None, "unit")
 
 
 def _evolving(run: MannRun) -> bool:
-    """Whether the run makes several snapshots (planes of evolving turbulence) from one stencil."""
+    """Whether the run makes several snapshots from one stencil."""
     return run.params.evo_time_s is not None and run.grid.nx > 1
 
 
 def memory_estimate_bytes(run: MannRun, threads: int, with_stencil: bool = True) -> int:
-    """Bytes a run allocates: stencil (unless given), OU state, spectra, one output plane, store buffers.
-
-    A single snapshot computes its stencil on demand (run_mann): then only the generator's per-thread
-    coefficient batches count."""
+    """Bytes [B] a run allocates: stencil (unless given), snapshot generator (MannSnapshots.bytes_needed), output
+    plane and store buffers. A single snapshot computes its stencil on demand (run_mann)."""
     g, evolving = run.grid, _evolving(run)
     on_demand = with_stencil and not evolving
-    need = snapshot_memory_bytes(synthesis_box(run), g.ny, g.nz, g.nx if evolving else 1, threads, buffers=2,
-                                 coefficients=on_demand)  # fmt: skip
+    need = MannSnapshots.bytes_needed(synthesis_box(run), g.ny, g.nz, g.nx if evolving else 1, threads, 2, on_demand)
     need += 2 * g.nt * g.ny * g.nz * 4  # the output plane and the store's encoding buffers
     if with_stencil and evolving:
         need += stencil_nbytes(synthesis_box(run), evolving) + _BUILD_SCRATCH
@@ -91,14 +83,11 @@ def describe(run: MannRun, out: str | Path, threads: int, with_stencil: bool = T
 
 
 def _touch_while_loading_kernels(gen: MannSnapshots, output: bool = True) -> None:
-    """First touch of a single snapshot's buffers (0.5 GiB for an 8192 x 64 x 64 box) while the compiled noise loads.
+    """First touch of a single snapshot's buffers while the compiled noise loads.
 
-    numba's first call in a process sets up its typing registries (Python, holding the GIL), and a first touch of
-    fresh memory can be slow and erratic (numpy's fills leave the GIL): the spectra are touched in a thread
-    meanwhile, then the output
-    plane here (on two cores when the kernels were loaded already, as in a sweep's worker). Returns when all is
-    touched, so no fill races the synthesis; the field is the same. ``output=False``: the planes go to the caller's
-    arrays (generate's ``target``), so no output plane is allocated.
+    numba's first call holds the GIL while fresh memory's first touch (numpy fills release it) is slow: the spectra
+    are touched in a thread meanwhile, the output plane here (none with ``output=False``: the caller's arrays).
+    Returns when all is touched, so no fill races the synthesis.
     """
     spectra, plane = gen.single_buffers(output)
     with ThreadPoolExecutor(1) as pool:
@@ -122,8 +111,8 @@ def _checked_stencil(run: MannRun, stencil: MannStencil | None) -> None:
 
 
 def _run_stencil(run: MannRun, stencil: MannStencil | None, cache_dir) -> MannStencil:
-    """The stencil ``run`` is made with: ``stencil`` (a unit stencil scaled to the run's ae), else one snapshot's
-    computed on demand (each slab is used once), else built (or read from ``cache_dir``)."""
+    """The stencil ``run`` is made with: ``stencil`` scaled to the run's ae, else one snapshot's computed on
+    demand, else built (or read from ``cache_dir``)."""
     if stencil is not None:
         return stencil.scaled(run.params)
     if cache_dir is None and not _evolving(run):
@@ -133,10 +122,9 @@ def _run_stencil(run: MannRun, stencil: MannStencil | None, cache_dir) -> MannSt
 
 def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress: bool, in_place: bool = False,
               gen: MannSnapshots | None = None) -> dict:  # fmt: skip
-    """Every plane of ``run`` from ``stencil`` into ``writer`` (a StoreWriter or MemoryWriter); returns
-    {component: [float64 sum, sum of squares]} of the written values. ``in_place`` (a MemoryWriter): the planes are
-    transformed straight into the writer's field (MemoryWriter.plane), not copied there. ``gen``: the snapshot
-    generator on ``stencil`` (its buffers and plans kept from an earlier seed; default a new one)."""
+    """Every plane of ``run`` into ``writer`` (StoreWriter or MemoryWriter); returns {component: [sum, sum of
+    squares]}. ``in_place``: planes transformed straight into the MemoryWriter's field; ``gen``: a generator on
+    ``stencil`` kept from an earlier seed."""
     g = run.grid
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
     gen = gen or MannSnapshots(stencil, g.ny, g.nz, threads, buffers=2)
@@ -166,10 +154,10 @@ def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress
     return sums
 
 
-def _summary(run: MannRun, sums: dict, path, t_start: float) -> dict:
-    g = run.grid
-    n = g.nt * g.nx * g.ny * g.nz
-    summary = {"path": None if path is None else str(path), "seconds": time.perf_counter() - t_start}
+def field_summary(path, t_start: float, sums: dict, grid, **extra) -> dict:
+    """A run's summary: path, seconds, ``extra`` and sigma_/mean_ u/v/w [m/s] from {component: [sum, sum of squares]}."""
+    n = grid.nt * grid.nx * grid.ny * grid.nz
+    summary = {"path": None if path is None else str(path), "seconds": time.perf_counter() - t_start, **extra}
     for c, (s1, s2) in sums.items():
         mean = s1 / n
         summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - mean * mean, 0.0))
@@ -187,24 +175,14 @@ def _require_memory(run: MannRun, threads: int, stencil, field_bytes: int = 0) -
     )
 
 
-def run_mann(
-    run: MannRun,
-    out: str | Path,
-    *,
-    overwrite: bool = False,
-    chunk_t: int | None = None,
-    progress: bool = False,
-    stencil: MannStencil | None = None,
-    threads: int | None = None,
-    cache_dir: str | Path | None = None,
-) -> dict:
+def run_mann(run: MannRun, out: str | Path, *, overwrite: bool = False, chunk_t: int | None = None,
+             progress: bool = False, stencil: MannStencil | None = None, threads: int | None = None,
+             cache_dir: str | Path | None = None) -> dict:  # fmt: skip
     """Generate ``run`` into a new store at ``out``; return {path, sigma_u/v/w [m/s], seconds, ...}.
 
-    Memory is checked before anything is allocated; planes are written as they are produced;
-    an exception (or Ctrl-C) leaves no store at ``out``. ``stencil`` (from build_mann_stencil of a
-    run with the same parameters and grid) skips the stencil computation, a unit stencil (energy "unit", of a run
-    differing at most in ae and seed) leaves only its scaling to ae. ``threads`` defaults
-    to os.cpu_count() and does not change the field.
+    Memory is checked before anything is allocated; an exception (or Ctrl-C) leaves no store. ``stencil``
+    (build_mann_stencil of a run differing at most in seed; a unit stencil: also in ae) skips its computation;
+    ``threads`` (default os.cpu_count()) does not change the field.
     """
     t_start = time.perf_counter()
     gen_threads = default_threads(threads)
@@ -213,30 +191,22 @@ def run_mann(
     path = Path(out)
     with create_store(path, run.grid, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite) as writer:
         sums = _generate(writer, run, _run_stencil(run, stencil, cache_dir), gen_threads, progress)
-    return _summary(run, sums, path, t_start)
+    return field_summary(path, t_start, sums, run.grid)
 
 
 def in_memory_bytes(run: MannRun, threads: int, with_stencil: bool = True) -> int:
-    """Bytes [B] mann_in_memory allocates: the run's (memory_estimate_bytes) and the field's 3 float32 components."""
+    """Bytes [B] mann_in_memory allocates: memory_estimate_bytes and the field's 3 float32 components."""
     return memory_estimate_bytes(run, threads, with_stencil) + 3 * run.grid.nbytes_per_component()
 
 
-def mann_in_memory(
-    run: MannRun,
-    *,
-    progress: bool = False,
-    stencil: MannStencil | None = None,
-    threads: int | None = None,
-    cache_dir: str | Path | None = None,
-    snapshots: MannSnapshots | None = None,
-):
-    """The field of ``run`` in memory, as the store run_mann writes would open: (xarray.Dataset, summary).
+def mann_in_memory(run: MannRun, *, progress: bool = False, stencil: MannStencil | None = None,
+                   threads: int | None = None, cache_dir: str | Path | None = None,
+                   snapshots: MannSnapshots | None = None):  # fmt: skip
+    """The field of ``run`` in memory as run_mann's store would open: (xarray.Dataset, summary with path None).
 
-    The same values, coordinates and attributes (but ``created_utc``) as ``xarray.open_zarr`` of run_mann's store
-    (turbgen.store.memory.MemoryWriter); the arguments as run_mann's; the summary's path is None. ``snapshots``:
-    a snapshot generator on ``stencil`` (MannSnapshots(stencil, ny, nz, threads, buffers=2)) whose buffers and plans
-    an earlier seed made: the same field, without allocating them again. Raises ParameterError when in_memory_bytes
-    exceeds the available memory.
+    The same values and attributes (but ``created_utc``) as that store; arguments as run_mann's. ``snapshots``: a
+    MannSnapshots(stencil, ny, nz, threads, buffers=2) kept from an earlier seed (no new buffers). Raises
+    ParameterError when in_memory_bytes exceeds the available memory.
     """
     t_start = time.perf_counter()
     gen_threads = default_threads(threads)
@@ -250,4 +220,4 @@ def mann_in_memory(
     with MemoryWriter(run.grid, run.to_attrs()) as writer:
         sums = _generate(writer, run, _run_stencil(run, stencil, cache_dir), gen_threads, progress, in_place=True,
                          gen=snapshots)  # fmt: skip
-    return writer.dataset, _summary(run, sums, None, t_start)
+    return writer.dataset, field_summary(None, t_start, sums, run.grid)

@@ -1,30 +1,19 @@
-"""Out-of-core Mann runs: a field whose snapshot does not fit in memory, made in two passes through scratch files.
+"""Out-of-core Mann runs: a field whose snapshot does not fit in memory, in two passes through scratch files.
 
     summary = run_mann_outofcore(run, "big.zarr", memory_bytes=4 * 2**30)
 
-Pass 1, per part of S k1 slabs (S a multiple of the synthesis batch, so every number is computed
-exactly as in memory): the stencil of those slabs, their noise and OU state through
-all snapshots in time order, the factor C, the (k2, k3) transforms and the crop. The cropped spectra
-(3, ny nz, S) of snapshot m go to the spectrum scratch file, laid out (snapshot, component, part,
-point, slab) so that every write is one contiguous block.
-Pass 2, per snapshot and component, per block of (y, z) points: the spectra of the block are read back
-from every part, transformed along k1 with the plans of the in-memory generator
-(synthesis.mann_spacetime.PencilTransform) and put in the output plane: in memory if it fits the
-budget, else in a plane scratch file (block, t, point), which is then written to the store in time
-chunks. The field is bit for bit the one run_mann makes (tests/runs/test_mann_outofcore.py).
+Pass 1, per part of S k1 slabs (a multiple of the synthesis batch: every number as in memory): the part's stencil,
+its snapshots in time order, cropped spectra to the spectrum file (snapshot, component, part, point, slab).
+Pass 2, per snapshot, component and block of (y, z) points: read back, transformed along k1 (PencilTransform) into
+the output plane (in memory, else a plane file), written in time chunks. Bit for bit run_mann's field.
 
-Memory is bounded by ``memory_bytes`` (S, the block sizes and the store's time chunk are chosen from
-it), never by the field. Scratch files live in a hidden directory next to the output,
-``.NAME.scratch-PID-XXXX``: removed at the end and on any exception, and by the next run writing next
-to it when its process is dead (after kill -9). With a dask ``client`` the parts of pass 1 and the
-blocks of pass 2 are its tasks (one big field spread over the workers; the scratch directory must be
-on a filesystem they share); this process writes the store. Without one both passes run here
-(threads in pass 1).
+S, the block sizes and the time chunk follow ``memory_bytes``. Scratch files live in ``.NAME.scratch-PID-XXXX``
+next to the output: removed at the end, on any exception, or by the next run once their process is dead. With a
+dask ``client`` the parts and blocks are its tasks (the scratch directory on a shared filesystem).
 """
 
 from __future__ import annotations
 
-import math
 import os
 from contextlib import nullcontext
 import re
@@ -75,22 +64,17 @@ _HINT = "raise `memory`, or lower `nt`, `ny`/`nz` or `pad_yz`"
 
 
 def worker_base_bytes() -> int:
-    """What a fresh worker process holds besides a task's planned arrays [bytes]: what this process held once this
-    module's imports were done (165-200 MiB measured, more in a fresh virtualenv), plus WORKER_LOADS_BYTES and
-    LATE_BYTES; at least BASE_BYTES."""
+    """What a fresh worker process holds besides a task's planned arrays [B]: this process's resident memory
+    after the imports plus WORKER_LOADS_BYTES and LATE_BYTES; at least BASE_BYTES."""
     if _IMPORTED_RESIDENT is None:
         return BASE_BYTES
     return max(BASE_BYTES, _IMPORTED_RESIDENT + WORKER_LOADS_BYTES + LATE_BYTES)
 
 
 def base_bytes() -> int:
-    """Memory [bytes] a budget leaves to the process besides a run's planned arrays: BASE_BYTES, or what is
-    resident now plus LATE_BYTES if that is more.
-
-    What is resident depends on what the process did before: computing ae from sigma_u (the Mann spectra's
-    quadrature) leaves ~70-125 MiB more resident than a given ae (the allocator keeps the freed buffers; measured),
-    and a budget must hold that too (it bounds the process's peak resident memory, VmHWM).
-    """
+    """Memory [B] a budget leaves to the process besides a run's planned arrays: BASE_BYTES, or what is resident now
+    plus LATE_BYTES if more (computing ae from sigma_u first leaves ~70-125 MiB more resident; a budget bounds
+    VmHWM)."""
     resident = resident_bytes()
     return BASE_BYTES if resident is None else max(BASE_BYTES, resident + LATE_BYTES)
 
@@ -117,22 +101,12 @@ def remove_stale_scratch(out: str | Path) -> list[Path]:
 class OutOfCorePlan:
     """Sizes of an out-of-core run under a memory budget [bytes] (see module docstring)."""
 
-    def __init__(
-        self,
-        run: MannRun,
-        memory_bytes: int,
-        threads: int,
-        chunk_t: int | None = None,
-        *,
-        slabs_per_part: int | None = None,
-        block_points: int | None = None,
-        plane_in_memory: bool | None = None,
-        base: int | None = None,
-    ):
-        """Sizes from the budget; ``slabs_per_part`` (a multiple of SLAB_BATCH), ``block_points`` (a multiple of
-        ROW_BLOCK) and ``plane_in_memory`` override them (tests: several parts and blocks on a small field).
-        ``base``: what the process making the passes holds besides the planned arrays [bytes] (default
-        :func:`base_bytes`: this process). ``minimum_bytes``: the smallest budget with one part."""
+    def __init__(self, run: MannRun, memory_bytes: int, threads: int, chunk_t: int | None = None, *,
+                 slabs_per_part: int | None = None, block_points: int | None = None,
+                 plane_in_memory: bool | None = None, base: int | None = None):  # fmt: skip
+        """Sizes from the budget; ``slabs_per_part`` (multiple of SLAB_BATCH), ``block_points`` (multiple of
+        ROW_BLOCK) and ``plane_in_memory`` override them (tests). ``base``: what the process holds besides the planned
+        arrays [B] (default :func:`base_bytes`). ``minimum_bytes``: the smallest budget with one part."""
         g, box = run.grid, synthesis_box(run)
         self.run, self.memory_bytes, self.threads = run, int(memory_bytes), threads
         self.per_worker = False  # the budget of each worker of a dask cluster (plan_for_budget)
@@ -205,10 +179,8 @@ class OutOfCorePlan:
 
 
 def least_budget_bytes(run: MannRun, chunk_t: int | None = None) -> int:
-    """A lower bound [bytes] of the memory budget any process can make ``run`` within: in memory with one thread, or
-    out of core with one thread (:class:`OutOfCorePlan`'s minimum), both with the smallest base any plan assumes
-    (BASE_BYTES; :func:`base_bytes` never plans with less). A budget below it fails in every worker, so a sweep can
-    refuse it before it starts."""
+    """A lower bound [B] of any process's budget for ``run``: in memory or out of core with one thread, on
+    the smallest base (BASE_BYTES). A sweep refuses a budget below it before it starts."""
     from turbgen.runs.mann import memory_estimate_bytes
 
     base = min(BASE_BYTES, base_bytes())
@@ -217,8 +189,7 @@ def least_budget_bytes(run: MannRun, chunk_t: int | None = None) -> int:
 
 
 def fits_in_memory(run: MannRun, memory_bytes: int | None, threads: int, with_stencil: bool = True) -> bool:
-    """Whether ``run`` is made in one pass within ``memory_bytes`` (True without a budget): its in-memory estimate
-    (turbgen.runs.mann.memory_estimate_bytes) plus what this process holds (:func:`base_bytes`)."""
+    """Whether ``run`` fits ``memory_bytes`` in one pass (memory_estimate_bytes + :func:`base_bytes`)."""
     from turbgen.runs.mann import memory_estimate_bytes
 
     return memory_bytes is None or memory_estimate_bytes(run, threads, with_stencil) + base_bytes() <= memory_bytes
@@ -226,13 +197,11 @@ def fits_in_memory(run: MannRun, memory_bytes: int | None, threads: int, with_st
 
 def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_t: int | None = None,
                     scheduler: str | None = None, with_stencil: bool = True) -> OutOfCorePlan | None:
-    """The out-of-core plan of ``run`` if it does not fit ``memory_bytes`` in memory, else None (also without a budget).
+    """The out-of-core plan of ``run`` if it does not fit ``memory_bytes`` in memory, else None.
 
-    ``scheduler`` None: both passes in this process, ``threads`` threads. "local": a LocalCluster of ``threads``
-    single-threaded worker processes (:func:`local_cluster`) which, with this process, share the budget. Any other
-    address: the budget holds per worker of that cluster (one task at a time, ``threads`` threads).
-    ``with_stencil``: the in-memory run would compute its stencil (False: a stencil cache gives it).
-    Raises ParameterError (one line, the minimum it needs) if the budget is too small even out of core.
+    ``scheduler`` None: both passes here on ``threads`` threads; "local": a LocalCluster of ``threads``
+    single-threaded workers sharing the budget with this process; an address: the budget per worker.
+    ``with_stencil``: the in-memory run would build its stencil. ParameterError if too small even out of core.
     """
     if fits_in_memory(run, memory_bytes, threads, with_stencil):
         return None
@@ -256,18 +225,14 @@ def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_
 
 
 def local_cluster(workers: int):
-    """A dask LocalCluster of ``workers`` single-threaded worker processes (what :func:`plan_for_budget` plans
-    for with scheduler "local"), quiet, on loopback, without a dashboard (runs.local_cluster)."""
+    """A quiet loopback LocalCluster of ``workers`` single-threaded processes (plan_for_budget's "local")."""
     from turbgen.runs.local_cluster import loopback_cluster
 
     return loopback_cluster(workers, 1, processes=True)
 
 
 class _File:
-    """A scratch file written and read by offsets (pwrite / preadv: no mapping, so not counted in RSS).
-
-    ``nbytes`` creates it (sized, sparse); without it an existing file is opened (a dask worker's side).
-    """
+    """A scratch file written and read by offsets (no mapping, not in RSS); ``nbytes``: create it sparse."""
 
     def __init__(self, path: Path, nbytes: int | None = None):
         if nbytes is None:
@@ -292,26 +257,15 @@ class _File:
         self.close()
 
 
-def run_mann_outofcore(
-    run: MannRun,
-    out: str | Path,
-    *,
-    memory_bytes: int,
-    overwrite: bool = False,
-    chunk_t: int | None = None,
-    progress: bool = False,
-    threads: int | None = None,
-    plan: OutOfCorePlan | None = None,
-    client=None,
-) -> dict:
-    """Generate ``run`` into a new store at ``out`` within ``memory_bytes``; return {path, sigma_*, mean_*, seconds, plan}.
+def run_mann_outofcore(run: MannRun, out: str | Path, *, memory_bytes: int, overwrite: bool = False,
+                       chunk_t: int | None = None, progress: bool = False, threads: int | None = None,
+                       plan: OutOfCorePlan | None = None, client=None) -> dict:  # fmt: skip
+    """Generate ``run`` into a new store at ``out`` within ``memory_bytes``; return {path, sigma_*, mean_*, seconds,
+    plan}.
 
-    The same field, bit for bit, as turbgen.runs.mann.run_mann. Disk space for the store (uncompressed)
-    and the scratch files is checked first; an exception leaves neither a store nor scratch files.
-    ``client``: a dask.distributed Client: the parts of pass 1 and the blocks of pass 2 run as its tasks
-    (its workers must see the output's directory; ``memory_bytes`` and ``threads`` then hold per task),
-    the store is written by this process. Without it both passes run here. The FFT backend selected here
-    (turbgen.fft.current) is the one the tasks use, wherever they run.
+    Bit for bit run_mann's field. The disk for store and scratch is checked first; an exception leaves neither.
+    ``client``: a dask Client running the passes' tasks (``memory_bytes`` and ``threads`` per task; they use this
+    process's FFT backend); this process writes the store.
     """
     t_start = time.perf_counter()
     threads = default_threads(threads)
@@ -362,13 +316,9 @@ def run_mann_outofcore(
                         bar.update(1)
         finally:
             shutil.rmtree(scratch_dir, ignore_errors=True)
-    n = g.nt * g.nx * g.ny * g.nz
-    summary = {"path": str(path), "seconds": time.perf_counter() - t_start, "plan": plan.describe()}
-    for c, (s1, s2) in sums.items():
-        mean = s1 / n
-        summary[f"sigma_{c}"] = math.sqrt(max(s2 / n - mean * mean, 0.0))
-        summary[f"mean_{c}"] = mean
-    return summary
+    from turbgen.runs.mann import field_summary
+
+    return field_summary(path, t_start, sums, g, plan=plan.describe())
 
 
 def _map(client, fn, items, bar) -> None:
@@ -397,8 +347,7 @@ def _spectra_offset(plan: OutOfCorePlan, m: int, c: int, part: int, point: int =
 
 def pass1_part(run: MannRun, plan: OutOfCorePlan, spectra_path: str, cells, times, threads: int, fft_backend: str,
                part: int) -> None:  # fmt: skip
-    """Pass 1 for one part of k1 slabs: its stencil, snapshots in time order, cropped spectra to the scratch file
-    (``fft_backend``: turbgen.fft's name)."""
+    """Pass 1 for one part of k1 slabs: its stencil and snapshots, cropped spectra to the scratch file."""
     box, g = synthesis_box(run), run.grid
     S = plan.slabs_per_part
     first, end = part * S, min((part + 1) * S, box.nk1)
@@ -417,8 +366,8 @@ def pass1_part(run: MannRun, plan: OutOfCorePlan, spectra_path: str, cells, time
 
 def pass2_blocks(run, plan: OutOfCorePlan, spectra_path: str, plane_path: str | None, m: int, c: int, blocks,
                  fft_backend: str, plane: np.ndarray | None = None) -> None:  # fmt: skip
-    """Pass 2 for blocks of (y, z) points of snapshot m, component c: read back, transform along k1 (``fft_backend``:
-    turbgen.fft's name), into ``plane`` (nt, points) or, without it, into the plane scratch file (block, t, point)."""
+    """Pass 2 for blocks of (y, z) points of snapshot m, component c: read back, transformed along k1, into
+    ``plane`` (nt, points) or the plane scratch file (block, t, point)."""
     g, box = run.grid, synthesis_box(run)
     S, P, B = plan.slabs_per_part, plan.points, plan.block_points
     transform = PencilTransform(g.nt, P, fft_backend)

@@ -1,13 +1,13 @@
-"""How a model runs: model name -> what a run is (spec class), how it runs, what memory it needs.
+"""The model registry: model name -> run class, run function, memory estimates (for the sweep and the service).
 
-Looked up by the sweep (planning and execution) and the service instead of switching on the model's name. The
-models are declared in turbgen.spec.models; ``MODELS`` resolves each declaration's ``runner`` (a :class:`Model`:
-:data:`MANN` and :data:`KAIMAL` here, a further model's in its own runs module) when it is first asked for.
+The models are declared in turbgen.spec.models; ``MODELS`` resolves each declaration's ``runner`` (:data:`MANN`,
+:data:`KAIMAL`) when first asked for.
 """
 
 from __future__ import annotations
 
 import functools
+import importlib
 import os
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
@@ -22,20 +22,14 @@ from turbgen.spec.models import declaration, model_names, resolve
 class Model:
     """One model of the registry.
 
-    name : "mann" | "kaimal" (the store's ``model`` attribute).
-    spec : the run class (from_mapping, to_attrs, from_attrs).
-    run : ``run(run, out, *, overwrite, chunk_t, threads, memory_bytes, shared)`` -> summary dict
-        (``memory_bytes``: budget [bytes] or None; ``shared``: the seed-independent part, or None).
-    memory_bytes : ``memory_bytes(run, threads)`` -> peak bytes of a run in memory.
-    least_memory_bytes : ``least_memory_bytes(run)`` -> the smallest footprint a run can be made with [bytes].
+    name : the store's ``model`` attribute. spec : the run class.
+    run : ``run(run, out, *, overwrite, chunk_t, threads, memory_bytes, shared)`` -> summary dict.
+    memory_bytes : ``memory_bytes(run, threads)`` -> peak bytes [B] of a run in memory.
+    least_memory_bytes : ``least_memory_bytes(run)`` -> the smallest footprint [B] a run can be made with.
     memory_fields : the run fields that lower the memory (for messages).
-    shared_part : ``shared_part(run, threads, memory_bytes)`` -> the function ``build(run)`` of the part
-        that runs with equal :attr:`shared_key` share (the ae-free Mann stencil), or None when the run
-        does not use one.
-    shared_key : ``shared_key(run)`` -> hashable; runs with equal keys share one part (Mann: equal but
-        for seed and ae, i.e. TI or turbulence class).
-    shared_bytes : ``shared_bytes(run)`` -> bytes [B] of that part, held by a worker besides the run.
-    out_of_core : a memory budget bounds the run's memory (a run over it is made out of core within it).
+    shared_part : ``shared_part(run, threads, memory_bytes)`` -> ``build(run)`` of the part runs with equal
+        ``shared_key(run)`` share (the ae-free Mann stencil), or None. shared_bytes : its bytes [B].
+    out_of_core : a memory budget bounds the run (over it, made out of core).
     """
 
     name: str
@@ -50,8 +44,13 @@ class Model:
     out_of_core: bool = False
 
 
+def _mann(name: str, *bound) -> Callable:
+    """turbgen.runs.mann's function ``name`` (imported when called) with ``bound`` arguments appended."""
+    return lambda *args: getattr(importlib.import_module("turbgen.runs.mann"), name)(*args, *bound)
+
+
 def _mann_out_of_core(run: MannRun, threads: int | None, memory_bytes: int | None) -> bool:
-    """Whether a Mann run exceeds its memory budget (then turbgen.runs.mann_outofcore makes it)."""
+    """Whether a Mann run exceeds its memory budget (then mann_outofcore makes it)."""
     if memory_bytes is None:
         return False
     from turbgen.runs.mann_outofcore import fits_in_memory
@@ -70,30 +69,12 @@ def _run_mann(run: MannRun, out, *, overwrite=False, chunk_t=None, threads=None,
     return run_mann(run, out, overwrite=overwrite, chunk_t=chunk_t, stencil=shared, threads=threads)
 
 
-def _mann_memory(run: MannRun, threads: int) -> int:
-    from turbgen.runs.mann import memory_estimate_bytes
-
-    return memory_estimate_bytes(run, threads)
-
-
 def _mann_shared(run: MannRun, threads: int | None, memory_bytes: int | None):
     if _mann_out_of_core(run, threads, memory_bytes):
         return None
     from turbgen.runs.mann import build_mann_stencil
 
     return functools.partial(build_mann_stencil, energy="unit")  # picklable: a sweep's workers build it
-
-
-def _mann_shared_key(run: MannRun):
-    from turbgen.runs.mann import shared_stencil_key
-
-    return shared_stencil_key(run)
-
-
-def _mann_shared_bytes(run: MannRun) -> int:
-    from turbgen.runs.mann import shared_stencil_nbytes
-
-    return shared_stencil_nbytes(run)
 
 
 def _run_kaimal(run: KaimalRun, out, *, overwrite=False, chunk_t=None, threads=None, memory_bytes=None, shared=None):
@@ -120,14 +101,15 @@ def _kaimal_least_memory(run: KaimalRun) -> int:
     return min(memory_needed(run.grid, sampler=sampler), memory_needed(run.grid, True, sampler))
 
 
-MANN = Model("mann", MannRun, _run_mann, _mann_memory, lambda run: _mann_memory(run, 1),
-             "`nt`, `ny`/`nz` or `pad_yz`", _mann_shared, _mann_shared_key, _mann_shared_bytes, out_of_core=True)
+MANN = Model("mann", MannRun, _run_mann, _mann("memory_estimate_bytes"), _mann("memory_estimate_bytes", 1),
+             "`nt`, `ny`/`nz` or `pad_yz`", _mann_shared, _mann("shared_stencil_key"), _mann("shared_stencil_nbytes"),
+             out_of_core=True)
 KAIMAL = Model("kaimal", KaimalRun, _run_kaimal, _kaimal_memory, _kaimal_least_memory,
                "`nt`, `ny`/`nz` or the number of planes", lambda run, threads, memory_bytes: None)
 
 
 class _Runners(Mapping):
-    """Model name -> :class:`Model`, over the declared models (turbgen.spec.models), each resolved when asked for."""
+    """Model name -> :class:`Model`, each resolved when asked for."""
 
     def __getitem__(self, name: str) -> Model:
         if name not in model_names():

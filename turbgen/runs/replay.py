@@ -1,13 +1,10 @@
-"""Replay a measured event (``turbgen mann --constrain DATA --fit``): the Mann model and the mean wind fitted to the
-sensors of DATA (turbgen.validation.fit), then the field conditioned on the same data with them.
+"""Replay a measured event (``turbgen mann --constrain DATA --fit``): the Mann model and mean wind fitted to DATA
+(turbgen.validation.fit), then the field conditioned on the same data with them.
 
-The fitted ae, L and Gamma (rounded to FIT_DIGITS significant digits, so that the last bits of a least-squares fit
-never change the field) replace the run file's and the preset's; typed ones are refused. The evolution time is not
-fitted by the one-point spectra: it stays the given or default one. Without a typed U the run's U is the fitted
-power law's speed at the hub (one height: the hub speed at which the file's own mean wind meets the data's mean u).
-Total-wind data lose the fitted profile and veer (instead of the file's or the default mean wind), and the store's
-``fit`` attribute records the fit, the data files' SHA-256 and the ``turbgen export`` options of that mean wind,
-which export uses when given none.
+The fitted ae, L and Gamma (rounded to FIT_DIGITS significant digits, so a fit's last bits never change the field)
+replace the run file's and preset's; typed ones are refused; the evolution time is not fitted. Without a typed U,
+U is the fitted hub speed. Total-wind data lose the fitted profile and veer; the store's ``fit`` attribute records
+the fit, the files' SHA-256 and the ``turbgen export`` options of that mean wind (export's default).
 """
 
 from __future__ import annotations
@@ -45,13 +42,7 @@ def _sha256(source: str) -> str | None:
 
 def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None) -> tuple[dict, list, dict]:
     """(the run mapping with the fitted parameters, the constraints with the fitted mean wind, the ``fit`` record).
-
-    Raises
-    ------
-    ParameterError
-        For other than one point-series file, a fit that is flagged (no convergence, a range boundary) and the
-        fit's own refusals (too short a record, fluctuation data without U).
-    """
+    ParameterError for other than one point-series file, a flagged fit and the fit's own refusals."""
     if len(constraints) != 1 or not isinstance(constraints[0], PointSeries):
         raise ParameterError(f"--fit (fit=True) fits one point-series file; got {len(constraints)} constraint "
                              "file(s) or a lidar record: fit them apart (turbgen fit mann) and give the values")
@@ -80,8 +71,7 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None) 
 
 
 def _hub_speed(ps: PointSeries, hub: float) -> float | None:
-    """The hub speed [m/s] at which the file's own mean wind (the profile not fitted: one height) meets the
-    sensors' mean u; None for fluctuation data."""
+    """The hub speed [m/s] at which the file's own mean wind meets the sensors' mean u (None: fluctuation data)."""
     if not ps.total_wind:
         return None
     s = [s for s in ps.sensors if "u" in s.series]

@@ -1,10 +1,5 @@
-"""File-backed spectrum buffer for Kaimal runs whose spectrum does not fit in memory.
-
-The generator puts the mixed spectrum frequency chunk by frequency chunk (all planes) and reads it
-back plane by plane; with this buffer both are contiguous reads and writes of an unlinked temporary
-file next to the output store, so memory holds one frequency chunk of all planes plus one plane's
-spectrum, whatever nt, the grid or the number of planes. Bins never put read back as zero.
-"""
+"""File-backed spectrum buffer for Kaimal runs whose spectrum does not fit in memory: an unlinked temporary file
+next to the store, written chunk by chunk and read plane by plane (unwritten bins read as zero)."""
 
 from __future__ import annotations
 

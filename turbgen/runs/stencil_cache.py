@@ -1,16 +1,12 @@
 """On-disk cache of ae-free Mann stencils (``turbgen mann --stencil-cache DIR``): one .npy per parameter set and box.
 
-A wrapper of synthesis.mann_stencil.build_stencil (the I/O it leaves out). The file name is the hash of everything
-the unit stencil depends on (synthesis.mann_stencil.stencil_key: all parameters but ae), so a cache entry can never
-serve another parameter set, and serves every ae (MannStencil.scaled). An entry ``mann-stencil-KEY.npy`` holds the
-four float64 factors and, for evolving fields, 1/tau_e as a fifth (float64) array; it is built straight into the
-file batch by batch (ordinary writes into reserved space, never a writable map) and read back memory-mapped, so
-the factors never have to be resident. Entries are written to a temporary name and renamed; an unreadable or
-mismatched entry is rebuilt and replaced; a full disk is a one-line ParameterError.
+The file name hashes all the unit stencil depends on (mann_stencil.stencil_key: all parameters but ae), so an entry
+serves every ae (MannStencil.scaled) and never another parameter set. ``mann-stencil-KEY.npy`` holds the four float64
+factors and, evolving, 1/tau_e; it is written batch by batch into reserved space (never a writable map), under a
+temporary name then renamed, and read back memory-mapped. A bad entry is rebuilt; a full disk is a ParameterError.
 
-The same directory keeps the per-frequency system S - R = H C H^T of constrained runs (:func:`cached_system`,
-``mann-stencil-system-KEY.npy``): it depends on the run's model and grid and on the measurement geometry, not on the
-seed or the data values, so every seed conditioned on the same measurements reads it instead of computing it again.
+The directory also keeps the system H C H^T of constrained runs (:func:`cached_system`), which depends on model,
+grid and measurement geometry but not on the seed or the data values.
 """
 
 from __future__ import annotations
@@ -40,25 +36,10 @@ from turbgen.theory.params import MannParams
 def cached_stencil(
     params: MannParams, box: BoxShape, cache_dir: str | Path, *, energy: str = "scaled", evolving: bool = True
 ) -> MannStencil:
-    """The stencil of ``params`` on ``box``, from the unit stencil read from ``cache_dir`` or built into it.
+    """The stencil of ``params`` on ``box`` from the unit stencil in ``cache_dir`` (read or built into it).
 
-    Parameters
-    ----------
-    params : MannParams
-        Mann parameters, ae [m^(4/3) s^-2] included (used only to scale).
-    box : BoxShape
-        The synthesis box.
-    cache_dir : str or pathlib.Path
-        The cache directory (created if missing).
-    energy : {"scaled", "unit"}
-        "unit": the unit stencil itself, its factors memory-mapped from the entry; "scaled": scaled to ae
-        (MannStencil.scaled), bit-identical to build_stencil(params, box).
-    evolving : bool
-        False: without 1/tau_e (single snapshots), a separate entry.
-
-    Returns
-    -------
-    MannStencil
+    ``energy`` "unit": the unit stencil, memory-mapped; "scaled": scaled to ``params.ae``, bit-identical to
+    build_stencil(params, box). ``evolving`` False: without 1/tau_e (single snapshots), a separate entry.
     """
     with_tau = evolving and params.evo_time_s is not None
     path = Path(cache_dir) / f"mann-stencil-{stencil_key(params, box, with_tau)}.npy"
@@ -82,12 +63,8 @@ ENTRY_BATCH_BYTES = 64 * 2**20  # an entry is built and written this many bytes 
 
 
 def _build_entry(params: MannParams, box: BoxShape, path: Path, shape: tuple, evolving: bool) -> None:
-    """Build the unit stencil into a temporary file next to ``path``, then rename it to ``path``.
-
-    Batches of k1 slabs are built in memory (build_stencil's ``slabs``: the same numbers as the whole stencil's)
-    and written with ordinary writes into a file whose space is reserved first: no writable map of a file that may
-    be sparse, which a full disk turns into SIGBUS. A full disk is a one-line ParameterError; nothing is left.
-    """
+    """Build the unit stencil batch by batch into a temporary file next to ``path`` (space reserved first: a
+    sparse writable map would turn a full disk into SIGBUS), then rename it; a full disk is a ParameterError."""
     path.parent.mkdir(parents=True, exist_ok=True)
     header = io.BytesIO()
     np.lib.format.write_array_header_2_0(header, {"descr": "<f8", "fortran_order": False, "shape": shape})
@@ -125,7 +102,7 @@ def _build_entry(params: MannParams, box: BoxShape, path: Path, shape: tuple, ev
 
 
 def _unit(params: MannParams, box: BoxShape, data: np.ndarray, with_tau: bool) -> MannStencil:
-    """The unit stencil of a mapped cache entry: factors (4, ...) float64 and 1/tau_e as float32 in memory."""
+    """The unit stencil of a mapped entry (1/tau_e as float32 in memory)."""
     inv_tau = data[4].astype(np.float32) if with_tau else None
     return MannStencil(params.with_ae(1.0), box, data[:4], inv_tau, None, None, energy="unit")
 
@@ -134,9 +111,8 @@ SYSTEM_VERSION = 1  # part of a system entry's key: change it when stream_covari
 
 
 def system_key(params: MannParams, box: BoxShape, with_tau: bool, times_s, arrays: dict) -> str:
-    """Hash of everything the system H C H^T of a constrained run depends on (cache file name): every parameter, ae
-    included, the box, the planes' relative times [s] and the streams' ``arrays`` (name -> array: planes, terms,
-    shifts, weights, decimation, offsets)."""
+    """Hash naming the system H C H^T of a constrained run: every parameter (ae included), the box, the planes'
+    relative times [s] and the streams' ``arrays``."""
     h = hashlib.sha256(json.dumps({"v": SYSTEM_VERSION, "params": asdict(params), "box": asdict(box),
                                    "tau": with_tau}, sort_keys=True).encode())  # fmt: skip
     for name, value in sorted({"times_s": np.asarray(times_s, dtype=np.float64), **arrays}.items()):
@@ -148,10 +124,8 @@ def system_key(params: MannParams, box: BoxShape, with_tau: bool, times_s, array
 
 def cached_system(cache_dir: str | Path, key: str, shape: tuple[int, ...], compute: Callable[[], np.ndarray]
                   ) -> np.ndarray:  # fmt: skip
-    """The system (complex128, ``shape``) of ``key`` read from ``cache_dir``, or ``compute()`` d and stored there
-    (a temporary name, then renamed; an unreadable or mismatched entry is computed again and replaced; a cache that
-    cannot keep it gives a RuntimeWarning). The entry holds exactly the computed array: a run reading it gets the
-    same bits as one computing it."""
+    """The system (complex128, ``shape``) of ``key`` read from ``cache_dir``, or ``compute()``-d and stored there
+    (temporary name, rename; a cache that cannot keep it only warns). The same bits either way."""
     path = Path(cache_dir) / f"mann-stencil-system-{key}.npy"
     try:
         data = np.load(path)

@@ -1,14 +1,8 @@
-"""Design-load-case sets: a DLC preset (turbgen.spec.dlc) run as one sweep, every field exported with its
-runner input files, and DIR/dlc_manifest.csv listing them for a load-case tool.
+"""Design-load-case sets: a DLC preset (turbgen.spec.dlc) run as one sweep, every field exported with its runner
+input files and listed in DIR/dlc_manifest.csv (columns: DLC_COLUMNS; TI = sigma1 / V_hub).
 
-    from turbgen.spec.dlc import DlcSet
-    from turbgen.sweep.dlc import make_dlc_plan, export_dlc
     plan = make_dlc_plan(DlcSet("1.2", "IIB"), out="dlc12", grid={"hub_height": 90})
-    result = run_sweep(plan)
-    manifest = export_dlc(plan, DlcSet("1.2", "IIB"), result)
-
-The manifest columns: file (the wind file, relative to DIR), inflowwind_file, dlc, class, V_hub_m_s, TI
-(the load case's sigma1 / V_hub), sigma1_m_s, seed, model, store.
+    manifest = export_dlc(plan, DlcSet("1.2", "IIB"), run_sweep(plan))
 """
 
 from __future__ import annotations
@@ -38,10 +32,8 @@ def make_dlc_plan(dlc: DlcSet, *, out, model: str = "kaimal", grid=None, chunk_t
                   workers: int | None = None, scheduler: str | None = None) -> SweepPlan:
     """The sweep of a DLC set: one run per speed and seed, named ``{model}_dlc1.2-IIB_U12_seed3``.
 
-    ``model``: "kaimal" (default; the standard's Annex C model) or "mann"; ``grid``: the sweep schema's grid
-    options; ``chunk_t``, ``workers``, ``scheduler`` as for :func:`turbgen.sweep.make_plan`. The plan's
-    ``presets`` holds the set's label. Raises ParameterError for an unknown model, bad grid options, an
-    unusable ``out`` or a run that needs more memory than is available here.
+    ``model``: "kaimal" (the standard's Annex C model) or "mann"; the other arguments as :func:`make_plan`'s.
+    ParameterError for an unknown model, bad grid options, an unusable ``out`` or a run over the memory here.
     """
     check_choice("model", model, tuple(MODELS))
     grid = check_grid_keys("grid", grid)
@@ -61,12 +53,8 @@ def make_dlc_plan(dlc: DlcSet, *, out, model: str = "kaimal", grid=None, chunk_t
 
 
 def export_dlc(plan: SweepPlan, dlc: DlcSet, result, fmt: str = "bts") -> Path:
-    """Export every complete field of the set to DIR/wind/ in ``fmt`` ("bts", "wnd" or "hawc2") with its runner
-    files and write DIR/dlc_manifest.csv; return its path.
-
-    An export whose files all exist is kept (the sweep is resumable); failed fields are left out of the
-    manifest (the sweep's manifest.csv says why). ParameterError for an unknown format or a failed export.
-    """
+    """Export every complete field to DIR/wind/ in ``fmt`` ("bts", "wnd", "hawc2") with its runner files and write
+    DIR/dlc_manifest.csv; return its path. Existing exports are kept (resumable); failed fields are left out."""
     check_choice("format", fmt, EXPORT_FORMATS)
     out = Path(plan.out)
     wind = out / WIND_DIR

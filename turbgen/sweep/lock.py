@@ -1,10 +1,7 @@
-"""A lock that keeps two sweeps from writing the same output directory (the ``filelock`` package).
+"""A lock keeping two sweeps from writing one output directory (``filelock``): ``DIR/.turbgen-sweep.lock``.
 
-``DIR/.turbgen-sweep.lock`` is an OS file lock (flock; filelock's soft lock where there is none), so a sweep
-that dies, even by SIGKILL, holds nothing any more. While held, the file names its owner's host, pid and
-start time (JSON) for the refusal message. On release it is removed while still held, so nothing is left
-behind; filelock itself never unlinks a Unix lock file because a *blocking* waiter could then lock the
-removed inode, but a SweepLock never waits (a second sweep is refused at once).
+An OS file lock, so a dead sweep (even SIGKILL) holds nothing; while held the file names its owner (host, pid,
+start) for the refusal. It is removed on release while still held, which is safe because a SweepLock never waits.
 """
 
 from __future__ import annotations
@@ -50,10 +47,7 @@ class SweepLock:
         return data if isinstance(data, dict) else {}
 
     def acquire(self) -> "SweepLock":
-        """Take the lock without waiting; return ``self``.
-
-        Raises SweepLockedError if another sweep (another process, or another SweepLock of this process) holds it.
-        """
+        """Take the lock without waiting; return ``self``. SweepLockedError if another sweep holds it."""
         try:
             self._lock.acquire()
         except Timeout:

@@ -1,9 +1,5 @@
-"""The sweep manifest: DIR/manifest.json and DIR/manifest.csv, one record per planned run (docs/sweep.md).
-
-Each record: name, model, preset, U_m_s, seed, path (relative to DIR), status ("pending", "complete",
-"failed"), action ("ran" in this invocation, "skipped" = an existing complete store was kept, "none"),
-duration_s, checksum, sigma_m_s, validation summary, lidar summary, error, parameters, finished_utc.
-"""
+"""The sweep manifest: DIR/manifest.json and DIR/manifest.csv, one record per planned run (fields: docs/sweep.md and
+state.base_record; status "pending" | "complete" | "failed", action "ran" | "skipped" | "none")."""
 
 from __future__ import annotations
 
@@ -20,28 +16,9 @@ from turbgen.store import open_store
 
 MANIFEST_JSON = "manifest.json"
 MANIFEST_CSV = "manifest.csv"
-CSV_COLUMNS = (
-    "name",
-    "model",
-    "preset",
-    "U_m_s",
-    "seed",
-    "status",
-    "action",
-    "duration_s",
-    "path",
-    "checksum",
-    "sigma_u_m_s",
-    "sigma_v_m_s",
-    "sigma_w_m_s",
-    "validation",
-    "lidar_k05_rad_m",
-    "lidar_cutoff_hz",
-    "lidar",
-    "error",
-    "finished_utc",
-    "parameters",
-)
+CSV_COLUMNS = ("name", "model", "preset", "U_m_s", "seed", "status", "action", "duration_s", "path", "checksum",
+               "sigma_u_m_s", "sigma_v_m_s", "sigma_w_m_s", "validation", "lidar_k05_rad_m", "lidar_cutoff_hz", "lidar",
+               "error", "finished_utc", "parameters")
 
 
 def utc_now() -> str:
@@ -50,11 +27,8 @@ def utc_now() -> str:
 
 
 def store_checksum(path: str | Path) -> str:
-    """'sha256:<64 hex digits>' of the u, v, w float32 data (planes in stored order, C order), not of the files.
-
-    Independent of chunking, compression and metadata, so two stores holding the same field have the same
-    checksum. Raises StoreError for an incomplete or unreadable store, or a chunk that is corrupted or not finite.
-    """
+    """'sha256:<hex>' of the u, v, w float32 data in stored order: the same for the same field whatever the chunking,
+    compression or metadata. StoreError for an incomplete, unreadable, corrupted or non-finite store."""
     fs = open_store(path)
     h = hashlib.sha256()
     for comp in ("u", "v", "w"):
@@ -78,33 +52,20 @@ def _csv_text(records: list[dict]) -> str:
     for r in records:
         sig = r.get("sigma_m_s") or [None, None, None]
         row = {k: r.get(k) for k in CSV_COLUMNS}
-        row.update(
-            sigma_u_m_s=sig[0],
-            sigma_v_m_s=sig[1],
-            sigma_w_m_s=sig[2],
-            validation=_validation_text(r.get("validation")),
-            lidar=_validation_text(r.get("lidar")),
-            lidar_k05_rad_m=((r.get("lidar") or {}).get("simulated") or {}).get("k05_rad_m"),
-            lidar_cutoff_hz=((r.get("lidar") or {}).get("simulated") or {}).get("cutoff_hz"),
-            parameters=json.dumps(r.get("parameters"), sort_keys=True),
-        )
+        simulated = (r.get("lidar") or {}).get("simulated") or {}
+        row.update(sigma_u_m_s=sig[0], sigma_v_m_s=sig[1], sigma_w_m_s=sig[2],
+                   validation=_validation_text(r.get("validation")), lidar=_validation_text(r.get("lidar")),
+                   lidar_k05_rad_m=simulated.get("k05_rad_m"), lidar_cutoff_hz=simulated.get("cutoff_hz"),
+                   parameters=json.dumps(r.get("parameters"), sort_keys=True))  # fmt: skip
         writer.writerow({k: ("" if v is None else v) for k, v in row.items()})
     return buf.getvalue()
 
 
 def write_manifest(directory: str | Path, sweep: dict, records: list[dict]) -> None:
-    """Write manifest.json, then manifest.csv, of ``records`` for the sweep definition ``sweep`` (each file whole
-    or not at all; OSError if one cannot be written).
-    """
+    """Write manifest.json, then manifest.csv, of ``records`` (each file whole or not at all)."""
     d = Path(directory)
     counts = {s: sum(r["status"] == s for r in records) for s in ("complete", "failed", "pending")}
-    doc = {
-        "turbgen_version": __version__,
-        "updated_utc": utc_now(),
-        "sweep": sweep,
-        "counts": counts,
-        "runs": records,
-    }
+    doc = {"turbgen_version": __version__, "updated_utc": utc_now(), "sweep": sweep, "counts": counts, "runs": records}
     write_file(d / MANIFEST_JSON, json.dumps(doc, indent=1, sort_keys=False) + "\n")
     write_file(d / MANIFEST_CSV, _csv_text(records))
 

@@ -1,9 +1,6 @@
-"""A sweep definition: models x presets x speeds x seeds on one grid, from a TOML/JSON file or options.
-
-The file format is ``turbgen/schemas/sweep.schema.json``. Every planned run is built from the same run
-mapping as ``turbgen mann|kaimal --preset P --U U --seed S``, so the sweep's store and the single run hold
-the same field. Store names: ``{model}_{preset}_U{U:g}_seed{seed}.zarr``.
-"""
+"""A sweep definition: models x presets x speeds x seeds on one grid, from a TOML/JSON file
+(``turbgen/schemas/sweep.schema.json``) or options. Each run is built as ``turbgen mann|kaimal --preset P --U U --seed S``
+builds it (the same field); stores are named ``{model}_{preset}_U{U:g}_seed{seed}.zarr``."""
 
 from __future__ import annotations
 
@@ -33,28 +30,10 @@ def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int
               *, user: Mapping[str, StabilityPreset] | None = None, spectrum=None):
     """The MannRun / KaimalRun of one preset run, exactly as ``turbgen mann|kaimal --preset`` builds it.
 
-    Parameters
-    ----------
-    model : {"mann", "kaimal"}
-        The model.
-    preset : str or StabilityPreset
-        Preset name (built-in or in ``user``) or the preset itself.
-    U_m_s : float
-        Mean wind speed [m/s], in [0.5, 100].
-    seed : int
-        Random seed, in [0, 2^63 - 1].
-    grid : Mapping, optional
-        Options with the sweep schema names (nt, dt [s], planes [m], ny, nz, dy [m], dz [m], hub_height [m]);
-        missing ones take the model's defaults (dz defaults to dy).
-    user : Mapping of str to StabilityPreset, optional
-        User presets.
-    spectrum : optional
-        The run's ``spectrum`` (a CSV path or a table, as ``turbgen kaimal --spectrum``) for a model that takes one.
-
-    Raises
-    ------
-    ParameterError
-        For an unknown model or preset, or a value outside its range.
+    ``model`` "mann" or "kaimal"; ``preset`` a name (built-in or in ``user``) or a StabilityPreset; ``U_m_s`` [m/s];
+    ``grid``: options with the sweep schema names (nt, dt [s], planes [m], ny, nz, dy [m], dz [m], hub_height [m]),
+    missing ones the model's defaults; ``spectrum``: the run's user spectrum (``turbgen kaimal --spectrum``) for a
+    model that takes one. ParameterError for an unknown model or preset, or a value outside its range.
     """
     spec = get_model(model).spec
     mapping = {"U_m_s": U_m_s, "seed": seed, **grid_mapping(grid)}
@@ -64,8 +43,7 @@ def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int
 
 
 def grid_mapping(grid: Mapping | None) -> dict:
-    """The run-mapping keys of sweep grid options: ``{"grid": {nt, dt_s, x_m, ...}}`` plus ``hub_height_m`` when given.
-    """
+    """The run-mapping keys of sweep grid options: ``{"grid": {nt, dt_s, x_m, ...}}`` (+ ``hub_height_m``)."""
     opts = dict(grid or {})
     g = {key: opts[name] for name, key in _GRID_NAMES.items() if name in opts}
     if "x_m" in g:
@@ -106,9 +84,7 @@ class PlannedRun:
 
 @dataclass(frozen=True)
 class SweepPlan:
-    """Validated sweep definition (built by :func:`make_plan`) and its runs: models x presets x speeds x seeds in
-    nested order. The fields are :func:`make_plan`'s arguments.
-    """
+    """Validated sweep definition (:func:`make_plan`'s arguments) and its runs, models x presets x speeds x seeds."""
 
     out: Path
     models: tuple[str, ...]
@@ -170,60 +146,22 @@ def check_grid_keys(where: str, opts: Mapping | None) -> dict:
     return opts
 
 
-def make_plan(
-    *,
-    out: str | Path,
-    models,
-    presets,
-    speeds,
-    seeds,
-    grid: Mapping | None = None,
-    model_grid: Mapping[str, Mapping] | None = None,
-    validate: bool = False,
-    chunk_t: int | None = None,
-    workers: int | None = None,
-    scheduler: str | None = None,
-    user_presets: Mapping[str, StabilityPreset] | None = None,
-    lidar: str | None = None,
-    constraints: ConstraintRequest | None = None,
-    spectrum: str | Path | None = None,
-) -> SweepPlan:
+def make_plan(*, out: str | Path, models, presets, speeds, seeds, grid: Mapping | None = None,
+              model_grid: Mapping[str, Mapping] | None = None, validate: bool = False, chunk_t: int | None = None,
+              workers: int | None = None, scheduler: str | None = None,
+              user_presets: Mapping[str, StabilityPreset] | None = None, lidar: str | None = None,
+              constraints: ConstraintRequest | None = None, spectrum: str | Path | None = None,
+) -> SweepPlan:  # fmt: skip
     """Check a sweep definition and build all its runs (ParameterError on the first bad value).
 
-    Parameters
-    ----------
-    out : str or Path
-        Output directory; it and missing parents are created when the sweep runs (checked here).
-    models, presets, speeds, seeds : iterable
-        Model names, preset names, mean wind speeds [m/s] in [0.5, 100], seeds in [0, 2^63 - 1]; each
-        non-empty, without duplicates, within turbgen.theory.ranges.LIMITS.
-    grid : Mapping, optional
-        Common grid options (sweep schema names, :func:`build_run`).
-    model_grid : Mapping, optional
-        Model name -> grid options overriding ``grid``.
-    validate : bool, optional
-        Validate every field.
-    chunk_t : int, optional
-        Time steps per chunk (>= 1).
-    workers : int, optional
-        LocalCluster workers, in [1, 256]; excludes ``scheduler``.
-    scheduler : str, optional
-        Address tcp://HOST:PORT of a running dask scheduler.
-    user_presets : Mapping, optional
-        User presets by name.
-    lidar : str, optional
-        Lidar preset or file run on every field.
-    constraints : ConstraintRequest, optional
-        Condition every (Mann) run on the same files; each run's data are placed on its grid here (a bad file
-        fails before any run) and its store name gets the digest of those data.
-    spectrum : str or Path, optional
-        User spectra CSV (f_hz, S_u, S_v, S_w) of the runs of every model that takes a ``spectrum`` (Kaimal).
-
-    Raises
-    ------
-    ParameterError
-        For any bad value, an unreachable scheduler, an unusable ``out``, duplicate store names, or a run
-        needing more memory than is available here (without a scheduler).
+    ``out``: the output directory (created when the sweep runs). ``models``, ``presets``, ``speeds`` [m/s], ``seeds``:
+    each non-empty, without duplicates, within turbgen.theory.ranges.LIMITS. ``grid``: common grid options
+    (:func:`build_run`), ``model_grid``: model name -> options overriding them. ``chunk_t``: time steps per chunk.
+    ``workers``: LocalCluster workers, excluding ``scheduler`` (tcp://HOST:PORT of a running dask scheduler).
+    ``lidar``: preset or file run on every field. ``constraints``: a ConstraintRequest conditioning every (Mann) run,
+    placed on each run's grid here (store names get the data's digest). ``spectrum``: user spectra CSV of the runs of
+    the models that take one. Also refused: an unreachable scheduler, an unusable ``out``, duplicate store names and,
+    without a scheduler, a run needing more memory than is available here.
     """
     user = dict(user_presets or {})
     models, presets = _check_models_presets(models, presets, user)
@@ -306,9 +244,8 @@ def _check_execution(out, chunk_t, workers, scheduler, lidar):
 
 
 def _planned_runs(models, presets, speeds, seeds, grid_options, user, table=None) -> list[PlannedRun]:
-    """Every run in nested order models x presets x speeds x seeds (``grid_options(model)``: its grid options;
-    ``table``: (f_hz, S) of a user spectrum for the models that take one).
-    """
+    """Every run in nested order models x presets x speeds x seeds (``grid_options(model)``; ``table``: a user
+    spectrum for the models that take one)."""
     runs = []
     for m in models:
         opts = grid_options(m)
@@ -340,21 +277,26 @@ def _check_runs(runs, speeds, chunk_t, lidar_description, *, local: bool) -> Non
         check_plan_memory(runs)
 
 
+def _distinct(runs):
+    """The runs, the first of those differing only in seed (which changes no memory)."""
+    seen = set()
+    for pr in runs:
+        if (key := replace(pr.run, seed=0)) not in seen:
+            seen.add(key)
+            yield pr
+
+
 def check_memory_budget(runs, memory_bytes: int | None, chunk_t: int | None = None) -> None:
-    """Refuse (one line, naming the run and the least budget it needs) a per-run budget ``memory_bytes``
-    (`turbgen sweep --memory`; None: no check) that a planned Mann run cannot be made within even out of core.
-    """
+    """Refuse a per-run budget ``memory_bytes`` (`turbgen sweep --memory`; None: no check) that a planned
+    Mann run cannot be made within even out of core."""
     if memory_bytes is None:
         return
     from turbgen.resources import format_bytes
     from turbgen.runs.mann_outofcore import least_budget_bytes
 
-    seen = set()
-    for pr in runs:
-        key = replace(pr.run, seed=0)  # the seed changes no memory
-        if not MODELS[pr.model].out_of_core or key in seen:
+    for pr in _distinct(runs):
+        if not MODELS[pr.model].out_of_core:
             continue
-        seen.add(key)
         need = least_budget_bytes(pr.run, chunk_t)
         if memory_bytes < need:
             raise ParameterError(
@@ -364,20 +306,13 @@ def check_memory_budget(runs, memory_bytes: int | None, chunk_t: int | None = No
 
 
 def check_plan_memory(runs) -> None:
-    """Refuse the sweep (one line, naming the run and what to lower) when a run's smallest footprint
-    (turbgen.runs.models) exceeds the memory available here; checked once per run apart from the seed.
-    """
+    """Refuse the sweep when a run's smallest footprint exceeds the memory available here."""
     from turbgen.resources import available_memory_bytes, format_bytes
 
     available = available_memory_bytes()
     if available is None:
         return
-    seen = set()
-    for pr in runs:
-        key = replace(pr.run, seed=0)  # the seed changes no memory
-        if key in seen:
-            continue
-        seen.add(key)
+    for pr in _distinct(runs):
         model = MODELS[pr.model]
         need = model.least_memory_bytes(pr.run)
         if need > available:

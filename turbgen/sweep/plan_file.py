@@ -16,10 +16,8 @@ from turbgen.theory import ranges
 
 
 def parse_seeds(value) -> list[int]:
-    """Sorted seeds of a list of ints or a text like '1-21' / '1-3,9' (ranges inclusive, merged).
-
-    Raises ParameterError for a range that runs backwards or more seeds than ``ranges.LIMITS["seeds"]``.
-    """
+    """Sorted seeds of a list of ints or a text like '1-21' / '1-3,9' (inclusive, merged); ParameterError for a
+    backward range or too many seeds."""
     if not isinstance(value, str):
         ranges.check_count("seeds", len(value))
         return sorted(value)
@@ -38,12 +36,9 @@ def parse_seeds(value) -> list[int]:
 
 
 def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides) -> SweepPlan:
-    """Plan from a sweep mapping (a file's content); non-None ``overrides`` (out, validate, workers, scheduler,
-    chunk_t) replace its values, a scheduler dropping the file's workers. Paths are relative to ``base_dir``.
-
-    Raises ParameterError if the mapping breaks the schema, a user preset is defined twice or invalid, no
-    ``out`` is given, or as :func:`make_plan`.
-    """
+    """Plan from a sweep mapping; non-None ``overrides`` (out, validate, workers, scheduler, chunk_t) replace its
+    values (a scheduler drops the file's workers); paths relative to ``base_dir``. ParameterError as :func:`make_plan`,
+    and for a schema violation, a user preset defined twice, or no ``out``."""
     check_mapping(data, "sweep", "sweep definition")
     base = Path(base_dir)
     user: dict[str, StabilityPreset] = {}

@@ -10,9 +10,8 @@ import numpy as np
 
 @dataclass
 class SweepResult:
-    """Records of every planned run (manifest order) and what this invocation did: the output directory, the
-    records, runs generated (``ran``) and kept (``skipped``), wall time [s], names of the runs not complete.
-    """
+    """Records of every planned run (manifest order) and what this invocation did: runs generated (``ran``) and kept
+    (``skipped``), wall time [s], names of the runs not complete."""
 
     out: Path
     records: list[dict]
@@ -38,25 +37,16 @@ class SweepResult:
 
 
 def summary_table(result: SweepResult) -> str:
-    """Plain-text table of every run (name, status, action, seconds, sigma_u, validation, error), then the
-    totals, failed validations, the lidar numbers (mean +- sd of k_0.5 [rad/m] and cut-off [Hz], with theory)
-    and failed lidar checks.
-    """
+    """Plain-text table of every run, then the totals, failed validations, the lidar numbers (mean +- sd of
+    k_0.5 [rad/m] and cut-off [Hz], with theory) and failed lidar checks."""
     rows = [("run", "status", "action", "seconds", "sigma_u", "validation", "error")]
     for r in result.records:
         sig = r.get("sigma_m_s") or [None]
         val = r.get("validation")
-        rows.append(
-            (
-                r["name"],
-                r["status"],
-                r["action"],
-                "" if r.get("duration_s") is None else f"{r['duration_s']:.1f}",
-                "" if sig[0] is None else f"{sig[0]:.3f}",
-                "" if val is None else ("pass" if val.get("passed") else "FAIL"),
-                (r.get("error") or "")[:70],
-            )
-        )
+        rows.append((r["name"], r["status"], r["action"],
+                     "" if r.get("duration_s") is None else f"{r['duration_s']:.1f}",
+                     "" if sig[0] is None else f"{sig[0]:.3f}",
+                     "" if val is None else ("pass" if val.get("passed") else "FAIL"), (r.get("error") or "")[:70]))
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     lines = ["  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip() for row in rows]
     lines.insert(1, "  ".join("-" * w for w in widths))

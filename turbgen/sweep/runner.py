@@ -1,17 +1,9 @@
 """Execute a sweep plan on dask.distributed: resumable, idempotent, one lock per output directory (docs/sweep.md).
 
-* A LocalCluster sized to the machine (one single-threaded worker process per core, at most one per run
-  and as many as fit in 80 % of the available memory) or an existing scheduler (its workers must see the
-  output directory at the same path).
-* Runs that share a part of their model (a Mann stencil, for runs differing only in seed or ae) get it
-  built once as a dask task and passed to each run task.
-* Before anything is submitted every planned store is inspected: complete stores with the planned
-  parameters are kept ("skipped"), incomplete ones regenerated, temporaries of dead writers removed; a
-  store with other parameters or grid refuses the sweep before anything is written.
-* A failing run is recorded with its error; the others continue. The manifest is rewritten atomically
-  after every finished run; records of earlier sweeps into the same directory are kept.
-* Ctrl-C, SIGTERM, SIGHUP: the local workers ignore them (the sweep shuts them down), pending runs are
-  re-inspected on disk, the manifest is saved and the interruption propagates.
+A LocalCluster sized to the machine (:func:`default_workers`) or an existing scheduler; parts shared between runs
+(a Mann stencil) built once as tasks. Every planned store is inspected first: complete ones kept, incomplete ones
+regenerated, one with other parameters refuses the sweep before anything is written. Failing runs are recorded, the
+manifest rewritten after each run. On Ctrl-C, SIGTERM, SIGHUP the manifest is saved and the interruption propagates.
 """
 
 from __future__ import annotations
@@ -87,18 +79,15 @@ DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 def _ignore_interrupts() -> None:
-    """Worker side (its main thread): ignore SIGINT, SIGTERM and SIGHUP (the sweep closes the workers) and drop
-    the heartbeat-failure traceback of a worker whose scheduler closes.
-    """
+    """Worker side: ignore SIGINT, SIGTERM and SIGHUP (the sweep closes the workers) and drop the heartbeat
+    failure traceback at shutdown."""
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, signal.SIG_IGN)
     logging.getLogger("distributed.worker").addFilter(_no_heartbeat_failure)
 
 
 def _no_heartbeat_failure(record: logging.LogRecord) -> bool:
-    """Logging filter of the workers: False for distributed's "Failed to communicate with scheduler during
-    heartbeat" (a traceback at an interrupted sweep's shutdown).
-    """
+    """Logging filter: False for distributed's heartbeat failure of a closing scheduler."""
     return not str(record.msg).startswith("Failed to communicate with scheduler during heartbeat")
 
 
@@ -130,39 +119,15 @@ def _settle_interrupted(plan: SweepPlan, records: dict) -> None:
 def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress: bool = True,
               threads: int | None = None, memory_bytes: int | None = None,
               stencil_cache: str | os.PathLike | None = None) -> SweepResult:
-    """Run every planned field that has no complete store yet; write DIR/manifest.{json,csv}.
+    """Run every planned field that has no complete store yet; write DIR/manifest.{json,csv}; return the SweepResult
+    (every run's record: failing runs are recorded, not raised).
 
-    Parameters
-    ----------
-    plan : SweepPlan
-        The checked sweep.
-    client : distributed.Client, optional
-        An existing client (otherwise from plan.scheduler, or a LocalCluster of plan.workers).
-    processes : bool, optional
-        Worker processes (default True) or threads for the sweep's own LocalCluster.
-    progress : bool, optional
-        Show progress (default True).
-    threads : int, optional
-        Threads of each run (default: cores / workers on the own LocalCluster, else all cores); never
-        changes the fields.
-    memory_bytes : int, optional
-        Memory budget of each run [bytes] (`--memory`): Mann runs that do not fit are made out of core.
-    stencil_cache : str or os.PathLike, optional
-        The constrained runs' stencil cache (`--stencil-cache`), shared by the seeds conditioned on the same
-        measurements; the workers must see it at the same path.
-
-    Returns
-    -------
-    SweepResult
-        Every run's record; failing runs are recorded, not raised.
-
-    Raises
-    ------
-    SweepLockedError
-        Before touching anything, when another sweep holds DIR.
-    ParameterError
-        If ``out`` cannot hold the sweep, a planned store exists with other parameters or grid (nothing run,
-        manifest unchanged), or the disk lacks space for the stores.
+    ``client``: an existing dask Client (default: from plan.scheduler, or a LocalCluster of plan.workers, worker
+    processes unless ``processes`` is False). ``threads``: threads of each run (default: cores / workers on the own
+    cluster); never changes the fields. ``memory_bytes``: each run's budget [B] (Mann runs over it go out of core).
+    ``stencil_cache``: the constrained runs' stencil cache (the workers must see it at the same path).
+    SweepLockedError when another sweep holds DIR; ParameterError if ``out`` cannot hold the sweep, a planned store
+    has other parameters (nothing run) or the disk lacks space for the stores.
     """
     t_start = time.perf_counter()
     out = plan.out

@@ -6,11 +6,10 @@ from turbgen.errors import ParameterError
 
 
 def check_scheduler_address(address: str, timeout_s: float = 3.0, connect: bool = True) -> str:
-    """``address`` if a dask scheduler answers there now: 'tcp://host:port' or tls:// (tcp:// assumed without a scheme).
+    """``address`` if a dask scheduler answers there now ('tcp://host:port' or tls://; tcp:// assumed).
 
-    Refuses malformed addresses, closed ports and other servers in one line (ParameterError) within
-    ``timeout_s`` [s] (dask itself retries for 30 s, then raises a traceback). ``connect`` False checks the form
-    only.
+    ParameterError in one line within ``timeout_s`` [s] for a malformed address, a closed port or another server (dask
+    itself retries 30 s, then raises a traceback); ``connect`` False checks the form only.
     """
     import socket
     from urllib.parse import urlsplit
@@ -37,8 +36,7 @@ def check_scheduler_address(address: str, timeout_s: float = 3.0, connect: bool 
 
 
 def _answers_as_scheduler(address: str, timeout_s: float) -> bool:
-    """True if a dask scheduler at ``address`` answers an identity request within ``timeout_s`` s
-    (any other server on an open port would keep dask's own connect waiting for 30 s)."""
+    """True if a dask scheduler at ``address`` answers an identity request within ``timeout_s`` [s]."""
     import asyncio
 
     from distributed.comm import connect

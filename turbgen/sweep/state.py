@@ -25,11 +25,8 @@ def _identity(model, attrs: dict, grid: dict) -> dict:
 
 
 def store_state(path: Path, pr: PlannedRun) -> tuple[str, str | None]:
-    """('absent' | 'incomplete' | 'mismatch' | 'complete', detail) of the store at ``path`` of planned run ``pr``.
-
-    The detail is a one-line store error or which keys differ from the plan's model, parameters and grid; None
-    when absent or complete.
-    """
+    """('absent' | 'incomplete' | 'mismatch' | 'complete', detail) of the store at ``path`` of ``pr``: a one-line
+    store error or the keys differing from the plan (None when absent or complete)."""
     if not path.exists():
         return "absent", None
     try:
@@ -52,31 +49,13 @@ def store_state(path: Path, pr: PlannedRun) -> tuple[str, str | None]:
 
 
 def remove_dead_temps(directory: Path, names) -> list[Path]:
-    """Remove the temporaries ('.NAME.tmp-PID-...') of stores ``names`` and of the manifests whose writer (on this
-    host) is dead; return them.
-    """
+    """Remove the temporaries of stores ``names`` and of the manifests whose writer is dead; return them."""
     return remove_dead_temporaries(directory, [*names, MANIFEST_JSON, MANIFEST_CSV])
 
 
 def base_record(pr: PlannedRun) -> dict:
-    """The manifest record of a planned run before it is inspected or run: status "pending", action "none", empty
-    results (turbgen.sweep.manifest).
-    """
-    return {
-        "name": pr.name,
-        "model": pr.model,
-        "preset": pr.preset,
-        "U_m_s": pr.U_m_s,
-        "seed": pr.seed,
-        "path": pr.store_name,
-        "status": "pending",
-        "action": "none",
-        "duration_s": None,
-        "checksum": None,
-        "sigma_m_s": None,
-        "validation": None,
-        "lidar": None,
-        "error": None,
-        "finished_utc": None,
-        "parameters": _norm(pr.run.to_attrs()["parameters"]),
-    }
+    """The manifest record of a planned run before it is inspected: status "pending", action "none", no results."""
+    empty = dict.fromkeys(("duration_s", "checksum", "sigma_m_s", "validation", "lidar", "error", "finished_utc"))
+    return {"name": pr.name, "model": pr.model, "preset": pr.preset, "U_m_s": pr.U_m_s, "seed": pr.seed,
+            "path": pr.store_name, "status": "pending", "action": "none", **empty,
+            "parameters": _norm(pr.run.to_attrs()["parameters"])}

@@ -17,34 +17,11 @@ from turbgen.sweep.manifest import store_checksum
 class RunTask:
     """What a worker needs for one run (``generate`` False: only checksum, validate, lidar an existing store).
 
-    Parameters
-    ----------
-    model : str
-        Model name (key of turbgen.runs.models.MODELS).
-    run : MannRun or KaimalRun
-        The run.
-    path : str
-        Store path.
-    overwrite : bool
-        Replace an incomplete store.
-    chunk_t : int or None
-        Time steps per chunk (None: the generator's default).
-    validate : bool
-        Run turbgen.validate on the store.
-    generate : bool, optional
-        Generate the field.
-    threads : int, optional
-        Threads of one run (None: os.cpu_count(); never changes the field).
-    memory_bytes : int, optional
-        Memory budget of one run [bytes]: a Mann run that does not fit goes out of core.
-    lidar : str, optional
-        Lidar preset or file to run on the field.
-    constraints : ConstraintRequest, optional
-        Condition the (Mann) field on these files (turbgen.runs.constrain).
-    cache_dir : str, optional
-        A constrained run's stencil cache.
-    fft_backend : str, optional
-        The run's FFT backend (None: the worker's current one).
+    model : key of turbgen.runs.models.MODELS. run : MannRun or KaimalRun. path : the store.
+    overwrite : replace an incomplete store. chunk_t : time steps per chunk (None: default). validate : run
+    turbgen.validate. threads : threads of the run (None: all cores). memory_bytes : the run's budget [B] (a Mann
+    run over it goes out of core). lidar : preset or file run on the field. constraints : a ConstraintRequest
+    (Mann). cache_dir : a constrained run's stencil cache. fft_backend : None: the worker's current one.
     """
 
     model: str
@@ -64,8 +41,7 @@ class RunTask:
 
 def validate_store(path: str, threads: int | None = None) -> dict:
     """Summary of turbgen.validate on one store: ``passed``, ``failed``, ``max_abs_z`` (metric -> [max |z|,
-    z_crit]) and ``seconds``; StoreError or ParameterError as the validator raises them.
-    """
+    z_crit]), ``seconds``."""
     from turbgen.validation import validate
 
     rep = validate(path, workers=threads)
@@ -78,9 +54,8 @@ def validate_store(path: str, threads: int | None = None) -> dict:
 
 
 def lidar_store(path: str, lidar: str) -> dict:
-    """Summary of the virtual lidar on one store: ``passed``, ``simulated`` and ``theory`` (k05_rad_m, d_eddy_min_m,
-    cutoff_hz), ``max_abs_z``, ``z_crit``; ParameterError for an unknown or unfitting lidar.
-    """
+    """Summary of the virtual lidar on one store: ``passed``, ``simulated``, ``theory``, ``max_abs_z``,
+    ``z_crit``."""
     from turbgen.virtual_lidar.report import lidar_report
     from turbgen.store import open_store
 
@@ -102,12 +77,8 @@ def _run_constrained(task: RunTask) -> dict:
 def execute_run(task: RunTask, shared=None) -> dict:
     """Worker side: generate one field, checksum it, optionally validate it and run the lidar. Never raises.
 
-    Returns
-    -------
-    dict
-        ``status`` ("complete" or "failed"), ``duration_s`` [s], and as available ``sigma_m_s`` [m/s],
-        ``checksum``, ``validation``, ``lidar`` and ``error`` (one line); a validator or lidar crash is
-        recorded in its entry and leaves the run complete.
+    Returns ``status`` ("complete" or "failed"), ``duration_s`` [s] and as available ``sigma_m_s`` [m/s],
+    ``checksum``, ``validation``, ``lidar`` and ``error`` (one line); a validator or lidar crash leaves the run complete.
     """
     t0 = time.perf_counter()
     out: dict = {"status": "failed"}
@@ -145,9 +116,8 @@ def _execute_run(task: RunTask, shared, out: dict) -> None:
 
 
 def task_bytes(task: RunTask) -> int:
-    """Peak memory [bytes] of one run with one thread (its generator's estimate, the shared Mann stencil included),
-    at most its budget when the run can be made out of core.
-    """
+    """Peak memory [B] of one run with one thread (the shared Mann stencil included), at most its budget for a run
+    that can go out of core."""
     model = MODELS[task.model]
     need = model.memory_bytes(task.run, 1)
     if task.generate and model.shared_part(task.run, task.threads, task.memory_bytes) is not None:

@@ -104,6 +104,15 @@ class InMemorySpectrum:
     def __init__(self, nx: int, nf: int, ny: int, nz: int):
         self.data = np.zeros((nx, nf, ny, nz), dtype=np.complex64)
 
+    @staticmethod
+    def bytes_needed(nx: int, nf: int, ny: int, nz: int) -> int:
+        """Bytes [B] of the buffer of this shape (its :attr:`nbytes`)."""
+        return nx * nf * ny * nz * np.dtype(np.complex64).itemsize
+
+    @property
+    def nbytes(self) -> int:
+        return self.data.nbytes
+
     def chunk(self, k0: int, k1: int) -> np.ndarray:
         """Where bins k0 .. k1 - 1 of all planes are made (nx, k1 - k0, ny, nz): a view of the buffer."""
         return self.data[:, k0:k1]
@@ -133,6 +142,15 @@ class PlaneRing:
         self.size = size
         self._planes: list[np.ndarray] = []
         self._count = 0
+
+    @staticmethod
+    def bytes_needed(nt: int, ny: int, nz: int, size: int) -> int:
+        """Bytes [B] of a ring of ``size`` planes (its :attr:`nbytes` once every plane is in use)."""
+        return size * nt * ny * nz * np.dtype(np.float32).itemsize
+
+    @property
+    def nbytes(self) -> int:
+        return sum(p.nbytes for p in self._planes)
 
     def touch(self) -> None:
         """Allocate every plane now and write it once (the first touch of fresh memory, in the caller's thread)."""

@@ -36,24 +36,12 @@ ROW_BLOCK = 64  # (y, z) rows per real inverse FFT along k1
 _ALIGN = 64
 _PAGE = 4096
 _SQRT_HALF = np.float32(np.sqrt(0.5))
+# float64 temporaries per point of a stencil computed on demand (slab_factors: 4 float64 arrays of a task's points)
+_COEF_TEMP_BYTES = 32
 
 
 def _padded_nk1(nk1: int) -> int:
     return -(-nk1 // 8) * 8  # rows of 8 complex64 = 64 bytes keep every row aligned
-
-
-def snapshot_memory_bytes(box: BoxShape, ny: int, nz: int, n_snapshots: int, threads: int, buffers: int = 1,
-                          coefficients: bool = False) -> int:  # fmt: skip
-    """Bytes allocated by the generator (stored stencil excluded): OU state, cropped spectra, output, scratch;
-    ``coefficients``: with the batches of a stencil computed on demand."""
-    slab = box.nyp * box.nzp
-    state = 3 * box.nk1 * slab * 8 if n_snapshots > 1 else 0
-    spectra = 3 * ny * nz * _padded_nk1(box.nk1) * 8
-    output = (1 if n_snapshots == 1 else buffers) * box.nt * ny * nz * 4  # output plane(s) (see _transform)
-    scratch = threads * (SLAB_BATCH * slab * (2 * 3 * 8 + 2 * 4) + 2 * ROW_BLOCK * (box.nt + 16) * 4)
-    if coefficients:
-        scratch += threads * TASK_SLABS * box.nk2_half * box.nzp * 48
-    return state + spectra + output + scratch
 
 
 def hermitian_complete(slab: np.ndarray) -> None:
@@ -74,15 +62,12 @@ class _Scratch:
 
     def __init__(self, box: BoxShape, nt: int, nz: int, n_slabs: int, backend: fft.FFTBackend,
                  coefficients: bool = False):  # fmt: skip
-        b, nyp, nzp = SLAB_BATCH, box.nyp, box.nzp
+        b = SLAB_BATCH
         self._fft = backend
-        _aligned = backend.empty
-        # a task's stencil coefficients, for a stencil computed on demand
-        self.coef = _aligned((4, TASK_SLABS, box.nk2_half, nzp), np.float32) if coefficients else None
-        self.noise = _aligned((b, 3, nyp, nzp), np.complex64)
-        self.uhat = _aligned((b, 3, nyp, nzp), np.complex64)
-        self.rho, self.sig = _aligned((2, b, box.nk2_half, nzp), np.float32)  # OU factors on the rows k2 >= 0
-        self.rows = _aligned((ROW_BLOCK, nt), np.float32)
+        self._shapes = shapes = self.shapes(box, nt, coefficients)
+        self.coef = backend.empty(*shapes["coef"]) if coefficients else None
+        self.noise, self.uhat, self.rows = (backend.empty(*shapes[k]) for k in ("noise", "uhat", "rows"))
+        self.rho, self.sig = backend.empty(*shapes["rho_sig"])
         self.staged = None  # rows re-strided for the transposing copy (allocated with the plans along k1)
         # pruned 2-D inverse transform: along z on all nyp rows, then along y only on the nz kept columns
         self._yz: dict[int, tuple[fft.Plan, fft.Plan]] = {}
@@ -90,6 +75,23 @@ class _Scratch:
             view, kept = self.uhat[:n], self.uhat[:n, :, :, :nz]
             self._yz[n] = (backend.plan("c2c_backward", view, view, 3), backend.plan("c2c_backward", kept, kept, 2))
         self._t: dict[int, fft.Plan] = {}
+
+    @staticmethod
+    def shapes(box: BoxShape, nt: int, coefficients: bool = False) -> dict:
+        """{name: (shape, dtype)} of a thread's arrays: a task's on-demand stencil coefficients, noise and u_hat of a
+        batch, the OU factors on the rows k2 >= 0, rows along k1 and their re-strided copy."""
+        slab = (SLAB_BATCH, 3, box.nyp, box.nzp)
+        shapes = {"noise": (slab, np.complex64), "uhat": (slab, np.complex64),
+                  "rho_sig": ((2, SLAB_BATCH, box.nk2_half, box.nzp), np.float32),
+                  "rows": ((ROW_BLOCK, nt), np.float32), "staged": ((ROW_BLOCK, nt + 16), np.float32)}
+        if coefficients:
+            shapes["coef"] = ((4, TASK_SLABS, box.nk2_half, box.nzp), np.float32)
+        return shapes
+
+    def arrays(self) -> list:
+        """The arrays this thread holds."""
+        return [a for a in (self.coef, self.noise, self.uhat, self.rho, self.sig, self.rows, self.staged)
+                if a is not None]
 
     def yz_transform(self, n: int) -> None:
         """Inverse transform of uhat[:n] over (k2, k3), exact on the kept columns z < nz only."""
@@ -100,7 +102,7 @@ class _Scratch:
     def plan_rows(self, spectra: np.ndarray) -> None:
         """Plans for blocks of ROW_BLOCK rows and for the last, shorter block of ``spectra`` (3, rows, nk1)."""
         rows = spectra.shape[1]
-        self.staged = self._fft.empty((ROW_BLOCK, self.rows.shape[1] + 16), np.float32)
+        self.staged = self._fft.empty(*self._shapes["staged"])
         for n in {min(ROW_BLOCK, rows), rows % ROW_BLOCK} - {0}:
             self._t[n] = self._fft.plan("c2r", spectra[0, :n], self.rows[:n], 1)
 
@@ -137,8 +139,37 @@ class MannSnapshots:
         self._outputs: list[np.ndarray] = []
         self._n_out = 0
         self._scratch: queue.SimpleQueue | None = None
+        self._scratches: list[_Scratch] = []
         # the cropped points y nz + z kept by :meth:`spectra` (None: all); such a generator yields no fields
         self._points = None if points is None else np.divmod(np.asarray(points, dtype=np.int64), nz)
+
+    @classmethod
+    def bytes_needed(cls, box: BoxShape, ny: int, nz: int, n_snapshots: int, threads: int, buffers: int = 1,
+                     coefficients: bool = False) -> int:  # fmt: skip
+        """Bytes [B] a whole-box generator allocates (:attr:`nbytes` once it has run; the stencil excluded): the
+        shapes of _allocate and _Scratch; ``coefficients`` (a stencil computed on demand) adds the float64
+        temporaries of computing them."""
+        def size(shape, dtype) -> int:
+            return int(np.prod(shape)) * np.dtype(dtype).itemsize
+
+        spectra = size((3, ny * nz, _padded_nk1(box.nk1)), np.complex64)
+        state = size((box.nk1, 3, box.nyp, box.nzp), np.complex64) if n_snapshots > 1 else 0
+        outputs = (1 if n_snapshots == 1 else min(max(buffers, 1), 2)) * size((box.nt, ny, nz), np.float32)
+        return spectra + state + outputs + threads * cls.thread_bytes(box, coefficients)
+
+    @staticmethod
+    def thread_bytes(box: BoxShape, coefficients: bool = False) -> int:
+        """Bytes [B] of one thread's buffers (_Scratch.shapes; ``coefficients``: with their float64 temporaries)."""
+        scratch = sum(int(np.prod(shape)) * np.dtype(dtype).itemsize
+                      for shape, dtype in _Scratch.shapes(box, box.nt, coefficients).values())  # fmt: skip
+        return scratch + (TASK_SLABS * box.nk2_half * box.nzp * _COEF_TEMP_BYTES if coefficients else 0)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes [B] of the arrays allocated so far (spectra, OU state, output planes, per-thread scratch)."""
+        arrays = [a for a in (self._spectra, self._state) if a is not None] + self._outputs
+        arrays += [a for s in self._scratches for a in s.arrays()]
+        return sum(a.nbytes for a in arrays)
 
     # -- public -------------------------------------------------------------------------
     def generate(self, seed: int | None, times_s, addend=None, target=None) -> Iterator[tuple[int, str, np.ndarray]]:
@@ -226,6 +257,7 @@ class MannSnapshots:
                 if whole:
                     scratch.plan_rows(self._spectra[:, :, : box.nk1])
                 self._scratch.put(scratch)
+                self._scratches.append(scratch)
         if n_snapshots > 1 and self._state is None:
             self._state = self._fft.empty((self._n_slabs, 3, box.nyp, box.nzp), np.complex64, _ALIGN)
 
