@@ -30,13 +30,14 @@ from turbgen.theory.kaimal import kaimal_band_variance
 from turbgen.theory.lattice import line_bands
 from turbgen.validation.fit.covariance import isserlis, separations
 from turbgen.validation.fit.data import FitData
-from turbgen.validation.fit.mann import MOVE_TOL, PASSES, Z95, _covariance
+from turbgen.validation.fit.mann import MOVE_TOL, Z95, _covariance
 from turbgen.validation.fit.result import FitValue
 from turbgen.validation.fit.spectra import estimate_bands
 from turbgen.validation.welch_kernel import WelchKernel
 
 IEC_COHERENCE = (12.0, 340.2)  # a [-], Lc = 8.1 Lambda1 [m] (IEC 61400-1, hub above 60 m): the starting weights
 START_L_M = 100.0
+PASSES = 12  # re-weighting passes: u's weights can make the passes alternate about the answer, closing slowly
 
 
 def gls(residual, covariance, x0, lo, hi) -> tuple:
