@@ -36,9 +36,9 @@ def truth(case: dict) -> dict:
             **{f"length_{c}_m": v for c, v in zip("uvw", p.length_scales_m)}, "a_yz": p.a_yz, "lc_m": p.lc_m}
 
 
-def run(n: int, seed0: int, out: str) -> None:
+def run(n: int, seed0: int, out: str, cases: list) -> None:
     with open(out, "a") as fh:
-        for name, case in CASES.items():
+        for name, case in ((c, CASES[c]) for c in cases):
             true = truth(case)
             for seed in range(seed0, seed0 + n):
                 ds = turbgen.kaimal(seed=seed, **case, **GRID).load()
@@ -80,6 +80,7 @@ if __name__ == "__main__":
     ap.add_argument("--n", type=int, default=60, help="realisations per case")
     ap.add_argument("--seed0", type=int, default=1000)
     ap.add_argument("--out", default="/tmp/fit_kaimal.jsonl")
+    ap.add_argument("--case", action="append", choices=list(CASES), help="run only these cases (default all)")
     ap.add_argument("--summary", help="print the table of a results file instead of running")
     a = ap.parse_args()
-    summary(a.summary) if a.summary else run(a.n, a.seed0, a.out)
+    summary(a.summary) if a.summary else run(a.n, a.seed0, a.out, a.case or list(CASES))

@@ -72,10 +72,15 @@ def fit_mann_command(ctx, data, U, nperseg, points, bootstrap, as_json, plots):
     from turbgen.api.fit import fit_mann
 
     result = fit_mann(data, U=U, nperseg=nperseg, points=[yz(p) for p in points] or None, bootstrap=bootstrap)
+    report(ctx, result, as_json, plots, PLOT_NAME)
+
+
+def report(ctx, result, as_json: bool, plots, name: str) -> None:
+    """Print a fit (JSON or its table), write its figure ``plots / name``, exit 2 with one line when flagged."""
     click.echo(json.dumps(result.to_dict()) if as_json else result.table())
     if plots is not None:
         plots.mkdir(parents=True, exist_ok=True)
-        result.plot(plots / PLOT_NAME)
+        result.plot(plots / name)
     if result.flags:
         click.echo(f"Error: the fit is not reliable: {'; '.join(result.flags)}", err=True)
         ctx.exit(2)

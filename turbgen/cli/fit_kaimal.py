@@ -3,12 +3,10 @@ the Mann model, ``turbgen.cli.theory.kaimal``, which this module gives the DATA 
 
 from __future__ import annotations
 
-import json
-
 import click
 from click.core import ParameterSource
 
-from turbgen.cli.fit_data import plots_dir, yz
+from turbgen.cli.fit_data import plots_dir, report, yz
 from turbgen.errors import ParameterError
 
 PLOT_NAME = "fit_kaimal.png"
@@ -53,13 +51,7 @@ def with_data(cmd: click.Command) -> click.Command:
 
         fit = fit_kaimal(data, U=opts["U"] if "U" in given else None, nperseg=nperseg,
                          points=[yz(p) for p in points] or None)
-        click.echo(json.dumps(fit.to_dict()) if opts["as_json"] else fit.table())
-        if plots is not None:
-            plots.mkdir(parents=True, exist_ok=True)
-            fit.plot(plots / PLOT_NAME)
-        if fit.flags:
-            click.echo(f"Error: the fit is not reliable: {'; '.join(fit.flags)}", err=True)
-            ctx.exit(2)
+        report(ctx, fit, opts["as_json"], plots, PLOT_NAME)
 
     cmd.callback, cmd.help = callback, (cmd.help or "") + DATA_HELP
     cmd.short_help = "Kaimal sigma_i, L_i and IEC a_yz, Lc fitted to the Mann model or to DATA."

@@ -160,7 +160,9 @@ def _lc_profile(prob: _Problem, x: np.ndarray, sd: float, lo, hi) -> tuple[FitVa
             t = step
         ends.append(end)
     note = None
-    if None in ends:
+    if ends == [None, None]:
+        note = "lc_m not identified: its 95 % interval covers its range"
+    elif None in ends:
         bound = f"lc_m > {ends[0]:.4g} m" if ends[1] is None else f"lc_m < {ends[1]:.4g} m"
         note = (f"lc_m not identified from {'above' if ends[1] is None else 'below'}: the coherence of the lowest "
                 f"bands does not fix it; {bound}")
