@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg import solve_triangular
@@ -34,6 +35,9 @@ from turbgen.validation.fit.mann import MOVE_TOL, Z95, _covariance
 from turbgen.validation.fit.result import FitValue
 from turbgen.validation.fit.spectra import estimate_bands
 from turbgen.validation.welch_kernel import WelchKernel
+
+if TYPE_CHECKING:
+    from turbgen.validation.fit.kaimal_result import KaimalFit
 
 IEC_COHERENCE = (12.0, 340.2)  # a [-], Lc = 8.1 Lambda1 [m] (IEC 61400-1, hub above 60 m): the starting weights
 START_L_M = 100.0
@@ -106,7 +110,8 @@ def _coherency(data: FitData, f_hz, coherence, white_vw: bool) -> tuple:
 
 
 def fit_spectrum(model: KaimalBands, c: str, x0, iss) -> tuple:
-    """(solution, covariance, converged) of component ``c``'s (ln sigma, ln L) (module docstring)."""
+    """(solution, covariance, converged, lower, upper bounds) of component ``c``'s (ln sigma, ln L) (module docstring;
+    ``iss``: the Isserlis terms of its points)."""
     s, b = c + c, model.bands
     ex = lambda x: model.expected(model.lines(math.exp(x[0]), math.exp(x[1])))  # noqa: E731
     r_s, r_l = ranges.RANGES["sigma_m_s"], ranges.RANGES["length_scales_m"]
@@ -115,7 +120,7 @@ def fit_spectrum(model: KaimalBands, c: str, x0, iss) -> tuple:
             lo, hi)
 
 
-def fit_kaimal_data(data: FitData, nperseg: int | None = None):
+def fit_kaimal_data(data: FitData, nperseg: int | None = None) -> KaimalFit:
     """Fit the Kaimal spectra and the u coherence to ``data`` (module docstring).
 
     Parameters
@@ -142,6 +147,9 @@ def fit_kaimal_data(data: FitData, nperseg: int | None = None):
     model = KaimalBands(bands, data.U_m_s)
     attrs = data.attrs or {}
     white_vw = attrs.get("model") == "kaimal" and attrs["parameters"].get("vw_coherence") == "white"
+    if attrs.get("model") == "kaimal" and attrs["parameters"].get("rescale"):
+        notes.append("the store's spectra were rescaled to their nominal sigma over the resolved band: the fitted "
+                     "sigma_k are those of the rescaled spectra")
 
     def component(c, coherence):
         geo = _coherency(data, bands.f_hz, coherence, white_vw)
