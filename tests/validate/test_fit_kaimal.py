@@ -121,7 +121,8 @@ def test_cli_json_plots_and_bad_input(fields, tmp_path):
     assert set(NAMES) <= set(out) and out["flags"] == []
     for n in NAMES:
         assert set(out[n]) == {"value", "ci95", "identified"} and out[n]["identified"]
-        assert out[n]["ci95"][0] < out[n]["value"] and (out[n]["ci95"][1] is None or out[n]["value"] < out[n]["ci95"][1])
+        lo, hi = out[n]["ci95"]
+        assert lo < out[n]["value"] and (hi is None or out[n]["value"] < hi)
     assert (tmp_path / "figs" / "fit_kaimal.png").read_bytes()[:4] == b"\x89PNG"
     t = np.arange(100) * 0.5
     path = tmp_path / "short.json"
