@@ -34,7 +34,7 @@ _INFO = ("info",)
 # public typed objects and functions of their own modules: name -> module
 _OBJECTS = {"MannParams": "turbgen.theory.params", "KaimalParams": "turbgen.theory.params", "Grid": "turbgen.grid",
             "MannGenerator": "turbgen.api.generator", "KaimalGenerator": "turbgen.api.generator",
-            "fit_mann": "turbgen.api.fit"}
+            "fit_mann": "turbgen.api.fit", "fit_kaimal": "turbgen.api.fit"}
 # what is made from a field (turbgen.api.products); the packages behind them are turbgen.validation,
 # turbgen.exporters and turbgen.virtual_lidar
 _PRODUCTS = ("validate", "export", "lidar")
@@ -45,7 +45,7 @@ if TYPE_CHECKING:
     from turbgen import errors, theory
     from turbgen.api.generator import KaimalGenerator, MannGenerator
     from turbgen.api.fields import kaimal, mann, open_store
-    from turbgen.api.fit import fit_mann
+    from turbgen.api.fit import fit_kaimal, fit_mann
     from turbgen.api.products import export, info, lidar, validate
     from turbgen.grid import Grid
     from turbgen.theory.params import KaimalParams, MannParams

@@ -1,4 +1,4 @@
-"""``turbgen.fit_mann``: the Mann model fitted to measured or generated data (``turbgen fit mann DATA``)."""
+"""``turbgen.fit_mann``, ``turbgen.fit_kaimal``: models fitted to measured or generated data (``turbgen fit ...``)."""
 
 from __future__ import annotations
 
@@ -13,6 +13,8 @@ from turbgen.exporters.field_files import FORMATS as WIND_FILES
 from turbgen.exporters.field_files import open_wind_file
 from turbgen.validation.fit import MannFit, fit_mann_data, load_fit_data
 from turbgen.validation.fit.evolution import with_evolution
+from turbgen.validation.fit.kaimal import fit_kaimal_data
+from turbgen.validation.fit.kaimal_result import KaimalFit
 from turbgen.validation.fit.mean_wind import fit_mean_wind
 
 
@@ -105,3 +107,38 @@ def bootstrap_sd(fit: MannFit, data, B: int, points=None) -> dict:
         xs.append([math.log(f.ae.value), math.log(f.length_scale_m.value), f.gamma.value])
     sd = np.std(np.array(xs), axis=0, ddof=1)
     return {"B": B, "sd": dict(zip(names, map(float, sd))), "sd_fit": {n: getattr(fit, n).sd_fit for n in names}}
+
+
+def fit_kaimal(data, *, U: float | None = None, nperseg: int | None = None, points=None) -> KaimalFit:
+    """Fit the IEC Kaimal model to ``data``: sigma_k [m/s], L_k [m] of the u, v, w spectra, a [-] and Lc [m] of the
+    u coherence exp(-a r sqrt((f/U)^2 + (0.12/Lc)^2)) (IEC 61400-1 Annex C; Guo et al. 2023, Eq. 11-12).
+
+    The Welch spectra of u, v, w are fitted by generalised least squares with each band's weight from the
+    estimator's covariance; a and Lc to the u co-coherence between sensors at one x, apart in y or z (not identified
+    with one sensor). 95 % intervals from the fits' covariances (turbgen.validation.fit.kaimal).
+
+    Parameters
+    ----------
+    data, U, nperseg, points
+        As :func:`fit_mann` (a store with several planes: its first plane).
+
+    Returns
+    -------
+    turbgen.validation.fit.kaimal_result.KaimalFit
+        ``values`` (name -> ``value``, ``ci95``; a name missing is not identified), ``chi2_dof``, ``flags`` (``ok``
+        False), ``notes``, ``to_dict()``, ``table()``, ``plot(path)``.
+
+    Raises
+    ------
+    ParameterError, StoreError
+        As :func:`fit_mann`.
+
+    Examples
+    --------
+    >>> import turbgen
+    >>> ds = turbgen.kaimal(U=10, nt=2048, ny=4, nz=4, dy=12, dz=12, planes=[0], seed=1)  # doctest: +SKIP
+    >>> fit = turbgen.fit_kaimal(ds, points=[(-6, z) for z in (-18, -6, 6, 18)])  # doctest: +SKIP
+    >>> fit.values["length_u_m"].ci95, fit.values["a_yz"].value  # doctest: +SKIP
+    """
+    return fit_kaimal_data(load_fit_data(os.fspath(data) if isinstance(data, os.PathLike) else data, U, points),
+                           nperseg)

@@ -11,21 +11,26 @@ from turbgen.errors import ParameterError
 PLOT_NAME = "fit_mann.png"
 
 
-def _plots_dir(ctx, param, value):
-    """--plots: a directory that can be made, without an existing plot unless --overwrite (checked first)."""
-    if value is None:
-        return None
-    from turbgen.store.paths import check_output_path
+def plots_dir(name: str, meta_key: str):
+    """--plots callback: a directory that can be made, without an existing ``name`` unless --overwrite (recorded in
+    ``ctx.meta[meta_key]``), checked before the fit."""
 
-    p = check_output_path(value, "--plots", create_parents=True)
-    if p.exists() and not p.is_dir():
-        raise ParameterError(f"--plots = {value!r} is a file, not a directory")
-    if (p / PLOT_NAME).exists() and not ctx.meta.get("fit_overwrite"):
-        raise ParameterError(f"--plots = {value!r} holds {PLOT_NAME}; pass --overwrite to replace it")
-    return p
+    def check(ctx, param, value):
+        if value is None:
+            return None
+        from turbgen.store.paths import check_output_path
+
+        p = check_output_path(value, "--plots", create_parents=True)
+        if p.exists() and not p.is_dir():
+            raise ParameterError(f"--plots = {value!r} is a file, not a directory")
+        if (p / name).exists() and not ctx.meta.get(meta_key):
+            raise ParameterError(f"--plots = {value!r} holds {name}; pass --overwrite to replace it")
+        return p
+
+    return check
 
 
-def _yz(text: str) -> tuple[float, float]:
+def yz(text: str) -> tuple[float, float]:
     """(y, z) [m] of a --point "Y,Z"."""
     try:
         y, z = (float(v) for v in text.split(","))
@@ -51,7 +56,7 @@ def _remember_overwrite(ctx, param, value):
               help="For a store: refit B fields made at the fitted parameters and print the bootstrap sd beside "
                    "the analytic one (default 0: off).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON: {name: {value, ci95, held}}, chi2_dof, flags, ...")
-@click.option("--plots", "plots", type=click.Path(), default=None, callback=_plots_dir,
+@click.option("--plots", "plots", type=click.Path(), default=None, callback=plots_dir(PLOT_NAME, "fit_overwrite"),
               help=f"Directory for {PLOT_NAME}: the band spectra with 95 % bars and the fitted model.")
 @click.option("--overwrite", is_flag=True, is_eager=True, expose_value=False, callback=_remember_overwrite,
               help=f"Replace an existing {PLOT_NAME} in --plots.")
@@ -67,11 +72,16 @@ def fit_mann_command(ctx, data, U, nperseg, points, bootstrap, as_json, plots):
     """
     from turbgen.api.fit import fit_mann
 
-    result = fit_mann(data, U=U, nperseg=nperseg, points=[_yz(p) for p in points] or None, bootstrap=bootstrap)
+    result = fit_mann(data, U=U, nperseg=nperseg, points=[yz(p) for p in points] or None, bootstrap=bootstrap)
+    report(ctx, result, as_json, plots, PLOT_NAME)
+
+
+def report(ctx, result, as_json: bool, plots, name: str) -> None:
+    """Print a fit (JSON or its table), write its figure ``plots / name``, exit 2 with one line when flagged."""
     click.echo(json.dumps(result.to_dict()) if as_json else result.table())
     if plots is not None:
         plots.mkdir(parents=True, exist_ok=True)
-        result.plot(plots / PLOT_NAME)
+        result.plot(plots / name)
     if result.flags:
         click.echo(f"Error: the fit is not reliable: {'; '.join(result.flags)}", err=True)
         ctx.exit(2)

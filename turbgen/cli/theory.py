@@ -289,10 +289,12 @@ def evolution(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_
 
 def _attach_subcommands():
     from turbgen.cli.fit_data import fit_mann_command
+    from turbgen.cli.fit_kaimal import with_data
     from turbgen.cli.theory_lidar import lidar_theory
 
     theory.add_command(lidar_theory)
     fit.add_command(fit_mann_command)
+    with_data(kaimal)
 
 
 _attach_subcommands()

@@ -57,6 +57,8 @@ class FitData:
         Component -> (P,) index into ``sites_m`` of each column of ``series`` (the covariance of point averages).
     u_xyz_m : tuple
         (x [m upstream], y [m], z [m]) of every column of u (the longitudinal coherence: ``fit.evolution``).
+    attrs : dict or None
+        A field's store attributes (its model and parameters), None for sensor data.
     """
 
     source: str
@@ -71,6 +73,7 @@ class FitData:
     sites_m: np.ndarray | None = None
     columns: dict | None = None
     u_xyz_m: tuple = ()
+    attrs: dict | None = None
 
     @property
     def nt(self) -> int:
@@ -212,7 +215,7 @@ def _grid_data(read, grid, attrs: dict, source: str, points=None) -> FitData:
         source += f" at {iy.size} point(s) (y, z) = " + ", ".join(f"({y:g}, {z:g})" for y, z in
                                                                   zip(g.y()[iy], g.z()[iz]))
     return FitData(source, g.dt_s, float(attrs["U_m_s"]), series, tuple((k, k) for k in range(n)), box, g,
-                   sites_m=sites, columns=cols, u_xyz_m=tuple(map(tuple, sites)))
+                   sites_m=sites, columns=cols, u_xyz_m=tuple(map(tuple, sites)), attrs=dict(attrs))
 
 
 def load_fit_data(data, U_m_s: float | None = None, points=None) -> FitData:
