@@ -64,3 +64,10 @@ def test_bad_wind_files_are_one_line(exported, tmp_path):
             open_wind_file(path)
     with pytest.raises(ParameterError, match="must end in .bts or .htc"):
         open_wind_file(tmp_path / "f.wnd")
+
+
+def test_fit_kaimal_reads_a_bts(exported):
+    """fit_kaimal takes the same wind files: the .bts of the field gives the fit of the field read back from it."""
+    ds, _, bts = exported
+    a, b = turbgen.fit_kaimal(open_wind_file(bts)), turbgen.fit_kaimal(bts)
+    assert a.to_dict() == b.to_dict()

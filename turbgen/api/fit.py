@@ -69,10 +69,7 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     >>> fit = turbgen.fit_mann("examples/mast-fit.json")  # doctest: +SKIP
     >>> fit.length_scale_m.value, fit.length_scale_m.ci95  # doctest: +SKIP
     """
-    if isinstance(data, os.PathLike):
-        data = os.fspath(data)
-    if isinstance(data, str) and os.path.splitext(data)[1].lower() in WIND_FILES:
-        data = open_wind_file(data)
+    data = _opened(data)
     if bootstrap and (isinstance(bootstrap, bool) or not isinstance(bootstrap, int) or bootstrap < 2):
         raise ParameterError(f"bootstrap = {bootstrap!r} must be an integer >= 2 (realisations), or 0 for none")
     fd = load_fit_data(data, U, points)
@@ -109,6 +106,15 @@ def bootstrap_sd(fit: MannFit, data, B: int, points=None) -> dict:
     return {"B": B, "sd": dict(zip(names, map(float, sd))), "sd_fit": {n: getattr(fit, n).sd_fit for n in names}}
 
 
+def _opened(data):
+    """``data`` with a path as a str, and a .bts or HAWC2 .htc opened as a field (turbgen.exporters.field_files)."""
+    if isinstance(data, os.PathLike):
+        data = os.fspath(data)
+    if isinstance(data, str) and os.path.splitext(data)[1].lower() in WIND_FILES:
+        return open_wind_file(data)
+    return data
+
+
 def fit_kaimal(data, *, U: float | None = None, nperseg: int | None = None, points=None) -> KaimalFit:
     """Fit the IEC Kaimal model to ``data``: sigma_k [m/s], L_k [m] of the u, v, w spectra, a [-] and Lc [m] of the
     u coherence exp(-a r sqrt((f/U)^2 + (0.12/Lc)^2)) (IEC 61400-1 Annex C; Guo et al. 2023, Eq. 11-12).
@@ -140,5 +146,5 @@ def fit_kaimal(data, *, U: float | None = None, nperseg: int | None = None, poin
     >>> fit = turbgen.fit_kaimal(ds, points=[(-6, z) for z in (-18, -6, 6, 18)])  # doctest: +SKIP
     >>> fit.values["length_u_m"].ci95, fit.values["a_yz"].value  # doctest: +SKIP
     """
-    return fit_kaimal_data(load_fit_data(os.fspath(data) if isinstance(data, os.PathLike) else data, U, points),
+    return fit_kaimal_data(load_fit_data(_opened(data), U, points),
                            nperseg)
