@@ -31,30 +31,10 @@ __all__ = ["EXPORTERS", "ExportRequest", "ExportResult", "export_store", "read_b
 
 
 def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> ExportResult:
-    """Export ``store`` (a path or an open FieldStore) in format ``fmt`` to ``out``.
-
-    Parameters
-    ----------
-    store : str, os.PathLike or FieldStore
-        The store or its path.
-    fmt : str
-        One of "bts", "wnd", "evo", "hawc2", "mt4d", "hdf5".
-    out : str or os.PathLike
-        The output file, or ROOT for the multi-file formats (wnd, evo, hawc2).
-    request : ExportRequest, optional
-        Export options; default ``ExportRequest()``.
-
-    Returns
-    -------
-    ExportResult
-
-    Raises
-    ------
-    ParameterError
-        For an unknown format, options it does not use, a bad ``out``, too little disk, an existing output
-        without ``request.overwrite``, a grid reaching the ground.
-    StoreError
-        For a missing or incomplete store.
+    """Export ``store`` (a path or an open FieldStore) in format ``fmt`` to ``out`` (ROOT for wnd, evo, hawc2) with
+    ``request`` (default ``ExportRequest()``): the engine of :func:`turbgen.export`, which documents the errors.
+    ParameterError for an unknown format, options it does not use, a bad ``out``, too little disk, an existing
+    output without ``request.overwrite``; StoreError for a missing or incomplete store.
     """
     check_choice("format", fmt, tuple(EXPORTERS))
     if isinstance(out, str) and out.endswith(("/", os.sep)):

@@ -73,15 +73,8 @@ def write_bts(path, plane: Plane, *, dy_m, dz_m, dt_s, U_m_s, hub_height_m, bott
 
 
 def read_bts(path) -> dict:
-    """Read a ``.bts`` back as velocities.
-
-    Returns
-    -------
-    dict
-        u, v, w (nt, ny, nz) [m/s]; y (ny,) [m] (centred on 0), z (nz,) absolute heights [m]; dt_s [s],
-        U_m_s [m/s], hub_height_m [m], periodic (header ID 8), id (the header ID), description, tower_z (ntwr,)
-        [m], tower_u/v/w (nt, ntwr) [m/s].
-    """
+    """Read a ``.bts`` back: u, v, w (nt, ny, nz) [m/s]; y (ny,) [m] centred, z (nz,) heights [m]; dt_s [s], U_m_s
+    [m/s], hub_height_m [m], periodic, id, description, tower_z (ntwr,) [m], tower_u/v/w (nt, ntwr) [m/s]."""
     raw = Path(path).read_bytes()
     (ident, nz, ny, ntwr, nt, dz, dy, dt, uhub, zhub, zbot, *rest) = _HEADER.unpack_from(raw, 0)
     scaling, nchar = rest[:6], rest[6]

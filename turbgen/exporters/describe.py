@@ -15,13 +15,8 @@ SUFFIXES = (".bts", ".dat", ".sum")
 
 
 def file_summary(path) -> list[tuple[str, str]]:
-    """(label, text) rows describing an exported ``.bts``, InflowWind ``.dat`` or ``.sum`` file.
-
-    Raises
-    ------
-    ParameterError
-        When the file cannot be read, has another suffix, or is not a .bts / InflowWind input file / .sum.
-    """
+    """(label, text) rows describing an exported ``.bts``, InflowWind ``.dat`` or ``.sum`` file (ParameterError for
+    an unreadable file or another kind)."""
     p = Path(path)
     try:
         if p.suffix.lower() == ".bts":

@@ -20,22 +20,10 @@ WIND_TYPES = {2: "uniform wind file", 3: "TurbSim binary .bts", 4: "Bladed-style
 class InflowWindInput:
     """What an InflowWind v5 input file says (the keys of the section its WindType uses).
 
-    Parameters
-    ----------
-    wind_type : int
-        2 (uniform), 3 (.bts), 4 (.wnd + .sum) or 5 (HAWC).
-    ref_height_m : float
-        Hub (reference) height [m]: RefHt, RefHt_Uni and the output point.
-    U_m_s : float
-        Mean hub speed [m/s] (HWindSpeed of the unused steady section, URef of HAWC).
-    files : dict
-        Key -> path of the wind files (FileName_Uni, FileName_BTS, FilenameRoot, FileName_u/v/w).
-    hawc : dict, optional
-        HAWC keys nx, ny, nz, dx, dy, dz, RefHt_HAWC, PLExp_HAWC (WindType 5).
-    ref_length_m : float
-        RefLength [m] of a uniform wind file.
-    title : str
-        Second line of the file (free text).
+    ``wind_type`` 2 (uniform), 3 (.bts), 4 (.wnd + .sum) or 5 (HAWC); ``ref_height_m`` hub height [m] (RefHt,
+    RefHt_Uni, the output point); ``U_m_s`` mean hub speed [m/s]; ``files`` key -> path of the wind files
+    (FileName_BTS, ...); ``hawc`` the HAWC keys (nx, ..., PLExp_HAWC); ``ref_length_m`` RefLength [m] of a
+    uniform wind file; ``title`` the second line.
     """
 
     wind_type: int

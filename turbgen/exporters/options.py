@@ -18,12 +18,8 @@ class ExportOptions:
 
     Parameters
     ----------
-    plane : int, optional
-        Plane index (default: the rotor plane).
-    hub_height_m : float, optional
-        Hub height [m] (default: the store's).
-    shear_exponent : float, optional
-        Power-law alpha [-].
+    plane, hub_height_m, shear_exponent, tower, periodic, drop_below_ground, overwrite, runner_files
+        As :class:`turbgen.exporters.ExportRequest` (``runner_files`` default True here).
     profile : str, optional
         ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE`` (inline: ``table:z,U[,dir];...``).
     veer_deg_per_m : float, optional
@@ -33,10 +29,6 @@ class ExportOptions:
     transient : str, optional
         IEC transient: EOG, EDC, ECD, EWS-V or EWS-H, with ``iec_class`` (e.g. "IIB"), ``rotor_diameter_m`` [m],
         ``transient_start_s`` (when it reaches the turbine [s], default 10) and ``transient_sign`` ("+" or "-").
-    tower, periodic, drop_below_ground, overwrite : bool
-        As :class:`turbgen.exporters.ExportRequest`.
-    runner_files : bool
-        Write the runners' input files for bts, wnd, evo, hawc2 (default True).
     """
 
     plane: int | None = None

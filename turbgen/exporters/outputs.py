@@ -24,25 +24,9 @@ class OutputSet:
     """Context manager handing out temporary paths for a set of final paths.
 
     ``with OutputSet([a, b], overwrite=False) as out: write(out.temp(a)); write(out.temp(b))``: on a normal
-    exit every temporary is renamed to its final path; on an exception (or a temporary not written) all are
-    removed and the final paths untouched.
-
-    Parameters
-    ----------
-    paths : iterable of str or os.PathLike
-        The final output paths (distinct).
-    overwrite : bool
-        Allow replacing existing outputs.
-    need_bytes : int, optional
-        Disk space the outputs need [bytes], checked against the free space when given.
-
-    Raises
-    ------
-    ParameterError
-        At construction for a bad, existing (without ``overwrite``) or unwritable output or too little disk; on
-        exit for a file-system error, as one line.
-    RuntimeError
-        On exit, when the exporter did not write the temporary of every path.
+    exit every temporary is renamed to its final path; on an exception all are removed, the final paths untouched
+    (RuntimeError if a temporary was not written). ``need_bytes``: disk space checked when given. ParameterError
+    for a bad, existing (without ``overwrite``) or unwritable output, too little disk, or a file-system error.
     """
 
     def __init__(self, paths, *, overwrite: bool, need_bytes: int | None = None):

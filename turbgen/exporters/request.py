@@ -21,12 +21,9 @@ class ExportRequest:
 
     Parameters
     ----------
-    plane : int, optional
-        Index into the store's planes (None = the rotor plane, x = 0).
-    hub_height_m : float, optional
-        Overrides the store's hub height [m], in [1, 1000].
-    shear_exponent : float, optional
-        Power-law alpha [-]; None: ``DEFAULT_SHEAR_EXPONENT``. Refused by formats without a mean profile.
+    plane, hub_height_m, shear_exponent : optional
+        Plane index (None: the rotor plane, x = 0); hub height [m] in [1, 1000] (None: the store's); power-law
+        alpha [-] (None: ``DEFAULT_SHEAR_EXPONENT``; refused by formats without a mean profile).
     tower, periodic, drop_below_ground, overwrite : bool, optional
         Add .bts tower points; flag the file periodic in time (default True); drop rows at or below the ground
         instead of refusing; replace existing outputs.

@@ -55,27 +55,9 @@ class VerticalLayout:
 
 def vertical_layout(grid: Grid, hub_height_m, shear_exponent=DEFAULT_SHEAR_EXPONENT,
                     *, drop_below_ground: bool = False, mean_wind: MeanWind | None = None) -> VerticalLayout:
-    """Check ``grid`` (z relative to the hub) against the ground and return the rows to export.
-
-    Parameters
-    ----------
-    grid : Grid
-        The store grid.
-    hub_height_m : float
-        Hub height [m], > 0.
-    shear_exponent : float, optional
-        Power-law exponent alpha [-] in [-1, 1]; default ``DEFAULT_SHEAR_EXPONENT`` (0.2).
-    drop_below_ground : bool, optional
-        Drop the rows at or below the ground (h <= 0) instead of refusing the grid.
-    mean_wind : MeanWind, optional
-        Profile, veer and history (replaces ``shear_exponent``); checked against the kept heights.
-
-    Raises
-    ------
-    ParameterError
-        For a bad hub height or exponent, a grid reaching the ground without ``drop_below_ground``, or kept
-        heights the profile does not cover.
-    """
+    """Check ``grid`` (z relative to the hub) at ``hub_height_m`` [m] against the ground; the rows to export with
+    the power law of ``shear_exponent`` [-] or ``mean_wind``. ``drop_below_ground``: drop the rows at h <= 0
+    instead of refusing (ParameterError), as for heights the profile does not cover."""
     hub = check_positive("hub height (m)", hub_height_m)
     wind = mean_wind if mean_wind is not None else MeanWind(shear_exponent=shear_exponent)
     heights = hub + grid.z()

@@ -38,19 +38,8 @@ def _defuse(title: str) -> str:
 
 
 def read_sum(path) -> dict:
-    """Parse a ``.sum`` as InflowWind does (keys in order).
-
-    Returns
-    -------
-    dict
-        clockwise (bool), hub_height_m [m], U_m_s [m/s], ti_percent (3 floats) [%], height_offset_m [m] (0 when
-        absent), periodic (bool).
-
-    Raises
-    ------
-    IndexError, ValueError, AttributeError
-        When a key is missing or its value is malformed.
-    """
+    """Parse a ``.sum`` as InflowWind does (keys in order): clockwise, hub_height_m [m], U_m_s [m/s], ti_percent
+    (3) [%], height_offset_m [m] (0 when absent), periodic; IndexError/ValueError for a missing or malformed key."""
     lines = Path(path).read_text().upper().splitlines()
     out = {"clockwise": False, "height_offset_m": 0.0, "periodic": False}
     i = 0

@@ -15,14 +15,8 @@ BODY_TIMEOUT_S = 10.0  # a request body (at most MAX_BODY_BYTES) must arrive wit
 async def read_json(request: Request):
     """The request body parsed as JSON, at most MAX_BODY_BYTES.
 
-    Only ``Content-Type: application/json``: any web page can POST a form or text/plain to a token-less loopback
-    server without a CORS preflight; a JSON body needs the preflight, which this server never grants.
-
-    Raises
-    ------
-    LimitError
-        415 for another content type, 413 for a body over MAX_BODY_BYTES, 408 for a body not received within
-        BODY_TIMEOUT_S, 422 for invalid or too deeply nested JSON.
+    Only ``Content-Type: application/json``: a form or text/plain needs no CORS preflight (any web page could post
+    it); JSON needs one, never granted. LimitError 415, 413, 408 (BODY_TIMEOUT_S) or 422 (invalid, too deep).
     """
     media = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if media != "application/json":

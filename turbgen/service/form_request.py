@@ -33,12 +33,8 @@ def _numbers(field: Field, text: str, count: int | None, limit: int) -> list[flo
 
 
 def parse_value(field: Field, text: str):
-    """The value of ``field`` typed as ``text`` (stripped, not empty), as the request body holds it.
-
-    A number, a string, a bool, a list of numbers (``planes``; ``gates``: their plane positions with the rotor 0
-    first), a list of upload ids (``constrain``) or None for a frozen ``evo``. ParameterError naming the field for
-    text not of its kind.
-    """
+    """The value of ``field`` typed as ``text`` (stripped, not empty), as the request body holds it (``gates``: their
+    plane positions after the rotor 0; a frozen ``evo``: None)."""
     if field.kind == "evo" and text.lower() in ("frozen", "none"):
         return None
     if field.kind in ("number", "evo"):
@@ -61,9 +57,8 @@ def parse_value(field: Field, text: str):
 def form_request(model: str, values: Mapping[str, str]) -> dict:
     """The request body, command and Python call of the form's ``values`` (field name -> text; empty: not given).
 
-    Returns ``body`` (for POST /runs), ``command`` (`turbgen <model> ...`, the uploads as ``FILE``) and ``python``
-    (``turbgen.<model>(...)``). ParameterError for an unknown model or field, or a value not of its field's kind (a
-    value out of range is refused by :func:`turbgen.service.run_ids.build_run`).
+    Returns ``body`` (for POST /runs), ``command`` (the uploads as ``FILE``) and ``python``; ParameterError for an
+    unknown model or field (ranges are :func:`turbgen.service.run_ids.build_run`'s).
     """
     if model not in MODELS:
         raise ParameterError(f"model: {model!r} is not one of {', '.join(MODELS)}")

@@ -19,24 +19,12 @@ from turbgen.service.limits import (DERIVED_RUNNING, DERIVED_WAITING, DerivedLim
 class ServiceSettings:
     """The server's settings (command-line options of `turbgen serve`).
 
-    Parameters
-    ----------
-    root : Path
-        The catalog's root directory.
-    token : str or None
-        Bearer token of mutating requests and new computations (None: open).
-    memory_budget_bytes : int
-        Largest memory estimate of a submitted run [bytes] (413 above).
-    max_queue : int
-        Most runs queued or running at once (429 above).
-    loopback_only : bool
-        Answer only requests whose Host header names a loopback address (400 otherwise: no DNS rebinding).
-    derived_running, derived_waiting : int
-        Exports, validations and lidar reports computed at once, and requests that may wait for them (503 beyond).
-    stencil_cache_bytes : int or None
-        Size cap of ``root/stencils`` [bytes] (least recently used entries evicted; None: no cap).
-    own_cluster : bool
-        The runs execute in this process (not --scheduler): start-up may remove dead temporaries in ``root/stencils``.
+    ``root`` the catalog's directory; ``token`` of mutating requests and new computations (None: open);
+    ``memory_budget_bytes`` largest run estimate [bytes] (413 above); ``max_queue`` runs queued or running (429
+    above); ``loopback_only``: answer only a loopback Host header (400 otherwise: no DNS rebinding);
+    ``derived_running``/``derived_waiting`` products computed at once and requests waiting (503 beyond);
+    ``stencil_cache_bytes`` cap of ``root/stencils`` [bytes] (None: none); ``own_cluster``: runs execute in this
+    process (start-up may remove dead temporaries in ``root/stencils``).
     """
 
     root: Path

@@ -4,10 +4,8 @@
     report = validate("mann.zarr", rotor_radius_m=63.0)
     report.passed, report.to_dict(), report.table(), report.plots("figs/")
 
-``estimators`` reads the Welch estimates (dask over the store's chunks), ``expectations`` gives the model's
-prediction for their ``prediction.SamplingDesign``, ``verdict`` the tolerances and pass/fail, ``report`` the table,
-JSON and plots. The theory needs only the sampling design, so it is computed in a thread of its own while the
-store is read.
+``estimators`` reads the Welch estimates, ``expectations`` predicts them for their ``prediction.SamplingDesign``
+(in a thread of its own while the store is read), ``verdict`` judges, ``report`` renders. docs/validate.md.
 """
 
 from __future__ import annotations
@@ -73,29 +71,12 @@ class ValidationReport:
 
 def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None = None,
              workers: int | None = None) -> ValidationReport:
-    """Validate a store against its model.
+    """Validate a store (path or FieldStore) against its model (the engine of :func:`turbgen.validate`).
 
-    Parameters
-    ----------
-    store : str, pathlib.Path or FieldStore
-        The store.
-    rotor_radius_m : float, optional
-        Rotor radius R [m] of the rotor-effective wind speed; None: 63 m, or the largest disc a smaller grid holds.
-    nperseg : int, optional
-        Welch segment length [samples]; None: ``estimators.default_nperseg``.
-    workers : int, optional
-        dask threads; None: the CPU count. With more than one the theory is computed alongside the estimates.
-
-    Returns
-    -------
-    ValidationReport
-        Estimates, predictions, metrics and timings [s] (``estimate``, ``theory``, ``verdict``, ``total``;
-        ``theory_kept`` True when the theory was kept from a store of this process differing only in seed).
-
-    Raises
-    ------
-    StoreError, ParameterError
-        On an unreadable store, bad input, or a conditional-mean store (not a sample of the model).
+    ``rotor_radius_m`` [m] (None: 63 m, or the largest disc a smaller grid holds); ``nperseg`` [samples] (None:
+    ``estimators.default_nperseg``); ``workers`` dask threads (None: the CPU count; more than one: the theory
+    alongside the estimates). The report's ``seconds`` hold ``estimate``, ``theory``, ``verdict``, ``total`` and
+    ``theory_kept``. StoreError or ParameterError for an unreadable store, bad input or a conditional-mean store.
     """
     fs = store if isinstance(store, FieldStore) else open_store(store)
     constraints = fs.attrs.get("constraints")

@@ -27,10 +27,8 @@ def chi2_z(ratio, nu):
 
 
 def coherence_stats(rho, n):
-    """Mean and sd of the coh2, cocoh and phase estimators from ``n`` independent samples of coherency ``rho`` (delta
-    method): ``coh2_mean``, ``coh2_sd``, ``cocoh_mean``, ``cocoh_sd`` [-], ``phase_sd`` [rad], the sds kept above the
-    float32 resolution COHERENCE_FLOOR.
-    """
+    """Delta-method mean and sd [-] of coh2 and cocoh and sd of the phase [rad] from ``n`` independent samples of
+    coherency ``rho``, the sds kept above COHERENCE_FLOOR (float32 resolution)."""
     rho = np.asarray(rho, complex)
     n = np.asarray(n, float)
     g = np.abs(rho) ** 2
@@ -130,9 +128,8 @@ class Bands:
     def coherence_checks(self, label, cross, auto_a, auto_b, rho_lines, exp_auto, cov) -> list[Check]:
         """Exact-law tests of the band-pooled sample coherency C = sum_g cross / sqrt(sum_g A sum_g B).
 
-        Its expectation is rho_band = sum_g rho_m E_m / sum_g E_m, and it is the sample coherency of
-        n_band = (sum_g E_m)^2 / Var(sum_g A) independent samples: |C|^2 follows Goodman's law, arg C - arg rho_band the
-        Rice phase law (``distributions``); near unit coherence (1 - |rho|^2 < NEAR_UNIT) the delta method.
+        E C = rho_band = sum_g rho_m E_m / sum_g E_m, from n_band = (sum_g E_m)^2 / Var(sum_g A) samples: Goodman's
+        and the Rice phase law (``distributions``); near unit coherence (1 - |rho|^2 < NEAR_UNIT) the delta method.
         """
         gs = self.groups
         c = np.array([np.sum(cross[g]) for g in gs])

@@ -37,10 +37,8 @@ class Check:
 
 @dataclass
 class MetricResult:
-    """One metric: its checks pass when every |z| <= z_crit = Phi^-1(1 - ALPHA / (2 n)) (Bonferroni over n checks).
-
-    ``quantity`` names what is compared, with units.
-    """
+    """One metric (``quantity``: what is compared, with units): its checks pass when every |z| <= z_crit =
+    Phi^-1(1 - ALPHA / (2 n)) (Bonferroni over n checks)."""
 
     name: str
     title: str

@@ -10,9 +10,8 @@ Write y = beta x + e with |beta|^2 = gamma2, e ~ CN(0, 1 - gamma2). Conditional 
     (n - 1) g / (1 - g) | Q  ~  F'(2, 2(n - 1); lambda = gamma2 Q / (1 - gamma2))   (noncentral F)
     arg C - arg rho | Q      ~  Rice phase law with kappa = gamma2 Q / (2 (1 - gamma2)).
 
-The unconditional laws average over Q with Gauss-Hermite nodes in the normal score of Q (so the extreme quantiles
-driving 1e-6 tails are sampled). One-sided tails become normal scores (:func:`normal_score`) for the Bonferroni
-rule of ``verdict``.
+The unconditional laws average over Q with Gauss-Hermite nodes in the normal score of Q (sampling the extreme
+quantiles that drive 1e-6 tails); tails become normal scores (:func:`normal_score`) for ``verdict``.
 """
 
 from __future__ import annotations
@@ -45,11 +44,8 @@ def _q_nodes(n):
 
 
 def coh2_tails(g, gamma2, n):
-    """(P(G <= g), P(G >= g)) of the sample magnitude-squared coherence G from n independent samples.
-
-    ``g`` observed [-] in [0, 1), ``gamma2`` true coherence [-] in [0, 1), ``n`` equivalent number of independent
-    samples (> 1, real); arrays broadcast.
-    """
+    """(P(G <= g), P(G >= g)) of the sample magnitude-squared coherence G for the observed ``g`` [-] in [0, 1), the
+    true ``gamma2`` [-] in [0, 1) and ``n`` (> 1, real) equivalent independent samples; arrays broadcast."""
     g, gamma2, n = np.broadcast_arrays(*(np.asarray(a, float) for a in (g, gamma2, n)))
     g = np.clip(g, 0.0, 1.0 - 1e-15)
     F = ((n - 1.0) * g / (1.0 - g))[..., None]
@@ -67,8 +63,7 @@ def coh2_tails(g, gamma2, n):
 
 
 def coh2_moments(gamma2, n):
-    """(E G, sd G) [-] of the sample magnitude-squared coherence from n independent samples (arguments as
-    :func:`coh2_tails`).
+    """(E G, sd G) [-] of the sample magnitude-squared coherence (arguments as :func:`coh2_tails`).
 
     G is a mixture of Beta(1 + j, n - 1) laws with j negative binomial (Carter, Knapp & Nuttall 1973), so
     E[1 - G] = (n - 1) E1 and E[(1 - G)^2] = n (n - 1) (E1 - E2), E1 = E[1 / (n + j)], E2 = E[1 / (n + j + 1)]. With
@@ -90,11 +85,7 @@ def coh2_moments(gamma2, n):
 
 
 def coh2_quantile(p, gamma2, n):
-    """Quantile [-] of the sample magnitude-squared coherence: g with P(G <= g) = p (bisection of :func:`coh2_tails`).
-
-    ``p`` in (0, 1), ``gamma2`` [-] and ``n`` as in :func:`coh2_tails`; arrays broadcast. The search starts
-    from mean +- 12 sd (:func:`coh2_moments`) clipped to [0, 1].
-    """
+    """Quantile g [-] with P(G <= g) = ``p`` (bisection of :func:`coh2_tails` from mean +- 12 sd); arrays broadcast."""
     p, gamma2, n = np.broadcast_arrays(*(np.asarray(a, float) for a in (p, gamma2, n)))
     mean, sd = coh2_moments(gamma2, n)
     lo, hi = np.maximum(mean - 12.0 * sd, 0.0), np.minimum(mean + 12.0 * sd, 1.0)
@@ -129,10 +120,7 @@ def _rice_phase_sf(t, kappa):
 
 
 def phase_sf(dphi, gamma2, n):
-    """Two-sided tail of the sample phase: P(|arg C - arg rho| >= |dphi|) (dphi [rad] wrapped to [0, pi]).
-
-    ``gamma2`` [-] and ``n`` as in :func:`coh2_tails`; arrays broadcast.
-    """
+    """Two-sided tail of the sample phase: P(|arg C - arg rho| >= |dphi|) (dphi [rad] wrapped to [0, pi])."""
     dphi, gamma2, n = np.broadcast_arrays(*(np.asarray(a, float) for a in (dphi, gamma2, n)))
     t = np.abs((dphi + np.pi) % (2.0 * np.pi) - np.pi)
     kappa = (gamma2 / (2.0 * (1.0 - gamma2)))[..., None] * _q_nodes(n)
@@ -163,9 +151,8 @@ def cospectrum_tails(x, c, n):
     """(P(X <= x), P(X >= x)) of the sample co-coherence X = Re sum conj(u_i) w_i / n of n independent circular
     Gaussian pairs with unit variances and real coherency c (|c| < 1).
 
-    X = (a G1 - b G2) / n with G1, G2 ~ Gamma(n, 1) independent, a = (1 + c) / 2, b = (1 - c) / 2 (a variance-gamma
-    law): its tails are exponential, so a normal z overstates a large deviation with few samples. Conditional on G2
-    the probability is a regularised incomplete gamma function; G2 is integrated with Gauss-Hermite nodes.
+    X = (a G1 - b G2) / n, G1, G2 ~ Gamma(n, 1), a = (1 + c) / 2, b = (1 - c) / 2 (variance-gamma, exponential tails):
+    a regularised incomplete gamma function given G2, integrated over G2 with Gauss-Hermite nodes.
     """
     x, c, n = np.broadcast_arrays(*(np.asarray(v, float) for v in (x, c, n)))
     a, b = (1.0 + c) / 2.0, (1.0 - c) / 2.0

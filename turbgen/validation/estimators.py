@@ -1,15 +1,12 @@
 """Welch estimates from a field store, computed with dask over the store's time chunks.
 
-The field is never loaded whole: one task reads one plane over one *span* (whole time chunks, ~4 Welch segments,
-each chunk decompressed once) and returns small sums, which are added up. Welch segments (Hann window, 50 % overlap,
-mean removed per segment) lie inside one span; those straddling two spans are not used (the estimates count the
-segments averaged and the tolerances use that count).
+One task reads one plane over one *span* (whole time chunks, ~4 Welch segments) and returns small sums, which are
+added up. Welch segments (Hann, 50 % overlap, mean removed) straddling two spans are not used (the tolerances use
+the count of segments averaged).
 
-Estimated (one-sided, [m^2 s^-2 Hz^-1] unless stated): per-point mean and variance of u, v, w; one-point
-auto-spectra and the u-w cross-spectrum averaged over segments, points and planes; yz cross-spectra for separations
-(a, b) grid steps with the auto-spectra of both point sets; longitudinal cross-spectra of u between every pair of
-planes (same y, z and stored time, the convected frame) on a sub-lattice of at most ~16 x 16 points; the
-rotor-effective wind speed of each plane (Guo et al. 2023, Eq. 23 on the grid) and its Welch spectrum.
+Estimated (one-sided [m^2 s^-2 Hz^-1]): per-point mean and variance; one-point auto-spectra and the u-w
+cross-spectrum; yz cross-spectra per separation; u cross-spectra between every pair of planes on a sub-lattice;
+the rotor-effective wind speed of each plane (Guo et al. 2023, Eq. 23 on the grid) and its spectrum.
 """
 
 from __future__ import annotations
@@ -95,11 +92,8 @@ class WelchSetup:
 
 
 def default_nperseg(nt: int) -> int:
-    """Default Welch segment length [samples] of a record of ``nt`` samples.
-
-    The largest power of two <= nt / 8 (about 15 half-overlapping segments), within [32, MAX_NPERSEG]; ParameterError
-    if nt < 4 MIN_NPERSEG.
-    """
+    """Default Welch segment length [samples] for ``nt`` samples: the largest power of two <= nt / 8 (~15
+    segments) in [MIN_NPERSEG, MAX_NPERSEG]; ParameterError if nt < 4 MIN_NPERSEG."""
     if nt < 4 * MIN_NPERSEG:
         raise ParameterError(f"nt = {nt} is too short to validate (needs >= {4 * MIN_NPERSEG} time steps)")
     return min(2 ** int(math.floor(math.log2(nt / 8))) if nt >= 8 * MIN_NPERSEG else MIN_NPERSEG, MAX_NPERSEG)
@@ -241,26 +235,9 @@ def plan_estimates(fs, *, rotor_radius_m: float | None = None, nperseg: int | No
                    separations=None) -> Estimates:
     """The sampling design of a store's estimates, before any data is read (sums still empty).
 
-    Parameters
-    ----------
-    fs : turbgen.store.FieldStore
-        The store.
-    rotor_radius_m : float, optional
-        Rotor radius R [m] of the rotor-effective wind speed (``point_sets.check_rotor_radius``).
-    nperseg : int, optional
-        Welch segment length [samples]; default ``default_nperseg(nt)``.
-    separations : sequence of (int, int), optional
-        yz separations [grid steps]; default ``point_sets.default_separations``.
-
-    Returns
-    -------
-    Estimates
-        Welch setup, separations, rotor disc, plane-pair sub-lattice and the segments averaged.
-
-    Raises
-    ------
-    ParameterError
-        If nperseg is outside [MIN_NPERSEG, nt / 2] or the rotor radius does not fit the grid.
+    ``rotor_radius_m`` [m] as ``point_sets.check_rotor_radius``; ``nperseg`` [samples] default
+    ``default_nperseg(nt)``; ``separations`` [grid steps] default ``point_sets.default_separations``. ParameterError
+    if nperseg is outside [MIN_NPERSEG, nt / 2] or the rotor radius does not fit the grid.
     """
     g = fs.grid
     setup = WelchSetup(nperseg or default_nperseg(g.nt), g.dt_s)

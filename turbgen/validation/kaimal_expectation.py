@@ -1,18 +1,11 @@
 """What a Kaimal / IEC store's model predicts for every estimate, on the store's grid.
 
-The generator synthesises a periodic record: line j of the one-sided Kaimal PSD S_i has the two-sided
-variance L_j = (1/2) of the integral of S_i over the line's bin [f_j - df/2, f_j + df/2] (IEC 61400-1 Kaimal
-spectrum; Guo et al. 2023, Eq. 11; the Nyquist line: its half bin, unshared), L_0 = 0 (no mean), times
-sigma_i^2 / sum(2 L_j) when the store says the spectrum was rescaled. (S_i(f_j) df / 2 instead, as before,
-is 3.7 % low at line 1 of u for L 340 m, U 10 m/s, nt 512 x 0.5 s, and biased sigma_v by ~0.2 sd.) The u yz line
-cross-covariance is L_j coh(r, f_j) with the IEC exponential coherence (Eq. 12, un-squared); v, w as
-the store says (white, or the same exponential); between planes the store's longitudinal model
-(Eq. 18 / Simley and Pao / Kristensen, un-squared, zero phase in the convected frame) for the
-components it was applied to, independent otherwise. The rotor-effective wind speed follows Eq. 25
-over the rotor points of the grid. A store made with user spectra (its ``spectrum`` parameter: band means on the
-lines, turbgen.theory.user_spectra) has L_j = (1/2) S_j times the band's width in place of the Kaimal integral; one
-made with a user yz coherence (its ``coherence`` parameter, turbgen.theory.user_coherence) has that table's values
-in place of Eq. 12.
+Line j of the one-sided Kaimal PSD S_i has the two-sided variance L_j = (1/2) int S_i over [f_j - df/2, f_j + df/2]
+(Guo et al. 2023, Eq. 11; the Nyquist line its half bin), L_0 = 0, times sigma_i^2 / sum(2 L_j) if rescaled (a
+user spectrum: (1/2) S_j times the band's width). The u yz line cross-covariance is L_j coh(r, f_j) (Eq. 12
+un-squared, or a user coherence table); v, w white or the same; between planes the store's longitudinal model
+(Eq. 18 / Simley and Pao / Kristensen, un-squared, zero phase) for the components it was applied to. The
+rotor-effective wind speed follows Eq. 25 over the rotor points of the grid.
 """
 
 from __future__ import annotations
@@ -32,20 +25,8 @@ from turbgen.validation.variance_law import MAX_MODE_POINTS, N_MODE_LINES, top_m
 
 
 def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
-    """Kaimal / IEC expectations from the store attributes written by turbgen.runs.kaimal.
-
-    Parameters
-    ----------
-    attrs : dict
-        The store's attributes (``parameters``, ``U_m_s`` [m/s]).
-    design : SamplingDesign
-        Grid, Welch segments and point sets of the estimates.
-
-    Returns
-    -------
-    Theory
-        Line (cross-)variances [m^2 s^-2] and correlation sums rho_bar [-] (module docstring).
-    """
+    """Kaimal / IEC expectations (line (cross-)variances [m^2 s^-2], correlation sums [-]) from the store
+    attributes ``attrs`` (``parameters``, ``U_m_s`` [m/s]) for the estimates' sampling ``design``."""
     km = kaimal_model_from_attrs(attrs)
     kp, long_components = km.params, km.long_components
     grid = design.grid

@@ -1,13 +1,9 @@
 """The Mann tensor on the (k2, k3) lattice of the generator's periodic box, slab by slab in k1.
 
-The generator samples the spectral tensor Phi_ij (Mann 1994, Eq. 13-17; Guo et al. 2023, Eq. 8) on
-the lattice of its periodic (xi = U t, y, z) box; the lattice itself (wavenumbers in FFT order) is
-shared with the generator (turbgen.theory.lattice). The tensor is evaluated here from turbgen.theory,
-not from the generator's stencil, so the validator checks the generator's factorisation too.
-
-The cells around the k1 axis are integrated with turbgen.theory.lattice.cell_rule, graded and sized
-here (CELL_RADIUS, CELL_GAUSS, halving panels) differently from the generator's (turbgen.synthesis.mann_cells),
-so an error in either shows up as a disagreement instead of cancelling out. Keep the parameters distinct.
+The tensor Phi_ij (Mann 1994, Eq. 13-17; Guo et al. 2023, Eq. 8) is evaluated from turbgen.theory, not from the
+generator's stencil, so the validator checks the generator's factorisation too. The cells around the k1 axis are
+integrated with turbgen.theory.lattice.cell_rule graded and sized differently from turbgen.synthesis.mann_cells,
+so an error in either shows up as a disagreement: keep the parameters distinct.
 """
 
 from __future__ import annotations
@@ -29,22 +25,10 @@ CELL_GAUSS = 4
 class MannLattice:
     """Mann tensor and space-time decay on the (k2, k3) lattice of the box, slab by slab in k1.
 
-    Each lattice point stands for its cell: the point value Phi(k) dk1 dk2 dk3 is used except in
-    the cells around the k1 axis at small k1, where Phi varies strongly inside a cell (on the axis
-    Phi_33 = E(k0)/(4 pi k1^2) with k0 -> Gamma a / L finite) and the cell integral is computed
-    (Gauss rules graded towards the axis down to the scale |k1|; Mann 1998). The generator does the
-    same (turbgen.synthesis.mann_stencil), with its own rule, so this is an independent check of it.
+    Each lattice point stands for its cell: Phi(k) dk1 dk2 dk3, except near the k1 axis at small k1, where Phi
+    varies strongly inside a cell and the cell integral is computed (Gauss rules graded towards the axis; Mann 1998).
 
-    Parameters
-    ----------
-    params : MannParams
-        The Mann model.
-    grid : Grid
-        The store's grid (dt [s], dy, dz [m]).
-    box : MannBox
-        The generator's periodic box (nyp x nzp points).
-    U : float
-        Mean wind speed [m/s] (k1 = 2 pi f / U).
+    ``grid``: the store's (dt [s], dy, dz [m]); ``box``: the generator's (nyp x nzp); ``U`` [m/s]: k1 = 2 pi f / U.
     """
 
     def __init__(self, params: MannParams, grid: Grid, box: MannBox, U: float):

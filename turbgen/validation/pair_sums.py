@@ -96,10 +96,8 @@ def weighted_gram(half: np.ndarray, counts: np.ndarray) -> np.ndarray:
 def pair_sum(coh: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """(nn, nn) symmetric sum over lags of counts x coh(nu_i) conj(coh(nu_j)), real part.
 
-    The lag grid is point-symmetric with counts(-l) = counts(l), and a coherency is Hermitian in the lag, so the terms
-    at l and -l have the same real part: the sum is the centre term plus twice the half-plane, A A^T with the rows of
-    A the real and imaginary parts of coh x sqrt(weights) (one symmetric BLAS product). ``coh`` is (nn, 2 ny - 1,
-    2 nz - 1) [-], ``counts`` (2 ny - 1, 2 nz - 1) pairs per lag (``rect_pair_counts``, ``set_pair_counts``).
+    Terms at l and -l have the same real part (counts and coherency symmetric), so the sum is one symmetric BLAS
+    product A A^T over half the lags. ``coh`` (nn, 2 ny - 1, 2 nz - 1) [-], ``counts`` (2 ny - 1, 2 nz - 1) pairs.
     """
     return weighted_gram(half_lags(coh), counts)
 
@@ -122,8 +120,7 @@ def box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
 def real_box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
     """``box_lags(ifft2(field2d) * size, ny, nz)`` for a real field (..., nyp, nzp) with half the transform.
 
-    ifft2 x size = conj(fft2) for real input: rfft2 holds the lags dz >= 0 and F(dy, -dz) = conj(F(-dy, dz)) the
-    others (full transform when nzp < 2 nz - 1).
+    rfft2 holds the lags dz >= 0, F(dy, -dz) = conj(F(-dy, dz)) the others (full transform when nzp < 2 nz - 1).
     """
     nyp, nzp = field2d.shape[-2:]
     if nzp < 2 * nz - 1:

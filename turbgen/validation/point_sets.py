@@ -14,10 +14,7 @@ LONG_POINTS_PER_AXIS = 16  # sub-lattice for the plane-pair cross-spectra: at mo
 
 
 def grid_steps(sep_m: float, step_m: float, n: int) -> int:
-    """A separation ``sep_m`` [m] as a whole number of grid steps ``step_m`` [m], clipped to [0, n // 2].
-
-    A positive separation is at least one step.
-    """
+    """A separation ``sep_m`` [m] in whole grid steps ``step_m`` [m], clipped to [0, n // 2] (>= 1 if positive)."""
     return int(min(max(round(sep_m / step_m), 1 if sep_m > 0 else 0), n // 2))
 
 
@@ -47,9 +44,8 @@ def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
 def check_rotor_radius(grid: Grid, radius_m: float | None) -> float:
     """The rotor radius R [m] to use: the disc must lie inside the grid, 0 < R <= half the smaller grid extent.
 
-    ``radius_m`` None: the default 63 m (NREL 5 MW, Jonkman et al. 2009), or the largest disc that fits a smaller grid,
-    enlarged to the nearest grid points when it holds none. ParameterError for a radius outside (0, half extent] or
-    the range of rotor radii (``turbgen.theory.ranges``).
+    ``radius_m`` None: 63 m (NREL 5 MW, Jonkman et al. 2009), or the largest disc a smaller grid holds (enlarged to
+    the nearest grid points when it holds none). ParameterError outside (0, half extent] or the range of radii.
     """
     half = min((grid.ny - 1) * grid.dy_m, (grid.nz - 1) * grid.dz_m) / 2.0
     if radius_m is None:

@@ -23,21 +23,8 @@ N_RHO_NODES = 24  # frequency nodes of the correlation sums rho_bar
 
 @dataclass(frozen=True, eq=False)
 class SamplingDesign:
-    """Where and how the estimates were taken: what the predictions must be computed for.
-
-    Attributes
-    ----------
-    grid : Grid
-        The store's grid.
-    setup : WelchSetup
-        Welch segments (length, dt [s], window scale).
-    separations : tuple of (int, int)
-        yz separations (a, b) [grid steps] of the yz coherences.
-    rotor_mask : numpy.ndarray
-        (ny, nz) bool, the grid points inside the rotor disc.
-    long_iy, long_iz : numpy.ndarray
-        Indices of the sub-lattice whose plane-to-plane coherence is estimated.
-    """
+    """Where and how the estimates were taken: the store's ``grid``, the Welch ``setup``, yz ``separations`` (a, b)
+    [grid steps], the (ny, nz) ``rotor_mask`` and the plane-pair sub-lattice ``long_iy``, ``long_iz``."""
 
     grid: Grid
     setup: WelchSetup

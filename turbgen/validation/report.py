@@ -110,11 +110,8 @@ def to_dict(report) -> dict:
 
 
 def constraints_note(attrs) -> str | None:
-    """For a store conditioned on measurements (its ``constraints`` attribute), what the validation means; else None.
-
-    A conditional sample is marginally a sample of the prior when the data are a measurement of a field of the same
-    model (Hoffman & Ribak 1991); other data pull its statistics towards theirs.
-    """
+    """For a store conditioned on measurements, what the validation means (a conditional sample is marginally one
+    of the prior only for data from the same model: Hoffman & Ribak 1991); else None."""
     c = attrs.get("constraints")
     if c is None:
         return None

@@ -1,9 +1,7 @@
 """The sums one validator task takes over one plane and one span of time (``estimators``).
 
-Every Welch segment's spectra are computed once per component (float32 FFT) and feed all the sums, each
-taken in one compiled pass over the spectra (``welch_sums``): per frequency, the sum of |X|^2 over the
-plane and over the first and second points of every yz separation's pairs, the cross-products
-conj(X_p) X_{p+d} of each separation, and the u-w cross-products; per point, the moments over time.
+Every Welch segment's spectra are computed once per component (float32 FFT) and feed all the sums, each in one
+compiled pass (``welch_sums``).
 """
 
 from __future__ import annotations
@@ -16,29 +14,13 @@ COMPONENTS = ("u", "v", "w")
 
 
 def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy: np.ndarray, iz: np.ndarray) -> dict:
-    """Moment and Welch sums of one plane over one span.
+    """Moment and Welch sums of one plane over one span of ``data`` (component -> float32 (t, ny, nz) [m/s]), for
+    segments of ``window`` at ``starts``, yz separations ``seps`` [grid steps], the rotor ``mask`` (ny, nz) and the
+    sub-lattice ``iy``, ``iz`` kept for the plane pairs.
 
-    Parameters
-    ----------
-    data : dict
-        Component -> float32 (t, ny, nz) velocities [m/s] of the span.
-    window : numpy.ndarray
-        (nperseg,) Welch window (mean removed per segment).
-    starts : iterable of int
-        Start samples of the segments in the span.
-    seps : sequence of (int, int)
-        yz separations (a, b) [grid steps].
-    mask : numpy.ndarray
-        (ny, nz) bool, the rotor points.
-    iy, iz : numpy.ndarray
-        Grid indices of the sub-lattice whose spectra are kept for the plane pairs.
-
-    Returns
-    -------
-    dict
-        ``sum``, ``sum2`` (component -> (ny, nz) [m/s], [m^2 s^-2] summed over t); ``rews`` (t,) [m/s]; unscaled
-        Welch sums over segments and points: ``auto`` (component -> (nf,)), ``yz`` (component -> {(a, b): [cross
-        (nf,) complex, A, B]}), ``uw`` (nf,) complex; ``sub`` (segments, nf, sub-lattice points) complex64 u spectra.
+    Returns ``sum``, ``sum2`` (component -> (ny, nz) [m/s], [m^2 s^-2] over t); ``rews`` (t,) [m/s]; unscaled Welch
+    sums: ``auto`` (component -> (nf,)), ``yz`` (component -> {(a, b): [cross complex, A, B]}), ``uw`` complex;
+    ``sub`` (segments, nf, sub-lattice points) complex64 u spectra.
     """
     from turbgen.validation.welch_sums import cross_sum, point_moments, spectrum_sums, window_segment
 
@@ -62,10 +44,8 @@ def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy
     cross = {c: np.zeros((len(seps), nf, 2)) for c in COMPONENTS}
     uw = np.zeros((nf, 2))
     sub = []
-    # reused: (segment - its mean) * window in the rows y < ny. The spare row ny makes the stride along t of the
-    # FFT's input and output not a multiple of 4 KiB on power-of-two planes (64 x 64 x 4 B = 16 KiB), so that
-    # the transform's strided reads and writes do not all fall into a few cache sets (a cheaper FFT for 1/64 more
-    # lanes). The spectra of the plane are the same bits.
+    # reused: (segment - its mean) * window in the rows y < ny; the spare row ny keeps the FFT's stride along t off
+    # multiples of 4 KiB (cache-set conflicts on power-of-two planes); the same bits.
     seg_buf = np.zeros((n, ny + 1, nz), np.float32)
     for s in starts:
         spec = {}

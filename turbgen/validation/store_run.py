@@ -24,27 +24,10 @@ class MannBox:
 
 @dataclass(frozen=True)
 class KaimalModel:
-    """The Kaimal / IEC model of a store.
-
-    Attributes
-    ----------
-    params : KaimalParams
-        sigma_i [m/s], length scales [m], yz coherence decrement a_yz [-] and scale lc [m].
-    long_model : str
-        Longitudinal coherence model (a key of theory.coherence_models.LONGITUDINAL_MODELS).
-    long_components : str
-        Components the longitudinal model applies to (the others are independent between planes).
-    vw_coherent : bool
-        True if v and w have the exponential yz coherence of u, False if white in y, z.
-    rescale : bool
-        True if each spectrum was rescaled to the nominal sigma_i.
-    a_x, b_x : float or None
-        Coefficients of the exponential longitudinal coherence (``long_model == "exp"``).
-    spectrum : LineSpectrum or None
-        The user spectra of the store (band means on its lines), or None for the Kaimal spectra.
-    coherence : LineCoherence or None
-        The user yz coherence of the store, or None for the IEC exponential.
-    """
+    """The Kaimal / IEC model of a store: ``params``, the longitudinal model (a key of
+    theory.coherence_models.LONGITUDINAL_MODELS, ``a_x``, ``b_x`` for "exp") and the components it applies to,
+    whether v, w have u's yz coherence and the spectra were rescaled, and the user ``spectrum`` and ``coherence``
+    (None: Kaimal, IEC exponential)."""
 
     params: KaimalParams
     long_model: str

@@ -1,9 +1,8 @@
 """The model's predictions for a store, kept for the next store that differs only in seed.
 
-The theory and the expected Welch estimates depend on the model, parameters, grid and the estimates' options,
-never on the seed or the data: a sweep validating 20 seeds of one configuration computes them once. The key is
-every attribute but the seed, creation time and measured rms; the entries are kept in this process only, a few at
-a time.
+The theory depends on the model, parameters, grid and the estimates' options, never on the seed or the data: a
+sweep validating 20 seeds computes it once. Key: every attribute but seed, creation time and measured rms; a few
+entries, kept in this process only.
 """
 
 from __future__ import annotations
@@ -29,10 +28,7 @@ def theory_key(model: str, attrs: dict, **options) -> str:
 
 
 def cached(key: str, compute):
-    """(value, hit): ``compute()``'s result for ``key``, computed only if this process has not kept it (hit True).
-
-    ``compute`` is called outside the lock: two threads missing the same key both compute it.
-    """
+    """(value, hit): ``compute()``'s result for ``key``, computed (outside the lock) unless kept (hit True)."""
     with _lock:
         if key in _entries:
             _entries.move_to_end(key)

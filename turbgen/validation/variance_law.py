@@ -5,12 +5,10 @@ weight of line j, ``Theory.pair_weights``). The amplitudes of line j are circula
 so line j contributes sum_k w_j L_j mu_jk E_jk with E_jk ~ Exp(1) independent and mu_jk the eigenvalues of C_j / N
 (sum_k mu_jk = 1, sum_k mu_jk^2 = rho_bar(f_j)).
 
-One moment-matched gamma law (Satterthwaite) has far too light an upper tail when a few modes dominate (the lowest
-lines of u are coherent over the whole grid). Here the top modes of the lowest N_MODE_LINES lines enter exactly
-(shape-1 terms, ``Theory.variance_modes``) and every line's remaining modes are one gamma term with their exact
-mean and variance (exact when they are equal, e.g. the spatially white v, w of Kaimal). Grids of more than
-MAX_MODE_POINTS points get the per-line gamma terms only. Tail probabilities by the Lugannani-Rice saddlepoint
-formula (Lugannani & Rice 1980; Butler 2007, Eq. 1.11).
+One moment-matched gamma law has far too light an upper tail when a few coherent modes dominate, so the top modes
+of the lowest N_MODE_LINES lines enter exactly (shape-1 terms) and each line's other modes as one gamma term with
+their exact mean and variance (per-line terms only above MAX_MODE_POINTS points). Tails by the Lugannani-Rice
+saddlepoint formula (Lugannani & Rice 1980; Butler 2007, Eq. 1.11).
 """
 
 from __future__ import annotations
@@ -57,14 +55,8 @@ def _orthonormal(y: np.ndarray) -> np.ndarray:
 def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray | None = None):
     """Shapes alpha [-] and scales theta [m^2 s^-2] of the gamma terms of the variance estimate (module docstring).
 
-    Parameters
-    ----------
-    line_means : numpy.ndarray
-        (nl,) w_j L_j of lines j = 1 .. [m^2 s^-2].
-    line_rho : numpy.ndarray
-        (nl,) rho_bar(f_j) = sum_k mu_jk^2 [-].
-    modes : numpy.ndarray, optional
-        (J, K + 1) ``top_modes`` of lines 1 .. J (J <= nl) [-]; the last column replaces ``line_rho`` there.
+    ``line_means`` (nl,) w_j L_j of lines j = 1 .. [m^2 s^-2], ``line_rho`` (nl,) rho_bar(f_j) [-], ``modes`` (J, K
+    + 1) ``top_modes`` of lines 1 .. J [-] (the last column replaces ``line_rho`` there).
     """
     m = np.asarray(line_means, float)
     rho = np.asarray(line_rho, float)

@@ -2,9 +2,8 @@
 
 Null hypothesis: the field is a realisation of the store's model on the store's grid (``expectations``). Every
 comparison becomes a normal score z from its exact or moment-matched law; a metric fails when any |z| exceeds
-z_crit = Phi^-1(1 - ALPHA / (2 n)), n its number of comparisons (Bonferroni, valid whatever their correlation), so
-a correct field fails a metric with probability <= ALPHA; no fudge factor enters. The measured false-failure rate
-is in benchmarks/calibration.md (``benchmarks/calibrate_validate.py``).
+z_crit = Phi^-1(1 - ALPHA / (2 n)) (Bonferroni over its n comparisons), so a correct field fails a metric with
+probability <= ALPHA (measured: benchmarks/calibration.md). Method and evidence: docs/validate.md.
 
 Uncertainties (Gaussian fields):
 
@@ -97,12 +96,8 @@ def expectations(est: Estimates, th: Theory) -> Expectations:
 
 def judge(est: Estimates, th: Theory, parallel: bool = False, expected: Expectations | None = None
           ) -> list[MetricResult]:
-    """Pass/fail of every metric of the store (module docstring): mean, variances, spectra, yz and longitudinal
-    coherences, u-w co-spectrum, REWS spectrum.
-
-    ``parallel`` judges the longitudinal coherence (most of the exact-law evaluations) in a second thread, with the
-    same results; ``expected`` is ``expectations(est, th)`` if already computed.
-    """
+    """Pass/fail of every metric of the store (module docstring); ``parallel``: the longitudinal coherence in a
+    second thread (the same results); ``expected``: ``expectations(est, th)`` if already computed."""
     ex = expected if expected is not None else expectations(est, th)
     kernel, bands, exp_auto = ex.kernel, ex.bands, ex.exp_auto
     f = est.freqs
@@ -141,9 +136,7 @@ def _mean(est: Estimates, th: Theory) -> MetricResult:
 
 
 def _variance(est: Estimates, th: Theory, c: str) -> MetricResult:
-    # One-sided line pair j: 2|Z_j|^2 is exponential with variance (2 L_j)^2; the point/plane
-    # average multiplies it by rho_bar(f_j). Expected: the lines the grid (Mann: the box lattice) holds.
-    # Law: a sum of gamma terms, the top modes of the lowest lines exact (``variance_law``).
+    # line pair j: 2|Z_j|^2 is exponential with variance (2 L_j)^2, times rho_bar(f_j) for the point average
     lines = th.auto[c][1:] * th.pair_weights[1:]
     rho = th.rho(th.rho_all[c], th.line_f[1:])
     var = np.sum(lines**2 * rho)
@@ -217,11 +210,8 @@ def _longitudinal(est, th, kernel, bands, exp_auto_u, cov_u) -> MetricResult:
 
 
 def _uw(est, th, kernel, bands, exp_auto, cov) -> MetricResult:
-    # Per bin: Var(co) <= E_u E_w (sqrt(rho_u rho_w) + rho_uw) / (2 K_m) (Cauchy-Schwarz on the Isserlis
-    # covariance, exact for one point), K_m = sqrt(K_u K_w) the exact equivalent segments of the u and w
-    # Welch estimates (K_x = E_x^2 / Var_x one point); neighbouring bins correlated as sqrt(corr_u corr_w).
-    # Per band the pooled co-coherence sum co / sqrt(sum E_u sum E_w) is compared with the exact
-    # variance-gamma law of n_band equivalent samples (``distributions.cospectrum_tails``).
+    # the bound of the module docstring per bin, K_m = sqrt(K_u K_w) (K_x = E_x^2 / Var_x of one point), neighbouring
+    # bins correlated as sqrt(corr_u corr_w); per band the pooled co-coherence against its variance-gamma law
     f = est.freqs
     b = bands.bins
     exp = kernel.apply(th.uw)

@@ -1,9 +1,7 @@
 """Expected one-sided Welch estimate of a periodic line process, exactly (Hann window, mean removed).
 
-A record of nt samples is a sum of spectral lines at f_j = j / (nt dt) (turbgen.theory.lattice); the
-Welch estimate of a bin is a weighted sum of the lines' (cross-)variances L_j [m^2 s^-2], so the
-expected estimate is computed exactly, also in the lowest bins where leakage and mean removal matter
-(Welch 1967 for the segment averaging; the weights below are the window's DTFT at the lines).
+The Welch estimate of a bin is a weighted sum of the record's line (cross-)variances L_j [m^2 s^-2] (lines at
+f_j = j / (nt dt)), so its expectation is exact, also where leakage and mean removal matter (Welch 1967).
 """
 
 from __future__ import annotations
@@ -23,14 +21,7 @@ class WelchKernel:
     A segment's windowed, mean-removed DFT is X_m = sum_j Z_j G_m(f_j) with G_m(f) = W(m/n - f dt) - e(f) W(m/n), W
     the window's DTFT and e(f) the segment mean of exp(i 2 pi f t); so E[P_m] = scale_m sum_j |G_m(f_j)|^2 L_j over the
     lines +-f_j (the line -f_j carries conj(L_j); G's period 1/dt folds partners near Nyquist back). Lines more than
-    KERNEL_BAND bins away are ignored.
-
-    Parameters
-    ----------
-    setup : WelchSetup
-        Segment length, sampling interval dt [s] and the density scale of every bin.
-    nt : int
-        Samples of the periodic record (lines j = 0 .. nt // 2).
+    KERNEL_BAND bins away are ignored. ``nt``: samples of the periodic record (lines j = 0 .. nt // 2).
     """
 
     def __init__(self, setup: WelchSetup, nt: int):

@@ -1,12 +1,9 @@
 """Compiled inner loops of one validator task (``span_sums``): point moments, windowed segments, and the
 per-frequency sums of a segment's spectra, each one pass over the data.
 
-The spectra are complex64 (nf, ny, nz), read as float32 (nf, ny, 2 nz) with re, im interleaved. For two
-rows a, b of that view, sum_k a[k] b[k] = Re sum_z conj(x_z) y_z, and with t = -i y (t[2z] = Im y_z,
-t[2z+1] = -Re y_z) sum_k a[k] t[k] = Im sum_z conj(x_z) y_z: every cross-product is an element-wise
-product of contiguous rows. The products are float32 summed per element over y (ny terms) and then in
-float64 over z, so their rounding is that of ny-term float32 sums (the numpy version: nz-term dot products);
-the powers |X|^2 likewise (cumulative over y in float32, then float64).
+The complex64 spectra (nf, ny, nz) are read as float32 (nf, ny, 2 nz), re and im interleaved: for rows a, b,
+sum_k a[k] b[k] = Re sum_z conj(x_z) y_z, and with t = -i y, sum_k a[k] t[k] = Im sum_z conj(x_z) y_z, so every
+cross-product is an element-wise product of contiguous rows, summed in float32 over y, then in float64 over z.
 """
 
 from __future__ import annotations
@@ -17,12 +14,8 @@ import numpy as np
 
 @numba.njit(nogil=True, cache=True)
 def point_moments(d, mask_index, block):
-    """Per-point float64 sums over time of a float32 span (t, ny, nz), and the mean over the points ``mask_index`` (flat
-    indices) at every time step.
-
-    Returns (s, s2) (ny, nz) sum [m/s] and sum of squares [m^2 s^-2]; the (t // block, ny, nz) sums over whole blocks
-    of ``block`` steps (segment means); the (t,) masked mean [m/s].
-    """
+    """Per-point float64 sums over time of a float32 span (t, ny, nz): (sum [m/s], sum of squares [m^2 s^-2]), the
+    (t // block, ny, nz) sums over blocks of ``block`` steps, the (t,) mean over the flat points ``mask_index``."""
     nt, ny, nz = d.shape
     npt = ny * nz
     flat = d.reshape(nt, npt)

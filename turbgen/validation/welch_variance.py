@@ -8,21 +8,17 @@ windowed, mean-removed DFT X_{t0, m} = sum_q Y_q c_m(q) exp(i 2 pi q t0 / nt), c
     Cov(|X_{s,m}|^2, |X_{s',m'}|^2) = |A|^2 + |B|^2,
     A = sum_q L_q c_m(q) conj(c_m'(q)) e^{i 2 pi q D / nt},   B = sum_q L_q c_m(q) c_m'(nt - q) e^{i 2 pi q D / nt},
 
-D = t0_s - t0_s'. Summed over all segment pairs this is the exact variance of the Welch average, including what
-the "K_eff = K / (1 + 2 rho_w ...)" rule of thumb leaves out: the actual segment starts, overlap for a coloured
-spectrum, the per-segment mean removal and the correlation of neighbouring bins.
+D = t0_s - t0_s'. Summed over all segment pairs this is the exact variance of the Welch average (actual segment
+starts, overlap with a coloured spectrum, mean removal, neighbouring bins: what the K_eff rule of thumb leaves out).
 
 Averages over N points/planes (``averaged``): the covariance of the average is
 (1 / N^2) sum_pq (|A_pq|^2 + |B_pq|^2) = sum_ij a_i conj(a_j) R(nu_i, nu_j) (same for B), with coh_pq(f)
 interpolated linearly in log f between frequency nodes nu_i, a_i the line sums of A weighted by node i's
-interpolation weight, and R the two-frequency correlation sum of the point set (``Theory.rho_*``). One node per
-bin would miss that the lowest bins collect lines from ~0.3 f_m to ~2 f_m by leakage, where the coherence is
-higher. Lines at negative frequencies use R at |f| (exact for real coherences).
+interpolation weight, and R the two-frequency correlation sum of the point set (``Theory.rho_*``; several nodes
+per bin: the lowest bins collect more coherent lines by leakage). Negative-frequency lines use R at |f|.
 
-Cost: lines within LINE_BAND bins of each bin (Hann |c|^2 falls as bin^-6), bin pairs up to MAX_LAG apart, all
-distinct start differences D; above MAX_WORK products the rule of thumb is used (long records, where it is
-accurate). ``node_terms`` folds the sums over D, A and B into one Gram matrix G_m per bin and ``averaged`` is
-sum_ij G_m,ij R_ij.
+Lines within LINE_BAND bins of each bin, bin pairs up to MAX_LAG apart; above MAX_WORK products the rule of thumb
+is used (long records, where it is accurate).
 """
 
 from __future__ import annotations
@@ -83,12 +79,9 @@ class WelchCovariance:
         return np.asarray(lines_half, float)[j]
 
     def node_terms(self, lines_half: np.ndarray, node_f: np.ndarray) -> dict | None:
-        """Lag d -> (nbins - d, nn, nn) Gram matrices G_m [(m^2 s^-2)^2] of the per-node line sums (module docstring),
-        so that the covariance for any R is sum_ij G_m,ij R_ij; None when too expensive.
-
-        ``lines_half`` (nt // 2 + 1,) are the two-sided line variances L_j [m^2 s^-2], ``node_f`` (nn,) the increasing
-        frequency nodes [Hz] of the correlation sums.
-        """
+        """Lag d -> (nbins - d, nn, nn) Gram matrices G_m [(m^2 s^-2)^2] such that the covariance for any R is
+        sum_ij G_m,ij R_ij (None when too expensive), from the line variances ``lines_half`` (nt // 2 + 1,) [m^2 s^-2]
+        and the increasing frequency nodes ``node_f`` (nn,) [Hz]."""
         if not self.feasible:
             return None
         nt = self.nt
@@ -112,11 +105,8 @@ class WelchCovariance:
         return out
 
     def averaged(self, terms: dict | None, rho2: np.ndarray) -> dict | None:
-        """Lag d -> (nbins - d,) Cov(P_m, P_{m+d}) [(m^2 s^-2 Hz^-1)^2] of the Welch estimate averaged over a point set.
-
-        ``terms`` from :meth:`node_terms` (None passes through), ``rho2`` (nn, nn) the point set's R(nu_i, nu_j) [-]
-        (all ones: one point).
-        """
+        """Lag d -> (nbins - d,) Cov(P_m, P_{m+d}) [(m^2 s^-2 Hz^-1)^2] of the Welch estimate averaged over a point
+        set with correlation sums ``rho2`` (nn, nn) [-] (all ones: one point); ``terms`` from :meth:`node_terms`."""
         if terms is None:
             return None
         scale = self.setup.scale
