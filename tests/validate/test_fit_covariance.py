@@ -125,3 +125,28 @@ def test_points_and_bootstrap_bad_input_is_one_line(tmp_path):
         assert r.exit_code == 2 and text in r.output and len(r.output.strip().splitlines()) == 1, r.output
     r = CliRunner().invoke(cli, ["fit", "mann", "examples/mast-fit.json", "--bootstrap", "3"])
     assert r.exit_code == 2 and "holds point series, not a field" in r.output
+
+
+def test_line_covariance_is_the_exact_welch_covariance():
+    """Bins 1 .. EXACT_BINS from the lines: at one point the exact one-point Welch covariance of
+    ``welch_variance`` (an independent sum); two points carrying one series: the same; two independent points:
+    half of it (exact identities: round-off tolerances)."""
+    from turbgen.validation.estimators import WelchSetup, segment_starts
+    from turbgen.validation.fit.covariance import EXACT_BINS, exact_lines, line_covariance
+    from turbgen.validation.welch_variance import WelchCovariance
+
+    nt, setup = 2048, WelchSetup(256, 0.5)
+    q = exact_lines(nt, setup.nperseg)
+    lines = np.zeros(nt // 2 + 1)
+    lines[1 : q + 1] = 1.0 / (1.0 + np.arange(1, q + 1) / 20.0) ** (5 / 3)
+    one = np.zeros((q, 3, 3, 1), complex)
+    one[:, 0, 0, 0] = lines[1 : q + 1]
+    cov = line_covariance(one, setup, nt, np.zeros((1, 1), int), {"uu": np.array([0])}, ("uu",))[:, 0, :, 0]
+    ref = WelchCovariance(setup, nt, segment_starts(nt, setup)).cov(lines)
+    for lag in range(4):  # rtol: the two keep different line windows (the mean removal leaks ~2e-4 into bin 1)
+        assert np.allclose(np.diagonal(cov, lag), ref[lag][1 : EXACT_BINS + 1 - lag], rtol=1e-3)
+    pairs, sets = np.array([[0, 1], [1, 0]]), {"uu": np.array([0, 1])}  # separations 0 and d
+    for coherent, factor in ((1.0, 1.0), (0.0, 0.5)):
+        two = np.concatenate([one, coherent * one], axis=3)
+        got = line_covariance(two, setup, nt, pairs, sets, ("uu",))[:, 0, :, 0]
+        assert np.allclose(got, factor * cov, rtol=1e-12)

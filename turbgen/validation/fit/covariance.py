@@ -8,13 +8,24 @@ Cov(s, t) is the mean of that over a in P_s, b in P_t: with coherencies g_pq^ab 
 from the model (``model.BandModel.coherency``) at each band's centre, so the covariance is that of a model, positive
 semi-definite by construction. Bands are joined by the correlation of Hann bins (``joined``): the Schur product of
 that PD correlation with the Gram matrix of the per-band square roots, positive definite when every band's block is.
+
+The band-centre coherencies miss that the lowest bins collect lines from ~0.3 to ~2 x their frequency by leakage,
+which are more coherent across points. On a store's periodic record the Welch estimate of a bin is a quadratic form
+in the record's DFT lines Y_q, so its covariance is exact from the lines' cross-spectra (``line_covariance``: Isserlis
+over the segment pairs, as ``turbgen.validation.welch_variance`` does for one point): it replaces the covariance of
+the bands within bins 1 .. EXACT_BINS (``spliced``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from turbgen.validation.estimators import segment_starts
+from turbgen.validation.welch_kernel import segment_gain
+
 INDEX = {"u": 0, "v": 1, "w": 2}
+EXACT_BINS = 8  # Welch bins 1 .. EXACT_BINS: covariance from the record's lines (module docstring)
+LINE_BAND = 8  # lines up to this many bins above EXACT_BINS enter (Hann leakage falls as bin^-6)
 
 
 def point_sets(data, used: tuple) -> dict:
@@ -68,3 +79,57 @@ def joined(cov: np.ndarray, band_corr: np.ndarray) -> np.ndarray:
     nb, k, _ = cov.shape
     gram = np.einsum("bsr,ctr->bsct", root, root)
     return (band_corr[:, None, :, None] * gram).reshape(nb * k, nb * k)
+
+
+def exact_lines(nt: int, nperseg: int) -> int:
+    """Number Q of the record's lines 1 .. Q that the estimates of bins 1 .. EXACT_BINS collect (``line_covariance``)."""
+    return min((EXACT_BINS + LINE_BAND) * nt // nperseg, nt // 2 - 1)
+
+
+def line_covariance(cross: np.ndarray, setup, nt: int, pair_index: np.ndarray, sets: dict, used: tuple
+                    ) -> np.ndarray:
+    """(EXACT_BINS, k, EXACT_BINS, k) covariance of the point-averaged Welch estimates of bins 1 .. EXACT_BINS of
+    the spectra ``used`` on an nt-periodic record (module docstring).
+
+    X^ia of bin m, segment start t, point a is sum_q Y_q^ia c_m(q) e^(i 2 pi q t / nt) (``segment_gain``), so with
+    S_q(d) = E Y_q^a conj Y_q^b at d = r_a - r_b, A^ik = E X_m^ia conj X_n^kb = sum_q S_q^ik c_m(q) conj c_n(q)
+    e^(i 2 pi q T / nt) and B^ik = E X_m^ia X_n^kb (c_n(-q) for conj c_n(q)) at start difference T, and
+    Cov(Re X^i conj X^j, Re X^k conj X^l) = Re(A^ik conj A^jl + B^il conj B^jk + A^il conj A^jk + B^ik conj B^jl) / 2
+    (Isserlis 1918), summed over the segment pairs and averaged over the point pairs of the two spectra.
+
+    ``cross`` (Q, 3, 3, D) are S_q at the lines q = 1 .. Q and the separations of ``pair_index`` (``separations``);
+    S_-q = conj S_q (a real record).
+    """
+    nq = cross.shape[0]
+    q = np.arange(-nq, nq + 1)
+    s_q = np.concatenate([np.conj(cross[::-1]), np.zeros_like(cross[:1]), cross]).reshape(q.size, -1)
+    c = segment_gain(np.arange(1, EXACT_BINS + 1)[:, None], q / (nt * setup.dt_s), setup)  # (M, nq)
+    c[:, nq] = 0.0  # the mean is removed from every segment
+    starts = np.asarray(segment_starts(nt, setup))
+    lag, count = np.unique(starts[:, None] - starts[None, :], return_counts=True)
+    w = c[:, None, :] * np.exp(2j * np.pi * np.outer(lag, q) / nt)  # (M, T, nq)
+    shape = (EXACT_BINS, EXACT_BINS, lag.size, 3, 3, -1)
+    a = (np.einsum("mtq,nq->mntq", w, np.conj(c)).reshape(-1, q.size) @ s_q).reshape(shape)
+    b = (np.einsum("mtq,nq->mntq", w, c[:, ::-1]).reshape(-1, q.size) @ s_q).reshape(shape)
+    out = np.empty((EXACT_BINS, len(used), EXACT_BINS, len(used)))
+    for x, s in enumerate(used):
+        for y, t in enumerate(used):
+            (i, j), (k, l) = ((INDEX[ch] for ch in name) for name in (s, t))
+            counts = np.bincount(pair_index[np.ix_(sets[s], sets[t])].ravel(), minlength=cross.shape[-1])
+            terms = (a[:, :, :, i, k] * np.conj(a[:, :, :, j, l]) + b[:, :, :, i, l] * np.conj(b[:, :, :, j, k])
+                     + a[:, :, :, i, l] * np.conj(a[:, :, :, j, k]) + b[:, :, :, i, k] * np.conj(b[:, :, :, j, l]))
+            out[:, x, :, y] = 0.5 * np.einsum("mntd,t,d->mn", terms.real, count, counts) / (sets[s].size * sets[t].size)
+    scale = setup.scale[1 : EXACT_BINS + 1] / starts.size
+    return out * scale[:, None, None, None] * scale[None, None, :, None]
+
+
+def spliced(full: np.ndarray, exact: np.ndarray) -> np.ndarray:
+    """``full`` (band-major covariance) with its leading block replaced by ``exact``: C -> T C T^T, T = diag(L_x
+    L_0^-1, 1) with L_x, L_0 the Cholesky factors of ``exact`` and of the block it replaces (the cross terms to the
+    other bands transformed alike), positive definite when both are."""
+    n = exact.shape[0]
+    t = np.linalg.cholesky(exact) @ np.linalg.inv(np.linalg.cholesky(full[:n, :n]))
+    out = full.copy()
+    out[:n] = t @ out[:n]
+    out[:, :n] = out[:, :n] @ t.T
+    return out

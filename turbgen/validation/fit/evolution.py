@@ -25,18 +25,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import cast
 
 import numpy as np
 from scipy.linalg import solve_triangular
 from scipy.optimize import brentq, minimize_scalar
 
+from turbgen.grid import Grid
 from turbgen.theory import ranges
 from turbgen.theory.eddy_lifetime import evolution_lifetime_s
 from turbgen.theory.mann_quadrature import perpendicular_quadrature
 from turbgen.theory.params import MannParams
 from turbgen.validation.fit.data import FitData
 from turbgen.validation.fit.model import BandModel
-from turbgen.validation.fit.spectra import _segment_dfts, estimate_bands
+from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.mann_lattice import MannLattice
 
 Z95 = 1.959963984540054  # standard normal 97.5 % quantile
@@ -147,12 +149,12 @@ class CoherenceModel:
         self.auto = bands.band_mean(self.kernel.apply(self.f11_lines))
         self.nodes = np.geomspace(self.k1[0], self.k1[-1], N_NODES)
         unit = replace(params, evo_time_s=1.0)
-        if data.grid is None:
+        if data.grid is None or data.box is None:
             kappa, w, g = perpendicular_quadrature(self.nodes, params, ((0, 0),))
             self.mass = w * g[(0, 0)]
             self.rate = 1.0 / evolution_lifetime_s(np.sqrt(self.nodes[:, None] ** 2 + kappa**2), unit)
         else:
-            slabs = list(MannLattice(unit, data.grid, data.box, data.U_m_s).slabs(self.nodes))
+            slabs = list(MannLattice(unit, cast(Grid, data.grid), data.box, data.U_m_s).slabs(self.nodes))
             self.mass = np.stack([phi[0, 0].ravel() for _, phi, _ in slabs])
             self.rate = np.stack([inv_tau.ravel() for _, _, inv_tau in slabs])
 
@@ -168,7 +170,7 @@ def _estimates(data: FitData, nperseg: int, pairs: dict):
     """(bands of the aligned u, (npairs, nbands) co-coherences, (npairs, nbands) variance factors)."""
     u = _aligned(data)
     bands = estimate_bands(replace(data, series={"u": u}, uw_columns=()), min(nperseg, u.shape[0] // 4))
-    X, ok = _segment_dfts(u, bands.setup)
+    X, ok = segment_dfts(u, bands.setup)
     r, factor, of_x = [], [], {}
     for (xa, _), cols in pairs.items():
         a, b = (np.array(c) for c in zip(*cols))

@@ -26,7 +26,8 @@ from scipy.optimize import least_squares
 from turbgen.spec.defaults import MANN_DEFAULTS
 from turbgen.theory import ranges
 from turbgen.theory.params import MannParams
-from turbgen.validation.fit.covariance import isserlis, point_sets, separations
+from turbgen.validation.fit.covariance import (EXACT_BINS, exact_lines, isserlis, line_covariance, point_sets,
+                                               separations, spliced)
 from turbgen.validation.fit.data import FitData
 from turbgen.validation.fit.model import BandModel
 from turbgen.validation.fit.result import FitValue, MannFit
@@ -62,17 +63,28 @@ def _start(bands: BandSpectra, model: BandModel, used: tuple, held: dict) -> dic
     return p
 
 
-def _isserlis_at(model, geometry, used, p) -> np.ndarray:
-    """The normalised covariance of the point averages (``covariance.isserlis``) at the parameters ``p``."""
+def _covariance_at(bands, model, geometry, used, p) -> np.ndarray:
+    """Joint covariance (band-major) of the band estimates at the parameters ``p`` (``covariance``): band centres,
+    and for a store's periodic record the bands within bins 1 .. EXACT_BINS from its lines."""
     seps, index, neg, sets = geometry
-    return isserlis(model.coherency(MannParams(**p), seps), index, neg, sets, used)
-
-
-def _solve(bands, model, used, free, held, p, iss):
-    """One generalised least-squares pass at the covariance of ``p`` (``iss``: its Isserlis terms): (solution, new
-    parameters)."""
+    params = MannParams(**p)
     e = model.expected(p["ae"], p["length_scale_m"], p["gamma"])
-    chol = np.linalg.cholesky(bands.full_covariance(used, e, iss))
+    full = bands.full_covariance(used, e, isserlis(model.coherency(params, seps), index, neg, sets, used))
+    low = [b for b in bands.bands if b[-1] <= EXACT_BINS]
+    if model.kind != "grid" or not low:
+        return full
+    cross = model.line_cross(params, seps, exact_lines(bands.nt, bands.setup.nperseg))
+    bins = line_covariance(cross, bands.setup, bands.nt, index, sets, used)
+    avg = np.zeros((len(low), EXACT_BINS))
+    for r, b in enumerate(low):
+        avg[r, b - 1] = 1.0 / b.size
+    exact = np.einsum("am,mxny,bn->axby", avg, bins, avg).reshape(len(low) * len(used), -1)
+    return spliced(full, exact)
+
+
+def _solve(bands, model, used, free, held, p, cov):
+    """One generalised least-squares pass at the covariance ``cov`` (of ``p``): (solution, new parameters)."""
+    chol = np.linalg.cholesky(cov)
 
     def resid(x):
         q = _params(x, free, held)
@@ -85,11 +97,6 @@ def _solve(bands, model, used, free, held, p, iss):
     sol = least_squares(resid, np.clip(x0, lo, hi), bounds=(lo, hi), x_scale=1.0, diff_step=1e-4, xtol=1e-10,
                         ftol=1e-10, gtol=1e-10, max_nfev=200)
     return sol, _params(sol.x, free, held)
-
-
-def _covariance_at(bands, model, used, p, iss) -> np.ndarray:
-    e = model.expected(p["ae"], p["length_scale_m"], p["gamma"])
-    return bands.covariance(used, e, iss)
 
 
 def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra | None = None) -> MannFit:
@@ -127,12 +134,12 @@ def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra 
     geometry = (*separations(np.asarray(data.sites_m, float)), point_sets(data, used))
     p = _start(bands, model, used, held)
     if model.kind == "grid":  # the continuous fit first: the lattice ratio at a point near the answer
-        p = _solve(bands, model, used, free, held, p, _isserlis_at(model, geometry, used, p))[1]
+        p = _solve(bands, model, used, free, held, p, _covariance_at(bands, model, geometry, used, p))[1]
     converged = False
     for _ in range(PASSES):
         model.update_ratio(MannParams(**p))
-        iss = _isserlis_at(model, geometry, used, p)
-        sol, q = _solve(bands, model, used, free, held, p, iss)
+        weights = _covariance_at(bands, model, geometry, used, p)
+        sol, q = _solve(bands, model, used, free, held, p, weights)
         cov = _covariance(sol.jac)
         sd = np.sqrt(np.diag(cov))
         moved = np.abs(np.array([_x(q, n) - _x(p, n) for n in free])) / np.maximum(sd, 1e-300)
@@ -140,7 +147,7 @@ def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra 
         if sol.status > 0 and np.all(moved < MOVE_TOL):
             converged = True
             break
-    return _result(data, bands, model, used, free, held, p, sol, cov, converged, notes, iss)
+    return _result(data, bands, model, used, free, held, p, sol, cov, converged, notes, weights)
 
 
 def _x(p: dict, n: str) -> float:
@@ -157,7 +164,7 @@ def _covariance(jac: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(cov), cov, np.inf)
 
 
-def _result(data, bands, model, used, free, held, p, sol, cov, converged, notes, iss) -> MannFit:
+def _result(data, bands, model, used, free, held, p, sol, cov, converged, notes, weights) -> MannFit:
     """The MannFit of a finished fit: intervals, chi^2 / dof, flags."""
     sd = np.sqrt(np.abs(np.diag(cov)))
     values, flags = {}, []
@@ -184,5 +191,5 @@ def _result(data, bands, model, used, free, held, p, sol, cov, converged, notes,
         chi2_dof=float(np.sum(sol.fun**2) / max(dof, 1)), dof=dof, flags=tuple(flags), notes=tuple(notes),
         model=model.kind, U_m_s=data.U_m_s, source=data.source, nperseg=bands.setup.nperseg, f_hz=bands.f_hz,
         data={s: bands.values[s] for s in used}, fitted={s: e[s] for s in used},
-        sd=dict(zip(used, np.sqrt(np.diagonal(_covariance_at(bands, model, used, p, iss), axis1=1, axis2=2)).T)),
+        sd=dict(zip(used, np.sqrt(np.diag(weights)).reshape(-1, len(used)).T)),
     )  # fmt: skip

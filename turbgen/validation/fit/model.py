@@ -109,6 +109,11 @@ class BandModel:
         diag = np.sqrt(np.abs(s[:, [0, 1, 2], [0, 1, 2], zero]))
         return s / (diag[:, :, None, None] * diag[:, None, :, None])
 
+    def line_cross(self, params: MannParams, seps_m: np.ndarray, nlines: int) -> np.ndarray:
+        """(nlines, 3, 3, D) cross-variances E Y_q^a conj Y_q^b [m^2 s^-2] of the store's record lines q = 1 ..
+        ``nlines`` between points ``seps_m`` (D, 3) [m] apart: the lattice sum (grid model only)."""
+        return self._lattice_cross(params, seps_m, self.k1[:nlines])
+
     def _lattice_cross(self, params, seps_m, k1) -> np.ndarray:
         g = self.grid
         lat = MannLattice(params, g, self.box, self.U)

@@ -92,7 +92,7 @@ def band_bins(nperseg: int) -> tuple:
     return tuple(np.arange(a, b) for a, b in zip(edges[:-1], edges[1:]) if b > a)
 
 
-def _segment_dfts(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, np.ndarray]:
+def segment_dfts(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, np.ndarray]:
     """(K, nf, P) windowed, mean-removed DFTs of the segments of every column, (K, P) bool: segment complete."""
     xt = np.ascontiguousarray(x.T)  # (P, nt): each segment's samples contiguous for the FFT
     segs = np.stack([xt[:, s : s + setup.nperseg] for s in segment_starts(x.shape[0], setup)])  # (K, P, n)
@@ -137,7 +137,7 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
     gain = np.diag(gram)
     values, factor, segs, dft = {}, {}, {}, {}
     for c, x in data.series.items():
-        X, ok = _segment_dfts(x, setup)
+        X, ok = segment_dfts(x, setup)
         k = ok.sum(axis=0)
         if k.min() < MIN_SEGMENTS:
             raise ParameterError(f"{data.source}: {c} has {int(k.min())} complete Welch segments of {n} samples in a "
