@@ -31,7 +31,7 @@ from turbgen.theory.kaimal import kaimal_band_variance
 from turbgen.theory.lattice import line_bands
 from turbgen.validation.fit.covariance import isserlis, separations
 from turbgen.validation.fit.data import FitData
-from turbgen.validation.fit.mann import MOVE_TOL, Z95, _covariance
+from turbgen.validation.fit.mann import MOVE_TOL, Z95, parameter_covariance
 from turbgen.validation.fit.result import FitValue
 from turbgen.validation.fit.spectra import estimate_bands
 from turbgen.validation.welch_kernel import WelchKernel
@@ -54,7 +54,7 @@ def gls(residual, covariance, x0, lo, hi) -> tuple:
         chol = np.linalg.cholesky(covariance(x))
         sol = least_squares(lambda y: solve_triangular(chol, residual(y), lower=True), x, bounds=(lo, hi),
                             diff_step=1e-4, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
-        cov = _covariance(sol.jac)
+        cov = parameter_covariance(sol.jac)
         moved = np.abs(sol.x - x) / np.maximum(np.sqrt(np.abs(np.diag(cov))), 1e-300)
         x = sol.x
         if sol.status > 0 and np.all(moved < MOVE_TOL):

@@ -31,7 +31,7 @@ from turbgen.theory.lattice import line_frequencies
 from turbgen.validation.fit.covariance import joined
 from turbgen.validation.fit.kaimal import IEC_COHERENCE, gls, log_values
 from turbgen.validation.fit.result import FitValue
-from turbgen.validation.fit.spectra import _segment_dfts
+from turbgen.validation.fit.spectra import segment_dfts
 
 POS_TOL_M = 1e-3  # points closer than this share an x / a distance
 A_MIN = 1e-2  # lower end of the fitted a [-] (the range's 0: full coherence)
@@ -75,7 +75,7 @@ class _Problem:
         self.dist = np.hypot(p[:, None, 1] - p[None, :, 1], p[:, None, 2] - p[None, :, 2])
         self.f = line_frequencies(bands.nt, bands.setup.dt_s)
         self.auto = model.expected(lines)
-        X, ok = _segment_dfts(u, bands.setup)
+        X, ok = segment_dfts(u, bands.setup)
         P, est = u.shape[1], []
         self.A, self.D = np.zeros((len(classes), P, P)), np.zeros((len(classes), P, P))
         for m, pairs in enumerate(classes.values()):

@@ -140,7 +140,7 @@ def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra 
         model.update_ratio(MannParams(**p))
         weights = _covariance_at(bands, model, geometry, used, p)
         sol, q = _solve(bands, model, used, free, held, p, weights)
-        cov = _covariance(sol.jac)
+        cov = parameter_covariance(sol.jac)
         sd = np.sqrt(np.diag(cov))
         moved = np.abs(np.array([_x(q, n) - _x(p, n) for n in free])) / np.maximum(sd, 1e-300)
         p = q
@@ -154,7 +154,7 @@ def _x(p: dict, n: str) -> float:
     return p[n] if n == "gamma" else math.log(p[n])
 
 
-def _covariance(jac: np.ndarray) -> np.ndarray:
+def parameter_covariance(jac: np.ndarray) -> np.ndarray:
     """(J^T J)^-1 of the whitened residuals; infinite variances where J^T J is singular (unidentified)."""
     jtj = jac.T @ jac
     try:
