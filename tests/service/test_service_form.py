@@ -34,9 +34,10 @@ NOT_A_RUN_OPTION = {
     "presets_file": "a client's file is not read; the built-in presets are offered",
     "fft_backend": "the server's backend (its TURBGEN_FFT_BACKEND) makes every run; it moves a field by round-off only",
 }
-# the service conditions Mann runs only; a user spectrum is a table sent in the request body (form.NOT_IN_FORM)
+# the service conditions Mann runs only; a user spectrum or yz coherence is a table sent in the request body
+# (form.NOT_IN_FORM), never a file name the server would read
 RUN_OPTIONS = {"mann": mann_cli.RUN_OPTIONS, "kaimal": kaimal_cli.RUN_OPTIONS}
-KAIMAL_NOT_IN_SERVICE = {"constrain", "noise", "conditional_mean", "spectrum"}
+KAIMAL_NOT_IN_SERVICE = {"constrain", "noise", "conditional_mean", "spectrum", "coherence"}
 MANN_NOT_IN_SERVICE = {"fit"}  # replaying (fit, then condition: turbgen.runs.replay) is not a service run yet
 COMMANDS = {"mann": (mann, MannRun, MANN_OPTIONS, MANN_REPLACES), "kaimal": (kaimal, KaimalRun, KAIMAL_OPTIONS,
                                                                           KAIMAL_REPLACES)}  # fmt: skip
@@ -127,3 +128,15 @@ def test_the_snapshot_marks_the_measurement_points_of_its_plane_only():
     assert [s["name"] for s in _measurement_points(constrained, 0.0)] == ["a"]
     assert [s["name"] for s in _measurement_points(constrained, 50.0)] == ["b"]
     assert _measurement_points(SimpleNamespace(attrs={}), 0.0) == []
+
+
+@pytest.mark.parametrize("key", ["spectrum", "coherence"])
+def test_a_table_given_as_a_file_name_is_refused_before_any_file_is_read(key, tmp_path):
+    """A request naming a server file for a user table is one ParameterError line; the file is never opened (it
+    does not exist: a read would say so instead)."""
+    from turbgen.errors import ParameterError
+    from turbgen.service.run_ids import build_run
+
+    with pytest.raises(ParameterError, match=key) as info:
+        build_run({"model": "kaimal", key: str(tmp_path / "site.csv")})
+    assert "does not exist" not in str(info.value) and "\n" not in str(info.value)
