@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from turbgen.cli.options import parse_floats, plane_positions
-from turbgen.cli.run_options import fft_backend_option, grid_options
+from turbgen.cli.run_options import constraint_options, fft_backend_option, grid_options
 from turbgen.resources import format_bytes
 from turbgen.runs.kaimal import kaimal_generator, memory_needed, plan_spill, run_kaimal
 from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X
@@ -82,15 +82,8 @@ def _three(name):
 @click.option("--overwrite", is_flag=True, help="Replace an existing store.")
 @click.option("--rescale", is_flag=True, help="Scale spectra so the expected sigma is the nominal one (recorded in "
               "the store); default: spectra follow Eq. 11 over the resolved band.")
-@click.option("--constrain", "constrain", multiple=True, type=click.Path(),
-              help="Condition the field on the measurements of FILE: point time series (JSON, "
-              "schemas/constraints.schema.json) or a `turbgen lidar --out` dataset; repeatable. The field is a "
-              "sample of the model conditioned on them (Hoffman & Ribak 1991); each full-rate series' record mean "
-              "is removed first (the field has zero record mean).")  # fmt: skip
-@click.option("--noise", type=float, help="With --constrain: measurement-noise sigma [m/s] >= 0 of every value "
-              "(default: each file's noise_m_s, else 0 = the field passes through the data).")  # fmt: skip
-@click.option("--conditional-mean", "conditional_mean", is_flag=True,
-              help="With --constrain: write the conditional mean (the optimal linear reconstruction, no random part).")
+@constraint_options(" or a `turbgen lidar --out` dataset",
+                    "; each full-rate series' record mean is removed first (the field has zero record mean)")
 def kaimal(**opt):
     """Kaimal 4D field: IEC spectra and yz coherence per plane, exponential longitudinal coherence between planes."""
     if not opt["constrain"] and (opt["noise"] is not None or opt["conditional_mean"]):

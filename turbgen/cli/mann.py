@@ -8,8 +8,8 @@ from contextlib import contextmanager
 import click
 
 from turbgen import resources
-from turbgen.cli.options import plane_positions
-from turbgen.cli.run_options import fft_backend_option, grid_options
+from turbgen.cli.options import evo_seconds, plane_positions
+from turbgen.cli.run_options import constraint_options, fft_backend_option, grid_options
 from turbgen.resources import default_threads, parse_size
 from turbgen.runs.mann import describe, run_mann
 from turbgen.runs.mann_outofcore import local_cluster, plan_for_budget, remove_stale_scratch
@@ -28,14 +28,8 @@ _ENERGY = ("ae", "sigma_u", "ti")
 
 
 def _evo(ctx, param, value):
-    if value is None:
-        return None
-    if value.strip().lower() in ("frozen", "none"):
-        return "frozen"
-    try:
-        return float(value)
-    except ValueError:
-        raise click.BadParameter(f"{value!r} is not a number of seconds or 'frozen'") from None
+    seconds = evo_seconds(ctx, param, value)
+    return "frozen" if seconds is None and value is not None else seconds
 
 
 @contextmanager
@@ -94,15 +88,7 @@ def _dask_client(scheduler, workers: int):
 @click.option("--scheduler", help="Out-of-core runs only: dask scheduler address whose workers make the passes "
               "(they must see --out's directory; --memory then holds per worker), or 'local' for a LocalCluster "
               "of --threads single-threaded workers sharing --memory with this process.")  # fmt: skip
-@click.option("--constrain", "constrain", multiple=True, type=click.Path(),
-              help="Condition the field on the measurements of FILE: point time series (JSON, "
-              "schemas/constraints.schema.json), a `turbgen lidar --out` dataset or a line-of-sight CSV file; "
-              "repeatable. The field is a "
-              "sample of the model conditioned on them (Hoffman & Ribak 1991).")  # fmt: skip
-@click.option("--noise", type=float, help="With --constrain: measurement-noise sigma [m/s] >= 0 of every value "
-              "(default: each file's noise_m_s, else 0 = the field passes through the data).")  # fmt: skip
-@click.option("--conditional-mean", "conditional_mean", is_flag=True,
-              help="With --constrain: write the conditional mean (the optimal linear reconstruction, no random part).")
+@constraint_options(", a `turbgen lidar --out` dataset or a line-of-sight CSV file", "")
 @click.option("--fit", "fit", is_flag=True,
               help="With --constrain of one point-series file: replay it. L, Gamma, ae and the mean wind (power law, "
               "veer) are fitted to the data first (turbgen fit mann) and the field is conditioned with them; --L, "

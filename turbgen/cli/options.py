@@ -1,7 +1,8 @@
-"""Parsers for list-valued CLI options ("0,50,100", "50:170:13.3", "1-21")."""
+"""Parsers for list-valued CLI options ("0,50,100", "50:170:13.3", "1-21") and helpers shared by commands."""
 
 from __future__ import annotations
 
+import functools
 import math
 
 import click
@@ -27,6 +28,34 @@ def evo_seconds(ctx, param, value):
         return float(value)
     except ValueError:
         raise click.BadParameter(f"{value!r} is not a number of seconds or 'frozen'") from None
+
+
+def stacked(options: list):
+    """One decorator applying click ``options`` in order (the first listed first in --help)."""
+    return lambda f: functools.reduce(lambda g, option: option(g), reversed(options), f)
+
+
+def plot_figure(**subplots):
+    """A matplotlib figure and axes (``plt.subplots(**subplots)``) on the Agg backend: no display needed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt.subplots(**subplots)
+
+
+def save_plot(fig, path, dpi: int) -> None:
+    """Lay out ``fig``, write it to the --plot ``path`` as PNG (atomically: never a partial file) and close it."""
+    import matplotlib.pyplot as plt
+
+    from turbgen.store.temporaries import write_atomically
+
+    fig.tight_layout()
+    try:
+        write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=dpi), "--plot")
+    finally:
+        plt.close(fig)
 
 
 def range_help(key: str) -> str:

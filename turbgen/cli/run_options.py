@@ -10,7 +10,7 @@ from collections.abc import Mapping
 import click
 
 from turbgen import fft
-from turbgen.cli.options import parse_floats, parse_range, range_help
+from turbgen.cli.options import parse_floats, parse_range, range_help, stacked
 
 
 def _list(parser, name):
@@ -34,13 +34,23 @@ def grid_options(defaults: Mapping):
         click.option("--dy", type=float, help=f"Lateral spacing [m], {range_help('dy_m')} (default {defaults['dy_m']:g})."),
         click.option("--dz", type=float, help=f"Vertical spacing [m], {range_help('dz_m')} (default: --dy)."),
     ]
+    return stacked(opts)
 
-    def add(f):
-        for opt in reversed(opts):
-            f = opt(f)
-        return f
 
-    return add
+def constraint_options(sources: str, after: str):
+    """Decorator adding --constrain (point series JSON, ``sources`` the further formats, ``after`` closing its
+    help), --noise and --conditional-mean."""
+    opts = [
+        click.option("--constrain", "constrain", multiple=True, type=click.Path(),
+                     help=f"Condition the field on the measurements of FILE: point time series (JSON, "
+                     f"schemas/constraints.schema.json){sources}; repeatable. The field is a sample of the model "
+                     f"conditioned on them (Hoffman & Ribak 1991){after}."),
+        click.option("--noise", type=float, help="With --constrain: measurement-noise sigma [m/s] >= 0 of every value "
+                     "(default: each file's noise_m_s, else 0 = the field passes through the data)."),
+        click.option("--conditional-mean", "conditional_mean", is_flag=True, help="With --constrain: write the "
+                     "conditional mean (the optimal linear reconstruction, no random part)."),
+    ]
+    return stacked(opts)
 
 
 def fft_backend_option(command):

@@ -9,10 +9,9 @@ import os
 import click
 import numpy as np
 
-from turbgen.cli.options import evo_seconds, parse_floats
+from turbgen.cli.options import evo_seconds, parse_floats, plot_figure, save_plot, stacked
 from turbgen.errors import ParameterError
 from turbgen.spec.defaults import MANN_DEFAULTS as D
-from turbgen.store.temporaries import write_atomically
 from turbgen.theory import ranges
 from turbgen.theory.params import LIFETIMES, MannParams, check_wind_speed
 
@@ -43,11 +42,7 @@ def _plot_path(ctx, param, value):
 def _model_options(f_default: str):
     """The decorator adding the model and evaluation-point options shared by every theory/fit command, with the
     command's own default frequency grid ``f_default`` in the help of --f (stated once, where it holds)."""
-    return lambda f: _with_options(f, f_default)
-
-
-def _with_options(f, f_default: str):
-    opts = [
+    return stacked([
         click.option("--L", "L", type=float, default=D["length_scale_m"], show_default=True, help="Mann length scale L [m]."),
         click.option("--gamma", type=float, default=D["gamma"], show_default=True, help="Shear anisotropy Γ [-]."),
         click.option("--ae", type=float, default=None,
@@ -69,10 +64,7 @@ def _with_options(f, f_default: str):
                      help="Write a PNG plot (Guo et al. 2023, Fig. 2 style); an existing file needs --overwrite."),
         click.option("--overwrite", is_flag=True, is_eager=True, expose_value=False, callback=_remember_overwrite,
                      help="Replace an existing --plot file."),
-    ]
-    for opt in reversed(opts):
-        f = opt(f)
-    return f
+    ])
 
 
 _mann_options = _model_options("40 log-spaced, 1e-3..1 Hz")
@@ -121,12 +113,7 @@ def _emit(columns: dict, as_json: bool, extra: dict | None = None):
 
 def _plot(path, x, curves: dict, xlabel: str, ylabel: str, logy=False):
     """Curves over log x (Guo et al. 2023, Fig. 2 style), written as PNG."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig, ax = plot_figure(figsize=(6, 4))
     for label, (y, style) in curves.items():
         ax.plot(x, y, style, label=label)
     ax.set_xscale("log")
@@ -136,11 +123,7 @@ def _plot(path, x, curves: dict, xlabel: str, ylabel: str, logy=False):
     ax.set_ylabel(ylabel)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
-    fig.tight_layout()
-    try:
-        write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=120), "--plot")
-    finally:
-        plt.close(fig)
+    save_plot(fig, path, 120)
 
 
 @click.group()

@@ -7,10 +7,9 @@ import json
 import click
 import numpy as np
 
-from turbgen.cli.options import parse_floats
+from turbgen.cli.options import parse_floats, plot_figure, save_plot
 from turbgen.errors import ParameterError
 from turbgen.spec.defaults import MANN_DEFAULTS
-from turbgen.store.temporaries import write_atomically
 
 
 @click.command("lidar")
@@ -55,12 +54,7 @@ def lidar_theory(model, preset, U, lidar_name, radius, f_text, frozen, as_json, 
 
 
 def _plot(path, out):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    fig, (a1, a2) = plot_figure(ncols=2, figsize=(10, 4))
     a1.semilogx(out["f"], out["coh2_RL"])
     a1.axhline(0.5, color="0.6", lw=0.8)
     a1.set(xlabel="f [Hz]", ylabel="γ²_RL [-]", ylim=(0, 1.02), title=f"{out['model']} {out['preset']}")
@@ -69,8 +63,4 @@ def _plot(path, out):
     a2.axvline(out["cutoff_hz"], color="C3", lw=0.8, label=f"cut-off {out['cutoff_hz']:.4f} Hz")
     a2.set(xlabel="f [Hz]", ylabel="|G_RL| [-]", ylim=(0, 1.05), title=f"lidar {out['lidar']}")
     a2.legend()
-    fig.tight_layout()
-    try:
-        write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110), "--plot")
-    finally:
-        plt.close(fig)
+    save_plot(fig, path, 110)

@@ -10,11 +10,12 @@ from dataclasses import asdict, dataclass
 
 from turbgen.spec.config import load_schema
 from turbgen.spec.defaults import KAIMAL_DEFAULTS, KAIMAL_GRID, MANN_DEFAULTS, MANN_GRID
+from turbgen.spec.models import model_names
 from turbgen.spec.presets import BUILTIN_PRESETS
 from turbgen.spec.run_inputs import GRID_OPTIONS, KAIMAL_OPTIONS, MANN_OPTIONS
 from turbgen.theory.ranges import LIMITS, RANGES
 
-MODELS = ("mann", "kaimal")
+MODELS = model_names()  # the registry's models (turbgen.spec.models)
 GROUPS = ("model", "energy", "grid", "planes", "mean wind / export", "constraints")
 OPTIONS = {"mann": MANN_OPTIONS, "kaimal": KAIMAL_OPTIONS}
 DEFAULTS = {"mann": {**MANN_DEFAULTS, **MANN_GRID}, "kaimal": {**KAIMAL_DEFAULTS, **KAIMAL_GRID}}
