@@ -116,6 +116,51 @@ def _settle_interrupted(plan: SweepPlan, records: dict) -> None:
             rec["error"] = "interrupted before this run finished"
 
 
+def _check_states(plan: SweepPlan, states: dict) -> None:
+    """Refuse a sweep into stores of other parameters; say which complete stores keep other time chunks."""
+    mismatched = [detail for state, detail in states.values() if state == "mismatch"]
+    if mismatched:
+        more = f" (and {len(mismatched) - 1} more)" if len(mismatched) > 1 else ""
+        raise ParameterError(f"{plan.out}: {mismatched[0]}{more}; nothing run, manifest unchanged: "
+                             "use another `out` for another grid or other parameters")
+    rechunked = [pr.store_name for pr in plan.runs if states[pr.name][0] == "complete" and plan.chunk_t
+                 and open_store(plan.out / pr.store_name).chunk_t != plan.chunk_t]
+    if rechunked:
+        print(f"kept {len(rechunked)} existing store(s) ({rechunked[0]}, ...) with time chunks other than "
+              f"--chunks {plan.chunk_t} (the field does not depend on chunking; delete them to rechunk)",
+              file=sys.stderr)
+
+
+def _tasks(plan: SweepPlan, states: dict, records: dict, previous: dict, stencil_cache) -> tuple[dict, int]:
+    """The RunTasks still to do (generate, or validate / lidar a kept store) and the number of complete stores;
+    a complete store keeps its previous record."""
+    tasks: dict[str, RunTask] = {}
+    skipped = 0
+    for pr in plan.runs:
+        rec = records[pr.name]
+        path = plan.out / pr.store_name
+        state = states[pr.name][0]
+        if state == "complete":
+            skipped += 1
+            old = previous.get(pr.name, {})
+            same = old.get("status") == "complete" and old.get("path") == pr.store_name and old.get("checksum")
+            if same:
+                for k in ("duration_s", "checksum", "sigma_m_s", "validation", "lidar", "finished_utc"):
+                    rec[k] = old.get(k)
+            rec["action"] = "skipped"
+            if same and (rec["validation"] is not None or not plan.validate) and (
+                    rec.get("lidar") is not None or not plan.lidar):
+                rec["status"] = "complete"
+                continue
+            tasks[pr.name] = RunTask(pr.model, pr.run, str(path), False, plan.chunk_t, plan.validate, False,
+                                     lidar=plan.lidar, constraints=plan.constraints)
+            continue
+        tasks[pr.name] = RunTask(pr.model, pr.run, str(path), state == "incomplete", plan.chunk_t, plan.validate,
+                                 lidar=plan.lidar, constraints=plan.constraints,
+                                 cache_dir=None if stencil_cache is None else os.fspath(stencil_cache))
+    return tasks, skipped
+
+
 def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress: bool = True,
               threads: int | None = None, memory_bytes: int | None = None,
               stencil_cache: str | os.PathLike | None = None) -> SweepResult:
@@ -137,42 +182,9 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
         previous = {r.get("name"): r for r in (read_manifest(out) or {}).get("runs", []) if isinstance(r, dict)}
         report_removed(remove_dead_temps(out, [pr.store_name for pr in plan.runs]))
         records = {pr.name: base_record(pr) for pr in plan.runs}
-        tasks: dict[str, RunTask] = {}
-        skipped = 0
         states = {pr.name: store_state(out / pr.store_name, pr) for pr in plan.runs}
-        mismatched = [detail for state, detail in states.values() if state == "mismatch"]
-        if mismatched:
-            more = f" (and {len(mismatched) - 1} more)" if len(mismatched) > 1 else ""
-            raise ParameterError(f"{out}: {mismatched[0]}{more}; nothing run, manifest unchanged: "
-                                 "use another `out` for another grid or other parameters")
-        rechunked = [pr.store_name for pr in plan.runs if states[pr.name][0] == "complete" and plan.chunk_t
-                     and open_store(out / pr.store_name).chunk_t != plan.chunk_t]
-        if rechunked:
-            print(f"kept {len(rechunked)} existing store(s) ({rechunked[0]}, ...) with time chunks other than "
-                  f"--chunks {plan.chunk_t} (the field does not depend on chunking; delete them to rechunk)",
-                  file=sys.stderr)
-        for pr in plan.runs:
-            rec = records[pr.name]
-            path = out / pr.store_name
-            state, detail = states[pr.name]
-            if state == "complete":
-                skipped += 1
-                old = previous.get(pr.name, {})
-                same = old.get("status") == "complete" and old.get("path") == pr.store_name and old.get("checksum")
-                if same:
-                    for k in ("duration_s", "checksum", "sigma_m_s", "validation", "lidar", "finished_utc"):
-                        rec[k] = old.get(k)
-                rec["action"] = "skipped"
-                if same and (rec["validation"] is not None or not plan.validate) and (
-                        rec.get("lidar") is not None or not plan.lidar):
-                    rec["status"] = "complete"
-                    continue
-                tasks[pr.name] = RunTask(pr.model, pr.run, str(path), False, plan.chunk_t, plan.validate, False,
-                                         lidar=plan.lidar, constraints=plan.constraints)
-                continue
-            tasks[pr.name] = RunTask(pr.model, pr.run, str(path), state == "incomplete", plan.chunk_t, plan.validate,
-                                     lidar=plan.lidar, constraints=plan.constraints,
-                                     cache_dir=None if stencil_cache is None else os.fspath(stencil_cache))
+        _check_states(plan, states)
+        tasks, skipped = _tasks(plan, states, records, previous, stencil_cache)
         need = sum(3 * t.run.grid.nbytes_per_component() for t in tasks.values() if t.generate)
         if need:
             n_gen = sum(t.generate for t in tasks.values())
