@@ -18,10 +18,7 @@ async def read_json(request: Request):
     Only ``Content-Type: application/json``: a form or text/plain needs no CORS preflight (any web page could post
     it); JSON needs one, never granted. LimitError 415, 413, 408 (BODY_TIMEOUT_S) or 422 (invalid, too deep).
     """
-    media = request.headers.get("content-type", "").split(";")[0].strip().lower()
-    if media != "application/json":
-        raise LimitError(415, f"request body: Content-Type must be application/json, not {media or 'missing'!r}")
-    data = await _bounded_body(request, MAX_BODY_BYTES)
+    data = (await read_upload(request, ("application/json",), MAX_BODY_BYTES))[1]
     try:
         value = json.loads(data)
     except RecursionError:  # the decoder itself recurses: thousands of nested arrays
@@ -39,8 +36,8 @@ async def read_upload(request: Request, types, max_bytes: int) -> tuple[str, byt
     """
     media = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if media not in types:
-        raise LimitError(415, f"request body: Content-Type must be one of {', '.join(types)}, not "
-                         f"{media or 'missing'!r}")  # fmt: skip
+        raise LimitError(415, f"request body: Content-Type must be {'one of ' if len(types) > 1 else ''}"
+                         f"{', '.join(types)}, not {media or 'missing'!r}")  # fmt: skip
     return media, bytes(await _bounded_body(request, max_bytes))
 
 

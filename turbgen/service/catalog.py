@@ -33,6 +33,14 @@ STARTS = "starts.json"
 FAILURE_ROOM, FAILURE_ROOM_BYTES = ".failure-room", 4096
 
 
+def remove_path(path: Path) -> None:
+    """Remove the file, link or directory tree ``path`` if it is there (best effort)."""
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
+
+
 def write_json_atomic(path: Path, data) -> None:
     """Write the JSON-able ``data`` to ``path`` whole or not at all (:func:`turbgen.atomic.write_file`)."""
     write_file(path, json.dumps(data, indent=1))
@@ -122,13 +130,16 @@ class Catalog:
         with contextlib.suppress(OSError):
             write_json_atomic(self.run_dir(rid) / STARTS, {"starts": self.starts(rid) + 1})
 
-    def clear_partial(self, rid: str) -> None:
-        """Remove temporaries a killed run left (the writer's temp siblings of the store)."""
+    def temporaries(self, rid: str) -> list[Path]:
+        """The writer's temporary siblings of run ``rid``'s store (a running run's, or a killed run's leftovers)."""
         d = self.run_dir(rid)
         prefix = temp_prefix(d / STORE)
-        for p in d.iterdir():
-            if p.name.startswith(prefix):
-                shutil.rmtree(p, ignore_errors=True) if p.is_dir() else p.unlink(missing_ok=True)
+        return [p for p in (d.iterdir() if d.is_dir() else ()) if p.name.startswith(prefix)]
+
+    def clear_partial(self, rid: str) -> None:
+        """Remove temporaries a killed run left."""
+        for p in self.temporaries(rid):
+            remove_path(p)
 
     def ids(self) -> list[str]:
         """Ids of every recorded run, sorted."""
@@ -144,7 +155,4 @@ class Catalog:
 
     def progress(self, rid: str, n_chunks_total: int) -> int:
         """Chunks already written to the temporary store of a running run, at most ``n_chunks_total`` (0 if none yet)."""
-        d = self.run_dir(rid)
-        prefix = temp_prefix(d / STORE)
-        n = sum(chunks_written(p) for p in (d.iterdir() if d.is_dir() else ()) if p.name.startswith(prefix))
-        return min(n, n_chunks_total)
+        return min(sum(chunks_written(p) for p in self.temporaries(rid)), n_chunks_total)

@@ -8,10 +8,9 @@ builders' process ids are not this host's).
 from __future__ import annotations
 
 import os
-import shutil
 from pathlib import Path
 
-from turbgen.service.catalog import Catalog
+from turbgen.service.catalog import Catalog, remove_path
 from turbgen.service.run_ids import valid_id
 from turbgen.store.temporaries import remove_dead_temporaries
 
@@ -37,13 +36,9 @@ def remove_dead_work(catalog: Catalog, *, stencils: bool) -> list[Path]:
 
 def _remove_unowned(directory: Path) -> list[Path]:
     """Remove the ``.tmp-*`` entries (temporaries without a process id) of ``directory``."""
-    removed = []
-    for p in directory.glob(".tmp-*") if directory.is_dir() else ():
-        if p.is_dir() and not p.is_symlink():
-            shutil.rmtree(p, ignore_errors=True)
-        else:
-            p.unlink(missing_ok=True)
-        removed.append(p)
+    removed = list(directory.glob(".tmp-*")) if directory.is_dir() else []
+    for p in removed:
+        remove_path(p)
     return removed
 
 

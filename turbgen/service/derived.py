@@ -6,12 +6,12 @@ meanwhile (a DELETE bumps the run's generation), served from there afterwards.
 from __future__ import annotations
 
 import json
-import shutil
 import zipfile
 from pathlib import Path
 
 from fastapi import Request
 
+from turbgen.service.catalog import remove_path
 from turbgen.service.limits import LimitError
 from turbgen.service.state import ServiceState, require_token
 from turbgen.store.temporaries import publish, temp_name
@@ -44,22 +44,15 @@ def cached_product(state: ServiceState, request: Request, rid: str, final: Path,
                 final.parent.mkdir(exist_ok=True)
                 old = publish(tmp, final, replace=True)
             if old is not None:
-                _remove(old)
+                remove_path(old)
         finally:
-            _remove(tmp)
+            remove_path(tmp)
     return final
 
 
 def _raise_if_deleted(state: ServiceState, rid: str, generation: int) -> None:
     if state.generation(rid) != generation or not state.catalog.exists(rid):
         raise LimitError(404, "the run was deleted while this was computed")
-
-
-def _remove(path: Path) -> None:
-    if path.is_dir() and not path.is_symlink():
-        shutil.rmtree(path, ignore_errors=True)
-    else:
-        path.unlink(missing_ok=True)
 
 
 def build_export(store: Path, rid: str, fmt: str, request, tmp: Path) -> None:

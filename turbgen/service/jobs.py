@@ -12,7 +12,7 @@ from pathlib import Path
 
 from turbgen.errors import one_line
 from turbgen.service.catalog import FAILURE_ROOM, Catalog, write_json_atomic
-from turbgen.service.limits import LimitError
+from turbgen.service.limits import RETRY_AFTER_S, LimitError
 from turbgen.service.run_ids import canonical_mapping, run_from_canonical
 from turbgen.spec.constraints import ConstraintRequest
 
@@ -57,10 +57,6 @@ def _scalars(summary: dict) -> dict:
     return {k: v for k, v in summary.items() if isinstance(v, (int, float, str, bool, list)) and k != "path"}
 
 
-class QueueFull(Exception):
-    """More runs queued or running than the server allows."""
-
-
 class Jobs:
     """Submitted runs by id (queued or running) on the dask ``client``, at most ``max_queue`` at once;
     ``stencil_cache_bytes`` caps the stencil cache ``root/stencils`` [bytes] (None: no cap)."""
@@ -78,7 +74,7 @@ class Jobs:
         """Submit run ``rid`` (``preset``: a label for listing; ``constraints``: upload keys,
         :func:`turbgen.service.run_ids.constraint_keys`) unless it is complete or active.
 
-        Returns "complete", "joined" (queued or running) or "queued" (a new computation). Raises QueueFull at
+        Returns "complete", "joined" (queued or running) or "queued" (a new computation). Raises LimitError 429 at
         ``max_queue`` runs, LimitError 507 when the run cannot be recorded (a full disk).
         """
         with self.lock:
@@ -87,7 +83,8 @@ class Jobs:
             if self.catalog.is_complete(rid):
                 return "complete"
             if len(self.active) >= self.max_queue:
-                raise QueueFull(f"{len(self.active)} runs are queued or running (the server's --max-queue)")
+                raise LimitError(429, f"{len(self.active)} runs are queued or running (the server's --max-queue)",
+                                 {"Retry-After": str(RETRY_AFTER_S)})  # fmt: skip
             try:
                 self.catalog.record(rid, model, canonical_mapping(run, constraints), preset)
             except OSError as exc:  # nothing queued: the run could not even be recorded (a full or read-only disk)

@@ -58,19 +58,13 @@ def check_token(expected: str | None, authorization: str | None) -> None:
                          {"WWW-Authenticate": "Bearer"})  # fmt: skip
 
 
-def run_memory_bytes(model: str, run) -> int:
-    """Memory [bytes] the run allocates with the default threads (the estimate the CLI checks too)."""
+def check_memory(model: str, run, budget_bytes: int) -> int:
+    """The run's estimated memory [bytes] with the default threads (the estimate the CLI checks too); LimitError 413
+    if it exceeds ``budget_bytes``."""
     from turbgen.resources import default_threads
     from turbgen.runs.models import get_model
 
-    return get_model(model).memory_bytes(run, default_threads(None))
-
-
-def check_memory(model: str, run, budget_bytes: int) -> int:
-    """The run's estimated memory [bytes]; LimitError 413 if it exceeds ``budget_bytes``."""
-    from turbgen.runs.models import get_model
-
-    need = run_memory_bytes(model, run)
+    need = get_model(model).memory_bytes(run, default_threads(None))
     _refuse_over_budget(need, budget_bytes, "the run", get_model(model).memory_fields.replace("`", ""))
     return need
 

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import json
 import re
+from types import SimpleNamespace
 
 from turbgen.service.catalog import Catalog
 from turbgen.service.jobs import Jobs
 from turbgen.store.layout import default_chunk_t, n_chunks
-from turbgen.store.temporaries import temp_prefix
 
 
 def run_status(catalog: Catalog, jobs: Jobs, rid: str) -> dict:
@@ -18,7 +18,7 @@ def run_status(catalog: Catalog, jobs: Jobs, rid: str) -> dict:
     grid = req["run"]["grid"]
     out = {"id": rid, "model": req["model"], "parameters": {k: v for k, v in req["run"].items() if k != "grid"},
            "grid": grid, "preset": req.get("preset"), "turbgen": req.get("turbgen")}  # fmt: skip
-    total = 3 * n_chunks(_GridShape(grid), default_chunk_t(grid["nt"]))
+    total = 3 * n_chunks(SimpleNamespace(nt=grid["nt"], nx=len(grid["x_m"])), default_chunk_t(grid["nt"]))
     if catalog.is_complete(rid):
         out["status"] = "complete"
         out["progress"] = {"chunks_done": total, "chunks_total": total}
@@ -31,7 +31,7 @@ def run_status(catalog: Catalog, jobs: Jobs, rid: str) -> dict:
             out["validation"] = {"passed": json.loads(rep.read_text()).get("passed")}
     elif jobs.is_active(rid):
         done = catalog.progress(rid, total)
-        out["status"] = "running" if done or _has_temp(catalog, rid) else "queued"
+        out["status"] = "running" if done or catalog.temporaries(rid) else "queued"
         out["progress"] = {"chunks_done": done, "chunks_total": total}
     else:
         reason = catalog.failure(rid)
@@ -65,21 +65,3 @@ def public_text(text: str, catalog: Catalog) -> str:
     for advice, instead in _CLI_ADVICE:
         text = text.replace(advice, instead)
     return text
-
-
-class _GridShape:
-    """The two grid fields n_chunks reads (nt, nx), from a grid mapping."""
-
-    def __init__(self, grid: dict):
-        self.nt = grid["nt"]
-        self.nx = len(grid["x_m"])
-
-
-def _has_temp(catalog: Catalog, rid: str) -> bool:
-    prefix = temp_prefix(catalog.store_path(rid))
-    return any(p.name.startswith(prefix) for p in catalog.run_dir(rid).iterdir())
-
-
-def links(rid: str) -> dict:
-    """The URLs of a run's status and store: ``status_url`` and ``store_url``."""
-    return {"status_url": f"/runs/{rid}", "store_url": f"/runs/{rid}/store"}

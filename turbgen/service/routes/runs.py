@@ -11,11 +11,10 @@ from fastapi.responses import FileResponse, JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from turbgen.service.bodies import read_json
-from turbgen.service.jobs import QueueFull
-from turbgen.service.limits import RETRY_AFTER_S, LimitError, check_constrained_memory, check_memory
+from turbgen.service.limits import LimitError, check_constrained_memory, check_memory
 from turbgen.service.run_ids import build_run, canonical_mapping, run_id
 from turbgen.service.state import ServiceState, complete_store, get_state, not_found, require_token
-from turbgen.service.status import links, run_status
+from turbgen.service.status import run_status
 
 router = APIRouter()
 NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")  # a path component the server may look up
@@ -29,7 +28,8 @@ async def submit(request: Request, state: ServiceState = Depends(get_state)):
     # in a thread: building a run may compile (numba) and submitting writes; on the event loop it held every request
     rid, submitted = await run_in_threadpool(_accept, body, state)
     code = 200 if submitted == "complete" else 202
-    return JSONResponse({"id": rid, "submitted": submitted, **links(rid)}, status_code=code)
+    return JSONResponse({"id": rid, "submitted": submitted, "status_url": f"/runs/{rid}",
+                         "store_url": f"/runs/{rid}/store"}, status_code=code)
 
 
 def _accept(body, state: ServiceState) -> tuple[str, str]:
@@ -42,10 +42,7 @@ def _accept(body, state: ServiceState) -> tuple[str, str]:
         check_constrained_memory(run, files, constraints, state.settings.memory_budget_bytes)
     elif not state.catalog.is_complete(rid):  # a complete run is served, never recomputed
         check_memory(model, run, state.settings.memory_budget_bytes)
-    try:
-        return rid, state.jobs.submit(rid, model, run, preset, constraints)
-    except QueueFull as exc:
-        raise LimitError(429, str(exc), {"Retry-After": str(RETRY_AFTER_S)}) from None
+    return rid, state.jobs.submit(rid, model, run, preset, constraints)
 
 
 @router.get("/runs")
@@ -57,7 +54,8 @@ def list_runs(model: str | None = None, preset: str | None = None, U: float | No
     for rid in state.catalog.ids():
         try:
             s = run_status(state.catalog, state.jobs, rid)
-            submitted = (state.catalog.run_dir(rid) / "request.json").stat().st_mtime
+            mtime = (state.catalog.run_dir(rid) / "request.json").stat().st_mtime
+            submitted = datetime.fromtimestamp(mtime, timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
         except (OSError, ValueError, KeyError):
             continue
         p = s["parameters"]
@@ -67,7 +65,7 @@ def list_runs(model: str | None = None, preset: str | None = None, U: float | No
             continue
         rows.append({k: s.get(k) for k in ("id", "model", "status", "progress", "error", "parameters", "grid")} |
                     {"preset": s["preset"], "U_m_s": p.get("U_m_s"), "seed": p.get("seed"),
-                     "submitted_utc": _utc(submitted), "size_bytes": _store_size(state, rid, s["status"])})  # fmt: skip
+                     "submitted_utc": submitted, "size_bytes": _store_size(state, rid, s["status"])})  # fmt: skip
     rows.sort(key=lambda r: r["submitted_utc"], reverse=True)
     return {"runs": rows}
 
@@ -86,10 +84,6 @@ def _store_size(state: ServiceState, rid: str, status: str) -> int | None:
     except OSError:
         return None
     return _SIZES[key]
-
-
-def _utc(seconds: float) -> str:
-    return datetime.fromtimestamp(seconds, timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
 
 @router.get("/runs/{rid}")

@@ -7,7 +7,6 @@ from starlette.concurrency import run_in_threadpool
 
 from turbgen.errors import ParameterError
 from turbgen.service.bodies import read_json
-from turbgen.service.jobs import QueueFull
 from turbgen.service.limits import RETRY_AFTER_S, LimitError, check_constrained_memory, check_memory
 from turbgen.service.run_ids import canonical_mapping, constraint_keys, run_id
 from turbgen.spec.constraints import CONSTRAINT_KEYS
@@ -58,9 +57,6 @@ async def sweeps(request: Request, state: ServiceState = Depends(get_state)):
                          {"Retry-After": str(RETRY_AFTER_S)})  # fmt: skip
     ids = []
     for pr, rid in zip(plan.runs, rids):
-        try:
-            state.jobs.submit(rid, pr.model, pr.run, pr.preset, constraints)
-        except QueueFull as exc:
-            raise LimitError(429, str(exc), {"Retry-After": str(RETRY_AFTER_S)}) from None
+        state.jobs.submit(rid, pr.model, pr.run, pr.preset, constraints)
         ids.append({"id": rid, "model": pr.model, "preset": pr.preset, "U_m_s": pr.U_m_s, "seed": pr.seed})
     return {"runs": ids}
