@@ -103,10 +103,6 @@ class SweepPlan:
     constraints: ConstraintRequest | None = None  # every run conditioned on the same files (Mann only)
     spectrum: str | None = None  # user spectra CSV of the runs of models that take one (Kaimal)
 
-    def grid_options(self, model: str) -> dict:
-        """Grid options of ``model``'s runs (its table over the common one; missing = command default)."""
-        return {**self.grid, **self.model_grid.get(model, {})}
-
     def to_dict(self) -> dict:
         """The definition, JSON-ready, for the manifest."""
         return {

@@ -50,6 +50,7 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
         if clash:
             raise ParameterError(f"user preset(s) {', '.join(clash)} defined both inline and in preset_file")
         user.update(inline)
+    constrain = {key: data[key] for key in CONSTRAINT_KEYS if key in data}  # paths relative to the file
     kw = dict(
         out=base / data["out"] if "out" in data else None,
         models=data["models"],
@@ -64,7 +65,7 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
         scheduler=data.get("scheduler"),
         user_presets=user,
         lidar=data.get("lidar"),
-        constraints=_constraints(data, base),
+        constraints=split_constraint_keys(resolve_constraint_paths(constrain, base))[1],
         spectrum=str(base / data["spectrum"]) if "spectrum" in data else None,
     )
     kw.update({k: v for k, v in overrides.items() if v is not None})
@@ -73,12 +74,6 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
     if overrides.get("scheduler"):
         kw["workers"] = overrides.get("workers")
     return make_plan(**kw)
-
-
-def _constraints(data: Mapping, base: Path):
-    """The sweep file's ConstraintRequest (paths relative to the file), or None without ``constrain``."""
-    keys = {key: data[key] for key in CONSTRAINT_KEYS if key in data}
-    return split_constraint_keys(resolve_constraint_paths(keys, base))[1]
 
 
 def plan_from_file(path: str | Path, **overrides) -> SweepPlan:

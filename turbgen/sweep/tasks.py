@@ -64,16 +64,6 @@ def lidar_store(path: str, lidar: str) -> dict:
             "max_abs_z": d["verdict"]["max_abs_z"], "z_crit": d["verdict"]["z_crit"]}
 
 
-def _run_constrained(task: RunTask) -> dict:
-    """The constrained Mann run of ``task`` (as ``turbgen mann --constrain``), its summary."""
-    from turbgen.runs.constrain import load_constraints, run_mann_constrained
-
-    c = task.constraints
-    return run_mann_constrained(task.run, task.path, load_constraints(c.files), noise_m_s=c.noise_m_s,
-                                conditional_mean=c.conditional_mean, overwrite=task.overwrite, chunk_t=task.chunk_t,
-                                threads=task.threads, cache_dir=task.cache_dir)  # fmt: skip
-
-
 def execute_run(task: RunTask, shared=None) -> dict:
     """Worker side: generate one field, checksum it, optionally validate it and run the lidar. Never raises.
 
@@ -94,8 +84,13 @@ def execute_run(task: RunTask, shared=None) -> dict:
 
 def _execute_run(task: RunTask, shared, out: dict) -> None:
     """execute_run's steps, their results into ``out``."""
-    if task.generate and task.constraints is not None:
-        summary = _run_constrained(task)
+    if task.generate and task.constraints is not None:  # as `turbgen mann --constrain`
+        from turbgen.runs.constrain import load_constraints, run_mann_constrained
+
+        c = task.constraints
+        summary = run_mann_constrained(task.run, task.path, load_constraints(c.files), noise_m_s=c.noise_m_s,
+                                       conditional_mean=c.conditional_mean, overwrite=task.overwrite,
+                                       chunk_t=task.chunk_t, threads=task.threads, cache_dir=task.cache_dir)  # fmt: skip
         out["sigma_m_s"] = [float(summary[f"sigma_{c}"]) for c in "uvw"]
     elif task.generate:
         summary = MODELS[task.model].run(task.run, task.path, overwrite=task.overwrite, chunk_t=task.chunk_t,
