@@ -30,10 +30,6 @@ from turbgen.store.writer import check_new_store
 PathLike = str | os.PathLike
 
 
-def _path(path: PathLike | None) -> Path | None:
-    return None if path is None else Path(path)
-
-
 def _file_mapping(config, schema: str) -> dict | None:
     """A run file's content (a path to TOML/JSON) or a mapping of the same keys, checked against ``schema``."""
     if config is None:
@@ -231,27 +227,18 @@ def mann(L: float | None = None, gamma: float | None = None, evo: float | str | 
             from turbgen.runs.mann import mann_in_memory
 
             return mann_in_memory(run, progress=progress, threads=default_threads(threads),
-                                  cache_dir=_path(stencil_cache))[0]
+                                  cache_dir=None if stencil_cache is None else Path(stencil_cache))[0]
         make = _mann_maker(run, overwrite, chunks, threads, stencil_cache, memory, progress)
     else:
-        from turbgen.runs.constrain import load_constraints, mann_constrained_in_memory, place, with_energy_from_data
+        from turbgen.runs.constrain import mann_constrained_in_memory
 
-        request = replace(request, files=tuple(load_constraints(request.files)))
-        fit_record = None
-        if fit:
-            from turbgen.runs.replay import check_fit_options, fitted_inputs
-
-            check_fit_options(options, prefix="")
-            mapping, files, fit_record = fitted_inputs(mapping, list(request.files))
-            request = replace(request, files=tuple(files))
-        run = with_energy_from_data(mapping, list(request.files), request.noise_m_s, stencil_cache)
-        placed = place(run, list(request.files), request.noise_m_s)  # every check of the data, before any output
+        run, files, placed, fit_record = constrained_mann_run(mapping, request, fit, options, stencil_cache, "")
         if out is None and _constrained_fits(run, placed, threads, memory):
-            return mann_constrained_in_memory(run, list(request.files), noise_m_s=request.noise_m_s,
+            return mann_constrained_in_memory(run, files, noise_m_s=request.noise_m_s,
                                               conditional_mean=request.conditional_mean,
                                               threads=default_threads(threads), cache_dir=stencil_cache,
                                               progress=progress, placed=placed, fit=fit_record)[0]  # fmt: skip
-        make = _constrained_maker(run, request, placed, overwrite, chunks, threads, stencil_cache, fit_record)
+        make = _constrained_maker(run, files, request, placed, overwrite, chunks, threads, stencil_cache, fit_record)
     if out is None:
         return _through_store(make, run.grid, run.default_store_name())
     make(Path(out))
@@ -271,6 +258,23 @@ def mann_run_mapping(options: Mapping, config: PathLike | Mapping | None = None,
     keys = None if preset is None else (lambda mapping, typed: mann_run_keys(preset, user=user))
     return split_constraint_keys(merge_run_inputs(_file_mapping(config, "mann-run"), given, grid, preset_keys=keys,
                                                   replaces=MANN_REPLACES, x_m=x_m))  # fmt: skip
+
+
+def constrained_mann_run(mapping: dict, request: ConstraintRequest, fit: bool, options: dict, stencil_cache,
+                         prefix: str = "--") -> tuple:
+    """(run, loaded constraints, placed data, fit record or None) of a constrained ``turbgen.mann`` / ``turbgen
+    mann``: with ``fit`` fitted to the data first (turbgen.runs.replay; ``options`` given, ``prefix`` naming them, are
+    refused); without an energy level, ae estimated from the data; every check of the data before any output."""
+    from turbgen.runs.constrain import load_constraints, place, with_energy_from_data
+
+    constraints, record = load_constraints(request.files), None
+    if fit:
+        from turbgen.runs.replay import check_fit_options, fitted_inputs
+
+        check_fit_options(options, prefix=prefix)
+        mapping, constraints, record = fitted_inputs(mapping, constraints)
+    run = with_energy_from_data(mapping, constraints, request.noise_m_s, stencil_cache)
+    return run, constraints, place(run, constraints, request.noise_m_s), record
 
 
 def kaimal_run(options: Mapping, config: PathLike | Mapping | None = None, preset: str | None = None,
@@ -347,12 +351,10 @@ def _mann_maker(run: MannRun, overwrite, chunks, threads, stencil_cache, memory,
     return make
 
 
-def _constrained_maker(run: MannRun, request, placed, overwrite, chunks, threads, stencil_cache, fit=None):
-    """The function writing ``run`` conditioned on ``request`` (files loaded, ``placed`` checked) as ``turbgen mann
-    --constrain`` does; ``fit``: the store's fit record."""
+def _constrained_maker(run: MannRun, constraints, request, placed, overwrite, chunks, threads, stencil_cache, fit):
+    """The function writing ``run`` conditioned on the loaded ``constraints`` (``placed`` checked) with ``request``'s
+    noise and conditional mean as ``turbgen mann --constrain`` does; ``fit``: the store's fit record."""
     from turbgen.runs.constrain import run_mann_constrained
-
-    constraints = list(request.files)  # loaded
 
     def make(out: Path) -> None:
         check_output_path(out, "`out`")
@@ -466,7 +468,7 @@ def kaimal(U: float | None = None, seed: int | None = None, out: PathLike | None
         if out is None:
             return kaimal_constrained_in_memory(run, constraints, noise_m_s=noise, conditional_mean=conditional_mean,
                                                 threads=threads)[0]  # fmt: skip
-        make = _kaimal_constrained_maker(run, constraints, noise, conditional_mean, overwrite, chunks, threads)
+        make = _kaimal_maker(run, overwrite, chunks, threads, progress, constraints, noise, conditional_mean)
     else:
         # straight into the Dataset when the run's arrays with the spectrum in memory and the field fit 80 % of the
         # available memory (the rule by which run_kaimal keeps its spectrum in memory), else through a store
@@ -482,29 +484,43 @@ def kaimal(U: float | None = None, seed: int | None = None, out: PathLike | None
     return _as_dataset(Path(out))
 
 
-def _kaimal_maker(run: KaimalRun, overwrite, chunks, threads, progress):
-    """The function writing ``run`` to a path as ``turbgen kaimal`` does (spectrum spilled when over memory)."""
-    from turbgen.runs.kaimal import kaimal_generator, plan_spill, run_kaimal
+def check_kaimal_output(run: KaimalRun, out, chunks, overwrite: bool, threads, constrain=None, noise=None,
+                        what: str = "--out") -> tuple[int, list | None]:
+    """(peak memory [B], loaded constraints or None) of ``turbgen kaimal`` / ``turbgen.kaimal`` to ``out``, after
+    its refusals in run_kaimal's order, before anything is written: an unusable ``out``, a coherence too costly to
+    sample, a spectrum that fits neither memory nor disk, ``constrain`` that does not match the run or the memory,
+    then the store (existing output, chunks, disk)."""
+    from turbgen.runs.kaimal import kaimal_generator, memory_needed, plan_spill
+
+    check_output_path(out, what)
+    sampler = kaimal_generator(run, workers=threads).sampler_bytes()
+    plan_spill(run.grid, Path(out).absolute(), None, sampler)
+    memory, constraints = memory_needed(run.grid, sampler=sampler), None
+    if constrain is not None:
+        from turbgen.runs.constrain import load_constraints
+        from turbgen.runs.constrain_kaimal import constrained_memory_bytes, place_kaimal, require_constrained_memory
+
+        constraints = load_constraints(constrain)
+        placed = place_kaimal(run, constraints, noise)
+        require_constrained_memory(run, placed, threads)
+        memory = constrained_memory_bytes(run, placed, threads)
+    check_new_store(out, run.grid, chunk_t=chunks, overwrite=overwrite)
+    return memory, constraints
+
+
+def _kaimal_maker(run: KaimalRun, overwrite, chunks, threads, progress, constraints=None, noise=None,
+                  conditional_mean: bool = False):
+    """The function writing ``run`` (conditioned on the loaded ``constraints`` if given) to a path as ``turbgen
+    kaimal`` does."""
+    from turbgen.runs.constrain_kaimal import run_kaimal_constrained
+    from turbgen.runs.kaimal import run_kaimal
 
     def make(path: Path) -> None:
-        check_output_path(path, "`out`")
-        plan_spill(run.grid, path.absolute(), None, kaimal_generator(run, workers=threads).sampler_bytes())
-        check_new_store(path, run.grid, chunk_t=chunks, overwrite=overwrite)
-        run_kaimal(run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=threads)
-
-    return make
-
-def _kaimal_constrained_maker(run: KaimalRun, constraints, noise, conditional_mean: bool, overwrite, chunks, threads):
-    """The function writing ``run`` conditioned on the loaded ``constraints`` as ``turbgen kaimal --constrain``
-    does; data placed and memory checked here, before anything is written."""
-    from turbgen.runs.constrain_kaimal import place_kaimal, require_constrained_memory, run_kaimal_constrained
-
-    require_constrained_memory(run, place_kaimal(run, constraints, noise), threads)
-
-    def make(path: Path) -> None:
-        check_output_path(path, "`out`")
-        check_new_store(path, run.grid, chunk_t=chunks, overwrite=overwrite)
-        run_kaimal_constrained(run, path, constraints, noise_m_s=noise, conditional_mean=conditional_mean,
-                               overwrite=overwrite, chunk_t=chunks, threads=threads)  # fmt: skip
+        check_kaimal_output(run, path, chunks, overwrite, threads, constraints, noise, "`out`")
+        if constraints is None:
+            run_kaimal(run, path, overwrite=overwrite, chunk_t=chunks, progress=progress, threads=threads)
+        else:
+            run_kaimal_constrained(run, path, constraints, noise_m_s=noise, conditional_mean=conditional_mean,
+                                   overwrite=overwrite, chunk_t=chunks, threads=threads)  # fmt: skip
 
     return make

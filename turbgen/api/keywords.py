@@ -19,21 +19,9 @@ PLANE_KEYWORDS = ("planes", "gates")
 _FLAGS = ("rescale", "conditional_mean")
 
 
-def _aliases(model: str) -> dict:
-    """Option name -> run key of ``model`` (its declared ``options``, turbgen.spec.models)."""
-    return resolve(declaration(model).options, "spec")
-
-
 def _no_files(name: str, value) -> bool:
     """An empty ``constrain`` (the command's repeatable option not given): not given, so a run file's list stays."""
     return name == "constrain" and isinstance(value, (list, tuple)) and not value
-
-
-def _evo_value(value):
-    """'frozen' (or 'none') -> None, the evolution time of frozen turbulence; other values as given."""
-    if isinstance(value, str) and value.strip().lower() in ("frozen", "none"):
-        return None
-    return value
 
 
 def _plane_positions(planes, gates) -> list[float] | None:
@@ -67,13 +55,13 @@ def run_inputs(model: str, options: Mapping) -> tuple[dict, dict, list[float] | 
     ``options`` maps option names to the values passed to ``turbgen.mann`` / ``turbgen.kaimal``; None (and a
     flag's False, an empty ``constrain``) is "not given".
     """
-    aliases = _aliases(model)
+    aliases = resolve(declaration(model).options, "spec")  # option name -> run key (turbgen.spec.models)
     given, grid = {}, {}
     for name, value in options.items():
         if value is None or name in PLANE_KEYWORDS or (name in _FLAGS and value is False) or _no_files(name, value):
             continue
-        if name == "evo":
-            value = _evo_value(value)
+        if name == "evo" and isinstance(value, str) and value.strip().lower() in ("frozen", "none"):
+            value = None  # the evolution time of frozen turbulence
         if name in GRID_OPTIONS:
             grid[GRID_OPTIONS[name]] = value
         else:

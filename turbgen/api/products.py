@@ -223,15 +223,7 @@ def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLi
     >>> report.passed, sorted(report.to_dict())[:2]
     (True, ['G_RL_simulated', 'G_RL_theory'])
     """
-    from turbgen.virtual_lidar import report
-    from turbgen.virtual_lidar.dataset import check_output
-
-    wind = lidar_mean_wind(mean_wind, shear, profile, veer, mean_history)
-    fs = field_store(store)
-    if out is not None:
-        check_output(out, overwrite)
-    result = report.lidar_report(fs, None if lidar is None else str(lidar), rotor_radius_m=rotor_radius,
-                                 add_mean_wind=mean_wind, shear_exponent=shear, mean_wind=wind)  # fmt: skip
+    result = lidar_report(store, lidar, out, overwrite, rotor_radius, mean_wind, shear, profile, veer, mean_history)
     if out is not None:
         result.write(out, overwrite=overwrite)
     if plots is not None:
@@ -239,16 +231,26 @@ def lidar(store, lidar: str | os.PathLike | None = None, *, out: str | os.PathLi
     return result
 
 
-def lidar_mean_wind(add: bool, shear_exponent: float, profile, veer, history):
-    """The MeanWind of the lidar's ``profile``, ``veer``, ``mean_history`` (each needs ``add``); None without them."""
+def lidar_report(store, lidar, out, overwrite: bool, rotor_radius, add: bool, shear_exponent: float, profile, veer,
+                 history):
+    """The LidarReport of :func:`lidar` and ``turbgen lidar`` (``out`` checked, not written): the mean wind of
+    ``profile``, ``veer``, ``history`` (each needs ``add``; a profile defaults to the power law of ``shear_exponent``)
+    added to u when ``add``."""
     from turbgen.spec.mean_wind_files import mean_wind_from_options
+    from turbgen.virtual_lidar import report
+    from turbgen.virtual_lidar.dataset import check_output
 
     given = [n for n, v in (("--profile", profile), ("--veer", veer), ("--mean-history", history)) if v is not None]
     if given and not add:
         raise ParameterError(f"{', '.join(given)} belong to --mean-wind")
     if profile is None and given:
         profile = f"power:{shear_exponent!r}"
-    return mean_wind_from_options(profile, veer, None if history is None else str(history))
+    wind = mean_wind_from_options(profile, veer, None if history is None else str(history))
+    fs = field_store(store)
+    if out is not None:
+        check_output(out, overwrite)
+    return report.lidar_report(fs, None if lidar is None else str(lidar), rotor_radius_m=rotor_radius,
+                               add_mean_wind=add, shear_exponent=shear_exponent, mean_wind=wind)  # fmt: skip
 
 
 def info(store) -> dict:

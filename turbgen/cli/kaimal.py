@@ -4,21 +4,18 @@ from __future__ import annotations
 
 import sys
 from dataclasses import replace
-from pathlib import Path
 
 import click
 
 from turbgen.cli.options import parse_floats, plane_positions
 from turbgen.cli.run_options import constraint_options, fft_backend_option, grid_options
 from turbgen.resources import format_bytes
-from turbgen.runs.kaimal import kaimal_generator, memory_needed, plan_spill, run_kaimal
+from turbgen.runs.kaimal import run_kaimal
 from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X
 from turbgen.spec.defaults import KAIMAL_DEFAULTS as D
 from turbgen.spec.defaults import KAIMAL_GRID as G
 from turbgen.spec.kaimal import LONG_COMPONENTS, VW_COHERENCE
 from turbgen.spec.run_inputs import GRID_OPTIONS, KAIMAL_OPTIONS
-from turbgen.store.paths import check_output_path
-from turbgen.store.writer import check_new_store
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS
 from turbgen.theory.kaimal import IEC_IREF
 from turbgen.theory.ranges import LIMITS
@@ -91,7 +88,7 @@ def kaimal(**opt):
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
     plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
-    from turbgen.api.fields import kaimal_run
+    from turbgen.api.fields import check_kaimal_output, kaimal_run
 
     # the run as turbgen.kaimal makes it, and the preset's keys at its U (they also name the default store)
     run, preset_keys = kaimal_run({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],
@@ -100,21 +97,8 @@ def kaimal(**opt):
         run = replace(run, coherence=opt["coherence"])
     g = run.grid
     out = opt["out"] if opt["out"] is not None else run.default_store_name(opt["preset"], preset_keys or None)
-    # refusals before anything is printed, in run_kaimal's order: a coherence too costly to sample, a spectrum that
-    # fits neither memory nor disk, then the store (existing output, chunks, disk)
-    check_output_path(out)
-    sampler = kaimal_generator(run, workers=opt["threads"]).sampler_bytes()
-    plan_spill(g, Path(out).absolute(), None, sampler)
-    constraints = None
-    if opt["constrain"]:
-        from turbgen.runs.constrain import load_constraint
-        from turbgen.runs.constrain_kaimal import constrained_memory_bytes, place_kaimal, require_constrained_memory
-
-        constraints = [load_constraint(path) for path in opt["constrain"]]
-        # every check of the data against the run, and of the memory, before any output
-        placed = place_kaimal(run, constraints, opt["noise"])
-        require_constrained_memory(run, placed, opt["threads"])
-    check_new_store(out, g, chunk_t=opt["chunks"], overwrite=opt["overwrite"])
+    memory, constraints = check_kaimal_output(run, out, opt["chunks"], opt["overwrite"], opt["threads"],
+                                              opt["constrain"] or None, opt["noise"])  # before any line
     k = run.kaimal
     spectra = f"user spectra {opt['spectrum'] or '(run file)'}"
     if run.spectrum is None:
@@ -127,8 +111,6 @@ def kaimal(**opt):
                f"long {run.long_model} {run.effective_long_parameters()} on {run.long_components}, seed {run.seed}")
     click.echo(f"  grid (t, x, y, z) = {g.nt} x {g.nx} x {g.ny} x {g.nz}, dt {g.dt_s:g} s, dy {g.dy_m:g} m, "
                f"dz {g.dz_m:g} m, planes x = {', '.join(f'{x:g}' for x in g.x_m)} m")
-    memory = memory_needed(g, sampler=sampler) if constraints is None else constrained_memory_bytes(run, placed,
-                                                                                                   opt["threads"])
     click.echo(f"  memory ~{format_bytes(memory)}, output {format_bytes(3 * g.nbytes_per_component())} "
                f"float32 -> {out}")
     if constraints is not None:

@@ -79,18 +79,11 @@ def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_expone
     Exit code 0 when the simulated coherence agrees with theory, 1 when it departs beyond the
     estimator's uncertainty, 2 for usage errors (nothing written).
     """
-    from turbgen.api.products import lidar_mean_wind
-    from turbgen.virtual_lidar import report
-    from turbgen.virtual_lidar.dataset import check_output
-    from turbgen.store import open_store
+    from turbgen.api.products import lidar_report
 
     try:
-        wind = lidar_mean_wind(mean_wind, shear_exponent, profile, veer, mean_history)
-        fs = open_store(store)
-        if out is not None:
-            check_output(out, overwrite)
-        result = report.lidar_report(fs, lidar_name, rotor_radius_m=rotor_radius, add_mean_wind=mean_wind,
-                                     shear_exponent=shear_exponent, mean_wind=wind)
+        result = lidar_report(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_exponent, profile,
+                              veer, mean_history)
     except TurbgenError as exc:
         from turbgen.cli import user_error
 

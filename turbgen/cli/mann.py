@@ -102,7 +102,7 @@ def mann(**opt):
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
     plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
-    from turbgen.api.fields import mann_run_mapping
+    from turbgen.api.fields import constrained_mann_run, mann_run_mapping
 
     # the run as turbgen.mann makes it; --constrain/--noise/--conditional-mean or the run file's
     mapping, request = mann_run_mapping({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],
@@ -113,17 +113,10 @@ def mann(**opt):
     if request is None:
         run = MannRun.from_mapping(mapping)
     else:
-        from turbgen.runs.constrain import constrained_store_name, load_constraints, place, with_energy_from_data
+        from turbgen.runs.constrain import constrained_store_name
 
-        constraints = load_constraints(request.files)
-        if opt["fit"]:
-            from turbgen.runs.replay import check_fit_options, fitted_inputs
-
-            check_fit_options(opt)
-            mapping, constraints, fit = fitted_inputs(mapping, constraints)
         # no ae, sigma_u, ti or IEC class given: ae estimated from the data (printed with the run below)
-        run = with_energy_from_data(mapping, constraints, request.noise_m_s, opt["stencil_cache"])
-        placed = place(run, constraints, request.noise_m_s)  # every check of the data against the run, before output
+        run, constraints, placed, fit = constrained_mann_run(mapping, request, opt["fit"], opt, opt["stencil_cache"])
         out = constrained_store_name(run, placed, request.conditional_mean)
     out = opt["out"] if opt["out"] is not None else out or run.default_store_name()
     check_output_path(out)

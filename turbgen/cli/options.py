@@ -72,10 +72,10 @@ def count_text(n: float) -> str:
     return f"about {n / 10**e:.3g}e+{e}"
 
 
-def _limit(name: str) -> tuple[str, int]:
-    """The LIMITS key and maximum count of a list option (turbgen.theory.ranges.LIMITS)."""
+def _limit(name: str) -> int:
+    """The maximum count of a list option (turbgen.theory.ranges.LIMITS)."""
     key = {"--planes": "planes", "--gates": "planes", "--seeds": "seeds", "--speeds": "speeds"}.get(name, "points")
-    return key, LIMITS[key]
+    return LIMITS[key]
 
 
 def parse_floats(text: str, name: str) -> list[float]:
@@ -86,7 +86,7 @@ def parse_floats(text: str, name: str) -> list[float]:
     if not all(v.strip() for v in items):  # '0,,50' or '0,50,': a value left out, not a list of two
         raise click.BadParameter(f"{text!r} has an empty entry (write numbers separated by single commas)",
                                  param_hint=name)
-    _, limit = _limit(name)
+    limit = _limit(name)
     if len(items) > limit:
         raise click.BadParameter(f"{len(items)} values is more than the maximum {limit}", param_hint=name)
     for v in items:
@@ -112,7 +112,7 @@ def parse_range(text: str, name: str) -> list[float]:
     if not (step > 0 and stop >= start and all(map(math.isfinite, (start, stop, step)))):
         raise click.BadParameter(f"{text!r} needs finite numbers, step > 0 and stop >= start", param_hint=name)
     n = math.floor((stop - start) / step * (1 + 1e-9) + 1e-9) + 1.0  # a float: 50:1e300:1 has ~1e300 values
-    _, limit = _limit(name)
+    limit = _limit(name)
     if n > limit:
         raise click.BadParameter(f"{text!r} gives {count_text(n)} values, more than the maximum {limit}",
                                  param_hint=name)
@@ -123,7 +123,7 @@ def parse_range(text: str, name: str) -> list[float]:
 def parse_ints(text: str, name: str) -> list[int]:
     """'1-21' or '1,4,7' or '1-3,9' -> sorted unique non-negative ints (at most the option's LIMITS count;
     counted before any range is expanded)."""
-    _, limit = _limit(name)
+    limit = _limit(name)
     ranges: list[tuple[int, int]] = []
     parts = text.split(",")
     if text.strip() and not all(p.strip() for p in parts):  # '1,,3': a value left out
@@ -169,12 +169,9 @@ def plane_positions(planes: list[float] | None, gates: list[float] | None) -> li
 def iec_class_options(help_text: str):
     """``--iec-class`` (turbine class and turbulence category, e.g. IIB) and its deprecated hidden alias ``--class``
     (which ``kaimal`` uses for the turbulence class alone); :func:`resolve_iec_class` merges the two arguments."""
-    def decorate(f):
-        f = click.option("--class", "class_alias", hidden=True, default=None,
-                         help="Deprecated alias of --iec-class.")(f)
-        return click.option("--iec-class", "iec_class", default=None, help=help_text)(f)
-
-    return decorate
+    return stacked([click.option("--iec-class", "iec_class", default=None, help=help_text),
+                    click.option("--class", "class_alias", hidden=True, default=None,
+                                 help="Deprecated alias of --iec-class.")])
 
 
 def resolve_iec_class(iec_class: str | None, class_alias: str | None, command: str) -> str | None:
