@@ -222,6 +222,7 @@ def _execute(plan, tasks, records, save, result, client, processes, progress, th
     from tqdm import tqdm
 
     own_client = cluster = None
+    interrupted = False
     if client is None:
         n = plan.workers or default_workers(tasks.values())
         own_client, cluster = _make_client(plan, n, processes)
@@ -277,11 +278,22 @@ def _execute(plan, tasks, records, save, result, client, processes, progress, th
                 bar.set_postfix_str(f"{name}: {rec['status']}", refresh=False)
                 bar.update(1)
     except (KeyboardInterrupt, SystemExit):
-        # shutting the cluster down mid-run makes the scheduler log lost comms at CRITICAL level
-        logging.getLogger("distributed").setLevel(logging.CRITICAL + 1)
+        interrupted = True
         raise
     finally:
-        if own_client is not None:
-            own_client.close()
-        if cluster is not None:
-            cluster.close()
+        close_quietly(own_client, cluster, quiet=interrupted)
+
+
+def close_quietly(*closables, quiet: bool) -> None:
+    """Close the sweep's own client and cluster. Shut down mid-run (``quiet``), the scheduler logs lost comms at
+    CRITICAL level: the ``distributed`` logger is silenced for the shutdown only, its level restored after."""
+    log = logging.getLogger("distributed")
+    level = log.level
+    if quiet:
+        log.setLevel(logging.CRITICAL + 1)
+    try:
+        for c in closables:
+            if c is not None:
+                c.close()
+    finally:
+        log.setLevel(level)
