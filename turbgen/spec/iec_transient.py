@@ -53,10 +53,9 @@ class IecTransient:
         Hub height and rotor diameter D [m], > 0, the rotor clear of the ground.
     start_s, duration_s : float
         Start of the event and length of the file [s]; the event ends within the file.
-    dt_s : float
-        Row spacing during the event [s], in [MIN_DT_S, T/4].
-    sign : int
-        +1 or -1: the standard's "+-" (direction change or shear sense); EOG takes +1 only.
+    dt_s, sign : float, int
+        Row spacing during the event [s], in [MIN_DT_S, T/4]; +1 or -1, the standard's "+-" (direction change or
+        shear sense), EOG +1 only.
 
     Raises
     ------

@@ -18,12 +18,9 @@ class MannParams:
 
     Parameters
     ----------
-    ae : float
-        alpha*epsilon^(2/3) [m^(4/3) s^-2], spectral energy level.
-    length_scale_m : float
-        L [m], length scale of the energy-containing eddies.
-    gamma : float
-        Gamma [-], shear anisotropy (0 = isotropic).
+    ae, length_scale_m, gamma : float
+        alpha*epsilon^(2/3) [m^(4/3) s^-2], spectral energy level; L [m], length scale of the energy-containing
+        eddies; Gamma [-], shear anisotropy (0 = isotropic).
     lifetime : str, optional
         "guo" (Guo et al. 2023, Eq. 6) or "mann" (Eq. 4, hypergeometric).
     factor1, factor2 : float, optional
@@ -60,14 +57,10 @@ class KaimalParams:
 
     Parameters
     ----------
-    sigma_m_s : tuple of float
-        (sigma_u, sigma_v, sigma_w) [m/s].
-    length_scales_m : tuple of float
-        (L1, L2, L3) [m], Kaimal integral length scales.
-    a_yz : float, optional
-        Coherence decay constant [-] (IEC: 12).
-    lc_m : float, optional
-        Coherence scale parameter Lc [m] (IEC: 8.1 Lambda1).
+    sigma_m_s, length_scales_m : tuple of float
+        (sigma_u, sigma_v, sigma_w) [m/s]; (L1, L2, L3) [m], Kaimal integral length scales.
+    a_yz, lc_m : float, optional
+        Coherence decay constant [-] (IEC: 12) and scale parameter Lc [m] (IEC: 8.1 Lambda1).
     """
 
     sigma_m_s: tuple[float, float, float]
