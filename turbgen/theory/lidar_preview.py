@@ -206,10 +206,8 @@ def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_
 
     Parameters
     ----------
-    f_hz, meas, U_m_s, radius_m
-        As :func:`mann_preview_spectra`.
-    kparams : KaimalParams
-        Kaimal spectra and IEC yz coherence.
+    f_hz, meas, U_m_s, radius_m, kparams
+        As :func:`mann_preview_spectra`; ``kparams`` (KaimalParams) the Kaimal spectra and IEC yz coherence.
     long_coherence : callable
         ``long_coherence(dx_m, f_hz)``: un-squared coherence [-] between planes dx [m] apart, for the
         components in ``long_components`` (the others are independent between planes).

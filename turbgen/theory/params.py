@@ -21,12 +21,10 @@ class MannParams:
     ae, length_scale_m, gamma : float
         alpha*epsilon^(2/3) [m^(4/3) s^-2], spectral energy level; L [m], length scale of the energy-containing
         eddies; Gamma [-], shear anisotropy (0 = isotropic).
-    lifetime : str, optional
-        "guo" (Guo et al. 2023, Eq. 6) or "mann" (Eq. 4, hypergeometric).
-    factor1, factor2 : float, optional
-        Slopes [-]: Guo lifetime's small-k -factor1 (stable 0.8), evolution's large-k -(2/3) factor2 (Eq. 15: 3.5).
-    evo_time_s : float or None, optional
-        gamma [s], time constant of tau_e (Eq. 15); None = frozen turbulence.
+    lifetime, factor1, factor2, evo_time_s : str, float, float, float or None, optional
+        "guo" (Guo et al. 2023, Eq. 6) or "mann" (Eq. 4, hypergeometric); slopes [-]: Guo lifetime's small-k
+        -factor1 (stable 0.8), evolution's large-k -(2/3) factor2 (Eq. 15: 3.5); gamma [s], time constant of
+        tau_e (Eq. 15), None = frozen turbulence.
     """
 
     ae: float

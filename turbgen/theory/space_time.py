@@ -27,10 +27,9 @@ def space_time_tensor(k1, k2, k3, dt_s: float, params: MannParams) -> np.ndarray
 
     Parameters
     ----------
-    k1, k2, k3 : array_like
-        Wavenumber components [rad/m] (broadcast together).
-    dt_s, params : float, MannParams
-        Time lag [s], finite; Mann model parameters (frozen turbulence: Theta = Phi).
+    k1, k2, k3, dt_s, params : array_like, array_like, array_like, float, MannParams
+        Wavenumber components [rad/m] (broadcast together); time lag [s], finite; Mann model parameters (frozen
+        turbulence: Theta = Phi).
     """
     dt = check_finite("dt (s)", dt_s)
     k1, k2, k3 = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (k1, k2, k3)))
