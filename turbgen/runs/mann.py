@@ -46,7 +46,7 @@ def shared_stencil_key(run: MannRun) -> tuple:
 
 def shared_stencil_nbytes(run: MannRun) -> int:
     """Bytes [B] of the unit stencil of ``run`` (a sweep's worker holds it besides the run's scaled one)."""
-    return stencil_nbytes(synthesis_box(run), run.grid.nx > 1 and run.params.evo_time_s is not None, "unit")
+    return stencil_nbytes(synthesis_box(run), _evolving(run), "unit")
 
 
 def _evolving(run: MannRun) -> bool:
