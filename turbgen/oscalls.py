@@ -31,13 +31,9 @@ def portable() -> bool:
     return os.environ.get(PORTABLE_ENV, "") not in ("", "0")
 
 
-def _linux() -> bool:
-    return sys.platform.startswith("linux") and not portable()
-
-
 def _libc_function(name: str):
     """The C library's function ``name`` (errno kept), or None where it is missing or the fallbacks are forced."""
-    if not _linux():
+    if portable() or not sys.platform.startswith("linux"):
         return None
     libc_name = ctypes.util.find_library("c")
     return getattr(ctypes.CDLL(libc_name, use_errno=True), name, None) if libc_name else None
