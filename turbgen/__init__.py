@@ -29,17 +29,15 @@ from typing import TYPE_CHECKING
 
 from turbgen.version import __version__
 
-_FIELDS = ("mann", "kaimal", "open_store")
-_INFO = ("info",)
-# public typed objects and functions of their own modules: name -> module
-_OBJECTS = {"MannParams": "turbgen.theory.params", "KaimalParams": "turbgen.theory.params", "Grid": "turbgen.grid",
-            "MannGenerator": "turbgen.api.generator", "KaimalGenerator": "turbgen.api.generator",
-            "fit_mann": "turbgen.api.fit", "fit_kaimal": "turbgen.api.fit"}
-# what is made from a field (turbgen.api.products); the packages behind them are turbgen.validation,
-# turbgen.exporters and turbgen.virtual_lidar
-_PRODUCTS = ("validate", "export", "lidar")
+# the public functions and typed objects: name -> module; what is made from a field (turbgen.api.products) comes of
+# turbgen.validation, turbgen.exporters and turbgen.virtual_lidar
+_OBJECTS = {"mann": "turbgen.api.fields", "kaimal": "turbgen.api.fields", "open_store": "turbgen.api.fields",
+            "validate": "turbgen.api.products", "export": "turbgen.api.products", "lidar": "turbgen.api.products",
+            "info": "turbgen.api.products", "MannParams": "turbgen.theory.params",
+            "KaimalParams": "turbgen.theory.params", "Grid": "turbgen.grid", "MannGenerator": "turbgen.api.generator",
+            "KaimalGenerator": "turbgen.api.generator", "fit_mann": "turbgen.api.fit", "fit_kaimal": "turbgen.api.fit"}
 _MODULES = ("theory", "errors", "api")
-__all__ = ["__version__", *_FIELDS, *_PRODUCTS, *_INFO, *_OBJECTS, "theory", "errors"]
+__all__ = ["__version__", *_OBJECTS, "theory", "errors"]
 
 if TYPE_CHECKING:
     from turbgen import errors, theory
@@ -52,10 +50,6 @@ if TYPE_CHECKING:
 
 
 def __getattr__(name: str):
-    if name in _FIELDS:
-        return getattr(importlib.import_module("turbgen.api.fields"), name)
-    if name in _INFO or name in _PRODUCTS:
-        return getattr(importlib.import_module("turbgen.api.products"), name)
     if name in _OBJECTS:
         return getattr(importlib.import_module(_OBJECTS[name]), name)
     if name in _MODULES:

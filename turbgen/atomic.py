@@ -13,15 +13,16 @@ from pathlib import Path
 TEMP_MARK = ".tmp-"
 
 
-def temp_prefix(path: Path) -> str:
+def temp_prefix(path: Path, mark: str = TEMP_MARK) -> str:
     """``.NAME.tmp-``: the name prefix of the temporary siblings used while writing ``path`` (named NAME)."""
-    return f".{Path(path).name}{TEMP_MARK}"
+    return f".{Path(path).name}{mark}"
 
 
-def temp_name(path: Path) -> Path:
-    """A fresh temporary sibling ``.NAME.tmp-PID-XXXXXXXX`` of ``path`` owned by this process (8 random hex digits)."""
+def temp_name(path: Path, mark: str = TEMP_MARK) -> Path:
+    """A fresh temporary sibling ``.NAME.tmp-PID-XXXXXXXX`` of ``path`` owned by this process (8 random hex digits;
+    ``mark`` in place of ``.tmp-``)."""
     path = Path(path)
-    return path.parent / f"{temp_prefix(path)}{os.getpid()}-{secrets.token_hex(4)}"
+    return path.parent / f"{temp_prefix(path, mark)}{os.getpid()}-{secrets.token_hex(4)}"
 
 
 def write_file(path: Path, data: str | bytes) -> None:

@@ -32,18 +32,13 @@ def _is_bool(value) -> bool:
     return isinstance(value, bool) or type(value).__name__ in ("bool", "bool_")
 
 
-def _is_number(value) -> bool:
-    if _is_bool(value):
-        return False
-    try:
-        return math.isfinite(float(value))
-    except (TypeError, ValueError):
-        return False
-
-
 def check_finite(name: str, value) -> float:
     """Return ``value`` as float, or raise if it is not a finite number."""
-    if not _is_number(value):
+    try:
+        number = not _is_bool(value) and math.isfinite(float(value))
+    except (TypeError, ValueError):
+        number = False
+    if not number:
         what = "a bool, not a number" if _is_bool(value) else "not a finite number"
         raise ParameterError(f"{name} = {value!r} is {what}")
     return float(value)

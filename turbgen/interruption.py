@@ -31,15 +31,11 @@ def forget_signals() -> None:
     clear_stop_requests()
 
 
-def _record(signum: int) -> BaseException:
+def _exit_on_signal(signum, frame):
     exc = KeyboardInterrupt() if signum == signal.SIGINT else SystemExit(128 + signum)
     _received.append(signum)
     request_stop(exc)
-    return exc
-
-
-def _exit_on_signal(signum, frame):
-    raise _record(signum)
+    raise exc
 
 
 def _quiet_about_signals(unraisable) -> None:

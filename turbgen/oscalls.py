@@ -31,13 +31,9 @@ def portable() -> bool:
     return os.environ.get(PORTABLE_ENV, "") not in ("", "0")
 
 
-def _linux() -> bool:
-    return sys.platform.startswith("linux") and not portable()
-
-
 def _libc_function(name: str):
     """The C library's function ``name`` (errno kept), or None where it is missing or the fallbacks are forced."""
-    if not _linux():
+    if portable() or not sys.platform.startswith("linux"):
         return None
     libc_name = ctypes.util.find_library("c")
     return getattr(ctypes.CDLL(libc_name, use_errno=True), name, None) if libc_name else None
@@ -97,14 +93,15 @@ def reserve(fd: int, nbytes: int, *, keep_size: bool, name: str = "") -> bool:
     return True
 
 
-def _proc_field(path: Path, key: str) -> str | None:
-    """The first value after ``key:`` in a /proc file, or None where it is missing, unreadable or forced off."""
+def _proc_bytes(path: Path, key: str) -> int | None:
+    """The value [kB] after ``key:`` in a /proc file in bytes, or None where it is missing, unreadable or forced off."""
     if portable():
         return None
     try:
         for line in path.read_text().splitlines():
             if line.startswith(key + ":"):
-                return line.split()[1]
+                value = line.split()[1]
+                return int(value) * 1024 if value.isdigit() else None
     except (OSError, IndexError):
         return None
     return None
@@ -112,14 +109,12 @@ def _proc_field(path: Path, key: str) -> str | None:
 
 def resident_bytes(status: Path = PROC_STATUS) -> int | None:
     """This process's resident memory now [bytes] (VmRSS), or None where /proc does not tell (not Linux)."""
-    value = _proc_field(status, "VmRSS")
-    return int(value) * 1024 if value is not None and value.isdigit() else None  # the value is in kB
+    return _proc_bytes(status, "VmRSS")
 
 
 def meminfo_available_bytes(meminfo: Path = PROC_MEMINFO) -> int | None:
     """MemAvailable of /proc/meminfo [bytes], or None where it is missing."""
-    value = _proc_field(meminfo, "MemAvailable")
-    return int(value) * 1024 if value is not None and value.isdigit() else None  # the value is in kB
+    return _proc_bytes(meminfo, "MemAvailable")
 
 
 def _read_int(path: Path) -> int | None:

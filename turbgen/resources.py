@@ -24,13 +24,6 @@ def format_bytes(n: float) -> str:
     return f"{n:.0f} B" if i == 0 else f"{n:.1f} {units[i]}"
 
 
-def _sysconf_available() -> int | None:
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (AttributeError, ValueError, OSError):
-        return None
-
-
 def available_memory_bytes(meminfo: Path = oscalls.PROC_MEMINFO, cgroup_root: Path = oscalls.CGROUP_ROOT) -> int | None:
     """Memory [bytes] this process can still allocate, or None if it cannot be determined.
 
@@ -39,7 +32,10 @@ def available_memory_bytes(meminfo: Path = oscalls.PROC_MEMINFO, cgroup_root: Pa
     """
     system = oscalls.meminfo_available_bytes(meminfo)
     if system is None:
-        system = _sysconf_available()
+        try:
+            system = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (AttributeError, ValueError, OSError):
+            pass
     headroom = oscalls.cgroup_headroom_bytes(cgroup_root)
     known = [v for v in (system, headroom) if v is not None]
     return min(known) if known else None

@@ -15,21 +15,20 @@ The store's ``constraints`` attribute records data, geometry, noise, solver repo
 from __future__ import annotations
 
 import math
-import sys
 import tempfile
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from turbgen.errors import ParameterError
 from turbgen.virtual_lidar.sampling import PLANE_TOL_M
 from turbgen.resources import default_threads, require_disk, require_memory
 from turbgen.runs.correction_scratch import CorrectionScratch
-from turbgen.runs.mann import build_mann_stencil, field_summary, memory_estimate_bytes
+from turbgen.runs.mann import build_mann_stencil, field_summary, memory_estimate_bytes, progress_bar
 from turbgen.runs.stencil_cache import cached_system, system_key
 from turbgen.spec.constraints import COMPONENTS, PointSeries, check_noise, sensor_fluctuations
 from turbgen.spec.mann import MannRun
@@ -195,7 +194,7 @@ def stream_system(run: MannRun, stencil, placed: PlacedData, threads: int | None
     streams, times = placed.streams, run.plane_times_s()
 
     def compute() -> np.ndarray:
-        with _bar("system", stencil.box.nk1, "slab", progress) as bar:
+        with progress_bar("system", stencil.box.nk1, "slab", progress) as bar:
             return cond.stream_covariance(stencil, streams, times, np.zeros(streams.n_streams),
                                           default_threads(threads), bar.update)  # fmt: skip
 
@@ -224,11 +223,6 @@ def solve_constraints(cov: np.ndarray, placed: PlacedData, measured: np.ndarray 
     return cond.solve(cov, np.where(observed, r, 0.0), observed)
 
 
-def _bar(desc: str, total: int, unit: str, show: bool):
-    """A progress bar on standard error (only on a terminal and when ``show``)."""
-    return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, disable=not (show and sys.stderr.isatty()))
-
-
 def unconstrained_measurement(run: MannRun, stencil, placed: PlacedData, threads: int,
                                progress: bool = False) -> np.ndarray:  # fmt: skip
     """Pass 1: H u_s of the run's unconstrained sample, measured on the snapshots' spectra
@@ -247,7 +241,7 @@ def unconstrained_measurement(run: MannRun, stencil, placed: PlacedData, threads
             bar.update(1)
 
     # each snapshot measured in a thread while the next is made (the generator's two alternating point buffers)
-    with _bar("pass 1", g.nx, "plane", progress) as bar, ThreadPoolExecutor(1) as measurer:
+    with progress_bar("pass 1", g.nx, "plane", progress) as bar, ThreadPoolExecutor(1) as measurer:
         pending = None
         for m, spectra in gen.spectra(run.seed, times):
             if pending is not None:
@@ -279,7 +273,7 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
 
     def planes():
         with CorrectionScratch(scratch_dir, (len(wanted), 3, box.nk1, g.ny, g.nz)) as scratch:
-            with _bar("correction", box.nk1, "slab", progress) as bar:
+            with progress_bar("correction", box.nk1, "slab", progress) as bar:
                 for slabs, block in cond.correction_blocks(stencil, placed.streams, x, run.plane_times_s(), wanted,
                                                            g.ny, g.nz, gen.threads):  # fmt: skip
                     scratch.write(slabs, block)
@@ -339,21 +333,9 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     (turbgen.runs.replay). Returns {path, seconds, sigma_/mean_ u/v/w [m/s], constraints}. ParameterError for
     measurements off the field or all missing, noise < 0, dependent zero-noise measurements; nothing written.
     """
-    t_start = time.perf_counter()
-    threads = default_threads(threads)
-    placed = place(run, files, noise_m_s) if placed is None else placed
-    g = run.grid
-    require_memory(constrained_memory_bytes(run, placed, threads),
-                   f"the constrained Mann run ({placed.streams.n_streams} measurement streams)",
-                   "lower `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
-    store_bytes = 3 * g.nt * g.nx * g.ny * g.nz * 4
-    require_disk(Path(out), correction_disk_bytes(run) + store_bytes, "the constrained Mann run (its store and the "
-                 "correction's scratch file)", "free space or choose another `out`")  # fmt: skip
-    opener = lambda: create_store(Path(out), g, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite)  # noqa: E731
-    record, sums = _write_conditioned(opener, run, files, placed, Path(out).absolute().parent,
-                                      conditional_mean=conditional_mean, threads=threads, cache_dir=cache_dir,
-                                      progress=progress, fit=fit)  # fmt: skip
-    return field_summary(str(out), t_start, sums, g, constraints=record)
+    opener = partial(create_store, Path(out), run.grid, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite)
+    return _conditioned(opener, run, files, str(out), noise_m_s=noise_m_s, conditional_mean=conditional_mean,
+                        threads=threads, cache_dir=cache_dir, progress=progress, placed=placed, fit=fit)[1]
 
 
 def mann_constrained_in_memory(run: MannRun, files: list, *, noise_m_s: float | None = None,
@@ -365,25 +347,10 @@ def mann_constrained_in_memory(run: MannRun, files: list, *, noise_m_s: float | 
     Values and attributes as that store's (but ``created_utc``); the correction's scratch file goes to the temporary
     directory. ParameterError as run_mann_constrained, and when the run with its field does not fit in memory.
     """
-    t_start = time.perf_counter()
-    threads = default_threads(threads)
-    placed = place(run, files, noise_m_s) if placed is None else placed
-    g = run.grid
-    require_memory(constrained_memory_bytes(run, placed, threads) + 3 * g.nbytes_per_component(),
-                   f"the constrained Mann run in memory ({placed.streams.n_streams} measurement streams)",
-                   "pass `out` to write a store, or lower `nt`, `ny`/`nz` or the number of measured series")
-    scratch_dir = Path(tempfile.gettempdir())
-    require_disk(scratch_dir, correction_disk_bytes(run), "the correction's scratch file of the constrained Mann run",
-                 "free space in the temporary directory (TMPDIR)")  # fmt: skip
-    holder: list = []
-
-    def opener():
-        holder.append(MemoryWriter(g, run.to_attrs()))
-        return holder[0]
-
-    record, sums = _write_conditioned(opener, run, files, placed, scratch_dir, conditional_mean=conditional_mean,
-                                      threads=threads, cache_dir=cache_dir, progress=progress, fit=fit)  # fmt: skip
-    return holder[0].dataset, field_summary(None, t_start, sums, g, constraints=record)
+    writer, summary = _conditioned(lambda: MemoryWriter(run.grid, run.to_attrs()), run, files, None,
+                                   noise_m_s=noise_m_s, conditional_mean=conditional_mean, threads=threads,
+                                   cache_dir=cache_dir, progress=progress, placed=placed, fit=fit)  # fmt: skip
+    return writer.dataset, summary
 
 
 def constrained_memory_bytes(run: MannRun, placed: PlacedData, threads: int) -> int:
@@ -395,22 +362,37 @@ def constrained_memory_bytes(run: MannRun, placed: PlacedData, threads: int) -> 
     return memory_estimate_bytes(run, threads) + extra
 
 
-def _write_conditioned(open_writer, run: MannRun, files, placed: PlacedData, scratch_dir: Path, *,
-                       conditional_mean: bool, threads: int, cache_dir, progress: bool,
-                       fit: dict | None = None) -> tuple[dict, dict]:
-    """The conditioned field of ``run`` into ``open_writer()`` (a store's or MemoryWriter, opened once the
-    system is solved); returns (constraints record, {component: [sum, sum of squares]})."""
-    g = run.grid
+def _conditioned(open_writer, run: MannRun, files, path: str | None, *, noise_m_s, conditional_mean: bool, threads,
+                 cache_dir, progress: bool, placed: PlacedData | None, fit: dict | None) -> tuple:
+    """(writer, summary): the conditioned field of ``run`` into ``open_writer()``, opened once the system is solved:
+    the store at ``path``, else (None) a MemoryWriter, whose field must fit in memory too and whose correction's
+    scratch file goes to the temporary directory."""
+    t_start = time.perf_counter()
+    threads = default_threads(threads)
+    placed = place(run, files, noise_m_s) if placed is None else placed
+    g, field_bytes, in_memory = run.grid, 3 * run.grid.nbytes_per_component(), path is None
+    require_memory(constrained_memory_bytes(run, placed, threads) + (field_bytes if in_memory else 0),
+                   f"the constrained Mann run{' in memory' if in_memory else ''} ({placed.streams.n_streams} "
+                   "measurement streams)", ("pass `out` to write a store, or lower" if in_memory else "lower")
+                   + " `nt`, `ny`/`nz` or the number of measured series")  # fmt: skip
+    if path is not None:
+        scratch_dir = Path(path).absolute().parent
+        require_disk(Path(path), correction_disk_bytes(run) + field_bytes, "the constrained Mann run (its store and "
+                     "the correction's scratch file)", "free space or choose another `out`")  # fmt: skip
+    else:
+        scratch_dir = Path(tempfile.gettempdir())
+        require_disk(scratch_dir, correction_disk_bytes(run), "the correction's scratch file of the constrained Mann "
+                     "run", "free space in the temporary directory (TMPDIR)")  # fmt: skip
     stencil = build_mann_stencil(run, cache_dir)
     cov = stream_system(run, stencil, placed, threads, progress, cache_dir)
     report, planes = conditioned_planes(run, stencil, placed, cov, scratch_dir, conditional_mean=conditional_mean,
                                         threads=threads, progress=progress)  # fmt: skip
     with open_writer() as writer:
-        remeasured, sums = write_planes(writer, placed, planes, lambda: _bar("write", g.nx, "plane", progress),
+        remeasured, sums = write_planes(writer, placed, planes, lambda: progress_bar("write", g.nx, "plane", progress),
                                         background=True)  # fmt: skip
         record = constraint_record(files, placed, report, remeasured, conditional_mean)
         writer.add_attrs(constraints=record, **({} if fit is None else {"fit": fit}))
-    return record, sums
+    return writer, field_summary(path, t_start, sums, g, constraints=record)
 
 
 def write_planes(writer, placed: PlacedData, planes, bar=None, background: bool = False) -> tuple[np.ndarray, dict]:

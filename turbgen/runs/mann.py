@@ -46,7 +46,7 @@ def shared_stencil_key(run: MannRun) -> tuple:
 
 def shared_stencil_nbytes(run: MannRun) -> int:
     """Bytes [B] of the unit stencil of ``run`` (a sweep's worker holds it besides the run's scaled one)."""
-    return stencil_nbytes(synthesis_box(run), run.grid.nx > 1 and run.params.evo_time_s is not None, "unit")
+    return stencil_nbytes(synthesis_box(run), _evolving(run), "unit")
 
 
 def _evolving(run: MannRun) -> bool:
@@ -80,6 +80,11 @@ def describe(run: MannRun, out: str | Path, threads: int, with_stencil: bool = T
         f"memory: about {format_bytes(memory_estimate_bytes(run, threads, with_stencil))} in one pass; "
         f"output: {out} ({format_bytes(3 * g.nbytes_per_component())} float32, uncompressed)",
     ]
+
+
+def progress_bar(desc: str, total: int, unit: str, show: bool):
+    """A progress bar on standard error (only on a terminal and when ``show``)."""
+    return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, disable=not (show and sys.stderr.isatty()))
 
 
 def _touch_while_loading_kernels(gen: MannSnapshots, output: bool = True) -> None:
@@ -130,8 +135,7 @@ def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress
     gen = gen or MannSnapshots(stencil, g.ny, g.nz, threads, buffers=2)
     if stencil.coef is None:  # one snapshot, its stencil computed on demand: no compiled code has run yet
         _touch_while_loading_kernels(gen, output=not in_place)
-    show = progress and sys.stderr.isatty()
-    bar = tqdm(total=g.nx, unit="plane", desc="mann", file=sys.stderr, disable=not show)
+    bar = progress_bar("mann", g.nx, "plane", progress)
     # One write in flight while the generator computes the next item (it alternates two buffers);
     # leaving the pool waits for that write, so an exception never races the writer's clean-up.
     with bar, ThreadPoolExecutor(1) as background:
@@ -194,11 +198,6 @@ def run_mann(run: MannRun, out: str | Path, *, overwrite: bool = False, chunk_t:
     return field_summary(path, t_start, sums, run.grid)
 
 
-def in_memory_bytes(run: MannRun, threads: int, with_stencil: bool = True) -> int:
-    """Bytes [B] mann_in_memory allocates: memory_estimate_bytes and the field's 3 float32 components."""
-    return memory_estimate_bytes(run, threads, with_stencil) + 3 * run.grid.nbytes_per_component()
-
-
 def mann_in_memory(run: MannRun, *, progress: bool = False, stencil: MannStencil | None = None,
                    threads: int | None = None, cache_dir: str | Path | None = None,
                    snapshots: MannSnapshots | None = None):  # fmt: skip
@@ -206,7 +205,7 @@ def mann_in_memory(run: MannRun, *, progress: bool = False, stencil: MannStencil
 
     The same values and attributes (but ``created_utc``) as that store; arguments as run_mann's. ``snapshots``: a
     MannSnapshots(stencil, ny, nz, threads, buffers=2) kept from an earlier seed (no new buffers). Raises
-    ParameterError when in_memory_bytes exceeds the available memory.
+    ParameterError when memory_estimate_bytes and the field's 3 float32 components exceed the available memory.
     """
     t_start = time.perf_counter()
     gen_threads = default_threads(threads)

@@ -17,20 +17,19 @@ from __future__ import annotations
 import os
 from contextlib import nullcontext
 import re
-import secrets
 import shutil
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from turbgen import fft
+from turbgen.atomic import temp_name, temp_prefix
 from turbgen.errors import ParameterError
 from turbgen.oscalls import resident_bytes
 from turbgen.resources import default_threads, format_bytes, require_disk
-from turbgen.runs.scratch import read_at, write_at
+from turbgen.runs.mann import field_summary, memory_estimate_bytes, progress_bar
+from turbgen.runs.scratch import ScratchFile
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.store.layout import default_chunk_t
@@ -60,6 +59,7 @@ LOCAL_CLUSTER_BYTES = 32 * 2**20
 # less, so kept as a margin), distributed's worker (+20 MiB)
 WORKER_LOADS_BYTES = 96 * 2**20
 _C64, _F32 = 8, 4
+SCRATCH_MARK = ".scratch-"  # scratch directories: .NAME.scratch-PID-XXXXXXXX next to the output
 _HINT = "raise `memory`, or lower `nt`, `ny`/`nz` or `pad_yz`"
 
 
@@ -79,15 +79,11 @@ def base_bytes() -> int:
     return BASE_BYTES if resident is None else max(BASE_BYTES, resident + LATE_BYTES)
 
 
-def _scratch_prefix(out: Path) -> str:
-    return f".{out.name}.scratch-"
-
-
 def remove_stale_scratch(out: str | Path) -> list[Path]:
     """Remove scratch directories of ``out`` left by dead processes (kill -9); return what was removed."""
     out = Path(out).expanduser().absolute()
     removed = []
-    pattern = re.compile(re.escape(_scratch_prefix(out)) + r"(\d+)-[0-9a-f]+$")
+    pattern = re.compile(re.escape(temp_prefix(out, SCRATCH_MARK)) + r"(\d+)-[0-9a-f]+$")
     if not out.parent.is_dir():
         return removed
     for p in out.parent.iterdir():
@@ -181,8 +177,6 @@ class OutOfCorePlan:
 def least_budget_bytes(run: MannRun, chunk_t: int | None = None) -> int:
     """A lower bound [B] of any process's budget for ``run``: in memory or out of core with one thread, on
     the smallest base (BASE_BYTES). A sweep refuses a budget below it before it starts."""
-    from turbgen.runs.mann import memory_estimate_bytes
-
     base = min(BASE_BYTES, base_bytes())
     in_memory = memory_estimate_bytes(run, 1) + base
     return min(in_memory, OutOfCorePlan(run, 2**62, 1, chunk_t, base=base).minimum_bytes)
@@ -190,8 +184,6 @@ def least_budget_bytes(run: MannRun, chunk_t: int | None = None) -> int:
 
 def fits_in_memory(run: MannRun, memory_bytes: int | None, threads: int, with_stencil: bool = True) -> bool:
     """Whether ``run`` fits ``memory_bytes`` in one pass (memory_estimate_bytes + :func:`base_bytes`)."""
-    from turbgen.runs.mann import memory_estimate_bytes
-
     return memory_bytes is None or memory_estimate_bytes(run, threads, with_stencil) + base_bytes() <= memory_bytes
 
 
@@ -231,30 +223,15 @@ def local_cluster(workers: int):
     return loopback_cluster(workers, 1, processes=True)
 
 
-class _File:
-    """A scratch file written and read by offsets (no mapping, not in RSS); ``nbytes``: create it sparse."""
+class _File(ScratchFile):
+    """The scratch file at ``path``; ``nbytes``: create it sparse."""
 
     def __init__(self, path: Path, nbytes: int | None = None):
         if nbytes is None:
-            self.fd = os.open(path, os.O_RDWR)
+            super().__init__(os.open(path, os.O_RDWR))
         else:
-            self.fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o600)
+            super().__init__(os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o600))
             os.ftruncate(self.fd, max(1, nbytes))
-
-    def write(self, offset: int, data: np.ndarray) -> None:
-        write_at(self.fd, data, offset)
-
-    def read(self, offset: int, out: np.ndarray) -> np.ndarray:
-        return read_at(self.fd, out, offset)
-
-    def close(self) -> None:
-        os.close(self.fd)
-
-    def __enter__(self) -> "_File":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
 
 
 def run_mann_outofcore(run: MannRun, out: str | Path, *, memory_bytes: int, overwrite: bool = False,
@@ -283,8 +260,7 @@ def run_mann_outofcore(run: MannRun, out: str | Path, *, memory_bytes: int, over
     times = times if plan.evolving else times[:1]
     order = [int(i) for i in np.argsort(run.plane_times_s(), kind="stable")]
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
-    scratch_dir = path.parent / f"{_scratch_prefix(path)}{os.getpid()}-{secrets.token_hex(4)}"
-    show = progress and sys.stderr.isatty()
+    scratch_dir = temp_name(path, SCRATCH_MARK)
     n_blocks = -(-plan.points // plan.block_points)
     spectra_bytes = plan.n_snapshots * 3 * plan.n_parts * plan.points * plan.slabs_per_part * _C64
     with create_store(path, g, run.to_attrs(), chunk_t=plan.chunk_t, overwrite=overwrite) as writer:
@@ -295,12 +271,12 @@ def run_mann_outofcore(run: MannRun, out: str | Path, *, memory_bytes: int, over
             if not plan.plane_in_memory:
                 _File(plane_path, n_blocks * g.nt * plan.block_points * _F32).close()
             cells = axis_cells(run.params, synthesis_box(run))
-            with tqdm(total=plan.n_parts, unit="part", desc="mann pass 1", file=sys.stderr, disable=not show) as bar:
+            with progress_bar("mann pass 1", plan.n_parts, "part", progress) as bar:
                 args = (run, plan, str(spectra_path), cells, times, threads, backend)
                 _map(client, lambda part: pass1_part(*args, part), range(plan.n_parts), bar)
             del cells
             plane = np.empty((g.nt, plan.points), np.float32) if plan.plane_in_memory else None  # after pass 1
-            with tqdm(total=3 * plan.n_snapshots, desc="mann pass 2", file=sys.stderr, disable=not show) as bar:
+            with progress_bar("mann pass 2", 3 * plan.n_snapshots, "it", progress) as bar:
                 for m in range(plan.n_snapshots):
                     targets = [order[m]] if plan.evolving else order  # frozen: the one snapshot is every plane
                     for c, comp in enumerate(COMPONENTS):
@@ -316,8 +292,6 @@ def run_mann_outofcore(run: MannRun, out: str | Path, *, memory_bytes: int, over
                         bar.update(1)
         finally:
             shutil.rmtree(scratch_dir, ignore_errors=True)
-    from turbgen.runs.mann import field_summary
-
     return field_summary(path, t_start, sums, g, plan=plan.describe())
 
 

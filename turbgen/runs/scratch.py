@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import Self
 
 import numpy as np
 
@@ -31,7 +32,32 @@ def read_at(fd: int, out: np.ndarray, offset: int) -> np.ndarray:
     return out
 
 
-class FileSpectrum:
+class ScratchFile:
+    """An open file ``fd`` written and read by byte offsets (no mapping, not in RSS); a context manager."""
+
+    def __init__(self, fd: int):
+        self.fd = fd
+
+    def write(self, offset: int, data: np.ndarray) -> None:
+        write_at(self.fd, data, offset)
+
+    def read(self, offset: int, out: np.ndarray) -> np.ndarray:
+        return read_at(self.fd, out, offset)
+
+    def close(self) -> None:
+        """Close the file (once)."""
+        if self.fd >= 0:
+            os.close(self.fd)
+            self.fd = -1
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class FileSpectrum(ScratchFile):
     """Spectrum buffer (n_planes, nf, ny, nz) complex64 in a temporary file (a context manager)."""
 
     def __init__(self, directory: str | Path, nx: int, nf: int, ny: int, nz: int):
@@ -39,12 +65,12 @@ class FileSpectrum:
         self.shape = (nf, ny, nz)
         fd, name = tempfile.mkstemp(prefix=".turbgen-spectrum-", dir=directory)
         os.unlink(name)  # the space is freed when the file is closed, even after a crash
-        self.fd = fd
+        super().__init__(fd)
         os.ftruncate(fd, nx * nf * self.point * ITEM)  # sparse: unwritten bins read as zeros
 
     def put(self, plane: int, k0: int, block: np.ndarray) -> None:
         """Store bins k0 .. k0 + len(block) of ``plane``."""
-        write_at(self.fd, np.asarray(block, dtype=np.complex64), (plane * self.nf + k0) * self.point * ITEM)
+        self.write((plane * self.nf + k0) * self.point * ITEM, np.asarray(block, dtype=np.complex64))
 
     def chunk(self, k0: int, k1: int) -> np.ndarray:
         """Where bins k0 .. k1 - 1 of all planes are made (nx, k1 - k0, ny, nz): a fresh array."""
@@ -57,16 +83,4 @@ class FileSpectrum:
 
     def get(self, plane: int) -> np.ndarray:
         """All bins of ``plane`` (nf, ny, nz), a fresh array."""
-        return read_at(self.fd, np.empty(self.shape, dtype=np.complex64), plane * self.nf * self.point * ITEM)
-
-    def close(self) -> None:
-        """Free the file."""
-        if self.fd >= 0:
-            os.close(self.fd)
-            self.fd = -1
-
-    def __enter__(self) -> "FileSpectrum":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
+        return self.read(plane * self.nf * self.point * ITEM, np.empty(self.shape, dtype=np.complex64))

@@ -53,10 +53,9 @@ class IecTransient:
         Hub height and rotor diameter D [m], > 0, the rotor clear of the ground.
     start_s, duration_s : float
         Start of the event and length of the file [s]; the event ends within the file.
-    dt_s : float
-        Row spacing during the event [s], in [MIN_DT_S, T/4].
-    sign : int
-        +1 or -1: the standard's "+-" (direction change or shear sense); EOG takes +1 only.
+    dt_s, sign : float, int
+        Row spacing during the event [s], in [MIN_DT_S, T/4]; +1 or -1, the standard's "+-" (direction change or
+        shear sense), EOG +1 only.
 
     Raises
     ------
@@ -108,11 +107,6 @@ class IecTransient:
         return PERIODS_S[self.kind]
 
     @property
-    def v_e1_m_s(self) -> float:
-        """1-year extreme gust V_e1 [m/s] of the turbine class."""
-        return iec.extreme_speeds_m_s(iec.V_REF_M_S[parse_class(self.iec_class)[0]])[1]
-
-    @property
     def sigma1_m_s(self) -> float:
         """NTM sigma1 = I_ref (0.75 V_hub + 5.6) [m/s]."""
         return iec_sigma1_m_s(self.V_hub_m_s, self.category)
@@ -122,15 +116,11 @@ class IecTransient:
         """Longitudinal turbulence scale parameter Lambda1 [m]."""
         return iec_lambda1_m(self.hub_height_m)
 
-    def eog_gust_m_s(self) -> float:
-        """EOG V_gust [m/s]."""
-        return iec.eog_gust_m_s(self.V_hub_m_s, self.v_e1_m_s, self.sigma1_m_s, self.rotor_diameter_m,
-                                self.lambda1_m)
-
     def magnitude(self) -> float:
         """The event's size: V_gust [m/s] (EOG), theta_e or theta_cg [deg] (EDC, ECD), the EWS amplitude [m/s]."""
-        if self.kind == "EOG":
-            return self.eog_gust_m_s()
+        if self.kind == "EOG":  # with the turbine class's 1-year extreme gust V_e1
+            v_e1 = iec.extreme_speeds_m_s(iec.V_REF_M_S[parse_class(self.iec_class)[0]])[1]
+            return iec.eog_gust_m_s(self.V_hub_m_s, v_e1, self.sigma1_m_s, self.rotor_diameter_m, self.lambda1_m)
         if self.kind == "EDC":
             return iec.edc_angle_deg(self.V_hub_m_s, self.sigma1_m_s, self.rotor_diameter_m, self.lambda1_m)
         if self.kind == "ECD":

@@ -48,14 +48,8 @@ class KaimalRun:
     ----------
     kaimal : KaimalParams
         sigma_u, sigma_v, sigma_w [m/s], Kaimal lengths L1..L3 [m], a_yz [-], Lc [m] (Guo et al. 2023, Eq. 11-12).
-    grid : Grid
-        The run's grid.
-    U_m_s : float
-        Hub-height mean wind speed [m/s].
-    seed : int
-        Random seed.
-    hub_height_m : float, optional
-        Hub height [m].
+    grid, U_m_s, seed, hub_height_m : Grid, float, int, float
+        The run's grid, hub-height mean wind speed [m/s], random seed, hub height [m] (optional).
     long_model : {"exp", "simley-pao", "kristensen"}, optional
         Eq. 18 with a_x, b_x (Guo et al. 2023; defaults Table 2 neutral), Eq. 18 with the Simley and Pao
         (2015) parameters, or Kristensen (1979).
@@ -257,12 +251,8 @@ def kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float = 90.
 
     Parameters
     ----------
-    U_m_s : float
-        Hub-height mean wind speed [m/s].
-    turb_class : str, optional
-        IEC class "A+", "A", "B" or "C".
-    hub_height_m : float, optional
-        Hub height [m].
+    U_m_s, turb_class, hub_height_m : float, str, float
+        Hub-height mean wind speed [m/s], IEC class "A+", "A", "B" or "C" (optional), hub height [m] (optional).
     sigma_m_s, length_scales_m : sequence of float, optional
         (sigma_u, sigma_v, sigma_w) [m/s] and Kaimal L1, L2, L3 [m]; None: the IEC values.
     a_yz, lc_m : float, optional

@@ -37,10 +37,9 @@ class MannRun:
         Mann parameters and the run's grid (dx = U dt).
     U_m_s, seed, hub_height_m : float, int, float
         Mean wind speed [m/s], random seed, hub height [m] (metadata for exports).
-    pad_yz : int, optional
-        The synthesis box is pad_yz times wider in y and z than the output (cropped).
-    ae_from : str, optional
-        How ae was chosen (text, recorded in the store).
+    pad_yz, ae_from : int, str, optional
+        The synthesis box is pad_yz times wider in y and z than the output (cropped); how ae was chosen (text,
+        recorded in the store).
     """
 
     params: MannParams

@@ -118,7 +118,7 @@ class MeanWind:
         elif self.table_heights_m or self.table_speeds_m_s or self.table_directions_deg:
             raise ParameterError(f"a height table belongs to the table profile, not {self.profile!r}")
         if self.history_times_s or self.history_speeds_m_s or self.history_directions_deg:
-            self._check_history()
+            self._check_columns("mean-history", "the mean history", "history_times_s")
         if self.transient is not None:
             if not isinstance(self.transient, IecTransient):
                 raise ParameterError(f"transient = {self.transient!r} is not a turbgen.spec.iec_transient.IecTransient")
@@ -127,30 +127,25 @@ class MeanWind:
                                      "give one")
 
     def _check_table(self):
-        put = object.__setattr__
-        z = _strictly_increasing("profile table heights (m)", self.table_heights_m)
+        z = self._check_columns("profile table", "the profile table", "table_heights_m")
         if z[0] <= 0.0:
             raise ParameterError(f"profile table height {z[0]:g} m is at or below the ground; heights must be > 0 m")
-        put(self, "table_heights_m", z)
-        put(self, "table_speeds_m_s", _column("profile table speeds (m/s)", self.table_speeds_m_s, len(z),
-                                              _speed))
-        if len(self.table_speeds_m_s) != len(z):
-            raise ParameterError(f"the profile table has {len(z)} heights but no speeds")
-        put(self, "table_directions_deg", _column("profile table directions (deg)", self.table_directions_deg, len(z),
-                                                  _direction))
         if self.table_directions_deg and self.veer_deg_per_m:
             raise ParameterError("give the veer either as a rate or as the table's direction column, not both")
 
-    def _check_history(self):
+    def _check_columns(self, name: str, whole: str, axis_key: str) -> tuple:
+        """Check and store the table's or history's axis ``axis_key``, speeds and directions; return the axis."""
         put = object.__setattr__
-        t = _strictly_increasing("mean-history times (s)", self.history_times_s)
-        put(self, "history_times_s", t)
-        put(self, "history_speeds_m_s", _column("mean-history speeds (m/s)", self.history_speeds_m_s, len(t),
-                                                _speed))
-        if len(self.history_speeds_m_s) != len(t):
-            raise ParameterError(f"the mean history has {len(t)} times but no speeds")
-        put(self, "history_directions_deg", _column("mean-history directions (deg)", self.history_directions_deg,
-                                                    len(t), _direction))
+        prefix, axis, unit = axis_key.split("_")
+        x = _strictly_increasing(f"{name} {axis} ({unit})", getattr(self, axis_key))
+        put(self, axis_key, x)
+        speeds = _column(f"{name} speeds (m/s)", getattr(self, f"{prefix}_speeds_m_s"), len(x), _speed)
+        if len(speeds) != len(x):
+            raise ParameterError(f"{whole} has {len(x)} {axis} but no speeds")
+        put(self, f"{prefix}_speeds_m_s", speeds)
+        key = f"{prefix}_directions_deg"
+        put(self, key, _column(f"{name} directions (deg)", getattr(self, key), len(x), _direction))
+        return x
 
     @property
     def has_history(self) -> bool:
@@ -273,16 +268,16 @@ class MeanWind:
         """Refuse (ParameterError) a history or transient with times outside [first_s, last_s] [s], the times at
         which the first and last file slices reach the turbine.
         """
+        spans = []
         if self.transient is not None:
             t0, t1 = self.transient.start_s, self.transient.start_s + self.transient.period_s
-            if t0 < first_s - 1e-9 or t1 > last_s + 1e-9:
-                raise ParameterError(f"the {self.transient.kind} from {t0:g} to {t1:g} s is outside the record "
-                                     f"[{first_s:g}, {last_s:g}] s seen at the turbine")
+            spans.append((t0, t1, f"the {self.transient.kind} from {t0:g} to {t1:g} s is"))
         if self.has_history:
             t0, t1 = self.history_times_s[0], self.history_times_s[-1]
+            spans.append((t0, t1, f"mean-history times [{t0:g}, {t1:g}] s are"))
+        for t0, t1, what in spans:
             if t0 < first_s - 1e-9 or t1 > last_s + 1e-9:
-                raise ParameterError(f"mean-history times [{t0:g}, {t1:g}] s are outside the record "
-                                     f"[{first_s:g}, {last_s:g}] s seen at the turbine")
+                raise ParameterError(f"{what} outside the record [{first_s:g}, {last_s:g}] s seen at the turbine")
 
     def describe(self) -> str:
         """One short line: profile, veer, history, transient (the .bts description, the .sum title, `turbgen info`).

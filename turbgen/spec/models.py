@@ -52,23 +52,22 @@ class ModelDeclaration:
     store_preview: str | None = None
 
 
+def _declare(name: str, run_class: str, synthesis: str) -> ModelDeclaration:
+    """The declaration of model ``name`` whose parts sit where the convention puts them (module and names from it)."""
+    up = name.upper()
+    return ModelDeclaration(
+        name=name, schema=f"{name}-run", spec=f"turbgen.spec.{name}:{run_class}",
+        options=f"turbgen.spec.run_inputs:{up}_OPTIONS", replaces=f"turbgen.spec.run_inputs:{up}_REPLACES",
+        command=f"turbgen.cli.{name}:{name}", runner=f"turbgen.runs.models:{up}", synthesis=synthesis,
+        validator_theory=f"turbgen.validation.{name}_expectation:{name}_theory",
+        preview=f"turbgen.virtual_lidar.preview:{name}_preview",
+        store_preview=f"turbgen.virtual_lidar.report:{name}_store_preview",
+    )
+
+
 DECLARATIONS: tuple[ModelDeclaration, ...] = (
-    ModelDeclaration(
-        name="mann", schema="mann-run", spec="turbgen.spec.mann:MannRun",
-        options="turbgen.spec.run_inputs:MANN_OPTIONS", replaces="turbgen.spec.run_inputs:MANN_REPLACES",
-        command="turbgen.cli.mann:mann", runner="turbgen.runs.models:MANN",
-        synthesis="turbgen.synthesis.mann_spacetime:MannSnapshots",
-        validator_theory="turbgen.validation.mann_expectation:mann_theory",
-        preview="turbgen.virtual_lidar.preview:mann_preview", store_preview="turbgen.virtual_lidar.report:mann_store_preview",
-    ),
-    ModelDeclaration(
-        name="kaimal", schema="kaimal-run", spec="turbgen.spec.kaimal:KaimalRun",
-        options="turbgen.spec.run_inputs:KAIMAL_OPTIONS", replaces="turbgen.spec.run_inputs:KAIMAL_REPLACES",
-        command="turbgen.cli.kaimal:kaimal", runner="turbgen.runs.models:KAIMAL",
-        synthesis="turbgen.synthesis.kaimal_evo:KaimalEvo",
-        validator_theory="turbgen.validation.kaimal_expectation:kaimal_theory",
-        preview="turbgen.virtual_lidar.preview:kaimal_preview", store_preview="turbgen.virtual_lidar.report:kaimal_store_preview",
-    ),
+    _declare("mann", "MannRun", "turbgen.synthesis.mann_spacetime:MannSnapshots"),
+    _declare("kaimal", "KaimalRun", "turbgen.synthesis.kaimal_evo:KaimalEvo"),
 )
 _BY_NAME = {d.name: d for d in DECLARATIONS}
 

@@ -17,12 +17,15 @@ from turbgen.spec.config import read_config
 from turbgen.spec.presets import BUILTIN_PRESETS, KaimalPreset, MannPreset, StabilityPreset
 
 
-def _table(data: Mapping, where: str, allowed: set[str]) -> dict:
+def _table(data: Mapping, where: str, allowed: set[str], required: set[str] | frozenset[str] = frozenset()) -> dict:
     if not isinstance(data, Mapping):
         raise ParameterError(f"{where} must be a table/object, got {type(data).__name__}")
     unknown = sorted(set(data) - allowed)
     if unknown:
         raise ParameterError(f"{where}: unknown key(s) {', '.join(unknown)}; allowed: {', '.join(sorted(allowed))}")
+    missing = sorted(required - set(data))
+    if missing:
+        raise ParameterError(f"{where}: missing {', '.join(missing)}")
     return dict(data)
 
 
@@ -36,18 +39,13 @@ def preset_from_mapping(name: str, data: Mapping) -> StabilityPreset:
     mann = kaimal = None
     try:
         if "mann" in d:
-            m = _table(d["mann"], f"preset {name!r} mann", {"L", "gamma", "evo", "factor1", "lifetime", "ae_ref"})
-            missing = {"L", "gamma", "evo"} - set(m)
-            if missing:
-                raise ParameterError(f"preset {name!r} mann: missing {', '.join(sorted(missing))}")
+            m = _table(d["mann"], f"preset {name!r} mann", {"L", "gamma", "evo", "factor1", "lifetime", "ae_ref"},
+                       {"L", "gamma", "evo"})
             mann = MannPreset(m["L"], m["gamma"], m["evo"], m.get("factor1", 1.0), m.get("lifetime", "guo"),
                               m.get("ae_ref"))
         if "kaimal" in d:
             keys = {"sigma_ratios", "length_scales_m", "a_yz", "lc_m", "a_x", "b_x"}
-            k = _table(d["kaimal"], f"preset {name!r} kaimal", keys)
-            missing = keys - set(k)
-            if missing:
-                raise ParameterError(f"preset {name!r} kaimal: missing {', '.join(sorted(missing))}")
+            k = _table(d["kaimal"], f"preset {name!r} kaimal", keys, keys)
             kaimal = KaimalPreset(tuple(k["sigma_ratios"]), tuple(k["length_scales_m"]), k["a_yz"], k["lc_m"], k["a_x"],
                                   k["b_x"])
     except TypeError as exc:

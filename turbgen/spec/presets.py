@@ -34,10 +34,8 @@ class MannPreset:
     ----------
     length_scale_m, gamma, evo_time_s : float
         L [m], Gamma [-] and evolution time gamma [s].
-    factor1 : float, optional
-        The small-k slope of the Guo lifetime is -factor1 [-].
-    lifetime : {"guo", "mann"}, optional
-        Lifetime model.
+    factor1, lifetime : float, {"guo", "mann"}, optional
+        The small-k slope of the Guo lifetime is -factor1 [-]; the lifetime model.
     ae_ref : float, optional
         Table 1 alpha*eps^(2/3) at 16 m/s [m^(4/3) s^-2] (> 0), for comparison only.
     """

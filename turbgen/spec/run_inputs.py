@@ -48,10 +48,9 @@ def merge_run_inputs(
     ----------
     file_mapping, given, grid_given : Mapping
         The run file's content (schema-checked) or None; the user's run keys (not None) and ``grid`` keys.
-    preset_keys : callable, optional
-        ``preset_keys(file mapping, given)`` -> the preset's run keys; None without a preset.
-    replaces : Mapping, optional
-        Given key -> keys it removes from the run file and the preset (one energy level, one source).
+    preset_keys, replaces : callable, Mapping, optional
+        ``preset_keys(file mapping, given)`` -> the preset's run keys (None without a preset); given key -> keys
+        it removes from the run file and the preset (one energy level, one source).
     x_m : sequence of float, optional
         Plane positions [m upstream]; None keeps the file's or the default.
     """

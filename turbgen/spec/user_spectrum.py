@@ -113,10 +113,8 @@ def line_coherence(value, grid: Grid, U_m_s: float) -> LineCoherence | None:
         A mapping of ``f_hz``, ``r_m``, ``coh`` (the form a store records), a CSV file of it
         (:func:`read_coherence_csv`), or a callable ``coh(f_hz, r_m, U_m_s)`` [-] evaluated on the lines x the
         grid's separations. None: the IEC exponential coherence.
-    grid : Grid
-        The run's grid.
-    U_m_s : float
-        The run's mean wind speed [m/s] (given to a callable).
+    grid, U_m_s : Grid, float
+        The run's grid and mean wind speed [m/s] (given to a callable).
 
     Returns
     -------

@@ -17,10 +17,8 @@ def exponential_yz(r_m, f_hz, U_m_s: float, a_yz: float = 12.0, lc_m: float = 34
     ----------
     r_m, f_hz : array_like
         Separation in the yz plane [m] and frequency [Hz]; the result [-] has their broadcast shape.
-    U_m_s : float
-        Mean wind speed [m/s].
-    a_yz, lc_m : float, optional
-        Coherence decrement [-] and scale parameter Lc = 8.1 Lambda_1 [m] (IEC 61400-1).
+    U_m_s, a_yz, lc_m : float
+        Mean wind speed [m/s]; coherence decrement [-] and scale parameter Lc = 8.1 Lambda_1 [m] (IEC 61400-1).
     """
     r = np.asarray(r_m, dtype=float)
     f = np.asarray(f_hz, dtype=float)
@@ -43,10 +41,8 @@ def exponential_longitudinal(dx_m, f_hz, U_m_s: float, a_x: float, b_x: float):
     ----------
     dx_m, f_hz : array_like
         Longitudinal separation [m] and frequency [Hz]; the result [-] has their broadcast shape.
-    U_m_s : float
-        Mean wind speed [m/s].
-    a_x, b_x : float
-        Decay parameter [-] and distance term [1/m].
+    U_m_s, a_x, b_x : float
+        Mean wind speed [m/s], decay parameter [-] and distance term [1/m].
     """
     dx = np.abs(np.asarray(dx_m, dtype=float))
     f = np.asarray(f_hz, dtype=float)

@@ -72,11 +72,7 @@ def evolution_lifetime_s(k, params: MannParams):
     kL = np.asarray(k, dtype=float) * params.length_scale_m
     if params.evo_time_s is None:
         return np.full_like(kL, np.inf)
-    expo = (1.0 - 2.0 * params.factor2 / 3.0) / 10.0
-    with np.errstate(divide="ignore", over="ignore"):
-        log_kL = np.log(kL)
-        out = params.evo_time_s * GUO_A * np.exp(-log_kL + np.logaddexp(10.0 * log_kL, 0.0) * expo)
-    return np.where(kL > 0, out, np.inf)
+    return _evolution_shape(kL, params.factor2, params.evo_time_s)
 
 
 TABLE_KL_MIN, TABLE_KL_MAX = 1e-6, 1e6
@@ -84,13 +80,13 @@ TABLE_STEP = {"mann": 1.0 / 64.0, "guo": 1.0 / 64.0, "evolution": 1.0 / 128.0}  
 TABLE_REL_ERROR = 1e-6  # bound on |tau_table / tau - 1| (tested)
 
 
-def _evolution_shape(kL, factor2: float):
-    """tau_e / gamma [-] of Eq. 15."""
+def _evolution_shape(kL, factor2: float, gamma_s: float = 1.0):
+    """tau_e of Eq. 15 for the evolution time ``gamma_s`` [s]; tau_e / gamma [-] for 1."""
     kL = np.asarray(kL, dtype=float)
     expo = (1.0 - 2.0 * factor2 / 3.0) / 10.0
     with np.errstate(divide="ignore", over="ignore"):
         log_kL = np.log(kL)
-        out = GUO_A * np.exp(-log_kL + np.logaddexp(10.0 * log_kL, 0.0) * expo)
+        out = gamma_s * GUO_A * np.exp(-log_kL + np.logaddexp(10.0 * log_kL, 0.0) * expo)
     return np.where(kL > 0, out, np.inf)
 
 

@@ -107,10 +107,8 @@ def fit_longitudinal(params: MannParams, U_m_s: float, dx_m: float = 100.0, f_hz
     ----------
     params, U_m_s : MannParams, float
         Mann model with ``evo_time_s`` set (frozen: ParameterError) and mean wind speed [m/s].
-    dx_m : float, optional
-        Longitudinal separation [m], > 0.
-    f_hz : array_like, optional
-        Fit frequencies [Hz]; default LONG_F_HZ (60 log-spaced, 3e-4 to 0.5 Hz).
+    dx_m, f_hz : float, array_like, optional
+        Longitudinal separation [m], > 0; fit frequencies [Hz], default LONG_F_HZ (60 log-spaced, 3e-4 to 0.5 Hz).
     """
     if params.evo_time_s is None:
         raise ParameterError("evo (gamma, s) is needed to fit a longitudinal coherence (frozen turbulence has coh = 1)")

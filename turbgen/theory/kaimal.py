@@ -21,10 +21,8 @@ def kaimal_spectrum(f_hz, sigma_m_s: float, length_scale_m: float, U_m_s: float)
     ----------
     f_hz : array_like
         Frequency [Hz] (only ``|f|`` is used); S(f) [m^2 s^-2 Hz^-1] has its shape, ∫_0^inf S df = sigma^2.
-    sigma_m_s, U_m_s : float
-        Standard deviation of the component and mean wind speed [m/s].
-    length_scale_m : float
-        Kaimal integral length scale L [m].
+    sigma_m_s, length_scale_m, U_m_s : float
+        Standard deviation of the component [m/s], Kaimal integral length scale L [m], mean wind speed [m/s].
     """
     f = np.asarray(f_hz, dtype=float)
     n = length_scale_m / U_m_s

@@ -85,10 +85,8 @@ def buffer_time_s(range_m: float, U_m_s: float, scan_time_s: float, cutoff_hz: f
     ----------
     range_m, U_m_s : float
         Preview distance x upstream of the rotor [m] and mean wind speed [m/s].
-    scan_time_s, pitch_delay_s : float
-        Duration of one scan and pitch actuator delay [s].
-    cutoff_hz, f_delay_hz : float
-        As :func:`filter_delay_s` [Hz].
+    scan_time_s, pitch_delay_s, cutoff_hz, f_delay_hz : float
+        Duration of one scan and pitch actuator delay [s]; as :func:`filter_delay_s` [Hz].
     """
     return (range_m / check_wind_speed(U_m_s) - 0.5 * scan_time_s - filter_delay_s(cutoff_hz, f_delay_hz)
             - pitch_delay_s)

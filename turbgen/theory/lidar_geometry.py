@@ -61,10 +61,8 @@ class Measurements:
 
     Parameters
     ----------
-    n, direction : numpy.ndarray
-        (M, 3) line-of-sight vectors and unit beam directions (x upstream, y, z) [-].
-    focus_m : numpy.ndarray
-        (M, 3) focus points relative to the hub [m].
+    n, direction, focus_m : numpy.ndarray
+        (M, 3) line-of-sight vectors and unit beam directions (x upstream, y, z) [-]; focus points from the hub [m].
     offsets_m, weights : numpy.ndarray
         (M, K) probe-volume positions along the beam from the focus [m] and weights [-] (rows sum to 1).
     beam, gate : numpy.ndarray

@@ -23,10 +23,8 @@ def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: f
 
     Parameters
     ----------
-    f_hz, meas : array_like, Measurements
-        Frequencies [Hz] and the lidar's measurements.
-    kparams, U_m_s : KaimalParams, float
-        Kaimal spectra with IEC yz coherence, and mean wind speed [m/s].
+    f_hz, meas, kparams, U_m_s : array_like, Measurements, KaimalParams, float
+        Frequencies [Hz], the lidar's measurements, Kaimal spectra with IEC yz coherence, mean wind speed [m/s].
     vw_coherence : bool, optional
         Give v and w the yz coherence of u.
     """
@@ -62,12 +60,9 @@ def lidar_ti_correction(meas: Measurements, kparams: KaimalParams, U_m_s: float,
     ----------
     meas, kparams, U_m_s
         As :func:`kaimal_los_spectra`.
-    averaging_s : float, optional
-        Averaging time T [s].
-    f_scan_hz, f_max_hz : float, optional
-        Rate at which each point is measured and highest frequency of the field [Hz]; f_scan > 1/T.
-    n_f : int, optional
-        Log-spaced frequencies of the sigma_L^2 quadrature.
+    averaging_s, f_scan_hz, f_max_hz, n_f : float, float, float, int, optional
+        Averaging time T [s]; rate at which each point is measured and highest frequency of the field [Hz]
+        (f_scan > 1/T); log-spaced frequencies of the sigma_L^2 quadrature.
     """
     from turbgen.theory.kaimal import kaimal_band_variance
 

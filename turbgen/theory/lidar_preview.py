@@ -140,18 +140,12 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
 
     Parameters
     ----------
-    f_hz : array_like
-        Positive frequencies [Hz].
-    meas : Measurements
-        One full scan's measurements.
-    params : MannParams
-        Mann model (``evo_time_s`` None: frozen turbulence).
+    f_hz, meas, params : array_like, Measurements, MannParams
+        Positive frequencies [Hz]; one full scan's measurements; Mann model (``evo_time_s`` None: frozen).
     U_m_s, radius_m : float
         Mean wind speed U [m/s], rotor radius R [m].
-    kappa_max, panel_width : float, optional
-        Upper end of the radial quadrature and its panel width above KAPPA_SPLIT [rad/m].
-    n_theta : int, optional
-        Trapezoid nodes in angle.
+    kappa_max, panel_width, n_theta : float, float, int, optional
+        Upper end of the radial quadrature and its panel width above KAPPA_SPLIT [rad/m]; trapezoid nodes in angle.
     box : BoxLattice, optional
         Sum over this box's (k2, k3) lattice instead (the spectra of what the box holds).
 
@@ -212,19 +206,14 @@ def kaimal_preview_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_
 
     Parameters
     ----------
-    f_hz, meas, U_m_s, radius_m
-        As :func:`mann_preview_spectra`.
-    kparams : KaimalParams
-        Kaimal spectra and IEC yz coherence.
+    f_hz, meas, U_m_s, radius_m, kparams
+        As :func:`mann_preview_spectra`; ``kparams`` (KaimalParams) the Kaimal spectra and IEC yz coherence.
     long_coherence : callable
         ``long_coherence(dx_m, f_hz)``: un-squared coherence [-] between planes dx [m] apart, for the
         components in ``long_components`` (the others are independent between planes).
-    long_components : str, optional
-        Components among "uvw" with longitudinal coherence.
-    vw_coherence : bool, optional
-        Give v and w the yz coherence of u.
-    rotor_spacing_m : float, optional
-        Rotor grid spacing [m] (default R/10).
+    long_components, vw_coherence, rotor_spacing_m : str, bool, float, optional
+        Components among "uvw" with longitudinal coherence; give v and w the yz coherence of u; rotor grid
+        spacing [m] (default R/10).
     spectra, yz_coherence : callable, optional
         ``spectra(f_hz) -> (3, n)`` one-sided PSDs [m^2/s] and ``yz_coherence(r_m, f_hz)`` [-] (un-squared) in place
         of the Kaimal spectra and IEC coherence of ``kparams`` (a store's user tables, turbgen.theory.user_spectra).

@@ -109,10 +109,8 @@ def perpendicular_quadrature(
 
     Parameters
     ----------
-    k1, params : array_like, MannParams
-        Longitudinal wavenumbers [rad/m] and Mann model.
-    pairs : iterable of tuple of int
-        Tensor components (i, j), indices in 0..2.
+    k1, params, pairs : array_like, MannParams, iterable of tuple of int
+        Longitudinal wavenumbers [rad/m], Mann model and the tensor components (i, j), indices in 0..2.
     dy_m, dz_m : float, optional
         Lateral and vertical separation [m].
     resolve_m : float, optional

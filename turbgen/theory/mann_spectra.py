@@ -48,10 +48,8 @@ def cross_spectrum(k1, params: MannParams, i: int, j: int, dy_m: float = 0.0, dz
     ----------
     k1, params : array_like, MannParams
         Longitudinal wavenumbers [rad/m] and Mann model.
-    i, j : int
-        Velocity components.
-    dy_m, dz_m : float, optional
-        Lateral and vertical separation [m].
+    i, j, dy_m, dz_m : int, int, float, float
+        Velocity components; lateral and vertical separation [m] (optional).
     """
     for name, v in (("i", i), ("j", j)):
         if v not in (0, 1, 2):

@@ -18,18 +18,13 @@ class MannParams:
 
     Parameters
     ----------
-    ae : float
-        alpha*epsilon^(2/3) [m^(4/3) s^-2], spectral energy level.
-    length_scale_m : float
-        L [m], length scale of the energy-containing eddies.
-    gamma : float
-        Gamma [-], shear anisotropy (0 = isotropic).
-    lifetime : str, optional
-        "guo" (Guo et al. 2023, Eq. 6) or "mann" (Eq. 4, hypergeometric).
-    factor1, factor2 : float, optional
-        Slopes [-]: Guo lifetime's small-k -factor1 (stable 0.8), evolution's large-k -(2/3) factor2 (Eq. 15: 3.5).
-    evo_time_s : float or None, optional
-        gamma [s], time constant of tau_e (Eq. 15); None = frozen turbulence.
+    ae, length_scale_m, gamma : float
+        alpha*epsilon^(2/3) [m^(4/3) s^-2], spectral energy level; L [m], length scale of the energy-containing
+        eddies; Gamma [-], shear anisotropy (0 = isotropic).
+    lifetime, factor1, factor2, evo_time_s : str, float, float, float or None, optional
+        "guo" (Guo et al. 2023, Eq. 6) or "mann" (Eq. 4, hypergeometric); slopes [-]: Guo lifetime's small-k
+        -factor1 (stable 0.8), evolution's large-k -(2/3) factor2 (Eq. 15: 3.5); gamma [s], time constant of
+        tau_e (Eq. 15), None = frozen turbulence.
     """
 
     ae: float
@@ -60,14 +55,10 @@ class KaimalParams:
 
     Parameters
     ----------
-    sigma_m_s : tuple of float
-        (sigma_u, sigma_v, sigma_w) [m/s].
-    length_scales_m : tuple of float
-        (L1, L2, L3) [m], Kaimal integral length scales.
-    a_yz : float, optional
-        Coherence decay constant [-] (IEC: 12).
-    lc_m : float, optional
-        Coherence scale parameter Lc [m] (IEC: 8.1 Lambda1).
+    sigma_m_s, length_scales_m : tuple of float
+        (sigma_u, sigma_v, sigma_w) [m/s]; (L1, L2, L3) [m], Kaimal integral length scales.
+    a_yz, lc_m : float, optional
+        Coherence decay constant [-] (IEC: 12) and scale parameter Lc [m] (IEC: 8.1 Lambda1).
     """
 
     sigma_m_s: tuple[float, float, float]

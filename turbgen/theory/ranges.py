@@ -138,12 +138,8 @@ def check_grid(grid) -> None:
     Plane positions must lie in the x range and increase strictly (stores and readers rely on sorted x;
     a negative x would be downstream of the rotor). Raises ParameterError otherwise.
     """
-    check("nt", grid.nt)
-    check("dt_s", grid.dt_s)
-    check("ny", grid.ny)
-    check("nz", grid.nz)
-    check("dy_m", grid.dy_m)
-    check("dz_m", grid.dz_m)
+    for key in ("nt", "dt_s", "ny", "nz", "dy_m", "dz_m"):
+        check(key, getattr(grid, key))
     xs = list(grid.x_m)
     check_count("planes", len(xs))
     for x in xs:

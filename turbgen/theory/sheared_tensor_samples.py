@@ -97,10 +97,8 @@ def sheared_tensor_on_circles(k1, kappa, beta, cos_t, sin_t, pairs, ae: float, l
     ----------
     k1, kappa, beta : numpy.ndarray
         (rows,) k1 [rad/m]; (rows, nr) radial nodes [rad/m] and beta(|k|) [-] (non-finite -> 0).
-    cos_t, sin_t : numpy.ndarray
-        (n_theta,) cosine and sine of the angles.
-    pairs : sequence of (int, int)
-        Tensor components (i, j) wanted.
+    cos_t, sin_t, pairs : numpy.ndarray, numpy.ndarray, sequence of (int, int)
+        (n_theta,) cosine and sine of the angles; the tensor components (i, j) wanted.
     ae, length_scale_m : float
         alpha*eps^(2/3) [m^(4/3) s^-2] and L [m].
 

@@ -27,12 +27,9 @@ def space_time_tensor(k1, k2, k3, dt_s: float, params: MannParams) -> np.ndarray
 
     Parameters
     ----------
-    k1, k2, k3 : array_like
-        Wavenumber components [rad/m] (broadcast together).
-    dt_s : float
-        Time lag [s], finite.
-    params : MannParams
-        Mann model parameters (frozen turbulence: Theta = Phi).
+    k1, k2, k3, dt_s, params : array_like, array_like, array_like, float, MannParams
+        Wavenumber components [rad/m] (broadcast together); time lag [s], finite; Mann model parameters (frozen
+        turbulence: Theta = Phi).
     """
     dt = check_finite("dt (s)", dt_s)
     k1, k2, k3 = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (k1, k2, k3)))
@@ -49,10 +46,8 @@ def longitudinal_coherence(f_hz, dx_m: float, U_m_s: float, params: MannParams) 
     ----------
     f_hz : array_like
         Frequencies [Hz], finite.
-    dx_m, U_m_s : float
-        Longitudinal separation [m] and mean wind speed [m/s].
-    params : MannParams
-        Mann model.
+    dx_m, U_m_s, params : float, float, MannParams
+        Longitudinal separation [m], mean wind speed [m/s] and Mann model.
     """
     f = np.atleast_1d(np.asarray(f_hz, dtype=float))
     if not np.all(np.isfinite(f)):

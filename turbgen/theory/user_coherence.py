@@ -48,10 +48,8 @@ class LineCoherence:
     ----------
     nt, dt_s : int, float
         The run's record: samples and interval [s].
-    r_m : tuple of float
-        (n,) increasing nodes [m], the first 0.
-    coh : tuple of tuple of float
-        (nt // 2, n) values [-], finite, in [-1, 1], 1 at r = 0.
+    r_m, coh : tuple of float, tuple of tuple of float
+        (n,) increasing nodes [m], the first 0; (nt // 2, n) values [-], finite, in [-1, 1], 1 at r = 0.
     """
 
     nt: int
