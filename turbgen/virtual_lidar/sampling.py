@@ -158,6 +158,23 @@ def _interp_axis(coord0: float, step: float, n: int, values: np.ndarray):
     return i, a
 
 
+def _corners(it, at, jy, ay, jz, az, shape):
+    """The 8 corners of the points' (t, y, z) cells: (t, y, z indices clipped to ``shape``, trilinear weight)."""
+    for dt_, wt in ((0, 1 - at), (1, at)):
+        for dy_, wy in ((0, 1 - ay), (1, ay)):
+            for dz_, wz in ((0, 1 - az), (1, az)):
+                yield (np.minimum(it + dt_, shape[0] - 1), np.minimum(jy + dy_, shape[1] - 1),
+                       np.minimum(jz + dz_, shape[2] - 1), wt * (wy * wz))
+
+
+def _heights(hub_height_m: float, points_m: np.ndarray) -> np.ndarray:
+    """Heights above the ground [m] of the probe points (k, 3); ParameterError if one is at or below it."""
+    h = hub_height_m + points_m[:, 2]
+    if np.any(h <= 0):
+        raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+    return h
+
+
 def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = False,
            shear_exponent: float = 0.2, mean_wind=None) -> LidarSamples:
     """Sample store ``fs`` with ``measurements`` (every beam with every gate) at the physical times ``times_s`` [s].
@@ -275,16 +292,9 @@ def _sample_with_mean_wind(fs, measurements, planes, T, col, bi, gi, dims, mean_
             jy, ay = _interp_axis(y0 + y_lo * g.dy_m, g.dy_m, y_hi - y_lo, p[:, 1])
             jz, az = _interp_axis(z0 + z_lo * g.dz_m, g.dz_m, z_hi - z_lo, p[:, 2])
             n = np.asarray(m.n, float)
-            shape = box["u"].shape
-            # the 8 corners of (t, y, z): flat indices and weights, shared by the three components
-            corners = []
-            for dt_, wt in ((0, 1 - at), (1, at)):
-                ii = np.minimum(it + dt_, shape[0] - 1)
-                for dy_, wy in ((0, 1 - ay), (1, ay)):
-                    yy = np.minimum(jy + dy_, shape[1] - 1)
-                    for dz_, wz in ((0, 1 - az), (1, az)):
-                        zz = np.minimum(jz + dz_, shape[2] - 1)
-                        corners.append(((ii * shape[1] + yy) * shape[2] + zz, wt * (wy * wz)))
+            shape = box["u"].shape  # flat indices of the corners, shared by the three components
+            corners = [((ti * shape[1] + yi) * shape[2] + zi, wc)
+                       for ti, yi, zi, wc in _corners(it, at, jy, ay, jz, az, shape)]
             los = _with_mean_wind(mean_wind, fs, box, corners, n, t, p)
             v_los[:, bi[m.beam], gi[m.gate]] = weighted_sum(los, m.weights)
             n1[bi[m.beam], gi[m.gate]] = n[0]
@@ -296,9 +306,7 @@ def _with_mean_wind(mean_wind, fs, box, corners, n, t, p) -> np.ndarray:
 
     ``t`` (n_scan, k) are the stored times (when each slice reaches the rotor), ``p`` (k, 3) the points.
     """
-    h = fs.hub_height_m + p[:, 2]
-    if np.any(h <= 0):
-        raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+    h = _heights(fs.hub_height_m, p)
     vals = {c: sum(w * box[c].ravel()[idx] for idx, w in corners) for c in "uvw"}
     u, v = mean_wind.full_uv(vals["u"], vals["v"], t, p[None, :, 1], h[None, :], fs.U_m_s, fs.hub_height_m)
     return n[0] * u + n[1] * v + n[2] * vals["w"]
@@ -342,15 +350,9 @@ def los_operator(grid, U_m_s: float, measurements, planes, times_s: np.ndarray) 
         jy, ay = _interp_axis(y0, g.dy_m, g.ny, p[:, 1])
         jz, az = _interp_axis(z0, g.dz_m, g.nz, p[:, 2])
         w = np.asarray(m.weights, float)
-        r = 0
-        for dt_, wt in ((0, 1 - at), (1, at)):
-            for dy_, wy in ((0, 1 - ay), (1, ay)):
-                for dz_, wz in ((0, 1 - az), (1, az)):
-                    t_index[:, j, r : r + k] = np.minimum(it + dt_, g.nt - 1)
-                    y_index[j, r : r + k] = np.minimum(jy + dy_, g.ny - 1)
-                    z_index[j, r : r + k] = np.minimum(jz + dz_, g.nz - 1)
-                    weight[:, j, r : r + k] = wt * (wy * wz) * w
-                    r += k
+        for r, (ti, yi, zi, wc) in enumerate(_corners(it, at, jy, ay, jz, az, (g.nt, g.ny, g.nz))):
+            s = slice(r * k, (r + 1) * k)
+            t_index[:, j, s], y_index[j, s], z_index[j, s], weight[:, j, s] = ti, yi, zi, wc * w
     return LosOperator(np.asarray(planes, np.int64), np.array([m.n for m in measurements], float), t_index,
                        y_index, z_index, weight)  # fmt: skip
 
@@ -425,9 +427,7 @@ def mean_wind_los_series(measurements, times_s: np.ndarray, U_m_s: float, hub_he
     out = np.zeros(np.shape(times_s))
     for j, m in enumerate(measurements):
         p = m.points_m()
-        h = hub_height_m + p[:, 2]
-        if np.any(h <= 0):
-            raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+        h = _heights(hub_height_m, p)
         t = times_s[:, j][:, None] + p[None, :, 0] / U_m_s
         u, _ = mean_wind.full_uv(0.0, 0.0, t, p[None, :, 1], h[None, :], U_m_s, hub_height_m)
         out[:, j] = m.n[0] * weighted_sum(u, m.weights)
@@ -439,8 +439,6 @@ def mean_wind_los(measurements, U_m_s: float, hub_height_m: float, shear_exponen
     (what ``add_mean_wind`` adds to v_los). Raises ParameterError for a probe point below the ground."""
     out = np.zeros(len(measurements))
     for j, m in enumerate(measurements):
-        h = hub_height_m + m.points_m()[:, 2]
-        if np.any(h <= 0):
-            raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+        h = _heights(hub_height_m, m.points_m())
         out[j] = m.n[0] * weighted_sum(U_m_s * (h / hub_height_m) ** shear_exponent, m.weights)
     return out
