@@ -240,7 +240,7 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
         time_out[:, bi[b]] = T[:, col[b]]
     if mean_wind is not None and add_mean_wind:
         # veer and time-varying means rotate (u, v) per probe point: the profile's own path (MeanWind.full_uv)
-        v_los, n1 = _sample_with_mean_wind(fs, measurements, planes, T, col, bi, gi, (n_scan, nb, ng), mean_wind)
+        los = _los_with_mean_wind(fs, measurements, planes, T, col, mean_wind)
     else:
         op = los_operator(g, U, measurements, planes, np.stack([T[:, col[m.beam]] for m in measurements], axis=1))
 
@@ -250,11 +250,11 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
         los = apply_los(op, read)
         if add_mean_wind:
             los = los + mean_wind_los(measurements, U, fs.hub_height_m, shear_exponent)[None, :]
-        v_los = np.zeros((n_scan, nb, ng))
-        n1 = np.zeros((nb, ng))
-        for j, m in enumerate(measurements):
-            v_los[:, bi[m.beam], gi[m.gate]] = los[:, j]
-            n1[bi[m.beam], gi[m.gate]] = m.n[0]
+    v_los = np.zeros((n_scan, nb, ng))
+    n1 = np.zeros((nb, ng))
+    for j, m in enumerate(measurements):
+        v_los[:, bi[m.beam], gi[m.gate]] = los[:, j]
+        n1[bi[m.beam], gi[m.gate]] = m.n[0]
     gx = np.array([g.x_m[next(planes[j] for j, m in enumerate(measurements) if m.gate == gg)] for gg in gates], float)
     if mean_wind is not None and add_mean_wind:
         return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, True, mean_wind.shear_exponent,
@@ -262,12 +262,10 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
     return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, add_mean_wind, shear_exponent)
 
 
-def _sample_with_mean_wind(fs, measurements, planes, T, col, bi, gi, dims, mean_wind):
-    """v_los (n_scan, nb, ng) and n_1 (nb, ng) of fluctuations plus ``mean_wind`` at every probe point and stored time."""
+def _los_with_mean_wind(fs, measurements, planes, T, col, mean_wind):
+    """v_los (n_scan, J) of fluctuations plus ``mean_wind`` at every probe point and stored time."""
     g, U = fs.grid, fs.U_m_s
-    n_scan, nb, ng = dims
-    v_los = np.zeros((n_scan, nb, ng))
-    n1 = np.zeros((nb, ng))
+    los = np.zeros((len(T), len(measurements)))
     y0, z0 = g.y()[0], g.z()[0]
     by_plane: dict[int, list[int]] = {}
     for j, ix in enumerate(planes):
@@ -295,10 +293,8 @@ def _sample_with_mean_wind(fs, measurements, planes, T, col, bi, gi, dims, mean_
             shape = box["u"].shape  # flat indices of the corners, shared by the three components
             corners = [((ti * shape[1] + yi) * shape[2] + zi, wc)
                        for ti, yi, zi, wc in _corners(it, at, jy, ay, jz, az, shape)]
-            los = _with_mean_wind(mean_wind, fs, box, corners, n, t, p)
-            v_los[:, bi[m.beam], gi[m.gate]] = weighted_sum(los, m.weights)
-            n1[bi[m.beam], gi[m.gate]] = n[0]
-    return v_los, n1
+            los[:, j] = weighted_sum(_with_mean_wind(mean_wind, fs, box, corners, n, t, p), m.weights)
+    return los
 
 
 def _with_mean_wind(mean_wind, fs, box, corners, n, t, p) -> np.ndarray:
@@ -396,19 +392,6 @@ def apply_los(op: LosOperator, read) -> np.ndarray:
                     continue
                 vals = block[op.t_index[:, j] - t[0], op.y_index[j] - y[0], op.z_index[j] - z[0]]
                 out[:, j] += op.n[j, c] * np.add.reduce(op.weight[:, j] * vals, axis=-1)
-    return out
-
-
-def adjoint_los(op: LosOperator, v: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-    """H^T v: the field (nx, 3, nt, ny, nz) float64 (``shape``) that the values ``v`` (n_scan, J) scatter back to
-    through the same weights, so that <H x, v> = <x, H^T v>."""
-    out = np.zeros(shape)
-    for j in range(op.weight.shape[1]):
-        for c in range(3):
-            if op.n[j, c] == 0.0:
-                continue
-            np.add.at(out[op.plane[j], c], (op.t_index[:, j], op.y_index[j][None], op.z_index[j][None]),
-                      op.n[j, c] * op.weight[:, j] * v[:, j, None])  # fmt: skip
     return out
 
 
