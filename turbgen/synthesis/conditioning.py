@@ -127,7 +127,7 @@ def spectra_samples(streams: Streams, spectra: np.ndarray, nt: int) -> np.ndarra
 
 def _slab_components(stencil: MannStencil, i: int, rows: int) -> np.ndarray:
     """Phi_i = 2 C C^T's six components (6, rows nzp) float64 in COMPONENT_PAIRS order on the rows 0 .. rows - 1 of
-    slab ``i`` (prior_spectrum.slab_spectrum's values, the same operations: kernels.slab_components)."""
+    slab ``i`` (from mann_oracle.slab_factor's operations: kernels.slab_components)."""
     box = stencil.box
     scratch = None if stencil.coef is not None else np.empty((4, 1, box.nk2_half, box.nzp), np.float32)
     coef, j = stencil.coefficients(i, i + 1, scratch)
@@ -139,7 +139,7 @@ def _slab_components(stencil: MannStencil, i: int, rows: int) -> np.ndarray:
 
 
 def _slab_phi(stencil: MannStencil, i: int) -> np.ndarray:
-    """Phi_i = 2 C C^T (3, 3, nyp nzp) (prior_spectrum.slab_spectrum, elementwise), symmetrised under k -> -k on the
+    """Phi_i = 2 C C^T (3, 3, nyp nzp) (C: mann_oracle.slab_factor), symmetrised under k -> -k on the
     k1 = 0 / Nyquist slabs (their real part: see prior_spectrum)."""
     box = stencil.box
     components = _slab_components(stencil, i, box.nyp)
