@@ -117,7 +117,7 @@ class LidarReport:
     store: str
     lidar: object
     run: LidarRun
-    f_hz: np.ndarray  # Welch bins 1 .. up to F_THEORY_MAX_HZ (where the theory is evaluated)
+    f_hz: np.ndarray
     coh2_theory: np.ndarray
     G_theory: np.ndarray
     theory_numbers: dict

@@ -57,7 +57,7 @@ class Measurement:
     offsets_m: tuple = (0.0,)
     weights: tuple = (1.0,)
     direction: tuple | None = field(default=None)
-    plane_x_m: float | None = None  # the gate's plane; default the focus x (a tilted beam's focus may lie off it)
+    plane_x_m: float | None = None
 
     def points_m(self) -> np.ndarray:
         """Probe-volume points focus + offset * direction, (k, 3) in (x upstream, y, z) [m]."""
@@ -87,7 +87,7 @@ class LidarSamples:
     v_los: np.ndarray
     time_s: np.ndarray
     gates_x_m: np.ndarray
-    n1: np.ndarray  # (n_beam, n_gate) longitudinal projection of each measurement
+    n1: np.ndarray
     mean_wind_added: bool
     shear_exponent: float
     mean_wind: str = ""
