@@ -13,15 +13,24 @@ import pytest
 
 from brute_force import dense_gain, generator_covariance
 from turbgen.errors import ParameterError
-from turbgen.synthesis.conditioning import (Streams, check_singular, circulant_apply, measure, measure_spectra,
-                                            measured_points, solve, spectra_samples, stream_covariance,
-                                            weights_field)  # fmt: skip
+from turbgen import fft
+from turbgen.synthesis.conditioning import (Streams, check_singular, circulant_apply, correction_blocks, measure,
+                                            measure_spectra, measured_points, solve, spectra_samples,
+                                            stream_covariance)  # fmt: skip
 from turbgen.synthesis.mann_spacetime import MannSnapshots
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil
 from turbgen.theory.params import MannParams
 
 NY = NZ = 2
 BOX = BoxShape(16, 10.0, 4, 4, 10.0, 10.0)
+
+
+def weights_field(stencil, streams, weights, times_s, plane, ny, nz):
+    """C H^T w on plane ``plane``, cropped to ny x nz: (3, nt, ny, nz) float64, from correction_blocks' spectra."""
+    spectra = np.empty((3, stencil.box.nk1, ny, nz), np.complex64)
+    for slabs, block in correction_blocks(stencil, streams, weights, times_s, [plane], ny, nz):
+        spectra[:, slabs.start : slabs.stop] = block[0]
+    return fft.oneshot().irfft(spectra.astype(complex), n=stencil.box.nt, axis=-3) * stencil.box.nt
 
 
 def _setup(evo, times):

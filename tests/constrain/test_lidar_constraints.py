@@ -14,13 +14,26 @@ from turbgen.cli import cli
 from turbgen.virtual_lidar.dataset import read_dataset
 from turbgen.virtual_lidar.description import lidar_from_mapping
 from turbgen.virtual_lidar.run import measurements_of
-from turbgen.virtual_lidar.sampling import adjoint_los, apply_los, check_measurements, los_operator
+from turbgen.virtual_lidar.sampling import apply_los, check_measurements, los_operator
 from turbgen.runs.constrain import place
 from turbgen.spec.mann import MannRun
 from turbgen.synthesis.conditioning import measure
 
 LIDAR = {"name": "small", "kind": "pulsed", "mount": "nacelle", "ranges_m": [20, 40], "beam_rate_hz": 1.0,
          "rotor_radius_m": 10, "azimuth_deg": [10, -10], "elevation_deg": [5, -5], "fwhm_m": 4}  # fmt: skip
+
+
+def adjoint_los(op, v: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """H^T v: the field (nx, 3, nt, ny, nz) that the values ``v`` (n_scan, J) scatter back to through the operator's
+    weights, so that <H x, v> = <x, H^T v>."""
+    out = np.zeros(shape)
+    for j in range(op.weight.shape[1]):
+        for c in np.flatnonzero(op.n[j]):
+            np.add.at(out[op.plane[j], c], (op.t_index[:, j], op.y_index[j][None], op.z_index[j][None]),
+                      op.n[j, c] * op.weight[:, j] * v[:, j, None])
+    return out
+
+
 GRID = ["--nt", "256", "--ny", "8", "--nz", "8", "--dy", "5", "--planes", "0,20,40", "--threads", "1"]
 
 

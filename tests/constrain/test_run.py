@@ -16,7 +16,8 @@ from turbgen.runs.mann import build_mann_stencil
 from turbgen.spec.constraints import point_series_from_mapping
 from turbgen.spec.mann import MannRun
 from turbgen.store import open_store
-from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_spectrum, slab_weight
+from turbgen.synthesis.mann_oracle import slab_factor
+from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_weight
 from turbgen.validation import validate
 
 GRID = {"nt": 128, "dt_s": 0.5, "x_m": [0.0, 40.0], "ny": 4, "nz": 4, "dy_m": 10.0}
@@ -95,7 +96,8 @@ def _dense_prior(stencil, run):
     ey = np.exp(2j * np.pi * np.outer(y, jy) / box.nyp)
     ez = np.exp(2j * np.pi * np.outer(z, lz) / box.nzp)
     for i in range(box.nk1):
-        phi, rho = slab_spectrum(stencil, i), _ou_factors(stencil, i, run.plane_times_s())
+        c_i = slab_factor(stencil, i)  # Phi_i = 2 C C^T
+        phi, rho = 2.0 * np.einsum("ikyz,jkyz->ijyz", c_i, c_i), _ou_factors(stencil, i, run.plane_times_s())
         en = np.exp(2j * np.pi * i * n / box.nt)
         for a in range(len(idx)):
             kernel = rho[p[a]][p] * phi[c[a]][c]  # (points, nyp, nzp)

@@ -13,12 +13,19 @@ from click.testing import CliRunner
 
 from turbgen.cli import cli
 from turbgen.errors import ParameterError
-from turbgen.exporters.uniform_wind import export_transient, read_uniform
-from turbgen.spec.iec_transient import IecTransient
+from turbgen.exporters.uniform_wind import export_transient
+from turbgen.spec.iec_transient import COLUMNS, IecTransient
 
 HUB, D, V = 90.0, 126.0, 12.0
 SIGMA1 = 0.14 * (0.75 * V + 5.6)  # class B: I_ref = 0.14
 LAMBDA1 = 42.0  # hub above 60 m
+
+
+def read_uniform(path) -> dict:
+    """Columns of a uniform wind file, name (``COLUMNS``) -> float array (``!`` lines skipped)."""
+    rows = [line.split() for line in Path(path).read_text().splitlines() if line.strip() and not line.startswith("!")]
+    data = np.asarray(rows, dtype=float)
+    return {c: data[:, k] for k, c in enumerate(COLUMNS)}
 
 
 def inflowwind_speed(cols, k, y, z):

@@ -6,6 +6,8 @@
 operation; ``reference_coefficients`` applies the energy as ``mann_factors.apply_energy`` does. The compiled
 kernel evaluates the same float64 operations in the same order point by point, except that log, exp and arctan
 come from the C library instead of numpy's SIMD loops (they differ in the last bit of a few per cent of values).
+
+``discrete_spectra`` is the exact expectation of the synthesised field from ``mann_oracle.slab_factor``.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from turbgen.synthesis.mann_cells import CELL_K1_FACTOR, CELL_RADIUS, _cell_rule
 from turbgen.theory.lattice import gauss_panel
 from turbgen.synthesis.box_shape import BoxShape
 from turbgen.synthesis.mann_factors import energy_scale
+from turbgen.synthesis.mann_oracle import slab_factor
 from turbgen.theory.eddy_lifetime import evolution_lifetime_table, shear_lifetime_table
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
@@ -140,3 +143,13 @@ def reference_axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray,
     index = np.array(index, dtype=np.int64).reshape(-1, 3)
     factor = np.concatenate(factor).astype(np.float32) if factor else np.zeros((0, 3, 3), np.float32)
     return index, factor
+
+
+def discrete_spectra(stencil) -> np.ndarray:
+    """S[i, j, slab] = sum over (k2, k3) of E[u_hat_i u_hat_j^*], (3, 3, nk1) real [m^2 s^-2]: a point's variance is
+    sum_slab w_slab S[i, i, slab], w = 1 on the k1 = 0 and Nyquist slabs, 2 elsewhere (the Hermitian partner)."""
+    out = np.empty((3, 3, stencil.box.nk1))
+    for i in range(stencil.box.nk1):
+        c = slab_factor(stencil, i)
+        out[:, :, i] = 2.0 * np.einsum("ikyz,jkyz->ij", c, c)
+    return out

@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from turbgen.synthesis.mann_oracle import discrete_spectra, slab_factor
+from stencil_reference import discrete_spectra
+from turbgen.synthesis.mann_oracle import slab_factor
 from turbgen.synthesis.mann_stencil import BoxShape, build_stencil, expand_k2
 from turbgen.theory.lattice import pair_weights
 from turbgen.theory.mann_spectra import one_point_spectra, variances

@@ -9,7 +9,8 @@ from turbgen.runs.mann import run_mann
 from turbgen.spec.mann import MannRun
 from turbgen.validation import theory_cache, validate
 from turbgen.validation.estimators import WelchSetup, segment_starts
-from turbgen.validation.pair_sums import box_lags, pair_sum, real_box_lags, rect_pair_counts, set_pair_counts
+from turbgen.validation.pair_sums import (box_lags, half_lags, real_box_lags, rect_pair_counts, set_pair_counts,
+                                          weighted_gram)
 from turbgen.validation.span_sums import COMPONENTS, span_sums
 from turbgen.validation.welch_sums import point_moments, window_segment
 
@@ -80,7 +81,7 @@ def test_pair_sums_equal_the_full_lag_grid():
     for counts in (rect_pair_counts(ny, nz, 4, 3), set_pair_counts(ny, nz, np.array([0, 2, 5]), np.array([1, 4]))):
         for c in (coh, coh.real + coh.real[:, ::-1, ::-1]):  # complex and real (symmetric) coherencies
             full = np.real(np.einsum("il,jl->ij", (c * counts).reshape(nn, -1), np.conj(c).reshape(nn, -1)))
-            np.testing.assert_allclose(pair_sum(c, counts), full, rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(weighted_gram(half_lags(c), counts), full, rtol=1e-12, atol=1e-12)
 
 
 @pytest.fixture(scope="module")

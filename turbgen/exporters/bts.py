@@ -16,7 +16,7 @@ import numpy as np
 from turbgen.version import __version__
 from turbgen.exporters.inflowwind_file import InflowWindInput, inflowwind_path, write_inflowwind
 from turbgen.exporters.outputs import OutputSet
-from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
+from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, layout_notes
 
 _HEADER = struct.Struct("<h4i6f6fi")
 
@@ -141,9 +141,7 @@ def export_bts(fs, out, req: ExportRequest) -> ExportResult:
              ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
              ifw_line(str(out), "FileName_BTS", "TurbSim binary full-field file"))
     notes = [f"plane x = {g.x_m[ix]:g} m in eddy time: slice k is stored t index k (t = k*{g.dt_s:g} s)",
-             *mean_wind_notes(lay, shift, g.nt, g.dt_s)]
-    if lay.z_first:
-        notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
+             *layout_notes(lay, shift, g.nt, g.dt_s)]
     if req.tower:
         notes.append("tower points: the mean wind plus the lowest row's fluctuations at y = 0 (held constant below the grid)")
     return ExportResult((out, dat) if req.runner_files else (out,), lines, tuple(notes), tuple(usage))

@@ -17,7 +17,7 @@ from turbgen.errors import ParameterError
 from turbgen.exporters.inflowwind_file import inflowwind_path
 from turbgen.exporters.lidarsim_file import evolution_section_lines, lidarsim_section_path, write_lidarsim_section
 from turbgen.exporters.outputs import OutputSet
-from turbgen.exporters.request import ExportRequest, ExportResult, Plane, mean_wind_notes
+from turbgen.exporters.request import ExportRequest, ExportResult, Plane, layout_notes
 from turbgen.exporters.wnd import (BladedStats, WndHeader, bladed_raw, check_even_nt, export_root, from_bladed,
                                 inflowwind_lines, read_wnd, root_file, write_pair, write_wnd_inflowwind)
 
@@ -81,12 +81,10 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
     notes = [f"ROOT.evo holds {g.nx} planes at {dist.tolist()} m upstream (the simulator picks the nearest to -X, "
              "X measured from the tower axis)",
              f"ROOT.wnd holds plane x = {g.x_m[ix_rotor]:g} m; the turbine's InflowWind must use WindType 3 or 4",
-             *mean_wind_notes(lay, shift, g.nt, g.dt_s)]
+             *layout_notes(lay, shift, g.nt, g.dt_s)]
     if rounded:
         notes.append(f"plane distances rounded to the .evo's whole metres: {', '.join(rounded)} m "
                      "(the simulator samples the stored eddy-time series of the nearest plane)")
-    if lay.z_first:
-        notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
     return ExportResult(tuple(paths), lines, tuple(notes), tuple(usage))
 
 

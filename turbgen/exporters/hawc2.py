@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from turbgen.exporters.inflowwind_file import (InflowWindInput, hawc2_wind_block, inflowwind_path,
+from turbgen.exporters.inflowwind_file import (InflowWindInput, hawc2_wind_block, hawc_lines, inflowwind_path,
                                             write_inflowwind)
 from turbgen.exporters.outputs import OutputSet
-from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
+from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, layout_notes
 
 
 def component_paths(root) -> dict[str, Path]:
@@ -58,39 +58,31 @@ def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
         write_hawc2({c: files.temp(p) for c, p in paths.items()}, plane, fs.U_m_s)
         if req.runner_files:
             usage += runner_files(files, fs, req, plane, lay, paths, dat, htc)
-    keys = [(paths["u"], "FileName_u", "u - URef"), (paths["v"], "FileName_v", "v"), (paths["w"], "FileName_w", "w"),
-            (g.nt, "nx", "number of grids in x (time)"), (g.ny, "ny", "number of grids in y"),
-            (lay.nz, "nz", "number of grids in z"), (fs.U_m_s * g.dt_s, "dx", "distance between x points (m) = URef*dt"),
-            (g.dy_m, "dy", "(m)"), (g.dz_m, "dz", "(m)"),
-            (lay.centre_m, "RefHt_HAWC", "height of the grid's vertical centre (m)"),
-            (0, "ScaleMethod", "0 = no scaling (keeps the shear stored in the files)"),
-            (1.0, "SFx", "unused"), (1.0, "SFy", "unused"), (1.0, "SFz", "unused"),
-            (0.0, "SigmaFx", "unused"), (0.0, "SigmaFy", "unused"), (0.0, "SigmaFz", "unused"),
-            (fs.U_m_s, "URef", "mean u at hub height (m/s), also the advection speed"),
-            (0, "WindProfile", "0 = constant: the mean profile is already in the files"),
-            (lay.shear_exponent, "PLExp_HAWC", "unused with WindProfile 0"), (0.03, "Z0", "unused with WindProfile 0"),
-            (0.0, "XOffset", "(m)")]
     lines = (ifw_line(5, "WindType", "switch for wind file type (5 = HAWC binary)"),
              ifw_line(0, "PropagationDir", "direction of wind propagation (deg)"),
-             *[ifw_line(v, k, c) for v, k, c in keys])
+             *hawc_lines({f"FileName_{c}": p for c, p in paths.items()}, hawc_keys(fs, lay), fs.U_m_s))
     notes = [f"plane x = {g.x_m[ix]:g} m in eddy time; HAWC boxes are always periodic in time",
              "written for InflowWind: the first x-plane reaches the turbine first and u - URef already holds the "
              "shear; in HAWC2 itself switch its shear off and check the box read direction (changed in v13.1)",
-             *mean_wind_notes(lay, 0.0, g.nt, g.dt_s)]
-    if lay.z_first:
-        notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
+             *layout_notes(lay, 0.0, g.nt, g.dt_s)]
     written = (*paths.values(), dat, htc) if req.runner_files else tuple(paths.values())
     return ExportResult(written, lines, tuple(notes), tuple(usage))
+
+
+def hawc_keys(fs, lay) -> dict:
+    """The HAWC-format keys nx .. PLExp_HAWC of store ``fs`` exported with vertical layout ``lay``."""
+    g = fs.grid
+    return {"nx": g.nt, "ny": g.ny, "nz": lay.nz, "dx": fs.U_m_s * g.dt_s, "dy": g.dy_m, "dz": g.dz_m,
+            "RefHt_HAWC": lay.centre_m, "PLExp_HAWC": lay.shear_exponent}
 
 
 def runner_files(files, fs, req: ExportRequest, plane: Plane, lay, paths: dict, dat: Path, htc: Path) -> list[str]:
     """Write the InflowWind v5 input file ``dat`` and the HAWC2 wind block ``htc``; one usage line per file."""
     g = fs.grid
     desc = f"turbgen {htc.name}: plane of {req.source(fs)}, {lay.wind.describe()}"
-    keys = {"nx": g.nt, "ny": g.ny, "nz": lay.nz, "dx": fs.U_m_s * g.dt_s, "dy": g.dy_m, "dz": g.dz_m,
-            "RefHt_HAWC": lay.centre_m, "PLExp_HAWC": lay.shear_exponent}
-    files_ifw = {"FileName_u": paths["u"], "FileName_v": paths["v"], "FileName_w": paths["w"]}
-    usage = [write_inflowwind(files, dat, InflowWindInput(5, lay.hub_height_m, fs.U_m_s, files_ifw, keys, title=desc))]
+    files_ifw = {f"FileName_{c}": p for c, p in paths.items()}
+    usage = [write_inflowwind(files, dat, InflowWindInput(5, lay.hub_height_m, fs.U_m_s, files_ifw, hawc_keys(fs, lay),
+                                                          title=desc))]
     ti = float(np.std(plane.fluct["u"], dtype=np.float64)) / fs.U_m_s
     files.temp(htc).write_text(hawc2_wind_block(
         paths=paths, folder=htc.absolute().parent, U_m_s=fs.U_m_s, ti=ti, centre_m=lay.centre_m, nt=g.nt, ny=g.ny,

@@ -75,16 +75,16 @@ def inflowwind_text(spec: InflowWindInput, path) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _hawc_lidar_output(spec: InflowWindInput, files: dict) -> list[str]:
-    """The HAWC, lidar and output sections of the input file (inert values where unused)."""
-    hw = {"nx": 2, "ny": 2, "nz": 2, "dx": 1.0, "dy": 1.0, "dz": 1.0, "RefHt_HAWC": spec.ref_height_m,
-          "PLExp_HAWC": 0.0, **spec.hawc}
+def hawc_lines(files: dict, hawc: dict, U_m_s: float, where: str = "") -> list[str]:
+    """The HAWC-format section, FileName_u to XOffset: ``files`` FileName_u/v/w -> box path (``where`` tells
+    relative to what), ``hawc`` nx, ny, nz, dx, dy, dz [m], RefHt_HAWC [m], PLExp_HAWC [-] (inert values where
+    missing); ``U_m_s`` URef [m/s]."""
+    hw = {"nx": 2, "ny": 2, "nz": 2, "dx": 1.0, "dy": 1.0, "dz": 1.0, "RefHt_HAWC": 0.0, "PLExp_HAWC": 0.0, **hawc}
     L = ifw_line
     return [
-        "================== Parameters for HAWC-format binary files  [Only used with WindType = 5] =====================",
-        L(files.get("FileName_u", "unused_u.bin"), "FileName_u", "u - URef (relative to this file)"),
-        L(files.get("FileName_v", "unused_v.bin"), "FileName_v", "v (relative to this file)"),
-        L(files.get("FileName_w", "unused_w.bin"), "FileName_w", "w (relative to this file)"),
+        L(files.get("FileName_u", "unused_u.bin"), "FileName_u", f"u - URef{where}"),
+        L(files.get("FileName_v", "unused_v.bin"), "FileName_v", f"v{where}"),
+        L(files.get("FileName_w", "unused_w.bin"), "FileName_w", f"w{where}"),
         L(int(hw["nx"]), "nx", "number of grids in x (time)"),
         L(int(hw["ny"]), "ny", "number of grids in y"),
         L(int(hw["nz"]), "nz", "number of grids in z"),
@@ -97,11 +97,20 @@ def _hawc_lidar_output(spec: InflowWindInput, files: dict) -> list[str]:
         L(1.0, "SFx", "unused"), L(1.0, "SFy", "unused"), L(1.0, "SFz", "unused"),
         L(0.0, "SigmaFx", "unused"), L(0.0, "SigmaFy", "unused"), L(0.0, "SigmaFz", "unused"),
         "-------------   Mean wind profile parameters (added to HAWC-format files)   ---------------------------------",
-        L(float(spec.U_m_s), "URef", "mean u at the reference height (m/s), also the advection speed"),
+        L(float(U_m_s), "URef", "mean u at the reference height (m/s), also the advection speed"),
         L(0, "WindProfile", "0 = constant: the mean profile is already in the files"),
         L(float(hw["PLExp_HAWC"]), "PLExp_HAWC", "unused with WindProfile 0"),
         L(0.03, "Z0", "unused with WindProfile 0"),
         L(0.0, "XOffset", "initial offset in +x (m)"),
+    ]
+
+
+def _hawc_lidar_output(spec: InflowWindInput, files: dict) -> list[str]:
+    """The HAWC, lidar and output sections of the input file (inert values where unused)."""
+    L = ifw_line
+    return [
+        "================== Parameters for HAWC-format binary files  [Only used with WindType = 5] =====================",
+        *hawc_lines(files, {"RefHt_HAWC": spec.ref_height_m, **spec.hawc}, spec.U_m_s, " (relative to this file)"),
         "-------------   LIDAR Parameters   --------------------------------------------------------------------------",
         L(0, "SensorType", "0 = none"),
         L(0, "NumPulseGate", "unused"), L(0.0, "PulseSpacing", "unused"), L(0, "NumBeam", "unused"),

@@ -160,9 +160,10 @@ def ifw_line(value, key: str, comment: str) -> str:
     return f"{text:>20}   {key:<15} - {comment}"
 
 
-def mean_wind_notes(lay: VerticalLayout, shift_s: float, nt: int, dt_s: float) -> list[str]:
-    """The summary's notes on the start shift ``shift_s`` [s], a non-default mean wind, a history or transient."""
-    notes = []
+def layout_notes(lay: VerticalLayout, shift_s: float, nt: int, dt_s: float) -> list[str]:
+    """The summary's notes on the start shift ``shift_s`` [s], a non-default mean wind, a history or transient,
+    and the rows dropped below the ground."""
+    notes = [f"dropped the {lay.z_first} grid rows at or below the ground"] if lay.z_first else []
     if shift_s:
         notes.append(f"not periodic: InflowWind starts the file {shift_s:.6g} s upstream (InitX/U, half the grid "
                      f"width over U): slice k reaches the turbine at t = k*{dt_s:g} - {shift_s:.6g} s; usable "

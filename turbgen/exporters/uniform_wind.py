@@ -32,13 +32,6 @@ def uniform_text(event: IecTransient) -> str:
     return "\n".join(head + body) + "\n"
 
 
-def read_uniform(path) -> dict:
-    """Columns of a uniform wind file, name (``COLUMNS``) -> float array (``!`` lines skipped)."""
-    rows = [line.split() for line in Path(path).read_text().splitlines() if line.strip() and not line.startswith("!")]
-    data = np.asarray(rows, dtype=float)
-    return {c: data[:, k] for k, c in enumerate(COLUMNS)}
-
-
 def export_transient(event: IecTransient, out, *, overwrite: bool = False, runner_files: bool = True):
     """Write ``event`` as the uniform wind file ``out`` and, with ``runner_files``, its InflowWind v5 input file
     ``<out stem>_InflowWind_uniform.dat`` (WindType 2, RefHt_Uni = hub, RefLength = D).

@@ -18,7 +18,7 @@ import numpy as np
 from turbgen.errors import ParameterError
 from turbgen.exporters.inflowwind_file import InflowWindInput, inflowwind_path, write_inflowwind
 from turbgen.exporters.outputs import OutputSet
-from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, mean_wind_notes
+from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult, Plane, ifw_line, layout_notes
 from turbgen.exporters.wnd_summary import sum_text
 
 _HEADER = struct.Struct("<hhi6f3fi4f4i6f")
@@ -180,7 +180,5 @@ def export_wnd(fs, out, req: ExportRequest) -> ExportResult:
         if req.runner_files:
             usage.append(write_wnd_inflowwind(files, paths[2], root, lay, fs.U_m_s, x_m=g.x_m[ix], shift_s=shift))
     notes = [f"plane x = {g.x_m[ix]:g} m in eddy time: slice k is stored t index k",
-             *mean_wind_notes(lay, shift, g.nt, g.dt_s)]
-    if lay.z_first:
-        notes.append(f"dropped the {lay.z_first} grid rows at or below the ground")
+             *layout_notes(lay, shift, g.nt, g.dt_s)]
     return ExportResult(tuple(paths), inflowwind_lines(root), tuple(notes), tuple(usage))

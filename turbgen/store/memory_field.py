@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from turbgen.errors import ParameterError, StoreError
+from turbgen.errors import StoreError
 from turbgen.store import layout
-from turbgen.store.plausibility import check_amplitudes, check_attributes
-from turbgen.store.reader import FieldStore
+from turbgen.store.plausibility import check_amplitudes
+from turbgen.store.reader import FieldStore, checked_grid
 
 LABEL = "the field in memory"
 
@@ -96,12 +96,7 @@ def memory_field(ds) -> MemoryField:
     if attrs.get(layout.MARKER) is not True or "turbgen_version" not in attrs:
         raise StoreError(f"{LABEL} is not a complete turbgen field (no turbgen attributes: make it with turbgen.mann, "
                          "turbgen.kaimal or a generator, or open a store with turbgen.open_store)")  # fmt: skip
-    layout.validate_attrs(attrs, where=f"{LABEL} is not a valid turbgen field", error=StoreError)
-    check_attributes(attrs, where=f"{LABEL} is not a valid turbgen field")
-    try:
-        grid = layout.grid_from_attrs(attrs["grid"])
-    except ParameterError as exc:
-        raise StoreError(f"{LABEL}: grid attribute: {exc}") from None
+    grid = checked_grid(attrs, f"{LABEL} is not a valid turbgen field")
     arrays = {}
     for c in layout.COMPONENTS:
         var = ds.variables.get(c)

@@ -220,6 +220,17 @@ def chunks_written(path) -> int:
     return sum(len(files) for c in layout.COMPONENTS for _, _, files in os.walk(Path(path) / c / "c"))
 
 
+def checked_grid(attrs: dict, where: str) -> Grid:
+    """The grid of field attributes ``attrs`` once they pass the layout and plausibility checks; StoreError
+    starting with ``where`` otherwise."""
+    layout.validate_attrs(attrs, where=where, error=StoreError)
+    check_attributes(attrs, where=where)
+    try:
+        return layout.grid_from_attrs(attrs["grid"])
+    except ParameterError as exc:
+        raise StoreError(f"{where}: grid attribute: {exc}") from None
+
+
 def open_store(path) -> FieldStore:
     """Open the complete turbgen field store at ``path`` read-only; one-line StoreError otherwise.
 
@@ -248,12 +259,7 @@ def open_store(path) -> FieldStore:
     if attrs.get(layout.MARKER) is not True:
         raise StoreError(f"{path} is incomplete (no completeness marker: the write was interrupted or the copy is "
                          "partial); regenerate it")
-    layout.validate_attrs(attrs, where=f"{path} is corrupted", error=StoreError)
-    check_attributes(attrs, where=f"{path} is corrupted")
-    try:
-        grid = layout.grid_from_attrs(attrs["grid"])
-    except ParameterError as exc:
-        raise StoreError(f"{path} is corrupted: grid attribute: {exc}") from None
+    grid = checked_grid(attrs, f"{path} is corrupted")
     try:
         _check_arrays(path, group, grid)
     except StoreError:

@@ -60,7 +60,6 @@ class StoreWriter:
         self._squares: dict[tuple, float] = {}  # (component, ix, t0, t1) -> the block's float64 sum of squares
         self._plane_locks = {(c, ix): threading.Lock() for c in layout.COMPONENTS for ix in range(grid.nx)}
 
-    # -- context protocol -------------------------------------------------------------------
     def __enter__(self) -> "StoreWriter":
         self._tmp = temp_name(self.path)
         try:
@@ -85,7 +84,6 @@ class StoreWriter:
             raise
         return False
 
-    # -- writing ----------------------------------------------------------------------------
     def add_attrs(self, **attrs) -> None:
         """Add attributes known only after generation (e.g. a synthesis report), written before the marker; numpy
         values and tuples are stored as plain JSON types. ValueError for one already set or the marker itself."""
@@ -131,7 +129,6 @@ class StoreWriter:
             self._squares[(component, ix, t0, t1)] = sum_sq
         return (total, sum_sq) if squares else total
 
-    # -- internals --------------------------------------------------------------------------
     def _create(self, root: Path) -> None:
         g = self.grid
         attrs = with_writer_attrs(self._attrs, g)

@@ -127,7 +127,7 @@ def spectra_samples(streams: Streams, spectra: np.ndarray, nt: int) -> np.ndarra
 
 def _slab_components(stencil: MannStencil, i: int, rows: int) -> np.ndarray:
     """Phi_i = 2 C C^T's six components (6, rows nzp) float64 in COMPONENT_PAIRS order on the rows 0 .. rows - 1 of
-    slab ``i`` (prior_spectrum.slab_spectrum's values, the same operations: kernels.slab_components)."""
+    slab ``i`` (from mann_oracle.slab_factor's operations: kernels.slab_components)."""
     box = stencil.box
     scratch = None if stencil.coef is not None else np.empty((4, 1, box.nk2_half, box.nzp), np.float32)
     coef, j = stencil.coefficients(i, i + 1, scratch)
@@ -139,7 +139,7 @@ def _slab_components(stencil: MannStencil, i: int, rows: int) -> np.ndarray:
 
 
 def _slab_phi(stencil: MannStencil, i: int) -> np.ndarray:
-    """Phi_i = 2 C C^T (3, 3, nyp nzp) (prior_spectrum.slab_spectrum, elementwise), symmetrised under k -> -k on the
+    """Phi_i = 2 C C^T (3, 3, nyp nzp) (C: mann_oracle.slab_factor), symmetrised under k -> -k on the
     k1 = 0 / Nyquist slabs (their real part: see prior_spectrum)."""
     box = stencil.box
     components = _slab_components(stencil, i, box.nyp)
@@ -641,7 +641,7 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
                       nz: int, threads: int = 1) -> Iterator[tuple[range, np.ndarray]]:  # fmt: skip
     """The yz-transformed, cropped spectra of C H^T w on the planes ``planes_out``, group of slabs by group: yields
     (slabs, block (P_out, 3, len(slabs), ny, nz) complex64), ``threads`` groups computed at once (the result does not
-    depend on it; :func:`correction_spectra` gathers them).
+    depend on it).
 
     ``weights`` (M, nt/q): w, one value per stream sample (e.g. S^-1 (d - H u_s - eps_s)); ``times_s`` the relative
     time x/U [s] of every plane. Per slab: the weights' spectra scattered onto each measured plane, summed with
@@ -692,16 +692,6 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
     yield from zip(groups, _ordered_map(group, groups, threads, workspace))
 
 
-def correction_spectra(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
-                       nz: int) -> np.ndarray:  # fmt: skip
-    """The yz-transformed, cropped spectra of C H^T w on the planes ``planes_out``: (P_out, 3, nk1, ny, nz) complex64
-    (:func:`correction_blocks` gathered); :func:`spectra_field` turns one plane's into the field."""
-    out = np.empty((len(list(planes_out)), 3, stencil.box.nk1, ny, nz), np.complex64)
-    for slabs, block in correction_blocks(stencil, streams, weights, times_s, planes_out, ny, nz):
-        out[:, :, slabs.start : slabs.stop] = block
-    return out
-
-
 def workspace_bytes(box, streams: Streams, n_out: int) -> int:
     """Bytes of the larger slab-group workspace of :func:`stream_covariance` and :func:`correction_blocks` (for
     ``n_out`` planes out)."""
@@ -714,16 +704,3 @@ def workspace_bytes(box, streams: Streams, n_out: int) -> int:
     chain = n_out + len(streams.used_planes())
     correction = SLAB_GROUP * (chain + 2 * n_out) * 3 * points * 8
     return max(lag, correction)
-
-
-def spectra_field(spectra: np.ndarray, nt: int) -> np.ndarray:
-    """The field (..., nt, ny, nz) float64 [m/s] of cropped spectra (..., nk1, ny, nz), e.g. one plane's
-    (3, nk1, ny, nz) of correction_spectra."""
-    return fft.oneshot().irfft(spectra.astype(complex), n=nt, axis=-3) * nt
-
-
-def weights_field(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, plane: int, ny: int,
-                  nz: int) -> np.ndarray:  # fmt: skip
-    """C H^T w on plane ``plane``, cropped to ny x nz: (3, nt, ny, nz) float64 (see correction_spectra)."""
-    spectra = correction_spectra(stencil, streams, weights, times_s, [plane], ny, nz)
-    return spectra_field(spectra[0], stencil.box.nt)

@@ -359,15 +359,20 @@ class KaimalEvo:
         (:class:`PlaneRing`); default: a new array per plane. The values are the same.
         """
         g = self.grid
-        nx = g.nx
         if spectrum is None:
-            spectrum = InMemorySpectrum(nx, self.nf, g.ny, g.nz)
-        mixed = component in self.long_components
-        # E|Z|^2 = 2 (real and imaginary parts of unit variance) and 2 E|X_k|^2 = v_k: X_k = sqrt(v_k) / 2 Z_k
-        amp = (np.sqrt(self.variances[component]) / 2.0).astype(np.float32)
-        if g.nt % 2 == 0:  # the Nyquist coefficient is real: Re(Z) has unit variance, E X^2 = v
-            amp[-1] = np.sqrt(self.variances[component][-1]).astype(np.float32)
+            spectrum = InMemorySpectrum(g.nx, self.nf, g.ny, g.nz)
         pool = ThreadPoolExecutor(max_workers=self.workers)
+        try:  # the pool is shut down however the generator ends (exception, early close)
+            self._fill_spectrum(component, pool, spectrum, tick)
+            yield from self._transformed(component, pool, spectrum, ring, tick)
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+    def _fill_spectrum(self, component: str, pool: ThreadPoolExecutor, spectrum, tick) -> None:
+        """Sample every plane's Fourier coefficients of ``component`` into ``spectrum``, frequency chunk by chunk
+        (mixed along x where the component is longitudinally coherent)."""
+        nx = self.grid.nx
+        mixed = component in self.long_components
         # one work array per pool thread for the torus noise, reused from chunk to chunk and sampled in place
         local = threading.local()
 
@@ -384,49 +389,53 @@ class KaimalEvo:
         def samplers(chunk: int):  # one pool thread, while the other threads fill the previous chunk's planes
             return self._once((component, chunk), lambda: self._groups(self._embeddings(component, bins(chunk))))
 
-        try:  # the pool is shut down however the generator ends (exception, early close)
-            upcoming = pool.submit(samplers, 0)
-            for chunk in range(self.n_chunks):
-                ks = bins(chunk)
-                groups = upcoming.result()
-                if chunk + 1 < self.n_chunks:  # ahead of this chunk's planes in the pool's queue
-                    upcoming = pool.submit(samplers, chunk + 1)
-                if len(ks):
-                    block = spectrum.chunk(ks.start, ks.stop)
+        upcoming = pool.submit(samplers, 0)
+        for chunk in range(self.n_chunks):
+            ks = bins(chunk)
+            groups = upcoming.result()
+            if chunk + 1 < self.n_chunks:  # ahead of this chunk's planes in the pool's queue
+                upcoming = pool.submit(samplers, chunk + 1)
+            if len(ks):
+                block = spectrum.chunk(ks.start, ks.stop)
 
-                    def fill(p, chunk=chunk, groups=groups, block=block):
-                        self._chunk_coefficients(component, p, chunk, groups, block[p], work)
+                def fill(p, chunk=chunk, groups=groups, block=block):
+                    self._chunk_coefficients(component, p, chunk, groups, block[p], work)
 
-                    # planes in parallel, each with its own random stream and block slice: order-independent
-                    list(pool.map(fill, range(nx)))
-                    if mixed and nx > 1:  # in the pool, alongside the next chunk's coefficients (disjoint bins)
-                        mixing.append(pool.submit(self._mix_and_put, ks, block, spectrum))
-                    else:
-                        spectrum.put_chunk(ks.start, block)
-                if tick:
-                    tick()
-            for done in mixing:
-                done.result()
-            local = None  # the work arrays are not needed by the transforms
-            # two planes transformed at once (half the threads each: the same bits), yielded in order
-            fft_workers = max(1, self.workers // 2)
+                # planes in parallel, each with its own random stream and block slice: order-independent
+                list(pool.map(fill, range(nx)))
+                if mixed and nx > 1:  # in the pool, alongside the next chunk's coefficients (disjoint bins)
+                    mixing.append(pool.submit(self._mix_and_put, ks, block, spectrum))
+                else:
+                    spectrum.put_chunk(ks.start, block)
+            if tick:
+                tick()
+        for done in mixing:
+            done.result()
 
-            def transform(p, out):
-                spec = spectrum.get(p)
-                if g.nt % 2 == 0:
-                    spec[-1] = spec[-1].real
-                return inverse_transform(spec, amp, g.nt, fft_workers, out, self.transforms)
+    def _transformed(self, component: str, pool: ThreadPoolExecutor, spectrum, ring, tick):
+        """Yield (plane index, field) of the filled ``spectrum``: two planes transformed at once (half the threads
+        each: the same bits), in order."""
+        g = self.grid
+        # E|Z|^2 = 2 (real and imaginary parts of unit variance) and 2 E|X_k|^2 = v_k: X_k = sqrt(v_k) / 2 Z_k
+        amp = (np.sqrt(self.variances[component]) / 2.0).astype(np.float32)
+        if g.nt % 2 == 0:  # the Nyquist coefficient is real: Re(Z) has unit variance, E X^2 = v
+            amp[-1] = np.sqrt(self.variances[component][-1]).astype(np.float32)
+        fft_workers = max(1, self.workers // 2)
 
-            def submit(p):  # buffers are taken here, in plane order, never in the pool's threads
-                return pool.submit(transform, p, None if ring is None else ring.take())
+        def transform(p, out):
+            spec = spectrum.get(p)
+            if g.nt % 2 == 0:
+                spec[-1] = spec[-1].real
+            return inverse_transform(spec, amp, g.nt, fft_workers, out, self.transforms)
 
-            ahead = [submit(p) for p in range(min(2, nx))]
-            for p in range(nx):
-                plane = ahead.pop(0).result()
-                if p + 2 < nx:
-                    ahead.append(submit(p + 2))
-                if tick:
-                    tick()
-                yield p, plane
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+        def submit(p):  # buffers are taken here, in plane order, never in the pool's threads
+            return pool.submit(transform, p, None if ring is None else ring.take())
+
+        ahead = [submit(p) for p in range(min(2, g.nx))]
+        for p in range(g.nx):
+            plane = ahead.pop(0).result()
+            if p + 2 < g.nx:
+                ahead.append(submit(p + 2))
+            if tick:
+                tick()
+            yield p, plane

@@ -1,7 +1,7 @@
 """The exact second moments of a synthesised Mann field, from its stencil: the discrete oracle of the tests.
 
 The generator forms u_hat = C n with E|n|^2 = 2 per component (turbgen.synthesis.mann_spacetime), so
-E[u_hat u_hat^H] = 2 C C^T at every stored point; these functions rebuild C from the compact stencil.
+E[u_hat u_hat^H] = 2 C C^T at every stored point; :func:`slab_factor` rebuilds C from the compact stencil.
 """
 
 from __future__ import annotations
@@ -35,15 +35,3 @@ def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
     c[:, :, rows, cols] = np.moveaxis(stencil.cell_factor[cells].astype(float), 0, -1)
     return c
 
-
-def discrete_spectra(stencil: MannStencil) -> np.ndarray:
-    """Exact expectation of the synthesised discrete field: S[i, j, slab] = sum over (k2, k3) of E[u_hat_i u_hat_j^*].
-
-    Shape (3, 3, nk1), real [m^2 s^-2]. A point's variance is sum_slab w_slab S[i, i, slab] with
-    w = 1 on the k1 = 0 and Nyquist slabs and 2 elsewhere (the Hermitian partner slab).
-    """
-    out = np.empty((3, 3, stencil.box.nk1))
-    for i in range(stencil.box.nk1):
-        c = slab_factor(stencil, i)
-        out[:, :, i] = 2.0 * np.einsum("ikyz,jkyz->ij", c, c)
-    return out

@@ -171,7 +171,6 @@ class MannSnapshots:
         arrays += [a for s in self._scratches for a in s.arrays()]
         return sum(a.nbytes for a in arrays)
 
-    # -- public -------------------------------------------------------------------------
     def generate(self, seed: int | None, times_s, addend=None, target=None) -> Iterator[tuple[int, str, np.ndarray]]:
         """Yield (plane index, component, field (nt, ny, nz) float32) for every plane and component.
 
@@ -242,7 +241,6 @@ class MannSnapshots:
             self._outputs.append(self._fft.empty((self.box.nt, self.ny, self.nz), np.float32, _PAGE))
         return self._spectra, self._outputs[0] if output else None
 
-    # -- internals ------------------------------------------------------------------------
     def _allocate(self, n_snapshots: int) -> None:
         box = self.box
         if self._spectra is None:

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from turbgen.synthesis.mann_oracle import slab_factor
 from turbgen.synthesis.mann_stencil import MannStencil, expand_k2
 
 
@@ -25,14 +24,6 @@ def slab_weight(stencil: MannStencil, i: int) -> float:
     """w_i: 1 on the k1 = 0 and (even nt) Nyquist slabs, 2 on the others (their Hermitian partner slab)."""
     nt = stencil.box.nt
     return 1.0 if i == 0 or (nt % 2 == 0 and i == nt // 2) else 2.0
-
-
-def slab_spectrum(stencil: MannStencil, i: int) -> np.ndarray:
-    """Phi_i = E[u_hat u_hat^H] = 2 C C^T of slab ``i`` (0 <= i <= nt // 2), (3, 3, nyp, nzp) float64 [m^2 s^-2] in FFT
-    order, from a scaled stencil's float32 coefficients and axis-cell factors (mann_oracle.slab_factor).
-    """
-    c = slab_factor(stencil, i)
-    return 2.0 * np.einsum("ikyz,jkyz->ijyz", c, c)
 
 
 def slab_inv_tau(stencil: MannStencil, i: int) -> np.ndarray | None:

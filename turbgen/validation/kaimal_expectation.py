@@ -28,7 +28,7 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
     """Kaimal / IEC expectations (line (cross-)variances [m^2 s^-2], correlation sums [-]) from the store
     attributes ``attrs`` (``parameters``, ``U_m_s`` [m/s]) for the estimates' sampling ``design``."""
     km = kaimal_model_from_attrs(attrs)
-    kp, long_components = km.params, km.long_components
+    kp, long_components = km.kaimal, km.long_components
     grid = design.grid
     U = float(attrs["U_m_s"])
     yz_coh, long_fn = _coherences(km, U)
@@ -74,8 +74,8 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
 
 def _coherences(km, U: float):
     """(yz_coh(component, r [m], f [Hz]), long_fn(dx [m], f [Hz])): the run's lateral coherency (Eq. 12, un-squared;
-    v and w incoherent unless ``vw_coherent``) and its longitudinal coherency model."""
-    kp, long_model = km.params, km.long_model
+    v and w incoherent unless ``vw_coherence`` is "exp") and its longitudinal coherency model."""
+    kp, long_model = km.kaimal, km.long_model
     if long_model == "exp":
         long_fn = lambda dx, f: LONGITUDINAL_MODELS["exp"](dx, f, U, km.a_x, km.b_x)  # noqa: E731
     else:
@@ -83,9 +83,9 @@ def _coherences(km, U: float):
         long_fn = lambda dx, f: LONGITUDINAL_MODELS[long_model](dx, f, U, s_tot, kp.length_scales_m[0])  # noqa: E731
 
     def yz_coh(c, r_m, f):
-        if (c == "u" or km.vw_coherent) and km.coherence is not None:  # the store's table
+        if (c == "u" or km.vw_coherence == "exp") and km.coherence is not None:  # the store's table
             return km.coherence(r_m, f)
-        if c == "u" or km.vw_coherent:
+        if c == "u" or km.vw_coherence == "exp":
             return exponential_yz(r_m, f, U, kp.a_yz, kp.lc_m)  # Eq. 12, un-squared
         return np.where(np.asarray(r_m) == 0, 1.0, 0.0) * np.ones_like(f)
 
@@ -95,7 +95,7 @@ def _coherences(km, U: float):
 def _auto_lines(km, grid, line_f: np.ndarray, U: float) -> dict:
     """Component -> the variance [m^2 s^-2] of each record line of the Kaimal spectrum (rescaled if the run was) or
     of the store's user spectra."""
-    kp, nt = km.params, grid.nt
+    kp, nt = km.kaimal, grid.nt
     if km.spectrum is not None:  # the generator's band variances, shared by the +-f_j pair
         return {c: v / pair_weights(nt) for c, v in zip(COMPONENTS, km.spectrum.line_variances())}
     df = line_f[1]
@@ -138,7 +138,7 @@ def _kaimal_modes(km, grid, line_f: np.ndarray, yz_coh, long_fn) -> dict:
     if grid.nx * grid.ny * grid.nz > MAX_MODE_POINTS:
         return modes
     lag_r = lag_radius(grid)
-    for c in COMPONENTS if km.vw_coherent else ("u",):
+    for c in COMPONENTS if km.vw_coherence == "exp" else ("u",):
         def lags(dx, f, c=c):
             g_x = 1.0 if dx == 0 else long_fn(dx, f) if c in km.long_components else 0.0
             return yz_coh(c, lag_r, np.full(lag_r.shape, f)) * g_x

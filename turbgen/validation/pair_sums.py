@@ -77,7 +77,7 @@ class RhoAccumulator:
 
 def half_lags(coh: np.ndarray) -> np.ndarray:
     """The centre and one half of the (point-symmetric) lag grid of ``coh`` (nn, 2 ny - 1, 2 nz - 1), flat from lag 0
-    on: (nn, H) if real, [Re | Im] (nn, 2 H) if complex (``pair_sum``).
+    on: (nn, H) if real, [Re | Im] (nn, 2 H) if complex (:func:`weighted_gram`).
     """
     flat = coh.reshape(coh.shape[0], -1)
     half = flat[:, (flat.shape[1] - 1) // 2 :]
@@ -85,21 +85,15 @@ def half_lags(coh: np.ndarray) -> np.ndarray:
 
 
 def weighted_gram(half: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """``pair_sum`` from ``half_lags(coh)``: (nn, nn)."""
+    """(nn, nn) symmetric sum over lags of counts x coh(nu_i) conj(coh(nu_j)), real part, from ``half`` =
+    ``half_lags(coh)``: terms at l and -l have the same real part (counts and coherency symmetric), so the sum is one
+    symmetric BLAS product A A^T over half the lags. ``coh`` (nn, 2 ny - 1, 2 nz - 1) [-], ``counts`` (2 ny - 1,
+    2 nz - 1) pairs."""
     w = counts.ravel()[(counts.size - 1) // 2 :] * 2.0
     w[0] *= 0.5  # lag 0 is its own mirror
     sw = np.sqrt(w)
     a = half * (np.tile(sw, 2) if half.shape[1] > sw.size else sw)
     return a @ a.T  # numpy recognises a @ a.T (syrk): exactly symmetric
-
-
-def pair_sum(coh: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """(nn, nn) symmetric sum over lags of counts x coh(nu_i) conj(coh(nu_j)), real part.
-
-    Terms at l and -l have the same real part (counts and coherency symmetric), so the sum is one symmetric BLAS
-    product A A^T over half the lags. ``coh`` (nn, 2 ny - 1, 2 nz - 1) [-], ``counts`` (2 ny - 1, 2 nz - 1) pairs.
-    """
-    return weighted_gram(half_lags(coh), counts)
 
 
 def rotor_pair_counts(grid: Grid, mask: np.ndarray) -> np.ndarray:

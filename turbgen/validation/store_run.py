@@ -9,9 +9,7 @@ from dataclasses import dataclass
 from turbgen.grid import Grid
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
-from turbgen.theory.params import KaimalParams, MannParams
-from turbgen.theory.user_coherence import LineCoherence
-from turbgen.theory.user_spectra import LineSpectrum
+from turbgen.theory.params import MannParams
 
 
 @dataclass(frozen=True)
@@ -20,24 +18,6 @@ class MannBox:
 
     nyp: int
     nzp: int
-
-
-@dataclass(frozen=True)
-class KaimalModel:
-    """The Kaimal / IEC model of a store: ``params``, the longitudinal model (a key of
-    theory.coherence_models.LONGITUDINAL_MODELS, ``a_x``, ``b_x`` for "exp") and the components it applies to,
-    whether v, w have u's yz coherence and the spectra were rescaled, and the user ``spectrum`` and ``coherence``
-    (None: Kaimal, IEC exponential)."""
-
-    params: KaimalParams
-    long_model: str
-    long_components: str
-    vw_coherent: bool
-    rescale: bool
-    a_x: float | None = None
-    b_x: float | None = None
-    spectrum: LineSpectrum | None = None
-    coherence: LineCoherence | None = None
 
 
 def mann_params_from_attrs(attrs: dict) -> MannParams:
@@ -51,8 +31,7 @@ def mann_box_from_attrs(attrs: dict, grid: Grid) -> MannBox:
     return MannBox(pad * grid.ny, pad * grid.nz)
 
 
-def kaimal_model_from_attrs(attrs: dict) -> KaimalModel:
-    """The Kaimal model of a Kaimal store; ParameterError if the attributes lack a Kaimal parameter."""
-    run = KaimalRun.from_attrs(attrs)
-    return KaimalModel(run.kaimal, run.long_model, run.long_components, run.vw_coherence == "exp", run.rescale,
-                       run.a_x, run.b_x, run.spectrum, run.coherence)
+def kaimal_model_from_attrs(attrs: dict) -> KaimalRun:
+    """The Kaimal run of a Kaimal store (its model: ``kaimal`` parameters, longitudinal model, user spectrum and
+    coherence tables); ParameterError if the attributes lack a Kaimal parameter."""
+    return KaimalRun.from_attrs(attrs)

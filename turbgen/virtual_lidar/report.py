@@ -58,9 +58,10 @@ def kaimal_store_preview(fs, description, f_hz, radius_m: float):
     if km.long_model != "exp":
         raise ParameterError(f"lidar theory supports the exponential longitudinal coherence only "
                              f"(store has long_model = {km.long_model!r})")
-    return preview_spectra("kaimal", description, fs.U_m_s, f_hz=f_hz, radius_m=radius_m, kaimal=km.params,
-                           a_x=km.a_x, b_x=km.b_x, long_components=km.long_components, vw_coherence=km.vw_coherent,
-                           spectra=km.spectrum, yz_coherence=km.coherence)  # the store's user tables, if any
+    return preview_spectra("kaimal", description, fs.U_m_s, f_hz=f_hz, radius_m=radius_m, kaimal=km.kaimal,
+                           a_x=km.a_x, b_x=km.b_x, long_components=km.long_components,
+                           vw_coherence=km.vw_coherence == "exp", spectra=km.spectrum,
+                           yz_coherence=km.coherence)  # the store's user tables, if any
 
 
 def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int | None = None):
@@ -116,7 +117,7 @@ class LidarReport:
     store: str
     lidar: object
     run: LidarRun
-    f_hz: np.ndarray  # Welch bins 1 .. up to F_THEORY_MAX_HZ (where the theory is evaluated)
+    f_hz: np.ndarray
     coh2_theory: np.ndarray
     G_theory: np.ndarray
     theory_numbers: dict

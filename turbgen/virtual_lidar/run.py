@@ -65,7 +65,7 @@ class LidarRun:
     ti_lidar: float
     ti_rotor: float
     welch: dict
-    simulated: dict  # k05_rad_m, d_eddy_min_m, cutoff_hz of the simulated curves
+    simulated: dict
     rotor_radius_m: float
 
 

@@ -57,7 +57,7 @@ class Measurement:
     offsets_m: tuple = (0.0,)
     weights: tuple = (1.0,)
     direction: tuple | None = field(default=None)
-    plane_x_m: float | None = None  # the gate's plane; default the focus x (a tilted beam's focus may lie off it)
+    plane_x_m: float | None = None
 
     def points_m(self) -> np.ndarray:
         """Probe-volume points focus + offset * direction, (k, 3) in (x upstream, y, z) [m]."""
@@ -87,7 +87,7 @@ class LidarSamples:
     v_los: np.ndarray
     time_s: np.ndarray
     gates_x_m: np.ndarray
-    n1: np.ndarray  # (n_beam, n_gate) longitudinal projection of each measurement
+    n1: np.ndarray
     mean_wind_added: bool
     shear_exponent: float
     mean_wind: str = ""
@@ -158,6 +158,23 @@ def _interp_axis(coord0: float, step: float, n: int, values: np.ndarray):
     return i, a
 
 
+def _corners(it, at, jy, ay, jz, az, shape):
+    """The 8 corners of the points' (t, y, z) cells: (t, y, z indices clipped to ``shape``, trilinear weight)."""
+    for dt_, wt in ((0, 1 - at), (1, at)):
+        for dy_, wy in ((0, 1 - ay), (1, ay)):
+            for dz_, wz in ((0, 1 - az), (1, az)):
+                yield (np.minimum(it + dt_, shape[0] - 1), np.minimum(jy + dy_, shape[1] - 1),
+                       np.minimum(jz + dz_, shape[2] - 1), wt * (wy * wz))
+
+
+def _heights(hub_height_m: float, points_m: np.ndarray) -> np.ndarray:
+    """Heights above the ground [m] of the probe points (k, 3); ParameterError if one is at or below it."""
+    h = hub_height_m + points_m[:, 2]
+    if np.any(h <= 0):
+        raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+    return h
+
+
 def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = False,
            shear_exponent: float = 0.2, mean_wind=None) -> LidarSamples:
     """Sample store ``fs`` with ``measurements`` (every beam with every gate) at the physical times ``times_s`` [s].
@@ -223,7 +240,7 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
         time_out[:, bi[b]] = T[:, col[b]]
     if mean_wind is not None and add_mean_wind:
         # veer and time-varying means rotate (u, v) per probe point: the profile's own path (MeanWind.full_uv)
-        v_los, n1 = _sample_with_mean_wind(fs, measurements, planes, T, col, bi, gi, (n_scan, nb, ng), mean_wind)
+        los = _los_with_mean_wind(fs, measurements, planes, T, col, mean_wind)
     else:
         op = los_operator(g, U, measurements, planes, np.stack([T[:, col[m.beam]] for m in measurements], axis=1))
 
@@ -233,11 +250,11 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
         los = apply_los(op, read)
         if add_mean_wind:
             los = los + mean_wind_los(measurements, U, fs.hub_height_m, shear_exponent)[None, :]
-        v_los = np.zeros((n_scan, nb, ng))
-        n1 = np.zeros((nb, ng))
-        for j, m in enumerate(measurements):
-            v_los[:, bi[m.beam], gi[m.gate]] = los[:, j]
-            n1[bi[m.beam], gi[m.gate]] = m.n[0]
+    v_los = np.zeros((n_scan, nb, ng))
+    n1 = np.zeros((nb, ng))
+    for j, m in enumerate(measurements):
+        v_los[:, bi[m.beam], gi[m.gate]] = los[:, j]
+        n1[bi[m.beam], gi[m.gate]] = m.n[0]
     gx = np.array([g.x_m[next(planes[j] for j, m in enumerate(measurements) if m.gate == gg)] for gg in gates], float)
     if mean_wind is not None and add_mean_wind:
         return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, True, mean_wind.shear_exponent,
@@ -245,12 +262,10 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
     return LidarSamples(v_los.astype(np.float32), time_out, gx, n1, add_mean_wind, shear_exponent)
 
 
-def _sample_with_mean_wind(fs, measurements, planes, T, col, bi, gi, dims, mean_wind):
-    """v_los (n_scan, nb, ng) and n_1 (nb, ng) of fluctuations plus ``mean_wind`` at every probe point and stored time."""
+def _los_with_mean_wind(fs, measurements, planes, T, col, mean_wind):
+    """v_los (n_scan, J) of fluctuations plus ``mean_wind`` at every probe point and stored time."""
     g, U = fs.grid, fs.U_m_s
-    n_scan, nb, ng = dims
-    v_los = np.zeros((n_scan, nb, ng))
-    n1 = np.zeros((nb, ng))
+    los = np.zeros((len(T), len(measurements)))
     y0, z0 = g.y()[0], g.z()[0]
     by_plane: dict[int, list[int]] = {}
     for j, ix in enumerate(planes):
@@ -275,20 +290,11 @@ def _sample_with_mean_wind(fs, measurements, planes, T, col, bi, gi, dims, mean_
             jy, ay = _interp_axis(y0 + y_lo * g.dy_m, g.dy_m, y_hi - y_lo, p[:, 1])
             jz, az = _interp_axis(z0 + z_lo * g.dz_m, g.dz_m, z_hi - z_lo, p[:, 2])
             n = np.asarray(m.n, float)
-            shape = box["u"].shape
-            # the 8 corners of (t, y, z): flat indices and weights, shared by the three components
-            corners = []
-            for dt_, wt in ((0, 1 - at), (1, at)):
-                ii = np.minimum(it + dt_, shape[0] - 1)
-                for dy_, wy in ((0, 1 - ay), (1, ay)):
-                    yy = np.minimum(jy + dy_, shape[1] - 1)
-                    for dz_, wz in ((0, 1 - az), (1, az)):
-                        zz = np.minimum(jz + dz_, shape[2] - 1)
-                        corners.append(((ii * shape[1] + yy) * shape[2] + zz, wt * (wy * wz)))
-            los = _with_mean_wind(mean_wind, fs, box, corners, n, t, p)
-            v_los[:, bi[m.beam], gi[m.gate]] = weighted_sum(los, m.weights)
-            n1[bi[m.beam], gi[m.gate]] = n[0]
-    return v_los, n1
+            shape = box["u"].shape  # flat indices of the corners, shared by the three components
+            corners = [((ti * shape[1] + yi) * shape[2] + zi, wc)
+                       for ti, yi, zi, wc in _corners(it, at, jy, ay, jz, az, shape)]
+            los[:, j] = weighted_sum(_with_mean_wind(mean_wind, fs, box, corners, n, t, p), m.weights)
+    return los
 
 
 def _with_mean_wind(mean_wind, fs, box, corners, n, t, p) -> np.ndarray:
@@ -296,9 +302,7 @@ def _with_mean_wind(mean_wind, fs, box, corners, n, t, p) -> np.ndarray:
 
     ``t`` (n_scan, k) are the stored times (when each slice reaches the rotor), ``p`` (k, 3) the points.
     """
-    h = fs.hub_height_m + p[:, 2]
-    if np.any(h <= 0):
-        raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+    h = _heights(fs.hub_height_m, p)
     vals = {c: sum(w * box[c].ravel()[idx] for idx, w in corners) for c in "uvw"}
     u, v = mean_wind.full_uv(vals["u"], vals["v"], t, p[None, :, 1], h[None, :], fs.U_m_s, fs.hub_height_m)
     return n[0] * u + n[1] * v + n[2] * vals["w"]
@@ -342,15 +346,9 @@ def los_operator(grid, U_m_s: float, measurements, planes, times_s: np.ndarray) 
         jy, ay = _interp_axis(y0, g.dy_m, g.ny, p[:, 1])
         jz, az = _interp_axis(z0, g.dz_m, g.nz, p[:, 2])
         w = np.asarray(m.weights, float)
-        r = 0
-        for dt_, wt in ((0, 1 - at), (1, at)):
-            for dy_, wy in ((0, 1 - ay), (1, ay)):
-                for dz_, wz in ((0, 1 - az), (1, az)):
-                    t_index[:, j, r : r + k] = np.minimum(it + dt_, g.nt - 1)
-                    y_index[j, r : r + k] = np.minimum(jy + dy_, g.ny - 1)
-                    z_index[j, r : r + k] = np.minimum(jz + dz_, g.nz - 1)
-                    weight[:, j, r : r + k] = wt * (wy * wz) * w
-                    r += k
+        for r, (ti, yi, zi, wc) in enumerate(_corners(it, at, jy, ay, jz, az, (g.nt, g.ny, g.nz))):
+            s = slice(r * k, (r + 1) * k)
+            t_index[:, j, s], y_index[j, s], z_index[j, s], weight[:, j, s] = ti, yi, zi, wc * w
     return LosOperator(np.asarray(planes, np.int64), np.array([m.n for m in measurements], float), t_index,
                        y_index, z_index, weight)  # fmt: skip
 
@@ -397,19 +395,6 @@ def apply_los(op: LosOperator, read) -> np.ndarray:
     return out
 
 
-def adjoint_los(op: LosOperator, v: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-    """H^T v: the field (nx, 3, nt, ny, nz) float64 (``shape``) that the values ``v`` (n_scan, J) scatter back to
-    through the same weights, so that <H x, v> = <x, H^T v>."""
-    out = np.zeros(shape)
-    for j in range(op.weight.shape[1]):
-        for c in range(3):
-            if op.n[j, c] == 0.0:
-                continue
-            np.add.at(out[op.plane[j], c], (op.t_index[:, j], op.y_index[j][None], op.z_index[j][None]),
-                      op.n[j, c] * op.weight[:, j] * v[:, j, None])  # fmt: skip
-    return out
-
-
 def mean_wind_los_series(measurements, times_s: np.ndarray, U_m_s: float, hub_height_m: float, mean_wind) -> np.ndarray:
     """The line-of-sight speed (n_scan, J) [m/s] of ``mean_wind`` alone, per scan and measurement (physical times
     ``times_s`` (n_scan, J) [s], each probe point at its stored time T + x / U): what :func:`sample` adds.
@@ -425,9 +410,7 @@ def mean_wind_los_series(measurements, times_s: np.ndarray, U_m_s: float, hub_he
     out = np.zeros(np.shape(times_s))
     for j, m in enumerate(measurements):
         p = m.points_m()
-        h = hub_height_m + p[:, 2]
-        if np.any(h <= 0):
-            raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+        h = _heights(hub_height_m, p)
         t = times_s[:, j][:, None] + p[None, :, 0] / U_m_s
         u, _ = mean_wind.full_uv(0.0, 0.0, t, p[None, :, 1], h[None, :], U_m_s, hub_height_m)
         out[:, j] = m.n[0] * weighted_sum(u, m.weights)
@@ -439,8 +422,6 @@ def mean_wind_los(measurements, U_m_s: float, hub_height_m: float, shear_exponen
     (what ``add_mean_wind`` adds to v_los). Raises ParameterError for a probe point below the ground."""
     out = np.zeros(len(measurements))
     for j, m in enumerate(measurements):
-        h = hub_height_m + m.points_m()[:, 2]
-        if np.any(h <= 0):
-            raise ParameterError("lidar: a probe point lies below the ground; cannot add the mean wind")
+        h = _heights(hub_height_m, m.points_m())
         out[j] = m.n[0] * weighted_sum(U_m_s * (h / hub_height_m) ** shear_exponent, m.weights)
     return out
