@@ -50,3 +50,22 @@ def test_main_keeps_openblas_to_one_thread_unless_the_user_says_otherwise(given,
         env["OPENBLAS_NUM_THREADS"] = given
     out = subprocess.run([sys.executable, "-c", BLAS_PROBE], capture_output=True, text=True, check=True, env=env)
     assert out.stdout.split()[-1] == expected
+
+
+LEAN = """
+import sys
+sys.modules["xarray"] = sys.modules["pandas"] = None  # as if not installed: importing either raises ImportError
+from turbgen.cli import main
+sys.argv = ["turbgen", *sys.argv[1:]]
+main()
+"""
+
+
+@pytest.mark.parametrize("model", ["mann", "kaimal"])
+def test_a_command_that_writes_a_store_needs_neither_xarray_nor_pandas(tmp_path, model):
+    """Start-up: xarray and pandas (~0.5 s of CPU) come with the Python API's Datasets only (turbgen.api.fields)."""
+    args = [model, "--nt", "64", "--ny", "4", "--nz", "4", "--planes", "0", "--out", "f.zarr"]
+    res = subprocess.run([sys.executable, "-c", LEAN, *args, *(["--ae", "0.1"] if model == "mann" else [])],
+                         cwd=tmp_path, capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert (tmp_path / "f.zarr" / "zarr.json").exists()

@@ -59,6 +59,20 @@ def test_ae_for_sigma_u_round_trip():
     assert ae == pytest.approx(0.311, rel=0.05)
 
 
+@pytest.mark.parametrize("p", [IEC, NEUTRAL, STABLE])
+def test_ae_for_sigma_u_integrates_f11_alone_to_the_same_bits(p):
+    """ae_for_sigma_u integrates F11 alone (the other spectra are not needed): the same float as sigma_u^2 over the
+    full variances' uu, so fields whose ae comes from sigma_u keep their bits (tests/synthesis/test_pinned_fields)."""
+    assert ms.ae_for_sigma_u(1.7, p) == 1.7 * 1.7 / ms.variances(p.with_ae(1.0))["uu"]
+
+
+def test_variances_do_not_read_the_evolution():
+    """The variances are cached without evo_time_s and factor2 (one-point statistics at zero time lag): computed
+    afresh, an evolving and a frozen shape with another factor2 give the same bits."""
+    frozen = MannParams(STABLE.ae, STABLE.length_scale_m, STABLE.gamma, factor1=0.8, factor2=2.0, evo_time_s=None)
+    assert ms._variances_cached.__wrapped__(STABLE) == ms._variances_cached.__wrapped__(frozen)
+
+
 @pytest.mark.parametrize("p", [IEC, STABLE], ids=["iec-mann", "stable-guo"])
 def test_one_point_convergence(p):
     # refined rule: 2x panels, 12 Gauss nodes, 512 angles everywhere, radial range to 1e5 s

@@ -8,8 +8,7 @@ import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
-
-import xarray as xr
+from typing import TYPE_CHECKING
 
 from turbgen import fft
 from turbgen.api.keywords import run_inputs
@@ -26,6 +25,9 @@ from turbgen.spec.run_inputs import KAIMAL_REPLACES, MANN_ENERGY_KEYS, MANN_REPL
 from turbgen.store import open_store as _open_field_store
 from turbgen.store.paths import check_output_path
 from turbgen.store.writer import check_new_store
+
+if TYPE_CHECKING:  # annotations only (see _as_dataset)
+    import xarray as xr
 
 PathLike = str | os.PathLike
 
@@ -47,6 +49,8 @@ def _presets(preset, presets_file):
 
 def _as_dataset(path: Path) -> xr.Dataset:
     """The checked store at ``path`` as a lazy Dataset whose ``encoding["source"]`` is the store's path."""
+    import xarray as xr  # on use: the commands write stores and need no Dataset (xarray + pandas: ~0.7 s CPU)
+
     fs = _open_field_store(path)
     ds = xr.open_zarr(str(fs.path), consolidated=True)
     ds.encoding["source"] = str(fs.path)

@@ -14,15 +14,16 @@ import threading
 from collections.abc import Iterable, Iterator
 from dataclasses import replace
 from pathlib import Path
-from typing import Generic, TypeVar
-
-import xarray as xr
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 from turbgen.grid import Grid
 from turbgen.resources import default_threads
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
 from turbgen.theory.params import KaimalParams, MannParams
+
+if TYPE_CHECKING:  # annotations only: a command that writes a store never imports xarray (pandas with it)
+    import xarray as xr
 
 PathLike = str | os.PathLike
 

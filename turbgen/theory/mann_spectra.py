@@ -82,26 +82,33 @@ def _k1_rule(length_scale_m: float):
     return k, w, 1e5 / length_scale_m
 
 
+def _one_point(params: MannParams) -> MannParams:
+    """``params`` without what one-point statistics never read (evolution: evo_time_s, factor2), for the cache key."""
+    return MannParams(params.ae, params.length_scale_m, params.gamma, params.lifetime, params.factor1, evo_time_s=None)
+
+
 @lru_cache(maxsize=256)
-def _variances_cached(params: MannParams) -> tuple[float, float, float, float]:
+def _variances_cached(params: MannParams, names: tuple[str, ...] = ("F11", "F22", "F33", "F13")) -> tuple[float, ...]:
+    """The integrals of ``names`` only: each spectrum's quadrature is independent of the others (same bits)."""
     k, w, k_max = _k1_rule(params.length_scale_m)
-    k_all = np.append(k, k_max)
-    f = one_point_spectra(k_all, params)
+    _, wq, g = perpendicular_quadrature(np.append(k, k_max), params, tuple(COMPONENTS[n] for n in names))
     out = []
-    for name in ("F11", "F22", "F33", "F13"):
-        body = np.sum(w * f[name][:-1])
-        tail = 1.5 * k_max * f[name][-1]  # ∫_K^inf C k^(-5/3) dk with C = F(K) K^(5/3); F13 decays faster
+    for name in names:
+        f = _integrate(wq, g[COMPONENTS[name]])
+        body = np.sum(w * f[:-1])
+        tail = 1.5 * k_max * f[-1]  # ∫_K^inf C k^(-5/3) dk with C = F(K) K^(5/3); F13 decays faster
         out.append(2.0 * (body + (tail if name != "F13" else 0.0)))  # two-sided: both signs of k1
     return tuple(out)
 
 
 def variances(params: MannParams) -> dict[str, float]:
-    """sigma_u^2, sigma_v^2, sigma_w^2 and <uw> = ∫ F_ij dk1 [m^2 s^-2] (keys uu vv ww uw), cached per ``params``.
+    """sigma_u^2, sigma_v^2, sigma_w^2 and <uw> = ∫ F_ij dk1 [m^2 s^-2] (keys uu vv ww uw), cached per ``params``
+    less its evolution (frozen and evolving fields share them).
 
     Gauss panels in ln(k1 L) on [1e-6, 1e5] plus the inertial tail (3/2) K F(K) beyond K = 1e5/L; at
     Gamma = 0 they match (1/3) B(5/2, 1/3) ae L^(2/3) to 1e-6.
     """
-    uu, vv, ww, uw = _variances_cached(params)
+    uu, vv, ww, uw = _variances_cached(_one_point(params))
     return {"uu": uu, "vv": vv, "ww": ww, "uw": uw}
 
 
@@ -111,5 +118,5 @@ def ae_for_sigma_u(sigma_u_m_s: float, params: MannParams) -> float:
     Spectra are linear in ae, so ae = sigma_u^2 / sigma_u^2(ae = 1). Raises ParameterError for sigma_u <= 0.
     """
     sigma = check_positive("sigma_u (m/s)", sigma_u_m_s)
-    unit = variances(params.with_ae(1.0))["uu"]  # spectra are linear in ae
+    (unit,) = _variances_cached(_one_point(params.with_ae(1.0)), ("F11",))  # spectra are linear in ae; sigma_u^2 alone
     return sigma * sigma / unit
