@@ -333,12 +333,18 @@ def _sensitivity(problem: _Problem, data: FitData, params: MannParams, x: float,
 
 def _propagated(problem: _Problem, data: FitData, fit: MannFit, pairs: dict, slope: np.ndarray, x: float) -> float:
     """Variance the one-point fit adds to ln gamma: s^T Sigma s + 2 a^T C G^T s, s = ``slope``, Sigma and G the fit's
-    covariance and gain, a = d ln gamma / d r of the coherence fit, C the covariance of the co-coherences with the
-    spectra (``evo_cross``)."""
-    k, cov, gain, sd = slope != 0, cast(np.ndarray, fit.cov_fit), fit.gain, cast(dict, fit.sd)
+    covariance and gain (``linear_terms``: a and C)."""
+    k, cov = slope != 0, cast(np.ndarray, fit.cov_fit)
     var = float(slope[k] @ cov[np.ix_(k, k)] @ slope[k])
-    if gain is None or len(fit.f_hz) != len(problem.model.bands.f_hz):
+    if fit.gain is None or len(fit.f_hz) != len(problem.model.bands.f_hz):
         return var
+    a, cross = linear_terms(problem, data, fit, pairs, x)
+    return var + 2.0 * float(a @ cross @ fit.gain.T @ slope)
+
+
+def linear_terms(problem: _Problem, data: FitData, fit: MannFit, pairs: dict, x: float) -> tuple:
+    """(a, C): a = d ln gamma / d r of the coherence fit at ln gamma = ``x`` (band-major), C the covariance of the
+    co-coherences with the one-point fit's band spectra (``evo_cross``; rows and columns band-major)."""
     dm = (problem.mean(math.exp(x + 1e-3)) - problem.mean(math.exp(x - 1e-3))) / 2e-3
     w = solve_triangular(problem.chol, dm.T.ravel(), lower=True)
     a = solve_triangular(problem.chol, w, lower=True, trans="T") / (w @ w)
@@ -352,8 +358,8 @@ def _propagated(problem: _Problem, data: FitData, fit: MannFit, pairs: dict, slo
     sites = [tuple(cols[list(c)] for c in zip(*pairs[p])) for p in problem.seps]
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = np.nan_to_num(coherence_spectra_corr(g, index, sites, point_sets(data, used), used))
-    cross = cross_covariance(corr, problem.model.bands.band_corr, problem.sd, np.stack([sd[s] for s in used]))
-    return var + 2.0 * float(a @ cross @ gain.T @ slope)
+    sd_f = np.stack([cast(dict, fit.sd)[s] for s in used])
+    return a, cross_covariance(corr, problem.model.bands.band_corr, problem.sd, sd_f)
 
 
 def _profile_end(problem: _Problem, x: float, c_min: float, grid, c, side: int) -> float | None:
