@@ -16,6 +16,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
+import pickle
 import time
 
 import numpy as np
@@ -23,7 +25,8 @@ import numpy as np
 import turbgen
 from turbgen.theory.params import MannParams
 from turbgen.validation.fit import load_fit_data
-from turbgen.validation.fit.evolution import fit_evolution
+from turbgen.validation.fit.evolution import fit_evolution, with_evolution
+from turbgen.validation.fit.mann import fit_mann_data
 
 CASES = [  # (ae, L, Gamma, gamma [s], dx [m])
     (0.08, 30.0, 3.2, 100.0, 100.0),
@@ -32,42 +35,83 @@ CASES = [  # (ae, L, Gamma, gamma [s], dx [m])
 GRID = dict(nt=1024, ny=12, nz=12, dy=6.0, dz=6.0, U=10.0, dt=0.5)
 
 
-def one(case: int, seed: int) -> dict:
+def _data(case: int, seed: int, cache: str | None):
+    """FitData of one realisation, from ``cache`` (a pickle per case and seed) when there."""
+    ae, L, G, evo, dx = CASES[case]
+    path = cache and os.path.join(cache, f"case{case}_seed{seed}.pkl")
+    if path and os.path.exists(path):
+        with open(path, "rb") as fh:
+            return pickle.load(fh)
+    fd = load_fit_data(turbgen.mann(L=L, gamma=G, ae=ae, evo=evo, planes=[0, dx], seed=seed, **GRID))
+    if path:
+        os.makedirs(cache, exist_ok=True)
+        with open(path + ".tmp", "wb") as fh:
+            pickle.dump(fd, fh)
+        os.replace(path + ".tmp", path)
+    return fd
+
+
+def one(case: int, seed: int, cache: str | None = None) -> dict:
     ae, L, G, evo, dx = CASES[case]
     t0 = time.perf_counter()
-    ds = turbgen.mann(L=L, gamma=G, ae=ae, evo=evo, planes=[0, dx], seed=seed, **GRID)
+    fd = _data(case, seed, cache)
     t1 = time.perf_counter()
-    fit = turbgen.fit_mann(ds)
+    fit = with_evolution(fd, fit_mann_data(fd))
     t2 = time.perf_counter()
-    oracle = fit_evolution(load_fit_data(ds), MannParams(ae, L, G), {}, fit.nperseg)
+    oracle = fit_evolution(fd, MannParams(ae, L, G), fit.nperseg)
     e = fit.evolution
-    out = {"case": case, "seed": seed, "truth": evo, "dx_m": dx, "value": e.value_s, "ci95": list(e.ci95),
-           "oracle_value": oracle.value_s, "oracle_ci95": list(oracle.ci95), "L": fit.length_scale_m.value,
-           "chi2": e.chi2, "dof": e.dof, "chi2_frozen": e.chi2_frozen, "t_gen_s": t1 - t0, "t_fit_s": t2 - t1}
-    return out
+    pair = e.pairs_m[0]
+    return {"case": case, "seed": seed, "truth": evo, "dx_m": dx, "value": e.value_s, "ci95": list(e.ci95),
+            "ci95_held": list(e.ci95_held), "sensitivity": list(e.sensitivity), "oracle_value": oracle.value_s,
+            "oracle_ci95": list(oracle.ci95), "ae": fit.ae.value, "L": fit.length_scale_m.value,
+            "Gamma": fit.gamma.value, "cov_fit": fit.cov_fit.tolist(), "gain": fit.gain.tolist(),
+            "sd_1pt": {k: list(v) for k, v in fit.sd.items()}, "f_hz_1pt": list(fit.f_hz), "chi2_dof_1pt": fit.chi2_dof,
+            "chi2": e.chi2, "dof": e.dof, "chi2_frozen": e.chi2_frozen, "f_hz": list(e.f_hz),
+            "r": list(e.data[pair]), "r_sd": list(e.sd[pair]), "oracle_r_fitted": list(oracle.fitted[pair]),
+            "t_gen_s": t1 - t0, "t_fit_s": t2 - t1}
 
 
 def inside(ci, truth) -> bool:
     return ci[0] <= truth and (ci[1] is None or truth <= ci[1])
 
 
+def intervals(r: dict) -> dict:
+    """The realisation's 95 % intervals of gamma by construction: "held" (coherence alone, L and Gamma at their
+    fit), "quadrature" (+ the shifts of L and Gamma as if independent: the old one), "joint" (+ s^T Sigma s), "fit"
+    (the product's: + the cross term with the coherence), "oracle" (ae, L, Gamma at the truth)."""
+    out = {"fit": r["ci95"], "oracle": r["oracle_ci95"], "held": r["ci95_held"]}
+    if None in r["ci95_held"] or r["ci95_held"][0] is None:
+        return out | {"quadrature": r["ci95_held"], "joint": r["ci95_held"]}
+    x, s, cov = math.log(r["value"]), np.array(r["sensitivity"]), np.array(r["cov_fit"])
+    quad, joint = float(np.sum((s * np.sqrt(np.diag(cov))) ** 2)), float(s @ cov @ s)
+    for name, var in (("quadrature", quad), ("joint", joint)):
+        out[name] = [math.exp(x + side * math.hypot(math.log(e) - x, 1.959964 * math.sqrt(var)))
+                     for e, side in zip(r["ci95_held"], (-1, 1))]
+    return out
+
+
+KINDS = ("held", "quadrature", "joint", "fit", "oracle")
+
+
 def summary(path: str) -> None:
     rows = [json.loads(line) for line in open(path)]
-    print("| case (ae, L, Γ, γ, dx) | n | coverage fit (± se) | coverage oracle (± se) | median γ̂ / γ | "
-          "mean χ²/dof |")
-    print("|---|---|---|---|---|---|")
+    print("| case (ae, L, Γ, γ, dx) | n | " + " | ".join(f"{k} (± se)" for k in KINDS) + " | median γ̂ / γ | sd ln γ̂ "
+          "| rms sd fit | corr(ln γ̂_oracle, ln L̂) |")
+    print("|---" * (len(KINDS) + 6) + "|")
     for c, spec in enumerate(CASES):
         rs = [r for r in rows if r["case"] == c]
         if not rs:
             continue
         n = len(rs)
         cells = []
-        for key in ("ci95", "oracle_ci95"):
-            p = np.mean([inside(r[key], r["truth"]) for r in rs])
-            cells.append(f"{100 * p:.1f} % ± {100 * math.sqrt(p * (1 - p) / n):.1f}")
-        ratio = np.median([r["value"] / r["truth"] for r in rs])
-        chi = np.mean([r["chi2"] / r["dof"] for r in rs])
-        print(f"| {spec} | {n} | {cells[0]} | {cells[1]} | {ratio:.3f} | {chi:.2f} |")
+        for kind in KINDS:
+            p = np.mean([inside(intervals(r)[kind], r["truth"]) for r in rs])
+            cells.append(f"{100 * p:.0f} % ± {100 * math.sqrt(p * (1 - p) / n):.0f}")
+        lg = np.log([r["value"] / r["truth"] for r in rs])
+        sd_fit = [(math.log(r["ci95"][1]) - math.log(r["ci95"][0])) / (2 * 1.959964) for r in rs if r["ci95"][1]]
+        corr = np.corrcoef(np.log([r["oracle_value"] for r in rs]), np.log([r["L"] for r in rs]))[0, 1]
+        print(f"| {spec} | {n} | {' | '.join(cells)} | {np.exp(np.median(lg)):.3f} | {lg.std(ddof=1):.3f} | "
+              f"{math.sqrt(np.mean(np.square(sd_fit))):.3f} | {corr:.2f} |")
 
 
 def main() -> None:
@@ -77,14 +121,21 @@ def main() -> None:
     ap.add_argument("--seed0", type=int, default=2000)
     ap.add_argument("--out", default="benchmarks/fit_evo_results.jsonl")
     ap.add_argument("--summary", default=None, help="print the coverage table of this results file and stop")
+    ap.add_argument("--cases", default=None, help="comma-separated cases, interleaved (overrides --case)")
+    ap.add_argument("--cache", default=None, help="directory of cached fields (pickled FitData)")
     a = ap.parse_args()
     if a.summary:
         summary(a.summary)
         return
+    cases = [int(c) for c in a.cases.split(",")] if a.cases else [a.case]
+    done = set()
+    if os.path.exists(a.out):  # resumable: skip the realisations already in the results file
+        done = {(r["case"], r["seed"]) for r in map(json.loads, open(a.out))}
     with open(a.out, "a") as fh:
         for seed in range(a.seed0, a.seed0 + a.n):
-            fh.write(json.dumps(one(a.case, seed)) + "\n")
-            fh.flush()
+            for case in (c for c in cases if (c, seed) not in done):
+                fh.write(json.dumps(one(case, seed, a.cache)) + "\n")
+                fh.flush()
 
 
 if __name__ == "__main__":

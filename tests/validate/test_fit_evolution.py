@@ -13,6 +13,7 @@ import turbgen
 from turbgen.cli import cli
 from turbgen.spec.constraints import PointSensor, PointSeries
 from turbgen.validation.fit import load_fit_data
+from turbgen.validation.fit.evo_cross import coherence_spectra_corr
 from turbgen.validation.fit.evolution import _aligned, x_pairs
 
 Z999_OVER_Z95 = 3.2905267314919255 / 1.959963984540054  # 99.9 % over 95 % two-sided normal quantiles
@@ -46,6 +47,8 @@ def test_recovery_on_two_planes_100_m_apart(evolving):
     half = (x - lo) if math.log(100.0) < x else (hi - x)
     assert abs(x - math.log(100.0)) <= Z999_OVER_Z95 * half, (e.value_s, e.ci95)
     assert e.chi2_frozen - e.chi2 > 100 and e.chi2 / e.dof < 3
+    # the one-point fit's uncertainty widens the coherence's own interval; the coherence fixes about L^2 / gamma
+    assert e.ci95[0] < e.ci95_held[0] and e.ci95_held[1] < e.ci95[1] and 1.5 < e.sensitivity[1] < 2.5
     out = fit.to_dict()["evo_time_s"]
     assert out["identified"] and out["ci95"][0] < out["value"] < out["ci95"][1]
     assert any(n.startswith("evo_time_s identified") for n in fit.notes)
@@ -128,3 +131,27 @@ def test_incoherent_masts_give_only_an_upper_bound():
     e = fit.evolution
     assert e.value_s == pytest.approx(1.0) and e.ci95[0] == 1.0 and e.ci95[1] < 100
     assert e.message.startswith("evo_time_s not identified from below")
+
+
+def test_coherence_spectra_correlation_is_that_of_gaussian_dfts():
+    """The Isserlis correlation of a pair's linearised co-coherence with each point-averaged spectrum equals that
+    of Monte Carlo complex Gaussian DFTs with the same coherencies (6 points on two planes, u, v, w correlated);
+    the sample correlation of n draws has sd (1 - kappa^2) / sqrt(n): agreement within 4 of those."""
+    rng = np.random.default_rng(1)
+    P, C, n = 3, 3, 100_000
+    N = 2 * P
+    A = rng.standard_normal((C * N, 2)) + 1j * rng.standard_normal((C * N, 2))
+    S = A @ A.conj().T + 0.5 * np.diag(rng.uniform(1, 2, C * N))  # channel (component, site): component * N + site
+    G = S / np.sqrt(np.outer(np.diag(S).real, np.diag(S).real))
+    g = G.reshape(C, N, C, N).transpose(0, 2, 1, 3).reshape(1, C, C, N * N)  # separation index a * N + b
+    sets = {"uu": np.arange(N), "vv": np.arange(N), "ww": np.arange(1, N), "uw": np.arange(N - 1)}
+    a, c = np.arange(P), np.arange(P, N)
+    kappa = coherence_spectra_corr(g, np.arange(N * N).reshape(N, N), [(a, c)], sets, tuple(sets))[0, 0]
+    X = np.linalg.cholesky(G) @ (rng.standard_normal((C * N, n)) + 1j * rng.standard_normal((C * N, n)))
+    rho = G[a, c].real.mean()
+    z = (np.real(X[a] * np.conj(X[c])) - rho / 2 * (np.abs(X[a]) ** 2 + np.abs(X[c]) ** 2)).mean(axis=0)
+    for m, s in enumerate(sets):
+        i, j = ("uvw".index(ch) * N + sets[s] for ch in s)
+        mc = np.corrcoef(z, np.real(X[i] * np.conj(X[j])).mean(axis=0))[0, 1]
+        assert abs(kappa[m] - mc) < 4 * (1 - mc**2) / math.sqrt(n), (s, kappa[m], mc)
+    assert np.max(np.abs(kappa)) > 0.1  # a case where the cross term matters

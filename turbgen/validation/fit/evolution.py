@@ -15,8 +15,11 @@ gives (1 - rho^2)^2 c / 2, and E r = rho - rho (1 - rho^2) c / 4 to the same ord
 ``BandSpectra.band_corr``.
 
 Fit: chi^2 over ln gamma on the range of evo (a scan, then a bounded refinement), weights at the fitted gamma
-(re-weighted until ln gamma moves < MOVE_TOL). The 95 % interval is where chi^2 <= min + 3.84 (profile), each side
-widened in quadrature by the shift of ln gamma when L and Gamma move by one standard deviation of their fit. An
+(re-weighted until ln gamma moves < MOVE_TOL). The 95 % interval is where chi^2 <= min + 3.84 (profile, ae, L and
+Gamma held: ``ci95_held``), each side widened in quadrature by 1.96 times the sd that the one-point fit adds (delta
+method): ln gamma-hat = x(r, theta-hat) with theta = (ln ae, ln L, Gamma), so Var adds s^T Sigma s + 2 s^T G C a, s
+the slope d x / d theta (secant over one sd), Sigma and G the one-point fit's covariance and gain d theta / d F, a
+= d x / d r and C the covariance of the co-coherences with the band spectra, which is not small (``evo_cross``). An
 interval reaching the top of the range means the frozen field (Taylor, gamma -> inf) is not excluded: gamma is not
 identified, and the result says so beside chi^2 of the frozen limit.
 """
@@ -36,8 +39,11 @@ from turbgen.theory import ranges
 from turbgen.theory.eddy_lifetime import evolution_lifetime_s
 from turbgen.theory.mann_quadrature import perpendicular_quadrature
 from turbgen.theory.params import MannParams
+from turbgen.validation.fit.covariance import point_sets, separations
 from turbgen.validation.fit.data import FitData
+from turbgen.validation.fit.evo_cross import coherence_spectra_corr, cross_covariance
 from turbgen.validation.fit.model import BandModel
+from turbgen.validation.fit.result import MannFit
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.mann_lattice import MannLattice
 
@@ -72,6 +78,10 @@ class EvoFit:
         Band centres [Hz].
     data, fitted, sd : dict
         (x_i, x_j) -> (nbands,) co-coherence estimates, their expectation at gamma, their standard deviations.
+    ci95_held : tuple
+        (lo, hi) [s] of the coherence alone, ae, L and Gamma held (None: a range end not reached).
+    sensitivity : numpy.ndarray
+        d ln gamma / d (ln ae, ln L, Gamma) that carries the one-point fit's covariance into ``ci95``.
     """
 
     value_s: float
@@ -85,6 +95,8 @@ class EvoFit:
     data: dict
     fitted: dict
     sd: dict
+    ci95_held: tuple
+    sensitivity: np.ndarray
 
     @property
     def identified(self) -> bool:
@@ -143,7 +155,7 @@ class CoherenceModel:
         self.bands, self.U = bands, data.U_m_s
         band_model = BandModel(bands, data.U_m_s, data.grid, data.box)
         band_model.update_ratio(params)
-        self.kernel, self.k1 = band_model.kernel, band_model.k1
+        self.kernel, self.k1, self.band_model = band_model.kernel, band_model.k1, band_model
         f11 = band_model.line_spectra(params.ae, params.length_scale_m, params.gamma)["uu"]
         self.f11_lines = np.concatenate([[0.0], f11 * band_model.dk1])
         self.auto = bands.band_mean(self.kernel.apply(self.f11_lines))
@@ -252,7 +264,7 @@ class _Problem:
         return (x if self.chi2(x) <= c[k] else grid[k]), grid, c
 
 
-def fit_evolution(data: FitData, params: MannParams, sd_fit: dict, nperseg: int) -> EvoFit | str:
+def fit_evolution(data: FitData, params: MannParams, nperseg: int, fit: MannFit | None = None) -> EvoFit | str:
     """gamma fitted to the longitudinal coherence of ``data`` (module docstring), or one line saying why not.
 
     Parameters
@@ -261,10 +273,10 @@ def fit_evolution(data: FitData, params: MannParams, sd_fit: dict, nperseg: int)
         The fit data (u and the positions of its columns).
     params : MannParams
         ae, L and Gamma of the one-point fit (held).
-    sd_fit : dict
-        "length_scale_m" -> sd of ln L, "gamma" -> sd of Gamma of the one-point fit (None: held).
     nperseg : int
         Welch segment length [samples] of the one-point fit.
+    fit : MannFit, optional
+        The one-point fit of ``data`` whose uncertainty the interval carries; None: ``params`` held exact.
 
     Returns
     -------
@@ -289,16 +301,65 @@ def fit_evolution(data: FitData, params: MannParams, sd_fit: dict, nperseg: int)
             break
     c_min = problem.chi2(x)
     ends = [_profile_end(problem, x, c_min, grid, c, side) for side in (-1, 1)]
-    shift = 0.0
-    for name, step in (("length_scale_m", lambda p, s: replace(p, length_scale_m=p.length_scale_m * math.exp(s))),
-                       ("gamma", lambda p, s: replace(p, gamma=min(p.gamma + s, ranges.RANGES["gamma"].hi)))):
-        if sd_fit.get(name) and math.isfinite(sd_fit[name]) and all(e is not None for e in ends):
-            moved_model = _Problem(CoherenceModel(bands, data, step(params, sd_fit[name])), seps, r, factor)
-            moved_model.chol = problem.chol
-            shift += (moved_model.best(lo, hi)[0] - x) ** 2
-    ci = [None if e is None else x + side * math.hypot(e - x, Z95 * math.sqrt(shift)) for e, side in zip(ends, (-1, 1))]
+    slope, var = np.zeros(3), 0.0
+    if fit is not None and fit.cov_fit is not None and all(e is not None for e in ends):
+        slope = _sensitivity(problem, data, params, x, np.diag(fit.cov_fit), (lo, hi))
+        var = _propagated(problem, data, fit, pairs, slope, x)
+    ci = [None if e is None else x + side * math.sqrt(max((e - x) ** 2 + CHI2_95 * var, 0.0))
+          for e, side in zip(ends, (-1, 1))]
     chi2_frozen = float(np.sum(solve_triangular(problem.chol, (r - 1.0).T.ravel(), lower=True) ** 2))
-    return _result(problem, bands, x, ci, c_min, chi2_frozen, (lo, hi))
+    return _result(problem, bands, x, ci, c_min, chi2_frozen, (lo, hi), (ends, slope))
+
+
+def _sensitivity(problem: _Problem, data: FitData, params: MannParams, x: float, var: np.ndarray,
+                 rng: tuple) -> np.ndarray:
+    """d ln gamma / d (ln ae, ln L, Gamma) of the fit: ln gamma refitted (weights held) with ln L, then Gamma, moved
+    by one sd of the one-point fit (a secant); 0 for ae (the co-coherence is a ratio: ae cancels) and for a held or
+    unidentified parameter."""
+    slope = np.zeros(3)
+    for k in (1, 2):
+        step = math.sqrt(var[k]) if math.isfinite(var[k]) else 0.0
+        if k == 2 and params.gamma + step > ranges.RANGES["gamma"].hi:
+            step = -step
+        if step == 0.0:
+            continue
+        moved = (replace(params, length_scale_m=params.length_scale_m * math.exp(step)) if k == 1
+                 else replace(params, gamma=params.gamma + step))
+        shifted = _Problem(CoherenceModel(problem.model.bands, data, moved), problem.seps, problem.r, problem.factor)
+        shifted.chol = problem.chol
+        slope[k] = (shifted.best(*rng)[0] - x) / step
+    return slope
+
+
+def _propagated(problem: _Problem, data: FitData, fit: MannFit, pairs: dict, slope: np.ndarray, x: float) -> float:
+    """Variance the one-point fit adds to ln gamma: s^T Sigma s + 2 a^T C G^T s, s = ``slope``, Sigma and G the fit's
+    covariance and gain (``linear_terms``: a and C)."""
+    k, cov = slope != 0, cast(np.ndarray, fit.cov_fit)
+    var = float(slope[k] @ cov[np.ix_(k, k)] @ slope[k])
+    if fit.gain is None or len(fit.f_hz) != len(problem.model.bands.f_hz):
+        return var
+    a, cross = linear_terms(problem, data, fit, pairs, x)
+    return var + 2.0 * float(a @ cross @ fit.gain.T @ slope)
+
+
+def linear_terms(problem: _Problem, data: FitData, fit: MannFit, pairs: dict, x: float) -> tuple:
+    """(a, C): a = d ln gamma / d r of the coherence fit at ln gamma = ``x`` (band-major), C the covariance of the
+    co-coherences with the one-point fit's band spectra (``evo_cross``; rows and columns band-major)."""
+    dm = (problem.mean(math.exp(x + 1e-3)) - problem.mean(math.exp(x - 1e-3))) / 2e-3
+    w = solve_triangular(problem.chol, dm.T.ravel(), lower=True)
+    a = solve_triangular(problem.chol, w, lower=True, trans="T") / (w @ w)
+    seps, index, _ = separations(np.asarray(data.sites_m, float))
+    g = problem.model.band_model.coherency(replace(fit.params, evo_time_s=math.exp(x)), seps)
+    if data.grid is None:  # frozen between x (``model``): times the co-coherence at dx (factorised)
+        for dx in {abs(d) for d in seps[:, 0] if abs(d) > POS_TOL_M}:
+            rho = problem.model.expected(math.exp(x), dx)
+            g[..., np.abs(np.abs(seps[:, 0]) - dx) < POS_TOL_M] *= rho[:, None, None, None]
+    cols, used = np.asarray(cast(dict, data.columns)["u"]), tuple(fit.data)
+    sites = [tuple(cols[list(c)] for c in zip(*pairs[p])) for p in problem.seps]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = np.nan_to_num(coherence_spectra_corr(g, index, sites, point_sets(data, used), used))
+    sd_f = np.stack([cast(dict, fit.sd)[s] for s in used])
+    return a, cross_covariance(corr, problem.model.bands.band_corr, problem.sd, sd_f)
 
 
 def _profile_end(problem: _Problem, x: float, c_min: float, grid, c, side: int) -> float | None:
@@ -311,7 +372,7 @@ def _profile_end(problem: _Problem, x: float, c_min: float, grid, c, side: int) 
     return brentq(lambda t: problem.chi2(t) - level, x, far, xtol=1e-4)
 
 
-def _result(problem: _Problem, bands, x: float, ci: list, c_min: float, chi2_frozen: float, rng) -> EvoFit:
+def _result(problem: _Problem, bands, x: float, ci: list, c_min: float, chi2_frozen: float, rng, held) -> EvoFit:
     """EvoFit of a finished fit, with the one line saying whether gamma is identified."""
     gamma = math.exp(x)
     lo = math.exp(rng[0]) if ci[0] is None else math.exp(ci[0])
@@ -326,14 +387,14 @@ def _result(problem: _Problem, bands, x: float, ci: list, c_min: float, chi2_fro
         msg = (f"evo_time_s identified; the frozen (Taylor) limit is excluded (chi2 {chi2_frozen:.4g} against "
                f"{c_min:.4g}, dof {dof})")
     seps = problem.seps
+    ends = tuple(None if e is None else math.exp(e) for e in held[0])
     return EvoFit(gamma, (lo, hi), c_min, chi2_frozen, dof, seps, msg, bands.f_hz, dict(zip(seps, problem.r)),
-                  dict(zip(seps, problem.mean(gamma))), dict(zip(seps, problem.sd)))
+                  dict(zip(seps, problem.mean(gamma))), dict(zip(seps, problem.sd)), ends, held[1])
 
 
 def with_evolution(data: FitData, fit):
     """``fit`` (a MannFit of ``data``) with ``evolution`` fitted, or a note saying why it was not."""
-    sd = {n: getattr(fit, n).sd_fit for n in ("length_scale_m", "gamma")}
-    evo = fit_evolution(data, fit.params, sd, fit.nperseg)
+    evo = fit_evolution(data, fit.params, fit.nperseg, fit)
     if isinstance(evo, str):
         return replace(fit, notes=fit.notes + (evo,))
     return replace(fit, evolution=evo, notes=fit.notes + (evo.message,))

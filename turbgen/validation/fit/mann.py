@@ -186,10 +186,16 @@ def _result(data, bands, model, used, free, held, p, sol, cov, converged, notes,
     if seg_m < 2 * math.pi * p["length_scale_m"]:
         notes.append(f"the Welch segments ({seg_m:.4g} m of flow) are shorter than 2 pi L = "
                      f"{2 * math.pi * p['length_scale_m']:.4g} m: the spectral peak is below the lowest band")
+    rows, ok = [NAMES.index(n) for n in free], bool(np.all(np.isfinite(cov)))
+    full, gain = np.zeros((len(NAMES), len(NAMES))), np.zeros((len(NAMES), sol.fun.size))
+    full[np.ix_(rows, rows)] = cov
+    if ok:  # else a parameter is unidentified (infinite variance): gain None
+        gain[rows] = -cov @ solve_triangular(np.linalg.cholesky(weights), sol.jac, lower=True, trans="T").T
     return MannFit(
         ae=values["ae"], length_scale_m=values["length_scale_m"], gamma=values["gamma"],
         chi2_dof=float(np.sum(sol.fun**2) / max(dof, 1)), dof=dof, flags=tuple(flags), notes=tuple(notes),
         model=model.kind, U_m_s=data.U_m_s, source=data.source, nperseg=bands.setup.nperseg, f_hz=bands.f_hz,
         data={s: bands.values[s] for s in used}, fitted={s: e[s] for s in used},
-        sd=dict(zip(used, np.sqrt(np.diag(weights)).reshape(-1, len(used)).T)),
+        sd=dict(zip(used, np.sqrt(np.diag(weights)).reshape(-1, len(used)).T)), cov_fit=full,
+        gain=gain if ok else None,
     )  # fmt: skip

@@ -72,6 +72,10 @@ class MannFit:
         The parametric bootstrap (``turbgen.api.fit.bootstrap_sd``): {"B", "sd", "sd_fit"}; None when not run.
     evolution : turbgen.validation.fit.evolution.EvoFit or None
         The eddy-evolution time fitted to the longitudinal coherence (None: no two points along x).
+    cov_fit : numpy.ndarray or None
+        (3, 3) covariance of the fitted (ln ae, ln L, Gamma), zero for a held one: what the gamma fit propagates.
+    gain : numpy.ndarray or None
+        (3, n) d (ln ae, ln L, Gamma) / d (band estimates, band-major ``data``): the fit's first-order response.
     """
 
     ae: FitValue
@@ -92,6 +96,8 @@ class MannFit:
     mean_wind: object = None
     bootstrap: dict | None = None
     evolution: EvoFit | None = None
+    cov_fit: np.ndarray | None = None
+    gain: np.ndarray | None = None
 
     @property
     def ok(self) -> bool:
