@@ -17,10 +17,12 @@ not known, and ignoring it over-states their covariance, which errs towards wide
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from turbgen import fft
+from turbgen.theory import ranges
 from turbgen.theory.lattice import line_frequencies
 from turbgen.theory.mann_quadrature import perpendicular_quadrature
 from turbgen.theory.params import MannParams
@@ -30,6 +32,7 @@ from turbgen.validation.mann_lattice import MannLattice
 from turbgen.validation.welch_kernel import WelchKernel
 
 N_RATIO_NODES = 96
+RATIO_STEP = 1e-3  # step in ln L and Gamma of the ratio's derivatives (``update_ratio``)
 PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 # Eq. 8 between sensors for the weights only: 4 Gauss nodes and 64 angles leave ~2e-4 of F_ii (7x faster)
 WEIGHT_RULE = {"n_gauss": 4, "n_theta": 64}
@@ -57,16 +60,30 @@ class BandModel:
         self.kernel = WelchKernel(bands.setup, nt)
         self.ratio_k1 = np.geomspace(self.k1[0], self.k1[-1], N_RATIO_NODES)
         self.ratio: dict | None = None  # name -> (N_RATIO_NODES,) lattice / continuous, set by ``update_ratio``
+        self.ratio_at, self.ratio_slope = None, None  # (ln L, Gamma) of ``ratio``, its derivatives there
         self._cross: tuple | None = None  # (params, separations, cross-spectra) of the last ``coherency``
 
     @property
     def kind(self) -> str:
         return "continuous" if self.grid is None else "grid"
 
-    def update_ratio(self, params: MannParams) -> None:
-        """Lattice sum / continuous spectrum at the ratio nodes for ``params`` (grid model only)."""
+    def update_ratio(self, params: MannParams, slopes: bool = False) -> None:
+        """Lattice sum / continuous spectrum at the ratio nodes for ``params`` (grid model only); with ``slopes``
+        also its derivatives in ln L and Gamma (forward differences of RATIO_STEP), so that ``line_spectra`` moves
+        the ratio with L and Gamma to first order: the fit's Jacobian then holds the ratio's dependence on them."""
         if self.grid is None:
             return
+        self.ratio, self.ratio_at = self._ratio(params), (math.log(params.length_scale_m), params.gamma)
+        self.ratio_slope = None
+        if slopes:
+            hl = RATIO_STEP if params.length_scale_m * math.exp(RATIO_STEP) <= ranges.RANGES["length_scale_m"].hi \
+                else -RATIO_STEP
+            hg = RATIO_STEP if params.gamma + RATIO_STEP <= ranges.RANGES["gamma"].hi else -RATIO_STEP
+            moved = (self._ratio(replace(params, length_scale_m=params.length_scale_m * math.exp(hl))),
+                     self._ratio(replace(params, gamma=params.gamma + hg)))
+            self.ratio_slope = tuple({n: (r[n] - self.ratio[n]) / h for n in NAMES} for r, h in zip(moved, (hl, hg)))
+
+    def _ratio(self, params: MannParams) -> dict:
         lat = MannLattice(params, self.grid, self.box, self.U)
         sums = {n: np.empty(N_RATIO_NODES) for n in NAMES}
         for k, phi, _ in lat.slabs(self.ratio_k1):
@@ -74,7 +91,7 @@ class BandModel:
                 sums[n][k] = phi[i, j].sum() / self.dk1
         cont = scaled_spectra(self.ratio_k1 * params.length_scale_m, params.gamma)
         scale = params.ae * params.length_scale_m ** (5.0 / 3.0)
-        self.ratio = {n: sums[n] / (scale * cont[n]) for n in NAMES}
+        return {n: sums[n] / (scale * cont[n]) for n in NAMES}
 
     def line_spectra(self, ae: float, length_scale_m: float, gamma: float) -> dict:
         """Name -> (nt/2,) two-sided F(k1) [m^3 s^-2] at the record's lines 1 .. nt/2 (times the grid ratio)."""
@@ -82,9 +99,17 @@ class BandModel:
         scale = ae * length_scale_m ** (5.0 / 3.0)
         out = {}
         for n in NAMES:
-            r = 1.0 if self.ratio is None else np.interp(np.log(self.k1), np.log(self.ratio_k1), self.ratio[n])
+            r = 1.0 if self.ratio is None else np.interp(np.log(self.k1), np.log(self.ratio_k1), self._ratio_of(
+                n, length_scale_m, gamma))
             out[n] = scale * f[n] * r
         return out
+
+    def _ratio_of(self, n: str, length_scale_m: float, gamma: float) -> np.ndarray:
+        """The ratio of spectrum ``n`` at the nodes for L and Gamma (to first order about ``ratio_at``)."""
+        if self.ratio_slope is None:
+            return self.ratio[n]
+        dl, dg = math.log(length_scale_m) - self.ratio_at[0], gamma - self.ratio_at[1]
+        return self.ratio[n] + dl * self.ratio_slope[0][n] + dg * self.ratio_slope[1][n]
 
     def expected(self, ae: float, length_scale_m: float, gamma: float) -> dict:
         """Name ("uu", "vv", "ww", "uw") -> (nbands,) expected band-averaged Welch estimate [m^2 s^-2 Hz^-1]."""
