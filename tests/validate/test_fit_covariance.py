@@ -157,7 +157,7 @@ def test_one_point_covariance_matches_monte_carlo_of_the_model_lines():
     """One grid point (issue 38's ``sonic1``): records drawn as complex Gaussian lines with the model's own 3 x 3
     line cross-spectra (``line_cross`` at separation 0) give band estimates whose covariance along the GLS direction
     of each parameter (linearised at the truth) is the fit's: the sample sd of R = 400 projections over the model's
-    sd lies within chi2 bounds (99.9 %, Bonferroni over 3; [0.86, 1.15]). Checks the band gain, the neighbour-band
+    sd lies within chi2 bounds (99.9 %, Bonferroni over 3; [0.87, 1.13]). Checks the band gain, the neighbour-band
     correlation, the u-w terms and the exact low bins together against the estimator itself."""
     from turbgen.validation.fit.mann import _covariance_at
 
