@@ -20,14 +20,14 @@ from turbgen.store.paths import check_output_path
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
               help="Output file, or root name for wnd/evo/hawc2.")
 @click.option("--plane", type=int, default=None, help="Plane index to export (default: the rotor plane, x = 0); evo: the plane of ROOT.wnd (ROOT.evo holds every plane).")
-@click.option("--hub-height", "hub_height", type=float, default=None, help="Hub height [m] (default: the store's).")
-@click.option("--shear-exponent", "shear", type=float, default=None,
+@click.option("--hub-height", "hub_height_m", type=float, default=None, help="Hub height [m] (default: the store's).")
+@click.option("--shear-exponent", "shear_exponent", type=float, default=None,
               help=f"Power-law exponent of the mean profile added to u (InflowWind formats; default {DEFAULT_SHEAR_EXPONENT:g}).")
 @click.option("--profile", "profile", default=None, metavar="KIND:VALUE",
               help="Mean profile added (InflowWind/HAWC2 formats): power:ALPHA | log:z0=Z0[,d=D] (roughness and "
                    "displacement, m) | table:FILE (CSV rows z [m], U [m/s] [, direction deg]; speeds scaled so the "
                    f"table's value at hub height is the hub mean; directions {CCW_NOTE}). Default power:0.2.")
-@click.option("--veer", "veer", type=float, default=None, metavar="DEG_PER_M",
+@click.option("--veer", "veer_deg_per_m", type=float, default=None, metavar="DEG_PER_M",
               help=f"Direction change with height [deg/m], (u, v) turned per height about the hub, {CCW_NOTE}: "
                    "northern-hemisphere veer is negative.")
 @click.option("--mean-history", "mean_history", type=click.Path(dir_okay=False), default=None, metavar="FILE",
@@ -39,8 +39,8 @@ from turbgen.store.paths import check_output_path
                                  "height, from --transient-start; needs --iec-class and --rotor-diameter. It rides "
                                  "on the slices: Taylor's shift keeps the hub mean U.")
 @click.option("--iec-class", default=None, help="--transient: turbine class and turbulence category, e.g. IIB.")
-@click.option("--rotor-diameter", type=float, default=None, help="--transient: rotor diameter D [m].")
-@click.option("--transient-start", type=float, default=10.0, show_default=True,
+@click.option("--rotor-diameter", "rotor_diameter_m", type=float, default=None, help="--transient: rotor diameter D [m].")
+@click.option("--transient-start", "transient_start_s", type=float, default=10.0, show_default=True,
               help="--transient: time the event reaches the turbine [s].")
 @click.option("--transient-sign", type=click.Choice(["+", "-"]), default="+", show_default=True,
               help=f"--transient: the standard's +-: the shear's sense (EWS) or the direction change's, + {CW_NOTE}.")
@@ -54,17 +54,10 @@ from turbgen.store.paths import check_output_path
                    "HAWC2 wind + mann block (hawc2), and OUT_LidarSim_evolution.txt, the LidarSim input file's "
                    "Wind Evolution section (evo).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-def export(store, fmt, out, plane, hub_height, shear, profile, veer, mean_history, transient, iec_class,
-           rotor_diameter, transient_start, transient_sign, tower, periodic, drop_below_ground, runner_files,
-           overwrite):
+def export(store, fmt, out, **options):
     """Export STORE to --format; prints the InflowWind input-file lines that load the result."""
     check_output_path(out)
-    opts = ExportOptions(plane=plane, hub_height_m=hub_height, shear_exponent=shear, profile=profile,
-                         veer_deg_per_m=veer, mean_history=mean_history, transient=transient, iec_class=iec_class,
-                         rotor_diameter_m=rotor_diameter, transient_start_s=transient_start,
-                         transient_sign=transient_sign, tower=tower, periodic=periodic,
-                         drop_below_ground=drop_below_ground, runner_files=runner_files, overwrite=overwrite)
-    request = export_request(store, fmt, opts)
+    request = export_request(store, fmt, ExportOptions(**options))  # the options' names are ExportOptions' fields
     result = export_store(store, fmt, out, request)
     for p in result.paths:
         click.echo(f"wrote {p}", err=True)

@@ -7,7 +7,9 @@ import math
 
 import click
 
-from turbgen.theory.ranges import LIMITS, RANGES
+from turbgen.errors import ParameterError
+from turbgen.theory import ranges
+from turbgen.theory.ranges import LIMITS, RANGES, count_text
 
 
 class FiniteFloatRange(click.FloatRange):
@@ -63,19 +65,9 @@ def range_help(key: str) -> str:
     return RANGES[key].text()
 
 
-def count_text(n: float) -> str:
-    """A count for a message: exact up to 10^12, else three digits and the power of ten ("about 1e+300"; ``n`` may
-    be an int beyond the float range)."""
-    if n <= 10**12:
-        return str(int(n))
-    e = math.floor(math.log10(n))
-    return f"about {n / 10**e:.3g}e+{e}"
-
-
-def _limit(name: str) -> int:
-    """The maximum count of a list option (turbgen.theory.ranges.LIMITS)."""
-    key = {"--planes": "planes", "--gates": "planes", "--seeds": "seeds", "--speeds": "speeds"}.get(name, "points")
-    return LIMITS[key]
+def _limit_key(name: str) -> str:
+    """The key of a list option's maximum count in turbgen.theory.ranges.LIMITS."""
+    return {"--planes": "planes", "--gates": "planes", "--seeds": "seeds", "--speeds": "speeds"}.get(name, "points")
 
 
 def parse_floats(text: str, name: str) -> list[float]:
@@ -86,7 +78,7 @@ def parse_floats(text: str, name: str) -> list[float]:
     if not all(v.strip() for v in items):  # '0,,50' or '0,50,': a value left out, not a list of two
         raise click.BadParameter(f"{text!r} has an empty entry (write numbers separated by single commas)",
                                  param_hint=name)
-    limit = _limit(name)
+    limit = LIMITS[_limit_key(name)]
     if len(items) > limit:
         raise click.BadParameter(f"{len(items)} values is more than the maximum {limit}", param_hint=name)
     for v in items:
@@ -112,7 +104,7 @@ def parse_range(text: str, name: str) -> list[float]:
     if not (step > 0 and stop >= start and all(map(math.isfinite, (start, stop, step)))):
         raise click.BadParameter(f"{text!r} needs finite numbers, step > 0 and stop >= start", param_hint=name)
     n = math.floor((stop - start) / step * (1 + 1e-9) + 1e-9) + 1.0  # a float: 50:1e300:1 has ~1e300 values
-    limit = _limit(name)
+    limit = LIMITS[_limit_key(name)]
     if n > limit:
         raise click.BadParameter(f"{text!r} gives {count_text(n)} values, more than the maximum {limit}",
                                  param_hint=name)
@@ -121,38 +113,11 @@ def parse_range(text: str, name: str) -> list[float]:
 
 
 def parse_ints(text: str, name: str) -> list[int]:
-    """'1-21' or '1,4,7' or '1-3,9' -> sorted unique non-negative ints (at most the option's LIMITS count;
-    counted before any range is expanded)."""
-    limit = _limit(name)
-    ranges: list[tuple[int, int]] = []
-    parts = text.split(",")
-    if text.strip() and not all(p.strip() for p in parts):  # '1,,3': a value left out
-        raise click.BadParameter(f"{text!r} has an empty entry (write integers separated by single commas)",
-                                 param_hint=name)
-    for part in parts:
-        part = part.strip()
-        if not part:
-            continue
-        lo, sep, hi = part.partition("-")
-        try:
-            lo_i, hi_i = int(lo), int(hi) if sep else int(lo)
-        except ValueError:
-            raise click.BadParameter(
-                f"{part!r} in {text!r} is not a non-negative integer or a range like 1-21", param_hint=name
-            ) from None
-        if hi_i < lo_i:
-            raise click.BadParameter(f"range {part!r} runs backwards (write {hi_i}-{lo_i})", param_hint=name)
-        ranges.append((lo_i, hi_i))
-    if not ranges:
-        raise click.BadParameter(f"{text!r} holds no integer", param_hint=name)
-    count = sum(hi - lo + 1 for lo, hi in ranges)
-    if count > limit:
-        raise click.BadParameter(f"{text!r} gives {count_text(count)} values, more than the maximum {limit}",
-                                 param_hint=name)
-    out: set[int] = set()
-    for lo, hi in ranges:
-        out.update(range(lo, hi + 1))
-    return sorted(out)
+    """'1-21' or '1,4,7' or '1-3,9' -> sorted unique non-negative ints (turbgen.theory.ranges.parse_ints)."""
+    try:
+        return ranges.parse_ints(text, _limit_key(name))
+    except ParameterError as exc:
+        raise click.BadParameter(str(exc), param_hint=name) from None
 
 
 def plane_positions(planes: list[float] | None, gates: list[float] | None) -> list[float] | None:

@@ -17,22 +17,14 @@ from turbgen.theory import ranges
 
 def parse_seeds(value) -> list[int]:
     """Sorted seeds of a list of ints or a text like '1-21' / '1-3,9' (inclusive, merged); ParameterError for a
-    backward range or too many seeds."""
+    bad entry, a backward range or too many seeds."""
     if not isinstance(value, str):
         ranges.check_count("seeds", len(value))
         return sorted(value)
-    spans = []
-    for part in value.split(","):
-        lo, _, hi = part.strip().partition("-")
-        lo_i, hi_i = int(lo), int(hi or lo)
-        if hi_i < lo_i:
-            raise ParameterError(f"seeds = {value!r}: range {part.strip()!r} runs backwards")
-        spans.append((lo_i, hi_i))
-    ranges.check_count("seeds", sum(hi - lo + 1 for lo, hi in spans), f"seeds = {value!r}")  # before expanding
-    out: set[int] = set()
-    for lo_i, hi_i in spans:
-        out.update(range(lo_i, hi_i + 1))
-    return sorted(out)
+    try:
+        return ranges.parse_ints(value)
+    except ParameterError as exc:
+        raise ParameterError(f"seeds = {value!r}: {exc}") from None
 
 
 def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides) -> SweepPlan:

@@ -8,6 +8,7 @@ and ranges") shows the table; tests/cli/test_bad_input.py checks every bound is 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from turbgen.errors import ParameterError, check_int, check_range
@@ -130,6 +131,39 @@ def check_count(key: str, n: int, what: str | None = None) -> int:
     if n > limit:
         raise ParameterError(f"{what or key}: {n} values is more than the maximum {limit}")
     return n
+
+
+def count_text(n: float) -> str:
+    """A count for a message: exact up to 10^12, else three digits and the power of ten ("about 1e+300"; ``n`` may
+    be an int beyond the float range)."""
+    if n <= 10**12:
+        return str(int(n))
+    e = math.floor(math.log10(n))
+    return f"about {n / 10**e:.3g}e+{e}"
+
+
+def parse_ints(text: str, key: str = "seeds") -> list[int]:
+    """'1-21' or '1,4,7' or '1-3,9' -> sorted unique non-negative ints; ParameterError for an empty entry, a
+    non-integer, a backward range or more than ``LIMITS[key]`` values (counted before any range is expanded)."""
+    parts = [p.strip() for p in text.split(",")]
+    if text.strip() and not all(parts):  # '1,,3': a value left out
+        raise ParameterError(f"{text!r} has an empty entry (write integers separated by single commas)")
+    spans: list[tuple[int, int]] = []
+    for part in filter(None, parts):
+        lo, sep, hi = part.partition("-")
+        try:
+            lo_i, hi_i = int(lo), int(hi) if sep else int(lo)
+        except ValueError:
+            raise ParameterError(f"{part!r} in {text!r} is not a non-negative integer or a range like 1-21") from None
+        if hi_i < lo_i:
+            raise ParameterError(f"range {part!r} runs backwards (write {hi_i}-{lo_i})")
+        spans.append((lo_i, hi_i))
+    if not spans:
+        raise ParameterError(f"{text!r} holds no integer")
+    count = sum(hi - lo + 1 for lo, hi in spans)
+    if count > LIMITS[key]:
+        raise ParameterError(f"{text!r} gives {count_text(count)} values, more than the maximum {LIMITS[key]}")
+    return sorted(set().union(*(range(lo, hi + 1) for lo, hi in spans)))
 
 
 def check_grid(grid) -> None:
