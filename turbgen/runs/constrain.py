@@ -1,7 +1,5 @@
 """Constrained Mann runs: a field conditioned on measured point time series (Hoffman & Ribak 1991).
 
-    summary = run_mann_constrained(run, "mast.zarr", [load_point_series("mast.json")], noise_m_s=0.1)
-
 A sensor at (x, y, z) belongs to the plane at x; its value at time T is the stored sample t = T + x / U (convected
 frame, Guo et al. 2023 Sect. 5.1.2), interpolated linearly onto the stored times (missing outside the data's span or
 next to a missing value) and bilinearly in (y, z). ``total_wind`` data lose their mean wind first
@@ -254,12 +252,9 @@ def unconstrained_measurement(run: MannRun, stencil, placed: PlacedData, threads
 def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarray, scratch_dir: Path, *,
                        conditional_mean: bool = False, threads: int | None = None,
                        progress: bool = False):  # fmt: skip
-    """The conditioned field of ``run``: (solver report, iterator of (plane index, component, field
-    (nt, ny, nz) float32 [m/s])); two buffers alternate (an array is valid until the item after next).
-
-    Pass 1 runs here; the iterator generates u_s again and adds the correction C H^T x, read from a scratch file in
-    ``scratch_dir`` and added to the spectra before their transform along time. ``cov``: stream_system's.
-    """
+    """(solver report, iterator of (plane index, component, field (nt, ny, nz) float32 [m/s])) of ``run``
+    conditioned: pass 1 runs here, the iterator is pass 2 (its correction read from a scratch file in
+    ``scratch_dir``); two buffers alternate (an array is valid until the item after next)."""
     g = run.grid
     gen = MannSnapshots(stencil, g.ny, g.nz, default_threads(threads), buffers=2)  # write_planes' background writes
     measured = eps = None
@@ -342,11 +337,8 @@ def mann_constrained_in_memory(run: MannRun, files: list, *, noise_m_s: float | 
                                conditional_mean: bool = False, threads: int | None = None, cache_dir=None,
                                progress: bool = False, placed: PlacedData | None = None,
                                fit: dict | None = None):  # fmt: skip
-    """The field of :func:`run_mann_constrained` in memory: (xarray.Dataset, summary with path None).
-
-    Values and attributes as that store's (but ``created_utc``); the correction's scratch file goes to the temporary
-    directory. ParameterError as run_mann_constrained, and when the run with its field does not fit in memory.
-    """
+    """The field of :func:`run_mann_constrained` in memory (values and attributes as that store's but
+    ``created_utc``): (xarray.Dataset, summary with path None). ParameterError also if it does not fit in memory."""
     writer, summary = _conditioned(lambda: MemoryWriter(run.grid, run.to_attrs()), run, files, None,
                                    noise_m_s=noise_m_s, conditional_mean=conditional_mean, threads=threads,
                                    cache_dir=cache_dir, progress=progress, placed=placed, fit=fit)  # fmt: skip

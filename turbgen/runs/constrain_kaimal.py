@@ -1,7 +1,5 @@
 """Constrained Kaimal runs: a Kaimal field conditioned on point time series or lidar LOS data (Hoffman & Ribak 1991).
 
-    summary = run_kaimal_constrained(run, "mast.zarr", [load_point_series("mast.json")], noise_m_s=0.1)
-
 Data placement, solver, the two passes and the ``constraints`` record are those of turbgen.runs.constrain; only the
 prior differs: the Kaimal generator's per-bin covariance (turbgen.synthesis.kaimal_conditioning).
 
@@ -148,11 +146,8 @@ def require_constrained_memory(run: KaimalRun, placed: KaimalPlaced, threads: in
 def run_kaimal_constrained(run: KaimalRun, out, files: list, *, noise_m_s: float | None = None,
                            conditional_mean: bool = False, overwrite: bool = False, chunk_t: int | None = None,
                            threads: int | None = None) -> dict:  # fmt: skip
-    """Generate ``run`` conditioned on ``files`` (PointSeries or lidar data) into a new store at ``out``.
-
-    Arguments, summary and errors as turbgen.runs.constrain.run_mann_constrained's, the summary with the synthesis
-    report.
-    """
+    """Generate ``run`` conditioned on ``files`` (PointSeries or lidar data) into a new store at ``out``; arguments,
+    summary (with the synthesis report) and errors as turbgen.runs.constrain.run_mann_constrained's."""
     return _conditioned(run, files, noise_m_s, conditional_mean, threads, str(out), lambda attrs: create_store(
         Path(out), run.grid, attrs, chunk_t=chunk_t, overwrite=overwrite))[1]
 

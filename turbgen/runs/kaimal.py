@@ -194,11 +194,8 @@ def in_memory_bytes(run: KaimalRun, gen: KaimalEvo | None = None) -> int:
 
 def kaimal_in_memory(run: KaimalRun, *, progress: bool = False, threads: int | None = None,
                      gen: KaimalEvo | None = None):
-    """The field of ``run`` in memory as run_kaimal's store would open: (xarray.Dataset, summary with path None).
-
-    The same values and attributes (but ``created_utc``); the spectrum stays in memory. ParameterError when
-    in_memory_bytes exceeds the available memory.
-    """
+    """The field of ``run`` in memory as run_kaimal's store would open (but ``created_utc``): (xarray.Dataset,
+    summary with path None). ParameterError when in_memory_bytes exceeds the available memory."""
     gen = gen or kaimal_generator(run, workers=threads)
     g = run.grid
     require_memory(in_memory_bytes(run, gen), f"the Kaimal run ({g.nx} planes x {g.nt} x {g.ny} x {g.nz}) and its "

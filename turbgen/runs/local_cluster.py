@@ -1,8 +1,6 @@
 """The dask LocalCluster turbgen starts itself (sweeps, out-of-core runs, `turbgen serve`): loopback only, no dashboard.
 
-dask's scheduler and workers always start an HTTP server; with in-process workers (the service) its address is
-``inproc://`` and the server listened on every interface, answering /metrics etc. from the network without a token.
-Here every server binds 127.0.0.1 (random ports).
+dask's HTTP servers (/metrics etc., no token) would otherwise listen on every interface: here all bind 127.0.0.1.
 """
 
 from __future__ import annotations

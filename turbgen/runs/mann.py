@@ -1,7 +1,5 @@
 """One Mann space-time run (turbgen.spec.mann.MannRun): stencil -> snapshots -> zarr store.
 
-    summary = run_mann(MannRun.from_mapping({"length_scale_m": 49, "evo_time_s": 400}), "mann.zarr")
-
 Shared by ``turbgen mann``, the sweep and the service (bit-identical stores); the stencil depends on all but the
 seed and can be shared between seeds.
 """
@@ -88,12 +86,8 @@ def progress_bar(desc: str, total: int, unit: str, show: bool):
 
 
 def _touch_while_loading_kernels(gen: MannSnapshots, output: bool = True) -> None:
-    """First touch of a single snapshot's buffers while the compiled noise loads.
-
-    numba's first call holds the GIL while fresh memory's first touch (numpy fills release it) is slow: the spectra
-    are touched in a thread meanwhile, the output plane here (none with ``output=False``: the caller's arrays).
-    Returns when all is touched, so no fill races the synthesis.
-    """
+    """Touch a single snapshot's fresh buffers (spectra in a thread, the output plane here unless ``output=False``)
+    while numba's first call loads the compiled noise holding the GIL; returns when all is touched."""
     spectra, plane = gen.single_buffers(output)
     with ThreadPoolExecutor(1) as pool:
         touched = pool.submit(spectra.fill, 0)
@@ -201,12 +195,9 @@ def run_mann(run: MannRun, out: str | Path, *, overwrite: bool = False, chunk_t:
 def mann_in_memory(run: MannRun, *, progress: bool = False, stencil: MannStencil | None = None,
                    threads: int | None = None, cache_dir: str | Path | None = None,
                    snapshots: MannSnapshots | None = None):  # fmt: skip
-    """The field of ``run`` in memory as run_mann's store would open: (xarray.Dataset, summary with path None).
-
-    The same values and attributes (but ``created_utc``) as that store; arguments as run_mann's. ``snapshots``: a
-    MannSnapshots(stencil, ny, nz, threads, buffers=2) kept from an earlier seed (no new buffers). Raises
-    ParameterError when memory_estimate_bytes and the field's 3 float32 components exceed the available memory.
-    """
+    """The field of ``run`` in memory as run_mann's store would open (but ``created_utc``): (xarray.Dataset,
+    summary with path None); arguments as run_mann's, ``snapshots`` a MannSnapshots(..., buffers=2) of an earlier
+    seed. ParameterError when the run and the field's 3 float32 components exceed the available memory."""
     t_start = time.perf_counter()
     gen_threads = default_threads(threads)
     _checked_stencil(run, stencil)

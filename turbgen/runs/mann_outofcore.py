@@ -1,7 +1,5 @@
 """Out-of-core Mann runs: a field whose snapshot does not fit in memory, in two passes through scratch files.
 
-    summary = run_mann_outofcore(run, "big.zarr", memory_bytes=4 * 2**30)
-
 Pass 1, per part of S k1 slabs (a multiple of the synthesis batch: every number as in memory): the part's stencil,
 its snapshots in time order, cropped spectra to the spectrum file (snapshot, component, part, point, slab).
 Pass 2, per snapshot, component and block of (y, z) points: read back, transformed along k1 (PencilTransform) into
@@ -237,13 +235,9 @@ class _File(ScratchFile):
 def run_mann_outofcore(run: MannRun, out: str | Path, *, memory_bytes: int, overwrite: bool = False,
                        chunk_t: int | None = None, progress: bool = False, threads: int | None = None,
                        plan: OutOfCorePlan | None = None, client=None) -> dict:  # fmt: skip
-    """Generate ``run`` into a new store at ``out`` within ``memory_bytes``; return {path, sigma_*, mean_*, seconds,
-    plan}.
-
-    Bit for bit run_mann's field. The disk for store and scratch is checked first; an exception leaves neither.
-    ``client``: a dask Client running the passes' tasks (``memory_bytes`` and ``threads`` per task; they use this
-    process's FFT backend); this process writes the store.
-    """
+    """Generate ``run`` (run_mann's field bit for bit) into a new store at ``out`` within ``memory_bytes``; return
+    {path, sigma_*, mean_*, seconds, plan}. Disk is checked first; an exception leaves no store or scratch.
+    ``client``: a dask Client running the passes' tasks (``memory_bytes``, ``threads`` per task)."""
     t_start = time.perf_counter()
     threads = default_threads(threads)
     backend = fft.current()

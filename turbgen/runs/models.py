@@ -1,8 +1,5 @@
-"""The model registry: model name -> run class, run function, memory estimates (for the sweep and the service).
-
-The models are declared in turbgen.spec.models; ``MODELS`` resolves each declaration's ``runner`` (:data:`MANN`,
-:data:`KAIMAL`) when first asked for.
-"""
+"""The model registry: model name -> run class, run function, memory estimates (for the sweep and the service);
+``MODELS`` resolves each turbgen.spec.models declaration's ``runner`` (:data:`MANN`, :data:`KAIMAL`) on first use."""
 
 from __future__ import annotations
 

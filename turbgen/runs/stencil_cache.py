@@ -36,11 +36,8 @@ from turbgen.theory.params import MannParams
 def cached_stencil(
     params: MannParams, box: BoxShape, cache_dir: str | Path, *, energy: str = "scaled", evolving: bool = True
 ) -> MannStencil:
-    """The stencil of ``params`` on ``box`` from the unit stencil in ``cache_dir`` (read or built into it).
-
-    ``energy`` "unit": the unit stencil, memory-mapped; "scaled": scaled to ``params.ae``, bit-identical to
-    build_stencil(params, box). ``evolving`` False: without 1/tau_e (single snapshots), a separate entry.
-    """
+    """The stencil of ``params`` on ``box`` from the unit stencil in ``cache_dir`` (read or built into it):
+    ``energy`` "unit" memory-mapped, "scaled" to ``params.ae`` (build_stencil's bits); ``evolving`` False: no 1/tau."""
     with_tau = evolving and params.evo_time_s is not None
     path = Path(cache_dir) / f"mann-stencil-{stencil_key(params, box, with_tau)}.npy"
     shape = (5 if with_tau else 4, box.nk1, box.nk2_half, box.nzp)

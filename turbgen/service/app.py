@@ -32,10 +32,8 @@ def create_app(root: Path, client, *, token: str | None = None, memory_budget: i
                loopback_only: bool = False, stencil_cache_bytes: int | None = DEFAULT_STENCIL_CACHE_BYTES,
                own_cluster: bool = True, derived_running: int = DERIVED_RUNNING,
                derived_waiting: int = DERIVED_WAITING) -> FastAPI:
-    """The application over the catalog in ``root`` running jobs on the dask ``client``; the other parameters
-    are :class:`~turbgen.service.state.ServiceSettings`'. ``app.state.service`` holds its state, ``app.state.jobs``
-    its job queue, ``app.state.removed`` the temporaries of dead processes removed at start-up.
-    """
+    """The application over the catalog in ``root`` running jobs on the dask ``client`` (the other parameters:
+    :class:`~turbgen.service.state.ServiceSettings`'); ``app.state`` holds ``service``, ``jobs`` and ``removed``."""
     settings = ServiceSettings(Path(root), token, memory_budget, max_queue, loopback_only, derived_running,
                                derived_waiting, stencil_cache_bytes, own_cluster)  # fmt: skip
     catalog = Catalog(settings.root)

@@ -13,11 +13,8 @@ BODY_TIMEOUT_S = 10.0  # a request body (at most MAX_BODY_BYTES) must arrive wit
 
 
 async def read_json(request: Request):
-    """The request body parsed as JSON, at most MAX_BODY_BYTES.
-
-    Only ``Content-Type: application/json``: a form or text/plain needs no CORS preflight (any web page could post
-    it); JSON needs one, never granted. LimitError 415, 413, 408 (BODY_TIMEOUT_S) or 422 (invalid, too deep).
-    """
+    """The request body parsed as JSON, at most MAX_BODY_BYTES; only ``Content-Type: application/json`` (a form or
+    text/plain needs no CORS preflight, so any web page could post it). LimitError 415, 413, 408 or 422."""
     data = (await read_upload(request, ("application/json",), MAX_BODY_BYTES))[1]
     try:
         value = json.loads(data)
@@ -30,10 +27,8 @@ async def read_json(request: Request):
 
 
 async def read_upload(request: Request, types, max_bytes: int) -> tuple[str, bytes]:
-    """(content type, body) of an upload whose content type is one of ``types``, at most ``max_bytes``.
-
-    The types are never a form encoding or text/plain (see :func:`read_json`). LimitError 415, 413 or 408 as there.
-    """
+    """(content type, body) of an upload whose content type is one of ``types`` (never a form encoding or text/plain:
+    :func:`read_json`), at most ``max_bytes``; LimitError 415, 413 or 408."""
     media = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if media not in types:
         raise LimitError(415, f"request body: Content-Type must be {'one of ' if len(types) > 1 else ''}"
@@ -56,10 +51,8 @@ async def _bounded_body(request: Request, max_bytes: int) -> bytearray:
 
 
 async def _next_within(chunks, waited: list) -> bytes | None:
-    """The next chunk of the body (None at its end), or 408 once the client has had BODY_TIMEOUT_S in all.
-
-    Counted in ticks of nominal length, so time the server held its event loop is not charged to the client.
-    """
+    """The next chunk of the body (None at its end), or 408 once the client has had BODY_TIMEOUT_S in all (counted
+    in ticks of nominal length: time the server held its event loop is not charged to the client)."""
     tick = BODY_TIMEOUT_S / 20
     read = asyncio.ensure_future(_next_chunk(chunks))
     while True:

@@ -1,9 +1,7 @@
 """Start-up clean-up of a server's root, and the size cap of its stencil cache.
 
-Every writer works under a temporary name with its process id (turbgen.store.temporaries); start-up removes those
-whose process is gone, in ``ROOT/stencils`` only when the runs execute in this process (with --scheduler the
-builders' process ids are not this host's).
-"""
+Start-up removes the temporaries (turbgen.store.temporaries) whose process is gone; in ``ROOT/stencils`` only when the
+runs execute in this process (with --scheduler the builders' process ids are not this host's)."""
 
 from __future__ import annotations
 

@@ -18,11 +18,8 @@ from turbgen.store.temporaries import publish, temp_name
 
 
 def cached_product(state: ServiceState, request: Request, rid: str, final: Path, ready, build) -> Path:
-    """``final`` once ``ready(final)``; built first by ``build(tmp)`` and published when it is not.
-
-    One build per product at a time (a concurrent request waits and reuses it); starting one needs the token.
-    Raises LimitError 401 without it, 503 when too many are computing, 404 for a run deleted meanwhile.
-    """
+    """``final`` once ``ready(final)``, built by ``build(tmp)`` and published if not (one build per product at a
+    time; starting one needs the token). LimitError 401 without it, 503 when too many compute, 404 for a deleted run."""
     if ready(final):
         return final
     generation = state.generation(rid)

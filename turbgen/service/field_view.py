@@ -23,11 +23,8 @@ def check_index(name: str, value: int, size: int) -> int:
 
 
 def build_series(store: Path, plane: int, iy: int, iz: int, tmp: Path) -> None:
-    """u, v, w at grid point (plane, iy, iz) of ``store`` as JSON into the new file ``tmp``.
-
-    The JSON holds ``x_m``, ``y_m``, ``z_m`` [m], ``dt_s`` [s], ``step``, ``nt`` and ``u``, ``v``, ``w`` [m/s]
-    (every ``step``-th sample of a record longer than :data:`MAX_SERIES_SAMPLES`).
-    """
+    """u, v, w at grid point (plane, iy, iz) of ``store`` as JSON into the new file ``tmp``: ``x_m``, ``y_m``, ``z_m``
+    [m], ``dt_s`` [s], ``step``, ``nt`` and ``u``, ``v``, ``w`` [m/s] (every ``step``-th of MAX_SERIES_SAMPLES+)."""
     from turbgen.store import open_store
 
     fs = open_store(store)
@@ -42,10 +39,8 @@ def build_series(store: Path, plane: int, iy: int, iz: int, tmp: Path) -> None:
 
 
 def build_snapshot(store: Path, component: str, plane: int, it: int, sigma: float | None, tmp: Path) -> None:
-    """The yz image of ``component`` at time index ``it`` of plane ``plane`` as a PNG into the new file ``tmp``.
-
-    ``sigma`` is the run's standard deviation of ``component`` [m/s] (colour scale +- 3 sigma); None: the frame's own.
-    """
+    """The yz image of ``component`` at time index ``it`` of plane ``plane`` as a PNG into the new file ``tmp``, colour
+    scale +- 3 ``sigma`` [m/s] (the run's standard deviation; None: the frame's own)."""
     import matplotlib
 
     matplotlib.use("Agg")

@@ -55,11 +55,8 @@ def parse_value(field: Field, text: str):
 
 
 def form_request(model: str, values: Mapping[str, str]) -> dict:
-    """The request body, command and Python call of the form's ``values`` (field name -> text; empty: not given).
-
-    Returns ``body`` (for POST /runs), ``command`` (the uploads as ``FILE``) and ``python``; ParameterError for an
-    unknown model or field (ranges are :func:`turbgen.service.run_ids.build_run`'s).
-    """
+    """``body`` (for POST /runs), ``command`` (uploads as ``FILE``) and ``python`` of the form's ``values`` (field
+    name -> text; empty: not given); ParameterError for an unknown model or field (ranges: run_ids.build_run's)."""
     if model not in MODELS:
         raise ParameterError(f"model: {model!r} is not one of {', '.join(MODELS)}")
     fields = {f.name: f for f in form_fields(model)}

@@ -23,12 +23,8 @@ _STENCIL_LOCK = threading.Lock()  # one stencil build at a time: a second reques
 def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: int | None = None,
             constraints: ConstraintRequest | None = None, energy_from_data: bool = False) -> dict:
     """Worker side: generate ``run`` of ``model`` into the store ``out`` as the CLI does; the run summary's
-    JSON-able entries.
-
-    Mann stencils are built one at a time per process, cached in ``stencil_cache``, trimmed to
-    ``stencil_cache_bytes`` [bytes] (None: no cap). ``constraints``: condition the field on these files, ae
-    estimated from them with ``energy_from_data``. A TurbgenError is recorded as the run's failure.
-    """
+    JSON-able entries. Mann stencils: one build at a time per process, cached in ``stencil_cache`` (capped at
+    ``stencil_cache_bytes``). ``constraints``: files to condition on (ae from them with ``energy_from_data``)."""
     from turbgen.runs.models import get_model
 
     if constraints is not None:
@@ -71,12 +67,8 @@ class Jobs:
         self.computations = 0  # runs handed to dask since start (duplicates are joined, not counted)
 
     def submit(self, rid: str, model: str, run, preset: str | None = None, constraints: dict | None = None) -> str:
-        """Submit run ``rid`` (``preset``: a label for listing; ``constraints``: upload keys,
-        :func:`turbgen.service.run_ids.constraint_keys`) unless it is complete or active.
-
-        Returns "complete", "joined" (queued or running) or "queued" (a new computation). Raises LimitError 429 at
-        ``max_queue`` runs, LimitError 507 when the run cannot be recorded (a full disk).
-        """
+        """Submit run ``rid`` (``preset``: a label; ``constraints``: upload keys) unless complete or active: "complete",
+        "joined" or "queued". LimitError 429 at ``max_queue`` runs, 507 when the run cannot be recorded (disk full)."""
         with self.lock:
             if rid in self.active:
                 return "joined"

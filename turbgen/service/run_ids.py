@@ -22,11 +22,8 @@ ENERGY_KEYS = ("ae", "sigma_u_m_s", "ti", "turb_class")  # a constrained request
 
 
 def build_run(body) -> tuple[str, object, dict]:
-    """(model, MannRun | KaimalRun, constraint keys) from a request body {"model": ..., "preset": ..., <run config keys>}.
-
-    The keys are those of ``turbgen mann|kaimal --config``; ``preset`` as ``--preset`` (given keys override it);
-    ``constrain`` names uploads by id, not files. Raises ParameterError naming the bad field.
-    """
+    """(model, MannRun | KaimalRun, constraint keys) from a request body {"model", "preset", ``--config`` keys}
+    (``constrain`` names uploads by id, not files). ParameterError naming the bad field."""
     if not isinstance(body, dict):
         raise ParameterError("request body: expected a JSON object with the run config")
     body = dict(body)

@@ -4,11 +4,8 @@ from __future__ import annotations
 
 
 def service_cluster(workers: int):
-    """The dask cluster of a server without --scheduler: ``workers`` threads of this process, no listening socket.
-
-    Threads, not processes: a killed server leaves no orphan worker writing into its root. Dask's per-node HTTP
-    servers (no Host check, no token) are stopped right after the start. Returns the started LocalCluster.
-    """
+    """The LocalCluster of a server without --scheduler: ``workers`` threads of this process (a killed server leaves
+    no orphan worker writing into its root), no listening socket (dask's HTTP servers stopped at once)."""
     from turbgen.runs.local_cluster import loopback_cluster
 
     cluster = loopback_cluster(1, workers, processes=False)
@@ -29,11 +26,8 @@ async def _stop_http_servers(cluster) -> None:
 
 
 def listening_socket(host: str, port: int):
-    """A socket bound to ``host``:``port`` as uvicorn binds (SO_REUSEADDR, the first address of ``host``).
-
-    Made first, so a port in use is refused before the catalog or the cluster exist; returned bound, not listening.
-    ParameterError when the address cannot be bound.
-    """
+    """A socket bound (not listening) to ``host``:``port`` as uvicorn binds, made first so a port in use is refused
+    before the catalog or cluster exist; ParameterError when the address cannot be bound."""
     import socket
 
     from turbgen.errors import ParameterError
@@ -68,11 +62,8 @@ MAX_HEADER_BYTES = 16 * 1024  # an incomplete request head larger than this is r
 
 
 def header_timeout_protocol(header_timeout_s: float):
-    """uvicorn's h11 protocol class with a deadline [s] for the request head.
-
-    uvicorn has none for a connection that sends nothing or half a head. Checked every ``header_timeout_s``: one
-    idle or stuck in a head since the last check is closed (within one to two periods).
-    """
+    """uvicorn's h11 protocol class with a deadline for the request head (uvicorn has none): a connection idle or
+    stuck in a head at two checks ``header_timeout_s`` [s] apart is closed."""
     from uvicorn.protocols.http.h11_impl import H11Protocol
 
     class HeaderTimeoutH11Protocol(H11Protocol):

@@ -1,9 +1,5 @@
-"""Batch sweeps: models x stability presets x wind speeds x seeds on dask.distributed.
-
-    from turbgen.sweep import make_plan, plan_from_file, run_sweep, summary_table
-    plan = make_plan(out="study", models=["mann"], presets=["neutral", "stable"], speeds=[12, 16], seeds=range(1, 22))
-    result = run_sweep(plan)          # resumable; DIR/manifest.json and manifest.csv
-"""
+"""Batch sweeps: models x stability presets x wind speeds x seeds on dask.distributed (make_plan or plan_from_file,
+then run_sweep: resumable; DIR/manifest.json and manifest.csv)."""
 
 from turbgen.sweep.lock import SweepLock, SweepLockedError
 from turbgen.sweep.plan import PlannedRun, SweepPlan, make_plan, store_name

@@ -1,9 +1,5 @@
 """Design-load-case sets: a DLC preset (turbgen.spec.dlc) run as one sweep, every field exported with its runner
-input files and listed in DIR/dlc_manifest.csv (columns: DLC_COLUMNS; TI = sigma1 / V_hub).
-
-    plan = make_dlc_plan(DlcSet("1.2", "IIB"), out="dlc12", grid={"hub_height": 90})
-    manifest = export_dlc(plan, DlcSet("1.2", "IIB"), run_sweep(plan))
-"""
+input files and listed in DIR/dlc_manifest.csv (columns: DLC_COLUMNS; TI = sigma1 / V_hub)."""
 
 from __future__ import annotations
 
@@ -30,11 +26,8 @@ EXPORT_FORMATS = ("bts", "wnd", "hawc2")
 
 def make_dlc_plan(dlc: DlcSet, *, out, model: str = "kaimal", grid=None, chunk_t: int | None = None,
                   workers: int | None = None, scheduler: str | None = None) -> SweepPlan:
-    """The sweep of a DLC set: one run per speed and seed, named ``{model}_dlc1.2-IIB_U12_seed3``.
-
-    ``model``: "kaimal" (the standard's Annex C model) or "mann"; the other arguments as :func:`make_plan`'s.
-    ParameterError for an unknown model, bad grid options, an unusable ``out`` or a run over the memory here.
-    """
+    """The sweep of a DLC set: one run per speed and seed, named ``{model}_dlc1.2-IIB_U12_seed3``; ``model``
+    "kaimal" (the standard's Annex C model) or "mann", the rest and the errors as :func:`make_plan`'s."""
     check_choice("model", model, tuple(MODELS))
     grid = check_grid_keys("grid", grid)
     if scheduler:

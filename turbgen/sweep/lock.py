@@ -1,8 +1,7 @@
 """A lock keeping two sweeps from writing one output directory (``filelock``): ``DIR/.turbgen-sweep.lock``.
 
-An OS file lock, so a dead sweep (even SIGKILL) holds nothing; while held the file names its owner (host, pid,
-start) for the refusal. It is removed on release while still held, which is safe because a SweepLock never waits.
-"""
+An OS file lock (a killed sweep holds nothing) naming its owner (host, pid, start) for the refusal; removed on
+release while still held, safe because a SweepLock never waits."""
 
 from __future__ import annotations
 

@@ -30,10 +30,9 @@ def build_run(model: str, preset: str | StabilityPreset, U_m_s: float, seed: int
               *, user: Mapping[str, StabilityPreset] | None = None, spectrum=None):
     """The MannRun / KaimalRun of one preset run, exactly as ``turbgen mann|kaimal --preset`` builds it.
 
-    ``model`` "mann" or "kaimal"; ``preset`` a name (built-in or in ``user``) or a StabilityPreset; ``U_m_s`` [m/s];
-    ``grid``: options with the sweep schema names (nt, dt [s], planes [m], ny, nz, dy [m], dz [m], hub_height [m]),
-    missing ones the model's defaults; ``spectrum``: the run's user spectrum (``turbgen kaimal --spectrum``) for a
-    model that takes one. ParameterError for an unknown model or preset, or a value outside its range.
+    ``preset`` a name (built-in or in ``user``) or a StabilityPreset; ``U_m_s`` [m/s]; ``grid``: the sweep schema's
+    grid options (nt, dt [s], planes [m], ny, nz, dy [m], dz [m], hub_height [m]; missing: the model's defaults);
+    ``spectrum``: ``turbgen kaimal --spectrum``'s table. ParameterError for an unknown model or preset or a bad value.
     """
     spec = get_model(model).spec
     mapping = {"U_m_s": U_m_s, "seed": seed, **grid_mapping(grid)}
@@ -150,14 +149,12 @@ def make_plan(*, out: str | Path, models, presets, speeds, seeds, grid: Mapping 
 ) -> SweepPlan:  # fmt: skip
     """Check a sweep definition and build all its runs (ParameterError on the first bad value).
 
-    ``out``: the output directory (created when the sweep runs). ``models``, ``presets``, ``speeds`` [m/s], ``seeds``:
-    each non-empty, without duplicates, within turbgen.theory.ranges.LIMITS. ``grid``: common grid options
-    (:func:`build_run`), ``model_grid``: model name -> options overriding them. ``chunk_t``: time steps per chunk.
-    ``workers``: LocalCluster workers, excluding ``scheduler`` (tcp://HOST:PORT of a running dask scheduler).
-    ``lidar``: preset or file run on every field. ``constraints``: a ConstraintRequest conditioning every (Mann) run,
-    placed on each run's grid here (store names get the data's digest). ``spectrum``: user spectra CSV of the runs of
-    the models that take one. Also refused: an unreachable scheduler, an unusable ``out``, duplicate store names and,
-    without a scheduler, a run needing more memory than is available here.
+    ``models``, ``presets``, ``speeds`` [m/s], ``seeds``: each non-empty, without duplicates, within
+    turbgen.theory.ranges.LIMITS. ``grid``: common grid options (:func:`build_run`), ``model_grid``: per model
+    overrides. ``workers``: LocalCluster workers, excluding ``scheduler`` (tcp://HOST:PORT). ``lidar``: preset or file
+    run on every field. ``constraints``: a ConstraintRequest conditioning every (Mann) run (store names get the data's
+    digest). Also refused: an unreachable scheduler, an unusable ``out``, duplicate store names and, without a
+    scheduler, a run needing more memory than is available here.
     """
     user = dict(user_presets or {})
     models, presets = _check_models_presets(models, presets, user)

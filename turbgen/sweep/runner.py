@@ -165,14 +165,13 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
               threads: int | None = None, memory_bytes: int | None = None,
               stencil_cache: str | os.PathLike | None = None) -> SweepResult:
     """Run every planned field that has no complete store yet; write DIR/manifest.{json,csv}; return the SweepResult
-    (every run's record: failing runs are recorded, not raised).
+    (failing runs are recorded, not raised).
 
-    ``client``: an existing dask Client (default: from plan.scheduler, or a LocalCluster of plan.workers, worker
-    processes unless ``processes`` is False). ``threads``: threads of each run (default: cores / workers on the own
-    cluster); never changes the fields. ``memory_bytes``: each run's budget [B] (Mann runs over it go out of core).
-    ``stencil_cache``: the constrained runs' stencil cache (the workers must see it at the same path).
+    ``client``: default from plan.scheduler, else a LocalCluster of plan.workers (processes unless ``processes`` is
+    False). ``threads`` per run (default: cores / workers) never changes the fields. ``memory_bytes``: each run's
+    budget [B] (Mann runs over it go out of core). ``stencil_cache``: seen by the workers at the same path.
     SweepLockedError when another sweep holds DIR; ParameterError if ``out`` cannot hold the sweep, a planned store
-    has other parameters (nothing run) or the disk lacks space for the stores.
+    has other parameters (nothing run) or the disk lacks space.
     """
     t_start = time.perf_counter()
     out = plan.out

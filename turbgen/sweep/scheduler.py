@@ -6,11 +6,8 @@ from turbgen.errors import ParameterError
 
 
 def check_scheduler_address(address: str, timeout_s: float = 3.0, connect: bool = True) -> str:
-    """``address`` if a dask scheduler answers there now ('tcp://host:port' or tls://; tcp:// assumed).
-
-    ParameterError in one line within ``timeout_s`` [s] for a malformed address, a closed port or another server (dask
-    itself retries 30 s, then raises a traceback); ``connect`` False checks the form only.
-    """
+    """``address`` if a dask scheduler answers there now ('tcp://host:port' or tls://; tcp:// assumed); ParameterError
+    within ``timeout_s`` [s] otherwise (dask retries 30 s, then a traceback). ``connect`` False checks the form only."""
     import socket
     from urllib.parse import urlsplit
 

@@ -65,8 +65,7 @@ def lidar_store(path: str, lidar: str) -> dict:
 
 
 def execute_run(task: RunTask, shared=None) -> dict:
-    """Worker side: generate one field, checksum it, optionally validate it and run the lidar. Never raises.
-
+    """Worker side: generate one field, checksum it, optionally validate it and run the lidar; never raises.
     Returns ``status`` ("complete" or "failed"), ``duration_s`` [s] and as available ``sigma_m_s`` [m/s],
     ``checksum``, ``validation``, ``lidar`` and ``error`` (one line); a validator or lidar crash leaves the run complete.
     """

@@ -73,10 +73,8 @@ def docs(request: Request):
 
 @router.get("/health")
 async def health(state: ServiceState = Depends(get_state)):
-    """Liveness: the version, the runs queued or running, and the computations started since start-up.
-
-    A coroutine on the event loop: it needs no worker thread, so it answers while every thread computes.
-    """
+    """Liveness: the version, the runs queued or running, and the computations started since start-up (a coroutine:
+    it answers while every worker thread computes)."""
     with state.jobs.lock:
         active = len(state.jobs.active)
     return {"ok": True, "turbgen": __version__, "active": active, "computations": state.jobs.computations}
