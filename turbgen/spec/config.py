@@ -25,11 +25,8 @@ def load_schema(name: str) -> dict:
 
 
 def check_mapping(data, schema_name: str, where: str) -> dict:
-    """``data`` if it satisfies the schema ``schema_name``, else ParameterError '<where>: <key path>: <message>'.
-
-    The best-matching error is reported; a failed ``pattern`` gives the schema's description of what is
-    expected, not the regex.
-    """
+    """``data`` if it satisfies the schema ``schema_name``, else ParameterError '<where>: <key path>: <message>' of
+    the best-matching error (a failed ``pattern``: the schema's description, not the regex)."""
     validator = jsonschema.Draft202012Validator(load_schema(schema_name))
     err = jsonschema.exceptions.best_match(validator.iter_errors(data))
     if err is not None:
@@ -72,13 +69,8 @@ def _description(schema: dict, path) -> str | None:
 
 def read_config(path, schema_name: str | None = None) -> dict:
     """The top-level table of a TOML or JSON (``.json``) file, validated against ``schema_name`` if given.
-
-    Raises
-    ------
-    ParameterError
-        If the file cannot be read, is not a regular file or too large (turbgen.input_files), is not valid
-        TOML/JSON or nested deeper than MAX_NESTING, fails the schema, or (without one) holds no table.
-    """
+    ParameterError if the file cannot be read, is not a regular file or too large (turbgen.input_files), is not
+    valid TOML/JSON or nested deeper than MAX_NESTING, fails the schema, or (without one) holds no table."""
     p = Path(path)
     data = parse_document(read_input(p, CONFIG), "JSON" if p.suffix.lower() == ".json" else "TOML", f"config {p}")
     if schema_name is not None:
@@ -89,11 +81,8 @@ def read_config(path, schema_name: str | None = None) -> dict:
 
 
 def parse_document(text: bytes, kind: str, where: str):
-    """The value of the JSON or TOML (``kind``) document ``text``, nested at most MAX_NESTING deep.
-
-    ParameterError naming ``where`` for invalid text (or not UTF-8) or deeper nesting (a parser's
-    RecursionError included).
-    """
+    """The value of the JSON or TOML (``kind``) document ``text``; ParameterError naming ``where`` for invalid text
+    (or not UTF-8) or nesting deeper than MAX_NESTING (a parser's RecursionError included)."""
     nested = ParameterError(f"{where}: nested deeper than {MAX_NESTING} levels of tables/arrays")
     try:
         data = json.loads(text, parse_constant=_refuse_constant) if kind == "JSON" else tomllib.loads(text.decode())

@@ -110,11 +110,10 @@ def mean_wind_spec(spec, total: bool, where: str, folder: Path) -> MeanWind | No
 def sensor_fluctuations(f: PointSeries, s: PointSensor, U_m_s: float, hub_height_m: float) -> tuple[dict, float]:
     """The sensor's series as fluctuations [m/s] (component -> series), and the time-mean of the mean u removed [m/s].
 
-    With ``total_wind``, the mean wind (:meth:`MeanWind.fluctuation_uv`) at the sensor's height and y and
-    at the stored time T + x / U (when that slice reaches the turbine in a periodic export, as the exports
-    use it) is taken from u, and from v when it turns; a value missing in u or v is then missing in both.
-    ParameterError when the mean wind turns and the sensor lacks u or v, or the profile does not cover
-    its height. ``U_m_s`` [m/s] and ``hub_height_m`` [m] are the run's.
+    With ``total_wind``, the mean wind (:meth:`MeanWind.fluctuation_uv`) at the sensor's height and y and at the
+    stored time T + x / U (as the periodic exports use it) is taken from u, and from v when it turns (a value missing
+    in u or v is then missing in both). ParameterError when it turns and the sensor lacks u or v, or the profile
+    does not cover its height.
     """
     if not f.total_wind:
         return dict(s.series), 0.0
@@ -167,10 +166,8 @@ class ConstraintRequest:
 
 
 def split_constraint_keys(mapping: dict) -> tuple[dict, ConstraintRequest | None]:
-    """(the run mapping without the constraint keys, its ConstraintRequest or None without ``constrain``).
-
-    ParameterError for ``noise_m_s`` or ``conditional_mean`` without ``constrain``, or a bad noise.
-    """
+    """(the run mapping without the constraint keys, its ConstraintRequest or None without ``constrain``);
+    ParameterError for ``noise_m_s`` or ``conditional_mean`` without ``constrain``, or a bad noise."""
     rest = {k: v for k, v in mapping.items() if k not in CONSTRAINT_KEYS}
     files = mapping.get("constrain") or ()
     if isinstance(files, (str, Path)) or not isinstance(files, (list, tuple)):

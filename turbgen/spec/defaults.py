@@ -55,12 +55,9 @@ KAIMAL_GRID = {"nt": 4096, "dt_s": 0.5, "x_m": DEFAULT_PLANES_M, "ny": 31, "nz":
 
 
 def grid_from_mapping(given: Mapping | Grid | None, defaults: Mapping) -> Grid:
-    """The grid of a run mapping's ``grid`` table: missing keys take ``defaults``; dz_m defaults to dy_m.
-
-    ``given`` is the ``grid`` table (nt, dt_s [s], x_m [m upstream], ny, nz, dy_m, dz_m [m]), a Grid (returned as
-    is) or None; ``defaults`` MANN_GRID or KAIMAL_GRID. Sizes and spacings are checked against the run's ranges
-    (turbgen.theory.ranges), not the store grid's looser ones: ParameterError.
-    """
+    """The grid of a run mapping's ``grid`` table (or a Grid, returned as is): missing keys take ``defaults``
+    (MANN_GRID or KAIMAL_GRID), dz_m defaults to dy_m. ParameterError outside the run's ranges (turbgen.theory.ranges,
+    tighter than the store grid's)."""
     if isinstance(given, Grid):
         return given
     g = {**defaults, **(given or {})}

@@ -24,17 +24,8 @@ SPEED_STEP_M_S = 2.0
 
 @dataclass(frozen=True)
 class DlcSet:
-    """A DLC set: load case, class, speeds and seeds (validated at construction; ParameterError otherwise).
-
-    Parameters
-    ----------
-    dlc, iec_class : str
-        "1.1", "1.2" (NTM) or "1.3" (ETM); turbine class and turbulence category, e.g. "IIB".
-    v_in_m_s, v_out_m_s : float
-        Cut-in and cut-out hub speeds [m/s], 0.5 <= V_in <= V_out <= V_ref.
-    seeds : tuple of int
-        Random seeds, distinct.
-    """
+    """A DLC set (validated at construction; ParameterError otherwise): ``dlc`` "1.1", "1.2" (NTM) or "1.3" (ETM),
+    ``iec_class`` e.g. "IIB", cut-in and cut-out hub speeds [m/s] 0.5 <= V_in <= V_out <= V_ref, distinct seeds."""
 
     dlc: str
     iec_class: str
@@ -82,11 +73,8 @@ class DlcSet:
         return iec.etm_sigma1_m_s(V_hub_m_s, IEC_IREF[self.category], iec.V_REF_M_S[turbine])
 
     def run_mapping(self, model: str, V_hub_m_s: float, seed: int) -> dict:
-        """The run mapping of one field of ``model`` ("mann" or "kaimal") at hub speed ``V_hub_m_s`` [m/s] and ``seed``.
-
-        The neutral preset's keys with the load case's sigma1 (Mann: model sigma_u; Kaimal: sigma1, 0.8 sigma1,
-        0.5 sigma1 and the IEC length scales of the hub height).
-        """
+        """The run mapping of one field of ``model`` at hub speed ``V_hub_m_s`` [m/s] and ``seed``: the neutral
+        preset's keys with the load case's sigma1 (Mann: model sigma_u; Kaimal: 1, 0.8, 0.5 sigma1, IEC lengths)."""
         keys = dict(run_keys(model, "neutral", V_hub_m_s))
         s1 = self.sigma1_m_s(V_hub_m_s)
         keys.update(U_m_s=V_hub_m_s, seed=seed, turb_class=self.category)

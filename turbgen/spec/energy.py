@@ -14,10 +14,8 @@ def resolve_ae(shape: MannParams, U_m_s: float, *, ae: float | None = None, sigm
                ti: float | None = None, turb_class: str = "A") -> tuple[float, str]:
     """alpha*eps^(2/3) [m^(4/3) s^-2] of a Mann run and a line saying how it was chosen (recorded in the store).
 
-    The first given of ``ae`` (taken as is), ``sigma_u_m_s`` [m/s], ``ti`` [-] (sigma_u = ti U) and
-    ``turb_class`` (its NTM sigma_1 = Iref (0.75 U + 5.6) at ``U_m_s`` [m/s]) sets the level: for a target
-    sigma_u, ae from the variance of ``shape`` (its own ae ignored). ParameterError for a value outside
-    its range or an unknown class.
+    The first given of ``ae``, ``sigma_u_m_s`` [m/s], ``ti`` [-] (sigma_u = ti U) and ``turb_class`` (NTM sigma_1 =
+    Iref (0.75 U + 5.6)) sets it; for a target sigma_u, from the variance of ``shape`` (its own ae ignored).
     """
     if ae is not None:
         return ranges.check("ae", ae), "ae"

@@ -27,10 +27,8 @@ NWP_EXPONENT = 0.2  # normal wind profile exponent (Sect. 6.3.2.2)
 
 
 def parse_class(text: str) -> tuple[str, str]:
-    """("II", "B") from "IIB" (also "IA+", "III C"): turbine class I/II/III and turbulence category A+/A/B/C.
-
-    Raises ParameterError for anything else.
-    """
+    """("II", "B") from "IIB" (also "IA+", "III C"): turbine class I/II/III and turbulence category A+/A/B/C;
+    ParameterError for anything else."""
     m = re.fullmatch(r"\s*(III|II|I)\s*(A\+|A|B|C)\s*", str(text).upper())
     if not m:
         raise ParameterError(f"IEC class {text!r} is not I, II or III followed by A+, A, B or C (e.g. IIB)")
@@ -41,26 +39,12 @@ MIN_DT_S = 0.001  # finest row spacing [s], as the fields' --dt
 
 @dataclass(frozen=True)
 class IecTransient:
-    """One IEC event at hub speed V_hub, validated at construction.
+    """One IEC event at hub speed V_hub, validated at construction (ParameterError otherwise).
 
-    Parameters
-    ----------
-    kind, iec_class : str
-        "EOG", "EDC", "ECD", "EWS-V" or "EWS-H" (vertical / horizontal shear); turbine class and category, e.g. "IIB".
-    V_hub_m_s : float
-        Hub-height mean speed [m/s], in (0, V_ref] (below V_e1 = 1.12 V_ref: the EOG gust is positive).
-    hub_height_m, rotor_diameter_m : float
-        Hub height and rotor diameter D [m], > 0, the rotor clear of the ground.
-    start_s, duration_s : float
-        Start of the event and length of the file [s]; the event ends within the file.
-    dt_s, sign : float, int
-        Row spacing during the event [s], in [MIN_DT_S, T/4]; +1 or -1, the standard's "+-" (direction change or
-        shear sense), EOG +1 only.
-
-    Raises
-    ------
-    ParameterError
-        For a bad class or kind, values out of range, or an event outside the record.
+    ``kind`` "EOG", "EDC", "ECD", "EWS-V" or "EWS-H"; ``iec_class`` e.g. "IIB"; ``V_hub_m_s`` [m/s] in (0, V_ref]
+    (below V_e1 = 1.12 V_ref the EOG gust is positive); hub height and rotor diameter D [m], the rotor clear of the
+    ground; ``start_s``, ``duration_s`` [s]: the event ends within the file; ``dt_s`` row spacing during the event
+    [s] in [MIN_DT_S, T/4]; ``sign`` +1 or -1, the standard's "+-" (direction change or shear sense), EOG +1 only.
     """
 
     kind: str
@@ -158,10 +142,8 @@ class IecTransient:
         return out
 
     def columns(self) -> dict:
-        """The uniform-wind columns (keys ``COLUMNS``) at :meth:`times_s`, in s, m/s, deg, m/s, -, -, -, m/s.
-
-        The EWS shear is LinVShear / HorizShear = (speed change across D) / V_hub with RefLength = D.
-        """
+        """The uniform-wind columns (keys ``COLUMNS``) at :meth:`times_s`, in s, m/s, deg, m/s, -, -, -, m/s (EWS
+        shear: LinVShear / HorizShear = (speed change across D) / V_hub with RefLength = D)."""
         t = self.times_s()
         ev = self.at(t)
         zero = np.zeros_like(t)

@@ -42,41 +42,16 @@ _INPUT_KEYS = set(UNITS) - set(DERIVED_KEYS)
 
 @dataclass(frozen=True)
 class KaimalRun:
-    """A Kaimal 4D field: spectra + yz coherence (``kaimal``), grid, speed, seed, longitudinal model.
+    """A Kaimal 4D field (Guo et al. 2023, Eq. 11-12, 18): spectra + yz coherence, grid, U, seed, longitudinal model.
 
-    Parameters
-    ----------
-    kaimal : KaimalParams
-        sigma_u, sigma_v, sigma_w [m/s], Kaimal lengths L1..L3 [m], a_yz [-], Lc [m] (Guo et al. 2023, Eq. 11-12).
-    grid, U_m_s, seed, hub_height_m : Grid, float, int, float
-        The run's grid, hub-height mean wind speed [m/s], random seed, hub height [m] (optional).
-    long_model : {"exp", "simley-pao", "kristensen"}, optional
-        Eq. 18 with a_x, b_x (Guo et al. 2023; defaults Table 2 neutral), Eq. 18 with the Simley and Pao
-        (2015) parameters, or Kristensen (1979).
-    a_x, b_x : float, optional
-        Eq. 18 parameters a_x [-] and b_x [1/m], "exp" only.
-    long_components : {"u", "uvw"}, optional
-        Components given the longitudinal coherence ("u": evoTurb).
-    rescale : bool, optional
-        Scale each spectrum so the expected variance is the nominal sigma^2 (else the resolved-band
-        integral of Eq. 11).
-    vw_coherence : {"white", "exp"}, optional
-        v, w incoherent in yz (IEC / TurbSim IECKAI) or given the u coherence (extension).
-    turb_class : str, optional
-        IEC class the sigmas came from (recorded only).
-    spectrum : LineSpectrum, optional
-        User spectra of u, v, w on the grid's lines (turbgen.theory.user_spectra) in place of Kaimal's; the
-        sigmas become the spectrum's (its line variances summed) and, with L1, enter only the Simley-Pao and
-        Kristensen coherences.
-    coherence : LineCoherence, optional
-        User yz coherence on the grid's lines (turbgen.theory.user_coherence) in place of the IEC exponential
-        (u, and v, w with vw_coherence "exp").
-
-    Raises
-    ------
-    ParameterError
-        For a value outside its range, an unknown choice, a_x / b_x with another model, or ``rescale``
-        with ``spectrum``.
+    ``kaimal``: sigma_u,v,w [m/s], L1..L3 [m], a_yz [-], Lc [m]. ``long_model``: "exp" (Eq. 18 with ``a_x`` [-],
+    ``b_x`` [1/m]; defaults Table 2 neutral), "simley-pao" (Eq. 18 with Simley and Pao 2015) or "kristensen"
+    (Kristensen 1979). ``long_components`` "u" (evoTurb) or "uvw". ``rescale``: expected variance = nominal sigma^2
+    (else the resolved-band integral of Eq. 11). ``vw_coherence`` "white" (IEC / TurbSim IECKAI) or "exp" (u's).
+    ``turb_class``: recorded only. ``spectrum`` / ``coherence``: user LineSpectrum / LineCoherence on the grid's
+    lines in place of Kaimal's / the IEC exponential (the sigmas become the spectrum's; L1 enters only the
+    Simley-Pao and Kristensen coherences). ParameterError for a value outside its range, an unknown choice, a_x /
+    b_x with another model, or ``rescale`` with ``spectrum``.
     """
 
     kaimal: KaimalParams
@@ -149,11 +124,8 @@ class KaimalRun:
         return {}
 
     def default_store_name(self, preset: str | None = None, preset_keys: Mapping | None = None) -> str:
-        """A readable store name, e.g. kaimal_U16_A_s1.zarr or kaimal_U16_stable_s1.zarr (``preset`` named).
-
-        A run that differs from the named one (U, class or preset with its ``preset_keys``, seed) in anything
-        else gets ``_p<8 hex digits>`` of everything that determines the field, so two fields never share it.
-        """
+        """A readable store name, e.g. kaimal_U16_A_s1.zarr or kaimal_U16_stable_s1.zarr (``preset`` named); a run
+        that differs from the named one in anything else gets ``_p<8 hex digits>`` of all that determines the field."""
         label = preset or self.turb_class or "sigma"
         base = f"kaimal_U{self.U_m_s:g}_{label}_s{self.seed}"
         named = {"U_m_s": self.U_m_s, "seed": self.seed}
@@ -167,11 +139,8 @@ class KaimalRun:
         return f"{base}_p{run_digest(self.parameters(), self.grid)}.zarr"
 
     def parameters(self) -> dict:
-        """Every input parameter as JSON values, the keys :meth:`from_mapping` reads back.
-
-        A user spectrum appears as its band means on the lines (LineSpectrum.to_table), a user coherence as
-        LineCoherence.to_table.
-        """
+        """Every input parameter as JSON values, the keys :meth:`from_mapping` reads back (user spectrum and
+        coherence as their ``to_table``)."""
         k = self.kaimal
         return {
             "U_m_s": self.U_m_s,
@@ -193,11 +162,8 @@ class KaimalRun:
         }
 
     def to_attrs(self, derived: Mapping | None = None) -> dict:
-        """The store attributes (model, parameters, derived, units, seed, U_m_s, hub_height_m; not the grid).
-
-        ``derived`` holds what the generator worked out (turbgen.runs.kaimal.store_attrs), recorded with
-        effective_long_parameters; None parameters are left out.
-        """
+        """The store attributes (model, parameters, derived: what the generator worked out, units, seed, U_m_s,
+        hub_height_m; not the grid); None parameters are left out."""
         params = {key: v for key, v in self.parameters().items() if v is not None}
         out = {"effective_long_parameters": self.effective_long_parameters(), **(derived or {})}
         return {
@@ -212,10 +178,8 @@ class KaimalRun:
 
     @classmethod
     def from_attrs(cls, attrs: Mapping) -> "KaimalRun":
-        """The run that wrote a store, from its ``parameters`` and ``grid`` attributes (derived values ignored).
-
-        Raises ParameterError if the attributes lack the Kaimal run or hold invalid values.
-        """
+        """The run that wrote a store, from its ``parameters`` and ``grid`` attributes (derived values ignored);
+        ParameterError if they lack the Kaimal run or hold invalid values."""
         try:
             inputs = {k: v for k, v in attrs["parameters"].items() if k not in DERIVED_KEYS}
             return cls.from_mapping({**inputs, "grid": attrs["grid"]})
@@ -224,12 +188,8 @@ class KaimalRun:
 
     @classmethod
     def from_mapping(cls, d: Mapping) -> "KaimalRun":
-        """A run from a (schema-valid) mapping: the keys of :meth:`parameters` plus ``grid``.
-
-        Missing keys take turbgen.spec.defaults; ``turb_class`` and ``hub_height_m`` give the IEC sigmas and
-        lengths unless given; ``spectrum`` is any form turbgen.spec.user_spectrum.line_spectrum takes.
-        ParameterError for an unknown key or a value outside its range.
-        """
+        """A run from a (schema-valid) mapping of :meth:`parameters`' keys and ``grid`` (missing: turbgen.spec.defaults,
+        the IEC sigmas and lengths of ``turb_class`` and ``hub_height_m``); ParameterError for a bad key or value."""
         unknown = set(d) - _INPUT_KEYS - {"grid"}
         if unknown:
             raise ParameterError(f"kaimal config: unknown keys {sorted(unknown)}")
@@ -247,17 +207,8 @@ class KaimalRun:
 
 def kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float = 90.0, sigma_m_s=None,
                   length_scales_m=None, a_yz: float | None = None, lc_m: float | None = None) -> KaimalParams:
-    """IEC Kaimal parameters of a class and hub height, any of them replaced by an explicit value.
-
-    Parameters
-    ----------
-    U_m_s, turb_class, hub_height_m : float, str, float
-        Hub-height mean wind speed [m/s], IEC class "A+", "A", "B" or "C" (optional), hub height [m] (optional).
-    sigma_m_s, length_scales_m : sequence of float, optional
-        (sigma_u, sigma_v, sigma_w) [m/s] and Kaimal L1, L2, L3 [m]; None: the IEC values.
-    a_yz, lc_m : float, optional
-        yz coherence decay [-] and scale Lc [m]; None: the IEC values.
-    """
+    """IEC Kaimal parameters at hub speed ``U_m_s`` [m/s] of class ``turb_class`` ("A+", "A", "B", "C") and hub
+    height [m]; ``sigma_m_s`` [m/s], ``length_scales_m`` L1..L3 [m], ``a_yz`` [-], ``lc_m`` [m] replace IEC's."""
     iec = iec_kaimal_params(U_m_s, turb_class, hub_height_m)
     return KaimalParams(
         sigma_m_s=tuple(sigma_m_s) if sigma_m_s is not None else iec.sigma_m_s,

@@ -29,18 +29,9 @@ _INPUT_KEYS = set(UNITS) | {"sigma_u_m_s", "ti", "turb_class", "grid"}
 
 @dataclass(frozen=True)
 class MannRun:
-    """Everything that determines a Mann space-time field (Guo et al. 2023, Sect. 2.3.1).
-
-    Parameters
-    ----------
-    params, grid : MannParams, Grid
-        Mann parameters and the run's grid (dx = U dt).
-    U_m_s, seed, hub_height_m : float, int, float
-        Mean wind speed [m/s], random seed, hub height [m] (metadata for exports).
-    pad_yz, ae_from : int, str, optional
-        The synthesis box is pad_yz times wider in y and z than the output (cropped); how ae was chosen (text,
-        recorded in the store).
-    """
+    """Everything that determines a Mann space-time field (Guo et al. 2023, Sect. 2.3.1): parameters, grid (dx = U
+    dt), U [m/s], seed, hub height [m] (for exports), ``pad_yz`` (synthesis box that many times wider in y and z,
+    cropped) and ``ae_from`` (how ae was chosen, recorded in the store)."""
 
     params: MannParams
     grid: Grid
@@ -84,22 +75,16 @@ class MannRun:
 
     @classmethod
     def from_attrs(cls, attrs: Mapping) -> "MannRun":
-        """The run that wrote a store, from its ``parameters``, ``derived`` and ``grid`` attributes.
-
-        Stores with ``ae_from`` among the parameters are read too; ParameterError if the attributes lack the
-        Mann run or hold invalid values.
-        """
+        """The run that wrote a store, from its ``parameters``, ``derived`` and ``grid`` attributes (also with
+        ``ae_from`` among the parameters); ParameterError if they lack the Mann run or hold invalid values."""
         try:
             return cls.from_mapping({**attrs["parameters"], **attrs.get("derived", {}), "grid": attrs["grid"]})
         except (KeyError, TypeError) as exc:
             raise ParameterError(f"store parameters lack the Mann run ({exc}); not a turbgen Mann store") from None
 
     def default_store_name(self) -> str:
-        """A readable store name from the parameters, e.g. mann_U16_L49_G3.1_evo400_s1.zarr.
-
-        A run that differs from the named one in anything the name does not show gets ``_p<8 hex digits>``
-        of everything that determines the field, so two fields never share it.
-        """
+        """A readable store name, e.g. mann_U16_L49_G3.1_evo400_s1.zarr; a run that differs from the named one in
+        anything the name does not show gets ``_p<8 hex digits>`` of all that determines the field."""
         p = self.params
         evo = "frozen" if p.evo_time_s is None else f"{p.evo_time_s:g}"
         base = f"mann_U{self.U_m_s:g}_L{p.length_scale_m:g}_G{p.gamma:g}_evo{evo}_s{self.seed}"
@@ -111,14 +96,9 @@ class MannRun:
 
     @classmethod
     def from_mapping(cls, d: Mapping) -> "MannRun":
-        """A run from a (schema-valid) mapping; missing keys take turbgen.spec.defaults.
-
-        The keys are those of :meth:`parameters` (ae_from only with ae), ``sigma_u_m_s`` [m/s], ``ti`` [-],
-        ``turb_class`` and ``grid`` (turbgen.spec.defaults.grid_from_mapping). The energy level
-        (turbgen.spec.energy.resolve_ae): ``ae`` if given, else for sigma_u = ``sigma_u_m_s``, else ``ti`` U,
-        else the IEC NTM sigma_1 of ``turb_class`` at U. ParameterError for an unknown key or a value outside
-        its range.
-        """
+        """A run from a (schema-valid) mapping of :meth:`parameters`' keys (ae_from only with ae), ``sigma_u_m_s``
+        [m/s], ``ti`` [-], ``turb_class`` and ``grid``; missing keys take turbgen.spec.defaults, the energy level
+        turbgen.spec.energy.resolve_ae's. ParameterError for an unknown key or a value outside its range."""
         unknown = set(d) - _INPUT_KEYS
         if unknown:
             raise ParameterError(f"mann config: unknown keys {sorted(unknown)}")

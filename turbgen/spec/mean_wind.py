@@ -67,22 +67,12 @@ def _column(name: str, values, n: int, check=check_finite) -> tuple:
 class MeanWind:
     """Mean-wind profile, veer and hub-height time history (validated at construction).
 
-    Parameters
-    ----------
-    profile, shear_exponent, roughness_m, displacement_m : str, float
-        "power" (alpha [-] in [-1, 1]), "log" (z0 > 0 and d >= 0 [m]) or "table" (the ``table_*`` columns).
-    table_heights_m, table_speeds_m_s, table_directions_deg : tuple of float
-        Heights above ground [m] (> 0, strictly increasing), speeds [m/s] (>= 0; only the ratio to hub
-        height counts) and optionally directions [deg] (veer = direction(h) - direction(hub)).
-    veer_deg_per_m : float
-        Linear veer rate [deg/m], |rate| <= 5; negative = clockwise with height (northern hemisphere).
-    history_times_s, history_speeds_m_s, history_directions_deg : tuple of float
-        Hub-height history: strictly increasing times at the turbine [s], speeds [m/s] (>= 0), optional
-        directions [deg]; linear between the times, the end values held outside them.
-    table_label, history_label : str
-        Where the table and the history came from (a file name), for descriptions.
-    transient : IecTransient, optional
-        An IEC 61400-1 transient on the mean (the store's V_hub and hub height); excludes a history.
+    ``profile`` "power" (``shear_exponent`` in [-1, 1]), "log" (``roughness_m`` > 0, ``displacement_m`` >= 0) or
+    "table": heights above ground [m] (increasing), speeds [m/s] (only the ratio to hub height counts), optional
+    directions [deg] (veer = direction(h) - direction(hub)). ``veer_deg_per_m`` |rate| <= 5, negative = clockwise
+    with height. History: increasing times at the turbine [s], speeds [m/s], optional directions [deg]; linear
+    between, end values held. ``*_label``: source file names for descriptions. ``transient``: an IecTransient on the
+    mean (the store's V_hub and hub height); excludes a history.
     """
 
     profile: str = "power"
@@ -164,11 +154,8 @@ class MeanWind:
         return self.has_history or self.turns or self.transient is not None
 
     def speed_ratio(self, heights_m, hub_height_m: float) -> np.ndarray:
-        """Profile ratio U(h) / U(h_hub) [-] at ``heights_m`` [m].
-
-        Raises ParameterError for a height (or the hub) outside the table or at or below d + z0 of the log
-        law, or a table speed of 0 at hub height.
-        """
+        """Profile ratio U(h) / U(h_hub) [-] at ``heights_m`` [m]; ParameterError for a height (or the hub) outside
+        the table or at or below d + z0 of the log law, or a table speed of 0 at hub height."""
         h = np.asarray(heights_m, dtype=float)
         if self.profile == "power":
             return formulas.power_law_ratio(h, hub_height_m, self.shear_exponent)
@@ -202,10 +189,8 @@ class MeanWind:
         return formulas.linear_veer_deg(h, hub_height_m, self.veer_deg_per_m)
 
     def hub_history(self, times_s, U_m_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """Hub speed [m/s] and direction [deg] at ``times_s`` [s] at the turbine.
-
-        The history's (linear, end values held), else ``U_m_s`` with 0, or with a transient's direction.
-        """
+        """Hub speed [m/s] and direction [deg] at ``times_s`` [s] at the turbine: the history's, else ``U_m_s`` with
+        0 or a transient's direction."""
         t = np.asarray(times_s, dtype=float)
         if not self.has_history:
             turn = np.zeros(t.shape) if self.transient is None else -self.transient.at(t)["direction_deg"]
@@ -232,17 +217,9 @@ class MeanWind:
         return speed * self.speed_ratio(h, hub_height_m), shift, turn
 
     def full_uv(self, u, v, times_s, y_m, heights_m, U_m_s: float, hub_height_m: float):
-        """Full (u, v) [m/s] from fluctuations by the module's formula (v unchanged without a turn).
-
-        Parameters
-        ----------
-        u, v : array_like
-            Fluctuations [m/s].
-        times_s, y_m, heights_m : array_like
-            Time at the turbine [s], lateral position [m] (+y left), height above ground [m]; broadcast with u.
-        U_m_s, hub_height_m : float
-            The store's mean speed [m/s] and hub height [m].
-        """
+        """Full (u, v) [m/s] from fluctuations by the module's formula (v unchanged without a turn), at time at the
+        turbine [s], y [m] (+y left) and height above ground [m] (broadcast with u), the store's U [m/s] and hub
+        height [m]."""
         h = np.asarray(heights_m, dtype=float)
         profile, shift, turn = self._added(np.asarray(times_s, dtype=float), y_m, h, U_m_s, hub_height_m)
         u = u + profile
@@ -252,10 +229,8 @@ class MeanWind:
         return formulas.rotate_horizontal(u, v, self.veer_deg(h, hub_height_m) + turn)
 
     def fluctuation_uv(self, u, v, times_s, y_m, heights_m, U_m_s: float, hub_height_m: float):
-        """Fluctuations (u', v') [m/s] from total (u, v): the inverse of :meth:`full_uv`, same arguments.
-
-        ``v`` may be None when the mean wind does not turn (then returned as given).
-        """
+        """Fluctuations (u', v') [m/s] from total (u, v): the inverse of :meth:`full_uv` (``v`` may be None when the
+        mean wind does not turn)."""
         h = np.asarray(heights_m, dtype=float)
         profile, shift, turn = self._added(np.asarray(times_s, dtype=float), y_m, h, U_m_s, hub_height_m)
         if self.turns:
@@ -280,11 +255,8 @@ class MeanWind:
                 raise ParameterError(f"{what} outside the record [{first_s:g}, {last_s:g}] s seen at the turbine")
 
     def describe(self) -> str:
-        """One short line: profile, veer, history, transient (the .bts description, the .sum title, `turbgen info`).
-
-        E.g. "log law z0 = 0.03 m, d = 0 m; veer -0.1 deg/m; hub history hist.csv (41 points); angles ccw from
-        above"; a transient's direction change is named clockwise, InflowWind's sense.
-        """
+        """One short line: profile, veer, history, transient (the .bts description, the .sum title, `turbgen info`);
+        a transient's direction change is named clockwise, InflowWind's sense."""
         if self.profile == "power":
             out = [f"power-law shear alpha = {self.shear_exponent:g}"]
         elif self.profile == "log":

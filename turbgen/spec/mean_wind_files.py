@@ -18,10 +18,8 @@ from turbgen.spec.mean_wind import MeanWind
 
 
 def read_columns(path, kind: InputKind, names: tuple[str, ...]) -> list[tuple[float, ...]]:
-    """The columns of the CSV ``path``, a file of ``kind`` (turbgen.input_files: its name and size cap).
-
-    Also raises ParameterError when the file cannot be read, is not a regular file or is too large.
-    """
+    """The columns of the CSV ``path``, a file of ``kind`` (turbgen.input_files: its name and size cap); also
+    ParameterError when the file cannot be read, is not a regular file or is too large."""
     return columns_from_lines(read_input_text(path, kind).splitlines(), f"{kind.name} {str(path)!r}", names)
 
 
@@ -55,11 +53,8 @@ def columns_from_lines(lines, where: str, names: tuple[str, ...], header: bool =
 
 
 def profile_fields(text: str, inline: bool = False) -> dict:
-    """:class:`MeanWind` keyword arguments of a profile option: ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``.
-
-    With ``inline``, ``table:ROWS`` holds the rows (``z,U[,dir];...``) instead of a file name. ParameterError
-    for an unknown kind, a malformed value or an unreadable table.
-    """
+    """:class:`MeanWind` keyword arguments of a profile option: ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``
+    (``inline``: ``table:z,U[,dir];...``). ParameterError for an unknown kind, a bad value or an unreadable table."""
     kind, _, value = text.partition(":")
     kind = kind.strip().lower()
     if kind == "power":
@@ -94,12 +89,9 @@ def profile_fields(text: str, inline: bool = False) -> dict:
 
 def mean_wind_from_options(profile: str | None = None, veer_deg_per_m: float | None = None,
                            history=None, transient=None, *, inline: bool = False) -> MeanWind | None:
-    """The MeanWind of the export options, or None when none is given (the exports' default power law).
-
-    ``profile`` as :func:`profile_fields`, ``veer_deg_per_m`` [deg/m], ``history`` a CSV of t [s], U [m/s]
-    [, direction (deg)] at hub height, ``transient`` an IecTransient; with ``inline`` the table and history hold
-    their rows (``a,b[,c];...``). ParameterError for a malformed option, unreadable file or value out of range.
-    """
+    """The MeanWind of the export options, or None when none is given (the exports' default power law): ``profile``
+    as :func:`profile_fields`, ``veer_deg_per_m`` [deg/m], ``history`` a CSV of t [s], U [m/s] [, direction (deg)]
+    (``inline``: its rows), ``transient`` an IecTransient. ParameterError for a bad option, file or value."""
     if profile is None and veer_deg_per_m is None and history is None and transient is None:
         return None
     fields = profile_fields(profile, inline) if profile is not None else {}

@@ -85,11 +85,8 @@ def declaration(name: str, what: str = "model") -> ModelDeclaration:
 
 
 def resolve(reference: str, layer: str):
-    """The attribute ``reference`` (``"turbgen.<layer>.<module>:<attribute>"``) names, imported from ``layer``.
-
-    ``layer`` ("spec", "runs", "validation", "virtual_lidar", "cli", ...) is the caller's own or one below it;
-    ValueError for a reference outside it (a wrong declaration, not user input).
-    """
+    """The attribute ``reference`` (``"turbgen.<layer>.<module>:<attribute>"``) names, imported from ``layer`` (the
+    caller's own or one below it); ValueError for a reference outside it (a wrong declaration, not user input)."""
     module, _, attribute = reference.partition(":")
     if not module.startswith(f"turbgen.{layer}.") or not attribute:
         raise ValueError(f"model reference {reference!r} is not a turbgen.{layer} attribute")

@@ -25,13 +25,9 @@ def mann_params_for(preset: str | StabilityPreset, U_m_s: float, *, user: Mappin
                     ae: float | None = None, length_scale_m: float | None = None, gamma: float | None = None,
                     evo_time_s: float | None = None, factor1: float | None = None, lifetime: str | None = None,
                     factor2: float | None = None) -> MannParams:
-    """MannParams of ``preset`` at U_m_s; explicit (non-None) arguments override the preset.
-
-    Unless ``ae`` is given, alpha*eps^(2/3) is re-derived so that the model sigma_u equals the IEC NTM
-    sigma_1 = Iref (0.75 U + 5.6) of the preset's class (Guo et al. 2023, Sect. 2.4), as MannRun.from_mapping
-    resolves :func:`mann_run_keys`. Overrides: ae [m^(4/3) s^-2], L [m], Gamma [-], gamma [s], factor1/2 [-],
-    lifetime model.
-    """
+    """MannParams of ``preset`` at U_m_s; explicit (non-None) arguments override the preset. Unless ``ae`` is given,
+    the model sigma_u is the IEC NTM sigma_1 = Iref (0.75 U + 5.6) of the preset's class (Guo et al. 2023, Sect.
+    2.4), as MannRun.from_mapping resolves :func:`mann_run_keys`."""
     given = {"ae": ae, "length_scale_m": length_scale_m, "gamma": gamma, "evo_time_s": evo_time_s,
              "factor1": factor1, "lifetime": lifetime, "factor2": factor2}
     mapping = {**mann_run_keys(preset, user=user), "U_m_s": U_m_s}
@@ -45,12 +41,8 @@ def kaimal_settings_for(preset: str | StabilityPreset, U_m_s: float, *,
                         length_scales_m: tuple[float, float, float] | None = None, a_yz: float | None = None,
                         lc_m: float | None = None, a_x: float | None = None,
                         b_x: float | None = None) -> KaimalSettings:
-    """KaimalSettings of ``preset`` at U_m_s; explicit arguments override the preset.
-
-    sigma_1 = Iref (0.75 U + 5.6) (IEC class of the preset), sigma_2,3 = sigma_1 x the preset's ratios;
-    exponential longitudinal coherence (Eq. 18) with the preset's Table 2 a_x, b_x. Overrides: sigmas
-    [m/s], L1..L3 [m], a_yz [-], Lc [m], a_x [-], b_x [1/m].
-    """
+    """KaimalSettings of ``preset`` at U_m_s; explicit arguments override the preset. sigma_1 = Iref (0.75 U + 5.6)
+    (the preset's class), sigma_2,3 = sigma_1 x its ratios; Eq. 18 with its Table 2 a_x, b_x (Guo et al. 2023)."""
     p = _resolve(preset, user)
     if p.kaimal is None:
         raise ParameterError(f"preset {p.name!r} has no Kaimal parameters")
@@ -64,11 +56,8 @@ def kaimal_settings_for(preset: str | StabilityPreset, U_m_s: float, *,
 
 
 def mann_run_keys(preset: str | StabilityPreset, *, user: Mapping[str, StabilityPreset] | None = None) -> dict:
-    """The keys of a Mann run mapping (MannRun.from_mapping) that ``preset`` sets.
-
-    length_scale_m, gamma, evo_time_s, factor1, lifetime and turb_class: the run derives ae for the
-    class's sigma_1 at its U (the ae of :func:`mann_params_for`).
-    """
+    """The keys of a Mann run mapping that ``preset`` sets: length_scale_m, gamma, evo_time_s, factor1, lifetime and
+    turb_class (the run derives ae for the class's sigma_1 at its U, as :func:`mann_params_for`)."""
     p = _resolve(preset, user)
     if p.mann is None:
         raise ParameterError(f"preset {p.name!r} has no Mann parameters")
@@ -79,11 +68,8 @@ def mann_run_keys(preset: str | StabilityPreset, *, user: Mapping[str, Stability
 
 def kaimal_run_keys(preset: str | StabilityPreset, U_m_s: float, *, user: Mapping[str, StabilityPreset] | None = None,
                     turb_class: str | None = None) -> dict:
-    """The keys of a Kaimal run mapping (KaimalRun.from_mapping) that ``preset`` sets at U_m_s.
-
-    sigma_m_s, length_scales_m, a_yz, lc_m, long_model, a_x, b_x; ``turb_class`` overrides the preset's
-    class, which sets sigma_1.
-    """
+    """The keys of a Kaimal run mapping that ``preset`` sets at U_m_s: sigma_m_s, length_scales_m, a_yz, lc_m,
+    long_model, a_x, b_x (``turb_class`` overrides the preset's class, which sets sigma_1)."""
     p = _resolve(preset, user)
     if turb_class is not None:
         p = replace(p, turb_class=turb_class)
@@ -94,10 +80,8 @@ def kaimal_run_keys(preset: str | StabilityPreset, U_m_s: float, *, user: Mappin
 
 def run_keys(model: str, preset: str | StabilityPreset, U_m_s: float, *,
              user: Mapping[str, StabilityPreset] | None = None, turb_class: str | None = None) -> dict:
-    """The run-mapping keys ``preset`` sets for ``model`` ("mann" or "kaimal"; another raises ParameterError).
-
-    :func:`mann_run_keys` (``preset`` and ``user`` only) or :func:`kaimal_run_keys`.
-    """
+    """The run-mapping keys ``preset`` sets for ``model``: :func:`mann_run_keys` or :func:`kaimal_run_keys`
+    (ParameterError for another model)."""
     if model == "mann":
         return mann_run_keys(preset, user=user)
     if model == "kaimal":

@@ -28,17 +28,9 @@ from turbgen.theory.params import KaimalParams, MannParams
 
 @dataclass(frozen=True)
 class MannPreset:
-    """Mann parameters of a stability class (speed-independent part; ae follows U).
-
-    Parameters
-    ----------
-    length_scale_m, gamma, evo_time_s : float
-        L [m], Gamma [-] and evolution time gamma [s].
-    factor1, lifetime : float, {"guo", "mann"}, optional
-        The small-k slope of the Guo lifetime is -factor1 [-]; the lifetime model.
-    ae_ref : float, optional
-        Table 1 alpha*eps^(2/3) at 16 m/s [m^(4/3) s^-2] (> 0), for comparison only.
-    """
+    """Mann parameters of a stability class (speed-independent part; ae follows U): L [m], Gamma [-], evolution
+    time gamma [s], -factor1 [-] the small-k slope of the Guo lifetime, the lifetime model ("guo" or "mann") and
+    ``ae_ref``, Table 1's alpha*eps^(2/3) at 16 m/s [m^(4/3) s^-2], for comparison only."""
 
     length_scale_m: float
     gamma: float
@@ -55,15 +47,8 @@ class MannPreset:
 
 @dataclass(frozen=True)
 class KaimalPreset:
-    """Kaimal parameters of a stability class (sigma_1 follows U; ratios, scales and coherences fixed).
-
-    Parameters
-    ----------
-    sigma_ratios, length_scales_m : tuple of float
-        sigma_1..3 / sigma_1 [-] and Kaimal L1..L3 [m].
-    a_yz, lc_m, a_x, b_x : float
-        yz coherence a_yz [-] and Lc [m]; Eq. 18 a_x [-] and b_x [1/m] (>= 0).
-    """
+    """Kaimal parameters of a stability class (sigma_1 follows U): sigma_1..3 / sigma_1 [-], L1..L3 [m], yz
+    coherence a_yz [-] and Lc [m], Eq. 18 a_x [-] and b_x [1/m] (>= 0)."""
 
     sigma_ratios: tuple[float, float, float]
     length_scales_m: tuple[float, float, float]
@@ -82,15 +67,8 @@ class KaimalPreset:
 
 @dataclass(frozen=True)
 class StabilityPreset:
-    """A named stability class: Mann and/or Kaimal parameters, and the IEC class that sets the TI.
-
-    Parameters
-    ----------
-    name, mann, kaimal : str, MannPreset or None, KaimalPreset or None
-        Preset name and the models' parameters (at least one given).
-    turb_class, source : str, optional
-        IEC class "A+", "A", "B" or "C"; where the numbers come from.
-    """
+    """A named stability class: Mann and/or Kaimal parameters (at least one), the IEC class ("A+", "A", "B" or "C")
+    that sets the TI, and where the numbers come from (``source``)."""
 
     name: str
     mann: MannPreset | None

@@ -44,15 +44,9 @@ def merge_run_inputs(
 ) -> dict:
     """The run mapping of one run, with its ``grid`` table: the run file's keys, then the preset's, then the given ones.
 
-    Parameters
-    ----------
-    file_mapping, given, grid_given : Mapping
-        The run file's content (schema-checked) or None; the user's run keys (not None) and ``grid`` keys.
-    preset_keys, replaces : callable, Mapping, optional
-        ``preset_keys(file mapping, given)`` -> the preset's run keys (None without a preset); given key -> keys
-        it removes from the run file and the preset (one energy level, one source).
-    x_m : sequence of float, optional
-        Plane positions [m upstream]; None keeps the file's or the default.
+    ``preset_keys(file mapping, given)``: the preset's run keys (None without a preset); ``replaces``: given key ->
+    keys it removes from the run file and the preset (one energy level, one source); ``x_m``: plane positions [m
+    upstream] (None keeps the file's or the default).
     """
     mapping = dict(file_mapping or {})
     grid = dict(mapping.pop("grid", {}))
@@ -68,12 +62,9 @@ def merge_run_inputs(
 
 
 def range_positions(text: str, name: str, limit: int) -> list[float]:
-    """'start:stop:step' [m] -> start, start + step, ... <= stop (1e-9 relative tolerance), rounded to 9 decimals.
-
-    The rule of the CLI's ``--gates``, so both give the same plane positions to the bit. ParameterError for
-    a malformed text, step <= 0, stop < start, a non-finite number or more than ``limit`` values
-    (``name`` names the input).
-    """
+    """'start:stop:step' [m] -> start, start + step, ... <= stop (1e-9 relative tolerance), rounded to 9 decimals
+    as the CLI's ``--gates``. ParameterError naming ``name`` for a malformed text, step <= 0, stop < start, a
+    non-finite number or more than ``limit`` values."""
     import math
 
     from turbgen.errors import ParameterError

@@ -72,12 +72,9 @@ def _from_mapping(value: Mapping) -> tuple:
 
 
 def line_spectrum(value, grid: Grid) -> LineSpectrum | None:
-    """The band means of ``value`` on ``grid``'s lines (None: no user spectrum).
-
-    ``value`` is a CSV path; a mapping of ``f_hz``, ``S_u``, ``S_v``, ``S_w`` (what a store records); four
-    arrays; a callable ``S(f_hz) -> (3, n)`` [m^2/s]; or a LineSpectrum of the same record. ParameterError
-    for anything else, or a table or callable LineSpectrum refuses.
-    """
+    """The band means of ``value`` on ``grid``'s lines (None: no user spectrum): a CSV path, a mapping of ``f_hz``,
+    ``S_u``, ``S_v``, ``S_w`` (a store's record), four arrays, a callable ``S(f_hz) -> (3, n)`` [m^2/s] or a
+    LineSpectrum of the same record. ParameterError for anything else or what LineSpectrum refuses."""
     if value is None:
         return None
     if isinstance(value, LineSpectrum):
@@ -105,27 +102,10 @@ def line_spectrum(value, grid: Grid) -> LineSpectrum | None:
 
 
 def line_coherence(value, grid: Grid, U_m_s: float) -> LineCoherence | None:
-    """The yz coherence ``value`` on ``grid``'s lines (turbgen.theory.user_coherence).
-
-    Parameters
-    ----------
-    value : None, LineCoherence, str, os.PathLike, Mapping or callable
-        A mapping of ``f_hz``, ``r_m``, ``coh`` (the form a store records), a CSV file of it
-        (:func:`read_coherence_csv`), or a callable ``coh(f_hz, r_m, U_m_s)`` [-] evaluated on the lines x the
-        grid's separations. None: the IEC exponential coherence.
-    grid, U_m_s : Grid, float
-        The run's grid and mean wind speed [m/s] (given to a callable).
-
-    Returns
-    -------
-    LineCoherence or None
-        The coherence the run samples.
-
-    Raises
-    ------
-    ParameterError
-        For a value of none of these forms, or one LineCoherence refuses.
-    """
+    """The LineCoherence the run samples (turbgen.theory.user_coherence) of ``value`` on ``grid``'s lines (None: the
+    IEC exponential): a mapping of ``f_hz``, ``r_m``, ``coh`` (a store's record), a CSV file of it
+    (:func:`read_coherence_csv`), or a callable ``coh(f_hz, r_m, U_m_s [m/s])`` [-] evaluated on the lines x the
+    grid's separations. ParameterError for anything else or what LineCoherence refuses."""
     if value is None or isinstance(value, LineCoherence) and (value.nt, value.dt_s) == (grid.nt, grid.dt_s):
         return value
     if isinstance(value, (str, os.PathLike)):
