@@ -31,13 +31,8 @@ def mann_lifetime(kL):
 
 
 def guo_lifetime(kL, factor1: float = 1.0):
-    """Guo lifetime tau~ = a (kL)^b1 ((kL)^10 + 1)^((b2 - b1)/10) [-] (Guo et al. 2023, Eq. 6-7).
-
-    b1 = -factor1, b2 = -2/3.
-
-    ``kL`` is |k| L [-] (array_like), ``factor1`` the small-k slope magnitude; evaluated in logarithms so
-    large kL stays finite; inf where kL <= 0.
-    """
+    """Guo lifetime tau~ = a (kL)^b1 ((kL)^10 + 1)^((b2 - b1)/10) [-] (Guo et al. 2023, Eq. 6-7), b1 = -factor1,
+    b2 = -2/3, of ``kL`` = |k| L [-]; evaluated in logarithms so large kL stays finite; inf where kL <= 0."""
     kL = np.asarray(kL, dtype=float)
     b1, b2 = -factor1, -2.0 / 3.0
     with np.errstate(divide="ignore", over="ignore"):

@@ -69,13 +69,9 @@ def gauss_panel(a: float, b: float, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def cell_rule(center: float, width: float, n: int, floor: float, ratio: float, max_panels: int):
-    """Gauss-Legendre nodes and weights over the cell [center - width/2, center + width/2].
-
-    A cell centred on 0 (where Phi peaks on the k1 axis) is split, on each side, into panels shrinking
-    by ``ratio`` towards 0 while the innermost is wider than ``floor`` (at most ``max_panels`` panels).
-
-    ``center``, ``width`` and ``floor`` in rad/m, ``n`` nodes per panel; returns nodes and weights [rad/m].
-    """
+    """Gauss-Legendre nodes and weights [rad/m] over the cell [center - width/2, center + width/2] [rad/m], ``n``
+    per panel; a cell centred on 0 (where Phi peaks on the k1 axis) is split on each side into panels shrinking by
+    ``ratio`` towards 0 while the innermost is wider than ``floor`` [rad/m] (at most ``max_panels``)."""
     if center != 0.0:
         return gauss_panel(center - width / 2, center + width / 2, n)
     edges = [width / 2]

@@ -16,12 +16,8 @@ MINUS_3_DB = 10.0 ** (-3.0 / 20.0)
 
 
 def _first_crossing(f: np.ndarray, y: np.ndarray, level: float) -> float:
-    """The first f where y(f) falls below ``level``; nan if never, f[0] if y[0] is below.
-
-    Inside the bracketing interval, the root (by bisection) of the Lagrange cubic in log f through the four
-    points around it (linear with fewer than four): error ~h^4 in the log-spacing h, so the result hardly
-    depends on the grid, unlike linear interpolation (~h^2).
-    """
+    """The first f where y(f) falls below ``level`` (nan if never, f[0] if y[0] is below): the root of the Lagrange
+    cubic in log f through the four points around it (error ~h^4 in the log-spacing h, linear's ~h^2)."""
     below = np.flatnonzero(y < level)
     if below.size == 0:
         return float("nan")
@@ -79,14 +75,8 @@ def filter_delay_s(cutoff_hz: float, f_delay_hz: float = 0.025) -> float:
 
 def buffer_time_s(range_m: float, U_m_s: float, scan_time_s: float, cutoff_hz: float,
                   pitch_delay_s: float = 0.0, f_delay_hz: float = 0.025) -> float:
-    """Buffer time T_buffer = x/U - T_scan/2 - T_filter - T_pitch [s] (Fu et al. 2023, Sect. 3.5).
-
-    Parameters
-    ----------
-    range_m, U_m_s : float
-        Preview distance x upstream of the rotor [m] and mean wind speed [m/s].
-    scan_time_s, pitch_delay_s, cutoff_hz, f_delay_hz : float
-        Duration of one scan and pitch actuator delay [s]; as :func:`filter_delay_s` [Hz].
-    """
+    """Buffer time T_buffer = x/U - T_scan/2 - T_filter - T_pitch [s] (Fu et al. 2023, Sect. 3.5) of the preview
+    distance x [m] and U [m/s]; scan and pitch-actuator times [s]; ``cutoff_hz``, ``f_delay_hz`` as
+    :func:`filter_delay_s`."""
     return (range_m / check_wind_speed(U_m_s) - 0.5 * scan_time_s - filter_delay_s(cutoff_hz, f_delay_hz)
             - pitch_delay_s)

@@ -57,17 +57,9 @@ def los_vectors(directions) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Measurements:
-    """Where and how a lidar measures: one row per measurement (beam x range gate).
-
-    Parameters
-    ----------
-    n, direction, focus_m : numpy.ndarray
-        (M, 3) line-of-sight vectors and unit beam directions (x upstream, y, z) [-]; focus points from the hub [m].
-    offsets_m, weights : numpy.ndarray
-        (M, K) probe-volume positions along the beam from the focus [m] and weights [-] (rows sum to 1).
-    beam, gate : numpy.ndarray
-        (M,) beam and range-gate index of each measurement.
-    """
+    """Where and how a lidar measures, one row per measurement (beam x range gate): (M, 3) LOS vectors ``n``, unit
+    beam directions (x upstream, y, z) and focus points from the hub [m]; (M, K) probe-volume offsets along the beam
+    [m] and weights (rows sum to 1); (M,) beam and gate indices."""
 
     n: np.ndarray
     focus_m: np.ndarray

@@ -30,15 +30,8 @@ GRADING = 3.0  # panels of the axis cell shrink by this factor towards k2 = 0 (k
 
 @dataclass(frozen=True)
 class BoxLattice:
-    """The periodic synthesis box whose (k2, k3) lattice replaces the continuous quadrature.
-
-    Parameters
-    ----------
-    nyp, nzp, dy_m, dz_m : int, int, float, float
-        Points of the periodic (padded) box in y and z, not the stored grid's, and their spacings [m].
-    record_s : float
-        Length nt dt of the periodic record [s] (the axis cells' k1 width is 2 pi / (U record_s)).
-    """
+    """The periodic synthesis box whose (k2, k3) lattice replaces the continuous quadrature: points of the padded box
+    in y and z and their spacings [m], and the record's length nt dt [s] (axis cells' k1 width 2 pi / (U T))."""
 
     nyp: int
     nzp: int

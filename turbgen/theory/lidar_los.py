@@ -18,15 +18,8 @@ def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: f
                        vw_coherence: bool = False) -> np.ndarray:
     """One-sided spectra S_los,i(f) [m^2 s^-2 Hz^-1], (M, n_f), of each measurement's line-of-sight speed.
 
-    IEC Kaimal model through the probe volume (Schlipf et al. 2020, Eq. 2, 6; Taylor within it): u is
-    coherent in the yz plane, v and w are spatially white unless ``vw_coherence``.
-
-    Parameters
-    ----------
-    f_hz, meas, kparams, U_m_s : array_like, Measurements, KaimalParams, float
-        Frequencies [Hz], the lidar's measurements, Kaimal spectra with IEC yz coherence, mean wind speed [m/s].
-    vw_coherence : bool, optional
-        Give v and w the yz coherence of u.
+    IEC Kaimal model ``kparams`` at U [m/s] through the probe volume (Schlipf et al. 2020, Eq. 2, 6; Taylor within
+    it): u is coherent in the yz plane, v and w are spatially white unless ``vw_coherence``.
     """
     f = np.atleast_1d(np.asarray(f_hz, dtype=float))
     U = check_wind_speed(U_m_s)
@@ -54,15 +47,8 @@ def lidar_ti_correction(meas: Measurements, kparams: KaimalParams, U_m_s: float,
 
     sigma_L^2 = ∫_{1/T}^{f_scan} S_los df (each point seen f_scan times a second, through its probe volume
     and beam angle), sigma_u^2 = ∫_{1/T}^{f_max} S_u df; the lidar TI multiplies each LOS standard
-    deviation by its c_TI.
-
-    Parameters
-    ----------
-    meas, kparams, U_m_s
-        As :func:`kaimal_los_spectra`.
-    averaging_s, f_scan_hz, f_max_hz, n_f : float, float, float, int, optional
-        Averaging time T [s]; rate at which each point is measured and highest frequency of the field [Hz]
-        (f_scan > 1/T); log-spaced frequencies of the sigma_L^2 quadrature.
+    deviation by its c_TI. ``averaging_s`` T [s], ``f_scan_hz`` > 1/T and ``f_max_hz`` [Hz]; ``n_f``
+    log-spaced frequencies of the sigma_L^2 quadrature; the rest as :func:`kaimal_los_spectra`.
     """
     from turbgen.theory.kaimal import kaimal_band_variance
 

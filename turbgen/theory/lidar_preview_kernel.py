@@ -13,32 +13,15 @@ import numpy as np
 @numba.njit(cache=True)
 def node_sums(k1, k2, k3, beams, beam_table, beam_of, nu_step, tables, phase, gate_of, scale, gate_x, phi_w,
               inv_tau, rotor, U):  # fmt: skip
-    """(S_LL, S_RL) summed over the nodes (two-sided in k1, the nodes' weights in ``phi_w``).
+    """(S_LL, S_RL) summed over the nodes (J,) k2, k3 [rad/m] at k1 (two-sided in k1; ``phi_w`` (3, 3, J): the
+    tensor times the nodes' weights).
 
     The decay D_gh = exp(-s |x_g - x_h|), s = 1 / (U tau_e), is summed by the recursion C_h = exp(-s (x_h -
-    x_{h-1})) (C_{h-1} + A_{h-1}): O(gates) per node.
-
-    Parameters
-    ----------
-    k1, k2, k3 : float, (J,) float64
-        k1 and the nodes [rad/m].
-    beams : (B, 3) float64
-        The distinct line-of-sight vectors; ``beam_table`` (B,) the row of ``tables`` of each, ``beam_of`` (count,)
-        the beam of each measurement.
-    nu_step : float
-        Step of the tables' |nu| grid [rad/m] (from 0).
-    tables : (T, N) float64
-        phi_hat(|nu|) of each distinct probe volume (linear interpolation between the grid points).
-    phase : (count, J) complex64
-        exp(i (k2 y_i + k3 z_i)) of each measurement's focus.
-    gate_of : (count,) int64
-        Each measurement's gate (gates sorted by ``gate_x``); ``scale`` (count, 3) its n_il / (M n_i1).
-    gate_x : (G,) float64
-        The gates' x [m], increasing.
-    phi_w : (3, 3, J) float64
-        The tensor times the nodes' weights; ``inv_tau`` (J,) 1/tau_e [1/s]; ``rotor`` (J,) the rotor's transfer.
-    U : float
-        Mean wind speed [m/s].
+    x_{h-1})) (C_{h-1} + A_{h-1}): O(gates) per node. ``beams`` (B, 3): the distinct LOS vectors, ``beam_table``
+    their row of ``tables`` (phi_hat(|nu|) of each probe volume on a |nu| grid of step ``nu_step`` [rad/m], linear
+    between), ``beam_of`` each measurement's beam; ``phase`` exp(i (k2 y_i + k3 z_i)); ``gate_of`` each
+    measurement's gate (sorted by ``gate_x`` [m]), ``scale`` its n_il / (M n_i1); ``inv_tau`` 1/tau_e [1/s];
+    ``rotor`` the rotor's transfer; U [m/s].
     """
     n_gates, count, n_beams = len(gate_x), len(beam_of), len(beams)
     last = tables.shape[1] - 1

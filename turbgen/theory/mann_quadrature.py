@@ -105,25 +105,11 @@ def perpendicular_quadrature(
     k1, params: MannParams, pairs, dy_m: float = 0.0, dz_m: float = 0.0, resolve_m: float = 0.0,
     resolve_kappa_max: float = np.inf, _rule=None
 ):
-    """Angular integrals on the radial nodes of the (k2, k3) plane, for every k1; radial weights are the caller's.
-
-    Parameters
-    ----------
-    k1, params, pairs : array_like, MannParams, iterable of tuple of int
-        Longitudinal wavenumbers [rad/m], Mann model and the tensor components (i, j), indices in 0..2.
-    dy_m, dz_m : float, optional
-        Lateral and vertical separation [m].
-    resolve_m : float, optional
-        Without separation: the length [m] whose oscillation exp(i kappa resolve_m) the radial panels
-        resolve below ``resolve_kappa_max`` [rad/m] (scalar or per k1); 0 for none.
-    _rule : dict, optional
-        Internal overrides (x_lo, x_hi, x_hi_sep, panel_ln, n_gauss, n_theta).
-
-    Returns
-    -------
-    kappa, weights, G : numpy.ndarray, numpy.ndarray, dict
-        (len(k1), n_r) radial nodes [rad/m] and weights [rad^2/m^2] (∫ g kappa dkappa ≈ sum weights g; padding
-        nodes weigh 0); G[(i, j)] = ∫_0^{2pi} Phi_ij exp(i kappa d cos(theta - theta_d)) dtheta [m^5 s^-2].
+    """Angular integrals on the radial nodes of the (k2, k3) plane for every k1 [rad/m] and tensor pair (i, j):
+    (kappa, weights, G), (len(k1), n_r) radial nodes [rad/m] and weights [rad^2/m^2] (∫ g kappa dkappa ≈ sum
+    weights g; padding nodes weigh 0), G[(i, j)] = ∫_0^{2pi} Phi_ij exp(i kappa d cos(theta - theta_d)) dtheta
+    [m^5 s^-2] at the separation (``dy_m``, ``dz_m``) [m]. Without one, the radial panels resolve exp(i kappa
+    ``resolve_m``) below ``resolve_kappa_max`` [rad/m]; ``_rule``: internal overrides of the rule's constants.
     """
     k1 = check_k1(k1)
     k1 = np.where(k1 == 0, K1_ZERO / params.length_scale_m, k1)

@@ -16,15 +16,8 @@ from turbgen.errors import ParameterError, check_int, check_range
 
 @dataclass(frozen=True)
 class Range:
-    """Closed interval [lo, hi] (open at ``lo`` when ``lo_open``) of one parameter, in SI units.
-
-    Parameters
-    ----------
-    label, lo, hi, why : str, float, float, str
-        Name in messages (option and unit), the bounds, one phrase for the README table.
-    lo_open, integer : bool, optional
-        Exclude ``lo``; the parameter is an integer.
-    """
+    """Closed interval [lo, hi] (open at ``lo`` when ``lo_open``) of one parameter, in SI units; ``label`` names it
+    in messages (option and unit), ``why`` is one phrase for the README table."""
 
     label: str
     lo: float
@@ -104,13 +97,8 @@ def check(key: str, value, label: str | None = None):
 
 
 def check_values(key: str, values, where: str) -> None:
-    """Check every value of an array against ``RANGES[key]``; NaN (a missing value) passes, +-inf does not.
-
-    Raises
-    ------
-    ParameterError
-        "<where>: <label> = <value> (index i) is ..." for the first value outside the range.
-    """
+    """Check every value of an array against ``RANGES[key]`` (NaN, a missing value, passes; +-inf does not);
+    ParameterError "<where>: <label> = <value> (index i) is ..." for the first value outside."""
     import numpy as np
 
     r = RANGES[key]

@@ -91,22 +91,9 @@ def _components(k1, kappa, beta, cos_t, sin_t, atan, e0, codes, out):
 
 
 def sheared_tensor_on_circles(k1, kappa, beta, cos_t, sin_t, pairs, ae: float, length_scale_m: float) -> np.ndarray:
-    """Phi_ij(k1, kappa cos(theta), kappa sin(theta)) of the requested pairs (Mann 1994 Eq. 19).
-
-    Parameters
-    ----------
-    k1, kappa, beta : numpy.ndarray
-        (rows,) k1 [rad/m]; (rows, nr) radial nodes [rad/m] and beta(|k|) [-] (non-finite -> 0).
-    cos_t, sin_t, pairs : numpy.ndarray, numpy.ndarray, sequence of (int, int)
-        (n_theta,) cosine and sine of the angles; the tensor components (i, j) wanted.
-    ae, length_scale_m : float
-        alpha*eps^(2/3) [m^(4/3) s^-2] and L [m].
-
-    Returns
-    -------
-    numpy.ndarray
-        (len(pairs), rows, nr, n_theta) Phi_ij [m^5 s^-2], bit for bit ``mann_tensor.sheared_tensor``'s.
-    """
+    """(len(pairs), rows, nr, n_theta) Phi_ij(k1, kappa cos(theta), kappa sin(theta)) [m^5 s^-2] (Mann 1994 Eq. 19),
+    bit for bit ``mann_tensor.sheared_tensor``'s: k1 (rows,) [rad/m], kappa and beta(|k|) (rows, nr) [rad/m], [-]
+    (non-finite beta -> 0), the angles' cosines and sines (n_theta,), ae [m^(4/3) s^-2], L [m]."""
     k1, kappa, beta, cos_t, sin_t = (np.ascontiguousarray(a, dtype=np.float64) for a in (k1, kappa, beta, cos_t, sin_t))
     shape = kappa.shape + cos_t.shape
     k0sq, y, x = (np.empty(shape) for _ in range(3))

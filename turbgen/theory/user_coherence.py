@@ -42,15 +42,8 @@ def _locate(nodes: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 @dataclass(frozen=True)
 class LineCoherence:
-    """The yz coherence gamma(r_j, f_k) [-] on a run's lines k = 1 .. nt // 2 and nodes r_j [m].
-
-    Parameters
-    ----------
-    nt, dt_s : int, float
-        The run's record: samples and interval [s].
-    r_m, coh : tuple of float, tuple of tuple of float
-        (n,) increasing nodes [m], the first 0; (nt // 2, n) values [-], finite, in [-1, 1], 1 at r = 0.
-    """
+    """The yz coherence ``coh`` (nt // 2, n) gamma(r_j, f_k) [-] in [-1, 1], 1 at r = 0, on a run's lines k = 1 ..
+    nt // 2 (``nt`` samples ``dt_s`` [s] apart) and increasing nodes ``r_m`` (n,) [m] from 0."""
 
     nt: int
     dt_s: float
@@ -101,13 +94,8 @@ class LineCoherence:
 
     @classmethod
     def from_callable(cls, coh: Callable, nt: int, dt_s: float, r_m, U_m_s: float) -> "LineCoherence":
-        """``coh(f_hz (nl, 1), r_m (1, n), U_m_s)`` [-] on the lines x nodes ``r_m`` (the grid's separations).
-
-        Raises
-        ------
-        ParameterError
-            If ``coh`` fails or does not return (nl, n) finite values in [-1, 1], 1 at r = 0.
-        """
+        """``coh(f_hz (nl, 1), r_m (1, n), U_m_s)`` [-] on the lines x nodes ``r_m`` (the grid's separations);
+        ParameterError if ``coh`` fails or does not return (nl, n) finite values in [-1, 1], 1 at r = 0."""
         f, r = line_frequencies(nt, dt_s)[1:, None], np.asarray(r_m, dtype=float)[None, :]
         try:
             values = np.broadcast_to(np.asarray(coh(f, r, U_m_s), dtype=float), (f.size, r.size))
@@ -118,14 +106,8 @@ class LineCoherence:
 
     @classmethod
     def from_table(cls, f_hz, r_m, coh, nt: int, dt_s: float) -> "LineCoherence":
-        """A table (f_hz (m,) increasing [Hz], r_m (n,), coh (m, n)) interpolated linearly in f onto the lines (the
-        table's own rows where it is given on them).
-
-        Raises
-        ------
-        ParameterError
-            For a wrong shape, frequencies not increasing or not covering the lines, or values LineCoherence refuses.
-        """
+        """A table (f_hz (m,) increasing [Hz], r_m (n,), coh (m, n)) interpolated linearly in f onto the lines;
+        ParameterError for a wrong shape, frequencies not increasing or not covering the lines, or bad values."""
         f, c = np.asarray(f_hz, dtype=float), np.asarray(coh, dtype=float)
         lines = line_frequencies(nt, dt_s)[1:]
         if f.ndim != 1 or c.ndim != 2 or c.shape[0] != f.size or (np.diff(f) <= 0).any():

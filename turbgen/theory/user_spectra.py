@@ -36,15 +36,8 @@ def _check_values(name: str, f_hz: np.ndarray, values: np.ndarray) -> None:
 
 @dataclass(frozen=True)
 class LineSpectrum:
-    """Band-mean one-sided PSDs of u, v, w on a run's lines k = 1 .. nt // 2.
-
-    Parameters
-    ----------
-    nt, dt_s : int, float
-        The run's record: samples and sampling interval [s].
-    S_m2_s : tuple of tuple of float
-        (3, nt // 2) band means S_k [m^2/s] of u, v, w at f_k = k / (nt dt).
-    """
+    """Band-mean one-sided PSDs (3, nt // 2) S_k [m^2/s] of u, v, w on a run's lines f_k = k / (nt dt), k = 1 ..
+    nt // 2 (``nt`` samples ``dt_s`` [s] apart)."""
 
     nt: int
     dt_s: float
@@ -109,21 +102,9 @@ class LineSpectrum:
 
     @classmethod
     def from_table(cls, f_hz, S_m2_s, nt: int, dt_s: float) -> "LineSpectrum":
-        """Band means at the run's lines, interpolated linearly in a table of band means (exact on the run's lines).
-
-        Parameters
-        ----------
-        f_hz, S_m2_s : array_like
-            (n,) increasing frequencies [Hz] >= 0 covering the lines df = 1/(nt dt) to nt // 2 df; (3, n) PSDs S_u,
-            S_v, S_w [m^2/s], finite and >= 0.
-        nt, dt_s : int, float
-            The run's record (samples, interval [s]).
-
-        Raises
-        ------
-        ParameterError
-            For a wrong shape, bad values, frequencies not increasing, or a table not covering the lines.
-        """
+        """Band means at the run's lines, interpolated linearly in a table of band means (exact on the lines):
+        (n,) increasing ``f_hz`` [Hz] covering df = 1/(nt dt) to nt // 2 df, (3, n) S_u, S_v, S_w [m^2/s] >= 0.
+        ParameterError for a wrong shape, bad values, frequencies not increasing or not covering the lines."""
         f = np.asarray(f_hz, dtype=float)
         S = np.asarray(S_m2_s, dtype=float)
         if f.ndim != 1 or f.size < 1 or S.shape != (3, f.size):
