@@ -26,10 +26,8 @@ def temp_name(path: Path, mark: str = TEMP_MARK) -> Path:
 
 
 def write_file(path: Path, data: str | bytes) -> None:
-    """Write ``data`` to ``path`` whole or not at all: a temporary sibling, fsync, then a rename over ``path``.
-
-    Mode 0o666 less the umask; a str is written as UTF-8. OSError when it cannot be written (``path`` untouched).
-    """
+    """Write ``data`` (a str as UTF-8) to ``path`` whole or not at all: a temporary sibling, fsync, then a rename
+    over ``path``; mode 0o666 less the umask. OSError when it cannot be written (``path`` untouched)."""
     tmp = temp_name(path)
     try:
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)

@@ -147,10 +147,8 @@ _MADE: dict[str, FFTBackend] = {}
 
 
 def register(name: str, factory: Callable[[], FFTBackend]) -> None:
-    """Make ``factory()`` the backend called ``name`` (``--fft-backend name``, ``fft_backend=name``, the variable).
-
-    The factory runs when the backend is first used, so a backend's library is imported only by the runs using it.
-    """
+    """Make ``factory()`` the backend called ``name`` (``--fft-backend name``, ``fft_backend=name``, the variable);
+    it runs on first use, so a backend's library is imported only by the runs using it."""
     _REGISTRY[name] = factory
     _MADE.pop(name, None)
 
@@ -195,15 +193,8 @@ def oneshot(name: str | None = None):
 
 @contextmanager
 def use(name: str | None) -> Iterator[str]:
-    """Run the block with backend ``name`` (None: leave the selection as it is); yields the backend's name.
-
-    The selection holds in every thread of the process until the block ends (see the module's docstring).
-
-    Raises
-    ------
-    ParameterError
-        For an unknown name, or while another call of this process holds a different backend.
-    """
+    """Run the block with backend ``name`` (None: leave the selection as it is) in every thread of the process;
+    yields the backend's name. ParameterError for an unknown name, or while another call holds a different one."""
     if name is None:
         yield current()
         return

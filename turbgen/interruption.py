@@ -17,11 +17,8 @@ _received: list[int] = []
 
 
 def received_signal() -> int | None:
-    """The last signal number :func:`exit_on_signals` turned into an exception, or None.
-
-    Library code may replace that exception with its own (h5py turns one raised inside an attribute write
-    into ``TypeError``); the CLI asks this to report the interruption, not the replacement.
-    """
+    """The last signal number :func:`exit_on_signals` turned into an exception, or None: the CLI reports the
+    interruption, not what library code replaced the exception with (h5py: ``TypeError``)."""
     return _received[-1] if _received else None
 
 
@@ -40,9 +37,7 @@ def _exit_on_signal(signum, frame):
 
 def _quiet_about_signals(unraisable) -> None:
     """sys.unraisablehook: silent about our signal's exception where Python could not raise it (a weakref
-    callback, a ``__del__``), which the writers' publish check acts on instead; anything else goes to the
-    default hook.
-    """
+    callback, a ``__del__``; the writers' publish check acts on it); anything else goes to the default hook."""
     if stop_requested() is not None and issubclass(unraisable.exc_type, (SystemExit, KeyboardInterrupt)):
         return
     sys.__unraisablehook__(unraisable)

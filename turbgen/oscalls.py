@@ -64,12 +64,9 @@ def rename_exchange(src: Path, dst: Path) -> bool:
 
 
 def reserve(fd: int, nbytes: int, *, keep_size: bool, name: str = "") -> bool:
-    """Allocate ``nbytes`` of disk from offset 0 of the open file ``fd``, so later writes cannot meet a full disk.
-
-    With ``keep_size`` the file's size stays (fallocate(2) FALLOC_FL_KEEP_SIZE), else it grows to at least
-    ``nbytes`` (posix_fallocate(3)). Returns False where the space cannot be reserved (the writes then meet
-    ENOSPC themselves); raises OSError (ENOSPC, EDQUOT, naming ``name``) when the space is not there.
-    """
+    """Allocate ``nbytes`` of disk from offset 0 of the open file ``fd``, so later writes cannot meet a full disk
+    (``keep_size``: fallocate(2) FALLOC_FL_KEEP_SIZE, else posix_fallocate(3)). False where the space cannot be
+    reserved; OSError (ENOSPC, EDQUOT, naming ``name``) when the space is not there."""
     if nbytes <= 0:
         return True
     if keep_size:

@@ -25,11 +25,8 @@ def format_bytes(n: float) -> str:
 
 
 def available_memory_bytes(meminfo: Path = oscalls.PROC_MEMINFO, cgroup_root: Path = oscalls.CGROUP_ROOT) -> int | None:
-    """Memory [bytes] this process can still allocate, or None if it cannot be determined.
-
-    Linux: MemAvailable from /proc/meminfo, capped by the container's cgroup limit minus usage.
-    Elsewhere: free physical pages from ``os.sysconf`` (an underestimate: excludes caches).
-    """
+    """Memory [bytes] this process can still allocate (None: unknown): Linux MemAvailable capped by the cgroup
+    limit minus usage; elsewhere free physical pages from ``os.sysconf`` (an underestimate: excludes caches)."""
     system = oscalls.meminfo_available_bytes(meminfo)
     if system is None:
         try:
@@ -42,11 +39,8 @@ def available_memory_bytes(meminfo: Path = oscalls.PROC_MEMINFO, cgroup_root: Pa
 
 
 def require_memory(nbytes: int, what: str, hint: str) -> int | None:
-    """Raise ParameterError unless ``nbytes`` fit in the available memory; return the available bytes.
-
-    ``what`` names what needs the memory, ``hint`` which field to change (e.g. "lower `nt`").
-    When the available memory cannot be determined the check passes (returns None).
-    """
+    """Raise ParameterError naming ``what`` and ``hint`` (e.g. "lower `nt`") unless ``nbytes`` fit in the available
+    memory; return the available bytes (None, passing, when unknown)."""
     available = available_memory_bytes()
     if available is not None and nbytes > available:
         raise ParameterError(f"{what} needs about {format_bytes(nbytes)} of memory but only {format_bytes(available)} "
@@ -64,12 +58,8 @@ def available_disk_bytes(path) -> int | None:
 
 
 def require_disk(path, nbytes: int, what: str, hint: str) -> int | None:
-    """Raise ParameterError unless ``nbytes`` fit on the filesystem of ``path``; return the free bytes.
-
-    The disk-space counterpart of :func:`require_memory` (same message form). ``path`` is the
-    output (or its directory); ``hint`` says what to change (e.g. "free space or choose another `out`").
-    When the free space cannot be determined the check passes (returns None).
-    """
+    """Raise ParameterError as :func:`require_memory` unless ``nbytes`` fit on the filesystem of ``path`` (the
+    output or its directory); return the free bytes (None, passing, when unknown)."""
     free = available_disk_bytes(path)
     if free is not None and nbytes > free:
         where = Path(path).expanduser().absolute()
@@ -83,10 +73,8 @@ _SIZE_UNITS = {"": 1, "b": 1, "k": 1000, "kb": 1000, "kib": 2**10, "m": 10**6, "
 
 
 def parse_size(text: str, name: str = "size") -> int:
-    """Bytes from a size such as '256MiB', '4GiB', '1.5GB' or '1000000' (binary and decimal units).
-
-    Raises ParameterError naming ``name`` and the accepted forms when ``text`` is not a positive size.
-    """
+    """Bytes from a size such as '256MiB', '4GiB', '1.5GB' or '1000000' (binary and decimal units); ParameterError
+    naming ``name`` and the accepted forms when ``text`` is not a positive size."""
     import re
 
     m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*([a-zA-Z]*)\s*", str(text))

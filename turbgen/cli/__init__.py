@@ -181,13 +181,8 @@ def cli(ctx):
 
 
 def _import_pyfftw_lean() -> None:
-    """Import pyfftw without its optional dask interface, for this command's process only (the application's
-    start-up, not the library's); nothing without pyfftw installed.
-
-    pyfftw's __init__ imports dask.array, and through it pandas, for an interface turbgen never uses: a second of
-    start-up and memory the out-of-core plans must leave to the process. That optional import is made to fail
-    fast while pyfftw loads; dask.array stays importable afterwards.
-    """
+    """Import pyfftw without its optional dask interface (dask.array and pandas: start-up and memory turbgen never
+    uses) for this command's process only: that import fails fast while pyfftw loads, and works again after."""
     if "pyfftw" in sys.modules or "dask.array.fft" in sys.modules:
         return
     sys.modules["dask.array.fft"] = None  # pyfftw's `from dask.array.fft import ...` raises ImportError at once

@@ -92,10 +92,8 @@ def parse_floats(text: str, name: str) -> list[float]:
 
 
 def parse_range(text: str, name: str) -> list[float]:
-    """'start:stop:step' -> start, start+step, ... <= stop (inclusive, 1e-9 relative tolerance).
-
-    The count is checked against the option's LIMITS before the list is built.
-    """
+    """'start:stop:step' -> start, start+step, ... <= stop (inclusive, 1e-9 relative tolerance); the count is
+    checked against the option's LIMITS before the list is built."""
     parts = text.split(":")
     try:
         start, stop, step = (float(p) for p in parts)
