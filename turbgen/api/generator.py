@@ -1,11 +1,5 @@
-"""Reusable generators: what does not depend on the seed is made once, then one field per seed.
-
-    g = turbgen.MannGenerator(turbgen.MannParams(ae=0.1, length_scale_m=49, gamma=3.1), turbgen.Grid(...))
-    for ds in g.fields(range(10)):      # xarray Datasets, as turbgen.mann(...) returns them
-        ...
-
-Both give the fields of ``turbgen.mann`` / ``turbgen.kaimal`` and the commands bit for bit (turbgen.runs).
-"""
+"""Reusable generators: what does not depend on the seed is made once, then one field per seed, the fields of
+``turbgen.mann`` / ``turbgen.kaimal`` and the commands bit for bit (turbgen.runs)."""
 
 from __future__ import annotations
 
@@ -186,8 +180,8 @@ class MannGenerator(_Generator[MannRun]):
 
 class KaimalGenerator(_Generator[KaimalRun]):
     """Kaimal 4D fields (IEC 61400-1; longitudinal coherence of Guo et al. 2023, Eq. 18) of one parameter set and
-    grid, one per seed: the yz samplers and longitudinal factors made by the first field are kept (~23 MiB for the
-    default grid), so a further seed costs its random draws and transforms only.
+    grid, one per seed: the yz samplers and longitudinal factors made by the first field are kept, so a further seed
+    costs its random draws and transforms only.
 
     Parameters
     ----------

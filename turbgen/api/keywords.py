@@ -1,9 +1,5 @@
-"""The keywords of ``turbgen.mann`` / ``turbgen.kaimal`` as run-mapping keys.
-
-The keywords are the commands' option names (turbgen.spec.run_inputs: ``L``, ``gamma``, ``evo``, ``U``, ``nt``,
-``dt``, ``ny``, ``nz``, ``dy``, ``dz``, ...) with ``planes`` and ``gates``; a run file's keys (``length_scale_m``, ...)
-are given through ``config``.
-"""
+"""The keywords of ``turbgen.mann`` / ``turbgen.kaimal`` (the commands' option names, turbgen.spec.run_inputs, with
+``planes`` and ``gates``) as run-mapping keys; a run file's keys (``length_scale_m``, ...) come through ``config``."""
 
 from __future__ import annotations
 
@@ -50,11 +46,8 @@ def _positions(values, name: str) -> list[float]:
 
 
 def run_inputs(model: str, options: Mapping) -> tuple[dict, dict, list[float] | None]:
-    """(run-mapping keys given, grid keys given, plane positions [m upstream] or None) of ``model``'s keywords.
-
-    ``options`` maps option names to the values passed to ``turbgen.mann`` / ``turbgen.kaimal``; None (and a
-    flag's False, an empty ``constrain``) is "not given".
-    """
+    """(run-mapping keys given, grid keys given, plane positions [m upstream] or None) of ``model``'s keywords
+    ``options`` (option name -> value; None, a flag's False and an empty ``constrain`` are "not given")."""
     aliases = resolve(declaration(model).options, "spec")  # option name -> run key (turbgen.spec.models)
     given, grid = {}, {}
     for name, value in options.items():

@@ -17,11 +17,9 @@ from turbgen.sweep.manifest import store_checksum
 class RunTask:
     """What a worker needs for one run (``generate`` False: only checksum, validate, lidar an existing store).
 
-    model : key of turbgen.runs.models.MODELS. run : MannRun or KaimalRun. path : the store.
-    overwrite : replace an incomplete store. chunk_t : time steps per chunk (None: default). validate : run
-    turbgen.validate. threads : threads of the run (None: all cores). memory_bytes : the run's budget [B] (a Mann
-    run over it goes out of core). lidar : preset or file run on the field. constraints : a ConstraintRequest
-    (Mann). cache_dir : a constrained run's stencil cache. fft_backend : None: the worker's current one.
+    ``model``: a key of turbgen.runs.models.MODELS; ``overwrite``: replace an incomplete store; ``threads`` None: all
+    cores; ``memory_bytes``: the run's budget [B] (a Mann run over it goes out of core); ``lidar``: preset or file;
+    ``cache_dir``: a constrained run's stencil cache; ``fft_backend`` None: the worker's current one.
     """
 
     model: str
