@@ -153,10 +153,11 @@ class PlaneRing:
 class KaimalEvo:
     """Generator of one Kaimal 4D field, one component at a time, plane by plane.
 
-    ``long_coherence`` / ``yz_coherence`` (r_m, f_hz) return un-squared coherences (yz None: IEC exponential_yz);
-    ``yz_decay_length_m(f_hz)`` bounds yz_coherence <= exp(-r / length) for a smaller torus; ``coherent_vw``: v, w
-    get u's yz coherence (IEC: white); ``rescale``: expected variance = nominal sigma^2; ``variances`` (3, nt//2 + 1)
-    band variances [m^2 s^-2] of a user spectrum; ``keep``: keep the samplers for :meth:`reseeded` copies.
+    ``long_coherence`` / ``yz_coherence`` (distance [m], f [Hz]) return un-squared coherences (yz None: IEC
+    exponential_yz); ``yz_decay_length_m(f_hz)`` bounds yz_coherence <= exp(-r / length) for a smaller torus;
+    ``coherent_vw``: v, w get u's yz coherence (IEC: white); ``rescale``: expected variance = nominal sigma^2;
+    ``variances`` (3, nt//2 + 1) band variances [m^2 s^-2] of a user spectrum; ``keep``: keep the samplers for
+    :meth:`reseeded` copies.
     """
 
     def __init__(

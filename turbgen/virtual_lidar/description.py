@@ -33,7 +33,7 @@ class LidarDescription:
     ``kind`` "pulsed" (Gaussian probe volume, ``fwhm_m``) or "cw" (Lorentzian from ``wavelength_m``,
     ``beam_radius_m`` and the focus distance); ``mount`` "nacelle" (``azimuth_deg``, ``elevation_deg`` per beam) or
     "spinner" (``half_cone_deg``, ``scan_deg``, ``tilt_deg``); ``ranges_m``: upstream x of the gates. ParameterError
-    for a value outside the ranges of schemas/lidar.schema.json or more than MAX_MEASUREMENTS beams x gates.
+    for a value outside its range (the checks below) or more than MAX_MEASUREMENTS beams x gates.
     """
 
     name: str
