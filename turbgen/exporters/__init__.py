@@ -31,10 +31,10 @@ __all__ = ["EXPORTERS", "ExportRequest", "ExportResult", "export_store", "read_b
 
 
 def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> ExportResult:
-    """Export ``store`` (a path or an open FieldStore) in format ``fmt`` to ``out`` (ROOT for wnd, evo, hawc2) with
-    ``request`` (default ``ExportRequest()``): the engine of :func:`turbgen.export`, which documents the errors.
-    ParameterError for an unknown format, options it does not use, a bad ``out``, too little disk, an existing
-    output without ``request.overwrite``; StoreError for a missing or incomplete store.
+    """Export ``store`` (a path or FieldStore) as ``fmt`` to ``out`` (ROOT for wnd, evo, hawc2): the export engine.
+
+    ParameterError for an unknown format, unused options, a bad or existing ``out``, too little disk; StoreError for a
+    missing or incomplete store.
     """
     check_choice("format", fmt, tuple(EXPORTERS))
     if isinstance(out, str) and out.endswith(("/", os.sep)):

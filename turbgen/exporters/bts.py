@@ -42,10 +42,7 @@ def tower_heights(bottom_m: float, dz_m: float) -> np.ndarray:
 
 def write_bts(path, plane: Plane, *, dy_m, dz_m, dt_s, U_m_s, hub_height_m, bottom_m, periodic: bool,
               description: str, tower: dict | None = None) -> None:
-    """Write ``plane`` (full velocities) and the optional ``tower`` {"u", "v", "w": (nt, ntwr) [m/s]} to ``path``.
-
-    One int16 scaling per component covers grid and tower; ``periodic`` sets header ID 8 (else 7).
-    """
+    """Write ``plane`` (full velocities) and optional ``tower`` points to ``path``; one int16 scale per component."""
     nt, ny, nz = plane.nt, plane.ny, plane.nz
     ntwr = 0 if tower is None else tower["u"].shape[1]
     blocks = plane.blocks(8 * ny * nz)
@@ -94,10 +91,8 @@ def read_bts(path) -> dict:
 
 
 def tower_values(plane: Plane, heights_m: np.ndarray, layout, U_m_s: float) -> dict:
-    """Tower-point velocities {"u", "v", "w": (nt, ntwr) [m/s]} at ``heights_m`` for a ``.bts``.
-
-    The mean wind at each tower height plus the fluctuations of the lowest grid row at y = 0, held constant
-    below the grid; ParameterError when the profile does not cover the tower heights.
+    """Tower-point velocities {"u", "v", "w": (nt, ntwr) [m/s]} at ``heights_m``: the mean wind plus the lowest
+    grid row's fluctuations at y = 0; ParameterError when the profile does not cover them.
     """
     cols = [(plane.ny - 1) // 2, plane.ny // 2]  # y = 0 is the centre column, or midway between two
     out = {}

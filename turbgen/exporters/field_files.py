@@ -1,8 +1,6 @@
-"""Wind files of other tools opened as a one-plane field (an xarray.Dataset as ``turbgen.open_store`` gives):
-a TurbSim ``.bts``, or the HAWC2 Mann boxes an htc file's ``begin mann`` block names (``turbgen fit mann DATA``).
+"""Wind files of other tools opened as a one-plane field: a TurbSim ``.bts`` or an htc file's HAWC2 Mann boxes.
 
-A HAWC2 box file has no header: its size, spacing and mean wind speed are those of the htc (``box_dim_u nx dx``,
-``box_dim_v``, ``box_dim_w``, ``wsp``); the sample interval is dx / wsp (Taylor's hypothesis, as HAWC2 advects it).
+A HAWC2 box has no header: size, spacing and wsp come from the htc, the sample interval is dx / wsp (Taylor).
 """
 
 from __future__ import annotations

@@ -1,9 +1,7 @@
 """HDF5 copy of the whole 4D field (h5py): u, v, w, the coordinates t, x, y, z and the store's attributes.
 
-MATLAB reverses the dimensions of a row-major HDF5 dataset, so the velocities are stored with C shape
-(nz, ny, nx, nt): MATLAB's ``h5read(f, '/u')`` returns (nt, nx, ny, nz), the store's (t, x, y, z), while
-h5py/NumPy see (z, y, x, t). Values are the stored float32 fluctuations (no mean, no shear) in the
-store's convected frame.
+Velocities have C shape (nz, ny, nx, nt), so MATLAB's ``h5read(f, '/u')`` returns the store's (t, x, y, z);
+stored float32 fluctuations in the convected frame.
 """
 
 from __future__ import annotations
@@ -31,10 +29,7 @@ def _attr_value(value):
 
 
 def export_hdf5(fs, out, req: ExportRequest) -> ExportResult:
-    """Export the whole store ``fs`` to the HDF5 file ``out`` (only ``req.overwrite`` is used).
-
-    Written plane by plane, one component-plane in memory, after reserving the file's disk space.
-    """
+    """Export the whole store ``fs`` to the HDF5 file ``out``, one component-plane in memory at a time."""
     out = Path(out)
     g = fs.grid
     coords = {"t": g.t(), "x": g.x(), "y": g.y(), "z": g.z()}

@@ -18,13 +18,7 @@ WIND_TYPES = {2: "uniform wind file", 3: "TurbSim binary .bts", 4: "Bladed-style
 
 @dataclass(frozen=True)
 class InflowWindInput:
-    """What an InflowWind v5 input file says (the keys of the section its WindType uses).
-
-    ``wind_type`` 2 (uniform), 3 (.bts), 4 (.wnd + .sum) or 5 (HAWC); ``ref_height_m`` hub height [m] (RefHt,
-    RefHt_Uni, the output point); ``U_m_s`` mean hub speed [m/s]; ``files`` key -> path of the wind files
-    (FileName_BTS, ...); ``hawc`` the HAWC keys (nx, ..., PLExp_HAWC); ``ref_length_m`` RefLength [m] of a
-    uniform wind file; ``title`` the second line.
-    """
+    """What an InflowWind v5 input file says: ``wind_type`` 2, 3, 4 or 5, hub height [m], U [m/s], the wind files."""
 
     wind_type: int
     ref_height_m: float
@@ -142,11 +136,9 @@ def write_inflowwind(files, path, spec: InflowWindInput) -> str:
 
 def hawc2_wind_block(*, paths: dict, folder: Path, U_m_s: float, ti: float, centre_m: float, nt: int, ny: int,
                      nz: int, dx_m: float, dy_m: float, dz_m: float, description: str) -> str:
-    """The HAWC2 htc ``begin wind`` block (with its ``begin mann`` sub-block) that loads an export's boxes.
+    """The HAWC2 htc ``begin wind`` block (with ``begin mann``) that loads an export's boxes.
 
-    The boxes hold u - wsp with the mean profile, so: constant shear, no scaling, box centre at the grid's centre
-    height ``centre_m`` [m] (HAWC2's z points down). ``paths`` are written relative to ``folder``; ``ti`` =
-    sigma_u / U [-]; spacings [m].
+    The boxes hold u - wsp with the mean profile: constant shear, no scaling, box centre at ``centre_m`` [m].
     """
     rel = {c: "./" + _rel(p, folder) for c, p in paths.items()}
     return "\n".join([

@@ -18,10 +18,7 @@ from turbgen.exporters.request import COMPONENTS, ExportRequest, ExportResult
 
 
 def export_mt4d(fs, out, req: ExportRequest) -> ExportResult:
-    """Export every plane of store ``fs`` to the ``.mt4d`` file ``out`` (only ``req.overwrite`` is used).
-
-    The notes give the box sizes, the slot times t_k = x_k/U [s] and the MATLAB ``reshape`` call.
-    """
+    """Export every plane of ``fs`` to the ``.mt4d`` file ``out``; the notes give the MATLAB ``reshape`` call."""
     out = Path(out)
     g = fs.grid
     with OutputSet([out], overwrite=req.overwrite) as files, open(files.temp(out), "wb") as f:

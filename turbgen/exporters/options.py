@@ -14,21 +14,10 @@ TRANSIENTS = ("EOG", "EDC", "ECD", "EWS-V", "EWS-H")
 
 @dataclass(frozen=True)
 class ExportOptions:
-    """The export options as typed (None: not given), before they are checked.
+    """The export options as typed (None: not given), before they are checked (fields as ExportRequest's).
 
-    Parameters
-    ----------
-    plane, hub_height_m, shear_exponent, tower, periodic, drop_below_ground, overwrite, runner_files
-        As :class:`turbgen.exporters.ExportRequest` (``runner_files`` default True here).
-    profile : str, optional
-        ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE`` (inline: ``table:z,U[,dir];...``).
-    veer_deg_per_m : float, optional
-        Veer rate [deg/m].
-    mean_history : str, optional
-        CSV file of t [s], U [m/s] [, direction deg] (inline: ``t,U[,dir];...``).
-    transient : str, optional
-        IEC transient: EOG, EDC, ECD, EWS-V or EWS-H, with ``iec_class`` (e.g. "IIB"), ``rotor_diameter_m`` [m],
-        ``transient_start_s`` (when it reaches the turbine [s], default 10) and ``transient_sign`` ("+" or "-").
+    ``profile``: ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``; ``mean_history``: CSV of t, U [, dir];
+    ``transient``: EOG, EDC, ECD, EWS-V or EWS-H with its ``iec_class``, ``rotor_diameter_m`` [m] and start [s].
     """
 
     plane: int | None = None

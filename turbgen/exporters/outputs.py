@@ -21,12 +21,10 @@ from turbgen.store.temporaries import (TEMP_MARK, remove_dead_temporaries,
 
 
 class OutputSet:
-    """Context manager handing out temporary paths for a set of final paths.
+    """Context manager handing out temporary paths for a set of final paths, renamed into place on normal exit.
 
-    ``with OutputSet([a, b], overwrite=False) as out: write(out.temp(a)); write(out.temp(b))``: on a normal
-    exit every temporary is renamed to its final path; on an exception all are removed, the final paths untouched
-    (RuntimeError if a temporary was not written). ``need_bytes``: disk space checked when given. ParameterError
-    for a bad, existing (without ``overwrite``) or unwritable output, too little disk, or a file-system error.
+    On an exception all temporaries are removed (RuntimeError if one was not written). ParameterError for a bad,
+    existing (without ``overwrite``) or unwritable output, or too little disk for ``need_bytes``.
     """
 
     def __init__(self, paths, *, overwrite: bool, need_bytes: int | None = None):

@@ -117,11 +117,9 @@ class ExportResult:
 
 
 class Plane:
-    """One yz-plane as stored (float32 fluctuations, kept rows only) plus the mean wind.
+    """One yz-plane as stored (float32 fluctuations, kept rows) plus the mean wind, made full in float64 per block.
 
-    Full velocities are made in float64 one time block at a time. With veer, history or transient (u, v) =
-    rotate((U(t, y, h) + u', v'), veer(h) + direction(t)) (:mod:`turbgen.spec.mean_wind`) at the time slice k
-    reaches the turbine, ``first_slice_s`` + k dt [s]; else only u gets the profile's mean.
+    With veer, history or transient (u, v) = rotate((U + u', v'), veer(h) + direction(t)) (turbgen.spec.mean_wind).
     """
 
     def __init__(self, fs, ix: int, layout: VerticalLayout, first_slice_s: float = 0.0):

@@ -1,8 +1,5 @@
-"""Mean wind profile and ground clearance for the InflowWind formats.
-
-The exporters add a mean at absolute height h = h_hub + z (default the power law U (h / h_hub)^alpha). A grid
-reaching the ground (h <= 0) can neither carry the profile nor be read by InflowWind: refused unless the rows
-below are dropped.
+"""Mean wind profile and ground clearance for the InflowWind formats (a grid reaching the ground is refused
+unless its rows below are dropped).
 """
 
 from __future__ import annotations

@@ -33,13 +33,9 @@ def uniform_text(event: IecTransient) -> str:
 
 
 def export_transient(event: IecTransient, out, *, overwrite: bool = False, runner_files: bool = True):
-    """Write ``event`` as the uniform wind file ``out`` and, with ``runner_files``, its InflowWind v5 input file
-    ``<out stem>_InflowWind_uniform.dat`` (WindType 2, RefHt_Uni = hub, RefLength = D).
+    """Write ``event`` as the uniform wind file ``out`` and, with ``runner_files``, its InflowWind input file.
 
-    Returns
-    -------
-    tuple of (list of pathlib.Path, list of str)
-        The paths written and one usage line per input file.
+    Returns (paths written, one usage line per input file).
     """
     out = Path(out)
     dat = inflowwind_path(out.with_suffix("") if out.suffix else out, "uniform")

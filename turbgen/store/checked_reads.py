@@ -1,7 +1,6 @@
-"""Reading a plane of a store chunk by chunk with its data checked: a chunk that does not decode (truncated,
-overwritten) or holds NaN/inf (the writer never stores them) is a one-line StoreError naming the component,
-plane, time index and chunk file. Whole chunks by the raw-chunk fast path where it applies (``chunk_files``),
-all else through zarr."""
+"""Reading a plane of a store chunk by chunk with its data checked: a chunk that does not decode or holds NaN/inf
+is a one-line StoreError naming the component, plane, time index and chunk file.
+"""
 
 from __future__ import annotations
 
@@ -14,10 +13,9 @@ from turbgen.store.chunk_files import read_chunk
 
 
 def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None, out: np.ndarray | None = None) -> np.ndarray:
-    """Plane ``ix`` of a component array (t, x, y, z) over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], read one
-    stored chunk at a time into ``out`` (C-contiguous float32 of that shape, returned; default a new array): a
-    buffer reused across reads saves fresh pages per read. ``path`` names the store in messages (default the
-    array's store root). StoreError "corrupted chunk at ..." or "NaN at ..." / "inf at ..." as above.
+    """Plane ``ix`` of a component array over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], one chunk at a time.
+
+    ``out``: a reused C-contiguous buffer (saves fresh pages per read); ``path`` names the store in messages.
     """
     name = arr.basename
     where = path if path is not None else getattr(arr.store, "root", None) or "store"

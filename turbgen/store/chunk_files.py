@@ -1,12 +1,8 @@
 """The raw-chunk fast path of the store's I/O: whole chunks of uncompressed stores moved by direct I/O (O_DIRECT).
 
-Everything else goes through zarr's public API, and so does a chunk wherever this path declines (a compressed or
-foreign-endian array, no O_DIRECT: another platform or ``TURBGEN_PORTABLE=1``, a file system refusing it); why it
-stays: benchmarks/bench_store_io.md. An uncompressed chunk with the ``bytes`` codec is a file of its C-order bytes
-at the array's chunk key (Zarr v3 specification).
-
-Direct I/O needs the buffer, offset and length aligned to the device's logical block: other chunks pass through
-a page-aligned bounce buffer, padded to a whole block, the file then truncated to its length.
+Where it declines (compressed or foreign-endian array, no O_DIRECT, ``TURBGEN_PORTABLE=1``) zarr's public API does
+it; why it stays: benchmarks/bench_store_io.md. An uncompressed ``bytes`` chunk is a file of its C-order bytes at
+its chunk key (Zarr v3 specification); unaligned chunks pass through a page-aligned bounce buffer.
 """
 
 from __future__ import annotations
@@ -87,10 +83,7 @@ def _direct(array, coords, flags: int, move) -> bool:
 
 
 def write_chunk(array, coords: tuple[int, ...], data: np.ndarray) -> bool:
-    """Write ``data``, the whole chunk ``coords`` of ``array`` (any layout; float32), as its file by direct I/O.
-
-    Returns False where the fast path declines (the caller then writes through zarr).
-    """
+    """Write the whole chunk ``coords`` of ``array`` from ``data`` by direct I/O; False where the path declines."""
     data = np.ascontiguousarray(data)
     nbytes, padded = data.nbytes, _round_up(data.nbytes)
 
@@ -111,10 +104,9 @@ def write_chunk(array, coords: tuple[int, ...], data: np.ndarray) -> bool:
 
 
 def read_chunk(array, coords: tuple[int, ...], out: np.ndarray) -> bool:
-    """Fill ``out`` (C-contiguous, the whole chunk ``coords`` of ``array``) from its file by direct I/O.
+    """Fill ``out`` with the whole chunk ``coords`` of ``array`` by direct I/O; False where the path declines.
 
-    Returns False where the fast path declines (the caller then reads through zarr); FileNotFoundError for a
-    missing file, ValueError for a file that does not hold exactly ``out.nbytes`` bytes.
+    FileNotFoundError for a missing file, ValueError for one not of exactly ``out.nbytes`` bytes.
     """
     nbytes, dest = out.nbytes, out.reshape(-1).view(np.uint8)
 

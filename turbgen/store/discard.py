@@ -11,12 +11,9 @@ from pathlib import Path
 def finish_before_raising(fn, *args):
     """``fn(*args)``, run to its end even when the calling thread is interrupted while it runs.
 
-    zarr performs a write in its own event-loop thread while the caller waits; an exception raised in the waiting
-    thread (Ctrl-C's KeyboardInterrupt, an application's signal turned into SystemExit) would leave that I/O running,
-    to recreate files in a temporary directory being removed. In the main thread (the only one Python raises such
-    exceptions in) ``fn`` therefore runs in a helper thread, and an interruption, even one landing while the helper
-    starts, waits for a started ``fn`` to end before it goes on (a second interruption stops that wait). Other
-    threads call ``fn`` directly.
+    zarr writes in its own event-loop thread: a KeyboardInterrupt or SystemExit in the waiting thread would leave that
+    I/O recreating files in a temporary directory being removed. In the main thread ``fn`` runs in a helper thread that
+    an interruption waits for (a second one stops the wait).
     """
     if threading.current_thread() is not threading.main_thread():
         return fn(*args)

@@ -7,12 +7,9 @@ One zarr v3 group holds one field::
                                uncompressed, fill value NaN, every chunk written (a missing one: a partial copy)
     <store>/t, x, y, z         float64 1-D coordinates, dimension_names (name,), attrs units/long_name
 
-Group attributes (JSON Schema ``turbgen/schemas/field.schema.json``): turbgen_version, created_utc (ISO 8601),
-layout_version, fft_backend (turbgen.fft; an input of the run like its seed, changing the field at float32
-round-off only; stores since 2026-11-28), model (turbgen.spec.models), parameters, units, seed, U_m_s,
-hub_height_m, frame = "convected" (the field at plane x and physical time T is the stored sample at
-t = T + x/U), frame_note, grid, rms_m_s {u, v, w} [m/s] (stores since 2026-11-26; turbgen.store.plausibility),
-and last the completeness marker turbgen_complete = true.
+Group attributes (``turbgen/schemas/field.schema.json``): turbgen_version, created_utc, layout_version,
+fft_backend, model, parameters, units, seed, U_m_s, hub_height_m, frame = "convected" (plane x at physical time T is
+the stored sample t = T + x/U), frame_note, grid, rms_m_s, and last the completeness marker turbgen_complete.
 """
 
 from __future__ import annotations
@@ -32,8 +29,7 @@ from turbgen.spec.models import model_names
 def silence_consolidated_metadata_warning() -> None:
     """Ignore zarr's warning that consolidated metadata is not part of the v3 specification (used knowingly).
 
-    A process-wide filter for that message only, added before each consolidation or open (adding it again
-    replaces it); ``warnings.catch_warnings()`` is not thread-safe across writer threads.
+    A process-wide filter for that message only: ``warnings.catch_warnings()`` is not thread-safe.
     """
     warnings.filterwarnings("ignore", message="Consolidated metadata is currently not part", category=UserWarning)
 
@@ -72,11 +68,7 @@ DEFAULT_CHUNK_T_MAX = 1024
 
 
 def compressor() -> None:
-    """Compressor of u, v, w: none (``compressors=None``; chunks stored raw).
-
-    float32 turbulence has random low mantissa bits: Blosc-lz4 + shuffle (older stores, still read) kept 0.88-0.92
-    of the bytes for an order of magnitude more CPU per value (benchmarks/README.md).
-    """
+    """Compressor of u, v, w: none; float32 turbulence has random low mantissa bits (benchmarks/README.md)."""
     return None
 
 
@@ -118,11 +110,7 @@ def _validator():
 
 
 def validate_attrs(attrs: dict, *, where: str, error: type[Exception]) -> None:
-    """Check group attributes against ``schemas/field.schema.json``; raise ``error`` (one line) if invalid.
-
-    The best-matching violation as "``where``: attribute PATH: message" (message cut to 160 characters);
-    ``error`` is the exception class (e.g. StoreError, ValueError).
-    """
+    """Check group attributes against ``schemas/field.schema.json``; raise ``error`` (one line) if invalid."""
     err = jsonschema.exceptions.best_match(_validator().iter_errors(attrs))
     if err is None and attrs["model"] not in MODELS:  # the schema takes a string: the models are declared in spec
         raise error(f"{where}: attribute model: {attrs['model']!r} is not one of {', '.join(MODELS)}")

@@ -1,13 +1,7 @@
 """A field kept in memory as the ``xarray.Dataset`` its store would open to: the writer's interface, no file.
 
-    with MemoryWriter(grid, attrs) as w:
-        w.write("u", ix, block)            # as StoreWriter.write
-    ds = w.dataset                         # u, v, w (t, x, y, z), coordinates and attributes of the store
-
-The same checks, float32 values and attributes (but ``created_utc``) as :class:`turbgen.store.writer.StoreWriter`
-and a store opened by ``xarray.open_zarr``. Used by ``turbgen.mann()`` / ``turbgen.kaimal()`` without ``out``.
-The (t, x, y, z) arrays are held plane by plane (each plane's (t, y, z) block contiguous, as the generators write
-them): ``numpy.ascontiguousarray`` gives a C-ordered copy where one is needed.
+The same checks, float32 values and attributes (but ``created_utc``) as :class:`turbgen.store.writer.StoreWriter`.
+Used by ``turbgen.mann()`` / ``turbgen.kaimal()`` without ``out``; each plane's (t, y, z) block is contiguous.
 """
 
 from __future__ import annotations
@@ -24,10 +18,7 @@ from turbgen.store.writer import checked_block, rms_from_squares, validated_call
 
 
 class MemoryWriter:
-    """Context manager collecting one field in memory; :attr:`dataset` after its ``with`` block.
-
-    ``attrs`` as for :func:`turbgen.store.create_store` (ValueError where it would refuse them).
-    """
+    """Context manager collecting one field in memory; :attr:`dataset` after its ``with`` block."""
 
     def __init__(self, grid: Grid, attrs: dict):
         self.grid = grid

@@ -1,9 +1,6 @@
-"""A field held in memory (an ``xarray.Dataset`` of ``turbgen.mann`` / ``turbgen.kaimal`` without ``out``, or of a
-generator) read through the interface of an opened store: validation, exports and the virtual lidar take either.
+"""A field held in memory (an ``xarray.Dataset``) read through the interface of an opened store.
 
-No file is written: the readers use the Dataset's arrays. ``chunk_t`` is the chunk length the store of the same field
-would have (turbgen.store.layout.default_chunk_t), so what is read span by span (validation, lidar) is read in the
-same spans as from that store, and gives the same numbers.
+``chunk_t`` is the chunk length the same field's store would have, so span-by-span reads give the same numbers.
 """
 
 from __future__ import annotations
@@ -19,10 +16,7 @@ LABEL = "the field in memory"
 
 
 class MemoryField(FieldStore):
-    """A complete field in memory with the reading interface of :class:`turbgen.store.FieldStore` (``path`` None).
-
-    Made by :func:`memory_field`; ``array(c)`` is the Dataset's numpy array (t, x, y, z), not a copy.
-    """
+    """A complete field in memory with the reading interface of :class:`turbgen.store.FieldStore` (``path`` None)."""
 
     def __init__(self, grid, attrs: dict, arrays: dict[str, np.ndarray]):
         super().__init__(None, grid, attrs, arrays)  # type: ignore[arg-type]
@@ -47,10 +41,7 @@ class MemoryField(FieldStore):
         return da.from_array(self.array(component), chunks=(self.chunk_t, 1, self.grid.ny, self.grid.nz))
 
     def read_span(self, component: str, ix: int, t0: int, t1: int, out: np.ndarray | None = None) -> np.ndarray:
-        """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t, ny, nz): a copy, or ``out`` filled.
-
-        Checked as a store's read is: StoreError for NaN/inf or an implausible value (a Dataset changed since).
-        """
+        """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t, ny, nz), checked as a store's read is."""
         block = self.array(component)[t0:t1, ix]
         out = np.array(block, dtype=np.float32, order="C") if out is None else _copied(block, out)
         bad = ~np.isfinite(out)
@@ -78,11 +69,9 @@ def _copied(block: np.ndarray, out: np.ndarray) -> np.ndarray:
 
 
 def memory_field(ds) -> MemoryField:
-    """The field of the Dataset ``ds`` (u, v, w (t, x, y, z) float32 with a turbgen store's attributes), checked as
-    :func:`turbgen.store.open_store` checks a store.
+    """The field of the Dataset ``ds`` (u, v, w float32 with a store's attributes), checked as open_store checks.
 
-    ``ds`` may be lazy (loaded; a Dataset in memory is not copied). StoreError when it lacks a turbgen field's
-    attributes, components or coordinates, or they do not match its grid.
+    StoreError when it lacks a turbgen field's attributes, components or coordinates, or they do not match its grid.
 
     Examples
     --------

@@ -13,12 +13,10 @@ MAX_NAME_BYTES = 200
 
 
 def check_output_path(path, what: str = "--out", *, create_parents: bool = False) -> Path:
-    """``path`` as a Path if a file or directory can be created there, else ParameterError naming it.
+    """``path`` (``~`` expanded) if a file or directory can be created there, else ParameterError naming it.
 
-    Refused: an empty path, a name longer than MAX_NAME_BYTES, an ancestor that is a file or a zarr store (an
-    output inside a store would be taken for part of it), and (unless ``create_parents``: the caller makes
-    missing directories) a parent that does not exist; ``path`` itself and --overwrite are the writers' business.
-    Returns ``path`` with ``~`` expanded (not made absolute); ``what`` names the option in messages.
+    Refused: an empty path, a name over MAX_NAME_BYTES, an ancestor that is a file or a zarr store, and (unless
+    ``create_parents``) a missing parent; ``what`` names the option in messages.
     """
     if path is None:
         raise ParameterError(f"{what} = None; give a file or directory name")
@@ -53,10 +51,7 @@ def enclosing_store(directory: Path) -> Path | None:
 
 
 def check_output_dir(path, what: str) -> Path:
-    """:func:`check_output_path` for a directory of outputs (a sweep's; missing parents the caller creates).
-
-    Also a ParameterError for a zarr store (or other zarr node) at ``path`` itself.
-    """
+    """:func:`check_output_path` for a directory of outputs; also ParameterError for a zarr node at ``path``."""
     p = check_output_path(path, what, create_parents=True)
     if (p / "zarr.json").is_file():
         raise ParameterError(f"{what} = {str(path)!r} is a field store, not a sweep directory; give another directory")

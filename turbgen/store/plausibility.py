@@ -1,16 +1,8 @@
 """Physical plausibility of a store that decodes: attributes within the allowed ranges, values within
 AMPLITUDE_RMS times the root mean square its writer recorded.
 
-A store can pass every structural check, decode and hold only finite numbers, yet be garbage: a chunk
-overwritten with 3e38, an attribute ``U_m_s`` = 1e308 or ``length_scale_m`` = -5 edited by hand.
-:func:`check_attributes` refuses such attributes on open (``info``, ``validate``, ``export`` alike) with the
-range table's message (turbgen.theory.ranges); :func:`check_amplitudes` refuses values beyond AMPLITUDE_RMS
-times the component's recorded ``rms_m_s`` (times the mean wind speed for stores without it).
-
-Why 100 rms: turbgen's fields are Gaussian (linear in Gaussian noise), so the largest |value| among n
-samples is about sqrt(2 ln n) rms: 7.4 rms for n = 10^12, far more samples than a store holds. A value
-of 100 rms has probability below exp(-5000); it is corrupted data, not turbulence. (A value the writer
-itself wrote is inside its own rms: at most sqrt(n) rms. The check finds values changed after the write.)
+Why 100 rms: the fields are Gaussian, so the largest of n samples is about sqrt(2 ln n) rms (7.4 for n = 10^12);
+100 rms has probability below exp(-5000): corrupted data, not turbulence.
 """
 
 from __future__ import annotations
@@ -28,12 +20,9 @@ AMPLITUDE_RMS = 100.0  # largest plausible |value| / rms (module docstring)
 
 
 def check_attributes(attrs: Mapping, where: str) -> None:
-    """StoreError unless the store's U_m_s, hub_height_m and every parameter the range table knows are in range.
+    """StoreError unless U_m_s, hub_height_m and every parameter turbgen.theory.ranges knows are in range.
 
-    The run parameters are checked against turbgen.theory.ranges (lists element by element; None, e.g. a frozen
-    field's evolution time, is skipped); parameters the table does not know are left to the run's own spec.
-
-    ``attrs`` are valid against the field schema; the message is "<where>: attribute <name>: <range message>".
+    Lists are checked element by element; None is skipped.
     """
     checks = [(key, key, attrs[key]) for key in ("U_m_s", "hub_height_m")]
     params = attrs.get("parameters", {})
@@ -49,10 +38,9 @@ def check_attributes(attrs: Mapping, where: str) -> None:
 
 
 def spread_warnings(attrs: Mapping) -> list[str]:
-    """Warnings for a recorded rms beyond the largest standard deviation a run may ask for (``sigma_m_s`` of
-    turbgen.theory.ranges, 30 m/s): a field made from implausible inputs (e.g. constraint values of 1e30 m/s gave
-    sigma_u = 2.6e29 m/s), or an extreme corner of the Mann ranges (ae 100, L 1000 m). The data decode and are
-    consistent, so ``info`` shows the store and warns (one sentence per component) instead of refusing it.
+    """Warnings for a recorded rms beyond the largest ``sigma_m_s`` of turbgen.theory.ranges (30 m/s).
+
+    Such data decode and are consistent (implausible inputs, extreme Mann corners), so ``info`` warns, not refuses.
     """
     rms = attrs.get(RMS_ATTR)
     if not isinstance(rms, Mapping):
@@ -75,11 +63,7 @@ def amplitude_limits(attrs: Mapping) -> dict[str, tuple[float, str]]:
 
 def check_amplitudes(block: np.ndarray, component: str, limit: tuple[float, str], where, ix: int, t0: int,
                      chunk_t: int) -> None:
-    """StoreError at the first value of ``block`` whose magnitude exceeds ``limit`` (one pass: its max and min).
-
-    ``block``: finite float32 (t, ny, nz) [m/s] of plane ``ix`` from time index ``t0``; ``limit`` the component's
-    :func:`amplitude_limits` entry; ``where`` names the store; ``chunk_t`` names the chunk file in the message.
-    """
+    """StoreError at the first value of ``block`` (plane ``ix`` from time ``t0``) beyond ``limit`` in magnitude."""
     bound, basis = limit
     if block.size == 0 or max(float(block.max()), -float(block.min())) <= bound:
         return

@@ -87,12 +87,9 @@ class FieldStore:
         return self.read_span(component, ix, 0, self.grid.nt)
 
     def read_span(self, component: str, ix: int, t0: int, t1: int, out: np.ndarray | None = None) -> np.ndarray:
-        """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], read and checked chunk
-        by chunk.
+        """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], read and checked.
 
-        A chunk must decode and hold finite values (:func:`read_checked`), none larger in magnitude than
-        AMPLITUDE_RMS times the component's recorded rms (:mod:`turbgen.store.plausibility`); else StoreError.
-        ``out``: a C-contiguous float32 (t1 - t0, ny, nz) buffer to read into (returned).
+        StoreError for a chunk that does not decode, NaN/inf, or a value beyond AMPLITUDE_RMS times the recorded rms.
         """
         arr = self.array(component)
         block = read_checked(arr, ix, t0, t1, self.path, out=out)
@@ -112,14 +109,7 @@ class FieldStore:
     def summary(self) -> dict:
         """What ``turbgen info`` shows, as JSON-serialisable values (units in the key names).
 
-        Returns
-        -------
-        dict
-            path, complete, model, turbgen_version, created_utc, fft_backend, grid, shape_t_x_y_z, duration_s [s],
-            width_y_m [m], height_z_m [m], chunk_t, U_m_s [m/s], hub_height_m [m], seed, frame,
-            frame_note, parameters, units, size_on_disk_bytes and size_uncompressed_bytes [bytes], warnings (an
-            implausible recorded rms: :func:`turbgen.store.plausibility.spread_warnings`); ``constraints``
-            (series, solver, residual [m/s]) only for a store conditioned on measurements.
+        ``constraints`` (series, solver, residual [m/s]) only for a store conditioned on measurements.
         """
         g, a = self.grid, self.attrs
         return {

@@ -1,8 +1,4 @@
-"""Temporaries of unfinished outputs (turbgen.atomic), the liveness of their writers, and atomic publication.
-
-A temporary whose PID is dead on this host (SIGKILL, power loss) is garbage: :func:`remove_dead_temporaries` deletes
-it (the next write of the same output, ``turbgen info`` and ``turbgen sweep`` call it and say so in one line).
-"""
+"""Temporaries of unfinished outputs (turbgen.atomic), the liveness of their writers, and atomic publication."""
 
 from __future__ import annotations
 
@@ -41,10 +37,7 @@ def parse_temp(name: str) -> tuple[str, int] | None:
 
 
 def remove_dead_temporaries(directory, names=None) -> list[Path]:
-    """Delete the temporaries in ``directory`` (of the final ``names``, or all) whose writer is dead; the removed paths.
-
-    Unreadable directories, entries that vanish meanwhile and entries that cannot be removed are skipped.
-    """
+    """Delete the temporaries in ``directory`` (of ``names``, or all) whose writer is dead; the removed paths."""
     directory = Path(directory)
     wanted = None if names is None else set(names)
     removed = []
@@ -85,18 +78,11 @@ def report_removed(removed) -> None:
 
 
 def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
-    """Move the finished temporary ``tmp`` to ``path`` atomically.
+    """Move the finished temporary sibling ``tmp`` to ``path`` atomically; returns where the old output lies, or None.
 
-    ``replace`` False: fails with FileExistsError if ``path`` exists (never clobbers, also not a
-    directory created meanwhile). ``replace`` True: ``path`` is swapped with ``tmp`` in one step
-    (renameat2 RENAME_EXCHANGE), so readers always see either the old or the new complete output;
-    the old one is left at the temporary name (a dead writer's garbage if we are killed now) and
-    returned for the caller to delete. Where renameat2 is missing, the old output is first renamed
-    to a temporary name of this process, then the new one renamed in (a short window without
-    ``path``; a writer losing a race against another one gets FileExistsError).
-
-    ``tmp`` (file or directory) is a sibling of ``path``. Returns where the old output now lies, or None.
-    FileExistsError as above; OSError for other rename failures.
+    ``replace`` False: FileExistsError if ``path`` exists. True: swapped in one step (renameat2 RENAME_EXCHANGE), the
+    old output left at the temporary name for the caller to delete; without renameat2, two renames (a short window
+    without ``path``).
     """
     tmp, path = Path(tmp), Path(path)
     exists = path.exists() or path.is_symlink()
@@ -126,9 +112,7 @@ def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
 def write_atomically(path: Path, write, what: str) -> Path:
     """Write the file ``path`` by ``write(tmp)`` under a temporary name, then rename it into place; returns ``path``.
 
-    A failed write (a full disk) leaves neither a partial file nor the temporary. ``tmp``'s suffix means nothing
-    (give the format, e.g. ``fig.savefig(tmp, format="png")``). ParameterError naming ``what`` (e.g. "the plot")
-    and ``path`` when the file system refuses the write.
+    ``tmp``'s suffix means nothing (give the format). ParameterError naming ``what`` and ``path`` on a refused write.
     """
     from turbgen.errors import ParameterError
 

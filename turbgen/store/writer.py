@@ -1,15 +1,11 @@
-"""Writing a field store safely through zarr's public API (whole raw chunks by ``chunk_files``' fast path):
-temporary sibling directory, completeness marker last, atomic rename.
+"""Writing a field store safely through zarr's public API: temporary sibling directory, completeness marker
+last, atomic rename (``temporaries.publish``).
 
     with create_store(path, grid, attrs, chunk_t=None, overwrite=False) as w:
         w.write("u", ix, block, t0)        # block (nt_block, ny, nz), any thread
 
-On normal exit of the ``with`` block the marker is written last, metadata consolidated and the
-temporary directory renamed to ``path`` (atomic: same parent directory, same filesystem; with
-``overwrite`` the old store is swapped out in the same step, see ``temporaries.publish``). On any
-exception (KeyboardInterrupt, SIGTERM and SIGHUP included) the temporary directory is removed and
-``path`` is untouched; a disk error (full, read-only) becomes a one-line StoreError. Temporaries
-of earlier writers of ``path`` that were killed (SIGKILL) are removed when the next write starts.
+On any exception the temporary directory is removed and ``path`` is untouched; a disk error is a one-line
+StoreError.
 """
 
 from __future__ import annotations
@@ -41,10 +37,8 @@ from turbgen.store.paths import check_output_path
 class StoreWriter:
     """Context manager writing one field store; made by :func:`create_store`.
 
-    ``write`` may be called from several threads: whole chunks (other planes or components, time blocks aligned to
-    ``chunk_t``) run in parallel, unaligned blocks of one plane one at a time (zarr read-modify-writes a partial
-    chunk). Every (component, plane, time sample) must be written before the ``with`` block ends, else
-    RuntimeError and nothing is published; a file-system error on entering or leaving is a one-line StoreError.
+    ``write`` is thread-safe (unaligned blocks of one plane one at a time: zarr read-modify-writes a partial chunk).
+    Every sample must be written before the ``with`` block ends, else RuntimeError and nothing is published.
     """
 
     def __init__(self, path: Path, grid: Grid, attrs: dict, chunk_t: int, overwrite: bool):
@@ -97,15 +91,8 @@ class StoreWriter:
     def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0, squares: bool = False):
         """Write ``data`` (nt_block, ny, nz) [m/s] as float32 to ``component`` at plane index ``ix``, time ``t0``.
 
-        Whole chunks go by the raw-chunk fast path where it applies (:mod:`turbgen.store.chunk_files`), all else
-        through zarr. ValueError for an unknown component, a plane out of range, a block that does not fit, or a
-        block holding NaN or inf.
-
-        Returns
-        -------
-        float or tuple of float
-            The block's float64 sum [m/s] (from the finiteness check: a caller accumulating the mean need not sum
-            again); with ``squares``, (sum [m/s], sum of squares [m^2/s^2]).
+        Returns the block's float64 sum [m/s], with ``squares`` also its sum of squares [m^2/s^2]. ValueError as
+        :func:`checked_block`.
         """
         if self._tmp is None:
             raise RuntimeError("StoreWriter.write outside its 'with' block")
@@ -186,22 +173,14 @@ def with_writer_attrs(attrs: dict, grid: Grid) -> dict:
 
 
 def validated_caller_attrs(attrs: dict, grid: Grid) -> dict:
-    """The caller's ``attrs`` checked (check_caller_attrs) and, with the writer's, against the field schema.
-
-    ValueError for attributes that lack a required key or a parameter's unit, set writer attributes, are not
-    JSON-serialisable, or do not match the schema.
-    """
+    """The caller's ``attrs`` checked (check_caller_attrs) and, with the writer's, against the schema (ValueError)."""
     full = check_caller_attrs(attrs)
     layout.validate_attrs({**with_writer_attrs(full, grid), layout.MARKER: True}, where="store attrs", error=ValueError)
     return full
 
 
 def rms_from_squares(squares: dict, grid: Grid) -> dict[str, float]:
-    """Component -> root mean square [m/s] over the field (the ``rms_m_s`` attribute).
-
-    ``squares`` maps (component, ix, t0, t1) to the block's float64 sum of squares [m^2/s^2]; summed in sorted key
-    order, so the value does not depend on how threads interleaved the writes.
-    """
+    """Component -> rms [m/s] from the blocks' sums of squares, summed in sorted key order (thread-independent)."""
     n = grid.nx * grid.nt * grid.ny * grid.nz
     total = {c: 0.0 for c in layout.COMPONENTS}
     for key in sorted(squares):
@@ -210,10 +189,9 @@ def rms_from_squares(squares: dict, grid: Grid) -> dict[str, float]:
 
 
 def checked_block(grid: Grid, component: str, ix: int, data, t0: int) -> tuple[np.ndarray, float, float]:
-    """``data`` as the float32 block a writer stores at (``component``, plane ``ix``, time ``t0``), with its float64
-    sum [m/s] and sum of squares [m^2/s^2].
+    """``data`` as the float32 block stored at (``component``, ``ix``, ``t0``), with its float64 sum and sum of squares.
 
-    ValueError for an unknown component, a plane index out of range, a block that does not fit, or NaN or inf.
+    ValueError for an unknown component, a plane out of range, a block that does not fit, or NaN or inf.
     """
     if component not in layout.COMPONENTS:
         raise ValueError(f"component {component!r} is not one of {layout.COMPONENTS}")
@@ -240,28 +218,12 @@ def _raise_disk_error(exc: BaseException, path: Path) -> None:
 
 def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: bool = False,
                     scratch_bytes: int = 0) -> tuple[Path, int]:
-    """What :func:`create_store` checks before it creates anything (a command calls it before it prints).
+    """What :func:`create_store` checks before it creates anything; returns (absolute path, chunk_t).
 
-    Returns (absolute path, chunk_t). Dead writers' temporaries of ``path`` are removed (said on stderr) first.
-
-    Parameters
-    ----------
-    path, grid : str or os.PathLike, Grid
-        The store directory to create and the field grid (its size for the disk check).
-    chunk_t : int, optional
-        Time samples per chunk, in [1, nt]; default min(nt, 1024).
-    overwrite : bool, optional
-        Whether an existing turbgen store at ``path`` may be replaced.
-    scratch_bytes : int, optional
-        Bytes of scratch files the run writes next to the store, counted with it in the disk check.
-
-    Raises
-    ------
-    ParameterError
-        For a bad output path, a ``chunk_t`` outside [1, nt], or too little free disk.
-    StoreError
-        When ``path`` exists and ``overwrite`` is False or it is not a turbgen store, or the output directory does
-        not exist or is not writable.
+    Dead writers' temporaries of ``path`` are removed first. ``chunk_t`` in [1, nt] (default min(nt, 1024));
+    ``scratch_bytes``: scratch files counted in the disk check. ParameterError for a bad path or chunk_t or too little
+    disk; StoreError for an existing ``path`` without ``overwrite`` or not a turbgen store, or an unwritable
+    directory.
     """
     path = check_output_path(path).absolute()
     if chunk_t is None:
@@ -287,10 +249,9 @@ def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: 
 
 
 def create_store(path, grid: Grid, attrs: dict, *, chunk_t: int | None = None, overwrite: bool = False) -> StoreWriter:
-    """A :class:`StoreWriter` (context manager) for a new field store at ``path``; nothing is created before ``with``.
+    """A :class:`StoreWriter` for a new field store at ``path``; nothing is created before ``with``.
 
-    ``attrs`` holds model, parameters, units, seed, U_m_s [m/s], hub_height_m [m]; the writer adds the rest
-    (:func:`with_writer_attrs`), rms_m_s and last the completeness marker. Other arguments and refusals as
+    ``attrs``: model, parameters, units, seed, U_m_s [m/s], hub_height_m [m] (the writer adds the rest). Refusals as
     :func:`check_new_store`; ValueError for ``attrs`` :func:`validated_caller_attrs` refuses.
     """
     full = validated_caller_attrs(attrs, grid)

@@ -1,8 +1,6 @@
 """The periodic synthesis box of a Mann (1998) field: its size, spacings and wavenumbers.
 
-The box is (xi, y, z) with xi along the mean wind; the real FFT is taken along xi (the time axis of a plane,
-dx = U dt), so the half spectrum holds slabs k1 >= 0 of shape (nyp, nzp). A plane sees the frozen box
-u(xi = -U t) (Taylor), so the stored slab of FFT frequency index i holds the physical wavenumber k1 = -i dk1.
+The real FFT runs along xi = -U t (Taylor), so the stored slab of FFT index i holds k1 = -i dk1.
 """
 
 from __future__ import annotations

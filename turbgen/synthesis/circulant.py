@@ -1,19 +1,9 @@
 """2-D circulant embedding of a distance-only coherence on a regular yz grid (exact Veers synthesis).
 
-A coherence depending only on the distance r is embedded in an My x Mz torus (wrapped lags min(i, M - i) h). The
-torus covariance is circulant, its eigenvalues the 2-D FFT of the wrapped kernel, and
-
-    Z = FFT2(sqrt(lam / (My Mz)) xi)[:ny, :nz],   xi complex standard normal (E|xi|^2 = 1),
-
-has E[Z Z^H] = C (and E[Z Z^T] = 0) exactly when every eigenvalue is >= 0 (Dietrich & Newsam 1997); O(M^2 log M)
-per frequency instead of O(N^3).
-
-The torus period follows the frequency: a fast-decaying kernel is wrapped as it is (:func:`torus_size`); one staying
-high over the grid is first multiplied by a C-infinity cut-off, 1 on every lag of the grid and 0 from half the
-period (smooth periodization, Bachmayr, Graham, Nguyen & Scheichl 2020; :func:`smooth_torus_size`). Both rules are
-empirical, so the torus is enlarged while an eigenvalue is negative beyond rounding; then small grids fall back to
-a dense square root (:func:`dense_embedding`, also where cheaper), large ones clip and report the clipping error.
-:func:`check_sampling_cost` refuses up front what neither can do.
+The wrapped kernel's 2-D FFT gives the torus eigenvalues; Z = FFT2(sqrt(lam / (My Mz)) xi)[:ny, :nz] has
+E[Z Z^H] = C exactly when all are >= 0 (Dietrich & Newsam 1997). A kernel staying high over the grid is first
+smoothly periodized (Bachmayr, Graham, Nguyen & Scheichl 2020). The torus grows while an eigenvalue is negative;
+then small grids fall back to a dense square root, large ones clip and report the error.
 """
 
 from __future__ import annotations
@@ -140,7 +130,7 @@ class Embedding:
                transforms=None) -> np.ndarray:  # fmt: skip
         """Map standard complex normals xi (..., *torus_shape) to coefficients (..., ny, nz) with covariance C.
 
-        ``overwrite``: xi (C-contiguous) may serve as the work array (destroyed); the same values.
+        ``overwrite``: xi may serve as the work array (destroyed).
         """
         if self.chol is not None:
             z = np.einsum("ij,...j->...i", self.chol.astype(xi.real.dtype), xi[..., 0])
@@ -235,11 +225,7 @@ def embed_many(kernels, ny: int, nz: int, dy_m: float, dz_m: float, decay_length
 
 def embed(kernel, ny: int, nz: int, dy_m: float, dz_m: float, decay_length_m: float,
           dense_when_cheaper: bool = True) -> Embedding:
-    """Embedding of C_ab = kernel(r_ab) (kernel(0) = 1, a function of distance in m).
-
-    The kernel is <= exp(-r / ``decay_length_m``) [m] (IEC: 1/(a kappa); inf for a constant kernel), which sets the
-    initial torus (:func:`torus_plan`).
-    """
+    """Embedding of C_ab = kernel(r_ab) (kernel(0) = 1, r in m), kernel <= exp(-r / ``decay_length_m``)."""
     my, mz, smooth = torus_plan(ny, nz, dy_m, dz_m, decay_length_m)
     cap = torus_cap(ny, nz)
     if dense_sampled(ny, nz, my * mz, dense_when_cheaper):

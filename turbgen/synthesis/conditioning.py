@@ -3,20 +3,11 @@
 Hoffman & Ribak (1991): with the prior u ~ N(0, C) (turbgen.synthesis.prior_spectrum), measurements
 d = H u + eps, eps ~ N(0, R) and S = H C H^T + R, a conditional sample is
 
-    u_c = u_s + C H^T S^-1 (d - H u_s - eps_s),      u_s ~ N(0, C), eps_s ~ N(0, R)
+    u_c = u_s + C H^T S^-1 (d - H u_s - eps_s),      u_s ~ N(0, C), eps_s ~ N(0, R).
 
-(C H^T S^-1 d: the conditional mean). Stream a combines values of one plane p_a, y_a(n) = sum_t w_t
-u_(c_t)(n + s_t, y_t, z_t), observed as z_a(m) = y_a(o_a + m q). The stored time axis is periodic, so S is
-block-circulant: one Hermitian (streams x streams) matrix per frequency. At full rate, slab i gives
-
-    L_i[a, b] = nt sum_(t in a, t' in b) w_t w_t' G_i^(p_a p_b)[c_t, c_t'](y_t - y_t', z_t - z_t')
-                * e^(2 pi i i (s_t - s_t') / nt)
-
-with G_i^(pq)(dy, dz) = sum_(j, l) rho_pq Phi_i exp(2 pi i (j dy / nyp + l dz / nzp)) (real part on the k1 = 0 /
-Nyquist slabs), rho_pq = exp(-|t_p - t_q| / tau_e) (Guo et al. 2023, Eq. 13-14), L_(nt - i) = conj L_i, and the
-decimated streams alias the q full-rate frequencies onto j:
-S_j[a, b] = (1/q) sum_l L_(j + l nt/q)[a, b] e^(2 pi i (j + l nt/q)(o_a - o_b) / nt) + sigma_a^2 delta_ab.
-Gaps, the per-direction grouping of terms and C H^T w: docs/constrained-fields.md, "How it is solved".
+The stored time axis is periodic, so S is block-circulant: one Hermitian (streams x streams) matrix per frequency,
+built from rho_pq Phi_i (Guo et al. 2023, Eq. 13-14); decimated streams alias q full-rate frequencies onto one.
+The equations, gaps and C H^T w: docs/constrained-fields.md, "How it is solved".
 """
 
 from __future__ import annotations
@@ -46,10 +37,10 @@ SINGULAR_RTOL = 1e-11  # eigenvalue / largest eigenvalue of S_i below which zero
 
 @dataclass(frozen=True, eq=False)
 class Streams:
-    """Measurement streams on the stored grid (module docstring): ``plane`` (M,) of each stream; per term (T,) its
-    ``term_stream``, ``term_component`` (0 u, 1 v, 2 w), ``term_iy``, ``term_iz``, ``term_weight`` [-] and
-    ``term_shift`` s_t >= 0 [stored steps] (default 0); ``names`` per stream (for messages); ``decimation`` q (divides
-    nt; default 1) and ``offset`` o_a in [0, q) (M,) of each stream's first sample (default 0)."""
+    """Measurement streams on the stored grid: ``plane`` (M,) per stream; per term (T,) ``term_stream``,
+    ``term_component`` (0 u, 1 v, 2 w), ``term_iy``, ``term_iz``, ``term_weight`` [-], ``term_shift`` s_t >= 0 [stored
+    steps]; ``decimation`` q (divides nt) and ``offset`` o_a in [0, q) of each stream's first sample.
+    """
 
     plane: np.ndarray
     term_stream: np.ndarray
@@ -91,10 +82,9 @@ def measure(streams: Streams, plane: int, component: int, field: np.ndarray, out
 
 def measure_spectra(streams: Streams, plane: int, spectra: np.ndarray, nz: int, nt: int, out: np.ndarray,
                     points: np.ndarray | None = None) -> None:  # fmt: skip
-    """Add the time spectra of H's terms on ``plane`` into ``out`` (M, nk1) complex128, from the cropped spectra
-    (3, ny nz, nk1) of that plane's snapshot (MannSnapshots.spectra: the field before its transform along time), or
-    of the sorted cropped points y nz + z ``points`` only (3, len(points), nk1; :func:`measured_points`):
-    Y_a(i) = sum_t w_t U_(c_t)(i, y_t, z_t) exp(2 pi i i s_t / nt). :func:`spectra_samples` turns them into H u."""
+    """Add Y_a(i) = sum_t w_t U_(c_t)(i, y_t, z_t) exp(2 pi i i s_t / nt) of H's terms on ``plane`` into ``out``
+    (M, nk1), from the cropped spectra of that plane's snapshot (all points, or the sorted ``points`` only).
+    """
     sel = np.flatnonzero(streams.plane[streams.term_stream] == plane)
     if len(sel) == 0:
         return
@@ -160,10 +150,9 @@ DIRECTION_DECIMALS = 12
 
 @dataclass(frozen=True, eq=False)
 class _Keys:
-    """The streams' terms grouped per (stream, direction, y, z) node, sorted by stream: ``term_key`` (T,) the key of
-    each term (-1: a term carried by another of its node's components), ``term_weight`` (T,) its weight along the
-    key's direction, ``bounds`` (M + 1,) the keys of each stream, ``dir``/``iy``/``iz`` (K,) of each key and
-    ``directions`` (D, 3) the unit vectors."""
+    """The streams' terms grouped per (stream, direction, y, z) node (a *key*), sorted by stream; ``term_key`` -1 marks
+    a term carried by another component of its node.
+    """
 
     term_key: np.ndarray
     term_weight: np.ndarray
@@ -300,10 +289,10 @@ def _component_basis(directions: np.ndarray) -> _Basis:
 
 
 class _LagTransform:
-    """The real 2-D DFTs of one slab's lag inputs (B, rows, nzp), exact on the columns z < min(e_z, nzp // 2 + 1)
-    (single-threaded plans: the same rounding for any thread count). With ``parity`` (Phi's components, nyp even)
-    only the rows k2 >= 0 go in and y is a DCT-I (even components) or DST-I (odd ones). ``window`` (B, 2 e_y - 1,
-    2 e_z - 1) receives the lag covariances over the keys' extents, ``pairs`` (P, ...) the direction pairs'."""
+    """The real 2-D DFTs of one slab's lag inputs, exact on the columns z < min(e_z, nzp // 2 + 1).
+
+    Single-threaded plans: the same rounding for any thread count. With ``parity`` (nyp even) y is a DCT-I / DST-I.
+    """
 
     def __init__(self, basis: _Basis, n_pairs: int, nyp: int, nzp: int, extent: tuple[int, int],
                  backend: fft.FFTBackend):  # fmt: skip
@@ -340,10 +329,9 @@ class _LagTransform:
 
 def _slab_system(stencil: MannStencil, i: int, lags: np.ndarray, keys: _Keys, basis: _Basis, amp: np.ndarray,
                  dir_pair: np.ndarray, pair_class: np.ndarray, transform: _LagTransform, out: np.ndarray) -> None:
-    """L_i (``out``, (M, M) complex128, zeroed here) of slab ``i``: per lag class, the real 2-D DFTs of
-    exp(-lag / tau_e) times the basis inputs (n^T Phi n' of the direction pairs, or Phi's components: _Basis),
-    the direction pairs' lag covariances over the keys' separations, then the pair sums of the streams of that
-    class (one class at a time: the DFTs stay in cache). ``amp`` (K,): the key amplitudes on the slab."""
+    """L_i (``out`` (M, M), zeroed here) of slab ``i`` from the key amplitudes ``amp`` (K,), one lag class at a time
+    (the DFTs stay in cache).
+    """
     box = stencil.box
     symmetric = slab_weight(stencil, i) == 1.0  # symmetrised under k -> -k, as _slab_phi (1/tau_e is even in k)
     rows = box.nyp if symmetric else transform.rows  # symmetrised on the whole plane, then cut to the rows used
@@ -397,8 +385,7 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
                       progress=None) -> np.ndarray:  # fmt: skip
     """The per-frequency matrices S_j (nt/q, M, M) complex128 [m^2 s^-2 times nt] of the block-circulant S.
 
-    ``stencil`` with coefficients (and 1/tau_e for several evolving planes); ``times_s`` the relative time x/U [s] of
-    every plane (storage order); ``noise_var`` (M,) the measurement-noise variances sigma_a^2 [m^2 s^-2] (R = diag).
+    ``times_s``: relative time x/U [s] of every plane; ``noise_var`` (M,): sigma_a^2 [m^2 s^-2] (R = diag).
     """
     box = stencil.box
     nt, q, m = box.nt, streams.decimation, streams.n_streams
@@ -466,10 +453,10 @@ def _ordered_map(fn, items: list, threads: int, workspace) -> Iterator:
 
 
 def check_singular(cov: np.ndarray, names) -> None:
-    """Raise ParameterError naming the measurements that are linearly dependent (S_i singular on some slab).
+    """Raise ParameterError naming the linearly dependent measurements (S_i singular on some slab).
 
-    Frequencies up to the middle only (S_(n - i) = conj S_i); the names are decided with margins
-    (:func:`dependent_set`), so every CPU names the same ones."""
+    The names are decided with margins (:func:`dependent_set`), so every CPU names the same ones.
+    """
     lam = np.linalg.eigvalsh(cov[: cov.shape[0] // 2 + 1])  # all at once
     top = np.maximum(lam[:, -1], np.finfo(float).tiny)
     singular = np.flatnonzero(lam[:, 0] <= SINGULAR_RTOL * top)
@@ -487,11 +474,11 @@ INVOLVED_RTOL = 1e-5  # share (|c_k| sigma_k / sigma_a) above which an earlier m
 
 
 def dependent_set(s: np.ndarray) -> list[int]:
-    """The smallest dependent set of the Hermitian S >= 0 (M, M), increasing: the first measurement whose residual
-    variance given the independent ones before it is <= DEPENDENT_RTOL of its variance (pivoted Cholesky), and the
-    earlier ones its combination uses (share > INVOLVED_RTOL). Both thresholds are far from round-off for exactly
-    dependent measurements, so the set does not depend on the CPU; if none is that small, the first residual within
-    a factor 10 of the smallest."""
+    """The smallest dependent set of the Hermitian S >= 0 (M, M), increasing (pivoted Cholesky).
+
+    The first measurement whose residual variance is <= DEPENDENT_RTOL of its variance, and the earlier ones its
+    combination uses (share > INVOLVED_RTOL): thresholds far from round-off, so the set does not depend on the CPU.
+    """
     m = s.shape[0]
     var = np.real(np.diag(s)).copy()
     low = np.zeros((m, m), complex)  # L of the independent pivots so far: S_II = L L^H
@@ -553,10 +540,8 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
           preconditioner: np.ndarray | None = None) -> tuple[np.ndarray, SolveReport]:  # fmt: skip
     """x = S^-1 r on the observed samples, zero elsewhere: (x (M, nt), report).
 
-    Every sample observed: the exact per-frequency solve. Otherwise conjugate gradients on S restricted to the
-    observed samples, preconditioned by the circulant solve of ``preconditioner`` (default ``cov``), to CG_TOLERANCE
-    (ParameterError after CG_MAX_ITERATIONS); with more than GAP_START_FRACTION missing they start from
-    :func:`_gap_start` (T_oo S_oo = I - T_om S_mo, T = S^-1: m gaps need up to m iterations).
+    All observed: the exact per-frequency solve. Otherwise preconditioned conjugate gradients on the observed samples
+    (ParameterError after CG_MAX_ITERATIONS), started from :func:`_gap_start` when many samples are missing.
     """
     pre = cov if preconditioner is None else preconditioner
     r = np.where(observed, r, 0.0)
@@ -575,10 +560,10 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
 
 
 def _gap_start(inverse: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, int]:
-    """An approximation of S_oo^-1 r through the precision matrix T = S^-1 of the full streams (circulant: ``inverse``
-    per frequency): S_oo^-1 = T_oo - T_om T_mm^-1 T_mo (the Schur complement; o observed, m missing samples), the
-    T_mm system solved by Jacobi-preconditioned conjugate gradients to 1e-12 (T is far better conditioned on
-    scattered gaps than S on the observed samples). Returns (x, iterations)."""
+    """S_oo^-1 r through the precision T = S^-1 of the full streams: T_oo - T_om T_mm^-1 T_mo (Schur complement).
+
+    T is far better conditioned on scattered gaps than S on the observed samples. Returns (x, iterations).
+    """
     missing = ~observed
     n = r.shape[1]
     weights = np.full(inverse.shape[0], 2.0)  # T's diagonal per stream: the mean of (S_j^-1)_aa over all j
@@ -639,13 +624,10 @@ def _conjugate_gradients(apply, precondition, b: np.ndarray, x: np.ndarray,
 
 def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
                       nz: int, threads: int = 1) -> Iterator[tuple[range, np.ndarray]]:  # fmt: skip
-    """The yz-transformed, cropped spectra of C H^T w on the planes ``planes_out``, group of slabs by group: yields
-    (slabs, block (P_out, 3, len(slabs), ny, nz) complex64), ``threads`` groups computed at once (the result does not
-    depend on it).
+    """Yield (slabs, yz-transformed cropped spectra (P_out, 3, len(slabs), ny, nz) complex64) of C H^T w.
 
-    ``weights`` (M, nt/q): w, one value per stream sample (e.g. S^-1 (d - H u_s - eps_s)); ``times_s`` the relative
-    time x/U [s] of every plane. Per slab: the weights' spectra scattered onto each measured plane, summed with
-    rho_pq by the Ornstein-Uhlenbeck recursion, times Phi, inverse 2-D FFT and crop.
+    ``weights`` (M, nt/q): one value per stream sample; the planes' rho_pq sums run by the Ornstein-Uhlenbeck
+    recursion. The result does not depend on ``threads``.
     """
     box, backend = stencil.box, fft.backend()  # resolved once: every workspace with the same backend
     times = np.asarray(times_s, dtype=float)

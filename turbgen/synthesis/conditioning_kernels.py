@@ -1,10 +1,5 @@
-"""Compiled loops of the Mann conditioning (turbgen.synthesis.conditioning): the streams' key amplitudes per slab
-and the pair sums of the stream covariance from the lag covariances of the prior.
-
-A *key* groups the terms of one stream on one (y, z) node along one direction n; on slab i its amplitude is
-P_k(i) = sum_(t in k) a_t exp(2 pi i i s_t / nt) (a_t the weight along n), and L_i[a, b] = sum_(k in a, k' in b)
-P_k conj(P_k') G_i^(n_k n_k')_(p_a p_b)(y_k - y_k', z_k - z_k'), G(d) = conj R(d) with R the real DFT of
-rho_pq n_k^T Phi_i n_k' (or combined from Phi's components: :func:`lag_window`, :func:`combine_pairs`).
+"""Compiled loops of the Mann conditioning (turbgen.synthesis.conditioning): key amplitudes per slab and the
+pair sums L_i[a, b] = sum_(k in a, k' in b) P_k conj(P_k') G(y_k - y_k', z_k - z_k').
 """
 
 from __future__ import annotations
@@ -28,12 +23,11 @@ def key_amplitudes(term_key, term_shift, term_weight, slabs, nt, out):
 
 @numba.njit(nogil=True, cache=True)
 def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, cls, lag, out):
-    """Add to L[a, b] (out, (M, M) complex128) of one slab the stream pairs of lag class ``cls``, from the key
-    amplitudes ``amp`` (K,), keys sorted by stream (stream a holds keys bounds[a] .. bounds[a + 1]), and that class's
-    lag covariances ``lag`` (direction pairs, 2 e_y - 1, 2 e_z - 1): G(dy, dz) at [dy + e_y - 1, dz + e_z - 1] for
-    |dy| < e_y, |dz| < e_z (the keys' extents, :func:`lag_window`); ``dir_pair`` (D, D) the index of a direction
-    pair, ``pair_class`` (M, M) the lag class of a stream pair. The pairs a <= b are summed, the others are their
-    Hermitian conjugates."""
+    """Add to L[a, b] (``out`` (M, M)) of one slab the stream pairs of lag class ``cls``.
+
+    ``lag`` holds G(dy, dz) at [dy + e_y - 1, dz + e_z - 1]; the pairs a <= b are summed, the others are their
+    Hermitian conjugates.
+    """
     cy, cz = (lag.shape[1] - 1) // 2, (lag.shape[2] - 1) // 2
     m = len(bounds) - 1
     for a in range(m):
@@ -54,13 +48,10 @@ def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, cls, l
 
 @numba.njit(nogil=True, cache=True)
 def chain_correction(f, rho, step, phi, rows, out):
-    """out[r] = Phi sum_q rho_(rows[r] q) f_q per (k2, k3) point: ``f`` (P, 3, 2 J) float32 the planes' complex
-    spectra in time order as (real, imaginary) pairs, ``rho`` (S, J) the Ornstein-Uhlenbeck factors of the S distinct
-    steps between neighbours and ``step`` (P - 1,) the step of each neighbour pair (their products are the factors
-    between any two planes), ``phi`` (3, 3, J) real symmetric, ``out`` (len(rows), 3, 2 J) float32 pairs (the sums
-    run in float64).
+    """out[r] = Phi sum_q rho_(rows[r] q) f_q per (k2, k3) point, sums in float64.
 
-    The sum runs forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once."""
+    Forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once.
+    """
     n_planes, n_values = f.shape[0], f.shape[2]
     block = 512  # values (256 points)
     fwd = np.empty((n_planes, 3, block))
@@ -170,14 +161,11 @@ def times_into(a, b):
 
 @numba.njit(nogil=True, cache=True)
 def lag_window(z, n_even, parity, nzp, out):
-    """The lag covariances G_b(dy, dz) = conj R_b(dy, dz) of the basis inputs (``out`` (B, 2 e_y - 1, 2 e_z - 1),
-    [dy + e_y - 1, dz + e_z - 1], |dy| < e_y, |dz| < e_z, periodic in nyp and nzp) from their DFTs R_b in ``z``
-    (B, rows, nzp // 2 + 1), read at the columns < min(e_z, nzp // 2 + 1) only (R(-d) = conj R(d) gives the others).
+    """The lag covariances G_b(dy, dz) = conj R_b(dy, dz) into ``out`` from their DFTs R_b in ``z``.
 
-    Without ``parity``, z holds R_b on every row (rows = nyp). With ``parity`` (nyp even, rows = nyp / 2 + 1), the
-    basis is Phi's components ordered even in k2 first (``n_even`` of them), and z holds them transformed along z
-    and then along y by a DCT-I (even: R(dy) = R(-dy) = z[dy]) or, for the odd ones, a DST-I on rows 1 .. nyp/2 - 1
-    (Y(dy) = z[dy]) with rows 0 and nyp/2 untouched: R(+-dy) = z[0] + (-1)^dy z[nyp/2] -+ i Y(dy), 0 <= dy <= nyp/2."""
+    With ``parity``, the odd components were transformed along y by a DST-I on rows 1 .. nyp/2 - 1:
+    R(+-dy) = z[0] + (-1)^dy z[nyp/2] -+ i Y(dy); the even ones by a DCT-I, R(dy) = z[dy].
+    """
     n_basis, ny_w, nz_w = out.shape
     cy, cz = (ny_w - 1) // 2, (nz_w - 1) // 2
     nyp = 2 * (z.shape[1] - 1) if parity else z.shape[1]
@@ -233,12 +221,9 @@ def combine_pairs(window, weights, out):
 
 @numba.njit(nogil=True, cache=True)
 def slab_components(coef, j, k1, k2, k3sq, cell_row, cell_col, cell_factor, out):
-    """Phi = 2 C C^T's six components (COMPONENT_PAIRS order: 11, 22, 33, 13, 12, 23) of one slab on its rows
-    0 .. R - 1 (``out`` (6, R, nzp) float64), from the stencil's compact coefficients: ``coef`` (4, S, nyp//2 + 1,
-    nzp) float32 (A, P, Z1, Z2; Z2 odd in k2, the rows k2 < 0 read from their mirror), ``j`` the slab in it, ``k1``
-    [rad/m], ``k2`` (nyp,) and ``k3sq`` (nzp,) [rad/m, rad^2/m^2]; the axis cells' factors (n, 3, 3) float64 at
-    (``cell_row``, ``cell_col``) replace the compact form. The operations of mann_oracle.slab_factor, then the
-    products, one point at a time."""
+    """Phi = 2 C C^T's six components (COMPONENT_PAIRS order) of one slab on rows 0 .. R - 1, from the compact
+    coefficients (the axis cells' factors replace them there): mann_oracle.slab_factor's operations, point by point.
+    """
     nyp, half = len(k2), coef.shape[2] - 1
     c = np.empty((3, 3))
     for r in range(out.shape[1]):

@@ -1,18 +1,12 @@
 """Gaussian conditioning of a Kaimal field on measurement streams, exact for the generator's discrete prior.
 
-KaimalEvo (turbgen.synthesis.kaimal_evo) makes component c of plane p as u_p(n) = irfft_k(amp_k X_kp) (norm
-"forward"), X_k = F_k Z_k across the planes (F_k the float32 longitudinal factor, the identity for components not
-in ``long_components``), Z_kq = A_k xi_kq the bin's yz sampler (circulant torus or dense factor, float32 values) of
-proper complex noise with E|xi|^2 = 2. Hence, exactly (Guo et al. 2023, Eq. 19 as the sampler realises it),
+As KaimalEvo samples it (Guo et al. 2023, Eq. 19),
 
     Cov(u_p(n, y), u_q(n', y')) = (1/nt) sum_(k = 1 .. nt - 1) h_k G_k[p, q] R_k(y, y') e^(2 pi i k (n - n') / nt),
 
-with G_k = F_k F_k^T, R_k = A_k A_k^H the realised yz correlation (the torus's fft2(scale^2) at the wrapped lag,
-chol chol^T, or the identity for white v, w), h_(nt - k) = h_k = nt 2 amp_k^2 on the regular bins, nt amp_N^2 on the
-real Nyquist bin; components are independent. Diagonal in the bin, the streams of turbgen.synthesis.conditioning
-give one dense matrix per frequency, L_k[a, b] = h_k G_k[p_a, p_b] sum_c (A_kc R_kc A_kc^H)[a, b] (A_kc[a, j] the
-sum of w_t e^(2 pi i k s_t / nt) of stream a's terms of component c at point j), solved as there. C H^T w is one
-extra synthesis: X_kp = (h_k / nt) R_k sum_b G_k[p, p_b] W_b(k) conj(A_kc[b]), then the generator's inverse FFT.
+G_k = F_k F_k^T, R_k = A_k A_k^H the realised yz correlation, h_k = nt 2 amp_k^2 (nt amp_N^2 at Nyquist).
+Diagonal in the bin, so the streams give one dense matrix per frequency, solved as in
+turbgen.synthesis.conditioning; C H^T w is one extra synthesis.
 """
 
 from __future__ import annotations
@@ -193,11 +187,7 @@ class Correction:
 
 
 def correction(gen: KaimalEvo, streams: Streams, weights: np.ndarray, component: str) -> Correction:
-    """C H^T w for one component (:class:`Correction`): per bin, the weights scattered through the adjoint of the
-    streams' terms on each measured plane, times R_k (the sampler's A A^H) and h_k / nt.
-
-    ``gen`` as in :func:`stream_covariance`; ``weights`` (M, nt/q) w, one value per stream sample.
-    """
+    """C H^T w for one component: per bin, the weights through the adjoint of the streams' terms, times R_k h_k / nt."""
     g = gen.grid
     nt, m = g.nt, streams.n_streams
     terms = _ComponentTerms.of(streams, COMPONENTS.index(component), g.nz)

@@ -1,20 +1,10 @@
 """Kaimal 4D fields: per-frequency yz synthesis with direct-product longitudinal coherence (evoTurb style).
 
-Cross-spectrum between component c at (plane p, point a) and (plane q, point b) (Guo et al. 2023, Eq. 19):
-
-    S_c(f) coh_yz(r_ab, f) gamma_x(|x_p - x_q|, f),   zero phase between planes (convected frame).
-
-Per frequency bin k (f_k = k df exactly, df = 1/(nt dt); evoTurb's off-by-one bin k -> (k + 1) df avoided):
-1. every plane gets independent yz coefficients with covariance coh_yz (u: by default the IEC exponential,
-   Eq. 12 un-squared, by 2-D circulant embedding; v, w: spatially white as IEC, or u's coherence);
-2. the real principal square root of gamma_x(|x_p - x_q|, f_k) (planes x planes) mixes the planes
-   (components in ``long_components``);
-3. amplitudes: 2 E|X_k|^2 = v_k, the Kaimal PSD (Eq. 11) integrated over [(k - 1/2) df, (k + 1/2) df]; X_0 = 0.
-   The realised variance is the band integral from df/2 to 1/(2 dt) (``rescale``: scaled to sigma^2);
-4. inverse real FFT over time (float32).
-
-One component at a time, through a spectrum buffer (in memory or file-backed); random streams keyed by (seed,
-component, plane, FIXED chunk of FREQ_CHUNK bins): the field does not depend on how it is written or on threads.
+Cross-spectrum (Guo et al. 2023, Eq. 19): S_c(f) coh_yz(r_ab, f) gamma_x(|x_p - x_q|, f), zero phase between
+planes. Per bin k (f_k = k df exactly, not evoTurb's (k + 1) df): yz coefficients by circulant embedding (u: IEC
+exponential, Eq. 12 un-squared; v, w white or u's), planes mixed by the square root of gamma_x, amplitudes the
+Kaimal PSD (Eq. 11) integrated over the bin, inverse real FFT. Random streams keyed by (seed, component, plane,
+FREQ_CHUNK chunk): the field does not depend on how it is written or on threads.
 """
 
 from __future__ import annotations
@@ -62,10 +52,9 @@ def resolved_band_hz(nt: int, dt_s: float) -> tuple[float, float]:
 
 
 def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarray, float]:
-    """Real factors F_k (nf, P, P) with F_k F_k^T = G_k, G_k[p, q] = gamma_x(|x_p - x_q|, f_k).
+    """Real principal square roots F_k (nf, P, P) of G_k[p, q] = gamma_x(|x_p - x_q|, f_k).
 
-    F_k is the principal square root of G_k (the same on every CPU, also as G_k -> all ones at low frequencies).
-    Returns (factors, max |G_clipped - G|), the spectral norm of the negative part clipped.
+    Returns (factors, the spectral norm of the negative part clipped).
     """
     x = np.asarray(x_m, dtype=float)
     f = np.asarray(f_hz, dtype=float)
@@ -77,14 +66,9 @@ def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarra
 
 def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int = 1,
                       out: np.ndarray | None = None, transforms=None) -> np.ndarray:  # fmt: skip
-    """One plane's field from its yz coefficients: ``irfft(spec * amp[:, None, None], n=nt, axis=0, norm="forward")``.
+    """One plane's fluctuations (nt, ny, nz) float32 [m/s]: irfft(spec * amp, n=nt, axis=0, norm="forward").
 
-    On contiguous blocks of ~1 MiB of columns (not strided time columns; the copy applies the amplitudes);
-    columns are independent, so the blocks change no bit.
-
-    ``spec`` (nf, ny, nz) complex64 [-] (not modified), ``amp`` (nf,) float32 [m/s]; ``workers`` FFT threads (the
-    values do not depend on them); ``out`` (nt, ny, nz) float32 C-contiguous (default: new); ``transforms`` an FFT
-    backend's one-shot transforms. Returns the fluctuations (nt, ny, nz) float32 [m/s].
+    On contiguous column blocks; columns are independent, so the blocking changes no bit.
     """
     nf = spec.shape[0]
     flat = spec.reshape(nf, -1)
@@ -128,11 +112,9 @@ class InMemorySpectrum:
 
 
 class PlaneRing:
-    """``size`` (>= 4) field planes (nt, ny, nz) float32 that :meth:`KaimalEvo.component_planes` writes into in
-    turn instead of new arrays (no page faults and zeroing of 3 nx fresh planes).
+    """``size`` (>= 4) reused field planes for :meth:`KaimalEvo.component_planes` (no page faults on fresh planes).
 
-    Only for a consumer done with plane k once it asks for plane k + size - 2, across components too (the
-    generator computes two planes ahead); the runs layer keeps at most size - 3 writes pending.
+    A consumer must be done with plane k once it asks for plane k + size - 2 (the generator works two planes ahead).
     """
 
     def __init__(self, nt: int, ny: int, nz: int, size: int = 4):
@@ -171,17 +153,11 @@ class PlaneRing:
 class KaimalEvo:
     """Generator of one Kaimal 4D field, one component at a time, plane by plane.
 
-    long_coherence(dx_m, f_hz) -> un-squared gamma_x (turbgen.theory.coherence_models).
-    yz_coherence(r_m, f_hz) -> un-squared yz coherence (1 at r = 0); None: IEC exponential_yz of ``kaimal``.
-    yz_decay_length_m(f_hz) -> a length [m] with yz_coherence(r, f) <= exp(-r / length), for a smaller
-        embedding torus; None: the default coherence's, else infinite (minimal embedding, exact for any).
-    long_components : components mixed between planes ("u" or "uvw").
-    coherent_vw : v, w get the u yz coherence (extension; IEC / TurbSim IECKAI: white).
-    rescale : scale each component's spectrum so its expected variance is the nominal sigma^2.
-    variances : (3, nt // 2 + 1) band variances [m^2 s^-2] of u, v, w of a user spectrum (line 0 zero); None:
-        the Kaimal spectra of ``kaimal``.
-    fft_backend : the FFT backend's name (turbgen.fft; None: the current one).
-    keep : keep the seed-free yz samplers and longitudinal factors for :meth:`reseeded` copies.
+    ``long_coherence`` / ``yz_coherence`` (distance [m], f [Hz]) return un-squared coherences (yz None: IEC
+    exponential_yz); ``yz_decay_length_m(f_hz)`` bounds yz_coherence <= exp(-r / length) for a smaller torus;
+    ``coherent_vw``: v, w get u's yz coherence (IEC: white); ``rescale``: expected variance = nominal sigma^2;
+    ``variances`` (3, nt//2 + 1) band variances [m^2 s^-2] of a user spectrum; ``keep``: keep the samplers for
+    :meth:`reseeded` copies.
     """
 
     def __init__(
@@ -310,10 +286,7 @@ class KaimalEvo:
 
     def _chunk_coefficients(self, component: str, plane: int, chunk: int, groups, out: np.ndarray,
                             work: Callable[[int], np.ndarray] | None = None) -> None:
-        """yz coefficients with E|Z|^2 = 2 of one plane and frequency chunk into ``out`` (n_bins, ny, nz) complex64.
-
-        ``work(n)``: a complex64 work array of n values this call may overwrite (default: a new one).
-        """
+        """yz coefficients (E|Z|^2 = 2) of one plane and frequency chunk into ``out`` (n_bins, ny, nz) complex64."""
         key = (self.seed, COMPONENTS.index(component), plane, chunk)
         # real and imaginary parts N(0, 1): E|xi|^2 = 2, compensated by the amplitudes (component_planes)
         if len(groups) == 1 and groups[0][3] is None and out.flags.c_contiguous:
@@ -354,9 +327,7 @@ class KaimalEvo:
     ) -> Iterator[tuple[int, np.ndarray]]:
         """Yield (plane index, field (nt, ny, nz) float32) for every plane of one component.
 
-        ``tick`` is called once per frequency chunk and once per plane. ``spectrum``: a buffer like
-        :class:`InMemorySpectrum` (default: a new one). ``ring``: write the planes into its buffers
-        (:class:`PlaneRing`); default: a new array per plane. The values are the same.
+        ``tick`` is called once per frequency chunk and per plane; ``ring`` (:class:`PlaneRing`) supplies the arrays.
         """
         g = self.grid
         if spectrum is None:

@@ -1,9 +1,7 @@
 """Cell-averaged Mann factors near the k1 axis, which replace the point factors of the stencil there.
 
-On the k1 axis Phi33 = E(k0) / (4 pi k1^2) with k0 finite, so with dk1 << dk2, dk3 the point rule Phi(k) dk puts
-far too much energy in the cells (k1, 0, 0) (Mann 1998). Cells with |k2| <= CELL_RADIUS dk2, |k3| <= CELL_RADIUS
-dk3 and |k1| <= CELL_K1_FACTOR max(dk2, dk3) use a square root of the cell-averaged tensor (Gauss rules graded
-towards the axis). turbgen.validation.mann_lattice uses its own rule on purpose: do not share the rules.
+On the axis Phi33 ~ 1 / k1^2, so with dk1 << dk2, dk3 the point rule puts far too much energy in the cells
+(k1, 0, 0) (Mann 1998). turbgen.validation.mann_lattice uses its own rule on purpose: do not share the rules.
 """
 
 from __future__ import annotations
@@ -48,13 +46,9 @@ def _slab_nodes(box: BoxShape, k1c: float, js: np.ndarray, ls: np.ndarray, off_a
 
 
 def axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarray]:
-    """(cell_index, cell_factor) of the cell-averaged factors near the k1 axis (see MannStencil and CELL_RADIUS).
+    """(cell_index, cell_factor): principal square roots of Phi_bar = (1/dV) ∫_cell Phi dk near the k1 axis.
 
-    Phi_bar = (1/dV) ∫_cell Phi dk, factor V sqrt(Lambda) V^T (the principal square root, the same on every CPU: see
-    turbgen.synthesis.square_root).
-
-    The nodes of _CELL_SLABS slabs are evaluated in one call and summed per cell in node order (the same sums as
-    slab by slab).
+    Nodes of _CELL_SLABS slabs per call, summed per cell in node order (the same sums as slab by slab).
     """
     dk1, dk2, dk3 = box.dk()
     r2 = min(CELL_RADIUS, (box.nyp - 1) // 2)

@@ -1,9 +1,7 @@
 """Compiled per-point loops of the Mann stencil (turbgen.synthesis.mann_stencil): lifetimes and compact factors.
 
-A few passes over a cache-sized batch of slabs, evaluating the float64 operations of the numpy reference
-(tests/synthesis/stencil_reference.py) in the same order; log, exp and arctan are left to numpy's ufuncs between
-the loops (mann_factors.slab_factors), which round as the reference does. ``error_model="numpy"``: a division by
-zero gives inf or nan (k = 0, the k1 = 0 slab: replaced by their limits) instead of raising.
+They evaluate the float64 operations of the numpy reference (tests/synthesis/stencil_reference.py) in the same
+order; log, exp and arctan stay numpy ufuncs between the loops, which round as the reference does.
 """
 
 from __future__ import annotations
@@ -26,11 +24,9 @@ def squared_wavenumbers(k1, k2, k3, factor, out):
 
 @numba.njit(nogil=True, cache=True, error_model="numpy")
 def table_spline(log_kl_sq, inv_2h, x0_h, step, n_intervals, c3, c2, c1, c0, out):
-    """The lifetime table's spline at x = ln((kL)^2) / (2 h) - x0 / h grid steps, as LifetimeTable.from_ksq.
+    """The lifetime table's spline at ln(|k|^2 L^2), as LifetimeTable.from_ksq; nan outside the table (k = 0 too).
 
-    ``log_kl_sq`` ln(|k|^2 L^2) in, ``out`` tau~ (nan outside the table's range, k = 0 among them: the caller
-    evaluates the exact function there), both C-contiguous of one shape; the rest the table's. Returns the number of
-    points outside the range.
+    Returns the number of points outside the range.
     """
     xs = log_kl_sq.reshape(-1)
     values = out.reshape(-1)
@@ -58,12 +54,8 @@ def table_spline(log_kl_sq, inv_2h, x0_h, step, n_intervals, c3, c2, c1, c0, out
 
 @numba.njit(nogil=True, cache=True, error_model="numpy")
 def transcendental_arguments(k1, k2, k3, beta_half, length_sq, e_arg, t_arg):
-    """The arguments of log and arctan in the factors of slabs k1 (b,) x rows k2 (nh,) x columns k3 (nzp,).
-
-    ``e_arg`` = 1 + k0^2 L^2 (of e = (1 + (k0 L)^2)^(-17/12)) and ``t_arg`` = beta k1 sqrt(q) / (k0^2 - k30 beta k1)
-    (of the arctan in zeta2, Mann 1994 Eq. 16), both (b, nh, nzp), with k30 = k3 + beta k1, q = k1^2 + k2^2,
-    k0^2 = k30^2 + q. ``beta_half`` (b, nh, nzp//2 + 1): beta = Gamma tau~ on the columns k3 >= 0 and the
-    Nyquist (|k|^2 is even in k3: column l > nzp//2 reads column nzp - l). ``length_sq`` = L^2 [m^2].
+    """The arguments 1 + k0^2 L^2 (of e) and beta k1 sqrt(q) / (k0^2 - k30 beta k1) (arctan in zeta2, Mann 1994
+    Eq. 16) on slabs x rows x columns; ``beta_half`` on the columns k3 >= 0 (|k|^2 is even in k3).
     """
     nzp = k3.size
     h = nzp // 2
@@ -83,14 +75,8 @@ def transcendental_arguments(k1, k2, k3, beta_half, length_sq, e_arg, t_arg):
 
 @numba.njit(nogil=True, cache=True, error_model="numpy")
 def mann_factors(k1, k2, k3, beta_half, inv_tau_half, e, arctan, unit, energy, scale, f0, f1, f2, f3, inv_tau):
-    """The compact factors of slabs k1 (b,) x rows k2 (nh,) x columns k3 (nzp,) into f0 .. f3 (b, nh, nzp).
-
-    ``beta_half`` as in transcendental_arguments; ``e`` (b, nh, nzp) = (1 + (k0 L)^2)^(-17/12) and ``arctan``
-    the arctan of its ``t_arg``. ``inv_tau_half`` (b, nh, nzp//2 + 1) 1/tau_e [1/s] on the same columns as
-    beta_half, written mirrored into ``inv_tau`` (b, nh, nzp); an empty ``inv_tau`` skips it.
-
-    ``unit``: (e, k30, c1, c2) (float64, ae-free); else (A, P, Z1, Z2) = (e, k30 e, c1 e, c2 e) ``energy``
-    ``scale`` as mann_factors.apply_energy forms them (A = 0 on the k3 axis), rounded by the float32 output.
+    """The compact factors of slabs x rows x columns into f0 .. f3: unit (e, k30, c1, c2) float64, else
+    (A, P, Z1, Z2) as mann_factors.apply_energy forms them; 1/tau_e [1/s] mirrored into a non-empty ``inv_tau``.
     """
     nzp = k3.size
     h = nzp // 2

@@ -1,9 +1,6 @@
-"""The Mann (1998) factors of the stencil's slabs, straight from Mann (1994) Eq. 13-17 (turbgen.synthesis.mann_stencil
-holds them; its module docstring gives the compact form (A, P, Z1, Z2)).
+"""The Mann (1998) factors of the stencil's slabs, from Mann (1994) Eq. 13-17.
 
-slab_factors computes the ae-free factors (e, k30, c1, c2) in float64, or the coefficients (A, P, Z1, Z2) of one
-energy level in float32, with the lifetimes from their tables; apply_energy forms the coefficients from the factors
-by the same float64 operations, so a unit stencil scaled to ae is bit-identical to a direct build.
+apply_energy uses a direct build's float64 operations, so a unit stencil scaled to ae is bit-identical to it.
 """
 
 from __future__ import annotations
@@ -29,13 +26,10 @@ def _table_half(table, log_kl_sq: np.ndarray, ksq, length_scale_m: float) -> np.
 
 
 def slab_factors(params: MannParams, box: BoxShape, i0: int, i1: int, out, inv_tau, energy: float | None) -> None:
-    """The factors of slabs [i0, i1) of ``box`` into the four arrays ``out`` (i1 - i0, nyp//2+1, nzp).
+    """The factors of slabs [i0, i1) of ``box`` into ``out`` (i1 - i0, nyp//2+1, nzp).
 
-    ``energy`` None: the ae-free factors (e, k30, c1, c2) (float64): e = (1 + (k0 L)^2)^(-17/12), c1, c2 the
-    zeta1, zeta2 of Mann (1994) Eq. 13-17 with beta and tau_e from the lifetime tables (relative error <= 1e-6);
-    all 0 at k = 0. ``energy`` = energy_scale(params): (A, P, Z1, Z2) times sqrt(dk1 dk2 dk3 / 2) as
-    apply_energy forms them (out float32). ``inv_tau`` (i1 - i0, nyp//2+1, nzp) float32 gets 1/tau_e [1/s], or
-    None. |k|^2, beta and tau_e are computed on the columns k3 >= 0 only (even in k3).
+    ``energy`` None: ae-free (e, k30, c1, c2) float64 (c1, c2: zeta1, zeta2 of Mann 1994 Eq. 13-17); else
+    (A, P, Z1, Z2) float32 as apply_energy forms them. 1/tau_e [1/s] into ``inv_tau`` unless None.
     """
     from turbgen.synthesis import mann_factor_kernel as kernel
 
@@ -85,11 +79,7 @@ def energy_scale(params: MannParams) -> float:
 
 
 def apply_energy(unit: np.ndarray, energy: float, k1, scale: float, out: np.ndarray) -> np.ndarray:
-    """(A, P, Z1, Z2) times sqrt(dk / 2) = ``scale`` into ``out`` (4, b, nh, nzp) float64 from the ``unit`` factors.
-
-    a = e ``energy`` (energy_scale), P = k30 a, Z1 = c1 a, Z2 = c2 a, A = a except on the k3 axis (never used
-    there); the operations of a direct build (mann_factor_kernel.mann_factors), so the bits are the same.
-    """
+    """(A, P, Z1, Z2) = (a, k30 a, c1 a, c2 a) times ``scale`` = sqrt(dk / 2), a = e ``energy``, from ``unit``."""
     a, p, z1, z2 = out
     np.multiply(unit[0], energy, out=a)
     np.multiply(unit[1], a, out=p)

@@ -1,8 +1,4 @@
-"""The exact second moments of a synthesised Mann field, from its stencil: the discrete oracle of the tests.
-
-The generator forms u_hat = C n with E|n|^2 = 2 per component (turbgen.synthesis.mann_spacetime), so
-E[u_hat u_hat^H] = 2 C C^T at every stored point; :func:`slab_factor` rebuilds C from the compact stencil.
-"""
+"""The exact second moments of a synthesised Mann field, E[u_hat u_hat^H] = 2 C C^T: the tests' discrete oracle."""
 
 from __future__ import annotations
 
@@ -12,10 +8,7 @@ from turbgen.synthesis.mann_stencil import _ODD, MannStencil, expand_k2, w_coeff
 
 
 def slab_factor(stencil: MannStencil, i: int) -> np.ndarray:
-    """The full factor C (3, 3, nyp, nzp) [float64, times sqrt(dk/2)] of slab ``i``: compact form + axis cells.
-
-    Any scaled stencil (stored, a part holding slab ``i``, or on demand); ValueError for a unit stencil.
-    """
+    """The full factor C (3, 3, nyp, nzp) float64 of slab ``i`` of a scaled stencil (ValueError for a unit one)."""
     box = stencil.box
     scratch = None if stencil.coef is not None else np.empty((4, 1, box.nk2_half, box.nzp), np.float32)
     coef, j = stencil.coefficients(i, i + 1, scratch)

@@ -1,10 +1,7 @@
 """Compiled inner loop of the Mann synthesis: the OU step of the noise and u_hat = C n on a batch of k1 slabs.
 
-One pass reads the noise state, fresh noise and factor rows once and writes the new state and u_hat once. Complex
-numbers are float32 (re, im) pairs: every factor is real, so re and im follow the same float32 operations in the
-order of the numpy formulation (n <- rho n + sig fresh, then Mann 1998 Eq. 46-47 as in mann_stencil): the same
-bits but for the sign of some zeros, which the transforms that follow add to non-zero terms. A row k2 < 0 reads
-the mirrored row (A, P, Z1, 1/tau_e and W are even in k2, Z2 is odd).
+Complex numbers are float32 (re, im) pairs following the numpy formulation's operations in order (same bits but
+for the sign of some zeros). A row k2 < 0 reads the mirrored row (Z2 is odd in k2, the rest even).
 """
 
 from __future__ import annotations
@@ -27,12 +24,7 @@ def _pairs(src, out, sign):
 
 @numba.njit(inline="always")
 def _factors(coef, rho, sig, i, j, h, k1, k2, k3sq, evolve, z2_sign, w, out):
-    """The factors of stored row h of slab i (stencil slab j), each duplicated per (re, im) pair, into ``out`` (7, 2 nzp),
-    Z2 times ``z2_sign`` (-1 on a row k2 < 0: Z2 is odd in k2).
-
-    W = (A^2 q + P^2) / (A |k|^2), 0 where A |k|^2 = 0 (there m = 0), as mann_stencil.w_coefficient; ``w`` (nzp,)
-    is scratch.
-    """
+    """The factors of stored row h of slab i, duplicated per (re, im), into ``out`` (7, 2 nzp); Z2 times ``z2_sign``."""
     a, p = coef[0, j, h], coef[1, j, h]
     q = k1 * k1 + k2 * k2
     for l in range(w.shape[0]):
@@ -81,23 +73,9 @@ def _frozen_row(n0, n1, n2, fac, k1, k2, uu, uv, uw):
 def ou_product(n, fresh, rho, sig, coef, j0, k1, k2, k3sq, uhat, evolve):
     """OU step of the noise (Guo et al. 2023, Eq. 13-14) and u_hat = C n (Mann 1998, Eq. 46-47) on b slabs.
 
-    Parameters
-    ----------
-    n, fresh : ndarray, float32 (b, 3, nyp, 2 nzp)
-        Noise state and fresh noise (complex64 arrays viewed as float32) [-]. If ``evolve``,
-        n <- rho n + sig fresh in place first; otherwise ``fresh`` is not read.
-    rho, sig : ndarray, float32 (b, nyp//2 + 1, nzp)
-        exp(-dt / tau_e) and sqrt(1 - rho^2) on the stored rows k2 >= 0 [-] (read only if ``evolve``).
-    coef : ndarray, float32 (4, slabs, nyp//2 + 1, nzp)
-        The stencil's A, P, Z1, Z2 on the rows k2 >= 0 (mann_stencil): A, Z1, Z2 [m^2/s], P [m/s].
-    j0 : int
-        The stencil slab of the batch's first slab.
-    k1, k2, k3sq : ndarray, float32 (b,), (nyp,), (nzp,)
-        k1 of the slabs, k2 of all rows [rad/m], k3^2 [rad^2/m^2].
-    uhat : ndarray, float32 (b, 3, nyp, 2 nzp)
-        Output u_hat (complex64 viewed as float32) [m/s].
-    evolve : bool
-        Whether to take the OU step.
+    ``n``, ``fresh``, ``uhat`` (b, 3, nyp, 2 nzp) float32 views of complex64; with ``evolve``, n <- rho n + sig fresh
+    in place first. ``coef`` (4, slabs, nyp//2 + 1, nzp): A, Z1, Z2 [m^2/s], P [m/s]; k1, k2 [rad/m], k3sq
+    [rad^2/m^2].
     """
     nyp, nh = n.shape[2], coef.shape[2]
     fac = np.empty((7, n.shape[3]), np.float32)

@@ -1,14 +1,9 @@
 """Mann space-time field: FFT synthesis (Mann 1998) of yz-plane snapshots evolving as Guo et al. (2022).
 
-Each plane x_n is a snapshot of the (xi = U t, y, z) box at relative time t_n = x_n / U. Snapshots
-are taken in time order and the Fourier noise follows the exact Ornstein-Uhlenbeck recursion
-    n_{m+1} = rho n_m + sqrt(1 - rho^2) xi_{m+1},   rho = exp(-(t_{m+1} - t_m) / tau_e(k)),
-so <u_hat(k, t) u_hat^*(k, t + dt)> = exp(-|dt| / tau_e) Phi(k) dk = Theta(k, dt) dk (Guo et al. (2023)
-Eq. 13-14) for every pair of planes, whatever their spacing.
-
-Per snapshot, over k1 in fixed slab batches (the same for any thread count): noise (or OU update) -> u_hat = C n
-(mann_stencil) -> Hermitian completion of the k1 = 0 / Nyquist slabs -> inverse FFT along k3, then k2 on the kept
-columns -> crop to ny x nz; then one real inverse FFT along k1 per component. Memory scales with one snapshot.
+Plane x_n is a snapshot of the (xi = U t, y, z) box at time x_n / U; the Fourier noise follows the exact OU
+recursion n_{m+1} = rho n_m + sqrt(1 - rho^2) xi, rho = exp(-dt / tau_e(k)), so every pair of planes has
+<u_hat(k, t) u_hat^*(k, t + dt)> = exp(-|dt| / tau_e) Phi(k) dk (Guo et al. 2023, Eq. 13-14).
+Memory scales with one snapshot.
 """
 
 from __future__ import annotations
@@ -45,10 +40,9 @@ def _padded_nk1(nk1: int) -> int:
 
 
 def hermitian_complete(slab: np.ndarray) -> None:
-    """Make the (..., nyp, nzp) spectra of a k1 = 0 or Nyquist slab Hermitian, in place, keeping E|.|^2.
+    """Make the spectra of a k1 = 0 or Nyquist slab Hermitian in place, keeping E|.|^2.
 
-    u_hat(k) <- (u_hat(k) + conj u_hat(-k)) / sqrt(2) (the noise relation n(-k) = -conj n(k), as C(-k) = -C(k));
-    without it the real inverse FFT keeps half the energy of these slabs.
+    u_hat(k) <- (u_hat(k) + conj u_hat(-k)) / sqrt(2); without it the real inverse FFT keeps half their energy.
     """
     mirror = np.roll(slab[..., ::-1, ::-1], 1, axis=(-2, -1))  # u_hat(-k2, -k3), a copy
     np.conjugate(mirror, out=mirror)
@@ -113,8 +107,7 @@ class _Scratch:
 class MannSnapshots:
     """Generator of Mann space-time snapshots on one stencil, cropped to ny x nz.
 
-    The field is bit-identical for any ``threads`` (random streams per (seed, snapshot, slab), fixed batches and
-    plans); ``fft_backend`` (turbgen.fft) changes it at float32 round-off.
+    Bit-identical for any ``threads``; ``fft_backend`` changes it at float32 round-off.
     """
 
     def __init__(self, stencil: MannStencil, ny: int, nz: int, threads: int | None = None, buffers: int = 1,
@@ -174,13 +167,8 @@ class MannSnapshots:
     def generate(self, seed: int | None, times_s, addend=None, target=None) -> Iterator[tuple[int, str, np.ndarray]]:
         """Yield (plane index, component, field (nt, ny, nz) float32) for every plane and component.
 
-        ``times_s``: the planes' relative times x/U [s] in storage order; planes come in time order (frozen: the
-        single snapshot once per plane). The yielded array is a reused buffer: consume it before asking for the next
-        item (``buffers=2``: before the item after next).
-
-        ``addend(plane, component)``: cropped spectra (nk1, ny nz) complex64 (conditioning.correction_blocks) added
-        before the transform along k1; ``seed=None``: the addend's field alone. ``target(plane, component)``: the
-        (nt, ny, nz) float32 array, (y, z) contiguous, to transform into and yield.
+        ``times_s``: relative times x/U [s]. The array is reused: consume it first. ``addend``: cropped spectra added
+        before the transform along k1 (``seed=None``: the addend alone); ``target``: the array to transform into.
         """
         times = np.asarray(times_s, dtype=float)
         order = [int(i) for i in np.argsort(times, kind="stable")]
@@ -214,11 +202,9 @@ class MannSnapshots:
                                                              sample=seed is not None, dest=dest)  # fmt: skip
 
     def spectra(self, seed: int, times_s) -> Iterator[tuple[int, np.ndarray]]:
-        """Yield (snapshot number m in time order, cropped spectra (3, ny nz, n_slabs) complex64) of this
-        stencil's slabs, for the snapshots at ``times_s`` in time order (frozen: one snapshot, m = 0).
+        """Yield (snapshot number, cropped spectra (3, ny nz or len(points), n_slabs) complex64) in time order.
 
-        The first pass of an out-of-core run (the whole-box generator's numbers before the transform along k1). The
-        array is reused: consume it first. With ``points``: (3, len(points), n_slabs) in two alternating buffers.
+        The first pass of an out-of-core run. The array is reused: consume it first.
         """
         times = np.sort(np.asarray(times_s, dtype=float), kind="stable")
         frozen = self.stencil.params.evo_time_s is None

@@ -1,14 +1,9 @@
 """The Mann (1998) synthesis stencil of one parameter set and grid: C(k) and 1/tau_e(k), stored compactly.
 
-Compact factor. With a = sqrt(E(k0)/(4 pi))/k0^2, m = k2 n0 - k1 n1 and C = D A (Mann 1998 Eq. 46-47;
-turbgen.theory.mann_tensor.tensor_factor) the product u_hat = C n reads
+With a = sqrt(E(k0)/(4 pi))/k0^2, m = k2 n0 - k1 n1 and C = D A (Mann 1998 Eq. 46-47) u_hat = C n reads
     u_hat_u = P n1 - (A k2) n2 + Z1 m,   u_hat_v = -P n0 + (A k1) n2 + Z2 m,   u_hat_w = W m
-with A = a, P = a k30, Z1 = a zeta1, Z2 = a zeta2, all times sqrt(dk1 dk2 dk3 / 2) (E|n|^2 = 2), and
-W = a k0^2/k^2 = (A^2 q + P^2) / (A k^2), q = k1^2 + k2^2, rebuilt when used. A, P, Z1 are even and Z2 odd under
-k2 -> -k2, so only rows k2 >= 0 are stored: 4 float32 numbers per (k1 >= 0, k2 >= 0, k3).
-
-``build_stencil`` makes one "scaled" (float32, for ae) or "unit" (float64 ae-free factors, every ae through
-:meth:`MannStencil.scaled`), in memory, on demand, or for some slabs. No I/O here (turbgen.runs.stencil_cache).
+with A = a, P = a k30, Z1 = a zeta1, Z2 = a zeta2, times sqrt(dk1 dk2 dk3 / 2), W = (A^2 q + P^2) / (A k^2).
+Z2 is odd in k2 and the rest even, so only rows k2 >= 0 are stored.
 """
 
 from __future__ import annotations
@@ -37,11 +32,8 @@ _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0
 class MannStencil:
     """The stencil of ``params`` on ``box``; make it with :func:`build_stencil`.
 
-    ``energy`` "scaled": ``coef`` (4, slabs, nyp//2+1, nzp) float32 holds (A, P, Z1, Z2) for params.ae (None:
-    computed on demand); ``cell_index`` (ncell, 3) (slab, row, column), sorted by slab, and ``cell_factor`` (ncell, 3,
-    3) float32 are the cell-averaged factors near the k1 axis. "unit": ``coef`` float64 holds the ae-free factors,
-    ``params`` carry ae = 1, no axis cells (not linear in ae to the last bit). ``inv_tau`` = 1/tau_e [1/s] float32
-    (None: single snapshots only). ``slab0``: the first slab held (a part of the box: out-of-core runs).
+    "scaled": ``coef`` (4, slabs, nyp//2+1, nzp) float32 (A, P, Z1, Z2) for params.ae, plus the axis cells; "unit":
+    float64 ae-free factors, ae = 1. ``inv_tau`` = 1/tau_e [1/s]; ``slab0`` the first slab held.
     """
 
     params: MannParams
@@ -74,10 +66,9 @@ class MannStencil:
         return slice(int(np.searchsorted(slabs, i0)), int(np.searchsorted(slabs, i1)))
 
     def scaled(self, params: MannParams) -> "MannStencil":
-        """The stencil of ``params`` (ae [m^(4/3) s^-2] included) in memory.
+        """The stencil of ``params`` (ae [m^(4/3) s^-2]) in memory, bit for bit build_stencil(params, box).
 
-        From a unit stencil by the float64 operations of a direct build: build_stencil(params, box) bit for bit. A
-        scaled stencil returns itself. ValueError if ``params`` differ in more than ae (scaled: at all).
+        ValueError if ``params`` differ in more than ae (scaled: at all).
         """
         if self.energy == "scaled":
             if params != self.params:
@@ -200,25 +191,9 @@ def build_stencil(
 ) -> MannStencil:
     """The stencil of ``params`` on ``box``.
 
-    Parameters
-    ----------
-    params : MannParams
-        Mann parameters; ae [m^(4/3) s^-2] is ignored for a unit stencil.
-    box : BoxShape
-        The synthesis box.
-    energy : {"scaled", "unit"}
-        "scaled": float32 coefficients for ``params``' ae with the axis cells; "unit": the ae-free float64 factors,
-        for every ae through MannStencil.scaled.
-    storage : {"memory", "on_demand"}
-        "on_demand" (scaled, whole box, not evolving): only the axis cells now, the coefficients when used.
-    evolving : bool
-        False skips 1/tau_e: enough for a single snapshot.
-    slabs : (int, int), optional
-        (first, end): only those k1 slabs, the same numbers as in the whole stencil.
-    cells : (numpy.ndarray, numpy.ndarray), optional
-        (cell_index, cell_factor) of axis_cells, computed once for many parts (scaled only).
-    factors : numpy.ndarray, optional
-        A float64 array (4, slabs, nyp//2+1, nzp) to hold a unit stencil's factors.
+    ``energy`` "scaled" (float32 for params.ae, with the axis cells) or "unit" (ae-free float64);
+    ``storage="on_demand"``: coefficients computed when used; ``evolving=False`` skips 1/tau_e; ``slabs`` (first,
+    end) a part of the box; ``cells`` axis_cells computed once; ``factors`` an array to hold a unit stencil.
     """
     if energy not in ENERGIES or storage not in STORAGES:
         raise ValueError(f"energy must be one of {ENERGIES} and storage one of {STORAGES} (got {energy}, {storage})")

@@ -8,11 +8,7 @@ import numba
 
 @numba.njit(nogil=True, cache=True)
 def crop_into_pencils(uhat, ny, nz, spectra, j0):
-    """spectra[c, y nz + z, j0 + j] = uhat[j, c, y, z] for y < ny, z < nz: the cropped spectra of b slabs.
-
-    ``uhat`` complex64 (b, 3, nyp, nzp) the yz-transformed slabs [m/s]; ``spectra`` complex64 (3, ny nz, >= j0 + b) the
-    pencils along k1; ``j0`` the pencil index of the first slab.
-    """
+    """spectra[c, y nz + z, j0 + j] = uhat[j, c, y, z] for y < ny, z < nz: the cropped pencils of b slabs."""
     b = uhat.shape[0]
     for c in range(3):
         for y in range(ny):

@@ -1,16 +1,11 @@
 """The exact discrete prior of a synthesised Mann field, slab by slab: what conditioning needs from the stencil.
 
-The generator (turbgen.synthesis.mann_spacetime) forms u_hat = C n on every point of the half spectrum, with
-E|n|^2 = 2, completes the k1 = 0 / Nyquist slabs Hermitian and takes the real inverse FFT (index convention:
-u(n, y, z) = sum u_hat_i(j, l) exp(+2 pi i (i n / nt + j y / nyp + l z / nzp))). Hence, with
-Phi_i(j, l) = 2 C C^T (3 x 3, real symmetric; the axis cells' factors where they replace the compact one), the
-covariance of the field between two points of planes p, q lagged by r = (dn, dy, dz) grid steps is
+With Phi_i = 2 C C^T, the covariance of two points of planes p, q lagged by (dn, dy, dz) steps is
 
     Cov(r) = Re sum_i w_i sum_(j, l) rho_pq,i(j, l) Phi_i(j, l) exp(2 pi i (i dn / nt + j dy / nyp + l dz / nzp)),
 
-w_i = 1 on the k1 = 0 and Nyquist slabs and 2 elsewhere, rho_pq = exp(-|t_p - t_q| / tau_e) the Ornstein-Uhlenbeck
-factor between snapshots (Guo et al. 2023, Eq. 13-14; 1 for frozen turbulence). This is exact for the periodic
-box; the stored field is its crop, so its covariance is the crop of this translation-invariant one.
+w_i = 1 on the k1 = 0 and Nyquist slabs, 2 elsewhere, rho_pq = exp(-|t_p - t_q| / tau_e) (Guo et al. 2023,
+Eq. 13-14); exact for the periodic box, whose crop is the stored field.
 """
 
 from __future__ import annotations

@@ -1,13 +1,8 @@
-"""Counter-keyed complex Gaussian noise: one independent stream per key -- (seed, snapshot, k1-slab) for
-Mann fields, (seed, component, plane, frequency chunk) for Kaimal fields.
+"""Counter-keyed complex Gaussian noise: one stream per key, (seed, snapshot, k1-slab) for Mann fields, (seed,
+component, plane, frequency chunk) for Kaimal fields; never dependent on call order, chunking or threads.
 
-A stream depends only on its key, never on call order, chunking or threads. The n complex values of ``key`` are
-
-    numpy.random.Generator(numpy.random.SFC64(numpy.random.SeedSequence(key)))
-        .standard_normal(2 n, dtype=numpy.float32).view(numpy.complex64)
-
-(real and imaginary parts interleaved, in C order of ``out``), produced by compiled kernels
-(turbgen.synthesis.sfc64, turbgen.synthesis.ziggurat_normals) tested equal to numpy's bit for bit.
+The values equal numpy.random.Generator(SFC64(SeedSequence(key))).standard_normal(2 n, dtype=float32) viewed as
+complex64, from compiled kernels (turbgen.synthesis.sfc64, ziggurat_normals) tested bit for bit.
 """
 
 from __future__ import annotations
@@ -31,11 +26,7 @@ def complex_normal(seed: int, snapshot: int, slab: int, out: np.ndarray) -> np.n
 
 
 def keyed_complex_normal(key: tuple[int, ...], out: np.ndarray) -> np.ndarray:
-    """Fill complex64 ``out`` (C-contiguous, any shape) in C order with the standard complex normals of stream ``key``.
-
-    ``key``: a fixed tuple of non-negative integers naming the stream. Real and imaginary parts are independent
-    N(0, 1) (E|n|^2 = 2).
-    """
+    """Fill complex64 ``out`` (C-contiguous) in C order with stream ``key``'s complex normals (E|n|^2 = 2)."""
     if out.dtype != np.complex64 or not out.flags.c_contiguous:
         layout = "C-contiguous" if out.flags.c_contiguous else "non-contiguous"
         raise ValueError(f"noise output must be a C-contiguous complex64 array, got a {layout} {out.dtype} one")

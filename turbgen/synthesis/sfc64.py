@@ -1,10 +1,7 @@
 """numpy's SFC64 generator seeded by ``SeedSequence(key)``, compiled (numba) so a stream is cheap to set up.
 
-The state after :func:`seed_state` is exactly that of ``numpy.random.SFC64(numpy.random.SeedSequence(key))``
-(numpy >= 1.17; O'Neill's SeedSequence mixing of the key's 32-bit words into a pool of 4 words, 3 uint64
-drawn from the pool, then 12 SFC64 steps) and :func:`next64` is its ``random_raw`` (Doty-Humphrey's Small
-Fast Chaotic generator, counter variant, 2013). A key is a tuple of non-negative integers; each integer
-contributes its 32-bit words least significant first (0 -> one word 0), as numpy's ``SeedSequence`` does.
+:func:`seed_state` gives exactly numpy's state (O'Neill's SeedSequence of the key's 32-bit words, least
+significant first) and :func:`next64` is ``random_raw`` (Doty-Humphrey's Small Fast Chaotic generator, 2013).
 """
 
 from __future__ import annotations

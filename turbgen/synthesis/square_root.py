@@ -1,9 +1,7 @@
 """The principal square root of symmetric positive semi-definite matrices: the factor of every dense covariance.
 
-Cholesky's factor exists only for numerically positive definite C, and V sqrt(Lambda) flips column signs with the
-last bit of an entry (the CPU's SIMD kernels): the same seed would name another field on another machine. The
-principal root V sqrt(Lambda) V^T is unique for any C >= 0 and Hölder continuous, ||sqrt(A) - sqrt(B)|| <=
-||A - B||^(1/2) (Bhatia 1997, "Matrix Analysis", Thm. X.1.1), so rounding moves it by round-off only.
+Cholesky needs C > 0 and V sqrt(Lambda) flips column signs with the last bit (another field on another CPU); the
+principal root is unique and Hölder continuous (Bhatia 1997, Thm. X.1.1), so rounding moves it by round-off only.
 """
 
 from __future__ import annotations

@@ -1,11 +1,8 @@
-"""float32 standard normals of one keyed SFC64 stream by the Ziggurat method, compiled (numba).
+"""float32 standard normals of one keyed SFC64 stream by numpy's Ziggurat, compiled (numba).
 
-The values equal numpy's ``Generator(SFC64(SeedSequence(key))).standard_normal(n, dtype=np.float32)``
-bit for bit (tested), inside compiled loops. The algorithm (numpy's ``random_standard_normal_f``) is the 256-layer
-Ziggurat of Marsaglia & Tsang (2000, J. Stat. Softw. 5(8)): each value takes one 32-bit word u (low, then high half
-of each SFC64 output): layer i = u & 255, sign (u >> 8) & 1, x = (u >> 9) w_i, returned when u >> 9 < k_i; else
-the wedge (or for i = 0 the tail, by Marsaglia's exact method) is tested, and on rejection the draw restarts. The
-tables come from r = 3.6541528853610088 and v = 4.92867323399e-3 by their recursion, equal to numpy's.
+Bit for bit numpy's ``Generator(SFC64(SeedSequence(key))).standard_normal(n, dtype=np.float32)`` (the 256-layer
+Ziggurat of Marsaglia & Tsang 2000, one 32-bit word per draw, low half first; tables from r = 3.6541528853610088,
+v = 4.92867323399e-3).
 """
 
 from __future__ import annotations
@@ -93,10 +90,7 @@ def _normal(u, a, b, c, w, has, buf):
 
 @numba.njit(nogil=True, cache=True)
 def fill_normals(words, out):
-    """Fill float32 ``out`` (1-D) with the first ``out.size`` normals of the stream keyed by ``words``.
-
-    ``words`` are the key's uint32 entropy words (turbgen.synthesis.sfc64.key_words).
-    """
+    """Fill float32 ``out`` (1-D) with the first normals of the stream keyed by uint32 ``words`` (sfc64.key_words)."""
     a, b, c, w = seed_state(words)
     has, buf = False, np.uint64(0)
     n = out.size

@@ -1,11 +1,7 @@
-"""Validation of a field store against its model: ``turbgen validate STORE``.
-
-    from turbgen.validation import validate
-    report = validate("mann.zarr", rotor_radius_m=63.0)
-    report.passed, report.to_dict(), report.table(), report.plots("figs/")
+"""Validation of a field store against its model: ``turbgen validate STORE`` (docs/validate.md).
 
 ``estimators`` reads the Welch estimates, ``expectations`` predicts them for their ``prediction.SamplingDesign``
-(in a thread of its own while the store is read), ``verdict`` judges, ``report`` renders. docs/validate.md.
+(in a thread of its own while the store is read), ``verdict`` judges, ``report`` renders.
 """
 
 from __future__ import annotations
@@ -73,10 +69,9 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
              workers: int | None = None) -> ValidationReport:
     """Validate a store (path or FieldStore) against its model (the engine of :func:`turbgen.validate`).
 
-    ``rotor_radius_m`` [m] (None: 63 m, or the largest disc a smaller grid holds); ``nperseg`` [samples] (None:
-    ``estimators.default_nperseg``); ``workers`` dask threads (None: the CPU count; more than one: the theory
-    alongside the estimates). The report's ``seconds`` hold ``estimate``, ``theory``, ``verdict``, ``total`` and
-    ``theory_kept``. StoreError or ParameterError for an unreadable store, bad input or a conditional-mean store.
+    ``rotor_radius_m`` [m] (None: 63 m, or the largest disc a smaller grid holds); ``nperseg`` [samples];
+    ``workers`` dask threads (more than one: the theory alongside the estimates). StoreError or ParameterError for an
+    unreadable store, bad input or a conditional-mean store.
     """
     fs = store if isinstance(store, FieldStore) else open_store(store)
     constraints = fs.attrs.get("constraints")

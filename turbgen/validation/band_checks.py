@@ -69,8 +69,8 @@ def coherence_stats(rho, n):
 class Bands:
     """Welch bins 1 .. n/2-1 grouped into log-spaced bands; band statistics from the Welch covariance.
 
-    A covariance is a dict lag d -> Cov(P_m, P_{m+d}): exact (``welch_variance``), or for very long records the rule of
-    thumb E_m E_m' r_d sqrt(rho_m rho_m') / K_eff (r_d the Hann bin correlations 1, 4/9, 1/36).
+    A covariance is a dict lag d -> Cov(P_m, P_{m+d}): exact (``welch_variance``) or, for very long records, the
+    rule of thumb with Hann bin correlations 1, 4/9, 1/36.
     """
 
     def __init__(self, est: Estimates):

@@ -1,12 +1,8 @@
 """Welch estimates from a field store, computed with dask over the store's time chunks.
 
-One task reads one plane over one *span* (whole time chunks, ~4 Welch segments) and returns small sums, which are
-added up. Welch segments (Hann, 50 % overlap, mean removed) straddling two spans are not used (the tolerances use
-the count of segments averaged).
-
-Estimated (one-sided [m^2 s^-2 Hz^-1]): per-point mean and variance; one-point auto-spectra and the u-w
-cross-spectrum; yz cross-spectra per separation; u cross-spectra between every pair of planes on a sub-lattice;
-the rotor-effective wind speed of each plane (Guo et al. 2023, Eq. 23 on the grid) and its spectrum.
+One task reads one plane over one *span* (whole time chunks) and returns small sums; Welch segments (Hann, 50 %
+overlap, mean removed) straddling two spans are not used. Estimated: point moments, one-point and u-w spectra, yz
+and plane-pair cross-spectra, and the rotor-effective wind speed (Guo et al. 2023, Eq. 23 on the grid).
 """
 
 from __future__ import annotations
@@ -204,7 +200,7 @@ def _plane_pairs(subs: list[np.ndarray]) -> np.ndarray:
 def welch_series(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, int, int]:
     """One-sided Welch PSD (Welch 1967) of the (nt, m) series ``x`` [m/s], averaged over segments and columns.
 
-    Returns (psd (nperseg // 2 + 1,) [m^2 s^-2 Hz^-1], segments per column, overlapping segment pairs per column).
+    Returns (psd [m^2 s^-2 Hz^-1], segments per column, overlapping segment pairs per column).
     """
     starts = segment_starts(x.shape[0], setup)
     w = setup.window[:, None]
@@ -235,9 +231,7 @@ def plan_estimates(fs, *, rotor_radius_m: float | None = None, nperseg: int | No
                    separations=None) -> Estimates:
     """The sampling design of a store's estimates, before any data is read (sums still empty).
 
-    ``rotor_radius_m`` [m] as ``point_sets.check_rotor_radius``; ``nperseg`` [samples] default
-    ``default_nperseg(nt)``; ``separations`` [grid steps] default ``point_sets.default_separations``. ParameterError
-    if nperseg is outside [MIN_NPERSEG, nt / 2] or the rotor radius does not fit the grid.
+    ParameterError if ``nperseg`` [samples] is outside [MIN_NPERSEG, nt / 2] or the rotor radius does not fit.
     """
     g = fs.grid
     setup = WelchSetup(nperseg or default_nperseg(g.nt), g.dt_s)

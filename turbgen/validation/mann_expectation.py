@@ -50,11 +50,9 @@ def _interp_lines(k1_nodes, values, k1_lines, positive: bool):
 
 
 def band_limited_spectra(params: MannParams, grid: Grid, k1: np.ndarray, n_theta: int = 24, n_panels: int = 24):
-    """Continuous F_ii(k1) = int Phi_ii dk2 dk3 over the grid's Nyquist rectangle |k2| <= pi/dy, |k3| <= pi/dz.
+    """Continuous F_ii(k1) = int Phi_ii dk2 dk3 [m^3 s^-2] over |k2| <= pi/dy, |k3| <= pi/dz, two-sided in k1.
 
-    The model the grid can represent, without a finite box's sampling; polar quadrature (``n_theta`` angle nodes per
-    sector, ``n_panels`` Gauss panels in ln kappa). Returns (3, len(k1)) F_11, F_22, F_33 [m^3 s^-2], two-sided in
-    k1, for ``k1`` [rad/m].
+    The model the grid can represent without a finite box's sampling, by polar quadrature.
     """
     kny, knz = np.pi / grid.dy_m, np.pi / grid.dz_m
     tc = np.arctan2(knz, kny)
@@ -88,11 +86,7 @@ def band_limited_spectra(params: MannParams, grid: Grid, k1: np.ndarray, n_theta
 
 
 def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
-    """Mann space-time expectations on the lattice of the generator's box (module docstring).
-
-    ``attrs``: the store attributes (Mann ``parameters`` with ``pad_yz``, ``U_m_s`` [m/s]); ``design``: the
-    estimates' sampling design. Lattice sums per record line [m^2 s^-2] are interpolated from k1 nodes on long records.
-    """
+    """Mann space-time expectations on the lattice of the generator's box (module docstring) for ``design``."""
     grid = design.grid
     params = mann_params_from_attrs(attrs)
     box = mann_box_from_attrs(attrs, grid)

@@ -25,10 +25,8 @@ CELL_GAUSS = 4
 class MannLattice:
     """Mann tensor and space-time decay on the (k2, k3) lattice of the box, slab by slab in k1.
 
-    Each lattice point stands for its cell: Phi(k) dk1 dk2 dk3, except near the k1 axis at small k1, where Phi
-    varies strongly inside a cell and the cell integral is computed (Gauss rules graded towards the axis; Mann 1998).
-
-    ``grid``: the store's (dt [s], dy, dz [m]); ``box``: the generator's (nyp x nzp); ``U`` [m/s]: k1 = 2 pi f / U.
+    Each point stands for Phi(k) dk1 dk2 dk3, but near the k1 axis at small k1 the cell integral is computed (Mann
+    1998). ``grid``: the store's (dt [s], dy, dz [m]); ``U`` [m/s]: k1 = 2 pi f / U.
     """
 
     def __init__(self, params: MannParams, grid: Grid, box: MannBox, U: float):

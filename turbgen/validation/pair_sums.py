@@ -85,10 +85,7 @@ def half_lags(coh: np.ndarray) -> np.ndarray:
 
 
 def weighted_gram(half: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """(nn, nn) symmetric sum over lags of counts x coh(nu_i) conj(coh(nu_j)), real part, from ``half`` =
-    ``half_lags(coh)``: terms at l and -l have the same real part (counts and coherency symmetric), so the sum is one
-    symmetric BLAS product A A^T over half the lags. ``coh`` (nn, 2 ny - 1, 2 nz - 1) [-], ``counts`` (2 ny - 1,
-    2 nz - 1) pairs."""
+    """(nn, nn) real sum over lags of counts x coh(nu_i) conj(coh(nu_j)), one symmetric product over half the lags."""
     w = counts.ravel()[(counts.size - 1) // 2 :] * 2.0
     w[0] *= 0.5  # lag 0 is its own mirror
     sw = np.sqrt(w)
@@ -112,10 +109,7 @@ def box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
 
 
 def real_box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
-    """``box_lags(ifft2(field2d) * size, ny, nz)`` for a real field (..., nyp, nzp) with half the transform.
-
-    rfft2 holds the lags dz >= 0, F(dy, -dz) = conj(F(-dy, dz)) the others (full transform when nzp < 2 nz - 1).
-    """
+    """``box_lags(ifft2(field2d) * size, ny, nz)`` for a real field (..., nyp, nzp) with half the transform."""
     nyp, nzp = field2d.shape[-2:]
     if nzp < 2 * nz - 1:
         return box_lags(fft.oneshot().ifft2(field2d) * (nyp * nzp), ny, nz)
@@ -126,10 +120,7 @@ def real_box_lags(field2d: np.ndarray, ny: int, nz: int) -> np.ndarray:
 
 
 def coherency_matrix(lags: dict, grid: Grid) -> np.ndarray:
-    """(nx ny nz, nx ny nz) coherency [-] between all points of all planes (ordered by plane, y, z).
-
-    ``lags`` maps the plane separation ``dx_key(|x_p - x_q|)`` to the (2 ny - 1, 2 nz - 1) coherency at the yz lags.
-    """
+    """(nx ny nz, nx ny nz) coherency [-] between all points of all planes (ordered by plane, y, z)."""
     iy, iz = (a.ravel() for a in np.meshgrid(np.arange(grid.ny), np.arange(grid.nz), indexing="ij"))
     dy = iy[:, None] - iy[None, :] + grid.ny - 1
     dz = iz[:, None] - iz[None, :] + grid.nz - 1

@@ -42,10 +42,9 @@ def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
 
 
 def check_rotor_radius(grid: Grid, radius_m: float | None) -> float:
-    """The rotor radius R [m] to use: the disc must lie inside the grid, 0 < R <= half the smaller grid extent.
+    """The rotor radius R [m]: 0 < R <= half the smaller grid extent, else ParameterError.
 
-    ``radius_m`` None: 63 m (NREL 5 MW, Jonkman et al. 2009), or the largest disc a smaller grid holds (enlarged to
-    the nearest grid points when it holds none). ParameterError outside (0, half extent] or the range of radii.
+    None: 63 m (NREL 5 MW, Jonkman et al. 2009), or the largest disc a smaller grid holds.
     """
     half = min((grid.ny - 1) * grid.dy_m, (grid.nz - 1) * grid.dz_m) / 2.0
     if radius_m is None:

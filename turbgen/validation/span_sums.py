@@ -1,7 +1,5 @@
-"""The sums one validator task takes over one plane and one span of time (``estimators``).
-
-Every Welch segment's spectra are computed once per component (float32 FFT) and feed all the sums, each in one
-compiled pass (``welch_sums``).
+"""The sums one validator task takes over one plane and one span of time (``estimators``), from one float32
+FFT per Welch segment and component.
 """
 
 from __future__ import annotations
@@ -14,13 +12,9 @@ COMPONENTS = ("u", "v", "w")
 
 
 def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy: np.ndarray, iz: np.ndarray) -> dict:
-    """Moment and Welch sums of one plane over one span of ``data`` (component -> float32 (t, ny, nz) [m/s]), for
-    segments of ``window`` at ``starts``, yz separations ``seps`` [grid steps], the rotor ``mask`` (ny, nz) and the
-    sub-lattice ``iy``, ``iz`` kept for the plane pairs.
+    """Moment and Welch sums of one plane over one span of ``data`` (component -> float32 (t, ny, nz) [m/s]).
 
-    Returns ``sum``, ``sum2`` (component -> (ny, nz) [m/s], [m^2 s^-2] over t); ``rews`` (t,) [m/s]; unscaled Welch
-    sums: ``auto`` (component -> (nf,)), ``yz`` (component -> {(a, b): [cross complex, A, B]}), ``uw`` complex;
-    ``sub`` (segments, nf, sub-lattice points) complex64 u spectra.
+    Returns ``sum``, ``sum2``, ``rews`` and the unscaled Welch sums ``auto``, ``yz``, ``uw``, ``sub``.
     """
     from turbgen.validation.welch_sums import cross_sum, point_moments, spectrum_sums, window_segment
 

@@ -1,8 +1,6 @@
-"""The model's predictions for a store, kept for the next store that differs only in seed.
+"""The model's predictions for a store, kept in this process for the next store that differs only in seed.
 
-The theory depends on the model, parameters, grid and the estimates' options, never on the seed or the data: a
-sweep validating 20 seeds computes it once. Key: every attribute but seed, creation time and measured rms; a few
-entries, kept in this process only.
+The key is every attribute but seed, creation time and measured rms.
 """
 
 from __future__ import annotations

@@ -71,11 +71,10 @@ def window_segment(d, start, window, mean, out):
 
 @numba.njit(nogil=True, cache=True)
 def spectrum_sums(xv, ny, sep_a, sep_b, total, part_a, part_b, cross):
-    """Add one segment's spectral sums of one component (float32 view (nf, ny_x, 2 nz); rows y >= ny are not read).
+    """Add one segment's spectral sums of one component (float32 view (nf, ny_x, 2 nz)) into float64 arrays.
 
-    Per frequency f, into float64 arrays: ``total[f]`` sum of |X|^2 over the plane; for separation
-    k = (sep_a[k], sep_b[k]) ``part_a[k, f]``, ``part_b[k, f]`` sums of |X|^2 over the first and second points of the
-    pairs, ``cross[k, f, 0 / 1]`` Re / Im of sum conj(X(y, z)) X(y + a, z + b).
+    Per frequency: ``total`` sum of |X|^2; per separation ``part_a``, ``part_b`` the pairs' |X|^2 sums and ``cross``
+    Re / Im of sum conj(X(y, z)) X(y + a, z + b).
     """
     nf, _, nz2 = xv.shape
     nz = nz2 // 2

@@ -1,13 +1,9 @@
 """Simulated lidar-rotor coherence against theory, with the verdict machinery of ``turbgen validate``.
 
-Under the null hypothesis "the field follows the theory" each bin's Welch gamma^2_RL follows Goodman's law of
-the sample coherence of n independent segments (Goodman 1963; Carter, Knapp & Nuttall 1973;
-``turbgen.validation.distributions``) with the theory's gamma^2 and n the bin's equivalent number of
-independent segments (``welch_expectation.effective_segments``, several seeds add theirs; or one given
-n_eff). Each bin's z = Phi^-1 of the law's smaller tail at the estimate; the family fails at |z| > z_crit
-(Bonferroni, ALPHA of the validator). The band shown is the law's 2.5-97.5 % quantiles. Bins are compared
-only where gamma^2 >= MIN_COH2 and n >= MIN_NEFF, where a Monte-Carlo of the estimator calibrated the law
-(docs/lidar.md, "Verdict"); below, the Welch estimate's lower tail is heavier than the law's.
+Under the null hypothesis each bin's Welch gamma^2_RL follows Goodman's law of the sample coherence of n
+independent segments (Goodman 1963; Carter, Knapp & Nuttall 1973), n from ``welch_expectation.effective_segments``;
+a bin fails at |z| > z_crit (Bonferroni). Bins are compared only where gamma^2 >= MIN_COH2 and n >= MIN_NEFF, where
+a Monte-Carlo calibrated the law (docs/lidar.md, "Verdict").
 """
 
 from __future__ import annotations
@@ -24,22 +20,10 @@ BAND_P = (0.025, 0.975)  # probabilities of the plotted band's edges
 
 
 def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None = None) -> MetricResult:
-    """MetricResult "lidar_coherence" comparing simulated and theoretical gamma^2_RL bin by bin (bins 1 .. Nyquist-1).
+    """MetricResult "lidar_coherence" of simulated vs theoretical gamma^2_RL [-] at ``f_hz`` [Hz] (0 .. Nyquist).
 
-    Bins are tested where the theory gives gamma^2 >= MIN_COH2, n_eff >= MIN_NEFF and f <= ``f_max_hz``; a bin's
-    z, expectation and sd are those of Goodman's law (``coh2_z``, ``coh2_moments``), or of the delta method
-    (``band_checks.coherence_stats``) where 1 - gamma^2 < NEAR_UNIT or n_eff <= 1.
-
-    Parameters
-    ----------
-    f_hz : array_like
-        Welch bin frequencies [Hz], 0 .. Nyquist.
-    coh2_sim, coh2_theory : array_like
-        Simulated and theoretical gamma^2_RL [-] per bin (the theory clipped to [0, 1]).
-    n_eff : float or array_like
-        Effective number of independent Welch segments [-], one for all bins or one per bin.
-    f_max_hz : float, optional
-        Highest frequency tested [Hz]; None tests up to Nyquist-1.
+    Bins 1 .. Nyquist-1 up to ``f_max_hz`` where gamma^2 >= MIN_COH2 and ``n_eff`` >= MIN_NEFF are tested by
+    Goodman's law, or by the delta method where 1 - gamma^2 < NEAR_UNIT or n_eff <= 1.
     """
     f = np.asarray(f_hz, float)
     sim = np.asarray(coh2_sim, float)
@@ -66,10 +50,7 @@ def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None 
 
 
 def crossing(f_hz, values, level: float) -> float | None:
-    """First frequency [Hz] where ``values`` falls below ``level`` (linear interpolation), bin 0 skipped.
-
-    ``f_hz[1]`` if bin 1 is already below; None if the curve never falls below (non-finite values never cross).
-    """
+    """First frequency [Hz] past bin 0 where ``values`` falls below ``level`` (linear interpolation); None if never."""
     f, v = np.asarray(f_hz, float), np.asarray(values, float)
     below = np.nonzero((v[1:] < level) & np.isfinite(v[1:]))[0]
     if below.size == 0:
@@ -82,10 +63,8 @@ def crossing(f_hz, values, level: float) -> float | None:
 
 
 def preview_numbers(f_hz, coh2, gain, U_m_s: float) -> dict:
-    """MCB k_0.5 [rad/m], d_eddy,min [m] and the -3 dB cut-off of |G_RL| [Hz] of one set of curves.
-
-    k_0.5 = 2 pi f_0.5 / U where gamma^2 = 0.5 (Guo et al. 2024 Eq. 26), d_eddy,min = 2 pi / k_0.5, the cut-off
-    where |G_RL| = 1/sqrt 2; each None where its curve never crosses its level (:func:`crossing`).
+    """MCB k_0.5 [rad/m] (gamma^2 = 0.5, Guo et al. 2024 Eq. 26), d_eddy,min = 2 pi / k_0.5 [m] and the
+    -3 dB cut-off of |G_RL| [Hz] of one set of curves; each None where its curve never crosses.
     """
     f05 = crossing(f_hz, coh2, 0.5)
     fc = crossing(f_hz, gain, 1.0 / np.sqrt(2.0))

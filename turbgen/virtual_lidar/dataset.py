@@ -1,10 +1,7 @@
 """The lidar output dataset: a small zarr group, xarray-readable, written atomically.
 
-Variables (units in attributes): v_los (scan, beam, gate) line-of-sight speed [m s-1], positive towards the
-lidar; time_s (scan, beam) its physical time [s]; u_LL (t_arrival) the lidar estimate of the
-rotor-effective wind speed aligned to rotor arrival; u_RR (t_arrival) u averaged over the rotor disc at
-x = 0; gate_x_m (gate), n1 (beam, gate). Attributes: every lidar parameter, the source store, the mean
-wind added, the TIs.
+v_los (scan, beam, gate) [m s-1] positive towards the lidar, time_s (scan, beam) [s], u_LL and u_RR
+(t_arrival), gate_x_m, n1; attributes: the lidar, the source store, the mean wind added, the TIs.
 """
 
 from __future__ import annotations
@@ -26,13 +23,10 @@ MARKER = "turbgen_lidar_complete"
 
 
 def check_output(path, overwrite: bool) -> Path:
-    """The absolute output path (``~`` expanded), checked before any work.
+    """The absolute output path, checked before any work.
 
-    Raises
-    ------
-    StoreError
-        If ``path`` exists without ``overwrite`` or is not a lidar dataset, or its directory is missing or not
-        writable.
+    StoreError if it exists without ``overwrite`` or is not a lidar dataset, or its directory is missing or
+    read-only.
     """
     path = Path(path).expanduser().absolute()
     # a path that is not a lidar dataset is never replaced, so `overwrite` is no remedy there: not suggested
@@ -51,16 +45,9 @@ def check_output(path, overwrite: bool) -> Path:
 
 
 def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: bool = False) -> Path:
-    """Write the lidar dataset at ``path``; return its absolute path.
+    """Write the lidar dataset atomically at ``path`` (marker last, then publish); return its absolute path.
 
-    Written under a temporary name, the completeness marker set last, then published (an existing dataset is
-    replaced only after the new one is complete). ``samples``: LidarSamples; ``t_arrival`` [s] the time axis of
-    ``u_ll`` and ``u_rr`` [m/s]; ``attrs``: dict, list and tuple values are stored as JSON strings.
-
-    Raises
-    ------
-    StoreError
-        As :func:`check_output`.
+    ``attrs``: dict, list and tuple values are stored as JSON. StoreError as :func:`check_output`.
     """
     import xarray as xr
 
@@ -110,18 +97,8 @@ def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: 
 class LidarData:
     """What ``turbgen lidar --out`` wrote, as needed to constrain a field with it.
 
-    Parameters
-    ----------
-    v_los, time_s : numpy.ndarray
-        (scan, beam, gate) [m/s] (beams in increasing number, NaN missing); (scan, beam) physical times [s].
-    lidar : dict
-        The lidar description's fields (``description.lidar_from_mapping`` rebuilds it).
-    mean_wind_added, shear_exponent : bool, float
-        Whether v_los includes a mean wind, and its power-law exponent alpha [-].
-    U_m_s, source : float, str
-        The mean wind of the store the lidar measured [m/s]; the dataset's path.
-    mean_wind : dict, optional
-        The added mean wind's ``MeanWind.to_attrs``; None: the power law with ``shear_exponent`` (or none added).
+    ``v_los`` (scan, beam, gate) [m/s] (NaN missing), ``time_s`` (scan, beam) [s], ``lidar`` the description's fields,
+    ``U_m_s`` the store's mean wind [m/s], ``mean_wind`` its ``MeanWind.to_attrs`` (None: the power law).
     """
 
     v_los: np.ndarray
@@ -144,13 +121,7 @@ def is_lidar_dataset(path) -> bool:
 
 
 def read_dataset(path) -> LidarData:
-    """Read a complete lidar dataset written by :func:`write_dataset`.
-
-    Raises
-    ------
-    StoreError
-        If ``path`` is not a complete lidar dataset.
-    """
+    """Read a complete lidar dataset written by :func:`write_dataset` (StoreError otherwise)."""
     import zarr
 
     p = Path(path)

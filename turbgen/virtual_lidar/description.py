@@ -1,10 +1,8 @@
 """What a lidar is: beams, range gates, probe volume, timing, and the turbine it serves.
 
-Presets (``PRESETS``, sources in their ``source`` field; docs/lidar.md): ``nacelle-4beam`` (Guo et al. 2023
-Table 3, NREL 5 MW rotor), ``spinner-cw`` and ``spinner-pulsed`` (the optima of Fu et al. 2023, IEA 15 MW
-rotor, 32 scan positions per revolution at 4 Hz, Eq. 12), ``nacelle-1beam`` (one pulsed beam along the shaft
-at 100 m). A user lidar is a TOML or JSON file with the same fields (``schemas/lidar.schema.json``). Frame
-and line-of-sight sign: ``turbgen.theory.lidar_geometry``.
+Presets (``PRESETS``; docs/lidar.md): ``nacelle-4beam`` (Guo et al. 2023 Table 3), ``spinner-cw`` and
+``spinner-pulsed`` (Fu et al. 2023, Eq. 12), ``nacelle-1beam``. A user lidar is a TOML or JSON file with the same
+fields (``schemas/lidar.schema.json``).
 """
 
 from __future__ import annotations
@@ -32,35 +30,10 @@ BEAM_RATE_RANGE_HZ = (1e-3, 1e3)
 class LidarDescription:
     """A lidar and the rotor it previews. Angles in degrees, lengths in metres, rates in Hz.
 
-    Parameters
-    ----------
-    name : str
-        A preset's key, or the file's stem.
-    kind : {"pulsed", "cw"}
-        Gaussian probe volume (FWHM ``fwhm_m``) or Lorentzian (Rayleigh length from the CW fields and focus distance).
-    mount : {"nacelle", "spinner"}
-        Beams from ``azimuth_deg``, ``elevation_deg``; or a cone of ``half_cone_deg`` at ``scan_deg``, ``tilt_deg``.
-    ranges_m : tuple of float
-        Upstream distances x of the range gates [m], each in [1, 5000] (spinner: along the shaft axis; the
-        focus distance is x / cos(half cone)).
-    beam_rate_hz, rotor_radius_m : float
-        Beams per second [Hz] in BEAM_RATE_RANGE_HZ (one beam with all its gates at a time); rotor radius [m], [1, 500].
-    azimuth_deg, elevation_deg : tuple of float, optional
-        Nacelle beams: one azimuth and one elevation per beam [deg], each in [-80, 80].
-    half_cone_deg, scan_deg, tilt_deg : float, tuple of float, float, optional
-        Spinner cone half-angle [deg] in [0, 80], scan angles [deg] (at least one), shaft tilt [deg] in [-30, 30].
-    fwhm_m : float, optional
-        Pulsed probe-volume FWHM [m], in [0.1, 1000] (default 30).
-    wavelength_m, beam_radius_m : float, optional
-        CW laser wavelength [m] in [1e-7, 1e-4] (1.565e-6) and beam radius at the lens [m] in [1e-4, 1] (0.028).
-    source : str, optional
-        Where the values come from (not compared).
-
-    Raises
-    ------
-    ParameterError
-        For a value outside its range, an unknown kind or mount, no range gate, beams without their angles,
-        or more than MAX_MEASUREMENTS beams x gates.
+    ``kind`` "pulsed" (Gaussian probe volume, ``fwhm_m``) or "cw" (Lorentzian from ``wavelength_m``,
+    ``beam_radius_m`` and the focus distance); ``mount`` "nacelle" (``azimuth_deg``, ``elevation_deg`` per beam) or
+    "spinner" (``half_cone_deg``, ``scan_deg``, ``tilt_deg``); ``ranges_m``: upstream x of the gates. ParameterError
+    for a value outside its range (the checks below) or more than MAX_MEASUREMENTS beams x gates.
     """
 
     name: str
@@ -128,8 +101,7 @@ class LidarDescription:
     def measurement_points(self) -> Measurements:
         """Every (beam, gate) measurement, beam-major: LOS vector, focus, probe-volume offsets [m] and weights.
 
-        Offsets and weights are padded with zero weights to a common length; the focus lies on the gate's plane x
-        (nacelle) or at x / cos(half cone) along the beam (spinner, Fu et al. 2023).
+        Padded with zero weights to a common length; a spinner's focus is at x / cos(half cone) (Fu et al. 2023).
         """
         d = self.directions()
         rows = []
@@ -158,10 +130,7 @@ class LidarDescription:
                             offsets_m=offsets, weights=weights, beam=beam, gate=gate)
 
     def schedule(self, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """Measurement times k / beam_rate_hz [s] and beams k mod n_beams for k = 0 .. floor(duration * rate) - 1.
-
-        Raises ParameterError if ``duration_s`` is not a finite number > 0.
-        """
+        """Times k / beam_rate_hz [s] and beams k mod n_beams, k < duration * rate (ParameterError unless > 0)."""
         n = int(np.floor(check_positive("duration (s)", duration_s) * self.beam_rate_hz + 1e-9))
         k = np.arange(n)
         return k / self.beam_rate_hz, k % self.n_beams
@@ -198,21 +167,14 @@ PRESETS: dict[str, LidarDescription] = {
 
 
 def lidar_from_mapping(data: dict, where: str = "lidar") -> LidarDescription:
-    """A LidarDescription from a mapping (a file's content), checked against schemas/lidar.schema.json.
-
-    ``name`` defaults to ``where``, which also names the source in errors. Raises ParameterError if the mapping
-    does not satisfy the schema or a value is out of range.
-    """
+    """A LidarDescription from a mapping checked against schemas/lidar.schema.json (``where`` names it in errors)."""
     data = dict(check_mapping(data, "lidar", where))
     data.setdefault("name", where)
     return LidarDescription(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in data.items()})
 
 
 def load_lidar(name_or_path) -> LidarDescription:
-    """A preset by name, or a TOML/JSON lidar file (named after its stem unless it sets ``name``).
-
-    Raises ParameterError if it is neither a preset nor an existing .toml/.json file, or the file is invalid.
-    """
+    """A preset by name, or a TOML/JSON lidar file (named after its stem unless it sets ``name``)."""
     key = str(name_or_path)
     if key in PRESETS:
         return PRESETS[key]

@@ -1,19 +1,7 @@
-"""Measured line-of-sight data as a plain CSV file, for constraining a field (``turbgen mann --constrain FILE.csv``).
+"""Measured line-of-sight data as a plain CSV file, for ``turbgen mann --constrain FILE.csv``.
 
-The format (docs/constrained-fields.md)::
-
-    # lidar = mylidar.toml        a preset name, or a .toml/.json lidar file relative to this one (required)
-    # U_m_s = 16                  the mean wind speed [m/s] of the record (required; the run must use it)
-    # total_wind = true           v_los includes the mean wind (default false: fluctuations)
-    # profile = log:z0=0.03       the mean-wind profile of total-wind data, as `turbgen export --profile`
-    # mean_history = hub.csv      the hub-height history of total-wind data, relative to this file
-    time_s,beam,gate,v_los_m_s
-    0.0,0,0,15.21
-
-One row per beam, gate and scan: ``beam`` and ``gate`` index the lidar's ``azimuth_deg`` and ``ranges_m``,
-``time_s`` [s] is the physical time of the beam's pulse (the same for all its gates), ``v_los_m_s`` [m/s]
-positive towards the lidar, empty or NaN a missing sample. The result is the same
-:class:`turbgen.virtual_lidar.dataset.LidarData` as a ``turbgen lidar --out`` dataset's.
+The format (header keys lidar, U_m_s, total_wind, profile, mean_history; columns time_s, beam, gate, v_los_m_s)
+is in docs/constrained-fields.md; the result is the same LidarData as a ``turbgen lidar --out`` dataset's.
 """
 
 from __future__ import annotations
@@ -113,13 +101,10 @@ def _grid(table: np.ndarray, n_beams: int, n_gates: int, where: str) -> tuple[np
 
 
 def read_los_csv(path) -> LidarData:
-    """The line-of-sight record of a CSV file (module docstring) as :class:`LidarData`.
+    """The line-of-sight record of a CSV file as :class:`LidarData`.
 
-    Raises
-    ------
-    ParameterError
-        If a header key is missing or unknown, a column or value is malformed, a beam or gate index is not the
-        lidar's, the gates of a beam are not measured together, or the scans are incomplete.
+    ParameterError for a missing or unknown key, a malformed column or value, a beam or gate not the lidar's, gates
+    of a beam not measured together, or incomplete scans.
     """
     path = Path(path).expanduser()
     where = f"line-of-sight file {path}"

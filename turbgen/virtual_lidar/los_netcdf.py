@@ -1,14 +1,7 @@
-"""Measured line-of-sight data as a netCDF file, for constraining a field (``turbgen mann --constrain FILE.nc``).
+"""Measured line-of-sight data as a netCDF file, for ``turbgen mann --constrain FILE.nc``.
 
-The table of :mod:`turbgen.virtual_lidar.los_csv` as four 1-D variables along one dimension (``time_s``,
-``beam``, ``gate``, ``v_los_m_s``; NaN or the fill value a missing sample) and the CSV header's keys as global
-attributes (``total_wind`` may also be 1/0)::
-
-    import xarray as xr
-    xr.Dataset({"time_s": ("sample", t), "beam": ("sample", b), "gate": ("sample", g), "v_los_m_s": ("sample", v)},
-               attrs={"lidar": "mylidar.toml", "U_m_s": 16.0}).to_netcdf("los.nc")
-
-netCDF3 files need only scipy; netCDF4/HDF5 files need ``h5netcdf`` or ``netCDF4`` (``turbgen[netcdf]``).
+The CSV table (:mod:`turbgen.virtual_lidar.los_csv`) as four 1-D variables, its header keys as global attributes.
+netCDF4/HDF5 files need ``turbgen[netcdf]``.
 """
 
 from __future__ import annotations
@@ -44,13 +37,10 @@ def _header(attrs: dict, where: str) -> dict:
 
 
 def read_los_netcdf(path) -> LidarData:
-    """The line-of-sight record of a netCDF file (module docstring) as :class:`LidarData`.
+    """The line-of-sight record of a netCDF file as :class:`LidarData`.
 
-    Raises
-    ------
-    ParameterError
-        If the file is not readable netCDF (or no engine for it is installed), a variable or attribute is
-        missing, unknown or malformed, or the record fails a check of ``los_csv.read_los_csv``.
+    ParameterError if unreadable (or no engine installed), a variable or attribute is missing, unknown or malformed,
+    or a check of ``los_csv.read_los_csv`` fails.
     """
     import xarray as xr
 

@@ -1,9 +1,6 @@
 """Brute-force search of a spinner lidar's range and half-cone angle (Fu et al. 2023 Sect. 3.5, Eq. 31).
 
-Maximise k_0.5 over the measurement range x and the half-cone angle phi subject to
-T_buffer = x/U - T_scan/2 - T_filter - T_pitch >= 0, T_filter the delay of the first-order low-pass filter at
-the -3 dB cut-off of |G_RL| (Eq. 30, f_delay = 0.025 Hz), T_pitch = 0.9 s (IEA 15 MW, Sect. 3.3). Each
-candidate is one evaluation of the Mann space-time theory on SEARCH_F_HZ.
+Maximise k_0.5 subject to T_buffer = x/U - T_scan/2 - T_filter - T_pitch >= 0 (T_filter: Eq. 30).
 """
 
 from __future__ import annotations
@@ -39,11 +36,9 @@ SEARCH_F_HZ = np.geomspace(2e-3, 0.25, 28)  # one spectral evaluation per candid
 
 def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch_delay_s: float = 0.9,
              f_delay_hz: float = 0.025, f_hz=SEARCH_F_HZ) -> Candidate:
-    """The :class:`Candidate` of one lidar (its first range gate is x [m]) for the Mann model at U [m/s].
+    """The :class:`Candidate` of one lidar (first range gate x [m]) for the Mann model at U [m/s].
 
-    ``pitch_delay_s``: T_pitch [s] in PITCH_DELAY_RANGE_S; ``f_delay_hz``: where the filter delay is taken
-    (Fu et al. 2023 Eq. 30); ``f_hz``: the frequencies of the evaluation. Raises ParameterError for
-    non-positive frequencies, a beam that does not look upstream or a pitch delay out of range.
+    ParameterError for non-positive frequencies, a beam not looking upstream or a pitch delay out of range.
     """
     pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)
     S = mann_preview_spectra(f_hz, lidar.measurement_points(), params, U_m_s, lidar.rotor_radius_m)
@@ -56,11 +51,9 @@ def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch
 
 def optimize_spinner(lidar: LidarDescription, params: MannParams, U_m_s: float, ranges_m, half_cones_deg,
                      *, pitch_delay_s: float = 0.9, progress=None) -> tuple[list[Candidate], Candidate | None]:
-    """Every candidate of the ``ranges_m`` [m] x ``half_cones_deg`` [deg] grid (range-major) and the feasible one
-    (T_buffer >= 0) with the largest k_0.5 (None if none is feasible).
+    """Every candidate of ``ranges_m`` x ``half_cones_deg`` (range-major) and the feasible one with the largest k_0.5.
 
-    ``progress`` is called with 1 after each candidate. Raises ParameterError if the lidar is not a spinner,
-    the grid is empty or exceeds MAX_CANDIDATES, a geometry is invalid or the pitch delay is out of range.
+    ParameterError if the lidar is not a spinner, the grid is empty or above MAX_CANDIDATES, or a value is invalid.
     """
     pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)  # before any candidate
     if lidar.mount != "spinner":

@@ -1,8 +1,7 @@
 """Preview quality of a lidar for a turbulence model: the theory behind `turbgen theory lidar`.
 
-Evaluates the lidar-rotor spectra of ``turbgen.theory.lidar_preview`` for a stability preset (Guo et al.
-2023 Table 1/2) at a mean wind speed and summarises what a lidar-assisted-control design needs: gamma^2_RL,
-|G_RL|, its -3 dB cut-off, the coherence bandwidth k_0.5 and d_eddy,min, the filter delay and buffer time.
+The lidar-rotor spectra of ``turbgen.theory.lidar_preview`` for a stability preset (Guo et al. 2023 Table 1/2)
+and the design numbers they give.
 """
 
 from __future__ import annotations
@@ -28,28 +27,11 @@ DEFAULT_F_HZ = np.geomspace(0.005, 0.3, 60)
 def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset: str = "neutral",
                     f_hz=DEFAULT_F_HZ, radius_m: float | None = None, frozen: bool = False,
                     **options) -> PreviewSpectra:
-    """S_RR, S_LL, S_RL of ``lidar`` at ``f_hz`` for the preset's model parameters at U (or explicit ones).
+    """S_RR, S_LL, S_RL of ``lidar`` at ``f_hz`` [Hz] for the preset's model parameters at ``U_m_s`` [m/s].
 
-    Parameters
-    ----------
-    model, lidar, U_m_s : str, LidarDescription, float
-        One of :data:`MODELS` (its ``preview`` in turbgen.spec.models is called), the lidar, mean wind speed [m/s].
-    preset : str, optional
-        Stability preset giving the model parameters at U (default "neutral").
-    f_hz : array_like, optional
-        Frequencies [Hz] (> 0); default 60 log-spaced from 0.005 to 0.3 Hz.
-    radius_m : float, optional
-        Rotor radius R [m]; default the lidar's ``rotor_radius_m``.
-    frozen : bool, optional
-        Frozen turbulence (Mann: no eddy lifetime; Kaimal: a_x = b_x = 0).
-    **options
-        The model's own keywords (:func:`mann_preview`, :func:`kaimal_preview`).
-
-    Raises
-    ------
-    ParameterError
-        For an unknown model or preset, a wind speed out of range, non-positive frequencies, or a beam that
-        does not look upstream.
+    ``radius_m`` [m] defaults to the lidar's rotor; ``frozen``: no eddy lifetime (Kaimal: a_x = b_x = 0);
+    ``**options`` go to the model's preview. ParameterError for an unknown model or preset, U out of range,
+    non-positive frequencies, or a beam not looking upstream.
     """
     check_choice("model", model, MODELS)
     R = lidar.rotor_radius_m if radius_m is None else radius_m
@@ -59,11 +41,7 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
 
 def mann_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, radius_m: float, frozen: bool,
                  mann: MannParams | None = None, box: BoxLattice | None = None) -> PreviewSpectra:
-    """The Mann model's ``preview``: ``lidar_preview.mann_preview_spectra`` (arguments as :func:`preview_spectra`).
-
-    ``mann`` replaces the preset's parameters; with ``box`` the sum runs over that periodic box's (k2, k3)
-    lattice (what a synthesised box holds) instead of the continuous integral.
-    """
+    """The Mann model's ``preview``; with ``box`` the sum runs over that box's (k2, k3) lattice."""
     params = mann if mann is not None else mann_params_for(preset, U_m_s)
     if frozen:
         params = replace(params, evo_time_s=None)
@@ -74,13 +52,7 @@ def kaimal_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, 
                    kaimal: KaimalParams | None = None, a_x: float | None = None, b_x: float | None = None,
                    long_components: str = "uvw", vw_coherence: bool = True, spectra=None,
                    yz_coherence=None) -> PreviewSpectra:
-    """The Kaimal model's ``preview``: ``lidar_preview.kaimal_preview_spectra`` (arguments as :func:`preview_spectra`).
-
-    Defaults follow Guo et al. (2023) Eq. 31/33 (Chen et al. 2022): the yz and longitudinal coherences act on all
-    three components (``vw_coherence``, ``long_components``). ``kaimal`` and ``a_x``, ``b_x`` [-] (exponential
-    longitudinal decay) replace the preset's values; ``spectra`` and ``yz_coherence`` (a store's LineSpectrum and
-    LineCoherence) the Kaimal spectra and IEC coherence.
-    """
+    """The Kaimal model's ``preview``; by default both coherences act on all components (Guo et al. 2023 Eq. 31/33)."""
     settings = kaimal_settings_for(preset, U_m_s)
     kp = kaimal if kaimal is not None else settings.kaimal
     ax = settings.a_x if a_x is None else a_x
@@ -98,12 +70,7 @@ def kaimal_preview(lidar: LidarDescription, U_m_s: float, *, preset: str, f_hz, 
 
 def summarise(spectra: PreviewSpectra, lidar: LidarDescription, U_m_s: float, *,
               pitch_delay_s: float = 0.0, f_delay_hz: float = 0.025) -> dict:
-    """The design numbers of a lidar, JSON-ready (non-finite values as None).
-
-    ``f`` [Hz], ``coh2_RL``, ``G_RL`` [-], ``k05_rad_m`` [rad/m], ``cutoff_hz`` [Hz], ``d_eddy_min_m`` [m],
-    ``scan_time_s`` [s], and where the cut-off exists ``filter_delay_s`` (taken at ``f_delay_hz``) and
-    ``buffer_time_s`` [s] (with the pitch actuator delay ``pitch_delay_s`` [s]).
-    """
+    """The design numbers of a lidar, JSON-ready (non-finite values as None)."""
     f = spectra.f_hz
     cutoff = cutoff_frequency_hz(f, spectra.G_RL)
     k05 = coherence_bandwidth_rad_m(f, spectra.coh2_RL, U_m_s)

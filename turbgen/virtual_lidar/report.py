@@ -1,9 +1,7 @@
 """`turbgen lidar STORE`: the virtual lidar's result against the preview theory of the store's own model.
 
-Theory: ``preview.preview_spectra`` with the store's model parameters and the sampling's discrete
-probe-volume weights, for a Mann store summed over the (k2, k3) lattice of its periodic synthesis box
-(what the box holds), then the expected Welch estimate at each bin (``welch_expectation``). Verdict:
-``compare.coherence_metric``.
+The theory uses the sampling's discrete probe-volume weights, the box's (k2, k3) lattice for Mann stores and the
+expected Welch estimate per bin (``welch_expectation``).
 """
 
 from __future__ import annotations
@@ -65,28 +63,10 @@ def kaimal_store_preview(fs, description, f_hz, radius_m: float):
 
 
 def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int | None = None):
-    """The expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] of ``description`` on store ``fs`` at the bins ``f_hz`` > 0.
+    """The expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] of ``description`` on store ``fs`` at ``f_hz`` > 0.
 
-    Parameters
-    ----------
-    fs, description : FieldStore, LidarDescription
-        The open store (model and parameters from its attributes) and the lidar.
-    f_hz, radius_m : array_like, float
-        Welch bin frequencies [Hz]; rotor radius R [m].
-    setup : WelchSetup
-        The Welch estimate's segment length and time step [s].
-    n_samples : int, optional
-        Samples of the lidar signal; given, the result's ``n_eff`` holds the equivalent independent segments
-        of its gamma^2_RL per bin (``welch_expectation.effective_segments``).
-
-    Returns
-    -------
-    ExpectedWelch
-
-    Raises
-    ------
-    ParameterError
-        If the store's model has no lidar theory, or a Kaimal store's options are outside it.
+    With ``n_samples`` the result's ``n_eff`` holds the equivalent independent segments per bin. ParameterError if
+    the store's model has no lidar theory, or a Kaimal store's options are outside it.
     """
     from turbgen.virtual_lidar.welch_expectation import expected_welch, theory_nodes
 
@@ -99,20 +79,7 @@ def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int |
 class LidarReport:
     """The virtual lidar's result on a store against the theory (:func:`lidar_report`).
 
-    Parameters
-    ----------
-    store, lidar, run : str, LidarDescription, LidarRun
-        The store's label (its path), the lidar and the simulated run.
-    f_hz : numpy.ndarray
-        Welch bins 1 .. up to F_THEORY_MAX_HZ where the theory is evaluated [Hz].
-    coh2_theory, G_theory : numpy.ndarray
-        Theoretical gamma^2_RL and |G_RL| [-] at ``f_hz`` (of the expected Welch spectra).
-    theory_numbers : dict
-        k05_rad_m [rad/m], d_eddy_min_m [m], cutoff_hz [Hz] of the theory.
-    metric : MetricResult
-        The coherence verdict.
-    U_m_s : float
-        Mean wind speed U [m/s].
+    ``f_hz`` [Hz] the bins where the theory is evaluated; ``theory_numbers`` k05_rad_m, d_eddy_min_m, cutoff_hz.
     """
     store: str
     lidar: object
@@ -182,14 +149,7 @@ class LidarReport:
         return "\n".join(lines)
 
     def write(self, out, overwrite: bool = False) -> Path:
-        """Write the lidar dataset (:mod:`turbgen.virtual_lidar.dataset`) ``out``, the report's numbers as attributes.
-
-        Raises
-        ------
-        StoreError
-            If ``out`` exists without ``overwrite``, is not a lidar dataset, or its directory is missing or not
-            writable.
-        """
+        """Write the lidar dataset ``out`` with the report's numbers as attributes (StoreError as check_output)."""
         from turbgen.virtual_lidar.dataset import write_dataset
 
         r = self.run
@@ -211,10 +171,7 @@ class LidarReport:
         return write_dataset(out, r.samples, r.t_arrival_s, r.u_LL, r.u_RR, attrs, overwrite=overwrite)
 
     def data(self):
-        """The measurements as a constraint (``turbgen.mann(constrain=[report])``), in memory: the same
-        :class:`turbgen.virtual_lidar.dataset.LidarData` as :meth:`write` and reading back give (v_los rounded to
-        float32, attributes through JSON, as stored).
-        """
+        """The measurements as a constraint (``turbgen.mann(constrain=[report])``), exactly as written and read back."""
         import json
 
         from turbgen.virtual_lidar.dataset import LidarData
@@ -275,22 +232,8 @@ def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, sh
                  nperseg=None, mean_wind=None) -> LidarReport:
     """Run the virtual lidar on the open store ``fs`` and compare with theory.
 
-    Parameters
-    ----------
-    fs : FieldStore
-        The open store.
-    lidar : LidarDescription or str, optional
-        A lidar, a preset name or a lidar file; default DEFAULT_LIDAR.
-    rotor_radius_m : float, optional
-        Rotor radius R [m]; default the lidar's turbine if it fits the grid, else the validator's default.
-    add_mean_wind, shear_exponent, mean_wind, nperseg
-        As :func:`turbgen.virtual_lidar.run.run_lidar`.
-
-    Raises
-    ------
-    ParameterError
-        For an unknown lidar, a lidar that does not fit the store, a signal too short, or a store whose model
-        the lidar theory does not support.
+    ``lidar``: a description, preset or file (default DEFAULT_LIDAR); the rest as :func:`run_lidar`. ParameterError
+    for an unknown lidar, one that does not fit the store, a signal too short, or a model without lidar theory.
     """
     from turbgen.virtual_lidar.description import LidarDescription, load_lidar
 

@@ -1,8 +1,4 @@
-"""One virtual-lidar run on a store: sample -> u_LL, u_RR, TI -> Welch gamma^2_RL, |G_RL| -> dataset.
-
-Shared by ``turbgen lidar`` and ``turbgen sweep --lidar``. A lidar is any object with
-``measurement_points()`` and ``schedule(duration_s)`` (``turbgen.virtual_lidar.description``).
-"""
+"""One virtual-lidar run on a store, shared by ``turbgen lidar`` and ``turbgen sweep --lidar``."""
 
 from __future__ import annotations
 
@@ -41,23 +37,7 @@ def lidar_attrs(description) -> dict:
 
 @dataclass
 class LidarRun:
-    """The result of one virtual-lidar run (:func:`run_lidar`).
-
-    Parameters
-    ----------
-    samples, t_arrival_s : LidarSamples, numpy.ndarray
-        Sampled line-of-sight speeds; rotor arrival time axis [s].
-    u_LL, u_RR : numpy.ndarray
-        Lidar estimate of the rotor-effective wind speed and rotor-disc average u at x = 0 [m/s].
-    ti_lidar, ti_rotor : float
-        Uncorrected lidar and rotor-averaged turbulence intensities [-].
-    welch : dict
-        Output of :func:`turbgen.virtual_lidar.signals.welch_rl`.
-    simulated : dict
-        k05_rad_m [rad/m], d_eddy_min_m [m], cutoff_hz [Hz] of the simulated curves.
-    rotor_radius_m : float
-        Rotor radius R used [m].
-    """
+    """The result of one virtual-lidar run (:func:`run_lidar`): u_LL, u_RR [m/s], TIs [-], Welch output."""
     samples: sampling.LidarSamples
     t_arrival_s: np.ndarray
     u_LL: np.ndarray
@@ -91,24 +71,9 @@ def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shea
               nperseg=None, mean_wind=None) -> LidarRun:
     """Sample ``fs`` with ``description`` and estimate the simulated preview quality.
 
-    Parameters
-    ----------
-    fs : FieldStore
-        The open store.
-    description : LidarDescription or object
-        The lidar (``measurement_points()`` and ``schedule(duration_s)``).
-    rotor_radius_m : float, optional
-        Rotor radius R [m] (0 < R <= half the smaller grid extent); None: the validator's default.
-    add_mean_wind, shear_exponent, mean_wind : optional
-        The mean wind added before sampling, as in :func:`turbgen.virtual_lidar.sampling.sample`.
-    nperseg : int, optional
-        Welch segment length [samples]; None: :func:`default_nperseg`.
-
-    Raises
-    ------
-    ParameterError
-        For a rotor radius that does not fit the grid, a lidar that does not fit the store, a store without a
-        plane x = 0, or a signal too short.
+    ``description``: any object with ``measurement_points()`` and ``schedule(duration_s)``; ``rotor_radius_m`` [m]
+    (None: the validator's default); mean wind as in :func:`turbgen.virtual_lidar.sampling.sample`. ParameterError
+    for a radius that does not fit the grid, a lidar that does not fit the store, no plane x = 0, or a short signal.
     """
     # the estimators here only: placing lidar data (constrained runs) needs this module but not scipy.signal
     from turbgen.virtual_lidar import compare, signals

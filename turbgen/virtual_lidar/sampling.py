@@ -1,14 +1,8 @@
 """Virtual lidar: line-of-sight speeds sampled from a field store along the beams.
 
-Frame (docs/store.md, "Convected frame"): x upstream from the rotor [m], y left looking downwind, z up from
-the hub; u downwind. A measurement (one beam, one range gate) returns v_los = sum_k w_k n . (u, v, w)(p_k),
-n the projection vector (v_los = +u for a beam looking straight upstream), p_k = focus + s_k d the
-probe-volume points at offsets s_k [m] along the beam direction d (default focus / |focus|).
-
-Every point of gate g's probe volume is taken from gate g's own plane x_g with Taylor's hypothesis within
-the probe volume (Guo et al. 2023, Sect. 5.1.2): the point x' at physical time T is the stored sample
-t = T + x'/U of plane x_g (linear in t, bilinear in y, z). Gates must be planes of the store; a beam may
-not leave the yz field. Each plane is read once, only the span its points need.
+A measurement returns v_los = sum_k w_k n . (u, v, w)(p_k), p_k = focus + s_k d (frame: docs/store.md). Each point
+of gate g's probe volume comes from gate g's own plane by Taylor's hypothesis (Guo et al. 2023, Sect. 5.1.2):
+point x' at physical time T is the stored time T + x'/U (linear in t, bilinear in y, z).
 """
 
 from __future__ import annotations
@@ -24,30 +18,14 @@ PLANE_TOL_M = 1e-6
 
 
 def weighted_sum(values: np.ndarray, weights) -> np.ndarray:
-    """sum_k values[..., k] weights[k] as elementwise products and numpy's pairwise sum along the last axis.
-
-    The same bits on every CPU and for any batch row (a BLAS dot sums in the order its kernel picks): the lidar
-    data a field is constrained on must be the same numbers whichever file carried them.
-    """
+    """sum_k values[..., k] weights[k] by numpy's pairwise sum: the same bits on every CPU and batch row (no BLAS)."""
     return np.add.reduce(np.asarray(values, float) * np.asarray(weights, float), axis=-1)
 
 
 @dataclass(frozen=True)
 class Measurement:
-    """One beam-gate of a lidar.
-
-    Parameters
-    ----------
-    beam, gate : int
-        Beam and range-gate indices.
-    n, focus_m : tuple of float
-        Unit projection vector on (u, v, w) [-]; (x, y, z) of the gate centre [m].
-    offsets_m, weights : tuple of float, optional
-        Probe-volume points along the beam [m] (0 = focus) and their weights [-] (>= 0, sum 1); default (0,), (1,).
-    direction : tuple of float, optional
-        Geometric unit direction (x, y, z) of the beam [-]; default the focus direction seen from the hub.
-    plane_x_m : float, optional
-        x of the gate's plane [m]; default the focus x (a tilted beam's focus may lie off it).
+    """One beam-gate: unit projection ``n`` on (u, v, w), ``focus_m`` (x, y, z) [m], probe ``offsets_m`` [m] along
+    ``direction`` with ``weights`` (>= 0, sum 1), ``plane_x_m`` the gate's plane [m] (default the focus x).
     """
 
     beam: int
@@ -68,20 +46,8 @@ class Measurement:
 
 @dataclass(frozen=True)
 class LidarSamples:
-    """The sampled line-of-sight speeds.
-
-    Parameters
-    ----------
-    v_los, time_s : numpy.ndarray
-        float32 (n_scan, n_beam, n_gate) speeds [m/s] (positive towards the lidar); (n_scan, n_beam) physical times [s].
-    gates_x_m, n1 : numpy.ndarray
-        (n_gate,) plane x of each gate [m]; (n_beam, n_gate) longitudinal projection n_1 of each measurement [-].
-    mean_wind_added, shear_exponent : bool, float
-        Whether a mean wind was added to u, and its power-law exponent alpha [-].
-    mean_wind : str, optional
-        The added mean wind described (``MeanWind.describe``); "" when none.
-    mean_wind_record : dict, optional
-        Its ``MeanWind.to_attrs`` (None: the power law with ``shear_exponent``, or none added).
+    """The sampled line-of-sight speeds: ``v_los`` float32 (n_scan, n_beam, n_gate) [m/s] positive towards the lidar,
+    ``time_s`` (n_scan, n_beam) [s], the gates' planes and n_1, and the mean wind added (if any).
     """
 
     v_los: np.ndarray
@@ -108,13 +74,9 @@ def _plane_index(grid, x: float, beam: int, gate: int) -> int:
 
 
 def check_measurements(fs, measurements) -> list[int]:
-    """Check the measurements' geometry and weights against store ``fs``; return each one's plane index.
+    """Check the measurements against store ``fs``; return each one's plane index.
 
-    Raises
-    ------
-    ParameterError
-        For weights negative, not one per offset or not summing to 1; n not a unit vector; a gate that is not
-        a plane of the store (within 1e-6 relative); a probe point outside the yz field or behind the rotor.
+    ParameterError for bad weights, n not a unit vector, a gate not on a plane, or a point off the yz field.
     """
     g = fs.grid
     y, z = g.y(), g.z()
@@ -177,33 +139,11 @@ def _heights(hub_height_m: float, points_m: np.ndarray) -> np.ndarray:
 
 def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = False,
            shear_exponent: float = 0.2, mean_wind=None) -> LidarSamples:
-    """Sample store ``fs`` with ``measurements`` (every beam with every gate) at the physical times ``times_s`` [s].
+    """Sample store ``fs`` with ``measurements`` at the physical times ``times_s`` [s], whole scans only.
 
-    ``beam_of_sample`` is each entry's beam: one beam at a time, cycling over all beams in a fixed order; only the
-    whole scans whose stored times fit in the store are kept.
-
-    Parameters
-    ----------
-    fs, measurements, times_s, beam_of_sample
-        As above.
-    add_mean_wind : bool, optional
-        Add the power-law mean wind U (h / h_hub)^alpha to u (default False: fluctuations only).
-    shear_exponent : float, optional
-        Power-law exponent alpha [-] for ``add_mean_wind`` (default 0.2).
-    mean_wind : MeanWind, optional
-        With ``add_mean_wind``: this mean wind instead of the power law, applied as the exports apply it
-        (``MeanWind.full_uv``) at each probe point and stored time.
-
-    Returns
-    -------
-    LidarSamples
-
-    Raises
-    ------
-    ParameterError
-        For bad measurements (:func:`check_measurements`), a beam missing a gate, a schedule that is not one
-        beam at a time in a repeating order, a store too short for two scans, a shear exponent outside
-        [-1, 1], or a probe point below the ground when adding the mean wind.
+    ``beam_of_sample``: one beam at a time in a repeating order. ``add_mean_wind``: the power law with
+    ``shear_exponent`` [-] or ``mean_wind`` (as the exports apply it). ParameterError as :func:`check_measurements`,
+    for a bad schedule, a store shorter than two scans, a shear exponent outside [-1, 1] or a point below ground.
     """
     shear_exponent = check_range("shear exponent", shear_exponent, -1.0, 1.0)  # the exports' range
     g, U = fs.grid, fs.U_m_s
@@ -298,10 +238,7 @@ def _los_with_mean_wind(fs, measurements, planes, T, col, mean_wind):
 
 
 def _with_mean_wind(mean_wind, fs, box, corners, n, t, p) -> np.ndarray:
-    """Line-of-sight projection (n_scan, k) of the interpolated fluctuations plus ``mean_wind`` at the probe points.
-
-    ``t`` (n_scan, k) are the stored times (when each slice reaches the rotor), ``p`` (k, 3) the points.
-    """
+    """Line-of-sight projection (n_scan, k) of fluctuations plus ``mean_wind`` at points ``p``, stored times ``t``."""
     h = _heights(fs.hub_height_m, p)
     vals = {c: sum(w * box[c].ravel()[idx] for idx, w in corners) for c in "uvw"}
     u, v = mean_wind.full_uv(vals["u"], vals["v"], t, p[None, :, 1], h[None, :], fs.U_m_s, fs.hub_height_m)
@@ -310,11 +247,8 @@ def _with_mean_wind(mean_wind, fs, box, corners, n, t, p) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class LosOperator:
-    """The virtual lidar as a sparse linear map of the field: v_los[s, j] = sum_r weight[s, j, r] n_j[c]
-    field[c, plane[j], t_index[s, j, r], y_index[j, r], z_index[j, r]] over the components c (n_j[c] != 0).
-
-    r runs over the probe points times the 8 corners of their (t, y, z) cell (probe-volume weight times the
-    trilinear weights). Fluctuations only (no mean wind).
+    """The virtual lidar as a sparse linear map of the fluctuations (no mean wind): v_los[s, j] = sum_r weight[s, j, r]
+    n_j[c] field[c, plane[j], t_index, y_index, z_index], r over probe points x the 8 trilinear cell corners.
     """
 
     plane: np.ndarray  # (J,) plane index of each measurement
@@ -326,10 +260,7 @@ class LosOperator:
 
 
 def los_operator(grid, U_m_s: float, measurements, planes, times_s: np.ndarray) -> LosOperator:
-    """The operator of ``measurements`` (on ``planes``) at physical times ``times_s`` (n_scan, J) [s].
-
-    Indices are clipped to the grid where the clipped corner's weight is 0.
-    """
+    """The operator of ``measurements`` at physical times ``times_s`` (n_scan, J) [s] (zero-weight corners clipped)."""
     g = grid
     y0, z0 = g.y()[0], g.z()[0]
     n_scan, n_meas = times_s.shape
@@ -396,13 +327,9 @@ def apply_los(op: LosOperator, read) -> np.ndarray:
 
 
 def mean_wind_los_series(measurements, times_s: np.ndarray, U_m_s: float, hub_height_m: float, mean_wind) -> np.ndarray:
-    """The line-of-sight speed (n_scan, J) [m/s] of ``mean_wind`` alone, per scan and measurement (physical times
-    ``times_s`` (n_scan, J) [s], each probe point at its stored time T + x / U): what :func:`sample` adds.
+    """The line-of-sight speed (n_scan, J) [m/s] of ``mean_wind`` alone: what :func:`sample` adds.
 
-    Raises
-    ------
-    ParameterError
-        For a turning mean wind (it turns the fluctuations' projection too) or a probe point below the ground.
+    ParameterError for a turning mean wind or a probe point below the ground.
     """
     if mean_wind.turns:
         raise ParameterError(f"lidar: the mean wind turns ({mean_wind.describe()}), which turns the fluctuations' "

@@ -1,11 +1,8 @@
 """Lidar and rotor signals from sampled line-of-sight speeds, and their Welch coherence.
 
-u_LL (Guo et al. 2023, Eq. 28 without its stray outer factor; Guo et al. 2024, Eq. 23): the mean
-over all beams and gates of v_los,i / n_i1, each taken from the most recent full scan (moving
-window, zero-order hold per beam) and aligned by its leading time x_i/U (Guo et al. 2023,
-Sect. 5.1.1: the measurement of gate i reaches the rotor x_i/U later). In the convected frame the
-arrival time of a measurement at physical time T is the stored time T + x_i/U.
-u_RR (Guo et al. 2023, Eq. 23): u averaged over the rotor disc of the plane x = 0.
+u_LL (Guo et al. 2023, Eq. 28 without its stray outer factor; Guo et al. 2024, Eq. 23): the mean of v_los,i / n_i1
+over the latest full scan, shifted by x_i/U (Guo et al. 2023, Sect. 5.1.1); u_RR (Guo et al. 2023, Eq. 23): u
+averaged over the rotor disc at x = 0.
 """
 
 from __future__ import annotations
@@ -19,11 +16,7 @@ from turbgen.validation.point_sets import rotor_mask
 
 
 def lidar_estimate(samples, U_m_s: float):
-    """(arrival times [s], u_LL [m/s]) on the scan-step grid (step = scan period / beams).
-
-    The arrival times (stored time of the rotor plane) run from the first time every beam-gate has a sample to
-    the last time all still have one; every n_1 of ``samples`` must be non-zero.
-    """
+    """(arrival times [s], u_LL [m/s]) on the scan-step grid, while every beam-gate has a sample."""
     v, T = samples.v_los.astype(float), samples.time_s
     n_scan, nb, ng = v.shape
     step = float(np.median(np.diff(np.sort(T.ravel()))))
@@ -41,11 +34,9 @@ def lidar_estimate(samples, U_m_s: float):
 
 
 def rotor_average(fs, radius_m: float, t_s: np.ndarray, chunk: int | None = None) -> tuple[np.ndarray, float]:
-    """u_RR [m/s] at the stored times ``t_s`` [s] (linear in time) and the rotor-averaged TI_R [-] of the disc of
-    radius ``radius_m`` [m] on the plane x = 0.
+    """u_RR [m/s] at stored times ``t_s`` [s] and TI_R [-] (Schlipf et al. 2020, Eq. 3) of the disc at x = 0.
 
-    TI_R = mean over disc points of sigma_u / U over the whole record (Schlipf et al. 2020, Eq. 3). Reads the
-    plane ``chunk`` time steps at a time (default the store's time chunk); ParameterError without a plane x = 0.
+    ParameterError without a plane x = 0.
     """
     g = fs.grid
     xs = g.x()
@@ -74,19 +65,10 @@ def lidar_ti(samples, U_m_s: float) -> float:
 
 
 def welch_rl(u_ll: np.ndarray, u_rr: np.ndarray, setup: WelchSetup) -> dict:
-    """Welch spectra of u_LL and u_RR [m/s] (one regular time grid) with the Hann window of ``setup``.
+    """Welch spectra of u_LL and u_RR [m/s] with the Hann window of ``setup``, segment means removed.
 
-    Returns
-    -------
-    dict
-        ``f_hz`` [Hz]; one-sided ``S_LL``, ``S_RR`` [m^2 s^-2 Hz^-1] and ``S_RL`` (complex); ``coh2_RL``, ``G_RL``
-        = |S_RL| / S_LL [-]; ``n_segments``; ``n_eff`` (effective independent segments); ``setup``. Segment
-        means are removed, so a mean wind does not enter.
-
-    Raises
-    ------
-    ParameterError
-        If the signal gives fewer than two segments.
+    Returns ``f_hz``, ``S_LL``, ``S_RR`` [m^2 s^-2 Hz^-1], ``S_RL``, ``coh2_RL``, ``G_RL`` = |S_RL| / S_LL,
+    ``n_segments``, ``n_eff``, ``setup``. ParameterError for fewer than two segments.
     """
     starts = segment_starts(u_ll.size, setup)
     if len(starts) < 2:

@@ -1,14 +1,8 @@
 """The expected Welch estimates of u_RR and u_LL spectra on a periodic record: what the estimator targets.
 
-A store's record of length T = nt dt is periodic, so u_RR and u_LL are sums of spectral lines at f_j = j / T,
-each of (cross-)variance L_j = S(f_j) / (2 T) for the one-sided preview spectra S. A Welch bin m is a
-weighted sum of lines with the weights |G_m(+-f_j)|^2 of the Hann window and the segment-mean removal
-(turbgen.validation.welch_kernel; Welch 1967). Near the lowest bins, where gamma^2_RL falls steeply, the
-window's main lobe mixes frequencies of different coherence, which this expectation accounts for.
-
-The theory is evaluated at every line below bin 2 and at the bin centres above (up to BAND_BINS bins beyond
-the last bin), and interpolated to the other lines: log S_RR, log S_LL and the complex coherency
-S_RL / sqrt(S_RR S_LL) by cubic splines in log f.
+The record is periodic, so the signals are lines at f_j = j / T of variance S(f_j) / (2 T); bin m weights them by
+|G_m(+-f_j)|^2 of the Hann window with mean removal (Welch 1967). This accounts for the main lobe mixing
+coherences near the lowest bins.
 """
 
 from __future__ import annotations
@@ -66,12 +60,9 @@ class ExpectedWelch(PreviewSpectra):
 
 def expected_welch(spectra: PreviewSpectra, f_bins_hz, setup: WelchSetup, record_s: float,
                    n_samples: int | None = None) -> ExpectedWelch:
-    """Expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] at ``f_bins_hz`` from ``spectra``, the theory at the nodes of
-    :func:`theory_nodes`, for a record of period ``record_s`` [s].
+    """Expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] at ``f_bins_hz`` for a record of ``record_s`` [s].
 
-    Their coh2_RL and G_RL are what the Welch gamma^2_RL and |G_RL| estimate (to the estimator's own
-    (1 - gamma^2)^2 / n bias). With ``n_samples`` (the signal's length) the result's ``n_eff`` is
-    :func:`effective_segments`.
+    Their coh2_RL, G_RL are what the Welch estimates target; ``n_samples`` adds :func:`effective_segments`.
     """
     f_bins = np.asarray(f_bins_hz, dtype=float)
     nodes, lines = theory_nodes(f_bins, setup, record_s)
@@ -90,18 +81,9 @@ def expected_welch(spectra: PreviewSpectra, f_bins_hz, setup: WelchSetup, record
 def effective_segments(S_RR, S_LL, lines_hz, f_bins_hz, setup: WelchSetup, n_samples: int) -> np.ndarray:
     """Equivalent number of independent segments [-] of the Welch gamma^2_RL of one record, per bin.
 
-    For each of u_RR and u_LL, n = E[P]^2 / Var[P] of its Welch estimate P of bin m over the actual segment
-    starts t_s of an ``n_samples`` signal (exact for Gaussian lines, Isserlis): the segment DFT is
-    F_s = sum_j a_j G_m(f_j) e^(i w_j t_s) + conj(a_j) G_m(-f_j) e^(-i w_j t_s), so with D = t_s - t_s'
-
-        Cov(F_s, F_s') = sum_j L_j (|G_m(f_j)|^2 e^(i w_j D) + |G_m(-f_j)|^2 e^(-i w_j D)) = A(D),
-        E[F_s F_s'] = sum_j L_j G_m(f_j) G_m(-f_j) 2 cos(w_j D) = B(D),
-        Var[sum_s |F_s|^2] = sum_(s, s') |A(D)|^2 + |B(D)|^2,   E = K A(0)   (K segments)
-
-    (lines within BAND_BINS bins of the bin). Unlike the rule of thumb ``WelchSetup.effective_segments``
-    (Welch 1967, white spectrum within the window) it holds where the spectrum is steep across the window's
-    lobe. Returns sqrt(n_RR n_LL), the n of Goodman's coherence law (``turbgen.virtual_lidar.compare``);
-    independent records add their values. ``S_RR``, ``S_LL`` are given at the evenly spaced ``lines_hz``.
+    n = E[P]^2 / Var[P] of each Welch estimate over the actual segment starts (exact for Gaussian lines, Isserlis);
+    unlike ``WelchSetup.effective_segments`` (Welch 1967) it holds where the spectrum is steep across the window's
+    lobe. Returns sqrt(n_RR n_LL), the n of Goodman's law; independent records add theirs.
     """
     lines = np.asarray(lines_hz, dtype=float)
     m = np.rint(np.asarray(f_bins_hz, dtype=float) * setup.nperseg * setup.dt_s).astype(int)
