@@ -3,11 +3,20 @@
 Hoffman & Ribak (1991): with the prior u ~ N(0, C) (turbgen.synthesis.prior_spectrum), measurements
 d = H u + eps, eps ~ N(0, R) and S = H C H^T + R, a conditional sample is
 
-    u_c = u_s + C H^T S^-1 (d - H u_s - eps_s),      u_s ~ N(0, C), eps_s ~ N(0, R).
+    u_c = u_s + C H^T S^-1 (d - H u_s - eps_s),      u_s ~ N(0, C), eps_s ~ N(0, R)
 
-The stored time axis is periodic, so S is block-circulant: one Hermitian (streams x streams) matrix per frequency,
-built from rho_pq Phi_i (Guo et al. 2023, Eq. 13-14); decimated streams alias q full-rate frequencies onto one.
-The equations, gaps and C H^T w: docs/constrained-fields.md, "How it is solved".
+(C H^T S^-1 d: the conditional mean). Stream a combines values of one plane p_a, y_a(n) = sum_t w_t
+u_(c_t)(n + s_t, y_t, z_t), observed as z_a(m) = y_a(o_a + m q). The stored time axis is periodic, so S is
+block-circulant: one Hermitian (streams x streams) matrix per frequency. At full rate, slab i gives
+
+    L_i[a, b] = nt sum_(t in a, t' in b) w_t w_t' G_i^(p_a p_b)[c_t, c_t'](y_t - y_t', z_t - z_t')
+                * e^(2 pi i i (s_t - s_t') / nt)
+
+with G_i^(pq)(dy, dz) = sum_(j, l) rho_pq Phi_i exp(2 pi i (j dy / nyp + l dz / nzp)) (real part on the k1 = 0 /
+Nyquist slabs), rho_pq = exp(-|t_p - t_q| / tau_e) (Guo et al. 2023, Eq. 13-14), L_(nt - i) = conj L_i, and the
+decimated streams alias the q full-rate frequencies onto j:
+S_j[a, b] = (1/q) sum_l L_(j + l nt/q)[a, b] e^(2 pi i (j + l nt/q)(o_a - o_b) / nt) + sigma_a^2 delta_ab.
+Gaps, the per-direction grouping of terms and C H^T w: docs/constrained-fields.md, "How it is solved".
 """
 
 from __future__ import annotations
