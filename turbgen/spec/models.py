@@ -9,9 +9,9 @@ so a declaration pointing into the wrong layer fails at once and no lower layer 
 
 A further model touches 6 files: one ``_declare`` line here, spec/<name>.py (run class, OPTIONS, REPLACES,
 DEFAULTS), schemas/<name>-run.schema.json, its synthesis module, runs/<name>.py (run, MODEL) and
-validation/<name>_expectation.py; its command (turbgen.cli.model), store, service form and validator read this
-registry. Optional: own command, preset keys (sweeps), lidar previews, ``turbgen.<name>()``
-(tests/spec/test_models.py keeps other modules from naming a model).
+validation/<name>_expectation.py; its command (turbgen.cli.model), store, validator, sweeps and service page read
+this registry. Optional: own command, preset keys (sweeps need them), lidar previews, ``turbgen.<name>()``, a
+sweep file's per-model grid table (tests/spec/test_models.py keeps other modules from naming a model).
 """
 
 from __future__ import annotations
