@@ -16,9 +16,13 @@ from turbgen.errors import ParameterError
 from turbgen.service.form import form_description, form_fields
 from turbgen.service.form_request import form_request
 from turbgen.service.run_ids import build_run
+from turbgen.spec.kaimal import OPTIONS as KAIMAL_OPTIONS
+from turbgen.spec.kaimal import REPLACES as KAIMAL_REPLACES
 from turbgen.spec.kaimal import KaimalRun
+from turbgen.spec.mann import OPTIONS as MANN_OPTIONS
+from turbgen.spec.mann import REPLACES as MANN_REPLACES
 from turbgen.spec.mann import MannRun
-from turbgen.spec.run_inputs import KAIMAL_OPTIONS, KAIMAL_REPLACES, MANN_OPTIONS, MANN_REPLACES, merge_run_inputs
+from turbgen.spec.run_inputs import merge_run_inputs
 from turbgen.api.keywords import run_inputs
 
 # options of the commands that do not describe the run: where it goes, how it is computed, where inputs come from

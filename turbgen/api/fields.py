@@ -17,11 +17,14 @@ from turbgen.resources import available_memory_bytes, default_threads, parse_siz
 from turbgen.spec.defaults import KAIMAL_DEFAULTS
 from turbgen.spec.config import check_mapping, read_config
 from turbgen.spec.constraints import ConstraintRequest, resolve_constraint_paths, split_constraint_keys
+from turbgen.spec.kaimal import REPLACES as KAIMAL_REPLACES
 from turbgen.spec.kaimal import KaimalRun
+from turbgen.spec.mann import ENERGY_KEYS as MANN_ENERGY_KEYS
+from turbgen.spec.mann import REPLACES as MANN_REPLACES
 from turbgen.spec.mann import MannRun
 from turbgen.spec.preset_files import load_presets
 from turbgen.spec.preset_runs import kaimal_run_keys, mann_run_keys
-from turbgen.spec.run_inputs import KAIMAL_REPLACES, MANN_ENERGY_KEYS, MANN_REPLACES, merge_run_inputs
+from turbgen.spec.run_inputs import merge_run_inputs
 from turbgen.store import open_store as _open_field_store
 from turbgen.store.paths import check_output_path
 from turbgen.store.writer import check_new_store

@@ -64,9 +64,9 @@ def user_error(exc: TurbgenError) -> UserError:
 _startup_collector_paused = False
 
 # command name -> (module, attribute), imported only when the command runs (or for --help); a model's command is
-# declared with the model (turbgen.spec.models)
+# declared with the model (turbgen.spec.models), else turbgen.cli.model builds it
 COMMANDS = {
-    **{d.name: tuple(d.command.split(":")) for d in DECLARATIONS},
+    **{d.name: tuple((d.command or "turbgen.cli.model:model_command").split(":")) for d in DECLARATIONS},
     "export": ("turbgen.cli.export", "export"),
     "fit": ("turbgen.cli.theory", "fit"),
     "info": ("turbgen.cli.info", "info"),
@@ -90,6 +90,8 @@ class TurbgenGroup(click.Group):
             return None
         module, attr = COMMANDS[cmd_name]
         command = getattr(importlib.import_module(module), attr)
+        if not isinstance(command, click.Command):  # turbgen.cli.model's factory
+            command = command(cmd_name)
         if _startup_collector_paused and not gc.isenabled():
             # the console script's imports (~10^6 objects that live as long as the process) go to the permanent
             # generation, so the cyclic collector never traverses them again

@@ -15,7 +15,8 @@ from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X
 from turbgen.spec.defaults import KAIMAL_DEFAULTS as D
 from turbgen.spec.defaults import KAIMAL_GRID as G
 from turbgen.spec.kaimal import LONG_COMPONENTS, VW_COHERENCE
-from turbgen.spec.run_inputs import GRID_OPTIONS, KAIMAL_OPTIONS
+from turbgen.spec.kaimal import OPTIONS as KAIMAL_OPTIONS
+from turbgen.spec.run_inputs import GRID_OPTIONS
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS
 from turbgen.theory.kaimal import IEC_IREF
 from turbgen.theory.ranges import LIMITS

@@ -15,8 +15,9 @@ from turbgen.runs.mann import describe, run_mann
 from turbgen.runs.mann_outofcore import local_cluster, plan_for_budget, remove_stale_scratch
 from turbgen.spec.defaults import MANN_DEFAULTS as D
 from turbgen.spec.defaults import MANN_GRID as G
+from turbgen.spec.mann import OPTIONS as MANN_OPTIONS
 from turbgen.spec.mann import MannRun
-from turbgen.spec.run_inputs import GRID_OPTIONS, MANN_OPTIONS
+from turbgen.spec.run_inputs import GRID_OPTIONS
 from turbgen.store.paths import check_output_path
 from turbgen.store.writer import check_new_store
 from turbgen.theory.params import LIFETIMES

@@ -10,10 +10,12 @@ import numpy as np
 from turbgen.cli.options import parse_floats, plot_figure, save_plot
 from turbgen.errors import ParameterError
 from turbgen.spec.defaults import MANN_DEFAULTS
+from turbgen.spec.models import DECLARATIONS
 
 
 @click.command("lidar")
-@click.option("--model", type=click.Choice(["mann", "kaimal"]), default="mann", show_default=True)
+@click.option("--model", type=click.Choice([d.name for d in DECLARATIONS if d.preview]), default="mann",
+              show_default=True)
 @click.option("--preset", type=click.Choice(["unstable", "neutral", "stable"]), default="neutral",
               show_default=True, help="Stability class (Guo et al. 2023 Table 1/2).")
 @click.option("--U", "U", type=float, default=MANN_DEFAULTS["U_m_s"], show_default=True, help="Mean wind speed U [m/s].")

@@ -15,6 +15,7 @@ import numpy as np
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
 from turbgen.resources import available_memory_bytes, format_bytes, require_memory
+from turbgen.runs.models import Model
 from turbgen.runs.scratch import FileSpectrum
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import create_store
@@ -205,3 +206,25 @@ def kaimal_in_memory(run: KaimalRun, *, progress: bool = False, threads: int | N
     with MemoryWriter(g, attrs) as w:
         sums = _fill(w, run, gen, False, None, progress)
     return w.dataset, _summary(gen, sums, None, t0, False)
+
+
+def _run(run: KaimalRun, out, *, overwrite=False, chunk_t=None, threads=None, memory_bytes=None, shared=None):
+    return run_kaimal(run, out, overwrite=overwrite, chunk_t=chunk_t, threads=threads)
+
+
+def _memory(run: KaimalRun, threads: int) -> int:
+    return memory_needed(run.grid, sampler=kaimal_generator(run, workers=threads).sampler_bytes())
+
+
+def _least_memory(run: KaimalRun) -> int:
+    floor = min(memory_needed(run.grid), memory_needed(run.grid, True))  # memory or disk, samplers not counted
+    available = available_memory_bytes()
+    if available is not None and floor > available:
+        # the samplers only add: refused without planning a torus per frequency (minutes for 8 M bins)
+        return floor
+    sampler = kaimal_generator(run, workers=1).sampler_bytes()
+    return min(memory_needed(run.grid, sampler=sampler), memory_needed(run.grid, True, sampler))
+
+
+MODEL = Model("kaimal", KaimalRun, _run, _memory, _least_memory, "`nt`, `ny`/`nz` or the number of planes",
+              lambda run, threads, memory_bytes: None)

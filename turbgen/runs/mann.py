@@ -6,7 +6,9 @@ seed and can be shared between seeds.
 
 from __future__ import annotations
 
+import functools
 import math
+import os
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -17,6 +19,7 @@ from tqdm import tqdm
 
 from turbgen.errors import ParameterError
 from turbgen.resources import default_threads, format_bytes, require_memory
+from turbgen.runs.models import Model
 from turbgen.runs.stencil_cache import cached_stencil
 from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
@@ -211,3 +214,31 @@ def mann_in_memory(run: MannRun, *, progress: bool = False, stencil: MannStencil
         sums = _generate(writer, run, _run_stencil(run, stencil, cache_dir), gen_threads, progress, in_place=True,
                          gen=snapshots)  # fmt: skip
     return writer.dataset, field_summary(None, t_start, sums, run.grid)
+
+
+def _out_of_core(run: MannRun, threads: int | None, memory_bytes: int | None) -> bool:
+    """Whether a Mann run exceeds its memory budget (then mann_outofcore makes it)."""
+    if memory_bytes is None:
+        return False
+    from turbgen.runs.mann_outofcore import fits_in_memory
+
+    return not fits_in_memory(run, memory_bytes, threads or os.cpu_count() or 1)
+
+
+def _run(run: MannRun, out, *, overwrite=False, chunk_t=None, threads=None, memory_bytes=None, shared=None):
+    if _out_of_core(run, threads, memory_bytes):
+        from turbgen.runs.mann_outofcore import run_mann_outofcore
+
+        return run_mann_outofcore(run, out, memory_bytes=memory_bytes, overwrite=overwrite, chunk_t=chunk_t,
+                                  threads=threads)
+    return run_mann(run, out, overwrite=overwrite, chunk_t=chunk_t, stencil=shared, threads=threads)
+
+
+def _shared(run: MannRun, threads: int | None, memory_bytes: int | None):
+    if _out_of_core(run, threads, memory_bytes):
+        return None
+    return functools.partial(build_mann_stencil, energy="unit")  # picklable: a sweep's workers build it
+
+
+MODEL = Model("mann", MannRun, _run, memory_estimate_bytes, lambda run: memory_estimate_bytes(run, 1),
+              "`nt`, `ny`/`nz` or `pad_yz`", _shared, shared_stencil_key, shared_stencil_nbytes, out_of_core=True)

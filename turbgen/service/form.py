@@ -9,16 +9,15 @@ import re
 from dataclasses import asdict, dataclass
 
 from turbgen.spec.config import load_schema
-from turbgen.spec.defaults import KAIMAL_DEFAULTS, KAIMAL_GRID, MANN_DEFAULTS, MANN_GRID
-from turbgen.spec.models import model_names
+from turbgen.spec.models import declaration, model_names, resolve
 from turbgen.spec.presets import BUILTIN_PRESETS
-from turbgen.spec.run_inputs import GRID_OPTIONS, KAIMAL_OPTIONS, MANN_OPTIONS
+from turbgen.spec.run_inputs import GRID_OPTIONS
 from turbgen.theory.ranges import LIMITS, RANGES
 
 MODELS = model_names()  # the registry's models (turbgen.spec.models)
 GROUPS = ("model", "energy", "grid", "planes", "mean wind / export", "constraints")
-OPTIONS = {"mann": MANN_OPTIONS, "kaimal": KAIMAL_OPTIONS}
-DEFAULTS = {"mann": {**MANN_DEFAULTS, **MANN_GRID}, "kaimal": {**KAIMAL_DEFAULTS, **KAIMAL_GRID}}
+OPTIONS = {m: resolve(declaration(m).options, "spec") for m in MODELS}
+DEFAULTS = {m: resolve(declaration(m).defaults, "spec") for m in MODELS}
 # run-mapping key -> group on the page (keys absent here are in "model")
 _GROUP_OF = {
     "ae": "energy", "sigma_u_m_s": "energy", "ti": "energy", "turb_class": "energy", "sigma_m_s": "energy",

@@ -38,6 +38,15 @@ UNITS = {
 DERIVED_KEYS = ("effective_long_parameters", "resolved_band_hz", "expected_sigma_m_s", "rescale_factors",
                 "freq_chunk")  # fmt: skip
 _INPUT_KEYS = set(UNITS) - set(DERIVED_KEYS)
+# option name (`turbgen kaimal`, turbgen.kaimal) -> key of the run mapping (schemas/kaimal-run.schema.json)
+OPTIONS = {
+    "U": "U_m_s", "turb_class": "turb_class", "hub_height": "hub_height_m", "sigma": "sigma_m_s",
+    "lengths": "length_scales_m", "ayz": "a_yz", "lc": "lc_m", "long_model": "long_model", "ax": "a_x",
+    "bx": "b_x", "long_components": "long_components", "vw_coherence": "vw_coherence", "rescale": "rescale",
+    "seed": "seed", "spectrum": "spectrum",
+}  # fmt: skip
+REPLACES = {"sigma_m_s": ("turb_class",)}  # given sigmas: no class to record
+DEFAULTS = {**KAIMAL_DEFAULTS, **KAIMAL_GRID}  # the run keys' and grid keys' defaults (the service form shows them)
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,17 @@ UNITS = {
 }  # fmt: skip
 DERIVED_KEYS = ("ae_from",)  # the store's 'derived' attribute: how ae was chosen (text)
 _INPUT_KEYS = set(UNITS) | {"sigma_u_m_s", "ti", "turb_class", "grid"}
+# option name (`turbgen mann`, turbgen.mann) -> key of the run mapping (schemas/mann-run.schema.json)
+OPTIONS = {
+    "U": "U_m_s", "L": "length_scale_m", "gamma": "gamma", "evo": "evo_time_s", "lifetime": "lifetime",
+    "factor1": "factor1", "factor2": "factor2", "seed": "seed", "hub_height": "hub_height_m", "pad_yz": "pad_yz",
+    "ae": "ae", "sigma_u": "sigma_u_m_s", "ti": "ti",
+    "constrain": "constrain", "noise": "noise_m_s", "conditional_mean": "conditional_mean",
+}  # fmt: skip
+# a given energy level replaces any from the run file or the preset: one level, one source
+ENERGY_KEYS = ("ae", "sigma_u_m_s", "ti")
+REPLACES = {key: (*ENERGY_KEYS, "ae_from") for key in ENERGY_KEYS}
+DEFAULTS = {**MANN_DEFAULTS, **MANN_GRID}  # the run keys' and grid keys' defaults (the service form shows them)
 
 
 @dataclass(frozen=True)

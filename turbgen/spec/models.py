@@ -7,9 +7,11 @@ the validator asks for ``"validation"``, the lidar for ``"virtual_lidar"``, the 
 so a declaration pointing into the wrong layer fails at once and no lower layer reaches up through the registry
 (tests/spec/test_models.py resolves every reference from its layer).
 
-A further model is one declaration here plus its own spec run class, schema, synthesis, runs Model, validator
-theory and cli command; lidar previews are optional (None: ``turbgen lidar`` refuses its stores in one line), and
-``turbgen.<name>()`` (turbgen.api) and sweep presets (turbgen.spec.presets, preset_runs) are extra.
+A further model touches 6 files: one ``_declare`` line here, spec/<name>.py (run class, OPTIONS, REPLACES,
+DEFAULTS), schemas/<name>-run.schema.json, its synthesis module, runs/<name>.py (run, MODEL) and
+validation/<name>_expectation.py; its command (turbgen.cli.model), store, validator, sweeps and service page read
+this registry. Optional: own command, preset keys (sweeps need them), lidar previews, ``turbgen.<name>()``, a
+sweep file's per-model grid table (tests/spec/test_models.py keeps other modules from naming a model).
 """
 
 from __future__ import annotations
@@ -28,12 +30,16 @@ class ModelDeclaration:
     ----------
     name, schema : str
         The store's ``model`` attribute, the command, ``turbgen.<name>``; turbgen/schemas/<schema>.schema.json.
-    spec, options, replaces : str
+    spec, options, replaces, defaults : str
         ``turbgen.spec`` references: the run class (``from_mapping``, ``to_attrs``, ``from_attrs``, ``parameters``);
-        option / keyword -> run key; given run key -> keys it removes from the run file and the preset.
-    command, runner, synthesis, validator_theory : str
-        The click command; the turbgen.runs.models.Model; the generator class (resolved by the registry's test only);
-        ``theory(attrs, design) -> Theory``.
+        option / keyword -> run key; given run key -> keys it removes from the run file and the preset; run and
+        grid key -> default.
+    runner, synthesis, validator_theory : str
+        The turbgen.runs.models.Model; the generator class (resolved by the registry's test only); ``theory(attrs,
+        design) -> Theory``.
+    command, presets : str or None
+        The click command (None: turbgen.cli.model builds one from the declaration); ``turbgen.spec``
+        ``keys(preset, U_m_s, *, user, turb_class)`` -> the run keys a stability preset sets (None: no presets).
     preview, store_preview : str or None
         ``turbgen.virtual_lidar`` references (None: not available): ``preview(lidar, U_m_s, *, preset, f_hz,
         radius_m, frozen, **options)`` and ``store_preview(fs, description, f_hz, radius_m)``, both -> PreviewSpectra.
@@ -44,30 +50,37 @@ class ModelDeclaration:
     spec: str
     options: str
     replaces: str
-    command: str
+    defaults: str
     runner: str
     synthesis: str
     validator_theory: str
+    command: str | None = None
+    presets: str | None = None
     preview: str | None = None
     store_preview: str | None = None
 
 
-def _declare(name: str, run_class: str, synthesis: str) -> ModelDeclaration:
-    """The declaration of model ``name`` whose parts sit where the convention puts them (module and names from it)."""
-    up = name.upper()
+def _declare(name: str, run_class: str, synthesis: str, **optional) -> ModelDeclaration:
+    """The declaration of model ``name`` whose required parts sit where the convention puts them (module and names
+    from it); ``optional``: the references of its optional parts."""
     return ModelDeclaration(
         name=name, schema=f"{name}-run", spec=f"turbgen.spec.{name}:{run_class}",
-        options=f"turbgen.spec.run_inputs:{up}_OPTIONS", replaces=f"turbgen.spec.run_inputs:{up}_REPLACES",
-        command=f"turbgen.cli.{name}:{name}", runner=f"turbgen.runs.models:{up}", synthesis=synthesis,
-        validator_theory=f"turbgen.validation.{name}_expectation:{name}_theory",
-        preview=f"turbgen.virtual_lidar.preview:{name}_preview",
-        store_preview=f"turbgen.virtual_lidar.report:{name}_store_preview",
+        options=f"turbgen.spec.{name}:OPTIONS", replaces=f"turbgen.spec.{name}:REPLACES",
+        defaults=f"turbgen.spec.{name}:DEFAULTS", runner=f"turbgen.runs.{name}:MODEL", synthesis=synthesis,
+        validator_theory=f"turbgen.validation.{name}_expectation:{name}_theory", **optional,
     )
 
 
+def _own(name: str) -> dict:
+    """The optional parts mann and kaimal have: own command, presets, lidar previews."""
+    return dict(command=f"turbgen.cli.{name}:{name}", presets=f"turbgen.spec.preset_runs:{name}_run_keys",
+                preview=f"turbgen.virtual_lidar.preview:{name}_preview",
+                store_preview=f"turbgen.virtual_lidar.report:{name}_store_preview")
+
+
 DECLARATIONS: tuple[ModelDeclaration, ...] = (
-    _declare("mann", "MannRun", "turbgen.synthesis.mann_spacetime:MannSnapshots"),
-    _declare("kaimal", "KaimalRun", "turbgen.synthesis.kaimal_evo:KaimalEvo"),
+    _declare("mann", "MannRun", "turbgen.synthesis.mann_spacetime:MannSnapshots", **_own("mann")),
+    _declare("kaimal", "KaimalRun", "turbgen.synthesis.kaimal_evo:KaimalEvo", **_own("kaimal")),
 )
 _BY_NAME = {d.name: d for d in DECLARATIONS}
 

@@ -12,6 +12,7 @@ from dataclasses import replace
 
 from turbgen.errors import ParameterError
 from turbgen.spec.mann import MannRun
+from turbgen.spec.models import declaration, resolve
 from turbgen.spec.presets import KaimalSettings, StabilityPreset, get_preset
 from turbgen.theory.kaimal import iec_sigma1_m_s
 from turbgen.theory.params import KaimalParams, MannParams, check_wind_speed
@@ -55,10 +56,12 @@ def kaimal_settings_for(preset: str | StabilityPreset, U_m_s: float, *,
     return KaimalSettings(params, "exp", k.a_x if a_x is None else a_x, k.b_x if b_x is None else b_x)
 
 
-def mann_run_keys(preset: str | StabilityPreset, *, user: Mapping[str, StabilityPreset] | None = None) -> dict:
+def mann_run_keys(preset: str | StabilityPreset, U_m_s: float | None = None, *,
+                  user: Mapping[str, StabilityPreset] | None = None, turb_class: str | None = None) -> dict:
     """The keys of a Mann run mapping that ``preset`` sets: length_scale_m, gamma, evo_time_s, factor1, lifetime and
-    turb_class (the run derives ae for the class's sigma_1 at its U, as :func:`mann_params_for`)."""
-    p = _resolve(preset, user)
+    turb_class (``turb_class`` overrides the preset's); the run derives ae for the class's sigma_1 at its U, as
+    :func:`mann_params_for`, so ``U_m_s`` is not used (it is in every model's preset-keys signature)."""
+    p = _resolve(preset, user) if turb_class is None else replace(_resolve(preset, user), turb_class=turb_class)
     if p.mann is None:
         raise ParameterError(f"preset {p.name!r} has no Mann parameters")
     m = p.mann
@@ -80,11 +83,10 @@ def kaimal_run_keys(preset: str | StabilityPreset, U_m_s: float, *, user: Mappin
 
 def run_keys(model: str, preset: str | StabilityPreset, U_m_s: float, *,
              user: Mapping[str, StabilityPreset] | None = None, turb_class: str | None = None) -> dict:
-    """The run-mapping keys ``preset`` sets for ``model``: :func:`mann_run_keys` or :func:`kaimal_run_keys`
-    (ParameterError for another model)."""
-    if model == "mann":
-        return mann_run_keys(preset, user=user)
-    if model == "kaimal":
-        return kaimal_run_keys(preset, U_m_s, user=user, turb_class=turb_class)
-    raise ParameterError(f"model = {model!r} has no presets")
+    """The run-mapping keys ``preset`` sets for ``model``: its declaration's ``presets`` (turbgen.spec.models;
+    ParameterError for a model without)."""
+    reference = declaration(model).presets
+    if reference is None:
+        raise ParameterError(f"model = {model!r} has no presets")
+    return resolve(reference, "spec")(preset, U_m_s, user=user, turb_class=turb_class)
 

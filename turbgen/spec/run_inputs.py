@@ -9,28 +9,8 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
-# option name -> key of the run mapping (MannRun.from_mapping, schemas/mann-run.schema.json)
-MANN_OPTIONS = {
-    "U": "U_m_s", "L": "length_scale_m", "gamma": "gamma", "evo": "evo_time_s", "lifetime": "lifetime",
-    "factor1": "factor1", "factor2": "factor2", "seed": "seed", "hub_height": "hub_height_m", "pad_yz": "pad_yz",
-    "ae": "ae", "sigma_u": "sigma_u_m_s", "ti": "ti",
-    "constrain": "constrain", "noise": "noise_m_s", "conditional_mean": "conditional_mean",
-}  # fmt: skip
-# option name -> key of the run mapping (KaimalRun.from_mapping, schemas/kaimal-run.schema.json)
-KAIMAL_OPTIONS = {
-    "U": "U_m_s", "turb_class": "turb_class", "hub_height": "hub_height_m", "sigma": "sigma_m_s",
-    "lengths": "length_scales_m", "ayz": "a_yz", "lc": "lc_m", "long_model": "long_model", "ax": "a_x",
-    "bx": "b_x", "long_components": "long_components", "vw_coherence": "vw_coherence", "rescale": "rescale",
-    "seed": "seed", "spectrum": "spectrum",
-}  # fmt: skip
 # option name -> key of the run mapping's grid table
 GRID_OPTIONS = {"nt": "nt", "dt": "dt_s", "ny": "ny", "nz": "nz", "dy": "dy_m", "dz": "dz_m"}
-
-# a given energy level replaces any from the run file or the preset: one level, one source
-MANN_ENERGY_KEYS = ("ae", "sigma_u_m_s", "ti")
-MANN_REPLACES = {key: ("ae", "sigma_u_m_s", "ti", "ae_from") for key in MANN_ENERGY_KEYS}
-# given sigmas: no class to record
-KAIMAL_REPLACES = {"sigma_m_s": ("turb_class",)}
 
 
 def merge_run_inputs(

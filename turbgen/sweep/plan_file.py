@@ -32,6 +32,10 @@ def plan_from_mapping(data: Mapping, *, base_dir: str | Path = ".", **overrides)
     values (a scheduler drops the file's workers); paths relative to ``base_dir``. ParameterError as :func:`make_plan`,
     and for a schema violation, a user preset defined twice, or no ``out``."""
     check_mapping(data, "sweep", "sweep definition")
+    unknown = [m for m in data["models"] if m not in MODELS]  # the schema takes any name: the registry's models
+    if unknown:
+        raise ParameterError(f"sweep definition: models/{data['models'].index(unknown[0])}: {unknown[0]!r} is not one "
+                             f"of {', '.join(MODELS)}")
     base = Path(base_dir)
     user: dict[str, StabilityPreset] = {}
     if "preset_file" in data:

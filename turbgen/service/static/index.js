@@ -166,6 +166,9 @@ function start() {
   FORM = JSON.parse($('#form-data').textContent);  // /form.json, in the page: the form exists once it has loaded
   $('#version').textContent = FORM.turbgen;
   $('#token-row').hidden = !FORM.token_required;
+  const models = Object.keys(FORM.models).map(m => `<option>${text(m)}</option>`).join('');  // the registry's
+  $('#model').innerHTML = models;
+  $('#f-model').innerHTML += models;
   $('#f-preset').innerHTML += FORM.models.mann.find(f => f.name === 'preset').choices.map(c => `<option>${text(c)}</option>`).join('');
   $('#model').onchange = renderForm;
   $('#submit').onsubmit = submitRun;
