@@ -23,6 +23,7 @@ from concurrent.futures import ThreadPoolExecutor
 from functools import lru_cache
 
 import numpy as np
+
 from turbgen import fft
 from turbgen.errors import ParameterError, check_finite
 from turbgen.theory.eddy_lifetime import shear_distortion_beta
@@ -209,7 +210,6 @@ def _jacobi_anger(samples, z, theta_d: float):
     j_all = j_pos[..., np.abs(orders)] * np.where(orders < 0, (-1.0) ** np.abs(orders), 1.0)
     phase = (1j) ** (orders % 4) * np.exp(1j * orders * theta_d)
     return 2.0 * np.pi * (c[..., orders] * j_all * phase).sum(axis=-1)
-
 
 
 def _bessel_j(n_max: int, z) -> np.ndarray:
