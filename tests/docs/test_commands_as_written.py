@@ -9,7 +9,10 @@ How it runs: the blocks of one page run in order, in one fresh directory holding
 finds the stores and files that the commands before it wrote. A line ``A && B`` whose A is ``pip install ...``
 runs B only (the set-up is what .ci/run does in a fresh virtualenv, and reinstalling here would repoint the test
 venv); ``python -m pytest ...`` is not run (it is this test suite: .ci/run runs it). ``turbgen`` is this checkout's
-command, run in a subprocess; python and curl are not used by runnable blocks.
+command, run in this process by click's CliRunner in the page's directory (what the console script runs, less a
+fresh interpreter's imports; tests/cli/test_entry_point.py is about the process), but in a subprocess when it gives
+``--memory``: that budget bounds the whole process's resident memory. python and curl are not used by runnable
+blocks.
 
 Substitution rule (small sizes where a size option exists, the command otherwise as written):
 - ``turbgen mann``, ``turbgen kaimal`` and ``turbgen sweep`` without ``--config`` get ``--nt 256`` (or their own
@@ -40,8 +43,12 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import NamedTuple
 
 import pytest
+from click.testing import CliRunner
+
+from turbgen.cli import cli
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -50,6 +57,7 @@ SYNOPSIS = "<!-- synopsis -->"
 SMALL_NT, SMALL_N = 256, 16
 DEFAULT_YZ = {"mann": (64, 4.7), "kaimal": (31, 5.0), "sweep": (64, 4.7)}
 VERDICT_COMMANDS = ("validate", "lidar")
+KEEP_VALIDATOR_THEORY = True  # tests/conftest.py: a store validated on several pages reuses its predictions
 
 
 def bash_blocks(page: Path) -> list[str]:
@@ -89,7 +97,6 @@ def _set(args: list[str], name: str, value) -> list[str]:
 def _default_out(cmd: str, args: list[str]) -> str:
     """The store name ``turbgen cmd args`` writes when no --out is given (computed by the command's own code)."""
     from turbgen.api.fields import kaimal_run, mann_run_mapping
-    from turbgen.cli import cli
     from turbgen.cli import kaimal as kaimal_cli
     from turbgen.cli import mann as mann_cli
     from turbgen.spec.mann import MannRun
@@ -146,13 +153,21 @@ def test_every_page_with_commands_is_collected():
     assert {"README.md", "mann.md", "kaimal.md", "theory.md", "validate.md"} <= names
 
 
+class Ran(NamedTuple):
+    """What a command gave: exit code, stdout and stderr."""
+
+    exit_code: int
+    stdout: str
+    stderr: str
+
+
 @pytest.fixture(scope="module")
 def ran(tmp_path_factory):
     """The repeatable commands run so far in this session: words -> (result, kept copy of its --out or None)."""
     return {"dir": tmp_path_factory.mktemp("ran"), "runs": {}}
 
 
-def _run(run: list[str], cwd: Path, ran: dict) -> subprocess.CompletedProcess:
+def _run(run: list[str], cwd: Path, ran: dict) -> Ran:
     """``turbgen`` + run[1:] in cwd, or the result of the same repeatable command run earlier (its --out copied)."""
     key = tuple(run)
     out = _option(run, "--out") if run[1] in ("mann", "kaimal") else None
@@ -161,11 +176,17 @@ def _run(run: list[str], cwd: Path, ran: dict) -> subprocess.CompletedProcess:
         if kept is not None:
             shutil.copytree(kept, cwd / out)
         return r
-    turbgen = [sys.executable, "-c", "from turbgen.cli import main; main()"]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
-           "MPLBACKEND": "Agg"}
-    r = subprocess.run([*turbgen, *run[1:]], cwd=cwd, env=env, capture_output=True, text=True, timeout=300)
-    if r.returncode == 0 and repeatable(run):
+    if "--memory" in run:  # a budget of the process's memory: a fresh process (module docstring)
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+        done = subprocess.run([sys.executable, "-c", "from turbgen.cli import main; main()", *run[1:]], cwd=cwd,
+                              env=env, capture_output=True, text=True, timeout=300)  # fmt: skip
+        r = Ran(done.returncode, done.stdout, done.stderr)
+    else:
+        res = CliRunner().invoke(cli, run[1:], prog_name="turbgen")
+        # an exception that is not the command's exit (SystemExit) is a crash, whatever exit code it left
+        assert res.exception is None or isinstance(res.exception, SystemExit), f"{shlex.join(run)}: {res.exc_info}"
+        r = Ran(res.exit_code, res.stdout, res.stderr)
+    if r.exit_code == 0 and repeatable(run):
         kept = None
         if out is not None:
             kept = ran["dir"] / f"{len(ran['runs'])}" / out
@@ -175,7 +196,9 @@ def _run(run: list[str], cwd: Path, ran: dict) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.parametrize("page, blocks", CASES, ids=[p.name for p, _ in CASES])
-def test_commands_run_as_written(page, blocks, tmp_path, ran):
+def test_commands_run_as_written(page, blocks, tmp_path, ran, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
     shutil.copytree(ROOT / "examples", tmp_path / "examples")
     for block in blocks:
         for words in filter(runnable, commands(block)):
@@ -186,4 +209,4 @@ def test_commands_run_as_written(page, blocks, tmp_path, ran):
             if target is not None:
                 (tmp_path / target).write_text(r.stdout)
             allowed = (0, 1) if run[1] in VERDICT_COMMANDS else (0, 3) if run[1] == "sweep" else (0,)
-            assert r.returncode in allowed, f"{page.name}: {shlex.join(run)} -> {r.returncode}\n{r.stderr[-2000:]}"
+            assert r.exit_code in allowed, f"{page.name}: {shlex.join(run)} -> {r.exit_code}\n{r.stderr[-2000:]}"

@@ -64,7 +64,7 @@ def test_quickstart_matches_the_commands(tmp_path):
 
 
 @pytest.mark.parametrize("page", ["README.md", "docs/getting-started.md"])
-def test_first_python_example_runs(page, tmp_path):
+def test_first_python_example_runs(page, tmp_path, run_example):
     """The first Python example of the README and of Getting started (at most 10 lines of code after the imports)
     runs as written."""
     import re
@@ -72,21 +72,15 @@ def test_first_python_example_runs(page, tmp_path):
     code = re.search(r"```python\n(.*?)```", (ROOT / page).read_text(), re.S).group(1)
     lines = [line for line in code.splitlines() if line.strip() and not line.startswith("import ")]
     assert len(lines) <= 10
-    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    run = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, env=env, timeout=600)
-    assert run.returncode == 0, run.stderr
-    assert "all metrics pass" in run.stdout and (tmp_path / "mann_small.bts").exists()  # both validate, export
+    assert "all metrics pass" in run_example(code, page) and (tmp_path / "mann_small.bts").exists()  # validate, export
 
 
-def test_api_guide_runs_as_written(tmp_path):
+def test_api_guide_runs_as_written(tmp_path, run_example):
     """The Python blocks of docs/api.md (the notebook path), run in order in one process as written."""
     import re
 
     blocks = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "api.md").read_text(), re.S)
     assert len(blocks) >= 3
-    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    run = subprocess.run([sys.executable, "-c", "\n".join(blocks)], cwd=tmp_path, capture_output=True, text=True,
-                         env=env, timeout=900)
-    assert run.returncode == 0, run.stderr
-    assert "all metrics pass" in run.stdout and "True [256, 11, 16, 16]" in run.stdout
+    printed = run_example("\n".join(blocks), "docs/api.md")
+    assert "all metrics pass" in printed and "True [256, 11, 16, 16]" in printed
     assert sorted(p.name for p in tmp_path.iterdir()) == ["field.bts", "field_InflowWind_bts.dat"]  # no store

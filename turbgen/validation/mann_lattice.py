@@ -8,6 +8,8 @@ so an error in either shows up as a disagreement: keep the parameters distinct.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from turbgen.grid import Grid
@@ -20,6 +22,17 @@ from turbgen.validation.store_run import MannBox
 CELL_RADIUS = 2  # cells |k2| <= 2 dk2, |k3| <= 2 dk3 around the k1 axis are integrated, not point-sampled
 CELL_K1_MAX = 8.0  # ... for |k1| <= 8 max(dk2, dk3); beyond, Phi is smooth on the cell scale there
 CELL_GAUSS = 4
+
+
+@lru_cache(maxsize=64)
+def _cell_nodes(n1: int, n2: tuple, n3: tuple):
+    """Indices into the x1 rule and the concatenated x2 and x3 rules listing the nodes cell by cell, (x1, x2, x3)
+    C order within each, and each cell's first node (the cells' rule sizes repeat from k1 to k1: cached)."""
+    o2, o3 = np.cumsum((0, *n2)), np.cumsum((0, *n3))
+    cells = [np.meshgrid(np.arange(n1), np.arange(o2[j], o2[j + 1]), np.arange(o3[m], o3[m + 1]), indexing="ij")
+             for j in range(len(n2)) for m in range(len(n3))]
+    i1, i2, i3 = (np.concatenate([c[a].ravel() for c in cells]) for a in range(3))
+    return i1, i2, i3, np.cumsum([0, *(c[0].size for c in cells[:-1])])
 
 
 class MannLattice:
@@ -47,15 +60,9 @@ class MannLattice:
         scale = max(abs(k1), self.dk1 / 4)
         rules2 = [cell_rule(j * self.dk2, self.dk2, CELL_GAUSS, scale, 2.0, 40) for j in range(-self.r2, self.r2 + 1)]
         rules3 = [cell_rule(l * self.dk3, self.dk3, CELL_GAUSS, scale, 2.0, 40) for l in range(-self.r3, self.r3 + 1)]
-        pts, wts, starts = [], [], []
-        for x2, w2 in rules2:
-            for x3, w3 in rules3:
-                starts.append(sum(p.shape[1] for p in pts))
-                g = np.meshgrid(x1, x2, x3, indexing="ij")
-                pts.append(np.stack([a.ravel() for a in g]))
-                wts.append((w1[:, None, None] * w2[None, :, None] * w3[None, None, :]).ravel())
-        k = np.concatenate(pts, axis=1)
-        phi = sheared_tensor(k[0], k[1], k[2], self.params) * np.concatenate(wts)  # one call for all cells
+        (x2, w2), (x3, w3) = ([np.concatenate(a) for a in zip(*r)] for r in (rules2, rules3))
+        i1, i2, i3, starts = _cell_nodes(x1.size, tuple(x.size for x, _ in rules2), tuple(x.size for x, _ in rules3))
+        phi = sheared_tensor(x1[i1], x2[i2], x3[i3], self.params) * (w1[i1] * w2[i2] * w3[i3])  # all cells at once
         cells = np.add.reduceat(phi, starts, axis=2)
         return cells.reshape(3, 3, len(rules2), len(rules3))
 
