@@ -3,14 +3,17 @@
 Per realisation (frozen Mann field, one plane, 8192 x 16 x 16 points, dx = U dt = 6 m, dy = dz = 6 m):
   box     turbgen: the field against the Mann tensor summed over its generator's box (grid-aware);
           wetb: `fit_mann_model_spectra(*spectra(1 / dx, u, v, w))` over the 256 columns (the continuous model);
-  sonic   one sensor's u, v, w series (8192 samples at dt = 0.5 s) drawn from the continuous model's one-point
-          spectra F11, F22, F33 and co-spectrum F13 (Mann 1994) at the record's own wavenumbers (a sensor whose
-          spectra hold every wavenumber, unlike a point of a box): turbgen against the continuous model, wetb as
-          above; reported is whether wetb's values lie inside turbgen's 95 % intervals.
+  sonic   one sensor's u, v, w series (``--nt`` samples at ``--dt``, default 8192 at 0.5 s; a 10-minute 20 Hz sonic:
+          --nt 12000 --dt 0.05) drawn from the continuous model's one-point spectra F11, F22, F33 and co-spectrum
+          F13 (Mann 1994) at the record's own wavenumbers (a sensor whose spectra hold every wavenumber, unlike a
+          point of a box): turbgen against the continuous model, wetb as above; reported is whether wetb's values
+          lie inside turbgen's 95 % intervals, and wetb's fit of the noise-free model spectra at the same lines
+          (its bias without any sampling error).
 wetb (the DTU Wind Energy Toolbox, PyPI `wetb`) is a benchmark peer only: `pip install --no-deps wetb` suffices
 for its mann_parameters module (numpy, scipy).
 
     python benchmarks/bench_fit_wetb.py --n 10 --out /tmp/fit_wetb.jsonl
+    python benchmarks/bench_fit_wetb.py --kinds sonic --nt 12000 --dt 0.05 --n 25 --out /tmp/fit_wetb.jsonl
     python benchmarks/bench_fit_wetb.py --summary /tmp/fit_wetb.jsonl
 """
 
@@ -50,16 +53,25 @@ def turbgen_fit(data, **kw) -> tuple[dict, float]:
 
 
 @functools.lru_cache(maxsize=4)
-def _line_spectra(case: tuple, n: int) -> tuple[float, dict]:
+def _line_spectra(case: tuple, n: int, dt_s: float) -> tuple[float, dict]:
     """(dk [rad/m], the one-point spectra at the n-sample record's lines k_m = m dk, 0 < m < n / 2)."""
-    dk = 2 * np.pi / (n * U_M_S * DT_S)
+    dk = 2 * np.pi / (n * U_M_S * dt_s)
     return dk, one_point_spectra(dk * np.arange(1, n // 2), MannParams(*case))
 
 
-def sonic_series(case, seed: int, n: int = 8192) -> dict:
+def wetb_noise_free(case, n: int, dt_s: float) -> list[float]:
+    """wetb's (ae, L, Gamma) fitted to the model's expected spectra at the record's lines (no sampling error)."""
+    from wetb.wind.turbulence.mann_parameters import fit_mann_model_spectra
+
+    dk, F = _line_spectra(tuple(case), n, dt_s)
+    spectra = (F[k] for k in ("F11", "F22", "F33", "F13"))
+    return [float(x) for x in fit_mann_model_spectra(dk * np.arange(1, n // 2), *spectra)]
+
+
+def sonic_series(case, seed: int, n: int = 8192, dt_s: float = DT_S) -> dict:
     """u, v, w (n,) [m/s] of one point, periodic, Gaussian with the continuous model's one-point spectra at the
     record's wavenumbers k_m = 2 pi m / (n dx): E|c_m|^2 = F(k_m) dk per line (two-sided F; the Nyquist line 0)."""
-    dk, F = _line_spectra(tuple(case), n)
+    dk, F = _line_spectra(tuple(case), n, dt_s)
     rng = np.random.default_rng(seed)
     z = (rng.standard_normal((3, n // 2 - 1)) + 1j * rng.standard_normal((3, n // 2 - 1))) / np.sqrt(2)
     a = np.sqrt(F["F11"] * dk)  # u, w jointly: the Cholesky factor of dk [[F11, F13], [F13, F33]]
@@ -73,7 +85,7 @@ def sonic_series(case, seed: int, n: int = 8192) -> dict:
     return out
 
 
-def realisation(case, seed: int, kinds=("box", "sonic")) -> list[dict]:
+def realisation(case, seed: int, kinds=("box", "sonic"), nt: int = 8192, dt_s: float = DT_S) -> list[dict]:
     ae, L, G = case
     todo = []
     if "box" in kinds:
@@ -81,40 +93,56 @@ def realisation(case, seed: int, kinds=("box", "sonic")) -> list[dict]:
                           planes=[0], evo=None, U=U_M_S)
         todo.append(("box", ds, {}, {c: ds[c].values[:, 0].reshape(ds.sizes["t"], -1).astype(float) for c in "uvw"}))
     if "sonic" in kinds:
-        series = sonic_series(case, seed)
-        sonic = PointSeries("sonic", DT_S * np.arange(8192), (PointSensor("s", 0.0, 0.0, 0.0, None, series),),
+        series = sonic_series(case, seed, nt, dt_s)
+        sonic = PointSeries("sonic", dt_s * np.arange(nt), (PointSensor("s", 0.0, 0.0, 0.0, None, series),),
                             total_wind=False, noise_m_s=None, source="bench_fit_wetb sonic")
         todo.append(("sonic", sonic, {"U": U_M_S}, series))
     rows = []
     for kind, tg_data, kw, arrays in todo:
         tg, tg_cpu = turbgen_fit(tg_data, **kw)
-        wb, wb_cpu = wetb_fit(U_M_S * DT_S, arrays["u"], arrays["v"], arrays["w"])
-        rows.append({"case": case, "seed": seed, "kind": kind, "turbgen": tg, "turbgen_cpu_s": tg_cpu,
-                     "wetb": dict(zip(NAMES, wb)), "wetb_cpu_s": wb_cpu})
+        dt = dt_s if kind == "sonic" else DT_S
+        wb, wb_cpu = wetb_fit(U_M_S * dt, arrays["u"], arrays["v"], arrays["w"])
+        row = {"case": case, "seed": seed, "kind": kind, "turbgen": tg, "turbgen_cpu_s": tg_cpu,
+               "wetb": dict(zip(NAMES, wb)), "wetb_cpu_s": wb_cpu}
+        if kind == "sonic":
+            row |= {"nt": nt, "dt_s": dt_s, "wetb_noise_free": dict(zip(NAMES, wetb_noise_free(case, nt, dt_s)))}
+        rows.append(row)
     return rows
 
 
 def summary(path: str) -> None:
+    """The table of a results file: per case, data kind and record (nt, dt), both tools' error (mean ± sd over the
+    realisations), wetb's inside turbgen's 95 % intervals, turbgen's own coverage (binomial se sqrt(0.95 0.05 / n)),
+    wetb's error on the noise-free spectra, median CPU s."""
     rows = [json.loads(line) for line in open(path)]
-    print("| (ae, L, Γ) | data | n | turbgen error ae / L / Γ (mean ± sd) | wetb error ae / L / Γ (mean ± sd) "
-          "| wetb inside turbgen's 95 % (ae / L / Γ) | CPU s per fit turbgen / wetb |")
-    print("|---|---|---|---|---|---|---|")
-    for case in CASES:
-        for kind in ("box", "sonic"):
-            sel = [r for r in rows if tuple(r["case"]) == case and r["kind"] == kind]
-            if not sel:
-                continue
+    print("| (ae, L, Γ) | data | record | n | turbgen error ae / L / Γ (mean ± sd) | wetb error ae / L / Γ (mean ± sd) "
+          "| wetb inside turbgen's 95 % (ae / L / Γ) | turbgen's own coverage (ae / L / Γ) | wetb error, noise-free "
+          "| CPU s per fit turbgen / wetb |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    records = sorted({(r.get("nt", 8192), r.get("dt_s", DT_S)) for r in rows})
+    for case, kind, (nt, dt) in [(c, k, rec) for c in CASES for k in ("box", "sonic") for rec in records]:
+        sel = [r for r in rows if tuple(r["case"]) == case and r["kind"] == kind
+               and (r.get("nt", 8192), r.get("dt_s", DT_S)) == (nt, dt)]
+        if not sel:
+            continue
 
-            def err(tool):
-                e = np.array([[r[tool][n]["value"] if tool == "turbgen" else r[tool][n] for n in NAMES]
-                              for r in sel]) / np.array(case) - 1
-                return " / ".join(f"{100 * m:+.1f} ± {100 * s:.1f} %" for m, s in zip(e.mean(0), e.std(0, ddof=1)))
+        def err(tool):
+            e = np.array([[r[tool][n]["value"] if tool == "turbgen" else r[tool][n] for n in NAMES]
+                          for r in sel]) / np.array(case) - 1
+            return " / ".join(f"{100 * m:+.1f} ± {100 * s:.1f} %" for m, s in zip(e.mean(0), e.std(0, ddof=1)))
 
-            inside = [np.mean([r["turbgen"][n]["ci95"][0] <= r["wetb"][n] <= r["turbgen"][n]["ci95"][1]
-                               for r in sel]) for n in NAMES]
-            cpu = f"{np.median([r['turbgen_cpu_s'] for r in sel]):.1f} / {np.median([r['wetb_cpu_s'] for r in sel]):.1f}"
-            print(f"| {case} | {kind} | {len(sel)} | {err('turbgen')} | {err('wetb')} | "
-                  + " / ".join(f"{100 * x:.0f} %" for x in inside) + f" | {cpu} |")
+        def share(values):  # per parameter, the fraction of rows whose turbgen interval holds values(row)[k]
+            hit = [[r["turbgen"][n]["ci95"][0] <= values(r)[k] <= r["turbgen"][n]["ci95"][1] for r in sel]
+                   for k, n in enumerate(NAMES)]
+            return " / ".join(f"{100 * np.mean(h):.0f} %" for h in hit)
+
+        own = share(lambda r: case)
+        inside = share(lambda r: [r["wetb"][n] for n in NAMES])
+        free = " / ".join(f"{100 * (sel[0]['wetb_noise_free'][n] / c - 1):+.1f} %" for n, c in zip(NAMES, case)) \
+            if "wetb_noise_free" in sel[0] else "-"
+        cpu = f"{np.median([r['turbgen_cpu_s'] for r in sel]):.1f} / {np.median([r['wetb_cpu_s'] for r in sel]):.2f}"
+        print(f"| {case} | {kind} | {nt} × {dt} s | {len(sel)} | {err('turbgen')} | {err('wetb')} | {inside} | {own} "
+              f"| {free} | {cpu} |")
 
 
 def main() -> None:
@@ -124,6 +152,8 @@ def main() -> None:
     ap.add_argument("--out", default="fit_wetb.jsonl")
     ap.add_argument("--summary", help="print the table of a results file and stop")
     ap.add_argument("--kinds", default="box,sonic", help="comma-separated data kinds (box, sonic)")
+    ap.add_argument("--nt", type=int, default=8192, help="samples of a sonic record")
+    ap.add_argument("--dt", type=float, default=DT_S, help="sampling interval of a sonic record [s]")
     a = ap.parse_args()
     if a.summary:
         summary(a.summary)
@@ -131,7 +161,7 @@ def main() -> None:
     with open(a.out, "a") as fh:
         for seed in range(a.seed0, a.seed0 + a.n):
             for case in CASES:
-                for row in realisation(case, seed, tuple(a.kinds.split(","))):
+                for row in realisation(case, seed, tuple(a.kinds.split(",")), a.nt, a.dt):
                     fh.write(json.dumps(row) + "\n")
                     fh.flush()
 
