@@ -3,7 +3,8 @@
 For every realisation (seed) of a Mann space-time field with known (ae, L, Gamma, gamma) on two planes dx apart (in
 memory, the grid model) the fit (``turbgen.fit_mann``: ae, L, Gamma from the one-point spectra, then gamma from the
 co-coherence of u between the planes' 8 x 8 sub-lattices, or between two masts of 4 sensors cut from the planes,
-cases 2-3: ``points``, the grid model, as bench_fit.py's mast4) and, to tell the interval's own calibration from the
+cases 2-3: ``points``, the grid model, as bench_fit.py's mast4; cases 4-5: the same masts' series drawn from the
+continuous model, ``mast_series``, fitted as a sensor file) and, to tell the interval's own calibration from the
 uncertainty that L and Gamma carry into it, gamma alone with ae, L, Gamma held at their true values ("oracle").
 Coverage: the fraction of realisations whose interval holds the true gamma; its binomial standard error is
 sqrt(p (1 - p) / n).
@@ -18,6 +19,7 @@ calibrated), CPU s per fit (ae, L, Gamma and gamma) and how often the frozen (Ta
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import os
@@ -27,10 +29,15 @@ import time
 import numpy as np
 
 import turbgen
+from turbgen.spec.constraints import PointSensor, PointSeries
+from turbgen.theory.eddy_lifetime import evolution_lifetime_s
+from turbgen.theory.mann_quadrature import perpendicular_quadrature
+from turbgen.theory.mann_spectra import one_point_spectra
 from turbgen.theory.params import MannParams
 from turbgen.validation.fit import load_fit_data
-from turbgen.validation.fit.evolution import Z95, fit_evolution, with_evolution
+from turbgen.validation.fit.evolution import N_NODES, Z95, fit_evolution, with_evolution
 from turbgen.validation.fit.mann import fit_mann_data
+from turbgen.validation.fit.model import PAIRS
 
 CASES = [  # (ae, L, Gamma, gamma [s], dx [m])
     (0.08, 30.0, 3.2, 100.0, 100.0),
@@ -39,7 +46,10 @@ CASES = [  # (ae, L, Gamma, gamma [s], dx [m])
     (0.08, 30.0, 3.2, 400.0, 50.0),
 ]
 MAST = [(3.0, z) for z in (-33.0, -9.0, 9.0, 33.0)]  # (y, z) [m] of a mast's 4 sensors (bench_fit.py's mast4)
-POINTS = [None, None, MAST, MAST]  # per case: the planes' 8 x 8 sub-lattices, or two masts cut from the field
+# per case: the planes' 8 x 8 sub-lattices (None), two masts cut from the field (MAST), or two masts' series drawn
+# from the continuous model ("series", ``mast_series``)
+POINTS = [None, None, MAST, MAST, "series", "series"]
+CASES += CASES[2:4]
 GRID = dict(nt=1024, ny=12, nz=12, dy=6.0, dz=6.0, U=10.0, dt=0.5)
 
 
@@ -50,14 +60,66 @@ def _data(case: int, seed: int, cache: str | None):
     if path and os.path.exists(path):
         with open(path, "rb") as fh:
             return pickle.load(fh)
-    fd = load_fit_data(turbgen.mann(L=L, gamma=G, ae=ae, evo=evo, planes=[0, dx], seed=seed, **GRID), None,
-                       POINTS[case])
+    if POINTS[case] == "series":
+        fd = load_fit_data(mast_series(case, seed), GRID["U"])
+    else:
+        fd = load_fit_data(turbgen.mann(L=L, gamma=G, ae=ae, evo=evo, planes=[0, dx], seed=seed, **GRID), None,
+                           POINTS[case])
     if path:
         os.makedirs(cache, exist_ok=True)
         with open(path + ".tmp", "wb") as fh:
             pickle.dump(fd, fh)
         os.replace(path + ".tmp", path)
     return fd
+
+
+@functools.lru_cache(maxsize=2)
+def _mast_factor(case: int) -> np.ndarray:
+    """(nt / 2 - 1, 24, 24) Cholesky factors of the lines' covariance E c_a,p conj c_b,q [m^2 s^-2] of u, v, w at the
+    two masts' 8 sensors in the convected frame: the continuous model's cross-spectra (Guo et al. 2023, Eq. 8) with
+    the decay exp(-|dx| / (U tau_e(|k|))) inside the (k2, k3) integral (Eq. 13, 15), separations r_a - r_b as in
+    ``covariance.separations``; coherencies at N_NODES k1 nodes, interpolated in ln k1 to the lines and scaled by
+    the one-point spectra there."""
+    ae, L, G, evo, dx = CASES[case]
+    params, n, U = MannParams(ae, L, G, evo_time_s=evo), GRID["nt"], GRID["U"]
+    dk = 2 * np.pi / (n * U * GRID["dt"])
+    k1 = dk * np.arange(1, n // 2)
+    nodes = np.geomspace(k1[0], k1[-1], N_NODES)
+    sites = [(x, y, z) for x in (0.0, dx) for y, z in MAST]
+    cov = np.zeros((k1.size, 3 * len(sites), 3 * len(sites)), complex)
+    cross: dict = {}
+    one = one_point_spectra(k1, params)
+    sd = np.sqrt(np.stack([one[f] for f in ("F11", "F22", "F33")], axis=1) * dk)  # (lines, 3)
+    for a, (xa, ya, za) in enumerate(sites):
+        for b, (xb, yb, zb) in enumerate(sites):
+            key = (ya - yb, za - zb, abs(xa - xb))
+            if key not in cross:
+                kappa, w, g = perpendicular_quadrature(nodes, params, PAIRS, key[0], key[1])
+                w = w * np.exp(-key[2] / (U * evolution_lifetime_s(np.hypot(nodes[:, None], kappa), params)))
+                cross[key] = {pq: (w * g[pq]).sum(axis=-1) for pq in PAIRS}
+            for p, q in PAIRS:
+                c = cross[key][(p, q)] / np.sqrt(cross[(0.0, 0.0, 0.0)][(p, p)] * cross[(0.0, 0.0, 0.0)][(q, q)])
+                c = np.interp(np.log(k1), np.log(nodes), c.real) + 1j * np.interp(np.log(k1), np.log(nodes), c.imag)
+                cov[:, 3 * a + p, 3 * b + q] = cov[:, 3 * a + q, 3 * b + p] = c * sd[:, p] * sd[:, q]
+    return np.linalg.cholesky(cov)
+
+
+def mast_series(case: int, seed: int) -> PointSeries:
+    """Fluctuations of u, v, w at two masts dx apart (4 sensors each, MAST), Gaussian and periodic with the
+    continuous model's lines (``_mast_factor``; a sensor holds every wavenumber, unlike a point of a grid); the
+    downstream mast's series delayed by dx / U (Taylor), whole samples when dx / (U dt) is an integer."""
+    n, dx = GRID["nt"], CASES[case][4]
+    chol = _mast_factor(case)
+    rng = np.random.default_rng(seed)
+    z = (rng.standard_normal(chol.shape[:2]) + 1j * rng.standard_normal(chol.shape[:2])) / np.sqrt(2)
+    X = np.zeros((n // 2 + 1, chol.shape[1]), complex)
+    X[1: n // 2] = n * np.einsum("mij,mj->mi", chol, z)
+    u = np.fft.irfft(X, n, axis=0).reshape(n, -1, 3)
+    lag = round(dx / (GRID["U"] * GRID["dt"]))
+    sensors = tuple(PointSensor(f"s{a}", dx * (a < len(MAST)), y, zz, None,
+                                {c: np.roll(u[:, a, k], 0 if a < len(MAST) else lag) for k, c in enumerate("uvw")})
+                    for a, (y, zz) in enumerate(MAST * 2))
+    return PointSeries("masts", GRID["dt"] * np.arange(n), sensors, False, None, "bench_fit_evo masts")
 
 
 def one(case: int, seed: int, cache: str | None = None) -> dict:
@@ -122,7 +184,7 @@ def summary(path: str) -> None:
         sd_fit = np.array([(math.log(r["ci95"][1]) - math.log(r["ci95"][0])) / (2 * Z95) if r["ci95"][1] else np.nan
                            for r in rs])
         corr = np.corrcoef(np.log([r["oracle_value"] for r in rs]), np.log([r["L"] for r in rs]))[0, 1]
-        where = "planes 8 × 8" if POINTS[c] is None else "masts 4 + 4"
+        where = "planes 8 × 8" if POINTS[c] is None else "series 4 + 4" if POINTS[c] == "series" else "masts 4 + 4"
         print(f"| {spec} | {where} | {n} | {' | '.join(cells)} | {np.exp(np.median(lg)):.3f} | {lg.std(ddof=1):.3f} "
               f"| {math.sqrt(np.nanmean(np.square(sd_fit))):.3f} | {corr:.2f} |")
         second.append(_details(spec, rs, lg, sd_fit))
