@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 import turbgen
-from bench_fit_evo import CASES, GRID
+from bench_fit_evo import CASES, GRID, POINTS
 from turbgen.validation.fit import load_fit_data
 from turbgen.validation.fit.evolution import CoherenceModel, _estimates, _Problem, fit_evolution, linear_terms, x_pairs
 from turbgen.validation.fit.mann import fit_mann_data
@@ -26,7 +26,8 @@ from turbgen.validation.fit.spectra import estimate_bands
 
 def bands_of(case: int, seed: int, nperseg: int) -> tuple:
     ae, L, G, evo, dx = CASES[case]
-    fd = load_fit_data(turbgen.mann(L=L, gamma=G, ae=ae, evo=evo, planes=[0, dx], seed=seed, **GRID))
+    fd = load_fit_data(turbgen.mann(L=L, gamma=G, ae=ae, evo=evo, planes=[0, dx], seed=seed, **GRID), None,
+                       POINTS[case])
     return fd, _estimates(fd, nperseg, x_pairs(fd.u_xyz_m)), estimate_bands(fd, nperseg)
 
 
