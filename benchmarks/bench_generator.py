@@ -9,16 +9,24 @@
 field costs through the generator. ``further``: ``field(seed=k)`` of the same, warm generator, k = 2, 3, ... (the
 random coefficients and the transforms only). Each field is dropped before the next is made (the field itself is
 2.2 GB). The process is warmed first (imports, compiled kernels of both models) on a small grid, so the first field
-does not pay the one-off numba load. Printed: each time, the ratio of the median further seed to the first field, and
-the load average before and after (the machine may be shared: the ratio within one process is the comparable figure).
+does not pay the one-off numba load. Printed: each time and its CPU (user + sys, all threads), the ratio of the median
+further seed to the first field in both, and the load average before and after (on a shared machine the CPU ratio is
+the comparable figure).
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import resource
 import statistics
 import time
+
+
+def _cpu() -> float:
+    """User + system CPU [s] of this process, all threads (the comparable figure on a loaded machine)."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
 
 
 def _warm() -> None:
@@ -51,23 +59,25 @@ def main() -> None:
 
     print(f"load average before: {os.getloadavg()}")
     _warm()
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), _cpu()
     g = _default_generator(args.model, 512 if args.quick else None)
     built = time.perf_counter() - t0
     print(f"{args.model}: grid (t, x, y, z) = {g.grid.shape}")
     ds = g.field(seed=1)
-    first = time.perf_counter() - t0
+    first, first_cpu = time.perf_counter() - t0, _cpu() - c0
     del ds
-    print(f"first field: {first:.2f} s (constructor {built:.2f} s)")
-    further = []
+    print(f"first field: {first:.2f} s, CPU {first_cpu:.2f} s (constructor {built:.2f} s)")
+    further, cpu = [], []
     for seed in range(2, 2 + args.seeds):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), _cpu()
         ds = g.field(seed=seed)
         further.append(time.perf_counter() - t0)
+        cpu.append(_cpu() - c0)
         del ds
-        print(f"seed {seed}: {further[-1]:.2f} s")
+        print(f"seed {seed}: {further[-1]:.2f} s, CPU {cpu[-1]:.2f} s")
     median = statistics.median(further)
-    print(f"further seed / first field: {median / first:.3f} (median {median:.2f} s of {len(further)} / {first:.2f} s)")
+    print(f"further seed / first field: {median / first:.3f} (median {median:.2f} s of {len(further)} / {first:.2f} s); "
+          f"in CPU {statistics.median(cpu) / first_cpu:.3f}")
     print(f"load average after: {os.getloadavg()}")
 
 
