@@ -176,11 +176,16 @@ def test_k1_zero_is_the_limit():
 
 def test_variance_is_integral_of_spectrum_sheared():
     # sigma_i^2 = ∫ F_ii dk1 over all k1 (two-sided): an independent adaptive quadrature in ln k1
+    from functools import lru_cache
+
     from scipy.integrate import quad
 
+    @lru_cache(maxsize=None)  # the three quadratures share most nodes: each k1's spectra computed once
+    def spectra(t):
+        return ms.one_point_spectra([np.exp(t)], NEUTRAL)
+
     def integrand(t, name):
-        k1 = np.exp(t)
-        return 2.0 * k1 * ms.one_point_spectra([k1], NEUTRAL)[name][0]
+        return 2.0 * np.exp(t) * spectra(t)[name][0]
 
     v = ms.variances(NEUTRAL)
     lo, hi = np.log(1e-7 / 49.0), np.log(1e6 / 49.0)

@@ -73,16 +73,13 @@ def welch_rl(u_ll: np.ndarray, u_rr: np.ndarray, setup: WelchSetup) -> dict:
     starts = segment_starts(u_ll.size, setup)
     if len(starts) < 2:
         raise ParameterError(f"lidar signal of {u_ll.size} samples is too short for segments of {setup.nperseg}")
-    w = setup.window
-    sll = srr = srl = 0.0
-    for s in starts:
-        a = u_ll[s : s + setup.nperseg]
-        b = u_rr[s : s + setup.nperseg]
-        A = fft.oneshot().rfft((a - a.mean()) * w)
-        B = fft.oneshot().rfft((b - b.mean()) * w)
-        sll = sll + np.abs(A) ** 2
-        srr = srr + np.abs(B) ** 2
-        srl = srl + B * np.conj(A)
+
+    def transforms(u):  # of all segments in one batch
+        x = np.stack([u[s : s + setup.nperseg] for s in starts])
+        return fft.oneshot().rfft((x - x.mean(axis=1, keepdims=True)) * setup.window, axis=-1)
+
+    A, B = transforms(u_ll), transforms(u_rr)
+    sll, srr, srl = (np.abs(A) ** 2).sum(axis=0), (np.abs(B) ** 2).sum(axis=0), (B * np.conj(A)).sum(axis=0)
     k = len(starts)
     scale = setup.scale / k
     sll, srr, srl = sll * scale, srr * scale, srl * scale
