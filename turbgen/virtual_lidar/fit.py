@@ -1,0 +1,214 @@
+"""Fit the Mann (1994) model to a ``turbgen lidar --out`` dataset: ``turbgen fit mann LIDAR``.
+
+A gate measures v_los = n . u averaged over its probe volume. ae and L are fitted to the Welch spectrum of v_los
+pooled over every beam and gate (``validation.fit.spectra``) against the mean of the measurements' LOS spectra
+F(k1) = ∫ n_i n_j Phi_ij(k) |phi_hat(k . n)|^2 dk2 dk3 (Guo et al. 2023, Eq. 29 for one measurement, the probe
+volume of Eq. 30), continuous, or summed over the periodic box of the Mann store the dataset was sampled from when
+that store is still there (what the box holds, as a store is fitted). Along x (n = (1, 0, 0)) the continuous F is
+|phi_hat(k1)|^2 F_11(k1), F_11 from the fit's table; other beams integrate (k2, k3) out to TAIL times the highest k1
+(the inertial tail beyond, ∫ ae k^(-17/3) / (4 pi) dk_perp over (9/55) ae k1^(-5/3), is 55/30 (k1 / kappa_max)^(5/3)
+of F: 0.6 % at the highest k1). Gamma is held (given, or the default): the LOS
+spectrum is nearly u's alone (n1 ~ 1), and one component's spectrum does not separate L from Gamma.
+The pooled band estimate's variance is one point's Welch variance times rho_bar, the point correlation of the
+pooled columns measured from their segment DFTs (``evolution._rho_bar``), bands joined by ``band_corr``;
+generalised least squares in (ln ae, ln L), re-weighted at the fitted model until it moves < MOVE_TOL sd, covariance
+(J^T J)^-1 of the whitened residuals, 95 % intervals x +- 1.96 sd exponentiated. The LOS spectra are computed at
+N_K1 k1 nodes for length scales on a grid of step DLN_L in ln L, when the fit first needs them, and interpolated
+(cubic in ln L, linear in ln k1, both of ln F); ae only scales them.
+
+The eddy-evolution time is fitted to the co-coherence of the gates at different ranges of a beam along x (n = (1,
+0, 0): the probe volume then filters k1 alone and cancels in the coherence, leaving u's; Guo et al. 2022, Eq. 13)
+by ``validation.fit.evolution`` (each gate shifted by x / U, the ae and L intervals propagated). Gates of an inclined
+beam differ in y, z and in what n mixes: not fitted, and the notes say so.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from scipy.linalg import solve_triangular
+from scipy.optimize import least_squares
+
+from turbgen.errors import ParameterError
+from turbgen.spec.defaults import MANN_DEFAULTS
+from turbgen.theory import ranges
+from turbgen.theory.lattice import line_frequencies
+from turbgen.theory.lidar_geometry import Measurements
+from turbgen.theory.lidar_lattice import BoxLattice
+from turbgen.theory.lidar_preview import KAPPA_MAX, mann_preview_spectra
+from turbgen.theory.lidar_weighting import discrete_transform
+from turbgen.theory.params import MannParams
+from turbgen.validation.fit.data import FitData, detrended
+from turbgen.validation.fit.evolution import _rho_bar, with_evolution
+from turbgen.validation.fit.mann import AE_MIN, MOVE_TOL, PASSES, Z95, parameter_covariance
+from turbgen.validation.fit.result import FitValue, MannFit
+from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
+from turbgen.validation.fit.table import scaled_spectra
+from turbgen.validation.welch_kernel import WelchKernel
+from turbgen.virtual_lidar.dataset import read_dataset
+from turbgen.virtual_lidar.description import LidarDescription
+
+N_K1 = 40  # k1 nodes of the LOS spectra (log-spaced over the record's lines)
+DLN_L = 0.25  # step of the length-scale grid in ln L
+ALONG_X = 1e-9  # a beam with n1 > 1 - ALONG_X looks along x
+TAIL = 30.0  # kappa_max / k1_max of the continuous (k2, k3) quadrature
+
+
+def los_spectrum(k1: np.ndarray, meas, params: MannParams, U_m_s: float, box: BoxLattice | None) -> np.ndarray:
+    """Two-sided spectrum F(k1) [m^3 s^-2] of one measurement's v_los (``meas`` of one row) at k1 > 0 [rad/m]."""
+    if box is None and meas.n[0, 0] > 1 - ALONG_X:  # phi_hat(k . n) = phi_hat(k1): u's spectrum filtered
+        L = params.length_scale_m
+        f11 = params.ae * L ** (5 / 3) * scaled_spectra(k1 * L, params.gamma)["uu"]
+        return f11 * discrete_transform(k1, meas.offsets_m[0], meas.weights[0]) ** 2
+    kappa_max = KAPPA_MAX if box is not None else max(KAPPA_MAX, TAIL * float(k1.max()))
+    s = mann_preview_spectra(k1 * U_m_s / (2 * np.pi), meas, params, U_m_s, 1.0, box=box, kappa_max=kappa_max)
+    return meas.n[0, 0] ** 2 * s.S_LL * U_m_s / (4 * np.pi)  # S_LL: v_los / n1, one-sided in f
+
+
+class LosModel:
+    """Expected band estimates of the pooled v_los spectrum for (ae, L) at a held Gamma (module docstring)."""
+
+    def __init__(self, bands, U_m_s: float, meas, gamma: float, box: BoxLattice | None):
+        self.bands, self.U, self.gamma, self.box = bands, U_m_s, gamma, box
+        k1 = 2 * np.pi * line_frequencies(bands.nt, bands.setup.dt_s)[1:] / U_m_s
+        self.ln_k1, self.dk1 = np.log(k1), 2 * np.pi / (bands.nt * bands.setup.dt_s * U_m_s)
+        self.nodes = np.geomspace(k1[0], k1[-1], N_K1)
+        self.kernel = WelchKernel(bands.setup, bands.nt)
+        keys, first, counts = np.unique(np.hstack([meas.n, meas.offsets_m, meas.weights]).round(12), axis=0,
+                                        return_index=True, return_counts=True)
+        self.classes = [(meas.subset([i]), c / meas.count) for i, c in zip(first, counts)]  # same n and probe
+        self.table: dict = {}  # index j of ln L = j DLN_L -> ln F at the nodes (ae = 1)
+
+    def _ln_f(self, j: int) -> np.ndarray:
+        """ln of the measurements' mean LOS spectrum F(k1) [m^3 s^-2] at the nodes for L = exp(j DLN_L), ae = 1."""
+        if j not in self.table:
+            p = MannParams(1.0, math.exp(j * DLN_L), self.gamma)
+            self.table[j] = np.log(sum(w * los_spectrum(self.nodes, m, p, self.U, self.box) for m, w in self.classes))
+        return self.table[j]
+
+    def expected(self, ae: float, length_scale_m: float) -> np.ndarray:
+        """(nbands,) expected pooled band estimate [m^2 s^-2 Hz^-1]: the table interpolated, Welch kernel applied."""
+        t = math.log(length_scale_m) / DLN_L
+        j = math.floor(t)
+        s = t - j  # Lagrange cubic through nodes j-1 .. j+2
+        w = (-s * (s - 1) * (s - 2) / 6, (s + 1) * (s - 1) * (s - 2) / 2, -(s + 1) * s * (s - 2) / 2,
+             (s + 1) * s * (s - 1) / 6)
+        ln_f = sum(wk * self._ln_f(j - 1 + k) for k, wk in enumerate(w))
+        lines = ae * np.exp(np.interp(self.ln_k1, np.log(self.nodes), ln_f)) * self.dk1
+        return self.bands.band_mean(self.kernel.apply(np.concatenate([[0.0], lines])))
+
+
+def lidar_fit_data(path, gamma: float | None = None) -> tuple[FitData, Measurements, float]:
+    """(FitData of the dataset's detrended v_los, column per beam x gate at its focus, the Measurements, Gamma).
+
+    ParameterError for a dataset whose beams are not sampled uniformly or a Gamma outside its range.
+    """
+    ld = read_dataset(path)
+    meas = LidarDescription(**ld.lidar).measurement_points()
+    ns, nb, ng = ld.v_los.shape
+    steps = np.diff(ld.time_s, axis=0)
+    dt = float(steps.mean()) if ns > 1 else 0.0
+    if ns < 2 or np.any(np.abs(steps - dt) > 1e-6 * dt):
+        raise ParameterError(f"lidar dataset {ld.source}: {ns} scan(s), not uniformly sampled; the Welch spectra "
+                             "need one scan interval")
+    cols, notes = detrended(ld.v_los.reshape(ns, nb * ng), lambda k: f"beam {k // ng} gate {k % ng}")
+    gaps = int(np.isnan(cols).sum())
+    notes += [f"{gaps} missing v_los values (Welch segments holding them are skipped)"] if gaps else []
+    g = ranges.check("gamma", MANN_DEFAULTS["gamma"] if gamma is None else gamma, "gamma (Gamma, -)")
+    notes.append(f"gamma (Gamma) is not identified by line-of-sight spectra (they are nearly u's): held at {g:g}")
+    fd = FitData(ld.source, dt, ld.U_m_s, {"u": cols}, (), notes=tuple(notes), sites_m=meas.focus_m,
+                 columns={"u": np.arange(nb * ng)})
+    return fd, meas, g
+
+
+def source_box(path) -> BoxLattice | None:
+    """The periodic box of the Mann store the dataset was sampled from, None if that store is gone or not Mann's."""
+    import zarr
+
+    from turbgen.store import open_store
+    from turbgen.validation.store_run import mann_box_from_attrs
+
+    store = zarr.open_group(str(path), mode="r").attrs.get("source_store")
+    if not isinstance(store, str) or not Path(store).is_dir():
+        return None
+    fs = open_store(store)
+    if fs.attrs.get("model") != "mann":
+        return None
+    g, b = fs.grid, mann_box_from_attrs(fs.attrs, fs.grid)
+    return BoxLattice(b.nyp, b.nzp, g.dy_m, g.dz_m, g.nt * g.dt_s)
+
+
+def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, box="source") -> MannFit:
+    """ae, L (Gamma held) fitted to a lidar dataset's LOS spectra, and the evolution time to its gates along x.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``turbgen lidar --out`` dataset.
+    nperseg : int, optional
+        Welch segment length [scans]; default ``estimators.default_nperseg``.
+    gamma : float, optional
+        Gamma held in the fit [-] (default MANN_DEFAULTS).
+    box : "source", BoxLattice or None
+        The lattice the spectra are summed over: "source" that of the store sampled (if there, else continuous).
+
+    Raises
+    ------
+    ParameterError
+        A dataset not uniformly sampled, too short or too gappy for the Welch estimates, a bad ``gamma``.
+    """
+    fd, meas, g = lidar_fit_data(path, gamma)
+    box = source_box(path) if box == "source" else box
+    bands = estimate_bands(fd, nperseg)
+    model = LosModel(bands, fd.U_m_s, meas, g, box)
+    rho = _rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands)
+    data, factor = bands.values["uu"], bands.var_factor["uu"] * rho
+    lo, hi = np.log([AE_MIN, ranges.RANGES["length_scale_m"].lo]), np.log([ranges.RANGES["ae"].hi, 500.0])
+    x = np.array([math.log(np.median(data / model.expected(1.0, 30.0))), math.log(30.0)])
+    converged = False
+    for _ in range(PASSES):
+        sd = model.expected(*np.exp(x)) * np.sqrt(factor)
+        chol = np.linalg.cholesky(bands.band_corr * np.outer(sd, sd))
+        sol = least_squares(lambda y: solve_triangular(chol, data - model.expected(*np.exp(y)), lower=True),
+                            np.clip(x, lo, hi), bounds=(lo, hi), diff_step=1e-4, xtol=1e-10, ftol=1e-10, gtol=1e-10)
+        cov = parameter_covariance(sol.jac)
+        moved, x = np.abs(sol.x - x) / np.sqrt(np.diag(cov)), sol.x
+        if sol.status > 0 and np.all(moved < MOVE_TOL):
+            converged = True
+            break
+    flags = [] if converged else [f"the fit did not converge ({sol.message.rstrip('.')}; {PASSES} passes)"]
+    flags += [f"{n} = {math.exp(v):.4g} is on the boundary of its fitted range [{math.exp(a):.4g}, {math.exp(b):.4g}]"
+              for n, v, a, b in zip(("ae", "length_scale_m"), x, lo, hi) if min(v - a, b - v) < 1e-6]
+    sdx = np.sqrt(np.diag(cov))
+    val = [FitValue(math.exp(v), (math.exp(v - Z95 * s), math.exp(v + Z95 * s)), float(s)) for v, s in zip(x, sdx)]
+    full = np.zeros((3, 3))
+    full[:2, :2] = cov
+    e = model.expected(*np.exp(x))
+    fit = MannFit(val[0], val[1], FitValue(g, None, None), float(np.sum(sol.fun**2) / max(sol.fun.size - 2, 1)),
+                  int(sol.fun.size - 2), tuple(flags), fd.notes + (_model_note(box),), "continuous" if box is None
+                  else "grid", fd.U_m_s, fd.source, bands.setup.nperseg, bands.f_hz, {"los": data}, {"los": e},
+                  {"los": e * np.sqrt(factor)}, cov_fit=full)  # fmt: skip
+    return _with_gates(fd, meas, fit)
+
+
+def _model_note(box) -> str:
+    if box is None:
+        return "line-of-sight spectra of the continuous Mann tensor with the probe volume (Guo et al. 2023, Eq. 29)"
+    return (f"line-of-sight spectra summed over the sampled store's {box.nyp} x {box.nzp} box with the probe volume "
+            "(what the box holds)")
+
+
+def _with_gates(fd: FitData, meas, fit: MannFit) -> MannFit:
+    """``fit`` with the evolution time from the gates of beams along x, or a note saying why there is none."""
+    along = np.flatnonzero(meas.n[:, 0] > 1 - ALONG_X)
+    if np.unique(np.round(meas.focus_m[along, 0], 6)).size < 2:
+        why = "no beam along x" if along.size == 0 else "one range gate along x"
+        return replace(fit, notes=fit.notes + (
+            f"evo_time_s not fitted: {why} (the co-coherence of gates at >= 2 ranges on a beam along x is needed; "
+            "gates of inclined beams differ in y, z and in what n mixes)",))
+    gates = replace(fd, series={"u": fd.series["u"][:, along]}, columns={"u": np.arange(along.size)},
+                    sites_m=meas.focus_m[along], u_xyz_m=tuple(map(tuple, meas.focus_m[along])))
+    return with_evolution(gates, fit)
