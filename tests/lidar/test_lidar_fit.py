@@ -55,9 +55,9 @@ def test_recovers_known_field(gates2):
 def test_los_spectrum_quadrature_along_x_is_filtered_u_spectrum():
     """Along x the LOS spectrum is |phi_hat(k1)|^2 F_11(k1) (the fit's table); the (k2, k3) quadrature of an inclined
     beam's path, given the same beam, must agree to within the tail it omits (55/30 (1 / TAIL)^(5/3) at the highest
-    k1, module docstring) plus the table's interpolation (~1e-3)."""
+    k1 the probe passes, module docstring) plus the table's interpolation (~1e-3)."""
     meas = LidarDescription("x", "pulsed", "nacelle", (60.0,), 1.0, 24.0, (0.0,), (0.0,)).measurement_points()
-    k1, p = np.geomspace(3e-3, 0.3, 6), MannParams(0.08, 30.0, 3.2)
+    k1, p = np.geomspace(3e-3, 0.16, 6), MannParams(0.08, 30.0, 3.2)  # k1 the probe passes (power gain > 0.01)
     table = los_spectrum(k1, meas, p, 10.0, None)
     with mock.patch("turbgen.virtual_lidar.fit.ALONG_X", -1.0):  # every beam "inclined": the quadrature
         quad = los_spectrum(k1, meas, p, 10.0, None)
@@ -103,3 +103,16 @@ def test_cli_json(gates2):
     out = json.loads(r.output)
     assert out["gamma"] == {"value": 3.2, "ci95": None, "held": True} and out["spectra"] == ["los"]
     assert out["evo_time_s"]["ci95"][1] is not None and out["model"] == "grid"
+
+
+def test_inclined_beams_fit_ae_l_but_not_the_evolution_time(tmp_path):
+    """Two beams 15 deg off the axis (the box's lattice sum with their probe volume): ae and L fitted, gamma not."""
+    (tmp_path / "lidar.toml").write_text(LIDAR.format(gates=[60.0]).replace("[0.0]\nelevation_deg = [0.0]",
+                                                                           "[15.0, -15.0]\nelevation_deg = [0.0, 0.0]"))
+    turbgen.mann(**TRUTH, seed=3, out=tmp_path / "f.zarr", planes=[0.0, 60.0], nt=2048, dt=0.5, U=10.0, ny=13, nz=9,
+                 dy=6.0, dz=6.0)
+    turbgen.lidar(tmp_path / "f.zarr", tmp_path / "lidar.toml", out=tmp_path / "l.zarr")
+    fit = turbgen.fit_mann(str(tmp_path / "l.zarr"), gamma=TRUTH["gamma"])
+    assert fit.ok and fit.model == "grid" and fit.evolution is None
+    assert [n for n in fit.notes if n.startswith("evo_time_s not fitted: no beam along x")]
+    assert abs(math.log(fit.ae.value / TRUTH["ae"])) < Z999 * fit.ae.sd_fit, fit.ae

@@ -6,8 +6,8 @@ F(k1) = ∫ n_i n_j Phi_ij(k) |phi_hat(k . n)|^2 dk2 dk3 (Guo et al. 2023, Eq. 2
 volume of Eq. 30), continuous, or summed over the periodic box of the Mann store the dataset was sampled from when
 that store is still there (what the box holds, as a store is fitted). Along x (n = (1, 0, 0)) the continuous F is
 |phi_hat(k1)|^2 F_11(k1), F_11 from the fit's table; other beams integrate (k2, k3) out to TAIL times the highest k1
-(the inertial tail beyond, ∫ ae k^(-17/3) / (4 pi) dk_perp over (9/55) ae k1^(-5/3), is 55/30 (k1 / kappa_max)^(5/3)
-of F: 0.6 % at the highest k1). Gamma is held (given, or the default): the LOS
+the probe passes (a fitted band, ``_passed``; the inertial tail beyond, ∫ ae k^(-17/3) / (4 pi) dk_perp over (9/55)
+ae k1^(-5/3), is 55/30 (k1 / kappa_max)^(5/3) of F without a probe, 0.6 % there; the probe damps it further). Gamma is held (given, or the default): the LOS
 spectrum is nearly u's alone (n1 ~ 1), and one component's spectrum does not separate L from Gamma.
 The pooled band estimate's variance is one point's Welch variance times rho_bar, the point correlation of the
 pooled columns measured from their segment DFTs (``evolution._rho_bar``), bands joined by ``band_corr``;
@@ -101,7 +101,8 @@ def los_spectrum(k1: np.ndarray, meas, params: MannParams, U_m_s: float, store: 
 
 def _quadrature(k1, meas, params, U_m_s, box) -> np.ndarray:
     """F(k1) of one measurement by the preview's (k2, k3) quadrature or lattice sum (module docstring)."""
-    kappa_max = KAPPA_MAX if box is not None else max(KAPPA_MAX, TAIL * float(k1.max()))
+    passed = k1[discrete_transform(k1 * meas.n[0, 0], meas.offsets_m[0], meas.weights[0]) ** 2 >= GAIN_MIN]
+    kappa_max = KAPPA_MAX if box is not None else max(KAPPA_MAX, TAIL * float(passed.max(initial=k1[0])))
     s = mann_preview_spectra(k1 * U_m_s / (2 * np.pi), meas, params, U_m_s, 1.0, box=box, kappa_max=kappa_max)
     return meas.n[0, 0] ** 2 * s.S_LL * U_m_s / (4 * np.pi)  # S_LL: v_los / n1, one-sided in f
 
@@ -208,7 +209,7 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     keep = _passed(bands, model)
     rho = _rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands)
     data, factor, corr = bands.values["uu"][keep], (bands.var_factor["uu"] * rho)[keep], bands.band_corr[keep][:, keep]
-    lo, hi = np.log([AE_MIN, ranges.RANGES["length_scale_m"].lo]), np.log([ranges.RANGES["ae"].hi, 500.0])
+    lo, hi = np.log([AE_MIN, ranges.RANGES["length_scale_m"].lo]), np.log([ranges.RANGES["ae"].hi, ranges.RANGES["length_scale_m"].hi])
     x = np.array([math.log(np.median(data / model.expected(1.0, 30.0)[keep])), math.log(30.0)])
     converged = False
     for _ in range(PASSES):
