@@ -177,9 +177,10 @@ def sampled_store(ld: LidarData) -> SampledStore | None:
     if not isinstance(path, str) or not Path(path).is_dir():
         return None
     fs = open_store(path)
-    if fs.attrs.get("model") != "mann":
+    try:
+        g, b = fs.grid, mann_box_from_attrs(fs.attrs, fs.grid)
+    except ParameterError:  # no Mann parameters: not a Mann store
         return None
-    g, b = fs.grid, mann_box_from_attrs(fs.attrs, fs.grid)
     phases = tuple(np.unique(np.round(t % g.dt_s, 9)) for t in ld.time_s.T)
     return SampledStore(BoxLattice(b.nyp, b.nzp, g.dy_m, g.dz_m, g.nt * g.dt_s), g.dt_s, phases)
 
