@@ -1,26 +1,20 @@
 """Fit the Mann (1994) model to a ``turbgen lidar --out`` dataset: ``turbgen fit mann LIDAR``.
 
 A gate measures v_los = n . u averaged over its probe volume. ae and L are fitted to the Welch spectrum of v_los
-pooled over every beam and gate (``validation.fit.spectra``) against the mean of the measurements' LOS spectra
-F(k1) = ∫ n_i n_j Phi_ij(k) |phi_hat(k . n)|^2 dk2 dk3 (Guo et al. 2023, Eq. 29 for one measurement, the probe
-volume of Eq. 30), continuous, or summed over the periodic box of the Mann store the dataset was sampled from when
-that store is still there (what the box holds, as a store is fitted). Along x (n = (1, 0, 0)) the continuous F is
-|phi_hat(k1)|^2 F_11(k1), F_11 from the fit's table; other beams integrate (k2, k3) out to TAIL times the highest k1
-the probe passes (a fitted band, ``_passed``; the inertial tail beyond, ∫ ae k^(-17/3) / (4 pi) dk_perp over (9/55)
-ae k1^(-5/3), is 55/30 (k1 / kappa_max)^(5/3) of F without a probe, 0.6 % there; the probe damps it further). Gamma is held (given, or the default): the LOS
-spectrum is nearly u's alone (n1 ~ 1), and one component's spectrum does not separate L from Gamma.
-The pooled band estimate's variance is one point's Welch variance times rho_bar, the point correlation of the
-pooled columns measured from their segment DFTs (``evolution._rho_bar``), bands joined by ``band_corr``;
-generalised least squares in (ln ae, ln L), re-weighted at the fitted model until it moves < MOVE_TOL sd, covariance
-(J^T J)^-1 of the whitened residuals, 95 % intervals x +- 1.96 sd exponentiated. The LOS spectra are computed at
-N_K1 k1 nodes for length scales on a grid of step DLN_L in ln L, when the fit first needs them, and interpolated
-(cubic in ln L and in ln k1, both of ln F: linear in ln k1 left the band values 4 % low where the probe's
-Gaussian bends ln F); ae only scales them.
+pooled over every beam and gate against the mean of the gates' LOS spectra F(k1) = ∫ n_i n_j Phi_ij |phi_hat(k . n)|^2
+dk2 dk3 (Guo et al. 2023, Eq. 29-30): summed over the box of the Mann store the dataset was sampled from while that
+store is there (along x with the sampler's interpolation in time, ``probe_gain``), else continuous. Along x (n = (1,
+0, 0)) the continuous F is |phi_hat(k1)|^2 F_11(k1) from the fit's table; other beams integrate (k2, k3) out to TAIL
+times the highest k1 the probe passes (the inertial tail beyond is 55/30 (k1 / kappa_max)^(5/3) of F without a
+probe, 0.6 %). Gamma is held: the LOS spectrum is nearly u's alone, which does not separate L from Gamma.
+Weights: one point's Welch variance times rho_bar, the pooled gates' point correlation measured from their segment
+DFTs (``evolution._rho_bar``), bands joined by ``band_corr``; generalised least squares in (ln ae, ln L), re-weighted
+at the fitted model, covariance (J^T J)^-1, 95 % intervals x +- 1.96 sd exponentiated. F is computed at N_K1 k1
+nodes for ln L on a grid of step DLN_L as the fit needs it, and interpolated cubic in both (of ln F).
 
-The eddy-evolution time is fitted to the co-coherence of the gates at different ranges of a beam along x (n = (1,
-0, 0): the probe volume then filters k1 alone and cancels in the coherence, leaving u's; Guo et al. 2022, Eq. 13)
-by ``validation.fit.evolution`` (each gate shifted by x / U, the ae and L intervals propagated). Gates of an inclined
-beam differ in y, z and in what n mixes: not fitted, and the notes say so.
+The eddy-evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (the probe then
+filters k1 alone and cancels in the coherence, leaving u's; Guo et al. 2022) by ``validation.fit.evolution``, L's
+interval propagated. Gates of an inclined beam differ in y, z and in what n mixes: not fitted, and noted.
 """
 
 from __future__ import annotations
@@ -212,7 +206,8 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     keep = _passed(bands, model)
     rho = _rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands)
     data, factor, corr = bands.values["uu"][keep], (bands.var_factor["uu"] * rho)[keep], bands.band_corr[keep][:, keep]
-    lo, hi = np.log([AE_MIN, ranges.RANGES["length_scale_m"].lo]), np.log([ranges.RANGES["ae"].hi, ranges.RANGES["length_scale_m"].hi])
+    r_ae, r_l = ranges.RANGES["ae"], ranges.RANGES["length_scale_m"]
+    lo, hi = np.log([AE_MIN, r_l.lo]), np.log([r_ae.hi, r_l.hi])
     x = np.array([math.log(np.median(data / model.expected(1.0, 30.0)[keep])), math.log(30.0)])
     converged = False
     for _ in range(PASSES):
