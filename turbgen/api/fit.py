@@ -16,10 +16,12 @@ from turbgen.validation.fit.evolution import with_evolution
 from turbgen.validation.fit.kaimal import fit_kaimal_data
 from turbgen.validation.fit.kaimal_result import KaimalFit
 from turbgen.validation.fit.mean_wind import fit_mean_wind
+from turbgen.virtual_lidar.dataset import is_lidar_dataset
+from turbgen.virtual_lidar.fit import fit_lidar
 
 
 def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points=None,
-             bootstrap: int = 0) -> MannFit:
+             bootstrap: int = 0, gamma: float | None = None) -> MannFit:
     """Fit ae, L, Gamma (Mann 1994) to the spectra of ``data`` and the evolution time gamma to its x coherence.
 
     The one-point spectra of u, v, w and the u-w co-spectrum are estimated (Welch, detrended), each band weighted by
@@ -34,7 +36,9 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
         A point-series JSON file (the ``--constrain`` format: one or more sensors with any of u, v, w), a field
         store, a field as a Dataset (``turbgen.mann``, in memory or not, ``turbgen.open_store``), a TurbSim ``.bts``
         or a HAWC2 ``.htc`` whose ``begin mann`` block names the boxes (fitted against the Mann tensor summed over
-        their periodic box, ``turbgen.exporters.field_files``).
+        their periodic box, ``turbgen.exporters.field_files``), or a ``turbgen lidar --out`` dataset (ae and L from
+        its line-of-sight spectra with the probe volume, Gamma held, the evolution time from gates along x:
+        ``turbgen.virtual_lidar.fit``).
     U : float, optional
         Mean wind speed [m/s] of k1 = 2 pi f / U for fluctuation data (default: the mean of u of total-wind data;
         a store holds its own).
@@ -46,6 +50,8 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     bootstrap : int, optional
         B >= 2: check the intervals by a parametric bootstrap (``bootstrap_sd``), reported in ``fit.bootstrap``;
         0 (default): none. Fields only.
+    gamma : float, optional
+        For a lidar dataset: the Gamma [-] held (default 3.9); other data fit it.
 
     Returns
     -------
@@ -70,6 +76,13 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     >>> fit.length_scale_m.value, fit.length_scale_m.ci95  # doctest: +SKIP
     """
     data = _opened(data)
+    if isinstance(data, str) and is_lidar_dataset(data):
+        if U is not None or points is not None or bootstrap:
+            raise ParameterError(f"DATA = {data!r} is a lidar dataset: it holds its own U and gates; U, points and "
+                                 "bootstrap do not apply")
+        return fit_lidar(data, nperseg, gamma)
+    if gamma is not None:
+        raise ParameterError(f"gamma = {gamma!r}: a held Gamma applies to a lidar dataset only (other data fit it)")
     if bootstrap and (isinstance(bootstrap, bool) or not isinstance(bootstrap, int) or bootstrap < 2):
         raise ParameterError(f"bootstrap = {bootstrap!r} must be an integer >= 2 (realisations), or 0 for none")
     fd = load_fit_data(data, U, points)

@@ -52,6 +52,8 @@ def _remember_overwrite(ctx, param, value):
 @click.option("--point", "points", multiple=True, metavar="Y,Z",
               help="For a store: fit the series at this grid point (y, z) [m] of every plane (repeat for a mast) "
                    "against the grid's expectation there; default a sub-lattice of 8 x 8 points.")
+@click.option("--gamma", type=float, default=None,
+              help="For a lidar dataset: the Gamma held (default 3.9; its LOS spectra do not identify it).")
 @click.option("--bootstrap", type=int, default=0, metavar="B",
               help="For a store: refit B fields made at the fitted parameters and print the bootstrap sd beside "
                    "the analytic one (default 0: off).")
@@ -61,9 +63,10 @@ def _remember_overwrite(ctx, param, value):
 @click.option("--overwrite", is_flag=True, is_eager=True, expose_value=False, callback=_remember_overwrite,
               help=f"Replace an existing {PLOT_NAME} in --plots.")
 @click.pass_context
-def fit_mann_command(ctx, data, U, nperseg, points, bootstrap, as_json, plots):
+def fit_mann_command(ctx, data, U, nperseg, points, gamma, bootstrap, as_json, plots):
     """Fit ae, L, Gamma of the Mann model to DATA: a point-series JSON file (sensors with u, v, w), a store, a
-    TurbSim .bts, or a HAWC2 .htc whose mann block names the boxes.
+    TurbSim .bts, a HAWC2 .htc whose mann block names the boxes, or a `turbgen lidar --out` dataset (ae, L and
+    the evolution time from gates along x; Gamma held).
 
     Weighted least squares over the Welch spectra of u, v, w and the u-w co-spectrum, each band weighted by the
     estimator's covariance; a store against its grid's expectation, sensors against the continuous model. Prints
@@ -72,7 +75,8 @@ def fit_mann_command(ctx, data, U, nperseg, points, bootstrap, as_json, plots):
     """
     from turbgen.api.fit import fit_mann
 
-    result = fit_mann(data, U=U, nperseg=nperseg, points=[yz(p) for p in points] or None, bootstrap=bootstrap)
+    result = fit_mann(data, U=U, nperseg=nperseg, points=[yz(p) for p in points] or None, bootstrap=bootstrap,
+                      gamma=gamma)
     report(ctx, result, as_json, plots, PLOT_NAME)
 
 

@@ -13,7 +13,7 @@ from turbgen.theory.params import MannParams
 if TYPE_CHECKING:
     from turbgen.validation.fit.evolution import EvoFit
 
-SPECTRUM_LABELS = {"uu": "u", "vv": "v", "ww": "w", "uw": "-uw (co-spectrum)"}
+SPECTRUM_LABELS = {"uu": "u", "vv": "v", "ww": "w", "uw": "-uw (co-spectrum)", "los": "line-of-sight"}
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,98 @@
+"""Coverage of the 95 % intervals of `turbgen fit mann LIDAR` (ae, L, and the eddy-evolution time from range gates).
+
+For every realisation (seed) of a Mann space-time field with known (ae, L, Gamma, gamma) on the planes of a forward
+pulsed beam's range gates, a virtual lidar (``turbgen.lidar``, FWHM 30 m, 1 Hz) writes its dataset, and
+``turbgen.fit_mann`` fits it with Gamma held at the truth (the grid model: the store's box). Coverage: the fraction
+of realisations whose interval holds the truth; its binomial standard error is sqrt(p (1 - p) / n).
+
+    python benchmarks/bench_fit_lidar.py --n 30 --case 0 --out benchmarks/fit_lidar_results.jsonl
+    python benchmarks/bench_fit_lidar.py --summary benchmarks/fit_lidar_results.jsonl
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import turbgen
+
+CASES = [  # (ae, L, Gamma, gamma [s], gate x [m])
+    (0.08, 30.0, 3.2, 200.0, (50.0, 100.0)),
+    (0.05, 20.0, 3.9, 100.0, (50.0, 75.0, 100.0)),
+]
+GRID = dict(nt=4096, ny=9, nz=9, dy=6.0, dz=6.0, U=10.0, dt=0.5)  # 2048 s; y = z = 0 is a grid point
+LIDAR = """kind = "pulsed"\nmount = "nacelle"\nranges_m = {gates}\nbeam_rate_hz = 1.0\nrotor_radius_m = 24.0
+azimuth_deg = [0.0]\nelevation_deg = [0.0]\nfwhm_m = 30.0\n"""
+
+
+def one(case: int, seed: int, work: Path) -> dict:
+    """Generate, measure and fit one realisation; the estimates, intervals and CPU seconds of the fit."""
+    ae, L, G, evo, gates = CASES[case]
+    (work / "lidar.toml").write_text(LIDAR.format(gates=list(gates)))
+    turbgen.mann(L=L, gamma=G, ae=ae, evo=evo, seed=seed, out=work / "f.zarr", overwrite=True,
+                         planes=[0.0, *gates], **GRID)
+    turbgen.lidar(work / "f.zarr", work / "lidar.toml", out=work / "l.zarr",
+                  overwrite=True)
+    t0 = time.process_time()
+    fit = turbgen.fit_mann(str(work / "l.zarr"), gamma=G)
+    row = {"case": case, "seed": seed, "cpu_s": time.process_time() - t0, "chi2_dof": fit.chi2_dof,
+           "flags": list(fit.flags)}
+    for name, truth in (("ae", ae), ("length_scale_m", L)):
+        v = getattr(fit, name)
+        row[name] = {"truth": truth, "value": v.value, "ci95": list(v.ci95), "sd": v.sd_fit}
+    e = fit.evolution
+    row["evo_time_s"] = None if e is None else {"truth": evo, "value": e.value_s, "ci95": list(e.ci95)}
+    return row
+
+
+def summary(path: str) -> None:
+    """A markdown table per case: coverage +- binomial se, median estimate / truth, rms sd of the fit."""
+    rows = [json.loads(line) for line in open(path)]
+    print("| case (ae, L, Γ, γ, gates) | n | ae in CI | L in CI | γ in CI | median ae/ae, L/L, γ/γ | sd ln L̂ "
+          "(rms sd fit) | CPU s per fit (median) | flagged |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for case in sorted({r["case"] for r in rows}):
+        rs = [r for r in rows if r["case"] == case]
+        n = len(rs)
+
+        def cover(name):
+            hit = [r[name] is not None and r[name]["ci95"][0] <= r[name]["truth"] <= (r[name]["ci95"][1] or math.inf)
+                   for r in rs]
+            p = float(np.mean(hit))
+            return f"{100 * p:.0f} % ± {100 * math.sqrt(p * (1 - p) / n):.0f}"
+
+        ratio = [np.median([r[k]["value"] / r[k]["truth"] for r in rs if r[k]]) for k in
+                 ("ae", "length_scale_m", "evo_time_s")]
+        lnl = np.log([r["length_scale_m"]["value"] for r in rs])
+        sd = math.sqrt(np.mean([r["length_scale_m"]["sd"] ** 2 for r in rs]))
+        print(f"| {CASES[case]} | {n} | {cover('ae')} | {cover('length_scale_m')} | {cover('evo_time_s')} | "
+              + ", ".join(f"{x:.3f}" for x in ratio) + f" | {np.std(lnl, ddof=1):.3f} ({sd:.3f}) | "
+              f"{np.median([r['cpu_s'] for r in rs]):.1f} | {sum(bool(r['flags']) for r in rs)} |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--case", type=int, default=0)
+    ap.add_argument("--n", type=int, default=30)
+    ap.add_argument("--seed0", type=int, default=5000)
+    ap.add_argument("--out", default="benchmarks/fit_lidar_results.jsonl")
+    ap.add_argument("--summary", default=None)
+    a = ap.parse_args()
+    if a.summary:
+        return summary(a.summary)
+    with tempfile.TemporaryDirectory() as tmp:
+        for seed in range(a.seed0, a.seed0 + a.n):
+            row = one(a.case, seed, Path(tmp))
+            with open(a.out, "a") as fh:
+                fh.write(json.dumps(row) + "\n")
+            print(json.dumps(row), flush=True)
+
+
+if __name__ == "__main__":
+    main()

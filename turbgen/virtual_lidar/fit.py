@@ -1,0 +1,271 @@
+"""Fit the Mann (1994) model to a ``turbgen lidar --out`` dataset: ``turbgen fit mann LIDAR``.
+
+A gate measures v_los = n . u averaged over its probe volume. ae and L are fitted to the Welch spectrum of v_los
+pooled over every beam and gate against the mean of the gates' LOS spectra F(k1) = ∫ n_i n_j Phi_ij |phi_hat(k . n)|^2
+dk2 dk3 (Guo et al. 2023, Eq. 29-30): summed over the box of the Mann store the dataset was sampled from while that
+store is there (along x with the sampler's interpolation in time, ``probe_gain``), else continuous. Along x (n = (1,
+0, 0)) the continuous F is |phi_hat(k1)|^2 F_11(k1) from the fit's table; other beams integrate (k2, k3) out to TAIL
+times the highest k1 the probe passes (the inertial tail beyond is 55/30 (k1 / kappa_max)^(5/3) of F without a
+probe, 0.6 %). Gamma is held: the LOS spectrum is nearly u's alone, which does not separate L from Gamma.
+Weights: one point's Welch variance times rho_bar, the pooled gates' point correlation measured from their segment
+DFTs (``evolution._rho_bar``), bands joined by ``band_corr``; generalised least squares in (ln ae, ln L), re-weighted
+at the fitted model, covariance (J^T J)^-1, 95 % intervals x +- 1.96 sd exponentiated. F is computed at N_K1 k1
+nodes for ln L on a grid of step DLN_L as the fit needs it, and interpolated cubic in both (of ln F).
+
+The eddy-evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (the probe then
+filters k1 alone and cancels in the coherence, leaving u's; Guo et al. 2022) by ``validation.fit.evolution``, L's
+interval propagated. Gates of an inclined beam differ in y, z and in what n mixes: not fitted, and noted.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.linalg import solve_triangular
+from scipy.optimize import least_squares
+
+from turbgen.errors import ParameterError
+from turbgen.spec.defaults import MANN_DEFAULTS
+from turbgen.theory import ranges
+from turbgen.theory.lattice import line_frequencies
+from turbgen.theory.lidar_geometry import Measurements
+from turbgen.theory.lidar_lattice import BoxLattice
+from turbgen.theory.lidar_preview import KAPPA_MAX, mann_preview_spectra
+from turbgen.theory.lidar_weighting import discrete_transform
+from turbgen.theory.params import MannParams
+from turbgen.validation.fit.data import FitData, detrended
+from turbgen.validation.fit.evolution import _rho_bar, with_evolution
+from turbgen.validation.fit.mann import AE_MIN, MOVE_TOL, PASSES, Z95, parameter_covariance
+from turbgen.validation.fit.result import FitValue, MannFit
+from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
+from turbgen.validation.fit.table import scaled_spectra
+from turbgen.validation.welch_kernel import WelchKernel
+from turbgen.virtual_lidar.dataset import LidarData, read_dataset
+from turbgen.virtual_lidar.description import LidarDescription
+
+N_K1 = 40  # k1 nodes of the LOS spectra (log-spaced over the record's lines)
+DLN_L = 0.25  # step of the length-scale grid in ln L
+ALONG_X = 1e-9  # a beam with n1 > 1 - ALONG_X looks along x
+TAIL = 30.0  # kappa_max / k1_max of the continuous (k2, k3) quadrature
+GAIN_MIN = 0.01  # bands where the probe volume passes less power than this are not fitted (``_passed``)
+MIN_BANDS = 4
+
+
+@dataclass(frozen=True, eq=False)
+class SampledStore:
+    """The Mann store a dataset was sampled from: its periodic ``box``, sampling interval ``dt_s`` [s] and, per beam,
+    the distinct scan times T modulo dt_s [s] (where the sampler's linear interpolation in time falls)."""
+
+    box: BoxLattice
+    dt_s: float
+    phases_s: tuple
+
+
+def probe_gain(k1: np.ndarray, meas, U_m_s: float, store: SampledStore | None) -> np.ndarray:
+    """|H(k1)|^2 of one measurement along x: its probe weights, sum_s w_s exp(i k1 s) (Guo et al. 2023, Eq. 30), or
+    with ``store`` each point as the sampler reads it, linear in stored time T + x/U between samples (a fraction
+    phi: (1 - phi) exp(-i w phi dt) + phi exp(i w (1 - phi) dt) at w = k1 U), averaged over the scans' phases."""
+    s, w = meas.offsets_m[0], meas.weights[0]
+    if store is None:
+        return discrete_transform(k1, s, w) ** 2
+    om, dt = k1[:, None] * U_m_s, store.dt_s
+    gain = np.zeros(k1.size)
+    for t0 in store.phases_s[int(meas.beam[0])]:
+        phi = ((t0 + (meas.focus_m[0, 0] + s) / U_m_s) / dt) % 1.0
+        phi = np.where(np.minimum(phi, 1 - phi) <= 1e-9, 0.0, phi)  # a node within rounding (sampling._interp_axis)
+        g = (1 - phi) * np.exp(-1j * om * phi * dt) + phi * np.exp(1j * om * (1 - phi) * dt)
+        gain += np.abs((w * np.exp(1j * k1[:, None] * s) * g).sum(axis=1)) ** 2
+    return gain / len(store.phases_s[int(meas.beam[0])])
+
+
+def los_spectrum(k1: np.ndarray, meas, params: MannParams, U_m_s: float, store: SampledStore | None) -> np.ndarray:
+    """Two-sided spectrum F(k1) [m^3 s^-2] of one measurement's v_los (``meas`` of one row) at k1 > 0 [rad/m]."""
+    box = None if store is None else store.box
+    if meas.n[0, 0] <= 1 - ALONG_X:
+        return _quadrature(k1, meas, params, U_m_s, box)
+    if box is None:  # phi_hat(k . n) = phi_hat(k1): u's spectrum filtered
+        L = params.length_scale_m
+        f11 = params.ae * L ** (5 / 3) * scaled_spectra(k1 * L, params.gamma)["uu"]
+    else:  # the box's u spectrum at a point
+        f11 = _quadrature(k1, replace(meas, offsets_m=np.zeros((1, 1)), weights=np.ones((1, 1))), params, U_m_s, box)
+    return f11 * probe_gain(k1, meas, U_m_s, store)
+
+
+def _quadrature(k1, meas, params, U_m_s, box) -> np.ndarray:
+    """F(k1) of one measurement by the preview's (k2, k3) quadrature or lattice sum (module docstring)."""
+    passed = k1[discrete_transform(k1 * meas.n[0, 0], meas.offsets_m[0], meas.weights[0]) ** 2 >= GAIN_MIN]
+    kappa_max = KAPPA_MAX if box is not None else max(KAPPA_MAX, TAIL * float(passed.max(initial=k1[0])))
+    s = mann_preview_spectra(k1 * U_m_s / (2 * np.pi), meas, params, U_m_s, 1.0, box=box, kappa_max=kappa_max)
+    return meas.n[0, 0] ** 2 * s.S_LL * U_m_s / (4 * np.pi)  # S_LL: v_los / n1, one-sided in f
+
+
+class LosModel:
+    """Expected band estimates of the pooled v_los spectrum for (ae, L) at a held Gamma (module docstring)."""
+
+    def __init__(self, bands, U_m_s: float, meas, gamma: float, store: SampledStore | None):
+        self.bands, self.U, self.gamma, self.store = bands, U_m_s, gamma, store
+        k1 = 2 * np.pi * line_frequencies(bands.nt, bands.setup.dt_s)[1:] / U_m_s
+        self.ln_k1, self.dk1 = np.log(k1), 2 * np.pi / (bands.nt * bands.setup.dt_s * U_m_s)
+        self.nodes = np.geomspace(k1[0], k1[-1], N_K1)
+        self.kernel = WelchKernel(bands.setup, bands.nt)
+        own = (meas.n[:, :1] > 1 - ALONG_X) & (store is not None)  # sampled along x: each gate its own phases
+        key = np.hstack([meas.n, meas.offsets_m, meas.weights, np.where(own, meas.focus_m[:, :1], 0.0),
+                         np.where(own, meas.beam[:, None], 0)]).round(12)
+        _, first, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
+        self.classes = [(meas.subset([i]), c / meas.count) for i, c in zip(first, counts)]
+        self.table: dict = {}  # index j of ln L = j DLN_L -> ln F at the nodes (ae = 1)
+
+    def _ln_f(self, j: int) -> np.ndarray:
+        """ln of the measurements' mean LOS spectrum F(k1) [m^3 s^-2] at the nodes for L = exp(j DLN_L), ae = 1."""
+        if j not in self.table:
+            p = MannParams(1.0, math.exp(j * DLN_L), self.gamma)
+            self.table[j] = np.log(sum(w * los_spectrum(self.nodes, m, p, self.U, self.store) for m, w in self.classes))
+        return self.table[j]
+
+    def expected(self, ae: float, length_scale_m: float) -> np.ndarray:
+        """(nbands,) expected pooled band estimate [m^2 s^-2 Hz^-1]: the table interpolated, Welch kernel applied."""
+        t = math.log(length_scale_m) / DLN_L
+        j = math.floor(t)
+        s = t - j  # Lagrange cubic through nodes j-1 .. j+2
+        w = (-s * (s - 1) * (s - 2) / 6, (s + 1) * (s - 1) * (s - 2) / 2, -(s + 1) * s * (s - 2) / 2,
+             (s + 1) * s * (s - 1) / 6)
+        ln_f = sum(wk * self._ln_f(j - 1 + k) for k, wk in enumerate(w))
+        lines = ae * np.exp(CubicSpline(np.log(self.nodes), ln_f)(self.ln_k1)) * self.dk1
+        return self.bands.band_mean(self.kernel.apply(np.concatenate([[0.0], lines])))
+
+
+def lidar_fit_data(ld: LidarData, gamma: float | None = None) -> tuple[FitData, Measurements, float]:
+    """(FitData of the dataset's detrended v_los, column per beam x gate at its focus, the Measurements, Gamma).
+
+    ParameterError for a dataset whose beams are not sampled uniformly or a Gamma outside its range.
+    """
+    meas = LidarDescription(**ld.lidar).measurement_points()
+    ns, nb, ng = ld.v_los.shape
+    steps = np.diff(ld.time_s, axis=0)
+    dt = float(steps.mean()) if ns > 1 else 0.0
+    if ns < 2 or np.any(np.abs(steps - dt) > 1e-6 * dt):
+        raise ParameterError(f"lidar dataset {ld.source}: {ns} scan(s), not uniformly sampled; the Welch spectra "
+                             "need one scan interval")
+    cols, notes = detrended(ld.v_los.reshape(ns, nb * ng), lambda k: f"beam {k // ng} gate {k % ng}")
+    gaps = int(np.isnan(cols).sum())
+    notes += [f"{gaps} missing v_los values (Welch segments holding them are skipped)"] if gaps else []
+    g = ranges.check("gamma", MANN_DEFAULTS["gamma"] if gamma is None else gamma, "gamma (Gamma, -)")
+    notes.append(f"gamma (Gamma) is not identified by line-of-sight spectra (they are nearly u's): held at {g:g}")
+    fd = FitData(ld.source, dt, ld.U_m_s, {"u": cols}, (), notes=tuple(notes), sites_m=meas.focus_m,
+                 columns={"u": np.arange(nb * ng)})
+    return fd, meas, g
+
+
+def sampled_store(ld: LidarData) -> SampledStore | None:
+    """The Mann store the dataset was sampled from (``SampledStore``), None if it is gone or not Mann's."""
+    import zarr
+
+    from turbgen.store import open_store
+    from turbgen.validation.store_run import mann_box_from_attrs
+
+    path = zarr.open_group(ld.source, mode="r").attrs.get("source_store")
+    if not isinstance(path, str) or not Path(path).is_dir():
+        return None
+    fs = open_store(path)
+    try:
+        g, b = fs.grid, mann_box_from_attrs(fs.attrs, fs.grid)
+    except ParameterError:  # no Mann parameters: not a Mann store
+        return None
+    phases = tuple(np.unique(np.round(t % g.dt_s, 9)) for t in ld.time_s.T)
+    return SampledStore(BoxLattice(b.nyp, b.nzp, g.dy_m, g.dz_m, g.nt * g.dt_s), g.dt_s, phases)
+
+
+def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, store="source") -> MannFit:
+    """ae, L (Gamma held) fitted to a lidar dataset's LOS spectra, and the evolution time to its gates along x.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``turbgen lidar --out`` dataset.
+    nperseg : int, optional
+        Welch segment length [scans]; default ``estimators.default_nperseg``.
+    gamma : float, optional
+        Gamma held in the fit [-] (default MANN_DEFAULTS).
+    store : "source", SampledStore or None
+        The store whose box and sampling the spectra follow: "source" the one sampled if there; None: continuous.
+
+    Raises
+    ------
+    ParameterError
+        A dataset not uniformly sampled, too short or too gappy for the Welch estimates, a bad ``gamma``.
+    """
+    ld = read_dataset(path)
+    fd, meas, g = lidar_fit_data(ld, gamma)
+    store = sampled_store(ld) if store == "source" else store
+    bands = estimate_bands(fd, nperseg)
+    model = LosModel(bands, fd.U_m_s, meas, g, store)
+    keep = _passed(bands, model)
+    rho = _rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands)
+    data, factor, corr = bands.values["uu"][keep], (bands.var_factor["uu"] * rho)[keep], bands.band_corr[keep][:, keep]
+    r_ae, r_l = ranges.RANGES["ae"], ranges.RANGES["length_scale_m"]
+    lo, hi = np.log([AE_MIN, r_l.lo]), np.log([r_ae.hi, r_l.hi])
+    x = np.array([math.log(np.median(data / model.expected(1.0, 30.0)[keep])), math.log(30.0)])
+    converged = False
+    for _ in range(PASSES):
+        sd = model.expected(*np.exp(x))[keep] * np.sqrt(factor)
+        chol = np.linalg.cholesky(corr * np.outer(sd, sd))
+        sol = least_squares(lambda y: solve_triangular(chol, data - model.expected(*np.exp(y))[keep], lower=True),
+                            np.clip(x, lo, hi), bounds=(lo, hi), diff_step=1e-4, xtol=1e-10, ftol=1e-10, gtol=1e-10)
+        cov = parameter_covariance(sol.jac)
+        moved, x = np.abs(sol.x - x) / np.sqrt(np.diag(cov)), sol.x
+        if sol.status > 0 and np.all(moved < MOVE_TOL):
+            converged = True
+            break
+    flags = [] if converged else [f"the fit did not converge ({sol.message.rstrip('.')}; {PASSES} passes)"]
+    flags += [f"{n} = {math.exp(v):.4g} is on the boundary of its fitted range [{math.exp(a):.4g}, {math.exp(b):.4g}]"
+              for n, v, a, b in zip(("ae", "length_scale_m"), x, lo, hi) if min(v - a, b - v) < 1e-6]
+    sdx = np.sqrt(np.diag(cov))
+    val = [FitValue(math.exp(v), (math.exp(v - Z95 * s), math.exp(v + Z95 * s)), float(s)) for v, s in zip(x, sdx)]
+    full = np.zeros((3, 3))
+    full[:2, :2] = cov
+    e = model.expected(*np.exp(x))[keep]
+    notes = fd.notes + (_model_note(store),) + (() if keep.all() else (
+        f"bands above {bands.f_hz[keep][-1]:.3g} Hz are not fitted: there the probe volume passes < {GAIN_MIN:g} of "
+        "the power, and the spectrum is the probe's and the sampler's rather than the turbulence's",))
+    fit = MannFit(val[0], val[1], FitValue(g, None, None), float(np.sum(sol.fun**2) / max(sol.fun.size - 2, 1)),
+                  int(sol.fun.size - 2), tuple(flags), notes, "continuous" if store is None else "grid", fd.U_m_s,
+                  fd.source, bands.setup.nperseg, bands.f_hz[keep], {"los": data}, {"los": e},
+                  {"los": e * np.sqrt(factor)}, cov_fit=full)  # fmt: skip
+    return _with_gates(fd, meas, fit)
+
+
+def _passed(bands, model: LosModel) -> np.ndarray:
+    """Bands whose centre k1 the probe volumes pass with power gain >= GAIN_MIN (phi_hat(k1 n1), Guo et al. 2023,
+    Eq. 30); ParameterError for fewer than MIN_BANDS."""
+    k1 = 2 * np.pi * bands.f_hz / model.U
+    gain = sum(w * discrete_transform(k1 * m.n[0, 0], m.offsets_m[0], m.weights[0]) ** 2 for m, w in model.classes)
+    keep = gain >= GAIN_MIN
+    if keep.sum() < MIN_BANDS:
+        raise ParameterError(f"{bands.nt} scans of {bands.setup.dt_s:g} s give {int(keep.sum())} Welch bands below the "
+                             f"probe volume's cut-off (power gain {GAIN_MIN:g}); at least {MIN_BANDS} are needed: a "
+                             "longer record or a smaller nperseg")
+    return keep
+
+
+def _model_note(store) -> str:
+    if store is None:
+        return "line-of-sight spectra of the continuous Mann tensor with the probe volume (Guo et al. 2023, Eq. 29)"
+    return (f"line-of-sight spectra summed over the sampled store's {store.box.nyp} x {store.box.nzp} box with the "
+            "probe volume as sampled (what the box holds; along x with the sampler's interpolation in time)")
+
+
+def _with_gates(fd: FitData, meas, fit: MannFit) -> MannFit:
+    """``fit`` with the evolution time from the gates of beams along x, or a note saying why there is none."""
+    along = np.flatnonzero(meas.n[:, 0] > 1 - ALONG_X)
+    if np.unique(np.round(meas.focus_m[along, 0], 6)).size < 2:
+        why = "no beam along x" if along.size == 0 else "one range gate along x"
+        return replace(fit, notes=fit.notes + (
+            f"evo_time_s not fitted: {why} (the co-coherence of gates at >= 2 ranges on a beam along x is needed; "
+            "gates of inclined beams differ in y, z and in what n mixes)",))
+    gates = replace(fd, series={"u": fd.series["u"][:, along]}, columns={"u": np.arange(along.size)},
+                    sites_m=meas.focus_m[along], u_xyz_m=tuple(map(tuple, meas.focus_m[along])))
+    return with_evolution(gates, fit)
