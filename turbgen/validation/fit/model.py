@@ -135,9 +135,19 @@ class BandModel:
         return s / (diag[:, :, None, None] * diag[:, None, :, None])
 
     def line_cross(self, params: MannParams, seps_m: np.ndarray, nlines: int) -> np.ndarray:
-        """(nlines, 3, 3, D) cross-variances E Y_q^a conj Y_q^b [m^2 s^-2] of the store's record lines q = 1 ..
-        ``nlines`` between points ``seps_m`` (D, 3) [m] apart: the lattice sum (grid model only)."""
-        return self._lattice_cross(params, seps_m, self.k1[:nlines])
+        """(nlines, 3, 3, D) cross-variances E Y_q^a conj Y_q^b [m^2 s^-2] of the record's lines q = 1 .. ``nlines``
+        between points ``seps_m`` (D, 3) [m] apart: the lattice sum, or continuous F(k1_q) dk1 (Eq. 8 of Guo et
+        al. 2023: a sensor record taken as periodic)."""
+        if self.grid is not None:
+            return self._lattice_cross(params, seps_m, self.k1[:nlines])
+        zero = np.all(seps_m == 0, axis=1)
+        out = np.zeros((nlines, 3, 3, seps_m.shape[0]), complex)
+        if not zero.all():
+            out[..., ~zero] = self._continuous_cross(params, seps_m[~zero], self.k1[:nlines])
+        f = self.line_spectra(params.ae, params.length_scale_m, params.gamma)  # the table at zero separation
+        for n, (p, q) in zip(NAMES, ((0, 0), (1, 1), (2, 2), (0, 2))):
+            out[:, p, q, zero] = out[:, q, p, zero] = f[n][:nlines, None]
+        return out * self.dk1
 
     def _lattice_cross(self, params, seps_m, k1) -> np.ndarray:
         g = self.grid
