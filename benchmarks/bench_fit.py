@@ -4,11 +4,14 @@ For every realisation (seed) of a Mann field with known (ae, L, Gamma) (frozen, 
 each against the grid's expectation (the lattice sum over the generator's box, what its points hold):
   grid      the field itself (its sub-lattice of 8 x 8 points);
   mast4     four sensors of u, v, w in the hub column (``points``: z = -33, -9, 9, 33 m at y = 3 m);
-  sonic1    one sensor of u, v, w next to the hub (y = z = 3 m).
+  sonic1    one sensor of u, v, w next to the hub (y = z = 3 m);
+and, against the continuous model, a sensor's record (``bench_fit_wetb.sonic_series``: --nt samples at --dt):
+  sonic     one sensor's u, v, w series of the continuous model at the record's lines (kind "sonic<nt>").
 Coverage: the fraction of realisations whose 95 % interval holds the true value, per parameter; with n
 realisations its binomial standard error is sqrt(0.95 0.05 / n).
 
     python benchmarks/bench_fit.py --n 50 --out benchmarks/fit_results.jsonl [--kinds grid --seed0 1007 --cache DIR]
+    python benchmarks/bench_fit.py --kinds sonic --nt 12000 --dt 0.05 --cases 0 --seed0 5000 --out /tmp/sonic.jsonl
     python benchmarks/fit_summary.py benchmarks/fit_results.jsonl
 """
 
@@ -20,7 +23,11 @@ import pickle
 import time
 from pathlib import Path
 
+import numpy as np
+from bench_fit_wetb import U_M_S, sonic_series
+
 import turbgen
+from turbgen.spec.constraints import PointSensor, PointSeries
 
 CASES = [  # (ae, L, Gamma) of the fields
     (0.08, 30.0, 3.2),
@@ -45,6 +52,12 @@ def field(case, seed: int, cache: str | None):
     return ds
 
 
+def sonic(case, seed: int, nt: int, dt_s: float) -> PointSeries:
+    """One sensor's fluctuation series of ``case`` (``bench_fit_wetb.sonic_series``)."""
+    sensor = PointSensor("s", 0.0, 0.0, 0.0, None, sonic_series(case, seed, nt, dt_s))
+    return PointSeries("sonic", dt_s * np.arange(nt), (sensor,), total_wind=False, noise_m_s=None, source="sonic")
+
+
 def covered(fit, truth) -> dict:
     out = {}
     for name, value in zip(("ae", "length_scale_m", "gamma"), truth):
@@ -58,17 +71,22 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=50, help="realisations per case")
     ap.add_argument("--seed0", type=int, default=1000)
     ap.add_argument("--out", default="benchmarks/fit_results.jsonl")
-    ap.add_argument("--kinds", default="grid,mast4,sonic1", help="fits to run, of grid, mast4, sonic1")
+    ap.add_argument("--kinds", default="grid,mast4,sonic1", help="fits to run, of grid, mast4, sonic1, sonic")
+    ap.add_argument("--nt", type=int, default=12000, help="samples of a sonic record")
+    ap.add_argument("--dt", type=float, default=0.05, help="sampling interval of a sonic record [s]")
     ap.add_argument("--cases", default=None, help="indices into CASES to run (default all), e.g. 0")
     ap.add_argument("--cache", default=None, help="directory of the fields (pickled Datasets), reused when there")
     a = ap.parse_args()
     with open(a.out, "a") as fh:
         for seed in range(a.seed0, a.seed0 + a.n):  # cases interleaved: a stopped run covers both
             for case in [CASES[int(k)] for k in a.cases.split(",")] if a.cases else CASES:
-                ds = field(case, seed, a.cache)
+                ds = None if a.kinds == "sonic" else field(case, seed, a.cache)
                 for kind in a.kinds.split(","):
                     t0 = time.perf_counter()
-                    fit = turbgen.fit_mann(ds, points=POINTS[kind])
+                    if kind == "sonic":
+                        fit, kind = turbgen.fit_mann(sonic(case, seed, a.nt, a.dt), U=U_M_S), f"sonic{a.nt}"
+                    else:
+                        fit = turbgen.fit_mann(ds, points=POINTS[kind])
                     row = {"case": case, "seed": seed, "kind": kind, "seconds": time.perf_counter() - t0,
                            "covered": covered(fit, case), "fit": fit.to_dict()}
                     fh.write(json.dumps(row) + "\n")

@@ -10,10 +10,11 @@ semi-definite by construction. Bands are joined by the correlation of Hann bins 
 that PD correlation with the Gram matrix of the per-band square roots, positive definite when every band's block is.
 
 The band-centre coherencies miss that the lowest bins collect lines from ~0.3 to ~2 x their frequency by leakage,
-which are more coherent across points. On a store's periodic record the Welch estimate of a bin is a quadratic form
-in the record's DFT lines Y_q, so its covariance is exact from the lines' cross-spectra (``line_covariance``: Isserlis
-over the segment pairs, as ``turbgen.validation.welch_variance`` does for one point): it replaces the covariance of
-the bands within bins 1 .. EXACT_BINS (``spliced``).
+which are more coherent across points and, below a segment's lowest bin, across many segments. On a periodic record
+the Welch estimate of a bin is a quadratic form in the record's DFT lines Y_q, so its covariance is exact from the
+lines' cross-spectra (``line_covariance``: Isserlis over the segment pairs, as ``turbgen.validation.welch_variance``
+does for one point): it replaces the covariance of the bands within bins 1 .. EXACT_BINS (``spliced``), for a store
+and for a sensor's record taken as periodic.
 """
 
 from __future__ import annotations

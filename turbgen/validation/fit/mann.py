@@ -28,6 +28,7 @@ from scipy.optimize import least_squares
 from turbgen.spec.defaults import MANN_DEFAULTS
 from turbgen.theory import ranges
 from turbgen.theory.params import MannParams
+from turbgen.validation.estimators import segment_starts
 from turbgen.validation.fit.covariance import (EXACT_BINS, exact_lines, isserlis, line_covariance, point_sets,
                                                separations, spliced)
 from turbgen.validation.fit.data import FitData
@@ -67,13 +68,16 @@ def _start(bands: BandSpectra, model: BandModel, used: tuple, held: dict) -> dic
 
 def _covariance_at(bands, model, geometry, used, p) -> np.ndarray:
     """Joint covariance (band-major) of the band estimates at the parameters ``p`` (``covariance``): band centres,
-    and for a store's periodic record the bands within bins 1 .. EXACT_BINS from its lines."""
+    and the bands within bins 1 .. EXACT_BINS from the record's lines (a sensor's record taken as periodic; not
+    with gaps). Lines below a segment's lowest bin are coherent over many segments: the band-centre covariance left
+    the first bin's variance ~1.5 x short on a 10-minute sonic record (benchmarks/fit_wetb.md)."""
     seps, index, neg, sets = geometry
     params = MannParams(**p)
     e = model.expected(p["ae"], p["length_scale_m"], p["gamma"])
     full = bands.full_covariance(used, e, isserlis(model.coherency(params, seps), index, neg, sets, used))
     low = [b for b in bands.bands if b[-1] <= EXACT_BINS]
-    if model.kind != "grid" or not low:
+    whole = len(segment_starts(bands.nt, bands.setup))
+    if not low or any(bands.segments[s[0]] < whole * sets[s].size for s in used if s != "uw"):
         return full
     cross = model.line_cross(params, seps, exact_lines(bands.nt, bands.setup.nperseg))
     bins = line_covariance(cross, bands.setup, bands.nt, index, sets, used)

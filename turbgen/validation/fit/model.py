@@ -36,7 +36,8 @@ RATIO_STEP = 1e-3  # step in ln L and Gamma of the ratio's derivatives (``update
 PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 # Eq. 8 between sensors for the weights only: 4 Gauss nodes and 64 angles leave ~2e-4 of F_ii (7x faster)
 WEIGHT_RULE = {"n_gauss": 4, "n_theta": 64}
-REUSE_LN_L, REUSE_GAMMA = 0.05, 0.1  # cross-spectra between points are reused while L and Gamma stay this close
+REUSE_LN_L, REUSE_GAMMA = 0.05, 0.1
+LINE_NODES = 24  # k1 nodes of the continuous cross-spectra between sensors for ``line_cross`` (smooth in ln k1)  # cross-spectra between points are reused while L and Gamma stay this close
 
 
 class BandModel:
@@ -135,9 +136,27 @@ class BandModel:
         return s / (diag[:, :, None, None] * diag[:, None, :, None])
 
     def line_cross(self, params: MannParams, seps_m: np.ndarray, nlines: int) -> np.ndarray:
-        """(nlines, 3, 3, D) cross-variances E Y_q^a conj Y_q^b [m^2 s^-2] of the store's record lines q = 1 ..
-        ``nlines`` between points ``seps_m`` (D, 3) [m] apart: the lattice sum (grid model only)."""
-        return self._lattice_cross(params, seps_m, self.k1[:nlines])
+        """(nlines, 3, 3, D) cross-variances E Y_q^a conj Y_q^b [m^2 s^-2] of the record's lines q = 1 .. ``nlines``
+        between points ``seps_m`` (D, 3) [m] apart: the lattice sum, or continuous F(k1_q) dk1 (Eq. 8 of Guo et
+        al. 2023: a sensor record taken as periodic)."""
+        if self.grid is not None:
+            return self._lattice_cross(params, seps_m, self.k1[:nlines])
+        f = self.line_spectra(params.ae, params.length_scale_m, params.gamma)  # the table at zero separation
+        one = np.zeros((self.k1.size, 3, 3))
+        for n, (p, q) in zip(NAMES, ((0, 0), (1, 1), (2, 2), (0, 2))):
+            one[:, p, q] = one[:, q, p] = f[n]
+        zero = np.all(seps_m == 0, axis=1)
+        out = np.zeros((nlines, 3, 3, seps_m.shape[0]), complex)
+        out[..., zero] = one[:nlines, :, :, None]
+        if not zero.all():  # coherencies at LINE_NODES of the lines, linear in ln k1 between them, times the table's
+            nodes = np.unique(np.geomspace(1, nlines, LINE_NODES).astype(int)) - 1
+            x, xi = np.log(self.k1[nodes]), np.log(self.k1[:nlines])
+            auto = np.sqrt(np.abs(np.diagonal(one, axis1=1, axis2=2)))  # (nt/2, 3)
+            g = self._continuous_cross(params, seps_m[~zero], self.k1[nodes]) / _outer(auto[nodes])
+            j = np.clip(np.searchsorted(x, xi, side="right") - 1, 0, x.size - 2)
+            t = ((xi - x[j]) / (x[j + 1] - x[j]))[:, None, None, None]
+            out[..., ~zero] = ((1 - t) * g[j] + t * g[j + 1]) * _outer(auto[:nlines])
+        return out * self.dk1
 
     def _lattice_cross(self, params, seps_m, k1) -> np.ndarray:
         g = self.grid
@@ -172,3 +191,8 @@ class BandModel:
                     done[(y, z)] = s
             out[..., d] = done[(y, z)]
         return out
+
+
+def _outer(a: np.ndarray) -> np.ndarray:
+    """(n, 3, 3, 1) a_p a_q of (n, 3) a."""
+    return (a[:, :, None] * a[:, None, :])[..., None]
