@@ -194,8 +194,8 @@ def test_a_mann_lifetime_store_is_fitted_with_its_lifetime(tmp_path):
 def test_sensor_series_of_the_mann_lifetime_are_fitted_with_it():
     """One sensor's u, v, w drawn from the continuous model with Mann's lifetime (the one-point spectra and u-w
     co-spectrum at the record's lines, Gaussian): the lifetime="mann" fit holds the truth in its 99.9 % intervals,
-    the default (Guo) fit of the same series does not hold Gamma (it lands ~12 % low: Guo's lifetime is longer at
-    large kL, Guo et al. 2023, Eq. 4 and 6, and a lower Gamma makes up for it; ae and L move < 2 %). Seed 9: the
+    the default (Guo) fit of the same series does not hold Gamma (it lands 10-12 % low: Guo's lifetime is longer at
+    large kL, Guo et al. 2023, Eq. 4 and 6, and a lower Gamma makes up for it; ae and L move < 3 %). Seed 9: the
     draw of seed 7 puts Gamma 3.3 sd low with either lifetime fitted to its own data (checked, seeds 7-12)."""
     n, dt, U = 8192, 0.5, 12.0
     dk = 2 * np.pi / (n * dt * U)

@@ -13,7 +13,7 @@ sd 10 % short for a 4-sensor mast (benchmarks/fit.md). The covariance of x is (J
 (the Gauss-Newton covariance (J^T W J)^-1, W the inverse joint covariance); the 95 % intervals are x +- 1.96 sd,
 exponentiated for ae and L.
 
-The eddy lifetime (Guo et al. 2023, Eq. 6-7, or Mann 1994's, their Eq. 4) is the data's: a turbgen store's own,
+The eddy lifetime (Guo et al. 2023, Eq. 6-7, or Mann's 1994, their Eq. 4) is the data's: a turbgen store's own,
 else the ``lifetime`` asked for (default the generator's, "guo").
 
 Identifiability: Gamma (the anisotropy) needs at least two velocity components' spectra; with one it is held at the

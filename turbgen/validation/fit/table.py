@@ -7,7 +7,7 @@ is tabulated by ``turbgen.theory.mann_spectra.one_point_spectra`` on X_NODES (8 
 GAMMA_NODES (0 .. 20, the range of Gamma, steps GAMMA_STEP) and interpolated: cubic spline in log k1 L of log f_ii
 and of the u-w correlation spectrum f_13 / sqrt(f_11 f_33), four-node Lagrange cubic in Gamma; beyond the largest
 k1 L the inertial-range slopes (-5/3, and -7/3 for f_13) continue it. One table per eddy lifetime (Guo et al. 2023,
-Eq. 6-7, and Mann 1994's, their Eq. 4), built by ``python -m turbgen.validation.fit.table`` into TABLE_PATHS (shipped
+Eq. 6-7, and Mann's 1994, their Eq. 4), built by ``python -m turbgen.validation.fit.table`` into TABLE_PATHS (shipped
 with the package; tests/validate/test_fit_mann.py recomputes columns of both and compares the interpolation with
 direct quadrature).
 """
