@@ -149,3 +149,16 @@ def test_one_height_keeps_the_files_mean_wind_at_the_data_s_speed():
     # rounded to 6 significant digits (FIT_DIGITS): within half a unit of the 6th, 5e-6 relative
     assert mapping["U_m_s"] == pytest.approx(u_mean * (HUB / 70.5) ** 0.2, rel=5e-6)
     assert "one height" in record["fit"]["shear_exponent"]["reason"]
+
+
+def test_the_run_s_lifetime_is_the_fit_s_and_the_field_s(replay):
+    """--fit with --lifetime mann fits Mann's (1994) lifetime and makes the field with it, recorded in the store;
+    the default run (the fixture) fits and makes Guo's."""
+    assert turbgen.open_store(replay[0]).attrs["fit"]["run"]["lifetime"] == "guo"
+    ds = turbgen.mann(constrain=[MAST], fit=True, lifetime="mann", nt=1024, dt=0.5, ny=16, nz=15, dy=3, planes=[0],
+                      evo="frozen", hub_height=HUB)
+    fit = turbgen.fit_mann(MAST, lifetime="mann")
+    record = ds.attrs["fit"]
+    assert ds.attrs["parameters"]["lifetime"] == "mann" and record["run"]["lifetime"] == "mann"
+    assert record["fit"]["lifetime"] == "mann"
+    assert record["run"]["gamma"] == float(f"{fit.gamma.value:.6g}")

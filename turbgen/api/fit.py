@@ -21,7 +21,7 @@ from turbgen.virtual_lidar.fit import fit_lidar
 
 
 def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points=None,
-             bootstrap: int = 0, gamma: float | None = None) -> MannFit:
+             bootstrap: int = 0, gamma: float | None = None, lifetime: str | None = None) -> MannFit:
     """Fit ae, L, Gamma (Mann 1994) to the spectra of ``data`` and the evolution time gamma to its x coherence.
 
     The one-point spectra of u, v, w and the u-w co-spectrum are estimated (Welch, detrended), each band weighted by
@@ -52,6 +52,9 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
         0 (default): none. Fields only.
     gamma : float, optional
         For a lidar dataset: the Gamma [-] held (default 3.9); other data fit it.
+    lifetime : {"guo", "mann"}, optional
+        The model's eddy lifetime: Guo et al. (2023, Eq. 6-7; the generator's default) or Mann (1994), as HAWC2's
+        and wetb's. Default: a turbgen store's own (a contradicting value is refused), else "guo".
 
     Returns
     -------
@@ -65,7 +68,7 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     ------
     ParameterError
         For bad input: an unreadable file, a non-uniform or non-stationary record, too few Welch segments, a
-        bootstrap of point series or with B < 2.
+        bootstrap of point series or with B < 2, a ``lifetime`` other than the store's.
     StoreError
         For a directory that is not a complete turbgen store.
 
@@ -77,9 +80,9 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     """
     data = _opened(data)
     if isinstance(data, str) and is_lidar_dataset(data):
-        if U is not None or points is not None or bootstrap:
-            raise ParameterError(f"DATA = {data!r} is a lidar dataset: it holds its own U and gates; U, points and "
-                                 "bootstrap do not apply")
+        if U is not None or points is not None or bootstrap or lifetime not in (None, "guo"):
+            raise ParameterError(f"DATA = {data!r} is a lidar dataset: it holds its own U and gates; U, points, "
+                                 "bootstrap and a lifetime other than 'guo' do not apply")
         return fit_lidar(data, nperseg, gamma)
     if gamma is not None:
         raise ParameterError(f"gamma = {gamma!r}: a held Gamma applies to a lidar dataset only (other data fit it)")
@@ -89,7 +92,7 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     if bootstrap and fd.grid is None:
         raise ParameterError(f"bootstrap = {bootstrap}: the parametric bootstrap regenerates the data's grid; "
                              f"{fd.source} holds point series, not a field")
-    fit = with_evolution(fd, replace(fit_mann_data(fd, nperseg), mean_wind=fit_mean_wind(fd.points)))
+    fit = with_evolution(fd, replace(fit_mann_data(fd, nperseg, lifetime=lifetime), mean_wind=fit_mean_wind(fd.points)))
     return replace(fit, bootstrap=bootstrap_sd(fit, fd, bootstrap, points)) if bootstrap else fit
 
 
@@ -111,7 +114,7 @@ def bootstrap_sd(fit: MannFit, data, B: int, points=None) -> dict:
     xs = []
     for seed in range(1, B + 1):
         ds = mann(L=p.length_scale_m, gamma=p.gamma, ae=p.ae, evo=None, seed=seed, U=data.U_m_s,
-                  planes=list(g.x_m), nt=g.nt, dt=g.dt_s, ny=g.ny, nz=g.nz, dy=g.dy_m, dz=g.dz_m,
+                  lifetime=p.lifetime, planes=list(g.x_m), nt=g.nt, dt=g.dt_s, ny=g.ny, nz=g.nz, dy=g.dy_m, dz=g.dz_m,
                   pad_yz=data.box.nyp // g.ny)
         f = fit_mann_data(load_fit_data(ds, None, points), fit.nperseg)
         xs.append([math.log(f.ae.value), math.log(f.length_scale_m.value), f.gamma.value])

@@ -7,6 +7,7 @@ import json
 import click
 
 from turbgen.errors import ParameterError
+from turbgen.theory.params import LIFETIMES
 
 PLOT_NAME = "fit_mann.png"
 
@@ -57,13 +58,16 @@ def _remember_overwrite(ctx, param, value):
 @click.option("--bootstrap", type=int, default=0, metavar="B",
               help="For a store: refit B fields made at the fitted parameters and print the bootstrap sd beside "
                    "the analytic one (default 0: off).")
+@click.option("--lifetime", type=click.Choice(LIFETIMES), default=None,
+              help="Eddy lifetime of the model: guo (Guo et al. 2023, Eq. 6; the generator's default) or mann "
+                   "(Mann 1994, as HAWC2 and wetb). Default: a store's own, else guo.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON: {name: {value, ci95, held}}, chi2_dof, flags, ...")
 @click.option("--plots", "plots", type=click.Path(), default=None, callback=plots_dir(PLOT_NAME, "fit_overwrite"),
               help=f"Directory for {PLOT_NAME}: the band spectra with 95 % bars and the fitted model.")
 @click.option("--overwrite", is_flag=True, is_eager=True, expose_value=False, callback=_remember_overwrite,
               help=f"Replace an existing {PLOT_NAME} in --plots.")
 @click.pass_context
-def fit_mann_command(ctx, data, U, nperseg, points, gamma, bootstrap, as_json, plots):
+def fit_mann_command(ctx, data, U, nperseg, points, gamma, bootstrap, lifetime, as_json, plots):
     """Fit ae, L, Gamma of the Mann model to DATA: a point-series JSON file (sensors with u, v, w), a store, a
     TurbSim .bts, a HAWC2 .htc whose mann block names the boxes, or a `turbgen lidar --out` dataset (ae, L and
     the evolution time from gates along x; Gamma held).
@@ -76,7 +80,7 @@ def fit_mann_command(ctx, data, U, nperseg, points, gamma, bootstrap, as_json, p
     from turbgen.api.fit import fit_mann
 
     result = fit_mann(data, U=U, nperseg=nperseg, points=[yz(p) for p in points] or None, bootstrap=bootstrap,
-                      gamma=gamma)
+                      gamma=gamma, lifetime=lifetime)
     report(ctx, result, as_json, plots, PLOT_NAME)
 
 

@@ -2,9 +2,10 @@
 (turbgen.validation.fit), then the field conditioned on the same data with them.
 
 The fitted ae, L and Gamma (rounded to FIT_DIGITS significant digits, so a fit's last bits never change the field)
-replace the run file's and preset's; typed ones are refused; the evolution time is not fitted. Without a typed U,
-U is the fitted hub speed. Total-wind data lose the fitted profile and veer; the store's ``fit`` attribute records
-the fit, the files' SHA-256 and the ``turbgen export`` options of that mean wind (export's default).
+replace the run file's and preset's; typed ones are refused; the evolution time is not fitted; the fit's eddy
+lifetime is the run's (``--lifetime``, default guo), which the field then uses. Without a typed U, U is the fitted hub
+speed. Total-wind data lose the fitted profile and veer; the store's ``fit`` attribute records the fit, the files'
+SHA-256 and the ``turbgen export`` options of that mean wind (export's default).
 """
 
 from __future__ import annotations
@@ -47,13 +48,14 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None) 
         raise ParameterError(f"--fit (fit=True) fits one point-series file; got {len(constraints)} constraint "
                              "file(s) or a lidar record: fit them apart (turbgen fit mann) and give the values")
     ps = constraints[0]
-    fit = fit_mann_data(data_from_points(ps, None if ps.total_wind else mapping.get("U_m_s")), nperseg)
+    fit = fit_mann_data(data_from_points(ps, None if ps.total_wind else mapping.get("U_m_s")), nperseg,
+                        lifetime=mapping.get("lifetime"))
     if fit.flags:
         raise ParameterError(f"--fit: the fit of {ps.source} is not reliable: {'; '.join(fit.flags)}")
     hub = MannRun.from_mapping(mapping).hub_height_m
     mean = fit_mean_wind(ps, hub)
     values = {k: float(f"{getattr(fit, k).value:.{FIT_DIGITS}g}") for k in FITTED}
-    out = {k: v for k, v in mapping.items() if k not in ("sigma_u_m_s", "ti")} | values
+    out = {k: v for k, v in mapping.items() if k not in ("sigma_u_m_s", "ti")} | values | {"lifetime": fit.lifetime}
     out["ae_from"] = f"fitted to {Path(ps.source).name} (turbgen fit mann)"
     if "U_m_s" not in mapping:
         out["U_m_s"] = float(f"{mean.U_hub_m_s or _hub_speed(ps, hub) or fit.U_m_s:.{FIT_DIGITS}g}")
@@ -65,7 +67,8 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None) 
                            displacement_m=0.0, table_heights_m=(), table_speeds_m_s=(), table_directions_deg=(),
                            table_label="")
         ps = replace(ps, mean_wind=replace(wind, veer_deg_per_m=export.get("veer_deg_per_m", wind.veer_deg_per_m)))
-    record = {"fit": replace(fit, mean_wind=mean).to_dict(), "run": {k: out[k] for k in (*FITTED, "U_m_s")},
+    record = {"fit": replace(fit, mean_wind=mean).to_dict(),
+              "run": {k: out[k] for k in (*FITTED, "U_m_s", "lifetime")},
               "files": [{"path": ps.source, "sha256": _sha256(ps.source)}], "export": export}
     return out, [ps], record
 
@@ -85,7 +88,7 @@ def describe_fit(record: dict) -> list[str]:
     ci = lambda k: "held" if f[k]["ci95"] is None else f"[{f[k]['ci95'][0]:.4g}, {f[k]['ci95'][1]:.4g}]"  # noqa: E731
     lines = [f"fitted to {', '.join(Path(x['path']).name for x in record['files'])}: L {run['length_scale_m']:g} m "
              f"{ci('length_scale_m')}, gamma {run['gamma']:g} {ci('gamma')}, ae {run['ae']:g} {ci('ae')} (95 %), "
-             f"chi2/dof {f['chi2_dof']:.3g}; U {run['U_m_s']:g} m/s"]
+             f"chi2/dof {f['chi2_dof']:.3g}; U {run['U_m_s']:g} m/s, {run.get('lifetime', 'guo')} lifetime"]
     mean = [f"{k} {f[k]['value']:.4g}" for k in ("shear_exponent", "veer_deg_per_m", "turbulence_intensity")
             if f.get(k, {}).get("value") is not None]
     exp = " ".join(f"--{k.split('_')[0]} {v}" for k, v in record["export"].items())

@@ -153,7 +153,7 @@ class CoherenceModel:
 
     def __init__(self, bands, data: FitData, params: MannParams):
         self.bands, self.U = bands, data.U_m_s
-        band_model = BandModel(bands, data.U_m_s, data.grid, data.box)
+        band_model = BandModel(bands, data.U_m_s, data.grid, data.box, params.lifetime)
         band_model.update_ratio(params)
         self.kernel, self.k1, self.band_model = band_model.kernel, band_model.k1, band_model
         f11 = band_model.line_spectra(params.ae, params.length_scale_m, params.gamma)["uu"]

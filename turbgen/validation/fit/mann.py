@@ -13,6 +13,9 @@ sd 10 % short for a 4-sensor mast (benchmarks/fit.md). The covariance of x is (J
 (the Gauss-Newton covariance (J^T W J)^-1, W the inverse joint covariance); the 95 % intervals are x +- 1.96 sd,
 exponentiated for ae and L.
 
+The eddy lifetime (Guo et al. 2023, Eq. 6-7, or Mann's 1994, their Eq. 4) is the data's: a turbgen store's own,
+else the ``lifetime`` asked for (default the generator's, "guo").
+
 Identifiability: Gamma (the anisotropy) needs at least two velocity components' spectra; with one it is held at the
 default and the result says so. A fit that does not converge or ends on a range boundary is flagged.
 """
@@ -25,9 +28,10 @@ import numpy as np
 from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
+from turbgen.errors import ParameterError, check_choice
 from turbgen.spec.defaults import MANN_DEFAULTS
 from turbgen.theory import ranges
-from turbgen.theory.params import MannParams
+from turbgen.theory.params import LIFETIMES, MannParams
 from turbgen.validation.estimators import segment_starts
 from turbgen.validation.fit.covariance import (EXACT_BINS, exact_lines, isserlis, line_covariance, point_sets,
                                                separations, spliced)
@@ -66,13 +70,23 @@ def _start(bands: BandSpectra, model: BandModel, used: tuple, held: dict) -> dic
     return p
 
 
+def data_lifetime(data: FitData, lifetime: str | None = None) -> str:
+    """The eddy lifetime to fit ``data`` with: a Mann store's own (ParameterError when ``lifetime`` contradicts it),
+    else ``lifetime`` or the default."""
+    stored = (data.attrs or {}).get("parameters", {}).get("lifetime")  # a Mann store's
+    if stored is not None and lifetime is not None and lifetime != stored:
+        raise ParameterError(f"lifetime = {lifetime!r}: {data.source} was generated with lifetime {stored!r}; drop "
+                             "the option or give that one")
+    return check_choice("lifetime", stored or lifetime or MANN_DEFAULTS["lifetime"], LIFETIMES)
+
+
 def _covariance_at(bands, model, geometry, used, p) -> np.ndarray:
     """Joint covariance (band-major) of the band estimates at the parameters ``p`` (``covariance``): band centres,
     and the bands within bins 1 .. EXACT_BINS from the record's lines (a sensor's record taken as periodic; not
     with gaps). Lines below a segment's lowest bin are coherent over many segments: the band-centre covariance left
     the first bin's variance ~1.5 x short on a 10-minute sonic record (benchmarks/fit_wetb.md)."""
     seps, index, neg, sets = geometry
-    params = MannParams(**p)
+    params = MannParams(**p, lifetime=model.lifetime)
     e = model.expected(p["ae"], p["length_scale_m"], p["gamma"])
     full = bands.full_covariance(used, e, isserlis(model.coherency(params, seps), index, neg, sets, used))
     low = [b for b in bands.bands if b[-1] <= EXACT_BINS]
@@ -105,7 +119,8 @@ def _solve(bands, model, used, free, held, p, cov):
     return sol, _params(sol.x, free, held)
 
 
-def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra | None = None) -> MannFit:
+def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra | None = None,
+                  lifetime: str | None = None) -> MannFit:
     """Fit the Mann model to ``data`` (module docstring).
 
     Parameters
@@ -116,6 +131,8 @@ def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra 
         Welch segment length [samples]; default ``estimators.default_nperseg``.
     bands : BandSpectra, optional
         Band estimates to fit instead of those of ``data`` (synthetic spectra with known noise: the tests).
+    lifetime : {"guo", "mann"}, optional
+        The eddy lifetime of the model (``data_lifetime``).
 
     Returns
     -------
@@ -125,10 +142,12 @@ def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra 
     Raises
     ------
     ParameterError
-        For a record too short or too gappy for the Welch estimates (``spectra.estimate_bands``).
+        For a record too short or too gappy for the Welch estimates (``spectra.estimate_bands``), or a ``lifetime``
+        other than a store's own.
     """
+    lifetime = data_lifetime(data, lifetime)
     bands = estimate_bands(data, nperseg) if bands is None else bands
-    model = BandModel(bands, data.U_m_s, data.grid, data.box)
+    model = BandModel(bands, data.U_m_s, data.grid, data.box, lifetime)
     used = tuple(s for s in SPECTRA if s in bands.values)
     notes = list(data.notes)
     held = {}
@@ -143,7 +162,7 @@ def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra 
         p = _solve(bands, model, used, free, held, p, _covariance_at(bands, model, geometry, used, p))[1]
     converged = False
     for _ in range(PASSES):
-        model.update_ratio(MannParams(**p), slopes=True)
+        model.update_ratio(MannParams(**p, lifetime=lifetime), slopes=True)
         weights = _covariance_at(bands, model, geometry, used, p)
         sol, q = _solve(bands, model, used, free, held, p, weights)
         cov = parameter_covariance(sol.jac)
@@ -200,7 +219,8 @@ def _result(data, bands, model, used, free, held, p, sol, cov, converged, notes,
     return MannFit(
         ae=values["ae"], length_scale_m=values["length_scale_m"], gamma=values["gamma"],
         chi2_dof=float(np.sum(sol.fun**2) / max(dof, 1)), dof=dof, flags=tuple(flags), notes=tuple(notes),
-        model=model.kind, U_m_s=data.U_m_s, source=data.source, nperseg=bands.setup.nperseg, f_hz=bands.f_hz,
+        model=model.kind, lifetime=model.lifetime, U_m_s=data.U_m_s, source=data.source,
+        nperseg=bands.setup.nperseg, f_hz=bands.f_hz,
         data={s: bands.values[s] for s in used}, fitted={s: e[s] for s in used},
         sd=dict(zip(used, np.sqrt(np.diag(weights)).reshape(-1, len(used)).T)), cov_fit=full,
         gain=gain if ok else None,

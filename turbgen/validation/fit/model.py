@@ -51,10 +51,12 @@ class BandModel:
         Mean wind speed [m/s] (k1 = 2 pi f / U).
     grid, box : optional
         The store's grid and periodic box: the grid model; None: the continuous model.
+    lifetime : {"guo", "mann"}, optional
+        The eddy lifetime (``MannParams.lifetime``) of the continuous spectra's table.
     """
 
-    def __init__(self, bands: BandSpectra, U_m_s: float, grid=None, box=None):
-        self.bands, self.U, self.grid, self.box = bands, U_m_s, grid, box
+    def __init__(self, bands: BandSpectra, U_m_s: float, grid=None, box=None, lifetime: str = "guo"):
+        self.bands, self.U, self.grid, self.box, self.lifetime = bands, U_m_s, grid, box, lifetime
         nt, dt = bands.nt, bands.setup.dt_s
         self.k1 = 2 * np.pi * line_frequencies(nt, dt)[1:] / U_m_s  # lines 1 .. nt/2 [rad/m]
         self.dk1 = 2 * np.pi / (nt * dt * U_m_s)
@@ -90,13 +92,13 @@ class BandModel:
         for k, phi, _ in lat.slabs(self.ratio_k1):
             for n, (i, j) in zip(NAMES, ((0, 0), (1, 1), (2, 2), (0, 2))):
                 sums[n][k] = phi[i, j].sum() / self.dk1
-        cont = scaled_spectra(self.ratio_k1 * params.length_scale_m, params.gamma)
+        cont = scaled_spectra(self.ratio_k1 * params.length_scale_m, params.gamma, self.lifetime)
         scale = params.ae * params.length_scale_m ** (5.0 / 3.0)
         return {n: sums[n] / (scale * cont[n]) for n in NAMES}
 
     def line_spectra(self, ae: float, length_scale_m: float, gamma: float) -> dict:
         """Name -> (nt/2,) two-sided F(k1) [m^3 s^-2] at the record's lines 1 .. nt/2 (times the grid ratio)."""
-        f = scaled_spectra(self.k1 * length_scale_m, gamma)
+        f = scaled_spectra(self.k1 * length_scale_m, gamma, self.lifetime)
         scale = ae * length_scale_m ** (5.0 / 3.0)
         out = {}
         for n in NAMES:

@@ -55,6 +55,8 @@ class MannFit:
         What the fit held or assumed (e.g. Gamma held for one component).
     model : str
         "grid" (the lattice sum over a turbgen store's box) or "continuous" (sensor data).
+    lifetime : str
+        The model's eddy lifetime, ``MannParams.lifetime``: "guo" (Guo et al. 2023, Eq. 6-7) or "mann" (Mann 1994).
     U_m_s : float
         Mean wind speed [m/s] of k1 = 2 pi f / U.
     source : str
@@ -98,6 +100,7 @@ class MannFit:
     evolution: EvoFit | None = None
     cov_fit: np.ndarray | None = None
     gain: np.ndarray | None = None
+    lifetime: str = "guo"
 
     @property
     def ok(self) -> bool:
@@ -107,21 +110,22 @@ class MannFit:
     @property
     def params(self) -> MannParams:
         """The fitted values as MannParams (frozen turbulence: the spectra do not fix an evolution time)."""
-        return MannParams(self.ae.value, self.length_scale_m.value, self.gamma.value)
+        return MannParams(self.ae.value, self.length_scale_m.value, self.gamma.value, self.lifetime)
 
     def to_dict(self) -> dict:
         """JSON-ready: {"ae": {"value", "ci95", "held"}, "length_scale_m": .., "gamma": .., "chi2_dof", ...}."""
         out = {n: getattr(self, n).to_dict() for n in ("ae", "length_scale_m", "gamma")}
         out.update(chi2_dof=self.chi2_dof, dof=self.dof, flags=list(self.flags), notes=list(self.notes),
-                   model=self.model, U_m_s=self.U_m_s, source=self.source, nperseg=self.nperseg,
-                   spectra=sorted(self.data), **({"bootstrap": self.bootstrap} if self.bootstrap else {}))
+                   model=self.model, lifetime=self.lifetime, U_m_s=self.U_m_s, source=self.source,
+                   nperseg=self.nperseg, spectra=sorted(self.data),
+                   **({"bootstrap": self.bootstrap} if self.bootstrap else {}))
         out["evo_time_s"] = self.evolution.to_dict() if self.evolution else {"value": None, "ci95": None, "held": True}
         return out | ({} if self.mean_wind is None else self.mean_wind.to_dict())
 
     def table(self) -> str:
         """Terminal text: one line per parameter, the goodness of fit, flags and notes."""
-        lines = [f"# Mann fit of {self.source} ({self.model} model, U = {self.U_m_s:.4g} m/s, "
-                 f"spectra {', '.join(self.data)})"]
+        lines = [f"# Mann fit of {self.source} ({self.model} model, {self.lifetime} lifetime, "
+                 f"U = {self.U_m_s:.4g} m/s, spectra {', '.join(self.data)})"]
         for name, unit in (("ae", "m^(4/3) s^-2"), ("length_scale_m", "m"), ("gamma", "-")):
             v = getattr(self, name)
             ci = "held (not identified)" if v.held else f"95 % interval [{v.ci95[0]:.4g}, {v.ci95[1]:.4g}]"

@@ -6,9 +6,10 @@ the quadrature over (k2, k3) of F_ij (Eq. 8 of Guo et al. 2023) then gives a fun
 is tabulated by ``turbgen.theory.mann_spectra.one_point_spectra`` on X_NODES (8 per decade of k1 L) times
 GAMMA_NODES (0 .. 20, the range of Gamma, steps GAMMA_STEP) and interpolated: cubic spline in log k1 L of log f_ii
 and of the u-w correlation spectrum f_13 / sqrt(f_11 f_33), four-node Lagrange cubic in Gamma; beyond the largest
-k1 L the inertial-range slopes (-5/3, and -7/3 for f_13) continue it. Built by
-``python -m turbgen.validation.fit.table`` into TABLE_PATH (shipped with the package; tests/validate/test_fit_table.py
-recomputes columns of it and compares the interpolation with direct quadrature).
+k1 L the inertial-range slopes (-5/3, and -7/3 for f_13) continue it. One table per eddy lifetime (Guo et al. 2023,
+Eq. 6-7, and Mann's 1994, their Eq. 4), built by ``python -m turbgen.validation.fit.table`` into TABLE_PATHS (shipped
+with the package; tests/validate/test_fit_mann.py recomputes columns of both and compares the interpolation with
+direct quadrature).
 """
 
 from __future__ import annotations
@@ -22,41 +23,42 @@ from scipy.interpolate import CubicSpline
 from turbgen.errors import ParameterError
 from turbgen.theory import ranges
 from turbgen.theory.mann_spectra import one_point_spectra
-from turbgen.theory.params import MannParams
+from turbgen.theory.params import LIFETIMES, MannParams
 
 NAMES = {"uu": "F11", "vv": "F22", "ww": "F33", "uw": "F13"}
 X_NODES = np.geomspace(1e-5, 1e5, 81)  # k1 L nodes
 GAMMA_STEP = 0.25
 GAMMA_NODES = np.arange(0.0, ranges.RANGES["gamma"].hi + GAMMA_STEP / 2, GAMMA_STEP)
-TABLE_PATH = Path(__file__).with_name("mann_table.npz")
+TABLE_PATHS = {lt: Path(__file__).with_name(f"mann_table{'' if lt == 'guo' else f'_{lt}_lifetime'}.npz") for lt in LIFETIMES}
 
 
-def table_column(gamma: float) -> np.ndarray:
+def table_column(gamma: float, lifetime: str = "guo") -> np.ndarray:
     """(4, len(X_NODES)) log f_11, log f_22, log f_33 and rho_13 = f_13 / sqrt(f_11 f_33) at Gamma = ``gamma``
     (ae = 1, L = 1 m; rho_13 is tabulated rather than log |f_13|: f_13 = 0 at Gamma = 0)."""
-    f = one_point_spectra(X_NODES, MannParams(1.0, 1.0, float(gamma)))
+    f = one_point_spectra(X_NODES, MannParams(1.0, 1.0, float(gamma), lifetime))
     rho = f["F13"] / np.sqrt(f["F11"] * f["F33"]) if gamma > 0 else np.zeros(X_NODES.size)
     return np.stack([np.log(f["F11"]), np.log(f["F22"]), np.log(f["F33"]), rho])
 
 
-def build_table(path=TABLE_PATH) -> None:
-    """Write the table (every Gamma node) to ``path`` (a .npz file)."""
-    cols = np.stack([table_column(g) for g in GAMMA_NODES])
-    np.savez_compressed(path, log_f=cols, x_nodes=X_NODES, gamma_nodes=GAMMA_NODES)
+def build_table(lifetime: str = "guo", path=None) -> None:
+    """Write the table of ``lifetime`` (every Gamma node) to ``path`` (a .npz file; default its TABLE_PATHS one)."""
+    cols = np.stack([table_column(g, lifetime) for g in GAMMA_NODES])
+    np.savez_compressed(path or TABLE_PATHS[lifetime], log_f=cols, x_nodes=X_NODES, gamma_nodes=GAMMA_NODES)
 
 
-@lru_cache(maxsize=1)
-def load_table() -> np.ndarray:
-    """(len(GAMMA_NODES), 4, len(X_NODES)) columns (``table_column``) from TABLE_PATH, checked against the nodes of
-    this module."""
-    with np.load(TABLE_PATH) as t:
+@lru_cache(maxsize=2)
+def load_table(lifetime: str = "guo") -> np.ndarray:
+    """(len(GAMMA_NODES), 4, len(X_NODES)) columns (``table_column``) of ``lifetime`` from TABLE_PATHS, checked
+    against the nodes of this module."""
+    path = TABLE_PATHS[lifetime]
+    with np.load(path) as t:
         if not (np.array_equal(t["x_nodes"], X_NODES) and np.array_equal(t["gamma_nodes"], GAMMA_NODES)):
-            raise ParameterError(f"{TABLE_PATH} was built for other nodes: rebuild it (python -m "
+            raise ParameterError(f"{path} was built for other nodes: rebuild it (python -m "
                                  "turbgen.validation.fit.table)")
         return t["log_f"]
 
 
-def scaled_spectra(x: np.ndarray, gamma: float) -> dict:
+def scaled_spectra(x: np.ndarray, gamma: float, lifetime: str = "guo") -> dict:
     """f_ij(k1 L, Gamma) (module docstring) at ``x`` = k1 L > 0, two-sided [m^3 s^-2 per ae L^(5/3)]; F13 < 0.
 
     Parameters
@@ -65,6 +67,8 @@ def scaled_spectra(x: np.ndarray, gamma: float) -> dict:
         k1 L [-], > 0.
     gamma : float
         Gamma [-], in the range of Gamma.
+    lifetime : {"guo", "mann"}, optional
+        The eddy lifetime of the table (``MannParams.lifetime``).
 
     Returns
     -------
@@ -78,7 +82,7 @@ def scaled_spectra(x: np.ndarray, gamma: float) -> dict:
     t = g / GAMMA_STEP
     weights = np.array([np.prod([(t - nodes[m]) / (nodes[k] - nodes[m]) for m in range(4) if m != k])
                         for k in range(4)])
-    cols = np.tensordot(weights, load_table()[nodes], axes=1)  # (4, nx)
+    cols = np.tensordot(weights, load_table(lifetime)[nodes], axes=1)  # (4, nx)
     lx, top = np.log(x), np.log(X_NODES[-1])
     spline = CubicSpline(np.log(X_NODES), cols, axis=1)(np.clip(lx, np.log(X_NODES[0]), top))
     out = {n: np.exp(spline[k] - 5.0 / 3.0 * np.maximum(lx - top, 0.0)) for k, n in enumerate(("uu", "vv", "ww"))}
@@ -88,4 +92,5 @@ def scaled_spectra(x: np.ndarray, gamma: float) -> dict:
 
 
 if __name__ == "__main__":
-    build_table()
+    for name in TABLE_PATHS:
+        build_table(name)
