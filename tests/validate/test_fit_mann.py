@@ -191,6 +191,19 @@ def test_a_mann_lifetime_store_is_fitted_with_its_lifetime(tmp_path):
         f"Error: lifetime = 'guo': {store} was generated with lifetime 'mann'; drop the option or give that one"]
 
 
+def test_a_store_of_another_factor1_is_refused(tmp_path):
+    """The fit's tables hold Guo's lifetime with factor1 = 1: a store made with the stable preset's 0.8 is refused in
+    one line (exit 2), not fitted as if it were 1."""
+    store = str(tmp_path / "f.zarr")
+    made = run("mann", "--factor1", "0.8", "--nt", "256", "--ny", "8", "--nz", "8", "--dy", "8", "--dz", "8",
+               "--planes", "0", "--evo", "frozen", "--out", store)
+    assert made.exit_code == 0, made.output
+    bad = run("fit", "mann", store)
+    assert bad.exit_code == 2 and bad.output.strip().splitlines() == [
+        f"Error: {store} was generated with factor1 = 0.8: the fit's tables hold the lifetime with factor1 = 1 only "
+        "(Guo et al. 2023, Eq. 7)"]
+
+
 def test_sensor_series_of_the_mann_lifetime_are_fitted_with_it():
     """One sensor's u, v, w drawn from the continuous model with Mann's lifetime (the one-point spectra and u-w
     co-spectrum at the record's lines, Gaussian): the lifetime="mann" fit holds the truth in its 99.9 % intervals,

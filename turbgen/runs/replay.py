@@ -48,6 +48,9 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None) 
         raise ParameterError(f"--fit (fit=True) fits one point-series file; got {len(constraints)} constraint "
                              "file(s) or a lidar record: fit them apart (turbgen fit mann) and give the values")
     ps = constraints[0]
+    if mapping.get("factor1", 1.0) != 1.0:
+        raise ParameterError(f"--fit with factor1 = {mapping['factor1']}: the fit's tables hold the lifetime with "
+                             "factor1 = 1 only (Guo et al. 2023, Eq. 7)")
     fit = fit_mann_data(data_from_points(ps, None if ps.total_wind else mapping.get("U_m_s")), nperseg,
                         lifetime=mapping.get("lifetime"))
     if fit.flags:

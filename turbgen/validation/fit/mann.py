@@ -73,7 +73,11 @@ def _start(bands: BandSpectra, model: BandModel, used: tuple, held: dict) -> dic
 def data_lifetime(data: FitData, lifetime: str | None = None) -> str:
     """The eddy lifetime to fit ``data`` with: a Mann store's own (ParameterError when ``lifetime`` contradicts it),
     else ``lifetime`` or the default."""
-    stored = (data.attrs or {}).get("parameters", {}).get("lifetime")  # a Mann store's
+    parameters = (data.attrs or {}).get("parameters", {})
+    stored = parameters.get("lifetime")  # a Mann store's
+    if parameters.get("factor1", 1.0) != 1.0:
+        raise ParameterError(f"{data.source} was generated with factor1 = {parameters['factor1']}: the fit's tables hold "
+                             "the lifetime with factor1 = 1 only (Guo et al. 2023, Eq. 7)")
     if stored is not None and lifetime is not None and lifetime != stored:
         raise ParameterError(f"lifetime = {lifetime!r}: {data.source} was generated with lifetime {stored!r}; drop "
                              "the option or give that one")
