@@ -1,20 +1,12 @@
 """Fit the Mann (1994) model to a ``turbgen lidar --out`` dataset: ``turbgen fit mann LIDAR``.
 
-A gate measures v_los = n . u averaged over its probe volume. ae and L are fitted to the Welch spectrum of v_los
-pooled over every beam and gate against the mean of the gates' LOS spectra F(k1) = ∫ n_i n_j Phi_ij |phi_hat(k . n)|^2
-dk2 dk3 (Guo et al. 2023, Eq. 29-30): summed over the box of the Mann store the dataset was sampled from while that
-store is there (along x with the sampler's interpolation in time, ``probe_gain``), else continuous. Along x (n = (1,
-0, 0)) the continuous F is |phi_hat(k1)|^2 F_11(k1) from the fit's table; other beams integrate (k2, k3) out to TAIL
-times the highest k1 the probe passes (the inertial tail beyond is 55/30 (k1 / kappa_max)^(5/3) of F without a
-probe, 0.6 %). Gamma is held: the LOS spectrum is nearly u's alone, which does not separate L from Gamma.
-Weights: one point's Welch variance times rho_bar, the pooled gates' point correlation measured from their segment
-DFTs (``evolution._rho_bar``), bands joined by ``band_corr``; generalised least squares in (ln ae, ln L), re-weighted
-at the fitted model, covariance (J^T J)^-1, 95 % intervals x +- 1.96 sd exponentiated. F is computed at N_K1 k1
-nodes for ln L on a grid of step DLN_L as the fit needs it, and interpolated cubic in both (of ln F).
-
-The eddy-evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (the probe then
-filters k1 alone and cancels in the coherence, leaving u's; Guo et al. 2022) by ``validation.fit.evolution``, L's
-interval propagated. Gates of an inclined beam differ in y, z and in what n mixes: not fitted, and noted.
+ae and L are fitted to the Welch spectrum of v_los pooled over every beam and gate against the gates' mean LOS spectrum
+F(k1) = ∫ n_i n_j Phi_ij |phi_hat(k . n)|^2 dk2 dk3 (Guo et al. 2023, Eq. 29-30): over the box of the Mann store the
+dataset was sampled from while it is there (along x with the sampler's interpolation in time), else continuous, with
+(k2, k3) integrated out to TAIL times the highest k1 the probe passes. Gamma is held: the LOS spectrum is nearly u's.
+Generalised least squares in (ln ae, ln L) weighted by one point's Welch variance times the gates' point correlation,
+re-weighted at the fitted model; F is tabulated in ln L (step DLN_L) at N_K1 k1 nodes and interpolated cubic.
+The evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (Guo et al. 2022).
 """
 
 from __future__ import annotations
