@@ -172,24 +172,11 @@ def sampled_store(ld: LidarData) -> SampledStore | None:
 
 
 def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, store="source") -> MannFit:
-    """ae, L (Gamma held) fitted to a lidar dataset's LOS spectra, and the evolution time to its gates along x.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        A ``turbgen lidar --out`` dataset.
-    nperseg : int, optional
-        Welch segment length [scans]; default ``estimators.default_nperseg``.
-    gamma : float, optional
-        Gamma held in the fit [-] (default MANN_DEFAULTS).
-    store : "source", SampledStore or None
-        The store whose box and sampling the spectra follow: "source" the one sampled if there; None: continuous.
-
-    Raises
-    ------
-    ParameterError
-        A dataset not uniformly sampled, too short or too gappy for the Welch estimates, a bad ``gamma``.
-    """
+    """ae, L (Gamma held) fitted to the LOS spectra of the lidar dataset at ``path``, and the evolution time to its
+    gates along x. ``nperseg`` [scans] as in ``estimators.default_nperseg``; ``gamma`` [-] held (default
+    MANN_DEFAULTS); ``store``: the SampledStore whose box and sampling the spectra follow, "source" (the one sampled,
+    if there) or None (continuous). ParameterError for a dataset not uniformly sampled, too short or too gappy, a bad
+    ``gamma``."""
     ld = read_dataset(path)
     fd, meas, g = lidar_fit_data(ld, gamma)
     store = sampled_store(ld) if store == "source" else store

@@ -115,30 +115,11 @@ def _solve(bands, model, used, free, held, p, cov):
 
 def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra | None = None,
                   lifetime: str | None = None) -> MannFit:
-    """Fit the Mann model to ``data`` (module docstring).
-
-    Parameters
-    ----------
-    data : FitData
-        Fluctuation series (``turbgen.validation.fit.data.load_fit_data``).
-    nperseg : int, optional
-        Welch segment length [samples]; default ``estimators.default_nperseg``.
-    bands : BandSpectra, optional
-        Band estimates to fit instead of those of ``data`` (synthetic spectra with known noise: the tests).
-    lifetime : {"guo", "mann"}, optional
-        The eddy lifetime of the model (``data_lifetime``).
-
-    Returns
-    -------
-    MannFit
-        Values, 95 % intervals, chi^2 / dof, flags, the band spectra and the fitted model.
-
-    Raises
-    ------
-    ParameterError
-        For a record too short or too gappy for the Welch estimates (``spectra.estimate_bands``), or a ``lifetime``
-        other than a store's own.
-    """
+    """Fit the Mann model to ``data`` (FitData, module docstring): a MannFit with values, 95 % intervals, chi^2 / dof,
+    flags, the band spectra and the fitted model. ``nperseg`` [samples] defaults to ``estimators.default_nperseg``;
+    ``bands`` replaces the band estimates of ``data`` (synthetic spectra with known noise: the tests); ``lifetime``
+    as in ``data_lifetime``. ParameterError for a record too short or too gappy for the Welch estimates, or a
+    ``lifetime`` other than a store's own."""
     lifetime = data_lifetime(data, lifetime)
     bands = estimate_bands(data, nperseg) if bands is None else bands
     model = BandModel(bands, data.U_m_s, data.grid, data.box, lifetime)

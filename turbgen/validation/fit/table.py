@@ -53,22 +53,8 @@ def load_table(lifetime: str = "guo") -> np.ndarray:
 
 
 def scaled_spectra(x: np.ndarray, gamma: float, lifetime: str = "guo") -> dict:
-    """f_ij(k1 L, Gamma) (module docstring) at ``x`` = k1 L > 0, two-sided [m^3 s^-2 per ae L^(5/3)]; F13 < 0.
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        k1 L [-], > 0.
-    gamma : float
-        Gamma [-], in the range of Gamma.
-    lifetime : {"guo", "mann"}, optional
-        The eddy lifetime of the table (``MannParams.lifetime``).
-
-    Returns
-    -------
-    dict
-        "uu", "vv", "ww", "uw" -> f(x) like ``x``.
-    """
+    """f_ij(k1 L, Gamma) (module docstring), two-sided [m^3 s^-2 per ae L^(5/3)], at ``x`` = k1 L > 0 for Gamma
+    ``gamma`` and the table of ``lifetime`` ("guo" or "mann"): {"uu", "vv", "ww", "uw" -> f(x)}; F13 < 0."""
     g = ranges.check("gamma", gamma, "Gamma (fitted, -)")
     last = GAMMA_NODES.size - 1
     i0 = int(np.clip(np.floor(g / GAMMA_STEP) - 1, 0, last - 3))
