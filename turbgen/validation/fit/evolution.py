@@ -265,24 +265,9 @@ class _Problem:
 
 
 def fit_evolution(data: FitData, params: MannParams, nperseg: int, fit: MannFit | None = None) -> EvoFit | str:
-    """gamma fitted to the longitudinal coherence of ``data`` (module docstring), or one line saying why not.
-
-    Parameters
-    ----------
-    data : FitData
-        The fit data (u and the positions of its columns).
-    params : MannParams
-        ae, L and Gamma of the one-point fit (held).
-    nperseg : int
-        Welch segment length [samples] of the one-point fit.
-    fit : MannFit, optional
-        The one-point fit of ``data`` whose uncertainty the interval carries; None: ``params`` held exact.
-
-    Returns
-    -------
-    EvoFit or str
-        The fit, or why there is none (no two u points along x at one (y, z)).
-    """
+    """EvoFit of gamma to the longitudinal coherence of ``data`` (module docstring), or one line saying why not (no two
+    u points along x at one (y, z)). ``params``: ae, L, Gamma of the one-point fit (held); ``nperseg`` [samples]: its
+    Welch segments; ``fit``: that MannFit, whose uncertainty the interval carries (None: ``params`` exact)."""
     pairs = x_pairs(data.u_xyz_m) if "u" in data.series else {}
     if not pairs:
         return ("evo_time_s not fitted: the data hold no two u series at one (y, z) and different x (two masts "
