@@ -31,7 +31,7 @@ from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.params import MannParams
 from turbgen.validation.fit.data import FitData, detrended
 from turbgen.validation.fit.evolution import _rho_bar, with_evolution
-from turbgen.validation.fit.mann import AE_MIN, MOVE_TOL, PASSES, Z95, parameter_covariance
+from turbgen.validation.fit.mann import MOVE_TOL, PASSES, Z95, _bounds, parameter_covariance
 from turbgen.validation.fit.result import FitValue, MannFit
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
@@ -185,8 +185,7 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     keep = _passed(bands, model)
     rho = _rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands)
     data, factor, corr = bands.values["uu"][keep], (bands.var_factor["uu"] * rho)[keep], bands.band_corr[keep][:, keep]
-    r_ae, r_l = ranges.RANGES["ae"], ranges.RANGES["length_scale_m"]
-    lo, hi = np.log([AE_MIN, r_l.lo]), np.log([r_ae.hi, r_l.hi])
+    lo, hi = _bounds(("ae", "length_scale_m"))
     x = np.array([math.log(np.median(data / model.expected(1.0, 30.0)[keep])), math.log(30.0)])
     converged = False
     for _ in range(PASSES):
