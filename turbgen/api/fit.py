@@ -97,17 +97,9 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
 
 
 def bootstrap_sd(fit: MannFit, data, B: int, points=None) -> dict:
-    """Standard deviations of the fitted ln ae, ln L and Gamma over B frozen turbgen fields (seeds 1 .. B) made at
-    the fitted parameters on the grid and box of the fitted field, each fitted like it (same points, segments).
-
-    With calibrated intervals sd_boot / sd_fit is sqrt(chi2_(B-1) / (B-1)) distributed about 1 (Gaussian
-    estimates): the check of issue 38 on turbgen's own fields.
-
-    Returns
-    -------
-    dict
-        {"B": B, "sd": {name: sd of the fitted variable}, "sd_fit": {name: the fit's analytic sd}}.
-    """
+    """{"B": B, "sd": {name: sd}, "sd_fit": {name: the fit's analytic sd}}: sd of the fitted ln ae, ln L and Gamma
+    over B frozen fields (seeds 1 .. B) made at the fitted parameters on the fitted field's grid and box, each fitted
+    like it. With calibrated intervals sd / sd_fit is sqrt(chi2_(B-1) / (B-1)) distributed (Gaussian estimates)."""
     from turbgen.api.fields import mann
 
     g, p, names = data.grid, fit.params, ("ae", "length_scale_m", "gamma")

@@ -1,11 +1,9 @@
-"""Replay a measured event (``turbgen mann --constrain DATA --fit``): the Mann model and mean wind fitted to DATA
-(turbgen.validation.fit), then the field conditioned on the same data with them.
+"""Replay a measured event (``turbgen mann --constrain DATA --fit``): the Mann model and mean wind fitted to DATA,
+then the field conditioned on the same data with them.
 
-The fitted ae, L and Gamma (rounded to FIT_DIGITS significant digits, so a fit's last bits never change the field)
-replace the run file's and preset's; typed ones are refused; the evolution time is not fitted; the fit's eddy
-lifetime is the run's (``--lifetime``, default guo), which the field then uses. Without a typed U, U is the fitted hub
-speed. Total-wind data lose the fitted profile and veer; the store's ``fit`` attribute records the fit, the files'
-SHA-256 and the ``turbgen export`` options of that mean wind (export's default).
+The fitted ae, L and Gamma (rounded to FIT_DIGITS digits, so a fit's last bits never change the field) replace the
+run's; typed ones are refused; the run's lifetime is the fit's. Without a typed U, U is the fitted hub speed. The
+store's ``fit`` attribute records the fit, the files' SHA-256 and the ``turbgen export`` options of that mean wind.
 """
 
 from __future__ import annotations

@@ -1,20 +1,12 @@
 """Fit the Mann (1994) model to a ``turbgen lidar --out`` dataset: ``turbgen fit mann LIDAR``.
 
-A gate measures v_los = n . u averaged over its probe volume. ae and L are fitted to the Welch spectrum of v_los
-pooled over every beam and gate against the mean of the gates' LOS spectra F(k1) = ∫ n_i n_j Phi_ij |phi_hat(k . n)|^2
-dk2 dk3 (Guo et al. 2023, Eq. 29-30): summed over the box of the Mann store the dataset was sampled from while that
-store is there (along x with the sampler's interpolation in time, ``probe_gain``), else continuous. Along x (n = (1,
-0, 0)) the continuous F is |phi_hat(k1)|^2 F_11(k1) from the fit's table; other beams integrate (k2, k3) out to TAIL
-times the highest k1 the probe passes (the inertial tail beyond is 55/30 (k1 / kappa_max)^(5/3) of F without a
-probe, 0.6 %). Gamma is held: the LOS spectrum is nearly u's alone, which does not separate L from Gamma.
-Weights: one point's Welch variance times rho_bar, the pooled gates' point correlation measured from their segment
-DFTs (``evolution._rho_bar``), bands joined by ``band_corr``; generalised least squares in (ln ae, ln L), re-weighted
-at the fitted model, covariance (J^T J)^-1, 95 % intervals x +- 1.96 sd exponentiated. F is computed at N_K1 k1
-nodes for ln L on a grid of step DLN_L as the fit needs it, and interpolated cubic in both (of ln F).
-
-The eddy-evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (the probe then
-filters k1 alone and cancels in the coherence, leaving u's; Guo et al. 2022) by ``validation.fit.evolution``, L's
-interval propagated. Gates of an inclined beam differ in y, z and in what n mixes: not fitted, and noted.
+ae and L are fitted to the Welch spectrum of v_los pooled over every beam and gate against the gates' mean LOS spectrum
+F(k1) = ∫ n_i n_j Phi_ij |phi_hat(k . n)|^2 dk2 dk3 (Guo et al. 2023, Eq. 29-30): over the box of the Mann store the
+dataset was sampled from while it is there (along x with the sampler's interpolation in time), else continuous, with
+(k2, k3) integrated out to TAIL times the highest k1 the probe passes. Gamma is held: the LOS spectrum is nearly u's.
+Generalised least squares in (ln ae, ln L) weighted by one point's Welch variance times the gates' point correlation,
+re-weighted at the fitted model; F is tabulated in ln L (step DLN_L) at N_K1 k1 nodes and interpolated cubic.
+The evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (Guo et al. 2022).
 """
 
 from __future__ import annotations
@@ -39,7 +31,7 @@ from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.params import MannParams
 from turbgen.validation.fit.data import FitData, detrended
 from turbgen.validation.fit.evolution import _rho_bar, with_evolution
-from turbgen.validation.fit.mann import AE_MIN, MOVE_TOL, PASSES, Z95, parameter_covariance
+from turbgen.validation.fit.mann import MOVE_TOL, PASSES, Z95, _bounds, parameter_covariance
 from turbgen.validation.fit.result import FitValue, MannFit
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
@@ -180,24 +172,11 @@ def sampled_store(ld: LidarData) -> SampledStore | None:
 
 
 def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, store="source") -> MannFit:
-    """ae, L (Gamma held) fitted to a lidar dataset's LOS spectra, and the evolution time to its gates along x.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        A ``turbgen lidar --out`` dataset.
-    nperseg : int, optional
-        Welch segment length [scans]; default ``estimators.default_nperseg``.
-    gamma : float, optional
-        Gamma held in the fit [-] (default MANN_DEFAULTS).
-    store : "source", SampledStore or None
-        The store whose box and sampling the spectra follow: "source" the one sampled if there; None: continuous.
-
-    Raises
-    ------
-    ParameterError
-        A dataset not uniformly sampled, too short or too gappy for the Welch estimates, a bad ``gamma``.
-    """
+    """ae, L (Gamma held) fitted to the LOS spectra of the lidar dataset at ``path``, and the evolution time to its
+    gates along x. ``nperseg`` [scans] as in ``estimators.default_nperseg``; ``gamma`` [-] held (default
+    MANN_DEFAULTS); ``store``: the SampledStore whose box and sampling the spectra follow, "source" (the one sampled,
+    if there) or None (continuous). ParameterError for a dataset not uniformly sampled, too short or too gappy, a bad
+    ``gamma``."""
     ld = read_dataset(path)
     fd, meas, g = lidar_fit_data(ld, gamma)
     store = sampled_store(ld) if store == "source" else store
@@ -206,8 +185,7 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     keep = _passed(bands, model)
     rho = _rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands)
     data, factor, corr = bands.values["uu"][keep], (bands.var_factor["uu"] * rho)[keep], bands.band_corr[keep][:, keep]
-    r_ae, r_l = ranges.RANGES["ae"], ranges.RANGES["length_scale_m"]
-    lo, hi = np.log([AE_MIN, r_l.lo]), np.log([r_ae.hi, r_l.hi])
+    lo, hi = _bounds(("ae", "length_scale_m"))
     x = np.array([math.log(np.median(data / model.expected(1.0, 30.0)[keep])), math.log(30.0)])
     converged = False
     for _ in range(PASSES):

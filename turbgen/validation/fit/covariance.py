@@ -9,12 +9,10 @@ from the model (``model.BandModel.coherency``) at each band's centre, so the cov
 semi-definite by construction. Bands are joined by the correlation of Hann bins (``joined``): the Schur product of
 that PD correlation with the Gram matrix of the per-band square roots, positive definite when every band's block is.
 
-The band-centre coherencies miss that the lowest bins collect lines from ~0.3 to ~2 x their frequency by leakage,
-which are more coherent across points and, below a segment's lowest bin, across many segments. On a periodic record
-the Welch estimate of a bin is a quadratic form in the record's DFT lines Y_q, so its covariance is exact from the
-lines' cross-spectra (``line_covariance``: Isserlis over the segment pairs, as ``turbgen.validation.welch_variance``
-does for one point): it replaces the covariance of the bands within bins 1 .. EXACT_BINS (``spliced``), for a store
-and for a sensor's record taken as periodic.
+The lowest bins collect by leakage lines from ~0.3 to ~2 x their frequency, more coherent across points and segments
+than the band centre says. On a periodic record (a store, or a sensor's record taken as periodic) a bin's Welch
+estimate is a quadratic form in the DFT lines Y_q: ``line_covariance`` (Isserlis over the segment pairs) gives the
+exact covariance of the bands within bins 1 .. EXACT_BINS, ``spliced`` in.
 """
 
 from __future__ import annotations

@@ -100,20 +100,9 @@ def detrended(x: np.ndarray, where) -> tuple[np.ndarray, list]:
 
 
 def data_from_points(ps: PointSeries, U_m_s: float | None = None) -> FitData:
-    """FitData of a point-series file: every sensor's u, v, w, detrended (module docstring).
-
-    Parameters
-    ----------
-    ps : PointSeries
-        The file (uniform sample times).
-    U_m_s : float, optional
-        Mean wind speed [m/s]; default the mean of u for total-wind data (needed otherwise).
-
-    Raises
-    ------
-    ParameterError
-        Non-uniform sample times, or no U for fluctuation data.
-    """
+    """FitData of a point-series file ``ps`` (uniform sample times): every sensor's u, v, w, detrended (module
+    docstring); ``U_m_s`` [m/s] defaults to the mean of u of total-wind data. ParameterError for non-uniform sample
+    times, or no U for fluctuation data."""
     where = f"point-series file {ps.source}"
     steps = np.diff(ps.time_s)
     dt = float(steps.mean())

@@ -14,14 +14,12 @@ of a band's auto-spectrum (1 / K_eff times the point-correlation sum and the ban
 gives (1 - rho^2)^2 c / 2, and E r = rho - rho (1 - rho^2) c / 4 to the same order. Bands covary through
 ``BandSpectra.band_corr``.
 
-Fit: chi^2 over ln gamma on the range of evo (a scan, then a bounded refinement), weights at the fitted gamma
-(re-weighted until ln gamma moves < MOVE_TOL). The 95 % interval is where chi^2 <= min + 3.84 (profile, ae, L and
-Gamma held: ``ci95_held``), each side widened in quadrature by 1.96 times the sd that the one-point fit adds (delta
-method): ln gamma-hat = x(r, theta-hat) with theta = (ln ae, ln L, Gamma), so Var adds s^T Sigma s + 2 s^T G C a, s
-the slope d x / d theta (secant over one sd), Sigma and G the one-point fit's covariance and gain d theta / d F, a
-= d x / d r and C the covariance of the co-coherences with the band spectra, which is not small (``evo_cross``). An
-interval reaching the top of the range means the frozen field (Taylor, gamma -> inf) is not excluded: gamma is not
-identified, and the result says so beside chi^2 of the frozen limit.
+Fit: chi^2 over ln gamma on the range of evo (scan, bounded refinement), re-weighted at the fitted gamma until ln
+gamma moves < MOVE_TOL. 95 % interval: chi^2 <= min + 3.84 with ae, L, Gamma held (``ci95_held``), each side widened
+in quadrature by 1.96 x the one-point fit's share (delta method): Var adds s^T Sigma s + 2 s^T G C a, s = d ln gamma
+/ d (ln ae, ln L, Gamma) (secant over one sd), Sigma and G the one-point fit's covariance and gain, a = d ln gamma /
+d r, C the covariance of co-coherences and band spectra (``evo_cross``). An interval reaching the top of the range
+does not exclude the frozen field (gamma -> inf): gamma is then not identified, and the result says so.
 """
 
 from __future__ import annotations
@@ -265,24 +263,9 @@ class _Problem:
 
 
 def fit_evolution(data: FitData, params: MannParams, nperseg: int, fit: MannFit | None = None) -> EvoFit | str:
-    """gamma fitted to the longitudinal coherence of ``data`` (module docstring), or one line saying why not.
-
-    Parameters
-    ----------
-    data : FitData
-        The fit data (u and the positions of its columns).
-    params : MannParams
-        ae, L and Gamma of the one-point fit (held).
-    nperseg : int
-        Welch segment length [samples] of the one-point fit.
-    fit : MannFit, optional
-        The one-point fit of ``data`` whose uncertainty the interval carries; None: ``params`` held exact.
-
-    Returns
-    -------
-    EvoFit or str
-        The fit, or why there is none (no two u points along x at one (y, z)).
-    """
+    """EvoFit of gamma to the longitudinal coherence of ``data`` (module docstring), or one line saying why not (no two
+    u points along x at one (y, z)). ``params``: ae, L, Gamma of the one-point fit (held); ``nperseg`` [samples]: its
+    Welch segments; ``fit``: that MannFit, whose uncertainty the interval carries (None: ``params`` exact)."""
     pairs = x_pairs(data.u_xyz_m) if "u" in data.series else {}
     if not pairs:
         return ("evo_time_s not fitted: the data hold no two u series at one (y, z) and different x (two masts "

@@ -121,24 +121,9 @@ def fit_spectrum(model: KaimalBands, c: str, x0, iss) -> tuple:
 
 
 def fit_kaimal_data(data: FitData, nperseg: int | None = None) -> KaimalFit:
-    """Fit the Kaimal spectra and the u coherence to ``data`` (module docstring).
-
-    Parameters
-    ----------
-    data : FitData
-        Fluctuation series (``load_fit_data``); of a store with several planes only the first plane is used.
-    nperseg : int, optional
-        Welch segment length [samples]; default ``estimators.default_nperseg``.
-
-    Returns
-    -------
-    KaimalFit
-
-    Raises
-    ------
-    ParameterError
-        For a record too short or too gappy for the Welch estimates (``spectra.estimate_bands``).
-    """
+    """The KaimalFit of the Kaimal spectra and the u coherence to ``data`` (FitData; of a store with several planes the
+    first plane; module docstring); ``nperseg`` [samples] defaults to ``estimators.default_nperseg``. ParameterError
+    for a record too short or too gappy for the Welch estimates (``spectra.estimate_bands``)."""
     from turbgen.validation.fit.kaimal_coherence import fit_coherence
     from turbgen.validation.fit.kaimal_result import KaimalFit
 

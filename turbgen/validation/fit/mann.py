@@ -1,23 +1,13 @@
 """Fit ae, L and Gamma of the Mann (1994) model to the Welch spectra of measured or generated data.
 
-Generalised least squares over the band estimates of F_uu, F_vv, F_ww and the u-w co-spectrum (``spectra``), the
-residuals whitened (Cholesky) by the estimates' joint covariance at the model's expected spectra and cross-spectra
-between the points (``covariance``: all four spectra of a band and neighbouring bands coupled),
-so that sum r^2 is chi^2 with n_bands - n_parameters degrees of freedom when the model holds. The parameters are x =
-(ln ae, ln L, Gamma) within the ranges of ``turbgen.theory.ranges``; scipy.optimize.least_squares (trust region
-reflective, bounds) minimises; the weights and (for a store) the lattice / continuous ratio of the grid model are
-updated from the fitted parameters and the fit repeated until the parameters move by less than MOVE_TOL standard
-deviations (iteratively re-weighted least squares, at most PASSES passes). Within a pass the ratio follows L and
-Gamma to first order (``BandModel.update_ratio``), so that J holds its dependence on them: held fixed, it left ln ae's
-sd 10 % short for a 4-sensor mast (benchmarks/fit.md). The covariance of x is (J^T J)^-1 of the whitened residuals
-(the Gauss-Newton covariance (J^T W J)^-1, W the inverse joint covariance); the 95 % intervals are x +- 1.96 sd,
-exponentiated for ae and L.
-
-The eddy lifetime (Guo et al. 2023, Eq. 6-7, or Mann's 1994, their Eq. 4) is the data's: a turbgen store's own,
-else the ``lifetime`` asked for (default the generator's, "guo").
-
-Identifiability: Gamma (the anisotropy) needs at least two velocity components' spectra; with one it is held at the
-default and the result says so. A fit that does not converge or ends on a range boundary is flagged.
+Generalised least squares in x = (ln ae, ln L, Gamma) over the band estimates of F_uu, F_vv, F_ww and the u-w
+co-spectrum (``spectra``), whitened by the estimates' joint covariance at the model (``covariance``), so that sum r^2
+is chi^2 with n_bands - n_parameters degrees of freedom; bounded by ``turbgen.theory.ranges``. The weights and a store's
+lattice / continuous ratio are updated at the fitted parameters until they move by < MOVE_TOL sd (at most PASSES);
+within a pass the ratio follows L and Gamma to first order (``BandModel.update_ratio``): held fixed, it left ln ae's
+sd 10 % short (benchmarks/fit.md). cov(x) = (J^T J)^-1; 95 % intervals x +- 1.96 sd, exponentiated for ae and L.
+The eddy lifetime (Guo et al. 2023, Eq. 6-7, or Mann 1994, Eq. 4) is a turbgen store's own, else ``lifetime``.
+Gamma needs two components' spectra; with one it is held at the default and the result says so.
 """
 
 from __future__ import annotations
@@ -125,30 +115,11 @@ def _solve(bands, model, used, free, held, p, cov):
 
 def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra | None = None,
                   lifetime: str | None = None) -> MannFit:
-    """Fit the Mann model to ``data`` (module docstring).
-
-    Parameters
-    ----------
-    data : FitData
-        Fluctuation series (``turbgen.validation.fit.data.load_fit_data``).
-    nperseg : int, optional
-        Welch segment length [samples]; default ``estimators.default_nperseg``.
-    bands : BandSpectra, optional
-        Band estimates to fit instead of those of ``data`` (synthetic spectra with known noise: the tests).
-    lifetime : {"guo", "mann"}, optional
-        The eddy lifetime of the model (``data_lifetime``).
-
-    Returns
-    -------
-    MannFit
-        Values, 95 % intervals, chi^2 / dof, flags, the band spectra and the fitted model.
-
-    Raises
-    ------
-    ParameterError
-        For a record too short or too gappy for the Welch estimates (``spectra.estimate_bands``), or a ``lifetime``
-        other than a store's own.
-    """
+    """Fit the Mann model to ``data`` (FitData, module docstring): a MannFit with values, 95 % intervals, chi^2 / dof,
+    flags, the band spectra and the fitted model. ``nperseg`` [samples] defaults to ``estimators.default_nperseg``;
+    ``bands`` replaces the band estimates of ``data`` (synthetic spectra with known noise: the tests); ``lifetime``
+    as in ``data_lifetime``. ParameterError for a record too short or too gappy for the Welch estimates, or a
+    ``lifetime`` other than a store's own."""
     lifetime = data_lifetime(data, lifetime)
     bands = estimate_bands(data, nperseg) if bands is None else bands
     model = BandModel(bands, data.U_m_s, data.grid, data.box, lifetime)

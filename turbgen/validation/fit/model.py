@@ -36,24 +36,14 @@ RATIO_STEP = 1e-3  # step in ln L and Gamma of the ratio's derivatives (``update
 PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 # Eq. 8 between sensors for the weights only: 4 Gauss nodes and 64 angles leave ~2e-4 of F_ii (7x faster)
 WEIGHT_RULE = {"n_gauss": 4, "n_theta": 64}
-REUSE_LN_L, REUSE_GAMMA = 0.05, 0.1
-LINE_NODES = 24  # k1 nodes of the continuous cross-spectra between sensors for ``line_cross`` (smooth in ln k1)  # cross-spectra between points are reused while L and Gamma stay this close
+REUSE_LN_L, REUSE_GAMMA = 0.05, 0.1  # cross-spectra between points are reused while L and Gamma stay this close
+LINE_NODES = 24  # k1 nodes of the continuous cross-spectra between sensors for ``line_cross`` (smooth in ln k1)
 
 
 class BandModel:
-    """Expected band spectra of ``bands`` for Mann parameters (module docstring).
-
-    Parameters
-    ----------
-    bands : BandSpectra
-        The estimates (Welch setup, record length, bands).
-    U_m_s : float
-        Mean wind speed [m/s] (k1 = 2 pi f / U).
-    grid, box : optional
-        The store's grid and periodic box: the grid model; None: the continuous model.
-    lifetime : {"guo", "mann"}, optional
-        The eddy lifetime (``MannParams.lifetime``) of the continuous spectra's table.
-    """
+    """Expected band spectra of ``bands`` (BandSpectra) for Mann parameters (module docstring), k1 = 2 pi f / ``U_m_s``
+    [m/s]: with the store's ``grid`` and periodic ``box`` the grid model, else the continuous one, from the table of
+    the eddy ``lifetime`` (``MannParams.lifetime``)."""
 
     def __init__(self, bands: BandSpectra, U_m_s: float, grid=None, box=None, lifetime: str = "guo"):
         self.bands, self.U, self.grid, self.box, self.lifetime = bands, U_m_s, grid, box, lifetime

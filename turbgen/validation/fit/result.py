@@ -66,8 +66,8 @@ class MannFit:
     f_hz : numpy.ndarray
         Band centres [Hz].
     data, fitted, sd : dict
-        Spectrum ("uu", "vv", "ww", "uw") -> band estimates, the fitted model's expectation of them and their
-        standard deviations, one-sided [m^2 s^-2 Hz^-1].
+        Spectrum ("uu", "vv", "ww", "uw"; "los" of a lidar dataset) -> band estimates, the fitted model's expectation
+        of them and their standard deviations, one-sided [m^2 s^-2 Hz^-1].
     mean_wind : turbgen.validation.fit.mean_wind.MeanWindFit or None
         Shear exponent, roughness, veer and turbulence intensity of total-wind sensor data.
     bootstrap : dict or None

@@ -104,25 +104,10 @@ def segment_dfts(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, np.ndarr
 
 
 def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
-    """Band-averaged Welch spectra of ``data`` and their variance factors (module docstring).
-
-    Parameters
-    ----------
-    data : FitData
-        The fluctuation series.
-    nperseg : int, optional
-        Welch segment length [samples]; default ``default_nperseg(nt)`` (about 15 half-overlapping segments).
-
-    Returns
-    -------
-    BandSpectra
-
-    Raises
-    ------
-    ParameterError
-        If the record is too short for a segment of ``MIN_NPERSEG`` samples, ``nperseg`` is outside [MIN_NPERSEG,
-        nt / 4], or a component has fewer than MIN_SEGMENTS complete segments per column (gaps).
-    """
+    """BandSpectra: band-averaged Welch spectra of ``data`` and their variance factors (module docstring); ``nperseg``
+    [samples] defaults to ``default_nperseg(nt)`` (about 15 half-overlapping segments). ParameterError for a record
+    shorter than 4 MIN_NPERSEG, ``nperseg`` outside [MIN_NPERSEG, nt / 4], or a component with fewer than
+    MIN_SEGMENTS complete segments per column (gaps)."""
     nt = data.nt
     if nt < 4 * MIN_NPERSEG:
         raise ParameterError(f"{data.source}: {nt} samples are too short a record to fit (needs >= {4 * MIN_NPERSEG}: "

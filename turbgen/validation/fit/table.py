@@ -1,15 +1,9 @@
 """The Mann one-point spectra tabulated in (k1 L, Gamma): what makes a fit take seconds.
 
-The one-point spectra scale exactly as F_ij(k1; ae, L, Gamma) = ae L^(5/3) f_ij(k1 L, Gamma): the Mann (1994) tensor
-(Eq. 13-17) depends on k and L only through k L, its energy spectrum being ae k^(-5/3) times a function of k L, and
-the quadrature over (k2, k3) of F_ij (Eq. 8 of Guo et al. 2023) then gives a function of k1 L. f_ij (ae = 1, L = 1 m)
-is tabulated by ``turbgen.theory.mann_spectra.one_point_spectra`` on X_NODES (8 per decade of k1 L) times
-GAMMA_NODES (0 .. 20, the range of Gamma, steps GAMMA_STEP) and interpolated: cubic spline in log k1 L of log f_ii
-and of the u-w correlation spectrum f_13 / sqrt(f_11 f_33), four-node Lagrange cubic in Gamma; beyond the largest
-k1 L the inertial-range slopes (-5/3, and -7/3 for f_13) continue it. One table per eddy lifetime (Guo et al. 2023,
-Eq. 6-7, and Mann's 1994, their Eq. 4), built by ``python -m turbgen.validation.fit.table`` into TABLE_PATHS (shipped
-with the package; tests/validate/test_fit_mann.py recomputes columns of both and compares the interpolation with
-direct quadrature).
+F_ij(k1; ae, L, Gamma) = ae L^(5/3) f_ij(k1 L, Gamma) exactly (the Mann (1994) tensor, Eq. 13-17, depends on k L
+only; Guo et al. 2023, Eq. 8). f_ij is tabulated on X_NODES x GAMMA_NODES and interpolated: cubic spline in log k1 L
+of log f_ii and of rho_13 = f_13 / sqrt(f_11 f_33), Lagrange cubic in Gamma, inertial slopes beyond the largest k1 L.
+One table per eddy lifetime, built by ``python -m turbgen.validation.fit.table`` into TABLE_PATHS (shipped).
 """
 
 from __future__ import annotations
@@ -59,22 +53,8 @@ def load_table(lifetime: str = "guo") -> np.ndarray:
 
 
 def scaled_spectra(x: np.ndarray, gamma: float, lifetime: str = "guo") -> dict:
-    """f_ij(k1 L, Gamma) (module docstring) at ``x`` = k1 L > 0, two-sided [m^3 s^-2 per ae L^(5/3)]; F13 < 0.
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        k1 L [-], > 0.
-    gamma : float
-        Gamma [-], in the range of Gamma.
-    lifetime : {"guo", "mann"}, optional
-        The eddy lifetime of the table (``MannParams.lifetime``).
-
-    Returns
-    -------
-    dict
-        "uu", "vv", "ww", "uw" -> f(x) like ``x``.
-    """
+    """f_ij(k1 L, Gamma) (module docstring), two-sided [m^3 s^-2 per ae L^(5/3)], at ``x`` = k1 L > 0 for Gamma
+    ``gamma`` and the table of ``lifetime`` ("guo" or "mann"): {"uu", "vv", "ww", "uw" -> f(x)}; F13 < 0."""
     g = ranges.check("gamma", gamma, "Gamma (fitted, -)")
     last = GAMMA_NODES.size - 1
     i0 = int(np.clip(np.floor(g / GAMMA_STEP) - 1, 0, last - 3))
