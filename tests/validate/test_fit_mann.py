@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -129,6 +130,12 @@ def test_gaps_are_skipped_and_reported(fields):
 
 def test_bad_input_is_one_line(fields, tmp_path):
     ps = _mast(fields[0])
+    blank = replace(ps, sensors=(replace(ps.sensors[0], series=ps.sensors[0].series | {
+        "u": np.full_like(ps.sensors[0].series["u"], np.nan)}),) + ps.sensors[1:])
+    with warnings.catch_warnings():  # a column of NaN only: refused in one line, no numpy warning on the way
+        warnings.simplefilter("error")
+        with pytest.raises(ParameterError, match="0 complete Welch segments"):
+            turbgen.fit_mann(blank, U=12.0)
     short = replace(ps, time_s=ps.time_s[:100], sensors=tuple(
         replace(s, series={c: v[:100] for c, v in s.series.items()}) for s in ps.sensors))
     with pytest.raises(ParameterError, match="too short"):

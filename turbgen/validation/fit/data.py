@@ -90,9 +90,11 @@ def detrended(x: np.ndarray, where) -> tuple[np.ndarray, list]:
     t = np.arange(x.shape[0], dtype=float)[:, None]
     xz = np.where(ok, x, 0.0)
     n, st, sx = w.sum(0), (w * t).sum(0), xz.sum(0)
-    slope = (n * (t * xz).sum(0) - st * sx) / (n * (w * t * t).sum(0) - st**2)
-    out = x - (slope * t + (sx - slope * st) / n)
-    rise, sigma = np.abs(slope) * (x.shape[0] - 1), np.sqrt(np.nanmean(out**2, axis=0))
+    with np.errstate(invalid="ignore", divide="ignore"):  # a column without 2 values stays NaN (refused later)
+        slope = (n * (t * xz).sum(0) - st * sx) / (n * (w * t * t).sum(0) - st**2)
+        out = x - (slope * t + (sx - slope * st) / n)
+    rise = np.abs(slope) * (x.shape[0] - 1)
+    sigma = np.sqrt(np.nansum(out**2, axis=0) / np.maximum(np.isfinite(out).sum(0), 1))
     notes = [f"{where(k)}: a trend of {rise[k]:.3g} m/s over the record, more than its standard deviation "
              f"{sigma[k]:.3g} m/s, was removed (the record may not be stationary)"
              for k in np.flatnonzero(rise > sigma)]
