@@ -97,27 +97,34 @@ def line_covariance(cross: np.ndarray, setup, nt: int, pair_index: np.ndarray, s
     (Isserlis 1918), summed over the segment pairs and averaged over the point pairs of the two spectra.
 
     ``cross`` (Q, 3, 3, D) are S_q at the lines q = 1 .. Q and the separations of ``pair_index`` (``separations``);
-    S_-q = conj S_q (a real record).
+    S_-q = conj S_q (a real record), so A = u Re S + i v Im S over q > 0, in real arithmetic. Only bins m <= n are
+    formed (the covariance is symmetric), T is taken mod nt (the phase's period), and the segment and pair counts
+    weigh a Gram matrix of the 9 components' (A, B) per bin pair: the same sums, regrouped.
     """
-    nq = cross.shape[0]
-    q = np.arange(-nq, nq + 1)
-    s_q = np.concatenate([np.conj(cross[::-1]), np.zeros_like(cross[:1]), cross]).reshape(q.size, -1)
-    c = segment_gain(np.arange(1, EXACT_BINS + 1)[:, None], q / (nt * setup.dt_s), setup)  # (M, nq)
-    c[:, nq] = 0.0  # the mean is removed from every segment
+    nq, (m, n) = cross.shape[0], np.triu_indices(EXACT_BINS)
+    q = np.concatenate([np.arange(1, nq + 1), -np.arange(1, nq + 1)])  # the lines q, then -q
+    c = segment_gain(np.arange(1, EXACT_BINS + 1)[:, None], q / (nt * setup.dt_s), setup)  # (M, 2Q)
     starts = np.asarray(segment_starts(nt, setup))
-    lag, count = np.unique(starts[:, None] - starts[None, :], return_counts=True)
-    w = c[:, None, :] * np.exp(2j * np.pi * np.outer(lag, q) / nt)  # (M, T, nq)
-    shape = (EXACT_BINS, EXACT_BINS, lag.size, 3, 3, -1)
-    a = (np.einsum("mtq,nq->mntq", w, np.conj(c)).reshape(-1, q.size) @ s_q).reshape(shape)
-    b = (np.einsum("mtq,nq->mntq", w, c[:, ::-1]).reshape(-1, q.size) @ s_q).reshape(shape)
-    out = np.empty((EXACT_BINS, len(used), EXACT_BINS, len(used)))
+    lag, count = np.unique((starts[:, None] - starts[None, :]) % nt, return_counts=True)
+    w = (np.stack([c[m] * np.conj(c[n]), c[m] * np.roll(c[n], nq, axis=1)])[:, :, None]
+         * np.exp(2j * np.pi * np.outer(lag, q) / nt))  # (2, P, T, 2Q): the weights of A, B at q, -q
+    u, v = w[..., :nq] + w[..., nq:], w[..., :nq] - w[..., nq:]
+    left = np.stack([np.concatenate([u.real, -v.imag], -1), np.concatenate([u.imag, v.real], -1)], 3)
+    left, s_q = left.reshape(-1, 2 * nq), np.concatenate([cross.real, cross.imag]).reshape(2 * nq, 9, -1)
+    gram, tri = {}, np.empty((m.size, len(used), len(used)))
     for x, s in enumerate(used):
         for y, t in enumerate(used):
             (i, j), (k, l) = ((INDEX[ch] for ch in name) for name in (s, t))
             counts = np.bincount(pair_index[np.ix_(sets[s], sets[t])].ravel(), minlength=cross.shape[-1])
-            terms = (a[:, :, :, i, k] * np.conj(a[:, :, :, j, l]) + b[:, :, :, i, l] * np.conj(b[:, :, :, j, k])
-                     + a[:, :, :, i, l] * np.conj(a[:, :, :, j, k]) + b[:, :, :, i, k] * np.conj(b[:, :, :, j, l]))
-            out[:, x, :, y] = 0.5 * np.einsum("mntd,t,d->mn", terms.real, count, counts) / (sets[s].size * sets[t].size)
+            if (key := counts.tobytes()) not in gram:  # sum_T,d count_T counts_d X_p X_r, X = Re, Im of A, B
+                ab = (left @ (s_q * np.sqrt(counts)).reshape(2 * nq, -1)).reshape(2, m.size, 2 * lag.size, 9, -1)
+                gram[key] = np.einsum("zptkl,t->zpkl", ab @ ab.swapaxes(-1, -2), np.repeat(count, 2)).reshape(
+                    2, m.size, 3, 3, 3, 3)
+            g = gram[key]
+            tri[:, x, y] = (g[0, :, i, k, j, l] + g[1, :, i, l, j, k] + g[0, :, i, l, j, k] + g[1, :, i, k, j, l]
+                            ) / (2 * sets[s].size * sets[t].size)
+    out = np.empty((EXACT_BINS, len(used), EXACT_BINS, len(used)))
+    out[m, :, n, :], out[n, :, m, :] = tri, tri.swapaxes(1, 2)
     scale = setup.scale[1 : EXACT_BINS + 1] / starts.size
     return out * scale[:, None, None, None] * scale[None, None, :, None]
 
