@@ -97,9 +97,8 @@ def line_covariance(cross: np.ndarray, setup, nt: int, pair_index: np.ndarray, s
     (Isserlis 1918), summed over the segment pairs and averaged over the point pairs of the two spectra.
 
     ``cross`` (Q, 3, 3, D) are S_q at the lines q = 1 .. Q and the separations of ``pair_index`` (``separations``);
-    S_-q = conj S_q (a real record), so A = u Re S + i v Im S over q > 0, in real arithmetic. Only bins m <= n are
-    formed (the covariance is symmetric), T is taken mod nt (the phase's period), and the segment and pair counts
-    weigh a Gram matrix of the 9 components' (A, B) per bin pair: the same sums, regrouped.
+    S_-q = conj S_q (a real record). The same sums, regrouped: A = u Re S + i v Im S over q > 0 (real arithmetic),
+    bins m <= n (symmetric), T mod nt (the phase's period), the counts weighing a Gram of the S^ik per bin pair.
     """
     nq, (m, n) = cross.shape[0], np.triu_indices(EXACT_BINS)
     q = np.concatenate([np.arange(1, nq + 1), -np.arange(1, nq + 1)])  # the lines q, then -q
@@ -110,19 +109,23 @@ def line_covariance(cross: np.ndarray, setup, nt: int, pair_index: np.ndarray, s
          * np.exp(2j * np.pi * np.outer(lag, q) / nt))  # (2, P, T, 2Q): the weights of A, B at q, -q
     u, v = w[..., :nq] + w[..., nq:], w[..., :nq] - w[..., nq:]
     left = np.stack([np.concatenate([u.real, -v.imag], -1), np.concatenate([u.imag, v.real], -1)], 3)
-    left, s_q = left.reshape(-1, 2 * nq), np.concatenate([cross.real, cross.imag]).reshape(2 * nq, 9, -1)
+    flat = cross.reshape(nq, 9, -1)  # the 9 S^ik, each distinct one formed once (the model's S^ki = S^ik)
+    keep, inv = np.unique([next(p for p in range(9) if np.array_equal(flat[:, p], flat[:, r])) for r in range(9)],
+                          return_inverse=True)
+    left, s_q = left.reshape(-1, 2 * nq), np.concatenate([flat[:, keep].real, flat[:, keep].imag])
     gram, tri = {}, np.empty((m.size, len(used), len(used)))
     for x, s in enumerate(used):
         for y, t in enumerate(used):
             (i, j), (k, l) = ((INDEX[ch] for ch in name) for name in (s, t))
+            ik, jl, il, jk = inv[[3 * i + k, 3 * j + l, 3 * i + l, 3 * j + k]]
             counts = np.bincount(pair_index[np.ix_(sets[s], sets[t])].ravel(), minlength=cross.shape[-1])
             if (key := counts.tobytes()) not in gram:  # sum_T,d count_T counts_d X_p X_r, X = Re, Im of A, B
-                ab = (left @ (s_q * np.sqrt(counts)).reshape(2 * nq, -1)).reshape(2, m.size, 2 * lag.size, 9, -1)
-                gram[key] = np.einsum("zptkl,t->zpkl", ab @ ab.swapaxes(-1, -2), np.repeat(count, 2)).reshape(
-                    2, m.size, 3, 3, 3, 3)
+                ab = (left @ (s_q * np.sqrt(counts)).reshape(2 * nq, -1)).reshape(2, m.size, 2 * lag.size, keep.size,
+                                                                                  -1)
+                gram[key] = np.einsum("zptkl,t->zpkl", ab @ ab.swapaxes(-1, -2), np.repeat(count, 2))
             g = gram[key]
-            tri[:, x, y] = (g[0, :, i, k, j, l] + g[1, :, i, l, j, k] + g[0, :, i, l, j, k] + g[1, :, i, k, j, l]
-                            ) / (2 * sets[s].size * sets[t].size)
+            tri[:, x, y] = (g[0, :, ik, jl] + g[1, :, il, jk] + g[0, :, il, jk] + g[1, :, ik, jl]) / (
+                2 * sets[s].size * sets[t].size)
     out = np.empty((EXACT_BINS, len(used), EXACT_BINS, len(used)))
     out[m, :, n, :], out[n, :, m, :] = tri, tri.swapaxes(1, 2)
     scale = setup.scale[1 : EXACT_BINS + 1] / starts.size
