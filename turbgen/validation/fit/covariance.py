@@ -110,8 +110,8 @@ def line_covariance(cross: np.ndarray, setup, nt: int, pair_index: np.ndarray, s
     u, v = w[..., :nq] + w[..., nq:], w[..., :nq] - w[..., nq:]
     left = np.stack([np.concatenate([u.real, -v.imag], -1), np.concatenate([u.imag, v.real], -1)], 3)
     flat = cross.reshape(nq, 9, -1)  # the 9 S^ik, each distinct one formed once (the model's S^ki = S^ik)
-    keep, inv = np.unique([next(p for p in range(9) if np.array_equal(flat[:, p], flat[:, r])) for r in range(9)],
-                          return_inverse=True)
+    keep, inv = np.unique([next(p for p in range(9) if p == r or np.array_equal(flat[:, p], flat[:, r]))
+                           for r in range(9)], return_inverse=True)
     left, s_q = left.reshape(-1, 2 * nq), np.concatenate([flat[:, keep].real, flat[:, keep].imag])
     gram, tri = {}, np.empty((m.size, len(used), len(used)))
     for x, s in enumerate(used):
