@@ -107,7 +107,7 @@ def line_covariance(cross: np.ndarray, setup, nt: int, pair_index: np.ndarray, s
     lag, count = np.unique((starts[:, None] - starts[None, :]) % nt, return_counts=True)
     w = (np.stack([c[m] * np.conj(c[n]), c[m] * np.roll(c[n], nq, axis=1)])[:, :, None]
          * np.exp(2j * np.pi * np.outer(lag, q) / nt))  # (2, P, T, 2Q): the weights of A, B at q, -q
-    u, v = w[..., :nq] + w[..., nq:], w[..., :nq] - w[..., nq:]
+    u, v = w[..., :nq] + w[..., nq:], w[..., :nq] - w[..., nq:]  # the weights at q plus, minus those at -q
     left = np.stack([np.concatenate([u.real, -v.imag], -1), np.concatenate([u.imag, v.real], -1)], 3)
     flat = cross.reshape(nq, 9, -1)  # the 9 S^ik, each distinct one formed once (the model's S^ki = S^ik)
     keep, inv = np.unique([next(p for p in range(9) if p == r or np.array_equal(flat[:, p], flat[:, r]))
@@ -120,8 +120,8 @@ def line_covariance(cross: np.ndarray, setup, nt: int, pair_index: np.ndarray, s
             ik, jl, il, jk = inv[[3 * i + k, 3 * j + l, 3 * i + l, 3 * j + k]]
             counts = np.bincount(pair_index[np.ix_(sets[s], sets[t])].ravel(), minlength=cross.shape[-1])
             if (key := counts.tobytes()) not in gram:  # sum_T,d count_T counts_d X_p X_r, X = Re, Im of A, B
-                ab = (left @ (s_q * np.sqrt(counts)).reshape(2 * nq, -1)).reshape(2, m.size, 2 * lag.size, keep.size,
-                                                                                  -1)
+                ab = left @ (s_q * np.sqrt(counts)).reshape(2 * nq, -1)  # Re, Im of A, B times sqrt(counts_d)
+                ab = ab.reshape(2, m.size, 2 * lag.size, keep.size, -1)
                 gram[key] = np.einsum("zptkl,t->zpkl", ab @ ab.swapaxes(-1, -2), np.repeat(count, 2))
             g = gram[key]
             tri[:, x, y] = (g[0, :, ik, jl] + g[1, :, il, jk] + g[0, :, il, jk] + g[1, :, ik, jl]) / (
