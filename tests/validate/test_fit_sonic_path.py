@@ -25,6 +25,8 @@ from turbgen.theory.params import MannParams
 from turbgen.theory.sonic_path import A_NODES, _g, path_transfer
 from turbgen.validation.fit.data import load_fit_data
 
+from test_fit_mann import sonic_series
+
 Z999 = 3.2905267314919255  # standard normal 99.95 % quantile: the two-sided 99.9 % interval
 TRUTH = (0.08, 30.0, 3.2)  # ae, L, Gamma
 PAIRS = ((0, 0), (1, 1), (2, 2), (0, 2))
@@ -130,12 +132,7 @@ def test_a_path_averaged_record_is_fitted_without_bias_only_with_its_path():
     nodes = np.geomspace(0.01 / p, k1[-1] * 1.01, 14)
     for name, t in zip(("F11", "F22", "F33", "F13"), mann_transfer(nodes, params, p).values()):
         F[name] = F[name] * np.interp(np.log(k1), np.log(nodes), t, left=1.0)
-    z = np.random.default_rng(1).standard_normal((6, n // 2 - 1))
-    z = (z[:3] + 1j * z[3:]) / np.sqrt(2)
-    a = np.sqrt(F["F11"] * dk)  # u, w jointly: the Cholesky factor of dk [[F11, F13], [F13, F33]]
-    b = F["F13"] * dk / a
-    lines = {"u": a * z[0], "v": np.sqrt(F["F22"] * dk) * z[1], "w": b * z[0] + np.sqrt(F["F33"] * dk - b * b) * z[2]}
-    series = {c: np.fft.irfft(np.concatenate([[0], n * x, [0]]), n) for c, x in lines.items()}
+    series = sonic_series(F, dk, n, 1)
     fits = [turbgen.fit_mann(PointSeries("s", dt * np.arange(n), (PointSensor("s", 0.0, 0.0, 0.0, None, series,
                                                                                path),), False, None, "sonic"), U=U)
             for path in (p, None)]  # fmt: skip
