@@ -72,6 +72,17 @@ def test_the_isotropic_transfer_has_its_limits():
     assert abs(edge[0] / edge[1] - 1) < 1e-6 and abs(edge[3] / edge[2] * 1.001 - 1) < 1e-9
 
 
+def test_the_transfer_is_near_moores():
+    """Moore's (1986) published w transfer for a vertical path, T = (4/a) (1 + e^(-a)/2 - 3 (1 - e^(-a)) / (2a)) with
+    a = k1 p = 2 pi f p / U (the one eddy-covariance software applies, e.g. EddyPro), is an approximation: 1 - a^2/12
+    at small a where the inertial range gives 1 - T ~ a^(5/3), and 4 / a at large a against our 3.86 / a. Ours is
+    within 0.03 of it everywhere (measured 0.028 at a = 2.5; at a = 1, 0.922 against 0.943) and below it."""
+    a = np.geomspace(0.01, 100.0, 81)
+    moore = 4 / a * (1 + np.exp(-a) / 2 - 3 * (1 - np.exp(-a)) / (2 * a))
+    ours = path_transfer(a)["ww"]
+    assert np.all(ours <= moore) and np.max(moore - ours) < 0.03
+
+
 def _file(tmp_path, paths, n=512):
     rng = np.random.default_rng(1)
     sensors = [{"name": f"s{k}", "x_m": 0.0, "y_m": 0.0, "z_m": 10.0 * k, **({} if p is None else {"path_m": p}),
