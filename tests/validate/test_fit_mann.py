@@ -211,6 +211,17 @@ def test_a_store_of_another_factor1_is_refused(tmp_path):
         "(Guo et al. 2023, Eq. 7)"]
 
 
+def sonic_series(F: dict, dk: float, n: int, seed: int) -> dict:
+    """u, v, w [m/s], n samples, Gaussian with the two-sided spectra F (F11, F22, F33, F13 at the lines 1 .. n/2 - 1,
+    dk [rad/m] apart); u and w jointly: the Cholesky factor of dk [[F11, F13], [F13, F33]]."""
+    z = np.random.default_rng(seed).standard_normal((6, n // 2 - 1))
+    z = (z[:3] + 1j * z[3:]) / np.sqrt(2)
+    a = np.sqrt(F["F11"] * dk)
+    b = F["F13"] * dk / a
+    lines = {"u": a * z[0], "v": np.sqrt(F["F22"] * dk) * z[1], "w": b * z[0] + np.sqrt(F["F33"] * dk - b * b) * z[2]}
+    return {c: np.fft.irfft(np.concatenate([[0], n * x, [0]]), n) for c, x in lines.items()}
+
+
 def test_sensor_series_of_the_mann_lifetime_are_fitted_with_it():
     """One sensor's u, v, w drawn from the continuous model with Mann's lifetime (the one-point spectra and u-w
     co-spectrum at the record's lines, Gaussian): the lifetime="mann" fit holds the truth in its 99.9 % intervals,
@@ -219,13 +230,7 @@ def test_sensor_series_of_the_mann_lifetime_are_fitted_with_it():
     draw of seed 7 puts Gamma 3.3 sd low with either lifetime fitted to its own data (checked, seeds 7-12)."""
     n, dt, U = 8192, 0.5, 12.0
     dk = 2 * np.pi / (n * dt * U)
-    F = one_point_spectra(dk * np.arange(1, n // 2), MannParams(*TRUTH, "mann"))
-    z = np.random.default_rng(9).standard_normal((6, n // 2 - 1))
-    z = (z[:3] + 1j * z[3:]) / np.sqrt(2)
-    a = np.sqrt(F["F11"] * dk)  # u, w jointly: the Cholesky factor of dk [[F11, F13], [F13, F33]]
-    b = F["F13"] * dk / a
-    lines = {"u": a * z[0], "v": np.sqrt(F["F22"] * dk) * z[1], "w": b * z[0] + np.sqrt(F["F33"] * dk - b * b) * z[2]}
-    series = {c: np.fft.irfft(np.concatenate([[0], n * x, [0]]), n) for c, x in lines.items()}
+    series = sonic_series(one_point_spectra(dk * np.arange(1, n // 2), MannParams(*TRUTH, "mann")), dk, n, 9)
     ps = PointSeries("s", dt * np.arange(n), (PointSensor("s", 0.0, 0.0, 0.0, None, series),), False, None, "sonic")
     fit, guo = (turbgen.fit_mann(ps, U=U, lifetime=lt) for lt in ("mann", None))
     assert fit.ok and fit.lifetime == "mann" and guo.lifetime == "guo"

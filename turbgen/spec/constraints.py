@@ -28,7 +28,8 @@ COMPONENTS = ("u", "v", "w")
 @dataclass(frozen=True, eq=False)
 class PointSensor:
     """One sensor: x_m [m upstream], y_m [m], and z_m [m from the hub] or height_m [m above ground] (one of
-    them), and ``series``: component ("u", "v", "w") -> values [m/s] (NaN: missing).
+    them), ``series``: component ("u", "v", "w") -> values [m/s] (NaN: missing), and a sonic's path_m [m] (None: a
+    point; only the fit uses it: turbgen.theory.sonic_path).
     """
 
     name: str
@@ -37,6 +38,7 @@ class PointSensor:
     z_m: float | None
     height_m: float | None
     series: dict
+    path_m: float | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,7 +85,8 @@ def point_series_from_mapping(data, source: str) -> PointSeries:
             if not np.isfinite(v).any():
                 raise ParameterError(f"{where}: {name} {c}_m_s has no value (all missing)")
             series[c] = v
-        sensors.append(PointSensor(name, float(s["x_m"]), float(s["y_m"]), s.get("z_m"), s.get("height_m"), series))
+        sensors.append(PointSensor(name, float(s["x_m"]), float(s["y_m"]), s.get("z_m"), s.get("height_m"), series,
+                                   s.get("path_m")))
     total = bool(data.get("total_wind", False))
     return PointSeries(data.get("name", Path(source).stem), t, tuple(sensors), total, data.get("noise_m_s"), source,
                        mean_wind_spec(data.get("mean_wind"), total, where, Path(source).parent))  # fmt: skip
@@ -140,9 +143,8 @@ def sensor_fluctuations(f: PointSeries, s: PointSensor, U_m_s: float, hub_height
 
 
 def load_point_series(path) -> PointSeries:
-    """Read and check a constraint file (JSON); ParameterError if it cannot be read, is not a regular file,
-    not JSON, nested too deeply, fails the schema or holds inconsistent values.
-    """
+    """Read and check a constraint file (JSON); ParameterError if it cannot be read, is not a regular file, not
+    JSON, nested too deeply, fails the schema or holds inconsistent values."""
     p = Path(path)
     data = parse_document(read_input(p, CONSTRAINTS), "JSON", f"constraint file {p}")
     return point_series_from_mapping(data, str(p))

@@ -4,7 +4,7 @@ Modules (equations of Guo et al. 2023): Mann ``params``, ``eddy_lifetime`` (Eq. 
 ``mann_spectra`` (Eq. 8-10), ``mann_quadrature``, ``space_time`` (Eq. 13, 16); Kaimal/IEC ``kaimal`` (Eq. 11),
 ``coherence_models`` (Eq. 12, 18); ``rotor_effective`` (Eq. 24-25); the lidar's ``lidar_geometry``,
 ``lidar_weighting``, ``lidar_preview`` (Eq. 29-35), ``lidar_lattice``, ``lidar_control``, ``lidar_los``;
-``lattice``, ``ranges`` and ``fitting`` (Eq. 20-22).
+``lattice``, ``ranges``, ``fitting`` (Eq. 20-22) and ``sonic_path`` (a sonic anemometer's path averaging).
 
 The main functions are also names of this package (``turbgen.theory.one_point_spectra``, ... : see ``__all__``),
 each imported from its module on first use.

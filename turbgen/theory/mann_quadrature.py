@@ -102,13 +102,14 @@ def check_k1(k1) -> np.ndarray:
 
 def perpendicular_quadrature(
     k1, params: MannParams, pairs, dy_m: float = 0.0, dz_m: float = 0.0, resolve_m: float = 0.0,
-    resolve_kappa_max: float = np.inf, _rule=None
+    resolve_kappa_max: float = np.inf, _rule=None, weight=None
 ):
     """Angular integrals on the radial nodes of the (k2, k3) plane for every k1 [rad/m] and tensor pair (i, j):
     (kappa, weights, G), (len(k1), n_r) radial nodes [rad/m] and weights [rad^2/m^2] (∫ g kappa dkappa ≈ sum
     weights g; padding nodes weigh 0), G[(i, j)] = ∫_0^{2pi} Phi_ij exp(i kappa d cos(theta - theta_d)) dtheta
     [m^5 s^-2] at the separation (``dy_m``, ``dz_m``) [m]. Without one, the radial panels resolve exp(i kappa
-    ``resolve_m``) below ``resolve_kappa_max`` [rad/m]; ``_rule``: internal overrides of the rule's constants.
+    ``resolve_m``) below ``resolve_kappa_max`` [rad/m]; ``_rule``: internal overrides of the rule's constants;
+    ``weight(pair, k1, kappa, cos theta, sin theta)`` multiplies Phi_ij in the angle integral (no separation).
     """
     k1 = check_k1(k1)
     k1 = np.where(k1 == 0, K1_ZERO / params.length_scale_m, k1)
@@ -165,7 +166,8 @@ def perpendicular_quadrature(
         phi = sheared_tensor_on_circles(k1[sl], kk, beta, cos_t, sin_t, pairs, params.ae, params.length_scale_m)
         for m, p in enumerate(pairs):
             if d == 0:
-                out[p][sl, :nr] = 2.0 * np.pi * phi[m].mean(axis=-1)
+                v = phi[m] if weight is None else phi[m] * weight(p, k1[sl, None, None], kk[..., None], cos_t, sin_t)
+                out[p][sl, :nr] = 2.0 * np.pi * v.mean(axis=-1)
             else:
                 out[p][sl, :nr] = _jacobi_anger(phi[m], kk * d, float(np.arctan2(dz, dy)))
 

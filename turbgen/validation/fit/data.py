@@ -1,13 +1,9 @@
 """The series a fit reads: fluctuations of u, v, w at one or more points, from a point-series file or a store.
 
-A point-series file (turbgen.spec.constraints, the ``turbgen mann --constrain`` format) holds sensors with any of
-u, v, w; a store holds u, v, w on its grid (a sub-lattice of at most STORE_POINTS_PER_AXIS^2 points per plane is
-read: the Welch averages over it are unbiased and the fit's variances are those of the same points). A store's
-records are periodic and stationary by construction and are used as they are (each Welch segment loses its mean, as
-in the validator); a sensor's series is detrended (its least-squares line through the finite values removed: a
-total-wind u loses its mean, a slow drift its trend), and a trend larger than the series' standard deviation is
-said in the result's notes (such a record may not be stationary). Missing values (NaN) stay missing: the Welch
-estimates skip the segments that hold them.
+A store is read at a sub-lattice of at most STORE_POINTS_PER_AXIS^2 points per plane (unbiased Welch averages; the
+fit's variances are those of the same points), its periodic records as they are; a sensor's series is detrended
+(its least-squares line through the finite values removed), a trend larger than its standard deviation said in the
+notes (the record may not be stationary). Missing values (NaN): the Welch estimates skip the segments holding them.
 """
 
 from __future__ import annotations
@@ -59,6 +55,8 @@ class FitData:
         (x [m upstream], y [m], z [m]) of every column of u (the longitudinal coherence: ``fit.evolution``).
     attrs : dict or None
         A field's store attributes (its model and parameters), None for sensor data.
+    path_m : numpy.ndarray or None
+        (N,) sonic path length [m] of every point (0: a point); None: all are points.
     """
 
     source: str
@@ -74,10 +72,18 @@ class FitData:
     columns: dict | None = None
     u_xyz_m: tuple = ()
     attrs: dict | None = None
+    path_m: np.ndarray | None = None
 
     @property
     def nt(self) -> int:
         return next(iter(self.series.values())).shape[0]
+
+    def spectrum_paths(self) -> dict:
+        """Spectrum ("uu", "vv", "ww", "uw") -> (P,) path lengths [m] of the columns averaged into it ({}: points)."""
+        if self.path_m is None:
+            return {}
+        uw = {"uw": self.path_m[self.columns["u"][[a for a, _ in self.uw_columns]]]} if self.uw_columns else {}
+        return {c + c: self.path_m[self.columns[c]] for c in self.series} | uw
 
 
 def detrended(x: np.ndarray, where) -> tuple[np.ndarray, list]:
@@ -132,21 +138,15 @@ def data_from_points(ps: PointSeries, U_m_s: float | None = None) -> FitData:
             for s in ps.sensors for c, v in s.series.items() if np.isnan(v).any()]
     sites = np.array([(s.x_m, s.y_m, s.z_m if s.z_m is not None else s.height_m) for s in ps.sensors], float)
     columns = {c: np.array([k for k, s in enumerate(ps.sensors) if c in s.series]) for c in series}
-    return FitData(ps.source, dt, U, series, uw, notes=tuple(notes + gaps), points=ps,
-                   sites_m=sites, columns=columns,
-                   u_xyz_m=tuple(map(tuple, sites[columns["u"]])) if "u" in columns else ())
+    paths = np.array([s.path_m or 0.0 for s in ps.sensors])
+    return FitData(ps.source, dt, U, series, uw, notes=tuple(notes + gaps), points=ps, sites_m=sites, columns=columns,
+                   u_xyz_m=tuple(map(tuple, sites[columns["u"]])) if "u" in columns else (),
+                   path_m=paths if paths.any() else None)
 
 
 def data_from_store(fs, points=None) -> FitData:
-    """FitData of a field store: u, v, w at a sub-lattice of every plane, or at ``points`` (module docstring).
-
-    Parameters
-    ----------
-    fs : turbgen.store.FieldStore
-        The store; a turbgen Mann store also gives its periodic box (its ``pad_yz``) for the grid's expectation.
-    points : sequence of (y, z) [m], optional
-        Read these points of every plane (``grid_points``) instead of the sub-lattice: sensors cut from the field.
-    """
+    """FitData of a FieldStore ``fs`` (a Mann store also gives its periodic box for the grid's expectation): u, v, w
+    at a sub-lattice of every plane, or at the (y, z) [m] ``points`` (``grid_points``): sensors cut from the field."""
     return _grid_data(lambda c, ix: fs.read_span(c, ix, 0, fs.grid.nt), fs.grid, fs.attrs, str(fs.path), points)
 
 
@@ -212,15 +212,8 @@ def _grid_data(read, grid, attrs: dict, source: str, points=None) -> FitData:
 def load_fit_data(data, U_m_s: float | None = None, points=None) -> FitData:
     """FitData of ``data``: a PointSeries, a FieldStore, an xarray.Dataset of a field, or the path of a point-series
     JSON file or of a store; ``points`` (y, z) [m] restrict a field to those grid points (``grid_points``).
-
-    Raises
-    ------
-    ParameterError
-        For an unreadable or invalid file, a path that is neither a JSON file nor a directory, ``U_m_s`` given
-        for a field (it holds its own), or ``points`` given for point series or off the grid.
-    turbgen.errors.StoreError
-        For a directory that is not a complete turbgen store.
-    """
+    ParameterError for an unreadable or invalid file, a path neither a JSON file nor a directory, ``U_m_s`` for a
+    field (it holds its own), ``points`` for point series or off the grid; StoreError for an incomplete store."""
     from turbgen.store import FieldStore, open_store
 
     if points is not None and (isinstance(data, PointSeries) or (isinstance(data, (str, Path))
@@ -232,8 +225,7 @@ def load_fit_data(data, U_m_s: float | None = None, points=None) -> FitData:
         p = Path(data).expanduser()
         if not p.is_dir():
             if p.suffix.lower() != ".json" and p.exists():
-                raise ParameterError(f"DATA = {str(data)!r} is neither a point-series JSON file nor a store "
-                                     "directory")
+                raise ParameterError(f"DATA = {str(data)!r} is neither a point-series JSON file nor a store directory")
             return data_from_points(load_point_series(p), U_m_s)
         data = open_store(p)
     if U_m_s is not None:

@@ -158,7 +158,7 @@ def fit_kaimal_data(data: FitData, nperseg: int | None = None) -> KaimalFit:
 
 def _first_plane(data: FitData) -> tuple[FitData, list]:
     """``data`` restricted to the points of a store's first plane (several planes: not independent sensors)."""
-    notes = list(data.notes)
+    notes = list(data.notes) + ["the Kaimal fit does not apply the sonic paths (path_m)"] * (data.path_m is not None)
     x_m = [] if data.grid is None else data.grid.x_m  # type: ignore[attr-defined]
     if len(x_m) < 2:
         return data, notes

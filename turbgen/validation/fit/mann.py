@@ -122,9 +122,10 @@ def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra 
     ``lifetime`` other than a store's own."""
     lifetime = data_lifetime(data, lifetime)
     bands = estimate_bands(data, nperseg) if bands is None else bands
-    model = BandModel(bands, data.U_m_s, data.grid, data.box, lifetime)
+    model = BandModel(bands, data.U_m_s, data.grid, data.box, lifetime, data.spectrum_paths())
     used = tuple(s for s in SPECTRA if s in bands.values)
-    notes = list(data.notes)
+    notes = list(data.notes) + ([f"sonic path averaging applied (paths {sorted(set(data.path_m.tolist()))} m; u, v, "
+                                 "w along x, y, z)"] if model.transfer else [])
     held = {}
     if sum(s != "uw" for s in used) < 2:
         held["gamma"] = MANN_DEFAULTS["gamma"]

@@ -5,7 +5,8 @@ Continuous model: F_ij(k1; ae, L, Gamma) = ae L^(5/3) f_ij(k1 L, Gamma), f_ij in
 of the tensor over the generator's box (``turbgen.validation.mann_lattice``, the validator's "theo. (grid)") to the
 continuous spectrum, at N_RATIO_NODES k1 nodes for given parameters (``MannFit`` updates it as the fit moves).
 
-The expected Welch estimate of every bin is that of a periodic line process with these spectra
+A sonic's path (``paths_m``) multiplies the lines of F_ij by T_ij(k1 p) (``turbgen.theory.sonic_path``), averaged
+over the columns. The expected Welch estimate of every bin is that of a periodic line process with these spectra
 (``welch_kernel.WelchKernel``: leakage and segment-mean removal in the lowest bins), averaged over the bands.
 
 ``coherency`` gives the cross-spectra between points (the covariance of point averages, ``covariance``): on the
@@ -26,6 +27,7 @@ from turbgen.theory import ranges
 from turbgen.theory.lattice import line_frequencies
 from turbgen.theory.mann_quadrature import perpendicular_quadrature
 from turbgen.theory.params import MannParams
+from turbgen.theory.sonic_path import path_transfer
 from turbgen.validation.fit.spectra import BandSpectra
 from turbgen.validation.fit.table import NAMES, scaled_spectra
 from turbgen.validation.mann_lattice import MannLattice
@@ -43,12 +45,14 @@ LINE_NODES = 24  # k1 nodes of the continuous cross-spectra between sensors for 
 class BandModel:
     """Expected band spectra of ``bands`` (BandSpectra) for Mann parameters (module docstring), k1 = 2 pi f / ``U_m_s``
     [m/s]: with the store's ``grid`` and periodic ``box`` the grid model, else the continuous one, from the table of
-    the eddy ``lifetime`` (``MannParams.lifetime``)."""
+    the eddy ``lifetime`` (``MannParams.lifetime``), ``paths_m`` as ``FitData.spectrum_paths``."""
 
-    def __init__(self, bands: BandSpectra, U_m_s: float, grid=None, box=None, lifetime: str = "guo"):
+    def __init__(self, bands: BandSpectra, U_m_s: float, grid=None, box=None, lifetime: str = "guo", paths_m=None):
         self.bands, self.U, self.grid, self.box, self.lifetime = bands, U_m_s, grid, box, lifetime
         nt, dt = bands.nt, bands.setup.dt_s
         self.k1 = 2 * np.pi * line_frequencies(nt, dt)[1:] / U_m_s  # lines 1 .. nt/2 [rad/m]
+        self.transfer = {n: np.mean([path_transfer(self.k1 * p)[n] for p in ps], axis=0)
+                         for n, ps in (paths_m or {}).items()}  # fmt: skip
         self.dk1 = 2 * np.pi / (nt * dt * U_m_s)
         self.kernel = WelchKernel(bands.setup, nt)
         self.ratio_k1 = np.geomspace(self.k1[0], self.k1[-1], N_RATIO_NODES)
@@ -94,7 +98,7 @@ class BandModel:
         for n in NAMES:
             r = 1.0 if self.ratio is None else np.interp(np.log(self.k1), np.log(self.ratio_k1), self._ratio_of(
                 n, length_scale_m, gamma))
-            out[n] = scale * f[n] * r
+            out[n] = scale * f[n] * r * self.transfer.get(n, 1.0)
         return out
 
     def _ratio_of(self, n: str, length_scale_m: float, gamma: float) -> np.ndarray:
