@@ -17,8 +17,6 @@ from pathlib import Path
 
 import numpy as np
 from scipy.interpolate import CubicSpline
-from scipy.linalg import solve_triangular
-from scipy.optimize import least_squares
 
 from turbgen.errors import ParameterError
 from turbgen.spec.defaults import MANN_DEFAULTS
@@ -30,8 +28,8 @@ from turbgen.theory.lidar_preview import KAPPA_MAX, mann_preview_spectra
 from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.params import MannParams
 from turbgen.validation.fit.data import FitData, detrended
-from turbgen.validation.fit.evolution import _rho_bar, with_evolution
-from turbgen.validation.fit.mann import MOVE_TOL, PASSES, Z95, _bounds, parameter_covariance
+from turbgen.validation.fit.evolution import rho_bar, with_evolution
+from turbgen.validation.fit.mann import PASSES, Z95, bounds, gls
 from turbgen.validation.fit.result import FitValue, MannFit
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
@@ -45,6 +43,7 @@ ALONG_X = 1e-9  # a beam with n1 > 1 - ALONG_X looks along x
 TAIL = 30.0  # kappa_max / k1_max of the continuous (k2, k3) quadrature
 GAIN_MIN = 0.01  # bands where the probe volume passes less power than this are not fitted (``_passed``)
 MIN_BANDS = 4
+NAMES = ("ae", "length_scale_m")
 
 
 @dataclass(frozen=True, eq=False)
@@ -183,24 +182,19 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     bands = estimate_bands(fd, nperseg)
     model = LosModel(bands, fd.U_m_s, meas, g, store)
     keep = _passed(bands, model)
-    rho = _rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands)
+    rho = rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands)
     data, factor, corr = bands.values["uu"][keep], (bands.var_factor["uu"] * rho)[keep], bands.band_corr[keep][:, keep]
-    lo, hi = _bounds(("ae", "length_scale_m"))
     x = np.array([math.log(np.median(data / model.expected(1.0, 30.0)[keep])), math.log(30.0)])
-    converged = False
-    for _ in range(PASSES):
-        sd = model.expected(*np.exp(x))[keep] * np.sqrt(factor)
-        chol = np.linalg.cholesky(corr * np.outer(sd, sd))
-        sol = least_squares(lambda y: solve_triangular(chol, data - model.expected(*np.exp(y))[keep], lower=True),
-                            np.clip(x, lo, hi), bounds=(lo, hi), diff_step=1e-4, xtol=1e-10, ftol=1e-10, gtol=1e-10)
-        cov = parameter_covariance(sol.jac)
-        moved, x = np.abs(sol.x - x) / np.sqrt(np.diag(cov)), sol.x
-        if sol.status > 0 and np.all(moved < MOVE_TOL):
-            converged = True
-            break
+
+    def weights_at(y):
+        sd = model.expected(*np.exp(y))[keep] * np.sqrt(factor)
+        return corr * np.outer(sd, sd)
+
+    sol, cov, _, converged = gls(lambda y: data - model.expected(*np.exp(y))[keep], weights_at, x, NAMES)
+    x, (lo, hi) = sol.x, bounds(NAMES)
     flags = [] if converged else [f"the fit did not converge ({sol.message.rstrip('.')}; {PASSES} passes)"]
     flags += [f"{n} = {math.exp(v):.4g} is on the boundary of its fitted range [{math.exp(a):.4g}, {math.exp(b):.4g}]"
-              for n, v, a, b in zip(("ae", "length_scale_m"), x, lo, hi) if min(v - a, b - v) < 1e-6]
+              for n, v, a, b in zip(NAMES, x, lo, hi) if min(v - a, b - v) < 1e-6]
     sdx = np.sqrt(np.diag(cov))
     val = [FitValue(math.exp(v), (math.exp(v - Z95 * s), math.exp(v + Z95 * s)), float(s)) for v, s in zip(x, sdx)]
     full = np.zeros((3, 3))
