@@ -27,13 +27,15 @@ from turbgen.theory.lidar_lattice import BoxLattice
 from turbgen.theory.lidar_preview import KAPPA_MAX, mann_preview_spectra
 from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.params import MannParams
+from turbgen.validation.estimators import segment_starts
+from turbgen.validation.fit.covariance import LINE_BAND
 from turbgen.validation.fit.data import FitData, detrended
 from turbgen.validation.fit.evolution import rho_bar, with_evolution
 from turbgen.validation.fit.mann import PASSES, Z95, bounds, gls
 from turbgen.validation.fit.result import FitValue, MannFit
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
-from turbgen.validation.welch_kernel import WelchKernel
+from turbgen.validation.welch_kernel import WelchKernel, segment_gain
 from turbgen.virtual_lidar.dataset import LidarData, read_dataset
 from turbgen.virtual_lidar.description import LidarDescription
 
@@ -117,16 +119,42 @@ class LosModel:
             self.table[j] = np.log(sum(w * los_spectrum(self.nodes, m, p, self.U, self.store) for m, w in self.classes))
         return self.table[j]
 
-    def expected(self, ae: float, length_scale_m: float) -> np.ndarray:
-        """(nbands,) expected pooled band estimate [m^2 s^-2 Hz^-1]: the table interpolated, Welch kernel applied."""
+    def lines(self, ae: float, length_scale_m: float) -> np.ndarray:
+        """(nt/2,) variances F(k1_q) dk1 [m^2 s^-2] of the record's lines q = 1 .. nt/2: the table interpolated."""
         t = math.log(length_scale_m) / DLN_L
         j = math.floor(t)
         s = t - j  # Lagrange cubic through nodes j-1 .. j+2
         w = (-s * (s - 1) * (s - 2) / 6, (s + 1) * (s - 1) * (s - 2) / 2, -(s + 1) * s * (s - 2) / 2,
              (s + 1) * s * (s - 1) / 6)
         ln_f = sum(wk * self._ln_f(j - 1 + k) for k, wk in enumerate(w))
-        lines = ae * np.exp(CubicSpline(np.log(self.nodes), ln_f)(self.ln_k1)) * self.dk1
-        return self.bands.band_mean(self.kernel.apply(np.concatenate([[0.0], lines])))
+        return ae * np.exp(CubicSpline(np.log(self.nodes), ln_f)(self.ln_k1)) * self.dk1
+
+    def expected(self, ae: float, length_scale_m: float) -> np.ndarray:
+        """(nbands,) expected pooled band estimate [m^2 s^-2 Hz^-1]: the Welch kernel applied to the lines."""
+        return self.bands.band_mean(self.kernel.apply(np.concatenate([[0.0], self.lines(ae, length_scale_m)])))
+
+    def covariance(self, ae: float, length_scale_m: float, rho: np.ndarray, keep: np.ndarray) -> np.ndarray:
+        """Covariance of the ``keep`` band estimates pooled over gates of point correlation ``rho`` (``rho_bar``): one
+        point's exact covariance from its lines (a periodic record; Isserlis 1918 over the segment pairs, as
+        ``covariance.line_covariance``), times sqrt(rho_b rho_c). The band-centre variance misses what the lines
+        feeding a bin share: bin 1's is 1.2 x short (lines below it span many segments), and where the probe makes
+        the spectrum steep (log slope -10 to -20) a band's bins covary beyond Hann's white-noise 4/9."""
+        setup, nt, bands = self.bands.setup, self.bands.nt, [b for b, k in zip(self.bands.bands, keep) if k]
+        top = max(b[-1] for b in bands)
+        nq = min((top + LINE_BAND) * nt // setup.nperseg, nt // 2 - 1)
+        q, lines = np.arange(-nq, nq + 1), self.lines(ae, length_scale_m)[:nq]
+        c = segment_gain(np.arange(1, top + 1)[:, None], q / (nt * setup.dt_s), setup)  # (top, 2 nq + 1)
+        c[:, nq] = 0.0  # the mean is removed from every segment
+        starts = np.asarray(segment_starts(nt, setup))
+        lag, count = np.unique(starts[:, None] - starts[None, :], return_counts=True)
+        w = np.concatenate([lines[::-1], [0.0], lines]) * np.exp(2j * np.pi * np.outer(lag, q) / nt)  # (T, 2 nq + 1)
+        cov = np.array([count @ (np.abs((w * cm) @ np.conj(c).T) ** 2 + np.abs((w * cm) @ c[:, ::-1].T) ** 2)
+                        for cm in c])  # Cov(P_m, P_n) = sum over segment pairs |A_mn|^2 + |B_mn|^2
+        avg = np.zeros((len(bands), top))
+        for r, b in enumerate(bands):
+            avg[r, b - 1] = 1.0 / b.size
+        avg *= setup.scale[1 : top + 1] / starts.size
+        return avg @ cov @ avg.T * np.sqrt(np.outer(rho[keep], rho[keep]))
 
 
 def lidar_fit_data(ld: LidarData, gamma: float | None = None) -> tuple[FitData, Measurements, float]:
@@ -182,15 +210,11 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     bands = estimate_bands(fd, nperseg)
     model = LosModel(bands, fd.U_m_s, meas, g, store)
     keep = _passed(bands, model)
-    rho = rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands)
-    data, factor, corr = bands.values["uu"][keep], (bands.var_factor["uu"] * rho)[keep], bands.band_corr[keep][:, keep]
+    rho, data = rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands), bands.values["uu"][keep]
+    rho *= len(segment_starts(bands.nt, bands.setup)) * fd.series["u"].shape[1] / bands.segments["u"]  # gaps: ~1 / K
     x = np.array([math.log(np.median(data / model.expected(1.0, 30.0)[keep])), math.log(30.0)])
-
-    def weights_at(y):
-        sd = model.expected(*np.exp(y))[keep] * np.sqrt(factor)
-        return corr * np.outer(sd, sd)
-
-    sol, cov, _, converged = gls(lambda y: data - model.expected(*np.exp(y))[keep], weights_at, x, NAMES)
+    sol, cov, weights, converged = gls(lambda y: data - model.expected(*np.exp(y))[keep],
+                                       lambda y: model.covariance(*np.exp(y), rho, keep), x, NAMES)
     x, (lo, hi) = sol.x, bounds(NAMES)
     flags = [] if converged else [f"the fit did not converge ({sol.message.rstrip('.')}; {PASSES} passes)"]
     flags += [f"{n} = {math.exp(v):.4g} is on the boundary of its fitted range [{math.exp(a):.4g}, {math.exp(b):.4g}]"
@@ -206,7 +230,7 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     fit = MannFit(val[0], val[1], FitValue(g, None, None), float(np.sum(sol.fun**2) / max(sol.fun.size - 2, 1)),
                   int(sol.fun.size - 2), tuple(flags), notes, "continuous" if store is None else "grid", fd.U_m_s,
                   fd.source, bands.setup.nperseg, bands.f_hz[keep], {"los": data}, {"los": e},
-                  {"los": e * np.sqrt(factor)}, cov_fit=full)  # fmt: skip
+                  {"los": np.sqrt(np.diag(weights))}, cov_fit=full)  # fmt: skip
     return _with_gates(fd, meas, fit)
 
 
