@@ -4,8 +4,9 @@ ae and L are fitted to the Welch spectrum of v_los pooled over every beam and ga
 F(k1) = ∫ n_i n_j Phi_ij |phi_hat(k . n)|^2 dk2 dk3 (Guo et al. 2023, Eq. 29-30): over the box of the Mann store the
 dataset was sampled from while it is there (along x with the sampler's interpolation in time), else continuous, with
 (k2, k3) integrated out to TAIL times the highest k1 the probe passes. Gamma is held: the LOS spectrum is nearly u's.
-Generalised least squares in (ln ae, ln L) weighted by one point's Welch variance times the gates' point correlation,
-re-weighted at the fitted model; F is tabulated in ln L (step DLN_L) at N_K1 k1 nodes and interpolated cubic.
+Generalised least squares in (ln ae, ln L), re-weighted at the fitted model, by the bands' exact covariance from one
+point's lines times the gates' point correlation: the band-centre variance left bin 1's 1.3 x and the probe-steepened
+top bands' 1.4 x short (benchmarks/fit_lidar.md). F is tabulated in ln L (step DLN_L) at N_K1 nodes, interpolated cubic.
 The evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (Guo et al. 2022).
 """
 
@@ -135,10 +136,7 @@ class LosModel:
 
     def covariance(self, ae: float, length_scale_m: float, rho: np.ndarray, keep: np.ndarray) -> np.ndarray:
         """Covariance of the ``keep`` band estimates pooled over gates of point correlation ``rho`` (``rho_bar``): one
-        point's exact covariance from its lines (a periodic record; Isserlis 1918 over the segment pairs, as
-        ``covariance.line_covariance``), times sqrt(rho_b rho_c). The band-centre variance misses what the lines
-        feeding a bin share: bin 1's is 1.2 x short (lines below it span many segments), and where the probe makes
-        the spectrum steep (log slope -10 to -20) a band's bins covary beyond Hann's white-noise 4/9."""
+        point's from its lines (Isserlis 1918, ``covariance.line_covariance``) times sqrt(rho_b rho_c)."""
         setup, nt, bands = self.bands.setup, self.bands.nt, [b for b, k in zip(self.bands.bands, keep) if k]
         top = max(b[-1] for b in bands)
         nq = min((top + LINE_BAND) * nt // setup.nperseg, nt // 2 - 1)
@@ -150,11 +148,8 @@ class LosModel:
         w = np.concatenate([lines[::-1], [0.0], lines]) * np.exp(2j * np.pi * np.outer(lag, q) / nt)  # (T, 2 nq + 1)
         cov = np.array([count @ (np.abs((w * cm) @ np.conj(c).T) ** 2 + np.abs((w * cm) @ c[:, ::-1].T) ** 2)
                         for cm in c])  # Cov(P_m, P_n) = sum over segment pairs |A_mn|^2 + |B_mn|^2
-        avg = np.zeros((len(bands), top))
-        for r, b in enumerate(bands):
-            avg[r, b - 1] = 1.0 / b.size
-        avg *= setup.scale[1 : top + 1] / starts.size
-        return avg @ cov @ avg.T * np.sqrt(np.outer(rho[keep], rho[keep]))
+        avg = np.array([np.isin(np.arange(1, top + 1), b) / b.size for b in bands]) * setup.scale[1 : top + 1]
+        return avg @ cov @ avg.T * np.sqrt(np.outer(rho[keep], rho[keep])) / starts.size**2
 
 
 def lidar_fit_data(ld: LidarData, gamma: float | None = None) -> tuple[FitData, Measurements, float]:
@@ -221,8 +216,7 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
               for n, v, a, b in zip(NAMES, x, lo, hi) if min(v - a, b - v) < 1e-6]
     sdx = np.sqrt(np.diag(cov))
     val = [FitValue(math.exp(v), (math.exp(v - Z95 * s), math.exp(v + Z95 * s)), float(s)) for v, s in zip(x, sdx)]
-    full = np.zeros((3, 3))
-    full[:2, :2] = cov
+    full = np.pad(cov, ((0, 1), (0, 1)))  # Gamma held
     e = model.expected(*np.exp(x))[keep]
     notes = fd.notes + (_model_note(store),) + (() if keep.all() else (
         f"bands above {bands.f_hz[keep][-1]:.3g} Hz are not fitted: there the probe volume passes < {GAIN_MIN:g} of "

@@ -144,16 +144,12 @@ def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra 
             model.update_ratio(MannParams(**q, lifetime=lifetime), slopes=True)
         return _covariance_at(bands, model, geometry, used, q)
 
-    x = np.array([_x(p, n) for n in free])
+    x = np.array([p[n] if n == "gamma" else math.log(p[n]) for n in free])
     if model.kind == "grid":  # the continuous fit first: the lattice ratio at a point near the answer
         x = gls(residual, lambda y: weights_at(y, ratio=False), x, free, passes=1)[0].x
     sol, cov, weights, converged = gls(residual, weights_at, x, free)
     p = _params(sol.x, free, held)
     return _result(data, bands, model, used, free, held, p, sol, cov, converged, notes, weights)
-
-
-def _x(p: dict, n: str) -> float:
-    return p[n] if n == "gamma" else math.log(p[n])
 
 
 def parameter_covariance(jac: np.ndarray) -> np.ndarray:
