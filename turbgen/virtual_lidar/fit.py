@@ -208,10 +208,10 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     rho, data = rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands), bands.values["uu"][keep]
     rho *= len(segment_starts(bands.nt, bands.setup)) * fd.series["u"].shape[1] / bands.segments["u"]  # gaps: ~1 / K
     x = np.array([math.log(np.median(data / model.expected(1.0, 30.0)[keep])), math.log(30.0)])
-    sol, cov, weights, converged = gls(lambda y: data - model.expected(*np.exp(y))[keep],
-                                       lambda y: model.covariance(*np.exp(y), rho, keep), x, NAMES)
+    sol, cov, weights, converged = gls(lambda y: data - model.expected(*np.exp(y))[keep], lambda y: model.covariance(
+        *np.exp(y), rho, keep), x, NAMES, passes=3 * PASSES)  # weights following L can oscillate, ~0.65 x a pass
     x, (lo, hi) = sol.x, bounds(NAMES)
-    flags = [] if converged else [f"the fit did not converge ({sol.message.rstrip('.')}; {PASSES} passes)"]
+    flags = [] if converged else [f"the fit did not converge ({sol.message.rstrip('.')}; {3 * PASSES} passes)"]
     flags += [f"{n} = {math.exp(v):.4g} is on the boundary of its fitted range [{math.exp(a):.4g}, {math.exp(b):.4g}]"
               for n, v, a, b in zip(NAMES, x, lo, hi) if min(v - a, b - v) < 1e-6]
     sdx = np.sqrt(np.diag(cov))
