@@ -29,14 +29,13 @@ from turbgen.theory.lidar_preview import KAPPA_MAX, mann_preview_spectra
 from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.params import MannParams
 from turbgen.validation.estimators import segment_starts
-from turbgen.validation.fit.covariance import LINE_BAND
 from turbgen.validation.fit.data import FitData, detrended
 from turbgen.validation.fit.evolution import rho_bar, with_evolution
 from turbgen.validation.fit.mann import PASSES, Z95, bounds, gls
 from turbgen.validation.fit.result import FitValue, MannFit
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
-from turbgen.validation.welch_kernel import WelchKernel, segment_gain
+from turbgen.validation.welch_kernel import WelchKernel
 from turbgen.virtual_lidar.dataset import LidarData, read_dataset
 from turbgen.virtual_lidar.description import LidarDescription
 
@@ -136,18 +135,19 @@ class LosModel:
 
     def covariance(self, ae: float, length_scale_m: float, rho: np.ndarray, keep: np.ndarray) -> np.ndarray:
         """Covariance of the ``keep`` band estimates pooled over gates of point correlation ``rho`` (``rho_bar``): one
-        point's from its lines (Isserlis 1918, ``covariance.line_covariance``) times sqrt(rho_b rho_c)."""
+        point's, exact for a periodic record (Isserlis 1918 over the segment pairs, as ``covariance.line_covariance``),
+        times sqrt(rho_b rho_c). X_m(s) = sum_t v_m(t) x(s + t) (v: Hann window, DFT row and mean removal), so with the
+        autocovariance R of the lines E X_m(s) conj X_n(s') = sum_t' conj v_n(t') c_m(s - s' - t'), c_m = v_m * R."""
         setup, nt, bands = self.bands.setup, self.bands.nt, [b for b, k in zip(self.bands.bands, keep) if k]
-        top = max(b[-1] for b in bands)
-        nq = min((top + LINE_BAND) * nt // setup.nperseg, nt // 2 - 1)
-        q, lines = np.arange(-nq, nq + 1), self.lines(ae, length_scale_m)[:nq]
-        c = segment_gain(np.arange(1, top + 1)[:, None], q / (nt * setup.dt_s), setup)  # (top, 2 nq + 1)
-        c[:, nq] = 0.0  # the mean is removed from every segment
+        top, n = max(b[-1] for b in bands), setup.nperseg
+        v = setup.window * np.exp(-2j * np.pi * np.outer(np.arange(1, top + 1), np.arange(n)) / n)  # (top, n)
+        v -= v.sum(axis=1, keepdims=True) / n  # the segment mean removed before the window
+        r = np.fft.irfft(np.concatenate([[0.0], self.lines(ae, length_scale_m)]), n=nt) * nt  # R(d), d = 0 .. nt - 1
+        c = np.fft.ifft(np.fft.ifft(v, n=nt) * np.fft.fft(r), axis=1) * nt  # c_m(d) = sum_t v_m(t) R(d + t)
         starts = np.asarray(segment_starts(nt, setup))
         lag, count = np.unique(starts[:, None] - starts[None, :], return_counts=True)
-        w = np.concatenate([lines[::-1], [0.0], lines]) * np.exp(2j * np.pi * np.outer(lag, q) / nt)  # (T, 2 nq + 1)
-        cov = np.array([count @ (np.abs((w * cm) @ np.conj(c).T) ** 2 + np.abs((w * cm) @ c[:, ::-1].T) ** 2)
-                        for cm in c])  # Cov(P_m, P_n) = sum over segment pairs |A_mn|^2 + |B_mn|^2
+        cov = sum(k * (np.abs(g @ np.conj(v).T) ** 2 + np.abs(g @ v.T) ** 2)  # |E X_m conj X_n|^2 + |E X_m X_n|^2
+                  for k, g in ((k, c[:, (d - np.arange(n)) % nt]) for d, k in zip(lag, count)))
         avg = np.array([np.isin(np.arange(1, top + 1), b) / b.size for b in bands]) * setup.scale[1 : top + 1]
         return avg @ cov @ avg.T * np.sqrt(np.outer(rho[keep], rho[keep])) / starts.size**2
 
