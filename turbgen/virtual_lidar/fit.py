@@ -209,7 +209,7 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     rho *= len(segment_starts(bands.nt, bands.setup)) * fd.series["u"].shape[1] / bands.segments["u"]  # gaps: ~1 / K
     x = np.array([math.log(np.median(data / model.expected(1.0, 30.0)[keep])), math.log(30.0)])
     sol, cov, weights, converged = gls(lambda y: data - model.expected(*np.exp(y))[keep], lambda y: model.covariance(
-        *np.exp(y), rho, keep), x, NAMES, passes=3 * PASSES)  # weights following L can oscillate, ~0.65 x a pass
+        math.exp(y[0]), math.exp(y[1]), rho, keep), x, NAMES, passes=3 * PASSES)  # weights following L can oscillate
     x, (lo, hi) = sol.x, bounds(NAMES)
     flags = [] if converged else [f"the fit did not converge ({sol.message.rstrip('.')}; {3 * PASSES} passes)"]
     flags += [f"{n} = {math.exp(v):.4g} is on the boundary of its fitted range [{math.exp(a):.4g}, {math.exp(b):.4g}]"
