@@ -74,6 +74,25 @@ def summary(path: str) -> None:
         print(f"| {CASES[case]} | {n} | {cover('ae')} | {cover('length_scale_m')} | {cover('evo_time_s')} | "
               + ", ".join(f"{x:.3f}" for x in ratio) + f" | {np.std(lnl, ddof=1):.3f} ({sd:.3f}) | "
               f"{np.median([r['cpu_s'] for r in rs]):.1f} | {sum(bool(r['flags']) for r in rs)} |")
+    print("\n| case | bias ln ae (± se) | sd ln ae (rms sd fit, ratio) | bias ln L (± se) | bias ln γ̂ (± se), sd | truth "
+          "below / above: ae, L | Taylor excluded | median χ²/dof |\n|---|---|---|---|---|---|---|---|")
+    for case in sorted({r["case"] for r in rows}):
+        rs = [r for r in rows if r["case"] == case]
+
+        def ln_err(name):
+            return np.array([math.log(r[name]["value"] / r[name]["truth"]) for r in rs if r[name]])
+
+        def side(name):
+            below = sum(r[name]["truth"] < r[name]["ci95"][0] for r in rs)
+            return f"{below} / {sum(r[name]['ci95'][1] is not None and r[name]['truth'] > r[name]['ci95'][1] for r in rs)}"
+
+        e, sd = {n: ln_err(n) for n in ("ae", "length_scale_m", "evo_time_s")}, lambda x: np.std(x, ddof=1)
+        fit_sd = math.sqrt(np.mean([r["ae"]["sd"] ** 2 for r in rs]))
+        bias = {n: f"{x.mean():.3f} ± {sd(x) / math.sqrt(x.size):.3f}" for n, x in e.items()}
+        print(f"| {case} | {bias['ae']} | {sd(e['ae']):.3f} ({fit_sd:.3f}, {sd(e['ae']) / fit_sd:.2f}) | "
+              f"{bias['length_scale_m']} | {bias['evo_time_s']}, {sd(e['evo_time_s']):.3f} | {side('ae')}, "
+              f"{side('length_scale_m')} | {sum(r['evo_time_s'] is not None and r['evo_time_s']['ci95'][1] is not None for r in rs)} / {len(rs)} | "
+              f"{np.median([r['chi2_dof'] for r in rs]):.2f} |")
 
 
 def main() -> None:

@@ -9,14 +9,17 @@ import numpy as np
 import pytest
 import zarr
 from click.testing import CliRunner
+from scipy.stats import chi2
 
 import turbgen
 from turbgen.cli import cli
 from turbgen.errors import ParameterError
 from turbgen.theory.params import MannParams
+from turbgen.validation.fit.data import FitData
+from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
 from turbgen.virtual_lidar.description import LidarDescription
-from turbgen.virtual_lidar.fit import TAIL, los_spectrum
+from turbgen.virtual_lidar.fit import TAIL, LosModel, los_spectrum
 
 TRUTH = dict(ae=0.08, L=30.0, gamma=3.2, evo=200.0)
 LIDAR = ('kind = "pulsed"\nmount = "nacelle"\nranges_m = {gates}\nbeam_rate_hz = 1.0\nrotor_radius_m = 24.0\n'
@@ -63,6 +66,41 @@ def test_los_spectrum_quadrature_along_x_is_filtered_u_spectrum():
         quad = los_spectrum(k1, meas, p, 10.0, None)
     np.testing.assert_allclose(quad, table, rtol=55 / 30 * TAIL ** (-5 / 3) + 1e-3)
     assert table[-1] < 0.05 * p.ae * 30 ** (5 / 3) * scaled_spectra(k1[-1:] * 30, 3.2)["uu"][0]  # the probe filters
+
+
+def test_band_covariance_matches_a_monte_carlo_of_the_lines():
+    """Issue 38: two gates' LOS series drawn from the fit's own lines (Gaussian, periodic, 2034 scans at 1 s, the
+    continuous model with the probe, gate coherency g = 0.9 at every line, so the pooled estimate's variance is one
+    gate's times rho = (1 + g^2) / 2 exactly). The sample variance of every fitted band over R = 2000 draws over
+    LosModel.covariance lies within chi^2_(R-1) / (R-1) bounds (two-sided 99.9 %, Bonferroni over the bands),
+    widened by sqrt(1 + kurtosis / 2) for the band estimate's excess kurtosis 12 / nu <= 0.3 (a chi^2 of nu >= 40
+    dof: 2 x 28.5 effective segments over rho and the low-bin excess); bands 1-2 correlate as it says within 4 se of
+    a sample correlation, (1 - r^2) / sqrt(R). The band-centre formula (var_factor x rho and Hann's 4/9 between
+    bins, the fit's weights before) falls outside at bin 1, the top band and the bands 1-2 correlation."""
+    nt, R, g, ae, L = 2034, 2000, 0.9, 0.08, 30.0
+    meas = LidarDescription("x", "pulsed", "nacelle", (50.0, 100.0), 1.0, 24.0, (0.0,), (0.0,)).measurement_points()
+    fd = FitData("mc", 1.0, 10.0, {"u": np.zeros((nt, 2))}, (), sites_m=meas.focus_m, columns={"u": np.arange(2)})
+    bands = estimate_bands(fd)
+    model = LosModel(bands, 10.0, meas, 3.2, None)
+    keep = np.array([b[-1] <= 27 for b in bands.bands])  # the benchmark's passed bands (0.21 Hz)
+    rng = np.random.default_rng(38)
+    sd = np.sqrt(np.append(model.lines(ae, L)[:-1], 0.0) / 2)  # Nyquist line left out
+    y = [sd * (rng.standard_normal((R, sd.size)) + 1j * rng.standard_normal((R, sd.size))) for _ in range(2)]
+    y[1] = g * y[0] + math.sqrt(1 - g**2) * y[1]
+    x = np.fft.irfft(np.concatenate([np.zeros((2, R, 1)), y], axis=2) * nt, n=nt, axis=2)  # (gate, draw, t)
+    X = segment_dfts(x.reshape(2 * R, nt).T, bands.setup)[0]
+    psd = (np.abs(X) ** 2).mean(axis=0) * bands.setup.scale[:, None]  # (nf, 2 R): each column's Welch estimate
+    vals = np.array([psd[b].mean(axis=0) for b in bands.bands])[keep].reshape(-1, 2, R).mean(axis=1)
+    var = vals.var(axis=1, ddof=1)
+    rho = np.full(keep.size, (1 + g**2) / 2)
+    cov = model.covariance(ae, L, rho, keep)
+    new, r, r_new = np.diag(cov), np.corrcoef(vals[:2])[0, 1], cov[0, 1] / math.sqrt(cov[0, 0] * cov[1, 1])
+    old = (model.expected(ae, L) ** 2 * bands.var_factor["uu"] * rho)[keep]
+    lo, hi = (math.sqrt(1.15) * (math.sqrt(chi2.ppf(q, R - 1) / (R - 1)) - 1) + 1 for q in
+              (1e-3 / 2 / keep.sum(), 1 - 1e-3 / 2 / keep.sum()))
+    assert np.all((lo**2 < var / new) & (var / new < hi**2)), (var / new, lo**2, hi**2)
+    assert var[0] / old[0] > hi**2 and var[-1] / old[-1] > hi**2, var / old
+    assert abs(r - r_new) < 4 * (1 - r**2) / math.sqrt(R) < abs(r - bands.band_corr[0, 1]), (r, r_new)
 
 
 def test_one_gate_says_why_no_evolution_time(tmp_path):

@@ -4,8 +4,9 @@ ae and L are fitted to the Welch spectrum of v_los pooled over every beam and ga
 F(k1) = ∫ n_i n_j Phi_ij |phi_hat(k . n)|^2 dk2 dk3 (Guo et al. 2023, Eq. 29-30): over the box of the Mann store the
 dataset was sampled from while it is there (along x with the sampler's interpolation in time), else continuous, with
 (k2, k3) integrated out to TAIL times the highest k1 the probe passes. Gamma is held: the LOS spectrum is nearly u's.
-Generalised least squares in (ln ae, ln L) weighted by one point's Welch variance times the gates' point correlation,
-re-weighted at the fitted model; F is tabulated in ln L (step DLN_L) at N_K1 k1 nodes and interpolated cubic.
+Generalised least squares in (ln ae, ln L), re-weighted at the fitted model, by the bands' exact covariance from one
+point's lines times the gates' point correlation: the band-centre variance left bin 1's 1.3 x and the probe-steepened
+top bands' 1.4 x short (benchmarks/fit_lidar.md). F is tabulated in ln L (step DLN_L) at N_K1 nodes, interpolated cubic.
 The evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (Guo et al. 2022).
 """
 
@@ -17,8 +18,6 @@ from pathlib import Path
 
 import numpy as np
 from scipy.interpolate import CubicSpline
-from scipy.linalg import solve_triangular
-from scipy.optimize import least_squares
 
 from turbgen.errors import ParameterError
 from turbgen.spec.defaults import MANN_DEFAULTS
@@ -29,9 +28,10 @@ from turbgen.theory.lidar_lattice import BoxLattice
 from turbgen.theory.lidar_preview import KAPPA_MAX, mann_preview_spectra
 from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.params import MannParams
+from turbgen.validation.estimators import segment_starts
 from turbgen.validation.fit.data import FitData, detrended
-from turbgen.validation.fit.evolution import _rho_bar, with_evolution
-from turbgen.validation.fit.mann import MOVE_TOL, PASSES, Z95, _bounds, parameter_covariance
+from turbgen.validation.fit.evolution import rho_bar, with_evolution
+from turbgen.validation.fit.mann import PASSES, Z95, bounds, gls
 from turbgen.validation.fit.result import FitValue, MannFit
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
@@ -45,6 +45,7 @@ ALONG_X = 1e-9  # a beam with n1 > 1 - ALONG_X looks along x
 TAIL = 30.0  # kappa_max / k1_max of the continuous (k2, k3) quadrature
 GAIN_MIN = 0.01  # bands where the probe volume passes less power than this are not fitted (``_passed``)
 MIN_BANDS = 4
+NAMES = ("ae", "length_scale_m")
 
 
 @dataclass(frozen=True, eq=False)
@@ -118,16 +119,37 @@ class LosModel:
             self.table[j] = np.log(sum(w * los_spectrum(self.nodes, m, p, self.U, self.store) for m, w in self.classes))
         return self.table[j]
 
-    def expected(self, ae: float, length_scale_m: float) -> np.ndarray:
-        """(nbands,) expected pooled band estimate [m^2 s^-2 Hz^-1]: the table interpolated, Welch kernel applied."""
+    def lines(self, ae: float, length_scale_m: float) -> np.ndarray:
+        """(nt/2,) variances F(k1_q) dk1 [m^2 s^-2] of the record's lines q = 1 .. nt/2: the table interpolated."""
         t = math.log(length_scale_m) / DLN_L
         j = math.floor(t)
         s = t - j  # Lagrange cubic through nodes j-1 .. j+2
         w = (-s * (s - 1) * (s - 2) / 6, (s + 1) * (s - 1) * (s - 2) / 2, -(s + 1) * s * (s - 2) / 2,
              (s + 1) * s * (s - 1) / 6)
         ln_f = sum(wk * self._ln_f(j - 1 + k) for k, wk in enumerate(w))
-        lines = ae * np.exp(CubicSpline(np.log(self.nodes), ln_f)(self.ln_k1)) * self.dk1
-        return self.bands.band_mean(self.kernel.apply(np.concatenate([[0.0], lines])))
+        return ae * np.exp(CubicSpline(np.log(self.nodes), ln_f)(self.ln_k1)) * self.dk1
+
+    def expected(self, ae: float, length_scale_m: float) -> np.ndarray:
+        """(nbands,) expected pooled band estimate [m^2 s^-2 Hz^-1]: the Welch kernel applied to the lines."""
+        return self.bands.band_mean(self.kernel.apply(np.concatenate([[0.0], self.lines(ae, length_scale_m)])))
+
+    def covariance(self, ae: float, length_scale_m: float, rho: np.ndarray, keep: np.ndarray) -> np.ndarray:
+        """Covariance of the ``keep`` band estimates pooled over gates of point correlation ``rho`` (``rho_bar``): one
+        point's, exact for a periodic record (Isserlis 1918 over the segment pairs, as ``covariance.line_covariance``),
+        times sqrt(rho_b rho_c). X_m(s) = sum_t v_m(t) x(s + t) (v: Hann window, DFT row and mean removal), so with the
+        autocovariance R of the lines E X_m(s) conj X_n(s') = sum_t' conj v_n(t') c_m(s - s' - t'), c_m = v_m * R."""
+        setup, nt, bands = self.bands.setup, self.bands.nt, [b for b, k in zip(self.bands.bands, keep) if k]
+        top, n = max(b[-1] for b in bands), setup.nperseg
+        v = setup.window * np.exp(-2j * np.pi * np.outer(np.arange(1, top + 1), np.arange(n)) / n)  # (top, n)
+        v -= v.sum(axis=1, keepdims=True) / n  # the segment mean removed before the window
+        r = np.fft.irfft(np.concatenate([[0.0], self.lines(ae, length_scale_m)]), n=nt) * nt  # R(d), d = 0 .. nt - 1
+        c = np.fft.ifft(np.fft.ifft(v, n=nt) * np.fft.fft(r), axis=1) * nt  # c_m(d) = sum_t v_m(t) R(d + t)
+        starts = np.asarray(segment_starts(nt, setup))
+        lag, count = np.unique(starts[:, None] - starts[None, :], return_counts=True)
+        cov = sum(k * (np.abs(g @ np.conj(v).T) ** 2 + np.abs(g @ v.T) ** 2)  # |E X_m conj X_n|^2 + |E X_m X_n|^2
+                  for k, g in ((k, c[:, (d - np.arange(n)) % nt]) for d, k in zip(lag, count)))
+        avg = np.array([np.isin(np.arange(1, top + 1), b) / b.size for b in bands]) * setup.scale[1 : top + 1]
+        return avg @ cov @ avg.T * np.sqrt(np.outer(rho[keep], rho[keep])) / starts.size**2
 
 
 def lidar_fit_data(ld: LidarData, gamma: float | None = None) -> tuple[FitData, Measurements, float]:
@@ -183,28 +205,18 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     bands = estimate_bands(fd, nperseg)
     model = LosModel(bands, fd.U_m_s, meas, g, store)
     keep = _passed(bands, model)
-    rho = _rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands)
-    data, factor, corr = bands.values["uu"][keep], (bands.var_factor["uu"] * rho)[keep], bands.band_corr[keep][:, keep]
-    lo, hi = _bounds(("ae", "length_scale_m"))
+    rho, data = rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands), bands.values["uu"][keep]
+    rho *= len(segment_starts(bands.nt, bands.setup)) * fd.series["u"].shape[1] / bands.segments["u"]  # gaps: ~1 / K
     x = np.array([math.log(np.median(data / model.expected(1.0, 30.0)[keep])), math.log(30.0)])
-    converged = False
-    for _ in range(PASSES):
-        sd = model.expected(*np.exp(x))[keep] * np.sqrt(factor)
-        chol = np.linalg.cholesky(corr * np.outer(sd, sd))
-        sol = least_squares(lambda y: solve_triangular(chol, data - model.expected(*np.exp(y))[keep], lower=True),
-                            np.clip(x, lo, hi), bounds=(lo, hi), diff_step=1e-4, xtol=1e-10, ftol=1e-10, gtol=1e-10)
-        cov = parameter_covariance(sol.jac)
-        moved, x = np.abs(sol.x - x) / np.sqrt(np.diag(cov)), sol.x
-        if sol.status > 0 and np.all(moved < MOVE_TOL):
-            converged = True
-            break
-    flags = [] if converged else [f"the fit did not converge ({sol.message.rstrip('.')}; {PASSES} passes)"]
+    sol, cov, weights, converged = gls(lambda y: data - model.expected(*np.exp(y))[keep], lambda y: model.covariance(
+        math.exp(y[0]), math.exp(y[1]), rho, keep), x, NAMES, passes=3 * PASSES)  # weights following L can oscillate
+    x, (lo, hi) = sol.x, bounds(NAMES)
+    flags = [] if converged else [f"the fit did not converge ({sol.message.rstrip('.')}; {3 * PASSES} passes)"]
     flags += [f"{n} = {math.exp(v):.4g} is on the boundary of its fitted range [{math.exp(a):.4g}, {math.exp(b):.4g}]"
-              for n, v, a, b in zip(("ae", "length_scale_m"), x, lo, hi) if min(v - a, b - v) < 1e-6]
+              for n, v, a, b in zip(NAMES, x, lo, hi) if min(v - a, b - v) < 1e-6]
     sdx = np.sqrt(np.diag(cov))
     val = [FitValue(math.exp(v), (math.exp(v - Z95 * s), math.exp(v + Z95 * s)), float(s)) for v, s in zip(x, sdx)]
-    full = np.zeros((3, 3))
-    full[:2, :2] = cov
+    full = np.pad(cov, ((0, 1), (0, 1)))  # Gamma held
     e = model.expected(*np.exp(x))[keep]
     notes = fd.notes + (_model_note(store),) + (() if keep.all() else (
         f"bands above {bands.f_hz[keep][-1]:.3g} Hz are not fitted: there the probe volume passes < {GAIN_MIN:g} of "
@@ -212,7 +224,7 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     fit = MannFit(val[0], val[1], FitValue(g, None, None), float(np.sum(sol.fun**2) / max(sol.fun.size - 2, 1)),
                   int(sol.fun.size - 2), tuple(flags), notes, "continuous" if store is None else "grid", fd.U_m_s,
                   fd.source, bands.setup.nperseg, bands.f_hz[keep], {"los": data}, {"los": e},
-                  {"los": e * np.sqrt(factor)}, cov_fit=full)  # fmt: skip
+                  {"los": np.sqrt(np.diag(weights))}, cov_fit=full)  # fmt: skip
     return _with_gates(fd, meas, fit)
 
 

@@ -192,12 +192,12 @@ def _estimates(data: FitData, nperseg: int, pairs: dict):
         key = (xa, tuple(a))  # the point-correlation sum of the points at one x
         if key not in of_x:
             one = replace(data, series={"u": u[:, a]}, uw_columns=())
-            of_x[key] = estimate_bands(one, bands.setup.nperseg).var_factor["uu"] * _rho_bar(X[:, :, a], bands.bands)
+            of_x[key] = estimate_bands(one, bands.setup.nperseg).var_factor["uu"] * rho_bar(X[:, :, a], bands.bands)
         factor.append(of_x[key])
     return bands, np.array(r), np.array(factor)
 
 
-def _rho_bar(X: np.ndarray, bands: tuple) -> np.ndarray:
+def rho_bar(X: np.ndarray, bands: tuple) -> np.ndarray:
     """(nbands,) rho_bar = sum_ab coh2_ab / P^2 of the P columns of X (K, nf, P): the variance of a P-point average
     of auto-spectrum estimates over that of one point. With G_ss' = sum_a conj(X_sa) X_s'a, E|G_ss'|^2 = sum_ab
     |S_ab|^2 and E[G_ss G_s's'] = (sum_a S_aa)^2 for independent segments (Isserlis 1918): their means over segment

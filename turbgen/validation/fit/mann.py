@@ -37,7 +37,7 @@ AE_MIN = 1e-6  # lower end of the fitted ae [m^(4/3) s^-2] (the range's open 0)
 NAMES = ("ae", "length_scale_m", "gamma")
 
 
-def _bounds(free: tuple) -> tuple[np.ndarray, np.ndarray]:
+def bounds(free: tuple) -> tuple[np.ndarray, np.ndarray]:
     r = ranges.RANGES
     lo = {"ae": math.log(AE_MIN), "length_scale_m": math.log(r["length_scale_m"].lo), "gamma": r["gamma"].lo}
     hi = {"ae": math.log(r["ae"].hi), "length_scale_m": math.log(r["length_scale_m"].hi), "gamma": r["gamma"].hi}
@@ -96,21 +96,21 @@ def _covariance_at(bands, model, geometry, used, p) -> np.ndarray:
     return spliced(full, exact)
 
 
-def _solve(bands, model, used, free, held, p, cov):
-    """One generalised least-squares pass at the covariance ``cov`` (of ``p``): (solution, new parameters)."""
-    chol = np.linalg.cholesky(cov)
-
-    def resid(x):
-        q = _params(x, free, held)
-        e = model.expected(q["ae"], q["length_scale_m"], q["gamma"])
-        r = np.stack([bands.values[s] - e[s] for s in used], axis=1).ravel()  # band-major
-        return solve_triangular(chol, r, lower=True)  # whitened: L^-1 r
-
-    x0 = np.array([math.log(p[n]) if n != "gamma" else p[n] for n in free])
-    lo, hi = _bounds(free)
-    sol = least_squares(resid, np.clip(x0, lo, hi), bounds=(lo, hi), x_scale=1.0, diff_step=1e-4, xtol=1e-10,
-                        ftol=1e-10, gtol=1e-10, max_nfev=200)
-    return sol, _params(sol.x, free, held)
+def gls(residual, covariance_at, x: np.ndarray, free: tuple, passes: int = PASSES):
+    """Re-weighted generalised least squares in x (the ``free`` parameters, ``bounds``): per pass ``residual(x)``
+    (data - model) whitened by the Cholesky factor of ``covariance_at(x)`` is minimised, until no parameter moves by
+    MOVE_TOL sd (at most ``passes``). (solution, cov(x) = (J^T J)^-1, the last weights, converged)."""
+    lo, hi = bounds(free)
+    for _ in range(passes):
+        weights = covariance_at(x)
+        chol = np.linalg.cholesky(weights)
+        sol = least_squares(lambda y: solve_triangular(chol, residual(y), lower=True), np.clip(x, lo, hi),
+                            bounds=(lo, hi), diff_step=1e-4, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
+        cov = parameter_covariance(sol.jac)
+        moved, x = np.abs(sol.x - x) / np.maximum(np.sqrt(np.diag(cov)), 1e-300), sol.x
+        if sol.status > 0 and np.all(moved < MOVE_TOL):
+            return sol, cov, weights, True
+    return sol, cov, weights, False
 
 
 def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra | None = None,
@@ -134,25 +134,23 @@ def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra 
     free = tuple(n for n in NAMES if n not in held)
     geometry = (*separations(np.asarray(data.sites_m, float)), point_sets(data, used))
     p = _start(bands, model, used, held)
+
+    def residual(x):
+        e = model.expected(**_params(x, free, held))
+        return np.stack([bands.values[s] - e[s] for s in used], axis=1).ravel()  # band-major
+
+    def weights_at(x, ratio=True):  # the grid ratio at x (not in the continuous pre-fit), the weights at x
+        q = _params(x, free, held)
+        if ratio:
+            model.update_ratio(MannParams(**q, lifetime=lifetime), slopes=True)
+        return _covariance_at(bands, model, geometry, used, q)
+
+    x = np.array([p[n] if n == "gamma" else math.log(p[n]) for n in free])
     if model.kind == "grid":  # the continuous fit first: the lattice ratio at a point near the answer
-        p = _solve(bands, model, used, free, held, p, _covariance_at(bands, model, geometry, used, p))[1]
-    converged = False
-    for _ in range(PASSES):
-        model.update_ratio(MannParams(**p, lifetime=lifetime), slopes=True)
-        weights = _covariance_at(bands, model, geometry, used, p)
-        sol, q = _solve(bands, model, used, free, held, p, weights)
-        cov = parameter_covariance(sol.jac)
-        sd = np.sqrt(np.diag(cov))
-        moved = np.abs(np.array([_x(q, n) - _x(p, n) for n in free])) / np.maximum(sd, 1e-300)
-        p = q
-        if sol.status > 0 and np.all(moved < MOVE_TOL):
-            converged = True
-            break
+        x = gls(residual, lambda y: weights_at(y, ratio=False), x, free, passes=1)[0].x
+    sol, cov, weights, converged = gls(residual, weights_at, x, free)
+    p = _params(sol.x, free, held)
     return _result(data, bands, model, used, free, held, p, sol, cov, converged, notes, weights)
-
-
-def _x(p: dict, n: str) -> float:
-    return p[n] if n == "gamma" else math.log(p[n])
 
 
 def parameter_covariance(jac: np.ndarray) -> np.ndarray:
@@ -169,7 +167,7 @@ def _result(data, bands, model, used, free, held, p, sol, cov, converged, notes,
     """The MannFit of a finished fit: intervals, chi^2 / dof, flags."""
     sd = np.sqrt(np.abs(np.diag(cov)))
     values, flags = {}, []
-    lo, hi = _bounds(free)
+    lo, hi = bounds(free)
     for k, n in enumerate(free):
         a, b = sol.x[k] - Z95 * sd[k], sol.x[k] + Z95 * sd[k]
         ci = (a, b) if n == "gamma" else (math.exp(a) if math.isfinite(a) else 0.0, math.exp(b))
