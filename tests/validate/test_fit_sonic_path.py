@@ -114,6 +114,15 @@ def test_a_bad_path_is_one_line_exit_2(tmp_path, bad, says):
         f"Error: constraint file {tmp_path / 'sonic.json'}: sensors/0/path_m: {says}"]
 
 
+@pytest.mark.parametrize("bad", [0.0, -0.1, 1.5])
+def test_a_sensor_built_in_python_checks_its_path(bad):
+    from turbgen.errors import ParameterError
+    from turbgen.spec.constraints import PointSensor
+
+    with pytest.raises(ParameterError, match=rf"^sensor s1: path_m = {bad:g} m is outside \(0, 1\] m$"):
+        PointSensor("s1", 0.0, 0.0, 0.0, None, {}, path_m=bad)
+
+
 def test_conditioning_keeps_the_sensor_a_point(tmp_path):
     """A path of 0.15 m is far below any grid step: the conditioned field is the same, bit for bit, with it."""
     t = np.arange(0.0, 25.0, 0.25)

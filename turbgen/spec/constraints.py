@@ -40,6 +40,10 @@ class PointSensor:
     series: dict
     path_m: float | None = None
 
+    def __post_init__(self):
+        if self.path_m is not None and not 0 < self.path_m <= 1:  # the constraints schema's range
+            raise ParameterError(f"sensor {self.name}: path_m = {self.path_m:g} m is outside (0, 1] m")
+
 
 @dataclass(frozen=True, eq=False)
 class PointSeries:
