@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from turbgen import fft
 from turbgen.errors import ParameterError
 from turbgen.spec.defaults import MANN_DEFAULTS
 from turbgen.theory import ranges
@@ -142,8 +143,9 @@ class LosModel:
         top, n = max(b[-1] for b in bands), setup.nperseg
         v = setup.window * np.exp(-2j * np.pi * np.outer(np.arange(1, top + 1), np.arange(n)) / n)  # (top, n)
         v -= v.sum(axis=1, keepdims=True) / n  # the segment mean removed before the window
-        r = np.fft.irfft(np.concatenate([[0.0], self.lines(ae, length_scale_m)]), n=nt) * nt  # R(d), d = 0 .. nt - 1
-        c = np.fft.ifft(np.fft.ifft(v, n=nt) * np.fft.fft(r), axis=1) * nt  # c_m(d) = sum_t v_m(t) R(d + t)
+        tf = fft.oneshot()
+        r = tf.irfft(np.concatenate([[0.0], self.lines(ae, length_scale_m)]), n=nt) * nt  # R(d), d = 0 .. nt - 1
+        c = tf.ifft(tf.ifft(v, n=nt) * tf.fft(r), axis=1) * nt  # c_m(d) = sum_t v_m(t) R(d + t)
         starts = np.asarray(segment_starts(nt, setup))
         lag, count = np.unique(starts[:, None] - starts[None, :], return_counts=True)
         cov = sum(k * (np.abs(g @ np.conj(v).T) ** 2 + np.abs(g @ v.T) ** 2)  # |E X_m conj X_n|^2 + |E X_m X_n|^2
