@@ -1,4 +1,4 @@
-"""The noise kernel (``fill_normals``: SFC64 + float32 Ziggurat) against an older revision's, in one process.
+"""This tree's noise kernel (``fill_normals``: SFC64 + float32 Ziggurat) against an older revision's, in one process.
 
     python benchmarks/bench_noise.py --against c2e1254           # 5e7 normals, 1 and 2 threads, 7 rounds
     python benchmarks/bench_noise.py --against c2e1254 --n 1e6   # to check the script
@@ -60,7 +60,7 @@ def main() -> None:
     n, words = int(args.n), key_words((1, 2, 3))
     print(f"load average {os.getloadavg()}")
     with tempfile.TemporaryDirectory() as tmp:
-        kernels = {args.against: _revision_kernel(args.against, tmp), "HEAD": fill_normals}
+        kernels = {args.against: _revision_kernel(args.against, tmp), "tree": fill_normals}
         outs = [np.ones(n, np.float32) for _ in range(2)]
         ref = kernels[args.against](words, np.empty(n, np.float32))
         assert np.array_equal(fill_normals(words, outs[0]).view(np.uint32), ref.view(np.uint32)), "bits differ"
@@ -70,7 +70,7 @@ def main() -> None:
                 for name, fill in kernels.items():
                     best[name] = min(best[name], _round(fill, outs[:threads], words))
             print(f"{threads} thread(s): " + ", ".join(f"{k} {v / n * 1e9:.3f} ns/normal" for k, v in best.items())
-                  + f"; HEAD / {args.against} = {best['HEAD'] / best[args.against]:.3f}")
+                  + f"; tree / {args.against} = {best['tree'] / best[args.against]:.3f}")
     print(f"load average {os.getloadavg()}")
 
 
