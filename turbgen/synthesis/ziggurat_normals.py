@@ -38,7 +38,7 @@ _RF = np.float32(_R)
 _INV_RF = np.float32(1.0 / _R)
 _INV_2_24 = np.float32(2.0**-24)
 _M32, _M23, _U8, _U9, _U32 = np.uint64(0xFFFFFFFF), np.uint64(0x7FFFFF), np.uint64(8), np.uint64(9), np.uint64(32)
-_MLAYER, _ONE, _M9, _U41 = np.uint64(0xFF), np.uint64(1), np.uint64(0x1FF), np.uint64(41)
+_MLAYER, _ONE, _TWO, _M9, _U41 = np.uint64(0xFF), np.uint64(1), np.uint64(2), np.uint64(0x1FF), np.uint64(41)
 # Tables indexed by the 9 low bits of a word (layer i, then the sign bit): k_i twice, then w_i and -w_i.
 _KIS = np.concatenate([KI, KI])
 _WIS = np.concatenate([WI, -WI])
@@ -104,38 +104,26 @@ def _normal(u, a, b, c, w, has, buf):
 def fill_normals(words, out):
     """Fill float32 ``out`` (1-D) with the first normals of the stream keyed by uint32 ``words`` (sfc64.key_words)."""
     a, b, c, w = seed_state(words)
-    has, buf = False, np.uint64(0)
-    n = out.size
-    i = 0
-    while i < n:
-        if has:  # a high half left buffered by the general path starts the next value
-            has = False
-            out[i], a, b, c, w, has, buf = _normal(buf, a, b, c, w, has, buf)
-            i += 1
-            continue
-        if i + 1 == n:
-            u, a, b, c, w, has, buf = _next32(a, b, c, w, has, buf)
-            out[i], a, b, c, w, has, buf = _normal(u, a, b, c, w, has, buf)
-            i += 1
-            continue
-        # Fast run: one 64-bit output per pair of values while both halves fall in their rectangles (97 %).
+    n, i = np.uint64(out.size), np.uint64(0)  # unsigned: stores without the negative-index wrap
+    while i + _ONE < n:  # at a pair boundary (no half word buffered)
+        # Fast: one 64-bit output per pair of values while both halves fall in their rectangles (97 %).
         # The 9-bit index (layer, sign) reads the signed tables, so x = m w_i carries its sign: the same
         # float32 product as numpy's x = m w_i then x = -x, without the branch.
-        o = out[i:]
-        n_pairs = (n - i) // 2
-        done = n_pairs
-        r = np.uint64(0)
-        for t in range(n_pairs):
-            r, a, b, c, w = next64(a, b, c, w)
-            jl, ml = r & _M9, (r >> _U9) & _M23
-            jh, mh = (r >> _U32) & _M9, r >> _U41
-            if (ml >= _KIS[jl]) | (mh >= _KIS[jh]):
-                done = t
-                break
-            o[2 * t] = np.float32(np.int32(ml)) * _WIS[jl]
-            o[2 * t + 1] = np.float32(np.int32(mh)) * _WIS[jh]
-        i += 2 * done
-        if done < n_pairs:  # the general path, exactly numpy's: the low half starts a value, the high half is buffered
-            out[i], a, b, c, w, has, buf = _normal(r & _M32, a, b, c, w, True, r >> _U32)
-            i += 1
+        r, a, b, c, w = next64(a, b, c, w)
+        jl, ml = r & _M9, (r >> _U9) & _M23
+        jh, mh = (r >> _U32) & _M9, r >> _U41
+        if (ml < _KIS[jl]) & (mh < _KIS[jh]):
+            out[i] = np.float32(np.int32(ml)) * _WIS[jl]
+            out[i + _ONE] = np.float32(np.int32(mh)) * _WIS[jh]
+            i += _TWO
+            continue
+        # else the general path, exactly numpy's: the low half starts a value, the high half is buffered
+        out[i], a, b, c, w, has, buf = _normal(r & _M32, a, b, c, w, True, r >> _U32)
+        i += _ONE
+        while has and i < n:  # a high half left buffered starts the next value
+            out[i], a, b, c, w, has, buf = _normal(buf, a, b, c, w, False, buf)
+            i += _ONE
+    if i < n:  # an odd last value, from the low half of a fresh output
+        r, a, b, c, w = next64(a, b, c, w)
+        out[i] = _normal(r & _M32, a, b, c, w, True, r >> _U32)[0]
     return out
