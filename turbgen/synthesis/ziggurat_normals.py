@@ -38,11 +38,23 @@ _RF = np.float32(_R)
 _INV_RF = np.float32(1.0 / _R)
 _INV_2_24 = np.float32(2.0**-24)
 _M32, _M23, _U8, _U9, _U32 = np.uint64(0xFFFFFFFF), np.uint64(0x7FFFFF), np.uint64(8), np.uint64(9), np.uint64(32)
-_MLAYER, _ONE, _M9, _U41 = np.uint64(0xFF), np.uint64(1), np.uint64(0x1FF), np.uint64(41)
+_MLAYER, _ONE, _TWO, _M9, _U41 = np.uint64(0xFF), np.uint64(1), np.uint64(2), np.uint64(0x1FF), np.uint64(41)
 # Tables indexed by the 9 low bits of a word (layer i, then the sign bit): k_i twice, then w_i and -w_i.
 _KIS = np.concatenate([KI, KI])
 _WIS = np.concatenate([WI, -WI])
 _MINUS_HALF = np.float64(-0.5)
+_TM = -0.5 * ((KI + 2.0**23) / 2 * WI.astype(np.float64)) ** 2  # t at each wedge's middle x_m = (k_i + 2^23) w_i / 2
+_EM_LO, _EM_HI = np.exp(_TM) * (1.0 - 2.0**-30), np.exp(_TM) * (1.0 + 2.0**-30)
+
+
+@numba.njit(nogil=True, cache=True, inline="always")
+def _under_density(y, x, i):
+    """numpy's wedge test y < exp(t), t = -x^2/2 (float64), mostly without exp: with d = t - t_m, exp(t) = e^t_m e^d
+    and 1 + d <= e^d <= 1 / (1 - d) (d < 1), widened by 2^-30 (far beyond rounding), decide 99.7 % of the y.
+    """
+    t = _MINUS_HALF * np.float64(x) * np.float64(x)
+    d = t - _TM[i]
+    return y < _EM_LO[i] * (1.0 + d) or (y * (1.0 - d) < _EM_HI[i] and y < math.exp(t))
 
 
 @numba.njit(nogil=True, cache=True)
@@ -61,7 +73,7 @@ def _next_float(a, b, c, w, has, buf):
     return np.float32(u >> _U8) * _INV_2_24, a, b, c, w, has, buf
 
 
-@numba.njit(nogil=True, cache=True)
+@numba.njit(nogil=True, cache=True, inline="always")  # inlined (numba IR) in fill_normals: 10 % less time there
 def _normal(u, a, b, c, w, has, buf):
     """One normal whose first word is ``u``, drawing further words as needed; returns (x, state...)."""
     while True:
@@ -83,7 +95,7 @@ def _normal(u, a, b, c, w, has, buf):
                     return (-t if (m >> _U8) & _ONE else t), a, b, c, w, has, buf
         else:  # wedge: a uniform height in [f_i, f_{i-1}] under exp(-x^2/2) (compared in float64, as numpy)
             f1, a, b, c, w, has, buf = _next_float(a, b, c, w, has, buf)
-            if (FI[i - 1] - FI[i]) * f1 + FI[i] < math.exp(_MINUS_HALF * np.float64(x) * np.float64(x)):
+            if _under_density(np.float64((FI[i - 1] - FI[i]) * f1 + FI[i]), x, i):
                 return x, a, b, c, w, has, buf
         u, a, b, c, w, has, buf = _next32(a, b, c, w, has, buf)
 
@@ -92,38 +104,26 @@ def _normal(u, a, b, c, w, has, buf):
 def fill_normals(words, out):
     """Fill float32 ``out`` (1-D) with the first normals of the stream keyed by uint32 ``words`` (sfc64.key_words)."""
     a, b, c, w = seed_state(words)
-    has, buf = False, np.uint64(0)
-    n = out.size
-    i = 0
-    while i < n:
-        if has:  # a high half left buffered by the general path starts the next value
-            has = False
-            out[i], a, b, c, w, has, buf = _normal(buf, a, b, c, w, has, buf)
-            i += 1
-            continue
-        if i + 1 == n:
-            u, a, b, c, w, has, buf = _next32(a, b, c, w, has, buf)
-            out[i], a, b, c, w, has, buf = _normal(u, a, b, c, w, has, buf)
-            i += 1
-            continue
-        # Fast run: one 64-bit output per pair of values while both halves fall in their rectangles (97 %).
+    n, i = np.uint64(out.size), np.uint64(0)  # unsigned: stores without the negative-index wrap
+    while i + _ONE < n:  # at a pair boundary (no half word buffered)
+        # Fast: one 64-bit output per pair of values while both halves fall in their rectangles (97 %).
         # The 9-bit index (layer, sign) reads the signed tables, so x = m w_i carries its sign: the same
         # float32 product as numpy's x = m w_i then x = -x, without the branch.
-        o = out[i:]
-        n_pairs = (n - i) // 2
-        done = n_pairs
-        r = np.uint64(0)
-        for t in range(n_pairs):
-            r, a, b, c, w = next64(a, b, c, w)
-            jl, ml = r & _M9, (r >> _U9) & _M23
-            jh, mh = (r >> _U32) & _M9, r >> _U41
-            if (ml >= _KIS[jl]) | (mh >= _KIS[jh]):
-                done = t
-                break
-            o[2 * t] = np.float32(np.int32(ml)) * _WIS[jl]
-            o[2 * t + 1] = np.float32(np.int32(mh)) * _WIS[jh]
-        i += 2 * done
-        if done < n_pairs:  # the general path, exactly numpy's: the low half starts a value, the high half is buffered
-            out[i], a, b, c, w, has, buf = _normal(r & _M32, a, b, c, w, True, r >> _U32)
-            i += 1
+        r, a, b, c, w = next64(a, b, c, w)
+        jl, ml = r & _M9, (r >> _U9) & _M23
+        jh, mh = (r >> _U32) & _M9, r >> _U41
+        if (ml < _KIS[jl]) & (mh < _KIS[jh]):
+            out[i] = np.float32(np.int32(ml)) * _WIS[jl]
+            out[i + _ONE] = np.float32(np.int32(mh)) * _WIS[jh]
+            i += _TWO
+            continue
+        # else the general path, exactly numpy's: the low half starts a value, the high half is buffered
+        out[i], a, b, c, w, has, buf = _normal(r & _M32, a, b, c, w, True, r >> _U32)
+        i += _ONE
+        while has and i < n:  # a high half left buffered starts the next value
+            out[i], a, b, c, w, has, buf = _normal(buf, a, b, c, w, False, buf)
+            i += _ONE
+    if i < n:  # an odd last value, from the low half of a fresh output
+        r, a, b, c, w = next64(a, b, c, w)
+        out[i] = _normal(r & _M32, a, b, c, w, True, r >> _U32)[0]
     return out
