@@ -8,6 +8,9 @@ each record's band estimates: its sd over the records against sqrt(a'Ca) (standa
 
     python benchmarks/bench_fit_sonic_cov.py --case 0.05,60,2 --n 2000 --seed0 100000
     python benchmarks/bench_fit_sonic_cov.py --case 0.05,60,2 --results benchmarks/fit_results_sonic_12000.jsonl
+    python benchmarks/bench_fit_sonic_cov.py --kind mast4 --case 0.05,60,2 --n 500 --seed0 300000
+
+--kind mast4: the 4-sensor mast of ``bench_fit.py``'s fields instead (grid model; --nt and --dt unused).
 """
 
 from __future__ import annotations
@@ -17,10 +20,12 @@ import json
 import math
 
 import numpy as np
+from bench_fit import POINTS, field
 from bench_fit_wetb import U_M_S, sonic_series
 from scipy.stats import chi2
 
 from turbgen.spec.constraints import PointSensor, PointSeries
+from turbgen.theory.params import MannParams
 from turbgen.validation.fit.covariance import point_sets, separations
 from turbgen.validation.fit.data import load_fit_data
 from turbgen.validation.fit.mann import NAMES, _covariance_at
@@ -35,19 +40,24 @@ def main() -> None:
     ap.add_argument("--seed0", type=int, default=100000)
     ap.add_argument("--nt", type=int, default=12000)
     ap.add_argument("--dt", type=float, default=0.05)
+    ap.add_argument("--kind", default="sonic", choices=("sonic", "mast4"))
     ap.add_argument("--results", default=None, help="bench_fit.py rows: project their seeds of this case")
     a = ap.parse_args()
     case = tuple(float(v) for v in a.case.split(","))
     p = dict(zip(NAMES, case))
 
     def vector(seed):
-        s = PointSensor("s", 0.0, 0.0, 0.0, None, sonic_series(case, seed, a.nt, a.dt))
-        data = load_fit_data(PointSeries("s", a.dt * np.arange(a.nt), (s,), False, None, "sonic"), U_M_S)
+        if a.kind == "mast4":
+            data = load_fit_data(field(case, seed, None), None, POINTS["mast4"])
+        else:
+            s = PointSensor("s", 0.0, 0.0, 0.0, None, sonic_series(case, seed, a.nt, a.dt))
+            data = load_fit_data(PointSeries("s", a.dt * np.arange(a.nt), (s,), False, None, "sonic"), U_M_S)
         b = estimate_bands(data)
         return data, b, np.stack([b.values[s] for s in SPECTRA], 1).ravel()
 
     data, bands, _ = vector(a.seed0)
-    model = BandModel(bands, U_M_S)
+    model = BandModel(bands, data.U_m_s, data.grid, data.box)
+    model.update_ratio(MannParams(*case), slopes=True)  # the grid model's lattice ratio at the truth (mast4)
     cov = _covariance_at(bands, model, (*separations(data.sites_m), point_sets(data, SPECTRA)), SPECTRA, p)
     jac = []
     for n in NAMES:  # central differences in ln ae, ln L, Gamma
@@ -56,8 +66,8 @@ def main() -> None:
     jac, ci = np.array(jac), np.linalg.inv(cov)
     gls = np.linalg.solve(jac @ ci @ jac.T, jac @ ci)
     sd = np.sqrt(np.einsum("pi,ij,pj->p", gls, cov, gls))
-    print(f"case {case}, nt {a.nt}, dt {a.dt} s, nperseg {bands.setup.nperseg}, segments {bands.segments['u']}; "
-          f"GLS sd at the truth (ln ae, ln L, Gamma) {np.round(sd, 5)}")
+    print(f"{a.kind}, case {case}, nt {data.nt}, dt {bands.setup.dt_s} s, nperseg {bands.setup.nperseg}, segments "
+          f"{bands.segments['u']}; GLS sd at the truth (ln ae, ln L, Gamma) {np.round(sd, 5)}")
     if a.results:
         rows = [r for r in map(json.loads, open(a.results)) if tuple(r["case"]) == case]
         x = np.array([vector(r["seed"])[2] for r in rows]) @ gls.T

@@ -275,7 +275,7 @@ def test_band_variance_of_white_noise_is_the_exact_welch_sum():
     """``var_factor`` of one white column (nt = 6000, 22 half-overlapping segments of 512) against the exact
     variance of each band's Welch mean over its squared mean (``WelchCovariance``: an independent sum over the
     record's lines and segment pairs; bin lags <= 3 hold all but 4e-5 of the correlation). Welch's (1967) product
-    (overlap times bin correlation) left the many-bin bands 2.7 % short; the bands inside bins 8 .. nperseg/2 - 8
+    (overlap times bin correlation) left the many-bin bands 2.6 % short; the bands inside bins 8 .. nperseg/2 - 8
     (no edge leakage) now agree to 1e-3 (the 4e-5 beyond lag 3 and the mean removal's leak)."""
     from turbgen.validation.estimators import segment_starts
     from turbgen.validation.welch_kernel import WelchKernel

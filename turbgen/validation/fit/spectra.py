@@ -8,7 +8,7 @@ column is skipped for that column (Welch over the gaps). Bins are averaged into 
 Variances (the fit's weights): a band of n bins of one point's Welch average over K segments has the variance S^2 times
 sum_d (n - |d|) (r_d + 2 q o_d) / (n^2 K), with r_d the correlation of white noise's Hann bins d apart in one segment,
 o_d in half-overlapping segments (``_rho2``) and q = (K - 1) / K the share of overlapping pairs: ``var_factor`` (Welch's
-(1967) product o_d = o_0 r_d left many-bin bands' variance 2.7 % short at K = 22). The joint covariance of the four
+(1967) product o_d = o_0 r_d left many-bin bands' variance 2.6 % short at K = 22). The joint covariance of the four
 spectra averaged over the points (``covariance``: Isserlis terms from the model's cross-spectra between the points)
 scales with it: ``BandSpectra.covariance``; neighbouring bands covary through the correlation of neighbouring Hann bins:
 ``BandSpectra.full_covariance``.
