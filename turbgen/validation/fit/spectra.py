@@ -5,12 +5,13 @@ default segment length ``default_nperseg``) is applied to every column; a segmen
 column is skipped for that column (Welch over the gaps). Bins are averaged into bands BANDS_PER_DECADE per decade
 (each lowest bin on its own), bins 1 .. n/2 - 1.
 
-Variances (the fit's weights): one bin of one point's Welch estimate has the variance S^2 / K_eff (Welch 1967; K_eff
-from the segment overlap, ``WelchSetup.effective_segments``); a band of n bins that of one bin times
-(n + 2 sum_d (n - d) r_d) / n^2, with r_d the correlation of Hann bins d apart (``WelchSetup.bin_rho2``):
-``var_factor``. The joint covariance of the four spectra averaged over the points (``covariance``: Isserlis terms
-from the model's cross-spectra between the points) scales with it: ``BandSpectra.covariance``; neighbouring bands
-covary through the correlation of neighbouring Hann bins: ``BandSpectra.full_covariance``.
+Variances (the fit's weights): a band of n bins of one point's Welch average over K segments has the variance S^2 times
+sum_d (n - |d|) (r_d + 2 q o_d) / (n^2 K), with r_d the correlation of white noise's Hann bins d apart in one segment,
+o_d in half-overlapping segments (``_rho2``) and q = (K - 1) / K the share of overlapping pairs: ``var_factor`` (Welch's
+(1967) product o_d = o_0 r_d left many-bin bands' variance 2.6 % short at K = 22). The joint covariance of the four
+spectra averaged over the points (``covariance``: Isserlis terms from the model's cross-spectra between the points)
+scales with it: ``BandSpectra.covariance``; neighbouring bands covary through the correlation of neighbouring Hann bins:
+``BandSpectra.full_covariance``.
 """
 
 from __future__ import annotations
@@ -118,8 +119,7 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
                              "samples")
     setup = WelchSetup(n, data.dt_s)
     bands = band_bins(n)
-    gram = _band_gram(bands, np.array([setup.bin_rho2(d) for d in range(4)]))
-    gain = np.diag(gram)
+    gram, over = (_band_gram(bands, np.array([_rho2(setup, s, d) for d in range(4)])) for s in (0, setup.hop))
     values, factor, segs, dft = {}, {}, {}, {}
     for c, x in data.series.items():
         X, ok = segment_dfts(x, setup)
@@ -130,8 +130,7 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
         dft[c], segs[c] = (X, ok), int(k.sum())
         psd = (np.abs(X) ** 2 * ok[:, None, :]).sum(axis=(0, 2)) * setup.scale / k.sum()
         values[c + c] = np.array([psd[b].mean() for b in bands])
-        k_eff = setup.effective_segments(int(k.sum()), int(k.sum() - x.shape[1])) / x.shape[1]
-        factor[c + c] = gain / k_eff
+        factor[c + c] = np.diag(gram + 2 * (1 - x.shape[1] / k.sum()) * over) * x.shape[1] / k.sum()
     if data.uw_columns:
         (xu, oku), (xw, okw) = dft["u"], dft["w"]
         iu, iw = (np.array(v) for v in zip(*data.uw_columns))
@@ -141,8 +140,17 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
         values["uw"] = np.array([co[b].mean() for b in bands])
         factor["uw"] = np.sqrt(factor["uu"] * factor["ww"])
     f = setup.freqs
+    gram += 2 * (1 - 1 / len(segment_starts(nt, setup))) * over  # a whole column's, for the bands' correlation
     return BandSpectra(setup, nt, bands, np.array([f[b].mean() for b in bands]), values, factor, segs,
-                       gram / np.sqrt(np.outer(gain, gain)))
+                       gram / np.sqrt(np.outer(np.diag(gram), np.diag(gram))))
+
+
+def _rho2(setup: WelchSetup, shift: int, lag: int) -> float:
+    """Correlation of white noise's periodogram bins ``lag`` apart in segments ``shift`` samples apart (Hann: 1, 4/9,
+    1/36 in one segment; 1/36, 0.020, 0.0069, 8e-4 half-overlapping, not 1/36 times the former as in Welch 1967)."""
+    w, n = setup.window, setup.nperseg
+    g = w[shift:] * w[: n - shift] * np.exp(-2j * np.pi * lag * np.arange(n - shift) / n)
+    return float(np.abs(g.sum()) ** 2 / np.sum(w**2) ** 2)
 
 
 def _band_gram(bands: tuple, r: np.ndarray) -> np.ndarray:
