@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -54,7 +55,10 @@ class BandModel:
         self.transfer = {n: np.mean([path_transfer(self.k1 * p)[n] for p in ps], axis=0)
                          for n, ps in (paths_m or {}).items()}  # fmt: skip
         self.dk1 = 2 * np.pi / (nt * dt * U_m_s)
-        self.kernel = WelchKernel(bands.setup, nt)
+        self.kernel = k = _kernel(bands.setup, nt)
+        dense = np.zeros((k.k.shape[0], nt // 2 + 1))  # the kernel as a matrix on the lines, averaged over bands:
+        np.add.at(dense, (np.arange(k.k.shape[0])[:, None], k.idx), k.k)  # ``expected`` = gain @ line variances
+        self.gain = np.stack([dense[b].mean(axis=0) for b in bands.bands])
         self.ratio_k1 = np.geomspace(self.k1[0], self.k1[-1], N_RATIO_NODES)
         self.ratio: dict | None = None  # name -> (N_RATIO_NODES,) lattice / continuous, set by ``update_ratio``
         self.ratio_at, self.ratio_slope = None, None  # (ln L, Gamma) of ``ratio``, its derivatives there
@@ -110,11 +114,8 @@ class BandModel:
 
     def expected(self, ae: float, length_scale_m: float, gamma: float) -> dict:
         """Name ("uu", "vv", "ww", "uw") -> (nbands,) expected band-averaged Welch estimate [m^2 s^-2 Hz^-1]."""
-        out = {}
-        for n, spec in self.line_spectra(ae, length_scale_m, gamma).items():
-            lines = np.concatenate([[0.0], spec * self.dk1])  # line variances L_j = F(k1_j) dk1, j = 0 .. nt/2
-            out[n] = self.bands.band_mean(self.kernel.apply(lines))
-        return out
+        spec = self.line_spectra(ae, length_scale_m, gamma)  # line variances F(k1_j) dk1 at j = 1 .. nt/2
+        return dict(zip(spec, np.stack(list(spec.values())) @ self.gain[:, 1:].T * self.dk1))
 
     def coherency(self, params: MannParams, seps_m: np.ndarray) -> np.ndarray:
         """(nbands, 3, 3, D) complex coherency S_pq(d) / sqrt(S_pp(0) S_qq(0)) at each band's centre and the
@@ -187,6 +188,9 @@ class BandModel:
                     done[(y, z)] = s
             out[..., d] = done[(y, z)]
         return out
+
+
+_kernel = lru_cache(maxsize=4)(WelchKernel)  # the Welch setup's kernel, parameter-free: built once per setup
 
 
 def _outer(a: np.ndarray) -> np.ndarray:

@@ -12,7 +12,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-from scipy.interpolate import CubicSpline
+from scipy.interpolate import CubicSpline, PPoly
 
 from turbgen.errors import ParameterError
 from turbgen.theory import ranges
@@ -40,7 +40,6 @@ def build_table(lifetime: str = "guo", path=None) -> None:
     np.savez_compressed(path or TABLE_PATHS[lifetime], log_f=cols, x_nodes=X_NODES, gamma_nodes=GAMMA_NODES)
 
 
-@lru_cache(maxsize=2)
 def load_table(lifetime: str = "guo") -> np.ndarray:
     """(len(GAMMA_NODES), 4, len(X_NODES)) columns (``table_column``) of ``lifetime`` from TABLE_PATHS, checked
     against the nodes of this module."""
@@ -50,6 +49,12 @@ def load_table(lifetime: str = "guo") -> np.ndarray:
             raise ParameterError(f"{path} was built for other nodes: rebuild it (python -m "
                                  "turbgen.validation.fit.table)")
         return t["log_f"]
+
+
+@lru_cache(maxsize=2)
+def table_spline(lifetime: str = "guo") -> CubicSpline:
+    """Cubic splines in log k1 L of all columns of ``load_table(lifetime)``, built once (linear in the data)."""
+    return CubicSpline(np.log(X_NODES), load_table(lifetime), axis=2)
 
 
 def scaled_spectra(x: np.ndarray, gamma: float, lifetime: str = "guo") -> dict:
@@ -62,9 +67,9 @@ def scaled_spectra(x: np.ndarray, gamma: float, lifetime: str = "guo") -> dict:
     t = g / GAMMA_STEP
     weights = np.array([np.prod([(t - nodes[m]) / (nodes[k] - nodes[m]) for m in range(4) if m != k])
                         for k in range(4)])
-    cols = np.tensordot(weights, load_table(lifetime)[nodes], axes=1)  # (4, nx)
-    lx, top = np.log(x), np.log(X_NODES[-1])
-    spline = CubicSpline(np.log(X_NODES), cols, axis=1)(np.clip(lx, np.log(X_NODES[0]), top))
+    s, lx, top = table_spline(lifetime), np.log(x), np.log(X_NODES[-1])
+    spline = PPoly.construct_fast(np.tensordot(s.c[:, :, nodes], weights, axes=([2], [0])), s.x)(
+        np.clip(lx, s.x[0], top)).T  # (4, x.size)
     out = {n: np.exp(spline[k] - 5.0 / 3.0 * np.maximum(lx - top, 0.0)) for k, n in enumerate(("uu", "vv", "ww"))}
     rho = spline[3] * np.exp(-2.0 / 3.0 * np.maximum(lx - top, 0.0))  # F13 ~ k1^(-7/3) in the inertial range
     out["uw"] = rho * np.sqrt(out["uu"] * out["ww"])
