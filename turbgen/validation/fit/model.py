@@ -50,6 +50,7 @@ class BandModel:
 
     def __init__(self, bands: BandSpectra, U_m_s: float, grid=None, box=None, lifetime: str = "guo", paths_m=None):
         self.bands, self.U, self.grid, self.box, self.lifetime = bands, U_m_s, grid, box, lifetime
+        self.kind = "continuous" if grid is None else "grid"
         nt, dt = bands.nt, bands.setup.dt_s
         self.k1 = 2 * np.pi * line_frequencies(nt, dt)[1:] / U_m_s  # lines 1 .. nt/2 [rad/m]
         self.transfer = {n: np.mean([path_transfer(self.k1 * p)[n] for p in ps], axis=0)
@@ -63,10 +64,6 @@ class BandModel:
         self.ratio: dict | None = None  # name -> (N_RATIO_NODES,) lattice / continuous, set by ``update_ratio``
         self.ratio_at, self.ratio_slope = None, None  # (ln L, Gamma) of ``ratio``, its derivatives there
         self._cross: tuple | None = None  # (params, separations, cross-spectra) of the last ``coherency``
-
-    @property
-    def kind(self) -> str:
-        return "continuous" if self.grid is None else "grid"
 
     def update_ratio(self, params: MannParams, slopes: bool = False) -> None:
         """Lattice sum / continuous spectrum at the ratio nodes for ``params`` (grid model only); with ``slopes``
