@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -117,8 +118,7 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
         raise ParameterError(f"nperseg = {n} is outside [{MIN_NPERSEG}, nt/4 = {nt // 4}] for a record of {nt} "
                              "samples")
     setup = WelchSetup(n, data.dt_s)
-    bands = band_bins(n)
-    gram = _band_gram(bands, np.array([setup.bin_rho2(d) for d in range(4)]))
+    bands, gram = band_bins(n), _band_gram(setup)
     gain = np.diag(gram)
     values, factor, segs, dft = {}, {}, {}, {}
     for c, x in data.series.items():
@@ -145,8 +145,11 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
                        gram / np.sqrt(np.outer(gain, gain)))
 
 
-def _band_gram(bands: tuple, r: np.ndarray) -> np.ndarray:
-    """(nbands, nbands) covariance of the band means of unit-variance bins correlated r_d at d bins apart (d < 4)."""
+@lru_cache(maxsize=8)
+def _band_gram(setup: WelchSetup) -> np.ndarray:
+    """(nbands, nbands) covariance of the band means (``band_bins``) of unit-variance bins correlated r_d
+    (``WelchSetup.bin_rho2``) at d < 4 bins apart: parameter-free, built once per setup (not per record)."""
+    bands, r = band_bins(setup.nperseg), np.array([setup.bin_rho2(d) for d in range(4)])
     nbins = bands[-1][-1] + 1
     lag = np.abs(np.arange(nbins)[:, None] - np.arange(nbins)[None, :])
     rb = np.where(lag < r.size, r[np.minimum(lag, r.size - 1)], 0.0)
