@@ -41,6 +41,7 @@ PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 WEIGHT_RULE = {"n_gauss": 4, "n_theta": 64}
 REUSE_LN_L, REUSE_GAMMA = 0.05, 0.1  # cross-spectra between points are reused while L and Gamma stay this close
 LINE_NODES = 24  # k1 nodes of the continuous cross-spectra between sensors for ``line_cross`` (smooth in ln k1)
+_kernel = lru_cache(maxsize=4)(WelchKernel)  # a Welch setup's kernel (parameter-free): built once per setup
 
 
 class BandModel:
@@ -93,14 +94,10 @@ class BandModel:
 
     def line_spectra(self, ae: float, length_scale_m: float, gamma: float) -> dict:
         """Name -> (nt/2,) two-sided F(k1) [m^3 s^-2] at the record's lines 1 .. nt/2 (times the grid ratio)."""
-        f = scaled_spectra(self.k1 * length_scale_m, gamma, self.lifetime)
-        scale = ae * length_scale_m ** (5.0 / 3.0)
-        out = {}
-        for n in NAMES:
-            r = 1.0 if self.ratio is None else np.interp(np.log(self.k1), np.log(self.ratio_k1), self._ratio_of(
-                n, length_scale_m, gamma))
-            out[n] = scale * f[n] * r * self.transfer.get(n, 1.0)
-        return out
+        f, scale = scaled_spectra(self.k1 * length_scale_m, gamma, self.lifetime), ae * length_scale_m ** (5.0 / 3.0)
+        ratio = {n: 1.0 if self.ratio is None else np.interp(np.log(self.k1), np.log(self.ratio_k1), self._ratio_of(
+            n, length_scale_m, gamma)) for n in NAMES}
+        return {n: scale * f[n] * ratio[n] * self.transfer.get(n, 1.0) for n in NAMES}
 
     def _ratio_of(self, n: str, length_scale_m: float, gamma: float) -> np.ndarray:
         """The ratio of spectrum ``n`` at the nodes for L and Gamma (to first order about ``ratio_at``)."""
@@ -185,9 +182,6 @@ class BandModel:
                     done[(y, z)] = s
             out[..., d] = done[(y, z)]
         return out
-
-
-_kernel = lru_cache(maxsize=4)(WelchKernel)  # the Welch setup's kernel, parameter-free: built once per setup
 
 
 def _outer(a: np.ndarray) -> np.ndarray:

@@ -147,8 +147,7 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
 
 @lru_cache(maxsize=8)
 def _band_gram(setup: WelchSetup) -> np.ndarray:
-    """(nbands, nbands) covariance of the band means (``band_bins``) of unit-variance bins correlated r_d
-    (``WelchSetup.bin_rho2``) at d < 4 bins apart: parameter-free, built once per setup (not per record)."""
+    """(nbands, nbands) covariance of the band means of unit-variance bins correlated r_d at d < 4 bins apart."""
     bands, r = band_bins(setup.nperseg), np.array([setup.bin_rho2(d) for d in range(4)])
     nbins = bands[-1][-1] + 1
     lag = np.abs(np.arange(nbins)[:, None] - np.arange(nbins)[None, :])

@@ -61,10 +61,8 @@ def scaled_spectra(x: np.ndarray, gamma: float, lifetime: str = "guo") -> dict:
     """f_ij(k1 L, Gamma) (module docstring), two-sided [m^3 s^-2 per ae L^(5/3)], at ``x`` = k1 L > 0 for Gamma
     ``gamma`` and the table of ``lifetime`` ("guo" or "mann"): {"uu", "vv", "ww", "uw" -> f(x)}; F13 < 0."""
     g = ranges.check("gamma", gamma, "Gamma (fitted, -)")
-    last = GAMMA_NODES.size - 1
-    i0 = int(np.clip(np.floor(g / GAMMA_STEP) - 1, 0, last - 3))
-    nodes = np.arange(i0, i0 + 4)
-    t = g / GAMMA_STEP
+    i0 = int(np.clip(np.floor(g / GAMMA_STEP) - 1, 0, GAMMA_NODES.size - 4))  # the 4 Lagrange nodes about Gamma
+    nodes, t = np.arange(i0, i0 + 4), g / GAMMA_STEP
     weights = np.array([np.prod([(t - nodes[m]) / (nodes[k] - nodes[m]) for m in range(4) if m != k])
                         for k in range(4)])
     s, lx, top = table_spline(lifetime), np.log(x), np.log(X_NODES[-1])
