@@ -58,9 +58,10 @@ class BandModel:
                          for n, ps in (paths_m or {}).items()}  # fmt: skip
         self.dk1 = 2 * np.pi / (nt * dt * U_m_s)
         self.kernel = k = _kernel(bands.setup, nt)
-        dense = np.zeros((k.k.shape[0], nt // 2 + 1))  # the kernel as a matrix on the lines, averaged over bands:
-        np.add.at(dense, (np.arange(k.k.shape[0])[:, None], k.idx), k.k)  # ``expected`` = gain @ line variances
-        self.gain = np.stack([dense[b].mean(axis=0) for b in bands.bands])
+        self.gain = np.zeros((len(bands.bands), nt // 2 + 1))  # ``expected`` = gain @ line variances: the kernel's
+        for g, b in zip(self.gain, bands.bands):  # rows averaged over each band (nbands x lines, not bins x lines)
+            np.add.at(g, k.idx[b], k.k[b])
+        self.gain /= [[b.size] for b in bands.bands]
         self.ratio_k1 = np.geomspace(self.k1[0], self.k1[-1], N_RATIO_NODES)
         self.ratio: dict | None = None  # name -> (N_RATIO_NODES,) lattice / continuous, set by ``update_ratio``
         self.ratio_at, self.ratio_slope = None, None  # (ln L, Gamma) of ``ratio``, its derivatives there
@@ -121,8 +122,7 @@ class BandModel:
                 REUSE_LN_L or abs(params.gamma - c[0].gamma) > REUSE_GAMMA:
             cross = self._continuous_cross if self.grid is None else self._lattice_cross
             self._cross = c = (params, seps_m, cross(params, seps_m, k1))
-        s = c[2]
-        zero = np.flatnonzero(np.all(seps_m == 0, axis=1))[0]
+        s, zero = c[2], np.flatnonzero(np.all(seps_m == 0, axis=1))[0]
         diag = np.sqrt(np.abs(s[:, [0, 1, 2], [0, 1, 2], zero]))
         return s / (diag[:, :, None, None] * diag[:, None, :, None])
 
