@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -40,6 +41,7 @@ PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 WEIGHT_RULE = {"n_gauss": 4, "n_theta": 64}
 REUSE_LN_L, REUSE_GAMMA = 0.05, 0.1  # cross-spectra between points are reused while L and Gamma stay this close
 LINE_NODES = 24  # k1 nodes of the continuous cross-spectra between sensors for ``line_cross`` (smooth in ln k1)
+_kernel = lru_cache(maxsize=4)(WelchKernel)  # a Welch setup's kernel (parameter-free): built once per setup
 
 
 class BandModel:
@@ -49,20 +51,21 @@ class BandModel:
 
     def __init__(self, bands: BandSpectra, U_m_s: float, grid=None, box=None, lifetime: str = "guo", paths_m=None):
         self.bands, self.U, self.grid, self.box, self.lifetime = bands, U_m_s, grid, box, lifetime
+        self.kind = "continuous" if grid is None else "grid"
         nt, dt = bands.nt, bands.setup.dt_s
         self.k1 = 2 * np.pi * line_frequencies(nt, dt)[1:] / U_m_s  # lines 1 .. nt/2 [rad/m]
         self.transfer = {n: np.mean([path_transfer(self.k1 * p)[n] for p in ps], axis=0)
                          for n, ps in (paths_m or {}).items()}  # fmt: skip
         self.dk1 = 2 * np.pi / (nt * dt * U_m_s)
-        self.kernel = WelchKernel(bands.setup, nt)
+        self.kernel = k = _kernel(bands.setup, nt)
+        self.gain = np.zeros((len(bands.bands), nt // 2 + 1))  # ``expected`` = gain @ line variances: the kernel's
+        for g, b in zip(self.gain, bands.bands):  # rows averaged over each band (nbands x lines, not bins x lines)
+            np.add.at(g, k.idx[b], k.k[b])
+        self.gain /= [[b.size] for b in bands.bands]
         self.ratio_k1 = np.geomspace(self.k1[0], self.k1[-1], N_RATIO_NODES)
         self.ratio: dict | None = None  # name -> (N_RATIO_NODES,) lattice / continuous, set by ``update_ratio``
         self.ratio_at, self.ratio_slope = None, None  # (ln L, Gamma) of ``ratio``, its derivatives there
         self._cross: tuple | None = None  # (params, separations, cross-spectra) of the last ``coherency``
-
-    @property
-    def kind(self) -> str:
-        return "continuous" if self.grid is None else "grid"
 
     def update_ratio(self, params: MannParams, slopes: bool = False) -> None:
         """Lattice sum / continuous spectrum at the ratio nodes for ``params`` (grid model only); with ``slopes``
@@ -92,14 +95,10 @@ class BandModel:
 
     def line_spectra(self, ae: float, length_scale_m: float, gamma: float) -> dict:
         """Name -> (nt/2,) two-sided F(k1) [m^3 s^-2] at the record's lines 1 .. nt/2 (times the grid ratio)."""
-        f = scaled_spectra(self.k1 * length_scale_m, gamma, self.lifetime)
-        scale = ae * length_scale_m ** (5.0 / 3.0)
-        out = {}
-        for n in NAMES:
-            r = 1.0 if self.ratio is None else np.interp(np.log(self.k1), np.log(self.ratio_k1), self._ratio_of(
-                n, length_scale_m, gamma))
-            out[n] = scale * f[n] * r * self.transfer.get(n, 1.0)
-        return out
+        f, scale = scaled_spectra(self.k1 * length_scale_m, gamma, self.lifetime), ae * length_scale_m ** (5.0 / 3.0)
+        ratio = {n: 1.0 if self.ratio is None else np.interp(np.log(self.k1), np.log(self.ratio_k1), self._ratio_of(
+            n, length_scale_m, gamma)) for n in NAMES}
+        return {n: scale * f[n] * ratio[n] * self.transfer.get(n, 1.0) for n in NAMES}
 
     def _ratio_of(self, n: str, length_scale_m: float, gamma: float) -> np.ndarray:
         """The ratio of spectrum ``n`` at the nodes for L and Gamma (to first order about ``ratio_at``)."""
@@ -110,11 +109,8 @@ class BandModel:
 
     def expected(self, ae: float, length_scale_m: float, gamma: float) -> dict:
         """Name ("uu", "vv", "ww", "uw") -> (nbands,) expected band-averaged Welch estimate [m^2 s^-2 Hz^-1]."""
-        out = {}
-        for n, spec in self.line_spectra(ae, length_scale_m, gamma).items():
-            lines = np.concatenate([[0.0], spec * self.dk1])  # line variances L_j = F(k1_j) dk1, j = 0 .. nt/2
-            out[n] = self.bands.band_mean(self.kernel.apply(lines))
-        return out
+        spec = self.line_spectra(ae, length_scale_m, gamma)  # line variances F(k1_j) dk1 at j = 1 .. nt/2
+        return dict(zip(spec, np.stack(list(spec.values())) @ self.gain[:, 1:].T * self.dk1))
 
     def coherency(self, params: MannParams, seps_m: np.ndarray) -> np.ndarray:
         """(nbands, 3, 3, D) complex coherency S_pq(d) / sqrt(S_pp(0) S_qq(0)) at each band's centre and the
@@ -126,8 +122,7 @@ class BandModel:
                 REUSE_LN_L or abs(params.gamma - c[0].gamma) > REUSE_GAMMA:
             cross = self._continuous_cross if self.grid is None else self._lattice_cross
             self._cross = c = (params, seps_m, cross(params, seps_m, k1))
-        s = c[2]
-        zero = np.flatnonzero(np.all(seps_m == 0, axis=1))[0]
+        s, zero = c[2], np.flatnonzero(np.all(seps_m == 0, axis=1))[0]
         diag = np.sqrt(np.abs(s[:, [0, 1, 2], [0, 1, 2], zero]))
         return s / (diag[:, :, None, None] * diag[:, None, :, None])
 

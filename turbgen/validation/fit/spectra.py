@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -118,8 +119,7 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
         raise ParameterError(f"nperseg = {n} is outside [{MIN_NPERSEG}, nt/4 = {nt // 4}] for a record of {nt} "
                              "samples")
     setup = WelchSetup(n, data.dt_s)
-    bands = band_bins(n)
-    gram, over = (_band_gram(bands, np.array([_rho2(setup, s, d) for d in range(4)])) for s in (0, setup.hop))
+    bands, gram, over = band_bins(n), _band_gram(setup, 0), _band_gram(setup, setup.hop)
     values, factor, segs, dft = {}, {}, {}, {}
     for c, x in data.series.items():
         X, ok = segment_dfts(x, setup)
@@ -140,7 +140,7 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
         values["uw"] = np.array([co[b].mean() for b in bands])
         factor["uw"] = np.sqrt(factor["uu"] * factor["ww"])
     f = setup.freqs
-    gram += 2 * (1 - 1 / len(segment_starts(nt, setup))) * over  # a whole column's, for the bands' correlation
+    gram = gram + 2 * (1 - 1 / len(segment_starts(nt, setup))) * over  # a whole column's, for the bands' correlation
     return BandSpectra(setup, nt, bands, np.array([f[b].mean() for b in bands]), values, factor, segs,
                        gram / np.sqrt(np.outer(np.diag(gram), np.diag(gram))))
 
@@ -153,12 +153,17 @@ def _rho2(setup: WelchSetup, shift: int, lag: int) -> float:
     return float(np.abs(g.sum()) ** 2 / np.sum(w**2) ** 2)
 
 
-def _band_gram(bands: tuple, r: np.ndarray) -> np.ndarray:
-    """(nbands, nbands) covariance of the band means of unit-variance bins correlated r_d at d bins apart (d < 4)."""
+@lru_cache(maxsize=8)
+def _band_gram(setup: WelchSetup, shift: int) -> np.ndarray:
+    """(nbands, nbands) covariance of the band means of unit-variance bins correlated r_d = ``_rho2(setup, shift, d)``
+    at d < 4 bins apart (read-only: cached)."""
+    bands, r = band_bins(setup.nperseg), np.array([_rho2(setup, shift, d) for d in range(4)])
     nbins = bands[-1][-1] + 1
     lag = np.abs(np.arange(nbins)[:, None] - np.arange(nbins)[None, :])
     rb = np.where(lag < r.size, r[np.minimum(lag, r.size - 1)], 0.0)
     m = np.zeros((len(bands), nbins))
     for i, b in enumerate(bands):
         m[i, b] = 1.0 / b.size
-    return m @ rb @ m.T
+    gram = m @ rb @ m.T
+    gram.flags.writeable = False
+    return gram

@@ -12,7 +12,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-from scipy.interpolate import CubicSpline
+from scipy.interpolate import CubicSpline, PPoly
 
 from turbgen.errors import ParameterError
 from turbgen.theory import ranges
@@ -40,7 +40,6 @@ def build_table(lifetime: str = "guo", path=None) -> None:
     np.savez_compressed(path or TABLE_PATHS[lifetime], log_f=cols, x_nodes=X_NODES, gamma_nodes=GAMMA_NODES)
 
 
-@lru_cache(maxsize=2)
 def load_table(lifetime: str = "guo") -> np.ndarray:
     """(len(GAMMA_NODES), 4, len(X_NODES)) columns (``table_column``) of ``lifetime`` from TABLE_PATHS, checked
     against the nodes of this module."""
@@ -52,19 +51,23 @@ def load_table(lifetime: str = "guo") -> np.ndarray:
         return t["log_f"]
 
 
+@lru_cache(maxsize=2)
+def table_spline(lifetime: str = "guo") -> CubicSpline:
+    """Cubic splines in log k1 L of all columns of ``load_table(lifetime)``, built once (linear in the data)."""
+    return CubicSpline(np.log(X_NODES), load_table(lifetime), axis=2)
+
+
 def scaled_spectra(x: np.ndarray, gamma: float, lifetime: str = "guo") -> dict:
     """f_ij(k1 L, Gamma) (module docstring), two-sided [m^3 s^-2 per ae L^(5/3)], at ``x`` = k1 L > 0 for Gamma
     ``gamma`` and the table of ``lifetime`` ("guo" or "mann"): {"uu", "vv", "ww", "uw" -> f(x)}; F13 < 0."""
     g = ranges.check("gamma", gamma, "Gamma (fitted, -)")
-    last = GAMMA_NODES.size - 1
-    i0 = int(np.clip(np.floor(g / GAMMA_STEP) - 1, 0, last - 3))
-    nodes = np.arange(i0, i0 + 4)
-    t = g / GAMMA_STEP
+    i0 = int(np.clip(np.floor(g / GAMMA_STEP) - 1, 0, GAMMA_NODES.size - 4))  # the 4 Lagrange nodes about Gamma
+    nodes, t = np.arange(i0, i0 + 4), g / GAMMA_STEP
     weights = np.array([np.prod([(t - nodes[m]) / (nodes[k] - nodes[m]) for m in range(4) if m != k])
                         for k in range(4)])
-    cols = np.tensordot(weights, load_table(lifetime)[nodes], axes=1)  # (4, nx)
-    lx, top = np.log(x), np.log(X_NODES[-1])
-    spline = CubicSpline(np.log(X_NODES), cols, axis=1)(np.clip(lx, np.log(X_NODES[0]), top))
+    s, lx, top = table_spline(lifetime), np.log(x), np.log(X_NODES[-1])
+    spline = PPoly.construct_fast(np.tensordot(s.c[:, :, nodes], weights, axes=([2], [0])), s.x)(
+        np.clip(lx, s.x[0], top)).T  # (4, x.size)
     out = {n: np.exp(spline[k] - 5.0 / 3.0 * np.maximum(lx - top, 0.0)) for k, n in enumerate(("uu", "vv", "ww"))}
     rho = spline[3] * np.exp(-2.0 / 3.0 * np.maximum(lx - top, 0.0))  # F13 ~ k1^(-7/3) in the inertial range
     out["uw"] = rho * np.sqrt(out["uu"] * out["ww"])
