@@ -76,11 +76,12 @@ class WelchSetup:
         w = self.window
         return float(np.sum(w[self.hop :] * w[: self.nperseg - self.hop]) ** 2 / np.sum(w**2) ** 2)
 
-    def bin_rho2(self, lag: int) -> float:
-        """Correlation of periodogram bins ``lag`` apart (white noise): 4/9 at lag 1, 1/36 at lag 2 for Hann."""
-        w2 = self.window**2
-        t = np.arange(self.nperseg)
-        return float(np.abs(np.sum(w2 * np.exp(-2j * np.pi * lag * t / self.nperseg))) ** 2 / np.sum(w2) ** 2)
+    def bin_rho2(self, lag: int, shift: int = 0) -> float:
+        """Correlation of white noise's periodogram bins ``lag`` apart in segments ``shift`` samples apart (Hann: 1,
+        4/9, 1/36 in one segment; 1/36, 0.020, 0.0069, 8e-4 half-overlapping, not 1/36 times those as Welch 1967)."""
+        w, n = self.window, self.nperseg
+        g = w[shift:] * w[: n - shift] * np.exp(-2j * np.pi * lag * np.arange(n - shift) / n)
+        return float(np.abs(g.sum()) ** 2 / np.sum(w**2) ** 2)
 
     def effective_segments(self, n_segments: int, n_overlapping_pairs: int) -> float:
         """Number of independent periodograms equivalent to the average (Welch 1967, Eq. of the variance)."""

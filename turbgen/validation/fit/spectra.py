@@ -6,11 +6,11 @@ column is skipped for that column (Welch over the gaps). Bins are averaged into 
 (each lowest bin on its own), bins 1 .. n/2 - 1.
 
 Variances (the fit's weights): a band of n bins of one point's Welch average over K segments has the variance S^2 times
-sum_d (n - |d|) (r_d + 2 q o_d) / (n^2 K), with r_d the correlation of white noise's Hann bins d apart in one segment,
-o_d in half-overlapping segments (``_rho2``) and q = (K - 1) / K the share of overlapping pairs: ``var_factor`` (Welch's
-(1967) product o_d = o_0 r_d left many-bin bands' variance 2.6 % short at K = 22). The joint covariance of the four
-spectra averaged over the points (``covariance``: Isserlis terms from the model's cross-spectra between the points)
-scales with it: ``BandSpectra.covariance``; neighbouring bands covary through the correlation of neighbouring Hann bins:
+sum_d (n - |d|) (r_d + 2 q o_d) / (n^2 K), r_d and o_d the correlations of white noise's Hann bins d apart in one and in
+half-overlapping segments (``WelchSetup.bin_rho2``), q = (K - 1) / K: ``var_factor`` (Welch's (1967) o_d = o_0 r_d left
+many-bin bands 2.6 % short at K = 22). The joint covariance of the four spectra averaged over the points
+(``covariance``: Isserlis terms from the model's cross-spectra between the points) scales with it:
+``BandSpectra.covariance``; neighbouring bands covary through the correlation of neighbouring Hann bins:
 ``BandSpectra.full_covariance``.
 """
 
@@ -139,31 +139,20 @@ def estimate_bands(data: FitData, nperseg: int | None = None) -> BandSpectra:
         co = co * setup.scale / max(both.sum(), 1)
         values["uw"] = np.array([co[b].mean() for b in bands])
         factor["uw"] = np.sqrt(factor["uu"] * factor["ww"])
-    f = setup.freqs
-    gram = gram + 2 * (1 - 1 / len(segment_starts(nt, setup))) * over  # a whole column's, for the bands' correlation
+    f, gram = setup.freqs, gram + 2 * (1 - 1 / len(segment_starts(nt, setup))) * over  # a whole column's (bands' corr.)
     return BandSpectra(setup, nt, bands, np.array([f[b].mean() for b in bands]), values, factor, segs,
                        gram / np.sqrt(np.outer(np.diag(gram), np.diag(gram))))
 
 
-def _rho2(setup: WelchSetup, shift: int, lag: int) -> float:
-    """Correlation of white noise's periodogram bins ``lag`` apart in segments ``shift`` samples apart (Hann: 1, 4/9,
-    1/36 in one segment; 1/36, 0.020, 0.0069, 8e-4 half-overlapping, not 1/36 times the former as in Welch 1967)."""
-    w, n = setup.window, setup.nperseg
-    g = w[shift:] * w[: n - shift] * np.exp(-2j * np.pi * lag * np.arange(n - shift) / n)
-    return float(np.abs(g.sum()) ** 2 / np.sum(w**2) ** 2)
-
-
 @lru_cache(maxsize=8)
 def _band_gram(setup: WelchSetup, shift: int) -> np.ndarray:
-    """(nbands, nbands) covariance of the band means of unit-variance bins correlated r_d = ``_rho2(setup, shift, d)``
+    """(nbands, nbands) covariance of the band means of unit-variance bins correlated r_d = ``setup.bin_rho2(d, shift)``
     at d < 4 bins apart (read-only: cached)."""
-    bands, r = band_bins(setup.nperseg), np.array([_rho2(setup, shift, d) for d in range(4)])
+    bands, r = band_bins(setup.nperseg), np.array([setup.bin_rho2(d, shift) for d in range(4)])
     nbins = bands[-1][-1] + 1
     lag = np.abs(np.arange(nbins)[:, None] - np.arange(nbins)[None, :])
     rb = np.where(lag < r.size, r[np.minimum(lag, r.size - 1)], 0.0)
-    m = np.zeros((len(bands), nbins))
-    for i, b in enumerate(bands):
-        m[i, b] = 1.0 / b.size
+    m = np.array([np.isin(np.arange(nbins), b) / b.size for b in bands])  # band means
     gram = m @ rb @ m.T
     gram.flags.writeable = False
     return gram
