@@ -421,13 +421,14 @@ def test_interrupted_export(request, fmt, out, names, sig, tmp_path):
 @pytest.mark.parametrize("sig,line", [(signal.SIGTERM, "Error: terminated (SIGTERM); unfinished output was removed"),
                                       (signal.SIGINT, "Error: interrupted; unfinished output was removed")],
                          ids=["SIGTERM", "SIGINT"])
-@pytest.mark.parametrize("how", ["replaced", "swallowed", "weakref"])
+@pytest.mark.parametrize("how", ["replaced", "timeout", "swallowed", "weakref"])
 def test_a_signal_whose_exit_the_library_replaced_is_still_reported_as_the_signal(store, tmp_path, monkeypatch,
                                                                                    sig, line, how):
     # h5py turns an exception raised inside an attribute write (our SIGTERM's SystemExit, Ctrl-C's
     # KeyboardInterrupt) into TypeError (seen in CI: a traceback and exit 1), and an exception raised in a
     # weakref callback is only printed, the export going on to publish (seen in CI: exit 0 and x.h5); the
-    # CLI must still report the signal, exit 128 + signum, publish nothing
+    # CLI must still report the signal, exit 128 + signum, publish nothing. "timeout": an OSError in its place (a
+    # dask close timing out after Ctrl-C; seen in CI: "Error: TimeoutError (errno None)", exit 2)
     import turbgen.exporters as export
     from turbgen.exporters.hdf5 import export_hdf5
 
@@ -444,6 +445,8 @@ def test_a_signal_whose_exit_the_library_replaced_is_still_reported_as_the_signa
             except BaseException:
                 if how == "replaced":
                     raise TypeError("Operation not defined for data type class") from None
+                if how == "timeout":
+                    raise TimeoutError("timed out after 10 s.") from None
 
         monkeypatch.setattr("h5py.AttributeManager.__setitem__", attr_write)
         return export_hdf5(fs, out, req)
@@ -581,3 +584,49 @@ def test_sweep_interrupted_while_its_workers_start_prints_one_line(sig, after, t
     assert "Traceback" not in err and "semaphore" not in err and "Error" not in err[:err.rfind("Error")], err[-1500:]
     assert lines[-1].startswith("Error: ") and all(line.startswith("sweep: ") for line in lines[:-1]), err[-1500:]
     _consistent(d)
+
+
+# the sweep's command with its cluster's close failing as once on a loaded CI machine: a nanny's kill of its worker
+# process times out (distributed's nanny then counts itself closed, the worker process still running)
+CLOSE_TIMES_OUT = """
+import distributed.nanny
+async def kill(self, timeout=5, reason=""):
+    raise TimeoutError("simulated: the worker process did not stop in time")
+distributed.nanny.Nanny.kill = kill
+from turbgen.cli import main
+main()
+"""
+
+
+def test_sweep_interrupted_exits_when_its_cluster_fails_to_close(tmp_path):
+    # CI (2026-11-29): Ctrl-C while the workers started; the cluster's close then timed out: the command printed
+    # "Error: TimeoutError (errno None)" (the close's error replaced the interruption) and never exited (its workers
+    # ignore SIGTERM, so the interpreter's exit, terminating and joining its children, waited for them). Now: the
+    # interruption's line and exit code, and no process of the sweep left behind.
+    d = tmp_path / "sw"
+    d.mkdir()
+    p = subprocess.Popen([sys.executable, "-c", CLOSE_TIMES_OUT, *SWEEP[:-1], "2", "--out", str(d)], env=ENV,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                         preexec_fn=_terminal_signals)
+    deadline = time.time() + 120
+    while p.poll() is None and not list(d.glob("*.zarr")) and time.time() < deadline:  # the workers have run
+        time.sleep(0.002)
+    assert p.poll() is None, p.stderr.read()[-500:]
+    os.killpg(p.pid, signal.SIGINT)
+    try:
+        _, err = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        pytest.fail(f"the interrupted sweep did not exit: {p.communicate()[1][-800:]}")
+    assert p.returncode == 130, err[-800:]
+    assert err.strip().splitlines()[-1] == "Error: interrupted; unfinished output was removed", err[-800:]
+    assert "Traceback" not in err
+    deadline = time.time() + 10  # the resource tracker leaves when its pipe closes, the workers were killed
+    while time.time() < deadline:
+        try:
+            os.killpg(p.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.05)
+    else:
+        pytest.fail("a process of the interrupted sweep is still running")

@@ -124,6 +124,8 @@ class TurbgenGroup(click.Group):
         try:
             return super().invoke(ctx)
         except TurbgenError as exc:
+            if interruption.received_signal() is not None:  # the library's error for our signal (a write stopped)
+                raise
             raise user_error(exc) from None
         except click.ClickException as exc:  # click's own usage errors (bad option, missing argument, ...)
             raise _one_line(exc) from None
@@ -138,6 +140,8 @@ class TurbgenGroup(click.Group):
                 click.echo(_stopped_line(ctx, f"terminated ({name})"), err=True)
             raise
         except OSError as exc:  # a file-system error the library did not word itself (read-only, missing dir)
+            if interruption.received_signal() is not None:  # or a library's own error for our signal (a timeout)
+                raise
             where = f"{exc.filename}: " if exc.filename else ""
             raise UserError(f"{where}{exc.strerror or type(exc).__name__} (errno {exc.errno})") from None
 

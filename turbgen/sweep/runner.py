@@ -8,7 +8,9 @@ manifest rewritten after each run. On Ctrl-C, SIGTERM, SIGHUP the manifest is sa
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import multiprocessing
 import os
 import signal
 import sys
@@ -34,14 +36,17 @@ from turbgen.sweep.tasks import RunTask, default_workers, execute_run
 __all__ = ["SweepResult", "run_sweep", "summary_table"]
 
 
-def _make_client(plan: SweepPlan, n: int, processes: bool):
+@contextlib.contextmanager
+def _own_client(plan: SweepPlan, n: int, processes: bool):
+    """The sweep's own (client, cluster) for the block (cluster None with plan.scheduler), closed after it. Worker
+    processes that outlive the close (interrupted mid-start, or a close that failed or timed out under load) are
+    killed: they ignore SIGTERM, so the interpreter's exit, which terminates and joins its children, would hang."""
     from distributed import Client
 
     from turbgen.runs.local_cluster import loopback_cluster
 
-    if plan.scheduler:
-        return Client(plan.scheduler), None
-    if processes and threading.current_thread() is threading.main_thread():
+    deferring = processes and not plan.scheduler and threading.current_thread() is threading.main_thread()
+    if deferring:
         # multiprocessing's resource tracker (a helper process) masks SIGINT/SIGTERM but not SIGHUP:
         # start it with SIGHUP ignored so a hang-up does not kill it (tracebacks on relaunch)
         from multiprocessing import resource_tracker
@@ -51,28 +56,29 @@ def _make_client(plan: SweepPlan, n: int, processes: bool):
             resource_tracker.ensure_running()
         finally:
             signal.signal(signal.SIGHUP, old)
+    before = set(multiprocessing.active_children())
+    client = cluster = None
     # a terminal's Ctrl-C goes to the whole process group: only the sweep may see it (it shuts the workers down).
     # The signals stay blocked until the workers ignore them (a worker inherits the starting thread's mask); one
     # that came meanwhile is raised when they are unblocked, with the cluster up and then closed in order
-    deferring = processes and threading.current_thread() is threading.main_thread()
     mask = signal.pthread_sigmask(signal.SIG_BLOCK, DEFERRED_SIGNALS) if deferring else None
     try:
-        cluster = loopback_cluster(n, 1, processes)
-        client = Client(cluster)
-        if processes:
-            client.run(_ignore_interrupts)
-    except BaseException:
-        if mask is not None:
-            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
-        raise
-    if mask is not None:
         try:
-            signal.pthread_sigmask(signal.SIG_SETMASK, mask)  # raises a signal that came during the start-up
-        except BaseException:
-            client.close()
-            cluster.close()
-            raise
-    return client, cluster
+            cluster = None if plan.scheduler else loopback_cluster(n, 1, processes)
+            client = Client(plan.scheduler or cluster)
+            if processes and cluster is not None:
+                client.run(_ignore_interrupts)
+        finally:
+            if mask is not None:
+                signal.pthread_sigmask(signal.SIG_SETMASK, mask)  # raises a signal that came during the start-up
+        yield client, cluster
+    finally:
+        try:
+            close_quietly(client, cluster, quiet=isinstance(sys.exc_info()[1], (KeyboardInterrupt, SystemExit)))
+        finally:
+            for child in set(multiprocessing.active_children()) - before:
+                child.kill()
+                child.join(10)
 
 
 DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
@@ -106,8 +112,7 @@ def _check_out(out: Path) -> None:
 def _settle_interrupted(plan: SweepPlan, records: dict) -> None:
     """After an interruption: record as complete the pending runs whose store a worker completed."""
     for pr in plan.runs:
-        rec = records[pr.name]
-        if rec["status"] != "pending":
+        if (rec := records[pr.name])["status"] != "pending":
             continue
         state, _ = store_state(plan.out / pr.store_name, pr)
         if state == "complete":  # checksum left empty: the next run of the sweep fills it in
@@ -137,9 +142,7 @@ def _tasks(plan: SweepPlan, states: dict, records: dict, previous: dict, stencil
     tasks: dict[str, RunTask] = {}
     skipped = 0
     for pr in plan.runs:
-        rec = records[pr.name]
-        path = plan.out / pr.store_name
-        state = states[pr.name][0]
+        rec, state = records[pr.name], states[pr.name][0]
         if state == "complete":
             skipped += 1
             old = previous.get(pr.name, {})
@@ -152,11 +155,8 @@ def _tasks(plan: SweepPlan, states: dict, records: dict, previous: dict, stencil
                     rec.get("lidar") is not None or not plan.lidar):
                 rec["status"] = "complete"
                 continue
-            tasks[pr.name] = RunTask(pr.model, pr.run, str(path), False, plan.chunk_t, plan.validate, False,
-                                     lidar=plan.lidar, constraints=plan.constraints)
-            continue
-        tasks[pr.name] = RunTask(pr.model, pr.run, str(path), state == "incomplete", plan.chunk_t, plan.validate,
-                                 lidar=plan.lidar, constraints=plan.constraints,
+        tasks[pr.name] = RunTask(pr.model, pr.run, str(plan.out / pr.store_name), state == "incomplete", plan.chunk_t,
+                                 plan.validate, state != "complete", lidar=plan.lidar, constraints=plan.constraints,
                                  cache_dir=None if stencil_cache is None else os.fspath(stencil_cache))
     return tasks, skipped
 
@@ -186,9 +186,8 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
         tasks, skipped = _tasks(plan, states, records, previous, stencil_cache)
         need = sum(3 * t.run.grid.nbytes_per_component() for t in tasks.values() if t.generate)
         if need:
-            n_gen = sum(t.generate for t in tasks.values())
-            require_disk(out, need, f"the {n_gen} stores still to generate", "free space, choose another `out` "
-                         "or sweep fewer seeds/speeds or a smaller grid")
+            require_disk(out, need, f"the {sum(t.generate for t in tasks.values())} stores still to generate",
+                         "free space, choose another `out` or sweep fewer seeds/speeds or a smaller grid")
         if progress:  # after every refusal: a refused sweep prints only its error
             print(f"sweep: {len(plan.runs)} runs -> {out}", file=sys.stderr)
         sweep_doc = plan.to_dict()
@@ -217,82 +216,80 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
 
 
 def _execute(plan, tasks, records, save, result, client, processes, progress, threads):
+    """Run ``tasks`` on ``client`` (None: the sweep's own local cluster, closed after), recording each result."""
+    n = plan.workers or default_workers(tasks.values())
+    own = contextlib.nullcontext((client, None)) if client is not None else _own_client(plan, n, processes)
+    with own as (client, cluster):
+        if cluster is not None and threads is None:  # share the cores between the local workers' FFTs
+            threads = max(1, (os.cpu_count() or 1) // n)
+        _submit_all(plan, tasks, records, save, result, client, progress, threads)
+
+
+def _submit_all(plan, tasks, records, save, result, client, progress, threads):
     from distributed import as_completed
     from tqdm import tqdm
 
-    own_client = cluster = None
-    interrupted = False
-    if client is None:
-        n = plan.workers or default_workers(tasks.values())
-        own_client, cluster = _make_client(plan, n, processes)
-        client = own_client
-        if cluster is not None and threads is None:  # share the cores between the local workers' FFTs
-            threads = max(1, (os.cpu_count() or 1) // n)
-    if threads is not None:
-        tasks = {name: replace(t, threads=threads) for name, t in tasks.items()}
-    backend = fft.current()  # the sweep's FFT backend, carried to its workers (other processes do not see it)
-    tasks = {name: replace(t, fft_backend=backend) for name, t in tasks.items()}
-    try:
-        by_name = {pr.name: pr for pr in plan.runs}
-        shared: dict = {}  # shared key -> [future of the shared part, runs still to use it]
-        futures = {}  # future key -> (run name, shared key or None)
-        pending = []
-        for name, task in tasks.items():
-            part, skey = None, None
-            # a constrained run builds its own stencil (turbgen.runs.constrain): no shared part
-            build = (MODELS[task.model].shared_part(task.run, task.threads, task.memory_bytes)
-                     if task.generate and task.constraints is None else None)  # fmt: skip
-            if build is not None:
-                skey = MODELS[task.model].shared_key(by_name[name].run)
-                if skey not in shared:
-                    shared[skey] = [client.submit(build, by_name[name].run, pure=False,
-                                                  key=f"turbgen-shared-{task.model}-{os.urandom(4).hex()}"), 0]
-                shared[skey][1] += 1
-                part = shared[skey][0]
-            fut = client.submit(execute_run, task, part, pure=False, key=f"turbgen-run-{name}-{os.urandom(4).hex()}")
-            pending.append(fut)
-            futures[fut.key] = (name, skey)
-        bar = tqdm(total=len(pending), desc="sweep", unit="field", file=sys.stderr,
-                   disable=not (progress and sys.stderr.isatty()))  # fmt: skip
-        with bar:
-            for fut in as_completed(pending):
-                name, skey = futures[fut.key]
-                if fut.status == "finished":
-                    res = fut.result()
-                else:  # the shared part's task (or the worker) failed: same error for each of its runs
-                    res = {"status": "failed", "error": one_line(fut.exception()), "duration_s": None}
-                fut.release()
-                if skey is not None:
-                    shared[skey][1] -= 1
-                    if shared[skey][1] == 0:
-                        shared.pop(skey)[0].release()
-                rec = records[name]
-                rec.update(res)
-                rec["finished_utc"] = utc_now()
-                if tasks[name].generate:
-                    rec["action"] = "ran"
-                    if rec["status"] == "complete":
-                        result.ran += 1
-                save()
-                bar.set_postfix_str(f"{name}: {rec['status']}", refresh=False)
-                bar.update(1)
-    except (KeyboardInterrupt, SystemExit):
-        interrupted = True
-        raise
-    finally:
-        close_quietly(own_client, cluster, quiet=interrupted)
+    # the sweep's FFT backend is carried to its workers (other processes do not see it)
+    tasks = {name: replace(t, threads=threads or t.threads, fft_backend=fft.current()) for name, t in tasks.items()}
+    by_name = {pr.name: pr for pr in plan.runs}
+    shared: dict = {}  # shared key -> [future of the shared part, runs still to use it]
+    futures = {}  # future key -> (run name, shared key or None)
+    pending = []
+    for name, task in tasks.items():
+        part, skey = None, None
+        # a constrained run builds its own stencil (turbgen.runs.constrain): no shared part
+        build = (MODELS[task.model].shared_part(task.run, task.threads, task.memory_bytes)
+                 if task.generate and task.constraints is None else None)  # fmt: skip
+        if build is not None:
+            skey = MODELS[task.model].shared_key(by_name[name].run)
+            if skey not in shared:
+                shared[skey] = [client.submit(build, by_name[name].run, pure=False,
+                                              key=f"turbgen-shared-{task.model}-{os.urandom(4).hex()}"), 0]
+            shared[skey][1] += 1
+            part = shared[skey][0]
+        fut = client.submit(execute_run, task, part, pure=False, key=f"turbgen-run-{name}-{os.urandom(4).hex()}")
+        pending.append(fut)
+        futures[fut.key] = (name, skey)
+    bar = tqdm(total=len(pending), desc="sweep", unit="field", file=sys.stderr,
+               disable=not (progress and sys.stderr.isatty()))  # fmt: skip
+    with bar:
+        for fut in as_completed(pending):
+            name, skey = futures[fut.key]
+            if fut.status == "finished":
+                res = fut.result()
+            else:  # the shared part's task (or the worker) failed: same error for each of its runs
+                res = {"status": "failed", "error": one_line(fut.exception()), "duration_s": None}
+            fut.release()
+            if skey is not None:
+                shared[skey][1] -= 1
+                if shared[skey][1] == 0:
+                    shared.pop(skey)[0].release()
+            rec = records[name]
+            rec.update(res)
+            rec["finished_utc"] = utc_now()
+            if tasks[name].generate:
+                rec["action"] = "ran"
+                if rec["status"] == "complete":
+                    result.ran += 1
+            save()
+            bar.set_postfix_str(f"{name}: {rec['status']}", refresh=False)
+            bar.update(1)
 
 
 def close_quietly(*closables, quiet: bool) -> None:
     """Close the sweep's own client and cluster. Shut down mid-run (``quiet``), the scheduler logs lost comms at
-    CRITICAL level: the ``distributed`` logger is silenced for the shutdown only, its level restored after."""
-    log = logging.getLogger("distributed")
-    level = log.level
+    CRITICAL level: the ``distributed`` and ``tornado.application`` loggers are silenced for the shutdown only (their
+    levels restored after), and a close that fails (a timeout under load) does not replace the interruption."""
+    logs = [logging.getLogger(name) for name in ("distributed", "tornado.application")]
+    levels = [log.level for log in logs]
     if quiet:
-        log.setLevel(logging.CRITICAL + 1)
+        for log in logs:
+            log.setLevel(logging.CRITICAL + 1)
     try:
         for c in closables:
             if c is not None:
-                c.close()
+                with contextlib.suppress(*((Exception,) if quiet else ())):
+                    c.close()
     finally:
-        log.setLevel(level)
+        for log, level in zip(logs, levels):
+            log.setLevel(level)
