@@ -605,7 +605,7 @@ def test_sweep_interrupted_exits_when_its_cluster_fails_to_close(tmp_path):
     # interruption's line and exit code, and no process of the sweep left behind.
     d = tmp_path / "sw"
     d.mkdir()
-    p = subprocess.Popen([sys.executable, "-c", CLOSE_TIMES_OUT, *SWEEP[:-1], "2", "--out", str(d)], env=ENV,
+    p = subprocess.Popen([sys.executable, "-c", CLOSE_TIMES_OUT, *SWEEP, "--out", str(d)], env=ENV,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
                          preexec_fn=_terminal_signals)
     deadline = time.time() + 120
