@@ -38,9 +38,9 @@ __all__ = ["SweepResult", "run_sweep", "summary_table"]
 
 @contextlib.contextmanager
 def _own_client(plan: SweepPlan, n: int, processes: bool):
-    """The sweep's own (client, cluster) for the block (cluster None with plan.scheduler), closed after it. Worker
-    processes that outlive the close (interrupted mid-start, or a close that failed or timed out under load) are
-    killed: they ignore SIGTERM, so the interpreter's exit, which terminates and joins its children, would hang."""
+    """The sweep's own (client, cluster) for the block (cluster None with plan.scheduler), closed after it. Its
+    worker processes that outlive the close (one that failed or timed out under load) are killed: they ignore
+    SIGTERM, so the interpreter's exit, which terminates and joins its children, would wait for them forever."""
     from distributed import Client
 
     from turbgen.runs.local_cluster import loopback_cluster
@@ -56,8 +56,8 @@ def _own_client(plan: SweepPlan, n: int, processes: bool):
             resource_tracker.ensure_running()
         finally:
             signal.signal(signal.SIGHUP, old)
-    before = set(multiprocessing.active_children())
     client = cluster = None
+    pids: set[int] = set()  # the workers' (other sweeps of this process keep theirs)
     # a terminal's Ctrl-C goes to the whole process group: only the sweep may see it (it shuts the workers down).
     # The signals stay blocked until the workers ignore them (a worker inherits the starting thread's mask); one
     # that came meanwhile is raised when they are unblocked, with the cluster up and then closed in order
@@ -67,7 +67,7 @@ def _own_client(plan: SweepPlan, n: int, processes: bool):
             cluster = None if plan.scheduler else loopback_cluster(n, 1, processes)
             client = Client(plan.scheduler or cluster)
             if processes and cluster is not None:
-                client.run(_ignore_interrupts)
+                pids = set(client.run(_ignore_interrupts).values())
         finally:
             if mask is not None:
                 signal.pthread_sigmask(signal.SIG_SETMASK, mask)  # raises a signal that came during the start-up
@@ -76,25 +76,23 @@ def _own_client(plan: SweepPlan, n: int, processes: bool):
         try:
             close_quietly(client, cluster, quiet=isinstance(sys.exc_info()[1], (KeyboardInterrupt, SystemExit)))
         finally:
-            for child in set(multiprocessing.active_children()) - before:
-                child.kill()
-                child.join(10)
+            for child in multiprocessing.active_children():
+                if child.pid in pids:
+                    child.kill()
+                    child.join(10)
 
 
 DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
-def _ignore_interrupts() -> None:
+def _ignore_interrupts() -> int:
     """Worker side: ignore SIGINT, SIGTERM and SIGHUP (the sweep closes the workers) and drop the heartbeat
-    failure traceback at shutdown."""
+    failure traceback at shutdown; return the worker's process id."""
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, signal.SIG_IGN)
-    logging.getLogger("distributed.worker").addFilter(_no_heartbeat_failure)
-
-
-def _no_heartbeat_failure(record: logging.LogRecord) -> bool:
-    """Logging filter: False for distributed's heartbeat failure of a closing scheduler."""
-    return not str(record.msg).startswith("Failed to communicate with scheduler during heartbeat")
+    heartbeat = "Failed to communicate with scheduler during heartbeat"  # the closing scheduler's
+    logging.getLogger("distributed.worker").addFilter(lambda record: not str(record.msg).startswith(heartbeat))
+    return os.getpid()
 
 
 def _check_out(out: Path) -> None:
