@@ -88,6 +88,19 @@ def test_dlc_needs_class_and_refuses_presets(tmp_path):
     assert not (tmp_path / "d").exists()
 
 
+def test_dlc_sets_take_the_models_with_a_sigma_rule_only(tmp_path):
+    # the load case's sigma1 enters Mann as sigma_u and Kaimal as 1, 0.8, 0.5 sigma1 (DlcSet.run_mapping): a further
+    # registered model is refused by name rather than given Kaimal's rule
+    from turbgen.runs.models import MODELS
+    from turbgen.spec.dlc import DLC_MODELS
+    from turbgen.sweep.dlc import make_dlc_plan
+
+    assert set(DLC_MODELS) <= set(MODELS)
+    with pytest.raises(ParameterError, match="'further' is not one of kaimal, mann"):
+        make_dlc_plan(DlcSet("1.2", "IIB", 10, 12, (1,)), out=tmp_path / "t", model="further")
+    assert not (tmp_path / "t").exists()
+
+
 def test_mann_and_etm_plans_target_sigma1(tmp_path):
     from turbgen.sweep.dlc import make_dlc_plan
     from turbgen.theory.mann_spectra import ae_for_sigma_u

@@ -19,6 +19,7 @@ from turbgen.theory import iec_transients as iec
 from turbgen.theory.kaimal import IEC_IREF, IEC_SIGMA_RATIOS, iec_sigma1_m_s
 
 DLCS = {"1.1": "NTM", "1.2": "NTM", "1.3": "ETM"}
+DLC_MODELS = ("kaimal", "mann")  # the models whose sigma rule DlcSet.run_mapping knows (others: refused)
 SPEED_STEP_M_S = 2.0
 
 
