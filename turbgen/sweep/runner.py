@@ -224,11 +224,12 @@ def _execute(plan, tasks, records, save, result, client, processes, progress, th
 
 
 def _submit_all(plan, tasks, records, save, result, client, progress, threads):
+    """Run ``tasks`` on ``client`` (``threads`` each, and this process's FFT backend: workers do not see it)."""
     from distributed import as_completed
     from tqdm import tqdm
 
-    # the sweep's FFT backend is carried to its workers (other processes do not see it)
-    tasks = {name: replace(t, threads=threads or t.threads, fft_backend=fft.current()) for name, t in tasks.items()}
+    backend = fft.current()
+    tasks = {name: replace(t, threads=threads or t.threads, fft_backend=backend) for name, t in tasks.items()}
     by_name = {pr.name: pr for pr in plan.runs}
     shared: dict = {}  # shared key -> [future of the shared part, runs still to use it]
     futures = {}  # future key -> (run name, shared key or None)
