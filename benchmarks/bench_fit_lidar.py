@@ -22,6 +22,8 @@ import numpy as np
 
 import turbgen
 
+Z95 = 1.959963984540054
+
 CASES = [  # (ae, L, Gamma, gamma [s], gate x [m])
     (0.08, 30.0, 3.2, 200.0, (50.0, 100.0)),
     (0.05, 20.0, 3.9, 100.0, (50.0, 75.0, 100.0)),
@@ -45,7 +47,8 @@ def one(case: int, seed: int, work: Path) -> dict:
            "flags": list(fit.flags)}
     for name, truth in (("ae", ae), ("length_scale_m", L)):
         v = getattr(fit, name)
-        row[name] = {"truth": truth, "value": v.value, "ci95": list(v.ci95), "sd": v.sd_fit}
+        row[name] = {"truth": truth, "value": v.value, "ci95": list(v.ci95), "sd": v.sd_fit,
+                     "wald": [v.value * math.exp(-Z95 * v.sd_fit), v.value * math.exp(Z95 * v.sd_fit)]}
     e = fit.evolution
     row["evo_time_s"] = None if e is None else {"truth": evo, "value": e.value_s, "ci95": list(e.ci95)}
     return row
@@ -54,7 +57,7 @@ def one(case: int, seed: int, work: Path) -> dict:
 def summary(path: str) -> None:
     """A markdown table per case: coverage +- binomial se, median estimate / truth, rms sd of the fit."""
     rows = [json.loads(line) for line in open(path)]
-    print("| case (ae, L, Γ, γ, gates) | n | ae in CI | L in CI | γ in CI | median ae/ae, L/L, γ/γ | sd ln L̂ "
+    print("| case (ae, L, Γ, γ, gates) | n | ae in CI | L in CI (Wald at L̂) | γ in CI | median ae/ae, L/L, γ/γ | sd ln L̂ "
           "(rms sd fit) | CPU s per fit (median) | flagged |")
     print("|---|---|---|---|---|---|---|---|---|")
     for case in sorted({r["case"] for r in rows}):
@@ -67,11 +70,13 @@ def summary(path: str) -> None:
             p = float(np.mean(hit))
             return f"{100 * p:.0f} % ± {100 * math.sqrt(p * (1 - p) / n):.0f}"
 
+        wald = np.mean([r["length_scale_m"]["wald"][0] <= r["length_scale_m"]["truth"] <= r["length_scale_m"]["wald"][1]
+                        for r in rs if "wald" in r["length_scale_m"]]) if "wald" in rs[0]["length_scale_m"] else math.nan
         ratio = [np.median([r[k]["value"] / r[k]["truth"] for r in rs if r[k]]) for k in
                  ("ae", "length_scale_m", "evo_time_s")]
         lnl = np.log([r["length_scale_m"]["value"] for r in rs])
         sd = math.sqrt(np.mean([r["length_scale_m"]["sd"] ** 2 for r in rs]))
-        print(f"| {CASES[case]} | {n} | {cover('ae')} | {cover('length_scale_m')} | {cover('evo_time_s')} | "
+        print(f"| {CASES[case]} | {n} | {cover('ae')} | {cover('length_scale_m')} ({100 * wald:.0f} %) | {cover('evo_time_s')} | "
               + ", ".join(f"{x:.3f}" for x in ratio) + f" | {np.std(lnl, ddof=1):.3f} ({sd:.3f}) | "
               f"{np.median([r['cpu_s'] for r in rs]):.1f} | {sum(bool(r['flags']) for r in rs)} |")
     print("\n| case | bias ln ae (± se) | sd ln ae (rms sd fit, ratio) | bias ln L (± se) | bias ln γ̂ (± se), sd | truth "

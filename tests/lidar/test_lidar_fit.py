@@ -47,6 +47,10 @@ def test_recovers_known_field(gates2):
     for name, truth in (("ae", TRUTH["ae"]), ("length_scale_m", TRUTH["L"])):
         v = getattr(fit, name)
         assert abs(math.log(v.value / truth)) < Z999 * v.sd_fit, (name, v)
+    lo, hi = np.log(fit.length_scale_m.ci95) - math.log(fit.length_scale_m.value)
+    # L's interval inverts the Wald test with the sd at each L, which grows with L here (the peak leaves the bands):
+    # narrower than the Wald interval at L^ below, wider above
+    assert 0 < -lo < 1.96 * fit.length_scale_m.sd_fit < hi, (lo, hi, fit.length_scale_m)
     evo = fit.evolution
     lo, hi = evo.ci95  # a profile interval: its 99.9 % version is ~1.68 x wider in ln gamma (chi2_1 3.84 -> 10.8)
     width = 1.68 * (math.log(hi) - math.log(lo)) / 2

@@ -239,3 +239,21 @@ def test_sensor_series_of_the_mann_lifetime_are_fitted_with_it():
         x, t = (v.value, truth) if name == "gamma" else (math.log(v.value), math.log(truth))
         assert abs(x - t) <= Z999 * v.sd_fit, (name, v.value, v.ci95)
     assert guo.gamma.ci95[1] < TRUTH[2]
+
+
+def test_inverted_interval_is_the_test_inversion():
+    """A constant sd gives x +- Z95 sd; an sd growing with the hypothesised value widens that side, and each end is
+    where the statistic reaches Z95^2 (bracketed from a step far from the sd); a statistic that never does gives the
+    range end."""
+    from turbgen.validation.fit.mann import Z95, inverted_interval
+
+    lo, hi = inverted_interval(lambda y: ((y - 1.0) / 0.2) ** 2, 1.0, 0.05, -10.0, 10.0)
+    assert lo == pytest.approx(1.0 - Z95 * 0.2, abs=1e-6) and hi == pytest.approx(1.0 + Z95 * 0.2, abs=1e-6)
+
+    def stat(y):
+        return ((y - 1.0) / (0.2 * math.exp(0.5 * (y - 1.0)))) ** 2
+
+    lo, hi = inverted_interval(stat, 1.0, 0.7, -10.0, 10.0)
+    assert hi - 1.0 > 1.0 - lo > 0 and stat(lo) == pytest.approx(Z95**2, rel=1e-5)
+    assert stat(hi) == pytest.approx(Z95**2, rel=1e-5)
+    assert inverted_interval(lambda y: 0.01 * (y - 1.0) ** 2, 1.0, 0.3, 0.0, 3.0) == (0.0, 3.0)

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy.interpolate import CubicSpline
+from scipy.linalg import solve_triangular
 
 from turbgen import fft
 from turbgen.errors import ParameterError
@@ -32,7 +33,7 @@ from turbgen.theory.params import MannParams
 from turbgen.validation.estimators import segment_starts
 from turbgen.validation.fit.data import FitData, detrended
 from turbgen.validation.fit.evolution import rho_bar, with_evolution
-from turbgen.validation.fit.mann import PASSES, Z95, bounds, gls
+from turbgen.validation.fit.mann import AE_MIN, PASSES, Z95, bounds, gls, inverted_interval, parameter_covariance
 from turbgen.validation.fit.result import FitValue, MannFit
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
@@ -217,10 +218,13 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     flags += [f"{n} = {math.exp(v):.4g} is on the boundary of its fitted range [{math.exp(a):.4g}, {math.exp(b):.4g}]"
               for n, v, a, b in zip(NAMES, x, lo, hi) if min(v - a, b - v) < 1e-6]
     sdx = np.sqrt(np.diag(cov))
-    val = [FitValue(math.exp(v), (math.exp(v - Z95 * s), math.exp(v + Z95 * s)), float(s)) for v, s in zip(x, sdx)]
+    ci = [(x[0] - Z95 * sdx[0], x[0] + Z95 * sdx[0]), _interval_ln_l(model, data, weights, keep, x, rho)]
+    val = [FitValue(math.exp(v), (math.exp(a), math.exp(b)), float(s)) for v, (a, b), s in zip(x, ci, sdx)]
     full = np.pad(cov, ((0, 1), (0, 1)))  # Gamma held
     e = model.expected(*np.exp(x))[keep]
-    notes = fd.notes + (_model_note(store),) + (() if keep.all() else (
+    notes = fd.notes + (_model_note(store),) + (() if ci[1][1] < _tabled()[1] else (
+        f"length_scale_m is not bounded from above by these data: its interval reaches {math.exp(ci[1][1]):.4g} m, the "
+        "top of the fitted range",)) + (() if keep.all() else (
         f"bands above {bands.f_hz[keep][-1]:.3g} Hz are not fitted: there the probe volume passes < {GAIN_MIN:g} of "
         "the power, and the spectrum is the probe's and the sampler's rather than the turbulence's",))
     fit = MannFit(val[0], val[1], FitValue(g, None, None), float(np.sum(sol.fun**2) / max(sol.fun.size - 2, 1)),
@@ -228,6 +232,31 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
                   fd.source, bands.setup.nperseg, bands.f_hz[keep], {"los": data}, {"los": e},
                   {"los": np.sqrt(np.diag(weights))}, cov_fit=full)  # fmt: skip
     return _with_gates(fd, meas, fit)
+
+
+def _interval_ln_l(model: LosModel, data, weights, keep, x, rho) -> tuple[float, float]:
+    """95 % interval of ln L: the ln L whose Wald test |ln L^ - ln L| <= Z95 sd(ln L) accepts, sd from the GLS
+    covariance at that L (ae at its profile: the model is linear in ae; weights and Jacobian there). At L^ (x +- Z95
+    sd(L^)) it was short on one side: sd ln L^ grows with L (the peak leaves the fitted bands), so a low L^ came with a
+    narrow interval (benchmarks/fit_lidar.md)."""
+    chol = np.linalg.cholesky(weights)
+    d = solve_triangular(chol, data, lower=True)
+
+    def sd(y: float) -> float:
+        m = [model.expected(1.0, math.exp(y + h))[keep] for h in (0.0, -1e-3, 1e-3)]
+        b = solve_triangular(chol, m[0], lower=True)
+        ae = max(d @ b / (b @ b), AE_MIN)
+        c = np.linalg.cholesky(model.covariance(ae, math.exp(y), rho, keep))
+        jac = solve_triangular(c, np.stack([ae * m[0], ae * (m[2] - m[1]) / 2e-3], axis=1), lower=True)
+        return float(np.sqrt(parameter_covariance(jac)[1, 1]))
+
+    return inverted_interval(lambda y: ((y - x[1]) / sd(y)) ** 2, float(x[1]), sd(float(x[1])), *_tabled())
+
+
+def _tabled() -> tuple[float, float]:
+    """The ln L range whose interpolation nodes (``LosModel.lines``) lie in L's allowed range."""
+    lo, hi = (float(b[1]) for b in bounds(NAMES))
+    return DLN_L * (math.ceil(lo / DLN_L) + 1), DLN_L * (math.floor(hi / DLN_L) - 2)
 
 
 def _passed(bands, model: LosModel) -> np.ndarray:

@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 from scipy.linalg import solve_triangular
-from scipy.optimize import least_squares
+from scipy.optimize import brentq, least_squares
 
 from turbgen.errors import ParameterError, check_choice
 from turbgen.spec.defaults import MANN_DEFAULTS
@@ -111,6 +111,23 @@ def gls(residual, covariance_at, x: np.ndarray, free: tuple, passes: int = PASSE
         if sol.status > 0 and np.all(moved < MOVE_TOL):
             return sol, cov, weights, True
     return sol, cov, weights, False
+
+
+def inverted_interval(stat, x: float, step: float, lo: float, hi: float) -> tuple[float, float]:
+    """95 % interval of one fitted variable by inverting a test: the y where ``stat(y)`` (chi^2 with one degree of
+    freedom under "the variable is y") rises Z95^2 above ``stat(x)`` at the fit ``x``, bracketed by steps of ``step``
+    (about its sd) outwards, then Brent's root; a range end (``lo``, ``hi``) where it does not rise that far."""
+    level, step, ends = stat(x) + Z95**2, min(max(step, 1e-3), 1.0), []
+    for edge in (lo, hi):
+        a = x
+        while a != edge:
+            b = edge if abs(edge - a) <= step else a + math.copysign(step, edge - a)
+            if stat(b) >= level:
+                a = brentq(lambda y: stat(y) - level, a, b, xtol=1e-6)
+                break
+            a = b
+        ends.append(a)
+    return ends[0], ends[1]
 
 
 def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra | None = None,
