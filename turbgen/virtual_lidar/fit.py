@@ -211,18 +211,20 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     rho, data = rho_bar(segment_dfts(fd.series["u"], bands.setup)[0], bands.bands), bands.values["uu"][keep]
     rho *= len(segment_starts(bands.nt, bands.setup)) * fd.series["u"].shape[1] / bands.segments["u"]  # gaps: ~1 / K
     x = np.array([math.log(np.median(data / model.expected(1.0, 30.0)[keep])), math.log(30.0)])
+    lo, hi = bounds(NAMES)
+    lo[1], hi[1] = DLN_L * (math.ceil(lo[1] / DLN_L) + 1), DLN_L * (math.floor(hi[1] / DLN_L) - 2)  # nodes in range
     sol, cov, weights, converged = gls(lambda y: data - model.expected(*np.exp(y))[keep], lambda y: model.covariance(
-        math.exp(y[0]), math.exp(y[1]), rho, keep), x, NAMES, passes=3 * PASSES)  # weights following L can oscillate
-    x, (lo, hi) = sol.x, bounds(NAMES)
+        math.exp(y[0]), math.exp(y[1]), rho, keep), x, NAMES, passes=3 * PASSES, limits=(lo, hi))  # L oscillates
+    x = sol.x
     flags = [] if converged else [f"the fit did not converge ({sol.message.rstrip('.')}; {3 * PASSES} passes)"]
     flags += [f"{n} = {math.exp(v):.4g} is on the boundary of its fitted range [{math.exp(a):.4g}, {math.exp(b):.4g}]"
               for n, v, a, b in zip(NAMES, x, lo, hi) if min(v - a, b - v) < 1e-6]
     sdx = np.sqrt(np.diag(cov))
-    ci = [(x[0] - Z95 * sdx[0], x[0] + Z95 * sdx[0]), _interval_ln_l(model, data, weights, keep, x, rho)]
+    ci = [(x[0] - Z95 * sdx[0], x[0] + Z95 * sdx[0]), _interval_ln_l(model, data, weights, keep, x, rho, lo, hi)]
     val = [FitValue(math.exp(v), (math.exp(a), math.exp(b)), float(s)) for v, (a, b), s in zip(x, ci, sdx)]
     full = np.pad(cov, ((0, 1), (0, 1)))  # Gamma held
     e = model.expected(*np.exp(x))[keep]
-    notes = fd.notes + (_model_note(store),) + (() if ci[1][1] < _tabled()[1] else (
+    notes = fd.notes + (_model_note(store),) + (() if ci[1][1] < hi[1] else (
         f"length_scale_m is not bounded from above by these data: its interval reaches {math.exp(ci[1][1]):.4g} m, the "
         "top of the fitted range",)) + (() if keep.all() else (
         f"bands above {bands.f_hz[keep][-1]:.3g} Hz are not fitted: there the probe volume passes < {GAIN_MIN:g} of "
@@ -234,11 +236,11 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     return _with_gates(fd, meas, fit)
 
 
-def _interval_ln_l(model: LosModel, data, weights, keep, x, rho) -> tuple[float, float]:
-    """95 % interval of ln L: the ln L whose Wald test |ln L^ - ln L| <= Z95 sd(ln L) accepts, sd from the GLS
-    covariance at that L (ae at its profile: the model is linear in ae; weights and Jacobian there). At L^ (x +- Z95
-    sd(L^)) it was short on one side: sd ln L^ grows with L (the peak leaves the fitted bands), so a low L^ came with a
-    narrow interval (benchmarks/fit_lidar.md)."""
+def _interval_ln_l(model: LosModel, data, weights, keep, x, rho, lo, hi) -> tuple[float, float]:
+    """95 % interval of ln L within the fit's limits ``lo[1]``, ``hi[1]``: the ln L whose Wald test |ln L^ - ln L| <=
+    Z95 sd(ln L) accepts, sd from the GLS covariance at that L (ae at its profile: the model is linear in ae; weights
+    and Jacobian there). At L^ (x +- Z95 sd(L^)) it was short on one side: sd ln L grows with L (the peak leaves the
+    fitted bands), so a low L^ came with a narrow interval (benchmarks/fit_lidar.md)."""
     chol = np.linalg.cholesky(weights)
     d = solve_triangular(chol, data, lower=True)
 
@@ -250,13 +252,8 @@ def _interval_ln_l(model: LosModel, data, weights, keep, x, rho) -> tuple[float,
         jac = solve_triangular(c, np.stack([ae * m[0], ae * (m[2] - m[1]) / 2e-3], axis=1), lower=True)
         return float(np.sqrt(parameter_covariance(jac)[1, 1]))
 
-    return inverted_interval(lambda y: ((y - x[1]) / sd(y)) ** 2, float(x[1]), sd(float(x[1])), *_tabled())
-
-
-def _tabled() -> tuple[float, float]:
-    """The ln L range whose interpolation nodes (``LosModel.lines``) lie in L's allowed range."""
-    lo, hi = (float(b[1]) for b in bounds(NAMES))
-    return DLN_L * (math.ceil(lo / DLN_L) + 1), DLN_L * (math.floor(hi / DLN_L) - 2)
+    y0, end = float(x[1]), (float(lo[1]), float(hi[1]))
+    return inverted_interval(lambda y: ((y - y0) / sd(y)) ** 2, y0, sd(y0), *end)
 
 
 def _passed(bands, model: LosModel) -> np.ndarray:

@@ -96,11 +96,12 @@ def _covariance_at(bands, model, geometry, used, p) -> np.ndarray:
     return spliced(full, exact)
 
 
-def gls(residual, covariance_at, x: np.ndarray, free: tuple, passes: int = PASSES):
-    """Re-weighted generalised least squares in x (the ``free`` parameters, ``bounds``): per pass ``residual(x)``
-    (data - model) whitened by the Cholesky factor of ``covariance_at(x)`` is minimised, until no parameter moves by
-    MOVE_TOL sd (at most ``passes``). (solution, cov(x) = (J^T J)^-1, the last weights, converged)."""
-    lo, hi = bounds(free)
+def gls(residual, covariance_at, x: np.ndarray, free: tuple, passes: int = PASSES, limits=None):
+    """Re-weighted generalised least squares in x (the ``free`` parameters, within ``limits`` = (lo, hi), default
+    ``bounds``): per pass ``residual(x)`` (data - model) whitened by the Cholesky factor of ``covariance_at(x)`` is
+    minimised, until no parameter moves by MOVE_TOL sd (at most ``passes``). (solution, cov(x) = (J^T J)^-1, the last
+    weights, converged)."""
+    lo, hi = bounds(free) if limits is None else limits
     for _ in range(passes):
         weights = covariance_at(x)
         chol = np.linalg.cholesky(weights)
