@@ -154,5 +154,4 @@ def fit_kaimal(data, *, U: float | None = None, nperseg: int | None = None, poin
     >>> fit = turbgen.fit_kaimal(ds, points=[(-6, z) for z in (-18, -6, 6, 18)])  # doctest: +SKIP
     >>> fit.values["length_u_m"].ci95, fit.values["a_yz"].value  # doctest: +SKIP
     """
-    return fit_kaimal_data(load_fit_data(_opened(data), U, points),
-                           nperseg)
+    return fit_kaimal_data(load_fit_data(_opened(data), U, points), nperseg)

@@ -16,8 +16,7 @@ from turbgen.errors import ParameterError
 from turbgen.store.paths import check_output_path
 from turbgen.resources import available_disk_bytes, require_disk
 from turbgen.cancellation import raise_if_stop_requested
-from turbgen.store.temporaries import (TEMP_MARK, remove_dead_temporaries,
-                                       report_removed)
+from turbgen.store.temporaries import TEMP_MARK, remove_dead_temporaries, report_removed
 
 
 class OutputSet:

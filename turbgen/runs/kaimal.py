@@ -20,14 +20,8 @@ from turbgen.runs.scratch import FileSpectrum
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.store import create_store
 from turbgen.store.memory import MemoryWriter
-from turbgen.synthesis.kaimal_evo import (
-    COMPONENTS,
-    FREQ_CHUNK,
-    InMemorySpectrum,
-    KaimalEvo,
-    PlaneRing,
-    resolved_band_hz,
-)
+from turbgen.synthesis.kaimal_evo import (COMPONENTS, FREQ_CHUNK, InMemorySpectrum, KaimalEvo, PlaneRing,
+                                          resolved_band_hz)
 from turbgen.synthesis.random_streams import keyed_complex_normal
 
 
@@ -105,10 +99,8 @@ def plan_spill(grid: Grid, out: Path, spill: bool | None, sampler: int) -> bool:
 def _touch_while_loading_noise(pool: ThreadPoolExecutor, ring: PlaneRing, spectrum: InMemorySpectrum | None) -> None:
     """Touch the spectrum (in ``pool``) and the ring while this thread loads the compiled noise (as
     runs.mann._touch_while_loading_kernels); returns when all is touched."""
-    if spectrum is None:  # spilled: the spectrum is a file
-        touched = pool.submit(ring.touch)
-    else:
-        touched = pool.submit(np.copyto, spectrum.data, 0)
+    # spilled (no spectrum): the spectrum is a file
+    touched = pool.submit(ring.touch) if spectrum is None else pool.submit(np.copyto, spectrum.data, 0)
     keyed_complex_normal((0,), np.empty(1, dtype=np.complex64))  # the stream is discarded: only the load counts
     if spectrum is not None:
         ring.touch()

@@ -32,13 +32,7 @@ from turbgen.spec.mann import MannRun
 from turbgen.store import create_store
 from turbgen.store.layout import default_chunk_t
 from turbgen.store.temporaries import pid_alive
-from turbgen.synthesis.mann_spacetime import (
-    COMPONENTS,
-    ROW_BLOCK,
-    SLAB_BATCH,
-    MannSnapshots,
-    PencilTransform,
-)
+from turbgen.synthesis.mann_spacetime import COMPONENTS, ROW_BLOCK, SLAB_BATCH, MannSnapshots, PencilTransform
 from turbgen.synthesis.mann_cells import axis_cells
 from turbgen.synthesis.mann_stencil import build_stencil, synthesis_box
 

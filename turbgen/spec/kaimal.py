@@ -152,38 +152,23 @@ class KaimalRun:
         coherence as their ``to_table``)."""
         k = self.kaimal
         return {
-            "U_m_s": self.U_m_s,
-            "turb_class": self.turb_class or "",
-            "hub_height_m": self.hub_height_m,
-            "sigma_m_s": list(k.sigma_m_s),
-            "length_scales_m": list(k.length_scales_m),
-            "a_yz": k.a_yz,
-            "lc_m": k.lc_m,
-            "long_model": self.long_model,
-            "a_x": self.a_x,
-            "b_x": self.b_x,
-            "long_components": self.long_components,
-            "vw_coherence": self.vw_coherence,
-            "rescale": self.rescale,
+            "U_m_s": self.U_m_s, "turb_class": self.turb_class or "", "hub_height_m": self.hub_height_m,
+            "sigma_m_s": list(k.sigma_m_s), "length_scales_m": list(k.length_scales_m), "a_yz": k.a_yz,
+            "lc_m": k.lc_m, "long_model": self.long_model, "a_x": self.a_x, "b_x": self.b_x,
+            "long_components": self.long_components, "vw_coherence": self.vw_coherence, "rescale": self.rescale,
             "seed": self.seed,
             **({} if self.spectrum is None else {"spectrum": self.spectrum.to_table()}),
             **({} if self.coherence is None else {"coherence": self.coherence.to_table()}),
-        }
+        }  # fmt: skip
 
     def to_attrs(self, derived: Mapping | None = None) -> dict:
         """The store attributes (model, parameters, derived: what the generator worked out, units, seed, U_m_s,
         hub_height_m; not the grid); None parameters are left out."""
         params = {key: v for key, v in self.parameters().items() if v is not None}
         out = {"effective_long_parameters": self.effective_long_parameters(), **(derived or {})}
-        return {
-            "model": "kaimal",
-            "parameters": params,
-            "derived": out,
-            "units": {key: UNITS[key] for key in (*params, *out)},
-            "seed": self.seed,
-            "U_m_s": self.U_m_s,
-            "hub_height_m": self.hub_height_m,
-        }
+        return {"model": "kaimal", "parameters": params, "derived": out,
+                "units": {key: UNITS[key] for key in (*params, *out)}, "seed": self.seed, "U_m_s": self.U_m_s,
+                "hub_height_m": self.hub_height_m}
 
     @classmethod
     def from_attrs(cls, attrs: Mapping) -> "KaimalRun":

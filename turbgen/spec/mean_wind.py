@@ -222,8 +222,7 @@ class MeanWind:
         height [m]."""
         h = np.asarray(heights_m, dtype=float)
         profile, shift, turn = self._added(np.asarray(times_s, dtype=float), y_m, h, U_m_s, hub_height_m)
-        u = u + profile
-        u = u + shift
+        u = u + profile + shift
         if not self.turns:
             return u, v
         return formulas.rotate_horizontal(u, v, self.veer_deg(h, hub_height_m) + turn)
@@ -235,9 +234,7 @@ class MeanWind:
         profile, shift, turn = self._added(np.asarray(times_s, dtype=float), y_m, h, U_m_s, hub_height_m)
         if self.turns:
             u, v = formulas.rotate_horizontal(u, v, -(self.veer_deg(h, hub_height_m) + turn))
-        u = u - profile
-        u = u - shift
-        return u, v
+        return u - profile - shift, v
 
     def check_record(self, first_s: float, last_s: float) -> None:
         """Refuse (ParameterError) a history or transient with times outside [first_s, last_s] [s], the times at

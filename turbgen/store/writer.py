@@ -29,8 +29,7 @@ from turbgen.store.attributes import check_caller_attrs, jsonable, looks_like_tu
 from turbgen.store.chunk_files import write_chunk
 from turbgen.store.discard import finish_before_raising, remove_path
 from turbgen.cancellation import raise_if_stop_requested
-from turbgen.store.temporaries import (publish, remove_dead_temporaries,
-                                       report_removed, temp_name)
+from turbgen.store.temporaries import publish, remove_dead_temporaries, report_removed, temp_name
 from turbgen.store.paths import check_output_path
 
 
@@ -226,8 +225,7 @@ def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: 
     directory.
     """
     path = check_output_path(path).absolute()
-    if chunk_t is None:
-        chunk_t = layout.default_chunk_t(grid.nt)
+    chunk_t = layout.default_chunk_t(grid.nt) if chunk_t is None else chunk_t
     chunk_t = check_int("chunks (time samples per chunk)", chunk_t, 1, grid.nt)
     if path.exists() or path.is_symlink():
         if not looks_like_turbgen_store(path):  # never replaced, so `overwrite` is no remedy: not suggested

@@ -35,11 +35,7 @@ class BoxShape:
 
     def dk(self) -> tuple[float, float, float]:
         """Wavenumber spacings (dk1, dk2, dk3) [rad/m] of the periodic box."""
-        return (
-            2 * np.pi / (self.nt * self.dx_m),
-            2 * np.pi / (self.nyp * self.dy_m),
-            2 * np.pi / (self.nzp * self.dz_m),
-        )
+        return 2 * np.pi / (self.nt * self.dx_m), 2 * np.pi / (self.nyp * self.dy_m), 2 * np.pi / (self.nzp * self.dz_m)
 
     def k1(self) -> np.ndarray:
         """Physical k1 [rad/m] of the stored slabs: -i dk1 (time reversal, see the module docstring)."""

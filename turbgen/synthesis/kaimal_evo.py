@@ -330,8 +330,7 @@ class KaimalEvo:
         ``tick`` is called once per frequency chunk and per plane; ``ring`` (:class:`PlaneRing`) supplies the arrays.
         """
         g = self.grid
-        if spectrum is None:
-            spectrum = InMemorySpectrum(g.nx, self.nf, g.ny, g.nz)
+        spectrum = InMemorySpectrum(g.nx, self.nf, g.ny, g.nz) if spectrum is None else spectrum
         pool = ThreadPoolExecutor(max_workers=self.workers)
         try:  # the pool is shut down however the generator ends (exception, early close)
             self._fill_spectrum(component, pool, spectrum, tick)

@@ -49,10 +49,7 @@ def shear_distortion_beta(k, params: MannParams):
     (isotropic: no distortion, also at k = 0), else inf at k = 0.
     """
     kL = np.asarray(k, dtype=float) * params.length_scale_m
-    if params.lifetime == "mann":
-        tau = mann_lifetime(kL)
-    else:
-        tau = guo_lifetime(kL, params.factor1)
+    tau = mann_lifetime(kL) if params.lifetime == "mann" else guo_lifetime(kL, params.factor1)
     if params.gamma == 0.0:
         return np.zeros_like(tau)  # isotropic: no distortion, also where tau = inf (k = 0)
     return params.gamma * tau

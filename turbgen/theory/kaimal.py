@@ -72,9 +72,5 @@ def iec_kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float =
     """
     lam = iec_lambda1_m(hub_height_m)
     s1 = iec_sigma1_m_s(U_m_s, turb_class)
-    return KaimalParams(
-        sigma_m_s=tuple(r * s1 for r in IEC_SIGMA_RATIOS),
-        length_scales_m=tuple(c * lam for c in IEC_LENGTH_FACTORS),
-        a_yz=12.0,
-        lc_m=8.1 * lam,
-    )
+    return KaimalParams(sigma_m_s=tuple(r * s1 for r in IEC_SIGMA_RATIOS),
+                        length_scales_m=tuple(c * lam for c in IEC_LENGTH_FACTORS), a_yz=12.0, lc_m=8.1 * lam)

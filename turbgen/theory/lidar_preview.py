@@ -170,10 +170,7 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
     lidar = _Lidar(meas, k2, k3, float(np.sqrt(k1_all.max() ** 2 + kappa.max() ** 2)) * 1.01)
     S = np.empty((f.size, 3), dtype=complex)
     for m, k1 in enumerate(k1_all):
-        if box is None:
-            phi_w = sheared_tensor(k1, k2, k3, params) * w
-        else:
-            phi_w = lattice_tensor(box, k1, params, U)
+        phi_w = sheared_tensor(k1, k2, k3, params) * w if box is None else lattice_tensor(box, k1, params, U)
         tau = evolution_lifetime_s(np.sqrt(k1 * k1 + kappa * kappa), params)
         with np.errstate(divide="ignore", invalid="ignore"):
             inv_tau = np.where(np.isfinite(tau), 1.0 / tau, 0.0)

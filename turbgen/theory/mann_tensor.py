@@ -31,8 +31,7 @@ def _distortion(k1, k2, k3, params: MannParams, beta=None):
     negligible = k1 * k1 + k2 * k2 + k3 * k3 < 1e-60
     k1, k2, k3 = (np.where(negligible, 0.0, a) for a in (k1, k2, k3))
     ksq = k1 * k1 + k2 * k2 + k3 * k3
-    if beta is None:
-        beta = shear_distortion_beta(np.sqrt(ksq), params)
+    beta = shear_distortion_beta(np.sqrt(ksq), params) if beta is None else beta
     beta = np.broadcast_to(beta, ksq.shape)
     beta = np.where(np.isfinite(beta), beta, 0.0)  # k = 0 carries no energy
     k30 = k3 + beta * k1

@@ -70,6 +70,5 @@ def rews_spectrum_kaimal(f_hz, kparams: KaimalParams, U_m_s: float, y_m, z_m, *,
         coh = exponential_yz(r_unique[None, :], f[:, None], U, kparams.a_yz, kparams.lc_m)
     else:
         coh = np.broadcast_to(yz_coherence(r_unique[None, :], f[:, None]), (f.size, r_unique.size))
-    if s1 is None:
-        s1 = kaimal_spectrum(f, kparams.sigma_m_s[0], kparams.length_scales_m[0], U)
+    s1 = kaimal_spectrum(f, kparams.sigma_m_s[0], kparams.length_scales_m[0], U) if s1 is None else s1
     return s1 * (coh * counts).sum(axis=-1) / y.size**2

@@ -25,9 +25,7 @@ def _node(k1, kappa, beta, cos_t, sin_t):
     k2 = kappa * cos_t
     k3 = kappa * sin_t
     if k1 * k1 + k2 * k2 + k3 * k3 < 1e-60:  # |k| < 1e-30 rad/m: k = 0 (E ~ k^4 would underflow)
-        k1 = 0.0
-        k2 = 0.0
-        k3 = 0.0
+        k1 = k2 = k3 = 0.0
     ksq = k1 * k1 + k2 * k2 + k3 * k3
     if not math.isfinite(beta):
         beta = 0.0
@@ -57,11 +55,9 @@ def _components(k1, kappa, beta, cos_t, sin_t, atan, e0, codes, out):
             for t in range(cos_t.size):
                 a1, a2, b, ksq, k30, k0sq, q = _node(k1[r], kappa[r, n], beta[r, n], cos_t[t], sin_t[t])
                 if q <= 1e-30 * ksq:  # on the k3 axis: zeta = 0
-                    z1 = 0.0
-                    z2 = 0.0
+                    z1 = z2 = 0.0
                 elif abs(a1) <= 1e-12 * math.sqrt(q):  # k1 -> 0 at fixed q
-                    z1 = -b
-                    z2 = 0.0
+                    z1, z2 = -b, 0.0
                 else:
                     sq = math.sqrt(q)
                     c1 = b * a1 * a1 * (k0sq - 2.0 * k30 * k30 + b * a1 * k30) / (ksq * q)

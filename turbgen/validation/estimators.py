@@ -24,13 +24,8 @@ from turbgen import fft
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
 from turbgen.store.chunk_files import empty_aligned
-from turbgen.validation.point_sets import (
-    LONG_POINTS_PER_AXIS,
-    check_rotor_radius,
-    default_separations,
-    long_sublattice,
-    rotor_mask,
-)
+from turbgen.validation.point_sets import (LONG_POINTS_PER_AXIS, check_rotor_radius, default_separations,
+                                           long_sublattice, rotor_mask)
 from turbgen.validation.span_sums import COMPONENTS, span_sums
 
 SPAN_SEGMENTS = 4  # a span holds at least this many segment lengths (fewer segments lost at span edges)

@@ -46,16 +46,9 @@ class SamplingDesign:
         """What the record and the Welch segments resolve: frequencies [Hz] and k1 = 2 pi f / U [rad/m]."""
         setup, grid, U = self.setup, self.grid, U_m_s
         f_lo, f_hi = 1.0 / (setup.nperseg * setup.dt_s), 0.5 / setup.dt_s
-        return {
-            "f_min_hz": f_lo,
-            "f_max_hz": f_hi,
-            "k1_min_rad_m": 2 * np.pi * f_lo / U,
-            "k1_max_rad_m": 2 * np.pi * f_hi / U,
-            "welch_df_hz": f_lo,
-            "record_df_hz": 1.0 / (grid.nt * grid.dt_s),
-            "k2_nyquist_rad_m": np.pi / grid.dy_m,
-            "k3_nyquist_rad_m": np.pi / grid.dz_m,
-        }
+        return {"f_min_hz": f_lo, "f_max_hz": f_hi, "k1_min_rad_m": 2 * np.pi * f_lo / U,
+                "k1_max_rad_m": 2 * np.pi * f_hi / U, "welch_df_hz": f_lo, "record_df_hz": 1.0 / (grid.nt * grid.dt_s),
+                "k2_nyquist_rad_m": np.pi / grid.dy_m, "k3_nyquist_rad_m": np.pi / grid.dz_m}
 
 
 @dataclass

@@ -36,28 +36,15 @@ SCHEMA = "turbgen-validate/1"
 
 
 def _check_dict(t: Check) -> dict:
-    return {
-        "label": t.label,
-        "band_hz": None if t.band_hz is None else [t.band_hz[0], t.band_hz[1]],
-        "estimate": t.estimate,
-        "expected": t.expected,
-        "sigma": t.sigma,
-        "z": t.z,
-    }
+    return {"label": t.label, "band_hz": None if t.band_hz is None else [t.band_hz[0], t.band_hz[1]],
+            "estimate": t.estimate, "expected": t.expected, "sigma": t.sigma, "z": t.z}
 
 
 def _metric_dict(m: MetricResult) -> dict:
     w = m.worst
-    return {
-        "title": m.title,
-        "quantity": m.quantity,
-        "passed": m.passed,
-        "max_abs_z": m.max_abs_z,
-        "z_crit": m.z_crit,
-        "n_tests": len(m.checks),
-        "worst": None if w is None else _check_dict(w),
-        "tests": [_check_dict(t) for t in m.checks],
-    }
+    return {"title": m.title, "quantity": m.quantity, "passed": m.passed, "max_abs_z": m.max_abs_z,
+            "z_crit": m.z_crit, "n_tests": len(m.checks), "worst": None if w is None else _check_dict(w),
+            "tests": [_check_dict(t) for t in m.checks]}
 
 
 def components(report) -> dict:
@@ -67,15 +54,9 @@ def components(report) -> dict:
     out = {}
     for c in COMPONENTS:
         s, s_exp = math.sqrt(est.variance[c]), math.sqrt(th.variance(c))
-        out[c] = {
-            "mean_m_s": est.mean[c],
-            "sigma_m_s": s,
-            "sigma_expected_m_s": s_exp,
-            "sigma_band_m_s": math.sqrt(th.band_variance(c)),
-            "sigma_model_m_s": th.sigma_model[c],
-            "ti": s / U,
-            "ti_expected": s_exp / U,
-        }
+        out[c] = {"mean_m_s": est.mean[c], "sigma_m_s": s, "sigma_expected_m_s": s_exp,
+                  "sigma_band_m_s": math.sqrt(th.band_variance(c)), "sigma_model_m_s": th.sigma_model[c],
+                  "ti": s / U, "ti_expected": s_exp / U}
     return out
 
 
@@ -85,19 +66,11 @@ def to_dict(report) -> dict:
     g = est.grid
     note = constraints_note(report.store.attrs)
     return {
-        "schema": SCHEMA,
-        "store": report.store.label,
-        "model": report.store.model,
-        "passed": report.passed,
-        "failed": report.failed,
-        "alpha": ALPHA,
+        "schema": SCHEMA, "store": report.store.label, "model": report.store.model, "passed": report.passed,
+        "failed": report.failed, "alpha": ALPHA,
         "settings": {
-            "nperseg": est.setup.nperseg,
-            "window": "hann",
-            "overlap": 0.5,
-            "segments": est.n_segments,
-            "effective_segments": est.effective_segments,
-            "rotor_radius_m": est.rotor_radius_m,
+            "nperseg": est.setup.nperseg, "window": "hann", "overlap": 0.5, "segments": est.n_segments,
+            "effective_segments": est.effective_segments, "rotor_radius_m": est.rotor_radius_m,
             "rotor_points": int(est.rotor_mask.sum()),
             "separations_m": [[a * g.dy_m, b * g.dz_m] for a, b in est.separations],
             "long_points_per_plane": int(est.long_iy.size * est.long_iz.size),

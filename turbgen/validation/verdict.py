@@ -106,11 +106,9 @@ def judge(est: Estimates, th: Theory, parallel: bool = False, expected: Expectat
     with second as pool:
         longitudinal = (pool.submit if pool else _done)(_longitudinal, est, th, kernel, bands, exp_auto["u"],
                                                         ex.cov_long)
-        for c in COMPONENTS:
-            out.append(_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c],
-                                 ex.cov_all[c], bands, f))
-        for c in COMPONENTS:
-            out.append(_yz(est, th, kernel, bands, c, exp_auto[c], ex.cov_yz[c]))
+        out += [_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c], ex.cov_all[c],
+                          bands, f) for c in COMPONENTS]
+        out += [_yz(est, th, kernel, bands, c, exp_auto[c], ex.cov_yz[c]) for c in COMPONENTS]
         uw = _uw(est, th, kernel, bands, exp_auto, ex.cov)
         rews = _spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
                          est.rews_psd, ex.exp_rews, ex.rews_cov, bands, f)

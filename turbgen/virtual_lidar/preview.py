@@ -74,15 +74,9 @@ def summarise(spectra: PreviewSpectra, lidar: LidarDescription, U_m_s: float, *,
     f = spectra.f_hz
     cutoff = cutoff_frequency_hz(f, spectra.G_RL)
     k05 = coherence_bandwidth_rad_m(f, spectra.coh2_RL, U_m_s)
-    out = {
-        "f": f.tolist(),
-        "coh2_RL": spectra.coh2_RL.tolist(),
-        "G_RL": spectra.G_RL.tolist(),
-        "k05_rad_m": k05,
-        "cutoff_hz": cutoff,
-        "d_eddy_min_m": 2.0 * np.pi / k05 if np.isfinite(k05) and k05 > 0 else float("nan"),
-        "scan_time_s": lidar.scan_time_s,
-    }
+    out = {"f": f.tolist(), "coh2_RL": spectra.coh2_RL.tolist(), "G_RL": spectra.G_RL.tolist(), "k05_rad_m": k05,
+           "cutoff_hz": cutoff, "d_eddy_min_m": 2.0 * np.pi / k05 if np.isfinite(k05) and k05 > 0 else float("nan"),
+           "scan_time_s": lidar.scan_time_s}
     out = {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in out.items()}
     if np.isfinite(cutoff):
         out["filter_delay_s"] = filter_delay_s(cutoff, f_delay_hz)

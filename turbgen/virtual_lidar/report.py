@@ -154,20 +154,10 @@ class LidarReport:
 
         r = self.run
         d = self.to_dict()
-        attrs = {
-            "source_store": self.store,
-            "lidar": d["lidar"],
-            "rotor_radius_m": r.rotor_radius_m,
-            "mean_wind_added": bool(r.samples.mean_wind_added),
-            "shear_exponent": float(r.samples.shear_exponent),
-            "mean_wind": r.samples.mean_wind_record,
-            "U_m_s": self.U_m_s,
-            "ti_lidar_uncorrected": r.ti_lidar,
-            "ti_rotor": r.ti_rotor,
-            "simulated": d["simulated"],
-            "theory": d["theory"],
-            "verdict": d["verdict"],
-        }
+        attrs = {"source_store": self.store, "lidar": d["lidar"], "rotor_radius_m": r.rotor_radius_m,
+                 "mean_wind_added": bool(r.samples.mean_wind_added), "shear_exponent": float(r.samples.shear_exponent),
+                 "mean_wind": r.samples.mean_wind_record, "U_m_s": self.U_m_s, "ti_lidar_uncorrected": r.ti_lidar,
+                 "ti_rotor": r.ti_rotor, "simulated": d["simulated"], "theory": d["theory"], "verdict": d["verdict"]}
         return write_dataset(out, r.samples, r.t_arrival_s, r.u_LL, r.u_RR, attrs, overwrite=overwrite)
 
     def data(self):

@@ -86,14 +86,5 @@ def welch_rl(u_ll: np.ndarray, u_rr: np.ndarray, setup: WelchSetup) -> dict:
     with np.errstate(divide="ignore", invalid="ignore"):
         coh2 = np.abs(srl) ** 2 / (sll * srr)
         gain = np.abs(srl) / sll
-    return {
-        "f_hz": setup.freqs,
-        "S_LL": sll,
-        "S_RR": srr,
-        "S_RL": srl,
-        "coh2_RL": coh2,
-        "G_RL": gain,
-        "n_segments": k,
-        "n_eff": setup.effective_segments(k, k - 1),
-        "setup": setup,
-    }
+    return {"f_hz": setup.freqs, "S_LL": sll, "S_RR": srr, "S_RL": srl, "coh2_RL": coh2, "G_RL": gain,
+            "n_segments": k, "n_eff": setup.effective_segments(k, k - 1), "setup": setup}
