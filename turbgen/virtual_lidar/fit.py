@@ -6,7 +6,8 @@ dataset was sampled from while it is there (along x with the sampler's interpola
 (k2, k3) integrated out to TAIL times the highest k1 the probe passes. Gamma is held: the LOS spectrum is nearly u's.
 Generalised least squares in (ln ae, ln L), re-weighted at the fitted model, by the bands' exact covariance from one
 point's lines times the gates' point correlation: the band-centre variance left bin 1's 1.3 x and the probe-steepened
-top bands' 1.4 x short (benchmarks/fit_lidar.md). F is tabulated in ln L (step DLN_L) at N_K1 nodes, interpolated cubic.
+top bands' 1.4 x short (benchmarks/fit_lidar.md); L's interval inverts the Wald test with the sd at each L. F is
+tabulated in ln L (step DLN_L) at N_K1 nodes, interpolated cubic.
 The evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (Guo et al. 2022).
 """
 
