@@ -40,6 +40,7 @@ import argparse
 import json
 import os
 import resource
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -47,6 +48,11 @@ import time
 
 L_M, GAMMA, DX, DY = 49.0, 3.1, 8.0, 4.7
 N_PLANES = 11
+
+
+def console_script() -> str:
+    """The ``turbgen`` command of this interpreter's environment (its bin/: no need to activate it), else PATH's."""
+    return shutil.which("turbgen", path=os.path.dirname(sys.executable)) or "turbgen"
 
 
 def _ae(lifetime: str) -> float:
@@ -171,7 +177,8 @@ def case_floor(nt: int) -> dict:
 def case_turbgen_box_cli(nt: int) -> dict:
     """`turbgen mann` of one Mann-lifetime box (planes = rotor only) through the console script, store written."""
     with tempfile.TemporaryDirectory(dir=os.environ.get("BENCH_TMP")) as tmp:
-        cmd = ["turbgen", "mann", "--lifetime", "mann", "--L", str(L_M), "--gamma", str(GAMMA), "--evo", "frozen",
+        cmd = [console_script(), "mann", "--lifetime", "mann", "--L", str(L_M), "--gamma", str(GAMMA), "--evo",
+               "frozen",
                "--U", "16", "--dt", "0.5", "--nt", str(nt), "--ny", "64", "--nz", "64", "--dy", str(DY),
                "--planes", "0", "--ae", str(float(_ae("mann"))), "--out", os.path.join(tmp, "box.zarr")]  # fmt: skip
         t0 = time.perf_counter()

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -58,6 +60,11 @@ print(json.dumps({
 """
 
 
+def console_script() -> str:
+    """The ``turbgen`` command of this interpreter's environment (its bin/: no need to activate it), else PATH's."""
+    return shutil.which("turbgen", path=os.path.dirname(sys.executable)) or "turbgen"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--store", help="validate this store instead of generating the default Mann store")
@@ -77,7 +84,7 @@ def main() -> None:
         result = json.loads(out.stdout.strip().splitlines()[-1])
         # what a user waits for: the command, process start and imports included (exit 1 = a metric failed)
         t0 = time.perf_counter()
-        cli = subprocess.run(["turbgen", "validate", "--json", "--rotor-radius", str(radius), store],
+        cli = subprocess.run([console_script(), "validate", "--json", "--rotor-radius", str(radius), store],
                              capture_output=True, text=True)
         result["cli_wall_s"] = round(time.perf_counter() - t0, 2) if cli.returncode in (0, 1) else None
         print(json.dumps(result))
