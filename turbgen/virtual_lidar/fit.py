@@ -221,7 +221,8 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     flags += [f"{n} = {math.exp(v):.4g} is on the boundary of its fitted range [{math.exp(a):.4g}, {math.exp(b):.4g}]"
               for n, v, a, b in zip(NAMES, x, lo, hi) if min(v - a, b - v) < 1e-6]
     sdx = np.sqrt(np.diag(cov))
-    ci = [(x[0] - Z95 * sdx[0], x[0] + Z95 * sdx[0]), _interval_ln_l(model, data, weights, keep, x, rho, lo, hi)]
+    ci = [(x[0] - Z95 * sdx[0], x[0] + Z95 * sdx[0]),
+          _interval_ln_l(model, data, weights, keep, x, rho, (lo, hi), sdx[1])]
     val = [FitValue(math.exp(v), (math.exp(a), math.exp(b)), float(s)) for v, (a, b), s in zip(x, ci, sdx)]
     full = np.pad(cov, ((0, 1), (0, 1)))  # Gamma held
     e = model.expected(*np.exp(x))[keep]
@@ -237,11 +238,12 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
     return _with_gates(fd, meas, fit)
 
 
-def _interval_ln_l(model: LosModel, data, weights, keep, x, rho, lo, hi) -> tuple[float, float]:
-    """95 % interval of ln L within the fit's limits ``lo[1]``, ``hi[1]``: the ln L whose Wald test |ln L^ - ln L| <=
+def _interval_ln_l(model: LosModel, data, weights, keep, x, rho, limits, sd_fit: float) -> tuple[float, float]:
+    """95 % interval of ln L within the fit's ``limits`` (lo, hi)[:, 1]: the ln L whose Wald test |ln L^ - ln L| <=
     Z95 sd(ln L) accepts, sd from the GLS covariance at that L (ae at its profile: the model is linear in ae; weights
     and Jacobian there). At L^ (x +- Z95 sd(L^)) it was short on one side: sd ln L grows with L (the peak leaves the
-    fitted bands), so a low L^ came with a narrow interval (benchmarks/fit_lidar.md)."""
+    fitted bands), so a low L^ came with a narrow interval (benchmarks/fit_lidar.md). ``sd_fit`` (the fit's sd of ln L
+    at L^) sets the bracketing step."""
     chol = np.linalg.cholesky(weights)
     d = solve_triangular(chol, data, lower=True)
 
@@ -253,8 +255,8 @@ def _interval_ln_l(model: LosModel, data, weights, keep, x, rho, lo, hi) -> tupl
         jac = solve_triangular(c, np.stack([ae * m[0], ae * (m[2] - m[1]) / 2e-3], axis=1), lower=True)
         return float(np.sqrt(parameter_covariance(jac)[1, 1]))
 
-    y0, end = float(x[1]), (float(lo[1]), float(hi[1]))
-    return inverted_interval(lambda y: ((y - y0) / sd(y)) ** 2, y0, sd(y0), *end)
+    y0, end = float(x[1]), (float(limits[0][1]), float(limits[1][1]))
+    return inverted_interval(lambda y: ((y - y0) / sd(y)) ** 2, y0, float(sd_fit), *end)
 
 
 def _passed(bands, model: LosModel) -> np.ndarray:
