@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import json
 import re
+import subprocess
+import sys
 
 import click
 import pytest
@@ -80,3 +82,30 @@ def test_lidar_optimize_takes_evo_frozen():
     k_frozen = json.loads(frozen.stdout)["candidates"][0]["k05_rad_m"]
     k_400 = json.loads(evolving.stdout)["candidates"][0]["k05_rad_m"]
     assert k_frozen > k_400  # no eddy evolution: the lidar preview stays coherent to smaller eddies
+
+
+LIST = """
+import sys
+from turbgen.cli import main
+sys.argv = ["turbgen", "--help"]
+try:
+    main()
+except SystemExit:
+    pass
+heavy = ("turbgen.validation", "turbgen.runs", "turbgen.synthesis", "turbgen.store", "zarr", "numba", "xarray")
+print("IMPORTED", *[m for m in heavy if m in sys.modules])
+"""
+
+
+def test_the_command_list_is_each_command_s_summary_and_imports_none():
+    """``turbgen --help`` lists the commands from SUMMARIES without importing them (all of them took ~3.5 s), and an
+    imported command's own short help is that summary, so the two listings cannot differ."""
+    from turbgen.cli import COMMANDS, SUMMARIES
+
+    out = subprocess.run([sys.executable, "-c", LIST], capture_output=True, text=True, check=True).stdout
+    assert out.splitlines()[-1] == "IMPORTED", out
+    lines = {line.split()[0]: " ".join(line.split()[1:]) for line in out.split("Commands:")[1].splitlines()[1:-1]}
+    assert lines == SUMMARIES and set(SUMMARIES) == set(COMMANDS), out  # one line each at 80 columns, none cut
+    for path, command in _commands(cli):
+        if len(path) == 1:
+            assert command.get_short_help_str(limit=200) == SUMMARIES[path[0]], path

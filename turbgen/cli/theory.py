@@ -202,7 +202,8 @@ def rews(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text,
 
 @click.group()
 def fit():
-    """Fit Kaimal / exponential-coherence models to the Mann (space-time) model, or the Mann model to data."""
+    """Fit the Mann model to measured data (``fit mann DATA``), or Kaimal / exponential-coherence models to the Mann
+    (space-time) model."""
 
 
 @fit.command(short_help="Kaimal sigma_i, L_i and IEC a_yz, Lc fitted to the Mann model.")

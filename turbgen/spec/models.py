@@ -43,6 +43,8 @@ class ModelDeclaration:
     preview, store_preview : str or None
         ``turbgen.virtual_lidar`` references (None: not available): ``preview(lidar, U_m_s, *, preset, f_hz,
         radius_m, frozen, **options)`` and ``store_preview(fs, description, f_hz, radius_m)``, both -> PreviewSpectra.
+    summary : str
+        The command's line in ``turbgen --help``.
     """
 
     name: str
@@ -58,6 +60,7 @@ class ModelDeclaration:
     presets: str | None = None
     preview: str | None = None
     store_preview: str | None = None
+    summary: str = "A 4D turbulence field."
 
 
 def _declare(name: str, run_class: str, synthesis: str, **optional) -> ModelDeclaration:
@@ -79,8 +82,10 @@ def _own(name: str) -> dict:
 
 
 DECLARATIONS: tuple[ModelDeclaration, ...] = (
-    _declare("mann", "MannRun", "turbgen.synthesis.mann_spacetime:MannSnapshots", **_own("mann")),
-    _declare("kaimal", "KaimalRun", "turbgen.synthesis.kaimal_evo:KaimalEvo", **_own("kaimal")),
+    _declare("mann", "MannRun", "turbgen.synthesis.mann_spacetime:MannSnapshots", **_own("mann"),
+             summary="Mann space-time 4D field: the sheared tensor, evolving eddies."),
+    _declare("kaimal", "KaimalRun", "turbgen.synthesis.kaimal_evo:KaimalEvo", **_own("kaimal"),
+             summary="Kaimal 4D field: IEC spectra, yz and longitudinal coherence."),
 )
 _BY_NAME = {d.name: d for d in DECLARATIONS}
 
