@@ -96,6 +96,22 @@ def test_sensor_series_are_aligned_by_taylors_delay(evolving):
         assert np.max(np.abs(np.diff(line, 2))) < 1e-12
 
 
+def test_the_part_of_taylors_delay_under_a_sample_is_in_the_model(frozen):
+    """A frozen field's series and its copy 2.5 samples later (the Fourier shift of the periodic record), as masts
+    12.5 m apart at U = 10 m/s: the alignment shifts by 2 samples, the remaining 0.25 s turns the cross-spectrum,
+    so the measured co-coherence falls to cos(2 pi f 0.25 s) at high f with no evolution at all. The model carries
+    that factor: the frozen limit stays inside the interval (a model without it read the fall as evolution)."""
+    nt, dt, delay = frozen.sizes["t"], 0.5, 1.25
+    turn = np.exp(2j * np.pi * np.fft.rfftfreq(nt, dt) * delay)  # the mast 12.5 m upstream sees the flow 1.25 s earlier
+    sensors = [PointSensor(f"x{x:g}", x, float(frozen.y[6]), float(frozen.z[5]), None,
+                           {c: np.fft.irfft(np.fft.rfft(frozen[c].values[:, 0, 6, 5].astype(float)) * turn**k, n=nt)
+                            for c in "uvw"}) for k, x in enumerate((0.0, 12.5))]
+    e = turbgen.fit_mann(PointSeries("m", np.arange(nt) * dt, tuple(sensors), False, None, "shifted"), U=10.0).evolution
+    top = e.data[(0.0, 12.5)]
+    assert top.min() < 0.8 and abs(top[-1] - math.cos(2 * np.pi * e.f_hz[-1] * 0.25)) < 0.1, (e.f_hz, top)
+    assert not e.identified and e.ci95[1] is None, e.message
+
+
 def test_one_x_only_is_not_fitted_and_said(evolving):
     """One mast (every sensor at x = 0): no pair along x; gamma is not fitted, the notes and the JSON say so."""
     ps = _masts(evolving)

@@ -8,7 +8,8 @@ Generalised least squares in (ln ae, ln L), re-weighted at the fitted model, by 
 point's lines times the gates' point correlation: the band-centre variance left bin 1's 1.3 x and the probe-steepened
 top bands' 1.4 x short (benchmarks/fit_lidar.md); L's interval inverts the Wald test with the sd at each L. F is
 tabulated in ln L (step DLN_L) at N_K1 nodes, interpolated cubic.
-The evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (Guo et al. 2022).
+The evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (Guo et al. 2022),
+against a model made as the spectra's: on the store's lattice, through the probe's gain (``_with_gates``).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from scipy.linalg import solve_triangular
 
 from turbgen import fft
 from turbgen.errors import ParameterError
+from turbgen.grid import Grid
 from turbgen.spec.defaults import MANN_DEFAULTS
 from turbgen.theory import ranges
 from turbgen.theory.lattice import line_frequencies
@@ -33,11 +35,12 @@ from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.params import MannParams
 from turbgen.validation.estimators import segment_starts
 from turbgen.validation.fit.data import FitData, detrended
-from turbgen.validation.fit.evolution import rho_bar, with_evolution
+from turbgen.validation.fit.evolution import Sampler, rho_bar, with_evolution
 from turbgen.validation.fit.mann import AE_MIN, PASSES, Z95, bounds, gls, inverted_interval, parameter_covariance
 from turbgen.validation.fit.result import FitValue, MannFit
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
+from turbgen.validation.store_run import MannBox, mann_box_from_attrs
 from turbgen.validation.welch_kernel import WelchKernel
 from turbgen.virtual_lidar.dataset import LidarData, read_dataset
 from turbgen.virtual_lidar.description import LidarDescription
@@ -53,12 +56,15 @@ NAMES = ("ae", "length_scale_m")
 
 @dataclass(frozen=True, eq=False)
 class SampledStore:
-    """The Mann store a dataset was sampled from: its periodic ``box``, sampling interval ``dt_s`` [s] and, per beam,
-    the distinct scan times T modulo dt_s [s] (where the sampler's linear interpolation in time falls)."""
+    """The Mann store a dataset was sampled from: its periodic ``box`` (also as the validator's ``mann_box`` on its
+    ``grid``), sampling interval ``dt_s`` [s] and, per beam, the distinct scan times T modulo dt_s [s] (where the
+    sampler's linear interpolation in time falls)."""
 
     box: BoxLattice
     dt_s: float
     phases_s: tuple
+    grid: Grid
+    mann_box: MannBox
 
 
 def probe_gain(k1: np.ndarray, meas, U_m_s: float, store: SampledStore | None) -> np.ndarray:
@@ -183,7 +189,6 @@ def sampled_store(ld: LidarData) -> SampledStore | None:
     import zarr
 
     from turbgen.store import open_store
-    from turbgen.validation.store_run import mann_box_from_attrs
 
     path = zarr.open_group(ld.source, mode="r").attrs.get("source_store")
     if not isinstance(path, str) or not Path(path).is_dir():
@@ -194,7 +199,7 @@ def sampled_store(ld: LidarData) -> SampledStore | None:
     except ParameterError:  # no Mann parameters: not a Mann store
         return None
     phases = tuple(np.unique(np.round(t % g.dt_s, 9)) for t in ld.time_s.T)
-    return SampledStore(BoxLattice(b.nyp, b.nzp, g.dy_m, g.dz_m, g.nt * g.dt_s), g.dt_s, phases)
+    return SampledStore(BoxLattice(b.nyp, b.nzp, g.dy_m, g.dz_m, g.nt * g.dt_s), g.dt_s, phases, g, b)
 
 
 def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, store="source") -> MannFit:
@@ -235,7 +240,7 @@ def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, stor
                   int(sol.fun.size - 2), tuple(flags), notes, "continuous" if store is None else "grid", fd.U_m_s,
                   fd.source, bands.setup.nperseg, bands.f_hz[keep], {"los": data}, {"los": e},
                   {"los": np.sqrt(np.diag(weights))}, cov_fit=full)  # fmt: skip
-    return _with_gates(fd, meas, fit)
+    return _with_gates(fd, meas, fit, store)
 
 
 def _interval_ln_l(model: LosModel, data, weights, keep, x, rho, limits, sd_fit: float) -> tuple[float, float]:
@@ -279,8 +284,11 @@ def _model_note(store) -> str:
             "probe volume as sampled (what the box holds; along x with the sampler's interpolation in time)")
 
 
-def _with_gates(fd: FitData, meas, fit: MannFit) -> MannFit:
-    """``fit`` with the evolution time from the gates of beams along x, or a note saying why there is none."""
+def _with_gates(fd: FitData, meas, fit: MannFit, store: SampledStore | None) -> MannFit:
+    """``fit`` with the evolution time from the gates of beams along x, or a note saying why there is none. As the
+    spectra, their coherence is summed over the sampled ``store``'s lattice (the continuous plane holds short-lived
+    large-|k| eddies the box lacks) and weighted by the probe's gain within each band (it passes the more coherent
+    low k1 of a band): without either gamma came out high (benchmarks/fit_lidar.md)."""
     along = np.flatnonzero(meas.n[:, 0] > 1 - ALONG_X)
     if np.unique(np.round(meas.focus_m[along, 0], 6)).size < 2:
         why = "no beam along x" if along.size == 0 else "one range gate along x"
@@ -289,4 +297,12 @@ def _with_gates(fd: FitData, meas, fit: MannFit) -> MannFit:
             "gates of inclined beams differ in y, z and in what n mixes)",))
     gates = replace(fd, series={"u": fd.series["u"][:, along]}, columns={"u": np.arange(along.size)},
                     sites_m=meas.focus_m[along], u_xyz_m=tuple(map(tuple, meas.focus_m[along])))
-    return with_evolution(gates, fit)
+    at_x: dict = {}
+    for i in along:
+        at_x.setdefault(float(meas.focus_m[i, 0]), []).append(meas.subset([int(i)]))
+
+    def gain(x_m: float, k1: np.ndarray) -> np.ndarray:  # the gates at x_m, averaged
+        return np.mean([probe_gain(k1, m, fd.U_m_s, store) for m in at_x[x_m]], axis=0)
+
+    grid, box = (None, None) if store is None else (store.grid, store.mann_box)
+    return with_evolution(gates, fit, Sampler(gain, grid, box))

@@ -3,16 +3,18 @@
 Estimate: u points at one (y, z) and different x (sensors, or the planes of a store) form pairs; per pair of x
 values and band the co-coherence r = sum Re C_ij / sqrt(sum A_i sum A_j) pools the Welch cross- and auto-spectra
 (``spectra``' segments and bands) over the (y, z) points and the band's bins. A store is in the convected frame;
-sensor series are first shifted by whole samples of x / U (Taylor's delay; the rest, under dt / 2, is not
-corrected). Model: rho(k1, dx) = sum Phi_11 exp(-dx / (U tau_e(k))) / sum Phi_11 (Guo et al. 2023, Eq. 13, 16),
-summed over the store's lattice (``MannLattice``, the validator's "theo. (grid)") or over the continuous (k2, k3)
-plane (``perpendicular_quadrature``) with ae, L and Gamma held at their one-point fit (factor2 at its default);
-through the expected Welch estimate of every bin (``WelchKernel``) and the band means. Variance (delta method with
-Isserlis 1918 moments of complex Gaussian DFTs): r_m = rho_m + Z_m / S with Z_m = Re X_i* X_j - rho_m (|X_i|^2 +
-|X_j|^2) / 2, so Cov(r_m, r_n) = tr(M_m R M_n R) c, R the (x, x) coherencies and c the one-point variance factor
-of a band's auto-spectrum (1 / K_eff times the point-correlation sum and the band gain, ``spectra``); one pair
-gives (1 - rho^2)^2 c / 2, and E r = rho - rho (1 - rho^2) c / 4 to the same order. Bands covary through
-``BandSpectra.band_corr``.
+sensor series are first shifted by whole samples of x / U (Taylor's delay; the rest delta, under dt / 2, turns
+the pair's cross-spectrum by exp(-i 2 pi f delta): the model's co-coherence carries cos(2 pi f delta) per line).
+Model: rho(k1, dx) = sum Phi_11 exp(-dx / (U tau_e(k))) / sum Phi_11 (Guo et al. 2023, Eq. 13, 16),
+summed over the store's lattice (``MannLattice``, the validator's "theo. (grid)"; also for series sampled from a
+store, ``Sampler``) or over the continuous (k2, k3) plane (``perpendicular_quadrature``) with ae, L and Gamma held at
+their one-point fit (factor2 at its default); through the expected Welch estimate of every bin (``WelchKernel``) and
+the band means, each point's line spectrum times its probe volume's power gain if it has one (lidar gates).
+Variance (delta method with Isserlis 1918 moments of complex Gaussian DFTs): r_m = rho_m + Z_m / S with Z_m = Re
+X_i* X_j - rho_m (|X_i|^2 + |X_j|^2) / 2, so Cov(r_m, r_n) = tr(M_m R M_n R) c, R the (x, x) coherencies and c
+the one-point variance factor of a band's auto-spectrum (1 / K_eff times the point-correlation sum and the band
+gain, ``spectra``); one pair gives (1 - rho^2)^2 c / 2, and E r = rho - rho (1 - rho^2) c / 4 to the same order.
+Bands covary through ``BandSpectra.band_corr``.
 
 Fit: chi^2 over ln gamma on the range of evo (scan, bounded refinement), re-weighted at the fitted gamma until ln
 gamma moves < MOVE_TOL. 95 % interval: chi^2 <= min + 3.84 with ae, L, Gamma held (``ci95_held``), each side widened
@@ -25,6 +27,7 @@ does not exclude the frozen field (gamma -> inf): gamma is then not identified, 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import cast
 
@@ -44,6 +47,7 @@ from turbgen.validation.fit.model import BandModel
 from turbgen.validation.fit.result import MannFit
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.mann_lattice import MannLattice
+from turbgen.validation.store_run import MannBox
 
 Z95 = 1.959963984540054  # standard normal 97.5 % quantile
 CHI2_95 = Z95**2  # chi^2 quantile 0.95 of one degree of freedom
@@ -118,6 +122,18 @@ class EvoFit:
         ax.legend(fontsize=7)
 
 
+@dataclass(frozen=True, eq=False)
+class Sampler:
+    """How sensor-like series (lidar gates) were sampled: ``gain(x_m, k1)``, the power gain |H(k1)|^2 at k1 [rad/m]
+    of the points at x [m] (their probe volume; a pair's cross-spectrum is taken as sqrt(g_a g_b) times the points',
+    i.e. H real and positive: weights symmetric about the focus), and the Mann store's ``grid`` and periodic ``box``
+    they were read from (the lattice their coherence is summed over, as their spectra; None: the continuous model)."""
+
+    gain: Callable[[float, np.ndarray], np.ndarray]
+    grid: Grid | None = None
+    box: MannBox | None = None
+
+
 def x_pairs(xyz: tuple) -> dict:
     """(x_i, x_j) with x_i < x_j -> [(column at x_i, column at x_j)] of the u columns at one (y, z)."""
     groups: dict = {}
@@ -134,12 +150,25 @@ def x_pairs(xyz: tuple) -> dict:
     return out
 
 
+def _lag(data: FitData, x_m: float) -> int:
+    """Whole samples of Taylor's delay x / U by which sensor columns at ``x_m`` [m] are shifted."""
+    return round(x_m / (data.U_m_s * data.dt_s))
+
+
+def _rest(data: FitData, x_a: float, x_b: float) -> float:
+    """The part of Taylor's delay between sensor columns at ``x_a`` and ``x_b`` [m] their shifts leave [s] (0 in a
+    store: its planes are in the convected frame)."""
+    if data.grid is not None:
+        return 0.0
+    return (x_b - x_a) / data.U_m_s - (_lag(data, x_b) - _lag(data, x_a)) * data.dt_s
+
+
 def _aligned(data: FitData) -> np.ndarray:
     """u of ``data`` in the convected frame: sensor columns shifted by whole samples of x / U (module docstring)."""
     u = data.series["u"]
     if data.grid is not None:
         return u
-    lag = np.array([round(x / (data.U_m_s * data.dt_s)) for x, _, _ in data.u_xyz_m])
+    lag = np.array([_lag(data, x) for x, _, _ in data.u_xyz_m])
     lag -= lag.min()
     n = u.shape[0] - lag.max()
     return np.stack([u[lag.max() - s: lag.max() - s + n, c] for c, s in enumerate(lag)], axis=1)
@@ -149,31 +178,43 @@ class CoherenceModel:
     """Expected band co-coherence of pairs dx apart as a function of gamma, the other parameters held (module
     docstring): per k1 node the Phi_11 masses and their decay rates at gamma = 1 s."""
 
-    def __init__(self, bands, data: FitData, params: MannParams):
-        self.bands, self.U = bands, data.U_m_s
-        band_model = BandModel(bands, data.U_m_s, data.grid, data.box, params.lifetime)
+    def __init__(self, bands, data: FitData, params: MannParams, sampler: Sampler | None = None):
+        self.bands, self.U, self.sampler, self.data = bands, data.U_m_s, sampler, data
+        grid, box = (data.grid, data.box) if sampler is None else (sampler.grid, sampler.box)
+        band_model = BandModel(bands, data.U_m_s, grid, box, params.lifetime)
         band_model.update_ratio(params)
         self.kernel, self.k1, self.band_model = band_model.kernel, band_model.k1, band_model
         f11 = band_model.line_spectra(params.ae, params.length_scale_m, params.gamma)["uu"]
         self.f11_lines = np.concatenate([[0.0], f11 * band_model.dk1])
-        self.auto = bands.band_mean(self.kernel.apply(self.f11_lines))
+        self._gain: dict = {}
         self.nodes = np.geomspace(self.k1[0], self.k1[-1], N_NODES)
         unit = replace(params, evo_time_s=1.0)
-        if data.grid is None or data.box is None:
+        if grid is None or box is None:
             kappa, w, g = perpendicular_quadrature(self.nodes, params, ((0, 0),))
             self.mass = w * g[(0, 0)]
             self.rate = 1.0 / evolution_lifetime_s(np.sqrt(self.nodes[:, None] ** 2 + kappa**2), unit)
         else:
-            slabs = list(MannLattice(unit, cast(Grid, data.grid), data.box, data.U_m_s).slabs(self.nodes))
+            slabs = list(MannLattice(unit, cast(Grid, grid), box, data.U_m_s).slabs(self.nodes))
             self.mass = np.stack([phi[0, 0].ravel() for _, phi, _ in slabs])
             self.rate = np.stack([inv_tau.ravel() for _, _, inv_tau in slabs])
 
-    def expected(self, gamma_s: float, dx_m: float) -> np.ndarray:
-        """(nbands,) expected co-coherence at separation ``dx_m`` (before the estimator's bias)."""
-        node = (self.mass * np.exp(-self.rate * (dx_m / (self.U * gamma_s)))).sum(1) / self.mass.sum(1)
-        rho = np.interp(np.log(self.k1), np.log(self.nodes), node)
-        cross = self.bands.band_mean(self.kernel.apply(self.f11_lines * np.concatenate([[1.0], rho])))
-        return cross / self.auto
+    def gain(self, x_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """(nt/2 + 1,) power gain at the lines 0 .. nt/2 of the points at ``x_m`` [m] (1 without a ``Sampler``) and
+        their expected band auto-spectra, computed once."""
+        if x_m not in self._gain:
+            g = np.ones(self.f11_lines.size) if self.sampler is None else np.concatenate(
+                [[1.0], self.sampler.gain(x_m, self.k1)])
+            self._gain[x_m] = g, self.bands.band_mean(self.kernel.apply(self.f11_lines * g))
+        return self._gain[x_m]
+
+    def expected(self, gamma_s: float, x_a: float, x_b: float) -> np.ndarray:
+        """(nbands,) expected co-coherence of points at ``x_a`` and ``x_b`` [m] (before the estimator's bias)."""
+        node = (self.mass * np.exp(-self.rate * (abs(x_b - x_a) / (self.U * gamma_s)))).sum(1) / self.mass.sum(1)
+        turn = np.cos(self.k1 * self.U * _rest(self.data, x_a, x_b))  # 2 pi f delta at the lines
+        rho = np.concatenate([[1.0], np.interp(np.log(self.k1), np.log(self.nodes), node) * turn])
+        (g_a, auto_a), (g_b, auto_b) = self.gain(x_a), self.gain(x_b)
+        return self.bands.band_mean(self.kernel.apply(self.f11_lines * np.sqrt(g_a * g_b) * rho)) / np.sqrt(
+            auto_a * auto_b)
 
 
 def _estimates(data: FitData, nperseg: int, pairs: dict):
@@ -218,12 +259,14 @@ class _Problem:
         self.xs = sorted({x for pair in seps for x in pair})
 
     def rho(self, gamma_s: float) -> dict:
-        dxs = {abs(b - a) for a in self.xs for b in self.xs}
-        return {dx: self.model.expected(gamma_s, dx) for dx in dxs}
+        """(x_a, x_b) -> (nbands,) expected co-coherence, for every two x of the pairs (x_a <= x_b)."""
+        one = np.ones(self.r.shape[1])  # a point with itself
+        return {(a, b): one if a == b else self.model.expected(gamma_s, a, b) for a in self.xs for b in self.xs
+                if a <= b}
 
     def mean(self, gamma_s: float) -> np.ndarray:
         rho = self.rho(gamma_s)
-        e = np.array([rho[b - a] for a, b in self.seps])
+        e = np.array([rho[pair] for pair in self.seps])
         return e - e * (1 - e**2) * self.factor / 4
 
     def set_weights(self, gamma_s: float) -> None:
@@ -232,7 +275,7 @@ class _Problem:
         nx, nb, npair = len(self.xs), self.r.shape[1], len(self.seps)
         cov = np.empty((nb, npair, npair))
         for b in range(nb):
-            R = np.array([[rho[abs(q - p)][b] for q in self.xs] for p in self.xs])
+            R = np.array([[rho[min(p, q), max(p, q)][b] for q in self.xs] for p in self.xs])
             M = np.zeros((npair, nx, nx))
             for m, (p, q) in enumerate(self.seps):
                 i, j = self.xs.index(p), self.xs.index(q)
@@ -262,17 +305,19 @@ class _Problem:
         return (x if self.chi2(x) <= c[k] else grid[k]), grid, c
 
 
-def fit_evolution(data: FitData, params: MannParams, nperseg: int, fit: MannFit | None = None) -> EvoFit | str:
+def fit_evolution(data: FitData, params: MannParams, nperseg: int, fit: MannFit | None = None,
+                  sampler: Sampler | None = None) -> EvoFit | str:
     """EvoFit of gamma to the longitudinal coherence of ``data`` (module docstring), or one line saying why not (no two
     u points along x at one (y, z)). ``params``: ae, L, Gamma of the one-point fit (held); ``nperseg`` [samples]: its
-    Welch segments; ``fit``: that MannFit, whose uncertainty the interval carries (None: ``params`` exact)."""
+    Welch segments; ``fit``: that MannFit, whose uncertainty the interval carries (None: ``params`` exact);
+    ``sampler``: how sensor-like series were sampled from a store (``Sampler``; None: ``data``'s own lattice if any)."""
     pairs = x_pairs(data.u_xyz_m) if "u" in data.series else {}
     if not pairs:
         return ("evo_time_s not fitted: the data hold no two u series at one (y, z) and different x (two masts "
                 "along the wind or two planes are needed)")
     seps = tuple(pairs)
     bands, r, factor = _estimates(data, nperseg, pairs)
-    problem = _Problem(CoherenceModel(bands, data, params), seps, r, factor)
+    problem = _Problem(CoherenceModel(bands, data, params, sampler), seps, r, factor)
     evo = ranges.RANGES["evo_time_s"]
     lo, hi = math.log(evo.lo), math.log(evo.hi)
     x = math.log(400.0)
@@ -308,7 +353,8 @@ def _sensitivity(problem: _Problem, data: FitData, params: MannParams, x: float,
             continue
         moved = (replace(params, length_scale_m=params.length_scale_m * math.exp(step)) if k == 1
                  else replace(params, gamma=params.gamma + step))
-        shifted = _Problem(CoherenceModel(problem.model.bands, data, moved), problem.seps, problem.r, problem.factor)
+        model = CoherenceModel(problem.model.bands, data, moved, problem.model.sampler)
+        shifted = _Problem(model, problem.seps, problem.r, problem.factor)
         shifted.chol = problem.chol
         slope[k] = (shifted.best(*rng)[0] - x) / step
     return slope
@@ -333,9 +379,9 @@ def linear_terms(problem: _Problem, data: FitData, fit: MannFit, pairs: dict, x:
     a = solve_triangular(problem.chol, w, lower=True, trans="T") / (w @ w)
     seps, index, _ = separations(np.asarray(data.sites_m, float))
     g = problem.model.band_model.coherency(replace(fit.params, evo_time_s=math.exp(x)), seps)
-    if data.grid is None:  # frozen between x (``model``): times the co-coherence at dx (factorised)
+    if problem.model.band_model.grid is None:  # frozen between x (``model``): times the co-coherence at dx
         for dx in {abs(d) for d in seps[:, 0] if abs(d) > POS_TOL_M}:
-            rho = problem.model.expected(math.exp(x), dx)
+            rho = problem.model.expected(math.exp(x), 0.0, dx)
             g[..., np.abs(np.abs(seps[:, 0]) - dx) < POS_TOL_M] *= rho[:, None, None, None]
     cols, used = np.asarray(cast(dict, data.columns)["u"]), tuple(fit.data)
     sites = [tuple(cols[list(c)] for c in zip(*pairs[p])) for p in problem.seps]
@@ -375,9 +421,10 @@ def _result(problem: _Problem, bands, x: float, ci: list, c_min: float, chi2_fro
                   dict(zip(seps, problem.mean(gamma))), dict(zip(seps, problem.sd)), ends, held[1])
 
 
-def with_evolution(data: FitData, fit):
-    """``fit`` (a MannFit of ``data``) with ``evolution`` fitted, or a note saying why it was not."""
-    evo = fit_evolution(data, fit.params, fit.nperseg, fit)
+def with_evolution(data: FitData, fit, sampler: Sampler | None = None):
+    """``fit`` (a MannFit of ``data``) with ``evolution`` fitted (``sampler`` as ``fit_evolution``), or a note saying
+    why it was not."""
+    evo = fit_evolution(data, fit.params, fit.nperseg, fit, sampler)
     if isinstance(evo, str):
         return replace(fit, notes=fit.notes + (evo,))
     return replace(fit, evolution=evo, notes=fit.notes + (evo.message,))
