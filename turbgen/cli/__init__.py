@@ -77,8 +77,7 @@ COMMANDS = {
     "transient": ("turbgen.cli.transient", "transient"),
     "validate": ("turbgen.cli.validate", "validate"),
 }
-# each command's one line in `turbgen --help`, which lists them without importing them (importing every command
-# took ~3.5 s); a command's short help is set from here when it is imported, so the two listings agree
+# each command's line in `turbgen --help`, listed without importing the commands (~3.5 s); their short help is set here
 SUMMARIES = {
     **{d.name: d.summary for d in DECLARATIONS},
     "export": "Write a store as OpenFAST, HAWC2 or lidar-simulator files.",

@@ -28,8 +28,9 @@ class ModelDeclaration:
 
     Parameters
     ----------
-    name, schema : str
-        The store's ``model`` attribute, the command, ``turbgen.<name>``; turbgen/schemas/<schema>.schema.json.
+    name, schema, summary : str
+        The store's ``model`` attribute, the command, ``turbgen.<name>``; turbgen/schemas/<schema>.schema.json; the
+        command's line in ``turbgen --help``.
     spec, options, replaces, defaults : str
         ``turbgen.spec`` references: the run class (``from_mapping``, ``to_attrs``, ``from_attrs``, ``parameters``);
         option / keyword -> run key; given run key -> keys it removes from the run file and the preset; run and
@@ -43,8 +44,6 @@ class ModelDeclaration:
     preview, store_preview : str or None
         ``turbgen.virtual_lidar`` references (None: not available): ``preview(lidar, U_m_s, *, preset, f_hz,
         radius_m, frozen, **options)`` and ``store_preview(fs, description, f_hz, radius_m)``, both -> PreviewSpectra.
-    summary : str
-        The command's line in ``turbgen --help``.
     """
 
     name: str

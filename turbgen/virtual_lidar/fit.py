@@ -56,12 +56,10 @@ NAMES = ("ae", "length_scale_m")
 
 @dataclass(frozen=True, eq=False)
 class SampledStore:
-    """The Mann store a dataset was sampled from: its periodic ``box`` (also as the validator's ``mann_box`` on its
-    ``grid``), sampling interval ``dt_s`` [s] and, per beam, the distinct scan times T modulo dt_s [s] (where the
-    sampler's linear interpolation in time falls)."""
+    """The Mann store a dataset was sampled from: its periodic ``box`` (also as the validator's ``mann_box``), ``grid``
+    and, per beam, the distinct scan times T modulo dt [s] (where the sampler's linear interpolation in time falls)."""
 
     box: BoxLattice
-    dt_s: float
     phases_s: tuple
     grid: Grid
     mann_box: MannBox
@@ -74,7 +72,7 @@ def probe_gain(k1: np.ndarray, meas, U_m_s: float, store: SampledStore | None) -
     s, w = meas.offsets_m[0], meas.weights[0]
     if store is None:
         return discrete_transform(k1, s, w) ** 2
-    om, dt = k1[:, None] * U_m_s, store.dt_s
+    om, dt = k1[:, None] * U_m_s, store.grid.dt_s
     gain = np.zeros(k1.size)
     for t0 in store.phases_s[int(meas.beam[0])]:
         phi = ((t0 + (meas.focus_m[0, 0] + s) / U_m_s) / dt) % 1.0
@@ -199,7 +197,7 @@ def sampled_store(ld: LidarData) -> SampledStore | None:
     except ParameterError:  # no Mann parameters: not a Mann store
         return None
     phases = tuple(np.unique(np.round(t % g.dt_s, 9)) for t in ld.time_s.T)
-    return SampledStore(BoxLattice(b.nyp, b.nzp, g.dy_m, g.dz_m, g.nt * g.dt_s), g.dt_s, phases, g, b)
+    return SampledStore(BoxLattice(b.nyp, b.nzp, g.dy_m, g.dz_m, g.nt * g.dt_s), phases, g, b)
 
 
 def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, store="source") -> MannFit:
@@ -297,12 +295,10 @@ def _with_gates(fd: FitData, meas, fit: MannFit, store: SampledStore | None) -> 
             "gates of inclined beams differ in y, z and in what n mixes)",))
     gates = replace(fd, series={"u": fd.series["u"][:, along]}, columns={"u": np.arange(along.size)},
                     sites_m=meas.focus_m[along], u_xyz_m=tuple(map(tuple, meas.focus_m[along])))
-    at_x: dict = {}
-    for i in along:
-        at_x.setdefault(float(meas.focus_m[i, 0]), []).append(meas.subset([int(i)]))
 
     def gain(x_m: float, k1: np.ndarray) -> np.ndarray:  # the gates at x_m, averaged
-        return np.mean([probe_gain(k1, m, fd.U_m_s, store) for m in at_x[x_m]], axis=0)
+        at = [int(i) for i in along if meas.focus_m[i, 0] == x_m]
+        return np.mean([probe_gain(k1, meas.subset([i]), fd.U_m_s, store) for i in at], axis=0)
 
-    grid, box = (None, None) if store is None else (store.grid, store.mann_box)
-    return with_evolution(gates, fit, Sampler(gain, grid, box))
+    lattice = (None, None) if store is None else (store.grid, store.mann_box)
+    return with_evolution(gates, fit, Sampler(gain, *lattice))

@@ -124,10 +124,9 @@ class EvoFit:
 
 @dataclass(frozen=True, eq=False)
 class Sampler:
-    """How sensor-like series (lidar gates) were sampled: ``gain(x_m, k1)``, the power gain |H(k1)|^2 at k1 [rad/m]
-    of the points at x [m] (their probe volume; a pair's cross-spectrum is taken as sqrt(g_a g_b) times the points',
-    i.e. H real and positive: weights symmetric about the focus), and the Mann store's ``grid`` and periodic ``box``
-    they were read from (the lattice their coherence is summed over, as their spectra; None: the continuous model)."""
+    """How sensor-like series (lidar gates) were sampled: ``gain(x_m, k1)``, the power gain |H(k1)|^2 at k1 [rad/m] of
+    the points at x [m] (a probe volume; a pair's cross-spectrum is sqrt(g_a g_b) times the points': H real, positive),
+    and the Mann store's ``grid`` and ``box`` they were read from (their coherence's lattice; None: continuous)."""
 
     gain: Callable[[float, np.ndarray], np.ndarray]
     grid: Grid | None = None
@@ -150,17 +149,13 @@ def x_pairs(xyz: tuple) -> dict:
     return out
 
 
-def _lag(data: FitData, x_m: float) -> int:
-    """Whole samples of Taylor's delay x / U by which sensor columns at ``x_m`` [m] are shifted."""
+def _lag(data: FitData, x_m: float) -> int:  # whole samples of Taylor's delay x / U: sensor columns' shift
     return round(x_m / (data.U_m_s * data.dt_s))
 
 
 def _rest(data: FitData, x_a: float, x_b: float) -> float:
-    """The part of Taylor's delay between sensor columns at ``x_a`` and ``x_b`` [m] their shifts leave [s] (0 in a
-    store: its planes are in the convected frame)."""
-    if data.grid is not None:
-        return 0.0
-    return (x_b - x_a) / data.U_m_s - (_lag(data, x_b) - _lag(data, x_a)) * data.dt_s
+    """Taylor's delay [s] between columns at ``x_a``, ``x_b`` [m] left by their shifts (0 in a store: convected)."""
+    return 0.0 if data.grid is not None else (x_b - x_a) / data.U_m_s - (_lag(data, x_b) - _lag(data, x_a)) * data.dt_s
 
 
 def _aligned(data: FitData) -> np.ndarray:
@@ -199,8 +194,7 @@ class CoherenceModel:
             self.rate = np.stack([inv_tau.ravel() for _, _, inv_tau in slabs])
 
     def gain(self, x_m: float) -> tuple[np.ndarray, np.ndarray]:
-        """(nt/2 + 1,) power gain at the lines 0 .. nt/2 of the points at ``x_m`` [m] (1 without a ``Sampler``) and
-        their expected band auto-spectra, computed once."""
+        """(nt/2 + 1,) power gain of the points at ``x_m`` [m] at the lines 0 .. nt/2 and their band auto-spectra."""
         if x_m not in self._gain:
             g = np.ones(self.f11_lines.size) if self.sampler is None else np.concatenate(
                 [[1.0], self.sampler.gain(x_m, self.k1)])
@@ -422,8 +416,7 @@ def _result(problem: _Problem, bands, x: float, ci: list, c_min: float, chi2_fro
 
 
 def with_evolution(data: FitData, fit, sampler: Sampler | None = None):
-    """``fit`` (a MannFit of ``data``) with ``evolution`` fitted (``sampler`` as ``fit_evolution``), or a note saying
-    why it was not."""
+    """``fit`` (a MannFit of ``data``) with ``evolution`` fitted (``sampler`` as fit_evolution's), or a note why not."""
     evo = fit_evolution(data, fit.params, fit.nperseg, fit, sampler)
     if isinstance(evo, str):
         return replace(fit, notes=fit.notes + (evo,))
