@@ -66,7 +66,6 @@ NAMES_A_MODEL = {
     "cli/fit_data.py": "`turbgen fit mann` (model fits are per model, optional)",
     "validation/fit/data.py": "the same", "validation/fit/kaimal.py": "the same",
     "spec/preset_files.py": "the presets' mann / kaimal tables (a model's preset keys may read any table)",
-    "spec/dlc.py": "IEC load cases: the Mann and Kaimal sigma rules",
     "service/form.py": "mann / kaimal keys the form does not show",
     "cli/sweep.py": "default model", "sweep/dlc.py": "default model", "service/routes/pages.py": "default model",
     "cli/theory_lidar.py": "default model",

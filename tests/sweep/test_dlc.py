@@ -4,6 +4,7 @@ listing every field's wind file and InflowWind input file; the NTM/ETM sigma1 an
 from __future__ import annotations
 
 import csv
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -89,16 +90,28 @@ def test_dlc_needs_class_and_refuses_presets(tmp_path):
 
 
 def test_dlc_sets_take_the_models_with_a_sigma_rule_only(tmp_path):
-    # the load case's sigma1 enters Mann as sigma_u and Kaimal as 1, 0.8, 0.5 sigma1 (DlcSet.run_mapping): a further
-    # registered model is refused by name rather than given Kaimal's rule
-    from turbgen.runs.models import MODELS
-    from turbgen.spec.dlc import DLC_MODELS
+    # the load case's sigma1 enters each model through its declared load_case rule (turbgen.spec.models); a model
+    # without one is refused by name rather than given another model's rule
     from turbgen.sweep.dlc import make_dlc_plan
 
-    assert set(DLC_MODELS) <= set(MODELS)
-    with pytest.raises(ParameterError, match="'further' is not one of kaimal, mann"):
+    with pytest.raises(ParameterError, match="'further' is not one of mann, kaimal"):
         make_dlc_plan(DlcSet("1.2", "IIB", 10, 12, (1,)), out=tmp_path / "t", model="further")
     assert not (tmp_path / "t").exists()
+
+
+def test_a_further_model_brings_its_own_load_case_rule(monkeypatch):
+    import turbgen.spec.dlc as dlc
+    import turbgen.spec.models as models
+
+    kaimal = models.declaration("kaimal")
+    further, bare = replace(kaimal, name="further"), replace(kaimal, name="bare", load_case=None)
+    monkeypatch.setattr(models, "_BY_NAME", {**models._BY_NAME, "further": further, "bare": bare})
+    monkeypatch.setattr(dlc, "DECLARATIONS", (*models.DECLARATIONS, further, bare))
+    d = DlcSet("1.2", "IIB", 10, 12, (1,))
+    assert dlc.dlc_models() == ("mann", "kaimal", "further")
+    assert d.run_mapping("further", 10.0, 1) == d.run_mapping("kaimal", 10.0, 1)
+    with pytest.raises(ParameterError, match="'bare' is not one of mann, kaimal, further"):
+        d.run_mapping("bare", 10.0, 1)
 
 
 def test_mann_and_etm_plans_target_sigma1(tmp_path):

@@ -1,8 +1,7 @@
 """The one reader of TOML/JSON files: run files (``--config``), sweep files and preset files.
 
 Files are validated against a JSON Schema of turbgen/schemas/ (e.g. mann-run.schema.json); any
-problem is a ParameterError naming the file and the offending key.
-"""
+problem is a ParameterError naming the file and the offending key."""
 
 from __future__ import annotations
 

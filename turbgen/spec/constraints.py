@@ -4,8 +4,7 @@ A file holds sample times (physical time [s] from the start of the field, any ra
 (x, y, z) (z from the hub, or height above ground) with any of u, v, w [m/s], null for missing (NaN
 here). With ``total_wind`` the data hold the total wind, whose mean (the exports' MeanWind, or the
 file's ``mean_wind``) is taken off by :func:`sensor_fluctuations`. turbgen.runs.constrain places the
-data on the run's grid.
-"""
+data on the run's grid."""
 
 from __future__ import annotations
 
@@ -29,8 +28,7 @@ COMPONENTS = ("u", "v", "w")
 class PointSensor:
     """One sensor: x_m [m upstream], y_m [m], and z_m [m from the hub] or height_m [m above ground] (one of
     them), ``series``: component ("u", "v", "w") -> values [m/s] (NaN: missing), and a sonic's path_m [m] (None: a
-    point; only the fit uses it: turbgen.theory.sonic_path).
-    """
+    point; only the fit uses it: turbgen.theory.sonic_path)."""
 
     name: str
     x_m: float
@@ -49,8 +47,7 @@ class PointSensor:
 class PointSeries:
     """A constraint file: ``time_s`` (strictly increasing) [s], ``sensors``, ``total_wind``, ``noise_m_s``
     [m/s] (None: not given), ``source`` (the file), ``mean_wind`` (the mean in total-wind data: the file's,
-    else the exports' default).
-    """
+    else the exports' default)."""
 
     name: str
     time_s: np.ndarray
@@ -120,8 +117,7 @@ def sensor_fluctuations(f: PointSeries, s: PointSensor, U_m_s: float, hub_height
     With ``total_wind``, the mean wind (:meth:`MeanWind.fluctuation_uv`) at the sensor's height and y and at the
     stored time T + x / U (as the periodic exports use it) is taken from u, and from v when it turns (a value missing
     in u or v is then missing in both). ParameterError when it turns and the sensor lacks u or v, or the profile
-    does not cover its height.
-    """
+    does not cover its height."""
     if not f.total_wind:
         return dict(s.series), 0.0
     where = f"constraint file {f.source}, {s.name}"
@@ -163,8 +159,7 @@ MAX_NOISE_M_S = 100.0  # the schemas' maximum of noise_m_s
 class ConstraintRequest:
     """What a run mapping asks to condition the field on: ``files`` (paths, or loaded PointSeries /
     LidarData), ``noise_m_s`` [m/s] (None: each file's own), ``conditional_mean`` (the conditional mean
-    instead of a conditional sample).
-    """
+    instead of a conditional sample)."""
 
     files: tuple
     noise_m_s: float | None = None

@@ -1,8 +1,7 @@
 """Defaults of every run (Guo et al. 2023, Sect. 5.1.2, neutral case) and the grid rule "dz defaults to dy".
 
 The commands show these values in their help, ``MannRun.from_mapping`` / ``KaimalRun.from_mapping``
-apply them, and the sweep plans with them: they are written nowhere else.
-"""
+apply them, and the sweep plans with them: they are written nowhere else."""
 
 from __future__ import annotations
 

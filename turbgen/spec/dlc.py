@@ -2,9 +2,8 @@
 
 Hub speeds V_in .. V_out in 2 m/s steps, 6 seeds each, at the turbine class's I_ref. Each run is the
 neutral preset's model shape with its variance set to the load case's sigma1 at V_hub (NTM: Sect.
-6.3.2.3; ETM: :func:`turbgen.theory.iec_transients.etm_sigma1_m_s`); Kaimal sigma2,3 = 0.8, 0.5 sigma1
-and the length scales from Lambda1(hub) (Annex C).
-"""
+6.3.2.3; ETM: :func:`turbgen.theory.iec_transients.etm_sigma1_m_s`) by the model's declared ``load_case``
+(turbgen.spec.models; e.g. Kaimal's sigma2,3 = 0.8, 0.5 sigma1 and the lengths from Lambda1(hub), Annex C)."""
 
 from __future__ import annotations
 
@@ -14,12 +13,12 @@ import numpy as np
 
 from turbgen.errors import ParameterError, check_choice, check_int, check_range
 from turbgen.spec.iec_transient import parse_class
+from turbgen.spec.models import DECLARATIONS, declaration, resolve
 from turbgen.spec.preset_runs import run_keys
 from turbgen.theory import iec_transients as iec
-from turbgen.theory.kaimal import IEC_IREF, IEC_SIGMA_RATIOS, iec_sigma1_m_s
+from turbgen.theory.kaimal import IEC_IREF, iec_sigma1_m_s
 
 DLCS = {"1.1": "NTM", "1.2": "NTM", "1.3": "ETM"}
-DLC_MODELS = ("kaimal", "mann")  # the models whose sigma rule DlcSet.run_mapping knows (others: refused)
 SPEED_STEP_M_S = 2.0
 
 
@@ -74,15 +73,14 @@ class DlcSet:
         return iec.etm_sigma1_m_s(V_hub_m_s, IEC_IREF[self.category], iec.V_REF_M_S[turbine])
 
     def run_mapping(self, model: str, V_hub_m_s: float, seed: int) -> dict:
-        """The run mapping of one field of ``model`` at hub speed ``V_hub_m_s`` [m/s] and ``seed``: the neutral
-        preset's keys with the load case's sigma1 (Mann: model sigma_u; Kaimal: 1, 0.8, 0.5 sigma1, IEC lengths)."""
-        keys = dict(run_keys(model, "neutral", V_hub_m_s))
-        s1 = self.sigma1_m_s(V_hub_m_s)
-        keys.update(U_m_s=V_hub_m_s, seed=seed, turb_class=self.category)
-        if model == "mann":
-            keys["sigma_u_m_s"] = s1
-        else:
-            for k in ("length_scales_m", "lc_m"):  # IEC values of the run's hub height (Annex C)
-                keys.pop(k, None)
-            keys["sigma_m_s"] = [r * s1 for r in IEC_SIGMA_RATIOS]
-        return keys
+        """The run mapping of one field of ``model`` (one of :func:`dlc_models`) at hub speed ``V_hub_m_s`` [m/s]
+        and ``seed``: the neutral preset's keys set to the load case's sigma1 by the model's ``load_case``."""
+        check_choice("model", model, dlc_models())
+        keys = {**run_keys(model, "neutral", V_hub_m_s), "U_m_s": V_hub_m_s, "seed": seed,
+                "turb_class": self.category}
+        return resolve(declaration(model).load_case, "spec")(keys, self.sigma1_m_s(V_hub_m_s))
+
+
+def dlc_models() -> tuple[str, ...]:
+    """The declared models with a load-case rule (turbgen.spec.models ``load_case``): the models of DLC sets."""
+    return tuple(d.name for d in DECLARATIONS if d.load_case)

@@ -1,7 +1,6 @@
 """The Mann energy level alpha*eps^(2/3) of a run, from ae itself, sigma_u, the TI or an IEC class.
 
-One rule, one quadrature, for ``MannRun.from_mapping`` (so every front end) and ``turbgen theory``.
-"""
+One rule, one quadrature, for ``MannRun.from_mapping`` (so every front end) and ``turbgen theory``."""
 
 from __future__ import annotations
 
@@ -15,8 +14,7 @@ def resolve_ae(shape: MannParams, U_m_s: float, *, ae: float | None = None, sigm
     """alpha*eps^(2/3) [m^(4/3) s^-2] of a Mann run and a line saying how it was chosen (recorded in the store).
 
     The first given of ``ae``, ``sigma_u_m_s`` [m/s], ``ti`` [-] (sigma_u = ti U) and ``turb_class`` (NTM sigma_1 =
-    Iref (0.75 U + 5.6)) sets it; for a target sigma_u, from the variance of ``shape`` (its own ae ignored).
-    """
+    Iref (0.75 U + 5.6)) sets it; for a target sigma_u, from the variance of ``shape`` (its own ae ignored)."""
     if ae is not None:
         return ranges.check("ae", ae), "ae"
     if sigma_u_m_s is not None:

@@ -5,8 +5,7 @@ horizontal speed at (X, Y, Z) and t is (OpenFAST IfW_UniformWind; Delta clockwis
 V_h = V (Z/RefHt)^VShr + V HLinShr/RefLength (Y cos Delta + X sin Delta) + V VLinShr/RefLength (Z - RefHt) + VGust;
 with V = V_hub, VShr = 0.2 (the normal wind profile), the EOG and ECD speed changes in VGust, the EDC
 and ECD direction in Delta and the EWS shear in VLinShr or HLinShr with RefLength = D, V_h is the
-standard's formula exactly at every row.
-"""
+standard's formula exactly at every row."""
 
 from __future__ import annotations
 
@@ -44,8 +43,7 @@ class IecTransient:
     ``kind`` "EOG", "EDC", "ECD", "EWS-V" or "EWS-H"; ``iec_class`` e.g. "IIB"; ``V_hub_m_s`` [m/s] in (0, V_ref]
     (below V_e1 = 1.12 V_ref the EOG gust is positive); hub height and rotor diameter D [m], the rotor clear of the
     ground; ``start_s``, ``duration_s`` [s]: the event ends within the file; ``dt_s`` row spacing during the event
-    [s] in [MIN_DT_S, T/4]; ``sign`` +1 or -1, the standard's "+-" (direction change or shear sense), EOG +1 only.
-    """
+    [s] in [MIN_DT_S, T/4]; ``sign`` +1 or -1, the standard's "+-" (direction change or shear sense), EOG +1 only."""
 
     kind: str
     iec_class: str
@@ -123,8 +121,7 @@ class IecTransient:
 
         "gust_m_s": speed change uniform over the rotor [m/s] (EOG, ECD); "direction_deg": clockwise seen from
         above, as InflowWind (EDC, ECD); "vshear_m_s", "hshear_m_s": speed change across D, times (z - z_hub) / D
-        or y / D (EWS-V, EWS-H).
-        """
+        or y / D (EWS-V, EWS-H)."""
         tau = np.asarray(t_s, dtype=float) - self.start_s
         zero = np.zeros_like(tau)
         out = {"gust_m_s": zero, "direction_deg": zero, "vshear_m_s": zero, "hshear_m_s": zero}

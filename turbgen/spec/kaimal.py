@@ -2,8 +2,7 @@
 
 ``KaimalRun.from_mapping`` reads a run file / request / preset mapping (schemas/kaimal-run.schema.json)
 with turbgen.spec.defaults; ``to_attrs`` / ``from_attrs`` write and read the store attributes;
-turbgen.runs.kaimal generates the field. Values are checked against turbgen.theory.ranges.
-"""
+turbgen.runs.kaimal generates the field. Values are checked against turbgen.theory.ranges."""
 
 from __future__ import annotations
 
@@ -19,7 +18,7 @@ from turbgen.spec.naming import run_digest
 from turbgen.spec.user_spectrum import line_coherence, line_spectrum
 from turbgen.theory import ranges
 from turbgen.theory.coherence_models import LONGITUDINAL_MODELS, simley_pao_parameters
-from turbgen.theory.kaimal import iec_kaimal_params
+from turbgen.theory.kaimal import IEC_SIGMA_RATIOS, iec_kaimal_params
 from turbgen.theory.params import KaimalParams, check_wind_speed
 from turbgen.theory.user_coherence import LineCoherence
 from turbgen.theory.user_spectra import LineSpectrum
@@ -60,8 +59,7 @@ class KaimalRun:
     ``turb_class``: recorded only. ``spectrum`` / ``coherence``: user LineSpectrum / LineCoherence on the grid's
     lines in place of Kaimal's / the IEC exponential (the sigmas become the spectrum's; L1 enters only the
     Simley-Pao and Kristensen coherences). ParameterError for a value outside its range, an unknown choice, a_x /
-    b_x with another model, or ``rescale`` with ``spectrum``.
-    """
+    b_x with another model, or ``rescale`` with ``spectrum``."""
 
     kaimal: KaimalParams
     grid: Grid
@@ -210,3 +208,10 @@ def kaimal_params(U_m_s: float, turb_class: str = "A", hub_height_m: float = 90.
         a_yz=iec.a_yz if a_yz is None else a_yz,
         lc_m=iec.lc_m if lc_m is None else lc_m,
     )
+
+
+def load_case_keys(keys: Mapping, sigma1_m_s: float) -> dict:
+    """The run keys ``keys`` (a preset's) for an IEC load case (turbgen.spec.dlc): sigma 1, 0.8, 0.5 sigma1 [m/s]
+    and the IEC length scales of the run's hub height (IEC 61400-1 Annex C)."""
+    out = {k: v for k, v in keys.items() if k not in ("length_scales_m", "lc_m")}
+    return {**out, "sigma_m_s": [r * sigma1_m_s for r in IEC_SIGMA_RATIOS]}

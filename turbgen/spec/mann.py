@@ -1,8 +1,7 @@
 """What a Mann space-time run is: parameters + grid + seed (Guo et al. 2023, Sect. 2.3.1), apart from how it runs.
 
 ``from_mapping`` reads a run file / request / preset mapping (schemas/mann-run.schema.json); ``to_attrs`` /
-``from_attrs`` write and read the store attributes. Values are checked against turbgen.theory.ranges.
-"""
+``from_attrs`` write and read the store attributes. Values are checked against turbgen.theory.ranges."""
 
 from __future__ import annotations
 
@@ -128,3 +127,9 @@ class MannRun:
         if d.get("ae") is not None:
             ae_from = d.get("ae_from", ae_from)
         return cls(shape.with_ae(ae), grid, U, v["seed"], v["hub_height_m"], v["pad_yz"], ae_from)
+
+
+def load_case_keys(keys: Mapping, sigma1_m_s: float) -> dict:
+    """The run keys ``keys`` (a preset's) for an IEC load case (turbgen.spec.dlc): the model's sigma_u is its
+    sigma1 [m/s]."""
+    return {**keys, "sigma_u_m_s": sigma1_m_s}

@@ -12,8 +12,7 @@ with r(h) = U(h)/U(h_hub) (:mod:`turbgen.theory.mean_wind`), U_hub(t) the histor
 store's U), g, s_v, s_h and the direction of a superimposed IEC transient
 (:class:`turbgen.spec.iec_transient.IecTransient`), u', v' the stored fluctuations; w is unchanged.
 Angles turn counter-clockwise seen from above (CCW_NOTE); an IEC direction, clockwise in InflowWind,
-enters with its sign flipped.
-"""
+enters with its sign flipped."""
 
 from __future__ import annotations
 
@@ -72,8 +71,7 @@ class MeanWind:
     directions [deg] (veer = direction(h) - direction(hub)). ``veer_deg_per_m`` |rate| <= 5, negative = clockwise
     with height. History: increasing times at the turbine [s], speeds [m/s], optional directions [deg]; linear
     between, end values held. ``*_label``: source file names for descriptions. ``transient``: an IecTransient on the
-    mean (the store's V_hub and hub height); excludes a history.
-    """
+    mean (the store's V_hub and hub height); excludes a history."""
 
     profile: str = "power"
     shear_exponent: float = DEFAULT_SHEAR_EXPONENT
@@ -238,8 +236,7 @@ class MeanWind:
 
     def check_record(self, first_s: float, last_s: float) -> None:
         """Refuse (ParameterError) a history or transient with times outside [first_s, last_s] [s], the times at
-        which the first and last file slices reach the turbine.
-        """
+        which the first and last file slices reach the turbine."""
         spans = []
         if self.transient is not None:
             t0, t1 = self.transient.start_s, self.transient.start_s + self.transient.period_s

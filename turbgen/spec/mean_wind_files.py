@@ -5,8 +5,7 @@ whitespace-separated numbers, one row per line, ``#`` comments and a non-numeric
 skipped; or the same rows inline (``a,b[,c];a,b[,c]``: the service, which reads no client path).
 Every reader returns the 2 or 3 columns and raises ParameterError for a row that is not numeric,
 rows of different lengths or a row without 2 or 3 values; ``names`` are the columns' names for
-messages, e.g. ("z (m)", "U (m/s)", "direction (deg)").
-"""
+messages, e.g. ("z (m)", "U (m/s)", "direction (deg)")."""
 
 from __future__ import annotations
 

@@ -10,9 +10,9 @@ so a declaration pointing into the wrong layer fails at once and no lower layer 
 A further model touches 6 files: one ``_declare`` line here, spec/<name>.py (run class, OPTIONS, REPLACES,
 DEFAULTS), schemas/<name>-run.schema.json, its synthesis module, runs/<name>.py (run, MODEL) and
 validation/<name>_expectation.py; its command (turbgen.cli.model), store, validator, sweeps and service page read
-this registry. Optional: own command, preset keys (sweeps need them), lidar previews, ``turbgen.<name>()``, a
-sweep file's per-model grid table (tests/spec/test_models.py keeps other modules from naming a model).
-"""
+this registry. Optional: own command, preset keys (sweeps need them), lidar previews, DLC sets,
+``turbgen.<name>()``, a sweep file's per-model grid table (tests/spec/test_models.py keeps other modules from naming
+a model)."""
 
 from __future__ import annotations
 
@@ -44,7 +44,9 @@ class ModelDeclaration:
     preview, store_preview : str or None
         ``turbgen.virtual_lidar`` references (None: not available): ``preview(lidar, U_m_s, *, preset, f_hz,
         radius_m, frozen, **options)`` and ``store_preview(fs, description, f_hz, radius_m)``, both -> PreviewSpectra.
-    """
+    load_case : str or None
+        ``turbgen.spec`` ``load_case(keys, sigma1_m_s)`` -> the preset's run keys set to an IEC load case's sigma1
+        [m/s] (turbgen.spec.dlc; None: no DLC sets)."""
 
     name: str
     schema: str
@@ -59,6 +61,7 @@ class ModelDeclaration:
     presets: str | None = None
     preview: str | None = None
     store_preview: str | None = None
+    load_case: str | None = None
     summary: str = "A 4D turbulence field."
 
 
@@ -74,8 +77,9 @@ def _declare(name: str, run_class: str, synthesis: str, **optional) -> ModelDecl
 
 
 def _own(name: str) -> dict:
-    """The optional parts mann and kaimal have: own command, presets, lidar previews."""
+    """The optional parts mann and kaimal have: own command, presets, lidar previews, DLC sets."""
     return dict(command=f"turbgen.cli.{name}:{name}", presets=f"turbgen.spec.preset_runs:{name}_run_keys",
+                load_case=f"turbgen.spec.{name}:load_case_keys",
                 preview=f"turbgen.virtual_lidar.preview:{name}_preview",
                 store_preview=f"turbgen.virtual_lidar.report:{name}_store_preview")
 

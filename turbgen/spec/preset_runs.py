@@ -2,8 +2,7 @@
 
 The run keys ``--preset``, sweeps and the service merge, so all build the same run. ``preset`` is a name
 (built-in or in ``user``: turbgen.spec.presets.get_preset) or a StabilityPreset; U_m_s [m/s]. Unknown presets,
-presets without the model's parameters and values outside their ranges raise ParameterError.
-"""
+presets without the model's parameters and values outside their ranges raise ParameterError."""
 
 from __future__ import annotations
 

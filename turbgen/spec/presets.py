@@ -13,8 +13,7 @@ Sources of the numbers:
 * Kaimal a_x, b_x (Eq. 18): Table 2 in the column of the class's gamma, fitted at U = 16 m/s and
   dx = 100 m and used unchanged at other speeds, as in the paper.
 
-User presets: turbgen.spec.preset_files; what a preset gives each model's run: turbgen.spec.preset_runs.
-"""
+User presets: turbgen.spec.preset_files; what a preset gives each model's run: turbgen.spec.preset_runs."""
 
 from __future__ import annotations
 
@@ -85,8 +84,7 @@ class StabilityPreset:
 @dataclass(frozen=True)
 class KaimalSettings:
     """What a Kaimal run takes from a preset: spectra/yz coherence (``kaimal``), the longitudinal model
-    ("exp") and its Eq. 18 parameters a_x [-], b_x [1/m].
-    """
+    ("exp") and its Eq. 18 parameters a_x [-], b_x [1/m]."""
 
     kaimal: KaimalParams
     long_model: str

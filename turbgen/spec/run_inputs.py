@@ -2,8 +2,7 @@
 
 What none of them gives takes turbgen.spec.defaults (in the model's from_mapping). The option names
 are the commands' (``turbgen mann --L 49`` is ``turbgen.mann(L=49)``); any key of the model's run
-schema is accepted under its own name too, so a key added to a schema needs no new option.
-"""
+schema is accepted under its own name too, so a key added to a schema needs no new option."""
 
 from __future__ import annotations
 
@@ -26,8 +25,7 @@ def merge_run_inputs(
 
     ``preset_keys(file mapping, given)``: the preset's run keys (None without a preset); ``replaces``: given key ->
     keys it removes from the run file and the preset (one energy level, one source); ``x_m``: plane positions [m
-    upstream] (None keeps the file's or the default).
-    """
+    upstream] (None keeps the file's or the default)."""
     mapping = dict(file_mapping or {})
     grid = dict(mapping.pop("grid", {}))
     layers = [mapping, dict(preset_keys(mapping, given)) if preset_keys else {}]

@@ -3,8 +3,7 @@ LineSpectrum (LineCoherence).
 
 The forms' meaning is in turbgen.theory.user_spectra (user_coherence). A spectrum CSV file has a header naming the
 columns ``f_hz,S_u,S_v,S_w`` (any order; ``#`` lines and blank lines skipped) and one row per frequency [Hz], PSDs
-in m^2/s; a coherence CSV file the columns ``f_hz,r_m,coh`` and one row per frequency [Hz] and separation [m].
-"""
+in m^2/s; a coherence CSV file the columns ``f_hz,r_m,coh`` and one row per frequency [Hz] and separation [m]."""
 
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ from turbgen.errors import ParameterError, check_choice
 from turbgen.exporters import ExportRequest, export_store
 from turbgen.exporters.inflowwind_file import inflowwind_path
 from turbgen.runs.models import get_model
-from turbgen.spec.dlc import DLC_MODELS, DlcSet
+from turbgen.spec.dlc import DlcSet, dlc_models
 from turbgen.store.paths import check_output_path
 from turbgen.sweep.plan import PlannedRun, SweepPlan, check_grid_keys, check_plan_memory, grid_mapping
 from turbgen.sweep.scheduler import check_scheduler_address
@@ -28,7 +28,7 @@ def make_dlc_plan(dlc: DlcSet, *, out, model: str = "kaimal", grid=None, chunk_t
                   workers: int | None = None, scheduler: str | None = None) -> SweepPlan:
     """The sweep of a DLC set: one run per speed and seed, named ``{model}_dlc1.2-IIB_U12_seed3``; ``model``
     "kaimal" (the standard's Annex C model) or "mann", the rest and the errors as :func:`make_plan`'s."""
-    check_choice("model", model, DLC_MODELS)
+    check_choice("model", model, dlc_models())
     grid = check_grid_keys("grid", grid)
     if scheduler:
         check_scheduler_address(scheduler)

@@ -154,8 +154,7 @@ def make_plan(*, out: str | Path, models, presets, speeds, seeds, grid: Mapping 
     overrides. ``workers``: LocalCluster workers, excluding ``scheduler`` (tcp://HOST:PORT). ``lidar``: preset or file
     run on every field. ``constraints``: a ConstraintRequest conditioning every (Mann) run (store names get the data's
     digest). Also refused: an unreachable scheduler, an unusable ``out``, duplicate store names and, without a
-    scheduler, a run needing more memory than is available here.
-    """
+    scheduler, a run needing more memory than is available here."""
     user = dict(user_presets or {})
     models, presets = _check_models_presets(models, presets, user)
     speeds, seeds = list(speeds), list(seeds)

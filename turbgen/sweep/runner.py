@@ -3,8 +3,7 @@
 A LocalCluster sized to the machine (:func:`default_workers`) or an existing scheduler; parts shared between runs
 (a Mann stencil) built once as tasks. Every planned store is inspected first: complete ones kept, incomplete ones
 regenerated, one with other parameters refuses the sweep before anything is written. Failing runs are recorded, the
-manifest rewritten after each run. On Ctrl-C, SIGTERM, SIGHUP the manifest is saved and the interruption propagates.
-"""
+manifest rewritten after each run. On Ctrl-C, SIGTERM, SIGHUP the manifest is saved and the interruption propagates."""
 
 from __future__ import annotations
 
@@ -169,8 +168,7 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
     False). ``threads`` per run (default: cores / workers) never changes the fields. ``memory_bytes``: each run's
     budget [B] (Mann runs over it go out of core). ``stencil_cache``: seen by the workers at the same path.
     SweepLockedError when another sweep holds DIR; ParameterError if ``out`` cannot hold the sweep, a planned store
-    has other parameters (nothing run) or the disk lacks space.
-    """
+    has other parameters (nothing run) or the disk lacks space."""
     t_start = time.perf_counter()
     out = plan.out
     check_memory_budget(plan.runs, memory_bytes, plan.chunk_t)  # before DIR or its manifest is touched

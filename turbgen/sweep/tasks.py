@@ -19,8 +19,7 @@ class RunTask:
 
     ``model``: a key of turbgen.runs.models.MODELS; ``overwrite``: replace an incomplete store; ``threads`` None: all
     cores; ``memory_bytes``: the run's budget [B] (a Mann run over it goes out of core); ``lidar``: preset or file;
-    ``cache_dir``: a constrained run's stencil cache; ``fft_backend`` None: the worker's current one.
-    """
+    ``cache_dir``: a constrained run's stencil cache; ``fft_backend`` None: the worker's current one."""
 
     model: str
     run: object
