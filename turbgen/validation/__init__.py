@@ -59,6 +59,9 @@ class ValidationReport:
 
         return table(self)
 
+    def __repr__(self) -> str:  # a notebook shows the table, not the arrays behind it
+        return self.table()
+
     def plots(self, directory) -> list:
         from turbgen.validation.report import plots
 

@@ -148,6 +148,9 @@ class LidarReport:
         ]
         return "\n".join(lines)
 
+    def __repr__(self) -> str:  # a notebook shows the summary, not the records behind it
+        return self.text()
+
     def write(self, out, overwrite: bool = False) -> Path:
         """Write the lidar dataset ``out`` with the report's numbers as attributes (StoreError as check_output)."""
         from turbgen.virtual_lidar.dataset import write_dataset

@@ -90,6 +90,9 @@ class KaimalFit:
                      "model holds)")
         return "\n".join(lines + [f"note: {n}" for n in self.notes] + [f"FLAG: {f}" for f in self.flags])
 
+    def __repr__(self) -> str:  # a notebook shows the table, not the band arrays behind it
+        return self.table()
+
     def plot(self, path) -> None:
         """Write a PNG to ``path``: the band spectra f S(f) with 95 % bars and the fit; the u co-coherence per
         distance with 95 % bars and the fit (with two or more sensors)."""

@@ -144,6 +144,9 @@ class MannFit:
         lines += [f"note: {n}" for n in self.notes] + [f"FLAG: {f}" for f in self.flags]
         return "\n".join(lines)
 
+    def __repr__(self) -> str:  # a notebook shows the table, not the band arrays behind it
+        return self.table()
+
     def plot(self, path) -> None:
         """Write a PNG of the band spectra (f S(f), error bars +- 1.96 sd) and the fitted model to ``path``."""
         import matplotlib
