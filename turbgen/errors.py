@@ -101,3 +101,11 @@ def check_choice(name: str, value, choices) -> str:
     if value not in choices:
         raise ParameterError(f"{name} = {value!r} is not one of {', '.join(map(str, choices))}")
     return value
+
+
+def check_instances(**named) -> None:
+    """TypeError naming the first argument ``name=(value, cls)`` whose value is not a ``cls`` (e.g. a dict given
+    where a turbgen.MannParams is expected)."""
+    for name, (value, cls) in named.items():
+        if not isinstance(value, cls):
+            raise TypeError(f"{name} must be a turbgen.{cls.__name__}, not {type(value).__name__}")

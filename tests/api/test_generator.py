@@ -136,6 +136,17 @@ def test_bad_seed_is_one_line_parameter_error():
     assert "\n" not in str(err.value)
 
 
+def test_objects_of_the_wrong_class_are_a_type_error_naming_them():
+    grid = turbgen.Grid(nt=16, dt_s=0.5, x_m=(0,), ny=4, nz=4, dy_m=8, dz_m=8)
+    mann = turbgen.MannParams(ae=0.05, length_scale_m=30, gamma=3.1)
+    cases = [(lambda: turbgen.MannGenerator({"ae": 0.05}, grid), "params must be a turbgen.MannParams, not dict"),
+             (lambda: turbgen.MannGenerator(mann, (16, 0.5)), "grid must be a turbgen.Grid, not tuple"),
+             (lambda: turbgen.KaimalGenerator(mann, grid), "params must be a turbgen.KaimalParams, not MannParams")]
+    for make, message in cases:
+        with pytest.raises(TypeError, match=message):
+            make()
+
+
 def test_public_objects_are_the_library_classes():
     from turbgen.grid import Grid
     from turbgen.theory.params import KaimalParams, MannParams

@@ -11,7 +11,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import partial
 
-from turbgen.errors import ParameterError, check_choice
+from turbgen.errors import ParameterError, check_choice, check_instances
 from turbgen.grid import Grid
 from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X, KAIMAL_DEFAULTS, KAIMAL_GRID, grid_from_mapping
 from turbgen.spec.naming import run_digest
@@ -77,6 +77,7 @@ class KaimalRun:
     coherence: LineCoherence | None = None
 
     def __post_init__(self):
+        check_instances(params=(self.kaimal, KaimalParams), grid=(self.grid, Grid))
         object.__setattr__(self, "U_m_s", check_wind_speed(self.U_m_s))
         for key in ("seed", "hub_height_m"):  # ranges: turbgen.theory.ranges
             object.__setattr__(self, key, ranges.check(key, getattr(self, key)))

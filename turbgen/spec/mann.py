@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from turbgen.errors import ParameterError
+from turbgen.errors import ParameterError, check_instances
 from turbgen.grid import Grid
 from turbgen.spec.defaults import MANN_DEFAULTS, MANN_GRID, grid_from_mapping
 from turbgen.spec.energy import resolve_ae
@@ -52,6 +52,7 @@ class MannRun:
     ae_from: str = "ae"
 
     def __post_init__(self):
+        check_instances(params=(self.params, MannParams), grid=(self.grid, Grid))
         object.__setattr__(self, "U_m_s", check_wind_speed(self.U_m_s))
         for key in ("seed", "hub_height_m", "pad_yz"):  # ranges: turbgen.theory.ranges
             object.__setattr__(self, key, ranges.check(key, getattr(self, key)))
