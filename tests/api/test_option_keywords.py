@@ -39,12 +39,21 @@ def test_a_lidar_report_in_memory_constrains_as_its_written_dataset(tmp_path):
 
 
 def test_plots_keywords_write_the_commands_figures(tmp_path):
-    ds = turbgen.mann(nt=256, ny=16, nz=16, dy=8, gates="50:170:13.3", pad_yz=1)
-    turbgen.validate(ds, plots=tmp_path / "v")
-    assert any((tmp_path / "v").glob("*.png"))
-    report = turbgen.lidar(ds, plots=tmp_path / "l", mean_wind=True, profile="log:z0=0.03")
-    assert [p.name for p in (tmp_path / "l").glob("*.png")] == ["lidar_coherence.png"]
-    assert report.to_dict()["lidar"] and report.run.samples.mean_wind_added
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    backend, figures = matplotlib.get_backend(), plt.get_fignums()
+    matplotlib.use("svg")  # as a notebook's inline backend: the library's plots must not switch it to Agg
+    try:
+        ds = turbgen.mann(nt=256, ny=16, nz=16, dy=8, gates="50:170:13.3", pad_yz=1)
+        turbgen.validate(ds, plots=tmp_path / "v")
+        assert any((tmp_path / "v").glob("*.png"))
+        report = turbgen.lidar(ds, plots=tmp_path / "l", mean_wind=True, profile="log:z0=0.03")
+        assert [p.name for p in (tmp_path / "l").glob("*.png")] == ["lidar_coherence.png"]
+        assert report.to_dict()["lidar"] and report.run.samples.mean_wind_added
+        assert matplotlib.get_backend() == "svg" and plt.get_fignums() == figures  # nothing left open in pyplot
+    finally:
+        matplotlib.use(backend)
 
 
 def test_info_of_a_field_in_memory_and_of_an_export(tmp_path):

@@ -49,6 +49,7 @@ def test_fit_of_the_htc_is_the_fit_of_the_field(exported):
     for name in ("ae", "length_scale_m", "gamma"):
         assert getattr(b, name).value == pytest.approx(getattr(a, name).value, rel=1e-6)
     assert repr(a) == a.table() and len(repr(a)) < 2000  # a notebook shows the table, not the band arrays
+    assert type(a.plot()).__name__ == "Figure"  # a notebook cell shows it; nothing written without a path
 
 
 def test_bad_wind_files_are_one_line(exported, tmp_path):
@@ -74,3 +75,4 @@ def test_fit_kaimal_reads_a_bts(exported):
     a, b = turbgen.fit_kaimal(open_wind_file(bts)), turbgen.fit_kaimal(bts)
     assert a.to_dict() == b.to_dict()
     assert repr(a) == a.table() and len(repr(a)) < 2000
+    assert type(a.plot()).__name__ == "Figure"

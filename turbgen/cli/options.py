@@ -37,27 +37,20 @@ def stacked(options: list):
     return lambda f: functools.reduce(lambda g, option: option(g), reversed(options), f)
 
 
-def plot_figure(**subplots):
-    """A matplotlib figure and axes (``plt.subplots(**subplots)``) on the Agg backend: no display needed."""
-    import matplotlib
+def plot_figure(figsize=None, **subplots):
+    """A matplotlib Figure of ``figsize`` [in] and its axes (``Figure.subplots(**subplots)``): no pyplot, no display."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt.subplots(**subplots)
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(**subplots)
 
 
 def save_plot(fig, path, dpi: int) -> None:
-    """Lay out ``fig``, write it to the --plot ``path`` as PNG (atomically: never a partial file) and close it."""
-    import matplotlib.pyplot as plt
-
+    """Lay out ``fig`` and write it to the --plot ``path`` as PNG (atomically: never a partial file)."""
     from turbgen.store.temporaries import write_atomically
 
     fig.tight_layout()
-    try:
-        write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=dpi), "--plot")
-    finally:
-        plt.close(fig)
+    write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=dpi), "--plot")
 
 
 def range_help(key: str) -> str:

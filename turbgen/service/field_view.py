@@ -41,10 +41,7 @@ def build_series(store: Path, plane: int, iy: int, iz: int, tmp: Path) -> None:
 def build_snapshot(store: Path, component: str, plane: int, it: int, sigma: float | None, tmp: Path) -> None:
     """The yz image of ``component`` at time index ``it`` of plane ``plane`` as a PNG into the new file ``tmp``, colour
     scale +- 3 ``sigma`` [m/s] (the run's standard deviation; None: the frame's own)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # not pyplot: no global state shared by the server's threads
 
     from turbgen.store import open_store
 
@@ -53,7 +50,8 @@ def build_snapshot(store: Path, component: str, plane: int, it: int, sigma: floa
     frame = np.asarray(fs.array(component)[it, plane], dtype=float)  # (ny, nz)
     lim = 3.0 * (sigma if sigma else float(frame.std()) or 1.0)
     y, z = g.y(), g.z()
-    fig, ax = plt.subplots(figsize=(5.2, 4.2), dpi=90)
+    fig = Figure(figsize=(5.2, 4.2), dpi=90)
+    ax = fig.subplots()
     mesh = ax.pcolormesh(y, z, frame.T, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="nearest")
     fig.colorbar(mesh, ax=ax, label=f"{component} [m/s]")
     for s in _measurement_points(fs, float(g.x_m[plane])):
@@ -63,7 +61,6 @@ def build_snapshot(store: Path, component: str, plane: int, it: int, sigma: floa
     fig.tight_layout()
     with open(tmp, "wb") as f:
         fig.savefig(f, format="png")
-    plt.close(fig)
 
 
 def _measurement_points(fs, x_m: float) -> list[dict]:

@@ -151,10 +151,7 @@ def plots(report, directory) -> list[Path]:
     """One PNG per metric with curves into ``directory`` (created if missing): the estimate with its 95 % band, the
     expectation on the grid, the continuous model where there is one; the paths.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
 
     out_dir = Path(directory)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -164,9 +161,10 @@ def plots(report, directory) -> list[Path]:
         if not m.curves:
             continue
         if m.name.startswith("yz_coherence") or m.name.startswith("longitudinal"):
-            fig = _coherence_figure(plt, m)
+            fig = _coherence_figure(m)
         else:
-            fig, ax = plt.subplots(figsize=(6, 4))
+            fig = Figure(figsize=(6, 4))
+            ax = fig.subplots()
             c = m.curves[0]
             ref = references.get(c.label)
             if m.name == "uw_cross_spectrum":  # premultiplied, linear axis: the sign and the peak show
@@ -182,17 +180,17 @@ def plots(report, directory) -> list[Path]:
                      fontsize=9)
         fig.tight_layout()
         path = out_dir / f"{m.name}.png"
-        try:
-            write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110), "the plot")
-        finally:
-            plt.close(fig)
+        write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110), "the plot")
         files.append(path)
     return files
 
 
-def _coherence_figure(plt, m: MetricResult):
+def _coherence_figure(m: MetricResult):
+    from matplotlib.figure import Figure
+
     kinds = sorted({c.label.split()[0] for c in m.curves})
-    fig, axes = plt.subplots(1, len(kinds), figsize=(5 * len(kinds), 4), squeeze=False)
+    fig = Figure(figsize=(5 * len(kinds), 4))
+    axes = fig.subplots(1, len(kinds), squeeze=False)
     for ax, kind in zip(axes[0], kinds):
         curves = [c for c in m.curves if c.label.split()[0] == kind]
         if m.name.startswith("longitudinal"):  # the first plane (rotor) against the others, as in the paper

@@ -180,16 +180,14 @@ class LidarReport:
         """Write ``lidar_coherence.png`` in ``directory``: gamma^2_RL and |G_RL| simulated (95 % band of the estimator)
         against theory, k_0.5 and cut-off marked (the style of Guo et al. 2023 Fig. 4 and Fu et al. 2023 Fig. 6).
         """
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
 
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
         c = self.metric.curves[0]
         w = self.run.welch
-        fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.4, 6.4), sharex=True)
+        fig = Figure(figsize=(6.4, 6.4))
+        a1, a2 = fig.subplots(2, 1, sharex=True)
         a1.fill_between(c.f_hz, np.clip(c.lower, 0, 1), np.clip(c.upper, 0, 1), color="C0", alpha=0.25,
                         label="theory ± 1.96 sd of the estimator")
         a1.semilogx(c.f_hz, c.estimate, "k.-", lw=0.8, ms=3, label="simulated (Welch)")
@@ -214,10 +212,7 @@ class LidarReport:
         a2.legend(fontsize=8)
         fig.tight_layout()
         path = directory / "lidar_coherence.png"
-        try:
-            write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110), "the plot")
-        finally:
-            plt.close(fig)
+        write_atomically(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110), "the plot")
         return [path]
 
 

@@ -93,16 +93,14 @@ class KaimalFit:
     def __repr__(self) -> str:  # a notebook shows the table, not the band arrays behind it
         return self.table()
 
-    def plot(self, path) -> None:
-        """Write a PNG to ``path``: the band spectra f S(f) with 95 % bars and the fit; the u co-coherence per
-        distance with 95 % bars and the fit (with two or more sensors)."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+    def plot(self, path=None):
+        """The band spectra f S(f) with 95 % bars and the fit; the u co-coherence per distance with 95 % bars and the
+        fit (two or more sensors): a matplotlib Figure (a notebook cell shows it), also written to ``path`` as PNG."""
+        from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
 
         coh = self.coherence
-        fig, axes = plt.subplots(1, 1 + bool(coh), figsize=(7 + 5 * bool(coh), 4.5), squeeze=False)
+        fig = Figure(figsize=(7 + 5 * bool(coh), 4.5))
+        axes = fig.subplots(1, 1 + bool(coh), squeeze=False)
         f = self.f_hz
         for k, s in enumerate(self.data):
             axes[0, 0].errorbar(f, f * self.data[s], yerr=1.96 * f * self.sd[s], fmt="o", ms=3, color=f"C{k}",
@@ -122,5 +120,6 @@ class KaimalFit:
             ax.grid(True, which="both", alpha=0.3)
             ax.legend(fontsize=7)
         fig.tight_layout()
-        fig.savefig(path, format="png", dpi=120)
-        plt.close(fig)
+        if path is not None:
+            fig.savefig(path, format="png", dpi=120)
+        return fig

@@ -147,15 +147,14 @@ class MannFit:
     def __repr__(self) -> str:  # a notebook shows the table, not the band arrays behind it
         return self.table()
 
-    def plot(self, path) -> None:
-        """Write a PNG of the band spectra (f S(f), error bars +- 1.96 sd) and the fitted model to ``path``."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+    def plot(self, path=None):
+        """The band spectra (f S(f), error bars +- 1.96 sd) and the fitted model, and the coherence with an evolution
+        time: a matplotlib Figure (a notebook cell shows it), also written to ``path`` as PNG if given."""
+        from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
 
         panels = 1 + bool(self.evolution)
-        fig, axes = plt.subplots(1, panels, figsize=(7 + 5 * (panels - 1), 4.5), squeeze=False)
+        fig = Figure(figsize=(7 + 5 * (panels - 1), 4.5))
+        axes = fig.subplots(1, panels, squeeze=False)
         ax = axes[0, 0]
         if self.evolution:
             self.evolution.plot(axes[0, 1])
@@ -175,5 +174,6 @@ class MannFit:
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
         fig.tight_layout()
-        fig.savefig(path, format="png", dpi=120)
-        plt.close(fig)
+        if path is not None:
+            fig.savefig(path, format="png", dpi=120)
+        return fig
