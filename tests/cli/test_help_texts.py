@@ -39,6 +39,13 @@ def test_no_summary_ends_at_an_abbreviation(limit):
         assert not cut.search(short), (path, short)  # "Write the IEC 61400-1 Ed.", "coh2 (Eq."
 
 
+def test_every_group_lists_its_commands_whole_on_an_80_column_terminal():
+    for path, command in [((), cli), *((p, c) for p, c in _commands(cli) if isinstance(c, click.Group))]:
+        res = CliRunner().invoke(cli, [*path, "--help"], terminal_width=80)
+        listing = res.output.split("Commands:")[1]
+        assert res.exit_code == 0 and not [line for line in listing.splitlines() if line.endswith("...")], res.output
+
+
 def test_json_help_says_what_it_prints_and_fit_kaimal_states_one_grid():
     for path, command in _commands(cli):
         for param in command.params:

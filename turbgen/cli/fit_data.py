@@ -44,7 +44,7 @@ def _remember_overwrite(ctx, param, value):
     ctx.meta["fit_overwrite"] = value
 
 
-@click.command("mann")
+@click.command("mann", short_help="Fit ae, L, Gamma (and the evolution time) to measured data.")
 @click.argument("data", type=click.Path())
 @click.option("--U", "U", type=float, default=None,
               help="Mean wind speed U [m/s] of k1 = 2 pi f / U for fluctuation data (default: the mean of u of "

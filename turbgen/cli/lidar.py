@@ -48,7 +48,7 @@ def lidar():
     """Virtual lidar on a store (`turbgen lidar STORE`, same as `turbgen lidar run STORE`)."""
 
 
-@lidar.command("run")
+@lidar.command("run", short_help="Sample a store with a lidar; its preview quality against theory.")
 @click.argument("store", type=click.Path(path_type=str))
 @click.option("--lidar", "lidar_name", default=None,
               help="lidar preset name or TOML/JSON lidar file (default: the 4-beam pulsed lidar of Guo et al. 2023, Table 3)")

@@ -10,7 +10,7 @@ from turbgen.cli.options import count_text, evo_seconds, parse_floats
 from turbgen.virtual_lidar.optimize import PITCH_DELAY_RANGE_S
 
 
-@click.command("optimize")
+@click.command("optimize", short_help="Choose the range and cone angle that maximise k_0.5.")
 @click.option("--lidar", "lidar_name", default="spinner-pulsed", show_default=True,
               help="Spinner lidar preset (spinner-cw, spinner-pulsed) or a TOML/JSON spinner lidar file.")
 @click.option("--U", "U", type=float, default=18.0, show_default=True, help="Mean wind speed U [m/s].")

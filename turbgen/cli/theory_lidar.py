@@ -13,7 +13,7 @@ from turbgen.spec.defaults import MANN_DEFAULTS
 from turbgen.spec.models import DECLARATIONS
 
 
-@click.command("lidar")
+@click.command("lidar", short_help="Lidar-rotor coherence, Wiener gain and cut-off of a lidar (no store).")
 @click.option("--model", type=click.Choice([d.name for d in DECLARATIONS if d.preview]), default="mann",
               show_default=True)
 @click.option("--preset", type=click.Choice(["unstable", "neutral", "stable"]), default="neutral",
