@@ -16,6 +16,8 @@ The Python API (the same runs, the same bits as the ``turbgen`` commands; turbge
     export          bts, wnd, evo, hawc2, mt4d, hdf5
     lidar           a virtual lidar on a store
     info            what ``turbgen info`` shows of a store, a field or an exported file
+    fit_mann, fit_kaimal
+                    the model's parameters fitted to measured data or a field, with 95 % intervals
     theory          the pure theory functions: spectra, coherences, lidar preview
     errors          ParameterError, StoreError (both TurbgenError)
 

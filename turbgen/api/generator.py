@@ -118,6 +118,8 @@ class MannGenerator(_Generator[MannRun]):
     ------
     ParameterError
         For a value outside its range, or a stencil that does not fit the available memory.
+    TypeError
+        For ``params`` that are not MannParams or a ``grid`` that is not a Grid.
 
     Examples
     --------
@@ -186,7 +188,7 @@ class KaimalGenerator(_Generator[KaimalRun]):
     Parameters
     ----------
     params : KaimalParams
-        sigma_m_s [m/s], length_scales_m [m], a_yz [-], lc_m [m] (:func:`turbgen.spec.kaimal.kaimal_params`: IEC values).
+        sigma_m_s [m/s], length_scales_m [m], a_yz [-], lc_m [m] (:func:`turbgen.theory.iec_kaimal_params`: IEC values).
     grid : Grid
         As :class:`MannGenerator`'s.
     U_m_s : float, optional
@@ -212,13 +214,15 @@ class KaimalGenerator(_Generator[KaimalRun]):
     ------
     ParameterError
         For a value outside its range.
+    TypeError
+        For ``params`` that are not KaimalParams or a ``grid`` that is not a Grid.
 
     Examples
     --------
     >>> import turbgen
-    >>> from turbgen.spec.kaimal import kaimal_params
-    >>> g = turbgen.KaimalGenerator(kaimal_params(12.0), turbgen.Grid(nt=64, dt_s=0.5, x_m=(0, 50), ny=4, nz=4,
-    ...                             dy_m=5, dz_m=5), U_m_s=12)
+    >>> iec = turbgen.theory.iec_kaimal_params(12.0, "A", 90.0)  # U [m/s], class, hub height [m]
+    >>> g = turbgen.KaimalGenerator(iec, turbgen.Grid(nt=64, dt_s=0.5, x_m=(0, 50), ny=4, nz=4, dy_m=5, dz_m=5),
+    ...                             U_m_s=12)
     >>> [ds.attrs["seed"] for ds in g.fields([3, 4])]
     [3, 4]
     """
