@@ -331,6 +331,10 @@ def test_uploads_that_name_files_or_are_malformed_are_refused(server):
     lidar, mean history or table profile; each refusal is one line, 4xx."""
     status, _, up = _upload(server, _los_csv("# lidar = nacelle-4beam\n# U_m_s = 12\n"), "text/csv")
     assert status == 201 and up["kind"] == "line of sight" and up["series"] == 40 and up["values"] == 80, up
+    sonic = b"# sensor s = x_m=0, y_m=0, z_m=0\ntime_s,s:u_m_s,s:w_m_s\n0,0.1,0.2\n0.5,,0.1\n"  # a point-series CSV
+    status, _, points = _upload(server, sonic, "text/csv")
+    assert status == 201 and points["kind"] == "point series" and points["series"] == 2 and points["values"] == 3
+    assert server.call("GET", f"/constraints/{points['id']}")[2] == points  # read back from the kept file
     kept = sorted(os.listdir(server.root / "constraints"))
     secret = "# lidar = nacelle-4beam\n# U_m_s = 12\n"
     total = secret + "# total_wind = true\n"
@@ -339,6 +343,7 @@ def test_uploads_that_name_files_or_are_malformed_are_refused(server):
         (_los_csv(total + "# mean_history = /etc/hosts\n"), "text/csv", 422, "mean_history names"),
         (_los_csv(total + "# profile = table:/etc/hosts\n"), "text/csv", 422, "names a file"),
         (_los_csv(secret, n_gates=9), "text/csv", 422, "gate"),
+        (b"# total_wind = true\n# mean_history = /etc/hosts\n" + sonic, "text/csv", 422, "mean_history names a file"),
         (b'{"mean_wind": {"mean_history": "/etc/hosts"}}', "application/json", 422, "mean_history names a file"),
         (b"[1, 2", "application/json", 422, "not valid JSON"),
         (b"time_s\n", "text/plain", 415, "Content-Type must be one of application/json, text/csv"),

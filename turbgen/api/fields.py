@@ -173,9 +173,9 @@ def mann(L: float | None = None, gamma: float | None = None, evo: float | str | 
         Memory budget [bytes] or a size such as ``"4GiB"`` (default: the available memory); a field over it is made
         out of core, the same field.
     constrain : list, optional
-        Condition the field on measurements (Hoffman & Ribak 1991): constraint files (point series JSON, ``turbgen
-        lidar --out`` datasets) or loaded constraints; made in memory in one pass. Without an energy level (``ae``,
-        ``sigma_u``, ``ti``, a class) ae is estimated from the data (``attrs["derived"]["ae_from"]``).
+        Condition the field on measurements (Hoffman & Ribak 1991): constraint files (point series JSON or CSV,
+        ``turbgen lidar --out`` datasets) or loaded constraints; made in memory in one pass. Without an energy level
+        (``ae``, ``sigma_u``, ``ti``, a class) ae is estimated from the data (``attrs["derived"]["ae_from"]``).
     noise : float, optional
         With ``constrain``: measurement-noise σ [m/s] >= 0 of every value (default: each file's, else 0).
     conditional_mean : bool, optional
@@ -424,8 +424,8 @@ def kaimal(U: float | None = None, seed: int | None = None, out: PathLike | None
     config, preset, presets_file, overwrite, chunks, threads, progress, fft_backend : optional
         As for :func:`mann` (``threads``: FFT threads).
     constrain : list, optional
-        Condition the field on measurements (Hoffman & Ribak 1991): point series JSON files, ``turbgen lidar --out``
-        datasets or :func:`turbgen.lidar` reports; each full-rate series' record mean is removed first.
+        Condition the field on measurements (Hoffman & Ribak 1991): point series JSON or CSV files, ``turbgen lidar
+        --out`` datasets or :func:`turbgen.lidar` reports; each full-rate series' record mean is removed first.
     noise, conditional_mean : optional
         As for :func:`mann`.
     spectrum : str, os.PathLike, Mapping, sequence or callable, optional

@@ -33,7 +33,7 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     Parameters
     ----------
     data : str, os.PathLike, turbgen.spec.constraints.PointSeries, FieldStore or xarray.Dataset
-        A point-series JSON file (the ``--constrain`` format: one or more sensors with any of u, v, w), a field
+        A point-series JSON or CSV file (the ``--constrain`` formats: one or more sensors with any of u, v, w), a field
         store, a field as a Dataset (``turbgen.mann``, in memory or not, ``turbgen.open_store``), a TurbSim ``.bts``
         or a HAWC2 ``.htc`` whose ``begin mann`` block names the boxes (fitted against the Mann tensor summed over
         their periodic box, ``turbgen.exporters.field_files``), or a ``turbgen lidar --out`` dataset (ae and L from

@@ -68,7 +68,7 @@ def _remember_overwrite(ctx, param, value):
               help=f"Replace an existing {PLOT_NAME} in --plots.")
 @click.pass_context
 def fit_mann_command(ctx, data, U, nperseg, points, gamma, bootstrap, lifetime, as_json, plots):
-    """Fit ae, L, Gamma of the Mann model to DATA: a point-series JSON file (sensors with u, v, w), a store, a
+    """Fit ae, L, Gamma of the Mann model to DATA: a point-series JSON or CSV file (sensors with u, v, w), a store, a
     TurbSim .bts, a HAWC2 .htc whose mann block names the boxes, or a `turbgen lidar --out` dataset (ae, L and
     the evolution time from gates along x; Gamma held).
 

@@ -14,7 +14,7 @@ MODEL_OPTIONS = ("L", "gamma", "ae", "sigma_u", "ti", "lifetime", "factor1", "fa
                  "plot_path")
 DATA_HELP = """
 
-With DATA (a point-series JSON file of sensors with u, v, w, or a store): σ_i, L_i and the u coherence a_yz, Lc
+With DATA (a point-series JSON or CSV file of sensors with u, v, w, or a store): σ_i, L_i and the u coherence a_yz, Lc
 fitted to the data's Welch spectra and u co-coherence, each band weighted by the estimator's variance, with 95 %
 intervals (turbgen.fit_kaimal); --U is then the mean wind of fluctuation data, the model options are refused.
 Exit 2 with one line when the fit is flagged."""

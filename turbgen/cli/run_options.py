@@ -38,13 +38,13 @@ def grid_options(defaults: Mapping):
 
 
 def constraint_options(sources: str, after: str):
-    """Decorator adding --constrain (point series JSON, ``sources`` the further formats, ``after`` closing its
+    """Decorator adding --constrain (point series JSON or CSV, ``sources`` the further formats, ``after`` closing its
     help), --noise and --conditional-mean."""
     opts = [
         click.option("--constrain", "constrain", multiple=True, type=click.Path(),
                      help=f"Condition the field on the measurements of FILE: point time series (JSON, "
-                     f"schemas/constraints.schema.json){sources}; repeatable. The field is a sample of the model "
-                     f"conditioned on them (Hoffman & Ribak 1991){after}."),
+                     f"schemas/constraints.schema.json, or CSV){sources}; repeatable. The field is a sample of the "
+                     f"model conditioned on them (Hoffman & Ribak 1991){after}."),
         click.option("--noise", type=float, help="With --constrain: measurement-noise sigma [m/s] >= 0 of every value "
                      "(default: each file's noise_m_s, else 0 = the field passes through the data)."),
         click.option("--conditional-mean", "conditional_mean", is_flag=True, help="With --constrain: write the "

@@ -423,17 +423,18 @@ def write_planes(writer, placed: PlacedData, planes, bar=None, background: bool 
 
 def load_constraint(path):
     """A constraint file: a ``turbgen lidar --out`` dataset, a line-of-sight CSV or netCDF file, or a point-series
-    JSON file. ParameterError or StoreError if it does not match its format."""
+    JSON or CSV file. ParameterError or StoreError if it does not match its format."""
     from turbgen.virtual_lidar.dataset import is_lidar_dataset, read_dataset
     from turbgen.virtual_lidar.los_csv import is_los_csv, read_los_csv
     from turbgen.virtual_lidar.los_netcdf import is_los_netcdf, read_los_netcdf
     from turbgen.spec.constraints import load_point_series
+    from turbgen.spec.point_csv import is_point_csv
 
     if is_lidar_dataset(path):
         return read_dataset(path)
     if is_los_netcdf(path):
         return read_los_netcdf(path)
-    return read_los_csv(path) if is_los_csv(path) else load_point_series(path)
+    return read_los_csv(path) if is_los_csv(path) and not is_point_csv(path) else load_point_series(path)
 
 
 def describe_constraints(record: dict) -> list[str]:

@@ -38,7 +38,7 @@ _GATES_HELP = "range gates start:stop:step [m]; planes = the rotor 0 plus the ga
 # meanings the schema does not give (else: its description, else the range table's note)
 _EXTRA = {
     "evo_time_s": "evolution time gamma [s] of the eddy lifetime, or frozen",
-    "constrain": "upload a point-series JSON or line-of-sight CSV file (as --constrain FILE)",
+    "constrain": "upload a point-series JSON or CSV, or a line-of-sight CSV file (as --constrain FILE)",
     "long_model": "longitudinal coherence model between planes", "rescale": "scale the spectra so the expected "
     "sigma is the nominal one", "long_components": "components given the longitudinal coherence (evoTurb: u)",
     "vw_coherence": "v, w in the yz plane: white (IEC) or exp (u's coherence)",

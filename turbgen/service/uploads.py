@@ -1,8 +1,8 @@
 """Measurements uploaded to `turbgen serve` (``POST /constraints``) for runs conditioned on them.
 
-The server opens no path a client names: the client uploads the *content* of a point-series JSON or line-of-sight
-CSV file, checked as ``--constrain`` would and kept as ``ROOT/constraints/<id>.json|.csv`` (id: 24 hex digits of
-its SHA-256). Content that names further files is refused.
+The server opens no path a client names: the client uploads the *content* of a point-series JSON or CSV or a
+line-of-sight CSV file, checked as ``--constrain`` would and kept as ``ROOT/constraints/<id>.json|.csv`` (id: 24
+hex digits of its SHA-256). Content that names further files is refused.
 """
 
 from __future__ import annotations
@@ -67,8 +67,10 @@ def describe(path: Path) -> dict:
     """:func:`_summary` of a kept upload."""
     from turbgen.virtual_lidar.los_csv import read_los_csv
     from turbgen.spec.constraints import load_point_series
+    from turbgen.spec.point_csv import is_point_csv
 
-    return _summary(load_point_series(path) if path.suffix == ".json" else read_los_csv(path))
+    points = path.suffix == ".json" or is_point_csv(path)
+    return _summary(load_point_series(path) if points else read_los_csv(path))
 
 
 def _summary(data) -> dict:
@@ -100,7 +102,10 @@ def _point_series(data: bytes, where: str):
 
 
 def _line_of_sight(data: bytes, where: str):
-    """The LidarData of a line-of-sight CSV upload; refused when its header names a file."""
+    """The LidarData of a line-of-sight CSV upload, or the PointSeries of a point-series one (its header declares
+    sensors); refused when its header names a file."""
+    from turbgen.spec.constraints import point_series_from_mapping
+    from turbgen.spec.point_csv import declares_sensors, point_csv_mapping
     from turbgen.virtual_lidar.description import PRESETS
     from turbgen.virtual_lidar.los_csv import los_record, parse_table
 
@@ -108,6 +113,11 @@ def _line_of_sight(data: bytes, where: str):
         text = data.decode("utf-8")
     except UnicodeDecodeError:
         raise ParameterError(f"{where}: a CSV upload must be UTF-8 text") from None
+    if declares_sensors(text.splitlines()):
+        mapping = point_csv_mapping(text, where)
+        wind = mapping.get("mean_wind", {})
+        _refuse_file_references(wind.get("profile"), "mean_history" in wind, where)
+        return point_series_from_mapping(mapping, where)
     header, table = parse_table(text.splitlines(), where)
     lidar = header.get("lidar")
     if lidar is not None and lidar not in PRESETS:

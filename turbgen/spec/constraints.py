@@ -143,9 +143,13 @@ def sensor_fluctuations(f: PointSeries, s: PointSensor, U_m_s: float, hub_height
 
 
 def load_point_series(path) -> PointSeries:
-    """Read and check a constraint file (JSON); ParameterError if it cannot be read, is not a regular file, not
-    JSON, nested too deeply, fails the schema or holds inconsistent values."""
+    """Read and check a constraint file (JSON, or CSV: turbgen.spec.point_csv); ParameterError if it cannot be read,
+    is not a regular file, not JSON, nested too deeply, fails the schema or holds inconsistent values."""
     p = Path(path)
+    if p.suffix.lower() == ".csv":
+        from turbgen.spec.point_csv import read_point_csv
+
+        return read_point_csv(p)
     data = parse_document(read_input(p, CONSTRAINTS), "JSON", f"constraint file {p}")
     return point_series_from_mapping(data, str(p))
 

@@ -16,7 +16,7 @@ router = APIRouter()
 
 @router.post("/constraints", status_code=201, dependencies=[Depends(require_token)])
 async def upload(request: Request, state: ServiceState = Depends(get_state)):
-    """Upload the content of a point-series JSON (application/json) or line-of-sight CSV (text/csv) constraint file:
+    """Upload the content of a point-series JSON (application/json) or CSV, or line-of-sight CSV (text/csv) file:
     its id (for a run's ``constrain``) and what it holds; 200 when the same content was uploaded before."""
     media, data = await read_upload(request, tuple(SUFFIXES), MAX_UPLOAD_BYTES)
     cid, info, new = await run_in_threadpool(state.catalog.uploads.add, media, data)

@@ -15,6 +15,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.spec.constraints import COMPONENTS, PointSeries, load_point_series
+from turbgen.spec.point_csv import is_point_csv
 from turbgen.theory import ranges
 from turbgen.validation.point_sets import long_sublattice
 from turbgen.validation.store_run import MannBox
@@ -224,8 +225,9 @@ def load_fit_data(data, U_m_s: float | None = None, points=None) -> FitData:
     if isinstance(data, (str, Path)):
         p = Path(data).expanduser()
         if not p.is_dir():
-            if p.suffix.lower() != ".json" and p.exists():
-                raise ParameterError(f"DATA = {str(data)!r} is neither a point-series JSON file nor a store directory")
+            if p.exists() and not (p.suffix.lower() == ".json" or is_point_csv(p)):
+                raise ParameterError(f"DATA = {str(data)!r} is neither a point-series JSON or CSV file nor a store "
+                                     "directory")
             return data_from_points(load_point_series(p), U_m_s)
         data = open_store(p)
     if U_m_s is not None:
