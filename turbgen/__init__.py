@@ -21,8 +21,7 @@ The Python API (the same runs, the same bits as the ``turbgen`` commands; turbge
     theory          the pure theory functions: spectra, coherences, lidar preview
     errors          ParameterError, StoreError (both TurbgenError)
 
-Names are imported on first use, so ``import turbgen`` (and every command) stays cheap.
-"""
+Names are imported on first use, so ``import turbgen`` (and every command) stays cheap."""
 
 from __future__ import annotations
 

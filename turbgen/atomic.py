@@ -1,8 +1,7 @@
 """Temporary names of unfinished outputs and the one writer of small whole files (JSON, text, uploads).
 
 Every turbgen writer works under a hidden sibling ``.NAME.tmp-PID-XXXXXXXX`` (PID = the writing process) and
-renames it to ``NAME`` only when complete; :mod:`turbgen.store.temporaries` removes the temporaries of dead writers.
-"""
+renames it to ``NAME`` only when complete; :mod:`turbgen.store.temporaries` removes the temporaries of dead writers."""
 
 from __future__ import annotations
 

@@ -2,8 +2,7 @@
 
 An application that stops a run (:mod:`turbgen.interruption`) calls :func:`request_stop`, and every writer calls
 :func:`raise_if_stop_requested` just before publishing, so an interruption swallowed on its way up (in a
-``__del__``, a weakref callback, a library's ``except``) still publishes nothing.
-"""
+``__del__``, a weakref callback, a library's ``except``) still publishes nothing."""
 
 from __future__ import annotations
 

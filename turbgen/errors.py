@@ -1,8 +1,7 @@
 """User-facing errors (one line each) and the single place where scalar inputs are checked.
 
 Messages name the run's fields in backquotes where they tell the user what to change (e.g. "lower `nt`"); each
-front end spells them its own way (the CLI as ``--nt``) and maps the error classes to its exit codes.
-"""
+front end spells them its own way (the CLI as ``--nt``) and maps the error classes to its exit codes."""
 
 from __future__ import annotations
 

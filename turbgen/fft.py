@@ -5,8 +5,7 @@ does not depend on where an allocation fell); ``plan(kind, inp, out, axis)``, an
 transform along one axis (FFTW's conventions), one plan set per worker thread, so the field is the same for any
 thread count; and ``oneshot``, scipy.fft's functions. Built in: ``pyfftw`` (default) and ``scipy``; others via
 :func:`register`. A selection (:func:`use`) holds for the whole process while its call runs (a run's work hops
-between threads), so two calls asking for different backends at once are refused.
-"""
+between threads), so two calls asking for different backends at once are refused."""
 
 from __future__ import annotations
 

@@ -3,8 +3,7 @@
 t [s]: eddy (convected-frame) time, t = n dt, n = 0..nt-1.
 x [m]: upstream distance of each yz-plane from the rotor (rotor = 0, positive upstream).
 y [m]: lateral, +y to the left looking downwind (InflowWind convention), centred on the hub.
-z [m]: vertical, relative to hub height (positive up), centred on the hub.
-"""
+z [m]: vertical, relative to hub height (positive up), centred on the hub."""
 
 from __future__ import annotations
 

@@ -4,8 +4,7 @@ histories, lidar files, line-of-sight records, ``serve --token-file``, the servi
 Rule: a regular file (or a link to one) of at most a size cap per kind. A FIFO, a device, a socket or a
 directory is refused before anything is read (opened non-blocking, checked on the descriptor), and so
 is a larger file (at most cap + 1 bytes are read, so neither /dev/zero nor a growing file can exhaust
-memory): one ParameterError line naming the path and the rule.
-"""
+memory): one ParameterError line naming the path and the rule."""
 
 from __future__ import annotations
 

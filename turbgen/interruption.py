@@ -1,8 +1,7 @@
 """Interruption handling of the applications (command line, sweep): signals become exceptions, writers are told.
 
 Application layer only: the library installs no signal handler and no ``sys.unraisablehook``; its writers
-are safe anyway (temporary names, atomic publish, :mod:`turbgen.cancellation`).
-"""
+are safe anyway (temporary names, atomic publish, :mod:`turbgen.cancellation`)."""
 
 from __future__ import annotations
 
@@ -50,8 +49,7 @@ def exit_on_signals():
     So ``with``-block clean-up runs as for Ctrl-C; each signal is recorded for :func:`received_signal` and
     requested as a stop of the writers. Only default handlers are replaced (a caller's own, or an ignored
     signal under ``nohup``, is kept); outside the main thread nothing is done. The handlers and
-    ``sys.unraisablehook`` are restored and the stop requests cleared on leaving the block.
-    """
+    ``sys.unraisablehook`` are restored and the stop requests cleared on leaving the block."""
     old = {}
     hook = sys.unraisablehook
     main = threading.current_thread() is threading.main_thread()

@@ -2,8 +2,7 @@
 
 renameat2(2), fallocate(2) (a full disk met when the space is asked for, not mid-write), /proc and
 /sys/fs/cgroup, statvfs(2) and O_DIRECT; where missing, each function says so (False, None, 0) or gives the
-portable answer. ``TURBGEN_PORTABLE=1`` (read at every call) forces the fallbacks (tested on Linux too).
-"""
+portable answer. ``TURBGEN_PORTABLE=1`` (read at every call) forces the fallbacks (tested on Linux too)."""
 
 from __future__ import annotations
 

@@ -2,8 +2,7 @@
 
 Library errors (``turbgen.errors.TurbgenError``) become one line on stderr, run fields spelled as options
 (:func:`as_options`), exit code by class (EXIT_CODES). Each sub-module holds one command or group, listed
-in COMMANDS and imported on use.
-"""
+in COMMANDS and imported on use."""
 
 from __future__ import annotations
 

@@ -75,8 +75,7 @@ def fit_mann_command(ctx, data, U, nperseg, points, gamma, bootstrap, lifetime, 
     Weighted least squares over the Welch spectra of u, v, w and the u-w co-spectrum, each band weighted by the
     estimator's covariance; a store against its grid's expectation, sensors against the continuous model. Prints
     the values with 95 % intervals and chi2/dof; exit 2 with one line when the fit is flagged (no convergence, a
-    range boundary).
-    """
+    range boundary)."""
     from turbgen.api.fit import fit_mann
 
     result = fit_mann(data, U=U, nperseg=nperseg, points=[yz(p) for p in points] or None, bootstrap=bootstrap,

@@ -81,8 +81,7 @@ def info(store: str, as_json: bool):
 
     A missing, incomplete or corrupted store (a chunk that does not decode or holds NaN; every
     chunk is decoded for stores up to 256 MiB) is reported in one line (exit code 2). Temporaries
-    left beside STORE (or inside it, for a sweep directory) by killed writers are removed.
-    """
+    left beside STORE (or inside it, for a sweep directory) by killed writers are removed."""
     path = Path(store).expanduser().absolute()
     if path.is_file():
         from turbgen.exporters.describe import file_summary

@@ -1,8 +1,7 @@
 """`turbgen lidar STORE`: the virtual lidar on a field store; `turbgen lidar optimize` (lidar theory).
 
 A first word that is not a subcommand (``run``, ``optimize``) is the store: ``turbgen lidar STORE`` is
-``turbgen lidar run STORE``.
-"""
+``turbgen lidar run STORE``."""
 
 from __future__ import annotations
 
@@ -77,8 +76,7 @@ def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_expone
     """Sample STORE with a lidar; report simulated preview quality (MCB, cut-off, TI).
 
     Exit code 0 when the simulated coherence agrees with theory, 1 when it departs beyond the
-    estimator's uncertainty, 2 for usage errors (nothing written).
-    """
+    estimator's uncertainty, 2 for usage errors (nothing written)."""
     from turbgen.api.products import lidar_report
 
     try:

@@ -2,8 +2,7 @@
 
 One option per entry of the model's OPTIONS, typed and described by its run schema, plus the grid options, --config,
 --out, --overwrite, --chunks and --threads; the inputs merge as the Python API's (turbgen.spec.run_inputs) and the
-model's turbgen.runs Model makes the run.
-"""
+model's turbgen.runs Model makes the run."""
 
 from __future__ import annotations
 

@@ -1,6 +1,5 @@
 """The grid options of `turbgen mann|kaimal`, combined by the Python API's rule (turbgen.api.fields: run file <
-preset < typed options); no option carries a default of its own (turbgen.spec.defaults, shown in the help).
-"""
+preset < typed options); no option carries a default of its own (turbgen.spec.defaults, shown in the help)."""
 
 from __future__ import annotations
 

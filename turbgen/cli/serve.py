@@ -33,8 +33,7 @@ from turbgen.service.limits import DEFAULT_MAX_QUEUE, DEFAULT_MEMORY_BUDGET_BYTE
 def serve(host, port, root, workers, scheduler, token_file, memory_gb, max_queue, stencil_cache_size):
     """Serve turbulence fields over HTTP: POST /runs, GET /runs/<id>, zarr at /runs/<id>/store, web page at /.
 
-    A field served is the one `turbgen mann|kaimal` writes for the same config, bit for bit.
-    """
+    A field served is the one `turbgen mann|kaimal` writes for the same config, bit for bit."""
     try:  # the service's libraries are the `service` extra, not in the base install
         import fastapi  # noqa: F401
         import uvicorn  # noqa: F401

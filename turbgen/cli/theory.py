@@ -211,8 +211,7 @@ def fit():
 def kaimal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path):
     """Kaimal σ_i, L_i (Guo et al. 2023, Eq. 20) and IEC a_yz, Lc (Eq. 21, dy = dz = 20 m) fitted to the Mann model.
 
-    --f / --k1 set the Eq. 20 grid.
-    """
+    --f / --k1 set the Eq. 20 grid."""
     from turbgen.theory.fitting import fit_kaimal_spectra, fit_yz_coherence
     from turbgen.theory.kaimal import kaimal_spectrum
     from turbgen.theory.mann_spectra import one_point_spectra
@@ -248,8 +247,7 @@ def kaimal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_tex
 def evolution(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path, dx):
     """a_x, b_x of the exponential longitudinal coherence (Eq. 18) fitted to the space-time model (Eq. 22).
 
-    --f / --k1 set the fitting grid.
-    """
+    --f / --k1 set the fitting grid."""
     from turbgen.theory.coherence_models import exponential_longitudinal
     from turbgen.theory.fitting import LONG_F_HZ, fit_longitudinal
     from turbgen.theory.space_time import longitudinal_coherence

@@ -35,8 +35,7 @@ def transient(kind, iec_class, class_alias, V_hub, hub_height, rotor_diameter, s
 
     The normal wind profile (alpha 0.2) is included; parameters (sigma1, Lambda1, V_e1) come from the
     class and V_hub. To superimpose turbulence, run InflowWind on a turbulent export instead: the uniform
-    file is deterministic.
-    """
+    file is deterministic."""
     iec_class = resolve_iec_class(iec_class, class_alias, "transient")
     if iec_class is None:
         raise click.UsageError("missing option --iec-class (turbine class and turbulence category, e.g. IIB)")

@@ -25,8 +25,7 @@ def validate(store, as_json, plots_dir, overwrite, rotor_radius):
     """Validate the field store STORE against its model (Mann or Kaimal).
 
     Exit code 0 when every metric passes, 1 when a metric fails, 2 for usage errors or a path
-    that is not a complete turbgen store.
-    """
+    that is not a complete turbgen store."""
     if plots_dir is not None:
         check_plots_dir(plots_dir, overwrite, "--plots")
     report = run_validation(store, rotor_radius_m=rotor_radius)

@@ -1,8 +1,7 @@
 """Exports of a turbgen store to the files aeroelastic and lidar simulators read (docs/export.md).
 
 Formats: ``bts`` (TurbSim, WindType 3), ``wnd`` (Bladed-style .wnd + .sum, WindType 4), ``evo`` (lidar-simulator
-4D set), ``hawc2`` (three float32 .bin, WindType 5), ``mt4d`` (4D Mann generator layout), ``hdf5`` (whole field).
-"""
+4D set), ``hawc2`` (three float32 .bin, WindType 5), ``mt4d`` (4D Mann generator layout), ``hdf5`` (whole field)."""
 
 from __future__ import annotations
 
@@ -34,8 +33,7 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
     """Export ``store`` (a path or FieldStore) as ``fmt`` to ``out`` (ROOT for wnd, evo, hawc2): the export engine.
 
     ParameterError for an unknown format, unused options, a bad or existing ``out``, too little disk; StoreError for a
-    missing or incomplete store.
-    """
+    missing or incomplete store."""
     check_choice("format", fmt, tuple(EXPORTERS))
     if isinstance(out, str) and out.endswith(("/", os.sep)):
         raise ParameterError(f"`out` = {out!r} names a directory; give the file (or ROOT) to write")

@@ -3,8 +3,7 @@ NREL/TP-500-46198, binary full-field appendix).
 
 Layout: 70-byte header ``<h4i6f6fi`` + description, then per time step ny*nz*3 int16, component fastest, then y
 (from -W/2, +y left looking downwind), then z (from the bottom), then ntwr*3 int16 tower points; V = (raw -
-offset) / slope per component.
-"""
+offset) / slope per component."""
 
 from __future__ import annotations
 
@@ -92,8 +91,7 @@ def read_bts(path) -> dict:
 
 def tower_values(plane: Plane, heights_m: np.ndarray, layout, U_m_s: float) -> dict:
     """Tower-point velocities {"u", "v", "w": (nt, ntwr) [m/s]} at ``heights_m``: the mean wind plus the lowest
-    grid row's fluctuations at y = 0; ParameterError when the profile does not cover them.
-    """
+    grid row's fluctuations at y = 0; ParameterError when the profile does not cover them."""
     cols = [(plane.ny - 1) // 2, plane.ny // 2]  # y = 0 is the centre column, or midway between two
     out = {}
     for c in COMPONENTS:

@@ -4,8 +4,7 @@ FUAS OpenFAST3.0_LidSim forks (evoTurb, Guo et al. 2022).
 ROOT.evo, little-endian int16: NL (<= 30), NL plane distances in whole metres (positive upstream), then per
 plane, time step, z (bottom up), y (from -W/2) the components u, v, w (fastest): the simulator's READER order.
 V = U (o + 1e-5 TI% raw) with U and TI from the ROOT.wnd header (which carries the rotor plane for InflowWind).
-The stored t axis is the simulator's "eddy index" time axis.
-"""
+The stored t axis is the simulator's "eddy index" time axis."""
 
 from __future__ import annotations
 
@@ -42,8 +41,7 @@ def plane_distances(x_m) -> tuple[np.ndarray, list[str]]:
 def export_evo(fs, out, req: ExportRequest) -> ExportResult:
     """Export every plane of ``fs`` to ROOT.evo, and one plane (default the rotor) to ROOT.wnd / ROOT.sum.
 
-    Two passes, one plane in memory: one TI scaling that fits every plane, then the planes.
-    """
+    Two passes, one plane in memory: one TI scaling that fits every plane, then the planes."""
     root = export_root(out)
     ix_rotor, lay = req.plane_index(fs), req.layout(fs)
     g = fs.grid

@@ -1,7 +1,6 @@
 """Wind files of other tools opened as a one-plane field: a TurbSim ``.bts`` or an htc file's HAWC2 Mann boxes.
 
-A HAWC2 box has no header: size, spacing and wsp come from the htc, the sample interval is dx / wsp (Taylor).
-"""
+A HAWC2 box has no header: size, spacing and wsp come from the htc, the sample interval is dx / wsp (Taylor)."""
 
 from __future__ import annotations
 

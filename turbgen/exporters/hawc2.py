@@ -3,8 +3,7 @@ OpenFAST's InflowWind documentation of the HAWC format).
 
 Three headerless little-endian float32 files ROOT_{u,v,w}.bin, nx*ny*nz values, z fastest (bottom up), then y
 REVERSED (+W/2 first), then x = time (the first x-plane reaches the turbine first). They hold u - URef, v, w of
-the full field, loaded with WindProfile = 0, ScaleMethod = 0, which reproduce it exactly.
-"""
+the full field, loaded with WindProfile = 0, ScaleMethod = 0, which reproduce it exactly."""
 
 from __future__ import annotations
 

@@ -1,8 +1,7 @@
 """HDF5 copy of the whole 4D field (h5py): u, v, w, the coordinates t, x, y, z and the store's attributes.
 
 Velocities have C shape (nz, ny, nx, nt), so MATLAB's ``h5read(f, '/u')`` returns the store's (t, x, y, z);
-stored float32 fluctuations in the convected frame.
-"""
+stored float32 fluctuations in the convected frame."""
 
 from __future__ import annotations
 

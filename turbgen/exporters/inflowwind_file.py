@@ -1,8 +1,7 @@
 """A complete InflowWind v5 input file (OpenFAST InflowWind documentation) for an exported wind file.
 
 The v5 parser reads the keys in a fixed order; every section is written (unused ones inert) so the file loads as
-is. File names inside are relative to the input file's folder, where InflowWind resolves them.
-"""
+is. File names inside are relative to the input file's folder, where InflowWind resolves them."""
 
 from __future__ import annotations
 
@@ -138,8 +137,7 @@ def hawc2_wind_block(*, paths: dict, folder: Path, U_m_s: float, ti: float, cent
                      nz: int, dx_m: float, dy_m: float, dz_m: float, description: str) -> str:
     """The HAWC2 htc ``begin wind`` block (with ``begin mann``) that loads an export's boxes.
 
-    The boxes hold u - wsp with the mean profile: constant shear, no scaling, box centre at ``centre_m`` [m].
-    """
+    The boxes hold u - wsp with the mean profile: constant shear, no scaling, box centre at ``centre_m`` [m]."""
     rel = {c: "./" + _rel(p, folder) for c, p in paths.items()}
     return "\n".join([
         f"; {description}",

@@ -3,8 +3,7 @@
 
 The fork reads the section by position: a separator line, ``EvolutionFlag`` (logical), the quoted
 ``.evo`` path (ROOT.wnd and ROOT.sum beside it), skipping lines that start with ``!``. It opens the path
-as written, relative to the folder OpenFAST runs in, so the path is written absolute.
-"""
+as written, relative to the folder OpenFAST runs in, so the path is written absolute."""
 
 from __future__ import annotations
 

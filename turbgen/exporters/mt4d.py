@@ -4,8 +4,7 @@
 Fortran order z fastest, then y, then x, then snapshot slot, then component (u, v, w): MATLAB
 ``reshape(data, [nz ny n1 nslots 3])``. Slot k = plane k (slot time t_k = x_k / U); the box's x axis is
 eddy time REVERSED (x increases downwind: box x index i holds stored t index nt-1-i); y and z ascending
-(+y left, z relative to the hub). Fluctuations only (no mean, no shear), as the generator writes them.
-"""
+(+y left, z relative to the hub). Fluctuations only (no mean, no shear), as the generator writes them."""
 
 from __future__ import annotations
 

@@ -17,8 +17,7 @@ class ExportOptions:
     """The export options as typed (None: not given), before they are checked (fields as ExportRequest's).
 
     ``profile``: ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``; ``mean_history``: CSV of t, U [, dir];
-    ``transient``: EOG, EDC, ECD, EWS-V or EWS-H with its ``iec_class``, ``rotor_diameter_m`` [m] and start [s].
-    """
+    ``transient``: EOG, EDC, ECD, EWS-V or EWS-H with its ``iec_class``, ``rotor_diameter_m`` [m] and start [s]."""
 
     plane: int | None = None
     hub_height_m: float | None = None

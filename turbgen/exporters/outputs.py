@@ -1,8 +1,7 @@
 """Atomic multi-file output: each file is written under a temporary sibling, all renamed into place once complete.
 
 Nothing at the final paths changes on an error (Ctrl-C, SIGTERM, a full disk); temporaries of exports killed
-earlier are removed by the next export.
-"""
+earlier are removed by the next export."""
 
 from __future__ import annotations
 
@@ -23,8 +22,7 @@ class OutputSet:
     """Context manager handing out temporary paths for a set of final paths, renamed into place on normal exit.
 
     On an exception all temporaries are removed (RuntimeError if one was not written). ParameterError for a bad,
-    existing (without ``overwrite``) or unwritable output, or too little disk for ``need_bytes``.
-    """
+    existing (without ``overwrite``) or unwritable output, or too little disk for ``need_bytes``."""
 
     def __init__(self, paths, *, overwrite: bool, need_bytes: int | None = None):
         self.paths = [Path(p) for p in paths]

@@ -1,6 +1,5 @@
 """Mean wind profile and ground clearance for the InflowWind formats (a grid reaching the ground is refused
-unless its rows below are dropped).
-"""
+unless its rows below are dropped)."""
 
 from __future__ import annotations
 

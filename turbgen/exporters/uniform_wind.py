@@ -2,8 +2,7 @@
 
 Layout: comment lines starting with ``!``, then one row per time with the 8 columns Time, WindSpeed,
 WindDir, VertSpeed, HorizShear, VertShear, LinVShear, GustSpeed (OpenFAST IfW_UniformWind); InflowWind
-interpolates linearly between rows and holds the end rows outside them.
-"""
+interpolates linearly between rows and holds the end rows outside them."""
 
 from __future__ import annotations
 
@@ -35,8 +34,7 @@ def uniform_text(event: IecTransient) -> str:
 def export_transient(event: IecTransient, out, *, overwrite: bool = False, runner_files: bool = True):
     """Write ``event`` as the uniform wind file ``out`` and, with ``runner_files``, its InflowWind input file.
 
-    Returns (paths written, one usage line per input file).
-    """
+    Returns (paths written, one usage line per input file)."""
     out = Path(out)
     dat = inflowwind_path(out.with_suffix("") if out.suffix else out, "uniform")
     paths = [out, dat] if runner_files else [out]

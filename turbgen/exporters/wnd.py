@@ -4,8 +4,7 @@ v1.50, and OpenFAST's InflowWind documentation); the same pair carries the heade
 
 ``.wnd``: 104-byte header (ID -99, TurbType 4), then per time step nz*ny*3 int16, component fastest, then y
 (from -W/2, +y left), then z (from the bottom); V = U (o + 1e-5 TI% raw), o = (1, 0, 0). No Bladed left-hand
-rule: v has InflowWind's sign (the lidar simulator's ``.evo`` reader never negates v either).
-"""
+rule: v has InflowWind's sign (the lidar simulator's ``.evo`` reader never negates v either)."""
 
 from __future__ import annotations
 

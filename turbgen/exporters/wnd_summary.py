@@ -1,6 +1,5 @@
 """TurbSim-style ``.sum`` of a ``.wnd`` export (Jonkman 2009, TurbSim User's Guide v1.50): the lines InflowWind v5
-and the lidar-simulator forks parse for WindType 4, written and read back in their order.
-"""
+and the lidar-simulator forks parse for WindType 4, written and read back in their order."""
 
 from __future__ import annotations
 
@@ -13,8 +12,7 @@ from turbgen.exporters.request import COMPONENTS
 def sum_text(*, hub_height_m: float, U_m_s: float, ti_percent, height_offset_m: float, periodic: bool,
              title: str) -> str:
     """The ``.sum`` text: title, CLOCKWISE (F; the forks need it before the hub height), hub height [m], UBar
-    [m/s], TI [%], height offset [m] (hub minus grid centre), PERIODIC when ``periodic``; keys in ``title`` defused.
-    """
+    [m/s], TI [%], height offset [m] (hub minus grid centre), PERIODIC when ``periodic``; keys in ``title`` defused."""
     lines = [_defuse(title),  # free text: must not contain the keys parsed below
              "",
              "         F  Clockwise rotation when looking downwind?",

@@ -7,8 +7,7 @@ next to a missing value) and bilinearly in (y, z). ``total_wind`` data lose thei
 
 Pass 1 generates the sample u_s and measures H u_s; S x = d - H u_s - eps_s is solved (turbgen.synthesis.conditioning);
 pass 2 generates u_s again (bit-identical) and adds C H^T x while writing (``conditional_mean``: C H^T S^-1 d only).
-The store's ``constraints`` attribute records data, geometry, noise, solver report and residual.
-"""
+The store's ``constraints`` attribute records data, geometry, noise, solver report and residual."""
 
 from __future__ import annotations
 
@@ -326,8 +325,7 @@ def run_mann_constrained(run: MannRun, out, files: list[PointSeries], *, noise_m
     ``conditional_mean``: write C H^T S^-1 d (no random part). ``progress``: bars of the stages on a terminal.
     ``placed``: ``place(run, files, noise_m_s)`` if the caller has it; ``fit``: the store's ``fit`` record
     (turbgen.runs.replay). Returns {path, seconds, sigma_/mean_ u/v/w [m/s], constraints}. ParameterError for
-    measurements off the field or all missing, noise < 0, dependent zero-noise measurements; nothing written.
-    """
+    measurements off the field or all missing, noise < 0, dependent zero-noise measurements; nothing written."""
     opener = partial(create_store, Path(out), run.grid, run.to_attrs(), chunk_t=chunk_t, overwrite=overwrite)
     return _conditioned(opener, run, files, str(out), noise_m_s=noise_m_s, conditional_mean=conditional_mean,
                         threads=threads, cache_dir=cache_dir, progress=progress, placed=placed, fit=fit)[1]
@@ -506,8 +504,7 @@ def estimate_ae(run: MannRun, placed: PlacedData, cache_dir=None) -> tuple[float
 
     With S(a) = (a / a_0) (S_0 - R) + R, the estimate solves d^T S(a)^-1 d = n (d ~ N(0, S(a))): without noise in one
     step (the maximum-likelihood estimate; relative standard deviation sqrt(2 / n)), with noise by the monotone
-    iteration a <- a d^T S(a)^-1 d / n.
-    """
+    iteration a <- a d^T S(a)^-1 d / n."""
     stencil = build_mann_stencil(run, cache_dir)
     a0 = run.params.ae
     cov0 = stream_system(run, stencil, placed, cache_dir=cache_dir)

@@ -6,8 +6,7 @@ prior differs: the Kaimal generator's per-bin covariance (turbgen.synthesis.kaim
 Record means: the synthesis has no bin 0, so every point's record mean is exactly 0 and a series observed at every
 stored step cannot be matched in its mean. That mean is removed from the data (place_kaimal;
 ``record_mean_removed_m_s``, ``residual_*`` against the data minus it); the conditioning on the rest is exact
-(with_mean_offset, kaimal_solve). Series observed every q > 1 steps keep their mean.
-"""
+(with_mean_offset, kaimal_solve). Series observed every q > 1 steps keep their mean."""
 
 from __future__ import annotations
 

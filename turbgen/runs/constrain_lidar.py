@@ -3,8 +3,7 @@
 The operator is the virtual lidar's own (virtual_lidar.sampling.los_operator), rebuilt from the dataset's lidar
 description and times. Each beam-gate is one stream observed once per scan, so the scan period must be a whole number
 q of time steps (Streams with decimation q). A mean wind the dataset added is subtracted along the line of sight
-(its recorded MeanWind, else the power law); a turning mean wind is refused (it turned the measured line of sight).
-"""
+(its recorded MeanWind, else the power law); a turning mean wind is refused (it turned the measured line of sight)."""
 
 from __future__ import annotations
 

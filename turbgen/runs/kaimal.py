@@ -164,8 +164,7 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
     ``threads``: FFT workers (default all cores). ``spill``: each component's spectrum in an unlinked scratch file
     next to ``out`` (None: when it would not fit in 80 % of the available memory). Neither changes the field.
     ``gen``: this run's generator, if built. Summary: path, sigma_u/v/w and expected_sigma [m/s], seconds, spilled
-    and the synthesis report (yz_clip_error, long_clip_error: 0 when exact).
-    """
+    and the synthesis report (yz_clip_error, long_clip_error: 0 when exact)."""
     g = run.grid
     out = Path(out)
     gen = gen or kaimal_generator(run, workers=threads)

@@ -1,7 +1,6 @@
 """The dask LocalCluster turbgen starts itself (sweeps, out-of-core runs, `turbgen serve`): loopback only, no dashboard.
 
-dask's HTTP servers (/metrics etc., no token) would otherwise listen on every interface: here all bind 127.0.0.1.
-"""
+dask's HTTP servers (/metrics etc., no token) would otherwise listen on every interface: here all bind 127.0.0.1."""
 
 from __future__ import annotations
 

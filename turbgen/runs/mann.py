@@ -1,8 +1,7 @@
 """One Mann space-time run (turbgen.spec.mann.MannRun): stencil -> snapshots -> zarr store.
 
 Shared by ``turbgen mann``, the sweep and the service (bit-identical stores); the stencil depends on all but the
-seed and can be shared between seeds.
-"""
+seed and can be shared between seeds."""
 
 from __future__ import annotations
 
@@ -183,8 +182,7 @@ def run_mann(run: MannRun, out: str | Path, *, overwrite: bool = False, chunk_t:
 
     Memory is checked before anything is allocated; an exception (or Ctrl-C) leaves no store. ``stencil``
     (build_mann_stencil of a run differing at most in seed; a unit stencil: also in ae) skips its computation;
-    ``threads`` (default os.cpu_count()) does not change the field.
-    """
+    ``threads`` (default os.cpu_count()) does not change the field."""
     t_start = time.perf_counter()
     gen_threads = default_threads(threads)
     _checked_stencil(run, stencil)

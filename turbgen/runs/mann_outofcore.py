@@ -7,8 +7,7 @@ the output plane (in memory, else a plane file), written in time chunks. Bit for
 
 S, the block sizes and the time chunk follow ``memory_bytes``. Scratch files live in ``.NAME.scratch-PID-XXXX``
 next to the output: removed at the end, on any exception, or by the next run once their process is dead. With a
-dask ``client`` the parts and blocks are its tasks (the scratch directory on a shared filesystem).
-"""
+dask ``client`` the parts and blocks are its tasks (the scratch directory on a shared filesystem)."""
 
 from __future__ import annotations
 
@@ -185,8 +184,7 @@ def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_
 
     ``scheduler`` None: both passes here on ``threads`` threads; "local": a LocalCluster of ``threads``
     single-threaded workers sharing the budget with this process; an address: the budget per worker.
-    ``with_stencil``: the in-memory run would build its stencil. ParameterError if too small even out of core.
-    """
+    ``with_stencil``: the in-memory run would build its stencil. ParameterError if too small even out of core."""
     if fits_in_memory(run, memory_bytes, threads, with_stencil):
         return None
     if scheduler != "local":

@@ -21,8 +21,7 @@ class Model:
     memory_fields : the run fields that lower the memory (for messages).
     shared_part : ``shared_part(run, threads, memory_bytes)`` -> ``build(run)`` of the part runs with equal
         ``shared_key(run)`` share (the ae-free Mann stencil), or None. shared_bytes : its bytes [B].
-    out_of_core : a memory budget bounds the run (over it, made out of core).
-    """
+    out_of_core : a memory budget bounds the run (over it, made out of core)."""
 
     name: str
     spec: type

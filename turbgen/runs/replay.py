@@ -3,8 +3,7 @@ then the field conditioned on the same data with them.
 
 The fitted ae, L and Gamma (rounded to FIT_DIGITS digits, so a fit's last bits never change the field) replace the
 run's; typed ones are refused; the run's lifetime is the fit's. Without a typed U, U is the fitted hub speed. The
-store's ``fit`` attribute records the fit, the files' SHA-256 and the ``turbgen export`` options of that mean wind.
-"""
+store's ``fit`` attribute records the fit, the files' SHA-256 and the ``turbgen export`` options of that mean wind."""
 
 from __future__ import annotations
 

@@ -6,8 +6,7 @@ factors and, evolving, 1/tau_e; it is written batch by batch into reserved space
 temporary name then renamed, and read back memory-mapped. A bad entry is rebuilt; a full disk is a ParameterError.
 
 The directory also keeps the system H C H^T of constrained runs (:func:`cached_system`), which depends on model,
-grid and measurement geometry but not on the seed or the data values.
-"""
+grid and measurement geometry but not on the seed or the data values."""
 
 from __future__ import annotations
 

@@ -2,8 +2,7 @@
 :class:`~turbgen.service.state.ServiceState`, with the service's error format and Host check.
 
 Every path component a client sends is either a run id (24 hex digits, checked before any disk
-access) or matched against names the server itself listed; anything else is 404.
-"""
+access) or matched against names the server itself listed; anything else is 404."""
 
 from __future__ import annotations
 

@@ -9,8 +9,7 @@
     ROOT/work/                    derived products being computed (temporary names, turbgen.service.derived)
     ROOT/stencils/                the Mann stencil cache of the runs (size-capped, turbgen.service.cleanup)
 
-Run ids: turbgen.service.run_ids.
-"""
+Run ids: turbgen.service.run_ids."""
 
 from __future__ import annotations
 

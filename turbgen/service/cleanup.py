@@ -18,8 +18,7 @@ DEFAULT_STENCIL_CACHE_BYTES = 4 * 2**30
 
 def remove_dead_work(catalog: Catalog, *, stencils: bool) -> list[Path]:
     """Remove the temporaries of dead processes under the catalog's root, also in ``ROOT/stencils`` if ``stencils``;
-    the removed paths.
-    """
+    the removed paths."""
     removed = (remove_dead_temporaries(catalog.work) + remove_dead_temporaries(catalog.runs)
                + remove_dead_temporaries(catalog.uploads.dir))  # fmt: skip
     for run_dir in catalog.runs.iterdir():

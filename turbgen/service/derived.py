@@ -1,7 +1,6 @@
 """Products derived from a complete run (exports, validation, lidar reports): computed on first request under a
 temporary name in ``ROOT/work``, published atomically under the run's directory unless the run was deleted
-meanwhile (a DELETE bumps the run's generation), served from there afterwards.
-"""
+meanwhile (a DELETE bumps the run's generation), served from there afterwards."""
 
 from __future__ import annotations
 

@@ -1,6 +1,5 @@
 """The field as the run's page shows it, cached products of a complete store: a point's u, v, w series (JSON) and
-a yz snapshot (PNG, +- 3 sigma of the run so frames compare, a constrained field's measurement points marked).
-"""
+a yz snapshot (PNG, +- 3 sigma of the run so frames compare, a constrained field's measurement points marked)."""
 
 from __future__ import annotations
 

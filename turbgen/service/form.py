@@ -1,7 +1,6 @@
 """The run form of the service's page, generated from the run schemas, the commands' option names
 (turbgen.spec.run_inputs) and the range table (turbgen.theory.ranges.RANGES): one field per schema key but
-:data:`NOT_IN_FORM`, named as the command's option (``-`` written ``_``), with its range, unit and default.
-"""
+:data:`NOT_IN_FORM`, named as the command's option (``-`` written ``_``), with its range, unit and default."""
 
 from __future__ import annotations
 

@@ -1,8 +1,7 @@
 """The service's job queue on dask.distributed: one computation per run id, joined by duplicates.
 
 A duplicate request for a queued or running id joins it; a complete store is never recomputed. After a restart,
-``resume`` re-queues every recorded run with neither a complete store nor a failure, unless started MAX_STARTS times.
-"""
+``resume`` re-queues every recorded run with neither a complete store nor a failure, unless started MAX_STARTS times."""
 
 from __future__ import annotations
 

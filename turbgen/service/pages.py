@@ -1,7 +1,6 @@
 """The pages of `turbgen serve`: the static files of the catalog page and the run page (turbgen/service/static:
 HTML, CSS and plain JavaScript using fetch, no library, no build step, nothing loaded from another host) and the API
-reference rendered from the OpenAPI description.
-"""
+reference rendered from the OpenAPI description."""
 
 from __future__ import annotations
 

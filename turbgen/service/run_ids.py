@@ -1,8 +1,7 @@
 """Service run requests and their ids.
 
 A run id is the first 24 hex digits of the SHA-256 of the canonical JSON of (model, run parameters with the seed,
-grid, constraint keys naming uploads by content digest, turbgen version): identical requests give the same id.
-"""
+grid, constraint keys naming uploads by content digest, turbgen version): identical requests give the same id."""
 
 from __future__ import annotations
 

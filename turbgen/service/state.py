@@ -24,8 +24,7 @@ class ServiceSettings:
     above); ``loopback_only``: answer only a loopback Host header (400 otherwise: no DNS rebinding);
     ``derived_running``/``derived_waiting`` products computed at once and requests waiting (503 beyond);
     ``stencil_cache_bytes`` cap of ``root/stencils`` [bytes] (None: none); ``own_cluster``: runs execute in this
-    process (start-up may remove dead temporaries in ``root/stencils``).
-    """
+    process (start-up may remove dead temporaries in ``root/stencils``)."""
 
     root: Path
     token: str | None

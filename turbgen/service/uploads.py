@@ -2,8 +2,7 @@
 
 The server opens no path a client names: the client uploads the *content* of a point-series JSON or CSV or a
 line-of-sight CSV file, checked as ``--constrain`` would and kept as ``ROOT/constraints/<id>.json|.csv`` (id: 24
-hex digits of its SHA-256). Content that names further files is refused.
-"""
+hex digits of its SHA-256). Content that names further files is refused."""
 
 from __future__ import annotations
 

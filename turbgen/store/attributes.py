@@ -1,6 +1,5 @@
 """Store attributes on the writer's side: the caller's attributes checked and made JSON-ready, and an
-existing directory recognised as a turbgen store by its root attributes.
-"""
+existing directory recognised as a turbgen store by its root attributes."""
 
 from __future__ import annotations
 

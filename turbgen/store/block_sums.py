@@ -1,7 +1,6 @@
 """The float64 sum and sum of squares of a float32 block in one compiled pass (the writer's finiteness check).
 
-Eight accumulators per sum, no fastmath: the result depends only on the block's values and order, never on threads.
-"""
+Eight accumulators per sum, no fastmath: the result depends only on the block's values and order, never on threads."""
 
 from __future__ import annotations
 

@@ -1,6 +1,5 @@
 """Reading a plane of a store chunk by chunk with its data checked: a chunk that does not decode or holds NaN/inf
-is a one-line StoreError naming the component, plane, time index and chunk file.
-"""
+is a one-line StoreError naming the component, plane, time index and chunk file."""
 
 from __future__ import annotations
 
@@ -15,8 +14,7 @@ from turbgen.store.chunk_files import read_chunk
 def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None, out: np.ndarray | None = None) -> np.ndarray:
     """Plane ``ix`` of a component array over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], one chunk at a time.
 
-    ``out``: a reused C-contiguous buffer (saves fresh pages per read); ``path`` names the store in messages.
-    """
+    ``out``: a reused C-contiguous buffer (saves fresh pages per read); ``path`` names the store in messages."""
     name = arr.basename
     where = path if path is not None else getattr(arr.store, "root", None) or "store"
     if out is None:

@@ -2,8 +2,7 @@
 
 Where it declines (compressed or foreign-endian array, no O_DIRECT, ``TURBGEN_PORTABLE=1``) zarr's public API does
 it; why it stays: benchmarks/bench_store_io.md. An uncompressed ``bytes`` chunk is a file of its C-order bytes at
-its chunk key (Zarr v3 specification); unaligned chunks pass through a page-aligned bounce buffer.
-"""
+its chunk key (Zarr v3 specification); unaligned chunks pass through a page-aligned bounce buffer."""
 
 from __future__ import annotations
 
@@ -106,8 +105,7 @@ def write_chunk(array, coords: tuple[int, ...], data: np.ndarray) -> bool:
 def read_chunk(array, coords: tuple[int, ...], out: np.ndarray) -> bool:
     """Fill ``out`` with the whole chunk ``coords`` of ``array`` by direct I/O; False where the path declines.
 
-    FileNotFoundError for a missing file, ValueError for one not of exactly ``out.nbytes`` bytes.
-    """
+    FileNotFoundError for a missing file, ValueError for one not of exactly ``out.nbytes`` bytes."""
     nbytes, dest = out.nbytes, out.reshape(-1).view(np.uint8)
 
     def move(path, fd):

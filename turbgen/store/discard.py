@@ -13,8 +13,7 @@ def finish_before_raising(fn, *args):
 
     zarr writes in its own event-loop thread: a KeyboardInterrupt or SystemExit in the waiting thread would leave that
     I/O recreating files in a temporary directory being removed. In the main thread ``fn`` runs in a helper thread that
-    an interruption waits for (a second one stops the wait).
-    """
+    an interruption waits for (a second one stops the wait)."""
     if threading.current_thread() is not threading.main_thread():
         return fn(*args)
     done, lock, state, out = threading.Event(), threading.Lock(), ["pending"], []

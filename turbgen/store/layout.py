@@ -9,8 +9,7 @@ One zarr v3 group holds one field::
 
 Group attributes (``turbgen/schemas/field.schema.json``): turbgen_version, created_utc, layout_version,
 fft_backend, model, parameters, units, seed, U_m_s, hub_height_m, frame = "convected" (plane x at physical time T is
-the stored sample t = T + x/U), frame_note, grid, rms_m_s, and last the completeness marker turbgen_complete.
-"""
+the stored sample t = T + x/U), frame_note, grid, rms_m_s, and last the completeness marker turbgen_complete."""
 
 from __future__ import annotations
 
@@ -29,8 +28,7 @@ from turbgen.spec.models import model_names
 def silence_consolidated_metadata_warning() -> None:
     """Ignore zarr's warning that consolidated metadata is not part of the v3 specification (used knowingly).
 
-    A process-wide filter for that message only: ``warnings.catch_warnings()`` is not thread-safe.
-    """
+    A process-wide filter for that message only: ``warnings.catch_warnings()`` is not thread-safe."""
     warnings.filterwarnings("ignore", message="Consolidated metadata is currently not part", category=UserWarning)
 
 LAYOUT_VERSION = 1

@@ -1,8 +1,7 @@
 """A field kept in memory as the ``xarray.Dataset`` its store would open to: the writer's interface, no file.
 
 The same checks, float32 values and attributes (but ``created_utc``) as :class:`turbgen.store.writer.StoreWriter`.
-Used by ``turbgen.mann()`` / ``turbgen.kaimal()`` without ``out``; each plane's (t, y, z) block is contiguous.
-"""
+Used by ``turbgen.mann()`` / ``turbgen.kaimal()`` without ``out``; each plane's (t, y, z) block is contiguous."""
 
 from __future__ import annotations
 

@@ -1,7 +1,6 @@
 """A field held in memory (an ``xarray.Dataset``) read through the interface of an opened store.
 
-``chunk_t`` is the chunk length the same field's store would have, so span-by-span reads give the same numbers.
-"""
+``chunk_t`` is the chunk length the same field's store would have, so span-by-span reads give the same numbers."""
 
 from __future__ import annotations
 

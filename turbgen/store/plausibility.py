@@ -2,8 +2,7 @@
 AMPLITUDE_RMS times the root mean square its writer recorded.
 
 Why 100 rms: the fields are Gaussian, so the largest of n samples is about sqrt(2 ln n) rms (7.4 for n = 10^12);
-100 rms has probability below exp(-5000): corrupted data, not turbulence.
-"""
+100 rms has probability below exp(-5000): corrupted data, not turbulence."""
 
 from __future__ import annotations
 
@@ -22,8 +21,7 @@ AMPLITUDE_RMS = 100.0  # largest plausible |value| / rms (module docstring)
 def check_attributes(attrs: Mapping, where: str) -> None:
     """StoreError unless U_m_s, hub_height_m and every parameter turbgen.theory.ranges knows are in range.
 
-    Lists are checked element by element; None is skipped.
-    """
+    Lists are checked element by element; None is skipped."""
     checks = [(key, key, attrs[key]) for key in ("U_m_s", "hub_height_m")]
     params = attrs.get("parameters", {})
     checks += [(f"parameters/{key}", key, value) for key, value in params.items() if key in ranges.RANGES]
@@ -40,8 +38,7 @@ def check_attributes(attrs: Mapping, where: str) -> None:
 def spread_warnings(attrs: Mapping) -> list[str]:
     """Warnings for a recorded rms beyond the largest ``sigma_m_s`` of turbgen.theory.ranges (30 m/s).
 
-    Such data decode and are consistent (implausible inputs, extreme Mann corners), so ``info`` warns, not refuses.
-    """
+    Such data decode and are consistent (implausible inputs, extreme Mann corners), so ``info`` warns, not refuses."""
     rms = attrs.get(RMS_ATTR)
     if not isinstance(rms, Mapping):
         return []

@@ -1,7 +1,6 @@
 """Opening a field store through zarr's public API: :func:`open_store` refuses anything that is not a complete,
 consistent turbgen store, and :meth:`FieldStore.read_span` checks the data as it reads them (corrupted chunks, NaN,
-values beyond the recorded rms: ``plausibility``). Every refusal is a one-line StoreError.
-"""
+values beyond the recorded rms: ``plausibility``). Every refusal is a one-line StoreError."""
 
 from __future__ import annotations
 
@@ -89,8 +88,7 @@ class FieldStore:
     def read_span(self, component: str, ix: int, t0: int, t1: int, out: np.ndarray | None = None) -> np.ndarray:
         """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], read and checked.
 
-        StoreError for a chunk that does not decode, NaN/inf, or a value beyond AMPLITUDE_RMS times the recorded rms.
-        """
+        StoreError for a chunk that does not decode, NaN/inf, or a value beyond AMPLITUDE_RMS times the recorded rms."""
         arr = self.array(component)
         block = read_checked(arr, ix, t0, t1, self.path, out=out)
         check_amplitudes(block, component, self._limits[component], self.path, ix, t0, arr.chunks[0])
@@ -109,8 +107,7 @@ class FieldStore:
     def summary(self) -> dict:
         """What ``turbgen info`` shows, as JSON-serialisable values (units in the key names).
 
-        ``constraints`` (series, solver, residual [m/s]) only for a store conditioned on measurements.
-        """
+        ``constraints`` (series, solver, residual [m/s]) only for a store conditioned on measurements."""
         g, a = self.grid, self.attrs
         return {
             "path": str(self.path),
@@ -227,8 +224,7 @@ def open_store(path) -> FieldStore:
     Checks, in order: the path exists; it is a zarr v3 group written by turbgen; the completeness marker is set;
     the attributes match ``schemas/field.schema.json`` and the plausible ranges; every array's own metadata is the
     consolidated copy; u, v, w and the coordinates have the grid's shapes, dtypes and values; every chunk is present
-    (a partial copy is refused). ``~`` in ``path`` is expanded.
-    """
+    (a partial copy is refused). ``~`` in ``path`` is expanded."""
     path = Path(path).expanduser().absolute()
     if not path.exists():
         raise StoreError(f"{path}: no such store{_leftover_hint(path)}")
@@ -265,8 +261,7 @@ def physical_time_view(path_or_fs):
 
     The stored sample (t, x) is the field at plane x at physical time T = t - x/U (convected frame), so
     ``ds.u.isel(x=i)`` against ``ds.T.isel(x=i)`` is the time series a sensor at plane i sees. Data stay lazy
-    (dask). ``path_or_fs`` is a FieldStore or a path for :func:`open_store` (StoreError).
-    """
+    (dask). ``path_or_fs`` is a FieldStore or a path for :func:`open_store` (StoreError)."""
     import xarray as xr
 
     fs = path_or_fs if isinstance(path_or_fs, FieldStore) else open_store(path_or_fs)

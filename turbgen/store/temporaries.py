@@ -82,8 +82,7 @@ def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
 
     ``replace`` False: FileExistsError if ``path`` exists. True: swapped in one step (renameat2 RENAME_EXCHANGE), the
     old output left at the temporary name for the caller to delete; without renameat2, two renames (a short window
-    without ``path``).
-    """
+    without ``path``)."""
     tmp, path = Path(tmp), Path(path)
     exists = path.exists() or path.is_symlink()
     if not replace or not exists:
@@ -112,8 +111,7 @@ def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
 def write_atomically(path: Path, write, what: str) -> Path:
     """Write the file ``path`` by ``write(tmp)`` under a temporary name, then rename it into place; returns ``path``.
 
-    ``tmp``'s suffix means nothing (give the format). ParameterError naming ``what`` and ``path`` on a refused write.
-    """
+    ``tmp``'s suffix means nothing (give the format). ParameterError naming ``what`` and ``path`` on a refused write."""
     from turbgen.errors import ParameterError
 
     path = Path(path)

@@ -5,8 +5,7 @@ last, atomic rename (``temporaries.publish``).
         w.write("u", ix, block, t0)        # block (nt_block, ny, nz), any thread
 
 On any exception the temporary directory is removed and ``path`` is untouched; a disk error is a one-line
-StoreError.
-"""
+StoreError."""
 
 from __future__ import annotations
 
@@ -37,8 +36,7 @@ class StoreWriter:
     """Context manager writing one field store; made by :func:`create_store`.
 
     ``write`` is thread-safe (unaligned blocks of one plane one at a time: zarr read-modify-writes a partial chunk).
-    Every sample must be written before the ``with`` block ends, else RuntimeError and nothing is published.
-    """
+    Every sample must be written before the ``with`` block ends, else RuntimeError and nothing is published."""
 
     def __init__(self, path: Path, grid: Grid, attrs: dict, chunk_t: int, overwrite: bool):
         self.path = path
@@ -91,8 +89,7 @@ class StoreWriter:
         """Write ``data`` (nt_block, ny, nz) [m/s] as float32 to ``component`` at plane index ``ix``, time ``t0``.
 
         Returns the block's float64 sum [m/s], with ``squares`` also its sum of squares [m^2/s^2]. ValueError as
-        :func:`checked_block`.
-        """
+        :func:`checked_block`."""
         if self._tmp is None:
             raise RuntimeError("StoreWriter.write outside its 'with' block")
         g = self.grid
@@ -190,8 +187,7 @@ def rms_from_squares(squares: dict, grid: Grid) -> dict[str, float]:
 def checked_block(grid: Grid, component: str, ix: int, data, t0: int) -> tuple[np.ndarray, float, float]:
     """``data`` as the float32 block stored at (``component``, ``ix``, ``t0``), with its float64 sum and sum of squares.
 
-    ValueError for an unknown component, a plane out of range, a block that does not fit, or NaN or inf.
-    """
+    ValueError for an unknown component, a plane out of range, a block that does not fit, or NaN or inf."""
     if component not in layout.COMPONENTS:
         raise ValueError(f"component {component!r} is not one of {layout.COMPONENTS}")
     if not 0 <= ix < grid.nx:
@@ -222,8 +218,7 @@ def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: 
     Dead writers' temporaries of ``path`` are removed first. ``chunk_t`` in [1, nt] (default min(nt, 1024));
     ``scratch_bytes``: scratch files counted in the disk check. ParameterError for a bad path or chunk_t or too little
     disk; StoreError for an existing ``path`` without ``overwrite`` or not a turbgen store, or an unwritable
-    directory.
-    """
+    directory."""
     path = check_output_path(path).absolute()
     chunk_t = layout.default_chunk_t(grid.nt) if chunk_t is None else chunk_t
     chunk_t = check_int("chunks (time samples per chunk)", chunk_t, 1, grid.nt)
@@ -250,8 +245,7 @@ def create_store(path, grid: Grid, attrs: dict, *, chunk_t: int | None = None, o
     """A :class:`StoreWriter` for a new field store at ``path``; nothing is created before ``with``.
 
     ``attrs``: model, parameters, units, seed, U_m_s [m/s], hub_height_m [m] (the writer adds the rest). Refusals as
-    :func:`check_new_store`; ValueError for ``attrs`` :func:`validated_caller_attrs` refuses.
-    """
+    :func:`check_new_store`; ValueError for ``attrs`` :func:`validated_caller_attrs` refuses."""
     full = validated_caller_attrs(attrs, grid)
     path, chunk_t = check_new_store(path, grid, chunk_t=chunk_t, overwrite=overwrite)
     return StoreWriter(path, grid, full, chunk_t, overwrite)

@@ -1,7 +1,6 @@
 """The periodic synthesis box of a Mann (1998) field: its size, spacings and wavenumbers.
 
-The real FFT runs along xi = -U t (Taylor), so the stored slab of FFT index i holds k1 = -i dk1.
-"""
+The real FFT runs along xi = -U t (Taylor), so the stored slab of FFT index i holds k1 = -i dk1."""
 
 from __future__ import annotations
 

@@ -3,8 +3,7 @@
 The wrapped kernel's 2-D FFT gives the torus eigenvalues; Z = FFT2(sqrt(lam / (My Mz)) xi)[:ny, :nz] has
 E[Z Z^H] = C exactly when all are >= 0 (Dietrich & Newsam 1997). A kernel staying high over the grid is first
 smoothly periodized (Bachmayr, Graham, Nguyen & Scheichl 2020). The torus grows while an eigenvalue is negative;
-then small grids fall back to a dense square root, large ones clip and report the error.
-"""
+then small grids fall back to a dense square root, large ones clip and report the error."""
 
 from __future__ import annotations
 
@@ -130,8 +129,7 @@ class Embedding:
                transforms=None) -> np.ndarray:  # fmt: skip
         """Map standard complex normals xi (..., *torus_shape) to coefficients (..., ny, nz) with covariance C.
 
-        ``overwrite``: xi may serve as the work array (destroyed).
-        """
+        ``overwrite``: xi may serve as the work array (destroyed)."""
         if self.chol is not None:
             z = np.einsum("ij,...j->...i", self.chol.astype(xi.real.dtype), xi[..., 0])
             return z.reshape(*xi.shape[:-2], self.ny, self.nz)

@@ -16,8 +16,7 @@ with G_i^(pq)(dy, dz) = sum_(j, l) rho_pq Phi_i exp(2 pi i (j dy / nyp + l dz / 
 Nyquist slabs), rho_pq = exp(-|t_p - t_q| / tau_e) (Guo et al. 2023, Eq. 13-14), L_(nt - i) = conj L_i, and the
 decimated streams alias the q full-rate frequencies onto j:
 S_j[a, b] = (1/q) sum_l L_(j + l nt/q)[a, b] e^(2 pi i (j + l nt/q)(o_a - o_b) / nt) + sigma_a^2 delta_ab.
-Gaps, the per-direction grouping of terms and C H^T w: docs/constrained-fields.md, "How it is solved".
-"""
+Gaps, the per-direction grouping of terms and C H^T w: docs/constrained-fields.md, "How it is solved"."""
 
 from __future__ import annotations
 
@@ -48,8 +47,7 @@ SINGULAR_RTOL = 1e-11  # eigenvalue / largest eigenvalue of S_i below which zero
 class Streams:
     """Measurement streams on the stored grid: ``plane`` (M,) per stream; per term (T,) ``term_stream``,
     ``term_component`` (0 u, 1 v, 2 w), ``term_iy``, ``term_iz``, ``term_weight`` [-], ``term_shift`` s_t >= 0 [stored
-    steps]; ``decimation`` q (divides nt) and ``offset`` o_a in [0, q) of each stream's first sample.
-    """
+    steps]; ``decimation`` q (divides nt) and ``offset`` o_a in [0, q) of each stream's first sample."""
 
     plane: np.ndarray
     term_stream: np.ndarray
@@ -92,8 +90,7 @@ def measure(streams: Streams, plane: int, component: int, field: np.ndarray, out
 def measure_spectra(streams: Streams, plane: int, spectra: np.ndarray, nz: int, nt: int, out: np.ndarray,
                     points: np.ndarray | None = None) -> None:  # fmt: skip
     """Add Y_a(i) = sum_t w_t U_(c_t)(i, y_t, z_t) exp(2 pi i i s_t / nt) of H's terms on ``plane`` into ``out``
-    (M, nk1), from the cropped spectra of that plane's snapshot (all points, or the sorted ``points`` only).
-    """
+    (M, nk1), from the cropped spectra of that plane's snapshot (all points, or the sorted ``points`` only)."""
     sel = np.flatnonzero(streams.plane[streams.term_stream] == plane)
     if len(sel) == 0:
         return
@@ -160,8 +157,7 @@ DIRECTION_DECIMALS = 12
 @dataclass(frozen=True, eq=False)
 class _Keys:
     """The streams' terms grouped per (stream, direction, y, z) node (a *key*), sorted by stream; ``term_key`` -1 marks
-    a term carried by another component of its node.
-    """
+    a term carried by another component of its node."""
 
     term_key: np.ndarray
     term_weight: np.ndarray
@@ -300,8 +296,7 @@ def _component_basis(directions: np.ndarray) -> _Basis:
 class _LagTransform:
     """The real 2-D DFTs of one slab's lag inputs, exact on the columns z < min(e_z, nzp // 2 + 1).
 
-    Single-threaded plans: the same rounding for any thread count. With ``parity`` (nyp even) y is a DCT-I / DST-I.
-    """
+    Single-threaded plans: the same rounding for any thread count. With ``parity`` (nyp even) y is a DCT-I / DST-I."""
 
     def __init__(self, basis: _Basis, n_pairs: int, nyp: int, nzp: int, extent: tuple[int, int],
                  backend: fft.FFTBackend):  # fmt: skip
@@ -339,8 +334,7 @@ class _LagTransform:
 def _slab_system(stencil: MannStencil, i: int, lags: np.ndarray, keys: _Keys, basis: _Basis, amp: np.ndarray,
                  dir_pair: np.ndarray, pair_class: np.ndarray, transform: _LagTransform, out: np.ndarray) -> None:
     """L_i (``out`` (M, M), zeroed here) of slab ``i`` from the key amplitudes ``amp`` (K,), one lag class at a time
-    (the DFTs stay in cache).
-    """
+    (the DFTs stay in cache)."""
     box = stencil.box
     symmetric = slab_weight(stencil, i) == 1.0  # symmetrised under k -> -k, as _slab_phi (1/tau_e is even in k)
     rows = box.nyp if symmetric else transform.rows  # symmetrised on the whole plane, then cut to the rows used
@@ -394,8 +388,7 @@ def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var
                       progress=None) -> np.ndarray:  # fmt: skip
     """The per-frequency matrices S_j (nt/q, M, M) complex128 [m^2 s^-2 times nt] of the block-circulant S.
 
-    ``times_s``: relative time x/U [s] of every plane; ``noise_var`` (M,): sigma_a^2 [m^2 s^-2] (R = diag).
-    """
+    ``times_s``: relative time x/U [s] of every plane; ``noise_var`` (M,): sigma_a^2 [m^2 s^-2] (R = diag)."""
     box = stencil.box
     nt, q, m = box.nt, streams.decimation, streams.n_streams
     n_dec = nt // q
@@ -464,8 +457,7 @@ def _ordered_map(fn, items: list, threads: int, workspace) -> Iterator:
 def check_singular(cov: np.ndarray, names) -> None:
     """Raise ParameterError naming the linearly dependent measurements (S_i singular on some slab).
 
-    The names are decided with margins (:func:`dependent_set`), so every CPU names the same ones.
-    """
+    The names are decided with margins (:func:`dependent_set`), so every CPU names the same ones."""
     lam = np.linalg.eigvalsh(cov[: cov.shape[0] // 2 + 1])  # all at once
     top = np.maximum(lam[:, -1], np.finfo(float).tiny)
     singular = np.flatnonzero(lam[:, 0] <= SINGULAR_RTOL * top)
@@ -486,8 +478,7 @@ def dependent_set(s: np.ndarray) -> list[int]:
     """The smallest dependent set of the Hermitian S >= 0 (M, M), increasing (pivoted Cholesky).
 
     The first measurement whose residual variance is <= DEPENDENT_RTOL of its variance, and the earlier ones its
-    combination uses (share > INVOLVED_RTOL): thresholds far from round-off, so the set does not depend on the CPU.
-    """
+    combination uses (share > INVOLVED_RTOL): thresholds far from round-off, so the set does not depend on the CPU."""
     m = s.shape[0]
     var = np.real(np.diag(s)).copy()
     low = np.zeros((m, m), complex)  # L of the independent pivots so far: S_II = L L^H
@@ -550,8 +541,7 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
     """x = S^-1 r on the observed samples, zero elsewhere: (x (M, nt), report).
 
     All observed: the exact per-frequency solve. Otherwise preconditioned conjugate gradients on the observed samples
-    (ParameterError after CG_MAX_ITERATIONS), started from :func:`_gap_start` when many samples are missing.
-    """
+    (ParameterError after CG_MAX_ITERATIONS), started from :func:`_gap_start` when many samples are missing."""
     pre = cov if preconditioner is None else preconditioner
     r = np.where(observed, r, 0.0)
     norm = float(np.linalg.norm(r))
@@ -571,8 +561,7 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
 def _gap_start(inverse: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, int]:
     """S_oo^-1 r through the precision T = S^-1 of the full streams: T_oo - T_om T_mm^-1 T_mo (Schur complement).
 
-    T is far better conditioned on scattered gaps than S on the observed samples. Returns (x, iterations).
-    """
+    T is far better conditioned on scattered gaps than S on the observed samples. Returns (x, iterations)."""
     missing = ~observed
     n = r.shape[1]
     weights = np.full(inverse.shape[0], 2.0)  # T's diagonal per stream: the mean of (S_j^-1)_aa over all j
@@ -636,8 +625,7 @@ def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarra
     """Yield (slabs, yz-transformed cropped spectra (P_out, 3, len(slabs), ny, nz) complex64) of C H^T w.
 
     ``weights`` (M, nt/q): one value per stream sample; the planes' rho_pq sums run by the Ornstein-Uhlenbeck
-    recursion. The result does not depend on ``threads``.
-    """
+    recursion. The result does not depend on ``threads``."""
     box, backend = stencil.box, fft.backend()  # resolved once: every workspace with the same backend
     times = np.asarray(times_s, dtype=float)
     planes_out = list(planes_out)

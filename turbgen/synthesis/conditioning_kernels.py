@@ -1,6 +1,5 @@
 """Compiled loops of the Mann conditioning (turbgen.synthesis.conditioning): key amplitudes per slab and the
-pair sums L_i[a, b] = sum_(k in a, k' in b) P_k conj(P_k') G(y_k - y_k', z_k - z_k').
-"""
+pair sums L_i[a, b] = sum_(k in a, k' in b) P_k conj(P_k') G(y_k - y_k', z_k - z_k')."""
 
 from __future__ import annotations
 
@@ -26,8 +25,7 @@ def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, cls, l
     """Add to L[a, b] (``out`` (M, M)) of one slab the stream pairs of lag class ``cls``.
 
     ``lag`` holds G(dy, dz) at [dy + e_y - 1, dz + e_z - 1]; the pairs a <= b are summed, the others are their
-    Hermitian conjugates.
-    """
+    Hermitian conjugates."""
     cy, cz = (lag.shape[1] - 1) // 2, (lag.shape[2] - 1) // 2
     m = len(bounds) - 1
     for a in range(m):
@@ -50,8 +48,7 @@ def pair_sums(amp, bounds, key_dir, key_iy, key_iz, dir_pair, pair_class, cls, l
 def chain_correction(f, rho, step, phi, rows, out):
     """out[r] = Phi sum_q rho_(rows[r] q) f_q per (k2, k3) point, sums in float64.
 
-    Forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once.
-    """
+    Forwards h_p = rho h_(p-1) + f_p and backwards k_p = rho k_(p+1) + f_p; h + k - f counts f_p once."""
     n_planes, n_values = f.shape[0], f.shape[2]
     block = 512  # values (256 points)
     fwd = np.empty((n_planes, 3, block))
@@ -164,8 +161,7 @@ def lag_window(z, n_even, parity, nzp, out):
     """The lag covariances G_b(dy, dz) = conj R_b(dy, dz) into ``out`` from their DFTs R_b in ``z``.
 
     With ``parity``, the odd components were transformed along y by a DST-I on rows 1 .. nyp/2 - 1:
-    R(+-dy) = z[0] + (-1)^dy z[nyp/2] -+ i Y(dy); the even ones by a DCT-I, R(dy) = z[dy].
-    """
+    R(+-dy) = z[0] + (-1)^dy z[nyp/2] -+ i Y(dy); the even ones by a DCT-I, R(dy) = z[dy]."""
     n_basis, ny_w, nz_w = out.shape
     cy, cz = (ny_w - 1) // 2, (nz_w - 1) // 2
     nyp = 2 * (z.shape[1] - 1) if parity else z.shape[1]
@@ -222,8 +218,7 @@ def combine_pairs(window, weights, out):
 @numba.njit(nogil=True, cache=True)
 def slab_components(coef, j, k1, k2, k3sq, cell_row, cell_col, cell_factor, out):
     """Phi = 2 C C^T's six components (COMPONENT_PAIRS order) of one slab on rows 0 .. R - 1, from the compact
-    coefficients (the axis cells' factors replace them there): mann_oracle.slab_factor's operations, point by point.
-    """
+    coefficients (the axis cells' factors replace them there): mann_oracle.slab_factor's operations, point by point."""
     nyp, half = len(k2), coef.shape[2] - 1
     c = np.empty((3, 3))
     for r in range(out.shape[1]):

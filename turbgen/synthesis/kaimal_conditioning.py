@@ -6,8 +6,7 @@ As KaimalEvo samples it (Guo et al. 2023, Eq. 19),
 
 G_k = F_k F_k^T, R_k = A_k A_k^H the realised yz correlation, h_k = nt 2 amp_k^2 (nt amp_N^2 at Nyquist).
 Diagonal in the bin, so the streams give one dense matrix per frequency, solved as in
-turbgen.synthesis.conditioning; C H^T w is one extra synthesis.
-"""
+turbgen.synthesis.conditioning; C H^T w is one extra synthesis."""
 
 from __future__ import annotations
 

@@ -4,8 +4,7 @@ Cross-spectrum (Guo et al. 2023, Eq. 19): S_c(f) coh_yz(r_ab, f) gamma_x(|x_p - 
 planes. Per bin k (f_k = k df exactly, not evoTurb's (k + 1) df): yz coefficients by circulant embedding (u: IEC
 exponential, Eq. 12 un-squared; v, w white or u's), planes mixed by the square root of gamma_x, amplitudes the
 Kaimal PSD (Eq. 11) integrated over the bin, inverse real FFT. Random streams keyed by (seed, component, plane,
-FREQ_CHUNK chunk): the field does not depend on how it is written or on threads.
-"""
+FREQ_CHUNK chunk): the field does not depend on how it is written or on threads."""
 
 from __future__ import annotations
 
@@ -54,8 +53,7 @@ def resolved_band_hz(nt: int, dt_s: float) -> tuple[float, float]:
 def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarray, float]:
     """Real principal square roots F_k (nf, P, P) of G_k[p, q] = gamma_x(|x_p - x_q|, f_k).
 
-    Returns (factors, the spectral norm of the negative part clipped).
-    """
+    Returns (factors, the spectral norm of the negative part clipped)."""
     x = np.asarray(x_m, dtype=float)
     f = np.asarray(f_hz, dtype=float)
     dx = np.abs(x[:, None] - x[None, :])
@@ -68,8 +66,7 @@ def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int =
                       out: np.ndarray | None = None, transforms=None) -> np.ndarray:  # fmt: skip
     """One plane's fluctuations (nt, ny, nz) float32 [m/s]: irfft(spec * amp, n=nt, axis=0, norm="forward").
 
-    On contiguous column blocks; columns are independent, so the blocking changes no bit.
-    """
+    On contiguous column blocks; columns are independent, so the blocking changes no bit."""
     nf = spec.shape[0]
     flat = spec.reshape(nf, -1)
     out = np.empty((nt, flat.shape[1]), dtype=np.float32) if out is None else out.reshape(nt, flat.shape[1])
@@ -114,8 +111,7 @@ class InMemorySpectrum:
 class PlaneRing:
     """``size`` (>= 4) reused field planes for :meth:`KaimalEvo.component_planes` (no page faults on fresh planes).
 
-    A consumer must be done with plane k once it asks for plane k + size - 2 (the generator works two planes ahead).
-    """
+    A consumer must be done with plane k once it asks for plane k + size - 2 (the generator works two planes ahead)."""
 
     def __init__(self, nt: int, ny: int, nz: int, size: int = 4):
         if size < 4:
@@ -157,8 +153,7 @@ class KaimalEvo:
     exponential_yz); ``yz_decay_length_m(f_hz)`` bounds yz_coherence <= exp(-r / length) for a smaller torus;
     ``coherent_vw``: v, w get u's yz coherence (IEC: white); ``rescale``: expected variance = nominal sigma^2;
     ``variances`` (3, nt//2 + 1) band variances [m^2 s^-2] of a user spectrum; ``keep``: keep the samplers for
-    :meth:`reseeded` copies.
-    """
+    :meth:`reseeded` copies."""
 
     def __init__(
         self,
@@ -327,8 +322,7 @@ class KaimalEvo:
     ) -> Iterator[tuple[int, np.ndarray]]:
         """Yield (plane index, field (nt, ny, nz) float32) for every plane of one component.
 
-        ``tick`` is called once per frequency chunk and per plane; ``ring`` (:class:`PlaneRing`) supplies the arrays.
-        """
+        ``tick`` is called once per frequency chunk and per plane; ``ring`` (:class:`PlaneRing`) supplies the arrays."""
         g = self.grid
         spectrum = InMemorySpectrum(g.nx, self.nf, g.ny, g.nz) if spectrum is None else spectrum
         pool = ThreadPoolExecutor(max_workers=self.workers)

@@ -1,8 +1,7 @@
 """Cell-averaged Mann factors near the k1 axis, which replace the point factors of the stencil there.
 
 On the axis Phi33 ~ 1 / k1^2, so with dk1 << dk2, dk3 the point rule puts far too much energy in the cells
-(k1, 0, 0) (Mann 1998). turbgen.validation.mann_lattice uses its own rule on purpose: do not share the rules.
-"""
+(k1, 0, 0) (Mann 1998). turbgen.validation.mann_lattice uses its own rule on purpose: do not share the rules."""
 
 from __future__ import annotations
 
@@ -48,8 +47,7 @@ def _slab_nodes(box: BoxShape, k1c: float, js: np.ndarray, ls: np.ndarray, off_a
 def axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarray]:
     """(cell_index, cell_factor): principal square roots of Phi_bar = (1/dV) ∫_cell Phi dk near the k1 axis.
 
-    Nodes of _CELL_SLABS slabs per call, summed per cell in node order (the same sums as slab by slab).
-    """
+    Nodes of _CELL_SLABS slabs per call, summed per cell in node order (the same sums as slab by slab)."""
     dk1, dk2, dk3 = box.dk()
     r2 = min(CELL_RADIUS, (box.nyp - 1) // 2)
     r3 = min(CELL_RADIUS, (box.nzp - 1) // 2)

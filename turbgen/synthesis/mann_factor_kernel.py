@@ -1,8 +1,7 @@
 """Compiled per-point loops of the Mann stencil (turbgen.synthesis.mann_stencil): lifetimes and compact factors.
 
 They evaluate the float64 operations of the numpy reference (tests/synthesis/stencil_reference.py) in the same
-order; log, exp and arctan stay numpy ufuncs between the loops, which round as the reference does.
-"""
+order; log, exp and arctan stay numpy ufuncs between the loops, which round as the reference does."""
 
 from __future__ import annotations
 
@@ -26,8 +25,7 @@ def squared_wavenumbers(k1, k2, k3, factor, out):
 def table_spline(log_kl_sq, inv_2h, x0_h, step, n_intervals, c3, c2, c1, c0, out):
     """The lifetime table's spline at ln(|k|^2 L^2), as LifetimeTable.from_ksq; nan outside the table (k = 0 too).
 
-    Returns the number of points outside the range.
-    """
+    Returns the number of points outside the range."""
     xs = log_kl_sq.reshape(-1)
     values = out.reshape(-1)
     outside = 0
@@ -55,8 +53,7 @@ def table_spline(log_kl_sq, inv_2h, x0_h, step, n_intervals, c3, c2, c1, c0, out
 @numba.njit(nogil=True, cache=True, error_model="numpy")
 def transcendental_arguments(k1, k2, k3, beta_half, length_sq, e_arg, t_arg):
     """The arguments 1 + k0^2 L^2 (of e) and beta k1 sqrt(q) / (k0^2 - k30 beta k1) (arctan in zeta2, Mann 1994
-    Eq. 16) on slabs x rows x columns; ``beta_half`` on the columns k3 >= 0 (|k|^2 is even in k3).
-    """
+    Eq. 16) on slabs x rows x columns; ``beta_half`` on the columns k3 >= 0 (|k|^2 is even in k3)."""
     nzp = k3.size
     h = nzp // 2
     for i in range(k1.size):
@@ -76,8 +73,7 @@ def transcendental_arguments(k1, k2, k3, beta_half, length_sq, e_arg, t_arg):
 @numba.njit(nogil=True, cache=True, error_model="numpy")
 def mann_factors(k1, k2, k3, beta_half, inv_tau_half, e, arctan, unit, energy, scale, f0, f1, f2, f3, inv_tau):
     """The compact factors of slabs x rows x columns into f0 .. f3: unit (e, k30, c1, c2) float64, else
-    (A, P, Z1, Z2) as mann_factors.apply_energy forms them; 1/tau_e [1/s] mirrored into a non-empty ``inv_tau``.
-    """
+    (A, P, Z1, Z2) as mann_factors.apply_energy forms them; 1/tau_e [1/s] mirrored into a non-empty ``inv_tau``."""
     nzp = k3.size
     h = nzp // 2
     with_tau = inv_tau.size > 0

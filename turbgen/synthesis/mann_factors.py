@@ -1,7 +1,6 @@
 """The Mann (1998) factors of the stencil's slabs, from Mann (1994) Eq. 13-17.
 
-apply_energy uses a direct build's float64 operations, so a unit stencil scaled to ae is bit-identical to it.
-"""
+apply_energy uses a direct build's float64 operations, so a unit stencil scaled to ae is bit-identical to it."""
 
 from __future__ import annotations
 
@@ -29,8 +28,7 @@ def slab_factors(params: MannParams, box: BoxShape, i0: int, i1: int, out, inv_t
     """The factors of slabs [i0, i1) of ``box`` into ``out`` (i1 - i0, nyp//2+1, nzp).
 
     ``energy`` None: ae-free (e, k30, c1, c2) float64 (c1, c2: zeta1, zeta2 of Mann 1994 Eq. 13-17); else
-    (A, P, Z1, Z2) float32 as apply_energy forms them. 1/tau_e [1/s] into ``inv_tau`` unless None.
-    """
+    (A, P, Z1, Z2) float32 as apply_energy forms them. 1/tau_e [1/s] into ``inv_tau`` unless None."""
     from turbgen.synthesis import mann_factor_kernel as kernel
 
     L = params.length_scale_m
@@ -73,8 +71,7 @@ def slab_factors(params: MannParams, box: BoxShape, i0: int, i1: int, out, inv_t
 
 def energy_scale(params: MannParams) -> float:
     """The factor a / e = sqrt(ae L^(17/3) / (4 pi)) [m^(7/2) s^-1] of the von Karman amplitude (Mann 1998, Eq. 46), from
-    ``params``' ae and length scale: the only place where ae enters the stencil's coefficients.
-    """
+    ``params``' ae and length scale: the only place where ae enters the stencil's coefficients."""
     return np.sqrt(params.ae * params.length_scale_m ** (17.0 / 3.0) / (4.0 * np.pi))
 
 

@@ -1,8 +1,7 @@
 """Compiled inner loop of the Mann synthesis: the OU step of the noise and u_hat = C n on a batch of k1 slabs.
 
 Complex numbers are float32 (re, im) pairs following the numpy formulation's operations in order (same bits but
-for the sign of some zeros). A row k2 < 0 reads the mirrored row (Z2 is odd in k2, the rest even).
-"""
+for the sign of some zeros). A row k2 < 0 reads the mirrored row (Z2 is odd in k2, the rest even)."""
 
 from __future__ import annotations
 
@@ -75,8 +74,7 @@ def ou_product(n, fresh, rho, sig, coef, j0, k1, k2, k3sq, uhat, evolve):
 
     ``n``, ``fresh``, ``uhat`` (b, 3, nyp, 2 nzp) float32 views of complex64; with ``evolve``, n <- rho n + sig fresh
     in place first. ``coef`` (4, slabs, nyp//2 + 1, nzp): A, Z1, Z2 [m^2/s], P [m/s]; k1, k2 [rad/m], k3sq
-    [rad^2/m^2].
-    """
+    [rad^2/m^2]."""
     nyp, nh = n.shape[2], coef.shape[2]
     fac = np.empty((7, n.shape[3]), np.float32)
     w = np.empty(coef.shape[3], np.float32)

@@ -3,8 +3,7 @@
 Plane x_n is a snapshot of the (xi = U t, y, z) box at time x_n / U; the Fourier noise follows the exact OU
 recursion n_{m+1} = rho n_m + sqrt(1 - rho^2) xi, rho = exp(-dt / tau_e(k)), so every pair of planes has
 <u_hat(k, t) u_hat^*(k, t + dt)> = exp(-|dt| / tau_e) Phi(k) dk (Guo et al. 2023, Eq. 13-14).
-Memory scales with one snapshot.
-"""
+Memory scales with one snapshot."""
 
 from __future__ import annotations
 
@@ -42,8 +41,7 @@ def _padded_nk1(nk1: int) -> int:
 def hermitian_complete(slab: np.ndarray) -> None:
     """Make the spectra of a k1 = 0 or Nyquist slab Hermitian in place, keeping E|.|^2.
 
-    u_hat(k) <- (u_hat(k) + conj u_hat(-k)) / sqrt(2); without it the real inverse FFT keeps half their energy.
-    """
+    u_hat(k) <- (u_hat(k) + conj u_hat(-k)) / sqrt(2); without it the real inverse FFT keeps half their energy."""
     mirror = np.roll(slab[..., ::-1, ::-1], 1, axis=(-2, -1))  # u_hat(-k2, -k3), a copy
     np.conjugate(mirror, out=mirror)
     slab += mirror
@@ -107,8 +105,7 @@ class _Scratch:
 class MannSnapshots:
     """Generator of Mann space-time snapshots on one stencil, cropped to ny x nz.
 
-    Bit-identical for any ``threads``; ``fft_backend`` changes it at float32 round-off.
-    """
+    Bit-identical for any ``threads``; ``fft_backend`` changes it at float32 round-off."""
 
     def __init__(self, stencil: MannStencil, ny: int, nz: int, threads: int | None = None, buffers: int = 1,
                  points: np.ndarray | None = None, fft_backend: str | None = None):  # fmt: skip
@@ -168,8 +165,7 @@ class MannSnapshots:
         """Yield (plane index, component, field (nt, ny, nz) float32) for every plane and component.
 
         ``times_s``: relative times x/U [s]. The array is reused: consume it first. ``addend``: cropped spectra added
-        before the transform along k1 (``seed=None``: the addend alone); ``target``: the array to transform into.
-        """
+        before the transform along k1 (``seed=None``: the addend alone); ``target``: the array to transform into."""
         times = np.asarray(times_s, dtype=float)
         order = [int(i) for i in np.argsort(times, kind="stable")]
         frozen = self.stencil.params.evo_time_s is None
@@ -204,8 +200,7 @@ class MannSnapshots:
     def spectra(self, seed: int, times_s) -> Iterator[tuple[int, np.ndarray]]:
         """Yield (snapshot number, cropped spectra (3, ny nz or len(points), n_slabs) complex64) in time order.
 
-        The first pass of an out-of-core run. The array is reused: consume it first.
-        """
+        The first pass of an out-of-core run. The array is reused: consume it first."""
         times = np.sort(np.asarray(times_s, dtype=float), kind="stable")
         frozen = self.stencil.params.evo_time_s is None
         if not frozen and self.stencil.inv_tau is None and len(times) > 1:

@@ -3,8 +3,7 @@
 With a = sqrt(E(k0)/(4 pi))/k0^2, m = k2 n0 - k1 n1 and C = D A (Mann 1998 Eq. 46-47) u_hat = C n reads
     u_hat_u = P n1 - (A k2) n2 + Z1 m,   u_hat_v = -P n0 + (A k1) n2 + Z2 m,   u_hat_w = W m
 with A = a, P = a k30, Z1 = a zeta1, Z2 = a zeta2, times sqrt(dk1 dk2 dk3 / 2), W = (A^2 q + P^2) / (A k^2).
-Z2 is odd in k2 and the rest even, so only rows k2 >= 0 are stored.
-"""
+Z2 is odd in k2 and the rest even, so only rows k2 >= 0 are stored."""
 
 from __future__ import annotations
 
@@ -33,8 +32,7 @@ class MannStencil:
     """The stencil of ``params`` on ``box``; make it with :func:`build_stencil`.
 
     "scaled": ``coef`` (4, slabs, nyp//2+1, nzp) float32 (A, P, Z1, Z2) for params.ae, plus the axis cells; "unit":
-    float64 ae-free factors, ae = 1. ``inv_tau`` = 1/tau_e [1/s]; ``slab0`` the first slab held.
-    """
+    float64 ae-free factors, ae = 1. ``inv_tau`` = 1/tau_e [1/s]; ``slab0`` the first slab held."""
 
     params: MannParams
     box: BoxShape
@@ -68,8 +66,7 @@ class MannStencil:
     def scaled(self, params: MannParams) -> "MannStencil":
         """The stencil of ``params`` (ae [m^(4/3) s^-2]) in memory, bit for bit build_stencil(params, box).
 
-        ValueError if ``params`` differ in more than ae (scaled: at all).
-        """
+        ValueError if ``params`` differ in more than ae (scaled: at all)."""
         if self.energy == "scaled":
             if params != self.params:
                 raise ValueError("the stencil was built for other parameters")
@@ -193,8 +190,7 @@ def build_stencil(
 
     ``energy`` "scaled" (float32 for params.ae, with the axis cells) or "unit" (ae-free float64);
     ``storage="on_demand"``: coefficients computed when used; ``evolving=False`` skips 1/tau_e; ``slabs`` (first,
-    end) a part of the box; ``cells`` axis_cells computed once; ``factors`` an array to hold a unit stencil.
-    """
+    end) a part of the box; ``cells`` axis_cells computed once; ``factors`` an array to hold a unit stencil."""
     if energy not in ENERGIES or storage not in STORAGES:
         raise ValueError(f"energy must be one of {ENERGIES} and storage one of {STORAGES} (got {energy}, {storage})")
     if storage == "on_demand":

@@ -5,8 +5,7 @@ With Phi_i = 2 C C^T, the covariance of two points of planes p, q lagged by (dn,
     Cov(r) = Re sum_i w_i sum_(j, l) rho_pq,i(j, l) Phi_i(j, l) exp(2 pi i (i dn / nt + j dy / nyp + l dz / nzp)),
 
 w_i = 1 on the k1 = 0 and Nyquist slabs, 2 elsewhere, rho_pq = exp(-|t_p - t_q| / tau_e) (Guo et al. 2023,
-Eq. 13-14); exact for the periodic box, whose crop is the stored field.
-"""
+Eq. 13-14); exact for the periodic box, whose crop is the stored field."""
 
 from __future__ import annotations
 

@@ -2,8 +2,7 @@
 component, plane, frequency chunk) for Kaimal fields; never dependent on call order, chunking or threads.
 
 The values equal numpy.random.Generator(SFC64(SeedSequence(key))).standard_normal(2 n, dtype=float32) viewed as
-complex64, from compiled kernels (turbgen.synthesis.sfc64, ziggurat_normals) tested bit for bit.
-"""
+complex64, from compiled kernels (turbgen.synthesis.sfc64, ziggurat_normals) tested bit for bit."""
 
 from __future__ import annotations
 
@@ -20,8 +19,7 @@ def slab_key(seed: int, snapshot: int, slab: int) -> tuple[int, int, int]:
 
 def complex_normal(seed: int, snapshot: int, slab: int, out: np.ndarray) -> np.ndarray:
     """Fill complex64 ``out`` (C-contiguous, any shape) with the standard complex normals of Mann slab
-    (seed, snapshot, slab) (:func:`keyed_complex_normal`).
-    """
+    (seed, snapshot, slab) (:func:`keyed_complex_normal`)."""
     return keyed_complex_normal(slab_key(seed, snapshot, slab), out)
 
 

@@ -1,8 +1,7 @@
 """numpy's SFC64 generator seeded by ``SeedSequence(key)``, compiled (numba) so a stream is cheap to set up.
 
 :func:`seed_state` gives exactly numpy's state (O'Neill's SeedSequence of the key's 32-bit words, least
-significant first) and :func:`next64` is ``random_raw`` (Doty-Humphrey's Small Fast Chaotic generator, 2013).
-"""
+significant first) and :func:`next64` is ``random_raw`` (Doty-Humphrey's Small Fast Chaotic generator, 2013)."""
 
 from __future__ import annotations
 

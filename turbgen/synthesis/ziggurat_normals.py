@@ -2,8 +2,7 @@
 
 Bit for bit numpy's ``Generator(SFC64(SeedSequence(key))).standard_normal(n, dtype=np.float32)`` (the 256-layer
 Ziggurat of Marsaglia & Tsang 2000, one 32-bit word per draw, low half first; tables from r = 3.6541528853610088,
-v = 4.92867323399e-3).
-"""
+v = 4.92867323399e-3)."""
 
 from __future__ import annotations
 
@@ -50,8 +49,7 @@ _EM_LO, _EM_HI = np.exp(_TM) * (1.0 - 2.0**-30), np.exp(_TM) * (1.0 + 2.0**-30)
 @numba.njit(nogil=True, cache=True, inline="always")
 def _under_density(y, x, i):
     """numpy's wedge test y < exp(t), t = -x^2/2 (float64), mostly without exp: with d = t - t_m, exp(t) = e^t_m e^d
-    and 1 + d <= e^d <= 1 / (1 - d) (d < 1), widened by 2^-30 (far beyond rounding), decide 99.7 % of the y.
-    """
+    and 1 + d <= e^d <= 1 / (1 - d) (d < 1), widened by 2^-30 (far beyond rounding), decide 99.7 % of the y."""
     t = _MINUS_HALF * np.float64(x) * np.float64(x)
     d = t - _TM[i]
     return y < _EM_LO[i] * (1.0 + d) or (y * (1.0 - d) < _EM_HI[i] and y < math.exp(t))

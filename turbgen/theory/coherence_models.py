@@ -2,8 +2,7 @@
 
 All return the *un-squared* (magnitude) coherence, the correlation of the Fourier amplitudes that a
 synthesis uses directly: square it to compare with a magnitude-squared estimate. Separations r, dx in
-m (only |dx| counts), frequencies in Hz (broadcast against the separations), speeds in m/s.
-"""
+m (only |dx| counts), frequencies in Hz (broadcast against the separations), speeds in m/s."""
 
 from __future__ import annotations
 
@@ -28,8 +27,7 @@ def exponential_yz(r_m, f_hz, U_m_s: float, a_yz: float = 12.0, lc_m: float = 34
 def exponential_yz_decay_length_m(f_hz: float, U_m_s: float, a_yz: float = 12.0, lc_m: float = 340.2) -> float:
     """Decay length 1 / (a_yz kappa) [m] of :func:`exponential_yz` at ``f_hz``: coh(r) = exp(-r / decay).
 
-    kappa = sqrt((f/U)^2 + (0.12/Lc)^2) [1/m]; infinite for a_yz = 0 (full coherence).
-    """
+    kappa = sqrt((f/U)^2 + (0.12/Lc)^2) [1/m]; infinite for a_yz = 0 (full coherence)."""
     kappa = np.hypot(f_hz / U_m_s, 0.12 / lc_m)
     return 1.0 / (a_yz * kappa) if a_yz > 0 else np.inf
 
@@ -53,8 +51,7 @@ def simley_pao_parameters(sigma_total_m_s: float, U_m_s: float, length_u_m: floa
     """(a_x [-], b_x [1/m]) of Guo et al. (2023) Eq. 18 from the LES fit of Simley & Pao (2015).
 
     a_x = 8.4 sigma_total / U + 0.05, b_x = 0.25 L_u^-1.24, with sigma_total = sqrt(s1^2 + s2^2 + s3^2)
-    [m/s] and L_u = 8.1 Lambda1 [m].
-    """
+    [m/s] and L_u = 8.1 Lambda1 [m]."""
     return 8.4 * sigma_total_m_s / U_m_s + 0.05, 0.25 * length_u_m**-1.24
 
 
@@ -75,8 +72,7 @@ def kristensen(dx_m, f_hz, U_m_s: float, sigma_total_m_s: float, length_u_m: flo
 
     gamma^2 = exp(-2 alpha G(xi)) (1 - exp(-1/(2 alpha^m xi^2)))^2, xi = f L_u / U,
     alpha = sigma_total dx / (U L_u), m = 2 if alpha <= 1 else 1; dx = 0 or f = 0 give 1.
-    ``sigma_total_m_s`` [m/s] and ``length_u_m`` [m] as :func:`simley_pao_parameters`.
-    """
+    ``sigma_total_m_s`` [m/s] and ``length_u_m`` [m] as :func:`simley_pao_parameters`."""
     dx = np.abs(np.asarray(dx_m, dtype=float))
     f = np.asarray(f_hz, dtype=float)
     xi = f * length_u_m / U_m_s

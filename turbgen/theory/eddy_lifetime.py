@@ -2,8 +2,7 @@
 
 Vectorised over |k|; shear lifetimes are non-dimensional (tau~ = tau dU/dz / Gamma), the evolution
 lifetime in seconds. Synthesis evaluates them on tens of millions of wavenumbers, so it uses the
-cubic-spline tables (:class:`LifetimeTable`) instead.
-"""
+cubic-spline tables (:class:`LifetimeTable`) instead."""
 
 from __future__ import annotations
 
@@ -22,8 +21,7 @@ GUO_A = float(hyp2f1(1.0 / 3.0, 17.0 / 6.0, 4.0 / 3.0, -1.0) ** -0.5)
 def mann_lifetime(kL):
     """Mann lifetime tau~ = (kL)^(-2/3) [2F1(1/3,17/6;4/3;-(kL)^-2)]^(-1/2) [-] (Guo et al. 2023, Eq. 4).
 
-    ``kL`` is |k| L [-] (array_like); inf where kL <= 0.
-    """
+    ``kL`` is |k| L [-] (array_like); inf where kL <= 0."""
     kL = np.asarray(kL, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         out = kL ** (-2.0 / 3.0) / np.sqrt(hyp2f1(1.0 / 3.0, 17.0 / 6.0, 4.0 / 3.0, -(kL ** -2.0)))
@@ -46,8 +44,7 @@ def shear_distortion_beta(k, params: MannParams):
     """Non-dimensional distortion time beta(k) = Gamma tau~(kL) [-] (Guo et al. 2023, after Eq. 4).
 
     tau~ is Eq. 4 or 6 per ``params.lifetime``; ``k`` is |k| [rad/m]. Zero everywhere for Gamma = 0
-    (isotropic: no distortion, also at k = 0), else inf at k = 0.
-    """
+    (isotropic: no distortion, also at k = 0), else inf at k = 0."""
     kL = np.asarray(k, dtype=float) * params.length_scale_m
     tau = mann_lifetime(kL) if params.lifetime == "mann" else guo_lifetime(kL, params.factor1)
     if params.gamma == 0.0:
@@ -59,8 +56,7 @@ def evolution_lifetime_s(k, params: MannParams):
     """Evolution lifetime tau_e(k) = gamma a (kL)^-1 ((kL)^10 + 1)^((1 - 2 factor2/3)/10) [s] (Guo et al. 2023, Eq. 15).
 
     gamma = ``params.evo_time_s``; factor2 = 3.5 gives the paper's exponent -2/15. ``k`` is |k| [rad/m].
-    Infinite for frozen parameters (evo_time_s None) and at k = 0.
-    """
+    Infinite for frozen parameters (evo_time_s None) and at k = 0."""
     kL = np.asarray(k, dtype=float) * params.length_scale_m
     if params.evo_time_s is None:
         return np.full_like(kL, np.inf)
@@ -90,8 +86,7 @@ class LifetimeTable:
     max|d^4 tau~/dx^4| / tau~, largest at the (kL)^10 knee (tests/theory/test_lifetime_table.py); outside
     [TABLE_KL_MIN, TABLE_KL_MAX] the exact function is evaluated. Interval i is [x0 + i h, x0 + (i + 1) h) with
     tau~ = ((c3 d + c2) d + c1) d + c0, d = x - x_i: ``coefficients`` (c3, c2, c1, c0), in the order the
-    compiled stencil kernel and :meth:`from_ksq` evaluate it.
-    """
+    compiled stencil kernel and :meth:`from_ksq` evaluate it."""
 
     def __init__(self, kind: str, parameter: float = 1.0):
         if kind == "mann":
@@ -112,8 +107,7 @@ class LifetimeTable:
     def from_ksq(self, ksq, length_scale_m: float) -> np.ndarray:
         """tau~(|k| L) [-] (tau_e / gamma for "evolution") from ``ksq`` = |k|^2 [rad^2/m^2] (any shape) and L [m].
 
-        float64 shaped like ``ksq``; exact outside the table's range, inf at k = 0.
-        """
+        float64 shaped like ``ksq``; exact outside the table's range, inf at k = 0."""
         ksq = np.asarray(ksq, dtype=float)
         with np.errstate(divide="ignore"):
             x = np.log(ksq * (length_scale_m * length_scale_m))

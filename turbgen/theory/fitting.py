@@ -1,8 +1,7 @@
 """Kaimal / exponential-coherence models fitted to the Mann space-time model (Guo et al. 2023, Sect. 2.4).
 
 The paper does not state its frequency grids; the defaults below are documented in the README. Fit
-frequencies must be at least 3 finite values > 0 and U inside turbgen.theory.ranges (else ParameterError).
-"""
+frequencies must be at least 3 finite values > 0 and U inside turbgen.theory.ranges (else ParameterError)."""
 
 from __future__ import annotations
 

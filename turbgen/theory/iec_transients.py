@@ -3,8 +3,7 @@
 Time t [s] runs from the start of the event: the formulas hold for 0 <= t <= T, the undisturbed value
 before and the final one after. Angles in degrees. sigma1 is the normal-turbulence-model standard
 deviation and Lambda1 the longitudinal scale parameter (:mod:`turbgen.theory.kaimal`); D the rotor
-diameter [m]. EOG: Sect. 6.3.3.3, EDC: 6.3.3.5, ECD: 6.3.3.6, EWS: 6.3.3.7.
-"""
+diameter [m]. EOG: Sect. 6.3.3.3, EDC: 6.3.3.5, ECD: 6.3.3.6, EWS: 6.3.3.7."""
 
 from __future__ import annotations
 
@@ -68,7 +67,6 @@ def etm_sigma1_m_s(v_hub_m_s: float, i_ref: float, v_ref_m_s: float) -> float:
     """Extreme turbulence model sigma1 [m/s] (Sect. 6.3.3.4).
 
     sigma1 = c I_ref (0.072 (V_ave / c + 3) (V_hub / c - 4) + 10), c = 2 m/s, V_ave = 0.2 V_ref, from the
-    hub speed and the class's reference speed [m/s] and reference intensity I_ref [-].
-    """
+    hub speed and the class's reference speed [m/s] and reference intensity I_ref [-]."""
     c = 2.0
     return c * i_ref * (0.072 * (0.2 * v_ref_m_s / c + 3.0) * (v_hub_m_s / c - 4.0) + 10.0)

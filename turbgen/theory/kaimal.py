@@ -32,8 +32,7 @@ def kaimal_spectrum(f_hz, sigma_m_s: float, length_scale_m: float, U_m_s: float)
 def kaimal_band_variance(f_lo_hz, f_hi_hz, sigma_m_s: float, length_scale_m: float, U_m_s: float):
     """Variance ∫ S(f) df [m^2 s^-2] of :func:`kaimal_spectrum` between ``f_lo_hz`` and ``f_hi_hz`` [Hz], closed form.
 
-    The antiderivative of Eq. 11 (Guo et al. 2023) is -sigma^2 (1 + 6 f L/U)^(-2/3); the edges broadcast.
-    """
+    The antiderivative of Eq. 11 (Guo et al. 2023) is -sigma^2 (1 + 6 f L/U)^(-2/3); the edges broadcast."""
     n = length_scale_m / U_m_s
     lo = np.asarray(f_lo_hz, dtype=float)
     hi = np.asarray(f_hi_hz, dtype=float)
@@ -50,8 +49,7 @@ def iec_sigma1_m_s(U_m_s: float, turb_class: str = "A") -> float:
     """NTM standard deviation sigma1 = Iref (0.75 U + 5.6) [m/s] (IEC 61400-1) at hub speed U [m/s].
 
     ``turb_class`` "A+", "A", "B" or "C" sets Iref = 0.18, 0.16, 0.14, 0.12; ParameterError for another
-    class or a speed outside turbgen.theory.ranges.
-    """
+    class or a speed outside turbgen.theory.ranges."""
     check_choice("class", turb_class, tuple(IEC_IREF))
     return IEC_IREF[turb_class] * (0.75 * check_wind_speed(U_m_s) + 5.6)
 

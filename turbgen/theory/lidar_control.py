@@ -2,8 +2,7 @@
 
 The -3 dB cut-off of |G_RL|, the measurement coherence bandwidth k_0.5 (Fu et al. 2023, Eq. 26; the
 smallest detectable eddy is 2 pi / k_0.5, Eq. 27), the delay of the first-order low-pass (Fu et al.
-2023, Eq. 30) and the buffer time (Guo et al. 2023, Sect. 3.5). Frequencies are increasing and > 0 [Hz].
-"""
+2023, Eq. 30) and the buffer time (Guo et al. 2023, Sect. 3.5). Frequencies are increasing and > 0 [Hz]."""
 
 from __future__ import annotations
 
@@ -62,8 +61,7 @@ def cutoff_frequency_hz(f_hz, gain) -> float:
 def coherence_bandwidth_rad_m(f_hz, coh2, U_m_s: float) -> float:
     """MCB k_0.5 = 2 pi f_0.5 / U [rad/m], f_0.5 where gamma^2_RL drops below 0.5 (Fu et al. 2023, Eq. 26).
 
-    ``f_hz`` increasing [Hz], ``coh2`` gamma^2_RL [-] at them, ``U_m_s`` [m/s]; nan if gamma^2 never drops below 0.5.
-    """
+    ``f_hz`` increasing [Hz], ``coh2`` gamma^2_RL [-] at them, ``U_m_s`` [m/s]; nan if gamma^2 never drops below 0.5."""
     return 2.0 * np.pi * _first_crossing(np.asarray(f_hz, float), np.asarray(coh2, float), 0.5) / U_m_s
 
 

@@ -5,8 +5,7 @@ y to the left looking downwind, z up from hub height; (u, v, w) with u downwind 
 of direction d measures v_los = n . (u, v, w), n = (d_x, -d_y, -d_z), *positive towards the lidar*
 (Guo et al. 2023, Eq. 26 with x downwind; Fu et al. 2023, Eq. 10 writes n_1 = -cos phi with x upstream
 and the opposite sign), so a beam looking straight upstream measures +u and the rotor-effective
-estimate, each measurement divided by its n_1 (Guo et al. 2023, Eq. 28), gives u for a uniform u.
-"""
+estimate, each measurement divided by its n_1 (Guo et al. 2023, Eq. 28), gives u for a uniform u."""
 
 from __future__ import annotations
 
@@ -21,8 +20,7 @@ def nacelle_directions(azimuth_deg, elevation_deg) -> np.ndarray:
     """Beam directions d = (cos beta cos phi, cos beta sin phi, sin beta) of a nacelle lidar (Guo et al. 2023, Fig. 3).
 
     ``azimuth_deg`` phi (towards +y) and ``elevation_deg`` beta (up) [deg] per beam, of equal shape (else
-    ParameterError); returns (n_beams, 3) unit vectors (x upstream, y, z).
-    """
+    ParameterError); returns (n_beams, 3) unit vectors (x upstream, y, z)."""
     phi = np.radians(np.atleast_1d(np.asarray(azimuth_deg, dtype=float)))
     beta = np.radians(np.atleast_1d(np.asarray(elevation_deg, dtype=float)))
     if phi.shape != beta.shape:
@@ -37,8 +35,7 @@ def spinner_directions(half_cone_deg: float, scan_deg, tilt_deg: float = 0.0) ->
     e_perp = (-sin tilt, 0, cos tilt): the cone around the shaft, tilted up with it (about y).
 
     ``half_cone_deg`` phi, ``scan_deg`` theta (from +y towards +z) and ``tilt_deg`` in degrees; returns one unit
-    vector (x upstream, y, z) per scan angle.
-    """
+    vector (x upstream, y, z) per scan angle."""
     phi = np.radians(float(half_cone_deg))
     theta = np.radians(np.atleast_1d(np.asarray(scan_deg, dtype=float)))
     tilt = np.radians(float(tilt_deg))

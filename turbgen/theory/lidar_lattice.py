@@ -9,8 +9,7 @@ field, differs from the continuous integral; the two converge as the box grows.
 Each lattice point carries Phi(k) dk2 dk3, except the cells around the k1 axis at small |k1|, where Phi
 varies strongly within a cell: there it carries the cell average over k1 in [k1 - dk1/2, k1 + dk1/2]
 (dk1 = 2 pi / (U T)) times dk2 dk3. The grading (CELL_RADIUS, CELL_K1_FACTOR, CELL_GAUSS, GRADING) is this
-module's own, distinct from the generator's and the validator's, so an error in any of them shows.
-"""
+module's own, distinct from the generator's and the validator's, so an error in any of them shows."""
 
 from __future__ import annotations
 
@@ -80,8 +79,7 @@ def lattice_tensor(box: BoxLattice, k1: float, params: MannParams, U_m_s: float)
     """Phi dk2 dk3 [m^3 s^-2], (3, 3, nyp nzp), on the box's lattice at k1 [rad/m], the axis cells integrated.
 
     At the nodes of :func:`lattice_wavenumbers`, a density in k1 like Phi; ``U_m_s`` [m/s] sets the record's
-    line spacing dk1 = 2 pi / (U T) (module docstring).
-    """
+    line spacing dk1 = 2 pi / (U T) (module docstring)."""
     dk2, dk3 = box.spacings()
     k2, k3 = (k.reshape(box.nyp, box.nzp) for k in lattice_wavenumbers(box))
     phi = sheared_tensor(k1, k2, k3, params) * (dk2 * dk3)  # (3, 3, nyp, nzp)

@@ -1,7 +1,6 @@
 """Line-of-sight spectra of a lidar in a Kaimal field and the lidar turbulence-intensity correction.
 
-Guo et al. 2023, Sect. 3; Schlipf et al. 2020; the geometry of turbgen.theory.lidar_geometry.
-"""
+Guo et al. 2023, Sect. 3; Schlipf et al. 2020; the geometry of turbgen.theory.lidar_geometry."""
 
 from __future__ import annotations
 
@@ -19,8 +18,7 @@ def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: f
     """One-sided spectra S_los,i(f) [m^2 s^-2 Hz^-1], (M, n_f), of each measurement's line-of-sight speed.
 
     IEC Kaimal model ``kparams`` at U [m/s] through the probe volume (Schlipf et al. 2020, Eq. 2, 6; Taylor within
-    it): u is coherent in the yz plane, v and w are spatially white unless ``vw_coherence``.
-    """
+    it): u is coherent in the yz plane, v and w are spatially white unless ``vw_coherence``."""
     f = np.atleast_1d(np.asarray(f_hz, dtype=float))
     U = check_wind_speed(U_m_s)
     pts = meas.sample_points_m()
@@ -48,8 +46,7 @@ def lidar_ti_correction(meas: Measurements, kparams: KaimalParams, U_m_s: float,
     sigma_L^2 = ∫_{1/T}^{f_scan} S_los df (each point seen f_scan times a second, through its probe volume
     and beam angle), sigma_u^2 = ∫_{1/T}^{f_max} S_u df; the lidar TI multiplies each LOS standard
     deviation by its c_TI. ``averaging_s`` T [s], ``f_scan_hz`` > 1/T and ``f_max_hz`` [Hz]; ``n_f``
-    log-spaced frequencies of the sigma_L^2 quadrature; the rest as :func:`kaimal_los_spectra`.
-    """
+    log-spaced frequencies of the sigma_L^2 quadrature; the rest as :func:`kaimal_los_spectra`."""
     from turbgen.theory.kaimal import kaimal_band_variance
 
     T = check_positive("averaging time T (s)", averaging_s)

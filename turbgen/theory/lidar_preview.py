@@ -13,8 +13,7 @@ The (k2, k3) integral is one polar quadrature for all three (so errors cancel in
 ``box`` the lattice of a periodic synthesis box. A single *point* needs a larger ``kappa_max``.
 
 Kaimal (direct product, Eq. 25, 31, 33): S_c(f) coh_yz(r, f) gamma_x(dx, f) between the probe-volume
-samples, the rotor on a square grid. gamma^2_RL (Eq. 34), |G_RL| (Eq. 35).
-"""
+samples, the rotor on a square grid. gamma^2_RL (Eq. 34), |G_RL| (Eq. 35)."""
 
 from __future__ import annotations
 
@@ -182,8 +181,7 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
 def rotor_points(radius_m: float, spacing_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(y, z) [m] of a square grid of spacing ``spacing_m`` (default R/10) inside the disc of radius ``radius_m`` [m].
 
-    Raises ParameterError if either is not a finite number > 0.
-    """
+    Raises ParameterError if either is not a finite number > 0."""
     R = check_positive("rotor radius (m)", radius_m)
     h = R / 10.0 if spacing_m is None else check_positive("rotor grid spacing (m)", spacing_m)
     n = int(np.floor(R / h))

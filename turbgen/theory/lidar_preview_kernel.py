@@ -21,8 +21,7 @@ def node_sums(k1, k2, k3, beams, beam_table, beam_of, nu_step, tables, phase, ga
     their row of ``tables`` (phi_hat(|nu|) of each probe volume on a |nu| grid of step ``nu_step`` [rad/m], linear
     between), ``beam_of`` each measurement's beam; ``phase`` exp(i (k2 y_i + k3 z_i)); ``gate_of`` each
     measurement's gate (sorted by ``gate_x`` [m]), ``scale`` its n_il / (M n_i1); ``inv_tau`` 1/tau_e [1/s];
-    ``rotor`` the rotor's transfer; U [m/s].
-    """
+    ``rotor`` the rotor's transfer; U [m/s]."""
     n_gates, count, n_beams = len(gate_x), len(beam_of), len(beams)
     last = tables.shape[1] - 1
     a = np.zeros((n_gates, 3), np.complex128)

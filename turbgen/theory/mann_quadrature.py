@@ -13,8 +13,7 @@ k2 = kappa cos(theta), k3 = kappa sin(theta), on which beta(|k|) is constant:
 * With a separation d = sqrt(dy^2 + dz^2) > 0: Jacobi-Anger on the angular Fourier coefficients c_n,
   ∫ Phi e^{i kappa d cos(theta - theta_d)} dtheta = 2 pi sum_n c_n i^n J_n(kappa d) e^{i n theta_d},
   exact in angle; radial sub-panels no wider than pi/d, the range cut where the dropped oscillating
-  tail is below SEP_TAIL of F_ii.
-"""
+  tail is below SEP_TAIL of F_ii."""
 
 from __future__ import annotations
 
@@ -52,8 +51,7 @@ def _radial_rule(x_lo: float, x_hi: float, panel_ln: float, n_gauss: int, max_wi
 
     Panels uniform in ln x (width <= panel_ln); those starting below ``split_below`` are split so that no
     sub-panel is wider than ``max_width_over_s``. With ``tail`` a last node at x_hi of weight (3/5) x_hi^2
-    adds ∫_{x_hi}^inf g x dx of g ~ x^(-11/3).
-    """
+    adds ∫_{x_hi}^inf g x dx of g ~ x^(-11/3)."""
     gx, gw = gauss(n_gauss)
     n_pan = int(np.ceil(np.log(x_hi / x_lo) / panel_ln))
     edges = np.log(x_lo) + np.arange(n_pan + 1) * (np.log(x_hi / x_lo) / n_pan)
@@ -78,8 +76,7 @@ def _separated_cut(sd: float) -> float:
     """Radial cut x = kappa/s with a separation d (s d = ``sd``), between 4 and X_HI.
 
     The dropped tail is ~x^(-5/3) of F_ii, reduced by ~(x s d)^(-3/2) by its oscillation when x s d > 1;
-    the cut keeps this estimate below SEP_TAIL.
-    """
+    the cut keeps this estimate below SEP_TAIL."""
     sd = min(max(sd, 1e-300), 1e300)
     x = (SEP_TAIL * sd**1.5) ** (-6.0 / 19.0)
     if x * sd < 1.0:  # no cancellation to count on
@@ -109,8 +106,7 @@ def perpendicular_quadrature(
     weights g; padding nodes weigh 0), G[(i, j)] = ∫_0^{2pi} Phi_ij exp(i kappa d cos(theta - theta_d)) dtheta
     [m^5 s^-2] at the separation (``dy_m``, ``dz_m``) [m]. Without one, the radial panels resolve exp(i kappa
     ``resolve_m``) below ``resolve_kappa_max`` [rad/m]; ``_rule``: internal overrides of the rule's constants;
-    ``weight(pair, k1, kappa, cos theta, sin theta)`` multiplies Phi_ij in the angle integral (no separation).
-    """
+    ``weight(pair, k1, kappa, cos theta, sin theta)`` multiplies Phi_ij in the angle integral (no separation)."""
     k1 = check_k1(k1)
     k1 = np.where(k1 == 0, K1_ZERO / params.length_scale_m, k1)
     dy = check_finite("dy (m)", dy_m)
@@ -187,8 +183,7 @@ def _angle_count(k1L, rule):
 def _jacobi_anger(samples, z, theta_d: float):
     """2 pi sum_n c_n i^n J_n(z) e^{i n theta_d} from equispaced angular samples (last axis).
 
-    c_n are the angular Fourier coefficients; orders with J_n(max z) < ~1e-17 are skipped.
-    """
+    c_n are the angular Fourier coefficients; orders with J_n(max z) < ~1e-17 are skipped."""
     n_theta = samples.shape[-1]
     c = fft.oneshot().fft(samples, axis=-1) / n_theta
     z_max = float(np.max(z))

@@ -3,8 +3,7 @@
 k1 in rad/m, finite (k1 = 0 is the limit k1 -> 0); spectra are TWO-SIDED in k1 [m^3 s^-2]:
 sigma_i^2 = ∫_{-inf}^{inf} F_ii dk1, and the one-sided frequency spectrum is S_i(f) = 2 F_ii(k1) 2 pi / U.
 The (k2, k3) quadrature of Eq. 8 is turbgen.theory.mann_quadrature. Components i, j are 0, 1, 2
-(u, v, w); anything else, or a k1 or separation that is not finite, raises ParameterError.
-"""
+(u, v, w); anything else, or a k1 or separation that is not finite, raises ParameterError."""
 
 from __future__ import annotations
 
@@ -62,8 +61,7 @@ def yz_coherence(k1, params: MannParams, i: int, j: int, dy_m: float, dz_m: floa
     """Magnitude-squared coherence (Eq. 9) and un-squared co-coherence (Eq. 10) of Guo et al. (2023).
 
     ``coh2 = |F_ij|^2 / (F_ii F_jj)``, ``cocoh = Re F_ij / sqrt(F_ii F_jj)``, each (len(k1),) [-]; arguments as
-    :func:`cross_spectrum`.
-    """
+    :func:`cross_spectrum`."""
     k1 = check_k1(k1)
     fij = cross_spectrum(k1, params, i, j, dy_m, dz_m)
     _, w, g = perpendicular_quadrature(k1, params, ((i, i), (j, j)))
@@ -106,8 +104,7 @@ def variances(params: MannParams) -> dict[str, float]:
     less its evolution (frozen and evolving fields share them).
 
     Gauss panels in ln(k1 L) on [1e-6, 1e5] plus the inertial tail (3/2) K F(K) beyond K = 1e5/L; at
-    Gamma = 0 they match (1/3) B(5/2, 1/3) ae L^(2/3) to 1e-6.
-    """
+    Gamma = 0 they match (1/3) B(5/2, 1/3) ae L^(2/3) to 1e-6."""
     uu, vv, ww, uw = _variances_cached(_one_point(params))
     return {"uu": uu, "vv": vv, "ww": ww, "uw": uw}
 
@@ -115,8 +112,7 @@ def variances(params: MannParams) -> dict[str, float]:
 def ae_for_sigma_u(sigma_u_m_s: float, params: MannParams) -> float:
     """alpha*eps^(2/3) [m^(4/3) s^-2] that gives ``sigma_u_m_s`` [m/s] for the shape (L, Gamma, lifetime) of ``params``.
 
-    Spectra are linear in ae, so ae = sigma_u^2 / sigma_u^2(ae = 1). Raises ParameterError for sigma_u <= 0.
-    """
+    Spectra are linear in ae, so ae = sigma_u^2 / sigma_u^2(ae = 1). Raises ParameterError for sigma_u <= 0."""
     sigma = check_positive("sigma_u (m/s)", sigma_u_m_s)
     (unit,) = _variances_cached(_one_point(params.with_ae(1.0)), ("F11",))  # spectra are linear in ae; sigma_u^2 alone
     return sigma * sigma / unit

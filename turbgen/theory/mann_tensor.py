@@ -2,8 +2,7 @@
 
 Wavenumbers in rad/m (broadcast together); the tensor in m^5 s^-2 per unit dk1 dk2 dk3, so
 sigma_i^2 = ∫ Phi_ii dk (Mann 1994, Eq. 13-19). Outputs have the 3x3 component axes first:
-``phi[i, j]`` is shaped like k1. Exact limits are used on k1 = 0 and on the k3 axis; zero at k = 0.
-"""
+``phi[i, j]`` is shaped like k1. Exact limits are used on k1 = 0 and on the k3 axis; zero at k = 0."""
 
 from __future__ import annotations
 
@@ -24,8 +23,7 @@ def _distortion(k1, k2, k3, params: MannParams, beta=None):
     """Undistorted wavenumber and the rapid-distortion coefficients zeta1, zeta2 (Mann 1994, Eq. 15-17).
 
     Returns (k1, k2, k0sq, k30, ksq, zeta1, zeta2, E0); on k1 = 0 zeta1 = -beta, zeta2 = 0 (the linear
-    growth of u under shear), on the k3 axis zeta = 0. ``beta`` may be precomputed (it depends on |k| only).
-    """
+    growth of u under shear), on the k3 axis zeta = 0. ``beta`` may be precomputed (it depends on |k| only)."""
     k1, k2, k3 = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (k1, k2, k3)))
     # |k| < 1e-30 rad/m carries no energy (E ~ k^4) but would underflow k^4: treat it as k = 0
     negligible = k1 * k1 + k2 * k2 + k3 * k3 < 1e-60
@@ -61,8 +59,7 @@ def _distortion(k1, k2, k3, params: MannParams, beta=None):
 def sheared_tensor(k1, k2, k3, params: MannParams, beta=None):
     """Phi_ij(k) [m^5 s^-2], (3, 3, *k1.shape), of the sheared Mann tensor (Mann 1994, Eq. 19).
 
-    ``beta`` optionally gives beta(|k|) [-] precomputed (see shear_distortion_beta), broadcastable to k1.
-    """
+    ``beta`` optionally gives beta(|k|) [-] precomputed (see shear_distortion_beta), broadcastable to k1."""
     k1, k2, k0sq, k30, ksq, z1, z2, e0 = _distortion(k1, k2, k3, params, beta)
     q = k1 * k1 + k2 * k2
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -84,8 +81,7 @@ def tensor_factor(k1, k2, k3, params: MannParams):
 
     C = D(k) A(k0): A the isotropic factor sqrt(E(k0)/(4 pi))/k0^2 [[0, k30, -k2], [-k30, 0, k1],
     [k2, -k1, 0]] and D = [[1, 0, zeta1], [0, 1, zeta2], [0, 0, k0^2/k^2]]. Times sqrt(dk1 dk2 dk3) it
-    gives Fourier amplitudes on a grid.
-    """
+    gives Fourier amplitudes on a grid."""
     k1, k2, k0sq, k30, ksq, z1, z2, e0 = _distortion(k1, k2, k3, params)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         amp = np.where(k0sq > 0, np.sqrt(e0 / (4.0 * np.pi)) / k0sq, 0.0)

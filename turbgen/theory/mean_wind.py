@@ -2,8 +2,7 @@
 
 The profiles TurbSim offers (Jonkman 2009, TurbSim User's Guide, "WindProfileType"), each as the ratio
 U(h) / U(h_ref) so the hub speed is set elsewhere. Veer turns the horizontal velocity by theta(h)
-counter-clockwise seen from above (towards +y, left looking downwind), as TurbSim per height.
-"""
+counter-clockwise seen from above (towards +y, left looking downwind), as TurbSim per height."""
 
 from __future__ import annotations
 
@@ -18,8 +17,7 @@ def power_law_ratio(heights_m, ref_height_m: float, exponent: float) -> np.ndarr
 def log_law_ratio(heights_m, ref_height_m: float, roughness_m: float, displacement_m: float = 0.0) -> np.ndarray:
     """Neutral log-law ratio ln((h - d) / z0) / ln((h_ref - d) / z0) [-] (Jonkman 2009, "LOG" profile).
 
-    Heights and h_ref must exceed d + z0 (roughness length z0 > 0 and displacement d, all in m).
-    """
+    Heights and h_ref must exceed d + z0 (roughness length z0 > 0 and displacement d, all in m)."""
     h = np.asarray(heights_m, dtype=float)
     return np.log((h - displacement_m) / roughness_m) / np.log((ref_height_m - displacement_m) / roughness_m)
 
@@ -27,8 +25,7 @@ def log_law_ratio(heights_m, ref_height_m: float, roughness_m: float, displaceme
 def table_ratio(heights_m, table_heights_m, table_speeds_m_s, ref_height_m: float) -> np.ndarray:
     """Tabulated ratio U(h) / U(h_ref) [-], U linear between the strictly increasing ``table_heights_m`` [m].
 
-    Heights and ``ref_height_m`` lie inside the table; the speed [m/s] at the reference must be > 0.
-    """
+    Heights and ``ref_height_m`` lie inside the table; the speed [m/s] at the reference must be > 0."""
     ref = np.interp(ref_height_m, table_heights_m, table_speeds_m_s)
     return np.interp(np.asarray(heights_m, dtype=float), table_heights_m, table_speeds_m_s) / ref
 
@@ -36,16 +33,14 @@ def table_ratio(heights_m, table_heights_m, table_speeds_m_s, ref_height_m: floa
 def linear_veer_deg(heights_m, ref_height_m: float, rate_deg_per_m: float) -> np.ndarray:
     """Veer angle theta(h) = rate (h - h_ref) [deg] counter-clockwise seen from above.
 
-    ``rate_deg_per_m`` [deg/m] is negative for northern-hemisphere veer (clockwise with height).
-    """
+    ``rate_deg_per_m`` [deg/m] is negative for northern-hemisphere veer (clockwise with height)."""
     return rate_deg_per_m * (np.asarray(heights_m, dtype=float) - ref_height_m)
 
 
 def rotate_horizontal(u, v, angle_deg):
     """(u cos(theta) - v sin(theta), u sin(theta) + v cos(theta)) [m/s]: (u, v) turned by ``angle_deg``.
 
-    u along x (downwind), v along y (left); broadcast against the angle [deg].
-    """
+    u along x (downwind), v along y (left); broadcast against the angle [deg]."""
     a = np.deg2rad(angle_deg)
     c, s = np.cos(a), np.sin(a)
     return u * c - v * s, u * s + v * c

@@ -3,8 +3,7 @@
 Values outside are refused with one line naming the value and the range (``ParameterError``; CLI exit
 code 2) before anything is computed. The ranges are what the models are meant for (atmospheric
 boundary layer, wind-turbine and lidar scales), not what happens to compute. docs/store.md ("Limits
-and ranges") shows the table; tests/cli/test_bad_input.py checks every bound is enforced.
-"""
+and ranges") shows the table; tests/cli/test_bad_input.py checks every bound is enforced."""
 
 from __future__ import annotations
 
@@ -158,8 +157,7 @@ def check_grid(grid) -> None:
     """Check a run's grid (turbgen.grid.Grid) against the table: sizes, spacings, planes.
 
     Plane positions must lie in the x range and increase strictly (stores and readers rely on sorted x;
-    a negative x would be downstream of the rotor). Raises ParameterError otherwise.
-    """
+    a negative x would be downstream of the rotor). Raises ParameterError otherwise."""
     for key in ("nt", "dt_s", "ny", "nz", "dy_m", "dz_m"):
         check(key, getattr(grid, key))
     xs = list(grid.x_m)

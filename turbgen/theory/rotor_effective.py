@@ -27,8 +27,7 @@ def rews_spectrum_mann(k1, params: MannParams, radius_m: float) -> np.ndarray:
 
     S_RR(k1) = ∫ Phi_11(k) 4 J1^2(kappa R) / (kappa R)^2 dk_perp; the radial panels resolve the J1^2
     oscillation up to kappa R = max(Z_SMOOTH, SMOOTH_S s R), s = sqrt(k1^2 + L^-2), and beyond it the
-    filter is its local mean (the dropped oscillating part nearly cancels).
-    """
+    filter is its local mean (the dropped oscillating part nearly cancels)."""
     R = check_positive("radius (m)", radius_m)
     k1 = np.atleast_1d(np.asarray(k1, dtype=float))
     z_smooth = np.maximum(Z_SMOOTH, SMOOTH_S * np.sqrt(k1 * k1 + params.length_scale_m**-2) * R)

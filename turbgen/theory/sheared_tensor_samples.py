@@ -2,8 +2,7 @@
 
 Two compiled loops do ``mann_tensor.sheared_tensor``'s arithmetic point by point in the same order (instead of
 ~40 whole-array passes over ~10^7 nodes); arctan, sqrt and E stay numpy calls between them (numpy's SIMD
-versions round differently from the C library's), so every Phi_ij is bit-identical (tested).
-"""
+versions round differently from the C library's), so every Phi_ij is bit-identical (tested)."""
 
 from __future__ import annotations
 

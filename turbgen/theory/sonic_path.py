@@ -6,8 +6,7 @@ by sinc(k.e p/2): F^p_ij(k1) = ∫∫ Phi_ij sinc(k.e_i p/2) sinc(k.e_j p/2) dk2
 isotropic inertial range, a function of a = k1 p: sinc^2(a/2) for u (exact for any tensor); for v (w alike) the
 k3 integral of Phi_22 = C k^(-11/3) (1 - k2^2/k^2) is closed, leaving T(a) = ∫ g sinc^2(a q/2) dq / ∫ g dq with
 q = k2/k1, g = A^(-4/3) - (8/11) q^2 A^(-7/3), A = 1 + q^2. The isotropic u-w co-spectrum is 0: its T is taken as
-sqrt(T_uu T_ww), within 0.025 of the Mann (1994) tensor's at p/L = 0.005 up to k1 p = 3 (v, w: 1e-3; the tests).
-"""
+sqrt(T_uu T_ww), within 0.025 of the Mann (1994) tensor's at p/L = 0.005 up to k1 p = 3 (v, w: 1e-3; the tests)."""
 
 from functools import lru_cache
 

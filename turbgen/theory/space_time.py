@@ -1,8 +1,7 @@
 """Space-time tensor and longitudinal coherence of Guo et al. (2022), as in Guo et al. (2023, Sect. 2.3.1).
 
 tau_e depends on |k| only, so the (k2, k3) integral of Theta_11 at fixed k1 is the quadrature of
-turbgen.theory.mann_quadrature with the radial factor exp(-dt / tau_e(sqrt(k1^2 + kappa^2))).
-"""
+turbgen.theory.mann_quadrature with the radial factor exp(-dt / tau_e(sqrt(k1^2 + kappa^2)))."""
 
 from __future__ import annotations
 

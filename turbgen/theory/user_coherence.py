@@ -9,8 +9,7 @@ run records in its store: a re-run, the validator and sweeps read the same numbe
 * a table (``f_hz`` (m,), ``r_m`` (n,), ``coh`` (m, n)) is interpolated linearly in f onto the lines.
 
 Between nodes the coherence is linear in r, beyond the last node held (only the circulant embedding's torus sees
-those values; turbgen.synthesis.circulant checks its eigenvalues).
-"""
+those values; turbgen.synthesis.circulant checks its eigenvalues)."""
 
 from __future__ import annotations
 

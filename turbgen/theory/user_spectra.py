@@ -5,8 +5,7 @@ variance of its band [f_k - df/2, f_k + df/2], as it does with the Kaimal spectr
 Eq. 11) integrated in closed form. So a user spectrum becomes the mean one-sided PSD S_k [m^2/s] of each
 band k >= 1: a callable's density averaged over the band by Gauss-Legendre quadrature, or a table of band
 means (a Welch-averaged measurement) interpolated linearly at f_k. A run records :class:`LineSpectrum` in
-its store, so a re-run and the validator need neither the callable nor the file.
-"""
+its store, so a re-run and the validator need neither the callable nor the file."""
 
 from __future__ import annotations
 
@@ -81,8 +80,7 @@ class LineSpectrum:
     def from_callable(cls, S: Callable, nt: int, dt_s: float) -> "LineSpectrum":
         """Band means of the density ``S(f_hz) -> (3, n)`` [m^2/s] over each line's band (Gauss-Legendre, GAUSS_NODES).
 
-        ``S`` is called once, on frequencies > 0 [Hz]; ParameterError unless it returns (3, n) finite values >= 0.
-        """
+        ``S`` is called once, on frequencies > 0 [Hz]; ParameterError unless it returns (3, n) finite values >= 0."""
         lo, hi = (edge[1:] for edge in line_bands(nt, dt_s))
         x, w = np.polynomial.legendre.leggauss(GAUSS_NODES)
         nodes = 0.5 * (lo + hi)[:, None] + 0.5 * (hi - lo)[:, None] * x[None, :]

@@ -1,8 +1,7 @@
 """Validation of a field store against its model: ``turbgen validate STORE`` (docs/validate.md).
 
 ``estimators`` reads the Welch estimates, ``expectations`` predicts them for their ``prediction.SamplingDesign``
-(in a thread of its own while the store is read), ``verdict`` judges, ``report`` renders.
-"""
+(in a thread of its own while the store is read), ``verdict`` judges, ``report`` renders."""
 
 from __future__ import annotations
 
@@ -74,8 +73,7 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
 
     ``rotor_radius_m`` [m] (None: 63 m, or the largest disc a smaller grid holds); ``nperseg`` [samples];
     ``workers`` dask threads (more than one: the theory alongside the estimates). StoreError or ParameterError for an
-    unreadable store, bad input or a conditional-mean store.
-    """
+    unreadable store, bad input or a conditional-mean store."""
     fs = store if isinstance(store, FieldStore) else open_store(store)
     constraints = fs.attrs.get("constraints")
     if constraints is not None and constraints.get("conditional_mean"):
@@ -108,8 +106,7 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
 
 def _theory(fs, planned: Estimates) -> tuple[Theory, Expectations]:
     """The model's predictions for the planned estimates and the expected Welch estimates and covariances the verdict
-    compares them with (``planned`` is only read).
-    """
+    compares them with (``planned`` is only read)."""
     th = theory_for(fs, SamplingDesign.of(planned))
     return th, expectations(planned, th)
 

@@ -1,6 +1,5 @@
 """Statistics of band-pooled Welch estimates: Welch bins grouped into log-spaced bands, and the normal score of each
-band's spectrum (gamma law) and coherence (Goodman's and the Rice phase law) comparison (``verdict`` explains).
-"""
+band's spectrum (gamma law) and coherence (Goodman's and the Rice phase law) comparison (``verdict`` explains)."""
 
 from __future__ import annotations
 
@@ -70,8 +69,7 @@ class Bands:
     """Welch bins 1 .. n/2-1 grouped into log-spaced bands; band statistics from the Welch covariance.
 
     A covariance is a dict lag d -> Cov(P_m, P_{m+d}): exact (``welch_variance``) or, for very long records, the
-    rule of thumb with Hann bin correlations 1, 4/9, 1/36.
-    """
+    rule of thumb with Hann bin correlations 1, 4/9, 1/36."""
 
     def __init__(self, est: Estimates):
         f = est.freqs
@@ -129,8 +127,7 @@ class Bands:
         """Exact-law tests of the band-pooled sample coherency C = sum_g cross / sqrt(sum_g A sum_g B).
 
         E C = rho_band = sum_g rho_m E_m / sum_g E_m, from n_band = (sum_g E_m)^2 / Var(sum_g A) samples: Goodman's
-        and the Rice phase law (``distributions``); near unit coherence (1 - |rho|^2 < NEAR_UNIT) the delta method.
-        """
+        and the Rice phase law (``distributions``); near unit coherence (1 - |rho|^2 < NEAR_UNIT) the delta method."""
         gs = self.groups
         c = np.array([np.sum(cross[g]) for g in gs])
         a = np.array([np.sum(auto_a[g]) for g in gs])

@@ -11,8 +11,7 @@ Write y = beta x + e with |beta|^2 = gamma2, e ~ CN(0, 1 - gamma2). Conditional 
     arg C - arg rho | Q      ~  Rice phase law with kappa = gamma2 Q / (2 (1 - gamma2)).
 
 The unconditional laws average over Q with Gauss-Hermite nodes in the normal score of Q (sampling the extreme
-quantiles that drive 1e-6 tails); tails become normal scores (:func:`normal_score`) for ``verdict``.
-"""
+quantiles that drive 1e-6 tails); tails become normal scores (:func:`normal_score`) for ``verdict``."""
 
 from __future__ import annotations
 
@@ -72,8 +71,7 @@ def coh2_moments(gamma2, n):
         E1 = (1 - gamma2) int_0^1 u^(n-1) / d(u) du,   E1 - E2 = (1 - gamma2)^2 int_0^1 u^(n-1) (1 - u) / d(u)^2 du,
 
     d(u) = 1 - gamma2 + gamma2 u; u = exp(-v / n) makes both smooth Gauss-Laguerre integrals (1e-9 relative for n in
-    [1.5, 1000], gamma2 in [0, 0.999]).
-    """
+    [1.5, 1000], gamma2 in [0, 0.999])."""
     gamma2, n = np.broadcast_arrays(*(np.asarray(a, float) for a in (gamma2, n)))
     c, nn = gamma2[..., None], n[..., None]
     u = np.exp(-_LAG_X / nn)
@@ -107,8 +105,7 @@ def _rice_phase_pdf(phi, kappa):
 
 def _rice_phase_sf(t, kappa):
     """P(|arg(a + e)| >= t), t in [0, pi]: twice the density's integral over [t, pi], in two Gauss-Legendre pieces (the
-    first a few standard deviations 1/sqrt(2 kappa) wide, where the tail mass sits).
-    """
+    first a few standard deviations 1/sqrt(2 kappa) wide, where the tail mass sits)."""
     t = np.asarray(t, float)
     width = np.minimum(np.pi - t, 10.0 / np.sqrt(2.0 * np.maximum(kappa, 1e-12)))
     total = 0.0
@@ -141,8 +138,7 @@ def coh2_z(g, gamma2, n):
 
 def phase_z(dphi, gamma2, n):
     """Signed normal score [-] of a phase deviation ``dphi`` [rad] (wrapped): sign(dphi) z with
-    P(|error| >= |dphi|) = 2 Phi(-z) under (gamma2, n) (:func:`phase_sf`).
-    """
+    P(|error| >= |dphi|) = 2 Phi(-z) under (gamma2, n) (:func:`phase_sf`)."""
     wrapped = (np.asarray(dphi, float) + np.pi) % (2.0 * np.pi) - np.pi
     return np.sign(wrapped) * norm.isf(np.maximum(phase_sf(dphi, gamma2, n), 1e-300) / 2.0)
 
@@ -152,8 +148,7 @@ def cospectrum_tails(x, c, n):
     Gaussian pairs with unit variances and real coherency c (|c| < 1).
 
     X = (a G1 - b G2) / n, G1, G2 ~ Gamma(n, 1), a = (1 + c) / 2, b = (1 - c) / 2 (variance-gamma, exponential tails):
-    a regularised incomplete gamma function given G2, integrated over G2 with Gauss-Hermite nodes.
-    """
+    a regularised incomplete gamma function given G2, integrated over G2 with Gauss-Hermite nodes."""
     x, c, n = np.broadcast_arrays(*(np.asarray(v, float) for v in (x, c, n)))
     a, b = (1.0 + c) / 2.0, (1.0 - c) / 2.0
     nn = n[..., None]

@@ -2,8 +2,7 @@
 
 One task reads one plane over one *span* (whole time chunks) and returns small sums; Welch segments (Hann, 50 %
 overlap, mean removed) straddling two spans are not used. Estimated: point moments, one-point and u-w spectra, yz
-and plane-pair cross-spectra, and the rotor-effective wind speed (Guo et al. 2023, Eq. 23 on the grid).
-"""
+and plane-pair cross-spectra, and the rotor-effective wind speed (Guo et al. 2023, Eq. 23 on the grid)."""
 
 from __future__ import annotations
 
@@ -196,8 +195,7 @@ def _plane_pairs(subs: list[np.ndarray]) -> np.ndarray:
 def welch_series(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, int, int]:
     """One-sided Welch PSD (Welch 1967) of the (nt, m) series ``x`` [m/s], averaged over segments and columns.
 
-    Returns (psd [m^2 s^-2 Hz^-1], segments per column, overlapping segment pairs per column).
-    """
+    Returns (psd [m^2 s^-2 Hz^-1], segments per column, overlapping segment pairs per column)."""
     starts = segment_starts(x.shape[0], setup)
     w = setup.window[:, None]
     acc = np.zeros(setup.nperseg // 2 + 1)
@@ -227,8 +225,7 @@ def plan_estimates(fs, *, rotor_radius_m: float | None = None, nperseg: int | No
                    separations=None) -> Estimates:
     """The sampling design of a store's estimates, before any data is read (sums still empty).
 
-    ParameterError if ``nperseg`` [samples] is outside [MIN_NPERSEG, nt / 2] or the rotor radius does not fit.
-    """
+    ParameterError if ``nperseg`` [samples] is outside [MIN_NPERSEG, nt / 2] or the rotor radius does not fit."""
     g = fs.grid
     setup = WelchSetup(nperseg or default_nperseg(g.nt), g.dt_s)
     if not MIN_NPERSEG <= setup.nperseg <= g.nt // 2:
@@ -255,8 +252,7 @@ def _spans(fs, setup: WelchSetup) -> list[tuple[int, int]]:
 
 def run_estimates(fs, est: Estimates, workers: int | None = None) -> Estimates:
     """Fill the planned estimates ``est`` (:func:`plan_estimates`) in place from the store, one dask task per (span,
-    plane) on ``workers`` threads (default the CPU count); returns ``est``.
-    """
+    plane) on ``workers`` threads (default the CPU count); returns ``est``."""
     g, setup = est.grid, est.setup
     spans = _spans(fs, setup)
     buffers = _ReadBuffers((max(t1 - t0 for t0, t1 in spans), g.ny, g.nz))

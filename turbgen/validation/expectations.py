@@ -10,6 +10,5 @@ from turbgen.validation.prediction import SamplingDesign, Theory
 
 def theory_for(fs, design: SamplingDesign) -> Theory:
     """The predictions of the store ``fs``'s model for the sampling ``design`` (its ``validator_theory``,
-    turbgen.spec.models); ParameterError for a model that is not declared.
-    """
+    turbgen.spec.models); ParameterError for a model that is not declared."""
     return resolve(declaration(fs.model, "store model").validator_theory, "validation")(fs.attrs, design)

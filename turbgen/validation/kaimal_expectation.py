@@ -5,8 +5,7 @@ Line j of the one-sided Kaimal PSD S_i has the two-sided variance L_j = (1/2) in
 user spectrum: (1/2) S_j times the band's width). The u yz line cross-covariance is L_j coh(r, f_j) (Eq. 12
 un-squared, or a user coherence table); v, w white or the same; between planes the store's longitudinal model
 (Eq. 18 / Simley and Pao / Kristensen, un-squared, zero phase) for the components it was applied to. The
-rotor-effective wind speed follows Eq. 25 over the rotor points of the grid.
-"""
+rotor-effective wind speed follows Eq. 25 over the rotor points of the grid."""
 
 from __future__ import annotations
 

@@ -6,8 +6,7 @@ lattice of Phi_ii(k1_j, k2, k3) dk1 dk2 dk3, k1_j = 2 pi f_j / U: the Mann spect
 (band-limited at pi/dy, pi/dz, missing the wavenumbers below the finite box's; Mann 1998). Between planes dx apart
 the space-time tensor Theta = exp(-dx/(U tau_e)) Phi (Guo et al. 2023, Eq. 13) is used; the rotor-effective wind
 speed uses Phi_11 |H_R(k2, k3)|^2 over the grid's rotor points (Eq. 24). The lattice sums are in
-``turbgen.validation.mann_lattice``.
-"""
+``turbgen.validation.mann_lattice``."""
 
 from __future__ import annotations
 
@@ -52,8 +51,7 @@ def _interp_lines(k1_nodes, values, k1_lines, positive: bool):
 def band_limited_spectra(params: MannParams, grid: Grid, k1: np.ndarray, n_theta: int = 24, n_panels: int = 24):
     """Continuous F_ii(k1) = int Phi_ii dk2 dk3 [m^3 s^-2] over |k2| <= pi/dy, |k3| <= pi/dz, two-sided in k1.
 
-    The model the grid can represent without a finite box's sampling, by polar quadrature.
-    """
+    The model the grid can represent without a finite box's sampling, by polar quadrature."""
     kny, knz = np.pi / grid.dy_m, np.pi / grid.dz_m
     tc = np.arctan2(knz, kny)
     gx, gw = np.polynomial.legendre.leggauss(n_theta)
@@ -123,8 +121,7 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
 def _line_sums(lat: MannLattice, design: SamplingDesign, k1_lines: np.ndarray, dxs: dict, h2: np.ndarray,
                U: float) -> dict:  # fmt: skip
     """Theory's per-line lattice sums {auto, yz, long, rews, uw} [m^2 s^-2]: at every record line on small lattices,
-    else at N_LINE_NODES k1 nodes, interpolated (auto spectra log-log, the others as ratios to them).
-    """
+    else at N_LINE_NODES k1 nodes, interpolated (auto spectra log-log, the others as ratios to them)."""
     grid, seps = design.grid, design.separations
     if k1_lines.size * lat.box.nyp * lat.box.nzp <= EXACT_LATTICE_POINTS:
         k1_nodes = k1_lines

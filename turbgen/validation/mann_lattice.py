@@ -3,8 +3,7 @@
 The tensor Phi_ij (Mann 1994, Eq. 13-17; Guo et al. 2023, Eq. 8) is evaluated from turbgen.theory, not from the
 generator's stencil, so the validator checks the generator's factorisation too. The cells around the k1 axis are
 integrated with turbgen.theory.lattice.cell_rule graded and sized differently from turbgen.synthesis.mann_cells,
-so an error in either shows up as a disagreement: keep the parameters distinct.
-"""
+so an error in either shows up as a disagreement: keep the parameters distinct."""
 
 from __future__ import annotations
 
@@ -39,8 +38,7 @@ class MannLattice:
     """Mann tensor and space-time decay on the (k2, k3) lattice of the box, slab by slab in k1.
 
     Each point stands for Phi(k) dk1 dk2 dk3, but near the k1 axis at small k1 the cell integral is computed (Mann
-    1998). ``grid``: the store's (dt [s], dy, dz [m]); ``U`` [m/s]: k1 = 2 pi f / U.
-    """
+    1998). ``grid``: the store's (dt [s], dy, dz [m]); ``U`` [m/s]: k1 = 2 pi f / U."""
 
     def __init__(self, params: MannParams, grid: Grid, box: MannBox, U: float):
         self.params, self.grid, self.box, self.U = params, grid, box, U

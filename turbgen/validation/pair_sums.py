@@ -4,8 +4,7 @@ All sums run over the (2 ny - 1, 2 nz - 1) grid of lags (dy, dz) between two poi
 the number of point pairs of a set at that lag. For Gaussian fields Cov(|X_p|^2, |X_q|^2) = E|X_p|^2 E|X_q|^2
 coh2_pq (Isserlis 1918), so an average over N points has the one-point variance times rho_bar = sum_pq coh2_pq /
 N^2. The sums are kept at pairs of frequency nodes, R(nu_i, nu_j) = sum_pq coh_pq(nu_i) conj(coh_pq(nu_j)) / N^2,
-as the exact Welch covariance needs (``welch_variance``); rho_bar(nu) = R(nu, nu).
-"""
+as the exact Welch covariance needs (``welch_variance``); rho_bar(nu) = R(nu, nu)."""
 
 from __future__ import annotations
 
@@ -41,8 +40,7 @@ def lag_radius(grid: Grid) -> np.ndarray:
 
 class RhoAccumulator:
     """Two-frequency sums R (nn, nn) over all ordered pairs of every averaged point set of ``design`` at ``nn``
-    frequency nodes; the u-w sum ``uw`` (nn,) is one-frequency (|coherency|^2).
-    """
+    frequency nodes; the u-w sum ``uw`` (nn,) is one-frequency (|coherency|^2)."""
 
     def __init__(self, design: SamplingDesign, nn: int):
         grid, seps, iy, iz = design.grid, design.separations, design.long_iy, design.long_iz
@@ -61,8 +59,7 @@ class RhoAccumulator:
 
     def add(self, component: str, coh: np.ndarray, multiplicity: int, same_plane: bool) -> None:
         """Add the coherency ``coh`` (nodes, 2ny-1, 2nz-1) [-] between the points of two planes, for ``multiplicity``
-        ordered plane pairs with this separation.
-        """
+        ordered plane pairs with this separation."""
         half = half_lags(coh)  # the real and imaginary parts once for all the point sets
         self.all[component] += multiplicity * weighted_gram(half, self.counts_all) / self.norm_all
         for s in self.seps:
@@ -77,8 +74,7 @@ class RhoAccumulator:
 
 def half_lags(coh: np.ndarray) -> np.ndarray:
     """The centre and one half of the (point-symmetric) lag grid of ``coh`` (nn, 2 ny - 1, 2 nz - 1), flat from lag 0
-    on: (nn, H) if real, [Re | Im] (nn, 2 H) if complex (:func:`weighted_gram`).
-    """
+    on: (nn, H) if real, [Re | Im] (nn, 2 H) if complex (:func:`weighted_gram`)."""
     flat = coh.reshape(coh.shape[0], -1)
     half = flat[:, (flat.shape[1] - 1) // 2 :]
     return np.concatenate([half.real, half.imag], axis=1) if np.iscomplexobj(half) else np.ascontiguousarray(half)

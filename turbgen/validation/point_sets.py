@@ -44,8 +44,7 @@ def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
 def check_rotor_radius(grid: Grid, radius_m: float | None) -> float:
     """The rotor radius R [m]: 0 < R <= half the smaller grid extent, else ParameterError.
 
-    None: 63 m (NREL 5 MW, Jonkman et al. 2009), or the largest disc a smaller grid holds.
-    """
+    None: 63 m (NREL 5 MW, Jonkman et al. 2009), or the largest disc a smaller grid holds."""
     half = min((grid.ny - 1) * grid.dy_m, (grid.nz - 1) * grid.dz_m) / 2.0
     if radius_m is None:
         nearest = float(np.hypot(grid.y()[:, None], grid.z()[None, :]).min())

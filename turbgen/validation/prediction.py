@@ -4,8 +4,7 @@ A field is described by the two-sided line variances L_j = E|Z_j|^2 [m^2 s^-2] o
 f_j = j / (nt dt) (one-sided variance of a line pair: 2 L_j; turbgen.theory.lattice), and by the line
 cross-covariances E[conj(Z_j^a) Z_j^b] between two points or components. ``Theory.rho_*`` hold, for every averaged
 point set, the two-frequency correlation sums R(nu_i, nu_j) at the nodes ``node_f`` (``pair_sums``), from which
-``welch_variance`` computes the exact covariance of averaged estimates.
-"""
+``welch_variance`` computes the exact covariance of averaged estimates."""
 
 from __future__ import annotations
 

@@ -18,8 +18,7 @@ JSON (``to_dict``; keys are stable, units in the names)::
     metrics           name -> title, quantity, passed, max_abs_z, z_crit, n_tests,
                       worst {label, band_hz, estimate, expected, sigma, z}, tests [same keys ...]
     seconds           estimate, theory (alongside the estimates when run in parallel), verdict, total [s]
-    constraints_note  only for a store conditioned on measurements: what the verdict means then
-"""
+    constraints_note  only for a store conditioned on measurements: what the verdict means then"""
 
 from __future__ import annotations
 
@@ -149,8 +148,7 @@ def _premultiplied(c: Curve, reference) -> tuple[Curve, tuple | None]:
 
 def plots(report, directory) -> list[Path]:
     """One PNG per metric with curves into ``directory`` (created if missing): the estimate with its 95 % band, the
-    expectation on the grid, the continuous model where there is one; the paths.
-    """
+    expectation on the grid, the continuous model where there is one; the paths."""
     from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
 
     out_dir = Path(directory)

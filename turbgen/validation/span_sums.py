@@ -1,6 +1,5 @@
 """The sums one validator task takes over one plane and one span of time (``estimators``), from one float32
-FFT per Welch segment and component.
-"""
+FFT per Welch segment and component."""
 
 from __future__ import annotations
 
@@ -14,8 +13,7 @@ COMPONENTS = ("u", "v", "w")
 def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy: np.ndarray, iz: np.ndarray) -> dict:
     """Moment and Welch sums of one plane over one span of ``data`` (component -> float32 (t, ny, nz) [m/s]).
 
-    Returns ``sum``, ``sum2``, ``rews`` and the unscaled Welch sums ``auto``, ``yz``, ``uw``, ``sub``.
-    """
+    Returns ``sum``, ``sum2``, ``rews`` and the unscaled Welch sums ``auto``, ``yz``, ``uw``, ``sub``."""
     from turbgen.validation.welch_sums import cross_sum, point_moments, spectrum_sums, window_segment
 
     out = {"sum": {}, "sum2": {}}

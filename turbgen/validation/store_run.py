@@ -1,6 +1,5 @@
 """The run a store describes, decoded from its attributes by the run's own spec (``MannRun.from_attrs``,
-``KaimalRun.from_attrs``): the one place the validator reads them.
-"""
+``KaimalRun.from_attrs``): the one place the validator reads them."""
 
 from __future__ import annotations
 

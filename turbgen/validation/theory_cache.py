@@ -1,7 +1,6 @@
 """The model's predictions for a store, kept in this process for the next store that differs only in seed.
 
-The key is every attribute but seed, creation time and measured rms.
-"""
+The key is every attribute but seed, creation time and measured rms."""
 
 from __future__ import annotations
 
@@ -17,8 +16,7 @@ _entries: OrderedDict = OrderedDict()
 
 def theory_key(model: str, attrs: dict, **options) -> str:
     """The cache key (canonical JSON) of a store's predictions: ``model``, ``attrs`` without the seed-only keys (at the
-    top level and in ``parameters``) and the estimates' ``options`` (e.g. rotor_radius_m, nperseg).
-    """
+    top level and in ``parameters``) and the estimates' ``options`` (e.g. rotor_radius_m, nperseg)."""
     kept = {k: v for k, v in attrs.items() if k not in _SEED_ONLY}
     if isinstance(kept.get("parameters"), dict):
         kept["parameters"] = {k: v for k, v in kept["parameters"].items() if k not in _SEED_ONLY}

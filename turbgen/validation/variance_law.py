@@ -8,8 +8,7 @@ so line j contributes sum_k w_j L_j mu_jk E_jk with E_jk ~ Exp(1) independent an
 One moment-matched gamma law has far too light an upper tail when a few coherent modes dominate, so the top modes
 of the lowest N_MODE_LINES lines enter exactly (shape-1 terms) and each line's other modes as one gamma term with
 their exact mean and variance (per-line terms only above MAX_MODE_POINTS points). Tails by the Lugannani-Rice
-saddlepoint formula (Lugannani & Rice 1980; Butler 2007, Eq. 1.11).
-"""
+saddlepoint formula (Lugannani & Rice 1980; Butler 2007, Eq. 1.11)."""
 
 from __future__ import annotations
 
@@ -32,8 +31,7 @@ def top_modes(coherency: np.ndarray) -> np.ndarray:
 
     Subspace iteration from a fixed random block of SUBSPACE vectors (Halko, Martinsson & Tropp 2011, Alg. 4.4) and
     Rayleigh-Ritz: deterministic, O(N^2) per step; the error of the k-th value falls as
-    (mu_{SUBSPACE+1} / mu_k)^(2 POWER_STEPS).
-    """
+    (mu_{SUBSPACE+1} / mu_k)^(2 POWER_STEPS)."""
     n = coherency.shape[0]
     if n <= 2 * SUBSPACE:
         mu = np.linalg.eigvalsh(coherency)[::-1]
@@ -47,8 +45,7 @@ def top_modes(coherency: np.ndarray) -> np.ndarray:
 
 def _orthonormal(y: np.ndarray) -> np.ndarray:
     """Orthonormal columns (N, k) spanning the columns of y (N, k) by Householder QR (a coherency matrix of rank < k
-    makes the Cholesky QR's y^H y singular).
-    """
+    makes the Cholesky QR's y^H y singular)."""
     return np.linalg.qr(y)[0]
 
 
@@ -56,8 +53,7 @@ def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray 
     """Shapes alpha [-] and scales theta [m^2 s^-2] of the gamma terms of the variance estimate (module docstring).
 
     ``line_means`` (nl,) w_j L_j of lines j = 1 .. [m^2 s^-2], ``line_rho`` (nl,) rho_bar(f_j) [-], ``modes`` (J, K
-    + 1) ``top_modes`` of lines 1 .. J [-] (the last column replaces ``line_rho`` there).
-    """
+    + 1) ``top_modes`` of lines 1 .. J [-] (the last column replaces ``line_rho`` there)."""
     m = np.asarray(line_means, float)
     rho = np.asarray(line_rho, float)
     modes = np.zeros((0, 2)) if modes is None or np.size(modes) == 0 else np.asarray(modes, float)[: m.size]
@@ -78,8 +74,7 @@ def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray 
 def gamma_sum_tails(x: float, alpha: np.ndarray, theta: np.ndarray) -> tuple[float, float]:
     """(P(S <= x), P(S >= x)) of S = sum_i Gamma(alpha_i, theta_i), independent (saddlepoint, Lugannani-Rice).
 
-    ``x`` is in the units of ``theta``; at the mean (0/0 in the formula) the moment-matched gamma law is used.
-    """
+    ``x`` is in the units of ``theta``; at the mean (0/0 in the formula) the moment-matched gamma law is used."""
     mean = float(np.sum(alpha * theta))
     var = float(np.sum(alpha * theta**2))
     if not x > 0:

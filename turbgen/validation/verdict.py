@@ -22,8 +22,7 @@ Uncertainties (Gaussian fields):
 Approximations: coherencies linear in log f between the rho nodes (at |f| for negative-frequency lines); rho_bar at
 the bin centre in the u-w bound and the long-record fallback; the equivalent-samples description of averaged
 coherences (conservative in the lowest bins); the gamma law of the spectra's band means; per-line gamma terms
-beyond the top modes for the variances.
-"""
+beyond the top modes for the variances."""
 
 from __future__ import annotations
 
@@ -53,8 +52,7 @@ def _band95(est, sd):
 @dataclass
 class Expectations:
     """The theory side of the verdict: expected Welch estimates and the covariances of the point-averaged estimates for
-    the planned segments (needs the theory and the sampling design, not the data).
-    """
+    the planned segments (needs the theory and the sampling design, not the data)."""
 
     kernel: WelchKernel
     bands: Bands

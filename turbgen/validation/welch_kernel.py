@@ -1,8 +1,7 @@
 """Expected one-sided Welch estimate of a periodic line process, exactly (Hann window, mean removed).
 
 The Welch estimate of a bin is a weighted sum of the record's line (cross-)variances L_j [m^2 s^-2] (lines at
-f_j = j / (nt dt)), so its expectation is exact, also where leakage and mean removal matter (Welch 1967).
-"""
+f_j = j / (nt dt)), so its expectation is exact, also where leakage and mean removal matter (Welch 1967)."""
 
 from __future__ import annotations
 
@@ -21,8 +20,7 @@ class WelchKernel:
     A segment's windowed, mean-removed DFT is X_m = sum_j Z_j G_m(f_j) with G_m(f) = W(m/n - f dt) - e(f) W(m/n), W
     the window's DTFT and e(f) the segment mean of exp(i 2 pi f t); so E[P_m] = scale_m sum_j |G_m(f_j)|^2 L_j over the
     lines +-f_j (the line -f_j carries conj(L_j); G's period 1/dt folds partners near Nyquist back). Lines more than
-    KERNEL_BAND bins away are ignored. ``nt``: samples of the periodic record (lines j = 0 .. nt // 2).
-    """
+    KERNEL_BAND bins away are ignored. ``nt``: samples of the periodic record (lines j = 0 .. nt // 2)."""
 
     def __init__(self, setup: WelchSetup, nt: int):
         n, dt = setup.nperseg, setup.dt_s
@@ -59,8 +57,7 @@ class WelchKernel:
 
     def apply(self, lines: np.ndarray) -> np.ndarray:
         """(n // 2 + 1,) expected one-sided Welch (cross-)spectrum [m^2 s^-2 Hz^-1] of the two-sided line
-        (cross-)variances ``lines`` (nt // 2 + 1,) [m^2 s^-2], real or complex.
-        """
+        (cross-)variances ``lines`` (nt // 2 + 1,) [m^2 s^-2], real or complex."""
         lines = np.asarray(lines)
         vals = lines[self.idx]
         if np.iscomplexobj(lines):
@@ -70,6 +67,5 @@ class WelchKernel:
 
 def segment_gain(m, f_hz, setup: WelchSetup) -> np.ndarray:
     """Complex gains G_m(f) [-] of Welch bins ``m`` for lines at ``f_hz`` [Hz] (any sign; broadcast): bin m of a
-    segment's windowed, mean-removed DFT of exp(i 2 pi f t) (:class:`WelchKernel`).
-    """
+    segment's windowed, mean-removed DFT of exp(i 2 pi f t) (:class:`WelchKernel`)."""
     return WelchKernel._g(np.asarray(m), np.asarray(f_hz, dtype=float), setup.nperseg, setup.dt_s)

@@ -3,8 +3,7 @@ per-frequency sums of a segment's spectra, each one pass over the data.
 
 The complex64 spectra (nf, ny, nz) are read as float32 (nf, ny, 2 nz), re and im interleaved: for rows a, b,
 sum_k a[k] b[k] = Re sum_z conj(x_z) y_z, and with t = -i y, sum_k a[k] t[k] = Im sum_z conj(x_z) y_z, so every
-cross-product is an element-wise product of contiguous rows, summed in float32 over y, then in float64 over z.
-"""
+cross-product is an element-wise product of contiguous rows, summed in float32 over y, then in float64 over z."""
 
 from __future__ import annotations
 
@@ -74,8 +73,7 @@ def spectrum_sums(xv, ny, sep_a, sep_b, total, part_a, part_b, cross):
     """Add one segment's spectral sums of one component (float32 view (nf, ny_x, 2 nz)) into float64 arrays.
 
     Per frequency: ``total`` sum of |X|^2; per separation ``part_a``, ``part_b`` the pairs' |X|^2 sums and ``cross``
-    Re / Im of sum conj(X(y, z)) X(y + a, z + b).
-    """
+    Re / Im of sum conj(X(y, z)) X(y + a, z + b)."""
     nf, _, nz2 = xv.shape
     nz = nz2 // 2
     ns = sep_a.size

@@ -18,8 +18,7 @@ interpolation weight, and R the two-frequency correlation sum of the point set (
 per bin: the lowest bins collect more coherent lines by leakage). Negative-frequency lines use R at |f|.
 
 Lines within LINE_BAND bins of each bin, bin pairs up to MAX_LAG apart; above MAX_WORK products the rule of thumb
-is used (long records, where it is accurate).
-"""
+is used (long records, where it is accurate)."""
 
 from __future__ import annotations
 
@@ -37,8 +36,7 @@ MAX_WORK = 6e7  # bins x lines x (lags x bin offsets) above which the rule-of-th
 
 class WelchCovariance:
     """Covariance (bins m, m' with |m - m'| <= MAX_LAG) of a Welch average over the segment ``starts`` of a record of
-    ``nt`` samples; ``feasible`` False when too expensive (module docstring).
-    """
+    ``nt`` samples; ``feasible`` False when too expensive (module docstring)."""
 
     def __init__(self, setup: WelchSetup, nt: int, starts):
         self.setup, self.nt = setup, nt
@@ -117,8 +115,7 @@ class WelchCovariance:
 
     def cov(self, lines_half: np.ndarray) -> dict | None:
         """Lag d -> (nbins - d,) Cov(P_m, P_{m+d}) [(m^2 s^-2 Hz^-1)^2] of the one-point Welch estimate of the line
-        variances ``lines_half`` (nt // 2 + 1,) [m^2 s^-2]; None when too expensive.
-        """
+        variances ``lines_half`` (nt // 2 + 1,) [m^2 s^-2]; None when too expensive."""
         if not self.feasible:
             return None
         L = self._lines(lines_half)  # (nb, nq)
@@ -141,8 +138,7 @@ class WelchCovariance:
 
 def _log_hat_weights(f: np.ndarray, nodes: np.ndarray) -> np.ndarray:
     """Weights (f.shape + (nn,)) of linear interpolation in log f between ``nodes`` [Hz] (clipped to their range), as
-    ``Theory.rho`` interpolates; they sum to 1.
-    """
+    ``Theory.rho`` interpolates; they sum to 1."""
     x = np.log(np.clip(f, nodes[0], nodes[-1]))
     xn = np.log(nodes)
     k = np.clip(np.searchsorted(xn, x, side="right") - 1, 0, nodes.size - 2)

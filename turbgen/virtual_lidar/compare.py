@@ -3,8 +3,7 @@
 Under the null hypothesis each bin's Welch gamma^2_RL follows Goodman's law of the sample coherence of n
 independent segments (Goodman 1963; Carter, Knapp & Nuttall 1973), n from ``welch_expectation.effective_segments``;
 a bin fails at |z| > z_crit (Bonferroni). Bins are compared only where gamma^2 >= MIN_COH2 and n >= MIN_NEFF, where
-a Monte-Carlo calibrated the law (docs/lidar.md, "Verdict").
-"""
+a Monte-Carlo calibrated the law (docs/lidar.md, "Verdict")."""
 
 from __future__ import annotations
 
@@ -23,8 +22,7 @@ def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None 
     """MetricResult "lidar_coherence" of simulated vs theoretical gamma^2_RL [-] at ``f_hz`` [Hz] (0 .. Nyquist).
 
     Bins 1 .. Nyquist-1 up to ``f_max_hz`` where gamma^2 >= MIN_COH2 and ``n_eff`` >= MIN_NEFF are tested by
-    Goodman's law, or by the delta method where 1 - gamma^2 < NEAR_UNIT or n_eff <= 1.
-    """
+    Goodman's law, or by the delta method where 1 - gamma^2 < NEAR_UNIT or n_eff <= 1."""
     f = np.asarray(f_hz, float)
     sim = np.asarray(coh2_sim, float)
     th = np.clip(np.asarray(coh2_theory, float), 0.0, 1.0)
@@ -64,8 +62,7 @@ def crossing(f_hz, values, level: float) -> float | None:
 
 def preview_numbers(f_hz, coh2, gain, U_m_s: float) -> dict:
     """MCB k_0.5 [rad/m] (gamma^2 = 0.5, Guo et al. 2024 Eq. 26), d_eddy,min = 2 pi / k_0.5 [m] and the
-    -3 dB cut-off of |G_RL| [Hz] of one set of curves; each None where its curve never crosses.
-    """
+    -3 dB cut-off of |G_RL| [Hz] of one set of curves; each None where its curve never crosses."""
     f05 = crossing(f_hz, coh2, 0.5)
     fc = crossing(f_hz, gain, 1.0 / np.sqrt(2.0))
     k05 = None if f05 is None else 2 * np.pi * f05 / U_m_s

@@ -1,8 +1,7 @@
 """The lidar output dataset: a small zarr group, xarray-readable, written atomically.
 
 v_los (scan, beam, gate) [m s-1] positive towards the lidar, time_s (scan, beam) [s], u_LL and u_RR
-(t_arrival), gate_x_m, n1; attributes: the lidar, the source store, the mean wind added, the TIs.
-"""
+(t_arrival), gate_x_m, n1; attributes: the lidar, the source store, the mean wind added, the TIs."""
 
 from __future__ import annotations
 
@@ -26,8 +25,7 @@ def check_output(path, overwrite: bool) -> Path:
     """The absolute output path, checked before any work.
 
     StoreError if it exists without ``overwrite`` or is not a lidar dataset, or its directory is missing or
-    read-only.
-    """
+    read-only."""
     path = Path(path).expanduser().absolute()
     # a path that is not a lidar dataset is never replaced, so `overwrite` is no remedy there: not suggested
     if path.exists() and not (path / "zarr.json").is_file():
@@ -47,8 +45,7 @@ def check_output(path, overwrite: bool) -> Path:
 def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: bool = False) -> Path:
     """Write the lidar dataset atomically at ``path`` (marker last, then publish); return its absolute path.
 
-    ``attrs``: dict, list and tuple values are stored as JSON. StoreError as :func:`check_output`.
-    """
+    ``attrs``: dict, list and tuple values are stored as JSON. StoreError as :func:`check_output`."""
     import xarray as xr
 
     path = check_output(path, overwrite)
@@ -98,8 +95,7 @@ class LidarData:
     """What ``turbgen lidar --out`` wrote, as needed to constrain a field with it.
 
     ``v_los`` (scan, beam, gate) [m/s] (NaN missing), ``time_s`` (scan, beam) [s], ``lidar`` the description's fields,
-    ``U_m_s`` the store's mean wind [m/s], ``mean_wind`` its ``MeanWind.to_attrs`` (None: the power law).
-    """
+    ``U_m_s`` the store's mean wind [m/s], ``mean_wind`` its ``MeanWind.to_attrs`` (None: the power law)."""
 
     v_los: np.ndarray
     time_s: np.ndarray

@@ -2,8 +2,7 @@
 
 Presets (``PRESETS``; docs/lidar.md): ``nacelle-4beam`` (Guo et al. 2023 Table 3), ``spinner-cw`` and
 ``spinner-pulsed`` (Fu et al. 2023, Eq. 12), ``nacelle-1beam``. A user lidar is a TOML or JSON file with the same
-fields (``schemas/lidar.schema.json``).
-"""
+fields (``schemas/lidar.schema.json``)."""
 
 from __future__ import annotations
 
@@ -33,8 +32,7 @@ class LidarDescription:
     ``kind`` "pulsed" (Gaussian probe volume, ``fwhm_m``) or "cw" (Lorentzian from ``wavelength_m``,
     ``beam_radius_m`` and the focus distance); ``mount`` "nacelle" (``azimuth_deg``, ``elevation_deg`` per beam) or
     "spinner" (``half_cone_deg``, ``scan_deg``, ``tilt_deg``); ``ranges_m``: upstream x of the gates. ParameterError
-    for a value outside its range (the checks below) or more than MAX_MEASUREMENTS beams x gates.
-    """
+    for a value outside its range (the checks below) or more than MAX_MEASUREMENTS beams x gates."""
 
     name: str
     kind: str
@@ -101,8 +99,7 @@ class LidarDescription:
     def measurement_points(self) -> Measurements:
         """Every (beam, gate) measurement, beam-major: LOS vector, focus, probe-volume offsets [m] and weights.
 
-        Padded with zero weights to a common length; a spinner's focus is at x / cos(half cone) (Fu et al. 2023).
-        """
+        Padded with zero weights to a common length; a spinner's focus is at x / cos(half cone) (Fu et al. 2023)."""
         d = self.directions()
         rows = []
         for b in range(self.n_beams):

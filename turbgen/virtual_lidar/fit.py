@@ -9,8 +9,7 @@ point's lines times the gates' point correlation: the band-centre variance left 
 top bands' 1.4 x short (benchmarks/fit_lidar.md); L's interval inverts the Wald test with the sd at each L. F is
 tabulated in ln L (step DLN_L) at N_K1 nodes, interpolated cubic.
 The evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (Guo et al. 2022),
-against a model made as the spectra's: on the store's lattice, through the probe's gain (``_with_gates``).
-"""
+against a model made as the spectra's: on the store's lattice, through the probe's gain (``_with_gates``)."""
 
 from __future__ import annotations
 
@@ -163,8 +162,7 @@ class LosModel:
 def lidar_fit_data(ld: LidarData, gamma: float | None = None) -> tuple[FitData, Measurements, float]:
     """(FitData of the dataset's detrended v_los, column per beam x gate at its focus, the Measurements, Gamma).
 
-    ParameterError for a dataset whose beams are not sampled uniformly or a Gamma outside its range.
-    """
+    ParameterError for a dataset whose beams are not sampled uniformly or a Gamma outside its range."""
     meas = LidarDescription(**ld.lidar).measurement_points()
     ns, nb, ng = ld.v_los.shape
     steps = np.diff(ld.time_s, axis=0)

@@ -1,8 +1,7 @@
 """Measured line-of-sight data as a plain CSV file, for ``turbgen mann --constrain FILE.csv``.
 
 The format (header keys lidar, U_m_s, total_wind, profile, mean_history; columns time_s, beam, gate, v_los_m_s)
-is in docs/constrained-fields.md; the result is the same LidarData as a ``turbgen lidar --out`` dataset's.
-"""
+is in docs/constrained-fields.md; the result is the same LidarData as a ``turbgen lidar --out`` dataset's."""
 
 from __future__ import annotations
 
@@ -104,8 +103,7 @@ def read_los_csv(path) -> LidarData:
     """The line-of-sight record of a CSV file as :class:`LidarData`.
 
     ParameterError for a missing or unknown key, a malformed column or value, a beam or gate not the lidar's, gates
-    of a beam not measured together, or incomplete scans.
-    """
+    of a beam not measured together, or incomplete scans."""
     path = Path(path).expanduser()
     where = f"line-of-sight file {path}"
     header, table = _rows(path, where)

@@ -1,8 +1,7 @@
 """Measured line-of-sight data as a netCDF file, for ``turbgen mann --constrain FILE.nc``.
 
 The CSV table (:mod:`turbgen.virtual_lidar.los_csv`) as four 1-D variables, its header keys as global attributes.
-netCDF4/HDF5 files need ``turbgen[netcdf]``.
-"""
+netCDF4/HDF5 files need ``turbgen[netcdf]``."""
 
 from __future__ import annotations
 
@@ -40,8 +39,7 @@ def read_los_netcdf(path) -> LidarData:
     """The line-of-sight record of a netCDF file as :class:`LidarData`.
 
     ParameterError if unreadable (or no engine installed), a variable or attribute is missing, unknown or malformed,
-    or a check of ``los_csv.read_los_csv`` fails.
-    """
+    or a check of ``los_csv.read_los_csv`` fails."""
     import xarray as xr
 
     path = Path(path).expanduser()

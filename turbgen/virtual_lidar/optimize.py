@@ -1,7 +1,6 @@
 """Brute-force search of a spinner lidar's range and half-cone angle (Fu et al. 2023 Sect. 3.5, Eq. 31).
 
-Maximise k_0.5 subject to T_buffer = x/U - T_scan/2 - T_filter - T_pitch >= 0 (T_filter: Eq. 30).
-"""
+Maximise k_0.5 subject to T_buffer = x/U - T_scan/2 - T_filter - T_pitch >= 0 (T_filter: Eq. 30)."""
 
 from __future__ import annotations
 
@@ -22,8 +21,7 @@ PITCH_DELAY_RANGE_S = (0.0, 10.0)  # allowed T_pitch [s]: a pitch actuator's del
 @dataclass(frozen=True)
 class Candidate:
     """One evaluated lidar geometry: range x [m], half-cone phi [deg], k_0.5 [rad/m] (nan if gamma^2 never reaches
-    0.5), -3 dB cut-off of |G_RL| [Hz] and T_buffer [s] (Fu et al. 2023 Eq. 31; nan without a cut-off).
-    """
+    0.5), -3 dB cut-off of |G_RL| [Hz] and T_buffer [s] (Fu et al. 2023 Eq. 31; nan without a cut-off)."""
     range_m: float
     half_cone_deg: float
     k05_rad_m: float
@@ -38,8 +36,7 @@ def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch
              f_delay_hz: float = 0.025, f_hz=SEARCH_F_HZ) -> Candidate:
     """The :class:`Candidate` of one lidar (first range gate x [m]) for the Mann model at U [m/s].
 
-    ParameterError for non-positive frequencies, a beam not looking upstream or a pitch delay out of range.
-    """
+    ParameterError for non-positive frequencies, a beam not looking upstream or a pitch delay out of range."""
     pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)
     S = mann_preview_spectra(f_hz, lidar.measurement_points(), params, U_m_s, lidar.rotor_radius_m)
     k05 = coherence_bandwidth_rad_m(S.f_hz, S.coh2_RL, U_m_s)
@@ -53,8 +50,7 @@ def optimize_spinner(lidar: LidarDescription, params: MannParams, U_m_s: float, 
                      *, pitch_delay_s: float = 0.9, progress=None) -> tuple[list[Candidate], Candidate | None]:
     """Every candidate of ``ranges_m`` x ``half_cones_deg`` (range-major) and the feasible one with the largest k_0.5.
 
-    ParameterError if the lidar is not a spinner, the grid is empty or above MAX_CANDIDATES, or a value is invalid.
-    """
+    ParameterError if the lidar is not a spinner, the grid is empty or above MAX_CANDIDATES, or a value is invalid."""
     pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)  # before any candidate
     if lidar.mount != "spinner":
         raise ParameterError(f"lidar {lidar.name!r}: the range x half-cone search is for spinner lidars")

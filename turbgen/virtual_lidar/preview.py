@@ -1,8 +1,7 @@
 """Preview quality of a lidar for a turbulence model: the theory behind `turbgen theory lidar`.
 
 The lidar-rotor spectra of ``turbgen.theory.lidar_preview`` for a stability preset (Guo et al. 2023 Table 1/2)
-and the design numbers they give.
-"""
+and the design numbers they give."""
 
 from __future__ import annotations
 
@@ -31,8 +30,7 @@ def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset
 
     ``radius_m`` [m] defaults to the lidar's rotor; ``frozen``: no eddy lifetime (Kaimal: a_x = b_x = 0);
     ``**options`` go to the model's preview. ParameterError for an unknown model or preset, U out of range,
-    non-positive frequencies, or a beam not looking upstream.
-    """
+    non-positive frequencies, or a beam not looking upstream."""
     check_choice("model", model, MODELS)
     R = lidar.rotor_radius_m if radius_m is None else radius_m
     preview = resolve(declaration(model).preview, "virtual_lidar")

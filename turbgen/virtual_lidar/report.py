@@ -1,8 +1,7 @@
 """`turbgen lidar STORE`: the virtual lidar's result against the preview theory of the store's own model.
 
 The theory uses the sampling's discrete probe-volume weights, the box's (k2, k3) lattice for Mann stores and the
-expected Welch estimate per bin (``welch_expectation``).
-"""
+expected Welch estimate per bin (``welch_expectation``)."""
 
 from __future__ import annotations
 
@@ -66,8 +65,7 @@ def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int |
     """The expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] of ``description`` on store ``fs`` at ``f_hz`` > 0.
 
     With ``n_samples`` the result's ``n_eff`` holds the equivalent independent segments per bin. ParameterError if
-    the store's model has no lidar theory, or a Kaimal store's options are outside it.
-    """
+    the store's model has no lidar theory, or a Kaimal store's options are outside it."""
     from turbgen.virtual_lidar.welch_expectation import expected_welch, theory_nodes
 
     record_s = fs.grid.nt * fs.grid.dt_s
@@ -79,8 +77,7 @@ def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int |
 class LidarReport:
     """The virtual lidar's result on a store against the theory (:func:`lidar_report`).
 
-    ``f_hz`` [Hz] the bins where the theory is evaluated; ``theory_numbers`` k05_rad_m, d_eddy_min_m, cutoff_hz.
-    """
+    ``f_hz`` [Hz] the bins where the theory is evaluated; ``theory_numbers`` k05_rad_m, d_eddy_min_m, cutoff_hz."""
     store: str
     lidar: object
     run: LidarRun
@@ -98,8 +95,7 @@ class LidarReport:
 
     def to_dict(self) -> dict:
         """The report, JSON-ready: store, lidar, rotor radius [m], mean wind, scans, Welch setup, TIs [-], simulated
-        and theoretical numbers, the curves (simulated bins 1 .. Nyquist-1, ``f_theory`` [Hz]) and the verdict.
-        """
+        and theoretical numbers, the curves (simulated bins 1 .. Nyquist-1, ``f_theory`` [Hz]) and the verdict."""
         r, w = self.run, self.run.welch
         sl = slice(1, -1)
         worst = self.metric.worst
@@ -178,8 +174,7 @@ class LidarReport:
 
     def plots(self, directory) -> list[Path]:
         """Write ``lidar_coherence.png`` in ``directory``: gamma^2_RL and |G_RL| simulated (95 % band of the estimator)
-        against theory, k_0.5 and cut-off marked (the style of Guo et al. 2023 Fig. 4 and Fu et al. 2023 Fig. 6).
-        """
+        against theory, k_0.5 and cut-off marked (the style of Guo et al. 2023 Fig. 4 and Fu et al. 2023 Fig. 6)."""
         from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
 
         directory = Path(directory)
@@ -221,8 +216,7 @@ def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, sh
     """Run the virtual lidar on the open store ``fs`` and compare with theory.
 
     ``lidar``: a description, preset or file (default DEFAULT_LIDAR); the rest as :func:`run_lidar`. ParameterError
-    for an unknown lidar, one that does not fit the store, a signal too short, or a model without lidar theory.
-    """
+    for an unknown lidar, one that does not fit the store, a signal too short, or a model without lidar theory."""
     from turbgen.virtual_lidar.description import LidarDescription, load_lidar
 
     desc = lidar if isinstance(lidar, LidarDescription) else load_lidar(lidar or DEFAULT_LIDAR)

@@ -14,8 +14,7 @@ from turbgen.virtual_lidar.sampling import Measurement
 
 def measurements_of(description) -> list[Measurement]:
     """The description's beam-gates as :class:`Measurement` rows, each on the plane of its gate's range
-    ``ranges_m[gate]`` when the description has ``ranges_m``.
-    """
+    ``ranges_m[gate]`` when the description has ``ranges_m``."""
     m = description.measurement_points()
     ranges = getattr(description, "ranges_m", None)
     return [
@@ -51,8 +50,7 @@ class LidarRun:
 
 def default_nperseg(n: int) -> int:
     """Welch segment length [samples]: the largest power of two <= n / 8 (about 15 half-overlapping segments),
-    at least 16; ParameterError if ``n`` < 64.
-    """
+    at least 16; ParameterError if ``n`` < 64."""
     if n < 64:
         raise ParameterError(f"lidar signal of {n} samples is too short (needs >= 64 scan steps)")
     return max(16, 2 ** int(np.floor(np.log2(n / 8))))
@@ -60,8 +58,7 @@ def default_nperseg(n: int) -> int:
 
 def check_lidar_fits(description, grid) -> None:
     """Refuse a lidar whose gates are not planes of ``grid`` or whose probe volumes leave it, before any field
-    exists (ParameterError, as ``sampling.check_measurements``).
-    """
+    exists (ParameterError, as ``sampling.check_measurements``)."""
     from types import SimpleNamespace
 
     sampling.check_measurements(SimpleNamespace(grid=grid), measurements_of(description))
@@ -73,8 +70,7 @@ def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shea
 
     ``description``: any object with ``measurement_points()`` and ``schedule(duration_s)``; ``rotor_radius_m`` [m]
     (None: the validator's default); mean wind as in :func:`turbgen.virtual_lidar.sampling.sample`. ParameterError
-    for a radius that does not fit the grid, a lidar that does not fit the store, no plane x = 0, or a short signal.
-    """
+    for a radius that does not fit the grid, a lidar that does not fit the store, no plane x = 0, or a short signal."""
     # the estimators here only: placing lidar data (constrained runs) needs this module but not scipy.signal
     from turbgen.virtual_lidar import compare, signals
     from turbgen.validation.estimators import WelchSetup

@@ -2,8 +2,7 @@
 
 A measurement returns v_los = sum_k w_k n . (u, v, w)(p_k), p_k = focus + s_k d (frame: docs/store.md). Each point
 of gate g's probe volume comes from gate g's own plane by Taylor's hypothesis (Guo et al. 2023, Sect. 5.1.2):
-point x' at physical time T is the stored time T + x'/U (linear in t, bilinear in y, z).
-"""
+point x' at physical time T is the stored time T + x'/U (linear in t, bilinear in y, z)."""
 
 from __future__ import annotations
 
@@ -25,8 +24,7 @@ def weighted_sum(values: np.ndarray, weights) -> np.ndarray:
 @dataclass(frozen=True)
 class Measurement:
     """One beam-gate: unit projection ``n`` on (u, v, w), ``focus_m`` (x, y, z) [m], probe ``offsets_m`` [m] along
-    ``direction`` with ``weights`` (>= 0, sum 1), ``plane_x_m`` the gate's plane [m] (default the focus x).
-    """
+    ``direction`` with ``weights`` (>= 0, sum 1), ``plane_x_m`` the gate's plane [m] (default the focus x)."""
 
     beam: int
     gate: int
@@ -47,8 +45,7 @@ class Measurement:
 @dataclass(frozen=True)
 class LidarSamples:
     """The sampled line-of-sight speeds: ``v_los`` float32 (n_scan, n_beam, n_gate) [m/s] positive towards the lidar,
-    ``time_s`` (n_scan, n_beam) [s], the gates' planes and n_1, and the mean wind added (if any).
-    """
+    ``time_s`` (n_scan, n_beam) [s], the gates' planes and n_1, and the mean wind added (if any)."""
 
     v_los: np.ndarray
     time_s: np.ndarray
@@ -76,8 +73,7 @@ def _plane_index(grid, x: float, beam: int, gate: int) -> int:
 def check_measurements(fs, measurements) -> list[int]:
     """Check the measurements against store ``fs``; return each one's plane index.
 
-    ParameterError for bad weights, n not a unit vector, a gate not on a plane, or a point off the yz field.
-    """
+    ParameterError for bad weights, n not a unit vector, a gate not on a plane, or a point off the yz field."""
     g = fs.grid
     y, z = g.y(), g.z()
     planes = []
@@ -143,8 +139,7 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
 
     ``beam_of_sample``: one beam at a time in a repeating order. ``add_mean_wind``: the power law with
     ``shear_exponent`` [-] or ``mean_wind`` (as the exports apply it). ParameterError as :func:`check_measurements`,
-    for a bad schedule, a store shorter than two scans, a shear exponent outside [-1, 1] or a point below ground.
-    """
+    for a bad schedule, a store shorter than two scans, a shear exponent outside [-1, 1] or a point below ground."""
     shear_exponent = check_range("shear exponent", shear_exponent, -1.0, 1.0)  # the exports' range
     g, U = fs.grid, fs.U_m_s
     planes = check_measurements(fs, measurements)
@@ -248,8 +243,7 @@ def _with_mean_wind(mean_wind, fs, box, corners, n, t, p) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class LosOperator:
     """The virtual lidar as a sparse linear map of the fluctuations (no mean wind): v_los[s, j] = sum_r weight[s, j, r]
-    n_j[c] field[c, plane[j], t_index, y_index, z_index], r over probe points x the 8 trilinear cell corners.
-    """
+    n_j[c] field[c, plane[j], t_index, y_index, z_index], r over probe points x the 8 trilinear cell corners."""
 
     plane: np.ndarray  # (J,) plane index of each measurement
     n: np.ndarray  # (J, 3) projection vectors
@@ -329,8 +323,7 @@ def apply_los(op: LosOperator, read) -> np.ndarray:
 def mean_wind_los_series(measurements, times_s: np.ndarray, U_m_s: float, hub_height_m: float, mean_wind) -> np.ndarray:
     """The line-of-sight speed (n_scan, J) [m/s] of ``mean_wind`` alone: what :func:`sample` adds.
 
-    ParameterError for a turning mean wind or a probe point below the ground.
-    """
+    ParameterError for a turning mean wind or a probe point below the ground."""
     if mean_wind.turns:
         raise ParameterError(f"lidar: the mean wind turns ({mean_wind.describe()}), which turns the fluctuations' "
                              "line of sight too; its line-of-sight part alone is not defined")

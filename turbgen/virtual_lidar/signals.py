@@ -2,8 +2,7 @@
 
 u_LL (Guo et al. 2023, Eq. 28 without its stray outer factor; Guo et al. 2024, Eq. 23): the mean of v_los,i / n_i1
 over the latest full scan, shifted by x_i/U (Guo et al. 2023, Sect. 5.1.1); u_RR (Guo et al. 2023, Eq. 23): u
-averaged over the rotor disc at x = 0.
-"""
+averaged over the rotor disc at x = 0."""
 
 from __future__ import annotations
 
@@ -36,8 +35,7 @@ def lidar_estimate(samples, U_m_s: float):
 def rotor_average(fs, radius_m: float, t_s: np.ndarray, chunk: int | None = None) -> tuple[np.ndarray, float]:
     """u_RR [m/s] at stored times ``t_s`` [s] and TI_R [-] (Schlipf et al. 2020, Eq. 3) of the disc at x = 0.
 
-    ParameterError without a plane x = 0.
-    """
+    ParameterError without a plane x = 0."""
     g = fs.grid
     xs = g.x()
     if not np.any(np.abs(xs) < 1e-9):
@@ -58,8 +56,7 @@ def rotor_average(fs, radius_m: float, t_s: np.ndarray, chunk: int | None = None
 
 def lidar_ti(samples, U_m_s: float) -> float:
     """Uncorrected lidar TI [-]: mean over beams and gates of sigma(v_los / n1) / U (Schlipf et al. 2020, Eq. 3,
-    without the c_TI correction of their Eq. 8).
-    """
+    without the c_TI correction of their Eq. 8)."""
     v = samples.v_los.astype(float) / samples.n1[None]
     return float(np.mean(v.std(axis=0)) / U_m_s)
 
@@ -68,8 +65,7 @@ def welch_rl(u_ll: np.ndarray, u_rr: np.ndarray, setup: WelchSetup) -> dict:
     """Welch spectra of u_LL and u_RR [m/s] with the Hann window of ``setup``, segment means removed.
 
     Returns ``f_hz``, ``S_LL``, ``S_RR`` [m^2 s^-2 Hz^-1], ``S_RL``, ``coh2_RL``, ``G_RL`` = |S_RL| / S_LL,
-    ``n_segments``, ``n_eff``, ``setup``. ParameterError for fewer than two segments.
-    """
+    ``n_segments``, ``n_eff``, ``setup``. ParameterError for fewer than two segments."""
     starts = segment_starts(u_ll.size, setup)
     if len(starts) < 2:
         raise ParameterError(f"lidar signal of {u_ll.size} samples is too short for segments of {setup.nperseg}")

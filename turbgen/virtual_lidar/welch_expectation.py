@@ -2,8 +2,7 @@
 
 The record is periodic, so the signals are lines at f_j = j / T of variance S(f_j) / (2 T); bin m weights them by
 |G_m(+-f_j)|^2 of the Hann window with mean removal (Welch 1967). This accounts for the main lobe mixing
-coherences near the lowest bins.
-"""
+coherences near the lowest bins."""
 
 from __future__ import annotations
 
@@ -22,8 +21,7 @@ BAND_BINS = 6  # lines up to this many bins beyond the last bin (Hann leakage po
 
 def theory_nodes(f_bins_hz, setup: WelchSetup, record_s: float) -> tuple[np.ndarray, np.ndarray]:
     """(nodes, lines) [Hz]: where the theory is evaluated (every line below bin 2, then the bin centres), and the
-    record's lines j / T (period ``record_s`` [s]) up to BAND_BINS bins beyond the last of ``f_bins_hz``.
-    """
+    record's lines j / T (period ``record_s`` [s]) up to BAND_BINS bins beyond the last of ``f_bins_hz``."""
     df = 1.0 / (setup.nperseg * setup.dt_s)
     top = int(np.rint(np.max(f_bins_hz) / df)) + BAND_BINS
     lines = np.arange(1, int(math.floor(top * df * record_s + 1e-9)) + 1) / record_s
@@ -36,8 +34,7 @@ def theory_nodes(f_bins_hz, setup: WelchSetup, record_s: float) -> tuple[np.ndar
 
 def weigh_lines(S_RR, S_LL, S_RL, lines_hz, f_bins_hz, setup: WelchSetup, record_s: float) -> tuple:
     """Expected one-sided Welch S_RR, S_LL (real), S_RL (complex) [m^2 s^-2 Hz^-1] at ``f_bins_hz`` of the spectra
-    given at the record's lines ``lines_hz`` = j / T, j >= 1 (the mean is removed from every segment).
-    """
+    given at the record's lines ``lines_hz`` = j / T, j >= 1 (the mean is removed from every segment)."""
     lines = np.asarray(lines_hz, dtype=float)
     m = np.rint(np.asarray(f_bins_hz, dtype=float) * setup.nperseg * setup.dt_s).astype(int)
     w_pos = np.abs(segment_gain(m[:, None], lines[None, :], setup)) ** 2
@@ -52,8 +49,7 @@ def weigh_lines(S_RR, S_LL, S_RL, lines_hz, f_bins_hz, setup: WelchSetup, record
 @dataclass(frozen=True)
 class ExpectedWelch(PreviewSpectra):
     """Expected one-sided Welch S_RR, S_LL, S_RL at the bins (:class:`PreviewSpectra`) and, if asked for, the
-    equivalent independent segments ``n_eff`` [-] of one record's gamma^2_RL per bin (:func:`effective_segments`).
-    """
+    equivalent independent segments ``n_eff`` [-] of one record's gamma^2_RL per bin (:func:`effective_segments`)."""
 
     n_eff: np.ndarray | None = None
 
@@ -62,8 +58,7 @@ def expected_welch(spectra: PreviewSpectra, f_bins_hz, setup: WelchSetup, record
                    n_samples: int | None = None) -> ExpectedWelch:
     """Expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] at ``f_bins_hz`` for a record of ``record_s`` [s].
 
-    Their coh2_RL, G_RL are what the Welch estimates target; ``n_samples`` adds :func:`effective_segments`.
-    """
+    Their coh2_RL, G_RL are what the Welch estimates target; ``n_samples`` adds :func:`effective_segments`."""
     f_bins = np.asarray(f_bins_hz, dtype=float)
     nodes, lines = theory_nodes(f_bins, setup, record_s)
     if nodes.size == lines.size:
@@ -83,8 +78,7 @@ def effective_segments(S_RR, S_LL, lines_hz, f_bins_hz, setup: WelchSetup, n_sam
 
     n = E[P]^2 / Var[P] of each Welch estimate over the actual segment starts (exact for Gaussian lines, Isserlis);
     unlike ``WelchSetup.effective_segments`` (Welch 1967) it holds where the spectrum is steep across the window's
-    lobe. Returns sqrt(n_RR n_LL), the n of Goodman's law; independent records add theirs.
-    """
+    lobe. Returns sqrt(n_RR n_LL), the n of Goodman's law; independent records add theirs."""
     lines = np.asarray(lines_hz, dtype=float)
     m = np.rint(np.asarray(f_bins_hz, dtype=float) * setup.nperseg * setup.dt_s).astype(int)
     starts = np.asarray(list(segment_starts(n_samples, setup)), dtype=float)

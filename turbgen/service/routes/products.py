@@ -37,8 +37,7 @@ def export(rid: str, format: str, http: Request, plane: int | None = None, drop_
     ``table:z,U[,dir];z,U[,dir];...``: the table's rows inline), ``veer`` [deg/m], ``mean_history``
     (``t,U[,dir];...`` inline), ``transient`` (EOG, EDC, ECD, EWS-V, EWS-H) with ``iec_class``, ``rotor_diameter``
     [m], ``transient_start`` [s], ``transient_sign`` (+/-), ``tower``, ``periodic``, ``runner_files`` (the
-    InflowWind input file and HAWC2 block in the .zip; default false).
-    """
+    InflowWind input file and HAWC2 block in the .zip; default false)."""
     if format not in EXPORT_FORMATS:
         raise ParameterError(f"format: {format!r} is not one of {', '.join(EXPORT_FORMATS)}")
     if format == "evo" and runner_files:  # its LidarSim section names the .evo by an absolute path on this server

@@ -4,8 +4,7 @@ Modules: ``data`` (point-series files and stores as detrended fluctuation series
 and their variances), ``table`` (the one-point spectra tabulated in k1 L and Gamma), ``model`` (expected band
 estimates and cross-spectra between points: continuous, or on a store's lattice), ``covariance`` (the joint
 covariance of the band estimates), ``mann`` (the generalised least-squares fit), ``result`` (MannFit); ``kaimal``,
-``kaimal_coherence``, ``kaimal_result``: the IEC Kaimal spectra and u coherence fitted the same way (KaimalFit).
-"""
+``kaimal_coherence``, ``kaimal_result``: the IEC Kaimal spectra and u coherence fitted the same way (KaimalFit)."""
 
 from turbgen.validation.fit.data import FitData, load_fit_data
 from turbgen.validation.fit.mann import fit_mann_data

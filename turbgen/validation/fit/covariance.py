@@ -12,8 +12,7 @@ that PD correlation with the Gram matrix of the per-band square roots, positive 
 The lowest bins collect by leakage lines from ~0.3 to ~2 x their frequency, more coherent across points and segments
 than the band centre says. On a periodic record (a store, or a sensor's record taken as periodic) a bin's Welch
 estimate is a quadratic form in the DFT lines Y_q: ``line_covariance`` (Isserlis over the segment pairs) gives the
-exact covariance of the bands within bins 1 .. EXACT_BINS, ``spliced`` in.
-"""
+exact covariance of the bands within bins 1 .. EXACT_BINS, ``spliced`` in."""
 
 from __future__ import annotations
 
@@ -98,8 +97,7 @@ def line_covariance(cross: np.ndarray, setup, nt: int, pair_index: np.ndarray, s
 
     ``cross`` (Q, 3, 3, D) are S_q at the lines q = 1 .. Q and the separations of ``pair_index`` (``separations``);
     S_-q = conj S_q (a real record). The same sums, regrouped: A = u Re S + i v Im S over q > 0 (real arithmetic),
-    bins m <= n (symmetric), T mod nt (the phase's period), the counts weighing a Gram of the S^ik per bin pair.
-    """
+    bins m <= n (symmetric), T mod nt (the phase's period), the counts weighing a Gram of the S^ik per bin pair."""
     nq, (m, n) = cross.shape[0], np.triu_indices(EXACT_BINS)
     q = np.concatenate([np.arange(1, nq + 1), -np.arange(1, nq + 1)])  # the lines q, then -q
     c = segment_gain(np.arange(1, EXACT_BINS + 1)[:, None], q / (nt * setup.dt_s), setup)  # (M, 2Q)

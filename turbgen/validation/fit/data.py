@@ -3,8 +3,7 @@
 A store is read at a sub-lattice of at most STORE_POINTS_PER_AXIS^2 points per plane (unbiased Welch averages; the
 fit's variances are those of the same points), its periodic records as they are; a sensor's series is detrended
 (its least-squares line through the finite values removed), a trend larger than its standard deviation said in the
-notes (the record may not be stationary). Missing values (NaN): the Welch estimates skip the segments holding them.
-"""
+notes (the record may not be stationary). Missing values (NaN): the Welch estimates skip the segments holding them."""
 
 from __future__ import annotations
 
@@ -90,8 +89,7 @@ class FitData:
 def detrended(x: np.ndarray, where) -> tuple[np.ndarray, list]:
     """The columns of ``x`` (nt, P) [m/s] minus their least-squares lines through their finite values, and a note
     for every column whose line rises over the record by more than the standard deviation about it (``where(k)``
-    names column k).
-    """
+    names column k)."""
     ok = np.isfinite(x)
     w = ok.astype(float)
     t = np.arange(x.shape[0], dtype=float)[:, None]

@@ -8,8 +8,7 @@ L^2 / gamma). With X_i^a the DFT of component i at point a in one bin and segmen
 points b; and Cov(Re X_i^a conj X_j^c, Re X_k^b conj X_l^d) = Re(S_il^ad S_kj^bc + S_ik^ab S_lj^dc) / 2 (Isserlis
 1918). With the model's coherencies at each band's centre (``model.BandModel.coherency``, the decay between planes at
 gamma included; Guo et al. 2023, Eq. 13) this gives their correlation per band (the Welch factors cancel); bands are
-joined by ``band_corr`` as the fit's own covariances are, and scaled by both estimates' standard deviations.
-"""
+joined by ``band_corr`` as the fit's own covariances are, and scaled by both estimates' standard deviations."""
 
 from __future__ import annotations
 
@@ -35,8 +34,7 @@ def coherence_spectra_corr(g: np.ndarray, index: np.ndarray, pair_sites: list, s
     """(nbands, npairs, k) correlation of each pair's co-coherence estimate with each spectrum's (module docstring).
 
     ``pair_sites``: per pair of x values the (P,) site indices at x_i and at x_j of its points; ``sets``: spectrum ->
-    site indices of its points (``covariance.point_sets``); ``index``: pair index into the separations of ``g``.
-    """
+    site indices of its points (``covariance.point_sets``); ``index``: pair index into the separations of ``g``."""
     uu = (0, 0)
     out = np.empty((g.shape[0], len(pair_sites), len(used)))
     for m, (a, c) in enumerate(pair_sites):

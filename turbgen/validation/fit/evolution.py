@@ -21,8 +21,7 @@ gamma moves < MOVE_TOL. 95 % interval: chi^2 <= min + 3.84 with ae, L, Gamma hel
 in quadrature by 1.96 x the one-point fit's share (delta method): Var adds s^T Sigma s + 2 s^T G C a, s = d ln gamma
 / d (ln ae, ln L, Gamma) (secant over one sd), Sigma and G the one-point fit's covariance and gain, a = d ln gamma /
 d r, C the covariance of co-coherences and band spectra (``evo_cross``). An interval reaching the top of the range
-does not exclude the frozen field (gamma -> inf): gamma is then not identified, and the result says so.
-"""
+does not exclude the frozen field (gamma -> inf): gamma is then not identified, and the result says so."""
 
 from __future__ import annotations
 

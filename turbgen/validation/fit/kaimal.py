@@ -12,8 +12,7 @@ from the model's coherency between the points: u's exp(-a r sqrt((f/U)^2 + (0.12
 un-squared; r the y-z distance) at the fitted a, Lc; v and w white for a store made so (IEC, TurbSim IECKAI), else
 u's (for sensors an assumption: IEC does not model it). The components are independent in the model, so each
 component's (ln sigma, ln L) is fitted alone by iteratively re-weighted generalised least squares (``gls``, as the
-Mann fit); 95 % intervals are x +- 1.96 sd of (J^T W J)^-1, exponentiated. a and Lc: ``kaimal_coherence``.
-"""
+Mann fit); 95 % intervals are x +- 1.96 sd of (J^T W J)^-1, exponentiated. a and Lc: ``kaimal_coherence``."""
 
 from __future__ import annotations
 

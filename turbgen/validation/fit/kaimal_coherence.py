@@ -12,8 +12,7 @@ pair-mean of Z's symmetric matrices, R the points' coherencies, c the one-point 
 gives (1 - rho^2)^2 c / 2, the first-order variance of the co-coherence over 1/c averages (Bendat & Piersol 2010,
 Sect. 9.2.3, give 2 rho^2 (1 - rho^2)^2 / n_d for its square); the bias to the same order, rho var / (2 (1 - rho^2)),
 is subtracted. Bands covary through the bins (``covariance.joined``). (ln a, ln Lc) by ``kaimal.gls``; a's interval
-from its covariance, Lc's from the chi^2 profile (``_lc_profile``).
-"""
+from its covariance, Lc's from the chi^2 profile (``_lc_profile``)."""
 
 from __future__ import annotations
 
@@ -116,8 +115,7 @@ class _Problem:
 def fit_coherence(data, bands, model, lines) -> CoherenceFit | str:
     """a and Lc fitted to the u co-coherence of ``data`` (module docstring), or one line saying why not.
 
-    ``bands``, ``model``: the Welch bands and ``kaimal.KaimalBands`` of the one-point fit; ``lines``: its u lines.
-    """
+    ``bands``, ``model``: the Welch bands and ``kaimal.KaimalBands`` of the one-point fit; ``lines``: its u lines."""
     if "u" not in data.series:
         return "a_yz, lc_m: not identified (the data hold no u)"
     classes = distance_classes(np.asarray(data.sites_m, float)[np.asarray(data.columns["u"])])

@@ -7,8 +7,7 @@ lattice / continuous ratio are updated at the fitted parameters until they move 
 within a pass the ratio follows L and Gamma to first order (``BandModel.update_ratio``): held fixed, it left ln ae's
 sd 10 % short (benchmarks/fit.md). cov(x) = (J^T J)^-1; 95 % intervals x +- 1.96 sd, exponentiated for ae and L.
 The eddy lifetime (Guo et al. 2023, Eq. 6-7, or Mann 1994, Eq. 4) is a turbgen store's own, else ``lifetime``.
-Gamma needs two components' spectra; with one it is held at the default and the result says so.
-"""
+Gamma needs two components' spectra; with one it is held at the default and the result says so."""
 
 from __future__ import annotations
 

@@ -12,8 +12,7 @@ heights unknown: the first sensor).
 Intervals: batch means (Flegal & Jones 2010). The record is cut into BLOCKS blocks, each estimate is made again from
 each block's means, and its standard error is the blocks' standard deviation / sqrt(BLOCKS), the interval ±
 t_0.975(BLOCKS - 1) of it. The turbulence of one mast moves the means of all its sensors together (the large eddies
-span the heights), so the scatter of the means about the line would understate the error; the blocks see it.
-"""
+span the heights), so the scatter of the means about the line would understate the error; the blocks see it."""
 
 from __future__ import annotations
 
@@ -111,8 +110,7 @@ def fit_mean_wind(ps, hub_height_m: float | None = None) -> MeanWindFit:
     module docstring).
 
     ``hub_height_m`` [m] places sensors given by z_m (relative to the hub) and picks the sensor of the turbulence
-    intensity; sensors given by height_m need none.
-    """
+    intensity; sensors given by height_m need none."""
     if ps is None or not ps.total_wind:
         return _none("no total-wind sensor data (a field, or fluctuations): no mean wind")
     sensors = [s for s in ps.sensors if "u" in s.series]

@@ -12,8 +12,7 @@ over the columns. The expected Welch estimate of every bin is that of a periodic
 ``coherency`` gives the cross-spectra between points (the covariance of point averages, ``covariance``): on the
 lattice, a 2-D transform of the tensor over (k2, k3) (times the space-time decay between planes, Guo et al. 2023,
 Eq. 13); continuous, Eq. 8 of Guo et al. (2023) at each separation (frozen: the decay between sensors along x is
-not known, and ignoring it over-states their covariance, which errs towards wider intervals).
-"""
+not known, and ignoring it over-states their covariance, which errs towards wider intervals)."""
 
 from __future__ import annotations
 

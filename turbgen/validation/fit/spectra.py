@@ -11,8 +11,7 @@ half-overlapping segments (``WelchSetup.bin_rho2``), q = (K - 1) / K: ``var_fact
 many-bin bands 2.6 % short at K = 22). The joint covariance of the four spectra averaged over the points
 (``covariance``: Isserlis terms from the model's cross-spectra between the points) scales with it:
 ``BandSpectra.covariance``; neighbouring bands covary through the correlation of neighbouring Hann bins:
-``BandSpectra.full_covariance``.
-"""
+``BandSpectra.full_covariance``."""
 
 from __future__ import annotations
 

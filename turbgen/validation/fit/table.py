@@ -3,8 +3,7 @@
 F_ij(k1; ae, L, Gamma) = ae L^(5/3) f_ij(k1 L, Gamma) exactly (the Mann (1994) tensor, Eq. 13-17, depends on k L
 only; Guo et al. 2023, Eq. 8). f_ij is tabulated on X_NODES x GAMMA_NODES and interpolated: cubic spline in log k1 L
 of log f_ii and of rho_13 = f_13 / sqrt(f_11 f_33), Lagrange cubic in Gamma, inertial slopes beyond the largest k1 L.
-One table per eddy lifetime, built by ``python -m turbgen.validation.fit.table`` into TABLE_PATHS (shipped).
-"""
+One table per eddy lifetime, built by ``python -m turbgen.validation.fit.table`` into TABLE_PATHS (shipped)."""
 
 from __future__ import annotations
 
