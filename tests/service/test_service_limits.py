@@ -98,6 +98,34 @@ def test_limits_413_and_429(guarded):
     assert guarded.call("POST", "/runs", _run(4), headers=AUTH)[0] == 202
 
 
+def test_a_run_whose_store_is_published_holds_no_queue_place(tmp_path):
+    """Found by CI (test_limits_413_and_429): a client saw its run complete and submitted the next one, which got
+    429, as the run left the queue only when its worker's result came back, a moment after the store's publication."""
+    from turbgen.service.catalog import Catalog
+    from turbgen.service.jobs import Jobs
+    from turbgen.service.limits import LimitError
+    from turbgen.service.run_ids import build_run, canonical_mapping, run_id
+
+    class Pending:  # a worker that has not answered yet
+        def add_done_callback(self, fn):
+            pass
+
+    class Client:
+        def submit(self, *args, **kwargs):
+            return Pending()
+
+    catalog = Catalog(tmp_path / "root")
+    jobs = Jobs(catalog, Client(), max_queue=1)
+    runs = [build_run({"model": "mann", "seed": s, "U_m_s": 10.0, "grid": dict(TINY_GRID)}) for s in (1, 2)]
+    rids = [run_id(model, canonical_mapping(run, c)) for model, run, c in runs]
+    assert jobs.submit(rids[0], *runs[0][:2]) == "queued"
+    with pytest.raises(LimitError) as err:
+        jobs.submit(rids[1], *runs[1][:2])
+    assert err.value.status == 429 and "1 runs are queued or running" in str(err.value)
+    turbgen.mann(nt=16, ny=4, nz=4, planes=[0], pad_yz=1, out=catalog.store_path(rids[0]))  # the worker published
+    assert jobs.submit(rids[1], *runs[1][:2]) == "queued" and set(jobs.active) == set(rids)
+
+
 _SERVER_FILE = Path(turbgen.__file__).parent / "schemas" / "lidar.schema.json"  # exists on the server
 
 

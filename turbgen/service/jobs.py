@@ -73,8 +73,10 @@ class Jobs:
                 return "joined"
             if self.catalog.is_complete(rid):
                 return "complete"
-            if len(self.active) >= self.max_queue:
-                raise LimitError(429, f"{len(self.active)} runs are queued or running (the server's --max-queue)",
+            # a run whose store is published holds no place while its worker's result comes back (the client
+            # already sees it complete and may submit the next)
+            if self.busy() >= self.max_queue:
+                raise LimitError(429, f"{self.busy()} runs are queued or running (the server's --max-queue)",
                                  {"Retry-After": str(RETRY_AFTER_S)})  # fmt: skip
             try:
                 self.catalog.record(rid, model, canonical_mapping(run, constraints), preset)
@@ -114,6 +116,10 @@ class Jobs:
             with self.lock:
                 if self.active.get(rid) is fut:
                     del self.active[rid]
+
+    def busy(self) -> int:
+        """The active runs whose store is not published yet: the queue places taken (call with the lock held)."""
+        return sum(not self.catalog.is_complete(r) for r in self.active)
 
     def is_active(self, rid: str) -> bool:
         """True while run ``rid`` is queued or running here."""

@@ -51,7 +51,7 @@ async def sweeps(request: Request, state: ServiceState = Depends(get_state)):
         else:
             check_memory(pr.model, pr.run, state.settings.memory_budget_bytes)
     with state.jobs.lock:
-        free = state.jobs.max_queue - len(state.jobs.active)
+        free = state.jobs.max_queue - state.jobs.busy()
     if len(new) > free:
         raise LimitError(429, f"the sweep has {len(new)} runs to compute, the queue has room for {free}",
                          {"Retry-After": str(RETRY_AFTER_S)})  # fmt: skip
