@@ -75,6 +75,7 @@ BAD = {
     "no column": ("# sensor s2 = x_m=0, y_m=0, z_m=1\n" + GOOD, "sensor 's2' has no column"),
     "position": (GOOD.replace(", z_m=0", ""), "sensor 's1' needs x_m, y_m and one of z_m, height_m"),
     "times": (GOOD.replace("0.5,", "0,"), "time_s must be finite and strictly increasing"),
+    "flag": ("# total_wind = yes\n" + GOOD, "total_wind = 'yes' must be true or false"),
 }
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 from turbgen.errors import ParameterError
 from turbgen.input_files import CONSTRAINTS, LINE_OF_SIGHT, check_input, read_input_text
 
-FILE_KEYS = {"name": str, "total_wind": lambda v: v.strip().lower() in ("true", "1", "yes"), "noise_m_s": float}
+FILE_KEYS = {"name": str, "total_wind": bool, "noise_m_s": float}
 MEAN_WIND_KEYS = {"profile": str, "veer_deg_per_m": float, "mean_history": str}
 SENSOR_KEYS = ("x_m", "y_m", "z_m", "height_m", "path_m")
 COMPONENT_COLUMNS = ("u_m_s", "v_m_s", "w_m_s")
@@ -60,7 +60,11 @@ def _header(lines: list[str], where: str) -> tuple[dict, dict]:
             sensors[name] = {"name": name, **{k: _number(v, f"{where}, sensor {name} {k}") for k, v in spec.items()}}
         elif key in FILE_KEYS or key in MEAN_WIND_KEYS:
             keys = FILE_KEYS if key in FILE_KEYS else MEAN_WIND_KEYS
-            parsed = _number(value, f"{where}, {key}") if keys[key] is float else keys[key](value.strip())
+            parsed = _number(value, f"{where}, {key}") if keys[key] is float else value.strip()
+            if keys[key] is bool:
+                if parsed.lower() not in ("true", "false"):
+                    raise ParameterError(f"{where}: {key} = {parsed!r} must be true or false")
+                parsed = parsed.lower() == "true"
             (doc if key in FILE_KEYS else doc.setdefault("mean_wind", {}))[key] = parsed
         else:
             allowed = ", ".join([*FILE_KEYS, *MEAN_WIND_KEYS, "sensor NAME"])
