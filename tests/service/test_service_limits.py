@@ -8,6 +8,7 @@ import os
 from pathlib import Path
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -220,6 +221,10 @@ def test_restart_after_kill_9(tmp_path):
             assert srv.call("GET", f"/runs/{slow}/store/zarr.json")[0] == 404  # no partial store served
         srv.wait(slow, timeout_s=120)
         assert srv.call("GET", f"/runs/{slow}/store/zarr.json")[0] == 200
+        # the status is complete once the store is published; the summary is the server's last write of the run
+        deadline = time.monotonic() + 60
+        while "summary" not in srv.call("GET", f"/runs/{slow}")[2] and time.monotonic() < deadline:
+            time.sleep(0.1)
         leftovers = [p for p in os.listdir(root / "runs" / slow) if p.startswith(".")]
         assert leftovers == []
     finally:

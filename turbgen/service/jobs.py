@@ -105,8 +105,8 @@ class Jobs:
         try:
             try:
                 summary = fut.result()
-                write_json_atomic(self.catalog.run_dir(rid) / "summary.json", summary)
                 (self.catalog.run_dir(rid) / FAILURE_ROOM).unlink(missing_ok=True)  # a complete run needs none
+                write_json_atomic(self.catalog.run_dir(rid) / "summary.json", summary)  # last: the run is done
             except Exception as exc:
                 if not self.catalog.is_complete(rid):
                     self.catalog.mark_failed(rid, one_line(exc))
