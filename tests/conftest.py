@@ -2,16 +2,25 @@
 
 - hypothesis runs derandomized (the same examples on every run and machine);
 - ``TURBGEN_FAST=1`` in the environment skips the tests marked ``slow`` (long statistical tests);
-  CI leaves it unset and runs everything.
+  CI leaves it unset and runs everything;
+- Ctrl-C is handled as in a terminal even when the suite was started with SIGINT ignored (a background job of a
+  shell without job control, ``nohup``): the interruption tests send SIGINT and expect turbgen's reaction, which
+  turbgen rightly withholds where the user's environment ignores the signal.
 """
 
 import os
+import signal
 
 import pytest
 from hypothesis import settings
 
 settings.register_profile("turbgen", derandomize=True, deadline=None)
 settings.load_profile("turbgen")
+
+
+def pytest_configure(config):
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:  # inherited: restore Python's default (KeyboardInterrupt)
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_collection_modifyitems(config, items):
