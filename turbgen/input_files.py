@@ -32,6 +32,7 @@ CONFIG = InputKind("config", _mib(1))  # run, sweep and presets files (TOML/JSON
 LIDAR_FILE = InputKind("lidar file", _mib(1))  # a lidar description (TOML/JSON)
 CONSTRAINTS = InputKind("constraint file", _mib(64))  # measured point series (JSON)
 LINE_OF_SIGHT = InputKind("line-of-sight file", _mib(256))  # a v_los record (CSV or netCDF)
+CSV_FILE = InputKind("CSV file", _mib(256))  # a CSV of either kind, before its header says which
 MEAN_HISTORY = InputKind("mean history", _mib(64))  # hub-height speed and direction over time
 PROFILE_TABLE = InputKind("profile table", _mib(1))  # z, U[, direction] rows
 SPECTRUM = InputKind("spectrum file", _mib(16))  # f_hz, S_u, S_v, S_w rows (a user spectrum)

@@ -62,6 +62,9 @@ def files(tmp_path_factory):
                        ("big_run.toml", CONFIG.max_bytes + 1)):  # fmt: skip
         with open(root / name, "wb") as f:
             f.truncate(size)  # sparse: no disk used
+    with open(root / "big_points.csv", "wb") as f:  # a point-series CSV by its header, too large to read
+        f.write(b"# sensor s = x_m=0, y_m=0, z_m=0\ntime_s,s:u_m_s\n")
+        f.truncate(CONSTRAINTS.max_bytes + 1)
     (root / "deep.json").write_text("[" * 100_000 + "]" * 100_000)
     (root / "deep_points.json").write_text('{"sensors": ' + "[" * 100_000 + "]" * 100_000 + "}")
     (root / "deep.toml").write_text("a = " + "[" * 100_000 + "]" * 100_000 + "\n")
@@ -79,7 +82,10 @@ CASES = [  # (id, args with {d} for the directory, substrings of the single erro
     ("sweep-config-fifo", ["sweep", "--config", "{d}/fifo_sweep.toml"], [FIFO_RULE]),
     ("presets-file-fifo", ["mann", "--presets-file", "{d}/fifo_presets.toml", "--preset", "x"], [FIFO_RULE]),
     ("constrain-fifo-json", ["mann", *SMALL, "--constrain", "{d}/fifo_points.json"], ["constraint file", FIFO_RULE]),
-    ("constrain-fifo-csv", ["mann", *SMALL, "--constrain", "{d}/fifo_los.csv"], ["line-of-sight", FIFO_RULE]),
+    ("constrain-fifo-csv", ["mann", *SMALL, "--constrain", "{d}/fifo_los.csv"], ["CSV file", FIFO_RULE]),
+    ("fit-fifo-csv", ["fit", "mann", "{d}/fifo_los.csv"], ["CSV file", FIFO_RULE]),
+    ("constrain-too-large-point-csv", ["mann", *SMALL, "--constrain", "{d}/big_points.csv"],
+     ["constraint file", "may hold at most 67108864 bytes (64 MiB)"]),
     ("constrain-fifo-nc", ["mann", *SMALL, "--constrain", "{d}/fifo_los.nc"], ["line-of-sight", FIFO_RULE]),
     ("kaimal-constrain-fifo", ["kaimal", *SMALL, "--constrain", "{d}/fifo_points.json"], [FIFO_RULE]),
     ("export-mean-history-fifo", ["export", "{store}", "--format", "bts", "--out", "{d}/o.bts",

@@ -75,8 +75,9 @@ class Jobs:
                 return "complete"
             # a run whose store is published holds no place while its worker's result comes back (the client
             # already sees it complete and may submit the next)
-            if self.busy() >= self.max_queue:
-                raise LimitError(429, f"{self.busy()} runs are queued or running (the server's --max-queue)",
+            busy = self.busy()
+            if busy >= self.max_queue:
+                raise LimitError(429, f"{busy} runs are queued or running (the server's --max-queue)",
                                  {"Retry-After": str(RETRY_AFTER_S)})  # fmt: skip
             try:
                 self.catalog.record(rid, model, canonical_mapping(run, constraints), preset)

@@ -56,7 +56,7 @@ class ConstraintUploads:
         except KeyError:
             pass
         where = f"upload {cid}"
-        info = _summary(_point_series(data, where) if media == "application/json" else _line_of_sight(data, where))
+        info = _summary(_point_series(data, where) if media == "application/json" else _csv(data, where))
         final = self.dir / f"{cid}{SUFFIXES[media]}"
         write_file(final, data)  # the same content under the same name: replacing a concurrent upload is harmless
         return cid, info, True
@@ -64,12 +64,9 @@ class ConstraintUploads:
 
 def describe(path: Path) -> dict:
     """:func:`_summary` of a kept upload."""
-    from turbgen.virtual_lidar.los_csv import read_los_csv
-    from turbgen.spec.constraints import load_point_series
-    from turbgen.spec.point_csv import is_point_csv
+    from turbgen.runs.constrain import load_constraint  # the reader --constrain uses, so the formats cannot drift
 
-    points = path.suffix == ".json" or is_point_csv(path)
-    return _summary(load_point_series(path) if points else read_los_csv(path))
+    return _summary(load_constraint(path))
 
 
 def _summary(data) -> dict:
@@ -100,7 +97,7 @@ def _point_series(data: bytes, where: str):
     return point_series_from_mapping(value, where)
 
 
-def _line_of_sight(data: bytes, where: str):
+def _csv(data: bytes, where: str):
     """The LidarData of a line-of-sight CSV upload, or the PointSeries of a point-series one (its header declares
     sensors); refused when its header names a file."""
     from turbgen.spec.constraints import point_series_from_mapping

@@ -9,7 +9,7 @@ import math
 from pathlib import Path
 
 from turbgen.errors import ParameterError
-from turbgen.input_files import CONSTRAINTS, LINE_OF_SIGHT, check_input, read_input_text
+from turbgen.input_files import CONSTRAINTS, CSV_FILE, check_input, read_input_text
 
 FILE_KEYS = {"name": str, "total_wind": bool, "noise_m_s": float}
 MEAN_WIND_KEYS = {"profile": str, "veer_deg_per_m": float, "mean_history": str}
@@ -22,7 +22,7 @@ def is_point_csv(path) -> bool:
     not a line-of-sight one."""
     if Path(path).suffix.lower() != ".csv":
         return False
-    with open(check_input(path, LINE_OF_SIGHT), "rb") as f:  # a regular file of either kind: its header only
+    with open(check_input(path, CSV_FILE), "rb") as f:  # a regular file of either kind: its header only
         return declares_sensors(f.read(1 << 16).decode("utf-8", "replace").splitlines())
 
 
