@@ -18,6 +18,7 @@ The Python API (the same runs, the same bits as the ``turbgen`` commands; turbge
     info            what ``turbgen info`` shows of a store, a field or an exported file
     fit_mann, fit_kaimal
                     the model's parameters fitted to measured data or a field, with 95 % intervals
+    point_series    measured point series made in memory (what a constraint file holds): to fit, to condition on
     theory          the pure theory functions: spectra, coherences, lidar preview
     errors          ParameterError, StoreError (both TurbgenError)
 
@@ -36,7 +37,8 @@ _OBJECTS = {"mann": "turbgen.api.fields", "kaimal": "turbgen.api.fields", "open_
             "validate": "turbgen.api.products", "export": "turbgen.api.products", "lidar": "turbgen.api.products",
             "info": "turbgen.api.products", "MannParams": "turbgen.theory.params",
             "KaimalParams": "turbgen.theory.params", "Grid": "turbgen.grid", "MannGenerator": "turbgen.api.generator",
-            "KaimalGenerator": "turbgen.api.generator", "fit_mann": "turbgen.api.fit", "fit_kaimal": "turbgen.api.fit"}
+            "KaimalGenerator": "turbgen.api.generator", "fit_mann": "turbgen.api.fit", "fit_kaimal": "turbgen.api.fit",
+            "point_series": "turbgen.spec.constraints"}
 _MODULES = ("theory", "errors", "api")
 __all__ = ["__version__", *_OBJECTS, "theory", "errors"]
 
@@ -47,6 +49,7 @@ if TYPE_CHECKING:
     from turbgen.api.fit import fit_kaimal, fit_mann
     from turbgen.api.products import export, info, lidar, validate
     from turbgen.grid import Grid
+    from turbgen.spec.constraints import point_series
     from turbgen.theory.params import KaimalParams, MannParams
 
 

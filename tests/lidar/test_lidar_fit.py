@@ -30,23 +30,31 @@ LIDAR = ('kind = "pulsed"\nmount = "nacelle"\nranges_m = {gates}\nbeam_rate_hz =
 Z999 = 3.29  # two-sided 99.9 % normal quantile: a calibrated interval misses this by chance once in 1000 seeds
 
 
-def dataset(tmp, gates, nt=2048, seed=1):
-    """A forward beam's dataset at ``gates`` [m] of a Mann space-time field (y = z = 0 a grid point)."""
+def dataset(tmp, gates, nt=2048, seed=1, report=False):
+    """A forward beam's dataset at ``gates`` [m] of a Mann space-time field (y = z = 0 a grid point); with
+    ``report`` (its path, the LidarReport written to it)."""
     (tmp / "lidar.toml").write_text(LIDAR.format(gates=list(gates)))
     turbgen.mann(**TRUTH, seed=seed, out=tmp / "f.zarr", planes=[0.0, *gates], nt=nt, dt=0.5, U=10.0, ny=9, nz=9,
                  dy=6.0, dz=6.0)
-    turbgen.lidar(tmp / "f.zarr", tmp / "lidar.toml", out=tmp / "l.zarr")
-    return tmp / "l.zarr"
+    written = turbgen.lidar(tmp / "f.zarr", tmp / "lidar.toml", out=tmp / "l.zarr")
+    return (tmp / "l.zarr", written) if report else tmp / "l.zarr"
 
 
 @pytest.fixture(scope="module")
-def gates2(tmp_path_factory):
-    return dataset(tmp_path_factory.mktemp("fitlidar"), (50.0, 100.0))
+def recorded2(tmp_path_factory):
+    return dataset(tmp_path_factory.mktemp("fitlidar"), (50.0, 100.0), report=True)
 
 
 @pytest.fixture(scope="module")
-def fit2(gates2):
-    return turbgen.fit_mann(str(gates2), gamma=TRUTH["gamma"])
+def gates2(recorded2):
+    return recorded2[0]
+
+
+@pytest.fixture(scope="module")
+def fit2(recorded2):
+    """The fit of the record in memory (``turbgen.fit_mann(turbgen.lidar(...))``); test_cli_json fits the dataset
+    written of it and finds the same."""
+    return turbgen.fit_mann(recorded2[1], gamma=TRUTH["gamma"])
 
 
 def test_recovers_known_field(fit2):
@@ -169,12 +177,20 @@ def test_bad_input_one_line_exit_2(gates2, tmp_path):
         turbgen.fit_mann("examples/mast-fit.json", gamma=3.0)
 
 
-def test_cli_json(gates2):
+def test_cli_json(recorded2, fit2):
+    """`turbgen fit mann LIDAR --json` of the dataset: the fit of the record in memory it was written from (the
+    sampled store's box model included); a report is a lidar record to the API's refusals too."""
+    gates2, report = recorded2
     r = CliRunner().invoke(cli, ["fit", "mann", str(gates2), "--gamma", "3.2", "--json"])
     assert r.exit_code == 0, r.output
     out = json.loads(r.output)
     assert out["gamma"] == {"value": 3.2, "ci95": None, "held": True} and out["spectra"] == ["los"]
     assert out["evo_time_s"]["ci95"][1] is not None and out["model"] == "grid"
+    memory = json.loads(json.dumps(fit2.to_dict()))
+    assert (out.pop("source"), memory.pop("source")) == (str(gates2), str(gates2.parent / "f.zarr"))
+    assert out == memory
+    with pytest.raises(ParameterError, match=r"^DATA = '.*f\.zarr' is a lidar record: it holds its own U"):
+        turbgen.fit_mann(report, U=8.0)
 
 
 def test_inclined_beams_fit_ae_l_but_not_the_evolution_time(tmp_path):

@@ -16,8 +16,9 @@ from turbgen.validation.fit.evolution import with_evolution
 from turbgen.validation.fit.kaimal import fit_kaimal_data
 from turbgen.validation.fit.kaimal_result import KaimalFit
 from turbgen.validation.fit.mean_wind import fit_mean_wind
-from turbgen.virtual_lidar.dataset import is_lidar_dataset
+from turbgen.virtual_lidar.dataset import LidarData, is_lidar_dataset
 from turbgen.virtual_lidar.fit import fit_lidar
+from turbgen.virtual_lidar.report import LidarReport
 
 
 def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points=None,
@@ -32,13 +33,14 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
 
     Parameters
     ----------
-    data : str, os.PathLike, turbgen.spec.constraints.PointSeries, FieldStore or xarray.Dataset
-        A point-series JSON or CSV file (the ``--constrain`` formats: one or more sensors with any of u, v, w), a field
-        store, a field as a Dataset (``turbgen.mann``, in memory or not, ``turbgen.open_store``), a TurbSim ``.bts``
-        or a HAWC2 ``.htc`` whose ``begin mann`` block names the boxes (fitted against the Mann tensor summed over
-        their periodic box, ``turbgen.exporters.field_files``), or a ``turbgen lidar --out`` dataset (ae and L from
-        its line-of-sight spectra with the probe volume, Gamma held, the evolution time from gates along x:
-        ``turbgen.virtual_lidar.fit``).
+    data : str, os.PathLike, PointSeries, LidarReport, LidarData, FieldStore or xarray.Dataset
+        A point-series JSON or CSV file (the ``--constrain`` formats: one or more sensors with any of u, v, w) or
+        the same made in memory (:func:`turbgen.point_series`), a field store, a field as a Dataset (``turbgen.mann``,
+        in memory or not, ``turbgen.open_store``), a TurbSim ``.bts`` or a HAWC2 ``.htc`` whose ``begin mann`` block
+        names the boxes (fitted against the Mann tensor summed over their periodic box,
+        ``turbgen.exporters.field_files``), or a lidar record: a ``turbgen lidar --out`` dataset or what
+        ``turbgen.lidar`` returned (ae and L from its line-of-sight spectra with the probe volume, Gamma held, the
+        evolution time from gates along x: ``turbgen.virtual_lidar.fit``).
     U : float, optional
         Mean wind speed [m/s] of k1 = 2 pi f / U for fluctuation data (default: the mean of u of total-wind data;
         a store holds its own).
@@ -79,9 +81,12 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     >>> fit.length_scale_m.value, fit.length_scale_m.ci95  # doctest: +SKIP
     """
     data = _opened(data)
-    if isinstance(data, str) and is_lidar_dataset(data):
+    if isinstance(data, LidarReport):
+        data = data.data()
+    if isinstance(data, LidarData) or (isinstance(data, str) and is_lidar_dataset(data)):
         if U is not None or points is not None or bootstrap or lifetime not in (None, "guo"):
-            raise ParameterError(f"DATA = {data!r} is a lidar dataset: it holds its own U and gates; U, points, "
+            what = repr(data.source if isinstance(data, LidarData) else data)
+            raise ParameterError(f"DATA = {what} is a lidar record: it holds its own U and gates; U, points, "
                                  "bootstrap and a lifetime other than 'guo' do not apply")
         return fit_lidar(data, nperseg, gamma)
     if gamma is not None:

@@ -65,10 +65,77 @@ class PointSeries:
                                  "total_wind")
 
 
-def point_series_from_mapping(data, source: str) -> PointSeries:
-    """A PointSeries from a schema-valid mapping; ParameterError naming ``source`` for any bad content."""
-    check_mapping(data, "constraints", f"constraint file {source}")
-    where = f"constraint file {source}"
+def point_series(time_s, sensors, *, total_wind: bool = False, noise_m_s: float | None = None,
+                 mean_wind: dict | None = None, name: str = "measured") -> PointSeries:
+    """Measured point series made in memory: what a constraint file holds, checked as one is.
+
+    The same object ``turbgen.fit_mann``, ``turbgen.fit_kaimal`` and ``constrain=[...]`` read from a point-series
+    JSON or CSV file, from arrays a notebook already has (a logger's pandas columns, say).
+
+    Parameters
+    ----------
+    time_s : array_like
+        Sample times [s] from the start of the field, strictly increasing (any rate).
+    sensors : sequence of dict
+        One per sensor, with a constraint file's keys: ``name``, ``x_m`` [m upstream], ``y_m`` [m], one of ``z_m``
+        [m from the hub] and ``height_m`` [m above ground], optionally ``path_m`` [m] (a sonic's path), and any of
+        ``u_m_s``, ``v_m_s``, ``w_m_s``: one value per time [m/s], NaN missing.
+    total_wind : bool, optional
+        The series hold the total wind (its mean is taken off, as ``mean_wind`` says), not fluctuations.
+    noise_m_s : float, optional
+        Measurement-noise sigma [m/s] of every value (default: 0 when conditioning).
+    mean_wind : dict, optional
+        With ``total_wind``: ``profile``, ``veer_deg_per_m``, ``mean_history`` as a file's ``mean_wind``.
+    name : str, optional
+        What records and messages call the data.
+
+    Returns
+    -------
+    turbgen.spec.constraints.PointSeries
+
+    Raises
+    ------
+    ParameterError
+        For what a constraint file may not hold (schemas/constraints.schema.json), naming the value.
+
+    Examples
+    --------
+    >>> import numpy as np, turbgen
+    >>> t = np.arange(0.0, 60.0, 0.5)
+    >>> mast = turbgen.point_series(t, [dict(name="sonic", x_m=0, y_m=0, z_m=0, u_m_s=np.sin(t), w_m_s=0 * t)])
+    >>> mast.sensors[0].name, sorted(mast.sensors[0].series)
+    ('sonic', ['u', 'w'])
+    """
+    mapping = {"kind": "point-series", "name": name, "time_s": _listed(time_s, "time_s"),
+               "sensors": [_sensor_mapping(s, k) for k, s in enumerate(sensors)], "total_wind": total_wind}
+    mapping.update({k: v for k, v in (("noise_m_s", noise_m_s), ("mean_wind", mean_wind)) if v is not None})
+    return point_series_from_mapping(mapping, f"(in memory) {name}", where=f"point_series {name!r}")
+
+
+def _sensor_mapping(sensor, k: int) -> dict:
+    """A sensor's mapping with its series as lists (NaN as null) for the schema."""
+    if not hasattr(sensor, "items"):
+        raise ParameterError(f"point_series: sensors[{k}] must be a dict of a sensor's keys, not "
+                             f"{type(sensor).__name__}")
+    return {key: _listed(v, f"sensors[{k}] {key}") if key.endswith("_m_s") else v for key, v in sensor.items()}
+
+
+def _listed(values, where: str) -> list:
+    """``values`` as a list of floats, None for NaN (a constraint file's null)."""
+    try:
+        a = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"point_series: {where} must be numbers") from None
+    if a.ndim != 1:
+        raise ParameterError(f"point_series: {where} must be one-dimensional, not of shape {a.shape}")
+    return [None if math.isnan(x) else x for x in a.tolist()]
+
+
+def point_series_from_mapping(data, source: str, where: str | None = None) -> PointSeries:
+    """A PointSeries from a schema-valid mapping; ParameterError naming ``where`` (default: the file ``source``)
+    for any bad content."""
+    where = where or f"constraint file {source}"
+    check_mapping(data, "constraints", where)
     t = np.asarray(data["time_s"], dtype=float)
     if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
         raise ParameterError(f"{where}: time_s must be finite and strictly increasing")

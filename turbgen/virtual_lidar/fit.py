@@ -41,7 +41,7 @@ from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
 from turbgen.validation.store_run import MannBox, mann_box_from_attrs
 from turbgen.validation.welch_kernel import WelchKernel
-from turbgen.virtual_lidar.dataset import LidarData, read_dataset
+from turbgen.virtual_lidar.dataset import LidarData, is_lidar_dataset, read_dataset
 from turbgen.virtual_lidar.description import LidarDescription
 
 N_K1 = 40  # k1 nodes of the LOS spectra (log-spaced over the record's lines)
@@ -181,12 +181,13 @@ def lidar_fit_data(ld: LidarData, gamma: float | None = None) -> tuple[FitData, 
 
 
 def sampled_store(ld: LidarData) -> SampledStore | None:
-    """The Mann store the dataset was sampled from (``SampledStore``), None if it is gone or not Mann's."""
+    """The Mann store the record was sampled from (``SampledStore``; a dataset names it, a report's record is its
+    own), None if it is gone, in memory or not Mann's."""
     import zarr
 
     from turbgen.store import open_store
 
-    path = zarr.open_group(ld.source, mode="r").attrs.get("source_store")
+    path = zarr.open_group(ld.source, mode="r").attrs.get("source_store") if is_lidar_dataset(ld.source) else ld.source
     if not isinstance(path, str) or not Path(path).is_dir():
         return None
     fs = open_store(path)
@@ -198,13 +199,13 @@ def sampled_store(ld: LidarData) -> SampledStore | None:
     return SampledStore(BoxLattice(b.nyp, b.nzp, g.dy_m, g.dz_m, g.nt * g.dt_s), phases, g, b)
 
 
-def fit_lidar(path, nperseg: int | None = None, gamma: float | None = None, store="source") -> MannFit:
-    """ae, L (Gamma held) fitted to the LOS spectra of the lidar dataset at ``path``, and the evolution time to its
-    gates along x. ``nperseg`` [scans] as in ``estimators.default_nperseg``; ``gamma`` [-] held (default
-    MANN_DEFAULTS); ``store``: the SampledStore whose box and sampling the spectra follow, "source" (the one sampled,
-    if there) or None (continuous). ParameterError for a dataset not uniformly sampled, too short or too gappy, a bad
-    ``gamma``."""
-    ld = read_dataset(path)
+def fit_lidar(data, nperseg: int | None = None, gamma: float | None = None, store="source") -> MannFit:
+    """ae, L (Gamma held) fitted to the LOS spectra of a lidar record (``data``: the path of a lidar dataset, or a
+    LidarData), and the evolution time to its gates along x. ``nperseg`` [scans] as in
+    ``estimators.default_nperseg``; ``gamma`` [-] held (default MANN_DEFAULTS); ``store``: the SampledStore whose box
+    and sampling the spectra follow, "source" (the one sampled, if there) or None (continuous). ParameterError for a
+    record not uniformly sampled, too short or too gappy, a bad ``gamma``."""
+    ld = data if isinstance(data, LidarData) else read_dataset(data)
     fd, meas, g = lidar_fit_data(ld, gamma)
     store = sampled_store(ld) if store == "source" else store
     bands = estimate_bands(fd, nperseg)

@@ -1,0 +1,70 @@
+"""``turbgen.point_series``: measured series made in memory are the PointSeries their constraint file gives, so the
+same conditioned field bit for bit and the same fit; bad input is one line naming the value."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import turbgen
+from turbgen.errors import ParameterError
+from turbgen.spec.constraints import load_point_series
+
+from test_point_csv import _same
+from test_run import _mast
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def in_memory(mapping: dict):
+    """``turbgen.point_series`` of a constraint file's mapping, its series as numpy arrays (NaN missing)."""
+    sensors = [{k: np.array([np.nan if x is None else x for x in v]) if k.endswith("_m_s") else v
+                for k, v in s.items()} for s in mapping["sensors"]]
+    keys = {k: mapping[k] for k in ("total_wind", "noise_m_s", "mean_wind", "name") if k in mapping}
+    return turbgen.point_series(np.asarray(mapping["time_s"]), sensors, **keys)
+
+
+def test_in_memory_series_condition_a_field_as_their_file(tmp_path):
+    mast = _mast(np.arange(0.0, 30.0, 0.25))  # a gap in u, z_m and height_m, a sensor without u
+    (tmp_path / "m.json").write_text(json.dumps(mast))
+    series = in_memory(mast)
+    _same(series, load_point_series(tmp_path / "m.json"))
+    small = dict(nt=128, ny=4, nz=4, dy=10, planes=[0, 40], seed=3)
+    a, b = (turbgen.mann(constrain=[c], **small) for c in (tmp_path / "m.json", series))
+    for c in "uvw":
+        np.testing.assert_array_equal(a[c].values, b[c].values)
+
+
+def test_in_memory_example_mast_fits_as_its_file():
+    mapping = json.loads((ROOT / "examples" / "mast-fit.json").read_text())
+    a, b = turbgen.fit_mann(ROOT / "examples" / "mast-fit.json"), turbgen.fit_mann(in_memory(mapping))
+    assert a.ok and b.ok
+    da, db = a.to_dict(), b.to_dict()
+    assert (da.pop("source"), db.pop("source")) == (str(ROOT / "examples" / "mast-fit.json"),
+                                                  f"(in memory) {mapping['name']}")
+    assert da == db
+
+
+SENSOR = {"name": "s", "x_m": 0.0, "y_m": 0.0, "z_m": 0.0, "u_m_s": [1.0, 2.0, 3.0]}
+BAD = {
+    "sensor not a dict": ([0, 1, 2], ["s"], "sensors[0] must be a dict of a sensor's keys, not str"),
+    "2-D series": ([0, 1, 2], [{**SENSOR, "u_m_s": np.ones((3, 2))}], "sensors[0] u_m_s must be one-dimensional"),
+    "text values": ([0, 1, 2], [{**SENSOR, "u_m_s": ["a", "b", "c"]}], "sensors[0] u_m_s must be numbers"),
+    "no position": ([0, 1, 2], [{k: v for k, v in SENSOR.items() if k != "x_m"}], "'x_m' is a required property"),
+    "length": ([0, 1, 2, 3], [SENSOR], "s u_m_s has 3 values for 4 times"),
+    "times": ([0, 2, 1], [SENSOR], "time_s must be finite and strictly increasing"),
+    "all missing": ([0, 1, 2], [{**SENSOR, "u_m_s": [np.nan] * 3}], "s u_m_s has no value (all missing)"),
+    "huge value": ([0, 1, 2], [{**SENSOR, "u_m_s": [1.0, 1e30, 2.0]}], "s u_m_s"),
+}
+
+
+@pytest.mark.parametrize("name", BAD)
+def test_bad_in_memory_series_is_one_line(name):
+    t, sensors, message = BAD[name]
+    with pytest.raises(ParameterError, match=re.escape(message)) as err:
+        turbgen.point_series(t, sensors, name="site")
+    assert "\n" not in str(err.value) and "point_series" in str(err.value)
