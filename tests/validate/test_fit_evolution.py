@@ -171,3 +171,28 @@ def test_coherence_spectra_correlation_is_that_of_gaussian_dfts():
         mc = np.corrcoef(z, np.real(X[i] * np.conj(X[j])).mean(axis=0))[0, 1]
         assert abs(kappa[m] - mc) < 4 * (1 - mc**2) / math.sqrt(n), (s, kappa[m], mc)
     assert np.max(np.abs(kappa)) > 0.1  # a case where the cross term matters
+
+
+def test_replay_of_two_masts_takes_the_fitted_evolution_time(evolving, tmp_path):
+    """`turbgen mann --constrain MASTS --fit`: sensors at two x identify gamma, so the replayed field is made with the
+    fitted evolution time (rounded as L), the store and `turbgen info` say so, and a typed --evo is refused."""
+    ps = _masts(evolving)
+    sensors = [{"name": s.name, "x_m": s.x_m, "y_m": s.y_m, "z_m": s.z_m,
+                **{f"{c}_m_s": list(v) for c, v in s.series.items()}} for s in ps.sensors]
+    path = tmp_path / "masts.json"
+    path.write_text(json.dumps({"kind": "point-series", "time_s": list(ps.time_s), "sensors": sensors}))
+    grid = ["--U", "10", "--nt", "1024", "--dt", "0.5", "--ny", "12", "--nz", "12", "--dy", "6", "--dz", "6",
+            "--planes", "0,100"]
+    r = CliRunner().invoke(cli, ["mann", "--constrain", str(path), "--fit", *grid, "--out", str(tmp_path / "r.zarr")])
+    assert r.exit_code == 0, r.output
+    ds = turbgen.open_store(tmp_path / "r.zarr")
+    e = ds.attrs["fit"]["fit"]["evo_time_s"]
+    fitted = float(f"{e['value']:.6g}")
+    assert e["identified"] and e["pairs_m"] == [[0.0, 100.0]]
+    assert ds.attrs["fit"]["run"]["evo_time_s"] == fitted == ds.attrs["parameters"]["evo_time_s"]
+    assert f"eddy-evolution time {fitted:g} s [" in r.output
+    r = CliRunner().invoke(cli, ["mann", "--constrain", str(path), "--fit", *grid, "--evo", "frozen",
+                                 "--out", str(tmp_path / "typed.zarr")])
+    assert r.exit_code == 2 and len(r.output.strip().splitlines()) == 1, r.output
+    assert "--evo with --fit (fit=True): the sensors along x identify the eddy-evolution time" in r.output
+    assert not (tmp_path / "typed.zarr").exists()

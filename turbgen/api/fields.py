@@ -279,7 +279,7 @@ def constrained_mann_run(mapping: dict, request: ConstraintRequest, fit: bool, o
         from turbgen.runs.replay import check_fit_options, fitted_inputs
 
         check_fit_options(options, prefix=prefix)
-        mapping, constraints, record = fitted_inputs(mapping, constraints)
+        mapping, constraints, record = fitted_inputs(mapping, constraints, evo_typed=options.get("evo") is not None)
     run = with_energy_from_data(mapping, constraints, request.noise_m_s, stencil_cache)
     return run, constraints, place(run, constraints, request.noise_m_s), record
 

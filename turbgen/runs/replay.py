@@ -2,8 +2,10 @@
 then the field conditioned on the same data with them.
 
 The fitted ae, L and Gamma (rounded to FIT_DIGITS digits, so a fit's last bits never change the field) replace the
-run's; typed ones are refused; the run's lifetime is the fit's. Without a typed U, U is the fitted hub speed. The
-store's ``fit`` attribute records the fit, the files' SHA-256 and the ``turbgen export`` options of that mean wind."""
+run's; typed ones are refused; the run's lifetime is the fit's. Sensors at two or more x fit the eddy-evolution time
+too (Guo et al. 2022); when the data identify it (the frozen limit outside its interval) it is the run's, and a typed
+one is refused. Without a typed U, U is the fitted hub speed. The store's ``fit`` attribute records the fit, the
+files' SHA-256 and the ``turbgen export`` options of that mean wind."""
 
 from __future__ import annotations
 
@@ -17,6 +19,7 @@ from turbgen.errors import ParameterError
 from turbgen.spec.constraints import PointSeries
 from turbgen.spec.mann import MannRun
 from turbgen.validation.fit.data import data_from_points
+from turbgen.validation.fit.evolution import with_evolution
 from turbgen.validation.fit.mann import fit_mann_data
 from turbgen.validation.fit.mean_wind import fit_mean_wind
 
@@ -38,9 +41,11 @@ def _sha256(source: str) -> str | None:
     return hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else None
 
 
-def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None) -> tuple[dict, list, dict]:
+def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None,
+                  evo_typed: bool = False) -> tuple[dict, list, dict]:
     """(the run mapping with the fitted parameters, the constraints with the fitted mean wind, the ``fit`` record).
-    ParameterError for other than one point-series file, a flagged fit and the fit's own refusals."""
+    ParameterError for other than one point-series file, a flagged fit, ``evo_typed`` (an evolution time given) when
+    the data identify one, and the fit's own refusals."""
     if len(constraints) != 1 or not isinstance(constraints[0], PointSeries):
         raise ParameterError(f"--fit (fit=True) fits one point-series file; got {len(constraints)} constraint "
                              "file(s) or a lidar record: fit them apart (turbgen fit mann) and give the values")
@@ -48,13 +53,14 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None) 
     if mapping.get("factor1", 1.0) != 1.0:
         raise ParameterError(f"--fit with factor1 = {mapping['factor1']}: the fit's tables hold the lifetime with "
                              "factor1 = 1 only (Guo et al. 2023, Eq. 7)")
-    fit = fit_mann_data(data_from_points(ps, None if ps.total_wind else mapping.get("U_m_s")), nperseg,
-                        lifetime=mapping.get("lifetime"))
+    data = data_from_points(ps, None if ps.total_wind else mapping.get("U_m_s"))
+    fit = fit_mann_data(data, nperseg, lifetime=mapping.get("lifetime"))
     if fit.flags:
         raise ParameterError(f"--fit: the fit of {ps.source} is not reliable: {'; '.join(fit.flags)}")
+    fit = with_evolution(data, fit)
     hub = MannRun.from_mapping(mapping).hub_height_m
     mean = fit_mean_wind(ps, hub)
-    values = {k: float(f"{getattr(fit, k).value:.{FIT_DIGITS}g}") for k in FITTED}
+    values = {k: float(f"{getattr(fit, k).value:.{FIT_DIGITS}g}") for k in FITTED} | _evolution(fit, evo_typed)
     out = {k: v for k, v in mapping.items() if k not in ("sigma_u_m_s", "ti")} | values | {"lifetime": fit.lifetime}
     out["ae_from"] = f"fitted to {Path(ps.source).name} (turbgen fit mann)"
     if "U_m_s" not in mapping:
@@ -68,9 +74,21 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None) 
                            table_label="")
         ps = replace(ps, mean_wind=replace(wind, veer_deg_per_m=export.get("veer_deg_per_m", wind.veer_deg_per_m)))
     record = {"fit": replace(fit, mean_wind=mean).to_dict(),
-              "run": {k: out[k] for k in (*FITTED, "U_m_s", "lifetime")},
+              "run": {k: out[k] for k in (*FITTED, "U_m_s", "lifetime", *values.keys() - FITTED.keys())},
               "files": [{"path": ps.source, "sha256": _sha256(ps.source)}], "export": export}
     return out, [ps], record
+
+
+def _evolution(fit, evo_typed: bool) -> dict:
+    """{"evo_time_s": the fitted evolution time, rounded} when the data identify it, else {}; ParameterError for
+    ``evo_typed`` then (the data set it, as L)."""
+    e = fit.evolution
+    if e is None or not e.identified:
+        return {}
+    if evo_typed:
+        raise ParameterError(f"--evo with --fit (fit=True): the sensors along x identify the eddy-evolution time "
+                             f"({e.value_s:.4g} s, 95 % [{e.ci95[0]:.4g}, {e.ci95[1]:.4g}]); drop --evo, or drop --fit")
+    return {"evo_time_s": float(f"{e.value_s:.{FIT_DIGITS}g}")}
 
 
 def _hub_speed(ps: PointSeries, hub: float) -> float | None:
@@ -91,6 +109,13 @@ def describe_fit(record: dict) -> list[str]:
              f"chi2/dof {f['chi2_dof']:.3g}; U {run['U_m_s']:g} m/s, {run.get('lifetime', 'guo')} lifetime"]
     mean = [f"{k} {f[k]['value']:.4g}" for k in ("shear_exponent", "veer_deg_per_m", "turbulence_intensity")
             if f.get(k, {}).get("value") is not None]
+    e = f.get("evo_time_s") or {}
+    if "evo_time_s" in run:
+        lines.append(f"eddy-evolution time {run['evo_time_s']:g} s [{e['ci95'][0]:.4g}, {e['ci95'][1]:.4g}] (95 %), "
+                     "fitted to the u coherence along x")
+    elif e.get("held") is False:
+        lines.append("eddy-evolution time not identified by the data (the frozen limit is inside its 95 % interval): "
+                     "the run's")
     exp = " ".join(f"--{k.split('_')[0]} {v}" for k, v in record["export"].items())
     return lines + ([f"fitted mean wind: {', '.join(mean)}" + (f" (turbgen export uses {exp})" if exp else "")]
                     if mean else [])
