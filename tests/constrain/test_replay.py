@@ -132,6 +132,8 @@ def test_refusals(tmp_path):
         turbgen.mann(constrain=[MAST], fit=True, sigma_u=1.0)
     with pytest.raises(ParameterError, match="`fit` needs `constrain`"):
         turbgen.mann(fit=True)
+    with pytest.raises(ParameterError, match="^--fit .fit=True. fits one point-series file or lidar record; got 2 "):
+        turbgen.mann(constrain=[MAST, MAST], fit=True)
     r = CliRunner().invoke(cli, ["mann", "--constrain", str(MAST), "--fit", "--factor1", "0.8",
                                  "--out", str(tmp_path / "x.zarr")])  # the fit's tables: factor1 = 1 only
     assert r.exit_code == 2 and r.output.strip().splitlines()[-1].startswith("Error: --fit with factor1 = 0.8: ")

@@ -145,6 +145,27 @@ def test_band_covariance_matches_a_monte_carlo_of_the_lines():
     assert abs(r - r_new) < 4 * (1 - r**2) / math.sqrt(R) < abs(r - bands.band_corr[0, 1]), (r, r_new)
 
 
+def test_replay_of_a_lidar_record(gates2, fit2):
+    """`turbgen.mann(constrain=[LIDAR], fit=True)`: the field of the record's fit (ae, L and the evolution time
+    fitted, Gamma the given one held, U the record's), conditioned on the record; a typed L is refused. The replay's
+    record is 32 s longer than the sampled field's: the lidar sampled that periodic field across its end, which a
+    constraint on a non-periodic record cannot place."""
+    grid = dict(planes=[0.0, 50.0, 100.0], nt=2048 + 64, dt=0.5, ny=9, nz=9, dy=6.0, dz=6.0)
+    ds = turbgen.mann(constrain=[gates2], fit=True, gamma=TRUTH["gamma"], seed=5, **grid)
+    p, run = ds.attrs["parameters"], ds.attrs["fit"]["run"]
+    e = fit2.evolution
+    assert e.identified and p["evo_time_s"] == run["evo_time_s"] == float(f"{e.value_s:.6g}")
+    for k in ("ae", "length_scale_m"):
+        assert p[k] == run[k] == float(f"{getattr(fit2, k).value:.6g}")
+    assert (p["gamma"], p["U_m_s"], ds.attrs["fit"]["files"][0]["path"]) == (TRUTH["gamma"], 10.0, str(gates2))
+    assert ds.attrs["constraints"]["residual_rms_m_s"] < 1e-4
+    with pytest.raises(ParameterError, match=r"^L with --fit \(fit=True\): the fit sets L and the energy level "
+                                             r"\(gamma held\) from the data"):
+        turbgen.mann(constrain=[gates2], fit=True, L=30.0, **grid)
+    with pytest.raises(ParameterError, match="with lifetime = 'mann': the lidar fit's model has Guo's lifetime only"):
+        turbgen.mann(constrain=[gates2], fit=True, lifetime="mann", **grid)
+
+
 def test_one_gate_says_why_no_evolution_time(tmp_path):
     fit = turbgen.fit_mann(str(dataset(tmp_path, (60.0,))))
     assert fit.evolution is None

@@ -181,8 +181,9 @@ def mann(L: float | None = None, gamma: float | None = None, evo: float | str | 
     conditional_mean : bool, optional
         With ``constrain``: the conditional mean (no random part).
     fit : bool, optional
-        With ``constrain`` of one point-series file: fit ae, L, Γ and the mean wind to it first
-        (turbgen.runs.replay; ``L``, ``gamma`` and the energy level are refused); ``attrs["fit"]`` records it.
+        With ``constrain`` of one point-series file or lidar record: fit ae, L, Γ (held for a lidar record), the
+        evolution time (sensors along x) and the mean wind to it first (turbgen.runs.replay; ``L``, ``gamma`` and the
+        energy level are refused); ``attrs["fit"]`` records it.
     progress : bool, optional
         Show a progress bar on stderr.
     fft_backend : str, optional
@@ -278,7 +279,9 @@ def constrained_mann_run(mapping: dict, request: ConstraintRequest, fit: bool, o
     if fit:
         from turbgen.runs.replay import check_fit_options, fitted_inputs
 
-        check_fit_options(options, prefix=prefix)
+        from turbgen.virtual_lidar.dataset import LidarData
+
+        check_fit_options(options, prefix=prefix, lidar=any(isinstance(c, LidarData) for c in constraints))
         mapping, constraints, record = fitted_inputs(mapping, constraints, evo_typed=options.get("evo") is not None)
     run = with_energy_from_data(mapping, constraints, request.noise_m_s, stencil_cache)
     return run, constraints, place(run, constraints, request.noise_m_s), record

@@ -91,9 +91,10 @@ def _dask_client(scheduler, workers: int):
               "of --threads single-threaded workers sharing --memory with this process.")  # fmt: skip
 @constraint_options(", a `turbgen lidar --out` dataset or a line-of-sight CSV file", "")
 @click.option("--fit", "fit", is_flag=True,
-              help="With --constrain of one point-series file: replay it. L, Gamma, ae and the mean wind (power law, "
-              "veer) are fitted to the data first (turbgen fit mann) and the field is conditioned with them; --L, "
-              "--gamma, --ae, --sigma-u, --ti are refused. The store records the fit; turbgen export uses its mean "
+              help="With --constrain of one point-series file or lidar record: replay it. L, Gamma, ae, the "
+              "evolution time (sensors along x) and the mean wind (power law, veer) are fitted to the data first "
+              "(turbgen fit mann) and the field is conditioned with them; --L, --gamma (held for a lidar record), "
+              "--ae, --sigma-u, --ti are refused. The store records the fit; turbgen export uses its mean "
               "wind.")  # fmt: skip
 def mann(**opt):
     """Mann space-time 4D field: yz-planes at the rotor and range gates, evolving with upstream distance."""

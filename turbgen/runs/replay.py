@@ -2,7 +2,8 @@
 then the field conditioned on the same data with them.
 
 The fitted ae, L and Gamma (rounded to FIT_DIGITS digits, so a fit's last bits never change the field) replace the
-run's; typed ones are refused; the run's lifetime is the fit's. Sensors at two or more x fit the eddy-evolution time
+run's; typed ones are refused; the run's lifetime is the fit's. A lidar record's fit holds Gamma (a given one) and
+keeps the record's U and mean wind. Sensors at two or more x fit the eddy-evolution time
 too (Guo et al. 2022); when the data identify it (the frozen limit outside its interval) it is the run's, and a typed
 one is refused. Without a typed U, U is the fitted hub speed. The store's ``fit`` attribute records the fit, the
 files' SHA-256 and the ``turbgen export`` options of that mean wind."""
@@ -22,18 +23,23 @@ from turbgen.validation.fit.data import data_from_points
 from turbgen.validation.fit.evolution import with_evolution
 from turbgen.validation.fit.mann import fit_mann_data
 from turbgen.validation.fit.mean_wind import fit_mean_wind
+from turbgen.virtual_lidar.dataset import LidarData
+from turbgen.virtual_lidar.fit import fit_lidar
 
 FIT_DIGITS = 6
 FITTED = {"ae": "ae", "length_scale_m": "L", "gamma": "gamma"}  # run key -> option
 REFUSED = ("L", "gamma", "ae", "sigma_u", "ti")  # options --fit sets (the energy level among them)
 
 
-def check_fit_options(given: dict, prefix: str = "--") -> None:
-    """Refuse, in one line, the options ``--fit`` sets (``given``: option name -> value, None: not given)."""
-    typed = [f"{prefix}{n.replace('_', '-') if prefix == '--' else n}" for n in REFUSED if given.get(n) is not None]
+def check_fit_options(given: dict, prefix: str = "--", lidar: bool = False) -> None:
+    """Refuse, in one line, the options ``--fit`` sets (``given``: option name -> value, None: not given); of a
+    ``lidar`` record the fit holds Gamma, so a given one is the value held."""
+    typed = [f"{prefix}{n.replace('_', '-') if prefix == '--' else n}" for n in REFUSED
+             if given.get(n) is not None and not (lidar and n == "gamma")]
     if typed:
-        raise ParameterError(f"{', '.join(typed)} with --fit (fit=True): the fit sets L, gamma and the energy level "
-                             "from the data; drop them, or drop --fit")
+        sets = "L and the energy level (gamma held)" if lidar else "L, gamma and the energy level"
+        raise ParameterError(f"{', '.join(typed)} with --fit (fit=True): the fit sets {sets} from the data; drop "
+                             "them, or drop --fit")
 
 
 def _sha256(source: str) -> str | None:
@@ -44,27 +50,41 @@ def _sha256(source: str) -> str | None:
 def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None,
                   evo_typed: bool = False) -> tuple[dict, list, dict]:
     """(the run mapping with the fitted parameters, the constraints with the fitted mean wind, the ``fit`` record).
-    ParameterError for other than one point-series file, a flagged fit, ``evo_typed`` (an evolution time given) when
-    the data identify one, and the fit's own refusals."""
-    if len(constraints) != 1 or not isinstance(constraints[0], PointSeries):
-        raise ParameterError(f"--fit (fit=True) fits one point-series file; got {len(constraints)} constraint "
-                             "file(s) or a lidar record: fit them apart (turbgen fit mann) and give the values")
-    ps = constraints[0]
+    ParameterError for other than one point-series file or lidar record, a flagged fit, ``evo_typed`` (an evolution
+    time given) when the data identify one, and the fit's own refusals."""
+    if len(constraints) != 1 or not isinstance(constraints[0], (PointSeries, LidarData)):
+        raise ParameterError(f"--fit (fit=True) fits one point-series file or lidar record; got {len(constraints)} "
+                             "constraint files: fit them apart (turbgen fit mann) and give the values")
     if mapping.get("factor1", 1.0) != 1.0:
         raise ParameterError(f"--fit with factor1 = {mapping['factor1']}: the fit's tables hold the lifetime with "
                              "factor1 = 1 only (Guo et al. 2023, Eq. 7)")
-    data = data_from_points(ps, None if ps.total_wind else mapping.get("U_m_s"))
-    fit = fit_mann_data(data, nperseg, lifetime=mapping.get("lifetime"))
-    if fit.flags:
-        raise ParameterError(f"--fit: the fit of {ps.source} is not reliable: {'; '.join(fit.flags)}")
-    fit = with_evolution(data, fit)
-    hub = MannRun.from_mapping(mapping).hub_height_m
-    mean = fit_mean_wind(ps, hub)
+    c = constraints[0]
+    fit, c, export, speed = (_lidar_fit if isinstance(c, LidarData) else _points_fit)(mapping, c, nperseg)
     values = {k: float(f"{getattr(fit, k).value:.{FIT_DIGITS}g}") for k in FITTED} | _evolution(fit, evo_typed)
     out = {k: v for k, v in mapping.items() if k not in ("sigma_u_m_s", "ti")} | values | {"lifetime": fit.lifetime}
-    out["ae_from"] = f"fitted to {Path(ps.source).name} (turbgen fit mann)"
-    if "U_m_s" not in mapping:
-        out["U_m_s"] = float(f"{mean.U_hub_m_s or _hub_speed(ps, hub) or fit.U_m_s:.{FIT_DIGITS}g}")
+    out["ae_from"] = f"fitted to {Path(c.source).name} (turbgen fit mann)"
+    out.setdefault("U_m_s", speed)
+    run = {k: out[k] for k in (*FITTED, "U_m_s", "lifetime", *values.keys() - FITTED.keys())}
+    record = {"fit": fit.to_dict(), "run": run, "files": [{"path": c.source, "sha256": _sha256(c.source)}],
+              "export": export}
+    return out, [c], record
+
+
+def _reliable(fit, source: str):
+    """``fit``, or ParameterError naming its flags."""
+    if fit.flags:
+        raise ParameterError(f"--fit: the fit of {source} is not reliable: {'; '.join(fit.flags)}")
+    return fit
+
+
+def _points_fit(mapping: dict, ps: PointSeries, nperseg: int | None) -> tuple:
+    """(the fit with its evolution time and mean wind, the series with the fitted mean wind, the export options of
+    that mean wind, the fitted hub speed [m/s]) of a point series."""
+    data = data_from_points(ps, None if ps.total_wind else mapping.get("U_m_s"))
+    fit = with_evolution(data, _reliable(fit_mann_data(data, nperseg, lifetime=mapping.get("lifetime")), ps.source))
+    hub = MannRun.from_mapping(mapping).hub_height_m
+    mean = fit_mean_wind(ps, hub)
+    speed = float(f"{mean.U_hub_m_s or _hub_speed(ps, hub) or fit.U_m_s:.{FIT_DIGITS}g}")
     export = mean.export_options()
     if ps.total_wind and export:
         wind = ps.mean_wind
@@ -73,10 +93,16 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None,
                            displacement_m=0.0, table_heights_m=(), table_speeds_m_s=(), table_directions_deg=(),
                            table_label="")
         ps = replace(ps, mean_wind=replace(wind, veer_deg_per_m=export.get("veer_deg_per_m", wind.veer_deg_per_m)))
-    record = {"fit": replace(fit, mean_wind=mean).to_dict(),
-              "run": {k: out[k] for k in (*FITTED, "U_m_s", "lifetime", *values.keys() - FITTED.keys())},
-              "files": [{"path": ps.source, "sha256": _sha256(ps.source)}], "export": export}
-    return out, [ps], record
+    return replace(fit, mean_wind=mean), ps, export, speed
+
+
+def _lidar_fit(mapping: dict, ld: LidarData, nperseg: int | None) -> tuple:
+    """As :func:`_points_fit` for a lidar record: ae, L and the evolution time from its line-of-sight spectra and
+    gates, Gamma held (the run's, default MANN_DEFAULTS), the mean wind the record's, U the record's."""
+    if mapping.get("lifetime", "guo") != "guo":
+        raise ParameterError(f"--fit of the lidar record {ld.source} with lifetime = {mapping['lifetime']!r}: the "
+                             "lidar fit's model has Guo's lifetime only; drop the lifetime")
+    return _reliable(fit_lidar(ld, nperseg, mapping.get("gamma")), ld.source), ld, {}, ld.U_m_s
 
 
 def _evolution(fit, evo_typed: bool) -> dict:
