@@ -21,7 +21,8 @@ from turbgen.validation.fit.evolution import Sampler, fit_evolution
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
 from turbgen.virtual_lidar.dataset import read_dataset
-from turbgen.virtual_lidar.description import LidarDescription
+from turbgen.virtual_lidar.description import LidarDescription, load_lidar
+from turbgen.virtual_lidar.run import measurements_of
 from turbgen.virtual_lidar.fit import TAIL, LosModel, lidar_fit_data, los_spectrum, probe_gain, sampled_store
 
 TRUTH = dict(ae=0.08, L=30.0, gamma=3.2, evo=200.0)
@@ -147,10 +148,12 @@ def test_band_covariance_matches_a_monte_carlo_of_the_lines():
 
 def test_replay_of_a_lidar_record(gates2, fit2):
     """`turbgen.mann(constrain=[LIDAR], fit=True)`: the field of the record's fit (ae, L and the evolution time
-    fitted, Gamma the given one held, U the record's), conditioned on the record; a typed L is refused. The replay's
-    record is 32 s longer than the sampled field's: the lidar sampled that periodic field across its end, which a
-    constraint on a non-periodic record cannot place."""
-    grid = dict(planes=[0.0, 50.0, 100.0], nt=2048 + 64, dt=0.5, ny=9, nz=9, dy=6.0, dz=6.0)
+    fitted, Gamma the given one held, U the record's), conditioned on the record; a typed L is refused. On the
+    sampled field's own grid: the last scan's farthest probe point (x = 145 m) falls on the record's last node, where
+    the scan-repeat check once refused the record ("do not repeat every 2 time steps")."""
+    x_far = max(m.points_m()[:, 0].max() for m in measurements_of(load_lidar(gates2.parent / "lidar.toml")))
+    assert read_dataset(gates2).time_s.max() + x_far / 10.0 == (2048 - 1) * 0.5
+    grid = dict(planes=[0.0, 50.0, 100.0], nt=2048, dt=0.5, ny=9, nz=9, dy=6.0, dz=6.0)
     ds = turbgen.mann(constrain=[gates2], fit=True, gamma=TRUTH["gamma"], seed=5, **grid)
     p, run = ds.attrs["parameters"], ds.attrs["fit"]["run"]
     e = fit2.evolution

@@ -286,6 +286,8 @@ def repeats_every(grid, U_m_s: float, measurements, times_s: np.ndarray, q: int,
     for j, m in enumerate(measurements):
         p, w = m.points_m(), np.abs(np.asarray(m.weights, float))
         it, at = _interp_axis(0.0, g.dt_s, g.nt, times_s[:, j, None] + p[None, :, 0] / U_m_s)
+        end = at == 1.0  # the record's last node: the clipped lower cell with all weight on it, as it + 1 with none
+        it, at = it + end, at - end
         _, ay = _interp_axis(g.y()[0], g.dy_m, g.ny, p[:, 1])
         _, az = _interp_axis(g.z()[0], g.dz_m, g.nz, p[:, 2])
         live = w > 0
