@@ -132,8 +132,13 @@ def test_refusals(tmp_path):
         turbgen.mann(constrain=[MAST], fit=True, sigma_u=1.0)
     with pytest.raises(ParameterError, match="`fit` needs `constrain`"):
         turbgen.mann(fit=True)
-    with pytest.raises(ParameterError, match="^--fit .fit=True. fits one point-series file or lidar record; got 2 "):
+    with pytest.raises(ParameterError, match="^--fit of 2 files: the sensor name.s. 'sonic 106.5 m', .* repeat; "):
         turbgen.mann(constrain=[MAST, MAST], fit=True)
+    other = turbgen.point_series([0.0, 0.5, 1.0], [dict(name="cup", x_m=0, y_m=0, z_m=0, u_m_s=[9.0, 9.5, 9.2])],
+                                 total_wind=True)
+    with pytest.raises(ParameterError, match=r"^--fit of .*mast-fit.json and \(in memory\) measured: files fitted "
+                                             r"together must share time_s, total_wind and mean_wind"):
+        turbgen.mann(constrain=[MAST, other], fit=True)
     r = CliRunner().invoke(cli, ["mann", "--constrain", str(MAST), "--fit", "--factor1", "0.8",
                                  "--out", str(tmp_path / "x.zarr")])  # the fit's tables: factor1 = 1 only
     assert r.exit_code == 2 and r.output.strip().splitlines()[-1].startswith("Error: --fit with factor1 = 0.8: ")

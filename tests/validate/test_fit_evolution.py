@@ -175,7 +175,8 @@ def test_coherence_spectra_correlation_is_that_of_gaussian_dfts():
 
 def test_replay_of_two_masts_takes_the_fitted_evolution_time(evolving, tmp_path):
     """`turbgen mann --constrain MASTS --fit`: sensors at two x identify gamma, so the replayed field is made with the
-    fitted evolution time (rounded as L), the store and `turbgen info` say so, and a typed --evo is refused."""
+    fitted evolution time (rounded as L), the store and `turbgen info` say so, and a typed --evo is refused; the masts
+    in two files give the same field."""
     ps = _masts(evolving)
     sensors = [{"name": s.name, "x_m": s.x_m, "y_m": s.y_m, "z_m": s.z_m,
                 **{f"{c}_m_s": list(v) for c, v in s.series.items()}} for s in ps.sensors]
@@ -191,6 +192,16 @@ def test_replay_of_two_masts_takes_the_fitted_evolution_time(evolving, tmp_path)
     assert e["identified"] and e["pairs_m"] == [[0.0, 100.0]]
     assert ds.attrs["fit"]["run"]["evo_time_s"] == fitted == ds.attrs["parameters"]["evo_time_s"]
     assert f"eddy-evolution time {fitted:g} s [" in r.output
+    # each mast in a file of its own (as two loggers write them): fitted as one, the same field to the bit
+    for k, name in enumerate(("x0.json", "x100.json")):
+        doc = {"kind": "point-series", "time_s": list(ps.time_s), "sensors": sensors[2 * k: 2 * k + 2]}
+        (tmp_path / name).write_text(json.dumps(doc))
+    two = turbgen.mann(constrain=[tmp_path / "x0.json", tmp_path / "x100.json"], fit=True, U=10, nt=1024, dt=0.5,
+                       ny=12, nz=12, dy=6, dz=6, planes=[0, 100])
+    assert [f["path"] for f in two.attrs["fit"]["files"]] == [str(tmp_path / "x0.json"), str(tmp_path / "x100.json")]
+    assert two.attrs["fit"]["run"] == ds.attrs["fit"]["run"]
+    for c in "uvw":
+        np.testing.assert_array_equal(two[c].values, ds[c].values)
     r = CliRunner().invoke(cli, ["mann", "--constrain", str(path), "--fit", *grid, "--evo", "frozen",
                                  "--out", str(tmp_path / "typed.zarr")])
     assert r.exit_code == 2 and len(r.output.strip().splitlines()) == 1, r.output

@@ -181,7 +181,7 @@ def mann(L: float | None = None, gamma: float | None = None, evo: float | str | 
     conditional_mean : bool, optional
         With ``constrain``: the conditional mean (no random part).
     fit : bool, optional
-        With ``constrain`` of one point-series file or lidar record: fit ae, L, Γ (held for a lidar record), the
+        With ``constrain`` of point-series files or one lidar record: fit ae, L, Γ (held for a lidar record), the
         evolution time (sensors along x) and the mean wind to it first (turbgen.runs.replay; ``L``, ``gamma`` and the
         energy level are refused); ``attrs["fit"]`` records it.
     progress : bool, optional

@@ -91,7 +91,7 @@ def _dask_client(scheduler, workers: int):
               "of --threads single-threaded workers sharing --memory with this process.")  # fmt: skip
 @constraint_options(", a `turbgen lidar --out` dataset or a line-of-sight CSV file", "")
 @click.option("--fit", "fit", is_flag=True,
-              help="With --constrain of one point-series file or lidar record: replay it. L, Gamma, ae, the "
+              help="With --constrain of point-series files or one lidar record: replay it. L, Gamma, ae, the "
               "evolution time (sensors along x) and the mean wind (power law, veer) are fitted to the data first "
               "(turbgen fit mann) and the field is conditioned with them; --L, --gamma (held for a lidar record), "
               "--ae, --sigma-u, --ti are refused. The store records the fit; turbgen export uses its mean "

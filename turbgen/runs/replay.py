@@ -50,24 +50,23 @@ def _sha256(source: str) -> str | None:
 def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None,
                   evo_typed: bool = False) -> tuple[dict, list, dict]:
     """(the run mapping with the fitted parameters, the constraints with the fitted mean wind, the ``fit`` record).
-    ParameterError for other than one point-series file or lidar record, a flagged fit, ``evo_typed`` (an evolution
-    time given) when the data identify one, and the fit's own refusals."""
-    if len(constraints) != 1 or not isinstance(constraints[0], (PointSeries, LidarData)):
-        raise ParameterError(f"--fit (fit=True) fits one point-series file or lidar record; got {len(constraints)} "
-                             "constraint files: fit them apart (turbgen fit mann) and give the values")
+    Point-series files are fitted as one; ParameterError for a lidar record with other files, a flagged fit,
+    ``evo_typed`` (an evolution time given) when the data identify one, and the fit's own refusals."""
+    if any(isinstance(c, LidarData) for c in constraints) and len(constraints) > 1:
+        raise ParameterError(f"--fit (fit=True) fits a lidar record alone; got {len(constraints)} constraint files: "
+                             "fit them apart (turbgen fit mann) and give the values")
     if mapping.get("factor1", 1.0) != 1.0:
         raise ParameterError(f"--fit with factor1 = {mapping['factor1']}: the fit's tables hold the lifetime with "
                              "factor1 = 1 only (Guo et al. 2023, Eq. 7)")
-    c = constraints[0]
-    fit, c, export, speed = (_lidar_fit if isinstance(c, LidarData) else _points_fit)(mapping, c, nperseg)
+    lidar = isinstance(constraints[0], LidarData)
+    fit, constraints, export, speed = (_lidar_fit if lidar else _points_fit)(mapping, constraints, nperseg)
     values = {k: float(f"{getattr(fit, k).value:.{FIT_DIGITS}g}") for k in FITTED} | _evolution(fit, evo_typed)
     out = {k: v for k, v in mapping.items() if k not in ("sigma_u_m_s", "ti")} | values | {"lifetime": fit.lifetime}
-    out["ae_from"] = f"fitted to {Path(c.source).name} (turbgen fit mann)"
+    out["ae_from"] = f"fitted to {', '.join(Path(c.source).name for c in constraints)} (turbgen fit mann)"
     out.setdefault("U_m_s", speed)
     run = {k: out[k] for k in (*FITTED, "U_m_s", "lifetime", *values.keys() - FITTED.keys())}
-    record = {"fit": fit.to_dict(), "run": run, "files": [{"path": c.source, "sha256": _sha256(c.source)}],
-              "export": export}
-    return out, [c], record
+    files = [{"path": c.source, "sha256": _sha256(c.source)} for c in constraints]
+    return out, constraints, {"fit": fit.to_dict(), "run": run, "files": files, "export": export}
 
 
 def _reliable(fit, source: str):
@@ -77,9 +76,10 @@ def _reliable(fit, source: str):
     return fit
 
 
-def _points_fit(mapping: dict, ps: PointSeries, nperseg: int | None) -> tuple:
+def _points_fit(mapping: dict, series: list, nperseg: int | None) -> tuple:
     """(the fit with its evolution time and mean wind, the series with the fitted mean wind, the export options of
-    that mean wind, the fitted hub speed [m/s]) of a point series."""
+    that mean wind, the fitted hub speed [m/s]) of point-series files, fitted as one (:func:`_merged`)."""
+    ps = _merged(series)
     data = data_from_points(ps, None if ps.total_wind else mapping.get("U_m_s"))
     fit = with_evolution(data, _reliable(fit_mann_data(data, nperseg, lifetime=mapping.get("lifetime")), ps.source))
     hub = MannRun.from_mapping(mapping).hub_height_m
@@ -92,17 +92,37 @@ def _points_fit(mapping: dict, ps: PointSeries, nperseg: int | None) -> tuple:
             wind = replace(wind, profile="power", shear_exponent=float(export["profile"][6:]), roughness_m=None,
                            displacement_m=0.0, table_heights_m=(), table_speeds_m_s=(), table_directions_deg=(),
                            table_label="")
-        ps = replace(ps, mean_wind=replace(wind, veer_deg_per_m=export.get("veer_deg_per_m", wind.veer_deg_per_m)))
-    return replace(fit, mean_wind=mean), ps, export, speed
+        wind = replace(wind, veer_deg_per_m=export.get("veer_deg_per_m", wind.veer_deg_per_m))
+        series = [replace(s, mean_wind=wind) for s in series]
+    return replace(fit, mean_wind=mean), series, export, speed
 
 
-def _lidar_fit(mapping: dict, ld: LidarData, nperseg: int | None) -> tuple:
+def _merged(series: list) -> PointSeries:
+    """Point-series files as one, their sensors side by side (two masts' files, say); ParameterError unless they
+    share the sample times, total_wind and mean wind, or if a sensor name repeats."""
+    first = series[0]
+    for ps in series[1:]:
+        if not (np.array_equal(ps.time_s, first.time_s) and (ps.total_wind, ps.mean_wind) == (first.total_wind,
+                                                                                              first.mean_wind)):
+            raise ParameterError(f"--fit of {first.source} and {ps.source}: files fitted together must share time_s, "
+                                 "total_wind and mean_wind (resample them onto one clock)")
+    names = [s.name for ps in series for s in ps.sensors]
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if len(series) > 1 and repeated:
+        raise ParameterError(f"--fit of {len(series)} files: the sensor name(s) {', '.join(map(repr, repeated))} "
+                             "repeat; name each sensor once")
+    return replace(first, sensors=tuple(s for ps in series for s in ps.sensors),
+                   source=" + ".join(ps.source for ps in series))
+
+
+def _lidar_fit(mapping: dict, records: list, nperseg: int | None) -> tuple:
     """As :func:`_points_fit` for a lidar record: ae, L and the evolution time from its line-of-sight spectra and
     gates, Gamma held (the run's, default MANN_DEFAULTS), the mean wind the record's, U the record's."""
+    ld = records[0]
     if mapping.get("lifetime", "guo") != "guo":
         raise ParameterError(f"--fit of the lidar record {ld.source} with lifetime = {mapping['lifetime']!r}: the "
                              "lidar fit's model has Guo's lifetime only; drop the lifetime")
-    return _reliable(fit_lidar(ld, nperseg, mapping.get("gamma")), ld.source), ld, {}, ld.U_m_s
+    return _reliable(fit_lidar(ld, nperseg, mapping.get("gamma")), ld.source), records, {}, ld.U_m_s
 
 
 def _evolution(fit, evo_typed: bool) -> dict:
