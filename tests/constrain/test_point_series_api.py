@@ -68,3 +68,12 @@ def test_bad_in_memory_series_is_one_line(name):
     with pytest.raises(ParameterError, match=re.escape(message)) as err:
         turbgen.point_series(t, sensors, name="site")
     assert "\n" not in str(err.value) and "point_series" in str(err.value)
+
+
+def test_a_point_series_shows_what_it_holds():
+    t = np.arange(0.0, 600.0, 0.05)
+    mast = turbgen.point_series(t, [dict(name=f"s{k}", x_m=0, y_m=-1.5, height_m=70.5 + 12 * k, u_m_s=10 + np.sin(t),
+                                         w_m_s=0 * t) for k in range(40)], total_wind=True, name="mast")
+    text = repr(mast)
+    assert text.startswith("PointSeries 'mast': 12000 samples, 0 to 599.95 s, total wind; s0 (x 0 m, y -1.5 m, "
+                           "height 70.5 m: u w); s1 (") and len(text) < 60 * 40  # not the 480,000 values

@@ -64,6 +64,15 @@ class PointSeries:
             raise ParameterError(f"constraint file {self.source}: a mean wind describes total-wind data; set "
                                  "total_wind")
 
+    def __repr__(self) -> str:
+        """What the data are (a notebook cell shows this, not every value): samples, span, kind, the sensors."""
+        t = self.time_s
+        where = lambda s: f"z {s.z_m:g} m" if s.z_m is not None else f"height {s.height_m:g} m"  # noqa: E731
+        sensors = "; ".join(f"{s.name} (x {s.x_m:g} m, y {s.y_m:g} m, {where(s)}: {' '.join(s.series)})"
+                            for s in self.sensors)
+        kind = "total wind" if self.total_wind else "fluctuations"
+        return f"PointSeries {self.name!r}: {t.size} samples, {t[0]:g} to {t[-1]:g} s, {kind}; {sensors}"
+
 
 def point_series(time_s, sensors, *, total_wind: bool = False, noise_m_s: float | None = None,
                  mean_wind: dict | None = None, name: str = "measured") -> PointSeries:
