@@ -16,7 +16,11 @@ from turbgen.validation.fit.evolution import with_evolution
 from turbgen.validation.fit.kaimal import fit_kaimal_data
 from turbgen.validation.fit.kaimal_result import KaimalFit
 from turbgen.validation.fit.mean_wind import fit_mean_wind
+from turbgen.runs.constrain import load_constraint
+from turbgen.spec.point_csv import is_point_csv
 from turbgen.virtual_lidar.dataset import LidarData, is_lidar_dataset
+from turbgen.virtual_lidar.los_csv import is_los_csv
+from turbgen.virtual_lidar.los_netcdf import is_los_netcdf
 from turbgen.virtual_lidar.fit import fit_lidar
 from turbgen.virtual_lidar.report import LidarReport
 
@@ -38,9 +42,10 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
         the same made in memory (:func:`turbgen.point_series`), a field store, a field as a Dataset (``turbgen.mann``,
         in memory or not, ``turbgen.open_store``), a TurbSim ``.bts`` or a HAWC2 ``.htc`` whose ``begin mann`` block
         names the boxes (fitted against the Mann tensor summed over their periodic box,
-        ``turbgen.exporters.field_files``), or a lidar record: a ``turbgen lidar --out`` dataset or what
-        ``turbgen.lidar`` returned (ae and L from its line-of-sight spectra with the probe volume, Gamma held, the
-        evolution time from gates along x: ``turbgen.virtual_lidar.fit``).
+        ``turbgen.exporters.field_files``), or a lidar record: a ``turbgen lidar --out`` dataset, a line-of-sight
+        CSV or netCDF file (the ``--constrain`` formats) or what ``turbgen.lidar`` returned (ae and L from its
+        line-of-sight spectra with the probe volume, Gamma held, the evolution time from gates along x:
+        ``turbgen.virtual_lidar.fit``).
     U : float, optional
         Mean wind speed [m/s] of k1 = 2 pi f / U for fluctuation data (default: the mean of u of total-wind data;
         a store holds its own).
@@ -90,7 +95,7 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
                                  "bootstrap and a lifetime other than 'guo' do not apply")
         return fit_lidar(data, nperseg, gamma)
     if gamma is not None:
-        raise ParameterError(f"gamma = {gamma!r}: a held Gamma applies to a lidar dataset only (other data fit it)")
+        raise ParameterError(f"gamma = {gamma!r}: a held Gamma applies to a lidar record only (other data fit it)")
     if bootstrap and (isinstance(bootstrap, bool) or not isinstance(bootstrap, int) or bootstrap < 2):
         raise ParameterError(f"bootstrap = {bootstrap!r} must be an integer >= 2 (realisations), or 0 for none")
     fd = load_fit_data(data, U, points)
@@ -120,11 +125,14 @@ def bootstrap_sd(fit: MannFit, data, B: int, points=None) -> dict:
 
 
 def _opened(data):
-    """``data`` with a path as a str, and a .bts or HAWC2 .htc opened as a field (turbgen.exporters.field_files)."""
+    """``data`` with a path as a str, a .bts or HAWC2 .htc opened as a field (turbgen.exporters.field_files), and a
+    line-of-sight CSV or netCDF file read as the lidar record ``--constrain`` reads (LidarData)."""
     if isinstance(data, os.PathLike):
         data = os.fspath(data)
     if isinstance(data, str) and os.path.splitext(data)[1].lower() in WIND_FILES:
         return open_wind_file(data)
+    if isinstance(data, str) and (is_los_netcdf(data) or (is_los_csv(data) and not is_point_csv(data))):
+        return load_constraint(data)
     return data
 
 
@@ -159,4 +167,9 @@ def fit_kaimal(data, *, U: float | None = None, nperseg: int | None = None, poin
     >>> fit = turbgen.fit_kaimal(ds, points=[(-6, z) for z in (-18, -6, 6, 18)])  # doctest: +SKIP
     >>> fit.values["length_u_m"].ci95, fit.values["a_yz"].value  # doctest: +SKIP
     """
-    return fit_kaimal_data(load_fit_data(_opened(data), U, points), nperseg)
+    data = _opened(data)
+    if isinstance(data, LidarReport | LidarData) or (isinstance(data, str) and is_lidar_dataset(data)):
+        what = data.store if isinstance(data, LidarReport) else getattr(data, "source", data)
+        raise ParameterError(f"DATA = {what!r} is a lidar record: the Kaimal fit takes "
+                             "point series and fields; fit a lidar record with turbgen fit mann")
+    return fit_kaimal_data(load_fit_data(data, U, points), nperseg)

@@ -54,7 +54,7 @@ def _remember_overwrite(ctx, param, value):
               help="For a store: fit the series at this grid point (y, z) [m] of every plane (repeat for a mast) "
                    "against the grid's expectation there; default a sub-lattice of 8 x 8 points.")
 @click.option("--gamma", type=float, default=None,
-              help="For a lidar dataset: the Gamma held (default 3.9; its LOS spectra do not identify it).")
+              help="For a lidar record: the Gamma held (default 3.9; its LOS spectra do not identify it).")
 @click.option("--bootstrap", type=int, default=0, metavar="B",
               help="For a store: refit B fields made at the fitted parameters and print the bootstrap sd beside "
                    "the analytic one (default 0: off).")
@@ -69,8 +69,8 @@ def _remember_overwrite(ctx, param, value):
 @click.pass_context
 def fit_mann_command(ctx, data, U, nperseg, points, gamma, bootstrap, lifetime, as_json, plots):
     """Fit ae, L, Gamma of the Mann model to DATA: a point-series JSON or CSV file (sensors with u, v, w), a store, a
-    TurbSim .bts, a HAWC2 .htc whose mann block names the boxes, or a `turbgen lidar --out` dataset (ae, L and
-    the evolution time from gates along x; Gamma held).
+    TurbSim .bts, a HAWC2 .htc whose mann block names the boxes, or a lidar record: a `turbgen lidar --out`
+    dataset or a line-of-sight CSV or netCDF file (ae, L and the evolution time from gates along x; Gamma held).
 
     Weighted least squares over the Welch spectra of u, v, w and the u-w co-spectrum, each band weighted by the
     estimator's covariance; a store against its grid's expectation, sensors against the continuous model. Prints
