@@ -205,5 +205,5 @@ def test_replay_of_two_masts_takes_the_fitted_evolution_time(evolving, tmp_path)
     r = CliRunner().invoke(cli, ["mann", "--constrain", str(path), "--fit", *grid, "--evo", "frozen",
                                  "--out", str(tmp_path / "typed.zarr")])
     assert r.exit_code == 2 and len(r.output.strip().splitlines()) == 1, r.output
-    assert "--evo with --fit (fit=True): the sensors along x identify the eddy-evolution time" in r.output
+    assert "--evo with --fit (fit=True): the data along x identify the eddy-evolution time" in r.output
     assert not (tmp_path / "typed.zarr").exists()

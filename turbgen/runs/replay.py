@@ -3,10 +3,10 @@ then the field conditioned on the same data with them.
 
 The fitted ae, L and Gamma (rounded to FIT_DIGITS digits, so a fit's last bits never change the field) replace the
 run's; typed ones are refused; the run's lifetime is the fit's. A lidar record's fit holds Gamma (a given one) and
-keeps the record's U and mean wind. Sensors at two or more x fit the eddy-evolution time
-too (Guo et al. 2022); when the data identify it (the frozen limit outside its interval) it is the run's, and a typed
-one is refused. Without a typed U, U is the fitted hub speed. The store's ``fit`` attribute records the fit, the
-files' SHA-256 and the ``turbgen export`` options of that mean wind."""
+keeps the record's U and mean wind. Sensors (or range gates) at two or more x fit the eddy-evolution time too (Guo
+et al. 2022); when the data identify it (the frozen limit outside its interval) it is the run's, and a typed one is
+refused. Without a typed U, U is the fitted hub speed. The store's ``fit`` attribute records the fit, the files'
+SHA-256 and the ``turbgen export`` options of that mean wind."""
 
 from __future__ import annotations
 
@@ -132,7 +132,7 @@ def _evolution(fit, evo_typed: bool) -> dict:
     if e is None or not e.identified:
         return {}
     if evo_typed:
-        raise ParameterError(f"--evo with --fit (fit=True): the sensors along x identify the eddy-evolution time "
+        raise ParameterError(f"--evo with --fit (fit=True): the data along x identify the eddy-evolution time "
                              f"({e.value_s:.4g} s, 95 % [{e.ci95[0]:.4g}, {e.ci95[1]:.4g}]); drop --evo, or drop --fit")
     return {"evo_time_s": float(f"{e.value_s:.{FIT_DIGITS}g}")}
 
