@@ -77,6 +77,7 @@ def test_recovery_on_the_grid_within_the_999_interval(fields):
     for ds in fields:
         fit = turbgen.fit_mann(ds)
         assert fit.ok and fit.model == "grid" and fit.dof > 20
+        assert not [n for n in fit.notes if n.startswith("the model misfits")], fit.chi2_dof  # model data
         for name, truth in zip(("ae", "length_scale_m", "gamma"), TRUTH):
             v = getattr(fit, name)
             x, t = (v.value, truth) if name == "gamma" else (math.log(v.value), math.log(truth))
@@ -234,6 +235,7 @@ def test_sensor_series_of_the_mann_lifetime_are_fitted_with_it():
     ps = PointSeries("s", dt * np.arange(n), (PointSensor("s", 0.0, 0.0, 0.0, None, series),), False, None, "sonic")
     fit, guo = (turbgen.fit_mann(ps, U=U, lifetime=lt) for lt in ("mann", None))
     assert fit.ok and fit.lifetime == "mann" and guo.lifetime == "guo"
+    assert not [n for n in fit.notes if n.startswith("the model misfits")], fit.chi2_dof  # the model's own data
     for name, truth in zip(("ae", "length_scale_m", "gamma"), TRUTH):
         v = getattr(fit, name)
         x, t = (v.value, truth) if name == "gamma" else (math.log(v.value), math.log(truth))
