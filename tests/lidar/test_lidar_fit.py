@@ -15,6 +15,7 @@ from scipy.stats import chi2
 import turbgen
 from turbgen.cli import cli
 from turbgen.errors import ParameterError
+from turbgen.spec.defaults import MANN_DEFAULTS
 from turbgen.theory.params import MannParams
 from turbgen.validation.fit.data import FitData
 from turbgen.validation.fit.evolution import Sampler, fit_evolution
@@ -189,9 +190,14 @@ def test_a_line_of_sight_csv_is_a_lidar_record_to_fit(gates2, tmp_path):
 
 
 def test_one_gate_says_why_no_evolution_time(tmp_path):
+    """... and Gamma is held at the generator's default, the value the help names (it once said 3.9, not 3.1)."""
     fit = turbgen.fit_mann(str(dataset(tmp_path, (60.0,))))
     assert fit.evolution is None
     assert [n for n in fit.notes if n.startswith("evo_time_s not fitted: one range gate along x")]
+    held = MANN_DEFAULTS["gamma"]
+    assert fit.gamma.value == held and f"held at {held:g}" in " ".join(fit.notes)
+    help_text = " ".join(CliRunner().invoke(cli, ["fit", "mann", "--help"]).output.split())
+    assert f"(default {held:g}, the generator's;" in help_text
 
 
 def test_missing_values_are_skipped_or_refused(gates2, tmp_path):

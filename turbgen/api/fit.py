@@ -58,7 +58,7 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
         B >= 2: check the intervals by a parametric bootstrap (``bootstrap_sd``), reported in ``fit.bootstrap``;
         0 (default): none. Fields only.
     gamma : float, optional
-        For a lidar dataset: the Gamma [-] held (default 3.9); other data fit it.
+        For a lidar record: the Gamma [-] held (default 3.1, the generator's); other data fit it.
     lifetime : {"guo", "mann"}, optional
         The model's eddy lifetime: Guo et al. (2023, Eq. 6-7; the generator's default) or Mann (1994), as HAWC2's
         and wetb's. Default: a turbgen store's own (a contradicting value is refused), else "guo".

@@ -7,6 +7,7 @@ import json
 import click
 
 from turbgen.errors import ParameterError
+from turbgen.spec.defaults import MANN_DEFAULTS
 from turbgen.theory.params import LIFETIMES
 
 PLOT_NAME = "fit_mann.png"
@@ -54,7 +55,8 @@ def _remember_overwrite(ctx, param, value):
               help="For a store: fit the series at this grid point (y, z) [m] of every plane (repeat for a mast) "
                    "against the grid's expectation there; default a sub-lattice of 8 x 8 points.")
 @click.option("--gamma", type=float, default=None,
-              help="For a lidar record: the Gamma held (default 3.9; its LOS spectra do not identify it).")
+              help=f"For a lidar record: the Gamma held (default {MANN_DEFAULTS['gamma']:g}, the generator's; its LOS "
+                   "spectra do not identify it).")
 @click.option("--bootstrap", type=int, default=0, metavar="B",
               help="For a store: refit B fields made at the fitted parameters and print the bootstrap sd beside "
                    "the analytic one (default 0: off).")
