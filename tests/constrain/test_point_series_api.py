@@ -81,3 +81,15 @@ def test_a_point_series_shows_what_it_holds():
     text = repr(mast)
     assert text.startswith("PointSeries 'mast': 12000 samples, 0 to 599.95 s, total wind; s0 (x 0 m, y -1.5 m, "
                            "height 70.5 m: u w); s1 (") and len(text) < 60 * 40  # not the 480,000 values
+
+
+def test_in_memory_series_are_checked_without_listing_every_value(monkeypatch):
+    """The schema sees the series' first values (the rest are floats by construction); its sample limit is kept."""
+    import turbgen.spec.constraints as constraints
+
+    schema = constraints.load_schema("constraints")
+    small = {**schema, "properties": {**schema["properties"], "time_s": {**schema["properties"]["time_s"],
+                                                                           "maxItems": 3}}}
+    monkeypatch.setattr(constraints, "load_schema", lambda name: small)
+    with pytest.raises(ParameterError, match=r"^point_series 'site': time_s holds 4 samples \(at most 3\)$"):
+        turbgen.point_series([0, 1, 2, 3], [{**SENSOR, "u_m_s": [1.0, 2.0, 3.0, 4.0]}], name="site")

@@ -16,7 +16,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.input_files import CONSTRAINTS, read_input
-from turbgen.spec.config import check_mapping, parse_document
+from turbgen.spec.config import check_mapping, load_schema, parse_document
 from turbgen.spec.mean_wind import MeanWind
 from turbgen.spec.mean_wind_files import mean_wind_from_options
 from turbgen.theory import ranges
@@ -115,36 +115,52 @@ def point_series(time_s, sensors, *, total_wind: bool = False, noise_m_s: float 
     >>> mast.sensors[0].name, sorted(mast.sensors[0].series)
     ('sonic', ['u', 'w'])
     """
-    mapping = {"kind": "point-series", "name": name, "time_s": _listed(time_s, "time_s"),
-               "sensors": [_sensor_mapping(s, k) for k, s in enumerate(sensors)], "total_wind": total_wind}
-    mapping.update({k: v for k, v in (("noise_m_s", noise_m_s), ("mean_wind", mean_wind)) if v is not None})
-    return point_series_from_mapping(mapping, f"(in memory) {name}", where=f"point_series {name!r}")
+    where = f"point_series {name!r}"
+    time = _array(time_s, "time_s")
+    sensors = [_sensor_arrays(s, k) for k, s in enumerate(sensors)]
+    keys = {k: v for k, v in (("noise_m_s", noise_m_s), ("mean_wind", mean_wind)) if v is not None}
+    most = load_schema("constraints")["properties"]["time_s"]["maxItems"]
+    if time.size > most:
+        raise ParameterError(f"{where}: time_s holds {time.size} samples (at most {most})")
+    # the schema checks the keys and types on the series' first values (the rest are floats by construction)
+    check_mapping({"kind": "point-series", "name": name, "time_s": _head(time), "total_wind": total_wind, **keys,
+                   "sensors": [{k: _head(v) for k, v in s.items()} for s in sensors]}, "constraints", where)
+    return point_series_from_mapping({"name": name, "time_s": time, "sensors": sensors, "total_wind": total_wind,
+                                      **keys}, f"(in memory) {name}", where=where, checked=True)
 
 
-def _sensor_mapping(sensor, k: int) -> dict:
-    """A sensor's mapping with its series as lists (NaN as null) for the schema."""
+def _sensor_arrays(sensor, k: int) -> dict:
+    """A sensor's mapping with its series as float arrays (NaN missing)."""
     if not hasattr(sensor, "items"):
         raise ParameterError(f"point_series: sensors[{k}] must be a dict of a sensor's keys, not "
                              f"{type(sensor).__name__}")
-    return {key: _listed(v, f"sensors[{k}] {key}") if key.endswith("_m_s") else v for key, v in sensor.items()}
+    return {key: _array(v, f"sensors[{k}] {key}") if key.endswith("_m_s") else v for key, v in sensor.items()}
 
 
-def _listed(values, where: str) -> list:
-    """``values`` as a list of floats, None for NaN (a constraint file's null)."""
+def _head(value):
+    """An array's first two values as the file's list (None for NaN); other values as they are."""
+    if not isinstance(value, np.ndarray):
+        return value
+    return [None if math.isnan(x) else x for x in value[:2].tolist()]
+
+
+def _array(values, where: str) -> np.ndarray:
+    """``values`` as a 1-D float array; ParameterError naming ``where`` otherwise."""
     try:
         a = np.asarray(values, dtype=float)
     except (TypeError, ValueError):
         raise ParameterError(f"point_series: {where} must be numbers") from None
     if a.ndim != 1:
         raise ParameterError(f"point_series: {where} must be one-dimensional, not of shape {a.shape}")
-    return [None if math.isnan(x) else x for x in a.tolist()]
+    return a
 
 
-def point_series_from_mapping(data, source: str, where: str | None = None) -> PointSeries:
-    """A PointSeries from a schema-valid mapping; ParameterError naming ``where`` (default: the file ``source``)
-    for any bad content."""
+def point_series_from_mapping(data, source: str, where: str | None = None, checked: bool = False) -> PointSeries:
+    """A PointSeries from a schema-valid mapping (``checked``: already checked, its series may be float arrays);
+    ParameterError naming ``where`` (default: the file ``source``) for any bad content."""
     where = where or f"constraint file {source}"
-    check_mapping(data, "constraints", where)
+    if not checked:
+        check_mapping(data, "constraints", where)
     t = np.asarray(data["time_s"], dtype=float)
     if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
         raise ParameterError(f"{where}: time_s must be finite and strictly increasing")
@@ -155,7 +171,8 @@ def point_series_from_mapping(data, source: str, where: str | None = None) -> Po
         for c in COMPONENTS:
             if f"{c}_m_s" not in s:
                 continue
-            v = np.array([math.nan if x is None else x for x in s[f"{c}_m_s"]], dtype=float)
+            v = s[f"{c}_m_s"]
+            v = v if isinstance(v, np.ndarray) else np.array([math.nan if x is None else x for x in v], dtype=float)
             if len(v) != len(t):
                 raise ParameterError(f"{where}: {name} {c}_m_s has {len(v)} values for {len(t)} times")
             ranges.check_values("measured_m_s", v, f"{where}: {name} {c}_m_s")
