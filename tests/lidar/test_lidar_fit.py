@@ -23,8 +23,8 @@ from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
 from turbgen.virtual_lidar.dataset import read_dataset
 from turbgen.virtual_lidar.description import LidarDescription, load_lidar
-from turbgen.virtual_lidar.run import measurements_of
 from turbgen.virtual_lidar.fit import TAIL, LosModel, lidar_fit_data, los_spectrum, probe_gain, sampled_store
+from turbgen.virtual_lidar.run import measurements_of
 
 TRUTH = dict(ae=0.08, L=30.0, gamma=3.2, evo=200.0)
 LIDAR = ('kind = "pulsed"\nmount = "nacelle"\nranges_m = {gates}\nbeam_rate_hz = 1.0\nrotor_radius_m = 24.0\n'

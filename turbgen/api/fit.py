@@ -11,17 +11,17 @@ import numpy as np
 from turbgen.errors import ParameterError
 from turbgen.exporters.field_files import FORMATS as WIND_FILES
 from turbgen.exporters.field_files import open_wind_file
+from turbgen.runs.constrain import load_constraint
+from turbgen.spec.point_csv import is_point_csv
 from turbgen.validation.fit import MannFit, fit_mann_data, load_fit_data
 from turbgen.validation.fit.evolution import with_evolution
 from turbgen.validation.fit.kaimal import fit_kaimal_data
 from turbgen.validation.fit.kaimal_result import KaimalFit
 from turbgen.validation.fit.mean_wind import fit_mean_wind
-from turbgen.runs.constrain import load_constraint
-from turbgen.spec.point_csv import is_point_csv
 from turbgen.virtual_lidar.dataset import LidarData, is_lidar_dataset
+from turbgen.virtual_lidar.fit import fit_lidar
 from turbgen.virtual_lidar.los_csv import is_los_csv
 from turbgen.virtual_lidar.los_netcdf import is_los_netcdf
-from turbgen.virtual_lidar.fit import fit_lidar
 from turbgen.virtual_lidar.report import LidarReport
 
 
