@@ -86,12 +86,9 @@ def fit_mann(data, *, U: float | None = None, nperseg: int | None = None, points
     >>> fit.length_scale_m.value, fit.length_scale_m.ci95  # doctest: +SKIP
     """
     data = _opened(data)
-    if isinstance(data, LidarReport):
-        data = data.data()
-    if isinstance(data, LidarData) or (isinstance(data, str) and is_lidar_dataset(data)):
+    if isinstance(data, LidarData):
         if U is not None or points is not None or bootstrap or lifetime not in (None, "guo"):
-            what = repr(data.source if isinstance(data, LidarData) else data)
-            raise ParameterError(f"DATA = {what} is a lidar record: it holds its own U and gates; U, points, "
+            raise ParameterError(f"DATA = {data.source!r} is a lidar record: it holds its own U and gates; U, points, "
                                  "bootstrap and a lifetime other than 'guo' do not apply")
         return fit_lidar(data, nperseg, gamma)
     if gamma is not None:
@@ -126,12 +123,16 @@ def bootstrap_sd(fit: MannFit, data, B: int, points=None) -> dict:
 
 def _opened(data):
     """``data`` with a path as a str, a .bts or HAWC2 .htc opened as a field (turbgen.exporters.field_files), and a
-    line-of-sight CSV or netCDF file read as the lidar record ``--constrain`` reads (LidarData)."""
+    lidar record (a LidarReport, a lidar dataset, a line-of-sight CSV or netCDF file) as the LidarData
+    ``--constrain`` reads."""
+    if isinstance(data, LidarReport):
+        return data.data()
     if isinstance(data, os.PathLike):
         data = os.fspath(data)
     if isinstance(data, str) and os.path.splitext(data)[1].lower() in WIND_FILES:
         return open_wind_file(data)
-    if isinstance(data, str) and (is_los_netcdf(data) or (is_los_csv(data) and not is_point_csv(data))):
+    if isinstance(data, str) and (is_lidar_dataset(data) or is_los_netcdf(data)
+                                  or (is_los_csv(data) and not is_point_csv(data))):
         return load_constraint(data)
     return data
 
@@ -168,8 +169,7 @@ def fit_kaimal(data, *, U: float | None = None, nperseg: int | None = None, poin
     >>> fit.values["length_u_m"].ci95, fit.values["a_yz"].value  # doctest: +SKIP
     """
     data = _opened(data)
-    if isinstance(data, LidarReport | LidarData) or (isinstance(data, str) and is_lidar_dataset(data)):
-        what = data.store if isinstance(data, LidarReport) else getattr(data, "source", data)
-        raise ParameterError(f"DATA = {what!r} is a lidar record: the Kaimal fit takes "
-                             "point series and fields; fit a lidar record with turbgen fit mann")
+    if isinstance(data, LidarData):
+        raise ParameterError(f"DATA = {data.source!r} is a lidar record: the Kaimal fit takes point series and "
+                             "fields; fit a lidar record with turbgen fit mann")
     return fit_kaimal_data(load_fit_data(data, U, points), nperseg)
