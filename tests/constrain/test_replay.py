@@ -119,6 +119,19 @@ def test_the_api_replays_the_same_field(replay):
     assert ds.attrs["fit"] == stored.attrs["fit"]
 
 
+def test_a_run_file_s_fit_key_replays_the_same_field(replay, tmp_path):
+    """``fit = true`` in a run file (schemas/mann-run.schema.json) is --fit: the same field and fit record."""
+    run_file = tmp_path / "replay.json"
+    run_file.write_text(json.dumps({"constrain": [str(MAST)], "fit": True, "hub_height_m": HUB, "evo_time_s": None,
+                                    "grid": {"nt": 1024, "dt_s": 0.5, "x_m": [0], "ny": 16, "nz": 15, "dy_m": 3}}))
+    out = tmp_path / "file.zarr"
+    r = CliRunner().invoke(cli, ["mann", "--config", str(run_file), "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    a, b = turbgen.open_store(out), turbgen.open_store(replay[0])
+    assert all(np.array_equal(a[c].values, b[c].values) for c in "uvw")
+    assert a.attrs["fit"]["run"] == b.attrs["fit"]["run"] and a.attrs["parameters"] == b.attrs["parameters"]
+
+
 def test_refusals(tmp_path):
     r = CliRunner().invoke(cli, ["mann", "--constrain", str(MAST), "--fit", "--L", "30", "--gamma", "3",
                                  "--out", str(tmp_path / "x.zarr")])
@@ -126,12 +139,15 @@ def test_refusals(tmp_path):
         "Error: --L, --gamma with --fit (fit=True): the fit sets L, gamma and the energy level from the data; drop "
         "them, or drop --fit")
     r = CliRunner().invoke(cli, ["mann", "--fit", "--out", str(tmp_path / "x.zarr")])
-    assert r.exit_code == 2 and "--fit needs --constrain DATA" in r.output
+    assert r.exit_code == 2 and r.output.strip().splitlines()[-1] == (
+        "Error: fit (--fit) needs constrain (--constrain DATA): the data to fit and replay")
     assert not (tmp_path / "x.zarr").exists()
     with pytest.raises(ParameterError, match="^sigma_u with --fit"):
         turbgen.mann(constrain=[MAST], fit=True, sigma_u=1.0)
-    with pytest.raises(ParameterError, match="`fit` needs `constrain`"):
+    with pytest.raises(ParameterError, match=r"^fit \(--fit\) needs constrain"):
         turbgen.mann(fit=True)
+    with pytest.raises(ParameterError, match=r"^fit \(--fit\) needs constrain"):
+        turbgen.mann(config={"fit": True})
     with pytest.raises(ParameterError, match="^--fit of 2 files: the sensor name.s. 'sonic 106.5 m', .* repeat; "):
         turbgen.mann(constrain=[MAST, MAST], fit=True)
     other = turbgen.point_series([0.0, 0.5, 1.0], [dict(name="cup", x_m=0, y_m=0, z_m=0, u_m_s=[9.0, 9.5, 9.2])],

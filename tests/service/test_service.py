@@ -11,6 +11,7 @@ import sys
 import threading
 import time
 import zipfile
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -20,6 +21,7 @@ import xarray as xr
 from service_server import TINY_GRID, Server
 
 from turbgen.exporters import export_store, read_bts, read_hawc2
+from turbgen.service.run_ids import canonical_mapping, run_from_canonical
 from turbgen.store import open_store
 
 CHROMEDRIVER = shutil.which("chromedriver")
@@ -318,6 +320,39 @@ def test_constrained_run_from_an_upload_is_the_cli_field(server, tmp_path):
     s = server.wait(sw["runs"][0]["id"], timeout_s=120)
     assert s["parameters"]["constrain"] == [up["id"]] and "constraints" in open_store(
         server.root / "runs" / sw["runs"][0]["id"] / "store.zarr").attrs
+
+
+def test_a_replay_from_an_upload_is_the_cli_field(server, tmp_path):
+    """A run with ``fit`` on an uploaded mast is `turbgen mann --constrain FILE --fit` to the bit (the fit in the
+    worker): U, L, Gamma and ae the fitted ones in its status; the keys the fit sets, a preset, and fit without
+    constrain or in a sweep refused (422) before anything is queued."""
+    mast = Path(__file__).resolve().parents[2] / "examples" / "mast-fit.json"
+    up = _upload(server, mast.read_bytes(), "application/json")[2]["id"]
+    grid = {"nt": 1024, "dt_s": 0.5, "ny": 16, "nz": 15, "dy_m": 3.0, "x_m": [0]}
+    cfg = {"model": "mann", "constrain": [up], "fit": True, "hub_height_m": 88.5, "evo_time_s": None, "grid": grid}
+    status, _, out = server.call("POST", "/runs", cfg)
+    assert status == 202, out
+    s = server.wait(out["id"], timeout_s=180)
+    _cli(["mann", "--constrain", str(mast), "--fit", "--hub-height", "88.5", "--evo", "frozen", "--nt", "1024", "--dt",
+          "0.5", "--ny", "16", "--nz", "15", "--dy", "3", "--planes", "0", "--out", "cli.zarr"], tmp_path)
+    served, local = open_store(server.root / "runs" / out["id"] / "store.zarr"), open_store(tmp_path / "cli.zarr")
+    for c in "uvw":
+        np.testing.assert_array_equal(served.array(c)[...], local.array(c)[...])
+    assert served.attrs["fit"]["run"] == local.attrs["fit"]["run"]
+    fitted = local.attrs["fit"]["run"]
+    assert {k: s["parameters"][k] for k in fitted} == fitted and s["parameters"]["fit"] is True
+    assert server.call("POST", "/runs", cfg)[2] == {**out, "submitted": "complete"}  # the same id: served
+    recorded = json.loads((server.root / "runs" / out["id"] / "request.json").read_text())["run"]
+    assert recorded["fit"] == {"given": ["evo_time_s"]} and "length_scale_m" not in recorded
+    assert canonical_mapping(*run_from_canonical("mann", recorded)) == recorded  # re-queued after a restart as it was
+    for body, detail in (({**cfg, "length_scale_m": 30.0}, "L with --fit (fit=True): the fit sets L, gamma and "),
+                         ({**cfg, "preset": "neutral"}, "preset with fit: the fit sets L, gamma and the energy level"),
+                         ({k: v for k, v in cfg.items() if k != "constrain"}, "fit (--fit) needs constrain")):
+        status, _, refused = server.call("POST", "/runs", body)
+        assert status == 422 and refused["detail"].startswith(detail), refused
+    sweep = {"models": ["mann"], "presets": ["neutral"], "speeds": [12], "seeds": [5], "constrain": [up], "fit": True}
+    status, _, refused = server.call("POST", "/sweeps", sweep)
+    assert status == 422 and refused["detail"].startswith("fit: not accepted by the service (a sweep's presets")
 
 
 def _los_csv(header: str, n_gates: int = 10) -> bytes:

@@ -183,7 +183,7 @@ def mann(L: float | None = None, gamma: float | None = None, evo: float | str | 
     fit : bool, optional
         With ``constrain`` of point-series files or one lidar record: fit ae, L, Γ (held for a lidar record), the
         evolution time (sensors along x) and the mean wind to it first (turbgen.runs.replay; ``L``, ``gamma`` and the
-        energy level are refused); ``attrs["fit"]`` records it.
+        energy level are refused); ``attrs["fit"]`` records it. A run file's ``fit = true`` is the same.
     progress : bool, optional
         Show a progress bar on stderr.
     fft_backend : str, optional
@@ -225,10 +225,8 @@ def mann(L: float | None = None, gamma: float | None = None, evo: float | str | 
     options = dict(L=L, gamma=gamma, evo=evo, seed=seed, U=U, ae=ae, sigma_u=sigma_u, ti=ti, planes=planes,
                    gates=gates, nt=nt, dt=dt, ny=ny, nz=nz, dy=dy, dz=dz, lifetime=lifetime, factor1=factor1,
                    factor2=factor2, pad_yz=pad_yz, hub_height=hub_height, constrain=constrain, noise=noise,
-                   conditional_mean=conditional_mean)  # fmt: skip
+                   conditional_mean=conditional_mean, fit=fit)  # fmt: skip
     mapping, request = mann_run_mapping(options, config, preset, presets_file)
-    if fit and request is None:
-        raise ParameterError("`fit` needs `constrain` (the data to fit and replay)")
     if request is None:
         run = MannRun.from_mapping(mapping)
         if out is None and _mann_fits(run, threads, stencil_cache, memory):
@@ -240,7 +238,7 @@ def mann(L: float | None = None, gamma: float | None = None, evo: float | str | 
     else:
         from turbgen.runs.constrain import mann_constrained_in_memory
 
-        run, files, placed, fit_record = constrained_mann_run(mapping, request, fit, options, stencil_cache, "")
+        run, files, placed, fit_record = constrained_mann_run(mapping, request, options, stencil_cache, "")
         if out is None and _constrained_fits(run, placed, threads, memory):
             return mann_constrained_in_memory(run, files, noise_m_s=request.noise_m_s,
                                               conditional_mean=request.conditional_mean,
@@ -268,15 +266,16 @@ def mann_run_mapping(options: Mapping, config: PathLike | Mapping | None = None,
                                                   replaces=MANN_REPLACES, x_m=x_m))  # fmt: skip
 
 
-def constrained_mann_run(mapping: dict, request: ConstraintRequest, fit: bool, options: dict, stencil_cache,
+def constrained_mann_run(mapping: dict, request: ConstraintRequest, options: dict, stencil_cache,
                          prefix: str = "--") -> tuple:
     """(run, loaded constraints, placed data, fit record or None) of a constrained ``turbgen.mann`` / ``turbgen
-    mann``: with ``fit`` fitted to the data first (turbgen.runs.replay; ``options`` given, ``prefix`` naming them, are
-    refused); without an energy level, ae estimated from the data; every check of the data before any output."""
+    mann``: with ``request.fit`` fitted to the data first (turbgen.runs.replay; ``options`` given, ``prefix``
+    naming them, are refused); without an energy level, ae estimated from the data; every check of the data before
+    any output."""
     from turbgen.runs.constrain import load_constraints, place, with_energy_from_data
 
     constraints, record = load_constraints(request.files), None
-    if fit:
+    if request.fit:
         from turbgen.runs.replay import check_fit_options, fitted_inputs
 
         from turbgen.virtual_lidar.dataset import LidarData

@@ -12,7 +12,7 @@ from turbgen.theory.ranges import LIMITS
 
 PLANE_KEYWORDS = ("planes", "gates")
 # flags: False is "not given", as an option not typed on the command line (a run file's true stays)
-_FLAGS = ("rescale", "conditional_mean")
+_FLAGS = ("rescale", "conditional_mean", "fit")
 
 
 def _no_files(name: str, value) -> bool:

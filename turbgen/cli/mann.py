@@ -110,15 +110,13 @@ def mann(**opt):
     mapping, request = mann_run_mapping({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],
                                         opt["presets_file"])  # fmt: skip
     constraints = out = fit = None
-    if opt["fit"] and request is None:
-        raise click.UsageError("--fit needs --constrain DATA (the data to fit and replay)")
     if request is None:
         run = MannRun.from_mapping(mapping)
     else:
         from turbgen.runs.constrain import constrained_store_name
 
         # no ae, sigma_u, ti or IEC class given: ae estimated from the data (printed with the run below)
-        run, constraints, placed, fit = constrained_mann_run(mapping, request, opt["fit"], opt, opt["stencil_cache"])
+        run, constraints, placed, fit = constrained_mann_run(mapping, request, opt, opt["stencil_cache"])
         out = constrained_store_name(run, placed, request.conditional_mean)
     out = opt["out"] if opt["out"] is not None else out or run.default_store_name()
     check_output_path(out)

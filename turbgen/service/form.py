@@ -22,7 +22,7 @@ _GROUP_OF = {
     "ae": "energy", "sigma_u_m_s": "energy", "ti": "energy", "turb_class": "energy", "sigma_m_s": "energy",
     "nt": "grid", "dt_s": "grid", "ny": "grid", "nz": "grid", "dy_m": "grid", "dz_m": "grid",
     "x_m": "planes", "gates": "planes", "U_m_s": "mean wind / export", "hub_height_m": "mean wind / export",
-    "constrain": "constraints", "noise_m_s": "constraints", "conditional_mean": "constraints",
+    "constrain": "constraints", "noise_m_s": "constraints", "conditional_mean": "constraints", "fit": "constraints",
 }  # fmt: skip
 # schema keys the form does not show, and why
 NOT_IN_FORM = {

@@ -12,7 +12,7 @@ from pathlib import Path
 from turbgen.errors import one_line
 from turbgen.service.catalog import FAILURE_ROOM, Catalog, write_json_atomic
 from turbgen.service.limits import RETRY_AFTER_S, LimitError
-from turbgen.service.run_ids import canonical_mapping, run_from_canonical
+from turbgen.service.run_ids import canonical_mapping, replay_mapping, run_from_canonical
 from turbgen.spec.constraints import ConstraintRequest
 
 MAX_STARTS = 3  # a run started this often without finishing (its server died each time) is failed, not re-queued
@@ -20,22 +20,29 @@ _STENCIL_LOCK = threading.Lock()  # one stencil build at a time: a second reques
 
 
 def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: int | None = None,
-            constraints: ConstraintRequest | None = None, energy_from_data: bool = False) -> dict:
+            constraints: ConstraintRequest | None = None, energy_from_data: bool = False,
+            replay: dict | None = None) -> dict:
     """Worker side: generate ``run`` of ``model`` into the store ``out`` as the CLI does; the run summary's
     JSON-able entries. Mann stencils: one build at a time per process, cached in ``stencil_cache`` (capped at
-    ``stencil_cache_bytes``). ``constraints``: files to condition on (ae from them with ``energy_from_data``)."""
+    ``stencil_cache_bytes``). ``constraints``: files to condition on (ae from them with ``energy_from_data``);
+    ``replay``: the run mapping the fit to them completes (``turbgen mann --fit``), the fitted keys in ``fit``."""
     from turbgen.runs.models import get_model
 
     if constraints is not None:
         from turbgen.runs.constrain import load_constraints, run_mann_constrained, with_energy_from_data
 
-        files = load_constraints(constraints.files)
-        if energy_from_data:
+        files, fit = load_constraints(constraints.files), None
+        if replay is not None:
+            from turbgen.runs.replay import fitted_inputs
+
+            mapping, files, fit = fitted_inputs(replay, files, evo_typed="evo_time_s" in replay)
+            run = with_energy_from_data(mapping, files, constraints.noise_m_s)  # ae fitted: the run of mapping
+        elif energy_from_data:
             mapping = {k: v for k, v in canonical_mapping(run).items() if k not in ("ae", "ae_from")}
             run = with_energy_from_data(mapping, files, constraints.noise_m_s, stencil_cache)
         summary = run_mann_constrained(run, out, files, noise_m_s=constraints.noise_m_s,
-                                       conditional_mean=constraints.conditional_mean, cache_dir=stencil_cache)
-        return _scalars(summary)
+                                       conditional_mean=constraints.conditional_mean, cache_dir=stencil_cache, fit=fit)
+        return _scalars(summary) | ({} if fit is None else {"fit": fit["run"]})
     entry = get_model(model)
     build_shared = entry.shared_part(run, None, None)
     shared = None
@@ -97,6 +104,7 @@ class Jobs:
                                         constraints.get("noise_m_s"), constraints.get("conditional_mean", False))
         fut = self.client.submit(execute, model, run, out, cache, self.stencil_cache_bytes, request,
                                  bool(constraints and constraints.get("energy_from_data")),
+                                 replay_mapping(run, constraints or {}),
                                  key=f"turbgen-run-{rid}-{uuid.uuid4().hex[:8]}", pure=False)  # fmt: skip
         self.active[rid] = fut
         self.computations += 1

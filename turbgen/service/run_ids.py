@@ -18,6 +18,8 @@ from turbgen.store.layout import grid_to_attrs
 _ID = re.compile(r"^[0-9a-f]{24}$")
 SERVICE_KEYS = (*CONSTRAINT_KEYS, "energy_from_data")  # the constraint keys of a recorded request
 ENERGY_KEYS = ("ae", "sigma_u_m_s", "ti", "turb_class")  # a constrained request with none: ae from the data
+# the run keys a replay (``fit``) sets from the data unless the request gives them (turbgen.runs.replay)
+FIT_SETS = ("ae", "ae_from", "length_scale_m", "gamma", "sigma_u_m_s", "ti", "U_m_s", "evo_time_s")
 
 
 def build_run(body) -> tuple[str, object, dict]:
@@ -35,6 +37,11 @@ def build_run(body) -> tuple[str, object, dict]:
     constraints = constraint_keys({key: body.pop(key) for key in CONSTRAINT_KEYS if key in body})
     if constraints and model != "mann":
         raise ParameterError(f"constrain: the service conditions Mann runs only, not {model}")
+    if "fit" in constraints:
+        if preset is not None:
+            raise ParameterError(f"preset with fit: the fit sets L, gamma and the energy level of {preset!r} from the "
+                                 "data; drop the preset, or drop fit")
+        constraints["fit"] = {"given": sorted(k for k in FIT_SETS if k in body)}  # the rest the worker fits
     if preset is not None:
         from turbgen.spec.preset_runs import run_keys
 
@@ -44,15 +51,17 @@ def build_run(body) -> tuple[str, object, dict]:
         if isinstance(U, bool) or not isinstance(U, (int, float)):  # a bad U is reported by from_mapping below
             U = entry.spec.from_mapping({}).U_m_s
         body = {**run_keys(model, preset, U), **body}
-    if constraints and not any(key in body for key in ENERGY_KEYS):
+    if constraints and "fit" not in constraints and not any(key in body for key in ENERGY_KEYS):
         constraints["energy_from_data"] = True  # as `turbgen mann --constrain`: ae estimated from the data (worker)
     return model, entry.spec.from_mapping(body), constraints
 
 
 def constraint_keys(mapping: dict) -> dict:
     """The constraint keys of a run request in canonical form ({} without constraints): ``constrain`` (upload ids),
-    ``noise_m_s`` when given, ``conditional_mean`` and ``energy_from_data`` when true."""
+    ``noise_m_s`` when given, ``conditional_mean`` and ``energy_from_data`` when true, ``fit`` ({"given": the
+    :data:`FIT_SETS` keys the request gives}) for a replay."""
     request = split_constraint_keys({k: v for k, v in mapping.items() if k != "energy_from_data"})[1]
+    fit = mapping.get("fit")  # true in a request, {"given": [...]} as recorded
     if request is None:
         return {}
     for n, cid in enumerate(request.files):
@@ -61,7 +70,27 @@ def constraint_keys(mapping: dict) -> dict:
                                  "(POST /constraints), not a file")
     return {"constrain": list(request.files), **({} if request.noise_m_s is None else {"noise_m_s": request.noise_m_s}),
             **({"conditional_mean": True} if request.conditional_mean else {}),
-            **({"energy_from_data": True} if mapping.get("energy_from_data") else {})}  # fmt: skip
+            **({"energy_from_data": True} if mapping.get("energy_from_data") else {}),
+            **({"fit": {"given": sorted(fit["given"] if isinstance(fit, dict) else ())}} if request.fit else {})}
+
+
+def replay_mapping(run, constraints: dict) -> dict | None:
+    """The run mapping of a replay request that the worker's fit completes (turbgen.runs.replay), None for others."""
+    if "fit" not in constraints:
+        return None
+    return {k: v for k, v in canonical_mapping(run, constraints).items() if k not in SERVICE_KEYS}
+
+
+def check_replay(constraints: dict, files: list) -> None:
+    """ParameterError for the keys of a replay request that its fit sets (Gamma is held for a lidar record: given,
+    it is the value held), as ``turbgen mann --fit`` refuses the options."""
+    from turbgen.runs.constrain import load_constraints
+    from turbgen.runs.replay import check_fit_options
+    from turbgen.spec.mann import OPTIONS
+    from turbgen.virtual_lidar.dataset import LidarData
+
+    given = {name: True for name, key in OPTIONS.items() if key in constraints["fit"]["given"]}
+    check_fit_options(given, prefix="", lidar=any(isinstance(c, LidarData) for c in load_constraints(files)))
 
 
 def _model(name):
@@ -76,7 +105,9 @@ def _model(name):
 def canonical_mapping(run, constraints: dict | None = None) -> dict:
     """The run mapping that rebuilds ``run`` exactly: its parameters (seed included), ``grid`` and ``constraints``."""
     constraints = constraints or {}
-    drop = ("ae", "ae_from") if constraints.get("energy_from_data") else ()  # the worker estimates it
+    drop: tuple = ("ae", "ae_from") if constraints.get("energy_from_data") else ()  # the worker estimates it
+    if "fit" in constraints:  # a replay: the worker fits the keys not given
+        drop = tuple(k for k in FIT_SETS if k not in constraints["fit"]["given"])
     return {**{k: v for k, v in run.parameters().items() if k not in drop}, "grid": grid_to_attrs(run.grid),
             **constraints}
 

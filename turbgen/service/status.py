@@ -18,12 +18,15 @@ def run_status(catalog: Catalog, jobs: Jobs, rid: str) -> dict:
     grid = req["run"]["grid"]
     out = {"id": rid, "model": req["model"], "parameters": {k: v for k, v in req["run"].items() if k != "grid"},
            "grid": grid, "preset": req.get("preset"), "turbgen": req.get("turbgen")}  # fmt: skip
+    if "fit" in out["parameters"]:
+        out["parameters"]["fit"] = True  # a replay (as requested): the fitted keys join once it is complete
     total = 3 * n_chunks(SimpleNamespace(nt=grid["nt"], nx=len(grid["x_m"])), default_chunk_t(grid["nt"]))
     if catalog.is_complete(rid):
         out["status"] = "complete"
         out["progress"] = {"chunks_done": total, "chunks_total": total}
         try:
             out["summary"] = json.loads((catalog.run_dir(rid) / "summary.json").read_text())
+            out["parameters"] |= out["summary"].get("fit", {})  # a replay's fitted keys
         except (OSError, ValueError):
             pass
         rep = catalog.run_dir(rid) / "validation" / "report.json"

@@ -248,7 +248,7 @@ def load_point_series(path) -> PointSeries:
 
 
 # the keys of a Mann run mapping (schemas/mann-run.schema.json) that condition the field; MannRun itself is the prior
-CONSTRAINT_KEYS = ("constrain", "noise_m_s", "conditional_mean")
+CONSTRAINT_KEYS = ("constrain", "noise_m_s", "conditional_mean", "fit")
 MAX_NOISE_M_S = 100.0  # the schemas' maximum of noise_m_s
 
 
@@ -256,27 +256,30 @@ MAX_NOISE_M_S = 100.0  # the schemas' maximum of noise_m_s
 class ConstraintRequest:
     """What a run mapping asks to condition the field on: ``files`` (paths, or loaded PointSeries /
     LidarData), ``noise_m_s`` [m/s] (None: each file's own), ``conditional_mean`` (the conditional mean
-    instead of a conditional sample)."""
+    instead of a conditional sample), ``fit`` (replay: the model fitted to the files first, turbgen.runs.replay)."""
 
     files: tuple
     noise_m_s: float | None = None
     conditional_mean: bool = False
+    fit: bool = False
 
 
 def split_constraint_keys(mapping: dict) -> tuple[dict, ConstraintRequest | None]:
     """(the run mapping without the constraint keys, its ConstraintRequest or None without ``constrain``);
-    ParameterError for ``noise_m_s`` or ``conditional_mean`` without ``constrain``, or a bad noise."""
+    ParameterError for ``noise_m_s``, ``conditional_mean`` or ``fit`` without ``constrain``, or a bad noise."""
     rest = {k: v for k, v in mapping.items() if k not in CONSTRAINT_KEYS}
     files = mapping.get("constrain") or ()
     if isinstance(files, (str, Path)) or not isinstance(files, (list, tuple)):
         files = (files,) if files else ()
-    noise, mean = mapping.get("noise_m_s"), bool(mapping.get("conditional_mean", False))
+    noise, mean, fit = mapping.get("noise_m_s"), bool(mapping.get("conditional_mean")), bool(mapping.get("fit"))
     if not files:
+        if fit:
+            raise ParameterError("fit (--fit) needs constrain (--constrain DATA): the data to fit and replay")
         if noise is not None or mean:
             raise ParameterError("a measurement noise (noise_m_s) or conditional_mean needs constraints: give "
                                   "constrain (--constrain FILE)")
         return rest, None
-    return rest, ConstraintRequest(tuple(files), check_noise(noise), mean)
+    return rest, ConstraintRequest(tuple(files), check_noise(noise), mean, fit)
 
 
 def check_noise(noise) -> float | None:

@@ -29,7 +29,7 @@ OPTIONS = {
     "U": "U_m_s", "L": "length_scale_m", "gamma": "gamma", "evo": "evo_time_s", "lifetime": "lifetime",
     "factor1": "factor1", "factor2": "factor2", "seed": "seed", "hub_height": "hub_height_m", "pad_yz": "pad_yz",
     "ae": "ae", "sigma_u": "sigma_u_m_s", "ti": "ti",
-    "constrain": "constrain", "noise": "noise_m_s", "conditional_mean": "conditional_mean",
+    "constrain": "constrain", "noise": "noise_m_s", "conditional_mean": "conditional_mean", "fit": "fit",
 }  # fmt: skip
 # a given energy level replaces any from the run file or the preset: one level, one source
 ENERGY_KEYS = ("ae", "sigma_u_m_s", "ti")

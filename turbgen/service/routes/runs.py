@@ -12,7 +12,7 @@ from starlette.concurrency import run_in_threadpool
 
 from turbgen.service.bodies import read_json
 from turbgen.service.limits import LimitError, check_constrained_memory, check_memory
-from turbgen.service.run_ids import build_run, canonical_mapping, run_id
+from turbgen.service.run_ids import build_run, canonical_mapping, check_replay, run_id
 from turbgen.service.state import ServiceState, complete_store, get_state, not_found, require_token
 from turbgen.service.status import run_status
 
@@ -39,6 +39,8 @@ def _accept(body, state: ServiceState) -> tuple[str, str]:
     rid = run_id(model, canonical_mapping(run, constraints))
     if constraints and not state.catalog.is_complete(rid):  # the data placed on the grid: refused before queueing
         files = [str(p) for p in state.catalog.uploads.paths(constraints["constrain"])]
+        if "fit" in constraints:  # the keys the fit sets, refused before queueing (its own refusals fail the run)
+            check_replay(constraints, files)
         check_constrained_memory(run, files, constraints, state.settings.memory_budget_bytes)
     elif not state.catalog.is_complete(rid):  # a complete run is served, never recomputed
         check_memory(model, run, state.settings.memory_budget_bytes)

@@ -22,6 +22,7 @@ REFUSED_KEYS = {
     "scheduler": "the server's own cluster runs every run",
     "workers": "the server's own cluster runs every run",
     "out": "runs are stored in the server's catalog: GET /runs/<id>/store",
+    "fit": "a sweep's presets set L, gamma and the energy level; replay with POST /runs and fit, a run per seed",
 }
 
 

@@ -112,6 +112,7 @@ async function submitRun(ev) {
 
 function params(run) {
   const p = run.parameters || {};
+  if (run.model === 'mann' && p.fit && p.length_scale_m == null) return 'fitted to the data (replay)';
   if (run.model === 'mann') {
     const evo = p.evo_time_s == null ? 'frozen' : p.evo_time_s + ' s';
     return `L ${p.length_scale_m} m, &Gamma; ${p.gamma}, evo ${evo}, ${p.lifetime || ''}`;
