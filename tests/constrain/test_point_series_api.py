@@ -93,3 +93,37 @@ def test_in_memory_series_are_checked_without_listing_every_value(monkeypatch):
     monkeypatch.setattr(constraints, "load_schema", lambda name: small)
     with pytest.raises(ParameterError, match=r"^point_series 'site': time_s holds 4 samples \(at most 3\)$"):
         turbgen.point_series([0, 1, 2, 3], [{**SENSOR, "u_m_s": [1.0, 2.0, 3.0, 4.0]}], name="site")
+
+
+def test_a_long_file_s_values_are_checked_as_the_schema_would_name_them(tmp_path, monkeypatch):
+    """A 20 Hz file's lists reach the schema cut to their first values when they hold only numbers (null in a
+    series); any other value deep in a list, and a list over the sample limit, get the full check's message."""
+    import turbgen.spec.config as config
+    import turbgen.spec.constraints as constraints
+
+    n = 12_000  # 10 min at 20 Hz
+    t = (np.arange(n) * 0.05).tolist()
+    u = np.sin(np.arange(n) * 0.01).tolist()
+    u[5_432] = None  # missing
+    data = {"kind": "point-series", "total_wind": False, "time_s": t, "sensors": [{**SENSOR, "u_m_s": u}]}
+    path = tmp_path / "long.json"
+    path.write_text(json.dumps(data))
+    ps = load_point_series(path)
+    assert ps.time_s.size == n and np.isnan(ps.sensors[0].series["u"][5_432])
+    np.testing.assert_array_equal(np.delete(ps.sensors[0].series["u"], 5_432), np.delete(np.array(u), 5_432).astype(float))
+    for key, value, message in (("u_m_s", "3.1", "sensors/0/u_m_s/10000: '3.1' is not of type 'number', 'null'"),
+                                ("u_m_s", True, "sensors/0/u_m_s/10000: True is not of type 'number', 'null'"),
+                                ("time_s", None, "time_s/10000: None is not of type 'number'")):
+        bad = json.loads(json.dumps(data))
+        (bad["sensors"][0] if key == "u_m_s" else bad)[key][10_000] = value
+        path.write_text(json.dumps(bad))
+        with pytest.raises(ParameterError, match=f"^constraint file {re.escape(str(path))}: {re.escape(message)}$"):
+            load_point_series(path)
+    schema = constraints.load_schema("constraints")
+    small = {**schema, "properties": {**schema["properties"], "time_s": {**schema["properties"]["time_s"],
+                                                                           "maxItems": n - 1}}}
+    for module in (constraints, config):  # the view's limit and the check's schema
+        monkeypatch.setattr(module, "load_schema", lambda name: small)
+    path.write_text(json.dumps(data))
+    with pytest.raises(ParameterError, match=r"time_s: a list of 12000 items is too long \(at most 11999\)$"):
+        load_point_series(path)

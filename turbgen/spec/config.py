@@ -102,11 +102,11 @@ def _refuse_constant(name: str):
 
 def nested_deeper_than(data, limit: int) -> bool:
     """Whether ``data`` nests dicts/lists more than ``limit`` levels, found without recursion."""
-    stack = [(data, 1)]
-    while stack:
+    stack = [(data, 1)] if isinstance(data, (dict, list)) else []
+    while stack:  # containers only: a long list of numbers is scanned once, not pushed value by value
         value, depth = stack.pop()
-        if isinstance(value, (dict, list)):
-            if depth > limit:
-                return True
-            stack.extend((v, depth + 1) for v in (value.values() if isinstance(value, dict) else value))
+        if depth > limit:
+            return True
+        stack.extend((v, depth + 1) for v in (value.values() if isinstance(value, dict) else value)
+                     if isinstance(v, (dict, list)))
     return False
