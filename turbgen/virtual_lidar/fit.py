@@ -36,7 +36,7 @@ from turbgen.validation.estimators import segment_starts
 from turbgen.validation.fit.data import FitData, detrended
 from turbgen.validation.fit.evolution import Sampler, rho_bar, with_evolution
 from turbgen.validation.fit.mann import AE_MIN, PASSES, Z95, bounds, gls, inverted_interval, parameter_covariance
-from turbgen.validation.fit.result import FitValue, MannFit
+from turbgen.validation.fit.result import FitValue, MannFit, misfit_notes
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.fit.table import scaled_spectra
 from turbgen.validation.store_run import MannBox, mann_box_from_attrs
@@ -233,8 +233,11 @@ def fit_lidar(data, nperseg: int | None = None, gamma: float | None = None, stor
         "top of the fitted range",)) + (() if keep.all() else (
         f"bands above {bands.f_hz[keep][-1]:.3g} Hz are not fitted: there the probe volume passes < {GAIN_MIN:g} of "
         "the power, and the spectrum is the probe's and the sampler's rather than the turbulence's",))
-    fit = MannFit(val[0], val[1], FitValue(g, None, None), float(np.sum(sol.fun**2) / max(sol.fun.size - 2, 1)),
-                  int(sol.fun.size - 2), tuple(flags), notes, "continuous" if store is None else "grid", fd.U_m_s,
+    dof = int(sol.fun.size - 2)
+    chi2_dof = float(np.sum(sol.fun**2) / max(dof, 1))
+    notes += tuple(misfit_notes(chi2_dof, dof, "this line-of-sight spectrum"))
+    fit = MannFit(val[0], val[1], FitValue(g, None, None), chi2_dof, dof, tuple(flags), notes,
+                  "continuous" if store is None else "grid", fd.U_m_s,
                   fd.source, bands.setup.nperseg, bands.f_hz[keep], {"los": data}, {"los": e},
                   {"los": np.sqrt(np.diag(weights))}, cov_fit=full)  # fmt: skip
     return _with_gates(fd, meas, fit, store)

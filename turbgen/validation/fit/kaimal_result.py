@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from turbgen.validation.fit.kaimal_coherence import CoherenceFit
+from turbgen.validation.fit.result import misfit_notes
 
 UNITS = {**{f"sigma_{c}_m_s": "m/s" for c in "uvw"}, **{f"length_{c}_m": "m" for c in "uvw"}, "a_yz": "-", "lc_m": "m"}
 NAMES = tuple(UNITS)
@@ -55,6 +56,7 @@ class KaimalFit:
             fitted[s] = model.expected(model.lines(*np.exp(sol.x)))
             sd[s] = fitted[s] * np.sqrt(bands.var_factor[s])  # one point's; the points' correlation aside
             chi2[s] = float(np.sum(sol.fun**2) / max(sol.fun.size - 2, 1))
+            notes = [*notes, *misfit_notes(chi2[s], sol.fun.size - 2, f"the {c} spectrum")]
         if isinstance(cfit, str):
             notes, cfit = [*notes, cfit], None
         else:

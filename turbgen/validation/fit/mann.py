@@ -16,7 +16,6 @@ import math
 import numpy as np
 from scipy.linalg import solve_triangular
 from scipy.optimize import brentq, least_squares
-from scipy.stats import chi2
 
 from turbgen.errors import ParameterError, check_choice
 from turbgen.spec.defaults import MANN_DEFAULTS
@@ -27,14 +26,13 @@ from turbgen.validation.fit.covariance import (EXACT_BINS, exact_lines, isserlis
                                                separations, spliced)
 from turbgen.validation.fit.data import FitData
 from turbgen.validation.fit.model import BandModel
-from turbgen.validation.fit.result import FitValue, MannFit
+from turbgen.validation.fit.result import FitValue, MannFit, misfit_notes
 from turbgen.validation.fit.spectra import SPECTRA, BandSpectra, estimate_bands
 
 Z95 = 1.959963984540054  # standard normal 97.5 % quantile
 PASSES = 6
 MOVE_TOL = 0.05  # re-weighting stops when no parameter moved by more than this many standard deviations
 AE_MIN = 1e-6  # lower end of the fitted ae [m^(4/3) s^-2] (the range's open 0)
-MISFIT_P = 1e-3  # chi^2 tail probability below which the fit notes that the model misfits the data
 NAMES = ("ae", "length_scale_m", "gamma")
 
 
@@ -205,10 +203,7 @@ def _result(data, bands, model, used, free, held, p, sol, cov, converged, notes,
         notes.append(f"the Welch segments ({seg_m:.4g} m of flow) are shorter than 2 pi L = "
                      f"{2 * math.pi * p['length_scale_m']:.4g} m: the spectral peak is below the lowest band")
     chi2_dof = float(np.sum(sol.fun**2) / max(dof, 1))
-    p_fit = float(chi2.sf(chi2_dof * dof, dof)) if dof > 0 else 1.0
-    if p_fit < MISFIT_P:  # whitened residuals are chi^2_dof distributed when the model holds
-        notes.append(f"the model misfits these data: chi2/dof = {chi2_dof:.3g} over {dof} dof (tail probability "
-                     f"{p_fit:.1e} were the model right): the 95 % intervals, which assume it, are too narrow")
+    notes += misfit_notes(chi2_dof, dof)
     rows, ok = [NAMES.index(n) for n in free], bool(np.all(np.isfinite(cov)))
     full, gain = np.zeros((len(NAMES), len(NAMES))), np.zeros((len(NAMES), sol.fun.size))
     full[np.ix_(rows, rows)] = cov

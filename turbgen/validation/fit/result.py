@@ -14,6 +14,19 @@ if TYPE_CHECKING:
     from turbgen.validation.fit.evolution import EvoFit
 
 SPECTRUM_LABELS = {"uu": "u", "vv": "v", "ww": "w", "uw": "-uw (co-spectrum)", "los": "line-of-sight"}
+MISFIT_P = 1e-3  # chi^2 tail probability below which a fit notes that the model misfits the data
+
+
+def misfit_notes(chi2_dof: float, dof: int, what: str = "these data") -> list[str]:
+    """[a note] when chi2/dof over ``dof`` degrees of freedom is beyond the chi^2 tail probability MISFIT_P (the
+    whitened residuals of a right model are chi^2_dof distributed), else []."""
+    from scipy.stats import chi2
+
+    p = float(chi2.sf(chi2_dof * dof, dof)) if dof > 0 else 1.0
+    if p >= MISFIT_P:
+        return []
+    return [f"the model misfits {what}: chi2/dof = {chi2_dof:.3g} over {dof} dof (tail probability {p:.1e} were the "
+            "model right): the 95 % intervals, which assume it, are too narrow"]
 
 
 @dataclass(frozen=True)
