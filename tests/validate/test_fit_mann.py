@@ -259,3 +259,22 @@ def test_inverted_interval_is_the_test_inversion():
     assert hi - 1.0 > 1.0 - lo > 0 and stat(lo) == pytest.approx(Z95**2, rel=1e-5)
     assert stat(hi) == pytest.approx(Z95**2, rel=1e-5)
     assert inverted_interval(lambda y: 0.01 * (y - 1.0) ** 2, 1.0, 0.3, 0.0, 3.0) == (0.0, 3.0)
+
+
+@pytest.mark.parametrize("gamma", [0.0, 5.0])
+def test_the_coherency_dropped_from_the_weights_is_below_1e_6(gamma):
+    """Beyond s d = SD_NEGLIGIBLE the fit's weights take the coherency between sensors as 0: there the quadrature with
+    a 16 x longer radial cut than the weights' rule (which leaves ~2.6e-5 of its own error) gives < 1e-6 for every
+    pair of components, with d along y and along z."""
+    from turbgen.theory.mann_quadrature import perpendicular_quadrature
+    from turbgen.theory.params import MannParams
+    from turbgen.validation.fit.model import PAIRS, SD_NEGLIGIBLE, WEIGHT_RULE
+
+    params, d = MannParams(ae=0.1, length_scale_m=30.0, gamma=gamma), 16.0
+    k1 = [math.sqrt((SD_NEGLIGIBLE / d) ** 2 - params.length_scale_m**-2)]
+    _, w0, g0 = perpendicular_quadrature(k1, params, PAIRS, _rule=WEIGHT_RULE)
+    auto = [abs((w0 * g0[(i, i)]).sum()) for i in range(3)]
+    for dy, dz in ((0.0, d), (d, 0.0)):
+        _, w, g = perpendicular_quadrature(k1, params, PAIRS, dy, dz, _rule={**WEIGHT_RULE, "x_hi_sep": 64.0})
+        worst = max(abs((w * g[(p, q)]).sum()) / math.sqrt(auto[p] * auto[q]) for p, q in PAIRS)
+        assert worst < 1e-6, (dy, dz, worst)
