@@ -207,3 +207,17 @@ def test_replay_of_two_masts_takes_the_fitted_evolution_time(evolving, tmp_path)
     assert r.exit_code == 2 and len(r.output.strip().splitlines()) == 1, r.output
     assert "--evo with --fit (fit=True): the data along x identify the eddy-evolution time" in r.output
     assert not (tmp_path / "typed.zarr").exists()
+
+
+def test_a_one_point_fit_at_the_top_of_l_s_range_still_gives_the_evolution_time():
+    """Two 20 Hz masts of points cut from a narrow box (12 x 12 nodes 4 m apart): the continuous one-point fit lands
+    on L = 1000 m (flagged), and gamma's interval carries its uncertainty by moving L one sd the other way; the
+    secant stepped above the range and failed with "L (length scale, m) = 7916.9 is outside the allowed range"."""
+    ds = turbgen.mann(L=30, gamma=3.2, ae=0.08, evo=100, U=10, nt=12000, dt=0.05, ny=12, nz=12, dy=4, planes=[0, 100],
+                      hub_height=90, seed=3)
+    sensors = [dict(name=f"s{x}_{k}", x_m=float(x), y_m=float(ds.y[6]), z_m=float(ds.z[k]),
+                    **{f"{c}_m_s": ds[c].values[:, i, 6, k] for c in "uvw"})
+               for i, x in enumerate((0, 100)) for k in (3, 9)]
+    fit = turbgen.fit_mann(turbgen.point_series(ds.t.values, sensors), U=10)
+    assert fit.length_scale_m.value > 999 and any("length_scale_m = 1000 is on the boundary" in f for f in fit.flags)
+    assert fit.evolution is not None and fit.evolution.ci95[1] is not None and fit.evolution.sensitivity[1] != 0

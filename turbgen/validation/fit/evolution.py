@@ -336,12 +336,13 @@ def _sensitivity(problem: _Problem, data: FitData, params: MannParams, x: float,
                  rng: tuple) -> np.ndarray:
     """d ln gamma / d (ln ae, ln L, Gamma) of the fit: ln gamma refitted (weights held) with ln L, then Gamma, moved
     by one sd of the one-point fit (a secant); 0 for ae (the co-coherence is a ratio: ae cancels) and for a held or
-    unidentified parameter."""
+    unidentified parameter. A step that would leave the parameter's range goes the other way, within it."""
     slope = np.zeros(3)
-    for k in (1, 2):
+    for k, name in ((1, "length_scale_m"), (2, "gamma")):
+        r, at = ranges.RANGES[name], math.log(params.length_scale_m) if k == 1 else params.gamma
+        lo, hi = (math.log(r.lo), math.log(r.hi)) if k == 1 else (r.lo, r.hi)
         step = math.sqrt(var[k]) if math.isfinite(var[k]) else 0.0
-        if k == 2 and params.gamma + step > ranges.RANGES["gamma"].hi:
-            step = -step
+        step = -min(step, (at - lo) / 2) if at + step > hi else step  # a fit at the top of its range (L 1000 m)
         if step == 0.0:
             continue
         moved = (replace(params, length_scale_m=params.length_scale_m * math.exp(step)) if k == 1
