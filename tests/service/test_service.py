@@ -324,8 +324,8 @@ def test_constrained_run_from_an_upload_is_the_cli_field(server, tmp_path):
 
 def test_a_replay_from_an_upload_is_the_cli_field(server, tmp_path):
     """A run with ``fit`` on an uploaded mast is `turbgen mann --constrain FILE --fit` to the bit (the fit in the
-    worker): U, L, Gamma and ae the fitted ones in its status; the keys the fit sets, a preset, and fit without
-    constrain or in a sweep refused (422) before anything is queued."""
+    worker): U, L, Gamma and ae the fitted ones in its status; the keys the fit sets, a preset, what the fit refuses,
+    and fit without constrain or in a sweep refused (422) before anything is queued."""
     mast = Path(__file__).resolve().parents[2] / "examples" / "mast-fit.json"
     up = _upload(server, mast.read_bytes(), "application/json")[2]["id"]
     grid = {"nt": 1024, "dt_s": 0.5, "ny": 16, "nz": 15, "dy_m": 3.0, "x_m": [0]}
@@ -347,7 +347,8 @@ def test_a_replay_from_an_upload_is_the_cli_field(server, tmp_path):
     assert canonical_mapping(*run_from_canonical("mann", recorded)) == recorded  # re-queued after a restart as it was
     for body, detail in (({**cfg, "length_scale_m": 30.0}, "L with --fit (fit=True): the fit sets L, gamma and "),
                          ({**cfg, "preset": "neutral"}, "preset with fit: the fit sets L, gamma and the energy level"),
-                         ({k: v for k, v in cfg.items() if k != "constrain"}, "fit (--fit) needs constrain")):
+                         ({k: v for k, v in cfg.items() if k != "constrain"}, "fit (--fit) needs constrain"),
+                         ({**cfg, "factor1": 0.8}, "--fit with factor1 = 0.8: the fit's tables hold the lifetime")):
         status, _, refused = server.call("POST", "/runs", body)
         assert status == 422 and refused["detail"].startswith(detail), refused
     sweep = {"models": ["mann"], "presets": ["neutral"], "speeds": [12], "seeds": [5], "constrain": [up], "fit": True}

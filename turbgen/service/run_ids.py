@@ -8,6 +8,7 @@ from __future__ import annotations
 import hashlib
 import json
 import re
+from typing import cast
 
 from turbgen.version import __version__
 from turbgen.errors import ParameterError
@@ -81,16 +82,19 @@ def replay_mapping(run, constraints: dict) -> dict | None:
     return {k: v for k, v in canonical_mapping(run, constraints).items() if k not in SERVICE_KEYS}
 
 
-def check_replay(constraints: dict, files: list) -> None:
-    """ParameterError for the keys of a replay request that its fit sets (Gamma is held for a lidar record: given,
-    it is the value held), as ``turbgen mann --fit`` refuses the options."""
+def check_replay(run, constraints: dict, files: list) -> None:
+    """ParameterError where ``turbgen mann --fit`` refuses the replay: the keys its fit sets (Gamma is held for a
+    lidar record: given, it is the value held), and the fit's own refusals (a flagged fit, say); the worker fits
+    again (a restarted server has no other record of it)."""
     from turbgen.runs.constrain import load_constraints
-    from turbgen.runs.replay import check_fit_options
+    from turbgen.runs.replay import check_fit_options, fitted_inputs
     from turbgen.spec.mann import OPTIONS
     from turbgen.virtual_lidar.dataset import LidarData
 
+    data, mapping = load_constraints(files), cast(dict, replay_mapping(run, constraints))
     given = {name: True for name, key in OPTIONS.items() if key in constraints["fit"]["given"]}
-    check_fit_options(given, prefix="", lidar=any(isinstance(c, LidarData) for c in load_constraints(files)))
+    check_fit_options(given, prefix="", lidar=any(isinstance(c, LidarData) for c in data))
+    fitted_inputs(mapping, data, evo_typed="evo_time_s" in mapping)
 
 
 def _model(name):

@@ -39,8 +39,8 @@ def _accept(body, state: ServiceState) -> tuple[str, str]:
     rid = run_id(model, canonical_mapping(run, constraints))
     if constraints and not state.catalog.is_complete(rid):  # the data placed on the grid: refused before queueing
         files = [str(p) for p in state.catalog.uploads.paths(constraints["constrain"])]
-        if "fit" in constraints:  # the keys the fit sets, refused before queueing (its own refusals fail the run)
-            check_replay(constraints, files)
+        if "fit" in constraints and not state.jobs.is_active(rid):  # the fit's refusals before queueing
+            check_replay(run, constraints, files)
         check_constrained_memory(run, files, constraints, state.settings.memory_budget_bytes)
     elif not state.catalog.is_complete(rid):  # a complete run is served, never recomputed
         check_memory(model, run, state.settings.memory_budget_bytes)
