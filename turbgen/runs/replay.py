@@ -22,11 +22,12 @@ from turbgen.spec.mann import MannRun
 from turbgen.validation.fit.data import data_from_points
 from turbgen.validation.fit.evolution import with_evolution
 from turbgen.validation.fit.mann import fit_mann_data
-from turbgen.validation.fit.mean_wind import fit_mean_wind
+from turbgen.validation.fit.mean_wind import fit_mean_wind, hub_direction_deg
 from turbgen.virtual_lidar.dataset import LidarData
 from turbgen.virtual_lidar.fit import fit_lidar
 
 FIT_DIGITS = 6
+TURN_DECIMALS = 6  # the turn into the data's mean wind [deg], rounded as the fitted values (4e-7 m/s at 20 m/s)
 FITTED = {"ae": "ae", "length_scale_m": "L", "gamma": "gamma"}  # run key -> option
 REFUSED = ("L", "gamma", "ae", "sigma_u", "ti")  # options --fit sets (the energy level among them)
 
@@ -59,14 +60,15 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None,
         raise ParameterError(f"--fit with factor1 = {mapping['factor1']}: the fit's tables hold the lifetime with "
                              "factor1 = 1 only (Guo et al. 2023, Eq. 7)")
     lidar = isinstance(constraints[0], LidarData)
-    fit, constraints, export, speed = (_lidar_fit if lidar else _points_fit)(mapping, constraints, nperseg)
+    fit, constraints, export, speed, turn = (_lidar_fit if lidar else _points_fit)(mapping, constraints, nperseg)
     values = {k: float(f"{getattr(fit, k).value:.{FIT_DIGITS}g}") for k in FITTED} | _evolution(fit, evo_typed)
     out = {k: v for k, v in mapping.items() if k not in ("sigma_u_m_s", "ti")} | values | {"lifetime": fit.lifetime}
     out["ae_from"] = f"fitted to {', '.join(Path(c.source).name for c in constraints)} (turbgen fit mann)"
     out.setdefault("U_m_s", speed)
     run = {k: out[k] for k in (*FITTED, "U_m_s", "lifetime", *values.keys() - FITTED.keys())}
     files = [{"path": c.source, "sha256": _sha256(c.source)} for c in constraints]
-    return out, constraints, {"fit": fit.to_dict(), "run": run, "files": files, "export": export}
+    record = {"fit": fit.to_dict(), "run": run, "files": files, "export": export}
+    return out, constraints, record | ({} if turn is None else {"turned_deg": turn})
 
 
 def _reliable(fit, source: str):
@@ -78,12 +80,18 @@ def _reliable(fit, source: str):
 
 def _points_fit(mapping: dict, series: list, nperseg: int | None) -> tuple:
     """(the fit with its evolution time and mean wind, the series with the fitted mean wind, the export options of
-    that mean wind, the fitted hub speed [m/s]) of point-series files, fitted as one (:func:`_merged`)."""
+    that mean wind, the fitted hub speed [m/s], the turn [deg]) of point-series files, fitted as one
+    (:func:`_merged`). The field's x is the data's mean wind direction at the hub: total-wind u, v are turned by
+    minus that direction (:func:`_turned`; the rest of the direction is the fitted veer)."""
     ps = _merged(series)
     data = data_from_points(ps, None if ps.total_wind else mapping.get("U_m_s"))
     fit = with_evolution(data, _reliable(fit_mann_data(data, nperseg, lifetime=mapping.get("lifetime")), ps.source))
     hub = MannRun.from_mapping(mapping).hub_height_m
     mean = fit_mean_wind(ps, hub)
+    turn = round(hub_direction_deg(ps, hub), TURN_DECIMALS) if ps.total_wind else None
+    if turn:
+        series = [_turned(s, turn) for s in series]
+        ps = _merged(series)
     speed = float(f"{mean.U_hub_m_s or _hub_speed(ps, hub) or fit.U_m_s:.{FIT_DIGITS}g}")
     export = mean.export_options()
     if ps.total_wind and export:
@@ -94,7 +102,16 @@ def _points_fit(mapping: dict, series: list, nperseg: int | None) -> tuple:
                            table_label="")
         wind = replace(wind, veer_deg_per_m=export.get("veer_deg_per_m", wind.veer_deg_per_m))
         series = [replace(s, mean_wind=wind) for s in series]
-    return replace(fit, mean_wind=mean), series, export, speed
+    return replace(fit, mean_wind=mean), series, export, speed, turn
+
+
+def _turned(ps: PointSeries, deg: float) -> PointSeries:
+    """``ps`` with every sensor's (u, v) turned by ``-deg`` (a sensor lacking either is left as it is)."""
+    c, n = np.cos(np.radians(deg)), np.sin(np.radians(deg))
+    sensors = [replace(s, series={**s.series, "u": s.series["u"] * c + s.series["v"] * n,
+                                  "v": s.series["v"] * c - s.series["u"] * n})
+               if {"u", "v"} <= s.series.keys() else s for s in ps.sensors]
+    return replace(ps, sensors=tuple(sensors))
 
 
 def _merged(series: list) -> PointSeries:
@@ -122,7 +139,7 @@ def _lidar_fit(mapping: dict, records: list, nperseg: int | None) -> tuple:
     if mapping.get("lifetime", "guo") != "guo":
         raise ParameterError(f"--fit of the lidar record {ld.source} with lifetime = {mapping['lifetime']!r}: the "
                              "lidar fit's model has Guo's lifetime only; drop the lifetime")
-    return _reliable(fit_lidar(ld, nperseg, mapping.get("gamma")), ld.source), records, {}, ld.U_m_s
+    return _reliable(fit_lidar(ld, nperseg, mapping.get("gamma")), ld.source), records, {}, ld.U_m_s, None
 
 
 def _evolution(fit, evo_typed: bool) -> dict:
@@ -162,6 +179,9 @@ def describe_fit(record: dict) -> list[str]:
     elif e.get("held") is False:
         lines.append("eddy-evolution time not identified by the data (the frozen limit is inside its 95 % interval): "
                      "the run's")
+    if record.get("turned_deg"):
+        lines.append(f"the data's mean wind direction at the hub, {record['turned_deg']:+.4g} deg (counter-clockwise "
+                     "from above), is the field's x: their u and v were turned by minus that")
     exp = " ".join(f"--{k.split('_')[0]} {v}" for k, v in record["export"].items())
     return lines + ([f"fitted mean wind: {', '.join(mean)}" + (f" (turbgen export uses {exp})" if exp else "")]
                     if mean else [])

@@ -3,10 +3,13 @@
 A store is read at a sub-lattice of at most STORE_POINTS_PER_AXIS^2 points per plane (unbiased Welch averages; the
 fit's variances are those of the same points), its periodic records as they are; a sensor's series is detrended
 (its least-squares line through the finite values removed), a trend larger than its standard deviation said in the
-notes (the record may not be stationary). Missing values (NaN): the Welch estimates skip the segments holding them."""
+notes (the record may not be stationary). Missing values (NaN): the Welch estimates skip the segments holding them.
+A sensor's total-wind u and v are first turned into its own mean wind direction (``along_wind``): the model's u is
+along the mean wind, and a sonic's axes seldom are."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,6 +23,7 @@ from turbgen.validation.point_sets import long_sublattice
 from turbgen.validation.store_run import MannBox
 
 STORE_POINTS_PER_AXIS = 8  # points per axis and plane read from a store (the spectra are averaged over them)
+TURN_NOTE_DEG = 1.0  # the notes name the turn into the mean wind when a sensor's exceeds this [deg]
 UNIFORM_RTOL = 1e-6  # sample times are uniform when every step is within this of the mean step
 
 
@@ -116,31 +120,54 @@ def data_from_points(ps: PointSeries, U_m_s: float | None = None) -> FitData:
     if np.any(np.abs(steps - dt) > UNIFORM_RTOL * dt):
         raise ParameterError(f"{where}: time_s is not uniformly sampled (steps {steps.min():g} to {steps.max():g} s); "
                              "the Welch spectra need one sampling interval")
+    aligned, notes = along_wind(ps)
     if U_m_s is None:
-        u_means = [np.nanmean(s.series["u"]) for s in ps.sensors if "u" in s.series]
+        u_means = [np.nanmean(a["u"]) for a in aligned if "u" in a]
         if not ps.total_wind or not u_means:
             raise ParameterError(f"{where}: the data are fluctuations: give the mean wind speed U (--U) for "
                                  "k1 = 2 pi f / U")
         U_m_s = float(np.mean(u_means))
     U = ranges.check("U_m_s", U_m_s, "U (mean wind speed, m/s)")
-    series, notes = {}, []
+    series = {}
     for c in COMPONENTS:
         names = [s.name for s in ps.sensors if c in s.series]
         if names:
-            cols = np.stack([s.series[c] for s in ps.sensors if c in s.series], axis=1)
+            cols = np.stack([a[c] for a in aligned if c in a], axis=1)
             series[c], more = detrended(cols, lambda k, c=c, names=names: f"{names[k]} {c}")
             notes += more
     with_u = [s for s in ps.sensors if "u" in s.series]
     with_w = [s for s in ps.sensors if "w" in s.series]
     uw = tuple((with_u.index(s), with_w.index(s)) for s in ps.sensors if s in with_u and s in with_w)
     gaps = [f"{s.name} {c}: {int(np.isnan(v).sum())} missing values (Welch segments holding them are skipped)"
-            for s in ps.sensors for c, v in s.series.items() if np.isnan(v).any()]
+            for s, a in zip(ps.sensors, aligned) for c, v in a.items() if np.isnan(v).any()]
     sites = np.array([(s.x_m, s.y_m, s.z_m if s.z_m is not None else s.height_m) for s in ps.sensors], float)
     columns = {c: np.array([k for k, s in enumerate(ps.sensors) if c in s.series]) for c in series}
     paths = np.array([s.path_m or 0.0 for s in ps.sensors])
     return FitData(ps.source, dt, U, series, uw, notes=tuple(notes + gaps), points=ps, sites_m=sites, columns=columns,
                    u_xyz_m=tuple(map(tuple, sites[columns["u"]])) if "u" in columns else (),
                    path_m=paths if paths.any() else None)
+
+
+def along_wind(ps: PointSeries) -> tuple[list[dict], list[str]]:
+    """Every sensor's series, a total-wind sensor's u and v turned into its mean wind direction theta = atan2(v̄, ū)
+    (u cos theta + v sin theta, -u sin theta + v cos theta: the yaw rotation of sonic data, Wilczak et al. 2001;
+    a sample missing either is missing in both), and a note naming the largest turn beyond TURN_NOTE_DEG."""
+    out, turns = [], {}
+    for s in ps.sensors:
+        u, v = s.series.get("u"), s.series.get("v")
+        if not (ps.total_wind and u is not None and v is not None):
+            out.append(s.series)
+            continue
+        theta = math.atan2(np.nanmean(v), np.nanmean(u))
+        c, n = math.cos(theta), math.sin(theta)
+        out.append({**s.series, "u": u * c + v * n, "v": v * c - u * n})
+        turns[s.name] = math.degrees(theta)
+    big = max(turns, key=lambda k: abs(turns[k]), default=None)
+    if big is None or abs(turns[big]) <= TURN_NOTE_DEG:
+        return out, []
+    return out, [f"the mean wind blows up to {turns[big]:+.1f} deg from x ({big}; counter-clockwise seen from above): "
+                 "u and v were turned into each sensor's mean wind direction, along which the model's u lies (the "
+                 "sensors' x and y are taken as given)"]
 
 
 def data_from_store(fs, points=None) -> FitData:

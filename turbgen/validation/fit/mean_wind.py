@@ -147,6 +147,19 @@ def fit_mean_wind(ps, hub_height_m: float | None = None) -> MeanWindFit:
     return MeanWindFit(*out, ti, ti_sensor, hub_u)
 
 
+def hub_direction_deg(ps, hub_height_m: float) -> float:
+    """The mean wind direction [deg, counter-clockwise seen from above] at ``hub_height_m`` [m] of the total-wind
+    sensors of ``ps`` holding u and v: their directions' least-squares line against height there (one height:
+    their mean); 0 without such sensors."""
+    sensors = [s for s in ps.sensors if {"u", "v"} <= s.series.keys()] if ps.total_wind else []
+    if not sensors:
+        return 0.0
+    h = np.array([s.height_m if s.height_m is not None else hub_height_m + s.z_m for s in sensors], dtype=float)
+    d = np.degrees([math.atan2(np.nanmean(s.series["v"]), np.nanmean(s.series["u"])) for s in sensors])
+    slope, intercept = _slope(h, d)
+    return float(np.mean(d)) if math.isnan(slope) else slope * hub_height_m + intercept
+
+
 def _intensity(sensors: list, h: np.ndarray, hub_height_m: float | None) -> tuple[MeanWindValue, str]:
     """sigma_u / U of the sensor nearest the hub (or the median height), interval from batch means; the sensor."""
     known = np.isfinite(h)
