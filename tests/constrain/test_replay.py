@@ -8,6 +8,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -168,6 +169,29 @@ def test_a_run_file_s_fit_key_replays_the_same_field(replay, tmp_path):
     a, b = turbgen.open_store(out), turbgen.open_store(replay[0])
     assert all(np.array_equal(a[c].values, b[c].values) for c in "uvw")
     assert a.attrs["fit"]["run"] == b.attrs["fit"]["run"] and a.attrs["parameters"] == b.attrs["parameters"]
+
+
+def test_plain_conditioning_on_data_off_the_wind_says_so(tmp_path):
+    """Without --fit nothing is turned (the file's frame is the field's): conditioning on the mast turned by 25 deg
+    notes the sensor furthest off and how many are beyond OFF_WIND_DEG; the aligned mast (a fraction of a degree)
+    gets no note."""
+    from turbgen.runs.constrain import OFF_WIND_DEG
+
+    turned = tmp_path / "turned.json"
+    turned.write_text(json.dumps(_turned(json.loads(MAST.read_text()), 25.0)))
+    grid = [*GRID, "--L", "24", "--U", "11.8"]
+    s = json.loads(MAST.read_text())["sensors"][0]  # the furthest off: 70.5 m, a fraction of a degree of its own
+    most = math.degrees(math.atan2(np.mean(s["v_m_s"]), np.mean(s["u_m_s"]))) + 25.0
+    for data, note in ((MAST, None), (turned, f"turned.json:sonic 70.5 m: after the file's mean wind the data still "
+                                              f"blow {most:+.1f} deg from the field's x (counter-clockwise from above; "
+                                              f"4 sensor(s) beyond {OFF_WIND_DEG:g} deg)")):
+        r = CliRunner().invoke(cli, ["mann", "--constrain", str(data), *grid, "--out", str(tmp_path / "f.zarr"),
+                                     "--overwrite"])  # fmt: skip
+        assert r.exit_code == 0, r.output
+        assert ("note:" in r.output) == (note is not None) and (note is None or note in r.output), r.output
+    with pytest.warns(UserWarning, match=f"^{re.escape(note)}"):  # the API's counterpart of the note
+        turbgen.mann(constrain=[turned], L=24, U=11.8, nt=1024, dt=0.5, ny=16, nz=15, dy=3, planes=[0], evo="frozen",
+                     hub_height=HUB)
 
 
 def test_refusals(tmp_path):

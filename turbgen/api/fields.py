@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -204,6 +205,12 @@ def mann(L: float | None = None, gamma: float | None = None, evo: float | str | 
     StoreError
         For an existing ``out`` without ``overwrite``, or an ``out`` that is not a turbgen store with it.
 
+    Warns
+    -----
+    UserWarning
+        When total-wind ``constrain`` data still blow more than 5 deg from the field's x after their mean wind (the
+        command's note): the mean of v then enters the field as turbulence.
+
     Examples
     --------
     >>> import turbgen
@@ -240,15 +247,25 @@ def mann(L: float | None = None, gamma: float | None = None, evo: float | str | 
 
         run, files, placed, fit_record = constrained_mann_run(mapping, request, options, stencil_cache, "")
         if out is None and _constrained_fits(run, placed, threads, memory):
-            return mann_constrained_in_memory(run, files, noise_m_s=request.noise_m_s,
-                                              conditional_mean=request.conditional_mean,
-                                              threads=default_threads(threads), cache_dir=stencil_cache,
-                                              progress=progress, placed=placed, fit=fit_record)[0]  # fmt: skip
+            return _noted(mann_constrained_in_memory(run, files, noise_m_s=request.noise_m_s,
+                                                     conditional_mean=request.conditional_mean,
+                                                     threads=default_threads(threads), cache_dir=stencil_cache,
+                                                     progress=progress, placed=placed, fit=fit_record)[0])
         make = _constrained_maker(run, files, request, placed, overwrite, chunks, threads, stencil_cache, fit_record)
     if out is None:
-        return _through_store(make, run.grid, run.default_store_name())
+        return _noted(_through_store(make, run.grid, run.default_store_name()))
     make(Path(out))
-    return _as_dataset(Path(out))
+    return _noted(_as_dataset(Path(out)))
+
+
+def _noted(ds: xr.Dataset) -> xr.Dataset:
+    """``ds``, after a UserWarning for what the command notes of its constraint data (total-wind data off the
+    field's x: turbgen.runs.constrain.off_wind_notes)."""
+    from turbgen.runs.constrain import off_wind_notes
+
+    for line in off_wind_notes(ds.attrs.get("constraints", {}).get("streams", [])):
+        warnings.warn(line.removeprefix("note: "), UserWarning, stacklevel=3)
+    return ds
 
 
 def mann_run_mapping(options: Mapping, config: PathLike | Mapping | None = None, preset: str | None = None,
@@ -453,6 +470,12 @@ def kaimal(U: float | None = None, seed: int | None = None, out: PathLike | None
     StoreError
         For an existing ``out`` without ``overwrite``, or an ``out`` that is not a turbgen store with it.
 
+    Warns
+    -----
+    UserWarning
+        When total-wind ``constrain`` data still blow more than 5 deg from the field's x after their mean wind (the
+        command's note): the mean of v then enters the field as turbulence.
+
     Examples
     --------
     >>> import turbgen
@@ -475,8 +498,8 @@ def kaimal(U: float | None = None, seed: int | None = None, out: PathLike | None
 
         constraints = load_constraints([constrain] if isinstance(constrain, (str, os.PathLike)) else constrain)
         if out is None:
-            return kaimal_constrained_in_memory(run, constraints, noise_m_s=noise, conditional_mean=conditional_mean,
-                                                threads=threads)[0]  # fmt: skip
+            return _noted(kaimal_constrained_in_memory(run, constraints, noise_m_s=noise,
+                                                       conditional_mean=conditional_mean, threads=threads)[0])
         make = _kaimal_maker(run, overwrite, chunks, threads, progress, constraints, noise, conditional_mean)
     else:
         # straight into the Dataset when the run's arrays with the spectrum in memory and the field fit 80 % of the
@@ -488,9 +511,9 @@ def kaimal(U: float | None = None, seed: int | None = None, out: PathLike | None
             return kaimal_in_memory(run, progress=progress, threads=threads)[0]
         make = _kaimal_maker(run, overwrite, chunks, threads, progress)
     if out is None:  # a field that does not fit: through a temporary store, loaded back
-        return _through_store(make, run.grid, f"kaimal_s{run.seed}.zarr")
+        return _noted(_through_store(make, run.grid, f"kaimal_s{run.seed}.zarr"))
     make(Path(out))
-    return _as_dataset(Path(out))
+    return _noted(_as_dataset(Path(out)))
 
 
 def check_kaimal_output(run: KaimalRun, out, chunks, overwrite: bool, threads, constrain=None, noise=None,

@@ -36,6 +36,9 @@ from turbgen.synthesis.mann_spacetime import MannSnapshots
 from turbgen.synthesis.mann_stencil import synthesis_box
 
 _NOISE_KEY = 0x636F6E73  # "cons": the stream of the measurement-noise sample eps_s, keyed with the run's seed
+# a note when total-wind data blow further than this from the field's x after their declared mean wind [deg]: a 10-min
+# mean direction scatters by ~(sigma_v / U) sqrt(2 T_int / T) ~ 1 deg, so this is a frame, not turbulence
+OFF_WIND_DEG = 5.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,6 +120,8 @@ def _point_streams(run: MannRun, f: PointSeries, sigma: float) -> list[PlacedStr
         ty = _axis_terms(s.y_m, g.y(), g.dy_m, "y", where)
         tz = _axis_terms(z, g.z(), g.dz_m, "z", where)
         series, shift = sensor_fluctuations(f, s, run.U_m_s, run.hub_height_m)
+        off = {"direction_deg": math.degrees(math.atan2(np.nanmean(series["v"]), shift + np.nanmean(series["u"])))
+               } if f.total_wind and {"u", "v"} <= series.keys() else {}  # what the declared mean wind left
         for comp, values in series.items():
             c = COMPONENTS.index(comp)
             on_grid = _on_grid(run, f.time_s, values, s.x_m, where)
@@ -127,7 +132,7 @@ def _point_streams(run: MannRun, f: PointSeries, sigma: float) -> list[PlacedStr
             out.append(PlacedStream(p, terms, 1, 0, on_grid, sigma, {
                 "name": name, "kind": "point", "component": comp, "x_m": s.x_m, "y_m": s.y_m, "z_m": z, "plane": p,
                 "noise_m_s": sigma, "mean_wind_subtracted_m_s": shift if comp == "u" else 0.0,
-                "mean_wind": f.mean_wind.describe() if f.total_wind else ""}))  # fmt: skip
+                "mean_wind": f.mean_wind.describe() if f.total_wind else "", **(off if comp == "u" else {})}))
     return out
 
 
@@ -448,7 +453,20 @@ def describe_constraints(record: dict) -> list[str]:
         f"{', '.join(record['files'])}; noise sigma {', '.join(f'{v:g}' for v in noise)} m/s",
         f"solve: {how}, relative residual {solver['relative_residual']:.1e}; field - data at the measurements: "
         f"max {record['residual_max_m_s']:.2e} m/s, rms {record['residual_rms_m_s']:.2e} m/s",
-    ] + [f"total-wind data: mean wind removed: {w} (export with it to get the data back)" for w in winds]
+    ] + [f"total-wind data: mean wind removed: {w} (export with it to get the data back)" for w in winds] + off_wind_notes(
+        record["streams"])
+
+
+def off_wind_notes(streams: list) -> list[str]:
+    """A note naming the sensor whose total-wind data blow furthest from the field's x, beyond OFF_WIND_DEG."""
+    off = [s for s in streams if abs(s.get("direction_deg", 0.0)) > OFF_WIND_DEG]
+    if not off:
+        return []
+    s = max(off, key=lambda s: abs(s["direction_deg"]))
+    return [f"note: {s['name'].rsplit(':', 1)[0]}: after the file's mean wind the data still blow "
+            f"{s['direction_deg']:+.1f} deg from the field's x (counter-clockwise from above; {len(off)} sensor(s) "
+            f"beyond {OFF_WIND_DEG:g} deg): the mean of v went into the field as turbulence. Total-wind data belong "
+            "in the field's frame (x along the mean wind): turn u and v, or replay with --fit, which does"]
 
 
 def load_constraints(files) -> list:
