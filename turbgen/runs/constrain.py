@@ -448,13 +448,13 @@ def describe_constraints(record: dict) -> list[str]:
     what = "conditional mean" if record["conditional_mean"] else "conditional sample"
     noise = sorted({s["noise_m_s"] for s in record["streams"]})
     winds = sorted({s["mean_wind"] for s in record["streams"] if s.get("mean_wind")})
+    removed = [f"total-wind data: mean wind removed: {w} (export with it to get the data back)" for w in winds]
     return [
         f"constrained ({what}) on {len(record['streams'])} measured series, {record['n_samples']} samples from "
         f"{', '.join(record['files'])}; noise sigma {', '.join(f'{v:g}' for v in noise)} m/s",
         f"solve: {how}, relative residual {solver['relative_residual']:.1e}; field - data at the measurements: "
         f"max {record['residual_max_m_s']:.2e} m/s, rms {record['residual_rms_m_s']:.2e} m/s",
-    ] + [f"total-wind data: mean wind removed: {w} (export with it to get the data back)" for w in winds] + off_wind_notes(
-        record["streams"])
+    ] + removed + off_wind_notes(record["streams"])
 
 
 def off_wind_notes(streams: list) -> list[str]:

@@ -106,7 +106,8 @@ def _points_fit(mapping: dict, series: list, nperseg: int | None) -> tuple:
 
 
 def _turned(ps: PointSeries, deg: float) -> PointSeries:
-    """``ps`` with every sensor's (u, v) turned by ``-deg`` (a sensor lacking either is left as it is)."""
+    """``ps`` with every sensor's (u, v) turned by ``-deg`` (a value missing in either is missing in both; a sensor
+    lacking u or v, a cup's speed, is left as it is)."""
     c, n = np.cos(np.radians(deg)), np.sin(np.radians(deg))
     sensors = [replace(s, series={**s.series, "u": s.series["u"] * c + s.series["v"] * n,
                                   "v": s.series["v"] * c - s.series["u"] * n})
