@@ -333,8 +333,13 @@ def test_a_replay_from_an_upload_is_the_cli_field(server, tmp_path):
     status, _, out = server.call("POST", "/runs", cfg)
     assert status == 202, out
     s = server.wait(out["id"], timeout_s=180)
-    _cli(["mann", "--constrain", str(mast), "--fit", "--hub-height", "88.5", "--evo", "frozen", "--nt", "1024", "--dt",
-          "0.5", "--ny", "16", "--nz", "15", "--dy", "3", "--planes", "0", "--out", "cli.zarr"], tmp_path)
+    done = _cli(["mann", "--constrain", str(mast), "--fit", "--hub-height", "88.5", "--evo", "frozen", "--nt", "1024",
+                 "--dt", "0.5", "--ny", "16", "--nz", "15", "--dy", "3", "--planes", "0", "--out", "cli.zarr"], tmp_path)
+    # the status (and the run page) has the command's lines about the fit and the conditioning, the paths public
+    lines, printed = s["summary"]["conditioning"], done.stdout + done.stderr
+    assert lines[0].startswith(f"fitted to {up}.json: L ") and str(server.root) not in " ".join(lines), lines
+    assert f"samples from /constraints/{up};" in lines[len(lines) - 3], lines
+    assert all(t in printed for t in lines if up not in t) and len([t for t in lines if up not in t]) >= 4, lines
     served, local = open_store(server.root / "runs" / out["id"] / "store.zarr"), open_store(tmp_path / "cli.zarr")
     for c in "uvw":
         np.testing.assert_array_equal(served.array(c)[...], local.array(c)[...])

@@ -16,7 +16,7 @@ import pytest
 import xarray as xr
 
 from service_server import Server
-from test_service import _until, browser  # noqa: F401  (the fixture: headless chromium)
+from test_service import MAST, SMALL_RUN, _until, _upload, browser  # noqa: F401  (the fixture: headless chromium)
 
 from turbgen.exporters import export_store, read_bts
 from turbgen.service.form import form_fields
@@ -217,6 +217,22 @@ def test_the_pages_load_nothing_from_another_host_and_refuse_other_names(server)
         assert status == 200 and not external.search(page.decode()) and "cdn" not in page.decode().lower(), path
     for path in ("/static/..%2Fform.py", "/static/form.py", "/static/index.html", "/runs/000000000000000000000000/view"):
         assert server.call("GET", path)[0] == 404, path
+
+
+def test_the_run_page_says_what_conditioning_did(server, browser):  # noqa: F811
+    """A run conditioned on an uploaded mast: its page lists the command's lines about the data (the status's
+    ``summary.conditioning``, tested against the command in test_service), one per line."""
+    from selenium.webdriver.common.by import By
+
+    up = _upload(server, Path(MAST).read_bytes(), "application/json")[2]["id"]
+    rid = server.call("POST", "/runs", {"model": "mann", **SMALL_RUN, "constrain": [up], "noise_m_s": 0.1})[2]["id"]
+    lines = server.wait(rid, timeout_s=120)["summary"]["conditioning"]
+    assert lines[0].startswith("constrained (conditional sample) on ") and f"/constraints/{up}" in lines[0], lines
+    browser.get(f"{server.url}/runs/{rid}/view")
+    rows = lambda: [r for r in browser.find_elements(By.CSS_SELECTOR, "#parameters tr")  # noqa: E731
+                    if r.find_element(By.TAG_NAME, "th").text == "conditioning"]
+    row = _until(rows, 60, "no conditioning row")[0]
+    assert row.find_element(By.TAG_NAME, "td").text.splitlines() == lines
 
 
 @pytest.mark.slow

@@ -27,6 +27,8 @@ def run_status(catalog: Catalog, jobs: Jobs, rid: str) -> dict:
         try:
             out["summary"] = json.loads((catalog.run_dir(rid) / "summary.json").read_text())
             out["parameters"] |= out["summary"].get("fit", {})  # a replay's fitted keys
+            if "conditioning" in out["summary"]:  # what the command prints of the fit and the conditioning
+                out["summary"]["conditioning"] = [public_text(t, catalog) for t in out["summary"]["conditioning"]]
         except (OSError, ValueError):
             pass
         rep = catalog.run_dir(rid) / "validation" / "report.json"

@@ -12,6 +12,8 @@ function showParameters(run) {
   rows.push(`<tr><th>grid</th><td>nt ${g.nt}, dt ${g.dt_s} s, ny ${g.ny}, nz ${g.nz}, dy ${g.dy_m} m, dz ${g.dz_m} m, ` +
     `planes x = ${g.x_m.join(', ')} m</td></tr>`);
   if (run.summary) rows.push(`<tr><th>&sigma; u, v, w</th><td>${['u', 'v', 'w'].map(c => (+run.summary['sigma_' + c]).toFixed(3)).join(', ')} m/s</td></tr>`);
+  if (run.summary && run.summary.conditioning)  // the command's lines about the fit and the data (notes among them)
+    rows.push(`<tr><th>conditioning</th><td>${run.summary.conditioning.map(text).join('<br>')}</td></tr>`);
   $('#parameters').innerHTML = rows.join('');
 }
 
