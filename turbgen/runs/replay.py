@@ -19,6 +19,7 @@ import numpy as np
 from turbgen.errors import ParameterError
 from turbgen.spec.constraints import PointSeries
 from turbgen.spec.mann import MannRun
+from turbgen.theory.mean_wind import rotate_horizontal
 from turbgen.validation.fit.data import data_from_points
 from turbgen.validation.fit.evolution import with_evolution
 from turbgen.validation.fit.mann import fit_mann_data
@@ -108,9 +109,7 @@ def _points_fit(mapping: dict, series: list, nperseg: int | None) -> tuple:
 def _turned(ps: PointSeries, deg: float) -> PointSeries:
     """``ps`` with every sensor's (u, v) turned by ``-deg`` (a value missing in either is missing in both; a sensor
     lacking u or v, a cup's speed, is left as it is)."""
-    c, n = np.cos(np.radians(deg)), np.sin(np.radians(deg))
-    sensors = [replace(s, series={**s.series, "u": s.series["u"] * c + s.series["v"] * n,
-                                  "v": s.series["v"] * c - s.series["u"] * n})
+    sensors = [replace(s, series=s.series | dict(zip("uv", rotate_horizontal(s.series["u"], s.series["v"], -deg))))
                if {"u", "v"} <= s.series.keys() else s for s in ps.sensors]
     return replace(ps, sensors=tuple(sensors))
 

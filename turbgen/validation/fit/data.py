@@ -9,7 +9,6 @@ along the mean wind, and a sonic's axes seldom are."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -19,6 +18,8 @@ from turbgen.errors import ParameterError
 from turbgen.spec.constraints import COMPONENTS, PointSeries, load_point_series
 from turbgen.spec.point_csv import is_point_csv
 from turbgen.theory import ranges
+from turbgen.theory.mean_wind import rotate_horizontal
+from turbgen.validation.fit.mean_wind import mean_direction_deg
 from turbgen.validation.point_sets import long_sublattice
 from turbgen.validation.store_run import MannBox
 
@@ -149,19 +150,18 @@ def data_from_points(ps: PointSeries, U_m_s: float | None = None) -> FitData:
 
 
 def along_wind(ps: PointSeries) -> tuple[list[dict], list[str]]:
-    """Every sensor's series, a total-wind sensor's u and v turned into its mean wind direction theta = atan2(v̄, ū)
-    (u cos theta + v sin theta, -u sin theta + v cos theta: the yaw rotation of sonic data, Wilczak et al. 2001;
-    a sample missing either is missing in both), and a note naming the largest turn beyond TURN_NOTE_DEG."""
+    """Every sensor's series, a total-wind sensor's u and v turned into its mean wind direction atan2(v̄, ū) (the yaw
+    rotation of sonic data, Wilczak et al. 2001; a sample missing either is missing in both), and a note naming the
+    largest turn beyond TURN_NOTE_DEG."""
     out, turns = [], {}
     for s in ps.sensors:
         u, v = s.series.get("u"), s.series.get("v")
         if not (ps.total_wind and u is not None and v is not None):
             out.append(s.series)
             continue
-        theta = math.atan2(np.nanmean(v), np.nanmean(u))
-        c, n = math.cos(theta), math.sin(theta)
-        out.append({**s.series, "u": u * c + v * n, "v": v * c - u * n})
-        turns[s.name] = math.degrees(theta)
+        turns[s.name] = mean_direction_deg(u, v)
+        along, across = rotate_horizontal(u, v, -turns[s.name])
+        out.append({**s.series, "u": along, "v": across})
     big = max(turns, key=lambda k: abs(turns[k]), default=None)
     if big is None or abs(turns[big]) <= TURN_NOTE_DEG:
         return out, []

@@ -147,6 +147,11 @@ def fit_mean_wind(ps, hub_height_m: float | None = None) -> MeanWindFit:
     return MeanWindFit(*out, ti, ti_sensor, hub_u)
 
 
+def mean_direction_deg(u, v) -> float:
+    """The direction atan2(v̄, ū) [deg, counter-clockwise seen from above] of the series' means (NaN skipped)."""
+    return math.degrees(math.atan2(np.nanmean(v), np.nanmean(u)))
+
+
 def hub_direction_deg(ps, hub_height_m: float) -> float:
     """The mean wind direction [deg, counter-clockwise seen from above] at ``hub_height_m`` [m] of the total-wind
     sensors of ``ps`` holding u and v: their directions' least-squares line against height there (one height:
@@ -155,7 +160,7 @@ def hub_direction_deg(ps, hub_height_m: float) -> float:
     if not sensors:
         return 0.0
     h = np.array([s.height_m if s.height_m is not None else hub_height_m + s.z_m for s in sensors], dtype=float)
-    d = np.degrees([math.atan2(np.nanmean(s.series["v"]), np.nanmean(s.series["u"])) for s in sensors])
+    d = np.array([mean_direction_deg(s.series["u"], s.series["v"]) for s in sensors])
     slope, intercept = _slope(h, d)
     return float(np.mean(d)) if math.isnan(slope) else slope * hub_height_m + intercept
 
