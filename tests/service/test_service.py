@@ -337,7 +337,7 @@ def test_a_replay_from_an_upload_is_the_cli_field(server, tmp_path):
                  "--dt", "0.5", "--ny", "16", "--nz", "15", "--dy", "3", "--planes", "0", "--out", "cli.zarr"], tmp_path)
     # the status (and the run page) has the command's lines about the fit and the conditioning, the paths public
     lines, printed = s["summary"]["conditioning"], done.stdout + done.stderr
-    assert lines[0].startswith(f"fitted to {up}.json: L ") and str(server.root) not in " ".join(lines), lines
+    assert lines[0].startswith(f"fitted to /constraints/{up}: L ") and str(server.root) not in " ".join(lines), lines
     assert f"samples from /constraints/{up};" in lines[len(lines) - 3], lines
     assert all(t in printed for t in lines if up not in t) and len([t for t in lines if up not in t]) >= 4, lines
     served, local = open_store(server.root / "runs" / out["id"] / "store.zarr"), open_store(tmp_path / "cli.zarr")
@@ -350,7 +350,7 @@ def test_a_replay_from_an_upload_is_the_cli_field(server, tmp_path):
     recorded = json.loads((server.root / "runs" / out["id"] / "request.json").read_text())["run"]
     assert recorded["fit"] == {"given": ["evo_time_s"]} and "length_scale_m" not in recorded
     assert canonical_mapping(*run_from_canonical("mann", recorded)) == recorded  # re-queued after a restart as it was
-    for body, detail in (({**cfg, "length_scale_m": 30.0}, "L with --fit (fit=True): the fit sets L, gamma and "),
+    for body, detail in (({**cfg, "length_scale_m": 30.0}, 'L with "fit": true: the fit sets L, gamma and '),
                          ({**cfg, "preset": "neutral"}, "preset with fit: the fit sets L, gamma and the energy level"),
                          ({k: v for k, v in cfg.items() if k != "constrain"}, "fit (--fit) needs constrain"),
                          ({**cfg, "factor1": 0.8}, "--fit with factor1 = 0.8: the fit's tables hold the lifetime")):

@@ -76,6 +76,67 @@ def test_a_disk_full_refusal_is_shown_without_the_root_or_out(tmp_path):
     assert str(catalog.root) not in shown and "`out`" not in shown and f"/runs/{rid}" in shown, shown
 
 
+def test_a_conditioning_note_names_the_upload_and_the_service_s_fit_key(tmp_path):
+    """The off-wind note of a constrained run, as the service shows it: the sensor named by its upload's id (not the
+    server's file name of it) and the advice in the request's spelling, "fit": true (not the command's --fit)."""
+    from turbgen.runs.constrain import off_wind_notes
+    from turbgen.service.catalog import Catalog
+    from turbgen.service.status import public_text
+
+    up = "0123456789abcdef01234567"
+    note = off_wind_notes([{"name": f"{up}.json:sonic 70.5 m:u", "direction_deg": 25.3}])[0]
+    assert note.startswith(f"note: {up}.json:sonic 70.5 m: ") and "--fit (fit=True)" in note  # the command's
+    shown = public_text(note, Catalog(tmp_path / "root"))
+    assert shown.startswith(f"note: /constraints/{up}:sonic 70.5 m: after the file's mean wind"), shown
+    assert "--fit" not in shown
+    assert 'or replay with "fit": true, which does' in shown, shown
+    # a name that only looks like an upload's inside a word or a path is left alone
+    assert public_text(f"x{up}.json and /data/{up}.csv", Catalog(tmp_path / "root")) == f"x{up}.json and /data/{up}.csv"
+
+
+def test_a_replay_is_fitted_once_at_submission_and_the_worker_takes_that_fit(tmp_path, monkeypatch):
+    """Found by the replay review: the server fitted a replay at submission (its refusals are a 422) and the worker
+    fitted it again, seconds each. The submission's fit now goes to the worker with the run; a run re-queued after a
+    restart has none and is fitted in the worker (the served field equals the command's: test_service)."""
+    from pathlib import Path
+
+    from turbgen.runs import constrain, replay
+    from turbgen.service.catalog import Catalog
+    from turbgen.service.jobs import Jobs, execute
+    from turbgen.service.routes.runs import _accept
+    from turbgen.service.state import ServiceSettings, ServiceState
+
+    submitted = []
+
+    class Client:  # the worker's side is called below, by hand
+        def submit(self, fn, *args, **kwargs):
+            submitted.append(args)
+            return type("Pending", (), {"add_done_callback": lambda self, f: None})()
+
+    catalog = Catalog(tmp_path / "root")
+    mast = Path(__file__).resolve().parents[2] / "examples" / "mast-fit.json"
+    up = catalog.uploads.add("application/json", mast.read_bytes())[0]
+    state = ServiceState(ServiceSettings(catalog.root, None, 2**34, 4), catalog, Jobs(catalog, Client(), 4))
+    fits = []
+    monkeypatch.setattr(replay, "fitted_inputs", lambda *a, **k: fits.append(a) or ("mapping", "files", "record"))
+    grid = {"nt": 1024, "dt_s": 0.5, "ny": 16, "nz": 15, "dy_m": 3.0, "x_m": [0]}  # the mast inside it
+    rid, how = _accept({"model": "mann", "constrain": [up], "fit": True, "hub_height_m": 88.5, "grid": grid}, state)
+    assert how == "queued" and len(fits) == 1 and submitted[0][-1] == ("mapping", "files", "record")
+    class Conditioned(Exception):  # the worker got past its fit: stop it there
+        pass
+
+    def conditioned(mapping, files, *rest):
+        raise Conditioned(mapping, files)
+
+    monkeypatch.setattr(constrain, "with_energy_from_data", conditioned)
+    with pytest.raises(Conditioned) as worker:
+        execute(*submitted[0])
+    assert worker.value.args == ("mapping", "files") and len(fits) == 1  # the submission's fit, not a second one
+    state.jobs.active.clear()
+    state.jobs.resume()  # after a restart: no fit to hand over, the worker fits
+    assert submitted[-1][-1] is None and len(fits) == 1
+
+
 def _dead_pid() -> int:
     import subprocess
     import sys

@@ -466,7 +466,7 @@ def off_wind_notes(streams: list) -> list[str]:
     return [f"note: {s['name'].rsplit(':', 1)[0]}: after the file's mean wind the data still blow "
             f"{s['direction_deg']:+.1f} deg from the field's x (counter-clockwise from above; {len(off)} sensor(s) "
             f"beyond {OFF_WIND_DEG:g} deg): the mean of v went into the field as turbulence. Total-wind data belong "
-            "in the field's frame (x along the mean wind): turn u and v, or replay with --fit, which does"]
+            "in the field's frame (x along the mean wind): turn u and v, or replay with --fit (fit=True), which does"]
 
 
 def load_constraints(files) -> list:

@@ -21,11 +21,12 @@ _STENCIL_LOCK = threading.Lock()  # one stencil build at a time: a second reques
 
 def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: int | None = None,
             constraints: ConstraintRequest | None = None, energy_from_data: bool = False,
-            replay: dict | None = None) -> dict:
+            replay: dict | None = None, fitted: tuple | None = None) -> dict:
     """Worker side: generate ``run`` of ``model`` into the store ``out`` as the CLI does; the run summary's
     JSON-able entries. Mann stencils: one build at a time per process, cached in ``stencil_cache`` (capped at
     ``stencil_cache_bytes``). ``constraints``: files to condition on (ae from them with ``energy_from_data``);
-    ``replay``: the run mapping the fit to them completes (``turbgen mann --fit``), the fitted keys in ``fit``."""
+    ``replay``: the run mapping the fit to them completes (``turbgen mann --fit``), the fitted keys in ``fit``;
+    ``fitted``: that fit when the submission made it (turbgen.runs.replay.fitted_inputs), None: fitted here."""
     from turbgen.runs.models import get_model
 
     if constraints is not None:
@@ -35,7 +36,8 @@ def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: 
         if replay is not None:
             from turbgen.runs.replay import fitted_inputs
 
-            mapping, files, fit = fitted_inputs(replay, files, evo_typed="evo_time_s" in replay)
+            fitted = fitted or fitted_inputs(replay, files, evo_typed="evo_time_s" in replay)
+            mapping, files, fit = fitted
             run = with_energy_from_data(mapping, files, constraints.noise_m_s)  # ae fitted: the run of mapping
         elif energy_from_data:
             mapping = {k: v for k, v in canonical_mapping(run).items() if k not in ("ae", "ae_from")}
@@ -81,9 +83,11 @@ class Jobs:
         self.active: dict[str, object] = {}
         self.computations = 0  # runs handed to dask since start (duplicates are joined, not counted)
 
-    def submit(self, rid: str, model: str, run, preset: str | None = None, constraints: dict | None = None) -> str:
-        """Submit run ``rid`` (``preset``: a label; ``constraints``: upload keys) unless complete or active: "complete",
-        "joined" or "queued". LimitError 429 at ``max_queue`` runs, 507 when the run cannot be recorded (disk full)."""
+    def submit(self, rid: str, model: str, run, preset: str | None = None, constraints: dict | None = None,
+               fitted: tuple | None = None) -> str:
+        """Submit run ``rid`` (``preset``: a label; ``constraints``: upload keys; ``fitted``: a replay's fit, see
+        :func:`execute`) unless complete or active: "complete", "joined" or "queued". LimitError 429 at
+        ``max_queue`` runs, 507 when the run cannot be recorded (disk full)."""
         with self.lock:
             if rid in self.active:
                 return "joined"
@@ -99,10 +103,10 @@ class Jobs:
                 self.catalog.record(rid, model, canonical_mapping(run, constraints), preset)
             except OSError as exc:  # nothing queued: the run could not even be recorded (a full or read-only disk)
                 raise LimitError(507, f"the server cannot record the run ({exc.strerror or exc}); try later") from None
-            self._start(rid, model, run, constraints)
+            self._start(rid, model, run, constraints, fitted)
             return "queued"
 
-    def _start(self, rid: str, model: str, run, constraints: dict | None = None) -> None:
+    def _start(self, rid: str, model: str, run, constraints: dict | None = None, fitted: tuple | None = None) -> None:
         self.catalog.clear_partial(rid)
         self.catalog.count_start(rid)
         out = str(self.catalog.store_path(rid))
@@ -113,7 +117,7 @@ class Jobs:
                                         constraints.get("noise_m_s"), constraints.get("conditional_mean", False))
         fut = self.client.submit(execute, model, run, out, cache, self.stencil_cache_bytes, request,
                                  bool(constraints and constraints.get("energy_from_data")),
-                                 replay_mapping(run, constraints or {}),
+                                 replay_mapping(run, constraints or {}), fitted,
                                  key=f"turbgen-run-{rid}-{uuid.uuid4().hex[:8]}", pure=False)  # fmt: skip
         self.active[rid] = fut
         self.computations += 1

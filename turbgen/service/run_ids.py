@@ -82,10 +82,10 @@ def replay_mapping(run, constraints: dict) -> dict | None:
     return {k: v for k, v in canonical_mapping(run, constraints).items() if k not in SERVICE_KEYS}
 
 
-def check_replay(run, constraints: dict, files: list) -> None:
-    """ParameterError where ``turbgen mann --fit`` refuses the replay: the keys its fit sets (Gamma is held for a
-    lidar record: given, it is the value held), and the fit's own refusals (a flagged fit, say); the worker fits
-    again (a restarted server has no other record of it)."""
+def check_replay(run, constraints: dict, files: list) -> tuple:
+    """The fit of a replay (turbgen.runs.replay.fitted_inputs), handed to the worker; ParameterError where ``turbgen
+    mann --fit`` refuses the replay: the keys its fit sets (Gamma is held for a lidar record: given, it is the value
+    held), and the fit's own refusals (a flagged fit, say). A run re-queued after a restart is fitted again."""
     from turbgen.runs.constrain import load_constraints
     from turbgen.runs.replay import check_fit_options, fitted_inputs
     from turbgen.spec.mann import OPTIONS
@@ -94,7 +94,7 @@ def check_replay(run, constraints: dict, files: list) -> None:
     data, mapping = load_constraints(files), cast(dict, replay_mapping(run, constraints))
     given = {name: True for name, key in OPTIONS.items() if key in constraints["fit"]["given"]}
     check_fit_options(given, prefix="", lidar=any(isinstance(c, LidarData) for c in data))
-    fitted_inputs(mapping, data, evo_typed="evo_time_s" in mapping)
+    return fitted_inputs(mapping, data, evo_typed="evo_time_s" in mapping)
 
 
 def _model(name):

@@ -55,18 +55,20 @@ _CLI_ADVICE = (
     ("`out`", "the server's catalog"),
     ("pass `drop_below_ground`", "pass ?drop_below_ground=true"),
     ("raise `hub_height` above", "submit a run with hub_height_m above"),
+    ("--fit (fit=True)", '"fit": true'),
 )
 
 
 def public_text(text: str, catalog: Catalog) -> str:
-    """A library message as clients see it: server paths made ``/runs/<id>[/store]``, ``/constraints/<id>`` or
-    ``<server root>/...``, the advice of :data:`_CLI_ADVICE` rewritten."""
+    """A library message as clients see it: server paths and upload names made ``/runs/<id>[/store]``,
+    ``/constraints/<id>`` or ``<server root>/...``, the advice of :data:`_CLI_ADVICE` rewritten."""
     for root in dict.fromkeys((catalog.root, catalog.root.resolve())):
         runs = re.escape(str(root / "runs"))
         text = re.sub(runs + r"/([0-9a-f]{24})/store\.zarr\b", r"/runs/\1/store", text)
         text = re.sub(runs + r"/([0-9a-f]{24})\b", r"/runs/\1", text)
         text = re.sub(re.escape(str(root / "constraints")) + r"/([0-9a-f]{24})\.(json|csv)\b", r"/constraints/\1", text)
         text = text.replace(str(root), "<server root>")
+    text = re.sub(r"(?<![\w/.-])([0-9a-f]{24})\.(json|csv)\b", r"/constraints/\1", text)  # an upload by its name
     for advice, instead in _CLI_ADVICE:
         text = text.replace(advice, instead)
     return text

@@ -36,15 +36,15 @@ def _accept(body, state: ServiceState) -> tuple[str, str]:
     """Check and queue the run of a POST /runs body: (its id, how it was submitted)."""
     model, run, constraints = build_run(body)
     preset = body.get("preset") if isinstance(body, dict) else None
-    rid = run_id(model, canonical_mapping(run, constraints))
+    rid, fitted = run_id(model, canonical_mapping(run, constraints)), None
     if constraints and not state.catalog.is_complete(rid):  # the data placed on the grid: refused before queueing
         files = [str(p) for p in state.catalog.uploads.paths(constraints["constrain"])]
         if "fit" in constraints and not state.jobs.is_active(rid):  # the fit's refusals before queueing
-            check_replay(run, constraints, files)
+            fitted = check_replay(run, constraints, files)  # the worker takes it: one fit per replay
         check_constrained_memory(run, files, constraints, state.settings.memory_budget_bytes)
     elif not state.catalog.is_complete(rid):  # a complete run is served, never recomputed
         check_memory(model, run, state.settings.memory_budget_bytes)
-    return rid, state.jobs.submit(rid, model, run, preset, constraints)
+    return rid, state.jobs.submit(rid, model, run, preset, constraints, fitted)
 
 
 @router.get("/runs")
