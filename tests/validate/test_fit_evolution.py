@@ -32,8 +32,15 @@ def frozen():
 
 def test_x_pairs_groups_points_at_one_y_z():
     xyz = ((0.0, 0.0, 0.0), (100.0, 0.0, 0.0), (0.0, 6.0, 0.0), (50.0, 6.0, 0.0), (100.0, 6.0, 0.0), (0.0, 9.0, 0.0))
-    assert x_pairs(xyz) == {(0.0, 100.0): [(0, 1), (2, 4)], (0.0, 50.0): [(2, 3)], (50.0, 100.0): [(3, 4)]}
+    o, fifty, hundred = (0.0, 0.0), (50.0, 0.0), (100.0, 0.0)
+    assert x_pairs(xyz) == {(o, hundred): [(0, 1), (2, 4)], (o, fifty): [(2, 3)], (fifty, hundred): [(3, 4)]}
     assert x_pairs(((0.0, 0.0, 0.0), (0.0, 0.0, 10.0))) == {}
+    # sensor data: at one height, positions (x, y), apart across the wind too (never at one x)
+    assert x_pairs(xyz, lateral=True) == {
+        ((0.0, 0.0), (50.0, 6.0)): [(0, 3)], ((0.0, 0.0), (100.0, 0.0)): [(0, 1)], ((0.0, 0.0), (100.0, 6.0)): [(0, 4)],
+        ((0.0, 6.0), (50.0, 6.0)): [(2, 3)], ((0.0, 6.0), (100.0, 0.0)): [(2, 1)], ((0.0, 6.0), (100.0, 6.0)): [(2, 4)],
+        ((0.0, 9.0), (50.0, 6.0)): [(5, 3)], ((0.0, 9.0), (100.0, 0.0)): [(5, 1)], ((0.0, 9.0), (100.0, 6.0)): [(5, 4)],
+        ((50.0, 6.0), (100.0, 0.0)): [(3, 1)], ((50.0, 6.0), (100.0, 6.0)): [(3, 4)]}
 
 
 def test_recovery_on_two_planes_100_m_apart(evolving):
@@ -61,7 +68,7 @@ def test_frozen_field_is_said_not_identified(frozen, tmp_path):
     fit = turbgen.fit_mann(frozen)
     e = fit.evolution
     assert not e.identified and e.ci95[1] is None and e.chi2_frozen < 1
-    assert np.all(np.abs(e.data[(0.0, 100.0)] - 1) < 1e-5)
+    assert np.all(np.abs(e.data[(0.0, 0.0), (100.0, 0.0)] - 1) < 1e-5) and e.lateral_m == (0.0,)
     assert any("frozen (Taylor) limit is inside the 95 % interval" in n for n in fit.notes)
     d = json.loads(json.dumps(fit.to_dict()))["evo_time_s"]
     assert d["ci95"][1] is None and not d["identified"]
@@ -107,7 +114,9 @@ def test_the_part_of_taylors_delay_under_a_sample_is_in_the_model(frozen):
                            {c: np.fft.irfft(np.fft.rfft(frozen[c].values[:, 0, 6, 5].astype(float)) * turn**k, n=nt)
                             for c in "uvw"}) for k, x in enumerate((0.0, 12.5))]
     e = turbgen.fit_mann(PointSeries("m", np.arange(nt) * dt, tuple(sensors), False, None, "shifted"), U=10.0).evolution
-    top = e.data[(0.0, 12.5)]
+    y = float(frozen.y[6])  # fluctuation data: positions as given
+    assert e.pairs_m == ((0.0, 12.5),) and e.lateral_m == (0.0,)
+    top = e.data[(0.0, y), (12.5, y)]
     assert top.min() < 0.8 and abs(top[-1] - math.cos(2 * np.pi * e.f_hz[-1] * 0.25)) < 0.1, (e.f_hz, top)
     assert not e.identified and e.ci95[1] is None, e.message
 
@@ -134,6 +143,41 @@ def test_cli_two_masts_json(evolving, tmp_path):
     e = out["evo_time_s"]
     assert e["pairs_m"] == [[0.0, 100.0]] and e["held"] is False
     assert e["ci95"][0] < e["value"] and (e["ci95"][1] is None or e["value"] < e["ci95"][1])
+
+
+def _total_wind_masts(ds, iy: tuple, turn_deg: float) -> PointSeries:
+    """Total-wind masts (U = 10 m/s) at planes 0 and 100 m, at y[iy[0]] and y[iy[1]], heights z[3] and z[8], in a
+    file whose frame is the field's turned by ``turn_deg`` (positions and u, v; counter-clockwise from above)."""
+    nt, lag = ds.sizes["t"], 20
+    c, n = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+    y0, sensors = float(ds.y[iy[0]]), []
+    for k, x in enumerate((0.0, 100.0)):
+        y = float(ds.y[iy[k]]) - y0
+        for z in (3, 8):
+            u, v, w = (ds[ch].values[lag * k: nt - lag + lag * k, k, iy[k], z].astype(float) for ch in "uvw")
+            sensors.append(PointSensor(f"m{k}z{z}", x * c + y * n, -x * n + y * c, float(ds.z[z]), None,
+                                       {"u": (u + 10.0) * c + v * n, "v": -(u + 10.0) * n + v * c, "w": w}))
+    return PointSeries("masts", ds.t.values[: nt - lag], tuple(sensors), True, None, "two masts")
+
+
+def test_masts_off_the_wind_line_are_fitted_in_the_wind_s_frame(evolving):
+    """Two masts 100 m apart along the wind and 18 m across it, in a file whose x runs along the mast line (the wind
+    10.2 deg off it): the fit turns the positions into the wind's frame and fits gamma with the pair's lateral offset
+    in the model (Phi_11 exp(i k2 dy)) -- the same L and gamma as the file in the field's own frame. Before, the masts
+    were taken 101.6 m apart along the wind and gamma came out low (the lateral decorrelation read as evolution),
+    and the field's own frame (the masts at two y) gave no pair at all."""
+    iy = (3, 6)
+    line = math.degrees(math.atan2(float(evolving.y[6] - evolving.y[3]), 100.0))
+    fits = [turbgen.fit_mann(_total_wind_masts(evolving, iy, t)) for t in (0.0, line)]
+    own, along_line = (f.evolution for f in fits)
+    assert fits[1].length_scale_m.value == pytest.approx(fits[0].length_scale_m.value, rel=1e-6)  # the spectra's too
+    (x0, x1), = own.pairs_m
+    assert (x0, x1, *own.lateral_m) == pytest.approx((0.0, 100.0, 18.0), abs=0.05)  # the sample's direction: ~0.01 deg
+    assert np.ravel(along_line.pairs_m) == pytest.approx(np.ravel(own.pairs_m), abs=1e-9)
+    assert along_line.lateral_m == pytest.approx(own.lateral_m, abs=1e-9)
+    for a, b in ((along_line.value_s, own.value_s), (along_line.chi2, own.chi2), (along_line.ci95[0], own.ci95[0])):
+        assert a == pytest.approx(b, rel=1e-6)
+    assert json.loads(json.dumps(fits[1].to_dict()))["evo_time_s"]["lateral_m"] == list(along_line.lateral_m)
 
 
 def test_incoherent_masts_give_only_an_upper_bound():

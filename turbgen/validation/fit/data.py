@@ -5,11 +5,13 @@ fit's variances are those of the same points), its periodic records as they are;
 (its least-squares line through the finite values removed), a trend larger than its standard deviation said in the
 notes (the record may not be stationary). Missing values (NaN): the Welch estimates skip the segments holding them.
 A sensor's total-wind u and v are first turned into its own mean wind direction (``along_wind``): the model's u is
-along the mean wind, and a sonic's axes seldom are."""
+along the mean wind, and a sonic's axes seldom are. For the Mann fits the sensors' positions are turned into the
+wind's frame too (``in_wind_frame``): two masts are apart along the wind and across it."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +64,8 @@ class FitData:
         A field's store attributes (its model and parameters), None for sensor data.
     path_m : numpy.ndarray or None
         (N,) sonic path length [m] of every point (0: a point); None: all are points.
+    turned_deg : float or None
+        The turn [deg] of ``sites_m`` and ``u_xyz_m`` into the wind's frame (``in_wind_frame``); None: as given.
     """
 
     source: str
@@ -78,6 +82,7 @@ class FitData:
     u_xyz_m: tuple = ()
     attrs: dict | None = None
     path_m: np.ndarray | None = None
+    turned_deg: float | None = None
 
     @property
     def nt(self) -> int:
@@ -166,8 +171,26 @@ def along_wind(ps: PointSeries) -> tuple[list[dict], list[str]]:
     if big is None or abs(turns[big]) <= TURN_NOTE_DEG:
         return out, []
     return out, [f"the mean wind blows up to {turns[big]:+.1f} deg from x ({big}; counter-clockwise seen from above): "
-                 "u and v were turned into each sensor's mean wind direction, along which the model's u lies (the "
-                 "sensors' x and y are taken as given)"]
+                 "u and v were turned into each sensor's mean wind direction, along which the model's u lies (and "
+                 "for the Mann fit the sensors' x and y into their mean direction)"]
+
+
+def in_wind_frame(data: FitData) -> FitData:
+    """``data`` with the sensors' (x, y) (``sites_m``, ``u_xyz_m``) turned about the origin by minus the mean of the
+    total-wind sensors' directions (the direction of their mean unit vector; ``mean_direction_deg``): x along the
+    mean wind, as the model's (the Mann fits: the covariance of the sensors' spectra and the longitudinal coherence
+    depend on their separations along and across the wind). ``data`` itself for a field, fluctuation data, sensors
+    without u and v, or data already turned."""
+    ps = data.points
+    with_uv = [s for s in ps.sensors if {"u", "v"} <= s.series.keys()] if ps is not None and ps.total_wind else []
+    if not with_uv or data.sites_m is None or data.turned_deg is not None:
+        return data
+    rad = np.radians([mean_direction_deg(s.series["u"], s.series["v"]) for s in with_uv])
+    mean_deg = math.degrees(math.atan2(np.sin(rad).mean(), np.cos(rad).mean()))
+    x, y = rotate_horizontal(data.sites_m[:, 0], data.sites_m[:, 1], -mean_deg)
+    sites = np.column_stack([x, y, data.sites_m[:, 2]])
+    u_xyz = tuple(map(tuple, sites[data.columns["u"]])) if data.columns and "u" in data.columns else ()
+    return replace(data, sites_m=sites, u_xyz_m=u_xyz, turned_deg=mean_deg)
 
 
 def data_from_store(fs, points=None) -> FitData:

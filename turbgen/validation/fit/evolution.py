@@ -1,11 +1,13 @@
 """Fit the eddy-evolution time gamma [s] (Guo et al. 2022) to the longitudinal coherence of u along x.
 
-Estimate: u points at one (y, z) and different x (sensors, or the planes of a store) form pairs; per pair of x
-values and band the co-coherence r = sum Re C_ij / sqrt(sum A_i sum A_j) pools the Welch cross- and auto-spectra
-(``spectra``' segments and bands) over the (y, z) points and the band's bins. A store is in the convected frame;
+Estimate: u points at one (y, z) and different x (the planes of a store), or for sensor data at one height and
+different x (two masts, in the wind's frame: they may be apart across the wind too), form pairs; per pair of positions
+(x, y) and band the co-coherence r = sum Re C_ij / sqrt(sum A_i sum A_j) pools the Welch cross- and auto-spectra
+(``spectra``' segments and bands) over the points of that layout and the band's bins. A store is in the convected frame;
 sensor series are first shifted by whole samples of x / U (Taylor's delay; the rest delta, under dt / 2, turns
 the pair's cross-spectrum by exp(-i 2 pi f delta): the model's co-coherence carries cos(2 pi f delta) per line).
-Model: rho(k1, dx) = sum Phi_11 exp(-dx / (U tau_e(k))) / sum Phi_11 (Guo et al. 2023, Eq. 13, 16),
+Model: rho(k1, dx, dy) = sum Phi_11 exp(i k2 dy) exp(-dx / (U tau_e(k))) / sum Phi_11 (Guo et al. 2023, Eq. 8, 13,
+16; dy = 0 on a lattice),
 summed over the store's lattice (``MannLattice``, the validator's "theo. (grid)"; also for series sampled from a
 store, ``Sampler``) or over the continuous (k2, k3) plane (``perpendicular_quadrature``) with ae, L and Gamma held at
 their one-point fit (factor2 at its default); through the expected Welch estimate of every bin (``WelchKernel``) and
@@ -40,7 +42,7 @@ from turbgen.theory.eddy_lifetime import evolution_lifetime_s
 from turbgen.theory.mann_quadrature import perpendicular_quadrature
 from turbgen.theory.params import MannParams
 from turbgen.validation.fit.covariance import point_sets, separations
-from turbgen.validation.fit.data import FitData
+from turbgen.validation.fit.data import FitData, in_wind_frame
 from turbgen.validation.fit.evo_cross import coherence_spectra_corr, cross_covariance
 from turbgen.validation.fit.model import BandModel
 from turbgen.validation.fit.result import MannFit
@@ -72,13 +74,16 @@ class EvoFit:
     dof : int
         Bands times pairs minus one.
     pairs_m : tuple
-        (x_i, x_j) [m] of the fitted pairs of x values.
+        (x_i, x_j) [m] of the fitted pairs: their positions along the wind.
+    lateral_m : tuple
+        y_j - y_i [m] of each pair: its offset across the wind (0 on a lattice and for masts on the wind's line).
     message : str
         One line: identified or not, and why.
     f_hz : numpy.ndarray
         Band centres [Hz].
     data, fitted, sd : dict
-        (x_i, x_j) -> (nbands,) co-coherence estimates, their expectation at gamma, their standard deviations.
+        ((x_i, y_i), (x_j, y_j)) -> (nbands,) co-coherence estimates of the pair of positions [m], their expectation
+        at gamma, their standard deviations.
     ci95_held : tuple
         (lo, hi) [s] of the coherence alone, ae, L and Gamma held (None: a range end not reached).
     sensitivity : numpy.ndarray
@@ -98,6 +103,7 @@ class EvoFit:
     sd: dict
     ci95_held: tuple
     sensitivity: np.ndarray
+    lateral_m: tuple = ()
 
     @property
     def identified(self) -> bool:
@@ -106,14 +112,15 @@ class EvoFit:
     def to_dict(self) -> dict:
         return {"value": self.value_s, "ci95": list(self.ci95), "held": False, "identified": self.identified,
                 "chi2": self.chi2, "chi2_frozen": self.chi2_frozen, "dof": self.dof,
-                "pairs_m": [list(p) for p in self.pairs_m], "message": self.message}
+                "pairs_m": [list(p) for p in self.pairs_m], "lateral_m": list(self.lateral_m), "message": self.message}
 
     def plot(self, ax) -> None:
         """Co-coherence per pair of x with 95 % bars and the fitted model on ``ax``."""
-        for k, p in enumerate(self.pairs_m):
-            ax.errorbar(self.f_hz, self.data[p], yerr=1.96 * self.sd[p], fmt="o", ms=3, color=f"C{k}",
-                        label=f"x = {p[0]:g}, {p[1]:g} m data")
-            ax.plot(self.f_hz, self.fitted[p], "-", color=f"C{k}", label=f"fitted, evo = {self.value_s:.3g} s")
+        for k, (a, b) in enumerate(self.data):
+            across = f", {b[1] - a[1]:+.3g} m across" if b[1] != a[1] else ""
+            ax.errorbar(self.f_hz, self.data[a, b], yerr=1.96 * self.sd[a, b], fmt="o", ms=3, color=f"C{k}",
+                        label=f"x = {a[0]:.4g}, {b[0]:.4g} m{across} data")
+            ax.plot(self.f_hz, self.fitted[a, b], "-", color=f"C{k}", label=f"fitted, evo = {self.value_s:.3g} s")
         ax.set_xscale("log")
         ax.set_xlabel("f [Hz]")
         ax.set_ylabel("co-coherence of u along x")
@@ -132,19 +139,20 @@ class Sampler:
     box: MannBox | None = None
 
 
-def x_pairs(xyz: tuple) -> dict:
-    """(x_i, x_j) with x_i < x_j -> [(column at x_i, column at x_j)] of the u columns at one (y, z)."""
+def x_pairs(xyz: tuple, lateral: bool = False) -> dict:
+    """((x_i, y_i), (x_j, y_j)) with x_j - x_i > POS_TOL_M -> [(column at i, column at j)] of the u columns at one
+    (y, z), positions (x, 0); ``lateral``: at one z, positions (x, y) (points across the wind from each other)."""
     groups: dict = {}
     for c, (x, y, z) in enumerate(xyz):
-        key = (round(y / POS_TOL_M), round(z / POS_TOL_M))
-        groups.setdefault(key, []).append((x, c))
+        key = round(z / POS_TOL_M) if lateral else (round(y / POS_TOL_M), round(z / POS_TOL_M))
+        groups.setdefault(key, []).append(((x, y if lateral else 0.0), c))
     out: dict = {}
     for cols in groups.values():
         cols.sort()
-        for a, (xa, ca) in enumerate(cols):
-            for xb, cb in cols[a + 1:]:
-                if xb - xa > POS_TOL_M:
-                    out.setdefault((xa, xb), []).append((ca, cb))
+        for a, (pa, ca) in enumerate(cols):
+            for pb, cb in cols[a + 1:]:
+                if pb[0] - pa[0] > POS_TOL_M:
+                    out.setdefault((pa, pb), []).append((ca, cb))
     return out
 
 
@@ -169,11 +177,12 @@ def _aligned(data: FitData) -> np.ndarray:
 
 
 class CoherenceModel:
-    """Expected band co-coherence of pairs dx apart as a function of gamma, the other parameters held (module
-    docstring): per k1 node the Phi_11 masses and their decay rates at gamma = 1 s."""
+    """Expected band co-coherence of pairs dx apart along the wind (and dy across it) as a function of gamma, the
+    other parameters held (module docstring): per k1 node the Phi_11 masses and their decay rates at gamma = 1 s."""
 
     def __init__(self, bands, data: FitData, params: MannParams, sampler: Sampler | None = None):
-        self.bands, self.U, self.sampler, self.data = bands, data.U_m_s, sampler, data
+        self.bands, self.U, self.sampler, self.data, self.params = bands, data.U_m_s, sampler, data, params
+        self._across: dict = {}
         grid, box = (data.grid, data.box) if sampler is None else (sampler.grid, sampler.box)
         band_model = BandModel(bands, data.U_m_s, grid, box, params.lifetime)
         band_model.update_ratio(params)
@@ -182,8 +191,9 @@ class CoherenceModel:
         self.f11_lines = np.concatenate([[0.0], f11 * band_model.dk1])
         self._gain: dict = {}
         self.nodes = np.geomspace(self.k1[0], self.k1[-1], N_NODES)
-        unit = replace(params, evo_time_s=1.0)
-        if grid is None or box is None:
+        unit = self.unit = replace(params, evo_time_s=1.0)
+        self.lattice = not (grid is None or box is None)
+        if not self.lattice:
             kappa, w, g = perpendicular_quadrature(self.nodes, params, ((0, 0),))
             self.mass = w * g[(0, 0)]
             self.rate = 1.0 / evolution_lifetime_s(np.sqrt(self.nodes[:, None] ** 2 + kappa**2), unit)
@@ -200,9 +210,25 @@ class CoherenceModel:
             self._gain[x_m] = g, self.bands.band_mean(self.kernel.apply(self.f11_lines * g))
         return self._gain[x_m]
 
-    def expected(self, gamma_s: float, x_a: float, x_b: float) -> np.ndarray:
-        """(nbands,) expected co-coherence of points at ``x_a`` and ``x_b`` [m] (before the estimator's bias)."""
-        node = (self.mass * np.exp(-self.rate * (abs(x_b - x_a) / (self.U * gamma_s)))).sum(1) / self.mass.sum(1)
+    def across(self, dy_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """(mass, rate) at the k1 nodes of points ``dy_m`` [m] apart across the wind: the (k2, k3) plane's Phi_11
+        exp(i k2 dy) and decay rates at gamma = 1 s (continuous model only; dy = 0: the one-point masses)."""
+        if abs(dy_m) <= POS_TOL_M:
+            return self.mass, self.rate
+        if self.lattice:
+            raise ValueError("a lattice's co-coherence is taken at one (y, z)")
+        if dy_m not in self._across:
+            kappa, w, g = perpendicular_quadrature(self.nodes, self.params, ((0, 0),), dy_m=dy_m)
+            rate = 1.0 / evolution_lifetime_s(np.sqrt(self.nodes[:, None] ** 2 + kappa**2), self.unit)
+            self._across[dy_m] = np.real(w * g[(0, 0)]), rate
+        return self._across[dy_m]
+
+    def expected(self, gamma_s: float, a: tuple, b: tuple) -> np.ndarray:
+        """(nbands,) expected co-coherence of points at the positions ``a`` and ``b`` (x, y) [m] (before the
+        estimator's bias); gamma_s = inf: the frozen field's."""
+        mass, rate = self.across(abs(b[1] - a[1]))
+        node = (mass * np.exp(-rate * (abs(b[0] - a[0]) / (self.U * gamma_s)))).sum(1) / self.mass.sum(1)
+        x_a, x_b = a[0], b[0]
         turn = np.cos(self.k1 * self.U * _rest(self.data, x_a, x_b))  # 2 pi f delta at the lines
         rho = np.concatenate([[1.0], np.interp(np.log(self.k1), np.log(self.nodes), node) * turn])
         (g_a, auto_a), (g_b, auto_b) = self.gain(x_a), self.gain(x_b)
@@ -216,14 +242,14 @@ def _estimates(data: FitData, nperseg: int, pairs: dict):
     bands = estimate_bands(replace(data, series={"u": u}, uw_columns=()), min(nperseg, u.shape[0] // 4))
     X, ok = segment_dfts(u, bands.setup)
     r, factor, of_x = [], [], {}
-    for (xa, _), cols in pairs.items():
+    for (pa, _), cols in pairs.items():
         a, b = (np.array(c) for c in zip(*cols))
         both = (ok[:, a] & ok[:, b])[:, None, :]
         sums = [(v * both).sum(axis=(0, 2)) for v in (np.real(np.conj(X[:, :, a]) * X[:, :, b]),
                                                      np.abs(X[:, :, a]) ** 2, np.abs(X[:, :, b]) ** 2)]
         c, aa, bb = (bands.band_mean(s) for s in sums)
         r.append(c / np.sqrt(aa * bb))
-        key = (xa, tuple(a))  # the point-correlation sum of the points at one x
+        key = (pa, tuple(a))  # the point-correlation sum of the points at one position
         if key not in of_x:
             one = replace(data, series={"u": u[:, a]}, uw_columns=())
             of_x[key] = estimate_bands(one, bands.setup.nperseg).var_factor["uu"] * rho_bar(X[:, :, a], bands.bands)
@@ -249,13 +275,19 @@ class _Problem:
 
     def __init__(self, model: CoherenceModel, seps: tuple, r: np.ndarray, factor: np.ndarray):
         self.model, self.seps, self.r, self.factor = model, seps, r, factor
-        self.xs = sorted({x for pair in seps for x in pair})
+        self.xs = sorted({x for pair in seps for x in pair})  # the positions (x, y)
 
     def rho(self, gamma_s: float) -> dict:
-        """(x_a, x_b) -> (nbands,) expected co-coherence, for every two x of the pairs (x_a <= x_b)."""
+        """(a, b) -> (nbands,) expected co-coherence, for every two positions of the pairs (a <= b)."""
         one = np.ones(self.r.shape[1])  # a point with itself
         return {(a, b): one if a == b else self.model.expected(gamma_s, a, b) for a in self.xs for b in self.xs
                 if a <= b}
+
+    def frozen(self) -> np.ndarray:
+        """(npairs, nbands) co-coherence of the frozen field (Taylor): 1 along the wind, the model's across it."""
+        mean = self.mean(math.inf) if any(a[1] != b[1] for a, b in self.seps) else None
+        return np.array([np.ones(self.r.shape[1]) if a[1] == b[1] else cast(np.ndarray, mean)[m]
+                         for m, (a, b) in enumerate(self.seps)])
 
     def mean(self, gamma_s: float) -> np.ndarray:
         rho = self.rho(gamma_s)
@@ -304,10 +336,13 @@ def fit_evolution(data: FitData, params: MannParams, nperseg: int, fit: MannFit 
     u points along x at one (y, z)). ``params``: ae, L, Gamma of the one-point fit (held); ``nperseg`` [samples]: its
     Welch segments; ``fit``: that MannFit, whose uncertainty the interval carries (None: ``params`` exact);
     ``sampler``: how sensor-like series were sampled from a store (``Sampler``; None: ``data``'s own lattice if any)."""
-    pairs = x_pairs(data.u_xyz_m) if "u" in data.series else {}
+    lateral = data.grid is None and sampler is None  # sensor data: masts may be apart across the wind too
+    data = in_wind_frame(data) if lateral else data
+    pairs = x_pairs(data.u_xyz_m, lateral) if "u" in data.series else {}
     if not pairs:
         return ("evo_time_s not fitted: the data hold no two u series at one (y, z) and different x (two masts "
-                "along the wind or two planes are needed)")
+                "along the wind or two planes are needed)" if not lateral else "evo_time_s not fitted: the data "
+                "hold no two u series at one height and apart along the wind (two masts are needed)")
     seps = tuple(pairs)
     bands, r, factor = _estimates(data, nperseg, pairs)
     problem = _Problem(CoherenceModel(bands, data, params, sampler), seps, r, factor)
@@ -328,7 +363,7 @@ def fit_evolution(data: FitData, params: MannParams, nperseg: int, fit: MannFit 
         var = _propagated(problem, data, fit, pairs, slope, x)
     ci = [None if e is None else x + side * math.sqrt(max((e - x) ** 2 + CHI2_95 * var, 0.0))
           for e, side in zip(ends, (-1, 1))]
-    chi2_frozen = float(np.sum(solve_triangular(problem.chol, (r - 1.0).T.ravel(), lower=True) ** 2))
+    chi2_frozen = float(np.sum(solve_triangular(problem.chol, (r - problem.frozen()).T.ravel(), lower=True) ** 2))
     return _result(problem, bands, x, ci, c_min, chi2_frozen, (lo, hi), (ends, slope))
 
 
@@ -375,7 +410,7 @@ def linear_terms(problem: _Problem, data: FitData, fit: MannFit, pairs: dict, x:
     g = problem.model.band_model.coherency(replace(fit.params, evo_time_s=math.exp(x)), seps)
     if problem.model.band_model.grid is None:  # frozen between x (``model``): times the co-coherence at dx
         for dx in {abs(d) for d in seps[:, 0] if abs(d) > POS_TOL_M}:
-            rho = problem.model.expected(math.exp(x), 0.0, dx)
+            rho = problem.model.expected(math.exp(x), (0.0, 0.0), (dx, 0.0))
             g[..., np.abs(np.abs(seps[:, 0]) - dx) < POS_TOL_M] *= rho[:, None, None, None]
     cols, used = np.asarray(cast(dict, data.columns)["u"]), tuple(fit.data)
     sites = [tuple(cols[list(c)] for c in zip(*pairs[p])) for p in problem.seps]
@@ -411,8 +446,9 @@ def _result(problem: _Problem, bands, x: float, ci: list, c_min: float, chi2_fro
                f"{c_min:.4g}, dof {dof})")
     seps = problem.seps
     ends = tuple(None if e is None else math.exp(e) for e in held[0])
-    return EvoFit(gamma, (lo, hi), c_min, chi2_frozen, dof, seps, msg, bands.f_hz, dict(zip(seps, problem.r)),
-                  dict(zip(seps, problem.mean(gamma))), dict(zip(seps, problem.sd)), ends, held[1])
+    return EvoFit(gamma, (lo, hi), c_min, chi2_frozen, dof, tuple((float(a[0]), float(b[0])) for a, b in seps), msg,
+                  bands.f_hz, dict(zip(seps, problem.r)), dict(zip(seps, problem.mean(gamma))),
+                  dict(zip(seps, problem.sd)), ends, held[1], tuple(float(b[1] - a[1]) for a, b in seps))
 
 
 def with_evolution(data: FitData, fit, sampler: Sampler | None = None):

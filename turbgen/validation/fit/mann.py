@@ -24,7 +24,7 @@ from turbgen.theory.params import LIFETIMES, MannParams
 from turbgen.validation.estimators import segment_starts
 from turbgen.validation.fit.covariance import (EXACT_BINS, exact_lines, isserlis, line_covariance, point_sets,
                                                separations, spliced)
-from turbgen.validation.fit.data import FitData
+from turbgen.validation.fit.data import FitData, in_wind_frame
 from turbgen.validation.fit.model import BandModel
 from turbgen.validation.fit.result import FitValue, MannFit, misfit_notes
 from turbgen.validation.fit.spectra import SPECTRA, BandSpectra, estimate_bands
@@ -137,7 +137,7 @@ def fit_mann_data(data: FitData, nperseg: int | None = None, bands: BandSpectra 
     ``bands`` replaces the band estimates of ``data`` (synthetic spectra with known noise: the tests); ``lifetime``
     as in ``data_lifetime``. ParameterError for a record too short or too gappy for the Welch estimates, or a
     ``lifetime`` other than a store's own."""
-    lifetime = data_lifetime(data, lifetime)
+    lifetime, data = data_lifetime(data, lifetime), in_wind_frame(data)
     bands = estimate_bands(data, nperseg) if bands is None else bands
     model = BandModel(bands, data.U_m_s, data.grid, data.box, lifetime, data.spectrum_paths())
     used = tuple(s for s in SPECTRA if s in bands.values)
