@@ -180,6 +180,26 @@ def test_masts_off_the_wind_line_are_fitted_in_the_wind_s_frame(evolving):
     assert json.loads(json.dumps(fits[1].to_dict()))["evo_time_s"]["lateral_m"] == list(along_line.lateral_m)
 
 
+def test_a_replay_of_masts_off_the_wind_says_where_they_are_placed(evolving, tmp_path):
+    """The replay conditions on the sensors at the file's x and y (on the field's planes) while the fit works in the
+    wind's frame: a mast the turn moves by more than half a grid step (here 18 m) is named, with the distance."""
+    line = math.degrees(math.atan2(float(evolving.y[6] - evolving.y[3]), 100.0))
+    ps = _total_wind_masts(evolving, (3, 6), line)
+    sensors = [{"name": s.name, "x_m": s.x_m, "y_m": s.y_m, "z_m": s.z_m,
+                **{f"{c}_m_s": list(v) for c, v in s.series.items()}} for s in ps.sensors]
+    path = tmp_path / "masts.json"
+    path.write_text(json.dumps({"kind": "point-series", "time_s": list(ps.time_s), "total_wind": True,
+                                "sensors": sensors}))
+    planes = f"0,{ps.sensors[2].x_m!r}"  # the file's x of the second mast (101.6 m along the mast line)
+    grid = ["--nt", "1152", "--dt", "0.5", "--ny", "12", "--nz", "12", "--dy", "6", "--dz", "6", "--planes", planes]
+    r = CliRunner().invoke(cli, ["mann", "--constrain", str(path), "--fit", "--evo", "frozen", *grid, "--hub-height",
+                                 "90", "--noise", "0.05", "--out", str(tmp_path / "r.zarr")])  # fmt: skip
+    assert r.exit_code == 0, r.output
+    off = turbgen.open_store(tmp_path / "r.zarr").attrs["fit"]["placed_off"]
+    assert off["sensor"] == "m1z3" and off["m"] == pytest.approx(2 * 101.6 * math.sin(math.radians(line) / 2), abs=0.2)
+    assert f"in the wind's frame, which the fit used, m1z3 is {off['m']:g} m from there" in r.output, r.output
+
+
 def test_incoherent_masts_give_only_an_upper_bound():
     """Independent noise at two masts 150 m apart: co-coherence 0, so gamma sits at the bottom of its range and only
     an upper bound is said (the one-point fit of noise is flagged on its own)."""

@@ -69,7 +69,19 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None,
     run = {k: out[k] for k in (*FITTED, "U_m_s", "lifetime", *values.keys() - FITTED.keys())}
     files = [{"path": c.source, "sha256": _sha256(c.source)} for c in constraints]
     record = {"fit": fit.to_dict(), "run": run, "files": files, "export": export}
-    return out, constraints, record | ({} if turn is None else {"turned_deg": turn})
+    return out, constraints, record | ({} if turn is None else {"turned_deg": turn} | _placed_off(mapping, constraints,
+                                                                                                turn))
+
+
+def _placed_off(mapping: dict, series: list, turn: float) -> dict:
+    """``{"placed_off": {"sensor", "m"}}`` when the turn into the wind's frame moves a sensor by more than half the
+    field's finer grid step [m]: conditioning keeps the file's x and y (point sensors sit on the field's planes), the
+    fits use the wind's frame (turbgen.validation.fit.data.in_wind_frame); {} otherwise."""
+    g = MannRun.from_mapping(mapping).grid
+    moved = {s.name: float(np.hypot(*(np.array(rotate_horizontal(s.x_m, s.y_m, -turn)) - (s.x_m, s.y_m))))
+             for ps in series for s in ps.sensors}
+    name = max(moved, key=lambda k: moved[k])
+    return {"placed_off": {"sensor": name, "m": round(moved[name], 3)}} if moved[name] > min(g.dy_m, g.dz_m) / 2 else {}
 
 
 def _reliable(fit, source: str):
@@ -182,6 +194,11 @@ def describe_fit(record: dict) -> list[str]:
     if record.get("turned_deg"):
         lines.append(f"the data's mean wind direction at the hub, {record['turned_deg']:+.4g} deg (counter-clockwise "
                      "from above), is the field's x: their u and v were turned by minus that")
+    if "placed_off" in record:
+        off = record["placed_off"]
+        lines.append(f"note: the sensors keep the file's x and y (conditioning puts them on the field's planes); in "
+                     f"the wind's frame, which the fit used, {off['sensor']} is {off['m']:g} m from there, more than "
+                     "half a grid step: give the file in the wind's frame to place it there")
     exp = " ".join(f"--{k.split('_')[0]} {v}" for k, v in record["export"].items())
     return lines + ([f"fitted mean wind: {', '.join(mean)}" + (f" (turbgen export uses {exp})" if exp else "")]
                     if mean else [])
