@@ -48,8 +48,10 @@ CASES = [  # (ae, L, Gamma, gamma [s], dx [m])
 MAST = [(3.0, z) for z in (-33.0, -9.0, 9.0, 33.0)]  # (y, z) [m] of a mast's 4 sensors (bench_fit.py's mast4)
 # per case: the planes' 8 x 8 sub-lattices (None), two masts cut from the field (MAST), or two masts' series drawn
 # from the continuous model ("series", ``mast_series``)
-POINTS = [None, None, MAST, MAST, "series", "series"]
-CASES += CASES[2:4]
+POINTS = [None, None, MAST, MAST, "series", "series", "series", "series"]
+CASES += CASES[2:4] + [CASES[0], CASES[3]]
+# the second mast's offset across the wind [m] (cases 6-7: the masts' line 10 deg off the wind, d = dx / cos 10 deg)
+LATERAL_M = [0.0] * 6 + [CASES[0][4] * math.tan(math.radians(10.0)), CASES[3][4] * math.tan(math.radians(10.0))]
 GRID = dict(nt=1024, ny=12, nz=12, dy=6.0, dz=6.0, U=10.0, dt=0.5)
 
 
@@ -85,7 +87,7 @@ def _mast_factor(case: int) -> np.ndarray:
     dk = 2 * np.pi / (n * U * GRID["dt"])
     k1 = dk * np.arange(1, n // 2)
     nodes = np.geomspace(k1[0], k1[-1], N_NODES)
-    sites = [(x, y, z) for x in (0.0, dx) for y, z in MAST]
+    sites = [(x, y + (LATERAL_M[case] if x else 0.0), z) for x in (0.0, dx) for y, z in MAST]
     cov = np.zeros((k1.size, 3 * len(sites), 3 * len(sites)), complex)
     cross: dict = {}
     one = one_point_spectra(k1, params)
@@ -107,7 +109,8 @@ def _mast_factor(case: int) -> np.ndarray:
 def mast_series(case: int, seed: int) -> PointSeries:
     """Fluctuations of u, v, w at two masts dx apart (4 sensors each, MAST), Gaussian and periodic with the
     continuous model's lines (``_mast_factor``; a sensor holds every wavenumber, unlike a point of a grid); the
-    downstream mast's series delayed by dx / U (Taylor), whole samples when dx / (U dt) is an integer."""
+    downstream mast's series delayed by dx / U (Taylor), whole samples when dx / (U dt) is an integer; the sensors of
+    the factor's second mast (labelled x = 0) LATERAL_M[case] across the wind from the first."""
     n, dx = GRID["nt"], CASES[case][4]
     chol = _mast_factor(case)
     rng = np.random.default_rng(seed)
@@ -116,7 +119,7 @@ def mast_series(case: int, seed: int) -> PointSeries:
     X[1: n // 2] = n * np.einsum("mij,mj->mi", chol, z)
     u = np.fft.irfft(X, n, axis=0).reshape(n, -1, 3)
     lag = round(dx / (GRID["U"] * GRID["dt"]))
-    sensors = tuple(PointSensor(f"s{a}", dx * (a < len(MAST)), y, zz, None,
+    sensors = tuple(PointSensor(f"s{a}", dx * (a < len(MAST)), y + LATERAL_M[case] * (a >= len(MAST)), zz, None,
                                 {c: np.roll(u[:, a, k], 0 if a < len(MAST) else lag) for k, c in enumerate("uvw")})
                     for a, (y, zz) in enumerate(MAST * 2))
     return PointSeries("masts", GRID["dt"] * np.arange(n), sensors, False, None, "bench_fit_evo masts")
@@ -131,13 +134,13 @@ def one(case: int, seed: int, cache: str | None = None) -> dict:
     t2, c2 = time.perf_counter(), time.process_time()
     oracle = fit_evolution(fd, MannParams(ae, L, G), fit.nperseg)
     e = fit.evolution
-    pair = e.pairs_m[0]
+    pair = next(iter(e.data))  # the pair of positions (x, y)
     return {"case": case, "seed": seed, "truth": evo, "dx_m": dx, "value": e.value_s, "ci95": list(e.ci95),
             "ci95_held": list(e.ci95_held), "sensitivity": list(e.sensitivity), "oracle_value": oracle.value_s,
             "oracle_ci95": list(oracle.ci95), "ae": fit.ae.value, "L": fit.length_scale_m.value,
             "Gamma": fit.gamma.value, "cov_fit": fit.cov_fit.tolist(), "gain": fit.gain.tolist(),
             "sd_1pt": {k: list(v) for k, v in fit.sd.items()}, "f_hz_1pt": list(fit.f_hz), "chi2_dof_1pt": fit.chi2_dof,
-            "chi2": e.chi2, "dof": e.dof, "chi2_frozen": e.chi2_frozen, "f_hz": list(e.f_hz),
+            "lateral_m": list(e.lateral_m), "chi2": e.chi2, "dof": e.dof, "chi2_frozen": e.chi2_frozen, "f_hz": list(e.f_hz),
             "r": list(e.data[pair]), "r_sd": list(e.sd[pair]), "oracle_r_fitted": list(oracle.fitted[pair]),
             "t_gen_s": t1 - t0, "t_fit_s": t2 - t1, "cpu_fit_s": c2 - c1,
             "identified": e.identified}
@@ -185,6 +188,7 @@ def summary(path: str) -> None:
                            for r in rs])
         corr = np.corrcoef(np.log([r["oracle_value"] for r in rs]), np.log([r["L"] for r in rs]))[0, 1]
         where = "planes 8 × 8" if POINTS[c] is None else "series 4 + 4" if POINTS[c] == "series" else "masts 4 + 4"
+        where += f", {LATERAL_M[c]:.3g} m across" if LATERAL_M[c] else ""
         print(f"| {spec} | {where} | {n} | {' | '.join(cells)} | {np.exp(np.median(lg)):.3f} | {lg.std(ddof=1):.3f} "
               f"| {math.sqrt(np.nanmean(np.square(sd_fit))):.3f} | {corr:.2f} |")
         second.append(_details(spec, rs, lg, sd_fit))
