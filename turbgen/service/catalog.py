@@ -24,20 +24,13 @@ from turbgen.version import __version__
 from turbgen.errors import TurbgenError
 from turbgen.service.run_ids import valid_id
 from turbgen.service.uploads import ConstraintUploads
+from turbgen.store.discard import remove_path
 from turbgen.store.reader import chunks_written
 from turbgen.store.temporaries import temp_name, temp_prefix
 
 STORE = "store.zarr"
 STARTS = "starts.json"
 FAILURE_ROOM, FAILURE_ROOM_BYTES = ".failure-room", 4096
-
-
-def remove_path(path: Path) -> None:
-    """Remove the file, link or directory tree ``path`` if it is there (best effort)."""
-    if path.is_dir() and not path.is_symlink():
-        shutil.rmtree(path, ignore_errors=True)
-    else:
-        path.unlink(missing_ok=True)
 
 
 def write_json_atomic(path: Path, data) -> None:

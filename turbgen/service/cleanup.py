@@ -8,7 +8,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from turbgen.service.catalog import Catalog, remove_path
+from turbgen.service.catalog import Catalog
+from turbgen.store.discard import remove_path
 from turbgen.service.run_ids import valid_id
 from turbgen.store.temporaries import remove_dead_temporaries
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from fastapi import Request
 
-from turbgen.service.catalog import remove_path
+from turbgen.store.discard import remove_path
 from turbgen.service.limits import LimitError
 from turbgen.service.state import ServiceState, require_token
 from turbgen.store.temporaries import publish, temp_name

@@ -7,14 +7,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from turbgen.validation.fit.kaimal_coherence import CoherenceFit
-from turbgen.validation.fit.result import misfit_notes
+from turbgen.validation.fit.result import FitReport, fit_figure, misfit_notes, saved
 
 UNITS = {**{f"sigma_{c}_m_s": "m/s" for c in "uvw"}, **{f"length_{c}_m": "m" for c in "uvw"}, "a_yz": "-", "lc_m": "m"}
 NAMES = tuple(UNITS)
 
 
-@dataclass(frozen=True, eq=False)
-class KaimalFit:
+@dataclass(frozen=True, eq=False, repr=False)
+class KaimalFit(FitReport):
     """Kaimal sigma_k [m/s], L_k [m] and the u coherence a [-], Lc [m] fitted to data.
 
     Attributes
@@ -66,11 +66,6 @@ class KaimalFit:
         return cls(values, chi2, tuple(flags), tuple(notes), data.U_m_s, data.source, bands.setup.nperseg,
                    bands.f_hz, {s: bands.values[s] for s in fitted}, fitted, sd, cfit)
 
-    @property
-    def ok(self) -> bool:
-        """True when nothing is flagged."""
-        return not self.flags
-
     def to_dict(self) -> dict:
         """JSON-ready: {"sigma_u_m_s": {"value", "ci95", "identified"}, ..., "chi2_dof", "flags", "notes", ...}."""
         out = {n: {**self.values[n].to_dict(), "identified": True} if n in self.values else
@@ -92,17 +87,11 @@ class KaimalFit:
                      "model holds)")
         return "\n".join(lines + [f"note: {n}" for n in self.notes] + [f"FLAG: {f}" for f in self.flags])
 
-    def __repr__(self) -> str:  # a notebook shows the table, not the band arrays behind it
-        return self.table()
-
     def plot(self, path=None):
         """The band spectra f S(f) with 95 % bars and the fit; the u co-coherence per distance with 95 % bars and the
         fit (two or more sensors): a matplotlib Figure (a notebook cell shows it), also written to ``path`` as PNG."""
-        from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
-
         coh = self.coherence
-        fig = Figure(figsize=(7 + 5 * bool(coh), 4.5))
-        axes = fig.subplots(1, 1 + bool(coh), squeeze=False)
+        fig, axes = fit_figure(1 + bool(coh))
         f = self.f_hz
         for k, s in enumerate(self.data):
             axes[0, 0].errorbar(f, f * self.data[s], yerr=1.96 * f * self.sd[s], fmt="o", ms=3, color=f"C{k}",
@@ -121,7 +110,4 @@ class KaimalFit:
             ax.set_xlabel("f [Hz]")
             ax.grid(True, which="both", alpha=0.3)
             ax.legend(fontsize=7)
-        fig.tight_layout()
-        if path is not None:
-            fig.savefig(path, format="png", dpi=120)
-        return fig
+        return saved(fig, path)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
@@ -29,6 +29,37 @@ def misfit_notes(chi2_dof: float, dof: int, what: str = "these data") -> list[st
             "model right): the 95 % intervals, which assume it, are too narrow"]
 
 
+class FitReport:
+    """What the fit results share: ``ok`` and their ``table()`` as repr."""
+
+    flags: tuple
+    table: Callable[[], str]
+
+    @property
+    def ok(self) -> bool:
+        """True when nothing is flagged."""
+        return not self.flags
+
+    def __repr__(self) -> str:  # a notebook shows the table, not the band arrays behind it
+        return self.table()
+
+
+def fit_figure(panels: int):
+    """(a matplotlib Figure, its (1, ``panels``) axes) of a fit's plot."""
+    from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
+
+    fig = Figure(figsize=(7 + 5 * (panels - 1), 4.5))
+    return fig, fig.subplots(1, panels, squeeze=False)
+
+
+def saved(fig, path):
+    """``fig`` laid out and, when ``path`` is given, written there as PNG."""
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, format="png", dpi=120)
+    return fig
+
+
 @dataclass(frozen=True)
 class FitValue:
     """A fitted parameter: ``value``, its 95 % interval ``ci95`` (lo, hi) and ``sd_fit`` (the standard deviation of
@@ -46,8 +77,8 @@ class FitValue:
         return {"value": self.value, "ci95": None if self.ci95 is None else list(self.ci95), "held": self.held}
 
 
-@dataclass(frozen=True, eq=False)
-class MannFit:
+@dataclass(frozen=True, eq=False, repr=False)
+class MannFit(FitReport):
     """Mann (1994) parameters fitted to measured or generated data (``turbgen.fit_mann``).
 
     Attributes
@@ -116,11 +147,6 @@ class MannFit:
     lifetime: str = "guo"
 
     @property
-    def ok(self) -> bool:
-        """True when nothing is flagged."""
-        return not self.flags
-
-    @property
     def params(self) -> MannParams:
         """The fitted values as MannParams (frozen turbulence: the spectra do not fix an evolution time)."""
         return MannParams(self.ae.value, self.length_scale_m.value, self.gamma.value, self.lifetime)
@@ -157,17 +183,10 @@ class MannFit:
         lines += [f"note: {n}" for n in self.notes] + [f"FLAG: {f}" for f in self.flags]
         return "\n".join(lines)
 
-    def __repr__(self) -> str:  # a notebook shows the table, not the band arrays behind it
-        return self.table()
-
     def plot(self, path=None):
         """The band spectra (f S(f), error bars +- 1.96 sd) and the fitted model, and the coherence with an evolution
         time: a matplotlib Figure (a notebook cell shows it), also written to ``path`` as PNG if given."""
-        from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
-
-        panels = 1 + bool(self.evolution)
-        fig = Figure(figsize=(7 + 5 * (panels - 1), 4.5))
-        axes = fig.subplots(1, panels, squeeze=False)
+        fig, axes = fit_figure(1 + bool(self.evolution))
         ax = axes[0, 0]
         if self.evolution:
             self.evolution.plot(axes[0, 1])
@@ -186,7 +205,4 @@ class MannFit:
                      f"αε^(2/3) = {self.ae.value:.3g}, χ²/dof = {self.chi2_dof:.2f}", fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
-        fig.tight_layout()
-        if path is not None:
-            fig.savefig(path, format="png", dpi=120)
-        return fig
+        return saved(fig, path)
