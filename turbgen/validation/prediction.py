@@ -8,6 +8,7 @@ point set, the two-frequency correlation sums R(nu_i, nu_j) at the nodes ``node_
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -110,10 +111,5 @@ def dx_key(dx_m: float) -> float:
 
 def plane_separations(grid: Grid) -> dict:
     """Distinct plane separations |x_p - x_q| [m] (``dx_key``) over ordered plane pairs -> number of such pairs."""
-    out: dict = {}
-    for xp in grid.x_m:
-        for xq in grid.x_m:
-            k = dx_key(xp - xq)
-            out[k] = out.get(k, 0) + 1
-    return out
+    return dict(Counter(dx_key(xp - xq) for xp in grid.x_m for xq in grid.x_m))
 

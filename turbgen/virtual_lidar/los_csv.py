@@ -41,10 +41,6 @@ def parse_header(lines: list[str], where: str) -> dict:
     return keys
 
 
-def _rows(path: Path, where: str) -> tuple[dict, np.ndarray]:
-    return parse_table(read_input_text(path, LINE_OF_SIGHT).splitlines(), where)
-
-
 def parse_table(text: list[str], where: str) -> tuple[dict, np.ndarray]:
     """(header, table (n, 4) of COLUMNS) of a CSV file's lines ``text``; ParameterError naming ``where``."""
     comments = [line for line in text if line.startswith("#")]
@@ -106,7 +102,7 @@ def read_los_csv(path) -> LidarData:
     of a beam not measured together, or incomplete scans."""
     path = Path(path).expanduser()
     where = f"line-of-sight file {path}"
-    header, table = _rows(path, where)
+    header, table = parse_table(read_input_text(path, LINE_OF_SIGHT).splitlines(), where)
     return los_record(path, header, table, where)
 
 
