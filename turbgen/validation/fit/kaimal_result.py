@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from turbgen.validation.fit.kaimal_coherence import CoherenceFit
-from turbgen.validation.fit.result import FitReport, fit_figure, misfit_notes, saved
+from turbgen.validation.fit.result import FitReport, misfit_notes
 
 UNITS = {**{f"sigma_{c}_m_s": "m/s" for c in "uvw"}, **{f"length_{c}_m": "m" for c in "uvw"}, "a_yz": "-", "lc_m": "m"}
 NAMES = tuple(UNITS)
@@ -90,8 +90,11 @@ class KaimalFit(FitReport):
     def plot(self, path=None):
         """The band spectra f S(f) with 95 % bars and the fit; the u co-coherence per distance with 95 % bars and the
         fit (two or more sensors): a matplotlib Figure (a notebook cell shows it), also written to ``path`` as PNG."""
+        from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
+
         coh = self.coherence
-        fig, axes = fit_figure(1 + bool(coh))
+        fig = Figure(figsize=(7 + 5 * bool(coh), 4.5))
+        axes = fig.subplots(1, 1 + bool(coh), squeeze=False)
         f = self.f_hz
         for k, s in enumerate(self.data):
             axes[0, 0].errorbar(f, f * self.data[s], yerr=1.96 * f * self.sd[s], fmt="o", ms=3, color=f"C{k}",
@@ -110,4 +113,7 @@ class KaimalFit(FitReport):
             ax.set_xlabel("f [Hz]")
             ax.grid(True, which="both", alpha=0.3)
             ax.legend(fontsize=7)
-        return saved(fig, path)
+        fig.tight_layout()
+        if path is not None:
+            fig.savefig(path, format="png", dpi=120)
+        return fig

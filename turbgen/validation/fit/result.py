@@ -44,22 +44,6 @@ class FitReport:
         return self.table()
 
 
-def fit_figure(panels: int):
-    """(a matplotlib Figure, its (1, ``panels``) axes) of a fit's plot."""
-    from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
-
-    fig = Figure(figsize=(7 + 5 * (panels - 1), 4.5))
-    return fig, fig.subplots(1, panels, squeeze=False)
-
-
-def saved(fig, path):
-    """``fig`` laid out and, when ``path`` is given, written there as PNG."""
-    fig.tight_layout()
-    if path is not None:
-        fig.savefig(path, format="png", dpi=120)
-    return fig
-
-
 @dataclass(frozen=True)
 class FitValue:
     """A fitted parameter: ``value``, its 95 % interval ``ci95`` (lo, hi) and ``sd_fit`` (the standard deviation of
@@ -186,7 +170,11 @@ class MannFit(FitReport):
     def plot(self, path=None):
         """The band spectra (f S(f), error bars +- 1.96 sd) and the fitted model, and the coherence with an evolution
         time: a matplotlib Figure (a notebook cell shows it), also written to ``path`` as PNG if given."""
-        fig, axes = fit_figure(1 + bool(self.evolution))
+        from matplotlib.figure import Figure  # not pyplot: the user's backend and figure list stay as they are
+
+        panels = 1 + bool(self.evolution)
+        fig = Figure(figsize=(7 + 5 * (panels - 1), 4.5))
+        axes = fig.subplots(1, panels, squeeze=False)
         ax = axes[0, 0]
         if self.evolution:
             self.evolution.plot(axes[0, 1])
@@ -205,4 +193,7 @@ class MannFit(FitReport):
                      f"αε^(2/3) = {self.ae.value:.3g}, χ²/dof = {self.chi2_dof:.2f}", fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
-        return saved(fig, path)
+        fig.tight_layout()
+        if path is not None:
+            fig.savefig(path, format="png", dpi=120)
+        return fig
