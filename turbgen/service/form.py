@@ -31,6 +31,8 @@ NOT_IN_FORM = {
     ("kaimal", "spectrum"): "a table of four columns: the request body's `spectrum` (f_hz, S_u, S_v, S_w), not a field",
     ("kaimal", "coherence"): "a table (f_hz x r_m): the request body's `coherence` (f_hz, r_m, coh), not a field",
 }
+# keys with a field kind of their own (the others' follows their schema type)
+_OWN_KINDS = {"evo_time_s": "evo", "x_m": "positions", "constrain": "upload"}
 # fields that are no schema key: the preset (as --preset) and the range gates (as --gates, giving grid.x_m)
 _PRESET_HELP = "stability preset: sets the model's stability keys at U; fields given here override it"
 _GATES_HELP = "range gates start:stop:step [m]; planes = the rotor 0 plus the gates (instead of planes)"
@@ -78,16 +80,11 @@ def _unit(spec: dict, key: str) -> str:
 
 
 def _kind(key: str, spec: dict) -> str:
-    if key == "evo_time_s":
-        return "evo"
-    if key == "x_m":
-        return "positions"
-    if key == "constrain":
-        return "upload"
+    if key in _OWN_KINDS:
+        return _OWN_KINDS[key]
     if "enum" in spec:
         return "choice"
-    kinds = {"integer": "integer", "boolean": "flag", "array": "list3"}
-    return kinds.get(spec.get("type"), "number")
+    return {"integer": "integer", "boolean": "flag", "array": "list3"}.get(spec.get("type"), "number")
 
 
 def _range(key: str, spec: dict) -> str:
