@@ -137,6 +137,40 @@ def test_a_replay_is_fitted_once_at_submission_and_the_worker_takes_that_fit(tmp
     assert submitted[-1][-1] is None and len(fits) == 1
 
 
+def test_a_published_store_is_complete_once_its_summary_is_written(tmp_path):
+    """Found by a suite run under load (test_the_run_page_says_what_conditioning_did: KeyError 'summary'): the status
+    said complete as soon as the store was published, before the worker's result (the summary: a replay's fitted
+    values, the conditioning lines) was written, and a page loaded then never showed them. Until the summary is
+    there the run is running with every chunk done; a run whose summary was never written (its server died in
+    between) is complete without one."""
+    import json
+
+    import turbgen
+    from turbgen.service.catalog import Catalog
+    from turbgen.service.jobs import Jobs
+    from turbgen.service.run_ids import build_run, canonical_mapping, run_id
+    from turbgen.service.status import run_status
+
+    class Client:  # a worker that has not answered yet
+        def submit(self, *args, **kwargs):
+            return type("Pending", (), {"add_done_callback": lambda self, f: None})()
+
+    catalog = Catalog(tmp_path / "root")
+    jobs = Jobs(catalog, Client(), max_queue=2)
+    model, run, c = build_run({"model": "mann", "seed": 1, "U_m_s": 10.0, "grid": dict(TINY_GRID)})
+    rid = run_id(model, canonical_mapping(run, c))
+    assert jobs.submit(rid, model, run) == "queued"
+    turbgen.mann(nt=16, ny=4, nz=4, planes=[0], pad_yz=1, out=catalog.store_path(rid))  # the worker published
+    s = run_status(catalog, jobs, rid)
+    assert s["status"] == "running" and s["progress"]["chunks_done"] == s["progress"]["chunks_total"], s
+    (catalog.run_dir(rid) / "summary.json").write_text(json.dumps({"seconds": 1.0}))
+    s = run_status(catalog, jobs, rid)
+    assert s["status"] == "complete" and s["summary"] == {"seconds": 1.0}, s
+    (catalog.run_dir(rid) / "summary.json").unlink()
+    jobs.active.clear()  # the server restarted: nothing will write the summary
+    assert run_status(catalog, jobs, rid)["status"] == "complete"
+
+
 def _dead_pid() -> int:
     import subprocess
     import sys

@@ -21,11 +21,15 @@ def run_status(catalog: Catalog, jobs: Jobs, rid: str) -> dict:
     if "fit" in out["parameters"]:
         out["parameters"]["fit"] = True  # a replay (as requested): the fitted keys join once it is complete
     total = 3 * n_chunks(SimpleNamespace(nt=grid["nt"], nx=len(grid["x_m"])), default_chunk_t(grid["nt"]))
-    if catalog.is_complete(rid):
+    summary = catalog.run_dir(rid) / "summary.json"  # written when the worker's result is back, after the store
+    if catalog.is_complete(rid) and jobs.is_active(rid) and not summary.is_file():
+        out["status"] = "running"  # the store is published, its summary (a replay's fitted values) not yet
+        out["progress"] = {"chunks_done": total, "chunks_total": total}
+    elif catalog.is_complete(rid):
         out["status"] = "complete"
         out["progress"] = {"chunks_done": total, "chunks_total": total}
         try:
-            out["summary"] = json.loads((catalog.run_dir(rid) / "summary.json").read_text())
+            out["summary"] = json.loads(summary.read_text())
             out["parameters"] |= out["summary"].get("fit", {})  # a replay's fitted keys
             if "conditioning" in out["summary"]:  # what the command prints of the fit and the conditioning
                 out["summary"]["conditioning"] = [public_text(t, catalog) for t in out["summary"]["conditioning"]]
