@@ -10,11 +10,11 @@ wind's frame too (``in_wind_frame``): two masts are apart along the wind and acr
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+from scipy.stats import circmean
 
 from turbgen.errors import ParameterError
 from turbgen.spec.constraints import COMPONENTS, PointSeries, load_point_series
@@ -177,7 +177,7 @@ def along_wind(ps: PointSeries) -> tuple[list[dict], list[str]]:
 
 def in_wind_frame(data: FitData) -> FitData:
     """``data`` with the sensors' (x, y) (``sites_m``, ``u_xyz_m``) turned about the origin by minus the mean of the
-    total-wind sensors' directions (the direction of their mean unit vector; ``mean_direction_deg``): x along the
+    total-wind sensors' directions (their circular mean, the direction of their mean unit vector): x along the
     mean wind, as the model's (the Mann fits: the covariance of the sensors' spectra and the longitudinal coherence
     depend on their separations along and across the wind). ``data`` itself for a field, fluctuation data, sensors
     without u and v, or data already turned."""
@@ -185,8 +185,8 @@ def in_wind_frame(data: FitData) -> FitData:
     with_uv = [s for s in ps.sensors if {"u", "v"} <= s.series.keys()] if ps is not None and ps.total_wind else []
     if not with_uv or data.sites_m is None or data.turned_deg is not None:
         return data
-    rad = np.radians([mean_direction_deg(s.series["u"], s.series["v"]) for s in with_uv])
-    mean_deg = math.degrees(math.atan2(np.sin(rad).mean(), np.cos(rad).mean()))
+    mean_deg = float(circmean([mean_direction_deg(s.series["u"], s.series["v"]) for s in with_uv], high=180.0,
+                              low=-180.0))
     x, y = rotate_horizontal(data.sites_m[:, 0], data.sites_m[:, 1], -mean_deg)
     sites = np.column_stack([x, y, data.sites_m[:, 2]])
     u_xyz = tuple(map(tuple, sites[data.columns["u"]])) if data.columns and "u" in data.columns else ()
