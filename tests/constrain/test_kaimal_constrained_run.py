@@ -137,7 +137,7 @@ def _write(path, mapping):
     return str(path)
 
 
-@pytest.mark.parametrize("case", range(7))
+@pytest.mark.parametrize("case", range(8))
 def test_bad_constraints_are_one_line_exit_2_nothing_written(tmp_path, case):
     from test_run import assert_refused, bad_cases
 

@@ -168,6 +168,9 @@ def bad_cases(mast) -> list:
     t = np.asarray(mast["time_s"])
     outside_y = json.loads(json.dumps(mast))
     outside_y["sensors"][0]["y_m"] = 100.0
+    low = json.loads(json.dumps(mast))
+    low["sensors"][0].pop("z_m", None)
+    low["sensors"][0]["height_m"] = 10.0
     late = json.loads(json.dumps(mast))
     late["time_s"] = list(t + 100.0)
     empty = json.loads(json.dumps(mast))
@@ -178,6 +181,8 @@ def bad_cases(mast) -> list:
         ("schema", {"kind": "point-series", "time_s": [0, 1], "sensors": [{"x_m": 0, "y_m": 0}]}, [],
          ["constraint file", "sensors"]),
         ("outside-y", outside_y, [], ["y = 100 m is outside the field"]),
+        ("below-the-field", low, [], ["hub: z (height 10 m less the hub height 150 m, --hub-height) = -140 m is "
+                                      "outside the field"]),
         ("outside-time", late, [], ["outside the field's record"]),
         ("all-missing", empty, [], ["v_m_s has no value"]),
         ("not-a-plane", off_plane, [], ["x = 20 m is not a plane of the run"]),
@@ -200,7 +205,7 @@ def assert_refused(tmp_path, command: list, case) -> None:
     assert not (tmp_path / "c.zarr").exists()
 
 
-@pytest.mark.parametrize("case", range(7))
+@pytest.mark.parametrize("case", range(8))
 def test_bad_constraints_are_one_line_exit_2_nothing_written(tmp_path, case):
     assert_refused(tmp_path, ["mann", *SMALL], bad_cases(_mast(np.arange(0.0, 20.0, 0.5)))[case])
 

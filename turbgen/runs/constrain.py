@@ -118,7 +118,8 @@ def _point_streams(run: MannRun, f: PointSeries, sigma: float) -> list[PlacedStr
         z = s.z_m if s.z_m is not None else s.height_m - run.hub_height_m
         p = _plane(run, s.x_m, where)
         ty = _axis_terms(s.y_m, g.y(), g.dy_m, "y", where)
-        tz = _axis_terms(z, g.z(), g.dz_m, "z", where)
+        tz = _axis_terms(z, g.z(), g.dz_m, "z" if s.z_m is not None else f"z (height {s.height_m:g} m less the hub "
+                         f"height {run.hub_height_m:g} m, `hub_height_m`)", where)
         series, shift = sensor_fluctuations(f, s, run.U_m_s, run.hub_height_m)
         off = {"direction_deg": math.degrees(math.atan2(np.nanmean(series["v"]), shift + np.nanmean(series["u"])))
                } if f.total_wind and {"u", "v"} <= series.keys() else {}  # what the declared mean wind left
