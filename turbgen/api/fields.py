@@ -53,7 +53,7 @@ def _presets(preset, presets_file):
 
 def _as_dataset(path: Path) -> xr.Dataset:
     """The checked store at ``path`` as a lazy Dataset whose ``encoding["source"]`` is the store's path."""
-    import xarray as xr  # on use: the commands write stores and need no Dataset (xarray + pandas: ~0.7 s CPU)
+    import xarray as xr  # on use: the commands write stores and need no Dataset (xarray + pandas are slow to import)
 
     fs = _open_field_store(path)
     ds = xr.open_zarr(str(fs.path), consolidated=True)

@@ -76,7 +76,7 @@ COMMANDS = {
     "transient": ("turbgen.cli.transient", "transient"),
     "validate": ("turbgen.cli.validate", "validate"),
 }
-# each command's line in `turbgen --help`, listed without importing the commands (~3.5 s); their short help is set here
+# each command's line in `turbgen --help`, listed without importing the commands (slow); their short help is set here
 SUMMARIES = {
     **{d.name: d.summary for d in DECLARATIONS},
     "export": "Write a store as OpenFAST, HAWC2 or lidar-simulator files.",

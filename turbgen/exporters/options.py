@@ -14,18 +14,15 @@ TRANSIENTS = ("EOG", "EDC", "ECD", "EWS-V", "EWS-H")
 
 @dataclass(frozen=True)
 class ExportOptions:
-    """The export options as typed (None: not given), before they are checked (fields as ExportRequest's).
-
-    ``profile``: ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``; ``mean_history``: CSV of t, U [, dir];
-    ``transient``: EOG, EDC, ECD, EWS-V or EWS-H with its ``iec_class``, ``rotor_diameter_m`` [m] and start [s]."""
+    """The export options as typed (None: not given), before they are checked (fields as ExportRequest's)."""
 
     plane: int | None = None
     hub_height_m: float | None = None
     shear_exponent: float | None = None
-    profile: str | None = None
+    profile: str | None = None  # ``power:ALPHA``, ``log:z0=Z0[,d=D]`` or ``table:FILE``
     veer_deg_per_m: float | None = None
-    mean_history: str | None = None
-    transient: str | None = None
+    mean_history: str | None = None  # CSV of t, U [, dir]
+    transient: str | None = None  # EOG, EDC, ECD, EWS-V or EWS-H with iec_class, rotor_diameter_m [m] and start [s]
     iec_class: str | None = None
     rotor_diameter_m: float | None = None
     transient_start_s: float = 10.0

@@ -17,42 +17,20 @@ COMPONENTS = ("u", "v", "w")
 
 @dataclass(frozen=True)
 class ExportRequest:
-    """Options shared by all formats.
+    """Options shared by all formats; ParameterError for a non-integer ``plane``, ``hub_height_m`` out of range, or
+    both ``mean_wind`` and ``shear_exponent``."""
 
-    Parameters
-    ----------
-    plane, hub_height_m, shear_exponent : optional
-        Plane index (None: the rotor plane, x = 0); hub height [m] in [1, 1000] (None: the store's); power-law
-        alpha [-] (None: ``DEFAULT_SHEAR_EXPONENT``; refused by formats without a mean profile).
-    tower, periodic, drop_below_ground, overwrite : bool, optional
-        Add .bts tower points; flag the file periodic in time (default True); drop rows at or below the ground
-        instead of refusing; replace existing outputs.
-    source_label : str, optional
-        How the exports name their source (.bts description, HDF5 ``source_store``); default the store's name.
-    mean_wind : MeanWind, optional
-        Profile, veer and hub-height history of the InflowWind/HAWC2 formats; None: the power law.
-    runner_files : bool, optional
-        Also write the runners' input files (InflowWind .dat, HAWC2 .htc block, LidarSim evolution section).
-    notes : tuple of str, optional
-        Remarks the export adds to its own (e.g. a mean wind taken from the store's fit record).
-
-    Raises
-    ------
-    ParameterError
-        For a non-integer ``plane``, ``hub_height_m`` out of range, or both ``mean_wind`` and ``shear_exponent``.
-    """
-
-    plane: int | None = None
-    hub_height_m: float | None = None
-    shear_exponent: float | None = None
-    tower: bool = False
-    periodic: bool = True
-    drop_below_ground: bool = False
-    overwrite: bool = False
-    source_label: str | None = None
-    mean_wind: MeanWind | None = None
-    runner_files: bool = False
-    notes: tuple = ()
+    plane: int | None = None  # plane index (None: the rotor plane, x = 0)
+    hub_height_m: float | None = None  # hub height [m] in [1, 1000] (None: the store's)
+    shear_exponent: float | None = None  # power-law alpha [-] (None: DEFAULT_SHEAR_EXPONENT; no mean profile: refused)
+    tower: bool = False  # add .bts tower points
+    periodic: bool = True  # flag the file periodic in time
+    drop_below_ground: bool = False  # drop rows at or below the ground instead of refusing
+    overwrite: bool = False  # replace existing outputs
+    source_label: str | None = None  # the exports' name of their source (.bts description, HDF5 ``source_store``)
+    mean_wind: MeanWind | None = None  # profile, veer, hub-height history of InflowWind/HAWC2 formats (None: power law)
+    runner_files: bool = False  # also the runners' input files (InflowWind .dat, HAWC2 .htc block, LidarSim section)
+    notes: tuple = ()  # remarks the export adds to its own (e.g. a mean wind taken from the store's fit record)
 
     def source(self, fs) -> str:
         """``source_label``, else the store directory's name (not its path: the same files on any machine)."""

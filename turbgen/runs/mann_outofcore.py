@@ -35,19 +35,14 @@ from turbgen.synthesis.mann_spacetime import COMPONENTS, ROW_BLOCK, SLAB_BATCH, 
 from turbgen.synthesis.mann_cells import axis_cells
 from turbgen.synthesis.mann_stencil import build_stencil, synthesis_box
 
-BASE_BYTES = 250 * 2**20  # the interpreter with turbgen, numpy, scipy, zarr, pyfftw loaded (VmHWM measured 165 MiB,
-# 197 MiB in a fresh virtualenv) + slack
-# what a run allocates after it is planned besides the planned arrays: the axis cells' temporaries (~100 k tensor
-# nodes at a time: +30 MiB of resident memory measured on a 2048 x 64 x 64 box), FFTW plans, zarr's buffers, and the
-# compiled kernels' library pages mapped when they load (libllvmlite.so is 40 MiB resident after the imports in a
-# long-installed environment, 85 MiB in a freshly installed one, whose files the page cache holds in larger pieces)
+BASE_BYTES = 250 * 2**20  # the interpreter with turbgen, numpy, scipy, zarr, pyfftw loaded (165-197 MiB) + slack
+# what a run allocates after it is planned besides the planned arrays: the axis cells' temporaries (~30 MiB), FFTW
+# plans, zarr's buffers and the compiled kernels' library pages (libllvmlite.so: 40-85 MiB resident)
 LATE_BYTES = 96 * 2**20
-# what a LocalCluster adds to the process that starts it: distributed (imported: +13 MiB), its scheduler (+2 MiB)
-# and multiprocessing's resource tracker process (15 MiB), measured
+# what a LocalCluster adds to the process that starts it: distributed, its scheduler, the resource tracker (~30 MiB)
 LOCAL_CLUSTER_BYTES = 32 * 2**20
-# what a fresh worker process adds to the imports this module needs before its first task ends: numba's LLVM
-# (+52 MiB measured), the lifetime tables (+19 MiB measured when they loaded scipy.interpolate; now scipy.linalg:
-# less, so kept as a margin), distributed's worker (+20 MiB)
+# what a fresh worker process adds to this module's imports before its first task ends: numba's LLVM (~52 MiB), the
+# lifetime tables, distributed's worker (~20 MiB)
 WORKER_LOADS_BYTES = 96 * 2**20
 _C64, _F32 = 8, 4
 SCRATCH_MARK = ".scratch-"  # scratch directories: .NAME.scratch-PID-XXXXXXXX next to the output

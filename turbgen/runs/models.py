@@ -12,27 +12,19 @@ from turbgen.spec.models import declaration, model_names, resolve
 
 @dataclass(frozen=True)
 class Model:
-    """One model of the registry.
+    """One model of the registry. ``shared_part(run, threads, memory_bytes)``: ``build(run)`` of the part runs with
+    equal ``shared_key(run)`` share (the ae-free Mann stencil), or None."""
 
-    name : the store's ``model`` attribute. spec : the run class.
-    run : ``run(run, out, *, overwrite, chunk_t, threads, memory_bytes, shared)`` -> summary dict.
-    memory_bytes : ``memory_bytes(run, threads)`` -> peak bytes [B] of a run in memory.
-    least_memory_bytes : ``least_memory_bytes(run)`` -> the smallest footprint [B] a run can be made with.
-    memory_fields : the run fields that lower the memory (for messages).
-    shared_part : ``shared_part(run, threads, memory_bytes)`` -> ``build(run)`` of the part runs with equal
-        ``shared_key(run)`` share (the ae-free Mann stencil), or None. shared_bytes : its bytes [B].
-    out_of_core : a memory budget bounds the run (over it, made out of core)."""
-
-    name: str
-    spec: type
-    run: Callable[..., dict]
-    memory_bytes: Callable[[object, int], int]
-    least_memory_bytes: Callable[[object], int]
-    memory_fields: str
+    name: str  # the store's ``model`` attribute
+    spec: type  # the run class
+    run: Callable[..., dict]  # ``run(run, out, *, overwrite, chunk_t, threads, memory_bytes, shared)`` -> summary
+    memory_bytes: Callable[[object, int], int]  # ``memory_bytes(run, threads)`` -> peak bytes [B] of a run in memory
+    least_memory_bytes: Callable[[object], int]  # -> the smallest footprint [B] a run can be made with
+    memory_fields: str  # the run fields that lower the memory (for messages)
     shared_part: Callable[[object, int | None, int | None], Callable | None]
     shared_key: Callable[[object], object] = lambda run: None
-    shared_bytes: Callable[[object], int] = lambda run: 0
-    out_of_core: bool = False
+    shared_bytes: Callable[[object], int] = lambda run: 0  # the shared part's bytes [B]
+    out_of_core: bool = False  # a memory budget bounds the run (over it, made out of core)
 
 
 class _Runners(Mapping):

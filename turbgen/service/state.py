@@ -17,24 +17,17 @@ from turbgen.service.limits import (DERIVED_RUNNING, DERIVED_WAITING, DerivedLim
 
 @dataclass(frozen=True)
 class ServiceSettings:
-    """The server's settings (command-line options of `turbgen serve`).
+    """The server's settings (command-line options of `turbgen serve`)."""
 
-    ``root`` the catalog's directory; ``token`` of mutating requests and new computations (None: open);
-    ``memory_budget_bytes`` largest run estimate [bytes] (413 above); ``max_queue`` runs queued or running (429
-    above); ``loopback_only``: answer only a loopback Host header (400 otherwise: no DNS rebinding);
-    ``derived_running``/``derived_waiting`` products computed at once and requests waiting (503 beyond);
-    ``stencil_cache_bytes`` cap of ``root/stencils`` [bytes] (None: none); ``own_cluster``: runs execute in this
-    process (start-up may remove dead temporaries in ``root/stencils``)."""
-
-    root: Path
-    token: str | None
-    memory_budget_bytes: int
-    max_queue: int
-    loopback_only: bool = False
-    derived_running: int = DERIVED_RUNNING
-    derived_waiting: int = DERIVED_WAITING
-    stencil_cache_bytes: int | None = None
-    own_cluster: bool = True
+    root: Path  # the catalog's directory
+    token: str | None  # of mutating requests and new computations (None: open)
+    memory_budget_bytes: int  # largest run estimate [bytes] (413 above)
+    max_queue: int  # runs queued or running (429 above)
+    loopback_only: bool = False  # answer only a loopback Host header (400 otherwise: no DNS rebinding)
+    derived_running: int = DERIVED_RUNNING  # products computed at once (503 beyond)
+    derived_waiting: int = DERIVED_WAITING  # requests waiting for them (503 beyond)
+    stencil_cache_bytes: int | None = None  # cap of ``root/stencils`` [bytes] (None: none)
+    own_cluster: bool = True  # runs execute in this process (start-up may remove dead temporaries in root/stencils)
 
 
 @dataclass

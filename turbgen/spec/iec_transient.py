@@ -38,22 +38,17 @@ MIN_DT_S = 0.001  # finest row spacing [s], as the fields' --dt
 
 @dataclass(frozen=True)
 class IecTransient:
-    """One IEC event at hub speed V_hub, validated at construction (ParameterError otherwise).
+    """One IEC event at hub speed V_hub, validated at construction (ParameterError otherwise)."""
 
-    ``kind`` "EOG", "EDC", "ECD", "EWS-V" or "EWS-H"; ``iec_class`` e.g. "IIB"; ``V_hub_m_s`` [m/s] in (0, V_ref]
-    (below V_e1 = 1.12 V_ref the EOG gust is positive); hub height and rotor diameter D [m], the rotor clear of the
-    ground; ``start_s``, ``duration_s`` [s]: the event ends within the file; ``dt_s`` row spacing during the event
-    [s] in [MIN_DT_S, T/4]; ``sign`` +1 or -1, the standard's "+-" (direction change or shear sense), EOG +1 only."""
-
-    kind: str
-    iec_class: str
-    V_hub_m_s: float
-    hub_height_m: float
-    rotor_diameter_m: float
-    start_s: float = 10.0
-    duration_s: float = 60.0
-    dt_s: float = 0.05
-    sign: int = 1
+    kind: str  # "EOG", "EDC", "ECD", "EWS-V" or "EWS-H"
+    iec_class: str  # e.g. "IIB"
+    V_hub_m_s: float  # [m/s] in (0, V_ref] (below V_e1 = 1.12 V_ref the EOG gust is positive)
+    hub_height_m: float  # [m]; the rotor clear of the ground
+    rotor_diameter_m: float  # D [m]
+    start_s: float = 10.0  # [s]; the event ends within the file
+    duration_s: float = 60.0  # [s]
+    dt_s: float = 0.05  # row spacing during the event [s] in [MIN_DT_S, T/4]
+    sign: int = 1  # +1 or -1, the standard's "+-" (direction change or shear sense), EOG +1 only
 
     def __post_init__(self):
         put = object.__setattr__

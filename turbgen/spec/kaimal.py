@@ -52,16 +52,12 @@ DEFAULTS = {**KAIMAL_DEFAULTS, **KAIMAL_GRID}  # the run keys' and grid keys' de
 class KaimalRun:
     """A Kaimal 4D field (Guo et al. 2023, Eq. 11-12, 18): spectra + yz coherence, grid, U, seed, longitudinal model.
 
-    ``kaimal``: sigma_u,v,w [m/s], L1..L3 [m], a_yz [-], Lc [m]. ``long_model``: "exp" (Eq. 18 with ``a_x`` [-],
-    ``b_x`` [1/m]; defaults Table 2 neutral), "simley-pao" (Eq. 18 with Simley and Pao 2015) or "kristensen"
-    (Kristensen 1979). ``long_components`` "u" (evoTurb) or "uvw". ``rescale``: expected variance = nominal sigma^2
-    (else the resolved-band integral of Eq. 11). ``vw_coherence`` "white" (IEC / TurbSim IECKAI) or "exp" (u's).
-    ``turb_class``: recorded only. ``spectrum`` / ``coherence``: user LineSpectrum / LineCoherence on the grid's
-    lines in place of Kaimal's / the IEC exponential (the sigmas become the spectrum's; L1 enters only the
-    Simley-Pao and Kristensen coherences). ParameterError for a value outside its range, an unknown choice, a_x /
-    b_x with another model, or ``rescale`` with ``spectrum``."""
+    ``long_model``: "exp" (Eq. 18 with ``a_x`` [-], ``b_x`` [1/m]; defaults Table 2 neutral), "simley-pao" (Eq. 18
+    with Simley and Pao 2015) or "kristensen" (Kristensen 1979). With a user ``spectrum`` the sigmas become the
+    spectrum's; L1 enters only the Simley-Pao and Kristensen coherences. ParameterError for a value outside its range,
+    an unknown choice, a_x / b_x with another model, or ``rescale`` with ``spectrum``."""
 
-    kaimal: KaimalParams
+    kaimal: KaimalParams  # sigma_u,v,w [m/s], L1..L3 [m], a_yz [-], Lc [m]
     grid: Grid
     U_m_s: float
     seed: int
@@ -69,12 +65,12 @@ class KaimalRun:
     long_model: str = "exp"
     a_x: float | None = None
     b_x: float | None = None
-    long_components: str = "u"
-    rescale: bool = False
-    vw_coherence: str = "white"
-    turb_class: str | None = None
-    spectrum: LineSpectrum | None = None
-    coherence: LineCoherence | None = None
+    long_components: str = "u"  # "u" (evoTurb) or "uvw"
+    rescale: bool = False  # expected variance = nominal sigma^2 (else the resolved-band integral of Eq. 11)
+    vw_coherence: str = "white"  # "white" (IEC / TurbSim IECKAI) or "exp" (u's)
+    turb_class: str | None = None  # recorded only
+    spectrum: LineSpectrum | None = None  # user spectrum on the grid's lines in place of Kaimal's
+    coherence: LineCoherence | None = None  # user yz coherence on the grid's lines in place of the IEC exponential
 
     def __post_init__(self):
         check_instances(params=(self.kaimal, KaimalParams), grid=(self.grid, Grid))

@@ -1,18 +1,15 @@
 """The model registry: the one place where a turbulence model (``mann``, ``kaimal``) declares every part of it.
 
 Each part but the name and schema is a reference ``"turbgen.<layer>.<module>:<attribute>"``, so the registry imports
-nothing (``turbgen --help`` reads it without numpy) and sits low enough for every layer to read (the store checks a
-store's ``model``). :func:`resolve` imports a reference only from the layer its caller names (its own or one below:
-the validator asks for ``"validation"``, the lidar for ``"virtual_lidar"``, the runs for ``"spec"`` and ``"runs"``),
-so a declaration pointing into the wrong layer fails at once and no lower layer reaches up through the registry
-(tests/spec/test_models.py resolves every reference from its layer).
+nothing (``turbgen --help`` reads it without numpy) and every layer can read it. :func:`resolve` imports a reference
+only from the layer its caller names (its own or one below), so a declaration pointing into the wrong layer fails at
+once and no lower layer reaches up through the registry (tests/spec/test_models.py resolves each from its layer).
 
-A further model touches 6 files: one ``_declare`` line here, spec/<name>.py (run class, OPTIONS, REPLACES,
-DEFAULTS), schemas/<name>-run.schema.json, its synthesis module, runs/<name>.py (run, MODEL) and
-validation/<name>_expectation.py; its command (turbgen.cli.model), store, validator, sweeps and service page read
-this registry. Optional: own command, preset keys (sweeps need them), lidar previews, DLC sets,
-``turbgen.<name>()``, a sweep file's per-model grid table (tests/spec/test_models.py keeps other modules from naming
-a model)."""
+A further model touches 6 files: a ``_declare`` line here, spec/<name>.py (run class, OPTIONS, REPLACES, DEFAULTS),
+schemas/<name>-run.schema.json, its synthesis module, runs/<name>.py (run, MODEL), validation/<name>_expectation.py;
+its command (turbgen.cli.model), store, validator, sweeps and service page read this registry. Optional: own command,
+preset keys (sweeps need them), lidar previews, DLC sets, ``turbgen.<name>()``, a sweep file's per-model grid table
+(tests/spec/test_models.py keeps other modules from naming a model)."""
 
 from __future__ import annotations
 
@@ -24,45 +21,25 @@ from turbgen.errors import ParameterError
 
 @dataclass(frozen=True)
 class ModelDeclaration:
-    """Everything turbgen knows of one model.
+    """Everything turbgen knows of one model: references into the layer a comment names (None: not available)."""
 
-    Parameters
-    ----------
-    name, schema, summary : str
-        The store's ``model`` attribute, the command, ``turbgen.<name>``; turbgen/schemas/<schema>.schema.json; the
-        command's line in ``turbgen --help``.
-    spec, options, replaces, defaults : str
-        ``turbgen.spec`` references: the run class (``from_mapping``, ``to_attrs``, ``from_attrs``, ``parameters``);
-        option / keyword -> run key; given run key -> keys it removes from the run file and the preset; run and
-        grid key -> default.
-    runner, synthesis, validator_theory : str
-        The turbgen.runs.models.Model; the generator class (resolved by the registry's test only); ``theory(attrs,
-        design) -> Theory``.
-    command, presets : str or None
-        The click command (None: turbgen.cli.model builds one from the declaration); ``turbgen.spec``
-        ``keys(preset, U_m_s, *, user, turb_class)`` -> the run keys a stability preset sets (None: no presets).
-    preview, store_preview : str or None
-        ``turbgen.virtual_lidar`` references (None: not available): ``preview(lidar, U_m_s, *, preset, f_hz,
-        radius_m, frozen, **options)`` and ``store_preview(fs, description, f_hz, radius_m)``, both -> PreviewSpectra.
-    load_case : str or None
-        ``turbgen.spec`` ``load_case(keys, sigma1_m_s)`` -> the preset's run keys set to an IEC load case's sigma1
-        [m/s] (turbgen.spec.dlc; None: no DLC sets)."""
-
-    name: str
-    schema: str
-    spec: str
-    options: str
-    replaces: str
-    defaults: str
-    runner: str
-    synthesis: str
-    validator_theory: str
-    command: str | None = None
-    presets: str | None = None
+    name: str  # the store's ``model`` attribute, the command, ``turbgen.<name>``
+    schema: str  # turbgen/schemas/<schema>.schema.json
+    spec: str  # spec: the run class (``from_mapping``, ``to_attrs``, ``from_attrs``, ``parameters``)
+    options: str  # spec: option / keyword -> run key
+    replaces: str  # spec: given run key -> keys it removes from the run file and the preset
+    defaults: str  # spec: run and grid key -> default
+    runner: str  # runs: the turbgen.runs.models.Model
+    synthesis: str  # the generator class (resolved by the registry's test only)
+    validator_theory: str  # validation: ``theory(attrs, design) -> Theory``
+    command: str | None = None  # the click command (None: turbgen.cli.model builds one from the declaration)
+    presets: str | None = None  # spec: ``keys(preset, U_m_s, *, user, turb_class)`` -> a stability preset's run keys
+    # virtual_lidar: ``preview(lidar, U_m_s, *, preset, f_hz, radius_m, frozen, **options)`` and
+    # ``store_preview(fs, description, f_hz, radius_m)``, both -> PreviewSpectra
     preview: str | None = None
     store_preview: str | None = None
-    load_case: str | None = None
-    summary: str = "A 4D turbulence field."
+    load_case: str | None = None  # spec: ``load_case(keys, sigma1_m_s)`` -> the preset's keys at an IEC sigma1 [m/s]
+    summary: str = "A 4D turbulence field."  # the command's line in ``turbgen --help``
 
 
 def _declare(name: str, run_class: str, synthesis: str, **optional) -> ModelDeclaration:

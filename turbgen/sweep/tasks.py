@@ -15,25 +15,21 @@ from turbgen.sweep.manifest import store_checksum
 
 @dataclass(frozen=True)
 class RunTask:
-    """What a worker needs for one run (``generate`` False: only checksum, validate, lidar an existing store).
+    """What a worker needs for one run."""
 
-    ``model``: a key of turbgen.runs.models.MODELS; ``overwrite``: replace an incomplete store; ``threads`` None: all
-    cores; ``memory_bytes``: the run's budget [B] (a Mann run over it goes out of core); ``lidar``: preset or file;
-    ``cache_dir``: a constrained run's stencil cache; ``fft_backend`` None: the worker's current one."""
-
-    model: str
+    model: str  # a key of turbgen.runs.models.MODELS
     run: object
     path: str
-    overwrite: bool
+    overwrite: bool  # replace an incomplete store
     chunk_t: int | None
     validate: bool
-    generate: bool = True
-    threads: int | None = None
-    memory_bytes: int | None = None
-    lidar: str | None = None
+    generate: bool = True  # False: only checksum, validate, lidar an existing store
+    threads: int | None = None  # None: all cores
+    memory_bytes: int | None = None  # the run's budget [B] (a Mann run over it goes out of core)
+    lidar: str | None = None  # preset or file
     constraints: object = None
-    cache_dir: str | None = None
-    fft_backend: str | None = None
+    cache_dir: str | None = None  # a constrained run's stencil cache
+    fft_backend: str | None = None  # None: the worker's current one
 
 
 def validate_store(path: str, threads: int | None = None) -> dict:

@@ -92,19 +92,16 @@ def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: 
 
 @dataclass(frozen=True, eq=False)
 class LidarData:
-    """What ``turbgen lidar --out`` wrote, as needed to constrain a field with it.
+    """What ``turbgen lidar --out`` wrote, as needed to constrain a field with it."""
 
-    ``v_los`` (scan, beam, gate) [m/s] (NaN missing), ``time_s`` (scan, beam) [s], ``lidar`` the description's fields,
-    ``U_m_s`` the store's mean wind [m/s], ``mean_wind`` its ``MeanWind.to_attrs`` (None: the power law)."""
-
-    v_los: np.ndarray
-    time_s: np.ndarray
-    lidar: dict
+    v_los: np.ndarray  # (scan, beam, gate) [m/s] (NaN missing)
+    time_s: np.ndarray  # (scan, beam) [s]
+    lidar: dict  # the description's fields
     mean_wind_added: bool
     shear_exponent: float
-    U_m_s: float
+    U_m_s: float  # the store's mean wind [m/s]
     source: str
-    mean_wind: dict | None = None
+    mean_wind: dict | None = None  # its ``MeanWind.to_attrs`` (None: the power law)
 
     def __post_init__(self):
         # NaN is a missing sample; inf or 1e30 m/s is no measurement (the field would follow it)

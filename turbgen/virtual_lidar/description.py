@@ -27,17 +27,13 @@ BEAM_RATE_RANGE_HZ = (1e-3, 1e3)
 
 @dataclass(frozen=True)
 class LidarDescription:
-    """A lidar and the rotor it previews. Angles in degrees, lengths in metres, rates in Hz.
-
-    ``kind`` "pulsed" (Gaussian probe volume, ``fwhm_m``) or "cw" (Lorentzian from ``wavelength_m``,
-    ``beam_radius_m`` and the focus distance); ``mount`` "nacelle" (``azimuth_deg``, ``elevation_deg`` per beam) or
-    "spinner" (``half_cone_deg``, ``scan_deg``, ``tilt_deg``); ``ranges_m``: upstream x of the gates. ParameterError
-    for a value outside its range (the checks below) or more than MAX_MEASUREMENTS beams x gates."""
+    """A lidar and the rotor it previews. Angles in degrees, lengths in metres, rates in Hz. ParameterError for a value
+    outside its range (the checks below) or more than MAX_MEASUREMENTS beams x gates."""
 
     name: str
-    kind: str
-    mount: str
-    ranges_m: tuple[float, ...]
+    kind: str  # "pulsed" (Gaussian probe volume, fwhm_m) or "cw" (Lorentzian: wavelength, beam radius, focus distance)
+    mount: str  # "nacelle" (azimuth_deg, elevation_deg per beam) or "spinner" (half_cone_deg, scan_deg, tilt_deg)
+    ranges_m: tuple[float, ...]  # upstream x of the gates
     beam_rate_hz: float
     rotor_radius_m: float
     azimuth_deg: tuple[float, ...] = ()

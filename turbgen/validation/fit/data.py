@@ -32,57 +32,23 @@ UNIFORM_RTOL = 1e-6  # sample times are uniform when every step is within this o
 
 @dataclass(frozen=True, eq=False)
 class FitData:
-    """Fluctuation series to fit a model to.
+    """Fluctuation series to fit to (``box``, ``grid``, ``attrs`` are None for sensor data, ``points`` for a field)."""
 
-    Attributes
-    ----------
-    source : str
-        The file or store read (for messages and the result).
-    dt_s : float
-        Sampling interval [s].
-    U_m_s : float
-        Mean wind speed [m/s] of Taylor's hypothesis k1 = 2 pi f / U.
-    series : dict
-        Component ("u", "v", "w") -> (nt, P) fluctuations [m/s] of the P points holding it (NaN: missing).
-    uw_columns : tuple
-        (column of u, column of w) pairs of the points holding both (the u-w cross-spectrum).
-    box : MannBox or None
-        The periodic box of a turbgen Mann store (fit to the grid's discrete expectation), None for sensor data.
-    grid : turbgen.grid.Grid or None
-        The store's grid (with ``box``), None for sensor data.
-    notes : tuple of str
-        What was done to the data (trends removed, missing values).
-    points : PointSeries or None
-        The sensor data as read (their mean wind: turbgen.validation.fit.mean_wind), None for a field.
-    sites_m : numpy.ndarray
-        (N, 3) positions x, y, z [m] of the points (a height for z where the sensor gives one).
-    columns : dict
-        Component -> (P,) index into ``sites_m`` of each column of ``series`` (the covariance of point averages).
-    u_xyz_m : tuple
-        (x [m upstream], y [m], z [m]) of every column of u (the longitudinal coherence: ``fit.evolution``).
-    attrs : dict or None
-        A field's store attributes (its model and parameters), None for sensor data.
-    path_m : numpy.ndarray or None
-        (N,) sonic path length [m] of every point (0: a point); None: all are points.
-    turned_deg : float or None
-        The turn [deg] of ``sites_m`` and ``u_xyz_m`` into the wind's frame (``in_wind_frame``); None: as given.
-    """
-
-    source: str
-    dt_s: float
-    U_m_s: float
-    series: dict
-    uw_columns: tuple
-    box: MannBox | None = None
-    grid: object = None
-    notes: tuple = ()
-    points: PointSeries | None = None
-    sites_m: np.ndarray | None = None
-    columns: dict | None = None
-    u_xyz_m: tuple = ()
-    attrs: dict | None = None
-    path_m: np.ndarray | None = None
-    turned_deg: float | None = None
+    source: str  # the file or store read (for messages and the result)
+    dt_s: float  # sampling interval [s]
+    U_m_s: float  # mean wind speed [m/s] of Taylor's hypothesis k1 = 2 pi f / U
+    series: dict  # component ("u", "v", "w") -> (nt, P) fluctuations [m/s] of the P points holding it (NaN: missing)
+    uw_columns: tuple  # (column of u, column of w) pairs of the points holding both (the u-w cross-spectrum)
+    box: MannBox | None = None  # a turbgen Mann store's periodic box (fit to the grid's discrete expectation)
+    grid: object = None  # the store's turbgen.grid.Grid (with ``box``)
+    notes: tuple = ()  # what was done to the data (trends removed, missing values)
+    points: PointSeries | None = None  # the sensor data as read (their mean wind: turbgen.validation.fit.mean_wind)
+    sites_m: np.ndarray | None = None  # (N, 3) positions x, y, z [m] of the points (z a height if a sensor gives one)
+    columns: dict | None = None  # component -> (P,) index into ``sites_m`` of each column of ``series``
+    u_xyz_m: tuple = ()  # (x [m upstream], y [m], z [m]) of every column of u (``fit.evolution``)
+    attrs: dict | None = None  # a field's store attributes (its model and parameters)
+    path_m: np.ndarray | None = None  # (N,) sonic path length [m] of every point (0: a point); None: all are points
+    turned_deg: float | None = None  # turn [deg] of ``sites_m``, ``u_xyz_m`` into the wind's frame (``in_wind_frame``)
 
     @property
     def nt(self) -> int:

@@ -36,13 +36,13 @@ from turbgen.validation.welch_kernel import WelchKernel
 N_RATIO_NODES = 96
 RATIO_STEP = 1e-3  # step in ln L and Gamma of the ratio's derivatives (``update_ratio``)
 PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
-# Eq. 8 between sensors for the weights only: 4 Gauss nodes and 64 angles leave ~2e-4 of F_ii (7x faster)
+# Eq. 8 between sensors for the weights only: 4 Gauss nodes and 64 angles leave ~2e-4 of F_ii, far cheaper
 WEIGHT_RULE = {"n_gauss": 4, "n_theta": 64}
 REUSE_LN_L, REUSE_GAMMA = 0.05, 0.1  # cross-spectra between points are reused while L and Gamma stay this close
 LINE_NODES = 24  # k1 nodes of the continuous cross-spectra between sensors for ``line_cross`` (smooth in ln k1)
 # beyond s d = 20 (s = sqrt(k1^2 + L^-2), d the y-z separation) the coherency between points is < 1e-6 (7e-7 at most
 # over Gamma 0-5, L 10-100 m, d along y or z, by the quadrature with a 64 x longer radial cut): taken as 0 there, where
-# WEIGHT_RULE's own error is 2.6e-5 and its oscillating integrand made a 20 Hz mast's weights cost 20 s per pass
+# WEIGHT_RULE's own error is 2.6e-5 and its oscillating integrand made a 20 Hz mast's weights slow
 SD_NEGLIGIBLE = 20.0
 _kernel = lru_cache(maxsize=4)(WelchKernel)  # a Welch setup's kernel (parameter-free): built once per setup
 

@@ -36,36 +36,18 @@ SPECTRA = ("uu", "vv", "ww", "uw")
 class BandSpectra:
     """Band-averaged one-sided Welch estimates [m^2 s^-2 Hz^-1] of fit data.
 
-    Attributes
-    ----------
-    setup : WelchSetup
-        Segment length and dt [s].
-    nt : int
-        Record length [samples].
-    bands : tuple of numpy.ndarray
-        Bin indices of every band.
-    f_hz : numpy.ndarray
-        (nbands,) band centre (mean bin frequency) [Hz].
-    values : dict
-        Spectrum ("uu", "vv", "ww", "uw") -> (nbands,) estimate (the co-spectrum Re S_uw for "uw").
-    var_factor : dict
-        Spectrum -> (nbands,) the band gain over K_eff: the variance of one point's auto-spectrum estimate is
-        factor S^2, that of its co-spectrum factor (S_uu S_ww + C^2) / 2.
-    segments : dict
-        Component -> complete segments used per column (summed over columns).
-    band_corr : numpy.ndarray
-        (nbands, nbands) correlation of the band averages from the correlation of Hann bins up to 3 apart
-        (neighbouring single-bin bands at low frequencies correlate by 4/9).
-    """
+    ``var_factor``: the variance of one point's auto-spectrum estimate is factor S^2, that of its co-spectrum
+    factor (S_uu S_ww + C^2) / 2. ``band_corr``: from the correlation of Hann bins up to 3 apart (neighbouring
+    single-bin bands at low frequencies correlate by 4/9)."""
 
-    setup: WelchSetup
-    nt: int
-    bands: tuple
-    f_hz: np.ndarray
-    values: dict
-    var_factor: dict
-    segments: dict
-    band_corr: np.ndarray
+    setup: WelchSetup  # segment length and dt [s]
+    nt: int  # record length [samples]
+    bands: tuple  # bin indices of every band
+    f_hz: np.ndarray  # (nbands,) band centre (mean bin frequency) [Hz]
+    values: dict  # spectrum ("uu", "vv", "ww", "uw") -> (nbands,) estimate (the co-spectrum Re S_uw for "uw")
+    var_factor: dict  # spectrum -> (nbands,) the band gain over K_eff
+    segments: dict  # component -> complete segments used per column (summed over columns)
+    band_corr: np.ndarray  # (nbands, nbands) correlation of the band averages
 
     def band_mean(self, binned: np.ndarray) -> np.ndarray:
         """(nbins,) values averaged over each band."""
