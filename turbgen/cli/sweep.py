@@ -57,11 +57,10 @@ def sweep(config, models, presets, speeds, seeds, presets_file, nt, dt, planes, 
           memory, stencil_cache):  # fmt: skip
     """Generate every field of a sweep (resumable: complete stores are kept), write DIR/manifest.json/.csv.
 
-    Either --config FILE (command-line --out, --workers, --scheduler, --validate and --chunks
-    override the file) or --model, --preset, --speeds, --seeds and --out. Exit code 0 when every
-    run has a complete store (and passed validation, with --validate), 1 when some run failed,
-    3 when all stores are complete but some failed validation or the lidar coherence check (see the summary and
-    the manifest)."""
+    Either --config FILE (command-line --out, --workers, --scheduler, --validate and --chunks override the file) or
+    --model, --preset, --speeds, --seeds and --out. Exit code 0 when every run has a complete store (and passed
+    validation, with --validate), 1 when some run failed, 3 when all stores are complete but some failed validation or
+    the lidar coherence check (see the summary and the manifest)."""
     from turbgen.spec.preset_files import load_presets
     from turbgen.sweep import make_plan, plan_from_file, run_sweep, summary_table
     from turbgen.sweep.plan import check_memory_budget

@@ -33,9 +33,8 @@ def transient(kind, iec_class, class_alias, V_hub, hub_height, rotor_diameter, s
               runner_files, overwrite):
     """Write the IEC 61400-1 Ed. 4 event KIND (EOG, EDC, ECD, EWS-V, EWS-H; Sect. 6.3.3) at V_hub as a uniform wind file.
 
-    The normal wind profile (alpha 0.2) is included; parameters (sigma1, Lambda1, V_e1) come from the
-    class and V_hub. To superimpose turbulence, run InflowWind on a turbulent export instead: the uniform
-    file is deterministic."""
+    The normal wind profile (alpha 0.2) is included; parameters (sigma1, Lambda1, V_e1) come from the class and V_hub.
+    To superimpose turbulence, run InflowWind on a turbulent export instead: the uniform file is deterministic."""
     iec_class = resolve_iec_class(iec_class, class_alias, "transient")
     if iec_class is None:
         raise click.UsageError("missing option --iec-class (turbine class and turbulence category, e.g. IIB)")

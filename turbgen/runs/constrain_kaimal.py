@@ -122,9 +122,8 @@ def kaimal_conditioned_planes(run: KaimalRun, placed: KaimalPlaced, cov: np.ndar
 
 
 def constrained_memory_bytes(run: KaimalRun, placed: KaimalPlaced, threads: int | None = None) -> int:
-    """Peak bytes [B] of a constrained run: memory_needed plus S (nt/q x M x M complex128), one
-    component's correction spectra and longitudinal factors on the measured planes, one plane's correction and the
-    stream arrays."""
+    """Peak bytes [B] of a constrained run: memory_needed plus S (nt/q x M x M complex128), one component's correction
+    spectra and longitudinal factors on the measured planes, one plane's correction and the stream arrays."""
     g, m = run.grid, placed.streams.n_streams
     sampler = kaimal_generator(run, workers=threads).sampler_bytes()
     nf, q = g.nt // 2 + 1, len(placed.streams.used_planes())

@@ -54,8 +54,7 @@ def _terms(op, j: int) -> tuple[np.ndarray, int]:
 
 
 def _mean_los(data: LidarData, ms, times: np.ndarray, run, where: str) -> np.ndarray | None:
-    """(n_scan, J) line-of-sight speed [m/s] of the mean wind the dataset added (None: none); a turning one is
-    refused."""
+    """(n_scan, J) line-of-sight speed [m/s] of the mean wind the dataset added (None: none); a turning one: refused."""
     if not data.mean_wind_added:
         return None
     if data.mean_wind is None:

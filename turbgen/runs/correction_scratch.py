@@ -1,6 +1,5 @@
-"""The correction C H^T w of a constrained Mann run on disk between its computation (slab groups, all planes) and
-the writing pass (plane by plane): (planes, 3, nk1, ny, nz) complex64 in an anonymous file (freed however the run
-ends)."""
+"""The correction C H^T w of a constrained Mann run on disk between its computation (slab groups, all planes) and the
+writing pass (plane by plane): (planes, 3, nk1, ny, nz) complex64 in an anonymous file (freed however the run ends)."""
 
 from __future__ import annotations
 
@@ -15,8 +14,7 @@ from turbgen.runs.scratch import read_at, write_at
 
 
 class CorrectionScratch:
-    """Cropped spectra (planes, 3, nk1, ny, nz) complex64 in an anonymous file in ``directory`` (a context
-    manager)."""
+    """Cropped spectra (planes, 3, nk1, ny, nz) complex64 in an anonymous file in ``directory`` (a context manager)."""
 
     def __init__(self, directory: Path, shape: tuple[int, int, int, int, int]):
         self.shape = shape

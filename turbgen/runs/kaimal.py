@@ -51,8 +51,7 @@ def store_attrs(run: KaimalRun, gen: KaimalEvo | None = None) -> dict:
 # chunks the longest phase of a run, long enough to write w's planes meanwhile (the store's writes are bound by the
 # disk); the field does not depend on the order
 ORDER = ("v", "w", "u")
-# planes whose store writes may lag behind the synthesis (at most; ring_planes)
-MAX_WRITE_BACKLOG = 8
+MAX_WRITE_BACKLOG = 8  # planes whose store writes may lag behind the synthesis (at most; ring_planes)
 
 
 def ring_planes(grid: Grid, spill: bool = False) -> int:
@@ -178,8 +177,7 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
 
 
 def in_memory_bytes(run: KaimalRun, gen: KaimalEvo | None = None) -> int:
-    """Bytes [B] kaimal_in_memory allocates: memory_needed (spectrum in memory) and the field's 3 float32
-    components."""
+    """Bytes [B] kaimal_in_memory allocates: memory_needed (spectrum in memory) and the field's 3 float32 components."""
     gen = gen or kaimal_generator(run)
     return memory_needed(run.grid, sampler=gen.sampler_bytes()) + 3 * run.grid.nbytes_per_component()
 

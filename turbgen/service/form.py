@@ -48,14 +48,12 @@ _EXTRA = {
 
 @dataclass(frozen=True)
 class Field:
-    """One field of the run form: ``name`` the command's option (``L``, ``hub_height``), ``key`` where the value goes
-    in the request body (a run key, ``grid.<key>``, ``preset`` or ``gates``), ``group`` one of :data:`GROUPS`,
-    ``kind`` number, integer, choice, flag, list3, positions, gates, evo or upload; the rest shown beside it."""
+    """One field of the run form; the fields after ``kind`` are shown beside it."""
 
-    name: str
-    key: str
-    group: str
-    kind: str
+    name: str  # the command's option (``L``, ``hub_height``)
+    key: str  # where the value goes in the request body (a run key, ``grid.<key>``, ``preset`` or ``gates``)
+    group: str  # one of GROUPS
+    kind: str  # number, integer, choice, flag, list3, positions, gates, evo or upload
     unit: str = ""
     range: str = ""
     default: str = ""

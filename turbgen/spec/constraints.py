@@ -1,10 +1,9 @@
 """Constraint files: measured point time series a field is conditioned on (schemas/constraints.schema.json).
 
-A file holds sample times (physical time [s] from the start of the field, any rate) and sensors at
-(x, y, z) (z from the hub, or height above ground) with any of u, v, w [m/s], null for missing (NaN
-here). With ``total_wind`` the data hold the total wind, whose mean (the exports' MeanWind, or the
-file's ``mean_wind``) is taken off by :func:`sensor_fluctuations`. turbgen.runs.constrain places the
-data on the run's grid."""
+A file holds sample times (physical time [s] from the start of the field, any rate) and sensors at (x, y, z) (z from the
+hub, or height above ground) with any of u, v, w [m/s], null for missing (NaN here). With ``total_wind`` the data hold
+the total wind, whose mean (the exports' MeanWind, or the file's ``mean_wind``) is taken off by
+:func:`sensor_fluctuations`. turbgen.runs.constrain places the data on the run's grid."""
 
 from __future__ import annotations
 
@@ -45,17 +44,15 @@ class PointSensor:
 
 @dataclass(frozen=True, eq=False)
 class PointSeries:
-    """A constraint file: ``time_s`` (strictly increasing) [s], ``sensors``, ``total_wind``, ``noise_m_s``
-    [m/s] (None: not given), ``source`` (the file), ``mean_wind`` (the mean in total-wind data: the file's,
-    else the exports' default)."""
+    """A constraint file."""
 
     name: str
-    time_s: np.ndarray
+    time_s: np.ndarray  # strictly increasing [s]
     sensors: tuple[PointSensor, ...]
     total_wind: bool
-    noise_m_s: float | None
-    source: str
-    mean_wind: MeanWind | None = None
+    noise_m_s: float | None  # [m/s] (None: not given)
+    source: str  # the file
+    mean_wind: MeanWind | None = None  # the mean in total-wind data: the file's, else the exports' default
 
     def __post_init__(self):
         if self.total_wind and self.mean_wind is None:  # the exports' default mean wind

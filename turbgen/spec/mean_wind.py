@@ -8,11 +8,10 @@ export applies it the same way: at height h and slice time t,
     theta(t, h) = veer(h) + direction(t),
     (u, v) = rotate((U(t, y, h) + u', v'), theta)        (Jonkman 2009, TurbSim's per-height rotation)
 
-with r(h) = U(h)/U(h_hub) (:mod:`turbgen.theory.mean_wind`), U_hub(t) the history's speed (else the
-store's U), g, s_v, s_h and the direction of a superimposed IEC transient
-(:class:`turbgen.spec.iec_transient.IecTransient`), u', v' the stored fluctuations; w is unchanged.
-Angles turn counter-clockwise seen from above (CCW_NOTE); an IEC direction, clockwise in InflowWind,
-enters with its sign flipped."""
+with r(h) = U(h)/U(h_hub) (:mod:`turbgen.theory.mean_wind`), U_hub(t) the history's speed (else the store's U), g, s_v,
+s_h and the direction of a superimposed IEC transient (:class:`turbgen.spec.iec_transient.IecTransient`), u', v' the
+stored fluctuations; w is unchanged. Angles turn counter-clockwise seen from above (CCW_NOTE); an IEC direction,
+clockwise in InflowWind, enters with its sign flipped."""
 
 from __future__ import annotations
 
@@ -64,29 +63,23 @@ def _column(name: str, values, n: int, check=check_finite) -> tuple:
 
 @dataclass(frozen=True)
 class MeanWind:
-    """Mean-wind profile, veer and hub-height time history (validated at construction).
+    """Mean-wind profile, veer and hub-height time history (validated at construction). History: linear between its
+    times, end values held."""
 
-    ``profile`` "power" (``shear_exponent`` in [-1, 1]), "log" (``roughness_m`` > 0, ``displacement_m`` >= 0) or
-    "table": heights above ground [m] (increasing), speeds [m/s] (only the ratio to hub height counts), optional
-    directions [deg] (veer = direction(h) - direction(hub)). ``veer_deg_per_m`` |rate| <= 5, negative = clockwise
-    with height. History: increasing times at the turbine [s], speeds [m/s], optional directions [deg]; linear
-    between, end values held. ``*_label``: source file names for descriptions. ``transient``: an IecTransient on the
-    mean (the store's V_hub and hub height); excludes a history."""
-
-    profile: str = "power"
-    shear_exponent: float = DEFAULT_SHEAR_EXPONENT
-    roughness_m: float | None = None
-    displacement_m: float = 0.0
-    table_heights_m: tuple = ()
-    table_speeds_m_s: tuple = ()
-    table_directions_deg: tuple = ()
-    veer_deg_per_m: float = 0.0
-    history_times_s: tuple = ()
+    profile: str = "power"  # "power", "log" or "table"
+    shear_exponent: float = DEFAULT_SHEAR_EXPONENT  # in [-1, 1]
+    roughness_m: float | None = None  # > 0
+    displacement_m: float = 0.0  # >= 0
+    table_heights_m: tuple = ()  # above ground [m], increasing
+    table_speeds_m_s: tuple = ()  # [m/s]: only the ratio to hub height counts
+    table_directions_deg: tuple = ()  # optional [deg]: veer = direction(h) - direction(hub)
+    veer_deg_per_m: float = 0.0  # |rate| <= 5, negative = clockwise with height
+    history_times_s: tuple = ()  # increasing times at the turbine [s]
     history_speeds_m_s: tuple = ()
-    history_directions_deg: tuple = ()
-    table_label: str = ""
+    history_directions_deg: tuple = ()  # optional
+    table_label: str = ""  # source file names for descriptions
     history_label: str = ""
-    transient: IecTransient | None = None
+    transient: IecTransient | None = None  # on the mean (the store's V_hub and hub height); excludes a history
 
     def __post_init__(self):
         check_choice("mean-wind profile", self.profile, PROFILES)

@@ -1,10 +1,9 @@
 """User stability presets from TOML or JSON files (the built-in ones: turbgen.spec.presets).
 
-A file holds ``{"presets": {NAME: {...}}}`` (or NAME -> {...} directly), each entry with an optional
-``mann`` table (L, gamma, evo, factor1, lifetime, ae_ref), an optional ``kaimal`` table (sigma_ratios,
-length_scales_m, a_yz, lc_m, a_x, b_x), ``turb_class`` (default "A") and ``source`` (free text). Bad
-names (built-in, or not a word of letters, digits, '-', '_'), unknown or missing keys and values
-outside their ranges raise ParameterError."""
+A file holds ``{"presets": {NAME: {...}}}`` (or NAME -> {...} directly), each entry with an optional ``mann`` table (L,
+gamma, evo, factor1, lifetime, ae_ref), an optional ``kaimal`` table (sigma_ratios, length_scales_m, a_yz, lc_m, a_x,
+b_x), ``turb_class`` (default "A") and ``source`` (free text). Bad names (built-in, or not a word of letters, digits,
+'-', '_'), unknown or missing keys and values outside their ranges raise ParameterError."""
 
 from __future__ import annotations
 

@@ -2,16 +2,15 @@
 
 Sources of the numbers:
 
-* Mann L, Gamma: Table 1 (after Pena 2019), at U = 16 m/s. alpha*eps^(2/3) is re-derived at every U
-  from the model variance for sigma_u = 0.16 (0.75 U + 5.6), as the paper scales it to IEC class 1A
-  (Sect. 2.4, 5.1.2); Table 1's value (``ae_ref``) is kept for comparison only.
-* Evolution time gamma = 600 / 400 / 200 s for unstable / neutral / stable (Sect. 2.4); factor1 = 0.8
-  for stable (the 4D Mann turbulence generator's stable preset), else 1.
-* Kaimal L1..L3, a_yz, Lc and sigma_2/sigma_1, sigma_3/sigma_1: Table 1 (fits to the Mann model,
-  Eq. 20-21); the neutral class is the IEC 61400-1 set (Sect. 2.4), Lambda1 = 42 m. sigma_1 follows
-  IEC class A at every U, sigma_2,3 keep the ratios (Sect. 5.1.2).
-* Kaimal a_x, b_x (Eq. 18): Table 2 in the column of the class's gamma, fitted at U = 16 m/s and
-  dx = 100 m and used unchanged at other speeds, as in the paper.
+* Mann L, Gamma: Table 1 (after Pena 2019), at U = 16 m/s. alpha*eps^(2/3) is re-derived at every U from the model
+  variance for sigma_u = 0.16 (0.75 U + 5.6), the paper's IEC class 1A scaling (Sect. 2.4, 5.1.2); Table 1's value
+  (``ae_ref``) is kept for comparison only.
+* Evolution time gamma = 600 / 400 / 200 s for unstable / neutral / stable (Sect. 2.4); factor1 = 0.8 for stable
+  (the 4D Mann turbulence generator's stable preset), else 1.
+* Kaimal L1..L3, a_yz, Lc, sigma_2/sigma_1, sigma_3/sigma_1: Table 1 (fits to the Mann model, Eq. 20-21); neutral is
+  the IEC 61400-1 set (Sect. 2.4), Lambda1 = 42 m. sigma_1 follows IEC class A at every U, sigma_2,3 keep the ratios.
+* Kaimal a_x, b_x (Eq. 18): Table 2 in the column of the class's gamma, fitted at U = 16 m/s and dx = 100 m, used
+  unchanged at other speeds, as in the paper.
 
 User presets: turbgen.spec.preset_files; what a preset gives each model's run: turbgen.spec.preset_runs."""
 

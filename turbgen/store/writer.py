@@ -4,8 +4,7 @@ last, atomic rename (``temporaries.publish``).
     with create_store(path, grid, attrs, chunk_t=None, overwrite=False) as w:
         w.write("u", ix, block, t0)        # block (nt_block, ny, nz), any thread
 
-On any exception the temporary directory is removed and ``path`` is untouched; a disk error is a one-line
-StoreError."""
+On any exception the temporary directory is removed and ``path`` is untouched; a disk error is a one-line StoreError."""
 
 from __future__ import annotations
 

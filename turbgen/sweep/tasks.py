@@ -47,8 +47,7 @@ def validate_store(path: str, threads: int | None = None) -> dict:
 
 
 def lidar_store(path: str, lidar: str) -> dict:
-    """Summary of the virtual lidar on one store: ``passed``, ``simulated``, ``theory``, ``max_abs_z``,
-    ``z_crit``."""
+    """Summary of the virtual lidar on one store: ``passed``, ``simulated``, ``theory``, ``max_abs_z``, ``z_crit``."""
     from turbgen.virtual_lidar.report import lidar_report
     from turbgen.store import open_store
 

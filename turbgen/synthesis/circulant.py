@@ -17,8 +17,7 @@ from turbgen import fft
 from turbgen.errors import ParameterError
 from turbgen.synthesis.square_root import principal_sqrt
 
-# eigenvalues above -EIG_RTOL * max(lam) are rounding noise of an exactly non-negative spectrum
-EIG_RTOL = 1e-10
+EIG_RTOL = 1e-10  # eigenvalues above -EIG_RTOL * max(lam) are rounding noise of an exactly non-negative spectrum
 # the torus is enlarged (x1.5 per step; one decay length more with the smooth cut-off) at most this many times
 MAX_ENLARGE = 4
 # grids with at most this many points fall back to a dense (principal) square root; larger ones clip
@@ -32,8 +31,7 @@ MAX_TORUS_POINTS = 1 << 21
 # operations of one dense factor per N^3: eigh with eigenvectors and the product V sqrt(Lambda) V^T
 # (benchmarks/README.md, "Measurements behind design choices")
 DENSE_OPS_PER_N3 = 4.0
-# at most this many floating-point operations for the dense factors of one component
-MAX_DENSE_FLOPS = 1.2e12
+MAX_DENSE_FLOPS = 1.2e12  # at most this many floating-point operations for the dense factors of one component
 
 
 def fft_size(n: int) -> int:

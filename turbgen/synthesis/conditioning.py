@@ -36,8 +36,7 @@ from turbgen.synthesis.mann_stencil import MannStencil
 from turbgen.synthesis.prior_spectrum import slab_inv_tau, slab_weight
 
 CG_TOLERANCE = 1e-10  # relative residual |S x - r| / |r| at which the conjugate gradients stop
-# a bound on the conjugate gradients (the circulant preconditioner knows nothing of the gaps)
-CG_MAX_ITERATIONS = 5000
+CG_MAX_ITERATIONS = 5000  # a bound on the conjugate gradients (the circulant preconditioner knows nothing of the gaps)
 # missing fraction above which conjugate gradients start from the precision-matrix solve (_gap_start)
 GAP_START_FRACTION = 1 / 16
 SINGULAR_RTOL = 1e-11  # eigenvalue / largest eigenvalue of S_i below which zero-noise measurements are dependent
@@ -45,20 +44,18 @@ SINGULAR_RTOL = 1e-11  # eigenvalue / largest eigenvalue of S_i below which zero
 
 @dataclass(frozen=True, eq=False)
 class Streams:
-    """Measurement streams on the stored grid: ``plane`` (M,) per stream; per term (T,) ``term_stream``,
-    ``term_component`` (0 u, 1 v, 2 w), ``term_iy``, ``term_iz``, ``term_weight`` [-], ``term_shift`` s_t >= 0 [stored
-    steps]; ``decimation`` q (divides nt) and ``offset`` o_a in [0, q) of each stream's first sample."""
+    """Measurement streams on the stored grid: (M,) arrays per stream, (T,) ``term_*`` arrays per term."""
 
     plane: np.ndarray
     term_stream: np.ndarray
-    term_component: np.ndarray
+    term_component: np.ndarray  # 0 u, 1 v, 2 w
     term_iy: np.ndarray
     term_iz: np.ndarray
-    term_weight: np.ndarray
+    term_weight: np.ndarray  # [-]
     names: tuple[str, ...]
-    term_shift: np.ndarray | None = None
-    decimation: int = 1
-    offset: np.ndarray | None = None
+    term_shift: np.ndarray | None = None  # s_t >= 0 [stored steps]
+    decimation: int = 1  # q (divides nt)
+    offset: np.ndarray | None = None  # o_a in [0, q) of each stream's first sample
 
     def __post_init__(self):
         if self.term_shift is None:

@@ -23,15 +23,14 @@ from turbgen.synthesis.kaimal_evo import COMPONENTS, FREQ_CHUNK, KaimalEvo, long
 
 @dataclass(frozen=True, eq=False)
 class BinPrior:
-    """The realised prior of one component on frequency bin ``k``: ``weight`` h_k [m^2 s^-2] (module docstring),
-    ``long`` G_k (P, P) [-] or None (planes independent), and the yz correlation: ``dense`` R (N, N) [-] (a dense
-    factor's), or ``torus_power`` scale^2 (My, Mz) [-] of a circulant torus, both None for white noise."""
+    """The realised prior of one component on frequency bin ``k`` (yz correlation: ``dense`` and ``torus_power``
+    None for white noise)."""
 
     k: int
-    weight: float
-    long: np.ndarray | None
-    dense: np.ndarray | None
-    torus_power: np.ndarray | None
+    weight: float  # h_k [m^2 s^-2] (module docstring)
+    long: np.ndarray | None  # G_k (P, P) [-] or None (planes independent)
+    dense: np.ndarray | None  # R (N, N) [-] (a dense factor's)
+    torus_power: np.ndarray | None  # scale^2 (My, Mz) [-] of a circulant torus
 
     def at_points(self, iy: np.ndarray, iz: np.ndarray, nz: int) -> np.ndarray:
         """R_k between the grid points (iy, iz) (n,) each: (n, n) float64."""
@@ -173,8 +172,7 @@ class Correction:
     long: np.ndarray | None
 
     def field(self, plane: int, nt: int) -> np.ndarray:
-        """The correction on ``plane``, (nt, ny, nz) float64 [m/s]: the generator's real inverse FFT (norm
-        "forward")."""
+        """The correction on ``plane``, (nt, ny, nz) float64 [m/s]: the generator's real inverse FFT (norm "forward")"""
         if self.long is None:
             hit = np.flatnonzero(self.planes == plane)
             if hit.size == 0:

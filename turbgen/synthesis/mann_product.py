@@ -72,9 +72,8 @@ def _frozen_row(n0, n1, n2, fac, k1, k2, uu, uv, uw):
 def ou_product(n, fresh, rho, sig, coef, j0, k1, k2, k3sq, uhat, evolve):
     """OU step of the noise (Guo et al. 2023, Eq. 13-14) and u_hat = C n (Mann 1998, Eq. 46-47) on b slabs.
 
-    ``n``, ``fresh``, ``uhat`` (b, 3, nyp, 2 nzp) float32 views of complex64; with ``evolve``, n <- rho n + sig fresh
-    in place first. ``coef`` (4, slabs, nyp//2 + 1, nzp): A, Z1, Z2 [m^2/s], P [m/s]; k1, k2 [rad/m], k3sq
-    [rad^2/m^2]."""
+    ``n``, ``fresh``, ``uhat`` (b, 3, nyp, 2 nzp) float32 views of complex64; with ``evolve``, n <- rho n + sig fresh in
+    place first. ``coef`` (4, slabs, nyp//2 + 1, nzp): A, Z1, Z2 [m^2/s], P [m/s]; k1, k2 [rad/m], k3sq [rad^2/m^2]."""
     nyp, nh = n.shape[2], coef.shape[2]
     fac = np.empty((7, n.shape[3]), np.float32)
     w = np.empty(coef.shape[3], np.float32)

@@ -1,15 +1,14 @@
 """The (k2, k3) quadrature of a periodic synthesis box, for the lidar preview spectra of what the box holds.
 
 A Mann field synthesised on a periodic box of nyp x nzp points spaced dy, dz [m] holds Phi on the lattice
-k2 = j dk2, k3 = l dk3 only (Mann 1998, Sec. 2; turbgen.theory.lattice), missing the lateral wavenumbers
-below dk2 = 2 pi / (nyp dy), dk3 = 2 pi / (nzp dz). At k1 comparable to dk2, dk3 those shape the
-lidar-rotor coherence (Guo et al. 2023, Eq. 24, 29, 32), so the lattice sum, the expectation of the box's
-field, differs from the continuous integral; the two converge as the box grows.
+k2 = j dk2, k3 = l dk3 only (Mann 1998, Sec. 2; turbgen.theory.lattice), missing the lateral wavenumbers below
+dk2 = 2 pi / (nyp dy), dk3 = 2 pi / (nzp dz), which shape the lidar-rotor coherence at k1 ~ dk2, dk3 (Guo et al. 2023,
+Eq. 24, 29, 32); the lattice sum (the box field's expectation) converges to the continuous integral as the box grows.
 
-Each lattice point carries Phi(k) dk2 dk3, except the cells around the k1 axis at small |k1|, where Phi
-varies strongly within a cell: there it carries the cell average over k1 in [k1 - dk1/2, k1 + dk1/2]
-(dk1 = 2 pi / (U T)) times dk2 dk3. The grading (CELL_RADIUS, CELL_K1_FACTOR, CELL_GAUSS, GRADING) is this
-module's own, distinct from the generator's and the validator's, so an error in any of them shows."""
+Each lattice point carries Phi(k) dk2 dk3, except near the k1 axis at small |k1|, where Phi varies strongly within a
+cell: there the cell average over [k1 - dk1/2, k1 + dk1/2] (dk1 = 2 pi / (U T)). The grading (CELL_RADIUS,
+CELL_K1_FACTOR, CELL_GAUSS, GRADING) is this module's own, distinct from the generator's and the validator's, so an
+error in any of them shows."""
 
 from __future__ import annotations
 

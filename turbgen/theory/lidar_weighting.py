@@ -1,10 +1,9 @@
 """Probe-volume weighting of a lidar along its beam, continuous and discrete.
 
-Pulsed lidar: Gaussian of FWHM W_L (Guo et al. 2023, Eq. 27, 30; the extra |k.n| factor of Fu et al.
-2023, Eq. 19 is a misprint). Continuous-wave lidar: Lorentzian of Rayleigh length z_R (Fu et al. 2023,
-Eq. 14-16). The theory and the virtual lidar both use the discrete weights (Fu et al. 2023, Sect. 2.3),
-so the frequency and time domains see the same probe volume. Every function raises ParameterError for
-a width or length that is not a finite number > 0."""
+Pulsed lidar: Gaussian of FWHM W_L (Guo et al. 2023, Eq. 27, 30; the extra |k.n| factor of Fu et al. 2023, Eq. 19 is a
+misprint). Continuous-wave lidar: Lorentzian of Rayleigh length z_R (Fu et al. 2023, Eq. 14-16). The theory and the
+virtual lidar both use the discrete weights (Fu et al. 2023, Sect. 2.3), so the frequency and time domains see the same
+probe volume. Every function raises ParameterError for a width or length that is not a finite number > 0."""
 
 from __future__ import annotations
 

@@ -22,8 +22,7 @@ from turbgen.errors import ParameterError
 from turbgen.theory.lattice import line_frequencies
 
 COLUMNS = ("f_hz", "r_m", "coh")
-# most values a store records (lines x nodes): ~20 B of JSON each in its metadata
-MAX_VALUES = 1 << 18
+MAX_VALUES = 1 << 18  # most values a store records (lines x nodes): ~20 B of JSON each in its metadata
 
 
 def grid_separations_m(ny: int, nz: int, dy_m: float, dz_m: float) -> np.ndarray:

@@ -18,8 +18,7 @@ from turbgen.errors import ParameterError
 from turbgen.theory.lattice import line_bands, line_frequencies
 
 COLUMNS = ("f_hz", "S_u", "S_v", "S_w")
-# nodes per band of a callable's quadrature: error ~ rho^(-2 n) for a pole rho band half-widths away
-GAUSS_NODES = 16
+GAUSS_NODES = 16  # nodes per band of a callable's quadrature: error ~ rho^(-2 n) for a pole rho band half-widths away
 # how far [df] the ends of a table may fall short of the run's lowest and highest lines (digits lost in a file)
 COVER_SLACK = 1e-6
 

@@ -17,8 +17,7 @@ NEAR_UNIT = 1e-3  # 1 - |rho|^2 below this: delta method with the float32 floor 
 
 
 def chi2_z(ratio, nu):
-    """Normal score [-] of an observed ``ratio`` under ratio ~ chi2_nu / nu (two-sided tails symmetric in
-    probability)."""
+    """Normal score [-] of an observed ``ratio`` under ratio ~ chi2_nu / nu (two-sided tails, equal in probability)."""
     ratio, nu = np.asarray(ratio, float), np.asarray(nu, float)
     lower = chi2.logcdf(nu * ratio, nu)
     upper = chi2.logsf(nu * ratio, nu)
@@ -93,9 +92,8 @@ class Bands:
         return {d: e[: e.size - d] * e[d:] * self.lag_corr.get(d, 0.0) / self.k_eff for d in range(MAX_LAG + 1)}
 
     def averaged_cov(self, wcov: WelchCovariance, terms, one_point: dict, rho2: np.ndarray, rho: np.ndarray) -> dict:
-        """Covariance dict of the point-averaged estimate: exact from ``terms`` (``WelchCovariance.node_terms``)
-        and the two-frequency sum ``rho2``; else the ``one_point`` covariance times sqrt(rho_m rho_m') (``rho``
-        per bin)."""
+        """Covariance dict of the point-averaged estimate: exact from ``terms`` (``WelchCovariance.node_terms``) and the
+        two-frequency sum ``rho2``; else the ``one_point`` covariance times sqrt(rho_m rho_m') (``rho`` per bin)."""
         exact = wcov.averaged(terms, rho2)
         if exact is not None:
             return exact

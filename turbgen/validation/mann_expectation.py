@@ -1,12 +1,11 @@
 """What a Mann store's model predicts for every estimate, on the lattice of the generator's box.
 
-The generator samples the spectral tensor on the lattice of its periodic (xi = U t, y, z) box, nt x nyp x nzp
-points spaced U dt, dy, dz (Guo et al. 2023, Eq. 8, 13, 24), so the expected field has L_j = sum over the (k2, k3)
-lattice of Phi_ii(k1_j, k2, k3) dk1 dk2 dk3, k1_j = 2 pi f_j / U: the Mann spectrum *as the grid resolves it*
-(band-limited at pi/dy, pi/dz, missing the wavenumbers below the finite box's; Mann 1998). Between planes dx apart
-the space-time tensor Theta = exp(-dx/(U tau_e)) Phi (Guo et al. 2023, Eq. 13) is used; the rotor-effective wind
-speed uses Phi_11 |H_R(k2, k3)|^2 over the grid's rotor points (Eq. 24). The lattice sums are in
-``turbgen.validation.mann_lattice``."""
+The generator samples the spectral tensor on the lattice of its periodic (xi = U t, y, z) box, nt x nyp x nzp points
+spaced U dt, dy, dz (Guo et al. 2023, Eq. 8, 13, 24), so the expected field has L_j = sum over the (k2, k3) lattice of
+Phi_ii(k1_j, k2, k3) dk1 dk2 dk3, k1_j = 2 pi f_j / U: the Mann spectrum *as the grid resolves it* (band-limited at
+pi/dy, pi/dz, missing the wavenumbers below the finite box's; Mann 1998). Between planes dx apart the space-time tensor
+Theta = exp(-dx/(U tau_e)) Phi (Guo et al. 2023, Eq. 13) is used; the rotor-effective wind speed uses Phi_11 |H_R(k2,
+k3)|^2 over the grid's rotor points (Eq. 24). The lattice sums are in ``turbgen.validation.mann_lattice``."""
 
 from __future__ import annotations
 

@@ -1,15 +1,13 @@
 """Fit the Mann (1994) model to a ``turbgen lidar --out`` dataset: ``turbgen fit mann LIDAR``.
 
 ae and L are fitted to the Welch spectrum of v_los pooled over every beam and gate against the gates' mean LOS spectrum
-F(k1) = ∫ n_i n_j Phi_ij |phi_hat(k . n)|^2 dk2 dk3 (Guo et al. 2023, Eq. 29-30): over the box of the Mann store the
-dataset was sampled from while it is there (along x with the sampler's interpolation in time), else continuous, with
-(k2, k3) integrated out to TAIL times the highest k1 the probe passes. Gamma is held: the LOS spectrum is nearly u's.
-Generalised least squares in (ln ae, ln L), re-weighted at the fitted model, by the bands' exact covariance from one
-point's lines times the gates' point correlation: the band-centre variance left bin 1's 1.3 x and the probe-steepened
-top bands' 1.4 x short (benchmarks/fit_lidar.md); L's interval inverts the Wald test with the sd at each L. F is
-tabulated in ln L (step DLN_L) at N_K1 nodes, interpolated cubic.
-The evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (Guo et al. 2022),
-against a model made as the spectra's: on the store's lattice, through the probe's gain (``_with_gates``)."""
+F(k1) = ∫ n_i n_j Phi_ij |phi_hat(k . n)|^2 dk2 dk3 (Guo et al. 2023, Eq. 29-30): on the box of the Mann store the
+dataset was sampled from while it is there, else continuous, (k2, k3) integrated out to TAIL times the highest k1 the
+probe passes. Gamma is held: the LOS spectrum is nearly u's. Generalised least squares in (ln ae, ln L), re-weighted at
+the fitted model, by the bands' exact covariance from one point's lines times the gates' point correlation
+(benchmarks/fit_lidar.md); L's interval inverts the Wald test with the sd at each L. F is tabulated in ln L (step
+DLN_L) at N_K1 nodes, interpolated cubic. The evolution time is fitted to the co-coherence of gates at different
+ranges of a beam along x (Guo et al. 2022), against a model made as the spectra's (``_with_gates``)."""
 
 from __future__ import annotations
 

@@ -301,9 +301,8 @@ def repeats_every(grid, U_m_s: float, measurements, times_s: np.ndarray, q: int,
 
 
 def apply_los(op: LosOperator, read) -> np.ndarray:
-    """v_los (n_scan, J) of the field given by ``read(component, plane, (t0, t1), (y0, y1), (z0, z1))`` -> the
-    float64 block [t0, t1) x [y0, y1) x [z0, z1) of that plane (each plane read once, only the span its points
-    need)."""
+    """v_los (n_scan, J) of the field given by ``read(component, plane, (t0, t1), (y0, y1), (z0, z1))`` -> the float64
+    block [t0, t1) x [y0, y1) x [z0, z1) of that plane (each plane read once, only the span its points need)."""
     out = np.zeros(op.weight.shape[:2])
     for ix in np.unique(op.plane):
         js = np.flatnonzero(op.plane == ix)

@@ -1,29 +1,22 @@
 """Fit the eddy-evolution time gamma [s] (Guo et al. 2022) to the longitudinal coherence of u along x.
 
-Estimate: u points at one (y, z) and different x (the planes of a store), or for sensor data at one height and
-different x (two masts, in the wind's frame: they may be apart across the wind too), form pairs; per pair of positions
-(x, y) and band the co-coherence r = sum Re C_ij / sqrt(sum A_i sum A_j) pools the Welch cross- and auto-spectra
-(``spectra``' segments and bands) over the points of that layout and the band's bins. A store is in the convected frame;
-sensor series are first shifted by whole samples of x / U (Taylor's delay; the rest delta, under dt / 2, turns
-the pair's cross-spectrum by exp(-i 2 pi f delta): the model's co-coherence carries cos(2 pi f delta) per line).
-Model: rho(k1, dx, dy) = sum Phi_11 exp(i k2 dy) exp(-dx / (U tau_e(k))) / sum Phi_11 (Guo et al. 2023, Eq. 8, 13,
-16; dy = 0 on a lattice),
-summed over the store's lattice (``MannLattice``, the validator's "theo. (grid)"; also for series sampled from a
-store, ``Sampler``) or over the continuous (k2, k3) plane (``perpendicular_quadrature``) with ae, L and Gamma held at
-their one-point fit (factor2 at its default); through the expected Welch estimate of every bin (``WelchKernel``) and
-the band means, each point's line spectrum times its probe volume's power gain if it has one (lidar gates).
-Variance (delta method with Isserlis 1918 moments of complex Gaussian DFTs): r_m = rho_m + Z_m / S with Z_m = Re
-X_i* X_j - rho_m (|X_i|^2 + |X_j|^2) / 2, so Cov(r_m, r_n) = tr(M_m R M_n R) c, R the (x, x) coherencies and c
-the one-point variance factor of a band's auto-spectrum (1 / K_eff times the point-correlation sum and the band
-gain, ``spectra``); one pair gives (1 - rho^2)^2 c / 2, and E r = rho - rho (1 - rho^2) c / 4 to the same order.
-Bands covary through ``BandSpectra.band_corr``.
+Estimate: pairs of u points at different x and one (y, z) (a store's planes) or one height (sensors, in the wind's
+frame: two masts may be apart across the wind too); per pair of positions (x, y) and band the co-coherence r = sum Re
+C_ij / sqrt(sum A_i sum A_j) pools the Welch cross- and auto-spectra (``spectra``) over the layout's points and the
+band's bins. Sensor series are first shifted by whole samples of Taylor's delay x / U; the rest delta (< dt / 2) gives
+the model's co-coherence a factor cos(2 pi f delta) per line. A store is in the convected frame. Model: rho(k1, dx, dy)
+= sum Phi_11 exp(i k2 dy) exp(-dx / (U tau_e(k))) / sum Phi_11 (Guo et al. 2023, Eq. 8, 13, 16; dy = 0 on a lattice)
+over the store's lattice (``MannLattice``; also for series sampled from a store, ``Sampler``) or the continuous (k2, k3)
+plane (``perpendicular_quadrature``), ae, L and Gamma held at their one-point fit (factor2 at its default); through the
+expected Welch estimate (``WelchKernel``), the band means and each point's probe-volume power gain (lidar gates).
+Variance (delta method with Isserlis 1918 moments; Z_m as in ``kaimal_coherence``): Cov(r_m, r_n) = tr(M_m R M_n R) c, R
+the (x, x) coherencies, c the one-point variance factor of a band's auto-spectrum (``spectra``); one pair gives (1 -
+rho^2)^2 c / 2, and E r = rho - rho (1 - rho^2) c / 4. Bands covary through ``BandSpectra.band_corr``.
 
 Fit: chi^2 over ln gamma on the range of evo (scan, bounded refinement), re-weighted at the fitted gamma until ln
 gamma moves < MOVE_TOL. 95 % interval: chi^2 <= min + 3.84 with ae, L, Gamma held (``ci95_held``), each side widened
-in quadrature by 1.96 x the one-point fit's share (delta method): Var adds s^T Sigma s + 2 s^T G C a, s = d ln gamma
-/ d (ln ae, ln L, Gamma) (secant over one sd), Sigma and G the one-point fit's covariance and gain, a = d ln gamma /
-d r, C the covariance of co-coherences and band spectra (``evo_cross``). An interval reaching the top of the range
-does not exclude the frozen field (gamma -> inf): gamma is then not identified, and the result says so."""
+in quadrature by 1.96 x the one-point fit's share (``_sensitivity``, ``_propagated``). An interval reaching the top
+of the range does not exclude the frozen field (gamma -> inf): gamma is then not identified, and the result says so."""
 
 from __future__ import annotations
 

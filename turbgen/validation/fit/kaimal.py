@@ -1,18 +1,16 @@
 """Fit the IEC Kaimal model to data: sigma_k, L_k of the u, v, w spectra and a, Lc of the u coherence.
 
 Spectra: S_k(f) = 4 sigma_k^2 (L_k/U) / (1 + 6 f L_k/U)^(5/3) (IEC 61400-1 Annex C; Guo et al. 2023, Eq. 11). The
-expected Welch band estimate gives line j of the record the variance of S_k over its bin [(j - 1/2) df, (j + 1/2)
-df] (``kaimal_band_variance``), through the estimator's leakage and mean removal (``WelchKernel``) and the band
-means. That is exactly the discrete spectrum of a turbgen Kaimal store (its generator draws line j with this
-variance, turbgen.synthesis.kaimal_evo; S(f_j) df differs from it in the lowest lines) and, for sensor data, the
-periodic approximation the Mann fit makes too.
+expected Welch band estimate gives line j the variance of S_k over its bin [(j - 1/2) df, (j + 1/2) df]
+(``kaimal_band_variance``) through the estimator's leakage and mean removal (``WelchKernel``): exactly a turbgen Kaimal
+store's discrete spectrum (turbgen.synthesis.kaimal_evo) and, for sensor data, the Mann fit's periodic approximation.
 
-Weights: the Welch covariance of ``spectra`` with the Isserlis terms of the point averages (``covariance.isserlis``)
-from the model's coherency between the points: u's exp(-a r sqrt((f/U)^2 + (0.12/Lc)^2)) (Guo et al. 2023, Eq. 12
-un-squared; r the y-z distance) at the fitted a, Lc; v and w white for a store made so (IEC, TurbSim IECKAI), else
-u's (for sensors an assumption: IEC does not model it). The components are independent in the model, so each
-component's (ln sigma, ln L) is fitted alone by iteratively re-weighted generalised least squares (``gls``, as the
-Mann fit); 95 % intervals are x +- 1.96 sd of (J^T W J)^-1, exponentiated. a and Lc: ``kaimal_coherence``."""
+Weights: the Welch covariance of ``spectra`` with the point averages' Isserlis terms (``covariance.isserlis``) from
+the model's coherency between points: u's exp(-a r sqrt((f/U)^2 + (0.12/Lc)^2)) (Guo et al. 2023, Eq. 12 un-squared;
+r the y-z distance) at the fitted a, Lc; v and w white for a store made so (IEC, TurbSim IECKAI), else u's (for
+sensors an assumption). The components are independent, so each one's (ln sigma, ln L) is fitted alone by iteratively
+re-weighted generalised least squares (``gls``); 95 % intervals x +- 1.96 sd of (J^T W J)^-1, exponentiated. a and
+Lc: ``kaimal_coherence``."""
 
 from __future__ import annotations
 

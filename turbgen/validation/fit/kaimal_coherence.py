@@ -3,14 +3,12 @@
 Estimate: the co-coherence (real part: the IEC coherency has no phase) of u points at one x a y-z distance r apart,
 pooled over the pairs at that distance, their Welch segments (``spectra``) and the band's bins:
 r_m = sum Re X_i* X_j / sqrt(sum |X_i|^2 sum |X_j|^2). Model: rho_m = sum K(v_j g(r_m, f_j)) / sum K(v_j) over the
-band (K the Welch kernel, v_j the fitted u lines; Guo et al. 2023, Eq. 12 un-squared): exact for a turbgen Kaimal
-store, whose lines carry coherency g(r, f_j).
+band (K the Welch kernel, v_j the fitted u lines; Guo et al. 2023, Eq. 12 un-squared): exact for a turbgen Kaimal store.
 
 Variance: the delta method with the Isserlis (1918) moments of complex Gaussian DFTs: r_m = rho_m + the pair-mean of
 Z_ij = Re X_i* X_j - rho_m (|X_i|^2 + |X_j|^2) / 2 (unit spectra), so Cov(r_m, r_n) = tr(M_m R M_n R) c, M_m the
 pair-mean of Z's symmetric matrices, R the points' coherencies, c the one-point band factor of ``spectra``; one pair
-gives (1 - rho^2)^2 c / 2, the first-order variance of the co-coherence over 1/c averages (Bendat & Piersol 2010,
-Sect. 9.2.3, give 2 rho^2 (1 - rho^2)^2 / n_d for its square); the bias to the same order, rho var / (2 (1 - rho^2)),
+gives (1 - rho^2)^2 c / 2 (Bendat & Piersol 2010, Sect. 9.2.3). The bias to the same order, rho var / (2 (1 - rho^2)),
 is subtracted. Bands covary through the bins (``covariance.joined``). (ln a, ln Lc) by ``kaimal.gls``; a's interval
 from its covariance, Lc's from the chi^2 profile (``_lc_profile``)."""
 

@@ -1,13 +1,12 @@
 """Fit ae, L and Gamma of the Mann (1994) model to the Welch spectra of measured or generated data.
 
 Generalised least squares in x = (ln ae, ln L, Gamma) over the band estimates of F_uu, F_vv, F_ww and the u-w
-co-spectrum (``spectra``), whitened by the estimates' joint covariance at the model (``covariance``), so that sum r^2
-is chi^2 with n_bands - n_parameters degrees of freedom; bounded by ``turbgen.theory.ranges``. The weights and a store's
-lattice / continuous ratio are updated at the fitted parameters until they move by < MOVE_TOL sd (at most PASSES);
-within a pass the ratio follows L and Gamma to first order (``BandModel.update_ratio``): held fixed, it left ln ae's
-sd 10 % short (benchmarks/fit.md). cov(x) = (J^T J)^-1; 95 % intervals x +- 1.96 sd, exponentiated for ae and L.
-The eddy lifetime (Guo et al. 2023, Eq. 6-7, or Mann 1994, Eq. 4) is a turbgen store's own, else ``lifetime``.
-Gamma needs two components' spectra; with one it is held at the default and the result says so."""
+co-spectrum (``spectra``), whitened by their joint covariance at the model (``covariance``): sum r^2 is chi^2 with
+n_bands - n_parameters dof; bounded by ``turbgen.theory.ranges``. The weights and a store's lattice / continuous ratio
+are updated at the fitted parameters until they move by < MOVE_TOL sd (at most PASSES); within a pass the ratio follows
+L and Gamma to first order (``BandModel.update_ratio``; benchmarks/fit.md). cov(x) = (J^T J)^-1; 95 % intervals
+x +- 1.96 sd, exponentiated for ae and L. The eddy lifetime (Guo et al. 2023, Eq. 6-7, or Mann 1994, Eq. 4) is a
+turbgen store's own, else ``lifetime``. Gamma needs two components' spectra; with one it is held at the default."""
 
 from __future__ import annotations
 

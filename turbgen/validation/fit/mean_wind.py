@@ -1,18 +1,14 @@
 """The mean wind of total-wind sensor data: power-law exponent, log-law roughness, veer and turbulence intensity.
 
 Per sensor: the time means ū, v̄ [m/s], the speed U = |(ū, v̄)|, the direction atan2(v̄, ū) [deg, counter-clockwise
-seen from above, as ``turbgen export --veer``] and σ_u of the along-wind series. Across heights h (least-squares
-lines through the sensors' means):
-- power law ln U = ln U_ref + α ln(h / h_ref): α;
-- log law U = (u*/κ) (ln h - ln z0): z0 = exp(-b / a) of the slope a and intercept b;
-- veer: the slope of the direction against h [deg/m].
-The turbulence intensity σ_u / U is that of the sensor nearest the hub (without a hub height: the median height;
-heights unknown: the first sensor).
+seen from above, as ``turbgen export --veer``] and σ_u of the along-wind series. Across heights h, least-squares lines
+through the sensors' means: the power law ln U = ln U_ref + α ln(h / h_ref); the log law U = (u*/κ) (ln h - ln z0),
+z0 = exp(-b / a) of slope a and intercept b; the veer [deg/m], the slope of the direction against h. The turbulence
+intensity σ_u / U is that of the sensor nearest the hub (else the median height; heights unknown: the first sensor).
 
-Intervals: batch means (Flegal & Jones 2010). The record is cut into BLOCKS blocks, each estimate is made again from
-each block's means, and its standard error is the blocks' standard deviation / sqrt(BLOCKS), the interval ±
-t_0.975(BLOCKS - 1) of it. The turbulence of one mast moves the means of all its sensors together (the large eddies
-span the heights), so the scatter of the means about the line would understate the error; the blocks see it."""
+Intervals: batch means (Flegal & Jones 2010): each estimate is made again from each of BLOCKS blocks' means; its
+standard error is the blocks' sd / sqrt(BLOCKS), the interval ± t_0.975(BLOCKS - 1) of it. One mast's turbulence
+moves all its sensors' means together (the large eddies span the heights), which the scatter about the line misses."""
 
 from __future__ import annotations
 

@@ -1,18 +1,15 @@
 """The Mann model's expected band spectra of fit data: continuous (sensor data) or on the store's lattice.
 
-Continuous model: F_ij(k1; ae, L, Gamma) = ae L^(5/3) f_ij(k1 L, Gamma), f_ij interpolated from a table
-(``turbgen.validation.fit.table``). A store's grid model multiplies it by the ratio of the lattice sum
-of the tensor over the generator's box (``turbgen.validation.mann_lattice``, the validator's "theo. (grid)") to the
-continuous spectrum, at N_RATIO_NODES k1 nodes for given parameters (``MannFit`` updates it as the fit moves).
+Continuous model: F_ij(k1; ae, L, Gamma) = ae L^(5/3) f_ij(k1 L, Gamma), f_ij interpolated from a table (``table``).
+A store's grid model multiplies it by the ratio of the lattice sum of the tensor over the generator's box
+(``turbgen.validation.mann_lattice``) to the continuous spectrum, at N_RATIO_NODES k1 nodes (``MannFit`` updates it as
+the fit moves). A sonic's path (``paths_m``) multiplies the lines of F_ij by T_ij(k1 p) (``turbgen.theory.sonic_path``),
+averaged over the columns. Every bin's expected Welch estimate is that of a periodic line process with these spectra
+(``welch_kernel.WelchKernel``: leakage and segment-mean removal), averaged over the bands.
 
-A sonic's path (``paths_m``) multiplies the lines of F_ij by T_ij(k1 p) (``turbgen.theory.sonic_path``), averaged
-over the columns. The expected Welch estimate of every bin is that of a periodic line process with these spectra
-(``welch_kernel.WelchKernel``: leakage and segment-mean removal in the lowest bins), averaged over the bands.
-
-``coherency`` gives the cross-spectra between points (the covariance of point averages, ``covariance``): on the
-lattice, a 2-D transform of the tensor over (k2, k3) (times the space-time decay between planes, Guo et al. 2023,
-Eq. 13); continuous, Eq. 8 of Guo et al. (2023) at each separation (frozen: the decay between sensors along x is
-not known, and ignoring it over-states their covariance, which errs towards wider intervals)."""
+``coherency``: the cross-spectra between points (``covariance``); on the lattice a 2-D transform of the tensor over
+(k2, k3) times the decay between planes (Guo et al. 2023, Eq. 13); continuous, Eq. 8 at each separation, frozen (the
+decay between sensors along x is not known; ignoring it errs towards wider intervals)."""
 
 from __future__ import annotations
 

@@ -1,17 +1,14 @@
 """Welch estimates of F_uu, F_vv, F_ww and the u-w co-spectrum of fit data, in log-spaced bands, with their variances.
 
 The validator's Welch setup (``estimators.WelchSetup``: Hann window, half-overlapping segments, segment mean removed;
-default segment length ``default_nperseg``) is applied to every column; a segment holding a missing value (NaN) of a
-column is skipped for that column (Welch over the gaps). Bins are averaged into bands BANDS_PER_DECADE per decade
-(each lowest bin on its own), bins 1 .. n/2 - 1.
+default segment length ``default_nperseg``) on every column, skipping a column's segments that hold a missing value
+(NaN). Bins 1 .. n/2 - 1 are averaged into BANDS_PER_DECADE bands per decade (each lowest bin on its own).
 
 Variances (the fit's weights): a band of n bins of one point's Welch average over K segments has the variance S^2 times
 sum_d (n - |d|) (r_d + 2 q o_d) / (n^2 K), r_d and o_d the correlations of white noise's Hann bins d apart in one and in
-half-overlapping segments (``WelchSetup.bin_rho2``), q = (K - 1) / K: ``var_factor`` (Welch's (1967) o_d = o_0 r_d left
-many-bin bands 2.6 % short at K = 22). The joint covariance of the four spectra averaged over the points
-(``covariance``: Isserlis terms from the model's cross-spectra between the points) scales with it:
-``BandSpectra.covariance``; neighbouring bands covary through the correlation of neighbouring Hann bins:
-``BandSpectra.full_covariance``."""
+half-overlapping segments (``WelchSetup.bin_rho2``), q = (K - 1) / K: ``var_factor``. The joint covariance of the four
+point-averaged spectra (``covariance``) scales with it (``BandSpectra.covariance``); neighbouring bands covary through
+neighbouring Hann bins (``BandSpectra.full_covariance``)."""
 
 from __future__ import annotations
 
