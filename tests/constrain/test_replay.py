@@ -114,21 +114,24 @@ def test_export_takes_the_fitted_mean_wind_unless_given_one(replay, tmp_path):
             assert np.abs(bts[c][:, iy, iz] - np.array(s[f"{c}_m_s"])).max() <= step, (s["name"], c)
 
 
-def _turned(data: dict, deg: float) -> dict:
-    """A point-series mapping with every sensor's (u, v) turned by ``deg`` (counter-clockwise seen from above)."""
+def _turned(data: dict, deg: float, positions: bool = True) -> dict:
+    """A point-series mapping in a frame turned by ``-deg``: every sensor's (u, v) and (x, y) turned by ``deg``
+    (counter-clockwise seen from above); only (u, v) without ``positions``."""
     c, n = math.cos(math.radians(deg)), math.sin(math.radians(deg))
     for s in data["sensors"]:
         u, v = np.array(s["u_m_s"]), np.array(s["v_m_s"])
         s["u_m_s"], s["v_m_s"] = (u * c - v * n).tolist(), (u * n + v * c).tolist()
+        if positions:
+            s["x_m"], s["y_m"] = s["x_m"] * c - s["y_m"] * n, s["x_m"] * n + s["y_m"] * c
     return data
 
 
 def test_a_mast_whose_axes_are_off_the_wind_fits_and_replays_as_the_aligned_one(replay, tmp_path):
-    """Sonic axes fixed to the boom, the wind 25 deg off them: the fit turns u, v into each sensor's mean wind
-    (and says so), the replay turns the data into the field's x (its mean direction at the hub), so both are the
-    aligned mast's: the fitted values to 1e-6, the field to float32 round-off (the bound of
-    test_the_field_passes_through_the_data). Before, U came out 9 % low and ae 7 % high, unannounced, and the
-    replay put the 5 m/s mean of v into the field."""
+    """The mast in a frame whose x is 25 deg off the wind (u, v and positions): the fit turns u, v into each
+    sensor's mean wind (and says so), the replay turns the data and the positions into the field's x (its mean
+    direction at the hub), so both are the aligned mast's: the fitted values to 1e-6, the sensors back at (0, -1.5) m,
+    the field to float32 round-off (the bound of test_the_field_passes_through_the_data). Before, U came out 9 % low
+    and ae 7 % high, unannounced, and the replay put the 5 m/s mean of v into the field."""
     turned = tmp_path / "turned.json"
     turned.write_text(json.dumps(_turned(json.loads(MAST.read_text()), 25.0)))
     a, b = turbgen.fit_mann(MAST), turbgen.fit_mann(turned)
@@ -144,6 +147,8 @@ def test_a_mast_whose_axes_are_off_the_wind_fits_and_replays_as_the_aligned_one(
                       hub_height=HUB)
     stored = turbgen.open_store(replay[0])
     assert ds.attrs["fit"]["turned_deg"] == pytest.approx(stored.attrs["fit"]["turned_deg"] + 25.0, abs=1e-4)
+    assert {tuple(xy) for xy in ds.attrs["fit"]["placed"].values()} == {(0.0, -1.5)}
+    assert "placed" not in stored.attrs["fit"]  # the aligned mast's sensors moved by less than a centimetre
     bound = max(float(np.abs(stored[c].values).max()) for c in "uvw")
     tol = np.finfo(np.float32).eps * math.log2(1024 * (2 * 16) * (2 * 15)) * bound
     assert max(float(np.abs(ds[c].values - stored[c].values).max()) for c in "uvw") <= tol
@@ -178,7 +183,7 @@ def test_plain_conditioning_on_data_off_the_wind_says_so(tmp_path):
     from turbgen.runs.constrain import OFF_WIND_DEG
 
     turned = tmp_path / "turned.json"
-    turned.write_text(json.dumps(_turned(json.loads(MAST.read_text()), 25.0)))
+    turned.write_text(json.dumps(_turned(json.loads(MAST.read_text()), 25.0, positions=False)))
     grid = [*GRID, "--L", "24", "--U", "11.8"]
     s = json.loads(MAST.read_text())["sensors"][0]  # the furthest off: 70.5 m, a fraction of a degree of its own
     most = math.degrees(math.atan2(np.mean(s["v_m_s"]), np.mean(s["u_m_s"]))) + 25.0

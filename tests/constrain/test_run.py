@@ -11,7 +11,8 @@ import pytest
 from click.testing import CliRunner
 
 from turbgen.cli import cli
-from turbgen.runs.constrain import conditioned_planes, place, run_mann_constrained, stream_system
+from turbgen.errors import ParameterError
+from turbgen.runs.constrain import _on_grid, conditioned_planes, place, run_mann_constrained, stream_system
 from turbgen.runs.mann import build_mann_stencil
 from turbgen.spec.constraints import point_series_from_mapping
 from turbgen.spec.mann import MannRun
@@ -208,6 +209,20 @@ def assert_refused(tmp_path, command: list, case) -> None:
 @pytest.mark.parametrize("case", range(8))
 def test_bad_constraints_are_one_line_exit_2_nothing_written(tmp_path, case):
     assert_refused(tmp_path, ["mann", *SMALL], bad_cases(_mast(np.arange(0.0, 20.0, 0.5)))[case])
+
+
+def test_a_first_sample_just_before_the_record_counts_at_its_start():
+    """A sensor's Taylor delay may put its first sample just before the record (a replay's sensor turned into the
+    wind's frame): it counts at the first stored time, interpolated with the second; a span that leaves the record
+    by more than its first or last sample interval is refused, as data outside the record always were."""
+    run = MannRun.from_mapping({"U_m_s": 10.0, "grid": {"nt": 40, "dt_s": 0.5, "x_m": [0.0], "ny": 4, "nz": 4}})
+    t = np.arange(0.0, 20.0, 0.5)
+    out = _on_grid(run, t, t.copy(), -2.0, "s")  # stored times t - 0.2 s: -0.2 .. 19.3 s
+    np.testing.assert_allclose(out[:-1], run.grid.t()[:-1] + 0.2, rtol=0, atol=1e-12)  # u = t at t = stored + 0.2
+    assert np.isnan(out[-1])  # 19.5 s: after the last sample
+    for x in (-6.0, 6.0):  # stored times -0.6 .. 18.9 s and 0.6 .. 20.1 s: the second sample outside
+        with pytest.raises(ParameterError, match="outside the field's record 0 .. 19.5 s"):
+            _on_grid(run, t, t.copy(), x, "s")
 
 
 def test_out_of_core_runs_refuse_constraints(tmp_path):

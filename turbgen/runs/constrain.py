@@ -66,23 +66,29 @@ def _axis_terms(value: float, coords: np.ndarray, step: float, what: str, where:
     return [(j, w) for j, w in ((i, 1.0 - frac), (i + 1, frac)) if w != 0.0]
 
 
-def _plane(run: MannRun, x: float, where: str) -> int:
+def _plane(run: MannRun, x: float, where: str, file_x: float | None = None) -> int:
+    """The index of the run's plane at ``x`` [m], else (a replay's sensor turned into the wind's frame) at its file's
+    ``file_x``: the Taylor delay stays that of ``x`` (:func:`_on_grid`); ParameterError if neither is a plane."""
     xs = run.grid.x()
-    i = int(np.argmin(np.abs(xs - x)))
-    if abs(xs[i] - x) > PLANE_TOL_M * max(1.0, abs(x)):
-        planes = ", ".join(f"{v:g}" for v in xs)
-        raise ParameterError(f"{where}: x = {x:g} m is not a plane of the run (planes: {planes} m); make the field "
-                             "with a plane there (`x_m`)")  # fmt: skip
-    return i
+    for v in (x,) if file_x is None else (x, file_x):
+        i = int(np.argmin(np.abs(xs - v)))
+        if abs(xs[i] - v) <= PLANE_TOL_M * max(1.0, abs(v)):
+            return i
+    planes = ", ".join(f"{v:g}" for v in xs)
+    also = "" if file_x is None else f" (turned into the wind's frame; nor is its file's x = {file_x:g} m)"
+    raise ParameterError(f"{where}: x = {x:g} m{also} is not a plane of the run (planes: {planes} m); make the field "
+                         "with a plane there (`x_m`)")  # fmt: skip
 
 
 def _on_grid(run: MannRun, t_s: np.ndarray, values: np.ndarray, x: float, where: str) -> np.ndarray:
     """The series interpolated linearly onto the stored times of the plane at x (NaN outside its span or next to a
-    missing value); refuses data outside the record [0, (nt - 1) dt]."""
+    missing value); refuses data whose span less its first and last sample interval leaves the record [0, (nt - 1)
+    dt] (a first or last sample just outside it, a sensor's Taylor delay, still counts at the record's end)."""
     g = run.grid
     stored = t_s + x / run.U_m_s
     end = (g.nt - 1) * g.dt_s
-    if stored[0] < -1e-9 * g.dt_s or stored[-1] > end + 1e-9 * g.dt_s:
+    inner = stored[[1, -2]] if len(stored) > 1 else stored[[0, 0]]
+    if inner[0] < -1e-9 * g.dt_s or inner[1] > end + 1e-9 * g.dt_s:
         raise ParameterError(f"{where}: its samples fall at stored times {stored[0]:g} .. {stored[-1]:g} s "
                              f"(time + x/U), outside the field's record 0 .. {end:g} s")  # fmt: skip
     tn = g.t()
@@ -116,7 +122,7 @@ def _point_streams(run: MannRun, f: PointSeries, sigma: float) -> list[PlacedStr
     for s in f.sensors:
         where = f"constraint file {f.source}, {s.name}"
         z = s.z_m if s.z_m is not None else s.height_m - run.hub_height_m
-        p = _plane(run, s.x_m, where)
+        p = _plane(run, s.x_m, where, s.plane_x_m)
         ty = _axis_terms(s.y_m, g.y(), g.dy_m, "y", where)
         tz = _axis_terms(z, g.z(), g.dz_m, "z" if s.z_m is not None else f"z (height {s.height_m:g} m less the hub "
                          f"height {run.hub_height_m:g} m, `hub_height_m`)", where)

@@ -11,6 +11,7 @@ SHA-256 and the ``turbgen export`` options of that mean wind."""
 from __future__ import annotations
 
 import hashlib
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -29,6 +30,7 @@ from turbgen.virtual_lidar.fit import fit_lidar
 
 FIT_DIGITS = 6
 TURN_DECIMALS = 6  # the turn into the data's mean wind [deg], rounded as the fitted values (4e-7 m/s at 20 m/s)
+MIN_MOVE_M = 0.01  # a sensor that turn moves less stays: a position is not known to better than a centimetre
 FITTED = {"ae": "ae", "length_scale_m": "L", "gamma": "gamma"}  # run key -> option
 REFUSED = ("L", "gamma", "ae", "sigma_u", "ti")  # options --fit sets (the energy level among them)
 
@@ -69,19 +71,14 @@ def fitted_inputs(mapping: dict, constraints: list, nperseg: int | None = None,
     run = {k: out[k] for k in (*FITTED, "U_m_s", "lifetime", *values.keys() - FITTED.keys())}
     files = [{"path": c.source, "sha256": _sha256(c.source)} for c in constraints]
     record = {"fit": fit.to_dict(), "run": run, "files": files, "export": export}
-    return out, constraints, record | ({} if turn is None else {"turned_deg": turn} | _placed_off(mapping, constraints,
-                                                                                                turn))
+    return out, constraints, record | ({} if turn is None else {"turned_deg": turn} | _placed(constraints))
 
 
-def _placed_off(mapping: dict, series: list, turn: float) -> dict:
-    """``{"placed_off": {"sensor", "m"}}`` when the turn into the wind's frame moves a sensor by more than half the
-    field's finer grid step [m]: conditioning keeps the file's x and y (point sensors sit on the field's planes), the
-    fits use the wind's frame (turbgen.validation.fit.data.in_wind_frame); {} otherwise."""
-    g = MannRun.from_mapping(mapping).grid
-    moved = {s.name: float(np.hypot(*(np.array(rotate_horizontal(s.x_m, s.y_m, -turn)) - (s.x_m, s.y_m))))
-             for ps in series for s in ps.sensors}
-    name = max(moved, key=lambda k: moved[k])
-    return {"placed_off": {"sensor": name, "m": round(moved[name], 3)}} if moved[name] > min(g.dy_m, g.dz_m) / 2 else {}
+def _placed(series: list) -> dict:
+    """``{"placed": {sensor: [x, y]}}``: the sensors :func:`_turned` moved, at their positions in the wind's frame
+    [m]; {} if none moved."""
+    moved = {s.name: [s.x_m, s.y_m] for ps in series for s in ps.sensors if s.plane_x_m is not None}
+    return {"placed": moved} if moved else {}
 
 
 def _reliable(fit, source: str):
@@ -119,10 +116,19 @@ def _points_fit(mapping: dict, series: list, nperseg: int | None) -> tuple:
 
 
 def _turned(ps: PointSeries, deg: float) -> PointSeries:
-    """``ps`` with every sensor's (u, v) turned by ``-deg`` (a value missing in either is missing in both; a sensor
-    lacking u or v, a cup's speed, is left as it is)."""
-    sensors = [replace(s, series=s.series | dict(zip("uv", rotate_horizontal(s.series["u"], s.series["v"], -deg))))
-               if {"u", "v"} <= s.series.keys() else s for s in ps.sensors]
+    """``ps`` in the wind's frame: every sensor's (u, v) turned by ``-deg`` (a value missing in either is missing in
+    both; a sensor lacking u or v, a cup's speed, keeps its series), and its (x, y) about the field's origin as the fit
+    turns them (turbgen.validation.fit.data.in_wind_frame). A sensor moved by MIN_MOVE_M or more goes to its turned
+    position to the centimetre, keeping its file's x as ``plane_x_m``; a smaller move is none (a position is not known
+    better: a mast's booms turned by a hundredth of a degree stay where they are)."""
+    sensors = []
+    for s in ps.sensors:
+        series = s.series | dict(zip("uv", rotate_horizontal(s.series["u"], s.series["v"], -deg))) \
+            if {"u", "v"} <= s.series.keys() else s.series
+        x, y = (float(v) for v in rotate_horizontal(s.x_m, s.y_m, -deg))
+        moved = math.hypot(x - s.x_m, y - s.y_m) >= MIN_MOVE_M
+        sensors.append(replace(s, series=series, **({"x_m": round(x, 2), "y_m": round(y, 2), "plane_x_m": s.x_m}
+                                                     if moved else {})))
     return replace(ps, sensors=tuple(sensors))
 
 
@@ -194,11 +200,11 @@ def describe_fit(record: dict) -> list[str]:
     if record.get("turned_deg"):
         lines.append(f"the data's mean wind direction at the hub, {record['turned_deg']:+.4g} deg (counter-clockwise "
                      "from above), is the field's x: their u and v were turned by minus that")
-    if "placed_off" in record:
-        off = record["placed_off"]
-        lines.append(f"note: the sensors keep the file's x and y (conditioning puts them on the field's planes); in "
-                     f"the wind's frame, which the fit used, {off['sensor']} is {off['m']:g} m from there, more than "
-                     "half a grid step: give the file in the wind's frame to place it there")
+    if record.get("placed"):
+        at = [f"{k} ({x:.6g}, {y:.6g})" for k, (x, y) in record["placed"].items()]
+        lines.append(f"the sensors' x and y were turned too: {', '.join(at[:4])}{', ...' if len(at) > 4 else ''} m in "
+                     "the wind's frame (a sensor whose turned x is no plane stays on its file x's plane, delayed by "
+                     "its turned x / U)")
     exp = " ".join(f"--{k.split('_')[0]} {v}" for k, v in record["export"].items())
     return lines + ([f"fitted mean wind: {', '.join(mean)}" + (f" (turbgen export uses {exp})" if exp else "")]
                     if mean else [])

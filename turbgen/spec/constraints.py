@@ -27,7 +27,8 @@ COMPONENTS = ("u", "v", "w")
 class PointSensor:
     """One sensor: x_m [m upstream], y_m [m], and z_m [m from the hub] or height_m [m above ground] (one of
     them), ``series``: component ("u", "v", "w") -> values [m/s] (NaN: missing), and a sonic's path_m [m] (None: a
-    point; only the fit uses it: turbgen.theory.sonic_path)."""
+    point; only the fit uses it: turbgen.theory.sonic_path). ``plane_x_m``: the plane of a sensor a replay turned into
+    the wind's frame (its file's x) where the field has none at its turned ``x_m`` (turbgen.runs.replay)."""
 
     name: str
     x_m: float
@@ -36,6 +37,7 @@ class PointSensor:
     height_m: float | None
     series: dict
     path_m: float | None = None
+    plane_x_m: float | None = None
 
     def __post_init__(self):
         if self.path_m is not None and not 0 < self.path_m <= 1:  # the constraints schema's range
