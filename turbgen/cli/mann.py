@@ -35,8 +35,7 @@ def _evo(ctx, param, value):
 
 @contextmanager
 def _dask_client(scheduler, workers: int):
-    """None (both passes in this process), a Client of the given scheduler, or of a LocalCluster of ``workers``
-    ('local')."""
+    """None (both passes in this process), a Client of the scheduler or of a LocalCluster of ``workers`` ('local')."""
     if scheduler is None:
         yield None
         return

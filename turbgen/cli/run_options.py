@@ -17,9 +17,8 @@ def _list(parser, name):
 
 
 def grid_options(defaults: Mapping):
-    """Decorator adding --planes, --gates, --nt, --dt, --ny, --nz, --dy, --dz, their help showing ``defaults``
-    (the model's grid table of turbgen.spec.defaults) and the allowed ranges (turbgen.theory.ranges, the table
-    the checks use)."""
+    """Decorator adding --planes, --gates, --nt, --dt, --ny, --nz, --dy, --dz, their help showing ``defaults`` (the
+    model's grid table of turbgen.spec.defaults) and the allowed ranges (turbgen.theory.ranges, as checked)."""
     opts = [
         click.option("--planes", callback=_list(parse_floats, "--planes"),
                      help="Plane positions x [m upstream], e.g. 0,50,100."),

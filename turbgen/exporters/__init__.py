@@ -30,8 +30,7 @@ __all__ = ["EXPORTERS", "ExportRequest", "ExportResult", "export_store", "read_b
 
 
 def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> ExportResult:
-    """Export ``store`` (a path or FieldStore) as ``fmt`` to ``out`` (ROOT for wnd, evo, hawc2): the export engine.
-
+    """Export ``store`` (a path or FieldStore) as ``fmt`` to ``out`` (ROOT for wnd, evo, hawc2): the export engine;
     ParameterError for an unknown format, unused options, a bad or existing ``out``, too little disk; StoreError for a
     missing or incomplete store."""
     check_choice("format", fmt, tuple(EXPORTERS))

@@ -39,9 +39,8 @@ def plane_distances(x_m) -> tuple[np.ndarray, list[str]]:
 
 
 def export_evo(fs, out, req: ExportRequest) -> ExportResult:
-    """Export every plane of ``fs`` to ROOT.evo, and one plane (default the rotor) to ROOT.wnd / ROOT.sum.
-
-    Two passes, one plane in memory: one TI scaling that fits every plane, then the planes."""
+    """Export every plane of ``fs`` to ROOT.evo, and one plane (default the rotor) to ROOT.wnd / ROOT.sum, in two passes
+    with one plane in memory: one TI scaling that fits every plane, then the planes."""
     root = export_root(out)
     ix_rotor, lay = req.plane_index(fs), req.layout(fs)
     g = fs.grid

@@ -135,9 +135,8 @@ def write_inflowwind(files, path, spec: InflowWindInput) -> str:
 
 def hawc2_wind_block(*, paths: dict, folder: Path, U_m_s: float, ti: float, centre_m: float, nt: int, ny: int,
                      nz: int, dx_m: float, dy_m: float, dz_m: float, description: str) -> str:
-    """The HAWC2 htc ``begin wind`` block (with ``begin mann``) that loads an export's boxes.
-
-    The boxes hold u - wsp with the mean profile: constant shear, no scaling, box centre at ``centre_m`` [m]."""
+    """The HAWC2 htc ``begin wind`` block (with ``begin mann``) that loads an export's boxes, which hold u - wsp with
+    the mean profile: constant shear, no scaling, box centre at ``centre_m`` [m]."""
     rel = {c: "./" + _rel(p, folder) for c, p in paths.items()}
     return "\n".join([
         f"; {description}",

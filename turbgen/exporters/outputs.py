@@ -19,10 +19,9 @@ from turbgen.store.temporaries import TEMP_MARK, remove_dead_temporaries, report
 
 
 class OutputSet:
-    """Context manager handing out temporary paths for a set of final paths, renamed into place on normal exit.
-
-    On an exception all temporaries are removed (RuntimeError if one was not written). ParameterError for a bad,
-    existing (without ``overwrite``) or unwritable output, or too little disk for ``need_bytes``."""
+    """Context manager handing out temporary paths for a set of final paths, renamed into place on normal exit, all
+    removed on an exception (RuntimeError if one was not written). ParameterError for a bad, existing (without
+    ``overwrite``) or unwritable output, or too little disk for ``need_bytes``."""
 
     def __init__(self, paths, *, overwrite: bool, need_bytes: int | None = None):
         self.paths = [Path(p) for p in paths]

@@ -95,9 +95,8 @@ class ExportResult:
 
 
 class Plane:
-    """One yz-plane as stored (float32 fluctuations, kept rows) plus the mean wind, made full in float64 per block.
-
-    With veer, history or transient (u, v) = rotate((U + u', v'), veer(h) + direction(t)) (turbgen.spec.mean_wind)."""
+    """One yz-plane as stored (float32 fluctuations, kept rows) plus the mean wind, made full in float64 per block: with
+    veer, history or transient (u, v) = rotate((U + u', v'), veer(h) + direction(t)) (turbgen.spec.mean_wind)."""
 
     def __init__(self, fs, ix: int, layout: VerticalLayout, first_slice_s: float = 0.0):
         self.fluct = {c: fs.read_plane(c, ix)[:, :, layout.z_first:] for c in COMPONENTS}

@@ -32,9 +32,8 @@ def uniform_text(event: IecTransient) -> str:
 
 
 def export_transient(event: IecTransient, out, *, overwrite: bool = False, runner_files: bool = True):
-    """Write ``event`` as the uniform wind file ``out`` and, with ``runner_files``, its InflowWind input file.
-
-    Returns (paths written, one usage line per input file)."""
+    """Write ``event`` as the uniform wind file ``out`` and, with ``runner_files``, its InflowWind input file: (paths
+    written, one usage line per input file)."""
     out = Path(out)
     dat = inflowwind_path(out.with_suffix("") if out.suffix else out, "uniform")
     paths = [out, dat] if runner_files else [out]

@@ -225,8 +225,7 @@ def stream_system(run: MannRun, stencil, placed: PlacedData, threads: int | None
 
 def solve_constraints(cov: np.ndarray, placed: PlacedData, measured: np.ndarray | None,
                       eps: np.ndarray | None) -> tuple[np.ndarray, cond.SolveReport]:  # fmt: skip
-    """x = S^-1 (d - H u_s - eps_s) (``measured`` None: S^-1 d, the conditional mean), (M, nt), zero at the
-    missing samples."""
+    """x = S^-1 (d - H u_s - eps_s) (``measured`` None: S^-1 d, the conditional mean), (M, nt), zero where missing."""
     observed = np.isfinite(placed.data)
     r = placed.data if measured is None else placed.data - measured - eps
     return cond.solve(cov, np.where(observed, r, 0.0), observed)

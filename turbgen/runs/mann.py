@@ -178,11 +178,10 @@ def _require_memory(run: MannRun, threads: int, stencil, field_bytes: int = 0) -
 def run_mann(run: MannRun, out: str | Path, *, overwrite: bool = False, chunk_t: int | None = None,
              progress: bool = False, stencil: MannStencil | None = None, threads: int | None = None,
              cache_dir: str | Path | None = None) -> dict:  # fmt: skip
-    """Generate ``run`` into a new store at ``out``; return {path, sigma_u/v/w [m/s], seconds, ...}.
-
-    Memory is checked before anything is allocated; an exception (or Ctrl-C) leaves no store. ``stencil``
-    (build_mann_stencil of a run differing at most in seed; a unit stencil: also in ae) skips its computation;
-    ``threads`` (default os.cpu_count()) does not change the field."""
+    """Generate ``run`` into a new store at ``out``; return {path, sigma_u/v/w [m/s], seconds, ...}. Memory is checked
+    before anything is allocated; an exception (or Ctrl-C) leaves no store. ``stencil`` (build_mann_stencil of a run
+    differing at most in seed; a unit stencil: also in ae) skips its computation; ``threads`` (default os.cpu_count())
+    does not change the field."""
     t_start = time.perf_counter()
     gen_threads = default_threads(threads)
     _checked_stencil(run, stencil)

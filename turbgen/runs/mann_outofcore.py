@@ -58,9 +58,8 @@ def worker_base_bytes() -> int:
 
 
 def base_bytes() -> int:
-    """Memory [B] a budget leaves to the process besides a run's planned arrays: BASE_BYTES, or what is resident now
-    plus LATE_BYTES if more (computing ae from sigma_u first leaves ~70-125 MiB more resident; a budget bounds
-    VmHWM)."""
+    """Memory [B] a budget leaves besides a run's planned arrays: BASE_BYTES, or what is resident now plus LATE_BYTES if
+    more (computing ae from sigma_u first leaves ~70-125 MiB more resident; a budget bounds VmHWM)."""
     resident = resident_bytes()
     return BASE_BYTES if resident is None else max(BASE_BYTES, resident + LATE_BYTES)
 
@@ -175,11 +174,10 @@ def fits_in_memory(run: MannRun, memory_bytes: int | None, threads: int, with_st
 
 def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_t: int | None = None,
                     scheduler: str | None = None, with_stencil: bool = True) -> OutOfCorePlan | None:
-    """The out-of-core plan of ``run`` if it does not fit ``memory_bytes`` in memory, else None.
-
-    ``scheduler`` None: both passes here on ``threads`` threads; "local": a LocalCluster of ``threads``
-    single-threaded workers sharing the budget with this process; an address: the budget per worker.
-    ``with_stencil``: the in-memory run would build its stencil. ParameterError if too small even out of core."""
+    """The out-of-core plan of ``run`` if it does not fit ``memory_bytes`` in memory, else None; ``scheduler`` None:
+    both passes here on ``threads`` threads; "local": a LocalCluster of ``threads`` single-threaded workers sharing the
+    budget with this process; an address: the budget per worker. ``with_stencil``: the in-memory run would build its
+    stencil. ParameterError if too small even out of core."""
     if fits_in_memory(run, memory_bytes, threads, with_stencil):
         return None
     if scheduler != "local":

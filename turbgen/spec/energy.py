@@ -11,10 +11,9 @@ from turbgen.theory.params import MannParams
 
 def resolve_ae(shape: MannParams, U_m_s: float, *, ae: float | None = None, sigma_u_m_s: float | None = None,
                ti: float | None = None, turb_class: str = "A") -> tuple[float, str]:
-    """alpha*eps^(2/3) [m^(4/3) s^-2] of a Mann run and a line saying how it was chosen (recorded in the store).
-
-    The first given of ``ae``, ``sigma_u_m_s`` [m/s], ``ti`` [-] (sigma_u = ti U) and ``turb_class`` (NTM sigma_1 =
-    Iref (0.75 U + 5.6)) sets it; for a target sigma_u, from the variance of ``shape`` (its own ae ignored)."""
+    """alpha*eps^(2/3) [m^(4/3) s^-2] of a Mann run and a line saying how it was chosen (recorded in the store): the
+    first given of ``ae``, ``sigma_u_m_s`` [m/s], ``ti`` [-] (sigma_u = ti U) and ``turb_class`` (NTM
+    sigma_1 = Iref (0.75 U + 5.6)) sets it; for a target sigma_u, from ``shape``'s variance (its own ae ignored)."""
     if ae is not None:
         return ranges.check("ae", ae), "ae"
     if sigma_u_m_s is not None:

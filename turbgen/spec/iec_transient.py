@@ -112,11 +112,10 @@ class IecTransient:
         return np.unique(np.concatenate([[0.0], event, [self.duration_s]]))
 
     def at(self, t_s) -> dict:
-        """The event at times ``t_s`` [s] of the record (the event's clock is t - start), zero where it has none.
-
-        "gust_m_s": speed change uniform over the rotor [m/s] (EOG, ECD); "direction_deg": clockwise seen from
-        above, as InflowWind (EDC, ECD); "vshear_m_s", "hshear_m_s": speed change across D, times (z - z_hub) / D
-        or y / D (EWS-V, EWS-H)."""
+        """The event at times ``t_s`` [s] of the record (the event's clock is t - start), zero where it has none:
+        "gust_m_s": speed change uniform over the rotor [m/s] (EOG, ECD); "direction_deg": clockwise seen from above, as
+        InflowWind (EDC, ECD); "vshear_m_s", "hshear_m_s": speed change across D, times (z - z_hub) / D or y / D (EWS-V,
+        EWS-H)."""
         tau = np.asarray(t_s, dtype=float) - self.start_s
         zero = np.zeros_like(tau)
         out = {"gust_m_s": zero, "direction_deg": zero, "vshear_m_s": zero, "hshear_m_s": zero}

@@ -131,6 +131,5 @@ class MannRun:
 
 
 def load_case_keys(keys: Mapping, sigma1_m_s: float) -> dict:
-    """The run keys ``keys`` (a preset's) for an IEC load case (turbgen.spec.dlc): the model's sigma_u is its
-    sigma1 [m/s]."""
+    """The run keys ``keys`` (a preset's) for an IEC load case (turbgen.spec.dlc): sigma_u is its sigma1 [m/s]."""
     return {**keys, "sigma_u_m_s": sigma1_m_s}

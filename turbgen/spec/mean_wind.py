@@ -208,9 +208,8 @@ class MeanWind:
         return speed * self.speed_ratio(h, hub_height_m), shift, turn
 
     def full_uv(self, u, v, times_s, y_m, heights_m, U_m_s: float, hub_height_m: float):
-        """Full (u, v) [m/s] from fluctuations by the module's formula (v unchanged without a turn), at time at the
-        turbine [s], y [m] (+y left) and height above ground [m] (broadcast with u), the store's U [m/s] and hub
-        height [m]."""
+        """Full (u, v) [m/s] from fluctuations by the module's formula (v unchanged without a turn), at turbine time
+        [s], y [m] (+y left) and height above ground [m] (broadcast with u), the store's U [m/s] and hub height [m]."""
         h = np.asarray(heights_m, dtype=float)
         profile, shift, turn = self._added(np.asarray(times_s, dtype=float), y_m, h, U_m_s, hub_height_m)
         u = u + profile + shift

@@ -21,11 +21,10 @@ def merge_run_inputs(
     replaces: Mapping[str, tuple] | None = None,
     x_m=None,
 ) -> dict:
-    """The run mapping of one run, with its ``grid`` table: the run file's keys, then the preset's, then the given ones.
-
-    ``preset_keys(file mapping, given)``: the preset's run keys (None without a preset); ``replaces``: given key ->
-    keys it removes from the run file and the preset (one energy level, one source); ``x_m``: plane positions [m
-    upstream] (None keeps the file's or the default)."""
+    """The run mapping of one run, with its ``grid`` table: the run file's keys, then the preset's, then the given ones;
+    ``preset_keys(file mapping, given)``: the preset's run keys (None without a preset); ``replaces``: given key -> keys
+    it removes from the run file and the preset (one energy level, one source); ``x_m``: plane positions [m upstream]
+    (None keeps the file's or the default)."""
     mapping = dict(file_mapping or {})
     grid = dict(mapping.pop("grid", {}))
     layers = [mapping, dict(preset_keys(mapping, given)) if preset_keys else {}]

@@ -12,8 +12,7 @@ from turbgen.store.chunk_files import read_chunk
 
 
 def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None, out: np.ndarray | None = None) -> np.ndarray:
-    """Plane ``ix`` of a component array over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], one chunk at a time.
-
+    """Plane ``ix`` of a component array over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], one chunk at a time;
     ``out``: a reused C-contiguous buffer (saves fresh pages per read); ``path`` names the store in messages."""
     name = arr.basename
     where = path if path is not None else getattr(arr.store, "root", None) or "store"

@@ -103,8 +103,7 @@ def write_chunk(array, coords: tuple[int, ...], data: np.ndarray) -> bool:
 
 
 def read_chunk(array, coords: tuple[int, ...], out: np.ndarray) -> bool:
-    """Fill ``out`` with the whole chunk ``coords`` of ``array`` by direct I/O; False where the path declines.
-
+    """Fill ``out`` with the whole chunk ``coords`` of ``array`` by direct I/O; False where the path declines;
     FileNotFoundError for a missing file, ValueError for one not of exactly ``out.nbytes`` bytes."""
     nbytes, dest = out.nbytes, out.reshape(-1).view(np.uint8)
 

@@ -9,11 +9,10 @@ from pathlib import Path
 
 
 def finish_before_raising(fn, *args):
-    """``fn(*args)``, run to its end even when the calling thread is interrupted while it runs.
-
-    zarr writes in its own event-loop thread: a KeyboardInterrupt or SystemExit in the waiting thread would leave that
-    I/O recreating files in a temporary directory being removed. In the main thread ``fn`` runs in a helper thread that
-    an interruption waits for (a second one stops the wait)."""
+    """``fn(*args)``, run to its end even when the calling thread is interrupted while it runs (zarr writes in its own
+    event-loop thread, and a KeyboardInterrupt or SystemExit in the waiting thread would leave that I/O recreating files
+    in a temporary directory being removed). In the main thread ``fn`` runs in a helper thread that an interruption
+    waits for (a second one stops the wait)."""
     if threading.current_thread() is not threading.main_thread():
         return fn(*args)
     done, lock, state, out = threading.Event(), threading.Lock(), ["pending"], []

@@ -26,9 +26,8 @@ from turbgen.spec.models import model_names
 
 
 def silence_consolidated_metadata_warning() -> None:
-    """Ignore zarr's warning that consolidated metadata is not part of the v3 specification (used knowingly).
-
-    A process-wide filter for that message only: ``warnings.catch_warnings()`` is not thread-safe."""
+    """Ignore zarr's warning that consolidated metadata is not part of the v3 specification (used knowingly) by a
+    process-wide filter for that message only: ``warnings.catch_warnings()`` is not thread-safe."""
     warnings.filterwarnings("ignore", message="Consolidated metadata is currently not part", category=UserWarning)
 
 LAYOUT_VERSION = 1

@@ -13,10 +13,9 @@ MAX_NAME_BYTES = 200
 
 
 def check_output_path(path, what: str = "--out", *, create_parents: bool = False) -> Path:
-    """``path`` (``~`` expanded) if a file or directory can be created there, else ParameterError naming it.
-
-    Refused: an empty path, a name over MAX_NAME_BYTES, an ancestor that is a file or a zarr store, and (unless
-    ``create_parents``) a missing parent; ``what`` names the option in messages."""
+    """``path`` (``~`` expanded) if a file or directory can be created there, else ParameterError naming it; refused: an
+    empty path, a name over MAX_NAME_BYTES, an ancestor that is a file or a zarr store, and (unless ``create_parents``)
+    a missing parent; ``what`` names the option in messages."""
     if path is None:
         raise ParameterError(f"{what} = None; give a file or directory name")
     text = os.fspath(path)

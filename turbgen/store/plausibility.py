@@ -19,9 +19,8 @@ AMPLITUDE_RMS = 100.0  # largest plausible |value| / rms (module docstring)
 
 
 def check_attributes(attrs: Mapping, where: str) -> None:
-    """StoreError unless U_m_s, hub_height_m and every parameter turbgen.theory.ranges knows are in range.
-
-    Lists are checked element by element; None is skipped."""
+    """StoreError unless U_m_s, hub_height_m and every parameter turbgen.theory.ranges knows are in range (lists element
+    by element; None skipped)."""
     checks = [(key, key, attrs[key]) for key in ("U_m_s", "hub_height_m")]
     params = attrs.get("parameters", {})
     checks += [(f"parameters/{key}", key, value) for key, value in params.items() if key in ranges.RANGES]
@@ -36,9 +35,8 @@ def check_attributes(attrs: Mapping, where: str) -> None:
 
 
 def spread_warnings(attrs: Mapping) -> list[str]:
-    """Warnings for a recorded rms beyond the largest ``sigma_m_s`` of turbgen.theory.ranges (30 m/s).
-
-    Such data decode and are consistent (implausible inputs, extreme Mann corners), so ``info`` warns, not refuses."""
+    """Warnings for a recorded rms beyond the largest ``sigma_m_s`` of turbgen.theory.ranges (30 m/s): such data decode
+    and are consistent (implausible inputs, extreme Mann corners), so ``info`` warns, not refuses."""
     rms = attrs.get(RMS_ATTR)
     if not isinstance(rms, Mapping):
         return []

@@ -64,9 +64,8 @@ class FieldStore:
         return int(self.array("u").chunks[0])
 
     def array(self, component: str) -> zarr.Array:
-        """The zarr array (nt, nx, ny, nz) of float32 velocity fluctuations [m/s] of ``component`` ("u", "v" or "w"),
-        read-only; reading it directly does not check the data (:meth:`read_span` does). ParameterError for another
-        component."""
+        """The zarr array (nt, nx, ny, nz) of float32 fluctuations [m/s] of ``component`` ("u", "v" or "w"), read-only;
+        reading it directly does not check the data (:meth:`read_span` does). ParameterError for another component."""
         if component not in layout.COMPONENTS:
             raise ParameterError(f"component = {component!r} is not one of {', '.join(layout.COMPONENTS)}")
         return self._group[component]
@@ -86,8 +85,7 @@ class FieldStore:
         return self.read_span(component, ix, 0, self.grid.nt)
 
     def read_span(self, component: str, ix: int, t0: int, t1: int, out: np.ndarray | None = None) -> np.ndarray:
-        """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], read and checked.
-
+        """Plane ``ix`` of ``component`` over t in [t0, t1), float32 (t1 - t0, ny, nz) [m/s], read and checked;
         StoreError for a chunk that does not decode, NaN/inf, or a value beyond AMPLITUDE_RMS times the recorded rms."""
         arr = self.array(component)
         block = read_checked(arr, ix, t0, t1, self.path, out=out)
@@ -105,9 +103,8 @@ class FieldStore:
         return sum(f.stat().st_size for f in self.path.rglob("*") if f.is_file())
 
     def summary(self) -> dict:
-        """What ``turbgen info`` shows, as JSON-serialisable values (units in the key names).
-
-        ``constraints`` (series, solver, residual [m/s]) only for a store conditioned on measurements."""
+        """What ``turbgen info`` shows, as JSON-serialisable values (units in the key names); ``constraints`` (series,
+        solver, residual [m/s]) only for a store conditioned on measurements."""
         g, a = self.grid, self.attrs
         return {
             "path": str(self.path),

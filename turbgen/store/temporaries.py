@@ -78,8 +78,7 @@ def report_removed(removed) -> None:
 
 
 def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
-    """Move the finished temporary sibling ``tmp`` to ``path`` atomically; returns where the old output lies, or None.
-
+    """Move the finished temporary sibling ``tmp`` to ``path`` atomically; returns where the old output lies, or None;
     ``replace`` False: FileExistsError if ``path`` exists. True: swapped in one step (renameat2 RENAME_EXCHANGE), the
     old output left at the temporary name for the caller to delete; without renameat2, two renames (a short window
     without ``path``)."""
@@ -109,9 +108,8 @@ def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
 
 
 def write_atomically(path: Path, write, what: str) -> Path:
-    """Write the file ``path`` by ``write(tmp)`` under a temporary name, then rename it into place; returns ``path``.
-
-    ``tmp``'s suffix means nothing (give the format). ParameterError naming ``what`` and ``path`` on a refused write."""
+    """Write the file ``path`` by ``write(tmp)`` under a temporary name (its suffix means nothing: give the format),
+    then rename it into place; returns ``path``. ParameterError naming ``what`` and ``path`` on a refused write."""
     from turbgen.errors import ParameterError
 
     path = Path(path)

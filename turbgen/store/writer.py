@@ -32,10 +32,9 @@ from turbgen.store.paths import check_output_path
 
 
 class StoreWriter:
-    """Context manager writing one field store; made by :func:`create_store`.
-
-    ``write`` is thread-safe (unaligned blocks of one plane one at a time: zarr read-modify-writes a partial chunk).
-    Every sample must be written before the ``with`` block ends, else RuntimeError and nothing is published."""
+    """Context manager writing one field store (made by :func:`create_store`); ``write`` is thread-safe (unaligned
+    blocks of one plane one at a time: zarr read-modify-writes a partial chunk). Every sample must be written before the
+    ``with`` block ends, else RuntimeError and nothing is published."""
 
     def __init__(self, path: Path, grid: Grid, attrs: dict, chunk_t: int, overwrite: bool):
         self.path = path
@@ -85,9 +84,8 @@ class StoreWriter:
         finish_before_raising(self._group.attrs.update, jsonable(attrs))
 
     def write(self, component: str, ix: int, data: np.ndarray, t0: int = 0, squares: bool = False):
-        """Write ``data`` (nt_block, ny, nz) [m/s] as float32 to ``component`` at plane index ``ix``, time ``t0``.
-
-        Returns the block's float64 sum [m/s], with ``squares`` also its sum of squares [m^2/s^2]. ValueError as
+        """Write ``data`` (nt_block, ny, nz) [m/s] as float32 to ``component`` at plane index ``ix``, time ``t0``;
+        returns the block's float64 sum [m/s], with ``squares`` also its sum of squares [m^2/s^2]. ValueError as
         :func:`checked_block`."""
         if self._tmp is None:
             raise RuntimeError("StoreWriter.write outside its 'with' block")
@@ -184,8 +182,7 @@ def rms_from_squares(squares: dict, grid: Grid) -> dict[str, float]:
 
 
 def checked_block(grid: Grid, component: str, ix: int, data, t0: int) -> tuple[np.ndarray, float, float]:
-    """``data`` as the float32 block stored at (``component``, ``ix``, ``t0``), with its float64 sum and sum of squares.
-
+    """``data`` as the float32 block stored at (``component``, ``ix``, ``t0``), with its float64 sum and sum of squares;
     ValueError for an unknown component, a plane out of range, a block that does not fit, or NaN or inf."""
     if component not in layout.COMPONENTS:
         raise ValueError(f"component {component!r} is not one of {layout.COMPONENTS}")
@@ -215,9 +212,8 @@ def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: 
     """What :func:`create_store` checks before it creates anything; returns (absolute path, chunk_t).
 
     Dead writers' temporaries of ``path`` are removed first. ``chunk_t`` in [1, nt] (default min(nt, 1024));
-    ``scratch_bytes``: scratch files counted in the disk check. ParameterError for a bad path or chunk_t or too little
-    disk; StoreError for an existing ``path`` without ``overwrite`` or not a turbgen store, or an unwritable
-    directory."""
+    ``scratch_bytes``: scratch files the disk check counts. ParameterError for a bad path, chunk_t or too little disk;
+    StoreError for an existing ``path`` without ``overwrite`` or not a turbgen store, or an unwritable directory."""
     path = check_output_path(path).absolute()
     chunk_t = layout.default_chunk_t(grid.nt) if chunk_t is None else chunk_t
     chunk_t = check_int("chunks (time samples per chunk)", chunk_t, 1, grid.nt)
@@ -241,9 +237,8 @@ def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: 
 
 
 def create_store(path, grid: Grid, attrs: dict, *, chunk_t: int | None = None, overwrite: bool = False) -> StoreWriter:
-    """A :class:`StoreWriter` for a new field store at ``path``; nothing is created before ``with``.
-
-    ``attrs``: model, parameters, units, seed, U_m_s [m/s], hub_height_m [m] (the writer adds the rest). Refusals as
+    """A :class:`StoreWriter` for a new field store at ``path`` (nothing is created before ``with``); ``attrs``: model,
+    parameters, units, seed, U_m_s [m/s], hub_height_m [m] (the writer adds the rest). Refusals as
     :func:`check_new_store`; ValueError for ``attrs`` :func:`validated_caller_attrs` refuses."""
     full = validated_caller_attrs(attrs, grid)
     path, chunk_t = check_new_store(path, grid, chunk_t=chunk_t, overwrite=overwrite)

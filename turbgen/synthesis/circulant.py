@@ -125,8 +125,7 @@ class Embedding:
 
     def sample(self, xi: np.ndarray, workers: int | None = None, overwrite: bool = False,
                transforms=None) -> np.ndarray:  # fmt: skip
-        """Map standard complex normals xi (..., *torus_shape) to coefficients (..., ny, nz) with covariance C.
-
+        """Map standard complex normals xi (..., *torus_shape) to coefficients (..., ny, nz) with covariance C;
         ``overwrite``: xi may serve as the work array (destroyed)."""
         if self.chol is not None:
             z = np.einsum("ij,...j->...i", self.chol.astype(xi.real.dtype), xi[..., 0])

@@ -209,8 +209,7 @@ def _keys(streams: Streams) -> _Keys:
 
 
 def _lag_classes(times: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The distinct plane-time lags |t_p - t_q| [s] between the streams' planes and the class (M, M) of each stream
-    pair."""
+    """The distinct plane-time lags |t_p - t_q| [s] of the streams' planes and the class (M, M) of each stream pair."""
     lag = np.round(np.abs(times[plane][:, None] - times[plane][None, :]), LAG_DECIMALS)
     values, cls = np.unique(lag, return_inverse=True)
     return values, cls.reshape(lag.shape).astype(np.int64)
@@ -291,9 +290,8 @@ def _component_basis(directions: np.ndarray) -> _Basis:
 
 
 class _LagTransform:
-    """The real 2-D DFTs of one slab's lag inputs, exact on the columns z < min(e_z, nzp // 2 + 1).
-
-    Single-threaded plans: the same rounding for any thread count. With ``parity`` (nyp even) y is a DCT-I / DST-I."""
+    """The real 2-D DFTs of one slab's lag inputs, exact on the columns z < min(e_z, nzp // 2 + 1); single-threaded
+    plans: the same rounding for any thread count. With ``parity`` (nyp even) y is a DCT-I / DST-I."""
 
     def __init__(self, basis: _Basis, n_pairs: int, nyp: int, nzp: int, extent: tuple[int, int],
                  backend: fft.FFTBackend):  # fmt: skip
@@ -383,9 +381,8 @@ def _direction_pairs(n_dir: int) -> np.ndarray:
 
 def stream_covariance(stencil: MannStencil, streams: Streams, times_s, noise_var, threads: int = 1,
                       progress=None) -> np.ndarray:  # fmt: skip
-    """The per-frequency matrices S_j (nt/q, M, M) complex128 [m^2 s^-2 times nt] of the block-circulant S.
-
-    ``times_s``: relative time x/U [s] of every plane; ``noise_var`` (M,): sigma_a^2 [m^2 s^-2] (R = diag)."""
+    """The per-frequency matrices S_j (nt/q, M, M) complex128 [m^2 s^-2 times nt] of the block-circulant S; ``times_s``:
+    relative time x/U [s] of every plane; ``noise_var`` (M,): sigma_a^2 [m^2 s^-2] (R = diag)."""
     box = stencil.box
     nt, q, m = box.nt, streams.decimation, streams.n_streams
     n_dec = nt // q
@@ -452,9 +449,8 @@ def _ordered_map(fn, items: list, threads: int, workspace) -> Iterator:
 
 
 def check_singular(cov: np.ndarray, names) -> None:
-    """Raise ParameterError naming the linearly dependent measurements (S_i singular on some slab).
-
-    The names are decided with margins (:func:`dependent_set`), so every CPU names the same ones."""
+    """Raise ParameterError naming the linearly dependent measurements (S_i singular on some slab), decided with margins
+    (:func:`dependent_set`) so that every CPU names the same ones."""
     lam = np.linalg.eigvalsh(cov[: cov.shape[0] // 2 + 1])  # all at once
     top = np.maximum(lam[:, -1], np.finfo(float).tiny)
     singular = np.flatnonzero(lam[:, 0] <= SINGULAR_RTOL * top)
@@ -472,10 +468,9 @@ INVOLVED_RTOL = 1e-5  # share (|c_k| sigma_k / sigma_a) above which an earlier m
 
 
 def dependent_set(s: np.ndarray) -> list[int]:
-    """The smallest dependent set of the Hermitian S >= 0 (M, M), increasing (pivoted Cholesky).
-
-    The first measurement whose residual variance is <= DEPENDENT_RTOL of its variance, and the earlier ones its
-    combination uses (share > INVOLVED_RTOL): thresholds far from round-off, so the set does not depend on the CPU."""
+    """The smallest dependent set of the Hermitian S >= 0 (M, M), increasing (pivoted Cholesky): the first measurement
+    whose residual variance is <= DEPENDENT_RTOL of its variance, and the earlier ones its combination uses
+    (share > INVOLVED_RTOL): thresholds far from round-off, so the set does not depend on the CPU."""
     m = s.shape[0]
     var = np.real(np.diag(s)).copy()
     low = np.zeros((m, m), complex)  # L of the independent pivots so far: S_II = L L^H
@@ -498,8 +493,7 @@ def dependent_set(s: np.ndarray) -> list[int]:
 
 
 def _involved(s: np.ndarray, basis: list[int], a: int, var: np.ndarray) -> list[int]:
-    """The measurements of ``basis`` that the least-squares combination of measurement ``a`` uses (share >
-    INVOLVED_RTOL)."""
+    """The measurements of ``basis`` that measurement ``a``'s least-squares combination uses (share > INVOLVED_RTOL)."""
     if not basis:
         return []
     c = np.linalg.solve(s[np.ix_(basis, basis)], s[basis, a])
@@ -535,10 +529,9 @@ class SolveReport:
 
 def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
           preconditioner: np.ndarray | None = None) -> tuple[np.ndarray, SolveReport]:  # fmt: skip
-    """x = S^-1 r on the observed samples, zero elsewhere: (x (M, nt), report).
-
-    All observed: the exact per-frequency solve. Otherwise preconditioned conjugate gradients on the observed samples
-    (ParameterError after CG_MAX_ITERATIONS), started from :func:`_gap_start` when many samples are missing."""
+    """x = S^-1 r on the observed samples, zero elsewhere: (x (M, nt), report); all observed: the exact per-frequency
+    solve. Otherwise preconditioned conjugate gradients on the observed samples (ParameterError after
+    CG_MAX_ITERATIONS), started from :func:`_gap_start` when many samples are missing."""
     pre = cov if preconditioner is None else preconditioner
     r = np.where(observed, r, 0.0)
     norm = float(np.linalg.norm(r))
@@ -556,9 +549,8 @@ def solve(cov: np.ndarray, r: np.ndarray, observed: np.ndarray,
 
 
 def _gap_start(inverse: np.ndarray, r: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, int]:
-    """S_oo^-1 r through the precision T = S^-1 of the full streams: T_oo - T_om T_mm^-1 T_mo (Schur complement).
-
-    T is far better conditioned on scattered gaps than S on the observed samples. Returns (x, iterations)."""
+    """S_oo^-1 r through the precision T = S^-1 of the full streams: T_oo - T_om T_mm^-1 T_mo (Schur complement; T is
+    far better conditioned on scattered gaps than S on the observed samples). Returns (x, iterations)."""
     missing = ~observed
     n = r.shape[1]
     weights = np.full(inverse.shape[0], 2.0)  # T's diagonal per stream: the mean of (S_j^-1)_aa over all j
@@ -619,10 +611,9 @@ def _conjugate_gradients(apply, precondition, b: np.ndarray, x: np.ndarray,
 
 def correction_blocks(stencil: MannStencil, streams: Streams, weights: np.ndarray, times_s, planes_out, ny: int,
                       nz: int, threads: int = 1) -> Iterator[tuple[range, np.ndarray]]:  # fmt: skip
-    """Yield (slabs, yz-transformed cropped spectra (P_out, 3, len(slabs), ny, nz) complex64) of C H^T w.
-
-    ``weights`` (M, nt/q): one value per stream sample; the planes' rho_pq sums run by the Ornstein-Uhlenbeck
-    recursion. The result does not depend on ``threads``."""
+    """Yield (slabs, yz-transformed cropped spectra (P_out, 3, len(slabs), ny, nz) complex64) of C H^T w; ``weights``
+    (M, nt/q): one value per stream sample; the planes' rho_pq sums run by the Ornstein-Uhlenbeck recursion. The result
+    does not depend on ``threads``."""
     box, backend = stencil.box, fft.backend()  # resolved once: every workspace with the same backend
     times = np.asarray(times_s, dtype=float)
     planes_out = list(planes_out)

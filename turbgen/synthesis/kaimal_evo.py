@@ -51,9 +51,8 @@ def resolved_band_hz(nt: int, dt_s: float) -> tuple[float, float]:
 
 
 def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarray, float]:
-    """Real principal square roots F_k (nf, P, P) of G_k[p, q] = gamma_x(|x_p - x_q|, f_k).
-
-    Returns (factors, the spectral norm of the negative part clipped)."""
+    """Real principal square roots F_k (nf, P, P) of G_k[p, q] = gamma_x(|x_p - x_q|, f_k), and the spectral norm of the
+    negative part clipped."""
     x = np.asarray(x_m, dtype=float)
     f = np.asarray(f_hz, dtype=float)
     dx = np.abs(x[:, None] - x[None, :])
@@ -64,9 +63,8 @@ def longitudinal_factors(long_coherence: Callable, x_m, f_hz) -> tuple[np.ndarra
 
 def inverse_transform(spec: np.ndarray, amp: np.ndarray, nt: int, workers: int = 1,
                       out: np.ndarray | None = None, transforms=None) -> np.ndarray:  # fmt: skip
-    """One plane's fluctuations (nt, ny, nz) float32 [m/s]: irfft(spec * amp, n=nt, axis=0, norm="forward").
-
-    On contiguous column blocks; columns are independent, so the blocking changes no bit."""
+    """One plane's fluctuations (nt, ny, nz) float32 [m/s]: irfft(spec * amp, n=nt, axis=0, norm="forward"), on
+    contiguous column blocks (columns are independent: the blocking changes no bit)."""
     nf = spec.shape[0]
     flat = spec.reshape(nf, -1)
     out = np.empty((nt, flat.shape[1]), dtype=np.float32) if out is None else out.reshape(nt, flat.shape[1])
@@ -109,9 +107,8 @@ class InMemorySpectrum:
 
 
 class PlaneRing:
-    """``size`` (>= 4) reused field planes for :meth:`KaimalEvo.component_planes` (no page faults on fresh planes).
-
-    A consumer must be done with plane k once it asks for plane k + size - 2 (the generator works two planes ahead)."""
+    """``size`` (>= 4) reused field planes for :meth:`KaimalEvo.component_planes` (no page faults on fresh planes); a
+    consumer must be done with plane k once it asks for plane k + size - 2 (the generator works two planes ahead)."""
 
     def __init__(self, nt: int, ny: int, nz: int, size: int = 4):
         if size < 4:
@@ -147,13 +144,11 @@ class PlaneRing:
 
 
 class KaimalEvo:
-    """Generator of one Kaimal 4D field, one component at a time, plane by plane.
-
-    ``long_coherence`` / ``yz_coherence`` (distance [m], f [Hz]) return un-squared coherences (yz None: IEC
-    exponential_yz); ``yz_decay_length_m(f_hz)`` bounds yz_coherence <= exp(-r / length) for a smaller torus;
-    ``coherent_vw``: v, w get u's yz coherence (IEC: white); ``rescale``: expected variance = nominal sigma^2;
-    ``variances`` (3, nt//2 + 1) band variances [m^2 s^-2] of a user spectrum; ``keep``: keep the samplers for
-    :meth:`reseeded` copies."""
+    """Generator of one Kaimal 4D field, one component at a time, plane by plane; ``long_coherence`` / ``yz_coherence``
+    (distance [m], f [Hz]) return un-squared coherences (yz None: IEC exponential_yz); ``yz_decay_length_m(f_hz)``
+    bounds yz_coherence <= exp(-r / length) for a smaller torus; ``coherent_vw``: v, w get u's yz coherence (IEC:
+    white); ``rescale``: expected variance = nominal sigma^2; ``variances`` (3, nt//2 + 1) band variances [m^2 s^-2] of
+    a user spectrum; ``keep``: keep the samplers for :meth:`reseeded` copies."""
 
     def __init__(
         self,
@@ -320,9 +315,8 @@ class KaimalEvo:
     def component_planes(
         self, component: str, tick: Callable[[], None] | None = None, spectrum=None, ring: PlaneRing | None = None
     ) -> Iterator[tuple[int, np.ndarray]]:
-        """Yield (plane index, field (nt, ny, nz) float32) for every plane of one component.
-
-        ``tick`` is called once per frequency chunk and per plane; ``ring`` (:class:`PlaneRing`) supplies the arrays."""
+        """Yield (plane index, field (nt, ny, nz) float32) for every plane of one component; ``tick`` is called once per
+        frequency chunk and per plane; ``ring`` (:class:`PlaneRing`) supplies the arrays."""
         g = self.grid
         spectrum = InMemorySpectrum(g.nx, self.nf, g.ny, g.nz) if spectrum is None else spectrum
         pool = ThreadPoolExecutor(max_workers=self.workers)

@@ -45,9 +45,8 @@ def _slab_nodes(box: BoxShape, k1c: float, js: np.ndarray, ls: np.ndarray, off_a
 
 
 def axis_cells(params: MannParams, box: BoxShape) -> tuple[np.ndarray, np.ndarray]:
-    """(cell_index, cell_factor): principal square roots of Phi_bar = (1/dV) ∫_cell Phi dk near the k1 axis.
-
-    Nodes of _CELL_SLABS slabs per call, summed per cell in node order (the same sums as slab by slab)."""
+    """(cell_index, cell_factor): principal square roots of Phi_bar = (1/dV) ∫_cell Phi dk near the k1 axis, from nodes
+    of _CELL_SLABS slabs per call, summed per cell in node order (the same sums as slab by slab)."""
     dk1, dk2, dk3 = box.dk()
     r2 = min(CELL_RADIUS, (box.nyp - 1) // 2)
     r3 = min(CELL_RADIUS, (box.nzp - 1) // 2)

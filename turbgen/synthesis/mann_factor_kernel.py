@@ -23,9 +23,8 @@ def squared_wavenumbers(k1, k2, k3, factor, out):
 
 @numba.njit(nogil=True, cache=True, error_model="numpy")
 def table_spline(log_kl_sq, inv_2h, x0_h, step, n_intervals, c3, c2, c1, c0, out):
-    """The lifetime table's spline at ln(|k|^2 L^2), as LifetimeTable.from_ksq; nan outside the table (k = 0 too).
-
-    Returns the number of points outside the range."""
+    """The lifetime table's spline at ln(|k|^2 L^2), as LifetimeTable.from_ksq; nan outside the table (k = 0 too);
+    returns the number of points outside the range."""
     xs = log_kl_sq.reshape(-1)
     values = out.reshape(-1)
     outside = 0

@@ -25,10 +25,9 @@ def _table_half(table, log_kl_sq: np.ndarray, ksq, length_scale_m: float) -> np.
 
 
 def slab_factors(params: MannParams, box: BoxShape, i0: int, i1: int, out, inv_tau, energy: float | None) -> None:
-    """The factors of slabs [i0, i1) of ``box`` into ``out`` (i1 - i0, nyp//2+1, nzp).
-
-    ``energy`` None: ae-free (e, k30, c1, c2) float64 (c1, c2: zeta1, zeta2 of Mann 1994 Eq. 13-17); else
-    (A, P, Z1, Z2) float32 as apply_energy forms them. 1/tau_e [1/s] into ``inv_tau`` unless None."""
+    """The factors of slabs [i0, i1) of ``box`` into ``out`` (i1 - i0, nyp//2+1, nzp); ``energy`` None: ae-free
+    (e, k30, c1, c2) float64 (c1, c2: zeta1, zeta2 of Mann 1994 Eq. 13-17); else (A, P, Z1, Z2) float32 as apply_energy
+    forms them. 1/tau_e [1/s] into ``inv_tau`` unless None."""
     from turbgen.synthesis import mann_factor_kernel as kernel
 
     L = params.length_scale_m

@@ -39,8 +39,7 @@ def _padded_nk1(nk1: int) -> int:
 
 
 def hermitian_complete(slab: np.ndarray) -> None:
-    """Make the spectra of a k1 = 0 or Nyquist slab Hermitian in place, keeping E|.|^2.
-
+    """Make the spectra of a k1 = 0 or Nyquist slab Hermitian in place, keeping E|.|^2:
     u_hat(k) <- (u_hat(k) + conj u_hat(-k)) / sqrt(2); without it the real inverse FFT keeps half their energy."""
     mirror = np.roll(slab[..., ::-1, ::-1], 1, axis=(-2, -1))  # u_hat(-k2, -k3), a copy
     np.conjugate(mirror, out=mirror)
@@ -103,9 +102,8 @@ class _Scratch:
 
 
 class MannSnapshots:
-    """Generator of Mann space-time snapshots on one stencil, cropped to ny x nz.
-
-    Bit-identical for any ``threads``; ``fft_backend`` changes it at float32 round-off."""
+    """Generator of Mann space-time snapshots on one stencil, cropped to ny x nz; bit-identical for any ``threads``;
+    ``fft_backend`` changes it at float32 round-off."""
 
     def __init__(self, stencil: MannStencil, ny: int, nz: int, threads: int | None = None, buffers: int = 1,
                  points: np.ndarray | None = None, fft_backend: str | None = None):  # fmt: skip
@@ -162,10 +160,9 @@ class MannSnapshots:
         return sum(a.nbytes for a in arrays)
 
     def generate(self, seed: int | None, times_s, addend=None, target=None) -> Iterator[tuple[int, str, np.ndarray]]:
-        """Yield (plane index, component, field (nt, ny, nz) float32) for every plane and component.
-
-        ``times_s``: relative times x/U [s]. The array is reused: consume it first. ``addend``: cropped spectra added
-        before the transform along k1 (``seed=None``: the addend alone); ``target``: the array to transform into."""
+        """Yield (plane index, component, field (nt, ny, nz) float32) for every plane and component; ``times_s``:
+        relative times x/U [s]. The array is reused: consume it first. ``addend``: cropped spectra added before the
+        transform along k1 (``seed=None``: the addend alone); ``target``: the array to transform into."""
         times = np.asarray(times_s, dtype=float)
         order = [int(i) for i in np.argsort(times, kind="stable")]
         frozen = self.stencil.params.evo_time_s is None
@@ -198,9 +195,8 @@ class MannSnapshots:
                                                              sample=seed is not None, dest=dest)  # fmt: skip
 
     def spectra(self, seed: int, times_s) -> Iterator[tuple[int, np.ndarray]]:
-        """Yield (snapshot number, cropped spectra (3, ny nz or len(points), n_slabs) complex64) in time order.
-
-        The first pass of an out-of-core run. The array is reused: consume it first."""
+        """Yield (snapshot number, cropped spectra (3, ny nz or len(points), n_slabs) complex64) in time order (the
+        first pass of an out-of-core run). The array is reused: consume it first."""
         times = np.sort(np.asarray(times_s, dtype=float), kind="stable")
         frozen = self.stencil.params.evo_time_s is None
         if not frozen and self.stencil.inv_tau is None and len(times) > 1:

@@ -29,10 +29,9 @@ _BUILD_POINTS = 1 << 16  # points per float64 batch and thread while building (0
 
 @dataclass(frozen=True, eq=False)
 class MannStencil:
-    """The stencil of ``params`` on ``box``; make it with :func:`build_stencil`.
-
-    "scaled": ``coef`` (4, slabs, nyp//2+1, nzp) float32 (A, P, Z1, Z2) for params.ae, plus the axis cells; "unit":
-    float64 ae-free factors, ae = 1. ``inv_tau`` = 1/tau_e [1/s]; ``slab0`` the first slab held."""
+    """The stencil of ``params`` on ``box`` (make it with :func:`build_stencil`); "scaled":
+    ``coef`` (4, slabs, nyp//2+1, nzp) float32 (A, P, Z1, Z2) for params.ae, plus the axis cells; "unit": float64
+    ae-free factors, ae = 1. ``inv_tau`` = 1/tau_e [1/s]; ``slab0`` the first slab held."""
 
     params: MannParams
     box: BoxShape
@@ -64,9 +63,8 @@ class MannStencil:
         return slice(int(np.searchsorted(slabs, i0)), int(np.searchsorted(slabs, i1)))
 
     def scaled(self, params: MannParams) -> "MannStencil":
-        """The stencil of ``params`` (ae [m^(4/3) s^-2]) in memory, bit for bit build_stencil(params, box).
-
-        ValueError if ``params`` differ in more than ae (scaled: at all)."""
+        """The stencil of ``params`` (ae [m^(4/3) s^-2]) in memory, bit for bit build_stencil(params, box); ValueError
+        if ``params`` differ in more than ae (scaled: at all)."""
         if self.energy == "scaled":
             if params != self.params:
                 raise ValueError("the stencil was built for other parameters")
@@ -186,11 +184,10 @@ def build_stencil(
     cells=None,
     factors: np.ndarray | None = None,
 ) -> MannStencil:
-    """The stencil of ``params`` on ``box``.
-
-    ``energy`` "scaled" (float32 for params.ae, with the axis cells) or "unit" (ae-free float64);
-    ``storage="on_demand"``: coefficients computed when used; ``evolving=False`` skips 1/tau_e; ``slabs`` (first,
-    end) a part of the box; ``cells`` axis_cells computed once; ``factors`` an array to hold a unit stencil."""
+    """The stencil of ``params`` on ``box``; ``energy`` "scaled" (float32 for params.ae, with the axis cells) or "unit"
+    (ae-free float64); ``storage="on_demand"``: coefficients computed when used; ``evolving=False`` skips 1/tau_e;
+    ``slabs`` (first, end) a part of the box; ``cells`` axis_cells computed once; ``factors`` an array to hold a unit
+    stencil."""
     if energy not in ENERGIES or storage not in STORAGES:
         raise ValueError(f"energy must be one of {ENERGIES} and storage one of {STORAGES} (got {energy}, {storage})")
     if storage == "on_demand":

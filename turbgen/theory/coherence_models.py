@@ -25,8 +25,7 @@ def exponential_yz(r_m, f_hz, U_m_s: float, a_yz: float = 12.0, lc_m: float = 34
 
 
 def exponential_yz_decay_length_m(f_hz: float, U_m_s: float, a_yz: float = 12.0, lc_m: float = 340.2) -> float:
-    """Decay length 1 / (a_yz kappa) [m] of :func:`exponential_yz` at ``f_hz``: coh(r) = exp(-r / decay).
-
+    """Decay length 1 / (a_yz kappa) [m] of :func:`exponential_yz` at ``f_hz``: coh(r) = exp(-r / decay),
     kappa = sqrt((f/U)^2 + (0.12/Lc)^2) [1/m]; infinite for a_yz = 0 (full coherence)."""
     kappa = np.hypot(f_hz / U_m_s, 0.12 / lc_m)
     return 1.0 / (a_yz * kappa) if a_yz > 0 else np.inf

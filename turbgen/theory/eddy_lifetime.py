@@ -19,9 +19,8 @@ GUO_A = float(hyp2f1(1.0 / 3.0, 17.0 / 6.0, 4.0 / 3.0, -1.0) ** -0.5)
 
 
 def mann_lifetime(kL):
-    """Mann lifetime tau~ = (kL)^(-2/3) [2F1(1/3,17/6;4/3;-(kL)^-2)]^(-1/2) [-] (Guo et al. 2023, Eq. 4).
-
-    ``kL`` is |k| L [-] (array_like); inf where kL <= 0."""
+    """Mann lifetime tau~ = (kL)^(-2/3) [2F1(1/3,17/6;4/3;-(kL)^-2)]^(-1/2) [-] (Guo et al. 2023, Eq. 4) of
+    ``kL`` = |k| L [-] (array_like); inf where kL <= 0."""
     kL = np.asarray(kL, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         out = kL ** (-2.0 / 3.0) / np.sqrt(hyp2f1(1.0 / 3.0, 17.0 / 6.0, 4.0 / 3.0, -(kL ** -2.0)))
@@ -41,10 +40,9 @@ def guo_lifetime(kL, factor1: float = 1.0):
 
 
 def shear_distortion_beta(k, params: MannParams):
-    """Non-dimensional distortion time beta(k) = Gamma tau~(kL) [-] (Guo et al. 2023, after Eq. 4).
-
-    tau~ is Eq. 4 or 6 per ``params.lifetime``; ``k`` is |k| [rad/m]. Zero everywhere for Gamma = 0
-    (isotropic: no distortion, also at k = 0), else inf at k = 0."""
+    """Non-dimensional distortion time beta(k) = Gamma tau~(kL) [-] (Guo et al. 2023, after Eq. 4), tau~ Eq. 4 or 6 per
+    ``params.lifetime``; ``k`` is |k| [rad/m]. Zero everywhere for Gamma = 0 (isotropic: no distortion, also at k = 0),
+    else inf at k = 0."""
     kL = np.asarray(k, dtype=float) * params.length_scale_m
     tau = mann_lifetime(kL) if params.lifetime == "mann" else guo_lifetime(kL, params.factor1)
     if params.gamma == 0.0:
@@ -54,9 +52,8 @@ def shear_distortion_beta(k, params: MannParams):
 
 def evolution_lifetime_s(k, params: MannParams):
     """Evolution lifetime tau_e(k) = gamma a (kL)^-1 ((kL)^10 + 1)^((1 - 2 factor2/3)/10) [s] (Guo et al. 2023, Eq. 15).
-
-    gamma = ``params.evo_time_s``; factor2 = 3.5 gives the paper's exponent -2/15. ``k`` is |k| [rad/m].
-    Infinite for frozen parameters (evo_time_s None) and at k = 0."""
+    gamma = ``params.evo_time_s``; factor2 = 3.5 gives the paper's exponent -2/15. ``k`` is |k| [rad/m]. Infinite for
+    frozen parameters (evo_time_s None) and at k = 0."""
     kL = np.asarray(k, dtype=float) * params.length_scale_m
     if params.evo_time_s is None:
         return np.full_like(kL, np.inf)
@@ -105,8 +102,7 @@ class LifetimeTable:
         self.n_intervals = n - 1
 
     def from_ksq(self, ksq, length_scale_m: float) -> np.ndarray:
-        """tau~(|k| L) [-] (tau_e / gamma for "evolution") from ``ksq`` = |k|^2 [rad^2/m^2] (any shape) and L [m].
-
+        """tau~(|k| L) [-] (tau_e / gamma for "evolution") from ``ksq`` = |k|^2 [rad^2/m^2] (any shape) and L [m],
         float64 shaped like ``ksq``; exact outside the table's range, inf at k = 0."""
         ksq = np.asarray(ksq, dtype=float)
         with np.errstate(divide="ignore"):

@@ -46,10 +46,9 @@ def iec_lambda1_m(hub_height_m: float) -> float:
 
 
 def iec_sigma1_m_s(U_m_s: float, turb_class: str = "A") -> float:
-    """NTM standard deviation sigma1 = Iref (0.75 U + 5.6) [m/s] (IEC 61400-1) at hub speed U [m/s].
-
-    ``turb_class`` "A+", "A", "B" or "C" sets Iref = 0.18, 0.16, 0.14, 0.12; ParameterError for another
-    class or a speed outside turbgen.theory.ranges."""
+    """NTM standard deviation sigma1 = Iref (0.75 U + 5.6) [m/s] (IEC 61400-1) at hub speed U [m/s]; ``turb_class``
+    "A+", "A", "B" or "C" sets Iref = 0.18, 0.16, 0.14, 0.12; ParameterError for another class or a speed outside
+    turbgen.theory.ranges."""
     check_choice("class", turb_class, tuple(IEC_IREF))
     return IEC_IREF[turb_class] * (0.75 * check_wind_speed(U_m_s) + 5.6)
 

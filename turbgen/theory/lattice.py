@@ -21,8 +21,7 @@ def line_frequencies(nt: int, dt_s: float) -> np.ndarray:
 
 
 def line_bands(nt: int, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """(lo, hi) [Hz]: the band each line j stands for (whose variance a generator gives it).
-
+    """(lo, hi) [Hz]: the band each line j stands for (whose variance a generator gives it):
     [(j - 1/2) df, (j + 1/2) df] clipped to [0, 1/(2 dt)], df = 1 / (nt dt); arguments as :func:`line_frequencies`."""
     df = 1.0 / (nt * dt_s)
     j = np.arange(nt // 2 + 1)
@@ -30,9 +29,8 @@ def line_bands(nt: int, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def pair_weights(nt: int) -> np.ndarray:
-    """(nt // 2 + 1,) weights [-] of the lines in a sum over the two-sided spectrum.
-
-    2 (the lines +-f_j together), 1 for j = 0 and for the single Nyquist line of an even nt."""
+    """(nt // 2 + 1,) weights [-] of the lines in a sum over the two-sided spectrum: 2 (the lines +-f_j together), 1 for
+    j = 0 and for the single Nyquist line of an even nt."""
     w = np.full(nt // 2 + 1, 2.0)
     w[0] = 1.0
     if nt % 2 == 0:
@@ -41,9 +39,8 @@ def pair_weights(nt: int) -> np.ndarray:
 
 
 def k2_wavenumbers(nyp: int, dy_m: float) -> np.ndarray:
-    """(nyp,) lateral wavenumbers k2 [rad/m] of a periodic box of nyp points spaced ``dy_m`` [m], in FFT order.
-
-    j dk2 for j <= nyp // 2 (the Nyquist row positive, as synthesised), else (j - nyp) dk2; dk2 = 2 pi / (nyp dy)."""
+    """(nyp,) lateral wavenumbers k2 [rad/m] of a periodic box of nyp points spaced ``dy_m`` [m], in FFT order: j dk2
+    for j <= nyp // 2 (the Nyquist row positive, as synthesised), else (j - nyp) dk2; dk2 = 2 pi / (nyp dy)."""
     j = np.arange(nyp)
     return np.where(j <= nyp // 2, j, j - nyp) * (2 * np.pi / (nyp * dy_m))
 

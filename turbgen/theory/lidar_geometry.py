@@ -17,8 +17,7 @@ from turbgen.errors import ParameterError
 
 
 def nacelle_directions(azimuth_deg, elevation_deg) -> np.ndarray:
-    """Beam directions d = (cos beta cos phi, cos beta sin phi, sin beta) of a nacelle lidar (Guo et al. 2023, Fig. 3).
-
+    """Beam directions d = (cos beta cos phi, cos beta sin phi, sin beta) of a nacelle lidar (Guo et al. 2023, Fig. 3);
     ``azimuth_deg`` phi (towards +y) and ``elevation_deg`` beta (up) [deg] per beam, of equal shape (else
     ParameterError); returns (n_beams, 3) unit vectors (x upstream, y, z)."""
     phi = np.radians(np.atleast_1d(np.asarray(azimuth_deg, dtype=float)))

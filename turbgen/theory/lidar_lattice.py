@@ -75,10 +75,9 @@ def lattice_wavenumbers(box: BoxLattice) -> tuple[np.ndarray, np.ndarray]:
 
 
 def lattice_tensor(box: BoxLattice, k1: float, params: MannParams, U_m_s: float):
-    """Phi dk2 dk3 [m^3 s^-2], (3, 3, nyp nzp), on the box's lattice at k1 [rad/m], the axis cells integrated.
-
-    At the nodes of :func:`lattice_wavenumbers`, a density in k1 like Phi; ``U_m_s`` [m/s] sets the record's
-    line spacing dk1 = 2 pi / (U T) (module docstring)."""
+    """Phi dk2 dk3 [m^3 s^-2], (3, 3, nyp nzp), on the box's lattice at k1 [rad/m], the axis cells integrated; at the
+    nodes of :func:`lattice_wavenumbers`, a density in k1 like Phi; ``U_m_s`` [m/s] sets the record's line spacing
+    dk1 = 2 pi / (U T) (module docstring)."""
     dk2, dk3 = box.spacings()
     k2, k3 = (k.reshape(box.nyp, box.nzp) for k in lattice_wavenumbers(box))
     phi = sheared_tensor(k1, k2, k3, params) * (dk2 * dk3)  # (3, 3, nyp, nzp)

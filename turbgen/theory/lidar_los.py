@@ -15,10 +15,9 @@ from turbgen.theory.params import KaimalParams, check_wind_speed
 
 def kaimal_los_spectra(f_hz, meas: Measurements, kparams: KaimalParams, U_m_s: float, *,
                        vw_coherence: bool = False) -> np.ndarray:
-    """One-sided spectra S_los,i(f) [m^2 s^-2 Hz^-1], (M, n_f), of each measurement's line-of-sight speed.
-
-    IEC Kaimal model ``kparams`` at U [m/s] through the probe volume (Schlipf et al. 2020, Eq. 2, 6; Taylor within
-    it): u is coherent in the yz plane, v and w are spatially white unless ``vw_coherence``."""
+    """One-sided spectra S_los,i(f) [m^2 s^-2 Hz^-1], (M, n_f), of each measurement's line-of-sight speed in the IEC
+    Kaimal model ``kparams`` at U [m/s] through the probe volume (Schlipf et al. 2020, Eq. 2, 6; Taylor within it): u is
+    coherent in the yz plane, v and w are spatially white unless ``vw_coherence``."""
     f = np.atleast_1d(np.asarray(f_hz, dtype=float))
     U = check_wind_speed(U_m_s)
     pts = meas.sample_points_m()

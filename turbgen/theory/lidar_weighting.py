@@ -23,17 +23,15 @@ def sigma_from_fwhm_m(fwhm_m: float) -> float:
 
 
 def rayleigh_length_m(focus_distance_m, wavelength_m: float = 1.565e-6, beam_radius_m: float = 0.028):
-    """Rayleigh length z_R = lambda f_d^2 / (pi r_b^2) of a continuous-wave lidar (Fu et al. 2023, Eq. 15).
-
-    z_R [m] shaped like ``focus_distance_m`` f_d [m]; ``wavelength_m`` lambda and ``beam_radius_m`` r_b [m]."""
+    """Rayleigh length z_R = lambda f_d^2 / (pi r_b^2) of a continuous-wave lidar (Fu et al. 2023, Eq. 15): z_R [m]
+    shaped like ``focus_distance_m`` f_d [m]; ``wavelength_m`` lambda and ``beam_radius_m`` r_b [m]."""
     check_positive("wavelength (m)", wavelength_m)
     check_positive("beam radius (m)", beam_radius_m)
     return wavelength_m * np.asarray(focus_distance_m, dtype=float) ** 2 / (np.pi * beam_radius_m**2)
 
 
 def gaussian_weight(s_m, fwhm_m: float):
-    """Pulsed weighting phi(s) = exp(-s^2 / (2 sigma_L^2)) / (sigma_L sqrt(2 pi)) [1/m] (Guo et al. 2023, Eq. 27).
-
+    """Pulsed weighting phi(s) = exp(-s^2 / (2 sigma_L^2)) / (sigma_L sqrt(2 pi)) [1/m] (Guo et al. 2023, Eq. 27);
     ``s_m`` [m] is the offset from the focus (array_like), ``fwhm_m`` the FWHM W_L [m]."""
     sig = sigma_from_fwhm_m(fwhm_m)
     s = np.asarray(s_m, dtype=float)
@@ -41,17 +39,15 @@ def gaussian_weight(s_m, fwhm_m: float):
 
 
 def gaussian_transform(nu_rad_m, fwhm_m: float):
-    """Fourier transform exp(-nu^2 sigma_L^2 / 2) [-] of the Gaussian weighting (Guo et al. 2023, Eq. 30).
-
-    ``nu_rad_m`` [rad/m] is the wavenumber along the beam (array_like), ``fwhm_m`` the FWHM W_L [m]."""
+    """Fourier transform exp(-nu^2 sigma_L^2 / 2) [-] of the Gaussian weighting (Guo et al. 2023, Eq. 30); ``nu_rad_m``
+    [rad/m] is the wavenumber along the beam (array_like), ``fwhm_m`` the FWHM W_L [m]."""
     sig = sigma_from_fwhm_m(fwhm_m)
     return np.exp(-0.5 * (np.asarray(nu_rad_m, dtype=float) * sig) ** 2)
 
 
 def lorentzian_weight(s_m, z_r_m: float):
-    """CW weighting phi(s) = z_R / (pi (z_R^2 + s^2)) [1/m] (Fu et al. 2023, Eq. 14).
-
-    ``s_m`` [m] is the offset from the focus (array_like), ``z_r_m`` the Rayleigh length z_R [m]."""
+    """CW weighting phi(s) = z_R / (pi (z_R^2 + s^2)) [1/m] (Fu et al. 2023, Eq. 14); ``s_m`` [m] is the offset from the
+    focus (array_like), ``z_r_m`` the Rayleigh length z_R [m]."""
     z = check_positive("Rayleigh length z_R (m)", z_r_m)
     s = np.asarray(s_m, dtype=float)
     return z / (np.pi * (z * z + s * s))
@@ -63,9 +59,8 @@ def lorentzian_transform(nu_rad_m, z_r_m: float):
 
 
 def pulsed_discrete(fwhm_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """(offsets [m], weights [-] summing to 1): Gaussian of FWHM ``fwhm_m`` [m] on [-1.5 W_L, 1.5 W_L], 2.5 m steps.
-
-    Fu et al. (2023), Sect. 2.3."""
+    """(offsets [m], weights [-] summing to 1): Gaussian of FWHM ``fwhm_m`` [m] on [-1.5 W_L, 1.5 W_L], 2.5 m steps (Fu
+    et al. 2023, Sect. 2.3)."""
     half = PULSED_HALF_WIDTH_FWHM * check_positive("FWHM W_L (m)", fwhm_m)
     n = int(np.floor(half / PULSED_STEP_M + 1e-9))
     s = PULSED_STEP_M * np.arange(-n, n + 1)
@@ -74,9 +69,8 @@ def pulsed_discrete(fwhm_m: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def cw_discrete(z_r_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """(offsets [m], weights [-] summing to 1), each (121,): Lorentzian of Rayleigh length ``z_r_m`` [m].
-
-    On [-6 z_R, 6 z_R] in steps of 0.1 z_R (Fu et al. 2023, Sect. 2.3)."""
+    """(offsets [m], weights [-] summing to 1), each (121,): Lorentzian of Rayleigh length ``z_r_m`` [m],
+    on [-6 z_R, 6 z_R] in steps of 0.1 z_R (Fu et al. 2023, Sect. 2.3)."""
     z = check_positive("Rayleigh length z_R (m)", z_r_m)
     n = int(round(CW_HALF_WIDTH_ZR / CW_STEP_ZR))
     s = CW_STEP_ZR * z * np.arange(-n, n + 1)

@@ -20,10 +20,9 @@ def von_karman_energy(k, ae: float, length_scale_m: float):
 
 
 def _distortion(k1, k2, k3, params: MannParams, beta=None):
-    """Undistorted wavenumber and the rapid-distortion coefficients zeta1, zeta2 (Mann 1994, Eq. 15-17).
-
-    Returns (k1, k2, k0sq, k30, ksq, zeta1, zeta2, E0); on k1 = 0 zeta1 = -beta, zeta2 = 0 (the linear
-    growth of u under shear), on the k3 axis zeta = 0. ``beta`` may be precomputed (it depends on |k| only)."""
+    """Undistorted wavenumber and the rapid-distortion coefficients zeta1, zeta2 (Mann 1994, Eq. 15-17): (k1, k2, k0sq,
+    k30, ksq, zeta1, zeta2, E0); on k1 = 0 zeta1 = -beta, zeta2 = 0 (the linear growth of u under shear), on the k3 axis
+    zeta = 0. ``beta`` may be precomputed (it depends on |k| only)."""
     k1, k2, k3 = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (k1, k2, k3)))
     # |k| < 1e-30 rad/m carries no energy (E ~ k^4) but would underflow k^4: treat it as k = 0
     negligible = k1 * k1 + k2 * k2 + k3 * k3 < 1e-60
@@ -57,9 +56,8 @@ def _distortion(k1, k2, k3, params: MannParams, beta=None):
 
 
 def sheared_tensor(k1, k2, k3, params: MannParams, beta=None):
-    """Phi_ij(k) [m^5 s^-2], (3, 3, *k1.shape), of the sheared Mann tensor (Mann 1994, Eq. 19).
-
-    ``beta`` optionally gives beta(|k|) [-] precomputed (see shear_distortion_beta), broadcastable to k1."""
+    """Phi_ij(k) [m^5 s^-2], (3, 3, *k1.shape), of the sheared Mann tensor (Mann 1994, Eq. 19); ``beta`` optionally
+    gives beta(|k|) [-] precomputed (see shear_distortion_beta), broadcastable to k1."""
     k1, k2, k0sq, k30, ksq, z1, z2, e0 = _distortion(k1, k2, k3, params, beta)
     q = k1 * k1 + k2 * k2
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):

@@ -65,10 +65,9 @@ def coherence_stats(rho, n):
 
 
 class Bands:
-    """Welch bins 1 .. n/2-1 grouped into log-spaced bands; band statistics from the Welch covariance.
-
-    A covariance is a dict lag d -> Cov(P_m, P_{m+d}): exact (``welch_variance``) or, for very long records, the
-    rule of thumb with Hann bin correlations 1, 4/9, 1/36."""
+    """Welch bins 1 .. n/2-1 grouped into log-spaced bands; band statistics from the Welch covariance, a dict
+    lag d -> Cov(P_m, P_{m+d}): exact (``welch_variance``) or, for very long records, the rule of thumb with Hann bin
+    correlations 1, 4/9, 1/36."""
 
     def __init__(self, est: Estimates):
         f = est.freqs

@@ -193,9 +193,8 @@ def _plane_pairs(subs: list[np.ndarray]) -> np.ndarray:
 
 
 def welch_series(x: np.ndarray, setup: WelchSetup) -> tuple[np.ndarray, int, int]:
-    """One-sided Welch PSD (Welch 1967) of the (nt, m) series ``x`` [m/s], averaged over segments and columns.
-
-    Returns (psd [m^2 s^-2 Hz^-1], segments per column, overlapping segment pairs per column)."""
+    """One-sided Welch PSD (Welch 1967) of the (nt, m) series ``x`` [m/s], averaged over segments and columns:
+    (psd [m^2 s^-2 Hz^-1], segments per column, overlapping segment pairs per column)."""
     starts = segment_starts(x.shape[0], setup)
     w = setup.window[:, None]
     acc = np.zeros(setup.nperseg // 2 + 1)
@@ -223,9 +222,8 @@ class _TqdmCallback(Callback):
 
 def plan_estimates(fs, *, rotor_radius_m: float | None = None, nperseg: int | None = None,
                    separations=None) -> Estimates:
-    """The sampling design of a store's estimates, before any data is read (sums still empty).
-
-    ParameterError if ``nperseg`` [samples] is outside [MIN_NPERSEG, nt / 2] or the rotor radius does not fit."""
+    """The sampling design of a store's estimates, before any data is read (sums still empty); ParameterError if
+    ``nperseg`` [samples] is outside [MIN_NPERSEG, nt / 2] or the rotor radius does not fit."""
     g = fs.grid
     setup = WelchSetup(nperseg or default_nperseg(g.nt), g.dt_s)
     if not MIN_NPERSEG <= setup.nperseg <= g.nt // 2:

@@ -48,9 +48,8 @@ def _interp_lines(k1_nodes, values, k1_lines, positive: bool):
 
 
 def band_limited_spectra(params: MannParams, grid: Grid, k1: np.ndarray, n_theta: int = 24, n_panels: int = 24):
-    """Continuous F_ii(k1) = int Phi_ii dk2 dk3 [m^3 s^-2] over |k2| <= pi/dy, |k3| <= pi/dz, two-sided in k1.
-
-    The model the grid can represent without a finite box's sampling, by polar quadrature."""
+    """Continuous F_ii(k1) = int Phi_ii dk2 dk3 [m^3 s^-2] over |k2| <= pi/dy, |k3| <= pi/dz, two-sided in k1: the model
+    the grid can represent without a finite box's sampling, by polar quadrature."""
     kny, knz = np.pi / grid.dy_m, np.pi / grid.dz_m
     tc = np.arctan2(knz, kny)
     gx, gw = np.polynomial.legendre.leggauss(n_theta)

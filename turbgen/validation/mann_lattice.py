@@ -35,10 +35,9 @@ def _cell_nodes(n1: int, n2: tuple, n3: tuple):
 
 
 class MannLattice:
-    """Mann tensor and space-time decay on the (k2, k3) lattice of the box, slab by slab in k1.
-
-    Each point stands for Phi(k) dk1 dk2 dk3, but near the k1 axis at small k1 the cell integral is computed (Mann
-    1998). ``grid``: the store's (dt [s], dy, dz [m]); ``U`` [m/s]: k1 = 2 pi f / U."""
+    """Mann tensor and space-time decay on the (k2, k3) lattice of the box, slab by slab in k1; each point stands for
+    Phi(k) dk1 dk2 dk3, but near the k1 axis at small k1 the cell integral is computed (Mann 1998). ``grid``: the
+    store's (dt [s], dy, dz [m]); ``U`` [m/s]: k1 = 2 pi f / U."""
 
     def __init__(self, params: MannParams, grid: Grid, box: MannBox, U: float):
         self.params, self.grid, self.box, self.U = params, grid, box, U

@@ -32,8 +32,7 @@ DEFAULT_ROTOR_RADIUS_M = 63.0  # NREL 5 MW reference turbine (Jonkman et al. 200
 
 
 def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
-    """(ny, nz) bool, the grid points inside the rotor disc of radius ``radius_m`` [m] around the hub; ParameterError if
-    none."""
+    """(ny, nz) bool: grid points in the rotor disc of radius ``radius_m`` [m] about the hub; ParameterError if none."""
     y, z = grid.y(), grid.z()
     mask = y[:, None] ** 2 + z[None, :] ** 2 <= radius_m**2 * (1 + 1e-12)
     if not mask.any():
@@ -42,9 +41,8 @@ def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
 
 
 def check_rotor_radius(grid: Grid, radius_m: float | None) -> float:
-    """The rotor radius R [m]: 0 < R <= half the smaller grid extent, else ParameterError.
-
-    None: 63 m (NREL 5 MW, Jonkman et al. 2009), or the largest disc a smaller grid holds."""
+    """The rotor radius R [m]: 0 < R <= half the smaller grid extent, else ParameterError; None: 63 m (NREL 5 MW,
+    Jonkman et al. 2009), or the largest disc a smaller grid holds."""
     half = min((grid.ny - 1) * grid.dy_m, (grid.nz - 1) * grid.dz_m) / 2.0
     if radius_m is None:
         nearest = float(np.hypot(grid.y()[:, None], grid.z()[None, :]).min())

@@ -11,9 +11,8 @@ COMPONENTS = ("u", "v", "w")
 
 
 def span_sums(data: dict, window: np.ndarray, starts, seps, mask: np.ndarray, iy: np.ndarray, iz: np.ndarray) -> dict:
-    """Moment and Welch sums of one plane over one span of ``data`` (component -> float32 (t, ny, nz) [m/s]).
-
-    Returns ``sum``, ``sum2``, ``rews`` and the unscaled Welch sums ``auto``, ``yz``, ``uw``, ``sub``."""
+    """Moment and Welch sums of one plane over one span of ``data`` (component -> float32 (t, ny, nz) [m/s]): ``sum``,
+    ``sum2``, ``rews`` and the unscaled Welch sums ``auto``, ``yz``, ``uw``, ``sub``."""
     from turbgen.validation.welch_sums import cross_sum, point_moments, spectrum_sums, window_segment
 
     out = {"sum": {}, "sum2": {}}

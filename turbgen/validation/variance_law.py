@@ -50,10 +50,9 @@ def _orthonormal(y: np.ndarray) -> np.ndarray:
 
 
 def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray | None = None):
-    """Shapes alpha [-] and scales theta [m^2 s^-2] of the gamma terms of the variance estimate (module docstring).
-
-    ``line_means`` (nl,) w_j L_j of lines j = 1 .. [m^2 s^-2], ``line_rho`` (nl,) rho_bar(f_j) [-], ``modes`` (J, K
-    + 1) ``top_modes`` of lines 1 .. J [-] (the last column replaces ``line_rho`` there)."""
+    """Shapes alpha [-] and scales theta [m^2 s^-2] of the gamma terms of the variance estimate (module docstring):
+    ``line_means`` (nl,) w_j L_j of lines j = 1 .. [m^2 s^-2], ``line_rho`` (nl,) rho_bar(f_j) [-], ``modes`` (J, K + 1)
+    ``top_modes`` of lines 1 .. J [-] (the last column replaces ``line_rho`` there)."""
     m = np.asarray(line_means, float)
     rho = np.asarray(line_rho, float)
     modes = np.zeros((0, 2)) if modes is None or np.size(modes) == 0 else np.asarray(modes, float)[: m.size]
@@ -72,9 +71,8 @@ def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray 
 
 
 def gamma_sum_tails(x: float, alpha: np.ndarray, theta: np.ndarray) -> tuple[float, float]:
-    """(P(S <= x), P(S >= x)) of S = sum_i Gamma(alpha_i, theta_i), independent (saddlepoint, Lugannani-Rice).
-
-    ``x`` is in the units of ``theta``; at the mean (0/0 in the formula) the moment-matched gamma law is used."""
+    """(P(S <= x), P(S >= x)) of S = sum_i Gamma(alpha_i, theta_i), independent (saddlepoint, Lugannani-Rice); ``x`` in
+    the units of ``theta``; at the mean (0/0 in the formula) the moment-matched gamma law is used."""
     mean = float(np.sum(alpha * theta))
     var = float(np.sum(alpha * theta**2))
     if not x > 0:

@@ -15,12 +15,11 @@ KERNEL_BAND = 32  # Welch bins either side of a bin whose lines are summed (Hann
 
 
 class WelchKernel:
-    """Expected one-sided Welch estimate of bins m = 0 .. n/2 as a weighted sum of spectral lines.
-
-    A segment's windowed, mean-removed DFT is X_m = sum_j Z_j G_m(f_j) with G_m(f) = W(m/n - f dt) - e(f) W(m/n), W
-    the window's DTFT and e(f) the segment mean of exp(i 2 pi f t); so E[P_m] = scale_m sum_j |G_m(f_j)|^2 L_j over the
-    lines +-f_j (the line -f_j carries conj(L_j); G's period 1/dt folds partners near Nyquist back). Lines more than
-    KERNEL_BAND bins away are ignored. ``nt``: samples of the periodic record (lines j = 0 .. nt // 2)."""
+    """Expected one-sided Welch estimate of bins m = 0 .. n/2 as a weighted sum of spectral lines: a segment's windowed,
+    mean-removed DFT is X_m = sum_j Z_j G_m(f_j) with G_m(f) = W(m/n - f dt) - e(f) W(m/n), W the window's DTFT and e(f)
+    the segment mean of exp(i 2 pi f t); so E[P_m] = scale_m sum_j |G_m(f_j)|^2 L_j over the lines +-f_j (the line -f_j
+    carries conj(L_j); G's period 1/dt folds partners near Nyquist back). Lines more than KERNEL_BAND bins away are
+    ignored. ``nt``: samples of the periodic record (lines j = 0 .. nt // 2)."""
 
     def __init__(self, setup: WelchSetup, nt: int):
         n, dt = setup.nperseg, setup.dt_s

@@ -70,10 +70,9 @@ def window_segment(d, start, window, mean, out):
 
 @numba.njit(nogil=True, cache=True)
 def spectrum_sums(xv, ny, sep_a, sep_b, total, part_a, part_b, cross):
-    """Add one segment's spectral sums of one component (float32 view (nf, ny_x, 2 nz)) into float64 arrays.
-
-    Per frequency: ``total`` sum of |X|^2; per separation ``part_a``, ``part_b`` the pairs' |X|^2 sums and ``cross``
-    Re / Im of sum conj(X(y, z)) X(y + a, z + b)."""
+    """Add one segment's spectral sums of one component (float32 view (nf, ny_x, 2 nz)) into float64 arrays, per
+    frequency: ``total`` sum of |X|^2; per separation ``part_a``, ``part_b`` the pairs' |X|^2 sums and ``cross`` Re / Im
+    of sum conj(X(y, z)) X(y + a, z + b)."""
     nf, _, nz2 = xv.shape
     nz = nz2 // 2
     ns = sep_a.size

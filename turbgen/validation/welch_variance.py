@@ -1,9 +1,8 @@
 """Exact covariance of Welch estimates of an nt-periodic Gaussian line process (short records).
 
-The model on the record is a sum of lines q = 0 .. nt-1 (frequency q / (nt dt), q > nt/2 negative) with independent
-circular Gaussian amplitudes Y_q, E|Y_q|^2 = L_q, Y_{nt-q} = conj(Y_q). A segment starting at sample t0 has the
-windowed, mean-removed DFT X_{t0, m} = sum_q Y_q c_m(q) exp(i 2 pi q t0 / nt), c_m(q) = G_m(q / (nt dt))
-(``welch_kernel.segment_gain``), so by Isserlis
+The record is a sum of lines q = 0 .. nt-1 (frequency q / (nt dt), q > nt/2 negative) with independent circular Gaussian
+amplitudes Y_q, E|Y_q|^2 = L_q, Y_{nt-q} = conj(Y_q). A segment starting at sample t0 has the windowed, mean-removed DFT
+X_{t0, m} = sum_q Y_q c_m(q) exp(i 2 pi q t0 / nt), c_m(q) = G_m(q / (nt dt)) (``segment_gain``), so by Isserlis
 
     Cov(|X_{s,m}|^2, |X_{s',m'}|^2) = |A|^2 + |B|^2,
     A = sum_q L_q c_m(q) conj(c_m'(q)) e^{i 2 pi q D / nt},   B = sum_q L_q c_m(q) c_m'(nt - q) e^{i 2 pi q D / nt},
@@ -11,14 +10,11 @@ windowed, mean-removed DFT X_{t0, m} = sum_q Y_q c_m(q) exp(i 2 pi q t0 / nt), c
 D = t0_s - t0_s'. Summed over all segment pairs this is the exact variance of the Welch average (actual segment
 starts, overlap with a coloured spectrum, mean removal, neighbouring bins: what the K_eff rule of thumb leaves out).
 
-Averages over N points/planes (``averaged``): the covariance of the average is
-(1 / N^2) sum_pq (|A_pq|^2 + |B_pq|^2) = sum_ij a_i conj(a_j) R(nu_i, nu_j) (same for B), with coh_pq(f)
-interpolated linearly in log f between frequency nodes nu_i, a_i the line sums of A weighted by node i's
-interpolation weight, and R the two-frequency correlation sum of the point set (``Theory.rho_*``; several nodes
-per bin: the lowest bins collect more coherent lines by leakage). Negative-frequency lines use R at |f|.
-
-Lines within LINE_BAND bins of each bin, bin pairs up to MAX_LAG apart; above MAX_WORK products the rule of thumb
-is used (long records, where it is accurate)."""
+Averages over N points/planes (``averaged``): the covariance of the average, (1 / N^2) sum_pq (|A_pq|^2 + |B_pq|^2),
+is sum_ij a_i conj(a_j) R(nu_i, nu_j) (same for B), with coh_pq(f) interpolated linearly in log f between frequency
+nodes nu_i, a_i the line sums of A weighted by node i's interpolation weight, and R the two-frequency correlation sum
+of the point set (``Theory.rho_*``; several nodes per bin: the lowest bins collect more coherent lines by leakage).
+Negative-frequency lines use R at |f|. Above MAX_WORK the rule of thumb is used (long records, where it is accurate)."""
 
 from __future__ import annotations
 

@@ -19,10 +19,9 @@ BAND_P = (0.025, 0.975)  # probabilities of the plotted band's edges
 
 
 def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None = None) -> MetricResult:
-    """MetricResult "lidar_coherence" of simulated vs theoretical gamma^2_RL [-] at ``f_hz`` [Hz] (0 .. Nyquist).
-
-    Bins 1 .. Nyquist-1 up to ``f_max_hz`` where gamma^2 >= MIN_COH2 and ``n_eff`` >= MIN_NEFF are tested by
-    Goodman's law, or by the delta method where 1 - gamma^2 < NEAR_UNIT or n_eff <= 1."""
+    """MetricResult "lidar_coherence" of simulated vs theoretical gamma^2_RL [-] at ``f_hz`` [Hz] (0 .. Nyquist):
+    bins 1 .. Nyquist-1 up to ``f_max_hz`` where gamma^2 >= MIN_COH2 and ``n_eff`` >= MIN_NEFF are tested by Goodman's
+    law, or by the delta method where 1 - gamma^2 < NEAR_UNIT or n_eff <= 1."""
     f = np.asarray(f_hz, float)
     sim = np.asarray(coh2_sim, float)
     th = np.clip(np.asarray(coh2_theory, float), 0.0, 1.0)

@@ -22,10 +22,8 @@ MARKER = "turbgen_lidar_complete"
 
 
 def check_output(path, overwrite: bool) -> Path:
-    """The absolute output path, checked before any work.
-
-    StoreError if it exists without ``overwrite`` or is not a lidar dataset, or its directory is missing or
-    read-only."""
+    """The absolute output path, checked before any work: StoreError if it exists without ``overwrite`` or is not a
+    lidar dataset, or its directory is missing or read-only."""
     path = Path(path).expanduser().absolute()
     # a path that is not a lidar dataset is never replaced, so `overwrite` is no remedy there: not suggested
     if path.exists() and not (path / "zarr.json").is_file():
@@ -43,9 +41,8 @@ def check_output(path, overwrite: bool) -> Path:
 
 
 def write_dataset(path, samples, t_arrival, u_ll, u_rr, attrs: dict, overwrite: bool = False) -> Path:
-    """Write the lidar dataset atomically at ``path`` (marker last, then publish); return its absolute path.
-
-    ``attrs``: dict, list and tuple values are stored as JSON. StoreError as :func:`check_output`."""
+    """Write the lidar dataset atomically at ``path`` (marker last, then publish); return its absolute path; ``attrs``:
+    dict, list and tuple values are stored as JSON. StoreError as :func:`check_output`."""
     import xarray as xr
 
     path = check_output(path, overwrite)

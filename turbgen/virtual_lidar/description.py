@@ -93,9 +93,8 @@ class LidarDescription:
         return spinner_directions(self.half_cone_deg, self.scan_deg, self.tilt_deg)
 
     def measurement_points(self) -> Measurements:
-        """Every (beam, gate) measurement, beam-major: LOS vector, focus, probe-volume offsets [m] and weights.
-
-        Padded with zero weights to a common length; a spinner's focus is at x / cos(half cone) (Fu et al. 2023)."""
+        """Every (beam, gate) measurement, beam-major: LOS vector, focus, probe-volume offsets [m] and weights, padded
+        with zero weights to a common length; a spinner's focus is at x / cos(half cone) (Fu et al. 2023)."""
         d = self.directions()
         rows = []
         for b in range(self.n_beams):

@@ -158,8 +158,7 @@ class LosModel:
 
 
 def lidar_fit_data(ld: LidarData, gamma: float | None = None) -> tuple[FitData, Measurements, float]:
-    """(FitData of the dataset's detrended v_los, column per beam x gate at its focus, the Measurements, Gamma).
-
+    """(FitData of the dataset's detrended v_los, column per beam x gate at its focus, the Measurements, Gamma);
     ParameterError for a dataset whose beams are not sampled uniformly or a Gamma outside its range."""
     meas = LidarDescription(**ld.lidar).measurement_points()
     ns, nb, ng = ld.v_los.shape

@@ -96,10 +96,9 @@ def _grid(table: np.ndarray, n_beams: int, n_gates: int, where: str) -> tuple[np
 
 
 def read_los_csv(path) -> LidarData:
-    """The line-of-sight record of a CSV file as :class:`LidarData`.
-
-    ParameterError for a missing or unknown key, a malformed column or value, a beam or gate not the lidar's, gates
-    of a beam not measured together, or incomplete scans."""
+    """The line-of-sight record of a CSV file as :class:`LidarData`; ParameterError for a missing or unknown key, a
+    malformed column or value, a beam or gate not the lidar's, gates of a beam not measured together, or incomplete
+    scans."""
     path = Path(path).expanduser()
     where = f"line-of-sight file {path}"
     header, table = parse_table(read_input_text(path, LINE_OF_SIGHT).splitlines(), where)

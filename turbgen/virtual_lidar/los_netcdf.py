@@ -36,10 +36,9 @@ def _header(attrs: dict, where: str) -> dict:
 
 
 def read_los_netcdf(path) -> LidarData:
-    """The line-of-sight record of a netCDF file as :class:`LidarData`.
-
-    ParameterError if unreadable (or no engine installed), a variable or attribute is missing, unknown or malformed,
-    or a check of ``los_csv.read_los_csv`` fails."""
+    """The line-of-sight record of a netCDF file as :class:`LidarData`; ParameterError if unreadable (or no engine
+    installed), a variable or attribute is missing, unknown or malformed, or a check of ``los_csv.read_los_csv``
+    fails."""
     import xarray as xr
 
     path = Path(path).expanduser()

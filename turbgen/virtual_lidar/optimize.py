@@ -34,9 +34,8 @@ SEARCH_F_HZ = np.geomspace(2e-3, 0.25, 28)  # one spectral evaluation per candid
 
 def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch_delay_s: float = 0.9,
              f_delay_hz: float = 0.025, f_hz=SEARCH_F_HZ) -> Candidate:
-    """The :class:`Candidate` of one lidar (first range gate x [m]) for the Mann model at U [m/s].
-
-    ParameterError for non-positive frequencies, a beam not looking upstream or a pitch delay out of range."""
+    """The :class:`Candidate` of one lidar (first range gate x [m]) for the Mann model at U [m/s]; ParameterError for
+    non-positive frequencies, a beam not looking upstream or a pitch delay out of range."""
     pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)
     S = mann_preview_spectra(f_hz, lidar.measurement_points(), params, U_m_s, lidar.rotor_radius_m)
     k05 = coherence_bandwidth_rad_m(S.f_hz, S.coh2_RL, U_m_s)
@@ -48,8 +47,7 @@ def evaluate(lidar: LidarDescription, params: MannParams, U_m_s: float, *, pitch
 
 def optimize_spinner(lidar: LidarDescription, params: MannParams, U_m_s: float, ranges_m, half_cones_deg,
                      *, pitch_delay_s: float = 0.9, progress=None) -> tuple[list[Candidate], Candidate | None]:
-    """Every candidate of ``ranges_m`` x ``half_cones_deg`` (range-major) and the feasible one with the largest k_0.5.
-
+    """Every candidate of ``ranges_m`` x ``half_cones_deg`` (range-major) and the feasible one with the largest k_0.5;
     ParameterError if the lidar is not a spinner, the grid is empty or above MAX_CANDIDATES, or a value is invalid."""
     pitch_delay_s = check_range("pitch-delay (T_pitch, s)", pitch_delay_s, *PITCH_DELAY_RANGE_S)  # before any candidate
     if lidar.mount != "spinner":

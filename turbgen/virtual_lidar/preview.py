@@ -26,11 +26,10 @@ DEFAULT_F_HZ = np.geomspace(0.005, 0.3, 60)
 def preview_spectra(model: str, lidar: LidarDescription, U_m_s: float, *, preset: str = "neutral",
                     f_hz=DEFAULT_F_HZ, radius_m: float | None = None, frozen: bool = False,
                     **options) -> PreviewSpectra:
-    """S_RR, S_LL, S_RL of ``lidar`` at ``f_hz`` [Hz] for the preset's model parameters at ``U_m_s`` [m/s].
-
-    ``radius_m`` [m] defaults to the lidar's rotor; ``frozen``: no eddy lifetime (Kaimal: a_x = b_x = 0);
-    ``**options`` go to the model's preview. ParameterError for an unknown model or preset, U out of range,
-    non-positive frequencies, or a beam not looking upstream."""
+    """S_RR, S_LL, S_RL of ``lidar`` at ``f_hz`` [Hz] for the preset's model parameters at ``U_m_s`` [m/s]; ``radius_m``
+    [m] defaults to the lidar's rotor; ``frozen``: no eddy lifetime (Kaimal: a_x = b_x = 0); ``**options`` go to the
+    model's preview. ParameterError for an unknown model or preset, U out of range, non-positive frequencies, or a beam
+    not looking upstream."""
     check_choice("model", model, MODELS)
     R = lidar.rotor_radius_m if radius_m is None else radius_m
     preview = resolve(declaration(model).preview, "virtual_lidar")

@@ -62,10 +62,9 @@ def kaimal_store_preview(fs, description, f_hz, radius_m: float):
 
 
 def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int | None = None):
-    """The expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] of ``description`` on store ``fs`` at ``f_hz`` > 0.
-
-    With ``n_samples`` the result's ``n_eff`` holds the equivalent independent segments per bin. ParameterError if
-    the store's model has no lidar theory, or a Kaimal store's options are outside it."""
+    """The expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] of ``description`` on store ``fs`` at ``f_hz`` > 0; with
+    ``n_samples`` the result's ``n_eff`` holds the equivalent independent segments per bin. ParameterError if the
+    store's model has no lidar theory, or a Kaimal store's options are outside it."""
     from turbgen.virtual_lidar.welch_expectation import expected_welch, theory_nodes
 
     record_s = fs.grid.nt * fs.grid.dt_s
@@ -75,9 +74,8 @@ def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int |
 
 @dataclass
 class LidarReport:
-    """The virtual lidar's result on a store against the theory (:func:`lidar_report`).
-
-    ``f_hz`` [Hz] the bins where the theory is evaluated; ``theory_numbers`` k05_rad_m, d_eddy_min_m, cutoff_hz."""
+    """The virtual lidar's result on a store against the theory (:func:`lidar_report`): ``f_hz`` [Hz] the bins where the
+    theory is evaluated, ``theory_numbers`` k05_rad_m, d_eddy_min_m, cutoff_hz."""
     store: str
     lidar: object
     run: LidarRun
@@ -213,10 +211,9 @@ class LidarReport:
 
 def lidar_report(fs, lidar=None, *, rotor_radius_m=None, add_mean_wind=False, shear_exponent=0.2,
                  nperseg=None, mean_wind=None) -> LidarReport:
-    """Run the virtual lidar on the open store ``fs`` and compare with theory.
-
-    ``lidar``: a description, preset or file (default DEFAULT_LIDAR); the rest as :func:`run_lidar`. ParameterError
-    for an unknown lidar, one that does not fit the store, a signal too short, or a model without lidar theory."""
+    """Run the virtual lidar on the open store ``fs`` and compare with theory; ``lidar``: a description, preset or file
+    (default DEFAULT_LIDAR); the rest as :func:`run_lidar`. ParameterError for an unknown lidar, one that does not fit
+    the store, a signal too short, or a model without lidar theory."""
     from turbgen.virtual_lidar.description import LidarDescription, load_lidar
 
     desc = lidar if isinstance(lidar, LidarDescription) else load_lidar(lidar or DEFAULT_LIDAR)

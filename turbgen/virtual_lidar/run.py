@@ -66,11 +66,10 @@ def check_lidar_fits(description, grid) -> None:
 
 def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shear_exponent=0.2,
               nperseg=None, mean_wind=None) -> LidarRun:
-    """Sample ``fs`` with ``description`` and estimate the simulated preview quality.
-
-    ``description``: any object with ``measurement_points()`` and ``schedule(duration_s)``; ``rotor_radius_m`` [m]
-    (None: the validator's default); mean wind as in :func:`turbgen.virtual_lidar.sampling.sample`. ParameterError
-    for a radius that does not fit the grid, a lidar that does not fit the store, no plane x = 0, or a short signal."""
+    """Sample ``fs`` with ``description`` and estimate the simulated preview quality; ``description``: any object with
+    ``measurement_points()`` and ``schedule(duration_s)``; ``rotor_radius_m`` [m] (None: the validator's default); mean
+    wind as in :func:`turbgen.virtual_lidar.sampling.sample`. ParameterError for a radius that does not fit the grid, a
+    lidar that does not fit the store, no plane x = 0, or a short signal."""
     # the estimators here only: placing lidar data (constrained runs) needs this module but not scipy.signal
     from turbgen.virtual_lidar import compare, signals
     from turbgen.validation.estimators import WelchSetup

@@ -71,9 +71,8 @@ def _plane_index(grid, x: float, beam: int, gate: int) -> int:
 
 
 def check_measurements(fs, measurements) -> list[int]:
-    """Check the measurements against store ``fs``; return each one's plane index.
-
-    ParameterError for bad weights, n not a unit vector, a gate not on a plane, or a point off the yz field."""
+    """Check the measurements against store ``fs`` and return each one's plane index; ParameterError for bad weights, n
+    not a unit vector, a gate not on a plane, or a point off the yz field."""
     g = fs.grid
     y, z = g.y(), g.z()
     planes = []
@@ -135,11 +134,10 @@ def _heights(hub_height_m: float, points_m: np.ndarray) -> np.ndarray:
 
 def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = False,
            shear_exponent: float = 0.2, mean_wind=None) -> LidarSamples:
-    """Sample store ``fs`` with ``measurements`` at the physical times ``times_s`` [s], whole scans only.
-
+    """Sample store ``fs`` with ``measurements`` at the physical times ``times_s`` [s], whole scans only;
     ``beam_of_sample``: one beam at a time in a repeating order. ``add_mean_wind``: the power law with
-    ``shear_exponent`` [-] or ``mean_wind`` (as the exports apply it). ParameterError as :func:`check_measurements`,
-    for a bad schedule, a store shorter than two scans, a shear exponent outside [-1, 1] or a point below ground."""
+    ``shear_exponent`` [-] or ``mean_wind`` (as the exports apply it). ParameterError as :func:`check_measurements`, for
+    a bad schedule, a store shorter than two scans, a shear exponent outside [-1, 1] or a point below ground."""
     shear_exponent = check_range("shear exponent", shear_exponent, -1.0, 1.0)  # the exports' range
     g, U = fs.grid, fs.U_m_s
     planes = check_measurements(fs, measurements)
@@ -322,9 +320,8 @@ def apply_los(op: LosOperator, read) -> np.ndarray:
 
 
 def mean_wind_los_series(measurements, times_s: np.ndarray, U_m_s: float, hub_height_m: float, mean_wind) -> np.ndarray:
-    """The line-of-sight speed (n_scan, J) [m/s] of ``mean_wind`` alone: what :func:`sample` adds.
-
-    ParameterError for a turning mean wind or a probe point below the ground."""
+    """The line-of-sight speed (n_scan, J) [m/s] of ``mean_wind`` alone: what :func:`sample` adds; ParameterError for a
+    turning mean wind or a probe point below the ground."""
     if mean_wind.turns:
         raise ParameterError(f"lidar: the mean wind turns ({mean_wind.describe()}), which turns the fluctuations' "
                              "line of sight too; its line-of-sight part alone is not defined")

@@ -33,8 +33,7 @@ def lidar_estimate(samples, U_m_s: float):
 
 
 def rotor_average(fs, radius_m: float, t_s: np.ndarray, chunk: int | None = None) -> tuple[np.ndarray, float]:
-    """u_RR [m/s] at stored times ``t_s`` [s] and TI_R [-] (Schlipf et al. 2020, Eq. 3) of the disc at x = 0.
-
+    """u_RR [m/s] at stored times ``t_s`` [s] and TI_R [-] (Schlipf et al. 2020, Eq. 3) of the disc at x = 0;
     ParameterError without a plane x = 0."""
     g = fs.grid
     xs = g.x()
@@ -62,10 +61,9 @@ def lidar_ti(samples, U_m_s: float) -> float:
 
 
 def welch_rl(u_ll: np.ndarray, u_rr: np.ndarray, setup: WelchSetup) -> dict:
-    """Welch spectra of u_LL and u_RR [m/s] with the Hann window of ``setup``, segment means removed.
-
-    Returns ``f_hz``, ``S_LL``, ``S_RR`` [m^2 s^-2 Hz^-1], ``S_RL``, ``coh2_RL``, ``G_RL`` = |S_RL| / S_LL,
-    ``n_segments``, ``n_eff``, ``setup``. ParameterError for fewer than two segments."""
+    """Welch spectra of u_LL and u_RR [m/s] with the Hann window of ``setup``, segment means removed: ``f_hz``,
+    ``S_LL``, ``S_RR`` [m^2 s^-2 Hz^-1], ``S_RL``, ``coh2_RL``, ``G_RL`` = |S_RL| / S_LL, ``n_segments``, ``n_eff``,
+    ``setup``. ParameterError for fewer than two segments."""
     starts = segment_starts(u_ll.size, setup)
     if len(starts) < 2:
         raise ParameterError(f"lidar signal of {u_ll.size} samples is too short for segments of {setup.nperseg}")

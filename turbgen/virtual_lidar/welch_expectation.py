@@ -56,9 +56,8 @@ class ExpectedWelch(PreviewSpectra):
 
 def expected_welch(spectra: PreviewSpectra, f_bins_hz, setup: WelchSetup, record_s: float,
                    n_samples: int | None = None) -> ExpectedWelch:
-    """Expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] at ``f_bins_hz`` for a record of ``record_s`` [s].
-
-    Their coh2_RL, G_RL are what the Welch estimates target; ``n_samples`` adds :func:`effective_segments`."""
+    """Expected Welch S_RR, S_LL, S_RL [m^2 s^-2 Hz^-1] at ``f_bins_hz`` for a record of ``record_s`` [s]; their
+    coh2_RL, G_RL are what the Welch estimates target; ``n_samples`` adds :func:`effective_segments`."""
     f_bins = np.asarray(f_bins_hz, dtype=float)
     nodes, lines = theory_nodes(f_bins, setup, record_s)
     if nodes.size == lines.size:
@@ -74,11 +73,10 @@ def expected_welch(spectra: PreviewSpectra, f_bins_hz, setup: WelchSetup, record
 
 
 def effective_segments(S_RR, S_LL, lines_hz, f_bins_hz, setup: WelchSetup, n_samples: int) -> np.ndarray:
-    """Equivalent number of independent segments [-] of the Welch gamma^2_RL of one record, per bin.
-
-    n = E[P]^2 / Var[P] of each Welch estimate over the actual segment starts (exact for Gaussian lines, Isserlis);
-    unlike ``WelchSetup.effective_segments`` (Welch 1967) it holds where the spectrum is steep across the window's
-    lobe. Returns sqrt(n_RR n_LL), the n of Goodman's law; independent records add theirs."""
+    """Equivalent number of independent segments [-] of the Welch gamma^2_RL of one record, per bin: n = E[P]^2 / Var[P]
+    of each Welch estimate over the actual segment starts (exact for Gaussian lines, Isserlis); unlike
+    ``WelchSetup.effective_segments`` (Welch 1967) it holds where the spectrum is steep across the window's lobe.
+    Returns sqrt(n_RR n_LL), the n of Goodman's law; independent records add theirs."""
     lines = np.asarray(lines_hz, dtype=float)
     m = np.rint(np.asarray(f_bins_hz, dtype=float) * setup.nperseg * setup.dt_s).astype(int)
     starts = np.asarray(list(segment_starts(n_samples, setup)), dtype=float)

@@ -63,9 +63,8 @@ class FitData:
 
 
 def detrended(x: np.ndarray, where) -> tuple[np.ndarray, list]:
-    """The columns of ``x`` (nt, P) [m/s] minus their least-squares lines through their finite values, and a note
-    for every column whose line rises over the record by more than the standard deviation about it (``where(k)``
-    names column k)."""
+    """The columns of ``x`` (nt, P) [m/s] minus their least-squares lines through their finite values, and a note for
+    every column whose line rises over the record by more than the sd about it (``where(k)`` names column k)."""
     ok = np.isfinite(x)
     w = ok.astype(float)
     t = np.arange(x.shape[0], dtype=float)[:, None]

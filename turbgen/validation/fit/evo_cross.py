@@ -31,8 +31,7 @@ def _cov4(g: np.ndarray, index: np.ndarray, ij: tuple, ac: tuple, kl: tuple, bd:
 
 def coherence_spectra_corr(g: np.ndarray, index: np.ndarray, pair_sites: list, sets: dict, used: tuple
                            ) -> np.ndarray:
-    """(nbands, npairs, k) correlation of each pair's co-coherence estimate with each spectrum's (module docstring).
-
+    """(nbands, npairs, k) correlation of each pair's co-coherence estimate with each spectrum's (module docstring);
     ``pair_sites``: per pair of x values the (P,) site indices at x_i and at x_j of its points; ``sets``: spectrum ->
     site indices of its points (``covariance.point_sets``); ``index``: pair index into the separations of ``g``."""
     uu = (0, 0)

@@ -43,9 +43,8 @@ PASSES = 12  # re-weighting passes: u's weights can make the passes alternate ab
 
 def gls(residual, covariance, x0, lo, hi) -> tuple:
     """Iteratively re-weighted generalised least squares: minimise |C^-1/2 residual(x)|^2, C = covariance(x) at the
-    previous pass's x, until no parameter moves by MOVE_TOL sd (at most PASSES passes).
-
-    Returns (scipy solution, (J^T W J)^-1, converged)."""
+    previous pass's x, until no parameter moves by MOVE_TOL sd (at most PASSES passes): (scipy solution, (J^T W J)^-1,
+    converged)."""
     x, converged = np.clip(np.asarray(x0, float), lo, hi), False
     for _ in range(PASSES):
         chol = np.linalg.cholesky(covariance(x))

@@ -111,9 +111,8 @@ class _Problem:
 
 
 def fit_coherence(data, bands, model, lines) -> CoherenceFit | str:
-    """a and Lc fitted to the u co-coherence of ``data`` (module docstring), or one line saying why not.
-
-    ``bands``, ``model``: the Welch bands and ``kaimal.KaimalBands`` of the one-point fit; ``lines``: its u lines."""
+    """a and Lc fitted to the u co-coherence of ``data`` (module docstring), or one line saying why not; ``bands``,
+    ``model``: the Welch bands and ``kaimal.KaimalBands`` of the one-point fit; ``lines``: its u lines."""
     if "u" not in data.series:
         return "a_yz, lc_m: not identified (the data hold no u)"
     classes = distance_classes(np.asarray(data.sites_m, float)[np.asarray(data.columns["u"])])

@@ -102,11 +102,9 @@ def _means(series: list, parts: int) -> np.ndarray:
 
 
 def fit_mean_wind(ps, hub_height_m: float | None = None) -> MeanWindFit:
-    """The mean wind of the point-series file ``ps`` (turbgen.spec.constraints.PointSeries, None for a field;
-    module docstring).
-
-    ``hub_height_m`` [m] places sensors given by z_m (relative to the hub) and picks the sensor of the turbulence
-    intensity; sensors given by height_m need none."""
+    """The mean wind of the point-series file ``ps`` (turbgen.spec.constraints.PointSeries, None for a field; module
+    docstring); ``hub_height_m`` [m] places sensors given by z_m (relative to the hub) and picks the sensor of the
+    turbulence intensity; sensors given by height_m need none."""
     if ps is None or not ps.total_wind:
         return _none("no total-wind sensor data (a field, or fluctuations): no mean wind")
     sensors = [s for s in ps.sensors if "u" in s.series]
