@@ -222,6 +222,11 @@ def test_a_replay_of_masts_off_the_wind_places_them_in_the_wind_s_frame(evolving
     # on the file's line (y = 0 there) the field is not the data
     j0 = int(np.searchsorted(ds.y.values, 0.0)) - 1
     assert np.abs(w[ok, j0] - expected[ok]).max() > 100 * tol
+    narrow = [*grid[:4], "--ny", "4", *grid[6:]]  # y from -9 to 9 m: the turned mast is outside, the file's inside
+    r = CliRunner().invoke(cli, ["mann", "--constrain", str(path), "--fit", "--evo", "frozen", *narrow, "--hub-height",
+                                 "90", "--out", str(tmp_path / "n.zarr")])  # fmt: skip
+    assert r.exit_code == 2 and not (tmp_path / "n.zarr").exists(), r.output
+    assert f"m1z3: y (turned into the wind's frame) = {y:g} m is outside the field (-9 .. 9 m)" in r.output, r.output
 
 
 def test_incoherent_masts_give_only_an_upper_bound():

@@ -123,7 +123,8 @@ def _point_streams(run: MannRun, f: PointSeries, sigma: float) -> list[PlacedStr
         where = f"constraint file {f.source}, {s.name}"
         z = s.z_m if s.z_m is not None else s.height_m - run.hub_height_m
         p = _plane(run, s.x_m, where, s.plane_x_m)
-        ty = _axis_terms(s.y_m, g.y(), g.dy_m, "y", where)
+        ty = _axis_terms(s.y_m, g.y(), g.dy_m, "y" if s.plane_x_m is None else "y (turned into the wind's frame)",
+                         where)
         tz = _axis_terms(z, g.z(), g.dz_m, "z" if s.z_m is not None else f"z (height {s.height_m:g} m less the hub "
                          f"height {run.hub_height_m:g} m, `hub_height_m`)", where)
         series, shift = sensor_fluctuations(f, s, run.U_m_s, run.hub_height_m)
