@@ -126,14 +126,15 @@ def test_the_snapshot_marks_the_measurement_points_of_its_plane_only():
 
     from turbgen.service.field_view import _measurement_points
 
-    streams = [{"name": "a", "x_m": 0.0, "y_m": 1.0, "z_m": 2.0}, {"name": "b", "x_m": 50.0, "y_m": 0.0, "z_m": 0.0},
-               {"name": "los", "x_m": 0.0, "y_m": None, "z_m": None},
+    streams = [{"name": "a", "x_m": 0.0, "y_m": 1.0, "z_m": 2.0, "plane": 0},
+               {"name": "b", "x_m": 50.0, "y_m": 0.0, "z_m": 0.0, "plane": 1},
+               {"name": "los", "x_m": 0.0, "y_m": None, "z_m": None, "plane": 0},
                {"name": "turned", "x_m": 49.24, "y_m": 8.68, "z_m": 0.0, "plane": 1}]  # fmt: skip
     constrained = SimpleNamespace(attrs={"constraints": {"streams": streams}})
-    assert [s["name"] for s in _measurement_points(constrained, 0, 0.0)] == ["a"]
+    assert [s["name"] for s in _measurement_points(constrained, 0)] == ["a"]
     # a replay's sensor turned into the wind's frame: on plane 1 (its file's x, 50 m) at its turned x
-    assert [s["name"] for s in _measurement_points(constrained, 1, 50.0)] == ["b", "turned"]
-    assert _measurement_points(SimpleNamespace(attrs={}), 0, 0.0) == []
+    assert [s["name"] for s in _measurement_points(constrained, 1)] == ["b", "turned"]
+    assert _measurement_points(SimpleNamespace(attrs={}), 0) == []
 
 
 @pytest.mark.parametrize("key", ["spectrum", "coherence"])

@@ -53,7 +53,7 @@ def build_snapshot(store: Path, component: str, plane: int, it: int, sigma: floa
     ax = fig.subplots()
     mesh = ax.pcolormesh(y, z, frame.T, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="nearest")
     fig.colorbar(mesh, ax=ax, label=f"{component} [m/s]")
-    for s in _measurement_points(fs, plane, float(g.x_m[plane])):
+    for s in _measurement_points(fs, plane):
         ax.plot(s["y_m"], s["z_m"], "k+", markersize=12, markeredgewidth=2)
     ax.set(xlabel="y [m]", ylabel="z [m]", aspect="equal",
            title=f"{component} at t = {it * g.dt_s:g} s, x = {g.x_m[plane]:g} m")  # fmt: skip
@@ -62,11 +62,10 @@ def build_snapshot(store: Path, component: str, plane: int, it: int, sigma: floa
         fig.savefig(f, format="png")
 
 
-def _measurement_points(fs, plane: int, x_m: float) -> list[dict]:
-    """The measurement points of a constrained store on plane ``plane`` at ``x_m`` [m] (none for other stores): by
-    the stream's plane (a replay's sensor turned into the wind's frame sits on its file x's plane), else by its x."""
+def _measurement_points(fs, plane: int) -> list[dict]:
+    """The measurement points of a constrained store on plane ``plane`` (none for other stores), by the stream's
+    recorded plane (a replay's sensor turned into the wind's frame sits on its file x's plane, off its turned x)."""
     record = fs.attrs.get("constraints")
     if not record:
         return []
-    return [s for s in record["streams"] if s.get("y_m") is not None
-            and (s["plane"] == plane if "plane" in s else abs(s["x_m"] - x_m) < 1e-6)]
+    return [s for s in record["streams"] if s.get("y_m") is not None and s["plane"] == plane]
