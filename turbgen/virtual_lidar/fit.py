@@ -2,11 +2,11 @@
 
 ae and L are fitted to the Welch spectrum of v_los pooled over every beam and gate against the gates' mean LOS spectrum
 F(k1) = ∫ n_i n_j Phi_ij |phi_hat(k . n)|^2 dk2 dk3 (Guo et al. 2023, Eq. 29-30): on the box of the Mann store the
-dataset was sampled from while it is there, else continuous, (k2, k3) integrated out to TAIL times the highest k1 the
-probe passes. Gamma is held: the LOS spectrum is nearly u's. Generalised least squares in (ln ae, ln L), re-weighted at
-the fitted model, by the bands' exact covariance from one point's lines times the gates' point correlation
-(benchmarks/fit_lidar.md); L's interval inverts the Wald test with the sd at each L. F is tabulated in ln L (step
-DLN_L) at N_K1 nodes, interpolated cubic. The evolution time is fitted to the co-coherence of gates at different
+dataset was sampled from while it is there, each probe point read as the sampler reads it (``sampled_gain``), else
+continuous, (k2, k3) integrated out to TAIL times the highest k1 the probe passes. Gamma is held: the LOS spectrum
+is nearly u's. Generalised least squares in (ln ae, ln L), re-weighted at the fitted model, by the bands' exact
+covariance from one point's lines times the gates' point correlation (benchmarks/fit_lidar.md); L's interval inverts
+the Wald test with the sd at each L. F is tabulated in ln L (step DLN_L) at N_K1 nodes, interpolated cubic. The evolution time is fitted to the co-coherence of gates at different
 ranges of a beam along x (Guo et al. 2022), against a model made as the spectra's (``_with_gates``)."""
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from turbgen.spec.defaults import MANN_DEFAULTS
 from turbgen.theory import ranges
 from turbgen.theory.lattice import line_frequencies
 from turbgen.theory.lidar_geometry import Measurements
-from turbgen.theory.lidar_lattice import BoxLattice
+from turbgen.theory.lidar_lattice import BoxLattice, lattice_tensor, lattice_wavenumbers
 from turbgen.theory.lidar_preview import KAPPA_MAX, mann_preview_spectra
 from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.params import MannParams
@@ -41,6 +41,7 @@ from turbgen.validation.store_run import MannBox, mann_box_from_attrs
 from turbgen.validation.welch_kernel import WelchKernel
 from turbgen.virtual_lidar.dataset import LidarData, is_lidar_dataset, read_dataset
 from turbgen.virtual_lidar.description import LidarDescription
+from turbgen.virtual_lidar.sampling import interp_axis
 
 N_K1 = 40  # k1 nodes of the LOS spectra (log-spaced over the record's lines)
 DLN_L = 0.25  # step of the length-scale grid in ln L
@@ -73,30 +74,68 @@ def probe_gain(k1: np.ndarray, meas, U_m_s: float, store: SampledStore | None) -
     gain = np.zeros(k1.size)
     for t0 in store.phases_s[int(meas.beam[0])]:
         phi = ((t0 + (meas.focus_m[0, 0] + s) / U_m_s) / dt) % 1.0
-        phi = np.where(np.minimum(phi, 1 - phi) <= 1e-9, 0.0, phi)  # a node within rounding (sampling._interp_axis)
+        phi = np.where(np.minimum(phi, 1 - phi) <= 1e-9, 0.0, phi)  # a node within rounding (sampling.interp_axis)
         g = (1 - phi) * np.exp(-1j * om * phi * dt) + phi * np.exp(1j * om * (1 - phi) * dt)
         gain += np.abs((w * np.exp(1j * k1[:, None] * s) * g).sum(axis=1)) ** 2
     return gain / len(store.phases_s[int(meas.beam[0])])
 
 
-def los_spectrum(k1: np.ndarray, meas, params: MannParams, U_m_s: float, store: SampledStore | None) -> np.ndarray:
-    """Two-sided spectrum F(k1) [m^3 s^-2] of one measurement's v_los (``meas`` of one row) at k1 > 0 [rad/m]."""
-    box = None if store is None else store.box
+def _cell_transfer(kh: np.ndarray, frac: np.ndarray) -> np.ndarray:
+    """Transfer of linear interpolation at a fraction ``frac`` of a cell, kh = wavenumber x cell width: a mode read
+    between its nodes, (1 - a) exp(-i kh a) + a exp(i kh (1 - a)), relative to the mode at the point."""
+    return (1 - frac) * np.exp(-1j * kh * frac) + frac * np.exp(1j * kh * (1 - frac))
+
+
+def sampled_gain(k1: np.ndarray, meas, U_m_s: float, store: SampledStore) -> np.ndarray:
+    """(k1.size, nyp nzp) |A(k)|^2 on the box's lattice of one measurement (``meas`` of one row) as the sampler reads
+    it: A = sum_s w_s exp(i (-k1 x_s + k2 y_s + k3 z_s)) H_t H_y H_z over its probe points p_s, H the transfers of
+    the linear interpolation in stored time T + x_s / U (averaged over the beam's scan phases) and bilinear in (y, z)
+    between the box's nodes (``_cell_transfer``; ``sampling.los_operator`` reads the same cells). The tensor's k1 runs
+    along the wind and x upstream, so the store holds mode k as exp(i (-k1 U t + k2 y + k3 z)); for a beam along x
+    the sign is immaterial (``probe_gain``), for an inclined one it pairs k1 with (k2, k3) as the synthesis did.
+    Without H it is phi_hat(k . n)^2 (Guo et al. 2023, Eq. 30); with it an inclined beam's spectrum is the store's."""
+    g, live = store.grid, meas.weights[0] > 0
+    p, w = meas.sample_points_m()[0][live], meas.weights[0][live]
+    k2, k3 = lattice_wavenumbers(store.box)
+    _, ay = interp_axis(float(g.y()[0]), g.dy_m, g.ny, p[:, 1])
+    _, az = interp_axis(float(g.z()[0]), g.dz_m, g.nz, p[:, 2])
+    space = w * np.exp(1j * (np.outer(k2, p[:, 1]) + np.outer(k3, p[:, 2])))  # (nodes, K)
+    space *= _cell_transfer(k2[:, None] * g.dy_m, ay) * _cell_transfer(k3[:, None] * g.dz_m, az)
+    phases = store.phases_s[int(meas.beam[0])]
+    out = np.zeros((k1.size, k2.size))
+    for t0 in phases:
+        _, at = interp_axis(0.0, g.dt_s, g.nt, t0 + p[:, 0] / U_m_s)
+        along = np.exp(-1j * np.outer(k1, p[:, 0])) * _cell_transfer(-k1[:, None] * U_m_s * g.dt_s, at)
+        out += np.abs(along @ space.T) ** 2
+    return out / len(phases)
+
+
+def _sampled_los(k1: np.ndarray, meas, params: MannParams, U_m_s: float, store: SampledStore,
+                 gain: np.ndarray) -> np.ndarray:
+    """F(k1) [m^3 s^-2] of one measurement on the box's lattice: sum_k n . Phi(k) n |A(k)|^2 (``sampled_gain``)."""
+    n = meas.n[0]
+    return np.array([np.einsum("i,ijk,j->k", n, lattice_tensor(store.box, float(k), params, U_m_s), n) @ gk
+                     for k, gk in zip(k1, gain)])
+
+
+def los_spectrum(k1: np.ndarray, meas, params: MannParams, U_m_s: float, store: SampledStore | None,
+                 gain: np.ndarray | None = None) -> np.ndarray:
+    """Two-sided spectrum F(k1) [m^3 s^-2] of one measurement's v_los (``meas`` of one row) at k1 > 0 [rad/m]: as
+    sampled from ``store`` (its ``sampled_gain`` at k1, computed if None), else of the continuous tensor."""
+    if store is not None:
+        return _sampled_los(k1, meas, params, U_m_s, store,
+                            sampled_gain(k1, meas, U_m_s, store) if gain is None else gain)
     if meas.n[0, 0] <= 1 - ALONG_X:
-        return _quadrature(k1, meas, params, U_m_s, box)
-    if box is None:  # phi_hat(k . n) = phi_hat(k1): u's spectrum filtered
-        L = params.length_scale_m
-        f11 = params.ae * L ** (5 / 3) * scaled_spectra(k1 * L, params.gamma)["uu"]
-    else:  # the box's u spectrum at a point
-        f11 = _quadrature(k1, replace(meas, offsets_m=np.zeros((1, 1)), weights=np.ones((1, 1))), params, U_m_s, box)
-    return f11 * probe_gain(k1, meas, U_m_s, store)
+        return _quadrature(k1, meas, params, U_m_s)
+    L = params.length_scale_m  # phi_hat(k . n) = phi_hat(k1): u's spectrum filtered
+    return params.ae * L ** (5 / 3) * scaled_spectra(k1 * L, params.gamma)["uu"] * probe_gain(k1, meas, U_m_s, None)
 
 
-def _quadrature(k1, meas, params, U_m_s, box) -> np.ndarray:
-    """F(k1) of one measurement by the preview's (k2, k3) quadrature or lattice sum (module docstring)."""
+def _quadrature(k1, meas, params, U_m_s) -> np.ndarray:
+    """F(k1) of one measurement by the preview's (k2, k3) quadrature (module docstring)."""
     passed = k1[discrete_transform(k1 * meas.n[0, 0], meas.offsets_m[0], meas.weights[0]) ** 2 >= GAIN_MIN]
-    kappa_max = KAPPA_MAX if box is not None else max(KAPPA_MAX, TAIL * float(passed.max(initial=k1[0])))
-    s = mann_preview_spectra(k1 * U_m_s / (2 * np.pi), meas, params, U_m_s, 1.0, box=box, kappa_max=kappa_max)
+    kappa_max = max(KAPPA_MAX, TAIL * float(passed.max(initial=k1[0])))
+    s = mann_preview_spectra(k1 * U_m_s / (2 * np.pi), meas, params, U_m_s, 1.0, kappa_max=kappa_max)
     return meas.n[0, 0] ** 2 * s.S_LL * U_m_s / (4 * np.pi)  # S_LL: v_los / n1, one-sided in f
 
 
@@ -109,18 +148,19 @@ class LosModel:
         self.ln_k1, self.dk1 = np.log(k1), 2 * np.pi / (bands.nt * bands.setup.dt_s * U_m_s)
         self.nodes = np.geomspace(k1[0], k1[-1], N_K1)
         self.kernel = WelchKernel(bands.setup, bands.nt)
-        own = (meas.n[:, :1] > 1 - ALONG_X) & (store is not None)  # sampled along x: each gate its own phases
-        key = np.hstack([meas.n, meas.offsets_m, meas.weights, np.where(own, meas.focus_m[:, :1], 0.0),
-                         np.where(own, meas.beam[:, None], 0)]).round(12)
+        own = store is not None  # sampled: each gate its own phases and cells
+        key = np.hstack([meas.n, meas.offsets_m, meas.weights, meas.focus_m * own, meas.beam[:, None] * own]).round(12)
         _, first, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
         self.classes = [(meas.subset([i]), c / meas.count) for i, c in zip(first, counts)]
+        self.gains = [None if store is None else sampled_gain(self.nodes, m, U_m_s, store) for m, _ in self.classes]
         self.table: dict = {}  # index j of ln L = j DLN_L -> ln F at the nodes (ae = 1)
 
     def _ln_f(self, j: int) -> np.ndarray:
         """ln of the measurements' mean LOS spectrum F(k1) [m^3 s^-2] at the nodes for L = exp(j DLN_L), ae = 1."""
         if j not in self.table:
             p = MannParams(1.0, math.exp(j * DLN_L), self.gamma)
-            self.table[j] = np.log(sum(w * los_spectrum(self.nodes, m, p, self.U, self.store) for m, w in self.classes))
+            self.table[j] = np.log(sum(w * los_spectrum(self.nodes, m, p, self.U, self.store, g)
+                                       for (m, w), g in zip(self.classes, self.gains)))
         return self.table[j]
 
     def lines(self, ae: float, length_scale_m: float) -> np.ndarray:
@@ -278,7 +318,8 @@ def _model_note(store) -> str:
     if store is None:
         return "line-of-sight spectra of the continuous Mann tensor with the probe volume (Guo et al. 2023, Eq. 29)"
     return (f"line-of-sight spectra summed over the sampled store's {store.box.nyp} x {store.box.nzp} box with the "
-            "probe volume as sampled (what the box holds; along x with the sampler's interpolation in time)")
+            "probe volume as sampled (what the box holds, read linearly in time and bilinearly across as the sampler "
+            "reads it)")
 
 
 def _with_gates(fd: FitData, meas, fit: MannFit, store: SampledStore | None) -> MannFit:

@@ -103,7 +103,7 @@ def check_measurements(fs, measurements) -> list[int]:
     return planes
 
 
-def _interp_axis(coord0: float, step: float, n: int, values: np.ndarray):
+def interp_axis(coord0: float, step: float, n: int, values: np.ndarray):
     """Lower index and fraction of linear interpolation on a regular axis of n nodes."""
     f = (values - coord0) / step
     f = np.where(np.abs(f - np.round(f)) <= 1e-9, np.round(f), f)  # a node within rounding is the node: the cell
@@ -206,8 +206,8 @@ def _los_with_mean_wind(fs, measurements, planes, T, col, mean_wind):
     for ix, idx in sorted(by_plane.items()):
         pts = [measurements[j].points_m() for j in idx]
         allp = np.concatenate(pts)
-        iy, _ = _interp_axis(y0, g.dy_m, g.ny, allp[:, 1])
-        iz, _ = _interp_axis(z0, g.dz_m, g.nz, allp[:, 2])
+        iy, _ = interp_axis(y0, g.dy_m, g.ny, allp[:, 1])
+        iz, _ = interp_axis(z0, g.dz_m, g.nz, allp[:, 2])
         y_lo, y_hi = int(iy.min()), min(int(iy.max()) + 2, g.ny)
         z_lo, z_hi = int(iz.min()), min(int(iz.max()) + 2, g.nz)
         t_lo = max(0, int(math.floor((T.min() + allp[:, 0].min() / U) / g.dt_s)))
@@ -219,9 +219,9 @@ def _los_with_mean_wind(fs, measurements, planes, T, col, mean_wind):
             m = measurements[j]
             Tm = T[:, col[m.beam]]  # (n_scan,)
             t = Tm[:, None] + p[None, :, 0] / U  # (n_scan, k) stored time
-            it, at = _interp_axis(t_lo * g.dt_s, g.dt_s, t_hi - t_lo, t)
-            jy, ay = _interp_axis(y0 + y_lo * g.dy_m, g.dy_m, y_hi - y_lo, p[:, 1])
-            jz, az = _interp_axis(z0 + z_lo * g.dz_m, g.dz_m, z_hi - z_lo, p[:, 2])
+            it, at = interp_axis(t_lo * g.dt_s, g.dt_s, t_hi - t_lo, t)
+            jy, ay = interp_axis(y0 + y_lo * g.dy_m, g.dy_m, y_hi - y_lo, p[:, 1])
+            jz, az = interp_axis(z0 + z_lo * g.dz_m, g.dz_m, z_hi - z_lo, p[:, 2])
             n = np.asarray(m.n, float)
             shape = box["u"].shape  # flat indices of the corners, shared by the three components
             corners = [((ti * shape[1] + yi) * shape[2] + zi, wc)
@@ -265,9 +265,9 @@ def los_operator(grid, U_m_s: float, measurements, planes, times_s: np.ndarray) 
     for j, (m, p) in enumerate(zip(measurements, per)):
         k = len(p)
         t = times_s[:, j, None] + p[None, :, 0] / U_m_s  # (n_scan, k) stored time
-        it, at = _interp_axis(0.0, g.dt_s, g.nt, t)
-        jy, ay = _interp_axis(y0, g.dy_m, g.ny, p[:, 1])
-        jz, az = _interp_axis(z0, g.dz_m, g.nz, p[:, 2])
+        it, at = interp_axis(0.0, g.dt_s, g.nt, t)
+        jy, ay = interp_axis(y0, g.dy_m, g.ny, p[:, 1])
+        jz, az = interp_axis(z0, g.dz_m, g.nz, p[:, 2])
         w = np.asarray(m.weights, float)
         for r, (ti, yi, zi, wc) in enumerate(_corners(it, at, jy, ay, jz, az, (g.nt, g.ny, g.nz))):
             s = slice(r * k, (r + 1) * k)
@@ -283,11 +283,11 @@ def repeats_every(grid, U_m_s: float, measurements, times_s: np.ndarray, q: int,
     g = grid
     for j, m in enumerate(measurements):
         p, w = m.points_m(), np.abs(np.asarray(m.weights, float))
-        it, at = _interp_axis(0.0, g.dt_s, g.nt, times_s[:, j, None] + p[None, :, 0] / U_m_s)
+        it, at = interp_axis(0.0, g.dt_s, g.nt, times_s[:, j, None] + p[None, :, 0] / U_m_s)
         end = at == 1.0  # the record's last node: the clipped lower cell with all weight on it, as it + 1 with none
         it, at = it + end, at - end
-        _, ay = _interp_axis(g.y()[0], g.dy_m, g.ny, p[:, 1])
-        _, az = _interp_axis(g.z()[0], g.dz_m, g.nz, p[:, 2])
+        _, ay = interp_axis(g.y()[0], g.dy_m, g.ny, p[:, 1])
+        _, az = interp_axis(g.z()[0], g.dz_m, g.nz, p[:, 2])
         live = w > 0
         scale = w * np.maximum(ay, 1 - ay) * np.maximum(az, 1 - az)  # the largest weight a time fraction multiplies
         steps = it[:, live] - it[0, live][None, :]
