@@ -69,6 +69,8 @@ def summary(path: str) -> None:
         n = len(rs)
 
         def cover(name):
+            if not any(r[name] for r in rs):
+                return "—"
             hit = [r[name] is not None and r[name]["ci95"][0] <= r[name]["truth"] <= (r[name]["ci95"][1] or math.inf)
                    for r in rs]
             p = float(np.mean(hit))
