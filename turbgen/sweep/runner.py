@@ -59,8 +59,15 @@ def _own_client(plan: SweepPlan, n: int, processes: bool):
     pids: set[int] = set()  # the workers' (other sweeps of this process keep theirs)
     # a terminal's Ctrl-C goes to the whole process group: only the sweep may see it (it shuts the workers down).
     # The signals stay blocked until the workers ignore them (a worker inherits the starting thread's mask); one
-    # that came meanwhile is raised when they are unblocked, with the cluster up and then closed in order
+    # that came meanwhile is raised when they are unblocked, with the cluster up and then closed in order. The mask
+    # is the main thread's only: another thread (a BLAS or pool thread made earlier) may take the signal, and Python
+    # then runs its handler in the main thread at once, inside distributed's start-up, which may swallow it (a sweep
+    # interrupted so ran to its end) — so the start-up's handlers only record it, and it is raised after them.
     mask = signal.pthread_sigmask(signal.SIG_BLOCK, DEFERRED_SIGNALS) if deferring else None
+    caught: list[int] = []
+    handlers = {s: h for s in DEFERRED_SIGNALS if deferring and (h := signal.getsignal(s)) is not None}  # not C's
+    for sig in handlers:
+        signal.signal(sig, lambda signum, _: caught.append(signum))
     try:
         try:
             cluster = None if plan.scheduler else loopback_cluster(n, 1, processes)
@@ -68,8 +75,12 @@ def _own_client(plan: SweepPlan, n: int, processes: bool):
             if processes and cluster is not None:
                 pids = set(client.run(_ignore_interrupts).values())
         finally:
+            for sig, handler in handlers.items():
+                signal.signal(sig, handler)
             if mask is not None:
                 signal.pthread_sigmask(signal.SIG_SETMASK, mask)  # raises a signal that came during the start-up
+            if caught:
+                signal.raise_signal(caught[0])  # one that another thread took meanwhile
         yield client, cluster
     finally:
         try:
