@@ -6,8 +6,9 @@ dataset was sampled from while it is there, each probe point read as the sampler
 continuous, (k2, k3) integrated out to TAIL times the highest k1 the probe passes. Gamma is held: the LOS spectrum
 is nearly u's. Generalised least squares in (ln ae, ln L), re-weighted at the fitted model, by the bands' exact
 covariance from one point's lines times the gates' point correlation (benchmarks/fit_lidar.md); L's interval inverts
-the Wald test with the sd at each L. F is tabulated in ln L (step DLN_L) at N_K1 nodes, interpolated cubic. The evolution time is fitted to the co-coherence of gates at different
-ranges of a beam along x (Guo et al. 2022), against a model made as the spectra's (``_with_gates``)."""
+the Wald test with the sd at each L. F is tabulated in ln L (step DLN_L) at N_K1 nodes, interpolated cubic. The
+evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (Guo et al. 2022),
+against a model made as the spectra's (``_with_gates``)."""
 
 from __future__ import annotations
 
