@@ -66,19 +66,18 @@ class SampledStore:
 
 def probe_gain(k1: np.ndarray, meas, U_m_s: float, store: SampledStore | None) -> np.ndarray:
     """|H(k1)|^2 of one measurement along x: its probe weights, sum_s w_s exp(i k1 s) (Guo et al. 2023, Eq. 30), or
-    with ``store`` each point as the sampler reads it, linear in stored time T + x/U between samples (a fraction
-    phi: (1 - phi) exp(-i w phi dt) + phi exp(i w (1 - phi) dt) at w = k1 U), averaged over the scans' phases."""
+    with ``store`` each point as the sampler reads it, linear in stored time T + x/U between samples
+    (``_cell_transfer`` at w dt, w = k1 U), averaged over the scans' phases."""
     s, w = meas.offsets_m[0], meas.weights[0]
     if store is None:
         return discrete_transform(k1, s, w) ** 2
-    om, dt = k1[:, None] * U_m_s, store.grid.dt_s
+    g, phases = store.grid, store.phases_s[int(meas.beam[0])]
     gain = np.zeros(k1.size)
-    for t0 in store.phases_s[int(meas.beam[0])]:
-        phi = ((t0 + (meas.focus_m[0, 0] + s) / U_m_s) / dt) % 1.0
-        phi = np.where(np.minimum(phi, 1 - phi) <= 1e-9, 0.0, phi)  # a node within rounding (sampling.interp_axis)
-        g = (1 - phi) * np.exp(-1j * om * phi * dt) + phi * np.exp(1j * om * (1 - phi) * dt)
-        gain += np.abs((w * np.exp(1j * k1[:, None] * s) * g).sum(axis=1)) ** 2
-    return gain / len(store.phases_s[int(meas.beam[0])])
+    for t0 in phases:
+        _, at = interp_axis(0.0, g.dt_s, g.nt, t0 + (meas.focus_m[0, 0] + s) / U_m_s)
+        gain += np.abs((w * np.exp(1j * k1[:, None] * s) * _cell_transfer(k1[:, None] * U_m_s * g.dt_s, at)).sum(
+            axis=1)) ** 2
+    return gain / len(phases)
 
 
 def _cell_transfer(kh: np.ndarray, frac: np.ndarray) -> np.ndarray:
@@ -111,21 +110,21 @@ def sampled_gain(k1: np.ndarray, meas, U_m_s: float, store: SampledStore) -> np.
     return out / len(phases)
 
 
-def _sampled_los(k1: np.ndarray, meas, params: MannParams, U_m_s: float, store: SampledStore,
-                 gain: np.ndarray) -> np.ndarray:
-    """F(k1) [m^3 s^-2] of one measurement on the box's lattice: sum_k n . Phi(k) n |A(k)|^2 (``sampled_gain``)."""
-    n = meas.n[0]
-    return np.array([np.einsum("i,ijk,j->k", n, lattice_tensor(store.box, float(k), params, U_m_s), n) @ gk
-                     for k, gk in zip(k1, gain)])
+def _sampled_los(k1: np.ndarray, terms: list, params: MannParams, U_m_s: float, store: SampledStore) -> np.ndarray:
+    """sum over ``terms`` (n, weight, gain) of weight x F(k1) [m^3 s^-2] on the box's lattice, F = sum_k n . Phi(k) n
+    |A(k)|^2 (``sampled_gain``): the lattice's tensor once per k1 for every measurement."""
+    out = np.zeros(k1.size)
+    for q, k in enumerate(k1):
+        phi = lattice_tensor(store.box, float(k), params, U_m_s)
+        out[q] = sum(w * (np.einsum("i,ijk,j->k", n, phi, n) @ g[q]) for n, w, g in terms)
+    return out
 
 
-def los_spectrum(k1: np.ndarray, meas, params: MannParams, U_m_s: float, store: SampledStore | None,
-                 gain: np.ndarray | None = None) -> np.ndarray:
+def los_spectrum(k1: np.ndarray, meas, params: MannParams, U_m_s: float, store: SampledStore | None) -> np.ndarray:
     """Two-sided spectrum F(k1) [m^3 s^-2] of one measurement's v_los (``meas`` of one row) at k1 > 0 [rad/m]: as
-    sampled from ``store`` (its ``sampled_gain`` at k1, computed if None), else of the continuous tensor."""
+    sampled from ``store`` (``sampled_gain``), else of the continuous tensor."""
     if store is not None:
-        return _sampled_los(k1, meas, params, U_m_s, store,
-                            sampled_gain(k1, meas, U_m_s, store) if gain is None else gain)
+        return _sampled_los(k1, [(meas.n[0], 1.0, sampled_gain(k1, meas, U_m_s, store))], params, U_m_s, store)
     if meas.n[0, 0] <= 1 - ALONG_X:
         return _quadrature(k1, meas, params, U_m_s)
     L = params.length_scale_m  # phi_hat(k . n) = phi_hat(k1): u's spectrum filtered
@@ -160,8 +159,12 @@ class LosModel:
         """ln of the measurements' mean LOS spectrum F(k1) [m^3 s^-2] at the nodes for L = exp(j DLN_L), ae = 1."""
         if j not in self.table:
             p = MannParams(1.0, math.exp(j * DLN_L), self.gamma)
-            self.table[j] = np.log(sum(w * los_spectrum(self.nodes, m, p, self.U, self.store, g)
-                                       for (m, w), g in zip(self.classes, self.gains)))
+            if self.store is None:
+                f = sum(w * los_spectrum(self.nodes, m, p, self.U, None) for m, w in self.classes)
+            else:
+                f = _sampled_los(self.nodes, [(m.n[0], w, g) for (m, w), g in zip(self.classes, self.gains)], p, self.U,
+                                 self.store)
+            self.table[j] = np.log(f)
         return self.table[j]
 
     def lines(self, ae: float, length_scale_m: float) -> np.ndarray:
