@@ -14,6 +14,7 @@ import re
 import signal
 import sys
 import warnings
+from contextlib import contextmanager
 
 import click
 
@@ -59,8 +60,8 @@ def user_error(exc: TurbgenError) -> UserError:
     return UserError(as_options(str(exc)), code)
 
 
-# main() (the console script) pauses the cyclic garbage collector until the command's module is imported
-_startup_collector_paused = False
+# set by main(), the console script (run_imports)
+_console_script = False
 
 # command name -> (module, attribute), imported only when the command runs (or for --help); a model's command is
 # declared with the model (turbgen.spec.models), else turbgen.cli.model builds it
@@ -101,15 +102,11 @@ class TurbgenGroup(click.Group):
         if cmd_name not in COMMANDS:
             return None
         module, attr = COMMANDS[cmd_name]
-        command = getattr(importlib.import_module(module), attr)
+        with run_imports():
+            command = getattr(importlib.import_module(module), attr)
         if not isinstance(command, click.Command):  # turbgen.cli.model's factory
             command = command(cmd_name)
         command.short_help = SUMMARIES[cmd_name]
-        if _startup_collector_paused and not gc.isenabled():
-            # the console script's imports (~10^6 objects that live as long as the process) go to the permanent
-            # generation, so the cyclic collector never traverses them again
-            gc.freeze()
-            gc.enable()
         return command
 
     def format_commands(self, ctx, formatter):
@@ -204,6 +201,23 @@ def cli(ctx):
         ctx.with_resource(interruption.exit_on_signals())
 
 
+@contextmanager
+def run_imports():
+    """Around the imports of a command (get_command) or of its work (in the command, so --help and usage errors skip
+    them): in the console script pyfftw first and lean, the cyclic collector paused, then the ~10^6 objects, as
+    long-lived as the process, frozen out of it (gc.freeze)."""
+    if not _console_script or not gc.isenabled():
+        yield
+        return
+    _import_pyfftw_lean()
+    gc.disable()
+    try:
+        yield
+    finally:
+        gc.freeze()
+        gc.enable()
+
+
 def _import_pyfftw_lean() -> None:
     """Import pyfftw without its optional dask interface (dask.array and pandas: start-up and memory turbgen never
     uses) for this command's process only: that import fails fast while pyfftw loads, and works again after."""
@@ -219,15 +233,10 @@ def _import_pyfftw_lean() -> None:
 
 
 def main():
-    """Console-script entry point (the cyclic garbage collector is paused until the command is imported)."""
-    global _startup_collector_paused
+    """Console-script entry point (its imports are frozen out of the cyclic collector: run_imports)."""
+    global _console_script
     # turbgen parallelises with its own thread pools: OpenBLAS threads would only oversubscribe the cores (set before
     # numpy loads OpenBLAS; a user's own setting is kept). The fields keep their bits (OpenBLAS does not split sums)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    _import_pyfftw_lean()
-    _startup_collector_paused = True
-    gc.disable()
-    try:
-        cli()
-    finally:
-        gc.enable()
+    _console_script = True
+    cli()

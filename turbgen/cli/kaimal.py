@@ -7,10 +7,10 @@ from dataclasses import replace
 
 import click
 
+from turbgen.cli import run_imports
 from turbgen.cli.options import parse_floats, plane_positions
 from turbgen.cli.run_options import constraint_options, fft_backend_option, grid_options
 from turbgen.resources import format_bytes
-from turbgen.runs.kaimal import run_kaimal
 from turbgen.spec.defaults import DEFAULT_A_X, DEFAULT_B_X
 from turbgen.spec.defaults import KAIMAL_DEFAULTS as D
 from turbgen.spec.defaults import KAIMAL_GRID as G
@@ -89,7 +89,9 @@ def kaimal(**opt):
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
     plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
-    from turbgen.api.fields import check_kaimal_output, kaimal_run
+    with run_imports():
+        from turbgen.api.fields import check_kaimal_output, kaimal_run
+        from turbgen.runs.kaimal import run_kaimal
 
     # the run as turbgen.kaimal makes it, and the preset's keys at its U (they also name the default store)
     run, preset_keys = kaimal_run({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],

@@ -8,18 +8,15 @@ from contextlib import contextmanager
 import click
 
 from turbgen import resources
+from turbgen.cli import run_imports
 from turbgen.cli.options import evo_seconds, plane_positions
 from turbgen.cli.run_options import constraint_options, fft_backend_option, grid_options
 from turbgen.resources import default_threads, parse_size
-from turbgen.runs.mann import describe, run_mann
-from turbgen.runs.mann_outofcore import local_cluster, plan_for_budget, remove_stale_scratch
 from turbgen.spec.defaults import MANN_DEFAULTS as D
 from turbgen.spec.defaults import MANN_GRID as G
 from turbgen.spec.mann import OPTIONS as MANN_OPTIONS
 from turbgen.spec.mann import MannRun
 from turbgen.spec.run_inputs import GRID_OPTIONS
-from turbgen.store.paths import check_output_path
-from turbgen.store.writer import check_new_store
 from turbgen.theory.params import LIFETIMES
 from turbgen.theory.ranges import LIMITS
 
@@ -40,6 +37,8 @@ def _dask_client(scheduler, workers: int):
         yield None
         return
     from distributed import Client
+
+    from turbgen.runs.mann_outofcore import local_cluster
 
     if scheduler == "local":
         with local_cluster(workers) as cluster, Client(cluster) as client:
@@ -103,7 +102,12 @@ def mann(**opt):
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
     plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
-    from turbgen.api.fields import constrained_mann_run, mann_run_mapping
+    with run_imports():
+        from turbgen.api.fields import constrained_mann_run, mann_run_mapping
+        from turbgen.runs.mann import describe, run_mann
+        from turbgen.runs.mann_outofcore import plan_for_budget, remove_stale_scratch
+        from turbgen.store.paths import check_output_path
+        from turbgen.store.writer import check_new_store
 
     # the run as turbgen.mann makes it; --constrain/--noise/--conditional-mean or the run file's
     mapping, request = mann_run_mapping({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],

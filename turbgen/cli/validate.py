@@ -7,8 +7,8 @@ import sys
 
 import click
 
-from turbgen.api.products import check_plots_dir
-from turbgen.validation import DEFAULT_ROTOR_RADIUS_M, validate as run_validation
+from turbgen.cli import run_imports
+from turbgen.spec.defaults import DEFAULT_ROTOR_RADIUS_M
 
 
 @click.command("validate")
@@ -26,6 +26,10 @@ def validate(store, as_json, plots_dir, overwrite, rotor_radius):
 
     Exit code 0 when every metric passes, 1 when a metric fails, 2 for usage errors or a path
     that is not a complete turbgen store."""
+    with run_imports():
+        from turbgen.api.products import check_plots_dir
+        from turbgen.validation import validate as run_validation
+
     if plots_dir is not None:
         check_plots_dir(plots_dir, overwrite, "--plots")
     report = run_validation(store, rotor_radius_m=rotor_radius)

@@ -13,6 +13,8 @@ from turbgen.theory import ranges
 # Rotor (x = 0) plus the lidar range gates 50 to 170 m in steps of 13.3 m: 11 planes [m upstream].
 GATES_M = tuple(round(50.0 + 13.3 * i, 9) for i in range(10))
 DEFAULT_PLANES_M = (0.0, *GATES_M)
+# The validator's rotor-effective wind: the NREL 5 MW reference turbine (Jonkman et al. 2009), as in Guo et al. 2023.
+DEFAULT_ROTOR_RADIUS_M = 63.0
 
 # Mann space-time model, neutral class (Guo et al. 2023, Table 1 and Sect. 2.4): L [m], Gamma [-], gamma [s].
 MANN_DEFAULTS = {

@@ -8,6 +8,7 @@ import numpy as np
 
 from turbgen.errors import ParameterError
 from turbgen.grid import Grid
+from turbgen.spec.defaults import DEFAULT_ROTOR_RADIUS_M
 from turbgen.theory import ranges
 
 LONG_POINTS_PER_AXIS = 16  # sub-lattice for the plane-pair cross-spectra: at most 16 x 16 points per plane ...
@@ -26,9 +27,6 @@ def default_separations(grid: Grid) -> tuple[tuple[int, int], ...]:
         if (a, b) != (0, 0) and (a, b) not in seps and (dy_m == 0 or a > 0) and (dz_m == 0 or b > 0):
             seps.append((a, b))
     return tuple(seps)
-
-
-DEFAULT_ROTOR_RADIUS_M = 63.0  # NREL 5 MW reference turbine (Jonkman et al. 2009), as in Guo et al. 2023
 
 
 def rotor_mask(grid: Grid, radius_m: float) -> np.ndarray:
