@@ -92,8 +92,9 @@ def sampled_gain(k1: np.ndarray, meas, U_m_s: float, store: SampledStore) -> np.
     the linear interpolation in stored time T + x_s / U (averaged over the beam's scan phases) and bilinear in (y, z)
     between the box's nodes (``_cell_transfer``; ``sampling.los_operator`` reads the same cells). The tensor's k1 runs
     along the wind and x upstream, so the store holds mode k as exp(i (-k1 U t + k2 y + k3 z)); for a beam along x
-    the sign is immaterial (``probe_gain``), for an inclined one it pairs k1 with (k2, k3) as the synthesis did.
-    Without H it is phi_hat(k . n)^2 (Guo et al. 2023, Eq. 30); with it an inclined beam's spectrum is the store's."""
+    the sign is immaterial (``probe_gain``); a probe point s along the beam's direction d has the phase -s k . n of
+    the LOS vector n = (d_x, -d_y, -d_z), so without H it is phi_hat(k . n)^2, the preview theory's (Guo et al. 2023,
+    Eq. 30); with it an inclined beam's spectrum is the store's."""
     g, live = store.grid, meas.weights[0] > 0
     p, w = meas.sample_points_m()[0][live], meas.weights[0][live]
     k2, k3 = lattice_wavenumbers(store.box)
