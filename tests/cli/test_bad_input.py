@@ -724,7 +724,7 @@ def test_ctrl_c_on_a_command_that_writes_nothing_says_only_interrupted(workdir, 
         raise KeyboardInterrupt
 
     monkeypatch.setattr("turbgen.validation.validate", interrupt)  # the command imports it when it runs
-    monkeypatch.setattr("turbgen.cli.info.store_info", interrupt)
+    monkeypatch.setattr("turbgen.api.products.info", interrupt)
     monkeypatch.chdir(workdir)
     res = CliRunner().invoke(cli, args, prog_name="turbgen")
     assert res.exit_code == 130, res.output

@@ -7,9 +7,8 @@ from pathlib import Path
 
 import click
 
-from turbgen.api.products import info as store_info
+from turbgen.cli import run_imports
 from turbgen.resources import format_bytes
-from turbgen.store.temporaries import remove_dead_temporaries, report_removed
 
 
 def _value(v) -> str:
@@ -93,6 +92,9 @@ def info(store: str, as_json: bool):
             width = max(len(k) for k, _ in rows)
             click.echo("\n".join(f"{k:<{width}}  {v}" for k, v in rows))
         return
+    with run_imports():
+        from turbgen.api.products import info as store_info
+        from turbgen.store.temporaries import remove_dead_temporaries, report_removed
     report_removed(remove_dead_temporaries(path.parent, [path.name]))
     if path.is_dir() and not (path / "zarr.json").is_file():
         report_removed(remove_dead_temporaries(path))  # e.g. a sweep directory

@@ -5,11 +5,10 @@ from __future__ import annotations
 
 import click
 
+from turbgen.cli import run_imports
 from turbgen.cli.options import iec_class_options, resolve_iec_class
-from turbgen.exporters.uniform_wind import export_transient
 from turbgen.spec.iec_transient import KINDS, IecTransient
 from turbgen.spec.mean_wind import CW_NOTE
-from turbgen.store.paths import check_output_path
 
 
 @click.command("transient", short_help="Write an IEC 61400-1 transient (EOG, EDC, ECD, EWS) as a uniform "
@@ -38,6 +37,9 @@ def transient(kind, iec_class, class_alias, V_hub, hub_height, rotor_diameter, s
     iec_class = resolve_iec_class(iec_class, class_alias, "transient")
     if iec_class is None:
         raise click.UsageError("missing option --iec-class (turbine class and turbulence category, e.g. IIB)")
+    with run_imports():
+        from turbgen.exporters.uniform_wind import export_transient
+        from turbgen.store.paths import check_output_path
     check_output_path(out)
     event = IecTransient(kind, iec_class, V_hub, hub_height, rotor_diameter, start_s=start, duration_s=duration,
                          dt_s=dt, sign=1 if sign == "+" else -1)
