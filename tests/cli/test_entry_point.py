@@ -28,7 +28,7 @@ def test_main_freezes_the_command_imports_and_leaves_the_collector_on(args, froz
     assert (int(count) > 10_000) if frozen else (int(count) == 0), out
 
 
-@pytest.mark.parametrize("command", ["mann", "kaimal", "validate", "info", "transient"])
+@pytest.mark.parametrize("command", ["mann", "kaimal", "validate", "info", "transient", "lidar"])
 def test_help_loads_none_of_the_work_s_modules(command):
     """--help of a command that makes or reads fields is quick: numba, zarr and dask load when its work starts."""
     out = subprocess.run([sys.executable, "-c", PROBE, command, "--help"], capture_output=True, text=True, check=True)

@@ -7,7 +7,7 @@ import json
 import click
 
 from turbgen.cli.options import count_text, evo_seconds, parse_floats
-from turbgen.virtual_lidar.optimize import PITCH_DELAY_RANGE_S
+from turbgen.theory.lidar_control import PITCH_DELAY_RANGE_S
 
 
 @click.command("optimize", short_help="Choose the range and cone angle that maximise k_0.5.")

@@ -12,6 +12,7 @@ from turbgen.errors import check_positive
 from turbgen.theory.params import check_wind_speed
 
 MINUS_3_DB = 10.0 ** (-3.0 / 20.0)
+PITCH_DELAY_RANGE_S = (0.0, 10.0)  # allowed T_pitch [s]: a pitch actuator's delay (0.9 s for the IEA 15 MW)
 
 
 def _first_crossing(f: np.ndarray, y: np.ndarray, level: float) -> float:

@@ -10,12 +10,12 @@ import numpy as np
 
 from turbgen.errors import ParameterError, check_range
 from turbgen.virtual_lidar.description import LidarDescription
-from turbgen.theory.lidar_control import buffer_time_s, coherence_bandwidth_rad_m, cutoff_frequency_hz
+from turbgen.theory.lidar_control import (PITCH_DELAY_RANGE_S, buffer_time_s, coherence_bandwidth_rad_m,
+                                         cutoff_frequency_hz)
 from turbgen.theory.lidar_preview import mann_preview_spectra
 from turbgen.theory.params import MannParams
 
 MAX_CANDIDATES = 2000
-PITCH_DELAY_RANGE_S = (0.0, 10.0)  # allowed T_pitch [s]: a pitch actuator's delay (0.9 s for the IEA 15 MW)
 
 
 @dataclass(frozen=True)
