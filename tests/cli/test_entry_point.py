@@ -44,7 +44,7 @@ def test_the_imports_a_command_makes_when_it_runs_are_frozen_too(tmp_path):
 
     helped, ran = last_line("--help"), last_line("--nt", "64", "--ny", "4", "--nz", "4", "--planes", "0", "--ae",
                                                  "0.1", "--out", "f.zarr")  # fmt: skip
-    assert ran[0] == "True" and ran[2:] == ["numba", "zarr"], ran
+    assert ran[0] == "True" and {"numba", "zarr"} <= set(ran[2:]), ran  # the run loaded its work's modules
     assert int(ran[1]) > int(helped[1]) + 50_000, (helped, ran)
 
 
