@@ -9,7 +9,8 @@ import pytest
 from click.testing import CliRunner
 
 import turbgen
-from turbgen.api import fields, generator, keywords, products
+from turbgen.api import fields, generator, products
+from turbgen.spec.run_inputs import run_inputs
 from turbgen.cli import cli
 from turbgen.errors import ParameterError, StoreError
 
@@ -124,7 +125,7 @@ def test_kaimal_preset_is_the_cli_field(tmp_path):
 
 
 def test_keywords_are_the_option_names_and_run_file_keys_go_in_config(tmp_path):
-    given, grid, x_m = keywords.run_inputs("mann", {"L": 30, "dt": 0.25, "evo": "frozen", "conditional_mean": False})
+    given, grid, x_m = run_inputs("mann", {"L": 30, "dt": 0.25, "evo": "frozen", "conditional_mean": False})
     assert given == {"length_scale_m": 30, "evo_time_s": None} and grid == {"dt_s": 0.25} and x_m is None
     with pytest.raises(TypeError, match="length_scale_m"):
         turbgen.mann(length_scale_m=30)

@@ -35,6 +35,16 @@ def test_help_loads_none_of_the_work_s_modules(command):
     assert out.stdout.splitlines()[-1].split()[2:] == [], out.stdout.splitlines()[-1]
 
 
+@pytest.mark.parametrize("args", [["mann", "--L", "5000"], ["kaimal", "--U", "500"], ["mann", "--gamma", "99"]])
+def test_a_bad_value_is_refused_before_the_run_s_modules_load(args, tmp_path):
+    """A typo answers as quickly as --help: the run is checked (turbgen.spec.run_inputs) before its imports."""
+    out = subprocess.run([sys.executable, "-c", PROBE, *args], cwd=tmp_path, capture_output=True, text=True,
+                         check=True)  # fmt: skip
+    assert "outside the allowed range" in out.stderr, out.stderr
+    assert out.stdout.splitlines()[-1].split()[2:] == [], out.stdout.splitlines()[-1]
+    assert not any(tmp_path.iterdir())
+
+
 def test_the_imports_a_command_makes_when_it_runs_are_frozen_too(tmp_path):
     """turbgen.cli.run_imports: a run's own imports (numba, zarr: > 10^5 objects) join the permanent generation."""
     def last_line(*args):

@@ -3,7 +3,8 @@
 fields    mann, kaimal (fields as xarray Datasets, in memory or in a store), open_store
 products  validate, export, lidar, info (on a store or a field in memory)
 generator MannGenerator, KaimalGenerator (one parameter set and grid, a field per seed)
-keywords  the keywords of mann / kaimal as run-mapping keys (the commands' option names and the run schemas' keys)"""
+
+Their keywords become a run as the commands' options do: turbgen.spec.run_inputs."""
 
 from turbgen.api.fields import kaimal, mann, open_store
 from turbgen.api.generator import KaimalGenerator, MannGenerator

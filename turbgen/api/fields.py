@@ -12,43 +12,18 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from turbgen import fft
-from turbgen.api.keywords import run_inputs
 from turbgen.errors import ParameterError, check_int
 from turbgen.resources import available_memory_bytes, default_threads, parse_size, require_memory
-from turbgen.spec.defaults import KAIMAL_DEFAULTS
-from turbgen.spec.config import check_mapping, read_config
-from turbgen.spec.constraints import ConstraintRequest, resolve_constraint_paths, split_constraint_keys
-from turbgen.spec.kaimal import REPLACES as KAIMAL_REPLACES
+from turbgen.spec.constraints import ConstraintRequest
 from turbgen.spec.kaimal import KaimalRun
-from turbgen.spec.mann import ENERGY_KEYS as MANN_ENERGY_KEYS
-from turbgen.spec.mann import REPLACES as MANN_REPLACES
 from turbgen.spec.mann import MannRun
-from turbgen.spec.preset_files import load_presets
-from turbgen.spec.preset_runs import kaimal_run_keys, mann_run_keys
-from turbgen.spec.run_inputs import merge_run_inputs
+from turbgen.spec.run_inputs import PathLike, kaimal_run, mann_run_mapping
 from turbgen.store import open_store as _open_field_store
 from turbgen.store.paths import check_output_path
 from turbgen.store.writer import check_new_store
 
 if TYPE_CHECKING:  # annotations only (see _as_dataset)
     import xarray as xr
-
-PathLike = str | os.PathLike
-
-
-def _file_mapping(config, schema: str) -> dict | None:
-    """A run file's content (a path to TOML/JSON) or a mapping of the same keys, checked against ``schema``."""
-    if config is None:
-        return None
-    if isinstance(config, Mapping):
-        return dict(check_mapping(dict(config), schema, "`config`"))
-    return resolve_constraint_paths(read_config(config, schema), Path(config).parent)
-
-
-def _presets(preset, presets_file):
-    if presets_file is not None and preset is None:
-        raise ParameterError("`presets_file` needs `preset`")
-    return load_presets(presets_file) if presets_file is not None else None
 
 
 def _as_dataset(path: Path) -> xr.Dataset:
@@ -268,21 +243,6 @@ def _noted(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def mann_run_mapping(options: Mapping, config: PathLike | Mapping | None = None, preset: str | None = None,
-                     presets_file: PathLike | None = None) -> tuple[dict, ConstraintRequest | None]:
-    """The run mapping of ``turbgen.mann`` and ``turbgen mann`` (run file < preset < ``options``, option name ->
-    value or None) and the ConstraintRequest (None: unconstrained). ParameterError for two energy levels,
-    ``presets_file`` without ``preset``, a bad run file or value."""
-    given, grid, x_m = run_inputs("mann", options)
-    energy = [key for key in MANN_ENERGY_KEYS if key in given]
-    if len(energy) > 1:
-        raise ParameterError(f"give one of `ae`, `sigma_u`, `ti` (got {', '.join(energy)})")
-    user = _presets(preset, presets_file)
-    keys = None if preset is None else (lambda mapping, typed: mann_run_keys(preset, user=user))
-    return split_constraint_keys(merge_run_inputs(_file_mapping(config, "mann-run"), given, grid, preset_keys=keys,
-                                                  replaces=MANN_REPLACES, x_m=x_m))  # fmt: skip
-
-
 def constrained_mann_run(mapping: dict, request: ConstraintRequest, options: dict, stencil_cache,
                          prefix: str = "--") -> tuple:
     """(run, loaded constraints, placed data, fit record or None) of a constrained ``turbgen.mann`` / ``turbgen
@@ -301,28 +261,6 @@ def constrained_mann_run(mapping: dict, request: ConstraintRequest, options: dic
         mapping, constraints, record = fitted_inputs(mapping, constraints, evo_typed=options.get("evo") is not None)
     run = with_energy_from_data(mapping, constraints, request.noise_m_s, stencil_cache)
     return run, constraints, place(run, constraints, request.noise_m_s), record
-
-
-def kaimal_run(options: Mapping, config: PathLike | Mapping | None = None, preset: str | None = None,
-               presets_file: PathLike | None = None) -> tuple[KaimalRun, dict]:
-    """The KaimalRun of ``turbgen.kaimal`` and ``turbgen kaimal`` (run file < preset < ``options``) and the preset's
-    keys resolved at its U and class ({} without a preset). ParameterError as :func:`mann_run_mapping`."""
-    if options.get("sigma") is not None and options.get("spectrum") is not None:
-        raise ParameterError("`sigma` (--sigma) with `spectrum`: the user spectrum sets sigma_u, sigma_v, sigma_w "
-                             "(its integral over the run's lines); scale the spectrum instead")
-    given, grid, x_m = run_inputs("kaimal", options)
-    user = _presets(preset, presets_file)
-    resolved: dict = {}
-
-    def keys(mapping, typed):  # the preset's sigmas follow the run's U and a given class
-        U_m_s = typed.get("U_m_s", mapping.get("U_m_s", KAIMAL_DEFAULTS["U_m_s"]))
-        resolved.update(kaimal_run_keys(preset, U_m_s, user=user, turb_class=typed.get("turb_class")))
-        return dict(resolved)
-
-    run = KaimalRun.from_mapping(merge_run_inputs(_file_mapping(config, "kaimal-run"), given, grid,
-                                                  preset_keys=None if preset is None else keys,
-                                                  replaces=KAIMAL_REPLACES, x_m=x_m))  # fmt: skip
-    return run, resolved
 
 
 def _budget(memory) -> int | None:

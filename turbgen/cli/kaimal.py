@@ -21,7 +21,7 @@ from turbgen.theory.coherence_models import LONGITUDINAL_MODELS
 from turbgen.theory.kaimal import IEC_IREF
 from turbgen.theory.ranges import LIMITS
 
-# the options that make the run (turbgen.api.fields.kaimal_run)
+# the options that make the run (turbgen.spec.run_inputs.kaimal_run)
 RUN_OPTIONS = (*KAIMAL_OPTIONS, *GRID_OPTIONS, "planes", "gates")
 
 
@@ -89,13 +89,16 @@ def kaimal(**opt):
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
     plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
-    with run_imports():
-        from turbgen.api.fields import check_kaimal_output, kaimal_run
-        from turbgen.runs.kaimal import run_kaimal
+    from turbgen.spec.run_inputs import kaimal_run
 
-    # the run as turbgen.kaimal makes it, and the preset's keys at its U (they also name the default store)
+    # the run as turbgen.kaimal makes it, and the preset's keys at its U (they also name the default store); a bad
+    # value is refused here, before the run's imports
     run, preset_keys = kaimal_run({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],
                                   opt["presets_file"])  # fmt: skip
+    with run_imports():
+        from turbgen.api.fields import check_kaimal_output
+        from turbgen.runs.kaimal import run_kaimal
+
     if opt["coherence"] is not None:
         run = replace(run, coherence=opt["coherence"])
     g = run.grid

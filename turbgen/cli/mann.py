@@ -20,7 +20,7 @@ from turbgen.spec.run_inputs import GRID_OPTIONS
 from turbgen.theory.params import LIFETIMES
 from turbgen.theory.ranges import LIMITS
 
-# the options that make the run (turbgen.api.fields.mann_run_mapping)
+# the options that make the run (turbgen.spec.run_inputs.mann_run_mapping)
 RUN_OPTIONS = (*MANN_OPTIONS, *GRID_OPTIONS, "planes", "gates")
 _ENERGY = ("ae", "sigma_u", "ti")
 
@@ -102,20 +102,22 @@ def mann(**opt):
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
     plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
+    from turbgen.spec.run_inputs import mann_run_mapping
+
+    # the run as turbgen.mann makes it; --constrain/--noise/--conditional-mean or the run file's (a bad value is
+    # refused here, before the run's imports)
+    mapping, request = mann_run_mapping({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],
+                                        opt["presets_file"])  # fmt: skip
+    run = MannRun.from_mapping(mapping) if request is None else None
     with run_imports():
-        from turbgen.api.fields import constrained_mann_run, mann_run_mapping
+        from turbgen.api.fields import constrained_mann_run
         from turbgen.runs.mann import describe, run_mann
         from turbgen.runs.mann_outofcore import plan_for_budget, remove_stale_scratch
         from turbgen.store.paths import check_output_path
         from turbgen.store.writer import check_new_store
 
-    # the run as turbgen.mann makes it; --constrain/--noise/--conditional-mean or the run file's
-    mapping, request = mann_run_mapping({name: opt[name] for name in RUN_OPTIONS}, opt["config"], opt["preset"],
-                                        opt["presets_file"])  # fmt: skip
     constraints = out = fit = None
-    if request is None:
-        run = MannRun.from_mapping(mapping)
-    else:
+    if request is not None:
         from turbgen.runs.constrain import constrained_store_name
 
         # no ae, sigma_u, ti or IEC class given: ae estimated from the data (printed with the run below)

@@ -38,7 +38,7 @@ def model_command(name: str) -> click.Command:
     properties = load_schema(d.schema)["properties"]
 
     def command(**opt):
-        from turbgen.api.keywords import run_inputs
+        from turbgen.spec.run_inputs import run_inputs
         from turbgen.runs.models import get_model
         from turbgen.spec.config import read_config
         from turbgen.spec.run_inputs import merge_run_inputs
