@@ -1,7 +1,8 @@
 """Coverage of the 95 % intervals of `turbgen fit mann LIDAR` (ae, L, and the eddy-evolution time from range gates).
 
 For every realisation (seed) of a Mann space-time field with known (ae, L, Gamma, gamma) on the planes of a forward
-pulsed beam's range gates, a virtual lidar (``turbgen.lidar``, FWHM 30 m, 1 Hz) writes its dataset, and
+pulsed beam's range gates (cases 2, 3: four beams 14 deg off the axis, 4 Hz), a virtual lidar (``turbgen.lidar``,
+FWHM 30 m, 1 Hz) writes its dataset, and
 ``turbgen.fit_mann`` fits it with Gamma held at the truth (the grid model: the store's box). Coverage: the fraction
 of realisations whose interval holds the truth; its binomial standard error is sqrt(p (1 - p) / n).
 
@@ -24,10 +25,11 @@ import turbgen
 
 Z95 = 1.959963984540054
 
-CASES = [  # (ae, L, Gamma, gamma [s], gate x [m]); case 2: the four inclined beams of FOUR (no gamma)
+CASES = [  # (ae, L, Gamma, gamma [s], gate x [m]); cases 2, 3: the four inclined beams of FOUR (gamma from beam 0)
     (0.08, 30.0, 3.2, 200.0, (50.0, 100.0)),
     (0.05, 20.0, 3.9, 100.0, (50.0, 75.0, 100.0)),
     (0.08, 30.0, 3.2, 200.0, (50.0, 100.0)),
+    (0.05, 20.0, 3.9, 100.0, (50.0, 75.0, 100.0)),
 ]
 GRID = dict(nt=4096, ny=9, nz=9, dy=6.0, dz=6.0, U=10.0, dt=0.5)  # 2048 s; y = z = 0 is a grid point
 WIDE = dict(GRID, ny=24, nz=24, dy=4.0, dz=4.0)  # the inclined beams' probe volumes reach |y|, |z| = 37 m
@@ -40,9 +42,9 @@ azimuth_deg = [14.4, 14.4, -14.4, -14.4]\nelevation_deg = [14.0, -14.0, -14.0, 1
 def one(case: int, seed: int, work: Path) -> dict:
     """Generate, measure and fit one realisation; the estimates, intervals and CPU seconds of the fit."""
     ae, L, G, evo, gates = CASES[case]
-    (work / "lidar.toml").write_text((FOUR if case == 2 else LIDAR).format(gates=list(gates)))
+    (work / "lidar.toml").write_text((FOUR if case >= 2 else LIDAR).format(gates=list(gates)))
     turbgen.mann(L=L, gamma=G, ae=ae, evo=evo, seed=seed, out=work / "f.zarr", overwrite=True,
-                 planes=[0.0, *gates], **(WIDE if case == 2 else GRID))
+                 planes=[0.0, *gates], **(WIDE if case >= 2 else GRID))
     turbgen.lidar(work / "f.zarr", work / "lidar.toml", out=work / "l.zarr",
                   overwrite=True)
     t0 = time.process_time()

@@ -26,7 +26,7 @@ from turbgen.validation.fit.table import scaled_spectra
 from turbgen.virtual_lidar.dataset import read_dataset
 from turbgen.virtual_lidar.description import LidarDescription, load_lidar
 from turbgen.virtual_lidar.fit import (TAIL, LosModel, SampledStore, lidar_fit_data, los_spectrum, probe_gain,
-                                      sampled_gain, sampled_store)
+                                      sampled_amplitudes, sampled_gain, sampled_store)
 from turbgen.virtual_lidar.sampling import apply_los, los_operator
 from turbgen.virtual_lidar.run import measurements_of
 
@@ -261,24 +261,42 @@ def test_cli_json(recorded2, fit2):
         turbgen.fit_mann(report, U=8.0)
 
 
-def test_inclined_beams_fit_ae_l_but_not_the_evolution_time(tmp_path):
-    """Four beams 14 deg off the axis up, down and sideways (the preset's geometry, one gate at 60 m): ae and L fitted
-    against the box's lattice sum with each probe point read as the sampler reads it, gamma not. Without the
-    sampler's interpolation in the model (bilinear across, linear in time) ae came out ~25 % low and L ~2.5 x long on
-    such records; with the probe's phase paired by the beam's direction d instead of its LOS vector n (the other sign
-    of k1 against k2, k3), ~50 % high and half as long."""
+def test_inclined_beams_fit_ae_l_and_the_evolution_time_from_one_beam_s_gates(tmp_path):
+    """Four beams 14 deg off the axis up, down and sideways (the preset's geometry, gates at x = 50, 75 and 100 m): ae and L
+    fitted against the box's lattice sum with each probe point read as the sampler reads it; gamma from the
+    co-coherence of beam 0's gates (6.4 m apart in y and z per 25 m in x), against the lattice sum of A_a conj(A_b) n .
+    Phi n with the decay between their planes (with two gates of a 2048 s record the frozen limit is not excluded). Without the sampler's interpolation in the model (bilinear across, linear
+    in time) ae came out ~25 % low and L ~2.5 x long on such records; with the probe's phase paired by the beam's
+    direction d instead of its LOS vector n (the other sign of k1 against k2, k3), ~50 % high and half as long."""
     four = ("[14.4, 14.4, -14.4, -14.4]\nelevation_deg = [14.0, -14.0, -14.0, 14.0]\nbeam_rate_hz = 4.0")
-    (tmp_path / "lidar.toml").write_text(LIDAR.format(gates=[60.0]).replace("beam_rate_hz = 1.0\n", "").replace(
-        "[0.0]\nelevation_deg = [0.0]", four))
-    turbgen.mann(**TRUTH, seed=3, out=tmp_path / "f.zarr", planes=[0.0, 60.0], nt=2048, dt=0.5, U=10.0, ny=10, nz=10,
-                 dy=6.0, dz=6.0)
+    (tmp_path / "lidar.toml").write_text(LIDAR.format(gates=[50.0, 75.0, 100.0]).replace("beam_rate_hz = 1.0\n",
+                                         "").replace("[0.0]\nelevation_deg = [0.0]", four))  # fmt: skip
+    turbgen.mann(**TRUTH, seed=3, out=tmp_path / "f.zarr", planes=[0.0, 50.0, 75.0, 100.0], nt=4096, dt=0.5, U=10.0,
+                 ny=16, nz=16, dy=6.0, dz=6.0)
     turbgen.lidar(tmp_path / "f.zarr", tmp_path / "lidar.toml", out=tmp_path / "l.zarr")
     fit = turbgen.fit_mann(str(tmp_path / "l.zarr"), gamma=TRUTH["gamma"])
-    assert fit.ok and fit.model == "grid" and fit.evolution is None
-    assert [n for n in fit.notes if n.startswith("evo_time_s not fitted: no beam along x")]
+    assert fit.ok and fit.model == "grid"
     for name, truth in (("ae", TRUTH["ae"]), ("length_scale_m", TRUTH["L"])):
         v = getattr(fit, name)
         assert abs(math.log(v.value / truth)) < Z999 * v.sd_fit, (name, v)
+    e = fit.evolution
+    assert e is not None and e.identified and e.pairs_m == ((50.0, 75.0), (50.0, 100.0), (75.0, 100.0)), e
+    assert e.lateral_m == pytest.approx((6.42, 12.84, 6.42), abs=0.01)
+    assert e.chi2_frozen > e.chi2 + 10, e.message  # the frozen field's lateral coherence alone is refused
+    sd = math.log(e.ci95[1] / e.ci95[0]) / (2 * 1.96)  # the interval's width in ln gamma as a normal sd
+    assert abs(math.log(e.value_s / TRUTH["evo"])) < Z999 * sd, (e.value_s, e.ci95)
+    assert "evo_time_s from the gates of beam 0 only (the beams' cross-coherence is not modelled)" in fit.notes
+
+
+def test_inclined_beams_with_one_gate_say_why_no_evolution_time(tmp_path):
+    four = ("[14.4, -14.4]\nelevation_deg = [14.0, -14.0]\nbeam_rate_hz = 2.0")
+    (tmp_path / "lidar.toml").write_text(LIDAR.format(gates=[60.0]).replace("beam_rate_hz = 1.0\n", "").replace(
+        "[0.0]\nelevation_deg = [0.0]", four))
+    turbgen.mann(**TRUTH, seed=3, out=tmp_path / "f.zarr", planes=[0.0, 60.0], nt=1024, dt=0.5, U=10.0, ny=10, nz=10,
+                 dy=6.0, dz=6.0)
+    turbgen.lidar(tmp_path / "f.zarr", tmp_path / "lidar.toml", out=tmp_path / "l.zarr")
+    fit = turbgen.fit_mann(str(tmp_path / "l.zarr"), gamma=TRUTH["gamma"])
+    assert fit.evolution is None and "evo_time_s not fitted: no beam has gates at two or more ranges" in fit.notes
 
 
 def test_an_inclined_beam_s_continuous_spectrum_is_the_limit_of_the_sampled_lattice_s():
@@ -321,3 +339,30 @@ def test_sampled_gain_is_the_sampler_s_response_to_a_lattice_mode():
                     != "u" else part(mode[ts[0]:ts[1], ys[0]:ys[1], zs[0]:zs[1]]) for part in (np.real, np.imag)]
             v = (apply_los(op, read[0]) + 1j * apply_los(op, read[1]))[:, 0] / meas.n[0, 0]
             assert np.mean(np.abs(v) ** 2) == pytest.approx(gain[q, node], rel=1e-9, abs=1e-14), (node, kq)
+
+
+def test_two_gates_of_a_beam_covary_as_their_sampled_amplitudes():
+    """The gates at x = 60 m and 90 m of a beam 14 deg up, read at the same scan times, return for one mode of the box
+    v_a conj(v_b) = A_a conj(A_b) (``sampled_amplitudes``, per scan phase): the cross-spectrum of gates along an
+    inclined beam, relative phase included (x, y and z all differ), is the lattice sum of A_a conj(A_b) n . Phi n.
+    To float64 round-off."""
+    grid = Grid(nt=64, dt_s=0.5, x_m=(0.0, 60.0, 90.0), ny=10, nz=10, dy_m=6.0, dz_m=6.0)
+    desc = LidarDescription("up", "pulsed", "nacelle", (60.0, 90.0), 1.0, 24.0, (0.0,), (14.0,))
+    meas, rows = desc.measurement_points(), measurements_of(desc)
+    box = BoxLattice(20, 20, 6.0, 6.0, grid.nt * grid.dt_s)
+    times = np.array([[0.0, 0.0], [1.25, 1.25]])
+    store = SampledStore(box, (np.unique(times[:, 0] % grid.dt_s),), grid, None)
+    k2, k3 = lattice_wavenumbers(box)
+    k1 = np.array([0.01, 0.08])
+    amp = [sampled_amplitudes(k1, meas.subset([g]), 10.0, store) for g in (0, 1)]  # (phases, k1, nodes)
+    t, y, z = np.arange(grid.nt) * grid.dt_s, grid.y(), grid.z()
+    op = los_operator(grid, 10.0, rows, [1, 2], times)
+    for node in (1, 47, 203):
+        for q, kq in enumerate(k1):
+            mode = np.exp(1j * (-kq * 10.0 * t[:, None, None] + k2[node] * y[None, :, None] + k3[node] * z[None, None]))
+            read = [lambda c, ix, ts, ys, zs, part=part: np.zeros((ts[1] - ts[0], ys[1] - ys[0], zs[1] - zs[0])) if c
+                    != "u" else part(mode[ts[0]:ts[1], ys[0]:ys[1], zs[0]:zs[1]]) for part in (np.real, np.imag)]
+            v = (apply_los(op, read[0]) + 1j * apply_los(op, read[1])) / meas.n[:, 0]  # (scans, gates)
+            # the mode's time factor exp(-i k1 U T) of each scan cancels in the product
+            expected = np.mean(amp[0][:, q, node] * np.conj(amp[1][:, q, node]))
+            assert np.mean(v[:, 0] * np.conj(v[:, 1])) == pytest.approx(expected, rel=1e-9, abs=1e-14), (node, kq)

@@ -86,15 +86,16 @@ def _cell_transfer(kh: np.ndarray, frac: np.ndarray) -> np.ndarray:
     return (1 - frac) * np.exp(-1j * kh * frac) + frac * np.exp(1j * kh * (1 - frac))
 
 
-def sampled_gain(k1: np.ndarray, meas, U_m_s: float, store: SampledStore) -> np.ndarray:
-    """(k1.size, nyp nzp) |A(k)|^2 on the box's lattice of one measurement (``meas`` of one row) as the sampler reads
-    it: A = sum_s w_s exp(i (-k1 x_s + k2 y_s + k3 z_s)) H_t H_y H_z over its probe points p_s, H the transfers of
-    the linear interpolation in stored time T + x_s / U (averaged over the beam's scan phases) and bilinear in (y, z)
-    between the box's nodes (``_cell_transfer``; ``sampling.los_operator`` reads the same cells). The tensor's k1 runs
-    along the wind and x upstream, so the store holds mode k as exp(i (-k1 U t + k2 y + k3 z)); for a beam along x
-    the sign is immaterial (``probe_gain``); a probe point s along the beam's direction d has the phase -s k . n of
-    the LOS vector n = (d_x, -d_y, -d_z), so without H it is phi_hat(k . n)^2, the preview theory's (Guo et al. 2023,
-    Eq. 30); with it an inclined beam's spectrum is the store's."""
+def sampled_amplitudes(k1: np.ndarray, meas, U_m_s: float, store: SampledStore) -> np.ndarray:
+    """(phases, k1.size, nyp nzp) complex amplitude A(k) on the box's lattice of one measurement (``meas`` of one row)
+    as the sampler reads it, one row per scan phase of its beam: A = sum_s w_s exp(i (-k1 x_s + k2 y_s + k3 z_s)) H_t
+    H_y H_z over its probe points p_s, H the transfers of the linear interpolation in stored time T + x_s / U and
+    bilinear in (y, z) between the box's nodes (``_cell_transfer``; ``sampling.los_operator`` reads the same cells).
+    The tensor's k1 runs along the wind and x upstream, so the store holds mode k as exp(i (-k1 U t + k2 y + k3 z));
+    a probe point s along the beam's direction d has the phase -s k . n of the LOS vector n = (d_x, -d_y, -d_z), so
+    without H |A|^2 is phi_hat(k . n)^2, the preview theory's (Guo et al. 2023, Eq. 30); with it an inclined beam's
+    spectrum is the store's. Two gates of a beam read at one scan time covary as A_a conj(A_b) (relative phase
+    included)."""
     g, live = store.grid, meas.weights[0] > 0
     p, w = meas.sample_points_m()[0][live], meas.weights[0][live]
     k2, k3 = lattice_wavenumbers(store.box)
@@ -102,13 +103,18 @@ def sampled_gain(k1: np.ndarray, meas, U_m_s: float, store: SampledStore) -> np.
     _, az = interp_axis(float(g.z()[0]), g.dz_m, g.nz, p[:, 2])
     space = w * np.exp(1j * (np.outer(k2, p[:, 1]) + np.outer(k3, p[:, 2])))  # (nodes, K)
     space *= _cell_transfer(k2[:, None] * g.dy_m, ay) * _cell_transfer(k3[:, None] * g.dz_m, az)
-    phases = store.phases_s[int(meas.beam[0])]
-    out = np.zeros((k1.size, k2.size))
-    for t0 in phases:
+    out = []
+    for t0 in store.phases_s[int(meas.beam[0])]:
         _, at = interp_axis(0.0, g.dt_s, g.nt, t0 + p[:, 0] / U_m_s)
         along = np.exp(-1j * np.outer(k1, p[:, 0])) * _cell_transfer(-k1[:, None] * U_m_s * g.dt_s, at)
-        out += np.abs(along @ space.T) ** 2
-    return out / len(phases)
+        out.append(along @ space.T)
+    return np.stack(out)
+
+
+def sampled_gain(k1: np.ndarray, meas, U_m_s: float, store: SampledStore) -> np.ndarray:
+    """(k1.size, nyp nzp) |A(k)|^2 of one measurement as the sampler reads it (``sampled_amplitudes``), averaged over
+    its beam's scan phases: for a beam along x the sign of k1 against (k2, k3) is immaterial (``probe_gain``)."""
+    return np.mean(np.abs(sampled_amplitudes(k1, meas, U_m_s, store)) ** 2, axis=0)
 
 
 def _sampled_los(k1: np.ndarray, terms: list, params: MannParams, U_m_s: float, store: SampledStore) -> np.ndarray:
@@ -328,16 +334,21 @@ def _model_note(store) -> str:
 
 
 def _with_gates(fd: FitData, meas, fit: MannFit, store: SampledStore | None) -> MannFit:
-    """``fit`` with the evolution time from the gates of beams along x, or a note saying why there is none. As the
-    spectra, their coherence is summed over the sampled ``store``'s lattice (the continuous plane holds short-lived
-    large-|k| eddies the box lacks) and weighted by the probe's gain within each band (it passes the more coherent
-    low k1 of a band): without either gamma came out high (benchmarks/fit_lidar.md)."""
+    """``fit`` with the evolution time from the gates of beams along x (else of an inclined beam, on the sampled
+    ``store``'s lattice: ``fit_gates``), or a note saying why there is none. As the spectra, their coherence is summed
+    over the ``store``'s lattice (the continuous plane holds short-lived large-|k| eddies the box lacks) and weighted
+    by the probe's gain within each band (it passes the more coherent low k1 of a band): without either gamma came
+    out high (benchmarks/fit_lidar.md)."""
     along = np.flatnonzero(meas.n[:, 0] > 1 - ALONG_X)
+    if along.size == 0 and store is not None:
+        from turbgen.virtual_lidar.fit_gates import with_inclined_gates  # it builds on this module
+
+        return with_inclined_gates(fd, meas, fit, store)
     if np.unique(np.round(meas.focus_m[along, 0], 6)).size < 2:
-        why = "no beam along x" if along.size == 0 else "one range gate along x"
+        why = ("one range gate along x" if along.size else "no beam along x, and the record's store is not there (the "
+               "gates of an inclined beam are fitted on its lattice only: their continuous model is not built)")
         return replace(fit, notes=fit.notes + (
-            f"evo_time_s not fitted: {why} (the co-coherence of gates at >= 2 ranges on a beam along x is needed; "
-            "gates of inclined beams differ in y, z and in what n mixes)",))
+            f"evo_time_s not fitted: {why}; gates at >= 2 ranges of one beam are needed",))
     gates = replace(fd, series={"u": fd.series["u"][:, along]}, columns={"u": np.arange(along.size)},
                     sites_m=meas.focus_m[along], u_xyz_m=tuple(map(tuple, meas.focus_m[along])))
 

@@ -153,7 +153,7 @@ def _lag(data: FitData, x_m: float) -> int:  # whole samples of Taylor's delay x
     return round(x_m / (data.U_m_s * data.dt_s))
 
 
-def _rest(data: FitData, x_a: float, x_b: float) -> float:
+def taylor_rest(data: FitData, x_a: float, x_b: float) -> float:
     """Taylor's delay [s] between columns at ``x_a``, ``x_b`` [m] left by their shifts (0 in a store: convected)."""
     return 0.0 if data.grid is not None else (x_b - x_a) / data.U_m_s - (_lag(data, x_b) - _lag(data, x_a)) * data.dt_s
 
@@ -195,6 +195,15 @@ class CoherenceModel:
             self.mass = np.stack([phi[0, 0].ravel() for _, phi, _ in slabs])
             self.rate = np.stack([inv_tau.ravel() for _, _, inv_tau in slabs])
 
+    def moved(self, params: MannParams) -> CoherenceModel:
+        """The same model for other ae, L, Gamma (``_sensitivity``)."""
+        return CoherenceModel(self.bands, self.data, params, self.sampler)
+
+    @staticmethod
+    def along_wind(a: tuple, b: tuple) -> bool:
+        """Whether the frozen field's co-coherence of positions ``a``, ``b`` is 1 (one y: apart along the wind only)."""
+        return a[1] == b[1]
+
     def gain(self, x_m: float) -> tuple[np.ndarray, np.ndarray]:
         """(nt/2 + 1,) power gain of the points at ``x_m`` [m] at the lines 0 .. nt/2 and their band auto-spectra."""
         if x_m not in self._gain:
@@ -222,7 +231,7 @@ class CoherenceModel:
         mass, rate = self.across(abs(b[1] - a[1]))
         node = (mass * np.exp(-rate * (abs(b[0] - a[0]) / (self.U * gamma_s)))).sum(1) / self.mass.sum(1)
         x_a, x_b = a[0], b[0]
-        turn = np.cos(self.k1 * self.U * _rest(self.data, x_a, x_b))  # 2 pi f delta at the lines
+        turn = np.cos(self.k1 * self.U * taylor_rest(self.data, x_a, x_b))  # 2 pi f delta at the lines
         rho = np.concatenate([[1.0], np.interp(np.log(self.k1), np.log(self.nodes), node) * turn])
         (g_a, auto_a), (g_b, auto_b) = self.gain(x_a), self.gain(x_b)
         return self.bands.band_mean(self.kernel.apply(self.f11_lines * np.sqrt(g_a * g_b) * rho)) / np.sqrt(
@@ -278,9 +287,9 @@ class _Problem:
 
     def frozen(self) -> np.ndarray:
         """(npairs, nbands) co-coherence of the frozen field (Taylor): 1 along the wind, the model's across it."""
-        mean = self.mean(math.inf) if any(a[1] != b[1] for a, b in self.seps) else None
-        return np.array([np.ones(self.r.shape[1]) if a[1] == b[1] else cast(np.ndarray, mean)[m]
-                         for m, (a, b) in enumerate(self.seps)])
+        along = [self.model.along_wind(a, b) for a, b in self.seps]
+        mean = None if all(along) else self.mean(math.inf)
+        return np.array([np.ones(self.r.shape[1]) if on else cast(np.ndarray, mean)[m] for m, on in enumerate(along)])
 
     def mean(self, gamma_s: float) -> np.ndarray:
         rho = self.rho(gamma_s)
@@ -336,9 +345,17 @@ def fit_evolution(data: FitData, params: MannParams, nperseg: int, fit: MannFit 
         return ("evo_time_s not fitted: the data hold no two u series at one (y, z) and different x (two masts "
                 "along the wind or two planes are needed)" if not lateral else "evo_time_s not fitted: the data "
                 "hold no two u series at one height and apart along the wind (two masts are needed)")
+    return fit_pairs(data, pairs, lambda bands: CoherenceModel(bands, data, params, sampler), nperseg, fit)
+
+
+def fit_pairs(data: FitData, pairs: dict, model_of: Callable, nperseg: int, fit: MannFit | None = None) -> EvoFit:
+    """EvoFit of gamma to the co-coherences of ``pairs`` (as ``x_pairs``: position pairs -> column pairs of u) against
+    ``model_of(bands)``: a model with ``bands``, ``params``, ``expected(gamma_s, a, b)``, ``along_wind(a, b)`` and
+    ``moved(params)`` (``CoherenceModel``; ``fit_evolution``'s other arguments)."""
     seps = tuple(pairs)
     bands, r, factor = _estimates(data, nperseg, pairs)
-    problem = _Problem(CoherenceModel(bands, data, params, sampler), seps, r, factor)
+    problem = _Problem(model_of(bands), seps, r, factor)
+    params = problem.model.params
     evo = ranges.RANGES["evo_time_s"]
     lo, hi = math.log(evo.lo), math.log(evo.hi)
     x = math.log(400.0)
@@ -352,7 +369,7 @@ def fit_evolution(data: FitData, params: MannParams, nperseg: int, fit: MannFit 
     ends = [_profile_end(problem, x, c_min, grid, c, side) for side in (-1, 1)]
     slope, var = np.zeros(3), 0.0
     if fit is not None and fit.cov_fit is not None and all(e is not None for e in ends):
-        slope = _sensitivity(problem, data, params, x, np.diag(fit.cov_fit), (lo, hi))
+        slope = _sensitivity(problem, params, x, np.diag(fit.cov_fit), (lo, hi))
         var = _propagated(problem, data, fit, pairs, slope, x)
     ci = [None if e is None else x + side * math.sqrt(max((e - x) ** 2 + CHI2_95 * var, 0.0))
           for e, side in zip(ends, (-1, 1))]
@@ -360,8 +377,7 @@ def fit_evolution(data: FitData, params: MannParams, nperseg: int, fit: MannFit 
     return _result(problem, bands, x, ci, c_min, chi2_frozen, (lo, hi), (ends, slope))
 
 
-def _sensitivity(problem: _Problem, data: FitData, params: MannParams, x: float, var: np.ndarray,
-                 rng: tuple) -> np.ndarray:
+def _sensitivity(problem: _Problem, params: MannParams, x: float, var: np.ndarray, rng: tuple) -> np.ndarray:
     """d ln gamma / d (ln ae, ln L, Gamma) of the fit: ln gamma refitted (weights held) with ln L, then Gamma, moved
     by one sd of the one-point fit (a secant); 0 for ae (the co-coherence is a ratio: ae cancels) and for a held or
     unidentified parameter. A step that would leave the parameter's range goes the other way, within it."""
@@ -375,8 +391,7 @@ def _sensitivity(problem: _Problem, data: FitData, params: MannParams, x: float,
             continue
         moved = (replace(params, length_scale_m=params.length_scale_m * math.exp(step)) if k == 1
                  else replace(params, gamma=params.gamma + step))
-        model = CoherenceModel(problem.model.bands, data, moved, problem.model.sampler)
-        shifted = _Problem(model, problem.seps, problem.r, problem.factor)
+        shifted = _Problem(problem.model.moved(moved), problem.seps, problem.r, problem.factor)
         shifted.chol = problem.chol
         slope[k] = (shifted.best(*rng)[0] - x) / step
     return slope
