@@ -93,7 +93,7 @@ def _weight_table(meas: Measurements, nu_max: float):
     return nu, tables, inverse.ravel()
 
 
-def _polar_nodes(kappa_max: float, n_theta: int, panel_width: float):
+def polar_nodes(kappa_max: float, n_theta: int, panel_width: float):
     """Flat (k2, k3) [rad/m] nodes of the polar quadrature and their weights kappa dkappa dtheta."""
     kappa, wk = _radial_nodes(kappa_max, panel_width)
     theta = 2.0 * np.pi * np.arange(n_theta) / n_theta
@@ -160,7 +160,7 @@ def mann_preview_spectra(f_hz, meas: Measurements, params: MannParams, U_m_s: fl
     f, U, R = _check(f_hz, meas, U_m_s, radius_m)
     k1_all = 2.0 * np.pi * f / U
     if box is None:
-        k2, k3, w = _polar_nodes(kappa_max, n_theta, panel_width)
+        k2, k3, w = polar_nodes(kappa_max, n_theta, panel_width)
     else:
         k2, k3 = lattice_wavenumbers(box)
     kappa = np.hypot(k2, k3)

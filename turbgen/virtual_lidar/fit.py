@@ -334,21 +334,19 @@ def _model_note(store) -> str:
 
 
 def _with_gates(fd: FitData, meas, fit: MannFit, store: SampledStore | None) -> MannFit:
-    """``fit`` with the evolution time from the gates of beams along x (else of an inclined beam, on the sampled
-    ``store``'s lattice: ``fit_gates``), or a note saying why there is none. As the spectra, their coherence is summed
+    """``fit`` with the evolution time from the gates of beams along x (else of an inclined beam: ``fit_gates``), or
+    a note saying why there is none. As the spectra, their coherence is summed
     over the ``store``'s lattice (the continuous plane holds short-lived large-|k| eddies the box lacks) and weighted
     by the probe's gain within each band (it passes the more coherent low k1 of a band): without either gamma came
     out high (benchmarks/fit_lidar.md)."""
     along = np.flatnonzero(meas.n[:, 0] > 1 - ALONG_X)
-    if along.size == 0 and store is not None:
+    if along.size == 0:
         from turbgen.virtual_lidar.fit_gates import with_inclined_gates  # it builds on this module
 
         return with_inclined_gates(fd, meas, fit, store)
     if np.unique(np.round(meas.focus_m[along, 0], 6)).size < 2:
-        why = ("one range gate along x" if along.size else "no beam along x, and the record's store is not there (the "
-               "gates of an inclined beam are fitted on its lattice only: their continuous model is not built)")
-        return replace(fit, notes=fit.notes + (
-            f"evo_time_s not fitted: {why}; gates at >= 2 ranges of one beam are needed",))
+        return replace(fit, notes=fit.notes + ("evo_time_s not fitted: one range gate along x; gates at >= 2 ranges "
+                                               "of one beam are needed",))
     gates = replace(fd, series={"u": fd.series["u"][:, along]}, columns={"u": np.arange(along.size)},
                     sites_m=meas.focus_m[along], u_xyz_m=tuple(map(tuple, meas.focus_m[along])))
 
