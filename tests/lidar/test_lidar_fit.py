@@ -393,3 +393,16 @@ def test_an_inclined_beam_s_gate_coherence_is_the_limit_of_the_sampled_lattice_s
         for a, b in ((pos[0], pos[1]), (pos[0], pos[2])):
             d = plane.expected(gamma_s, a, b)[low] - lattice.expected(gamma_s, a, b)[low]
             assert np.all(np.abs(d) < 0.03), (gamma_s, a[0], b[0], np.round(d, 4))
+
+
+def test_the_gates_fitted_are_one_beam_s_nearest_farthest_and_evenly_between():
+    from turbgen.virtual_lidar.fit_gates import MAX_GATES, gate_rows
+
+    ranges = (50.0, 60.0, 70.0, 80.0, 90.0, 100.0, 110.0)
+    meas = LidarDescription("4", "pulsed", "nacelle", ranges, 4.0, 24.0, (14.4, 14.4, -14.4, -14.4),
+                            (14.0, -14.0, -14.0, 14.0)).measurement_points()
+    rows = gate_rows(meas)
+    assert MAX_GATES == 4 and set(meas.beam[rows]) == {0}
+    assert meas.focus_m[rows, 0].tolist() == [50.0, 70.0, 90.0, 110.0]
+    one = LidarDescription("1", "pulsed", "nacelle", (60.0,), 4.0, 24.0, (14.4, -14.4), (14.0, -14.0))
+    assert gate_rows(one.measurement_points()) is None

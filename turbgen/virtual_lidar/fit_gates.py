@@ -118,17 +118,26 @@ class GateCoherence:
         return self._welch(rho_lines * np.sqrt(line_a * line_b) * turn).real / np.sqrt(welch_a * welch_b)
 
 
+def gate_rows(meas) -> np.ndarray | None:
+    """Rows of ``meas`` whose gates are fitted, by range: the first beam with gates at two or more ranges, at most
+    MAX_GATES of them (the nearest, the farthest and evenly between); None without such a beam."""
+    beams = [b for b in np.unique(meas.beam) if np.unique(np.round(meas.focus_m[meas.beam == b, 0], 6)).size > 1]
+    if not beams:
+        return None
+    rows = np.flatnonzero(meas.beam == beams[0])
+    rows = rows[np.argsort(meas.focus_m[rows, 0], kind="stable")]
+    if rows.size > MAX_GATES:
+        rows = rows[[k * (rows.size - 1) // (MAX_GATES - 1) for k in range(MAX_GATES)]]
+    return rows
+
+
 def with_inclined_gates(fd: FitData, meas, fit: MannFit, store: SampledStore | None) -> MannFit:
     """``fit`` with the evolution time from the gates of the first beam that has two or more ranges, or a note saying
     why there is none. One beam only: the gates of different beams covary too (their cross-beam coherence is not
     modelled), so pooling them would understate the interval."""
-    beams = [b for b in np.unique(meas.beam) if np.unique(np.round(meas.focus_m[meas.beam == b, 0], 6)).size > 1]
-    if not beams:
+    rows = gate_rows(meas)
+    if rows is None:
         return replace(fit, notes=fit.notes + ("evo_time_s not fitted: no beam has gates at two or more ranges",))
-    rows = np.flatnonzero(meas.beam == beams[0])
-    rows = rows[np.argsort(meas.focus_m[rows, 0], kind="stable")]
-    if rows.size > MAX_GATES:  # the nearest, the farthest and evenly between
-        rows = rows[[k * (rows.size - 1) // (MAX_GATES - 1) for k in range(MAX_GATES)]]
     positions = tuple(tuple(float(c) for c in meas.focus_m[i]) for i in rows)
     data = replace(fd, series={"u": fd.series["u"][:, rows]}, columns={"u": np.arange(rows.size)},
                    sites_m=meas.focus_m[rows], u_xyz_m=positions)
@@ -139,6 +148,6 @@ def with_inclined_gates(fd: FitData, meas, fit: MannFit, store: SampledStore | N
         return GateCoherence(bands, data, fit.params, meas.subset(rows), positions, store)
 
     evo = fit_pairs(data, pairs, model_of, fit.nperseg, fit)
-    one = (f"evo_time_s from the gates of beam {int(beams[0])} only (the beams' cross-coherence is not modelled), at "
+    one = (f"evo_time_s from the gates of beam {int(meas.beam[rows[0]])} only (the beams' cross-coherence is not modelled), at "
            f"x = {', '.join(f'{p[0]:.4g}' for p in positions)} m")
     return replace(fit, evolution=evo, notes=fit.notes + (evo.message, one))
