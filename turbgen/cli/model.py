@@ -38,10 +38,9 @@ def model_command(name: str) -> click.Command:
     properties = load_schema(d.schema)["properties"]
 
     def command(**opt):
-        from turbgen.spec.run_inputs import run_inputs
         from turbgen.runs.models import get_model
         from turbgen.spec.config import read_config
-        from turbgen.spec.run_inputs import merge_run_inputs
+        from turbgen.spec.run_inputs import merge_run_inputs, run_inputs
 
         plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
         given, grid, x_m = run_inputs(name, {o: opt[o] for o in (*options, *GRID_OPTIONS, "planes", "gates")})

@@ -8,7 +8,7 @@ is nearly u's. Generalised least squares in (ln ae, ln L), re-weighted at the fi
 covariance from one point's lines times the gates' point correlation (benchmarks/fit_lidar.md); L's interval inverts
 the Wald test with the sd at each L. F is tabulated in ln L (step DLN_L) at N_K1 nodes, interpolated cubic. The
 evolution time is fitted to the co-coherence of gates at different ranges of a beam along x (Guo et al. 2022),
-against a model made as the spectra's (``_with_gates``)."""
+against a model made as the spectra's (``_with_gates``), else of one inclined beam (``fit_gates``)."""
 
 from __future__ import annotations
 
@@ -334,19 +334,16 @@ def _model_note(store) -> str:
 
 
 def _with_gates(fd: FitData, meas, fit: MannFit, store: SampledStore | None) -> MannFit:
-    """``fit`` with the evolution time from the gates of beams along x (else of an inclined beam: ``fit_gates``), or
-    a note saying why there is none. As the spectra, their coherence is summed
-    over the ``store``'s lattice (the continuous plane holds short-lived large-|k| eddies the box lacks) and weighted
-    by the probe's gain within each band (it passes the more coherent low k1 of a band): without either gamma came
-    out high (benchmarks/fit_lidar.md)."""
+    """``fit`` with the evolution time from the gates of beams along x (else of one inclined beam: ``fit_gates``), or
+    a note saying why there is none. As the spectra, their coherence is summed over the sampled ``store``'s lattice
+    (the continuous plane holds short-lived large-|k| eddies the box lacks) and weighted by the probe's gain within
+    each band (it passes the more coherent low k1 of a band): without either gamma came out high
+    (benchmarks/fit_lidar.md)."""
     along = np.flatnonzero(meas.n[:, 0] > 1 - ALONG_X)
-    if along.size == 0:
+    if np.unique(np.round(meas.focus_m[along, 0], 6)).size < 2:
         from turbgen.virtual_lidar.fit_gates import with_inclined_gates  # it builds on this module
 
         return with_inclined_gates(fd, meas, fit, store)
-    if np.unique(np.round(meas.focus_m[along, 0], 6)).size < 2:
-        return replace(fit, notes=fit.notes + ("evo_time_s not fitted: one range gate along x; gates at >= 2 ranges "
-                                               "of one beam are needed",))
     gates = replace(fd, series={"u": fd.series["u"][:, along]}, columns={"u": np.arange(along.size)},
                     sites_m=meas.focus_m[along], u_xyz_m=tuple(map(tuple, meas.focus_m[along])))
 
