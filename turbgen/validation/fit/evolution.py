@@ -110,13 +110,13 @@ class EvoFit:
     def plot(self, ax) -> None:
         """Co-coherence per pair of x with 95 % bars and the fitted model on ``ax``."""
         for k, (a, b) in enumerate(self.data):
-            across = f", {b[1] - a[1]:+.3g} m across" if b[1] != a[1] else ""
+            across = f", {b[1] - a[1]:+.3g} m apart in y" if b[1] != a[1] else ""
             ax.errorbar(self.f_hz, self.data[a, b], yerr=1.96 * self.sd[a, b], fmt="o", ms=3, color=f"C{k}",
                         label=f"x = {a[0]:.4g}, {b[0]:.4g} m{across} data")
             ax.plot(self.f_hz, self.fitted[a, b], "-", color=f"C{k}", label=f"fitted, evo = {self.value_s:.3g} s")
         ax.set_xscale("log")
         ax.set_xlabel("f [Hz]")
-        ax.set_ylabel("co-coherence of u along x")
+        ax.set_ylabel("co-coherence along x (u; a lidar's v_los)")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
 
