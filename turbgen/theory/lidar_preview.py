@@ -84,8 +84,9 @@ def _radial_nodes(kappa_max: float = KAPPA_MAX, panel: float = PANEL_WIDTH):
     return kappa, np.concatenate([w for _, w in parts]) * kappa  # kappa dkappa
 
 
-def _weight_table(meas: Measurements, nu_max: float):
-    """phi_hat on a fine |nu| grid for each distinct probe volume (rows sharing offsets share a table)."""
+def weight_tables(meas: Measurements, nu_max: float):
+    """(|nu| grid [rad/m] of step ~2e-4 up to ``nu_max``, phi_hat on it for each distinct probe volume, each row's
+    table): rows sharing offsets and weights share a table; read linearly between the grid's points."""
     keys, first, inverse = np.unique(np.hstack([meas.offsets_m, meas.weights]).round(12), axis=0,
                                      return_index=True, return_inverse=True)
     nu = np.linspace(0.0, nu_max, int(nu_max / 2e-4) + 2)
@@ -109,7 +110,7 @@ class _Lidar:
         x_gate = meas.focus_m[:, 0]
         self.xs, gate_of = np.unique(np.round(x_gate, 6), return_inverse=True)
         self.gate_of = gate_of.ravel().astype(np.int64)
-        nu, tables, table_of = _weight_table(meas, nu_max)
+        nu, tables, table_of = weight_tables(meas, nu_max)
         self.nu_step, self.tables = float(nu[1] - nu[0]), np.array(tables, dtype=float)
         # measurements that share a LOS vector and a probe volume share phi_hat(k . n) (a beam's gates)
         beams, beam_of = np.unique(np.hstack([meas.n.round(12), table_of[:, None]]), axis=0, return_inverse=True)

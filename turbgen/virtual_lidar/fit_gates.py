@@ -19,7 +19,7 @@ from scipy.interpolate import CubicSpline
 from turbgen.theory.eddy_lifetime import evolution_lifetime_s
 from turbgen.theory.lattice import line_frequencies
 from turbgen.theory.lidar_lattice import lattice_tensor, lattice_wavenumbers
-from turbgen.theory.lidar_preview import KAPPA_MAX, N_THETA, PANEL_WIDTH, polar_nodes
+from turbgen.theory.lidar_preview import KAPPA_MAX, N_THETA, PANEL_WIDTH, polar_nodes, weight_tables
 from turbgen.theory.lidar_weighting import discrete_transform
 from turbgen.theory.mann_tensor import sheared_tensor
 from turbgen.theory.params import MannParams
@@ -29,7 +29,6 @@ from turbgen.validation.fit.result import MannFit
 from turbgen.validation.welch_kernel import WelchKernel
 from turbgen.virtual_lidar.fit import GAIN_MIN, TAIL, SampledStore, sampled_amplitudes
 
-NU_TABLE = 2**15  # points of the continuous model's phi_hat table (step ~2e-4 rad/m at |k| <= 6 rad/m)
 MAX_GATES = 4  # gates of the beam fitted (6 pairs: the continuous plane holds ~10^5 nodes per k1 node and pair)
 
 
@@ -71,8 +70,7 @@ class GateCoherence:
         if self.store is not None:
             return sampled_amplitudes(self.nodes, m, self.U, self.store)
         (n1, n2, n3), (x, y, z) = m.n[0], m.focus_m[0]
-        nu = np.linspace(0.0, self.nodes[-1] + np.hypot(self.k2, self.k3).max(), NU_TABLE)  # |k . n| <= |k|
-        table = discrete_transform(nu, m.offsets_m[0], m.weights[0])  # phi_hat, linear between (as the preview's)
+        nu, (table, *_), _ = weight_tables(m, self.nodes[-1] + np.hypot(self.k2, self.k3).max())  # |k . n| <= |k|
         return np.stack([[(np.interp(np.abs(k * n1 + self.k2 * n2 + self.k3 * n3), nu, table)
                            * np.exp(1j * (-k * x + self.k2 * y + self.k3 * z))).astype(np.complex64)
                           for k in self.nodes]])  # fmt: skip
