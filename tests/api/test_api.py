@@ -10,7 +10,7 @@ from click.testing import CliRunner
 
 import turbgen
 from turbgen.api import fields, generator, products
-from turbgen.spec.run_inputs import run_inputs
+from turbgen.spec.run_mapping import run_inputs
 from turbgen.cli import cli
 from turbgen.errors import ParameterError, StoreError
 

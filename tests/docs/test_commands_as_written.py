@@ -96,7 +96,7 @@ def _set(args: list[str], name: str, value) -> list[str]:
 
 def _default_out(cmd: str, args: list[str]) -> str:
     """The store name ``turbgen cmd args`` writes when no --out is given (computed by the command's own code)."""
-    from turbgen.spec.run_inputs import kaimal_run, mann_run_mapping
+    from turbgen.spec.run_mapping import kaimal_run, mann_run_mapping
     from turbgen.cli import kaimal as kaimal_cli
     from turbgen.cli import mann as mann_cli
     from turbgen.spec.mann import MannRun

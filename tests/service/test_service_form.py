@@ -10,7 +10,7 @@ import pytest
 
 from turbgen.cli.kaimal import kaimal
 from turbgen.cli.mann import mann
-from turbgen.spec.run_inputs import kaimal_run, mann_run_mapping
+from turbgen.spec.run_mapping import kaimal_run, mann_run_mapping
 from turbgen.cli import kaimal as kaimal_cli, mann as mann_cli
 from turbgen.errors import ParameterError
 from turbgen.service.form import form_description, form_fields
@@ -23,7 +23,7 @@ from turbgen.spec.mann import OPTIONS as MANN_OPTIONS
 from turbgen.spec.mann import REPLACES as MANN_REPLACES
 from turbgen.spec.mann import MannRun
 from turbgen.spec.run_inputs import merge_run_inputs
-from turbgen.spec.run_inputs import run_inputs
+from turbgen.spec.run_mapping import run_inputs
 
 # options of the commands that do not describe the run: where it goes, how it is computed, where inputs come from
 NOT_A_RUN_OPTION = {
@@ -90,7 +90,7 @@ def test_the_command_and_the_python_call_make_the_run_of_the_body(model):
     words = shlex.split(out["command"])
     assert words[:2] == ["turbgen", model]
     opt = command.make_context(model, words[2:]).params
-    # the run as the command makes it from its options (turbgen.spec.run_inputs.mann_run_mapping / kaimal_run)
+    # the run as the command makes it from its options (turbgen.spec.run_mapping.mann_run_mapping / kaimal_run)
     given_options = {name: opt[name] for name in RUN_OPTIONS[model]}
     if model == "mann":
         assert MannRun.from_mapping(mann_run_mapping(given_options, None, opt["preset"])[0]) == run

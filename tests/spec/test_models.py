@@ -62,7 +62,7 @@ def test_a_store_of_an_undeclared_model_is_refused_in_one_line():
 # why a further model needs no edit there; a file not listed that names one fails below, so the count cannot grow
 NAMES_A_MODEL = {
     "__init__.py": "turbgen.mann / turbgen.kaimal front ends (optional per model)",
-    "api/__init__.py": "the same", "spec/run_inputs.py": "the same (their run mappings)",
+    "api/__init__.py": "the same", "spec/run_mapping.py": "the same (their run mappings)",
     "cli/fit_data.py": "`turbgen fit mann` (model fits are per model, optional)",
     "validation/fit/data.py": "the same", "validation/fit/kaimal.py": "the same",
     "spec/preset_files.py": "the presets' mann / kaimal tables (a model's preset keys may read any table)",

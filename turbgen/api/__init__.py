@@ -4,7 +4,7 @@ fields    mann, kaimal (fields as xarray Datasets, in memory or in a store), ope
 products  validate, export, lidar, info (on a store or a field in memory)
 generator MannGenerator, KaimalGenerator (one parameter set and grid, a field per seed)
 
-Their keywords become a run as the commands' options do: turbgen.spec.run_inputs."""
+Their keywords become a run as the commands' options do: turbgen.spec.run_mapping."""
 
 from turbgen.api.fields import kaimal, mann, open_store
 from turbgen.api.generator import KaimalGenerator, MannGenerator

@@ -17,7 +17,7 @@ from turbgen.resources import available_memory_bytes, default_threads, parse_siz
 from turbgen.spec.constraints import ConstraintRequest
 from turbgen.spec.kaimal import KaimalRun
 from turbgen.spec.mann import MannRun
-from turbgen.spec.run_inputs import PathLike, kaimal_run, mann_run_mapping
+from turbgen.spec.run_mapping import PathLike, kaimal_run, mann_run_mapping
 from turbgen.store import open_store as _open_field_store
 from turbgen.store.paths import check_output_path
 from turbgen.store.writer import check_new_store

@@ -21,7 +21,7 @@ from turbgen.theory.coherence_models import LONGITUDINAL_MODELS
 from turbgen.theory.kaimal import IEC_IREF
 from turbgen.theory.ranges import LIMITS
 
-# the options that make the run (turbgen.spec.run_inputs.kaimal_run)
+# the options that make the run (turbgen.spec.run_mapping.kaimal_run)
 RUN_OPTIONS = (*KAIMAL_OPTIONS, *GRID_OPTIONS, "planes", "gates")
 
 
@@ -89,7 +89,7 @@ def kaimal(**opt):
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
     plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
-    from turbgen.spec.run_inputs import kaimal_run
+    from turbgen.spec.run_mapping import kaimal_run
 
     # the run as turbgen.kaimal makes it, and the preset's keys at its U (they also name the default store); a bad
     # value is refused here, before the run's imports

@@ -20,7 +20,7 @@ from turbgen.spec.run_inputs import GRID_OPTIONS
 from turbgen.theory.params import LIFETIMES
 from turbgen.theory.ranges import LIMITS
 
-# the options that make the run (turbgen.spec.run_inputs.mann_run_mapping)
+# the options that make the run (turbgen.spec.run_mapping.mann_run_mapping)
 RUN_OPTIONS = (*MANN_OPTIONS, *GRID_OPTIONS, "planes", "gates")
 _ENERGY = ("ae", "sigma_u", "ti")
 
@@ -102,7 +102,7 @@ def mann(**opt):
     if opt["presets_file"] and opt["preset"] is None:
         raise click.UsageError("--presets-file needs --preset")
     plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
-    from turbgen.spec.run_inputs import mann_run_mapping
+    from turbgen.spec.run_mapping import mann_run_mapping
 
     # the run as turbgen.mann makes it; --constrain/--noise/--conditional-mean or the run file's (a bad value is
     # refused here, before the run's imports)

@@ -40,7 +40,8 @@ def model_command(name: str) -> click.Command:
     def command(**opt):
         from turbgen.runs.models import get_model
         from turbgen.spec.config import read_config
-        from turbgen.spec.run_inputs import merge_run_inputs, run_inputs
+        from turbgen.spec.run_inputs import merge_run_inputs
+        from turbgen.spec.run_mapping import run_inputs
 
         plane_positions(opt["planes"], opt["gates"])  # --planes and --gates: a usage error
         given, grid, x_m = run_inputs(name, {o: opt[o] for o in (*options, *GRID_OPTIONS, "planes", "gates")})
