@@ -8,7 +8,9 @@ from __future__ import annotations
 import os
 import time
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
 from dataclasses import dataclass
+from functools import partial
 
 from turbgen.errors import ParameterError
 from turbgen.store import FieldStore, open_store
@@ -86,16 +88,12 @@ def validate(store, *, rotor_radius_m: float | None = None, nperseg: int | None 
     planned = plan_estimates(fs, rotor_radius_m=rotor_radius_m, nperseg=nperseg)
     parallel = (workers or os.cpu_count() or 1) > 1
     key = theory_key(fs.model, fs.attrs, rotor_radius_m=rotor_radius_m, nperseg=nperseg)
-    if parallel:
-        with ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-theory") as pool:
-            theory = pool.submit(_timed, cached, key, lambda: _theory(fs, planned))
-            est = run_estimates(fs, planned, workers)
-            t1 = time.perf_counter()
-            ((th, expected), kept), theory_s = theory.result()
-    else:
+    theory = partial(_timed, cached, key, lambda: _theory(fs, planned))
+    with ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-theory") if parallel else nullcontext() as pool:
+        theory_result = pool.submit(theory).result if pool else theory  # alongside the estimates, or after them
         est = run_estimates(fs, planned, workers)
         t1 = time.perf_counter()
-        ((th, expected), kept), theory_s = _timed(cached, key, lambda: _theory(fs, planned))
+        ((th, expected), kept), theory_s = theory_result()
     t2 = time.perf_counter()
     metrics = judge(est, th, parallel, expected)
     t3 = time.perf_counter()

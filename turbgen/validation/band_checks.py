@@ -78,8 +78,7 @@ class Bands:
         idx = np.clip(np.searchsorted(edges, fb, side="right") - 1, 0, n_edges - 2)
         self.groups = [self.bins[idx == k] for k in range(n_edges - 1) if np.any(idx == k)]
         self.f = f
-        rho1, rho2 = est.setup.bin_rho2(1), est.setup.bin_rho2(2)
-        self.lag_corr = {0: 1.0, 1: rho1, 2: rho2}
+        self.lag_corr = {0: 1.0, 1: est.setup.bin_rho2(1), 2: est.setup.bin_rho2(2)}
         self.k_eff = est.effective_segments
 
     def cov(self, wcov: WelchCovariance, lines: np.ndarray, expected: np.ndarray) -> dict:
@@ -126,10 +125,7 @@ class Bands:
         E C = rho_band = sum_g rho_m E_m / sum_g E_m, from n_band = (sum_g E_m)^2 / Var(sum_g A) samples: Goodman's
         and the Rice phase law (``distributions``); near unit coherence (1 - |rho|^2 < NEAR_UNIT) the delta method."""
         gs = self.groups
-        c = np.array([np.sum(cross[g]) for g in gs])
-        a = np.array([np.sum(auto_a[g]) for g in gs])
-        b = np.array([np.sum(auto_b[g]) for g in gs])
-        e_sum = np.array([np.sum(exp_auto[g]) for g in gs])
+        c, a, b, e_sum = (np.array([np.sum(v[g]) for g in gs]) for v in (cross, auto_a, auto_b, exp_auto))
         rho_band = np.array([np.sum(rho_lines[g] * exp_auto[g]) for g in gs]) / e_sum
         n_band = e_sum**2 / np.array([self.sum_var(cov, g) for g in gs])
         coh = c / np.sqrt(a * b)

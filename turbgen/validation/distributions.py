@@ -32,14 +32,11 @@ _GL_X, _GL_W = roots_legendre(N_PHI_NODES)
 _LAG_X, _LAG_W = roots_laguerre(N_MOMENT_NODES)
 
 
-def _q_nodes(n):
-    """chi2_{2n} quantiles at the Gauss-Hermite normal scores, shape n.shape + (N_Q_NODES,)."""
-    n = np.asarray(n, float)[..., None]
-    s = _Q_SCORES
-    # chi2_{2n} quantile = 2 x gamma(n) quantile; each tail from its own side for precision
-    lo = 2.0 * gammaincinv(n, ndtr(np.minimum(s, 0.0)))
-    hi = 2.0 * gammainccinv(n, ndtr(-np.maximum(s, 0.0)))
-    return np.where(s < 0, lo, hi)
+def _gamma_nodes(n):
+    """Gamma(n) quantiles (halved chi2_{2n} ones) at the Gauss-Hermite normal scores, shape n.shape + (N_Q_NODES,);
+    each tail from its own side for precision."""
+    n, s = np.asarray(n, float)[..., None], _Q_SCORES
+    return np.where(s < 0, gammaincinv(n, ndtr(np.minimum(s, 0.0))), gammainccinv(n, ndtr(-np.maximum(s, 0.0))))
 
 
 def coh2_tails(g, gamma2, n):
@@ -48,7 +45,7 @@ def coh2_tails(g, gamma2, n):
     g, gamma2, n = np.broadcast_arrays(*(np.asarray(a, float) for a in (g, gamma2, n)))
     g = np.clip(g, 0.0, 1.0 - 1e-15)
     F = ((n - 1.0) * g / (1.0 - g))[..., None]
-    lam = (gamma2 / (1.0 - gamma2))[..., None] * _q_nodes(n)
+    lam = (gamma2 / (1.0 - gamma2))[..., None] * (2.0 * _gamma_nodes(n))
     d2 = 2.0 * (n - 1.0)[..., None]
     cdf = ncfdtr(2.0, d2, lam, F)  # noncentral F cdf (Boost); its complement keeps ~1e-10 relative at 1e-6 tails
     # Boost returns nan where the cdf underflows (F far in a tail, e.g. cdf < 1e-200 at lambda ~ 3000): 0 or 1
@@ -120,7 +117,7 @@ def phase_sf(dphi, gamma2, n):
     """Two-sided tail of the sample phase: P(|arg C - arg rho| >= |dphi|) (dphi [rad] wrapped to [0, pi])."""
     dphi, gamma2, n = np.broadcast_arrays(*(np.asarray(a, float) for a in (dphi, gamma2, n)))
     t = np.abs((dphi + np.pi) % (2.0 * np.pi) - np.pi)
-    kappa = (gamma2 / (2.0 * (1.0 - gamma2)))[..., None] * _q_nodes(n)
+    kappa = (gamma2 / (2.0 * (1.0 - gamma2)))[..., None] * (2.0 * _gamma_nodes(n))
     return np.sum(_Q_WEIGHTS * _rice_phase_sf(t[..., None], kappa), axis=-1)
 
 
@@ -152,9 +149,7 @@ def cospectrum_tails(x, c, n):
     x, c, n = np.broadcast_arrays(*(np.asarray(v, float) for v in (x, c, n)))
     a, b = (1.0 + c) / 2.0, (1.0 - c) / 2.0
     nn = n[..., None]
-    s = _Q_SCORES
-    g2 = np.where(s < 0, gammaincinv(nn, ndtr(np.minimum(s, 0.0))), gammainccinv(nn, ndtr(-np.maximum(s, 0.0))))
-    arg = np.maximum((nn * x[..., None] + b[..., None] * g2) / np.maximum(a, 1e-300)[..., None], 0.0)
+    arg = np.maximum((nn * x[..., None] + b[..., None] * _gamma_nodes(n)) / np.maximum(a, 1e-300)[..., None], 0.0)
     lower = np.sum(_Q_WEIGHTS * gammainc(nn, arg), axis=-1)
     upper = np.sum(_Q_WEIGHTS * gammaincc(nn, arg), axis=-1)
     return np.clip(lower, 0.0, 1.0), np.clip(upper, 0.0, 1.0)

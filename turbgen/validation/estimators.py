@@ -271,13 +271,10 @@ def run_estimates(fs, est: Estimates, workers: int | None = None) -> Estimates:
 
 def _combine(est: Estimates, spans, results) -> None:
     """Add the per-task sums into the normalised estimates."""
-    g, setup = est.grid, est.setup
-    seps = est.separations
-    n_seg = est.n_segments
+    g, setup, seps, n_seg = est.grid, est.setup, est.separations, est.n_segments
     nf = setup.nperseg // 2 + 1
     scale = setup.scale
-    n_pts = g.ny * g.nz
-    norm = scale / (n_seg * n_pts * g.nx)
+    norm = scale / (n_seg * g.ny * g.nz * g.nx)
     sums = {c: np.zeros((g.nx, g.ny, g.nz)) for c in COMPONENTS}
     sums2 = {c: np.zeros((g.nx, g.ny, g.nz)) for c in COMPONENTS}
     auto = {c: np.zeros(nf) for c in COMPONENTS}
@@ -302,11 +299,8 @@ def _combine(est: Estimates, spans, results) -> None:
         est.mean[c] = float(point_mean.mean())
         est.variance[c] = float((sums2[c] / g.nt - point_mean**2).mean())
         est.auto[c] = auto[c] * norm
-        est.yz[c] = {}
-        for a, b in seps:
-            n_pairs = (g.ny - a) * (g.nz - b) * g.nx * n_seg
-            cc, pa, pb = yz[c][(a, b)]
-            est.yz[c][(a, b)] = (cc * scale / n_pairs, pa * scale / n_pairs, pb * scale / n_pairs)
+        est.yz[c] = {(a, b): tuple(v * scale / ((g.ny - a) * (g.nz - b) * g.nx * n_seg) for v in yz[c][(a, b)])
+                     for a, b in seps}  # (C, A, B) per pair and segment
     est.uw = uw * norm
     n_sub = est.long_iy.size * est.long_iz.size
     est.long_cross = long_cross * scale / (n_seg * n_sub)

@@ -48,9 +48,8 @@ def kaimal_theory(attrs: dict, design: SamplingDesign) -> Theory:
     modes = _kaimal_modes(km, grid, line_f, yz_coh, long_fn)
 
     def reference() -> dict:  # continuous Kaimal spectra, or the user's band means (plots only)
-        if km.spectrum is not None:
-            return {f"spectrum_{c}": (line_f[1:], np.asarray(km.spectrum.S_m2_s[i])) for i, c in enumerate(COMPONENTS)}
-        return {f"spectrum_{c}": (line_f[1:], kaimal_spectrum(line_f[1:], kp.sigma_m_s[i], kp.length_scales_m[i], U))
+        return {f"spectrum_{c}": (line_f[1:], kaimal_spectrum(line_f[1:], kp.sigma_m_s[i], kp.length_scales_m[i], U)
+                                  if km.spectrum is None else np.asarray(km.spectrum.S_m2_s[i]))
                 for i, c in enumerate(COMPONENTS)}  # fmt: skip
 
     band = design.band(U)

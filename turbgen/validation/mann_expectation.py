@@ -80,7 +80,6 @@ def band_limited_spectra(params: MannParams, grid: Grid, k1: np.ndarray, n_theta
     return out
 
 
-
 def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
     """Mann space-time expectations on the lattice of the generator's box (module docstring) for ``design``."""
     grid = design.grid
@@ -99,10 +98,9 @@ def mann_theory(attrs: dict, design: SamplingDesign) -> Theory:
     # the continuous model band-limited to the grid (sigma_i metrics), smooth in k1: interpolated log-log
     bl_k1 = np.geomspace(k1_lines[1], k1_lines[-1], N_RHO_NODES)
     band_lim = band_limited_spectra(params, grid, bl_k1)
-    auto_model = {}
-    for i, c in enumerate(COMPONENTS):
-        spline = CubicSpline(np.log(bl_k1), np.log(band_lim[i]))
-        auto_model[c] = np.concatenate([[0.0], np.exp(spline(np.log(k1_lines[1:]))) * lat.dk1])
+    log_k1 = np.log(k1_lines[1:])
+    auto_model = {c: np.concatenate([[0.0], np.exp(CubicSpline(np.log(bl_k1), np.log(band_lim[i]))(log_k1)) * lat.dk1])
+                  for i, c in enumerate(COMPONENTS)}
     node_f = design.node_freqs()
     acc, rho_rews = _node_correlations(lat, design, node_f, dxs, h2, U)
     modes = _variance_modes(lat, grid, dxs, k1_lines[1 : N_MODE_LINES + 1], U, box.nyp * box.nzp)
@@ -141,19 +139,18 @@ def _line_sums(lat: MannLattice, design: SamplingDesign, k1_lines: np.ndarray, d
         for dx in dxs:
             long_nodes[dx][n] = np.sum(phi[0, 0] * np.exp(-dx / U * inv_tau))  # Theta_11, Eq. 13
         rews_nodes[n] = np.sum(phi[0, 0] * h2)  # Eq. 24 on the lattice
-    exact = k1_nodes is k1_lines
-    auto = {c: f_nodes[c] if exact else _interp_lines(k1_nodes, f_nodes[c], k1_lines, True) for c in COMPONENTS}
+    if k1_nodes is k1_lines:
+        return {"auto": f_nodes, "yz": yz_nodes, "long": long_nodes, "rews": rews_nodes, "uw": f13}
+    auto = {c: _interp_lines(k1_nodes, f_nodes[c], k1_lines, True) for c in COMPONENTS}
 
     def ratio_lines(values, ref):
-        return values if exact else _interp_lines(k1_nodes, values / ref, k1_lines, False)
+        return _interp_lines(k1_nodes, values / ref, k1_lines, False)
 
-    norm13 = np.sqrt(f_nodes["u"] * f_nodes["w"])
-    uw = f13 if exact else ratio_lines(f13, norm13) * np.sqrt(auto["u"] * auto["w"])
-    yz = {c: {s: yz_nodes[c][s] if exact else ratio_lines(yz_nodes[c][s], f_nodes[c]) * auto[c] for s in seps}
-          for c in COMPONENTS}  # fmt: skip
-    long = {dx: v if exact else ratio_lines(v, f_nodes["u"]) * auto["u"] for dx, v in long_nodes.items()}
-    rews = rews_nodes if exact else ratio_lines(rews_nodes, f_nodes["u"]) * auto["u"]
-    return {"auto": auto, "yz": yz, "long": long, "rews": rews, "uw": uw}
+    return {"auto": auto, "yz": {c: {s: ratio_lines(yz_nodes[c][s], f_nodes[c]) * auto[c] for s in seps}
+                                 for c in COMPONENTS},
+            "long": {dx: ratio_lines(v, f_nodes["u"]) * auto["u"] for dx, v in long_nodes.items()},
+            "rews": ratio_lines(rews_nodes, f_nodes["u"]) * auto["u"],
+            "uw": ratio_lines(f13, np.sqrt(f_nodes["u"] * f_nodes["w"])) * np.sqrt(auto["u"] * auto["w"])}
 
 
 def _node_correlations(lat: MannLattice, design: SamplingDesign, node_f: np.ndarray, dxs: dict, h2: np.ndarray,
@@ -185,19 +182,15 @@ def _node_correlations(lat: MannLattice, design: SamplingDesign, node_f: np.ndar
 def _band(design: SamplingDesign, box, U: float) -> dict:
     """The design's band [rad/m] with the box's extent and lattice spacing, and a note saying what was summed."""
     grid = design.grid
-    band = design.band(U)
-    band.update(
-        box_y_m=box.nyp * grid.dy_m,
-        box_z_m=box.nzp * grid.dz_m,
-        k2_min_rad_m=2 * np.pi / (box.nyp * grid.dy_m),
-        k3_min_rad_m=2 * np.pi / (box.nzp * grid.dz_m),
-        note=(
-            "Mann tensor summed over the box lattice (cells at the k1 axis integrated): |k2| <= pi/dy, "
-            f"|k3| <= pi/dz, spacing 2 pi/box size; box {box.nyp} x {box.nzp} points "
-            f"({box.nyp * grid.dy_m:g} m x {box.nzp * grid.dz_m:g} m)"
-        ),
-    )
-    return band
+    return design.band(U) | {
+        "box_y_m": box.nyp * grid.dy_m,
+        "box_z_m": box.nzp * grid.dz_m,
+        "k2_min_rad_m": 2 * np.pi / (box.nyp * grid.dy_m),
+        "k3_min_rad_m": 2 * np.pi / (box.nzp * grid.dz_m),
+        "note": "Mann tensor summed over the box lattice (cells at the k1 axis integrated): |k2| <= pi/dy, "
+                f"|k3| <= pi/dz, spacing 2 pi/box size; box {box.nyp} x {box.nzp} points "
+                f"({box.nyp * grid.dy_m:g} m x {box.nzp * grid.dz_m:g} m)",
+    }
 
 
 def _variance_modes(lat: MannLattice, grid: Grid, dxs: dict, k1: np.ndarray, U: float, size: int) -> dict:

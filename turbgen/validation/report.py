@@ -129,21 +129,19 @@ def table(report) -> str:
     return "\n".join(lines)
 
 
-def _draw(ax, c: Curve, color, logy: bool, reference=None, label_prefix: str = ""):
-    ax.fill_between(c.f_hz, c.lower, c.upper, color=color, alpha=0.25, lw=0)
-    ax.plot(c.f_hz, c.estimate, color=color, lw=1.0, label=f"{label_prefix}sim.")
-    ax.plot(c.f_hz, c.expected, color="k", lw=1.2, ls="-", label=f"{label_prefix}theo. (grid)")
-    if reference is not None:  # (f [Hz], values) of the continuous model
-        ax.plot(reference[0], reference[1], color="0.4", lw=1.0, ls="--", label="model (continuous)")
+def _draw(ax, c: Curve, logy: bool, reference=None):
+    """The estimate ``c`` with its 95 % band, the expectation and the continuous model (``reference`` (f [Hz], values))
+    on ``ax``; premultiplied by f on a linear axis unless ``logy``."""
+    w = 1.0 if logy else c.f_hz
+    ax.fill_between(c.f_hz, w * c.lower, w * c.upper, color="C0", alpha=0.25, lw=0)
+    ax.plot(c.f_hz, w * c.estimate, color="C0", lw=1.0, label="sim.")
+    ax.plot(c.f_hz, w * c.expected, color="k", lw=1.2, ls="-", label="theo. (grid)")
+    if reference is not None:
+        ax.plot(reference[0], reference[1] * (1.0 if logy else reference[0]), color="0.4", lw=1.0, ls="--",
+                label="model (continuous)")
     ax.set_xscale("log")
     if logy:
         ax.set_yscale("log")
-
-
-def _premultiplied(c: Curve, reference) -> tuple[Curve, tuple | None]:
-    ref = None if reference is None else (reference[0], reference[0] * reference[1])
-    f = c.f_hz
-    return Curve(c.label, f, f * c.estimate, f * c.expected, f * c.lower, f * c.upper), ref
 
 
 def plots(report, directory) -> list[Path]:
@@ -163,15 +161,9 @@ def plots(report, directory) -> list[Path]:
         else:
             fig = Figure(figsize=(6, 4))
             ax = fig.subplots()
-            c = m.curves[0]
-            ref = references.get(c.label)
-            if m.name == "uw_cross_spectrum":  # premultiplied, linear axis: the sign and the peak show
-                c, ref = _premultiplied(c, ref)
-                _draw(ax, c, "C0", logy=False, reference=ref)
-                ax.set_ylabel("f Co_uw(f) [m^2/s^2]")
-            else:
-                _draw(ax, c, "C0", logy=True, reference=ref)
-                ax.set_ylabel(f"S(f) [{m.quantity}]")
+            logy = m.name != "uw_cross_spectrum"  # uw premultiplied, linear axis: the sign and the peak show
+            _draw(ax, m.curves[0], logy, references.get(m.curves[0].label))
+            ax.set_ylabel(f"S(f) [{m.quantity}]" if logy else "f Co_uw(f) [m^2/s^2]")
             ax.set_xlabel("f [Hz]")
             ax.legend(fontsize=8)
         fig.suptitle(f"{m.title}: {'pass' if m.passed else 'FAIL'} (max|z| {m.max_abs_z:.1f}, z_crit {m.z_crit:.1f})",

@@ -37,16 +37,10 @@ def top_modes(coherency: np.ndarray) -> np.ndarray:
         mu = np.linalg.eigvalsh(coherency)[::-1]
     else:
         q = np.random.default_rng(0).standard_normal((n, SUBSPACE)).astype(coherency.dtype)
-        for _ in range(POWER_STEPS):
-            q = _orthonormal(coherency @ q)
+        for _ in range(POWER_STEPS):  # Householder QR: a C of rank < SUBSPACE makes Cholesky QR's y^H y singular
+            q = np.linalg.qr(coherency @ q)[0]
         mu = np.linalg.eigvalsh(np.conj(q.T) @ coherency @ q)[::-1]
     return np.append(np.clip(mu[:N_MODES] / n, 0.0, None), np.sum(np.abs(coherency) ** 2) / n**2)
-
-
-def _orthonormal(y: np.ndarray) -> np.ndarray:
-    """Orthonormal columns (N, k) spanning the columns of y (N, k) by Householder QR (a coherency matrix of rank < k
-    makes the Cholesky QR's y^H y singular)."""
-    return np.linalg.qr(y)[0]
 
 
 def gamma_terms(line_means: np.ndarray, line_rho: np.ndarray, modes: np.ndarray | None = None):
@@ -84,15 +78,13 @@ def gamma_sum_tails(x: float, alpha: np.ndarray, theta: np.ndarray) -> tuple[flo
     def k1(t):
         return float(np.sum(alpha * theta / (1.0 - theta * t)))
 
-    if x > mean:
-        t = brentq(lambda s: k1(s) - x, 0.0, (1.0 - 1e-15) / theta.max(), xtol=1e-300, rtol=1e-14, maxiter=500)
-    else:  # K'(t) < sum(alpha) / |t| for t < 0
-        t = brentq(lambda s: k1(s) - x, -2.0 * alpha.sum() / x, 0.0, xtol=1e-300, rtol=1e-14, maxiter=500)
+    # the saddlepoint K'(t) = x: 0 < t < 1 / max theta above the mean; below, K'(t) < sum(alpha) / |t| for t < 0
+    bracket = (0.0, (1.0 - 1e-15) / theta.max()) if x > mean else (-2.0 * alpha.sum() / x, 0.0)
+    t = brentq(lambda s: k1(s) - x, *bracket, xtol=1e-300, rtol=1e-14, maxiter=500)
     k = -float(np.sum(alpha * np.log1p(-theta * t)))
     k2 = float(np.sum(alpha * (theta / (1.0 - theta * t)) ** 2))
     w = np.sign(t) * np.sqrt(max(2.0 * (t * x - k), 0.0))
     u = t * np.sqrt(k2)
     upper = float(norm.sf(w) + norm.pdf(w) * (1.0 / u - 1.0 / w))
-    upper = min(max(upper, 0.0), 1.0)
     lower = float(norm.cdf(w) - norm.pdf(w) * (1.0 / u - 1.0 / w))
-    return min(max(lower, 0.0), 1.0), upper
+    return min(max(lower, 0.0), 1.0), min(max(upper, 0.0), 1.0)

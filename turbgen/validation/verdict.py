@@ -26,9 +26,10 @@ beyond the top modes for the variances."""
 
 from __future__ import annotations
 
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from scipy.stats import chi2
@@ -102,32 +103,23 @@ def judge(est: Estimates, th: Theory, parallel: bool = False, expected: Expectat
     out = [_mean(est, th), *(_variance(est, th, c) for c in COMPONENTS)]
     second = ThreadPoolExecutor(max_workers=1, thread_name_prefix="turbgen-verdict") if parallel else nullcontext()
     with second as pool:
-        longitudinal = (pool.submit if pool else _done)(_longitudinal, est, th, kernel, bands, exp_auto["u"],
-                                                        ex.cov_long)
+        task = partial(_longitudinal, est, th, kernel, bands, exp_auto["u"], ex.cov_long)
+        longitudinal = pool.submit(task).result if pool else task  # alongside the others, or after them
         out += [_spectrum(f"spectrum_{c}", f"one-point spectrum of {c}", est.auto[c], exp_auto[c], ex.cov_all[c],
                           bands, f) for c in COMPONENTS]
         out += [_yz(est, th, kernel, bands, c, exp_auto[c], ex.cov_yz[c]) for c in COMPONENTS]
         uw = _uw(est, th, kernel, bands, exp_auto, ex.cov)
         rews = _spectrum("rews_spectrum", f"rotor-effective wind speed spectrum (R = {est.rotor_radius_m:g} m)",
                          est.rews_psd, ex.exp_rews, ex.rews_cov, bands, f)
-        out += [longitudinal.result(), uw, rews]
+        out += [longitudinal(), uw, rews]
     return out
-
-
-def _done(fn, *args) -> Future:
-    """fn(*args) now, as a completed Future."""
-    fut = Future()
-    fut.set_result(fn(*args))
-    return fut
 
 
 def _mean(est: Estimates, th: Theory) -> MetricResult:
     # The grand mean is the average of the j = 0 lines Z_0 (variance L_0 per point); averaging over
     # points can only lower the variance, so sd = sqrt(L_0) is conservative.
-    checks = []
-    for c in COMPONENTS:
-        sd = np.sqrt(th.auto[c][0] + (FLOAT32_FLOOR**2) * th.variance(c))
-        checks.append(Check(c, None, est.mean[c], 0.0, float(sd), float(est.mean[c] / sd)))
+    sd = {c: np.sqrt(th.auto[c][0] + (FLOAT32_FLOOR**2) * th.variance(c)) for c in COMPONENTS}
+    checks = [Check(c, None, est.mean[c], 0.0, float(sd[c]), float(est.mean[c] / sd[c])) for c in COMPONENTS]
     return MetricResult("mean", "mean of u, v, w", "m/s", checks)
 
 
@@ -135,12 +127,10 @@ def _variance(est: Estimates, th: Theory, c: str) -> MetricResult:
     # line pair j: 2|Z_j|^2 is exponential with variance (2 L_j)^2, times rho_bar(f_j) for the point average
     lines = th.auto[c][1:] * th.pair_weights[1:]
     rho = th.rho(th.rho_all[c], th.line_f[1:])
-    var = np.sum(lines**2 * rho)
-    e = th.variance(c)
+    sd = float(np.sqrt(np.sum(lines**2 * rho)))
     z = float(normal_score(*gamma_sum_tails(est.variance[c], *gamma_terms(lines, rho, th.variance_modes.get(c)))))
-    sd = float(np.sqrt(var))
-    t = Check(f"sigma_{c}^2", None, est.variance[c], e, sd, z)
-    return MetricResult(f"sigma_{c}", f"variance of {c} (sigma_{c}, TI)", "m^2/s^2", [t])
+    return MetricResult(f"sigma_{c}", f"variance of {c} (sigma_{c}, TI)", "m^2/s^2",
+                        [Check(f"sigma_{c}^2", None, est.variance[c], th.variance(c), sd, z)])
 
 
 def _spectrum(name, title, estimate, expected, cov, bands: Bands, f) -> MetricResult:
@@ -157,49 +147,47 @@ def _sep_label(est: Estimates, s) -> str:
     return f"dy={s[0] * est.grid.dy_m:g}m dz={s[1] * est.grid.dz_m:g}m"
 
 
+def _pair(est, bands, lab, cross, auto_a, auto_b, rho, exp_auto, cov, n, phase_expected) -> tuple[list, list]:
+    """Band checks (``Bands.coherence_checks``) and per-bin coh2 and phase curves of one pair of averaged spectra;
+    ``n``: equivalent samples per bin of the per-bin bands for the plots."""
+    b, f = bands.bins, est.freqs
+    st = coherence_stats(rho, n)
+    curves = []
+    for name, e, m, sd in (("coh2", np.abs(cross) ** 2 / (auto_a * auto_b), st["coh2_mean"], st["coh2_sd"]),
+                           ("phase", np.angle(cross), phase_expected, st["phase_sd"])):
+        lo, hi = _band95(e[b], sd[b])
+        curves.append(Curve(f"{name} {lab}", f[b], e[b], m[b], lo, hi))
+    return bands.coherence_checks(lab, cross, auto_a, auto_b, rho, exp_auto, cov), curves
+
+
 def _yz(est, th, kernel, bands, c, exp_auto, covs) -> MetricResult:
     # covs: separation -> covariance of the auto-spectrum averaged over the first points of its pairs
     checks, curves = [], []
-    b = bands.bins
-    f = est.freqs
     for s in est.separations:
         cc, pa, pb = est.yz[c][s]
-        coh2 = np.abs(cc) ** 2 / (pa * pb)
-        phase = np.angle(cc)
         rho = kernel.apply(th.yz[c][s]) / exp_auto
-        lab = _sep_label(est, s)
-        checks += bands.coherence_checks(lab, cc, pa, pb, rho, exp_auto, covs[s])
-        st = coherence_stats(rho, exp_auto**2 / covs[s][0])  # per-bin bands for the plots
-        for name, e, m, sd in (("coh2", coh2, st["coh2_mean"], st["coh2_sd"]),
-                               ("phase", phase, np.angle(rho), st["phase_sd"])):
-            lo, hi = _band95(e[b], sd[b])
-            curves.append(Curve(f"{name} {lab}", f[b], e[b], m[b], lo, hi))
+        more, pair_curves = _pair(est, bands, _sep_label(est, s), cc, pa, pb, rho, exp_auto, covs[s],
+                                  exp_auto**2 / covs[s][0], np.angle(rho))
+        checks += more
+        curves += pair_curves
     return MetricResult(f"yz_coherence_{c}", f"yz coherence of {c} (magnitude-squared and phase)", "-, rad",
                         checks, curves)
-
 
 
 def _longitudinal(est, th, kernel, bands, exp_auto_u, cov_u) -> MetricResult:
     # cov_u: covariance of the u auto-spectrum averaged over the plane-pair sub-lattice of one plane
     checks, curves = [], []
     g = est.grid
-    b = bands.bins
-    f = est.freqs
     n_bins = exp_auto_u**2 / cov_u[0]
     for p in range(g.nx):
         for q in range(p + 1, g.nx):
-            cross = est.long_cross[p, q]
-            coh2 = np.abs(cross) ** 2 / (est.long_auto[p] * est.long_auto[q])
-            phase = np.angle(cross)
             rho = kernel.apply(th.long_lines(g.x_m[q] - g.x_m[p])) / exp_auto_u
-            lab = f"x={g.x_m[p]:g}m-{g.x_m[q]:g}m"
             # expected phase arg(rho) = 0 in the convected frame of the store
-            checks += bands.coherence_checks(lab, cross, est.long_auto[p], est.long_auto[q], rho, exp_auto_u, cov_u)
-            st = coherence_stats(rho, n_bins)
-            lo, hi = _band95(coh2[b], st["coh2_sd"][b])
-            curves.append(Curve(f"coh2 {lab}", f[b], coh2[b], st["coh2_mean"][b], lo, hi))
-            lo, hi = _band95(phase[b], st["phase_sd"][b])
-            curves.append(Curve(f"phase {lab}", f[b], phase[b], np.zeros(b.size), lo, hi))
+            more, pair_curves = _pair(est, bands, f"x={g.x_m[p]:g}m-{g.x_m[q]:g}m", est.long_cross[p, q],
+                                      est.long_auto[p], est.long_auto[q], rho, exp_auto_u, cov_u, n_bins,
+                                      np.zeros(n_bins.size))
+            checks += more
+            curves += pair_curves
     return MetricResult("longitudinal_coherence_u",
                         "longitudinal coherence of u between planes (magnitude-squared and phase, convected frame)",
                         "-, rad", checks, curves)
@@ -214,24 +202,21 @@ def _uw(est, th, kernel, bands, exp_auto, cov) -> MetricResult:
     eu, ew = exp_auto["u"], exp_auto["w"]
     norm_uw = np.sqrt(eu * ew)
     rho = np.sqrt(th.rho(th.rho_all["u"], f) * th.rho(th.rho_all["w"], f)) + th.rho(th.rho_uw, f)
+
+    def lag_corr(c, d):  # correlation of bins d apart of the one-point estimate with covariance dict c
+        return np.clip(c[d] / np.sqrt(c[0][: f.size - d] * c[0][d:]), 0, 1)
+
     with np.errstate(divide="ignore", invalid="ignore"):
         k_m = np.sqrt(eu**2 / cov["u"][0] * ew**2 / cov["w"][0])
         sd = np.nan_to_num(norm_uw * np.sqrt(rho / (2.0 * k_m)))
-        corr = {d: np.nan_to_num(np.sqrt(np.clip(cov["u"][d] / np.sqrt(cov["u"][0][: f.size - d] * cov["u"][0][d:]), 0, 1)
-                                         * np.clip(cov["w"][d] / np.sqrt(cov["w"][0][: f.size - d] * cov["w"][0][d:]),
-                                                   0, 1)))
-                for d in cov["u"]}
+        sd_cov = {d: sd[: f.size - d] * sd[d:] * np.nan_to_num(np.sqrt(lag_corr(cov["u"], d) * lag_corr(cov["w"], d)))
+                  for d in cov["u"]}
     co = est.uw.real
     checks = []
     for g in bands.groups:
-        var = 0.0
-        for d, r in corr.items():
-            m = g[g + d <= g[-1]]
-            part = np.sum(sd[m] * sd[m + d] * r[m])
-            var += part if d == 0 else 2.0 * part
         scale = np.sqrt(np.sum(eu[g]) * np.sum(ew[g]))
         x, c = float(np.sum(co[g]) / scale), float(np.sum(exp[g]) / scale)
-        v = var / scale**2
+        v = bands.sum_var(sd_cov, g) / scale**2
         n_band = (1.0 + c * c) / (2.0 * v)
         z = float(cospectrum_z(x, c, n_band))
         checks.append(Check("co-spectrum/sqrt(SuSw)", (float(f[g[0]]), float(f[g[-1]])), x, c, float(np.sqrt(v)), z))

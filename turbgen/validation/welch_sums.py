@@ -139,10 +139,8 @@ def cross_sum(xv, yv, ny, out):
     acc_re = np.empty(nz2, np.float32)
     acc_im = np.empty(nz2 // 2, np.float32)
     for f in range(nf):
-        for j in range(nz2):
-            acc_re[j] = 0.0
-        for j in range(nz2 // 2):
-            acc_im[j] = 0.0
+        acc_re[:] = 0.0
+        acc_im[:] = 0.0
         for y in range(ny):
             p = xv[f, y]
             q = yv[f, y]

@@ -56,6 +56,7 @@ class WelchCovariance:
         self.offsets = np.arange(-ext, ext + 1)
         q = self.base[:, None] + self.offsets[None, :]  # (nb, nq) extended line index
         self.q = np.mod(q, nt)
+        self.j = np.where(self.q > nt // 2, nt - self.q, self.q)  # line j <= nt // 2 of each column
         f = q / (nt * setup.dt_s)
         self.c = segment_gain(m[:, None], f, setup)  # (nb, nq): c_m(q), q = self.q
         self.c[self.q == 0] = 0.0
@@ -66,22 +67,14 @@ class WelchCovariance:
         self.cneg[self.q == 0] = 0.0  # (not windowed: c_m(-q) matters where -q is near bin m, i.e. m near 0 or n/2)
         self.phase = np.exp(2j * np.pi * np.outer(self.lags, q.ravel()) / nt).reshape(self.lags.size, *q.shape)
 
-    def _lines(self, lines_half: np.ndarray) -> np.ndarray:
-        """(nb, nq) line variance L of every column q of the index window."""
-        nt = self.nt
-        j = np.where(self.q > nt // 2, nt - self.q, self.q)
-        return np.asarray(lines_half, float)[j]
-
     def node_terms(self, lines_half: np.ndarray, node_f: np.ndarray) -> dict | None:
         """Lag d -> (nbins - d, nn, nn) Gram matrices G_m [(m^2 s^-2)^2] such that the covariance for any R is
         sum_ij G_m,ij R_ij (None when too expensive), from the line variances ``lines_half`` (nt // 2 + 1,) [m^2 s^-2]
         and the increasing frequency nodes ``node_f`` (nn,) [Hz]."""
         if not self.feasible:
             return None
-        nt = self.nt
-        j = np.where(self.q > nt // 2, nt - self.q, self.q)
-        hat = _log_hat_weights(j / (nt * self.setup.dt_s), node_f)  # (nb, nq, nn)
-        L = self._lines(lines_half)
+        hat = _log_hat_weights(self.j / (self.nt * self.setup.dt_s), node_f)  # (nb, nq, nn)
+        L = np.asarray(lines_half, float)[self.j]  # (nb, nq) line variance of every column q of the index window
         sw = np.sqrt(np.tile(self.lag_count.astype(float), 2))[None, :, None]  # real and imaginary rows
         out = {}
         for lag in range(MAX_LAG + 1):
@@ -114,12 +107,11 @@ class WelchCovariance:
         variances ``lines_half`` (nt // 2 + 1,) [m^2 s^-2]; None when too expensive."""
         if not self.feasible:
             return None
-        L = self._lines(lines_half)  # (nb, nq)
+        L = np.asarray(lines_half, float)[self.j]  # (nb, nq)
         scale = self.setup.scale
         out = {}
         for lag in range(MAX_LAG + 1):
-            a_rows = slice(0, self.nb - lag)
-            b_rows = slice(lag, self.nb)
+            a_rows, b_rows = slice(0, self.nb - lag), slice(lag, self.nb)
             # align bin m+lag's coefficients on bin m's q window: shift by base difference
             shift = self.base[b_rows] - self.base[a_rows]
             cb = _shift_rows(self.c[b_rows], shift)

@@ -23,7 +23,7 @@ from turbgen.theory import ranges
 from turbgen.theory.mean_wind import rotate_horizontal
 from turbgen.validation.fit.mean_wind import mean_direction_deg
 from turbgen.validation.point_sets import long_sublattice
-from turbgen.validation.store_run import MannBox
+from turbgen.validation.store_run import MannBox, mann_box_from_attrs
 
 STORE_POINTS_PER_AXIS = 8  # points per axis and plane read from a store (the spectra are averaged over them)
 TURN_NOTE_DEG = 1.0  # the notes name the turn into the mean wind when a sensor's exceeds this [deg]
@@ -204,23 +204,20 @@ def grid_points(grid, points) -> tuple[np.ndarray, np.ndarray]:
     return iy, iz
 
 
-def _grid_data(read, grid, attrs: dict, source: str, points=None) -> FitData:
-    """FitData of a field on a grid: ``read(component, ix)`` -> (nt, ny, nz) of plane ix; the box from ``attrs``."""
-    from turbgen.validation.store_run import mann_box_from_attrs
-
-    g = grid
+def _grid_data(read, g, attrs: dict, source: str, points=None) -> FitData:
+    """FitData of a field on grid ``g``: ``read(component, ix)`` -> (nt, ny, nz) of plane ix; the box from ``attrs``."""
     iy, iz = grid_points(g, points)
     series = {c: np.concatenate([np.asarray(read(c, ix))[:, iy, iz] for ix in range(g.nx)], axis=1).astype(float)
               for c in COMPONENTS}  # fmt: skip
     sites = np.array([(x, y, z) for x in g.x_m for y, z in zip(g.y()[iy], g.z()[iz])])
     n = sites.shape[0]
     box = mann_box_from_attrs(attrs, g) if attrs.get("model") == "mann" else MannBox(g.ny, g.nz)
-    cols = {c: np.arange(n) for c in COMPONENTS}
     if points is not None:
         source += f" at {iy.size} point(s) (y, z) = " + ", ".join(f"({y:g}, {z:g})" for y, z in
                                                                   zip(g.y()[iy], g.z()[iz]))
     return FitData(source, g.dt_s, float(attrs["U_m_s"]), series, tuple((k, k) for k in range(n)), box, g,
-                   sites_m=sites, columns=cols, u_xyz_m=tuple(map(tuple, sites)), attrs=dict(attrs))
+                   sites_m=sites, columns={c: np.arange(n) for c in COMPONENTS}, u_xyz_m=tuple(map(tuple, sites)),
+                   attrs=dict(attrs))
 
 
 def load_fit_data(data, U_m_s: float | None = None, points=None) -> FitData:

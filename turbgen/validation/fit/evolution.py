@@ -37,13 +37,13 @@ from turbgen.theory.params import MannParams
 from turbgen.validation.fit.covariance import point_sets, separations
 from turbgen.validation.fit.data import FitData, in_wind_frame
 from turbgen.validation.fit.evo_cross import coherence_spectra_corr, cross_covariance
+from turbgen.validation.fit.mann import Z95
 from turbgen.validation.fit.model import BandModel
 from turbgen.validation.fit.result import MannFit
 from turbgen.validation.fit.spectra import estimate_bands, segment_dfts
 from turbgen.validation.mann_lattice import MannLattice
 from turbgen.validation.store_run import MannBox
 
-Z95 = 1.959963984540054  # standard normal 97.5 % quantile
 CHI2_95 = Z95**2  # chi^2 quantile 0.95 of one degree of freedom
 N_NODES = 48  # k1 nodes of the coherence (interpolated to the record's lines)
 N_SCAN = 61  # ln gamma scan points over the range of evo
@@ -246,11 +246,7 @@ def _estimates(data: FitData, nperseg: int, pairs: dict):
     r, factor, of_x = [], [], {}
     for (pa, _), cols in pairs.items():
         a, b = (np.array(c) for c in zip(*cols))
-        both = (ok[:, a] & ok[:, b])[:, None, :]
-        sums = [(v * both).sum(axis=(0, 2)) for v in (np.real(np.conj(X[:, :, a]) * X[:, :, b]),
-                                                     np.abs(X[:, :, a]) ** 2, np.abs(X[:, :, b]) ** 2)]
-        c, aa, bb = (bands.band_mean(s) for s in sums)
-        r.append(c / np.sqrt(aa * bb))
+        r.append(bands.co_coherence(X, ok, a, b))
         key = (pa, tuple(a))  # the point-correlation sum of the points at one position
         if key not in of_x:
             one = replace(data, series={"u": u[:, a]}, uw_columns=())

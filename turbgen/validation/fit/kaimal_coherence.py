@@ -77,15 +77,9 @@ class _Problem:
         self.A, self.D = np.zeros((len(classes), P, P)), np.zeros((len(classes), P, P))
         for m, pairs in enumerate(classes.values()):
             a, b = (np.array(c) for c in zip(*pairs))
-            both = (ok[:, a] & ok[:, b])[:, None, :]
-            sums = [bands.band_mean((v * both).sum(axis=(0, 2))) for v in (np.real(np.conj(X[:, :, a]) * X[:, :, b]),
-                                                                          np.abs(X[:, :, a]) ** 2,
-                                                                          np.abs(X[:, :, b]) ** 2)]
-            est.append(sums[0] / np.sqrt(sums[1] * sums[2]))
-            np.add.at(self.A[m], (a, b), 0.5 / a.size)
-            np.add.at(self.A[m], (b, a), 0.5 / a.size)
-            np.add.at(self.D[m], (a, a), 0.5 / a.size)
-            np.add.at(self.D[m], (b, b), 0.5 / a.size)
+            est.append(bands.co_coherence(X, ok, a, b))
+            for M, (i, j) in ((self.A, (a, b)), (self.A, (b, a)), (self.D, (a, a)), (self.D, (b, b))):
+                np.add.at(M[m], (i, j), 0.5 / a.size)
         self.est = np.array(est).T  # (nb, D)
         self.var = np.zeros_like(self.est)
 

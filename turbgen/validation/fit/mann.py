@@ -43,10 +43,7 @@ def bounds(free: tuple) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _params(x: np.ndarray, free: tuple, held: dict) -> dict:
-    p = dict(held)
-    for n, v in zip(free, x):
-        p[n] = math.exp(v) if n != "gamma" else float(v)
-    return p
+    return {**held, **{n: math.exp(v) if n != "gamma" else float(v) for n, v in zip(free, x)}}
 
 
 def _start(bands: BandSpectra, model: BandModel, used: tuple, held: dict) -> dict:

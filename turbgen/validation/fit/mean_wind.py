@@ -19,6 +19,7 @@ import numpy as np
 from scipy import stats
 
 BLOCKS = 8  # batch-means blocks of the variance estimate (each block >> the integral time scale)
+T95 = float(stats.t.ppf(0.975, BLOCKS - 1))  # the interval's half-width in standard errors
 NAMES = ("shear_exponent", "z0_m", "veer_deg_per_m", "turbulence_intensity")
 
 
@@ -125,7 +126,6 @@ def fit_mean_wind(ps, hub_height_m: float | None = None) -> MeanWindFit:
     full = pick((_means(u, 1)[0], _means(v, 1)[0]))
     blocks = np.array([pick(m) for m in zip(_means(u, BLOCKS), _means(v, BLOCKS))])
     sd = np.std(blocks, axis=0, ddof=1) / math.sqrt(BLOCKS)
-    t = float(stats.t.ppf(0.975, BLOCKS - 1))
     reasons = (None, "the mean speed does not increase with height: no log law",
                "fewer than two heights with u and v: veer not identified")
     out = []
@@ -135,8 +135,8 @@ def fit_mean_wind(ps, hub_height_m: float | None = None) -> MeanWindFit:
         elif not math.isfinite(sd[k]):
             out.append(MeanWindValue(transform(full[k]), None, "not identified in every block: no interval"))
         else:
-            out.append(MeanWindValue(transform(full[k]), (transform(full[k] - t * sd[k]),
-                                                          transform(full[k] + t * sd[k]))))
+            out.append(MeanWindValue(transform(full[k]), (transform(full[k] - T95 * sd[k]),
+                                                          transform(full[k] + T95 * sd[k]))))
     hub_u = float(math.exp(full[3])) if hub_height_m is not None else None
     return MeanWindFit(*out, ti, ti_sensor, hub_u)
 
@@ -173,5 +173,4 @@ def _intensity(sensors: list, h: np.ndarray, hub_height_m: float | None) -> tupl
     blocks = np.array([np.nanmean(b) for b in np.array_split(dev2, BLOCKS)])
     var, sd_var = float(np.nanmean(dev2)), float(np.std(blocks, ddof=1) / math.sqrt(BLOCKS))
     ti, sd = math.sqrt(var) / U, sd_var / (2 * math.sqrt(var) * U)  # d(sqrt var)/d var = 1 / (2 sigma)
-    t = float(stats.t.ppf(0.975, BLOCKS - 1))
-    return MeanWindValue(ti, (ti - t * sd, ti + t * sd)), s.name + (f" at {h[k]:g} m" if known[k] else "")
+    return MeanWindValue(ti, (ti - T95 * sd, ti + T95 * sd)), s.name + (f" at {h[k]:g} m" if known[k] else "")

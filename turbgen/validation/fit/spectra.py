@@ -50,6 +50,14 @@ class BandSpectra:
         """(nbins,) values averaged over each band."""
         return np.array([binned[b].mean() for b in self.bands])
 
+    def co_coherence(self, X: np.ndarray, ok: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """(nbands,) co-coherence sum Re conj(X_a) X_b / sqrt(sum |X_a|^2 sum |X_b|^2) of the column pairs (a, b) of
+        the DFTs ``X`` (``segment_dfts``, ``ok`` its complete segments), pooled over the pairs, segments and bins."""
+        both = (ok[:, a] & ok[:, b])[:, None, :]
+        c, aa, bb = (self.band_mean((v * both).sum(axis=(0, 2))) for v in (
+            np.real(np.conj(X[:, :, a]) * X[:, :, b]), np.abs(X[:, :, a]) ** 2, np.abs(X[:, :, b]) ** 2))
+        return c / np.sqrt(aa * bb)
+
     def covariance(self, used: tuple, expected: dict, isserlis: np.ndarray) -> np.ndarray:
         """(nbands, k, k) covariance of the band estimates of the k spectra ``used``: the normalised point-averaged
         Isserlis terms ``isserlis`` (``covariance.isserlis``) times sqrt(S_i S_j S_k S_l) of the ``expected`` auto
