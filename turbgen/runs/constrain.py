@@ -184,8 +184,7 @@ def placed_streams(run, files: list, noise_m_s: float | None = None) -> list[Pla
     placed = []
     for f in files:
         if isinstance(f, PointSeries):
-            sigma = noise_m_s if noise_m_s is not None else (f.noise_m_s or 0.0)
-            placed += _point_streams(run, f, sigma)
+            placed += _point_streams(run, f, noise_m_s if noise_m_s is not None else (f.noise_m_s or 0.0))
         else:
             placed += lidar_streams(run, f, 0.0 if noise_m_s is None else noise_m_s)
     return placed
@@ -291,8 +290,7 @@ def conditioned_planes(run: MannRun, stencil, placed: PlacedData, cov: np.ndarra
             def addend(ix: int, c: int) -> np.ndarray:  # added to the sample's spectra before their time transform
                 return read(0 if frozen else ix, c).reshape(box.nk1, g.ny * g.nz)
 
-            seed = None if conditional_mean else run.seed
-            yield from gen.generate(seed, run.plane_times_s(), addend)
+            yield from gen.generate(None if conditional_mean else run.seed, run.plane_times_s(), addend)
 
     return report, planes()
 

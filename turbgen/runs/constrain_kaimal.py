@@ -67,8 +67,7 @@ def with_mean_offset(cov: np.ndarray, placed: KaimalPlaced) -> np.ndarray:
     v, which C H^T never sees: the solver's matrix when every sample is observed, else its preconditioner."""
     out = cov.copy()
     for group in placed.full_rate:
-        tau2 = float(np.mean(cov[:, group, group].real))
-        out[0, group[:, None], group[None, :]] += tau2
+        out[0, group[:, None], group[None, :]] += float(np.mean(cov[:, group, group].real))
     return out
 
 
@@ -164,8 +163,7 @@ def _conditioned(run: KaimalRun, files: list, noise_m_s, conditional_mean: bool,
     t_start = time.perf_counter()
     placed = place_kaimal(run, files, noise_m_s)
     g = run.grid
-    field_bytes = 0 if path is not None else 3 * g.nbytes_per_component()
-    require_constrained_memory(run, placed, threads, field_bytes)
+    require_constrained_memory(run, placed, threads, 0 if path is not None else 3 * g.nbytes_per_component())
     cov = kaimal_stream_system(run, placed)
     report, gen, planes = kaimal_conditioned_planes(run, placed, cov, conditional_mean=conditional_mean,
                                                     threads=threads)  # fmt: skip

@@ -49,8 +49,7 @@ def _terms(op, j: int) -> tuple[np.ndarray, int]:
         for r in np.flatnonzero(live):
             key = (c, int(op.y_index[j, r]), int(op.z_index[j, r]), int(op.t_index[0, j, r]) - first)
             rows[key] = rows.get(key, 0.0) + op.n[j, c] * weight[r]
-    terms = np.array([(*k, w) for k, w in sorted(rows.items()) if w != 0.0], dtype=float)
-    return terms, first
+    return np.array([(*k, w) for k, w in sorted(rows.items()) if w != 0.0], dtype=float), first
 
 
 def _mean_los(data: LidarData, ms, times: np.ndarray, run, where: str) -> np.ndarray | None:
@@ -79,8 +78,7 @@ def lidar_streams(run, data: LidarData, sigma: float) -> list:
                              "U")  # fmt: skip
     if not np.isfinite(data.v_los).any():  # nothing to condition on (an empty reduction further on)
         raise ParameterError(f"{where}: v_los has no value (every line-of-sight value is missing or NaN)")
-    description = lidar_from_mapping(data.lidar, where)
-    ms = measurements_of(description)
+    ms = measurements_of(lidar_from_mapping(data.lidar, where))
     try:
         planes = check_measurements(SimpleNamespace(grid=g), ms)
     except ParameterError as exc:
@@ -89,9 +87,8 @@ def lidar_streams(run, data: LidarData, sigma: float) -> list:
     gates = sorted({m.gate for m in ms})
     n_scan = data.v_los.shape[0]
     times = np.stack([data.time_s[:, beams.index(m.beam)] for m in ms], axis=1)
-    if (times.max() + max(m.points_m()[:, 0].max() for m in ms) / run.U_m_s > (g.nt - 1) * g.dt_s + 1e-9
-            or times.min() < 0):  # fmt: skip
-        end = (g.nt - 1) * g.dt_s
+    end = (g.nt - 1) * g.dt_s
+    if times.max() + max(m.points_m()[:, 0].max() for m in ms) / run.U_m_s > end + 1e-9 or times.min() < 0:
         raise ParameterError(f"{where}: its measurements fall outside the field's record 0 .. {end:g} s (stored "
                              "time T + x/U)")  # fmt: skip
     q = _scan_step(data, g.dt_s, where)
@@ -100,15 +97,14 @@ def lidar_streams(run, data: LidarData, sigma: float) -> list:
                              "weights; the lidar cannot be placed on this grid")  # fmt: skip
     op = los_operator(g, run.U_m_s, ms, planes, times[:1])
     mean = _mean_los(data, ms, times, run, where)
-    n_dec = g.nt // q if g.nt % q == 0 else None
-    if n_dec is None:
+    if g.nt % q:
         raise ParameterError(f"{where}: the scan period ({q} time steps) does not divide the record of {g.nt} steps: "
                              f"make the field with `nt` a multiple of {q}")  # fmt: skip
     out = []
     for j, m in enumerate(ms):
         terms, first = _terms(op, j)
         values = data.v_los[:, beams.index(m.beam), gates.index(m.gate)] - (0.0 if mean is None else mean[:, j])
-        series = np.full(n_dec, np.nan)
+        series = np.full(g.nt // q, np.nan)
         series[first // q + np.arange(n_scan)] = values
         name = f"{Path(data.source).name}:beam{m.beam}:gate{m.gate}"
         focus = m.points_m()[len(m.offsets_m) // 2]

@@ -172,8 +172,7 @@ def run_kaimal(run: KaimalRun, out, *, overwrite: bool = False, chunk_t: int | N
     t0 = time.perf_counter()
     with create_store(Path(out), g, attrs, chunk_t=chunk_t, overwrite=overwrite) as w:
         sums = _fill(w, run, gen, spill, out.absolute().parent, progress)
-        path = w.path
-    return _summary(gen, sums, path, t0, spill)
+    return _summary(gen, sums, w.path, t0, spill)
 
 
 def in_memory_bytes(run: KaimalRun, gen: KaimalEvo | None = None) -> int:

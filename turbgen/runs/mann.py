@@ -103,8 +103,7 @@ def _checked_stencil(run: MannRun, stencil: MannStencil | None) -> None:
     """Refuse a given stencil built for another run than ``run`` (a unit stencil: for another but in ae)."""
     if stencil is None:
         return
-    unit = stencil.energy == "unit"
-    params = run.params.with_ae(1.0) if unit else run.params
+    params = run.params.with_ae(1.0) if stencil.energy == "unit" else run.params
     if stencil.params != params or stencil.box != synthesis_box(run) or stencil.slab_range != (0, stencil.box.nk1):
         raise ParameterError("the given stencil was built for other parameters or another grid than this run")
     if stencil.inv_tau is None and _evolving(run):
@@ -131,10 +130,9 @@ def _generate(writer, run: MannRun, stencil: MannStencil, threads: int, progress
     gen = gen or MannSnapshots(stencil, g.ny, g.nz, threads, buffers=2)
     if stencil.coef is None:  # one snapshot, its stencil computed on demand: no compiled code has run yet
         _touch_while_loading_kernels(gen, output=not in_place)
-    bar = progress_bar("mann", g.nx, "plane", progress)
     # One write in flight while the generator computes the next item (it alternates two buffers);
     # leaving the pool waits for that write, so an exception never races the writer's clean-up.
-    with bar, ThreadPoolExecutor(1) as background:
+    with progress_bar("mann", g.nx, "plane", progress) as bar, ThreadPoolExecutor(1) as background:
         pending = None
 
         def write_and_sum(comp, ix, field):  # in the background, with the next item's synthesis

@@ -84,13 +84,14 @@ class OutOfCorePlan:
 
     def __init__(self, run: MannRun, memory_bytes: int, threads: int, chunk_t: int | None = None, *,
                  slabs_per_part: int | None = None, block_points: int | None = None,
-                 plane_in_memory: bool | None = None, base: int | None = None):  # fmt: skip
+                 plane_in_memory: bool | None = None, base: int | None = None, per_worker: bool = False):  # fmt: skip
         """Sizes from the budget; ``slabs_per_part`` (multiple of SLAB_BATCH), ``block_points`` (multiple of
         ROW_BLOCK) and ``plane_in_memory`` override them (tests). ``base``: what the process holds besides the planned
-        arrays [B] (default :func:`base_bytes`). ``minimum_bytes``: the smallest budget with one part."""
+        arrays [B] (default :func:`base_bytes`). ``per_worker``: the budget is each worker's of a dask cluster
+        (plan_for_budget). ``minimum_bytes``: the smallest budget with one part."""
         g, box = run.grid, synthesis_box(run)
         self.run, self.memory_bytes, self.threads = run, int(memory_bytes), threads
-        self.per_worker = False  # the budget of each worker of a dask cluster (plan_for_budget)
+        self.per_worker = per_worker
         self.evolving = run.params.evo_time_s is not None and g.nx > 1
         self.n_snapshots = g.nx if self.evolving else 1
         self.points = g.ny * g.nz
@@ -163,8 +164,7 @@ def least_budget_bytes(run: MannRun, chunk_t: int | None = None) -> int:
     """A lower bound [B] of any process's budget for ``run``: in memory or out of core with one thread, on
     the smallest base (BASE_BYTES). A sweep refuses a budget below it before it starts."""
     base = min(BASE_BYTES, base_bytes())
-    in_memory = memory_estimate_bytes(run, 1) + base
-    return min(in_memory, OutOfCorePlan(run, 2**62, 1, chunk_t, base=base).minimum_bytes)
+    return min(memory_estimate_bytes(run, 1) + base, OutOfCorePlan(run, 2**62, 1, chunk_t, base=base).minimum_bytes)
 
 
 def fits_in_memory(run: MannRun, memory_bytes: int | None, threads: int, with_stencil: bool = True) -> bool:
@@ -181,9 +181,7 @@ def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_
     if fits_in_memory(run, memory_bytes, threads, with_stencil):
         return None
     if scheduler != "local":
-        plan = OutOfCorePlan(run, memory_bytes, threads, chunk_t)
-        plan.per_worker = scheduler is not None
-        return plan
+        return OutOfCorePlan(run, memory_bytes, threads, chunk_t, per_worker=scheduler is not None)
     # this process (what it holds, the cluster's own share) and the workers, fresh processes
     here, worker_base = base_bytes() + LOCAL_CLUSTER_BYTES, worker_base_bytes()
     per_worker = OutOfCorePlan(run, 2**62, 1, chunk_t, base=worker_base).minimum_bytes
@@ -194,9 +192,7 @@ def plan_for_budget(run: MannRun, memory_bytes: int | None, threads: int, chunk_
             f"{format_bytes(per_worker)}; got a budget of {format_bytes(memory_bytes)}); raise `memory`, use fewer "
             "`threads` (workers), or lower `nt`, `ny`/`nz` or `pad_yz`"
         )
-    plan = OutOfCorePlan(run, (memory_bytes - here) // threads, 1, chunk_t, base=worker_base)
-    plan.per_worker = True
-    return plan
+    return OutOfCorePlan(run, (memory_bytes - here) // threads, 1, chunk_t, base=worker_base, per_worker=True)
 
 
 def local_cluster(workers: int):
@@ -227,26 +223,22 @@ def run_mann_outofcore(run: MannRun, out: str | Path, *, memory_bytes: int, over
     threads = default_threads(threads)
     backend = fft.current()
     plan = plan or OutOfCorePlan(run, memory_bytes, threads, chunk_t)
-    if client is not None and plan.plane_in_memory:  # workers hand planes over through the plane file
-        plan.plane_in_memory = False
+    plan.plane_in_memory = plan.plane_in_memory and client is None  # workers hand planes over through the plane file
     g = run.grid
     path = Path(out).expanduser().absolute()
     remove_stale_scratch(path)
-    store_bytes = 3 * g.nt * g.nx * g.ny * g.nz * _F32
-    require_disk(path.parent, store_bytes + plan.scratch_bytes(), "the out-of-core Mann run (store + scratch)",
-               "free disk space or write `out` elsewhere")  # fmt: skip
-    times = np.sort(run.plane_times_s(), kind="stable")
-    times = times if plan.evolving else times[:1]
+    require_disk(path.parent, 3 * g.nbytes_per_component() + plan.scratch_bytes(),
+                 "the out-of-core Mann run (store + scratch)", "free disk space or write `out` elsewhere")
+    times = np.sort(run.plane_times_s(), kind="stable")[: None if plan.evolving else 1]
     order = [int(i) for i in np.argsort(run.plane_times_s(), kind="stable")]
     sums = {c: [0.0, 0.0] for c in COMPONENTS}
     scratch_dir = temp_name(path, SCRATCH_MARK)
     n_blocks = -(-plan.points // plan.block_points)
-    spectra_bytes = plan.n_snapshots * 3 * plan.n_parts * plan.points * plan.slabs_per_part * _C64
     with create_store(path, g, run.to_attrs(), chunk_t=plan.chunk_t, overwrite=overwrite) as writer:
         scratch_dir.mkdir()
         try:
             spectra_path, plane_path = scratch_dir / "spectra", scratch_dir / "plane"
-            _File(spectra_path, spectra_bytes).close()
+            _File(spectra_path, plan.n_snapshots * 3 * plan.n_parts * plan.points * plan.slabs_per_part * _C64).close()
             if not plan.plane_in_memory:
                 _File(plane_path, n_blocks * g.nt * plan.block_points * _F32).close()
             cells = axis_cells(run.params, synthesis_box(run))
@@ -309,11 +301,8 @@ def pass1_part(run: MannRun, plan: OutOfCorePlan, spectra_path: str, cells, time
     with _File(Path(spectra_path)) as spectra_file:
         for m, spectra in gen.spectra(run.seed, times):
             for c in range(3):
-                block = spectra[c]  # (points, end - first)
-                if end - first < S:  # the last part: pad its rows to S slabs so every write is one block
-                    full = np.zeros((plan.points, S), np.complex64)
-                    full[:, : end - first] = block
-                    block = full
+                block = spectra[c]  # (points, end - first); the last part's rows padded to S slabs: one write each
+                block = block if end - first == S else np.pad(block, ((0, 0), (0, S - (end - first))))
                 spectra_file.write(_spectra_offset(plan, m, c, part), block)
 
 

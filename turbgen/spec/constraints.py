@@ -157,9 +157,7 @@ def _sensor_arrays(sensor, k: int) -> dict:
 
 def _head(value):
     """An array's first two values as the file's list (None for NaN); other values as they are."""
-    if not isinstance(value, np.ndarray):
-        return value
-    return [None if math.isnan(x) else x for x in value[:2].tolist()]
+    return [None if math.isnan(x) else x for x in value[:2].tolist()] if isinstance(value, np.ndarray) else value
 
 
 def _array(values, where: str) -> np.ndarray:
@@ -186,9 +184,7 @@ def point_series_from_mapping(data, source: str, where: str | None = None, check
     for k, s in enumerate(data["sensors"]):
         name = s.get("name", f"sensor {k}")
         series = {}
-        for c in COMPONENTS:
-            if f"{c}_m_s" not in s:
-                continue
+        for c in [c for c in COMPONENTS if f"{c}_m_s" in s]:
             v = s[f"{c}_m_s"]
             v = v if isinstance(v, np.ndarray) else np.array([math.nan if x is None else x for x in v], dtype=float)
             if len(v) != len(t):

@@ -69,8 +69,7 @@ class DlcSet:
         """The load case's sigma1 [m/s] at V_hub: NTM (1.1, 1.2) or ETM (1.3)."""
         if DLCS[self.dlc] == "NTM":
             return iec_sigma1_m_s(V_hub_m_s, self.category)
-        turbine = parse_class(self.iec_class)[0]
-        return iec.etm_sigma1_m_s(V_hub_m_s, IEC_IREF[self.category], iec.V_REF_M_S[turbine])
+        return iec.etm_sigma1_m_s(V_hub_m_s, IEC_IREF[self.category], iec.V_REF_M_S[parse_class(self.iec_class)[0]])
 
     def run_mapping(self, model: str, V_hub_m_s: float, seed: int) -> dict:
         """The run mapping of one field of ``model`` (one of :func:`dlc_models`) at hub speed ``V_hub_m_s`` [m/s]

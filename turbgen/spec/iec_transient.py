@@ -55,8 +55,7 @@ class IecTransient:
         put(self, "kind", check_choice("transient", str(self.kind).upper(), KINDS))
         turbine, category = parse_class(self.iec_class)
         put(self, "iec_class", turbine + category)
-        v_ref = iec.V_REF_M_S[turbine]
-        put(self, "V_hub_m_s", check_range("V_hub (m/s)", self.V_hub_m_s, 0.0, v_ref, lo_open=True))
+        put(self, "V_hub_m_s", check_range("V_hub (m/s)", self.V_hub_m_s, 0.0, iec.V_REF_M_S[turbine], lo_open=True))
         put(self, "hub_height_m", check_positive("hub height (m)", self.hub_height_m))
         put(self, "rotor_diameter_m", check_positive("rotor diameter (m)", self.rotor_diameter_m))
         if self.rotor_diameter_m / 2 >= self.hub_height_m:
@@ -128,8 +127,7 @@ class IecTransient:
             out["gust_m_s"] = iec.cosine_rise(tau, iec.ECD_GUST_M_S, period)
             out["direction_deg"] = iec.cosine_rise(tau, self.sign * size, period)
         else:
-            key = "vshear_m_s" if self.kind == "EWS-V" else "hshear_m_s"
-            out[key] = self.sign * size * iec.ews_factor(tau, period)
+            out["vshear_m_s" if self.kind == "EWS-V" else "hshear_m_s"] = self.sign * size * iec.ews_factor(tau, period)
         return out
 
     def columns(self) -> dict:
@@ -137,8 +135,7 @@ class IecTransient:
         shear: LinVShear / HorizShear = (speed change across D) / V_hub with RefLength = D)."""
         t = self.times_s()
         ev = self.at(t)
-        zero = np.zeros_like(t)
-        return dict(zip(COLUMNS, (t, np.full_like(t, self.V_hub_m_s), ev["direction_deg"], zero,
+        return dict(zip(COLUMNS, (t, np.full_like(t, self.V_hub_m_s), ev["direction_deg"], np.zeros_like(t),
                                   ev["hshear_m_s"] / self.V_hub_m_s, np.full_like(t, NWP_EXPONENT),
                                   ev["vshear_m_s"] / self.V_hub_m_s, ev["gust_m_s"])))
 

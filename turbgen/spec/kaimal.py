@@ -82,10 +82,8 @@ class KaimalRun:
         check_choice("long_components", self.long_components, LONG_COMPONENTS)
         check_choice("vw_coherence", self.vw_coherence, VW_COHERENCE)
         if self.long_model == "exp":
-            a_x = DEFAULT_A_X if self.a_x is None else ranges.check("a_x", self.a_x)
-            b_x = DEFAULT_B_X if self.b_x is None else ranges.check("b_x", self.b_x)
-            object.__setattr__(self, "a_x", a_x)
-            object.__setattr__(self, "b_x", b_x)
+            object.__setattr__(self, "a_x", DEFAULT_A_X if self.a_x is None else ranges.check("a_x", self.a_x))
+            object.__setattr__(self, "b_x", DEFAULT_B_X if self.b_x is None else ranges.check("b_x", self.b_x))
         elif self.a_x is not None or self.b_x is not None:
             raise ParameterError(f"a_x / b_x apply to long_model exp only, not {self.long_model!r}")
         object.__setattr__(self, "rescale", bool(self.rescale))

@@ -44,18 +44,9 @@ def _strictly_increasing(name: str, values) -> tuple:
     return vals
 
 
-def _direction(name: str, value) -> float:
-    """A direction [deg] within one turn either way (a compass bearing or a relative angle)."""
-    return check_range(name, value, -DIRECTION_LIMIT_DEG, DIRECTION_LIMIT_DEG)
-
-
-def _speed(name: str, value) -> float:
-    """A mean speed [m/s] >= 0 and a plausible wind (turbgen.theory.ranges "measured_m_s")."""
-    return check_range(name, value, 0.0, ranges.RANGES["measured_m_s"].hi)
-
-
-def _column(name: str, values, n: int, check=check_finite) -> tuple:
-    vals = tuple(check(name, v) for v in values)
+def _column(name: str, values, n: int, lo: float, hi: float) -> tuple:
+    """``values`` in [lo, hi], none or ``n`` of them."""
+    vals = tuple(check_range(name, v, lo, hi) for v in values)
     if vals and len(vals) != n:
         raise ParameterError(f"{name} has {len(vals)} values for {n} rows")
     return vals
@@ -120,12 +111,14 @@ class MeanWind:
         prefix, axis, unit = axis_key.split("_")
         x = _strictly_increasing(f"{name} {axis} ({unit})", getattr(self, axis_key))
         put(self, axis_key, x)
-        speeds = _column(f"{name} speeds (m/s)", getattr(self, f"{prefix}_speeds_m_s"), len(x), _speed)
+        speeds = _column(f"{name} speeds (m/s)", getattr(self, f"{prefix}_speeds_m_s"), len(x), 0.0,
+                         ranges.RANGES["measured_m_s"].hi)  # a plausible wind
         if len(speeds) != len(x):
             raise ParameterError(f"{whole} has {len(x)} {axis} but no speeds")
         put(self, f"{prefix}_speeds_m_s", speeds)
         key = f"{prefix}_directions_deg"
-        put(self, key, _column(f"{name} directions (deg)", getattr(self, key), len(x), _direction))
+        put(self, key, _column(f"{name} directions (deg)", getattr(self, key), len(x), -DIRECTION_LIMIT_DEG,
+                               DIRECTION_LIMIT_DEG))
         return x
 
     @property
@@ -191,19 +184,15 @@ class MeanWind:
                      if self.history_directions_deg else np.zeros(t.shape))
         return speed, direction
 
-    def transient_terms(self, times_s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The transient's gust and shear changes across D, (g, s_v, s_h) [m/s], at ``times_s`` [s] (or zeros)."""
-        t = np.asarray(times_s, dtype=float)
-        if self.transient is None:
-            return np.zeros(t.shape), np.zeros(t.shape), np.zeros(t.shape)
-        ev = self.transient.at(t)
-        return ev["gust_m_s"], ev["vshear_m_s"], ev["hshear_m_s"]
-
     def _added(self, t, y_m, h, U_m_s: float, hub_height_m: float):
         """(U_hub(t) r(h), g + s_v (h - h_hub) / D + s_h y / D) [m/s] and the turn [deg] of the module's formula."""
         speed, turn = self.hub_history(t, U_m_s)
-        gust, vshear, hshear = self.transient_terms(t)
-        diameter = self.transient.rotor_diameter_m if self.transient is not None else 1.0
+        if self.transient is None:
+            gust = vshear = hshear = np.zeros(t.shape)
+            diameter = 1.0
+        else:  # the transient's gust and shear changes across D
+            ev, diameter = self.transient.at(t), self.transient.rotor_diameter_m
+            gust, vshear, hshear = ev["gust_m_s"], ev["vshear_m_s"], ev["hshear_m_s"]
         shift = gust + vshear * (h - hub_height_m) / diameter + hshear * np.asarray(y_m, dtype=float) / diameter
         return speed * self.speed_ratio(h, hub_height_m), shift, turn
 
@@ -268,12 +257,10 @@ class MeanWind:
     def to_attrs(self) -> dict:
         """JSON-ready attributes (units in the key names) of the fields that apply, lists for the tables."""
         out = {"profile": self.profile}
+        skip = {"profile": True, "displacement_m": self.profile != "log", "shear_exponent": self.profile != "power",
+                "veer_deg_per_m": not self.veer_deg_per_m}
         for key, value in self.__dict__.items():
-            if key == "profile" or value in ((), "", None) or (key == "displacement_m" and self.profile != "log"):
-                continue
-            if key == "shear_exponent" and self.profile != "power":
-                continue
-            if key == "veer_deg_per_m" and not value:
+            if skip.get(key) or value in ((), "", None):
                 continue
             if key == "transient":
                 value = {f: getattr(value, f) for f in ("kind", "iec_class", "V_hub_m_s", "hub_height_m",

@@ -48,8 +48,7 @@ def _header(lines: list[str], where: str) -> tuple[dict, dict]:
             continue  # a comment
         if key.startswith("sensor "):
             name = key[len("sensor "):].strip()
-            spec = dict(item.partition("=")[::2] for item in value.split(","))
-            spec = {k.strip(): v for k, v in spec.items()}
+            spec = {k.strip(): v for k, v in (item.partition("=")[::2] for item in value.split(","))}
             unknown = sorted(set(spec) - set(SENSOR_KEYS))
             if not name or name in sensors or unknown:
                 bad = f" (not {', '.join(unknown)})" if unknown else ""

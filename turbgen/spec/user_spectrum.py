@@ -62,14 +62,6 @@ def read_coherence_csv(path) -> dict:
     return {"f_hz": f, "r_m": r, "coh": coh}
 
 
-def _from_mapping(value: Mapping) -> tuple:
-    keys = set(value)
-    if keys != set(COLUMNS):
-        raise ParameterError(f"spectrum mapping: keys {', '.join(sorted(map(str, keys)))}; needs exactly "
-                             f"{', '.join(COLUMNS)}")
-    return value["f_hz"], [value[c] for c in COLUMNS[1:]]
-
-
 def line_spectrum(value, grid: Grid) -> LineSpectrum | None:
     """The band means of ``value`` on ``grid``'s lines (None: no user spectrum): a CSV path, a mapping of ``f_hz``,
     ``S_u``, ``S_v``, ``S_w`` (a store's record), four arrays, a callable ``S(f_hz) -> (3, n)`` [m^2/s] or a
@@ -84,7 +76,10 @@ def line_spectrum(value, grid: Grid) -> LineSpectrum | None:
     if isinstance(value, (str, os.PathLike)):
         f, S = read_spectrum_csv(value)
     elif isinstance(value, Mapping):
-        f, S = _from_mapping(value)
+        if set(value) != set(COLUMNS):
+            raise ParameterError(f"spectrum mapping: keys {', '.join(sorted(map(str, value)))}; needs exactly "
+                                 f"{', '.join(COLUMNS)}")
+        f, S = value["f_hz"], [value[c] for c in COLUMNS[1:]]
     elif isinstance(value, Callable):
         return LineSpectrum.from_callable(value, grid.nt, grid.dt_s)
     else:

@@ -34,6 +34,5 @@ def _sums(flat):
 
 def block_sums(block: np.ndarray) -> tuple[float, float]:
     """(sum, sum of squares) of a float32 ``block``'s values, accumulated in float64; not finite for NaN or inf."""
-    flat = np.ascontiguousarray(block, dtype=np.float32).reshape(-1)
-    total, squares = _sums(flat)
+    total, squares = _sums(np.ascontiguousarray(block, dtype=np.float32).reshape(-1))
     return float(total), float(squares)

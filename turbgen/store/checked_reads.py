@@ -27,8 +27,7 @@ def read_checked(arr: zarr.Array, ix: int, t0: int, t1: int, path=None, out: np.
         chunk_file = f"{name}/{arr.metadata.encode_chunk_key((a // step, ix, 0, 0))}"
         block = out[a - t0 : b - t0]
         try:
-            whole = a % step == 0 and b - a == step
-            if not (whole and read_chunk(arr, (a // step, ix, 0, 0), block)):
+            if not (a % step == 0 and b - a == step and read_chunk(arr, (a // step, ix, 0, 0), block)):
                 arr.get_basic_selection((slice(a, b), ix), out=nd_buffer.from_numpy_array(block))
         except Exception as exc:  # a decompression/decoding failure inside zarr, a missing or short chunk file
             raise StoreError(f"{where}: corrupted chunk at {name}, plane index {ix}, t index {a - a % step}-{b - 1} "

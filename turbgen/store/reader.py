@@ -30,8 +30,7 @@ class FieldStore:
         self._limits = amplitude_limits(attrs)
 
     def __repr__(self) -> str:
-        g = self.grid
-        return f"FieldStore({str(self.path)!r}, model={self.model!r}, shape={g.shape})"
+        return f"FieldStore({str(self.path)!r}, model={self.model!r}, shape={self.grid.shape})"
 
     @property
     def label(self) -> str:
@@ -263,7 +262,5 @@ def physical_time_view(path_or_fs):
 
     fs = path_or_fs if isinstance(path_or_fs, FieldStore) else open_store(path_or_fs)
     ds = xr.open_zarr(str(fs.path), consolidated=True)
-    t = fs.grid.t()
-    x = fs.grid.x()
-    T = t[:, None] - x[None, :] / fs.U_m_s
+    T = fs.grid.t()[:, None] - fs.grid.x()[None, :] / fs.U_m_s
     return ds.assign_coords(T=(("t", "x"), T, {"units": "s", "long_name": "physical time at plane x: T = t - x/U"}))

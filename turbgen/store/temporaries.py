@@ -65,9 +65,8 @@ def removed_line(removed) -> str:
     removed = list(removed)
     if not removed:
         return ""
-    first = removed[0]
     more = f" and {len(removed) - 1} more" if len(removed) > 1 else ""
-    return f"removed {first}{more} (temporary of an interrupted write whose process is gone)"
+    return f"removed {removed[0]}{more} (temporary of an interrupted write whose process is gone)"
 
 
 def report_removed(removed) -> None:
@@ -83,8 +82,7 @@ def publish(tmp: Path, path: Path, *, replace: bool) -> Path | None:
     old output left at the temporary name for the caller to delete; without renameat2, two renames (a short window
     without ``path``)."""
     tmp, path = Path(tmp), Path(path)
-    exists = path.exists() or path.is_symlink()
-    if not replace or not exists:
+    if not replace or not (path.exists() or path.is_symlink()):
         if oscalls.rename_noreplace(tmp, path):
             return None
         if path.exists() or path.is_symlink():

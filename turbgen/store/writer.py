@@ -54,22 +54,19 @@ class StoreWriter:
         try:
             finish_before_raising(self._create, self._tmp)
         except BaseException as exc:
-            self._discard()
-            _raise_disk_error(exc, self.path)
+            self._abandon(exc)
             raise
         return self
 
     def __exit__(self, exc_type, exc, tb) -> bool:
         if exc_type is not None:
-            self._discard()
-            _raise_disk_error(exc, self.path)
+            self._abandon(exc)
             return False
         try:
             raise_if_stop_requested()  # an interruption whose exception was swallowed on the way publishes nothing
             self._finish()
         except BaseException as err:
-            self._discard()
-            _raise_disk_error(err, self.path)
+            self._abandon(err)
             raise
         return False
 
@@ -111,8 +108,7 @@ class StoreWriter:
 
     def _create(self, root: Path) -> None:
         g = self.grid
-        attrs = with_writer_attrs(self._attrs, g)
-        group = zarr.open_group(str(root), mode="w-", zarr_format=3, attributes=attrs)
+        group = zarr.open_group(str(root), mode="w-", zarr_format=3, attributes=with_writer_attrs(self._attrs, g))
         for name, values in layout.coordinates(g).items():
             arr = group.create_array(name, shape=values.shape, dtype=layout.COORD_DTYPE, chunks=values.shape,
                                      dimension_names=(name,), attributes=layout.COORD_ATTRS[name], compressors=None)
@@ -154,6 +150,14 @@ class StoreWriter:
         if self._tmp is not None:
             remove_path(self._tmp)
             self._tmp = None
+
+    def _abandon(self, exc: BaseException) -> None:
+        """Discard the temporary directory; re-raise an OSError of the file system (disk full, read-only, ...) as a
+        one-line StoreError."""
+        self._discard()
+        if isinstance(exc, OSError) and not isinstance(exc, StoreError):
+            reason = exc.strerror or (str(exc).splitlines() or [type(exc).__name__])[0]
+            raise StoreError(f"writing {self.path} failed: {reason} (errno {exc.errno}); nothing was written") from None
 
 
 def with_writer_attrs(attrs: dict, grid: Grid) -> dict:
@@ -198,13 +202,6 @@ def checked_block(grid: Grid, component: str, ix: int, data, t0: int) -> tuple[n
     if not np.isfinite(total):
         raise ValueError(f"{component} plane {ix}: block at t0={t0} contains NaN or inf")
     return block, total, sum_sq
-
-
-def _raise_disk_error(exc: BaseException, path: Path) -> None:
-    """Re-raise an OSError of the file system (disk full, read-only, ...) as a one-line StoreError."""
-    if isinstance(exc, OSError) and not isinstance(exc, StoreError):
-        reason = exc.strerror or (str(exc).splitlines() or [type(exc).__name__])[0]
-        raise StoreError(f"writing {path} failed: {reason} (errno {exc.errno}); nothing was written") from None
 
 
 def check_new_store(path, grid: Grid, *, chunk_t: int | None = None, overwrite: bool = False,
