@@ -130,9 +130,7 @@ class TurbgenGroup(click.Group):
             sig = interruption.received_signal()
             if sig is None:
                 raise
-            _quiet_shutdown()
-            what = "interrupted" if sig == signal.SIGINT else f"terminated ({signal.Signals(sig).name})"
-            click.echo(_stopped_line(ctx, what), err=True)
+            _say_stopped(ctx, sig)
             ctx.exit(128 + sig)
 
     def _invoke_one_line(self, ctx):
@@ -145,14 +143,11 @@ class TurbgenGroup(click.Group):
         except click.ClickException as exc:  # click's own usage errors (bad option, missing argument, ...)
             raise _one_line(exc) from None
         except KeyboardInterrupt:  # Ctrl-C: writers have removed their temporaries; conventional exit 130
-            _quiet_shutdown()
-            click.echo(_stopped_line(ctx, "interrupted"), err=True)
+            _say_stopped(ctx, signal.SIGINT)
             ctx.exit(130)
         except SystemExit as exc:  # SIGTERM / SIGHUP turned into SystemExit(128 + signum) by the writers
             if exc.code in (128 + signal.SIGTERM, 128 + signal.SIGHUP):
-                _quiet_shutdown()
-                name = signal.Signals(exc.code - 128).name
-                click.echo(_stopped_line(ctx, f"terminated ({name})"), err=True)
+                _say_stopped(ctx, exc.code - 128)
             raise
         except OSError as exc:  # a file-system error the library did not word itself (read-only, missing dir)
             if interruption.received_signal() is not None:  # or a library's own error for our signal (a timeout)
@@ -166,11 +161,15 @@ class TurbgenGroup(click.Group):
 PUBLISHING_COMMANDS = (*(d.name for d in DECLARATIONS), "export", "sweep")
 
 
-def _stopped_line(ctx, what: str) -> str:
-    """The one line of an interrupted or terminated command; it says unfinished output was removed only for a
-    command that writes its output under temporary names (PUBLISHING_COMMANDS)."""
+def _say_stopped(ctx, sig: int) -> None:
+    """Print the one line of a command stopped by signal ``sig``, without warnings about zarr reads submitted but never
+    run; it says unfinished output was removed only for a command that writes its output under temporary names
+    (PUBLISHING_COMMANDS)."""
+    warnings.filterwarnings("ignore", message="coroutine .* was never awaited", category=RuntimeWarning)
+    logging.getLogger("asyncio").setLevel(logging.CRITICAL)  # "Task was destroyed but it is pending!" at exit
+    what = "interrupted" if sig == signal.SIGINT else f"terminated ({signal.Signals(sig).name})"
     removed = ctx.invoked_subcommand in PUBLISHING_COMMANDS
-    return f"Error: {what}" + ("; unfinished output was removed" if removed else "")
+    click.echo(f"Error: {what}" + ("; unfinished output was removed" if removed else ""), err=True)
 
 
 def _one_line(exc: click.ClickException) -> click.ClickException:
@@ -182,12 +181,6 @@ def _one_line(exc: click.ClickException) -> click.ClickException:
     if isinstance(exc, click.UsageError) and ctx is not None and ctx.command_path:
         message = f"{ctx.command_path}: {message}"
     return UserError(message)
-
-
-def _quiet_shutdown() -> None:
-    """After an interruption: no warnings about zarr reads that were submitted but never run."""
-    warnings.filterwarnings("ignore", message="coroutine .* was never awaited", category=RuntimeWarning)
-    logging.getLogger("asyncio").setLevel(logging.CRITICAL)  # "Task was destroyed but it is pending!" at exit
 
 
 @click.group(cls=TurbgenGroup, context_settings={"help_option_names": ["-h", "--help"]})

@@ -86,11 +86,8 @@ def info(store: str, as_json: bool):
         from turbgen.exporters.describe import file_summary
 
         rows = file_summary(path)
-        if as_json:
-            click.echo(json.dumps(dict(rows), indent=2))
-        else:
-            width = max(len(k) for k, _ in rows)
-            click.echo("\n".join(f"{k:<{width}}  {v}" for k, v in rows))
+        width = max(len(k) for k, _ in rows)
+        click.echo(json.dumps(dict(rows), indent=2) if as_json else "\n".join(f"{k:<{width}}  {v}" for k, v in rows))
         return
     with run_imports():
         from turbgen.api.products import info as store_info
@@ -99,7 +96,4 @@ def info(store: str, as_json: bool):
     if path.is_dir() and not (path / "zarr.json").is_file():
         report_removed(remove_dead_temporaries(path))  # e.g. a sweep directory
     summary = store_info(path)
-    if as_json:
-        click.echo(json.dumps(summary, indent=2))
-    else:
-        click.echo("\n".join(_lines(summary)))
+    click.echo(json.dumps(summary, indent=2) if as_json else "\n".join(_lines(summary)))

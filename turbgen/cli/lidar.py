@@ -90,8 +90,7 @@ def run(store, lidar_name, out, overwrite, rotor_radius, mean_wind, shear_expone
         path = result.write(out, overwrite=overwrite)
         click.echo(f"wrote {path}", err=True)
     if plots_dir is not None:
-        files = result.plots(plots_dir)
-        click.echo(f"wrote {len(files)} plots to {plots_dir}", err=True)
+        click.echo(f"wrote {len(result.plots(plots_dir))} plots to {plots_dir}", err=True)
     click.echo(json.dumps(result.to_dict(), indent=1) if as_json else result.text())
     sys.exit(0 if result.passed else 1)
 

@@ -99,8 +99,7 @@ def parse_range(text: str, name: str) -> list[float]:
     if n > limit:
         raise click.BadParameter(f"{text!r} gives {count_text(n)} values, more than the maximum {limit}",
                                  param_hint=name)
-    n = int(n)
-    return [round(start + i * step, 9) for i in range(n)]
+    return [round(start + i * step, 9) for i in range(int(n))]
 
 
 def parse_ints(text: str, name: str) -> list[int]:

@@ -19,7 +19,7 @@ def _list(parser, name):
 def grid_options(defaults: Mapping):
     """Decorator adding --planes, --gates, --nt, --dt, --ny, --nz, --dy, --dz, their help showing ``defaults`` (the
     model's grid table of turbgen.spec.defaults) and the allowed ranges (turbgen.theory.ranges, as checked)."""
-    opts = [
+    return stacked([
         click.option("--planes", callback=_list(parse_floats, "--planes"),
                      help="Plane positions x [m upstream], e.g. 0,50,100."),
         click.option("--gates", callback=_list(parse_range, "--gates"),
@@ -31,14 +31,13 @@ def grid_options(defaults: Mapping):
         click.option("--nz", type=int, help=f"Vertical points, {range_help('nz')} (default {defaults['nz']})."),
         click.option("--dy", type=float, help=f"Lateral spacing [m], {range_help('dy_m')} (default {defaults['dy_m']:g})."),
         click.option("--dz", type=float, help=f"Vertical spacing [m], {range_help('dz_m')} (default: --dy)."),
-    ]
-    return stacked(opts)
+    ])
 
 
 def constraint_options(sources: str, after: str):
     """Decorator adding --constrain (point series JSON or CSV, ``sources`` the further formats, ``after`` closing its
     help), --noise and --conditional-mean."""
-    opts = [
+    return stacked([
         click.option("--constrain", "constrain", multiple=True, type=click.Path(),
                      help=f"Condition the field on the measurements of FILE: point time series (JSON, "
                      f"schemas/constraints.schema.json, or CSV){sources}; repeatable. The field is a sample of the "
@@ -47,8 +46,7 @@ def constraint_options(sources: str, after: str):
                      "(default: each file's noise_m_s, else 0 = the field passes through the data)."),
         click.option("--conditional-mean", "conditional_mean", is_flag=True, help="With --constrain: write the "
                      "conditional mean (the optimal linear reconstruction, no random part)."),
-    ]
-    return stacked(opts)
+    ])
 
 
 def fft_backend_option(command):

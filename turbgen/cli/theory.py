@@ -71,7 +71,8 @@ _mann_options = _model_options("40 log-spaced, 1e-3..1 Hz")
 
 
 def _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U) -> MannParams:
-    """MannParams from the options; αε^(2/3) from --ae, --sigma-u, --ti or IEC class A at U (turbgen.spec.energy)."""
+    """MannParams from U and the model options (a command's ``**mann``); αε^(2/3) from --ae, --sigma-u, --ti or IEC
+    class A at U (turbgen.spec.energy)."""
     from turbgen.spec.energy import resolve_ae
 
     U = check_wind_speed(U)
@@ -111,16 +112,12 @@ def _emit(columns: dict, as_json: bool, extra: dict | None = None):
         click.echo("  ".join(f"{x:12.5g}" for x in row))
 
 
-def _plot(path, x, curves: dict, xlabel: str, ylabel: str, logy=False):
+def _plot(path, x, curves: dict, xlabel: str, ylabel: str):
     """Curves over log x (Guo et al. 2023, Fig. 2 style), written as PNG."""
     fig, ax = plot_figure(figsize=(6, 4))
     for label, (y, style) in curves.items():
         ax.plot(x, y, style, label=label)
-    ax.set_xscale("log")
-    if logy:
-        ax.set_yscale("log")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
+    ax.set(xscale="log", xlabel=xlabel, ylabel=ylabel)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     save_plot(fig, path, 120)
@@ -133,11 +130,11 @@ def theory():
 
 @theory.command(short_help="Mann one-point spectra F_ij(k1) (two-sided, m^3 s^-2).")
 @_mann_options
-def spectra(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path):
+def spectra(U, k1_text, f_text, as_json, plot_path, **mann):
     """Mann one-point spectra F_ij(k1) (two-sided, m^3 s^-2; Guo et al. 2023, Eq. 8)."""
     from turbgen.theory.mann_spectra import one_point_spectra
 
-    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    p = _params(U=U, **mann)
     f, k1 = _points(k1_text, f_text, U)
     F = one_point_spectra(k1, p)
     cols = {"k1": k1, "f": f, **{n: F[n] for n in ("F11", "F22", "F33", "F13")}}
@@ -152,12 +149,11 @@ def spectra(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_te
 @click.option("--dy", type=float, callback=_ranged("separation_m", "--dy (m)"), default=20.0, show_default=True, help="Lateral separation [m].")
 @click.option("--dz", type=float, callback=_ranged("separation_m", "--dz (m)"), default=20.0, show_default=True, help="Vertical separation [m].")
 @click.option("--components", type=click.Choice(["uu", "vv", "ww", "uw"]), default="uu", show_default=True)
-def coherence(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path,
-              dy, dz, components):
+def coherence(U, k1_text, f_text, as_json, plot_path, dy, dz, components, **mann):
     """yz-plane coherence of the Mann model: coh2 (Eq. 9) and co-coherence (Eq. 10)."""
     from turbgen.theory.mann_spectra import yz_coherence
 
-    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    p = _params(U=U, **mann)
     f, k1 = _points(k1_text, f_text, U)
     i, j = ("uvw".index(components[0]), "uvw".index(components[1]))
     coh2, cocoh = yz_coherence(k1, p, i, j, dy, dz)
@@ -169,12 +165,11 @@ def coherence(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_
 @theory.command(short_help="Longitudinal (magnitude-squared) coherence of u from the space-time tensor.")
 @_mann_options
 @click.option("--dx", type=float, callback=_ranged("separation_m", "--dx (m)"), default=100.0, show_default=True, help="Longitudinal separation [m].")
-def longitudinal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path,
-                 dx):
+def longitudinal(U, k1_text, f_text, as_json, plot_path, dx, **mann):
     """Longitudinal (magnitude-squared) coherence of u from the space-time tensor (Guo et al. 2023, Eq. 16)."""
     from turbgen.theory.space_time import longitudinal_coherence
 
-    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    p = _params(U=U, **mann)
     f, k1 = _points(k1_text, f_text, U)
     coh2 = longitudinal_coherence(f, dx, U, p)
     _emit({"f": f, "k1": k1, "coh2": coh2}, as_json)
@@ -185,12 +180,12 @@ def longitudinal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, 
 @theory.command(short_help="Rotor-effective wind speed spectrum of the Mann model (two-sided).")
 @_mann_options
 @click.option("--radius", type=float, callback=_ranged("rotor_radius_m", "--radius (m)"), default=63.0, show_default=True, help="Rotor radius R [m].")
-def rews(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path, radius):
+def rews(U, k1_text, f_text, as_json, plot_path, radius, **mann):
     """Rotor-effective wind speed spectrum of the Mann model (Guo et al. 2023, Eq. 24; two-sided, m^3 s^-2)."""
     from turbgen.theory.mann_spectra import one_point_spectra
     from turbgen.theory.rotor_effective import rews_spectrum_mann
 
-    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    p = _params(U=U, **mann)
     f, k1 = _points(k1_text, f_text, U)
     s_rr = rews_spectrum_mann(k1, p, radius)
     f11 = one_point_spectra(k1, p)["F11"]
@@ -208,7 +203,7 @@ def fit():
 
 @fit.command(short_help="Kaimal sigma_i, L_i and IEC a_yz, Lc fitted to the Mann model.")
 @_model_options("1000 linear steps, 1e-3..1 Hz (Eq. 20)")
-def kaimal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path):
+def kaimal(U, k1_text, f_text, as_json, plot_path, **mann):
     """Kaimal σ_i, L_i (Guo et al. 2023, Eq. 20) and IEC a_yz, Lc (Eq. 21, dy = dz = 20 m) fitted to the Mann model.
 
     --f / --k1 set the Eq. 20 grid."""
@@ -216,7 +211,7 @@ def kaimal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_tex
     from turbgen.theory.kaimal import kaimal_spectrum
     from turbgen.theory.mann_spectra import one_point_spectra
 
-    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    p = _params(U=U, **mann)
     grid = None if (k1_text is None and f_text is None) else _points(k1_text, f_text, U)[0]
     res = fit_kaimal_spectra(p, U, grid)
     a_yz, lc = fit_yz_coherence(p, U)
@@ -244,7 +239,7 @@ def kaimal(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_tex
 @fit.command(short_help="a_x, b_x of the exponential longitudinal coherence (space-time fit).")
 @_model_options("60 log-spaced, 3e-4..0.5 Hz")
 @click.option("--dx", type=float, callback=_ranged("separation_m", "--dx (m)"), default=100.0, show_default=True, help="Longitudinal separation [m].")
-def evolution(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_text, f_text, as_json, plot_path, dx):
+def evolution(U, k1_text, f_text, as_json, plot_path, dx, **mann):
     """a_x, b_x of the exponential longitudinal coherence (Eq. 18) fitted to the space-time model (Eq. 22).
 
     --f / --k1 set the fitting grid."""
@@ -252,15 +247,13 @@ def evolution(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U, k1_
     from turbgen.theory.fitting import LONG_F_HZ, fit_longitudinal
     from turbgen.theory.space_time import longitudinal_coherence
 
-    if evo is None:  # before the (slow) energy-level quadrature
+    if mann["evo"] is None:  # before the (slow) energy-level quadrature
         raise ParameterError("--evo frozen: fit evolution needs an evolution time (frozen turbulence has coh = 1)")
-    p = _params(L, gamma, ae, sigma_u, ti, lifetime, factor1, factor2, evo, U)
+    p = _params(U=U, **mann)
     grid = None if (k1_text is None and f_text is None) else _points(k1_text, f_text, U)[0]
     a_x, b_x = fit_longitudinal(p, U, dx, grid)
-    if as_json:
-        click.echo(json.dumps({"a_x": a_x, "b_x": b_x}))
-    else:
-        click.echo(f"a_x = {a_x:.4g}, b_x = {b_x:.4g} 1/m  (dx = {dx:g} m, gamma = {p.evo_time_s:g} s, U = {U:g} m/s)")
+    click.echo(json.dumps({"a_x": a_x, "b_x": b_x}) if as_json else
+               f"a_x = {a_x:.4g}, b_x = {b_x:.4g} 1/m  (dx = {dx:g} m, gamma = {p.evo_time_s:g} s, U = {U:g} m/s)")
     if plot_path:
         f = LONG_F_HZ if grid is None else grid
         coh2 = longitudinal_coherence(f, dx, U, p)

@@ -34,10 +34,6 @@ def validate(store, as_json, plots_dir, overwrite, rotor_radius):
         check_plots_dir(plots_dir, overwrite, "--plots")
     report = run_validation(store, rotor_radius_m=rotor_radius)
     if plots_dir is not None:
-        files = report.plots(plots_dir)
-        click.echo(f"wrote {len(files)} plots to {plots_dir}", err=True)
-    if as_json:
-        click.echo(json.dumps(report.to_dict(), indent=1))
-    else:
-        click.echo(report.table())
+        click.echo(f"wrote {len(report.plots(plots_dir))} plots to {plots_dir}", err=True)
+    click.echo(json.dumps(report.to_dict(), indent=1) if as_json else report.table())
     sys.exit(0 if report.passed else 1)

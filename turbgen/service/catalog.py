@@ -52,13 +52,11 @@ class Catalog:
         self._complete: set[str] = set()  # ids whose store opened as complete (a published store stays so)
 
     def run_dir(self, rid: str) -> Path:
-        """Directory of run ``rid``."""
         if not valid_id(rid):
             raise KeyError(rid)
         return self.runs / rid
 
     def store_path(self, rid: str) -> Path:
-        """Path of run ``rid``'s store."""
         return self.run_dir(rid) / STORE
 
     def exists(self, rid: str) -> bool:

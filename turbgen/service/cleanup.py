@@ -5,7 +5,6 @@ runs execute in this process (with --scheduler the builders' process ids are not
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 from turbgen.service.catalog import Catalog
@@ -58,10 +57,7 @@ def trim_stencil_cache(directory: Path, max_bytes: int | None) -> list[Path]:
     for _, _, size, p in entries[:-1]:
         if total <= max_bytes:
             break
-        try:
-            os.unlink(p)
-        except FileNotFoundError:
-            pass
+        p.unlink(missing_ok=True)
         total -= size
         evicted.append(p)
     return evicted

@@ -66,6 +66,4 @@ def _measurement_points(fs, plane: int) -> list[dict]:
     """The measurement points of a constrained store on plane ``plane`` (none for other stores), by the stream's
     recorded plane (a replay's sensor turned into the wind's frame sits on its file x's plane, off its turned x)."""
     record = fs.attrs.get("constraints")
-    if not record:
-        return []
-    return [s for s in record["streams"] if s.get("y_m") is not None and s["plane"] == plane]
+    return [s for s in record["streams"] if s.get("y_m") is not None and s["plane"] == plane] if record else []

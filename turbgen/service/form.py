@@ -109,9 +109,7 @@ def _default(model: str, key: str) -> str:
 
 
 def _help(key: str, spec: dict) -> str:
-    if key in _EXTRA:
-        return _EXTRA[key]
-    return spec.get("description") or (RANGES[key].why if key in RANGES else "")
+    return _EXTRA.get(key) or spec.get("description") or (RANGES[key].why if key in RANGES else "")
 
 
 def _field(model: str, key: str, spec: dict, grid: bool) -> Field:

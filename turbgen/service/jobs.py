@@ -30,12 +30,12 @@ def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: 
     from turbgen.runs.models import get_model
 
     if constraints is not None:
-        from turbgen.runs.constrain import load_constraints, run_mann_constrained, with_energy_from_data
+        from turbgen.runs.constrain import (describe_constraints, load_constraints, run_mann_constrained,
+                                            with_energy_from_data)  # fmt: skip
+        from turbgen.runs.replay import describe_fit, fitted_inputs
 
         files, fit = load_constraints(constraints.files), None
         if replay is not None:
-            from turbgen.runs.replay import fitted_inputs
-
             fitted = fitted or fitted_inputs(replay, files, evo_typed="evo_time_s" in replay)
             mapping, files, fit = fitted
             run = with_energy_from_data(mapping, files, constraints.noise_m_s)  # ae fitted: the run of mapping
@@ -44,8 +44,9 @@ def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: 
             run = with_energy_from_data(mapping, files, constraints.noise_m_s, stencil_cache)
         summary = run_mann_constrained(run, out, files, noise_m_s=constraints.noise_m_s,
                                        conditional_mean=constraints.conditional_mean, cache_dir=stencil_cache, fit=fit)
-        return _scalars(summary) | {"conditioning": _conditioning(summary, fit)} | ({} if fit is None else
-                                                                                  {"fit": fit["run"]})
+        notes = describe_constraints(summary["constraints"])  # as `turbgen mann --constrain [--fit]` prints, fit first
+        return _scalars(summary) | ({"conditioning": notes} if fit is None else
+                                    {"conditioning": describe_fit(fit) + notes, "fit": fit["run"]})
     entry = get_model(model)
     build_shared = entry.shared_part(run, None, None)
     shared = None
@@ -56,14 +57,6 @@ def execute(model: str, run, out: str, stencil_cache: str, stencil_cache_bytes: 
             shared = build_shared(run, stencil_cache)
             trim_stencil_cache(Path(stencil_cache), stencil_cache_bytes)  # the entry just used is the most recent
     return _scalars(entry.run(run, out, shared=shared))
-
-
-def _conditioning(summary: dict, fit: dict | None) -> list[str]:
-    """The lines ``turbgen mann --constrain [--fit]`` prints about the fit and the conditioning (their notes too)."""
-    from turbgen.runs.constrain import describe_constraints
-    from turbgen.runs.replay import describe_fit
-
-    return ([] if fit is None else describe_fit(fit)) + describe_constraints(summary["constraints"])
 
 
 def _scalars(summary: dict) -> dict:

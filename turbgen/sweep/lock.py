@@ -8,12 +8,12 @@ from __future__ import annotations
 import json
 import os
 import socket
-from datetime import datetime, timezone
 from pathlib import Path
 
 from filelock import FileLock, Timeout
 
 from turbgen.errors import TurbgenError
+from turbgen.sweep.manifest import utc_now
 
 LOCK_NAME = ".turbgen-sweep.lock"
 
@@ -27,11 +27,7 @@ class SweepLock:
 
     def __init__(self, directory: str | Path):
         self.path = Path(directory) / LOCK_NAME
-        self.owner = {
-            "host": socket.gethostname(),
-            "pid": os.getpid(),
-            "started_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        }
+        self.owner = {"host": socket.gethostname(), "pid": os.getpid(), "started_utc": utc_now()}
         self._lock = FileLock(self.path, blocking=False, on_acquired=self._write_owner)
 
     def _write_owner(self, fd: int) -> None:
@@ -51,10 +47,8 @@ class SweepLock:
             self._lock.acquire()
         except Timeout:
             pid, host, since = (self._holder().get(k, "?") for k in ("pid", "host", "started_utc"))
-            raise SweepLockedError(
-                f"{self.path.parent} is locked by another sweep (pid {pid} on {host} since {since}); "
-                "wait for it to finish or use another `out`"
-            ) from None
+            raise SweepLockedError(f"{self.path.parent} is locked by another sweep (pid {pid} on {host} since "
+                                   f"{since}); wait for it to finish or use another `out`") from None
         return self
 
     def release(self) -> None:

@@ -47,10 +47,7 @@ def grid_mapping(grid: Mapping | None) -> dict:
     g = {key: opts[name] for name, key in _GRID_NAMES.items() if name in opts}
     if "x_m" in g:
         g["x_m"] = [float(x) for x in g["x_m"]]
-    mapping = {"grid": g}
-    if "hub_height" in opts:
-        mapping["hub_height_m"] = opts["hub_height"]
-    return mapping
+    return {"grid": g, **({"hub_height_m": opts["hub_height"]} if "hub_height" in opts else {})}
 
 
 def store_name(model: str, preset: str, U_m_s: float, seed: int) -> str:
@@ -283,9 +280,7 @@ def check_memory_budget(runs, memory_bytes: int | None, chunk_t: int | None = No
     from turbgen.resources import format_bytes
     from turbgen.runs.mann_outofcore import least_budget_bytes
 
-    for pr in _distinct(runs):
-        if not MODELS[pr.model].out_of_core:
-            continue
+    for pr in (r for r in _distinct(runs) if MODELS[r.model].out_of_core):
         need = least_budget_bytes(pr.run, chunk_t)
         if memory_bytes < need:
             raise ParameterError(

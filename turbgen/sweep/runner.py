@@ -209,8 +209,13 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
         if tasks:
             if memory_bytes is not None:
                 tasks = {name: replace(t, memory_bytes=memory_bytes) for name, t in tasks.items()}
-            try:
-                _execute(plan, tasks, records, save, result, client, processes, progress, threads)
+            try:  # on ``client``, else the sweep's own local cluster, closed after
+                n = plan.workers or default_workers(tasks.values())
+                own = contextlib.nullcontext((client, None)) if client is not None else _own_client(plan, n, processes)
+                with own as (client, cluster):
+                    if cluster is not None and threads is None:  # share the cores between the local workers' FFTs
+                        threads = max(1, (os.cpu_count() or 1) // n)
+                    _submit_all(plan, tasks, records, save, result, client, progress, threads)
             except (KeyboardInterrupt, SystemExit):
                 _settle_interrupted(plan, records)
                 save()
@@ -220,16 +225,6 @@ def run_sweep(plan: SweepPlan, *, client=None, processes: bool = True, progress:
         result.seconds = round(time.perf_counter() - t_start, 3)
         save()
     return result
-
-
-def _execute(plan, tasks, records, save, result, client, processes, progress, threads):
-    """Run ``tasks`` on ``client`` (None: the sweep's own local cluster, closed after), recording each result."""
-    n = plan.workers or default_workers(tasks.values())
-    own = contextlib.nullcontext((client, None)) if client is not None else _own_client(plan, n, processes)
-    with own as (client, cluster):
-        if cluster is not None and threads is None:  # share the cores between the local workers' FFTs
-            threads = max(1, (os.cpu_count() or 1) // n)
-        _submit_all(plan, tasks, records, save, result, client, progress, threads)
 
 
 def _submit_all(plan, tasks, records, save, result, client, progress, threads):
