@@ -94,14 +94,12 @@ class ScipyBackend:
     """scipy.fft (pocketfft) for every transform: no pyfftw needed."""
 
     name = "scipy"
+    empty = staticmethod(aligned_empty)
 
     def __init__(self):
         import scipy.fft
 
         self.oneshot = scipy.fft
-
-    def empty(self, shape, dtype, align: int = 64) -> np.ndarray:
-        return aligned_empty(shape, dtype, align)
 
     def plan(self, kind: str, inp: np.ndarray, out: np.ndarray, axis: int) -> Plan:
         return _ScipyPlan(kind, inp, out, axis)
@@ -123,6 +121,7 @@ class PyfftwBackend:
     """pyfftw for planned transforms (FFTW_ESTIMATE: the same plan in every process); scipy.fft for the others."""
 
     name = "pyfftw"
+    empty = staticmethod(aligned_empty)
     _DIRECTIONS = {"c2c_forward": "FFTW_FORWARD", "c2c_backward": "FFTW_BACKWARD", "r2c": "FFTW_FORWARD",
                    "c2r": "FFTW_BACKWARD", "dct1": ["FFTW_REDFT00"], "dst1": ["FFTW_RODFT00"]}  # fmt: skip
 
@@ -131,9 +130,6 @@ class PyfftwBackend:
         import scipy.fft
 
         self._pyfftw, self.oneshot = pyfftw, scipy.fft
-
-    def empty(self, shape, dtype, align: int = 64) -> np.ndarray:
-        return aligned_empty(shape, dtype, align)
 
     def plan(self, kind: str, inp: np.ndarray, out: np.ndarray, axis: int) -> Plan:
         flags = ("FFTW_ESTIMATE", "FFTW_DESTROY_INPUT") if kind == "c2r" else ("FFTW_ESTIMATE",)
@@ -169,8 +165,7 @@ def current() -> str:
     name = _selected.name
     if name is not None:
         return name
-    name = os.environ.get(ENVIRONMENT_VARIABLE) or DEFAULT
-    return check_name(name, f"FFT backend in {ENVIRONMENT_VARIABLE}:")
+    return check_name(os.environ.get(ENVIRONMENT_VARIABLE) or DEFAULT, f"FFT backend in {ENVIRONMENT_VARIABLE}:")
 
 
 def backend(name: str | None = None) -> FFTBackend:

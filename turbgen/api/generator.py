@@ -22,18 +22,6 @@ if TYPE_CHECKING:  # annotations only: a command that writes a store never impor
 PathLike = str | os.PathLike
 
 
-def _written(path: PathLike, grid: Grid, overwrite: bool, chunks: int | None, write) -> xr.Dataset:
-    """``write(path)`` after the checks of a new store at ``path``; the store opened lazily (turbgen.open_store)."""
-    from turbgen.api.fields import open_store
-    from turbgen.store.paths import check_output_path
-    from turbgen.store.writer import check_new_store
-
-    check_output_path(path, "`out`")
-    check_new_store(path, grid, chunk_t=chunks, overwrite=overwrite)
-    write(Path(path))
-    return open_store(path)
-
-
 RunT = TypeVar("RunT", MannRun, KaimalRun)
 
 
@@ -81,11 +69,17 @@ class _Generator(Generic[RunT]):
         StoreError
             For an existing ``out`` without ``overwrite``.
         """
+        from turbgen.api.fields import open_store
+        from turbgen.store.paths import check_output_path
+        from turbgen.store.writer import check_new_store
+
         run = replace(self.run, seed=seed)
         if out is None:
             return self._in_memory(run, progress)
-        return _written(out, run.grid, overwrite, chunks,
-                        lambda path: self._to_store(run, path, overwrite, chunks, progress))
+        check_output_path(out, "`out`")
+        check_new_store(out, run.grid, chunk_t=chunks, overwrite=overwrite)
+        self._to_store(run, Path(out), overwrite, chunks, progress)
+        return open_store(out)
 
     def fields(self, seeds: Iterable[int]) -> Iterator[xr.Dataset]:
         """Yield the field of each of ``seeds`` in memory, in order (:meth:`field`)."""

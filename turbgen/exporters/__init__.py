@@ -42,8 +42,7 @@ def export_store(store, fmt: str, out, request: ExportRequest | None = None) -> 
         store = open_store(store)
     if store.path is not None and Path(store.path).resolve() in Path(out).resolve().parents:
         raise ParameterError(f"`out` = {str(out)!r} is inside the store {str(store.path)!r}; write the export beside it")
-    need = export_bytes(fmt, store.grid)
-    require_disk(out, need, f"the {fmt} export of {Path(store.label).name}",
+    require_disk(out, export_bytes(fmt, store.grid), f"the {fmt} export of {Path(store.label).name}",
                  "free space there or choose another `out`")
     result = EXPORTERS[fmt](store, out, request)
     return replace(result, notes=(*request.notes, *result.notes)) if request.notes else result

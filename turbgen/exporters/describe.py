@@ -18,16 +18,13 @@ def file_summary(path) -> list[tuple[str, str]]:
     """(label, text) rows describing an exported ``.bts``, InflowWind ``.dat`` or ``.sum`` file (ParameterError for
     an unreadable file or another kind)."""
     p = Path(path)
+    rows = {".bts": _bts, ".dat": _inflowwind, ".sum": _summary}.get(p.suffix.lower())
+    if rows is None:
+        raise ParameterError(f"{str(p)!r} is neither a store nor a file of {', '.join(SUFFIXES)}")
     try:
-        if p.suffix.lower() == ".bts":
-            return _bts(p)
-        if p.suffix.lower() == ".dat":
-            return _inflowwind(p)
-        if p.suffix.lower() == ".sum":
-            return _summary(p)
+        return rows(p)
     except (OSError, IndexError, struct.error, UnicodeDecodeError) as err:
         raise ParameterError(f"{str(p)!r} cannot be read as an export: {getattr(err, 'strerror', None) or err}") from None
-    raise ParameterError(f"{str(p)!r} is neither a store nor a file of {', '.join(SUFFIXES)}")
 
 
 def _summary(p: Path) -> list[tuple[str, str]]:

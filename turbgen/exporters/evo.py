@@ -62,8 +62,7 @@ def export_evo(fs, out, req: ExportRequest) -> ExportResult:
             for ix in range(g.nx):  # pass 2: plane, time, z, y, component
                 plane = Plane(fs, ix, lay, -shift)
                 for a, b in plane.blocks(8 * plane.ny * plane.nz):
-                    block = bladed_raw(plane, a, b, header.U_m_s, header.ti_percent)
-                    f.write(np.ascontiguousarray(block).tobytes())
+                    f.write(np.ascontiguousarray(bladed_raw(plane, a, b, header.U_m_s, header.ti_percent)).tobytes())
                 if ix == ix_rotor:
                     write_pair(files, root, plane, header, lay, periodic=req.periodic,
                                title=f"turbgen 4D export: the .wnd holds plane x = {g.x_m[ix]:g} m"
@@ -91,6 +90,4 @@ def read_evo(path) -> dict:
     raw = np.fromfile(path, dtype="<i2")
     nl = int(raw[0])
     data = raw[1 + nl:].reshape(nl, h.nt, h.nz, h.ny, 3).transpose(0, 1, 3, 2, 4)
-    out = from_bladed(data, h.U_m_s, h.ti_percent)
-    out["x_up"] = raw[1:1 + nl].astype(float)
-    return out
+    return from_bladed(data, h.U_m_s, h.ti_percent) | {"x_up": raw[1:1 + nl].astype(float)}

@@ -43,16 +43,14 @@ def read_hawc2(root, shape, U_ref: float) -> dict:
 
 def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
     """Export one plane of store ``fs`` to ROOT_{u,v,w}.bin (``out``: ROOT, or a path ending in .bin)."""
-    root = Path(out)
-    if root.suffix.lower() == ".bin":
-        root = root.with_suffix("")
+    root = Path(out).with_suffix("") if Path(out).suffix.lower() == ".bin" else Path(out)
     ix, lay = req.plane_index(fs), req.layout(fs)
     g = fs.grid
     paths = component_paths(root)
     dat, htc = inflowwind_path(root, "hawc2"), root.with_name(root.name + "_wind.htc")
+    written = (*paths.values(), dat, htc) if req.runner_files else tuple(paths.values())
     usage = []
-    with OutputSet([*paths.values(), dat, htc] if req.runner_files else paths.values(),
-                   overwrite=req.overwrite) as files:
+    with OutputSet(written, overwrite=req.overwrite) as files:
         plane = Plane(fs, ix, lay)
         write_hawc2({c: files.temp(p) for c, p in paths.items()}, plane, fs.U_m_s)
         if req.runner_files:
@@ -64,7 +62,6 @@ def export_hawc2(fs, out, req: ExportRequest) -> ExportResult:
              "written for InflowWind: the first x-plane reaches the turbine first and u - URef already holds the "
              "shear; in HAWC2 itself switch its shear off and check the box read direction (changed in v13.1)",
              *layout_notes(lay, 0.0, g.nt, g.dt_s)]
-    written = (*paths.values(), dat, htc) if req.runner_files else tuple(paths.values())
     return ExportResult(written, lines, tuple(notes), tuple(usage))
 
 

@@ -22,9 +22,7 @@ DIMENSION_ORDER = "MATLAB h5read: (t, x, y, z); row-major (h5py/NumPy): (z, y, x
 
 def _attr_value(value):
     """HDF5-storable attribute: numbers, strings and bools as they are, anything else as JSON."""
-    if isinstance(value, (bool, int, float, str, np.number)):
-        return value
-    return json.dumps(value)
+    return value if isinstance(value, (bool, int, float, str, np.number)) else json.dumps(value)
 
 
 def export_hdf5(fs, out, req: ExportRequest) -> ExportResult:

@@ -63,7 +63,21 @@ def inflowwind_text(spec: InflowWindInput, path) -> str:
         "================== Parameters for Binary Bladed-style Full-Field files   [used only for WindType = 4 or 7] =====",
         L(files.get("FilenameRoot", "unused"), "FilenameRoot", "root of ROOT.wnd and ROOT.sum (relative to this file)"),
         L(False, "TowerFile", "have tower file (.twr) (flag)"),
-        *_hawc_lidar_output(spec, files),
+        "================== Parameters for HAWC-format binary files  [Only used with WindType = 5] =====================",
+        *hawc_lines(files, {"RefHt_HAWC": spec.ref_height_m, **spec.hawc}, spec.U_m_s, " (relative to this file)"),
+        "-------------   LIDAR Parameters   --------------------------------------------------------------------------",
+        L(0, "SensorType", "0 = none"),
+        L(0, "NumPulseGate", "unused"), L(0.0, "PulseSpacing", "unused"), L(0, "NumBeam", "unused"),
+        L(0.0, "FocalDistanceX", "unused"), L(0.0, "FocalDistanceY", "unused"), L(0.0, "FocalDistanceZ", "unused"),
+        "         0.0, 0.0, 0.0   RotorApexOffsetPos - unused",
+        L(float(spec.U_m_s), "URefLid", "unused"), L(0.25, "MeasurementInterval", "unused"),
+        L(False, "LidRadialVel", "unused"), L(0, "ConsiderHubMotion", "unused"),
+        "====================== OUTPUT ==================================================",
+        L(False, "SumPrint", "print summary data to <RootName>.IfW.sum (flag)"),
+        "OutList      - the next line(s) list the output channels",
+        '"Wind1VelX, Wind1VelY, Wind1VelZ"',
+        'END of input file (the word "END" must appear in the first 3 columns of the last OutList line)',
+        "---------------------------------------------------------------------------------------",
     ]
     return "\n".join(lines) + "\n"
 
@@ -95,28 +109,6 @@ def hawc_lines(files: dict, hawc: dict, U_m_s: float, where: str = "") -> list[s
         L(float(hw["PLExp_HAWC"]), "PLExp_HAWC", "unused with WindProfile 0"),
         L(0.03, "Z0", "unused with WindProfile 0"),
         L(0.0, "XOffset", "initial offset in +x (m)"),
-    ]
-
-
-def _hawc_lidar_output(spec: InflowWindInput, files: dict) -> list[str]:
-    """The HAWC, lidar and output sections of the input file (inert values where unused)."""
-    L = ifw_line
-    return [
-        "================== Parameters for HAWC-format binary files  [Only used with WindType = 5] =====================",
-        *hawc_lines(files, {"RefHt_HAWC": spec.ref_height_m, **spec.hawc}, spec.U_m_s, " (relative to this file)"),
-        "-------------   LIDAR Parameters   --------------------------------------------------------------------------",
-        L(0, "SensorType", "0 = none"),
-        L(0, "NumPulseGate", "unused"), L(0.0, "PulseSpacing", "unused"), L(0, "NumBeam", "unused"),
-        L(0.0, "FocalDistanceX", "unused"), L(0.0, "FocalDistanceY", "unused"), L(0.0, "FocalDistanceZ", "unused"),
-        "         0.0, 0.0, 0.0   RotorApexOffsetPos - unused",
-        L(float(spec.U_m_s), "URefLid", "unused"), L(0.25, "MeasurementInterval", "unused"),
-        L(False, "LidRadialVel", "unused"), L(0, "ConsiderHubMotion", "unused"),
-        "====================== OUTPUT ==================================================",
-        L(False, "SumPrint", "print summary data to <RootName>.IfW.sum (flag)"),
-        "OutList      - the next line(s) list the output channels",
-        '"Wind1VelX, Wind1VelY, Wind1VelZ"',
-        'END of input file (the word "END" must appear in the first 3 columns of the last OutList line)',
-        "---------------------------------------------------------------------------------------",
     ]
 
 
@@ -153,9 +145,7 @@ def hawc2_wind_block(*, paths: dict, folder: Path, U_m_s: float, ti: float, cent
         "  turb_format 1 ; Mann boxes",
         "  tower_shadow_method 0 ;",
         "  begin mann ;",
-        f"    filename_u {rel['u']} ;",
-        f"    filename_v {rel['v']} ;",
-        f"    filename_w {rel['w']} ;",
+        *(f"    filename_{c} {rel[c]} ;" for c in "uvw"),
         f"    box_dim_u {nt} {dx_m:.10g} ;",
         f"    box_dim_v {ny} {dy_m:.10g} ;",
         f"    box_dim_w {nz} {dz_m:.10g} ;",

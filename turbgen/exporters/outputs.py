@@ -13,7 +13,7 @@ from pathlib import Path
 from turbgen import oscalls
 from turbgen.errors import ParameterError
 from turbgen.store.paths import check_output_path
-from turbgen.resources import available_disk_bytes, require_disk
+from turbgen.resources import available_disk_bytes
 from turbgen.cancellation import raise_if_stop_requested
 from turbgen.store.temporaries import TEMP_MARK, remove_dead_temporaries, report_removed
 
@@ -21,9 +21,9 @@ from turbgen.store.temporaries import TEMP_MARK, remove_dead_temporaries, report
 class OutputSet:
     """Context manager handing out temporary paths for a set of final paths, renamed into place on normal exit, all
     removed on an exception (RuntimeError if one was not written). ParameterError for a bad, existing (without
-    ``overwrite``) or unwritable output, or too little disk for ``need_bytes``."""
+    ``overwrite``) or unwritable output."""
 
-    def __init__(self, paths, *, overwrite: bool, need_bytes: int | None = None):
+    def __init__(self, paths, *, overwrite: bool):
         self.paths = [Path(p) for p in paths]
         if len(set(self.paths)) != len(self.paths):
             raise ParameterError(f"output paths {[str(p) for p in self.paths]} are not distinct")
@@ -39,10 +39,6 @@ class OutputSet:
                 raise ParameterError(f"output directory {str(p.parent)!r} is not writable")
         for parent in {p.parent for p in self.paths}:
             report_removed(remove_dead_temporaries(parent, [p.name for p in self.paths if p.parent == parent]))
-        if need_bytes is not None:
-            names = ", ".join(p.name for p in self.paths)
-            require_disk(self.paths[0], need_bytes, f"the export ({names})",
-                         "free space there or choose another `out`")
         token = f"{os.getpid()}-{secrets.token_hex(4)}"
         self._temps = {p: p.with_name(f".{p.name}{TEMP_MARK}{token}") for p in self.paths}
 

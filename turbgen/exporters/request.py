@@ -111,11 +111,9 @@ class Plane:
     def full(self, c: str, a: int = 0, b: int | None = None) -> np.ndarray:
         """Full velocity [m/s] of component ``c`` ("u", "v" or "w") for time steps a..b-1, float64 (b - a, ny, nz)."""
         v = self.fluct[c][a:b].astype(np.float64)
-        if not self.varying:
-            if c == "u":
-                v += self.mean_u[None, None, :]
-            return v
-        if c == "w":
+        if c == "u" and not self.varying:
+            v += self.mean_u[None, None, :]
+        if c == "w" or not self.varying:
             return v
         u, other = self.wind.full_uv(self.fluct["u"][a:b].astype(np.float64), self.fluct["v"][a:b].astype(np.float64),
                                      self.times_s[a:b, None, None], self.y_m[None, :, None],

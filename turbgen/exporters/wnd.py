@@ -109,9 +109,7 @@ def read_wnd(path) -> dict:
     raw = Path(path).read_bytes()
     h = WndHeader.unpack(raw)
     data = np.frombuffer(raw, dtype="<i2", offset=_HEADER.size).reshape(-1, h.nz, h.ny, 3)
-    out = from_bladed(data.transpose(0, 2, 1, 3), h.U_m_s, h.ti_percent)
-    out["header"] = h
-    return out
+    return from_bladed(data.transpose(0, 2, 1, 3), h.U_m_s, h.ti_percent) | {"header": h}
 
 
 def check_even_nt(nt: int) -> None:
@@ -139,9 +137,8 @@ def inflowwind_lines(root: Path) -> tuple[str, ...]:
 def write_wnd_inflowwind(files: OutputSet, path: Path, root: Path, lay, U_m_s: float, *, x_m: float,
                          shift_s: float) -> str:
     """Write the InflowWind v5 input file ``path`` (WindType 4, FilenameRoot ``root``); return its usage line."""
-    title = f"turbgen {root.name}.wnd: plane x = {x_m:g} m, {lay.wind.describe()}"
-    if shift_s:
-        title = f"NOT PERIODIC: starts {shift_s:.6g} s upstream (InitX/U). " + title
+    title = (f"NOT PERIODIC: starts {shift_s:.6g} s upstream (InitX/U). " if shift_s else "") + \
+        f"turbgen {root.name}.wnd: plane x = {x_m:g} m, {lay.wind.describe()}"
     return write_inflowwind(files, path, InflowWindInput(4, lay.hub_height_m, U_m_s, {"FilenameRoot": root},
                                                         title=title))
 

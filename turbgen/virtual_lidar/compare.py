@@ -18,10 +18,10 @@ MIN_NEFF = 10.0
 BAND_P = (0.025, 0.975)  # probabilities of the plotted band's edges
 
 
-def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None = None) -> MetricResult:
+def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff) -> MetricResult:
     """MetricResult "lidar_coherence" of simulated vs theoretical gamma^2_RL [-] at ``f_hz`` [Hz] (0 .. Nyquist):
-    bins 1 .. Nyquist-1 up to ``f_max_hz`` where gamma^2 >= MIN_COH2 and ``n_eff`` >= MIN_NEFF are tested by Goodman's
-    law, or by the delta method where 1 - gamma^2 < NEAR_UNIT or n_eff <= 1."""
+    bins 1 .. Nyquist-1 where gamma^2 >= MIN_COH2 and ``n_eff`` >= MIN_NEFF are tested by Goodman's law, or by the
+    delta method where 1 - gamma^2 < NEAR_UNIT or n_eff <= 1."""
     f = np.asarray(f_hz, float)
     sim = np.asarray(coh2_sim, float)
     th = np.clip(np.asarray(coh2_theory, float), 0.0, 1.0)
@@ -38,8 +38,6 @@ def coherence_metric(f_hz, coh2_sim, coh2_theory, n_eff, f_max_hz: float | None 
     sel = np.zeros(f.size, bool)
     sel[1:-1] = True
     sel &= (th >= MIN_COH2) & (n >= MIN_NEFF)
-    if f_max_hz is not None:
-        sel &= f <= f_max_hz
     checks = [Check("coh2_RL", (float(f[i]), float(f[i])), float(sim[i]), float(mean[i]), float(sd[i]), float(z[i]))
               for i in np.nonzero(sel)[0]]
     curve = Curve("coh2_RL", f[1:-1], sim[1:-1], mean[1:-1], lower[1:-1], upper[1:-1])

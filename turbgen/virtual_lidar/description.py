@@ -109,22 +109,17 @@ class LidarDescription:
                     s, w = cw_discrete(float(rayleigh_length_m(focus_dist, self.wavelength_m, self.beam_radius_m)))
                 rows.append((b, g, focus_dist, s, w))
         k = max(r[3].size for r in rows)
-        M = len(rows)
-        offsets = np.zeros((M, k))
-        weights = np.zeros((M, k))
+        offsets, weights = np.zeros((len(rows), k)), np.zeros((len(rows), k))
         for i, (_, _, _, s, w) in enumerate(rows):  # pad with zero weights (same rows for one kind)
             offsets[i, : s.size], weights[i, : w.size] = s, w
-        beam = np.array([r[0] for r in rows])
-        gate = np.array([r[1] for r in rows])
-        dist = np.array([r[2] for r in rows])
+        beam, gate, dist = (np.array([r[j] for r in rows]) for j in range(3))
         direction = d[beam]
         return Measurements(n=los_vectors(direction), focus_m=direction * dist[:, None], direction=direction,
                             offsets_m=offsets, weights=weights, beam=beam, gate=gate)
 
     def schedule(self, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
         """Times k / beam_rate_hz [s] and beams k mod n_beams, k < duration * rate (ParameterError unless > 0)."""
-        n = int(np.floor(check_positive("duration (s)", duration_s) * self.beam_rate_hz + 1e-9))
-        k = np.arange(n)
+        k = np.arange(int(np.floor(check_positive("duration (s)", duration_s) * self.beam_rate_hz + 1e-9)))
         return k / self.beam_rate_hz, k % self.n_beams
 
     def to_attrs(self) -> dict:

@@ -24,14 +24,6 @@ DEFAULT_LIDAR = "nacelle-4beam"
 F_THEORY_MAX_HZ = 0.5
 
 
-def _model_spectra(fs, description, f_hz, radius_m: float):
-    """PreviewSpectra of the store's model at f_hz > 0: its declared ``store_preview`` (turbgen.spec.models)."""
-    reference = declaration(fs.model, "store model").store_preview
-    if reference is None:
-        raise ParameterError(f"store model {fs.model!r} has no lidar theory")
-    return resolve(reference, "virtual_lidar")(fs, description, f_hz, radius_m)
-
-
 def mann_store_preview(fs, description, f_hz, radius_m: float):
     """PreviewSpectra of a Mann store at f_hz > 0 [Hz]: on its box's lattice, for rotor radius ``radius_m`` [m]."""
     from turbgen.virtual_lidar.preview import preview_spectra
@@ -69,7 +61,11 @@ def store_theory(fs, description, f_hz, radius_m: float, setup, n_samples: int |
 
     record_s = fs.grid.nt * fs.grid.dt_s
     nodes, _ = theory_nodes(f_hz, setup, record_s)
-    return expected_welch(_model_spectra(fs, description, nodes, radius_m), f_hz, setup, record_s, n_samples)
+    reference = declaration(fs.model, "store model").store_preview  # the model's, declared in turbgen.spec.models
+    if reference is None:
+        raise ParameterError(f"store model {fs.model!r} has no lidar theory")
+    spectra = resolve(reference, "virtual_lidar")(fs, description, nodes, radius_m)
+    return expected_welch(spectra, f_hz, setup, record_s, n_samples)
 
 
 @dataclass

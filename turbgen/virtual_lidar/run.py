@@ -83,8 +83,7 @@ def run_lidar(fs, description, *, rotor_radius_m=None, add_mean_wind=False, shea
                         mean_wind=mean_wind)
     t_arr, u_ll = signals.lidar_estimate(s, fs.U_m_s)
     u_rr, ti_r = signals.rotor_average(fs, radius, t_arr)
-    step = float(t_arr[1] - t_arr[0])
-    setup = WelchSetup(nperseg or default_nperseg(u_ll.size), step)
+    setup = WelchSetup(nperseg or default_nperseg(u_ll.size), float(t_arr[1] - t_arr[0]))
     w = signals.welch_rl(u_ll, u_rr, setup)  # segment means removed: the mean wind does not enter
     sim = compare.preview_numbers(w["f_hz"], w["coh2_RL"], w["G_RL"], fs.U_m_s)
     return LidarRun(s, t_arr, u_ll, u_rr, signals.lidar_ti(s, fs.U_m_s), ti_r, w, sim, radius)

@@ -109,10 +109,7 @@ def interp_axis(coord0: float, step: float, n: int, values: np.ndarray):
     f = np.where(np.abs(f - np.round(f)) <= 1e-9, np.round(f), f)  # a node within rounding is the node: the cell
     # (and the constrained runs' scan pattern) does not depend on how T + x/U rounds
     i = np.clip(np.floor(f).astype(np.int64), 0, max(n - 2, 0))
-    a = f - i
-    if n == 1:
-        a = np.zeros_like(f)
-    return i, a
+    return i, (np.zeros_like(f) if n == 1 else f - i)
 
 
 def _corners(it, at, jy, ay, jz, az, shape):
@@ -168,9 +165,7 @@ def sample(fs, measurements, times_s, beam_of_sample, *, add_mean_wind: bool = F
     col = {b: i for i, b in enumerate(order.tolist())}
     bi = {b: i for i, b in enumerate(beams)}
     gi = {gg: i for i, gg in enumerate(gates)}
-    time_out = np.zeros((n_scan, nb))
-    for b in beams:
-        time_out[:, bi[b]] = T[:, col[b]]
+    time_out = T[:, [col[b] for b in beams]]
     if mean_wind is not None and add_mean_wind:
         # veer and time-varying means rotate (u, v) per probe point: the profile's own path (MeanWind.full_uv)
         los = _los_with_mean_wind(fs, measurements, planes, T, col, mean_wind)

@@ -27,9 +27,7 @@ def theory_nodes(f_bins_hz, setup: WelchSetup, record_s: float) -> tuple[np.ndar
     lines = np.arange(1, int(math.floor(top * df * record_s + 1e-9)) + 1) / record_s
     low = lines[lines < 2.0 * df * (1 - 1e-9)]
     nodes = np.concatenate([low, df * np.arange(2, top + 1)])
-    if nodes.size >= lines.size:
-        nodes = lines
-    return nodes, lines
+    return (lines if nodes.size >= lines.size else nodes), lines
 
 
 def weigh_lines(S_RR, S_LL, S_RL, lines_hz, f_bins_hz, setup: WelchSetup, record_s: float) -> tuple:
