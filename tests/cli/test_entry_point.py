@@ -28,11 +28,19 @@ def test_main_freezes_the_command_imports_and_leaves_the_collector_on(args, froz
     assert (int(count) > 10_000) if frozen else (int(count) == 0), out
 
 
-@pytest.mark.parametrize("command", ["mann", "kaimal", "validate", "info", "transient", "lidar"])
+@pytest.mark.parametrize("command", ["mann", "kaimal", "validate", "info", "transient", "lidar", "export"])
 def test_help_loads_none_of_the_work_s_modules(command):
     """--help of a command that makes or reads fields is quick: numba, zarr and dask load when its work starts."""
     out = subprocess.run([sys.executable, "-c", PROBE, command, "--help"], capture_output=True, text=True, check=True)
     assert out.stdout.splitlines()[-1].split()[2:] == [], out.stdout.splitlines()[-1]
+
+
+def test_the_export_command_offers_every_exporter():
+    """turbgen export lists its formats without importing the exporters (--help above): the same names, in order."""
+    from turbgen.cli.export import FORMATS
+    from turbgen.exporters import EXPORTERS
+
+    assert FORMATS == tuple(EXPORTERS)
 
 
 @pytest.mark.parametrize("args", [["mann", "--L", "5000"], ["kaimal", "--U", "500"], ["mann", "--gamma", "99"]])
