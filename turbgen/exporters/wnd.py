@@ -137,8 +137,8 @@ def inflowwind_lines(root: Path) -> tuple[str, ...]:
 def write_wnd_inflowwind(files: OutputSet, path: Path, root: Path, lay, U_m_s: float, *, x_m: float,
                          shift_s: float) -> str:
     """Write the InflowWind v5 input file ``path`` (WindType 4, FilenameRoot ``root``); return its usage line."""
-    title = (f"NOT PERIODIC: starts {shift_s:.6g} s upstream (InitX/U). " if shift_s else "") + \
-        f"turbgen {root.name}.wnd: plane x = {x_m:g} m, {lay.wind.describe()}"
+    title = f"turbgen {root.name}.wnd: plane x = {x_m:g} m, {lay.wind.describe()}"
+    title = (f"NOT PERIODIC: starts {shift_s:.6g} s upstream (InitX/U). " if shift_s else "") + title
     return write_inflowwind(files, path, InflowWindInput(4, lay.hub_height_m, U_m_s, {"FilenameRoot": root},
                                                         title=title))
 
